@@ -1,0 +1,121 @@
+//! Numeric phase of assembly (style R9): element matrices computed in parallel (rayon) and
+//! added into the values of the pattern's sparse matrices.
+
+use crate::element::LocalMatrices;
+use crate::error::{ElementError, FeError};
+use crate::model::FeModel;
+use crate::pattern::{ElementMap, ElementTransform, SystemPattern};
+use faer::sparse::SparseColMat;
+use nalgebra::{DMatrix, Point3};
+use rayon::prelude::*;
+
+/// Assembled stiffness and mass on the free dofs, both triangles stored.
+#[derive(Clone, Debug)]
+pub struct Assembled {
+    pub K: SparseColMat<usize, f64>,
+    pub M: SparseColMat<usize, f64>,
+}
+
+/// One thread's stiffness and mass values.
+type ValuePair = (Vec<f64>, Vec<f64>);
+
+/// Stiffness and mass of element `index` in global axes.
+pub fn element_matrices(model: &FeModel, index: usize) -> Result<LocalMatrices, ElementError> {
+    let element = &model.elements[index];
+    let mut X_e: Vec<Point3<f64>> = Vec::with_capacity(element.nodes().len());
+    for node in element.nodes() {
+        let x = model.mesh.nodes.get(node.index()).ok_or(ElementError::MissingNode {
+            element: index,
+            node: node.0,
+            count: model.mesh.nodes.len(),
+        })?;
+        X_e.push(*x);
+    }
+    element.local_matrices(index, &X_e, &model.properties())
+}
+
+/// $\mathbf T_e^T \mathbf A \mathbf T_e$ added at the element's slots.
+fn scatter(map: &ElementMap, A: &DMatrix<f64>, values: &mut [f64]) {
+    let nd = map.dofs.len();
+    match &map.transform {
+        ElementTransform::Select(position) => {
+            for (b, pb) in position.iter().enumerate() {
+                let Some(c) = pb else { continue };
+                for (a, pa) in position.iter().enumerate() {
+                    let Some(r) = pa else { continue };
+                    values[map.slots[*r as usize + *c as usize * nd]] += A[(a, b)];
+                }
+            }
+        }
+        ElementTransform::Dense(T_e) => {
+            let reduced = T_e.transpose() * A * T_e;
+            for c in 0..nd {
+                for r in 0..nd {
+                    values[map.slots[r + c * nd]] += reduced[(r, c)];
+                }
+            }
+        }
+    }
+}
+
+/// Fills `K_values` and `M_values` (laid out as `pattern`) from the elements of `model`.
+///
+/// Work is split into one contiguous range of elements per rayon thread; each range adds
+/// into its own buffer and the buffers are summed, so the result does not depend on timing
+/// beyond the order of that final sum.
+pub fn assemble_into(
+    model: &FeModel,
+    pattern: &SystemPattern,
+    K_values: &mut [f64],
+    M_values: &mut [f64],
+) -> Result<(), FeError> {
+    let nnz = pattern.nnz();
+    assert_eq!(K_values.len(), nnz, "K values must have the pattern's length");
+    assert_eq!(M_values.len(), nnz, "M values must have the pattern's length");
+    assert_eq!(
+        pattern.elements.len(),
+        model.elements.len(),
+        "pattern built for another model"
+    );
+    let n_elements = model.elements.len();
+    let n_chunks = rayon::current_num_threads().clamp(1, n_elements.max(1));
+    let chunk = n_elements.div_ceil(n_chunks).max(1);
+    let fill = |range: std::ops::Range<usize>, K: &mut [f64], M: &mut [f64]| -> Result<(), FeError> {
+        for e in range {
+            let m = element_matrices(model, e)?;
+            scatter(&pattern.elements[e], &m.K_e, K);
+            scatter(&pattern.elements[e], &m.M_e, M);
+        }
+        Ok(())
+    };
+    K_values.fill(0.0);
+    M_values.fill(0.0);
+    let others: Vec<Result<ValuePair, FeError>> = (1..n_chunks)
+        .into_par_iter()
+        .map(|t| {
+            let mut K = vec![0.0; nnz];
+            let mut M = vec![0.0; nnz];
+            fill(t * chunk..((t + 1) * chunk).min(n_elements), &mut K, &mut M)?;
+            Ok((K, M))
+        })
+        .collect();
+    fill(0..chunk.min(n_elements), K_values, M_values)?;
+    for other in others {
+        let (K, M) = other?;
+        K_values.par_iter_mut().zip(K.par_iter()).for_each(|(a, b)| *a += b);
+        M_values.par_iter_mut().zip(M.par_iter()).for_each(|(a, b)| *a += b);
+    }
+    Ok(())
+}
+
+/// Assembles $\mathbf K$ and $\mathbf M$ on the free dofs (allocating form of
+/// [`assemble_into`]).
+pub fn assemble(model: &FeModel, pattern: &SystemPattern) -> Result<Assembled, FeError> {
+    let mut K = vec![0.0; pattern.nnz()];
+    let mut M = vec![0.0; pattern.nnz()];
+    assemble_into(model, pattern, &mut K, &mut M)?;
+    Ok(Assembled {
+        K: SparseColMat::new(pattern.symbolic.clone(), K),
+        M: SparseColMat::new(pattern.symbolic.clone(), M),
+    })
+}

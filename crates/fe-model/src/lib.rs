@@ -1,0 +1,60 @@
+//! # fe-model: 3D beam and solid finite-element models
+//!
+//! The first stage of the flexmbs pipeline (see `ARCHITECTURE.md`):
+//!
+//! ```text
+//! mesh (.msh or generated) -> FeModel -> DofMap + SystemPattern -> sparse K, M -> statics / modes
+//! ```
+//!
+//! A [`FeModel`] holds a [`Mesh`] (nodes, cells, named sets), materials, beam sections,
+//! elements, supports and linear constraints. [`DofMap`] numbers the independent dofs after
+//! eliminating supports and constraints; [`SystemPattern`] is the symbolic phase of assembly
+//! (done once); [`assemble`] fills the values in parallel. [`solve_static`] and
+//! [`modal_dense`] are the linear analyses of this stage.
+//!
+//! What this crate does not do: rotations of bodies, time, reduction.
+//!
+//! # Notation
+//!
+//! | symbol | Rust | meaning | source |
+//! |---|---|---|---|
+//! | $\mathbf X$ | `X`, `X_e` | reference nodal coordinates (of one element) | |
+//! | $\mathbf u$ | `u` | nodal dofs $[u_x, u_y, u_z, \theta_x, \theta_y, \theta_z]$ per node | brief §2 |
+//! | $\mathbf T$ | `DofMap` rows | full dofs from independent dofs, $\mathbf u = \mathbf T \mathbf u_f$ | elimination of supports and constraints |
+//! | $\mathbf K_e,\ \mathbf M_e$ | `K_e`, `M_e` | element stiffness and mass, global axes | element modules |
+//! | $\mathbf K,\ \mathbf M$ | `K`, `M` | assembled $\mathbf T^T \mathbf K_{full} \mathbf T$, likewise $\mathbf M$ | [`assemble`] |
+//! | $E, \nu, G, \rho$ | `E()`, `nu()`, `G()`, `rho()` | isotropic material | [`IsotropicMaterial`] |
+//! | $A, I_y, I_z, J, k_y, k_z$ | `A()`, `Iy()`, ... | beam section, shear factors | [`BeamSection`] |
+//! | $\omega$ | `omega` | circular eigenfrequency, $\mathbf K \boldsymbol\phi = \omega^2 \mathbf M \boldsymbol\phi$ | [`modal_dense`] |
+//!
+//! Superscripts: every vector is in global axes unless its name ends in `_loc` (element axes).
+
+#![allow(non_snake_case)]
+
+pub mod assembly;
+pub mod box_mesh;
+pub mod dof;
+pub mod element;
+pub mod error;
+pub mod generate;
+pub mod interface;
+pub mod mesh;
+pub mod modal;
+pub mod model;
+pub mod pattern;
+pub mod property;
+pub mod quadrature;
+pub mod section;
+pub mod statics;
+
+pub use assembly::{assemble, assemble_into, Assembled};
+pub use dof::{Dof, DofMap, DofStatus};
+pub use element::{Beam2, BeamTheory, Element, LocalMatrices, MassKind, Properties};
+pub use error::{ElementError, FeError, PropertyError, DOF_NAMES};
+pub use mesh::{Cell, CellId, CellKind, Mesh, NodeId};
+pub use modal::{modal_dense, ModalSolution};
+pub use model::{BeamProperties, DofMask, FeModel, LinearConstraint, NodalLoad, Support};
+pub use pattern::SystemPattern;
+pub use property::{IsotropicMaterial, MaterialId, SectionId};
+pub use section::BeamSection;
+pub use statics::{solve_static, StaticSolution};

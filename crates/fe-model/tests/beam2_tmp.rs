@@ -1,0 +1,2 @@
+#[path = "unit/beam2.rs"]
+mod beam2;

@@ -1,0 +1,2 @@
+#[path = "unit/gmsh.rs"]
+mod gmsh;

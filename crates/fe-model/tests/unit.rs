@@ -1,0 +1,12 @@
+#![allow(non_snake_case)]
+//! fe-model tests, one binary (style R19). Each module says what belongs in it.
+
+mod unit {
+    /// Dof numbering, elimination, assembly invariants and the errors of bad input.
+    mod assembly;
+    /// Structure-level beam tests against `benchmarks.md` A1/A2: statics to round-off,
+    /// frequencies within 0.1 % and converging, the Timoshenko frequency equation.
+    mod beam_structure;
+    /// Shared fixtures: materials, sections, beam models along skewed axes.
+    pub mod common;
+}

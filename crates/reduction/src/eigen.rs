@@ -1,0 +1,998 @@
+//! The $m$ lowest eigenpairs of $\mathbf K\boldsymbol\phi = \omega^2\mathbf M\boldsymbol\phi$
+//! for sparse symmetric $\mathbf K \succeq 0$ and $\mathbf M \succ 0$, by shift-invert
+//! Krylov-Schur on a sparse Cholesky factor (brief §3).
+//!
+//! # Method
+//!
+//! 1. Factor $\mathbf P(\mathbf K - \sigma\mathbf M)\mathbf P^T = \mathbf L\mathbf L^T$ with
+//!    faer's sparse Cholesky (AMD fill-reducing permutation $\mathbf P$, supernodal or
+//!    simplicial as faer's symbolic analysis chooses) — [`ShiftInvert::new`].
+//! 2. Run faer's Krylov-Schur for self-adjoint operators,
+//!    [`faer::matrix_free::eigen::partial_self_adjoint_eigen`], on
+//!    $$\mathbf C = \mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T},$$
+//!    which is symmetric in the standard inner product and has the eigenpairs
+//!    $\mu_k = 1/(\lambda_k - \sigma)$, $\mathbf y_k = \mathbf L^T\mathbf P\boldsymbol\phi_k$
+//!    (Ericsson & Ruhe 1980, "The spectral transformation Lanczos method", Math. Comp. 35;
+//!    Grimes, Lewis & Simon 1994, SIAM J. Matrix Anal. Appl. 15, §2). Since
+//!    $\mathbf K - \sigma\mathbf M \succ 0$ is required for the factor, $\sigma < \lambda_1$,
+//!    so every $\mu_k > 0$ and the *largest* $\mu$ (what Krylov-Schur finds) are the *lowest*
+//!    $\lambda$.
+//! 3. Back-transform $\boldsymbol\phi_k = \mathbf P^T\mathbf L^{-T}\mathbf y_k$, then a
+//!    Rayleigh-Ritz step on $(\mathbf K, \mathbf M)$ in the span of the $m$ vectors
+//!    ([`rayleigh_ritz`]): it makes $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf I$
+//!    hold to round-off (the Krylov vectors are only orthonormal in the standard inner
+//!    product, and the $\mathbf y_k$ only approximately $\mathbf C$-orthogonal) and gives
+//!    $\lambda_k$ as Rayleigh quotients of $\mathbf K$ itself, so rigid-body modes come out
+//!    with $|\lambda| \approx \varepsilon\|\mathbf K\|/\|\mathbf M\|$.
+//! 4. Check every pair by its relative residual ([`relative_residual`]) and refuse the result
+//!    if one is above the tolerance.
+//!
+//! ## Why $\mathbf L^{-1}\mathbf M\mathbf L^{-T}$ and not $(\mathbf K-\sigma\mathbf M)^{-1}\mathbf M$
+//!
+//! $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$ is self-adjoint only in the $\mathbf M$ inner
+//! product, and faer's Krylov-Schur orthogonalises in the standard one. The split form needs
+//! the forward and backward triangular solves separately; faer exposes them:
+//! [`SupernodalLltRef::l_solve_with_conj`] and [`SupernodalLltRef::l_transpose_solve_with_conj`]
+//! for a supernodal factor, and the sparse triangular solves
+//! [`triangular_solve::solve_lower_triangular_in_place`] /
+//! [`triangular_solve::solve_lower_triangular_transpose_in_place`] on the CSC factor of a
+//! simplicial one. The permutation $\mathbf P$ is applied by index gathers fused into the
+//! product with $\mathbf M$, so one application of $\mathbf C$ costs one forward solve, one
+//! backward solve and one sparse product, the same as one solve with
+//! $\mathbf K - \sigma\mathbf M$ followed by a product with $\mathbf M$. The alternative, a
+//! Cholesky factor of $\mathbf M$ to symmetrise, costs a second factorisation of the same
+//! fill and is worse.
+//!
+//! ## Shift
+//!
+//! $\sigma = 0$ ([`Shift::Zero`]) needs $\mathbf K \succ 0$ (a supported body). A free body
+//! or a mechanism has a singular $\mathbf K$; with $\sigma = 0$ the factorisation reports
+//! [`ReductionError::SingularStiffness`]. A negative shift makes
+//! $\mathbf K - \sigma\mathbf M \succ 0$ and the rigid-body modes ($\lambda = 0$) become
+//! the dominant $\mu = 1/|\sigma|$. [`Shift::Auto`] takes
+//! $\sigma = -10^{-8}\,\mathrm{median}_i(K_{ii}/M_{ii})$ (see [`AUTO_SHIFT_FRACTION`] for why
+//! this fraction).
+//!
+//! ## Tolerance
+//!
+//! faer's Krylov-Schur locks a Ritz pair when its residual estimate
+//! $|\beta_m s_{mk}|$ falls below an *absolute* tolerance, in the units of $\mu$. We pass
+//! `tolerance` $\cdot\,\hat\mu\cdot$ [`KRYLOV_TOLERANCE_FACTOR`], with $\hat\mu$ an estimate
+//! of $\mu_1$ from two applications of $\mathbf C$. For the $k$-th mode this is a relative
+//! accuracy of `tolerance`$\cdot\mu_1/\mu_k$ times the factor, so when the wanted spectrum
+//! spans a wide range the first pass can fall short on the highest modes; the residual check
+//! then sees it and the run is repeated (at most [`MAX_ATTEMPTS`] times in all) with the
+//! absolute tolerance scaled down by the worst shortfall. Residuals are always computed on
+//! $(\mathbf K, \mathbf M)$ themselves, never taken from the Krylov estimates.
+//!
+//! ## Limits
+//!
+//! Single-vector Krylov methods see only one vector per distinct eigenvalue in exact
+//! arithmetic; exactly repeated eigenvalues (symmetric structures, the six rigid modes of a
+//! free body) are found because round-off seeds the other copies and shift-invert amplifies
+//! them by $\mu_k/\mu_j$ per step. This is how ARPACK works too, and the tests include
+//! repeated eigenvalues, but a copy can in principle be missed: the residual check cannot
+//! detect a missing copy.
+
+#![allow(non_snake_case)]
+
+use crate::error::ReductionError;
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::temp_mat_zeroed;
+use faer::matrix_free::eigen::{
+    partial_self_adjoint_eigen, partial_self_adjoint_eigen_scratch, PartialEigenParams,
+};
+use faer::matrix_free::LinOp;
+use faer::prelude::*;
+use faer::sparse::linalg::cholesky::simplicial::SimplicialLltRef;
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymbolicCholeskyRaw, SymmetricOrdering,
+};
+use faer::sparse::linalg::matmul::sparse_dense_matmul;
+use faer::sparse::linalg::triangular_solve;
+use faer::linalg::cholesky::llt::factor::LltError;
+use faer::mat::AsMatMut;
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
+use faer::{Accum, Conj, Side};
+use rayon::prelude::*;
+
+/// Fraction of the median diagonal ratio $K_{ii}/M_{ii}$ used by [`Shift::Auto`]:
+/// $\sigma = -10^{-8}\,\mathrm{median}_i(K_{ii}/M_{ii})$.
+///
+/// $K_{ii}/M_{ii}$ is the Rayleigh quotient of a unit dof displacement, of the order of the
+/// highest eigenvalues of the mesh. The lowest flexible eigenvalue is smaller by about
+/// $(h/L)^2$ ($h$ element size, $L$ body size): $10^{-2}$ to $10^{-6}$ for practical
+/// meshes. A shift well below it keeps the separation of the flexible $\mu_k$ as good as
+/// with $\sigma = 0$, and makes the rigid-body $\mu = 1/|\sigma|$ dominate strongly, which is
+/// what lets Krylov-Schur pull all copies of the (six-fold) zero eigenvalue out of round-off.
+/// The price is the conditioning of $\mathbf K - \sigma\mathbf M$, about
+/// $\lambda_{max}/|\sigma| \approx 10^{8}$, harmless for a Cholesky factor in double
+/// precision and far from the singularity threshold [`SINGULAR_PIVOT_RATIO`].
+pub const AUTO_SHIFT_FRACTION: f64 = 1e-8;
+
+/// A Cholesky pivot $L_{jj}^2$ below this fraction of its diagonal entry $A_{jj}$ is taken
+/// as a singular matrix: $10^3\varepsilon \approx 2\cdot 10^{-13}$.
+///
+/// The pivot of a dof is $1/(\mathbf A^{-1})_{jj}$ in the ordering of the factor, i.e. the
+/// stiffness of that dof with everything eliminated before it released. For a singular
+/// positive semi-definite matrix it is zero in exact arithmetic and comes out as round-off,
+/// a few $\varepsilon A_{jj}$, of either sign; a negative one stops faer's factorisation, a
+/// positive one would be accepted and produce $\mu \approx 10^{16}$. A non-singular
+/// stiffness whose pivots fall below $10^3\varepsilon$ is singular to working precision:
+/// its lowest eigenvalues cannot be separated from round-off anyway.
+pub const SINGULAR_PIVOT_RATIO: f64 = 1e3 * f64::EPSILON;
+
+/// The Krylov-Schur locking tolerance is `tolerance` times this factor, relative to
+/// $\hat\mu_1$. The residual check on $(\mathbf K, \mathbf M)$ relates to the Krylov
+/// estimate only through the conditioning of $\mathbf L$ (see [`relative_residual`]), so
+/// the Krylov solve is asked for a little more than the user.
+pub const KRYLOV_TOLERANCE_FACTOR: f64 = 0.1;
+
+/// At most this many Krylov-Schur runs, each with a tighter locking tolerance than the last,
+/// before [`ReductionError::EigenNotConverged`] is returned.
+pub const MAX_ATTEMPTS: usize = 3;
+
+/// The shift $\sigma$ of the spectral transformation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shift {
+    /// $\sigma = 0$: for a supported body ($\mathbf K \succ 0$); the fastest convergence for
+    /// the lowest modes.
+    Zero,
+    /// A given $\sigma$. Must be below the lowest eigenvalue ($\mathbf K - \sigma\mathbf M$
+    /// must be positive definite); negative for a free body.
+    Value(f64),
+    /// For a body that may be free: $\sigma = -$[`AUTO_SHIFT_FRACTION]$\cdot
+    /// \mathrm{median}_i(K_{ii}/M_{ii})$.
+    Auto,
+}
+
+impl Shift {
+    /// The numerical value of $\sigma$ for the pencil $(\mathbf K, \mathbf M)$.
+    ///
+    /// # Errors
+    /// [`ReductionError::InvalidSettings`] for a non-finite value,
+    /// [`ReductionError::MassNotPositiveDefinite`] for a non-positive $M_{ii}$ (with
+    /// [`Shift::Auto`]), [`ReductionError::SingularStiffness`] if no $K_{ii}$ is positive.
+    pub fn resolve(
+        &self,
+        K: SparseColMatRef<'_, usize, f64>,
+        M: SparseColMatRef<'_, usize, f64>,
+    ) -> Result<f64, ReductionError> {
+        match *self {
+            Shift::Zero => Ok(0.0),
+            Shift::Value(sigma) if sigma.is_finite() => Ok(sigma),
+            Shift::Value(sigma) => Err(ReductionError::InvalidSettings {
+                what: format!("shift must be finite, got {sigma}"),
+            }),
+            Shift::Auto => {
+                check_square_pair(K, M)?;
+                let K_diag = diagonal(K);
+                let M_diag = diagonal(M);
+                check_mass_diagonal(&M_diag)?;
+                let mut ratios: Vec<f64> = K_diag
+                    .iter()
+                    .zip(&M_diag)
+                    .filter(|(k, _)| **k > 0.0)
+                    .map(|(k, m)| k / m)
+                    .collect();
+                if ratios.is_empty() {
+                    return Err(ReductionError::SingularStiffness {
+                        dof: 0,
+                        pivot_ratio: 0.0,
+                    });
+                }
+                let mid = ratios.len() / 2;
+                let (_, median, _) = ratios.select_nth_unstable_by(mid, f64::total_cmp);
+                Ok(-AUTO_SHIFT_FRACTION * *median)
+            },
+        }
+    }
+}
+
+/// Settings of [`lowest_modes`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct EigenSettings {
+    /// Number $m$ of lowest modes wanted, $1 \le m < n$.
+    pub n_modes: usize,
+    /// Shift $\sigma$ of the spectral transformation (read by [`lowest_modes`] only; a
+    /// [`ShiftInvert`] already has its shift).
+    pub shift: Shift,
+    /// Largest accepted relative residual of a returned pair (see [`relative_residual`]).
+    /// `1e-8` gives eigenvalues to about `1e-14` relative (the error of a Rayleigh quotient
+    /// is quadratic in the vector error) and vectors to about `1e-8`.
+    pub tolerance: f64,
+    /// Maximum number of Krylov-Schur restarts per attempt (faer's default is 1000).
+    pub max_restarts: usize,
+    /// Largest Krylov subspace dimension; `0` for faer's choice,
+    /// $\max(64, 2m)$. Memory is $n \times (2\,\mathrm{krylov\_dim} + 1)$ doubles.
+    pub krylov_dim: usize,
+}
+
+impl EigenSettings {
+    /// `n_modes` modes with `shift`, tolerance `1e-8`, 1000 restarts, faer's Krylov dimension.
+    pub fn new(n_modes: usize, shift: Shift) -> Self {
+        Self { n_modes, shift, tolerance: 1e-8, max_restarts: 1000, krylov_dim: 0 }
+    }
+}
+
+/// The result of [`lowest_modes`].
+#[derive(Debug, Clone)]
+pub struct EigenSolution {
+    /// $\lambda_k = \omega_k^2$, ascending.
+    pub eigenvalues: Vec<f64>,
+    /// $\boldsymbol\Phi$, $n \times m$, column $k$ the mode of `eigenvalues[k]`,
+    /// $\mathbf M$-orthonormal: $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf I$. The
+    /// sign of each column makes its largest-magnitude entry positive.
+    pub vectors: Mat<f64>,
+    /// Relative residual of each pair, [`relative_residual`].
+    pub residuals: Vec<f64>,
+    /// The shift $\sigma$ that was used.
+    pub shift: f64,
+}
+
+/// The $m$ lowest eigenpairs of $\mathbf K\boldsymbol\phi = \lambda\mathbf M\boldsymbol\phi$,
+/// $\lambda = \omega^2$ (brief §3): factorisation of $\mathbf K - \sigma\mathbf M$ and
+/// [`ShiftInvert::lowest_modes`].
+///
+/// `K` and `M` are symmetric with both triangles stored (CSC, unsorted row indices allowed).
+///
+/// # Errors
+/// See [`ShiftInvert::new`] and [`ShiftInvert::lowest_modes`].
+pub fn lowest_modes(
+    K: SparseColMatRef<'_, usize, f64>,
+    M: SparseColMatRef<'_, usize, f64>,
+    settings: &EigenSettings,
+) -> Result<EigenSolution, ReductionError> {
+    check_square_pair(K, M)?;
+    check_mode_count(settings, K.nrows())?;
+    let sigma = settings.shift.resolve(K, M)?;
+    let factor = ShiftInvert::new(K, M, sigma)?;
+    factor.lowest_modes(K, M, settings)
+}
+
+/// A Cholesky factorisation $\mathbf P(\mathbf K - \sigma\mathbf M)\mathbf P^T = \mathbf
+/// L\mathbf L^T$, usable both for solves (constraint modes
+/// $\boldsymbol\Psi = -\mathbf K_{ii}^{-1}\mathbf K_{ib}$, brief §3) and for the
+/// shift-invert eigensolver, so that Craig-Bampton needs one factorisation of
+/// $\mathbf K_{ii}$ for both.
+#[derive(Debug)]
+pub struct ShiftInvert {
+    sigma: f64,
+    symbolic: SymbolicCholesky<usize>,
+    L_values: Vec<f64>,
+    /// `perm_fwd[i]` is the original dof of row `i` of the factor; identity if faer chose no
+    /// permutation.
+    perm_fwd: Vec<usize>,
+    /// Inverse of `perm_fwd`.
+    perm_inv: Vec<usize>,
+}
+
+impl ShiftInvert {
+    /// Factor $\mathbf K - \sigma\mathbf M$ (faer sparse Cholesky, AMD ordering, the global
+    /// parallelism [`faer::get_global_parallelism`]). Only the lower triangle is read by the
+    /// factorisation; both must be stored. With $\sigma = 0$, `M` is only checked, not read.
+    ///
+    /// # Errors
+    /// - [`ReductionError::DimensionMismatch`]: `K`, `M` not square of the same size.
+    /// - [`ReductionError::InvalidSettings`]: $\sigma$ not finite.
+    /// - [`ReductionError::NotSymmetric`]: one triangle missing or unsymmetric values.
+    /// - [`ReductionError::MassNotPositiveDefinite`]: some $M_{ii} \le 0$.
+    /// - [`ReductionError::SingularStiffness`]: $\sigma = 0$ and $\mathbf K$ singular (a pivot
+    ///   $\le$ [`SINGULAR_PIVOT_RATIO`] times its diagonal).
+    /// - [`ReductionError::ShiftedNotPositiveDefinite`]: $\sigma \neq 0$ and
+    ///   $\mathbf K - \sigma\mathbf M$ not positive definite.
+    /// - [`ReductionError::Factorization`]: out of memory or index overflow in faer.
+    pub fn new(
+        K: SparseColMatRef<'_, usize, f64>,
+        M: SparseColMatRef<'_, usize, f64>,
+        sigma: f64,
+    ) -> Result<Self, ReductionError> {
+        check_square_pair(K, M)?;
+        if !sigma.is_finite() {
+            return Err(ReductionError::InvalidSettings {
+                what: format!("shift must be finite, got {sigma}"),
+            });
+        }
+        check_symmetric(K, "K")?;
+        check_symmetric(M, "M")?;
+        let M_diag = diagonal(M);
+        check_mass_diagonal(&M_diag)?;
+        let n = K.nrows();
+
+        // The matrix to factor, lower triangle. With sigma = 0 faer reads the lower triangle
+        // of K in place; otherwise K - sigma M is formed once (lower triangle only, half the
+        // memory of the full matrix).
+        let shifted;
+        let A = if sigma == 0.0 {
+            K
+        } else {
+            shifted = lower_shifted(K, M, sigma);
+            shifted.as_ref()
+        };
+        let A_diag = diagonal_lower(A);
+
+        let symbolic = factorize_symbolic_cholesky(
+            A.symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| ReductionError::Factorization(format!("{e:?}")))?;
+        let (perm_fwd, perm_inv) = match symbolic.perm() {
+            Some(p) => {
+                let (fwd, inv) = p.arrays();
+                (fwd.to_vec(), inv.to_vec())
+            },
+            None => ((0..n).collect(), (0..n).collect()),
+        };
+
+        let par = faer::get_global_parallelism();
+        let mut L_values = Vec::new();
+        L_values
+            .try_reserve_exact(symbolic.len_val())
+            .map_err(|_| ReductionError::Factorization("out of memory for the factor".into()))?;
+        L_values.resize(symbolic.len_val(), 0.0);
+        let mut mem = MemBuffer::try_new(
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        )
+        .map_err(|_| ReductionError::Factorization("out of memory for the workspace".into()))?;
+        let result = symbolic.factorize_numeric_llt::<f64>(
+            &mut L_values,
+            A,
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        );
+        drop(mem);
+        if let Err(LltError::NonPositivePivot { index }) = result {
+            return Err(not_positive_definite(perm_fwd[index], 0.0, sigma));
+        }
+
+        let this = Self { sigma, symbolic, L_values, perm_fwd, perm_inv };
+        // A positive pivot can still be round-off (see SINGULAR_PIVOT_RATIO).
+        let (worst_index, worst_ratio) = this
+            .pivots()
+            .into_iter()
+            .enumerate()
+            .map(|(i, l)| (i, l * l / A_diag[this.perm_fwd[i]]))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap_or((0, 1.0));
+        if worst_ratio.is_nan() || worst_ratio <= SINGULAR_PIVOT_RATIO {
+            return Err(not_positive_definite(this.perm_fwd[worst_index], worst_ratio, sigma));
+        }
+        Ok(this)
+    }
+
+    /// The shift $\sigma$ of this factorisation.
+    pub fn shift(&self) -> f64 {
+        self.sigma
+    }
+
+    /// Dimension $n$.
+    pub fn nrows(&self) -> usize {
+        self.perm_fwd.len()
+    }
+
+    /// Number of stored values of $\mathbf L$ (supernodal storage includes explicit zeros).
+    pub fn factor_len(&self) -> usize {
+        self.L_values.len()
+    }
+
+    /// Solves $(\mathbf K - \sigma\mathbf M)\mathbf X = \mathbf B$ in place, `rhs` holding
+    /// $\mathbf B$ on entry and $\mathbf X$ on exit (one column per right-hand side; for the
+    /// constraint modes, $\mathbf B = -\mathbf K_{ib}$ with $\sigma = 0$).
+    ///
+    /// # Panics
+    /// If `rhs.nrows()` differs from [`ShiftInvert::nrows`].
+    pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        let par = faer::get_global_parallelism();
+        let k = rhs.ncols();
+        let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(k, par));
+        LltRef::new(&self.symbolic, &self.L_values).solve_in_place_with_conj(
+            Conj::No,
+            rhs,
+            par,
+            MemStack::new(&mut mem),
+        );
+    }
+
+    /// The diagonal of $\mathbf L$, in the permuted order.
+    fn pivots(&self) -> Vec<f64> {
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                // The diagonal is the first stored entry of each column of L.
+                let col_ptr = s.col_ptr();
+                (0..s.nrows()).map(|j| self.L_values[col_ptr[j]]).collect()
+            },
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let L = SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values);
+                let mut d = vec![0.0; s.nrows()];
+                for sn in 0..s.n_supernodes() {
+                    let node = L.supernode(sn);
+                    let start = node.start();
+                    let val = node.val();
+                    for k in 0..val.ncols() {
+                        d[start + k] = val[(k, k)];
+                    }
+                }
+                d
+            },
+        }
+    }
+
+    /// Forward solve $\mathbf L\mathbf x = \mathbf b$ in place (permuted order).
+    fn l_solve(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let L = SimplicialLltRef::<'_, usize, f64>::new(s, &self.L_values);
+                let L = SparseColMatRef::new(s.factor(), L.values());
+                triangular_solve::solve_lower_triangular_in_place(L, Conj::No, rhs, par);
+            },
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values)
+                    .l_solve_with_conj(Conj::No, rhs, par, stack);
+            },
+        }
+    }
+
+    /// Backward solve $\mathbf L^T\mathbf x = \mathbf b$ in place (permuted order).
+    fn l_transpose_solve(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let L = SimplicialLltRef::<'_, usize, f64>::new(s, &self.L_values);
+                let L = SparseColMatRef::new(s.factor(), L.values());
+                triangular_solve::solve_lower_triangular_transpose_in_place(
+                    L,
+                    Conj::No,
+                    rhs,
+                    par,
+                );
+            },
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values)
+                    .l_transpose_solve_with_conj(Conj::No, rhs, par, stack);
+            },
+        }
+    }
+
+    /// Workspace of [`Self::l_solve`] / [`Self::l_transpose_solve`] plus one $n \times k$
+    /// temporary.
+    fn solve_scratch(&self, k: usize, par: Par) -> StackReq {
+        self.symbolic.solve_in_place_scratch::<f64>(k, par)
+    }
+
+    /// The $m$ lowest eigenpairs of $(\mathbf K, \mathbf M)$ from this factorisation of
+    /// $\mathbf K - \sigma\mathbf M$ (see the [module docs](self) for the method).
+    /// `settings.shift` is not read: the shift is the factor's. `K` and `M` must be the
+    /// matrices that were factored (they give the Rayleigh-Ritz step and the residuals).
+    ///
+    /// # Errors
+    /// - [`ReductionError::DimensionMismatch`], [`ReductionError::InvalidModeCount`],
+    ///   [`ReductionError::InvalidSettings`] for bad input.
+    /// - [`ReductionError::MassNotPositiveDefinite`] if $\mathbf M$ is found indefinite on
+    ///   the computed subspace (a Ritz value $\mu \le 0$ or a non-positive-definite
+    ///   $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi$).
+    /// - [`ReductionError::EigenNotConverged`] if Krylov-Schur runs out of restarts or a
+    ///   residual stays above `settings.tolerance` after [`MAX_ATTEMPTS`] runs.
+    pub fn lowest_modes(
+        &self,
+        K: SparseColMatRef<'_, usize, f64>,
+        M: SparseColMatRef<'_, usize, f64>,
+        settings: &EigenSettings,
+    ) -> Result<EigenSolution, ReductionError> {
+        let n = self.nrows();
+        check_square_pair(K, M)?;
+        if K.nrows() != n {
+            return Err(ReductionError::DimensionMismatch {
+                what: "K of ShiftInvert::lowest_modes (must be the factored matrix)",
+                expected_rows: n,
+                expected_cols: n,
+                rows: K.nrows(),
+                cols: K.ncols(),
+            });
+        }
+        check_mode_count(settings, n)?;
+        if !(settings.tolerance.is_finite() && settings.tolerance > 0.0) {
+            return Err(ReductionError::InvalidSettings {
+                what: format!("tolerance must be positive and finite, got {}", settings.tolerance),
+            });
+        }
+        let m = settings.n_modes;
+        let op = Operator { factor: self, M };
+        let par = faer::get_global_parallelism();
+        let params = PartialEigenParams {
+            max_dim: settings.krylov_dim,
+            max_restarts: settings.max_restarts,
+            ..Default::default()
+        };
+        // faer's Krylov-Schur needs a subspace smaller than n (it panics otherwise): the
+        // same dimension rule as faer's, max(64, 2m, krylov_dim).
+        let max_dim = settings.krylov_dim.max(64).max(2 * m);
+        if max_dim >= n {
+            let (mu, Y) = dense_operator_eigen(&op, m)?;
+            let _ = mu;
+            return self.finish(K, M, Y.as_ref(), m, m, settings);
+        }
+
+        // Start vector: C applied to a fixed pseudo-random vector, as ARPACK does for
+        // shift-invert, which removes the components the operator damps; the norm of a
+        // second application estimates mu_1 for the tolerance scale.
+        let mut v = Mat::<f64>::zeros(n, 1);
+        let mut state = 0x9E37_79B9_7F4A_7C15_u64;
+        for i in 0..n {
+            v[(i, 0)] = uniform(&mut state);
+        }
+        let mut Cv = Mat::<f64>::zeros(n, 1);
+        apply_alloc(&op, Cv.as_mut(), v.as_ref(), par);
+        let norm = Cv.norm_l2();
+        let v0 = Cv.col(0) / norm;
+        apply_alloc(&op, Cv.as_mut(), v0.as_mat(), par);
+        let mu_scale = Cv.norm_l2();
+
+        let mut tol_abs = settings.tolerance * KRYLOV_TOLERANCE_FACTOR * mu_scale;
+        let mut last_error = None;
+        for _attempt in 0..MAX_ATTEMPTS {
+            let mut Y = Mat::<f64>::zeros(n, m);
+            let mut mu = vec![0.0; m];
+            let mut mem = MemBuffer::try_new(partial_self_adjoint_eigen_scratch(
+                &op, m, par, params,
+            ))
+            .map_err(|_| {
+                ReductionError::Factorization("out of memory for the Krylov basis".into())
+            })?;
+            let info = partial_self_adjoint_eigen(
+                Y.as_mut(),
+                &mut mu,
+                &op,
+                v0.as_ref(),
+                tol_abs,
+                par,
+                MemStack::new(&mut mem),
+                params,
+            );
+            drop(mem);
+            let converged = info.n_converged_eigen;
+            if converged < m {
+                return Err(ReductionError::EigenNotConverged {
+                    requested: m,
+                    converged,
+                    failed_modes: (converged..m).collect(),
+                    worst_residual: f64::INFINITY,
+                    tolerance: settings.tolerance,
+                });
+            }
+            if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
+                return Err(ReductionError::MassNotPositiveDefinite {
+                    dof: None,
+                    why: format!(
+                        "the shift-invert operator has the eigenvalue {:.3e} <= 0 (Ritz value {bad})",
+                        mu[bad]
+                    ),
+                });
+            }
+            match self.finish(K, M, Y.as_ref(), m, converged, settings) {
+                Ok(sol) => return Ok(sol),
+                Err(ReductionError::EigenNotConverged {
+                    requested,
+                    converged,
+                    failed_modes,
+                    worst_residual,
+                    tolerance,
+                }) => {
+                    // Tighten by the worst shortfall (and at least tenfold), see module docs.
+                    let shortfall = (settings.tolerance / worst_residual).min(0.1);
+                    tol_abs *= shortfall.max(1e-6);
+                    last_error = Some(ReductionError::EigenNotConverged {
+                        requested,
+                        converged,
+                        failed_modes,
+                        worst_residual,
+                        tolerance,
+                    });
+                },
+                Err(e) => return Err(e),
+            }
+        }
+        Err(last_error.expect("MAX_ATTEMPTS >= 1"))
+    }
+
+    /// Back-transformation, Rayleigh-Ritz, sign convention and residual check of the Ritz
+    /// vectors `Y` of $\mathbf C$ (permuted order).
+    fn finish(
+        &self,
+        K: SparseColMatRef<'_, usize, f64>,
+        M: SparseColMatRef<'_, usize, f64>,
+        Y: MatRef<'_, f64>,
+        m: usize,
+        converged: usize,
+        settings: &EigenSettings,
+    ) -> Result<EigenSolution, ReductionError> {
+        let n = self.nrows();
+        let par = faer::get_global_parallelism();
+        // phi = P^T L^{-T} y
+        let mut Z = Y.to_owned();
+        let mut mem = MemBuffer::new(self.solve_scratch(m, par));
+        self.l_transpose_solve(Z.as_mut(), par, MemStack::new(&mut mem));
+        let Phi = Mat::<f64>::from_fn(n, m, |i, j| Z[(self.perm_inv[i], j)]);
+        let (eigenvalues, vectors, KPhi, MPhi) = rayleigh_ritz(K, M, Phi.as_ref())?;
+        let residuals: Vec<f64> = (0..m)
+            .map(|j| {
+                relative_residual(KPhi.col(j), MPhi.col(j), eigenvalues[j], self.sigma)
+            })
+            .collect();
+        let failed_modes: Vec<usize> =
+            (0..m).filter(|&j| !(residuals[j] <= settings.tolerance)).collect();
+        if !failed_modes.is_empty() {
+            let worst_residual = failed_modes
+                .iter()
+                .map(|&j| residuals[j])
+                .fold(0.0_f64, |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
+            return Err(ReductionError::EigenNotConverged {
+                requested: m,
+                converged: converged.min(m - failed_modes.len()),
+                failed_modes,
+                worst_residual,
+                tolerance: settings.tolerance,
+            });
+        }
+        Ok(EigenSolution { eigenvalues, vectors, residuals, shift: self.sigma })
+    }
+}
+
+/// Rayleigh-Ritz for $(\mathbf K, \mathbf M)$ on the span of the columns of `Phi`:
+/// with $\mathbf B = \boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf R^T\mathbf R$
+/// (dense Cholesky) and $\mathbf R^{-T}\boldsymbol\Phi^T\mathbf K\boldsymbol\Phi\mathbf R^{-1}
+/// = \mathbf S\boldsymbol\Lambda\mathbf S^T$, the Ritz vectors are
+/// $\boldsymbol\Phi\mathbf R^{-1}\mathbf S$ (Parlett, "The Symmetric Eigenvalue Problem",
+/// 1998, §11.4 and §15.1). Returns $\boldsymbol\Lambda$ ascending, the vectors (sign: largest
+/// entry positive), and their products with $\mathbf K$ and $\mathbf M$.
+#[allow(clippy::type_complexity)]
+fn rayleigh_ritz(
+    K: SparseColMatRef<'_, usize, f64>,
+    M: SparseColMatRef<'_, usize, f64>,
+    Phi: MatRef<'_, f64>,
+) -> Result<(Vec<f64>, Mat<f64>, Mat<f64>, Mat<f64>), ReductionError> {
+    let (n, m) = Phi.shape();
+    let par = faer::get_global_parallelism();
+    let mut KPhi = Mat::<f64>::zeros(n, m);
+    let mut MPhi = Mat::<f64>::zeros(n, m);
+    sparse_dense_matmul(KPhi.as_mut(), Accum::Replace, K, Phi, 1.0, par);
+    sparse_dense_matmul(MPhi.as_mut(), Accum::Replace, M, Phi, 1.0, par);
+    let symmetrise = |A: Mat<f64>| Mat::<f64>::from_fn(m, m, |i, j| 0.5 * (A[(i, j)] + A[(j, i)]));
+    let A = symmetrise(Phi.transpose() * &KPhi);
+    let B = symmetrise(Phi.transpose() * &MPhi);
+    let llt = B.llt(Side::Lower).map_err(|_| ReductionError::MassNotPositiveDefinite {
+        dof: None,
+        why: "Phi^T M Phi of the computed modes is not positive definite".into(),
+    })?;
+    let L = llt.L();
+    // G = L^{-1} A L^{-T}
+    let mut G = A;
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(L, G.as_mut(), par);
+    let mut G = G.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(L, G.as_mut(), par);
+    let G = symmetrise(G);
+    let evd = G.self_adjoint_eigen(Side::Lower).map_err(|e| {
+        ReductionError::Factorization(format!("dense eigensolver of the Ritz problem: {e:?}"))
+    })?;
+    let eigenvalues: Vec<f64> = (0..m).map(|k| evd.S()[k]).collect();
+    // T = L^{-T} S
+    let mut T = evd.U().to_owned();
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(L.transpose(), T.as_mut(), par);
+    // Sign: largest-magnitude entry of each mode positive.
+    let mut vectors = Phi * &T;
+    for j in 0..m {
+        let col = vectors.col(j);
+        let (mut imax, mut vmax) = (0, 0.0_f64);
+        for i in 0..n {
+            if col[i].abs() > vmax.abs() {
+                (imax, vmax) = (i, col[i]);
+            }
+        }
+        let _ = imax;
+        if vmax < 0.0 {
+            for t in T.col_mut(j).iter_mut() {
+                *t = -*t;
+            }
+            for v in vectors.col_mut(j).iter_mut() {
+                *v = -*v;
+            }
+        }
+    }
+    Ok((eigenvalues, vectors, &KPhi * &T, &MPhi * &T))
+}
+
+/// Relative residual of an eigenpair,
+/// $$r = \frac{\|\mathbf K\boldsymbol\phi - \lambda\mathbf M\boldsymbol\phi\|_2}
+/// {\max(\|\mathbf K\boldsymbol\phi\|_2,\ |\lambda - \sigma|\,\|\mathbf M\boldsymbol\phi\|_2)}.$$
+///
+/// For $\sigma = 0$ this is the brief's $\|\mathbf K\boldsymbol\phi - \lambda\mathbf
+/// M\boldsymbol\phi\| / \|\mathbf K\boldsymbol\phi\|$ with the guard
+/// $|\lambda|\,\|\mathbf M\boldsymbol\phi\|$. For a rigid-body mode ($\lambda \approx 0$,
+/// $\mathbf K\boldsymbol\phi \approx 0$) that guard is itself round-off, and the ratio would
+/// be $O(1)$ for any vector; the numerator is also the residual of the shifted pencil,
+/// $(\mathbf K - \sigma\mathbf M)\boldsymbol\phi - (\lambda - \sigma)\mathbf M\boldsymbol\phi$,
+/// whose natural scale is $|\lambda - \sigma|\,\|\mathbf M\boldsymbol\phi\|$: a rigid mode
+/// is measured against the inertia forces at the shift, which is the accuracy shift-invert
+/// delivers ($\mu = 1/(\lambda - \sigma)$ relative).
+pub fn relative_residual(KPhi: ColRef<'_, f64>, MPhi: ColRef<'_, f64>, lambda: f64, sigma: f64) -> f64 {
+    let r = (KPhi - MPhi * lambda).norm_l2();
+    let scale = KPhi.norm_l2().max((lambda - sigma).abs() * MPhi.norm_l2());
+    r / scale
+}
+
+/// $\mathbf C = \mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T}$ as a faer operator.
+struct Operator<'a> {
+    factor: &'a ShiftInvert,
+    M: SparseColMatRef<'a, usize, f64>,
+}
+
+impl std::fmt::Debug for Operator<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Operator").field("n", &self.factor.nrows()).finish()
+    }
+}
+
+impl LinOp<f64> for Operator<'_> {
+    fn apply_scratch(&self, rhs_ncols: usize, par: Par) -> StackReq {
+        self.factor.solve_scratch(rhs_ncols, par)
+    }
+
+    fn nrows(&self) -> usize {
+        self.factor.nrows()
+    }
+
+    fn ncols(&self) -> usize {
+        self.factor.nrows()
+    }
+
+    fn apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+        let (n, k) = rhs.shape();
+        let (mut z, stack) = temp_mat_zeroed::<f64, _, _>(n, k, stack);
+        let mut z = z.as_mat_mut();
+        z.copy_from(rhs);
+        // z = L^{-T} y
+        self.factor.l_transpose_solve(z.rb_mut(), par, stack);
+        // out = P M P^T z, fused: out_i = sum_p M[p] z[inv[row p]] over column fwd[i] of M
+        // (M symmetric, so its column is its row).
+        let mut out = out;
+        let fwd = &self.factor.perm_fwd;
+        let inv = &self.factor.perm_inv;
+        let (row_idx, val) = (self.M.row_idx(), self.M.val());
+        let M = self.M;
+        for c in 0..k {
+            let zc = z.rb().col(c);
+            let row = |i: usize| -> f64 {
+                let j = fwd[i];
+                let mut s = 0.0;
+                for p in M.col_range(j) {
+                    s += val[p] * zc[inv[row_idx[p]]];
+                }
+                s
+            };
+            let mut oc = out.rb_mut().col_mut(c);
+            match (oc.rb_mut().try_as_col_major_mut(), par) {
+                (Some(slice), Par::Rayon(_)) => slice
+                    .as_slice_mut()
+                    .par_iter_mut()
+                    .with_min_len(4096)
+                    .enumerate()
+                    .for_each(|(i, o)| *o = row(i)),
+                _ => {
+                    for i in 0..n {
+                        oc[i] = row(i);
+                    }
+                },
+            }
+        }
+        // out = L^{-1} out
+        self.factor.l_solve(out, par, stack);
+    }
+
+    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+        self.apply(out, rhs, par, stack)
+    }
+}
+
+/// The error for a failed or singular factorisation of $\mathbf K - \sigma\mathbf M$ at
+/// (original) `dof`.
+fn not_positive_definite(dof: usize, pivot_ratio: f64, sigma: f64) -> ReductionError {
+    if sigma == 0.0 {
+        ReductionError::SingularStiffness { dof, pivot_ratio }
+    } else {
+        ReductionError::ShiftedNotPositiveDefinite {
+            shift: sigma,
+            dof,
+            pivot_ratio,
+            hint: if sigma > 0.0 {
+                "the shift is above the lowest eigenvalue; lower it"
+            } else {
+                "K or M is indefinite, or the shift is too close to zero for a free body"
+            },
+        }
+    }
+}
+
+/// Applies `op` with a freshly allocated workspace.
+fn apply_alloc(op: &Operator<'_>, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par) {
+    let mut mem = MemBuffer::new(op.apply_scratch(rhs.ncols(), par));
+    op.apply(out, rhs, par, MemStack::new(&mut mem));
+}
+
+/// Small problems (faer's Krylov-Schur needs $n$ above its subspace dimension): the dense
+/// $\mathbf C$ from $n$ applications, its dense eigendecomposition, the $m$ largest $\mu$.
+fn dense_operator_eigen(op: &Operator<'_>, m: usize) -> Result<(Vec<f64>, Mat<f64>), ReductionError> {
+    let n = op.nrows();
+    let par = faer::get_global_parallelism();
+    let mut C = Mat::<f64>::zeros(n, n);
+    apply_alloc(op, C.as_mut(), Mat::<f64>::identity(n, n).as_ref(), par);
+    let C = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (C[(i, j)] + C[(j, i)]));
+    let evd = C.self_adjoint_eigen(Side::Lower).map_err(|e| {
+        ReductionError::Factorization(format!("dense eigensolver: {e:?}"))
+    })?;
+    // Ascending: the m largest are the last m.
+    let mu: Vec<f64> = (0..m).map(|k| evd.S()[n - 1 - k]).collect();
+    if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
+        return Err(ReductionError::MassNotPositiveDefinite {
+            dof: None,
+            why: format!("the shift-invert operator has the eigenvalue {:.3e} <= 0", mu[bad]),
+        });
+    }
+    let Y = Mat::<f64>::from_fn(n, m, |i, k| evd.U()[(i, n - 1 - k)]);
+    Ok((mu, Y))
+}
+
+/// Uniform pseudo-random number in $[-1, 1)$ (SplitMix64): the start vector is fixed, so
+/// results are reproducible.
+fn uniform(state: &mut u64) -> f64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+}
+
+fn check_square_pair(
+    K: SparseColMatRef<'_, usize, f64>,
+    M: SparseColMatRef<'_, usize, f64>,
+) -> Result<(), ReductionError> {
+    let n = K.nrows();
+    if K.ncols() != n {
+        return Err(ReductionError::DimensionMismatch {
+            what: "K must be square",
+            expected_rows: n,
+            expected_cols: n,
+            rows: K.nrows(),
+            cols: K.ncols(),
+        });
+    }
+    if M.nrows() != n || M.ncols() != n {
+        return Err(ReductionError::DimensionMismatch {
+            what: "M must have the shape of K",
+            expected_rows: n,
+            expected_cols: n,
+            rows: M.nrows(),
+            cols: M.ncols(),
+        });
+    }
+    Ok(())
+}
+
+fn check_mode_count(settings: &EigenSettings, n: usize) -> Result<(), ReductionError> {
+    if settings.n_modes == 0 || settings.n_modes >= n {
+        return Err(ReductionError::InvalidModeCount { requested: settings.n_modes, n });
+    }
+    Ok(())
+}
+
+fn check_mass_diagonal(M_diag: &[f64]) -> Result<(), ReductionError> {
+    if let Some(dof) = M_diag.iter().position(|&d| !(d > 0.0 && d.is_finite())) {
+        return Err(ReductionError::MassNotPositiveDefinite {
+            dof: Some(dof),
+            why: format!("diagonal entry {:.3e} is not positive", M_diag[dof]),
+        });
+    }
+    Ok(())
+}
+
+/// Diagonal of a CSC matrix (duplicates summed).
+fn diagonal(A: SparseColMatRef<'_, usize, f64>) -> Vec<f64> {
+    let mut d = vec![0.0; A.nrows()];
+    for j in 0..A.ncols() {
+        for p in A.col_range(j) {
+            if A.row_idx()[p] == j {
+                d[j] += A.val()[p];
+            }
+        }
+    }
+    d
+}
+
+/// Diagonal of the lower triangle handed to the factorisation.
+fn diagonal_lower(A: SparseColMatRef<'_, usize, f64>) -> Vec<f64> {
+    diagonal(A)
+}
+
+/// Checks that the strict lower and upper triangles hold the same values, by comparing a
+/// position-weighted sum of each (one pass, no transpose). A matrix stored with one triangle
+/// only fails it; explicit zeros in one triangle do not matter.
+fn check_symmetric(A: SparseColMatRef<'_, usize, f64>, name: &'static str) -> Result<(), ReductionError> {
+    // Weight of the unordered pair {i, j}: a deterministic value in [1, 2).
+    let weight = |i: usize, j: usize| {
+        let (a, b) = if i < j { (i, j) } else { (j, i) };
+        let h = (a as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (b as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
+        1.0 + (h >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (mut lower, mut upper, mut abs, mut count) = (0.0, 0.0, 0.0, 0usize);
+    for j in 0..A.ncols() {
+        for p in A.col_range(j) {
+            let i = A.row_idx()[p];
+            let v = A.val()[p];
+            if i == j {
+                continue;
+            }
+            let w = v * weight(i, j);
+            if i > j {
+                lower += w;
+            } else {
+                upper += w;
+            }
+            abs += w.abs();
+            count += 1;
+        }
+    }
+    // Round-off of two recursive sums of `count` terms: at most count * eps * sum |terms|
+    // (Higham, "Accuracy and Stability of Numerical Algorithms", 2002, §4.2).
+    let tol = (count.max(1) as f64) * f64::EPSILON * abs;
+    if (lower - upper).abs() > tol || lower.is_nan() || upper.is_nan() {
+        return Err(ReductionError::NotSymmetric { matrix: name, lower, upper });
+    }
+    Ok(())
+}
+
+/// The lower triangle of $\mathbf K - \sigma\mathbf M$ (union of the patterns).
+fn lower_shifted(
+    K: SparseColMatRef<'_, usize, f64>,
+    M: SparseColMatRef<'_, usize, f64>,
+    sigma: f64,
+) -> SparseColMat<usize, f64> {
+    let n = K.nrows();
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    let mut row_idx = Vec::new();
+    let mut values = Vec::new();
+    // slot[i]: position of row i in the column being built, usize::MAX if absent.
+    let mut slot = vec![usize::MAX; n];
+    col_ptr.push(0);
+    for j in 0..n {
+        let start = row_idx.len();
+        let mut add = |i: usize, v: f64| {
+            if i < j {
+                return;
+            }
+            if slot[i] == usize::MAX {
+                slot[i] = row_idx.len();
+                row_idx.push(i);
+                values.push(v);
+            } else {
+                values[slot[i]] += v;
+            }
+        };
+        for p in K.col_range(j) {
+            add(K.row_idx()[p], K.val()[p]);
+        }
+        for p in M.col_range(j) {
+            add(M.row_idx()[p], -sigma * M.val()[p]);
+        }
+        for &i in &row_idx[start..] {
+            slot[i] = usize::MAX;
+        }
+        col_ptr.push(row_idx.len());
+    }
+    let symbolic = SymbolicSparseColMat::new_unsorted_checked(n, n, col_ptr, None, row_idx);
+    SparseColMat::new(symbolic, values)
+}

@@ -1,0 +1,64 @@
+//! Errors of the reduction stage. Each says what failed, where (matrix, dof, mode) and what to
+//! do about it.
+
+use thiserror::Error;
+
+/// Errors of the sparse eigensolver and the shift-invert factorisation.
+///
+/// Dof indices are those of the matrices as given (the fill-reducing permutation of the
+/// Cholesky factor is undone before an index is reported).
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum ReductionError {
+    /// Two matrices that must have the same shape, or a matrix that must be square, do not.
+    #[error("{what}: expected a {expected_rows} x {expected_cols} matrix, got {rows} x {cols}")]
+    DimensionMismatch {
+        what: &'static str,
+        expected_rows: usize,
+        expected_cols: usize,
+        rows: usize,
+        cols: usize,
+    },
+    /// The number of requested modes must satisfy $1 \le m < n$.
+    #[error("{requested} modes requested from a problem with {n} dofs (need 1 <= n_modes < {n})")]
+    InvalidModeCount { requested: usize, n: usize },
+    /// A setting is outside its range (a tolerance that is not positive, a shift that is not
+    /// finite, ...).
+    #[error("invalid eigensolver setting: {what}")]
+    InvalidSettings { what: String },
+    /// A matrix is not stored with both triangles, or is not symmetric. The solver needs full
+    /// symmetric CSC storage: the Cholesky factor reads the lower triangle, the products with
+    /// $\mathbf K$ and $\mathbf M$ read both.
+    #[error("{matrix} is not symmetric with both triangles stored: the weighted sums of its strict lower and strict upper triangles are {lower:.6e} and {upper:.6e}")]
+    NotSymmetric { matrix: &'static str, lower: f64, upper: f64 },
+    /// The stiffness matrix is singular (a free body or a mechanism) and the shift is zero,
+    /// so $\mathbf K$ itself has no Cholesky factor. `pivot_ratio` is the pivot over the
+    /// diagonal entry of that dof ($\le 0$ when the factorisation stopped there).
+    #[error("the stiffness matrix is singular at dof {dof} (pivot / diagonal = {pivot_ratio:.3e}): the body is free or a mechanism; use a negative shift (Shift::Auto or Shift::Value(sigma < 0)) to compute its rigid-body modes, or add supports")]
+    SingularStiffness { dof: usize, pivot_ratio: f64 },
+    /// $\mathbf K - \sigma\mathbf M$ has no Cholesky factor for a non-zero shift. For
+    /// $\sigma > 0$ the shift lies above the lowest eigenvalue (Sylvester's law of inertia);
+    /// for $\sigma < 0$, $\mathbf K$ or $\mathbf M$ is indefinite, or the shift is so small
+    /// that $\mathbf K - \sigma\mathbf M$ is singular to working precision.
+    #[error("K - sigma M with sigma = {shift:.6e} is not positive definite at dof {dof} (pivot / diagonal = {pivot_ratio:.3e}): {hint}")]
+    ShiftedNotPositiveDefinite { shift: f64, dof: usize, pivot_ratio: f64, hint: &'static str },
+    /// The mass matrix is not positive definite: a dof without mass (a non-positive diagonal
+    /// entry), or an indefinite matrix found by the eigensolver (`dof` is then `None`).
+    #[error("the mass matrix is not positive definite{}: {why}", dof.map(|d| format!(" at dof {d}")).unwrap_or_default())]
+    MassNotPositiveDefinite { dof: Option<usize>, why: String },
+    /// Krylov-Schur did not deliver the requested eigenpairs: either it stopped after
+    /// `max_restarts` with only `converged` locked pairs, or the residual check of the
+    /// returned pairs failed (`failed_modes`, 0-based in ascending order of eigenvalue).
+    #[error("eigensolver did not converge: {converged} of {requested} modes converged; modes {failed_modes:?} fail the residual check (worst relative residual {worst_residual:.3e} > {tolerance:.3e}); raise max_restarts or krylov_dim, or loosen the tolerance")]
+    EigenNotConverged {
+        requested: usize,
+        converged: usize,
+        failed_modes: Vec<usize>,
+        worst_residual: f64,
+        tolerance: f64,
+    },
+    /// The sparse factorisation failed for a reason other than the matrix (out of memory,
+    /// index overflow).
+    #[error("sparse factorisation failed: {0}")]
+    Factorization(String),
+}

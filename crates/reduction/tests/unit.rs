@@ -1,0 +1,10 @@
+//! Unit tests of the reduction crate: one binary, one module per area (house style R19).
+//! Fast enough for a debug build (the workspace builds tests with opt-level 2).
+
+#![allow(non_snake_case)]
+
+/// `reduction::eigen`: the sparse shift-invert eigensolver against analytic chain spectra, a
+/// dense reference, free bodies (negative shift), a 3D lattice, and the error cases.
+mod eigen {
+    include!("unit/eigen.rs");
+}
