@@ -1,1 +1,544 @@
-//! (in progress)
+//! 6-dof interface nodes on solids, tied to a set of surface nodes by a spider (brief §2):
+//! RBE2 (the surface follows the interface node rigidly) or RBE3 (the interface node follows
+//! the weighted mean motion of the surface and adds no stiffness). Both are sets of
+//! [`LinearConstraint`]s, eliminated by [`crate::DofMap`], never penalised.
+//!
+//! The interface node's six dofs stay **independent** in both kinds: they are the boundary
+//! dofs of the Craig-Bampton reduction. No element touches the interface node; its dofs are
+//! active because the constraints refer to them.
+//!
+//! | symbol | Rust | meaning |
+//! |---|---|---|
+//! | $\mathbf x_m$, $\mathbf u_m$, $\boldsymbol\theta_m$ | `x_m`, dofs 0..3, 3..6 of the interface node | interface node: position, translation, rotation |
+//! | $\mathbf x_s$, $\mathbf u_s$ | `x_s`, dofs 0..3 of a surface node | surface node $s$ |
+//! | $\mathbf r_s$ | `r` | $\mathbf x_s - \mathbf x_m$ |
+//! | $w_s$ | `weights[s]` | RBE3 weight of surface node $s$ |
+//! | $\mathbf S_s$ | `S_s` | $[\mathbf I,\ -\tilde{\mathbf r}_s]$ ($3 \times 6$): rigid motion of the interface seen at $s$ |
+//! | $\mathbf G$ | `G` | RBE3 map $[\mathbf u_m; \boldsymbol\theta_m] = \mathbf G \mathbf u_{surface}$ ($6 \times 3n$) |
+//!
+//! # Weights and the default position
+//!
+//! When the surface nodes cover whole faces of the model's solid elements (a face whose nodes
+//! all lie in the set counts), the interface node defaults to the area centroid
+//! $\int \mathbf x\, dA / A$ of those faces, and the RBE3 weights are tributary areas: each
+//! face's area shared among its nodes in proportion to the diagonal of the face mass matrix
+//! $\int N_i^2 dA$ (HRZ lumping, as for [`crate::element::solid::scalar_mass`]). The consistent
+//! $\int N_i\, dA$ would be zero (tri6) or negative (quad8) at the corners of quadratic faces.
+//! Otherwise (no faces, or surface nodes on no face) the position is the node mean and the
+//! weights are equal.
+
+#![allow(non_snake_case)]
+
+use crate::error::FeError;
+use crate::mesh::NodeId;
+use crate::model::{FeModel, LinearConstraint};
+use crate::quadrature;
+use nalgebra::{DMatrix, Matrix3, Matrix6, Point3, Vector3};
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, BTreeSet};
+
+/// How the interface node is tied to its surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SpiderKind {
+    /// Rigid spider: every surface node's translation is
+    /// $\mathbf u_s = \mathbf u_m + \boldsymbol\theta_m \times \mathbf r_s$ (dependent: the
+    /// surface translations). Stiffens the surface.
+    Rbe2,
+    /// Interpolation spider: the interface node moves with the weighted least-squares rigid fit
+    /// of the surface motion; adds no stiffness (dependent: six surface dofs, see
+    /// [`add_interface`]).
+    Rbe3,
+}
+
+/// One interface: its name, its 6-dof node, the spider kind and the surface nodes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Interface {
+    pub name: String,
+    pub node: NodeId,
+    pub kind: SpiderKind,
+    pub surface: Vec<NodeId>,
+}
+
+/// The interfaces of a model, in the order they were added.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Interfaces(pub Vec<Interface>);
+
+impl Interfaces {
+    /// [`add_interface`], and records the interface. Names must be unique.
+    pub fn add(
+        &mut self,
+        model: &mut FeModel,
+        name: &str,
+        surface_nodes: &[NodeId],
+        at: Option<Point3<f64>>,
+        kind: SpiderKind,
+    ) -> Result<NodeId, FeError> {
+        if self.get(name).is_some() {
+            return Err(interface_error(name, "an interface of that name already exists".into()));
+        }
+        let node = add_interface(model, name, surface_nodes, at, kind)?;
+        let mut surface = surface_nodes.to_vec();
+        surface.sort_unstable();
+        surface.dedup();
+        self.0.push(Interface {
+            name: name.to_string(),
+            node,
+            kind,
+            surface,
+        });
+        Ok(node)
+    }
+
+    /// The interface called `name`.
+    pub fn get(&self, name: &str) -> Option<&Interface> {
+        self.0.iter().find(|i| i.name == name)
+    }
+
+    /// The interface nodes, in order.
+    pub fn nodes(&self) -> Vec<NodeId> {
+        self.0.iter().map(|i| i.node).collect()
+    }
+}
+
+fn interface_error(name: &str, why: String) -> FeError {
+    FeError::Interface {
+        name: name.to_string(),
+        why,
+    }
+}
+
+/// [`add_interface`] on the nodes of a named node set (a gmsh physical surface, or a face set
+/// of [`crate::box_mesh::box_mesh`] such as `"x1"`).
+pub fn add_interface_on_set(
+    model: &mut FeModel,
+    name: &str,
+    set: &str,
+    at: Option<Point3<f64>>,
+    kind: SpiderKind,
+) -> Result<NodeId, FeError> {
+    let nodes = model.node_set(set, &format!("interface '{name}'"))?.to_vec();
+    add_interface(model, name, &nodes, at, kind)
+}
+
+/// Adds a 6-dof interface node at `at` (default: the area centroid of the surface, see the
+/// module docs) and the spider constraints tying it to `surface_nodes`. Returns the new node.
+///
+/// **RBE2**: for every surface node, three constraints
+/// $\mathbf u_s = \mathbf u_m + \boldsymbol\theta_m \times \mathbf r_s$, the surface
+/// translations dependent.
+///
+/// **RBE3** (MSC Nastran's RBE3 with the "UM" option, *Quick Reference Guide*, RBE3 entry):
+/// the interface motion is the weighted least-squares rigid fit of the surface motion,
+/// $\min \sum_s w_s |\mathbf u_s - \mathbf S_s [\mathbf u_m; \boldsymbol\theta_m]|^2$, i.e.
+/// $[\mathbf u_m; \boldsymbol\theta_m] = \mathbf G \mathbf u_{surface}$ with
+/// $\mathbf G = (\sum_s w_s \mathbf S_s^T \mathbf S_s)^{-1} [w_1 \mathbf S_1^T, \dots, w_n \mathbf S_n^T]$.
+/// These six equations are solved for six surface dofs $\mathbf u_d$ (the dependent ones)
+/// instead of for the interface dofs, so the interface dofs stay independent:
+/// $\mathbf u_d = \mathbf G_d^{-1}([\mathbf u_m; \boldsymbol\theta_m] - \mathbf G_r \mathbf u_r)$.
+///
+/// # Derivation
+/// Not in the seed. The constraint set $\{[\mathbf u_m; \boldsymbol\theta_m] = \mathbf G
+/// \mathbf u_{surface}\}$ is the same whichever six unknowns it is solved for, so the spider
+/// still adds no stiffness: a free body with RBE3 interfaces keeps its frequencies (checked by
+/// `unit::interface::rbe3_adds_no_stiffness`). The dependent dofs are the columns of $\mathbf G$
+/// (with its rotation rows scaled by the RMS radius $\ell$ of the surface, so that all six rows
+/// are lengths) picked by column-pivoted Gram-Schmidt (QR with column pivoting, Golub & Van
+/// Loan, *Matrix Computations*, 4th ed., §5.4.2): the best-conditioned $\mathbf G_d$ the greedy
+/// choice finds. Surface dofs that are supported or already dependent are not candidates.
+/// A load $\mathbf f_m$ on the interface node reaches the surface as
+/// $\mathbf G^T \mathbf f_m$: uniform for a force on a flat, evenly weighted face.
+///
+/// # Errors
+/// [`FeError::Interface`] naming the interface if the surface is empty, if its nodes
+/// coincide or are collinear (the message says which rotation it cannot carry), or if a
+/// surface dof the spider needs is already dependent on another constraint (or, for RBE2,
+/// supported). [`FeError::UnknownNode`] for a surface node the model does not have.
+pub fn add_interface(
+    model: &mut FeModel,
+    name: &str,
+    surface_nodes: &[NodeId],
+    at: Option<Point3<f64>>,
+    kind: SpiderKind,
+) -> Result<NodeId, FeError> {
+    let context = format!("interface '{name}'");
+    let mut surface = surface_nodes.to_vec();
+    surface.sort_unstable();
+    surface.dedup();
+    if surface.is_empty() {
+        return Err(interface_error(name, "the surface node set is empty".into()));
+    }
+    for &s in &surface {
+        model.check_node(s, &context)?;
+    }
+    let (centroid, weights) = surface_centroid_and_weights(model, &surface);
+    let X: Vec<Point3<f64>> = surface.iter().map(|s| model.mesh.nodes[s.index()]).collect();
+    check_carries_six_motions(name, &X, &weights)?;
+
+    // Dofs that cannot be dependent: supported, or dependent on another constraint.
+    let supported: BTreeSet<(NodeId, usize)> = model
+        .supports
+        .iter()
+        .flat_map(|s| (0..6).filter(|&k| s.dofs.0[k]).map(move |k| (s.node, k)))
+        .collect();
+    let dependent: BTreeSet<(NodeId, usize)> = model
+        .constraints
+        .iter()
+        .map(|c| (c.dependent.0, c.dependent.1 as usize))
+        .collect();
+    for &s in &surface {
+        for k in 0..3 {
+            if dependent.contains(&(s, k)) {
+                return Err(interface_error(
+                    name,
+                    format!(
+                        "surface node {} dof {} is already dependent on another constraint",
+                        model.mesh.node_tags[s.index()],
+                        crate::error::DOF_NAMES[k]
+                    ),
+                ));
+            }
+            if kind == SpiderKind::Rbe2 && supported.contains(&(s, k)) {
+                return Err(interface_error(
+                    name,
+                    format!(
+                        "surface node {} dof {} is supported; an RBE2 spider would make it dependent (support the interface node instead)",
+                        model.mesh.node_tags[s.index()],
+                        crate::error::DOF_NAMES[k]
+                    ),
+                ));
+            }
+        }
+    }
+
+    let x_m = at.unwrap_or(centroid);
+    let m = model.add_node(x_m);
+    let constraints = match kind {
+        SpiderKind::Rbe2 => rbe2_constraints(name, m, &x_m, &surface, &X),
+        SpiderKind::Rbe3 => {
+            let candidate = |s: NodeId, k: usize| !supported.contains(&(s, k));
+            rbe3_constraints(name, m, &x_m, &surface, &X, &weights, candidate)?
+        }
+    };
+    model.constraints.extend(constraints);
+    Ok(m)
+}
+
+/// RBE2 rows: $u_{s,i} = u_{m,i} + (\boldsymbol\theta_m \times \mathbf r_s)_i$.
+fn rbe2_constraints(
+    name: &str,
+    m: NodeId,
+    x_m: &Point3<f64>,
+    surface: &[NodeId],
+    X: &[Point3<f64>],
+) -> Vec<LinearConstraint> {
+    let mut out = Vec::with_capacity(3 * surface.len());
+    for (&s, x_s) in surface.iter().zip(X) {
+        let r = x_s - x_m;
+        // theta x r = (ty rz - tz ry, tz rx - tx rz, tx ry - ty rx).
+        let rows: [[(u8, f64); 2]; 3] = [[(4, r.z), (5, -r.y)], [(5, r.x), (3, -r.z)], [(3, r.y), (4, -r.x)]];
+        for (i, row) in rows.iter().enumerate() {
+            let mut terms = vec![(m, i as u8, 1.0)];
+            terms.extend(row.iter().filter(|(_, c)| *c != 0.0).map(|&(k, c)| (m, k, c)));
+            out.push(LinearConstraint {
+                name: name.to_string(),
+                dependent: (s, i as u8),
+                terms,
+            });
+        }
+    }
+    out
+}
+
+/// $\mathbf S_s = [\mathbf I, -\tilde{\mathbf r}_s]$: $\mathbf u_m + \boldsymbol\theta_m \times
+/// \mathbf r_s = \mathbf S_s [\mathbf u_m; \boldsymbol\theta_m]$.
+fn rigid_map(r: &Vector3<f64>) -> nalgebra::SMatrix<f64, 3, 6> {
+    let mut S = nalgebra::SMatrix::<f64, 3, 6>::zeros();
+    S.fixed_view_mut::<3, 3>(0, 0).fill_with_identity();
+    // -[r]x, since theta x r = -r x theta.
+    S.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-r.cross_matrix()));
+    S
+}
+
+/// RBE3 rows by the "UM" elimination (see [`add_interface`]).
+fn rbe3_constraints(
+    name: &str,
+    m: NodeId,
+    x_m: &Point3<f64>,
+    surface: &[NodeId],
+    X: &[Point3<f64>],
+    weights: &[f64],
+    candidate: impl Fn(NodeId, usize) -> bool,
+) -> Result<Vec<LinearConstraint>, FeError> {
+    let n = surface.len();
+    let mut A = Matrix6::zeros();
+    for (x_s, &w) in X.iter().zip(weights) {
+        let S = rigid_map(&(x_s - x_m));
+        A += w * S.transpose() * S;
+    }
+    let A_inv = A
+        .try_inverse()
+        .ok_or_else(|| interface_error(name, "the RBE3 normal matrix is singular".into()))?;
+    let mut G = DMatrix::zeros(6, 3 * n);
+    for (s, (x_s, &w)) in X.iter().zip(weights).enumerate() {
+        let S = rigid_map(&(x_s - x_m));
+        G.view_mut((0, 3 * s), (6, 3)).copy_from(&(w * A_inv * S.transpose()));
+    }
+    // Choose six columns by column-pivoted Gram-Schmidt on G with the rotation rows scaled to
+    // lengths (they act on translations / length otherwise, and pivoting would be unit-biased).
+    let w_sum: f64 = weights.iter().sum();
+    let ell = (X
+        .iter()
+        .zip(weights)
+        .map(|(x, w)| w * (x - x_m).norm_squared())
+        .sum::<f64>()
+        / w_sum)
+        .sqrt()
+        .max(f64::MIN_POSITIVE);
+    let mut Q = G.clone();
+    for r in 3..6 {
+        Q.row_mut(r).scale_mut(ell);
+    }
+    let mut chosen: Vec<usize> = Vec::with_capacity(6);
+    let initial = (0..3 * n).map(|c| Q.column(c).norm()).fold(0.0, f64::max);
+    for _ in 0..6 {
+        let best = (0..3 * n)
+            .filter(|&c| !chosen.contains(&c) && candidate(surface[c / 3], c % 3))
+            .map(|c| (c, Q.column(c).norm()))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        // 1e-10: far above the round-off left in a column after orthogonalisation against
+        // the others (~1e-16 relative), far below any pivot of a usable surface.
+        let Some((c, norm)) = best.filter(|&(_, norm)| norm > 1e-10 * initial) else {
+            return Err(interface_error(
+                name,
+                "no six surface dofs can carry the interface motion (too many surface dofs are supported)".into(),
+            ));
+        };
+        let q = Q.column(c) / norm;
+        for j in 0..3 * n {
+            let p = q.dot(&Q.column(j));
+            Q.column_mut(j).axpy(-p, &q, 1.0);
+        }
+        chosen.push(c);
+    }
+    let mut G_d = Matrix6::zeros();
+    for (i, &c) in chosen.iter().enumerate() {
+        G_d.set_column(i, &G.fixed_view::<6, 1>(0, c));
+    }
+    let G_d_inv = G_d
+        .try_inverse()
+        .ok_or_else(|| interface_error(name, "the chosen RBE3 dependent dofs are singular".into()))?;
+    // u_d = G_d^{-1} [u_m; theta_m] - G_d^{-1} G_r u_r.
+    let H = G_d_inv * &G;
+    let mut out = Vec::with_capacity(6);
+    for (i, &c) in chosen.iter().enumerate() {
+        let mut terms = Vec::with_capacity(3 * n);
+        for k in 0..6 {
+            if G_d_inv[(i, k)] != 0.0 {
+                terms.push((m, k as u8, G_d_inv[(i, k)]));
+            }
+        }
+        for j in (0..3 * n).filter(|j| !chosen.contains(j)) {
+            if H[(i, j)] != 0.0 {
+                terms.push((surface[j / 3], (j % 3) as u8, -H[(i, j)]));
+            }
+        }
+        out.push(LinearConstraint {
+            name: name.to_string(),
+            dependent: (surface[c / 3], (c % 3) as u8),
+            terms,
+        });
+    }
+    Ok(out)
+}
+
+/// Checks that the surface points carry all six rigid motions: not all coincident, not
+/// collinear. With the weighted centroid $\mathbf c$ and $\mathbf r_s = \mathbf x_s - \mathbf c$,
+/// the "inertia" $\mathbf J = \sum_s w_s (|\mathbf r_s|^2 \mathbf I - \mathbf r_s \mathbf r_s^T)$
+/// is singular exactly when the points lie on a line (null vector: the line's direction, the
+/// axis the spider cannot turn about) or coincide ($\mathbf J = 0$).
+fn check_carries_six_motions(name: &str, X: &[Point3<f64>], weights: &[f64]) -> Result<(), FeError> {
+    let w_sum: f64 = weights.iter().sum();
+    let c = X
+        .iter()
+        .zip(weights)
+        .fold(Vector3::zeros(), |acc, (x, w)| acc + *w * x.coords)
+        / w_sum;
+    let mut J = Matrix3::zeros();
+    let mut size: f64 = 0.0;
+    for (x, &w) in X.iter().zip(weights) {
+        let r = x.coords - c;
+        J += w * (r.norm_squared() * Matrix3::identity() - r * r.transpose());
+        size = size.max(x.coords.norm());
+    }
+    let eig = nalgebra::SymmetricEigen::new(J);
+    let (i_min, lambda_min) = eig.eigenvalues.argmin();
+    let lambda_max = eig.eigenvalues.max();
+    // Coincident: J vanishes to round-off of the coordinates (|x| ~ size).
+    if lambda_max <= 1e-20 * w_sum * size * size || X.len() == 1 {
+        return Err(interface_error(
+            name,
+            format!(
+                "its {} surface node(s) coincide: it cannot carry rotations about any axis (it needs at least 3 non-collinear nodes)",
+                X.len()
+            ),
+        ));
+    }
+    // Collinear: relative 1e-8 means an offset from the line below 1e-4 of the set's extent.
+    if lambda_min <= 1e-8 * lambda_max {
+        let axis = eig.eigenvectors.column(i_min).into_owned();
+        return Err(interface_error(
+            name,
+            format!(
+                "its {} surface nodes are collinear: it cannot carry a rotation about {} (it needs at least 3 non-collinear nodes)",
+                X.len(),
+                axis_name(&axis)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// "the x axis" for a global axis, else the direction's components.
+fn axis_name(d: &Vector3<f64>) -> String {
+    for (k, label) in ["x", "y", "z"].iter().enumerate() {
+        if d[k].abs() >= 1.0 - 1e-9 {
+            return format!("the {label} axis");
+        }
+    }
+    format!("the axis [{:.4}, {:.4}, {:.4}]", d.x, d.y, d.z)
+}
+
+/// Area centroid and tributary-area weights of the surface (module docs), or the node mean
+/// and equal weights when the surface does not cover whole element faces.
+fn surface_centroid_and_weights(model: &FeModel, surface: &[NodeId]) -> (Point3<f64>, Vec<f64>) {
+    let mean = surface
+        .iter()
+        .fold(Vector3::zeros(), |acc, s| acc + model.mesh.nodes[s.index()].coords)
+        / surface.len() as f64;
+    let equal = (Point3::from(mean), vec![1.0; surface.len()]);
+    let position: BTreeMap<NodeId, usize> = surface.iter().enumerate().map(|(i, &s)| (s, i)).collect();
+    // Faces of solid elements whose nodes all lie in the surface, each once.
+    let mut faces: BTreeMap<Vec<NodeId>, Vec<NodeId>> = BTreeMap::new();
+    for element in &model.elements {
+        let Some((kind, solid)) = element.solid() else { continue };
+        for face in kind.faces() {
+            let nodes: Vec<NodeId> = face.iter().map(|&a| solid.nodes[a]).collect();
+            if nodes.iter().all(|n| position.contains_key(n)) {
+                let mut key = nodes.clone();
+                key.sort_unstable();
+                faces.entry(key).or_insert(nodes);
+            }
+        }
+    }
+    if faces.is_empty() {
+        return equal;
+    }
+    let mut weights = vec![0.0; surface.len()];
+    let mut area = 0.0;
+    let mut moment = Vector3::zeros();
+    for nodes in faces.values() {
+        let X: Vec<Point3<f64>> = nodes.iter().map(|n| model.mesh.nodes[n.index()]).collect();
+        let (a, first, diag) = face_integrals(&X);
+        area += a;
+        moment += first;
+        let d_sum: f64 = diag.iter().sum();
+        for (n, d) in nodes.iter().zip(diag) {
+            weights[position[n]] += a * d / d_sum;
+        }
+    }
+    if weights.iter().any(|&w| !(w > 0.0)) || !(area > 0.0) {
+        return equal;
+    }
+    (Point3::from(moment / area), weights)
+}
+
+/// Area $A$, first moment $\int \mathbf x\, dA$, and the face mass diagonal $\int N_i^2 dA$ of
+/// one face (tri3, quad4, tri6 or quad8, by node count; orderings of
+/// [`crate::element::SolidKind::faces`]).
+fn face_integrals(X: &[Point3<f64>]) -> (f64, Vector3<f64>, Vec<f64>) {
+    let n = X.len();
+    let rule: quadrature::Rule<2> = match n {
+        // Degree 5 / 3x3 Gauss: exact for N_i^2 on flat faces (degree 4), ample for the rest.
+        3 | 6 => quadrature::triangle(5),
+        _ => quadrature::quadrilateral(3),
+    };
+    let mut area = 0.0;
+    let mut first = Vector3::zeros();
+    let mut diag = vec![0.0; n];
+    let mut N = vec![0.0; n];
+    let mut dN = vec![[0.0; 2]; n];
+    for (p, w) in rule.points.iter().zip(&rule.weights) {
+        face_shape(n, p, &mut N, &mut dN);
+        let mut x = Vector3::zeros();
+        let mut xs = Vector3::zeros();
+        let mut xt = Vector3::zeros();
+        for i in 0..n {
+            x += N[i] * X[i].coords;
+            xs += dN[i][0] * X[i].coords;
+            xt += dN[i][1] * X[i].coords;
+        }
+        let dA = w * xs.cross(&xt).norm();
+        area += dA;
+        first += dA * x;
+        for i in 0..n {
+            diag[i] += dA * N[i] * N[i];
+        }
+    }
+    (area, first, diag)
+}
+
+/// Shape functions of the face kinds: tri3/tri6 on the reference triangle, quad4/quad8 on
+/// $[-1, 1]^2$ (corners anticlockwise, then edge nodes of edges (0,1), (1,2), ...).
+fn face_shape(n: usize, p: &[f64; 2], N: &mut [f64], dN: &mut [[f64; 2]]) {
+    let (s, t) = (p[0], p[1]);
+    match n {
+        3 | 6 => {
+            let L = [1.0 - s - t, s, t];
+            let dL = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+            if n == 3 {
+                N[..3].copy_from_slice(&L);
+                dN[..3].copy_from_slice(&dL);
+            } else {
+                for i in 0..3 {
+                    N[i] = L[i] * (2.0 * L[i] - 1.0);
+                    dN[i] = [(4.0 * L[i] - 1.0) * dL[i][0], (4.0 * L[i] - 1.0) * dL[i][1]];
+                }
+                for (e, (a, b)) in [(0, 1), (1, 2), (2, 0)].into_iter().enumerate() {
+                    N[3 + e] = 4.0 * L[a] * L[b];
+                    dN[3 + e] = [
+                        4.0 * (L[b] * dL[a][0] + L[a] * dL[b][0]),
+                        4.0 * (L[b] * dL[a][1] + L[a] * dL[b][1]),
+                    ];
+                }
+            }
+        }
+        _ => {
+            let corners = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+            for (i, c) in corners.iter().enumerate() {
+                let (a, b) = (1.0 + c[0] * s, 1.0 + c[1] * t);
+                if n == 4 {
+                    N[i] = 0.25 * a * b;
+                    dN[i] = [0.25 * c[0] * b, 0.25 * a * c[1]];
+                } else {
+                    let q = c[0] * s + c[1] * t - 1.0;
+                    N[i] = 0.25 * a * b * q;
+                    dN[i] = [0.25 * c[0] * b * (q + a), 0.25 * c[1] * a * (q + b)];
+                }
+            }
+            if n == 8 {
+                // Edge nodes 4: (0,-1), 5: (1,0), 6: (0,1), 7: (-1,0).
+                for (i, c) in [[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]].iter().enumerate() {
+                    if c[0] == 0.0 {
+                        let b = 1.0 + c[1] * t;
+                        N[4 + i] = 0.5 * (1.0 - s * s) * b;
+                        dN[4 + i] = [-s * b, 0.5 * (1.0 - s * s) * c[1]];
+                    } else {
+                        let a = 1.0 + c[0] * s;
+                        N[4 + i] = 0.5 * a * (1.0 - t * t);
+                        dN[4 + i] = [0.5 * c[0] * (1.0 - t * t), -t * a];
+                    }
+                }
+            }
+        }
+    }
+}

@@ -160,7 +160,7 @@ impl BeamSection {
 /// $x_n = n\pi a/(2t) \ge n\pi/2$, whose terms are below $2e^{-n\pi}/n^5$: by $n = 15$ they are
 /// under $10^{-25}$.
 pub fn rectangle_torsion_constant(b: f64, h: f64) -> f64 {
-    const ZETA_5: f64 = 1.036_927_755_143_369_9;
+    const ZETA_5: f64 = 1.036_927_755_143_37; // zeta(5), to f64 precision
     let (a, t) = if b >= h { (b, h) } else { (h, b) };
     let pi = std::f64::consts::PI;
     let mut sum = (1.0 - 1.0 / 32.0) * ZETA_5;

@@ -4,6 +4,12 @@
 mod unit {
     /// Dof numbering, elimination, assembly invariants and the errors of bad input.
     mod assembly;
+    /// Element level for the 3D beam: symmetry, rigid null space, mass, independent
+    /// quadrature of the shape functions, one-element cantilevers, sections, errors.
+    mod beam2;
+    /// gmsh reader: fixtures in four encodings agree, inline parse cases, node orderings
+    /// against gmsh's reference elements, located errors, no panic on random/cut/mutated input.
+    mod gmsh;
     /// Structure-level beam tests against `benchmarks.md` A1/A2: statics to round-off,
     /// frequencies within 0.1 % and converging, the Timoshenko frequency equation.
     mod beam_structure;

@@ -61,4 +61,18 @@ pub enum ReductionError {
     /// index overflow).
     #[error("sparse factorisation failed: {0}")]
     Factorization(String),
+    /// An interface of a body cannot serve as a Craig-Bampton boundary (missing node, a dof
+    /// that is not free, the body still free with all interfaces held, ...).
+    #[error("interface '{name}': {what}")]
+    Interface { name: String, what: String },
+    /// The FE model could not be numbered or assembled.
+    #[error("FE model: {0}")]
+    Fe(String),
+}
+
+impl ReductionError {
+    /// Wraps an FE-stage error (kept as text: `FeError` is not `Clone`).
+    pub fn from_fe(e: fe_model::FeError) -> Self {
+        ReductionError::Fe(e.to_string())
+    }
 }

@@ -8,3 +8,9 @@
 mod eigen {
     include!("unit/eigen.rs");
 }
+
+/// `reduction::craig_bampton` and `invariants`: statics exact with static modes, the free
+/// body's rigid null space, spectrum convergence from above, mass data, errors.
+mod craig_bampton {
+    include!("unit/craig_bampton.rs");
+}

@@ -53,7 +53,7 @@ use nalgebra::{DMatrix, Matrix3, Matrix4, Point3, Rotation3, SMatrix, Vector3};
 type Matrix12 = SMatrix<f64, 12, 12>;
 
 /// Relative length below which the two nodes count as coincident, against the coordinates'
-/// magnitude: a few hundred ulps of the coordinates, far below any meaningful element.
+/// magnitude: about 5000 ulps of the coordinates, far below any meaningful element.
 const ZERO_LENGTH_RTOL: f64 = 1e-12;
 /// $\lVert \mathbf e_x \times \mathbf v \rVert / \lVert \mathbf v \rVert$ below which the
 /// orientation vector counts as parallel to the axis (angle below 1e-9 rad: the local $y$
@@ -115,8 +115,8 @@ pub fn local_axes(beam: &Beam2, element: usize, X: [Point3<f64>; 2]) -> Result<(
     let d = X[1] - X[0];
     let L = d.norm();
     let scale = 1.0_f64.max(X[0].coords.norm()).max(X[1].coords.norm());
-    // `!(L >= ..)` so that a NaN length is refused too.
-    if !(L >= ZERO_LENGTH_RTOL * scale) {
+    // A non-finite coordinate gives a non-finite length: refused too, rather than NaN matrices.
+    if !L.is_finite() || L < ZERO_LENGTH_RTOL * scale {
         return Err(ElementError::ZeroLength {
             element,
             n1: u64::from(beam.nodes[0].0),
@@ -135,7 +135,7 @@ pub fn local_axes(beam: &Beam2, element: usize, X: [Point3<f64>; 2]) -> Result<(
     }
     let z = e_x.cross(&v);
     let z_norm = z.norm();
-    if !(z_norm >= PARALLEL_RTOL * v_norm) {
+    if z_norm < PARALLEL_RTOL * v_norm {
         return Err(parallel());
     }
     let e_z: Vector3<f64> = z / z_norm;
@@ -164,9 +164,13 @@ fn shear_parameters(theory: BeamTheory, L: f64, s: &BeamSection, m: &IsotropicMa
 /// Bending stiffness of one plane in the dofs $[v_1, \theta_1, v_2, \theta_2]$ with
 /// $\theta = +v'$ (the $x$-$y$ plane convention), Przemieniecki (1968) ch. 5:
 ///
-/// $$\frac{EI}{(1+\Phi)L^3}\begin{bmatrix} 12 & 6L & -12 & 6L \\ 6L & (4+\Phi)L^2 & -6L & (2-\Phi)L^2 \\
-/// -12 & -6L & 12 & -6L \\ 6L & (2-\Phi)L^2 & -6L & (4+\Phi)L^2 \end{bmatrix}$$
-fn bending_stiffness(EI: f64, L: f64, Phi: f64) -> Matrix4<f64> {
+/// ```text
+///   EI / ((1 + Phi) L^3) * [  12      6L          -12     6L
+///                             6L    (4 + Phi)L^2  -6L   (2 - Phi)L^2
+///                            -12     -6L           12    -6L
+///                             6L    (2 - Phi)L^2  -6L   (4 + Phi)L^2 ]
+/// ```
+pub fn bending_stiffness(EI: f64, L: f64, Phi: f64) -> Matrix4<f64> {
     let c = EI / ((1.0 + Phi) * L * L * L);
     let (a, b) = ((4.0 + Phi) * L * L, (2.0 - Phi) * L * L);
     let s = 6.0 * L;
@@ -180,8 +184,15 @@ fn bending_stiffness(EI: f64, L: f64, Phi: f64) -> Matrix4<f64> {
 
 /// Translational part of the consistent bending mass of one plane, dofs and convention as
 /// [`bending_stiffness`], divided by $\rho A L$ (Przemieniecki (1968) ch. 11; Archer 1965):
-/// $\frac{1}{(1+\Phi)^2}\begin{bmatrix} m_1 & m_2 L & m_3 & -m_4 L \\ & m_5 L^2 & m_4 L & -m_6 L^2 \\
-/// & & m_1 & -m_2 L \\ \text{sym.} & & & m_5 L^2\end{bmatrix}$ with
+///
+/// ```text
+///   1 / (1 + Phi)^2 * [ m1    m2 L     m3    -m4 L
+///                             m5 L^2   m4 L  -m6 L^2
+///                                      m1    -m2 L
+///                       sym.                  m5 L^2 ]
+/// ```
+///
+/// with
 /// $m_1 = \tfrac{13}{35} + \tfrac{7}{10}\Phi + \tfrac13\Phi^2$,
 /// $m_2 = \tfrac{11}{210} + \tfrac{11}{120}\Phi + \tfrac1{24}\Phi^2$,
 /// $m_3 = \tfrac{9}{70} + \tfrac{3}{10}\Phi + \tfrac16\Phi^2$,
@@ -191,7 +202,7 @@ fn bending_stiffness(EI: f64, L: f64, Phi: f64) -> Matrix4<f64> {
 /// For $\Phi = 0$ this is the classic $\frac{1}{420}[156, 22L, 54, -13L; \dots]$.
 ///
 /// # Derivation
-/// $\int_0^L \mathbf N_v^T \mathbf N_v\,dx / L$ with the interdependent (exact static)
+/// $\int_0^L \mathbf N_v^T \mathbf N_v\ dx / L$ with the interdependent (exact static)
 /// Timoshenko shape functions of Friedman & Kosmatka, "An improved two-node Timoshenko beam
 /// finite element", Comput. Struct. 47 (1993) 473–481, with $\xi = x/L$:
 /// $N_{v1} = (2\xi^3 - 3\xi^2 - \Phi\xi + 1 + \Phi)/(1+\Phi)$,
@@ -200,7 +211,7 @@ fn bending_stiffness(EI: f64, L: f64, Phi: f64) -> Matrix4<f64> {
 /// $N_{v4} = L(\xi^3 - (1-\Phi/2)\xi^2 - \Phi\xi/2)/(1+\Phi)$.
 /// Integrated symbolically (sympy); the same integral by Gauss quadrature is
 /// `tests/unit/beam2.rs::timoshenko_local_matrices_match_quadrature_of_shape_functions`.
-fn bending_mass_translational(L: f64, Phi: f64) -> Matrix4<f64> {
+pub fn bending_mass_translational(L: f64, Phi: f64) -> Matrix4<f64> {
     let (P, P2) = (Phi, Phi * Phi);
     let m1 = 13.0 / 35.0 + 7.0 / 10.0 * P + P2 / 3.0;
     let m2 = (11.0 / 210.0 + 11.0 / 120.0 * P + P2 / 24.0) * L;
@@ -219,21 +230,28 @@ fn bending_mass_translational(L: f64, Phi: f64) -> Matrix4<f64> {
 
 /// Rotary-inertia part of the consistent bending mass of one plane, dofs and convention as
 /// [`bending_stiffness`], divided by $\rho I$ (Przemieniecki (1968) ch. 11; Archer 1965):
-/// $\frac{1}{(1+\Phi)^2 L}\begin{bmatrix} \tfrac65 & r_1 L & -\tfrac65 & r_1 L \\ & r_2 L^2 & -r_1 L & r_3 L^2 \\
-/// & & \tfrac65 & -r_1 L \\ \text{sym.} & & & r_2 L^2\end{bmatrix}$ with
+///
+/// ```text
+///   1 / ((1 + Phi)^2 L) * [ 6/5   r1 L     -6/5   r1 L
+///                                 r2 L^2   -r1 L  r3 L^2
+///                                           6/5  -r1 L
+///                           sym.                  r2 L^2 ]
+/// ```
+///
+/// with
 /// $r_1 = \tfrac1{10} - \tfrac12\Phi$, $r_2 = \tfrac{2}{15} + \tfrac16\Phi + \tfrac13\Phi^2$,
 /// $r_3 = -\tfrac1{30} - \tfrac16\Phi + \tfrac16\Phi^2$.
 /// For $\Phi = 0$ this is the classic $\frac{1}{30L}[36, 3L, -36, 3L; \dots]$.
 ///
 /// # Derivation
-/// $L\int_0^L \mathbf N_\theta^T \mathbf N_\theta\,dx$ with the rotation shape functions of
+/// $L\int_0^L \mathbf N_\theta^T \mathbf N_\theta\ dx$ with the rotation shape functions of
 /// Friedman & Kosmatka (1993):
 /// $N_{\theta1} = 6(\xi^2 - \xi)/((1+\Phi)L)$,
 /// $N_{\theta2} = (3\xi^2 - (4+\Phi)\xi + 1 + \Phi)/(1+\Phi)$,
 /// $N_{\theta3} = -N_{\theta1}$,
 /// $N_{\theta4} = (3\xi^2 - (2-\Phi)\xi)/(1+\Phi)$; checked as for
 /// [`bending_mass_translational`].
-fn bending_mass_rotary(L: f64, Phi: f64) -> Matrix4<f64> {
+pub fn bending_mass_rotary(L: f64, Phi: f64) -> Matrix4<f64> {
     let (P, P2) = (Phi, Phi * Phi);
     let r0 = 6.0 / 5.0;
     let r1 = (1.0 / 10.0 - P / 2.0) * L;
@@ -304,11 +322,11 @@ fn local_mass_consistent(L: f64, Phi_y: f64, Phi_z: f64, s: &BeamSection, m: &Is
 /// torsional rotation, and on each bending rotation the HRZ value (Hinton, Rock & Zienkiewicz
 /// 1976): the consistent diagonal entry scaled by the factor that makes the translational
 /// diagonal sum to $\rho A L$,
-/// $$m_\theta = \frac{\rho A L}{2}\,\frac{[\mathbf M^{cons}]_{\theta\theta}}{[\mathbf M^{cons}]_{vv}}.$$
+/// $$m_\theta = \frac{\rho A L}{2}\frac{M_{\theta\theta}^{cons}}{M_{vv}^{cons}}.$$
 /// For Euler-Bernoulli without rotary inertia this is $\rho A L^3 / 78$ (Cook et al. 2002
 /// ch. 11); with it and with shear the same rule uses the full consistent diagonal, so the
 /// value stays positive and follows the theory. In global axes each node's rotational 3x3
-/// block is $\mathbf R\,\mathrm{diag}(m_{\theta x}, m_{\theta y}, m_{\theta z})\mathbf R^T$,
+/// block is $\mathbf R \mathrm{diag}(m_{\theta x}, m_{\theta y}, m_{\theta z})\mathbf R^T$,
 /// which is diagonal only when the beam is aligned with the global axes; translations stay
 /// diagonal, and there is no coupling between nodes or between translations and rotations.
 fn local_mass_lumped(L: f64, Phi_y: f64, Phi_z: f64, s: &BeamSection, m: &IsotropicMaterial) -> Matrix12 {

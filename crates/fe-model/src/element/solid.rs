@@ -320,16 +320,10 @@ pub fn stiffness(
             }
         }
     }
-    // Only the blocks b >= a were summed; mirror them (K_ba = K_ab^T).
-    for a in 0..n {
-        for b in a + 1..n {
-            for i in 0..3 {
-                for j in 0..3 {
-                    K_e[(3 * b + j, 3 * a + i)] = K_e[(3 * a + i, 3 * b + j)];
-                }
-            }
-        }
-    }
+    // Only the blocks b >= a were summed. Mirror the upper triangle (diagonal blocks
+    // included) so that K_e is symmetric bit for bit: inside a diagonal block, lambda g_i g_j
+    // and lambda g_j g_i round differently.
+    mirror_upper(&mut K_e);
     Ok(K_e)
 }
 
@@ -358,11 +352,12 @@ pub fn scalar_mass(
         let p = point_values(kind, element, q, X_e, xi)?;
         let f = rho * w * p.det_J;
         for a in 0..n {
-            for b in 0..n {
+            for b in a..n {
                 m[(a, b)] += f * p.N[a] * p.N[b];
             }
         }
     }
+    mirror_upper(&mut m);
     if mass == MassKind::Lumped {
         let total: f64 = m.iter().sum();
         let diagonal: f64 = m.diagonal().iter().sum();
@@ -375,6 +370,15 @@ pub fn scalar_mass(
         m = lumped;
     }
     Ok(m)
+}
+
+/// Copies the strict upper triangle onto the lower one.
+fn mirror_upper(A: &mut DMatrix<f64>) {
+    for c in 0..A.ncols() {
+        for r in 0..c {
+            A[(c, r)] = A[(r, c)];
+        }
+    }
 }
 
 /// Element volume $\int dV$ by the mass rule (exact for the geometries the mass rule is exact

@@ -6,12 +6,12 @@
 //!
 //! # Why our own parser
 //!
-//! The `mshio` crate reads MSH 4.1 only, skips `$PhysicalNames` and reports errors as nom
-//! parse failures without a line or the entity involved. MSH 2.2 needs a parser of our own
-//! anyway, and both versions share what matters here (tokens, binary values, the mapping of
-//! tags to dense ids, physical groups), so one small reader (about 600 lines) for both gives
-//! every error its file, line (ASCII) or byte offset (binary), section and entity, and no
-//! dependency.
+//! The `mshio` crate (0.4) reads MSH 4.1 only, skips `$PhysicalNames`, and its errors are a
+//! backtrace of nom error kinds pointing into the input: no line, no element or node tag.
+//! MSH 2.2 needs a parser of our own anyway, and both versions share what matters here
+//! (tokens, binary values, the mapping of tags to dense ids, physical groups), so one small
+//! reader for both (about 1,000 lines of code) gives every error its file, line (ASCII) or
+//! byte offset (binary), section and entity, without a dependency.
 //!
 //! # What is read
 //!
@@ -61,7 +61,7 @@
 //! Any other type is [`MshError::UnsupportedElementType`]. Our node orderings are gmsh's
 //! (gmsh reference manual, "Node ordering"), so [`node_permutation_from_gmsh`] is the identity
 //! for every kind; the conversion still goes through it so a kind with a different order
-//! would need one table changed. `tests/data/gmsh_reference_elements.txt` holds gmsh's own
+//! would need one table changed. `tests/data/gmsh/gmsh_reference_elements.txt` holds gmsh's own
 //! reference coordinates of each type's nodes (written by `make_fixtures.py`), and the unit
 //! tests check the edge tables below against it and against the fixtures' geometry.
 //!
@@ -177,29 +177,61 @@ pub enum MshError {
         "{path}: {at}: MSH {format} is not supported (supported: 4.1 and 2.2, ASCII or binary with \
          data size 8); re-export with `gmsh -save -format msh41` or `-format msh22`"
     )]
-    UnsupportedVersion { path: PathBuf, at: Location, format: String },
+    UnsupportedVersion {
+        path: PathBuf,
+        at: Location,
+        format: String,
+    },
     /// The input ends, or the section's end marker comes, before the records its header
     /// announced. `at` is where the missing record should have been.
     #[error("{path}: {at}: section {section} is truncated: expected {expected}, found {found}")]
-    Truncated { path: PathBuf, at: Location, section: String, expected: String, found: String },
+    Truncated {
+        path: PathBuf,
+        at: Location,
+        section: String,
+        expected: String,
+        found: String,
+    },
     /// A token that should be a number is not one of the expected kind (a negative count, a
     /// letter in a coordinate, a non-finite coordinate).
     #[error("{path}: {at}: in section {section}: expected {expected}, found '{found}'")]
-    MalformedNumber { path: PathBuf, at: Location, section: String, expected: String, found: String },
+    MalformedNumber {
+        path: PathBuf,
+        at: Location,
+        section: String,
+        expected: String,
+        found: String,
+    },
     /// Something other than a number is wrong: a missing end marker, an unquoted physical
     /// name, a bad flag or endianness marker.
     #[error("{path}: {at}: in section {section}: expected {expected}, found {found}")]
-    Malformed { path: PathBuf, at: Location, section: String, expected: String, found: String },
+    Malformed {
+        path: PathBuf,
+        at: Location,
+        section: String,
+        expected: String,
+        found: String,
+    },
     /// The element type is not one fe-model meshes with; `at` is the element's record.
     #[error(
         "{path}: {at}: element {element} has gmsh type {gmsh_type}, which fe-model does not read \
          (supported: 1 line2, 2 tri3, 3 quad4, 4 tet4, 5 hex8, 6 wedge6, 9 tri6, 11 tet10, 16 quad8, \
          17 hex20; 15 points are skipped)"
     )]
-    UnsupportedElementType { path: PathBuf, at: Location, element: u64, gmsh_type: i32 },
+    UnsupportedElementType {
+        path: PathBuf,
+        at: Location,
+        element: u64,
+        gmsh_type: i32,
+    },
     /// An element refers to a node tag that no `$Nodes` section (before it) defines.
     #[error("{path}: {at}: element {element} references node {node}, which is not defined in $Nodes")]
-    MissingNode { path: PathBuf, at: Location, element: u64, node: u64 },
+    MissingNode {
+        path: PathBuf,
+        at: Location,
+        element: u64,
+        node: u64,
+    },
     /// Two nodes have the same tag.
     #[error("{path}: {at}: node {node} is defined twice")]
     DuplicateNode { path: PathBuf, at: Location, node: u64 },
@@ -213,7 +245,10 @@ pub enum MshError {
 
 /// Reads the gmsh file at `path` (MSH 4.1 or 2.2, ASCII or binary) into a [`Mesh`].
 pub fn read(path: &Path) -> Result<Mesh, MshError> {
-    let bytes = std::fs::read(path).map_err(|source| MshError::Io { path: path.to_path_buf(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| MshError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     parse(bytes, path)
 }
 
@@ -263,7 +298,10 @@ fn parse_bytes(data: &[u8], origin: &Path) -> Result<Mesh, MshError> {
 /// tells the endianness.
 fn read_mesh_format(cur: &mut Cursor<'_>) -> Result<(Version, bool), MshError> {
     let path = cur.path();
-    let missing = |found: String| MshError::MissingMeshFormat { path: path.to_path_buf(), found };
+    let missing = |found: String| MshError::MissingMeshFormat {
+        path: path.to_path_buf(),
+        found,
+    };
     match cur.next_section() {
         None => return Err(missing("no section at all".to_string())),
         Some((_, marker)) if marker == b"$MeshFormat" => {}
@@ -294,7 +332,9 @@ fn read_mesh_format(cur: &mut Cursor<'_>) -> Result<(Version, bool), MshError> {
         return Err(unsupported(format!("{version_number} {kind}")));
     };
     if binary && data_size != 8 {
-        return Err(unsupported(format!("{version_number} binary with data size {data_size}")));
+        return Err(unsupported(format!(
+            "{version_number} binary with data size {data_size}"
+        )));
     }
     if binary {
         cur.set_binary(true);
@@ -328,7 +368,11 @@ fn read_physical_names(cur: &mut Cursor<'_>, names: &mut BTreeMap<DimTag, String
                 names.insert((dim, tag), String::from_utf8_lossy(name).into_owned());
             }
             other => {
-                return Err(cur.malformed(start, "a quoted name such as \"clamp\"", format!("'{}'", excerpt(other))))
+                return Err(cur.malformed(
+                    start,
+                    "a quoted name such as \"clamp\"",
+                    format!("'{}'", excerpt(other)),
+                ))
             }
         }
     }
@@ -362,7 +406,12 @@ fn gmsh_element(gmsh_type: i32) -> Option<(GmshElement, usize)> {
 }
 
 fn unsupported_element_type(cur: &Cursor<'_>, pos: usize, element: u64, gmsh_type: i32) -> MshError {
-    MshError::UnsupportedElementType { path: cur.path().to_path_buf(), at: cur.at(pos), element, gmsh_type }
+    MshError::UnsupportedElementType {
+        path: cur.path().to_path_buf(),
+        at: cur.at(pos),
+        element,
+        gmsh_type,
+    }
 }
 
 /// The [`CellKind`] of a gmsh element type, or `None` if we do not read that type.
@@ -432,5 +481,8 @@ pub fn node_permutation_from_gmsh(kind: CellKind) -> &'static [usize] {
 /// The nodes of one element, given in gmsh's order, in ours. `gmsh_nodes` has
 /// `kind.node_count()` entries (the readers read exactly that many).
 fn from_gmsh_order(kind: CellKind, gmsh_nodes: &[NodeId]) -> Vec<NodeId> {
-    node_permutation_from_gmsh(kind).iter().filter_map(|&i| gmsh_nodes.get(i).copied()).collect()
+    node_permutation_from_gmsh(kind)
+        .iter()
+        .filter_map(|&i| gmsh_nodes.get(i).copied())
+        .collect()
 }

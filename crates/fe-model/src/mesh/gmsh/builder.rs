@@ -76,7 +76,11 @@ impl<'a> Builder<'a> {
             }
         };
         if self.node_ids.insert(tag, id).is_some() {
-            return Err(MshError::DuplicateNode { path: self.path.to_path_buf(), at: self.at(pos), node: tag });
+            return Err(MshError::DuplicateNode {
+                path: self.path.to_path_buf(),
+                at: self.at(pos),
+                node: tag,
+            });
         }
         self.mesh.nodes.push(x);
         self.mesh.node_tags.push(tag);
@@ -141,13 +145,14 @@ impl<'a> Builder<'a> {
                     None
                 }
                 GmshElement::Cell(kind) => {
-                    let id = CellId(u32::try_from(self.mesh.cells.len()).map_err(|_| {
-                        MshError::UnsupportedFeature {
-                            path: self.path.to_path_buf(),
-                            at: self.at(pos),
-                            what: "a mesh with more than 2^32 cells".to_string(),
-                        }
-                    })?);
+                    let id =
+                        CellId(
+                            u32::try_from(self.mesh.cells.len()).map_err(|_| MshError::UnsupportedFeature {
+                                path: self.path.to_path_buf(),
+                                at: self.at(pos),
+                                what: "a mesh with more than 2^32 cells".to_string(),
+                            })?,
+                        );
                     let nodes = super::from_gmsh_order(kind, &self.scratch);
                     self.mesh.cells.push(Cell { kind, nodes, tag });
                     self.elements.insert(tag, Seen::Cell(id));
@@ -194,7 +199,10 @@ impl<'a> Builder<'a> {
             groups.entry(*key).or_default();
         }
         for ((dim, tag), members) in groups {
-            let name = names.get(&(dim, tag)).cloned().unwrap_or_else(|| format!("physical_{dim}_{tag}"));
+            let name = names
+                .get(&(dim, tag))
+                .cloned()
+                .unwrap_or_else(|| format!("physical_{dim}_{tag}"));
             mesh.add_to_node_set(&name, members.nodes);
             if dim >= 1 {
                 let set = mesh.cell_sets.entry(name).or_default();

@@ -53,11 +53,21 @@ pub(super) struct Cursor<'a> {
 
 impl<'a> Cursor<'a> {
     pub(super) fn new(data: &'a [u8], path: &'a Path) -> Self {
-        Cursor { data, pos: 0, path, binary: false, big_endian: false, section: String::new() }
+        Cursor {
+            data,
+            pos: 0,
+            path,
+            binary: false,
+            big_endian: false,
+            section: String::new(),
+        }
     }
 
     pub(super) fn locator(&self) -> Locator<'a> {
-        Locator { data: self.data, binary: self.binary }
+        Locator {
+            data: self.data,
+            binary: self.binary,
+        }
     }
 
     pub(super) fn path(&self) -> &'a Path {
@@ -151,7 +161,10 @@ impl<'a> Cursor<'a> {
 
     /// Moves past the end of the current line (after its `\n`, or to the end of the input).
     pub(super) fn skip_line(&mut self) {
-        match self.data[self.pos.min(self.data.len())..].iter().position(|&b| b == b'\n') {
+        match self.data[self.pos.min(self.data.len())..]
+            .iter()
+            .position(|&b| b == b'\n')
+        {
             Some(offset) => self.pos += offset + 1,
             None => self.pos = self.data.len(),
         }
@@ -248,7 +261,9 @@ impl<'a> Cursor<'a> {
     /// Checks that `count` records of `record_bytes` each fit in the rest of the input, before
     /// a binary block is read or allocated.
     pub(super) fn ensure_binary(&self, count: u64, record_bytes: usize, expected: &str) -> Result<(), MshError> {
-        let needed = usize::try_from(count).ok().and_then(|count| count.checked_mul(record_bytes));
+        let needed = usize::try_from(count)
+            .ok()
+            .and_then(|count| count.checked_mul(record_bytes));
         match needed {
             Some(needed) if needed <= self.remaining() => Ok(()),
             _ => Err(self.truncated_at_eof(&format!("{count} × {expected}"))),
@@ -274,7 +289,11 @@ impl<'a> Cursor<'a> {
     /// A C `int` (4 bytes).
     pub(super) fn int(&mut self, expected: &str) -> Result<i32, MshError> {
         let bytes = self.take::<4>(expected)?;
-        Ok(if self.big_endian { i32::from_be_bytes(bytes) } else { i32::from_le_bytes(bytes) })
+        Ok(if self.big_endian {
+            i32::from_be_bytes(bytes)
+        } else {
+            i32::from_le_bytes(bytes)
+        })
     }
 
     /// A non-negative C `int` as a count or tag.
@@ -287,7 +306,11 @@ impl<'a> Cursor<'a> {
     /// A `size_t` (8 bytes: the header's data size, checked when the format is read).
     pub(super) fn size(&mut self, expected: &str) -> Result<u64, MshError> {
         let bytes = self.take::<8>(expected)?;
-        Ok(if self.big_endian { u64::from_be_bytes(bytes) } else { u64::from_le_bytes(bytes) })
+        Ok(if self.big_endian {
+            u64::from_be_bytes(bytes)
+        } else {
+            u64::from_le_bytes(bytes)
+        })
     }
 
     /// A `double` that must be finite (a coordinate).
@@ -304,7 +327,11 @@ impl<'a> Cursor<'a> {
     /// A `double`, any value (bounding boxes we do not use).
     pub(super) fn binary_double(&mut self, expected: &str) -> Result<f64, MshError> {
         let bytes = self.take::<8>(expected)?;
-        Ok(if self.big_endian { f64::from_be_bytes(bytes) } else { f64::from_le_bytes(bytes) })
+        Ok(if self.big_endian {
+            f64::from_be_bytes(bytes)
+        } else {
+            f64::from_le_bytes(bytes)
+        })
     }
 
     /// Skips `count` binary values of `bytes` each (checked against the remaining input).

@@ -66,8 +66,12 @@ pub(super) fn read_elements(cur: &mut Cursor<'_>, binary: bool, builder: &mut Bu
                 let tag = cur.int_unsigned("element tag")?;
                 return Err(unsupported_element_type(cur, pos, tag, gmsh_type));
             };
-            // tag_count < 2^31, so this sum cannot overflow a 64-bit usize.
-            let record = 4 * (1 + tag_count as usize + node_count);
+            // An overflowing record size cannot fit in the input: `ensure_binary` reports it.
+            let record = usize::try_from(tag_count)
+                .ok()
+                .and_then(|tags| tags.checked_add(1 + node_count))
+                .and_then(|ints| ints.checked_mul(4))
+                .unwrap_or(usize::MAX);
             cur.ensure_binary(following, record, "element records (tag, tags and nodes)")?;
             for _ in 0..following {
                 let pos = cur.pos();

@@ -22,7 +22,12 @@ pub(super) fn read_entities(
     binary: bool,
     entity_groups: &mut HashMap<DimTag, Vec<i32>>,
 ) -> Result<(), MshError> {
-    const WHAT: [&str; 4] = ["number of points", "number of curves", "number of surfaces", "number of volumes"];
+    const WHAT: [&str; 4] = [
+        "number of points",
+        "number of curves",
+        "number of surfaces",
+        "number of volumes",
+    ];
     if binary {
         cur.skip_line();
     }
@@ -39,7 +44,9 @@ pub(super) fn read_entities(
                 cur.skip_binary(box_values, 8, "bounding-box coordinates")?;
                 let n = cur.size("number of physical tags")?;
                 cur.ensure_binary(n, 4, "physical tags")?;
-                let physicals = (0..n).map(|_| cur.int("physical tag")).collect::<Result<Vec<i32>, _>>()?;
+                let physicals = (0..n)
+                    .map(|_| cur.int("physical tag"))
+                    .collect::<Result<Vec<i32>, _>>()?;
                 if dim > 0 {
                     let bounding = cur.size("number of bounding entities")?;
                     cur.skip_binary(bounding, 4, "bounding entity tags")?;

@@ -1,2 +1,0 @@
-#[path = "unit/beam2.rs"]
-mod beam2;

@@ -1,2 +1,0 @@
-#[path = "unit/gmsh.rs"]
-mod gmsh;

@@ -1,0 +1,139 @@
+//! Rigid-body inertia and mass-field invariants of a reduced body (brief §3; Shabana,
+//! *Dynamics of Multibody Systems*, ch. 5), and the mass-weighted rigid fit that evaluates
+//! the CB modes at the centre of mass (brief §4).
+//!
+//! Everything is computed from the consistent mass matrix $\mathbf M_f$ of the body without
+//! supports or spiders, on every element-active dof slot, and from the CB basis on those
+//! slots $\mathbf S_f$: for fields interpolated by the shape functions,
+//! $\int\rho\,\mathbf a\cdot\mathbf b\,dV = \mathbf a^T\mathbf M_f\mathbf b$. Rigid motions
+//! are interpolated exactly by every element (beams included, through their rotation
+//! slots), so mass, centre of mass, inertia tensor, $\int\rho\mathbf S$ and
+//! $\int\rho\tilde{\mathbf x}\mathbf S$ are exact. The second-order invariants
+//! $\int\rho\,x_k\mathbf S_l$ and $\int\rho\,\mathbf S_k^T\mathbf S_l$ place scalar fields in
+//! the translation slots only: exact for solids (whose mass matrix is the same scalar matrix
+//! in each direction), an approximation for beams (the rotary inertia of the sections is left
+//! out of these deformation-dependent terms, and Hermite interpolation sees the scalar field
+//! with zero slopes), averaged over the three directions.
+
+use crate::error::ReductionError;
+use crate::reduced_body::{DenseMatrix, InertiaData};
+use faer::Mat;
+use fe_model::{assemble, DofMap, FeModel, SystemPattern};
+use nalgebra::{Matrix3, Matrix6, Vector3};
+
+/// The rigid-motion matrix on the free dofs of `dofs`: columns are translations along
+/// $x, y, z$, then rotations about the axes through `c`.
+fn rigid_modes(model: &FeModel, dofs: &DofMap, c: Vector3<f64>) -> Mat<f64> {
+    let mut R = Mat::zeros(dofs.n_free(), 6);
+    for d in 0..dofs.n_free() {
+        let slot = dofs.full_slot(fe_model::Dof(d as u32));
+        let (node, k) = (slot / 6, slot % 6);
+        let r = model.mesh.nodes[node].coords - c;
+        if k < 3 {
+            R[(d, k)] = 1.0;
+            for l in 0..3 {
+                // (e_l x r)_k
+                R[(d, 3 + l)] = Vector3::ith(l, 1.0).cross(&r)[k];
+            }
+        } else {
+            R[(d, k)] = 1.0;
+        }
+    }
+    R
+}
+
+/// Mass data and the rigid fit $\boldsymbol\Phi_{com} = (\boldsymbol\Phi_R^T\mathbf M
+/// \boldsymbol\Phi_R)^{-1}\boldsymbol\Phi_R^T\mathbf M\mathbf V$ (6 x n) from the CB basis on
+/// every slot of the model, `S_full` ($6 n_{nodes} \times n$).
+pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, Mat<f64>), ReductionError> {
+    let mut bare = model.clone();
+    bare.supports.clear();
+    bare.constraints.clear();
+    let dofs = DofMap::new(&bare).map_err(ReductionError::from_fe)?;
+    let pattern = SystemPattern::new(&bare, &dofs);
+    let M = assemble(&bare, &pattern).map_err(ReductionError::from_fe)?.M;
+    let n_f = dofs.n_free();
+    let n = S_full.ncols();
+    let S = Mat::from_fn(n_f, n, |d, j| S_full[(dofs.full_slot(fe_model::Dof(d as u32)), j)]);
+    let MS = &M * &S;
+
+    // Mass and centre of mass from the rigid modes about the origin: with translations T and
+    // rotations W, T^T M W = m c~^T (see the module docs).
+    let R0 = rigid_modes(&bare, &dofs, Vector3::zeros());
+    let G0 = R0.transpose() * (&M * &R0);
+    let mass = (G0[(0, 0)] + G0[(1, 1)] + G0[(2, 2)]) / 3.0;
+    if !(mass > 0.0) {
+        return Err(ReductionError::MassNotPositiveDefinite { dof: None, why: format!("the body's total mass is {mass:.3e}") });
+    }
+    let c = Vector3::new(G0[(1, 5)], G0[(2, 3)], G0[(0, 4)]) / mass;
+    let R = rigid_modes(&bare, &dofs, c);
+    let MR = &M * &R;
+    let G = R.transpose() * &MR;
+    let inertia_com = Matrix3::from_fn(|i, j| G[(3 + i, 3 + j)]);
+    let RtMS = R.transpose() * &MS;
+    let S_t = DenseMatrix::from_faer(RtMS.subrows(0, 3));
+    let S_r = DenseMatrix::from_faer(RtMS.subrows(3, 3));
+
+    // (brief §4) Phi_com: the rigid motion that fits each CB mode best in the mass norm.
+    let G6 = Matrix6::from_fn(|i, j| G[(i, j)]);
+    let G6_inv = G6.try_inverse().ok_or_else(|| ReductionError::MassNotPositiveDefinite {
+        dof: None,
+        why: "the rigid-body mass matrix Phi_R^T M Phi_R is singular".into(),
+    })?;
+    let Phi_com = Mat::from_fn(6, n, |i, j| (0..6).map(|k| G6_inv[(i, k)] * RtMS[(k, j)]).sum());
+
+    // Second-order invariants from scalar fields placed in translation slot `comp`.
+    let slots: Vec<(usize, usize)> = (0..n_f)
+        .map(|d| {
+            let s = dofs.full_slot(fe_model::Dof(d as u32));
+            (s / 6, s % 6)
+        })
+        .collect();
+    let place = |comp: usize, f: &dyn Fn(usize, usize) -> f64, ncols: usize| {
+        Mat::from_fn(n_f, ncols, |d, j| {
+            let (node, k) = slots[d];
+            if k == comp {
+                f(node, j)
+            } else {
+                0.0
+            }
+        })
+    };
+    let S_node = |node: usize, comp: usize, j: usize| S_full[(6 * node + comp, j)];
+    let mut S_x = Mat::<f64>::zeros(9, n);
+    let mut S_bar: Vec<Mat<f64>> = (0..9).map(|_| Mat::zeros(n, n)).collect();
+    for comp in 0..3 {
+        // M P_comp(S_l) for each l.
+        let MP: Vec<Mat<f64>> = (0..3).map(|l| &M * &place(comp, &|node, j| S_node(node, l, j), n)).collect();
+        let X = place(comp, &|node, k| model.mesh.nodes[node].coords[k] - c[k], 3);
+        for l in 0..3 {
+            let XtMP = X.transpose() * &MP[l];
+            for k in 0..3 {
+                for j in 0..n {
+                    S_x[(3 * k + l, j)] += XtMP[(k, j)] / 3.0;
+                }
+            }
+            for k in 0..3 {
+                let Pk = place(comp, &|node, j| S_node(node, k, j), n);
+                let block = Pk.transpose() * &MP[l];
+                S_bar[3 * k + l] += block * faer::Scale(1.0 / 3.0);
+            }
+        }
+    }
+    Ok((
+        InertiaData {
+            mass,
+            center_of_mass: [c.x, c.y, c.z],
+            inertia_com: [
+                [inertia_com[(0, 0)], inertia_com[(0, 1)], inertia_com[(0, 2)]],
+                [inertia_com[(1, 0)], inertia_com[(1, 1)], inertia_com[(1, 2)]],
+                [inertia_com[(2, 0)], inertia_com[(2, 1)], inertia_com[(2, 2)]],
+            ],
+            S_t,
+            S_r,
+            S_x: DenseMatrix::from_faer(S_x.as_ref()),
+            S_bar: S_bar.iter().map(|m| DenseMatrix::from_faer(m.as_ref())).collect(),
+        },
+        Phi_com,
+    ))
+}

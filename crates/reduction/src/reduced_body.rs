@@ -1,0 +1,139 @@
+//! [`ReducedBody`]: everything the superelement needs from a Craig-Bampton reduction, as a
+//! versioned file (like Adams' MNF or Simpack's SID): reduced once, reused by many studies.
+//!
+//! # Coordinates
+//!
+//! The CB coordinates of a body with $N$ interfaces and $m$ fixed-interface modes are
+//! $\mathbf q^{jj} = [\mathbf u_1, \boldsymbol\theta_1, \dots, \mathbf u_N,
+//! \boldsymbol\theta_N, \boldsymbol\eta]$, $n = 6N + m$ entries: the interface
+//! displacements and rotations (static, constraint modes) followed by the modal amplitudes
+//! (dynamic, fixed-interface modes). All vectors are in the FE model's axes, which are the
+//! body axes of the undeformed body.
+//!
+//! # Mass-field invariants
+//!
+//! With the displacement field of the body $\mathbf u(\mathbf x) = \mathbf S(\mathbf x)
+//! \mathbf q^{jj}$ ($\mathbf S = \mathbf N \mathbf V$: the FE shape functions times the CB
+//! basis), the floating-frame mass matrix needs volume integrals of $\rho$ times products of
+//! $\mathbf x$ and $\mathbf S$ (Shabana, *Dynamics of Multibody Systems*, ch. 5). They are
+//! computed from the consistent FE mass matrix: $\int \rho\, \mathbf f^T \mathbf g\, dV =
+//! \mathbf f^T \mathbf M \mathbf g$ for fields interpolated by the shape functions.
+//! Positions $\mathbf x$ are measured from the centre of mass.
+
+#![allow(non_snake_case)]
+
+use serde::{Deserialize, Serialize};
+
+/// Version of the reduced-body format this build writes and reads.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// A dense matrix as plain data (column-major), for files; convert to `faer::Mat` to compute.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DenseMatrix {
+    pub nrows: usize,
+    pub ncols: usize,
+    /// Column-major values, `nrows * ncols` of them.
+    pub data: Vec<f64>,
+}
+
+impl DenseMatrix {
+    pub fn zeros(nrows: usize, ncols: usize) -> Self {
+        Self { nrows, ncols, data: vec![0.0; nrows * ncols] }
+    }
+
+    pub fn from_faer(m: faer::MatRef<'_, f64>) -> Self {
+        let mut data = Vec::with_capacity(m.nrows() * m.ncols());
+        for j in 0..m.ncols() {
+            for i in 0..m.nrows() {
+                data.push(m[(i, j)]);
+            }
+        }
+        Self { nrows: m.nrows(), ncols: m.ncols(), data }
+    }
+
+    pub fn to_faer(&self) -> faer::Mat<f64> {
+        faer::Mat::from_fn(self.nrows, self.ncols, |i, j| self.data[i + j * self.nrows])
+    }
+
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        self.data[i + j * self.nrows]
+    }
+}
+
+/// One interface of a reduced body: a 6-dof point whose coordinates are CB coordinates.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct InterfacePoint {
+    pub name: String,
+    /// The FE node (index into the FE model's nodes) of the interface.
+    pub node: u32,
+    /// Undeformed position $\mathbf x_k$ in body axes (the FE model's coordinates).
+    pub position: [f64; 3],
+}
+
+/// Rigid-body inertia and the mass-field invariants of the modes (module docs).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct InertiaData {
+    /// Total mass $m = \int \rho\, dV$.
+    pub mass: f64,
+    /// Centre of mass of the undeformed body, FE coordinates.
+    pub center_of_mass: [f64; 3],
+    /// Inertia tensor about the centre of mass, $\int \rho (\mathbf x^T \mathbf x \mathbf 1 -
+    /// \mathbf x \mathbf x^T) dV$ (with the sections' rotary inertia for beams), row-major.
+    pub inertia_com: [[f64; 3]; 3],
+    /// $3 \times n$: $\int \rho\, \mathbf S\, dV$ (translational participation).
+    pub S_t: DenseMatrix,
+    /// $3 \times n$: $\int \rho\, \tilde{\mathbf x} \mathbf S\, dV$ about the centre of mass,
+    /// rotary inertia of beam sections included (rotational participation).
+    pub S_r: DenseMatrix,
+    /// $9 \times n$: row $3k + l$ is $\int \rho\, x_k \mathbf S_l\, dV$ ($\mathbf S_l$: row $l$
+    /// of $\mathbf S$), $\mathbf x$ from the centre of mass.
+    pub S_x: DenseMatrix,
+    /// Nine $n \times n$ matrices: entry $3k + l$ is $\bar{\mathbf S}_{kl} = \int \rho\,
+    /// \mathbf S_k^T \mathbf S_l\, dV$ (translational field only; the rotary inertia of beam
+    /// sections enters $\mathbf M_{CB}$ but not these second-order terms).
+    pub S_bar: Vec<DenseMatrix>,
+}
+
+/// Mode shapes on every FE node, for output and recovery of the deformed mesh.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeshModes {
+    /// Reference coordinates of the FE nodes.
+    pub nodes: Vec<[f64; 3]>,
+    /// $6 n_{nodes} \times n$: the CB basis on every node's six dof slots (zero where a slot
+    /// is inactive or supported).
+    pub shapes: DenseMatrix,
+}
+
+/// A Craig-Bampton reduced body: the data the AIC-FFR superelement reads.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReducedBody {
+    pub format_version: u32,
+    pub name: String,
+    /// Interfaces in the order of the CB coordinates.
+    pub interfaces: Vec<InterfacePoint>,
+    /// Number $m$ of fixed-interface (dynamic) modes.
+    pub n_modes: usize,
+    /// Circular frequencies [rad/s] of the kept fixed-interface modes, ascending.
+    pub fixed_interface_omega: Vec<f64>,
+    /// $\mathbf K_{CB} = \mathbf V^T \mathbf K \mathbf V$, $n \times n$.
+    pub K_CB: DenseMatrix,
+    /// $\mathbf M_{CB} = \mathbf V^T \mathbf M \mathbf V$, $n \times n$.
+    pub M_CB: DenseMatrix,
+    pub inertia: InertiaData,
+    /// $6 \times n$: the CB modes evaluated at the centre of mass by the mass-weighted rigid
+    /// fit $(\boldsymbol\Phi_R^T \mathbf M \boldsymbol\Phi_R)^{-1} \boldsymbol\Phi_R^T \mathbf M
+    /// \mathbf V$ (brief §4), rows: translation, then rotation.
+    pub Phi_com: DenseMatrix,
+    /// Index of the auxiliary interface at the centre of mass, when the body was reduced with
+    /// one (the third frame choice).
+    pub auxiliary_interface: Option<usize>,
+    /// Mode shapes on the mesh, when kept.
+    pub mesh: Option<MeshModes>,
+}
+
+impl ReducedBody {
+    /// Number of CB coordinates $n = 6N + m$.
+    pub fn n_coordinates(&self) -> usize {
+        6 * self.interfaces.len() + self.n_modes
+    }
+}
