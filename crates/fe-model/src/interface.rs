@@ -150,9 +150,12 @@ pub fn add_interface_on_set(
 ///
 /// # Errors
 /// [`FeError::Interface`] naming the interface if the surface is empty, if its nodes
-/// coincide or are collinear (the message says which rotation it cannot carry), or if a
-/// surface dof the spider needs is already dependent on another constraint (or, for RBE2,
-/// supported). [`FeError::UnknownNode`] for a surface node the model does not have.
+/// coincide or are collinear (the message says which rotation it cannot carry), if an RBE2
+/// surface dof is supported or already dependent on another constraint, or if an RBE3 finds no
+/// six free surface dofs to make dependent. [`FeError::UnknownNode`] for a surface node the
+/// model does not have. Spiders on adjacent faces (sharing nodes) are fine: shared dofs are
+/// substituted so that no constraint refers to a dependent dof; two RBE2 spiders, though,
+/// cannot share a node.
 pub fn add_interface(
     model: &mut FeModel,
     name: &str,
@@ -187,11 +190,11 @@ pub fn add_interface(
         .collect();
     for &s in &surface {
         for k in 0..3 {
-            if dependent.contains(&(s, k)) {
+            if kind == SpiderKind::Rbe2 && dependent.contains(&(s, k)) {
                 return Err(interface_error(
                     name,
                     format!(
-                        "surface node {} dof {} is already dependent on another constraint",
+                        "surface node {} dof {} is already dependent on another constraint; an RBE2 spider cannot define it again",
                         model.mesh.node_tags[s.index()],
                         crate::error::DOF_NAMES[k]
                     ),
@@ -211,16 +214,59 @@ pub fn add_interface(
     }
 
     let x_m = at.unwrap_or(centroid);
-    let m = model.add_node(x_m);
+    // The node the interface will get; added only once nothing can fail.
+    let m = NodeId(model.node_count() as u32);
+    let definitions: BTreeMap<(NodeId, u8), Definition> = model
+        .constraints
+        .iter()
+        .map(|c| (c.dependent, c.terms.clone()))
+        .collect();
     let constraints = match kind {
         SpiderKind::Rbe2 => rbe2_constraints(name, m, &x_m, &surface, &X),
         SpiderKind::Rbe3 => {
-            let candidate = |s: NodeId, k: usize| !supported.contains(&(s, k));
-            rbe3_constraints(name, m, &x_m, &surface, &X, &weights, candidate)?
+            let candidate = |s: NodeId, k: usize| !supported.contains(&(s, k)) && !dependent.contains(&(s, k));
+            rbe3_constraints(name, m, &x_m, &surface, &X, &weights, &definitions, candidate)?
         }
     };
+    let added = model.add_node(x_m);
+    debug_assert_eq!(added, m);
+    substitute(&mut model.constraints, &constraints);
     model.constraints.extend(constraints);
     Ok(m)
+}
+
+/// Keeps every constraint's right-hand side independent when spiders share surface nodes
+/// (adjacent faces share their edge): a dof that a `new` constraint defines is replaced by its
+/// definition wherever an `existing` constraint uses it. The `new` rows refer to independent
+/// dofs only (RBE2: the interface node; RBE3: see [`rbe3_constraints`]), so no chain remains
+/// for [`crate::DofMap`] to refuse, and the constrained motions are unchanged.
+fn substitute(existing: &mut [LinearConstraint], new: &[LinearConstraint]) {
+    let fresh: BTreeMap<(NodeId, u8), &Definition> = new.iter().map(|c| (c.dependent, &c.terms)).collect();
+    for c in existing.iter_mut() {
+        if !c.terms.iter().any(|t| fresh.contains_key(&(t.0, t.1))) {
+            continue;
+        }
+        // Sum coefficients per dof, in first-seen order, so that the rows stay short.
+        let mut order: Vec<(NodeId, u8)> = Vec::new();
+        let mut sum: BTreeMap<(NodeId, u8), f64> = BTreeMap::new();
+        let mut add = |key: (NodeId, u8), v: f64| {
+            if !sum.contains_key(&key) {
+                order.push(key);
+            }
+            *sum.entry(key).or_insert(0.0) += v;
+        };
+        for &(node, k, v) in &c.terms {
+            match fresh.get(&(node, k)) {
+                Some(def) => def.iter().for_each(|&(n2, k2, v2)| add((n2, k2), v * v2)),
+                None => add((node, k), v),
+            }
+        }
+        c.terms = order
+            .into_iter()
+            .map(|key| (key.0, key.1, sum[&key]))
+            .filter(|t| t.2 != 0.0)
+            .collect();
+    }
 }
 
 /// RBE2 rows: $u_{s,i} = u_{m,i} + (\boldsymbol\theta_m \times \mathbf r_s)_i$.
@@ -259,7 +305,13 @@ fn rigid_map(r: &Vector3<f64>) -> nalgebra::SMatrix<f64, 3, 6> {
     S
 }
 
-/// RBE3 rows by the "UM" elimination (see [`add_interface`]).
+/// A linear definition of a dependent dof: its terms $(node, dof, c)$.
+type Definition = Vec<(NodeId, u8, f64)>;
+
+/// RBE3 rows by the "UM" elimination (see [`add_interface`]). `definitions` holds the
+/// existing constraints: a surface dof that one of them defines is replaced by its definition
+/// before the dependent dofs are chosen, so the new rows refer to independent dofs only.
+#[allow(clippy::too_many_arguments)]
 fn rbe3_constraints(
     name: &str,
     m: NodeId,
@@ -267,9 +319,9 @@ fn rbe3_constraints(
     surface: &[NodeId],
     X: &[Point3<f64>],
     weights: &[f64],
+    definitions: &BTreeMap<(NodeId, u8), Definition>,
     candidate: impl Fn(NodeId, usize) -> bool,
 ) -> Result<Vec<LinearConstraint>, FeError> {
-    let n = surface.len();
     let mut A = Matrix6::zeros();
     for (x_s, &w) in X.iter().zip(weights) {
         let S = rigid_map(&(x_s - x_m));
@@ -278,13 +330,37 @@ fn rbe3_constraints(
     let A_inv = A
         .try_inverse()
         .ok_or_else(|| interface_error(name, "the RBE3 normal matrix is singular".into()))?;
-    let mut G = DMatrix::zeros(6, 3 * n);
-    for (s, (x_s, &w)) in X.iter().zip(weights).enumerate() {
-        let S = rigid_map(&(x_s - x_m));
-        G.view_mut((0, 3 * s), (6, 3)).copy_from(&(w * A_inv * S.transpose()));
+    // Columns of G over independent dofs: [u_m; theta_m] = G u_cols.
+    let mut columns: Vec<(NodeId, u8)> = Vec::new();
+    let mut index: BTreeMap<(NodeId, u8), usize> = BTreeMap::new();
+    let mut entries: Vec<(usize, nalgebra::Vector6<f64>)> = Vec::new();
+    let mut add = |key: (NodeId, u8), g: nalgebra::Vector6<f64>| {
+        let next = columns.len();
+        let c = *index.entry(key).or_insert(next);
+        if c == next {
+            columns.push(key);
+        }
+        entries.push((c, g));
+    };
+    for ((&s, x_s), &w) in surface.iter().zip(X).zip(weights) {
+        let G_s = w * A_inv * rigid_map(&(x_s - x_m)).transpose();
+        for k in 0..3u8 {
+            let g = G_s.column(k as usize).into_owned();
+            match definitions.get(&(s, k)) {
+                Some(def) => def.iter().for_each(|&(n2, k2, c)| add((n2, k2), c * g)),
+                None => add((s, k), g),
+            }
+        }
+    }
+    let nc = columns.len();
+    let mut G = DMatrix::zeros(6, nc);
+    for (c, g) in entries {
+        let mut col = G.column_mut(c);
+        col += g;
     }
     // Choose six columns by column-pivoted Gram-Schmidt on G with the rotation rows scaled to
     // lengths (they act on translations / length otherwise, and pivoting would be unit-biased).
+    // Candidates: this surface's own translations that are free.
     let w_sum: f64 = weights.iter().sum();
     let ell = (X
         .iter()
@@ -294,15 +370,20 @@ fn rbe3_constraints(
         / w_sum)
         .sqrt()
         .max(f64::MIN_POSITIVE);
+    let own: BTreeSet<NodeId> = surface.iter().copied().collect();
+    let is_candidate = |c: usize| {
+        let (node, k) = columns[c];
+        own.contains(&node) && k < 3 && candidate(node, k as usize)
+    };
     let mut Q = G.clone();
     for r in 3..6 {
         Q.row_mut(r).scale_mut(ell);
     }
     let mut chosen: Vec<usize> = Vec::with_capacity(6);
-    let initial = (0..3 * n).map(|c| Q.column(c).norm()).fold(0.0, f64::max);
+    let initial = (0..nc).map(|c| Q.column(c).norm()).fold(0.0, f64::max);
     for _ in 0..6 {
-        let best = (0..3 * n)
-            .filter(|&c| !chosen.contains(&c) && candidate(surface[c / 3], c % 3))
+        let best = (0..nc)
+            .filter(|&c| !chosen.contains(&c) && is_candidate(c))
             .map(|c| (c, Q.column(c).norm()))
             .max_by(|a, b| a.1.total_cmp(&b.1));
         // 1e-10: far above the round-off left in a column after orthogonalisation against
@@ -310,11 +391,11 @@ fn rbe3_constraints(
         let Some((c, norm)) = best.filter(|&(_, norm)| norm > 1e-10 * initial) else {
             return Err(interface_error(
                 name,
-                "no six surface dofs can carry the interface motion (too many surface dofs are supported)".into(),
+                "no six free surface dofs can carry the interface motion (too many surface dofs are supported or already dependent)".into(),
             ));
         };
         let q = Q.column(c) / norm;
-        for j in 0..3 * n {
+        for j in 0..nc {
             let p = q.dot(&Q.column(j));
             Q.column_mut(j).axpy(-p, &q, 1.0);
         }
@@ -331,20 +412,20 @@ fn rbe3_constraints(
     let H = G_d_inv * &G;
     let mut out = Vec::with_capacity(6);
     for (i, &c) in chosen.iter().enumerate() {
-        let mut terms = Vec::with_capacity(3 * n);
+        let mut terms = Vec::with_capacity(nc);
         for k in 0..6 {
             if G_d_inv[(i, k)] != 0.0 {
                 terms.push((m, k as u8, G_d_inv[(i, k)]));
             }
         }
-        for j in (0..3 * n).filter(|j| !chosen.contains(j)) {
+        for j in (0..nc).filter(|j| !chosen.contains(j)) {
             if H[(i, j)] != 0.0 {
-                terms.push((surface[j / 3], (j % 3) as u8, -H[(i, j)]));
+                terms.push((columns[j].0, columns[j].1, -H[(i, j)]));
             }
         }
         out.push(LinearConstraint {
             name: name.to_string(),
-            dependent: (surface[c / 3], (c % 3) as u8),
+            dependent: columns[c],
             terms,
         });
     }

@@ -49,7 +49,9 @@ pub mod statics;
 
 pub use assembly::{assemble, assemble_into, Assembled};
 pub use dof::{Dof, DofMap, DofStatus};
-pub use element::{Beam2, BeamTheory, Element, LocalMatrices, MassKind, Properties};
+pub use box_mesh::{box_mesh, solid_model, solid_model_with_materials};
+pub use element::{Beam2, BeamTheory, Element, LocalMatrices, MassKind, Properties, Solid, SolidKind};
+pub use interface::{add_interface, add_interface_on_set, Interface, Interfaces, SpiderKind};
 pub use error::{ElementError, FeError, PropertyError, DOF_NAMES};
 pub use mesh::{Cell, CellId, CellKind, Mesh, NodeId};
 pub use modal::{modal_dense, ModalSolution};

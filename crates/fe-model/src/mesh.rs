@@ -28,8 +28,9 @@ impl CellId {
     }
 }
 
-/// Topology of a mesh cell. Node orderings are ours (documented on each element kind in
-/// `crate::element`); the gmsh reader converts from gmsh's ordering.
+/// Topology of a mesh cell. Node orderings are gmsh's (drawn on each element kind in
+/// `crate::element`), so the gmsh reader's permutations are the identity; a VTK writer must
+/// reorder (tet10 swaps nodes 8 and 9; hex20 differs more).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum CellKind {
     Line2,

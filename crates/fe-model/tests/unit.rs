@@ -10,6 +10,13 @@ mod unit {
     /// gmsh reader: fixtures in four encodings agree, inline parse cases, node orderings
     /// against gmsh's reference elements, located errors, no panic on random/cut/mutated input.
     mod gmsh;
+    /// Solid elements (tet4, tet10, hex8, hex20, wedge6): shape functions, patch tests, rigid
+    /// modes, mass, box meshes, solid models; cantilever vs Timoshenko; tet4 locking.
+    mod solid;
+    /// Quadrature rules: exactness degrees.
+    mod quadrature;
+    /// RBE2/RBE3 interface nodes on solids: rigid patch, no added stiffness, bad sets.
+    mod interface;
     /// Structure-level beam tests against `benchmarks.md` A1/A2: statics to round-off,
     /// frequencies within 0.1 % and converging, the Timoshenko frequency equation.
     mod beam_structure;

@@ -12,8 +12,8 @@
 
 use crate::eigen::{EigenSettings, Shift, ShiftInvert};
 use crate::error::ReductionError;
-use crate::invariants::inertia_data;
-use crate::reduced_body::{DenseMatrix, InterfacePoint, MeshModes, ReducedBody, FORMAT_VERSION};
+use crate::invariants::{inertia_data, inertia_data_from_mass};
+use crate::reduced_body::{DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, FORMAT_VERSION};
 use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
 use faer::Mat;
 use fe_model::{assemble, DofMap, DofStatus, FeModel, NodeId, SystemPattern, DOF_NAMES};
@@ -61,48 +61,63 @@ pub struct Partition {
 
 /// Splits the free dofs of `dofs` into boundary (the interface nodes' six dofs) and internal.
 pub fn partition(model: &FeModel, dofs: &DofMap, interfaces: &[(String, NodeId)]) -> Result<Partition, ReductionError> {
-    let n = dofs.n_free();
-    let mut position: Vec<Option<Result<usize, usize>>> = vec![None; n];
+    let tag = |node: usize| model.mesh.node_tags.get(node).copied().unwrap_or(node as u64 + 1);
+    let interfaces: Vec<(String, usize)> = interfaces.iter().map(|(n, node)| (n.clone(), node.index())).collect();
+    partition_by(dofs.n_free(), model.node_count(), &interfaces, &|node| format!("node {}", tag(node)), &|node, k| {
+        match dofs.status(NodeId(node as u32), k) {
+            DofStatus::Free(d) => Ok(d.index()),
+            DofStatus::Inactive => Err("inactive (no element or spider uses it)"),
+            DofStatus::Supported => Err("supported"),
+            DofStatus::Dependent => Err("dependent (a spider defines it)"),
+        }
+    })
+}
+
+/// The partition for any model: `slot(node, k)` is the free dof of dof `k` of `node`, or why
+/// that slot has none; `label(node)` names a node in messages (its tag for an FE model, its
+/// index for external matrices).
+fn partition_by(
+    n_free: usize,
+    n_nodes: usize,
+    interfaces: &[(String, usize)],
+    label: &dyn Fn(usize) -> String,
+    slot: &dyn Fn(usize, usize) -> Result<usize, &'static str>,
+) -> Result<Partition, ReductionError> {
+    let mut position: Vec<Option<Result<usize, usize>>> = vec![None; n_free];
     let mut boundary = Vec::with_capacity(6 * interfaces.len());
     for (name, node) in interfaces {
-        if node.index() >= model.node_count() {
+        if *node >= n_nodes {
             return Err(ReductionError::Interface {
                 name: name.clone(),
-                what: format!("node {} does not exist (the model has {} nodes)", node.0, model.node_count()),
+                what: format!("node {node} does not exist (the model has {n_nodes} nodes)"),
             });
         }
         for k in 0..6 {
-            match dofs.status(*node, k) {
-                DofStatus::Free(d) => {
-                    if position[d.index()].is_some() {
+            match slot(*node, k) {
+                Ok(d) => {
+                    if position[d].is_some() {
                         return Err(ReductionError::Interface {
                             name: name.clone(),
-                            what: format!("node {} is used by two interfaces", model.mesh.node_tags[node.index()]),
+                            what: format!("{} is used by two interfaces", label(*node)),
                         });
                     }
-                    position[d.index()] = Some(Ok(boundary.len()));
-                    boundary.push(d.index());
+                    position[d] = Some(Ok(boundary.len()));
+                    boundary.push(d);
                 }
-                other => {
+                Err(why) => {
                     return Err(ReductionError::Interface {
                         name: name.clone(),
                         what: format!(
-                            "dof {} of node {} is {} but an interface needs all six dofs free (beam node, or an RBE2/RBE3 interface node of a solid)",
+                            "dof {} of {} is {why} but an interface needs all six dofs free (beam node, or an RBE2/RBE3 interface node of a solid)",
                             DOF_NAMES[k],
-                            model.mesh.node_tags[node.index()],
-                            match other {
-                                DofStatus::Inactive => "inactive (no element or spider uses it)",
-                                DofStatus::Supported => "supported",
-                                DofStatus::Dependent => "dependent (a spider defines it)",
-                                DofStatus::Free(_) => unreachable!(),
-                            }
+                            label(*node),
                         ),
                     });
                 }
             }
         }
     }
-    let mut internal = Vec::with_capacity(n - boundary.len());
+    let mut internal = Vec::with_capacity(n_free - boundary.len());
     let position = position
         .into_iter()
         .enumerate()
@@ -138,58 +153,55 @@ fn split(A: SparseColMatRef<'_, usize, f64>, p: &Partition) -> Result<(SparseCol
     Ok((A_ii, A_ib))
 }
 
-/// Reduces `model` with the given interfaces (name, node) by Craig-Bampton.
-///
-/// Interfaces are beam nodes or the 6-dof nodes of RBE2/RBE3 spiders on solids; their six
-/// dofs must be free. The FE model's own supports are kept (a body clamped in the FE model
-/// stays clamped).
-pub fn reduce(
-    model: &FeModel,
-    name: &str,
-    interfaces: &[(String, NodeId)],
-    settings: &CbSettings,
-) -> Result<ReducedBody, ReductionError> {
-    let mut interfaces: Vec<(String, NodeId)> = interfaces.to_vec();
-    let auxiliary_interface = settings.auxiliary_node.map(|node| {
-        interfaces.push(("auxiliary".to_string(), node));
-        interfaces.len() - 1
-    });
-    if interfaces.is_empty() {
-        return Err(ReductionError::Interface { name: name.into(), what: "a reduced body needs at least one interface".into() });
-    }
-    let dofs = DofMap::new(model).map_err(ReductionError::from_fe)?;
-    let pattern = SystemPattern::new(model, &dofs);
-    let a = assemble(model, &pattern).map_err(ReductionError::from_fe)?;
-    let p = partition(model, &dofs, &interfaces)?;
-    let (nb, ni, n_free) = (p.boundary.len(), p.internal.len(), dofs.n_free());
+/// The CB basis on the free dofs and the reduced matrices: what [`reduce`] and
+/// [`reduce_external`] share.
+struct Projection {
+    /// $\mathbf V$, free dofs x $n$.
+    V: Mat<f64>,
+    /// Circular frequencies of the kept fixed-interface modes.
+    omega: Vec<f64>,
+    K_CB: Mat<f64>,
+    M_CB: Mat<f64>,
+}
 
+/// The core of the reduction, independent of where $\mathbf K$ and $\mathbf M$ came from:
+/// constraint modes and fixed-interface modes from one factorisation of $\mathbf K_{ii}$,
+/// the basis $\mathbf V$ and the projections (module docs). `describe(d)` names free dof `d`
+/// in messages.
+fn project(
+    K: SparseColMatRef<'_, usize, f64>,
+    M: SparseColMatRef<'_, usize, f64>,
+    p: &Partition,
+    modes: ModeSelection,
+    name: &str,
+    describe: &dyn Fn(usize) -> String,
+) -> Result<Projection, ReductionError> {
+    let (nb, ni, n_free) = (p.boundary.len(), p.internal.len(), K.nrows());
     // One factorisation of K_ii for the constraint modes and the fixed-interface modes.
-    let (K_ii, K_ib) = split(a.K.as_ref(), &p)?;
-    let (M_ii, _) = split(a.M.as_ref(), &p)?;
+    let (K_ii, K_ib) = split(K, p)?;
+    let (M_ii, _) = split(M, p)?;
     let (Psi, Phi_i, omega) = if ni == 0 {
         (Mat::zeros(0, nb), Mat::zeros(0, 0), Vec::new())
     } else {
         let factor = ShiftInvert::new(K_ii.as_ref(), M_ii.as_ref(), 0.0).map_err(|e| match e {
-            ReductionError::SingularStiffness { dof, .. } => {
-                let (tag, k) = dofs.describe(fe_model::Dof(p.internal[dof] as u32));
-                ReductionError::Interface {
-                    name: name.into(),
-                    what: format!(
-                        "with the interfaces held, the body can still move without straining near node {tag} dof {k}: add an interface or a support there"
-                    ),
-                }
-            }
+            ReductionError::SingularStiffness { dof, .. } => ReductionError::Interface {
+                name: name.into(),
+                what: format!(
+                    "with the interfaces held, the body can still move without straining near {}: add an interface or a support there",
+                    describe(p.internal[dof])
+                ),
+            },
             other => other,
         })?;
         // (brief §3) Psi = -K_ii^{-1} K_ib: 6N solves with the one factor.
         let mut Psi = -&K_ib;
         factor.solve_in_place(Psi.as_mut());
-        let (Phi_i, omega) = fixed_interface_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), settings.modes, ni)?;
+        let (Phi_i, omega) = fixed_interface_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), modes, ni)?;
         (Psi, Phi_i, omega)
     };
     let m = omega.len();
     let n = nb + m;
-    // V on the free dofs, in the free-dof order of the FE model.
+    // V on the free dofs, in the free-dof order of the model.
     let mut V = Mat::<f64>::zeros(n_free, n);
     for (b, &d) in p.boundary.iter().enumerate() {
         V[(d, b)] = 1.0;
@@ -202,27 +214,34 @@ pub fn reduce(
             V[(d, nb + c)] = Phi_i[(i, c)];
         }
     }
-    let KV = &a.K * &V;
-    let MV = &a.M * &V;
+    let KV = K * &V;
+    let MV = M * &V;
     let K_CB = symmetrize(V.transpose() * &KV);
     let M_CB = symmetrize(V.transpose() * &MV);
+    Ok(Projection { V, omega, K_CB, M_CB })
+}
 
-    let positions: Vec<[f64; 3]> = model.mesh.nodes.iter().map(|x| [x.x, x.y, x.z]).collect();
-    // The CB basis on every node's six slots: S_full = T V (dependent slots follow their spider).
-    let mut S_full = Mat::<f64>::zeros(6 * model.node_count(), n);
-    for slot in 0..6 * model.node_count() {
-        let (d, c) = dofs.row(slot);
-        for (&dof, &coef) in d.iter().zip(c) {
-            for col in 0..n {
-                S_full[(slot, col)] += coef * V[(dof as usize, col)];
-            }
-        }
-    }
-    let (inertia, Phi_com) = inertia_data(model, &S_full)?;
+/// The last step shared by [`reduce`] and [`reduce_external`]: checks the auxiliary node
+/// against the centre of mass and packs the [`ReducedBody`].
+struct BodyParts<'a> {
+    name: &'a str,
+    interfaces: &'a [(String, usize)],
+    nodes: Vec<[f64; 3]>,
+    projection: Projection,
+    S_full: Mat<f64>,
+    inertia: InertiaData,
+    Phi_com: Mat<f64>,
+    auxiliary_interface: Option<usize>,
+    keep_mesh_shapes: bool,
+}
+
+fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
+    let BodyParts { name, interfaces, nodes, projection, S_full, inertia, Phi_com, auxiliary_interface, keep_mesh_shapes } =
+        parts;
     if let Some(aux) = auxiliary_interface {
-        let x = positions[interfaces[aux].1.index()];
+        let x = nodes[interfaces[aux].1];
         let c = inertia.center_of_mass;
-        let size = model.mesh.nodes.iter().map(|p| p.coords.norm()).fold(0.0f64, f64::max).max(1e-300);
+        let size = nodes.iter().map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0f64, f64::max).max(1e-300);
         let d = ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2) + (x[2] - c[2]).powi(2)).sqrt();
         // The auxiliary frame is defined at the centre of mass; a node off it by more than a
         // millionth of the body's size was placed wrongly.
@@ -233,22 +252,265 @@ pub fn reduce(
             });
         }
     }
+    let Projection { omega, K_CB, M_CB, .. } = projection;
     Ok(ReducedBody {
         format_version: FORMAT_VERSION,
         name: name.to_string(),
         interfaces: interfaces
             .iter()
-            .map(|(name, node)| InterfacePoint { name: name.clone(), node: node.0, position: positions[node.index()] })
+            .map(|(name, node)| InterfacePoint { name: name.clone(), node: *node as u32, position: nodes[*node] })
             .collect(),
-        n_modes: m,
+        n_modes: omega.len(),
         fixed_interface_omega: omega,
         K_CB: DenseMatrix::from_faer(K_CB.as_ref()),
         M_CB: DenseMatrix::from_faer(M_CB.as_ref()),
         inertia,
         Phi_com: DenseMatrix::from_faer(Phi_com.as_ref()),
         auxiliary_interface,
-        mesh: settings.keep_mesh_shapes.then(|| MeshModes { nodes: positions, shapes: DenseMatrix::from_faer(S_full.as_ref()) }),
+        mesh: keep_mesh_shapes.then(|| MeshModes { nodes, shapes: DenseMatrix::from_faer(S_full.as_ref()) }),
     })
+}
+
+/// The interface list with the auxiliary node appended (named `auxiliary`), and its index.
+fn with_auxiliary(
+    name: &str,
+    interfaces: &[(String, usize)],
+    auxiliary_node: Option<NodeId>,
+) -> Result<(Vec<(String, usize)>, Option<usize>), ReductionError> {
+    let mut interfaces = interfaces.to_vec();
+    let auxiliary_interface = auxiliary_node.map(|node| {
+        interfaces.push(("auxiliary".to_string(), node.index()));
+        interfaces.len() - 1
+    });
+    if interfaces.is_empty() {
+        return Err(ReductionError::Interface { name: name.into(), what: "a reduced body needs at least one interface".into() });
+    }
+    Ok((interfaces, auxiliary_interface))
+}
+
+/// Reduces `model` with the given interfaces (name, node) by Craig-Bampton.
+///
+/// Interfaces are beam nodes or the 6-dof nodes of RBE2/RBE3 spiders on solids; their six
+/// dofs must be free. The FE model's own supports are kept (a body clamped in the FE model
+/// stays clamped).
+pub fn reduce(
+    model: &FeModel,
+    name: &str,
+    interfaces: &[(String, NodeId)],
+    settings: &CbSettings,
+) -> Result<ReducedBody, ReductionError> {
+    let interfaces: Vec<(String, usize)> = interfaces.iter().map(|(n, node)| (n.clone(), node.index())).collect();
+    let (interfaces, auxiliary_interface) = with_auxiliary(name, &interfaces, settings.auxiliary_node)?;
+    let dofs = DofMap::new(model).map_err(ReductionError::from_fe)?;
+    let pattern = SystemPattern::new(model, &dofs);
+    let a = assemble(model, &pattern).map_err(ReductionError::from_fe)?;
+    let node_ids: Vec<(String, NodeId)> = interfaces.iter().map(|(n, i)| (n.clone(), NodeId(*i as u32))).collect();
+    let p = partition(model, &dofs, &node_ids)?;
+    let describe = |d: usize| {
+        let (tag, k) = dofs.describe(fe_model::Dof(d as u32));
+        format!("node {tag} dof {k}")
+    };
+    let projection = project(a.K.as_ref(), a.M.as_ref(), &p, settings.modes, name, &describe)?;
+    let n = projection.V.ncols();
+    // The CB basis on every node's six slots: S_full = T V (dependent slots follow their spider).
+    let mut S_full = Mat::<f64>::zeros(6 * model.node_count(), n);
+    for slot in 0..6 * model.node_count() {
+        let (d, c) = dofs.row(slot);
+        for (&dof, &coef) in d.iter().zip(c) {
+            for col in 0..n {
+                S_full[(slot, col)] += coef * projection.V[(dof as usize, col)];
+            }
+        }
+    }
+    let (inertia, Phi_com) = inertia_data(model, &S_full)?;
+    finish(BodyParts {
+        name,
+        interfaces: &interfaces,
+        nodes: model.mesh.nodes.iter().map(|x| [x.x, x.y, x.z]).collect(),
+        projection,
+        S_full,
+        inertia,
+        Phi_com,
+        auxiliary_interface,
+        keep_mesh_shapes: settings.keep_mesh_shapes,
+    })
+}
+
+/// Reduces a model given as matrices, from another FE code: node coordinates, $\mathbf K$
+/// and $\mathbf M$ with `dofs_per_node` (3 or 6) dofs for every node, in node order
+/// (row $d$ is dof $d \bmod$ `dofs_per_node` of node $\lfloor d/$`dofs_per_node`$\rfloor$,
+/// dofs ordered $[u_x, u_y, u_z, \theta_x, \theta_y, \theta_z]$). Interfaces are `(name,
+/// node index)`; each needs six dofs, so with `dofs_per_node = 3` (a solid mesh) use
+/// [`reduce_external_dofs`], where the interface nodes (of RBE2/RBE3 spiders already
+/// eliminated by the other code) carry six dofs and the others three.
+///
+/// Same result as [`reduce`] for the same matrices (`tests/unit/matrix_market.rs` checks it
+/// to round-off), except for the mass data; see [`reduce_external_dofs`].
+pub fn reduce_external(
+    nodes: &[[f64; 3]],
+    K: SparseColMatRef<'_, usize, f64>,
+    M: SparseColMatRef<'_, usize, f64>,
+    dofs_per_node: usize,
+    name: &str,
+    interfaces: &[(String, usize)],
+    settings: &CbSettings,
+) -> Result<ReducedBody, ReductionError> {
+    if dofs_per_node != 3 && dofs_per_node != 6 {
+        return Err(ReductionError::ExternalModel {
+            what: format!("dofs_per_node must be 3 (solids) or 6 (beams, shells), got {dofs_per_node}"),
+        });
+    }
+    if K.nrows() != nodes.len() * dofs_per_node {
+        return Err(ReductionError::ExternalModel {
+            what: format!(
+                "K has {} rows but {} nodes x {dofs_per_node} dofs per node make {}",
+                K.nrows(),
+                nodes.len(),
+                nodes.len() * dofs_per_node
+            ),
+        });
+    }
+    let dofs: Vec<(usize, usize)> = (0..K.nrows()).map(|d| (d / dofs_per_node, d % dofs_per_node)).collect();
+    reduce_external_dofs(nodes, K, M, &dofs, name, interfaces, settings)
+}
+
+/// [`reduce_external`] with an explicit dof list: row $d$ of $\mathbf K$ and $\mathbf M$ is
+/// dof `dofs[d].1` (0..6, $[u_x, u_y, u_z, \theta_x, \theta_y, \theta_z]$) of node
+/// `dofs[d].0`. Nodes may carry any subset of their six dofs (three for solid nodes, six for
+/// interface nodes, none for a node whose dofs the other code eliminated).
+///
+/// # Mass data
+/// [`reduce`] computes the mass, centre of mass, inertia tensor and invariants from the mass
+/// matrix of the body *without* supports or spiders (`invariants` module docs). Here only the
+/// given $\mathbf M$ exists, so they are computed from it, on the given dofs:
+/// - supports eliminated by the other code take their mass with them (a clamped node's mass
+///   is missing from the total); spiders eliminated by elimination keep it exactly for the
+///   rigid-body data (mass, centre, inertia, $\int\rho\mathbf S$, $\int\rho\tilde{\mathbf x}
+///   \mathbf S$), because a rigid motion of the independent dofs is a rigid motion of the
+///   dependent ones (RBE2 and RBE3 both reproduce rigid motion);
+/// - the second-order invariants place scalar fields in the translation slots of the given
+///   dofs only, so with spiders eliminated the mass of the dependent surface nodes, lumped
+///   into the interface node's six dofs, is seen at the interface node: an approximation
+///   where [`reduce`] is exact for solids;
+/// - the mesh shapes ([`MeshModes`]) hold zeros in the slots the matrices do not have.
+///
+/// # Errors
+/// [`ReductionError::ExternalModel`] for inconsistent sizes, a dof listed twice, a node index
+/// out of range or a non-symmetric matrix (with the offending entry);
+/// [`ReductionError::Interface`] for an interface node without its six dofs; and every
+/// error of [`reduce`]'s eigen solution.
+pub fn reduce_external_dofs(
+    nodes: &[[f64; 3]],
+    K: SparseColMatRef<'_, usize, f64>,
+    M: SparseColMatRef<'_, usize, f64>,
+    dofs: &[(usize, usize)],
+    name: &str,
+    interfaces: &[(String, usize)],
+    settings: &CbSettings,
+) -> Result<ReducedBody, ReductionError> {
+    let n_free = dofs.len();
+    for (what, A) in [("K", K), ("M", M)] {
+        if A.nrows() != n_free || A.ncols() != n_free {
+            return Err(ReductionError::ExternalModel {
+                what: format!("{what} is {} x {} but the dof list has {n_free} dofs", A.nrows(), A.ncols()),
+            });
+        }
+        check_symmetric_entries(A, what)?;
+    }
+    if let Some(bad) = nodes.iter().position(|x| x.iter().any(|c| !c.is_finite())) {
+        return Err(ReductionError::ExternalModel { what: format!("node {bad} has a non-finite coordinate {:?}", nodes[bad]) });
+    }
+    let mut slot_dof: Vec<Option<usize>> = vec![None; 6 * nodes.len()];
+    for (d, &(node, k)) in dofs.iter().enumerate() {
+        if node >= nodes.len() || k >= 6 {
+            return Err(ReductionError::ExternalModel {
+                what: format!("dof {d} is dof {k} of node {node}, but there are {} nodes and 6 dofs per node", nodes.len()),
+            });
+        }
+        if let Some(other) = slot_dof[6 * node + k].replace(d) {
+            return Err(ReductionError::ExternalModel {
+                what: format!("dofs {other} and {d} are both dof {} of node {node}", DOF_NAMES[k]),
+            });
+        }
+    }
+    let (interfaces, auxiliary_interface) = with_auxiliary(name, interfaces, settings.auxiliary_node)?;
+    let p = partition_by(n_free, nodes.len(), &interfaces, &|node| format!("node {node} (index)"), &|node, k| {
+        slot_dof[6 * node + k].ok_or("not in the matrices")
+    })?;
+    let describe = |d: usize| format!("node {} (index) dof {}", dofs[d].0, DOF_NAMES[dofs[d].1]);
+    let projection = project(K, M, &p, settings.modes, name, &describe)?;
+    let n = projection.V.ncols();
+    let mut S_full = Mat::<f64>::zeros(6 * nodes.len(), n);
+    for (d, &(node, k)) in dofs.iter().enumerate() {
+        for col in 0..n {
+            S_full[(6 * node + k, col)] = projection.V[(d, col)];
+        }
+    }
+    let slots: Vec<usize> = dofs.iter().map(|&(node, k)| 6 * node + k).collect();
+    let (inertia, Phi_com) = inertia_data_from_mass(M, &slots, nodes, &S_full)?;
+    finish(BodyParts {
+        name,
+        interfaces: &interfaces,
+        nodes: nodes.to_vec(),
+        projection,
+        S_full,
+        inertia,
+        Phi_com,
+        auxiliary_interface,
+        keep_mesh_shapes: settings.keep_mesh_shapes,
+    })
+}
+
+/// Refuses a matrix whose entries $(i, j)$ and $(j, i)$ differ, naming the first such pair.
+///
+/// Tolerance $10^{-10} \max|A|$: an assembled matrix is symmetric to a few ulps of its
+/// largest entries (each entry is a sum of element contributions added in the same order for
+/// both triangles, up to the order of a few terms), and a file written by another code
+/// prints $a_{ij}$ and $a_{ji}$ with the same digits, so a real asymmetry or a missing
+/// triangle stands out by many orders of magnitude.
+fn check_symmetric_entries(A: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<(), ReductionError> {
+    let mut entries: Vec<(usize, usize, f64)> = Vec::with_capacity(A.compute_nnz());
+    let mut max = 0.0f64;
+    for j in 0..A.ncols() {
+        for (&i, &v) in A.row_idx_of_col_raw(j).iter().zip(A.val_of_col(j)) {
+            entries.push((i, j, v));
+            max = max.max(v.abs());
+        }
+    }
+    if !max.is_finite() {
+        return Err(ReductionError::ExternalModel { what: format!("{what} has a non-finite entry") });
+    }
+    // Sum duplicates (faer matrices built from triplets have none; be safe).
+    let sorted = |key: &dyn Fn(&(usize, usize, f64)) -> (usize, usize)| {
+        let mut e: Vec<((usize, usize), f64)> = entries.iter().map(|t| (key(t), t.2)).collect();
+        e.sort_by_key(|x| x.0);
+        e.dedup_by(|b, a| {
+            if a.0 == b.0 {
+                a.1 += b.1;
+                true
+            } else {
+                false
+            }
+        });
+        e
+    };
+    let by_col = sorted(&|t| (t.0, t.1));
+    let by_row = sorted(&|t| (t.1, t.0));
+    let tol = 1e-10 * max;
+    let value = |list: &[((usize, usize), f64)], key: (usize, usize)| {
+        list.binary_search_by_key(&key, |x| x.0).map(|p| list[p].1).unwrap_or(0.0)
+    };
+    for &((i, j), v) in &by_col {
+        let w = value(&by_row, (i, j));
+        if (v - w).abs() > tol {
+            return Err(ReductionError::ExternalModel {
+                what: format!(
+                    "{what} is not symmetric: entry ({i}, {j}) is {v:e} but ({j}, {i}) is {w:e} (0-based; both triangles must be stored, and equal to within {tol:.1e})"
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// $\frac12(\mathbf A + \mathbf A^T)$: the projections are symmetric up to round-off; make

@@ -78,22 +78,20 @@
 
 use crate::error::ReductionError;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::factor::LltError;
 use faer::linalg::temp_mat_zeroed;
-use faer::matrix_free::eigen::{
-    partial_self_adjoint_eigen, partial_self_adjoint_eigen_scratch, PartialEigenParams,
-};
+use faer::mat::AsMatMut;
+use faer::matrix_free::eigen::{partial_self_adjoint_eigen, partial_self_adjoint_eigen_scratch, PartialEigenParams};
 use faer::matrix_free::LinOp;
 use faer::prelude::*;
 use faer::sparse::linalg::cholesky::simplicial::SimplicialLltRef;
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
-    SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering,
 };
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::linalg::triangular_solve;
-use faer::linalg::cholesky::llt::factor::LltError;
-use faer::mat::AsMatMut;
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::{Accum, Conj, Side};
 use rayon::prelude::*;
@@ -129,6 +127,11 @@ pub const SINGULAR_PIVOT_RATIO: f64 = 1e3 * f64::EPSILON;
 /// estimate only through the conditioning of $\mathbf L$ (see [`relative_residual`]), so
 /// the Krylov solve is asked for a little more than the user.
 pub const KRYLOV_TOLERANCE_FACTOR: f64 = 0.1;
+
+/// Largest $n$ solved densely when faer's Krylov-Schur cannot run (it needs $n$ above its
+/// subspace dimension $\max(64, 2m)$): the dense path costs $n$ operator applications and an
+/// $O(n^3)$ eigendecomposition.
+pub const DENSE_LIMIT: usize = 2000;
 
 /// At most this many Krylov-Schur runs, each with a tighter locking tolerance than the last,
 /// before [`ReductionError::EigenNotConverged`] is returned.
@@ -186,7 +189,7 @@ impl Shift {
                 let mid = ratios.len() / 2;
                 let (_, median, _) = ratios.select_nth_unstable_by(mid, f64::total_cmp);
                 Ok(-AUTO_SHIFT_FRACTION * *median)
-            },
+            }
         }
     }
 }
@@ -213,7 +216,13 @@ pub struct EigenSettings {
 impl EigenSettings {
     /// `n_modes` modes with `shift`, tolerance `1e-8`, 1000 restarts, faer's Krylov dimension.
     pub fn new(n_modes: usize, shift: Shift) -> Self {
-        Self { n_modes, shift, tolerance: 1e-8, max_restarts: 1000, krylov_dim: 0 }
+        Self {
+            n_modes,
+            shift,
+            tolerance: 1e-8,
+            max_restarts: 1000,
+            krylov_dim: 0,
+        }
     }
 }
 
@@ -311,7 +320,7 @@ impl ShiftInvert {
             shifted = lower_shifted(K, M, sigma);
             shifted.as_ref()
         };
-        let A_diag = diagonal_lower(A);
+        let A_diag = diagonal(A);
 
         let symbolic = factorize_symbolic_cholesky(
             A.symbolic(),
@@ -324,7 +333,7 @@ impl ShiftInvert {
             Some(p) => {
                 let (fwd, inv) = p.arrays();
                 (fwd.to_vec(), inv.to_vec())
-            },
+            }
             None => ((0..n).collect(), (0..n).collect()),
         };
 
@@ -334,10 +343,8 @@ impl ShiftInvert {
             .try_reserve_exact(symbolic.len_val())
             .map_err(|_| ReductionError::Factorization("out of memory for the factor".into()))?;
         L_values.resize(symbolic.len_val(), 0.0);
-        let mut mem = MemBuffer::try_new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-        )
-        .map_err(|_| ReductionError::Factorization("out of memory for the workspace".into()))?;
+        let mut mem = MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
+            .map_err(|_| ReductionError::Factorization("out of memory for the workspace".into()))?;
         let result = symbolic.factorize_numeric_llt::<f64>(
             &mut L_values,
             A,
@@ -352,7 +359,13 @@ impl ShiftInvert {
             return Err(not_positive_definite(perm_fwd[index], 0.0, sigma));
         }
 
-        let this = Self { sigma, symbolic, L_values, perm_fwd, perm_inv };
+        let this = Self {
+            sigma,
+            symbolic,
+            L_values,
+            perm_fwd,
+            perm_inv,
+        };
         // A positive pivot can still be round-off (see SINGULAR_PIVOT_RATIO).
         let (worst_index, worst_ratio) = this
             .pivots()
@@ -407,7 +420,7 @@ impl ShiftInvert {
                 // The diagonal is the first stored entry of each column of L.
                 let col_ptr = s.col_ptr();
                 (0..s.nrows()).map(|j| self.L_values[col_ptr[j]]).collect()
-            },
+            }
             SymbolicCholeskyRaw::Supernodal(s) => {
                 let L = SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values);
                 let mut d = vec![0.0; s.nrows()];
@@ -420,7 +433,7 @@ impl ShiftInvert {
                     }
                 }
                 d
-            },
+            }
         }
     }
 
@@ -431,11 +444,10 @@ impl ShiftInvert {
                 let L = SimplicialLltRef::<'_, usize, f64>::new(s, &self.L_values);
                 let L = SparseColMatRef::new(s.factor(), L.values());
                 triangular_solve::solve_lower_triangular_in_place(L, Conj::No, rhs, par);
-            },
+            }
             SymbolicCholeskyRaw::Supernodal(s) => {
-                SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values)
-                    .l_solve_with_conj(Conj::No, rhs, par, stack);
-            },
+                SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values).l_solve_with_conj(Conj::No, rhs, par, stack);
+            }
         }
     }
 
@@ -445,17 +457,16 @@ impl ShiftInvert {
             SymbolicCholeskyRaw::Simplicial(s) => {
                 let L = SimplicialLltRef::<'_, usize, f64>::new(s, &self.L_values);
                 let L = SparseColMatRef::new(s.factor(), L.values());
-                triangular_solve::solve_lower_triangular_transpose_in_place(
-                    L,
+                triangular_solve::solve_lower_triangular_transpose_in_place(L, Conj::No, rhs, par);
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values).l_transpose_solve_with_conj(
                     Conj::No,
                     rhs,
                     par,
+                    stack,
                 );
-            },
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values)
-                    .l_transpose_solve_with_conj(Conj::No, rhs, par, stack);
-            },
+            }
         }
     }
 
@@ -513,8 +524,15 @@ impl ShiftInvert {
         // same dimension rule as faer's, max(64, 2m, krylov_dim).
         let max_dim = settings.krylov_dim.max(64).max(2 * m);
         if max_dim >= n {
-            let (mu, Y) = dense_operator_eigen(&op, m)?;
-            let _ = mu;
+            if n > DENSE_LIMIT {
+                return Err(ReductionError::InvalidSettings {
+                    what: format!(
+                        "the Krylov subspace dimension max(64, 2 n_modes, krylov_dim) = {max_dim} \
+                         must be below n = {n}: ask for fewer modes, or use a dense solver"
+                    ),
+                });
+            }
+            let Y = dense_operator_eigen(&op, m)?;
             return self.finish(K, M, Y.as_ref(), m, m, settings);
         }
 
@@ -538,12 +556,8 @@ impl ShiftInvert {
         for _attempt in 0..MAX_ATTEMPTS {
             let mut Y = Mat::<f64>::zeros(n, m);
             let mut mu = vec![0.0; m];
-            let mut mem = MemBuffer::try_new(partial_self_adjoint_eigen_scratch(
-                &op, m, par, params,
-            ))
-            .map_err(|_| {
-                ReductionError::Factorization("out of memory for the Krylov basis".into())
-            })?;
+            let mut mem = MemBuffer::try_new(partial_self_adjoint_eigen_scratch(&op, m, par, params))
+                .map_err(|_| ReductionError::Factorization("out of memory for the Krylov basis".into()))?;
             let info = partial_self_adjoint_eigen(
                 Y.as_mut(),
                 &mut mu,
@@ -556,9 +570,7 @@ impl ShiftInvert {
             );
             drop(mem);
             let converged = info.n_converged_eigen;
-            if std::env::var("REDUCTION_EIGEN_DEBUG").is_ok() {
-                eprintln!("attempt {_attempt}: tol_abs {tol_abs:.3e} mu_scale {mu_scale:.3e} converged {converged} mu {mu:?}");
-            }
+
             if converged < m {
                 return Err(ReductionError::EigenNotConverged {
                     requested: m,
@@ -587,6 +599,7 @@ impl ShiftInvert {
                     tolerance,
                 }) => {
                     // Tighten by the worst shortfall (and at least tenfold), see module docs.
+                    eprintln!("TEMPDEBUG retry worst {worst_residual:e} failed {failed_modes:?}");
                     let shortfall = (settings.tolerance / worst_residual).min(0.1);
                     tol_abs *= shortfall.max(1e-6);
                     last_error = Some(ReductionError::EigenNotConverged {
@@ -596,7 +609,7 @@ impl ShiftInvert {
                         worst_residual,
                         tolerance,
                     });
-                },
+                }
                 Err(e) => return Err(e),
             }
         }
@@ -629,19 +642,28 @@ impl ShiftInvert {
         // tolerance (see `residual_floor`).
         let failed_modes: Vec<usize> = (0..m)
             .filter(|&j| {
-                !(residuals[j] <= settings.tolerance)
-                    && !(residuals[j]
-                        <= residual_floor(K, M, vectors.col(j), eigenvalues[j], self.sigma))
+                let floor = || {
+                    residual_floor(
+                        K,
+                        M,
+                        vectors.col(j),
+                        KPhi.col(j),
+                        MPhi.col(j),
+                        eigenvalues[j],
+                        self.sigma,
+                    )
+                };
+                !(residuals[j] <= settings.tolerance) && !(residuals[j] <= floor())
             })
             .collect();
-        if std::env::var("REDUCTION_EIGEN_DEBUG").is_ok() {
-            eprintln!("finish: lambda {eigenvalues:?}\n residuals {residuals:?}\n floors {:?}", (0..m).map(|j| residual_floor(K, M, vectors.col(j), eigenvalues[j], self.sigma)).collect::<Vec<_>>());
-        }
         if !failed_modes.is_empty() {
-            let worst_residual = failed_modes
-                .iter()
-                .map(|&j| residuals[j])
-                .fold(0.0_f64, |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
+            let worst_residual = failed_modes.iter().map(|&j| residuals[j]).fold(0.0_f64, |a, b| {
+                if b.is_nan() {
+                    f64::INFINITY
+                } else {
+                    a.max(b)
+                }
+            });
             return Err(ReductionError::EigenNotConverged {
                 requested: m,
                 converged: converged.min(m - failed_modes.len()),
@@ -650,7 +672,12 @@ impl ShiftInvert {
                 tolerance: settings.tolerance,
             });
         }
-        Ok(EigenSolution { eigenvalues, vectors, residuals, shift: self.sigma })
+        Ok(EigenSolution {
+            eigenvalues,
+            vectors,
+            residuals,
+            shift: self.sigma,
+        })
     }
 }
 
@@ -676,10 +703,12 @@ fn rayleigh_ritz(
     let symmetrise = |A: Mat<f64>| Mat::<f64>::from_fn(m, m, |i, j| 0.5 * (A[(i, j)] + A[(j, i)]));
     let A = symmetrise(Phi.transpose() * &KPhi);
     let B = symmetrise(Phi.transpose() * &MPhi);
-    let llt = B.llt(Side::Lower).map_err(|_| ReductionError::MassNotPositiveDefinite {
-        dof: None,
-        why: "Phi^T M Phi of the computed modes is not positive definite".into(),
-    })?;
+    let llt = B
+        .llt(Side::Lower)
+        .map_err(|_| ReductionError::MassNotPositiveDefinite {
+            dof: None,
+            why: "Phi^T M Phi of the computed modes is not positive definite".into(),
+        })?;
     let L = llt.L();
     // G = L^{-1} A L^{-T}
     let mut G = A;
@@ -687,9 +716,9 @@ fn rayleigh_ritz(
     let mut G = G.transpose().to_owned();
     faer::linalg::triangular_solve::solve_lower_triangular_in_place(L, G.as_mut(), par);
     let G = symmetrise(G);
-    let evd = G.self_adjoint_eigen(Side::Lower).map_err(|e| {
-        ReductionError::Factorization(format!("dense eigensolver of the Ritz problem: {e:?}"))
-    })?;
+    let evd = G
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| ReductionError::Factorization(format!("dense eigensolver of the Ritz problem: {e:?}")))?;
     let eigenvalues: Vec<f64> = (0..m).map(|k| evd.S()[k]).collect();
     // T = L^{-T} S
     let mut T = evd.U().to_owned();
@@ -698,13 +727,12 @@ fn rayleigh_ritz(
     let mut vectors = Phi * &T;
     for j in 0..m {
         let col = vectors.col(j);
-        let (mut imax, mut vmax) = (0, 0.0_f64);
+        let mut vmax = 0.0_f64;
         for i in 0..n {
             if col[i].abs() > vmax.abs() {
-                (imax, vmax) = (i, col[i]);
+                vmax = col[i];
             }
         }
-        let _ = imax;
         if vmax < 0.0 {
             for t in T.col_mut(j).iter_mut() {
                 *t = -*t;
@@ -750,18 +778,20 @@ fn residual_floor(
     K: SparseColMatRef<'_, usize, f64>,
     M: SparseColMatRef<'_, usize, f64>,
     phi: ColRef<'_, f64>,
+    Kphi: ColRef<'_, f64>,
+    Mphi: ColRef<'_, f64>,
     lambda: f64,
     sigma: f64,
 ) -> f64 {
     let n = phi.nrows();
-    let max_col = |A: SparseColMatRef<'_, usize, f64>| {
-        (0..A.ncols()).map(|j| A.col_range(j).len()).max().unwrap_or(0)
-    };
+    let max_col = |A: SparseColMatRef<'_, usize, f64>| (0..A.ncols()).map(|j| A.col_range(j).len()).max().unwrap_or(0);
     let c = (2 + max_col(K).max(max_col(M))) as f64;
     let gamma = c * f64::EPSILON / (1.0 - c * f64::EPSILON);
     // |A| |phi| by columns: A symmetric, so column i is row i.
     let abs_product = |A: SparseColMatRef<'_, usize, f64>, i: usize| -> f64 {
-        A.col_range(i).map(|p| A.val()[p].abs() * phi[A.row_idx()[p]].abs()).sum::<f64>()
+        A.col_range(i)
+            .map(|p| A.val()[p].abs() * phi[A.row_idx()[p]].abs())
+            .sum::<f64>()
     };
     let bound: f64 = (0..n)
         .into_par_iter()
@@ -772,11 +802,6 @@ fn residual_floor(
         })
         .sum::<f64>()
         .sqrt();
-    let mut Kphi = Mat::<f64>::zeros(n, 1);
-    let mut Mphi = Mat::<f64>::zeros(n, 1);
-    let par = faer::get_global_parallelism();
-    sparse_dense_matmul(Kphi.as_mut(), Accum::Replace, K, phi.as_mat(), 1.0, par);
-    sparse_dense_matmul(Mphi.as_mut(), Accum::Replace, M, phi.as_mat(), 1.0, par);
     let scale = Kphi.norm_l2().max((lambda - sigma).abs() * Mphi.norm_l2());
     gamma * bound / scale
 }
@@ -807,7 +832,6 @@ impl LinOp<f64> for Operator<'_> {
     }
 
     fn apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
-        let t0 = std::time::Instant::now();
         let (n, k) = rhs.shape();
         let (mut z, stack) = temp_mat_zeroed::<f64, _, _>(n, k, stack);
         let mut z = z.as_mat_mut();
@@ -843,15 +867,11 @@ impl LinOp<f64> for Operator<'_> {
                     for i in 0..n {
                         oc[i] = row(i);
                     }
-                },
+                }
             }
         }
-        let t2 = std::time::Instant::now();
         // out = L^{-1} out
         self.factor.l_solve(out, par, stack);
-        if std::env::var("REDUCTION_EIGEN_DEBUG").is_ok() {
-            eprintln!("apply k={k}: {:?} (l_solve {:?})", t0.elapsed(), t2.elapsed());
-        }
     }
 
     fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
@@ -886,15 +906,15 @@ fn apply_alloc(op: &Operator<'_>, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, pa
 
 /// Small problems (faer's Krylov-Schur needs $n$ above its subspace dimension): the dense
 /// $\mathbf C$ from $n$ applications, its dense eigendecomposition, the $m$ largest $\mu$.
-fn dense_operator_eigen(op: &Operator<'_>, m: usize) -> Result<(Vec<f64>, Mat<f64>), ReductionError> {
+fn dense_operator_eigen(op: &Operator<'_>, m: usize) -> Result<Mat<f64>, ReductionError> {
     let n = op.nrows();
     let par = faer::get_global_parallelism();
     let mut C = Mat::<f64>::zeros(n, n);
     apply_alloc(op, C.as_mut(), Mat::<f64>::identity(n, n).as_ref(), par);
     let C = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (C[(i, j)] + C[(j, i)]));
-    let evd = C.self_adjoint_eigen(Side::Lower).map_err(|e| {
-        ReductionError::Factorization(format!("dense eigensolver: {e:?}"))
-    })?;
+    let evd = C
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| ReductionError::Factorization(format!("dense eigensolver: {e:?}")))?;
     // Ascending: the m largest are the last m.
     let mu: Vec<f64> = (0..m).map(|k| evd.S()[n - 1 - k]).collect();
     if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
@@ -903,8 +923,7 @@ fn dense_operator_eigen(op: &Operator<'_>, m: usize) -> Result<(Vec<f64>, Mat<f6
             why: format!("the shift-invert operator has the eigenvalue {:.3e} <= 0", mu[bad]),
         });
     }
-    let Y = Mat::<f64>::from_fn(n, m, |i, k| evd.U()[(i, n - 1 - k)]);
-    Ok((mu, Y))
+    Ok(Mat::<f64>::from_fn(n, m, |i, k| evd.U()[(i, n - 1 - k)]))
 }
 
 /// Uniform pseudo-random number in $[-1, 1)$ (SplitMix64): the start vector is fixed, so
@@ -946,7 +965,10 @@ fn check_square_pair(
 
 fn check_mode_count(settings: &EigenSettings, n: usize) -> Result<(), ReductionError> {
     if settings.n_modes == 0 || settings.n_modes >= n {
-        return Err(ReductionError::InvalidModeCount { requested: settings.n_modes, n });
+        return Err(ReductionError::InvalidModeCount {
+            requested: settings.n_modes,
+            n,
+        });
     }
     Ok(())
 }
@@ -972,11 +994,6 @@ fn diagonal(A: SparseColMatRef<'_, usize, f64>) -> Vec<f64> {
         }
     }
     d
-}
-
-/// Diagonal of the lower triangle handed to the factorisation.
-fn diagonal_lower(A: SparseColMatRef<'_, usize, f64>) -> Vec<f64> {
-    diagonal(A)
 }
 
 /// Checks that the strict lower and upper triangles hold the same values, by comparing a
@@ -1011,7 +1028,11 @@ fn check_symmetric(A: SparseColMatRef<'_, usize, f64>, name: &'static str) -> Re
     // (Higham, "Accuracy and Stability of Numerical Algorithms", 2002, §4.2).
     let tol = (count.max(1) as f64) * f64::EPSILON * abs;
     if (lower - upper).abs() > tol || lower.is_nan() || upper.is_nan() {
-        return Err(ReductionError::NotSymmetric { matrix: name, lower, upper });
+        return Err(ReductionError::NotSymmetric {
+            matrix: name,
+            lower,
+            upper,
+        });
     }
     Ok(())
 }

@@ -30,7 +30,11 @@ pub enum ReductionError {
     /// symmetric CSC storage: the Cholesky factor reads the lower triangle, the products with
     /// $\mathbf K$ and $\mathbf M$ read both.
     #[error("{matrix} is not symmetric with both triangles stored: the weighted sums of its strict lower and strict upper triangles are {lower:.6e} and {upper:.6e}")]
-    NotSymmetric { matrix: &'static str, lower: f64, upper: f64 },
+    NotSymmetric {
+        matrix: &'static str,
+        lower: f64,
+        upper: f64,
+    },
     /// The stiffness matrix is singular (a free body or a mechanism) and the shift is zero,
     /// so $\mathbf K$ itself has no Cholesky factor. `pivot_ratio` is the pivot over the
     /// diagonal entry of that dof ($\le 0$ when the factorisation stopped there).
@@ -41,7 +45,12 @@ pub enum ReductionError {
     /// for $\sigma < 0$, $\mathbf K$ or $\mathbf M$ is indefinite, or the shift is so small
     /// that $\mathbf K - \sigma\mathbf M$ is singular to working precision.
     #[error("K - sigma M with sigma = {shift:.6e} is not positive definite at dof {dof} (pivot / diagonal = {pivot_ratio:.3e}): {hint}")]
-    ShiftedNotPositiveDefinite { shift: f64, dof: usize, pivot_ratio: f64, hint: &'static str },
+    ShiftedNotPositiveDefinite {
+        shift: f64,
+        dof: usize,
+        pivot_ratio: f64,
+        hint: &'static str,
+    },
     /// The mass matrix is not positive definite: a dof without mass (a non-positive diagonal
     /// entry), or an indefinite matrix found by the eigensolver (`dof` is then `None`).
     #[error("the mass matrix is not positive definite{}: {why}", dof.map(|d| format!(" at dof {d}")).unwrap_or_default())]
@@ -68,6 +77,25 @@ pub enum ReductionError {
     /// The FE model could not be numbered or assembled.
     #[error("FE model: {0}")]
     Fe(String),
+    /// Matrices and node coordinates from another FE code are inconsistent (sizes, dof list,
+    /// an unsymmetric entry); see `craig_bampton::reduce_external`.
+    #[error("external model: {what}")]
+    ExternalModel { what: String },
+    /// A reduced-body file (`file` module) could not be written or read back: which file, and
+    /// what is wrong with it.
+    #[error("reduced-body file {}: {problem}", path.display())]
+    BodyFile {
+        path: std::path::PathBuf,
+        problem: crate::file::BodyFileProblem,
+    },
+    /// A Matrix Market file (`matrix_market` module) could not be written or read: which
+    /// file, the 1-based line when one is to blame, and what is wrong.
+    #[error("Matrix Market file {}{}: {what}", path.display(), line.map(|l| format!(", line {l}")).unwrap_or_default())]
+    MatrixMarket {
+        path: std::path::PathBuf,
+        line: Option<usize>,
+        what: String,
+    },
 }
 
 impl ReductionError {

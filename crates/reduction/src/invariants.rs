@@ -17,18 +17,18 @@
 
 use crate::error::ReductionError;
 use crate::reduced_body::{DenseMatrix, InertiaData};
+use faer::sparse::SparseColMatRef;
 use faer::Mat;
 use fe_model::{assemble, DofMap, FeModel, SystemPattern};
 use nalgebra::{Matrix3, Matrix6, Vector3};
 
-/// The rigid-motion matrix on the free dofs of `dofs`: columns are translations along
-/// $x, y, z$, then rotations about the axes through `c`.
-fn rigid_modes(model: &FeModel, dofs: &DofMap, c: Vector3<f64>) -> Mat<f64> {
-    let mut R = Mat::zeros(dofs.n_free(), 6);
-    for d in 0..dofs.n_free() {
-        let slot = dofs.full_slot(fe_model::Dof(d as u32));
+/// The rigid-motion matrix on the dofs whose full slots (`6 node + k`) are `slots`: columns
+/// are translations along $x, y, z$, then rotations about the axes through `c`.
+fn rigid_modes(slots: &[usize], nodes: &[[f64; 3]], c: Vector3<f64>) -> Mat<f64> {
+    let mut R = Mat::zeros(slots.len(), 6);
+    for (d, &slot) in slots.iter().enumerate() {
         let (node, k) = (slot / 6, slot % 6);
-        let r = model.mesh.nodes[node].coords - c;
+        let r = Vector3::from(nodes[node]) - c;
         if k < 3 {
             R[(d, k)] = 1.0;
             for l in 0..3 {
@@ -44,7 +44,8 @@ fn rigid_modes(model: &FeModel, dofs: &DofMap, c: Vector3<f64>) -> Mat<f64> {
 
 /// Mass data and the rigid fit $\boldsymbol\Phi_{com} = (\boldsymbol\Phi_R^T\mathbf M
 /// \boldsymbol\Phi_R)^{-1}\boldsymbol\Phi_R^T\mathbf M\mathbf V$ (6 x n) from the CB basis on
-/// every slot of the model, `S_full` ($6 n_{nodes} \times n$).
+/// every slot of the model, `S_full` ($6 n_{nodes} \times n$), with $\mathbf M$ the mass
+/// matrix of the model without supports or spiders (module docs).
 pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, Mat<f64>), ReductionError> {
     let mut bare = model.clone();
     bare.supports.clear();
@@ -52,22 +53,37 @@ pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, 
     let dofs = DofMap::new(&bare).map_err(ReductionError::from_fe)?;
     let pattern = SystemPattern::new(&bare, &dofs);
     let M = assemble(&bare, &pattern).map_err(ReductionError::from_fe)?.M;
-    let n_f = dofs.n_free();
+    let slots: Vec<usize> = (0..dofs.n_free()).map(|d| dofs.full_slot(fe_model::Dof(d as u32))).collect();
+    let nodes: Vec<[f64; 3]> = model.mesh.nodes.iter().map(|x| [x.x, x.y, x.z]).collect();
+    inertia_data_from_mass(M.as_ref(), &slots, &nodes, S_full)
+}
+
+/// [`inertia_data`] from a given mass matrix $\mathbf M$ on the dofs whose full slots
+/// (`6 node + k`) are `slots` (row $d$ of $\mathbf M$ is slot `slots[d]`), node coordinates
+/// `nodes`, and the CB basis on every slot, `S_full` ($6 n_{nodes} \times n$). Used directly
+/// for matrices from another FE code (`reduce_external_dofs`, whose docs say what differs).
+pub fn inertia_data_from_mass(
+    M: SparseColMatRef<'_, usize, f64>,
+    slots: &[usize],
+    nodes: &[[f64; 3]],
+    S_full: &Mat<f64>,
+) -> Result<(InertiaData, Mat<f64>), ReductionError> {
+    let n_f = slots.len();
     let n = S_full.ncols();
-    let S = Mat::from_fn(n_f, n, |d, j| S_full[(dofs.full_slot(fe_model::Dof(d as u32)), j)]);
-    let MS = &M * &S;
+    let S = Mat::from_fn(n_f, n, |d, j| S_full[(slots[d], j)]);
+    let MS = M * &S;
 
     // Mass and centre of mass from the rigid modes about the origin: with translations T and
     // rotations W, T^T M W = m c~^T (see the module docs).
-    let R0 = rigid_modes(&bare, &dofs, Vector3::zeros());
-    let G0 = R0.transpose() * (&M * &R0);
+    let R0 = rigid_modes(slots, nodes, Vector3::zeros());
+    let G0 = R0.transpose() * (M * &R0);
     let mass = (G0[(0, 0)] + G0[(1, 1)] + G0[(2, 2)]) / 3.0;
     if !(mass > 0.0) {
         return Err(ReductionError::MassNotPositiveDefinite { dof: None, why: format!("the body's total mass is {mass:.3e}") });
     }
     let c = Vector3::new(G0[(1, 5)], G0[(2, 3)], G0[(0, 4)]) / mass;
-    let R = rigid_modes(&bare, &dofs, c);
-    let MR = &M * &R;
+    let R = rigid_modes(slots, nodes, c);
+    let MR = M * &R;
     let G = R.transpose() * &MR;
     let inertia_com = Matrix3::from_fn(|i, j| G[(3 + i, 3 + j)]);
     let RtMS = R.transpose() * &MS;
@@ -83,12 +99,7 @@ pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, 
     let Phi_com = Mat::from_fn(6, n, |i, j| (0..6).map(|k| G6_inv[(i, k)] * RtMS[(k, j)]).sum());
 
     // Second-order invariants from scalar fields placed in translation slot `comp`.
-    let slots: Vec<(usize, usize)> = (0..n_f)
-        .map(|d| {
-            let s = dofs.full_slot(fe_model::Dof(d as u32));
-            (s / 6, s % 6)
-        })
-        .collect();
+    let slots: Vec<(usize, usize)> = slots.iter().map(|&s| (s / 6, s % 6)).collect();
     let place = |comp: usize, f: &dyn Fn(usize, usize) -> f64, ncols: usize| {
         Mat::from_fn(n_f, ncols, |d, j| {
             let (node, k) = slots[d];
@@ -104,8 +115,8 @@ pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, 
     let mut S_bar: Vec<Mat<f64>> = (0..9).map(|_| Mat::zeros(n, n)).collect();
     for comp in 0..3 {
         // M P_comp(S_l) for each l.
-        let MP: Vec<Mat<f64>> = (0..3).map(|l| &M * &place(comp, &|node, j| S_node(node, l, j), n)).collect();
-        let X = place(comp, &|node, k| model.mesh.nodes[node].coords[k] - c[k], 3);
+        let MP: Vec<Mat<f64>> = (0..3).map(|l| M * &place(comp, &|node, j| S_node(node, l, j), n)).collect();
+        let X = place(comp, &|node, k| nodes[node][k] - c[k], 3);
         for l in 0..3 {
             let XtMP = X.transpose() * &MP[l];
             for k in 0..3 {

@@ -14,3 +14,13 @@ mod eigen {
 mod craig_bampton {
     include!("unit/craig_bampton.rs");
 }
+
+/// `reduction::modal`: full-model modes through the sparse path (A1 clamped and free).
+mod full_model_modes {
+    include!("unit/full_model_modes.rs");
+}
+
+/// NAFEMS FV32 (A4): in-plane modes of a tapered membrane meshed with hex20.
+mod fv32 {
+    include!("unit/fv32.rs");
+}

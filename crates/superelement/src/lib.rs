@@ -1,1 +1,100 @@
-//! superelement
+//! # superelement: the AIC-FFR body
+//!
+//! The absolute-interface-coordinate floating frame of reference superelement of the seed
+//! paper (Schilder, Ellenbroek, de Boer; [E17], [S19]): from a Craig-Bampton
+//! [`reduction::ReducedBody`] and a state in absolute interface coordinates, the frame (2.6),
+//! the local CB coordinates, the velocity transformation (3.9)-(3.11), the forces (4.3)-(4.4)
+//! and the tangent matrices for Newton, for one body at a time.
+//!
+//! ```text
+//! ReducedBody + FrameChoice + MassVariant + Damping  --Superelement::new-->  Superelement
+//! BodyState (r_k, R_k, v_k, omega_k, eta, eta_dot, last frame) + accelerations + gravity
+//!     --evaluate-->  Evaluation { frame, q_jj, residual, M, K_t, C_t, force parts }
+//! ```
+//!
+//! The superelement's coordinates are $\mathbf q = [\mathbf r_1, \boldsymbol\pi_1, \dots,
+//! \mathbf r_N, \boldsymbol\pi_N, \boldsymbol\eta]$ ($6N + m$): absolute interface positions and
+//! orientations (varied spatially, $\delta\mathbf R_k = \widetilde{\delta\boldsymbol\pi}_k\mathbf R_k$)
+//! and the fixed-interface modal coordinates, which stay independent coordinates of the body.
+//!
+//! ## Where this crate goes beyond the seed
+//!
+//! * The CB rotation coordinates are rotation vectors, so their variation carries
+//!   $\mathbf J_l^{-1}(\boldsymbol\theta_k)$ ($\boldsymbol\Lambda$): (3.7)-(3.11) are used in their
+//!   exact form ([`transform`]); for small elastic rotations they are the seed's.
+//! * The `Lumped` inertia of (4.4) is given a kinetic energy, so its $\mathbf Q_v$ is derived
+//!   rather than assumed ([`forces`], `lumped_inertia`); the `Exact` inertia is the standard
+//!   FFR one from the inertia invariants ([`mass`]).
+//! * Every tangent is exact (geometric terms of $\mathbf R_j$, $\mathbf T_j$, $\boldsymbol\Lambda$,
+//!   the mass matrix and the quadratic velocity forces) and checked against central
+//!   differences (`tests/unit/fd_tangent.rs`).
+//!
+//! # Notation
+//!
+//! | symbol | Rust | meaning | source |
+//! |---|---|---|---|
+//! | $\{P_j, E_j\}$ → $\mathbf r_j,\ \mathbf R_j$ | [`Frame`] `r`, `R`; `R_j` | floating frame: origin (material point $P_j$), rotation | §2 |
+//! | $\mathbf r_k,\ \mathbf R_k$ | [`BodyState`] `r`, `R` | absolute interface position, orientation | §3 |
+//! | $\mathbf v_k,\ \boldsymbol\omega_k$ | `v`, `omega` | interface velocity, spatial angular velocity | |
+//! | $\delta\mathbf q^{OO}$ | `dq` | $[\delta\mathbf r_1, \delta\boldsymbol\pi_1, \dots, \delta\boldsymbol\eta]$, spatial | (3.5) |
+//! | $\mathbf x_k$ | `x` | undeformed interface position from $P_j$, body axes | §2 |
+//! | $\mathbf u_k,\ \boldsymbol\theta_k$ | `q_jj` blocks | $\mathbf R_j^T(\mathbf r_k - \mathbf r_j) - \mathbf x_k$, $\log(\mathbf R_j^T\mathbf R_k)$ | brief §4 |
+//! | $\mathbf q^{j,j}$ | `q_jj` | local CB coordinates $[\mathbf u_1, \boldsymbol\theta_1, \dots, \boldsymbol\eta]$ | (2.3) |
+//! | $[\boldsymbol\Phi_j]$ | `Phi_j` | 6 frame-fixing rows, $\boldsymbol\Phi_j\mathbf q^{jj} = 0$ | (2.6) |
+//! | $[\boldsymbol\Phi_{rig}]$ | `Phi_rig` | rigid modes of the deformed interface set | (3.6) |
+//! | $\boldsymbol\Lambda$ | `Lambda` | $\mathrm{diag}(\mathbf I, \mathbf J_l^{-1}(\boldsymbol\theta_k), \dots, \mathbf I)$ | this crate |
+//! | $\mathbf Z_j,\ \mathbf T_j$ | `Z`, `T` | frame and deformation projectors (with $\boldsymbol\Psi = \boldsymbol\Lambda\boldsymbol\Phi_{rig}$) | (3.9)-(3.10) |
+//! | $[\bar{\mathbf R}^j_O]$ | `rotate(.., false)` | block-diagonal $\mathbf R_j^T$ (identity on $\boldsymbol\eta$) | (3.6) |
+//! | $\mathbf A$ | `velocity_transform` | FFR velocities from absolute ones | (3.11) |
+//! | $\mathbf Y,\ \mathbf B$ | `Y`, `B` | $\mathbf Z_j\boldsymbol\Lambda$, $\mathbf T_j\boldsymbol\Lambda$; $\mathbf P = [\mathbf Y; \mathbf B]$ | this crate |
+//! | $\mathbf y,\ \mathbf a$ | `y`, `a` | $\bar{\mathbf R}^T\dot{\mathbf q}$, $\bar{\mathbf R}^T\ddot{\mathbf q}$ | |
+//! | $\boldsymbol\nu = [\mathbf V; \boldsymbol\Omega; \dot{\mathbf q}^{jj}]$ | `nu` | FFR body-axis quasi-velocities | [`mass`] |
+//! | $\mathbf M_{CB},\ \mathbf K_{CB}$ | `M_CB`, `K_CB` | reduced mass, stiffness | (4.4) |
+//! | $\mathbf M_{ffr}$ | `FfrInertia::mass_matrix` | FFR mass matrix from the invariants | (4.1) |
+//! | $\mathbf Q_v$ | `q_v` | quadratic velocity forces | (4.4) |
+//! | $\mathbf K_t,\ \mathbf C_t$ | `stiffness`, `damping` | $\partial\mathbf r/\partial\mathbf q$, $\partial\mathbf r/\partial\dot{\mathbf q}$ | [S19] |
+//!
+//! Superscripts: a quantity without a frame marker is in inertial axes; body-axis quantities
+//! are named in the docs ("body axes", superscript $L$). Vectors are columns.
+//!
+//! # Equation map
+//!
+//! | eq. | meaning | function |
+//! |---|---|---|
+//! | (2.3), brief §4 | local CB coordinates | `superelement::local_coordinates::local_coordinates` |
+//! | (2.6) | frame fixed to body, $\boldsymbol\Phi_j\mathbf q^{jj} = 0$ | `superelement::Superelement::solve_frame` |
+//! | (3.6) | rigid modes of the interface set | `superelement::transform::phi_rig` |
+//! | (3.9)-(3.10) | $\mathbf Z_j$, $\mathbf T_j$ (exact form) | `superelement::transform::Kinematics::new` |
+//! | (3.11) | velocity transformation $\mathbf A$ | `superelement::transform::Kinematics::velocity_transform` |
+//! | (4.3) | FFR inertia force, `Exact` | `superelement::mass::FfrInertia::force` |
+//! | (4.4) | elastic force | `superelement::Superelement::elastic` (crate-private, in `forces.rs`) |
+//! | (4.4) | inertia, `Lumped` | `superelement::Superelement::lumped_inertia` (in `forces.rs`) |
+//! | [S19] | tangents $\mathbf K_t$, $\mathbf C_t$ | `superelement::Superelement::evaluate_kinematics` |
+//!
+//! # Modules
+//!
+//! [`so3`] rotations; [`local_coordinates`]; [`frame`] (2.6); [`transform`] (3.6)-(3.11) and
+//! their derivatives; [`mass`] FFR inertia; [`forces`] body-axis forces and partials;
+//! [`tangent`] the residual and tangents; [`recovery`] the deformed mesh; [`testing`] helpers.
+
+#![allow(non_snake_case)]
+
+pub mod body;
+pub mod error;
+pub mod forces;
+pub mod frame;
+pub mod local_coordinates;
+pub mod mass;
+pub mod recovery;
+pub mod so3;
+pub mod tangent;
+pub mod testing;
+pub mod transform;
+
+pub use body::{BodyState, Damping, Superelement};
+pub use error::SuperelementError;
+pub use frame::{Frame, FrameChoice, FrameSettings};
+pub use mass::{FfrInertia, MassVariant};
+pub use recovery::MeshState;
+pub use tangent::Evaluation;
+pub use transform::Kinematics;

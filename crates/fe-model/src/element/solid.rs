@@ -279,8 +279,8 @@ fn check_node_count(kind: SolidKind, element: usize, X_e: &[Point3<f64>]) -> Res
 /// # Derivation
 /// For isotropic $\mathbf D$ the $3 \times 3$ block of nodes $a, b$ is, with
 /// $\mathbf g = \partial N / \partial \mathbf x$,
-/// $\mathbf K_{ab} = \int \big(\lambda\, \mathbf g_a \mathbf g_b^T + \mu\, \mathbf g_b \mathbf g_a^T
-/// + \mu\, (\mathbf g_a \cdot \mathbf g_b)\, \mathbf I\big)\, dV$,
+/// $\mathbf K_{ab} = \int \big(\lambda\, \mathbf g_a \mathbf g_b^T + \mu\, \mathbf g_b \mathbf g_a^T +
+/// \mu\, (\mathbf g_a \cdot \mathbf g_b)\, \mathbf I\big)\, dV$,
 /// from $K_{ai,bj} = \int \partial_k N_a\, C_{ikjl}\, \partial_l N_b$ with
 /// $C_{ikjl} = \lambda \delta_{ik}\delta_{jl} + \mu(\delta_{ij}\delta_{kl} + \delta_{il}\delta_{kj})$.
 /// It equals $\mathbf B^T \mathbf D \mathbf B$ entry by entry at a sixth of the cost; the test

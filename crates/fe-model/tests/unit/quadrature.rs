@@ -88,13 +88,26 @@ const INEXACT: f64 = 1e-6;
 
 fn check_simplex<const D: usize>(rule: &Rule<D>, exact: impl Fn(&[usize; D]) -> f64 + Copy, measure: f64) {
     let w_sum: f64 = rule.weights.iter().sum();
-    assert!((w_sum - measure).abs() <= EXACT * measure, "weights sum to {w_sum}, not {measure}");
+    assert!(
+        (w_sum - measure).abs() <= EXACT * measure,
+        "weights sum to {w_sum}, not {measure}"
+    );
     for p in 0..=rule.degree {
         let e = worst(rule, &total_degree::<D>(p), exact);
-        assert!(e <= EXACT, "degree-{} rule, {} points: error {e:.2e} at total degree {p}", rule.degree, rule.len());
+        assert!(
+            e <= EXACT,
+            "degree-{} rule, {} points: error {e:.2e} at total degree {p}",
+            rule.degree,
+            rule.len()
+        );
     }
     let e = worst(rule, &total_degree::<D>(rule.degree + 1), exact);
-    assert!(e > INEXACT, "degree-{} rule is exact at degree {} too ({e:.2e}): understated", rule.degree, rule.degree + 1);
+    assert!(
+        e > INEXACT,
+        "degree-{} rule is exact at degree {} too ({e:.2e}): understated",
+        rule.degree,
+        rule.degree + 1
+    );
 }
 
 fn check_tensor<const D: usize>(rule: &Rule<D>, measure: f64) {
@@ -103,10 +116,18 @@ fn check_tensor<const D: usize>(rule: &Rule<D>, measure: f64) {
     assert!((w_sum - measure).abs() <= EXACT * measure);
     for p in 0..=rule.degree {
         let e = worst(rule, &per_variable::<D>(p), exact);
-        assert!(e <= EXACT, "tensor rule of degree {}: error {e:.2e} at degree {p}", rule.degree);
+        assert!(
+            e <= EXACT,
+            "tensor rule of degree {}: error {e:.2e} at degree {p}",
+            rule.degree
+        );
     }
     let e = worst(rule, &per_variable::<D>(rule.degree + 1), exact);
-    assert!(e > INEXACT, "tensor rule of degree {} is exact one degree higher", rule.degree);
+    assert!(
+        e > INEXACT,
+        "tensor rule of degree {} is exact one degree higher",
+        rule.degree
+    );
 }
 
 #[test]
@@ -137,8 +158,14 @@ fn triangle_rules_have_their_stated_degree() {
         let r = quadrature::triangle(asked);
         assert_eq!((r.degree, r.len()), (degree, points));
         check_simplex(&r, |e: &[usize; 2]| triangle_moment(e[0], e[1]), 0.5);
-        assert!(r.weights.iter().all(|&w| w > 0.0), "triangle rule {degree} has a non-positive weight");
-        assert!(r.points.iter().all(|p| p[0] > 0.0 && p[1] > 0.0 && p[0] + p[1] < 1.0), "points inside");
+        assert!(
+            r.weights.iter().all(|&w| w > 0.0),
+            "triangle rule {degree} has a non-positive weight"
+        );
+        assert!(
+            r.points.iter().all(|p| p[0] > 0.0 && p[1] > 0.0 && p[0] + p[1] < 1.0),
+            "points inside"
+        );
     }
 }
 
@@ -149,7 +176,9 @@ fn tetrahedron_rules_have_their_stated_degree() {
         assert_eq!((r.degree, r.len()), (degree, points));
         check_simplex(&r, |e: &[usize; 3]| tet_moment(e[0], e[1], e[2]), 1.0 / 6.0);
         assert!(
-            r.points.iter().all(|p| p.iter().all(|&x| x > 0.0) && p.iter().sum::<f64>() < 1.0),
+            r.points
+                .iter()
+                .all(|p| p.iter().all(|&x| x > 0.0) && p.iter().sum::<f64>() < 1.0),
             "tetrahedron rule {degree}: a point outside"
         );
         // Only Keast's degree-3 rule has a negative (centroid) weight, as documented.

@@ -1,74 +1,662 @@
-use faer::sparse::{SparseColMat, Triplet};
-use faer::Mat;
-use reduction::eigen::{lowest_modes, EigenSettings, Shift};
-use std::time::Instant;
+// Tests of `reduction::eigen` (included by `tests/unit.rs`).
+//
+// - chains of springs and masses, lumped and consistent mass, fixed-free and free-free,
+//   against their analytic spectra;
+// - a random sparse SPD pencil against a dense reference;
+// - free bodies with a negative shift (1D chain, 3D lattice with six rigid modes) and the
+//   singular-stiffness error with sigma = 0;
+// - a 3D lattice of ~30k dofs: residuals and M-orthonormality; the `ShiftInvert` solve;
+// - a spectrum spread over ten decades (soft mount) against a dense reference;
+// - the error cases.
+
+use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
+use faer::{Mat, MatRef, Side};
+use reduction::eigen::{lowest_modes, EigenSettings, EigenSolution, Shift, ShiftInvert};
+use reduction::ReductionError;
+use std::f64::consts::PI;
+
+const EPS: f64 = f64::EPSILON;
+
+// ---------------------------------------------------------------------------------------
+// Fixtures
+// ---------------------------------------------------------------------------------------
 
 fn from_triplets(n: usize, t: &[(usize, usize, f64)]) -> SparseColMat<usize, f64> {
     let t: Vec<_> = t.iter().map(|&(i, j, v)| Triplet::new(i, j, v)).collect();
-    SparseColMat::try_new_from_triplets(n, n, &t).unwrap()
+    SparseColMat::try_new_from_triplets(n, n, &t).expect("valid triplets")
 }
 
-/// Fixed-free chain: n masses, spring k to the wall at mass 0, springs between neighbours.
-fn chain_fixed_free_lumped(n: usize, k: f64, m: f64) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
+#[derive(Clone, Copy, Debug)]
+enum Ends {
+    /// Mass 0 tied to a wall by a spring, the last mass free.
+    FixedFree,
+    /// No wall: one rigid-body mode.
+    FreeFree,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Mass {
+    /// Point masses `m`.
+    Lumped,
+    /// Bar elements of mass `m` each, consistent mass $m/6\,[2, 1; 1, 2]$.
+    Consistent,
+}
+
+/// A chain of `n` dofs with springs `k` (bars of stiffness `k` and mass `m`).
+///
+/// FixedFree: dofs 1..n of a bar clamped at node 0 (lumped: n masses, n springs).
+/// FreeFree: n nodes, n - 1 springs.
+fn chain(n: usize, ends: Ends, mass: Mass, k: f64, m: f64) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
     let mut tk = Vec::new();
     let mut tm = Vec::new();
-    for i in 0..n {
-        tk.push((i, i, if i + 1 == n { k } else { 2.0 * k }));
-        if i + 1 < n {
-            tk.push((i, i + 1, -k));
-            tk.push((i + 1, i, -k));
+    // Element e joins nodes (a, b); None is the wall.
+    let elements: Vec<(Option<usize>, usize)> = match ends {
+        Ends::FixedFree => (0..n).map(|i| (i.checked_sub(1), i)).collect(),
+        Ends::FreeFree => (1..n).map(|i| (Some(i - 1), i)).collect(),
+    };
+    for (a, b) in elements {
+        let (me_d, me_o) = match mass {
+            Mass::Lumped => (0.0, 0.0),
+            Mass::Consistent => (m / 3.0, m / 6.0),
+        };
+        tk.push((b, b, k));
+        tm.push((b, b, me_d));
+        if let Some(a) = a {
+            tk.extend([(a, a, k), (a, b, -k), (b, a, -k)]);
+            tm.extend([(a, a, me_d), (a, b, me_o), (b, a, me_o)]);
         }
-        tm.push((i, i, m));
+    }
+    if let Mass::Lumped = mass {
+        for i in 0..n {
+            tm.push((i, i, m));
+        }
     }
     (from_triplets(n, &tk), from_triplets(n, &tm))
 }
 
-#[test]
-fn experiment_chain() {
-    let n = 2000;
-    let (k, m) = (2.0e7, 0.5);
-    let (K, M) = chain_fixed_free_lumped(n, k, m);
-    let s = EigenSettings::new(10, Shift::Zero);
-    let t = Instant::now();
-    let sol = lowest_modes(K.as_ref(), M.as_ref(), &s).unwrap();
-    println!("time {:?}", t.elapsed());
-    for j in 0..10 {
-        let th = (2.0 * (j as f64 + 1.0) - 1.0) * std::f64::consts::PI / (2.0 * (2.0 * n as f64 + 1.0));
-        let ex = 4.0 * k / m * th.sin().powi(2);
-        println!("{j} {:.16e} {:.16e} rel {:.3e} res {:.3e}", sol.eigenvalues[j], ex, (sol.eigenvalues[j] - ex) / ex, sol.residuals[j]);
+/// The j-th (0-based) eigenvalue of [`chain`], from the discrete wave $u_i = \sin(i\theta)$
+/// (fixed-free) or $\cos(i\theta)$ (free-free), and the largest eigenvalue bound.
+///
+/// Lumped: $\lambda = 4k/m\,\sin^2(\theta/2)$; consistent: $\lambda = 6k(1-\cos\theta) /
+/// (m(2+\cos\theta))$. The free end (or ends) fix $\theta$: fixed-free lumped
+/// $\theta = (2j+1)\pi/(2n+1)$, fixed-free consistent $(2j+1)\pi/(2n)$, free-free lumped
+/// $j\pi/n$, free-free consistent $j\pi/(n-1)$.
+fn chain_exact(n: usize, ends: Ends, mass: Mass, k: f64, m: f64, j: usize) -> (f64, f64) {
+    let (n, j) = (n as f64, j as f64);
+    let theta = match (ends, mass) {
+        (Ends::FixedFree, Mass::Lumped) => (2.0 * j + 1.0) * PI / (2.0 * n + 1.0),
+        (Ends::FixedFree, Mass::Consistent) => (2.0 * j + 1.0) * PI / (2.0 * n),
+        (Ends::FreeFree, Mass::Lumped) => j * PI / n,
+        (Ends::FreeFree, Mass::Consistent) => j * PI / (n - 1.0),
+    };
+    match mass {
+        Mass::Lumped => (4.0 * k / m * (theta / 2.0).sin().powi(2), 4.0 * k / m),
+        Mass::Consistent => (6.0 * k * (1.0 - theta.cos()) / (m * (2.0 + theta.cos())), 12.0 * k / m),
     }
-    let _ = Mat::<f64>::zeros(1, 1);
 }
 
-/// Free-free chain: n masses, n - 1 springs.
-fn chain_free_free_lumped(n: usize, k: f64, m: f64) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
-    let mut tk = Vec::new();
-    let mut tm = Vec::new();
-    for i in 0..n {
-        let d = if i == 0 || i + 1 == n { k } else { 2.0 * k };
-        tk.push((i, i, d));
-        if i + 1 < n {
-            tk.push((i, i + 1, -k));
-            tk.push((i + 1, i, -k));
+/// Truss lattice: nodes on an `nx x ny x nz` grid of spacing 1, axial springs (EA = 1) to all
+/// 26 neighbours (edges, face and body diagonals: a 27-point stencil with 3 coupled dofs per
+/// node, like hex8 elasticity), unit lumped masses. With `clamped`, the nodes at x = 0 are
+/// removed. The free lattice has exactly six rigid-body modes.
+fn lattice(nx: usize, ny: usize, nz: usize, clamped: bool) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
+    let first = usize::from(clamped);
+    let dof = |i: usize, j: usize, k: usize| (i >= first).then(|| 3 * ((i - first) + (nx - first) * (j + ny * k)));
+    let n = 3 * (nx - first) * ny * nz;
+    let (mut tk, mut tm) = (Vec::new(), Vec::new());
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                if let Some(a) = dof(i, j, k) {
+                    tm.extend((0..3).map(|c| (a + c, a + c, 1.0)));
+                }
+                for dk in -1i64..=1 {
+                    for dj in -1i64..=1 {
+                        for di in -1i64..=1 {
+                            let b = [i as i64 + di, j as i64 + dj, k as i64 + dk];
+                            // Each bond once: only the "positive" half of the neighbours.
+                            if (dk, dj, di) <= (0, 0, 0)
+                                || b.iter().any(|&x| x < 0)
+                                || b[0] >= nx as i64
+                                || b[1] >= ny as i64
+                                || b[2] >= nz as i64
+                            {
+                                continue;
+                            }
+                            let e = [di as f64, dj as f64, dk as f64];
+                            let len: f64 = e.iter().map(|x| x * x).sum::<f64>().sqrt();
+                            let (a, b) = (dof(i, j, k), dof(b[0] as usize, b[1] as usize, b[2] as usize));
+                            for c in 0..3 {
+                                for d in 0..3 {
+                                    // EA/len * e e^T / len^2
+                                    let v = e[c] * e[d] / len.powi(3);
+                                    if let Some(a) = a {
+                                        tk.push((a + c, a + d, v));
+                                    }
+                                    if let Some(b) = b {
+                                        tk.push((b + c, b + d, v));
+                                    }
+                                    if let (Some(a), Some(b)) = (a, b) {
+                                        tk.push((a + c, b + d, -v));
+                                        tk.push((b + c, a + d, -v));
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
         }
-        tm.push((i, i, m));
     }
     (from_triplets(n, &tk), from_triplets(n, &tm))
 }
 
-#[test]
-fn experiment_free() {
-    let n = 2000;
-    let (k, m) = (2.0e7, 0.5);
-    let (K, M) = chain_free_free_lumped(n, k, m);
-    let r = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(10, Shift::Zero));
-    println!("sigma=0: {:?}", r.as_ref().err());
-    let t = Instant::now();
-    let sol = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(10, Shift::Auto)).unwrap();
-    println!("time {:?} shift {}", t.elapsed(), sol.shift);
-    for j in 0..10 {
-        let th = (j as f64) * std::f64::consts::PI / (2.0 * n as f64);
-        let ex = 4.0 * k / m * th.sin().powi(2);
-        println!("{j} {:.16e} {:.16e} rel {:.3e} res {:.3e}", sol.eigenvalues[j], ex, (sol.eigenvalues[j] - ex) / ex, sol.residuals[j]);
+/// SplitMix64 in [0, 1): fixed-seed fixtures without a `rand` dependency.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
     }
+}
+
+/// A random sparse SPD pencil: K = B^T B + 1e-2 I (B sparse, ~4 entries per column, so K has
+/// eigenvalues from ~1e-2 up), M = diagonally dominant random sparse.
+fn random_spd_pair(n: usize, seed: u64) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
+    let mut rng = Rng(seed);
+    let mut B = Mat::<f64>::zeros(n, n);
+    for j in 0..n {
+        for _ in 0..4 {
+            let i = (rng.next() * n as f64) as usize;
+            B[(i, j)] += rng.next() - 0.5;
+        }
+    }
+    let mut tk = Vec::new();
+    let Kd = B.transpose() * &B;
+    for j in 0..n {
+        for i in 0..n {
+            let v = Kd[(i, j)] + if i == j { 1e-2 } else { 0.0 };
+            if v != 0.0 {
+                tk.push((i, j, v));
+            }
+        }
+    }
+    let mut tm = Vec::new();
+    for i in 0..n {
+        tm.push((i, i, 1.0 + rng.next()));
+        let j = (rng.next() * n as f64) as usize;
+        if j != i {
+            let v = 0.2 * (rng.next() - 0.5);
+            tm.extend([(i, j, v), (j, i, v)]);
+        }
+    }
+    (from_triplets(n, &tk), from_triplets(n, &tm))
+}
+
+fn dense(A: SparseColMatRef<'_, usize, f64>) -> Mat<f64> {
+    A.to_dense()
+}
+
+/// $\max_{ij} |(\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi - \mathbf I)_{ij}|$.
+fn m_orthonormality_error(Phi: MatRef<'_, f64>, M: SparseColMatRef<'_, usize, f64>) -> f64 {
+    let G = Phi.transpose() * (M * Phi);
+    let mut worst = 0.0_f64;
+    for j in 0..G.ncols() {
+        for i in 0..G.nrows() {
+            worst = worst.max((G[(i, j)] - if i == j { 1.0 } else { 0.0 }).abs());
+        }
+    }
+    worst
+}
+
+/// Dense reference: the eigenpairs of $\mathbf L^{-1}\mathbf K\mathbf L^{-T}$ with
+/// $\mathbf M = \mathbf L\mathbf L^T$, back-transformed, ascending.
+fn dense_reference(K: SparseColMatRef<'_, usize, f64>, M: SparseColMatRef<'_, usize, f64>) -> (Vec<f64>, Mat<f64>) {
+    let Md = dense(M);
+    let llt = Md.llt(Side::Lower).expect("M is SPD");
+    let L = llt.L();
+    let mut A = dense(K);
+    let par = faer::Par::Seq;
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(L, A.as_mut(), par);
+    let mut A = A.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(L, A.as_mut(), par);
+    let evd = A.self_adjoint_eigen(Side::Lower).expect("dense evd");
+    let n = A.nrows();
+    let mut Phi = evd.U().to_owned();
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(L.transpose(), Phi.as_mut(), par);
+    ((0..n).map(|i| evd.S()[i]).collect(), Phi)
+}
+
+fn solve(K: &SparseColMat<usize, f64>, M: &SparseColMat<usize, f64>, settings: &EigenSettings) -> EigenSolution {
+    lowest_modes(K.as_ref(), M.as_ref(), settings).expect("eigensolver")
+}
+
+// ---------------------------------------------------------------------------------------
+// 1. Chains against analytic spectra
+// ---------------------------------------------------------------------------------------
+
+/// Compares the lowest `m` computed eigenvalues of a chain with the analytic ones, skipping
+/// `skip` rigid modes.
+fn check_chain(ends: Ends, mass: Mass, shift: Shift, skip: usize) -> EigenSolution {
+    let (n, m_modes) = (2000, 10);
+    let (k, m) = (2.0e7, 0.5); // not unit values, so that scaling errors show
+    let (K, M) = chain(n, ends, mass, k, m);
+    let sol = solve(&K, &M, &EigenSettings::new(m_modes, shift));
+    assert_eq!(sol.eigenvalues.len(), m_modes);
+    for j in skip..m_modes {
+        let (exact, lambda_max) = chain_exact(n, ends, mass, k, m, j);
+        let rel = (sol.eigenvalues[j] - exact).abs() / exact;
+        // The eigenvalue is a Rayleigh quotient: its error is quadratic in the vector error
+        // (residual <= 1e-8 gives ~1e-16), so what is left is the round-off of phi^T K phi,
+        // about eps * lambda_max / lambda_j per entry, summed over n entries with random
+        // signs: eps (lambda_max / lambda_j) / sqrt(n). Factor 4 for the constants, 16 eps
+        // for the analytic formula. For mode 1 of the lumped fixed-free chain this is 1.3e-10.
+        let tol = 4.0 * EPS * (lambda_max / exact) / (n as f64).sqrt() + 16.0 * EPS;
+        assert!(
+            rel <= tol,
+            "{ends:?} {mass:?} mode {j}: lambda = {:.16e}, exact {exact:.16e}, rel. error {rel:.3e} > {tol:.3e}",
+            sol.eigenvalues[j]
+        );
+    }
+    // Ascending, M-orthonormal.
+    assert!(sol.eigenvalues.windows(2).all(|w| w[0] <= w[1]));
+    // Round-off of length-n dot products with a tridiagonal M: n eps (Higham 2002, §3.1).
+    let tol = n as f64 * EPS;
+    let err = m_orthonormality_error(sol.vectors.as_ref(), M.as_ref());
+    assert!(err <= tol, "Phi^T M Phi - I = {err:.3e} > {tol:.3e}");
+    // Mode shapes: the analytic wave, M-normalised, against the computed one.
+    for j in skip..m_modes {
+        let (n_f, jf) = (n as f64, j as f64);
+        let u = Mat::<f64>::from_fn(n, 1, |i, _| {
+            let i = i as f64;
+            match (ends, mass) {
+                (Ends::FixedFree, Mass::Lumped) => ((i + 1.0) * (2.0 * jf + 1.0) * PI / (2.0 * n_f + 1.0)).sin(),
+                (Ends::FixedFree, Mass::Consistent) => ((i + 1.0) * (2.0 * jf + 1.0) * PI / (2.0 * n_f)).sin(),
+                (Ends::FreeFree, Mass::Lumped) => ((i + 0.5) * jf * PI / n_f).cos(),
+                (Ends::FreeFree, Mass::Consistent) => (i * jf * PI / (n_f - 1.0)).cos(),
+            }
+        });
+        let u_M = (u.transpose() * (M.as_ref() * &u))[(0, 0)].sqrt();
+        let cos = ((u.transpose() * (M.as_ref() * sol.vectors.col(j).as_mat()))[(0, 0)] / u_M).abs();
+        // The angle to the exact mode is ~ residual / relative gap ~ 1e-9, so 1 - cos ~ 1e-18:
+        // what remains is the round-off of the dot products, n eps.
+        let tol = n as f64 * EPS;
+        assert!((1.0 - cos).abs() <= tol, "{ends:?} {mass:?} mode {j}: 1 - |cos| = {:.3e} > {tol:.3e}", 1.0 - cos);
+    }
+    sol
+}
+
+#[test]
+fn chain_fixed_free_lumped_matches_analytic() {
+    check_chain(Ends::FixedFree, Mass::Lumped, Shift::Zero, 0);
+}
+
+#[test]
+fn chain_fixed_free_consistent_matches_analytic() {
+    check_chain(Ends::FixedFree, Mass::Consistent, Shift::Zero, 0);
+}
+
+// ---------------------------------------------------------------------------------------
+// 3. Free bodies: negative shift, singular stiffness
+// ---------------------------------------------------------------------------------------
+
+/// Free-free chain with [`Shift::Auto`]: one rigid mode with lambda ~ 0, the rest analytic.
+fn check_free_free(mass: Mass, shift: Shift) {
+    let sol = check_chain(Ends::FreeFree, mass, shift, 1);
+    assert!(sol.shift < 0.0);
+    let (k, m) = (2.0e7, 0.5);
+    let (_, lambda_max) = chain_exact(2000, Ends::FreeFree, mass, k, m, 0);
+    // A Rayleigh quotient of K is exact to eps ||K|| / ||M||-ish round-off: 16 eps lambda_max.
+    let tol = 16.0 * EPS * lambda_max;
+    assert!(sol.eigenvalues[0].abs() <= tol, "rigid mode lambda = {:.3e} > {tol:.3e}", sol.eigenvalues[0]);
+    assert!(sol.eigenvalues[0].abs() <= 1e-9 * sol.eigenvalues[1]); // "tiny relative to lambda_2"
+}
+
+#[test]
+fn chain_free_free_lumped_auto_shift() {
+    check_free_free(Mass::Lumped, Shift::Auto);
+}
+
+#[test]
+fn chain_free_free_consistent_auto_shift() {
+    check_free_free(Mass::Consistent, Shift::Auto);
+}
+
+#[test]
+fn chain_free_free_explicit_negative_shift() {
+    // Below the first flexible eigenvalue (98.7 for the lumped chain), as Auto would pick.
+    check_free_free(Mass::Lumped, Shift::Value(-1.0));
+}
+
+#[test]
+fn chain_free_free_zero_shift_is_singular_stiffness() {
+    let (K, M) = chain(2000, Ends::FreeFree, Mass::Lumped, 2.0e7, 0.5);
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(10, Shift::Zero)).unwrap_err();
+    match &err {
+        ReductionError::SingularStiffness { dof, pivot_ratio } => {
+            assert!(*dof < 2000);
+            // Exactly singular: the pivot is round-off (or the factorisation stopped, 0).
+            assert!(*pivot_ratio <= reduction::eigen::SINGULAR_PIVOT_RATIO);
+        },
+        other => panic!("expected SingularStiffness, got {other:?}"),
+    }
+    assert!(err.to_string().contains("negative shift"), "the message suggests the fix: {err}");
+    // The same with the lower-level API.
+    assert!(matches!(ShiftInvert::new(K.as_ref(), M.as_ref(), 0.0), Err(ReductionError::SingularStiffness { .. })));
+}
+
+/// A free 3D lattice has six rigid-body modes (three translations, three rotations): all six
+/// copies of the zero eigenvalue must be found, and they must span the rigid motions.
+#[test]
+fn lattice_free_six_rigid_modes() {
+    let (nx, ny, nz) = (9, 8, 7);
+    let (K, M) = lattice(nx, ny, nz, false);
+    let sol = solve(&K, &M, &EigenSettings::new(12, Shift::Auto));
+    let lambda_flex = sol.eigenvalues[6];
+    // Rigid: Rayleigh quotients at round-off, eps * lambda_max (lambda_max <= 2 * max K_ii/M_ii
+    // = 2 * 2 * (2 + 8/sqrt(2)^3 + 8/sqrt(3)^3 ) < 30 for this lattice), far below the first
+    // flexible eigenvalue.
+    let tol = 64.0 * EPS * 30.0;
+    for j in 0..6 {
+        assert!(sol.eigenvalues[j].abs() <= tol, "mode {j}: lambda = {:.3e}", sol.eigenvalues[j]);
+    }
+    assert!(lambda_flex > 1e-3, "first flexible eigenvalue {lambda_flex:.3e}");
+    // Span: each analytic rigid motion r (M-normalised) lies in span(Phi_rigid):
+    // || r - Phi (Phi^T M r) ||_M = 0 up to the vector error of the modes.
+    let n = K.nrows();
+    let c = [(nx - 1) as f64 / 2.0, (ny - 1) as f64 / 2.0, (nz - 1) as f64 / 2.0];
+    let Phi_r = sol.vectors.get(.., 0..6);
+    for r_kind in 0..6 {
+        let r = Mat::<f64>::from_fn(n, 1, |dof, _| {
+            let (node, comp) = (dof / 3, dof % 3);
+            let x = [(node % nx) as f64 - c[0], ((node / nx) % ny) as f64 - c[1], (node / (nx * ny)) as f64 - c[2]];
+            if r_kind < 3 {
+                f64::from(u8::from(comp == r_kind))
+            } else {
+                // rotation about axis a: (e_a x x)_comp
+                let a = r_kind - 3;
+                let (b, d) = ((a + 1) % 3, (a + 2) % 3);
+                if comp == d {
+                    x[b]
+                } else if comp == b {
+                    -x[d]
+                } else {
+                    0.0
+                }
+            }
+        });
+        let r_M = (r.transpose() * (M.as_ref() * &r))[(0, 0)].sqrt();
+        let r = r / r_M;
+        let coef = Phi_r.transpose() * (M.as_ref() * &r);
+        let rest = &r - Phi_r * &coef;
+        let rest_M = (rest.transpose() * (M.as_ref() * &rest))[(0, 0)].abs().sqrt();
+        // The rigid vectors carry flexible components of relative size ~ residual (<= 1e-8
+        // against the shift, see `relative_residual`) times sqrt(|sigma| / lambda_flex).
+        assert!(rest_M <= 1e-6, "rigid motion {r_kind} is {rest_M:.3e} outside the computed rigid modes");
+    }
+    // The flexible modes are M-orthogonal to the rigid ones (round-off, n eps).
+    let err = m_orthonormality_error(sol.vectors.as_ref(), M.as_ref());
+    assert!(err <= n as f64 * EPS, "Phi^T M Phi - I = {err:.3e}");
+}
+
+// ---------------------------------------------------------------------------------------
+// 2. Random sparse SPD pencil against a dense reference
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn random_sparse_spd_matches_dense_reference() {
+    let n = 300;
+    let (K, M) = random_spd_pair(n, 7);
+    let m = 12;
+    let sol = solve(&K, &M, &EigenSettings::new(m, Shift::Zero));
+    let (lambda_ref, Phi_ref) = dense_reference(K.as_ref(), M.as_ref());
+    let lambda_max = lambda_ref[n - 1];
+    for j in 0..m {
+        let rel = (sol.eigenvalues[j] - lambda_ref[j]).abs() / lambda_ref[j];
+        // Both are backward stable: errors of n eps lambda_max in absolute terms (the dense
+        // reference is the weaker one), relative to lambda_j.
+        let tol = n as f64 * EPS * lambda_max / lambda_ref[j];
+        assert!(rel <= tol, "mode {j}: {:.16e} vs {:.16e}, rel {rel:.3e} > {tol:.3e}", sol.eigenvalues[j], lambda_ref[j]);
+        // Subspace: |phi_ref^T M phi| = 1 for simple eigenvalues. The angle between the two
+        // vectors is bounded by (errors ~ n eps lambda_max) / (gap to the nearest eigenvalue).
+        let gap = (lambda_ref[j + 1] - lambda_ref[j]).min(if j > 0 { lambda_ref[j] - lambda_ref[j - 1] } else { f64::INFINITY });
+        let cos = (Phi_ref.col(j).transpose() * (M.as_ref() * sol.vectors.col(j).as_mat()))[0].abs();
+        let angle_tol = n as f64 * EPS * lambda_max / gap;
+        assert!(1.0 - cos <= angle_tol * angle_tol + n as f64 * EPS, "mode {j}: 1 - |cos| = {:.3e}", 1.0 - cos);
+    }
+    // Residuals as reported must be what they claim.
+    for j in 0..m {
+        let phi = sol.vectors.col(j).as_mat();
+        let Kphi = K.as_ref() * phi;
+        let Mphi = M.as_ref() * phi;
+        let r = (&Kphi - &Mphi * faer::Scale(sol.eigenvalues[j])).norm_l2() / Kphi.norm_l2();
+        // Same formula, same data: equal to round-off (relative 1e-6 of a number near 1e-12).
+        assert!((r - sol.residuals[j]).abs() <= 1e-6 * r.max(1e-300) + 1e-15, "mode {j}: {r:.3e} vs {:.3e}", sol.residuals[j]);
+    }
+}
+
+/// Below faer's Krylov subspace dimension (64) the problem is solved densely through the same
+/// operator; same answer as the analytic one.
+#[test]
+fn small_problem_takes_the_dense_path() {
+    let (n, k, m) = (40, 3.0, 2.0);
+    let (K, M) = chain(n, Ends::FixedFree, Mass::Lumped, k, m);
+    let sol = solve(&K, &M, &EigenSettings::new(5, Shift::Zero));
+    for j in 0..5 {
+        let (exact, lambda_max) = chain_exact(n, Ends::FixedFree, Mass::Lumped, k, m, j);
+        // Dense eigendecomposition of C (backward stable: n eps mu_max, relative to mu_j, i.e.
+        // n eps lambda_j / lambda_1), then the Rayleigh-Ritz step's round-off as in `check_chain`.
+        let tol = n as f64 * EPS * (exact / chain_exact(n, Ends::FixedFree, Mass::Lumped, k, m, 0).0 + lambda_max / exact);
+        assert!((sol.eigenvalues[j] - exact).abs() / exact <= tol, "mode {j}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// 4. 3D lattice, ~30k dofs; one factorisation for solves and modes
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn lattice_3d_clamped_residuals_and_orthonormality() {
+    // 22 x 22 x 21 nodes, the x = 0 face clamped: 3 * 21 * 22 * 21 = 29106 dofs. Unequal
+    // sides, yet the y-z symmetry still gives double eigenvalues.
+    let (K, M) = lattice(22, 22, 21, true);
+    let n = K.nrows();
+    assert_eq!(n, 29106);
+    let settings = EigenSettings::new(10, Shift::Zero);
+    let factor = ShiftInvert::new(K.as_ref(), M.as_ref(), 0.0).expect("clamped lattice is SPD");
+    let sol = factor.lowest_modes(K.as_ref(), M.as_ref(), &settings).expect("modes");
+    // Residuals are checked inside against the tolerance (or the round-off floor, far below it
+    // here: lambda_max / lambda_1 ~ 1e4); check that they are reported and small.
+    for (j, r) in sol.residuals.iter().enumerate() {
+        assert!(*r <= settings.tolerance, "mode {j}: residual {r:.3e}");
+    }
+    assert!(sol.eigenvalues.windows(2).all(|w| w[0] <= w[1]));
+    // Rayleigh-Ritz makes Phi^T M Phi = I to round-off: dot products of length n (with 3
+    // entries per row of M... here M is diagonal), bounded by n eps.
+    let err = m_orthonormality_error(sol.vectors.as_ref(), M.as_ref());
+    assert!(err <= n as f64 * EPS, "Phi^T M Phi - I = {err:.3e} > {:.3e}", n as f64 * EPS);
+    // Phi^T K Phi = Lambda: off-diagonal round-off of n eps max|K| |phi|^2 ~ n eps lambda_max
+    // (lambda_max <= 2 max K_ii/M_ii < 30 for the lattice).
+    let KP = sol.vectors.transpose() * (K.as_ref() * &sol.vectors);
+    for i in 0..10 {
+        for j in 0..10 {
+            let expected = if i == j { sol.eigenvalues[i] } else { 0.0 };
+            assert!((KP[(i, j)] - expected).abs() <= n as f64 * EPS * 30.0, "Phi^T K Phi ({i},{j})");
+        }
+    }
+    // Same answer from the one-call API (same start vector: identical up to round-off).
+    let sol2 = solve(&K, &M, &settings);
+    for j in 0..10 {
+        assert!((sol2.eigenvalues[j] - sol.eigenvalues[j]).abs() <= 1e-12 * sol.eigenvalues[j], "mode {j}");
+    }
+    // The factor also solves: K x = b for two right-hand sides (the constraint-mode use).
+    let b = Mat::<f64>::from_fn(n, 2, |i, j| ((i * (j + 3)) % 17) as f64 - 8.0);
+    let mut x = b.clone();
+    factor.solve_in_place(x.as_mut());
+    let r = K.as_ref() * &x - &b;
+    // Backward-stable Cholesky solve: ||r|| <= c n eps ||K|| ||x||, ||K|| < 30.
+    let tol = n as f64 * EPS * 30.0 * x.norm_l2();
+    assert!(r.norm_l2() <= tol, "||K x - b|| = {:.3e} > {tol:.3e}", r.norm_l2());
+}
+
+// ---------------------------------------------------------------------------------------
+// Spectrum spread over many decades
+// ---------------------------------------------------------------------------------------
+
+/// A chain on a very soft mount: lambda_1 is 1e5 times below lambda_2, so the first Krylov
+/// tolerance, relative to mu_1, is far too loose for the other modes; the residual check must
+/// catch that and tighten it (module docs, "Tolerance").
+#[test]
+fn soft_mount_spread_spectrum_matches_dense_reference() {
+    let n = 400;
+    let (k, m) = (1.0, 1.0);
+    let (K, M) = {
+        let (K, M) = chain(n, Ends::FixedFree, Mass::Lumped, k, m);
+        // Replace the wall spring k by 1e-7 k.
+        let mut K = K.to_dense();
+        K[(0, 0)] -= k * (1.0 - 1e-7);
+        let t: Vec<_> = (0..n)
+            .flat_map(|j| (0..n).map(move |i| (i, j)))
+            .filter(|&(i, j)| K[(i, j)] != 0.0)
+            .map(|(i, j)| (i, j, K[(i, j)]))
+            .collect();
+        (from_triplets(n, &t), M)
+    };
+    let sol = solve(&K, &M, &EigenSettings::new(8, Shift::Zero));
+    let (lambda_ref, _) = dense_reference(K.as_ref(), M.as_ref());
+    assert!(lambda_ref[1] / lambda_ref[0] > 1e4, "the fixture spreads the spectrum");
+    for j in 0..8 {
+        let rel = (sol.eigenvalues[j] - lambda_ref[j]).abs() / lambda_ref[j];
+        // As in `random_sparse_spd_matches_dense_reference`: n eps lambda_max / lambda_j.
+        let tol = n as f64 * EPS * lambda_ref[n - 1] / lambda_ref[j];
+        assert!(rel <= tol, "mode {j}: rel {rel:.3e} > {tol:.3e}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// 5. Errors
+// ---------------------------------------------------------------------------------------
+
+fn small_chain() -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
+    chain(200, Ends::FixedFree, Mass::Lumped, 1.0, 1.0)
+}
+
+#[test]
+fn error_zero_modes() {
+    let (K, M) = small_chain();
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(0, Shift::Zero)).unwrap_err();
+    assert_eq!(err, ReductionError::InvalidModeCount { requested: 0, n: 200 });
+}
+
+#[test]
+fn error_too_many_modes() {
+    let (K, M) = small_chain();
+    for m in [200, 201] {
+        let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(m, Shift::Zero)).unwrap_err();
+        assert_eq!(err, ReductionError::InvalidModeCount { requested: m, n: 200 });
+    }
+}
+
+#[test]
+fn error_shape_mismatch() {
+    let (K, _) = small_chain();
+    let (_, M) = chain(199, Ends::FixedFree, Mass::Lumped, 1.0, 1.0);
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(5, Shift::Zero)).unwrap_err();
+    assert!(matches!(err, ReductionError::DimensionMismatch { rows: 199, cols: 199, .. }), "{err:?}");
+    // Non-square K.
+    let K = SparseColMat::<usize, f64>::try_new_from_triplets(200, 199, &[Triplet::new(0, 0, 1.0)]).unwrap();
+    let (_, M) = small_chain();
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(5, Shift::Zero)).unwrap_err();
+    assert!(matches!(err, ReductionError::DimensionMismatch { .. }), "{err:?}");
+    // A factor used with matrices of another size.
+    let (K, M) = small_chain();
+    let factor = ShiftInvert::new(K.as_ref(), M.as_ref(), 0.0).unwrap();
+    let (K2, M2) = chain(150, Ends::FixedFree, Mass::Lumped, 1.0, 1.0);
+    let err = factor.lowest_modes(K2.as_ref(), M2.as_ref(), &EigenSettings::new(5, Shift::Zero)).unwrap_err();
+    assert!(matches!(err, ReductionError::DimensionMismatch { .. }), "{err:?}");
+}
+
+#[test]
+fn error_mass_with_nonpositive_diagonal() {
+    let (K, _) = small_chain();
+    let t: Vec<_> = (0..200).map(|i| (i, i, if i == 57 { -1.0 } else { 1.0 })).collect();
+    let M = from_triplets(200, &t);
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(5, Shift::Zero)).unwrap_err();
+    assert!(matches!(err, ReductionError::MassNotPositiveDefinite { dof: Some(57), .. }), "{err:?}");
+    // Same with the automatic shift (which reads the diagonal first).
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(5, Shift::Auto)).unwrap_err();
+    assert!(matches!(err, ReductionError::MassNotPositiveDefinite { dof: Some(57), .. }), "{err:?}");
+}
+
+/// An indefinite M with a positive diagonal: the 2 x 2 block [1, -100; -100, 1] at dofs
+/// (100, 101) is negative along e_100 + e_101, a smooth direction of small stiffness, so the
+/// pencil has an eigenvalue near -k/(99 m), which shift-invert finds among the largest |mu|.
+/// (An indefiniteness that only shows at high frequencies is not detected: module docs.)
+#[test]
+fn error_indefinite_mass_found_by_the_eigensolver() {
+    let (K, _) = small_chain();
+    let mut t: Vec<_> = (0..200).map(|i| (i, i, 1.0)).collect();
+    t.extend([(100, 101, -100.0), (101, 100, -100.0)]);
+    let M = from_triplets(200, &t);
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(10, Shift::Zero)).unwrap_err();
+    assert!(matches!(err, ReductionError::MassNotPositiveDefinite { dof: None, .. }), "{err:?}");
+    // With a negative shift, K - sigma M itself is indefinite if |sigma| is large enough.
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(10, Shift::Value(-1.0))).unwrap_err();
+    assert!(matches!(err, ReductionError::ShiftedNotPositiveDefinite { .. }), "{err:?}");
+}
+
+#[test]
+fn error_one_triangle_stored() {
+    let (K, M) = small_chain();
+    let Kd = K.to_dense();
+    let t: Vec<_> = (0..200)
+        .flat_map(|j| (j..200).map(move |i| (i, j)))
+        .filter(|&(i, j)| Kd[(i, j)] != 0.0)
+        .map(|(i, j)| (i, j, Kd[(i, j)]))
+        .collect();
+    let K_lower = from_triplets(200, &t);
+    let err = lowest_modes(K_lower.as_ref(), M.as_ref(), &EigenSettings::new(5, Shift::Zero)).unwrap_err();
+    assert!(matches!(err, ReductionError::NotSymmetric { matrix: "K", .. }), "{err:?}");
+}
+
+#[test]
+fn error_shift_above_lowest_eigenvalue() {
+    let (K, M) = small_chain();
+    let (lambda_1, _) = chain_exact(200, Ends::FixedFree, Mass::Lumped, 1.0, 1.0, 0);
+    // Between lambda_1 and lambda_2: K - sigma M has exactly one negative eigenvalue.
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(5, Shift::Value(2.0 * lambda_1))).unwrap_err();
+    assert!(matches!(err, ReductionError::ShiftedNotPositiveDefinite { .. }), "{err:?}");
+    assert!(err.to_string().contains("above the lowest eigenvalue"), "{err}");
+}
+
+#[test]
+fn error_not_converged_reports_the_modes() {
+    let (K, M) = small_chain();
+    let mut settings = EigenSettings::new(5, Shift::Zero);
+    settings.max_restarts = 0; // no restart: Krylov-Schur locks nothing
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &settings).unwrap_err();
+    match err {
+        ReductionError::EigenNotConverged { requested, converged, failed_modes, .. } => {
+            assert_eq!(requested, 5);
+            assert!(converged < 5);
+            assert_eq!(failed_modes, (converged..5).collect::<Vec<_>>());
+        },
+        other => panic!("expected EigenNotConverged, got {other:?}"),
+    }
+}
+
+#[test]
+fn error_invalid_settings() {
+    let (K, M) = small_chain();
+    for tolerance in [0.0, -1.0, f64::NAN] {
+        let mut settings = EigenSettings::new(5, Shift::Zero);
+        settings.tolerance = tolerance;
+        let err = lowest_modes(K.as_ref(), M.as_ref(), &settings).unwrap_err();
+        assert!(matches!(err, ReductionError::InvalidSettings { .. }), "{err:?}");
+    }
+    let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(5, Shift::Value(f64::INFINITY))).unwrap_err();
+    assert!(matches!(err, ReductionError::InvalidSettings { .. }), "{err:?}");
 }

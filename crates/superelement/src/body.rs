@@ -1,0 +1,411 @@
+//! [`Superelement`]: one AIC-FFR body built from a [`ReducedBody`], and its state
+//! [`BodyState`]. The entry points are [`Superelement::solve_frame`],
+//! [`Superelement::kinematics`] and [`Superelement::evaluate`].
+
+#![allow(non_snake_case)]
+
+use crate::error::SuperelementError;
+use crate::frame::{phi_j_psi, Frame, FrameChoice, FrameSettings, FrameSolve};
+use crate::local_coordinates::local_coordinates;
+use crate::mass::{FfrInertia, MassVariant};
+use crate::transform::Kinematics;
+use faer::Mat;
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use reduction::{MeshModes, ReducedBody};
+use serde::{Deserialize, Serialize};
+
+/// Damping of the elastic coordinates, acting on the elastic velocity $\dot{\mathbf q}^{jj} =
+/// \mathbf T_j\boldsymbol\Lambda\bar{\mathbf R}^T\dot{\mathbf q}$:
+/// $\mathbf D = \alpha\mathbf M_{CB} + \beta\mathbf K_{CB} + \mathrm{diag}_\eta(2\zeta_i\omega_i m_{ii})$.
+///
+/// $m_{ii}$ is the modal mass of fixed-interface mode $i$ (the $\eta$ diagonal of
+/// $\mathbf M_{CB}$; 1 for mass-normalised modes), $\omega_i$ its circular frequency
+/// (`ReducedBody::fixed_interface_omega`). Rigid motion is never damped: $\dot{\mathbf q}^{jj}$
+/// excludes it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Damping {
+    /// Rayleigh mass factor $\alpha$ [1/s].
+    pub alpha: f64,
+    /// Rayleigh stiffness factor $\beta$ [s].
+    pub beta: f64,
+    /// Damping ratio $\zeta_i$ of each fixed-interface mode (empty: none; else one per mode).
+    pub modal_ratios: Vec<f64>,
+}
+
+impl Damping {
+    /// No damping.
+    pub fn none() -> Self {
+        Self::default()
+    }
+
+    /// Rayleigh damping $\alpha\mathbf M_{CB} + \beta\mathbf K_{CB}$.
+    pub fn rayleigh(alpha: f64, beta: f64) -> Self {
+        Self { alpha, beta, modal_ratios: Vec::new() }
+    }
+}
+
+/// The state of one body in absolute interface coordinates, with the last frame as the warm
+/// start of (2.6).
+///
+/// Velocities are spatial: $\dot{\mathbf r}_k = \mathbf v_k$, $\dot{\mathbf R}_k =
+/// \tilde{\boldsymbol\omega}_k\mathbf R_k$. The superelement's generalised velocity is
+/// $\dot{\mathbf q} = [\mathbf v_1, \boldsymbol\omega_1, \dots, \mathbf v_N, \boldsymbol\omega_N,
+/// \dot{\boldsymbol\eta}]$, and accelerations are passed in the same order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BodyState {
+    /// Interface positions $\mathbf r_k$.
+    pub r: Vec<Vector3<f64>>,
+    /// Interface orientations $\mathbf R_k$ (from the FE model's axes, brief §4:
+    /// $\mathbf R_{k0} = \mathbf I$).
+    pub R: Vec<UnitQuaternion<f64>>,
+    /// Interface velocities $\mathbf v_k$.
+    pub v: Vec<Vector3<f64>>,
+    /// Spatial angular velocities $\boldsymbol\omega_k$.
+    pub omega: Vec<Vector3<f64>>,
+    /// Modal coordinates $\boldsymbol\eta$.
+    pub eta: Vec<f64>,
+    /// $\dot{\boldsymbol\eta}$.
+    pub eta_dot: Vec<f64>,
+    /// The last frame: the Newton start of (2.6). Keep it up to date with the frame returned
+    /// by [`Superelement::solve_frame`] or [`crate::Evaluation::frame`].
+    pub frame: Frame,
+}
+
+impl BodyState {
+    /// $\dot{\mathbf q} = [\mathbf v_1, \boldsymbol\omega_1, \dots, \dot{\boldsymbol\eta}]$.
+    pub fn velocity_vector(&self) -> Vec<f64> {
+        let mut qd = Vec::with_capacity(6 * self.r.len() + self.eta.len());
+        for k in 0..self.r.len() {
+            qd.extend_from_slice(self.v[k].as_slice());
+            qd.extend_from_slice(self.omega[k].as_slice());
+        }
+        qd.extend_from_slice(&self.eta_dot);
+        qd
+    }
+}
+
+/// One AIC-FFR superelement: everything precomputed from a [`ReducedBody`] that does not depend
+/// on the state.
+#[derive(Clone, Debug)]
+pub struct Superelement {
+    pub(crate) name: String,
+    pub(crate) n_interfaces: usize,
+    pub(crate) n_modes: usize,
+    pub(crate) n: usize,
+    pub(crate) frame_choice: FrameChoice,
+    pub(crate) frame_solve: FrameSolve,
+    pub(crate) mass_variant: MassVariant,
+    /// FE coordinates of the frame origin $P_j$.
+    pub(crate) origin: Vector3<f64>,
+    /// Undeformed interface positions from $P_j$, body axes.
+    pub(crate) x: Vec<Vector3<f64>>,
+    /// $\boldsymbol\Phi_j$, $6\times n$ (2.6).
+    pub(crate) Phi_j: Mat<f64>,
+    pub(crate) K_CB: Mat<f64>,
+    pub(crate) M_CB: Mat<f64>,
+    /// Damping matrix $\mathbf D$ on $\dot{\mathbf q}^{jj}$ ([`Damping`]).
+    pub(crate) D: Mat<f64>,
+    pub(crate) damped: bool,
+    pub(crate) inertia: FfrInertia,
+    /// Body size $L$ for the frame tolerance.
+    pub(crate) length: f64,
+    pub(crate) frame_settings: FrameSettings,
+    pub(crate) mesh: Option<MeshModes>,
+}
+
+fn invalid(body: &ReducedBody, what: impl Into<String>) -> SuperelementError {
+    SuperelementError::InvalidBody { body: body.name.clone(), what: what.into() }
+}
+
+fn check_dense(body: &ReducedBody, name: &str, m: &reduction::DenseMatrix, rows: usize, cols: usize) -> Result<(), SuperelementError> {
+    if m.nrows != rows || m.ncols != cols || m.data.len() != rows * cols {
+        return Err(invalid(
+            body,
+            format!("{name} is {} x {} ({} values), expected {rows} x {cols}", m.nrows, m.ncols, m.data.len()),
+        ));
+    }
+    if let Some(i) = m.data.iter().position(|v| !v.is_finite()) {
+        return Err(invalid(body, format!("{name} has a non-finite entry at ({}, {})", i % rows.max(1), i / rows.max(1))));
+    }
+    Ok(())
+}
+
+impl Superelement {
+    /// Builds the superelement of `body` with the given frame, inertia variant and damping,
+    /// after checking every shape the formulation relies on.
+    pub fn new(
+        body: &ReducedBody,
+        frame_choice: FrameChoice,
+        mass_variant: MassVariant,
+        damping: Damping,
+    ) -> Result<Self, SuperelementError> {
+        let N = body.interfaces.len();
+        let m = body.n_modes;
+        let n = body.n_coordinates();
+        if N == 0 {
+            return Err(invalid(body, "a superelement needs at least one interface"));
+        }
+        check_dense(body, "K_CB", &body.K_CB, n, n)?;
+        check_dense(body, "M_CB", &body.M_CB, n, n)?;
+        check_dense(body, "Phi_com", &body.Phi_com, 6, n)?;
+        let inertia = &body.inertia;
+        check_dense(body, "S_t", &inertia.S_t, 3, n)?;
+        check_dense(body, "S_r", &inertia.S_r, 3, n)?;
+        check_dense(body, "S_x", &inertia.S_x, 9, n)?;
+        if inertia.S_bar.len() != 9 {
+            return Err(invalid(body, format!("S_bar has {} matrices, expected 9", inertia.S_bar.len())));
+        }
+        for (i, S) in inertia.S_bar.iter().enumerate() {
+            check_dense(body, &format!("S_bar[{i}]"), S, n, n)?;
+        }
+        if !(inertia.mass > 0.0 && inertia.mass.is_finite()) {
+            return Err(invalid(body, format!("the mass must be positive and finite, got {}", inertia.mass)));
+        }
+        if body.fixed_interface_omega.len() != m {
+            return Err(invalid(
+                body,
+                format!("{} fixed-interface frequencies for {m} modes", body.fixed_interface_omega.len()),
+            ));
+        }
+        for (name, v) in [("alpha", damping.alpha), ("beta", damping.beta)] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(invalid(body, format!("damping {name} must be finite and >= 0, got {v}")));
+            }
+        }
+        if !damping.modal_ratios.is_empty() && damping.modal_ratios.len() != m {
+            return Err(invalid(
+                body,
+                format!("{} modal damping ratios for {m} fixed-interface modes", damping.modal_ratios.len()),
+            ));
+        }
+        if let Some(z) = damping.modal_ratios.iter().find(|z| !(**z >= 0.0 && z.is_finite())) {
+            return Err(invalid(body, format!("modal damping ratios must be finite and >= 0, got {z}")));
+        }
+        let positions: Vec<Vector3<f64>> = body.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
+        let com = Vector3::from(inertia.center_of_mass);
+        let bad_choice = |what: String| SuperelementError::InvalidFrameChoice {
+            body: body.name.clone(),
+            choice: frame_choice.to_string(),
+            what,
+        };
+        let (origin, frame_solve, Phi_j) = match frame_choice {
+            FrameChoice::CenterOfMass => (com, FrameSolve::Newton, body.Phi_com.to_faer()),
+            FrameChoice::InterfaceNode(k) => {
+                if k >= N {
+                    return Err(bad_choice(format!("the body has {N} interfaces (0-based index {k})")));
+                }
+                (positions[k], FrameSolve::AtInterface(k), selection(n, k))
+            }
+            FrameChoice::AuxiliaryNode => {
+                let k = body
+                    .auxiliary_interface
+                    .ok_or_else(|| bad_choice("the body was reduced without an auxiliary interface".into()))?;
+                if k >= N {
+                    return Err(bad_choice(format!("auxiliary interface {k} of {N}")));
+                }
+                (positions[k], FrameSolve::AtInterface(k), selection(n, k))
+            }
+        };
+        let x: Vec<Vector3<f64>> = positions.iter().map(|p| p - origin).collect();
+        let K_CB = body.K_CB.to_faer();
+        let M_CB = body.M_CB.to_faer();
+        let mut D = Mat::from_fn(n, n, |i, j| damping.alpha * M_CB[(i, j)] + damping.beta * K_CB[(i, j)]);
+        for (i, z) in damping.modal_ratios.iter().enumerate() {
+            let c = 6 * N + i;
+            D[(c, c)] += 2.0 * z * body.fixed_interface_omega[i] * M_CB[(c, c)];
+        }
+        let damped = damping.alpha > 0.0 || damping.beta > 0.0 || damping.modal_ratios.iter().any(|z| *z > 0.0);
+        let ffr = FfrInertia::new(inertia, &origin, &M_CB);
+        // Body size: farthest interface from the frame origin, or the radius of gyration for a
+        // body whose only interface sits at the frame.
+        let Ic = Matrix3::from_fn(|i, j| inertia.inertia_com[i][j]);
+        let gyration = (Ic.trace() / (2.0 * inertia.mass)).max(0.0).sqrt();
+        let length = x.iter().map(|v| v.norm()).fold(gyration, f64::max).max(f64::MIN_POSITIVE);
+        // (3.9) must be solvable for the undeformed body.
+        let G = phi_j_psi(Phi_j.as_ref(), &x, &vec![Matrix3::identity(); N]);
+        match crate::frame::inverse_with_rcond(&G) {
+            Some((_, rcond)) if rcond >= crate::frame::RCOND_MIN => {}
+            other => {
+                return Err(bad_choice(format!(
+                    "Phi_j Phi_rig of the undeformed body is singular (rcond {:.3e})",
+                    other.map(|o| o.1).unwrap_or(0.0)
+                )))
+            }
+        }
+        Ok(Self {
+            name: body.name.clone(),
+            n_interfaces: N,
+            n_modes: m,
+            n,
+            frame_choice,
+            frame_solve,
+            mass_variant,
+            origin,
+            x,
+            Phi_j,
+            K_CB,
+            M_CB,
+            D,
+            damped,
+            inertia: ffr,
+            length,
+            frame_settings: FrameSettings::default(),
+            mesh: body.mesh.clone(),
+        })
+    }
+
+    /// Replaces the settings of the frame solve.
+    pub fn with_frame_settings(mut self, settings: FrameSettings) -> Self {
+        self.frame_settings = settings;
+        self
+    }
+
+    /// Body name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// Number of interfaces $N$.
+    pub fn n_interfaces(&self) -> usize {
+        self.n_interfaces
+    }
+    /// Number of fixed-interface modes $m$.
+    pub fn n_modes(&self) -> usize {
+        self.n_modes
+    }
+    /// Number of coordinates of the superelement, $6N + m$ (also the length of $\mathbf q^{jj}$).
+    pub fn n_coordinates(&self) -> usize {
+        self.n
+    }
+    /// The frame choice.
+    pub fn frame_choice(&self) -> FrameChoice {
+        self.frame_choice
+    }
+    /// The inertia variant.
+    pub fn mass_variant(&self) -> MassVariant {
+        self.mass_variant
+    }
+    /// Undeformed interface positions $\mathbf x_k$ from the frame origin, body axes.
+    pub fn interface_positions(&self) -> &[Vector3<f64>] {
+        &self.x
+    }
+    /// FE coordinates of the frame origin $P_j$.
+    pub fn frame_origin(&self) -> Vector3<f64> {
+        self.origin
+    }
+    /// Undeformed centre of mass from the frame origin, body axes.
+    pub fn center_of_mass(&self) -> Vector3<f64> {
+        self.inertia.d
+    }
+    /// Total mass.
+    pub fn mass(&self) -> f64 {
+        self.inertia.mass
+    }
+    /// $\boldsymbol\Phi_j$ (2.6).
+    pub fn phi_j(&self) -> &Mat<f64> {
+        &self.Phi_j
+    }
+    /// $\mathbf K_{CB}$.
+    pub fn k_cb(&self) -> &Mat<f64> {
+        &self.K_CB
+    }
+    /// $\mathbf M_{CB}$.
+    pub fn m_cb(&self) -> &Mat<f64> {
+        &self.M_CB
+    }
+    /// The FFR inertia invariants about the frame origin.
+    pub fn ffr_inertia(&self) -> &FfrInertia {
+        &self.inertia
+    }
+
+    /// The undeformed body placed rigidly at `frame`, at rest: $\mathbf r_k = \mathbf r_j +
+    /// \mathbf R_j\mathbf x_k$, $\mathbf R_k = \mathbf R_j$, $\boldsymbol\eta = \mathbf 0$.
+    pub fn undeformed_state(&self, frame: Frame) -> BodyState {
+        self.rigid_state(frame, Vector3::zeros(), Vector3::zeros())
+    }
+
+    /// The undeformed body at `frame` moving rigidly with the frame-origin velocity `v_j` and
+    /// angular velocity `omega`: $\mathbf v_k = \mathbf v_j + \boldsymbol\omega\times\mathbf R_j\mathbf x_k$.
+    pub fn rigid_state(&self, frame: Frame, v_j: Vector3<f64>, omega: Vector3<f64>) -> BodyState {
+        let N = self.n_interfaces;
+        let arm: Vec<Vector3<f64>> = self.x.iter().map(|x| frame.R * x).collect();
+        BodyState {
+            r: arm.iter().map(|a| frame.r + a).collect(),
+            R: vec![frame.R; N],
+            v: arm.iter().map(|a| v_j + omega.cross(a)).collect(),
+            omega: vec![omega; N],
+            eta: vec![0.0; self.n_modes],
+            eta_dot: vec![0.0; self.n_modes],
+            frame,
+        }
+    }
+
+    pub(crate) fn check_state(&self, s: &BodyState) -> Result<(), SuperelementError> {
+        let N = self.n_interfaces;
+        let m = self.n_modes;
+        let bad = |what: String| Err(SuperelementError::InvalidState { what });
+        if s.r.len() != N || s.R.len() != N || s.v.len() != N || s.omega.len() != N {
+            return bad(format!(
+                "body '{}' has {N} interfaces; the state has {} positions, {} orientations, {} velocities, {} angular velocities",
+                self.name,
+                s.r.len(),
+                s.R.len(),
+                s.v.len(),
+                s.omega.len()
+            ));
+        }
+        if s.eta.len() != m || s.eta_dot.len() != m {
+            return bad(format!(
+                "body '{}' has {m} modes; the state has {} modal coordinates and {} rates",
+                self.name,
+                s.eta.len(),
+                s.eta_dot.len()
+            ));
+        }
+        let finite = s.r.iter().chain(&s.v).chain(&s.omega).all(|v| v.iter().all(|x| x.is_finite()))
+            && s.R.iter().all(|q| q.coords.iter().all(|x| x.is_finite()))
+            && s.eta.iter().chain(&s.eta_dot).all(|x| x.is_finite())
+            && s.frame.r.iter().all(|x| x.is_finite())
+            && s.frame.R.coords.iter().all(|x| x.is_finite());
+        if !finite {
+            return bad("the state has a non-finite entry".into());
+        }
+        Ok(())
+    }
+
+    /// Solves the frame (2.6) and builds the configuration-level matrices (3.6)-(3.11).
+    pub fn kinematics(&self, state: &BodyState) -> Result<Kinematics, SuperelementError> {
+        let (frame, iterations) = self.solve_frame(state)?;
+        self.kinematics_at(state, frame, iterations)
+    }
+
+    /// Like [`Self::kinematics`] for a given frame (not solved; for tests of the local maps).
+    pub fn kinematics_at(&self, state: &BodyState, frame: Frame, iterations: usize) -> Result<Kinematics, SuperelementError> {
+        let mut q = vec![0.0; self.n];
+        local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut q);
+        Kinematics::new(frame, iterations, q, &self.x, self.Phi_j.as_ref())
+    }
+
+    /// Velocity of the frame (3.9) in inertial axes: $(\dot{\mathbf r}_j, \boldsymbol\omega_j) =
+    /// \mathrm{diag}(\mathbf R_j,\mathbf R_j)\,\mathbf Z_j\boldsymbol\Lambda\bar{\mathbf R}^T\dot{\mathbf q}$.
+    pub fn frame_velocity(&self, kin: &Kinematics, state: &BodyState) -> (Vector3<f64>, Vector3<f64>) {
+        let y = kin.rotate(&state.velocity_vector(), false);
+        let Y = kin.Y();
+        let xi: Vec<f64> = (0..6).map(|a| (0..self.n).map(|j| Y[(a, j)] * y[j]).sum()).collect();
+        (
+            kin.R_j * Vector3::new(xi[0], xi[1], xi[2]),
+            kin.R_j * Vector3::new(xi[3], xi[4], xi[5]),
+        )
+    }
+
+    /// Elastic velocity $\dot{\mathbf q}^{jj} = \mathbf T_j\boldsymbol\Lambda\bar{\mathbf R}^T\dot{\mathbf q}$ (3.10).
+    pub fn local_velocity(&self, kin: &Kinematics, state: &BodyState) -> Vec<f64> {
+        let y = kin.rotate(&state.velocity_vector(), false);
+        let B = kin.B();
+        (0..self.n).map(|i| (0..self.n).map(|j| B[(i, j)] * y[j]).sum()).collect()
+    }
+}
+
+/// $\boldsymbol\Phi_j$ of a frame at interface $k$: the 6 rows selecting $\mathbf q_k^{jj}$.
+fn selection(n: usize, k: usize) -> Mat<f64> {
+    Mat::from_fn(6, n, |i, j| if j == 6 * k + i { 1.0 } else { 0.0 })
+}

@@ -1,0 +1,32 @@
+//! Errors of the superelement. Each says what failed, with the numbers a user needs to act.
+
+use thiserror::Error;
+
+/// Everything that can go wrong building or evaluating a superelement.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum SuperelementError {
+    /// The reduced body is inconsistent (a matrix of the wrong shape, a non-finite or
+    /// non-positive mass, a damping list of the wrong length, ...).
+    #[error("invalid reduced body '{body}': {what}")]
+    InvalidBody { body: String, what: String },
+    /// The frame choice does not fit the body (an interface index out of range, an auxiliary
+    /// frame on a body reduced without an auxiliary interface).
+    #[error("frame choice {choice} does not fit body '{body}': {what}")]
+    InvalidFrameChoice { body: String, choice: String, what: String },
+    /// The state does not fit the body (wrong number of interfaces or modal coordinates,
+    /// non-finite values).
+    #[error("invalid state: {what}")]
+    InvalidState { what: String },
+    /// Newton on $\boldsymbol\Phi_j\mathbf q^{jj} = \mathbf 0$ (2.6) did not reach the
+    /// tolerance. `residual` is $\max(|\mathbf g_t|/L, |\mathbf g_r|)$ of the last iterate
+    /// ($L$: body size). Usually the warm start (the previous frame) is far from the new state:
+    /// take a smaller step, or start from the frame of a nearby state.
+    #[error("frame solve (2.6) did not converge in {iterations} iterations: residual {residual:.3e} > tolerance {tolerance:.3e}")]
+    FrameNotConverged { iterations: usize, residual: f64, tolerance: f64 },
+    /// $\boldsymbol\Phi_j\boldsymbol\Phi_{rig}$ (3.9) is singular: the frame cannot see all
+    /// six rigid motions of the (deformed) interface set. `rcond` is the ratio of the smallest
+    /// to the largest singular value.
+    #[error("Phi_j Phi_rig is singular (rcond {rcond:.3e}): the frame does not fix all six rigid motions of the deformed body")]
+    SingularFrame { rcond: f64 },
+}

@@ -1,0 +1,477 @@
+//! Inertia of the body: the standard floating-frame (FFR) mass matrix from the inertia
+//! invariants, its generalised inertia force with the quadratic velocity terms, and their
+//! partial derivatives (the `Exact` variant); the `Lumped` variant needs only
+//! $\mathbf M_{CB}$ (see [`crate::forces`]).
+//!
+//! # FFR coordinates and kinetic energy
+//!
+//! A material point with undeformed position $\mathbf x$ (from the frame origin $P_j$, body
+//! axes) is at $\mathbf p = \mathbf r_j + \mathbf R_j(\mathbf x + \mathbf w)$, $\mathbf w =
+//! \mathbf S(\mathbf x)\mathbf q^{jj}$ (the translational CB field). With the body-axis
+//! quasi-velocities $\boldsymbol\nu = [\mathbf V;\ \boldsymbol\Omega;\ \dot{\mathbf q}^{jj}]$,
+//! $\mathbf V = \mathbf R_j^T\dot{\mathbf r}_j$, $\tilde{\boldsymbol\Omega} = \mathbf R_j^T\dot{\mathbf R}_j$:
+//! $\mathbf R_j^T\dot{\mathbf p} = \mathbf V - (\mathbf x + \mathbf w)^\sim\boldsymbol\Omega + \mathbf S\dot{\mathbf q}^{jj}$
+//! and $T = \tfrac12\boldsymbol\nu^T\mathbf M_{ffr}(\mathbf q^{jj})\boldsymbol\nu$ with
+//!
+//! $$\mathbf M_{ffr} = \begin{bmatrix} m\mathbf I & -\tilde{\mathbf s} & \mathbf S_t\\
+//! \tilde{\mathbf s} & \mathbf J(\mathbf q) & \mathbf S_r + \mathbf S_w(\mathbf q)\\
+//! \mathbf S_t^T & (\mathbf S_r + \mathbf S_w)^T & \mathbf M_{CB}\end{bmatrix},$$
+//!
+//! $\mathbf s = m\mathbf d + \mathbf S_t\mathbf q$ (first moment, $\mathbf d$ the centre of mass
+//! from $P_j$), $\mathbf J = \mathbf J_0 + 2\,\mathrm{tr}(\mathbf X)\mathbf I - \mathbf X - \mathbf X^T
+//! + \mathrm{tr}(\mathbf W)\mathbf I - \mathbf W$ with $X_{ab} = \int\rho x_a w_b = (\mathbf S_x)_{ab}\mathbf q$,
+//! $W_{ab} = \int\rho w_a w_b = \mathbf q^T\bar{\mathbf S}_{ab}\mathbf q$, and row $i$ of
+//! $\mathbf S_w(\mathbf q) = \int\rho\tilde{\mathbf w}\mathbf S$ equal to $\mathbf q^T\tilde{\mathbf S}_i$,
+//! $\tilde{\mathbf S}_i = \epsilon_{iab}\bar{\mathbf S}_{ab}$ (skew). The invariants are those of
+//! `reduction::InertiaData`, moved from the centre of mass to $P_j$. The rotary inertia of beam
+//! sections enters $\mathbf J_0$, $\mathbf S_r$ and $\mathbf M_{CB}$ but not the
+//! deformation-dependent terms (as in `InertiaData`): $T$ is still one kinetic energy, so the
+//! forces below conserve energy exactly.
+//!
+//! # Generalised inertia force
+//!
+//! Euler-Poincaré on the frame ($\mathbf V, \boldsymbol\Omega$ are a body twist) and Lagrange on
+//! $\mathbf q^{jj}$, with $\mathbf p = \mathbf M_{ffr}\boldsymbol\nu$:
+//! $\mathbf F = \mathbf M_{ffr}\dot{\boldsymbol\nu} + \dot{\mathbf M}_{ffr}\boldsymbol\nu +
+//! [\boldsymbol\Omega\times\mathbf p_V;\ \boldsymbol\Omega\times\mathbf p_\Omega + \mathbf V\times\mathbf p_V;\ \mathbf 0]
+//! - [\mathbf 0;\ \mathbf 0;\ \partial T/\partial\mathbf q]$, which works out as
+//!
+//! * $\mathbf F_V = m\dot{\mathbf V} + \dot{\boldsymbol\Omega}\times\mathbf s + \mathbf S_t\ddot{\mathbf q}
+//!   + \boldsymbol\Omega\times\dot{\mathbf s} + \boldsymbol\Omega\times\mathbf p_V$,
+//! * $\mathbf F_\Omega = \mathbf s\times\dot{\mathbf V} + \mathbf J\dot{\boldsymbol\Omega} + (\mathbf S_r + \mathbf S_w)\ddot{\mathbf q}
+//!   + \dot{\mathbf s}\times\mathbf V + \dot{\mathbf J}\boldsymbol\Omega + \boldsymbol\Omega\times\mathbf p_\Omega + \mathbf V\times\mathbf p_V$,
+//! * $\mathbf F_q = \mathbf S_t^T\dot{\mathbf V} + (\mathbf S_r + \mathbf S_w)^T\dot{\boldsymbol\Omega} + \mathbf M_{CB}\ddot{\mathbf q}
+//!   + 2\mathbf S_w(\dot{\mathbf q})^T\boldsymbol\Omega - \mathbf S_t^T(\mathbf V\times\boldsymbol\Omega)
+//!   - \tfrac12\,\mathbf j_q(\boldsymbol\Omega)^T\boldsymbol\Omega$,
+//!
+//! with $\mathbf j_q(\mathbf w) = \partial(\mathbf J(\mathbf q)\mathbf w)/\partial\mathbf q$ and
+//! $\mathbf S_w(\dot{\mathbf q})\dot{\mathbf q} = 0$ ($\tilde{\mathbf S}_i$ skew). This is the
+//! seed's $\mathbf M\ddot{\mathbf q} + \mathbf C\dot{\mathbf q}$ of (4.1) in body-axis
+//! quasi-velocities. The power balance $\boldsymbol\nu^T\mathbf F = \dot T$ is checked by
+//! `tests/unit/energy.rs`, the partials by `tests/unit/fd_tangent.rs::ffr_partials`.
+
+#![allow(non_snake_case)]
+
+use crate::so3::skew;
+use faer::Mat;
+use nalgebra::{Matrix3, Vector3};
+use reduction::InertiaData;
+use serde::{Deserialize, Serialize};
+
+/// Which inertia the superelement uses (brief §4; seed §4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MassVariant {
+    /// The standard FFR mass matrix from the inertia invariants transformed by $\mathbf A$
+    /// (3.11), with the exact quadratic velocity forces (4.3): $\mathbf M = \mathbf A^T\mathbf M_{ffr}\mathbf A$,
+    /// $\mathbf Q_v = \mathbf A^T(\mathbf M_{ffr}\dot{\mathbf A}\dot{\mathbf q} + \mathbf h)$.
+    Exact,
+    /// The seed's simplification (4.4): $\mathbf M = \bar{\mathbf R}\mathbf M_{CB}\bar{\mathbf R}^T$,
+    /// and $\mathbf Q_v$ from the same "lumped" kinetic energy (see
+    /// [`crate::forces::lumped_inertia`] for what that means).
+    Lumped,
+}
+
+/// The six unique index pairs $(a, b)$, $a \le b$, of a symmetric $3\times3$ pattern.
+pub(crate) const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+/// Index into [`PAIRS`] of $(a, b)$ in either order.
+#[inline]
+pub(crate) fn pair(a: usize, b: usize) -> usize {
+    match (a.min(b), a.max(b)) {
+        (0, 0) => 0,
+        (1, 1) => 1,
+        (2, 2) => 2,
+        (0, 1) => 3,
+        (0, 2) => 4,
+        _ => 5,
+    }
+}
+
+/// The inertia invariants in the frame's coordinates (origin $P_j$), ready for
+/// $\mathbf M_{ffr}$ (module docs).
+#[derive(Clone, Debug)]
+pub struct FfrInertia {
+    pub mass: f64,
+    /// Centre of mass from $P_j$, body axes.
+    pub d: Vector3<f64>,
+    /// Inertia tensor about $P_j$ (rotary inertia of beam sections included).
+    pub J0: Matrix3<f64>,
+    /// $\int\rho\mathbf S$, $3\times n$.
+    pub S_t: Mat<f64>,
+    /// $\int\rho\tilde{\mathbf x}\mathbf S$ about $P_j$ (rotary inertia included), $3\times n$.
+    pub S_r: Mat<f64>,
+    /// Row $3a + b$: $\int\rho\, x_a\mathbf S_b$, $\mathbf x$ from $P_j$; $9\times n$.
+    pub S_x: Mat<f64>,
+    /// $\bar{\mathbf S}_{ab} + \bar{\mathbf S}_{ba}$ for the pairs of [`PAIRS`] ($n\times n$, symmetric).
+    pub S_bar_sym: Vec<Mat<f64>>,
+    /// $\tilde{\mathbf S}_i = \bar{\mathbf S}_{jk} - \bar{\mathbf S}_{kj}$, $(i,j,k)$ cyclic ($n\times n$, skew).
+    pub S_tilde: Vec<Mat<f64>>,
+    /// $\mathbf M_{CB}$.
+    pub M_CB: Mat<f64>,
+}
+
+/// $\int\rho\,\mathbf f$ rows of a `DenseMatrix` as a faer matrix.
+fn dense(m: &reduction::DenseMatrix) -> Mat<f64> {
+    m.to_faer()
+}
+
+impl FfrInertia {
+    /// Moves the invariants of `data` (about the centre of mass) to the frame origin
+    /// `origin` (FE coordinates): with $\mathbf x = \mathbf x_c + \mathbf d$,
+    /// $\int\rho\tilde{\mathbf x}\mathbf S = \mathbf S_r + \tilde{\mathbf d}\mathbf S_t$,
+    /// $\int\rho x_a\mathbf S_b = (\mathbf S_x)_{ab} + d_a(\mathbf S_t)_b$,
+    /// $\mathbf J_0 = \mathbf I_c + m(|\mathbf d|^2\mathbf I - \mathbf d\mathbf d^T)$.
+    pub fn new(data: &InertiaData, origin: &Vector3<f64>, M_CB: &Mat<f64>) -> Self {
+        let m = data.mass;
+        let c = Vector3::from(data.center_of_mass);
+        let d = c - origin;
+        let Ic = Matrix3::from_fn(|i, j| data.inertia_com[i][j]);
+        let J0 = Ic + (Matrix3::identity() * d.norm_squared() - d * d.transpose()) * m;
+        let S_t = dense(&data.S_t);
+        let n = S_t.ncols();
+        let Sr_c = dense(&data.S_r);
+        let Dt = skew(&d);
+        let S_r = Mat::from_fn(3, n, |i, j| Sr_c[(i, j)] + (0..3).map(|k| Dt[(i, k)] * S_t[(k, j)]).sum::<f64>());
+        let Sx_c = dense(&data.S_x);
+        let S_x = Mat::from_fn(9, n, |r, j| Sx_c[(r, j)] + d[r / 3] * S_t[(r % 3, j)]);
+        let S_bar: Vec<Mat<f64>> = data.S_bar.iter().map(dense).collect();
+        let S_bar_sym = PAIRS
+            .iter()
+            .map(|&(a, b)| Mat::from_fn(n, n, |i, j| S_bar[3 * a + b][(i, j)] + S_bar[3 * b + a][(i, j)]))
+            .collect();
+        let S_tilde = (0..3)
+            .map(|i| {
+                let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+                Mat::from_fn(n, n, |r, s| S_bar[3 * j + k][(r, s)] - S_bar[3 * k + j][(r, s)])
+            })
+            .collect();
+        Self { mass: m, d, J0, S_t, S_r, S_x, S_bar_sym, S_tilde, M_CB: M_CB.clone() }
+    }
+
+    /// Number of CB coordinates $n$.
+    pub fn n(&self) -> usize {
+        self.S_t.ncols()
+    }
+}
+
+/// $\mathbf A\mathbf x$ for a $3\times n$ matrix.
+#[inline]
+pub(crate) fn mul3(A: &Mat<f64>, x: &[f64]) -> Vector3<f64> {
+    let mut r = Vector3::zeros();
+    for (j, xj) in x.iter().enumerate() {
+        r[0] += A[(0, j)] * xj;
+        r[1] += A[(1, j)] * xj;
+        r[2] += A[(2, j)] * xj;
+    }
+    r
+}
+
+/// $\mathbf A^T\mathbf w$ for a $3\times n$ matrix, added to `out` times `alpha`.
+#[inline]
+pub(crate) fn add_mul3t(out: &mut [f64], A: &Mat<f64>, w: &Vector3<f64>, alpha: f64) {
+    for (j, o) in out.iter_mut().enumerate() {
+        *o += alpha * (A[(0, j)] * w[0] + A[(1, j)] * w[1] + A[(2, j)] * w[2]);
+    }
+}
+
+/// $\mathbf A\mathbf x$ for an $n\times n$ matrix into `out`.
+#[inline]
+pub(crate) fn matvec(A: &Mat<f64>, x: &[f64], out: &mut [f64]) {
+    out.iter_mut().for_each(|o| *o = 0.0);
+    for (j, xj) in x.iter().enumerate() {
+        if *xj == 0.0 {
+            continue;
+        }
+        let col = A.col(j);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o += col[i] * xj;
+        }
+    }
+}
+
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// The FFR inertia force and, on request, its partial derivatives (module docs).
+pub struct FfrForce {
+    /// $\mathbf F = \mathbf M_{ffr}\dot{\boldsymbol\nu} + \mathbf h$, $6 + n$.
+    pub F: Vec<f64>,
+    /// $\mathbf M_{ffr}(\mathbf q)$, $(6+n)^2$.
+    pub M: Mat<f64>,
+    /// $\partial\mathbf F/\partial\boldsymbol\nu$, $(6+n)^2$.
+    pub F_nu: Mat<f64>,
+    /// $\partial\mathbf F/\partial\mathbf q^{jj}$ at fixed $\boldsymbol\nu, \dot{\boldsymbol\nu}$, $(6+n)\times n$.
+    pub F_q: Mat<f64>,
+}
+
+/// Precomputed contractions of the invariants with $\mathbf q$ and its rates.
+struct Contractions {
+    s: Vector3<f64>,
+    sd: Vector3<f64>,
+    J: Matrix3<f64>,
+    Jd: Matrix3<f64>,
+    /// $\bar{\mathbf S}^{sym}_p\mathbf q$ and $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$.
+    sig: Vec<Vec<f64>>,
+    sigd: Vec<Vec<f64>>,
+    /// $\tilde{\mathbf S}_i\mathbf q$, $\tilde{\mathbf S}_i\dot{\mathbf q}$, $\tilde{\mathbf S}_i\ddot{\mathbf q}$.
+    tq: Vec<Vec<f64>>,
+    tqd: Vec<Vec<f64>>,
+    tqdd: Vec<Vec<f64>>,
+}
+
+impl FfrInertia {
+    fn contractions(&self, q: &[f64], qd: &[f64], qdd: &[f64]) -> Contractions {
+        let n = self.n();
+        let m = self.mass;
+        let s = self.d * m + mul3(&self.S_t, q);
+        let sd = mul3(&self.S_t, qd);
+        let mut sig = vec![vec![0.0; n]; 6];
+        let mut sigd = vec![vec![0.0; n]; 6];
+        for p in 0..6 {
+            matvec(&self.S_bar_sym[p], q, &mut sig[p]);
+            matvec(&self.S_bar_sym[p], qd, &mut sigd[p]);
+        }
+        let mut tq = vec![vec![0.0; n]; 3];
+        let mut tqd = vec![vec![0.0; n]; 3];
+        let mut tqdd = vec![vec![0.0; n]; 3];
+        for i in 0..3 {
+            matvec(&self.S_tilde[i], q, &mut tq[i]);
+            matvec(&self.S_tilde[i], qd, &mut tqd[i]);
+            matvec(&self.S_tilde[i], qdd, &mut tqdd[i]);
+        }
+        // X_ab = (S_x)_ab q; J1 = 2 tr(X) I - X - X^T; W_ab = q^T S_bar_ab q = q.sig_ab / 2.
+        let X = Matrix3::from_fn(|a, b| (0..n).map(|j| self.S_x[(3 * a + b, j)] * q[j]).sum::<f64>());
+        let Xd = Matrix3::from_fn(|a, b| (0..n).map(|j| self.S_x[(3 * a + b, j)] * qd[j]).sum::<f64>());
+        let W = Matrix3::from_fn(|a, b| 0.5 * dot(q, &sig[pair(a, b)]));
+        let W3 = Matrix3::from_fn(|a, b| dot(qd, &sig[pair(a, b)]));
+        let I = Matrix3::identity();
+        let J = self.J0 + I * (2.0 * X.trace()) - X - X.transpose() + I * W.trace() - W;
+        let Jd = I * (2.0 * Xd.trace()) - Xd - Xd.transpose() + I * W3.trace() - W3;
+        Contractions { s, sd, J, Jd, sig, sigd, tq, tqd, tqdd }
+    }
+
+    /// $\mathbf j_q(\mathbf w) = \partial(\mathbf J(\mathbf q)\mathbf w)/\partial\mathbf q$ ($3\times n$):
+    /// row $i$ is $w_i(2\,\mathrm{tr}\mathbf S_x + \mathrm{tr}\boldsymbol\sigma) - \sum_b w_b
+    /// ((\mathbf S_x)_{ib} + (\mathbf S_x)_{bi} + \boldsymbol\sigma_{ib})$, $\boldsymbol\sigma_{ab} =
+    /// (\bar{\mathbf S}_{ab} + \bar{\mathbf S}_{ba})\mathbf q$. With `with_sx = false` only the
+    /// $\boldsymbol\sigma$ part (that is $\partial(\dot{\mathbf J}\mathbf w)/\partial\mathbf q$ when
+    /// `sig` holds $\bar{\mathbf S}^{sym}\dot{\mathbf q}$).
+    fn jq(&self, w: &Vector3<f64>, sig: &[Vec<f64>], with_sx: bool, out: &mut Mat<f64>, r0: usize) {
+        let n = self.n();
+        for j in 0..n {
+            let trs = sig[0][j] + sig[1][j] + sig[2][j];
+            let trx = if with_sx { self.S_x[(0, j)] + self.S_x[(4, j)] + self.S_x[(8, j)] } else { 0.0 };
+            for i in 0..3 {
+                let mut v = w[i] * (2.0 * trx + trs);
+                for b in 0..3 {
+                    let sx = if with_sx { self.S_x[(3 * i + b, j)] + self.S_x[(3 * b + i, j)] } else { 0.0 };
+                    v -= w[b] * (sx + sig[pair(i, b)][j]);
+                }
+                out[(r0 + i, j)] += v;
+            }
+        }
+    }
+
+    /// $\mathbf S_w(\mathbf q)\mathbf x$: component $i$ is $\mathbf q^T\tilde{\mathbf S}_i\mathbf x$
+    /// $= -(\tilde{\mathbf S}_i\mathbf q)\cdot\mathbf x$.
+    fn sw_mul(tq: &[Vec<f64>], x: &[f64]) -> Vector3<f64> {
+        Vector3::new(-dot(&tq[0], x), -dot(&tq[1], x), -dot(&tq[2], x))
+    }
+
+    /// $\mathbf M_{ffr}(\mathbf q)$ (module docs).
+    pub fn mass_matrix(&self, q: &[f64]) -> Mat<f64> {
+        let n = self.n();
+        let zeros = vec![0.0; n];
+        let c = self.contractions(q, &zeros, &zeros);
+        let mut M = Mat::zeros(6 + n, 6 + n);
+        self.fill_mass(&c, &mut M);
+        M
+    }
+
+    fn fill_mass(&self, c: &Contractions, M: &mut Mat<f64>) {
+        let n = self.n();
+        let m = self.mass;
+        let st = skew(&c.s);
+        for i in 0..3 {
+            M[(i, i)] = m;
+            for j in 0..3 {
+                M[(i, 3 + j)] = -st[(i, j)];
+                M[(3 + i, j)] = st[(i, j)];
+                M[(3 + i, 3 + j)] = c.J[(i, j)];
+            }
+        }
+        for j in 0..n {
+            for i in 0..3 {
+                let srw = self.S_r[(i, j)] - c.tq[i][j];
+                M[(i, 6 + j)] = self.S_t[(i, j)];
+                M[(6 + j, i)] = self.S_t[(i, j)];
+                M[(3 + i, 6 + j)] = srw;
+                M[(6 + j, 3 + i)] = srw;
+            }
+            for i in 0..n {
+                M[(6 + i, 6 + j)] = self.M_CB[(i, j)];
+            }
+        }
+    }
+
+    /// $\mathbf F(\mathbf q, \boldsymbol\nu, \dot{\boldsymbol\nu})$ and, when `partials`, its
+    /// derivatives (module docs).
+    ///
+    /// # Derivation
+    /// Straight differentiation of the three force blocks of the module docs; with
+    /// $\mathbf p_V = m\mathbf V + \boldsymbol\Omega\times\mathbf s + \dot{\mathbf s}$,
+    /// $\mathbf p_\Omega = \mathbf s\times\mathbf V + \mathbf J\boldsymbol\Omega + (\mathbf S_r + \mathbf S_w)\dot{\mathbf q}$,
+    /// $c_{ab} = \delta_{ab}|\boldsymbol\Omega|^2 - \Omega_a\Omega_b$ and $\mathrm{Rows}(\mathbf t)$ the
+    /// $3\times n$ matrix with rows $\mathbf t_i^T$ ($= \partial(\mathbf S_w(\mathbf q)\mathbf x)/\partial\mathbf q$
+    /// for $\mathbf t_i = \tilde{\mathbf S}_i\mathbf x$):
+    ///
+    /// | block | $\partial/\partial\mathbf V$ | $\partial/\partial\boldsymbol\Omega$ | $\partial/\partial\dot{\mathbf q}$ | $\partial/\partial\mathbf q$ |
+    /// |---|---|---|---|---|
+    /// | $\mathbf F_V$ | $m\tilde{\boldsymbol\Omega}$ | $-\tilde{\dot{\mathbf s}} - \tilde{\mathbf p}_V - \tilde{\boldsymbol\Omega}\tilde{\mathbf s}$ | $2\tilde{\boldsymbol\Omega}\mathbf S_t$ | $(\tilde{\dot{\boldsymbol\Omega}} + \tilde{\boldsymbol\Omega}^2)\mathbf S_t$ |
+    /// | $\mathbf F_\Omega$ | $\tilde{\dot{\mathbf s}} + \tilde{\boldsymbol\Omega}\tilde{\mathbf s} - \tilde{\mathbf p}_V + m\tilde{\mathbf V}$ | $\dot{\mathbf J} - \tilde{\mathbf p}_\Omega + \tilde{\boldsymbol\Omega}\mathbf J - \tilde{\mathbf V}\tilde{\mathbf s}$ | $\mathbf j_q(\boldsymbol\Omega) + \tilde{\boldsymbol\Omega}(\mathbf S_r + \mathbf S_w)$ | see below |
+    /// | $\mathbf F_q$ | $\mathbf S_t^T\tilde{\boldsymbol\Omega}$ | $2\mathbf S_w(\dot{\mathbf q})^T - \mathbf S_t^T\tilde{\mathbf V} - \mathbf j_q(\boldsymbol\Omega)^T$ | $-2\sum_i\Omega_i\tilde{\mathbf S}_i$ | $-\sum_i\dot\Omega_i\tilde{\mathbf S}_i - \tfrac12\sum_{ab}c_{ab}\bar{\mathbf S}^{sym}_{ab}$ |
+    ///
+    /// $\partial\mathbf F_\Omega/\partial\mathbf q = -\tilde{\dot{\mathbf V}}\mathbf S_t + \mathbf j_q(\dot{\boldsymbol\Omega})
+    /// + \mathrm{Rows}(\tilde{\mathbf S}\ddot{\mathbf q}) + \dot{\mathbf j}_q(\boldsymbol\Omega)
+    /// + \tilde{\boldsymbol\Omega}(-\tilde{\mathbf V}\mathbf S_t + \mathbf j_q(\boldsymbol\Omega) + \mathrm{Rows}(\tilde{\mathbf S}\dot{\mathbf q}))
+    /// + \tilde{\mathbf V}\tilde{\boldsymbol\Omega}\mathbf S_t$, with $\dot{\mathbf j}_q(\mathbf w) =
+    /// \partial(\dot{\mathbf J}\mathbf w)/\partial\mathbf q$. Checked by
+    /// `tests/unit/fd_tangent.rs::ffr_partials`.
+    pub fn force(&self, q: &[f64], nu: &[f64], nu_dot: &[f64], partials: bool) -> FfrForce {
+        let n = self.n();
+        let m = self.mass;
+        let v3 = |x: &[f64], o: usize| Vector3::new(x[o], x[o + 1], x[o + 2]);
+        let (V, Om, qd) = (v3(nu, 0), v3(nu, 3), &nu[6..]);
+        let (Vd, Omd, qdd) = (v3(nu_dot, 0), v3(nu_dot, 3), &nu_dot[6..]);
+        let c = self.contractions(q, qd, qdd);
+        let (s, sd) = (c.s, c.sd);
+        let Srw_qd = mul3(&self.S_r, qd) + Self::sw_mul(&c.tq, qd);
+        let Srw_qdd = mul3(&self.S_r, qdd) + Self::sw_mul(&c.tq, qdd);
+        let p_V = V * m + Om.cross(&s) + sd;
+        let p_Om = s.cross(&V) + c.J * Om + Srw_qd;
+        let F_V = Vd * m + Omd.cross(&s) + mul3(&self.S_t, qdd) + Om.cross(&sd) + Om.cross(&p_V);
+        let F_Om = s.cross(&Vd) + c.J * Omd + Srw_qdd + sd.cross(&V) + c.Jd * Om + Om.cross(&p_Om) + V.cross(&p_V);
+        let mut F = vec![0.0; 6 + n];
+        F[0..3].copy_from_slice(F_V.as_slice());
+        F[3..6].copy_from_slice(F_Om.as_slice());
+        {
+            let Fq = &mut F[6..];
+            matvec(&self.M_CB, qdd, Fq);
+            add_mul3t(Fq, &self.S_t, &Vd, 1.0);
+            // (S_r + S_w)^T Omd, S_w^T x = -sum_i x_i tq_i.
+            add_mul3t(Fq, &self.S_r, &Omd, 1.0);
+            add_mul3t(Fq, &self.S_t, &V.cross(&Om), -1.0);
+            for j in 0..n {
+                let mut v = 0.0;
+                for i in 0..3 {
+                    v -= Omd[i] * c.tq[i][j];
+                    // 2 S_w(qd)^T Om
+                    v -= 2.0 * Om[i] * c.tqd[i][j];
+                }
+                Fq[j] += v;
+            }
+            // - 1/2 j_q(Om)^T Om
+            let mut jq = Mat::zeros(3, n);
+            self.jq(&Om, &c.sig, true, &mut jq, 0);
+            add_mul3t(Fq, &jq, &Om, -0.5);
+        }
+        let mut out = FfrForce { F, M: Mat::zeros(0, 0), F_nu: Mat::zeros(0, 0), F_q: Mat::zeros(0, 0) };
+        if !partials {
+            return out;
+        }
+        let mut M = Mat::zeros(6 + n, 6 + n);
+        self.fill_mass(&c, &mut M);
+
+        let (Ot, Vt, st, sdt) = (skew(&Om), skew(&V), skew(&s), skew(&sd));
+        let mut F_nu = Mat::zeros(6 + n, 6 + n);
+        let put3 = |A: &mut Mat<f64>, r0: usize, c0: usize, B: &Matrix3<f64>| {
+            for i in 0..3 {
+                for j in 0..3 {
+                    A[(r0 + i, c0 + j)] += B[(i, j)];
+                }
+            }
+        };
+        put3(&mut F_nu, 0, 0, &(Ot * m));
+        put3(&mut F_nu, 0, 3, &(-sdt - skew(&p_V) - Ot * st));
+        put3(&mut F_nu, 3, 0, &(sdt + Ot * st - skew(&p_V) + Vt * m));
+        put3(&mut F_nu, 3, 3, &(c.Jd - skew(&p_Om) + Ot * c.J - Vt * st));
+        let mut jq_Om = Mat::zeros(3, n);
+        self.jq(&Om, &c.sig, true, &mut jq_Om, 0);
+        for j in 0..n {
+            let St = Vector3::new(self.S_t[(0, j)], self.S_t[(1, j)], self.S_t[(2, j)]);
+            let Srw = Vector3::new(
+                self.S_r[(0, j)] - c.tq[0][j],
+                self.S_r[(1, j)] - c.tq[1][j],
+                self.S_r[(2, j)] - c.tq[2][j],
+            );
+            // [V, qd] = 2 Om~ S_t ; [Om, qd] = j_q(Om) + Om~ Srw
+            let a = Ot * St * 2.0;
+            let b = Ot * Srw;
+            // [qd, V] = S_t^T Om~ ; row j of it is (Om~^T S_t_j)^T = -(Om~ S_t_j)^T
+            let cv = -(Ot * St);
+            // [qd, Om] = 2 S_w(qd)^T - S_t^T V~ - j_q(Om)^T ; S_w(qd)^T row j = -tqd_.j
+            let cw = Vt * St; // -(S_t^T V~) row j = -(V~^T S_t_j)^T = (V~ S_t_j)^T
+            for i in 0..3 {
+                F_nu[(i, 6 + j)] += a[i];
+                F_nu[(3 + i, 6 + j)] += b[i] + jq_Om[(i, j)];
+                F_nu[(6 + j, i)] += cv[i];
+                F_nu[(6 + j, 3 + i)] += -2.0 * c.tqd[i][j] + cw[i] - jq_Om[(i, j)];
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let mut v = 0.0;
+                for k in 0..3 {
+                    v -= 2.0 * Om[k] * self.S_tilde[k][(i, j)];
+                }
+                F_nu[(6 + i, 6 + j)] = v;
+            }
+        }
+
+        let mut F_q = Mat::zeros(6 + n, n);
+        // F_Om rows: j_q(Omd) + jdot_q(Om) + Om~ j_q(Om) and the S_t, Rows terms.
+        let mut jq_Omd = Mat::zeros(3, n);
+        self.jq(&Omd, &c.sig, true, &mut jq_Omd, 0);
+        let mut jqd_Om = Mat::zeros(3, n);
+        self.jq(&Om, &c.sigd, false, &mut jqd_Om, 0);
+        let A_V = skew(&Omd) + Ot * Ot;
+        let A_Om = -skew(&Vd) - Ot * Vt + Vt * Ot;
+        for j in 0..n {
+            let St = Vector3::new(self.S_t[(0, j)], self.S_t[(1, j)], self.S_t[(2, j)]);
+            let fv = A_V * St;
+            let jqO = Vector3::new(jq_Om[(0, j)], jq_Om[(1, j)], jq_Om[(2, j)]);
+            let rows_qd = Vector3::new(c.tqd[0][j], c.tqd[1][j], c.tqd[2][j]);
+            let fo = A_Om * St + Ot * (jqO + rows_qd);
+            for i in 0..3 {
+                F_q[(i, j)] = fv[i];
+                F_q[(3 + i, j)] = fo[i] + jq_Omd[(i, j)] + c.tqdd[i][j] + jqd_Om[(i, j)];
+            }
+        }
+        // F_q rows: -sum_i Omd_i S~_i - 1/2 sum_ab c_ab S_bar_sym_ab.
+        let on2 = Om.norm_squared();
+        let cab = |a: usize, b: usize| if a == b { on2 - Om[a] * Om[a] } else { -Om[a] * Om[b] };
+        let mut w = [0.0; 6];
+        for (p, &(a, b)) in PAIRS.iter().enumerate() {
+            // Off-diagonal pairs appear twice in the double sum.
+            w[p] = -0.5 * cab(a, b) * if a == b { 1.0 } else { 2.0 };
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let mut v = 0.0;
+                for k in 0..3 {
+                    v -= Omd[k] * self.S_tilde[k][(i, j)];
+                }
+                for p in 0..6 {
+                    v += w[p] * self.S_bar_sym[p][(i, j)];
+                }
+                F_q[(6 + i, j)] = v;
+            }
+        }
+        out.M = M;
+        out.F_nu = F_nu;
+        out.F_q = F_q;
+        out
+    }
+}

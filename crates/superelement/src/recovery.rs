@@ -1,0 +1,59 @@
+//! Recovery of the deformed FE mesh from the state: every node at
+//! $\mathbf r_j + \mathbf R_j(\mathbf x - \mathbf x_{P_j} + \mathbf S_t\mathbf q^{jj})$ with the CB shapes
+//! of `ReducedBody::mesh` (translation slots), and, for nodes with rotation slots (beams,
+//! spider nodes), orientation $\mathbf R_j\exp(\mathbf S_r\mathbf q^{jj})$.
+
+#![allow(non_snake_case)]
+
+use crate::body::Superelement;
+use crate::so3;
+use crate::transform::Kinematics;
+use nalgebra::{UnitQuaternion, Vector3};
+
+/// The deformed mesh of one body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshState {
+    /// Absolute node positions.
+    pub positions: Vec<Vector3<f64>>,
+    /// Displacements from the FE reference positions, in inertial axes
+    /// (positions minus reference coordinates; includes the rigid motion).
+    pub displacements: Vec<Vector3<f64>>,
+    /// Absolute node orientations (identity rotation slots give $\mathbf R_j$).
+    pub orientations: Vec<UnitQuaternion<f64>>,
+    /// Elastic displacement of each node in body axes, $\mathbf S_t\mathbf q^{jj}$ (for stress recovery).
+    pub elastic: Vec<Vector3<f64>>,
+}
+
+impl Superelement {
+    /// The deformed mesh for the configuration `kin`, or `None` when the reduced body was
+    /// saved without mesh shapes.
+    ///
+    /// Checked by `tests/unit/recovery.rs` (interface nodes land on the interface positions;
+    /// a rigid motion moves the mesh rigidly).
+    pub fn recover_mesh(&self, kin: &Kinematics) -> Option<MeshState> {
+        let mesh = self.mesh.as_ref()?;
+        let S = &mesh.shapes;
+        let n = self.n;
+        let q = &kin.q_jj;
+        let mut out = MeshState {
+            positions: Vec::with_capacity(mesh.nodes.len()),
+            displacements: Vec::with_capacity(mesh.nodes.len()),
+            orientations: Vec::with_capacity(mesh.nodes.len()),
+            elastic: Vec::with_capacity(mesh.nodes.len()),
+        };
+        for (i, x) in mesh.nodes.iter().enumerate() {
+            let mut w = [0.0; 6];
+            for (slot, wk) in w.iter_mut().enumerate() {
+                *wk = (0..n).map(|j| S.get(6 * i + slot, j) * q[j]).sum();
+            }
+            let x = Vector3::from(*x);
+            let u = Vector3::new(w[0], w[1], w[2]);
+            let p = kin.frame.r + kin.R_j * (x - self.origin + u);
+            out.positions.push(p);
+            out.displacements.push(p - x);
+            out.orientations.push(kin.frame.R * so3::exp(&Vector3::new(w[3], w[4], w[5])));
+            out.elastic.push(u);
+        }
+        Some(out)
+    }
+}
