@@ -37,20 +37,17 @@ use std::collections::BTreeMap;
 /// A structured box mesh of `kind` cells (see the module docs for how bricks are cut and what
 /// sets are made).
 ///
-/// # Panics
-/// If `kind` is not a solid kind, a division count is zero, or a length is not positive and
-/// finite: these are programming errors in the test or example that asks for the mesh.
-pub fn box_mesh(kind: CellKind, lengths: [f64; 3], divisions: [usize; 3]) -> Mesh {
-    let solid =
-        SolidKind::from_cell_kind(kind).unwrap_or_else(|| panic!("box_mesh needs a solid cell kind, got {kind:?}"));
-    assert!(
-        divisions.iter().all(|&d| d > 0),
-        "box_mesh: every division count must be >= 1, got {divisions:?}"
-    );
-    assert!(
-        lengths.iter().all(|&l| l > 0.0 && l.is_finite()),
-        "box_mesh: every length must be positive and finite, got {lengths:?}"
-    );
+/// Sizes come from study files, so bad ones are errors, not panics: a kind that is not a
+/// solid, a zero division count, or a length that is not positive and finite.
+pub fn box_mesh(kind: CellKind, lengths: [f64; 3], divisions: [usize; 3]) -> Result<Mesh, FeError> {
+    let bad = |what: String| FeError::Generator { generator: "box_mesh", what };
+    let solid = SolidKind::from_cell_kind(kind).ok_or_else(|| bad(format!("needs a solid cell kind, got {kind:?}")))?;
+    if !divisions.iter().all(|&d| d > 0) {
+        return Err(bad(format!("every division count must be >= 1, got {divisions:?}")));
+    }
+    if !lengths.iter().all(|&l| l > 0.0 && l.is_finite()) {
+        return Err(bad(format!("every length must be positive and finite, got {lengths:?}")));
+    }
     let [nx, ny, nz] = divisions;
     // Cells as lists of points on the half-spacing grid, G in 0..=2n per axis.
     let mut cells: Vec<Vec<[usize; 3]>> = Vec::new();
@@ -142,7 +139,7 @@ pub fn box_mesh(kind: CellKind, lengths: [f64; 3], divisions: [usize; 3]) -> Mes
         all.push(mesh.add_cell(kind, nodes));
     }
     mesh.cell_sets.insert("volume".to_string(), all);
-    mesh
+    Ok(mesh)
 }
 
 /// The grid points of the hexahedron with lowest corner `o` (half-spacing grid) for reference

@@ -871,7 +871,9 @@ impl LinOp<f64> for Operator<'_> {
             }
         }
         // out = L^{-1} out
-        self.factor.l_solve(out, par, stack);
+        let mut out = out;
+        self.factor.l_solve(out.rb_mut(), par, stack);
+        if std::env::var("TEMPDEBUG").is_ok() { eprintln!("TEMPDEBUG apply |in| {:e} |out| {:e}", rhs.norm_l2(), out.norm_l2()); }
     }
 
     fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {

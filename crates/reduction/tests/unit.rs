@@ -24,3 +24,9 @@ mod full_model_modes {
 mod fv32 {
     include!("unit/fv32.rs");
 }
+
+/// From a gmsh mesh to a reduced body: physical groups as material and interface sets,
+/// RBE2/RBE3 interfaces, interface statics equal to the full model's.
+mod solid_body {
+    include!("unit/solid_body.rs");
+}

@@ -11,7 +11,7 @@ use nalgebra::{Matrix6, Point3, SMatrix, Vector3, Vector6};
 
 /// A box along x, clamped at x = 0.
 fn clamped_box(kind: CellKind, lengths: [f64; 3], divisions: [usize; 3]) -> FeModel {
-    let mut model = solid_model(box_mesh(kind, lengths, divisions), material(), MassKind::Consistent).unwrap();
+    let mut model = solid_model(box_mesh(kind, lengths, divisions).unwrap(), material(), MassKind::Consistent).unwrap();
     for n in model.node_set("x0", "clamp").unwrap().to_vec() {
         model.add_support(n, DofMask::ALL);
     }
@@ -135,7 +135,7 @@ fn rbe3_interface_follows_the_weighted_least_squares_rigid_fit() {
 fn rbe3_adds_no_stiffness() {
     let free = || {
         solid_model(
-            box_mesh(CellKind::Hex20, [1.0, 0.8, 0.6], [2, 2, 2]),
+            box_mesh(CellKind::Hex20, [1.0, 0.8, 0.6], [2, 2, 2]).unwrap(),
             material(),
             MassKind::Consistent,
         )

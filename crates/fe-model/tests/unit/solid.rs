@@ -500,7 +500,7 @@ fn patch_test_reproduces_a_linear_field_on_distorted_patches() {
         } else {
             [3, 3, 3]
         };
-        let mut mesh = box_mesh(cell_kind, [1.0, 1.2, 0.9], divisions);
+        let mut mesh = box_mesh(cell_kind, [1.0, 1.2, 0.9], divisions).unwrap();
         distort_interior(&mut mesh, 0.2, 0.3);
         let boundary: std::collections::BTreeSet<NodeId> = mesh.node_sets.values().flatten().copied().collect();
         let model = solid_model(mesh, material(), MassKind::Consistent).unwrap();
@@ -552,7 +552,7 @@ fn box_mesh_counts_sets_and_volume() {
     let lengths = [2.0, 1.0, 0.5];
     let divisions = [3, 2, 2];
     for kind in KINDS {
-        let mesh = box_mesh(kind, lengths, divisions);
+        let mesh = box_mesh(kind, lengths, divisions).unwrap();
         assert_eq!(
             mesh.nodes.len(),
             expected_node_count(kind, divisions),
@@ -603,7 +603,7 @@ fn box_mesh_counts_sets_and_volume() {
 fn box_mesh_is_conforming() {
     let lengths = [2.0, 1.0, 0.5];
     for kind in KINDS {
-        let mesh = box_mesh(kind, lengths, [3, 2, 2]);
+        let mesh = box_mesh(kind, lengths, [3, 2, 2]).unwrap();
         let sk = kind_of(kind);
         let mut count: std::collections::BTreeMap<Vec<NodeId>, usize> = Default::default();
         let mut area = std::collections::BTreeMap::new();
@@ -641,7 +641,7 @@ fn box_mesh_is_conforming() {
 fn free_meshed_body_has_six_rigid_modes() {
     for kind in KINDS {
         let model = solid_model(
-            box_mesh(kind, [1.0, 0.8, 0.6], [2, 2, 2]),
+            box_mesh(kind, [1.0, 0.8, 0.6], [2, 2, 2]).unwrap(),
             material(),
             MassKind::Consistent,
         )
@@ -658,7 +658,7 @@ fn free_meshed_body_has_six_rigid_modes() {
 
 #[test]
 fn solid_model_with_materials_assigns_and_reports() {
-    let mut mesh = box_mesh(CellKind::Hex8, [2.0, 1.0, 1.0], [2, 1, 1]);
+    let mut mesh = box_mesh(CellKind::Hex8, [2.0, 1.0, 1.0], [2, 1, 1]).unwrap();
     mesh.cell_sets.insert("left".into(), vec![fe_model::CellId(0)]);
     mesh.cell_sets.insert("right".into(), vec![fe_model::CellId(1)]);
     let soft = IsotropicMaterial::new("soft", 1e9, 0.3, 1000.0).unwrap();
@@ -704,7 +704,7 @@ fn cantilever_material() -> IsotropicMaterial {
 /// A 10 x 1 x 1 cantilever along x, clamped at x = 0 (all nodes of the face), with an RBE3
 /// interface at the centroid of the face x = L.
 fn cantilever(kind: CellKind, divisions: [usize; 3]) -> (FeModel, NodeId) {
-    let mesh = box_mesh(kind, [L, 1.0, 1.0], divisions);
+    let mesh = box_mesh(kind, [L, 1.0, 1.0], divisions).unwrap();
     let mut model = solid_model(mesh, cantilever_material(), MassKind::Consistent).unwrap();
     for n in model.node_set("x0", "clamp").unwrap().to_vec() {
         model.add_support(n, DofMask::ALL);

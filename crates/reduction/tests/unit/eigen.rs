@@ -660,3 +660,11 @@ fn error_invalid_settings() {
     let err = lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(5, Shift::Value(f64::INFINITY))).unwrap_err();
     assert!(matches!(err, ReductionError::InvalidSettings { .. }), "{err:?}");
 }
+
+#[test]
+fn zz_experiment_random() {
+    let (K, M) = random_spd_pair(300, 7);
+    let (l, _) = dense_reference(K.as_ref(), M.as_ref());
+    println!("{:?}", &l[..30]);
+    println!("{:?}", &l[290..]);
+}

@@ -10,7 +10,7 @@ use reduction::{modal_sparse, Shift};
 /// in-plane modes are those of plane stress (which is what FV32 asks for).
 fn fv32_model(nx: usize, ny: usize) -> fe_model::FeModel {
     let (t, L) = (0.05, 10.0);
-    let mut mesh = box_mesh(CellKind::Hex20, [L, 5.0, t], [nx, ny, 1]);
+    let mut mesh = box_mesh(CellKind::Hex20, [L, 5.0, t], [nx, ny, 1]).unwrap();
     for p in mesh.nodes.iter_mut() {
         let width = 5.0 - 0.4 * p.x;
         p.y = 2.5 + (p.y - 2.5) * width / 5.0;
