@@ -536,6 +536,13 @@ impl ShiftInvert {
             return self.finish(K, M, Y.as_ref(), m, m, settings);
         }
 
+        if std::env::var("TEMPDEBUG2").is_ok() {
+            let mut C = Mat::<f64>::zeros(n, n);
+            apply_alloc(&op, C.as_mut(), Mat::<f64>::identity(n, n).as_ref(), par);
+            let asym = (&C - C.transpose()).norm_l2() / C.norm_l2();
+            let raw = match self.symbolic.raw() { SymbolicCholeskyRaw::Simplicial(_) => "simplicial", _ => "supernodal" };
+            eprintln!("TEMPDEBUG asym {asym:e} {raw}");
+        }
         // Start vector: C applied to a fixed pseudo-random vector, as ARPACK does for
         // shift-invert, which removes the components the operator damps; the norm of a
         // second application estimates mu_1 for the tolerance scale.
@@ -552,6 +559,17 @@ impl ShiftInvert {
         let mu_scale = Cv.norm_l2();
 
         let mut tol_abs = settings.tolerance * KRYLOV_TOLERANCE_FACTOR * mu_scale;
+        if std::env::var("TEMPDEBUG3").is_ok() {
+            let mut C = Mat::<f64>::zeros(n, n);
+            apply_alloc(&op, C.as_mut(), Mat::<f64>::identity(n, n).as_ref(), par);
+            let C = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (C[(i, j)] + C[(j, i)]));
+            let mut Y = Mat::<f64>::zeros(n, m);
+            let mut mu = vec![0.0; m];
+            let mut mem = MemBuffer::new(partial_self_adjoint_eigen_scratch(&C.as_ref(), m, par, params));
+            eprintln!("TEMPDEBUG3 dense start");
+            let info = partial_self_adjoint_eigen(Y.as_mut(), &mut mu, &C.as_ref(), v0.as_ref(), tol_abs, par, MemStack::new(&mut mem), params);
+            eprintln!("TEMPDEBUG3 dense done {}", info.n_converged_eigen);
+        }
         let mut last_error = None;
         for _attempt in 0..MAX_ATTEMPTS {
             let mut Y = Mat::<f64>::zeros(n, m);

@@ -416,6 +416,20 @@ fn header_line(bytes: &[u8], start: usize, limit: usize) -> Option<(&[u8], usize
     Some((&window[..end], start + end + 1))
 }
 
+/// A whole number in the one form [`to_bytes`] writes it (no sign, no leading zero): the
+/// header lines are outside the checksums, so only their canonical form is accepted, and every
+/// change to them is detected.
+fn canonical_number(text: &str) -> Option<u64> {
+    let value: u64 = text.parse().ok()?;
+    (value.to_string() == text).then_some(value)
+}
+
+/// A CRC-32 as [`to_bytes`] writes it: exactly 8 lower-case hex digits.
+fn canonical_crc(text: &str) -> Option<u32> {
+    let ok = text.len() == 8 && text.bytes().all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b));
+    ok.then(|| u32::from_str_radix(text, 16).ok()).flatten()
+}
+
 /// A short printable rendering of raw bytes, for messages.
 fn printable(bytes: &[u8]) -> String {
     String::from_utf8_lossy(&bytes[..bytes.len().min(24)]).into_owned()
@@ -432,7 +446,7 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         what: "no end of line within 64 bytes after the magic".into(),
     })?;
     let version_text = std::str::from_utf8(&line1[magic.len()..]).unwrap_or("");
-    let version: u64 = version_text.parse().map_err(|_| BodyFileProblem::Header {
+    let version = canonical_number(version_text).ok_or_else(|| BodyFileProblem::Header {
         line: 1,
         what: format!("'{}' is not a format version (a whole number)", printable(&line1[magic.len()..])),
     })?;
@@ -447,9 +461,9 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
     let line2 = std::str::from_utf8(line2).map_err(|_| line2_error(format!("not text: {:?}", printable(line2))))?;
     let words: Vec<&str> = line2.split(' ').collect();
     let (json_len, json_crc) = match words.as_slice() {
-        ["metadata", len, "crc32", crc] if crc.len() == 8 => (
-            len.parse::<u64>().map_err(|_| line2_error(format!("'{len}' is not a byte count")))?,
-            u32::from_str_radix(crc, 16).map_err(|_| line2_error(format!("'{crc}' is not 8 hex digits")))?,
+        ["metadata", len, "crc32", crc] => (
+            canonical_number(len).ok_or_else(|| line2_error(format!("'{len}' is not a byte count")))?,
+            canonical_crc(crc).ok_or_else(|| line2_error(format!("'{crc}' is not 8 lower-case hex digits")))?,
         ),
         _ => return Err(line2_error(format!("expected 'metadata <bytes> crc32 <8 hex digits>', found '{line2}'"))),
     };
@@ -539,10 +553,8 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
                 entry.offset
             )));
         }
-        let stored = u32::from_str_radix(&entry.crc32, 16)
-            .ok()
-            .filter(|_| entry.crc32.len() == 8)
-            .ok_or_else(|| shape(format!("{name}: crc32 '{}' is not 8 hex digits", entry.crc32)))?;
+        let stored = canonical_crc(&entry.crc32)
+            .ok_or_else(|| shape(format!("{name}: crc32 '{}' is not 8 lower-case hex digits", entry.crc32)))?;
         let found = (binary.len() as u64).saturating_sub(offset);
         if found < needed {
             return Err(BodyFileProblem::TruncatedArray { array: name.clone(), offset, expected: needed, found });

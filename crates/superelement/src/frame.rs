@@ -161,7 +161,7 @@ impl Superelement {
         let mut residual = f64::INFINITY;
         for it in 0..=self.frame_settings.max_iterations {
             local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut q);
-            let mut g = Vector6::zeros();
+            let mut g: Vector6<f64> = Vector6::zeros();
             for a in 0..6 {
                 g[a] = (0..self.n).map(|c| self.Phi_j[(a, c)] * q[c]).sum();
             }

@@ -287,18 +287,6 @@ impl Kinematics {
         b
     }
 
-    /// $\tilde{\mathbf N}_{\mathbf s}$ (module docs): $D\boldsymbol\Psi[\boldsymbol\varepsilon]\mathbf s = \tilde{\mathbf N}_{\mathbf s}\boldsymbol\varepsilon$.
-    pub(crate) fn n_tilde(&self, s: &[f64]) -> Blocks {
-        let N = self.n_interfaces();
-        let sr = Vector3::new(s[3], s[4], s[5]);
-        let mut b = Blocks::zeros(N);
-        for k in 0..N {
-            b.t[k] = skew(&sr);
-            b.r[k] = so3::left_jacobian_inv_derivative(&theta_of(&self.q_jj, k), &sr);
-        }
-        b
-    }
-
     /// $\partial(\mathbf P^T\mathbf F)/\partial\mathbf q^{jj}$ for a fixed $\mathbf F \in \mathbb R^{6+n}$, added to `out`.
     ///
     /// # Derivation

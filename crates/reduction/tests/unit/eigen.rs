@@ -668,3 +668,45 @@ fn zz_experiment_random() {
     println!("{:?}", &l[..30]);
     println!("{:?}", &l[290..]);
 }
+
+#[test]
+fn zz_experiment_faer_dense() {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::matrix_free::eigen::*;
+    let (K, M) = random_spd_pair(300, 7);
+    // C = L^{-1} M L^{-T}, K = L L^T
+    let Kd = K.to_dense();
+    let llt = Kd.llt(Side::Lower).unwrap();
+    let L = llt.L();
+    let mut C = M.to_dense();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(L, C.as_mut(), faer::Par::Seq);
+    let mut C = C.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(L, C.as_mut(), faer::Par::Seq);
+    let C = Mat::<f64>::from_fn(300, 300, |i, j| 0.5 * (C[(i, j)] + C[(j, i)]));
+    let n = 300;
+    let mut state = 0x9E37_79B9_7F4A_7C15_u64;
+    let mut uniform = || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    };
+    let v = Mat::<f64>::from_fn(n, 1, |_, _| uniform());
+    let Cv = &C * &v;
+    let v0 = &Cv / Cv.norm_l2();
+    let mu_scale = (&C * &v0).norm_l2();
+    println!("mu_scale {mu_scale}");
+    for tol in [1e-9 * mu_scale / 170.0, 1e-9 * mu_scale / 170.0 * 1.0000001, 1e-8 * mu_scale / 170.0, 1e-7 * mu_scale / 170.0, 1e-10 * mu_scale / 170.0] {
+        let m = 12;
+        let par = faer::Par::rayon(2);
+        let params = PartialEigenParams::default();
+        let mut mem = MemBuffer::new(partial_self_adjoint_eigen_scratch(&C.as_ref(), m, par, params));
+        let mut V = Mat::<f64>::zeros(n, m);
+        let mut w = vec![0.0; m];
+        println!("tol {tol}");
+        let info = partial_self_adjoint_eigen(V.as_mut(), &mut w, &C.as_ref(), v0.col(0), tol * 170.0, par, MemStack::new(&mut mem), params);
+        println!("tol {tol}: converged {} {:?}", info.n_converged_eigen, &w[..3]);
+    }
+}
