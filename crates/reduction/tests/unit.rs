@@ -30,3 +30,25 @@ mod fv32 {
 mod solid_body {
     include!("unit/solid_body.rs");
 }
+
+/// `reduction::file`: the `.rbody` reduced-body file. Bit-identical round trips (mesh shapes,
+/// auxiliary interface, awkward scalars), every error named with the file (magic, version,
+/// truncation, checksum, JSON, shapes), and no panic or acceptance on truncation or random
+/// byte changes.
+mod file_format {
+    include!("unit/file_format.rs");
+}
+
+/// `reduction::matrix_market` and `reduce_external`: exact Matrix Market round trips,
+/// symmetric files expanded, errors with file and line; external K, M and node coordinates
+/// reduce to the body `reduce` gives for the same FE model (beam; solid with RBE2 spiders).
+mod matrix_market {
+    include!("unit/matrix_market.rs");
+}
+
+/// `reduction::diagnostics`: effective masses from M_CB against a dense solution of the full
+/// model, the sum rule (all modes + what the interface carries = rigid mass, lumped hand
+/// value m/2n), the static residual, and the warnings.
+mod diagnostics {
+    include!("unit/diagnostics.rs");
+}
