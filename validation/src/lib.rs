@@ -28,7 +28,12 @@ pub struct Row {
 
 impl Row {
     pub fn new(quantity: impl Into<String>, reference: f64, ours: f64, tolerance: f64) -> Self {
-        Self { quantity: quantity.into(), reference, ours, tolerance }
+        Self {
+            quantity: quantity.into(),
+            reference,
+            ours,
+            tolerance,
+        }
     }
 
     /// $|ours - reference| / |reference|$.
@@ -56,17 +61,23 @@ impl Table {
     pub fn markdown(&self) -> String {
         let mut s = String::new();
         let _ = writeln!(s, "### {}\n\n{}\n", self.title, self.note);
-        let _ = writeln!(s, "| quantity | reference | flexmbs | rel. error | tolerance |\n|---|---:|---:|---:|---:|");
+        let _ = writeln!(
+            s,
+            "| quantity | reference | flexmbs | rel. error | tolerance |\n|---|---:|---:|---:|---:|"
+        );
         for r in &self.rows {
             let _ = writeln!(
                 s,
-                "| {} | {:.6e} | {:.6e} | {:.2e} | {:.0e} {} |",
+                "| {} | {:.6e} | {:.6e} | {:.2e} | {} |",
                 r.quantity,
                 r.reference,
                 r.ours,
                 r.relative_error(),
-                r.tolerance,
-                if r.passes() { "" } else { "**FAIL**" }
+                if r.tolerance.is_finite() {
+                    format!("{:.0e}{}", r.tolerance, if r.passes() { "" } else { " **FAIL**" })
+                } else {
+                    "—".to_string()
+                }
             );
         }
         s

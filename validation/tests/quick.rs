@@ -10,7 +10,15 @@ fn quick_subset_within_tolerances() {
     for t in &tables {
         for r in &t.rows {
             if !r.passes() {
-                failures.push(format!("{}: {}: {} vs {} ({:.2e} > {:.0e})", t.title, r.quantity, r.ours, r.reference, r.relative_error(), r.tolerance));
+                failures.push(format!(
+                    "{}: {}: {} vs {} ({:.2e} > {:.0e})",
+                    t.title,
+                    r.quantity,
+                    r.ours,
+                    r.reference,
+                    r.relative_error(),
+                    r.tolerance
+                ));
             }
         }
     }

@@ -93,6 +93,7 @@ fn run(ex: usize, ey: usize, ez: usize) {
     println!("Krylov-Schur + Rayleigh-Ritz, {N_MODES} modes: {t_eig:>10.0} ms");
     println!("total:                               {t_total:>10.0} ms");
     println!("peak RSS (VmHWM, whole process):     {:>10.0} MB", peak_rss_mb());
+    println!("operator applications (L^-T, M, L^-1): {}", sol.operator_applications);
     println!("worst relative residual: {worst:.2e}");
     println!("frequencies (Hz): {}", f.join(" "));
     if let Ok(dir) = std::env::var("REDUCTION_BENCH_MTX_DIR") {

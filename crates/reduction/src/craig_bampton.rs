@@ -26,7 +26,7 @@ pub enum ModeSelection {
     StaticOnly,
     /// The `m` lowest fixed-interface modes.
     Count(usize),
-    /// Every fixed-interface mode below a frequency [Hz].
+    /// Every fixed-interface mode below a frequency (Hz).
     CutoffHz(f64),
 }
 
@@ -44,7 +44,11 @@ pub struct CbSettings {
 impl CbSettings {
     /// Settings keeping `modes`, the mesh shapes, and no auxiliary node.
     pub fn new(modes: ModeSelection) -> Self {
-        Self { modes, keep_mesh_shapes: true, auxiliary_node: None }
+        Self {
+            modes,
+            keep_mesh_shapes: true,
+            auxiliary_node: None,
+        }
     }
 }
 
@@ -63,14 +67,18 @@ pub struct Partition {
 pub fn partition(model: &FeModel, dofs: &DofMap, interfaces: &[(String, NodeId)]) -> Result<Partition, ReductionError> {
     let tag = |node: usize| model.mesh.node_tags.get(node).copied().unwrap_or(node as u64 + 1);
     let interfaces: Vec<(String, usize)> = interfaces.iter().map(|(n, node)| (n.clone(), node.index())).collect();
-    partition_by(dofs.n_free(), model.node_count(), &interfaces, &|node| format!("node {}", tag(node)), &|node, k| {
-        match dofs.status(NodeId(node as u32), k) {
+    partition_by(
+        dofs.n_free(),
+        model.node_count(),
+        &interfaces,
+        &|node| format!("node {}", tag(node)),
+        &|node, k| match dofs.status(NodeId(node as u32), k) {
             DofStatus::Free(d) => Ok(d.index()),
             DofStatus::Inactive => Err("inactive (no element or spider uses it)"),
             DofStatus::Supported => Err("supported"),
             DofStatus::Dependent => Err("dependent (a spider defines it)"),
-        }
-    })
+        },
+    )
 }
 
 /// The partition for any model: `slot(node, k)` is the free dof of dof `k` of `node`, or why
@@ -128,11 +136,18 @@ fn partition_by(
             })
         })
         .collect();
-    Ok(Partition { boundary, internal, position })
+    Ok(Partition {
+        boundary,
+        internal,
+        position,
+    })
 }
 
 /// The internal-internal block as a sparse matrix and the internal-boundary block dense.
-fn split(A: SparseColMatRef<'_, usize, f64>, p: &Partition) -> Result<(SparseColMat<usize, f64>, Mat<f64>), ReductionError> {
+fn split(
+    A: SparseColMatRef<'_, usize, f64>,
+    p: &Partition,
+) -> Result<(SparseColMat<usize, f64>, Mat<f64>), ReductionError> {
     let (ni, nb) = (p.internal.len(), p.boundary.len());
     let mut triplets = Vec::with_capacity(A.compute_nnz());
     let mut A_ib = Mat::zeros(ni, nb);
@@ -236,19 +251,34 @@ struct BodyParts<'a> {
 }
 
 fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
-    let BodyParts { name, interfaces, nodes, projection, S_full, inertia, Phi_com, auxiliary_interface, keep_mesh_shapes } =
-        parts;
+    let BodyParts {
+        name,
+        interfaces,
+        nodes,
+        projection,
+        S_full,
+        inertia,
+        Phi_com,
+        auxiliary_interface,
+        keep_mesh_shapes,
+    } = parts;
     if let Some(aux) = auxiliary_interface {
         let x = nodes[interfaces[aux].1];
         let c = inertia.center_of_mass;
-        let size = nodes.iter().map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0f64, f64::max).max(1e-300);
+        let size = nodes
+            .iter()
+            .map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt())
+            .fold(0.0f64, f64::max)
+            .max(1e-300);
         let d = ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2) + (x[2] - c[2]).powi(2)).sqrt();
         // The auxiliary frame is defined at the centre of mass; a node off it by more than a
         // millionth of the body's size was placed wrongly.
         if d > 1e-6 * size {
             return Err(ReductionError::Interface {
                 name: "auxiliary".into(),
-                what: format!("the auxiliary node is {d:.3e} from the centre of mass {c:?}; place it at the centre of mass"),
+                what: format!(
+                    "the auxiliary node is {d:.3e} from the centre of mass {c:?}; place it at the centre of mass"
+                ),
             });
         }
     }
@@ -258,7 +288,11 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
         name: name.to_string(),
         interfaces: interfaces
             .iter()
-            .map(|(name, node)| InterfacePoint { name: name.clone(), node: *node as u32, position: nodes[*node] })
+            .map(|(name, node)| InterfacePoint {
+                name: name.clone(),
+                node: *node as u32,
+                position: nodes[*node],
+            })
             .collect(),
         n_modes: omega.len(),
         fixed_interface_omega: omega,
@@ -267,23 +301,32 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
         inertia,
         Phi_com: DenseMatrix::from_faer(Phi_com.as_ref()),
         auxiliary_interface,
-        mesh: keep_mesh_shapes.then(|| MeshModes { nodes, shapes: DenseMatrix::from_faer(S_full.as_ref()) }),
+        mesh: keep_mesh_shapes.then(|| MeshModes {
+            nodes,
+            shapes: DenseMatrix::from_faer(S_full.as_ref()),
+        }),
     })
 }
+
+/// Interfaces as (name, node index).
+type NamedNodes = Vec<(String, usize)>;
 
 /// The interface list with the auxiliary node appended (named `auxiliary`), and its index.
 fn with_auxiliary(
     name: &str,
     interfaces: &[(String, usize)],
     auxiliary_node: Option<NodeId>,
-) -> Result<(Vec<(String, usize)>, Option<usize>), ReductionError> {
+) -> Result<(NamedNodes, Option<usize>), ReductionError> {
     let mut interfaces = interfaces.to_vec();
     let auxiliary_interface = auxiliary_node.map(|node| {
         interfaces.push(("auxiliary".to_string(), node.index()));
         interfaces.len() - 1
     });
     if interfaces.is_empty() {
-        return Err(ReductionError::Interface { name: name.into(), what: "a reduced body needs at least one interface".into() });
+        return Err(ReductionError::Interface {
+            name: name.into(),
+            what: "a reduced body needs at least one interface".into(),
+        });
     }
     Ok((interfaces, auxiliary_interface))
 }
@@ -412,19 +455,28 @@ pub fn reduce_external_dofs(
     for (what, A) in [("K", K), ("M", M)] {
         if A.nrows() != n_free || A.ncols() != n_free {
             return Err(ReductionError::ExternalModel {
-                what: format!("{what} is {} x {} but the dof list has {n_free} dofs", A.nrows(), A.ncols()),
+                what: format!(
+                    "{what} is {} x {} but the dof list has {n_free} dofs",
+                    A.nrows(),
+                    A.ncols()
+                ),
             });
         }
         check_symmetric_entries(A, what)?;
     }
     if let Some(bad) = nodes.iter().position(|x| x.iter().any(|c| !c.is_finite())) {
-        return Err(ReductionError::ExternalModel { what: format!("node {bad} has a non-finite coordinate {:?}", nodes[bad]) });
+        return Err(ReductionError::ExternalModel {
+            what: format!("node {bad} has a non-finite coordinate {:?}", nodes[bad]),
+        });
     }
     let mut slot_dof: Vec<Option<usize>> = vec![None; 6 * nodes.len()];
     for (d, &(node, k)) in dofs.iter().enumerate() {
         if node >= nodes.len() || k >= 6 {
             return Err(ReductionError::ExternalModel {
-                what: format!("dof {d} is dof {k} of node {node}, but there are {} nodes and 6 dofs per node", nodes.len()),
+                what: format!(
+                    "dof {d} is dof {k} of node {node}, but there are {} nodes and 6 dofs per node",
+                    nodes.len()
+                ),
             });
         }
         if let Some(other) = slot_dof[6 * node + k].replace(d) {
@@ -434,9 +486,13 @@ pub fn reduce_external_dofs(
         }
     }
     let (interfaces, auxiliary_interface) = with_auxiliary(name, interfaces, settings.auxiliary_node)?;
-    let p = partition_by(n_free, nodes.len(), &interfaces, &|node| format!("node {node} (index)"), &|node, k| {
-        slot_dof[6 * node + k].ok_or("not in the matrices")
-    })?;
+    let p = partition_by(
+        n_free,
+        nodes.len(),
+        &interfaces,
+        &|node| format!("node {node} (index)"),
+        &|node, k| slot_dof[6 * node + k].ok_or("not in the matrices"),
+    )?;
     let describe = |d: usize| format!("node {} (index) dof {}", dofs[d].0, DOF_NAMES[dofs[d].1]);
     let projection = project(K, M, &p, settings.modes, name, &describe)?;
     let n = projection.V.ncols();
@@ -469,45 +525,37 @@ pub fn reduce_external_dofs(
 /// prints $a_{ij}$ and $a_{ji}$ with the same digits, so a real asymmetry or a missing
 /// triangle stands out by many orders of magnitude.
 fn check_symmetric_entries(A: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<(), ReductionError> {
-    let mut entries: Vec<(usize, usize, f64)> = Vec::with_capacity(A.compute_nnz());
+    // Summed per position: a matrix built from triplets may list a position twice.
+    let mut value: std::collections::HashMap<(usize, usize), f64> = std::collections::HashMap::new();
     let mut max = 0.0f64;
     for j in 0..A.ncols() {
         for (&i, &v) in A.row_idx_of_col_raw(j).iter().zip(A.val_of_col(j)) {
-            entries.push((i, j, v));
+            *value.entry((i, j)).or_default() += v;
             max = max.max(v.abs());
         }
     }
     if !max.is_finite() {
-        return Err(ReductionError::ExternalModel { what: format!("{what} has a non-finite entry") });
-    }
-    // Sum duplicates (faer matrices built from triplets have none; be safe).
-    let sorted = |key: &dyn Fn(&(usize, usize, f64)) -> (usize, usize)| {
-        let mut e: Vec<((usize, usize), f64)> = entries.iter().map(|t| (key(t), t.2)).collect();
-        e.sort_by_key(|x| x.0);
-        e.dedup_by(|b, a| {
-            if a.0 == b.0 {
-                a.1 += b.1;
-                true
-            } else {
-                false
-            }
+        return Err(ReductionError::ExternalModel {
+            what: format!("{what} has a non-finite entry"),
         });
-        e
-    };
-    let by_col = sorted(&|t| (t.0, t.1));
-    let by_row = sorted(&|t| (t.1, t.0));
+    }
     let tol = 1e-10 * max;
-    let value = |list: &[((usize, usize), f64)], key: (usize, usize)| {
-        list.binary_search_by_key(&key, |x| x.0).map(|p| list[p].1).unwrap_or(0.0)
-    };
-    for &((i, j), v) in &by_col {
-        let w = value(&by_row, (i, j));
-        if (v - w).abs() > tol {
-            return Err(ReductionError::ExternalModel {
-                what: format!(
-                    "{what} is not symmetric: entry ({i}, {j}) is {v:e} but ({j}, {i}) is {w:e} (0-based; both triangles must be stored, and equal to within {tol:.1e})"
-                ),
-            });
+    // Column by column, so that the first offending entry is reported, whatever the hashing.
+    for j in 0..A.ncols() {
+        for &i in A.row_idx_of_col_raw(j) {
+            let v = value[&(i, j)];
+            let w = value.get(&(j, i)).copied();
+            if (v - w.unwrap_or(0.0)).abs() > tol {
+                let mirror = match w {
+                    Some(w) => format!("({j}, {i}) is {w:e}"),
+                    None => format!("({j}, {i}) is not stored"),
+                };
+                return Err(ReductionError::ExternalModel {
+                    what: format!(
+                        "{what} is not symmetric: entry ({i}, {j}) is {v:e} but {mirror} (0-based; both triangles must be stored, and equal to within {tol:.1e})"
+                    ),
+                });
+            }
         }
     }
     Ok(())
@@ -541,7 +589,9 @@ fn fixed_interface_modes(
         }
         ModeSelection::CutoffHz(f) => {
             if !(f > 0.0 && f.is_finite()) {
-                return Err(ReductionError::InvalidSettings { what: format!("cut-off frequency must be positive, got {f} Hz") });
+                return Err(ReductionError::InvalidSettings {
+                    what: format!("cut-off frequency must be positive, got {f} Hz"),
+                });
             }
             let cutoff = 2.0 * std::f64::consts::PI * f;
             // Ask for more modes until one lies above the cut-off (or the model runs out).

@@ -17,7 +17,9 @@
 //!
 //! # Derivation from the reduced body alone
 //!
-//! The reduced body holds no FE matrices, but $\mathbf M_{CB}$ is enough. Let
+//! The reduced body holds no FE matrices, but $\mathbf M_{CB}$ is enough. Superscripts name its
+//! blocks: $\mathbf M_{CB}^{\eta b}$ is the rows of the modal coordinates $\boldsymbol\eta$
+//! and the columns of the interface coordinates $b$ (`M_CB[6N.., ..6N]`). Let
 //! $\boldsymbol\Phi_{rig}$ ($6N \times 6$) be the rigid modes of the interface set (3.6) about
 //! the centre of mass. In the CB basis $\mathbf V = [\mathbf V_b\ \mathbf V_\eta]$, the motion
 //! $\mathbf V_b\boldsymbol\Phi_{rig}$ is the static response to a rigid motion of the
@@ -25,9 +27,9 @@
 //! ($\mathbf R$: the rigid modes of the whole body) gives $\mathbf R_i = -\mathbf K_{ii}^{-1}
 //! \mathbf K_{ib}\mathbf R_b = \boldsymbol\Psi\mathbf R_b$, so
 //! $\mathbf V_b\boldsymbol\Phi_{rig} = \mathbf R$: the rigid motion of the whole body. Hence
-//! $$\mathbf L = \mathbf V_\eta^T\mathbf M\mathbf R = \mathbf M_{CB}[\eta, b]\,
-//! \boldsymbol\Phi_{rig},\qquad m_k = \mathbf M_{CB}[\eta_k, \eta_k],\qquad
-//! \boldsymbol\Phi_{rig}^T\mathbf M_{CB}[b, b]\boldsymbol\Phi_{rig} = \mathbf R^T\mathbf M
+//! $$\mathbf L = \mathbf V_\eta^T\mathbf M\mathbf R = \mathbf M_{CB}^{\eta b}\,
+//! \boldsymbol\Phi_{rig},\qquad m_k = \mathbf M_{CB}^{\eta_k\eta_k},\qquad
+//! \boldsymbol\Phi_{rig}^T\mathbf M_{CB}^{bb}\boldsymbol\Phi_{rig} = \mathbf R^T\mathbf M
 //! \mathbf R,$$
 //! the last being the body's rigid mass matrix ($m\mathbf 1$ and the inertia tensor about the
 //! centre of mass on its diagonal blocks). No data beyond [`ReducedBody`] is needed.
@@ -44,8 +46,8 @@
 //! the effective masses of all modes add up to the total mass (inertia) minus what the
 //! interfaces carry, and the sum over the *kept* modes falls short of that by the modes left
 //! out. The table's `static` row is the rest,
-//! $\mathrm{diag}\,\boldsymbol\Phi_{rig}^T(\mathbf M_{CB}[b,b] - \mathbf M_{CB}[b,\eta]
-//! \mathbf M_{CB}[\eta,\eta]^{-1}\mathbf M_{CB}[\eta,b])\boldsymbol\Phi_{rig}$ over the rigid
+//! $\mathrm{diag}\,\boldsymbol\Phi_{rig}^T(\mathbf M_{CB}^{bb} - \mathbf M_{CB}^{b\eta}
+//! (\mathbf M_{CB}^{\eta\eta})^{-1}\mathbf M_{CB}^{\eta b})\boldsymbol\Phi_{rig}$ over the rigid
 //! mass: the share the constraint modes carry (the interfaces' own, plus the modes not kept);
 //! `kept + static = 1` for a free body. `tests/unit/diagnostics.rs` checks both identities
 //! against an independent dense solution of the full FE model.
@@ -79,13 +81,13 @@ pub const FREE_BODY_RTOL: f64 = 1e-6;
 pub struct ModeDiagnostics {
     /// 1-based mode number, ascending frequency.
     pub mode: usize,
-    /// Fixed-interface frequency [Hz].
+    /// Fixed-interface frequency (Hz).
     pub frequency_hz: f64,
     /// Generalised mass $m_k$ (1 for the mass-normalised modes of [`crate::reduce`]).
     pub generalized_mass: f64,
     /// Participation factors $\Gamma_{kd} = L_{kd}/m_k$.
     pub participation: [f64; 6],
-    /// Effective mass $L_{kd}^2/m_k$ [kg for translations, kg m² for rotations].
+    /// Effective mass $L_{kd}^2/m_k$ (kg for translations, kg m² for rotations).
     pub effective_mass: [f64; 6],
     /// `effective_mass` over the body's mass (translations) or inertia about the centre of
     /// mass (rotations).
@@ -102,14 +104,26 @@ pub enum DiagnosticWarning {
     StaticOnly { excitation_hz: f64 },
     /// The highest kept fixed-interface frequency is below `factor` times the excitation:
     /// modes are missing.
-    ModesMissing { highest_hz: f64, excitation_hz: f64, factor: f64 },
+    ModesMissing {
+        highest_hz: f64,
+        excitation_hz: f64,
+        factor: f64,
+    },
     /// Kept modes near or below the excitation ([`NEAR_EXCITATION_RATIO`]): the study will
     /// excite them near resonance, so their damping matters.
-    NearExcitation { modes: Vec<usize>, frequencies_hz: Vec<f64>, excitation_hz: f64 },
+    NearExcitation {
+        modes: Vec<usize>,
+        frequencies_hz: Vec<f64>,
+        excitation_hz: f64,
+    },
     /// The CB static modes do not carry the body's rigid mass in `direction`: the body is
     /// supported in its FE model, and the effective masses do not add up as the module docs
     /// say.
-    NotFree { direction: String, static_block: f64, body: f64 },
+    NotFree {
+        direction: String,
+        static_block: f64,
+        body: f64,
+    },
 }
 
 impl fmt::Display for DiagnosticWarning {
@@ -156,7 +170,7 @@ pub struct Diagnostics {
     /// The share the static (constraint) modes carry: the interfaces' own mass and the modes
     /// not kept (module docs). `kept + static = 1` for a free body.
     pub static_fraction: [f64; 6],
-    /// The highest frequency the study excites [Hz], if given.
+    /// The highest frequency the study excites (Hz), if given.
     pub excitation_hz: Option<f64>,
     /// The kept modes should reach `factor` times the excitation.
     pub factor: f64,
@@ -177,7 +191,11 @@ fn phi_rig(body: &ReducedBody, c: [f64; 3]) -> Vec<[f64; 6]> {
         for a in 0..3 {
             let mut e = [0.0; 3];
             e[a] = 1.0;
-            let e_x_r = [e[1] * r[2] - e[2] * r[1], e[2] * r[0] - e[0] * r[2], e[0] * r[1] - e[1] * r[0]];
+            let e_x_r = [
+                e[1] * r[2] - e[2] * r[1],
+                e[2] * r[0] - e[0] * r[2],
+                e[0] * r[1] - e[1] * r[0],
+            ];
             for b in 0..3 {
                 P[6 * k + b][3 + a] = e_x_r[b];
             }
@@ -198,7 +216,13 @@ pub fn diagnostics(body: &ReducedBody, excitation_hz: Option<f64>, factor: f64) 
     let J = body.inertia.inertia_com;
     let mass = body.inertia.mass;
     let rigid_mass = [mass, mass, mass, J[0][0], J[1][1], J[2][2]];
-    let fraction = |value: f64, d: usize| if rigid_mass[d] > 0.0 { value / rigid_mass[d] } else { 0.0 };
+    let fraction = |value: f64, d: usize| {
+        if rigid_mass[d] > 0.0 {
+            value / rigid_mass[d]
+        } else {
+            0.0
+        }
+    };
 
     // Static block: diag(Phi_rig^T M_bb Phi_rig).
     let mut static_block = [0.0; 6];
@@ -242,12 +266,18 @@ pub fn diagnostics(body: &ReducedBody, excitation_hz: Option<f64>, factor: f64) 
     for d in 0..6 {
         let (a, b) = (static_block[d], rigid_mass[d]);
         if (a - b).abs() > FREE_BODY_RTOL * b.abs().max(a.abs()) {
-            warnings.push(DiagnosticWarning::NotFree { direction: DIRECTIONS[d].into(), static_block: a, body: b });
+            warnings.push(DiagnosticWarning::NotFree {
+                direction: DIRECTIONS[d].into(),
+                static_block: a,
+                body: b,
+            });
         }
     }
     if let Some(f) = excitation_hz {
         if !(f > 0.0 && f.is_finite()) {
-            warnings.push(DiagnosticWarning::InvalidInput { what: format!("the excitation frequency {f} Hz is not positive") });
+            warnings.push(DiagnosticWarning::InvalidInput {
+                what: format!("the excitation frequency {f} Hz is not positive"),
+            });
         } else if !(factor >= 1.0 && factor.is_finite()) {
             warnings.push(DiagnosticWarning::InvalidInput {
                 what: format!("the factor {factor} must be at least 1 (3 to 5 is common)"),
@@ -257,10 +287,16 @@ pub fn diagnostics(body: &ReducedBody, excitation_hz: Option<f64>, factor: f64) 
         } else {
             let highest = modes.iter().map(|d| d.frequency_hz).fold(0.0, f64::max);
             if highest < factor * f {
-                warnings.push(DiagnosticWarning::ModesMissing { highest_hz: highest, excitation_hz: f, factor });
+                warnings.push(DiagnosticWarning::ModesMissing {
+                    highest_hz: highest,
+                    excitation_hz: f,
+                    factor,
+                });
             }
-            let near: Vec<&ModeDiagnostics> =
-                modes.iter().filter(|d| d.frequency_hz < NEAR_EXCITATION_RATIO * f).collect();
+            let near: Vec<&ModeDiagnostics> = modes
+                .iter()
+                .filter(|d| d.frequency_hz < NEAR_EXCITATION_RATIO * f)
+                .collect();
             if !near.is_empty() {
                 warnings.push(DiagnosticWarning::NearExcitation {
                     modes: near.iter().map(|d| d.mode).collect(),
@@ -317,9 +353,16 @@ impl fmt::Display for Diagnostics {
         }
         row(f, "kept modes", None, &self.kept_fraction)?;
         row(f, "static modes", None, &self.static_fraction)?;
-        writeln!(f, "(static: carried by the interfaces themselves and by the modes not kept)")?;
+        writeln!(
+            f,
+            "(static: carried by the interfaces themselves and by the modes not kept)"
+        )?;
         match self.excitation_hz {
-            Some(hz) => writeln!(f, "excitation up to {hz:.4e} Hz; kept modes should reach {} x that", self.factor)?,
+            Some(hz) => writeln!(
+                f,
+                "excitation up to {hz:.4e} Hz; kept modes should reach {} x that",
+                self.factor
+            )?,
             None => writeln!(f, "no excitation frequency given: no frequency check")?,
         }
         if self.warnings.is_empty() {

@@ -1,87 +1,103 @@
 //! The $m$ lowest eigenpairs of $\mathbf K\boldsymbol\phi = \omega^2\mathbf M\boldsymbol\phi$
 //! for sparse symmetric $\mathbf K \succeq 0$ and $\mathbf M \succ 0$, by shift-invert
-//! Krylov-Schur on a sparse Cholesky factor (brief §3).
+//! Lanczos on a sparse Cholesky factor (brief §3).
 //!
 //! # Method
 //!
 //! 1. Factor $\mathbf P(\mathbf K - \sigma\mathbf M)\mathbf P^T = \mathbf L\mathbf L^T$ with
 //!    faer's sparse Cholesky (AMD fill-reducing permutation $\mathbf P$, supernodal or
-//!    simplicial as faer's symbolic analysis chooses) — [`ShiftInvert::new`].
-//! 2. Run faer's Krylov-Schur for self-adjoint operators,
-//!    [`faer::matrix_free::eigen::partial_self_adjoint_eigen`], on
+//!    simplicial as faer's symbolic analysis chooses): [`ShiftInvert::new`].
+//! 2. Find the $m$ largest eigenvalues of the standard symmetric problem for
 //!    $$\mathbf C = \mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T},$$
-//!    which is symmetric in the standard inner product and has the eigenpairs
-//!    $\mu_k = 1/(\lambda_k - \sigma)$, $\mathbf y_k = \mathbf L^T\mathbf P\boldsymbol\phi_k$
-//!    (Ericsson & Ruhe 1980, "The spectral transformation Lanczos method", Math. Comp. 35;
-//!    Grimes, Lewis & Simon 1994, SIAM J. Matrix Anal. Appl. 15, §2). Since
-//!    $\mathbf K - \sigma\mathbf M \succ 0$ is required for the factor, $\sigma < \lambda_1$,
-//!    so every $\mu_k > 0$ and the *largest* $\mu$ (what Krylov-Schur finds) are the *lowest*
-//!    $\lambda$.
-//! 3. Back-transform $\boldsymbol\phi_k = \mathbf P^T\mathbf L^{-T}\mathbf y_k$, then a
+//!    whose eigenpairs are $\mu_k = 1/(\lambda_k - \sigma)$,
+//!    $\mathbf y_k = \mathbf L^T\mathbf P\boldsymbol\phi_k$ (Ericsson & Ruhe 1980, "The
+//!    spectral transformation Lanczos method", Math. Comp. 35; Grimes, Lewis & Simon 1994,
+//!    SIAM J. Matrix Anal. Appl. 15, §2), by thick-restart Lanczos ([`thick_restart_lanczos`]).
+//!    The factor exists only if $\mathbf K - \sigma\mathbf M \succ 0$, i.e. $\sigma <
+//!    \lambda_1$, so every $\mu_k > 0$ and the *largest* $\mu$ are the *lowest* $\lambda$.
+//! 3. Back-transform $\boldsymbol\phi_k = \mathbf P^T\mathbf L^{-T}\mathbf y_k$ and do a
 //!    Rayleigh-Ritz step on $(\mathbf K, \mathbf M)$ in the span of the $m$ vectors
-//!    ([`rayleigh_ritz`]): it makes $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf I$
-//!    hold to round-off (the Krylov vectors are only orthonormal in the standard inner
-//!    product, and the $\mathbf y_k$ only approximately $\mathbf C$-orthogonal) and gives
-//!    $\lambda_k$ as Rayleigh quotients of $\mathbf K$ itself, so rigid-body modes come out
-//!    with $|\lambda| \approx \varepsilon\|\mathbf K\|/\|\mathbf M\|$.
-//! 4. Check every pair by its relative residual ([`relative_residual`]) and refuse the result
-//!    if one is above the tolerance.
+//!    ([`rayleigh_ritz`]). It makes $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf I$
+//!    hold to round-off (the Lanczos vectors are orthonormal in the standard inner product
+//!    only, and the $\mathbf y_k$ only approximately $\mathbf C$-orthogonal) and gives each
+//!    $\lambda_k$ as a Rayleigh quotient of $\mathbf K$ itself, so rigid-body modes come out
+//!    with $|\lambda| \approx \varepsilon\lambda_{max}$.
+//! 4. Check every pair by its relative residual ([`relative_residual`]) on
+//!    $(\mathbf K, \mathbf M)$ themselves, never by the Krylov estimates.
 //!
-//! ## Why $\mathbf L^{-1}\mathbf M\mathbf L^{-T}$ and not $(\mathbf K-\sigma\mathbf M)^{-1}\mathbf M$
+//! ## The operator: $\mathbf L^{-1}\mathbf M\mathbf L^{-T}$ rather than $(\mathbf K-\sigma\mathbf M)^{-1}\mathbf M$
 //!
 //! $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$ is self-adjoint only in the $\mathbf M$ inner
-//! product, and faer's Krylov-Schur orthogonalises in the standard one. The split form needs
-//! the forward and backward triangular solves separately; faer exposes them:
+//! product, which a standard symmetric Krylov solver does not use. The split form needs the
+//! forward and backward triangular solves separately; faer exposes them:
 //! [`SupernodalLltRef::l_solve_with_conj`] and [`SupernodalLltRef::l_transpose_solve_with_conj`]
-//! for a supernodal factor, and the sparse triangular solves
-//! [`triangular_solve::solve_lower_triangular_in_place`] /
+//! on a supernodal factor, [`triangular_solve::solve_lower_triangular_in_place`] and
 //! [`triangular_solve::solve_lower_triangular_transpose_in_place`] on the CSC factor of a
-//! simplicial one. The permutation $\mathbf P$ is applied by index gathers fused into the
-//! product with $\mathbf M$, so one application of $\mathbf C$ costs one forward solve, one
-//! backward solve and one sparse product, the same as one solve with
-//! $\mathbf K - \sigma\mathbf M$ followed by a product with $\mathbf M$. The alternative, a
-//! Cholesky factor of $\mathbf M$ to symmetrise, costs a second factorisation of the same
-//! fill and is worse.
+//! simplicial one. $\mathbf P$ is applied by index gathers fused into the product with
+//! $\mathbf M$, so one application of $\mathbf C$ costs one forward solve, one backward solve
+//! and one sparse product: the same as one solve with $\mathbf K - \sigma\mathbf M$ and one
+//! product with $\mathbf M$. Symmetrising with a Cholesky factor of $\mathbf M$ instead would
+//! cost a second factorisation of the same fill. The operator implements faer's
+//! [`LinOp`], so faer's own Krylov-Schur can be put back in one call once it is fixed (below).
+//!
+//! ## Why not faer's `partial_self_adjoint_eigen`
+//!
+//! faer 0.24's Krylov-Schur for self-adjoint operators
+//! ([`faer::matrix_free::eigen::partial_self_adjoint_eigen`]) hangs on some inputs (an endless
+//! re-orthogonalisation loop; faer issue #262, open). It does so on this module's own
+//! random-pencil test (`random_sparse_spd_matches_dense_reference`), with the operator
+//! replaced by a dense symmetric matrix too, so it is not our operator. A likely cause: when
+//! it compacts the Ritz vectors to lock and to retain, a vector locked after one retained
+//! overwrites it, the new basis holds a column twice, the next Ritz vectors are not
+//! orthonormal, and the Gram-Schmidt loop, which stops only on a relative criterion, never
+//! does. Clustered spectra, where a later Ritz value converges before an earlier one, trigger
+//! it. [`thick_restart_lanczos`] is the same method (Krylov-Schur is thick-restart Lanczos
+//! for a symmetric operator: Wu & Simon 2000, SIAM J. Matrix Anal. Appl. 22; Stewart 2001,
+//! SIAM J. Matrix Anal. Appl. 23), written without locking, with a bounded classical
+//! Gram-Schmidt with one re-orthogonalisation ("twice is enough": Giraud, Langou &
+//! Rozložník 2005, Comput. Math. Appl. 50) and a convergence test relative to each Ritz value.
 //!
 //! ## Shift
 //!
 //! $\sigma = 0$ ([`Shift::Zero`]) needs $\mathbf K \succ 0$ (a supported body). A free body
-//! or a mechanism has a singular $\mathbf K$; with $\sigma = 0$ the factorisation reports
+//! or a mechanism has a singular $\mathbf K$, and with $\sigma = 0$ the factorisation reports
 //! [`ReductionError::SingularStiffness`]. A negative shift makes
-//! $\mathbf K - \sigma\mathbf M \succ 0$ and the rigid-body modes ($\lambda = 0$) become
-//! the dominant $\mu = 1/|\sigma|$. [`Shift::Auto`] takes
-//! $\sigma = -10^{-8}\,\mathrm{median}_i(K_{ii}/M_{ii})$ (see [`AUTO_SHIFT_FRACTION`] for why
-//! this fraction).
+//! $\mathbf K - \sigma\mathbf M \succ 0$, and the rigid-body modes ($\lambda = 0$) become the
+//! dominant $\mu = 1/|\sigma|$. [`Shift::Auto`] takes
+//! $\sigma = -10^{-8}\,\mathrm{median}_i(K_{ii}/M_{ii})$; [`AUTO_SHIFT_FRACTION`] says why.
 //!
 //! ## Tolerance
 //!
-//! faer's Krylov-Schur locks a Ritz pair when its residual estimate
-//! $|\beta_m s_{mk}|$ falls below an *absolute* tolerance, in the units of $\mu$. We pass
-//! `tolerance` $\cdot\,\hat\mu\cdot$ [`KRYLOV_TOLERANCE_FACTOR`], with $\hat\mu$ an estimate
-//! of $\mu_1$ from two applications of $\mathbf C$. For the $k$-th mode this is a relative
-//! accuracy of `tolerance`$\cdot\mu_1/\mu_k$ times the factor, so when the wanted spectrum
-//! spans a wide range the first pass can fall short on the highest modes; the residual check
-//! then sees it and the run is repeated (at most [`MAX_ATTEMPTS`] times in all) with the
-//! absolute tolerance scaled down by the worst shortfall. Residuals are always computed on
-//! $(\mathbf K, \mathbf M)$ themselves, never taken from the Krylov estimates.
+//! `settings.tolerance` bounds the relative residual of every returned pair
+//! ([`relative_residual`]). Lanczos stops when the residual estimate of each wanted Ritz pair,
+//! $|\beta_p s_{pk}|$, is below `tolerance` $\cdot$ [`KRYLOV_TOLERANCE_FACTOR]$\cdot|\mu_k|$
+//! (a safety factor of 10: the residual of $(\mathbf K, \mathbf M)$ relates to that of
+//! $\mathbf C$ through $\mathbf L$). If a pair then fails the check, Lanczos continues from
+//! where it stopped with the Krylov tolerance lowered by the shortfall, at most
+//! [`MAX_ATTEMPTS`] times in all. A residual at or below the round-off floor of its own
+//! evaluation ([`residual_floor`]) is accepted whatever the tolerance: the lowest modes of a
+//! fine mesh, and rigid-body modes with a tiny shift, can have a floor above `1e-8`; their
+//! reported residual may then exceed `tolerance`.
 //!
 //! ## Limits
 //!
-//! Single-vector Krylov methods see only one vector per distinct eigenvalue in exact
-//! arithmetic; exactly repeated eigenvalues (symmetric structures, the six rigid modes of a
-//! free body) are found because round-off seeds the other copies and shift-invert amplifies
-//! them by $\mu_k/\mu_j$ per step. This is how ARPACK works too, and the tests include
-//! repeated eigenvalues, but a copy can in principle be missed: the residual check cannot
-//! detect a missing copy.
+//! A single-vector Krylov method sees one vector per distinct eigenvalue in exact arithmetic.
+//! Exactly repeated eigenvalues (symmetric structures, the six rigid modes of a free body)
+//! are found because round-off seeds the other copies and shift-invert amplifies them by
+//! $\mu_k/\mu_j$ per step; this is how ARPACK works too, and the tests include repeated
+//! eigenvalues, but a copy can in principle be missed, and the residual check cannot see a
+//! missing copy. An indefinite $\mathbf M$ with a positive diagonal is detected only when it
+//! reaches the wanted part of the spectrum (a Ritz value $\mu \le 0$ among the largest in
+//! magnitude, or $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi$ not positive definite).
 
 #![allow(non_snake_case)]
 
 use crate::error::ReductionError;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltError;
+use faer::linalg::matmul::matmul;
 use faer::linalg::temp_mat_zeroed;
 use faer::mat::AsMatMut;
-use faer::matrix_free::eigen::{partial_self_adjoint_eigen, partial_self_adjoint_eigen_scratch, PartialEigenParams};
 use faer::matrix_free::LinOp;
 use faer::prelude::*;
 use faer::sparse::linalg::cholesky::simplicial::SimplicialLltRef;
@@ -99,65 +115,67 @@ use rayon::prelude::*;
 /// Fraction of the median diagonal ratio $K_{ii}/M_{ii}$ used by [`Shift::Auto`]:
 /// $\sigma = -10^{-8}\,\mathrm{median}_i(K_{ii}/M_{ii})$.
 ///
-/// $K_{ii}/M_{ii}$ is the Rayleigh quotient of a unit dof displacement, of the order of the
-/// highest eigenvalues of the mesh. The lowest flexible eigenvalue is smaller by about
-/// $(h/L)^2$ ($h$ element size, $L$ body size): $10^{-2}$ to $10^{-6}$ for practical
-/// meshes. A shift well below it keeps the separation of the flexible $\mu_k$ as good as
-/// with $\sigma = 0$, and makes the rigid-body $\mu = 1/|\sigma|$ dominate strongly, which is
-/// what lets Krylov-Schur pull all copies of the (six-fold) zero eigenvalue out of round-off.
-/// The price is the conditioning of $\mathbf K - \sigma\mathbf M$, about
-/// $\lambda_{max}/|\sigma| \approx 10^{8}$, harmless for a Cholesky factor in double
-/// precision and far from the singularity threshold [`SINGULAR_PIVOT_RATIO`].
+/// $K_{ii}/M_{ii}$ is the Rayleigh quotient of a unit displacement of one dof, of the order
+/// of the highest eigenvalues of the mesh. The lowest flexible eigenvalue is smaller by about
+/// $(h/L)^2$ for solids and bars and $(h/L)^4$ for beams in bending ($h$ element size, $L$
+/// body size): $10^{-2}$ to $10^{-8}$ for practical meshes. A shift at or below it keeps the
+/// separation of the flexible $\mu_k$ about as good as with $\sigma = 0$, and makes the
+/// rigid-body $\mu = 1/|\sigma|$ dominate strongly, which is what pulls all copies of the
+/// (six-fold) zero eigenvalue out of round-off. The price is the conditioning of
+/// $\mathbf K - \sigma\mathbf M$, about $\lambda_{max}/|\sigma| \approx 10^{8}$: harmless for
+/// a Cholesky factor in double precision, far from [`SINGULAR_PIVOT_RATIO`], and it puts the
+/// residual floor of the rigid modes near $\varepsilon\lambda_{max}/|\sigma| \approx 10^{-8}$
+/// ([`residual_floor`]).
 pub const AUTO_SHIFT_FRACTION: f64 = 1e-8;
 
-/// A Cholesky pivot $L_{jj}^2$ below this fraction of its diagonal entry $A_{jj}$ is taken
-/// as a singular matrix: $10^3\varepsilon \approx 2\cdot 10^{-13}$.
+/// A Cholesky pivot $L_{jj}^2$ at or below this fraction of its diagonal entry $A_{jj}$ is
+/// taken as a singular matrix: $10^3\varepsilon \approx 2\cdot 10^{-13}$.
 ///
-/// The pivot of a dof is $1/(\mathbf A^{-1})_{jj}$ in the ordering of the factor, i.e. the
-/// stiffness of that dof with everything eliminated before it released. For a singular
-/// positive semi-definite matrix it is zero in exact arithmetic and comes out as round-off,
-/// a few $\varepsilon A_{jj}$, of either sign; a negative one stops faer's factorisation, a
-/// positive one would be accepted and produce $\mu \approx 10^{16}$. A non-singular
-/// stiffness whose pivots fall below $10^3\varepsilon$ is singular to working precision:
-/// its lowest eigenvalues cannot be separated from round-off anyway.
+/// The pivot of a dof is $1/(\mathbf A^{-1})_{jj}$ in the order of the factor: the stiffness
+/// of that dof with everything eliminated before it released. For a singular positive
+/// semi-definite matrix it is zero in exact arithmetic and comes out as round-off, a few
+/// $\varepsilon A_{jj}$ of either sign (the free-free chain of the tests gives
+/// $4\cdot 10^{-16}$); a negative one stops faer's factorisation, a positive one would be
+/// accepted and give $\mu \approx 10^{16}$. A stiffness whose pivots fall below
+/// $10^3\varepsilon$ is singular to working precision: its lowest eigenvalues cannot be told
+/// from round-off anyway.
 pub const SINGULAR_PIVOT_RATIO: f64 = 1e3 * f64::EPSILON;
 
-/// The Krylov-Schur locking tolerance is `tolerance` times this factor, relative to
-/// $\hat\mu_1$. The residual check on $(\mathbf K, \mathbf M)$ relates to the Krylov
-/// estimate only through the conditioning of $\mathbf L$ (see [`relative_residual`]), so
-/// the Krylov solve is asked for a little more than the user.
+/// Lanczos stops when every wanted Ritz pair of $\mathbf C$ has a residual estimate below
+/// `tolerance` times this factor times $|\mu_k|$: a safety factor of 10 between the Krylov
+/// target and the check on $(\mathbf K, \mathbf M)$.
 pub const KRYLOV_TOLERANCE_FACTOR: f64 = 0.1;
 
-/// Largest $n$ solved densely when faer's Krylov-Schur cannot run (it needs $n$ above its
-/// subspace dimension $\max(64, 2m)$): the dense path costs $n$ operator applications and an
-/// $O(n^3)$ eigendecomposition.
-pub const DENSE_LIMIT: usize = 2000;
-
-/// At most this many Krylov-Schur runs, each with a tighter locking tolerance than the last,
-/// before [`ReductionError::EigenNotConverged`] is returned.
+/// At most this many convergence rounds (Lanczos continued with a lower Krylov tolerance
+/// after a failed residual check) before [`ReductionError::EigenNotConverged`].
 pub const MAX_ATTEMPTS: usize = 3;
+
+/// Largest $n$ solved densely when the Krylov basis would not fit ($n \le p + 1$, $p$ the
+/// subspace dimension): the dense path costs $n$ operator applications and an $O(n^3)$
+/// eigendecomposition.
+pub const DENSE_LIMIT: usize = 2000;
 
 /// The shift $\sigma$ of the spectral transformation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shift {
-    /// $\sigma = 0$: for a supported body ($\mathbf K \succ 0$); the fastest convergence for
-    /// the lowest modes.
+    /// $\sigma = 0$: for a supported body ($\mathbf K \succ 0$).
     Zero,
-    /// A given $\sigma$. Must be below the lowest eigenvalue ($\mathbf K - \sigma\mathbf M$
-    /// must be positive definite); negative for a free body.
+    /// A given $\sigma$. It must be below the lowest eigenvalue ($\mathbf K - \sigma\mathbf M$
+    /// positive definite); negative for a free body.
     Value(f64),
-    /// For a body that may be free: $\sigma = -$[`AUTO_SHIFT_FRACTION]$\cdot
-    /// \mathrm{median}_i(K_{ii}/M_{ii})$.
+    /// For a body that may be free: $\sigma = -$[`AUTO_SHIFT_FRACTION`]$\cdot
+    /// \mathrm{median}_i(K_{ii}/M_{ii})$. Works for supported bodies too.
     Auto,
 }
 
 impl Shift {
-    /// The numerical value of $\sigma$ for the pencil $(\mathbf K, \mathbf M)$.
+    /// The value of $\sigma$ for the pencil $(\mathbf K, \mathbf M)$.
     ///
     /// # Errors
-    /// [`ReductionError::InvalidSettings`] for a non-finite value,
-    /// [`ReductionError::MassNotPositiveDefinite`] for a non-positive $M_{ii}$ (with
-    /// [`Shift::Auto`]), [`ReductionError::SingularStiffness`] if no $K_{ii}$ is positive.
+    /// [`ReductionError::InvalidSettings`] for a non-finite value; with [`Shift::Auto`],
+    /// [`ReductionError::DimensionMismatch`], [`ReductionError::MassNotPositiveDefinite`] for a
+    /// non-positive $M_{ii}$, and [`ReductionError::SingularStiffness`] if no $K_{ii}$ is
+    /// positive.
     pub fn resolve(
         &self,
         K: SparseColMatRef<'_, usize, f64>,
@@ -194,33 +212,36 @@ impl Shift {
     }
 }
 
-/// Settings of [`lowest_modes`].
+/// Settings of [`lowest_modes`] and [`ShiftInvert::lowest_modes`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct EigenSettings {
     /// Number $m$ of lowest modes wanted, $1 \le m < n$.
     pub n_modes: usize,
     /// Shift $\sigma$ of the spectral transformation (read by [`lowest_modes`] only; a
-    /// [`ShiftInvert`] already has its shift).
+    /// [`ShiftInvert`] has its shift already).
     pub shift: Shift,
-    /// Largest accepted relative residual of a returned pair (see [`relative_residual`]).
-    /// `1e-8` gives eigenvalues to about `1e-14` relative (the error of a Rayleigh quotient
-    /// is quadratic in the vector error) and vectors to about `1e-8`.
+    /// Largest accepted relative residual of a returned pair, [`relative_residual`] (but see
+    /// [`residual_floor`]). `1e-8` gives eigenvalues to about $10^{-14}$ relative plus
+    /// round-off (the error of a Rayleigh quotient is quadratic in the vector error) and
+    /// vectors to about $10^{-8}$.
     pub tolerance: f64,
-    /// Maximum number of Krylov-Schur restarts per attempt (faer's default is 1000).
+    /// Maximum number of thick restarts of Lanczos, over all attempts.
     pub max_restarts: usize,
-    /// Largest Krylov subspace dimension; `0` for faer's choice,
-    /// $\max(64, 2m)$. Memory is $n \times (2\,\mathrm{krylov\_dim} + 1)$ doubles.
+    /// Krylov subspace dimension $p$; `0` for $\max(2m, m + 32)$. Memory is about
+    /// $n(p + 1) + nm$ doubles besides the factor; each restart cycle costs about $(p - m)/2$
+    /// operator applications.
     pub krylov_dim: usize,
 }
 
 impl EigenSettings {
-    /// `n_modes` modes with `shift`, tolerance `1e-8`, 1000 restarts, faer's Krylov dimension.
+    /// `n_modes` modes with `shift`, tolerance `1e-8`, at most 100 restarts, automatic Krylov
+    /// dimension.
     pub fn new(n_modes: usize, shift: Shift) -> Self {
         Self {
             n_modes,
             shift,
             tolerance: 1e-8,
-            max_restarts: 1000,
+            max_restarts: 100,
             krylov_dim: 0,
         }
     }
@@ -239,13 +260,16 @@ pub struct EigenSolution {
     pub residuals: Vec<f64>,
     /// The shift $\sigma$ that was used.
     pub shift: f64,
+    /// Number of applications of $\mathbf C$ (one forward and one backward solve each).
+    pub operator_applications: usize,
 }
 
 /// The $m$ lowest eigenpairs of $\mathbf K\boldsymbol\phi = \lambda\mathbf M\boldsymbol\phi$,
-/// $\lambda = \omega^2$ (brief §3): factorisation of $\mathbf K - \sigma\mathbf M$ and
+/// $\lambda = \omega^2$ (brief §3): [`Shift::resolve`], [`ShiftInvert::new`], then
 /// [`ShiftInvert::lowest_modes`].
 ///
-/// `K` and `M` are symmetric with both triangles stored (CSC, unsorted row indices allowed).
+/// `K` and `M` are symmetric with both triangles stored (CSC; unsorted row indices are
+/// allowed).
 ///
 /// # Errors
 /// See [`ShiftInvert::new`] and [`ShiftInvert::lowest_modes`].
@@ -477,18 +501,19 @@ impl ShiftInvert {
     }
 
     /// The $m$ lowest eigenpairs of $(\mathbf K, \mathbf M)$ from this factorisation of
-    /// $\mathbf K - \sigma\mathbf M$ (see the [module docs](self) for the method).
+    /// $\mathbf K - \sigma\mathbf M$ (the [module docs](self) describe the method).
     /// `settings.shift` is not read: the shift is the factor's. `K` and `M` must be the
-    /// matrices that were factored (they give the Rayleigh-Ritz step and the residuals).
+    /// matrices that were factored; they give the Rayleigh-Ritz step and the residuals.
     ///
     /// # Errors
     /// - [`ReductionError::DimensionMismatch`], [`ReductionError::InvalidModeCount`],
     ///   [`ReductionError::InvalidSettings`] for bad input.
-    /// - [`ReductionError::MassNotPositiveDefinite`] if $\mathbf M$ is found indefinite on
-    ///   the computed subspace (a Ritz value $\mu \le 0$ or a non-positive-definite
-    ///   $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi$).
-    /// - [`ReductionError::EigenNotConverged`] if Krylov-Schur runs out of restarts or a
-    ///   residual stays above `settings.tolerance` after [`MAX_ATTEMPTS`] runs.
+    /// - [`ReductionError::MassNotPositiveDefinite`] if $\mathbf M$ shows indefinite on the
+    ///   computed subspace (a wanted Ritz value $\mu \le 0$, or
+    ///   $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi$ not positive definite).
+    /// - [`ReductionError::EigenNotConverged`] if Lanczos runs out of restarts, or a residual
+    ///   stays above `settings.tolerance` (and its round-off floor) after [`MAX_ATTEMPTS`]
+    ///   rounds.
     pub fn lowest_modes(
         &self,
         K: SparseColMatRef<'_, usize, f64>,
@@ -513,141 +538,83 @@ impl ShiftInvert {
             });
         }
         let m = settings.n_modes;
-        let op = Operator { factor: self, M };
-        let par = faer::get_global_parallelism();
-        let params = PartialEigenParams {
-            max_dim: settings.krylov_dim,
-            max_restarts: settings.max_restarts,
-            ..Default::default()
+        let p = match settings.krylov_dim {
+            0 => (2 * m).max(m + 32),
+            p if p > m => p,
+            p => {
+                return Err(ReductionError::InvalidSettings {
+                    what: format!("krylov_dim = {p} must exceed n_modes = {m} (or be 0 for automatic)"),
+                })
+            }
         };
-        // faer's Krylov-Schur needs a subspace smaller than n (it panics otherwise): the
-        // same dimension rule as faer's, max(64, 2m, krylov_dim).
-        let max_dim = settings.krylov_dim.max(64).max(2 * m);
-        if max_dim >= n {
+        let op = Operator { factor: self, M };
+        if p + 1 >= n {
             if n > DENSE_LIMIT {
                 return Err(ReductionError::InvalidSettings {
                     what: format!(
-                        "the Krylov subspace dimension max(64, 2 n_modes, krylov_dim) = {max_dim} \
-                         must be below n = {n}: ask for fewer modes, or use a dense solver"
+                        "the Krylov subspace dimension {p} leaves no room in n = {n}: ask for fewer modes or a \
+                         smaller krylov_dim"
                     ),
                 });
             }
             let Y = dense_operator_eigen(&op, m)?;
-            return self.finish(K, M, Y.as_ref(), m, m, settings);
+            let mut sol = self.finish(K, M, Y.as_ref(), settings)?;
+            sol.operator_applications = n;
+            return Ok(sol);
         }
 
-        if std::env::var("TEMPDEBUG2").is_ok() {
-            let mut C = Mat::<f64>::zeros(n, n);
-            apply_alloc(&op, C.as_mut(), Mat::<f64>::identity(n, n).as_ref(), par);
-            let asym = (&C - C.transpose()).norm_l2() / C.norm_l2();
-            let raw = match self.symbolic.raw() { SymbolicCholeskyRaw::Simplicial(_) => "simplicial", _ => "supernodal" };
-            eprintln!("TEMPDEBUG asym {asym:e} {raw}");
-        }
-        // Start vector: C applied to a fixed pseudo-random vector, as ARPACK does for
-        // shift-invert, which removes the components the operator damps; the norm of a
-        // second application estimates mu_1 for the tolerance scale.
-        let mut v = Mat::<f64>::zeros(n, 1);
-        let mut state = 0x9E37_79B9_7F4A_7C15_u64;
-        for i in 0..n {
-            v[(i, 0)] = uniform(&mut state);
-        }
-        let mut Cv = Mat::<f64>::zeros(n, 1);
-        apply_alloc(&op, Cv.as_mut(), v.as_ref(), par);
-        let norm = Cv.norm_l2();
-        let v0 = Cv.col(0) / norm;
-        apply_alloc(&op, Cv.as_mut(), v0.as_mat(), par);
-        let mu_scale = Cv.norm_l2();
-
-        let mut tol_abs = settings.tolerance * KRYLOV_TOLERANCE_FACTOR * mu_scale;
-        if std::env::var("TEMPDEBUG3").is_ok() {
-            let mut C = Mat::<f64>::zeros(n, n);
-            apply_alloc(&op, C.as_mut(), Mat::<f64>::identity(n, n).as_ref(), par);
-            let C = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (C[(i, j)] + C[(j, i)]));
-            let mut Y = Mat::<f64>::zeros(n, m);
-            let mut mu = vec![0.0; m];
-            let mut mem = MemBuffer::new(partial_self_adjoint_eigen_scratch(&C.as_ref(), m, par, params));
-            eprintln!("TEMPDEBUG3 dense start");
-            let info = partial_self_adjoint_eigen(Y.as_mut(), &mut mu, &C.as_ref(), v0.as_ref(), tol_abs, par, MemStack::new(&mut mem), params);
-            eprintln!("TEMPDEBUG3 dense done {}", info.n_converged_eigen);
-        }
-        let mut last_error = None;
-        for _attempt in 0..MAX_ATTEMPTS {
-            let mut Y = Mat::<f64>::zeros(n, m);
-            let mut mu = vec![0.0; m];
-            let mut mem = MemBuffer::try_new(partial_self_adjoint_eigen_scratch(&op, m, par, params))
-                .map_err(|_| ReductionError::Factorization("out of memory for the Krylov basis".into()))?;
-            let info = partial_self_adjoint_eigen(
-                Y.as_mut(),
-                &mut mu,
-                &op,
-                v0.as_ref(),
-                tol_abs,
-                par,
-                MemStack::new(&mut mem),
-                params,
-            );
-            drop(mem);
-            let converged = info.n_converged_eigen;
-
-            if converged < m {
-                return Err(ReductionError::EigenNotConverged {
-                    requested: m,
-                    converged,
-                    failed_modes: (converged..m).collect(),
-                    worst_residual: f64::INFINITY,
-                    tolerance: settings.tolerance,
-                });
-            }
+        let mut lanczos = Lanczos::new(&op, p)?;
+        let mut krylov_tolerance = settings.tolerance * KRYLOV_TOLERANCE_FACTOR;
+        for attempt in 0..MAX_ATTEMPTS {
+            let (mu, Y) = match lanczos.run(m, krylov_tolerance, settings.max_restarts)? {
+                LanczosOutcome::Converged { mu, Y } => (mu, Y),
+                LanczosOutcome::NotConverged { unconverged } => {
+                    return Err(ReductionError::EigenNotConverged {
+                        requested: m,
+                        converged: m - unconverged.len(),
+                        failed_modes: unconverged,
+                        worst_residual: f64::INFINITY,
+                        tolerance: settings.tolerance,
+                    })
+                }
+            };
             if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
                 return Err(ReductionError::MassNotPositiveDefinite {
                     dof: None,
                     why: format!(
-                        "the shift-invert operator has the eigenvalue {:.3e} <= 0 (Ritz value {bad})",
+                        "the shift-invert operator L^-1 M L^-T has the eigenvalue {:.3e} <= 0 among the {m} \
+                         largest in magnitude (Ritz value {bad})",
                         mu[bad]
                     ),
                 });
             }
-            match self.finish(K, M, Y.as_ref(), m, converged, settings) {
-                Ok(sol) => return Ok(sol),
-                Err(ReductionError::EigenNotConverged {
-                    requested,
-                    converged,
-                    failed_modes,
-                    worst_residual,
-                    tolerance,
-                }) => {
-                    // Tighten by the worst shortfall (and at least tenfold), see module docs.
-                    eprintln!("TEMPDEBUG retry worst {worst_residual:e} failed {failed_modes:?}");
-                    let shortfall = (settings.tolerance / worst_residual).min(0.1);
-                    tol_abs *= shortfall.max(1e-6);
-                    last_error = Some(ReductionError::EigenNotConverged {
-                        requested,
-                        converged,
-                        failed_modes,
-                        worst_residual,
-                        tolerance,
-                    });
+            match self.finish(K, M, Y.as_ref(), settings) {
+                Ok(mut sol) => {
+                    sol.operator_applications = lanczos.applications;
+                    return Ok(sol);
+                }
+                // Continue Lanczos with the Krylov tolerance lowered by the shortfall (at least
+                // tenfold, at most a millionfold): module docs, "Tolerance".
+                Err(ReductionError::EigenNotConverged { worst_residual, .. }) if attempt + 1 < MAX_ATTEMPTS => {
+                    krylov_tolerance *= (settings.tolerance / worst_residual).clamp(1e-6, 0.1);
                 }
                 Err(e) => return Err(e),
             }
         }
-        Err(last_error.expect("MAX_ATTEMPTS >= 1"))
+        unreachable!("the last attempt returns")
     }
 
-    /// Back-transformation, Rayleigh-Ritz, sign convention and residual check of the Ritz
-    /// vectors `Y` of $\mathbf C$ (permuted order).
+    /// Back-transformation $\boldsymbol\Phi = \mathbf P^T\mathbf L^{-T}\mathbf Y$ of the Ritz
+    /// vectors `Y` of $\mathbf C$ (permuted order), Rayleigh-Ritz, residual check.
     fn finish(
         &self,
         K: SparseColMatRef<'_, usize, f64>,
         M: SparseColMatRef<'_, usize, f64>,
         Y: MatRef<'_, f64>,
-        m: usize,
-        converged: usize,
         settings: &EigenSettings,
     ) -> Result<EigenSolution, ReductionError> {
-        let n = self.nrows();
+        let (n, m) = Y.shape();
         let par = faer::get_global_parallelism();
-        // phi = P^T L^{-T} y
         let mut Z = Y.to_owned();
         let mut mem = MemBuffer::new(self.solve_scratch(m, par));
         self.l_transpose_solve(Z.as_mut(), par, MemStack::new(&mut mem));
@@ -656,8 +623,7 @@ impl ShiftInvert {
         let residuals: Vec<f64> = (0..m)
             .map(|j| relative_residual(KPhi.col(j), MPhi.col(j), eigenvalues[j], self.sigma))
             .collect();
-        // A residual at the round-off floor of its own evaluation is accepted whatever the
-        // tolerance (see `residual_floor`).
+        // A residual at the round-off floor of its own evaluation passes whatever the tolerance.
         let failed_modes: Vec<usize> = (0..m)
             .filter(|&j| {
                 let floor = || {
@@ -684,7 +650,7 @@ impl ShiftInvert {
             });
             return Err(ReductionError::EigenNotConverged {
                 requested: m,
-                converged: converged.min(m - failed_modes.len()),
+                converged: m - failed_modes.len(),
                 failed_modes,
                 worst_residual,
                 tolerance: settings.tolerance,
@@ -695,17 +661,18 @@ impl ShiftInvert {
             vectors,
             residuals,
             shift: self.sigma,
+            operator_applications: 0,
         })
     }
 }
 
 /// Rayleigh-Ritz for $(\mathbf K, \mathbf M)$ on the span of the columns of `Phi`:
-/// with $\mathbf B = \boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf R^T\mathbf R$
-/// (dense Cholesky) and $\mathbf R^{-T}\boldsymbol\Phi^T\mathbf K\boldsymbol\Phi\mathbf R^{-1}
+/// with $\mathbf B = \boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf R\mathbf R^T$
+/// (dense Cholesky) and $\mathbf R^{-1}\boldsymbol\Phi^T\mathbf K\boldsymbol\Phi\mathbf R^{-T}
 /// = \mathbf S\boldsymbol\Lambda\mathbf S^T$, the Ritz vectors are
-/// $\boldsymbol\Phi\mathbf R^{-1}\mathbf S$ (Parlett, "The Symmetric Eigenvalue Problem",
-/// 1998, §11.4 and §15.1). Returns $\boldsymbol\Lambda$ ascending, the vectors (sign: largest
-/// entry positive), and their products with $\mathbf K$ and $\mathbf M$.
+/// $\boldsymbol\Phi\mathbf R^{-T}\mathbf S$ (Parlett, "The Symmetric Eigenvalue Problem",
+/// SIAM 1998, §11.4 and §15.1). Returns $\boldsymbol\Lambda$ ascending, the vectors (each with
+/// its largest-magnitude entry positive), and their products with $\mathbf K$ and $\mathbf M$.
 #[allow(clippy::type_complexity)]
 fn rayleigh_ritz(
     K: SparseColMatRef<'_, usize, f64>,
@@ -727,37 +694,32 @@ fn rayleigh_ritz(
             dof: None,
             why: "Phi^T M Phi of the computed modes is not positive definite".into(),
         })?;
-    let L = llt.L();
-    // G = L^{-1} A L^{-T}
+    let R = llt.L();
+    // G = R^{-1} A R^{-T}
     let mut G = A;
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(L, G.as_mut(), par);
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
     let mut G = G.transpose().to_owned();
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(L, G.as_mut(), par);
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
     let G = symmetrise(G);
     let evd = G
         .self_adjoint_eigen(Side::Lower)
         .map_err(|e| ReductionError::Factorization(format!("dense eigensolver of the Ritz problem: {e:?}")))?;
     let eigenvalues: Vec<f64> = (0..m).map(|k| evd.S()[k]).collect();
-    // T = L^{-T} S
+    // T = R^{-T} S, then the sign convention on the columns of Phi T.
     let mut T = evd.U().to_owned();
-    faer::linalg::triangular_solve::solve_upper_triangular_in_place(L.transpose(), T.as_mut(), par);
-    // Sign: largest-magnitude entry of each mode positive.
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(R.transpose(), T.as_mut(), par);
     let mut vectors = Phi * &T;
     for j in 0..m {
         let col = vectors.col(j);
-        let mut vmax = 0.0_f64;
+        let mut largest = 0.0_f64;
         for i in 0..n {
-            if col[i].abs() > vmax.abs() {
-                vmax = col[i];
+            if col[i].abs() > largest.abs() {
+                largest = col[i];
             }
         }
-        if vmax < 0.0 {
-            for t in T.col_mut(j).iter_mut() {
-                *t = -*t;
-            }
-            for v in vectors.col_mut(j).iter_mut() {
-                *v = -*v;
-            }
+        if largest < 0.0 {
+            T.col_mut(j).iter_mut().for_each(|t| *t = -*t);
+            vectors.col_mut(j).iter_mut().for_each(|v| *v = -*v);
         }
     }
     Ok((eigenvalues, vectors, &KPhi * &T, &MPhi * &T))
@@ -770,12 +732,12 @@ fn rayleigh_ritz(
 /// For $\sigma = 0$ this is the brief's $\|\mathbf K\boldsymbol\phi - \lambda\mathbf
 /// M\boldsymbol\phi\| / \|\mathbf K\boldsymbol\phi\|$ with the guard
 /// $|\lambda|\,\|\mathbf M\boldsymbol\phi\|$. For a rigid-body mode ($\lambda \approx 0$,
-/// $\mathbf K\boldsymbol\phi \approx 0$) that guard is itself round-off, and the ratio would
-/// be $O(1)$ for any vector; the numerator is also the residual of the shifted pencil,
+/// $\mathbf K\boldsymbol\phi \approx 0$) that guard is itself round-off and the ratio would be
+/// $O(1)$ for any vector. The numerator is also the residual of the shifted pencil,
 /// $(\mathbf K - \sigma\mathbf M)\boldsymbol\phi - (\lambda - \sigma)\mathbf M\boldsymbol\phi$,
-/// whose natural scale is $|\lambda - \sigma|\,\|\mathbf M\boldsymbol\phi\|$: a rigid mode
-/// is measured against the inertia forces at the shift, which is the accuracy shift-invert
-/// delivers ($\mu = 1/(\lambda - \sigma)$ relative).
+/// whose natural scale is $|\lambda - \sigma|\,\|\mathbf M\boldsymbol\phi\|$: a rigid mode is
+/// measured against the inertia forces at the shift, which is the accuracy shift-invert
+/// delivers ($\mu = 1/(\lambda - \sigma)$, relative).
 pub fn relative_residual(KPhi: ColRef<'_, f64>, MPhi: ColRef<'_, f64>, lambda: f64, sigma: f64) -> f64 {
     let r = (KPhi - MPhi * lambda).norm_l2();
     let scale = KPhi.norm_l2().max((lambda - sigma).abs() * MPhi.norm_l2());
@@ -784,15 +746,16 @@ pub fn relative_residual(KPhi: ColRef<'_, f64>, MPhi: ColRef<'_, f64>, lambda: f
 
 /// Round-off floor of [`relative_residual`]: the worst-case error of evaluating
 /// $\mathbf K\boldsymbol\phi - \lambda\mathbf M\boldsymbol\phi$ in floating point,
-/// $\gamma_c\,\|\,|\mathbf K||\boldsymbol\phi| + |\lambda|\,|\mathbf M||\boldsymbol\phi|\,\|$
-/// with $\gamma_c = c\varepsilon/(1 - c\varepsilon)$, $c$ = 2 + the largest number of
-/// entries in a column (Higham, "Accuracy and Stability of Numerical Algorithms", 2002,
-/// §3.5), over the same scale as the residual.
+/// $\gamma_c\,\|\,|\mathbf K||\boldsymbol\phi| + |\lambda|\,|\mathbf M||\boldsymbol\phi|\,\|_2$
+/// with $\gamma_c = c\varepsilon/(1 - c\varepsilon)$ and $c$ = 2 + the most entries in a
+/// column (Higham, "Accuracy and Stability of Numerical Algorithms", SIAM 2002, §3.1 and
+/// §3.5), over the scale of [`relative_residual`].
 ///
-/// For the lowest mode of a fine mesh this is about $\varepsilon\lambda_{max}/\lambda_1$,
-/// which can exceed a tolerance of `1e-8` (a slender beam, a free body with a tiny shift):
-/// no eigenpair can be verified below it, so a residual at or below the floor is accepted.
-fn residual_floor(
+/// It is about $\varepsilon\lambda_{max}/\lambda_k$ for a flexible mode and
+/// $\varepsilon\lambda_{max}/|\sigma|$ for a rigid one, and can exceed a tolerance of `1e-8`
+/// (the lowest mode of a fine mesh or a slender beam, the rigid modes with [`Shift::Auto`]):
+/// no pair can be verified below it, so a residual at or below the floor is accepted.
+pub fn residual_floor(
     K: SparseColMatRef<'_, usize, f64>,
     M: SparseColMatRef<'_, usize, f64>,
     phi: ColRef<'_, f64>,
@@ -805,13 +768,13 @@ fn residual_floor(
     let max_col = |A: SparseColMatRef<'_, usize, f64>| (0..A.ncols()).map(|j| A.col_range(j).len()).max().unwrap_or(0);
     let c = (2 + max_col(K).max(max_col(M))) as f64;
     let gamma = c * f64::EPSILON / (1.0 - c * f64::EPSILON);
-    // |A| |phi| by columns: A symmetric, so column i is row i.
+    // (|A| |phi|)_i from column i: A is symmetric, so its column is its row.
     let abs_product = |A: SparseColMatRef<'_, usize, f64>, i: usize| -> f64 {
         A.col_range(i)
             .map(|p| A.val()[p].abs() * phi[A.row_idx()[p]].abs())
-            .sum::<f64>()
+            .sum()
     };
-    let bound: f64 = (0..n)
+    let bound = (0..n)
         .into_par_iter()
         .with_min_len(4096)
         .map(|i| {
@@ -824,7 +787,8 @@ fn residual_floor(
     gamma * bound / scale
 }
 
-/// $\mathbf C = \mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T}$ as a faer operator.
+/// $\mathbf C = \mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T}$ as a faer
+/// [`LinOp`] (symmetric, so `conj_apply` is `apply`).
 struct Operator<'a> {
     factor: &'a ShiftInvert,
     M: SparseColMatRef<'a, usize, f64>,
@@ -856,23 +820,15 @@ impl LinOp<f64> for Operator<'_> {
         z.copy_from(rhs);
         // z = L^{-T} y
         self.factor.l_transpose_solve(z.rb_mut(), par, stack);
-        // out = P M P^T z, fused: out_i = sum_p M[p] z[inv[row p]] over column fwd[i] of M
-        // (M symmetric, so its column is its row).
+        // out = P M P^T z, fused into one gather: out_i = sum_p M_p z[inv[row_p]] over column
+        // fwd[i] of M (M is symmetric, so its column is its row).
         let mut out = out;
-        let fwd = &self.factor.perm_fwd;
-        let inv = &self.factor.perm_inv;
-        let (row_idx, val) = (self.M.row_idx(), self.M.val());
+        let (fwd, inv) = (&self.factor.perm_fwd, &self.factor.perm_inv);
         let M = self.M;
+        let (row_idx, val) = (M.row_idx(), M.val());
         for c in 0..k {
             let zc = z.rb().col(c);
-            let row = |i: usize| -> f64 {
-                let j = fwd[i];
-                let mut s = 0.0;
-                for p in M.col_range(j) {
-                    s += val[p] * zc[inv[row_idx[p]]];
-                }
-                s
-            };
+            let row = |i: usize| -> f64 { M.col_range(fwd[i]).map(|p| val[p] * zc[inv[row_idx[p]]]).sum() };
             let mut oc = out.rb_mut().col_mut(c);
             match (oc.rb_mut().try_as_col_major_mut(), par) {
                 (Some(slice), Par::Rayon(_)) => slice
@@ -889,9 +845,7 @@ impl LinOp<f64> for Operator<'_> {
             }
         }
         // out = L^{-1} out
-        let mut out = out;
-        self.factor.l_solve(out.rb_mut(), par, stack);
-        if std::env::var("TEMPDEBUG").is_ok() { eprintln!("TEMPDEBUG apply |in| {:e} |out| {:e}", rhs.norm_l2(), out.norm_l2()); }
+        self.factor.l_solve(out, par, stack);
     }
 
     fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
@@ -924,8 +878,224 @@ fn apply_alloc(op: &Operator<'_>, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, pa
     op.apply(out, rhs, par, MemStack::new(&mut mem));
 }
 
-/// Small problems (faer's Krylov-Schur needs $n$ above its subspace dimension): the dense
-/// $\mathbf C$ from $n$ applications, its dense eigendecomposition, the $m$ largest $\mu$.
+/// After re-orthogonalisation, a new Lanczos vector below this fraction of $\|\mathbf C
+/// \mathbf v_j\|$ is round-off: the Krylov space is invariant (to working precision) and
+/// Lanczos continues with a random direction ($\beta_j = 0$). $10^3\varepsilon$: the noise of
+/// two Gram-Schmidt passes against at most a few hundred vectors.
+const BREAKDOWN_RATIO: f64 = 1e3 * f64::EPSILON;
+
+/// What [`Lanczos::run`] ends with.
+enum LanczosOutcome {
+    /// The `m` largest Ritz values $\mu$ (descending magnitude) and their Ritz vectors.
+    Converged { mu: Vec<f64>, Y: Mat<f64> },
+    /// Restarts exhausted; the wanted Ritz pairs (0-based, descending $|\mu|$) not converged.
+    NotConverged { unconverged: Vec<usize> },
+}
+
+/// Ritz values of the projected matrix, descending in magnitude, with their eigenvectors.
+struct Ritz {
+    theta: Vec<f64>,
+    S: Mat<f64>,
+}
+
+/// Thick-restart Lanczos for the $m$ largest-magnitude eigenpairs of the symmetric
+/// [`Operator`] (Wu & Simon 2000, "Thick-restart Lanczos method for large symmetric
+/// eigenvalue problems", SIAM J. Matrix Anal. Appl. 22, §2-3; the symmetric case of Stewart's
+/// Krylov-Schur, 2001).
+///
+/// The Krylov decomposition $\mathbf C\mathbf V_p = \mathbf V_p\mathbf T_p +
+/// \beta_p\mathbf v_{p+1}\mathbf e_p^T$ is extended one vector at a time, each new vector
+/// orthogonalised against all previous ones by classical Gram-Schmidt done twice. At a
+/// full basis, $\mathbf T_p = \mathbf S\boldsymbol\Theta\mathbf S^T$ gives the Ritz pairs and
+/// their residual estimates $|\beta_p s_{pk}|$; a pair converges when its estimate is below
+/// `tolerance` $\cdot|\theta_k|$ (relative, as ARPACK's). Restart keeps the
+/// $k = m + (p - m)/2$ largest Ritz vectors, $\mathbf V_k \leftarrow \mathbf V_p\mathbf S_k$,
+/// $\mathbf v_{k+1} \leftarrow \mathbf v_{p+1}$, with $\mathbf T_{k+1}$ diagonal
+/// $\boldsymbol\Theta_k$ bordered by the arrow $\beta_p\mathbf s_{p,1:k}$. No locking:
+/// converged vectors keep being refined, which costs little and avoids the bookkeeping that
+/// breaks faer's version (module docs).
+struct Lanczos<'a> {
+    op: &'a Operator<'a>,
+    par: Par,
+    p: usize,
+    /// $n \times (p + 1)$ basis.
+    V: Mat<f64>,
+    /// $p \times p$ projected matrix (arrowhead plus tridiagonal).
+    T: Mat<f64>,
+    /// Coupling $\beta_p$ of $\mathbf v_{p+1}$ after the last step.
+    beta: f64,
+    /// Valid columns of `V`: extension starts at column `k`.
+    k: usize,
+    restarts: usize,
+    applications: usize,
+    last_ritz: Option<Ritz>,
+    mem: MemBuffer,
+    rng: u64,
+}
+
+impl<'a> Lanczos<'a> {
+    /// Basis of dimension `p`, started from $\mathbf C$ applied to a fixed pseudo-random
+    /// vector (as ARPACK does for shift-invert: it removes the components that $\mathbf C$
+    /// damps, so the start vector lies in the range of the operator).
+    fn new(op: &'a Operator<'a>, p: usize) -> Result<Self, ReductionError> {
+        let n = op.nrows();
+        let par = faer::get_global_parallelism();
+        let mem = MemBuffer::try_new(op.apply_scratch(1, par))
+            .map_err(|_| ReductionError::Factorization("out of memory for the solve workspace".into()))?;
+        let mut V = Mat::<f64>::zeros(n, p + 1);
+        let mut this = Self {
+            op,
+            par,
+            p,
+            V: Mat::new(),
+            T: Mat::zeros(p, p),
+            beta: 0.0,
+            k: 0,
+            restarts: 0,
+            applications: 0,
+            last_ritz: None,
+            mem,
+            rng: 0x9E37_79B9_7F4A_7C15,
+        };
+        let v = Mat::<f64>::from_fn(n, 1, |_, _| uniform(&mut this.rng));
+        op.apply(V.get_mut(.., 0..1), v.as_ref(), par, MemStack::new(&mut this.mem));
+        this.applications += 1;
+        let norm = V.col(0).norm_l2();
+        if !(norm.is_finite() && norm > 0.0) {
+            return Err(ReductionError::Factorization(format!(
+                "the shift-invert operator gave a vector of norm {norm}"
+            )));
+        }
+        V.col_mut(0).iter_mut().for_each(|x| *x /= norm);
+        this.V = V;
+        Ok(this)
+    }
+
+    /// Runs restart cycles until the `m` largest Ritz pairs meet `tolerance` (relative), or
+    /// `max_restarts` restarts have been done in all. Can be called again with a lower
+    /// tolerance: it continues from the current basis.
+    fn run(&mut self, m: usize, tolerance: f64, max_restarts: usize) -> Result<LanczosOutcome, ReductionError> {
+        let keep = (m + (self.p - m) / 2).min(self.p - 1);
+        loop {
+            if self.k == self.p {
+                let ritz = self.last_ritz.take().expect("a full basis has its Ritz pairs");
+                if self.restarts >= max_restarts {
+                    let unconverged = (0..m).filter(|&j| !self.converged(&ritz, j, tolerance)).collect();
+                    self.last_ritz = Some(ritz);
+                    return Ok(LanczosOutcome::NotConverged { unconverged });
+                }
+                self.restart(&ritz, keep);
+            }
+            self.extend()?;
+            let ritz = self.ritz()?;
+            if (0..m).all(|j| self.converged(&ritz, j, tolerance)) {
+                let Y = self.V.get(.., 0..self.p) * ritz.S.get(.., 0..m);
+                let mu = ritz.theta[..m].to_vec();
+                self.last_ritz = Some(ritz);
+                return Ok(LanczosOutcome::Converged { mu, Y });
+            }
+            self.last_ritz = Some(ritz);
+        }
+    }
+
+    /// Residual estimate of Ritz pair `j` against `tolerance` relative to $|\theta_j|$.
+    fn converged(&self, ritz: &Ritz, j: usize, tolerance: f64) -> bool {
+        (self.beta * ritz.S[(self.p - 1, j)]).abs() <= tolerance * ritz.theta[j].abs()
+    }
+
+    /// Lanczos steps from column `k` to a full basis of `p` vectors.
+    fn extend(&mut self) -> Result<(), ReductionError> {
+        let par = self.par;
+        for j in self.k..self.p {
+            let (done, mut next) = self.V.as_mut().split_at_col_mut(j + 1);
+            let done = done.rb();
+            let mut w = next.rb_mut().get_mut(.., 0..1);
+            self.op
+                .apply(w.rb_mut(), done.get(.., j..j + 1), par, MemStack::new(&mut self.mem));
+            self.applications += 1;
+            let norm0 = w.norm_l2();
+            if !norm0.is_finite() {
+                return Err(ReductionError::Factorization(format!(
+                    "the shift-invert operator gave a vector of norm {norm0}"
+                )));
+            }
+            let alpha = orthogonalise(w.rb_mut(), done, par);
+            let mut beta = w.norm_l2();
+            if !(beta > BREAKDOWN_RATIO * norm0) {
+                // Invariant subspace: continue with a random direction, decoupled (beta = 0).
+                for i in 0..w.nrows() {
+                    w[(i, 0)] = uniform(&mut self.rng);
+                }
+                orthogonalise(w.rb_mut(), done, par);
+                let norm = w.norm_l2();
+                w.col_mut(0).iter_mut().for_each(|x| *x /= norm);
+                beta = 0.0;
+            } else {
+                w.col_mut(0).iter_mut().for_each(|x| *x /= beta);
+            }
+            self.T[(j, j)] = alpha;
+            if j + 1 < self.p {
+                self.T[(j + 1, j)] = beta;
+                self.T[(j, j + 1)] = beta;
+            } else {
+                self.beta = beta;
+            }
+        }
+        self.k = self.p;
+        Ok(())
+    }
+
+    /// Ritz pairs of the full projected matrix, descending in magnitude.
+    fn ritz(&self) -> Result<Ritz, ReductionError> {
+        let evd = self
+            .T
+            .self_adjoint_eigen(Side::Lower)
+            .map_err(|e| ReductionError::Factorization(format!("dense eigensolver of the Lanczos matrix: {e:?}")))?;
+        let p = self.p;
+        let mut order: Vec<usize> = (0..p).collect();
+        order.sort_by(|&a, &b| evd.S()[b].abs().total_cmp(&evd.S()[a].abs()));
+        Ok(Ritz {
+            theta: order.iter().map(|&j| evd.S()[j]).collect(),
+            S: Mat::from_fn(p, p, |i, j| evd.U()[(i, order[j])]),
+        })
+    }
+
+    /// Thick restart: keep the `keep` largest Ritz vectors and the residual vector.
+    fn restart(&mut self, ritz: &Ritz, keep: usize) {
+        let p = self.p;
+        let Vk = self.V.get(.., 0..p) * ritz.S.get(.., 0..keep);
+        self.V.get_mut(.., 0..keep).copy_from(&Vk);
+        let (head, tail) = self.V.as_mut().split_at_col_mut(p);
+        head.col_mut(keep).copy_from(tail.col(0));
+        self.T.fill(0.0);
+        for i in 0..keep {
+            self.T[(i, i)] = ritz.theta[i];
+            let b = self.beta * ritz.S[(p - 1, i)];
+            self.T[(i, keep)] = b;
+            self.T[(keep, i)] = b;
+        }
+        self.k = keep;
+        self.restarts += 1;
+    }
+}
+
+/// Classical Gram-Schmidt of `w` against the orthonormal columns of `V`, done twice ("twice is
+/// enough": Giraud, Langou & Rozložník 2005). Returns the coefficient along the last column
+/// (the Lanczos $\alpha_j$ when `V` ends with $\mathbf v_j$).
+fn orthogonalise(mut w: MatMut<'_, f64>, V: MatRef<'_, f64>, par: Par) -> f64 {
+    let j = V.ncols();
+    let mut h = Mat::<f64>::zeros(j, 1);
+    let mut last = 0.0;
+    for _pass in 0..2 {
+        matmul(h.as_mut(), Accum::Replace, V.transpose(), w.rb(), 1.0, par);
+        matmul(w.rb_mut(), Accum::Add, V, h.as_ref(), -1.0, par);
+        last += h[(j - 1, 0)];
+    }
+    last
+}
+
+/// Small problems: the dense $\mathbf C$ from $n$ applications, its dense
+/// eigendecomposition, the $m$ largest $\mu$ (descending).
 fn dense_operator_eigen(op: &Operator<'_>, m: usize) -> Result<Mat<f64>, ReductionError> {
     let n = op.nrows();
     let par = faer::get_global_parallelism();
@@ -935,7 +1105,8 @@ fn dense_operator_eigen(op: &Operator<'_>, m: usize) -> Result<Mat<f64>, Reducti
     let evd = C
         .self_adjoint_eigen(Side::Lower)
         .map_err(|e| ReductionError::Factorization(format!("dense eigensolver: {e:?}")))?;
-    // Ascending: the m largest are the last m.
+    // Ascending: the m largest are the last m. (For an indefinite M, a large negative mu is
+    // not picked here; the Rayleigh-Ritz step may still see it.)
     let mu: Vec<f64> = (0..m).map(|k| evd.S()[n - 1 - k]).collect();
     if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
         return Err(ReductionError::MassNotPositiveDefinite {

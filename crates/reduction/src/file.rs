@@ -4,7 +4,7 @@
 //!
 //! # Why one file, half text and half binary
 //!
-//! - **One file**, not a directory: it is one artifact to copy, cache and delete; [`write`]
+//! - **One file**, not a directory: it is one artifact to copy, cache and delete; [`write()`]
 //!   replaces it atomically (temporary file and rename), so a study never sees half a body;
 //!   and one set of checksums covers all of it. A directory of JSON and array files can be
 //!   copied in part and cannot be replaced in one step.
@@ -62,7 +62,7 @@ use std::path::{Path, PathBuf};
 /// The first bytes of every reduced-body file, followed by a space and the format version.
 pub const MAGIC: &str = "FLEXMBS-RBODY";
 
-/// The file extension [`write`] callers should use (not enforced).
+/// The file extension [`write()`] callers should use (not enforced).
 pub const EXTENSION: &str = "rbody";
 
 /// What is wrong with a reduced-body file; the file itself is named by
@@ -83,7 +83,9 @@ pub enum BodyFileProblem {
     #[error("header line {line}: {what}")]
     Header { line: usize, what: String },
     /// The file ends inside the JSON metadata block.
-    #[error("the metadata block is truncated: the header announces {expected} bytes, the file has {found} after the header")]
+    #[error(
+        "the metadata block is truncated: the header announces {expected} bytes, the file has {found} after the header"
+    )]
     TruncatedMetadata { expected: u64, found: u64 },
     /// A stored CRC-32 does not match the bytes: the file was changed or damaged after it was
     /// written. `block` is `metadata` or the array's name.
@@ -92,10 +94,19 @@ pub enum BodyFileProblem {
     /// The metadata block is not the JSON of format version 1; `line` and `column` are
     /// serde_json's, counted in the JSON block (its line 1 is line 3 of the file).
     #[error("malformed metadata JSON at line {line}, column {column} of the block (file line {}): {message}", line + 2)]
-    Json { line: usize, column: usize, message: String },
+    Json {
+        line: usize,
+        column: usize,
+        message: String,
+    },
     /// The file ends inside an array.
     #[error("array {array} is truncated: it needs {expected} bytes from byte {offset} of the array section, the file has {found}")]
-    TruncatedArray { array: String, offset: u64, expected: u64, found: u64 },
+    TruncatedArray {
+        array: String,
+        offset: u64,
+        expected: u64,
+        found: u64,
+    },
     /// Bytes after the last array.
     #[error("{count} unexpected bytes after the last array (the index accounts for {expected} bytes of arrays)")]
     TrailingBytes { count: u64, expected: u64 },
@@ -113,7 +124,9 @@ fn version_message(found: u64, supported: u32) -> String {
     if found > supported as u64 {
         format!("format version {found} is newer than this build, which reads version {supported}: read it with a newer flexmbs, or reduce the body again with this one")
     } else {
-        format!("format version {found} is not supported: this build reads version {supported} only; reduce the body again")
+        format!(
+            "format version {found} is not supported: this build reads version {supported} only; reduce the body again"
+        )
     }
 }
 
@@ -125,7 +138,7 @@ struct Metadata {
     name: String,
     interfaces: Vec<InterfacePoint>,
     n_modes: usize,
-    /// Circular frequencies [rad/s] of the fixed-interface modes.
+    /// Circular frequencies (rad/s) of the fixed-interface modes.
     fixed_interface_omega: Vec<f64>,
     mass: f64,
     center_of_mass: [f64; 3],
@@ -206,7 +219,9 @@ fn expected_arrays(
     }
     list.push(("Phi_com".to_string(), 6, n));
     if let Some(nodes) = mesh_nodes {
-        let slots = nodes.checked_mul(6).ok_or_else(|| format!("6 x {nodes} mesh nodes overflows"))?;
+        let slots = nodes
+            .checked_mul(6)
+            .ok_or_else(|| format!("6 x {nodes} mesh nodes overflows"))?;
         list.push(("mesh.nodes".to_string(), 3, nodes));
         list.push(("mesh.shapes".to_string(), slots, n));
     }
@@ -271,8 +286,15 @@ fn check_writable(body: &ReducedBody) -> Result<(), String> {
             ));
         }
     }
-    let expected = expected_arrays(body.interfaces.len(), body.n_modes, body.mesh.as_ref().map(|m| m.nodes.len()))?;
-    let expected: Vec<_> = expected.into_iter().filter(|(name, _, _)| name != "mesh.nodes").collect();
+    let expected = expected_arrays(
+        body.interfaces.len(),
+        body.n_modes,
+        body.mesh.as_ref().map(|m| m.nodes.len()),
+    )?;
+    let expected: Vec<_> = expected
+        .into_iter()
+        .filter(|(name, _, _)| name != "mesh.nodes")
+        .collect();
     for ((name, rows, cols), (_, A)) in expected.iter().zip(body_arrays(body)) {
         if A.nrows != *rows || A.ncols != *cols {
             return Err(format!(
@@ -289,13 +311,32 @@ fn check_writable(body: &ReducedBody) -> Result<(), String> {
     // JSON has no NaN or infinity: refuse them here rather than write a file that cannot be
     // read back.
     let mut scalars: Vec<(String, f64)> = vec![("mass".into(), body.inertia.mass)];
-    scalars.extend(body.inertia.center_of_mass.iter().enumerate().map(|(i, &v)| (format!("center_of_mass[{i}]"), v)));
+    scalars.extend(
+        body.inertia
+            .center_of_mass
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| (format!("center_of_mass[{i}]"), v)),
+    );
     for (i, row) in body.inertia.inertia_com.iter().enumerate() {
-        scalars.extend(row.iter().enumerate().map(|(j, &v)| (format!("inertia_com[{i}][{j}]"), v)));
+        scalars.extend(
+            row.iter()
+                .enumerate()
+                .map(|(j, &v)| (format!("inertia_com[{i}][{j}]"), v)),
+        );
     }
-    scalars.extend(body.fixed_interface_omega.iter().enumerate().map(|(i, &v)| (format!("fixed_interface_omega[{i}]"), v)));
+    scalars.extend(
+        body.fixed_interface_omega
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| (format!("fixed_interface_omega[{i}]"), v)),
+    );
     for p in &body.interfaces {
-        scalars.extend(p.position.iter().map(|&v| (format!("position of interface '{}'", p.name), v)));
+        scalars.extend(
+            p.position
+                .iter()
+                .map(|&v| (format!("position of interface '{}'", p.name), v)),
+        );
     }
     if let Some((what, v)) = scalars.iter().find(|(_, v)| !v.is_finite()) {
         return Err(format!("{what} is {v}, which JSON cannot hold"));
@@ -316,7 +357,10 @@ fn push_f64s(out: &mut Vec<u8>, values: impl Iterator<Item = f64>) {
 /// [`BodyFileProblem::Unwritable`] when the body's own counts and shapes disagree or a JSON
 /// scalar is not finite.
 pub fn to_bytes(body: &ReducedBody, destination: &Path) -> Result<Vec<u8>, ReductionError> {
-    let error = |problem| ReductionError::BodyFile { path: destination.to_path_buf(), problem };
+    let error = |problem| ReductionError::BodyFile {
+        path: destination.to_path_buf(),
+        problem,
+    };
     check_writable(body).map_err(|what| error(BodyFileProblem::Unwritable { what }))?;
     let mut arrays: Vec<(String, usize, usize, Vec<u8>)> = Vec::new();
     let mut add = |name: String, rows: usize, cols: usize, values: &mut dyn Iterator<Item = f64>| {
@@ -330,7 +374,12 @@ pub fn to_bytes(body: &ReducedBody, destination: &Path) -> Result<Vec<u8>, Reduc
         add(name, A.nrows, A.ncols, &mut A.data.iter().copied());
     }
     if let (Some(mesh), Some((name, S))) = (&body.mesh, shapes) {
-        add("mesh.nodes".into(), 3, mesh.nodes.len(), &mut mesh.nodes.iter().flat_map(|x| x.iter().copied()));
+        add(
+            "mesh.nodes".into(),
+            3,
+            mesh.nodes.len(),
+            &mut mesh.nodes.iter().flat_map(|x| x.iter().copied()),
+        );
         add(name, S.nrows, S.ncols, &mut S.data.iter().copied());
     }
     let mut offset = 0u64;
@@ -362,8 +411,11 @@ pub fn to_bytes(body: &ReducedBody, destination: &Path) -> Result<Vec<u8>, Reduc
         mesh_nodes: body.mesh.as_ref().map(|m| m.nodes.len()),
         arrays: index,
     };
-    let json = serde_json::to_vec_pretty(&metadata)
-        .map_err(|e| error(BodyFileProblem::Unwritable { what: format!("JSON encoding failed: {e}") }))?;
+    let json = serde_json::to_vec_pretty(&metadata).map_err(|e| {
+        error(BodyFileProblem::Unwritable {
+            what: format!("JSON encoding failed: {e}"),
+        })
+    })?;
     let mut out = Vec::with_capacity(json.len() + offset as usize + 64);
     out.extend_from_slice(format!("{MAGIC} {FORMAT_VERSION}\n").as_bytes());
     out.extend_from_slice(format!("metadata {} crc32 {:08x}\n", json.len(), crc32(&json)).as_bytes());
@@ -382,9 +434,15 @@ pub fn write(body: &ReducedBody, path: &Path) -> Result<(), ReductionError> {
     let bytes = to_bytes(body, path)?;
     let io = |action: &'static str, e: std::io::Error| ReductionError::BodyFile {
         path: path.to_path_buf(),
-        problem: BodyFileProblem::Io { action, message: e.to_string() },
+        problem: BodyFileProblem::Io {
+            action,
+            message: e.to_string(),
+        },
     };
-    let file_name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "body".into());
+    let file_name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "body".into());
     let tmp = path.with_file_name(format!(".{file_name}.tmp-{}", std::process::id()));
     std::fs::write(&tmp, &bytes).map_err(|e| io("write", e))?;
     std::fs::rename(&tmp, path).map_err(|e| {
@@ -393,18 +451,24 @@ pub fn write(body: &ReducedBody, path: &Path) -> Result<(), ReductionError> {
     })
 }
 
-/// Reads a reduced-body file written by [`write`].
+/// Reads a reduced-body file written by [`write()`].
 pub fn read(path: &Path) -> Result<ReducedBody, ReductionError> {
     let bytes = std::fs::read(path).map_err(|e| ReductionError::BodyFile {
         path: path.to_path_buf(),
-        problem: BodyFileProblem::Io { action: "read", message: e.to_string() },
+        problem: BodyFileProblem::Io {
+            action: "read",
+            message: e.to_string(),
+        },
     })?;
     from_bytes(&bytes, path)
 }
 
 /// Parses the bytes of a reduced-body file; `origin` names it in errors. Never panics.
 pub fn from_bytes(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
-    parse(bytes).map_err(|problem| ReductionError::BodyFile { path: PathBuf::from(origin), problem })
+    parse(bytes).map_err(|problem| ReductionError::BodyFile {
+        path: PathBuf::from(origin),
+        problem,
+    })
 }
 
 /// The next line (without its `\n`) from `start`, looking at most `limit` bytes ahead: header
@@ -439,7 +503,9 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
     // Line 1: magic and version, read before anything else (module docs, "Versions").
     let magic = format!("{MAGIC} ");
     if !bytes.starts_with(magic.as_bytes()) {
-        return Err(BodyFileProblem::WrongMagic { found: printable(bytes) });
+        return Err(BodyFileProblem::WrongMagic {
+            found: printable(bytes),
+        });
     }
     let (line1, next) = header_line(bytes, 0, 64).ok_or_else(|| BodyFileProblem::Header {
         line: 1,
@@ -448,10 +514,16 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
     let version_text = std::str::from_utf8(&line1[magic.len()..]).unwrap_or("");
     let version = canonical_number(version_text).ok_or_else(|| BodyFileProblem::Header {
         line: 1,
-        what: format!("'{}' is not a format version (a whole number)", printable(&line1[magic.len()..])),
+        what: format!(
+            "'{}' is not a format version (a whole number)",
+            printable(&line1[magic.len()..])
+        ),
     })?;
     if version != FORMAT_VERSION as u64 {
-        return Err(BodyFileProblem::UnsupportedVersion { found: version, supported: FORMAT_VERSION });
+        return Err(BodyFileProblem::UnsupportedVersion {
+            found: version,
+            supported: FORMAT_VERSION,
+        });
     }
 
     // Line 2: `metadata <bytes> crc32 <hex>`.
@@ -465,23 +537,37 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
             canonical_number(len).ok_or_else(|| line2_error(format!("'{len}' is not a byte count")))?,
             canonical_crc(crc).ok_or_else(|| line2_error(format!("'{crc}' is not 8 lower-case hex digits")))?,
         ),
-        _ => return Err(line2_error(format!("expected 'metadata <bytes> crc32 <8 hex digits>', found '{line2}'"))),
+        _ => {
+            return Err(line2_error(format!(
+                "expected 'metadata <bytes> crc32 <8 hex digits>', found '{line2}'"
+            )))
+        }
     };
     let available = (bytes.len() - json_start) as u64;
     // The JSON block and the newline after it.
     if json_len >= available {
-        return Err(BodyFileProblem::TruncatedMetadata { expected: json_len.saturating_add(1), found: available });
+        return Err(BodyFileProblem::TruncatedMetadata {
+            expected: json_len.saturating_add(1),
+            found: available,
+        });
     }
     let json_end = json_start + json_len as usize;
     let json = &bytes[json_start..json_end];
     let computed = crc32(json);
     if computed != json_crc {
-        return Err(BodyFileProblem::Checksum { block: "metadata".into(), stored: json_crc, computed });
+        return Err(BodyFileProblem::Checksum {
+            block: "metadata".into(),
+            stored: json_crc,
+            computed,
+        });
     }
     if bytes[json_end] != b'\n' {
         return Err(BodyFileProblem::Header {
             line: 3,
-            what: format!("the metadata block must end with a newline, found byte {:#04x}", bytes[json_end]),
+            what: format!(
+                "the metadata block must end with a newline, found byte {:#04x}",
+                bytes[json_end]
+            ),
         });
     }
     let meta: Metadata = serde_json::from_slice(json).map_err(|e| BodyFileProblem::Json {
@@ -521,7 +607,11 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
             meta.arrays.len(),
             meta.interfaces.len(),
             meta.n_modes,
-            if meta.mesh_nodes.is_some() { "mesh shapes" } else { "no mesh shapes" },
+            if meta.mesh_nodes.is_some() {
+                "mesh shapes"
+            } else {
+                "no mesh shapes"
+            },
             expected.len()
         )));
     }
@@ -530,7 +620,10 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
     let mut values: Vec<Vec<f64>> = Vec::with_capacity(expected.len());
     for (k, (entry, (name, rows, cols))) in meta.arrays.iter().zip(&expected).enumerate() {
         if &entry.name != name {
-            return Err(shape(format!("array {k} of the index is '{}' where '{name}' belongs", entry.name)));
+            return Err(shape(format!(
+                "array {k} of the index is '{}' where '{name}' belongs",
+                entry.name
+            )));
         }
         if (entry.rows, entry.cols) != (*rows, *cols) {
             return Err(shape(format!(
@@ -545,7 +638,10 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
             .and_then(|c| c.checked_mul(8))
             .ok_or_else(|| shape(format!("{name}: {rows} x {cols} values overflow a byte count")))?;
         if entry.bytes != needed {
-            return Err(shape(format!("{name}: the index says {} bytes, {rows} x {cols} values take {needed}", entry.bytes)));
+            return Err(shape(format!(
+                "{name}: the index says {} bytes, {rows} x {cols} values take {needed}",
+                entry.bytes
+            )));
         }
         if entry.offset != offset {
             return Err(shape(format!(
@@ -553,16 +649,29 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
                 entry.offset
             )));
         }
-        let stored = canonical_crc(&entry.crc32)
-            .ok_or_else(|| shape(format!("{name}: crc32 '{}' is not 8 lower-case hex digits", entry.crc32)))?;
+        let stored = canonical_crc(&entry.crc32).ok_or_else(|| {
+            shape(format!(
+                "{name}: crc32 '{}' is not 8 lower-case hex digits",
+                entry.crc32
+            ))
+        })?;
         let found = (binary.len() as u64).saturating_sub(offset);
         if found < needed {
-            return Err(BodyFileProblem::TruncatedArray { array: name.clone(), offset, expected: needed, found });
+            return Err(BodyFileProblem::TruncatedArray {
+                array: name.clone(),
+                offset,
+                expected: needed,
+                found,
+            });
         }
         let chunk = &binary[offset as usize..(offset + needed) as usize];
         let computed = crc32(chunk);
         if computed != stored {
-            return Err(BodyFileProblem::Checksum { block: name.clone(), stored, computed });
+            return Err(BodyFileProblem::Checksum {
+                block: name.clone(),
+                stored,
+                computed,
+            });
         }
         values.push(
             chunk
@@ -573,7 +682,10 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         offset += needed;
     }
     if binary.len() as u64 > offset {
-        return Err(BodyFileProblem::TrailingBytes { count: binary.len() as u64 - offset, expected: offset });
+        return Err(BodyFileProblem::TrailingBytes {
+            count: binary.len() as u64 - offset,
+            expected: offset,
+        });
     }
 
     let mut values = values.into_iter();
@@ -591,8 +703,15 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
     let S_bar = (5..14).map(|k| next_matrix(shapes[k])).collect();
     let Phi_com = next_matrix(shapes[14]);
     let mesh = meta.mesh_nodes.map(|_| {
-        let nodes = next_matrix(shapes[15]).data.chunks_exact(3).map(|x| [x[0], x[1], x[2]]).collect();
-        MeshModes { nodes, shapes: next_matrix(shapes[16]) }
+        let nodes = next_matrix(shapes[15])
+            .data
+            .chunks_exact(3)
+            .map(|x| [x[0], x[1], x[2]])
+            .collect();
+        MeshModes {
+            nodes,
+            shapes: next_matrix(shapes[16]),
+        }
     });
     Ok(ReducedBody {
         format_version: meta.format_version,

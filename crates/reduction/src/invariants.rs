@@ -53,7 +53,9 @@ pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, 
     let dofs = DofMap::new(&bare).map_err(ReductionError::from_fe)?;
     let pattern = SystemPattern::new(&bare, &dofs);
     let M = assemble(&bare, &pattern).map_err(ReductionError::from_fe)?.M;
-    let slots: Vec<usize> = (0..dofs.n_free()).map(|d| dofs.full_slot(fe_model::Dof(d as u32))).collect();
+    let slots: Vec<usize> = (0..dofs.n_free())
+        .map(|d| dofs.full_slot(fe_model::Dof(d as u32)))
+        .collect();
     let nodes: Vec<[f64; 3]> = model.mesh.nodes.iter().map(|x| [x.x, x.y, x.z]).collect();
     inertia_data_from_mass(M.as_ref(), &slots, &nodes, S_full)
 }
@@ -79,7 +81,10 @@ pub fn inertia_data_from_mass(
     let G0 = R0.transpose() * (M * &R0);
     let mass = (G0[(0, 0)] + G0[(1, 1)] + G0[(2, 2)]) / 3.0;
     if !(mass > 0.0) {
-        return Err(ReductionError::MassNotPositiveDefinite { dof: None, why: format!("the body's total mass is {mass:.3e}") });
+        return Err(ReductionError::MassNotPositiveDefinite {
+            dof: None,
+            why: format!("the body's total mass is {mass:.3e}"),
+        });
     }
     let c = Vector3::new(G0[(1, 5)], G0[(2, 3)], G0[(0, 4)]) / mass;
     let R = rigid_modes(slots, nodes, c);
@@ -92,10 +97,12 @@ pub fn inertia_data_from_mass(
 
     // (brief §4) Phi_com: the rigid motion that fits each CB mode best in the mass norm.
     let G6 = Matrix6::from_fn(|i, j| G[(i, j)]);
-    let G6_inv = G6.try_inverse().ok_or_else(|| ReductionError::MassNotPositiveDefinite {
-        dof: None,
-        why: "the rigid-body mass matrix Phi_R^T M Phi_R is singular".into(),
-    })?;
+    let G6_inv = G6
+        .try_inverse()
+        .ok_or_else(|| ReductionError::MassNotPositiveDefinite {
+            dof: None,
+            why: "the rigid-body mass matrix Phi_R^T M Phi_R is singular".into(),
+        })?;
     let Phi_com = Mat::from_fn(6, n, |i, j| (0..6).map(|k| G6_inv[(i, k)] * RtMS[(k, j)]).sum());
 
     // Second-order invariants from scalar fields placed in translation slot `comp`.
@@ -115,7 +122,9 @@ pub fn inertia_data_from_mass(
     let mut S_bar: Vec<Mat<f64>> = (0..9).map(|_| Mat::zeros(n, n)).collect();
     for comp in 0..3 {
         // M P_comp(S_l) for each l.
-        let MP: Vec<Mat<f64>> = (0..3).map(|l| M * &place(comp, &|node, j| S_node(node, l, j), n)).collect();
+        let MP: Vec<Mat<f64>> = (0..3)
+            .map(|l| M * &place(comp, &|node, j| S_node(node, l, j), n))
+            .collect();
         let X = place(comp, &|node, k| nodes[node][k] - c[k], 3);
         for l in 0..3 {
             let XtMP = X.transpose() * &MP[l];

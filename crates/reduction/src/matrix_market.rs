@@ -10,7 +10,7 @@
 //! [`write_matrix_market`] writes `coordinate real general`: every stored entry, both
 //! triangles of a symmetric matrix. We do not write the `symmetric` variant: the Matrix
 //! Market definition stores the *lower* triangle of a symmetric matrix, and sprs's symmetric
-//! writer stores the upper one, which strict readers reject or misread; a general file is
+//! writer stores the upper one, which the definition does not provide for; a general file is
 //! read the same way by every reader, at twice the size. Values are printed by Rust's `{}`
 //! for `f64`, the shortest decimal that parses back to the same number, so a round trip is
 //! exact (`tests/unit/matrix_market.rs`). `{}` prints no exponent, so $10^{-300}$ takes about
@@ -80,7 +80,11 @@ enum Symmetry {
 /// The checks (module docs) run first; sprs then reads the checked text, and its triplets
 /// become a faer matrix.
 pub fn parse_matrix_market(bytes: &[u8], origin: &Path) -> Result<SparseColMat<usize, f64>, ReductionError> {
-    let error = |line: Option<usize>, what: String| ReductionError::MatrixMarket { path: origin.to_path_buf(), line, what };
+    let error = |line: Option<usize>, what: String| ReductionError::MatrixMarket {
+        path: origin.to_path_buf(),
+        line,
+        what,
+    };
     let text = std::str::from_utf8(bytes).map_err(|e| {
         let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
         error(Some(line), "not text (invalid UTF-8)".into())
@@ -94,6 +98,9 @@ pub fn parse_matrix_market(bytes: &[u8], origin: &Path) -> Result<SparseColMat<u
         .map_err(|e| error(None, format!("cannot build the sparse matrix: {e:?}")))
 }
 
+/// An error of [`check`]: the 1-based line at fault, if one is, and why.
+type LineError = (Option<usize>, String);
+
 /// Checks what sprs would trust: the banner, the size line, and every entry (count of fields,
 /// numbers, indices in range, count of entries); in a symmetric file, that no entry is given
 /// in both triangles. Returns the shape and the text for sprs, or the 1-based line at fault
@@ -103,28 +110,43 @@ pub fn parse_matrix_market(bytes: &[u8], origin: &Path) -> Result<SparseColMat<u
 /// banner (`real`, single spaces: sprs compares the banner's bytes, and reads `integer`
 /// files only into integer matrices), no comment or blank lines before the size line (its
 /// comment loop does not trim, and spins at the end of a file without a size line).
-fn check(text: &str) -> Result<((usize, usize), String), (Option<usize>, String)> {
+fn check(text: &str) -> Result<((usize, usize), String), LineError> {
     let mut lines = text.lines().enumerate().map(|(k, l)| (k + 1, l));
     let (_, banner) = lines.next().ok_or((Some(1), "the file is empty".to_string()))?;
     let words: Vec<String> = banner.split_whitespace().map(|w| w.to_lowercase()).collect();
-    let banner_error = |what: &str| (Some(1), format!("{what}; the first line must read '%%MatrixMarket matrix coordinate real general' (or 'integer', or 'symmetric'), found '{banner}'"));
+    let banner_error = |what: &str| {
+        (Some(1), format!("{what}; the first line must read '%%MatrixMarket matrix coordinate real general' (or 'integer', or 'symmetric'), found '{banner}'"))
+    };
     if words.len() != 5 || words[0] != "%%matrixmarket" || words[1] != "matrix" {
         return Err(banner_error("not a Matrix Market banner"));
     }
     if words[2] != "coordinate" {
-        return Err(banner_error("only the sparse 'coordinate' format is read (not dense 'array')"));
+        return Err(banner_error(
+            "only the sparse 'coordinate' format is read (not dense 'array')",
+        ));
     }
     if words[3] != "real" && words[3] != "integer" {
-        return Err(banner_error(&format!("'{}' values cannot become a real matrix", words[3])));
+        return Err(banner_error(&format!(
+            "'{}' values cannot become a real matrix",
+            words[3]
+        )));
     }
     let symmetry = match words[4].as_str() {
         "general" => Symmetry::General,
         "symmetric" => Symmetry::Symmetric,
-        other => return Err(banner_error(&format!("'{other}' matrices are not read (a stiffness or mass matrix is general or symmetric)"))),
+        other => {
+            return Err(banner_error(&format!(
+                "'{other}' matrices are not read (a stiffness or mass matrix is general or symmetric)"
+            )))
+        }
     };
     let mut clean = format!(
         "%%MatrixMarket matrix coordinate real {}\n",
-        if symmetry == Symmetry::General { "general" } else { "symmetric" }
+        if symmetry == Symmetry::General {
+            "general"
+        } else {
+            "symmetric"
+        }
     );
     let mut size: Option<(usize, usize, usize)> = None;
     let mut count = 0usize;
@@ -140,13 +162,21 @@ fn check(text: &str) -> Result<((usize, usize), String), (Option<usize>, String)
             match parsed.as_slice() {
                 [Some(r), Some(c), Some(e)] => {
                     if symmetry == Symmetry::Symmetric && r != c {
-                        return Err((Some(line), format!("a symmetric matrix must be square, this one is {r} x {c}")));
+                        return Err((
+                            Some(line),
+                            format!("a symmetric matrix must be square, this one is {r} x {c}"),
+                        ));
                     }
                     size = Some((*r, *c, *e));
                     clean.push_str(trimmed);
                     clean.push('\n');
                 }
-                _ => return Err((Some(line), format!("expected the size line 'rows columns entries', found '{trimmed}'"))),
+                _ => {
+                    return Err((
+                        Some(line),
+                        format!("expected the size line 'rows columns entries', found '{trimmed}'"),
+                    ))
+                }
             }
             continue;
         };
@@ -155,7 +185,10 @@ fn check(text: &str) -> Result<((usize, usize), String), (Option<usize>, String)
             continue;
         }
         if count == entries {
-            return Err((Some(line), format!("more entries than the {entries} the size line announces")));
+            return Err((
+                Some(line),
+                format!("more entries than the {entries} the size line announces"),
+            ));
         }
         let [i, j, v] = fields.as_slice() else {
             return Err((Some(line), format!("an entry is 'row column value', found '{trimmed}'")));
@@ -190,7 +223,10 @@ fn check(text: &str) -> Result<((usize, usize), String), (Option<usize>, String)
         return Err((None, "no size line 'rows columns entries' after the banner".into()));
     };
     if count < entries {
-        return Err((None, format!("the size line announces {entries} entries but the file has {count} (truncated?)")));
+        return Err((
+            None,
+            format!("the size line announces {entries} entries but the file has {count} (truncated?)"),
+        ));
     }
     Ok(((rows, cols), clean))
 }

@@ -145,16 +145,33 @@ impl Superelement {
         self.check_state(state)?;
         match self.frame_solve {
             FrameSolve::AtInterface(k) => Ok((Frame::new(state.r[k], state.R[k]), 0)),
-            FrameSolve::Newton => self.newton_frame(state),
+            FrameSolve::Newton => {
+                // The equations have spurious roots with elastic rotations near pi, which
+                // Newton can reach from a frame far from the body (a cold start). Interface 0
+                // gives a start within the elastic deformation of the solution (R_k0 = I):
+                // use it when the warm start implies an elastic rotation above 1 rad (far
+                // beyond the small-strain range of the formulation), and retry from it when
+                // Newton fails from the warm start.
+                let guess = Frame::new(state.r[0] - state.R[0] * self.x[0], state.R[0]);
+                let warm_is_far =
+                    state.R.iter().any(|R_k| crate::local_coordinates::elastic_rotation(&state.frame.R, R_k).norm() > 1.0);
+                if warm_is_far {
+                    return self.newton_frame(state, guess);
+                }
+                self.newton_frame(state, state.frame).or_else(|e| match self.newton_frame(state, guess) {
+                    Ok(found) => Ok(found),
+                    Err(_) => Err(e),
+                })
+            }
         }
     }
 
-    fn newton_frame(&self, state: &BodyState) -> Result<(Frame, usize), SuperelementError> {
+    fn newton_frame(&self, state: &BodyState, start: Frame) -> Result<(Frame, usize), SuperelementError> {
         let N = self.n_interfaces;
         let L = self.length;
         let r_max = state.r.iter().map(|r| r.norm()).fold(0.0, f64::max);
         let tol = self.frame_settings.tolerance + 64.0 * f64::EPSILON * (1.0 + r_max / L);
-        let mut frame = state.frame;
+        let mut frame = start;
         let mut q = vec![0.0; self.n];
         let mut r_loc = vec![Vector3::zeros(); N];
         let mut Lambda = vec![Matrix3::identity(); N];

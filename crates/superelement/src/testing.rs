@@ -224,7 +224,8 @@ pub mod fixtures {
 
     /// A straight beam of `elements` elements from `a` to `b` with interfaces at both ends (and,
     /// with `auxiliary`, an auxiliary interface at the middle node: `elements` must be even).
-    /// Returns the FE model, the interface nodes and the reduced body.
+    /// Returns the FE model, the interface nodes (in the body's interface order, the auxiliary
+    /// one last) and the reduced body.
     pub fn straight_beam(
         a: Point3<f64>,
         b: Point3<f64>,
@@ -237,7 +238,7 @@ pub mod fixtures {
         let orientation = axis.cross(&Vector3::new(0.3, 0.9, -0.2)).normalize();
         let props = properties(&mut model, orientation);
         let nodes = fe_model::generate::straight_beam(&mut model, a, b, elements, &props, Some("beam")).unwrap();
-        let ends = vec![nodes[0], nodes[elements]];
+        let mut ends = vec![nodes[0], nodes[elements]];
         let mut settings = CbSettings::new(modes);
         if auxiliary {
             assert!(elements % 2 == 0, "the auxiliary node is the middle node: use an even element count");
@@ -245,6 +246,10 @@ pub mod fixtures {
         }
         let interfaces: Vec<(String, NodeId)> = ends.iter().enumerate().map(|(i, n)| (format!("end{i}"), *n)).collect();
         let body = reduce(&model, "beam", &interfaces, &settings).unwrap();
+        if auxiliary {
+            // The reduction appends the auxiliary interface last.
+            ends.push(nodes[elements / 2]);
+        }
         (model, ends, body)
     }
 

@@ -27,8 +27,13 @@ fn beam(n: usize, mass: MassKind) -> (FeModel, Vec<NodeId>) {
     let material = model.add_material(IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap());
     let section = model.add_section(BeamSection::rectangle("30x20", 0.03, 0.02, 0.3).unwrap());
     let axis = Vector3::new(1.0, 0.5, -0.3).normalize();
-    let props =
-        BeamProperties { section, material, orientation: Vector3::z().cross(&axis), theory: BeamTheory::Timoshenko, mass };
+    let props = BeamProperties {
+        section,
+        material,
+        orientation: Vector3::z().cross(&axis),
+        theory: BeamTheory::Timoshenko,
+        mass,
+    };
     let p0 = Point3::new(0.1, 0.2, 0.3);
     let nodes = straight_beam(&mut model, p0, p0 + axis, n, &props, None).unwrap();
     (model, nodes)
@@ -78,8 +83,12 @@ fn reference(model: &FeModel, clamp: NodeId, c: [f64; 3]) -> Reference {
     let pick = |A: &DMatrix<f64>, rows: &[usize], cols: &[usize]| {
         DMatrix::from_fn(rows.len(), cols.len(), |i, j| A[(rows[i], cols[j])])
     };
-    let (K_ii, M_ii, M_ib, M_bb) =
-        (pick(&K, &internal, &internal), pick(&M, &internal, &internal), pick(&M, &internal, &boundary), pick(&M, &boundary, &boundary));
+    let (K_ii, M_ii, M_ib, M_bb) = (
+        pick(&K, &internal, &internal),
+        pick(&M, &internal, &internal),
+        pick(&M, &internal, &boundary),
+        pick(&M, &boundary, &boundary),
+    );
     // K_ii phi = lambda M_ii phi via M_ii = L L^T: C = L^-1 K_ii L^-T, phi = L^-T y, which are
     // M_ii-orthonormal.
     let L = M_ii.clone().cholesky().unwrap().l();
@@ -92,16 +101,27 @@ fn reference(model: &FeModel, clamp: NodeId, c: [f64; 3]) -> Reference {
     let Lk = Phi.transpose() * &MR_i;
     let mut order: Vec<usize> = (0..internal.len()).collect();
     order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
-    let effective = order.iter().map(|&k| [0, 1, 2, 3, 4, 5].map(|d| Lk[(k, d)] * Lk[(k, d)])).collect();
+    let effective = order
+        .iter()
+        .map(|&k| [0, 1, 2, 3, 4, 5].map(|d| Lk[(k, d)] * Lk[(k, d)]))
+        .collect();
     let R_b = pick(&R, &boundary, &[0, 1, 2, 3, 4, 5]);
     let schur = &M_bb - M_ib.transpose() * M_ii.clone().cholesky().unwrap().solve(&M_ib);
     let carried = R_b.transpose() * schur * &R_b;
     let rigid = R.transpose() * &M * &R;
-    Reference { effective, interface: [0, 1, 2, 3, 4, 5].map(|d| carried[(d, d)]), rigid: [0, 1, 2, 3, 4, 5].map(|d| rigid[(d, d)]) }
+    Reference {
+        effective,
+        interface: [0, 1, 2, 3, 4, 5].map(|d| carried[(d, d)]),
+        rigid: [0, 1, 2, 3, 4, 5].map(|d| rigid[(d, d)]),
+    }
 }
 
 fn clamped_body(model: &FeModel, clamp: NodeId, m: usize) -> ReducedBody {
-    let selection = if m == 0 { ModeSelection::StaticOnly } else { ModeSelection::Count(m) };
+    let selection = if m == 0 {
+        ModeSelection::StaticOnly
+    } else {
+        ModeSelection::Count(m)
+    };
     reduce(model, "beam", &[("A".to_string(), clamp)], &CbSettings::new(selection)).unwrap()
 }
 
@@ -109,17 +129,28 @@ fn check_against_reference(n: usize, mass: MassKind) {
     let (model, nodes) = beam(n, mass);
     let clamp = nodes[0];
     let ni = 6 * (n + 1) - 6;
-    let full = clamped_body(&model, clamp, 1);
-    let reference = reference(&model, clamp, full.inertia.center_of_mass);
+    let first = clamped_body(&model, clamp, 1);
+    let reference = reference(&model, clamp, first.inertia.center_of_mass);
     let total: [f64; 6] = std::array::from_fn(|d| reference.effective.iter().map(|e| e[d]).sum());
-    let rigid = diagnostics(&full, None, 3.0).rigid_mass;
+    let rigid = diagnostics(&first, None, 3.0).rigid_mass;
     for d in 0..6 {
         // The identity on the dense reference: all modes + what the interface carries = the
         // rigid mass; round-off of dense solves of condition ~1e8, relative.
         let sum = total[d] + reference.interface[d];
-        assert!((sum - reference.rigid[d]).abs() <= 1e-8 * reference.rigid[d], "{}: {sum} vs {}", DIRECTIONS[d], reference.rigid[d]);
+        assert!(
+            (sum - reference.rigid[d]).abs() <= 1e-8 * reference.rigid[d],
+            "{}: {sum} vs {}",
+            DIRECTIONS[d],
+            reference.rigid[d]
+        );
         // And the rigid mass is the body's mass data (round-off).
-        assert!((rigid[d] - reference.rigid[d]).abs() <= 1e-10 * rigid[d], "{}: {} vs {}", DIRECTIONS[d], rigid[d], reference.rigid[d]);
+        assert!(
+            (rigid[d] - reference.rigid[d]).abs() <= 1e-10 * rigid[d],
+            "{}: {} vs {}",
+            DIRECTIONS[d],
+            rigid[d],
+            reference.rigid[d]
+        );
     }
     let mut previous: Option<Diagnostics> = None;
     for m in [0, 3, 10, ni - 1] {
@@ -133,23 +164,32 @@ fn check_against_reference(n: usize, mass: MassKind) {
             }
         }
         println!("{mass:?}, m = {m:2}: per-mode effective masses within {worst:.2e} of the dense reference (fraction of the rigid mass)");
-        // Modes from the shift-invert solver (relative residual 1e-8, so vectors to ~1e-8)
-        // against dense ones: effective masses agree to that accuracy, relative to the mass.
-        assert!(worst <= 1e-7, "m = {m}: worst {worst:.3e}");
+        // Modes from the crate's solver against dense ones. The solver guarantees relative
+        // residuals of 1e-8 (vectors to about 1e-8); measured 1.7e-11 (consistent) and
+        // 1.4e-12 (lumped). 1e-9 keeps a margin of 50 over the measurement and still catches
+        // any error in the formula (which would be of order one).
+        assert!(worst <= 1e-9, "m = {m}: worst {worst:.3e}");
         for d in 0..6 {
             // kept + static = 1 for a free body: the same projection, round-off only.
-            assert!((diag.kept_fraction[d] + diag.static_fraction[d] - 1.0).abs() <= 1e-10, "{diag}");
+            assert!(
+                (diag.kept_fraction[d] + diag.static_fraction[d] - 1.0).abs() <= 1e-10,
+                "{diag}"
+            );
             // The static share is what the interface carries plus the modes not kept.
             let unkept: f64 = reference.effective[m..].iter().map(|e| e[d]).sum();
             let expected = (reference.interface[d] + unkept) / rigid[d];
             assert!(
-                (diag.static_fraction[d] - expected).abs() <= 1e-7,
+                // Same accuracy argument as the per-mode values, summed over the modes.
+                (diag.static_fraction[d] - expected).abs() <= 1e-9,
                 "m = {m}, {}: static {} vs interface + unkept {expected}",
                 DIRECTIONS[d],
                 diag.static_fraction[d]
             );
             if let Some(p) = &previous {
-                assert!(diag.static_fraction[d] <= p.static_fraction[d] + 1e-12, "static share grew with more modes");
+                assert!(
+                    diag.static_fraction[d] <= p.static_fraction[d] + 1e-12,
+                    "static share grew with more modes"
+                );
             }
         }
         if m == 10 {
@@ -174,7 +214,13 @@ fn effective_masses_sum_to_rigid_mass_minus_the_interface_node_mass_lumped() {
     let r = reference(&model, nodes[0], body.inertia.center_of_mass);
     let m = body.inertia.mass;
     for d in 0..3 {
-        assert!((r.interface[d] - m / (2.0 * n as f64)).abs() <= 1e-12 * m, "{}: {} vs m/2n = {}", DIRECTIONS[d], r.interface[d], m / (2.0 * n as f64));
+        assert!(
+            (r.interface[d] - m / (2.0 * n as f64)).abs() <= 1e-12 * m,
+            "{}: {} vs m/2n = {}",
+            DIRECTIONS[d],
+            r.interface[d],
+            m / (2.0 * n as f64)
+        );
     }
 }
 
@@ -183,9 +229,19 @@ fn warnings_fire_when_expected() {
     let (model, nodes) = beam(8, MassKind::Consistent);
     let interfaces = vec![("A".to_string(), nodes[0]), ("B".to_string(), nodes[8])];
     let body = reduce(&model, "beam", &interfaces, &CbSettings::new(ModeSelection::Count(4))).unwrap();
-    let f: Vec<f64> = body.fixed_interface_omega.iter().map(|w| w / (2.0 * std::f64::consts::PI)).collect();
+    let f: Vec<f64> = body
+        .fixed_interface_omega
+        .iter()
+        .map(|w| w / (2.0 * std::f64::consts::PI))
+        .collect();
     let highest = f[3];
-    let kinds = |d: &Diagnostics| d.warnings.iter().map(|w| format!("{w:?}")).collect::<Vec<_>>().join("; ");
+    let kinds = |d: &Diagnostics| {
+        d.warnings
+            .iter()
+            .map(|w| format!("{w:?}"))
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
 
     // No excitation: no frequency check, and the free body raises nothing.
     let d = diagnostics(&body, None, 4.0);
@@ -193,11 +249,19 @@ fn warnings_fire_when_expected() {
     assert!(d.to_string().contains("warnings: none"));
     // Excitation well below: fine.
     let d = diagnostics(&body, Some(highest / 5.0), 4.0);
-    assert!(d.warnings.iter().all(|w| !matches!(w, DiagnosticWarning::ModesMissing { .. })), "{}", kinds(&d));
+    assert!(
+        d.warnings
+            .iter()
+            .all(|w| !matches!(w, DiagnosticWarning::ModesMissing { .. })),
+        "{}",
+        kinds(&d)
+    );
     // Excitation at half the highest kept mode with factor 4: modes missing.
     let d = diagnostics(&body, Some(highest / 2.0), 4.0);
     assert!(
-        d.warnings.iter().any(|w| matches!(w, DiagnosticWarning::ModesMissing { factor, .. } if *factor == 4.0)),
+        d.warnings
+            .iter()
+            .any(|w| matches!(w, DiagnosticWarning::ModesMissing { factor, .. } if *factor == 4.0)),
         "{}",
         kinds(&d)
     );
@@ -209,23 +273,45 @@ fn warnings_fire_when_expected() {
         DiagnosticWarning::NearExcitation { modes, .. } => Some(modes.clone()),
         _ => None,
     });
-    let expected: Vec<usize> = (1..=4).filter(|&k| f[k - 1] < std::f64::consts::SQRT_2 * f[0]).collect();
+    let expected: Vec<usize> = (1..=4)
+        .filter(|&k| f[k - 1] < std::f64::consts::SQRT_2 * f[0])
+        .collect();
     assert_eq!(near, Some(expected));
     // Static modes only, with an excitation.
     let stat = reduce(&model, "beam", &interfaces, &CbSettings::new(ModeSelection::StaticOnly)).unwrap();
     let d = diagnostics(&stat, Some(10.0), 3.0);
-    assert!(matches!(d.warnings.as_slice(), [DiagnosticWarning::StaticOnly { .. }]), "{}", kinds(&d));
+    assert!(
+        matches!(d.warnings.as_slice(), [DiagnosticWarning::StaticOnly { .. }]),
+        "{}",
+        kinds(&d)
+    );
     // Unusable inputs are reported, not panicked on.
     for (f, factor) in [(-1.0, 3.0), (f64::NAN, 3.0), (10.0, 0.5)] {
         let d = diagnostics(&body, Some(f), factor);
-        assert!(matches!(d.warnings.as_slice(), [DiagnosticWarning::InvalidInput { .. }]), "{}", kinds(&d));
+        assert!(
+            matches!(d.warnings.as_slice(), [DiagnosticWarning::InvalidInput { .. }]),
+            "{}",
+            kinds(&d)
+        );
     }
     // A body supported in its FE model: the effective masses do not add up, and it says so.
     let mut supported = model.clone();
     supported.add_support(nodes[4], DofMask::ALL);
-    let body = reduce(&supported, "beam", &interfaces, &CbSettings::new(ModeSelection::Count(2))).unwrap();
+    let body = reduce(
+        &supported,
+        "beam",
+        &interfaces,
+        &CbSettings::new(ModeSelection::Count(2)),
+    )
+    .unwrap();
     let d = diagnostics(&body, None, 3.0);
-    assert!(d.warnings.iter().any(|w| matches!(w, DiagnosticWarning::NotFree { .. })), "{}", kinds(&d));
+    assert!(
+        d.warnings
+            .iter()
+            .any(|w| matches!(w, DiagnosticWarning::NotFree { .. })),
+        "{}",
+        kinds(&d)
+    );
     // Plain data: a JSON round trip.
     let json = serde_json::to_string(&d).unwrap();
     assert_eq!(serde_json::from_str::<Diagnostics>(&json).unwrap(), d);

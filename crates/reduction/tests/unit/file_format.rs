@@ -48,7 +48,10 @@ fn f64_bits(b: &ReducedBody) -> Vec<u64> {
     v.push(i.mass);
     v.extend(i.center_of_mass);
     v.extend(i.inertia_com.iter().flatten());
-    for m in [&b.K_CB, &b.M_CB, &i.S_t, &i.S_r, &i.S_x, &b.Phi_com].into_iter().chain(i.S_bar.iter()) {
+    for m in [&b.K_CB, &b.M_CB, &i.S_t, &i.S_r, &i.S_x, &b.Phi_com]
+        .into_iter()
+        .chain(i.S_bar.iter())
+    {
         v.extend(&m.data);
     }
     if let Some(mesh) = &b.mesh {
@@ -71,8 +74,13 @@ fn origin() -> PathBuf {
 fn problem(bytes: &[u8]) -> BodyFileProblem {
     match file::from_bytes(bytes, &origin()) {
         Err(e @ ReductionError::BodyFile { .. }) => {
-            assert!(e.to_string().contains("bodies/beam.rbody"), "the message does not name the file: {e}");
-            let ReductionError::BodyFile { path, problem } = e else { unreachable!() };
+            assert!(
+                e.to_string().contains("bodies/beam.rbody"),
+                "the message does not name the file: {e}"
+            );
+            let ReductionError::BodyFile { path, problem } = e else {
+                unreachable!()
+            };
             assert_eq!(path, origin());
             problem
         }
@@ -134,7 +142,10 @@ fn round_trip_is_bit_identical_with_modes_and_mesh_shapes() {
 fn round_trip_without_mesh_shapes_and_with_an_auxiliary_interface() {
     let b = body(6, 3, false);
     assert!(b.mesh.is_none());
-    assert_identical(&b, &file::from_bytes(&file::to_bytes(&b, &origin()).unwrap(), &origin()).unwrap());
+    assert_identical(
+        &b,
+        &file::from_bytes(&file::to_bytes(&b, &origin()).unwrap(), &origin()).unwrap(),
+    );
 
     // The middle node of a uniform straight beam is its centre of mass.
     let (model, interfaces, nodes) = beam(6);
@@ -142,11 +153,23 @@ fn round_trip_without_mesh_shapes_and_with_an_auxiliary_interface() {
     settings.auxiliary_node = Some(nodes[3]);
     let b = reduce(&model, "beam", &interfaces, &settings).unwrap();
     assert_eq!(b.auxiliary_interface, Some(2));
-    assert_identical(&b, &file::from_bytes(&file::to_bytes(&b, &origin()).unwrap(), &origin()).unwrap());
+    assert_identical(
+        &b,
+        &file::from_bytes(&file::to_bytes(&b, &origin()).unwrap(), &origin()).unwrap(),
+    );
 
     // Static modes only: no modes, empty frequency list.
-    let b = reduce(&model, "static", &interfaces, &CbSettings::new(ModeSelection::StaticOnly)).unwrap();
-    assert_identical(&b, &file::from_bytes(&file::to_bytes(&b, &origin()).unwrap(), &origin()).unwrap());
+    let b = reduce(
+        &model,
+        "static",
+        &interfaces,
+        &CbSettings::new(ModeSelection::StaticOnly),
+    )
+    .unwrap();
+    assert_identical(
+        &b,
+        &file::from_bytes(&file::to_bytes(&b, &origin()).unwrap(), &origin()).unwrap(),
+    );
 }
 
 #[test]
@@ -177,14 +200,22 @@ fn write_and_read_a_file_on_disk() {
     // Writing again replaces the file (atomically, through a temporary file and a rename).
     file::write(&b, &path).unwrap();
     assert_identical(&b, &file::read(&path).unwrap());
-    let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
     assert_eq!(leftovers.len(), 1, "temporary files left behind: {leftovers:?}");
     // A missing file: an I/O error that names it.
     let missing = dir.join("missing.rbody");
     let e = file::read(&missing).unwrap_err();
     assert!(
-        matches!(&e, ReductionError::BodyFile { problem: BodyFileProblem::Io { action: "read", .. }, .. })
-            && e.to_string().contains("missing.rbody"),
+        matches!(
+            &e,
+            ReductionError::BodyFile {
+                problem: BodyFileProblem::Io { action: "read", .. },
+                ..
+            }
+        ) && e.to_string().contains("missing.rbody"),
         "{e}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
@@ -195,7 +226,10 @@ fn wrong_magic_and_unsupported_versions_are_named() {
     let bytes = file::to_bytes(&body(4, 2, false), &origin()).unwrap();
     // Someone passes the JSON of a body, or an MNF.
     let p = problem(br#"{"format_version": 1, "name": "beam"}"#);
-    assert!(matches!(&p, BodyFileProblem::WrongMagic { found } if found.starts_with("{\"format")), "{p}");
+    assert!(
+        matches!(&p, BodyFileProblem::WrongMagic { found } if found.starts_with("{\"format")),
+        "{p}"
+    );
     assert!(p.to_string().contains("not a reduced-body file"), "{p}");
     assert!(matches!(problem(b""), BodyFileProblem::WrongMagic { .. }));
 
@@ -205,13 +239,21 @@ fn wrong_magic_and_unsupported_versions_are_named() {
     let p = problem(&newer);
     assert_eq!(p, BodyFileProblem::UnsupportedVersion { found: 2, supported: 1 });
     let message = p.to_string();
-    assert!(message.contains("version 2 is newer") && message.contains("reads version 1"), "{message}");
+    assert!(
+        message.contains("version 2 is newer") && message.contains("reads version 1"),
+        "{message}"
+    );
     let mut older = bytes.clone();
     older[14] = b'0';
     let p = problem(&older);
     assert!(p.to_string().contains("version 0 is not supported"), "{p}");
     // The version is a canonical whole number: "+1" or "01" are not version 1.
-    for bad in [&b"FLEXMBS-RBODY +1\n"[..], b"FLEXMBS-RBODY 01\n", b"FLEXMBS-RBODY one\n", b"FLEXMBS-RBODY 1"] {
+    for bad in [
+        &b"FLEXMBS-RBODY +1\n"[..],
+        b"FLEXMBS-RBODY 01\n",
+        b"FLEXMBS-RBODY one\n",
+        b"FLEXMBS-RBODY 1",
+    ] {
         let mut changed = bad.to_vec();
         changed.extend(&bytes[16..]);
         let p = problem(&changed);
@@ -228,8 +270,11 @@ fn truncations_name_the_block_and_the_bytes() {
     assert!(matches!(p, BodyFileProblem::TruncatedMetadata { found: 10, .. }), "{p}");
     // Inside each array: the message names the array and the bytes expected and found.
     for entry in json["arrays"].as_array().unwrap() {
-        let (name, offset, size) =
-            (entry["name"].as_str().unwrap(), entry["offset"].as_u64().unwrap(), entry["bytes"].as_u64().unwrap());
+        let (name, offset, size) = (
+            entry["name"].as_str().unwrap(),
+            entry["offset"].as_u64().unwrap(),
+            entry["bytes"].as_u64().unwrap(),
+        );
         let cut = binary + offset as usize + size as usize / 2 + 3;
         let p = problem(&bytes[..cut]);
         assert_eq!(
@@ -246,7 +291,10 @@ fn truncations_name_the_block_and_the_bytes() {
     // One byte too many.
     let mut longer = bytes.clone();
     longer.push(0);
-    assert!(matches!(problem(&longer), BodyFileProblem::TrailingBytes { count: 1, .. }));
+    assert!(matches!(
+        problem(&longer),
+        BodyFileProblem::TrailingBytes { count: 1, .. }
+    ));
 }
 
 #[test]
@@ -259,15 +307,24 @@ fn checksum_mismatches_name_the_block() {
     let mut changed = bytes.clone();
     changed[at] = if changed[at] == b'1' { b'2' } else { b'1' };
     let p = problem(&changed);
-    assert!(matches!(&p, BodyFileProblem::Checksum { block, .. } if block == "metadata"), "{p}");
+    assert!(
+        matches!(&p, BodyFileProblem::Checksum { block, .. } if block == "metadata"),
+        "{p}"
+    );
     // One bit of M_CB.
     let m_cb = &json["arrays"][1];
     assert_eq!(m_cb["name"], "M_CB");
     let mut changed = bytes.clone();
     changed[binary + m_cb["offset"].as_u64().unwrap() as usize + 17] ^= 0x10;
     let p = problem(&changed);
-    assert!(matches!(&p, BodyFileProblem::Checksum { block, .. } if block == "M_CB"), "{p}");
-    assert!(p.to_string().contains("M_CB") && p.to_string().contains("damaged"), "{p}");
+    assert!(
+        matches!(&p, BodyFileProblem::Checksum { block, .. } if block == "M_CB"),
+        "{p}"
+    );
+    assert!(
+        p.to_string().contains("M_CB") && p.to_string().contains("damaged"),
+        "{p}"
+    );
 }
 
 #[test]
@@ -280,7 +337,10 @@ fn malformed_metadata_json_gives_line_and_column() {
     assert!(p.to_string().contains("file line 6"), "{p}");
     // An unknown field: a v1 file has exactly the v1 fields.
     let p = problem(&edit_metadata(&bytes, |j| j["colour"] = "red".into()));
-    assert!(matches!(&p, BodyFileProblem::Json { message, .. } if message.contains("colour")), "{p}");
+    assert!(
+        matches!(&p, BodyFileProblem::Json { message, .. } if message.contains("colour")),
+        "{p}"
+    );
 }
 
 #[test]
@@ -290,19 +350,35 @@ fn inconsistent_shapes_are_refused_with_the_rule() {
     let p = problem(&edit_metadata(&bytes, |j| j["arrays"][0]["rows"] = 13.into()));
     let message = p.to_string();
     assert!(matches!(p, BodyFileProblem::Shape { .. }), "{p}");
-    assert!(message.contains("K_CB is 13 x 14 but must be n x n with n = 6N + m"), "{message}");
+    assert!(
+        message.contains("K_CB is 13 x 14 but must be n x n with n = 6N + m"),
+        "{message}"
+    );
     // n_modes that disagrees with the frequencies.
     let p = problem(&edit_metadata(&bytes, |j| j["n_modes"] = 3.into()));
-    assert!(p.to_string().contains("2 fixed-interface frequencies for n_modes = 3"), "{p}");
+    assert!(
+        p.to_string().contains("2 fixed-interface frequencies for n_modes = 3"),
+        "{p}"
+    );
     // An interface more: every array would have to be larger.
     let p = problem(&edit_metadata(&bytes, |j| {
         let extra = j["interfaces"][0].clone();
         j["interfaces"].as_array_mut().unwrap().push(extra);
     }));
-    assert!(p.to_string().contains("K_CB is 14 x 14 but must be n x n with n = 6N + m (N interfaces, m modes) = 20 x 20"), "{p}");
+    assert!(
+        p.to_string()
+            .contains("K_CB is 14 x 14 but must be n x n with n = 6N + m (N interfaces, m modes) = 20 x 20"),
+        "{p}"
+    );
     // Arrays swapped in the index.
-    let p = problem(&edit_metadata(&bytes, |j| j["arrays"].as_array_mut().unwrap().swap(2, 3)));
-    assert!(p.to_string().contains("array 2 of the index is 'S_r' where 'S_t' belongs"), "{p}");
+    let p = problem(&edit_metadata(&bytes, |j| {
+        j["arrays"].as_array_mut().unwrap().swap(2, 3)
+    }));
+    assert!(
+        p.to_string()
+            .contains("array 2 of the index is 'S_r' where 'S_t' belongs"),
+        "{p}"
+    );
     // A wrong offset, a missing array, an auxiliary interface that does not exist, absurd counts.
     let p = problem(&edit_metadata(&bytes, |j| j["arrays"][4]["offset"] = 8.into()));
     assert!(p.to_string().contains("S_x is at offset 8"), "{p}");
@@ -311,7 +387,11 @@ fn inconsistent_shapes_are_refused_with_the_rule() {
     }));
     assert!(p.to_string().contains("the index lists 16 arrays"), "{p}");
     let p = problem(&edit_metadata(&bytes, |j| j["auxiliary_interface"] = 5.into()));
-    assert!(p.to_string().contains("auxiliary_interface = 5 but there are 2 interfaces"), "{p}");
+    assert!(
+        p.to_string()
+            .contains("auxiliary_interface = 5 but there are 2 interfaces"),
+        "{p}"
+    );
     let p = problem(&edit_metadata(&bytes, |j| j["mesh_nodes"] = (u64::MAX / 2).into()));
     assert!(p.to_string().contains("overflows"), "{p}");
 }
@@ -321,14 +401,20 @@ fn bodies_that_cannot_be_written_are_refused() {
     let mut b = body(4, 2, false);
     b.inertia.mass = f64::NAN;
     let e = file::to_bytes(&b, Path::new("out/nan.rbody")).unwrap_err();
-    assert!(e.to_string().contains("out/nan.rbody") && e.to_string().contains("mass is NaN"), "{e}");
+    assert!(
+        e.to_string().contains("out/nan.rbody") && e.to_string().contains("mass is NaN"),
+        "{e}"
+    );
     let mut b = body(4, 2, false);
     b.K_CB.nrows -= 1;
     let e = file::to_bytes(&b, Path::new("out/bad.rbody")).unwrap_err();
     assert!(e.to_string().contains("K_CB is 13 x 14 but must be n x n"), "{e}");
     let mut b = body(4, 2, false);
     b.n_modes = 3;
-    assert!(file::to_bytes(&b, Path::new("x")).unwrap_err().to_string().contains("2 frequencies for 3 modes"));
+    assert!(file::to_bytes(&b, Path::new("x"))
+        .unwrap_err()
+        .to_string()
+        .contains("2 frequencies for 3 modes"));
 }
 
 /// A small deterministic generator (xorshift64*), so that a failure can be replayed.
@@ -355,7 +441,7 @@ fn no_truncation_or_byte_change_panics_or_is_accepted() {
     }
     // Random changes of 1 to 3 bytes, each to a different value, anywhere: all refused (the
     // checksums cover every byte after line 2, and lines 1 and 2 are canonical text).
-    let mut rng = Rng(0x5EED_0F_F11E);
+    let mut rng = Rng(0x5EED_F11E);
     let mut kinds = std::collections::BTreeMap::<String, usize>::new();
     for _ in 0..4000 {
         let mut changed = bytes.clone();
@@ -368,7 +454,9 @@ fn no_truncation_or_byte_change_panics_or_is_accepted() {
         }
         let p = problem(&changed);
         let kind = format!("{p:?}");
-        *kinds.entry(kind[..kind.find([' ', '{']).unwrap_or(kind.len())].to_string()).or_default() += 1;
+        *kinds
+            .entry(kind[..kind.find([' ', '{']).unwrap_or(kind.len())].to_string())
+            .or_default() += 1;
     }
     // Changes focused on the two header lines, where the checksums do not reach.
     let header_end = parts(&bytes).0;
@@ -378,7 +466,9 @@ fn no_truncation_or_byte_change_panics_or_is_accepted() {
         changed[at] ^= 1 + rng.below(255) as u8;
         let p = problem(&changed);
         let kind = format!("{p:?}");
-        *kinds.entry(kind[..kind.find([' ', '{']).unwrap_or(kind.len())].to_string()).or_default() += 1;
+        *kinds
+            .entry(kind[..kind.find([' ', '{']).unwrap_or(kind.len())].to_string())
+            .or_default() += 1;
     }
     println!("problems found: {kinds:?}");
 }

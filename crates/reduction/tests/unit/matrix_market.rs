@@ -36,8 +36,11 @@ fn free_beam(n: usize) -> (FeModel, Vec<(String, NodeId)>) {
     (model, vec![("A".to_string(), nodes[0]), ("B".to_string(), nodes[n])])
 }
 
-/// K and M on the free dofs, and the (node, dof) of every free dof.
-fn export(model: &FeModel) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>, Vec<(usize, usize)>) {
+/// K and M on the free dofs, and the (node, dof) of every free dof: what another FE code
+/// would hand over.
+type Exported = (SparseColMat<usize, f64>, SparseColMat<usize, f64>, Vec<(usize, usize)>);
+
+fn export(model: &FeModel) -> Exported {
     let dofs = DofMap::new(model).unwrap();
     let a = assemble(model, &SystemPattern::new(model, &dofs)).unwrap();
     let list = (0..dofs.n_free())
@@ -71,7 +74,9 @@ fn temp_dir(tag: &str) -> PathBuf {
 fn parse_error(text: &str, line: Option<usize>, words: &[&str]) -> String {
     let origin = Path::new("models/K.mtx");
     let e = parse_matrix_market(text.as_bytes(), origin).unwrap_err();
-    let ReductionError::MatrixMarket { path, line: got, .. } = &e else { panic!("not a Matrix Market error: {e}") };
+    let ReductionError::MatrixMarket { path, line: got, .. } = &e else {
+        panic!("not a Matrix Market error: {e}")
+    };
     assert_eq!(path, origin);
     assert_eq!(*got, line, "{e}");
     let message = e.to_string();
@@ -96,7 +101,11 @@ fn stiffness_and_mass_round_trip_exactly() {
         assert_eq!(entries(back.as_ref()), entries(A.as_ref()), "{name} changed");
     }
     let text = String::from_utf8(to_matrix_market(K.as_ref())).unwrap();
-    assert!(text.starts_with("%%MatrixMarket matrix coordinate real general\n"), "{}", &text[..80]);
+    assert!(
+        text.starts_with("%%MatrixMarket matrix coordinate real general\n"),
+        "{}",
+        &text[..80]
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -112,7 +121,10 @@ fn symmetric_files_are_expanded_to_both_triangles() {
     let expected = vec![vec![4.0, -1.0, 0.0], vec![-1.0, 4.0, -2.5], vec![0.0, -2.5, 3.0]];
     // The standard's lower triangle, with comments, blank lines and odd spacing.
     let lower = "%%MatrixMarket  matrix coordinate real symmetric\n% from code X\n%\n3 3 5\n1 1 4\n2 1 -1\n\n2 2 4\n3 2 -2.5e0\n3  3 3.0\n";
-    assert_eq!(dense(&parse_matrix_market(lower.as_bytes(), Path::new("l.mtx")).unwrap()), expected);
+    assert_eq!(
+        dense(&parse_matrix_market(lower.as_bytes(), Path::new("l.mtx")).unwrap()),
+        expected
+    );
     // The upper triangle (as sprs writes it), and integer values.
     let upper = "%%MatrixMarket matrix coordinate integer symmetric\n3 3 5\n1 1 4\n1 2 -1\n2 2 4\n2 3 -2\n3 3 3\n";
     let U = dense(&parse_matrix_market(upper.as_bytes(), Path::new("u.mtx")).unwrap());
@@ -120,36 +132,81 @@ fn symmetric_files_are_expanded_to_both_triangles() {
     assert_eq!(U[2][1], -2.0);
     // Duplicates in a general file are summed.
     let dup = "%%MatrixMarket matrix coordinate real general\n2 2 3\n1 1 1.5\n1 1 2.5\n2 1 7\n";
-    assert_eq!(dense(&parse_matrix_market(dup.as_bytes(), Path::new("d.mtx")).unwrap()), vec![vec![4.0, 0.0], vec![7.0, 0.0]]);
+    assert_eq!(
+        dense(&parse_matrix_market(dup.as_bytes(), Path::new("d.mtx")).unwrap()),
+        vec![vec![4.0, 0.0], vec![7.0, 0.0]]
+    );
 }
 
 #[test]
 fn errors_name_the_file_and_the_line() {
     parse_error("", Some(1), &["empty"]);
-    parse_error("%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n4\n", Some(1), &["coordinate"]);
-    parse_error("%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n", Some(1), &["'complex'"]);
-    parse_error("%%MatrixMarket matrix coordinate real hermitian\n1 1 1\n1 1 1\n", Some(1), &["'hermitian'"]);
+    parse_error(
+        "%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n4\n",
+        Some(1),
+        &["coordinate"],
+    );
+    parse_error(
+        "%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n",
+        Some(1),
+        &["'complex'"],
+    );
+    parse_error(
+        "%%MatrixMarket matrix coordinate real hermitian\n1 1 1\n1 1 1\n",
+        Some(1),
+        &["'hermitian'"],
+    );
     parse_error("% not a banner\n", Some(1), &["not a Matrix Market banner"]);
-    parse_error("%%MatrixMarket matrix coordinate real general\n% only comments\n", None, &["no size line"]);
-    parse_error("%%MatrixMarket matrix coordinate real general\n3 3\n", Some(2), &["size line"]);
-    parse_error("%%MatrixMarket matrix coordinate real symmetric\n3 2 1\n1 1 1\n", Some(2), &["must be square"]);
+    parse_error(
+        "%%MatrixMarket matrix coordinate real general\n% only comments\n",
+        None,
+        &["no size line"],
+    );
+    parse_error(
+        "%%MatrixMarket matrix coordinate real general\n3 3\n",
+        Some(2),
+        &["size line"],
+    );
+    parse_error(
+        "%%MatrixMarket matrix coordinate real symmetric\n3 2 1\n1 1 1\n",
+        Some(2),
+        &["must be square"],
+    );
     let head = "%%MatrixMarket matrix coordinate real general\n% comment\n3 3 3\n1 1 1.0\n";
-    parse_error(&format!("{head}4 1 2.0\n3 3 1\n"), Some(5), &["row index '4' is not in 1..=3"]);
+    parse_error(
+        &format!("{head}4 1 2.0\n3 3 1\n"),
+        Some(5),
+        &["row index '4' is not in 1..=3"],
+    );
     parse_error(&format!("{head}1 0 2.0\n3 3 1\n"), Some(5), &["column index '0'"]);
     parse_error(&format!("{head}1 2 abc\n3 3 1\n"), Some(5), &["value 'abc'"]);
     parse_error(&format!("{head}1 2 NaN\n3 3 1\n"), Some(5), &["not a finite number"]);
     parse_error(&format!("{head}1 2\n3 3 1\n"), Some(5), &["'row column value'"]);
-    parse_error(&format!("{head}1 2 1\n"), None, &["announces 3 entries but the file has 2"]);
-    parse_error(&format!("{head}1 2 1\n2 2 1\n3 3 1\n"), Some(7), &["more entries than the 3"]);
+    parse_error(
+        &format!("{head}1 2 1\n"),
+        None,
+        &["announces 3 entries but the file has 2"],
+    );
+    parse_error(
+        &format!("{head}1 2 1\n2 2 1\n3 3 1\n"),
+        Some(7),
+        &["more entries than the 3"],
+    );
     // Both triangles of an entry in a symmetric file would double it.
     let both = "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n2 1 1\n1 1 1\n1 2 1\n";
-    parse_error(both, Some(6), &["entry (1, 2)", "already given on line 4"]);
+    parse_error(both, Some(5), &["entry (1, 2)", "already given on line 3"]);
     // Binary junk.
     let e = parse_matrix_market(b"%%MatrixMarket\n\xff\xfe", Path::new("models/K.mtx")).unwrap_err();
-    assert!(e.to_string().contains("line 2") && e.to_string().contains("UTF-8"), "{e}");
+    assert!(
+        e.to_string().contains("line 2") && e.to_string().contains("UTF-8"),
+        "{e}"
+    );
     // A missing file.
     let e = read_matrix_market(Path::new("/nonexistent/K.mtx")).unwrap_err();
-    assert!(e.to_string().contains("/nonexistent/K.mtx") && e.to_string().contains("cannot read"), "{e}");
+    assert!(
+        e.to_string().contains("/nonexistent/K.mtx") && e.to_string().contains("cannot read"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -168,7 +225,11 @@ fn no_truncation_of_a_file_panics() {
 fn relative_difference(a: &DenseMatrix, b: &DenseMatrix) -> f64 {
     assert_eq!((a.nrows, a.ncols), (b.nrows, b.ncols));
     let scale = a.data.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(f64::MIN_POSITIVE);
-    a.data.iter().zip(&b.data).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+    a.data
+        .iter()
+        .zip(&b.data)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / scale
 }
 
 /// The worst relative difference over the data both ways of reducing must share; `rigid_only`
@@ -199,7 +260,10 @@ fn compare(a: &ReducedBody, b: &ReducedBody, rigid_only: bool) -> f64 {
         for (x, y) in ia.S_bar.iter().zip(&ib.S_bar) {
             worst = worst.max(relative_difference(x, y));
         }
-        worst = worst.max(relative_difference(&a.mesh.as_ref().unwrap().shapes, &b.mesh.as_ref().unwrap().shapes));
+        worst = worst.max(relative_difference(
+            &a.mesh.as_ref().unwrap().shapes,
+            &b.mesh.as_ref().unwrap().shapes,
+        ));
     }
     worst
 }
@@ -271,13 +335,18 @@ fn inconsistent_external_models_are_refused_with_the_reason() {
     let by_index: Vec<(String, usize)> = interfaces.iter().map(|(n, node)| (n.clone(), node.index())).collect();
     let settings = CbSettings::new(ModeSelection::Count(2));
     let run = |nodes: &[[f64; 3]], K: SparseColMatRef<'_, usize, f64>, dpn: usize, ifaces: &[(String, usize)]| {
-        reduce_external(nodes, K, M.as_ref(), dpn, "beam", ifaces, &settings).unwrap_err().to_string()
+        reduce_external(nodes, K, M.as_ref(), dpn, "beam", ifaces, &settings)
+            .unwrap_err()
+            .to_string()
     };
     assert!(run(&nodes, K.as_ref(), 4, &by_index).contains("dofs_per_node must be 3"));
     assert!(run(&nodes[1..], K.as_ref(), 6, &by_index).contains("K has 30 rows but 4 nodes x 6 dofs per node make 24"));
     let ghost = vec![("ghost".to_string(), 17)];
     let e = run(&nodes, K.as_ref(), 6, &ghost);
-    assert!(e.contains("interface 'ghost'") && e.contains("node 17 does not exist"), "{e}");
+    assert!(
+        e.contains("interface 'ghost'") && e.contains("node 17 does not exist"),
+        "{e}"
+    );
     // Only the lower triangle of K: the missing upper entries are named.
     let mut lower = Vec::new();
     for j in 0..K.ncols() {
@@ -289,7 +358,10 @@ fn inconsistent_external_models_are_refused_with_the_reason() {
     }
     let L = SparseColMat::try_new_from_triplets(K.nrows(), K.ncols(), &lower).unwrap();
     let e = run(&nodes, L.as_ref(), 6, &by_index);
-    assert!(e.contains("K is not symmetric: entry (") && e.contains("both triangles"), "{e}");
+    assert!(
+        e.contains("K is not symmetric: entry (") && e.contains("both triangles"),
+        "{e}"
+    );
     // A non-finite coordinate.
     let mut bad = nodes.clone();
     bad[2][1] = f64::NAN;

@@ -1,1 +1,111 @@
-//! todo
+//! The frame solve (2.6).
+
+use super::common::*;
+use nalgebra::Vector3;
+use superelement::testing::{perturb_state, test_state, Rng, StateSpec};
+use superelement::{Damping, Frame, FrameChoice, FrameSettings, MassVariant, Superelement, SuperelementError};
+
+/// Warm-started from the previous step's frame, Newton needs few iterations (seed §4), and
+/// the converged frame satisfies (2.6) to the tolerance.
+#[test]
+fn warm_start_converges_in_a_few_iterations() {
+    for fx in [l_frame(), beam_dynamic()] {
+        let se = superelement(&fx.body, FrameChoice::CenterOfMass, MassVariant::Exact);
+        let (state, _) = test_state(&se, &StateSpec::moving(120.0, 1));
+        let (f0, _) = se.solve_frame(&state).unwrap();
+        // A "time step": every coordinate moves by 1e-3 of its scale.
+        let mut rng = Rng::new(5);
+        let dq: Vec<f64> = (0..se.n_coordinates()).map(|_| 1e-3 * rng.next()).collect();
+        let mut next = perturb_state(&state, &dq);
+        next.frame = f0;
+        let kin = se.kinematics(&next).unwrap();
+        assert!(kin.frame_iterations <= 3, "{}: {} iterations", fx.name, kin.frame_iterations);
+        let g: Vec<f64> = (0..6).map(|a| (0..se.n_coordinates()).map(|c| se.phi_j()[(a, c)] * kin.q_jj[c]).sum()).collect();
+        assert!(g.iter().all(|x| x.abs() < 1e-12), "{}: residual {g:?}", fx.name);
+    }
+}
+
+/// From a cold start (identity frame) a body turned by 170 degrees is still found: the
+/// solver starts from interface 0 when the warm start is more than 1 rad away.
+#[test]
+fn cold_start_far_away_converges() {
+    let fx = l_frame();
+    let se = superelement(&fx.body, FrameChoice::CenterOfMass, MassVariant::Exact);
+    let (mut state, _) = test_state(&se, &StateSpec::moving(170.0, 3));
+    let (reference, _) = se.solve_frame(&state).unwrap();
+    state.frame = Frame::new(Vector3::new(50.0, 0.0, 0.0), Default::default());
+    let (f, _) = se.solve_frame(&state).unwrap();
+    assert!((f.r - reference.r).norm() < 1e-12 && f.R.angle_to(&reference.R) < 1e-12);
+}
+
+/// Too few iterations give the error with the iteration count and the residual.
+#[test]
+fn non_convergence_is_reported() {
+    let fx = l_frame();
+    let se = superelement(&fx.body, FrameChoice::CenterOfMass, MassVariant::Exact)
+        .with_frame_settings(FrameSettings { tolerance: 1e-12, max_iterations: 1 });
+    let (mut state, _) = test_state(&se, &StateSpec { deformation: 0.05, ..StateSpec::moving(30.0, 3) });
+    state.frame.r += Vector3::new(0.3, 0.0, 0.0);
+    match se.solve_frame(&state) {
+        Err(e @ SuperelementError::FrameNotConverged { iterations: 1, residual, tolerance }) => {
+            assert!(residual > tolerance);
+            let msg = e.to_string();
+            assert!(msg.contains("did not converge in 1 iterations"), "{msg}");
+        }
+        other => panic!("expected FrameNotConverged, got {other:?}"),
+    }
+}
+
+/// Frames at an interface (and the auxiliary interface) are explicit: R_j = R_k, r_j = r_k,
+/// and that interface's CB coordinates vanish.
+#[test]
+fn interface_frames_are_explicit() {
+    for fx in [beam_auxiliary(), l_frame()] {
+        let mut choices = vec![FrameChoice::InterfaceNode(1)];
+        if let Some(a) = fx.body.auxiliary_interface {
+            choices.push(FrameChoice::AuxiliaryNode);
+            assert_eq!(a, fx.body.interfaces.len() - 1);
+        }
+        for choice in choices {
+            let se = superelement(&fx.body, choice, MassVariant::Lumped);
+            let k = match choice {
+                FrameChoice::InterfaceNode(k) => k,
+                _ => fx.body.auxiliary_interface.unwrap(),
+            };
+            let (state, _) = test_state(&se, &StateSpec::moving(120.0, 8));
+            let kin = se.kinematics(&state).unwrap();
+            assert_eq!(kin.frame_iterations, 0);
+            assert_eq!(kin.frame.r, state.r[k]);
+            assert_eq!(kin.frame.R, state.R[k]);
+            assert!(kin.q_jj[6 * k..6 * k + 6].iter().all(|x| x.abs() < 1e-15), "{:?}", &kin.q_jj[6 * k..6 * k + 6]);
+            // T_j has zero rows for that interface: its modes are dropped.
+            let T = kin.T();
+            for i in 6 * k..6 * k + 6 {
+                assert!((0..se.n_coordinates()).all(|j| T[(i, j)].abs() < 1e-14));
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_frame_choices_and_states_are_refused() {
+    let body = &beam_static().body;
+    let e = Superelement::new(body, FrameChoice::InterfaceNode(2), MassVariant::Exact, Damping::none()).unwrap_err();
+    assert!(matches!(e, SuperelementError::InvalidFrameChoice { .. }), "{e}");
+    let e = Superelement::new(body, FrameChoice::AuxiliaryNode, MassVariant::Exact, Damping::none()).unwrap_err();
+    assert!(e.to_string().contains("without an auxiliary interface"), "{e}");
+    let e = Superelement::new(body, FrameChoice::CenterOfMass, MassVariant::Exact, Damping { alpha: 0.0, beta: 0.0, modal_ratios: vec![0.1] })
+        .unwrap_err();
+    assert!(e.to_string().contains("modal damping ratios"), "{e}");
+    let mut broken = body.clone();
+    broken.M_CB.nrows -= 1;
+    let e = Superelement::new(&broken, FrameChoice::CenterOfMass, MassVariant::Exact, Damping::none()).unwrap_err();
+    assert!(e.to_string().contains("M_CB"), "{e}");
+    let se = superelement(body, FrameChoice::CenterOfMass, MassVariant::Exact);
+    let mut state = se.undeformed_state(Frame::identity());
+    state.eta.push(0.0);
+    assert!(matches!(se.solve_frame(&state), Err(SuperelementError::InvalidState { .. })));
+    let mut state = se.undeformed_state(Frame::identity());
+    state.r[0].x = f64::NAN;
+    assert!(matches!(se.solve_frame(&state), Err(SuperelementError::InvalidState { .. })));
+}

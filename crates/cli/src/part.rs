@@ -1,0 +1,262 @@
+//! A validated part: its FE model (mesh, elements, properties), its interfaces resolved to
+//! nodes, and how to reduce it; and the one function that turns these into the FE model an
+//! analysis or a reduction runs on ([`Part::build`]).
+//!
+//! Supports and interfaces are added in a fixed order: supports on mesh nodes, then the
+//! interface spiders, then supports on interface nodes. An RBE3 spider must know which
+//! surface dofs are supported before it picks its dependent dofs, and a support on an
+//! interface node needs that node to exist.
+
+#![allow(non_snake_case)]
+
+use crate::source::KeyPath;
+use fe_model::element::solid::scalar_mass;
+use fe_model::{DofMask, Element, FeError, FeModel, MassKind, NodalLoad, NodeId, SpiderKind};
+use nalgebra::{Point3, Vector3};
+use reduction::ModeSelection;
+use std::path::PathBuf;
+
+/// Beams carry rotations at every node; solids only translations (interfaces add six dofs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PartKind {
+    Beam,
+    Solid,
+}
+
+/// Where an interface attaches.
+#[derive(Clone, Debug)]
+pub enum InterfaceTarget {
+    /// A beam node: the node is the interface.
+    BeamNode(NodeId),
+    /// A new 6-dof node tied to surface nodes by a spider.
+    Spider {
+        surface: Vec<NodeId>,
+        kind: SpiderKind,
+        node_position: Option<Point3<f64>>,
+    },
+}
+
+#[derive(Clone, Debug)]
+pub struct InterfaceSpec {
+    pub name: String,
+    /// `parts[i].interfaces[k]`, for messages.
+    pub path: KeyPath,
+    pub target: InterfaceTarget,
+}
+
+/// Craig-Bampton settings of a part.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reduction {
+    pub modes: ModeSelection,
+    pub auxiliary_node: bool,
+    pub keep_mesh_shapes: bool,
+}
+
+/// A node of a part as named in a support or load.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NodeRef {
+    /// Interface `k` of the part.
+    Interface(usize),
+    /// Mesh nodes (a node set, or the node at a position).
+    Nodes(Vec<NodeId>),
+}
+
+#[derive(Clone, Debug)]
+pub struct SupportSpec {
+    pub at: NodeRef,
+    pub dofs: DofMask,
+}
+
+#[derive(Clone, Debug)]
+pub struct LoadSpec {
+    pub at: NodeRef,
+    pub force: Vector3<f64>,
+    pub moment: Vector3<f64>,
+}
+
+/// A part of a validated study.
+#[derive(Clone, Debug)]
+pub struct Part {
+    pub name: String,
+    pub path: KeyPath,
+    pub kind: PartKind,
+    /// One line for reports: "20 beam elements (Timoshenko)", "gmsh mesh bar.msh: 96 tet10".
+    pub description: String,
+    /// The gmsh file it was read from, if any.
+    pub mesh_file: Option<PathBuf>,
+    /// Mesh, elements and properties; no interfaces, no supports.
+    pub base: FeModel,
+    pub interfaces: Vec<InterfaceSpec>,
+    pub reduction: Option<Reduction>,
+}
+
+/// The FE model an analysis runs on, with the node of each interface.
+#[derive(Clone, Debug)]
+pub struct Built {
+    pub model: FeModel,
+    pub interfaces: Vec<(String, NodeId)>,
+    /// The auxiliary interface node at the centre of mass, when asked for.
+    pub auxiliary: Option<NodeId>,
+}
+
+impl Part {
+    /// The FE model with `supports` and the interfaces; with `auxiliary`, also an interface
+    /// node at the centre of mass (beams: the node there; solids: an RBE3 spider on every
+    /// node of the solid elements, which adds no stiffness).
+    pub fn build(&self, supports: &[SupportSpec], auxiliary: bool) -> Result<Built, FeError> {
+        let mut model = self.base.clone();
+        for s in supports {
+            if let NodeRef::Nodes(nodes) = &s.at {
+                for &n in nodes {
+                    model.add_support(n, s.dofs);
+                }
+            }
+        }
+        let mut interfaces = Vec::with_capacity(self.interfaces.len());
+        for i in &self.interfaces {
+            let node = match &i.target {
+                InterfaceTarget::BeamNode(n) => *n,
+                InterfaceTarget::Spider {
+                    surface,
+                    kind,
+                    node_position,
+                } => fe_model::add_interface(&mut model, &i.name, surface, *node_position, *kind)?,
+            };
+            interfaces.push((i.name.clone(), node));
+        }
+        for s in supports {
+            if let NodeRef::Interface(k) = s.at {
+                model.add_support(interfaces[k].1, s.dofs);
+            }
+        }
+        let auxiliary = if auxiliary { Some(self.add_auxiliary(&mut model)?) } else { None };
+        Ok(Built {
+            model,
+            interfaces,
+            auxiliary,
+        })
+    }
+
+    fn add_auxiliary(&self, model: &mut FeModel) -> Result<NodeId, FeError> {
+        let (mass, c) = center_of_mass(&self.base)?;
+        let bad = |why: String| FeError::Interface {
+            name: "auxiliary".into(),
+            why,
+        };
+        if !(mass > 0.0) {
+            return Err(bad("the part has no mass, so no centre of mass".into()));
+        }
+        match self.kind {
+            PartKind::Beam => {
+                let node = self.base.mesh.nearest_node(&c).ok_or_else(|| bad("the part has no nodes".into()))?;
+                let d = (self.base.mesh.nodes[node.index()] - c).norm();
+                if d > 1e-9 * model_size(&self.base).max(f64::MIN_POSITIVE) {
+                    return Err(bad(format!(
+                        "no beam node at the centre of mass ({:.6}, {:.6}, {:.6}); the nearest is {:.3e} m away (use an even number of elements on a symmetric beam)",
+                        c.x, c.y, c.z, d
+                    )));
+                }
+                Ok(node)
+            }
+            PartKind::Solid => {
+                let mut nodes: Vec<NodeId> = self.base.elements.iter().flat_map(|e| e.nodes().to_vec()).collect();
+                nodes.sort_unstable();
+                nodes.dedup();
+                fe_model::add_interface(model, "auxiliary", &nodes, Some(c), SpiderKind::Rbe3)
+            }
+        }
+    }
+
+    /// The nodal loads of `loads` on a model built by [`Part::build`]; a load on a set is
+    /// refused by the validator, so every `Nodes` here has one node.
+    pub fn nodal_loads(built: &Built, loads: &[LoadSpec]) -> Vec<NodalLoad> {
+        loads
+            .iter()
+            .filter_map(|l| {
+                let node = match &l.at {
+                    NodeRef::Interface(k) => built.interfaces[*k].1,
+                    NodeRef::Nodes(n) => *n.first()?,
+                };
+                Some(NodalLoad {
+                    node,
+                    force: l.force,
+                    moment: l.moment,
+                })
+            })
+            .collect()
+    }
+}
+
+/// The largest extent of the model's bounding box (1 for an empty model), the length scale
+/// for position tolerances.
+pub fn model_size(model: &FeModel) -> f64 {
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+    for p in &model.mesh.nodes {
+        lo = lo.inf(&p.coords);
+        hi = hi.sup(&p.coords);
+    }
+    let size = (hi - lo).max();
+    if size.is_finite() && size > 0.0 {
+        size
+    } else {
+        1.0
+    }
+}
+
+/// Mass and centre of mass of the elements of `model`, from the same mass distribution the
+/// reduction sees (the reduction checks an auxiliary node against its own centre of mass to
+/// a millionth of the body's size, so an approximation would not do).
+///
+/// # Derivation
+/// Beams: $\rho A L$ at the element midpoint, exact for a straight prismatic element with
+/// consistent or lumped (half to each node) mass. Solids: with the scalar mass matrix
+/// $m_{ab} = \int\rho N_a N_b\,dV$ and $\sum_a N_a = 1$,
+/// $\int\rho\,dV = \sum_{ab} m_{ab}$ and $\int\rho\,\mathbf x\,dV = \sum_b \mathbf x_b \sum_a m_{ab}$
+/// (isoparametric: $\mathbf x = \sum_b N_b\mathbf x_b$); for HRZ-lumped mass the same sums
+/// over the diagonal, which is what the reduction's lumped mass matrix gives.
+pub fn center_of_mass(model: &FeModel) -> Result<(f64, Point3<f64>), FeError> {
+    let mut mass = 0.0;
+    let mut first = Vector3::zeros();
+    for (e, element) in model.elements.iter().enumerate() {
+        match element {
+            Element::Beam2(b) => {
+                let x1 = model.mesh.nodes[b.nodes[0].index()];
+                let x2 = model.mesh.nodes[b.nodes[1].index()];
+                let (Some(section), Some(material)) = (
+                    model.sections.get(b.section.0 as usize),
+                    model.materials.get(b.material.0 as usize),
+                ) else {
+                    continue;
+                };
+                let m = material.rho() * section.A() * (x2 - x1).norm();
+                mass += m;
+                first += (x1.coords + x2.coords) * (0.5 * m);
+            }
+            _ => {
+                let Some((kind, solid)) = element.solid() else {
+                    continue;
+                };
+                let Some(material) = model.materials.get(solid.material.0 as usize) else {
+                    continue;
+                };
+                let X_e: Vec<Point3<f64>> = solid.nodes.iter().map(|n| model.mesh.nodes[n.index()]).collect();
+                let m_ab = scalar_mass(kind, e, &X_e, material.rho(), solid.mass)?;
+                for b in 0..X_e.len() {
+                    let col: f64 = m_ab.column(b).sum();
+                    mass += col;
+                    first += X_e[b].coords * col;
+                }
+            }
+        }
+    }
+    Ok((mass, Point3::from(first / mass.max(f64::MIN_POSITIVE))))
+}
+
+/// A `MassKind` from the file's choice.
+pub fn mass_kind(m: Option<crate::study_file::MassFile>) -> MassKind {
+    match m {
+        Some(crate::study_file::MassFile::Lumped) => MassKind::Lumped,
+        _ => MassKind::Consistent,
+    }
+}

@@ -1,0 +1,1409 @@
+//! Validation: from the raw [`StudyFile`] to a [`Study`] in which every reference is
+//! resolved (materials, sections, parts, node sets, interfaces), every value is checked
+//! against its range, and every part's FE model is built, before any analysis runs
+//! (style R12).
+//!
+//! The validator collects all the errors it finds rather than stopping at the first, and
+//! each names its file, line, column and key ([`crate::source`]). A reference to something
+//! undefined lists the close matches. Nothing here panics on any input: the property test
+//! `tests/cli.rs::random_and_mutated_study_files_fail_cleanly` feeds it random and mutated
+//! files.
+
+use crate::part::{
+    mass_kind, model_size, InterfaceSpec, InterfaceTarget, LoadSpec, NodeRef, Part, PartKind, Reduction,
+    SupportSpec,
+};
+use crate::source::{close_matches, quote_list, unknown_reference, KeyPath, Source, StudyError, StudyErrors};
+use crate::study_file::*;
+use fe_model::generate::{beam_arc, frame, straight_beam, Member};
+use fe_model::{
+    BeamProperties, BeamSection, BeamTheory, CellKind, DofMask, FeError, FeModel, IsotropicMaterial, NodeId,
+    SpiderKind, DOF_NAMES,
+};
+use nalgebra::{Point3, Vector3};
+use reduction::ModeSelection;
+use std::path::Path;
+
+/// Largest beam element count per generated beam or member: beyond it a typo is likelier
+/// than a model (and the model would not fit the dense paths anyway).
+pub const MAX_BEAM_ELEMENTS: usize = 100_000;
+/// Largest number of solid cells a generated box may have (six tets per brick count six).
+pub const MAX_BOX_CELLS: usize = 2_000_000;
+/// Largest number of modes a modal analysis or a reduction may ask for.
+pub const MAX_MODES: usize = 10_000;
+
+/// A modal analysis's eigensolver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Solver {
+    /// Dense up to [`DENSE_AUTO_LIMIT`] free dofs, sparse above.
+    Auto,
+    Dense,
+    Sparse,
+}
+
+/// `Solver::Auto` uses the dense path up to this many free dofs.
+pub const DENSE_AUTO_LIMIT: usize = 1500;
+
+#[derive(Clone, Debug)]
+pub enum AnalysisSpec {
+    /// Linear statics of the part with supports and nodal loads.
+    Static {
+        supports: Vec<SupportSpec>,
+        loads: Vec<LoadSpec>,
+    },
+    /// The lowest `modes` modes of the part (free, or on supports).
+    Modal {
+        modes: usize,
+        solver: Solver,
+        supports: Vec<SupportSpec>,
+    },
+    /// Craig-Bampton reduction of the part to a reduced-body file.
+    Reduce,
+}
+
+#[derive(Clone, Debug)]
+pub struct Analysis {
+    /// Unique; names the results folder.
+    pub name: String,
+    /// `analyses[i]`, for messages.
+    pub path: KeyPath,
+    /// Index into [`Study::parts`].
+    pub part: usize,
+    pub spec: AnalysisSpec,
+}
+
+impl Analysis {
+    pub fn kind_name(&self) -> &'static str {
+        match self.spec {
+            AnalysisSpec::Static { .. } => "static",
+            AnalysisSpec::Modal { .. } => "modal",
+            AnalysisSpec::Reduce => "reduce",
+        }
+    }
+}
+
+/// A validated study.
+#[derive(Clone, Debug)]
+pub struct Study {
+    pub source: Source,
+    pub title: Option<String>,
+    pub parts: Vec<Part>,
+    pub analyses: Vec<Analysis>,
+    /// Rendered warnings (suspicious units), printed on stderr.
+    pub warnings: Vec<String>,
+}
+
+impl Study {
+    /// `file:line:col` of the value at `path`, for messages about runtime failures.
+    pub fn location(&self, path: &KeyPath) -> String {
+        match self.source.locate(path, false) {
+            Some(span) => {
+                let (l, c) = crate::source::line_column(&self.source.text, span.start);
+                format!("{}:{l}:{c}", self.source.path.display())
+            }
+            None => self.source.path.display().to_string(),
+        }
+    }
+
+    /// The part called `name`, or an error with the close matches.
+    pub fn part(&self, name: &str) -> Result<usize, String> {
+        self.parts.iter().position(|p| p.name == name).ok_or_else(|| {
+            let names: Vec<String> = self.parts.iter().map(|p| p.name.clone()).collect();
+            format!("{} in {}", unknown_reference("part", name, &names), self.source.path.display())
+        })
+    }
+}
+
+/// Reads, parses and validates the study file at `path`.
+pub fn load(path: &Path) -> Result<Study, Box<dyn std::error::Error + Send + Sync>> {
+    let source = Source::read(path).map_err(|e| format!("cannot read study file {}: {e}", path.display()))?;
+    Ok(parse_and_validate(source)?)
+}
+
+/// Parses and validates a study held in memory.
+pub fn parse_and_validate(source: Source) -> Result<Study, StudyErrors> {
+    let file: StudyFile = match toml::from_str(&source.text) {
+        Ok(f) => f,
+        Err(e) => {
+            let error = source.toml_error(&e);
+            return Err(StudyErrors {
+                source,
+                errors: vec![error],
+            });
+        }
+    };
+    validate(source, &file)
+}
+
+/// The checks of the module docs.
+pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> {
+    let mut v = Validator {
+        src: &source,
+        errors: Vec::new(),
+        warnings: Vec::new(),
+    };
+    let materials = v.materials(&file.materials);
+    let sections = v.sections(&file.sections);
+    let mut parts: Vec<(String, Option<Part>)> = Vec::new();
+    for (i, p) in file.parts.iter().enumerate() {
+        let path = KeyPath::root().key("parts").index(i);
+        if parts.iter().any(|(n, _)| *n == p.name) {
+            v.err(&path.key("name"), format!("a part named '{}' is already defined", p.name));
+            continue;
+        }
+        let part = v.part(&path, p, &materials, &sections, file);
+        parts.push((p.name.clone(), part));
+    }
+    let analyses = v.analyses(&file.analyses, &parts);
+    v.multibody_sections(file);
+    let warnings = v.warnings.iter().map(|w| source.render(w)).collect();
+    let errors = std::mem::take(&mut v.errors);
+    if !errors.is_empty() {
+        return Err(StudyErrors { source, errors });
+    }
+    let parts = parts.into_iter().filter_map(|(_, p)| p).collect();
+    Ok(Study {
+        title: file.study.as_ref().and_then(|s| s.title.clone()),
+        source,
+        parts,
+        analyses,
+        warnings,
+    })
+}
+
+/// A material as resolved: its name and the checked value.
+struct Materials(Vec<(String, IsotropicMaterial)>);
+
+impl Materials {
+    fn names(&self) -> Vec<String> {
+        self.0.iter().map(|(n, _)| n.clone()).collect()
+    }
+    fn get(&self, name: &str) -> Option<&IsotropicMaterial> {
+        self.0.iter().find(|(n, _)| n == name).map(|(_, m)| m)
+    }
+}
+
+/// Sections are built per part, with the Poisson's ratio of the part's material (shear
+/// factors by shape depend on it).
+struct Sections<'f>(Vec<(String, KeyPath, &'f SectionFile)>);
+
+impl Sections<'_> {
+    fn names(&self) -> Vec<String> {
+        self.0.iter().map(|(n, _, _)| n.clone()).collect()
+    }
+}
+
+struct Validator<'s> {
+    src: &'s Source,
+    errors: Vec<StudyError>,
+    warnings: Vec<StudyError>,
+}
+
+/// Names become file names (results folders, cache files): keep them portable.
+fn check_name(name: &str) -> Result<(), String> {
+    if name.is_empty() {
+        return Err("the name is empty".into());
+    }
+    if name.len() > 100 {
+        return Err("the name is longer than 100 characters".into());
+    }
+    if let Some(c) = name.chars().find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))) {
+        return Err(format!(
+            "the name '{name}' contains '{c}': names may only contain ASCII letters, digits, '-', '_' and '.' (they name files)"
+        ));
+    }
+    if name.starts_with('.') {
+        return Err(format!("the name '{name}' starts with '.' (it names files)"));
+    }
+    Ok(())
+}
+
+fn vec3(v: &Vec3) -> Vector3<f64> {
+    Vector3::new(v[0], v[1], v[2])
+}
+
+fn point(v: &Vec3) -> Point3<f64> {
+    Point3::new(v[0], v[1], v[2])
+}
+
+impl Validator<'_> {
+    fn err(&mut self, path: &KeyPath, message: impl Into<String>) {
+        self.errors.push(StudyError::at(path, message));
+    }
+
+    fn err_key(&mut self, path: &KeyPath, message: impl Into<String>) {
+        self.errors.push(StudyError::at_key(path, message));
+    }
+
+    fn warn(&mut self, path: &KeyPath, message: impl Into<String>) {
+        self.warnings.push(StudyError::at(path, message));
+    }
+
+    /// Refuses the keys of the table at `path` that are not in `allowed` (the schema accepts
+    /// the union of the keys of every kind; this checks the kind's own).
+    fn only_keys(&mut self, path: &KeyPath, allowed: &[&str], what: &str) {
+        for k in self.src.keys(path) {
+            if !allowed.contains(&k.as_str()) {
+                let close = close_matches(&k, allowed.iter().copied());
+                let hint = if close.is_empty() {
+                    String::new()
+                } else {
+                    format!("; did you mean {}?", quote_list(&close, "or"))
+                };
+                self.err_key(
+                    &path.key(&k),
+                    format!("key `{k}` does not apply to {what}{hint} (its keys: {})", allowed.join(", ")),
+                );
+            }
+        }
+    }
+
+    /// The value, or a "missing key" error on the table at `path`.
+    fn require<T: Copy>(&mut self, path: &KeyPath, value: Option<T>, key: &str, what: &str) -> Option<T> {
+        if value.is_none() {
+            self.err(path, format!("missing key `{key}` ({what})"));
+        }
+        value
+    }
+
+    fn require_ref<'a, T>(&mut self, path: &KeyPath, value: &'a Option<T>, key: &str, what: &str) -> Option<&'a T> {
+        if value.is_none() {
+            self.err(path, format!("missing key `{key}` ({what})"));
+        }
+        value.as_ref()
+    }
+
+    /// A positive, finite value.
+    fn positive(&mut self, path: &KeyPath, value: f64, what: &str) -> Option<f64> {
+        if value > 0.0 && value.is_finite() {
+            Some(value)
+        } else {
+            self.err(path, format!("{what} must be positive and finite, got {value}"));
+            None
+        }
+    }
+
+    fn finite3(&mut self, path: &KeyPath, v: &Vec3, what: &str) -> Option<Vector3<f64>> {
+        if v.iter().all(|x| x.is_finite()) {
+            Some(vec3(v))
+        } else {
+            self.err(path, format!("{what} must have finite components, got {v:?}"));
+            None
+        }
+    }
+
+    fn materials(&mut self, list: &[MaterialFile]) -> Materials {
+        let mut out = Vec::new();
+        for (i, m) in list.iter().enumerate() {
+            let path = KeyPath::root().key("materials").index(i);
+            if let Err(e) = check_name(&m.name) {
+                self.err(&path.key("name"), e);
+                continue;
+            }
+            if out.iter().any(|(n, _): &(String, _)| *n == m.name) {
+                self.err(&path.key("name"), format!("a material named '{}' is already defined", m.name));
+                continue;
+            }
+            let E = self.positive(&path.key("E"), m.E, "Young's modulus E [Pa]");
+            if let Some(E) = E {
+                if E < 1e5 {
+                    self.warn(
+                        &path.key("E"),
+                        format!("E = {E} Pa is softer than any solid: study files are in SI units (Pa, not MPa or GPa)"),
+                    );
+                }
+            }
+            let rho_ok = m.rho >= 0.0 && m.rho.is_finite();
+            if !rho_ok {
+                self.err(
+                    &path.key("rho"),
+                    format!("density rho [kg/m^3] must be non-negative and finite, got {}", m.rho),
+                );
+            } else if m.rho > 0.0 && m.rho < 1.0 {
+                self.warn(
+                    &path.key("rho"),
+                    format!(
+                        "rho = {} kg/m^3 is lighter than air: study files are in SI units (kg/m^3, not g/cm^3 or t/mm^3)",
+                        m.rho
+                    ),
+                );
+            }
+            let made = match (m.nu, m.G) {
+                (Some(_), Some(_)) => {
+                    self.err_key(&path.key("G"), "give Poisson's ratio `nu` or the shear modulus `G`, not both");
+                    continue;
+                }
+                (None, None) => {
+                    self.err(&path, "missing key `nu` or `G` (Poisson's ratio, or shear modulus [Pa])");
+                    continue;
+                }
+                (Some(nu), None) => {
+                    if !(nu > -1.0 && nu < 0.5) {
+                        self.err(&path.key("nu"), format!("Poisson's ratio nu must lie in (-1, 0.5), got {nu}"));
+                        continue;
+                    }
+                    E.filter(|_| rho_ok).map(|E| IsotropicMaterial::new(&m.name, E, nu, m.rho))
+                }
+                (None, Some(G)) => {
+                    let Some(G) = self.positive(&path.key("G"), G, "shear modulus G [Pa]") else {
+                        continue;
+                    };
+                    if let Some(E) = E {
+                        let nu = E / (2.0 * G) - 1.0;
+                        if !(nu > -1.0 && nu < 0.5) {
+                            self.err(
+                                &path.key("G"),
+                                format!("E = {E} and G = {G} give Poisson's ratio nu = E/(2G) - 1 = {nu:.4}, outside (-1, 0.5)"),
+                            );
+                            continue;
+                        }
+                    }
+                    E.filter(|_| rho_ok).map(|E| IsotropicMaterial::from_E_G(&m.name, E, G, m.rho))
+                }
+            };
+            match made {
+                Some(Ok(material)) => out.push((m.name.clone(), material)),
+                Some(Err(e)) => self.err(&path, e.to_string()),
+                None => {}
+            }
+        }
+        Materials(out)
+    }
+
+    fn sections<'f>(&mut self, list: &'f [SectionFile]) -> Sections<'f> {
+        let mut out: Vec<(String, KeyPath, &'f SectionFile)> = Vec::new();
+        for (i, s) in list.iter().enumerate() {
+            let path = KeyPath::root().key("sections").index(i);
+            if let Err(e) = check_name(&s.name) {
+                self.err(&path.key("name"), e);
+                continue;
+            }
+            if out.iter().any(|(n, _, _)| *n == s.name) {
+                self.err(&path.key("name"), format!("a section named '{}' is already defined", s.name));
+                continue;
+            }
+            let (keys, what): (&[&str], &str) = match s.shape {
+                SectionShape::Rectangle => (&["b", "h"], "a rectangle section (width b along local y, height h along local z, m)"),
+                SectionShape::Circle => (&["d"], "a circle section (diameter d, m)"),
+                SectionShape::Tube => (&["d_outer", "d_inner"], "a tube section (diameters d_outer, d_inner, m)"),
+                SectionShape::Values => (
+                    &["A", "Iy", "Iz", "J", "ky", "kz"],
+                    "a section by values (A [m^2], Iy, Iz, J [m^4], shear factors ky, kz)",
+                ),
+            };
+            let mut allowed = vec!["name", "shape"];
+            allowed.extend_from_slice(keys);
+            self.only_keys(&path, &allowed, what);
+            let values: [(&str, Option<f64>); 11] = [
+                ("b", s.b),
+                ("h", s.h),
+                ("d", s.d),
+                ("d_outer", s.d_outer),
+                ("d_inner", s.d_inner),
+                ("A", s.A),
+                ("Iy", s.Iy),
+                ("Iz", s.Iz),
+                ("J", s.J),
+                ("ky", s.ky),
+                ("kz", s.kz),
+            ];
+            let mut ok = true;
+            for (key, value) in values {
+                if !keys.contains(&key) {
+                    continue;
+                }
+                let optional = matches!(key, "ky" | "kz");
+                match value {
+                    None if optional => {}
+                    None => {
+                        self.err(&path, format!("missing key `{key}` ({what})"));
+                        ok = false;
+                    }
+                    Some(x) if key == "d_inner" => {
+                        if !(x >= 0.0 && x.is_finite()) {
+                            self.err(&path.key(key), format!("d_inner must be non-negative and finite, got {x}"));
+                            ok = false;
+                        }
+                    }
+                    Some(x) if optional => {
+                        if !(x > 0.0 && x <= 1.0) {
+                            self.err(&path.key(key), format!("shear factor {key} must lie in (0, 1], got {x}"));
+                            ok = false;
+                        }
+                    }
+                    Some(x) => ok &= self.positive(&path.key(key), x, key).is_some(),
+                }
+            }
+            if let (SectionShape::Tube, Some(o), Some(i)) = (s.shape, s.d_outer, s.d_inner) {
+                if i >= o {
+                    self.err(&path.key("d_inner"), format!("d_inner = {i} must be smaller than d_outer = {o}"));
+                    ok = false;
+                }
+            }
+            if ok {
+                out.push((s.name.clone(), path, s));
+            }
+        }
+        Sections(out)
+    }
+
+    /// The section `name` built with Poisson's ratio `nu`, or an error at `at`.
+    fn section(&mut self, at: &KeyPath, name: &str, sections: &Sections<'_>, nu: f64) -> Option<BeamSection> {
+        let Some((_, path, s)) = sections.0.iter().find(|(n, _, _)| n == name) else {
+            self.err(at, unknown_reference("section", name, &sections.names()));
+            return None;
+        };
+        let k = 5.0 / 6.0;
+        let made = match s.shape {
+            SectionShape::Rectangle => BeamSection::rectangle(name, s.b?, s.h?, nu),
+            SectionShape::Circle => BeamSection::circle(name, s.d?, nu),
+            SectionShape::Tube => BeamSection::tube(name, s.d_outer?, s.d_inner?, nu),
+            SectionShape::Values => {
+                BeamSection::from_values(name, s.A?, s.Iy?, s.Iz?, s.J?, s.ky.unwrap_or(k), s.kz.unwrap_or(k))
+            }
+        };
+        match made {
+            Ok(section) => Some(section),
+            Err(e) => {
+                self.err(path, e.to_string());
+                None
+            }
+        }
+    }
+
+    fn material<'m>(&mut self, at: &KeyPath, name: &str, materials: &'m Materials) -> Option<&'m IsotropicMaterial> {
+        let m = materials.get(name);
+        if m.is_none() {
+            self.err(at, unknown_reference("material", name, &materials.names()));
+        }
+        m
+    }
+
+    fn part(
+        &mut self,
+        path: &KeyPath,
+        p: &PartFile,
+        materials: &Materials,
+        sections: &Sections<'_>,
+        file: &StudyFile,
+    ) -> Option<Part> {
+        if let Err(e) = check_name(&p.name) {
+            self.err(&path.key("name"), e);
+            return None;
+        }
+        let given: Vec<&str> = [("beam", p.beam.is_some()), ("box", p.box_.is_some()), ("mesh", p.mesh.is_some())]
+            .iter()
+            .filter(|(_, g)| *g)
+            .map(|(k, _)| *k)
+            .collect();
+        if given.len() != 1 {
+            let m = if given.is_empty() {
+                "missing geometry: give one of [parts.beam] (a generated beam), [parts.box] (a generated solid box) or [parts.mesh] (a gmsh file)".to_string()
+            } else {
+                format!("give one geometry per part, not {}", given.join(" and "))
+            };
+            self.err(path, m);
+            return None;
+        }
+        let mass = mass_kind(p.mass);
+        let built = if let Some(beam) = &p.beam {
+            let material = p
+                .material
+                .as_ref()
+                .or_else(|| {
+                    self.err(path, "missing key `material` (the beam's material)");
+                    None
+                })
+                .and_then(|m| self.material(&path.key("material"), m, materials))?
+                .clone();
+            self.beam(&path.key("beam"), &p.name, beam, material, sections, mass)
+                .map(|(m, d)| (m, d, PartKind::Beam, None))
+        } else if let Some(b) = &p.box_ {
+            let material = p
+                .material
+                .as_ref()
+                .or_else(|| {
+                    self.err(path, "missing key `material` (the box's material)");
+                    None
+                })
+                .and_then(|m| self.material(&path.key("material"), m, materials))?
+                .clone();
+            self.solid_box(&path.key("box"), b, material, mass)
+                .map(|(m, d)| (m, d, PartKind::Solid, None))
+        } else if let Some(mesh) = &p.mesh {
+            self.mesh(path, p, mesh, materials, mass)
+                .map(|(m, d, f)| (m, d, PartKind::Solid, Some(f)))
+        } else {
+            None
+        };
+        let (base, description, kind, mesh_file) = built?;
+        let interfaces = self.interfaces(path, p, &base, kind)?;
+        let reduction = match &p.reduction {
+            Some(r) => Some(self.reduction(&path.key("reduction"), r, interfaces.len())?),
+            None => None,
+        };
+        let part = Part {
+            name: p.name.clone(),
+            path: path.clone(),
+            kind,
+            description,
+            mesh_file,
+            base,
+            interfaces,
+            reduction,
+        };
+        // Build the spiders now: a surface that cannot carry an interface is an input error,
+        // and should be reported with its key before anything runs.
+        let auxiliary = part.reduction.as_ref().is_some_and(|r| r.auxiliary_node);
+        if let Err(e) = part.build(&[], auxiliary) {
+            self.fe_error(path, &part, &e);
+            return None;
+        }
+        let _ = file;
+        Some(part)
+    }
+
+    /// An FE error while building `part`, pointed at the interface it names, if any.
+    fn fe_error(&mut self, path: &KeyPath, part: &Part, e: &FeError) {
+        if let FeError::Interface { name, .. } = e {
+            if name == "auxiliary" {
+                self.err(&path.key("reduction").key("auxiliary_node"), e.to_string());
+                return;
+            }
+            if let Some(i) = part.interfaces.iter().find(|i| i.name == *name) {
+                self.err(&i.path, e.to_string());
+                return;
+            }
+        }
+        self.err(path, format!("part '{}': {e}", part.name));
+    }
+
+    fn theory(t: Option<TheoryFile>) -> BeamTheory {
+        match t {
+            Some(TheoryFile::EulerBernoulli) => BeamTheory::EulerBernoulli,
+            _ => BeamTheory::Timoshenko,
+        }
+    }
+
+    /// The orientation vector of a beam along `axis`: the given one (checked not parallel),
+    /// or global z, or global y for a beam within about 6 degrees of z.
+    fn orientation(&mut self, path: &KeyPath, given: Option<&Vec3>, axis: &Vector3<f64>) -> Option<Vector3<f64>> {
+        let a = axis.normalize();
+        match given {
+            Some(v) => {
+                let v = self.finite3(path, v, "the orientation vector")?;
+                if v.norm() == 0.0 || a.cross(&v.normalize()).norm() < 1e-6 {
+                    self.err(
+                        path,
+                        format!(
+                            "the orientation vector {:?} is parallel to the beam axis {:?} (it must point into the local x-y plane)",
+                            [v.x, v.y, v.z],
+                            [a.x, a.y, a.z]
+                        ),
+                    );
+                    return None;
+                }
+                Some(v)
+            }
+            None => Some(if a.cross(&Vector3::z()).norm() > 0.1 {
+                Vector3::z()
+            } else {
+                Vector3::y()
+            }),
+        }
+    }
+
+    fn element_count(&mut self, path: &KeyPath, n: usize) -> Option<usize> {
+        if n == 0 || n > MAX_BEAM_ELEMENTS {
+            self.err(path, format!("the element count must lie in 1..={MAX_BEAM_ELEMENTS}, got {n}"));
+            return None;
+        }
+        Some(n)
+    }
+
+    fn beam(
+        &mut self,
+        path: &KeyPath,
+        name: &str,
+        b: &BeamFile,
+        material: IsotropicMaterial,
+        sections: &Sections<'_>,
+        mass: fe_model::MassKind,
+    ) -> Option<(FeModel, String)> {
+        let common = ["kind", "section", "theory", "mass"];
+        let (keys, what): (&[&str], &str) = match b.kind {
+            BeamKind::Straight => (&["orientation", "elements", "from", "to"], "a straight beam"),
+            BeamKind::Arc => (&["elements", "center", "start", "axis", "angle_deg"], "an arc"),
+            BeamKind::Frame => (&["orientation", "points", "members"], "a frame"),
+        };
+        let mut allowed = common.to_vec();
+        allowed.extend_from_slice(keys);
+        self.only_keys(path, &allowed, what);
+        let theory = Self::theory(b.theory);
+        let nu = material.nu();
+        let mut model = FeModel::default();
+        let material_id = model.add_material(material);
+        let section = self.section(&path.key("section"), &b.section, sections, nu)?;
+        let section_id = model.add_section(section);
+        let props = |orientation: Vector3<f64>, section| BeamProperties {
+            section,
+            material: material_id,
+            orientation,
+            theory,
+            mass,
+        };
+        let theory_name = match theory {
+            BeamTheory::Timoshenko => "Timoshenko",
+            BeamTheory::EulerBernoulli => "Euler-Bernoulli",
+        };
+        let result = match b.kind {
+            BeamKind::Straight => {
+                let from = self.require(path, b.from, "from", "first point of the beam [m]");
+                let to = self.require(path, b.to, "to", "last point of the beam [m]");
+                let n = self.require(path, b.elements, "elements", "number of elements");
+                let (from, to, n) = (from?, to?, n?);
+                let n = self.element_count(&path.key("elements"), n)?;
+                let p0 = point(&self.finite3(&path.key("from"), &from, "`from`")?.into());
+                let p1 = point(&self.finite3(&path.key("to"), &to, "`to`")?.into());
+                let axis = p1 - p0;
+                if !(axis.norm() > 0.0) {
+                    self.err(&path.key("to"), "`to` coincides with `from`: the beam has zero length");
+                    return None;
+                }
+                let orientation = self.orientation(&path.key("orientation"), b.orientation.as_ref(), &axis)?;
+                straight_beam(&mut model, p0, p1, n, &props(orientation, section_id), Some(name))
+                    .map(|_| format!("straight beam, {n} {theory_name} elements"))
+            }
+            BeamKind::Arc => {
+                let center = self.require(path, b.center, "center", "centre of the arc [m]");
+                let start = self.require(path, b.start, "start", "first point of the arc [m]");
+                let axis = self.require(path, b.axis, "axis", "normal of the arc's plane");
+                let angle = self.require(path, b.angle_deg, "angle_deg", "swept angle [deg]");
+                let n = self.require(path, b.elements, "elements", "number of elements");
+                let (center, start, axis, angle, n) = (center?, start?, axis?, angle?, n?);
+                let n = self.element_count(&path.key("elements"), n)?;
+                let c = point(&self.finite3(&path.key("center"), &center, "`center`")?.into());
+                let s = point(&self.finite3(&path.key("start"), &start, "`start`")?.into());
+                let axis = self.finite3(&path.key("axis"), &axis, "`axis`")?;
+                if !(angle.is_finite() && angle != 0.0 && angle.abs() <= 360.0) {
+                    self.err(&path.key("angle_deg"), format!("the angle must be non-zero and at most 360 degrees in size, got {angle}"));
+                    return None;
+                }
+                beam_arc(
+                    &mut model,
+                    c,
+                    s,
+                    axis,
+                    angle.to_radians(),
+                    n,
+                    &props(Vector3::z(), section_id),
+                    Some(name),
+                )
+                .map(|_| format!("arc of {angle} degrees, {n} {theory_name} elements"))
+            }
+            BeamKind::Frame => {
+                let points = self.require_ref(path, &b.points, "points", "joint points of the frame [m]");
+                let members = self.require_ref(path, &b.members, "members", "members between the points");
+                let (points, members) = (points?, members?);
+                let mut pts = Vec::with_capacity(points.len());
+                for (i, p) in points.iter().enumerate() {
+                    pts.push(point(&self.finite3(&path.key("points").index(i), p, "a point")?.into()));
+                }
+                if members.is_empty() {
+                    self.err(&path.key("members"), "a frame needs at least one member");
+                    return None;
+                }
+                let mut list = Vec::with_capacity(members.len());
+                let mut total = 0;
+                for (j, m) in members.iter().enumerate() {
+                    let mp = path.key("members").index(j);
+                    let mut bad = false;
+                    for (key, idx) in [("from", m.from), ("to", m.to)] {
+                        if idx >= pts.len() {
+                            self.err(
+                                &mp.key(key),
+                                format!("point {idx} does not exist: the frame has {} points (0-based)", pts.len()),
+                            );
+                            bad = true;
+                        }
+                    }
+                    if bad {
+                        continue;
+                    }
+                    if m.from == m.to || (pts[m.to] - pts[m.from]).norm() == 0.0 {
+                        self.err(&mp.key("to"), "the member starts and ends at the same point");
+                        continue;
+                    }
+                    let Some(n) = self.element_count(&mp.key("elements"), m.elements) else {
+                        continue;
+                    };
+                    total += n;
+                    let section = match &m.section {
+                        Some(s) => match self.section(&mp.key("section"), s, sections, nu) {
+                            Some(sec) => model.add_section(sec),
+                            None => continue,
+                        },
+                        None => section_id,
+                    };
+                    let axis = pts[m.to] - pts[m.from];
+                    let given = m.orientation.as_ref().or(b.orientation.as_ref());
+                    let at = if m.orientation.is_some() {
+                        mp.key("orientation")
+                    } else {
+                        path.key("orientation")
+                    };
+                    let Some(orientation) = self.orientation(&at, given, &axis) else {
+                        continue;
+                    };
+                    list.push(Member {
+                        from: m.from,
+                        to: m.to,
+                        elements: n,
+                        props: props(orientation, section),
+                    });
+                }
+                if list.len() != members.len() {
+                    return None;
+                }
+                frame(&mut model, &pts, &list, name)
+                    .map(|_| format!("frame of {} members, {total} {theory_name} elements", list.len()))
+            }
+        };
+        match result {
+            Ok(description) => Some((model, description)),
+            Err(e) => {
+                self.err(path, e.to_string());
+                None
+            }
+        }
+    }
+
+    fn solid_box(
+        &mut self,
+        path: &KeyPath,
+        b: &BoxFile,
+        material: IsotropicMaterial,
+        mass: fe_model::MassKind,
+    ) -> Option<(FeModel, String)> {
+        let mut ok = true;
+        for (i, l) in b.size.iter().enumerate() {
+            ok &= self.positive(&path.key("size").index(i), *l, "a box length [m]").is_some();
+        }
+        for (i, d) in b.divisions.iter().enumerate() {
+            if *d == 0 {
+                self.err(&path.key("divisions").index(i), "a division count must be at least 1");
+                ok = false;
+            }
+        }
+        let origin = match &b.origin {
+            Some(o) => self.finite3(&path.key("origin"), o, "the origin")?,
+            None => Vector3::zeros(),
+        };
+        if !ok {
+            return None;
+        }
+        let (kind, per_brick) = match b.element {
+            ElementFile::Hex8 => (CellKind::Hex8, 1),
+            ElementFile::Hex20 => (CellKind::Hex20, 1),
+            ElementFile::Tet4 => (CellKind::Tet4, 6),
+            ElementFile::Tet10 => (CellKind::Tet10, 6),
+            ElementFile::Wedge6 => (CellKind::Wedge6, 2),
+        };
+        let cells = b
+            .divisions
+            .iter()
+            .try_fold(per_brick, |acc: usize, &d| acc.checked_mul(d))
+            .unwrap_or(usize::MAX);
+        if cells > MAX_BOX_CELLS {
+            self.err(
+                &path.key("divisions"),
+                format!("{cells} cells is more than a generated box may have ({MAX_BOX_CELLS}); mesh it with gmsh"),
+            );
+            return None;
+        }
+        let mut mesh = match fe_model::box_mesh(kind, b.size, b.divisions) {
+            Ok(m) => m,
+            Err(e) => {
+                self.err(path, e.to_string());
+                return None;
+            }
+        };
+        for p in &mut mesh.nodes {
+            *p += origin;
+        }
+        let n_cells = mesh.cells.len();
+        match fe_model::solid_model(mesh, material, mass) {
+            Ok(model) => Some((model, format!("box {:?} m, {n_cells} {kind:?} cells", b.size))),
+            Err(e) => {
+                self.err(path, e.to_string());
+                None
+            }
+        }
+    }
+
+    fn mesh(
+        &mut self,
+        path: &KeyPath,
+        p: &PartFile,
+        m: &MeshFile,
+        materials: &Materials,
+        mass: fe_model::MassKind,
+    ) -> Option<(FeModel, String, std::path::PathBuf)> {
+        let file = self.src.dir().join(&m.file);
+        let mesh = match fe_model::mesh::gmsh::read(&file) {
+            Ok(mesh) => mesh,
+            Err(e) => {
+                self.err(&path.key("mesh").key("file"), format!("cannot read the mesh: {e}"));
+                return None;
+            }
+        };
+        let volumes = mesh.cells.iter().filter(|c| c.kind.dimension() == 3).count();
+        if volumes == 0 {
+            self.err(
+                &path.key("mesh").key("file"),
+                format!("{} has no volume cells (tet, hex, wedge): fe-model meshes solids only", file.display()),
+            );
+            return None;
+        }
+        let description = format!("gmsh mesh {}, {} nodes, {volumes} volume cells", m.file, mesh.nodes.len());
+        let model = match (&p.material, &m.materials) {
+            (Some(_), Some(_)) => {
+                self.err_key(
+                    &path.key("mesh").key("materials"),
+                    "give the part's `material` or `mesh.materials` (one per physical volume), not both",
+                );
+                return None;
+            }
+            (None, None) => {
+                self.err(path, "missing key `material` (or `mesh.materials`, a material per physical volume)");
+                return None;
+            }
+            (Some(name), None) => {
+                let material = self.material(&path.key("material"), name, materials)?.clone();
+                fe_model::solid_model(mesh, material, mass)
+            }
+            (None, Some(map)) => {
+                let mut list = Vec::new();
+                let sets: Vec<String> = mesh.cell_sets.keys().cloned().collect();
+                for (set, material) in map {
+                    let at = path.key("mesh").key("materials").key(set);
+                    if !mesh.cell_sets.contains_key(set) {
+                        self.err_key(&at, unknown_reference("physical volume (cell set)", set, &sets));
+                        continue;
+                    }
+                    if let Some(mat) = self.material(&at, material, materials) {
+                        list.push((set.as_str(), mat.clone()));
+                    }
+                }
+                if list.len() != map.len() {
+                    return None;
+                }
+                fe_model::solid_model_with_materials(mesh, &list, mass)
+            }
+        };
+        match model {
+            Ok(model) => Some((model, description, file)),
+            Err(e) => {
+                self.err(&path.key("mesh"), e.to_string());
+                None
+            }
+        }
+    }
+
+    /// Every node whose position is within `radius` of `c`.
+    fn nodes_near(model: &FeModel, c: &Point3<f64>, radius: f64) -> Vec<NodeId> {
+        model
+            .mesh
+            .nodes
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| (*p - c).norm() <= radius)
+            .map(|(i, _)| NodeId(i as u32))
+            .collect()
+    }
+
+    /// The node at `x` (within a millionth of the model's size), or an error naming the
+    /// nearest.
+    fn node_at(&mut self, path: &KeyPath, model: &FeModel, x: &Vec3) -> Option<NodeId> {
+        let x = point(&self.finite3(path, x, "the position")?.into());
+        let Some(node) = model.mesh.nearest_node(&x) else {
+            self.err(path, "the part has no nodes");
+            return None;
+        };
+        let p = model.mesh.nodes[node.index()];
+        let d = (p - x).norm();
+        if d > 1e-6 * model_size(model) {
+            self.err(
+                path,
+                format!(
+                    "no node at ({}, {}, {}); the nearest, node {} at ({}, {}, {}), is {d:.3e} m away",
+                    x.x,
+                    x.y,
+                    x.z,
+                    model.mesh.node_tags[node.index()],
+                    p.x,
+                    p.y,
+                    p.z
+                ),
+            );
+            return None;
+        }
+        Some(node)
+    }
+
+    fn node_set<'m>(&mut self, path: &KeyPath, model: &'m FeModel, set: &str) -> Option<&'m [NodeId]> {
+        let nodes = model.mesh.node_set(set);
+        if nodes.is_none() {
+            let known: Vec<String> = model.mesh.node_sets.keys().cloned().collect();
+            self.err(path, unknown_reference("node set", set, &known));
+        }
+        nodes
+    }
+
+    fn interfaces(&mut self, path: &KeyPath, p: &PartFile, model: &FeModel, kind: PartKind) -> Option<Vec<InterfaceSpec>> {
+        let mut out: Vec<InterfaceSpec> = Vec::new();
+        let mut ok = true;
+        for (k, i) in p.interfaces.iter().enumerate() {
+            let ip = path.key("interfaces").index(k);
+            if let Err(e) = check_name(&i.name) {
+                self.err(&ip.key("name"), e);
+                ok = false;
+                continue;
+            }
+            if i.name == "auxiliary" {
+                self.err(&ip.key("name"), "the name 'auxiliary' is reserved for the auxiliary node of the reduction");
+                ok = false;
+                continue;
+            }
+            if out.iter().any(|o| o.name == i.name) {
+                self.err(&ip.key("name"), format!("part '{}' already has an interface named '{}'", p.name, i.name));
+                ok = false;
+                continue;
+            }
+            let target = match kind {
+                PartKind::Beam => {
+                    self.only_keys(&ip, &["name", "set", "node_at"], "an interface of a beam part (a beam node)");
+                    match (&i.set, &i.node_at) {
+                        (Some(set), None) => self.node_set(&ip.key("set"), model, set).and_then(|nodes| {
+                            if nodes.len() == 1 {
+                                Some(InterfaceTarget::BeamNode(nodes[0]))
+                            } else {
+                                self.err(
+                                    &ip.key("set"),
+                                    format!(
+                                        "node set '{set}' has {} nodes; a beam interface is one node (such as '{}.end')",
+                                        nodes.len(),
+                                        p.name
+                                    ),
+                                );
+                                None
+                            }
+                        }),
+                        (None, Some(x)) => self.node_at(&ip.key("node_at"), model, x).map(InterfaceTarget::BeamNode),
+                        _ => {
+                            self.err(&ip, "give the interface's node by `set` (a one-node set such as 'beam.end') or by `node_at` = [x, y, z], one of them");
+                            None
+                        }
+                    }
+                }
+                PartKind::Solid => {
+                    self.only_keys(
+                        &ip,
+                        &["name", "set", "near", "radius", "spider", "node_position"],
+                        "an interface of a solid part (a spider on surface nodes)",
+                    );
+                    let spider = match i.spider {
+                        Some(SpiderFile::Rbe2) => Some(SpiderKind::Rbe2),
+                        Some(SpiderFile::Rbe3) => Some(SpiderKind::Rbe3),
+                        None => {
+                            self.err(&ip, "missing key `spider` (\"rbe2\": rigid, or \"rbe3\": interpolating)");
+                            None
+                        }
+                    };
+                    let node_position = match &i.node_position {
+                        Some(x) => match self.finite3(&ip.key("node_position"), x, "the node position") {
+                            Some(v) => Some(Point3::from(v)),
+                            None => {
+                                ok = false;
+                                None
+                            }
+                        },
+                        None => None,
+                    };
+                    let surface = match (&i.set, &i.near, i.radius) {
+                        (Some(set), None, None) => self.node_set(&ip.key("set"), model, set).map(<[NodeId]>::to_vec),
+                        (None, Some(c), Some(r)) => {
+                            let c = self.finite3(&ip.key("near"), c, "`near`");
+                            let r = self.positive(&ip.key("radius"), r, "the radius [m]");
+                            match (c, r) {
+                                (Some(c), Some(r)) => {
+                                    let nodes = Self::nodes_near(model, &Point3::from(c), r);
+                                    if nodes.is_empty() {
+                                        let nearest = model
+                                            .mesh
+                                            .nearest_node(&Point3::from(c))
+                                            .map(|n| (model.mesh.nodes[n.index()] - Point3::from(c)).norm());
+                                        self.err(
+                                            &ip.key("radius"),
+                                            format!(
+                                                "no node within {r} m of {:?}{}",
+                                                [c.x, c.y, c.z],
+                                                nearest.map_or(String::new(), |d| format!("; the nearest is {d:.3e} m away"))
+                                            ),
+                                        );
+                                        None
+                                    } else {
+                                        Some(nodes)
+                                    }
+                                }
+                                _ => None,
+                            }
+                        }
+                        (None, Some(_), None) => {
+                            self.err(&ip, "missing key `radius` (nodes within `radius` of `near` form the surface)");
+                            None
+                        }
+                        _ => {
+                            self.err(&ip, "give the surface nodes by `set` (a node set or physical group) or by `near` = [x, y, z] and `radius`, one of them");
+                            None
+                        }
+                    };
+                    match (surface, spider) {
+                        (Some(surface), Some(kind)) => Some(InterfaceTarget::Spider {
+                            surface,
+                            kind,
+                            node_position,
+                        }),
+                        _ => None,
+                    }
+                }
+            };
+            match target {
+                Some(target) => out.push(InterfaceSpec {
+                    name: i.name.clone(),
+                    path: ip,
+                    target,
+                }),
+                None => ok = false,
+            }
+        }
+        // Two beam interfaces on one node would be one interface twice.
+        for (a, ia) in out.iter().enumerate() {
+            for ib in &out[a + 1..] {
+                if let (InterfaceTarget::BeamNode(x), InterfaceTarget::BeamNode(y)) = (&ia.target, &ib.target) {
+                    if x == y {
+                        self.err(&ib.path, format!("interfaces '{}' and '{}' are the same node", ia.name, ib.name));
+                        ok = false;
+                    }
+                }
+            }
+        }
+        ok.then_some(out)
+    }
+
+    fn reduction(&mut self, path: &KeyPath, r: &ReductionFile, n_interfaces: usize) -> Option<Reduction> {
+        let modes = match (r.modes, r.cutoff_hz) {
+            (Some(_), Some(_)) => {
+                self.err_key(&path.key("cutoff_hz"), "give `modes` (a count) or `cutoff_hz` (a frequency), not both");
+                return None;
+            }
+            (None, None) => {
+                self.err(path, "missing key `modes` (number of fixed-interface modes, 0 for static modes only) or `cutoff_hz` (keep the modes below this frequency)");
+                return None;
+            }
+            (Some(0), None) => ModeSelection::StaticOnly,
+            (Some(m), None) => {
+                if m > MAX_MODES {
+                    self.err(&path.key("modes"), format!("at most {MAX_MODES} modes, got {m}"));
+                    return None;
+                }
+                ModeSelection::Count(m)
+            }
+            (None, Some(f)) => ModeSelection::CutoffHz(self.positive(&path.key("cutoff_hz"), f, "the cut-off frequency [Hz]")?),
+        };
+        let auxiliary_node = r.auxiliary_node.unwrap_or(false);
+        if n_interfaces == 0 && !auxiliary_node {
+            self.err(path, "a reduced part needs at least one interface ([[parts.interfaces]])");
+            return None;
+        }
+        Some(Reduction {
+            modes,
+            auxiliary_node,
+            keep_mesh_shapes: r.keep_mesh_shapes.unwrap_or(true),
+        })
+    }
+
+    /// A node reference by `at` (an interface, else a node set) or `node_at`.
+    fn node_ref(&mut self, path: &KeyPath, part: &Part, at: &Option<String>, node_at: &Option<Vec3>) -> Option<NodeRef> {
+        match (at, node_at) {
+            (Some(name), None) => {
+                if let Some(k) = part.interfaces.iter().position(|i| i.name == *name) {
+                    return Some(NodeRef::Interface(k));
+                }
+                if let Some(nodes) = part.base.mesh.node_set(name) {
+                    if nodes.is_empty() {
+                        self.err(&path.key("at"), format!("node set '{name}' is empty"));
+                        return None;
+                    }
+                    return Some(NodeRef::Nodes(nodes.to_vec()));
+                }
+                let mut known: Vec<String> = part.interfaces.iter().map(|i| i.name.clone()).collect();
+                known.extend(part.base.mesh.node_sets.keys().cloned());
+                self.err(
+                    &path.key("at"),
+                    unknown_reference(&format!("interface or node set of part '{}'", part.name), name, &known),
+                );
+                None
+            }
+            (None, Some(x)) => self.node_at(&path.key("node_at"), &part.base, x).map(|n| NodeRef::Nodes(vec![n])),
+            _ => {
+                self.err(path, "give the node by `at` (an interface or node set name) or by `node_at` = [x, y, z], one of them");
+                None
+            }
+        }
+    }
+
+    fn dofs(&mut self, path: &KeyPath, d: &Option<DofsFile>) -> Option<DofMask> {
+        let names = ["all", "translations", "rotations"];
+        match d {
+            None => Some(DofMask::ALL),
+            Some(DofsFile::Named(n)) => match n.as_str() {
+                "all" => Some(DofMask::ALL),
+                "translations" => Some(DofMask::TRANSLATIONS),
+                "rotations" => Some(DofMask::ROTATIONS),
+                other => {
+                    let mut all: Vec<String> = names.iter().map(|s| s.to_string()).collect();
+                    all.extend(DOF_NAMES.iter().map(|s| s.to_string()));
+                    let hint = if DOF_NAMES.contains(&other) {
+                        format!("; a single dof is a list: dofs = [\"{other}\"]")
+                    } else {
+                        let close = close_matches(other, all.iter().map(String::as_str));
+                        if close.is_empty() {
+                            String::new()
+                        } else {
+                            format!("; did you mean {}?", quote_list(&close, "or"))
+                        }
+                    };
+                    self.err(
+                        path,
+                        format!("unknown dofs '{other}'{hint} (use \"all\", \"translations\", \"rotations\" or a list of ux, uy, uz, rx, ry, rz)"),
+                    );
+                    None
+                }
+            },
+            Some(DofsFile::List(list)) => {
+                let mut mask = [false; 6];
+                let mut ok = true;
+                for (i, n) in list.iter().enumerate() {
+                    match DOF_NAMES.iter().position(|d| d == n) {
+                        Some(k) => mask[k] = true,
+                        None => {
+                            self.err(&path.index(i), unknown_reference("dof", n, &DOF_NAMES.map(String::from)));
+                            ok = false;
+                        }
+                    }
+                }
+                if list.is_empty() {
+                    self.err(path, "the dof list is empty");
+                    ok = false;
+                }
+                ok.then_some(DofMask(mask))
+            }
+        }
+    }
+
+    fn supports(&mut self, path: &KeyPath, part: &Part, list: &Option<Vec<SupportFile>>) -> Option<Vec<SupportSpec>> {
+        let mut out = Vec::new();
+        let mut ok = true;
+        for (i, s) in list.iter().flatten().enumerate() {
+            let sp = path.key("supports").index(i);
+            let at = self.node_ref(&sp, part, &s.at, &s.node_at);
+            let dofs = self.dofs(&sp.key("dofs"), &s.dofs);
+            match (at, dofs) {
+                (Some(at), Some(dofs)) => out.push(SupportSpec { at, dofs }),
+                _ => ok = false,
+            }
+        }
+        ok.then_some(out)
+    }
+
+    fn loads(&mut self, path: &KeyPath, part: &Part, list: &Option<Vec<NodalLoadFile>>) -> Option<Vec<LoadSpec>> {
+        let Some(list) = list.as_ref().filter(|l| !l.is_empty()) else {
+            self.err(path, "missing key `loads` (a static analysis needs at least one load)");
+            return None;
+        };
+        let mut out = Vec::new();
+        let mut ok = true;
+        for (i, l) in list.iter().enumerate() {
+            let lp = path.key("loads").index(i);
+            let Some(at) = self.node_ref(&lp, part, &l.at, &l.node_at) else {
+                ok = false;
+                continue;
+            };
+            if let NodeRef::Nodes(nodes) = &at {
+                if nodes.len() != 1 {
+                    self.err(
+                        &lp.key("at"),
+                        format!(
+                            "node set '{}' has {} nodes; a load acts at one node (to spread a load over a surface, define an RBE3 interface on it and load the interface)",
+                            l.at.as_deref().unwrap_or(""),
+                            nodes.len()
+                        ),
+                    );
+                    ok = false;
+                    continue;
+                }
+            }
+            let zero = [0.0; 3];
+            let force = self.finite3(&lp.key("force"), l.force.as_ref().unwrap_or(&zero), "the force [N]");
+            let moment = self.finite3(&lp.key("moment"), l.moment.as_ref().unwrap_or(&zero), "the moment [N m]");
+            let (Some(force), Some(moment)) = (force, moment) else {
+                ok = false;
+                continue;
+            };
+            if l.force.is_none() && l.moment.is_none() {
+                self.err(&lp, "missing key `force` [N] or `moment` [N m]");
+                ok = false;
+                continue;
+            }
+            if part.kind == PartKind::Solid && moment != Vector3::zeros() && matches!(at, NodeRef::Nodes(_)) {
+                self.err(
+                    &lp.key("moment"),
+                    "a solid's mesh nodes have no rotations: put the moment on an interface",
+                );
+                ok = false;
+                continue;
+            }
+            out.push(LoadSpec { at, force, moment });
+        }
+        ok.then_some(out)
+    }
+
+    fn analyses(&mut self, list: &[AnalysisFile], parts: &[(String, Option<Part>)]) -> Vec<Analysis> {
+        let mut out: Vec<Analysis> = Vec::new();
+        let part_names: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
+        for (i, a) in list.iter().enumerate() {
+            let path = KeyPath::root().key("analyses").index(i);
+            let kind = a.kind.name();
+            let allowed: &[&str] = match a.kind {
+                AnalysisKind::Static => &["type", "name", "part", "supports", "loads"],
+                AnalysisKind::Modal => &["type", "name", "part", "supports", "modes", "solver"],
+                AnalysisKind::Reduce => &["type", "name", "part"],
+                AnalysisKind::Equilibrium | AnalysisKind::Dynamic | AnalysisKind::Linearized => {
+                    self.err(
+                        &path.key("type"),
+                        format!("a '{kind}' analysis is not supported yet: needs the multibody solver (issue 6); today's analyses are static, modal and reduce"),
+                    );
+                    continue;
+                }
+            };
+            self.only_keys(&path, allowed, &format!("a '{kind}' analysis"));
+            let Some(part_name) = &a.part else {
+                self.err(&path, format!("missing key `part` (the part a '{kind}' analysis runs on)"));
+                continue;
+            };
+            let Some(index) = part_names.iter().position(|n| n == part_name) else {
+                self.err(&path.key("part"), unknown_reference("part", part_name, &part_names));
+                continue;
+            };
+            // A part that failed validation has its own errors already.
+            let Some(part) = parts[index].1.as_ref() else {
+                continue;
+            };
+            let index = parts[..index].iter().filter(|(_, p)| p.is_some()).count();
+            let name = a.name.clone().unwrap_or_else(|| format!("{kind}-{part_name}"));
+            if let Err(e) = check_name(&name) {
+                self.err(&path.key("name"), e);
+                continue;
+            }
+            if out.iter().any(|o| o.name == name) {
+                let at = if a.name.is_some() { path.key("name") } else { path.clone() };
+                self.err(
+                    &at,
+                    format!("an analysis named '{name}' is already defined (analyses name their results folders: give each a unique `name`)"),
+                );
+                continue;
+            }
+            let spec = match a.kind {
+                AnalysisKind::Static => {
+                    let supports = self.supports(&path, part, &a.supports);
+                    let loads = self.loads(&path, part, &a.loads);
+                    match (supports, loads) {
+                        (Some(supports), Some(loads)) => AnalysisSpec::Static { supports, loads },
+                        _ => continue,
+                    }
+                }
+                AnalysisKind::Modal => {
+                    let supports = self.supports(&path, part, &a.supports);
+                    let Some(modes) = self.require(&path, a.modes, "modes", "number of modes") else {
+                        continue;
+                    };
+                    if modes == 0 || modes > MAX_MODES {
+                        self.err(&path.key("modes"), format!("the number of modes must lie in 1..={MAX_MODES}, got {modes}"));
+                        continue;
+                    }
+                    let solver = match a.solver {
+                        Some(SolverFile::Dense) => Solver::Dense,
+                        Some(SolverFile::Sparse) => Solver::Sparse,
+                        _ => Solver::Auto,
+                    };
+                    let Some(supports) = supports else {
+                        continue;
+                    };
+                    AnalysisSpec::Modal {
+                        modes,
+                        solver,
+                        supports,
+                    }
+                }
+                AnalysisKind::Reduce => {
+                    if part.reduction.is_none() {
+                        self.err(
+                            &path.key("part"),
+                            format!("part '{part_name}' has no [parts.reduction] (modes or cut-off frequency) to reduce with"),
+                        );
+                        continue;
+                    }
+                    AnalysisSpec::Reduce
+                }
+                _ => continue,
+            };
+            // The supports change the spiders (an RBE3 avoids supported dofs, an RBE2 cannot
+            // take them): build once to report a conflict here rather than mid-run.
+            if let AnalysisSpec::Static { supports, .. } | AnalysisSpec::Modal { supports, .. } = &spec {
+                if let Err(e) = part.build(supports, false) {
+                    self.err(&path.key("supports"), format!("with these supports, part '{part_name}': {e}"));
+                    continue;
+                }
+            }
+            out.push(Analysis {
+                name,
+                path,
+                part: index,
+                spec,
+            });
+        }
+        out
+    }
+
+    fn multibody_sections(&mut self, file: &StudyFile) {
+        let present = [
+            ("bodies", !file.bodies.is_empty()),
+            ("rigid_bodies", !file.rigid_bodies.is_empty()),
+            ("joints", !file.joints.is_empty()),
+            ("drivers", !file.drivers.is_empty()),
+            ("loads", !file.loads.is_empty()),
+            ("sensors", !file.sensors.is_empty()),
+            ("output", file.output.is_some()),
+        ];
+        for (key, is) in present {
+            if is {
+                let section = if key == "output" { "[output]".to_string() } else { format!("[[{key}]]") };
+                self.err_key(
+                    &KeyPath::root().key(key),
+                    format!("{section} is not supported yet: needs the multibody solver (issue 6)"),
+                );
+            }
+        }
+    }
+}
