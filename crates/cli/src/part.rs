@@ -129,7 +129,11 @@ impl Part {
                 model.add_support(interfaces[k].1, s.dofs);
             }
         }
-        let auxiliary = if auxiliary { Some(self.add_auxiliary(&mut model)?) } else { None };
+        let auxiliary = if auxiliary {
+            Some(self.add_auxiliary(&mut model)?)
+        } else {
+            None
+        };
         Ok(Built {
             model,
             interfaces,
@@ -148,7 +152,11 @@ impl Part {
         }
         match self.kind {
             PartKind::Beam => {
-                let node = self.base.mesh.nearest_node(&c).ok_or_else(|| bad("the part has no nodes".into()))?;
+                let node = self
+                    .base
+                    .mesh
+                    .nearest_node(&c)
+                    .ok_or_else(|| bad("the part has no nodes".into()))?;
                 let d = (self.base.mesh.nodes[node.index()] - c).norm();
                 if d > 1e-9 * model_size(&self.base).max(f64::MIN_POSITIVE) {
                     return Err(bad(format!(

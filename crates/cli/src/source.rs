@@ -200,10 +200,8 @@ impl Source {
 
     /// The directory that relative paths in the file are relative to.
     pub fn dir(&self) -> PathBuf {
-        match self.path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        }
+        // An empty path (a file in the working folder) joins to the bare relative name.
+        self.path.parent().map(Path::to_path_buf).unwrap_or_default()
     }
 
     fn node(&self, path: &KeyPath) -> Option<(&Node, Option<Range<usize>>)> {
@@ -251,7 +249,11 @@ impl Source {
         let mut p = path.clone();
         loop {
             if let Some((node, key_span)) = self.node(&p) {
-                let span = if key { key_span.unwrap_or(node.span.clone()) } else { node.span.clone() };
+                let span = if key {
+                    key_span.unwrap_or(node.span.clone())
+                } else {
+                    node.span.clone()
+                };
                 // An array of tables spans from its first header; point at that header's line.
                 return Some(span);
             }
@@ -259,31 +261,45 @@ impl Source {
         }
     }
 
-    /// The key path of the innermost value whose span holds `offset`.
+    /// The key path of the innermost key or value whose span holds `offset`.
+    ///
+    /// `toml` gives a table only the span of its header (`[[parts]]`), not of its
+    /// contents, so the search looks at every key and value rather than descending into the
+    /// spans that hold the offset; the shortest span that holds it wins.
     pub fn path_at(&self, offset: usize) -> KeyPath {
-        let mut path = KeyPath::root();
-        let Some(mut node) = self.root.as_ref() else {
-            return path;
-        };
-        loop {
-            let next = match &node.tree {
-                SpanTree::Table(entries) => entries.iter().find_map(|(k, ks, n)| {
-                    (n.span.contains(&offset) || ks.contains(&offset)).then(|| (Segment::Key(k.clone()), n))
-                }),
-                SpanTree::Array(items) => items
-                    .iter()
-                    .enumerate()
-                    .find_map(|(i, n)| n.span.contains(&offset).then_some((Segment::Index(i), n))),
-                SpanTree::Scalar => None,
-            };
-            match next {
-                Some((s, n)) => {
-                    path.0.push(s);
-                    node = n;
-                }
-                None => return path,
+        fn consider(span: &Range<usize>, path: &KeyPath, offset: usize, best: &mut Option<(usize, KeyPath)>) {
+            let holds = span.contains(&offset) || (span.is_empty() && span.start == offset);
+            if holds && best.as_ref().is_none_or(|(len, _)| span.len() <= *len) {
+                *best = Some((span.len(), path.clone()));
             }
         }
+        fn visit(node: &Node, path: &mut KeyPath, offset: usize, best: &mut Option<(usize, KeyPath)>) {
+            match &node.tree {
+                SpanTree::Table(entries) => {
+                    for (k, ks, n) in entries {
+                        path.0.push(Segment::Key(k.clone()));
+                        consider(ks, path, offset, best);
+                        consider(&n.span, path, offset, best);
+                        visit(n, path, offset, best);
+                        path.0.pop();
+                    }
+                }
+                SpanTree::Array(items) => {
+                    for (i, n) in items.iter().enumerate() {
+                        path.0.push(Segment::Index(i));
+                        consider(&n.span, path, offset, best);
+                        visit(n, path, offset, best);
+                        path.0.pop();
+                    }
+                }
+                SpanTree::Scalar => {}
+            }
+        }
+        let mut best = None;
+        if let Some(root) = &self.root {
+            visit(root, &mut KeyPath::root(), offset, &mut best);
+        }
+        best.map(|(_, p)| p).unwrap_or_default()
     }
 
     /// Converts a `toml` parse or type error, with its key path and, for an unknown key or
@@ -326,17 +342,26 @@ impl Source {
             Anchor::File => None,
         };
         let file = self.path.display();
-        let key = if e.path.0.is_empty() { String::new() } else { format!("{}: ", e.path) };
+        let key = if e.path.0.is_empty() {
+            String::new()
+        } else {
+            format!("{}: ", e.path)
+        };
         let Some(span) = span else {
             return format!("{file}: {key}{}", e.message);
         };
         let (line, col) = line_column(&self.text, span.start);
         let mut out = format!("{file}:{line}:{col}: {key}{}", e.message);
-        if let Some(text) = self.text.lines().nth(line - 1) {
+        if let Some(full) = self.text.lines().nth(line - 1) {
+            // Show at most 160 characters of a long line, from 60 before the column.
+            let skip = (col - 1).saturating_sub(60);
+            let text: String = full.chars().skip(skip).take(160).collect();
+            let col = col - skip;
             // Underline the span on its first line only, at most to the end of that line.
-            let width = self.text[span.start.min(self.text.len())..span.end.min(self.text.len())]
-                .lines()
-                .next()
+            let width = self
+                .text
+                .get(span.start..span.end)
+                .and_then(|s| s.lines().next())
                 .map_or(1, |s| s.chars().count().max(1));
             let width = width.min(text.chars().count().saturating_sub(col - 1).max(1));
             let gutter = line.to_string().len();
@@ -374,8 +399,8 @@ fn unknown_name_hint(message: &str) -> Option<String> {
     (!close.is_empty()).then(|| format!("; did you mean {}?", quote_list(&close, "or")))
 }
 
-/// The names among `candidates` close to `name`: by edit distance (at most a third of the
-/// longer name, and at least 1), ignoring case, `-` and `_`, closest first, at most three.
+/// The names among `candidates` close to `name`: by edit distance with transpositions (at
+/// most a third of the longer name, and at least 1), ignoring case, `-` and `_`, closest first, at most three.
 pub fn close_matches<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Vec<String> {
     let norm = |s: &str| s.to_lowercase().replace(['-', '_'], "");
     let n = norm(name);
@@ -383,7 +408,7 @@ pub fn close_matches<'a>(name: &str, candidates: impl IntoIterator<Item = &'a st
         .into_iter()
         .filter(|c| *c != name)
         .filter_map(|c| {
-            let d = strsim::levenshtein(&n, &norm(c));
+            let d = strsim::osa_distance(&n, &norm(c));
             let limit = (n.chars().count().max(c.chars().count()) / 3).max(1);
             (d <= limit).then(|| (d, c.to_string()))
         })
@@ -403,11 +428,16 @@ pub fn quote_list(names: &[String], conjunction: &str) -> String {
     }
 }
 
-/// "unknown material 'stel'; did you mean 'steel'? (defined: steel, aluminium)" — the tail
-/// after the unknown name, for any kind of reference.
+/// "unknown material 'stel'; did you mean 'steel'? (defined: steel, aluminium)".
 pub fn unknown_reference(what: &str, name: &str, defined: &[String]) -> String {
+    format!("unknown {what} '{name}'{}", suggestions(name, defined, what))
+}
+
+/// "; did you mean 'steel'? (defined: steel, aluminium)": the close matches of `name` among
+/// `defined`, then the defined names (at most twelve). `what` names them when there are none.
+pub fn suggestions(name: &str, defined: &[String], what: &str) -> String {
     let close = close_matches(name, defined.iter().map(String::as_str));
-    let mut m = format!("unknown {what} '{name}'");
+    let mut m = String::new();
     if !close.is_empty() {
         m.push_str(&format!("; did you mean {}?", quote_list(&close, "or")));
     }

@@ -9,11 +9,15 @@
 //! `tests/cli.rs::random_and_mutated_study_files_fail_cleanly` feeds it random and mutated
 //! files.
 
+// Material constants keep their physical names (E, G), as in fe_model.
+#![allow(non_snake_case)]
+
 use crate::part::{
-    mass_kind, model_size, InterfaceSpec, InterfaceTarget, LoadSpec, NodeRef, Part, PartKind, Reduction,
-    SupportSpec,
+    mass_kind, model_size, InterfaceSpec, InterfaceTarget, LoadSpec, NodeRef, Part, PartKind, Reduction, SupportSpec,
 };
-use crate::source::{close_matches, quote_list, unknown_reference, KeyPath, Source, StudyError, StudyErrors};
+use crate::source::{
+    close_matches, quote_list, suggestions, unknown_reference, KeyPath, Source, StudyError, StudyErrors,
+};
 use crate::study_file::*;
 use fe_model::generate::{beam_arc, frame, straight_beam, Member};
 use fe_model::{
@@ -109,7 +113,11 @@ impl Study {
     pub fn part(&self, name: &str) -> Result<usize, String> {
         self.parts.iter().position(|p| p.name == name).ok_or_else(|| {
             let names: Vec<String> = self.parts.iter().map(|p| p.name.clone()).collect();
-            format!("{} in {}", unknown_reference("part", name, &names), self.source.path.display())
+            format!(
+                "{} in {}",
+                unknown_reference("part", name, &names),
+                self.source.path.display()
+            )
         })
     }
 }
@@ -148,7 +156,10 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
     for (i, p) in file.parts.iter().enumerate() {
         let path = KeyPath::root().key("parts").index(i);
         if parts.iter().any(|(n, _)| *n == p.name) {
-            v.err(&path.key("name"), format!("a part named '{}' is already defined", p.name));
+            v.err(
+                &path.key("name"),
+                format!("a part named '{}' is already defined", p.name),
+            );
             continue;
         }
         let part = v.part(&path, p, &materials, &sections, file);
@@ -207,7 +218,10 @@ fn check_name(name: &str) -> Result<(), String> {
     if name.len() > 100 {
         return Err("the name is longer than 100 characters".into());
     }
-    if let Some(c) = name.chars().find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))) {
+    if let Some(c) = name
+        .chars()
+        .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.')))
+    {
         return Err(format!(
             "the name '{name}' contains '{c}': names may only contain ASCII letters, digits, '-', '_' and '.' (they name files)"
         ));
@@ -252,7 +266,10 @@ impl Validator<'_> {
                 };
                 self.err_key(
                     &path.key(&k),
-                    format!("key `{k}` does not apply to {what}{hint} (its keys: {})", allowed.join(", ")),
+                    format!(
+                        "key `{k}` does not apply to {what}{hint} (its keys: {})",
+                        allowed.join(", ")
+                    ),
                 );
             }
         }
@@ -301,7 +318,10 @@ impl Validator<'_> {
                 continue;
             }
             if out.iter().any(|(n, _): &(String, _)| *n == m.name) {
-                self.err(&path.key("name"), format!("a material named '{}' is already defined", m.name));
+                self.err(
+                    &path.key("name"),
+                    format!("a material named '{}' is already defined", m.name),
+                );
                 continue;
             }
             let E = self.positive(&path.key("E"), m.E, "Young's modulus E [Pa]");
@@ -309,7 +329,9 @@ impl Validator<'_> {
                 if E < 1e5 {
                     self.warn(
                         &path.key("E"),
-                        format!("E = {E} Pa is softer than any solid: study files are in SI units (Pa, not MPa or GPa)"),
+                        format!(
+                            "E = {E} Pa is softer than any solid: study files are in SI units (Pa, not MPa or GPa)"
+                        ),
                     );
                 }
             }
@@ -330,19 +352,29 @@ impl Validator<'_> {
             }
             let made = match (m.nu, m.G) {
                 (Some(_), Some(_)) => {
-                    self.err_key(&path.key("G"), "give Poisson's ratio `nu` or the shear modulus `G`, not both");
+                    self.err_key(
+                        &path.key("G"),
+                        "give Poisson's ratio `nu` or the shear modulus `G`, not both",
+                    );
                     continue;
                 }
                 (None, None) => {
-                    self.err(&path, "missing key `nu` or `G` (Poisson's ratio, or shear modulus [Pa])");
+                    self.err(
+                        &path,
+                        "missing key `nu` or `G` (Poisson's ratio, or shear modulus [Pa])",
+                    );
                     continue;
                 }
                 (Some(nu), None) => {
                     if !(nu > -1.0 && nu < 0.5) {
-                        self.err(&path.key("nu"), format!("Poisson's ratio nu must lie in (-1, 0.5), got {nu}"));
+                        self.err(
+                            &path.key("nu"),
+                            format!("Poisson's ratio nu must lie in (-1, 0.5), got {nu}"),
+                        );
                         continue;
                     }
-                    E.filter(|_| rho_ok).map(|E| IsotropicMaterial::new(&m.name, E, nu, m.rho))
+                    E.filter(|_| rho_ok)
+                        .map(|E| IsotropicMaterial::new(&m.name, E, nu, m.rho))
                 }
                 (None, Some(G)) => {
                     let Some(G) = self.positive(&path.key("G"), G, "shear modulus G [Pa]") else {
@@ -358,7 +390,8 @@ impl Validator<'_> {
                             continue;
                         }
                     }
-                    E.filter(|_| rho_ok).map(|E| IsotropicMaterial::from_E_G(&m.name, E, G, m.rho))
+                    E.filter(|_| rho_ok)
+                        .map(|E| IsotropicMaterial::from_E_G(&m.name, E, G, m.rho))
                 }
             };
             match made {
@@ -379,13 +412,22 @@ impl Validator<'_> {
                 continue;
             }
             if out.iter().any(|(n, _, _)| *n == s.name) {
-                self.err(&path.key("name"), format!("a section named '{}' is already defined", s.name));
+                self.err(
+                    &path.key("name"),
+                    format!("a section named '{}' is already defined", s.name),
+                );
                 continue;
             }
             let (keys, what): (&[&str], &str) = match s.shape {
-                SectionShape::Rectangle => (&["b", "h"], "a rectangle section (width b along local y, height h along local z, m)"),
+                SectionShape::Rectangle => (
+                    &["b", "h"],
+                    "a rectangle section (width b along local y, height h along local z, m)",
+                ),
                 SectionShape::Circle => (&["d"], "a circle section (diameter d, m)"),
-                SectionShape::Tube => (&["d_outer", "d_inner"], "a tube section (diameters d_outer, d_inner, m)"),
+                SectionShape::Tube => (
+                    &["d_outer", "d_inner"],
+                    "a tube section (diameters d_outer, d_inner, m)",
+                ),
                 SectionShape::Values => (
                     &["A", "Iy", "Iz", "J", "ky", "kz"],
                     "a section by values (A [m^2], Iy, Iz, J [m^4], shear factors ky, kz)",
@@ -421,13 +463,19 @@ impl Validator<'_> {
                     }
                     Some(x) if key == "d_inner" => {
                         if !(x >= 0.0 && x.is_finite()) {
-                            self.err(&path.key(key), format!("d_inner must be non-negative and finite, got {x}"));
+                            self.err(
+                                &path.key(key),
+                                format!("d_inner must be non-negative and finite, got {x}"),
+                            );
                             ok = false;
                         }
                     }
                     Some(x) if optional => {
                         if !(x > 0.0 && x <= 1.0) {
-                            self.err(&path.key(key), format!("shear factor {key} must lie in (0, 1], got {x}"));
+                            self.err(
+                                &path.key(key),
+                                format!("shear factor {key} must lie in (0, 1], got {x}"),
+                            );
                             ok = false;
                         }
                     }
@@ -436,7 +484,10 @@ impl Validator<'_> {
             }
             if let (SectionShape::Tube, Some(o), Some(i)) = (s.shape, s.d_outer, s.d_inner) {
                 if i >= o {
-                    self.err(&path.key("d_inner"), format!("d_inner = {i} must be smaller than d_outer = {o}"));
+                    self.err(
+                        &path.key("d_inner"),
+                        format!("d_inner = {i} must be smaller than d_outer = {o}"),
+                    );
                     ok = false;
                 }
             }
@@ -491,11 +542,15 @@ impl Validator<'_> {
             self.err(&path.key("name"), e);
             return None;
         }
-        let given: Vec<&str> = [("beam", p.beam.is_some()), ("box", p.box_.is_some()), ("mesh", p.mesh.is_some())]
-            .iter()
-            .filter(|(_, g)| *g)
-            .map(|(k, _)| *k)
-            .collect();
+        let given: Vec<&str> = [
+            ("beam", p.beam.is_some()),
+            ("box", p.box_.is_some()),
+            ("mesh", p.mesh.is_some()),
+        ]
+        .iter()
+        .filter(|(_, g)| *g)
+        .map(|(k, _)| *k)
+        .collect();
         if given.len() != 1 {
             let m = if given.is_empty() {
                 "missing geometry: give one of [parts.beam] (a generated beam), [parts.box] (a generated solid box) or [parts.mesh] (a gmsh file)".to_string()
@@ -615,7 +670,10 @@ impl Validator<'_> {
 
     fn element_count(&mut self, path: &KeyPath, n: usize) -> Option<usize> {
         if n == 0 || n > MAX_BEAM_ELEMENTS {
-            self.err(path, format!("the element count must lie in 1..={MAX_BEAM_ELEMENTS}, got {n}"));
+            self.err(
+                path,
+                format!("the element count must lie in 1..={MAX_BEAM_ELEMENTS}, got {n}"),
+            );
             return None;
         }
         Some(n)
@@ -686,7 +744,10 @@ impl Validator<'_> {
                 let s = point(&self.finite3(&path.key("start"), &start, "`start`")?.into());
                 let axis = self.finite3(&path.key("axis"), &axis, "`axis`")?;
                 if !(angle.is_finite() && angle != 0.0 && angle.abs() <= 360.0) {
-                    self.err(&path.key("angle_deg"), format!("the angle must be non-zero and at most 360 degrees in size, got {angle}"));
+                    self.err(
+                        &path.key("angle_deg"),
+                        format!("the angle must be non-zero and at most 360 degrees in size, got {angle}"),
+                    );
                     return None;
                 }
                 beam_arc(
@@ -722,7 +783,10 @@ impl Validator<'_> {
                         if idx >= pts.len() {
                             self.err(
                                 &mp.key(key),
-                                format!("point {idx} does not exist: the frame has {} points (0-based)", pts.len()),
+                                format!(
+                                    "point {idx} does not exist: the frame has {} points (0-based)",
+                                    pts.len()
+                                ),
                             );
                             bad = true;
                         }
@@ -787,7 +851,9 @@ impl Validator<'_> {
     ) -> Option<(FeModel, String)> {
         let mut ok = true;
         for (i, l) in b.size.iter().enumerate() {
-            ok &= self.positive(&path.key("size").index(i), *l, "a box length [m]").is_some();
+            ok &= self
+                .positive(&path.key("size").index(i), *l, "a box length [m]")
+                .is_some();
         }
         for (i, d) in b.divisions.iter().enumerate() {
             if *d == 0 {
@@ -861,11 +927,18 @@ impl Validator<'_> {
         if volumes == 0 {
             self.err(
                 &path.key("mesh").key("file"),
-                format!("{} has no volume cells (tet, hex, wedge): fe-model meshes solids only", file.display()),
+                format!(
+                    "{} has no volume cells (tet, hex, wedge): fe-model meshes solids only",
+                    file.display()
+                ),
             );
             return None;
         }
-        let description = format!("gmsh mesh {}, {} nodes, {volumes} volume cells", m.file, mesh.nodes.len());
+        let description = format!(
+            "gmsh mesh {}, {} nodes, {volumes} volume cells",
+            m.file,
+            mesh.nodes.len()
+        );
         let model = match (&p.material, &m.materials) {
             (Some(_), Some(_)) => {
                 self.err_key(
@@ -875,7 +948,10 @@ impl Validator<'_> {
                 return None;
             }
             (None, None) => {
-                self.err(path, "missing key `material` (or `mesh.materials`, a material per physical volume)");
+                self.err(
+                    path,
+                    "missing key `material` (or `mesh.materials`, a material per physical volume)",
+                );
                 return None;
             }
             (Some(name), None) => {
@@ -960,7 +1036,13 @@ impl Validator<'_> {
         nodes
     }
 
-    fn interfaces(&mut self, path: &KeyPath, p: &PartFile, model: &FeModel, kind: PartKind) -> Option<Vec<InterfaceSpec>> {
+    fn interfaces(
+        &mut self,
+        path: &KeyPath,
+        p: &PartFile,
+        model: &FeModel,
+        kind: PartKind,
+    ) -> Option<Vec<InterfaceSpec>> {
         let mut out: Vec<InterfaceSpec> = Vec::new();
         let mut ok = true;
         for (k, i) in p.interfaces.iter().enumerate() {
@@ -971,18 +1053,28 @@ impl Validator<'_> {
                 continue;
             }
             if i.name == "auxiliary" {
-                self.err(&ip.key("name"), "the name 'auxiliary' is reserved for the auxiliary node of the reduction");
+                self.err(
+                    &ip.key("name"),
+                    "the name 'auxiliary' is reserved for the auxiliary node of the reduction",
+                );
                 ok = false;
                 continue;
             }
             if out.iter().any(|o| o.name == i.name) {
-                self.err(&ip.key("name"), format!("part '{}' already has an interface named '{}'", p.name, i.name));
+                self.err(
+                    &ip.key("name"),
+                    format!("part '{}' already has an interface named '{}'", p.name, i.name),
+                );
                 ok = false;
                 continue;
             }
             let target = match kind {
                 PartKind::Beam => {
-                    self.only_keys(&ip, &["name", "set", "node_at"], "an interface of a beam part (a beam node)");
+                    self.only_keys(
+                        &ip,
+                        &["name", "set", "node_at"],
+                        "an interface of a beam part (a beam node)",
+                    );
                     match (&i.set, &i.node_at) {
                         (Some(set), None) => self.node_set(&ip.key("set"), model, set).and_then(|nodes| {
                             if nodes.len() == 1 {
@@ -1016,7 +1108,10 @@ impl Validator<'_> {
                         Some(SpiderFile::Rbe2) => Some(SpiderKind::Rbe2),
                         Some(SpiderFile::Rbe3) => Some(SpiderKind::Rbe3),
                         None => {
-                            self.err(&ip, "missing key `spider` (\"rbe2\": rigid, or \"rbe3\": interpolating)");
+                            self.err(
+                                &ip,
+                                "missing key `spider` (\"rbe2\": rigid, or \"rbe3\": interpolating)",
+                            );
                             None
                         }
                     };
@@ -1048,7 +1143,9 @@ impl Validator<'_> {
                                             format!(
                                                 "no node within {r} m of {:?}{}",
                                                 [c.x, c.y, c.z],
-                                                nearest.map_or(String::new(), |d| format!("; the nearest is {d:.3e} m away"))
+                                                nearest.map_or(String::new(), |d| format!(
+                                                    "; the nearest is {d:.3e} m away"
+                                                ))
                                             ),
                                         );
                                         None
@@ -1060,7 +1157,10 @@ impl Validator<'_> {
                             }
                         }
                         (None, Some(_), None) => {
-                            self.err(&ip, "missing key `radius` (nodes within `radius` of `near` form the surface)");
+                            self.err(
+                                &ip,
+                                "missing key `radius` (nodes within `radius` of `near` form the surface)",
+                            );
                             None
                         }
                         _ => {
@@ -1092,7 +1192,10 @@ impl Validator<'_> {
             for ib in &out[a + 1..] {
                 if let (InterfaceTarget::BeamNode(x), InterfaceTarget::BeamNode(y)) = (&ia.target, &ib.target) {
                     if x == y {
-                        self.err(&ib.path, format!("interfaces '{}' and '{}' are the same node", ia.name, ib.name));
+                        self.err(
+                            &ib.path,
+                            format!("interfaces '{}' and '{}' are the same node", ia.name, ib.name),
+                        );
                         ok = false;
                     }
                 }
@@ -1104,7 +1207,10 @@ impl Validator<'_> {
     fn reduction(&mut self, path: &KeyPath, r: &ReductionFile, n_interfaces: usize) -> Option<Reduction> {
         let modes = match (r.modes, r.cutoff_hz) {
             (Some(_), Some(_)) => {
-                self.err_key(&path.key("cutoff_hz"), "give `modes` (a count) or `cutoff_hz` (a frequency), not both");
+                self.err_key(
+                    &path.key("cutoff_hz"),
+                    "give `modes` (a count) or `cutoff_hz` (a frequency), not both",
+                );
                 return None;
             }
             (None, None) => {
@@ -1119,11 +1225,16 @@ impl Validator<'_> {
                 }
                 ModeSelection::Count(m)
             }
-            (None, Some(f)) => ModeSelection::CutoffHz(self.positive(&path.key("cutoff_hz"), f, "the cut-off frequency [Hz]")?),
+            (None, Some(f)) => {
+                ModeSelection::CutoffHz(self.positive(&path.key("cutoff_hz"), f, "the cut-off frequency [Hz]")?)
+            }
         };
         let auxiliary_node = r.auxiliary_node.unwrap_or(false);
         if n_interfaces == 0 && !auxiliary_node {
-            self.err(path, "a reduced part needs at least one interface ([[parts.interfaces]])");
+            self.err(
+                path,
+                "a reduced part needs at least one interface ([[parts.interfaces]])",
+            );
             return None;
         }
         Some(Reduction {
@@ -1134,7 +1245,13 @@ impl Validator<'_> {
     }
 
     /// A node reference by `at` (an interface, else a node set) or `node_at`.
-    fn node_ref(&mut self, path: &KeyPath, part: &Part, at: &Option<String>, node_at: &Option<Vec3>) -> Option<NodeRef> {
+    fn node_ref(
+        &mut self,
+        path: &KeyPath,
+        part: &Part,
+        at: &Option<String>,
+        node_at: &Option<Vec3>,
+    ) -> Option<NodeRef> {
         match (at, node_at) {
             (Some(name), None) => {
                 if let Some(k) = part.interfaces.iter().position(|i| i.name == *name) {
@@ -1151,13 +1268,22 @@ impl Validator<'_> {
                 known.extend(part.base.mesh.node_sets.keys().cloned());
                 self.err(
                     &path.key("at"),
-                    unknown_reference(&format!("interface or node set of part '{}'", part.name), name, &known),
+                    format!(
+                        "part '{}' has no interface or node set '{name}'{}",
+                        part.name,
+                        suggestions(name, &known, "interface or node set")
+                    ),
                 );
                 None
             }
-            (None, Some(x)) => self.node_at(&path.key("node_at"), &part.base, x).map(|n| NodeRef::Nodes(vec![n])),
+            (None, Some(x)) => self
+                .node_at(&path.key("node_at"), &part.base, x)
+                .map(|n| NodeRef::Nodes(vec![n])),
             _ => {
-                self.err(path, "give the node by `at` (an interface or node set name) or by `node_at` = [x, y, z], one of them");
+                self.err(
+                    path,
+                    "give the node by `at` (an interface or node set name) or by `node_at` = [x, y, z], one of them",
+                );
                 None
             }
         }
@@ -1198,7 +1324,10 @@ impl Validator<'_> {
                     match DOF_NAMES.iter().position(|d| d == n) {
                         Some(k) => mask[k] = true,
                         None => {
-                            self.err(&path.index(i), unknown_reference("dof", n, &DOF_NAMES.map(String::from)));
+                            self.err(
+                                &path.index(i),
+                                unknown_reference("dof", n, &DOF_NAMES.map(String::from)),
+                            );
                             ok = false;
                         }
                     }
@@ -1256,7 +1385,11 @@ impl Validator<'_> {
             }
             let zero = [0.0; 3];
             let force = self.finite3(&lp.key("force"), l.force.as_ref().unwrap_or(&zero), "the force [N]");
-            let moment = self.finite3(&lp.key("moment"), l.moment.as_ref().unwrap_or(&zero), "the moment [N m]");
+            let moment = self.finite3(
+                &lp.key("moment"),
+                l.moment.as_ref().unwrap_or(&zero),
+                "the moment [N m]",
+            );
             let (Some(force), Some(moment)) = (force, moment) else {
                 ok = false;
                 continue;
@@ -1299,7 +1432,10 @@ impl Validator<'_> {
             };
             self.only_keys(&path, allowed, &format!("a '{kind}' analysis"));
             let Some(part_name) = &a.part else {
-                self.err(&path, format!("missing key `part` (the part a '{kind}' analysis runs on)"));
+                self.err(
+                    &path,
+                    format!("missing key `part` (the part a '{kind}' analysis runs on)"),
+                );
                 continue;
             };
             let Some(index) = part_names.iter().position(|n| n == part_name) else {
@@ -1317,7 +1453,11 @@ impl Validator<'_> {
                 continue;
             }
             if out.iter().any(|o| o.name == name) {
-                let at = if a.name.is_some() { path.key("name") } else { path.clone() };
+                let at = if a.name.is_some() {
+                    path.key("name")
+                } else {
+                    path.clone()
+                };
                 self.err(
                     &at,
                     format!("an analysis named '{name}' is already defined (analyses name their results folders: give each a unique `name`)"),
@@ -1339,7 +1479,10 @@ impl Validator<'_> {
                         continue;
                     };
                     if modes == 0 || modes > MAX_MODES {
-                        self.err(&path.key("modes"), format!("the number of modes must lie in 1..={MAX_MODES}, got {modes}"));
+                        self.err(
+                            &path.key("modes"),
+                            format!("the number of modes must lie in 1..={MAX_MODES}, got {modes}"),
+                        );
                         continue;
                     }
                     let solver = match a.solver {
@@ -1372,7 +1515,10 @@ impl Validator<'_> {
             // take them): build once to report a conflict here rather than mid-run.
             if let AnalysisSpec::Static { supports, .. } | AnalysisSpec::Modal { supports, .. } = &spec {
                 if let Err(e) = part.build(supports, false) {
-                    self.err(&path.key("supports"), format!("with these supports, part '{part_name}': {e}"));
+                    self.err(
+                        &path.key("supports"),
+                        format!("with these supports, part '{part_name}': {e}"),
+                    );
                     continue;
                 }
             }
@@ -1398,7 +1544,11 @@ impl Validator<'_> {
         ];
         for (key, is) in present {
             if is {
-                let section = if key == "output" { "[output]".to_string() } else { format!("[[{key}]]") };
+                let section = if key == "output" {
+                    "[output]".to_string()
+                } else {
+                    format!("[[{key}]]")
+                };
                 self.err_key(
                     &KeyPath::root().key(key),
                     format!("{section} is not supported yet: needs the multibody solver (issue 6)"),

@@ -72,13 +72,13 @@ pub struct StudyInfo {
 #[allow(non_snake_case)]
 pub struct MaterialFile {
     pub name: String,
-    /// Young's modulus [Pa].
+    /// Young's modulus (Pa).
     pub E: f64,
-    /// Poisson's ratio [-].
+    /// Poisson's ratio (-).
     pub nu: Option<f64>,
-    /// Shear modulus [Pa].
+    /// Shear modulus (Pa).
     pub G: Option<f64>,
-    /// Density [kg/m^3].
+    /// Density (kg/m^3).
     pub rho: f64,
 }
 
@@ -89,23 +89,23 @@ pub struct MaterialFile {
 pub struct SectionFile {
     pub name: String,
     pub shape: SectionShape,
-    /// Rectangle: width along local y [m].
+    /// Rectangle: width along local y (m).
     pub b: Option<f64>,
-    /// Rectangle: height along local z [m].
+    /// Rectangle: height along local z (m).
     pub h: Option<f64>,
-    /// Circle: diameter [m].
+    /// Circle: diameter (m).
     pub d: Option<f64>,
-    /// Tube: outer diameter [m].
+    /// Tube: outer diameter (m).
     pub d_outer: Option<f64>,
-    /// Tube: inner diameter [m].
+    /// Tube: inner diameter (m).
     pub d_inner: Option<f64>,
-    /// Values: area [m^2].
+    /// Values: area (m^2).
     pub A: Option<f64>,
-    /// Values: second moment about local y [m^4].
+    /// Values: second moment about local y (m^4).
     pub Iy: Option<f64>,
-    /// Values: second moment about local z [m^4].
+    /// Values: second moment about local z (m^4).
     pub Iz: Option<f64>,
-    /// Values: torsion constant [m^4].
+    /// Values: torsion constant (m^4).
     pub J: Option<f64>,
     /// Values: shear factor for shear along local y (default 5/6).
     pub ky: Option<f64>,
@@ -162,7 +162,7 @@ pub struct BeamFile {
     pub orientation: Option<Vec3>,
     /// Number of elements (straight, arc).
     pub elements: Option<usize>,
-    /// Straight: first and last point [m].
+    /// Straight: first and last point (m).
     pub from: Option<Vec3>,
     pub to: Option<Vec3>,
     /// Arc: centre, first point, axis (normal of the arc's plane), swept angle.
@@ -260,7 +260,7 @@ pub enum SpiderFile {
 pub struct ReductionFile {
     /// Number of fixed-interface modes (0: static modes only).
     pub modes: Option<usize>,
-    /// Keep every fixed-interface mode below this frequency [Hz].
+    /// Keep every fixed-interface mode below this frequency (Hz).
     pub cutoff_hz: Option<f64>,
     /// Add an auxiliary interface at the centre of mass (default false).
     pub auxiliary_node: Option<bool>,
@@ -293,9 +293,9 @@ pub struct AnalysisFile {
     pub tolerance: Option<f64>,
     /// equilibrium: `newton` or `arc-length`.
     pub method: Option<String>,
-    /// dynamic: end time [s].
+    /// dynamic: end time (s).
     pub t_end: Option<f64>,
-    /// dynamic: time step [s].
+    /// dynamic: time step (s).
     pub dt: Option<f64>,
     /// dynamic: spectral radius at infinity of generalized-alpha, in [0, 1].
     pub rho_inf: Option<f64>,
@@ -377,7 +377,7 @@ impl<'de> Deserialize<'de> for DofsFile {
     }
 }
 
-/// A force [N] and moment [N m] in global axes at one node: an interface, a one-node set, or
+/// A force (N) and moment (N m) in global axes at one node: an interface, a one-node set, or
 /// the node at `node_at`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -404,7 +404,7 @@ pub struct BodyFile {
     pub frame_interface: Option<String>,
     /// `exact` (default) or `lumped` inertia (brief §4).
     pub inertia: Option<String>,
-    /// Where the part's origin is placed [m], and its rotation.
+    /// Where the part's origin is placed (m), and its rotation.
     pub position: Option<Vec3>,
     pub rotation: Option<RotationFile>,
 }
@@ -422,10 +422,10 @@ pub struct RotationFile {
 #[serde(deny_unknown_fields)]
 pub struct RigidBodyFile {
     pub name: String,
-    /// Mass [kg].
+    /// Mass (kg).
     pub mass: f64,
     pub center_of_mass: Vec3,
-    /// Inertia tensor about the centre of mass in global axes at t = 0 [kg m^2].
+    /// Inertia tensor about the centre of mass in global axes at t = 0 (kg m^2).
     pub inertia: [[f64; 3]; 3],
     /// Named points of the body (its nodes), `{ A = [0, 0, 0] }`.
     #[serde(default)]
@@ -485,9 +485,9 @@ pub struct LoadFile {
     /// `gravity` or `point`.
     #[serde(rename = "type")]
     pub kind: String,
-    /// Gravity: acceleration [m/s^2].
+    /// Gravity: acceleration (m/s^2).
     pub g: Option<Vec3>,
-    /// Point load: `"body.point"`, force [N], moment [N m], in `global` (default) or `body` axes.
+    /// Point load: `"body.point"`, force (N), moment (N m), in `global` (default) or `body` axes.
     pub at: Option<String>,
     pub force: Option<Vec3>,
     pub moment: Option<Vec3>,

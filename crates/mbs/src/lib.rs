@@ -1,1 +1,81 @@
-//! mbs
+//! # mbs: flexible multibody systems in minimal coordinates
+//!
+//! Bodies (AIC-FFR superelements from [`superelement`], rigid bodies, point masses) act on
+//! shared *nodes*; joints, supports and drivers make some node coordinates functions of others,
+//! so the unknowns are independent coordinates only and no Lagrange multipliers appear
+//! (brief §5). Static and dynamic analyses work on these coordinates.
+//!
+//! ```text
+//! Model (serde data)  --System::new-->  System (coordinates, elements, sparse pattern)
+//!   System::initial_state  ->  State  ->  solve_static / solve_dynamic (Integrator)  ->  sensors
+//! ```
+//!
+//! # Notation
+//!
+//! | symbol | Rust | meaning | source |
+//! |---|---|---|---|
+//! | $\mathbf r_c,\ \mathbf R_c$ | [`NodeMotion`] `r`, `R` | node position, orientation (node axes to inertial) | brief §5 |
+//! | $\mathbf V_c = [\mathbf v_c; \boldsymbol\omega_c]$ | `v`, `omega` | node velocity, spatial angular velocity | |
+//! | $\mathbf A_c = [\mathbf a_c; \boldsymbol\alpha_c]$ | `a`, `alpha` | node acceleration | |
+//! | $\mathbf q$ | [`State`] | independent coordinates: scalars and SO(3) rotations | brief §5 |
+//! | $\dot{\mathbf q},\ \ddot{\mathbf q}$ | `State::velocity`, `acceleration` | rates (spatial $\boldsymbol\omega$ for rotations) | |
+//! | $\mathbf q\oplus\delta\mathbf q$ | [`System::retract`] | scalars added, $\mathbf R \leftarrow \exp(\widetilde{\delta\boldsymbol\pi})\mathbf R$ | so3 |
+//! | $\mathbf J_c$ | [`NodeKinematics`] `J` | $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$ | brief §5 |
+//! | $\dot{\mathbf J}_c\dot{\mathbf q}$ | `NodeKinematics::motion.a` at $\ddot{\mathbf q} = 0$ | convective acceleration | brief §5 |
+//! | $\mathbf r_c$ | (internal) | node residual: inertia + internal − external force | |
+//! | $\mathbf F$ | [`System::residual`] | $\sum_c\mathbf J_c^T\mathbf r_c$ (+ modal, joint springs) | brief §5 |
+//! | $\mathbf G_r$ | [`System::generalized_force`] | $\partial(\mathbf J^T\mathbf r)/\partial\mathbf q$ at fixed $\mathbf r$: joints' geometric term | this crate |
+//! | $\hat{\mathbf M},\ \hat{\mathbf C},\ \hat{\mathbf K}$ | [`Matrices`] | $\partial\mathbf F/\partial\ddot{\mathbf q}$, $\partial\mathbf F/\partial\dot{\mathbf q}$, $\partial\mathbf F/\partial\mathbf q$ | this crate |
+//! | $\lambda$ | `lambda` | load factor (statics) | |
+//! | $\rho_\infty,\ \alpha_m,\ \alpha_f,\ \beta,\ \gamma$ | [`AlphaParameters`] | generalized-α | Chung & Hulbert 1993 |
+//! | $\beta',\ \gamma'$ | `bp`, `gp` | iteration-matrix factors | BCA 2012 |
+//! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration | BCA 2012 |
+//!
+//! Vectors are inertial unless said otherwise; rigid-body mass data and follower loads are in
+//! node axes.
+//!
+//! # Equation map
+//!
+//! | eq. | meaning | function |
+//! |---|---|---|
+//! | brief §5 | node configuration from independent coordinates | `mbs::coordinates::CoordinateMap::motions_into` |
+//! | brief §5 | $\mathbf J$, $\dot{\mathbf J}\dot{\mathbf q}$ and their derivatives | `mbs::coordinates::CoordinateMap::derivatives_into` |
+//! | brief §5 | $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q} + \mathbf Q_v - \mathbf Q) = 0$ | `mbs::System::residual` |
+//! | this crate | tangent of $\mathbf J^T\mathbf r$ incl. $\mathbf G_r$ | `mbs::System::matrices` |
+//! | Newton-Euler | rigid body residual and tangents | `mbs::body::rigid_element` (crate-private) |
+//! | brief §6 | Newton with load stepping | `mbs::solve_static` |
+//! | BCA 2012 Alg. 1 | Lie-group generalized-α | `mbs::Integrator::step` |
+//!
+//! # Modules
+//!
+//! [`model`] (serde data), [`time_function`], [`node`], [`coordinates`] (the maps and their
+//! derivatives), [`topology`] (the tree and its checks), [`body`] (elements), [`system`]
+//! (assembly), [`static_solver`], [`dynamic_solver`], [`sensors`], [`linearized`], [`error`].
+
+#![allow(non_snake_case)]
+
+pub mod body;
+pub mod coordinates;
+pub mod dynamic_solver;
+pub mod error;
+pub mod linearized;
+pub mod model;
+pub mod node;
+pub mod sensors;
+pub mod static_solver;
+pub mod system;
+pub mod time_function;
+pub mod topology;
+
+pub use dynamic_solver::{solve_dynamic, AlphaParameters, DynamicSettings, Integrator, StepReport, Trajectory};
+pub use error::{Incomplete, ModelError, SolveError};
+pub use model::{
+    Body, BodyId, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind, JointSpring, Load,
+    LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor, SensorKind, Spring, Support,
+    TranslationSupport,
+};
+pub use node::NodeMotion;
+pub use sensors::{Energies, SensorRecord};
+pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
+pub use system::{Matrices, NodeKinematics, State, System};
+pub use time_function::{Interpolation, TimeFunction};

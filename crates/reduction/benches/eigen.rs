@@ -36,11 +36,12 @@ fn main() {
         Err(_) if full => vec!["50k".into(), "200k".into()],
         Err(_) => vec!["3k".into()],
     };
-    println!("reduction/benches/eigen: clamped hex8 block (inline stand-in element, see file docs)");
+    println!("reduction/benches/eigen: clamped hex8 block (hex8 element written inline in the bench, see file docs)");
     println!(
-        "threads: faer {:?}, rayon {}",
+        "threads: faer {:?}, rayon {}; load average at start: {}",
         faer::get_global_parallelism(),
-        rayon::current_num_threads()
+        rayon::current_num_threads(),
+        std::fs::read_to_string("/proc/loadavg").unwrap_or_default().trim()
     );
     for size in sizes {
         // Elements (ex, ey, ez); nodes at x = 0 clamped, so dofs = 3 ex (ey+1) (ez+1).
@@ -72,26 +73,37 @@ fn run(ex: usize, ey: usize, ez: usize) {
     }
 
     let t_total = Instant::now();
+    let cpu_total = cpu_ms();
     let t = Instant::now();
+    let cpu = cpu_ms();
     let factor = ShiftInvert::new(K.as_ref(), M.as_ref(), 0.0).expect("factorisation");
     let t_factor = ms(t);
+    let cpu_factor = cpu_ms() - cpu;
     let t = Instant::now();
-    let mut settings = EigenSettings::new(N_MODES, Shift::Zero);
-    if let Ok(k) = std::env::var("REDUCTION_KDIM") { settings.krylov_dim = k.parse().unwrap(); }
-    if let Ok(k) = std::env::var("REDUCTION_TOL") { settings.tolerance = k.parse().unwrap(); }
-    let sol = factor.lowest_modes(K.as_ref(), M.as_ref(), &settings).expect("eigensolver");
+    let cpu = cpu_ms();
+    let settings = EigenSettings::new(N_MODES, Shift::Zero);
+    let sol = factor
+        .lowest_modes(K.as_ref(), M.as_ref(), &settings)
+        .expect("eigensolver");
     let t_eig = ms(t);
+    let cpu_eig = cpu_ms() - cpu;
     let t_total = ms(t_total);
+    let cpu_total = cpu_ms() - cpu_total;
     let worst = sol.residuals.iter().cloned().fold(0.0, f64::max);
     let f: Vec<String> = sol
         .eigenvalues
         .iter()
         .map(|l| format!("{:.2}", l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)))
         .collect();
-    println!("factor values: {} ({:.0} MB)", factor.factor_len(), factor.factor_len() as f64 * 8e-6);
-    println!("factorisation (symbolic + numeric): {t_factor:>10.0} ms");
-    println!("Krylov-Schur + Rayleigh-Ritz, {N_MODES} modes: {t_eig:>10.0} ms");
-    println!("total:                               {t_total:>10.0} ms");
+    println!(
+        "factor values: {} ({:.0} MB)",
+        factor.factor_len(),
+        factor.factor_len() as f64 * 8e-6
+    );
+    println!("                                     wall (ms)   CPU user+sys (ms)");
+    println!("factorisation (symbolic + numeric): {t_factor:>10.0} {cpu_factor:>10.0}");
+    println!("Lanczos + Rayleigh-Ritz, {N_MODES} modes:   {t_eig:>10.0} {cpu_eig:>10.0}");
+    println!("total:                              {t_total:>10.0} {cpu_total:>10.0}");
     println!("peak RSS (VmHWM, whole process):     {:>10.0} MB", peak_rss_mb());
     println!("operator applications (L^-T, M, L^-1): {}", sol.operator_applications);
     println!("worst relative residual: {worst:.2e}");
@@ -108,14 +120,28 @@ fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
+/// User + system CPU time of this process (Linux `/proc/self/stat`, clock ticks of 10 ms), 0
+/// elsewhere: on a shared machine it is less noisy than wall time.
+fn cpu_ms() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            // Fields after the command name (which is in parentheses): utime is field 14, stime 15.
+            let rest = &s[s.rfind(')')? + 2..];
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) * 10.0)
+        })
+        .unwrap_or(0.0)
+}
+
 /// Peak resident set size of this process (Linux `/proc/self/status`), 0 elsewhere.
 fn peak_rss_mb() -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
-            s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| {
-                l.split_whitespace().nth(1).and_then(|kb| kb.parse::<f64>().ok())
-            })
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1).and_then(|kb| kb.parse::<f64>().ok()))
         })
         .map(|kb| kb / 1024.0)
         .unwrap_or(0.0)
@@ -138,7 +164,11 @@ fn hex8_matrices() -> ([[f64; 24]; 24], [[f64; 24]; 24]) {
         let mut dN = [[0.0; 3]; 8]; // d N_a / d x_d
         for a in 0..8 {
             let s = [sign(a, 0), sign(a, 1), sign(a, 2)];
-            let f = [(1.0 + s[0] * xi[0]) / 2.0, (1.0 + s[1] * xi[1]) / 2.0, (1.0 + s[2] * xi[2]) / 2.0];
+            let f = [
+                (1.0 + s[0] * xi[0]) / 2.0,
+                (1.0 + s[1] * xi[1]) / 2.0,
+                (1.0 + s[2] * xi[2]) / 2.0,
+            ];
             N[a] = f[0] * f[1] * f[2];
             // dxi/dx = 2/H
             dN[a][0] = s[0] / 2.0 * f[1] * f[2] * 2.0 / H;
@@ -171,9 +201,8 @@ fn assemble_block(ex: usize, ey: usize, ez: usize) -> (SparseColMat<usize, f64>,
     let (Ke, Me) = hex8_matrices();
     let (nx, ny, nz) = (ex + 1, ey + 1, ez + 1);
     // Node (i, j, k), i >= 1 free; dof of free node = 3 * ((i-1) + ex (j + ny k)) + c.
-    let node_dof = |i: usize, j: usize, k: usize| -> Option<usize> {
-        (i >= 1).then(|| 3 * ((i - 1) + ex * (j + ny * k)))
-    };
+    let node_dof =
+        |i: usize, j: usize, k: usize| -> Option<usize> { (i >= 1).then(|| 3 * ((i - 1) + ex * (j + ny * k))) };
     let n = 3 * ex * ny * nz;
     let mut col_ptr = vec![0usize];
     let mut row_idx = Vec::new();
@@ -200,7 +229,8 @@ fn assemble_block(ex: usize, ey: usize, ez: usize) -> (SparseColMat<usize, f64>,
                                         for ey_ in j.saturating_sub(1)..=j.min(ey - 1) {
                                             for ex_ in i.saturating_sub(1)..=i.min(ex - 1) {
                                                 let local = |p: usize, q: usize, r: usize| -> Option<usize> {
-                                                    let (a, b, c2) = (p.wrapping_sub(ex_), q.wrapping_sub(ey_), r.wrapping_sub(ez_));
+                                                    let (a, b, c2) =
+                                                        (p.wrapping_sub(ex_), q.wrapping_sub(ey_), r.wrapping_sub(ez_));
                                                     (a <= 1 && b <= 1 && c2 <= 1).then(|| a + 2 * b + 4 * c2)
                                                 };
                                                 if let (Some(la), Some(lb)) = (local(i, j, k), local(bi, bj, bk)) {

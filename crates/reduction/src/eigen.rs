@@ -12,12 +12,12 @@
 //!    whose eigenpairs are $\mu_k = 1/(\lambda_k - \sigma)$,
 //!    $\mathbf y_k = \mathbf L^T\mathbf P\boldsymbol\phi_k$ (Ericsson & Ruhe 1980, "The
 //!    spectral transformation Lanczos method", Math. Comp. 35; Grimes, Lewis & Simon 1994,
-//!    SIAM J. Matrix Anal. Appl. 15, §2), by thick-restart Lanczos ([`thick_restart_lanczos`]).
+//!    SIAM J. Matrix Anal. Appl. 15, §2), by thick-restart Lanczos (the private `Lanczos`).
 //!    The factor exists only if $\mathbf K - \sigma\mathbf M \succ 0$, i.e. $\sigma <
 //!    \lambda_1$, so every $\mu_k > 0$ and the *largest* $\mu$ are the *lowest* $\lambda$.
 //! 3. Back-transform $\boldsymbol\phi_k = \mathbf P^T\mathbf L^{-T}\mathbf y_k$ and do a
 //!    Rayleigh-Ritz step on $(\mathbf K, \mathbf M)$ in the span of the $m$ vectors
-//!    ([`rayleigh_ritz`]). It makes $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf I$
+//!    (`rayleigh_ritz`). It makes $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf I$
 //!    hold to round-off (the Lanczos vectors are orthonormal in the standard inner product
 //!    only, and the $\mathbf y_k$ only approximately $\mathbf C$-orthogonal) and gives each
 //!    $\lambda_k$ as a Rayleigh quotient of $\mathbf K$ itself, so rigid-body modes come out
@@ -51,7 +51,7 @@
 //! overwrites it, the new basis holds a column twice, the next Ritz vectors are not
 //! orthonormal, and the Gram-Schmidt loop, which stops only on a relative criterion, never
 //! does. Clustered spectra, where a later Ritz value converges before an earlier one, trigger
-//! it. [`thick_restart_lanczos`] is the same method (Krylov-Schur is thick-restart Lanczos
+//! it. Our `Lanczos` is the same method (Krylov-Schur is thick-restart Lanczos
 //! for a symmetric operator: Wu & Simon 2000, SIAM J. Matrix Anal. Appl. 22; Stewart 2001,
 //! SIAM J. Matrix Anal. Appl. 23), written without locking, with a bounded classical
 //! Gram-Schmidt with one re-orthogonalisation ("twice is enough": Giraud, Langou &
@@ -69,15 +69,19 @@
 //! ## Tolerance
 //!
 //! `settings.tolerance` bounds the relative residual of every returned pair
-//! ([`relative_residual`]). Lanczos stops when the residual estimate of each wanted Ritz pair,
-//! $|\beta_p s_{pk}|$, is below `tolerance` $\cdot$ [`KRYLOV_TOLERANCE_FACTOR]$\cdot|\mu_k|$
-//! (a safety factor of 10: the residual of $(\mathbf K, \mathbf M)$ relates to that of
-//! $\mathbf C$ through $\mathbf L$). If a pair then fails the check, Lanczos continues from
-//! where it stopped with the Krylov tolerance lowered by the shortfall, at most
-//! [`MAX_ATTEMPTS`] times in all. A residual at or below the round-off floor of its own
+//! ([`relative_residual`]). Lanczos stops when the residual estimate of every wanted Ritz
+//! pair, $|\beta_k s_{kj}|$, is below `tolerance` $\cdot$ [`KRYLOV_TOLERANCE_FACTOR`]
+//! $\cdot\,|\mu_j|$: relative to each Ritz value, so a wide spread of the wanted spectrum does
+//! not loosen the test of the higher modes. The factor 0.1 is a safety margin: for
+//! $\mathbf r = \mathbf C\mathbf y - \mu\mathbf y$ and $\boldsymbol\phi = \mathbf
+//! P^T\mathbf L^{-T}\mathbf y$, $\mathbf K\boldsymbol\phi - \lambda\mathbf M\boldsymbol\phi
+//! = -\mathbf P^T\mathbf L\mathbf r/\mu$, so the residual on $(\mathbf K, \mathbf M)$ differs
+//! from the Krylov one by the action of $\mathbf L$. If a pair still fails the check, Lanczos
+//! continues from where it stopped with the Krylov tolerance lowered by the shortfall, at
+//! most [`MAX_ATTEMPTS`] rounds in all. A residual at or below the round-off floor of its own
 //! evaluation ([`residual_floor`]) is accepted whatever the tolerance: the lowest modes of a
-//! fine mesh, and rigid-body modes with a tiny shift, can have a floor above `1e-8`; their
-//! reported residual may then exceed `tolerance`.
+//! fine mesh, and rigid-body modes with [`Shift::Auto`], can have a floor above `1e-8`, and
+//! their reported residual may then exceed `tolerance`.
 //!
 //! ## Limits
 //!
@@ -131,8 +135,9 @@ pub const AUTO_SHIFT_FRACTION: f64 = 1e-8;
 /// A Cholesky pivot $L_{jj}^2$ at or below this fraction of its diagonal entry $A_{jj}$ is
 /// taken as a singular matrix: $10^3\varepsilon \approx 2\cdot 10^{-13}$.
 ///
-/// The pivot of a dof is $1/(\mathbf A^{-1})_{jj}$ in the order of the factor: the stiffness
-/// of that dof with everything eliminated before it released. For a singular positive
+/// The pivot $L_{jj}^2 = 1/((\mathbf A_{1:j,1:j})^{-1})_{jj}$ (in the order of the factor) is
+/// the stiffness of dof $j$ with the dofs eliminated before it free and those after it held.
+/// For a singular positive
 /// semi-definite matrix it is zero in exact arithmetic and comes out as round-off, a few
 /// $\varepsilon A_{jj}$ of either sign (the free-free chain of the tests gives
 /// $4\cdot 10^{-16}$); a negative one stops faer's factorisation, a positive one would be
@@ -279,7 +284,7 @@ pub fn lowest_modes(
     settings: &EigenSettings,
 ) -> Result<EigenSolution, ReductionError> {
     check_square_pair(K, M)?;
-    check_mode_count(settings, K.nrows())?;
+    krylov_dimension(settings, K.nrows())?;
     let sigma = settings.shift.resolve(K, M)?;
     let factor = ShiftInvert::new(K, M, sigma)?;
     factor.lowest_modes(K, M, settings)
@@ -531,22 +536,8 @@ impl ShiftInvert {
                 cols: K.ncols(),
             });
         }
-        check_mode_count(settings, n)?;
-        if !(settings.tolerance.is_finite() && settings.tolerance > 0.0) {
-            return Err(ReductionError::InvalidSettings {
-                what: format!("tolerance must be positive and finite, got {}", settings.tolerance),
-            });
-        }
+        let p = krylov_dimension(settings, n)?;
         let m = settings.n_modes;
-        let p = match settings.krylov_dim {
-            0 => (2 * m).max(m + 32),
-            p if p > m => p,
-            p => {
-                return Err(ReductionError::InvalidSettings {
-                    what: format!("krylov_dim = {p} must exceed n_modes = {m} (or be 0 for automatic)"),
-                })
-            }
-        };
         let op = Operator { factor: self, M };
         if p + 1 >= n {
             if n > DENSE_LIMIT {
@@ -905,10 +896,10 @@ struct Ritz {
 ///
 /// The Krylov decomposition $\mathbf C\mathbf V_p = \mathbf V_p\mathbf T_p +
 /// \beta_p\mathbf v_{p+1}\mathbf e_p^T$ is extended one vector at a time, each new vector
-/// orthogonalised against all previous ones by classical Gram-Schmidt done twice. At a
-/// full basis, $\mathbf T_p = \mathbf S\boldsymbol\Theta\mathbf S^T$ gives the Ritz pairs and
-/// their residual estimates $|\beta_p s_{pk}|$; a pair converges when its estimate is below
-/// `tolerance` $\cdot|\theta_k|$ (relative, as ARPACK's). Restart keeps the
+/// orthogonalised against all previous ones by classical Gram-Schmidt done twice. After each
+/// step, $\mathbf T_k = \mathbf S\boldsymbol\Theta\mathbf S^T$ gives the Ritz pairs and
+/// their residual estimates $|\beta_k s_{kj}|$; a pair converges when its estimate is below
+/// `tolerance` $\cdot|\theta_j|$ (relative, as ARPACK's). A full basis ($k = p$) is restarted. Restart keeps the
 /// $k = m + (p - m)/2$ largest Ritz vectors, $\mathbf V_k \leftarrow \mathbf V_p\mathbf S_k$,
 /// $\mathbf v_{k+1} \leftarrow \mathbf v_{p+1}$, with $\mathbf T_{k+1}$ diagonal
 /// $\boldsymbol\Theta_k$ bordered by the arrow $\beta_p\mathbf s_{p,1:k}$. No locking:
@@ -922,9 +913,10 @@ struct Lanczos<'a> {
     V: Mat<f64>,
     /// $p \times p$ projected matrix (arrowhead plus tridiagonal).
     T: Mat<f64>,
-    /// Coupling $\beta_p$ of $\mathbf v_{p+1}$ after the last step.
+    /// Coupling $\beta_k$ of $\mathbf v_{k+1}$ after the last step.
     beta: f64,
-    /// Valid columns of `V`: extension starts at column `k`.
+    /// Size of the current decomposition: columns `0..k` of `V` and `T` are valid, column `k`
+    /// of `V` is the next vector.
     k: usize,
     restarts: usize,
     applications: usize,
@@ -971,9 +963,10 @@ impl<'a> Lanczos<'a> {
         Ok(this)
     }
 
-    /// Runs restart cycles until the `m` largest Ritz pairs meet `tolerance` (relative), or
-    /// `max_restarts` restarts have been done in all. Can be called again with a lower
-    /// tolerance: it continues from the current basis.
+    /// Runs Lanczos steps (and thick restarts) until the `m` largest Ritz pairs meet
+    /// `tolerance` (relative), checked after every step, or until `max_restarts` restarts
+    /// have been done in all. Can be called again with a lower tolerance: it continues from
+    /// the current basis.
     fn run(&mut self, m: usize, tolerance: f64, max_restarts: usize) -> Result<LanczosOutcome, ReductionError> {
         let keep = (m + (self.p - m) / 2).min(self.p - 1);
         loop {
@@ -986,81 +979,85 @@ impl<'a> Lanczos<'a> {
                 }
                 self.restart(&ritz, keep);
             }
-            self.extend()?;
-            let ritz = self.ritz()?;
-            if (0..m).all(|j| self.converged(&ritz, j, tolerance)) {
-                let Y = self.V.get(.., 0..self.p) * ritz.S.get(.., 0..m);
-                let mu = ritz.theta[..m].to_vec();
-                self.last_ritz = Some(ritz);
-                return Ok(LanczosOutcome::Converged { mu, Y });
-            }
-            self.last_ritz = Some(ritz);
-        }
-    }
-
-    /// Residual estimate of Ritz pair `j` against `tolerance` relative to $|\theta_j|$.
-    fn converged(&self, ritz: &Ritz, j: usize, tolerance: f64) -> bool {
-        (self.beta * ritz.S[(self.p - 1, j)]).abs() <= tolerance * ritz.theta[j].abs()
-    }
-
-    /// Lanczos steps from column `k` to a full basis of `p` vectors.
-    fn extend(&mut self) -> Result<(), ReductionError> {
-        let par = self.par;
-        for j in self.k..self.p {
-            let (done, mut next) = self.V.as_mut().split_at_col_mut(j + 1);
-            let done = done.rb();
-            let mut w = next.rb_mut().get_mut(.., 0..1);
-            self.op
-                .apply(w.rb_mut(), done.get(.., j..j + 1), par, MemStack::new(&mut self.mem));
-            self.applications += 1;
-            let norm0 = w.norm_l2();
-            if !norm0.is_finite() {
-                return Err(ReductionError::Factorization(format!(
-                    "the shift-invert operator gave a vector of norm {norm0}"
-                )));
-            }
-            let alpha = orthogonalise(w.rb_mut(), done, par);
-            let mut beta = w.norm_l2();
-            if !(beta > BREAKDOWN_RATIO * norm0) {
-                // Invariant subspace: continue with a random direction, decoupled (beta = 0).
-                for i in 0..w.nrows() {
-                    w[(i, 0)] = uniform(&mut self.rng);
+            self.step()?;
+            if self.k > m {
+                // A k x k dense eigenproblem per step: negligible next to the two solves.
+                let ritz = self.ritz()?;
+                if (0..m).all(|j| self.converged(&ritz, j, tolerance)) {
+                    let Y = self.V.get(.., 0..self.k) * ritz.S.get(.., 0..m);
+                    let mu = ritz.theta[..m].to_vec();
+                    return Ok(LanczosOutcome::Converged { mu, Y });
                 }
-                orthogonalise(w.rb_mut(), done, par);
-                let norm = w.norm_l2();
-                w.col_mut(0).iter_mut().for_each(|x| *x /= norm);
-                beta = 0.0;
-            } else {
-                w.col_mut(0).iter_mut().for_each(|x| *x /= beta);
-            }
-            self.T[(j, j)] = alpha;
-            if j + 1 < self.p {
-                self.T[(j + 1, j)] = beta;
-                self.T[(j, j + 1)] = beta;
-            } else {
-                self.beta = beta;
+                if self.k == self.p {
+                    self.last_ritz = Some(ritz);
+                }
             }
         }
-        self.k = self.p;
+    }
+
+    /// Residual estimate $|\beta_k s_{kj}|$ of Ritz pair `j` against `tolerance` relative to
+    /// $|\theta_j|$.
+    fn converged(&self, ritz: &Ritz, j: usize, tolerance: f64) -> bool {
+        (self.beta * ritz.S[(self.k - 1, j)]).abs() <= tolerance * ritz.theta[j].abs()
+    }
+
+    /// One Lanczos step: $\mathbf w = \mathbf C\mathbf v_k$, orthogonalised against
+    /// $\mathbf v_0 \dots \mathbf v_k$, becomes $\mathbf v_{k+1}$.
+    fn step(&mut self) -> Result<(), ReductionError> {
+        let (par, j) = (self.par, self.k);
+        let (done, mut next) = self.V.as_mut().split_at_col_mut(j + 1);
+        let done = done.rb();
+        let mut w = next.rb_mut().get_mut(.., 0..1);
+        self.op
+            .apply(w.rb_mut(), done.get(.., j..j + 1), par, MemStack::new(&mut self.mem));
+        self.applications += 1;
+        let norm0 = w.norm_l2();
+        if !norm0.is_finite() {
+            return Err(ReductionError::Factorization(format!(
+                "the shift-invert operator gave a vector of norm {norm0}"
+            )));
+        }
+        let alpha = orthogonalise(w.rb_mut(), done, par);
+        let mut beta = w.norm_l2();
+        if !(beta > BREAKDOWN_RATIO * norm0) {
+            // Invariant subspace: continue with a random direction, decoupled (beta = 0).
+            for i in 0..w.nrows() {
+                w[(i, 0)] = uniform(&mut self.rng);
+            }
+            orthogonalise(w.rb_mut(), done, par);
+            let norm = w.norm_l2();
+            w.col_mut(0).iter_mut().for_each(|x| *x /= norm);
+            beta = 0.0;
+        } else {
+            w.col_mut(0).iter_mut().for_each(|x| *x /= beta);
+        }
+        self.T[(j, j)] = alpha;
+        if j + 1 < self.p {
+            self.T[(j + 1, j)] = beta;
+            self.T[(j, j + 1)] = beta;
+        }
+        self.beta = beta;
+        self.k = j + 1;
         Ok(())
     }
 
-    /// Ritz pairs of the full projected matrix, descending in magnitude.
+    /// Ritz pairs of the current projected matrix $\mathbf T_k$, descending in magnitude.
     fn ritz(&self) -> Result<Ritz, ReductionError> {
-        let evd = self
-            .T
-            .self_adjoint_eigen(Side::Lower)
-            .map_err(|e| ReductionError::Factorization(format!("dense eigensolver of the Lanczos matrix: {e:?}")))?;
-        let p = self.p;
-        let mut order: Vec<usize> = (0..p).collect();
+        let k = self.k;
+        let evd =
+            self.T.get(0..k, 0..k).self_adjoint_eigen(Side::Lower).map_err(|e| {
+                ReductionError::Factorization(format!("dense eigensolver of the Lanczos matrix: {e:?}"))
+            })?;
+        let mut order: Vec<usize> = (0..k).collect();
         order.sort_by(|&a, &b| evd.S()[b].abs().total_cmp(&evd.S()[a].abs()));
         Ok(Ritz {
             theta: order.iter().map(|&j| evd.S()[j]).collect(),
-            S: Mat::from_fn(p, p, |i, j| evd.U()[(i, order[j])]),
+            S: Mat::from_fn(k, k, |i, j| evd.U()[(i, order[j])]),
         })
     }
 
-    /// Thick restart: keep the `keep` largest Ritz vectors and the residual vector.
+    /// Thick restart from a full basis: keep the `keep` largest Ritz vectors and the residual
+    /// vector.
     fn restart(&mut self, ritz: &Ritz, keep: usize) {
         let p = self.p;
         let Vk = self.V.get(.., 0..p) * ritz.S.get(.., 0..keep);
@@ -1154,14 +1151,24 @@ fn check_square_pair(
     Ok(())
 }
 
-fn check_mode_count(settings: &EigenSettings, n: usize) -> Result<(), ReductionError> {
-    if settings.n_modes == 0 || settings.n_modes >= n {
-        return Err(ReductionError::InvalidModeCount {
-            requested: settings.n_modes,
-            n,
+/// Checks `settings` for a problem of size `n` and returns the Krylov dimension $p$.
+fn krylov_dimension(settings: &EigenSettings, n: usize) -> Result<usize, ReductionError> {
+    let m = settings.n_modes;
+    if m == 0 || m >= n {
+        return Err(ReductionError::InvalidModeCount { requested: m, n });
+    }
+    if !(settings.tolerance.is_finite() && settings.tolerance > 0.0) {
+        return Err(ReductionError::InvalidSettings {
+            what: format!("tolerance must be positive and finite, got {}", settings.tolerance),
         });
     }
-    Ok(())
+    match settings.krylov_dim {
+        0 => Ok((2 * m).max(m + 32)),
+        p if p > m => Ok(p),
+        p => Err(ReductionError::InvalidSettings {
+            what: format!("krylov_dim = {p} must exceed n_modes = {m} (or be 0 for automatic)"),
+        }),
+    }
 }
 
 fn check_mass_diagonal(M_diag: &[f64]) -> Result<(), ReductionError> {

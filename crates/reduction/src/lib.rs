@@ -1,4 +1,35 @@
-//! reduction (docs written later)
+//! # reduction: Craig-Bampton reduction of flexible bodies
+//!
+//! The second stage of the flexmbs pipeline (brief §1, §3):
+//!
+//! ```text
+//! FE model (K, M sparse) + interfaces -> constraint modes Psi + fixed-interface modes Phi_i
+//!     -> K_CB, M_CB, inertia invariants -> ReducedBody (saved, reused by many simulations)
+//! ```
+//!
+//! [`eigen`] is the sparse generalised eigensolver underneath: the lowest modes of
+//! $\mathbf K\boldsymbol\phi = \omega^2\mathbf M\boldsymbol\phi$ by shift-invert Lanczos on a
+//! sparse Cholesky factor, and [`ShiftInvert`], the one factorisation of $\mathbf K_{ii}$ that
+//! gives both the constraint modes and the fixed-interface modes.
+//!
+//! # Notation
+//!
+//! | symbol | Rust | meaning | source |
+//! |---|---|---|---|
+//! | $\mathbf K,\ \mathbf M$ | `K`, `M` | sparse symmetric stiffness ($\succeq 0$) and mass ($\succ 0$), both triangles stored | brief §3 |
+//! | $\lambda_k = \omega_k^2,\ \boldsymbol\phi_k$ | `eigenvalues[k]`, `vectors.col(k)` | eigenpair of $\mathbf K\boldsymbol\phi = \lambda\mathbf M\boldsymbol\phi$, ascending, $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf I$ | [`eigen::EigenSolution`] |
+//! | $m$ | `n_modes` | number of lowest modes wanted | [`eigen::EigenSettings`] |
+//! | $\sigma$ | `sigma`, `shift` | spectral shift, $\sigma < \lambda_1$; negative for a free body | [`eigen::Shift`]; Ericsson & Ruhe 1980 |
+//! | $\mathbf P$ | `perm_fwd`, `perm_inv` | fill-reducing (AMD) permutation of the factor | faer `SymbolicCholesky::perm` |
+//! | $\mathbf L$ | `L_values` | Cholesky factor, $\mathbf P(\mathbf K - \sigma\mathbf M)\mathbf P^T = \mathbf L\mathbf L^T$ | [`eigen::ShiftInvert`] |
+//! | $\mathbf C$ | `Operator` | shift-invert operator $\mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T}$, symmetric | [`eigen`] module docs |
+//! | $\mu_k,\ \mathbf y_k$ | `mu`, `Y` | eigenpairs of $\mathbf C$: $\mu_k = 1/(\lambda_k - \sigma)$, $\mathbf y_k = \mathbf L^T\mathbf P\boldsymbol\phi_k$ | Grimes, Lewis & Simon 1994, §2 |
+//! | $\mathbf V_k,\ \mathbf T_k,\ \beta_k$ | `V`, `T`, `beta` | Lanczos basis, projected matrix, coupling: $\mathbf C\mathbf V_k = \mathbf V_k\mathbf T_k + \beta_k\mathbf v_{k+1}\mathbf e_k^T$ | Wu & Simon 2000 |
+//! | $p$ | `krylov_dim` | Krylov subspace dimension, default $\max(2m, m + 32)$ | [`eigen::EigenSettings`] |
+//! | $r_k$ | `residuals[k]` | $\|\mathbf K\boldsymbol\phi_k - \lambda_k\mathbf M\boldsymbol\phi_k\| / \max(\|\mathbf K\boldsymbol\phi_k\|, \lvert\lambda_k - \sigma\rvert\,\|\mathbf M\boldsymbol\phi_k\|)$ | [`eigen::relative_residual`] |
+//!
+//! Vectors are columns; `^T` is transpose. Dof indices in errors are those of the matrices
+//! as given, never of the permuted factor.
 #![allow(non_snake_case)]
 pub mod craig_bampton;
 pub mod diagnostics;

@@ -24,9 +24,9 @@ use serde::{Deserialize, Serialize};
 /// excludes it.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Damping {
-    /// Rayleigh mass factor $\alpha$ [1/s].
+    /// Rayleigh mass factor $\alpha$ \[1/s\].
     pub alpha: f64,
-    /// Rayleigh stiffness factor $\beta$ [s].
+    /// Rayleigh stiffness factor $\beta$ \[s\].
     pub beta: f64,
     /// Damping ratio $\zeta_i$ of each fixed-interface mode (empty: none; else one per mode).
     pub modal_ratios: Vec<f64>,
@@ -40,7 +40,11 @@ impl Damping {
 
     /// Rayleigh damping $\alpha\mathbf M_{CB} + \beta\mathbf K_{CB}$.
     pub fn rayleigh(alpha: f64, beta: f64) -> Self {
-        Self { alpha, beta, modal_ratios: Vec::new() }
+        Self {
+            alpha,
+            beta,
+            modal_ratios: Vec::new(),
+        }
     }
 }
 
@@ -114,18 +118,39 @@ pub struct Superelement {
 }
 
 fn invalid(body: &ReducedBody, what: impl Into<String>) -> SuperelementError {
-    SuperelementError::InvalidBody { body: body.name.clone(), what: what.into() }
+    SuperelementError::InvalidBody {
+        body: body.name.clone(),
+        what: what.into(),
+    }
 }
 
-fn check_dense(body: &ReducedBody, name: &str, m: &reduction::DenseMatrix, rows: usize, cols: usize) -> Result<(), SuperelementError> {
+fn check_dense(
+    body: &ReducedBody,
+    name: &str,
+    m: &reduction::DenseMatrix,
+    rows: usize,
+    cols: usize,
+) -> Result<(), SuperelementError> {
     if m.nrows != rows || m.ncols != cols || m.data.len() != rows * cols {
         return Err(invalid(
             body,
-            format!("{name} is {} x {} ({} values), expected {rows} x {cols}", m.nrows, m.ncols, m.data.len()),
+            format!(
+                "{name} is {} x {} ({} values), expected {rows} x {cols}",
+                m.nrows,
+                m.ncols,
+                m.data.len()
+            ),
         ));
     }
     if let Some(i) = m.data.iter().position(|v| !v.is_finite()) {
-        return Err(invalid(body, format!("{name} has a non-finite entry at ({}, {})", i % rows.max(1), i / rows.max(1))));
+        return Err(invalid(
+            body,
+            format!(
+                "{name} has a non-finite entry at ({}, {})",
+                i % rows.max(1),
+                i / rows.max(1)
+            ),
+        ));
     }
     Ok(())
 }
@@ -153,33 +178,51 @@ impl Superelement {
         check_dense(body, "S_r", &inertia.S_r, 3, n)?;
         check_dense(body, "S_x", &inertia.S_x, 9, n)?;
         if inertia.S_bar.len() != 9 {
-            return Err(invalid(body, format!("S_bar has {} matrices, expected 9", inertia.S_bar.len())));
+            return Err(invalid(
+                body,
+                format!("S_bar has {} matrices, expected 9", inertia.S_bar.len()),
+            ));
         }
         for (i, S) in inertia.S_bar.iter().enumerate() {
             check_dense(body, &format!("S_bar[{i}]"), S, n, n)?;
         }
         if !(inertia.mass > 0.0 && inertia.mass.is_finite()) {
-            return Err(invalid(body, format!("the mass must be positive and finite, got {}", inertia.mass)));
+            return Err(invalid(
+                body,
+                format!("the mass must be positive and finite, got {}", inertia.mass),
+            ));
         }
         if body.fixed_interface_omega.len() != m {
             return Err(invalid(
                 body,
-                format!("{} fixed-interface frequencies for {m} modes", body.fixed_interface_omega.len()),
+                format!(
+                    "{} fixed-interface frequencies for {m} modes",
+                    body.fixed_interface_omega.len()
+                ),
             ));
         }
         for (name, v) in [("alpha", damping.alpha), ("beta", damping.beta)] {
             if !(v >= 0.0 && v.is_finite()) {
-                return Err(invalid(body, format!("damping {name} must be finite and >= 0, got {v}")));
+                return Err(invalid(
+                    body,
+                    format!("damping {name} must be finite and >= 0, got {v}"),
+                ));
             }
         }
         if !damping.modal_ratios.is_empty() && damping.modal_ratios.len() != m {
             return Err(invalid(
                 body,
-                format!("{} modal damping ratios for {m} fixed-interface modes", damping.modal_ratios.len()),
+                format!(
+                    "{} modal damping ratios for {m} fixed-interface modes",
+                    damping.modal_ratios.len()
+                ),
             ));
         }
         if let Some(z) = damping.modal_ratios.iter().find(|z| !(**z >= 0.0 && z.is_finite())) {
-            return Err(invalid(body, format!("modal damping ratios must be finite and >= 0, got {z}")));
+            return Err(invalid(
+                body,
+                format!("modal damping ratios must be finite and >= 0, got {z}"),
+            ));
         }
         let positions: Vec<Vector3<f64>> = body.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
         let com = Vector3::from(inertia.center_of_mass);
@@ -220,7 +263,11 @@ impl Superelement {
         // body whose only interface sits at the frame.
         let Ic = Matrix3::from_fn(|i, j| inertia.inertia_com[i][j]);
         let gyration = (Ic.trace() / (2.0 * inertia.mass)).max(0.0).sqrt();
-        let length = x.iter().map(|v| v.norm()).fold(gyration, f64::max).max(f64::MIN_POSITIVE);
+        let length = x
+            .iter()
+            .map(|v| v.norm())
+            .fold(gyration, f64::max)
+            .max(f64::MIN_POSITIVE);
         // (3.9) must be solvable for the undeformed body.
         let G = phi_j_psi(Phi_j.as_ref(), &x, &vec![Matrix3::identity(); N]);
         match crate::frame::inverse_with_rcond(&G) {
@@ -361,11 +408,15 @@ impl Superelement {
                 s.eta_dot.len()
             ));
         }
-        let finite = s.r.iter().chain(&s.v).chain(&s.omega).all(|v| v.iter().all(|x| x.is_finite()))
-            && s.R.iter().all(|q| q.coords.iter().all(|x| x.is_finite()))
-            && s.eta.iter().chain(&s.eta_dot).all(|x| x.is_finite())
-            && s.frame.r.iter().all(|x| x.is_finite())
-            && s.frame.R.coords.iter().all(|x| x.is_finite());
+        let finite =
+            s.r.iter()
+                .chain(&s.v)
+                .chain(&s.omega)
+                .all(|v| v.iter().all(|x| x.is_finite()))
+                && s.R.iter().all(|q| q.coords.iter().all(|x| x.is_finite()))
+                && s.eta.iter().chain(&s.eta_dot).all(|x| x.is_finite())
+                && s.frame.r.iter().all(|x| x.is_finite())
+                && s.frame.R.coords.iter().all(|x| x.is_finite());
         if !finite {
             return bad("the state has a non-finite entry".into());
         }
@@ -379,7 +430,12 @@ impl Superelement {
     }
 
     /// Like [`Self::kinematics`] for a given frame (not solved; for tests of the local maps).
-    pub fn kinematics_at(&self, state: &BodyState, frame: Frame, iterations: usize) -> Result<Kinematics, SuperelementError> {
+    pub fn kinematics_at(
+        &self,
+        state: &BodyState,
+        frame: Frame,
+        iterations: usize,
+    ) -> Result<Kinematics, SuperelementError> {
         let mut q = vec![0.0; self.n];
         local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut q);
         Kinematics::new(frame, iterations, q, &self.x, self.Phi_j.as_ref())
@@ -401,7 +457,9 @@ impl Superelement {
     pub fn local_velocity(&self, kin: &Kinematics, state: &BodyState) -> Vec<f64> {
         let y = kin.rotate(&state.velocity_vector(), false);
         let B = kin.B();
-        (0..self.n).map(|i| (0..self.n).map(|j| B[(i, j)] * y[j]).sum()).collect()
+        (0..self.n)
+            .map(|i| (0..self.n).map(|j| B[(i, j)] * y[j]).sum())
+            .collect()
     }
 }
 

@@ -23,7 +23,11 @@ pub enum SuperelementError {
     /// ($L$: body size). Usually the warm start (the previous frame) is far from the new state:
     /// take a smaller step, or start from the frame of a nearby state.
     #[error("frame solve (2.6) did not converge in {iterations} iterations: residual {residual:.3e} > tolerance {tolerance:.3e}")]
-    FrameNotConverged { iterations: usize, residual: f64, tolerance: f64 },
+    FrameNotConverged {
+        iterations: usize,
+        residual: f64,
+        tolerance: f64,
+    },
     /// $\boldsymbol\Phi_j\boldsymbol\Phi_{rig}$ (3.9) is singular: the frame cannot see all
     /// six rigid motions of the (deformed) interface set. `rcond` is the ratio of the smallest
     /// to the largest singular value.

@@ -15,16 +15,25 @@
 //! Notation as in [`crate::transform`]: $\boldsymbol\xi = \mathbf Y\mathbf y = [\mathbf V;\ \boldsymbol\Omega]$
 //! (frame velocity, body axes), $\dot{\mathbf q}^{jj} = \mathbf B\mathbf y$, $\mathbf N_y$,
 //! $\boldsymbol\Omega_q = \partial\boldsymbol\Omega/\partial\mathbf q^{jj} = (\mathbf Z_j\mathbf N_y)_r$.
+//!
+//! # Cost
+//!
+//! No product here is dense in $(6+n)^3$: $\mathbf X = [\mathbf 0; \mathbf I] + [\mathbf I_6; -\boldsymbol\Psi]\mathbf Z_j$
+//! is the identity plus rank 6, $\boldsymbol\Psi$ and $\mathbf N_y$ are block-sparse, so every
+//! product with $\mathbf X$, $\mathbf P$, $\mathbf T_j$ or $\mathbf B$ costs $O(n^2)$ times 6
+//! ([`Kinematics`]`::mul_x`, `xt_mul`, `mul_t`, `tt_mul`).
 
 #![allow(non_snake_case)]
 
 use crate::body::Superelement;
+use crate::mass::{add_mul3t, matvec, mul3, FfrForce, FfrScratch};
 use crate::so3::{self, skew};
-use crate::transform::{gemm, mul_blocks, w_stack, Blocks, Kinematics};
+use crate::transform::{copy_mat, gemm, lambda_right, lambda_t_left, mul_blocks, Blocks, Kinematics};
 use faer::{Accum, Mat};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 /// Velocity-level quantities shared by all forces of one evaluation.
+#[derive(Clone, Debug)]
 pub(crate) struct Motion {
     /// $\mathbf y = \bar{\mathbf R}^T\dot{\mathbf q}$.
     pub y: Vec<f64>,
@@ -36,37 +45,56 @@ pub(crate) struct Motion {
     pub xi: [f64; 6],
     /// $\dot{\mathbf q}^{jj} = \mathbf B\mathbf y$.
     pub c: Vec<f64>,
-    /// $\mathbf N_y$ and $\mathbf X\mathbf N_y$ (only with tangents).
+    /// $\mathbf N_y$.
     pub n_y: Blocks,
-    pub XNy: Mat<f64>,
+    /// $\mathbf Z_j\mathbf N_y$ ($6\times n$; rows 3..6 are $\boldsymbol\Omega_q$).
+    pub ZNy: Mat<f64>,
 }
 
 impl Motion {
-    pub fn new(kin: &Kinematics, qd: &[f64], qdd: &[f64], g: &Vector3<f64>, tangents: bool) -> Self {
+    pub fn new(N: usize, n: usize) -> Self {
+        Self {
+            y: vec![0.0; n],
+            a: vec![0.0; n],
+            g: Vector3::zeros(),
+            xi: [0.0; 6],
+            c: vec![0.0; n],
+            n_y: Blocks::zeros(N),
+            ZNy: Mat::zeros(6, n),
+        }
+    }
+
+    pub fn update(&mut self, kin: &Kinematics, qd: &[f64], qdd: &[f64], g: &Vector3<f64>, tangents: bool) {
         let n = kin.n();
-        let y = kin.rotate(qd, false);
-        let a = kin.rotate(qdd, false);
-        let P = &kin.P;
-        let mut xi = [0.0; 6];
-        let mut c = vec![0.0; n];
+        let N = kin.n_interfaces();
+        kin.rotate_into(qd, false, &mut self.y);
+        kin.rotate_into(qdd, false, &mut self.a);
+        self.g = kin.R_j.transpose() * g;
+        self.xi = [0.0; 6];
         for j in 0..n {
-            let yj = y[j];
+            let p = kin.P.col_as_slice(j);
             for i in 0..6 {
-                xi[i] += P[(i, j)] * yj;
-            }
-            for i in 0..n {
-                c[i] += P[(6 + i, j)] * yj;
+                self.xi[i] += p[i] * self.y[j];
             }
         }
-        let (n_y, XNy) = if tangents {
-            let nb = kin.n_y(&y, &xi);
-            let mut XNy = Mat::zeros(6 + n, n);
-            mul_blocks(kin.X.as_ref(), &nb, &mut XNy, Accum::Replace);
-            (nb, XNy)
-        } else {
-            (Blocks::zeros(0), Mat::zeros(0, 0))
-        };
-        Self { y, a, g: kin.R_j.transpose() * g, xi, c, n_y, XNy }
+        // c = Lambda y - Psi xi, block by block.
+        let (xt, xr) = (
+            Vector3::new(self.xi[0], self.xi[1], self.xi[2]),
+            Vector3::new(self.xi[3], self.xi[4], self.xi[5]),
+        );
+        for k in 0..N {
+            let yu = Vector3::new(self.y[6 * k], self.y[6 * k + 1], self.y[6 * k + 2]);
+            let yt = Vector3::new(self.y[6 * k + 3], self.y[6 * k + 4], self.y[6 * k + 5]);
+            let cu = yu - xt - xr.cross(&kin.r_loc[k]);
+            let ct = kin.Lambda[k] * (yt - xr);
+            self.c[6 * k..6 * k + 3].copy_from_slice(cu.as_slice());
+            self.c[6 * k + 3..6 * k + 6].copy_from_slice(ct.as_slice());
+        }
+        self.c[6 * N..].copy_from_slice(&self.y[6 * N..]);
+        if tangents {
+            kin.fill_n_y(&self.y, &self.xi, &mut self.n_y);
+            mul_blocks(kin.Z(), &self.n_y, &mut self.ZNy, Accum::Replace);
+        }
     }
 
     pub fn omega(&self) -> Vector3<f64> {
@@ -75,6 +103,7 @@ impl Motion {
 }
 
 /// Body-axis forces and their partials, accumulated over the force kinds.
+#[derive(Clone, Debug)]
 pub(crate) struct Local {
     pub rho_in: Vec<f64>,
     pub rho_el: Vec<f64>,
@@ -89,37 +118,139 @@ pub(crate) struct Local {
     pub Dy: Mat<f64>,
     /// $\partial\boldsymbol\rho/\partial\mathbf g^L$ of the residual ($n\times3$).
     pub Dg: Mat<f64>,
+    /// $\sum\alpha_i\mathbf F_i$ of every term $\mathbf P^T\mathbf F_i$ of the residual: their
+    /// $\partial(\mathbf P^T\mathbf F)/\partial\mathbf q^{jj}|_{\mathbf F}$ is linear in $\mathbf F$, so one
+    /// call of [`Kinematics`]`::add_d_pt` serves them all.
+    pub F_sum: Vec<f64>,
 }
 
 impl Local {
-    pub fn new(n: usize, tangents: bool) -> Self {
-        let t = if tangents { n } else { 0 };
+    pub fn new(n: usize) -> Self {
         Self {
             rho_in: vec![0.0; n],
             rho_el: vec![0.0; n],
             rho_d: vec![0.0; n],
             rho_g: vec![0.0; n],
             M: Mat::zeros(n, n),
-            Dq: Mat::zeros(t, t),
-            Dy: Mat::zeros(t, t),
-            Dg: Mat::zeros(t, if tangents { 3 } else { 0 }),
+            Dq: Mat::zeros(n, n),
+            Dy: Mat::zeros(n, n),
+            Dg: Mat::zeros(n, 3),
+            F_sum: vec![0.0; 6 + n],
+        }
+    }
+
+    pub fn clear(&mut self, tangents: bool) {
+        for v in [&mut self.rho_in, &mut self.rho_el, &mut self.rho_d, &mut self.rho_g] {
+            v.iter_mut().for_each(|x| *x = 0.0);
+        }
+        if tangents {
+            self.F_sum.fill(0.0);
+            self.Dq.fill(0.0);
+            self.Dy.fill(0.0);
+            self.Dg.fill(0.0);
         }
     }
 }
 
-/// $\mathbf P^T\mathbf F$ into `out` (overwrites).
-fn pt_mul(kin: &Kinematics, F: &[f64], out: &mut [f64]) {
-    let n = kin.n();
-    for j in 0..n {
-        out[j] = (0..6 + n).map(|i| kin.P[(i, j)] * F[i]).sum();
+/// Buffers of one evaluation, sized once for a body ([`crate::Workspace`] holds it).
+#[derive(Clone, Debug)]
+pub(crate) struct Scratch {
+    pub ffr: FfrForce,
+    pub ffr_scratch: FfrScratch,
+    /// $(6+n)\times n$.
+    pub MX: Mat<f64>,
+    pub FX: Mat<f64>,
+    pub MXNy: Mat<f64>,
+    pub E: Mat<f64>,
+    pub E2: Mat<f64>,
+    /// $(6+n)\times6$.
+    pub t6: Mat<f64>,
+    pub t6b: Mat<f64>,
+    /// $n\times6$, $6\times n$, $(6+n)\times3$.
+    pub n6: Mat<f64>,
+    pub six_n: Mat<f64>,
+    pub six_three: Mat<f64>,
+    pub MXUW: Mat<f64>,
+    /// $n\times n$.
+    pub nn1: Mat<f64>,
+    pub nn2: Mat<f64>,
+    /// $n\times3$, $3\times n$.
+    pub n3a: Mat<f64>,
+    pub n3b: Mat<f64>,
+    pub n3c: Mat<f64>,
+    pub three_n: Mat<f64>,
+    pub blocks: Blocks,
+    pub blocks2: Blocks,
+    /// Vectors of length $n$ and $6+n$.
+    pub v1: Vec<f64>,
+    pub v2: Vec<f64>,
+    pub F6: Vec<f64>,
+    pub nu: Vec<f64>,
+    pub nu_dot: Vec<f64>,
+}
+
+impl Scratch {
+    pub fn new(N: usize, n: usize) -> Self {
+        let m6 = || Mat::zeros(6 + n, n);
+        Self {
+            ffr: FfrForce::zeros(n),
+            ffr_scratch: FfrScratch::new(n),
+            MX: m6(),
+            FX: m6(),
+            MXNy: m6(),
+            E: m6(),
+            E2: m6(),
+            t6: Mat::zeros(6 + n, 6),
+            t6b: Mat::zeros(6 + n, 6),
+            n6: Mat::zeros(n, 6),
+            six_n: Mat::zeros(6, n),
+            six_three: Mat::zeros(6, 3),
+            MXUW: Mat::zeros(6 + n, 3),
+            nn1: Mat::zeros(n, n),
+            nn2: Mat::zeros(n, n),
+            n3a: Mat::zeros(n, 3),
+            n3b: Mat::zeros(n, 3),
+            n3c: Mat::zeros(n, 3),
+            three_n: Mat::zeros(3, n),
+            blocks: Blocks::zeros(N),
+            blocks2: Blocks::zeros(N),
+            v1: vec![0.0; n],
+            v2: vec![0.0; n],
+            F6: vec![0.0; 6 + n],
+            nu: vec![0.0; 6 + n],
+            nu_dot: vec![0.0; 6 + n],
+        }
     }
 }
 
-/// $\mathbf F = [\mathbf 0_6;\ \mathbf f]$.
-fn lift(f: &[f64]) -> Vec<f64> {
-    let mut F = vec![0.0; 6 + f.len()];
-    F[6..].copy_from_slice(f);
-    F
+/// `out += alpha * x` for vectors.
+fn add_to(out: &mut [f64], x: &[f64], alpha: f64) {
+    for (o, v) in out.iter_mut().zip(x) {
+        *o += alpha * v;
+    }
+}
+
+/// `out += alpha * A` for matrices of the same shape.
+fn add_scaled(out: &mut Mat<f64>, A: &Mat<f64>, alpha: f64) {
+    for j in 0..A.ncols() {
+        for (o, a) in out.col_as_slice_mut(j).iter_mut().zip(A.col_as_slice(j)) {
+            *o += alpha * a;
+        }
+    }
+}
+
+/// $\mathbf W(\mathbf x)$ into `out` ($n\times3$): the stack of $\tilde{\mathbf x}_b$ over the $2N$
+/// interface 3-blocks, zero eta rows.
+pub(crate) fn w_into(x: &[f64], N: usize, out: &mut Mat<f64>) {
+    out.fill(0.0);
+    for b in 0..2 * N {
+        let S = skew(&Vector3::new(x[3 * b], x[3 * b + 1], x[3 * b + 2]));
+        for i in 0..3 {
+            for j in 0..3 {
+                out[(3 * b + i, j)] = S[(i, j)];
+            }
+        }
+    }
 }
 
 impl Superelement {
@@ -133,16 +264,18 @@ impl Superelement {
     /// exactly ([`crate::transform`]). Its derivative: $\partial\boldsymbol\rho_{el}/\partial\mathbf q^{jj}
     /// = \partial(\mathbf P^T[\mathbf 0;\mathbf f])/\partial\mathbf q^{jj} + \mathbf B^T\mathbf K_{CB}$,
     /// $\mathbf f = \mathbf K_{CB}\mathbf q^{jj}$ ([`Kinematics`]`::add_d_pt`). Tested by
-    /// `tests/unit/fd_tangent.rs::tangents_match_fd` and `tests/unit/invariance.rs`.
-    pub(crate) fn elastic(&self, kin: &Kinematics, loc: &mut Local, tangents: bool) {
-        let n = self.n;
-        let mut f = vec![0.0; n];
-        crate::mass::matvec(&self.K_CB, &kin.q_jj, &mut f);
-        let F = lift(&f);
-        pt_mul(kin, &F, &mut loc.rho_el);
+    /// `tests/unit/fd_tangent.rs::elastic_tangent_matches_fd`, `tests/unit/invariance.rs` and
+    /// `tests/unit/energy.rs::gravity_is_the_gradient_of_its_potential`.
+    pub(crate) fn elastic(&self, kin: &Kinematics, loc: &mut Local, w: &mut Scratch, tangents: bool) {
+        matvec(&self.K_CB, &kin.q_jj, &mut w.v1);
+        w.F6[..6].fill(0.0);
+        w.F6[6..].copy_from_slice(&w.v1);
+        kin.pt_vec(&w.F6, &mut loc.rho_el);
         if tangents {
-            kin.add_d_pt(&F, &mut loc.Dq, 1.0);
-            gemm(&mut loc.Dq, kin.B().transpose(), self.K_CB.as_ref(), 1.0, Accum::Add);
+            add_to(&mut loc.F_sum, &w.F6, 1.0);
+            kin.tt_mul(self.K_CB.as_ref(), &mut w.six_n, &mut w.nn1);
+            lambda_t_left(&kin.Lambda, &mut w.nn1);
+            add_scaled(&mut loc.Dq, &w.nn1, 1.0);
         }
     }
 
@@ -152,26 +285,33 @@ impl Superelement {
     /// # Derivation
     /// The Rayleigh dissipation function $\tfrac12\dot{\mathbf q}^{jjT}\mathbf D\dot{\mathbf q}^{jj}$
     /// differentiated by $\dot{\mathbf q}$. $\partial/\partial\mathbf y = \mathbf B^T\mathbf D\mathbf B$;
-    /// $\partial/\partial\mathbf q^{jj} = \partial(\mathbf P^T[\mathbf 0;\mathbf D\dot{\mathbf q}^{jj}])/\partial\mathbf q^{jj}
-    /// + \mathbf B^T\mathbf D\,\mathbf T_j\mathbf N_y$ (since $D(\mathbf B\mathbf y) = \mathbf T_j\mathbf N_y$).
-    /// Tested by `tests/unit/fd_tangent.rs::tangents_match_fd` (damped bodies).
-    pub(crate) fn damping_force(&self, kin: &Kinematics, mo: &Motion, loc: &mut Local, tangents: bool) {
+    /// $\partial/\partial\mathbf q^{jj} = \partial(\mathbf P^T[\mathbf 0;\mathbf D\dot{\mathbf q}^{jj}])/\partial\mathbf q^{jj} +
+    /// \mathbf B^T\mathbf D\,\mathbf T_j\mathbf N_y$ (since $D(\mathbf B\mathbf y) = \mathbf T_j\mathbf N_y$).
+    /// Tested by `tests/unit/fd_tangent.rs::damping_tangents_match_fd`.
+    pub(crate) fn damping_force(
+        &self,
+        kin: &Kinematics,
+        mo: &Motion,
+        loc: &mut Local,
+        w: &mut Scratch,
+        tangents: bool,
+    ) {
         if !self.damped {
             return;
         }
-        let n = self.n;
-        let mut f = vec![0.0; n];
-        crate::mass::matvec(&self.D, &mo.c, &mut f);
-        let F = lift(&f);
-        pt_mul(kin, &F, &mut loc.rho_d);
+        matvec(&self.D, &mo.c, &mut w.v1);
+        w.F6[..6].fill(0.0);
+        w.F6[6..].copy_from_slice(&w.v1);
+        kin.pt_vec(&w.F6, &mut loc.rho_d);
         if tangents {
-            kin.add_d_pt(&F, &mut loc.Dq, 1.0);
-            let mut DB = Mat::zeros(n, n);
-            gemm(&mut DB, self.D.as_ref(), kin.B(), 1.0, Accum::Replace);
-            gemm(&mut loc.Dy, kin.B().transpose(), DB.as_ref(), 1.0, Accum::Add);
-            let mut DTN = Mat::zeros(n, n);
-            gemm(&mut DTN, self.D.as_ref(), mo.XNy.as_ref().subrows(6, n), 1.0, Accum::Replace);
-            gemm(&mut loc.Dq, kin.B().transpose(), DTN.as_ref(), 1.0, Accum::Add);
+            add_to(&mut loc.F_sum, &w.F6, 1.0);
+            // S = Lambda^T T^T D T.
+            kin.mul_t(self.D.as_ref(), &mut w.n6, &mut w.nn1);
+            kin.tt_mul(w.nn1.as_ref(), &mut w.six_n, &mut w.nn2);
+            lambda_t_left(&kin.Lambda, &mut w.nn2);
+            mul_blocks(w.nn2.as_ref(), &mo.n_y, &mut loc.Dq, Accum::Add);
+            lambda_right(&kin.Lambda, &mut w.nn2);
+            add_scaled(&mut loc.Dy, &w.nn2, 1.0);
         }
     }
 
@@ -185,49 +325,69 @@ impl Superelement {
     /// $-\mathbf Q_g^T[\delta\mathbf r_j^L;\ \delta\boldsymbol\Pi;\ \delta\mathbf q^{jj}]$, transformed by
     /// $\mathbf P$ ((3.11) in body axes). Partials: $\partial\mathbf Q_g/\partial\mathbf q^{jj} =
     /// [\mathbf 0;\ -\tilde{\mathbf g}^L\mathbf S_t;\ \mathbf 0]$, $\partial\mathbf Q_g/\partial\mathbf g^L =
-    /// [m\mathbf I;\ \tilde{\mathbf s};\ \mathbf S_t^T]$. Tested by `tests/unit/fd_tangent.rs::tangents_match_fd`
+    /// [m\mathbf I;\ \tilde{\mathbf s};\ \mathbf S_t^T]$. Tested by `tests/unit/fd_tangent.rs::gravity_tangent_matches_fd`
     /// and `tests/unit/energy.rs::gravity_is_the_gradient_of_its_potential`.
-    pub(crate) fn gravity(&self, kin: &Kinematics, mo: &Motion, loc: &mut Local, tangents: bool) {
+    pub(crate) fn gravity(&self, kin: &Kinematics, mo: &Motion, loc: &mut Local, w: &mut Scratch, tangents: bool) {
         let n = self.n;
         let I = &self.inertia;
         let g = mo.g;
-        if g == Vector3::zeros() && !tangents {
+        if g == Vector3::zeros() {
+            // Zero force; its derivatives are zero too except through g itself.
+            if tangents {
+                self.gravity_dg(kin, loc, w, &(I.d * I.mass + mul3(&I.S_t, &kin.q_jj)));
+            }
             return;
         }
-        let s = I.d * I.mass + crate::mass::mul3(&I.S_t, &kin.q_jj);
-        let mut Q = vec![0.0; 6 + n];
+        let s = I.d * I.mass + mul3(&I.S_t, &kin.q_jj);
+        let Q = &mut w.F6;
         let sg = s.cross(&g);
         for i in 0..3 {
             Q[i] = I.mass * g[i];
             Q[3 + i] = sg[i];
         }
-        crate::mass::add_mul3t(&mut Q[6..], &I.S_t, &g, 1.0);
-        pt_mul(kin, &Q, &mut loc.rho_g);
+        Q[6..].fill(0.0);
+        add_mul3t(&mut Q[6..], &I.S_t, &g, 1.0);
+        kin.pt_vec(Q, &mut loc.rho_g);
         if tangents {
-            kin.add_d_pt(&Q, &mut loc.Dq, -1.0);
-            let Y = kin.Y();
-            let gt = skew(&g);
+            add_to(&mut loc.F_sum, &w.F6, -1.0);
             // - Y_r^T (-g~ S_t) = Y_r^T g~ S_t
-            let mut GS = Mat::zeros(3, n);
+            let gt = skew(&g);
             for j in 0..n {
                 let v = gt * Vector3::new(I.S_t[(0, j)], I.S_t[(1, j)], I.S_t[(2, j)]);
                 for i in 0..3 {
-                    GS[(i, j)] = v[i];
+                    w.three_n[(i, j)] = v[i];
                 }
             }
-            gemm(&mut loc.Dq, Y.subrows(3, 3).transpose(), GS.as_ref(), 1.0, Accum::Add);
-            // Dg -= Y_t^T m + Y_r^T s~ + B^T S_t^T
-            let st = skew(&s);
-            for j in 0..n {
-                let yt = Vector3::new(Y[(0, j)], Y[(1, j)], Y[(2, j)]);
-                let yr = Vector3::new(Y[(3, j)], Y[(4, j)], Y[(5, j)]);
-                let v = yt * I.mass + st.transpose() * yr;
-                for i in 0..3 {
-                    loc.Dg[(j, i)] -= v[i];
-                }
-            }
-            gemm(&mut loc.Dg, kin.B().transpose(), I.S_t.as_ref().transpose(), -1.0, Accum::Add);
+            gemm(
+                &mut loc.Dq,
+                kin.Y().subrows(3, 3).transpose(),
+                w.three_n.as_ref(),
+                1.0,
+                Accum::Add,
+            );
+            self.gravity_dg(kin, loc, w, &s);
         }
+    }
+
+    /// $\partial\boldsymbol\rho/\partial\mathbf g^L$ of the residual: $-\mathbf P^T[m\mathbf I;\ \tilde{\mathbf s};\ \mathbf S_t^T]$.
+    fn gravity_dg(&self, kin: &Kinematics, loc: &mut Local, w: &mut Scratch, s: &Vector3<f64>) {
+        let n = self.n;
+        let I = &self.inertia;
+        let Y = kin.Y();
+        let st = skew(s);
+        for j in 0..n {
+            let yt = Vector3::new(Y[(0, j)], Y[(1, j)], Y[(2, j)]);
+            let yr = Vector3::new(Y[(3, j)], Y[(4, j)], Y[(5, j)]);
+            let v = yt * I.mass + st.transpose() * yr;
+            for i in 0..3 {
+                loc.Dg[(j, i)] -= v[i];
+                w.n3a[(j, i)] = I.S_t[(i, j)];
+            }
+        }
+        // - B^T S_t^T = - Lambda^T T^T S_t^T
+        kin.tt_mul(w.n3a.as_ref(), &mut w.six_three, &mut w.n3b);
+        lambda_t_left(&kin.Lambda, &mut w.n3b);
+        add_scaled(&mut loc.Dg, &w.n3b, -1.0);
     }
 
     /// Inertia force of the `Exact` variant: $\boldsymbol\rho_{in} = \mathbf P^T\mathbf F(\mathbf q^{jj},
@@ -244,147 +404,158 @@ impl Superelement {
     /// with $\mathbf s = \mathbf Z_j\mathbf N_y\dot{\mathbf q}^{jj}$, $\mathbf c = \dot{\mathbf q}^{jj}$ and
     /// $\mathbf U$ the $n\times3$ stack of $\tilde{\mathbf c}_{u_k}$ and $-D\mathbf J_l^{-1}(\boldsymbol\theta_k)[\mathbf c_{\theta_k}]$:
     ///
-    /// * $\partial\boldsymbol\rho/\partial\mathbf q^{jj} = \partial(\mathbf P^T\mathbf F)/\partial\mathbf q^{jj}|_{\mathbf F}
-    ///   + \mathbf P^T[\mathbf F_q + \mathbf F_\nu\mathbf X\mathbf N_y + \mathbf M_{ffr}\boldsymbol\Xi]$,
-    ///   $\boldsymbol\Xi = \mathbf X(\mathbf N_{\dot y} - \tilde{\mathbf N}_s + \mathbf Q_c) + (\mathbf X\mathbf U +
-    ///   \mathbf P\mathbf W(\mathbf y))\boldsymbol\Omega_q + \mathbf X\mathbf N_y\mathbf T_j\mathbf N_y$, where
+    /// * $\partial\boldsymbol\rho/\partial\mathbf q^{jj} = \partial(\mathbf P^T\mathbf F)/\partial\mathbf q^{jj}|_{\mathbf F} +
+    ///   \mathbf P^T[\mathbf F_q + \mathbf F_\nu\mathbf X\mathbf N_y + \mathbf M_{ffr}\boldsymbol\Xi]$,
+    ///   $\boldsymbol\Xi = \mathbf X(\mathbf N_{\dot y} - \tilde{\mathbf N}_s + \mathbf Q_c) + \mathbf X(\mathbf U +
+    ///   \boldsymbol\Lambda\mathbf W(\mathbf y))\boldsymbol\Omega_q + \mathbf X\mathbf N_y\mathbf T_j\mathbf N_y$, where
     ///   $\mathbf Q_c$ has the blocks $\mathbf Q(\boldsymbol\theta_k, \boldsymbol\zeta_{k,r}, \mathbf c_{\theta_k})$
     ///   ([`so3::left_jacobian_inv_second`]) on $\boldsymbol\theta_k$: the second derivative of
     ///   $\mathbf P\mathbf y$ along $\dot{\mathbf q}^{jj}$;
     /// * $\partial\boldsymbol\rho/\partial\mathbf y = \mathbf P^T[\mathbf F_\nu\mathbf P + \mathbf M_{ffr}\boldsymbol\Sigma]$,
-    ///   $\boldsymbol\Sigma = -\mathbf P\,\mathrm{diag}(\tilde{\boldsymbol\Omega}) + \mathbf X\,\mathrm{diag}_\theta(D\mathbf J_l^{-1}[\mathbf c_{\theta_k}])
-    ///   + (\mathbf X\mathbf U + \mathbf P\mathbf W(\mathbf y))\mathbf Y_r + \mathbf X\mathbf N_y\mathbf B$.
+    ///   $\boldsymbol\Sigma = -\mathbf P\,\mathrm{diag}(\tilde{\boldsymbol\Omega}) + \mathbf X\,\mathrm{diag}_\theta(D\mathbf J_l^{-1}[\mathbf c_{\theta_k}]) +
+    ///   \mathbf X(\mathbf U + \boldsymbol\Lambda\mathbf W(\mathbf y))\mathbf Y_r + \mathbf X\mathbf N_y\mathbf B$.
     ///
-    /// Tested by `tests/unit/fd_tangent.rs::tangents_match_fd` (Exact, every frame choice) and
-    /// `tests/unit/energy.rs` (power balance, rigid kinetic energy).
-    pub(crate) fn exact_inertia(&self, kin: &Kinematics, mo: &Motion, loc: &mut Local, tangents: bool) {
+    /// All products go through $\mathbf M_{ffr}\mathbf X$ and $\mathbf F_\nu\mathbf X$ (module docs, Cost).
+    /// Tested by `tests/unit/fd_tangent.rs::tangents_match_fd` and `::inertia_tangents_match_fd`
+    /// (Exact, every frame choice) and `tests/unit/energy.rs` (power balance, rigid kinetic energy).
+    pub(crate) fn exact_inertia(
+        &self,
+        kin: &Kinematics,
+        mo: &Motion,
+        loc: &mut Local,
+        w: &mut Scratch,
+        tangents: bool,
+    ) {
         let n = self.n;
         let N = self.n_interfaces;
         let Om = mo.omega();
-        let P = &kin.P;
-        // nu = [xi; c]; ydot = a + W(y) Om.
-        let mut nu = vec![0.0; 6 + n];
-        nu[..6].copy_from_slice(&mo.xi);
-        nu[6..].copy_from_slice(&mo.c);
-        let mut ydot = mo.a.clone();
+        // ydot = a + W(y) Om  (in v2); Lambda ydot (in v1).
         for b in 0..2 * N {
             let yb = Vector3::new(mo.y[3 * b], mo.y[3 * b + 1], mo.y[3 * b + 2]);
             let v = yb.cross(&Om);
             for i in 0..3 {
-                ydot[3 * b + i] += v[i];
+                w.v2[3 * b + i] = mo.a[3 * b + i] + v[i];
             }
         }
-        // nu_dot = P ydot + X N_y c. N_y is needed even without tangents: build it locally.
-        let mut nu_dot = vec![0.0; 6 + n];
-        for j in 0..n {
-            for i in 0..6 + n {
-                nu_dot[i] += P[(i, j)] * ydot[j];
-            }
-        }
-        let (nb_owned, XNy_owned);
-        let (nb, XNy) = if tangents {
-            (&mo.n_y, &mo.XNy)
-        } else {
-            nb_owned = kin.n_y(&mo.y, &mo.xi);
-            let mut m = Mat::zeros(6 + n, n);
-            mul_blocks(kin.X.as_ref(), &nb_owned, &mut m, Accum::Replace);
-            XNy_owned = m;
-            (&nb_owned, &XNy_owned)
-        };
-        let _ = nb;
-        for j in 0..n {
-            for i in 0..6 + n {
-                nu_dot[i] += XNy[(i, j)] * mo.c[j];
-            }
-        }
-        let ffr = self.inertia.force(&kin.q_jj, &nu, &nu_dot, tangents);
-        pt_mul(kin, &ffr.F, &mut loc.rho_in);
-        if !tangents {
-            let M = self.inertia.mass_matrix(&kin.q_jj);
-            let mut MP = Mat::zeros(6 + n, n);
-            gemm(&mut MP, M.as_ref(), P.as_ref(), 1.0, Accum::Replace);
-            gemm(&mut loc.M, P.as_ref().transpose(), MP.as_ref(), 1.0, Accum::Replace);
-            return;
-        }
-        let Mf = &ffr.M;
-        let mut MP = Mat::zeros(6 + n, n);
-        gemm(&mut MP, Mf.as_ref(), P.as_ref(), 1.0, Accum::Replace);
-        gemm(&mut loc.M, P.as_ref().transpose(), MP.as_ref(), 1.0, Accum::Replace);
-
-        let c = &mo.c;
-        // s = Z N_y c (first six rows of XNy c).
-        let mut s = [0.0; 6];
-        for j in 0..n {
-            for i in 0..6 {
-                s[i] += XNy[(i, j)] * c[j];
-            }
-        }
+        w.v2[6 * N..].copy_from_slice(&mo.a[6 * N..]);
+        // nu = [xi; c]; nu_dot = P ydot + X (N_y c).
+        w.nu[..6].copy_from_slice(&mo.xi);
+        w.nu[6..].copy_from_slice(&mo.c);
         let mut xi_yd = [0.0; 6];
         for j in 0..n {
+            let p = kin.P.col_as_slice(j);
             for i in 0..6 {
-                xi_yd[i] += P[(i, j)] * ydot[j];
+                xi_yd[i] += p[i] * w.v2[j];
             }
         }
+        // N_y c and its Z-image s.
+        let mut s = [0.0; 6];
+        let Ot = skew(&Om);
+        {
+            let th = |k| crate::local_coordinates::theta_of(&kin.q_jj, k);
+            let c = &mo.c;
+            for k in 0..N {
+                let cu = Vector3::new(c[6 * k], c[6 * k + 1], c[6 * k + 2]);
+                let ct = Vector3::new(c[6 * k + 3], c[6 * k + 4], c[6 * k + 5]);
+                let yr = Vector3::new(mo.y[6 * k + 3], mo.y[6 * k + 4], mo.y[6 * k + 5]);
+                let nu = -(Ot * cu);
+                let nr = so3::left_jacobian_inv_derivative(&th(k), &(yr - Om)) * ct;
+                w.v1[6 * k..6 * k + 3].copy_from_slice(nu.as_slice());
+                w.v1[6 * k + 3..6 * k + 6].copy_from_slice(nr.as_slice());
+            }
+            w.v1[6 * N..].fill(0.0);
+        }
+        for j in 0..6 * N {
+            let z = kin.X.col_as_slice(j);
+            for i in 0..6 {
+                s[i] += z[i] * w.v1[j];
+            }
+        }
+        // nu_dot: top = xi_yd + s ; bottom = Lambda ydot - Psi xi_yd + (N_y c) - Psi s.
+        let (t6, r6) = (
+            Vector3::new(xi_yd[0] + s[0], xi_yd[1] + s[1], xi_yd[2] + s[2]),
+            Vector3::new(xi_yd[3] + s[3], xi_yd[4] + s[4], xi_yd[5] + s[5]),
+        );
+        w.nu_dot[..6].copy_from_slice(&[t6.x, t6.y, t6.z, r6.x, r6.y, r6.z]);
+        for k in 0..N {
+            let yu = Vector3::new(w.v2[6 * k], w.v2[6 * k + 1], w.v2[6 * k + 2]);
+            let yt = kin.Lambda[k] * Vector3::new(w.v2[6 * k + 3], w.v2[6 * k + 4], w.v2[6 * k + 5]);
+            let bu = yu - t6 - r6.cross(&kin.r_loc[k]);
+            let bt = yt - kin.Lambda[k] * r6;
+            for i in 0..3 {
+                w.nu_dot[6 + 6 * k + i] = bu[i] + w.v1[6 * k + i];
+                w.nu_dot[6 + 6 * k + 3 + i] = bt[i] + w.v1[6 * k + 3 + i];
+            }
+        }
+        w.nu_dot[6 + 6 * N..].copy_from_slice(&w.v2[6 * N..]);
+
+        self.inertia
+            .force_into(&kin.q_jj, &w.nu, &w.nu_dot, true, &mut w.ffr, &mut w.ffr_scratch);
+        kin.pt_vec(&w.ffr.F, &mut loc.rho_in);
+        // Body-axis mass P^T M_ffr P = Lambda^T X^T (M_ffr X) Lambda.
+        kin.mul_x(w.ffr.M.as_ref(), &mut w.t6, &mut w.MX);
+        kin.xt_mul(w.MX.as_ref(), &mut w.six_n, &mut loc.M, Accum::Replace);
+        lambda_t_left(&kin.Lambda, &mut loc.M);
+        lambda_right(&kin.Lambda, &mut loc.M);
+        if !tangents {
+            return;
+        }
+        let c = &mo.c;
         let Om_yd = Vector3::new(xi_yd[3], xi_yd[4], xi_yd[5]);
         let s_r = Vector3::new(s[3], s[4], s[5]);
-        let mut blocks = Blocks::zeros(N);
-        let mut dj = Blocks::zeros(N);
-        let mut U = Mat::zeros(n, 3);
+        // blocks: N_ydot - N~_s + Q_c ; blocks2: Lambda diag(-Om~) + diag_theta(DJ) ; U + Lambda W(y) in n3a.
+        w.n3a.fill(0.0);
         for k in 0..N {
             let th = crate::local_coordinates::theta_of(&kin.q_jj, k);
             let yr = Vector3::new(mo.y[6 * k + 3], mo.y[6 * k + 4], mo.y[6 * k + 5]);
-            let ydr = Vector3::new(ydot[6 * k + 3], ydot[6 * k + 4], ydot[6 * k + 5]);
+            let ydr = Vector3::new(w.v2[6 * k + 3], w.v2[6 * k + 4], w.v2[6 * k + 5]);
             let cu = Vector3::new(c[6 * k], c[6 * k + 1], c[6 * k + 2]);
             let cth = Vector3::new(c[6 * k + 3], c[6 * k + 4], c[6 * k + 5]);
-            blocks.t[k] = -skew(&Om_yd) - skew(&s_r);
-            blocks.r[k] = so3::left_jacobian_inv_derivative(&th, &(ydr - Om_yd))
+            w.blocks.t[k] = -skew(&Om_yd) - skew(&s_r);
+            w.blocks.r[k] = so3::left_jacobian_inv_derivative(&th, &(ydr - Om_yd))
                 - so3::left_jacobian_inv_derivative(&th, &s_r)
                 + so3::left_jacobian_inv_second(&th, &(yr - Om), &cth);
             let DJ = so3::left_jacobian_inv_directional(&th, &cth);
-            dj.r[k] = DJ;
-            let cut = skew(&cu);
+            w.blocks2.t[k] = -Ot;
+            w.blocks2.r[k] = -(kin.Lambda[k] * Ot) + DJ;
+            let yu = Vector3::new(mo.y[6 * k], mo.y[6 * k + 1], mo.y[6 * k + 2]);
+            let ut = skew(&cu) + skew(&yu);
+            let ur = -DJ + kin.Lambda[k] * skew(&yr);
             for a in 0..3 {
                 for b in 0..3 {
-                    U[(6 * k + a, b)] = cut[(a, b)];
-                    U[(6 * k + 3 + a, b)] = -DJ[(a, b)];
+                    w.n3a[(6 * k + a, b)] = ut[(a, b)];
+                    w.n3a[(6 * k + 3 + a, b)] = ur[(a, b)];
                 }
             }
         }
-        // XU + P W(y): (6+n) x 3.
-        let W = w_stack(&mo.y, N);
-        let mut XUPW = Mat::zeros(6 + n, 3);
-        gemm(&mut XUPW, kin.X.as_ref(), U.as_ref(), 1.0, Accum::Replace);
-        gemm(&mut XUPW, P.as_ref(), W.as_ref(), 1.0, Accum::Add);
-        let Om_q = XNy.as_ref().subrows(3, 3);
-        let TNy = XNy.as_ref().subrows(6, n);
+        kin.mul_x(w.ffr.F_nu.as_ref(), &mut w.t6, &mut w.FX);
+        mul_blocks(w.MX.as_ref(), &mo.n_y, &mut w.MXNy, Accum::Replace);
+        kin.mul_psi(w.MXNy.as_ref(), &mut w.t6b);
+        gemm(&mut w.MXUW, w.MX.as_ref(), w.n3a.as_ref(), 1.0, Accum::Replace);
+        let Om_q = mo.ZNy.as_ref().subrows(3, 3);
 
-        // Xi.
-        let mut Xi = Mat::zeros(6 + n, n);
-        mul_blocks(kin.X.as_ref(), &blocks, &mut Xi, Accum::Replace);
-        gemm(&mut Xi, XUPW.as_ref(), Om_q, 1.0, Accum::Add);
-        gemm(&mut Xi, XNy.as_ref(), TNy, 1.0, Accum::Add);
-        // E = F_q + F_nu XNy + M_ffr Xi ; Dq += P^T E + d(P^T F).
-        let mut E = ffr.F_q.clone();
-        gemm(&mut E, ffr.F_nu.as_ref(), XNy.as_ref(), 1.0, Accum::Add);
-        gemm(&mut E, Mf.as_ref(), Xi.as_ref(), 1.0, Accum::Add);
-        gemm(&mut loc.Dq, P.as_ref().transpose(), E.as_ref(), 1.0, Accum::Add);
-        kin.add_d_pt(&ffr.F, &mut loc.Dq, 1.0);
+        // E = F_q + FX N_y + MX blocks + MXUW Om_q + MXNy N_y - (MXNy Psi) ZNy ; Dq += Lambda^T X^T E.
+        copy_mat(&mut w.E, w.ffr.F_q.as_ref());
+        mul_blocks(w.FX.as_ref(), &mo.n_y, &mut w.E, Accum::Add);
+        mul_blocks(w.MX.as_ref(), &w.blocks, &mut w.E, Accum::Add);
+        mul_blocks(w.MXNy.as_ref(), &mo.n_y, &mut w.E, Accum::Add);
+        gemm(&mut w.E, w.MXUW.as_ref(), Om_q, 1.0, Accum::Add);
+        gemm(&mut w.E, w.t6b.as_ref(), mo.ZNy.as_ref(), -1.0, Accum::Add);
+        kin.xt_mul(w.E.as_ref(), &mut w.six_n, &mut w.nn1, Accum::Replace);
+        lambda_t_left(&kin.Lambda, &mut w.nn1);
+        add_scaled(&mut loc.Dq, &w.nn1, 1.0);
+        add_to(&mut loc.F_sum, &w.ffr.F, 1.0);
 
-        // Sigma for d/dy.
-        let mut om_blocks = Blocks::zeros(N);
-        for k in 0..N {
-            om_blocks.t[k] = -skew(&Om);
-            om_blocks.r[k] = -skew(&Om);
-        }
-        let mut Sigma = Mat::zeros(6 + n, n);
-        mul_blocks(P.as_ref(), &om_blocks, &mut Sigma, Accum::Replace);
-        mul_blocks(kin.X.as_ref(), &dj, &mut Sigma, Accum::Add);
-        gemm(&mut Sigma, XUPW.as_ref(), kin.Y().subrows(3, 3), 1.0, Accum::Add);
-        gemm(&mut Sigma, XNy.as_ref(), kin.B(), 1.0, Accum::Add);
-        let mut E2 = Mat::zeros(6 + n, n);
-        gemm(&mut E2, ffr.F_nu.as_ref(), P.as_ref(), 1.0, Accum::Replace);
-        gemm(&mut E2, Mf.as_ref(), Sigma.as_ref(), 1.0, Accum::Add);
-        gemm(&mut loc.Dy, P.as_ref().transpose(), E2.as_ref(), 1.0, Accum::Add);
+        // E2 = (FX + MXNy - (MXNy Psi) Z) Lambda + MX blocks2 + MXUW Y_r ; Dy += Lambda^T X^T E2.
+        copy_mat(&mut w.E2, w.FX.as_ref());
+        add_scaled(&mut w.E2, &w.MXNy, 1.0);
+        gemm(&mut w.E2, w.t6b.as_ref(), kin.Z(), -1.0, Accum::Add);
+        lambda_right(&kin.Lambda, &mut w.E2);
+        mul_blocks(w.MX.as_ref(), &w.blocks2, &mut w.E2, Accum::Add);
+        gemm(&mut w.E2, w.MXUW.as_ref(), kin.Y().subrows(3, 3), 1.0, Accum::Add);
+        kin.xt_mul(w.E2.as_ref(), &mut w.six_n, &mut w.nn1, Accum::Replace);
+        lambda_t_left(&kin.Lambda, &mut w.nn1);
+        add_scaled(&mut loc.Dy, &w.nn1, 1.0);
     }
 
     /// Inertia force of the `Lumped` variant.
@@ -400,44 +571,51 @@ impl Superelement {
     /// mass matrix), and it differs from the exact $T$ only in how the convective velocity of
     /// the deformed body is interpolated (by the constraint modes from the interfaces). The
     /// quadratic velocity force then follows from Lagrange's equations on $(\mathbb R^3\times SO(3))^N$
-    /// with spatial angular velocities, $\mathbf f = \dot{\mathbf p} + [\mathbf p_{\omega_k}\times\boldsymbol\omega_k]
-    /// - \partial T/\partial\mathbf q$ (the middle term from $\delta\boldsymbol\omega = \delta\dot{\boldsymbol\pi} - \boldsymbol\omega\times\delta\boldsymbol\pi$),
+    /// with spatial angular velocities, $\mathbf f = \dot{\mathbf p} + [\mathbf p_{\omega_k}\times\boldsymbol\omega_k] -
+    /// \partial T/\partial\mathbf q$ (the middle term from $\delta\boldsymbol\omega = \delta\dot{\boldsymbol\pi} - \boldsymbol\omega\times\delta\boldsymbol\pi$),
     /// with $\mathbf p = \bar{\mathbf R}\mathbf M_{CB}\mathbf y$ and $T_L$ depending on $\mathbf q$ only
     /// through $\mathbf R_j$ ($\delta\boldsymbol\Pi = \mathbf Y_r\bar{\mathbf R}^T\delta\mathbf q$). In body axes,
     /// with $\boldsymbol\Omega = \mathbf Y_r\mathbf y$ and $\mathbf p^L = \mathbf M_{CB}\mathbf y$:
     ///
-    /// $$\boldsymbol\rho_{in} = \mathbf M_{CB}\mathbf a + \mathbf M_{CB}\mathbf W(\mathbf y)\boldsymbol\Omega
-    /// + [\boldsymbol\Omega\times\mathbf p^L_b]_b + [\mathbf p^L_{\theta_k}\times\mathbf y_{\theta_k}]_k
-    /// - \mathbf Y_r^T\mathbf W(\mathbf y)^T\mathbf p^L.$$
+    /// $$\boldsymbol\rho_{in} = \mathbf M_{CB}\mathbf a + \mathbf M_{CB}\mathbf W(\mathbf y)\boldsymbol\Omega +
+    /// [\boldsymbol\Omega\times\mathbf p^L_b]_b + [\mathbf p^L_{\theta_k}\times\mathbf y_{\theta_k}]_k -
+    /// \mathbf Y_r^T\mathbf W(\mathbf y)^T\mathbf p^L.$$
     ///
     /// A single rigid body at its interface gives $m\mathbf R^T\ddot{\mathbf r}$ and Euler's
     /// $\mathbf J\dot{\boldsymbol\Omega} + \boldsymbol\Omega\times\mathbf J\boldsymbol\Omega$; the power
     /// $\mathbf y^T\boldsymbol\rho_{in} = \dot T_L$ (the last three terms do no work). Partials:
-    /// $\partial/\partial\mathbf q^{jj} = (\mathbf M_{CB}\mathbf W(\mathbf y) - \mathbf W(\mathbf p^L))\boldsymbol\Omega_q
-    /// - \partial(\mathbf Y_r^T\mathbf w)/\partial\mathbf q^{jj}|_{\mathbf w = \mathbf W^T\mathbf p^L}$ and
-    /// $\partial/\partial\mathbf y = -\mathbf M_{CB}\,\mathrm{diag}(\tilde{\boldsymbol\Omega}) + \mathrm{diag}(\tilde{\boldsymbol\Omega})\mathbf M_{CB}
-    /// + (\mathbf M_{CB}\mathbf W(\mathbf y) - \mathbf W(\mathbf p^L))\mathbf Y_r + [-\tilde{\mathbf y}_{\theta_k}(\mathbf M_{CB})_{\theta_k\cdot}
-    /// + \tilde{\mathbf p}^L_{\theta_k}\mathbf E^\theta_k]_k + \mathbf Y_r^T(\mathbf W(\mathbf p^L)^T - \mathbf W(\mathbf y)^T\mathbf M_{CB})$.
-    /// Tested by `tests/unit/fd_tangent.rs::tangents_match_fd` (Lumped) and `tests/unit/energy.rs`.
-    pub(crate) fn lumped_inertia(&self, kin: &Kinematics, mo: &Motion, loc: &mut Local, tangents: bool) {
+    /// $\partial/\partial\mathbf q^{jj} = (\mathbf M_{CB}\mathbf W(\mathbf y) - \mathbf W(\mathbf p^L))\boldsymbol\Omega_q -
+    /// \partial(\mathbf Y_r^T\mathbf w)/\partial\mathbf q^{jj}|_{\mathbf w = \mathbf W^T\mathbf p^L}$ and
+    /// $\partial/\partial\mathbf y = -\mathbf M_{CB}\,\mathrm{diag}(\tilde{\boldsymbol\Omega}) + \mathrm{diag}(\tilde{\boldsymbol\Omega})\mathbf M_{CB} +
+    /// (\mathbf M_{CB}\mathbf W(\mathbf y) - \mathbf W(\mathbf p^L))\mathbf Y_r + [-\tilde{\mathbf y}_{\theta_k}(\mathbf M_{CB})_{\theta_k\cdot} +
+    /// \tilde{\mathbf p}^L_{\theta_k}\mathbf E^\theta_k]_k + \mathbf Y_r^T(\mathbf W(\mathbf p^L)^T - \mathbf W(\mathbf y)^T\mathbf M_{CB})$.
+    /// Tested by `tests/unit/fd_tangent.rs::tangents_match_fd`, `::inertia_tangents_match_fd`
+    /// (Lumped) and `tests/unit/energy.rs`.
+    pub(crate) fn lumped_inertia(
+        &self,
+        kin: &Kinematics,
+        mo: &Motion,
+        loc: &mut Local,
+        w: &mut Scratch,
+        tangents: bool,
+    ) {
         let n = self.n;
         let N = self.n_interfaces;
         let M = &self.M_CB;
         let Om = mo.omega();
         let y = &mo.y;
-        let mut p = vec![0.0; n];
-        crate::mass::matvec(M, y, &mut p);
-        // W(y) Om : block b = y_b x Om.
-        let mut wo = vec![0.0; n];
+        // p = M y (v1); W(y) Om (v2): block b = y_b x Om.
+        matvec(M, y, &mut w.v1);
         for b in 0..2 * N {
             let yb = Vector3::new(y[3 * b], y[3 * b + 1], y[3 * b + 2]);
-            let v = yb.cross(&Om);
-            wo[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
+            let v = yb.cross(&Om) + Vector3::new(mo.a[3 * b], mo.a[3 * b + 1], mo.a[3 * b + 2]);
+            w.v2[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
         }
-        let mut rho = vec![0.0; n];
-        let mut tmp = vec![0.0; n];
-        crate::mass::matvec(M, &mo.a, &mut rho);
-        crate::mass::matvec(M, &wo, &mut tmp);
+        w.v2[6 * N..].copy_from_slice(&mo.a[6 * N..]);
+        // M (a + W(y) Om)
+        matvec(M, &w.v2, &mut loc.rho_in);
+        let p = &w.v1;
+        let rho = &mut loc.rho_in;
         // W(y)^T p = sum_b p_b x y_b.
         let mut wtp = Vector3::zeros();
         for b in 0..2 * N {
@@ -459,64 +637,51 @@ impl Superelement {
         }
         let Y = kin.Y();
         for j in 0..n {
-            rho[j] += tmp[j] - (Y[(3, j)] * wtp[0] + Y[(4, j)] * wtp[1] + Y[(5, j)] * wtp[2]);
+            rho[j] -= Y[(3, j)] * wtp[0] + Y[(4, j)] * wtp[1] + Y[(5, j)] * wtp[2];
         }
-        loc.rho_in.copy_from_slice(&rho);
-        for j in 0..n {
-            for i in 0..n {
-                loc.M[(i, j)] = M[(i, j)];
-            }
-        }
+        copy_mat(&mut loc.M, M.as_ref());
         if !tangents {
             return;
         }
-        let Wy = w_stack(y, N);
-        let Wp = w_stack(&p, N);
-        // MW - W(p): n x 3.
-        let mut MWW = Wp.clone();
-        gemm(&mut MWW, M.as_ref(), Wy.as_ref(), 1.0, Accum::Replace);
-        for j in 0..3 {
-            for i in 0..n {
-                MWW[(i, j)] -= Wp[(i, j)];
-            }
-        }
-        let Om_q = mo.XNy.as_ref().subrows(3, 3);
-        gemm(&mut loc.Dq, MWW.as_ref(), Om_q, 1.0, Accum::Add);
-        let mut F = vec![0.0; 6 + n];
-        F[3..6].copy_from_slice(wtp.as_slice());
-        kin.add_d_pt(&F, &mut loc.Dq, -1.0);
+        // n3a = W(y), n3b = W(p), n3c = M W(y) - W(p).
+        w_into(y, N, &mut w.n3a);
+        w_into(p, N, &mut w.n3b);
+        gemm(&mut w.n3c, M.as_ref(), w.n3a.as_ref(), 1.0, Accum::Replace);
+        add_scaled(&mut w.n3c, &w.n3b, -1.0);
+        let Om_q = mo.ZNy.as_ref().subrows(3, 3);
+        gemm(&mut loc.Dq, w.n3c.as_ref(), Om_q, 1.0, Accum::Add);
+        w.F6.fill(0.0);
+        w.F6[3..6].copy_from_slice(wtp.as_slice());
+        add_to(&mut loc.F_sum, &w.F6, -1.0);
 
         // d/dy.
         let Yr = Y.subrows(3, 3);
-        gemm(&mut loc.Dy, MWW.as_ref(), Yr, 1.0, Accum::Add);
+        gemm(&mut loc.Dy, w.n3c.as_ref(), Yr, 1.0, Accum::Add);
         let Ot = skew(&Om);
-        let mut ob = Blocks::zeros(N);
         for k in 0..N {
-            ob.t[k] = -Ot;
-            ob.r[k] = -Ot;
+            w.blocks.t[k] = -Ot;
+            w.blocks.r[k] = -Ot;
         }
         // -M diag(Om~)
-        mul_blocks(M.as_ref(), &ob, &mut loc.Dy, Accum::Add);
-        // diag(Om~) M
-        for b in 0..2 * N {
-            for j in 0..n {
-                let col = Vector3::new(M[(3 * b, j)], M[(3 * b + 1, j)], M[(3 * b + 2, j)]);
-                let v = Ot * col;
+        mul_blocks(M.as_ref(), &w.blocks, &mut loc.Dy, Accum::Add);
+        // diag(Om~) M and the rotation rows -y_r~ M_r.
+        for j in 0..n {
+            let col = M.col_as_slice(j);
+            let o = loc.Dy.col_as_slice_mut(j);
+            for b in 0..2 * N {
+                let mc = Vector3::new(col[3 * b], col[3 * b + 1], col[3 * b + 2]);
+                let mut v = Ot * mc;
+                if b % 2 == 1 {
+                    let yr = Vector3::new(y[3 * b], y[3 * b + 1], y[3 * b + 2]);
+                    v -= yr.cross(&mc);
+                }
                 for i in 0..3 {
-                    loc.Dy[(3 * b + i, j)] += v[i];
+                    o[3 * b + i] += v[i];
                 }
             }
         }
         for k in 0..N {
-            let yr = skew(&Vector3::new(y[6 * k + 3], y[6 * k + 4], y[6 * k + 5]));
             let pr = skew(&Vector3::new(p[6 * k + 3], p[6 * k + 4], p[6 * k + 5]));
-            for j in 0..n {
-                let col = Vector3::new(M[(6 * k + 3, j)], M[(6 * k + 4, j)], M[(6 * k + 5, j)]);
-                let v = yr * col;
-                for i in 0..3 {
-                    loc.Dy[(6 * k + 3 + i, j)] -= v[i];
-                }
-            }
             for a in 0..3 {
                 for b in 0..3 {
                     loc.Dy[(6 * k + 3 + a, 6 * k + 3 + b)] += pr[(a, b)];
@@ -524,9 +689,12 @@ impl Superelement {
             }
         }
         // Y_r^T (W(p)^T - W(y)^T M)
-        let mut R3 = Wp.transpose().to_owned();
-        gemm(&mut R3, Wy.as_ref().transpose(), M.as_ref(), -1.0, Accum::Add);
-        gemm(&mut loc.Dy, Yr.transpose(), R3.as_ref(), 1.0, Accum::Add);
-        let _ = Matrix3::<f64>::zeros();
+        for j in 0..n {
+            for i in 0..3 {
+                w.three_n[(i, j)] = w.n3b[(j, i)];
+            }
+        }
+        gemm(&mut w.three_n, w.n3a.as_ref().transpose(), M.as_ref(), -1.0, Accum::Add);
+        gemm(&mut loc.Dy, Yr.transpose(), w.three_n.as_ref(), 1.0, Accum::Add);
     }
 }

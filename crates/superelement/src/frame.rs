@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 /// (brief §4; seed §2, Figs. 4-6). One switch, so that the validation suite can compare them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum FrameChoice {
-    /// [E17]: $\boldsymbol\Phi_j$ = the CB modes evaluated at the undeformed centre of mass by
+    /// \[E17\]: $\boldsymbol\Phi_j$ = the CB modes evaluated at the undeformed centre of mass by
     /// the mass-weighted rigid fit (`ReducedBody::Phi_com`). The frame origin is the centre
     /// of mass; "no elastic deformation at the frame" means $\int\rho\mathbf S\,dV\,\mathbf q^{jj} = 0$
     /// and $\int\rho\tilde{\mathbf x}\mathbf S\,dV\,\mathbf q^{jj} = 0$ (a linearised mean-axis
@@ -56,7 +56,10 @@ impl Frame {
 
     /// The frame at the origin, aligned with the inertial axes.
     pub fn identity() -> Self {
-        Self { r: Vector3::zeros(), R: UnitQuaternion::identity() }
+        Self {
+            r: Vector3::zeros(),
+            R: UnitQuaternion::identity(),
+        }
     }
 }
 
@@ -76,7 +79,10 @@ pub struct FrameSettings {
 
 impl Default for FrameSettings {
     fn default() -> Self {
-        Self { tolerance: 1e-12, max_iterations: 30 }
+        Self {
+            tolerance: 1e-12,
+            max_iterations: 30,
+        }
     }
 }
 
@@ -153,15 +159,18 @@ impl Superelement {
                 // beyond the small-strain range of the formulation), and retry from it when
                 // Newton fails from the warm start.
                 let guess = Frame::new(state.r[0] - state.R[0] * self.x[0], state.R[0]);
-                let warm_is_far =
-                    state.R.iter().any(|R_k| crate::local_coordinates::elastic_rotation(&state.frame.R, R_k).norm() > 1.0);
+                let warm_is_far = state
+                    .R
+                    .iter()
+                    .any(|R_k| crate::local_coordinates::elastic_rotation(&state.frame.R, R_k).norm() > 1.0);
                 if warm_is_far {
                     return self.newton_frame(state, guess);
                 }
-                self.newton_frame(state, state.frame).or_else(|e| match self.newton_frame(state, guess) {
-                    Ok(found) => Ok(found),
-                    Err(_) => Err(e),
-                })
+                self.newton_frame(state, state.frame)
+                    .or_else(|e| match self.newton_frame(state, guess) {
+                        Ok(found) => Ok(found),
+                        Err(_) => Err(e),
+                    })
             }
         }
     }
@@ -205,7 +214,7 @@ impl Superelement {
             let dt = Vector3::new(d[0], d[1], d[2]);
             let dr = Vector3::new(d[3], d[4], d[5]);
             frame.r += frame.R * dt;
-            frame.R = frame.R * so3::exp(&dr);
+            frame.R *= so3::exp(&dr);
             frame.R.renormalize();
         }
         Err(SuperelementError::FrameNotConverged {

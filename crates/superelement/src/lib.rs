@@ -1,7 +1,7 @@
 //! # superelement: the AIC-FFR body
 //!
 //! The absolute-interface-coordinate floating frame of reference superelement of the seed
-//! paper (Schilder, Ellenbroek, de Boer; [E17], [S19]): from a Craig-Bampton
+//! paper (Schilder, Ellenbroek, de Boer; \[E17\], \[S19\]): from a Craig-Bampton
 //! [`reduction::ReducedBody`] and a state in absolute interface coordinates, the frame (2.6),
 //! the local CB coordinates, the velocity transformation (3.9)-(3.11), the forces (4.3)-(4.4)
 //! and the tangent matrices for Newton, for one body at a time.
@@ -9,10 +9,28 @@
 //! ```text
 //! ReducedBody + FrameChoice + MassVariant + Damping  --Superelement::new-->  Superelement
 //! BodyState (r_k, R_k, v_k, omega_k, eta, eta_dot, last frame) + accelerations + gravity
-//!     --evaluate-->  Evaluation { frame, q_jj, residual, M, K_t, C_t, force parts }
+//!     --evaluate / evaluate_into-->  Evaluation { frame, q_jj, residual, M, K_t, C_t, force parts }
 //! ```
 //!
-//! The superelement's coordinates are $\mathbf q = [\mathbf r_1, \boldsymbol\pi_1, \dots,
+//! # API
+//!
+//! * [`Superelement::new`]`(&ReducedBody, FrameChoice, MassVariant, Damping)` checks every
+//!   shape and precomputes the invariants about the frame origin.
+//! * [`Superelement::solve_frame`] solves (2.6) from `state.frame` (warm start);
+//!   [`Superelement::kinematics`] adds $\mathbf q^{jj}$, $\mathbf Z_j$, $\mathbf T_j$, $\mathbf A$
+//!   ([`Kinematics`]); [`Superelement::frame_velocity`] and [`Superelement::local_velocity`] give
+//!   (3.9) and (3.10) applied to the state's velocities.
+//! * [`Superelement::evaluate`] returns the residual $\mathbf r = \mathbf M\ddot{\mathbf q} + \mathbf Q_v +
+//!   \mathbf f_{el} + \mathbf f_d - \mathbf f_g$, its parts and $\mathbf M$, $\mathbf K_t$, $\mathbf C_t$
+//!   as faer matrices; [`Superelement::evaluate_into`] does the same into a reused
+//!   [`Workspace`] and [`Evaluation`] (no allocation; the hot-loop form);
+//!   [`Superelement::forces`] skips the tangents.
+//! * [`Superelement::kinetic_energy`], [`Superelement::strain_energy`],
+//!   [`Superelement::gravity_potential`]; [`Superelement::recover_mesh`] for the deformed mesh.
+//! * [`testing`]: the central-difference helper, state perturbations through exp, test states,
+//!   and (feature `testing`) reduced-body fixtures.
+//!
+//! //! The superelement's coordinates are $\mathbf q = [\mathbf r_1, \boldsymbol\pi_1, \dots,
 //! \mathbf r_N, \boldsymbol\pi_N, \boldsymbol\eta]$ ($6N + m$): absolute interface positions and
 //! orientations (varied spatially, $\delta\mathbf R_k = \widetilde{\delta\boldsymbol\pi}_k\mathbf R_k$)
 //! and the fixed-interface modal coordinates, which stay independent coordinates of the body.
@@ -52,7 +70,7 @@
 //! | $\mathbf M_{CB},\ \mathbf K_{CB}$ | `M_CB`, `K_CB` | reduced mass, stiffness | (4.4) |
 //! | $\mathbf M_{ffr}$ | `FfrInertia::mass_matrix` | FFR mass matrix from the invariants | (4.1) |
 //! | $\mathbf Q_v$ | `q_v` | quadratic velocity forces | (4.4) |
-//! | $\mathbf K_t,\ \mathbf C_t$ | `stiffness`, `damping` | $\partial\mathbf r/\partial\mathbf q$, $\partial\mathbf r/\partial\dot{\mathbf q}$ | [S19] |
+//! | $\mathbf K_t,\ \mathbf C_t$ | `stiffness`, `damping` | $\partial\mathbf r/\partial\mathbf q$, $\partial\mathbf r/\partial\dot{\mathbf q}$ | \[S19\] |
 //!
 //! Superscripts: a quantity without a frame marker is in inertial axes; body-axis quantities
 //! are named in the docs ("body axes", superscript $L$). Vectors are columns.
@@ -61,15 +79,21 @@
 //!
 //! | eq. | meaning | function |
 //! |---|---|---|
-//! | (2.3), brief §4 | local CB coordinates | `superelement::local_coordinates::local_coordinates` |
-//! | (2.6) | frame fixed to body, $\boldsymbol\Phi_j\mathbf q^{jj} = 0$ | `superelement::Superelement::solve_frame` |
-//! | (3.6) | rigid modes of the interface set | `superelement::transform::phi_rig` |
-//! | (3.9)-(3.10) | $\mathbf Z_j$, $\mathbf T_j$ (exact form) | `superelement::transform::Kinematics::new` |
+//! | (2.3), brief §4 | local CB coordinates $\mathbf u_k$, $\boldsymbol\theta_k$ | `superelement::local_coordinates::local_coordinates` |
+//! | (2.6) | frame fixed to body, $\boldsymbol\Phi_j\mathbf q^{jj} = 0$ (Newton) | `superelement::Superelement::solve_frame` (`frame.rs`) |
+//! | (3.6) | rigid modes of the deformed interface set | `superelement::transform::phi_rig` |
+//! | (3.9)-(3.10) | $\mathbf Z_j$, $\mathbf T_j$ (exact form, with $\boldsymbol\Lambda$) | `superelement::transform::Kinematics::update` |
+//! | (3.9) | frame velocity | `superelement::Superelement::frame_velocity` (`body.rs`) |
 //! | (3.11) | velocity transformation $\mathbf A$ | `superelement::transform::Kinematics::velocity_transform` |
-//! | (4.3) | FFR inertia force, `Exact` | `superelement::mass::FfrInertia::force` |
-//! | (4.4) | elastic force | `superelement::Superelement::elastic` (crate-private, in `forces.rs`) |
-//! | (4.4) | inertia, `Lumped` | `superelement::Superelement::lumped_inertia` (in `forces.rs`) |
-//! | [S19] | tangents $\mathbf K_t$, $\mathbf C_t$ | `superelement::Superelement::evaluate_kinematics` |
+//! | (4.1) | FFR mass matrix from the inertia invariants | `superelement::mass::FfrInertia::mass_matrix` |
+//! | (4.3) | FFR inertia force $\mathbf M_{ffr}\dot{\boldsymbol\nu} + \mathbf h$ and partials | `superelement::mass::FfrInertia::force_into` |
+//! | (4.3) | `Exact` inertia in absolute coordinates, $\mathbf A^T(\dots)$ | `superelement::Superelement::exact_inertia` (`forces.rs`) |
+//! | (4.4) | elastic force $\bar{\mathbf R}\mathbf T_j^T\mathbf K_{CB}\mathbf q^{jj}$ | `superelement::Superelement::elastic` (`forces.rs`) |
+//! | (4.4) | `Lumped` inertia, $\bar{\mathbf R}\mathbf M_{CB}\bar{\mathbf R}^T$ and its $\mathbf Q_v$ | `superelement::Superelement::lumped_inertia` (`forces.rs`) |
+//! | \[S19\] | tangents $\mathbf K_t$, $\mathbf C_t$, $\mathbf M$ (chain rule to absolute coordinates) | `superelement::Superelement::evaluate_local` (`tangent.rs`) |
+//!
+//! The `forces.rs` and `tangent.rs` functions are crate-private methods of [`Superelement`];
+//! [`Superelement::evaluate`] is their public entry point.
 //!
 //! # Modules
 //!
@@ -94,7 +118,7 @@ pub mod transform;
 pub use body::{BodyState, Damping, Superelement};
 pub use error::SuperelementError;
 pub use frame::{Frame, FrameChoice, FrameSettings};
-pub use mass::{FfrInertia, MassVariant};
+pub use mass::{FfrForce, FfrInertia, FfrScratch, MassVariant};
 pub use recovery::MeshState;
-pub use tangent::Evaluation;
+pub use tangent::{Evaluation, Workspace};
 pub use transform::Kinematics;

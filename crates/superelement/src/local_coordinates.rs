@@ -22,8 +22,8 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 ///
 /// # Derivation
 /// Not in the seed in this form ((3.1) is its inverse). With $\delta\mathbf R_j =
-/// \widetilde{\delta\boldsymbol\pi}_j\mathbf R_j$: $\delta\mathbf u_k = \mathbf R_j^T\delta\mathbf r_k
-/// - [\mathbf I,\ -\tilde{\mathbf r}_k^{jj}]\,[\mathbf R_j^T\delta\mathbf r_j;\ \mathbf R_j^T\delta\boldsymbol\pi_j]$
+/// \widetilde{\delta\boldsymbol\pi}_j\mathbf R_j$: $\delta\mathbf u_k = \mathbf R_j^T\delta\mathbf r_k -
+/// [\mathbf I,\ -\tilde{\mathbf r}_k^{jj}]\,[\mathbf R_j^T\delta\mathbf r_j;\ \mathbf R_j^T\delta\boldsymbol\pi_j]$
 /// with $\mathbf r_k^{jj} = \mathbf x_k + \mathbf u_k$: the translation rows of (3.7).
 /// Checked by `tests/unit/fd_tangent.rs::local_coordinates_variation`.
 pub fn interface_displacement(frame: &Frame, r_k: &Vector3<f64>, x_k: &Vector3<f64>) -> Vector3<f64> {

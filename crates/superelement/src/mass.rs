@@ -18,8 +18,8 @@
 //! \mathbf S_t^T & (\mathbf S_r + \mathbf S_w)^T & \mathbf M_{CB}\end{bmatrix},$$
 //!
 //! $\mathbf s = m\mathbf d + \mathbf S_t\mathbf q$ (first moment, $\mathbf d$ the centre of mass
-//! from $P_j$), $\mathbf J = \mathbf J_0 + 2\,\mathrm{tr}(\mathbf X)\mathbf I - \mathbf X - \mathbf X^T
-//! + \mathrm{tr}(\mathbf W)\mathbf I - \mathbf W$ with $X_{ab} = \int\rho x_a w_b = (\mathbf S_x)_{ab}\mathbf q$,
+//! from $P_j$), $\mathbf J = \mathbf J_0 + 2\,\mathrm{tr}(\mathbf X)\mathbf I - \mathbf X - \mathbf X^T +
+//! \mathrm{tr}(\mathbf W)\mathbf I - \mathbf W$ with $X_{ab} = \int\rho x_a w_b = (\mathbf S_x)_{ab}\mathbf q$,
 //! $W_{ab} = \int\rho w_a w_b = \mathbf q^T\bar{\mathbf S}_{ab}\mathbf q$, and row $i$ of
 //! $\mathbf S_w(\mathbf q) = \int\rho\tilde{\mathbf w}\mathbf S$ equal to $\mathbf q^T\tilde{\mathbf S}_i$,
 //! $\tilde{\mathbf S}_i = \epsilon_{iab}\bar{\mathbf S}_{ab}$ (skew). The invariants are those of
@@ -33,16 +33,16 @@
 //! Euler-Poincaré on the frame ($\mathbf V, \boldsymbol\Omega$ are a body twist) and Lagrange on
 //! $\mathbf q^{jj}$, with $\mathbf p = \mathbf M_{ffr}\boldsymbol\nu$:
 //! $\mathbf F = \mathbf M_{ffr}\dot{\boldsymbol\nu} + \dot{\mathbf M}_{ffr}\boldsymbol\nu +
-//! [\boldsymbol\Omega\times\mathbf p_V;\ \boldsymbol\Omega\times\mathbf p_\Omega + \mathbf V\times\mathbf p_V;\ \mathbf 0]
-//! - [\mathbf 0;\ \mathbf 0;\ \partial T/\partial\mathbf q]$, which works out as
+//! [\boldsymbol\Omega\times\mathbf p_V;\ \boldsymbol\Omega\times\mathbf p_\Omega + \mathbf V\times\mathbf p_V;\ \mathbf 0] -
+//! [\mathbf 0;\ \mathbf 0;\ \partial T/\partial\mathbf q]$, which works out as
 //!
-//! * $\mathbf F_V = m\dot{\mathbf V} + \dot{\boldsymbol\Omega}\times\mathbf s + \mathbf S_t\ddot{\mathbf q}
-//!   + \boldsymbol\Omega\times\dot{\mathbf s} + \boldsymbol\Omega\times\mathbf p_V$,
-//! * $\mathbf F_\Omega = \mathbf s\times\dot{\mathbf V} + \mathbf J\dot{\boldsymbol\Omega} + (\mathbf S_r + \mathbf S_w)\ddot{\mathbf q}
-//!   + \dot{\mathbf s}\times\mathbf V + \dot{\mathbf J}\boldsymbol\Omega + \boldsymbol\Omega\times\mathbf p_\Omega + \mathbf V\times\mathbf p_V$,
-//! * $\mathbf F_q = \mathbf S_t^T\dot{\mathbf V} + (\mathbf S_r + \mathbf S_w)^T\dot{\boldsymbol\Omega} + \mathbf M_{CB}\ddot{\mathbf q}
-//!   + 2\mathbf S_w(\dot{\mathbf q})^T\boldsymbol\Omega - \mathbf S_t^T(\mathbf V\times\boldsymbol\Omega)
-//!   - \tfrac12\,\mathbf j_q(\boldsymbol\Omega)^T\boldsymbol\Omega$,
+//! * $\mathbf F_V = m\dot{\mathbf V} + \dot{\boldsymbol\Omega}\times\mathbf s + \mathbf S_t\ddot{\mathbf q} +
+//!   \boldsymbol\Omega\times\dot{\mathbf s} + \boldsymbol\Omega\times\mathbf p_V$,
+//! * $\mathbf F_\Omega = \mathbf s\times\dot{\mathbf V} + \mathbf J\dot{\boldsymbol\Omega} + (\mathbf S_r + \mathbf S_w)\ddot{\mathbf q} +
+//!   \dot{\mathbf s}\times\mathbf V + \dot{\mathbf J}\boldsymbol\Omega + \boldsymbol\Omega\times\mathbf p_\Omega + \mathbf V\times\mathbf p_V$,
+//! * $\mathbf F_q = \mathbf S_t^T\dot{\mathbf V} + (\mathbf S_r + \mathbf S_w)^T\dot{\boldsymbol\Omega} + \mathbf M_{CB}\ddot{\mathbf q} +
+//!   2\mathbf S_w(\dot{\mathbf q})^T\boldsymbol\Omega - \mathbf S_t^T(\mathbf V\times\boldsymbol\Omega) -
+//!   \tfrac12\,\mathbf j_q(\boldsymbol\Omega)^T\boldsymbol\Omega$,
 //!
 //! with $\mathbf j_q(\mathbf w) = \partial(\mathbf J(\mathbf q)\mathbf w)/\partial\mathbf q$ and
 //! $\mathbf S_w(\dot{\mathbf q})\dot{\mathbf q} = 0$ ($\tilde{\mathbf S}_i$ skew). This is the
@@ -67,16 +67,16 @@ pub enum MassVariant {
     Exact,
     /// The seed's simplification (4.4): $\mathbf M = \bar{\mathbf R}\mathbf M_{CB}\bar{\mathbf R}^T$,
     /// and $\mathbf Q_v$ from the same "lumped" kinetic energy (see
-    /// [`crate::forces::lumped_inertia`] for what that means).
+    /// `Superelement::lumped_inertia` in `forces.rs` for what that means).
     Lumped,
 }
 
 /// The six unique index pairs $(a, b)$, $a \le b$, of a symmetric $3\times3$ pattern.
-pub(crate) const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+pub const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
 /// Index into [`PAIRS`] of $(a, b)$ in either order.
 #[inline]
-pub(crate) fn pair(a: usize, b: usize) -> usize {
+pub fn pair(a: usize, b: usize) -> usize {
     match (a.min(b), a.max(b)) {
         (0, 0) => 0,
         (1, 1) => 1,
@@ -108,6 +108,10 @@ pub struct FfrInertia {
     pub S_tilde: Vec<Mat<f64>>,
     /// $\mathbf M_{CB}$.
     pub M_CB: Mat<f64>,
+    /// $[\tilde{\mathbf S}_0; \tilde{\mathbf S}_1; \tilde{\mathbf S}_2]$ ($3n\times n$) and the six
+    /// $\bar{\mathbf S}^{sym}_p$ stacked ($6n\times n$): one product each gives all contractions.
+    tilde_stack: Mat<f64>,
+    sym_stack: Mat<f64>,
 }
 
 /// $\int\rho\,\mathbf f$ rows of a `DenseMatrix` as a faer matrix.
@@ -120,7 +124,10 @@ impl FfrInertia {
     /// `origin` (FE coordinates): with $\mathbf x = \mathbf x_c + \mathbf d$,
     /// $\int\rho\tilde{\mathbf x}\mathbf S = \mathbf S_r + \tilde{\mathbf d}\mathbf S_t$,
     /// $\int\rho x_a\mathbf S_b = (\mathbf S_x)_{ab} + d_a(\mathbf S_t)_b$,
-    /// $\mathbf J_0 = \mathbf I_c + m(|\mathbf d|^2\mathbf I - \mathbf d\mathbf d^T)$.
+    /// $\mathbf J_0 = \mathbf I_c + m(|\mathbf d|^2\mathbf I - \mathbf d\mathbf d^T)$ (parallel axes).
+    /// Checked by `tests/unit/energy.rs::rigid_kinetic_energy_is_exact` (frames off the centre of
+    /// mass) and `tests/unit/linear_limit.rs::frequencies_match_fe_to_the_modes_kept` (the
+    /// `Exact` mass equals $\mathbf M_{CB}$ at the undeformed state).
     pub fn new(data: &InertiaData, origin: &Vector3<f64>, M_CB: &Mat<f64>) -> Self {
         let m = data.mass;
         let c = Vector3::from(data.center_of_mass);
@@ -131,21 +138,37 @@ impl FfrInertia {
         let n = S_t.ncols();
         let Sr_c = dense(&data.S_r);
         let Dt = skew(&d);
-        let S_r = Mat::from_fn(3, n, |i, j| Sr_c[(i, j)] + (0..3).map(|k| Dt[(i, k)] * S_t[(k, j)]).sum::<f64>());
+        let S_r = Mat::from_fn(3, n, |i, j| {
+            Sr_c[(i, j)] + (0..3).map(|k| Dt[(i, k)] * S_t[(k, j)]).sum::<f64>()
+        });
         let Sx_c = dense(&data.S_x);
         let S_x = Mat::from_fn(9, n, |r, j| Sx_c[(r, j)] + d[r / 3] * S_t[(r % 3, j)]);
         let S_bar: Vec<Mat<f64>> = data.S_bar.iter().map(dense).collect();
-        let S_bar_sym = PAIRS
+        let S_bar_sym: Vec<Mat<f64>> = PAIRS
             .iter()
             .map(|&(a, b)| Mat::from_fn(n, n, |i, j| S_bar[3 * a + b][(i, j)] + S_bar[3 * b + a][(i, j)]))
             .collect();
-        let S_tilde = (0..3)
+        let S_tilde: Vec<Mat<f64>> = (0..3)
             .map(|i| {
                 let (j, k) = ((i + 1) % 3, (i + 2) % 3);
                 Mat::from_fn(n, n, |r, s| S_bar[3 * j + k][(r, s)] - S_bar[3 * k + j][(r, s)])
             })
             .collect();
-        Self { mass: m, d, J0, S_t, S_r, S_x, S_bar_sym, S_tilde, M_CB: M_CB.clone() }
+        let tilde_stack = Mat::from_fn(3 * n, n, |r, c| S_tilde[r / n][(r % n, c)]);
+        let sym_stack = Mat::from_fn(6 * n, n, |r, c| S_bar_sym[r / n][(r % n, c)]);
+        Self {
+            mass: m,
+            d,
+            J0,
+            S_t,
+            S_r,
+            S_x,
+            S_bar_sym,
+            S_tilde,
+            M_CB: M_CB.clone(),
+            tilde_stack,
+            sym_stack,
+        }
     }
 
     /// Number of CB coordinates $n$.
@@ -182,9 +205,8 @@ pub(crate) fn matvec(A: &Mat<f64>, x: &[f64], out: &mut [f64]) {
         if *xj == 0.0 {
             continue;
         }
-        let col = A.col(j);
-        for (i, o) in out.iter_mut().enumerate() {
-            *o += col[i] * xj;
+        for (o, a) in out.iter_mut().zip(A.col_as_slice(j)) {
+            *o += a * xj;
         }
     }
 }
@@ -195,6 +217,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// The FFR inertia force and, on request, its partial derivatives (module docs).
+#[derive(Clone, Debug)]
 pub struct FfrForce {
     /// $\mathbf F = \mathbf M_{ffr}\dot{\boldsymbol\nu} + \mathbf h$, $6 + n$.
     pub F: Vec<f64>,
@@ -206,50 +229,125 @@ pub struct FfrForce {
     pub F_q: Mat<f64>,
 }
 
-/// Precomputed contractions of the invariants with $\mathbf q$ and its rates.
+impl FfrForce {
+    /// Buffers for $n$ CB coordinates.
+    pub fn zeros(n: usize) -> Self {
+        Self {
+            F: vec![0.0; 6 + n],
+            M: Mat::zeros(6 + n, 6 + n),
+            F_nu: Mat::zeros(6 + n, 6 + n),
+            F_q: Mat::zeros(6 + n, n),
+        }
+    }
+}
+
+/// Scratch of [`FfrInertia::force_into`]: contractions of the invariants with $\mathbf q$ and
+/// its rates, kept between calls so that the hot loop does not allocate.
+#[derive(Clone, Debug)]
+pub struct FfrScratch {
+    /// Columns $\bar{\mathbf S}^{sym}_p\mathbf q$ and $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ ($n\times6$).
+    sig: Mat<f64>,
+    sigd: Mat<f64>,
+    /// Columns $\tilde{\mathbf S}_i\mathbf q$, $\tilde{\mathbf S}_i\dot{\mathbf q}$, $\tilde{\mathbf S}_i\ddot{\mathbf q}$ ($n\times3$).
+    tq: Mat<f64>,
+    tqd: Mat<f64>,
+    tqdd: Mat<f64>,
+    /// $\mathbf j_q$ buffers ($3\times n$).
+    jq_Om: Mat<f64>,
+    jq_Omd: Mat<f64>,
+    jqd_Om: Mat<f64>,
+    /// Right-hand sides $[\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}]$ and the stacked products.
+    rhs: Mat<f64>,
+    tilde_prod: Mat<f64>,
+    sym_prod: Mat<f64>,
+}
+
+impl FfrScratch {
+    pub fn new(n: usize) -> Self {
+        Self {
+            sig: Mat::zeros(n, 6),
+            sigd: Mat::zeros(n, 6),
+            tq: Mat::zeros(n, 3),
+            tqd: Mat::zeros(n, 3),
+            tqdd: Mat::zeros(n, 3),
+            jq_Om: Mat::zeros(3, n),
+            jq_Omd: Mat::zeros(3, n),
+            jqd_Om: Mat::zeros(3, n),
+            rhs: Mat::zeros(n, 3),
+            tilde_prod: Mat::zeros(3 * n, 3),
+            sym_prod: Mat::zeros(6 * n, 2),
+        }
+    }
+}
+
+/// Small contractions of [`FfrScratch`]'s columns.
 struct Contractions {
     s: Vector3<f64>,
     sd: Vector3<f64>,
     J: Matrix3<f64>,
     Jd: Matrix3<f64>,
-    /// $\bar{\mathbf S}^{sym}_p\mathbf q$ and $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$.
-    sig: Vec<Vec<f64>>,
-    sigd: Vec<Vec<f64>>,
-    /// $\tilde{\mathbf S}_i\mathbf q$, $\tilde{\mathbf S}_i\dot{\mathbf q}$, $\tilde{\mathbf S}_i\ddot{\mathbf q}$.
-    tq: Vec<Vec<f64>>,
-    tqd: Vec<Vec<f64>>,
-    tqdd: Vec<Vec<f64>>,
 }
 
 impl FfrInertia {
-    fn contractions(&self, q: &[f64], qd: &[f64], qdd: &[f64]) -> Contractions {
+    fn contractions(&self, q: &[f64], qd: &[f64], qdd: &[f64], w: &mut FfrScratch) -> Contractions {
         let n = self.n();
         let m = self.mass;
         let s = self.d * m + mul3(&self.S_t, q);
         let sd = mul3(&self.S_t, qd);
-        let mut sig = vec![vec![0.0; n]; 6];
-        let mut sigd = vec![vec![0.0; n]; 6];
+        w.rhs.col_as_slice_mut(0).copy_from_slice(q);
+        w.rhs.col_as_slice_mut(1).copy_from_slice(qd);
+        w.rhs.col_as_slice_mut(2).copy_from_slice(qdd);
+        let par = faer::Par::Seq;
+        faer::linalg::matmul::matmul(
+            w.tilde_prod.as_mut(),
+            faer::Accum::Replace,
+            self.tilde_stack.as_ref(),
+            w.rhs.as_ref(),
+            1.0,
+            par,
+        );
+        faer::linalg::matmul::matmul(
+            w.sym_prod.as_mut(),
+            faer::Accum::Replace,
+            self.sym_stack.as_ref(),
+            w.rhs.as_ref().subcols(0, 2),
+            1.0,
+            par,
+        );
         for p in 0..6 {
-            matvec(&self.S_bar_sym[p], q, &mut sig[p]);
-            matvec(&self.S_bar_sym[p], qd, &mut sigd[p]);
+            w.sig
+                .col_as_slice_mut(p)
+                .copy_from_slice(&w.sym_prod.col_as_slice(0)[p * n..(p + 1) * n]);
+            w.sigd
+                .col_as_slice_mut(p)
+                .copy_from_slice(&w.sym_prod.col_as_slice(1)[p * n..(p + 1) * n]);
         }
-        let mut tq = vec![vec![0.0; n]; 3];
-        let mut tqd = vec![vec![0.0; n]; 3];
-        let mut tqdd = vec![vec![0.0; n]; 3];
         for i in 0..3 {
-            matvec(&self.S_tilde[i], q, &mut tq[i]);
-            matvec(&self.S_tilde[i], qd, &mut tqd[i]);
-            matvec(&self.S_tilde[i], qdd, &mut tqdd[i]);
+            w.tq.col_as_slice_mut(i)
+                .copy_from_slice(&w.tilde_prod.col_as_slice(0)[i * n..(i + 1) * n]);
+            w.tqd
+                .col_as_slice_mut(i)
+                .copy_from_slice(&w.tilde_prod.col_as_slice(1)[i * n..(i + 1) * n]);
+            w.tqdd
+                .col_as_slice_mut(i)
+                .copy_from_slice(&w.tilde_prod.col_as_slice(2)[i * n..(i + 1) * n]);
         }
         // X_ab = (S_x)_ab q; J1 = 2 tr(X) I - X - X^T; W_ab = q^T S_bar_ab q = q.sig_ab / 2.
-        let X = Matrix3::from_fn(|a, b| (0..n).map(|j| self.S_x[(3 * a + b, j)] * q[j]).sum::<f64>());
-        let Xd = Matrix3::from_fn(|a, b| (0..n).map(|j| self.S_x[(3 * a + b, j)] * qd[j]).sum::<f64>());
-        let W = Matrix3::from_fn(|a, b| 0.5 * dot(q, &sig[pair(a, b)]));
-        let W3 = Matrix3::from_fn(|a, b| dot(qd, &sig[pair(a, b)]));
+        let mut X = Matrix3::<f64>::zeros();
+        let mut Xd = Matrix3::<f64>::zeros();
+        for j in 0..n {
+            let c = self.S_x.col_as_slice(j);
+            for r in 0..9 {
+                X[(r / 3, r % 3)] += c[r] * q[j];
+                Xd[(r / 3, r % 3)] += c[r] * qd[j];
+            }
+        }
+        let W = Matrix3::from_fn(|a, b| 0.5 * dot(q, w.sig.col_as_slice(pair(a, b))));
+        let W3 = Matrix3::from_fn(|a, b| dot(qd, w.sig.col_as_slice(pair(a, b))));
         let I = Matrix3::identity();
         let J = self.J0 + I * (2.0 * X.trace()) - X - X.transpose() + I * W.trace() - W;
         let Jd = I * (2.0 * Xd.trace()) - Xd - Xd.transpose() + I * W3.trace() - W3;
-        Contractions { s, sd, J, Jd, sig, sigd, tq, tqd, tqdd }
+        Contractions { s, sd, J, Jd }
     }
 
     /// $\mathbf j_q(\mathbf w) = \partial(\mathbf J(\mathbf q)\mathbf w)/\partial\mathbf q$ ($3\times n$):
@@ -258,45 +356,53 @@ impl FfrInertia {
     /// (\bar{\mathbf S}_{ab} + \bar{\mathbf S}_{ba})\mathbf q$. With `with_sx = false` only the
     /// $\boldsymbol\sigma$ part (that is $\partial(\dot{\mathbf J}\mathbf w)/\partial\mathbf q$ when
     /// `sig` holds $\bar{\mathbf S}^{sym}\dot{\mathbf q}$).
-    fn jq(&self, w: &Vector3<f64>, sig: &[Vec<f64>], with_sx: bool, out: &mut Mat<f64>, r0: usize) {
+    fn jq(&self, w: &Vector3<f64>, sig: &Mat<f64>, with_sx: bool, out: &mut Mat<f64>) {
         let n = self.n();
+        let sg: [&[f64]; 6] = std::array::from_fn(|p| sig.col_as_slice(p));
         for j in 0..n {
-            let trs = sig[0][j] + sig[1][j] + sig[2][j];
-            let trx = if with_sx { self.S_x[(0, j)] + self.S_x[(4, j)] + self.S_x[(8, j)] } else { 0.0 };
+            let sx = self.S_x.col_as_slice(j);
+            let trs = sg[0][j] + sg[1][j] + sg[2][j];
+            let trx = if with_sx { sx[0] + sx[4] + sx[8] } else { 0.0 };
+            let o = out.col_as_slice_mut(j);
             for i in 0..3 {
                 let mut v = w[i] * (2.0 * trx + trs);
                 for b in 0..3 {
-                    let sx = if with_sx { self.S_x[(3 * i + b, j)] + self.S_x[(3 * b + i, j)] } else { 0.0 };
-                    v -= w[b] * (sx + sig[pair(i, b)][j]);
+                    let x = if with_sx { sx[3 * i + b] + sx[3 * b + i] } else { 0.0 };
+                    v -= w[b] * (x + sg[pair(i, b)][j]);
                 }
-                out[(r0 + i, j)] += v;
+                o[i] = v;
             }
         }
     }
 
     /// $\mathbf S_w(\mathbf q)\mathbf x$: component $i$ is $\mathbf q^T\tilde{\mathbf S}_i\mathbf x$
     /// $= -(\tilde{\mathbf S}_i\mathbf q)\cdot\mathbf x$.
-    fn sw_mul(tq: &[Vec<f64>], x: &[f64]) -> Vector3<f64> {
-        Vector3::new(-dot(&tq[0], x), -dot(&tq[1], x), -dot(&tq[2], x))
+    fn sw_mul(tq: &Mat<f64>, x: &[f64]) -> Vector3<f64> {
+        Vector3::new(
+            -dot(tq.col_as_slice(0), x),
+            -dot(tq.col_as_slice(1), x),
+            -dot(tq.col_as_slice(2), x),
+        )
     }
 
     /// $\mathbf M_{ffr}(\mathbf q)$ (module docs).
     pub fn mass_matrix(&self, q: &[f64]) -> Mat<f64> {
         let n = self.n();
         let zeros = vec![0.0; n];
-        let c = self.contractions(q, &zeros, &zeros);
+        let mut w = FfrScratch::new(n);
+        let c = self.contractions(q, &zeros, &zeros, &mut w);
         let mut M = Mat::zeros(6 + n, 6 + n);
-        self.fill_mass(&c, &mut M);
+        self.fill_mass(&c, &w, &mut M);
         M
     }
 
-    fn fill_mass(&self, c: &Contractions, M: &mut Mat<f64>) {
+    fn fill_mass(&self, c: &Contractions, w: &FfrScratch, M: &mut Mat<f64>) {
         let n = self.n();
         let m = self.mass;
         let st = skew(&c.s);
         for i in 0..3 {
-            M[(i, i)] = m;
             for j in 0..3 {
+                M[(i, j)] = if i == j { m } else { 0.0 };
                 M[(i, 3 + j)] = -st[(i, j)];
                 M[(3 + i, j)] = st[(i, j)];
                 M[(3 + i, 3 + j)] = c.J[(i, j)];
@@ -304,16 +410,23 @@ impl FfrInertia {
         }
         for j in 0..n {
             for i in 0..3 {
-                let srw = self.S_r[(i, j)] - c.tq[i][j];
+                let srw = self.S_r[(i, j)] - w.tq[(j, i)];
                 M[(i, 6 + j)] = self.S_t[(i, j)];
                 M[(6 + j, i)] = self.S_t[(i, j)];
                 M[(3 + i, 6 + j)] = srw;
                 M[(6 + j, 3 + i)] = srw;
             }
-            for i in 0..n {
-                M[(6 + i, 6 + j)] = self.M_CB[(i, j)];
-            }
+            M.col_as_slice_mut(6 + j)[6..].copy_from_slice(self.M_CB.col_as_slice(j));
         }
+    }
+
+    /// Allocating form of [`Self::force_into`].
+    pub fn force(&self, q: &[f64], nu: &[f64], nu_dot: &[f64], partials: bool) -> FfrForce {
+        let n = self.n();
+        let mut out = FfrForce::zeros(n);
+        let mut w = FfrScratch::new(n);
+        self.force_into(q, nu, nu_dot, partials, &mut out, &mut w);
+        out
     }
 
     /// $\mathbf F(\mathbf q, \boldsymbol\nu, \dot{\boldsymbol\nu})$ and, when `partials`, its
@@ -333,29 +446,38 @@ impl FfrInertia {
     /// | $\mathbf F_\Omega$ | $\tilde{\dot{\mathbf s}} + \tilde{\boldsymbol\Omega}\tilde{\mathbf s} - \tilde{\mathbf p}_V + m\tilde{\mathbf V}$ | $\dot{\mathbf J} - \tilde{\mathbf p}_\Omega + \tilde{\boldsymbol\Omega}\mathbf J - \tilde{\mathbf V}\tilde{\mathbf s}$ | $\mathbf j_q(\boldsymbol\Omega) + \tilde{\boldsymbol\Omega}(\mathbf S_r + \mathbf S_w)$ | see below |
     /// | $\mathbf F_q$ | $\mathbf S_t^T\tilde{\boldsymbol\Omega}$ | $2\mathbf S_w(\dot{\mathbf q})^T - \mathbf S_t^T\tilde{\mathbf V} - \mathbf j_q(\boldsymbol\Omega)^T$ | $-2\sum_i\Omega_i\tilde{\mathbf S}_i$ | $-\sum_i\dot\Omega_i\tilde{\mathbf S}_i - \tfrac12\sum_{ab}c_{ab}\bar{\mathbf S}^{sym}_{ab}$ |
     ///
-    /// $\partial\mathbf F_\Omega/\partial\mathbf q = -\tilde{\dot{\mathbf V}}\mathbf S_t + \mathbf j_q(\dot{\boldsymbol\Omega})
-    /// + \mathrm{Rows}(\tilde{\mathbf S}\ddot{\mathbf q}) + \dot{\mathbf j}_q(\boldsymbol\Omega)
-    /// + \tilde{\boldsymbol\Omega}(-\tilde{\mathbf V}\mathbf S_t + \mathbf j_q(\boldsymbol\Omega) + \mathrm{Rows}(\tilde{\mathbf S}\dot{\mathbf q}))
-    /// + \tilde{\mathbf V}\tilde{\boldsymbol\Omega}\mathbf S_t$, with $\dot{\mathbf j}_q(\mathbf w) =
+    /// $\partial\mathbf F_\Omega/\partial\mathbf q = -\tilde{\dot{\mathbf V}}\mathbf S_t + \mathbf j_q(\dot{\boldsymbol\Omega}) +
+    /// \mathrm{Rows}(\tilde{\mathbf S}\ddot{\mathbf q}) + \dot{\mathbf j}_q(\boldsymbol\Omega) +
+    /// \tilde{\boldsymbol\Omega}(-\tilde{\mathbf V}\mathbf S_t + \mathbf j_q(\boldsymbol\Omega) + \mathrm{Rows}(\tilde{\mathbf S}\dot{\mathbf q})) +
+    /// \tilde{\mathbf V}\tilde{\boldsymbol\Omega}\mathbf S_t$, with $\dot{\mathbf j}_q(\mathbf w) =
     /// \partial(\dot{\mathbf J}\mathbf w)/\partial\mathbf q$. Checked by
     /// `tests/unit/fd_tangent.rs::ffr_partials`.
-    pub fn force(&self, q: &[f64], nu: &[f64], nu_dot: &[f64], partials: bool) -> FfrForce {
+    pub fn force_into(
+        &self,
+        q: &[f64],
+        nu: &[f64],
+        nu_dot: &[f64],
+        partials: bool,
+        out: &mut FfrForce,
+        w: &mut FfrScratch,
+    ) {
         let n = self.n();
         let m = self.mass;
         let v3 = |x: &[f64], o: usize| Vector3::new(x[o], x[o + 1], x[o + 2]);
         let (V, Om, qd) = (v3(nu, 0), v3(nu, 3), &nu[6..]);
         let (Vd, Omd, qdd) = (v3(nu_dot, 0), v3(nu_dot, 3), &nu_dot[6..]);
-        let c = self.contractions(q, qd, qdd);
+        let c = self.contractions(q, qd, qdd, w);
         let (s, sd) = (c.s, c.sd);
-        let Srw_qd = mul3(&self.S_r, qd) + Self::sw_mul(&c.tq, qd);
-        let Srw_qdd = mul3(&self.S_r, qdd) + Self::sw_mul(&c.tq, qdd);
+        let Srw_qd = mul3(&self.S_r, qd) + Self::sw_mul(&w.tq, qd);
+        let Srw_qdd = mul3(&self.S_r, qdd) + Self::sw_mul(&w.tq, qdd);
         let p_V = V * m + Om.cross(&s) + sd;
         let p_Om = s.cross(&V) + c.J * Om + Srw_qd;
         let F_V = Vd * m + Omd.cross(&s) + mul3(&self.S_t, qdd) + Om.cross(&sd) + Om.cross(&p_V);
         let F_Om = s.cross(&Vd) + c.J * Omd + Srw_qdd + sd.cross(&V) + c.Jd * Om + Om.cross(&p_Om) + V.cross(&p_V);
-        let mut F = vec![0.0; 6 + n];
+        let F = &mut out.F;
         F[0..3].copy_from_slice(F_V.as_slice());
         F[3..6].copy_from_slice(F_Om.as_slice());
+        self.jq(&Om, &w.sig, true, &mut w.jq_Om);
         {
             let Fq = &mut F[6..];
             matvec(&self.M_CB, qdd, Fq);
@@ -363,48 +485,44 @@ impl FfrInertia {
             // (S_r + S_w)^T Omd, S_w^T x = -sum_i x_i tq_i.
             add_mul3t(Fq, &self.S_r, &Omd, 1.0);
             add_mul3t(Fq, &self.S_t, &V.cross(&Om), -1.0);
+            let (tq, tqd) = (&w.tq, &w.tqd);
             for j in 0..n {
                 let mut v = 0.0;
                 for i in 0..3 {
-                    v -= Omd[i] * c.tq[i][j];
+                    v -= Omd[i] * tq[(j, i)];
                     // 2 S_w(qd)^T Om
-                    v -= 2.0 * Om[i] * c.tqd[i][j];
+                    v -= 2.0 * Om[i] * tqd[(j, i)];
                 }
                 Fq[j] += v;
             }
             // - 1/2 j_q(Om)^T Om
-            let mut jq = Mat::zeros(3, n);
-            self.jq(&Om, &c.sig, true, &mut jq, 0);
-            add_mul3t(Fq, &jq, &Om, -0.5);
+            add_mul3t(Fq, &w.jq_Om, &Om, -0.5);
         }
-        let mut out = FfrForce { F, M: Mat::zeros(0, 0), F_nu: Mat::zeros(0, 0), F_q: Mat::zeros(0, 0) };
         if !partials {
-            return out;
+            return;
         }
-        let mut M = Mat::zeros(6 + n, 6 + n);
-        self.fill_mass(&c, &mut M);
+        self.fill_mass(&c, w, &mut out.M);
 
         let (Ot, Vt, st, sdt) = (skew(&Om), skew(&V), skew(&s), skew(&sd));
-        let mut F_nu = Mat::zeros(6 + n, 6 + n);
+        let F_nu = &mut out.F_nu;
         let put3 = |A: &mut Mat<f64>, r0: usize, c0: usize, B: &Matrix3<f64>| {
             for i in 0..3 {
                 for j in 0..3 {
-                    A[(r0 + i, c0 + j)] += B[(i, j)];
+                    A[(r0 + i, c0 + j)] = B[(i, j)];
                 }
             }
         };
-        put3(&mut F_nu, 0, 0, &(Ot * m));
-        put3(&mut F_nu, 0, 3, &(-sdt - skew(&p_V) - Ot * st));
-        put3(&mut F_nu, 3, 0, &(sdt + Ot * st - skew(&p_V) + Vt * m));
-        put3(&mut F_nu, 3, 3, &(c.Jd - skew(&p_Om) + Ot * c.J - Vt * st));
-        let mut jq_Om = Mat::zeros(3, n);
-        self.jq(&Om, &c.sig, true, &mut jq_Om, 0);
+        put3(F_nu, 0, 0, &(Ot * m));
+        put3(F_nu, 0, 3, &(-sdt - skew(&p_V) - Ot * st));
+        put3(F_nu, 3, 0, &(sdt + Ot * st - skew(&p_V) + Vt * m));
+        put3(F_nu, 3, 3, &(c.Jd - skew(&p_Om) + Ot * c.J - Vt * st));
+        let jq_Om = &w.jq_Om;
         for j in 0..n {
             let St = Vector3::new(self.S_t[(0, j)], self.S_t[(1, j)], self.S_t[(2, j)]);
             let Srw = Vector3::new(
-                self.S_r[(0, j)] - c.tq[0][j],
-                self.S_r[(1, j)] - c.tq[1][j],
-                self.S_r[(2, j)] - c.tq[2][j],
+                self.S_r[(0, j)] - w.tq[(j, 0)],
+                self.S_r[(1, j)] - w.tq[(j, 1)],
+                self.S_r[(2, j)] - w.tq[(j, 2)],
             );
             // [V, qd] = 2 Om~ S_t ; [Om, qd] = j_q(Om) + Om~ Srw
             let a = Ot * St * 2.0;
@@ -414,64 +532,59 @@ impl FfrInertia {
             // [qd, Om] = 2 S_w(qd)^T - S_t^T V~ - j_q(Om)^T ; S_w(qd)^T row j = -tqd_.j
             let cw = Vt * St; // -(S_t^T V~) row j = -(V~^T S_t_j)^T = (V~ S_t_j)^T
             for i in 0..3 {
-                F_nu[(i, 6 + j)] += a[i];
-                F_nu[(3 + i, 6 + j)] += b[i] + jq_Om[(i, j)];
-                F_nu[(6 + j, i)] += cv[i];
-                F_nu[(6 + j, 3 + i)] += -2.0 * c.tqd[i][j] + cw[i] - jq_Om[(i, j)];
+                F_nu[(i, 6 + j)] = a[i];
+                F_nu[(3 + i, 6 + j)] = b[i] + jq_Om[(i, j)];
+                F_nu[(6 + j, i)] = cv[i];
+                F_nu[(6 + j, 3 + i)] = -2.0 * w.tqd[(j, i)] + cw[i] - jq_Om[(i, j)];
             }
         }
         for j in 0..n {
+            let s0 = self.S_tilde[0].col_as_slice(j);
+            let s1 = self.S_tilde[1].col_as_slice(j);
+            let s2 = self.S_tilde[2].col_as_slice(j);
+            let o = &mut F_nu.col_as_slice_mut(6 + j)[6..];
+            let (a0, a1, a2) = (-2.0 * Om[0], -2.0 * Om[1], -2.0 * Om[2]);
             for i in 0..n {
-                let mut v = 0.0;
-                for k in 0..3 {
-                    v -= 2.0 * Om[k] * self.S_tilde[k][(i, j)];
-                }
-                F_nu[(6 + i, 6 + j)] = v;
+                o[i] = a0 * s0[i] + a1 * s1[i] + a2 * s2[i];
             }
         }
 
-        let mut F_q = Mat::zeros(6 + n, n);
         // F_Om rows: j_q(Omd) + jdot_q(Om) + Om~ j_q(Om) and the S_t, Rows terms.
-        let mut jq_Omd = Mat::zeros(3, n);
-        self.jq(&Omd, &c.sig, true, &mut jq_Omd, 0);
-        let mut jqd_Om = Mat::zeros(3, n);
-        self.jq(&Om, &c.sigd, false, &mut jqd_Om, 0);
+        self.jq(&Omd, &w.sig, true, &mut w.jq_Omd);
+        self.jq(&Om, &w.sigd, false, &mut w.jqd_Om);
+        let F_q = &mut out.F_q;
         let A_V = skew(&Omd) + Ot * Ot;
         let A_Om = -skew(&Vd) - Ot * Vt + Vt * Ot;
         for j in 0..n {
             let St = Vector3::new(self.S_t[(0, j)], self.S_t[(1, j)], self.S_t[(2, j)]);
             let fv = A_V * St;
             let jqO = Vector3::new(jq_Om[(0, j)], jq_Om[(1, j)], jq_Om[(2, j)]);
-            let rows_qd = Vector3::new(c.tqd[0][j], c.tqd[1][j], c.tqd[2][j]);
+            let rows_qd = Vector3::new(w.tqd[(j, 0)], w.tqd[(j, 1)], w.tqd[(j, 2)]);
             let fo = A_Om * St + Ot * (jqO + rows_qd);
             for i in 0..3 {
                 F_q[(i, j)] = fv[i];
-                F_q[(3 + i, j)] = fo[i] + jq_Omd[(i, j)] + c.tqdd[i][j] + jqd_Om[(i, j)];
+                F_q[(3 + i, j)] = fo[i] + w.jq_Omd[(i, j)] + w.tqdd[(j, i)] + w.jqd_Om[(i, j)];
             }
         }
         // F_q rows: -sum_i Omd_i S~_i - 1/2 sum_ab c_ab S_bar_sym_ab.
         let on2 = Om.norm_squared();
         let cab = |a: usize, b: usize| if a == b { on2 - Om[a] * Om[a] } else { -Om[a] * Om[b] };
-        let mut w = [0.0; 6];
+        let mut wp = [0.0; 6];
         for (p, &(a, b)) in PAIRS.iter().enumerate() {
             // Off-diagonal pairs appear twice in the double sum.
-            w[p] = -0.5 * cab(a, b) * if a == b { 1.0 } else { 2.0 };
+            wp[p] = -0.5 * cab(a, b) * if a == b { 1.0 } else { 2.0 };
         }
         for j in 0..n {
+            let st: [&[f64]; 3] = std::array::from_fn(|k| self.S_tilde[k].col_as_slice(j));
+            let sb: [&[f64]; 6] = std::array::from_fn(|p| self.S_bar_sym[p].col_as_slice(j));
+            let o = &mut F_q.col_as_slice_mut(j)[6..];
             for i in 0..n {
-                let mut v = 0.0;
-                for k in 0..3 {
-                    v -= Omd[k] * self.S_tilde[k][(i, j)];
-                }
+                let mut v = -(Omd[0] * st[0][i] + Omd[1] * st[1][i] + Omd[2] * st[2][i]);
                 for p in 0..6 {
-                    v += w[p] * self.S_bar_sym[p][(i, j)];
+                    v += wp[p] * sb[p][i];
                 }
-                F_q[(6 + i, j)] = v;
+                o[i] = v;
             }
         }
-        out.M = M;
-        out.F_nu = F_nu;
-        out.F_q = F_q;
-        out
     }
 }

@@ -51,7 +51,8 @@ impl Superelement {
             let p = kin.frame.r + kin.R_j * (x - self.origin + u);
             out.positions.push(p);
             out.displacements.push(p - x);
-            out.orientations.push(kin.frame.R * so3::exp(&Vector3::new(w[3], w[4], w[5])));
+            out.orientations
+                .push(kin.frame.R * so3::exp(&Vector3::new(w[3], w[4], w[5])));
             out.elastic.push(u);
         }
         Some(out)

@@ -12,13 +12,13 @@
 //!   \exp(\widetilde{\delta\boldsymbol\pi})\mathbf R$ ([`perturb`]).
 //! * Left Jacobian: $\exp(\boldsymbol\theta + \delta\boldsymbol\theta) = \exp(\mathbf J_l(\boldsymbol\theta)
 //!   \delta\boldsymbol\theta)\exp(\boldsymbol\theta)$ to first order;
-//!   $\mathbf J_l(\boldsymbol\theta) = \mathbf I + \frac{1-\cos t}{t^2}\tilde{\boldsymbol\theta}
-//!   + \frac{t - \sin t}{t^3}\tilde{\boldsymbol\theta}^2$, $t = |\boldsymbol\theta|$.
+//!   $\mathbf J_l(\boldsymbol\theta) = \mathbf I + \frac{1-\cos t}{t^2}\tilde{\boldsymbol\theta} +
+//!   \frac{t - \sin t}{t^3}\tilde{\boldsymbol\theta}^2$, $t = |\boldsymbol\theta|$.
 //!   Right Jacobian $\mathbf J_r(\boldsymbol\theta) = \mathbf J_l(-\boldsymbol\theta) =
 //!   \mathbf J_l^T(\boldsymbol\theta)$: $\exp(\boldsymbol\theta + \delta\boldsymbol\theta) =
 //!   \exp(\boldsymbol\theta)\exp(\mathbf J_r\delta\boldsymbol\theta)$.
-//! * Inverse: $\mathbf J_l^{-1}(\boldsymbol\theta) = \mathbf I - \tfrac12\tilde{\boldsymbol\theta}
-//!   + \beta(t)\,\tilde{\boldsymbol\theta}^2$ with $\beta(t) = \frac{1}{t^2} -
+//! * Inverse: $\mathbf J_l^{-1}(\boldsymbol\theta) = \mathbf I - \tfrac12\tilde{\boldsymbol\theta} +
+//!   \beta(t)\,\tilde{\boldsymbol\theta}^2$ with $\beta(t) = \frac{1}{t^2} -
 //!   \frac{1+\cos t}{2t\sin t}$, singular at $t = 2\pi$ only.
 //!
 //! Every function is tested in `tests/unit/so3.rs` (round trips and central differences).
@@ -56,7 +56,11 @@ pub fn log(q: &UnitQuaternion<f64>) -> Vector3<f64> {
     let s = v.norm();
     // 2 atan2(s, w) / s; below s = 1e-6 the series 2/w (1 - s^2/(3 w^2)) is exact to
     // round-off (next term s^4/(5 w^4) < 1e-24).
-    let f = if s < 1e-6 { 2.0 / w * (1.0 - s * s / (3.0 * w * w)) } else { 2.0 * s.atan2(w) / s };
+    let f = if s < 1e-6 {
+        2.0 / w * (1.0 - s * s / (3.0 * w * w))
+    } else {
+        2.0 * s.atan2(w) / s
+    };
     v * f
 }
 
@@ -164,8 +168,8 @@ pub fn right_jacobian_inv(theta: &Vector3<f64>) -> Matrix3<f64> {
 ///
 /// # Derivation
 /// $\mathbf J_l^{-1}\mathbf x = \mathbf x - \tfrac12\boldsymbol\theta\times\mathbf x + \beta\mathbf v$,
-/// $\mathbf v = \tilde{\boldsymbol\theta}^2\mathbf x = \boldsymbol\theta(\boldsymbol\theta\cdot\mathbf x)
-/// - t^2\mathbf x$, and $\partial\beta/\partial\boldsymbol\theta = \gamma\boldsymbol\theta^T$:
+/// $\mathbf v = \tilde{\boldsymbol\theta}^2\mathbf x = \boldsymbol\theta(\boldsymbol\theta\cdot\mathbf x) -
+/// t^2\mathbf x$, and $\partial\beta/\partial\boldsymbol\theta = \gamma\boldsymbol\theta^T$:
 /// $\mathbf H = \tfrac12\tilde{\mathbf x} + \beta[(\boldsymbol\theta\cdot\mathbf x)\mathbf I +
 /// \boldsymbol\theta\mathbf x^T - 2\mathbf x\boldsymbol\theta^T] + \gamma\mathbf v\boldsymbol\theta^T$.
 /// Checked by `tests/unit/so3.rs::jacobian_inverse_derivatives_match_fd`.
@@ -173,7 +177,8 @@ pub fn left_jacobian_inv_derivative(theta: &Vector3<f64>, x: &Vector3<f64>) -> M
     let (beta, gamma, _) = jinv_coefficients(theta.norm());
     let tx = theta.dot(x);
     let v = theta * tx - x * theta.norm_squared();
-    skew(x) * 0.5 + (Matrix3::identity() * tx + theta * x.transpose() - x * theta.transpose() * 2.0) * beta
+    skew(x) * 0.5
+        + (Matrix3::identity() * tx + theta * x.transpose() - x * theta.transpose() * 2.0) * beta
         + v * theta.transpose() * gamma
 }
 
@@ -198,14 +203,14 @@ pub fn left_jacobian_inv_directional(theta: &Vector3<f64>, c: &Vector3<f64>) -> 
 /// two directions).
 ///
 /// # Derivation
-/// With $\mathbf w = (\boldsymbol\theta\cdot\mathbf x)\mathbf c + \boldsymbol\theta(\mathbf x\cdot\mathbf c)
-/// - 2\mathbf x(\boldsymbol\theta\cdot\mathbf c)$ we have $\mathbf H\mathbf c = \tfrac12\mathbf x\times\mathbf c
-/// + \beta\mathbf w + \gamma(\boldsymbol\theta\cdot\mathbf c)\mathbf v$; differentiating
+/// With $\mathbf w = (\boldsymbol\theta\cdot\mathbf x)\mathbf c + \boldsymbol\theta(\mathbf x\cdot\mathbf c) -
+/// 2\mathbf x(\boldsymbol\theta\cdot\mathbf c)$ we have $\mathbf H\mathbf c = \tfrac12\mathbf x\times\mathbf c +
+/// \beta\mathbf w + \gamma(\boldsymbol\theta\cdot\mathbf c)\mathbf v$; differentiating
 /// ($\partial\gamma/\partial\boldsymbol\theta = \delta\,\boldsymbol\theta^T$):
-/// $\mathbf Q = \gamma\mathbf w\boldsymbol\theta^T + \beta[\mathbf c\mathbf x^T + (\mathbf x\cdot\mathbf c)\mathbf I
-/// - 2\mathbf x\mathbf c^T] + \delta(\boldsymbol\theta\cdot\mathbf c)\mathbf v\boldsymbol\theta^T
-/// + \gamma\mathbf v\mathbf c^T + \gamma(\boldsymbol\theta\cdot\mathbf c)[(\boldsymbol\theta\cdot\mathbf x)\mathbf I
-/// + \boldsymbol\theta\mathbf x^T - 2\mathbf x\boldsymbol\theta^T]$.
+/// $\mathbf Q = \gamma\mathbf w\boldsymbol\theta^T + \beta[\mathbf c\mathbf x^T + (\mathbf x\cdot\mathbf c)\mathbf I -
+/// 2\mathbf x\mathbf c^T] + \delta(\boldsymbol\theta\cdot\mathbf c)\mathbf v\boldsymbol\theta^T +
+/// \gamma\mathbf v\mathbf c^T + \gamma(\boldsymbol\theta\cdot\mathbf c)[(\boldsymbol\theta\cdot\mathbf x)\mathbf I +
+/// \boldsymbol\theta\mathbf x^T - 2\mathbf x\boldsymbol\theta^T]$.
 /// Checked by `tests/unit/so3.rs::jacobian_inverse_derivatives_match_fd`.
 pub fn left_jacobian_inv_second(theta: &Vector3<f64>, x: &Vector3<f64>, c: &Vector3<f64>) -> Matrix3<f64> {
     let (beta, gamma, delta) = jinv_coefficients(theta.norm());

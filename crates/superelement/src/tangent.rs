@@ -1,6 +1,6 @@
-//! The residual of one body and its tangent matrices for Newton [S19]:
-//! $\mathbf r(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}) = \mathbf M\ddot{\mathbf q} + \mathbf Q_v + \mathbf f_{el}
-//! + \mathbf f_d - \mathbf f_g$, $\mathbf K_t = \partial\mathbf r/\partial\mathbf q$,
+//! The residual of one body and its tangent matrices for Newton \[S19\]:
+//! $\mathbf r(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}) = \mathbf M\ddot{\mathbf q} + \mathbf Q_v + \mathbf f_{el} +
+//! \mathbf f_d - \mathbf f_g$, $\mathbf K_t = \partial\mathbf r/\partial\mathbf q$,
 //! $\mathbf C_t = \partial\mathbf r/\partial\dot{\mathbf q}$, $\mathbf M = \partial\mathbf r/\partial\ddot{\mathbf q}$.
 //!
 //! Naming rule: `evaluate` returns forces and tangents together (they share every
@@ -18,11 +18,12 @@
 
 use crate::body::{BodyState, Superelement};
 use crate::error::SuperelementError;
-use crate::forces::{Local, Motion};
+use crate::forces::{w_into, Local, Motion, Scratch};
 use crate::frame::Frame;
+use crate::local_coordinates::local_coordinates;
 use crate::mass::MassVariant;
 use crate::so3::skew;
-use crate::transform::{gemm, rotate_matrix, w_stack, Kinematics};
+use crate::transform::{gemm, lambda_right, rotate_matrix, Kinematics};
 use faer::{Accum, Mat};
 use nalgebra::Vector3;
 
@@ -51,43 +52,150 @@ pub struct Evaluation {
     pub f_gravity: Vec<f64>,
     /// $\mathbf M$.
     pub mass: Mat<f64>,
-    /// $\mathbf K_t = \partial\mathbf r/\partial\mathbf q$ (empty when tangents were not asked for).
+    /// $\mathbf K_t = \partial\mathbf r/\partial\mathbf q$ (not updated by [`Superelement::forces`]).
     pub stiffness: Mat<f64>,
-    /// $\mathbf C_t = \partial\mathbf r/\partial\dot{\mathbf q}$ (empty when tangents were not asked for).
+    /// $\mathbf C_t = \partial\mathbf r/\partial\dot{\mathbf q}$ (not updated by [`Superelement::forces`]).
     pub damping: Mat<f64>,
 }
 
+impl Evaluation {
+    /// Zeroed output for a body with `n` coordinates.
+    pub fn zeros(n: usize) -> Self {
+        Self {
+            frame: Frame::identity(),
+            frame_iterations: 0,
+            q_jj: vec![0.0; n],
+            residual: vec![0.0; n],
+            f_inertia: vec![0.0; n],
+            q_v: vec![0.0; n],
+            f_elastic: vec![0.0; n],
+            f_damping: vec![0.0; n],
+            f_gravity: vec![0.0; n],
+            mass: Mat::zeros(n, n),
+            stiffness: Mat::zeros(n, n),
+            damping: Mat::zeros(n, n),
+        }
+    }
+}
+
+/// Every buffer one evaluation needs, sized for one superelement ([`Superelement::workspace`]):
+/// with [`Superelement::evaluate_into`] a hot loop does not allocate (style R8).
+#[derive(Clone, Debug)]
+pub struct Workspace {
+    pub(crate) kin: Kinematics,
+    pub(crate) qd: Vec<f64>,
+    pub(crate) mo: Motion,
+    pub(crate) loc: Local,
+    pub(crate) scratch: Scratch,
+    pub(crate) KL: Mat<f64>,
+    pub(crate) tmp: Mat<f64>,
+    pub(crate) H: Mat<f64>,
+    pub(crate) W: Mat<f64>,
+    pub(crate) n6: Mat<f64>,
+    pub(crate) rho: Vec<f64>,
+}
+
+impl Workspace {
+    /// The configuration of the last evaluation (frame, $\mathbf q^{jj}$, $\mathbf Z_j$, $\mathbf T_j$, ...).
+    pub fn kinematics(&self) -> &Kinematics {
+        &self.kin
+    }
+}
+
 impl Superelement {
+    /// Buffers for [`Self::evaluate_into`].
+    pub fn workspace(&self) -> Workspace {
+        let (N, n) = (self.n_interfaces, self.n);
+        Workspace {
+            kin: Kinematics::empty(N, n),
+            qd: vec![0.0; n],
+            mo: Motion::new(N, n),
+            loc: Local::new(n),
+            scratch: Scratch::new(N, n),
+            KL: Mat::zeros(n, n),
+            tmp: Mat::zeros(n, n),
+            H: Mat::zeros(n, 3),
+            W: Mat::zeros(n, 3),
+            n6: Mat::zeros(n, 6),
+            rho: vec![0.0; n],
+        }
+    }
+
     /// Forces and tangents of the body at `state` with accelerations `acc` ($[\mathbf a_1,
     /// \boldsymbol\alpha_1, \dots, \ddot{\boldsymbol\eta}]$, spatial) under gravity `gravity`.
-    /// The frame is solved from `state.frame`.
-    pub fn evaluate(&self, state: &BodyState, acc: &[f64], gravity: &Vector3<f64>) -> Result<Evaluation, SuperelementError> {
-        self.evaluate_with(state, acc, gravity, true)
+    /// The frame is solved from `state.frame`. Allocates; see [`Self::evaluate_into`].
+    pub fn evaluate(
+        &self,
+        state: &BodyState,
+        acc: &[f64],
+        gravity: &Vector3<f64>,
+    ) -> Result<Evaluation, SuperelementError> {
+        let mut ws = self.workspace();
+        let mut out = Evaluation::zeros(self.n);
+        self.evaluate_into(state, acc, gravity, true, &mut ws, &mut out)?;
+        Ok(out)
     }
 
     /// Forces only (no tangents; cheaper, for explicit integrators and energy checks).
-    pub fn forces(&self, state: &BodyState, acc: &[f64], gravity: &Vector3<f64>) -> Result<Evaluation, SuperelementError> {
-        self.evaluate_with(state, acc, gravity, false)
+    pub fn forces(
+        &self,
+        state: &BodyState,
+        acc: &[f64],
+        gravity: &Vector3<f64>,
+    ) -> Result<Evaluation, SuperelementError> {
+        let mut ws = self.workspace();
+        let mut out = Evaluation::zeros(self.n);
+        self.evaluate_into(state, acc, gravity, false, &mut ws, &mut out)?;
+        Ok(out)
     }
 
-    fn evaluate_with(
+    /// [`Self::evaluate`] into reused buffers: `ws` from [`Self::workspace`], `out` from
+    /// [`Evaluation::zeros`]. With `tangents = false` only the forces and the mass matrix are
+    /// computed (`out.stiffness`, `out.damping` keep their old values).
+    pub fn evaluate_into(
         &self,
         state: &BodyState,
         acc: &[f64],
         gravity: &Vector3<f64>,
         tangents: bool,
-    ) -> Result<Evaluation, SuperelementError> {
+        ws: &mut Workspace,
+        out: &mut Evaluation,
+    ) -> Result<(), SuperelementError> {
         if acc.len() != self.n {
             return Err(SuperelementError::InvalidState {
                 what: format!("{} accelerations for {} coordinates", acc.len(), self.n),
             });
         }
-        let kin = self.kinematics(state)?;
-        let qd = state.velocity_vector();
-        Ok(self.evaluate_kinematics(&kin, &qd, acc, gravity, tangents))
+        let (frame, iterations) = self.solve_frame(state)?;
+        local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut ws.kin.q_jj);
+        ws.kin.update(frame, iterations, &self.x, self.Phi_j.as_ref())?;
+        for k in 0..self.n_interfaces {
+            ws.qd[6 * k..6 * k + 3].copy_from_slice(state.v[k].as_slice());
+            ws.qd[6 * k + 3..6 * k + 6].copy_from_slice(state.omega[k].as_slice());
+        }
+        ws.qd[6 * self.n_interfaces..].copy_from_slice(&state.eta_dot);
+        self.evaluate_local(acc, gravity, tangents, ws, out);
+        Ok(())
     }
 
-    /// [`Self::evaluate`] for a configuration already solved ([`Self::kinematics`]).
+    /// [`Self::evaluate`] for a configuration already solved ([`Self::kinematics`]); allocates.
+    pub fn evaluate_kinematics(
+        &self,
+        kin: &Kinematics,
+        qd: &[f64],
+        acc: &[f64],
+        gravity: &Vector3<f64>,
+        tangents: bool,
+    ) -> Evaluation {
+        let mut ws = self.workspace();
+        ws.kin = kin.clone();
+        ws.qd.copy_from_slice(qd);
+        let mut out = Evaluation::zeros(self.n);
+        self.evaluate_local(acc, gravity, tangents, &mut ws, &mut out);
+        out
+    }
+
+    /// The forces and tangents for the configuration and velocities in `ws`.
     ///
     /// # Derivation
     /// Every force is $\bar{\mathbf R}\boldsymbol\rho(\mathbf q^{jj}, \mathbf y, \mathbf a, \mathbf g^L)$
@@ -98,84 +206,84 @@ impl Superelement {
     /// (likewise $\mathbf a$, $\mathbf g^L$), and rotates the result, $\delta(\bar{\mathbf R}\boldsymbol\rho)
     /// = \bar{\mathbf R}(\delta\boldsymbol\rho - \mathbf W(\boldsymbol\rho)\delta\boldsymbol\Pi)$. Hence
     ///
-    /// $$\mathbf K_t = \bar{\mathbf R}\Big[\frac{\partial\boldsymbol\rho}{\partial\mathbf q^{jj}}\mathbf B
-    /// + \Big(\frac{\partial\boldsymbol\rho}{\partial\mathbf y}\mathbf W(\mathbf y) + \mathbf M^L\mathbf W(\mathbf a)
-    /// + \frac{\partial\boldsymbol\rho}{\partial\mathbf g^L}\tilde{\mathbf g}^L - \mathbf W(\boldsymbol\rho)\Big)\mathbf Y_r\Big]\bar{\mathbf R}^T,$$
+    /// $$\mathbf K_t = \bar{\mathbf R}\Big[\frac{\partial\boldsymbol\rho}{\partial\mathbf q^{jj}}\mathbf B +
+    /// \Big(\frac{\partial\boldsymbol\rho}{\partial\mathbf y}\mathbf W(\mathbf y) + \mathbf M^L\mathbf W(\mathbf a) +
+    /// \frac{\partial\boldsymbol\rho}{\partial\mathbf g^L}\tilde{\mathbf g}^L - \mathbf W(\boldsymbol\rho)\Big)\mathbf Y_r\Big]\bar{\mathbf R}^T,$$
     ///
     /// $\mathbf C_t = \bar{\mathbf R}\,\partial\boldsymbol\rho/\partial\mathbf y\,\bar{\mathbf R}^T$,
     /// $\mathbf M = \bar{\mathbf R}\mathbf M^L\bar{\mathbf R}^T$. The term $\mathbf M^L\mathbf W(\mathbf a)\mathbf Y_r$
     /// (with the $\mathbf q^{jj}$-dependence of $\mathbf M^L$ inside $\partial\boldsymbol\rho/\partial\mathbf q^{jj}$)
     /// is $\partial(\mathbf M\ddot{\mathbf q})/\partial\mathbf q$. Checked entry by entry against
     /// central differences by `tests/unit/fd_tangent.rs::tangents_match_fd`.
-    pub fn evaluate_kinematics(
+    fn evaluate_local(
         &self,
-        kin: &Kinematics,
-        qd: &[f64],
         acc: &[f64],
         gravity: &Vector3<f64>,
         tangents: bool,
-    ) -> Evaluation {
+        ws: &mut Workspace,
+        out: &mut Evaluation,
+    ) {
         let n = self.n;
         let N = self.n_interfaces;
-        let mo = Motion::new(kin, qd, acc, gravity, tangents);
-        let mut loc = Local::new(n, tangents);
-        self.elastic(kin, &mut loc, tangents);
-        self.damping_force(kin, &mo, &mut loc, tangents);
-        self.gravity(kin, &mo, &mut loc, tangents);
+        let kin = &ws.kin;
+        let mo = &mut ws.mo;
+        mo.update(kin, &ws.qd, acc, gravity, tangents);
+        let loc = &mut ws.loc;
+        let w = &mut ws.scratch;
+        loc.clear(tangents);
+        self.elastic(kin, loc, w, tangents);
+        self.damping_force(kin, mo, loc, w, tangents);
+        self.gravity(kin, mo, loc, w, tangents);
         match self.mass_variant {
-            MassVariant::Exact => self.exact_inertia(kin, &mo, &mut loc, tangents),
-            MassVariant::Lumped => self.lumped_inertia(kin, &mo, &mut loc, tangents),
+            MassVariant::Exact => self.exact_inertia(kin, mo, loc, w, tangents),
+            MassVariant::Lumped => self.lumped_inertia(kin, mo, loc, w, tangents),
         }
-        let rho: Vec<f64> = (0..n).map(|i| loc.rho_in[i] + loc.rho_el[i] + loc.rho_d[i] - loc.rho_g[i]).collect();
+        for i in 0..n {
+            ws.rho[i] = loc.rho_in[i] + loc.rho_el[i] + loc.rho_d[i] - loc.rho_g[i];
+        }
         let R = &kin.R_j;
-        let mut mass = Mat::zeros(n, n);
-        rotate_matrix(R, N, &loc.M, &mut mass);
-        let f_inertia = kin.rotate(&loc.rho_in, true);
-        let mut q_v = f_inertia.clone();
+        rotate_matrix(R, N, &loc.M, &mut ws.KL, &mut out.mass);
+        kin.rotate_into(&loc.rho_in, true, &mut out.f_inertia);
+        kin.rotate_into(&loc.rho_el, true, &mut out.f_elastic);
+        kin.rotate_into(&loc.rho_d, true, &mut out.f_damping);
+        kin.rotate_into(&loc.rho_g, true, &mut out.f_gravity);
+        kin.rotate_into(&ws.rho, true, &mut out.residual);
+        out.q_v.copy_from_slice(&out.f_inertia);
         for j in 0..n {
+            let a = acc[j];
+            for (q, m) in out.q_v.iter_mut().zip(out.mass.col_as_slice(j)) {
+                *q -= m * a;
+            }
+        }
+        out.frame = kin.frame;
+        out.frame_iterations = kin.frame_iterations;
+        out.q_jj.copy_from_slice(&kin.q_jj);
+        if !tangents {
+            return;
+        }
+        kin.add_d_pt(&loc.F_sum, &mut loc.Dq, 1.0);
+        // K^L = Dq B + (Dy W(y) + M W(a) + Dg g~ - W(rho)) Y_r, with Dq B = (Dq T) Lambda.
+        kin.mul_t(loc.Dq.as_ref(), &mut ws.n6, &mut ws.KL);
+        lambda_right(&kin.Lambda, &mut ws.KL);
+        w_into(&ws.rho, N, &mut ws.H);
+        for j in 0..3 {
+            for h in ws.H.col_as_slice_mut(j) {
+                *h = -*h;
+            }
+        }
+        w_into(&mo.y, N, &mut ws.W);
+        gemm(&mut ws.H, loc.Dy.as_ref(), ws.W.as_ref(), 1.0, Accum::Add);
+        w_into(&mo.a, N, &mut ws.W);
+        gemm(&mut ws.H, loc.M.as_ref(), ws.W.as_ref(), 1.0, Accum::Add);
+        let gt = skew(&mo.g);
+        for j in 0..3 {
             for i in 0..n {
-                q_v[i] -= mass[(i, j)] * acc[j];
+                ws.H[(i, j)] += loc.Dg[(i, 0)] * gt[(0, j)] + loc.Dg[(i, 1)] * gt[(1, j)] + loc.Dg[(i, 2)] * gt[(2, j)];
             }
         }
-        let (stiffness, damping) = if tangents {
-            // K^L = Dq B + (Dy W(y) + M W(a) + Dg g~ - W(rho)) Y_r.
-            let mut KL = Mat::zeros(n, n);
-            gemm(&mut KL, loc.Dq.as_ref(), kin.B(), 1.0, Accum::Replace);
-            let mut H = w_stack(&rho, N);
-            for j in 0..3 {
-                for i in 0..n {
-                    H[(i, j)] = -H[(i, j)];
-                }
-            }
-            gemm(&mut H, loc.Dy.as_ref(), w_stack(&mo.y, N).as_ref(), 1.0, Accum::Add);
-            gemm(&mut H, loc.M.as_ref(), w_stack(&mo.a, N).as_ref(), 1.0, Accum::Add);
-            let gt = skew(&mo.g);
-            let gt = Mat::from_fn(3, 3, |i, j| gt[(i, j)]);
-            gemm(&mut H, loc.Dg.as_ref(), gt.as_ref(), 1.0, Accum::Add);
-            gemm(&mut KL, H.as_ref(), kin.Y().subrows(3, 3), 1.0, Accum::Add);
-            let mut K = Mat::zeros(n, n);
-            rotate_matrix(R, N, &KL, &mut K);
-            let mut C = Mat::zeros(n, n);
-            rotate_matrix(R, N, &loc.Dy, &mut C);
-            (K, C)
-        } else {
-            (Mat::zeros(0, 0), Mat::zeros(0, 0))
-        };
-        let _ = Vector3::<f64>::zeros();
-        Evaluation {
-            frame: kin.frame,
-            frame_iterations: kin.frame_iterations,
-            q_jj: kin.q_jj.clone(),
-            residual: kin.rotate(&rho, true),
-            f_inertia,
-            q_v,
-            f_elastic: kin.rotate(&loc.rho_el, true),
-            f_damping: kin.rotate(&loc.rho_d, true),
-            f_gravity: kin.rotate(&loc.rho_g, true),
-            mass,
-            stiffness,
-            damping,
-        }
+        gemm(&mut ws.KL, ws.H.as_ref(), kin.Y().subrows(3, 3), 1.0, Accum::Add);
+        rotate_matrix(R, N, &ws.KL, &mut ws.tmp, &mut out.stiffness);
+        rotate_matrix(R, N, &loc.Dy, &mut ws.tmp, &mut out.damping);
     }
 
     /// Kinetic energy $\tfrac12\dot{\mathbf q}^T\mathbf M\dot{\mathbf q}$ of the chosen inertia variant.

@@ -1,6 +1,6 @@
 //! Test helpers shared with the multibody crate (style R13): the one central-difference
 //! helper with its worst-entry report, state perturbations through the exponential map, and
-//! deterministic deformed moving states. With the `testing` feature, [`fixtures`] builds
+//! deterministic deformed moving states. With the `testing` feature, `fixtures` builds
 //! reduced beam bodies through `fe-model` and `reduction`.
 
 #![allow(non_snake_case)]
@@ -62,7 +62,11 @@ pub fn fd_jacobian(steps: &[f64], mut f: impl FnMut(&[f64]) -> Vec<f64>) -> Mat<
 /// another row) from hiding behind the largest entry; the $10^{-7}$ floor keeps entries that
 /// are zero analytically, where the difference quotient returns round-off, from dividing by zero.
 pub fn compare(name: &str, analytic: MatRef<'_, f64>, numeric: MatRef<'_, f64>) -> FdReport {
-    assert_eq!((analytic.nrows(), analytic.ncols()), (numeric.nrows(), numeric.ncols()), "{name}: shapes differ");
+    assert_eq!(
+        (analytic.nrows(), analytic.ncols()),
+        (numeric.nrows(), numeric.ncols()),
+        "{name}: shapes differ"
+    );
     let (m, n) = (analytic.nrows(), analytic.ncols());
     let a = |i, j| analytic[(i, j)];
     let b = |i, j| numeric[(i, j)];
@@ -77,13 +81,29 @@ pub fn compare(name: &str, analytic: MatRef<'_, f64>, numeric: MatRef<'_, f64>) 
             global = global.max(v);
         }
     }
-    let mut rep = FdReport { name: name.into(), worst: 0.0, row: 0, col: 0, analytic: 0.0, numeric: 0.0, scale: 0.0 };
+    let mut rep = FdReport {
+        name: name.into(),
+        worst: 0.0,
+        row: 0,
+        col: 0,
+        analytic: 0.0,
+        numeric: 0.0,
+        scale: 0.0,
+    };
     for j in 0..n {
         for i in 0..m {
             let s = row_max[i].max(col_max[j]).max(1e-7 * global).max(f64::MIN_POSITIVE);
             let e = (a(i, j) - b(i, j)).abs() / s;
             if e > rep.worst || !e.is_finite() {
-                rep = FdReport { name: name.into(), worst: e, row: i, col: j, analytic: a(i, j), numeric: b(i, j), scale: s };
+                rep = FdReport {
+                    name: name.into(),
+                    worst: e,
+                    row: i,
+                    col: j,
+                    analytic: a(i, j),
+                    numeric: b(i, j),
+                    scale: s,
+                };
             }
         }
     }
@@ -91,7 +111,12 @@ pub fn compare(name: &str, analytic: MatRef<'_, f64>, numeric: MatRef<'_, f64>) 
 }
 
 /// [`fd_jacobian`] then [`compare`].
-pub fn check_jacobian(name: &str, analytic: MatRef<'_, f64>, steps: &[f64], f: impl FnMut(&[f64]) -> Vec<f64>) -> FdReport {
+pub fn check_jacobian(
+    name: &str,
+    analytic: MatRef<'_, f64>,
+    steps: &[f64],
+    f: impl FnMut(&[f64]) -> Vec<f64>,
+) -> FdReport {
     let numeric = fd_jacobian(steps, f);
     compare(name, analytic, numeric.as_ref())
 }
@@ -135,7 +160,7 @@ impl Rng {
     pub fn new(seed: u64) -> Self {
         Self(seed)
     }
-    pub fn next(&mut self) -> f64 {
+    pub fn uniform(&mut self) -> f64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -144,20 +169,20 @@ impl Rng {
         (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
     }
     pub fn vector(&mut self) -> Vector3<f64> {
-        Vector3::new(self.next(), self.next(), self.next())
+        Vector3::new(self.uniform(), self.uniform(), self.uniform())
     }
 }
 
 /// How far a test state is from the undeformed body at rest.
 #[derive(Clone, Copy, Debug)]
 pub struct StateSpec {
-    /// Rotation of the body from the FE axes: angle [deg] about `axis`.
+    /// Rotation of the body from the FE axes: angle \[deg\] about `axis`.
     pub angle_deg: f64,
     pub axis: Vector3<f64>,
-    /// Elastic interface displacements (times the body size), elastic rotations [rad] and
+    /// Elastic interface displacements (times the body size), elastic rotations \[rad\] and
     /// modal amplitudes (times the body size and the square root of the mass).
     pub deformation: f64,
-    /// Rigid angular velocity [rad/s]; linear velocities scale with it and the body size,
+    /// Rigid angular velocity \[rad/s\]; linear velocities scale with it and the body size,
     /// elastic rates with it and `deformation`, accelerations with its square.
     pub spin: f64,
     pub seed: u64,
@@ -166,7 +191,13 @@ pub struct StateSpec {
 impl StateSpec {
     /// A rotated (`angle_deg` about a skew axis), deformed (2%) and moving (3 rad/s) state.
     pub fn moving(angle_deg: f64, seed: u64) -> Self {
-        Self { angle_deg, axis: Vector3::new(0.3, -0.5, 0.8), deformation: 0.02, spin: 3.0, seed }
+        Self {
+            angle_deg,
+            axis: Vector3::new(0.3, -0.5, 0.8),
+            deformation: 0.02,
+            spin: 3.0,
+            seed,
+        }
     }
 }
 
@@ -176,7 +207,12 @@ pub fn test_state(se: &Superelement, spec: &StateSpec) -> (BodyState, Vec<f64>) 
     let mut rng = Rng::new(spec.seed);
     let N = se.n_interfaces();
     let m = se.n_modes();
-    let L = se.interface_positions().iter().map(|x| x.norm()).fold(0.0, f64::max).max(0.1);
+    let L = se
+        .interface_positions()
+        .iter()
+        .map(|x| x.norm())
+        .fold(0.0, f64::max)
+        .max(0.1);
     let R0 = UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(spec.axis), spec.angle_deg.to_radians());
     let r0 = Vector3::new(0.3, -0.7, 1.1) * L;
     let frame = Frame::new(r0, R0);
@@ -192,8 +228,8 @@ pub fn test_state(se: &Superelement, spec: &StateSpec) -> (BodyState, Vec<f64>) 
     }
     let eta_scale = e * L * se.mass().sqrt();
     for i in 0..m {
-        s.eta[i] = rng.next() * eta_scale;
-        s.eta_dot[i] = rng.next() * eta_scale * spec.spin;
+        s.eta[i] = rng.uniform() * eta_scale;
+        s.eta_dot[i] = rng.uniform() * eta_scale * spec.spin;
     }
     let mut acc = vec![0.0; 6 * N + m];
     for k in 0..N {
@@ -203,7 +239,7 @@ pub fn test_state(se: &Superelement, spec: &StateSpec) -> (BodyState, Vec<f64>) 
         acc[6 * k + 3..6 * k + 6].copy_from_slice(al.as_slice());
     }
     for i in 0..m {
-        acc[6 * N + i] = rng.next() * eta_scale * spec.spin * spec.spin;
+        acc[6 * N + i] = rng.uniform() * eta_scale * spec.spin * spec.spin;
     }
     (s, acc)
 }
@@ -219,7 +255,13 @@ pub mod fixtures {
     pub fn properties(model: &mut FeModel, orientation: Vector3<f64>) -> BeamProperties {
         let material = model.add_material(IsotropicMaterial::new("aluminium", 70e9, 0.33, 2700.0).unwrap());
         let section = model.add_section(BeamSection::rectangle("rect", 0.05, 0.03, 0.33).unwrap());
-        BeamProperties { section, material, orientation, theory: BeamTheory::EulerBernoulli, mass: MassKind::Consistent }
+        BeamProperties {
+            section,
+            material,
+            orientation,
+            theory: BeamTheory::EulerBernoulli,
+            mass: MassKind::Consistent,
+        }
     }
 
     /// A straight beam of `elements` elements from `a` to `b` with interfaces at both ends (and,
@@ -241,7 +283,10 @@ pub mod fixtures {
         let mut ends = vec![nodes[0], nodes[elements]];
         let mut settings = CbSettings::new(modes);
         if auxiliary {
-            assert!(elements % 2 == 0, "the auxiliary node is the middle node: use an even element count");
+            assert!(
+                elements % 2 == 0,
+                "the auxiliary node is the middle node: use an even element count"
+            );
             settings.auxiliary_node = Some(nodes[elements / 2]);
         }
         let interfaces: Vec<(String, NodeId)> = ends.iter().enumerate().map(|(i, n)| (format!("end{i}"), *n)).collect();
@@ -269,5 +314,21 @@ pub mod fixtures {
         let interfaces = vec![("a".to_string(), a), ("corner".to_string(), c), ("b".to_string(), b)];
         let body = reduce(&model, "l-frame", &interfaces, &CbSettings::new(modes)).unwrap();
         (model, vec![a, c, b], body)
+    }
+
+    /// A hex8 block 1 x 0.2 x 0.3 m (5 x 1 x 2 bricks, aluminium) with an RBE2 interface on the
+    /// face x = 0 and an RBE3 interface on the face x = 1, at the face centroids: a solid body
+    /// with spider interfaces, whose second-order mass invariants are exact (module docs of
+    /// `reduction::invariants`).
+    pub fn solid_block(modes: ModeSelection) -> (FeModel, Vec<NodeId>, ReducedBody) {
+        use fe_model::interface::{add_interface_on_set, SpiderKind};
+        let mesh = fe_model::box_mesh::box_mesh(fe_model::CellKind::Hex8, [1.0, 0.2, 0.3], [5, 1, 2]).unwrap();
+        let material = IsotropicMaterial::new("aluminium", 70e9, 0.33, 2700.0).unwrap();
+        let mut model = fe_model::box_mesh::solid_model(mesh, material, MassKind::Consistent).unwrap();
+        let a = add_interface_on_set(&mut model, "a", "x0", None, SpiderKind::Rbe2).unwrap();
+        let b = add_interface_on_set(&mut model, "b", "x1", None, SpiderKind::Rbe3).unwrap();
+        let interfaces = vec![("a".to_string(), a), ("b".to_string(), b)];
+        let body = reduce(&model, "block", &interfaces, &CbSettings::new(modes)).unwrap();
+        (model, vec![a, b], body)
     }
 }

@@ -105,34 +105,75 @@ pub(crate) struct Blocks {
 
 impl Blocks {
     pub fn zeros(N: usize) -> Self {
-        Self { t: vec![Matrix3::zeros(); N], r: vec![Matrix3::zeros(); N] }
+        Self {
+            t: vec![Matrix3::zeros(); N],
+            r: vec![Matrix3::zeros(); N],
+        }
     }
 }
 
-/// `out (+)= A * blocks` for `A` with $n$ columns (eta columns of the product are zero).
+/// Column `j` of a column-major matrix as a slice.
+#[inline]
+pub(crate) fn col(A: MatRef<'_, f64>, j: usize) -> &[f64] {
+    A.col(j).try_as_col_major().expect("column-major matrix").as_slice()
+}
+
+/// `out (+)= A * blocks` for `A` with $n$ columns (eta columns of the product are zero;
+/// with `Accum::Add` they are left as they are).
 pub(crate) fn mul_blocks(A: MatRef<'_, f64>, blocks: &Blocks, out: &mut Mat<f64>, accum: Accum) {
     let N = blocks.t.len();
     if accum == Accum::Replace {
         out.fill(0.0);
     }
+    let r = A.nrows();
     for k in 0..N {
         for (off, B) in [(6 * k, &blocks.t[k]), (6 * k + 3, &blocks.r[k])] {
+            let (a0, a1, a2) = (col(A, off), col(A, off + 1), col(A, off + 2));
             for j in 0..3 {
-                for i in 0..A.nrows() {
-                    out[(i, off + j)] += A[(i, off)] * B[(0, j)] + A[(i, off + 1)] * B[(1, j)] + A[(i, off + 2)] * B[(2, j)];
+                let (b0, b1, b2) = (B[(0, j)], B[(1, j)], B[(2, j)]);
+                let o = &mut out.col_as_slice_mut(off + j)[..r];
+                for i in 0..r {
+                    o[i] += a0[i] * b0 + a1[i] * b1 + a2[i] * b2;
                 }
             }
         }
     }
 }
 
-/// `out += alpha * A B` (sequential faer product; all our matrices are small).
+/// `dst = src` for column-major matrices of the same shape (plain slice copies: faer's generic
+/// `copy_from` is several times slower at these sizes).
+#[inline]
+pub(crate) fn copy_mat(dst: &mut Mat<f64>, src: MatRef<'_, f64>) {
+    for j in 0..src.ncols() {
+        dst.col_as_slice_mut(j).copy_from_slice(col(src, j));
+    }
+}
+
+/// `out (+)= alpha * A B` (faer's sequential product: all our matrices are small, and its
+/// small-matrix kernels beat hand-written column updates here; measured with
+/// `benches/evaluate.rs`).
 #[inline]
 pub(crate) fn gemm(out: &mut Mat<f64>, A: MatRef<'_, f64>, B: MatRef<'_, f64>, alpha: f64, accum: Accum) {
     matmul(out.as_mut(), accum, A, B, alpha, Par::Seq);
 }
 
 impl Kinematics {
+    /// An empty configuration for a body with `N` interfaces and `n` CB coordinates; filled by
+    /// [`Self::update`]. Lets hot loops reuse the buffers.
+    pub(crate) fn empty(N: usize, n: usize) -> Self {
+        Self {
+            frame: Frame::identity(),
+            frame_iterations: 0,
+            R_j: Matrix3::identity(),
+            q_jj: vec![0.0; n],
+            r_loc: vec![Vector3::zeros(); N],
+            Lambda: vec![Matrix3::identity(); N],
+            G_inv: Matrix6::identity(),
+            X: Mat::zeros(6 + n, n),
+            P: Mat::zeros(6 + n, n),
+        }
+    }
+
     /// Builds the transformation for the converged `frame` and the CB coordinates `q_jj`
     /// (3.9)-(3.10) with the exact factor $\boldsymbol\Lambda$ (module docs).
     pub(crate) fn new(
@@ -142,60 +183,62 @@ impl Kinematics {
         x: &[Vector3<f64>],
         Phi_j: MatRef<'_, f64>,
     ) -> Result<Self, crate::SuperelementError> {
+        let mut kin = Self::empty(x.len(), q_jj.len());
+        kin.q_jj = q_jj;
+        kin.update(frame, frame_iterations, x, Phi_j)?;
+        Ok(kin)
+    }
+
+    /// Recomputes everything from `self.q_jj` (already filled) and `frame`.
+    pub(crate) fn update(
+        &mut self,
+        frame: Frame,
+        frame_iterations: usize,
+        x: &[Vector3<f64>],
+        Phi_j: MatRef<'_, f64>,
+    ) -> Result<(), crate::SuperelementError> {
         let N = x.len();
-        let n = q_jj.len();
-        let r_loc: Vec<Vector3<f64>> = (0..N).map(|k| x[k] + u_of(&q_jj, k)).collect();
-        let Lambda: Vec<Matrix3<f64>> = (0..N).map(|k| so3::left_jacobian_inv(&theta_of(&q_jj, k))).collect();
-        let G = crate::frame::phi_j_psi(Phi_j, &r_loc, &Lambda);
+        let n = self.q_jj.len();
+        self.frame = frame;
+        self.frame_iterations = frame_iterations;
+        self.R_j = frame.R.to_rotation_matrix().into_inner();
+        for k in 0..N {
+            self.r_loc[k] = x[k] + u_of(&self.q_jj, k);
+            self.Lambda[k] = so3::left_jacobian_inv(&theta_of(&self.q_jj, k));
+        }
+        let G = crate::frame::phi_j_psi(Phi_j, &self.r_loc, &self.Lambda);
         let (G_inv, rcond) =
             crate::frame::inverse_with_rcond(&G).ok_or(crate::SuperelementError::SingularFrame { rcond: 0.0 })?;
         if rcond < crate::frame::RCOND_MIN {
             return Err(crate::SuperelementError::SingularFrame { rcond });
         }
-        // Z = G^{-1} Phi_j ; T = I - Psi Z.
-        let mut X = Mat::zeros(6 + n, n);
+        self.G_inv = G_inv;
+        // Z = G^{-1} Phi_j ; T = I - Psi Z ; P = X Lambda.
+        let X = &mut self.X;
         for j in 0..n {
+            let pj = Phi_j.col(j);
+            let col = X.col_as_slice_mut(j);
             for a in 0..6 {
-                X[(a, j)] = (0..6).map(|b| G_inv[(a, b)] * Phi_j[(b, j)]).sum();
+                col[a] = (0..6).map(|b| G_inv[(a, b)] * pj[b]).sum();
             }
-        }
-        for j in 0..n {
-            X[(6 + j, j)] = 1.0;
-        }
-        for k in 0..N {
-            let mr = -skew(&r_loc[k]);
-            for j in 0..n {
-                let zt = Vector3::new(X[(0, j)], X[(1, j)], X[(2, j)]);
-                let zr = Vector3::new(X[(3, j)], X[(4, j)], X[(5, j)]);
-                let pu = zt + mr * zr;
-                let pr = Lambda[k] * zr;
+            let zt = Vector3::new(col[0], col[1], col[2]);
+            let zr = Vector3::new(col[3], col[4], col[5]);
+            for v in col[6..].iter_mut() {
+                *v = 0.0;
+            }
+            col[6 + j] = 1.0;
+            for k in 0..N {
+                let pu = zt + zr.cross(&self.r_loc[k]);
+                let pr = self.Lambda[k] * zr;
                 for i in 0..3 {
-                    X[(6 + 6 * k + i, j)] -= pu[i];
-                    X[(6 + 6 * k + 3 + i, j)] -= pr[i];
+                    col[6 + 6 * k + i] -= pu[i];
+                    col[6 + 6 * k + 3 + i] -= pr[i];
                 }
             }
         }
-        let mut P = X.clone();
-        for k in 0..N {
-            for i in 0..6 + n {
-                let row = Vector3::new(X[(i, 6 * k + 3)], X[(i, 6 * k + 4)], X[(i, 6 * k + 5)]);
-                let v = Lambda[k].transpose() * row;
-                for c in 0..3 {
-                    P[(i, 6 * k + 3 + c)] = v[c];
-                }
-            }
-        }
-        Ok(Self {
-            R_j: frame.R.to_rotation_matrix().into_inner(),
-            frame,
-            frame_iterations,
-            q_jj,
-            r_loc,
-            Lambda,
-            G_inv,
-            X,
-            P,
-        })
+        copy_mat(&mut self.P, self.X.as_ref());
+        lambda_right(&self.Lambda, &mut self.P);
+        Ok(())
     }
 
     /// Number of CB coordinates $n$.
@@ -236,13 +279,19 @@ impl Kinematics {
     /// $\bar{\mathbf R}^T\mathbf x$ (or $\bar{\mathbf R}\mathbf x$ with `forward`): rotates each 3-block of
     /// the interface part, leaves the eta part.
     pub fn rotate(&self, x: &[f64], forward: bool) -> Vec<f64> {
-        let mut out = x.to_vec();
+        let mut out = vec![0.0; x.len()];
+        self.rotate_into(x, forward, &mut out);
+        out
+    }
+
+    /// [`Self::rotate`] into `out`.
+    pub fn rotate_into(&self, x: &[f64], forward: bool, out: &mut [f64]) {
+        out.copy_from_slice(x);
         let R = if forward { self.R_j } else { self.R_j.transpose() };
         for b in 0..2 * self.n_interfaces() {
             let v = R * Vector3::new(x[3 * b], x[3 * b + 1], x[3 * b + 2]);
             out[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
         }
-        out
     }
 
     /// $\mathbf A$ (3.11) in inertial axes: $(6+n)\times n$, rows $[\delta\mathbf r_j;\ \delta\boldsymbol\pi_j;\ \delta\mathbf q^{jj}]$.
@@ -274,17 +323,15 @@ impl Kinematics {
     }
 
     /// $\mathbf N_{\mathbf y}$ (module docs) for body-axis interface velocities `y`, with
-    /// $\boldsymbol\xi = \mathbf Y\mathbf y$.
-    pub(crate) fn n_y(&self, y: &[f64], xi: &[f64]) -> Blocks {
-        let N = self.n_interfaces();
+    /// $\boldsymbol\xi = \mathbf Y\mathbf y$: $-\tilde{\boldsymbol\xi}_r$ on each $\mathbf u_k$,
+    /// $\mathbf H(\boldsymbol\theta_k, \mathbf y_{\theta_k} - \boldsymbol\xi_r)$ on each $\boldsymbol\theta_k$.
+    pub(crate) fn fill_n_y(&self, y: &[f64], xi: &[f64], out: &mut Blocks) {
         let Om = Vector3::new(xi[3], xi[4], xi[5]);
-        let mut b = Blocks::zeros(N);
-        for k in 0..N {
-            b.t[k] = -skew(&Om);
+        for k in 0..self.n_interfaces() {
+            out.t[k] = -skew(&Om);
             let zeta_r = Vector3::new(y[6 * k + 3], y[6 * k + 4], y[6 * k + 5]) - Om;
-            b.r[k] = so3::left_jacobian_inv_derivative(&theta_of(&self.q_jj, k), &zeta_r);
+            out.r[k] = so3::left_jacobian_inv_derivative(&theta_of(&self.q_jj, k), &zeta_r);
         }
-        b
     }
 
     /// $\partial(\mathbf P^T\mathbf F)/\partial\mathbf q^{jj}$ for a fixed $\mathbf F \in \mathbb R^{6+n}$, added to `out`.
@@ -294,19 +341,19 @@ impl Kinematics {
     /// = \boldsymbol\phi^T\mathbf N_y\boldsymbol\varepsilon$ with $\boldsymbol\phi = \mathbf X^T\mathbf F$; the
     /// form is bilinear in $(\mathbf y, \boldsymbol\varepsilon)$ through $\boldsymbol\xi_r = \mathbf Y_r\mathbf y$
     /// and $\boldsymbol\zeta_{k,r} = (\mathbf E^\theta_k - \mathbf Y_r)\mathbf y$:
-    /// $\boldsymbol\phi^T\mathbf N_y\boldsymbol\varepsilon = \sum_k \boldsymbol\xi_r^T\tilde{\boldsymbol\phi}_{k,t}\boldsymbol\varepsilon_{u_k}
-    /// + \boldsymbol\zeta_{k,r}^T\mathbf K_k\boldsymbol\varepsilon_{\theta_k}$, where
+    /// $\boldsymbol\phi^T\mathbf N_y\boldsymbol\varepsilon = \sum_k \boldsymbol\xi_r^T\tilde{\boldsymbol\phi}_{k,t}\boldsymbol\varepsilon_{u_k} +
+    /// \boldsymbol\zeta_{k,r}^T\mathbf K_k\boldsymbol\varepsilon_{\theta_k}$, where
     /// $\mathbf K_k = \partial(\mathbf J_l^{-T}(\boldsymbol\theta_k)\boldsymbol\phi_{k,r})/\partial\boldsymbol\theta_k
     /// = -\mathbf H(-\boldsymbol\theta_k, \boldsymbol\phi_{k,r})$. Hence
-    /// $\partial(\mathbf P^T\mathbf F)/\partial\mathbf q^{jj} = \sum_k \mathbf Y_r^T\tilde{\boldsymbol\phi}_{k,t}\mathbf E^u_k
-    /// + (\mathbf E^\theta_k - \mathbf Y_r)^T\mathbf K_k\mathbf E^\theta_k$.
+    /// $\partial(\mathbf P^T\mathbf F)/\partial\mathbf q^{jj} = \sum_k \mathbf Y_r^T\tilde{\boldsymbol\phi}_{k,t}\mathbf E^u_k +
+    /// (\mathbf E^\theta_k - \mathbf Y_r)^T\mathbf K_k\mathbf E^\theta_k$.
+    /// Every force of the residual goes through it, so every test of
+    /// `tests/unit/fd_tangent.rs` checks it.
     pub(crate) fn add_d_pt(&self, F: &[f64], out: &mut Mat<f64>, alpha: f64) {
         let n = self.n();
         let N = self.n_interfaces();
         let mut phi = vec![0.0; n];
-        for j in 0..n {
-            phi[j] = (0..6 + n).map(|i| self.X[(i, j)] * F[i]).sum();
-        }
+        self.xt_vec(F, &mut phi);
         let Y = self.Y();
         for k in 0..N {
             let pt = skew(&Vector3::new(phi[6 * k], phi[6 * k + 1], phi[6 * k + 2]));
@@ -331,53 +378,201 @@ impl Kinematics {
     }
 }
 
-/// $\bar{\mathbf R}$-rotation of an $n\times n$ matrix: `out` $= \bar{\mathbf R}\mathbf K\bar{\mathbf R}^T$.
-pub(crate) fn rotate_matrix(R: &Matrix3<f64>, N: usize, K: &Mat<f64>, out: &mut Mat<f64>) {
-    let n = K.nrows();
-    let nb = 2 * N;
-    let block_of = |i: usize| if i < 3 * nb { Some(i / 3) } else { None };
-    // First K Rbar^T (columns), then Rbar (rows).
-    let mut tmp = K.clone();
-    for b in 0..nb {
-        for i in 0..n {
-            let row = Vector3::new(K[(i, 3 * b)], K[(i, 3 * b + 1)], K[(i, 3 * b + 2)]);
-            let v = R * row;
-            for c in 0..3 {
-                tmp[(i, 3 * b + c)] = v[c];
-            }
-        }
-    }
-    for j in 0..n {
-        for i in 0..n {
-            if block_of(i).is_none() {
-                out[(i, j)] = tmp[(i, j)];
-            }
-        }
-        for b in 0..nb {
-            let col = Vector3::new(tmp[(3 * b, j)], tmp[(3 * b + 1, j)], tmp[(3 * b + 2, j)]);
-            let v = R * col;
-            for c in 0..3 {
-                out[(3 * b + c, j)] = v[c];
-            }
+/// $\mathbf A\boldsymbol\Lambda$ in place: the $\boldsymbol\theta_k$ column blocks times $\mathbf J_l^{-1}(\boldsymbol\theta_k)$.
+pub(crate) fn lambda_right(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
+    for (k, L) in Lambda.iter().enumerate() {
+        let c = 6 * k + 3;
+        for i in 0..A.nrows() {
+            let row = Vector3::new(A[(i, c)], A[(i, c + 1)], A[(i, c + 2)]);
+            let v = L.transpose() * row;
+            A[(i, c)] = v[0];
+            A[(i, c + 1)] = v[1];
+            A[(i, c + 2)] = v[2];
         }
     }
 }
 
-/// $\mathbf W(\mathbf x)$: the $n\times3$ stack of $\tilde{\mathbf x}_b$ over the $2N$ interface
-/// 3-blocks (zero eta rows), so that $\delta(\bar{\mathbf R}^T\mathbf x_{spatial}) = \mathbf W(\bar{\mathbf R}^T\mathbf x)\,\delta\boldsymbol\Pi$
-/// for a fixed spatial vector, $\delta\boldsymbol\Pi = \mathbf R_j^T\delta\boldsymbol\pi_j$.
-pub(crate) fn w_stack(x: &[f64], N: usize) -> Mat<f64> {
-    let n = x.len();
-    let mut W = Mat::zeros(n, 3);
-    for b in 0..2 * N {
-        let S = skew(&Vector3::new(x[3 * b], x[3 * b + 1], x[3 * b + 2]));
-        for i in 0..3 {
-            for j in 0..3 {
-                W[(3 * b + i, j)] = S[(i, j)];
+/// $\boldsymbol\Lambda^T\mathbf A$ in place: the $\boldsymbol\theta_k$ row blocks times $\mathbf J_l^{-T}(\boldsymbol\theta_k)$.
+pub(crate) fn lambda_t_left(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
+    for j in 0..A.ncols() {
+        let col = A.col_as_slice_mut(j);
+        for (k, L) in Lambda.iter().enumerate() {
+            let r = 6 * k + 3;
+            let v = L.transpose() * Vector3::new(col[r], col[r + 1], col[r + 2]);
+            col[r..r + 3].copy_from_slice(v.as_slice());
+        }
+    }
+}
+
+impl Kinematics {
+    /// `out` $= \mathbf A\boldsymbol\Psi$ ($r\times6$) for $\mathbf A$ ($r\times n$), using the
+    /// block structure of $\boldsymbol\Psi = \boldsymbol\Lambda\boldsymbol\Phi_{rig}$ (rows $[\mathbf I,\ -\tilde{\mathbf r}_k]$
+    /// and $[\mathbf 0,\ \boldsymbol\Lambda_k]$).
+    pub(crate) fn mul_psi(&self, A: MatRef<'_, f64>, out: &mut Mat<f64>) {
+        out.fill(0.0);
+        for (k, (r, L)) in self.r_loc.iter().zip(&self.Lambda).enumerate() {
+            let mr = -skew(r);
+            for c in 0..3 {
+                let au = col(A, 6 * k + c);
+                let at = col(A, 6 * k + 3 + c);
+                let o = out.col_as_slice_mut(c);
+                for i in 0..A.nrows() {
+                    o[i] += au[i];
+                }
+                for b in 0..3 {
+                    let (m, l) = (mr[(c, b)], L[(c, b)]);
+                    if m == 0.0 && l == 0.0 {
+                        continue;
+                    }
+                    let o = out.col_as_slice_mut(3 + b);
+                    for i in 0..A.nrows() {
+                        o[i] += au[i] * m + at[i] * l;
+                    }
+                }
             }
         }
     }
-    W
+
+    /// `out` $= \boldsymbol\Psi^T\mathbf E$ ($6\times k$) for $\mathbf E$ ($n\times k$).
+    pub(crate) fn psi_t_mul(&self, E: MatRef<'_, f64>, out: &mut Mat<f64>) {
+        for j in 0..E.ncols() {
+            let e = col(E, j);
+            let mut v = [0.0; 6];
+            for (k, (r, L)) in self.r_loc.iter().zip(&self.Lambda).enumerate() {
+                let eu = Vector3::new(e[6 * k], e[6 * k + 1], e[6 * k + 2]);
+                let et = Vector3::new(e[6 * k + 3], e[6 * k + 4], e[6 * k + 5]);
+                // [I; -r~^T] e_u + [0; L^T] e_t, -r~^T = r~.
+                let w = r.cross(&eu) + L.transpose() * et;
+                for i in 0..3 {
+                    v[i] += eu[i];
+                    v[3 + i] += w[i];
+                }
+            }
+            out.col_as_slice_mut(j).copy_from_slice(&v);
+        }
+    }
+
+    /// `out` $= \mathbf A\mathbf X$ ($r\times n$) for $\mathbf A$ ($r\times(6+n)$), with
+    /// $\mathbf X = [\mathbf 0; \mathbf I] + [\mathbf I_6; -\boldsymbol\Psi]\mathbf Z_j$:
+    /// $\mathbf A_{\cdot q} + (\mathbf A_{\cdot 6} - \mathbf A_{\cdot q}\boldsymbol\Psi)\mathbf Z_j$.
+    /// `tmp` is $r\times6$.
+    pub(crate) fn mul_x(&self, A: MatRef<'_, f64>, tmp: &mut Mat<f64>, out: &mut Mat<f64>) {
+        let n = self.n();
+        self.mul_psi(A.subcols(6, n), tmp);
+        for c in 0..6 {
+            let a = col(A, c);
+            let t = tmp.col_as_slice_mut(c);
+            for i in 0..t.len() {
+                t[i] = a[i] - t[i];
+            }
+        }
+        copy_mat(out, A.subcols(6, n));
+        gemm(out, tmp.as_ref(), self.Z(), 1.0, Accum::Add);
+    }
+
+    /// `out` $(+)= \mathbf X^T\mathbf E$ ($n\times k$) for $\mathbf E$ ($(6+n)\times k$):
+    /// $\mathbf E_q + \mathbf Z_j^T(\mathbf E_6 - \boldsymbol\Psi^T\mathbf E_q)$. `tmp` is $6\times k$.
+    pub(crate) fn xt_mul(&self, E: MatRef<'_, f64>, tmp: &mut Mat<f64>, out: &mut Mat<f64>, accum: Accum) {
+        let n = self.n();
+        self.psi_t_mul(E.subrows(6, n), tmp);
+        for j in 0..E.ncols() {
+            let e = col(E, j);
+            let t = tmp.col_as_slice_mut(j);
+            for i in 0..6 {
+                t[i] = e[i] - t[i];
+            }
+        }
+        match accum {
+            Accum::Replace => copy_mat(out, E.subrows(6, n)),
+            Accum::Add => {
+                for j in 0..E.ncols() {
+                    let e = col(E, j);
+                    let o = out.col_as_slice_mut(j);
+                    for i in 0..n {
+                        o[i] += e[6 + i];
+                    }
+                }
+            }
+        }
+        gemm(out, self.Z().transpose(), tmp.as_ref(), 1.0, Accum::Add);
+    }
+
+    /// `out` $= \mathbf T_j^T\mathbf A = \mathbf A - \mathbf Z_j^T(\boldsymbol\Psi^T\mathbf A)$ for $\mathbf A$ ($n\times k$); `tmp` is $6\times k$.
+    pub(crate) fn tt_mul(&self, A: MatRef<'_, f64>, tmp: &mut Mat<f64>, out: &mut Mat<f64>) {
+        self.psi_t_mul(A, tmp);
+        copy_mat(out, A);
+        gemm(out, self.Z().transpose(), tmp.as_ref(), -1.0, Accum::Add);
+    }
+
+    /// `out` $= \mathbf A\mathbf T_j = \mathbf A - (\mathbf A\boldsymbol\Psi)\mathbf Z_j$ for $\mathbf A$ ($r\times n$); `tmp` is $r\times6$.
+    pub(crate) fn mul_t(&self, A: MatRef<'_, f64>, tmp: &mut Mat<f64>, out: &mut Mat<f64>) {
+        self.mul_psi(A, tmp);
+        copy_mat(out, A);
+        gemm(out, tmp.as_ref(), self.Z(), -1.0, Accum::Add);
+    }
+
+    /// $\mathbf X^T\mathbf f$ for a vector $\mathbf f \in \mathbb R^{6+n}$.
+    pub(crate) fn xt_vec(&self, f: &[f64], out: &mut [f64]) {
+        let n = self.n();
+        let mut t = [0.0; 6];
+        t.copy_from_slice(&f[..6]);
+        for (k, (r, L)) in self.r_loc.iter().zip(&self.Lambda).enumerate() {
+            let eu = Vector3::new(f[6 + 6 * k], f[7 + 6 * k], f[8 + 6 * k]);
+            let et = Vector3::new(f[9 + 6 * k], f[10 + 6 * k], f[11 + 6 * k]);
+            let w = r.cross(&eu) + L.transpose() * et;
+            for i in 0..3 {
+                t[i] -= eu[i];
+                t[3 + i] -= w[i];
+            }
+        }
+        for j in 0..n {
+            let z = self.X.col_as_slice(j);
+            out[j] = f[6 + j] + (0..6).map(|a| z[a] * t[a]).sum::<f64>();
+        }
+    }
+
+    /// $\mathbf P^T\mathbf f = \boldsymbol\Lambda^T\mathbf X^T\mathbf f$.
+    pub(crate) fn pt_vec(&self, f: &[f64], out: &mut [f64]) {
+        self.xt_vec(f, out);
+        for (k, L) in self.Lambda.iter().enumerate() {
+            let r = 6 * k + 3;
+            let v = L.transpose() * Vector3::new(out[r], out[r + 1], out[r + 2]);
+            out[r..r + 3].copy_from_slice(v.as_slice());
+        }
+    }
+}
+
+/// $\bar{\mathbf R}$-rotation of an $n\times n$ matrix: `out` $= \bar{\mathbf R}\mathbf K\bar{\mathbf R}^T$
+/// (`tmp` is $n\times n$).
+pub(crate) fn rotate_matrix(R: &Matrix3<f64>, N: usize, K: &Mat<f64>, tmp: &mut Mat<f64>, out: &mut Mat<f64>) {
+    let n = K.nrows();
+    let nb = 2 * N;
+    // tmp = K Rbar^T: column block b becomes [k0 k1 k2] R^T.
+    copy_mat(tmp, K.as_ref());
+    for b in 0..nb {
+        for c in 0..3 {
+            let o = tmp.col_as_slice_mut(3 * b + c);
+            let (k0, k1, k2) = (
+                K.col_as_slice(3 * b),
+                K.col_as_slice(3 * b + 1),
+                K.col_as_slice(3 * b + 2),
+            );
+            let (r0, r1, r2) = (R[(c, 0)], R[(c, 1)], R[(c, 2)]);
+            for i in 0..n {
+                o[i] = k0[i] * r0 + k1[i] * r1 + k2[i] * r2;
+            }
+        }
+    }
+    // out = Rbar tmp, column by column.
+    for j in 0..n {
+        let k = tmp.col_as_slice(j);
+        let o = out.col_as_slice_mut(j);
+        for b in 0..nb {
+            let v = R * Vector3::new(k[3 * b], k[3 * b + 1], k[3 * b + 2]);
+            o[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
+        }
+        o[3 * nb..].copy_from_slice(&k[3 * nb..]);
+    }
 }
 
 /// Helper for tests and callers: the frame rotation matrix of a quaternion.

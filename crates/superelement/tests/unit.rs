@@ -6,21 +6,21 @@
 mod unit {
     /// Shared fixtures: reduced bodies (built once per binary), frame choices, variants.
     pub mod common;
-    /// Rotations: exp/log round trips (also near pi), Jacobians and their derivatives vs
-    /// central differences.
-    mod so3;
-    /// The frame solve (2.6): convergence from warm and cold starts, errors, explicit frames.
-    mod frame;
+    /// Kinetic energy of rigid motion, power balance of the inertia forces, potentials.
+    mod energy;
     /// Every tangent against central differences: local coordinates, frame Jacobian, FFR
     /// partials, K_t, C_t, M for all frame choices and both inertia variants.
     mod fd_tangent;
+    /// The frame solve (2.6): convergence from warm and cold starts, errors, explicit frames.
+    mod frame;
     /// Rigid motions: zero elastic force, the frame moves with the body, centre-of-mass frame.
     mod invariance;
     /// Small motions reproduce the linear FE model: statics exactly, frequencies to the
     /// accuracy of the modes kept.
     mod linear_limit;
-    /// Kinetic energy of rigid motion, power balance of the inertia forces, potentials.
-    mod energy;
     /// Recovery of the deformed mesh.
     mod recovery;
+    /// Rotations: exp/log round trips (also near pi), Jacobians and their derivatives vs
+    /// central differences.
+    mod so3;
 }

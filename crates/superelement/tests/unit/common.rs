@@ -25,7 +25,12 @@ pub fn beam_static() -> &'static Fixture {
             ModeSelection::StaticOnly,
             false,
         );
-        Fixture { name: "beam-static", model, interfaces, body }
+        Fixture {
+            name: "beam-static",
+            model,
+            interfaces,
+            body,
+        }
     })
 }
 
@@ -40,7 +45,12 @@ pub fn beam_dynamic() -> &'static Fixture {
             ModeSelection::Count(4),
             false,
         );
-        Fixture { name: "beam-dynamic", model, interfaces, body }
+        Fixture {
+            name: "beam-dynamic",
+            model,
+            interfaces,
+            body,
+        }
     })
 }
 
@@ -55,7 +65,12 @@ pub fn beam_auxiliary() -> &'static Fixture {
             ModeSelection::Count(2),
             true,
         );
-        Fixture { name: "beam-auxiliary", model, interfaces, body }
+        Fixture {
+            name: "beam-auxiliary",
+            model,
+            interfaces,
+            body,
+        }
     })
 }
 
@@ -64,18 +79,47 @@ pub fn l_frame() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
     F.get_or_init(|| {
         let (model, interfaces, body) = fixtures::l_frame(ModeSelection::Count(3));
-        Fixture { name: "l-frame", model, interfaces, body }
+        Fixture {
+            name: "l-frame",
+            model,
+            interfaces,
+            body,
+        }
+    })
+}
+
+/// A hex8 block with an RBE2 and an RBE3 interface and 2 modes.
+pub fn solid_block() -> &'static Fixture {
+    static F: OnceLock<Fixture> = OnceLock::new();
+    F.get_or_init(|| {
+        let (model, interfaces, body) = fixtures::solid_block(ModeSelection::Count(2));
+        Fixture {
+            name: "solid-block",
+            model,
+            interfaces,
+            body,
+        }
     })
 }
 
 pub fn all_fixtures() -> Vec<&'static Fixture> {
-    vec![beam_static(), beam_dynamic(), beam_auxiliary(), l_frame()]
+    vec![
+        beam_static(),
+        beam_dynamic(),
+        beam_auxiliary(),
+        l_frame(),
+        solid_block(),
+    ]
 }
 
 /// Every frame choice that fits `body`.
 pub fn frame_choices(body: &ReducedBody) -> Vec<FrameChoice> {
     let N = body.interfaces.len();
-    let mut v = vec![FrameChoice::CenterOfMass, FrameChoice::InterfaceNode(0), FrameChoice::InterfaceNode(N - 1)];
+    let mut v = vec![
+        FrameChoice::CenterOfMass,
+        FrameChoice::InterfaceNode(0),
+        FrameChoice::InterfaceNode(N - 1),
+    ];
     if body.auxiliary_interface.is_some() {
         v.push(FrameChoice::AuxiliaryNode);
     }

@@ -25,7 +25,12 @@ const ANGLES: [f64; 3] = [30.0, 120.0, 170.0];
 /// Finite-difference steps for the superelement's coordinates: 1e-6 of the body size for
 /// positions, 1e-6 rad, and 1e-6 of the modal amplitude scale for eta.
 fn steps(se: &Superelement) -> Vec<f64> {
-    let L = se.interface_positions().iter().map(|x| x.norm()).fold(0.0, f64::max).max(0.1);
+    let L = se
+        .interface_positions()
+        .iter()
+        .map(|x| x.norm())
+        .fold(0.0, f64::max)
+        .max(0.1);
     let mut h = Vec::new();
     for _ in 0..se.n_interfaces() {
         h.extend([1e-6 * L; 3]);
@@ -48,13 +53,17 @@ fn check_tangents(se: &Superelement, state: &BodyState, acc: &[f64], g: &Vector3
     let mut base = state.clone();
     base.frame = ev.frame;
     let h = steps(se);
-    let rep = check_jacobian("K_t", ev.stiffness.as_ref(), &h, |d| se.evaluate(&perturb_state(&base, d), acc, g).unwrap().residual);
+    let rep = check_jacobian("K_t", ev.stiffness.as_ref(), &h, |d| {
+        se.evaluate(&perturb_state(&base, d), acc, g).unwrap().residual
+    });
     assert_ok(rep, what);
     // The residual is exactly quadratic in the velocities and linear in the accelerations,
     // so central differences are exact there for any step: unit steps keep the round-off of
     // the (large) elastic part of the residual out of these two checks.
     let unit = vec![1.0; h.len()];
-    let rep = check_jacobian("C_t", ev.damping.as_ref(), &unit, |d| se.evaluate(&perturb_velocity(&base, d), acc, g).unwrap().residual);
+    let rep = check_jacobian("C_t", ev.damping.as_ref(), &unit, |d| {
+        se.evaluate(&perturb_velocity(&base, d), acc, g).unwrap().residual
+    });
     assert_ok(rep, what);
     let rep = check_jacobian("M", ev.mass.as_ref(), &unit, |d| {
         let a: Vec<f64> = acc.iter().zip(d).map(|(a, d)| a + d).collect();
@@ -79,7 +88,13 @@ fn tangents_match_fd() {
                 let se = superelement(&fx.body, frame, mass);
                 for (i, angle) in ANGLES.iter().enumerate() {
                     let (state, acc) = test_state(&se, &StateSpec::moving(*angle, 7 + i as u64));
-                    check_tangents(&se, &state, &acc, &gravity(), &format!("{} {frame} {mass:?} {angle} deg", fx.name));
+                    check_tangents(
+                        &se,
+                        &state,
+                        &acc,
+                        &gravity(),
+                        &format!("{} {frame} {mass:?} {angle} deg", fx.name),
+                    );
                 }
             }
         }
@@ -90,7 +105,7 @@ fn tangents_match_fd() {
 /// the configuration dependence of the mass are not hidden behind the stiffness.
 #[test]
 fn inertia_tangents_match_fd() {
-    for fx in [beam_dynamic(), l_frame(), beam_auxiliary()] {
+    for fx in [beam_dynamic(), l_frame(), beam_auxiliary(), solid_block()] {
         let body = with_stiffness_scaled(&fx.body, 0.0);
         for frame in frame_choices(&body) {
             for mass in VARIANTS {
@@ -99,7 +114,13 @@ fn inertia_tangents_match_fd() {
                 spec.spin = 20.0;
                 spec.deformation = 0.05;
                 let (state, acc) = test_state(&se, &spec);
-                check_tangents(&se, &state, &acc, &Vector3::zeros(), &format!("{} {frame} {mass:?} inertia only", fx.name));
+                check_tangents(
+                    &se,
+                    &state,
+                    &acc,
+                    &Vector3::zeros(),
+                    &format!("{} {frame} {mass:?} inertia only", fx.name),
+                );
             }
         }
     }
@@ -116,7 +137,13 @@ fn elastic_tangent_matches_fd() {
             spec.spin = 0.0;
             spec.deformation = 0.3;
             let (state, acc) = test_state(&se, &spec);
-            check_tangents(&se, &state, &acc, &Vector3::zeros(), &format!("{} {frame} elastic only", fx.name));
+            check_tangents(
+                &se,
+                &state,
+                &acc,
+                &Vector3::zeros(),
+                &format!("{} {frame} elastic only", fx.name),
+            );
         }
     }
 }
@@ -132,7 +159,13 @@ fn gravity_tangent_matches_fd() {
             spec.spin = 0.0;
             spec.deformation = 0.1;
             let (state, acc) = test_state(&se, &spec);
-            check_tangents(&se, &state, &acc, &gravity(), &format!("{} {frame} gravity only", fx.name));
+            check_tangents(
+                &se,
+                &state,
+                &acc,
+                &gravity(),
+                &format!("{} {frame} gravity only", fx.name),
+            );
         }
     }
 }
@@ -143,18 +176,34 @@ fn damping_tangents_match_fd() {
     for fx in [beam_dynamic(), l_frame()] {
         let body = with_stiffness_scaled(&fx.body, 0.0);
         let m = body.n_modes;
-        let damping = Damping { alpha: 3.0, beta: 0.0, modal_ratios: (0..m).map(|i| 0.02 * (i + 1) as f64).collect() };
+        let damping = Damping {
+            alpha: 3.0,
+            beta: 0.0,
+            modal_ratios: (0..m).map(|i| 0.02 * (i + 1) as f64).collect(),
+        };
         let mut stiff = fx.body.clone();
         stiff.M_CB = body.M_CB.clone();
         for frame in frame_choices(&body) {
             for mass in VARIANTS {
                 let se = Superelement::new(&body, frame, mass, damping.clone()).unwrap();
                 let (state, acc) = test_state(&se, &StateSpec::moving(120.0, 9));
-                check_tangents(&se, &state, &acc, &Vector3::zeros(), &format!("{} {frame} {mass:?} damped", fx.name));
+                check_tangents(
+                    &se,
+                    &state,
+                    &acc,
+                    &Vector3::zeros(),
+                    &format!("{} {frame} {mass:?} damped", fx.name),
+                );
                 // Stiffness-proportional damping on the real body.
                 let se = Superelement::new(&fx.body, frame, mass, Damping::rayleigh(0.0, 1e-4)).unwrap();
                 let (state, acc) = test_state(&se, &StateSpec::moving(170.0, 10));
-                check_tangents(&se, &state, &acc, &gravity(), &format!("{} {frame} {mass:?} beta-damped", fx.name));
+                check_tangents(
+                    &se,
+                    &state,
+                    &acc,
+                    &gravity(),
+                    &format!("{} {frame} {mass:?} beta-damped", fx.name),
+                );
             }
         }
     }
@@ -166,7 +215,13 @@ fn damping_tangents_match_fd() {
 fn local_coordinates_variation() {
     let fx = l_frame();
     let se = superelement(&fx.body, superelement::FrameChoice::CenterOfMass, MassVariant::Exact);
-    let (state, _) = test_state(&se, &StateSpec { deformation: 0.2, ..StateSpec::moving(120.0, 2) });
+    let (state, _) = test_state(
+        &se,
+        &StateSpec {
+            deformation: 0.2,
+            ..StateSpec::moving(120.0, 2)
+        },
+    );
     let frame = se.solve_frame(&state).unwrap().0;
     let kin = se.kinematics_at(&state, frame, 0).unwrap();
     let n = se.n_coordinates();
@@ -190,7 +245,9 @@ fn local_coordinates_variation() {
         A[(i, i)] = 1.0;
     }
     let h = steps(&se);
-    let rep = check_jacobian("dq_jj/dq (frame held)", A.as_ref(), &h, |d| local(&perturb_state(&state, d), &frame));
+    let rep = check_jacobian("dq_jj/dq (frame held)", A.as_ref(), &h, |d| {
+        local(&perturb_state(&state, d), &frame)
+    });
     assert_ok(rep, "local coordinates");
     // Frame variation in body axes: r_j + R_j d_t, R_j exp(d_r).
     let Phi_rig = kin.phi_rig();
@@ -198,7 +255,12 @@ fn local_coordinates_variation() {
     for j in 0..6 {
         for k in 0..N {
             let t = Vector3::new(Phi_rig[(6 * k, j)], Phi_rig[(6 * k + 1, j)], Phi_rig[(6 * k + 2, j)]);
-            let r = kin.Lambda[k] * Vector3::new(Phi_rig[(6 * k + 3, j)], Phi_rig[(6 * k + 4, j)], Phi_rig[(6 * k + 5, j)]);
+            let r = kin.Lambda[k]
+                * Vector3::new(
+                    Phi_rig[(6 * k + 3, j)],
+                    Phi_rig[(6 * k + 4, j)],
+                    Phi_rig[(6 * k + 5, j)],
+                );
             for i in 0..3 {
                 A[(6 * k + i, j)] = -t[i];
                 A[(6 * k + 3 + i, j)] = -r[i];
@@ -206,7 +268,10 @@ fn local_coordinates_variation() {
         }
     }
     let rep = check_jacobian("dq_jj/dframe", A.as_ref(), &[1e-6; 6], |d| {
-        let f = Frame::new(frame.r + frame.R * Vector3::new(d[0], d[1], d[2]), frame.R * so3::exp(&Vector3::new(d[3], d[4], d[5])));
+        let f = Frame::new(
+            frame.r + frame.R * Vector3::new(d[0], d[1], d[2]),
+            frame.R * so3::exp(&Vector3::new(d[3], d[4], d[5])),
+        );
         local(&state, &f)
     });
     assert_ok(rep, "local coordinates vs frame");
@@ -225,7 +290,13 @@ fn frame_jacobian() {
     for fx in all_fixtures() {
         for frame_choice in frame_choices(&fx.body) {
             let se = superelement(&fx.body, frame_choice, MassVariant::Exact);
-            let (state, _) = test_state(&se, &StateSpec { deformation: 0.1, ..StateSpec::moving(170.0, 4) });
+            let (state, _) = test_state(
+                &se,
+                &StateSpec {
+                    deformation: 0.1,
+                    ..StateSpec::moving(170.0, 4)
+                },
+            );
             let kin = se.kinematics(&state).unwrap();
             let frame = kin.frame;
             let n = se.n_coordinates();
@@ -233,7 +304,10 @@ fn frame_jacobian() {
             let G = kin.G_inv.try_inverse().unwrap();
             let A = Mat::from_fn(6, 6, |i, j| -G[(i, j)]);
             let rep = check_jacobian("d(Phi_j q_jj)/dframe", A.as_ref(), &[1e-6; 6], |d| {
-                let f = Frame::new(frame.r + frame.R * Vector3::new(d[0], d[1], d[2]), frame.R * so3::exp(&Vector3::new(d[3], d[4], d[5])));
+                let f = Frame::new(
+                    frame.r + frame.R * Vector3::new(d[0], d[1], d[2]),
+                    frame.R * so3::exp(&Vector3::new(d[3], d[4], d[5])),
+                );
                 let q = se.kinematics_at(&state, f, 0).unwrap().q_jj;
                 (0..6).map(|a| (0..n).map(|c| Phi_j[(a, c)] * q[c]).sum()).collect()
             });
@@ -251,7 +325,9 @@ fn frame_jacobian() {
             });
             assert_ok(rep, &format!("{} {frame_choice}", fx.name));
             let Br = rotate_cols(kin.B(), &kin);
-            let rep = check_jacobian("dq_jj/dq", Br.as_ref(), &h, |d| se.kinematics(&perturb_state(&base, d)).unwrap().q_jj);
+            let rep = check_jacobian("dq_jj/dq", Br.as_ref(), &h, |d| {
+                se.kinematics(&perturb_state(&base, d)).unwrap().q_jj
+            });
             assert_ok(rep, &format!("{} {frame_choice}", fx.name));
         }
     }
@@ -279,13 +355,17 @@ fn rotate_cols(A: faer::MatRef<'_, f64>, kin: &superelement::Kinematics) -> Mat<
 #[test]
 fn ffr_partials() {
     let fx = l_frame();
-    let se = superelement(&fx.body, superelement::FrameChoice::InterfaceNode(1), MassVariant::Exact);
+    let se = superelement(
+        &fx.body,
+        superelement::FrameChoice::InterfaceNode(1),
+        MassVariant::Exact,
+    );
     let I = se.ffr_inertia();
     let n = se.n_coordinates();
     let mut rng = superelement::testing::Rng::new(17);
-    let q: Vec<f64> = (0..n).map(|_| 0.05 * rng.next()).collect();
-    let nu: Vec<f64> = (0..6 + n).map(|_| 3.0 * rng.next()).collect();
-    let nud: Vec<f64> = (0..6 + n).map(|_| 9.0 * rng.next()).collect();
+    let q: Vec<f64> = (0..n).map(|_| 0.05 * rng.uniform()).collect();
+    let nu: Vec<f64> = (0..6 + n).map(|_| 3.0 * rng.uniform()).collect();
+    let nud: Vec<f64> = (0..6 + n).map(|_| 9.0 * rng.uniform()).collect();
     let F = I.force(&q, &nu, &nud, true);
     let h = vec![1e-6; n];
     let rep = check_jacobian("dF/dq", F.F_q.as_ref(), &h, |d| {
@@ -305,6 +385,9 @@ fn ffr_partials() {
     });
     assert_ok(rep, "ffr");
     let M = I.mass_matrix(&q);
-    let diff = (0..6 + n).flat_map(|i| (0..6 + n).map(move |j| (i, j))).map(|(i, j)| (M[(i, j)] - F.M[(i, j)]).abs()).fold(0.0, f64::max);
+    let diff = (0..6 + n)
+        .flat_map(|i| (0..6 + n).map(move |j| (i, j)))
+        .map(|(i, j)| (M[(i, j)] - F.M[(i, j)]).abs())
+        .fold(0.0, f64::max);
     assert!(diff == 0.0);
 }

@@ -15,12 +15,19 @@ fn warm_start_converges_in_a_few_iterations() {
         let (f0, _) = se.solve_frame(&state).unwrap();
         // A "time step": every coordinate moves by 1e-3 of its scale.
         let mut rng = Rng::new(5);
-        let dq: Vec<f64> = (0..se.n_coordinates()).map(|_| 1e-3 * rng.next()).collect();
+        let dq: Vec<f64> = (0..se.n_coordinates()).map(|_| 1e-3 * rng.uniform()).collect();
         let mut next = perturb_state(&state, &dq);
         next.frame = f0;
         let kin = se.kinematics(&next).unwrap();
-        assert!(kin.frame_iterations <= 3, "{}: {} iterations", fx.name, kin.frame_iterations);
-        let g: Vec<f64> = (0..6).map(|a| (0..se.n_coordinates()).map(|c| se.phi_j()[(a, c)] * kin.q_jj[c]).sum()).collect();
+        assert!(
+            kin.frame_iterations <= 3,
+            "{}: {} iterations",
+            fx.name,
+            kin.frame_iterations
+        );
+        let g: Vec<f64> = (0..6)
+            .map(|a| (0..se.n_coordinates()).map(|c| se.phi_j()[(a, c)] * kin.q_jj[c]).sum())
+            .collect();
         assert!(g.iter().all(|x| x.abs() < 1e-12), "{}: residual {g:?}", fx.name);
     }
 }
@@ -42,12 +49,26 @@ fn cold_start_far_away_converges() {
 #[test]
 fn non_convergence_is_reported() {
     let fx = l_frame();
-    let se = superelement(&fx.body, FrameChoice::CenterOfMass, MassVariant::Exact)
-        .with_frame_settings(FrameSettings { tolerance: 1e-12, max_iterations: 1 });
-    let (mut state, _) = test_state(&se, &StateSpec { deformation: 0.05, ..StateSpec::moving(30.0, 3) });
+    let se = superelement(&fx.body, FrameChoice::CenterOfMass, MassVariant::Exact).with_frame_settings(FrameSettings {
+        tolerance: 1e-12,
+        max_iterations: 1,
+    });
+    let (mut state, _) = test_state(
+        &se,
+        &StateSpec {
+            deformation: 0.05,
+            ..StateSpec::moving(30.0, 3)
+        },
+    );
     state.frame.r += Vector3::new(0.3, 0.0, 0.0);
     match se.solve_frame(&state) {
-        Err(e @ SuperelementError::FrameNotConverged { iterations: 1, residual, tolerance }) => {
+        Err(
+            e @ SuperelementError::FrameNotConverged {
+                iterations: 1,
+                residual,
+                tolerance,
+            },
+        ) => {
             assert!(residual > tolerance);
             let msg = e.to_string();
             assert!(msg.contains("did not converge in 1 iterations"), "{msg}");
@@ -77,7 +98,11 @@ fn interface_frames_are_explicit() {
             assert_eq!(kin.frame_iterations, 0);
             assert_eq!(kin.frame.r, state.r[k]);
             assert_eq!(kin.frame.R, state.R[k]);
-            assert!(kin.q_jj[6 * k..6 * k + 6].iter().all(|x| x.abs() < 1e-15), "{:?}", &kin.q_jj[6 * k..6 * k + 6]);
+            assert!(
+                kin.q_jj[6 * k..6 * k + 6].iter().all(|x| x.abs() < 1e-15),
+                "{:?}",
+                &kin.q_jj[6 * k..6 * k + 6]
+            );
             // T_j has zero rows for that interface: its modes are dropped.
             let T = kin.T();
             for i in 6 * k..6 * k + 6 {
@@ -94,8 +119,17 @@ fn bad_frame_choices_and_states_are_refused() {
     assert!(matches!(e, SuperelementError::InvalidFrameChoice { .. }), "{e}");
     let e = Superelement::new(body, FrameChoice::AuxiliaryNode, MassVariant::Exact, Damping::none()).unwrap_err();
     assert!(e.to_string().contains("without an auxiliary interface"), "{e}");
-    let e = Superelement::new(body, FrameChoice::CenterOfMass, MassVariant::Exact, Damping { alpha: 0.0, beta: 0.0, modal_ratios: vec![0.1] })
-        .unwrap_err();
+    let e = Superelement::new(
+        body,
+        FrameChoice::CenterOfMass,
+        MassVariant::Exact,
+        Damping {
+            alpha: 0.0,
+            beta: 0.0,
+            modal_ratios: vec![0.1],
+        },
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("modal damping ratios"), "{e}");
     let mut broken = body.clone();
     broken.M_CB.nrows -= 1;
@@ -104,8 +138,69 @@ fn bad_frame_choices_and_states_are_refused() {
     let se = superelement(body, FrameChoice::CenterOfMass, MassVariant::Exact);
     let mut state = se.undeformed_state(Frame::identity());
     state.eta.push(0.0);
-    assert!(matches!(se.solve_frame(&state), Err(SuperelementError::InvalidState { .. })));
+    assert!(matches!(
+        se.solve_frame(&state),
+        Err(SuperelementError::InvalidState { .. })
+    ));
     let mut state = se.undeformed_state(Frame::identity());
     state.r[0].x = f64::NAN;
-    assert!(matches!(se.solve_frame(&state), Err(SuperelementError::InvalidState { .. })));
+    assert!(matches!(
+        se.solve_frame(&state),
+        Err(SuperelementError::InvalidState { .. })
+    ));
+}
+
+/// The frame velocity (3.9) and the elastic velocity (3.10) of the state's velocities are the
+/// time derivatives of the solved frame and of q_jj along the motion (central differences in
+/// time, step 1e-6 s: truncation ~1e-12 relative; 1e-7 leaves room for the round-off of
+/// differencing positions of size ~1).
+#[test]
+fn frame_and_elastic_velocities_are_time_derivatives() {
+    for fx in all_fixtures() {
+        for choice in frame_choices(&fx.body) {
+            let se = superelement(&fx.body, choice, MassVariant::Exact);
+            let (state, _) = test_state(
+                &se,
+                &StateSpec {
+                    deformation: 0.1,
+                    ..StateSpec::moving(120.0, 6)
+                },
+            );
+            let kin = se.kinematics(&state).unwrap();
+            let (v_j, w_j) = se.frame_velocity(&kin, &state);
+            let qd_jj = se.local_velocity(&kin, &state);
+            let h = 1e-6;
+            let at = |t: f64| {
+                let mut s = state.clone();
+                for k in 0..se.n_interfaces() {
+                    s.r[k] += state.v[k] * t;
+                    s.R[k] = superelement::so3::exp(&(state.omega[k] * t)) * state.R[k];
+                }
+                for i in 0..se.n_modes() {
+                    s.eta[i] += state.eta_dot[i] * t;
+                }
+                s.frame = kin.frame;
+                se.kinematics(&s).unwrap()
+            };
+            let (kp, km) = (at(h), at(-h));
+            let v_fd = (kp.frame.r - km.frame.r) / (2.0 * h);
+            let w_fd = superelement::so3::log(&(kp.frame.R * km.frame.R.inverse())) / (2.0 * h);
+            let scale = v_j.norm() + w_j.norm();
+            assert!(
+                (v_fd - v_j).norm() + (w_fd - w_j).norm() < 1e-7 * scale,
+                "{} {choice}: {v_j} {w_j} vs {v_fd} {w_fd}",
+                fx.name
+            );
+            let qscale = qd_jj.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            for i in 0..se.n_coordinates() {
+                let fd = (kp.q_jj[i] - km.q_jj[i]) / (2.0 * h);
+                assert!(
+                    (fd - qd_jj[i]).abs() < 1e-6 * qscale,
+                    "{} {choice}: qdot_jj[{i}] = {} vs {fd}",
+                    fx.name,
+                    qd_jj[i]
+                );
+            }
+        }
+    }
 }

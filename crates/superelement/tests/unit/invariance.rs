@@ -14,10 +14,14 @@ fn placed(se: &superelement::Superelement, Q: UnitQuaternion<f64>, t: Vector3<f6
 }
 
 fn rotations() -> Vec<UnitQuaternion<f64>> {
-    [(30.0, Vector3::new(1.0, 2.0, -0.5)), (120.0, Vector3::new(-0.3, 0.1, 1.0)), (179.9, Vector3::new(0.6, -0.8, 0.2))]
-        .iter()
-        .map(|(a, ax)| UnitQuaternion::from_axis_angle(&Unit::new_normalize(*ax), f64::to_radians(*a)))
-        .collect()
+    [
+        (30.0, Vector3::new(1.0, 2.0, -0.5)),
+        (120.0, Vector3::new(-0.3, 0.1, 1.0)),
+        (179.9, Vector3::new(0.6, -0.8, 0.2)),
+    ]
+    .iter()
+    .map(|(a, ax)| UnitQuaternion::from_axis_angle(&Unit::new_normalize(*ax), f64::to_radians(*a)))
+    .collect()
 }
 
 /// Round-off: local coordinates of a rigidly placed body are differences of O(L + |t|)
@@ -30,7 +34,10 @@ fn rigid_motion_gives_zero_elastic_force_and_carries_the_frame() {
             for mass in VARIANTS {
                 let se = superelement(&fx.body, frame, mass);
                 let n = se.n_coordinates();
-                let kmax = (0..n).flat_map(|i| (0..n).map(move |j| (i, j))).map(|(i, j)| se.k_cb()[(i, j)].abs()).fold(0.0, f64::max);
+                let kmax = (0..n)
+                    .flat_map(|i| (0..n).map(move |j| (i, j)))
+                    .map(|(i, j)| se.k_cb()[(i, j)].abs())
+                    .fold(0.0, f64::max);
                 for Q in rotations() {
                     let t = Vector3::new(3.0, -7.0, 5.0);
                     let mut state = placed(&se, Q, t);
@@ -43,7 +50,12 @@ fn rigid_motion_gives_zero_elastic_force_and_carries_the_frame() {
                     assert!(fmax < 1e-13 * kmax, "{} {frame}: elastic force {fmax:e}", fx.name);
                     // The frame is the FE frame origin carried by the rigid motion.
                     let expected = Frame::new(t + Q * se.frame_origin(), Q);
-                    assert!((ev.frame.r - expected.r).norm() < 1e-13, "{} {frame}: frame at {}", fx.name, ev.frame.r);
+                    assert!(
+                        (ev.frame.r - expected.r).norm() < 1e-13,
+                        "{} {frame}: frame at {}",
+                        fx.name,
+                        ev.frame.r
+                    );
                     assert!(ev.frame.R.angle_to(&expected.R) < 1e-13, "{} {frame}", fx.name);
                 }
             }
@@ -63,7 +75,13 @@ fn center_of_mass_frame_stays_at_the_center_of_mass() {
             let mut state = placed(&se, Q, t);
             state.frame = Frame::identity();
             let (f, _) = se.solve_frame(&state).unwrap();
-            assert!((f.r - (t + Q * com)).norm() < 1e-13, "{}: {} vs {}", fx.name, f.r, t + Q * com);
+            assert!(
+                (f.r - (t + Q * com)).norm() < 1e-13,
+                "{}: {} vs {}",
+                fx.name,
+                f.r,
+                t + Q * com
+            );
         }
     }
 }
@@ -87,7 +105,11 @@ fn rigid_motion_of_a_deformed_state_is_objective() {
                 }
                 moved.frame = Frame::new(t + Q * ev.frame.r, Q * ev.frame.R);
                 let ev2 = se.evaluate(&moved, &vec![0.0; n], &Vector3::zeros()).unwrap();
-                let dq = ev.q_jj.iter().zip(&ev2.q_jj).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+                let dq = ev
+                    .q_jj
+                    .iter()
+                    .zip(&ev2.q_jj)
+                    .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
                 assert!(dq < 1e-13, "{} {frame}: q_jj changed by {dq:e}", fx.name);
                 let scale = ev.f_elastic.iter().fold(0.0f64, |a, b| a.max(b.abs()));
                 for b in 0..2 * se.n_interfaces() {
@@ -101,11 +123,19 @@ fn rigid_motion_of_a_deformed_state_is_objective() {
                 let mut Mo = Vector3::zeros();
                 for k in 0..se.n_interfaces() {
                     let f = Vector3::new(ev2.f_elastic[6 * k], ev2.f_elastic[6 * k + 1], ev2.f_elastic[6 * k + 2]);
-                    let m = Vector3::new(ev2.f_elastic[6 * k + 3], ev2.f_elastic[6 * k + 4], ev2.f_elastic[6 * k + 5]);
+                    let m = Vector3::new(
+                        ev2.f_elastic[6 * k + 3],
+                        ev2.f_elastic[6 * k + 4],
+                        ev2.f_elastic[6 * k + 5],
+                    );
                     F += f;
                     Mo += m + moved.r[k].cross(&f);
                 }
-                assert!(F.norm() < 1e-10 * scale && Mo.norm() < 1e-9 * scale, "{} {frame}: resultant {F} {Mo}", fx.name);
+                assert!(
+                    F.norm() < 1e-10 * scale && Mo.norm() < 1e-9 * scale,
+                    "{} {frame}: resultant {F} {Mo}",
+                    fx.name
+                );
             }
         }
     }

@@ -13,7 +13,10 @@ fn mat3(A: &Matrix3<f64>) -> Mat<f64> {
 /// and large rotations.
 fn thetas() -> Vec<Vector3<f64>> {
     let axis = Vector3::new(0.3, -0.5, 0.8).normalize();
-    [1e-9, 1e-5, 0.05, 0.099, 0.101, 0.3, 0.49, 0.51, 1.0, 2.0, 3.0].iter().map(|t| axis * *t).collect()
+    [1e-9, 1e-5, 0.05, 0.099, 0.101, 0.3, 0.49, 0.51, 1.0, 2.0, 3.0]
+        .iter()
+        .map(|t| axis * *t)
+        .collect()
 }
 
 #[test]
@@ -23,7 +26,10 @@ fn log_inverts_exp_away_from_pi() {
         let th = rng.vector() * 1.8; // |theta| < 3.12
         let back = log(&exp(&th));
         // Round-off: atan2 and the sinc are accurate to a few ulps of pi.
-        assert!((back - th).norm() <= 8.0 * f64::EPSILON * (1.0 + th.norm()), "{th} -> {back}");
+        assert!(
+            (back - th).norm() <= 8.0 * f64::EPSILON * (1.0 + th.norm()),
+            "{th} -> {back}"
+        );
     }
     for th in thetas() {
         assert!((log(&exp(&th)) - th).norm() <= 8.0 * f64::EPSILON * (1.0 + th.norm()));
@@ -75,17 +81,31 @@ fn jacobian_inverse_derivatives_match_fd() {
     let c = Vector3::new(-0.6, 0.2, 0.9);
     for th in thetas() {
         let h = [1e-6; 3];
-        let rep = check_jacobian("H = d(Jl^-1 x)/dtheta", mat3(&left_jacobian_inv_derivative(&th, &x)).as_ref(), &h, |d| {
-            (left_jacobian_inv(&(th + Vector3::new(d[0], d[1], d[2]))) * x).as_slice().to_vec()
-        });
+        let rep = check_jacobian(
+            "H = d(Jl^-1 x)/dtheta",
+            mat3(&left_jacobian_inv_derivative(&th, &x)).as_ref(),
+            &h,
+            |d| {
+                (left_jacobian_inv(&(th + Vector3::new(d[0], d[1], d[2]))) * x)
+                    .as_slice()
+                    .to_vec()
+            },
+        );
         assert!(rep.worst < 1e-8, "|theta| = {}: {rep}", th.norm());
         // D Jl^-1 [c] x = H(theta, x) c
         let lhs = left_jacobian_inv_directional(&th, &c) * x;
         let rhs = left_jacobian_inv_derivative(&th, &x) * c;
         assert!((lhs - rhs).norm() < 1e-14);
-        let rep = check_jacobian("Q = d(H c)/dtheta", mat3(&left_jacobian_inv_second(&th, &x, &c)).as_ref(), &h, |d| {
-            (left_jacobian_inv_derivative(&(th + Vector3::new(d[0], d[1], d[2])), &x) * c).as_slice().to_vec()
-        });
+        let rep = check_jacobian(
+            "Q = d(H c)/dtheta",
+            mat3(&left_jacobian_inv_second(&th, &x, &c)).as_ref(),
+            &h,
+            |d| {
+                (left_jacobian_inv_derivative(&(th + Vector3::new(d[0], d[1], d[2])), &x) * c)
+                    .as_slice()
+                    .to_vec()
+            },
+        );
         assert!(rep.worst < 1e-7, "|theta| = {}: {rep}", th.norm());
     }
 }

@@ -1,0 +1,215 @@
+//! The command line: parsing the arguments and dispatching to the commands.
+
+use crate::error::BoxError;
+use crate::run::Options;
+use std::path::PathBuf;
+
+pub const USAGE: &str = "\
+flexmbs: from a mesh to the motion of a flexible mechanism
+
+usage:
+  flexmbs run [STUDY.toml]           run the analyses of a study and write a results folder;
+                                     without a file, run the built-in example (a 3D cantilever:
+                                     statics and modes against beam theory)
+  flexmbs check STUDY.toml           validate a study file, run nothing
+  flexmbs reduce STUDY.toml [--part NAME]
+                                     reduce the parts that have a [parts.reduction] (or the one
+                                     named) to reduced-body files (.rbody)
+  flexmbs inspect FILE.rbody [--excitation-hz F]
+                                     show a reduced body: interfaces, mass data, fixed-interface
+                                     frequencies, modal effective masses (and, with F, whether
+                                     the kept modes reach 3 x F)
+  flexmbs example [NAME [DIR]]       list the built-in example studies, or write one into DIR
+                                     (default: the current folder)
+  flexmbs --help | --version
+
+options of run and reduce:
+  --out DIR      results folder (default: STUDY-results beside the study file)
+  --cache DIR    reduced-body cache (default: .flexmbs-cache beside the study file); a part
+                 whose mesh and settings did not change is not reduced again
+
+The study file format is described in docs/study-file.md. Errors go to stderr with the
+file, line, column and key they are about; the exit code is 0 on success, 2 on any error.";
+
+/// A command line that cannot be understood: the message and a pointer to `--help`.
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} (see `flexmbs --help`)", self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+fn usage(message: impl Into<String>) -> BoxError {
+    Box::new(UsageError(message.into()))
+}
+
+/// `--name value` pairs, in command-line order.
+type Flags = Vec<(String, String)>;
+
+/// Splits `args` into positional arguments and `--name value` options; refuses options not
+/// in `known`.
+fn parse(args: &[String], known: &[&str]) -> Result<(Vec<String>, Flags), BoxError> {
+    let mut positional = Vec::new();
+    let mut options = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        if let Some(name) = a.strip_prefix("--") {
+            let (name, value) = match name.split_once('=') {
+                Some((n, v)) => (n.to_string(), Some(v.to_string())),
+                None => (name.to_string(), None),
+            };
+            if !known.contains(&name.as_str()) {
+                let close = crate::source::close_matches(&name, known.iter().copied());
+                let hint = match close.first() {
+                    Some(c) => format!("; did you mean --{c}?"),
+                    None if known.is_empty() => " (this command takes no options)".to_string(),
+                    None => format!(" (options: --{})", known.join(", --")),
+                };
+                return Err(usage(format!("unknown option --{name}{hint}")));
+            }
+            let value = match value {
+                Some(v) => v,
+                None => it
+                    .next()
+                    .cloned()
+                    .ok_or_else(|| usage(format!("option --{name} needs a value")))?,
+            };
+            options.push((name, value));
+        } else {
+            positional.push(a.clone());
+        }
+    }
+    Ok((positional, options))
+}
+
+fn option<'a>(options: &'a [(String, String)], name: &str) -> Option<&'a str> {
+    options.iter().rev().find(|(n, _)| n == name).map(|(_, v)| v.as_str())
+}
+
+fn run_options(options: &[(String, String)]) -> Options {
+    Options {
+        out: option(options, "out").map(PathBuf::from),
+        cache: option(options, "cache").map(PathBuf::from),
+    }
+}
+
+fn one_file(positional: &[String], command: &str, what: &str) -> Result<PathBuf, BoxError> {
+    match positional {
+        [file] => Ok(PathBuf::from(file)),
+        [] => Err(usage(format!("`flexmbs {command}` needs {what}"))),
+        [_, extra, ..] => Err(usage(format!(
+            "`flexmbs {command}` takes one file; unexpected argument '{extra}'"
+        ))),
+    }
+}
+
+fn load(path: &std::path::Path) -> Result<crate::study::Study, BoxError> {
+    let study = crate::study::load(path)?;
+    for w in &study.warnings {
+        eprintln!("flexmbs: warning: {w}");
+    }
+    Ok(study)
+}
+
+/// Runs the command line `args` (without the program name).
+pub fn main_with(args: &[String]) -> Result<(), BoxError> {
+    let Some((command, rest)) = args.split_first() else {
+        return Err(usage("no command given"));
+    };
+    match command.as_str() {
+        "--help" | "-h" | "help" => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        "--version" | "-V" => {
+            println!("flexmbs {}", env!("CARGO_PKG_VERSION"));
+            Ok(())
+        }
+        "run" => {
+            let (positional, options) = parse(rest, &["out", "cache"])?;
+            match positional.as_slice() {
+                // Until the multibody solver exists (issue 6), the built-in example is the
+                // cantilever; with it, this becomes the flexible slider-crank (issue 7).
+                [] => {
+                    if !options.is_empty() {
+                        return Err(usage(
+                            "--out and --cache apply to a study file; the built-in example writes nothing",
+                        ));
+                    }
+                    print!("{}", crate::beam_example::run().map_err(|e| e.to_string())?);
+                    Ok(())
+                }
+                _ => {
+                    let path = one_file(&positional, "run", "a study file")?;
+                    let study = load(&path)?;
+                    crate::run::run(&study, &run_options(&options))?;
+                    Ok(())
+                }
+            }
+        }
+        "check" => {
+            let (positional, _) = parse(rest, &[])?;
+            let path = one_file(&positional, "check", "a study file")?;
+            let study = load(&path)?;
+            println!(
+                "{}: valid: {} parts, {} analyses",
+                path.display(),
+                study.parts.len(),
+                study.analyses.len()
+            );
+            Ok(())
+        }
+        "reduce" => {
+            let (positional, options) = parse(rest, &["part", "out", "cache"])?;
+            let path = one_file(&positional, "reduce", "a study file")?;
+            let study = load(&path)?;
+            crate::run::reduce_command(&study, option(&options, "part"), &run_options(&options))?;
+            Ok(())
+        }
+        "inspect" => {
+            let (positional, options) = parse(rest, &["excitation-hz"])?;
+            let path = one_file(&positional, "inspect", "a reduced-body file (.rbody)")?;
+            let excitation = match option(&options, "excitation-hz") {
+                Some(v) => Some(
+                    v.parse::<f64>()
+                        .ok()
+                        .filter(|f| *f > 0.0 && f.is_finite())
+                        .ok_or_else(|| usage(format!("--excitation-hz needs a positive frequency in Hz, got '{v}'")))?,
+                ),
+                None => None,
+            };
+            print!("{}", crate::inspect::inspect(&path, excitation, 3.0)?);
+            Ok(())
+        }
+        "example" => {
+            let (positional, _) = parse(rest, &[])?;
+            match positional.as_slice() {
+                [] => {
+                    print!("{}", crate::examples::list());
+                    Ok(())
+                }
+                [name] | [name, _] => {
+                    let dir = PathBuf::from(positional.get(1).map_or(".", String::as_str));
+                    let study = crate::examples::write(name, &dir)?;
+                    println!("{}", study.display());
+                    eprintln!("flexmbs: run it with `flexmbs run {}`", study.display());
+                    Ok(())
+                }
+                [_, _, extra, ..] => Err(usage(format!("unexpected argument '{extra}'"))),
+            }
+        }
+        other => {
+            let commands = ["run", "check", "reduce", "inspect", "example", "help"];
+            let close = crate::source::close_matches(other, commands.iter().copied());
+            let hint = match close.first() {
+                Some(c) => format!("; did you mean `{c}`?"),
+                None => String::new(),
+            };
+            Err(usage(format!("unknown command '{other}'{hint}")))
+        }
+    }
+}

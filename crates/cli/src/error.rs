@@ -1,0 +1,53 @@
+//! Errors of the program: any error of the libraries, wrapped in the context that says which
+//! part, analysis or file it is about. `main` prints the chain, one cause per line.
+
+use std::fmt;
+
+/// Any error, sendable across threads.
+pub type BoxError = Box<dyn std::error::Error + Send + Sync + 'static>;
+
+/// An error with a sentence of context in front of it.
+#[derive(Debug)]
+pub struct Context {
+    pub message: String,
+    pub source: BoxError,
+}
+
+impl fmt::Display for Context {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for Context {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        Some(&*self.source)
+    }
+}
+
+/// `.context(|| "what was being done")` on any result.
+pub trait ResultExt<T> {
+    fn context(self, message: impl FnOnce() -> String) -> Result<T, BoxError>;
+}
+
+impl<T, E: Into<BoxError>> ResultExt<T> for Result<T, E> {
+    fn context(self, message: impl FnOnce() -> String) -> Result<T, BoxError> {
+        self.map_err(|e| {
+            Box::new(Context {
+                message: message(),
+                source: e.into(),
+            }) as BoxError
+        })
+    }
+}
+
+/// The error and its causes, one per line: the report `main` prints.
+pub fn report(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut out = format!("flexmbs: error: {e}");
+    let mut source = e.source();
+    while let Some(s) = source {
+        out.push_str(&format!("\n  caused by: {s}"));
+        source = s.source();
+    }
+    out
+}

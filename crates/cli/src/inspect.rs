@@ -1,0 +1,75 @@
+//! `flexmbs inspect FILE.rbody`: what a reduced body holds, for a person checking it before
+//! using it in a study: size, interfaces, mass data, fixed-interface frequencies and modal
+//! effective masses (`reduction::diagnostics`).
+
+use crate::error::{BoxError, ResultExt};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The report of `inspect`. `excitation_hz`: the highest frequency a study will excite; the
+/// diagnostics then check that the kept modes reach `factor` times it.
+pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<String, BoxError> {
+    let body = reduction::file::read(path).context(|| format!("cannot inspect {}", path.display()))?;
+    let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "reduced body '{}' ({}, {:.1} kB, format version {})",
+        body.name,
+        path.display(),
+        size as f64 / 1e3,
+        body.format_version
+    );
+    let _ = writeln!(
+        s,
+        "CB coordinates: {} = 6 x {} interfaces + {} fixed-interface modes",
+        body.n_coordinates(),
+        body.interfaces.len(),
+        body.n_modes
+    );
+    let _ = writeln!(
+        s,
+        "mode shapes on the mesh: {}",
+        match &body.mesh {
+            Some(m) => format!("kept, on {} nodes", m.nodes.len()),
+            None => "not kept".into(),
+        }
+    );
+    let i = &body.inertia;
+    let _ = writeln!(s, "\nmass data");
+    let _ = writeln!(s, "  mass            {:.6e} kg", i.mass);
+    let _ = writeln!(
+        s,
+        "  centre of mass  ({:.6e}, {:.6e}, {:.6e}) m",
+        i.center_of_mass[0], i.center_of_mass[1], i.center_of_mass[2]
+    );
+    let _ = writeln!(s, "  inertia about the centre of mass [kg m^2]:");
+    for row in &i.inertia_com {
+        let _ = writeln!(s, "    {:>14.6e} {:>14.6e} {:>14.6e}", row[0], row[1], row[2]);
+    }
+    let _ = writeln!(s, "\ninterfaces");
+    let _ = writeln!(
+        s,
+        "  {:>3}  {:<16} {:>8} {:>14} {:>14} {:>14}",
+        "#", "name", "FE node", "x [m]", "y [m]", "z [m]"
+    );
+    for (k, p) in body.interfaces.iter().enumerate() {
+        let aux = if body.auxiliary_interface == Some(k) {
+            "  (auxiliary, at the centre of mass)"
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            s,
+            "  {:>3}  {:<16} {:>8} {:>14.6e} {:>14.6e} {:>14.6e}{aux}",
+            k, p.name, p.node, p.position[0], p.position[1], p.position[2]
+        );
+    }
+    let _ = writeln!(s, "\nfixed-interface modes and effective masses");
+    if body.n_modes == 0 {
+        let _ = writeln!(s, "  none kept: static (constraint) modes only");
+    }
+    let d = reduction::diagnostics(&body, excitation_hz, factor);
+    let _ = write!(s, "{d}");
+    Ok(s)
+}

@@ -1,0 +1,237 @@
+//! The results folder: CSV files (one per result group, with units in the header),
+//! `summary.json` and `summary.md`, written as the analyses finish so that an interrupted
+//! run keeps what it computed. Every file is written to a temporary name and renamed, so a
+//! file that exists is complete.
+//!
+//! ```text
+//! <results>/
+//!   summary.json, summary.md      rewritten after every analysis
+//!   <analysis>/                   one folder per analysis, named by it
+//!     *.csv                       result groups, header "name (unit)"
+//!     *.vtu, *.pvd                ParaView: mesh and displacement fields (crate::vtu)
+//!     <part>.rbody                reduce: the reduced body
+//! ```
+
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// A CSV table built in memory and written at once.
+pub struct Csv {
+    text: String,
+    columns: usize,
+}
+
+impl Csv {
+    /// A table with a header line; each column name carries its unit, `"ux [m]"`.
+    pub fn new(header: &[&str]) -> Self {
+        Self {
+            text: header.join(",") + "\n",
+            columns: header.len(),
+        }
+    }
+
+    /// Appends a row; text cells with a comma or quote are quoted.
+    pub fn row(&mut self, cells: &[String]) {
+        debug_assert_eq!(cells.len(), self.columns);
+        let quoted: Vec<String> = cells
+            .iter()
+            .map(|c| {
+                if c.contains([',', '"', '\n']) {
+                    format!("\"{}\"", c.replace('"', "\"\""))
+                } else {
+                    c.clone()
+                }
+            })
+            .collect();
+        self.text.push_str(&quoted.join(","));
+        self.text.push('\n');
+    }
+
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        write_atomic(path, self.text.as_bytes())
+    }
+}
+
+/// A number for a CSV cell: the shortest decimal that reads back to the same `f64`.
+pub fn num(x: f64) -> String {
+    format!("{x:e}")
+}
+
+/// One part, for the summary.
+#[derive(Clone, Debug, Serialize)]
+pub struct PartSummary {
+    pub name: String,
+    pub description: String,
+    pub nodes: usize,
+    pub elements: usize,
+    pub interfaces: Vec<String>,
+}
+
+/// Status of an analysis in the summary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Status {
+    Pending,
+    Done,
+    Failed,
+}
+
+impl std::fmt::Display for Status {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Status::Pending => "pending",
+            Status::Done => "done",
+            Status::Failed => "failed",
+        })
+    }
+}
+
+/// One analysis, for the summary.
+#[derive(Clone, Debug, Serialize)]
+pub struct AnalysisSummary {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub part: String,
+    pub status: Status,
+    pub seconds: Option<f64>,
+    /// Independent dofs of the FE model it ran on.
+    pub free_dofs: Option<usize>,
+    /// Lines of text: what it found (also printed on stdout).
+    pub report: Vec<String>,
+    /// Analysis-specific numbers (frequencies, modes kept, maximum displacement, ...).
+    pub results: serde_json::Value,
+    /// Files written, relative to the results folder.
+    pub files: Vec<String>,
+    pub error: Option<String>,
+}
+
+/// `summary.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    pub flexmbs_version: String,
+    pub study: String,
+    pub title: Option<String>,
+    /// `running`, `complete` or `failed`.
+    pub status: String,
+    pub parts: Vec<PartSummary>,
+    pub analyses: Vec<AnalysisSummary>,
+    pub total_seconds: f64,
+}
+
+impl Summary {
+    /// Writes `summary.json` and `summary.md` into `dir`.
+    pub fn write(&self, dir: &Path) -> std::io::Result<()> {
+        let json = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
+        write_atomic(&dir.join("summary.json"), json.as_bytes())?;
+        write_atomic(&dir.join("summary.md"), self.markdown().as_bytes())
+    }
+
+    /// The short human summary: model sizes, analyses with timings, and what each found.
+    pub fn markdown(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "# {}\n", self.title.as_deref().unwrap_or("flexmbs results"));
+        let _ = writeln!(
+            s,
+            "Study `{}`, flexmbs {}, status **{}**, {:.2} s in all.\n",
+            self.study, self.flexmbs_version, self.status, self.total_seconds
+        );
+        let _ = writeln!(
+            s,
+            "## Parts\n\n| part | model | nodes | elements | interfaces |\n|---|---|---|---|---|"
+        );
+        for p in &self.parts {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} |",
+                p.name,
+                p.description,
+                p.nodes,
+                p.elements,
+                if p.interfaces.is_empty() {
+                    "-".to_string()
+                } else {
+                    p.interfaces.join(", ")
+                }
+            );
+        }
+        let _ = writeln!(
+            s,
+            "\n## Analyses\n\n| analysis | type | part | free dofs | status | time [s] |\n|---|---|---|---|---|---|"
+        );
+        for a in &self.analyses {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {} |",
+                a.name,
+                a.kind,
+                a.part,
+                a.free_dofs.map_or("-".to_string(), |n| n.to_string()),
+                a.status,
+                a.seconds.map_or("-".to_string(), |t| format!("{t:.3}"))
+            );
+        }
+        for a in &self.analyses {
+            if a.report.is_empty() && a.error.is_none() {
+                continue;
+            }
+            let _ = writeln!(s, "\n### {}\n", a.name);
+            for line in &a.report {
+                let _ = writeln!(s, "- {line}");
+            }
+            if let Some(e) = &a.error {
+                let _ = writeln!(s, "- **failed**: {e}");
+            }
+        }
+        s
+    }
+}
+
+/// The default results folder of a study: `<study dir>/<study stem>-results`.
+pub fn default_results_dir(study: &Path) -> PathBuf {
+    let stem = study
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "study".into());
+    study
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default()
+        .join(format!("{stem}-results"))
+}
+
+/// Empties the folder of one analysis of the files this program writes there (an earlier
+/// run's modes must not mix with this run's), and creates it.
+pub fn prepare_analysis_dir(dir: &Path) -> std::io::Result<()> {
+    if dir.is_dir() {
+        for entry in std::fs::read_dir(dir)? {
+            let path = entry?.path();
+            let ours = path
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| matches!(e, "csv" | "vtu" | "pvd" | "rbody"));
+            if ours && path.is_file() {
+                std::fs::remove_file(&path)?;
+            }
+        }
+    }
+    std::fs::create_dir_all(dir)
+}

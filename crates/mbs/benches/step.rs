@@ -1,0 +1,76 @@
+//! One generalized-α step (style R20; prints µs, asserts nothing).
+//!
+//! * The planar flexible slider-crank (benchmarks.md C2) with the rod as 1, 2 and 4
+//!   superelements (2 modes each).
+//! * A cantilever chain of 1..512 identical beam superelements (static modes only) under
+//!   gravity: the cost per step should grow linearly with the number of superelements (the
+//!   iteration matrix is banded; element evaluation is parallel).
+//!
+//! Run with `cargo bench -p mbs --bench step` (release) or as a test with `cargo test --benches`.
+
+#![allow(non_snake_case)]
+
+#[path = "../tests/unit/fixtures.rs"]
+mod fixtures;
+
+use mbs::{DynamicSettings, Integrator, Model, Support, System};
+use nalgebra::{Isometry3, Vector3};
+use reduction::ModeSelection;
+use std::time::Instant;
+use superelement::{FrameChoice, MassVariant};
+
+/// Mean wall time of a step and Newton iterations per step after `warm` steps.
+fn time_steps(sys: &System, h: f64, warm: usize, steps: usize) -> (f64, f64) {
+    let settings = DynamicSettings::new(h, f64::INFINITY, 0.9);
+    let mut it = Integrator::new(sys, sys.initial_state(), settings).expect("consistent initial accelerations");
+    for _ in 0..warm {
+        it.step().expect("step");
+    }
+    let mut iterations = 0;
+    let start = Instant::now();
+    for _ in 0..steps {
+        iterations += it.step().expect("step").residuals.len() - 1;
+    }
+    (start.elapsed().as_secs_f64() * 1e6 / steps as f64, iterations as f64 / steps as f64)
+}
+
+/// A cantilever of `n` identical 0.1 m steel beam superelements along x under gravity.
+fn chain(n: usize, body: &reduction::ReducedBody) -> Model {
+    let mut m = Model::new("chain");
+    let nodes: Vec<_> = (0..=n).map(|i| m.add_node(&format!("n{i}"), Vector3::new(0.1 * i as f64, 0.0, 0.0))).collect();
+    for i in 0..n {
+        let mut b = body.clone();
+        b.name = format!("s{i}");
+        m.add_flexible_body(b, vec![nodes[i], nodes[i + 1]], Isometry3::translation(0.1 * i as f64, 0.0, 0.0), FrameChoice::CenterOfMass, MassVariant::Exact);
+    }
+    m.add_support(Support::clamp(nodes[0]));
+    m.gravity = Vector3::new(0.0, -9.81, 0.0);
+    m
+}
+
+fn main() {
+    // `cargo test --benches` passes `--bench`-less args; keep the run short there.
+    let quick = !std::env::args().any(|a| a == "--bench");
+    println!("slider-crank (C2), rod as N superelements with 2 modes, h = T/400:");
+    for n in [1, 2, 4] {
+        let (model, _, _) = fixtures::slider_crank(n, ModeSelection::Count(2), 150.0);
+        let sys = System::new(&model).unwrap();
+        let h = 2.0 * std::f64::consts::PI / 150.0 / 400.0;
+        let (us, its) = time_steps(&sys, h, 20, if quick { 10 } else { 200 });
+        println!("  N = {n:3}: {:5} unknowns, {us:10.1} µs/step, {its:.2} iterations/step", sys.n_dof());
+    }
+    println!("cantilever chain of N superelements (static modes), gravity, h = 1 ms:");
+    let body = fixtures::beam_body("segment", Vector3::zeros(), Vector3::new(0.1, 0.0, 0.0), 3, 0.01, 2.1e11, 7800.0, ModeSelection::StaticOnly);
+    let max = if quick { 64 } else { 512 };
+    let mut n = 1;
+    while n <= max {
+        let sys = System::new(&chain(n, &body)).unwrap();
+        let (us, its) = time_steps(&sys, 1e-3, 3, if quick { 3 } else { 20 });
+        println!(
+            "  N = {n:3}: {:5} unknowns, {us:10.1} µs/step, {its:.2} iterations/step, {:8.2} µs per superelement-iteration",
+            sys.n_dof(),
+            us / (its * n as f64)
+        );
+        n *= 2;
+    }
+}

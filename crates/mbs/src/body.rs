@@ -1,0 +1,299 @@
+//! Elements: everything that puts a force on nodes, as a function of the nodes' configuration,
+//! velocity and acceleration ([`NodeMotion`]).
+//!
+//! Each element returns its residual $\mathbf r_e = \mathbf f_{inertia} + \mathbf f_{internal} -
+//! \mathbf f_{external}$ on its *ports* (6 rows $[\mathbf f; \mathbf m]$ per node, inertial axes,
+//! then the flexible body's modal coordinates) and the tangents $\mathbf M = \partial\mathbf r/\partial\mathbf A$,
+//! $\mathbf C_t = \partial\mathbf r/\partial\mathbf V$, $\mathbf K_t = \partial\mathbf r/\partial\mathbf x$ with spatial
+//! rotation variations, the superelement's conventions. Naming rule: `*_element` functions
+//! return residual and tangents together.
+//!
+//! * Flexible: the AIC-FFR superelement ([`superelement::Superelement::evaluate`]); interface
+//!   $k$'s orientation is its node's times a constant offset ($\mathbf R_k = \mathbf R_{node}\mathbf C_k$),
+//!   which leaves spatial velocities and variations unchanged.
+//! * Rigid body at its reference node, centre of mass $\mathbf b = \mathbf R\mathbf c$ from it,
+//!   $\mathbf I_G = \mathbf R\mathbf J\mathbf R^T$ ([`rigid_element`]).
+//! * Point mass, point-to-point spring-damper ([`spring_element`]), nodal loads (dead and
+//!   follower, [`load_element`]).
+
+#![allow(non_snake_case)]
+
+use crate::node::NodeMotion;
+use faer::Mat;
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use superelement::so3::skew;
+use superelement::{BodyState, Frame, Superelement, SuperelementError};
+
+/// Residual and tangents of one element on its ports.
+#[derive(Clone, Debug)]
+pub(crate) struct ElementOutput {
+    pub residual: Vec<f64>,
+    /// The inertia, internal (elastic, damping) and external (load, gravity) parts of the
+    /// residual, for the convergence scale.
+    pub inertia: Vec<f64>,
+    pub internal: Vec<f64>,
+    pub external: Vec<f64>,
+    pub M: Mat<f64>,
+    pub C: Mat<f64>,
+    pub K: Mat<f64>,
+    /// New floating frame (flexible bodies).
+    pub frame: Option<Frame>,
+}
+
+impl ElementOutput {
+    fn zeros(n: usize, tangents: bool) -> Self {
+        let k = if tangents { n } else { 0 };
+        Self {
+            residual: vec![0.0; n],
+            inertia: vec![0.0; n],
+            internal: vec![0.0; n],
+            external: vec![0.0; n],
+            M: Mat::zeros(k, k),
+            C: Mat::zeros(k, k),
+            K: Mat::zeros(k, k),
+            frame: None,
+        }
+    }
+
+    fn finish(&mut self) {
+        for i in 0..self.residual.len() {
+            self.residual[i] = self.inertia[i] + self.internal[i] - self.external[i];
+        }
+    }
+}
+
+fn set3(M: &mut Mat<f64>, r: usize, c: usize, B: &Matrix3<f64>) {
+    for i in 0..3 {
+        for j in 0..3 {
+            M[(r + i, c + j)] += B[(i, j)];
+        }
+    }
+}
+
+fn put(v: &mut [f64], at: usize, x: &Vector3<f64>) {
+    v[at] += x.x;
+    v[at + 1] += x.y;
+    v[at + 2] += x.z;
+}
+
+/// A flexible body placed on its nodes.
+#[derive(Clone, Debug)]
+pub(crate) struct FlexibleElement {
+    pub body: usize,
+    pub se: Superelement,
+    pub nodes: Vec<usize>,
+    /// $\mathbf C_k$: $\mathbf R_k = \mathbf R_{node}\mathbf C_k$.
+    pub offsets: Vec<UnitQuaternion<f64>>,
+    /// Scalar indices of $\boldsymbol\eta$.
+    pub modal: Vec<usize>,
+    /// $\|\mathbf K_{CB}\|_\infty$ and the body size, for the residual's round-off floor.
+    pub k_norm: f64,
+    pub size: f64,
+}
+
+impl FlexibleElement {
+    /// The superelement's state from the node motions and the modal coordinates.
+    pub(crate) fn body_state(&self, motions: &[NodeMotion], eta: &[f64], eta_dot: &[f64], frame: Frame) -> BodyState {
+        BodyState {
+            r: self.nodes.iter().map(|&n| motions[n].r).collect(),
+            R: self.nodes.iter().zip(&self.offsets).map(|(&n, C)| motions[n].R * C).collect(),
+            v: self.nodes.iter().map(|&n| motions[n].v).collect(),
+            omega: self.nodes.iter().map(|&n| motions[n].omega).collect(),
+            eta: eta.to_vec(),
+            eta_dot: eta_dot.to_vec(),
+            frame,
+        }
+    }
+
+    /// Residual and tangents (4.3)-(4.4), [S19] through the superelement.
+    pub(crate) fn element(
+        &self,
+        state: &BodyState,
+        eta_dd: &[f64],
+        motions: &[NodeMotion],
+        gravity: &Vector3<f64>,
+        tangents: bool,
+    ) -> Result<ElementOutput, SuperelementError> {
+        let N = self.nodes.len();
+        let mut acc = Vec::with_capacity(6 * N + eta_dd.len());
+        for &n in &self.nodes {
+            acc.extend_from_slice(motions[n].a.as_slice());
+            acc.extend_from_slice(motions[n].alpha.as_slice());
+        }
+        acc.extend_from_slice(eta_dd);
+        let ev = if tangents { self.se.evaluate(state, &acc, gravity)? } else { self.se.forces(state, &acc, gravity)? };
+        let internal: Vec<f64> = ev.f_elastic.iter().zip(&ev.f_damping).map(|(a, b)| a + b).collect();
+        Ok(ElementOutput {
+            residual: ev.residual,
+            inertia: ev.f_inertia,
+            internal,
+            external: ev.f_gravity,
+            M: if tangents { ev.mass } else { Mat::zeros(0, 0) },
+            C: ev.damping,
+            K: ev.stiffness,
+            frame: Some(ev.frame),
+        })
+    }
+}
+
+/// Rigid-body mass data in the reference node's axes.
+#[derive(Clone, Debug)]
+pub(crate) struct RigidElement {
+    pub body: usize,
+    pub node: usize,
+    pub mass: f64,
+    /// Centre of mass from the node, node axes.
+    pub c: Vector3<f64>,
+    /// Inertia about the centre of mass, node axes.
+    pub J: Matrix3<f64>,
+}
+
+/// Rigid body on its reference node: with $\mathbf b = \mathbf R\mathbf c$, $\mathbf I_G = \mathbf R\mathbf J\mathbf R^T$,
+/// $\mathbf a_G = \mathbf a + \boldsymbol\alpha\times\mathbf b + \boldsymbol\omega\times(\boldsymbol\omega\times\mathbf b)$
+/// and $\mathbf F = m(\mathbf a_G - \mathbf g)$:
+/// $\mathbf r = [\mathbf F;\ \mathbf b\times\mathbf F + \mathbf I_G\boldsymbol\alpha + \boldsymbol\omega\times\mathbf I_G\boldsymbol\omega]$
+/// (Newton-Euler about the node).
+///
+/// # Derivation
+/// $\mathbf M = \partial\mathbf r/\partial[\mathbf a;\boldsymbol\alpha] = \begin{bmatrix}m\mathbf I & -m\tilde{\mathbf b}\\
+/// m\tilde{\mathbf b} & \mathbf I_G - m\tilde{\mathbf b}\tilde{\mathbf b}\end{bmatrix}$. With
+/// $\mathbf W = \partial\mathbf a_G/\partial\boldsymbol\omega = -\widetilde{\boldsymbol\omega\times\mathbf b} - \tilde{\boldsymbol\omega}\tilde{\mathbf b}$:
+/// $\mathbf C_t = [\mathbf 0, m\mathbf W;\ \mathbf 0, m\tilde{\mathbf b}\mathbf W + \tilde{\boldsymbol\omega}\mathbf I_G - \widetilde{\mathbf I_G\boldsymbol\omega}]$.
+/// A spatial rotation variation gives $\delta\mathbf b = -\tilde{\mathbf b}\delta\boldsymbol\pi$,
+/// $\delta\mathbf I_G = \widetilde{\delta\boldsymbol\pi}\mathbf I_G - \mathbf I_G\widetilde{\delta\boldsymbol\pi}$, so with
+/// $\mathbf A_b = -(\tilde{\boldsymbol\alpha} + \tilde{\boldsymbol\omega}\tilde{\boldsymbol\omega})\tilde{\mathbf b}$:
+/// $\partial\mathbf F/\partial\boldsymbol\pi = m\mathbf A_b$ and $\partial\mathbf r_m/\partial\boldsymbol\pi =
+/// \tilde{\mathbf F}\tilde{\mathbf b} + m\tilde{\mathbf b}\mathbf A_b - \widetilde{\mathbf I_G\boldsymbol\alpha} + \mathbf I_G\tilde{\boldsymbol\alpha}
+/// + \tilde{\boldsymbol\omega}(\mathbf I_G\tilde{\boldsymbol\omega} - \widetilde{\mathbf I_G\boldsymbol\omega})$; nothing depends
+/// on $\mathbf r$ or $\mathbf v$. Checked by `tests/unit/elements.rs::rigid_body_tangents_match_fd`.
+pub(crate) fn rigid_element(e: &RigidElement, m: &NodeMotion, gravity: &Vector3<f64>, tangents: bool) -> ElementOutput {
+    let mut out = ElementOutput::zeros(6, tangents);
+    let R = m.R.to_rotation_matrix();
+    let b = R * e.c;
+    let IG = R.matrix() * e.J * R.matrix().transpose();
+    let (w, al) = (m.omega, m.alpha);
+    let aG = m.a + al.cross(&b) + w.cross(&w.cross(&b));
+    let mass = e.mass;
+    let Fi = aG * mass;
+    let Fg = gravity * mass;
+    put(&mut out.inertia, 0, &Fi);
+    put(&mut out.inertia, 3, &(b.cross(&Fi) + IG * al + w.cross(&(IG * w))));
+    put(&mut out.external, 0, &Fg);
+    put(&mut out.external, 3, &b.cross(&Fg));
+    out.finish();
+    if tangents {
+        let bt = skew(&b);
+        let wt = skew(&w);
+        let I3 = Matrix3::identity();
+        set3(&mut out.M, 0, 0, &(I3 * mass));
+        set3(&mut out.M, 0, 3, &(-bt * mass));
+        set3(&mut out.M, 3, 0, &(bt * mass));
+        set3(&mut out.M, 3, 3, &(IG - bt * bt * mass));
+        let W = -skew(&w.cross(&b)) - wt * bt;
+        set3(&mut out.C, 0, 3, &(W * mass));
+        set3(&mut out.C, 3, 3, &(bt * W * mass + wt * IG - skew(&(IG * w))));
+        let F = (aG - gravity) * mass;
+        let Ab = -(skew(&al) + wt * wt) * bt;
+        set3(&mut out.K, 0, 3, &(Ab * mass));
+        let Km = skew(&F) * bt + bt * Ab * mass - skew(&(IG * al)) + IG * skew(&al) + wt * (IG * wt - skew(&(IG * w)));
+        set3(&mut out.K, 3, 3, &Km);
+    }
+    out
+}
+
+/// Point mass: $\mathbf r = [m(\mathbf a - \mathbf g);\ \mathbf 0]$.
+pub(crate) fn point_mass_element(mass: f64, m: &NodeMotion, gravity: &Vector3<f64>, tangents: bool) -> ElementOutput {
+    let mut out = ElementOutput::zeros(6, tangents);
+    put(&mut out.inertia, 0, &(m.a * mass));
+    put(&mut out.external, 0, &(gravity * mass));
+    out.finish();
+    if tangents {
+        set3(&mut out.M, 0, 0, &(Matrix3::identity() * mass));
+    }
+    out
+}
+
+/// A spring-damper between two nodes (or a node and a fixed point).
+#[derive(Clone, Debug)]
+pub(crate) struct SpringElement {
+    pub a: usize,
+    pub b: Option<usize>,
+    pub ground: Vector3<f64>,
+    pub k: f64,
+    pub c: f64,
+    pub l0: f64,
+}
+
+/// Axial spring-damper: $\mathbf d = \mathbf x_b - \mathbf x_a$, $l = |\mathbf d|$, $\mathbf e = \mathbf d/l$,
+/// $\dot l = \mathbf e\cdot(\mathbf v_b - \mathbf v_a)$, $f = k(l - l_0) + c\dot l$; residual $-f\mathbf e$ at
+/// $a$, $+f\mathbf e$ at $b$.
+///
+/// # Derivation
+/// With $\mathbf P = \mathbf I - \mathbf e\mathbf e^T$: $\partial\mathbf e/\partial\mathbf x_b = \mathbf P/l$,
+/// $\partial\dot l/\partial\mathbf x_b = (\mathbf P\Delta\mathbf v)^T/l$, so
+/// $\partial(f\mathbf e)/\partial\mathbf x_b = \mathbf e(k\mathbf e + c\mathbf P\Delta\mathbf v/l)^T + f\mathbf P/l$ and
+/// $\partial(f\mathbf e)/\partial\mathbf v_b = c\,\mathbf e\mathbf e^T$; $a$ enters with the opposite sign.
+/// Ports: $a$ (6 rows), then $b$ (6 rows) when $b$ is a node. Checked by
+/// `tests/unit/elements.rs::spring_tangents_match_fd`.
+pub(crate) fn spring_element(s: &SpringElement, ma: &NodeMotion, mb: Option<&NodeMotion>, tangents: bool) -> (ElementOutput, f64) {
+    let n = if mb.is_some() { 12 } else { 6 };
+    let mut out = ElementOutput::zeros(n, tangents);
+    let (xb, vb) = mb.map_or((s.ground, Vector3::zeros()), |m| (m.r, m.v));
+    let d = xb - ma.r;
+    let l = d.norm();
+    if l <= 0.0 {
+        return (out, 0.0);
+    }
+    let e = d / l;
+    let dv = vb - ma.v;
+    let ld = e.dot(&dv);
+    let f = s.k * (l - s.l0) + s.c * ld;
+    put(&mut out.internal, 0, &(-e * f));
+    if n == 12 {
+        put(&mut out.internal, 6, &(e * f));
+    }
+    out.finish();
+    if tangents {
+        let P = Matrix3::identity() - e * e.transpose();
+        let Kb = e * (e * s.k + P * dv * (s.c / l)).transpose() + P * (f / l);
+        let Cb = e * e.transpose() * s.c;
+        set3(&mut out.K, 0, 0, &Kb);
+        set3(&mut out.C, 0, 0, &Cb);
+        if n == 12 {
+            set3(&mut out.K, 6, 6, &Kb);
+            set3(&mut out.K, 0, 6, &(-Kb));
+            set3(&mut out.K, 6, 0, &(-Kb));
+            set3(&mut out.C, 6, 6, &Cb);
+            set3(&mut out.C, 0, 6, &(-Cb));
+            set3(&mut out.C, 6, 0, &(-Cb));
+        }
+    }
+    (out, 0.5 * s.k * (l - s.l0) * (l - s.l0))
+}
+
+/// A nodal load; `local` is its value in node axes for a follower.
+#[derive(Clone, Debug)]
+pub(crate) struct LoadElement {
+    pub node: usize,
+    pub moment: bool,
+    pub follower: bool,
+    /// Dead: the inertial value; follower: the value in node axes.
+    pub value: Vector3<f64>,
+    pub time: crate::time_function::CompiledFunction,
+}
+
+/// Load $\mathbf f = x(t)\,\mathbf f_0$ (dead) or $x(t)\,\mathbf R\mathbf f_0^{node}$ (follower); residual $-\lambda\mathbf f$.
+/// A follower's tangent is $\partial(-\mathbf f)/\partial\boldsymbol\pi = \tilde{\mathbf f}$ (from
+/// $\delta(\mathbf R\mathbf f_0) = \delta\boldsymbol\pi\times\mathbf f$); a dead load has none.
+pub(crate) fn load_element(l: &LoadElement, m: &NodeMotion, t: f64, lambda: f64, tangents: bool) -> ElementOutput {
+    let mut out = ElementOutput::zeros(6, tangents);
+    let x = l.time.eval(t).0 * lambda;
+    let f = if l.follower { m.R * l.value * x } else { l.value * x };
+    let at = if l.moment { 3 } else { 0 };
+    put(&mut out.external, at, &f);
+    out.finish();
+    if tangents && l.follower {
+        set3(&mut out.K, at, 3, &skew(&f));
+    }
+    out
+}

@@ -1,0 +1,273 @@
+//! Named outputs ([`crate::model::SensorKind`]) recorded at converged steps, and the energy and
+//! momentum of the whole system.
+//!
+//! * Reactions are the residual of the removed (prescribed) coordinates, $\sum_c\mathbf J_{c,p}^T\mathbf r_c$:
+//!   the generalised force the support or driver must supply.
+//! * Momentum: the generalised momentum $\mathbf M\mathbf V$ of every body paired with the rigid
+//!   velocity fields $[\mathbf e; \mathbf 0]$ (linear) and $[\mathbf e\times\mathbf r_k; \mathbf e]$ (angular,
+//!   about the origin) — Noether's conserved quantities of a kinetic energy invariant under
+//!   rigid motions.
+
+#![allow(non_snake_case)]
+
+use crate::coordinates::Slot;
+use crate::error::SolveError;
+use crate::model::SensorKind;
+use crate::system::{unknown, State, System, Workspace};
+use crate::topology::RootRotation;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use superelement::so3;
+
+/// Sensor values over time: one row per output time, sensors side by side.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SensorRecord {
+    pub names: Vec<String>,
+    /// Number of values of each sensor.
+    pub widths: Vec<usize>,
+    pub times: Vec<f64>,
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl SensorRecord {
+    /// Values of sensor `name` at each time.
+    pub fn series(&self, name: &str) -> Option<Vec<Vec<f64>>> {
+        let i = self.names.iter().position(|n| n == name)?;
+        let start: usize = self.widths[..i].iter().sum();
+        Some(self.rows.iter().map(|r| r[start..start + self.widths[i]].to_vec()).collect())
+    }
+
+    /// Component `k` of sensor `name` at each time.
+    pub fn column(&self, name: &str, k: usize) -> Option<Vec<f64>> {
+        Some(self.series(name)?.into_iter().map(|v| v[k]).collect())
+    }
+}
+
+/// Energies of the system.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Energies {
+    pub kinetic: f64,
+    /// Flexible bodies, springs, joint springs.
+    pub strain: f64,
+    /// $-\mathbf g\cdot\sum m\mathbf r_G$.
+    pub gravity: f64,
+}
+
+impl Energies {
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.strain + self.gravity
+    }
+}
+
+impl System {
+    /// Kinetic, strain and gravity energy at `state`.
+    pub fn energies(&self, state: &State) -> Result<Energies, SolveError> {
+        let nodes = self.node_motions(state);
+        let g = self.model.gravity;
+        let mut e = Energies::default();
+        let map = &self.topo.map;
+        let body_err = |f: &crate::body::FlexibleElement, source| SolveError::Body {
+            body: self.model.bodies[f.body].name().to_string(),
+            t: state.time,
+            source,
+        };
+        for (i, f) in self.flexible.iter().enumerate() {
+            let bs = self.body_state(i, state, &nodes);
+            e.kinetic += f.se.kinetic_energy(&bs).map_err(|s| body_err(f, s))?;
+            let kin = f.se.kinematics(&bs).map_err(|s| body_err(f, s))?;
+            e.strain += f.se.strain_energy(&kin);
+            e.gravity += f.se.gravity_potential(&kin, &g);
+        }
+        for r in &self.rigid {
+            let m = &nodes[r.node];
+            let R = m.R.to_rotation_matrix();
+            let b = R * r.c;
+            let IG = R.matrix() * r.J * R.matrix().transpose();
+            let vG = m.v + m.omega.cross(&b);
+            e.kinetic += 0.5 * r.mass * vG.norm_squared() + 0.5 * m.omega.dot(&(IG * m.omega));
+            e.gravity -= r.mass * g.dot(&(m.r + b));
+        }
+        for p in &self.model.point_masses {
+            let m = &nodes[p.node.index()];
+            e.kinetic += 0.5 * p.mass * m.v.norm_squared();
+            e.gravity -= p.mass * g.dot(&m.r);
+        }
+        for s in &self.springs {
+            e.strain += crate::body::spring_element(s, &nodes[s.a], s.b.map(|b| &nodes[b]), false).1;
+        }
+        for &(s, k, _, rest) in &self.joint_springs {
+            let x = state.scalars[s];
+            e.strain += 0.5 * k * (x - rest) * (x - rest);
+        }
+        let _ = map;
+        Ok(e)
+    }
+
+    /// Linear momentum and angular momentum about the origin (module docs).
+    pub fn momentum(&self, state: &State) -> Result<(Vector3<f64>, Vector3<f64>), SolveError> {
+        let nodes = self.node_motions(state);
+        let (mut L, mut H) = (Vector3::zeros(), Vector3::zeros());
+        for (i, f) in self.flexible.iter().enumerate() {
+            let bs = self.body_state(i, state, &nodes);
+            let n = f.se.n_coordinates();
+            let ev = f.se.forces(&bs, &vec![0.0; n], &Vector3::zeros()).map_err(|source| SolveError::Body {
+                body: self.model.bodies[f.body].name().to_string(),
+                t: state.time,
+                source,
+            })?;
+            let qd = bs.velocity_vector();
+            let p: Vec<f64> = (0..n).map(|r| (0..n).map(|c| ev.mass[(r, c)] * qd[c]).sum()).collect();
+            for (k, &node) in f.nodes.iter().enumerate() {
+                let pf = Vector3::new(p[6 * k], p[6 * k + 1], p[6 * k + 2]);
+                let pm = Vector3::new(p[6 * k + 3], p[6 * k + 4], p[6 * k + 5]);
+                L += pf;
+                H += nodes[node].r.cross(&pf) + pm;
+            }
+        }
+        for r in &self.rigid {
+            let m = &nodes[r.node];
+            let R = m.R.to_rotation_matrix();
+            let b = R * r.c;
+            let IG = R.matrix() * r.J * R.matrix().transpose();
+            let p = (m.v + m.omega.cross(&b)) * r.mass;
+            L += p;
+            H += (m.r + b).cross(&p) + IG * m.omega;
+        }
+        for pm in &self.model.point_masses {
+            let m = &nodes[pm.node.index()];
+            let p = m.v * pm.mass;
+            L += p;
+            H += m.r.cross(&p);
+        }
+        Ok((L, H))
+    }
+
+    /// The superelement state of flexible element `i`.
+    pub(crate) fn body_state(&self, i: usize, state: &State, nodes: &[crate::NodeMotion]) -> superelement::BodyState {
+        let f = &self.flexible[i];
+        let map = &self.topo.map;
+        let eta: Vec<f64> = f.modal.iter().map(|&s| state.scalars[s]).collect();
+        let eta_d: Vec<f64> = f.modal.iter().map(|&s| state.velocity[unknown(map.scalars[s].slot)]).collect();
+        f.body_state(nodes, &eta, &eta_d, state.frames[i])
+    }
+
+    /// A record with this system's sensor names and widths, no rows.
+    pub fn sensor_record(&self) -> SensorRecord {
+        let widths = self
+            .model
+            .sensors
+            .iter()
+            .map(|s| match &s.kind {
+                SensorKind::NodePosition { .. }
+                | SensorKind::NodeDisplacement { .. }
+                | SensorKind::NodeRotation { .. }
+                | SensorKind::NodeVelocity { .. }
+                | SensorKind::NodeAngularVelocity { .. }
+                | SensorKind::LinearMomentum
+                | SensorKind::AngularMomentum => 3,
+                SensorKind::Reaction { .. } => 6,
+                SensorKind::ModalCoordinates { body } => self.topo.modal_scalars[body.index()].len(),
+                _ => 1,
+            })
+            .collect();
+        SensorRecord { names: self.model.sensors.iter().map(|s| s.name.clone()).collect(), widths, times: Vec::new(), rows: Vec::new() }
+    }
+
+    /// Generalised residual of scalar coordinate `s` (a reaction when prescribed).
+    fn coordinate_effort(&self, ws: &Workspace, s: usize) -> f64 {
+        match self.topo.map.scalars[s].slot {
+            Slot::Unknown(d) => ws.F[d],
+            Slot::Prescribed(p) => ws.reactions[p],
+        }
+    }
+
+    /// Appends the sensor values at `state` (evaluated into `ws`) to `rec`.
+    pub(crate) fn record(&self, state: &State, ws: &Workspace, rec: &mut SensorRecord) -> Result<(), SolveError> {
+        let nodes = &ws.nodes;
+        let map = &self.topo.map;
+        let mut row = Vec::new();
+        let mut energies = None;
+        let mut momentum = None;
+        let push3 = |row: &mut Vec<f64>, v: Vector3<f64>| row.extend_from_slice(v.as_slice());
+        for s in &self.model.sensors {
+            match &s.kind {
+                SensorKind::NodePosition { node } => push3(&mut row, nodes[node.index()].r),
+                SensorKind::NodeDisplacement { node } => {
+                    push3(&mut row, nodes[node.index()].r - self.model.nodes[node.index()].position)
+                }
+                SensorKind::NodeRotation { node } => {
+                    let R = nodes[node.index()].R * self.model.nodes[node.index()].orientation.inverse();
+                    push3(&mut row, so3::log(&R))
+                }
+                SensorKind::NodeVelocity { node } => push3(&mut row, nodes[node.index()].v),
+                SensorKind::NodeAngularVelocity { node } => push3(&mut row, nodes[node.index()].omega),
+                SensorKind::LineDistance { node, a, b, normal } => {
+                    let (p, a, b) = (nodes[node.index()].r, nodes[a.index()].r, nodes[b.index()].r);
+                    let e = (b - a).normalize();
+                    let c = e.cross(&(p - a));
+                    row.push(match normal {
+                        Some(n) => c.dot(&n.normalize()),
+                        None => c.norm(),
+                    });
+                }
+                SensorKind::JointCoordinate { joint, coordinate } => {
+                    row.push(state.scalars[self.topo.joint_scalars[joint.index()][*coordinate]])
+                }
+                SensorKind::JointRate { joint, coordinate } => row.push(self.joint_rate(state, *joint, *coordinate)),
+                SensorKind::ModalCoordinates { body } => {
+                    for &sc in &self.topo.modal_scalars[body.index()] {
+                        row.push(state.scalars[sc]);
+                    }
+                }
+                SensorKind::Reaction { node } => match &self.topo.roots[node.index()] {
+                    Some(rc) => {
+                        let mut f = Vector3::zeros();
+                        for (sc, e) in &rc.translation {
+                            f += e * self.coordinate_effort(ws, *sc);
+                        }
+                        let mut m = Vector3::zeros();
+                        match &rc.rotation {
+                            RootRotation::Free(r) => {
+                                let d = map.rotations[*r].dof;
+                                m = Vector3::new(ws.F[d], ws.F[d + 1], ws.F[d + 2]);
+                            }
+                            RootRotation::Axes(axes) => {
+                                for (sc, e) in axes {
+                                    m += e * self.coordinate_effort(ws, *sc);
+                                }
+                            }
+                        }
+                        push3(&mut row, f);
+                        push3(&mut row, m);
+                    }
+                    None => row.extend([f64::NAN; 6]),
+                },
+                SensorKind::DriverEffort { driver } => {
+                    let p = map.prescribed.iter().position(|(d, _)| *d == Some(*driver));
+                    row.push(p.map_or(f64::NAN, |p| ws.reactions[p]));
+                }
+                SensorKind::KineticEnergy | SensorKind::StrainEnergy | SensorKind::GravityPotential => {
+                    if energies.is_none() {
+                        energies = Some(self.energies(state)?);
+                    }
+                    let e = energies.unwrap();
+                    row.push(match s.kind {
+                        SensorKind::KineticEnergy => e.kinetic,
+                        SensorKind::StrainEnergy => e.strain,
+                        _ => e.gravity,
+                    });
+                }
+                SensorKind::LinearMomentum | SensorKind::AngularMomentum => {
+                    if momentum.is_none() {
+                        momentum = Some(self.momentum(state)?);
+                    }
+                    let (L, H) = momentum.unwrap();
+                    push3(&mut row, if matches!(s.kind, SensorKind::LinearMomentum) { L } else { H });
+                }
+            }
+        }
+        rec.times.push(state.time);
+        rec.rows.push(row);
+        Ok(())
+    }
+}

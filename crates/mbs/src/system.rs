@@ -1,0 +1,1121 @@
+//! [`System`]: a checked [`Model`] turned into independent coordinates, elements and a sparse
+//! pattern; [`State`]: the coordinates, velocities and accelerations at one instant.
+//!
+//! The equations in the independent coordinates are (brief §5)
+//! $$\mathbf F(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}, t) = \sum_c\mathbf J_c^T\mathbf r_c + \mathbf r_\eta + \mathbf r_{joint} = \mathbf 0,$$
+//! with $\mathbf r_c$ the residual of all elements at node $c$ evaluated at the node motion
+//! $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$, $\mathbf A_c = \mathbf J_c\ddot{\mathbf q} + \dot{\mathbf J}_c\dot{\mathbf q}$; the same
+//! sums over the prescribed columns are the reactions. Their derivatives $\hat{\mathbf M} =
+//! \partial\mathbf F/\partial\ddot{\mathbf q}$, $\hat{\mathbf C} = \partial\mathbf F/\partial\dot{\mathbf q}$,
+//! $\hat{\mathbf K} = \partial\mathbf F/\partial\mathbf q$ are assembled into one sparse pattern
+//! ([`crate::coordinates`] gives the formulas).
+//!
+//! Style R9: the pattern, the element-to-slot maps and the symbolic LU are built once in
+//! [`System::new`]; each Newton iteration refills values only (`evaluate_into`).
+
+#![allow(non_snake_case)]
+
+use crate::body::{
+    load_element, point_mass_element, rigid_element, spring_element, ElementOutput, FlexibleElement, LoadElement,
+    RigidElement, SpringElement,
+};
+use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
+use crate::error::{ModelError, SolveError};
+use crate::model::{Body, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId};
+use crate::node::NodeMotion;
+use crate::time_function::CompiledFunction;
+use crate::topology::{self, RootRotation, Topology};
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::{SparseColMat, SymbolicSparseColMat};
+use faer::Mat;
+use nalgebra::{UnitQuaternion, Vector3};
+use rayon::prelude::*;
+use superelement::{so3, Frame, Superelement};
+
+/// One element of the assembly: what it is and where it acts.
+#[derive(Clone, Debug)]
+pub(crate) enum ElementKind {
+    Flexible(usize),
+    Rigid(usize),
+    PointMass(usize, f64),
+    Spring(usize),
+    Load(usize),
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct ElementRef {
+    pub kind: ElementKind,
+    /// Node ports, 6 rows each.
+    pub nodes: Vec<usize>,
+    /// Unknown dof of each modal coordinate (flexible bodies).
+    pub modal: Vec<usize>,
+}
+
+/// Sparse structure of $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$ and the maps that scatter into it.
+#[derive(Clone, Debug)]
+pub(crate) struct Pattern {
+    pub symbolic: SymbolicSparseColMat<usize>,
+    pub lu: Option<SymbolicLu<usize>>,
+    /// Per element: its unknown dofs (sorted), the position of each node's unknown column among
+    /// them, the position of each modal dof, and the slots of the dense local block (column major).
+    pub elem_dofs: Vec<Vec<usize>>,
+    pub elem_pos: Vec<Vec<Vec<usize>>>,
+    pub elem_modal_pos: Vec<Vec<usize>>,
+    pub elem_slots: Vec<Vec<usize>>,
+    /// Per node: slots of (unknown column i, unknown column k) for the geometric term.
+    pub node_slots: Vec<Vec<usize>>,
+    /// Slot of each joint spring's diagonal entry (when its coordinate is unknown).
+    pub joint_spring_slots: Vec<Option<usize>>,
+}
+
+impl Pattern {
+    fn new(n: usize, sets: &[Vec<usize>]) -> SymbolicSparseColMat<usize> {
+        let mut keys: Vec<u64> = Vec::new();
+        for s in sets {
+            for &c in s {
+                for &r in s {
+                    keys.push(c as u64 * n as u64 + r as u64);
+                }
+            }
+        }
+        for d in 0..n {
+            keys.push(d as u64 * n as u64 + d as u64);
+        }
+        keys.sort_unstable();
+        keys.dedup();
+        let mut col_ptr = vec![0usize; n + 1];
+        let mut row_idx = Vec::with_capacity(keys.len());
+        for &k in &keys {
+            col_ptr[(k / n as u64) as usize + 1] += 1;
+            row_idx.push((k % n as u64) as usize);
+        }
+        for j in 0..n {
+            col_ptr[j + 1] += col_ptr[j];
+        }
+        SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx)
+    }
+
+    /// Position of entry (r, c) in the values array.
+    pub(crate) fn slot(&self, r: usize, c: usize) -> usize {
+        let cp = self.symbolic.col_ptr();
+        let rows = &self.symbolic.row_idx()[cp[c]..cp[c + 1]];
+        cp[c] + rows.binary_search(&r).expect("entry in the pattern")
+    }
+
+    pub(crate) fn nnz(&self) -> usize {
+        self.symbolic.row_idx().len()
+    }
+}
+
+/// The coordinates, velocities and accelerations of a system at one instant, and each
+/// flexible body's last floating frame (the warm start of (2.6)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct State {
+    pub(crate) time: f64,
+    /// Every scalar coordinate (unknown and prescribed).
+    pub(crate) scalars: Vec<f64>,
+    pub(crate) rotations: Vec<UnitQuaternion<f64>>,
+    /// $\dot{\mathbf q}$ (unknowns).
+    pub(crate) velocity: Vec<f64>,
+    /// $\ddot{\mathbf q}$ (unknowns).
+    pub(crate) acceleration: Vec<f64>,
+    /// Per flexible element.
+    pub(crate) frames: Vec<Frame>,
+}
+
+impl State {
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+    /// $\dot{\mathbf q}$ in the order of [`System::dof_labels`].
+    pub fn velocity(&self) -> &[f64] {
+        &self.velocity
+    }
+    /// $\ddot{\mathbf q}$.
+    pub fn acceleration(&self) -> &[f64] {
+        &self.acceleration
+    }
+    pub fn velocity_mut(&mut self) -> &mut [f64] {
+        &mut self.velocity
+    }
+    pub fn acceleration_mut(&mut self) -> &mut [f64] {
+        &mut self.acceleration
+    }
+    /// Sets the time (prescribed coordinates follow at the next evaluation).
+    pub fn set_time(&mut self, t: f64) {
+        self.time = t;
+    }
+}
+
+/// Dense $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$ and $\mathbf F$ (for tests and the
+/// linearised analysis).
+#[derive(Clone, Debug)]
+pub struct Matrices {
+    pub F: Vec<f64>,
+    pub M: Mat<f64>,
+    pub C: Mat<f64>,
+    pub K: Mat<f64>,
+}
+
+/// Kinematic data of one node: $\mathbf J_c$ over its unknown columns and its derivatives.
+#[derive(Clone, Debug)]
+pub struct NodeKinematics {
+    pub motion: NodeMotion,
+    /// Unknown dof of each column.
+    pub dofs: Vec<usize>,
+    /// $\mathbf J_c$, $6\times$ `dofs.len()`.
+    pub J: Mat<f64>,
+    /// $\partial\mathbf V_c/\partial\mathbf q$, $\partial\mathbf A_c/\partial\mathbf q$, $\partial\mathbf A_c/\partial\dot{\mathbf q}$.
+    pub DV: Mat<f64>,
+    pub DA: Mat<f64>,
+    pub DAd: Mat<f64>,
+}
+
+/// Buffers of one analysis (style R8): created once, refilled by every evaluation.
+pub(crate) struct Workspace {
+    pub motions: Vec<Motion>,
+    pub nodes: Vec<NodeMotion>,
+    pub derivs: Vec<NodeDerivatives>,
+    pub node_res: Vec<[f64; 6]>,
+    pub F: Vec<f64>,
+    pub reactions: Vec<f64>,
+    pub M: Vec<f64>,
+    pub C: Vec<f64>,
+    pub K: Vec<f64>,
+    pub presc_rate: Vec<f64>,
+    pub presc_acc: Vec<f64>,
+    /// $\|\mathbf J^T\mathbf f_{inertia}\| + \|\mathbf J^T\mathbf f_{internal}\| + \|\mathbf J^T\mathbf f_{external}\|$:
+    /// the force scale of the convergence test.
+    pub scale: f64,
+    /// Round-off floor of $\|\mathbf F\|$ (absolute): see [`System::residual_floor`].
+    pub floor: f64,
+    /// Iteration-matrix values and the last numeric LU.
+    pub S: Vec<f64>,
+}
+
+/// A model ready for analysis.
+#[derive(Clone, Debug)]
+pub struct System {
+    pub(crate) model: Model,
+    pub(crate) topo: Topology,
+    pub(crate) flexible: Vec<FlexibleElement>,
+    pub(crate) rigid: Vec<RigidElement>,
+    pub(crate) springs: Vec<SpringElement>,
+    pub(crate) loads: Vec<LoadElement>,
+    /// (scalar, stiffness, damping, rest).
+    pub(crate) joint_springs: Vec<(usize, f64, f64, f64)>,
+    pub(crate) drivers: Vec<CompiledFunction>,
+    pub(crate) elements: Vec<ElementRef>,
+    pub(crate) pattern: Pattern,
+    /// Flexible element of each body (or `None`).
+    /// Scale of each unknown for the increment test: the model size for lengths, 1 for
+    /// angles, body size times the square root of its mass for modal coordinates.
+    pub(crate) dof_scale: Vec<f64>,
+}
+
+fn finite(v: f64) -> bool {
+    v.is_finite()
+}
+
+impl System {
+    /// Checks the model and builds the coordinates, elements and sparse pattern.
+    pub fn new(model: &Model) -> Result<Self, ModelError> {
+        topology::check_references(model)?;
+        let topo = topology::build(model)?;
+        let map = &topo.map;
+        let invalid = |entity: String, what: String| ModelError::InvalidValue { entity, what };
+        let mut flexible = Vec::new();
+        let mut rigid = Vec::new();
+        // Model size: spread of the nodes, flexible bodies and centres of mass.
+        let centroid = model.nodes.iter().map(|n| n.position).sum::<Vector3<f64>>() / model.nodes.len().max(1) as f64;
+        let mut size = model.nodes.iter().map(|n| (n.position - centroid).norm()).fold(1e-3, f64::max);
+        let mut modal_scale = vec![1.0; model.bodies.len()];
+        for (bi, body) in model.bodies.iter().enumerate() {
+            match body {
+                Body::Flexible(f) => {
+                    let N = f.reduced.interfaces.len();
+                    if f.nodes.len() != N {
+                        return Err(invalid(
+                            format!("body '{}'", f.name),
+                            format!("{} nodes for {N} interfaces", f.nodes.len()),
+                        ));
+                    }
+                    let se = Superelement::new(&f.reduced, f.frame, f.mass, f.damping.clone())
+                        .map_err(|source| ModelError::Superelement { body: f.name.clone(), source })?;
+                    let pos: Vec<Vector3<f64>> = f.reduced.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
+                    let tolerance = 1e-6 * (1.0 + size_body(&pos));
+                    let mut offsets = Vec::with_capacity(N);
+                    for k in 0..N {
+                        let node = &model.nodes[f.nodes[k].index()];
+                        let x = f.placement.transform_point(&pos[k].into()).coords;
+                        let distance = (x - node.position).norm();
+                        if !(distance <= tolerance) {
+                            return Err(ModelError::InterfaceMismatch {
+                                body: f.name.clone(),
+                                interface: k,
+                                name: f.reduced.interfaces[k].name.clone(),
+                                node: node.name.clone(),
+                                distance,
+                                tolerance,
+                            });
+                        }
+                        offsets.push(node.orientation.inverse() * f.placement.rotation);
+                    }
+                    size = size.max(2.0 * size_body(&pos));
+                    let K = se.k_cb();
+                    let k_norm = (0..K.nrows()).map(|i| (0..K.ncols()).map(|j| K[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
+                    modal_scale[bi] = size_body(&pos).max(1e-3) * f.reduced.inertia.mass.sqrt();
+                    flexible.push(FlexibleElement {
+                        body: bi,
+                        se,
+                        nodes: f.nodes.iter().map(|n| n.index()).collect(),
+                        offsets,
+                        modal: topo.modal_scalars[bi].clone(),
+                        k_norm,
+                        size: 2.0 * size_body(&pos),
+                    });
+                }
+                Body::Rigid(r) => {
+                    let ok = r.mass >= 0.0
+                        && finite(r.mass)
+                        && r.center_of_mass.iter().all(|x| x.is_finite())
+                        && r.inertia.iter().all(|x| x.is_finite());
+                    if !ok {
+                        return Err(invalid(
+                            format!("rigid body '{}'", r.name),
+                            "mass must be finite and >= 0, centre of mass and inertia finite".into(),
+                        ));
+                    }
+                    size = size.max(r.center_of_mass.norm());
+                    rigid.push(RigidElement {
+                        body: bi,
+                        node: r.reference.index(),
+                        mass: r.mass,
+                        c: r.center_of_mass,
+                        J: (r.inertia + r.inertia.transpose()) * 0.5,
+                    });
+                }
+            }
+        }
+        for (i, p) in model.point_masses.iter().enumerate() {
+            if !(p.mass >= 0.0 && finite(p.mass)) {
+                return Err(invalid(format!("point mass {i}"), format!("mass must be finite and >= 0, got {}", p.mass)));
+            }
+        }
+        let mut springs = Vec::new();
+        for s in &model.springs {
+            if !(s.stiffness >= 0.0 && s.damping >= 0.0 && finite(s.stiffness) && finite(s.damping)) {
+                return Err(invalid(format!("spring '{}'", s.name), "stiffness and damping must be finite and >= 0".into()));
+            }
+            let xa = model.nodes[s.a.index()].position;
+            let xb = s.b.map_or(s.ground_point, |b| model.nodes[b.index()].position);
+            let l0 = s.rest_length.unwrap_or((xb - xa).norm());
+            springs.push(SpringElement { a: s.a.index(), b: s.b.map(|b| b.index()), ground: s.ground_point, k: s.stiffness, c: s.damping, l0 });
+        }
+        let mut loads = Vec::new();
+        for (i, l) in model.loads.iter().enumerate() {
+            let time = l.time.compile(&format!("load {i}"))?;
+            if !l.value.iter().all(|x| x.is_finite()) {
+                return Err(invalid(format!("load {i}"), "non-finite value".into()));
+            }
+            let node = &model.nodes[l.node.index()];
+            let (follower, value) = match l.axes {
+                LoadAxes::Dead => (false, l.value),
+                LoadAxes::Follower => (true, node.orientation.inverse() * l.value),
+            };
+            loads.push(LoadElement { node: l.node.index(), moment: l.kind == LoadKind::Moment, follower, value, time });
+        }
+        let mut joint_springs = Vec::new();
+        for (i, js) in model.joint_springs.iter().enumerate() {
+            let s = *topo.joint_scalars[js.joint.index()].get(js.coordinate).ok_or_else(|| {
+                invalid(format!("joint spring {i}"), format!("joint coordinate {} does not exist", js.coordinate))
+            })?;
+            joint_springs.push((s, js.stiffness, js.damping, js.rest));
+        }
+        let drivers = model
+            .drivers
+            .iter()
+            .map(|d| d.motion.compile(&format!("driver '{}'", d.name)))
+            .collect::<Result<Vec<_>, _>>()?;
+        for c in &model.initial {
+            if let InitialCondition::JointValue { joint, coordinate, .. } | InitialCondition::JointRate { joint, coordinate, .. } = c {
+                let j = &model.joints[joint.index()];
+                match topo.joint_scalars[joint.index()].get(*coordinate) {
+                    Some(&s) if matches!(map.scalars[s].slot, Slot::Unknown(_)) => {}
+                    _ => {
+                        return Err(invalid(
+                            format!("initial condition on joint '{}'", j.name),
+                            format!("coordinate {coordinate} is not a free coordinate of the joint"),
+                        ))
+                    }
+                }
+            }
+        }
+        topology::held_coordinates(model, &topo)?;
+
+        // Elements and the sparse pattern.
+        let mut elements = Vec::new();
+        for (i, f) in flexible.iter().enumerate() {
+            let modal = f.modal.iter().map(|&s| unknown(map.scalars[s].slot)).collect();
+            elements.push(ElementRef { kind: ElementKind::Flexible(i), nodes: f.nodes.clone(), modal });
+        }
+        for (i, r) in rigid.iter().enumerate() {
+            elements.push(ElementRef { kind: ElementKind::Rigid(i), nodes: vec![r.node], modal: vec![] });
+        }
+        for p in &model.point_masses {
+            elements.push(ElementRef { kind: ElementKind::PointMass(p.node.index(), p.mass), nodes: vec![p.node.index()], modal: vec![] });
+        }
+        for (i, s) in springs.iter().enumerate() {
+            let mut nodes = vec![s.a];
+            nodes.extend(s.b);
+            elements.push(ElementRef { kind: ElementKind::Spring(i), nodes, modal: vec![] });
+        }
+        for (i, l) in loads.iter().enumerate() {
+            elements.push(ElementRef { kind: ElementKind::Load(i), nodes: vec![l.node], modal: vec![] });
+        }
+        let n = map.n_dof;
+        let node_unknown: Vec<Vec<usize>> =
+            map.chains.iter().map(|c| c.cols.iter().copied().filter(|&id| id < n).collect()).collect();
+        let mut sets: Vec<Vec<usize>> = Vec::new();
+        for e in &elements {
+            let mut s: Vec<usize> = e.nodes.iter().flat_map(|&a| node_unknown[a].iter().copied()).collect();
+            s.extend(&e.modal);
+            s.sort_unstable();
+            s.dedup();
+            sets.push(s);
+        }
+        let n_elem_sets = sets.len();
+        for (c, u) in node_unknown.iter().enumerate() {
+            if !map.chains[c].root {
+                sets.push(u.clone());
+            }
+        }
+        let symbolic = Pattern::new(n, &sets);
+        let lu = if n > 0 {
+            Some(SymbolicLu::try_new(symbolic.as_ref()).map_err(|e| invalid("system".into(), format!("symbolic LU failed: {e:?}")))?)
+        } else {
+            None
+        };
+        let mut pattern = Pattern {
+            symbolic,
+            lu,
+            elem_dofs: Vec::new(),
+            elem_pos: Vec::new(),
+            elem_modal_pos: Vec::new(),
+            elem_slots: Vec::new(),
+            node_slots: vec![Vec::new(); model.nodes.len()],
+            joint_spring_slots: Vec::new(),
+        };
+        for (e, dofs) in elements.iter().zip(sets.iter().take(n_elem_sets)) {
+            let find = |d: usize| dofs.binary_search(&d).expect("dof of the element");
+            let pos = e.nodes.iter().map(|&a| node_unknown[a].iter().map(|&d| find(d)).collect()).collect();
+            let modal_pos = e.modal.iter().map(|&d| find(d)).collect();
+            let slots = dofs.iter().flat_map(|&c| dofs.iter().map(move |&r| (r, c))).map(|(r, c)| pattern.slot(r, c)).collect();
+            pattern.elem_dofs.push(dofs.clone());
+            pattern.elem_pos.push(pos);
+            pattern.elem_modal_pos.push(modal_pos);
+            pattern.elem_slots.push(slots);
+        }
+        for (c, u) in node_unknown.iter().enumerate() {
+            if !map.chains[c].root {
+                pattern.node_slots[c] = u.iter().flat_map(|&k| u.iter().map(move |&i| (i, k))).map(|(i, k)| pattern.slot(i, k)).collect();
+            }
+        }
+        pattern.joint_spring_slots = joint_springs
+            .iter()
+            .map(|&(s, ..)| match map.scalars[s].slot {
+                Slot::Unknown(d) => Some(pattern.slot(d, d)),
+                Slot::Prescribed(_) => None,
+            })
+            .collect();
+        let dof_scale = topo
+            .dims
+            .iter()
+            .map(|d| match d {
+                topology::Dimension::Length => size,
+                topology::Dimension::Angle => 1.0,
+                topology::Dimension::Modal(b) => modal_scale[*b],
+            })
+            .collect();
+        Ok(Self {
+            model: model.clone(),
+            topo,
+            flexible,
+            rigid,
+            springs,
+            loads,
+            joint_springs,
+            drivers,
+            elements,
+            pattern,
+            dof_scale,
+        })
+    }
+
+    /// The model this system was built from.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// Number of unknowns $\dim\dot{\mathbf q}$.
+    pub fn n_dof(&self) -> usize {
+        self.topo.map.n_dof
+    }
+
+    /// What each unknown is ("node 'tip' translation x", "joint 'crank' angle", ...).
+    pub fn dof_labels(&self) -> &[String] {
+        &self.topo.map.dof_labels
+    }
+
+    /// Round-off floor of $\|\mathbf F\|$: $10\,\varepsilon\big(\sum_b(\|\mathbf K_{CB,b}\|_\infty R_b)^2 +
+    /// \sum_s(k_s R_s)^2\big)^{1/2}$, with $R$ the largest distance of the element's nodes from the
+    /// origin plus its size.
+    ///
+    /// The elastic forces are computed from $\mathbf u_k = \mathbf R_j^T(\mathbf r_k - \mathbf r_j) - \mathbf x_k$,
+    /// whose round-off is $\varepsilon R$; times the stiffness this is the smallest residual a
+    /// converged state can have. For a stiff slender body under a small load it can exceed a
+    /// relative tolerance (the elastica's axial stiffness is $10^5$ times its bending stiffness),
+    /// so Newton's test is $\|\mathbf F\| \le \mathrm{tol}\cdot f_{scale} + \mathrm{floor}$. The factor 10
+    /// covers the few roundings of the subtraction, the product and the rotations.
+    pub fn residual_floor(&self, nodes: &[NodeMotion]) -> f64 {
+        let mut sum = 0.0;
+        for f in &self.flexible {
+            let R = f.nodes.iter().map(|&n| nodes[n].r.norm()).fold(0.0, f64::max) + f.size;
+            sum += (f.k_norm * R).powi(2);
+        }
+        for s in &self.springs {
+            let R = nodes[s.a].r.norm() + s.b.map_or(s.ground.norm(), |b| nodes[b].r.norm());
+            sum += (s.k * R).powi(2);
+        }
+        10.0 * f64::EPSILON * sum.sqrt()
+    }
+
+    /// $\max_i |\delta q_i|/s_i$ with the unknowns' scales $s_i$ (model size for lengths, 1 for
+    /// angles, body size $\times\sqrt{m}$ for modal coordinates).
+    pub fn increment_norm(&self, dq: &[f64]) -> f64 {
+        dq.iter().zip(&self.dof_scale).map(|(d, s)| d.abs() / s).fold(0.0, f64::max)
+    }
+
+    /// Number of stored entries of the sparse system matrices.
+    pub fn nnz(&self) -> usize {
+        self.pattern.nnz()
+    }
+
+    /// The model's initial configuration at $t = 0$ with its initial conditions applied
+    /// (joint values and rates, node velocities, rigid motion); accelerations zero (the
+    /// dynamic solver computes consistent ones).
+    pub fn initial_state(&self) -> State {
+        let map = &self.topo.map;
+        let mut state = State {
+            time: 0.0,
+            scalars: vec![0.0; map.scalars.len()],
+            rotations: vec![UnitQuaternion::identity(); map.rotations.len()],
+            velocity: vec![0.0; map.n_dof],
+            acceleration: vec![0.0; map.n_dof],
+            frames: Vec::new(),
+        };
+        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
+        self.apply_drivers(&mut state, &mut pr, &mut pa);
+        for c in &self.model.initial {
+            match c {
+                InitialCondition::JointValue { joint, coordinate, value } => {
+                    state.scalars[self.topo.joint_scalars[joint.index()][*coordinate]] = *value;
+                }
+                InitialCondition::JointRate { joint, coordinate, rate } => {
+                    let s = self.topo.joint_scalars[joint.index()][*coordinate];
+                    state.velocity[unknown(map.scalars[s].slot)] = *rate;
+                }
+                _ => {}
+            }
+        }
+        let motions = self.node_motions(&state);
+        for c in &self.model.initial {
+            match c {
+                InitialCondition::NodeVelocity { node, velocity, angular_velocity } => {
+                    self.set_root_velocity(&mut state, node.index(), velocity, angular_velocity);
+                }
+                InitialCondition::RigidMotion { velocity, angular_velocity } => {
+                    for n in 0..self.model.nodes.len() {
+                        if self.topo.roots[n].is_some() {
+                            let v = velocity + angular_velocity.cross(&motions[n].r);
+                            self.set_root_velocity(&mut state, n, &v, angular_velocity);
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        state.frames = self.flexible.iter().map(|f| rigid_fit(f, &motions)).collect();
+        state
+    }
+
+    /// Gives the free coordinates of independent node `n` the velocity $(\mathbf v, \boldsymbol\omega)$
+    /// (projected on the free directions).
+    fn set_root_velocity(&self, state: &mut State, n: usize, v: &Vector3<f64>, w: &Vector3<f64>) {
+        let map = &self.topo.map;
+        let Some(rc) = &self.topo.roots[n] else { return };
+        for (s, e) in &rc.translation {
+            if let Slot::Unknown(d) = map.scalars[*s].slot {
+                state.velocity[d] = e.dot(v);
+            }
+        }
+        match &rc.rotation {
+            RootRotation::Free(r) => {
+                let d = map.rotations[*r].dof;
+                state.velocity[d..d + 3].copy_from_slice(w.as_slice());
+            }
+            RootRotation::Axes(axes) => {
+                for (s, e) in axes {
+                    if let Slot::Unknown(d) = map.scalars[*s].slot {
+                        state.velocity[d] = e.dot(w);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Moves independent node `node` to `position`, `orientation` (free directions only; the
+    /// removed ones keep their values). For initial deformations and tests.
+    pub fn set_node_pose(&self, state: &mut State, node: NodeId, position: Vector3<f64>, orientation: UnitQuaternion<f64>) {
+        let map = &self.topo.map;
+        let n = node.index();
+        let Some(rc) = &self.topo.roots[n] else { return };
+        let nd = &self.model.nodes[n];
+        for (s, e) in &rc.translation {
+            if let Slot::Unknown(_) = map.scalars[*s].slot {
+                state.scalars[*s] = e.dot(&(position - nd.position));
+            }
+        }
+        if let RootRotation::Free(r) = &rc.rotation {
+            state.rotations[*r] = orientation * nd.orientation.inverse();
+        }
+    }
+
+    /// Sets the velocity of independent node `node` (free directions).
+    pub fn set_node_velocity(&self, state: &mut State, node: NodeId, v: Vector3<f64>, omega: Vector3<f64>) {
+        self.set_root_velocity(state, node.index(), &v, &omega);
+    }
+
+    /// Value of scalar coordinate `coordinate` of `joint`.
+    pub fn joint_value(&self, state: &State, joint: JointId, coordinate: usize) -> f64 {
+        state.scalars[self.topo.joint_scalars[joint.index()][coordinate]]
+    }
+
+    /// Sets a free joint coordinate's value and rate.
+    pub fn set_joint(&self, state: &mut State, joint: JointId, coordinate: usize, value: f64, rate: f64) {
+        let s = self.topo.joint_scalars[joint.index()][coordinate];
+        if let Slot::Unknown(d) = self.topo.map.scalars[s].slot {
+            state.scalars[s] = value;
+            state.velocity[d] = rate;
+        }
+    }
+
+    /// Rate of a joint coordinate (driven ones from their driver).
+    pub fn joint_rate(&self, state: &State, joint: JointId, coordinate: usize) -> f64 {
+        let s = self.topo.joint_scalars[joint.index()][coordinate];
+        match self.topo.map.scalars[s].slot {
+            Slot::Unknown(d) => state.velocity[d],
+            Slot::Prescribed(p) => self.topo.map.prescribed[p].0.map_or(0.0, |d| self.drivers[d].eval(state.time).1),
+        }
+    }
+
+    /// Re-guesses every flexible body's floating frame from the current node motions (by the
+    /// rigid fit of its interfaces); use after moving nodes far by hand.
+    pub fn reset_frames(&self, state: &mut State) {
+        let motions = self.node_motions(state);
+        state.frames = self.flexible.iter().map(|f| rigid_fit(f, &motions)).collect();
+    }
+
+    /// $\mathbf q \oplus \delta\mathbf q$: scalars added, rotations $\exp(\widetilde{\delta\boldsymbol\pi})\mathbf R$.
+    pub fn retract(&self, state: &State, dq: &[f64]) -> State {
+        let mut s = state.clone();
+        self.retract_in_place(&mut s, state, dq);
+        s
+    }
+
+    /// `out` = `base` $\oplus$ `dq` (configuration only).
+    pub(crate) fn retract_in_place(&self, out: &mut State, base: &State, dq: &[f64]) {
+        let map = &self.topo.map;
+        for (i, sc) in map.scalars.iter().enumerate() {
+            if let Slot::Unknown(d) = sc.slot {
+                out.scalars[i] = base.scalars[i] + dq[d];
+            }
+        }
+        for (i, r) in map.rotations.iter().enumerate() {
+            let d = r.dof;
+            let mut q = so3::exp(&Vector3::new(dq[d], dq[d + 1], dq[d + 2])) * base.rotations[i];
+            q.renormalize_fast();
+            out.rotations[i] = q;
+        }
+    }
+
+    /// Writes driven values into the state and their rates and accelerations into `pr`, `pa`.
+    pub(crate) fn apply_drivers(&self, state: &mut State, pr: &mut [f64], pa: &mut [f64]) {
+        for (p, &(driver, s)) in self.topo.map.prescribed.iter().enumerate() {
+            let (x, xd, xdd) = driver.map_or((0.0, 0.0, 0.0), |d| self.drivers[d].eval(state.time));
+            state.scalars[s] = x;
+            pr[p] = xd;
+            pa[p] = xdd;
+        }
+    }
+
+    /// Motions of all nodes at `state` (drivers evaluated at its time).
+    pub fn node_motions(&self, state: &State) -> Vec<NodeMotion> {
+        let mut s = state.clone();
+        let np = self.topo.map.n_prescribed();
+        let (mut pr, mut pa) = (vec![0.0; np], vec![0.0; np]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let mut motions = vec![Motion::ground(); self.model.nodes.len()];
+        self.topo.map.motions_into(&values(&s, &pr, &pa), &mut motions);
+        motions.iter().map(NodeMotion::from).collect()
+    }
+
+    /// $\mathbf J_c$, $\partial\mathbf V_c/\partial\mathbf q$, $\partial\mathbf A_c/\partial\mathbf q$, $\partial\mathbf A_c/\partial\dot{\mathbf q}$
+    /// of every node at `state` (drivers at its time). With zero accelerations,
+    /// `motion.a`, `motion.alpha` are the convective term $\dot{\mathbf J}_c\dot{\mathbf q}$ (plus the
+    /// drivers' accelerations).
+    pub fn node_kinematics(&self, state: &State) -> Vec<NodeKinematics> {
+        let mut s = state.clone();
+        let map = &self.topo.map;
+        let np = map.n_prescribed();
+        let (mut pr, mut pa) = (vec![0.0; np], vec![0.0; np]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let x = values(&s, &pr, &pa);
+        let nn = self.model.nodes.len();
+        let mut motions = vec![Motion::ground(); nn];
+        map.motions_into(&x, &mut motions);
+        let mut derivs = vec![NodeDerivatives::default(); nn];
+        map.derivatives_into(&x, &motions, &mut derivs);
+        (0..nn)
+            .map(|c| {
+                let d = &derivs[c];
+                let u = d.unknown.len();
+                let m = &motions[c];
+                NodeKinematics {
+                    motion: NodeMotion::from(m),
+                    dofs: d.unknown.iter().map(|&k| map.chains[c].cols[k]).collect(),
+                    J: Mat::from_fn(6, u, |i, j| m.col(d.unknown[j])[i]),
+                    DV: Mat::from_fn(6, u, |i, j| d.DV[j][i]),
+                    DA: Mat::from_fn(6, u, |i, j| d.DA[j][i]),
+                    DAd: Mat::from_fn(6, u, |i, j| d.DAd[j][i]),
+                }
+            })
+            .collect()
+    }
+
+    /// $\sum_c\mathbf J_c^T\mathbf f_c$ for given node forces, and the geometric term
+    /// $\partial(\sum_c\mathbf J_c^T\mathbf f_c)/\partial\mathbf q$ at fixed $\mathbf f_c$ (dense; for tests).
+    pub fn generalized_force(&self, state: &State, node_forces: &[[f64; 6]]) -> (Vec<f64>, Mat<f64>) {
+        let mut s = state.clone();
+        let map = &self.topo.map;
+        let np = map.n_prescribed();
+        let (mut pr, mut pa) = (vec![0.0; np], vec![0.0; np]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let x = values(&s, &pr, &pa);
+        let nn = self.model.nodes.len();
+        let mut motions = vec![Motion::ground(); nn];
+        map.motions_into(&x, &mut motions);
+        let mut derivs = vec![NodeDerivatives::default(); nn];
+        map.derivatives_into(&x, &motions, &mut derivs);
+        let n = map.n_dof;
+        let mut F = vec![0.0; n];
+        let mut G = Mat::zeros(n, n);
+        for c in 0..nn {
+            for (k, &id) in map.chains[c].cols.iter().enumerate() {
+                if id < n {
+                    let col = motions[c].col(k);
+                    F[id] += (0..6).map(|i| col[i] * node_forces[c][i]).sum::<f64>();
+                }
+            }
+            let u: Vec<usize> = derivs[c].unknown.iter().map(|&k| map.chains[c].cols[k]).collect();
+            map.geometric_term(c, &derivs[c], &node_forces[c], |i, k, g| G[(u[i], u[k])] += g);
+        }
+        (F, G)
+    }
+
+    pub(crate) fn workspace(&self) -> Workspace {
+        let nn = self.model.nodes.len();
+        let np = self.topo.map.n_prescribed();
+        let nnz = self.pattern.nnz();
+        Workspace {
+            motions: vec![Motion::ground(); nn],
+            nodes: Vec::with_capacity(nn),
+            derivs: vec![NodeDerivatives::default(); nn],
+            node_res: vec![[0.0; 6]; nn],
+            F: vec![0.0; self.n_dof()],
+            reactions: vec![0.0; np],
+            M: vec![0.0; nnz],
+            C: vec![0.0; nnz],
+            K: vec![0.0; nnz],
+            presc_rate: vec![0.0; np],
+            presc_acc: vec![0.0; np],
+            scale: 0.0,
+            floor: 0.0,
+            S: vec![0.0; nnz],
+        }
+    }
+
+    /// Evaluates $\mathbf F$, the reactions and (with `tangents`) $\hat{\mathbf M}$, $\hat{\mathbf C}$,
+    /// $\hat{\mathbf K}$ at `state`, loads and gravity scaled by `lambda`; updates the state's
+    /// floating frames (warm starts) and its driven coordinates.
+    pub(crate) fn evaluate_into(&self, state: &mut State, lambda: f64, tangents: bool, ws: &mut Workspace) -> Result<(), SolveError> {
+        let map = &self.topo.map;
+        let n = map.n_dof;
+        self.apply_drivers(state, &mut ws.presc_rate, &mut ws.presc_acc);
+        let x = values(state, &ws.presc_rate, &ws.presc_acc);
+        map.motions_into(&x, &mut ws.motions);
+        ws.nodes.clear();
+        ws.nodes.extend(ws.motions.iter().map(NodeMotion::from));
+        let gravity = self.model.gravity * lambda;
+        let nodes = &ws.nodes;
+        let st: &State = state;
+        let outputs: Vec<Result<ElementOutput, SolveError>> = self
+            .elements
+            .par_iter()
+            .map(|e| self.element_output(e, st, nodes, &gravity, lambda, tangents))
+            .collect();
+        let mut outs = Vec::with_capacity(outputs.len());
+        for o in outputs {
+            outs.push(o?);
+        }
+        let new_frames: Vec<(usize, Frame)> = self
+            .elements
+            .iter()
+            .zip(&outs)
+            .filter_map(|(e, o)| match (&e.kind, o.frame) {
+                (ElementKind::Flexible(i), Some(f)) => Some((*i, f)),
+                _ => None,
+            })
+            .collect();
+        // Node residuals and their parts.
+        let nn = self.model.nodes.len();
+        let mut parts = vec![[[0.0; 6]; 3]; nn];
+        for r in ws.node_res.iter_mut() {
+            *r = [0.0; 6];
+        }
+        ws.F.iter_mut().for_each(|f| *f = 0.0);
+        ws.reactions.iter_mut().for_each(|f| *f = 0.0);
+        let mut gparts = vec![vec![0.0; n]; 3];
+        for (e, o) in self.elements.iter().zip(&outs) {
+            for (ia, &a) in e.nodes.iter().enumerate() {
+                for i in 0..6 {
+                    ws.node_res[a][i] += o.residual[6 * ia + i];
+                    parts[a][0][i] += o.inertia[6 * ia + i];
+                    parts[a][1][i] += o.internal[6 * ia + i];
+                    parts[a][2][i] += o.external[6 * ia + i];
+                }
+            }
+            let base = 6 * e.nodes.len();
+            for (i, &d) in e.modal.iter().enumerate() {
+                ws.F[d] += o.residual[base + i];
+                gparts[0][d] += o.inertia[base + i];
+                gparts[1][d] += o.internal[base + i];
+                gparts[2][d] += o.external[base + i];
+            }
+        }
+        for c in 0..nn {
+            let m = &ws.motions[c];
+            for (k, &id) in map.chains[c].cols.iter().enumerate() {
+                let col = m.col(k);
+                let dot = |r: &[f64; 6]| (0..6).map(|i| col[i] * r[i]).sum::<f64>();
+                if id < n {
+                    ws.F[id] += dot(&ws.node_res[c]);
+                    for p in 0..3 {
+                        gparts[p][id] += dot(&parts[c][p]);
+                    }
+                } else {
+                    ws.reactions[id - n] += dot(&ws.node_res[c]);
+                }
+            }
+        }
+        for &(s, k, c, rest) in &self.joint_springs {
+            let (xv, xd, _) = scalar_values(map, &x, s);
+            let f = k * (xv - rest) + c * xd;
+            match map.scalars[s].slot {
+                Slot::Unknown(d) => {
+                    ws.F[d] += f;
+                    gparts[1][d] += f;
+                }
+                Slot::Prescribed(p) => ws.reactions[p] += f,
+            }
+        }
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        ws.scale = norm(&gparts[0]) + norm(&gparts[1]) + norm(&gparts[2]);
+        ws.floor = self.residual_floor(&ws.nodes);
+        if !tangents {
+            for (i, f) in new_frames {
+                state.frames[i] = f;
+            }
+            return Ok(());
+        }
+        map.derivatives_into(&x, &ws.motions, &mut ws.derivs);
+        for v in [&mut ws.M, &mut ws.C, &mut ws.K] {
+            v.iter_mut().for_each(|x| *x = 0.0);
+        }
+        let locals: Vec<[Vec<f64>; 3]> = self
+            .elements
+            .par_iter()
+            .enumerate()
+            .map(|(ei, e)| self.local_matrices(ei, e, &outs[ei], &ws.motions, &ws.derivs))
+            .collect();
+        for (ei, l) in locals.iter().enumerate() {
+            for (q, &slot) in self.pattern.elem_slots[ei].iter().enumerate() {
+                ws.M[slot] += l[0][q];
+                ws.C[slot] += l[1][q];
+                ws.K[slot] += l[2][q];
+            }
+        }
+        for c in 0..nn {
+            let slots = &self.pattern.node_slots[c];
+            if slots.is_empty() {
+                continue;
+            }
+            let u = ws.derivs[c].unknown.len();
+            let Kv = &mut ws.K;
+            map.geometric_term(c, &ws.derivs[c], &ws.node_res[c], |i, k, g| Kv[slots[k * u + i]] += g);
+        }
+        for (&(_, k, c, _), slot) in self.joint_springs.iter().zip(&self.pattern.joint_spring_slots) {
+            if let Some(slot) = slot {
+                ws.K[*slot] += k;
+                ws.C[*slot] += c;
+            }
+        }
+        for (i, f) in new_frames {
+            state.frames[i] = f;
+        }
+        Ok(())
+    }
+
+    /// One element's output at the node motions.
+    fn element_output(
+        &self,
+        e: &ElementRef,
+        state: &State,
+        nodes: &[NodeMotion],
+        gravity: &Vector3<f64>,
+        lambda: f64,
+        tangents: bool,
+    ) -> Result<ElementOutput, SolveError> {
+        let map = &self.topo.map;
+        Ok(match &e.kind {
+            ElementKind::Flexible(i) => {
+                let f = &self.flexible[*i];
+                let eta: Vec<f64> = f.modal.iter().map(|&s| state.scalars[s]).collect();
+                let eta_d: Vec<f64> = f.modal.iter().map(|&s| state.velocity[unknown(map.scalars[s].slot)]).collect();
+                let eta_dd: Vec<f64> = f.modal.iter().map(|&s| state.acceleration[unknown(map.scalars[s].slot)]).collect();
+                let bs = f.body_state(nodes, &eta, &eta_d, state.frames[*i]);
+                f.element(&bs, &eta_dd, nodes, gravity, tangents).map_err(|source| SolveError::Body {
+                    body: self.model.bodies[f.body].name().to_string(),
+                    t: state.time,
+                    source,
+                })?
+            }
+            ElementKind::Rigid(i) => rigid_element(&self.rigid[*i], &nodes[self.rigid[*i].node], gravity, tangents),
+            ElementKind::PointMass(node, m) => point_mass_element(*m, &nodes[*node], gravity, tangents),
+            ElementKind::Spring(i) => {
+                let s = &self.springs[*i];
+                spring_element(s, &nodes[s.a], s.b.map(|b| &nodes[b]), tangents).0
+            }
+            ElementKind::Load(i) => {
+                let l = &self.loads[*i];
+                load_element(l, &nodes[l.node], state.time, lambda, tangents)
+            }
+        })
+    }
+
+    /// The element's $\hat{\mathbf M}_e$, $\hat{\mathbf C}_e$, $\hat{\mathbf K}_e$ on its unknown dofs
+    /// (column major), from its port tangents and the node kinematics (module docs of
+    /// [`crate::coordinates`]): $\mathbf J^T\mathbf M\mathbf J$, $\mathbf J^T(\mathbf C\mathbf J + \mathbf M\,\partial\mathbf A/\partial\dot{\mathbf q})$,
+    /// $\mathbf J^T(\mathbf K\mathbf J + \mathbf C\,\partial\mathbf V/\partial\mathbf q + \mathbf M\,\partial\mathbf A/\partial\mathbf q)$.
+    fn local_matrices(&self, ei: usize, e: &ElementRef, o: &ElementOutput, motions: &[Motion], derivs: &[NodeDerivatives]) -> [Vec<f64>; 3] {
+        let s = self.pattern.elem_dofs[ei].len();
+        let mut Ml = vec![0.0; s * s];
+        let mut Cl = vec![0.0; s * s];
+        let mut Kl = vec![0.0; s * s];
+        let pos = &self.pattern.elem_pos[ei];
+        let mpos = &self.pattern.elem_modal_pos[ei];
+        let N = e.nodes.len();
+        // Columns of each port: (local position, J, DV, DA, DAd) with J etc. as 6-vectors.
+        type PortCol = (usize, [f64; 6], [f64; 6], [f64; 6], [f64; 6]);
+        let ports: Vec<Vec<PortCol>> = e
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(ia, &a)| {
+                let d = &derivs[a];
+                d.unknown.iter().enumerate().map(|(u, &k)| (pos[ia][u], motions[a].col(k), d.DV[u], d.DA[u], d.DAd[u])).collect()
+            })
+            .collect();
+        let (M, C, K) = (&o.M, &o.C, &o.K);
+        // Row vector of block (row r of the element matrix, port b) times a port column.
+        let rowdot = |A: &Mat<f64>, r: usize, b: usize, x: &[f64; 6]| (0..6).map(|j| A[(r, 6 * b + j)] * x[j]).sum::<f64>();
+        // Rows: node ports.
+        for ia in 0..N {
+            for (ib, pb) in ports.iter().enumerate() {
+                for (qb, Jb, DV, DA, DAd) in pb {
+                    // y = block(a, b) * column, for each of the six rows of port a.
+                    let mut yM = [0.0; 6];
+                    let mut yC = [0.0; 6];
+                    let mut yK = [0.0; 6];
+                    for i in 0..6 {
+                        let r = 6 * ia + i;
+                        yM[i] = rowdot(M, r, ib, Jb);
+                        yC[i] = rowdot(C, r, ib, Jb) + rowdot(M, r, ib, DAd);
+                        yK[i] = rowdot(K, r, ib, Jb) + rowdot(C, r, ib, DV) + rowdot(M, r, ib, DA);
+                    }
+                    for (qa, Ja, ..) in &ports[ia] {
+                        let at = qb * s + qa;
+                        Ml[at] += (0..6).map(|i| Ja[i] * yM[i]).sum::<f64>();
+                        Cl[at] += (0..6).map(|i| Ja[i] * yC[i]).sum::<f64>();
+                        Kl[at] += (0..6).map(|i| Ja[i] * yK[i]).sum::<f64>();
+                    }
+                }
+            }
+            for (j, &qj) in mpos.iter().enumerate() {
+                let c = 6 * N + j;
+                for (qa, Ja, ..) in &ports[ia] {
+                    let at = qj * s + qa;
+                    Ml[at] += (0..6).map(|i| Ja[i] * M[(6 * ia + i, c)]).sum::<f64>();
+                    Cl[at] += (0..6).map(|i| Ja[i] * C[(6 * ia + i, c)]).sum::<f64>();
+                    Kl[at] += (0..6).map(|i| Ja[i] * K[(6 * ia + i, c)]).sum::<f64>();
+                }
+            }
+        }
+        // Rows: modal coordinates.
+        for (i, &qi) in mpos.iter().enumerate() {
+            let r = 6 * N + i;
+            for (ib, pb) in ports.iter().enumerate() {
+                for (qb, Jb, DV, DA, DAd) in pb {
+                    let at = qb * s + qi;
+                    Ml[at] += rowdot(M, r, ib, Jb);
+                    Cl[at] += rowdot(C, r, ib, Jb) + rowdot(M, r, ib, DAd);
+                    Kl[at] += rowdot(K, r, ib, Jb) + rowdot(C, r, ib, DV) + rowdot(M, r, ib, DA);
+                }
+            }
+            for (j, &qj) in mpos.iter().enumerate() {
+                let c = 6 * N + j;
+                let at = qj * s + qi;
+                Ml[at] += M[(r, c)];
+                Cl[at] += C[(r, c)];
+                Kl[at] += K[(r, c)];
+            }
+        }
+        [Ml, Cl, Kl]
+    }
+
+    /// $\mathbf F$ at `state` with loads scaled by `lambda` (updates the frames' warm starts).
+    pub fn residual(&self, state: &mut State, lambda: f64) -> Result<Vec<f64>, SolveError> {
+        let mut ws = self.workspace();
+        self.evaluate_into(state, lambda, false, &mut ws)?;
+        Ok(ws.F)
+    }
+
+    /// $\mathbf F$, $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$ (dense) at `state`.
+    pub fn matrices(&self, state: &mut State, lambda: f64) -> Result<Matrices, SolveError> {
+        let mut ws = self.workspace();
+        self.evaluate_into(state, lambda, true, &mut ws)?;
+        let n = self.n_dof();
+        Ok(Matrices { F: ws.F.clone(), M: self.dense(&ws.M, n), C: self.dense(&ws.C, n), K: self.dense(&ws.K, n) })
+    }
+
+    pub(crate) fn dense(&self, values: &[f64], n: usize) -> Mat<f64> {
+        let mut A = Mat::zeros(n, n);
+        let cp = self.pattern.symbolic.col_ptr();
+        let ri = self.pattern.symbolic.row_idx();
+        for c in 0..n {
+            for p in cp[c]..cp[c + 1] {
+                A[(ri[p], c)] += values[p];
+            }
+        }
+        A
+    }
+
+    /// Solves $\mathbf S\mathbf x = \mathbf b$ in place for the values `S` on the system pattern.
+    pub(crate) fn solve(&self, S: &[f64], b: &mut [f64]) -> Result<(), String> {
+        let n = self.n_dof();
+        if n == 0 {
+            return Ok(());
+        }
+        use faer::linalg::solvers::Solve;
+        let A = SparseColMat::new(self.pattern.symbolic.clone(), S.to_vec());
+        let lu = Lu::try_new_with_symbolic(self.pattern.lu.clone().expect("symbolic LU for n > 0"), A.as_ref())
+            .map_err(|e| format!("{e:?}"))?;
+        let mut rhs = faer::Mat::from_fn(n, 1, |i, _| b[i]);
+        lu.solve_in_place(rhs.as_mut());
+        for i in 0..n {
+            b[i] = rhs[(i, 0)];
+            if !b[i].is_finite() {
+                return Err("non-finite solution".into());
+            }
+        }
+        Ok(())
+    }
+
+    /// Combines the iteration matrix $\beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$
+    /// into `ws.S`, where $\mathbf T$ applies $\mathbf J_l(\mathbf h_r)$ to the columns of each rotation
+    /// coordinate ($\mathbf h$: the step's increment $h\Delta\mathbf q$; identity when `None`).
+    pub(crate) fn iteration_matrix(&self, ws: &mut Workspace, beta: f64, gamma: f64, increment: Option<&[f64]>) {
+        for i in 0..ws.S.len() {
+            ws.S[i] = beta * ws.M[i] + gamma * ws.C[i] + ws.K[i];
+        }
+        let Some(h) = increment else { return };
+        let cp = self.pattern.symbolic.col_ptr();
+        for r in &self.topo.map.rotations {
+            let d = r.dof;
+            let T = so3::left_jacobian(&Vector3::new(h[d], h[d + 1], h[d + 2]));
+            let len = cp[d + 1] - cp[d];
+            for t in 0..len {
+                let k = [ws.K[cp[d] + t], ws.K[cp[d + 1] + t], ws.K[cp[d + 2] + t]];
+                for j in 0..3 {
+                    let kt = k[0] * T[(0, j)] + k[1] * T[(1, j)] + k[2] * T[(2, j)];
+                    ws.S[cp[d + j] + t] += kt - k[j];
+                }
+            }
+        }
+    }
+}
+
+/// The unknown index of a slot known to be unknown.
+pub(crate) fn unknown(slot: Slot) -> usize {
+    match slot {
+        Slot::Unknown(d) => d,
+        Slot::Prescribed(_) => unreachable!("modal and initial-condition coordinates are unknowns"),
+    }
+}
+
+pub(crate) fn values<'a>(s: &'a State, pr: &'a [f64], pa: &'a [f64]) -> Values<'a> {
+    Values {
+        scalars: &s.scalars,
+        rotations: &s.rotations,
+        vel: &s.velocity,
+        acc: &s.acceleration,
+        presc_rate: pr,
+        presc_acc: pa,
+    }
+}
+
+fn scalar_values(map: &crate::coordinates::CoordinateMap, x: &Values, s: usize) -> (f64, f64, f64) {
+    let v = x.scalars[s];
+    match map.scalars[s].slot {
+        Slot::Unknown(d) => (v, x.vel[d], x.acc[d]),
+        Slot::Prescribed(p) => (v, x.presc_rate[p], x.presc_acc[p]),
+    }
+}
+
+/// Largest distance of the interface positions from their centroid.
+fn size_body(pos: &[Vector3<f64>]) -> f64 {
+    let c = pos.iter().sum::<Vector3<f64>>() / pos.len().max(1) as f64;
+    pos.iter().map(|p| (p - c).norm()).fold(0.0, f64::max)
+}
+
+/// A first guess of a flexible body's frame from its nodes: the orientation of interface 0 and
+/// the origin that fits the undeformed interface positions best (least squares, rotation fixed).
+fn rigid_fit(f: &FlexibleElement, motions: &[NodeMotion]) -> Frame {
+    let R = motions[f.nodes[0]].R * f.offsets[0];
+    let x = f.se.interface_positions();
+    let mut r = Vector3::zeros();
+    for (k, &n) in f.nodes.iter().enumerate() {
+        r += motions[n].r - R * x[k];
+    }
+    Frame::new(r / f.nodes.len() as f64, R)
+}

@@ -1,0 +1,143 @@
+//! Each refused model gives its named error.
+
+use crate::fixtures::{beam_body, rigid};
+use mbs::{DriverTarget, JointKind, Model, ModelError, NodeId, Support, System, TimeFunction};
+use nalgebra::{Isometry3, Vector3};
+use reduction::ModeSelection;
+use superelement::{FrameChoice, MassVariant};
+
+fn err(model: &Model) -> ModelError {
+    match System::new(model) {
+        Ok(_) => panic!("model accepted"),
+        Err(e) => {
+            eprintln!("{e}");
+            e
+        }
+    }
+}
+
+/// A planar four-bar of rigid bodies: ground pivots A, D; crank AB, coupler BC, rocker CD.
+fn four_bar(rigid_coupler: bool) -> Model {
+    let mut m = Model::new("four-bar");
+    let z = Vector3::z();
+    let a = m.add_node("A", Vector3::zeros());
+    let a1 = m.add_node("A1", Vector3::zeros());
+    let b = m.add_node("B", Vector3::new(0.0, 1.0, 0.0));
+    let b1 = m.add_node("B1", Vector3::new(0.0, 1.0, 0.0));
+    let c = m.add_node("C", Vector3::new(2.0, 1.0, 0.0));
+    let c1 = m.add_node("C1", Vector3::new(2.0, 1.0, 0.0));
+    let d = m.add_node("D", Vector3::new(2.0, 0.0, 0.0));
+    m.add_support(Support::clamp(a));
+    m.add_support(Support::hinge(d, z));
+    m.add_joint("jA", a, a1, JointKind::Revolute { axis: z });
+    m.add_rigid_body(rigid("crank", a1, vec![b], 1.0, Vector3::new(0.0, 0.5, 0.0), [0.1; 3]));
+    m.add_joint("jB", b, b1, JointKind::Revolute { axis: z });
+    if rigid_coupler {
+        m.add_rigid_body(rigid("coupler", b1, vec![c], 1.0, Vector3::new(1.0, 0.0, 0.0), [0.1; 3]));
+    } else {
+        let body = beam_body("coupler", Vector3::new(0.0, 1.0, 0.0), Vector3::new(2.0, 1.0, 0.0), 3, 0.02, 2e11, 7800.0, ModeSelection::StaticOnly);
+        m.add_flexible_body(body, vec![b1, c], Isometry3::identity(), FrameChoice::CenterOfMass, MassVariant::Exact);
+    }
+    // Oriented from the supported rocker to the coupler, so that the flexible coupler's end
+    // C is the dependent node (the rocker's group enters at its supported node D).
+    m.add_joint("jC", c1, c, JointKind::Revolute { axis: z });
+    m.add_rigid_body(rigid("rocker", c1, vec![d], 1.0, Vector3::new(0.0, -0.5, 0.0), [0.1; 3]));
+    m
+}
+
+#[test]
+fn rigid_loop_is_refused_with_its_members() {
+    match err(&four_bar(true)) {
+        ModelError::RigidLoop { bodies, joints, supports } => {
+            assert_eq!(bodies, ["coupler", "crank", "rocker"]);
+            assert_eq!(joints, ["jA", "jB", "jC"]);
+            assert_eq!(supports, ["A", "D"]);
+        }
+        e => panic!("{e:?}"),
+    }
+    // The same loop closed through a flexible coupler is accepted.
+    System::new(&four_bar(false)).unwrap();
+}
+
+#[test]
+fn unheld_coordinate_names_node_and_direction() {
+    let mut m = Model::new("unheld");
+    let a = m.add_node("a", Vector3::zeros());
+    m.point_masses.push(mbs::PointMass { node: a, mass: 1.0 });
+    match err(&m) {
+        ModelError::UnheldCoordinate { coordinate } => assert_eq!(coordinate, "node 'a' rotation, component x"),
+        e => panic!("{e:?}"),
+    }
+}
+
+#[test]
+fn unknown_references_are_named() {
+    let mut m = Model::new("refs");
+    let a = m.add_node("a", Vector3::zeros());
+    m.add_rigid_body(rigid("r", a, vec![NodeId(7)], 1.0, Vector3::zeros(), [1.0; 3]));
+    assert!(matches!(err(&m), ModelError::UnknownNode { id: 7, referenced_by, .. } if referenced_by == "body 'r'"));
+    let mut m = Model::new("refs");
+    let a = m.add_node("a", Vector3::zeros());
+    m.add_rigid_body(rigid("r", a, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
+    m.add_driver("d", DriverTarget::Joint { joint: mbs::JointId(3), coordinate: 0 }, TimeFunction::constant(0.0));
+    assert!(matches!(err(&m), ModelError::UnknownJoint { id: 3, .. }));
+}
+
+#[test]
+fn conflicting_trees_are_refused() {
+    // Two joints into one rigid group.
+    let mut m = Model::new("two parents");
+    let n: Vec<NodeId> = (0..4).map(|i| m.add_node(&format!("n{i}"), Vector3::new(i as f64, 0.0, 0.0))).collect();
+    let p = m.add_node("p", Vector3::new(1.0, 0.0, 0.0));
+    let q = m.add_node("q", Vector3::new(2.0, 0.0, 0.0));
+    for &k in &n {
+        m.add_rigid_body(rigid(&format!("b{}", k.0), k, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
+    }
+    m.add_rigid_body(rigid("pq", p, vec![q], 1.0, Vector3::zeros(), [1.0; 3]));
+    m.add_joint("j1", n[1], p, JointKind::Spherical);
+    m.add_joint("j2", n[2], q, JointKind::Spherical);
+    assert!(matches!(err(&m), ModelError::TwoParentJoints { .. }));
+    // A support on a joint child.
+    let mut m = Model::new("support on child");
+    let a = m.add_node("a", Vector3::zeros());
+    let b = m.add_node("b", Vector3::zeros());
+    m.add_rigid_body(rigid("ra", a, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
+    m.add_rigid_body(rigid("rb", b, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
+    m.add_joint("j", a, b, JointKind::Spherical);
+    m.add_support(Support::pin(b));
+    assert!(matches!(err(&m), ModelError::SupportOnDependentNode { node, joint } if node == "b" && joint == "j"));
+    m.supports.clear();
+    m.add_support(Support::pin(a));
+    m.add_support(Support::clamp(a));
+    assert!(matches!(err(&m), ModelError::DuplicateSupport { count: 2, .. }));
+}
+
+#[test]
+fn geometry_mismatches_are_refused() {
+    let mut m = Model::new("mismatch");
+    let a = m.add_node("a", Vector3::zeros());
+    let b = m.add_node("b", Vector3::new(1.1, 0.0, 0.0));
+    let body = beam_body("beam", Vector3::zeros(), Vector3::new(1.0, 0.0, 0.0), 3, 0.02, 2e11, 7800.0, ModeSelection::StaticOnly);
+    m.add_flexible_body(body, vec![a, b], Isometry3::identity(), FrameChoice::CenterOfMass, MassVariant::Exact);
+    assert!(matches!(err(&m), ModelError::InterfaceMismatch { interface: 1, .. }));
+    let mut m = Model::new("apart");
+    let a = m.add_node("a", Vector3::zeros());
+    let b = m.add_node("b", Vector3::new(0.1, 0.0, 0.0));
+    m.add_support(Support::clamp(a));
+    m.add_joint("hinge", a, b, JointKind::Revolute { axis: Vector3::z() });
+    m.add_rigid_body(rigid("r", b, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
+    assert!(matches!(err(&m), ModelError::JointNodesApart { .. }));
+}
+
+#[test]
+fn invalid_drivers_are_refused() {
+    let mut m = Model::new("driver");
+    let a = m.add_node("a", Vector3::zeros());
+    m.add_rigid_body(rigid("r", a, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
+    m.add_driver("spin", DriverTarget::NodeRotation { node: a }, TimeFunction::constant(1.0));
+    assert!(matches!(err(&m), ModelError::InvalidDriver { .. }));
+    m.drivers.clear();
+    m.add_support(Support::clamp(a));
+    m.add_driver("push", DriverTarget::NodeTranslation { node: a, component: 0 }, TimeFunction::constant(1.0));
+    assert!(matches!(err(&m), ModelError::InvalidDriver { .. }));
+}

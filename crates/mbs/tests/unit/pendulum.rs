@@ -1,0 +1,102 @@
+//! Rigid pendulum on a revolute joint under gravity.
+
+use crate::fixtures::pendulum;
+use mbs::{solve_dynamic, DynamicSettings, InitialCondition, SensorKind, System};
+use std::f64::consts::PI;
+
+const G: f64 = 9.81;
+
+/// Complete elliptic integral of the first kind, $K(k) = \pi/(2\,\mathrm{AGM}(1, \sqrt{1-k^2}))$.
+fn elliptic_k(k: f64) -> f64 {
+    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
+    for _ in 0..40 {
+        let (an, bn) = (0.5 * (a + b), (a * b).sqrt());
+        a = an;
+        b = bn;
+    }
+    PI / (2.0 * a)
+}
+
+/// Angle history of the pendulum released from rest at `theta0`.
+fn run(theta0: f64, h: f64, end: f64, rho: f64) -> (Vec<f64>, Vec<f64>) {
+    let (mut model, j) = pendulum(1.0, 1.0, 0.01);
+    model.initial.push(InitialCondition::JointValue { joint: j, coordinate: 0, value: theta0 });
+    model.add_sensor("theta", SensorKind::JointCoordinate { joint: j, coordinate: 0 });
+    let sys = System::new(&model).unwrap();
+    let mut settings = DynamicSettings::new(h, end, rho);
+    settings.tolerance = 1e-12;
+    let traj = solve_dynamic(&sys, sys.initial_state(), &settings).unwrap();
+    (traj.sensors.times.clone(), traj.sensors.column("theta", 0).unwrap())
+}
+
+/// Times of the downward zero crossings of theta (linear interpolation: theta'' = 0 at theta
+/// = 0, so its error is third order in the step).
+fn down_crossings(t: &[f64], x: &[f64]) -> Vec<f64> {
+    (1..x.len()).filter(|&i| x[i - 1] > 0.0 && x[i] <= 0.0).map(|i| t[i - 1] + (t[i] - t[i - 1]) * x[i - 1] / (x[i - 1] - x[i])).collect()
+}
+
+/// I_O / (m g d) of the fixture pendulum (m = 1, d = 1, I_G = 0.01).
+fn ratio() -> f64 {
+    (0.01 + 1.0) / G
+}
+
+#[test]
+fn small_amplitude_period() {
+    let T0 = 2.0 * PI * ratio().sqrt();
+    let (t, x) = run(1e-3, T0 / 400.0, 2.6 * T0, 1.0);
+    let c = down_crossings(&t, &x);
+    let T = c[1] - c[0];
+    // Generalized-alpha (rho_inf = 1, trapezoidal) lengthens the period by (w h)^2/12 = 2.1e-5
+    // at 400 steps per period; the finite-amplitude correction theta0^2/16 is 6e-8.
+    let rel = (T - T0).abs() / T0;
+    eprintln!("small amplitude: T = {T:.9}, exact {T0:.9}, relative error {rel:.3e}");
+    assert!(rel < 5e-5, "period {T} vs {T0}");
+}
+
+#[test]
+fn large_amplitude_period_is_the_elliptic_one() {
+    let theta0: f64 = 2.0;
+    let T = 4.0 * ratio().sqrt() * elliptic_k((theta0 / 2.0).sin());
+    let (t, x) = run(theta0, T / 1000.0, 2.6 * T, 1.0);
+    let c = down_crossings(&t, &x);
+    let Tn = c[1] - c[0];
+    let rel = (Tn - T).abs() / T;
+    eprintln!("amplitude 2 rad: T = {Tn:.9}, elliptic {T:.9}, relative error {rel:.3e}");
+    // Period error of the trapezoidal rule at 1000 steps per period: ~(2 pi / 1000)^2 / 12 =
+    // 3e-6 for the linear part; the nonlinear motion is slower near the top, so allow 2e-5.
+    assert!(rel < 2e-5);
+}
+
+#[test]
+fn second_order_in_time() {
+    // theta(1 s) from rest at 1 rad with rho_inf = 0.8, against a reference at h = 1/3200.
+    let end = 1.0;
+    let last = |h: f64| *run(1.0, h, end, 0.8).1.last().unwrap();
+    let reference = last(end / 3200.0);
+    let hs = [end / 25.0, end / 50.0, end / 100.0, end / 200.0];
+    let errs: Vec<f64> = hs.iter().map(|&h| (last(h) - reference).abs()).collect();
+    let (lx, ly): (Vec<f64>, Vec<f64>) = hs.iter().zip(&errs).map(|(h, e)| (h.ln(), e.ln())).unzip();
+    let (mx, my) = (lx.iter().sum::<f64>() / 4.0, ly.iter().sum::<f64>() / 4.0);
+    let slope = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>() / lx.iter().map(|x| (x - mx) * (x - mx)).sum::<f64>();
+    eprintln!("errors {errs:?}, fitted order {slope:.3}");
+    assert!(slope >= 1.8, "order {slope}");
+}
+
+#[test]
+fn driver_effort_is_the_inverse_dynamics_torque() {
+    // A driven pendulum: the driver supplies I_O theta'' + m g d sin(theta) (about z).
+    let (mut model, j) = pendulum(1.0, 1.0, 0.01);
+    let (a, w) = (0.8, 2.5);
+    let d = model.add_driver("drive", mbs::DriverTarget::Joint { joint: j, coordinate: 0 }, mbs::TimeFunction::Sine { offset: 0.0, amplitude: a, omega: w, phase: 0.3 });
+    model.add_sensor("torque", SensorKind::DriverEffort { driver: d });
+    let sys = System::new(&model).unwrap();
+    let traj = solve_dynamic(&sys, sys.initial_state(), &DynamicSettings::new(0.01, 1.0, 0.8)).unwrap();
+    let torque = traj.sensors.column("torque", 0).unwrap();
+    for (t, q) in traj.sensors.times.iter().zip(&torque) {
+        let th = a * (w * t + 0.3).sin();
+        let thdd = -a * w * w * (w * t + 0.3).sin();
+        let exact = 1.01 * thdd + G * th.sin();
+        // No unknowns: the effort is evaluated exactly at each step (round-off only).
+        assert!((q - exact).abs() < 1e-10 * (1.0 + exact.abs()), "t = {t}: {q} vs {exact}");
+    }
+}
