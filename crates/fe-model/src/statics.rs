@@ -116,14 +116,40 @@ pub fn solve_static(model: &FeModel, loads: &[NodalLoad]) -> Result<StaticSoluti
     }
     let displacements = dofs.expand(&u_f);
     let f_int = internal_forces(model, &displacements)?;
+    let reactions = support_reactions(model, &dofs, &f_int, &f_full);
+    Ok(StaticSolution {
+        displacements,
+        reactions,
+        relative_residual,
+    })
+}
+
+/// Reactions at the supported dofs: the out-of-balance force $\mathbf f_{int} - \mathbf f_{ext}$
+/// of every slot, with the residual of each dependent slot carried to the dofs its
+/// constraint names ($\mathbf T^T$ applied to the residual, supported dofs kept). A support
+/// on a spider's interface node thus receives the force its spider carries.
+pub fn support_reactions(
+    model: &FeModel,
+    dofs: &DofMap,
+    f_int: &[[f64; 6]],
+    f_ext: &[[f64; 6]],
+) -> Vec<(NodeId, [f64; 6])> {
+    let mut residual: Vec<[f64; 6]> = f_int.iter().zip(f_ext).map(|(a, b)| std::array::from_fn(|k| a[k] - b[k])).collect();
+    for c in &model.constraints {
+        let (node, k) = (c.dependent.0.index(), c.dependent.1 as usize);
+        let r = residual[node][k];
+        for &(term_node, term_k, coef) in &c.terms {
+            residual[term_node.index()][term_k as usize] += coef * r;
+        }
+    }
     let mut reactions = Vec::new();
-    for node in 0..model.node_count() {
+    for (node, r_node) in residual.iter().enumerate() {
         let id = NodeId(node as u32);
         let mut r = [0.0; 6];
         let mut any = false;
         for k in 0..6 {
             if dofs.status(id, k) == DofStatus::Supported {
-                r[k] = f_int[node][k] - f_full[node][k];
+                r[k] = r_node[k];
                 any = true;
             }
         }
@@ -131,11 +157,7 @@ pub fn solve_static(model: &FeModel, loads: &[NodalLoad]) -> Result<StaticSoluti
             reactions.push((id, r));
         }
     }
-    Ok(StaticSolution {
-        displacements,
-        reactions,
-        relative_residual,
-    })
+    reactions
 }
 
 /// Solves $\mathbf K \mathbf u = \mathbf f$ on the free dofs.

@@ -312,3 +312,27 @@ fn spiders_on_adjacent_faces_share_their_edge() {
         assert!((translation(&sol.displacements[s.index()]) - rigid).norm() <= 1e-12 * scale);
     }
 }
+
+/// Reactions at a support on an RBE2 interface node balance the load: the force reaches the
+/// support through the spider's constraints, not through an element.
+#[test]
+fn reactions_at_a_spider_support_balance_the_load() {
+    let mesh = box_mesh(CellKind::Hex8, [2.0, 0.5, 0.5], [4, 1, 1]).unwrap();
+    let mut model = solid_model(mesh, material(), MassKind::Consistent).unwrap();
+    let clamp = add_interface_on_set(&mut model, "clamp", "x0", None, SpiderKind::Rbe2).unwrap();
+    let tip = add_interface_on_set(&mut model, "tip", "x1", None, SpiderKind::Rbe3).unwrap();
+    model.add_support(clamp, DofMask::ALL);
+    let F = Vector3::new(3.0, -2.0, 5.0) * 1e3;
+    let s = fe_model::solve_static(&model, &[fe_model::NodalLoad::force(tip, F)]).unwrap();
+    assert_eq!(s.reactions.len(), 1);
+    let (node, r) = s.reactions[0];
+    assert_eq!(node, clamp);
+    let x_clamp = model.mesh.nodes[clamp.index()].coords;
+    let x_tip = model.mesh.nodes[tip.index()].coords;
+    let moment = (x_tip - x_clamp).cross(&F);
+    for k in 0..3 {
+        // Equilibrium of the whole body: round-off of the solve, relative to the load.
+        assert!((r[k] + F[k]).abs() < 1e-8 * F.norm(), "force {k}: {r:?}");
+        assert!((r[3 + k] + moment[k]).abs() < 1e-8 * moment.norm(), "moment {k}: {r:?}");
+    }
+}
