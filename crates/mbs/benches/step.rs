@@ -31,17 +31,28 @@ fn time_steps(sys: &System, h: f64, warm: usize, steps: usize) -> (f64, f64) {
     for _ in 0..steps {
         iterations += it.step().expect("step").residuals.len() - 1;
     }
-    (start.elapsed().as_secs_f64() * 1e6 / steps as f64, iterations as f64 / steps as f64)
+    (
+        start.elapsed().as_secs_f64() * 1e6 / steps as f64,
+        iterations as f64 / steps as f64,
+    )
 }
 
 /// A cantilever of `n` identical 0.1 m steel beam superelements along x under gravity.
 fn chain(n: usize, body: &reduction::ReducedBody) -> Model {
     let mut m = Model::new("chain");
-    let nodes: Vec<_> = (0..=n).map(|i| m.add_node(&format!("n{i}"), Vector3::new(0.1 * i as f64, 0.0, 0.0))).collect();
+    let nodes: Vec<_> = (0..=n)
+        .map(|i| m.add_node(&format!("n{i}"), Vector3::new(0.1 * i as f64, 0.0, 0.0)))
+        .collect();
     for i in 0..n {
         let mut b = body.clone();
         b.name = format!("s{i}");
-        m.add_flexible_body(b, vec![nodes[i], nodes[i + 1]], Isometry3::translation(0.1 * i as f64, 0.0, 0.0), FrameChoice::CenterOfMass, MassVariant::Exact);
+        m.add_flexible_body(
+            b,
+            vec![nodes[i], nodes[i + 1]],
+            Isometry3::translation(0.1 * i as f64, 0.0, 0.0),
+            FrameChoice::CenterOfMass,
+            MassVariant::Exact,
+        );
     }
     m.add_support(Support::clamp(nodes[0]));
     m.gravity = Vector3::new(0.0, -9.81, 0.0);
@@ -57,10 +68,22 @@ fn main() {
         let sys = System::new(&model).unwrap();
         let h = 2.0 * std::f64::consts::PI / 150.0 / 400.0;
         let (us, its) = time_steps(&sys, h, 20, if quick { 10 } else { 200 });
-        println!("  N = {n:3}: {:5} unknowns, {us:10.1} µs/step, {its:.2} iterations/step", sys.n_dof());
+        println!(
+            "  N = {n:3}: {:5} unknowns, {us:10.1} µs/step, {its:.2} iterations/step",
+            sys.n_dof()
+        );
     }
     println!("cantilever chain of N superelements (static modes), gravity, h = 1 ms:");
-    let body = fixtures::beam_body("segment", Vector3::zeros(), Vector3::new(0.1, 0.0, 0.0), 3, 0.01, 2.1e11, 7800.0, ModeSelection::StaticOnly);
+    let body = fixtures::beam_body(
+        "segment",
+        Vector3::zeros(),
+        Vector3::new(0.1, 0.0, 0.0),
+        3,
+        0.01,
+        2.1e11,
+        7800.0,
+        ModeSelection::StaticOnly,
+    );
     let max = if quick { 64 } else { 512 };
     let mut n = 1;
     while n <= max {

@@ -96,7 +96,12 @@ impl FlexibleElement {
     pub(crate) fn body_state(&self, motions: &[NodeMotion], eta: &[f64], eta_dot: &[f64], frame: Frame) -> BodyState {
         BodyState {
             r: self.nodes.iter().map(|&n| motions[n].r).collect(),
-            R: self.nodes.iter().zip(&self.offsets).map(|(&n, C)| motions[n].R * C).collect(),
+            R: self
+                .nodes
+                .iter()
+                .zip(&self.offsets)
+                .map(|(&n, C)| motions[n].R * C)
+                .collect(),
             v: self.nodes.iter().map(|&n| motions[n].v).collect(),
             omega: self.nodes.iter().map(|&n| motions[n].omega).collect(),
             eta: eta.to_vec(),
@@ -121,7 +126,11 @@ impl FlexibleElement {
             acc.extend_from_slice(motions[n].alpha.as_slice());
         }
         acc.extend_from_slice(eta_dd);
-        let ev = if tangents { self.se.evaluate(state, &acc, gravity)? } else { self.se.forces(state, &acc, gravity)? };
+        let ev = if tangents {
+            self.se.evaluate(state, &acc, gravity)?
+        } else {
+            self.se.forces(state, &acc, gravity)?
+        };
         let internal: Vec<f64> = ev.f_elastic.iter().zip(&ev.f_damping).map(|(a, b)| a + b).collect();
         Ok(ElementOutput {
             residual: ev.residual,
@@ -139,7 +148,6 @@ impl FlexibleElement {
 /// Rigid-body mass data in the reference node's axes.
 #[derive(Clone, Debug)]
 pub(crate) struct RigidElement {
-    pub body: usize,
     pub node: usize,
     pub mass: f64,
     /// Centre of mass from the node, node axes.
@@ -163,9 +171,9 @@ pub(crate) struct RigidElement {
 /// $\delta\mathbf I_G = \widetilde{\delta\boldsymbol\pi}\mathbf I_G - \mathbf I_G\widetilde{\delta\boldsymbol\pi}$, so with
 /// $\mathbf A_b = -(\tilde{\boldsymbol\alpha} + \tilde{\boldsymbol\omega}\tilde{\boldsymbol\omega})\tilde{\mathbf b}$:
 /// $\partial\mathbf F/\partial\boldsymbol\pi = m\mathbf A_b$ and $\partial\mathbf r_m/\partial\boldsymbol\pi =
-/// \tilde{\mathbf F}\tilde{\mathbf b} + m\tilde{\mathbf b}\mathbf A_b - \widetilde{\mathbf I_G\boldsymbol\alpha} + \mathbf I_G\tilde{\boldsymbol\alpha}
-/// + \tilde{\boldsymbol\omega}(\mathbf I_G\tilde{\boldsymbol\omega} - \widetilde{\mathbf I_G\boldsymbol\omega})$; nothing depends
-/// on $\mathbf r$ or $\mathbf v$. Checked by `tests/unit/elements.rs::rigid_body_tangents_match_fd`.
+/// \tilde{\mathbf F}\tilde{\mathbf b} + m\tilde{\mathbf b}\mathbf A_b - \widetilde{\mathbf I_G\boldsymbol\alpha} + \mathbf I_G\tilde{\boldsymbol\alpha} +
+/// \tilde{\boldsymbol\omega}(\mathbf I_G\tilde{\boldsymbol\omega} - \widetilde{\mathbf I_G\boldsymbol\omega})$; nothing depends
+/// on $\mathbf r$ or $\mathbf v$. Checked, assembled, by `tests/unit/tangent.rs` (rigid chain and mixed model).
 pub(crate) fn rigid_element(e: &RigidElement, m: &NodeMotion, gravity: &Vector3<f64>, tangents: bool) -> ElementOutput {
     let mut out = ElementOutput::zeros(6, tangents);
     let R = m.R.to_rotation_matrix();
@@ -234,8 +242,13 @@ pub(crate) struct SpringElement {
 /// $\partial(f\mathbf e)/\partial\mathbf x_b = \mathbf e(k\mathbf e + c\mathbf P\Delta\mathbf v/l)^T + f\mathbf P/l$ and
 /// $\partial(f\mathbf e)/\partial\mathbf v_b = c\,\mathbf e\mathbf e^T$; $a$ enters with the opposite sign.
 /// Ports: $a$ (6 rows), then $b$ (6 rows) when $b$ is a node. Checked by
-/// `tests/unit/elements.rs::spring_tangents_match_fd`.
-pub(crate) fn spring_element(s: &SpringElement, ma: &NodeMotion, mb: Option<&NodeMotion>, tangents: bool) -> (ElementOutput, f64) {
+/// `tests/unit/tangent.rs::flexible_mixed_tangents_match_fd`.
+pub(crate) fn spring_element(
+    s: &SpringElement,
+    ma: &NodeMotion,
+    mb: Option<&NodeMotion>,
+    tangents: bool,
+) -> (ElementOutput, f64) {
     let n = if mb.is_some() { 12 } else { 6 };
     let mut out = ElementOutput::zeros(n, tangents);
     let (xb, vb) = mb.map_or((s.ground, Vector3::zeros()), |m| (m.r, m.v));

@@ -46,11 +46,11 @@
 //!
 //! The equations are $\mathbf F = \mathbf J^T\mathbf r(\mathbf x(\mathbf q), \mathbf V(\mathbf q,
 //! \dot{\mathbf q}), \mathbf A(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q})) = 0$ with node residuals
-//! $\mathbf r$ (brief §5: $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q}
-//! + \mathbf Q_v - \mathbf Q)$). Node variations are $\delta\mathbf x_c = \mathbf J_c\delta\mathbf q$, so
+//! $\mathbf r$ (brief §5: $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q} +
+//! \mathbf Q_v - \mathbf Q)$). Node variations are $\delta\mathbf x_c = \mathbf J_c\delta\mathbf q$, so
 //!
-//! $$\frac{\partial\mathbf F}{\partial\mathbf q} = \mathbf G_r + \mathbf J^T\Big(\mathbf K_t\mathbf J
-//! + \mathbf C_t\frac{\partial\mathbf V}{\partial\mathbf q} + \mathbf M\frac{\partial\mathbf A}{\partial\mathbf q}\Big),
+//! $$\frac{\partial\mathbf F}{\partial\mathbf q} = \mathbf G_r + \mathbf J^T\Big(\mathbf K_t\mathbf J +
+//! \mathbf C_t\frac{\partial\mathbf V}{\partial\mathbf q} + \mathbf M\frac{\partial\mathbf A}{\partial\mathbf q}\Big),
 //! \quad \frac{\partial\mathbf F}{\partial\dot{\mathbf q}} = \mathbf J^T\Big(\mathbf C_t\mathbf J +
 //! \mathbf M\frac{\partial\mathbf A}{\partial\dot{\mathbf q}}\Big),\quad
 //! \frac{\partial\mathbf F}{\partial\ddot{\mathbf q}} = \mathbf J^T\mathbf M\mathbf J,$$
@@ -87,24 +87,36 @@ pub(crate) enum Slot {
 /// operation's coordinate among the node's columns.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) enum Op {
-    Translate { axis: Vector3<f64>, coord: usize, col: usize },
-    Rotate { axis: Vector3<f64>, coord: usize, col: usize },
-    Offset { d: Vector3<f64>, C: UnitQuaternion<f64> },
-    FreeRotation { rot: usize, col: usize },
+    Translate {
+        axis: Vector3<f64>,
+        coord: usize,
+        col: usize,
+    },
+    Rotate {
+        axis: Vector3<f64>,
+        coord: usize,
+        col: usize,
+    },
+    Offset {
+        d: Vector3<f64>,
+        C: UnitQuaternion<f64>,
+    },
+    FreeRotation {
+        rot: usize,
+        col: usize,
+    },
 }
 
 /// A scalar coordinate.
 #[derive(Clone, Debug)]
 pub(crate) struct Scalar {
     pub slot: Slot,
-    pub label: String,
 }
 
 /// An SO(3) coordinate; its three velocity components are `dof..dof + 3`.
 #[derive(Clone, Debug)]
 pub(crate) struct Rotation {
     pub dof: usize,
-    pub label: String,
 }
 
 /// How one node is reached.
@@ -173,7 +185,16 @@ pub struct Motion {
 impl Motion {
     pub(crate) fn ground() -> Self {
         let z = Vector3::zeros();
-        Self { p: z, R: UnitQuaternion::identity(), v: z, w: z, a: z, al: z, Jv: Vec::new(), Jw: Vec::new() }
+        Self {
+            p: z,
+            R: UnitQuaternion::identity(),
+            v: z,
+            w: z,
+            a: z,
+            al: z,
+            Jv: Vec::new(),
+            Jw: Vec::new(),
+        }
     }
 
     /// Column $i$ of $\mathbf J_c$ as $[\mathbf J^v; \mathbf J^\omega]$.
@@ -202,7 +223,16 @@ impl Tangent {
     fn zero(ncols: usize, with_J: bool) -> Self {
         let z = Vector3::zeros();
         let n = if with_J { ncols } else { 0 };
-        Self { dp: z, dpi: z, dv: z, dw: z, da: z, dal: z, dJv: vec![z; n], dJw: vec![z; n] }
+        Self {
+            dp: z,
+            dpi: z,
+            dv: z,
+            dw: z,
+            da: z,
+            dal: z,
+            dJv: vec![z; n],
+            dJw: vec![z; n],
+        }
     }
 }
 
@@ -336,7 +366,13 @@ fn apply_tangent(op: &Op, m: &Motion, t: &mut Tangent, dir: Dir, map: &Coordinat
             }
         }
         Op::FreeRotation { col, .. } => {
-            let e = |k: usize| if k >= *col && k < col + 3 { Vector3::ith(k - col, 1.0) } else { Vector3::zeros() };
+            let e = |k: usize| {
+                if k >= *col && k < col + 3 {
+                    Vector3::ith(k - col, 1.0)
+                } else {
+                    Vector3::zeros()
+                }
+            };
             match dir {
                 Dir::Position(k) => {
                     t.dpi = e(k);
@@ -411,7 +447,10 @@ impl CoordinateMap {
             let chain = &self.chains[c];
             let ncols = chain.cols.len();
             let unknown: Vec<usize> = (0..ncols).filter(|&k| chain.cols[k] < self.n_dof).collect();
-            let mut d = NodeDerivatives { unknown: unknown.clone(), ..Default::default() };
+            let mut d = NodeDerivatives {
+                unknown: unknown.clone(),
+                ..Default::default()
+            };
             if chain.root {
                 // J constant: a position variation moves the node along its column, a rate
                 // variation changes its velocity by the column; nothing else.
@@ -476,7 +515,13 @@ impl CoordinateMap {
 
     /// $(\mathbf G_r)_{ik} \mathrel{+}= \mathbf r_c\cdot\partial\mathbf J_{c,i}/\partial q_k$ for node `c` with
     /// residual `r`: calls `add(i, k, value)` with `i`, `k` positions in `d.unknown`.
-    pub(crate) fn geometric_term(&self, c: usize, d: &NodeDerivatives, r: &[f64; 6], mut add: impl FnMut(usize, usize, f64)) {
+    pub(crate) fn geometric_term(
+        &self,
+        c: usize,
+        d: &NodeDerivatives,
+        r: &[f64; 6],
+        mut add: impl FnMut(usize, usize, f64),
+    ) {
         if self.chains[c].root {
             return;
         }

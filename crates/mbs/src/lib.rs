@@ -71,8 +71,8 @@ pub use dynamic_solver::{solve_dynamic, AlphaParameters, DynamicSettings, Integr
 pub use error::{Incomplete, ModelError, SolveError};
 pub use model::{
     Body, BodyId, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind, JointSpring, Load,
-    LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor, SensorKind, Spring, Support,
-    TranslationSupport,
+    LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor, SensorKind, Spring,
+    Support, TranslationSupport,
 };
 pub use node::NodeMotion;
 pub use sensors::{Energies, SensorRecord};

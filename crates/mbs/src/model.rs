@@ -61,7 +61,7 @@ pub struct Node {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Body {
     /// An AIC-FFR superelement ([`superelement::Superelement`]).
-    Flexible(FlexibleBody),
+    Flexible(Box<FlexibleBody>),
     /// A rigid body: its nodes move rigidly with its reference node.
     Rigid(RigidBody),
 }
@@ -143,11 +143,17 @@ pub enum TranslationSupport {
     Free,
     Fixed,
     /// `fixed[i]` removes the translation along inertial axis `i`.
-    Components { fixed: [bool; 3] },
+    Components {
+        fixed: [bool; 3],
+    },
     /// A slider along a fixed line through the initial position.
-    Line { direction: Vector3<f64> },
+    Line {
+        direction: Vector3<f64>,
+    },
     /// Motion in a fixed plane through the initial position.
-    Plane { normal: Vector3<f64> },
+    Plane {
+        normal: Vector3<f64>,
+    },
 }
 
 /// Which rotations of a supported node are removed.
@@ -157,7 +163,9 @@ pub enum RotationSupport {
     Fixed,
     /// Rotation about a fixed inertial axis only (a revolute joint to the ground). Removing a
     /// single rotation component is not offered: it is not integrable (not a coordinate).
-    Axis { axis: Vector3<f64> },
+    Axis {
+        axis: Vector3<f64>,
+    },
 }
 
 /// A support: coordinates of an independent node removed (ground, clamp, pin, slider).
@@ -171,19 +179,35 @@ pub struct Support {
 impl Support {
     /// All six dofs removed.
     pub fn clamp(node: NodeId) -> Self {
-        Self { node, translation: TranslationSupport::Fixed, rotation: RotationSupport::Fixed }
+        Self {
+            node,
+            translation: TranslationSupport::Fixed,
+            rotation: RotationSupport::Fixed,
+        }
     }
     /// Translations removed, rotation free.
     pub fn pin(node: NodeId) -> Self {
-        Self { node, translation: TranslationSupport::Fixed, rotation: RotationSupport::Free }
+        Self {
+            node,
+            translation: TranslationSupport::Fixed,
+            rotation: RotationSupport::Free,
+        }
     }
     /// Translations removed, rotation about `axis` only.
     pub fn hinge(node: NodeId, axis: Vector3<f64>) -> Self {
-        Self { node, translation: TranslationSupport::Fixed, rotation: RotationSupport::Axis { axis } }
+        Self {
+            node,
+            translation: TranslationSupport::Fixed,
+            rotation: RotationSupport::Axis { axis },
+        }
     }
     /// A slider along `direction` with its rotation removed.
     pub fn slider(node: NodeId, direction: Vector3<f64>) -> Self {
-        Self { node, translation: TranslationSupport::Line { direction }, rotation: RotationSupport::Fixed }
+        Self {
+            node,
+            translation: TranslationSupport::Line { direction },
+            rotation: RotationSupport::Fixed,
+        }
     }
 }
 
@@ -305,7 +329,12 @@ pub enum SensorKind {
     /// Distance of `node` from the line through `a` and `b` (1): the midpoint deflection of a
     /// rod relative to its chord. With `normal`, signed: $((\mathbf b - \mathbf a)/|\mathbf b - \mathbf a|
     /// \times (\mathbf p - \mathbf a))\cdot\mathbf n$.
-    LineDistance { node: NodeId, a: NodeId, b: NodeId, normal: Option<Vector3<f64>> },
+    LineDistance {
+        node: NodeId,
+        a: NodeId,
+        b: NodeId,
+        normal: Option<Vector3<f64>>,
+    },
     /// A scalar joint coordinate (1).
     JointCoordinate { joint: JointId, coordinate: usize },
     /// Its rate (1).
@@ -340,14 +369,29 @@ pub struct Sensor {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum InitialCondition {
     /// A scalar joint coordinate's value (moves the child and everything after it).
-    JointValue { joint: JointId, coordinate: usize, value: f64 },
+    JointValue {
+        joint: JointId,
+        coordinate: usize,
+        value: f64,
+    },
     /// A scalar joint coordinate's rate.
-    JointRate { joint: JointId, coordinate: usize, rate: f64 },
+    JointRate {
+        joint: JointId,
+        coordinate: usize,
+        rate: f64,
+    },
     /// Velocity of an independent node (its free components).
-    NodeVelocity { node: NodeId, velocity: Vector3<f64>, angular_velocity: Vector3<f64> },
+    NodeVelocity {
+        node: NodeId,
+        velocity: Vector3<f64>,
+        angular_velocity: Vector3<f64>,
+    },
     /// A rigid motion of the whole model, $\mathbf v = \mathbf v_0 + \boldsymbol\omega\times\mathbf r$,
     /// given to every independent node (free components only).
-    RigidMotion { velocity: Vector3<f64>, angular_velocity: Vector3<f64> },
+    RigidMotion {
+        velocity: Vector3<f64>,
+        angular_velocity: Vector3<f64>,
+    },
 }
 
 /// The multibody model.
@@ -371,7 +415,10 @@ pub struct Model {
 
 impl Model {
     pub fn new(name: &str) -> Self {
-        Self { name: name.into(), ..Default::default() }
+        Self {
+            name: name.into(),
+            ..Default::default()
+        }
     }
 
     /// Adds a node with identity orientation.
@@ -379,8 +426,17 @@ impl Model {
         self.add_node_oriented(name, position, UnitQuaternion::identity())
     }
 
-    pub fn add_node_oriented(&mut self, name: &str, position: Vector3<f64>, orientation: UnitQuaternion<f64>) -> NodeId {
-        self.nodes.push(Node { name: name.into(), position, orientation });
+    pub fn add_node_oriented(
+        &mut self,
+        name: &str,
+        position: Vector3<f64>,
+        orientation: UnitQuaternion<f64>,
+    ) -> NodeId {
+        self.nodes.push(Node {
+            name: name.into(),
+            position,
+            orientation,
+        });
         NodeId(self.nodes.len() as u32 - 1)
     }
 
@@ -399,7 +455,15 @@ impl Model {
         mass: MassVariant,
     ) -> BodyId {
         let name = reduced.name.clone();
-        self.add_body(Body::Flexible(FlexibleBody { name, reduced, nodes, placement, frame, mass, damping: Damping::none() }))
+        self.add_body(Body::Flexible(Box::new(FlexibleBody {
+            name,
+            reduced,
+            nodes,
+            placement,
+            frame,
+            mass,
+            damping: Damping::none(),
+        })))
     }
 
     pub fn add_rigid_body(&mut self, body: RigidBody) -> BodyId {
@@ -407,7 +471,12 @@ impl Model {
     }
 
     pub fn add_joint(&mut self, name: &str, parent: NodeId, child: NodeId, kind: JointKind) -> JointId {
-        self.joints.push(Joint { name: name.into(), parent, child, kind });
+        self.joints.push(Joint {
+            name: name.into(),
+            parent,
+            child,
+            kind,
+        });
         JointId(self.joints.len() as u32 - 1)
     }
 
@@ -417,7 +486,11 @@ impl Model {
 
     /// Adds a driver; returns its index (for [`SensorKind::DriverEffort`]).
     pub fn add_driver(&mut self, name: &str, target: DriverTarget, motion: TimeFunction) -> usize {
-        self.drivers.push(Driver { name: name.into(), target, motion });
+        self.drivers.push(Driver {
+            name: name.into(),
+            target,
+            motion,
+        });
         self.drivers.len() - 1
     }
 
@@ -427,20 +500,30 @@ impl Model {
 
     /// A dead force with a constant time function (scaled by the load factor in statics).
     pub fn add_dead_force(&mut self, node: NodeId, force: Vector3<f64>) {
-        self.add_load(Load { node, kind: LoadKind::Force, axes: LoadAxes::Dead, value: force, time: TimeFunction::constant(1.0) });
+        self.add_load(Load {
+            node,
+            kind: LoadKind::Force,
+            axes: LoadAxes::Dead,
+            value: force,
+            time: TimeFunction::constant(1.0),
+        });
     }
 
     /// A dead moment with a constant time function.
     pub fn add_dead_moment(&mut self, node: NodeId, moment: Vector3<f64>) {
-        self.add_load(Load { node, kind: LoadKind::Moment, axes: LoadAxes::Dead, value: moment, time: TimeFunction::constant(1.0) });
+        self.add_load(Load {
+            node,
+            kind: LoadKind::Moment,
+            axes: LoadAxes::Dead,
+            value: moment,
+            time: TimeFunction::constant(1.0),
+        });
     }
 
     pub fn add_sensor(&mut self, name: &str, kind: SensorKind) {
-        self.sensors.push(Sensor { name: name.into(), kind });
-    }
-
-    /// Node name for messages (or its id when out of range).
-    pub(crate) fn node_name(&self, id: NodeId) -> String {
-        self.nodes.get(id.index()).map(|n| n.name.clone()).unwrap_or_else(|| format!("#{}", id.0))
+        self.sensors.push(Sensor {
+            name: name.into(),
+            kind,
+        });
     }
 }

@@ -19,6 +19,13 @@ pub struct NodeMotion {
 
 impl From<&Motion> for NodeMotion {
     fn from(m: &Motion) -> Self {
-        Self { r: m.p, R: m.R, v: m.v, omega: m.w, a: m.a, alpha: m.al }
+        Self {
+            r: m.p,
+            R: m.R,
+            v: m.v,
+            omega: m.w,
+            a: m.a,
+            alpha: m.al,
+        }
     }
 }

@@ -34,7 +34,12 @@ impl SensorRecord {
     pub fn series(&self, name: &str) -> Option<Vec<Vec<f64>>> {
         let i = self.names.iter().position(|n| n == name)?;
         let start: usize = self.widths[..i].iter().sum();
-        Some(self.rows.iter().map(|r| r[start..start + self.widths[i]].to_vec()).collect())
+        Some(
+            self.rows
+                .iter()
+                .map(|r| r[start..start + self.widths[i]].to_vec())
+                .collect(),
+        )
     }
 
     /// Component `k` of sensor `name` at each time.
@@ -110,11 +115,13 @@ impl System {
         for (i, f) in self.flexible.iter().enumerate() {
             let bs = self.body_state(i, state, &nodes);
             let n = f.se.n_coordinates();
-            let ev = f.se.forces(&bs, &vec![0.0; n], &Vector3::zeros()).map_err(|source| SolveError::Body {
-                body: self.model.bodies[f.body].name().to_string(),
-                t: state.time,
-                source,
-            })?;
+            let ev =
+                f.se.forces(&bs, &vec![0.0; n], &Vector3::zeros())
+                    .map_err(|source| SolveError::Body {
+                        body: self.model.bodies[f.body].name().to_string(),
+                        t: state.time,
+                        source,
+                    })?;
             let qd = bs.velocity_vector();
             let p: Vec<f64> = (0..n).map(|r| (0..n).map(|c| ev.mass[(r, c)] * qd[c]).sum()).collect();
             for (k, &node) in f.nodes.iter().enumerate() {
@@ -147,7 +154,11 @@ impl System {
         let f = &self.flexible[i];
         let map = &self.topo.map;
         let eta: Vec<f64> = f.modal.iter().map(|&s| state.scalars[s]).collect();
-        let eta_d: Vec<f64> = f.modal.iter().map(|&s| state.velocity[unknown(map.scalars[s].slot)]).collect();
+        let eta_d: Vec<f64> = f
+            .modal
+            .iter()
+            .map(|&s| state.velocity[unknown(map.scalars[s].slot)])
+            .collect();
         f.body_state(nodes, &eta, &eta_d, state.frames[i])
     }
 
@@ -170,7 +181,12 @@ impl System {
                 _ => 1,
             })
             .collect();
-        SensorRecord { names: self.model.sensors.iter().map(|s| s.name.clone()).collect(), widths, times: Vec::new(), rows: Vec::new() }
+        SensorRecord {
+            names: self.model.sensors.iter().map(|s| s.name.clone()).collect(),
+            widths,
+            times: Vec::new(),
+            rows: Vec::new(),
+        }
     }
 
     /// Generalised residual of scalar coordinate `s` (a reaction when prescribed).
@@ -192,9 +208,10 @@ impl System {
         for s in &self.model.sensors {
             match &s.kind {
                 SensorKind::NodePosition { node } => push3(&mut row, nodes[node.index()].r),
-                SensorKind::NodeDisplacement { node } => {
-                    push3(&mut row, nodes[node.index()].r - self.model.nodes[node.index()].position)
-                }
+                SensorKind::NodeDisplacement { node } => push3(
+                    &mut row,
+                    nodes[node.index()].r - self.model.nodes[node.index()].position,
+                ),
                 SensorKind::NodeRotation { node } => {
                     let R = nodes[node.index()].R * self.model.nodes[node.index()].orientation.inverse();
                     push3(&mut row, so3::log(&R))
@@ -262,7 +279,14 @@ impl System {
                         momentum = Some(self.momentum(state)?);
                     }
                     let (L, H) = momentum.unwrap();
-                    push3(&mut row, if matches!(s.kind, SensorKind::LinearMomentum) { L } else { H });
+                    push3(
+                        &mut row,
+                        if matches!(s.kind, SensorKind::LinearMomentum) {
+                            L
+                        } else {
+                            H
+                        },
+                    );
                 }
             }
         }

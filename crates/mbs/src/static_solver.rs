@@ -5,7 +5,8 @@
 //! Each load step keeps its residual history $\|\mathbf F\|/f_{scale}$ per iteration, the
 //! evidence that $\hat{\mathbf K}$ is the exact tangent (quadratic convergence near the solution).
 //! A step that fails (no convergence in `max_iterations`, divergence, a singular tangent or a
-//! floating frame that does not converge) is retried with half the increment.
+//! floating frame that does not converge) is retried with half the increment. Each step starts
+//! from the secant predictor $\mathbf q_n\oplus\frac{\Delta\lambda_{n+1}}{\Delta\lambda_n}(\mathbf q_n\ominus\mathbf q_{n-1})$.
 //!
 //! Arc-length continuation (Riks/Crisfield) is not implemented: limit points stop the
 //! analysis with [`SolveError::NotConverged`].
@@ -41,7 +42,14 @@ impl StaticSettings {
     /// The whole load in `steps` equal increments (grown when Newton converges fast).
     pub fn new(steps: usize) -> Self {
         let d = 1.0 / steps.max(1) as f64;
-        Self { tolerance: 1e-10, max_iterations: 25, initial_increment: d, min_increment: 1e-6, max_increment: 1.0, time: 0.0 }
+        Self {
+            tolerance: 1e-10,
+            max_iterations: 25,
+            initial_increment: d,
+            min_increment: 1e-6,
+            max_increment: 1.0,
+            time: 0.0,
+        }
     }
 }
 
@@ -77,8 +85,13 @@ pub(crate) fn newton_static(
     let n = system.n_dof();
     let mut dq = vec![0.0; n];
     for it in 0..=settings.max_iterations {
-        system.evaluate_into(state, lambda, true, ws)?;
-        let norm = ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
+        // Forces alone after a correction; tangents only when another correction is needed.
+        system.evaluate_into(state, lambda, it == 0, ws)?;
+        let mut norm = ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if it > 0 && norm > settings.tolerance * ws.scale + ws.floor && norm.is_finite() {
+            system.evaluate_into(state, lambda, true, ws)?;
+            norm = ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
+        }
         let rel = if ws.scale > 0.0 { norm / ws.scale } else { norm };
         history.push(rel);
         if !rel.is_finite() {
@@ -94,9 +107,11 @@ pub(crate) fn newton_static(
         for i in 0..n {
             dq[i] = -ws.F[i];
         }
-        system
-            .solve(&ws.S, &mut dq)
-            .map_err(|what| SolveError::Singular { t: lambda, step: 0, what: format!("tangent stiffness ({what})") })?;
+        system.solve(&ws.S, &mut dq).map_err(|what| SolveError::Singular {
+            t: lambda,
+            step: 0,
+            what: format!("tangent stiffness ({what})"),
+        })?;
         let base = state.clone();
         system.retract_in_place(state, &base, &dq);
     }
@@ -112,24 +127,46 @@ pub fn solve_static(
     let mut state = start;
     state.time = settings.time;
     let mut ws = system.workspace();
-    let mut sol = StaticSolution { state: state.clone(), steps: Vec::new(), sensors: system.sensor_record(), rejected: Vec::new() };
+    let mut sol = StaticSolution {
+        state: state.clone(),
+        steps: Vec::new(),
+        sensors: system.sensor_record(),
+        rejected: Vec::new(),
+    };
     let fail = |error: SolveError, sol: StaticSolution| Box::new(Incomplete { error, partial: sol });
     if !(settings.initial_increment > 0.0 && settings.min_increment > 0.0 && settings.tolerance > 0.0) {
-        return Err(fail(SolveError::InvalidSettings { what: "increments and tolerance must be positive".into() }, sol));
+        return Err(fail(
+            SolveError::InvalidSettings {
+                what: "increments and tolerance must be positive".into(),
+            },
+            sol,
+        ));
     }
     let mut lambda = 0.0;
     let mut dl = settings.initial_increment.min(settings.max_increment);
     let mut step = 0;
+    // The last converged step (state, load factor) for the secant predictor.
+    let mut previous: Option<(State, f64)> = None;
     while lambda < 1.0 {
         let target = (lambda + dl).min(1.0);
         let saved = state.clone();
+        // Secant predictor: continue the last step's motion in proportion to the new increment.
+        if let Some((prev, l_prev)) = &previous {
+            let ratio = (target - lambda) / (lambda - l_prev);
+            let dq: Vec<f64> = system.difference(&saved, prev).iter().map(|d| d * ratio).collect();
+            system.retract_in_place(&mut state, &saved, &dq);
+        }
         let outcome = newton_static(system, &mut state, target, settings, &mut ws);
         match outcome {
             Ok((history, true)) => {
                 step += 1;
+                previous = Some((saved, lambda));
                 lambda = target;
                 let iterations = history.len() - 1;
-                sol.steps.push(LoadStep { lambda, residuals: history });
+                sol.steps.push(LoadStep {
+                    lambda,
+                    residuals: history,
+                });
                 if let Err(e) = system.record(&state, &ws, &mut sol.sensors) {
                     sol.state = state;
                     return Err(fail(e, sol));
@@ -145,11 +182,22 @@ pub fn solve_static(
                     Ok((h, _)) => {
                         let r = *h.last().unwrap_or(&f64::NAN);
                         let it = h.len().saturating_sub(1);
-                        (h, SolveError::NotConverged { t: target, step: step + 1, residual: r, iterations: it })
+                        (
+                            h,
+                            SolveError::NotConverged {
+                                t: target,
+                                step: step + 1,
+                                residual: r,
+                                iterations: it,
+                            },
+                        )
                     }
                     Err(e) => (Vec::new(), e),
                 };
-                sol.rejected.push(LoadStep { lambda: target, residuals: history });
+                sol.rejected.push(LoadStep {
+                    lambda: target,
+                    residuals: history,
+                });
                 state = saved;
                 dl *= 0.5;
                 if dl < settings.min_increment {

@@ -69,7 +69,8 @@ pub(crate) struct Pattern {
 }
 
 impl Pattern {
-    fn new(n: usize, sets: &[Vec<usize>]) -> SymbolicSparseColMat<usize> {
+    /// The CSC structure holding every $\text{set}\times\text{set}$ block and the diagonal.
+    fn structure(n: usize, sets: &[Vec<usize>]) -> SymbolicSparseColMat<usize> {
         let mut keys: Vec<u64> = Vec::new();
         for s in sets {
             for &c in s {
@@ -228,7 +229,11 @@ impl System {
         let mut rigid = Vec::new();
         // Model size: spread of the nodes, flexible bodies and centres of mass.
         let centroid = model.nodes.iter().map(|n| n.position).sum::<Vector3<f64>>() / model.nodes.len().max(1) as f64;
-        let mut size = model.nodes.iter().map(|n| (n.position - centroid).norm()).fold(1e-3, f64::max);
+        let mut size = model
+            .nodes
+            .iter()
+            .map(|n| (n.position - centroid).norm())
+            .fold(1e-3, f64::max);
         let mut modal_scale = vec![1.0; model.bodies.len()];
         for (bi, body) in model.bodies.iter().enumerate() {
             match body {
@@ -240,9 +245,14 @@ impl System {
                             format!("{} nodes for {N} interfaces", f.nodes.len()),
                         ));
                     }
-                    let se = Superelement::new(&f.reduced, f.frame, f.mass, f.damping.clone())
-                        .map_err(|source| ModelError::Superelement { body: f.name.clone(), source })?;
-                    let pos: Vec<Vector3<f64>> = f.reduced.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
+                    let se = Superelement::new(&f.reduced, f.frame, f.mass, f.damping.clone()).map_err(|source| {
+                        ModelError::Superelement {
+                            body: f.name.clone(),
+                            source,
+                        }
+                    })?;
+                    let pos: Vec<Vector3<f64>> =
+                        f.reduced.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
                     let tolerance = 1e-6 * (1.0 + size_body(&pos));
                     let mut offsets = Vec::with_capacity(N);
                     for k in 0..N {
@@ -263,7 +273,9 @@ impl System {
                     }
                     size = size.max(2.0 * size_body(&pos));
                     let K = se.k_cb();
-                    let k_norm = (0..K.nrows()).map(|i| (0..K.ncols()).map(|j| K[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
+                    let k_norm = (0..K.nrows())
+                        .map(|i| (0..K.ncols()).map(|j| K[(i, j)].abs()).sum::<f64>())
+                        .fold(0.0, f64::max);
                     modal_scale[bi] = size_body(&pos).max(1e-3) * f.reduced.inertia.mass.sqrt();
                     flexible.push(FlexibleElement {
                         body: bi,
@@ -288,7 +300,6 @@ impl System {
                     }
                     size = size.max(r.center_of_mass.norm());
                     rigid.push(RigidElement {
-                        body: bi,
                         node: r.reference.index(),
                         mass: r.mass,
                         c: r.center_of_mass,
@@ -299,18 +310,31 @@ impl System {
         }
         for (i, p) in model.point_masses.iter().enumerate() {
             if !(p.mass >= 0.0 && finite(p.mass)) {
-                return Err(invalid(format!("point mass {i}"), format!("mass must be finite and >= 0, got {}", p.mass)));
+                return Err(invalid(
+                    format!("point mass {i}"),
+                    format!("mass must be finite and >= 0, got {}", p.mass),
+                ));
             }
         }
         let mut springs = Vec::new();
         for s in &model.springs {
             if !(s.stiffness >= 0.0 && s.damping >= 0.0 && finite(s.stiffness) && finite(s.damping)) {
-                return Err(invalid(format!("spring '{}'", s.name), "stiffness and damping must be finite and >= 0".into()));
+                return Err(invalid(
+                    format!("spring '{}'", s.name),
+                    "stiffness and damping must be finite and >= 0".into(),
+                ));
             }
             let xa = model.nodes[s.a.index()].position;
             let xb = s.b.map_or(s.ground_point, |b| model.nodes[b.index()].position);
             let l0 = s.rest_length.unwrap_or((xb - xa).norm());
-            springs.push(SpringElement { a: s.a.index(), b: s.b.map(|b| b.index()), ground: s.ground_point, k: s.stiffness, c: s.damping, l0 });
+            springs.push(SpringElement {
+                a: s.a.index(),
+                b: s.b.map(|b| b.index()),
+                ground: s.ground_point,
+                k: s.stiffness,
+                c: s.damping,
+                l0,
+            });
         }
         let mut loads = Vec::new();
         for (i, l) in model.loads.iter().enumerate() {
@@ -323,12 +347,21 @@ impl System {
                 LoadAxes::Dead => (false, l.value),
                 LoadAxes::Follower => (true, node.orientation.inverse() * l.value),
             };
-            loads.push(LoadElement { node: l.node.index(), moment: l.kind == LoadKind::Moment, follower, value, time });
+            loads.push(LoadElement {
+                node: l.node.index(),
+                moment: l.kind == LoadKind::Moment,
+                follower,
+                value,
+                time,
+            });
         }
         let mut joint_springs = Vec::new();
         for (i, js) in model.joint_springs.iter().enumerate() {
             let s = *topo.joint_scalars[js.joint.index()].get(js.coordinate).ok_or_else(|| {
-                invalid(format!("joint spring {i}"), format!("joint coordinate {} does not exist", js.coordinate))
+                invalid(
+                    format!("joint spring {i}"),
+                    format!("joint coordinate {} does not exist", js.coordinate),
+                )
             })?;
             joint_springs.push((s, js.stiffness, js.damping, js.rest));
         }
@@ -338,7 +371,9 @@ impl System {
             .map(|d| d.motion.compile(&format!("driver '{}'", d.name)))
             .collect::<Result<Vec<_>, _>>()?;
         for c in &model.initial {
-            if let InitialCondition::JointValue { joint, coordinate, .. } | InitialCondition::JointRate { joint, coordinate, .. } = c {
+            if let InitialCondition::JointValue { joint, coordinate, .. }
+            | InitialCondition::JointRate { joint, coordinate, .. } = c
+            {
                 let j = &model.joints[joint.index()];
                 match topo.joint_scalars[joint.index()].get(*coordinate) {
                     Some(&s) if matches!(map.scalars[s].slot, Slot::Unknown(_)) => {}
@@ -357,25 +392,48 @@ impl System {
         let mut elements = Vec::new();
         for (i, f) in flexible.iter().enumerate() {
             let modal = f.modal.iter().map(|&s| unknown(map.scalars[s].slot)).collect();
-            elements.push(ElementRef { kind: ElementKind::Flexible(i), nodes: f.nodes.clone(), modal });
+            elements.push(ElementRef {
+                kind: ElementKind::Flexible(i),
+                nodes: f.nodes.clone(),
+                modal,
+            });
         }
         for (i, r) in rigid.iter().enumerate() {
-            elements.push(ElementRef { kind: ElementKind::Rigid(i), nodes: vec![r.node], modal: vec![] });
+            elements.push(ElementRef {
+                kind: ElementKind::Rigid(i),
+                nodes: vec![r.node],
+                modal: vec![],
+            });
         }
         for p in &model.point_masses {
-            elements.push(ElementRef { kind: ElementKind::PointMass(p.node.index(), p.mass), nodes: vec![p.node.index()], modal: vec![] });
+            elements.push(ElementRef {
+                kind: ElementKind::PointMass(p.node.index(), p.mass),
+                nodes: vec![p.node.index()],
+                modal: vec![],
+            });
         }
         for (i, s) in springs.iter().enumerate() {
             let mut nodes = vec![s.a];
             nodes.extend(s.b);
-            elements.push(ElementRef { kind: ElementKind::Spring(i), nodes, modal: vec![] });
+            elements.push(ElementRef {
+                kind: ElementKind::Spring(i),
+                nodes,
+                modal: vec![],
+            });
         }
         for (i, l) in loads.iter().enumerate() {
-            elements.push(ElementRef { kind: ElementKind::Load(i), nodes: vec![l.node], modal: vec![] });
+            elements.push(ElementRef {
+                kind: ElementKind::Load(i),
+                nodes: vec![l.node],
+                modal: vec![],
+            });
         }
         let n = map.n_dof;
-        let node_unknown: Vec<Vec<usize>> =
-            map.chains.iter().map(|c| c.cols.iter().copied().filter(|&id| id < n).collect()).collect();
+        let node_unknown: Vec<Vec<usize>> = map
+            .chains
+            .iter()
+            .map(|c| c.cols.iter().copied().filter(|&id| id < n).collect())
+            .collect();
         let mut sets: Vec<Vec<usize>> = Vec::new();
         for e in &elements {
             let mut s: Vec<usize> = e.nodes.iter().flat_map(|&a| node_unknown[a].iter().copied()).collect();
@@ -390,9 +448,12 @@ impl System {
                 sets.push(u.clone());
             }
         }
-        let symbolic = Pattern::new(n, &sets);
+        let symbolic = Pattern::structure(n, &sets);
         let lu = if n > 0 {
-            Some(SymbolicLu::try_new(symbolic.as_ref()).map_err(|e| invalid("system".into(), format!("symbolic LU failed: {e:?}")))?)
+            Some(
+                SymbolicLu::try_new(symbolic.as_ref())
+                    .map_err(|e| invalid("system".into(), format!("symbolic LU failed: {e:?}")))?,
+            )
         } else {
             None
         };
@@ -408,9 +469,17 @@ impl System {
         };
         for (e, dofs) in elements.iter().zip(sets.iter().take(n_elem_sets)) {
             let find = |d: usize| dofs.binary_search(&d).expect("dof of the element");
-            let pos = e.nodes.iter().map(|&a| node_unknown[a].iter().map(|&d| find(d)).collect()).collect();
+            let pos = e
+                .nodes
+                .iter()
+                .map(|&a| node_unknown[a].iter().map(|&d| find(d)).collect())
+                .collect();
             let modal_pos = e.modal.iter().map(|&d| find(d)).collect();
-            let slots = dofs.iter().flat_map(|&c| dofs.iter().map(move |&r| (r, c))).map(|(r, c)| pattern.slot(r, c)).collect();
+            let slots = dofs
+                .iter()
+                .flat_map(|&c| dofs.iter().map(move |&r| (r, c)))
+                .map(|(r, c)| pattern.slot(r, c))
+                .collect();
             pattern.elem_dofs.push(dofs.clone());
             pattern.elem_pos.push(pos);
             pattern.elem_modal_pos.push(modal_pos);
@@ -418,7 +487,11 @@ impl System {
         }
         for (c, u) in node_unknown.iter().enumerate() {
             if !map.chains[c].root {
-                pattern.node_slots[c] = u.iter().flat_map(|&k| u.iter().map(move |&i| (i, k))).map(|(i, k)| pattern.slot(i, k)).collect();
+                pattern.node_slots[c] = u
+                    .iter()
+                    .flat_map(|&k| u.iter().map(move |&i| (i, k)))
+                    .map(|(i, k)| pattern.slot(i, k))
+                    .collect();
             }
         }
         pattern.joint_spring_slots = joint_springs
@@ -493,7 +566,10 @@ impl System {
     /// $\max_i |\delta q_i|/s_i$ with the unknowns' scales $s_i$ (model size for lengths, 1 for
     /// angles, body size $\times\sqrt{m}$ for modal coordinates).
     pub fn increment_norm(&self, dq: &[f64]) -> f64 {
-        dq.iter().zip(&self.dof_scale).map(|(d, s)| d.abs() / s).fold(0.0, f64::max)
+        dq.iter()
+            .zip(&self.dof_scale)
+            .map(|(d, s)| d.abs() / s)
+            .fold(0.0, f64::max)
     }
 
     /// Number of stored entries of the sparse system matrices.
@@ -518,10 +594,18 @@ impl System {
         self.apply_drivers(&mut state, &mut pr, &mut pa);
         for c in &self.model.initial {
             match c {
-                InitialCondition::JointValue { joint, coordinate, value } => {
+                InitialCondition::JointValue {
+                    joint,
+                    coordinate,
+                    value,
+                } => {
                     state.scalars[self.topo.joint_scalars[joint.index()][*coordinate]] = *value;
                 }
-                InitialCondition::JointRate { joint, coordinate, rate } => {
+                InitialCondition::JointRate {
+                    joint,
+                    coordinate,
+                    rate,
+                } => {
                     let s = self.topo.joint_scalars[joint.index()][*coordinate];
                     state.velocity[unknown(map.scalars[s].slot)] = *rate;
                 }
@@ -531,10 +615,17 @@ impl System {
         let motions = self.node_motions(&state);
         for c in &self.model.initial {
             match c {
-                InitialCondition::NodeVelocity { node, velocity, angular_velocity } => {
+                InitialCondition::NodeVelocity {
+                    node,
+                    velocity,
+                    angular_velocity,
+                } => {
                     self.set_root_velocity(&mut state, node.index(), velocity, angular_velocity);
                 }
-                InitialCondition::RigidMotion { velocity, angular_velocity } => {
+                InitialCondition::RigidMotion {
+                    velocity,
+                    angular_velocity,
+                } => {
                     for n in 0..self.model.nodes.len() {
                         if self.topo.roots[n].is_some() {
                             let v = velocity + angular_velocity.cross(&motions[n].r);
@@ -576,7 +667,13 @@ impl System {
 
     /// Moves independent node `node` to `position`, `orientation` (free directions only; the
     /// removed ones keep their values). For initial deformations and tests.
-    pub fn set_node_pose(&self, state: &mut State, node: NodeId, position: Vector3<f64>, orientation: UnitQuaternion<f64>) {
+    pub fn set_node_pose(
+        &self,
+        state: &mut State,
+        node: NodeId,
+        position: Vector3<f64>,
+        orientation: UnitQuaternion<f64>,
+    ) {
         let map = &self.topo.map;
         let n = node.index();
         let Some(rc) = &self.topo.roots[n] else { return };
@@ -615,7 +712,9 @@ impl System {
         let s = self.topo.joint_scalars[joint.index()][coordinate];
         match self.topo.map.scalars[s].slot {
             Slot::Unknown(d) => state.velocity[d],
-            Slot::Prescribed(p) => self.topo.map.prescribed[p].0.map_or(0.0, |d| self.drivers[d].eval(state.time).1),
+            Slot::Prescribed(p) => self.topo.map.prescribed[p]
+                .0
+                .map_or(0.0, |d| self.drivers[d].eval(state.time).1),
         }
     }
 
@@ -631,6 +730,23 @@ impl System {
         let mut s = state.clone();
         self.retract_in_place(&mut s, state, dq);
         s
+    }
+
+    /// $\mathbf a \ominus \mathbf b$: the $\delta\mathbf q$ with $\mathbf b\oplus\delta\mathbf q = \mathbf a$
+    /// (rotations $\log(\mathbf R_a\mathbf R_b^T)$).
+    pub fn difference(&self, a: &State, b: &State) -> Vec<f64> {
+        let map = &self.topo.map;
+        let mut d = vec![0.0; map.n_dof];
+        for (i, sc) in map.scalars.iter().enumerate() {
+            if let Slot::Unknown(k) = sc.slot {
+                d[k] = a.scalars[i] - b.scalars[i];
+            }
+        }
+        for (i, r) in map.rotations.iter().enumerate() {
+            let v = so3::log(&(a.rotations[i] * b.rotations[i].inverse()));
+            d[r.dof..r.dof + 3].copy_from_slice(v.as_slice());
+        }
+        d
     }
 
     /// `out` = `base` $\oplus$ `dq` (configuration only).
@@ -758,7 +874,13 @@ impl System {
     /// Evaluates $\mathbf F$, the reactions and (with `tangents`) $\hat{\mathbf M}$, $\hat{\mathbf C}$,
     /// $\hat{\mathbf K}$ at `state`, loads and gravity scaled by `lambda`; updates the state's
     /// floating frames (warm starts) and its driven coordinates.
-    pub(crate) fn evaluate_into(&self, state: &mut State, lambda: f64, tangents: bool, ws: &mut Workspace) -> Result<(), SolveError> {
+    pub(crate) fn evaluate_into(
+        &self,
+        state: &mut State,
+        lambda: f64,
+        tangents: bool,
+        ws: &mut Workspace,
+    ) -> Result<(), SolveError> {
         let map = &self.topo.map;
         let n = map.n_dof;
         self.apply_drivers(state, &mut ws.presc_rate, &mut ws.presc_acc);
@@ -901,14 +1023,23 @@ impl System {
             ElementKind::Flexible(i) => {
                 let f = &self.flexible[*i];
                 let eta: Vec<f64> = f.modal.iter().map(|&s| state.scalars[s]).collect();
-                let eta_d: Vec<f64> = f.modal.iter().map(|&s| state.velocity[unknown(map.scalars[s].slot)]).collect();
-                let eta_dd: Vec<f64> = f.modal.iter().map(|&s| state.acceleration[unknown(map.scalars[s].slot)]).collect();
+                let eta_d: Vec<f64> = f
+                    .modal
+                    .iter()
+                    .map(|&s| state.velocity[unknown(map.scalars[s].slot)])
+                    .collect();
+                let eta_dd: Vec<f64> = f
+                    .modal
+                    .iter()
+                    .map(|&s| state.acceleration[unknown(map.scalars[s].slot)])
+                    .collect();
                 let bs = f.body_state(nodes, &eta, &eta_d, state.frames[*i]);
-                f.element(&bs, &eta_dd, nodes, gravity, tangents).map_err(|source| SolveError::Body {
-                    body: self.model.bodies[f.body].name().to_string(),
-                    t: state.time,
-                    source,
-                })?
+                f.element(&bs, &eta_dd, nodes, gravity, tangents)
+                    .map_err(|source| SolveError::Body {
+                        body: self.model.bodies[f.body].name().to_string(),
+                        t: state.time,
+                        source,
+                    })?
             }
             ElementKind::Rigid(i) => rigid_element(&self.rigid[*i], &nodes[self.rigid[*i].node], gravity, tangents),
             ElementKind::PointMass(node, m) => point_mass_element(*m, &nodes[*node], gravity, tangents),
@@ -927,7 +1058,14 @@ impl System {
     /// (column major), from its port tangents and the node kinematics (module docs of
     /// [`crate::coordinates`]): $\mathbf J^T\mathbf M\mathbf J$, $\mathbf J^T(\mathbf C\mathbf J + \mathbf M\,\partial\mathbf A/\partial\dot{\mathbf q})$,
     /// $\mathbf J^T(\mathbf K\mathbf J + \mathbf C\,\partial\mathbf V/\partial\mathbf q + \mathbf M\,\partial\mathbf A/\partial\mathbf q)$.
-    fn local_matrices(&self, ei: usize, e: &ElementRef, o: &ElementOutput, motions: &[Motion], derivs: &[NodeDerivatives]) -> [Vec<f64>; 3] {
+    fn local_matrices(
+        &self,
+        ei: usize,
+        e: &ElementRef,
+        o: &ElementOutput,
+        motions: &[Motion],
+        derivs: &[NodeDerivatives],
+    ) -> [Vec<f64>; 3] {
         let s = self.pattern.elem_dofs[ei].len();
         let mut Ml = vec![0.0; s * s];
         let mut Cl = vec![0.0; s * s];
@@ -943,12 +1081,17 @@ impl System {
             .enumerate()
             .map(|(ia, &a)| {
                 let d = &derivs[a];
-                d.unknown.iter().enumerate().map(|(u, &k)| (pos[ia][u], motions[a].col(k), d.DV[u], d.DA[u], d.DAd[u])).collect()
+                d.unknown
+                    .iter()
+                    .enumerate()
+                    .map(|(u, &k)| (pos[ia][u], motions[a].col(k), d.DV[u], d.DA[u], d.DAd[u]))
+                    .collect()
             })
             .collect();
         let (M, C, K) = (&o.M, &o.C, &o.K);
         // Row vector of block (row r of the element matrix, port b) times a port column.
-        let rowdot = |A: &Mat<f64>, r: usize, b: usize, x: &[f64; 6]| (0..6).map(|j| A[(r, 6 * b + j)] * x[j]).sum::<f64>();
+        let rowdot =
+            |A: &Mat<f64>, r: usize, b: usize, x: &[f64; 6]| (0..6).map(|j| A[(r, 6 * b + j)] * x[j]).sum::<f64>();
         // Rows: node ports.
         for ia in 0..N {
             for (ib, pb) in ports.iter().enumerate() {
@@ -1015,7 +1158,12 @@ impl System {
         let mut ws = self.workspace();
         self.evaluate_into(state, lambda, true, &mut ws)?;
         let n = self.n_dof();
-        Ok(Matrices { F: ws.F.clone(), M: self.dense(&ws.M, n), C: self.dense(&ws.C, n), K: self.dense(&ws.K, n) })
+        Ok(Matrices {
+            F: ws.F.clone(),
+            M: self.dense(&ws.M, n),
+            C: self.dense(&ws.C, n),
+            K: self.dense(&ws.K, n),
+        })
     }
 
     pub(crate) fn dense(&self, values: &[f64], n: usize) -> Mat<f64> {

@@ -27,18 +27,37 @@ pub enum TimeFunction {
     Linear { initial: f64, rate: f64 },
     /// Linear from `from` at `t_start` to `to` at `t_end`, constant before and after (the
     /// rate jumps at both ends).
-    Ramp { t_start: f64, t_end: f64, from: f64, to: f64 },
+    Ramp {
+        t_start: f64,
+        t_end: f64,
+        from: f64,
+        to: f64,
+    },
     /// From `from` to `to` with the quintic $10s^3 - 15s^4 + 6s^5$, $s = (t - t_s)/(t_e - t_s)$:
     /// rate and acceleration are zero at both ends.
-    SmoothRamp { t_start: f64, t_end: f64, from: f64, to: f64 },
+    SmoothRamp {
+        t_start: f64,
+        t_end: f64,
+        from: f64,
+        to: f64,
+    },
     /// The spin-up angle of benchmarks.md C1 (Simo & Vu-Quoc 1986):
     /// $\theta = \frac{\omega_s}{T_s}\big(\frac{t^2}{2} + (\frac{T_s}{2\pi})^2(\cos\frac{2\pi t}{T_s} - 1)\big)$
     /// for $t \le T_s$, then $\omega_s(t - T_s/2)$.
     SpinUp { omega: f64, duration: f64 },
     /// $x = x_0 + A\sin(\omega t + \varphi)$.
-    Sine { offset: f64, amplitude: f64, omega: f64, phase: f64 },
+    Sine {
+        offset: f64,
+        amplitude: f64,
+        omega: f64,
+        phase: f64,
+    },
     /// Tabulated values (strictly increasing times), held constant outside the table.
-    Table { times: Vec<f64>, values: Vec<f64>, interpolation: Interpolation },
+    Table {
+        times: Vec<f64>,
+        values: Vec<f64>,
+        interpolation: Interpolation,
+    },
 }
 
 impl TimeFunction {
@@ -58,8 +77,10 @@ impl TimeFunction {
             if line.is_empty() || line.starts_with('#') {
                 continue;
             }
-            let fields: Vec<&str> =
-                line.split(|c: char| c == ',' || c == ';' || c.is_whitespace()).filter(|s| !s.is_empty()).collect();
+            let fields: Vec<&str> = line
+                .split(|c: char| c == ',' || c == ';' || c.is_whitespace())
+                .filter(|s| !s.is_empty())
+                .collect();
             let parsed: Result<Vec<f64>, _> = fields.iter().map(|f| f.parse::<f64>()).collect();
             match parsed {
                 Ok(v) if v.len() >= 2 => {
@@ -75,31 +96,63 @@ impl TimeFunction {
                 }
             }
         }
-        let f = Self::Table { times, values, interpolation };
+        let f = Self::Table {
+            times,
+            values,
+            interpolation,
+        };
         f.compile("CSV table")?;
         Ok(f)
     }
 
     /// Checks the data and precomputes what evaluation needs (spline moments).
     pub(crate) fn compile(&self, entity: &str) -> Result<CompiledFunction, ModelError> {
-        let bad = |what: String| Err(ModelError::InvalidValue { entity: entity.into(), what });
+        let bad = |what: String| {
+            Err(ModelError::InvalidValue {
+                entity: entity.into(),
+                what,
+            })
+        };
         let finite = |xs: &[f64]| xs.iter().all(|x| x.is_finite());
         match self {
             Self::Constant { value } if !value.is_finite() => bad("constant is not finite".into()),
             Self::Linear { initial, rate } if !finite(&[*initial, *rate]) => bad("non-finite linear function".into()),
-            Self::Ramp { t_start, t_end, from, to } | Self::SmoothRamp { t_start, t_end, from, to } => {
+            Self::Ramp {
+                t_start,
+                t_end,
+                from,
+                to,
+            }
+            | Self::SmoothRamp {
+                t_start,
+                t_end,
+                from,
+                to,
+            } => {
                 if !finite(&[*t_start, *t_end, *from, *to]) || !(t_end > t_start) {
-                    return bad(format!("ramp needs finite values and t_end > t_start (got {t_start} .. {t_end})"));
+                    return bad(format!(
+                        "ramp needs finite values and t_end > t_start (got {t_start} .. {t_end})"
+                    ));
                 }
-                Ok(CompiledFunction { f: self.clone(), moments: Vec::new() })
+                Ok(CompiledFunction {
+                    f: self.clone(),
+                    moments: Vec::new(),
+                })
             }
-            Self::SpinUp { omega, duration } if !(finite(&[*omega]) && *duration > 0.0 && duration.is_finite()) => {
-                bad(format!("spin-up needs a finite speed and a positive duration (got {omega}, {duration})"))
-            }
-            Self::Sine { offset, amplitude, omega, phase } if !finite(&[*offset, *amplitude, *omega, *phase]) => {
-                bad("non-finite sine".into())
-            }
-            Self::Table { times, values, interpolation } => {
+            Self::SpinUp { omega, duration } if !(finite(&[*omega]) && *duration > 0.0 && duration.is_finite()) => bad(
+                format!("spin-up needs a finite speed and a positive duration (got {omega}, {duration})"),
+            ),
+            Self::Sine {
+                offset,
+                amplitude,
+                omega,
+                phase,
+            } if !finite(&[*offset, *amplitude, *omega, *phase]) => bad("non-finite sine".into()),
+            Self::Table {
+                times,
+                values,
+                interpolation,
+            } => {
                 if times.len() != values.len() || times.is_empty() {
                     return bad(format!("table has {} times and {} values", times.len(), values.len()));
                 }
@@ -107,15 +160,25 @@ impl TimeFunction {
                     return bad("table has a non-finite entry".into());
                 }
                 if let Some(i) = (1..times.len()).find(|&i| !(times[i] > times[i - 1])) {
-                    return bad(format!("table times must increase strictly (row {i}: {} after {})", times[i], times[i - 1]));
+                    return bad(format!(
+                        "table times must increase strictly (row {i}: {} after {})",
+                        times[i],
+                        times[i - 1]
+                    ));
                 }
                 let moments = match interpolation {
                     Interpolation::Linear => Vec::new(),
                     Interpolation::CubicSpline => natural_spline_moments(times, values),
                 };
-                Ok(CompiledFunction { f: self.clone(), moments })
+                Ok(CompiledFunction {
+                    f: self.clone(),
+                    moments,
+                })
             }
-            _ => Ok(CompiledFunction { f: self.clone(), moments: Vec::new() }),
+            _ => Ok(CompiledFunction {
+                f: self.clone(),
+                moments: Vec::new(),
+            }),
         }
     }
 }
@@ -134,7 +197,12 @@ impl CompiledFunction {
         match &self.f {
             TimeFunction::Constant { value } => (*value, 0.0, 0.0),
             TimeFunction::Linear { initial, rate } => (initial + rate * t, *rate, 0.0),
-            TimeFunction::Ramp { t_start, t_end, from, to } => {
+            TimeFunction::Ramp {
+                t_start,
+                t_end,
+                from,
+                to,
+            } => {
                 if t <= *t_start {
                     (*from, 0.0, 0.0)
                 } else if t >= *t_end {
@@ -144,7 +212,12 @@ impl CompiledFunction {
                     (from + r * (t - t_start), r, 0.0)
                 }
             }
-            TimeFunction::SmoothRamp { t_start, t_end, from, to } => {
+            TimeFunction::SmoothRamp {
+                t_start,
+                t_end,
+                from,
+                to,
+            } => {
                 let d = t_end - t_start;
                 let s = ((t - t_start) / d).clamp(0.0, 1.0);
                 if t <= *t_start || t >= *t_end {
@@ -170,11 +243,24 @@ impl CompiledFunction {
                     (w * (t - 0.5 * T), w, 0.0)
                 }
             }
-            TimeFunction::Sine { offset, amplitude, omega, phase } => {
+            TimeFunction::Sine {
+                offset,
+                amplitude,
+                omega,
+                phase,
+            } => {
                 let a = omega * t + phase;
-                (offset + amplitude * a.sin(), amplitude * omega * a.cos(), -amplitude * omega * omega * a.sin())
+                (
+                    offset + amplitude * a.sin(),
+                    amplitude * omega * a.cos(),
+                    -amplitude * omega * omega * a.sin(),
+                )
             }
-            TimeFunction::Table { times, values, interpolation } => {
+            TimeFunction::Table {
+                times,
+                values,
+                interpolation,
+            } => {
                 let n = times.len();
                 if t <= times[0] {
                     return (values[0], 0.0, 0.0);

@@ -52,14 +52,10 @@ pub(crate) struct Topology {
     pub map: CoordinateMap,
     /// Scalar index of each joint coordinate.
     pub joint_scalars: Vec<Vec<usize>>,
-    /// Rotation index of each spherical joint.
-    pub joint_rotation: Vec<Option<usize>>,
     /// Independent nodes' coordinates.
     pub roots: Vec<Option<RootCoordinates>>,
     /// Scalar indices of each body's modal coordinates (empty for rigid bodies).
     pub modal_scalars: Vec<Vec<usize>>,
-    /// The joint whose child group a node belongs to (for messages).
-    pub dependent_on: Vec<Option<usize>>,
     /// Dimension of each unknown.
     pub dims: Vec<Dimension>,
 }
@@ -107,7 +103,10 @@ pub(crate) fn perpendicular_pair(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64
 fn unit(v: &Vector3<f64>, entity: &str, what: &str) -> Result<Vector3<f64>, ModelError> {
     let n = v.norm();
     if !(n > 1e-300) || !n.is_finite() {
-        return Err(ModelError::InvalidValue { entity: entity.into(), what: format!("{what} must be a finite non-zero vector, got {v:?}") });
+        return Err(ModelError::InvalidValue {
+            entity: entity.into(),
+            what: format!("{what} must be a finite non-zero vector, got {v:?}"),
+        });
     }
     Ok(v / n)
 }
@@ -119,14 +118,22 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
         if id.index() < nn {
             Ok(())
         } else {
-            Err(ModelError::UnknownNode { id: id.0, count: nn, referenced_by: who() })
+            Err(ModelError::UnknownNode {
+                id: id.0,
+                count: nn,
+                referenced_by: who(),
+            })
         }
     };
     let joint = |j: crate::JointId, who: &dyn Fn() -> String| {
         if j.index() < model.joints.len() {
             Ok(())
         } else {
-            Err(ModelError::UnknownJoint { id: j.0, count: model.joints.len(), referenced_by: who() })
+            Err(ModelError::UnknownJoint {
+                id: j.0,
+                count: model.joints.len(),
+                referenced_by: who(),
+            })
         }
     };
     for b in &model.bodies {
@@ -191,18 +198,18 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
                 node(*b, &who)?;
             }
             SensorKind::JointCoordinate { joint: j, .. } | SensorKind::JointRate { joint: j, .. } => joint(*j, &who)?,
-            SensorKind::ModalCoordinates { body } => {
-                if body.index() >= model.bodies.len() {
-                    return Err(ModelError::UnknownBody { id: body.0, count: model.bodies.len(), referenced_by: who() });
-                }
+            SensorKind::ModalCoordinates { body } if body.index() >= model.bodies.len() => {
+                return Err(ModelError::UnknownBody {
+                    id: body.0,
+                    count: model.bodies.len(),
+                    referenced_by: who(),
+                });
             }
-            SensorKind::DriverEffort { driver } => {
-                if *driver >= model.drivers.len() {
-                    return Err(ModelError::InvalidValue {
-                        entity: who(),
-                        what: format!("driver {driver} does not exist ({} drivers)", model.drivers.len()),
-                    });
-                }
+            SensorKind::DriverEffort { driver } if *driver >= model.drivers.len() => {
+                return Err(ModelError::InvalidValue {
+                    entity: who(),
+                    what: format!("driver {driver} does not exist ({} drivers)", model.drivers.len()),
+                });
             }
             _ => {}
         }
@@ -210,7 +217,9 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
     for c in &model.initial {
         let who = || "initial condition".to_string();
         match c {
-            InitialCondition::JointValue { joint: j, .. } | InitialCondition::JointRate { joint: j, .. } => joint(*j, &who)?,
+            InitialCondition::JointValue { joint: j, .. } | InitialCondition::JointRate { joint: j, .. } => {
+                joint(*j, &who)?
+            }
             InitialCondition::NodeVelocity { node: n, .. } => node(*n, &who)?,
             InitialCondition::RigidMotion { .. } => {}
         }
@@ -231,7 +240,10 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         support[s.node.index()] = Some(s);
     }
     if let Some(i) = (0..nn).find(|&i| count[i] > 1) {
-        return Err(ModelError::DuplicateSupport { node: name(i), count: count[i] });
+        return Err(ModelError::DuplicateSupport {
+            node: name(i),
+            count: count[i],
+        });
     }
 
     // Driver targets.
@@ -333,7 +345,11 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
                 v.sort();
                 v.dedup();
             }
-            return Err(ModelError::RigidLoop { bodies, joints, supports });
+            return Err(ModelError::RigidLoop {
+                bodies,
+                joints,
+                supports,
+            });
         }
         adjacency[a].push((b, e));
         adjacency[b].push((a, e));
@@ -362,7 +378,10 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
             });
         }
         if let Some(n) = members(*g).into_iter().find(|&n| grounded[n]) {
-            return Err(ModelError::SupportOnDependentNode { node: name(n), joint: model.joints[js[0]].name.clone() });
+            return Err(ModelError::SupportOnDependentNode {
+                node: name(n),
+                joint: model.joints[js[0]].name.clone(),
+            });
         }
     }
 
@@ -390,7 +409,10 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
     let mut roots: Vec<usize> = Vec::new();
     for &g in &group_list {
         match entry[&g].1 {
-            Some(j) => children.entry(group[model.joints[j].parent.index()]).or_default().push(g),
+            Some(j) => children
+                .entry(group[model.joints[j].parent.index()])
+                .or_default()
+                .push(g),
             None => roots.push(g),
         }
     }
@@ -402,7 +424,11 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
             queue.extend(cs.iter().copied());
         }
     }
-    debug_assert_eq!(group_order.len(), group_list.len(), "the joint tree is acyclic after the loop check");
+    debug_assert_eq!(
+        group_order.len(),
+        group_list.len(),
+        "the joint tree is acyclic after the loop check"
+    );
 
     // Coordinates and chains.
     let mut b = Builder::default();
@@ -410,9 +436,7 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
     let mut chain_slots: Vec<Vec<Slot>> = vec![Vec::new(); nn];
     let mut order = Vec::with_capacity(nn);
     let mut joint_scalars = vec![Vec::new(); model.joints.len()];
-    let mut joint_rotation = vec![None; model.joints.len()];
     let mut root_coords = vec![None; nn];
-    let mut dependent_on = vec![None; nn];
     for &g in &group_order {
         let (e, joint) = entry[&g];
         // Entry node.
@@ -423,23 +447,29 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
                 (None, ops, own)
             }
             Some(ji) => {
-                let (mut ops, own, scalars, rot) = joint_chain(model, ji, &joint_driver, &mut b)?;
+                let (mut ops, own, scalars) = joint_chain(model, ji, &joint_driver, &mut b)?;
                 // Column positions continue after the parent's columns (prefix property).
                 let shift = chain_slots[model.joints[ji].parent.index()].len();
                 for op in &mut ops {
                     match op {
-                        Op::Translate { col, .. } | Op::Rotate { col, .. } | Op::FreeRotation { col, .. } => *col += shift,
+                        Op::Translate { col, .. } | Op::Rotate { col, .. } | Op::FreeRotation { col, .. } => {
+                            *col += shift
+                        }
                         Op::Offset { .. } => {}
                     }
                 }
                 joint_scalars[ji] = scalars;
-                joint_rotation[ji] = rot;
                 (Some(model.joints[ji].parent.index()), ops, own)
             }
         };
         let mut slots = parent.map_or(Vec::new(), |p| chain_slots[p].clone());
         slots.extend(own);
-        chains[e] = Some(Chain { parent, ops, cols: Vec::new(), root: parent.is_none() });
+        chains[e] = Some(Chain {
+            parent,
+            ops,
+            cols: Vec::new(),
+            root: parent.is_none(),
+        });
         chain_slots[e] = slots;
         order.push(e);
         // The group's other nodes, by rigid offsets (breadth first from the entry).
@@ -454,16 +484,21 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
                     seen.push(w);
                     let (nu, nw) = (&model.nodes[u], &model.nodes[w]);
                     let Rinv = nu.orientation.inverse();
-                    let op = Op::Offset { d: Rinv * (nw.position - nu.position), C: Rinv * nw.orientation };
-                    chains[w] = Some(Chain { parent: Some(u), ops: vec![op], cols: Vec::new(), root: false });
+                    let op = Op::Offset {
+                        d: Rinv * (nw.position - nu.position),
+                        C: Rinv * nw.orientation,
+                    };
+                    chains[w] = Some(Chain {
+                        parent: Some(u),
+                        ops: vec![op],
+                        cols: Vec::new(),
+                        root: false,
+                    });
                     chain_slots[w] = chain_slots[u].clone();
                     order.push(w);
                     queue.push_back(w);
                 }
             }
-        }
-        for &w in &seen {
-            dependent_on[w] = joint;
         }
     }
     debug_assert_eq!(order.len(), nn);
@@ -473,7 +508,13 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
     for (bi, body) in model.bodies.iter().enumerate() {
         if let Body::Flexible(f) = body {
             modal_scalars[bi] = (0..f.reduced.n_modes)
-                .map(|i| b.scalar(Slot::Unknown(0), format!("body '{}' modal coordinate {i}", f.name), Dimension::Modal(bi)))
+                .map(|i| {
+                    b.scalar(
+                        Slot::Unknown(0),
+                        format!("body '{}' modal coordinate {i}", f.name),
+                        Dimension::Modal(bi),
+                    )
+                })
                 .collect();
         }
     }
@@ -501,7 +542,13 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         order,
         dof_labels: b.dof_labels,
     };
-    Ok(Topology { map, joint_scalars, joint_rotation, roots: root_coords, modal_scalars, dependent_on, dims: b.dims })
+    Ok(Topology {
+        map,
+        joint_scalars,
+        roots: root_coords,
+        modal_scalars,
+        dims: b.dims,
+    })
 }
 
 /// Path of edges between `a` and `b` in the forest `adjacency` (breadth first).
@@ -571,7 +618,7 @@ impl Builder {
             }
             p => p,
         };
-        self.scalars.push(Scalar { slot, label });
+        self.scalars.push(Scalar { slot });
         s
     }
 
@@ -595,8 +642,11 @@ impl Builder {
             self.dims.push(Dimension::Angle);
         }
         self.n_dof += 3;
-        self.rotations.push(Rotation { dof, label });
-        (self.rotations.len() - 1, [Slot::Unknown(dof), Slot::Unknown(dof + 1), Slot::Unknown(dof + 2)])
+        self.rotations.push(Rotation { dof });
+        (
+            self.rotations.len() - 1,
+            [Slot::Unknown(dof), Slot::Unknown(dof + 1), Slot::Unknown(dof + 2)],
+        )
     }
 }
 
@@ -628,15 +678,26 @@ fn root_chain(
         TranslationSupport::Line { direction } => {
             let d = unit(direction, &entity, "the slider direction")?;
             let (b1, b2) = perpendicular_pair(&d);
-            ([d, b1, b2], [true, false, false], ["along the line", "across the line (1)", "across the line (2)"])
+            (
+                [d, b1, b2],
+                [true, false, false],
+                ["along the line", "across the line (1)", "across the line (2)"],
+            )
         }
         TranslationSupport::Plane { normal } => {
             let nn = unit(normal, &entity, "the plane normal")?;
             let (b1, b2) = perpendicular_pair(&nn);
-            ([b1, b2, nn], [true, true, false], ["in-plane 1", "in-plane 2", "normal to the plane"])
+            (
+                [b1, b2, nn],
+                [true, true, false],
+                ["in-plane 1", "in-plane 2", "normal to the plane"],
+            )
         }
     };
-    let mut ops = vec![Op::Offset { d: node.position, C: UnitQuaternion::identity() }];
+    let mut ops = vec![Op::Offset {
+        d: node.position,
+        C: UnitQuaternion::identity(),
+    }];
     let mut slots = Vec::new();
     let mut translation = [(0, Vector3::zeros()); 3];
     for i in 0..3 {
@@ -645,14 +706,25 @@ fn root_chain(
             (Some(&d), false) => {
                 return Err(ModelError::InvalidDriver {
                     driver: model.drivers[d].name.clone(),
-                    what: format!("translation component {i} of node '{}' is removed by its support", node.name),
+                    what: format!(
+                        "translation component {i} of node '{}' is removed by its support",
+                        node.name
+                    ),
                 })
             }
             (None, true) => Kind::Free,
             (None, false) => Kind::Zero,
         };
-        let (s, slot) = b.new_scalar(kind, format!("node '{}' translation {}", node.name, names[i]), Dimension::Length);
-        ops.push(Op::Translate { axis: basis[i], coord: s, col: slots.len() });
+        let (s, slot) = b.new_scalar(
+            kind,
+            format!("node '{}' translation {}", node.name, names[i]),
+            Dimension::Length,
+        );
+        ops.push(Op::Translate {
+            axis: basis[i],
+            coord: s,
+            col: slots.len(),
+        });
         slots.push(slot);
         translation[i] = (s, basis[i]);
     }
@@ -669,15 +741,26 @@ fn root_chain(
         }
         RotationSupport::Free => {
             let (r, s3) = b.rotation(format!("node '{}' rotation", node.name));
-            ops.push(Op::FreeRotation { rot: r, col: slots.len() });
+            ops.push(Op::FreeRotation {
+                rot: r,
+                col: slots.len(),
+            });
             slots.extend(s3);
             RootRotation::Free(r)
         }
         RotationSupport::Fixed => {
             let mut axes = [(0, Vector3::zeros()); 3];
             for (i, c) in ["x", "y", "z"].iter().enumerate() {
-                let (s, slot) = b.new_scalar(Kind::Zero, format!("node '{}' rotation about {c}", node.name), Dimension::Angle);
-                ops.push(Op::Rotate { axis: I[i], coord: s, col: slots.len() });
+                let (s, slot) = b.new_scalar(
+                    Kind::Zero,
+                    format!("node '{}' rotation about {c}", node.name),
+                    Dimension::Angle,
+                );
+                ops.push(Op::Rotate {
+                    axis: I[i],
+                    coord: s,
+                    col: slots.len(),
+                });
                 slots.push(slot);
                 axes[i] = (s, I[i]);
             }
@@ -696,18 +779,25 @@ fn root_chain(
             .enumerate()
             {
                 let (s, slot) = b.new_scalar(kind, format!("node '{}' {what}", node.name), Dimension::Angle);
-                ops.push(Op::Rotate { axis: e, coord: s, col: slots.len() });
+                ops.push(Op::Rotate {
+                    axis: e,
+                    coord: s,
+                    col: slots.len(),
+                });
                 slots.push(slot);
                 axes[i] = (s, e);
             }
             RootRotation::Axes(axes)
         }
     };
-    ops.push(Op::Offset { d: Vector3::zeros(), C: node.orientation });
+    ops.push(Op::Offset {
+        d: Vector3::zeros(),
+        C: node.orientation,
+    });
     Ok((ops, slots, RootCoordinates { translation, rotation }))
 }
 
-type JointParts = (Vec<Op>, Vec<Slot>, Vec<usize>, Option<usize>);
+type JointParts = (Vec<Op>, Vec<Slot>, Vec<usize>);
 
 /// The operations of a joint, appended to its parent node's frame (axes in the parent's axes).
 fn joint_chain(
@@ -720,7 +810,10 @@ fn joint_chain(
     let entity = format!("joint '{}'", j.name);
     let (p, c) = (&model.nodes[j.parent.index()], &model.nodes[j.child.index()]);
     if j.parent == j.child {
-        return Err(ModelError::InvalidValue { entity, what: "parent and child are the same node".into() });
+        return Err(ModelError::InvalidValue {
+            entity,
+            what: "parent and child are the same node".into(),
+        });
     }
     let Rp = p.orientation.inverse();
     let d0 = Rp * (c.position - p.position);
@@ -748,19 +841,36 @@ fn joint_chain(
         let dim = if rotate { Dimension::Angle } else { Dimension::Length };
         let (s, slot) = b.new_scalar(kind, format!("joint '{}' {what}", j.name), dim);
         let col = slots.len();
-        ops.push(if rotate { Op::Rotate { axis: Rp * axis, coord: s, col } } else { Op::Translate { axis: Rp * axis, coord: s, col } });
+        ops.push(if rotate {
+            Op::Rotate {
+                axis: Rp * axis,
+                coord: s,
+                col,
+            }
+        } else {
+            Op::Translate {
+                axis: Rp * axis,
+                coord: s,
+                col,
+            }
+        });
         slots.push(slot);
         scalars.push(s);
     };
-    let mut rotation = None;
     match &j.kind {
         JointKind::Spherical => {
-            ops.push(Op::Offset { d: d0, C: UnitQuaternion::identity() });
+            ops.push(Op::Offset {
+                d: d0,
+                C: UnitQuaternion::identity(),
+            });
             let (r, s3) = b.rotation(format!("joint '{}' rotation", j.name));
+            debug_assert!(r < b.rotations.len());
             ops.push(Op::FreeRotation { rot: r, col: 0 });
             slots.extend(s3);
-            ops.push(Op::Offset { d: Vector3::zeros(), C: c.orientation });
-            rotation = Some(r);
+            ops.push(Op::Offset {
+                d: Vector3::zeros(),
+                C: c.orientation,
+            });
         }
         JointKind::Revolute { axis } => {
             add(b, &mut ops, true, unit(axis, &entity, "the axis")?, "angle");
@@ -777,7 +887,10 @@ fn joint_chain(
             let a1 = unit(axis1, &entity, "axis1")?;
             let a2 = unit(axis2, &entity, "axis2")?;
             if a1.cross(&a2).norm() < 1e-6 {
-                return Err(ModelError::InvalidValue { entity, what: "the two axes are parallel".into() });
+                return Err(ModelError::InvalidValue {
+                    entity,
+                    what: "the two axes are parallel".into(),
+                });
             }
             add(b, &mut ops, true, a1, "angle 1");
             add(b, &mut ops, true, a2, "angle 2");
@@ -793,7 +906,7 @@ fn joint_chain(
     if !matches!(j.kind, JointKind::Spherical) {
         ops.push(Op::Offset { d: d0, C: C0 });
     }
-    Ok((ops, slots, scalars, rotation))
+    Ok((ops, slots, scalars))
 }
 
 /// Which translations and rotations of each node something holds (module docs).
@@ -852,7 +965,14 @@ pub(crate) fn held_coordinates(model: &Model, topo: &Topology) -> Result<(), Mod
     let rotations = vec![UnitQuaternion::identity(); map.rotations.len()];
     let zeros = vec![0.0; map.n_dof];
     let pz = vec![0.0; map.n_prescribed()];
-    let x = Values { scalars: &scalars, rotations: &rotations, vel: &zeros, acc: &zeros, presc_rate: &pz, presc_acc: &pz };
+    let x = Values {
+        scalars: &scalars,
+        rotations: &rotations,
+        vel: &zeros,
+        acc: &zeros,
+        presc_rate: &pz,
+        presc_acc: &pz,
+    };
     let mut motions = vec![Motion::ground(); nn];
     map.motions_into(&x, &mut motions);
     for c in 0..nn {
@@ -864,7 +984,9 @@ pub(crate) fn held_coordinates(model: &Model, topo: &Topology) -> Result<(), Mod
         }
     }
     if let Some(d) = held.iter().position(|h| !h) {
-        return Err(ModelError::UnheldCoordinate { coordinate: map.dof_labels[d].clone() });
+        return Err(ModelError::UnheldCoordinate {
+            coordinate: map.dof_labels[d].clone(),
+        });
     }
     Ok(())
 }

@@ -1,5 +1,7 @@
 //! Unit tests of the multibody crate (fast, debug build with opt-level 2). Index:
 
+#![allow(non_snake_case)]
+
 /// Model builders shared by the tests: beam superelements, chains, pendulums.
 #[path = "unit/fixtures.rs"]
 mod fixtures;

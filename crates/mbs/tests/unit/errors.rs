@@ -33,22 +33,55 @@ fn four_bar(rigid_coupler: bool) -> Model {
     m.add_rigid_body(rigid("crank", a1, vec![b], 1.0, Vector3::new(0.0, 0.5, 0.0), [0.1; 3]));
     m.add_joint("jB", b, b1, JointKind::Revolute { axis: z });
     if rigid_coupler {
-        m.add_rigid_body(rigid("coupler", b1, vec![c], 1.0, Vector3::new(1.0, 0.0, 0.0), [0.1; 3]));
+        m.add_rigid_body(rigid(
+            "coupler",
+            b1,
+            vec![c],
+            1.0,
+            Vector3::new(1.0, 0.0, 0.0),
+            [0.1; 3],
+        ));
     } else {
-        let body = beam_body("coupler", Vector3::new(0.0, 1.0, 0.0), Vector3::new(2.0, 1.0, 0.0), 3, 0.02, 2e11, 7800.0, ModeSelection::StaticOnly);
-        m.add_flexible_body(body, vec![b1, c], Isometry3::identity(), FrameChoice::CenterOfMass, MassVariant::Exact);
+        let body = beam_body(
+            "coupler",
+            Vector3::new(0.0, 1.0, 0.0),
+            Vector3::new(2.0, 1.0, 0.0),
+            3,
+            0.02,
+            2e11,
+            7800.0,
+            ModeSelection::StaticOnly,
+        );
+        m.add_flexible_body(
+            body,
+            vec![b1, c],
+            Isometry3::identity(),
+            FrameChoice::CenterOfMass,
+            MassVariant::Exact,
+        );
     }
     // Oriented from the supported rocker to the coupler, so that the flexible coupler's end
     // C is the dependent node (the rocker's group enters at its supported node D).
     m.add_joint("jC", c1, c, JointKind::Revolute { axis: z });
-    m.add_rigid_body(rigid("rocker", c1, vec![d], 1.0, Vector3::new(0.0, -0.5, 0.0), [0.1; 3]));
+    m.add_rigid_body(rigid(
+        "rocker",
+        c1,
+        vec![d],
+        1.0,
+        Vector3::new(0.0, -0.5, 0.0),
+        [0.1; 3],
+    ));
     m
 }
 
 #[test]
 fn rigid_loop_is_refused_with_its_members() {
     match err(&four_bar(true)) {
-        ModelError::RigidLoop { bodies, joints, supports } => {
+        ModelError::RigidLoop {
+            bodies,
+            joints,
+            supports,
+        } => {
             assert_eq!(bodies, ["coupler", "crank", "rocker"]);
             assert_eq!(joints, ["jA", "jB", "jC"]);
             assert_eq!(supports, ["A", "D"]);
@@ -79,7 +112,14 @@ fn unknown_references_are_named() {
     let mut m = Model::new("refs");
     let a = m.add_node("a", Vector3::zeros());
     m.add_rigid_body(rigid("r", a, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
-    m.add_driver("d", DriverTarget::Joint { joint: mbs::JointId(3), coordinate: 0 }, TimeFunction::constant(0.0));
+    m.add_driver(
+        "d",
+        DriverTarget::Joint {
+            joint: mbs::JointId(3),
+            coordinate: 0,
+        },
+        TimeFunction::constant(0.0),
+    );
     assert!(matches!(err(&m), ModelError::UnknownJoint { id: 3, .. }));
 }
 
@@ -87,7 +127,9 @@ fn unknown_references_are_named() {
 fn conflicting_trees_are_refused() {
     // Two joints into one rigid group.
     let mut m = Model::new("two parents");
-    let n: Vec<NodeId> = (0..4).map(|i| m.add_node(&format!("n{i}"), Vector3::new(i as f64, 0.0, 0.0))).collect();
+    let n: Vec<NodeId> = (0..4)
+        .map(|i| m.add_node(&format!("n{i}"), Vector3::new(i as f64, 0.0, 0.0)))
+        .collect();
     let p = m.add_node("p", Vector3::new(1.0, 0.0, 0.0));
     let q = m.add_node("q", Vector3::new(2.0, 0.0, 0.0));
     for &k in &n {
@@ -117,8 +159,23 @@ fn geometry_mismatches_are_refused() {
     let mut m = Model::new("mismatch");
     let a = m.add_node("a", Vector3::zeros());
     let b = m.add_node("b", Vector3::new(1.1, 0.0, 0.0));
-    let body = beam_body("beam", Vector3::zeros(), Vector3::new(1.0, 0.0, 0.0), 3, 0.02, 2e11, 7800.0, ModeSelection::StaticOnly);
-    m.add_flexible_body(body, vec![a, b], Isometry3::identity(), FrameChoice::CenterOfMass, MassVariant::Exact);
+    let body = beam_body(
+        "beam",
+        Vector3::zeros(),
+        Vector3::new(1.0, 0.0, 0.0),
+        3,
+        0.02,
+        2e11,
+        7800.0,
+        ModeSelection::StaticOnly,
+    );
+    m.add_flexible_body(
+        body,
+        vec![a, b],
+        Isometry3::identity(),
+        FrameChoice::CenterOfMass,
+        MassVariant::Exact,
+    );
     assert!(matches!(err(&m), ModelError::InterfaceMismatch { interface: 1, .. }));
     let mut m = Model::new("apart");
     let a = m.add_node("a", Vector3::zeros());
@@ -134,10 +191,18 @@ fn invalid_drivers_are_refused() {
     let mut m = Model::new("driver");
     let a = m.add_node("a", Vector3::zeros());
     m.add_rigid_body(rigid("r", a, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
-    m.add_driver("spin", DriverTarget::NodeRotation { node: a }, TimeFunction::constant(1.0));
+    m.add_driver(
+        "spin",
+        DriverTarget::NodeRotation { node: a },
+        TimeFunction::constant(1.0),
+    );
     assert!(matches!(err(&m), ModelError::InvalidDriver { .. }));
     m.drivers.clear();
     m.add_support(Support::clamp(a));
-    m.add_driver("push", DriverTarget::NodeTranslation { node: a, component: 0 }, TimeFunction::constant(1.0));
+    m.add_driver(
+        "push",
+        DriverTarget::NodeTranslation { node: a, component: 0 },
+        TimeFunction::constant(1.0),
+    );
     assert!(matches!(err(&m), ModelError::InvalidDriver { .. }));
 }

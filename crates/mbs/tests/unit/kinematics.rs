@@ -27,31 +27,155 @@ pub fn chain() -> Model {
     let n11 = m.add_node("n11", Vector3::new(2.3, 0.6, -0.2));
     let s0 = m.add_node("s0", Vector3::new(-0.5, 0.3, 0.0));
     let s1 = m.add_node("s1", Vector3::new(-0.5, 0.3, 0.0));
-    m.add_rigid_body(rigid("b0", n0, vec![n1], 2.0, Vector3::new(0.1, 0.0, 0.05), [0.1, 0.2, 0.15]));
-    m.add_joint("rev", n1, n2, JointKind::Revolute { axis: Vector3::new(0.3, 0.2, 1.0) });
-    m.add_rigid_body(rigid("b1", n2, vec![n3], 1.5, Vector3::new(0.0, 0.1, 0.0), [0.1, 0.1, 0.2]));
-    m.add_joint("pri", n3, n4, JointKind::Prismatic { axis: Vector3::new(1.0, 0.5, 0.2) });
-    m.add_rigid_body(rigid("b2", n4, vec![], 1.0, Vector3::new(0.05, 0.0, 0.1), [0.05, 0.06, 0.07]));
-    m.add_joint("uni", n4, n5, JointKind::Universal { axis1: Vector3::new(1.0, 0.0, 0.2), axis2: Vector3::new(0.1, 1.0, 0.3) });
-    m.add_rigid_body(rigid("b3", n5, vec![n6], 1.2, Vector3::new(0.0, 0.0, 0.1), [0.08, 0.09, 0.05]));
+    m.add_rigid_body(rigid(
+        "b0",
+        n0,
+        vec![n1],
+        2.0,
+        Vector3::new(0.1, 0.0, 0.05),
+        [0.1, 0.2, 0.15],
+    ));
+    m.add_joint(
+        "rev",
+        n1,
+        n2,
+        JointKind::Revolute {
+            axis: Vector3::new(0.3, 0.2, 1.0),
+        },
+    );
+    m.add_rigid_body(rigid(
+        "b1",
+        n2,
+        vec![n3],
+        1.5,
+        Vector3::new(0.0, 0.1, 0.0),
+        [0.1, 0.1, 0.2],
+    ));
+    m.add_joint(
+        "pri",
+        n3,
+        n4,
+        JointKind::Prismatic {
+            axis: Vector3::new(1.0, 0.5, 0.2),
+        },
+    );
+    m.add_rigid_body(rigid(
+        "b2",
+        n4,
+        vec![],
+        1.0,
+        Vector3::new(0.05, 0.0, 0.1),
+        [0.05, 0.06, 0.07],
+    ));
+    m.add_joint(
+        "uni",
+        n4,
+        n5,
+        JointKind::Universal {
+            axis1: Vector3::new(1.0, 0.0, 0.2),
+            axis2: Vector3::new(0.1, 1.0, 0.3),
+        },
+    );
+    m.add_rigid_body(rigid(
+        "b3",
+        n5,
+        vec![n6],
+        1.2,
+        Vector3::new(0.0, 0.0, 0.1),
+        [0.08, 0.09, 0.05],
+    ));
     m.add_joint("sph", n6, n7, JointKind::Spherical);
-    m.add_rigid_body(rigid("b4", n7, vec![n8], 0.9, Vector3::new(0.1, 0.1, 0.0), [0.04, 0.05, 0.06]));
-    m.add_joint("cyl", n8, n9, JointKind::Cylindrical { axis: Vector3::new(0.2, -0.4, 1.0) });
-    m.add_rigid_body(rigid("b5", n9, vec![n10], 0.8, Vector3::new(0.0, 0.05, 0.05), [0.03, 0.04, 0.05]));
-    m.add_joint("pla", n10, n11, JointKind::Planar { normal: Vector3::new(0.5, 0.5, 1.0) });
-    m.add_rigid_body(rigid("b6", n11, vec![], 0.7, Vector3::new(0.02, 0.0, 0.03), [0.02, 0.03, 0.04]));
+    m.add_rigid_body(rigid(
+        "b4",
+        n7,
+        vec![n8],
+        0.9,
+        Vector3::new(0.1, 0.1, 0.0),
+        [0.04, 0.05, 0.06],
+    ));
+    m.add_joint(
+        "cyl",
+        n8,
+        n9,
+        JointKind::Cylindrical {
+            axis: Vector3::new(0.2, -0.4, 1.0),
+        },
+    );
+    m.add_rigid_body(rigid(
+        "b5",
+        n9,
+        vec![n10],
+        0.8,
+        Vector3::new(0.0, 0.05, 0.05),
+        [0.03, 0.04, 0.05],
+    ));
+    m.add_joint(
+        "pla",
+        n10,
+        n11,
+        JointKind::Planar {
+            normal: Vector3::new(0.5, 0.5, 1.0),
+        },
+    );
+    m.add_rigid_body(rigid(
+        "b6",
+        n11,
+        vec![],
+        0.7,
+        Vector3::new(0.02, 0.0, 0.03),
+        [0.02, 0.03, 0.04],
+    ));
     // Slider along a line with a rotation axis driven in time, and a driven revolute on it.
     m.add_support(Support {
         node: s0,
-        translation: TranslationSupport::Line { direction: Vector3::new(1.0, 1.0, 0.0) },
-        rotation: RotationSupport::Axis { axis: Vector3::new(0.0, 0.3, 1.0) },
+        translation: TranslationSupport::Line {
+            direction: Vector3::new(1.0, 1.0, 0.0),
+        },
+        rotation: RotationSupport::Axis {
+            axis: Vector3::new(0.0, 0.3, 1.0),
+        },
     });
-    m.add_driver("spin", DriverTarget::NodeRotation { node: s0 }, TimeFunction::Sine { offset: 0.1, amplitude: 0.4, omega: 3.0, phase: 0.2 });
-    m.add_joint("drv", s0, s1, JointKind::Revolute { axis: Vector3::new(1.0, 0.0, 0.0) });
+    m.add_driver(
+        "spin",
+        DriverTarget::NodeRotation { node: s0 },
+        TimeFunction::Sine {
+            offset: 0.1,
+            amplitude: 0.4,
+            omega: 3.0,
+            phase: 0.2,
+        },
+    );
+    m.add_joint(
+        "drv",
+        s0,
+        s1,
+        JointKind::Revolute {
+            axis: Vector3::new(1.0, 0.0, 0.0),
+        },
+    );
     let j = mbs::JointId(m.joints.len() as u32 - 1);
-    m.add_driver("tilt", DriverTarget::Joint { joint: j, coordinate: 0 }, TimeFunction::Sine { offset: 0.0, amplitude: 0.3, omega: 2.0, phase: 0.5 });
+    m.add_driver(
+        "tilt",
+        DriverTarget::Joint {
+            joint: j,
+            coordinate: 0,
+        },
+        TimeFunction::Sine {
+            offset: 0.0,
+            amplitude: 0.3,
+            omega: 2.0,
+            phase: 0.5,
+        },
+    );
     m.add_rigid_body(rigid("slider", s0, vec![], 1.0, Vector3::zeros(), [0.1, 0.1, 0.1]));
-    m.add_rigid_body(rigid("arm", s1, vec![], 1.0, Vector3::new(0.0, 0.2, 0.0), [0.1, 0.1, 0.1]));
+    m.add_rigid_body(rigid(
+        "arm",
+        s1,
+        vec![],
+        1.0,
+        Vector3::new(0.0, 0.2, 0.0),
+        [0.1, 0.1, 0.1],
+    ));
     m
 }
 
@@ -122,7 +246,9 @@ fn jacobian_is_the_derivative_of_the_node_configurations() {
     let base = sys.node_motions(&s);
     let J = stack(&sys, &s, |k| k.J.clone());
     let n = sys.n_dof();
-    let rep = check_jacobian("J", J.as_ref(), &vec![1e-6; n], |d| configuration(&sys, &sys.retract(&s, d), &base));
+    let rep = check_jacobian("J", J.as_ref(), &vec![1e-6; n], |d| {
+        configuration(&sys, &sys.retract(&s, d), &base)
+    });
     eprintln!("{rep}");
     assert!(rep.worst < TOL, "{rep}");
 }
@@ -135,7 +261,9 @@ fn velocity_and_convective_acceleration_are_time_derivatives() {
     let s = random_state(&sys, 2);
     let n = sys.n_dof();
     let at = |tau: f64| {
-        let dq: Vec<f64> = (0..n).map(|i| tau * s.velocity()[i] + 0.5 * tau * tau * s.acceleration()[i]).collect();
+        let dq: Vec<f64> = (0..n)
+            .map(|i| tau * s.velocity()[i] + 0.5 * tau * tau * s.acceleration()[i])
+            .collect();
         let mut st = sys.retract(&s, &dq);
         st.set_time(s.time() + tau);
         for i in 0..n {
@@ -148,10 +276,14 @@ fn velocity_and_convective_acceleration_are_time_derivatives() {
     let A = motion_vector(&sys, &s, true);
     let Vm = Mat::from_fn(V.len(), 1, |i, _| V[i]);
     let Am = Mat::from_fn(A.len(), 1, |i, _| A[i]);
-    let rep = check_jacobian("V = d(config)/dt", Vm.as_ref(), &[1e-5], |d| configuration(&sys, &at(d[0]), &base));
+    let rep = check_jacobian("V = d(config)/dt", Vm.as_ref(), &[1e-5], |d| {
+        configuration(&sys, &at(d[0]), &base)
+    });
     eprintln!("{rep}");
     assert!(rep.worst < 1e-6, "{rep}");
-    let rep = check_jacobian("A = dV/dt", Am.as_ref(), &[1e-5], |d| motion_vector(&sys, &at(d[0]), false));
+    let rep = check_jacobian("A = dV/dt", Am.as_ref(), &[1e-5], |d| {
+        motion_vector(&sys, &at(d[0]), false)
+    });
     eprintln!("{rep}");
     assert!(rep.worst < 1e-6, "{rep}");
     // The convective term alone: with qdd = 0 and no drivers moving, A = Jdot qd.
@@ -159,10 +291,15 @@ fn velocity_and_convective_acceleration_are_time_derivatives() {
     s0.acceleration_mut().iter_mut().for_each(|a| *a = 0.0);
     let a0 = motion_vector(&sys, &s0, true);
     let J = stack(&sys, &s, |k| k.J.clone());
-    let a1: Vec<f64> = (0..A.len()).map(|i| A[i] - (0..n).map(|j| J[(i, j)] * s.acceleration()[j]).sum::<f64>()).collect();
+    let a1: Vec<f64> = (0..A.len())
+        .map(|i| A[i] - (0..n).map(|j| J[(i, j)] * s.acceleration()[j]).sum::<f64>())
+        .collect();
     let scale = a0.iter().fold(1.0f64, |m, x| m.max(x.abs()));
     for i in 0..a0.len() {
-        assert!((a0[i] - a1[i]).abs() < 1e-12 * scale, "A - J qdd differs from the convective term at {i}");
+        assert!(
+            (a0[i] - a1[i]).abs() < 1e-12 * scale,
+            "A - J qdd differs from the convective term at {i}"
+        );
     }
 }
 
@@ -176,10 +313,14 @@ fn derivatives_of_velocity_and_acceleration_match_fd() {
     let DAd = stack(&sys, &s, |k| k.DAd.clone());
     let J = stack(&sys, &s, |k| k.J.clone());
     let h = vec![1e-6; n];
-    let rep = check_jacobian("dV/dq", DV.as_ref(), &h, |d| motion_vector(&sys, &sys.retract(&s, d), false));
+    let rep = check_jacobian("dV/dq", DV.as_ref(), &h, |d| {
+        motion_vector(&sys, &sys.retract(&s, d), false)
+    });
     eprintln!("{rep}");
     assert!(rep.worst < TOL, "{rep}");
-    let rep = check_jacobian("dA/dq", DA.as_ref(), &h, |d| motion_vector(&sys, &sys.retract(&s, d), true));
+    let rep = check_jacobian("dA/dq", DA.as_ref(), &h, |d| {
+        motion_vector(&sys, &sys.retract(&s, d), true)
+    });
     eprintln!("{rep}");
     assert!(rep.worst < TOL, "{rep}");
     let with_rates = |d: &[f64]| {
@@ -189,10 +330,14 @@ fn derivatives_of_velocity_and_acceleration_match_fd() {
         }
         st
     };
-    let rep = check_jacobian("dA/dqd", DAd.as_ref(), &h, |d| motion_vector(&sys, &with_rates(d), true));
+    let rep = check_jacobian("dA/dqd", DAd.as_ref(), &h, |d| {
+        motion_vector(&sys, &with_rates(d), true)
+    });
     eprintln!("{rep}");
     assert!(rep.worst < TOL, "{rep}");
-    let rep = check_jacobian("dV/dqd = J", J.as_ref(), &h, |d| motion_vector(&sys, &with_rates(d), false));
+    let rep = check_jacobian("dV/dqd = J", J.as_ref(), &h, |d| {
+        motion_vector(&sys, &with_rates(d), false)
+    });
     eprintln!("{rep}");
     assert!(rep.worst < TOL, "{rep}");
 }
@@ -202,10 +347,14 @@ fn geometric_term_matches_fd() {
     let sys = System::new(&chain()).unwrap();
     let s = random_state(&sys, 4);
     let mut rng = Rng::new(9);
-    let forces: Vec<[f64; 6]> = (0..sys.model().nodes.len()).map(|_| std::array::from_fn(|_| 10.0 * rng.uniform())).collect();
+    let forces: Vec<[f64; 6]> = (0..sys.model().nodes.len())
+        .map(|_| std::array::from_fn(|_| 10.0 * rng.uniform()))
+        .collect();
     let (_, G) = sys.generalized_force(&s, &forces);
     let n = sys.n_dof();
-    let rep = check_jacobian("G_r", G.as_ref(), &vec![1e-6; n], |d| sys.generalized_force(&sys.retract(&s, d), &forces).0);
+    let rep = check_jacobian("G_r", G.as_ref(), &vec![1e-6; n], |d| {
+        sys.generalized_force(&sys.retract(&s, d), &forces).0
+    });
     eprintln!("{rep}");
     assert!(rep.worst < TOL, "{rep}");
 }

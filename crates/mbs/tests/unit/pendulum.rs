@@ -20,8 +20,18 @@ fn elliptic_k(k: f64) -> f64 {
 /// Angle history of the pendulum released from rest at `theta0`.
 fn run(theta0: f64, h: f64, end: f64, rho: f64) -> (Vec<f64>, Vec<f64>) {
     let (mut model, j) = pendulum(1.0, 1.0, 0.01);
-    model.initial.push(InitialCondition::JointValue { joint: j, coordinate: 0, value: theta0 });
-    model.add_sensor("theta", SensorKind::JointCoordinate { joint: j, coordinate: 0 });
+    model.initial.push(InitialCondition::JointValue {
+        joint: j,
+        coordinate: 0,
+        value: theta0,
+    });
+    model.add_sensor(
+        "theta",
+        SensorKind::JointCoordinate {
+            joint: j,
+            coordinate: 0,
+        },
+    );
     let sys = System::new(&model).unwrap();
     let mut settings = DynamicSettings::new(h, end, rho);
     settings.tolerance = 1e-12;
@@ -32,7 +42,10 @@ fn run(theta0: f64, h: f64, end: f64, rho: f64) -> (Vec<f64>, Vec<f64>) {
 /// Times of the downward zero crossings of theta (linear interpolation: theta'' = 0 at theta
 /// = 0, so its error is third order in the step).
 fn down_crossings(t: &[f64], x: &[f64]) -> Vec<f64> {
-    (1..x.len()).filter(|&i| x[i - 1] > 0.0 && x[i] <= 0.0).map(|i| t[i - 1] + (t[i] - t[i - 1]) * x[i - 1] / (x[i - 1] - x[i])).collect()
+    (1..x.len())
+        .filter(|&i| x[i - 1] > 0.0 && x[i] <= 0.0)
+        .map(|i| t[i - 1] + (t[i] - t[i - 1]) * x[i - 1] / (x[i - 1] - x[i]))
+        .collect()
 }
 
 /// I_O / (m g d) of the fixture pendulum (m = 1, d = 1, I_G = 0.01).
@@ -77,7 +90,8 @@ fn second_order_in_time() {
     let errs: Vec<f64> = hs.iter().map(|&h| (last(h) - reference).abs()).collect();
     let (lx, ly): (Vec<f64>, Vec<f64>) = hs.iter().zip(&errs).map(|(h, e)| (h.ln(), e.ln())).unzip();
     let (mx, my) = (lx.iter().sum::<f64>() / 4.0, ly.iter().sum::<f64>() / 4.0);
-    let slope = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>() / lx.iter().map(|x| (x - mx) * (x - mx)).sum::<f64>();
+    let slope = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
+        / lx.iter().map(|x| (x - mx) * (x - mx)).sum::<f64>();
     eprintln!("errors {errs:?}, fitted order {slope:.3}");
     assert!(slope >= 1.8, "order {slope}");
 }
@@ -87,7 +101,19 @@ fn driver_effort_is_the_inverse_dynamics_torque() {
     // A driven pendulum: the driver supplies I_O theta'' + m g d sin(theta) (about z).
     let (mut model, j) = pendulum(1.0, 1.0, 0.01);
     let (a, w) = (0.8, 2.5);
-    let d = model.add_driver("drive", mbs::DriverTarget::Joint { joint: j, coordinate: 0 }, mbs::TimeFunction::Sine { offset: 0.0, amplitude: a, omega: w, phase: 0.3 });
+    let d = model.add_driver(
+        "drive",
+        mbs::DriverTarget::Joint {
+            joint: j,
+            coordinate: 0,
+        },
+        mbs::TimeFunction::Sine {
+            offset: 0.0,
+            amplitude: a,
+            omega: w,
+            phase: 0.3,
+        },
+    );
     model.add_sensor("torque", SensorKind::DriverEffort { driver: d });
     let sys = System::new(&model).unwrap();
     let traj = solve_dynamic(&sys, sys.initial_state(), &DynamicSettings::new(0.01, 1.0, 0.8)).unwrap();
@@ -97,6 +123,9 @@ fn driver_effort_is_the_inverse_dynamics_torque() {
         let thdd = -a * w * w * (w * t + 0.3).sin();
         let exact = 1.01 * thdd + G * th.sin();
         // No unknowns: the effort is evaluated exactly at each step (round-off only).
-        assert!((q - exact).abs() < 1e-10 * (1.0 + exact.abs()), "t = {t}: {q} vs {exact}");
+        assert!(
+            (q - exact).abs() < 1e-10 * (1.0 + exact.abs()),
+            "t = {t}: {q} vs {exact}"
+        );
     }
 }

@@ -11,7 +11,10 @@ fn slider_follows_the_rigid_mechanism() {
     let (model, _, _) = slider_crank(2, ModeSelection::Count(2), speed);
     let sys = System::new(&model).unwrap();
     let period = 2.0 * std::f64::consts::PI / speed;
-    let settings = DynamicSettings { output_every: 5, ..DynamicSettings::new(period / 400.0, 2.0 * period, 0.9) };
+    let settings = DynamicSettings {
+        output_every: 5,
+        ..DynamicSettings::new(period / 400.0, 2.0 * period, 0.9)
+    };
     let traj = solve_dynamic(&sys, sys.initial_state(), &settings).unwrap();
     let x = traj.sensors.column("slider", 0).unwrap();
     let z = traj.sensors.column("slider", 2).unwrap();

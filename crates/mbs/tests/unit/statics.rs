@@ -38,7 +38,10 @@ pub fn tip(n: usize, load: f64, moment: bool) -> ([f64; 3], Vec<Vec<f64>>) {
     let sol = solve_static(&sys, sys.initial_state(), &StaticSettings::new(4)).unwrap();
     let d = sol.sensors.series("tip").unwrap().last().unwrap().clone();
     let r = sol.sensors.series("rot").unwrap().last().unwrap().clone();
-    ([d[1], -d[0], r[2]], sol.steps.iter().map(|s| s.residuals.clone()).collect())
+    (
+        [d[1], -d[0], r[2]],
+        sol.steps.iter().map(|s| s.residuals.clone()).collect(),
+    )
 }
 
 /// Order of the last Newton iteration, log r_last / log r_prev (relative residuals below one:
@@ -55,7 +58,10 @@ fn elastica_approaches_the_table_at_second_order() {
         for n in [1, 2, 4, 8] {
             let (t, _) = tip(n, a, false);
             let err = (0..3).map(|i| (t[i] - reference[i]).abs()).fold(0.0, f64::max);
-            eprintln!("a = {a}, N = {n}: w/L {:.5} u/L {:.5} rot {:.5}  (max error {err:.2e})", t[0], t[1], t[2]);
+            eprintln!(
+                "a = {a}, N = {n}: w/L {:.5} u/L {:.5} rot {:.5}  (max error {err:.2e})",
+                t[0], t[1], t[2]
+            );
             errors.push(err);
         }
         // Each superelement is a linear beam in its own frame, so the error of the chain falls
@@ -76,7 +82,10 @@ fn roll_up_approaches_the_arc() {
     for n in [1, 2, 4, 8] {
         let (t, _) = tip(n, b, true);
         let err = (0..3).map(|i| (t[i] - exact[i]).abs()).fold(0.0, f64::max);
-        eprintln!("b = pi/2, N = {n}: w/L {:.5} u/L {:.5} rot {:.5} (max error {err:.2e})", t[0], t[1], t[2]);
+        eprintln!(
+            "b = pi/2, N = {n}: w/L {:.5} u/L {:.5} rot {:.5} (max error {err:.2e})",
+            t[0], t[1], t[2]
+        );
         errors.push(err);
     }
     for w in errors.windows(2).skip(1) {
@@ -114,5 +123,18 @@ fn clamp_reaction_balances_the_tip_load() {
     let expected = [0.0, -P, 0.0, 0.0, 0.0, -x[0] * P];
     for i in 0..6 {
         assert!((r[i] - expected[i]).abs() < 1e-8 * P, "reaction {r:?} vs {expected:?}");
+    }
+}
+
+#[test]
+#[ignore]
+fn print_histories() {
+    for n in [1, 4, 8] {
+        let (_, h) = tip(n, 5.0, false);
+        let total: usize = h.iter().map(|s| s.len() - 1).sum();
+        eprintln!("N={n}: {} load steps, {total} iterations", h.len());
+        for s in &h {
+            eprintln!("  {:?}", s.iter().map(|x| format!("{x:.1e}")).collect::<Vec<_>>());
+        }
     }
 }

@@ -23,15 +23,52 @@ fn mixed() -> Model {
         Vector3::new(2.0, 0.3, 0.2),
         Vector3::new(2.3, 0.1, 0.4),
     ];
-    let n: Vec<mbs::NodeId> = p.iter().enumerate().map(|(i, x)| m.add_node(&format!("n{i}"), *x)).collect();
+    let n: Vec<mbs::NodeId> = p
+        .iter()
+        .enumerate()
+        .map(|(i, x)| m.add_node(&format!("n{i}"), *x))
+        .collect();
     let b1 = beam_body("b1", p[0], p[1], 4, 0.05, 2e6, 2000.0, ModeSelection::Count(2));
-    m.add_flexible_body(b1, vec![n[0], n[1]], Isometry3::identity(), FrameChoice::CenterOfMass, MassVariant::Exact);
-    m.add_rigid_body(rigid("r1", n[1], vec![n[2]], 0.7, Vector3::new(0.1, 0.05, 0.0), [0.01, 0.02, 0.015]));
-    m.add_joint("rev", n[2], n[3], JointKind::Revolute { axis: Vector3::new(0.2, 0.1, 1.0) });
+    m.add_flexible_body(
+        b1,
+        vec![n[0], n[1]],
+        Isometry3::identity(),
+        FrameChoice::CenterOfMass,
+        MassVariant::Exact,
+    );
+    m.add_rigid_body(rigid(
+        "r1",
+        n[1],
+        vec![n[2]],
+        0.7,
+        Vector3::new(0.1, 0.05, 0.0),
+        [0.01, 0.02, 0.015],
+    ));
+    m.add_joint(
+        "rev",
+        n[2],
+        n[3],
+        JointKind::Revolute {
+            axis: Vector3::new(0.2, 0.1, 1.0),
+        },
+    );
     let b2 = beam_body("b2", p[3], p[4], 4, 0.05, 2e6, 2000.0, ModeSelection::Count(1));
-    m.add_flexible_body(b2, vec![n[3], n[4]], Isometry3::identity(), FrameChoice::InterfaceNode(0), MassVariant::Lumped);
+    m.add_flexible_body(
+        b2,
+        vec![n[3], n[4]],
+        Isometry3::identity(),
+        FrameChoice::InterfaceNode(0),
+        MassVariant::Lumped,
+    );
     m.add_joint("sph", n[4], n[5], JointKind::Spherical);
-    m.add_rigid_body(rigid("r2", n[5], vec![n[6]], 0.5, Vector3::new(0.1, -0.05, 0.1), [0.01, 0.01, 0.02]));
+    m.add_rigid_body(rigid(
+        "r2",
+        n[5],
+        vec![n[6]],
+        0.5,
+        Vector3::new(0.1, -0.05, 0.1),
+        [0.01, 0.01, 0.02],
+    ));
     m.point_masses.push(PointMass { node: n[3], mass: 0.3 });
     m.springs.push(Spring {
         name: "tie".into(),
@@ -43,8 +80,20 @@ fn mixed() -> Model {
         rest_length: Some(2.0),
     });
     m.add_support(Support::pin(n[0]));
-    m.add_load(Load { node: n[4], kind: LoadKind::Force, axes: LoadAxes::Follower, value: Vector3::new(0.0, 3.0, 1.0), time: TimeFunction::constant(1.0) });
-    m.add_load(Load { node: n[6], kind: LoadKind::Moment, axes: LoadAxes::Follower, value: Vector3::new(0.5, 0.0, 0.8), time: TimeFunction::constant(1.0) });
+    m.add_load(Load {
+        node: n[4],
+        kind: LoadKind::Force,
+        axes: LoadAxes::Follower,
+        value: Vector3::new(0.0, 3.0, 1.0),
+        time: TimeFunction::constant(1.0),
+    });
+    m.add_load(Load {
+        node: n[6],
+        kind: LoadKind::Moment,
+        axes: LoadAxes::Follower,
+        value: Vector3::new(0.5, 0.0, 0.8),
+        time: TimeFunction::constant(1.0),
+    });
     m.add_dead_force(n[1], Vector3::new(0.0, 0.0, -2.0));
     m.gravity = Vector3::new(0.0, -9.81, 0.0);
     m
@@ -91,7 +140,13 @@ fn rigid_chain_tangents_match_fd() {
     let mut model = chain();
     model.gravity = Vector3::new(0.3, -9.81, 0.5);
     let n_last = mbs::NodeId(11);
-    model.add_load(Load { node: n_last, kind: LoadKind::Force, axes: LoadAxes::Follower, value: Vector3::new(1.0, 2.0, 0.5), time: TimeFunction::constant(1.0) });
+    model.add_load(Load {
+        node: n_last,
+        kind: LoadKind::Force,
+        axes: LoadAxes::Follower,
+        value: Vector3::new(1.0, 2.0, 0.5),
+        time: TimeFunction::constant(1.0),
+    });
     let sys = System::new(&model).unwrap();
     let s = random_state(&sys, 11);
     check_tangents(&sys, &s, 1e-6, 1e-6);
