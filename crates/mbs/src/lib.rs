@@ -69,6 +69,7 @@ pub mod topology;
 
 pub use dynamic_solver::{solve_dynamic, AlphaParameters, DynamicSettings, Integrator, StepReport, Trajectory};
 pub use error::{Incomplete, ModelError, SolveError};
+pub use linearized::{linearize, spectrum, LinearSpectrum};
 pub use model::{
     Body, BodyId, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind, JointSpring, Load,
     LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor, SensorKind, Spring,

@@ -320,6 +320,9 @@ pub enum SensorKind {
     NodePosition { node: NodeId },
     /// $\mathbf r - \mathbf r_0$ (3).
     NodeDisplacement { node: NodeId },
+    /// Position in the axes of node `reference`, $\mathbf R_{ref}^T(\mathbf r - \mathbf r_{ref})$ (3):
+    /// the motion seen from a moving frame (the tip of a rotating beam seen from its hub).
+    RelativePosition { node: NodeId, reference: NodeId },
     /// Rotation vector $\log(\mathbf R\mathbf R_0^T)$ from the initial orientation (3).
     NodeRotation { node: NodeId },
     /// $\mathbf v$ (3).

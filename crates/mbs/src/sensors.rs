@@ -170,6 +170,7 @@ impl System {
             .iter()
             .map(|s| match &s.kind {
                 SensorKind::NodePosition { .. }
+                | SensorKind::RelativePosition { .. }
                 | SensorKind::NodeDisplacement { .. }
                 | SensorKind::NodeRotation { .. }
                 | SensorKind::NodeVelocity { .. }
@@ -212,6 +213,10 @@ impl System {
                     &mut row,
                     nodes[node.index()].r - self.model.nodes[node.index()].position,
                 ),
+                SensorKind::RelativePosition { node, reference } => {
+                    let (p, r) = (&nodes[node.index()], &nodes[reference.index()]);
+                    push3(&mut row, r.R.inverse() * (p.r - r.r))
+                }
                 SensorKind::NodeRotation { node } => {
                     let R = nodes[node.index()].R * self.model.nodes[node.index()].orientation.inverse();
                     push3(&mut row, so3::log(&R))

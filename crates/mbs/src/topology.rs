@@ -192,6 +192,10 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
             | SensorKind::NodeVelocity { node: n }
             | SensorKind::NodeAngularVelocity { node: n }
             | SensorKind::Reaction { node: n } => node(*n, &who)?,
+            SensorKind::RelativePosition { node: n, reference } => {
+                node(*n, &who)?;
+                node(*reference, &who)?;
+            }
             SensorKind::LineDistance { node: n, a, b, .. } => {
                 node(*n, &who)?;
                 node(*a, &who)?;

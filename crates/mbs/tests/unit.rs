@@ -43,3 +43,8 @@ mod data;
 /// follows the rigid mechanism with a small elastic correction.
 #[path = "unit/slider_crank.rs"]
 mod slider_crank;
+
+/// Linearised analysis: clamped-free beam frequencies (benchmarks.md A1) from superelements,
+/// and the geometric stiffness of an axial preload.
+#[path = "unit/linearized.rs"]
+mod linearized;

@@ -55,9 +55,10 @@ pub enum ReductionError {
     /// entry), or an indefinite matrix found by the eigensolver (`dof` is then `None`).
     #[error("the mass matrix is not positive definite{}: {why}", dof.map(|d| format!(" at dof {d}")).unwrap_or_default())]
     MassNotPositiveDefinite { dof: Option<usize>, why: String },
-    /// Krylov-Schur did not deliver the requested eigenpairs: either it stopped after
-    /// `max_restarts` with only `converged` locked pairs, or the residual check of the
-    /// returned pairs failed (`failed_modes`, 0-based in ascending order of eigenvalue).
+    /// The eigensolver did not deliver the requested eigenpairs: either Lanczos ran out of
+    /// `max_restarts` with only `converged` pairs converged (`worst_residual` is then
+    /// infinite), or the residual check of the returned pairs failed. `failed_modes` are
+    /// 0-based, in ascending order of eigenvalue.
     #[error("eigensolver did not converge: {converged} of {requested} modes converged; modes {failed_modes:?} fail the residual check (worst relative residual {worst_residual:.3e} > {tolerance:.3e}); raise max_restarts or krylov_dim, or loosen the tolerance")]
     EigenNotConverged {
         requested: usize,

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use fe_model::{BeamProperties, BeamSection, BeamTheory, FeModel, IsotropicMaterial, MassKind};
-use mbs::{JointKind, Model, NodeId, RigidBody, Support};
+use mbs::{solve_static, JointKind, Model, NodeId, RigidBody, SensorKind, StaticSettings, Support, System};
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 use reduction::{reduce, CbSettings, ModeSelection, ReducedBody};
 use superelement::{FrameChoice, MassVariant};
@@ -236,4 +236,69 @@ pub fn slider_crank(n: usize, modes: ModeSelection, speed: f64) -> (Model, Vec<N
         rate: w_rod,
     });
     (m, rod_nodes, [ja, jb])
+}
+
+/// Mattiasson's elastica (benchmarks.md B1): a -> (w/L, u/L, tip rotation).
+pub const ELASTICA: [(f64, [f64; 3]); 7] = [
+    (1.0, [0.30172, 0.05643, 0.46135]),
+    (2.0, [0.49346, 0.16064, 0.78175]),
+    (3.0, [0.60325, 0.25442, 0.98602]),
+    (4.0, [0.66996, 0.32894, 1.12124]),
+    (5.0, [0.71379, 0.38763, 1.21537]),
+    (7.0, [0.76737, 0.47293, 1.33496]),
+    (10.0, [0.81061, 0.55500, 1.43029]),
+];
+
+/// Square section 10 mm, L = 1, E chosen for EI = 1 N m^2: slenderness L/r = 346 and axial
+/// strain a/(EA) < 5e-5, far below the table's 5 digits.
+pub const ELASTICA_SIDE: f64 = 0.01;
+pub const ELASTICA_E: f64 = 1.2e9;
+
+/// Tip (w/L, u/L, rotation) of the cantilever of `n` superelements under tip load `a` (force,
+/// `moment = false`) or `b` (moment), with the Newton histories of the load steps.
+pub fn elastica_tip(n: usize, load: f64, moment: bool) -> ([f64; 3], Vec<mbs::LoadStep>) {
+    let (mut model, nodes) = cantilever(n, 1.0, ELASTICA_SIDE, ELASTICA_E, 1000.0, ModeSelection::StaticOnly, 3);
+    let tip = *nodes.last().unwrap();
+    let EI = ELASTICA_E * ELASTICA_SIDE.powi(4) / 12.0;
+    if moment {
+        model.add_dead_moment(tip, Vector3::new(0.0, 0.0, load * EI));
+    } else {
+        model.add_dead_force(tip, Vector3::new(0.0, load * EI, 0.0));
+    }
+    model.add_sensor("tip", SensorKind::NodeDisplacement { node: tip });
+    model.add_sensor("rot", SensorKind::NodeRotation { node: tip });
+    let sys = System::new(&model).unwrap();
+    let sol = solve_static(&sys, sys.initial_state(), &StaticSettings::new(4)).unwrap();
+    let d = sol.sensors.series("tip").unwrap().last().unwrap().clone();
+    let r = sol.sensors.series("rot").unwrap().last().unwrap().clone();
+    ([d[1], -d[0], r[2]], sol.steps)
+}
+
+
+/// The spin-up beam of benchmarks.md C1 (Simo & Vu-Quoc 1986): L = 10 m, EA = 2.8e7 N,
+/// EI = 1.4e4 N m^2 (both bending planes), rho A = 1.2 kg/m, clamped to a hub on the z axis
+/// whose angle follows the spin-up profile to `omega` in 15 s; `n` superelements with `modes`
+/// fixed-interface modes each. Sensor "tip": the tip in the hub's axes.
+pub fn spin_up(n: usize, modes: ModeSelection, omega: f64) -> Model {
+    let (L, E, A, I, rho) = (10.0, 7e10, 4e-4, 2e-7, 3000.0);
+    let mut fe = FeModel::default();
+    let material = fe.add_material(IsotropicMaterial::new("c1", E, 0.3, rho).unwrap());
+    let section = fe.add_section(BeamSection::from_values("c1", A, I, I, 2.0 * I, 5.0 / 6.0, 5.0 / 6.0).unwrap());
+    let props = BeamProperties { section, material, orientation: Vector3::y(), theory: BeamTheory::EulerBernoulli, mass: MassKind::Consistent };
+    let seg = L / n as f64;
+    let nodes = fe_model::generate::straight_beam(&mut fe, Point3::origin(), Point3::new(seg, 0.0, 0.0), 4, &props, Some("seg")).unwrap();
+    let mut settings = CbSettings::new(modes);
+    settings.keep_mesh_shapes = false;
+    let body = reduce(&fe, "seg", &[("a".into(), nodes[0]), ("b".into(), nodes[4])], &settings).unwrap();
+    let mut m = Model::new("spin-up");
+    let beam: Vec<NodeId> = (0..=n).map(|i| m.add_node(&format!("b{i}"), Vector3::new(seg * i as f64, 0.0, 0.0))).collect();
+    for i in 0..n {
+        let mut b = body.clone();
+        b.name = format!("seg{i}");
+        m.add_flexible_body(b, vec![beam[i], beam[i + 1]], Isometry3::translation(seg * i as f64, 0.0, 0.0), FrameChoice::CenterOfMass, MassVariant::Exact);
+    }
+    m.add_support(Support::hinge(beam[0], Vector3::z()));
+    m.add_driver("hub", mbs::DriverTarget::NodeRotation { node: beam[0] }, mbs::TimeFunction::SpinUp { omega, duration: 15.0 });
+    m.add_sensor("tip", SensorKind::RelativePosition { node: beam[n], reference: beam[0] });
+    m
 }

@@ -1,54 +1,18 @@
 //! Geometrically nonlinear statics of a cantilever made of N beam superelements.
 
-use crate::fixtures::cantilever;
+use crate::fixtures::{cantilever, elastica_tip as tip, ELASTICA, ELASTICA_E as E, ELASTICA_SIDE as SIDE};
 use mbs::{solve_static, SensorKind, StaticSettings, System};
 use nalgebra::Vector3;
 use reduction::ModeSelection;
 
-/// Mattiasson's elastica (benchmarks.md B1): a -> (w/L, u/L, tip rotation).
-pub const ELASTICA: [(f64, [f64; 3]); 7] = [
-    (1.0, [0.30172, 0.05643, 0.46135]),
-    (2.0, [0.49346, 0.16064, 0.78175]),
-    (3.0, [0.60325, 0.25442, 0.98602]),
-    (4.0, [0.66996, 0.32894, 1.12124]),
-    (5.0, [0.71379, 0.38763, 1.21537]),
-    (7.0, [0.76737, 0.47293, 1.33496]),
-    (10.0, [0.81061, 0.55500, 1.43029]),
-];
-
-/// Square section 10 mm, L = 1, E chosen for EI = 1 N m^2: slenderness L/r = 346 and axial
-/// strain a/(EA) < 5e-5, far below the table's 5 digits.
-pub const SIDE: f64 = 0.01;
-pub const E: f64 = 1.2e9;
-
-/// Tip (w/L, u/L, rotation) of the cantilever of `n` superelements under tip load `a` (force,
-/// `moment = false`) or `b` (moment), with the Newton histories of the load steps.
-pub fn tip(n: usize, load: f64, moment: bool) -> ([f64; 3], Vec<Vec<f64>>) {
-    let (mut model, nodes) = cantilever(n, 1.0, SIDE, E, 1000.0, ModeSelection::StaticOnly, 3);
-    let tip = *nodes.last().unwrap();
-    let EI = E * SIDE.powi(4) / 12.0;
-    if moment {
-        model.add_dead_moment(tip, Vector3::new(0.0, 0.0, load * EI));
-    } else {
-        model.add_dead_force(tip, Vector3::new(0.0, load * EI, 0.0));
-    }
-    model.add_sensor("tip", SensorKind::NodeDisplacement { node: tip });
-    model.add_sensor("rot", SensorKind::NodeRotation { node: tip });
-    let sys = System::new(&model).unwrap();
-    let sol = solve_static(&sys, sys.initial_state(), &StaticSettings::new(4)).unwrap();
-    let d = sol.sensors.series("tip").unwrap().last().unwrap().clone();
-    let r = sol.sensors.series("rot").unwrap().last().unwrap().clone();
-    (
-        [d[1], -d[0], r[2]],
-        sol.steps.iter().map(|s| s.residuals.clone()).collect(),
-    )
-}
-
-/// Order of the last Newton iteration, log r_last / log r_prev (relative residuals below one:
-/// 2 for r_last = r_prev^2).
+/// Order of the last Newton correction above round-off (1e-11 of the model size):
+/// log d_{k+1} / log d_k for corrections below 0.1 (2 for d_{k+1} = d_k^2).
 pub fn last_order(history: &[f64]) -> f64 {
-    let k = history.len() - 1;
-    history[k].ln() / history[k - 1].ln()
+    (1..history.len())
+        .filter(|&k| history[k - 1] < 0.1 && history[k] > 1e-11)
+        .map(|k| history[k].ln() / history[k - 1].ln())
+        .last()
+        .unwrap_or(0.0)
 }
 
 #[test]
@@ -95,14 +59,15 @@ fn roll_up_approaches_the_arc() {
 
 #[test]
 fn newton_converges_quadratically() {
-    let (_, histories) = tip(4, 5.0, false);
-    let last = histories.last().unwrap();
-    let order = last_order(last);
-    eprintln!("residual history of the last load step: {last:?}, order {order:.2}");
-    // Quadratic: the last residual is (at least) the square of the one before. Earlier
-    // iterations of a large load step alternate (a correction with large rotations strains the
-    // stiff axial direction), as is usual for additive Newton corrections on slender beams.
-    assert!(order > 1.8, "{last:?}");
+    let (_, steps) = tip(4, 5.0, false);
+    let last = steps.last().unwrap();
+    let order = last_order(&last.increments);
+    eprintln!("last load step: residuals {:?}", last.residuals);
+    eprintln!("                corrections {:?}, order {order:.2}", last.increments);
+    // Quadratic: the last correction above round-off is the square of the one before. The
+    // residuals jump in the first iterations of a large load step (a correction with large
+    // rotations strains the stiff axial direction) and show it less clearly.
+    assert!(order > 1.8, "{:?}", last.increments);
 }
 
 #[test]
@@ -131,10 +96,11 @@ fn clamp_reaction_balances_the_tip_load() {
 fn print_histories() {
     for n in [1, 4, 8] {
         let (_, h) = tip(n, 5.0, false);
-        let total: usize = h.iter().map(|s| s.len() - 1).sum();
+        let total: usize = h.iter().map(|s| s.increments.len()).sum();
         eprintln!("N={n}: {} load steps, {total} iterations", h.len());
         for s in &h {
-            eprintln!("  {:?}", s.iter().map(|x| format!("{x:.1e}")).collect::<Vec<_>>());
+            eprintln!("  r {:?}", s.residuals.iter().map(|x| format!("{x:.1e}")).collect::<Vec<_>>());
+            eprintln!("  d {:?}", s.increments.iter().map(|x| format!("{x:.1e}")).collect::<Vec<_>>());
         }
     }
 }
