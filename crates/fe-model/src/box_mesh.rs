@@ -40,13 +40,18 @@ use std::collections::BTreeMap;
 /// Sizes come from study files, so bad ones are errors, not panics: a kind that is not a
 /// solid, a zero division count, or a length that is not positive and finite.
 pub fn box_mesh(kind: CellKind, lengths: [f64; 3], divisions: [usize; 3]) -> Result<Mesh, FeError> {
-    let bad = |what: String| FeError::Generator { generator: "box_mesh", what };
+    let bad = |what: String| FeError::Generator {
+        generator: "box_mesh",
+        what,
+    };
     let solid = SolidKind::from_cell_kind(kind).ok_or_else(|| bad(format!("needs a solid cell kind, got {kind:?}")))?;
     if !divisions.iter().all(|&d| d > 0) {
         return Err(bad(format!("every division count must be >= 1, got {divisions:?}")));
     }
     if !lengths.iter().all(|&l| l > 0.0 && l.is_finite()) {
-        return Err(bad(format!("every length must be positive and finite, got {lengths:?}")));
+        return Err(bad(format!(
+            "every length must be positive and finite, got {lengths:?}"
+        )));
     }
     let [nx, ny, nz] = divisions;
     // Cells as lists of points on the half-spacing grid, G in 0..=2n per axis.

@@ -48,11 +48,11 @@ pub mod section;
 pub mod statics;
 
 pub use assembly::{assemble, assemble_into, Assembled};
-pub use dof::{Dof, DofMap, DofStatus};
 pub use box_mesh::{box_mesh, solid_model, solid_model_with_materials};
+pub use dof::{Dof, DofMap, DofStatus};
 pub use element::{Beam2, BeamTheory, Element, LocalMatrices, MassKind, Properties, Solid, SolidKind};
-pub use interface::{add_interface, add_interface_on_set, Interface, Interfaces, SpiderKind};
 pub use error::{ElementError, FeError, PropertyError, DOF_NAMES};
+pub use interface::{add_interface, add_interface_on_set, Interface, Interfaces, SpiderKind};
 pub use mesh::{Cell, CellId, CellKind, Mesh, NodeId};
 pub use modal::{modal_dense, ModalSolution};
 pub use model::{BeamProperties, DofMask, FeModel, LinearConstraint, NodalLoad, Support};

@@ -56,7 +56,9 @@ pub fn modal_dense(model: &FeModel, n_modes: usize) -> Result<ModalSolution, FeE
     // diagonal ratio.
     let (trK, trM) = (0..n).fold((0.0, 0.0), |(a, b), i| (a + K[(i, i)], b + M[(i, i)]));
     if !(trM > 0.0) {
-        return Err(FeError::LinearAlgebra(format!("the mass matrix has trace {trM:.3e}: the model has no mass")));
+        return Err(FeError::LinearAlgebra(format!(
+            "the mass matrix has trace {trM:.3e}: the model has no mass"
+        )));
     }
     let s = 1e-3 * (trK / trM).max(f64::MIN_POSITIVE);
     let A = Mat::from_fn(n, n, |i, j| K[(i, j)] + s * M[(i, j)]);
@@ -74,7 +76,9 @@ pub fn modal_dense(model: &FeModel, n_modes: usize) -> Result<ModalSolution, FeE
     let mut Ct = C.transpose().to_owned();
     solve_lower_triangular_in_place(L, Ct.as_mut(), Par::rayon(0));
     let C = Mat::from_fn(n, n, |i, j| 0.5 * (Ct[(i, j)] + Ct[(j, i)]));
-    let evd = C.self_adjoint_eigen(Side::Lower).map_err(|e| FeError::LinearAlgebra(format!("dense eigen: {e:?}")))?;
+    let evd = C
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| FeError::LinearAlgebra(format!("dense eigen: {e:?}")))?;
     let m = n_modes.min(n);
     let S = evd.S();
     // The largest mu are the lowest modes; faer sorts ascending.

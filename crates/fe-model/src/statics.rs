@@ -134,7 +134,11 @@ pub fn support_reactions(
     f_int: &[[f64; 6]],
     f_ext: &[[f64; 6]],
 ) -> Vec<(NodeId, [f64; 6])> {
-    let mut residual: Vec<[f64; 6]> = f_int.iter().zip(f_ext).map(|(a, b)| std::array::from_fn(|k| a[k] - b[k])).collect();
+    let mut residual: Vec<[f64; 6]> = f_int
+        .iter()
+        .zip(f_ext)
+        .map(|(a, b)| std::array::from_fn(|k| a[k] - b[k]))
+        .collect();
     for c in &model.constraints {
         let (node, k) = (c.dependent.0.index(), c.dependent.1 as usize);
         let r = residual[node][k];

@@ -7,19 +7,19 @@ mod unit {
     /// Element level for the 3D beam: symmetry, rigid null space, mass, independent
     /// quadrature of the shape functions, one-element cantilevers, sections, errors.
     mod beam2;
-    /// gmsh reader: fixtures in four encodings agree, inline parse cases, node orderings
-    /// against gmsh's reference elements, located errors, no panic on random/cut/mutated input.
-    mod gmsh;
-    /// Solid elements (tet4, tet10, hex8, hex20, wedge6): shape functions, patch tests, rigid
-    /// modes, mass, box meshes, solid models; cantilever vs Timoshenko; tet4 locking.
-    mod solid;
-    /// Quadrature rules: exactness degrees.
-    mod quadrature;
-    /// RBE2/RBE3 interface nodes on solids: rigid patch, no added stiffness, bad sets.
-    mod interface;
     /// Structure-level beam tests against `benchmarks.md` A1/A2: statics to round-off,
     /// frequencies within 0.1 % and converging, the Timoshenko frequency equation.
     mod beam_structure;
     /// Shared fixtures: materials, sections, beam models along skewed axes.
     pub mod common;
+    /// gmsh reader: fixtures in four encodings agree, inline parse cases, node orderings
+    /// against gmsh's reference elements, located errors, no panic on random/cut/mutated input.
+    mod gmsh;
+    /// RBE2/RBE3 interface nodes on solids: rigid patch, no added stiffness, bad sets.
+    mod interface;
+    /// Quadrature rules: exactness degrees.
+    mod quadrature;
+    /// Solid elements (tet4, tet10, hex8, hex20, wedge6): shape functions, patch tests, rigid
+    /// modes, mass, box meshes, solid models; cantilever vs Timoshenko; tet4 locking.
+    mod solid;
 }

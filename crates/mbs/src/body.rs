@@ -12,9 +12,9 @@
 //!   $k$'s orientation is its node's times a constant offset ($\mathbf R_k = \mathbf R_{node}\mathbf C_k$),
 //!   which leaves spatial velocities and variations unchanged.
 //! * Rigid body at its reference node, centre of mass $\mathbf b = \mathbf R\mathbf c$ from it,
-//!   $\mathbf I_G = \mathbf R\mathbf J\mathbf R^T$ ([`rigid_element`]).
-//! * Point mass, point-to-point spring-damper ([`spring_element`]), nodal loads (dead and
-//!   follower, [`load_element`]).
+//!   $\mathbf I_G = \mathbf R\mathbf J\mathbf R^T$ (`rigid_element`).
+//! * Point mass, point-to-point spring-damper (`spring_element`), nodal loads (dead and
+//!   follower, `load_element`).
 
 #![allow(non_snake_case)]
 

@@ -17,7 +17,7 @@
 //! # The map: a chain of elementary operations per node
 //!
 //! Each node is reached from its parent node (or from the ground frame) by a short list of
-//! operations [`Op`] acting on a moving frame $\{\mathbf p, \mathbf R\}$ with velocity
+//! operations `Op` acting on a moving frame $\{\mathbf p, \mathbf R\}$ with velocity
 //! $\{\mathbf v, \boldsymbol\omega\}$ and acceleration $\{\mathbf a, \boldsymbol\alpha\}$ (all inertial;
 //! $\mathbf v$ is the velocity of the point $\mathbf p$):
 //!

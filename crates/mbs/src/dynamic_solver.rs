@@ -2,7 +2,7 @@
 //! Brüls, Cardona & Arnold 2012, *Mech. Mach. Theory* 48, "Lie group generalized-α time
 //! integration of constrained flexible multibody systems", Algorithm 1 without constraints).
 //!
-//! With the step $h$, the user's spectral radius at infinity $\rho_\infty\in[0,1]$ and
+//! With the step $h$, the user's spectral radius at infinity $\rho_\infty\in[0, 1]$ and
 //! $\alpha_m = \frac{2\rho_\infty - 1}{\rho_\infty + 1}$, $\alpha_f = \frac{\rho_\infty}{\rho_\infty + 1}$,
 //! $\gamma = \tfrac12 + \alpha_f - \alpha_m$, $\beta = \tfrac14(\gamma + \tfrac12)^2$:
 //!

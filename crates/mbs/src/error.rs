@@ -113,9 +113,19 @@ pub enum SolveError {
 
 /// A [`SolveError`] with the part of the result computed before it (the converged steps, their
 /// sensors and residual histories), so a failed run can still be inspected.
-#[derive(Debug, Error)]
+#[derive(Error)]
 #[error("{error}")]
-pub struct Incomplete<T: std::fmt::Debug> {
+pub struct Incomplete<T> {
     pub error: SolveError,
     pub partial: T,
+}
+
+/// Shows the error only: the partial result can be large (every recorded sensor value).
+impl<T> std::fmt::Debug for Incomplete<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Incomplete")
+            .field("error", &self.error)
+            .field("partial", &format_args!("<{}>", std::any::type_name::<T>()))
+            .finish()
+    }
 }

@@ -1,56 +1,77 @@
 //! # mbs: flexible multibody systems in minimal coordinates
 //!
 //! Bodies (AIC-FFR superelements from [`superelement`], rigid bodies, point masses) act on
-//! shared *nodes*; joints, supports and drivers make some node coordinates functions of others,
-//! so the unknowns are independent coordinates only and no Lagrange multipliers appear
-//! (brief §5). Static and dynamic analyses work on these coordinates.
+//! shared *nodes*; joints, supports and drivers make some node coordinates explicit functions
+//! of others, so the unknowns are independent coordinates only and no Lagrange multipliers
+//! appear (brief §5). Static, dynamic and linearised analyses work on these coordinates.
 //!
 //! ```text
-//! Model (serde data)  --System::new-->  System (coordinates, elements, sparse pattern)
-//!   System::initial_state  ->  State  ->  solve_static / solve_dynamic (Integrator)  ->  sensors
+//! Model (serde data)  --System::new-->  System (coordinate tree, elements, sparse pattern)
+//!   System::initial_state -> State -> solve_static | solve_dynamic (Integrator) | spectrum
+//!                                      -> SensorRecord (+ Incomplete with the history on error)
 //! ```
+//!
+//! * A body's interface *is* a node: bodies sharing a node are welded. A flexible body's nodes
+//!   stay independent, which is how a kinematic loop closes; a loop of rigid bodies and joints
+//!   only is refused ([`ModelError::RigidLoop`], [`topology`]).
+//! * Joints are directed, parent node to child node: the child's configuration follows from the
+//!   parent's and the joint coordinates ([`JointKind`]). Supports and node drivers act on
+//!   independent nodes.
+//! * Reactions ([`SensorKind::Reaction`], [`SensorKind::DriverEffort`]) are the residual of the
+//!   removed coordinates: the force (moment) the support or driver applies *to* the model.
 //!
 //! # Notation
 //!
 //! | symbol | Rust | meaning | source |
 //! |---|---|---|---|
 //! | $\mathbf r_c,\ \mathbf R_c$ | [`NodeMotion`] `r`, `R` | node position, orientation (node axes to inertial) | brief §5 |
-//! | $\mathbf V_c = [\mathbf v_c; \boldsymbol\omega_c]$ | `v`, `omega` | node velocity, spatial angular velocity | |
+//! | $\mathbf V_c = [\mathbf v_c; \boldsymbol\omega_c]$ | `v`, `omega` | node velocity, spatial angular velocity ($\dot{\mathbf R} = \tilde{\boldsymbol\omega}\mathbf R$) | so3 |
 //! | $\mathbf A_c = [\mathbf a_c; \boldsymbol\alpha_c]$ | `a`, `alpha` | node acceleration | |
 //! | $\mathbf q$ | [`State`] | independent coordinates: scalars and SO(3) rotations | brief §5 |
-//! | $\dot{\mathbf q},\ \ddot{\mathbf q}$ | `State::velocity`, `acceleration` | rates (spatial $\boldsymbol\omega$ for rotations) | |
+//! | $\dot{\mathbf q},\ \ddot{\mathbf q}$ | [`State::velocity`], [`State::acceleration`] | rates (spatial $\boldsymbol\omega$ for rotations) | |
 //! | $\mathbf q\oplus\delta\mathbf q$ | [`System::retract`] | scalars added, $\mathbf R \leftarrow \exp(\widetilde{\delta\boldsymbol\pi})\mathbf R$ | so3 |
-//! | $\mathbf J_c$ | [`NodeKinematics`] `J` | $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$ | brief §5 |
+//! | $\mathbf J_c$ | [`NodeKinematics`] `J` | $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$ (+ driver columns) | brief §5 |
 //! | $\dot{\mathbf J}_c\dot{\mathbf q}$ | `NodeKinematics::motion.a` at $\ddot{\mathbf q} = 0$ | convective acceleration | brief §5 |
 //! | $\mathbf r_c$ | (internal) | node residual: inertia + internal − external force | |
-//! | $\mathbf F$ | [`System::residual`] | $\sum_c\mathbf J_c^T\mathbf r_c$ (+ modal, joint springs) | brief §5 |
-//! | $\mathbf G_r$ | [`System::generalized_force`] | $\partial(\mathbf J^T\mathbf r)/\partial\mathbf q$ at fixed $\mathbf r$: joints' geometric term | this crate |
-//! | $\hat{\mathbf M},\ \hat{\mathbf C},\ \hat{\mathbf K}$ | [`Matrices`] | $\partial\mathbf F/\partial\ddot{\mathbf q}$, $\partial\mathbf F/\partial\dot{\mathbf q}$, $\partial\mathbf F/\partial\mathbf q$ | this crate |
+//! | $\mathbf F$ | [`System::residual`] | $\sum_c\mathbf J_c^T\mathbf r_c$ (+ modal rows, joint springs) | brief §5 |
+//! | $\mathbf G_r$ | [`System::generalized_force`] | $\partial(\mathbf J^T\mathbf r)/\partial\mathbf q$ at fixed $\mathbf r$: the joints' geometric term | [`coordinates`] |
+//! | $\hat{\mathbf M},\ \hat{\mathbf C},\ \hat{\mathbf K}$ | [`Matrices`] | $\partial\mathbf F/\partial\ddot{\mathbf q}$, $\partial\mathbf F/\partial\dot{\mathbf q}$, $\partial\mathbf F/\partial\mathbf q$ | [`coordinates`] |
+//! | $\mathbf K_t,\ \mathbf C_t,\ \mathbf M$ | `ElementOutput` | element tangents on its node ports | [S19], [`body`] |
 //! | $\lambda$ | `lambda` | load factor (statics) | |
-//! | $\rho_\infty,\ \alpha_m,\ \alpha_f,\ \beta,\ \gamma$ | [`AlphaParameters`] | generalized-α | Chung & Hulbert 1993 |
+//! | $\rho_\infty,\ \alpha_m,\ \alpha_f,\ \beta,\ \gamma$ | [`AlphaParameters`] | generalized-α parameters | Chung & Hulbert 1993 |
 //! | $\beta',\ \gamma'$ | `bp`, `gp` | iteration-matrix factors | BCA 2012 |
 //! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration | BCA 2012 |
+//! | $\mathbf T(h\Delta\mathbf q)$ | `System::iteration_matrix` | tangent operator $\mathbf J_l$ of each rotation increment | BCA 2012 |
 //!
-//! Vectors are inertial unless said otherwise; rigid-body mass data and follower loads are in
-//! node axes.
+//! Vectors are inertial unless said otherwise; rigid-body mass data are in their reference
+//! node's axes. BCA 2012: Brüls, Cardona, Arnold, *Mech. Mach. Theory* 48 (2012).
 //!
 //! # Equation map
 //!
 //! | eq. | meaning | function |
 //! |---|---|---|
-//! | brief §5 | node configuration from independent coordinates | `mbs::coordinates::CoordinateMap::motions_into` |
-//! | brief §5 | $\mathbf J$, $\dot{\mathbf J}\dot{\mathbf q}$ and their derivatives | `mbs::coordinates::CoordinateMap::derivatives_into` |
+//! | brief §5 | node configurations, velocities, accelerations and $\mathbf J$ from the independent coordinates | `mbs::coordinates::CoordinateMap::motions_into` |
+//! | this crate | $\partial\mathbf V/\partial\mathbf q$, $\partial\mathbf A/\partial\mathbf q$, $\partial\mathbf A/\partial\dot{\mathbf q}$, $\partial\mathbf J/\partial\mathbf q$ | `mbs::coordinates::CoordinateMap::derivatives_into` |
+//! | this crate | geometric term $\mathbf G_r$ | `mbs::coordinates::CoordinateMap::geometric_term` |
 //! | brief §5 | $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q} + \mathbf Q_v - \mathbf Q) = 0$ | `mbs::System::residual` |
-//! | this crate | tangent of $\mathbf J^T\mathbf r$ incl. $\mathbf G_r$ | `mbs::System::matrices` |
-//! | Newton-Euler | rigid body residual and tangents | `mbs::body::rigid_element` (crate-private) |
+//! | this crate | $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$ | `mbs::System::matrices` |
+//! | Newton-Euler | rigid body about its reference node | `mbs::body::rigid_element` |
+//! | (4.3)-(4.4), [S19] | flexible body | `mbs::body::FlexibleElement::element` (calls `superelement::Superelement::evaluate`) |
 //! | brief §6 | Newton with load stepping | `mbs::solve_static` |
-//! | BCA 2012 Alg. 1 | Lie-group generalized-α | `mbs::Integrator::step` |
+//! | BCA 2012, Alg. 1 | Lie-group generalized-α step | `mbs::Integrator::step` |
+//! | brief §6 | linearised spectrum | `mbs::spectrum` |
+//!
+//! # Not implemented
+//!
+//! Arc-length continuation (statics stop at a limit point with [`SolveError::NotConverged`]),
+//! adaptive time steps, and joints reversed automatically (a tree that can only be built by
+//! reversing a joint is refused with a message saying so).
 //!
 //! # Modules
 //!
 //! [`model`] (serde data), [`time_function`], [`node`], [`coordinates`] (the maps and their
 //! derivatives), [`topology`] (the tree and its checks), [`body`] (elements), [`system`]
-//! (assembly), [`static_solver`], [`dynamic_solver`], [`sensors`], [`linearized`], [`error`].
+//! (assembly), [`static_solver`], [`dynamic_solver`], [`linearized`], [`sensors`], [`error`].
 
 #![allow(non_snake_case)]
 

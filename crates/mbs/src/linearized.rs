@@ -42,16 +42,26 @@ pub fn linearize(system: &System, state: &State) -> Result<Matrices, SolveError>
 pub fn spectrum(system: &System, state: &State) -> Result<LinearSpectrum, SolveError> {
     let m = linearize(system, state)?;
     let n = system.n_dof();
-    let singular = |what: &str| SolveError::Singular { t: state.time(), step: 0, what: what.into() };
+    let singular = |what: &str| SolveError::Singular {
+        t: state.time(),
+        step: 0,
+        what: what.into(),
+    };
     let lu = m.M.partial_piv_lu();
     let mut MK = m.K.clone();
     lu.solve_in_place(MK.as_mut());
     let mut MC = m.C.clone();
     lu.solve_in_place(MC.as_mut());
-    if MK.col_iter().chain(MC.col_iter()).any(|c| c.iter().any(|x| !x.is_finite())) {
+    if MK
+        .col_iter()
+        .chain(MC.col_iter())
+        .any(|c| c.iter().any(|x| !x.is_finite()))
+    {
         return Err(singular("mass matrix of the linearisation"));
     }
-    let ev = MK.eigenvalues().map_err(|_| singular("eigenvalues of M^-1 K did not converge"))?;
+    let ev = MK
+        .eigenvalues()
+        .map_err(|_| singular("eigenvalues of M^-1 K did not converge"))?;
     let mut omega: Vec<f64> = ev.iter().filter(|l| l.re > 0.0).map(|l| l.re.sqrt()).collect();
     omega.sort_by(f64::total_cmp);
     let A = Mat::from_fn(2 * n, 2 * n, |i, j| match (i < n, j < n) {
@@ -60,7 +70,9 @@ pub fn spectrum(system: &System, state: &State) -> Result<LinearSpectrum, SolveE
         (false, true) => -MK[(i - n, j)],
         (false, false) => -MC[(i - n, j - n)],
     });
-    let ev = A.eigenvalues().map_err(|_| singular("state-space eigenvalues did not converge"))?;
+    let ev = A
+        .eigenvalues()
+        .map_err(|_| singular("state-space eigenvalues did not converge"))?;
     let mut state_space: Vec<(f64, f64)> = ev.iter().filter(|l| l.im >= 0.0).map(|l| (l.re, l.im)).collect();
     state_space.sort_by(|a, b| a.1.total_cmp(&b.1));
     Ok(LinearSpectrum { omega, state_space })

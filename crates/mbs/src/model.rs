@@ -7,8 +7,8 @@
 //! [`crate::System::new`], which reports an unknown id with the entity that refers to it.
 //!
 //! Geometry is in the inertial frame at the initial configuration: joint axes, support
-//! directions and dead loads are inertial vectors; follower loads, rigid-body mass data and
-//! the offsets they imply are in the axes of their node at the initial configuration.
+//! directions and loads (dead and follower) are inertial vectors there; rigid-body mass data
+//! are in the axes of their reference node.
 
 use crate::time_function::TimeFunction;
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
@@ -299,7 +299,8 @@ pub enum LoadKind {
 pub enum LoadAxes {
     /// Fixed inertial direction.
     Dead,
-    /// Turns with the node (`value` in node axes at the initial configuration).
+    /// Turns with the node: `value` is the inertial vector at the initial configuration, and
+    /// the load keeps its direction relative to the node's axes.
     Follower,
 }
 

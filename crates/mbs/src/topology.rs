@@ -1,4 +1,4 @@
-//! From a [`Model`] to the tree of dependent coordinates ([`CoordinateMap`]), with the checks
+//! From a [`Model`] to the tree of dependent coordinates (`CoordinateMap`), with the checks
 //! that make it well defined.
 //!
 //! # The tree

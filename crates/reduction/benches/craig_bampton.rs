@@ -7,14 +7,20 @@
 //! (`REDUCTION_CB_SIZES=50k,200k,600k` to choose); without `--bench` (as `cargo test --benches`
 //! runs it) a 3k-dof block, so CI checks that it runs.
 
-use fe_model::{add_interface_on_set, box_mesh, solid_model, CellKind, DofMap, IsotropicMaterial, MassKind, SpiderKind};
+use fe_model::{
+    add_interface_on_set, box_mesh, solid_model, CellKind, DofMap, IsotropicMaterial, MassKind, SpiderKind,
+};
 use reduction::{reduce, CbSettings, ModeSelection};
 use std::time::Instant;
 
 fn peak_rss_mb() -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM")).and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
         .map(|kb| kb / 1024.0)
         .unwrap_or(f64::NAN)
 }
@@ -43,7 +49,12 @@ fn main() {
             }
         };
         let t0 = Instant::now();
-        let mesh = box_mesh(CellKind::Hex8, [2.0 * ex as f64 / ez as f64, ey as f64 / ez as f64, 1.0], [ex, ey, ez]).unwrap();
+        let mesh = box_mesh(
+            CellKind::Hex8,
+            [2.0 * ex as f64 / ez as f64, ey as f64 / ez as f64, 1.0],
+            [ex, ey, ez],
+        )
+        .unwrap();
         let steel = IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap();
         let mut model = solid_model(mesh, steel, MassKind::Consistent).unwrap();
         let a = add_interface_on_set(&mut model, "root", "x0", None, SpiderKind::Rbe2).unwrap();
@@ -55,7 +66,11 @@ fn main() {
             &model,
             "block",
             &[("root".into(), a), ("tip".into(), b)],
-            &CbSettings { modes: ModeSelection::Count(20), keep_mesh_shapes: false, auxiliary_node: None },
+            &CbSettings {
+                modes: ModeSelection::Count(20),
+                keep_mesh_shapes: false,
+                auxiliary_node: None,
+            },
         )
         .unwrap();
         let t_reduce = t1.elapsed();

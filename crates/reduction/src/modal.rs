@@ -11,13 +11,21 @@ use fe_model::{assemble, DofMap, FeModel, ModalSolution, SystemPattern};
 /// `shift`: [`Shift::Zero`] for a supported model; [`Shift::Auto`] (or a negative value)
 /// when the model may have rigid-body modes. Each pair's relative residual is checked by the
 /// eigensolver; the residuals are returned beside the modes.
-pub fn modal_sparse(model: &FeModel, n_modes: usize, shift: Shift) -> Result<(ModalSolution, Vec<f64>), ReductionError> {
+pub fn modal_sparse(
+    model: &FeModel,
+    n_modes: usize,
+    shift: Shift,
+) -> Result<(ModalSolution, Vec<f64>), ReductionError> {
     let dofs = DofMap::new(model).map_err(ReductionError::from_fe)?;
     let pattern = SystemPattern::new(model, &dofs);
     let a = assemble(model, &pattern).map_err(ReductionError::from_fe)?;
     let solution = lowest_modes(a.K.as_ref(), a.M.as_ref(), &EigenSettings::new(n_modes, shift))?;
     let n = dofs.n_free();
-    let omega = solution.eigenvalues.iter().map(|&l| if l >= 0.0 { l.sqrt() } else { -(-l).sqrt() }).collect();
+    let omega = solution
+        .eigenvalues
+        .iter()
+        .map(|&l| if l >= 0.0 { l.sqrt() } else { -(-l).sqrt() })
+        .collect();
     let shapes = (0..solution.eigenvalues.len())
         .map(|j| dofs.expand(&(0..n).map(|i| solution.vectors[(i, j)]).collect::<Vec<_>>()))
         .collect();

@@ -38,7 +38,11 @@ pub struct DenseMatrix {
 
 impl DenseMatrix {
     pub fn zeros(nrows: usize, ncols: usize) -> Self {
-        Self { nrows, ncols, data: vec![0.0; nrows * ncols] }
+        Self {
+            nrows,
+            ncols,
+            data: vec![0.0; nrows * ncols],
+        }
     }
 
     pub fn from_faer(m: faer::MatRef<'_, f64>) -> Self {
@@ -48,7 +52,11 @@ impl DenseMatrix {
                 data.push(m[(i, j)]);
             }
         }
-        Self { nrows: m.nrows(), ncols: m.ncols(), data }
+        Self {
+            nrows: m.nrows(),
+            ncols: m.ncols(),
+            data,
+        }
     }
 
     pub fn to_faer(&self) -> faer::Mat<f64> {

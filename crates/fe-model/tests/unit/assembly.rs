@@ -292,10 +292,16 @@ fn bad_input_gives_errors_that_name_the_entity() {
 #[test]
 fn box_mesh_refuses_bad_sizes_with_an_error() {
     use fe_model::{box_mesh, CellKind};
-    let e = box_mesh(CellKind::Hex8, [1.0, 0.0, 1.0], [1, 1, 1]).unwrap_err().to_string();
+    let e = box_mesh(CellKind::Hex8, [1.0, 0.0, 1.0], [1, 1, 1])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("box_mesh") && e.contains("positive"), "{e}");
-    let e = box_mesh(CellKind::Hex20, [1.0, 1.0, 1.0], [1, 0, 1]).unwrap_err().to_string();
+    let e = box_mesh(CellKind::Hex20, [1.0, 1.0, 1.0], [1, 0, 1])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("division"), "{e}");
-    let e = box_mesh(CellKind::Line2, [1.0, 1.0, 1.0], [1, 1, 1]).unwrap_err().to_string();
+    let e = box_mesh(CellKind::Line2, [1.0, 1.0, 1.0], [1, 1, 1])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("solid"), "{e}");
 }

@@ -221,19 +221,35 @@ fn timoshenko_pinned_pinned_frequencies_match_the_frequency_equation() {
         // Bending along local z uses Iy and kz. The free torsion about the axis is a rigid
         // mode at round-off level, skipped by the 1 rad/s threshold.
         let w = frequencies_of(&modes, Kind::BendZ, 1.0);
-        (1..=4).map(|n| rel(w[n - 1], roots(n as f64 * PI / L, s.Iy(), s.A(), s.kz()))).collect()
+        (1..=4)
+            .map(|n| rel(w[n - 1], roots(n as f64 * PI / L, s.Iy(), s.A(), s.kz())))
+            .collect()
     };
     let coarse = errors(BeamTheory::Timoshenko, 40);
     let fine = errors(BeamTheory::Timoshenko, 80);
     for n in 0..4 {
         // 80 elements: about 3.5e-4 for the 4th mode; 1e-3 is the A1 target.
-        assert!(fine[n] < 1e-3, "Timoshenko mode {}: error {:.2e} with 80 elements", n + 1, fine[n]);
+        assert!(
+            fine[n] < 1e-3,
+            "Timoshenko mode {}: error {:.2e} with 80 elements",
+            n + 1,
+            fine[n]
+        );
         // O(h^2): halving h divides the error by 4; 3.5 allows for higher-order terms.
-        assert!(coarse[n] / fine[n] > 3.5, "mode {}: errors {:.2e} -> {:.2e} do not converge at rate 2", n + 1, coarse[n], fine[n]);
+        assert!(
+            coarse[n] / fine[n] > 3.5,
+            "mode {}: errors {:.2e} -> {:.2e} do not converge at rate 2",
+            n + 1,
+            coarse[n],
+            fine[n]
+        );
     }
     // The test can fail: Euler-Bernoulli misses shear and is off by several percent here.
     let eb = errors(BeamTheory::EulerBernoulli, 40);
-    assert!(eb.iter().cloned().fold(0.0, f64::max) > 0.03, "Euler-Bernoulli should be visibly stiffer on a stocky beam: {eb:?}");
+    assert!(
+        eb.iter().cloned().fold(0.0, f64::max) > 0.03,
+        "Euler-Bernoulli should be visibly stiffer on a stocky beam: {eb:?}"
+    );
 }
 
 /// A Timoshenko model tends to the Euler-Bernoulli one as the shear stiffness grows.

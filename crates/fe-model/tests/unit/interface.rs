@@ -11,7 +11,12 @@ use nalgebra::{Matrix6, Point3, SMatrix, Vector3, Vector6};
 
 /// A box along x, clamped at x = 0.
 fn clamped_box(kind: CellKind, lengths: [f64; 3], divisions: [usize; 3]) -> FeModel {
-    let mut model = solid_model(box_mesh(kind, lengths, divisions).unwrap(), material(), MassKind::Consistent).unwrap();
+    let mut model = solid_model(
+        box_mesh(kind, lengths, divisions).unwrap(),
+        material(),
+        MassKind::Consistent,
+    )
+    .unwrap();
     for n in model.node_set("x0", "clamp").unwrap().to_vec() {
         model.add_support(n, DofMask::ALL);
     }

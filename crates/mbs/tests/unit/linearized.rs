@@ -23,17 +23,28 @@ fn cantilever_frequencies_match_euler_bernoulli() {
     let sp = spectrum(&sys, &sys.initial_state()).unwrap();
     let w1 = omega_1();
     let w2 = 4.69409113f64.powi(2) / 1.87510407f64.powi(2) * w1;
-    eprintln!("first frequencies {:?} rad/s; Euler-Bernoulli {w1:.4}, {w2:.4}", &sp.omega[..6]);
+    eprintln!(
+        "first frequencies {:?} rad/s; Euler-Bernoulli {w1:.4}, {w2:.4}",
+        &sp.omega[..6]
+    );
     // Square section: each bending frequency twice. 4 superelements of 4 consistent-mass
     // elements with 2 fixed-interface modes each reproduce the 16-element beam, whose first
     // two frequencies are within 1e-5 and 1e-4 of the continuum.
-    for (w, exact) in [(sp.omega[0], w1), (sp.omega[1], w1), (sp.omega[2], w2), (sp.omega[3], w2)] {
+    for (w, exact) in [
+        (sp.omega[0], w1),
+        (sp.omega[1], w1),
+        (sp.omega[2], w2),
+        (sp.omega[3], w2),
+    ] {
         assert!((w - exact).abs() < 2e-4 * exact, "{w} vs {exact}");
     }
     // No damping: the state-space eigenvalues are ±i omega (to the accuracy of the
     // nonsymmetric eigensolver on the 2n system, ~1e-7 relative here).
     let (re, im) = sp.state_space[0];
-    assert!(re.abs() < 1e-5 * w1 && (im - sp.omega[0]).abs() < 1e-6 * w1, "{re} {im}");
+    assert!(
+        re.abs() < 1e-5 * w1 && (im - sp.omega[0]).abs() < 1e-6 * w1,
+        "{re} {im}"
+    );
 }
 
 #[test]

@@ -129,3 +129,41 @@ fn driver_effort_is_the_inverse_dynamics_torque() {
         );
     }
 }
+
+#[test]
+fn a_failed_step_returns_the_history_so_far() {
+    // One Newton iteration allowed and a tolerance below round-off: the first step cannot
+    // converge; the error says where, and the initial sensors come back with it.
+    let (mut model, j) = pendulum(1.0, 1.0, 0.01);
+    model.initial.push(InitialCondition::JointValue {
+        joint: j,
+        coordinate: 0,
+        value: 1.0,
+    });
+    model.add_sensor(
+        "theta",
+        SensorKind::JointCoordinate {
+            joint: j,
+            coordinate: 0,
+        },
+    );
+    let sys = System::new(&model).unwrap();
+    let settings = DynamicSettings {
+        max_iterations: 1,
+        tolerance: 1e-30,
+        ..DynamicSettings::new(0.01, 1.0, 0.8)
+    };
+    let err = solve_dynamic(&sys, sys.initial_state(), &settings).unwrap_err();
+    match err.error {
+        mbs::SolveError::NotConverged {
+            step, iterations, t, ..
+        } => {
+            assert_eq!((step, iterations), (1, 1));
+            assert!((t - 0.01).abs() < 1e-15);
+        }
+        e => panic!("{e:?}"),
+    }
+    assert_eq!(err.partial.sensors.times, vec![0.0]);
+    assert_eq!(err.partial.final_state.time(), 0.0);
+    eprintln!("{err}");
+}

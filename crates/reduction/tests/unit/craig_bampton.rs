@@ -26,7 +26,15 @@ fn free_beam(n: usize, mid: bool) -> (FeModel, Vec<(String, NodeId)>, Vec<NodeId
         theory: BeamTheory::Timoshenko,
         mass: MassKind::Consistent,
     };
-    let nodes = straight_beam(&mut model, Point3::new(0.1, 0.2, 0.3), Point3::new(0.1, 0.2, 0.3) + axis, n, &props, None).unwrap();
+    let nodes = straight_beam(
+        &mut model,
+        Point3::new(0.1, 0.2, 0.3),
+        Point3::new(0.1, 0.2, 0.3) + axis,
+        n,
+        &props,
+        None,
+    )
+    .unwrap();
     let mut interfaces = vec![("A".to_string(), nodes[0]), ("B".to_string(), nodes[n])];
     if mid {
         interfaces.push(("M".to_string(), nodes[n / 2]));
@@ -84,17 +92,33 @@ fn static_modes_reproduce_interface_statics_exactly() {
     let mut f = nalgebra::DVector::zeros(12);
     f.fixed_rows_mut::<3>(0).copy_from(&F);
     f.fixed_rows_mut::<3>(9).copy_from(&Mo);
-    let q = K.clone().cholesky().expect("clamped reduced K is positive definite").solve(&f);
+    let q = K
+        .clone()
+        .cholesky()
+        .expect("clamped reduced K is positive definite")
+        .solve(&f);
     // Full FE model, same supports and loads.
     let mut full = model.clone();
     full.add_support(nodes[0], DofMask::ALL);
-    let u = solve_static(&full, &[NodalLoad::force(nodes[8], F), NodalLoad::moment(nodes[4], Mo)]).unwrap().displacements;
+    let u = solve_static(&full, &[NodalLoad::force(nodes[8], F), NodalLoad::moment(nodes[4], Mo)])
+        .unwrap()
+        .displacements;
     let scale = q.amax();
     for k in 0..6 {
         // Constraint modes are the exact static response to interface loads: only the
         // round-off of two Cholesky solves separates them (cond ~ 1e8 here).
-        assert!((q[k] - u[nodes[8].index()][k]).abs() <= 1e-8 * scale, "B dof {k}: {} vs {}", q[k], u[nodes[8].index()][k]);
-        assert!((q[6 + k] - u[nodes[4].index()][k]).abs() <= 1e-8 * scale, "M dof {k}: {} vs {}", q[6 + k], u[nodes[4].index()][k]);
+        assert!(
+            (q[k] - u[nodes[8].index()][k]).abs() <= 1e-8 * scale,
+            "B dof {k}: {} vs {}",
+            q[k],
+            u[nodes[8].index()][k]
+        );
+        assert!(
+            (q[6 + k] - u[nodes[4].index()][k]).abs() <= 1e-8 * scale,
+            "M dof {k}: {} vs {}",
+            q[6 + k],
+            u[nodes[4].index()][k]
+        );
     }
 }
 
@@ -107,14 +131,28 @@ fn free_body_static_block_has_exactly_the_six_rigid_motions_as_null_space() {
     let c = Vector3::from(body.inertia.center_of_mass);
     let R = phi_rig(&body, c);
     // Rigid motions strain nothing: round-off of the projection, relative to ||K||.
-    assert!((&K * &R).amax() <= 1e-9 * K.amax(), "K_CB Phi_rig = {:.3e}", (&K * &R).amax());
+    assert!(
+        (&K * &R).amax() <= 1e-9 * K.amax(),
+        "K_CB Phi_rig = {:.3e}",
+        (&K * &R).amax()
+    );
     let mut e: Vec<f64> = Kbb.symmetric_eigen().eigenvalues.iter().cloned().collect();
     e.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
     // Six eigenvalues at round-off, the seventh (the smallest non-zero, printed) clearly not.
     let smallest_nonzero = e[6];
-    println!("smallest non-zero eigenvalue of the static block: {smallest_nonzero:.6e} (largest {:.6e})", e[17]);
-    assert!(e[5].abs() <= 1e-9 * e[17], "sixth eigenvalue {:.3e} is not a rigid mode", e[5]);
-    assert!(smallest_nonzero >= 1e-6 * e[17], "seventh eigenvalue {smallest_nonzero:.3e} is too small");
+    println!(
+        "smallest non-zero eigenvalue of the static block: {smallest_nonzero:.6e} (largest {:.6e})",
+        e[17]
+    );
+    assert!(
+        e[5].abs() <= 1e-9 * e[17],
+        "sixth eigenvalue {:.3e} is not a rigid mode",
+        e[5]
+    );
+    assert!(
+        smallest_nonzero >= 1e-6 * e[17],
+        "seventh eigenvalue {smallest_nonzero:.3e} is too small"
+    );
 }
 
 #[test]
@@ -125,16 +163,27 @@ fn free_free_spectrum_converges_from_above_as_modes_are_added() {
     let exact: Vec<f64> = full.omega.iter().skip(6).map(|w| w * w).collect();
     let mut previous: Option<Vec<f64>> = None;
     for m in [0, 4, 8, 16] {
-        let selection = if m == 0 { ModeSelection::StaticOnly } else { ModeSelection::Count(m) };
+        let selection = if m == 0 {
+            ModeSelection::StaticOnly
+        } else {
+            ModeSelection::Count(m)
+        };
         let body = reduce(&model, "beam", &interfaces, &CbSettings::new(selection)).unwrap();
         let e = dense_eigenvalues(&dense(&body.K_CB), &dense(&body.M_CB));
         let elastic: Vec<f64> = e.iter().skip(6).take(6).cloned().collect();
         for (i, (&ours, &reference)) in elastic.iter().zip(&exact).enumerate() {
             // Rayleigh-Ritz: every reduced eigenvalue lies above the full one (round-off
             // of both dense solves allowed).
-            assert!(ours >= reference * (1.0 - 1e-9), "m = {m}, mode {i}: {ours} below the full model's {reference}");
+            assert!(
+                ours >= reference * (1.0 - 1e-9),
+                "m = {m}, mode {i}: {ours} below the full model's {reference}"
+            );
             if let Some(p) = &previous {
-                assert!(ours <= p[i] * (1.0 + 1e-9), "m = {m}, mode {i}: {ours} rose above {} with more modes", p[i]);
+                assert!(
+                    ours <= p[i] * (1.0 + 1e-9),
+                    "m = {m}, mode {i}: {ours} rose above {} with more modes",
+                    p[i]
+                );
             }
         }
         let worst = elastic.iter().zip(&exact).map(|(o, r)| (o - r) / r).fold(0.0, f64::max);
@@ -160,7 +209,11 @@ fn mass_data_and_rigid_fit_at_the_centre_of_mass() {
     assert!((body.inertia.mass - m).abs() < 1e-12 * m);
     let axis = Vector3::new(1.0, 0.5, -0.3).normalize();
     let c = Vector3::new(0.1, 0.2, 0.3) + axis * 0.5;
-    assert!((Vector3::from(body.inertia.center_of_mass) - c).norm() < 1e-12, "com {:?}", body.inertia.center_of_mass);
+    assert!(
+        (Vector3::from(body.inertia.center_of_mass) - c).norm() < 1e-12,
+        "com {:?}",
+        body.inertia.center_of_mass
+    );
     // Inertia about the centre: rho A L^3/12 across the axis plus the sections' rotary
     // inertia rho I L; about the axis rho (2I) L.
     let J = nalgebra::Matrix3::from_fn(|i, j| body.inertia.inertia_com[i][j]);
@@ -182,11 +235,19 @@ fn bad_interfaces_give_named_errors() {
     let (mut model, mut interfaces, nodes) = free_beam(4, false);
     interfaces.push(("ghost".into(), NodeId(999)));
     let e = reduce(&model, "beam", &interfaces, &CbSettings::new(ModeSelection::StaticOnly)).unwrap_err();
-    assert!(e.to_string().contains("interface 'ghost'") && e.to_string().contains("999"), "{e}");
+    assert!(
+        e.to_string().contains("interface 'ghost'") && e.to_string().contains("999"),
+        "{e}"
+    );
     interfaces.pop();
     model.add_support(nodes[4], DofMask::single(2));
     let e = reduce(&model, "beam", &interfaces, &CbSettings::new(ModeSelection::StaticOnly)).unwrap_err();
-    assert!(matches!(e, ReductionError::Interface { .. }) && e.to_string().contains("uz") && e.to_string().contains("supported"), "{e}");
+    assert!(
+        matches!(e, ReductionError::Interface { .. })
+            && e.to_string().contains("uz")
+            && e.to_string().contains("supported"),
+        "{e}"
+    );
     // A second, disconnected beam is free even with the interfaces held.
     let (mut model, interfaces, _) = free_beam(4, false);
     let p = BeamProperties {
@@ -196,7 +257,15 @@ fn bad_interfaces_give_named_errors() {
         theory: BeamTheory::EulerBernoulli,
         mass: MassKind::Consistent,
     };
-    straight_beam(&mut model, Point3::new(5.0, 0.0, 0.0), Point3::new(6.0, 0.0, 0.0), 2, &p, None).unwrap();
+    straight_beam(
+        &mut model,
+        Point3::new(5.0, 0.0, 0.0),
+        Point3::new(6.0, 0.0, 0.0),
+        2,
+        &p,
+        None,
+    )
+    .unwrap();
     let e = reduce(&model, "beam", &interfaces, &CbSettings::new(ModeSelection::StaticOnly)).unwrap_err();
     assert!(e.to_string().contains("without straining"), "{e}");
     let _ = Mat::<f64>::zeros(1, 1);

@@ -42,8 +42,16 @@ fn a1_cantilever_through_the_sparse_path() {
         let exact = beta * beta * (E * I / (rho * s.A() * L.powi(4))).sqrt();
         // One of the computed frequencies is this plane's first bending frequency. 0.1 % is
         // the target; 40 cubic elements are at about 1e-7.
-        let best = modes.omega.iter().map(|w| ((w - exact) / exact).abs()).fold(f64::INFINITY, f64::min);
-        assert!(best < 1e-3, "no frequency within 0.1 % of {exact} rad/s: {:?}", modes.omega);
+        let best = modes
+            .omega
+            .iter()
+            .map(|w| ((w - exact) / exact).abs())
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            best < 1e-3,
+            "no frequency within 0.1 % of {exact} rad/s: {:?}",
+            modes.omega
+        );
     }
     let dense = modal_dense(&model, 12).unwrap();
     for (a, b) in modes.omega.iter().zip(&dense.omega) {
@@ -64,5 +72,9 @@ fn a1_free_free_through_the_sparse_path_with_a_negative_shift() {
         // elastic frequency.
         assert!(w.abs() < 1e-4 * first, "rigid mode at {w} rad/s");
     }
-    assert!(((modes.omega[6] - first) / first).abs() < 1e-3, "first elastic {} vs {first}", modes.omega[6]);
+    assert!(
+        ((modes.omega[6] - first) / first).abs() < 1e-3,
+        "first elastic {} vs {first}",
+        modes.omega[6]
+    );
 }

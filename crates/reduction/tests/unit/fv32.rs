@@ -16,7 +16,10 @@ fn fv32_model(nx: usize, ny: usize) -> fe_model::FeModel {
         p.y = 2.5 + (p.y - 2.5) * width / 5.0;
     }
     let clamp: Vec<NodeId> = mesh.node_set("x0").unwrap().to_vec();
-    let mid: Vec<NodeId> = (0..mesh.nodes.len() as u32).map(NodeId).filter(|n| (mesh.nodes[n.index()].z - t / 2.0).abs() < 1e-9).collect();
+    let mid: Vec<NodeId> = (0..mesh.nodes.len() as u32)
+        .map(NodeId)
+        .filter(|n| (mesh.nodes[n.index()].z - t / 2.0).abs() < 1e-9)
+        .collect();
     let steel = IsotropicMaterial::new("FV32 steel", 200e9, 0.3, 8000.0).unwrap();
     let mut model = solid_model(mesh, steel, MassKind::Consistent).unwrap();
     for n in clamp {
@@ -42,7 +45,9 @@ fn fv32_in_plane_frequencies_within_half_a_percent() {
         .into_iter()
         .zip(&modes.shapes)
         .filter(|(_, shape)| {
-            let (in_plane, out) = shape.iter().fold((0.0, 0.0), |(a, b), u| (a + u[0] * u[0] + u[1] * u[1], b + u[2] * u[2]));
+            let (in_plane, out) = shape
+                .iter()
+                .fold((0.0, 0.0), |(a, b), u| (a + u[0] * u[0] + u[1] * u[1], b + u[2] * u[2]));
             out < 1e-2 * in_plane
         })
         .map(|(f, _)| f)
@@ -55,4 +60,3 @@ fn fv32_in_plane_frequencies_within_half_a_percent() {
         assert!(e < 5e-3, "FV32 mode {}: {ours} Hz vs {r} Hz", i + 1);
     }
 }
-
