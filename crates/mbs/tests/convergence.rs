@@ -1,5 +1,7 @@
 //! Convergence studies (slow; run with `cargo test --release --test convergence -- --nocapture`).
-//! Each prints its table; the asserts check the rates the method can honestly reach.
+//! Each prints its table; the asserts check the rates the method can honestly reach. In a debug
+//! build (`cargo test --workspace`) they are ignored: they take 25 s in release, a minute in
+//! debug.
 
 #![allow(non_snake_case)]
 
@@ -30,6 +32,7 @@ fn cell(e: &Result<f64, mbs::SolveError>) -> String {
 /// B1: every load of the table with N = 1..16 superelements; the error of (w/L, u/L,
 /// rotation) falls as 1/N^2.
 #[test]
+#[cfg_attr(debug_assertions, ignore = "release only: cargo test --release --test convergence")]
 fn elastica_all_loads() {
     let ns = [1usize, 2, 4, 8, 16];
     println!("elastica: max |error| of (w/L, u/L, tip rotation) against Mattiasson (1981)");
@@ -62,6 +65,7 @@ fn elastica_all_loads() {
 
 /// B2: the roll-up to b = pi/2, pi and 3 pi/2 with N = 2..16, and the closed circle at 2 pi.
 #[test]
+#[cfg_attr(debug_assertions, ignore = "release only: cargo test --release --test convergence")]
 fn roll_up_to_the_circle() {
     use std::f64::consts::PI;
     println!("roll-up: max |error| of (w/L, u/L, rotation) against the arc");
@@ -101,6 +105,7 @@ fn roll_up_to_the_circle() {
 
 /// Pendulum at 1 rad: theta(2 s) against a 1/6400 s reference for rho_inf = 0, 0.5, 0.8, 1.
 #[test]
+#[cfg_attr(debug_assertions, ignore = "release only: cargo test --release --test convergence")]
 fn pendulum_time_step_order() {
     let run = |h: f64, rho: f64| {
         let (mut model, j) = pendulum(1.0, 1.0, 0.01);
@@ -152,6 +157,7 @@ fn pendulum_time_step_order() {
 /// steadily with h (h = 10 ms grows slower than 5 ms), so it is an instability of the weakly
 /// damped scheme on this stiff rotating system, not of the model.
 #[test]
+#[cfg_attr(debug_assertions, ignore = "release only: cargo test --release --test convergence")]
 fn spin_up_stays_bounded() {
     for omega in [4.0, 6.0, 10.0] {
         let mut peaks = Vec::new();

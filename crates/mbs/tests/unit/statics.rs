@@ -11,7 +11,7 @@ pub fn last_order(history: &[f64]) -> f64 {
     (1..history.len())
         .filter(|&k| history[k - 1] < 0.1 && history[k] > 1e-11)
         .map(|k| history[k].ln() / history[k - 1].ln())
-        .last()
+        .next_back()
         .unwrap_or(0.0)
 }
 
@@ -92,25 +92,5 @@ fn clamp_reaction_balances_the_tip_load() {
     let expected = [0.0, -P, 0.0, 0.0, 0.0, -x[0] * P];
     for i in 0..6 {
         assert!((r[i] - expected[i]).abs() < 1e-8 * P, "reaction {r:?} vs {expected:?}");
-    }
-}
-
-#[test]
-#[ignore]
-fn print_histories() {
-    for n in [1, 4, 8] {
-        let (_, h) = tip(n, 5.0, false);
-        let total: usize = h.iter().map(|s| s.increments.len()).sum();
-        eprintln!("N={n}: {} load steps, {total} iterations", h.len());
-        for s in &h {
-            eprintln!(
-                "  r {:?}",
-                s.residuals.iter().map(|x| format!("{x:.1e}")).collect::<Vec<_>>()
-            );
-            eprintln!(
-                "  d {:?}",
-                s.increments.iter().map(|x| format!("{x:.1e}")).collect::<Vec<_>>()
-            );
-        }
     }
 }
