@@ -190,32 +190,3 @@ fn spin_up_stays_bounded() {
         assert!((peaks[1] - peaks[2]).abs() < 0.05 * peaks[2] + 1e-3, "{peaks:?}");
     }
 }
-
-/// Scratch: the spin-up with settings from the environment (SPIN_OMEGA, SPIN_N, SPIN_H,
-/// SPIN_RHO), printing the tip every second.
-#[test]
-#[ignore]
-fn spin_up_scratch() {
-    let var = |k: &str, d: f64| std::env::var(k).ok().and_then(|v| v.parse().ok()).unwrap_or(d);
-    let (omega, n, h, rho) = (
-        var("SPIN_OMEGA", 10.0),
-        var("SPIN_N", 4.0) as usize,
-        var("SPIN_H", 0.005),
-        var("SPIN_RHO", 0.9),
-    );
-    let model = spin_up(n, ModeSelection::Count(2), omega);
-    let sys = System::new(&model).unwrap();
-    let settings = DynamicSettings {
-        output_every: (1.0 / h).round() as usize,
-        ..DynamicSettings::new(h, 30.0, rho)
-    };
-    let traj = solve_dynamic(&sys, sys.initial_state(), &settings);
-    let (rec, err) = match traj {
-        Ok(t) => (t.sensors, None),
-        Err(e) => (e.partial.sensors, Some(e.error)),
-    };
-    for (t, r) in rec.times.iter().zip(&rec.rows) {
-        println!("t = {t:6.2}: tip in hub axes ({:.5}, {:.5}, {:.2e})", r[0], r[1], r[2]);
-    }
-    println!("{err:?}");
-}
