@@ -198,6 +198,23 @@ impl Files {
         let p = self.path(name);
         write_vtu(&p, mesh, fields).context(|| format!("cannot write {}", p.display()))
     }
+    /// A field of six dofs per node, as the point fields "displacement" and "rotation".
+    fn six_dof_vtu(&mut self, name: &str, mesh: &VtuMesh, values: &[[f64; 6]]) -> Result<(), BoxError> {
+        let (u, r) = six_dof_fields(values);
+        let fields = [
+            PointField {
+                name: "displacement",
+                components: 3,
+                values: &u,
+            },
+            PointField {
+                name: "rotation",
+                components: 3,
+                values: &r,
+            },
+        ];
+        self.vtu(name, mesh, &fields)
+    }
     fn pvd(&mut self, name: &str, entries: &[(f64, String)]) -> Result<(), BoxError> {
         let p = self.path(name);
         write_pvd(&p, entries).context(|| format!("cannot write {}", p.display()))
@@ -345,23 +362,7 @@ fn run_static(
     }
 
     let mesh = VtuMesh::from_model(&built.model, &spiders(part, &built));
-    let (u, r) = six_dof_fields(&s.displacements);
-    files.vtu(
-        "static.vtu",
-        &mesh,
-        &[
-            PointField {
-                name: "displacement",
-                components: 3,
-                values: &u,
-            },
-            PointField {
-                name: "rotation",
-                components: 3,
-                values: &r,
-            },
-        ],
-    )?;
+    files.six_dof_vtu("static.vtu", &mesh, &s.displacements)?;
     files.pvd("static.pvd", &[(0.0, "static.vtu".into())])?;
     Ok(Outcome {
         free_dofs: n_free,
@@ -416,24 +417,8 @@ fn run_modal(
     let mesh = VtuMesh::from_model(&built.model, &spiders(part, &built));
     let mut entries = Vec::new();
     for (k, shape) in solution.shapes.iter().enumerate() {
-        let (u, r) = six_dof_fields(shape);
         let name = format!("mode_{:03}.vtu", k + 1);
-        files.vtu(
-            &name,
-            &mesh,
-            &[
-                PointField {
-                    name: "displacement",
-                    components: 3,
-                    values: &u,
-                },
-                PointField {
-                    name: "rotation",
-                    components: 3,
-                    values: &r,
-                },
-            ],
-        )?;
+        files.six_dof_vtu(&name, &mesh, shape)?;
         entries.push(((k + 1) as f64, name));
     }
     files.pvd("modes.pvd", &entries)?;
@@ -611,24 +596,8 @@ fn run_reduce(part: &Part, cache: &Path, files: &mut Files) -> Result<Outcome, B
                 let values: Vec<[f64; 6]> = (0..n_nodes)
                     .map(|n| std::array::from_fn(|k| shapes.shapes.get(6 * n + k, c)))
                     .collect();
-                let (u, rot) = six_dof_fields(&values);
                 let file = format!("shape_{:03}.vtu", c + 1);
-                files.vtu(
-                    &file,
-                    &mesh,
-                    &[
-                        PointField {
-                            name: "displacement",
-                            components: 3,
-                            values: &u,
-                        },
-                        PointField {
-                            name: "rotation",
-                            components: 3,
-                            values: &rot,
-                        },
-                    ],
-                )?;
+                files.six_dof_vtu(&file, &mesh, &values)?;
                 let nb = 6 * body.interfaces.len();
                 let row = if c < nb {
                     vec![
