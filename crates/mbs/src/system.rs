@@ -786,11 +786,9 @@ impl System {
         motions.iter().map(NodeMotion::from).collect()
     }
 
-    /// $\mathbf J_c$, $\partial\mathbf V_c/\partial\mathbf q$, $\partial\mathbf A_c/\partial\mathbf q$, $\partial\mathbf A_c/\partial\dot{\mathbf q}$
-    /// of every node at `state` (drivers at its time). With zero accelerations,
-    /// `motion.a`, `motion.alpha` are the convective term $\dot{\mathbf J}_c\dot{\mathbf q}$ (plus the
-    /// drivers' accelerations).
-    pub fn node_kinematics(&self, state: &State) -> Vec<NodeKinematics> {
+    /// Every node's motion and its derivatives at `state`, with the drivers at its time (the
+    /// shared first step of [`Self::node_kinematics`] and [`Self::generalized_force`]).
+    fn motions_and_derivatives(&self, state: &State) -> (Vec<Motion>, Vec<NodeDerivatives>) {
         let mut s = state.clone();
         let map = &self.topo.map;
         let np = map.n_prescribed();
@@ -802,6 +800,17 @@ impl System {
         map.motions_into(&x, &mut motions);
         let mut derivs = vec![NodeDerivatives::default(); nn];
         map.derivatives_into(&x, &motions, &mut derivs);
+        (motions, derivs)
+    }
+
+    /// $\mathbf J_c$, $\partial\mathbf V_c/\partial\mathbf q$, $\partial\mathbf A_c/\partial\mathbf q$, $\partial\mathbf A_c/\partial\dot{\mathbf q}$
+    /// of every node at `state` (drivers at its time). With zero accelerations,
+    /// `motion.a`, `motion.alpha` are the convective term $\dot{\mathbf J}_c\dot{\mathbf q}$ (plus the
+    /// drivers' accelerations).
+    pub fn node_kinematics(&self, state: &State) -> Vec<NodeKinematics> {
+        let map = &self.topo.map;
+        let nn = self.model.nodes.len();
+        let (motions, derivs) = self.motions_and_derivatives(state);
         (0..nn)
             .map(|c| {
                 let d = &derivs[c];
@@ -822,17 +831,9 @@ impl System {
     /// $\sum_c\mathbf J_c^T\mathbf f_c$ for given node forces, and the geometric term
     /// $\partial(\sum_c\mathbf J_c^T\mathbf f_c)/\partial\mathbf q$ at fixed $\mathbf f_c$ (dense; for tests).
     pub fn generalized_force(&self, state: &State, node_forces: &[[f64; 6]]) -> (Vec<f64>, Mat<f64>) {
-        let mut s = state.clone();
         let map = &self.topo.map;
-        let np = map.n_prescribed();
-        let (mut pr, mut pa) = (vec![0.0; np], vec![0.0; np]);
-        self.apply_drivers(&mut s, &mut pr, &mut pa);
-        let x = values(&s, &pr, &pa);
         let nn = self.model.nodes.len();
-        let mut motions = vec![Motion::ground(); nn];
-        map.motions_into(&x, &mut motions);
-        let mut derivs = vec![NodeDerivatives::default(); nn];
-        map.derivatives_into(&x, &motions, &mut derivs);
+        let (motions, derivs) = self.motions_and_derivatives(state);
         let n = map.n_dof;
         let mut F = vec![0.0; n];
         let mut G = Mat::zeros(n, n);
