@@ -1,0 +1,1 @@
+//! Speed comparisons and scaling studies (issue 9). (Being written.)
