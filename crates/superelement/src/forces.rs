@@ -47,8 +47,6 @@ pub(crate) struct Motion {
     pub c: Vec<f64>,
     /// $\mathbf N_y$.
     pub n_y: Blocks,
-    /// $\mathbf Z_j\mathbf N_y$ ($6\times n$; rows 3..6 are $\boldsymbol\Omega_q$).
-    pub ZNy: Mat<f64>,
 }
 
 impl Motion {
@@ -60,7 +58,6 @@ impl Motion {
             xi: [0.0; 6],
             c: vec![0.0; n],
             n_y: Blocks::zeros(N),
-            ZNy: Mat::zeros(6, n),
         }
     }
 
@@ -93,7 +90,6 @@ impl Motion {
         self.c[6 * N..].copy_from_slice(&self.y[6 * N..]);
         if tangents {
             kin.fill_n_y(&self.y, &self.xi, &mut self.n_y);
-            mul_blocks(kin.Z(), &self.n_y, &mut self.ZNy, Accum::Replace);
         }
     }
 
@@ -112,9 +108,13 @@ pub(crate) struct Local {
     /// $\partial\boldsymbol\rho/\partial\mathbf a$: the body-axis mass matrix.
     pub M: Mat<f64>,
     /// $\partial\boldsymbol\rho/\partial\mathbf q^{jj}$ of the residual $\boldsymbol\rho_{in} +
-    /// \boldsymbol\rho_{el} + \boldsymbol\rho_d - \boldsymbol\rho_g$.
+    /// \boldsymbol\rho_{el} + \boldsymbol\rho_d - \boldsymbol\rho_g$. Every term of the elastic,
+    /// damping, gravity and `Exact` inertia forces has the left factor $\boldsymbol\Lambda^T$
+    /// (from $\mathbf P^T = \boldsymbol\Lambda^T\mathbf X^T$): those forces accumulate their terms
+    /// without it, and [`Local::apply_lambda_t`] applies it once to the sum (one pass over
+    /// the matrix instead of one per term).
     pub Dq: Mat<f64>,
-    /// $\partial\boldsymbol\rho/\partial\mathbf y$ of the residual.
+    /// $\partial\boldsymbol\rho/\partial\mathbf y$ of the residual (same deferred $\boldsymbol\Lambda^T$ as `Dq`).
     pub Dy: Mat<f64>,
     /// $\partial\boldsymbol\rho/\partial\mathbf g^L$ of the residual ($n\times3$).
     pub Dg: Mat<f64>,
@@ -139,6 +139,12 @@ impl Local {
         }
     }
 
+    /// Applies the deferred left factor $\boldsymbol\Lambda^T$ to `Dq` and `Dy` (their docs).
+    pub fn apply_lambda_t(&mut self, Lambda: &[nalgebra::Matrix3<f64>]) {
+        lambda_t_left(Lambda, &mut self.Dq);
+        lambda_t_left(Lambda, &mut self.Dy);
+    }
+
     pub fn clear(&mut self, tangents: bool) {
         for v in [&mut self.rho_in, &mut self.rho_el, &mut self.rho_d, &mut self.rho_g] {
             v.iter_mut().for_each(|x| *x = 0.0);
@@ -160,7 +166,6 @@ pub(crate) struct Scratch {
     /// $(6+n)\times n$.
     pub MX: Mat<f64>,
     pub FX: Mat<f64>,
-    pub MXNy: Mat<f64>,
     pub E: Mat<f64>,
     pub E2: Mat<f64>,
     /// $(6+n)\times6$.
@@ -197,7 +202,6 @@ impl Scratch {
             ffr_scratch: FfrScratch::new(n),
             MX: m6(),
             FX: m6(),
-            MXNy: m6(),
             E: m6(),
             E2: m6(),
             t6: Mat::zeros(6 + n, 6),
@@ -273,9 +277,8 @@ impl Superelement {
         kin.pt_vec(&w.F6, &mut loc.rho_el);
         if tangents {
             add_to(&mut loc.F_sum, &w.F6, 1.0);
-            kin.tt_mul(self.K_CB.as_ref(), &mut w.six_n, &mut w.nn1);
-            lambda_t_left(&kin.Lambda, &mut w.nn1);
-            add_scaled(&mut loc.Dq, &w.nn1, 1.0);
+            // T^T K_CB; Lambda^T comes once for all terms (`Local::Dq`).
+            kin.tt_mul(self.K_CB.as_ref(), &mut w.six_n, &mut loc.Dq, Accum::Add);
         }
     }
 
@@ -305,10 +308,9 @@ impl Superelement {
         kin.pt_vec(&w.F6, &mut loc.rho_d);
         if tangents {
             add_to(&mut loc.F_sum, &w.F6, 1.0);
-            // S = Lambda^T T^T D T.
+            // S = T^T D T (Lambda^T comes once for all terms, `Local::Dq`).
             kin.mul_t(self.D.as_ref(), &mut w.n6, &mut w.nn1);
-            kin.tt_mul(w.nn1.as_ref(), &mut w.six_n, &mut w.nn2);
-            lambda_t_left(&kin.Lambda, &mut w.nn2);
+            kin.tt_mul(w.nn1.as_ref(), &mut w.six_n, &mut w.nn2, Accum::Replace);
             mul_blocks(w.nn2.as_ref(), &mo.n_y, &mut loc.Dq, Accum::Add);
             lambda_right(&kin.Lambda, &mut w.nn2);
             add_scaled(&mut loc.Dy, &w.nn2, 1.0);
@@ -350,7 +352,7 @@ impl Superelement {
         kin.pt_vec(Q, &mut loc.rho_g);
         if tangents {
             add_to(&mut loc.F_sum, &w.F6, -1.0);
-            // - Y_r^T (-g~ S_t) = Y_r^T g~ S_t
+            // - Y_r^T (-g~ S_t) = Lambda^T Z_r^T g~ S_t (Lambda^T comes once for all terms, `Local::Dq`).
             let gt = skew(&g);
             for j in 0..n {
                 let v = gt * Vector3::new(I.S_t[(0, j)], I.S_t[(1, j)], I.S_t[(2, j)]);
@@ -360,7 +362,7 @@ impl Superelement {
             }
             gemm(
                 &mut loc.Dq,
-                kin.Y().subrows(3, 3).transpose(),
+                kin.ZT.as_ref().subcols(3, 3),
                 w.three_n.as_ref(),
                 1.0,
                 Accum::Add,
@@ -385,7 +387,7 @@ impl Superelement {
             }
         }
         // - B^T S_t^T = - Lambda^T T^T S_t^T
-        kin.tt_mul(w.n3a.as_ref(), &mut w.six_three, &mut w.n3b);
+        kin.tt_mul(w.n3a.as_ref(), &mut w.six_three, &mut w.n3b, Accum::Replace);
         lambda_t_left(&kin.Lambda, &mut w.n3b);
         add_scaled(&mut loc.Dg, &w.n3b, -1.0);
     }
@@ -528,34 +530,37 @@ impl Superelement {
                 }
             }
         }
+        // With Om_q = Z_r N_y and Y_r = Z_r Lambda, both partials share
+        // H = FX + MXNy - (MXNy Psi) Z + MXUW Z_r:
+        //   E  = F_q + FX N_y + MX blocks + MXUW Om_q + MXNy N_y - (MXNy Psi) Z N_y = F_q + MX blocks + H N_y,
+        //   E2 = (FX + MXNy - (MXNy Psi) Z) Lambda + MX blocks2 + MXUW Y_r = H Lambda + MX blocks2,
+        // and Dq += Lambda^T X^T E, Dy += Lambda^T X^T E2 (Lambda^T deferred, `Local::Dq`).
+        // H is built in FX; MXNy Psi = MX (N_y Psi) only involves the 6N interface columns.
         kin.mul_x(w.ffr.F_nu.as_ref(), &mut w.t6, &mut w.FX);
-        mul_blocks(w.MX.as_ref(), &mo.n_y, &mut w.MXNy, Accum::Replace);
-        kin.mul_psi(w.MXNy.as_ref(), &mut w.t6b);
+        kin.blocks_psi(&mo.n_y, &mut w.n6);
+        let ni = 6 * N;
+        gemm(
+            &mut w.t6b,
+            w.MX.as_ref().subcols(0, ni),
+            w.n6.as_ref().subrows(0, ni),
+            1.0,
+            Accum::Replace,
+        );
+        mul_blocks(w.MX.as_ref(), &mo.n_y, &mut w.FX, Accum::Add);
+        gemm(&mut w.FX, w.t6b.as_ref(), kin.Z(), -1.0, Accum::Add);
         gemm(&mut w.MXUW, w.MX.as_ref(), w.n3a.as_ref(), 1.0, Accum::Replace);
-        let Om_q = mo.ZNy.as_ref().subrows(3, 3);
+        gemm(&mut w.FX, w.MXUW.as_ref(), kin.Z().subrows(3, 3), 1.0, Accum::Add);
 
-        // E = F_q + FX N_y + MX blocks + MXUW Om_q + MXNy N_y - (MXNy Psi) ZNy ; Dq += Lambda^T X^T E.
         copy_mat(&mut w.E, w.ffr.F_q.as_ref());
-        mul_blocks(w.FX.as_ref(), &mo.n_y, &mut w.E, Accum::Add);
         mul_blocks(w.MX.as_ref(), &w.blocks, &mut w.E, Accum::Add);
-        mul_blocks(w.MXNy.as_ref(), &mo.n_y, &mut w.E, Accum::Add);
-        gemm(&mut w.E, w.MXUW.as_ref(), Om_q, 1.0, Accum::Add);
-        gemm(&mut w.E, w.t6b.as_ref(), mo.ZNy.as_ref(), -1.0, Accum::Add);
-        kin.xt_mul(w.E.as_ref(), &mut w.six_n, &mut w.nn1, Accum::Replace);
-        lambda_t_left(&kin.Lambda, &mut w.nn1);
-        add_scaled(&mut loc.Dq, &w.nn1, 1.0);
+        mul_blocks(w.FX.as_ref(), &mo.n_y, &mut w.E, Accum::Add);
+        kin.xt_mul(w.E.as_ref(), &mut w.six_n, &mut loc.Dq, Accum::Add);
         add_to(&mut loc.F_sum, &w.ffr.F, 1.0);
 
-        // E2 = (FX + MXNy - (MXNy Psi) Z) Lambda + MX blocks2 + MXUW Y_r ; Dy += Lambda^T X^T E2.
         copy_mat(&mut w.E2, w.FX.as_ref());
-        add_scaled(&mut w.E2, &w.MXNy, 1.0);
-        gemm(&mut w.E2, w.t6b.as_ref(), kin.Z(), -1.0, Accum::Add);
         lambda_right(&kin.Lambda, &mut w.E2);
         mul_blocks(w.MX.as_ref(), &w.blocks2, &mut w.E2, Accum::Add);
-        gemm(&mut w.E2, w.MXUW.as_ref(), kin.Y().subrows(3, 3), 1.0, Accum::Add);
-        kin.xt_mul(w.E2.as_ref(), &mut w.six_n, &mut w.nn1, Accum::Replace);
-        lambda_t_left(&kin.Lambda, &mut w.nn1);
-        add_scaled(&mut loc.Dy, &w.nn1, 1.0);
+        kin.xt_mul(w.E2.as_ref(), &mut w.six_n, &mut loc.Dy, Accum::Add);
     }
 
     /// Inertia force of the `Lumped` variant.
@@ -648,8 +653,9 @@ impl Superelement {
         w_into(p, N, &mut w.n3b);
         gemm(&mut w.n3c, M.as_ref(), w.n3a.as_ref(), 1.0, Accum::Replace);
         add_scaled(&mut w.n3c, &w.n3b, -1.0);
-        let Om_q = mo.ZNy.as_ref().subrows(3, 3);
-        gemm(&mut loc.Dq, w.n3c.as_ref(), Om_q, 1.0, Accum::Add);
+        // Om_q = (Z_j N_y)_r.
+        mul_blocks(kin.Z().subrows(3, 3), &mo.n_y, &mut w.three_n, Accum::Replace);
+        gemm(&mut loc.Dq, w.n3c.as_ref(), w.three_n.as_ref(), 1.0, Accum::Add);
         w.F6.fill(0.0);
         w.F6[3..6].copy_from_slice(wtp.as_slice());
         add_to(&mut loc.F_sum, &w.F6, -1.0);

@@ -86,6 +86,14 @@ impl Default for FrameSettings {
     }
 }
 
+/// Buffers of the Newton solve of (2.6): $\mathbf q^{jj}$ ($n$), $\mathbf r_k^{jj}$ and
+/// $\boldsymbol\Lambda$ blocks ($N$ each).
+pub(crate) struct FrameScratch<'a> {
+    pub q: &'a mut [f64],
+    pub r_loc: &'a mut [Vector3<f64>],
+    pub Lambda: &'a mut [Matrix3<f64>],
+}
+
 /// How the frame is found, decided once from the [`FrameChoice`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum FrameSolve {
@@ -148,6 +156,26 @@ impl Superelement {
     /// For [`FrameChoice::InterfaceNode`] and [`FrameChoice::AuxiliaryNode`] the solution is
     /// explicit, $\mathbf r_j = \mathbf r_k$, $\mathbf R_j = \mathbf R_k$.
     pub fn solve_frame(&self, state: &BodyState) -> Result<(Frame, usize), SuperelementError> {
+        let (mut q, mut r_loc, mut Lambda) = (
+            vec![0.0; self.n],
+            vec![Vector3::zeros(); self.n_interfaces],
+            vec![Matrix3::identity(); self.n_interfaces],
+        );
+        let mut scratch = FrameScratch {
+            q: &mut q,
+            r_loc: &mut r_loc,
+            Lambda: &mut Lambda,
+        };
+        self.solve_frame_in(state, &mut scratch)
+    }
+
+    /// [`Self::solve_frame`] with the Newton iterates in `scratch` (no allocation; the hot loop
+    /// passes buffers of its workspace).
+    pub(crate) fn solve_frame_in(
+        &self,
+        state: &BodyState,
+        scratch: &mut FrameScratch<'_>,
+    ) -> Result<(Frame, usize), SuperelementError> {
         self.check_state(state)?;
         match self.frame_solve {
             FrameSolve::AtInterface(k) => Ok((Frame::new(state.r[k], state.R[k]), 0)),
@@ -164,29 +192,33 @@ impl Superelement {
                     .iter()
                     .any(|R_k| crate::local_coordinates::elastic_rotation(&state.frame.R, R_k).norm() > 1.0);
                 if warm_is_far {
-                    return self.newton_frame(state, guess);
+                    return self.newton_frame(state, guess, scratch);
                 }
-                self.newton_frame(state, state.frame)
-                    .or_else(|e| match self.newton_frame(state, guess) {
+                self.newton_frame(state, state.frame, scratch).or_else(|e| {
+                    match self.newton_frame(state, guess, scratch) {
                         Ok(found) => Ok(found),
                         Err(_) => Err(e),
-                    })
+                    }
+                })
             }
         }
     }
 
-    fn newton_frame(&self, state: &BodyState, start: Frame) -> Result<(Frame, usize), SuperelementError> {
+    fn newton_frame(
+        &self,
+        state: &BodyState,
+        start: Frame,
+        scratch: &mut FrameScratch<'_>,
+    ) -> Result<(Frame, usize), SuperelementError> {
         let N = self.n_interfaces;
         let L = self.length;
         let r_max = state.r.iter().map(|r| r.norm()).fold(0.0, f64::max);
         let tol = self.frame_settings.tolerance + 64.0 * f64::EPSILON * (1.0 + r_max / L);
         let mut frame = start;
-        let mut q = vec![0.0; self.n];
-        let mut r_loc = vec![Vector3::zeros(); N];
-        let mut Lambda = vec![Matrix3::identity(); N];
+        let FrameScratch { q, r_loc, Lambda } = scratch;
         let mut residual = f64::INFINITY;
         for it in 0..=self.frame_settings.max_iterations {
-            local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut q);
+            local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, q);
             let mut g: Vector6<f64> = Vector6::zeros();
             for a in 0..6 {
                 g[a] = (0..self.n).map(|c| self.Phi_j[(a, c)] * q[c]).sum();
@@ -202,10 +234,10 @@ impl Superelement {
                 break;
             }
             for k in 0..N {
-                r_loc[k] = self.x[k] + u_of(&q, k);
-                Lambda[k] = so3::left_jacobian_inv(&crate::local_coordinates::theta_of(&q, k));
+                r_loc[k] = self.x[k] + u_of(q, k);
+                Lambda[k] = so3::left_jacobian_inv(&crate::local_coordinates::theta_of(q, k));
             }
-            let G = phi_j_psi(self.Phi_j.as_ref(), &r_loc, &Lambda);
+            let G = phi_j_psi(self.Phi_j.as_ref(), r_loc, Lambda);
             let (Gi, rcond) = inverse_with_rcond(&G).ok_or(SuperelementError::SingularFrame { rcond: 0.0 })?;
             if rcond < RCOND_MIN {
                 return Err(SuperelementError::SingularFrame { rcond });

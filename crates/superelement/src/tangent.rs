@@ -19,7 +19,7 @@
 use crate::body::{BodyState, Superelement};
 use crate::error::SuperelementError;
 use crate::forces::{w_into, Local, Motion, Scratch};
-use crate::frame::Frame;
+use crate::frame::{Frame, FrameScratch};
 use crate::local_coordinates::local_coordinates;
 use crate::mass::MassVariant;
 use crate::so3::skew;
@@ -88,7 +88,6 @@ pub struct Workspace {
     pub(crate) loc: Local,
     pub(crate) scratch: Scratch,
     pub(crate) KL: Mat<f64>,
-    pub(crate) tmp: Mat<f64>,
     pub(crate) H: Mat<f64>,
     pub(crate) W: Mat<f64>,
     pub(crate) n6: Mat<f64>,
@@ -113,7 +112,6 @@ impl Superelement {
             loc: Local::new(n),
             scratch: Scratch::new(N, n),
             KL: Mat::zeros(n, n),
-            tmp: Mat::zeros(n, n),
             H: Mat::zeros(n, 3),
             W: Mat::zeros(n, 3),
             n6: Mat::zeros(n, 6),
@@ -166,7 +164,14 @@ impl Superelement {
                 what: format!("{} accelerations for {} coordinates", acc.len(), self.n),
             });
         }
-        let (frame, iterations) = self.solve_frame(state)?;
+        // The Newton iterates of (2.6) live in the configuration's own buffers, which are
+        // rebuilt for the converged frame right after.
+        let mut scratch = FrameScratch {
+            q: &mut ws.kin.q_jj,
+            r_loc: &mut ws.kin.r_loc,
+            Lambda: &mut ws.kin.Lambda,
+        };
+        let (frame, iterations) = self.solve_frame_in(state, &mut scratch)?;
         local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut ws.kin.q_jj);
         ws.kin.update(frame, iterations, &self.x, self.Phi_j.as_ref())?;
         for k in 0..self.n_interfaces {
@@ -234,15 +239,21 @@ impl Superelement {
         self.elastic(kin, loc, w, tangents);
         self.damping_force(kin, mo, loc, w, tangents);
         self.gravity(kin, mo, loc, w, tangents);
-        match self.mass_variant {
-            MassVariant::Exact => self.exact_inertia(kin, mo, loc, w, tangents),
-            MassVariant::Lumped => self.lumped_inertia(kin, mo, loc, w, tangents),
+        if self.mass_variant == MassVariant::Exact {
+            self.exact_inertia(kin, mo, loc, w, tangents);
+        }
+        if tangents {
+            // The forces above left out the common left factor Lambda^T (`Local::Dq`).
+            loc.apply_lambda_t(&kin.Lambda);
+        }
+        if self.mass_variant == MassVariant::Lumped {
+            self.lumped_inertia(kin, mo, loc, w, tangents);
         }
         for i in 0..n {
             ws.rho[i] = loc.rho_in[i] + loc.rho_el[i] + loc.rho_d[i] - loc.rho_g[i];
         }
         let R = &kin.R_j;
-        rotate_matrix(R, N, &loc.M, &mut ws.KL, &mut out.mass);
+        rotate_matrix(R, N, &loc.M, &mut out.mass);
         kin.rotate_into(&loc.rho_in, true, &mut out.f_inertia);
         kin.rotate_into(&loc.rho_el, true, &mut out.f_elastic);
         kin.rotate_into(&loc.rho_d, true, &mut out.f_damping);
@@ -261,7 +272,7 @@ impl Superelement {
         if !tangents {
             return;
         }
-        kin.add_d_pt(&loc.F_sum, &mut loc.Dq, 1.0);
+        kin.add_d_pt(&loc.F_sum, &mut ws.scratch.v1, &mut loc.Dq, 1.0);
         // K^L = Dq B + (Dy W(y) + M W(a) + Dg g~ - W(rho)) Y_r, with Dq B = (Dq T) Lambda.
         kin.mul_t(loc.Dq.as_ref(), &mut ws.n6, &mut ws.KL);
         lambda_right(&kin.Lambda, &mut ws.KL);
@@ -282,8 +293,8 @@ impl Superelement {
             }
         }
         gemm(&mut ws.KL, ws.H.as_ref(), kin.Y().subrows(3, 3), 1.0, Accum::Add);
-        rotate_matrix(R, N, &ws.KL, &mut ws.tmp, &mut out.stiffness);
-        rotate_matrix(R, N, &loc.Dy, &mut ws.tmp, &mut out.damping);
+        rotate_matrix(R, N, &ws.KL, &mut out.stiffness);
+        rotate_matrix(R, N, &loc.Dy, &mut out.damping);
     }
 
     /// Kinetic energy $\tfrac12\dot{\mathbf q}^T\mathbf M\dot{\mathbf q}$ of the chosen inertia variant.

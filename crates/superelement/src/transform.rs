@@ -49,7 +49,7 @@ use crate::local_coordinates::{theta_of, u_of};
 use crate::so3::{self, skew};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
-use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
 /// $\boldsymbol\Phi_{rig}$ (3.6): the $n\times6$ rigid-body modes of the interface set about the
 /// frame origin, on the *deformed* local positions $\mathbf r_k^{jj} = \mathbf x_k + \mathbf u_k$:
@@ -93,6 +93,15 @@ pub struct Kinematics {
     pub X: Mat<f64>,
     /// $\mathbf P = \mathbf X\boldsymbol\Lambda = [\mathbf Y;\ \mathbf B]$, $(6+n)\times n$.
     pub P: Mat<f64>,
+    /// Explicit copies for faer's products, filled by [`Self::update`] with the fields above
+    /// (faer's small kernels are fastest on contiguous column-major operands, and a dense
+    /// $6N\times6$ product beats a block loop): $\mathbf Z_j^T$ ($n\times6$), the interface rows of
+    /// $\boldsymbol\Psi = \boldsymbol\Lambda\boldsymbol\Phi_{rig}$ ($6N\times6$; its eta rows are zero) and
+    /// their transpose, $\mathbf Y_r^T$ ($n\times3$).
+    pub(crate) ZT: Mat<f64>,
+    pub(crate) YrT: Mat<f64>,
+    pub(crate) Psi: Mat<f64>,
+    pub(crate) PsiT: Mat<f64>,
 }
 
 /// A block-diagonal operator on $\mathbf q^{jj}$: a $3\times3$ block on each $\mathbf u_k$ and on
@@ -171,6 +180,10 @@ impl Kinematics {
             G_inv: Matrix6::identity(),
             X: Mat::zeros(6 + n, n),
             P: Mat::zeros(6 + n, n),
+            ZT: Mat::zeros(n, 6),
+            YrT: Mat::zeros(n, 3),
+            Psi: Mat::zeros(6 * N, 6),
+            PsiT: Mat::zeros(6, 6 * N),
         }
     }
 
@@ -213,31 +226,51 @@ impl Kinematics {
             return Err(crate::SuperelementError::SingularFrame { rcond });
         }
         self.G_inv = G_inv;
-        // Z = G^{-1} Phi_j ; T = I - Psi Z ; P = X Lambda.
-        let X = &mut self.X;
-        for j in 0..n {
-            let pj = Phi_j.col(j);
-            let col = X.col_as_slice_mut(j);
+        // Psi rows: u_k -> [I, -r~_k], theta_k -> [0, Lambda_k].
+        self.Psi.fill(0.0);
+        for k in 0..N {
+            let mr = -skew(&self.r_loc[k]);
+            for a in 0..3 {
+                self.Psi[(6 * k + a, a)] = 1.0;
+                for b in 0..3 {
+                    self.Psi[(6 * k + a, 3 + b)] = mr[(a, b)];
+                    self.Psi[(6 * k + 3 + a, 3 + b)] = self.Lambda[k][(a, b)];
+                }
+            }
+        }
+        for i in 0..6 * N {
             for a in 0..6 {
-                col[a] = (0..6).map(|b| G_inv[(a, b)] * pj[b]).sum();
+                self.PsiT[(a, i)] = self.Psi[(i, a)];
             }
-            let zt = Vector3::new(col[0], col[1], col[2]);
-            let zr = Vector3::new(col[3], col[4], col[5]);
-            for v in col[6..].iter_mut() {
-                *v = 0.0;
-            }
-            col[6 + j] = 1.0;
+        }
+        // Z = G^{-1} Phi_j ; T = I - Psi Z ; P = X Lambda.
+        for j in 0..n {
+            let z = G_inv * Vector6::from_column_slice(col(Phi_j, j));
+            let zt = Vector3::new(z[0], z[1], z[2]);
+            let zr = Vector3::new(z[3], z[4], z[5]);
+            let c = self.X.col_as_slice_mut(j);
+            c[..6].copy_from_slice(z.as_slice());
+            c[6..].fill(0.0);
+            c[6 + j] = 1.0;
             for k in 0..N {
                 let pu = zt + zr.cross(&self.r_loc[k]);
                 let pr = self.Lambda[k] * zr;
                 for i in 0..3 {
-                    col[6 + 6 * k + i] -= pu[i];
-                    col[6 + 6 * k + 3 + i] -= pr[i];
+                    c[6 + 6 * k + i] -= pu[i];
+                    c[6 + 6 * k + 3 + i] -= pr[i];
                 }
+            }
+            for a in 0..6 {
+                self.ZT[(j, a)] = z[a];
             }
         }
         copy_mat(&mut self.P, self.X.as_ref());
         lambda_right(&self.Lambda, &mut self.P);
+        for j in 0..n {
+            for d in 0..3 {
+                self.YrT[(j, d)] = self.P[(3 + d, j)];
+            }
+        }
         Ok(())
     }
 
@@ -349,24 +382,27 @@ impl Kinematics {
     /// (\mathbf E^\theta_k - \mathbf Y_r)^T\mathbf K_k\mathbf E^\theta_k$.
     /// Every force of the residual goes through it, so every test of
     /// `tests/unit/fd_tangent.rs` checks it.
-    pub(crate) fn add_d_pt(&self, F: &[f64], out: &mut Mat<f64>, alpha: f64) {
-        let n = self.n();
+    /// `phi` is scratch of length $n$.
+    pub(crate) fn add_d_pt(&self, F: &[f64], phi: &mut [f64], out: &mut Mat<f64>, alpha: f64) {
         let N = self.n_interfaces();
-        let mut phi = vec![0.0; n];
-        self.xt_vec(F, &mut phi);
-        let Y = self.Y();
+        self.xt_vec(F, phi);
+        let Yr = [
+            col(self.YrT.as_ref(), 0),
+            col(self.YrT.as_ref(), 1),
+            col(self.YrT.as_ref(), 2),
+        ];
         for k in 0..N {
             let pt = skew(&Vector3::new(phi[6 * k], phi[6 * k + 1], phi[6 * k + 2]));
             let pr = Vector3::new(phi[6 * k + 3], phi[6 * k + 4], phi[6 * k + 5]);
             let K = -so3::left_jacobian_inv_derivative(&-theta_of(&self.q_jj, k), &pr);
             // Y_r^T (pt) at columns u_k ; -Y_r^T K at columns theta_k ; K at (theta_k, theta_k).
-            for i in 0..n {
-                let yr = Vector3::new(Y[(3, i)], Y[(4, i)], Y[(5, i)]);
-                let a = pt.transpose() * yr;
-                let b = K.transpose() * yr;
+            for (c0, B, sign) in [(6 * k, &pt, alpha), (6 * k + 3, &K, -alpha)] {
                 for c in 0..3 {
-                    out[(i, 6 * k + c)] += alpha * a[c];
-                    out[(i, 6 * k + 3 + c)] -= alpha * b[c];
+                    let (b0, b1, b2) = (sign * B[(0, c)], sign * B[(1, c)], sign * B[(2, c)]);
+                    let o = out.col_as_slice_mut(c0 + c);
+                    for i in 0..o.len() {
+                        o[i] += b0 * Yr[0][i] + b1 * Yr[1][i] + b2 * Yr[2][i];
+                    }
                 }
             }
             for a in 0..3 {
@@ -381,15 +417,25 @@ impl Kinematics {
 /// $\mathbf A\boldsymbol\Lambda$ in place: the $\boldsymbol\theta_k$ column blocks times $\mathbf J_l^{-1}(\boldsymbol\theta_k)$.
 pub(crate) fn lambda_right(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
     for (k, L) in Lambda.iter().enumerate() {
-        let c = 6 * k + 3;
-        for i in 0..A.nrows() {
-            let row = Vector3::new(A[(i, c)], A[(i, c + 1)], A[(i, c + 2)]);
-            let v = L.transpose() * row;
-            A[(i, c)] = v[0];
-            A[(i, c + 1)] = v[1];
-            A[(i, c + 2)] = v[2];
+        // Row i of the block becomes row_i L: new column c = sum_d L[(d, c)] column d.
+        let (c0, rest) = A.as_mut().subcols_mut(6 * k + 3, 3).split_at_col_mut(1);
+        let (c1, c2) = rest.split_at_col_mut(1);
+        let (a0, a1, a2) = (first_col_mut(c0), first_col_mut(c1), first_col_mut(c2));
+        for i in 0..a0.len() {
+            let (x, y, z) = (a0[i], a1[i], a2[i]);
+            a0[i] = L[(0, 0)] * x + L[(1, 0)] * y + L[(2, 0)] * z;
+            a1[i] = L[(0, 1)] * x + L[(1, 1)] * y + L[(2, 1)] * z;
+            a2[i] = L[(0, 2)] * x + L[(1, 2)] * y + L[(2, 2)] * z;
         }
     }
+}
+
+/// The first column of a column-major view as a slice.
+fn first_col_mut<'a>(m: faer::MatMut<'a, f64>) -> &'a mut [f64] {
+    m.col_mut(0)
+        .try_as_col_major_mut()
+        .expect("column-major matrix")
+        .as_slice_mut()
 }
 
 /// $\boldsymbol\Lambda^T\mathbf A$ in place: the $\boldsymbol\theta_k$ row blocks times $\mathbf J_l^{-T}(\boldsymbol\theta_k)$.
@@ -405,29 +451,28 @@ pub(crate) fn lambda_t_left(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
 }
 
 impl Kinematics {
-    /// `out` $= \mathbf A\boldsymbol\Psi$ ($r\times6$) for $\mathbf A$ ($r\times n$), using the
-    /// block structure of $\boldsymbol\Psi = \boldsymbol\Lambda\boldsymbol\Phi_{rig}$ (rows $[\mathbf I,\ -\tilde{\mathbf r}_k]$
-    /// and $[\mathbf 0,\ \boldsymbol\Lambda_k]$).
+    /// `out` $= \mathbf A\boldsymbol\Psi$ ($r\times6$) for $\mathbf A$ ($r\times n$), $\boldsymbol\Psi =
+    /// \boldsymbol\Lambda\boldsymbol\Phi_{rig}$ (rows $[\mathbf I,\ -\tilde{\mathbf r}_k]$ and $[\mathbf 0,\
+    /// \boldsymbol\Lambda_k]$): only the $6N$ interface columns of $\mathbf A$ enter.
     pub(crate) fn mul_psi(&self, A: MatRef<'_, f64>, out: &mut Mat<f64>) {
+        let ni = self.Psi.nrows();
+        gemm(out, A.subcols(0, ni), self.Psi.as_ref(), 1.0, Accum::Replace);
+    }
+
+    /// `out` $= \mathbf N\boldsymbol\Psi$ ($n\times6$) for a block-diagonal $\mathbf N$ ([`Blocks`]):
+    /// rows $\mathbf N_{u_k}[\mathbf I,\ -\tilde{\mathbf r}_k]$ on $\mathbf u_k$, $[\mathbf 0,\
+    /// \mathbf N_{\theta_k}\boldsymbol\Lambda_k]$ on $\boldsymbol\theta_k$, zero on $\boldsymbol\eta$.
+    pub(crate) fn blocks_psi(&self, blocks: &Blocks, out: &mut Mat<f64>) {
         out.fill(0.0);
         for (k, (r, L)) in self.r_loc.iter().zip(&self.Lambda).enumerate() {
-            let mr = -skew(r);
-            for c in 0..3 {
-                let au = col(A, 6 * k + c);
-                let at = col(A, 6 * k + 3 + c);
-                let o = out.col_as_slice_mut(c);
-                for i in 0..A.nrows() {
-                    o[i] += au[i];
-                }
+            let (Nt, Nr) = (&blocks.t[k], &blocks.r[k]);
+            let Ntr = -(Nt * skew(r));
+            let NrL = Nr * L;
+            for a in 0..3 {
                 for b in 0..3 {
-                    let (m, l) = (mr[(c, b)], L[(c, b)]);
-                    if m == 0.0 && l == 0.0 {
-                        continue;
-                    }
-                    let o = out.col_as_slice_mut(3 + b);
-                    for i in 0..A.nrows() {
-                        o[i] += au[i] * m + at[i] * l;
-                    }
+                    out[(6 * k + a, b)] = Nt[(a, b)];
+                    out[(6 * k + a, 3 + b)] = Ntr[(a, b)];
+                    out[(6 * k + 3 + a, 3 + b)] = NrL[(a, b)];
                 }
             }
         }
@@ -435,21 +480,8 @@ impl Kinematics {
 
     /// `out` $= \boldsymbol\Psi^T\mathbf E$ ($6\times k$) for $\mathbf E$ ($n\times k$).
     pub(crate) fn psi_t_mul(&self, E: MatRef<'_, f64>, out: &mut Mat<f64>) {
-        for j in 0..E.ncols() {
-            let e = col(E, j);
-            let mut v = [0.0; 6];
-            for (k, (r, L)) in self.r_loc.iter().zip(&self.Lambda).enumerate() {
-                let eu = Vector3::new(e[6 * k], e[6 * k + 1], e[6 * k + 2]);
-                let et = Vector3::new(e[6 * k + 3], e[6 * k + 4], e[6 * k + 5]);
-                // [I; -r~^T] e_u + [0; L^T] e_t, -r~^T = r~.
-                let w = r.cross(&eu) + L.transpose() * et;
-                for i in 0..3 {
-                    v[i] += eu[i];
-                    v[3 + i] += w[i];
-                }
-            }
-            out.col_as_slice_mut(j).copy_from_slice(&v);
-        }
+        let ni = self.Psi.nrows();
+        gemm(out, self.PsiT.as_ref(), E.subrows(0, ni), 1.0, Accum::Replace);
     }
 
     /// `out` $= \mathbf A\mathbf X$ ($r\times n$) for $\mathbf A$ ($r\times(6+n)$), with
@@ -494,14 +526,23 @@ impl Kinematics {
                 }
             }
         }
-        gemm(out, self.Z().transpose(), tmp.as_ref(), 1.0, Accum::Add);
+        gemm(out, self.ZT.as_ref(), tmp.as_ref(), 1.0, Accum::Add);
     }
 
-    /// `out` $= \mathbf T_j^T\mathbf A = \mathbf A - \mathbf Z_j^T(\boldsymbol\Psi^T\mathbf A)$ for $\mathbf A$ ($n\times k$); `tmp` is $6\times k$.
-    pub(crate) fn tt_mul(&self, A: MatRef<'_, f64>, tmp: &mut Mat<f64>, out: &mut Mat<f64>) {
+    /// `out` $(+)= \mathbf T_j^T\mathbf A = \mathbf A - \mathbf Z_j^T(\boldsymbol\Psi^T\mathbf A)$ for $\mathbf A$ ($n\times k$); `tmp` is $6\times k$.
+    pub(crate) fn tt_mul(&self, A: MatRef<'_, f64>, tmp: &mut Mat<f64>, out: &mut Mat<f64>, accum: Accum) {
         self.psi_t_mul(A, tmp);
-        copy_mat(out, A);
-        gemm(out, self.Z().transpose(), tmp.as_ref(), -1.0, Accum::Add);
+        match accum {
+            Accum::Replace => copy_mat(out, A),
+            Accum::Add => {
+                for j in 0..A.ncols() {
+                    for (o, a) in out.col_as_slice_mut(j).iter_mut().zip(col(A, j)) {
+                        *o += a;
+                    }
+                }
+            }
+        }
+        gemm(out, self.ZT.as_ref(), tmp.as_ref(), -1.0, Accum::Add);
     }
 
     /// `out` $= \mathbf A\mathbf T_j = \mathbf A - (\mathbf A\boldsymbol\Psi)\mathbf Z_j$ for $\mathbf A$ ($r\times n$); `tmp` is $r\times6$.
@@ -542,36 +583,37 @@ impl Kinematics {
     }
 }
 
-/// $\bar{\mathbf R}$-rotation of an $n\times n$ matrix: `out` $= \bar{\mathbf R}\mathbf K\bar{\mathbf R}^T$
-/// (`tmp` is $n\times n$).
-pub(crate) fn rotate_matrix(R: &Matrix3<f64>, N: usize, K: &Mat<f64>, tmp: &mut Mat<f64>, out: &mut Mat<f64>) {
+/// $\bar{\mathbf R}$-rotation of an $n\times n$ matrix: `out` $= \bar{\mathbf R}\mathbf K\bar{\mathbf R}^T$.
+///
+/// Two passes with no temporary: the interface column blocks of `out` get $\mathbf K$'s times
+/// $\mathbf R^T$ (the eta columns are copied), then each interface 3-block of every column of `out` is
+/// turned by $\mathbf R$ in place.
+pub(crate) fn rotate_matrix(R: &Matrix3<f64>, N: usize, K: &Mat<f64>, out: &mut Mat<f64>) {
     let n = K.nrows();
     let nb = 2 * N;
-    // tmp = K Rbar^T: column block b becomes [k0 k1 k2] R^T.
-    copy_mat(tmp, K.as_ref());
     for b in 0..nb {
+        let (k0, k1, k2) = (
+            K.col_as_slice(3 * b),
+            K.col_as_slice(3 * b + 1),
+            K.col_as_slice(3 * b + 2),
+        );
         for c in 0..3 {
-            let o = tmp.col_as_slice_mut(3 * b + c);
-            let (k0, k1, k2) = (
-                K.col_as_slice(3 * b),
-                K.col_as_slice(3 * b + 1),
-                K.col_as_slice(3 * b + 2),
-            );
+            let o = out.col_as_slice_mut(3 * b + c);
             let (r0, r1, r2) = (R[(c, 0)], R[(c, 1)], R[(c, 2)]);
             for i in 0..n {
                 o[i] = k0[i] * r0 + k1[i] * r1 + k2[i] * r2;
             }
         }
     }
-    // out = Rbar tmp, column by column.
+    for j in 3 * nb..n {
+        out.col_as_slice_mut(j).copy_from_slice(K.col_as_slice(j));
+    }
     for j in 0..n {
-        let k = tmp.col_as_slice(j);
         let o = out.col_as_slice_mut(j);
         for b in 0..nb {
-            let v = R * Vector3::new(k[3 * b], k[3 * b + 1], k[3 * b + 2]);
+            let v = R * Vector3::new(o[3 * b], o[3 * b + 1], o[3 * b + 2]);
             o[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
         }
-        o[3 * nb..].copy_from_slice(&k[3 * nb..]);
     }
 }
 
