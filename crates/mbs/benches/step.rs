@@ -7,6 +7,9 @@
 //!   iteration matrix is banded; element evaluation is parallel).
 //!
 //! Run with `cargo bench -p mbs --bench step` (release) or as a test with `cargo test --benches`.
+//! `cargo bench -p mbs --bench step -- crank 2` or `-- chain 128` runs one case (for
+//! `valgrind --tool=callgrind --toggle-collect='mbs::dynamic_solver::Integrator::step'` on a
+//! loaded machine, where instruction counts are the fair comparison).
 
 #![allow(non_snake_case)]
 
@@ -61,13 +64,25 @@ fn chain(n: usize, body: &reduction::ReducedBody) -> Model {
 
 fn main() {
     // `cargo test --benches` passes `--bench`-less args; keep the run short there.
+    let args: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
     let quick = !std::env::args().any(|a| a == "--bench");
+    // `-- CASE N [STEPS]`: one case, optionally with its number of timed steps (callgrind
+    // counts of two runs with different STEPS give the instructions per step, setup excluded).
+    let only: Option<(&str, usize)> = match args.as_slice() {
+        [case, n, ..] => Some((case.as_str(), n.parse().expect("a number of superelements"))),
+        _ => None,
+    };
+    let steps_arg: Option<usize> = args.get(2).map(|s| s.parse().expect("a number of steps"));
+    let run = |case: &str, n: usize| only.is_none_or(|(c, m)| c == case && m == n);
     println!("slider-crank (C2), rod as N superelements with 2 modes, h = T/400:");
     for n in [1, 2, 4] {
+        if !run("crank", n) {
+            continue;
+        }
         let (model, _, _) = fixtures::slider_crank(n, ModeSelection::Count(2), 150.0);
         let sys = System::new(&model).unwrap();
         let h = 2.0 * std::f64::consts::PI / 150.0 / 400.0;
-        let (us, its) = time_steps(&sys, h, 20, if quick { 10 } else { 200 });
+        let (us, its) = time_steps(&sys, h, 20, steps_arg.unwrap_or(if quick { 10 } else { 200 }));
         println!(
             "  N = {n:3}: {:5} unknowns, {us:10.1} µs/step, {its:.2} iterations/step",
             sys.n_dof()
@@ -84,16 +99,18 @@ fn main() {
         7800.0,
         ModeSelection::StaticOnly,
     );
-    let max = if quick { 64 } else { 512 };
+    let max = if quick && only.is_none() { 64 } else { 512 };
     let mut n = 1;
     while n <= max {
-        let sys = System::new(&chain(n, &body)).unwrap();
-        let (us, its) = time_steps(&sys, 1e-3, 3, if quick { 3 } else { 20 });
-        println!(
-            "  N = {n:3}: {:5} unknowns, {us:10.1} µs/step, {its:.2} iterations/step, {:8.2} µs per superelement-iteration",
-            sys.n_dof(),
-            us / (its * n as f64)
-        );
+        if run("chain", n) {
+            let sys = System::new(&chain(n, &body)).unwrap();
+            let (us, its) = time_steps(&sys, 1e-3, 3, steps_arg.unwrap_or(if quick { 3 } else { 20 }));
+            println!(
+                "  N = {n:3}: {:5} unknowns, {us:10.1} µs/step, {its:.2} iterations/step, {:8.2} µs per superelement-iteration",
+                sys.n_dof(),
+                us / (its * n as f64)
+            );
+        }
         n *= 2;
     }
 }

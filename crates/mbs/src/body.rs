@@ -22,7 +22,7 @@ use crate::node::NodeMotion;
 use faer::Mat;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use superelement::so3::skew;
-use superelement::{BodyState, Frame, Superelement, SuperelementError};
+use superelement::{BodyState, Evaluation, Frame, Superelement, SuperelementError, Workspace as SeWorkspace};
 
 /// Residual and tangents of one element on its ports.
 #[derive(Clone, Debug)]
@@ -41,7 +41,7 @@ pub(crate) struct ElementOutput {
 }
 
 impl ElementOutput {
-    fn zeros(n: usize, tangents: bool) -> Self {
+    pub(crate) fn zeros(n: usize, tangents: bool) -> Self {
         let k = if tangents { n } else { 0 };
         Self {
             residual: vec![0.0; n],
@@ -74,6 +74,15 @@ fn put(v: &mut [f64], at: usize, x: &Vector3<f64>) {
     v[at] += x.x;
     v[at + 1] += x.y;
     v[at + 2] += x.z;
+}
+
+/// The reused buffers of one flexible element (see [`FlexibleElement::buffer`]).
+#[derive(Clone, Debug)]
+pub(crate) struct FlexBuffer {
+    pub ws: SeWorkspace,
+    pub ev: Evaluation,
+    pub state: BodyState,
+    pub acc: Vec<f64>,
 }
 
 /// A flexible body placed on its nodes.
@@ -110,38 +119,77 @@ impl FlexibleElement {
         }
     }
 
-    /// Residual and tangents (4.3)-(4.4), [S19] through the superelement.
-    pub(crate) fn element(
+    /// Buffers for [`Self::element_into`] (style R8): the superelement's workspace and
+    /// output, the body state and the accelerations, sized once.
+    pub(crate) fn buffer(&self) -> FlexBuffer {
+        let n = self.se.n_coordinates();
+        let N = self.nodes.len();
+        let z = Vector3::zeros();
+        let m = self.modal.len();
+        FlexBuffer {
+            ws: self.se.workspace(),
+            ev: Evaluation::zeros(n),
+            state: BodyState {
+                r: vec![z; N],
+                R: vec![UnitQuaternion::identity(); N],
+                v: vec![z; N],
+                omega: vec![z; N],
+                eta: vec![0.0; m],
+                eta_dot: vec![0.0; m],
+                frame: Frame::identity(),
+            },
+            acc: vec![0.0; n],
+        }
+    }
+
+    /// [`Self::element`] without allocation: the body state is refilled from the node motions
+    /// and `modal(i) = (η_i, η̇_i, η̈_i)`, the superelement evaluates into its workspace
+    /// ([`Superelement::evaluate_into`]) and the result is copied into `out`, which must have
+    /// been built for this element (`6N + m` rows).
+    pub(crate) fn element_into(
         &self,
-        state: &BodyState,
-        eta_dd: &[f64],
         motions: &[NodeMotion],
+        modal: impl Fn(usize) -> (f64, f64, f64),
+        frame: Frame,
         gravity: &Vector3<f64>,
         tangents: bool,
-    ) -> Result<ElementOutput, SuperelementError> {
+        buf: &mut FlexBuffer,
+        out: &mut ElementOutput,
+    ) -> Result<(), SuperelementError> {
         let N = self.nodes.len();
-        let mut acc = Vec::with_capacity(6 * N + eta_dd.len());
-        for &n in &self.nodes {
-            acc.extend_from_slice(motions[n].a.as_slice());
-            acc.extend_from_slice(motions[n].alpha.as_slice());
+        let bs = &mut buf.state;
+        for (k, (&n, C)) in self.nodes.iter().zip(&self.offsets).enumerate() {
+            let m = &motions[n];
+            bs.r[k] = m.r;
+            bs.R[k] = m.R * C;
+            bs.v[k] = m.v;
+            bs.omega[k] = m.omega;
+            buf.acc[6 * k..6 * k + 3].copy_from_slice(m.a.as_slice());
+            buf.acc[6 * k + 3..6 * k + 6].copy_from_slice(m.alpha.as_slice());
         }
-        acc.extend_from_slice(eta_dd);
-        let ev = if tangents {
-            self.se.evaluate(state, &acc, gravity)?
-        } else {
-            self.se.forces(state, &acc, gravity)?
-        };
-        let internal: Vec<f64> = ev.f_elastic.iter().zip(&ev.f_damping).map(|(a, b)| a + b).collect();
-        Ok(ElementOutput {
-            residual: ev.residual,
-            inertia: ev.f_inertia,
-            internal,
-            external: ev.f_gravity,
-            M: if tangents { ev.mass } else { Mat::zeros(0, 0) },
-            C: ev.damping,
-            K: ev.stiffness,
-            frame: Some(ev.frame),
-        })
+        for i in 0..self.modal.len() {
+            let (x, xd, xdd) = modal(i);
+            bs.eta[i] = x;
+            bs.eta_dot[i] = xd;
+            buf.acc[6 * N + i] = xdd;
+        }
+        bs.frame = frame;
+        self.se
+            .evaluate_into(bs, &buf.acc, gravity, tangents, &mut buf.ws, &mut buf.ev)?;
+        let ev = &buf.ev;
+        out.residual.copy_from_slice(&ev.residual);
+        out.inertia.copy_from_slice(&ev.f_inertia);
+        for i in 0..out.internal.len() {
+            out.internal[i] = ev.f_elastic[i] + ev.f_damping[i];
+        }
+        out.external.copy_from_slice(&ev.f_gravity);
+        if tangents {
+            out.M.copy_from(&ev.mass);
+            out.C.copy_from(&ev.damping);
+            out.K.copy_from(&ev.stiffness);
+        }
+        out.frame = Some(ev.frame);
+        Ok(())
     }
 }
 

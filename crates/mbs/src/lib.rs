@@ -9,6 +9,7 @@
 //! Model (serde data)  --System::new-->  System (coordinate tree, elements, sparse pattern)
 //!   System::initial_state -> State -> solve_static | solve_dynamic (Integrator) | spectrum
 //!                                      -> SensorRecord (+ Incomplete with the history on error)
+//!   solve_static_with(StaticMethod::{LoadStepping, ArcLength}), buckling, solve_dynamic_adaptive
 //! ```
 //!
 //! * A body's interface *is* a node: bodies sharing a node are welded. A flexible body's nodes
@@ -38,6 +39,10 @@
 //! | $\hat{\mathbf M},\ \hat{\mathbf C},\ \hat{\mathbf K}$ | [`Matrices`] | $\partial\mathbf F/\partial\ddot{\mathbf q}$, $\partial\mathbf F/\partial\dot{\mathbf q}$, $\partial\mathbf F/\partial\mathbf q$ | [`coordinates`] |
 //! | $\mathbf K_t,\ \mathbf C_t,\ \mathbf M$ | `ElementOutput` | element tangents on its node ports | \[S19\], [`body`] |
 //! | $\lambda$ | `lambda` | load factor (statics) | |
+//! | $\mathbf P$ | `arc_length::load_vector` | $-\partial\mathbf F/\partial\lambda$: generalised external force at $\lambda = 1$ | Riks 1979 |
+//! | $\Delta s,\ s_i$ | [`ArcLengthSettings`], `System::dof_scale` | arc length; scale of unknown $i$ in its norm | Crisfield 1981 |
+//! | $\hat{\mathbf K}_0,\ \Delta\hat{\mathbf K},\ \mu$ | [`buckling`] | unloaded tangent, its change to the loaded state, buckling multiplier | Bathe §6.8.2 |
+//! | $\mathbf e_{n+1}$ | [`Integrator::step_adaptive`] | local error estimate $h^2\lvert\beta-\frac16\rvert(\mathbf a_{n+1}-\mathbf a_n)$ | Zienkiewicz & Xie 1991 |
 //! | $\rho_\infty,\ \alpha_m,\ \alpha_f,\ \beta,\ \gamma$ | [`AlphaParameters`] | generalized-α parameters | Chung & Hulbert 1993 |
 //! | $\beta',\ \gamma'$ | `bp`, `gp` | iteration-matrix factors | BCA 2012 |
 //! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration | BCA 2012 |
@@ -58,23 +63,34 @@
 //! | Newton-Euler | rigid body about its reference node | `mbs::body::rigid_element` |
 //! | (4.3)-(4.4), \[S19\] | flexible body | `mbs::body::FlexibleElement::element` (calls `superelement::Superelement::evaluate`) |
 //! | brief §6 | Newton with load stepping | `mbs::solve_static` |
+//! | Riks 1979, Crisfield 1981 | arc-length continuation (spherical constraint, bordered Newton) | `mbs::solve_arc_length`, `mbs::solve_static_with` |
+//! | Bathe §6.8.2 | linearised buckling $(\hat{\mathbf K}_0 + \mu\Delta\hat{\mathbf K})\boldsymbol\phi = \mathbf 0$ | `mbs::buckling` |
+//! | Zienkiewicz & Xie 1991 | local error estimate and step control | `mbs::Integrator::step_adaptive`, `mbs::solve_dynamic_adaptive` |
 //! | BCA 2012, Alg. 1 | Lie-group generalized-α step | `mbs::Integrator::step` |
 //! | brief §6 | linearised spectrum | `mbs::spectrum` |
 //!
 //! # Not implemented
 //!
-//! Arc-length continuation (statics stop at a limit point with [`SolveError::NotConverged`]),
-//! adaptive time steps, and joints reversed automatically (a tree that can only be built by
-//! reversing a joint is refused with a message saying so).
+//! * Joints reversed automatically (a tree that can only be built by reversing a joint is
+//!   refused with a message saying so).
+//! * Exact conservation of the momenta of flexible and rigid bodies: generalized-α conserves
+//!   them to second order only (linear forms of the velocities, as the momentum of point
+//!   masses, to round-off); see [`dynamic_solver`], "What is conserved".
+//! * Labels of the linearised modes by the bodies and nodes that carry their energy.
+//! * The spin-up drift at 10 rad/s, $\rho_\infty = 0.9$, $h = 5$ ms (issue 6) is not investigated.
+//! * Arc-length, buckling and the adaptive step are dense or serial where noted ([`buckling`]
+//!   is dense); they are not yet reachable from study files.
 //!
 //! # Modules
 //!
 //! [`model`] (serde data), [`time_function`], [`node`], [`coordinates`] (the maps and their
 //! derivatives), [`topology`] (the tree and its checks), [`body`] (elements), [`system`]
-//! (assembly), [`static_solver`], [`dynamic_solver`], [`linearized`], [`sensors`], [`error`].
+//! (assembly), [`static_solver`], [`arc_length`], [`dynamic_solver`], [`linearized`] (spectrum
+//! and buckling), [`sensors`], [`error`].
 
 #![allow(non_snake_case)]
 
+pub mod arc_length;
 pub mod body;
 pub mod coordinates;
 pub mod dynamic_solver;
@@ -88,9 +104,13 @@ pub mod system;
 pub mod time_function;
 pub mod topology;
 
-pub use dynamic_solver::{solve_dynamic, AlphaParameters, DynamicSettings, Integrator, StepReport, Trajectory};
+pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
+pub use dynamic_solver::{
+    solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters, DynamicSettings,
+    Integrator, StepReport, Trajectory,
+};
 pub use error::{Incomplete, ModelError, SolveError};
-pub use linearized::{linearize, spectrum, LinearSpectrum};
+pub use linearized::{buckling, linearize, spectrum, Buckling, LinearSpectrum};
 pub use model::{
     Body, BodyId, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind, JointSpring, Load,
     LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor, SensorKind, Spring,

@@ -10,8 +10,8 @@
 //! elastica (the first residual of a step is dominated by the axial strain that any linear
 //! extrapolation of large rotations creates in stiff slender bodies).
 //!
-//! Arc-length continuation (Riks/Crisfield) is not implemented: limit points stop the
-//! analysis with [`SolveError::NotConverged`].
+//! Load stepping cannot pass a limit point (it stops there with [`SolveError::NotConverged`],
+//! or jumps to another branch): use [`crate::solve_arc_length`] ([`crate::StaticMethod::ArcLength`]).
 
 #![allow(non_snake_case)]
 
@@ -85,6 +85,18 @@ pub struct StaticSolution {
     pub rejected: Vec<LoadStep>,
 }
 
+impl StaticSolution {
+    /// An empty solution at `state` with the system's sensor names (no rows yet).
+    pub(crate) fn start(system: &System, state: &State) -> Self {
+        Self {
+            state: state.clone(),
+            steps: Vec::new(),
+            sensors: system.sensor_record(),
+            rejected: Vec::new(),
+        }
+    }
+}
+
 /// Newton at a fixed load factor from `state`; returns the iteration history and whether it
 /// converged.
 pub(crate) fn newton_static(
@@ -127,7 +139,7 @@ pub(crate) fn newton_static(
         for i in 0..n {
             dq[i] = -ws.F[i];
         }
-        system.solve(&ws.S, &mut dq).map_err(|what| SolveError::Singular {
+        system.solve(ws, &mut dq).map_err(|what| SolveError::Singular {
             t: lambda,
             step: 0,
             what: format!("tangent stiffness ({what})"),
@@ -154,12 +166,7 @@ pub fn solve_static(
     let mut state = start;
     state.time = settings.time;
     let mut ws = system.workspace();
-    let mut sol = StaticSolution {
-        state: state.clone(),
-        steps: Vec::new(),
-        sensors: system.sensor_record(),
-        rejected: Vec::new(),
-    };
+    let mut sol = StaticSolution::start(system, &state);
     let fail = |error: SolveError, sol: StaticSolution| Box::new(Incomplete { error, partial: sol });
     if !(settings.initial_increment > 0.0 && settings.min_increment > 0.0 && settings.tolerance > 0.0) {
         let what = "increments and tolerance must be positive".into();

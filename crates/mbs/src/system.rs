@@ -11,13 +11,16 @@
 //! ([`crate::coordinates`] gives the formulas).
 //!
 //! Style R9: the pattern, the element-to-slot maps and the symbolic LU are built once in
-//! [`System::new`]; each Newton iteration refills values only (`evaluate_into`).
+//! [`System::new`]; each Newton iteration refills values only (`evaluate_into`). Style R8: the
+//! per-element outputs, each superelement's workspace ([`superelement::Superelement::evaluate_into`]),
+//! the element matrices and the iteration matrix live in the analysis' `Workspace`, so an
+//! iteration allocates only in faer's numeric LU and in the small rigid-element outputs.
 
 #![allow(non_snake_case)]
 
 use crate::body::{
-    load_element, point_mass_element, rigid_element, spring_element, ElementOutput, FlexibleElement, LoadElement,
-    RigidElement, SpringElement,
+    load_element, point_mass_element, rigid_element, spring_element, ElementOutput, FlexBuffer, FlexibleElement,
+    LoadElement, RigidElement, SpringElement,
 };
 use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
 use crate::error::{ModelError, SolveError};
@@ -192,6 +195,22 @@ pub(crate) struct Workspace {
     pub floor: f64,
     /// Iteration-matrix values and the last numeric LU.
     pub S: Vec<f64>,
+    /// Per element (order of `System::elements`): its output and reused buffers.
+    pub elems: Vec<ElementBuffer>,
+    /// Per node: the inertia, internal and external parts of its residual.
+    pub parts: Vec<[[f64; 6]; 3]>,
+    /// The generalised inertia, internal and external forces ($\mathbf J^T$ of `parts`).
+    pub gparts: [Vec<f64>; 3],
+    /// The iteration matrix on the system pattern (values refilled by [`System::solve_ws`]).
+    pub A: Option<SparseColMat<usize, f64>>,
+}
+
+/// One element's output and the buffers it is computed in (style R8: sized once per analysis).
+pub(crate) struct ElementBuffer {
+    pub out: ElementOutput,
+    pub flex: Option<FlexBuffer>,
+    /// $\hat{\mathbf M}_e$, $\hat{\mathbf C}_e$, $\hat{\mathbf K}_e$ on the element's unknowns (column major).
+    pub local: [Vec<f64>; 3],
 }
 
 /// A model ready for analysis.
@@ -869,6 +888,30 @@ impl System {
             scale: 0.0,
             floor: 0.0,
             S: vec![0.0; nnz],
+            elems: self
+                .elements
+                .iter()
+                .enumerate()
+                .map(|(ei, e)| {
+                    let rows = 6 * e.nodes.len() + e.modal.len();
+                    let s = self.pattern.elem_dofs[ei].len();
+                    ElementBuffer {
+                        out: ElementOutput::zeros(rows, true),
+                        flex: match e.kind {
+                            ElementKind::Flexible(i) => Some(self.flexible[i].buffer()),
+                            _ => None,
+                        },
+                        local: [vec![0.0; s * s], vec![0.0; s * s], vec![0.0; s * s]],
+                    }
+                })
+                .collect(),
+            parts: vec![[[0.0; 6]; 3]; nn],
+            gparts: [
+                vec![0.0; self.n_dof()],
+                vec![0.0; self.n_dof()],
+                vec![0.0; self.n_dof()],
+            ],
+            A: (nnz > 0).then(|| SparseColMat::new(self.pattern.symbolic.clone(), vec![0.0; nnz])),
         }
     }
 
@@ -892,34 +935,22 @@ impl System {
         let gravity = self.model.gravity * lambda;
         let nodes = &ws.nodes;
         let st: &State = state;
-        let outputs: Vec<Result<ElementOutput, SolveError>> = self
-            .elements
+        self.elements
             .par_iter()
-            .map(|e| self.element_output(e, st, nodes, &gravity, lambda, tangents))
-            .collect();
-        let mut outs = Vec::with_capacity(outputs.len());
-        for o in outputs {
-            outs.push(o?);
-        }
-        let new_frames: Vec<(usize, Frame)> = self
-            .elements
-            .iter()
-            .zip(&outs)
-            .filter_map(|(e, o)| match (&e.kind, o.frame) {
-                (ElementKind::Flexible(i), Some(f)) => Some((*i, f)),
-                _ => None,
-            })
-            .collect();
+            .zip(ws.elems.par_iter_mut())
+            .try_for_each(|(e, b)| self.element_output(e, st, nodes, &gravity, lambda, tangents, b))?;
         // Node residuals and their parts.
         let nn = self.model.nodes.len();
-        let mut parts = vec![[[0.0; 6]; 3]; nn];
+        let parts = &mut ws.parts;
+        parts.iter_mut().for_each(|p| *p = [[0.0; 6]; 3]);
         for r in ws.node_res.iter_mut() {
             *r = [0.0; 6];
         }
         ws.F.iter_mut().for_each(|f| *f = 0.0);
         ws.reactions.iter_mut().for_each(|f| *f = 0.0);
-        let mut gparts = vec![vec![0.0; n]; 3];
-        for (e, o) in self.elements.iter().zip(&outs) {
+        let gparts = &mut ws.gparts;
+        gparts.iter_mut().for_each(|g| g.iter_mut().for_each(|x| *x = 0.0));
+        for (e, o) in self.elements.iter().zip(ws.elems.iter().map(|b| &b.out)) {
             for (ia, &a) in e.nodes.iter().enumerate() {
                 for i in 0..6 {
                     ws.node_res[a][i] += o.residual[6 * ia + i];
@@ -966,22 +997,20 @@ impl System {
         ws.scale = norm(&gparts[0]) + norm(&gparts[1]) + norm(&gparts[2]);
         ws.floor = self.residual_floor(&ws.nodes);
         if !tangents {
-            for (i, f) in new_frames {
-                state.frames[i] = f;
-            }
+            self.store_frames(ws, state);
             return Ok(());
         }
         map.derivatives_into(&x, &ws.motions, &mut ws.derivs);
         for v in [&mut ws.M, &mut ws.C, &mut ws.K] {
             v.iter_mut().for_each(|x| *x = 0.0);
         }
-        let locals: Vec<[Vec<f64>; 3]> = self
-            .elements
-            .par_iter()
+        let (motions, derivs) = (&ws.motions, &ws.derivs);
+        ws.elems
+            .par_iter_mut()
             .enumerate()
-            .map(|(ei, e)| self.local_matrices(ei, e, &outs[ei], &ws.motions, &ws.derivs))
-            .collect();
-        for (ei, l) in locals.iter().enumerate() {
+            .for_each(|(ei, b)| self.local_matrices(ei, &self.elements[ei], &b.out, motions, derivs, &mut b.local));
+        for (ei, b) in ws.elems.iter().enumerate() {
+            let l = &b.local;
             for (q, &slot) in self.pattern.elem_slots[ei].iter().enumerate() {
                 ws.M[slot] += l[0][q];
                 ws.C[slot] += l[1][q];
@@ -1003,13 +1032,22 @@ impl System {
                 ws.C[*slot] += c;
             }
         }
-        for (i, f) in new_frames {
-            state.frames[i] = f;
-        }
+        self.store_frames(ws, state);
         Ok(())
     }
 
-    /// One element's output at the node motions.
+    /// The flexible elements' new floating frames into the state (the next warm starts).
+    fn store_frames(&self, ws: &Workspace, state: &mut State) {
+        for (e, b) in self.elements.iter().zip(&ws.elems) {
+            if let (ElementKind::Flexible(i), Some(f)) = (&e.kind, b.out.frame) {
+                state.frames[*i] = f;
+            }
+        }
+    }
+
+    /// One element's output at the node motions, into `buf.out` (flexible bodies evaluate in
+    /// their reused superelement workspace).
+    #[allow(clippy::too_many_arguments)]
     fn element_output(
         &self,
         e: &ElementRef,
@@ -1018,29 +1056,25 @@ impl System {
         gravity: &Vector3<f64>,
         lambda: f64,
         tangents: bool,
-    ) -> Result<ElementOutput, SolveError> {
+        buf: &mut ElementBuffer,
+    ) -> Result<(), SolveError> {
         let map = &self.topo.map;
-        Ok(match &e.kind {
+        buf.out = match &e.kind {
             ElementKind::Flexible(i) => {
                 let f = &self.flexible[*i];
-                let eta: Vec<f64> = f.modal.iter().map(|&s| state.scalars[s]).collect();
-                let eta_d: Vec<f64> = f
-                    .modal
-                    .iter()
-                    .map(|&s| state.velocity[unknown(map.scalars[s].slot)])
-                    .collect();
-                let eta_dd: Vec<f64> = f
-                    .modal
-                    .iter()
-                    .map(|&s| state.acceleration[unknown(map.scalars[s].slot)])
-                    .collect();
-                let bs = f.body_state(nodes, &eta, &eta_d, state.frames[*i]);
-                f.element(&bs, &eta_dd, nodes, gravity, tangents)
+                let modal = |k: usize| {
+                    let s = f.modal[k];
+                    let d = unknown(map.scalars[s].slot);
+                    (state.scalars[s], state.velocity[d], state.acceleration[d])
+                };
+                let flex = buf.flex.as_mut().expect("flexible element buffer");
+                f.element_into(nodes, modal, state.frames[*i], gravity, tangents, flex, &mut buf.out)
                     .map_err(|source| SolveError::Body {
                         body: self.model.bodies[f.body].name().to_string(),
                         t: state.time,
                         source,
-                    })?
+                    })?;
+                return Ok(());
             }
             ElementKind::Rigid(i) => rigid_element(&self.rigid[*i], &nodes[self.rigid[*i].node], gravity, tangents),
             ElementKind::PointMass(node, m) => point_mass_element(*m, &nodes[*node], gravity, tangents),
@@ -1052,7 +1086,8 @@ impl System {
                 let l = &self.loads[*i];
                 load_element(l, &nodes[l.node], state.time, lambda, tangents)
             }
-        })
+        };
+        Ok(())
     }
 
     /// The element's $\hat{\mathbf M}_e$, $\hat{\mathbf C}_e$, $\hat{\mathbf K}_e$ on its unknown dofs
@@ -1066,11 +1101,13 @@ impl System {
         o: &ElementOutput,
         motions: &[Motion],
         derivs: &[NodeDerivatives],
-    ) -> [Vec<f64>; 3] {
+        local: &mut [Vec<f64>; 3],
+    ) {
         let s = self.pattern.elem_dofs[ei].len();
-        let mut Ml = vec![0.0; s * s];
-        let mut Cl = vec![0.0; s * s];
-        let mut Kl = vec![0.0; s * s];
+        let [Ml, Cl, Kl] = local;
+        for v in [&mut *Ml, &mut *Cl, &mut *Kl] {
+            v.iter_mut().for_each(|x| *x = 0.0);
+        }
         let pos = &self.pattern.elem_pos[ei];
         let mpos = &self.pattern.elem_modal_pos[ei];
         let N = e.nodes.len();
@@ -1144,7 +1181,6 @@ impl System {
                 Kl[at] += K[(r, c)];
             }
         }
-        [Ml, Cl, Kl]
     }
 
     /// $\mathbf F$ at `state` with loads scaled by `lambda` (updates the frames' warm starts).
@@ -1179,23 +1215,20 @@ impl System {
         A
     }
 
-    /// Solves $\mathbf S\mathbf x = \mathbf b$ in place for the values `S` on the system pattern.
-    pub(crate) fn solve(&self, S: &[f64], b: &mut [f64]) -> Result<(), String> {
+    /// Solves $\mathbf S\mathbf X = \mathbf B$ in place for the values `ws.S` on the system pattern;
+    /// `b` holds the right-hand sides column after column (`b.len()` a multiple of `n_dof`).
+    /// The matrix is refilled in `ws.A`: no allocation but faer's numeric LU.
+    pub(crate) fn solve(&self, ws: &mut Workspace, b: &mut [f64]) -> Result<(), String> {
         let n = self.n_dof();
-        if n == 0 {
-            return Ok(());
-        }
+        let Some(A) = ws.A.as_mut() else { return Ok(()) };
         use faer::linalg::solvers::Solve;
-        let A = SparseColMat::new(self.pattern.symbolic.clone(), S.to_vec());
+        A.val_mut().copy_from_slice(&ws.S);
         let lu = Lu::try_new_with_symbolic(self.pattern.lu.clone().expect("symbolic LU for n > 0"), A.as_ref())
             .map_err(|e| format!("{e:?}"))?;
-        let mut rhs = faer::Mat::from_fn(n, 1, |i, _| b[i]);
-        lu.solve_in_place(rhs.as_mut());
-        for i in 0..n {
-            b[i] = rhs[(i, 0)];
-            if !b[i].is_finite() {
-                return Err("non-finite solution".into());
-            }
+        let k = b.len() / n;
+        lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(b, n, k));
+        if b.iter().any(|x| !x.is_finite()) {
+            return Err("non-finite solution".into());
         }
         Ok(())
     }

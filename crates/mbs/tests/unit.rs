@@ -48,3 +48,8 @@ mod slider_crank;
 /// and the geometric stiffness of an axial preload.
 #[path = "unit/linearized.rs"]
 mod linearized;
+
+/// Arc-length continuation through the limit point of the von Mises truss (exact curve), and
+/// linearised buckling of a column of N superelements against Euler's load.
+#[path = "unit/arc_length.rs"]
+mod arc_length;

@@ -17,8 +17,8 @@ fn elliptic_k(k: f64) -> f64 {
     PI / (2.0 * a)
 }
 
-/// Angle history of the pendulum released from rest at `theta0`.
-fn run(theta0: f64, h: f64, end: f64, rho: f64) -> (Vec<f64>, Vec<f64>) {
+/// The fixture pendulum released from rest at `theta0`, with the sensor "theta".
+fn released(theta0: f64) -> System {
     let (mut model, j) = pendulum(1.0, 1.0, 0.01);
     model.initial.push(InitialCondition::JointValue {
         joint: j,
@@ -32,7 +32,12 @@ fn run(theta0: f64, h: f64, end: f64, rho: f64) -> (Vec<f64>, Vec<f64>) {
             coordinate: 0,
         },
     );
-    let sys = System::new(&model).unwrap();
+    System::new(&model).unwrap()
+}
+
+/// Angle history of the pendulum released from rest at `theta0`.
+fn run(theta0: f64, h: f64, end: f64, rho: f64) -> (Vec<f64>, Vec<f64>) {
+    let sys = released(theta0);
     let mut settings = DynamicSettings::new(h, end, rho);
     settings.tolerance = 1e-12;
     let traj = solve_dynamic(&sys, sys.initial_state(), &settings).unwrap();
@@ -166,4 +171,57 @@ fn a_failed_step_returns_the_history_so_far() {
     assert_eq!(err.partial.sensors.times, vec![0.0]);
     assert_eq!(err.partial.final_state.time(), 0.0);
     eprintln!("{err}");
+}
+
+/// The pendulum released from 2 rad, integrated to `end` with the adaptive step at local
+/// tolerance `tol`: (times, angles).
+fn run_adaptive(tol: f64, end: f64) -> (Vec<f64>, Vec<f64>) {
+    let sys = released(2.0);
+    let mut settings = DynamicSettings::new(1e-3, end, 1.0);
+    settings.tolerance = 1e-12;
+    let adaptive = mbs::AdaptiveSettings::new(tol, 1e-6, 0.1);
+    let traj = mbs::solve_dynamic_adaptive(&sys, sys.initial_state(), &settings, &adaptive).unwrap();
+    (traj.sensors.times.clone(), traj.sensors.column("theta", 0).unwrap())
+}
+
+#[test]
+fn adaptive_step_meets_the_tolerance_and_shrinks_where_the_motion_is_fast() {
+    let theta0: f64 = 2.0;
+    let T = 4.0 * ratio().sqrt() * elliptic_k((theta0 / 2.0).sin());
+    let end = 1.3 * T;
+    // Reference: fixed steps T/4000 and T/8000, Richardson-extrapolated (second order).
+    let n = (end / (T / 4000.0)).round();
+    let (_, x1) = run(theta0, end / n, end, 1.0);
+    let (_, x2) = run(theta0, end / (2.0 * n), end, 1.0);
+    let reference = x2.last().unwrap() + (x2.last().unwrap() - x1.last().unwrap()) / 3.0;
+    let mut errors = Vec::new();
+    for tol in [1e-5, 1e-7] {
+        let (t, x) = run_adaptive(tol, end);
+        assert!((t.last().unwrap() - end).abs() < 1e-12, "ends at {}", t.last().unwrap());
+        let err = (x.last().unwrap() - reference).abs();
+        // Step sizes near the bottom (|theta| < 0.3, fastest: the largest jerk, theta' cos
+        // theta) and near the turning points (|theta| > 1.8, theta' -> 0).
+        let mean = |keep: &dyn Fn(f64) -> bool| {
+            let h: Vec<f64> = (1..t.len() - 1)
+                .filter(|&i| keep(x[i]))
+                .map(|i| t[i + 1] - t[i])
+                .collect();
+            h.iter().sum::<f64>() / h.len() as f64
+        };
+        let (h_bottom, h_top) = (mean(&|th: f64| th.abs() < 0.3), mean(&|th: f64| th.abs() > 1.8));
+        eprintln!(
+            "tol {tol:.0e}: {} steps, final error {err:.2e}, mean h at the bottom {h_bottom:.2e}, at the turning points {h_top:.2e}",
+            t.len() - 1
+        );
+        assert!(h_bottom < 0.7 * h_top, "{h_bottom} vs {h_top}");
+        errors.push((err, t.len() - 1));
+    }
+    // A local error per step of tol over ~tol^(-1/3) steps: the global error falls like
+    // tol^(2/3), a factor 21 for 100 times tighter (measured 18), and stays below the sum of
+    // the local tolerances (steps x tol: the errors add up, mostly as a phase error).
+    assert!(errors[0].0 / errors[1].0 > 10.0, "{errors:?}");
+    for (&(err, steps), tol) in errors.iter().zip([1e-5, 1e-7]) {
+        assert!(err < steps as f64 * tol, "{errors:?}");
+    }
+    assert!(errors[1].1 > 3 * errors[0].1, "{errors:?}");
 }
