@@ -112,6 +112,13 @@ pub enum FeError {
     #[error("the mass matrix is not positive definite (a free dof without mass near node {node_tag} dof {dof})")]
     MasslessDof { node_tag: u64, dof: &'static str },
     /// A dense eigenvalue or sparse factorisation failed for a reason other than the above.
+    /// Nested dissection needs one finite position per dof (`ordering::nested_dissection`).
+    #[error("fill-reducing ordering: {n_dofs} dofs but {n_points} dof positions: {why}")]
+    OrderingPoints {
+        n_dofs: usize,
+        n_points: usize,
+        why: String,
+    },
     #[error("linear algebra failed: {0}")]
     LinearAlgebra(String),
     /// A generator was asked for something it cannot build.

@@ -12,6 +12,10 @@
 //! (done once); [`assemble`] fills the values in parallel. [`solve_static`] and
 //! [`modal_dense`] are the linear analyses of this stage.
 //!
+//! Sparse Cholesky factorisations ([`SparseCholesky`], used here by [`solve_static`] and by
+//! `reduction`) order the unknowns by nested dissection on the node positions for large
+//! models, by AMD otherwise ([`ordering`], [`FillOrdering`]).
+//!
 //! What this crate does not do: rotations of bodies, time, reduction.
 //!
 //! # Notation
@@ -41,10 +45,12 @@ pub mod interface;
 pub mod mesh;
 pub mod modal;
 pub mod model;
+pub mod ordering;
 pub mod pattern;
 pub mod property;
 pub mod quadrature;
 pub mod section;
+pub mod sparse_cholesky;
 pub mod statics;
 
 pub use assembly::{assemble, assemble_into, Assembled};
@@ -56,7 +62,11 @@ pub use interface::{add_interface, add_interface_on_set, Interface, Interfaces, 
 pub use mesh::{Cell, CellId, CellKind, Mesh, NodeId};
 pub use modal::{modal_dense, ModalSolution};
 pub use model::{BeamProperties, DofMask, FeModel, LinearConstraint, NodalLoad, Support};
+pub use ordering::{
+    dof_points, factor_flops, nested_dissection, nested_dissection_with_leaves, symbolic_cholesky, FillOrdering,
+};
 pub use pattern::SystemPattern;
 pub use property::{IsotropicMaterial, MaterialId, SectionId};
 pub use section::BeamSection;
+pub use sparse_cholesky::{CholeskyError, SparseCholesky};
 pub use statics::{solve_static, StaticSolution};

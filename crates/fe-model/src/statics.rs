@@ -6,12 +6,11 @@ use crate::dof::{DofMap, DofStatus};
 use crate::error::{FeError, DOF_NAMES};
 use crate::mesh::NodeId;
 use crate::model::{FeModel, NodalLoad};
+use crate::ordering::{dof_points, FillOrdering};
 use crate::pattern::{element_slots, SystemPattern};
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering};
-use faer::sparse::linalg::LltError;
+use crate::sparse_cholesky::{CholeskyError, SparseCholesky};
 use faer::sparse::{SparseColMat, SparseColMatRef};
-use faer::{Mat, Side};
+use faer::Mat;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -27,7 +26,9 @@ pub struct StaticSolution {
     pub relative_residual: f64,
 }
 
-/// Sparse Cholesky factor of a symmetric positive definite matrix on the free dofs of `dofs`.
+/// Sparse Cholesky factor of a symmetric positive definite matrix on the free dofs of `dofs`,
+/// with the fill-reducing `ordering` ([`FillOrdering::Auto`]: nested dissection on the dof
+/// positions `points` for large models, see [`crate::ordering`]).
 ///
 /// A non-positive pivot means the structure can move without straining; the error names
 /// the node and dof where the factorisation broke down (mapped back through the
@@ -35,26 +36,16 @@ pub struct StaticSolution {
 pub fn cholesky(
     A: SparseColMatRef<'_, usize, f64>,
     dofs: &DofMap,
-) -> Result<faer::sparse::linalg::solvers::Llt<usize, f64>, FeError> {
-    match A.sp_cholesky(Side::Lower) {
-        Ok(llt) => Ok(llt),
-        Err(LltError::Numeric(faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index })) => {
-            // The factorisation works on P A P^T; recompute the (deterministic) symbolic
-            // analysis to map the pivot back to our dof.
-            let original = factorize_symbolic_cholesky(
-                A.symbolic(),
-                Side::Lower,
-                SymmetricOrdering::Amd,
-                CholeskySymbolicParams::default(),
-            )
-            .ok()
-            .and_then(|s| s.perm().map(|p| p.arrays().0[index.min(A.nrows() - 1)]))
-            .unwrap_or(index.min(A.nrows() - 1));
-            let (node_tag, dof) = dofs.describe(crate::dof::Dof(original as u32));
-            Err(FeError::Mechanism { node_tag, dof })
+    points: Option<&[[f64; 3]]>,
+    ordering: FillOrdering,
+) -> Result<SparseCholesky, FeError> {
+    SparseCholesky::new(A, points, ordering).map_err(|e| match e {
+        CholeskyError::NonPositivePivot { dof } => {
+            let (node_tag, dof) = dofs.describe(crate::dof::Dof(dof as u32));
+            FeError::Mechanism { node_tag, dof }
         }
-        Err(e) => Err(FeError::LinearAlgebra(format!("sparse Cholesky failed: {e:?}"))),
-    }
+        other => FeError::LinearAlgebra(other.to_string()),
+    })
 }
 
 /// One element's full slots and its forces at them.
@@ -104,7 +95,8 @@ pub fn solve_static(model: &FeModel, loads: &[NodalLoad]) -> Result<StaticSoluti
     let assembled = assemble(model, &pattern)?;
     let f_full = load_vector(model, loads)?;
     let f = dofs.restrict(&f_full, "load")?;
-    let u_f = solve_with(&assembled.K, &dofs, &f)?;
+    let points = dof_points(model, &dofs);
+    let u_f = solve_with(&assembled.K, &dofs, &f, Some(&points), FillOrdering::Auto)?;
     let relative_residual = relative_residual(&assembled.K, &u_f, &f);
     // A singular K can pass the factorisation with a tiny positive pivot; the solve then
     // has a large residual. 1e-8 is far above the round-off of a well-posed solve (~1e-14
@@ -164,9 +156,16 @@ pub fn support_reactions(
     reactions
 }
 
-/// Solves $\mathbf K \mathbf u = \mathbf f$ on the free dofs.
-pub fn solve_with(K: &SparseColMat<usize, f64>, dofs: &DofMap, f: &[f64]) -> Result<Vec<f64>, FeError> {
-    let llt = cholesky(K.as_ref(), dofs)?;
+/// Solves $\mathbf K \mathbf u = \mathbf f$ on the free dofs ([`cholesky`] says what
+/// `points` and `ordering` choose).
+pub fn solve_with(
+    K: &SparseColMat<usize, f64>,
+    dofs: &DofMap,
+    f: &[f64],
+    points: Option<&[[f64; 3]]>,
+    ordering: FillOrdering,
+) -> Result<Vec<f64>, FeError> {
+    let llt = cholesky(K.as_ref(), dofs, points, ordering)?;
     let mut rhs = Mat::from_fn(f.len(), 1, |i, _| f[i]);
     llt.solve_in_place(rhs.as_mut());
     let u: Vec<f64> = (0..f.len()).map(|i| rhs[(i, 0)]).collect();

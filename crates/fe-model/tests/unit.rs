@@ -17,6 +17,9 @@ mod unit {
     mod gmsh;
     /// RBE2/RBE3 interface nodes on solids: rigid patch, no added stiffness, bad sets.
     mod interface;
+    /// Fill-reducing orderings: nested dissection is a valid permutation, solves as AMD does,
+    /// and gives a smaller factor on a 3D block.
+    mod ordering;
     /// Quadrature rules: exactness degrees.
     mod quadrature;
     /// Solid elements (tet4, tet10, hex8, hex20, wedge6): shape functions, patch tests, rigid

@@ -1,17 +1,38 @@
 //! Whole Craig-Bampton reduction of a generated solid block, as a user runs it: hex8 box
 //! mesh, RBE2 interfaces on the two end faces, 20 fixed-interface modes, through
-//! `reduction::reduce` (factorisation of K_ii, 12 constraint-mode solves, Krylov-Schur, the
-//! projections and the inertia invariants). Prints wall time per stage and the peak RSS.
+//! `reduction::reduce_with_progress` (factorisation of K_ii, 12 constraint-mode solves,
+//! Lanczos, the projections and the inertia invariants). Prints wall time per stage, the
+//! factor size and the peak RSS; each size runs in its own process, so that its peak RSS is
+//! its own (issue 9: reduction time against mesh size).
 //!
-//! `cargo bench -p reduction --bench craig_bampton -- --bench` runs 50k and 200k dofs
-//! (`REDUCTION_CB_SIZES=50k,200k,600k` to choose); without `--bench` (as `cargo test --benches`
-//! runs it) a 3k-dof block, so CI checks that it runs.
+//! `cargo bench -p reduction --bench craig_bampton -- --bench` runs 50k and 200k dofs;
+//! `REDUCTION_CB_SIZES=10k,25k,50k,100k,200k` chooses sizes (also 3k, 600k), and
+//! `REDUCTION_ORDERING=amd,nd` the fill-reducing orderings to compare (`auto` by default).
+//! Without `--bench` (as `cargo test --benches` runs it) a 3k-dof block with both orderings,
+//! so CI checks that it runs.
 
-use fe_model::{
-    add_interface_on_set, box_mesh, solid_model, CellKind, DofMap, IsotropicMaterial, MassKind, SpiderKind,
-};
-use reduction::{reduce, CbSettings, ModeSelection};
+mod common;
+
+use common::{block, divisions, parse_ordering};
+use fe_model::{DofMap, FillOrdering};
+use reduction::{reduce_with_progress, CbSettings, ModeSelection, Stage};
 use std::time::Instant;
+
+/// CPU seconds (user + system, all threads) of this process so far: less sensitive to the
+/// load of a shared machine than wall time.
+fn cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            // Fields after the command name (which may hold spaces) in parentheses.
+            let rest = &s[s.rfind(')')? + 2..];
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            // utime and stime are fields 14 and 15 of stat, 12 and 13 after the name; ticks
+            // of 1/100 s on Linux.
+            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
+        })
+        .unwrap_or(f64::NAN)
+}
 
 fn peak_rss_mb() -> f64 {
     std::fs::read_to_string("/proc/self/status")
@@ -25,61 +46,108 @@ fn peak_rss_mb() -> f64 {
         .unwrap_or(f64::NAN)
 }
 
-fn main() {
-    let full = std::env::args().any(|a| a == "--bench");
-    let sizes: Vec<String> = match std::env::var("REDUCTION_CB_SIZES") {
-        Ok(s) => s.split(',').map(|x| x.trim().to_string()).collect(),
-        Err(_) if full => vec!["50k".into(), "200k".into()],
-        Err(_) => vec!["3k".into()],
-    };
+/// One reduction in this process; prints one line.
+fn run_one(size: &str, ordering: FillOrdering) {
+    let (ex, ey, ez) = divisions(size).expect("checked by the parent");
+    let t0 = Instant::now();
+    let (model, a, b) = block((ex, ey, ez));
+    let n_free = DofMap::new(&model).unwrap().n_free();
+    let t_model = t0.elapsed().as_secs_f64();
+    // Stage start times; the eigen iteration reports many times, only its first counts.
+    let mut marks: Vec<(&'static str, f64, f64)> = Vec::new();
+    let mut factor = (0usize, 0.0f64, FillOrdering::Auto);
+    let mut applications = 0;
+    let t1 = Instant::now();
+    let body = reduce_with_progress(
+        &model,
+        "block",
+        &[("root".into(), a), ("tip".into(), b)],
+        &CbSettings {
+            modes: ModeSelection::Count(20),
+            keep_mesh_shapes: false,
+            auxiliary_node: None,
+        },
+        ordering,
+        &mut |stage| {
+            let t = t1.elapsed().as_secs_f64();
+            let name = match stage {
+                Stage::Assembling => "assemble",
+                Stage::Factorising { .. } => "factor",
+                Stage::Factorised {
+                    factor_len,
+                    flops,
+                    ordering,
+                } => {
+                    factor = (factor_len, flops, ordering);
+                    return;
+                }
+                Stage::ConstraintModes { .. } => "Psi",
+                Stage::EigenIteration { applications: k, .. } => {
+                    applications = k;
+                    "Lanczos"
+                }
+                Stage::Projecting => "project",
+                Stage::Invariants => "invariants",
+                _ => "other",
+            };
+            if marks.last().map(|m| m.0) != Some(name) {
+                marks.push((name, t, cpu_seconds()));
+            }
+        },
+    )
+    .unwrap();
+    let total = t1.elapsed().as_secs_f64();
+    let cpu_end = cpu_seconds();
+    let mut stages = String::new();
+    for (k, (name, t, cpu)) in marks.iter().enumerate() {
+        let end = marks.get(k + 1).map_or(total, |m| m.1);
+        let cpu_next = marks.get(k + 1).map_or(cpu_end, |m| m.2);
+        stages += &format!("{name} {:.2}/{:.2}, ", end - t, cpu_next - cpu);
+    }
     println!(
-        "reduction/benches/craig_bampton: hex8 block, RBE2 interfaces on both end faces, 20 modes; load average {}",
+        "{size:>5} {:<17} {ex} x {ey} x {ez} hex8, {n_free} free dofs: model {t_model:.2} s, reduce {total:.2} s (stage wall/CPU s: {stages}{applications} operator applications), factor {:.1} M values ({:.2} GB, {:.0} Gflop), peak RSS {:.0} MB, f1 = {:.4} Hz",
+        format!("{:?}", factor.2),
+        factor.0 as f64 / 1e6,
+        factor.0 as f64 * 8.0 / 1e9,
+        factor.1 / 1e9,
+        peak_rss_mb(),
+        body.fixed_interface_omega[0] / (2.0 * std::f64::consts::PI)
+    );
+}
+
+fn main() {
+    if let Ok(child) = std::env::var("REDUCTION_CB_CHILD") {
+        let (size, ordering) = child.split_once(':').expect("size:ordering");
+        run_one(size, parse_ordering(ordering).expect("checked by the parent"));
+        return;
+    }
+    let full = std::env::args().any(|a| a == "--bench");
+    let list = |var: &str, bench: &str, test: &str| -> Vec<String> {
+        let s = std::env::var(var).unwrap_or_else(|_| if full { bench.into() } else { test.into() });
+        s.split(',').map(|x| x.trim().to_string()).collect()
+    };
+    let sizes = list("REDUCTION_CB_SIZES", "50k,200k", "3k");
+    let orderings = list("REDUCTION_ORDERING", "auto", "amd,nd");
+    println!(
+        "reduction/benches/craig_bampton: hex8 block, RBE2 interfaces on both end faces, 20 modes; {} threads; load average {}",
+        rayon::current_num_threads(),
         std::fs::read_to_string("/proc/loadavg").unwrap_or_default().trim()
     );
-    for size in sizes {
-        // Elements (ex, ey, ez): dofs ~ 3 (ex+1)(ey+1)(ez+1).
-        let (ex, ey, ez) = match size.as_str() {
-            "3k" => (12, 8, 8),
-            "50k" => (30, 23, 23),
-            "200k" => (48, 37, 37),
-            "600k" => (70, 53, 53),
-            other => {
-                eprintln!("unknown size {other} (3k, 50k, 200k, 600k)");
+    for size in &sizes {
+        if divisions(size).is_none() {
+            eprintln!("unknown size {size} (3k, 10k, 25k, 50k, 100k, 200k, 600k)");
+            std::process::exit(2);
+        }
+        for ordering in &orderings {
+            if parse_ordering(ordering).is_none() {
+                eprintln!("unknown ordering {ordering} (auto, amd, nd)");
                 std::process::exit(2);
             }
-        };
-        let t0 = Instant::now();
-        let mesh = box_mesh(
-            CellKind::Hex8,
-            [2.0 * ex as f64 / ez as f64, ey as f64 / ez as f64, 1.0],
-            [ex, ey, ez],
-        )
-        .unwrap();
-        let steel = IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap();
-        let mut model = solid_model(mesh, steel, MassKind::Consistent).unwrap();
-        let a = add_interface_on_set(&mut model, "root", "x0", None, SpiderKind::Rbe2).unwrap();
-        let b = add_interface_on_set(&mut model, "tip", "x1", None, SpiderKind::Rbe2).unwrap();
-        let n_free = DofMap::new(&model).unwrap().n_free();
-        let t_model = t0.elapsed();
-        let t1 = Instant::now();
-        let body = reduce(
-            &model,
-            "block",
-            &[("root".into(), a), ("tip".into(), b)],
-            &CbSettings {
-                modes: ModeSelection::Count(20),
-                keep_mesh_shapes: false,
-                auxiliary_node: None,
-            },
-        )
-        .unwrap();
-        let t_reduce = t1.elapsed();
-        println!(
-            "{size:>5}: {ex} x {ey} x {ez} hex8, {n_free} free dofs: model {:.2} s, reduce (factor + Psi + 20 modes + projections + invariants) {:.2} s, peak RSS {:.0} MB, f1 = {:.1} Hz",
-            t_model.as_secs_f64(),
-            t_reduce.as_secs_f64(),
-            peak_rss_mb(),
-            body.fixed_interface_omega[0] / (2.0 * std::f64::consts::PI)
-        );
+            let status = std::process::Command::new(std::env::current_exe().unwrap())
+                .env("REDUCTION_CB_CHILD", format!("{size}:{ordering}"))
+                .status()
+                .unwrap();
+            assert!(status.success(), "the {size} {ordering} run failed: {status}");
+        }
     }
 }

@@ -14,9 +14,9 @@ use crate::eigen::{EigenSettings, Shift, ShiftInvert};
 use crate::error::ReductionError;
 use crate::invariants::{inertia_data, inertia_data_from_mass};
 use crate::reduced_body::{DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, FORMAT_VERSION};
-use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::Mat;
-use fe_model::{assemble, DofMap, DofStatus, FeModel, NodeId, SystemPattern, DOF_NAMES};
+use fe_model::{assemble, dof_points, DofMap, DofStatus, FeModel, FillOrdering, NodeId, SystemPattern, DOF_NAMES};
 use serde::{Deserialize, Serialize};
 
 /// How many fixed-interface modes to keep.
@@ -50,6 +50,37 @@ impl CbSettings {
             auxiliary_node: None,
         }
     }
+}
+
+/// A stage of [`reduce_with_progress`], reported as it starts (or, for
+/// [`Stage::Factorised`] and [`Stage::EigenIteration`], as it progresses).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Stage {
+    /// Assembling $\mathbf K$ and $\mathbf M$ on the free dofs.
+    Assembling,
+    /// Ordering and factoring $\mathbf K_{ii}$ ($n_i$ = `internal_dofs`).
+    Factorising { internal_dofs: usize },
+    /// $\mathbf K_{ii}$ factored: stored values of $\mathbf L$, the floating-point operations
+    /// the factorisation took ($\sum_j c_j^2$) and the ordering used.
+    Factorised {
+        factor_len: usize,
+        flops: f64,
+        ordering: FillOrdering,
+    },
+    /// The constraint modes $\boldsymbol\Psi$: `count` solves with the factor.
+    ConstraintModes { count: usize },
+    /// Lanczos: `converged` of the `wanted` fixed-interface modes meet the Krylov tolerance,
+    /// after `applications` operator applications.
+    EigenIteration {
+        converged: usize,
+        wanted: usize,
+        applications: usize,
+    },
+    /// The basis $\mathbf V$ and the projections $\mathbf K_{CB}$, $\mathbf M_{CB}$.
+    Projecting,
+    /// Mass data, inertia invariants and the rigid fit $\boldsymbol\Phi_{com}$.
+    Invariants,
 }
 
 /// The boundary/internal split of the free dofs.
@@ -144,28 +175,39 @@ fn partition_by(
 }
 
 /// The internal-internal block as a sparse matrix and the internal-boundary block dense.
+///
+/// Internal positions increase with the free-dof index, so each column of $\mathbf A_{ii}$
+/// is column `internal[c]` of $\mathbf A$ filtered, in the same row order: no sort.
 fn split(
     A: SparseColMatRef<'_, usize, f64>,
     p: &Partition,
 ) -> Result<(SparseColMat<usize, f64>, Mat<f64>), ReductionError> {
     let (ni, nb) = (p.internal.len(), p.boundary.len());
-    let mut triplets = Vec::with_capacity(A.compute_nnz());
     let mut A_ib = Mat::zeros(ni, nb);
-    let sym = A.symbolic();
-    let values = A.val();
-    for col in 0..A.ncols() {
-        let range = sym.col_range(col);
-        for (&row, &v) in sym.row_idx()[range.clone()].iter().zip(&values[range]) {
-            match (p.position[row], p.position[col]) {
-                (Err(r), Err(c)) => triplets.push(Triplet::new(r, c, v)),
-                (Err(r), Ok(c)) => A_ib[(r, c)] += v,
-                _ => {}
+    for (c, &col) in p.boundary.iter().enumerate() {
+        for (&row, &v) in A.row_idx_of_col_raw(col).iter().zip(A.val_of_col(col)) {
+            if let Err(r) = p.position[row] {
+                A_ib[(r, c)] += v;
             }
         }
     }
-    let A_ii = SparseColMat::try_new_from_triplets(ni, ni, &triplets)
-        .map_err(|e| ReductionError::Factorization(format!("building the internal block: {e:?}")))?;
-    Ok((A_ii, A_ib))
+    let mut col_ptr = Vec::with_capacity(ni + 1);
+    let mut row_idx = Vec::with_capacity(A.compute_nnz());
+    let mut values = Vec::with_capacity(A.compute_nnz());
+    col_ptr.push(0);
+    for &col in &p.internal {
+        for (&row, &v) in A.row_idx_of_col_raw(col).iter().zip(A.val_of_col(col)) {
+            if let Err(r) = p.position[row] {
+                row_idx.push(r);
+                values.push(v);
+            }
+        }
+        col_ptr.push(row_idx.len());
+    }
+    // Rows stay in A's order: sorted (and unique) when A's are, as for assembled matrices
+    // and those read by `read_matrix_market`.
+    let symbolic = SymbolicSparseColMat::new_unsorted_checked(ni, ni, col_ptr, None, row_idx);
+    Ok((SparseColMat::new(symbolic, values), A_ib))
 }
 
 /// The CB basis on the free dofs and the reduced matrices: what [`reduce`] and
@@ -183,14 +225,31 @@ struct Projection {
 /// constraint modes and fixed-interface modes from one factorisation of $\mathbf K_{ii}$,
 /// the basis $\mathbf V$ and the projections (module docs). `describe(d)` names free dof `d`
 /// in messages.
+/// The free-dof matrices and how to order and name their dofs, for [`project`].
+struct FreeSystem<'a> {
+    K: SparseColMatRef<'a, usize, f64>,
+    M: SparseColMatRef<'a, usize, f64>,
+    /// Position of each free dof (its node), for nested dissection.
+    points: &'a [[f64; 3]],
+    ordering: FillOrdering,
+    /// Names free dof `d` in messages.
+    describe: &'a dyn Fn(usize) -> String,
+}
+
 fn project(
-    K: SparseColMatRef<'_, usize, f64>,
-    M: SparseColMatRef<'_, usize, f64>,
+    system: &FreeSystem<'_>,
     p: &Partition,
     modes: ModeSelection,
     name: &str,
-    describe: &dyn Fn(usize) -> String,
+    progress: &mut dyn FnMut(Stage),
 ) -> Result<Projection, ReductionError> {
+    let FreeSystem {
+        K,
+        M,
+        points,
+        ordering,
+        describe,
+    } = *system;
     let (nb, ni, n_free) = (p.boundary.len(), p.internal.len(), K.nrows());
     // One factorisation of K_ii for the constraint modes and the fixed-interface modes.
     let (K_ii, K_ib) = split(K, p)?;
@@ -198,7 +257,10 @@ fn project(
     let (Psi, Phi_i, omega) = if ni == 0 {
         (Mat::zeros(0, nb), Mat::zeros(0, 0), Vec::new())
     } else {
-        let factor = ShiftInvert::new(K_ii.as_ref(), M_ii.as_ref(), 0.0).map_err(|e| match e {
+        progress(Stage::Factorising { internal_dofs: ni });
+        let points_i: Vec<[f64; 3]> = p.internal.iter().map(|&d| points[d]).collect();
+        let factor = ShiftInvert::with_ordering(K_ii.as_ref(), M_ii.as_ref(), 0.0, Some(&points_i), ordering)
+            .map_err(|e| match e {
             ReductionError::SingularStiffness { dof, .. } => ReductionError::Interface {
                 name: name.into(),
                 what: format!(
@@ -208,12 +270,19 @@ fn project(
             },
             other => other,
         })?;
+        progress(Stage::Factorised {
+            factor_len: factor.factor_len(),
+            flops: factor.factor_flops(),
+            ordering: factor.ordering(),
+        });
         // (brief §3) Psi = -K_ii^{-1} K_ib: 6N solves with the one factor.
+        progress(Stage::ConstraintModes { count: nb });
         let mut Psi = -&K_ib;
         factor.solve_in_place(Psi.as_mut());
-        let (Phi_i, omega) = fixed_interface_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), modes, ni)?;
+        let (Phi_i, omega) = fixed_interface_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), modes, ni, progress)?;
         (Psi, Phi_i, omega)
     };
+    progress(Stage::Projecting);
     let m = omega.len();
     let n = nb + m;
     // V on the free dofs, in the free-dof order of the model.
@@ -221,11 +290,14 @@ fn project(
     for (b, &d) in p.boundary.iter().enumerate() {
         V[(d, b)] = 1.0;
     }
-    for (i, &d) in p.internal.iter().enumerate() {
-        for c in 0..nb {
+    // Column by column: the matrices are column-major.
+    for c in 0..nb {
+        for (i, &d) in p.internal.iter().enumerate() {
             V[(d, c)] = Psi[(i, c)];
         }
-        for c in 0..m {
+    }
+    for c in 0..m {
+        for (i, &d) in p.internal.iter().enumerate() {
             V[(d, nb + c)] = Phi_i[(i, c)];
         }
     }
@@ -335,15 +407,30 @@ fn with_auxiliary(
 ///
 /// Interfaces are beam nodes or the 6-dof nodes of RBE2/RBE3 spiders on solids; their six
 /// dofs must be free. The FE model's own supports are kept (a body clamped in the FE model
-/// stays clamped).
+/// stays clamped). The factorisation of $\mathbf K_{ii}$ uses [`FillOrdering::Auto`]
+/// (nested dissection on the node positions for large models).
 pub fn reduce(
     model: &FeModel,
     name: &str,
     interfaces: &[(String, NodeId)],
     settings: &CbSettings,
 ) -> Result<ReducedBody, ReductionError> {
+    reduce_with_progress(model, name, interfaces, settings, FillOrdering::Auto, &mut |_| {})
+}
+
+/// [`reduce`] with a chosen fill-reducing `ordering` for $\mathbf K_{ii}$, calling
+/// `progress` as each [`Stage`] starts (for a progress bar, or to time the stages).
+pub fn reduce_with_progress(
+    model: &FeModel,
+    name: &str,
+    interfaces: &[(String, NodeId)],
+    settings: &CbSettings,
+    ordering: FillOrdering,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<ReducedBody, ReductionError> {
     let interfaces: Vec<(String, usize)> = interfaces.iter().map(|(n, node)| (n.clone(), node.index())).collect();
     let (interfaces, auxiliary_interface) = with_auxiliary(name, &interfaces, settings.auxiliary_node)?;
+    progress(Stage::Assembling);
     let dofs = DofMap::new(model).map_err(ReductionError::from_fe)?;
     let pattern = SystemPattern::new(model, &dofs);
     let a = assemble(model, &pattern).map_err(ReductionError::from_fe)?;
@@ -353,18 +440,26 @@ pub fn reduce(
         let (tag, k) = dofs.describe(fe_model::Dof(d as u32));
         format!("node {tag} dof {k}")
     };
-    let projection = project(a.K.as_ref(), a.M.as_ref(), &p, settings.modes, name, &describe)?;
+    let points = dof_points(model, &dofs);
+    let system = FreeSystem {
+        K: a.K.as_ref(),
+        M: a.M.as_ref(),
+        points: &points,
+        ordering,
+        describe: &describe,
+    };
+    let projection = project(&system, &p, settings.modes, name, progress)?;
     let n = projection.V.ncols();
     // The CB basis on every node's six slots: S_full = T V (dependent slots follow their spider).
     let mut S_full = Mat::<f64>::zeros(6 * model.node_count(), n);
-    for slot in 0..6 * model.node_count() {
-        let (d, c) = dofs.row(slot);
-        for (&dof, &coef) in d.iter().zip(c) {
-            for col in 0..n {
-                S_full[(slot, col)] += coef * projection.V[(dof as usize, col)];
-            }
+    for col in 0..n {
+        let V_col = projection.V.col(col);
+        for slot in 0..6 * model.node_count() {
+            let (d, c) = dofs.row(slot);
+            S_full[(slot, col)] = d.iter().zip(c).map(|(&dof, &coef)| coef * V_col[dof as usize]).sum();
         }
     }
+    progress(Stage::Invariants);
     let (inertia, Phi_com) = inertia_data(model, &S_full)?;
     finish(BodyParts {
         name,
@@ -494,11 +589,19 @@ pub fn reduce_external_dofs(
         &|node, k| slot_dof[6 * node + k].ok_or("not in the matrices"),
     )?;
     let describe = |d: usize| format!("node {} (index) dof {}", dofs[d].0, DOF_NAMES[dofs[d].1]);
-    let projection = project(K, M, &p, settings.modes, name, &describe)?;
+    let points: Vec<[f64; 3]> = dofs.iter().map(|&(node, _)| nodes[node]).collect();
+    let system = FreeSystem {
+        K,
+        M,
+        points: &points,
+        ordering: FillOrdering::Auto,
+        describe: &describe,
+    };
+    let projection = project(&system, &p, settings.modes, name, &mut |_| {})?;
     let n = projection.V.ncols();
     let mut S_full = Mat::<f64>::zeros(6 * nodes.len(), n);
-    for (d, &(node, k)) in dofs.iter().enumerate() {
-        for col in 0..n {
+    for col in 0..n {
+        for (d, &(node, k)) in dofs.iter().enumerate() {
             S_full[(6 * node + k, col)] = projection.V[(d, col)];
         }
     }
@@ -574,8 +677,22 @@ fn fixed_interface_modes(
     M_ii: SparseColMatRef<'_, usize, f64>,
     selection: ModeSelection,
     ni: usize,
+    progress: &mut dyn FnMut(Stage),
 ) -> Result<(Mat<f64>, Vec<f64>), ReductionError> {
-    let solve = |m: usize| factor.lowest_modes(K_ii, M_ii, &EigenSettings::new(m, Shift::Zero));
+    let mut solve = |m: usize| {
+        factor.lowest_modes_with_progress(
+            K_ii,
+            M_ii,
+            &EigenSettings::new(m, Shift::Zero),
+            &mut |converged, wanted, applications| {
+                progress(Stage::EigenIteration {
+                    converged,
+                    wanted,
+                    applications,
+                })
+            },
+        )
+    };
     let to_omega = |lambda: &[f64]| lambda.iter().map(|l| l.max(0.0).sqrt()).collect::<Vec<f64>>();
     match selection {
         ModeSelection::StaticOnly => Ok((Mat::zeros(ni, 0), Vec::new())),

@@ -17,7 +17,7 @@
 
 use crate::error::ReductionError;
 use crate::reduced_body::{DenseMatrix, InertiaData};
-use faer::sparse::SparseColMatRef;
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::Mat;
 use fe_model::{assemble, DofMap, FeModel, SystemPattern};
 use nalgebra::{Matrix3, Matrix6, Vector3};
@@ -105,38 +105,39 @@ pub fn inertia_data_from_mass(
         })?;
     let Phi_com = Mat::from_fn(6, n, |i, j| (0..6).map(|k| G6_inv[(i, k)] * RtMS[(k, j)]).sum());
 
-    // Second-order invariants from scalar fields placed in translation slot `comp`.
-    let slots: Vec<(usize, usize)> = slots.iter().map(|&s| (s / 6, s % 6)).collect();
-    let place = |comp: usize, f: &dyn Fn(usize, usize) -> f64, ncols: usize| {
-        Mat::from_fn(n_f, ncols, |d, j| {
-            let (node, k) = slots[d];
-            if k == comp {
-                f(node, j)
-            } else {
-                0.0
-            }
-        })
-    };
-    let S_node = |node: usize, comp: usize, j: usize| S_full[(6 * node + comp, j)];
+    // Second-order invariants from scalar fields placed in translation slot `comp`:
+    // P_comp(f)^T M P_comp(g) = f_c^T M_cc g_c, with M_cc the block of M on the dofs of slot
+    // `comp` and f_c the field at their nodes. All three fields S_0, S_1, S_2 side by side
+    // (F_c, n_c x 3n) make one sparse product and one dense product per direction:
+    // S_bar[3k + l] = 1/3 sum_c (F_c^T M_cc F_c)_{kl} and S_x[3k + l] = 1/3 sum_c (X_c^T M_cc F_c)_{kl}.
     let mut S_x = Mat::<f64>::zeros(9, n);
     let mut S_bar: Vec<Mat<f64>> = (0..9).map(|_| Mat::zeros(n, n)).collect();
+    let mut position = vec![usize::MAX; n_f];
     for comp in 0..3 {
-        // M P_comp(S_l) for each l.
-        let MP: Vec<Mat<f64>> = (0..3)
-            .map(|l| M * &place(comp, &|node, j| S_node(node, l, j), n))
-            .collect();
-        let X = place(comp, &|node, k| nodes[node][k] - c[k], 3);
-        for l in 0..3 {
-            let XtMP = X.transpose() * &MP[l];
-            for k in 0..3 {
+        let dofs_c: Vec<usize> = (0..n_f).filter(|&d| slots[d] % 6 == comp).collect();
+        if dofs_c.is_empty() {
+            continue;
+        }
+        let n_c = dofs_c.len();
+        for (r, &d) in dofs_c.iter().enumerate() {
+            position[d] = r;
+        }
+        let M_cc = submatrix(M, &dofs_c, &position);
+        for &d in &dofs_c {
+            position[d] = usize::MAX;
+        }
+        let node_c = |r: usize| slots[dofs_c[r]] / 6;
+        let F = Mat::from_fn(n_c, 3 * n, |r, col| S_full[(6 * node_c(r) + col / n, col % n)]);
+        let X = Mat::from_fn(n_c, 3, |r, k| nodes[node_c(r)][k] - c[k]);
+        let MF = &M_cc * &F;
+        let G = F.transpose() * &MF;
+        let XtMF = X.transpose() * &MF;
+        for k in 0..3 {
+            for l in 0..3 {
+                S_bar[3 * k + l] += G.submatrix(k * n, l * n, n, n) * faer::Scale(1.0 / 3.0);
                 for j in 0..n {
-                    S_x[(3 * k + l, j)] += XtMP[(k, j)] / 3.0;
+                    S_x[(3 * k + l, j)] += XtMF[(k, l * n + j)] / 3.0;
                 }
-            }
-            for k in 0..3 {
-                let Pk = place(comp, &|node, j| S_node(node, k, j), n);
-                let block = Pk.transpose() * &MP[l];
-                S_bar[3 * k + l] += block * faer::Scale(1.0 / 3.0);
             }
         }
     }
@@ -156,4 +157,24 @@ pub fn inertia_data_from_mass(
         },
         Phi_com,
     ))
+}
+
+/// The block of `M` on the rows and columns `rows` (sorted ascending), with `position[d]` the
+/// index of dof `d` in `rows` (`usize::MAX` if absent).
+fn submatrix(M: SparseColMatRef<'_, usize, f64>, rows: &[usize], position: &[usize]) -> SparseColMat<usize, f64> {
+    let mut col_ptr = Vec::with_capacity(rows.len() + 1);
+    let mut row_idx = Vec::new();
+    let mut values = Vec::new();
+    col_ptr.push(0);
+    for &d in rows {
+        for (&i, &v) in M.row_idx_of_col_raw(d).iter().zip(M.val_of_col(d)) {
+            if position[i] != usize::MAX {
+                row_idx.push(position[i]);
+                values.push(v);
+            }
+        }
+        col_ptr.push(row_idx.len());
+    }
+    let symbolic = SymbolicSparseColMat::new_unsorted_checked(rows.len(), rows.len(), col_ptr, None, row_idx);
+    SparseColMat::new(symbolic, values)
 }

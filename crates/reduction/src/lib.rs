@@ -20,7 +20,7 @@
 //! | $\lambda_k = \omega_k^2,\ \boldsymbol\phi_k$ | `eigenvalues[k]`, `vectors.col(k)` | eigenpair of $\mathbf K\boldsymbol\phi = \lambda\mathbf M\boldsymbol\phi$, ascending, $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf I$ | [`eigen::EigenSolution`] |
 //! | $m$ | `n_modes` | number of lowest modes wanted | [`eigen::EigenSettings`] |
 //! | $\sigma$ | `sigma`, `shift` | spectral shift, $\sigma < \lambda_1$; negative for a free body | [`eigen::Shift`]; Ericsson & Ruhe 1980 |
-//! | $\mathbf P$ | `perm_fwd`, `perm_inv` | fill-reducing (AMD) permutation of the factor | faer `SymbolicCholesky::perm` |
+//! | $\mathbf P$ | `perm_fwd`, `perm_inv` | fill-reducing permutation of the factor (AMD or nested dissection) | `fe_model::ordering` |
 //! | $\mathbf L$ | `L_values` | Cholesky factor, $\mathbf P(\mathbf K - \sigma\mathbf M)\mathbf P^T = \mathbf L\mathbf L^T$ | [`eigen::ShiftInvert`] |
 //! | $\mathbf C$ | `Operator` | shift-invert operator $\mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T}$, symmetric | [`eigen`] module docs |
 //! | $\mu_k,\ \mathbf y_k$ | `mu`, `Y` | eigenpairs of $\mathbf C$: $\mu_k = 1/(\lambda_k - \sigma)$, $\mathbf y_k = \mathbf L^T\mathbf P\boldsymbol\phi_k$ | Grimes, Lewis & Simon 1994, §2 |
@@ -40,7 +40,7 @@ pub mod invariants;
 pub mod matrix_market;
 pub mod modal;
 pub mod reduced_body;
-pub use craig_bampton::{partition, reduce, CbSettings, ModeSelection, Partition};
+pub use craig_bampton::{partition, reduce, reduce_with_progress, CbSettings, ModeSelection, Partition, Stage};
 pub use craig_bampton::{reduce_external, reduce_external_dofs};
 pub use diagnostics::{diagnostics, DiagnosticWarning, Diagnostics, ModeDiagnostics};
 pub use eigen::{lowest_modes, EigenSettings, EigenSolution, Shift, ShiftInvert};

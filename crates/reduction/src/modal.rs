@@ -2,9 +2,9 @@
 //! eigensolver (brief §3; [`crate::eigen`]). The dense path `fe_model::modal_dense` serves
 //! only small models.
 
-use crate::eigen::{lowest_modes, EigenSettings, Shift};
+use crate::eigen::{EigenSettings, Shift, ShiftInvert};
 use crate::error::ReductionError;
-use fe_model::{assemble, DofMap, FeModel, ModalSolution, SystemPattern};
+use fe_model::{assemble, dof_points, DofMap, FeModel, FillOrdering, ModalSolution, SystemPattern};
 
 /// The `n_modes` lowest modes of `model`, mass-normalised, on every node.
 ///
@@ -19,7 +19,11 @@ pub fn modal_sparse(
     let dofs = DofMap::new(model).map_err(ReductionError::from_fe)?;
     let pattern = SystemPattern::new(model, &dofs);
     let a = assemble(model, &pattern).map_err(ReductionError::from_fe)?;
-    let solution = lowest_modes(a.K.as_ref(), a.M.as_ref(), &EigenSettings::new(n_modes, shift))?;
+    let (K, M) = (a.K.as_ref(), a.M.as_ref());
+    // Nested dissection on the node positions for large models (fe_model::ordering).
+    let points = dof_points(model, &dofs);
+    let factor = ShiftInvert::with_ordering(K, M, shift.resolve(K, M)?, Some(&points), FillOrdering::Auto)?;
+    let solution = factor.lowest_modes(K, M, &EigenSettings::new(n_modes, shift))?;
     let n = dofs.n_free();
     let omega = solution
         .eigenvalues

@@ -775,3 +775,39 @@ fn error_invalid_settings() {
     .unwrap_err();
     assert!(matches!(err, ReductionError::InvalidSettings { .. }), "{err:?}");
 }
+
+/// Block Lanczos (`EigenSettings::block_size` > 1): the same eigenvalues as the dense
+/// reference on the random pencil, and the six-fold zero eigenvalue of the free lattice, which
+/// a block finds without relying on round-off to seed the copies.
+#[test]
+fn block_lanczos_matches_dense_reference_and_finds_repeated_eigenvalues() {
+    let n = 300;
+    let (K, M) = random_spd_pair(n, 7);
+    let (lambda_ref, _) = dense_reference(K.as_ref(), M.as_ref());
+    let lambda_max = lambda_ref[n - 1];
+    for b in [2, 3, 4] {
+        let settings = EigenSettings {
+            block_size: b,
+            ..EigenSettings::new(12, Shift::Zero)
+        };
+        let sol = solve(&K, &M, &settings);
+        for j in 0..12 {
+            let rel = (sol.eigenvalues[j] - lambda_ref[j]).abs() / lambda_ref[j];
+            // As in `random_sparse_spd_matches_dense_reference`: n eps lambda_max absolute.
+            let tol = n as f64 * EPS * lambda_max / lambda_ref[j];
+            assert!(rel <= tol, "b = {b}, mode {j}: rel {rel:.3e} > {tol:.3e}");
+            assert!(sol.residuals[j] <= 1e-8, "b = {b}, mode {j}: residual {:.2e}", sol.residuals[j]);
+        }
+    }
+    let (K, M) = lattice(9, 8, 7, false);
+    let settings = EigenSettings {
+        block_size: 4,
+        ..EigenSettings::new(12, Shift::Auto)
+    };
+    let sol = solve(&K, &M, &settings);
+    // Tolerances of `lattice_free_six_rigid_modes`.
+    for j in 0..6 {
+        assert!(sol.eigenvalues[j].abs() <= 64.0 * EPS * 30.0, "mode {j}: {:.3e}", sol.eigenvalues[j]);
+    }
+    assert!(sol.eigenvalues[6] > 1e-3, "first flexible eigenvalue {:.3e}", sol.eigenvalues[6]);
+}

@@ -1,0 +1,105 @@
+//! Fill-reducing orderings of $\mathbf K_{ii}$ compared (issue 4): faer's AMD against our
+//! nested dissection (`fe_model::ordering`) with several leaf sizes, on the hex8 blocks of
+//! `benches/craig_bampton.rs` (RBE2 interfaces on both end faces, interface dofs removed as
+//! Craig-Bampton removes them). Prints the ordering time, the factor size and its flops
+//! ($\sum_j c_j^2$); with `REDUCTION_ORDERING_NUMERIC=1` also the numeric factorisation
+//! time (memory: 8 bytes per factor value).
+//!
+//! `cargo bench -p reduction --bench ordering -- --bench` runs 10k to 200k dofs
+//! (`REDUCTION_CB_SIZES` to choose); without `--bench`, a 3k block.
+
+#![allow(non_snake_case)]
+
+mod common;
+
+use common::{block, divisions};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering};
+use faer::sparse::{SparseColMat, Triplet};
+use fe_model::{
+    assemble, dof_points, factor_flops, nested_dissection_with_leaves, symbolic_cholesky, DofMap, FillOrdering,
+    SparseCholesky, SystemPattern,
+};
+use std::time::Instant;
+
+fn main() {
+    let full = std::env::args().any(|a| a == "--bench");
+    let sizes = std::env::var("REDUCTION_CB_SIZES").unwrap_or_else(|_| {
+        if full {
+            "10k,25k,50k,100k,200k".into()
+        } else {
+            "3k".into()
+        }
+    });
+    let numeric = std::env::var("REDUCTION_ORDERING_NUMERIC").is_ok();
+    println!(
+        "reduction/benches/ordering: K_ii of hex8 blocks; load average {}",
+        std::fs::read_to_string("/proc/loadavg").unwrap_or_default().trim()
+    );
+    for size in sizes.split(',').map(str::trim) {
+        let (model, a, b) = block(divisions(size).unwrap_or_else(|| panic!("unknown size {size}")));
+        let dofs = DofMap::new(&model).unwrap();
+        let K = assemble(&model, &SystemPattern::new(&model, &dofs)).unwrap().K;
+        // K_ii: the free dofs but the interface nodes' twelve.
+        let mut keep = vec![true; dofs.n_free()];
+        for node in [a, b] {
+            for k in 0..6 {
+                if let Some(d) = dofs.free_dof(node, k) {
+                    keep[d.index()] = false;
+                }
+            }
+        }
+        let internal: Vec<usize> = (0..dofs.n_free()).filter(|&d| keep[d]).collect();
+        let mut position = vec![usize::MAX; dofs.n_free()];
+        internal.iter().enumerate().for_each(|(i, &d)| position[d] = i);
+        let mut triplets = Vec::new();
+        for j in 0..K.ncols() {
+            for (&i, &v) in K.row_idx_of_col_raw(j).iter().zip(K.val_of_col(j)) {
+                if keep[i] && keep[j] {
+                    triplets.push(Triplet::new(position[i], position[j], v));
+                }
+            }
+        }
+        let ni = internal.len();
+        let K_ii = SparseColMat::try_new_from_triplets(ni, ni, &triplets).unwrap();
+        let all_points = dof_points(&model, &dofs);
+        let points: Vec<[f64; 3]> = internal.iter().map(|&d| all_points[d]).collect();
+        let report = |what: String,
+                      seconds: f64,
+                      symbolic: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>| {
+            println!(
+                "{size:>5} {ni:>7} dofs  {what:<22} ordering + symbolic {seconds:6.2} s, factor {:7.1} M values ({:5.2} GB), {:9.1} Gflop",
+                symbolic.len_val() as f64 / 1e6,
+                symbolic.len_val() as f64 * 8.0 / 1e9,
+                factor_flops(symbolic) / 1e9
+            );
+        };
+        let t = Instant::now();
+        let (amd, _) = symbolic_cholesky(K_ii.symbolic(), None, FillOrdering::Amd).unwrap();
+        report("AMD".into(), t.elapsed().as_secs_f64(), &amd);
+        drop(amd);
+        for leaf in [32, 128, 512] {
+            let t = Instant::now();
+            let (fwd, inv) = nested_dissection_with_leaves(K_ii.symbolic(), &points, leaf).unwrap();
+            let nd = factorize_symbolic_cholesky(
+                K_ii.symbolic(),
+                faer::Side::Lower,
+                SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, ni)),
+                CholeskySymbolicParams::default(),
+            )
+            .unwrap();
+            report(format!("ND, leaves <= {leaf}"), t.elapsed().as_secs_f64(), &nd);
+        }
+        if numeric {
+            for ordering in [FillOrdering::Amd, FillOrdering::NestedDissection] {
+                let t = Instant::now();
+                let factor = SparseCholesky::new(K_ii.as_ref(), Some(&points), ordering).unwrap();
+                println!(
+                    "{size:>5} {ni:>7} dofs  {ordering:?}: ordering + symbolic + numeric factorisation {:.2} s ({} values)",
+                    t.elapsed().as_secs_f64(),
+                    factor.factor_len()
+                );
+            }
+        }
+    }
+}
