@@ -1,4 +1,12 @@
 //! One module per group of problems of `benchmarks.md`.
 
+/// C1-C4: dynamics.
+pub mod dynamics;
 /// A1-A4: linear references (exact or NAFEMS).
 pub mod linear;
+/// B1-B3: geometrically nonlinear statics.
+pub mod nonlinear_statics;
+/// A5: linear transient against the exact modal series.
+pub mod transient;
+/// The seed's comparison: frame choices x inertia variants, beam rod against solid rod.
+pub mod variants;

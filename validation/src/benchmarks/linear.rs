@@ -311,3 +311,15 @@ pub fn a4_fv32(extent: Extent) -> Result<Table> {
         rows: reference.iter().enumerate().map(|(i, &r)| Row::new(format!("f_{} [Hz]", i + 1), r, f[i], 5e-3)).collect(),
     })
 }
+
+/// A1-A4 as report blocks, in report order.
+pub fn a1_to_a4(extent: Extent) -> Result<Vec<crate::Block>> {
+    use crate::Block;
+    let mut blocks = vec![Block::Heading("A. Linear references".into())];
+    blocks.extend(a1_cantilever_frequencies(extent)?.into_iter().map(Block::Table));
+    blocks.push(Block::Table(a1_timoshenko_pinned_pinned(extent)?));
+    blocks.push(Block::Table(a2_cantilever_statics()?));
+    blocks.push(Block::Table(a3_craig_bampton_convergence(extent)?));
+    blocks.push(Block::Table(a4_fv32(extent)?));
+    Ok(blocks)
+}

@@ -1,0 +1,879 @@
+//! Reusable model builders for the benchmarks, by library calls on `fe_model`, `reduction`
+//! and `mbs`: beam and solid segments reduced by Craig-Bampton, chains of superelements,
+//! the elastica cantilever, the 45-degree bend, the spin-up beam, the planar and spatial
+//! slider-cranks and the free-floating beam.
+//!
+//! Every builder takes a [`Variant`] (frame choice and inertia variant), so the seed's
+//! comparison runs the same model six ways. The `auxiliary-node` frame needs an interface at
+//! the centre of mass held fixed in the reduction: segments are meshed with an even number of
+//! elements, the middle node is that interface, and [`add_segment`] gives it its own (free)
+//! multibody node.
+
+use fe_model::interface::{add_interface_on_set, SpiderKind};
+use fe_model::{BeamProperties, BeamSection, BeamTheory, CellKind, FeModel, IsotropicMaterial, MassKind};
+use mbs::{BodyId, JointId, JointKind, Model, NodeId, RigidBody, SensorKind, Support};
+use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use reduction::{reduce, CbSettings, ModeSelection, ReducedBody};
+use superelement::{FrameChoice, MassVariant};
+
+/// Any failure while building a model: the FE stage or the reduction.
+#[derive(Debug, thiserror::Error)]
+pub enum BuildError {
+    #[error("model '{model}': FE model: {source}")]
+    Fe {
+        model: String,
+        #[source]
+        source: fe_model::FeError,
+    },
+    #[error("model '{model}': section or material: {source}")]
+    Property {
+        model: String,
+        #[source]
+        source: fe_model::PropertyError,
+    },
+    #[error("model '{model}': reduction: {source}")]
+    Reduction {
+        model: String,
+        #[source]
+        source: reduction::ReductionError,
+    },
+}
+
+/// The formulation's switches compared in the report (brief §4).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Variant {
+    pub frame: FrameChoice,
+    pub mass: MassVariant,
+}
+
+impl Variant {
+    /// The default of the suite: frame at the centre of mass [E17], exact inertia.
+    pub const REFERENCE: Variant = Variant {
+        frame: FrameChoice::CenterOfMass,
+        mass: MassVariant::Exact,
+    };
+
+    /// The six combinations, in report order.
+    pub fn all() -> [Variant; 6] {
+        let frames = [
+            FrameChoice::CenterOfMass,
+            FrameChoice::InterfaceNode(0),
+            FrameChoice::AuxiliaryNode,
+        ];
+        let mut v = [Self::REFERENCE; 6];
+        for (i, f) in frames.iter().enumerate() {
+            v[2 * i] = Variant {
+                frame: *f,
+                mass: MassVariant::Exact,
+            };
+            v[2 * i + 1] = Variant {
+                frame: *f,
+                mass: MassVariant::Lumped,
+            };
+        }
+        v
+    }
+
+    /// "center-of-mass / exact".
+    pub fn label(&self) -> String {
+        let mass = match self.mass {
+            MassVariant::Exact => "exact",
+            MassVariant::Lumped => "lumped",
+        };
+        format!("{} / {mass}", self.frame)
+    }
+}
+
+/// A beam cross-section and material by value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BeamSpec {
+    pub E: f64,
+    pub nu: f64,
+    pub rho: f64,
+    pub section: BeamSection,
+    pub theory: BeamTheory,
+}
+
+impl BeamSpec {
+    fn properties(
+        &self,
+        fe: &mut FeModel,
+        orientation: Vector3<f64>,
+        model: &str,
+    ) -> Result<BeamProperties, BuildError> {
+        let material = fe.add_material(IsotropicMaterial::new("material", self.E, self.nu, self.rho).map_err(
+            |source| BuildError::Property {
+                model: model.into(),
+                source,
+            },
+        )?);
+        let section = fe.add_section(self.section.clone());
+        Ok(BeamProperties {
+            section,
+            material,
+            orientation,
+            theory: self.theory,
+            mass: MassKind::Consistent,
+        })
+    }
+}
+
+/// One reduced segment in its own FE axes (placed by [`add_segment`], possibly many times).
+#[derive(Clone, Debug)]
+pub struct Segment {
+    pub body: ReducedBody,
+}
+
+/// Reduces `fe` with interfaces `ends` (and, for the auxiliary-node frame, `middle` as the
+/// auxiliary interface).
+fn reduce_segment(
+    fe: &FeModel,
+    name: &str,
+    ends: &[(String, fe_model::NodeId)],
+    middle: fe_model::NodeId,
+    modes: ModeSelection,
+    frame: FrameChoice,
+) -> Result<Segment, BuildError> {
+    let mut settings = CbSettings::new(modes);
+    settings.keep_mesh_shapes = false;
+    if frame == FrameChoice::AuxiliaryNode {
+        settings.auxiliary_node = Some(middle);
+    }
+    let mut body = reduce(fe, name, ends, &settings).map_err(|source| BuildError::Reduction {
+        model: name.into(),
+        source,
+    })?;
+    body.name = name.into();
+    Ok(Segment { body })
+}
+
+/// A straight beam segment from `a` to `b` (FE axes) of `elements` elements (even, so the
+/// middle node exists for the auxiliary-node frame), interfaces at both ends.
+pub fn beam_segment(
+    name: &str,
+    spec: &BeamSpec,
+    a: Vector3<f64>,
+    b: Vector3<f64>,
+    elements: usize,
+    orientation: Vector3<f64>,
+    modes: ModeSelection,
+    frame: FrameChoice,
+) -> Result<Segment, BuildError> {
+    let mut fe = FeModel::default();
+    let props = spec.properties(&mut fe, orientation, name)?;
+    let elements = elements + elements % 2;
+    let nodes = fe_model::generate::straight_beam(
+        &mut fe,
+        Point3::from(a),
+        Point3::from(b),
+        elements,
+        &props,
+        Some("beam"),
+    )
+    .map_err(|source| BuildError::Fe {
+        model: name.into(),
+        source,
+    })?;
+    let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
+    reduce_segment(&fe, name, &ends, nodes[elements / 2], modes, frame)
+}
+
+/// A circular-arc beam segment about `center` and `axis` from `start` through `angle`.
+pub fn arc_segment(
+    name: &str,
+    spec: &BeamSpec,
+    center: Point3<f64>,
+    start: Point3<f64>,
+    axis: Vector3<f64>,
+    angle: f64,
+    elements: usize,
+    modes: ModeSelection,
+    frame: FrameChoice,
+) -> Result<Segment, BuildError> {
+    let mut fe = FeModel::default();
+    // The arc lies in the plane normal to `axis`: that normal is every element's orientation.
+    let props = spec.properties(&mut fe, axis, name)?;
+    let elements = elements + elements % 2;
+    let nodes = fe_model::generate::beam_arc(&mut fe, center, start, axis, angle, elements, &props, Some("arc"))
+        .map_err(|source| BuildError::Fe {
+            model: name.into(),
+            source,
+        })?;
+    let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
+    reduce_segment(&fe, name, &ends, nodes[elements / 2], modes, frame)
+}
+
+/// A solid rod segment: a box of `length` x `side` x `side` of hex20 or tet10 cells
+/// (`divisions` along the length, one or two across), RBE2 interfaces at the centroids of the
+/// end faces. The FE axes put the rod's axis on the x axis (the box is shifted by -side/2).
+pub fn solid_rod_segment(
+    name: &str,
+    kind: CellKind,
+    material: IsotropicMaterial,
+    length: f64,
+    side: f64,
+    divisions: [usize; 3],
+    modes: ModeSelection,
+    frame: FrameChoice,
+) -> Result<Segment, BuildError> {
+    let fe_err = |source| BuildError::Fe {
+        model: name.into(),
+        source,
+    };
+    let mut divisions = divisions;
+    // An even count along the length puts a node layer at mid-length for the auxiliary node.
+    divisions[0] += divisions[0] % 2;
+    let mut mesh = fe_model::box_mesh::box_mesh(kind, [length, side, side], divisions).map_err(fe_err)?;
+    for p in mesh.nodes.iter_mut() {
+        p.y -= side / 2.0;
+        p.z -= side / 2.0;
+    }
+    let mut fe = fe_model::box_mesh::solid_model(mesh, material, MassKind::Consistent).map_err(fe_err)?;
+    let a = add_interface_on_set(&mut fe, "a", "x0", Some(Point3::origin()), SpiderKind::Rbe2).map_err(fe_err)?;
+    let b = add_interface_on_set(
+        &mut fe,
+        "b",
+        "x1",
+        Some(Point3::new(length, 0.0, 0.0)),
+        SpiderKind::Rbe2,
+    )
+    .map_err(fe_err)?;
+    // The auxiliary interface: an RBE3 (no added stiffness) on the mid-length node layer.
+    let middle = if frame == FrameChoice::AuxiliaryNode {
+        let layer: Vec<fe_model::NodeId> = (0..fe.mesh.nodes.len())
+            .filter(|&i| (fe.mesh.nodes[i].x - length / 2.0).abs() < 1e-9 * length)
+            .map(|i| fe_model::NodeId(i as u32))
+            .collect();
+        fe_model::interface::add_interface(
+            &mut fe,
+            "aux",
+            &layer,
+            Some(Point3::new(length / 2.0, 0.0, 0.0)),
+            SpiderKind::Rbe3,
+        )
+        .map_err(fe_err)?
+    } else {
+        a
+    };
+    reduce_segment(&fe, name, &[("a".into(), a), ("b".into(), b)], middle, modes, frame)
+}
+
+/// Places `segment` in `model` with `placement` (FE axes to inertial), on the nodes `ends`;
+/// for the auxiliary-node frame adds the auxiliary node (free, carried by the body alone).
+pub fn add_segment(
+    model: &mut Model,
+    segment: &Segment,
+    name: &str,
+    ends: [NodeId; 2],
+    placement: Isometry3<f64>,
+    variant: Variant,
+) -> BodyId {
+    let mut body = segment.body.clone();
+    body.name = name.into();
+    let mut nodes = ends.to_vec();
+    if let Some(k) = body.auxiliary_interface {
+        let x = body.interfaces[k].position;
+        let p = placement * Point3::new(x[0], x[1], x[2]);
+        nodes.push(model.add_node(&format!("{name}.aux"), p.coords));
+    }
+    model.add_flexible_body(body, nodes, placement, variant.frame, variant.mass)
+}
+
+/// Axis-to-axis rotation taking the FE x axis onto `direction`.
+fn x_onto(direction: Vector3<f64>) -> UnitQuaternion<f64> {
+    UnitQuaternion::rotation_between(&Vector3::x(), &direction).unwrap_or_else(|| {
+        // Antiparallel: half a turn about z.
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI)
+    })
+}
+
+/// A straight chain of `n` identical beam segments from `start` to `end` (one reduction,
+/// placed `n` times): the nodes `n_0..n_N` and the bodies.
+pub fn beam_chain(
+    model: &mut Model,
+    prefix: &str,
+    spec: &BeamSpec,
+    (start, end): (Vector3<f64>, Vector3<f64>),
+    n: usize,
+    elements_per_segment: usize,
+    modes: ModeSelection,
+    variant: Variant,
+) -> Result<(Vec<NodeId>, Vec<BodyId>), BuildError> {
+    let length = (end - start).norm();
+    let e = (end - start) / length;
+    let seg = length / n as f64;
+    // Orientation vector: any direction not along the axis; z for a beam in the x-y plane.
+    let orientation = if e.z.abs() < 0.9 { Vector3::z() } else { Vector3::x() };
+    let q = x_onto(e);
+    let segment = beam_segment(
+        prefix,
+        spec,
+        Vector3::zeros(),
+        Vector3::new(seg, 0.0, 0.0),
+        elements_per_segment,
+        q.inverse() * orientation,
+        modes,
+        variant.frame,
+    )?;
+    let nodes: Vec<NodeId> = (0..=n)
+        .map(|i| model.add_node(&format!("{prefix}{i}"), start + e * (seg * i as f64)))
+        .collect();
+    let bodies = (0..n)
+        .map(|i| {
+            let placement = Isometry3::from_parts(Translation3::from(start + e * (seg * i as f64)), q);
+            add_segment(
+                model,
+                &segment,
+                &format!("{prefix}.seg{i}"),
+                [nodes[i], nodes[i + 1]],
+                placement,
+                variant,
+            )
+        })
+        .collect();
+    Ok((nodes, bodies))
+}
+
+/// A rigid body with mass `m`, centre of mass `c` and a diagonal inertia.
+pub fn rigid(name: &str, reference: NodeId, nodes: Vec<NodeId>, m: f64, c: Vector3<f64>, I: [f64; 3]) -> RigidBody {
+    RigidBody {
+        name: name.into(),
+        reference,
+        nodes,
+        mass: m,
+        center_of_mass: c,
+        inertia: Matrix3::from_diagonal(&Vector3::new(I[0], I[1], I[2])),
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// B1, B2: the elastica cantilever.
+
+/// Square section 10 mm, L = 1, E chosen for EI = 1 N m^2: slenderness L/r = 346 and axial
+/// strain a/(EA) < 1e-4, far below the table's five digits.
+pub const ELASTICA_SIDE: f64 = 0.01;
+pub const ELASTICA_E: f64 = 1.2e9;
+
+/// The elastica cantilever: L = 1 along x, clamped at the origin, `n` superelements of
+/// `elements` Euler-Bernoulli elements each (static modes only: statics), sensors "tip"
+/// (displacement) and "rot" (rotation vector) at the tip. Returns the model and the tip node.
+pub fn elastica_cantilever(n: usize, elements: usize, variant: Variant) -> Result<(Model, NodeId), BuildError> {
+    let spec = square_spec("elastica", ELASTICA_E, 1000.0, ELASTICA_SIDE)?;
+    let (mut model, nodes) = cantilever("elastica", &spec, n, elements, ModeSelection::StaticOnly, variant)?;
+    let tip = nodes[n];
+    model.add_sensor("tip", SensorKind::NodeDisplacement { node: tip });
+    model.add_sensor("rot", SensorKind::NodeRotation { node: tip });
+    Ok((model, tip))
+}
+
+/// A steel-like beam spec with a square section of side `side`, Euler-Bernoulli theory.
+fn square_spec(model: &str, E: f64, rho: f64, side: f64) -> Result<BeamSpec, BuildError> {
+    Ok(BeamSpec {
+        E,
+        nu: 0.3,
+        rho,
+        section: BeamSection::rectangle("square", side, side, 0.3).map_err(|source| BuildError::Property {
+            model: model.into(),
+            source,
+        })?,
+        theory: BeamTheory::EulerBernoulli,
+    })
+}
+
+/// A cantilever of length 1 along x, clamped at the origin, as a chain of `n` superelements:
+/// the model and its nodes `n_0..n_N`.
+fn cantilever(
+    name: &str,
+    spec: &BeamSpec,
+    n: usize,
+    elements: usize,
+    modes: ModeSelection,
+    variant: Variant,
+) -> Result<(Model, Vec<NodeId>), BuildError> {
+    let mut model = Model::new(name);
+    let (nodes, _) = beam_chain(
+        &mut model,
+        "n",
+        spec,
+        (Vector3::zeros(), Vector3::x()),
+        n,
+        elements,
+        modes,
+        variant,
+    )?;
+    model.add_support(Support::clamp(nodes[0]));
+    Ok((model, nodes))
+}
+
+/// Bending stiffness of the elastica section, EI = E a^4 / 12.
+pub fn elastica_EI() -> f64 {
+    ELASTICA_E * ELASTICA_SIDE.powi(4) / 12.0
+}
+
+// ---------------------------------------------------------------------------------------
+// B3: the 45-degree bend.
+
+/// Bathe-Bolourchi bend: radius 100, 45 degrees from the origin along x curving towards y,
+/// centre (0, 100, 0); square 1 x 1 (A = 1, I = 1/12), E = 1e7, nu = 0 (G = 5e6), and the
+/// torsion constant J = 0.141 so that GJ = 7.05e5 (the benchmark's value; the exact
+/// Saint-Venant constant of the unit square is 0.1406). `n` superelements of `elements`
+/// elements each, clamped at the origin; sensor "tip" (position).
+pub fn bend_45(n: usize, elements: usize, variant: Variant) -> Result<(Model, NodeId), BuildError> {
+    let (R, E) = (100.0, 1e7);
+    let spec = BeamSpec {
+        E,
+        nu: 0.0,
+        rho: 1.0,
+        section: BeamSection::from_values(
+            "square",
+            1.0,
+            1.0 / 12.0,
+            1.0 / 12.0,
+            BEND_GJ / 5e6,
+            5.0 / 6.0,
+            5.0 / 6.0,
+        )
+        .map_err(|source| BuildError::Property {
+            model: "bend".into(),
+            source,
+        })?,
+        // Timoshenko: the section's shear factors (5/6) give GA; at R/h = 100 shear is small.
+        theory: BeamTheory::Timoshenko,
+    };
+    let center = Point3::new(0.0, R, 0.0);
+    let dphi = std::f64::consts::FRAC_PI_4 / n as f64;
+    // One arc segment starting at the origin; segment i is it turned by i dphi about the
+    // centre (the z axis through `center`).
+    let segment = arc_segment(
+        "bend",
+        &spec,
+        center,
+        Point3::origin(),
+        Vector3::z(),
+        dphi,
+        elements,
+        ModeSelection::StaticOnly,
+        variant.frame,
+    )?;
+    let mut model = Model::new("45-degree bend");
+    let nodes: Vec<NodeId> = (0..=n)
+        .map(|i| {
+            let p =
+                center + Rotation3::from_axis_angle(&Vector3::z_axis(), dphi * i as f64) * (Point3::origin() - center);
+            model.add_node(&format!("b{i}"), p.coords)
+        })
+        .collect();
+    for i in 0..n {
+        let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), dphi * i as f64);
+        // Rotation about the centre: x -> c + q (x - c).
+        let placement = Isometry3::from_parts(Translation3::from(center.coords - q * center.coords), q);
+        add_segment(
+            &mut model,
+            &segment,
+            &format!("bend{i}"),
+            [nodes[i], nodes[i + 1]],
+            placement,
+            variant,
+        );
+    }
+    model.add_support(Support::clamp(nodes[0]));
+    model.add_sensor("tip", SensorKind::NodePosition { node: nodes[n] });
+    Ok((model, nodes[n]))
+}
+
+/// GJ of the 45-degree bend (benchmarks.md B3).
+pub const BEND_GJ: f64 = 7.05e5;
+
+// ---------------------------------------------------------------------------------------
+// A5: linear transient cantilever; C1: spin-up.
+
+/// A5 cantilever: steel, L = 1 m along x, square 20 mm (L/h = 50, rotary inertia and shear
+/// shift the first modes by < 1e-3 of the Euler-Bernoulli values; Euler-Bernoulli elements
+/// ignore both anyway), `n` superelements with `modes` fixed-interface modes each; sensor
+/// "tip" (displacement). Returns the model, tip node, and (EI, rho A).
+pub fn a5_cantilever(
+    n: usize,
+    elements: usize,
+    modes: ModeSelection,
+    variant: Variant,
+) -> Result<(Model, NodeId, f64, f64), BuildError> {
+    let (E, rho, side) = (210e9, 7850.0, 0.02);
+    let spec = square_spec("A5", E, rho, side)?;
+    let (mut model, nodes) = cantilever("A5 cantilever", &spec, n, elements, modes, variant)?;
+    model.add_sensor("tip", SensorKind::NodeDisplacement { node: nodes[n] });
+    Ok((model, nodes[n], E * side.powi(4) / 12.0, rho * side * side))
+}
+
+/// The spin-up beam of benchmarks.md C1 (Simo & Vu-Quoc 1986): L = 10 m, EA = 2.8e7 N,
+/// EI = 1.4e4 N m^2 (both bending planes), rho A = 1.2 kg/m, clamped to a hub on the z axis
+/// whose angle follows the spin-up profile to `omega` in 15 s; `n` superelements with `modes`
+/// fixed-interface modes each. Sensor "tip": the tip in the hub's axes.
+pub fn spin_up(n: usize, modes: ModeSelection, omega: f64, variant: Variant) -> Result<Model, BuildError> {
+    let (L, E, A, I, rho) = (10.0, 7e10, 4e-4, 2e-7, 3000.0);
+    let spec = BeamSpec {
+        E,
+        nu: 0.3,
+        rho,
+        section: BeamSection::from_values("c1", A, I, I, 2.0 * I, 5.0 / 6.0, 5.0 / 6.0).map_err(|source| {
+            BuildError::Property {
+                model: "spin-up".into(),
+                source,
+            }
+        })?,
+        theory: BeamTheory::EulerBernoulli,
+    };
+    let mut m = Model::new("spin-up");
+    let (beam, _) = beam_chain(
+        &mut m,
+        "b",
+        &spec,
+        (Vector3::zeros(), Vector3::x() * L),
+        n,
+        4,
+        modes,
+        variant,
+    )?;
+    m.add_support(Support::hinge(beam[0], Vector3::z()));
+    m.add_driver(
+        "hub",
+        mbs::DriverTarget::NodeRotation { node: beam[0] },
+        mbs::TimeFunction::SpinUp { omega, duration: 15.0 },
+    );
+    m.add_sensor(
+        "tip",
+        SensorKind::RelativePosition {
+            node: beam[n],
+            reference: beam[0],
+        },
+    );
+    Ok(m)
+}
+
+// ---------------------------------------------------------------------------------------
+// C2, C3: slider-cranks.
+
+/// How the connecting rod is modelled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RodModel {
+    /// Round steel section d = 6 mm (the benchmark), `elements` Euler-Bernoulli elements per
+    /// superelement.
+    Beam { elements: usize },
+    /// A square section of the same bending stiffness as the 6 mm round one (side
+    /// d (3 pi / 16)^(1/4) = 5.24 mm) as beam elements: the beam twin of [`RodModel::Solid`].
+    SquareBeam { elements: usize },
+    /// The same square rod as a solid mesh (hex20 or tet10), `divisions` cells along each
+    /// superelement and one (hex20) or two (tet10) across.
+    Solid { kind: CellKind, divisions: usize },
+}
+
+/// Crank length, rod length, rod diameter, steel E and rho (benchmarks.md C2).
+pub const CRANK: f64 = 0.15;
+pub const ROD: f64 = 0.30;
+pub const ROD_D: f64 = 0.006;
+const STEEL_E: f64 = 200e9;
+const STEEL_RHO: f64 = 7870.0;
+
+/// Side of the square section with the bending stiffness of the round rod: a^4/12 = pi d^4/64.
+pub fn square_rod_side() -> f64 {
+    ROD_D * (3.0 * std::f64::consts::PI / 16.0).powf(0.25)
+}
+
+/// One rod segment of length `seg` along the FE x axis.
+fn rod_segment(rod: RodModel, seg: f64, modes: ModeSelection, frame: FrameChoice) -> Result<Segment, BuildError> {
+    let prop_err = |source| BuildError::Property {
+        model: "rod".into(),
+        source,
+    };
+    match rod {
+        RodModel::Beam { elements } | RodModel::SquareBeam { elements } => {
+            let section = match rod {
+                RodModel::Beam { .. } => BeamSection::circle("rod", ROD_D, 0.3).map_err(prop_err)?,
+                _ => {
+                    let a = square_rod_side();
+                    BeamSection::rectangle("rod", a, a, 0.3).map_err(prop_err)?
+                }
+            };
+            let spec = BeamSpec {
+                E: STEEL_E,
+                nu: 0.3,
+                rho: STEEL_RHO,
+                section,
+                theory: BeamTheory::EulerBernoulli,
+            };
+            beam_segment(
+                "rod",
+                &spec,
+                Vector3::zeros(),
+                Vector3::new(seg, 0.0, 0.0),
+                elements,
+                Vector3::y(),
+                modes,
+                frame,
+            )
+        }
+        RodModel::Solid { kind, divisions } => {
+            let across = if kind == CellKind::Tet10 { 2 } else { 1 };
+            solid_rod_segment(
+                "rod",
+                kind,
+                IsotropicMaterial::new("steel", STEEL_E, 0.3, STEEL_RHO).map_err(prop_err)?,
+                seg,
+                square_rod_side(),
+                [divisions, across, across],
+                modes,
+                frame,
+            )
+        }
+    }
+}
+
+/// The rigid crank of C2 and C3: ground node O at the origin, a revolute joint about `axis`
+/// driven by `angle`, and a rigid crank of 0.1 kg from O to the crank pin A at (0.15, 0, 0).
+/// Returns the crank joint and node A.
+fn add_crank(m: &mut Model, axis: Vector3<f64>, angle: mbs::TimeFunction) -> (JointId, NodeId) {
+    let o = m.add_node("O", Vector3::zeros());
+    let c0 = m.add_node("crank", Vector3::zeros());
+    let a = m.add_node("A", Vector3::new(CRANK, 0.0, 0.0));
+    m.add_support(Support::clamp(o));
+    let jc = m.add_joint("crank", o, c0, JointKind::Revolute { axis });
+    m.add_driver(
+        "crank angle",
+        mbs::DriverTarget::Joint {
+            joint: jc,
+            coordinate: 0,
+        },
+        angle,
+    );
+    m.add_rigid_body(rigid(
+        "crank",
+        c0,
+        vec![a],
+        0.1,
+        Vector3::new(CRANK / 2.0, 0.0, 0.0),
+        [1e-5, 2e-4, 2e-4],
+    ));
+    (jc, a)
+}
+
+/// A slider-crank and what the benchmarks read from it.
+pub struct SliderCrank {
+    pub model: Model,
+    pub rod_nodes: Vec<NodeId>,
+    pub crank_joint: JointId,
+    /// Mass of the whole rod.
+    pub rod_mass: f64,
+}
+
+/// The planar slider-crank of benchmarks.md C2: rigid crank 0.15 m driven at `speed` rad/s
+/// from the dead centre with the rigid mechanism's velocities, rod 0.30 m as `n` superelements
+/// (`n` even: the midpoint is a node), slider of half the rod's mass on the x axis, pinned
+/// joints about z, no gravity. Sensors "slider" (position) and "midpoint" (signed deflection
+/// of the midpoint from the chord, in the plane).
+pub fn slider_crank_planar(
+    n: usize,
+    modes: ModeSelection,
+    rod: RodModel,
+    speed: f64,
+    variant: Variant,
+) -> Result<SliderCrank, BuildError> {
+    let n = n.max(2) + n % 2;
+    let mut m = Model::new("planar slider-crank");
+    let z = Vector3::z();
+    let (jc, a) = add_crank(
+        &mut m,
+        z,
+        mbs::TimeFunction::Linear {
+            initial: 0.0,
+            rate: speed,
+        },
+    );
+    let s = m.add_node("slider", Vector3::new(CRANK + ROD, 0.0, 0.0));
+    let seg = ROD / n as f64;
+    let segment = rod_segment(rod, seg, modes, variant.frame)?;
+    let rod_nodes: Vec<NodeId> = (0..=n)
+        .map(|i| m.add_node(&format!("rod{i}"), Vector3::new(CRANK + seg * i as f64, 0.0, 0.0)))
+        .collect();
+    for i in 0..n {
+        let place = Isometry3::translation(CRANK + seg * i as f64, 0.0, 0.0);
+        add_segment(
+            &mut m,
+            &segment,
+            &format!("rod{i}"),
+            [rod_nodes[i], rod_nodes[i + 1]],
+            place,
+            variant,
+        );
+    }
+    let rod_mass = segment.body.inertia.mass * n as f64;
+    let ja = m.add_joint("pin A", a, rod_nodes[0], JointKind::Revolute { axis: z });
+    m.add_support(Support::slider(s, Vector3::x()));
+    let jb = m.add_joint("pin B", s, rod_nodes[n], JointKind::Revolute { axis: z });
+    m.point_masses.push(mbs::PointMass {
+        node: s,
+        mass: rod_mass / 2.0,
+    });
+    m.add_sensor("slider", SensorKind::NodePosition { node: s });
+    m.add_sensor(
+        "midpoint",
+        SensorKind::LineDistance {
+            node: rod_nodes[n / 2],
+            a: rod_nodes[0],
+            b: rod_nodes[n],
+            normal: Some(z),
+        },
+    );
+    // Rigid-body velocities at the dead centre: the rod turns about B at -speed * crank / rod.
+    let w_rod = -speed * CRANK / ROD;
+    let B = Vector3::new(CRANK + ROD, 0.0, 0.0);
+    for (i, &node) in rod_nodes.iter().enumerate() {
+        if i > 0 && i < n {
+            let r = Vector3::new(CRANK + seg * i as f64, 0.0, 0.0) - B;
+            m.initial.push(mbs::InitialCondition::NodeVelocity {
+                node,
+                velocity: z.cross(&r) * w_rod,
+                angular_velocity: z * w_rod,
+            });
+        }
+    }
+    // Auxiliary nodes (at each segment's middle) move with the rod too.
+    for k in 0..m.nodes.len() {
+        if m.nodes[k].name.ends_with(".aux") {
+            let r = m.nodes[k].position - B;
+            m.initial.push(mbs::InitialCondition::NodeVelocity {
+                node: NodeId(k as u32),
+                velocity: z.cross(&r) * w_rod,
+                angular_velocity: z * w_rod,
+            });
+        }
+    }
+    m.initial.push(mbs::InitialCondition::JointRate {
+        joint: ja,
+        coordinate: 0,
+        rate: w_rod - speed,
+    });
+    m.initial.push(mbs::InitialCondition::JointRate {
+        joint: jb,
+        coordinate: 0,
+        rate: w_rod,
+    });
+    Ok(SliderCrank {
+        model: m,
+        rod_nodes,
+        crank_joint: jc,
+        rod_mass,
+    })
+}
+
+/// Offset of the spatial slider-crank's guide from the crank's plane of rotation (C3).
+pub const GUIDE_OFFSET: f64 = 0.1;
+
+/// The spatial slider-crank of benchmarks.md C3: the crank turns about the y axis in the plane
+/// y = 0 (tip at (0.15 cos, 0, -0.15 sin)); the slider moves along the line
+/// (x, 0.1, 0), perpendicular to the crank axis and offset from the crank's plane by 0.1 m.
+/// The rod (same as C2) is joined to the crank by a spherical joint and to the slider by a
+/// universal joint whose two axes are normal to the rod (no spin of the rod about its axis).
+/// Starts at rest with the crank at the outer dead centre and spins it up smoothly
+/// (the C1 profile) to `speed` within `ramp` seconds. Sensors "slider", "mid_y" and "mid_z":
+/// the midpoint's deflection from the chord measured about the fixed y and z axes
+/// (`LineDistance` with normal y: the component along y x chord, in the crank's plane of
+/// rotation; normal z: along z x chord, out of that plane).
+pub fn slider_crank_spatial(
+    n: usize,
+    modes: ModeSelection,
+    rod: RodModel,
+    speed: f64,
+    ramp: f64,
+    variant: Variant,
+) -> Result<SliderCrank, BuildError> {
+    let n = n.max(2) + n % 2;
+    let mut m = Model::new("spatial slider-crank");
+    let y = Vector3::y();
+    let A = Vector3::new(CRANK, 0.0, 0.0);
+    let dx = (ROD * ROD - GUIDE_OFFSET * GUIDE_OFFSET).sqrt();
+    let B = Vector3::new(CRANK + dx, GUIDE_OFFSET, 0.0);
+    let (jc, a) = add_crank(
+        &mut m,
+        y,
+        mbs::TimeFunction::SpinUp {
+            omega: speed,
+            duration: ramp,
+        },
+    );
+    let s = m.add_node("slider", B);
+    let e = (B - A).normalize();
+    let q = x_onto(e);
+    let seg = ROD / n as f64;
+    let segment = rod_segment(rod, seg, modes, variant.frame)?;
+    let rod_nodes: Vec<NodeId> = (0..=n)
+        .map(|i| m.add_node(&format!("rod{i}"), A + e * (seg * i as f64)))
+        .collect();
+    for i in 0..n {
+        let place = Isometry3::from_parts(Translation3::from(A + e * (seg * i as f64)), q);
+        add_segment(
+            &mut m,
+            &segment,
+            &format!("rod{i}"),
+            [rod_nodes[i], rod_nodes[i + 1]],
+            place,
+            variant,
+        );
+    }
+    let rod_mass = segment.body.inertia.mass * n as f64;
+    m.add_joint("ball A", a, rod_nodes[0], JointKind::Spherical);
+    m.add_support(Support::slider(s, Vector3::x()));
+    let axis1 = e.cross(&Vector3::z()).normalize();
+    let axis2 = e.cross(&axis1).normalize();
+    m.add_joint("universal B", s, rod_nodes[n], JointKind::Universal { axis1, axis2 });
+    m.point_masses.push(mbs::PointMass {
+        node: s,
+        mass: rod_mass / 2.0,
+    });
+    m.add_sensor("slider", SensorKind::NodePosition { node: s });
+    for (name, normal) in [("mid_y", y), ("mid_z", Vector3::z())] {
+        m.add_sensor(
+            name,
+            SensorKind::LineDistance {
+                node: rod_nodes[n / 2],
+                a: rod_nodes[0],
+                b: rod_nodes[n],
+                normal: Some(normal),
+            },
+        );
+    }
+    Ok(SliderCrank {
+        model: m,
+        rod_nodes,
+        crank_joint: jc,
+        rod_mass,
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// C4: free-floating beam.
+
+/// C4: an aluminium-like beam 1 m along x, square 50 mm, E = 7e7 (soft: first elastic
+/// frequency about 52 rad/s), one superelement of 6 elements with 2 modes, no supports and no
+/// loads. Returns the model and its two end nodes.
+pub fn free_beam(variant: Variant) -> Result<(Model, [NodeId; 2]), BuildError> {
+    let spec = square_spec("free beam", 7e7, 2700.0, 0.05)?;
+    let mut m = Model::new("free beam");
+    let (nodes, _) = beam_chain(
+        &mut m,
+        "f",
+        &spec,
+        (Vector3::zeros(), Vector3::x()),
+        1,
+        6,
+        ModeSelection::Count(2),
+        variant,
+    )?;
+    for (name, kind) in [
+        ("L", SensorKind::LinearMomentum),
+        ("H", SensorKind::AngularMomentum),
+        ("T", SensorKind::KineticEnergy),
+        ("U", SensorKind::StrainEnergy),
+    ] {
+        m.add_sensor(name, kind);
+    }
+    Ok((m, [nodes[0], nodes[1]]))
+}
