@@ -9,8 +9,9 @@ flexmbs: from a mesh to the motion of a flexible mechanism
 
 usage:
   flexmbs run [STUDY.toml]           run the analyses of a study and write a results folder;
-                                     without a file, run the built-in example (a 3D cantilever:
-                                     statics and modes against beam theory)
+                                     without a file, run the built-in example: the flexible
+                                     planar slider-crank (benchmarks.md C2), results in
+                                     ./slider_crank-results/
   flexmbs check STUDY.toml           validate a study file, run nothing
   flexmbs reduce STUDY.toml [--part NAME]
                                      reduce the parts that have a [parts.reduction] (or the one
@@ -21,12 +22,15 @@ usage:
                                      the kept modes reach 3 x F)
   flexmbs example [NAME [DIR]]       list the built-in example studies, or write one into DIR
                                      (default: the current folder)
+  flexmbs validate [ARGS]            the validation suite (benchmarks.md): --quick, --no-report,
+                                     --report-dir DIR, --only ID ...
   flexmbs --help | --version
 
 options of run and reduce:
   --out DIR      results folder (default: STUDY-results beside the study file)
   --cache DIR    reduced-body cache (default: .flexmbs-cache beside the study file); a part
                  whose mesh and settings did not change is not reduced again
+  --t-end T      end every dynamic analysis at T seconds at the latest (a short run)
 
 The study file format is described in docs/study-file.md. Errors go to stderr with the
 file, line, column and key they are about; the exit code is 0 on success, 2 on any error.";
@@ -94,6 +98,7 @@ fn run_options(options: &[(String, String)]) -> Options {
     Options {
         out: option(options, "out").map(PathBuf::from),
         cache: option(options, "cache").map(PathBuf::from),
+        t_end: None,
     }
 }
 
@@ -130,23 +135,22 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             Ok(())
         }
         "run" => {
-            let (positional, options) = parse(rest, &["out", "cache"])?;
+            let (positional, options) = parse(rest, &["out", "cache", "t-end"])?;
+            let mut run_options = run_options(&options);
+            if let Some(v) = option(&options, "t-end") {
+                run_options.t_end = Some(
+                    v.parse::<f64>()
+                        .ok()
+                        .filter(|t| *t > 0.0 && t.is_finite())
+                        .ok_or_else(|| usage(format!("--t-end needs a positive time in seconds, got '{v}'")))?,
+                );
+            }
             match positional.as_slice() {
-                // Until the multibody solver exists (issue 6), the built-in example is the
-                // cantilever; with it, this becomes the flexible slider-crank (issue 7).
-                [] => {
-                    if !options.is_empty() {
-                        return Err(usage(
-                            "--out and --cache apply to a study file; the built-in example writes nothing",
-                        ));
-                    }
-                    print!("{}", crate::beam_example::run().map_err(|e| e.to_string())?);
-                    Ok(())
-                }
+                [] => crate::builtin::run(&run_options),
                 _ => {
                     let path = one_file(&positional, "run", "a study file")?;
                     let study = load(&path)?;
-                    crate::run::run(&study, &run_options(&options))?;
+                    crate::run::run(&study, &run_options)?;
                     Ok(())
                 }
             }
@@ -155,8 +159,20 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let (positional, _) = parse(rest, &[])?;
             let path = one_file(&positional, "check", "a study file")?;
             let study = load(&path)?;
+            let m = &study.mechanism;
+            let mechanism = if m.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    ", a mechanism of {} flexible and {} rigid bodies, {} joints, {} sensors",
+                    m.bodies.len(),
+                    m.rigid_bodies.len(),
+                    m.joints.len(),
+                    m.sensors.len()
+                )
+            };
             println!(
-                "{}: valid: {} parts, {} analyses",
+                "{}: valid: {} parts, {} analyses{mechanism}",
                 path.display(),
                 study.parts.len(),
                 study.analyses.len()
@@ -203,7 +219,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             }
         }
         other => {
-            let commands = ["run", "check", "reduce", "inspect", "example", "help"];
+            let commands = ["run", "check", "reduce", "inspect", "example", "validate", "help"];
             let close = crate::source::close_matches(other, commands.iter().copied());
             let hint = match close.first() {
                 Some(c) => format!("; did you mean `{c}`?"),

@@ -31,13 +31,57 @@ pub const EXAMPLES: &[Example] = &[
             ),
         ],
     },
+    Example {
+        name: "elastica",
+        description:
+            "B1: Mattiasson's elastica, a cantilever of four superelements under a large tip force (equilibrium)",
+        files: &[("elastica.toml", include_bytes!("../../../examples/elastica.toml"))],
+    },
+    Example {
+        name: "bend45",
+        description: "B3: the Bathe-Bolourchi 45-degree bend under an out-of-plane tip force (equilibrium)",
+        files: &[("bend45.toml", include_bytes!("../../../examples/bend45.toml"))],
+    },
+    Example {
+        name: "spin_up",
+        description: "C1: spin-up of a flexible beam by a driven hub, tip seen from the hub (dynamic)",
+        files: &[("spin_up.toml", include_bytes!("../../../examples/spin_up.toml"))],
+    },
+    Example {
+        name: "slider_crank",
+        description:
+            "C2: planar flexible slider-crank at 150 rad/s, rod midpoint deflection (dynamic); `flexmbs run` runs it",
+        files: &[(
+            "slider_crank.toml",
+            include_bytes!("../../../examples/slider_crank.toml"),
+        )],
+    },
+    Example {
+        name: "slider_crank_spatial",
+        description: "C3: spatial slider-crank, crank axis offset 0.1 m from the guide (dynamic)",
+        files: &[(
+            "slider_crank_spatial.toml",
+            include_bytes!("../../../examples/slider_crank_spatial.toml"),
+        )],
+    },
+    Example {
+        name: "four_bar",
+        description: "a four-bar whose coupler is a solid from a gmsh mesh (equilibrium, linearized, dynamic)",
+        files: &[
+            ("four_bar.toml", include_bytes!("../../../examples/four_bar.toml")),
+            (
+                "meshes/link_hex8.msh",
+                include_bytes!("../../../examples/meshes/link_hex8.msh"),
+            ),
+        ],
+    },
 ];
 
 /// The list for `flexmbs example` without a name.
 pub fn list() -> String {
     let mut s = String::from("built-in examples (write one with `flexmbs example NAME [DIR]`):\n");
     for e in EXAMPLES {
-        s.push_str(&format!("  {:<12} {}\n", e.name, e.description));
+        s.push_str(&format!("  {:<21} {}\n", e.name, e.description));
     }
     s
 }

@@ -25,19 +25,23 @@
 //! | [`study`] | validation `StudyFile` → `Study` |
 //! | [`part`] | a validated part and the FE model an analysis runs on |
 //! | [`run`] | the analyses: static, modal, reduce; `flexmbs reduce` |
+//! | [`mechanism_run`] | the mechanism as an `mbs::Model`; equilibrium, dynamic, linearized; streamed sensors and meshes |
 //! | [`cache`] | reduced bodies cached by a hash of what produced them |
 //! | [`output`] | results folder, CSV, summary |
 //! | [`vtu`] | VTK XML unstructured grids and `.pvd` collections |
 //! | [`inspect`] | `flexmbs inspect FILE.rbody` |
 //! | [`examples`] | the built-in example studies of `examples/` |
-//! | [`beam_example`] | the built-in cantilever report of `flexmbs run` without a file |
+//! | [`beam_example`] | the cantilever report against beam theory (the former built-in example) |
+//! | [`builtin`] | `flexmbs run` without a file: the flexible slider-crank (benchmarks.md C2) |
 
 pub mod beam_example;
+pub mod builtin;
 pub mod cache;
 pub mod cli;
 pub mod error;
 pub mod examples;
 pub mod inspect;
+pub mod mechanism_run;
 pub mod output;
 pub mod part;
 pub mod run;

@@ -23,6 +23,8 @@ pub struct Options {
     pub out: Option<PathBuf>,
     /// Reduced-body cache (default: `<study dir>/.flexmbs-cache`).
     pub cache: Option<PathBuf>,
+    /// Ends every dynamic analysis at this time if it is earlier (`--t-end`, for short runs).
+    pub t_end: Option<f64>,
 }
 
 impl Options {
@@ -44,6 +46,8 @@ struct Outcome {
     report: Vec<String>,
     results: serde_json::Value,
     files: Vec<String>,
+    /// A solver that stopped after writing part of its results.
+    failure: Option<String>,
 }
 
 fn part_summary(p: &Part) -> PartSummary {
@@ -75,7 +79,9 @@ pub fn run(study: &Study, options: &Options) -> Result<Summary, BoxError> {
             .map(|a| AnalysisSummary {
                 name: a.name.clone(),
                 kind: a.kind_name().into(),
-                part: study.parts[a.part].name.clone(),
+                part: a
+                    .part
+                    .map_or_else(|| "(mechanism)".to_string(), |p| study.parts[p].name.clone()),
                 status: Status::Pending,
                 seconds: None,
                 free_dofs: None,
@@ -96,23 +102,35 @@ pub fn run(study: &Study, options: &Options) -> Result<Summary, BoxError> {
     if n == 0 {
         eprintln!("flexmbs: the study has no [[analyses]]: nothing to run");
     }
+    let mut mechanism: Option<crate::mechanism_run::BuiltMechanism> = None;
     for (i, a) in study.analyses.iter().enumerate() {
-        let part = &study.parts[a.part];
+        let of = match a.part {
+            Some(p) => format!("part '{}'", study.parts[p].name),
+            None => "the mechanism".to_string(),
+        };
         eprintln!(
-            "flexmbs: [{}/{n}] {} analysis '{}' of part '{}'",
+            "flexmbs: [{}/{n}] {} analysis '{}' of {of}",
             i + 1,
             a.kind_name(),
-            a.name,
-            part.name
+            a.name
         );
         let t = Instant::now();
-        let result = run_analysis(study, a, &out, &cache);
+        let result = match &a.spec {
+            AnalysisSpec::Mbs(spec) => {
+                let mut spec = spec.clone();
+                if let (crate::study::MbsAnalysis::Dynamic { t_end, .. }, Some(limit)) = (&mut spec, options.t_end) {
+                    *t_end = t_end.min(limit);
+                }
+                run_mbs(study, a, &spec, &out, &cache, &mut mechanism)
+            }
+            _ => run_analysis(study, a, &out, &cache),
+        };
         let entry = &mut summary.analyses[i];
         entry.seconds = Some(t.elapsed().as_secs_f64());
         summary.total_seconds = start.elapsed().as_secs_f64();
         match result {
             Ok(o) => {
-                println!("{} '{}' (part '{}'):", a.kind_name(), a.name, part.name);
+                println!("{} '{}' ({of}):", a.kind_name(), a.name);
                 for line in &o.report {
                     println!("  {line}");
                 }
@@ -121,6 +139,21 @@ pub fn run(study: &Study, options: &Options) -> Result<Summary, BoxError> {
                 entry.report = o.report;
                 entry.results = o.results;
                 entry.files = o.files;
+                if let Some(failure) = o.failure {
+                    // The solver stopped: what it computed is written; the run fails here.
+                    entry.status = Status::Failed;
+                    entry.error = Some(failure.clone());
+                    summary.status = "failed".into();
+                    write_summary(&summary)?;
+                    return Err(format!(
+                        "{} analysis '{}' ({}): {failure} in {}",
+                        a.kind_name(),
+                        a.name,
+                        study.location(&a.path),
+                        out.join(&a.name).display()
+                    )
+                    .into());
+                }
                 write_summary(&summary)?;
             }
             Err(e) => {
@@ -156,10 +189,39 @@ pub fn run(study: &Study, options: &Options) -> Result<Summary, BoxError> {
     Ok(summary)
 }
 
+/// An analysis of the mechanism; the mechanism is built (and its bodies reduced) once.
+fn run_mbs(
+    study: &Study,
+    a: &Analysis,
+    spec: &crate::study::MbsAnalysis,
+    out: &Path,
+    cache: &Path,
+    mechanism: &mut Option<crate::mechanism_run::BuiltMechanism>,
+) -> Result<Outcome, BoxError> {
+    let dir = out.join(&a.name);
+    prepare_analysis_dir(&dir).context(|| format!("cannot prepare the results folder {}", dir.display()))?;
+    if mechanism.is_none() {
+        *mechanism = Some(crate::mechanism_run::build(study, cache)?);
+    }
+    let Some(built) = mechanism.as_ref() else {
+        return Err("the mechanism could not be built".into());
+    };
+    let o = crate::mechanism_run::run_analysis(study, spec, built, &dir, &a.name)?;
+    Ok(Outcome {
+        free_dofs: o.free_dofs,
+        report: o.report,
+        results: o.results,
+        files: o.files,
+        failure: o.failure,
+    })
+}
+
 fn run_analysis(study: &Study, a: &Analysis, out: &Path, cache: &Path) -> Result<Outcome, BoxError> {
     let dir = out.join(&a.name);
     prepare_analysis_dir(&dir).context(|| format!("cannot prepare the results folder {}", dir.display()))?;
-    let part = &study.parts[a.part];
+    let Some(part) = a.part.map(|p| &study.parts[p]) else {
+        return Err(format!("analysis '{}' has no part", a.name).into());
+    };
     let mut files = Files {
         dir: dir.clone(),
         prefix: a.name.clone(),
@@ -173,6 +235,7 @@ fn run_analysis(study: &Study, a: &Analysis, out: &Path, cache: &Path) -> Result
             supports,
         } => run_modal(part, *modes, *solver, supports, &mut files)?,
         AnalysisSpec::Reduce => run_reduce(part, cache, &mut files)?,
+        AnalysisSpec::Mbs(_) => return Err(format!("analysis '{}' runs on the mechanism", a.name).into()),
     };
     o.files = files.list;
     Ok(o)
@@ -374,6 +437,7 @@ fn run_static(
             "interfaces": interfaces,
         }),
         files: Vec::new(),
+        failure: None,
     })
 }
 
@@ -442,6 +506,7 @@ fn run_modal(
         report,
         results: json!({ "solver": method, "frequencies_hz": f }),
         files: Vec::new(),
+        failure: None,
     })
 }
 
@@ -512,8 +577,33 @@ pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
         keep_mesh_shapes: reduction.keep_mesh_shapes,
         auxiliary_node: built.auxiliary,
     };
-    let body = reduction::reduce(&built.model, &part.name, &built.interfaces, &settings)
-        .context(|| format!("part '{}': Craig-Bampton reduction failed", part.name))?;
+    // A spinner on stderr naming the stage (hidden when stderr is not a terminal).
+    let bar = indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let mut progress = |stage: reduction::Stage| {
+        let what = match stage {
+            reduction::Stage::Assembling => "assembling K and M".to_string(),
+            reduction::Stage::Factorising { internal_dofs } => format!("factorising K_ii ({internal_dofs} dofs)"),
+            reduction::Stage::ConstraintModes { count } => format!("{count} constraint modes"),
+            reduction::Stage::EigenIteration { converged, wanted, .. } => {
+                format!("fixed-interface modes: {converged} of {wanted} converged")
+            }
+            reduction::Stage::Projecting => "projecting K_CB, M_CB".to_string(),
+            reduction::Stage::Invariants => "inertia invariants".to_string(),
+            _ => return,
+        };
+        bar.set_message(format!("part '{}': {what}", part.name));
+    };
+    let body = reduction::reduce_with_progress(
+        &built.model,
+        &part.name,
+        &built.interfaces,
+        &settings,
+        fe_model::FillOrdering::Auto,
+        &mut progress,
+    )
+    .context(|| format!("part '{}': Craig-Bampton reduction failed", part.name))?;
+    bar.finish_and_clear();
     eprintln!(
         "flexmbs: part '{}': reduced in {:.2} s to {} coordinates ({} interfaces, {} modes)",
         part.name,
@@ -671,6 +761,7 @@ fn run_reduce(part: &Part, cache: &Path, files: &mut Files) -> Result<Outcome, B
             "cache_file": r.file.display().to_string(),
         }),
         files: Vec::new(),
+        failure: None,
     })
 }
 

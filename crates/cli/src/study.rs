@@ -28,6 +28,9 @@ use nalgebra::{Point3, Vector3};
 use reduction::ModeSelection;
 use std::path::Path;
 
+pub mod mechanism;
+pub use mechanism::{MbsAnalysis, Mechanism};
+
 /// Largest beam element count per generated beam or member: beyond it a typo is likelier
 /// than a model (and the model would not fit the dense paths anyway).
 pub const MAX_BEAM_ELEMENTS: usize = 100_000;
@@ -63,6 +66,8 @@ pub enum AnalysisSpec {
     },
     /// Craig-Bampton reduction of the part to a reduced-body file.
     Reduce,
+    /// An analysis of the mechanism (equilibrium, dynamic, linearized).
+    Mbs(MbsAnalysis),
 }
 
 #[derive(Clone, Debug)]
@@ -71,8 +76,8 @@ pub struct Analysis {
     pub name: String,
     /// `analyses[i]`, for messages.
     pub path: KeyPath,
-    /// Index into [`Study::parts`].
-    pub part: usize,
+    /// Index into [`Study::parts`]; `None` for the analyses of the mechanism.
+    pub part: Option<usize>,
     pub spec: AnalysisSpec,
 }
 
@@ -82,6 +87,9 @@ impl Analysis {
             AnalysisSpec::Static { .. } => "static",
             AnalysisSpec::Modal { .. } => "modal",
             AnalysisSpec::Reduce => "reduce",
+            AnalysisSpec::Mbs(MbsAnalysis::Equilibrium { .. }) => "equilibrium",
+            AnalysisSpec::Mbs(MbsAnalysis::Dynamic { .. }) => "dynamic",
+            AnalysisSpec::Mbs(MbsAnalysis::Linearized { .. }) => "linearized",
         }
     }
 }
@@ -93,6 +101,8 @@ pub struct Study {
     pub title: Option<String>,
     pub parts: Vec<Part>,
     pub analyses: Vec<Analysis>,
+    /// The mechanism (empty without `[[bodies]]`, `[[rigid_bodies]]`, `[[point_masses]]`).
+    pub mechanism: Mechanism,
     /// Rendered warnings (suspicious units), printed on stderr.
     pub warnings: Vec<String>,
 }
@@ -165,8 +175,8 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
         let part = v.part(&path, p, &materials, &sections, file);
         parts.push((p.name.clone(), part));
     }
-    let analyses = v.analyses(&file.analyses, &parts);
-    v.multibody_sections(file);
+    let mechanism = v.mechanism(file, &parts);
+    let analyses = v.analyses(&file.analyses, &parts, &mechanism);
     let warnings = v.warnings.iter().map(|w| source.render(w)).collect();
     let errors = std::mem::take(&mut v.errors);
     if !errors.is_empty() {
@@ -178,6 +188,7 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
         source,
         parts,
         analyses,
+        mechanism,
         warnings,
     })
 }
@@ -1412,7 +1423,34 @@ impl Validator<'_> {
         ok.then_some(out)
     }
 
-    fn analyses(&mut self, list: &[AnalysisFile], parts: &[(String, Option<Part>)]) -> Vec<Analysis> {
+    /// The analysis's name (`default` without `name`), checked as a file name and unique.
+    fn analysis_name(&mut self, path: &KeyPath, a: &AnalysisFile, default: String, out: &[Analysis]) -> Option<String> {
+        let name = a.name.clone().unwrap_or(default);
+        if let Err(e) = check_name(&name) {
+            self.err(&path.key("name"), e);
+            return None;
+        }
+        if out.iter().any(|o| o.name == name) {
+            let at = if a.name.is_some() {
+                path.key("name")
+            } else {
+                path.clone()
+            };
+            self.err(
+                &at,
+                format!("an analysis named '{name}' is already defined (analyses name their results folders: give each a unique `name`)"),
+            );
+            return None;
+        }
+        Some(name)
+    }
+
+    fn analyses(
+        &mut self,
+        list: &[AnalysisFile],
+        parts: &[(String, Option<Part>)],
+        mechanism: &Mechanism,
+    ) -> Vec<Analysis> {
         let mut out: Vec<Analysis> = Vec::new();
         let part_names: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
         for (i, a) in list.iter().enumerate() {
@@ -1423,10 +1461,25 @@ impl Validator<'_> {
                 AnalysisKind::Modal => &["type", "name", "part", "supports", "modes", "solver"],
                 AnalysisKind::Reduce => &["type", "name", "part"],
                 AnalysisKind::Equilibrium | AnalysisKind::Dynamic | AnalysisKind::Linearized => {
-                    self.err(
-                        &path.key("type"),
-                        format!("a '{kind}' analysis is not supported yet: needs the multibody solver (issue 6); today's analyses are static, modal and reduce"),
-                    );
+                    if mechanism.is_empty() {
+                        self.err(
+                            &path.key("type"),
+                            format!("a '{kind}' analysis runs on the mechanism, and the study defines none ([[bodies]], [[rigid_bodies]] or [[point_masses]])"),
+                        );
+                        continue;
+                    }
+                    let Some(spec) = self.mbs_analysis(&path, a) else {
+                        continue;
+                    };
+                    let Some(name) = self.analysis_name(&path, a, kind.to_string(), &out) else {
+                        continue;
+                    };
+                    out.push(Analysis {
+                        name,
+                        path,
+                        part: None,
+                        spec: AnalysisSpec::Mbs(spec),
+                    });
                     continue;
                 }
             };
@@ -1447,23 +1500,9 @@ impl Validator<'_> {
                 continue;
             };
             let index = parts[..index].iter().filter(|(_, p)| p.is_some()).count();
-            let name = a.name.clone().unwrap_or_else(|| format!("{kind}-{part_name}"));
-            if let Err(e) = check_name(&name) {
-                self.err(&path.key("name"), e);
+            let Some(name) = self.analysis_name(&path, a, format!("{kind}-{part_name}"), &out) else {
                 continue;
-            }
-            if out.iter().any(|o| o.name == name) {
-                let at = if a.name.is_some() {
-                    path.key("name")
-                } else {
-                    path.clone()
-                };
-                self.err(
-                    &at,
-                    format!("an analysis named '{name}' is already defined (analyses name their results folders: give each a unique `name`)"),
-                );
-                continue;
-            }
+            };
             let spec = match a.kind {
                 AnalysisKind::Static => {
                     let supports = self.supports(&path, part, &a.supports);
@@ -1525,35 +1564,10 @@ impl Validator<'_> {
             out.push(Analysis {
                 name,
                 path,
-                part: index,
+                part: Some(index),
                 spec,
             });
         }
         out
-    }
-
-    fn multibody_sections(&mut self, file: &StudyFile) {
-        let present = [
-            ("bodies", !file.bodies.is_empty()),
-            ("rigid_bodies", !file.rigid_bodies.is_empty()),
-            ("joints", !file.joints.is_empty()),
-            ("drivers", !file.drivers.is_empty()),
-            ("loads", !file.loads.is_empty()),
-            ("sensors", !file.sensors.is_empty()),
-            ("output", file.output.is_some()),
-        ];
-        for (key, is) in present {
-            if is {
-                let section = if key == "output" {
-                    "[output]".to_string()
-                } else {
-                    format!("[[{key}]]")
-                };
-                self.err_key(
-                    &KeyPath::root().key(key),
-                    format!("{section} is not supported yet: needs the multibody solver (issue 6)"),
-                );
-            }
-        }
     }
 }

@@ -16,10 +16,10 @@
 //! Units are SI throughout (m, kg, s, N, Pa); angles are in degrees and their keys end in
 //! `_deg`.
 //!
-//! The sections `bodies`, `rigid_bodies`, `joints`, `drivers`, `loads`, `sensors`, `output`
-//! and the analyses `equilibrium`, `dynamic` and `linearized` are the multibody part of a
-//! study. Their schema is defined now so that files can be written against it, but the
-//! validator refuses them until the multibody solver exists (issue 6).
+//! The sections `bodies`, `rigid_bodies`, `point_masses`, `springs`, `supports`, `joints`,
+//! `drivers`, `loads`, `sensors`, `initial`, `output` and the analyses `equilibrium`,
+//! `dynamic` and `linearized` are the multibody part of a study (the mechanism), validated by
+//! `crate::study::mechanism` and run by `crate::mechanism_run` on the `mbs` crate.
 
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -39,11 +39,17 @@ pub struct StudyFile {
     pub sections: Vec<SectionFile>,
     #[serde(default)]
     pub parts: Vec<PartFile>,
-    // --- multibody sections: defined, refused until issue 6 -------------------------------
+    // --- multibody sections ---------------------------------------------------------------
     #[serde(default)]
     pub bodies: Vec<BodyFile>,
     #[serde(default)]
     pub rigid_bodies: Vec<RigidBodyFile>,
+    #[serde(default)]
+    pub point_masses: Vec<PointMassFile>,
+    #[serde(default)]
+    pub springs: Vec<SpringFile>,
+    #[serde(default)]
+    pub supports: Vec<MbsSupportFile>,
     #[serde(default)]
     pub joints: Vec<JointFile>,
     #[serde(default)]
@@ -52,6 +58,8 @@ pub struct StudyFile {
     pub loads: Vec<LoadFile>,
     #[serde(default)]
     pub sensors: Vec<SensorFile>,
+    #[serde(default)]
+    pub initial: Vec<InitialFile>,
     pub output: Option<OutputFile>,
     // ----------------------------------------------------------------------------------------
     #[serde(default)]
@@ -276,7 +284,7 @@ pub struct AnalysisFile {
     pub kind: AnalysisKind,
     /// Names the results folder of the analysis (default `<type>-<part>`).
     pub name: Option<String>,
-    /// static, modal, reduce: the part.
+    /// static, modal, reduce: the part (multibody analyses run on the mechanism).
     pub part: Option<String>,
     /// static, modal: held dofs.
     pub supports: Option<Vec<SupportFile>>,
@@ -291,15 +299,19 @@ pub struct AnalysisFile {
     pub steps: Option<usize>,
     /// equilibrium, dynamic: Newton tolerance on the relative residual.
     pub tolerance: Option<f64>,
-    /// equilibrium: `newton` or `arc-length`.
+    /// equilibrium: `newton`.
     pub method: Option<String>,
+    /// equilibrium, dynamic: Newton iterations per step (default 25, 20).
+    pub max_iterations: Option<usize>,
     /// dynamic: end time (s).
     pub t_end: Option<f64>,
     /// dynamic: time step (s).
     pub dt: Option<f64>,
     /// dynamic: spectral radius at infinity of generalized-alpha, in [0, 1].
     pub rho_inf: Option<f64>,
-    /// linearized: about `equilibrium` or the state at time `at_time`.
+    /// linearized: about `initial` (default), `equilibrium`, or the state at time `at_time`
+    /// of a dynamic run with step `dt`; equilibrium: the time at which drivers and load
+    /// functions are evaluated (default 0).
     pub about: Option<String>,
     pub at_time: Option<f64>,
 }
@@ -388,7 +400,7 @@ pub struct NodalLoadFile {
     pub moment: Option<Vec3>,
 }
 
-// --- multibody sections (issue 6) ----------------------------------------------------------
+// --- multibody sections -------------------------------------------------------------------
 
 /// `[[bodies]]`: a flexible body, an instance of a reduced part placed in the mechanism.
 #[derive(Debug, Deserialize)]
@@ -407,6 +419,9 @@ pub struct BodyFile {
     /// Where the part's origin is placed (m), and its rotation.
     pub position: Option<Vec3>,
     pub rotation: Option<RotationFile>,
+    /// Damping: `{ alpha = .., beta = .. }` (Rayleigh, on the CB matrices) and/or
+    /// `{ modal_ratio = .. }` (the same ratio for every fixed-interface mode).
+    pub damping: Option<DampingFile>,
 }
 
 /// A rotation by axis and angle (Euler angles appear nowhere: style, brief §4).
@@ -415,6 +430,18 @@ pub struct BodyFile {
 pub struct RotationFile {
     pub axis: Vec3,
     pub angle_deg: f64,
+}
+
+/// Damping of a flexible body.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DampingFile {
+    /// Rayleigh mass factor (1/s).
+    pub alpha: Option<f64>,
+    /// Rayleigh stiffness factor (s).
+    pub beta: Option<f64>,
+    /// Damping ratio of every fixed-interface mode (-).
+    pub modal_ratio: Option<f64>,
 }
 
 /// `[[rigid_bodies]]`
@@ -432,6 +459,45 @@ pub struct RigidBodyFile {
     pub points: BTreeMap<String, Vec3>,
 }
 
+/// `[[point_masses]]`: a mass on a point (translational inertia only).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointMassFile {
+    pub name: String,
+    /// `"body.point"`.
+    pub at: String,
+    /// Mass (kg).
+    pub mass: f64,
+}
+
+/// `[[springs]]`: a point-to-point spring-damper.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpringFile {
+    pub name: String,
+    /// Two points; the second may be `"ground"` (then `ground_point` says where).
+    pub between: [String; 2],
+    pub ground_point: Option<Vec3>,
+    /// Stiffness (N/m).
+    pub stiffness: f64,
+    /// Damping (N s/m), default 0.
+    pub damping: Option<f64>,
+    /// Unstretched length (m), default the initial length.
+    pub rest_length: Option<f64>,
+}
+
+/// `[[supports]]`: dofs of a point held by the ground.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MbsSupportFile {
+    /// `"body.point"`.
+    pub at: String,
+    /// `clamp`, `pin`, `hinge` (with `axis`), `slider` (with `axis`), `plane` (with `axis`, the normal).
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub axis: Option<Vec3>,
+}
+
 /// `[[joints]]`: minimal-coordinate joints (brief §5).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -444,37 +510,51 @@ pub struct JointFile {
     /// one) or `"ground"`: parent first.
     pub between: [String; 2],
     /// Joint axis in global axes at t = 0 (revolute, prismatic, cylindrical; the normal of a
-    /// planar joint).
+    /// planar joint; the first axis of a universal joint).
     pub axis: Option<Vec3>,
     /// Second axis (universal joint).
     pub axis2: Option<Vec3>,
 }
 
-/// `[[drivers]]`: a joint coordinate or node coordinate given as a function of time.
+/// `[[drivers]]`: a joint coordinate given as a function of time.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DriverFile {
     pub name: String,
     /// The driven joint.
     pub joint: String,
+    /// Which scalar coordinate of the joint (default 0).
+    pub coordinate: Option<usize>,
     pub function: TimeFunctionFile,
 }
 
-/// A function of time: `constant-speed` (`speed`), `spin-up` (`speed`, `ramp_time`: the
-/// smooth ramp of benchmark C1), `harmonic` (`amplitude`, `frequency_hz`, `phase_deg`), or
-/// `table` (`t`, `value`, piecewise linear).
+/// A function of time: `constant-speed` (`speed`, `initial`), `ramp` (`t_start`, `t_end`,
+/// `from`, `to`, `smooth`), `spin-up` (`speed`, `ramp_time`: the smooth ramp of benchmark
+/// C1), `harmonic` (`amplitude`, `frequency_hz`, `phase_deg`, `offset`), `table` (`t`,
+/// `value` or `file`, `interpolation`).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TimeFunctionFile {
     #[serde(rename = "type")]
     pub kind: String,
     pub speed: Option<f64>,
+    pub initial: Option<f64>,
     pub ramp_time: Option<f64>,
+    pub t_start: Option<f64>,
+    pub t_end: Option<f64>,
+    pub from: Option<f64>,
+    pub to: Option<f64>,
+    pub smooth: Option<bool>,
     pub amplitude: Option<f64>,
     pub frequency_hz: Option<f64>,
     pub phase_deg: Option<f64>,
+    pub offset: Option<f64>,
     pub t: Option<Vec<f64>>,
     pub value: Option<Vec<f64>>,
+    /// A CSV file of `time, value` rows, relative to the study file.
+    pub file: Option<String>,
+    /// `linear` (default) or `cubic`.
+    pub interpolation: Option<String>,
 }
 
 /// `[[loads]]`: gravity, or a force and moment at a body point.
@@ -496,18 +576,41 @@ pub struct LoadFile {
     pub function: Option<TimeFunctionFile>,
 }
 
-/// `[[sensors]]`: named outputs, one CSV column group each.
+/// `[[sensors]]`: named outputs, one CSV file each.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorFile {
     pub name: String,
-    /// `position`, `rotation`, `velocity`, `modal`, `reaction`, `energy`, `deflection`.
+    /// `position`, `displacement`, `relative-position`, `rotation`, `velocity`,
+    /// `angular-velocity`, `deflection`, `joint`, `joint-rate`, `modal`, `reaction`,
+    /// `driver-effort`, `energy`, `momentum`.
     #[serde(rename = "type")]
     pub kind: String,
-    /// `"body.point"`, a body, or a joint.
-    pub of: String,
-    /// Deflection: relative to the chord between two points of the body.
+    /// `"body.point"`, a body, a joint or a driver.
+    pub of: Option<String>,
+    /// Deflection: relative to the chord between two points.
     pub chord: Option<[String; 2]>,
+    /// Deflection: signed along this normal.
+    pub normal: Option<Vec3>,
+    /// Relative position: in the axes of this point.
+    pub reference: Option<String>,
+    /// Joint, joint-rate: which scalar coordinate (default 0).
+    pub coordinate: Option<usize>,
+}
+
+/// `[[initial]]`: initial values that differ from the assembled configuration at rest.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialFile {
+    /// A joint coordinate's `value` and/or `rate` (with `coordinate`, default 0) ...
+    pub joint: Option<String>,
+    pub coordinate: Option<usize>,
+    pub value: Option<f64>,
+    pub rate: Option<f64>,
+    /// ... or the `velocity` (m/s) and `angular_velocity` (rad/s) of a point.
+    pub at: Option<String>,
+    pub velocity: Option<Vec3>,
+    pub angular_velocity: Option<Vec3>,
 }
 
 /// `[output]`: how often the multibody analyses write.
@@ -518,4 +621,6 @@ pub struct OutputFile {
     pub every: Option<usize>,
     /// Write the deformed meshes for ParaView every n-th step (default: never).
     pub vtu_every: Option<usize>,
+    /// Draw a PNG plot per sensor (default true).
+    pub plots: Option<bool>,
 }

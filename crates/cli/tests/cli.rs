@@ -29,3 +29,8 @@ mod vtu;
 /// Random and mutated study files (fixed seeds): no panic, exit code 2 with a message.
 #[path = "cli/property.rs"]
 mod property;
+
+/// The mechanism: B1 and B3 against their references, streamed results of a dynamic run, a
+/// solver failure with partial results, errors of the assembled mechanism, `validate`.
+#[path = "cli/mechanism.rs"]
+mod mechanism;

@@ -1,0 +1,1144 @@
+//! The analyses of the mechanism: the validated [`Mechanism`] becomes an `mbs::Model` (bodies
+//! reduced through the cache, points merged by fixed joints into nodes, ground nodes for the
+//! joints to the ground), then `mbs::solve_static`, the generalized-α `mbs::Integrator` step
+//! by step, or `mbs::spectrum`.
+//!
+//! Results stream as they are computed: one CSV file per sensor (header with units), flushed
+//! after every row, and the deformed meshes of every body (`mechanism_NNNNN.vtu`, listed in
+//! `mechanism.pvd`, rewritten after each) at the output times, so an interrupted run keeps
+//! them. A solver failure keeps what was written and reports time, step and residual.
+
+#![allow(non_snake_case)]
+
+use crate::error::{BoxError, ResultExt};
+use crate::output::num;
+use crate::run::{reduce_part, Reduced};
+use crate::source::KeyPath;
+use crate::study::mechanism::{
+    About, BodySource, FrameSpec, InitialSpec, MbsAnalysis, Mechanism, PointRef, ReactionAt, SensorTarget,
+};
+use crate::study::Study;
+use crate::vtu::{write_pvd, write_vtu, CellRole, PointField, VtuMesh};
+use mbs::{
+    Body, DriverTarget, FlexibleBody, InitialCondition, JointKind, Load, Model, NodeId, PointMass, RigidBody,
+    SensorKind, Spring, Support, System,
+};
+use nalgebra::{Isometry3, Point3, Vector3};
+use reduction::ReducedBody;
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use superelement::{Frame, FrameChoice, Superelement};
+
+/// Prefix of the sensors added for the mesh recovery (modal coordinates of each body); they
+/// are not written as sensor files.
+const HIDDEN: &str = "__flexmbs_modal.";
+
+/// One sensor of the study: the `mbs` sensors it is made of and its CSV columns with units.
+#[derive(Clone, Debug)]
+pub struct SensorGroup {
+    pub name: String,
+    pub mbs_names: Vec<String>,
+    pub columns: Vec<String>,
+}
+
+/// The mechanism as an `mbs::Model`, with what the outputs need.
+pub struct BuiltMechanism {
+    pub model: Model,
+    pub groups: Vec<SensorGroup>,
+    /// Per flexible body: the reduced body, its FE mesh for drawing (bodies from parts), and
+    /// the hidden sensor of its modal coordinates.
+    pub bodies: Vec<BodyOut>,
+    /// Per rigid body: its reference node and point nodes.
+    pub rigid: Vec<Vec<NodeId>>,
+    /// `(location, name)` of every named entity, for locating `mbs::ModelError`s.
+    pub entities: Vec<(KeyPath, String)>,
+    /// Reductions: (part, coordinates, modes, from cache).
+    pub reductions: Vec<serde_json::Value>,
+}
+
+pub struct BodyOut {
+    pub name: String,
+    pub reduced: ReducedBody,
+    pub mesh: Option<VtuMesh>,
+    pub placement: Isometry3<f64>,
+    pub frame: FrameChoice,
+    pub nodes: Vec<NodeId>,
+}
+
+/// Key of a point before merging: flexible (body, interface index) or rigid (body, point).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Key {
+    Flexible(usize, usize),
+    Rigid(usize, usize),
+}
+
+fn find(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}
+
+/// An error about the entity at `path` of the study, located in the file.
+fn located(study: &Study, path: &KeyPath, message: impl std::fmt::Display) -> BoxError {
+    format!("{}: {path}: {message}", study.location(path)).into()
+}
+
+/// Each flexible body's reduced body with its FE mesh for drawing, and a summary entry per
+/// reduction.
+type ReducedBodies = (Vec<(ReducedBody, Option<VtuMesh>)>, Vec<serde_json::Value>);
+
+/// Reduces (or reads from the cache) every flexible body's part, once per part.
+fn reduce_bodies(study: &Study, cache: &Path) -> Result<ReducedBodies, BoxError> {
+    let mut done: BTreeMap<usize, Reduced> = BTreeMap::new();
+    let mut out = Vec::new();
+    let mut reductions = Vec::new();
+    for b in &study.mechanism.bodies {
+        match &b.source {
+            BodySource::Part(p) => {
+                if !done.contains_key(p) {
+                    let r = reduce_part(&study.parts[*p], cache)?;
+                    reductions.push(json!({
+                        "part": study.parts[*p].name,
+                        "fe_dofs": r.free_dofs,
+                        "coordinates": r.body.n_coordinates(),
+                        "interfaces": r.body.interfaces.len(),
+                        "modes_kept": r.body.n_modes,
+                        "from_cache": r.from_cache,
+                    }));
+                    done.insert(*p, r);
+                }
+                let r = &done[p];
+                let mesh = (r.body.mesh.as_ref().map(|m| m.nodes.len()) == Some(r.built.model.node_count()))
+                    .then(|| VtuMesh::from_model(&r.built.model, &[]));
+                out.push((r.body.clone(), mesh));
+            }
+            BodySource::File(_, body) => out.push(((**body).clone(), None)),
+        }
+    }
+    Ok((out, reductions))
+}
+
+/// Builds the `mbs::Model` of the study's mechanism (module docs).
+pub fn build(study: &Study, cache: &Path) -> Result<BuiltMechanism, BoxError> {
+    let m = &study.mechanism;
+    let (reduced, reductions) = reduce_bodies(study, cache)?;
+    // Every point, its position and its name.
+    let mut keys: Vec<Key> = Vec::new();
+    let mut positions: Vec<Vector3<f64>> = Vec::new();
+    for (b, (body, _)) in reduced.iter().enumerate() {
+        let place = m.bodies[b].placement;
+        for (k, i) in body.interfaces.iter().enumerate() {
+            keys.push(Key::Flexible(b, k));
+            positions.push((place * Point3::from(Vector3::from(i.position))).coords);
+        }
+    }
+    for (b, r) in m.rigid_bodies.iter().enumerate() {
+        for (k, (_, x)) in r.points.iter().enumerate() {
+            keys.push(Key::Rigid(b, k));
+            positions.push(*x);
+        }
+    }
+    let key_index = |p: &PointRef| -> Option<usize> {
+        let key = match p {
+            PointRef::Ground => return None,
+            PointRef::Flexible { body, interface } => {
+                let k = reduced[*body].0.interfaces.iter().position(|i| i.name == *interface)?;
+                Key::Flexible(*body, k)
+            }
+            PointRef::Rigid { body, point } => Key::Rigid(*body, *point),
+        };
+        keys.iter().position(|k| *k == key)
+    };
+    let resolve = |p: &PointRef, path: &KeyPath| -> Result<usize, BoxError> {
+        key_index(p).ok_or_else(|| {
+            located(
+                study,
+                path,
+                format!("point '{}' is not in the reduced body", m.point_name(p)),
+            )
+        })
+    };
+    let size = positions.iter().map(|p| p.norm()).fold(1e-3, f64::max);
+    // Fixed joints merge points into one node.
+    let mut parent: Vec<usize> = (0..keys.len()).collect();
+    let mut grounded: Vec<usize> = Vec::new();
+    for j in m.joints.iter().filter(|j| j.kind.is_none()) {
+        match (&j.parent, &j.child) {
+            (PointRef::Ground, PointRef::Ground) => {}
+            (PointRef::Ground, p) | (p, PointRef::Ground) => grounded.push(resolve(p, &j.path)?),
+            (a, b) => {
+                let (a, b) = (resolve(a, &j.path)?, resolve(b, &j.path)?);
+                let d = (positions[a] - positions[b]).norm();
+                // The points of a fixed joint are one node: they must coincide to round-off of
+                // the placement (a millionth of the model size).
+                if d > 1e-6 * size {
+                    return Err(located(
+                        study,
+                        &j.path,
+                        format!("fixed joint '{}': '{}' and '{}' are {d:.3e} m apart; the points of a fixed joint must coincide", j.name, m.point_name(&j.parent), m.point_name(&j.child)),
+                    ));
+                }
+                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                parent[rb] = ra;
+            }
+        }
+    }
+    let point_label = |k: &Key| match k {
+        Key::Flexible(b, i) => format!("{}.{}", m.bodies[*b].name, reduced[*b].0.interfaces[*i].name),
+        Key::Rigid(b, i) => format!("{}.{}", m.rigid_bodies[*b].name, m.rigid_bodies[*b].points[*i].0),
+    };
+    let mut model = Model::new(study.title.as_deref().unwrap_or("mechanism"));
+    let mut node_of = vec![NodeId(0); keys.len()];
+    let mut class_node: BTreeMap<usize, NodeId> = BTreeMap::new();
+    for i in 0..keys.len() {
+        let r = find(&mut parent, i);
+        if let Some(n) = class_node.get(&r) {
+            node_of[i] = *n;
+            let name = &mut model.nodes[n.index()].name;
+            name.push('=');
+            name.push_str(&point_label(&keys[i]));
+        } else {
+            let n = model.add_node(&point_label(&keys[i]), positions[r]);
+            class_node.insert(r, n);
+            node_of[i] = n;
+        }
+    }
+    let node = |p: &PointRef, path: &KeyPath| -> Result<NodeId, BoxError> { Ok(node_of[resolve(p, path)?]) };
+    for g in grounded {
+        model.add_support(Support::clamp(node_of[g]));
+    }
+    let mut entities: Vec<(KeyPath, String)> = Vec::new();
+    // Flexible bodies.
+    let mut bodies = Vec::new();
+    for (b, (body, mesh)) in reduced.iter().enumerate() {
+        let (body, mesh) = (body.clone(), mesh.clone());
+        let spec = &m.bodies[b];
+        let nodes: Vec<NodeId> = (0..body.interfaces.len())
+            .map(|k| node_of[keys.iter().position(|x| *x == Key::Flexible(b, k)).unwrap_or(0)])
+            .collect();
+        let frame = match &spec.frame {
+            FrameSpec::CenterOfMass => FrameChoice::CenterOfMass,
+            FrameSpec::AuxiliaryNode => FrameChoice::AuxiliaryNode,
+            FrameSpec::InterfaceNode(name) => match body.interfaces.iter().position(|i| i.name == *name) {
+                Some(k) => FrameChoice::InterfaceNode(k),
+                None => {
+                    return Err(located(
+                        study,
+                        &spec.path.key("frame_interface"),
+                        format!("the reduced body has no interface '{name}'"),
+                    ))
+                }
+            },
+        };
+        let mut damping = spec.damping.clone();
+        if let Some(z) = spec.modal_ratio {
+            damping.modal_ratios = vec![z; body.n_modes];
+        }
+        let mut reduced_body = body.clone();
+        reduced_body.name = spec.name.clone();
+        model.add_body(Body::Flexible(Box::new(FlexibleBody {
+            name: spec.name.clone(),
+            reduced: reduced_body,
+            nodes: nodes.clone(),
+            placement: spec.placement,
+            frame,
+            mass: spec.inertia,
+            damping,
+        })));
+        entities.push((spec.path.clone(), spec.name.clone()));
+        if body.n_modes > 0 {
+            model.add_sensor(
+                &format!("{HIDDEN}{}", spec.name),
+                SensorKind::ModalCoordinates {
+                    body: mbs::BodyId(model.bodies.len() as u32 - 1),
+                },
+            );
+        }
+        bodies.push(BodyOut {
+            name: spec.name.clone(),
+            reduced: body,
+            mesh,
+            placement: spec.placement,
+            frame,
+            nodes,
+        });
+    }
+    // Rigid bodies: the mass data about the first point (nodes have the identity orientation,
+    // so the body's axes are the global axes at t = 0), or about a node at the centre of mass
+    // for a body without points.
+    let mut rigid = Vec::new();
+    for (b, r) in m.rigid_bodies.iter().enumerate() {
+        let nodes: Vec<NodeId> = (0..r.points.len())
+            .map(|k| node_of[keys.iter().position(|x| *x == Key::Rigid(b, k)).unwrap_or(0)])
+            .collect();
+        let (reference, others) = match nodes.split_first() {
+            Some((first, rest)) => (*first, rest.to_vec()),
+            None => (
+                model.add_node(&format!("{}.(center of mass)", r.name), r.center_of_mass),
+                Vec::new(),
+            ),
+        };
+        let c = r.center_of_mass - model.nodes[reference.index()].position;
+        model.add_rigid_body(RigidBody {
+            name: r.name.clone(),
+            reference,
+            nodes: others.clone(),
+            mass: r.mass,
+            center_of_mass: c,
+            inertia: r.inertia,
+        });
+        entities.push((r.path.clone(), r.name.clone()));
+        let mut all = vec![reference];
+        all.extend(others);
+        rigid.push(all);
+    }
+    for p in &m.point_masses {
+        model.point_masses.push(PointMass {
+            node: node(&p.at, &p.path)?,
+            mass: p.mass,
+        });
+    }
+    for s in &m.springs {
+        model.springs.push(Spring {
+            name: s.name.clone(),
+            a: node(&s.a, &s.path)?,
+            b: match &s.b {
+                Some(b) => Some(node(b, &s.path)?),
+                None => None,
+            },
+            ground_point: s.ground_point,
+            stiffness: s.stiffness,
+            damping: s.damping,
+            rest_length: s.rest_length,
+        });
+        entities.push((s.path.clone(), s.name.clone()));
+    }
+    for s in &m.supports {
+        let n = node(&s.at, &s.path)?;
+        model.add_support(Support {
+            node: n,
+            translation: s.translation.clone(),
+            rotation: s.rotation.clone(),
+        });
+        entities.push((s.path.clone(), model.nodes[n.index()].name.clone()));
+    }
+    // Joints (fixed ones are merged nodes, above); a joint to the ground gets a clamped node.
+    let mut joint_ids: Vec<Option<mbs::JointId>> = Vec::new();
+    let mut ground_nodes: Vec<Option<NodeId>> = Vec::new();
+    for j in &m.joints {
+        let Some(kind) = &j.kind else {
+            joint_ids.push(None);
+            ground_nodes.push(None);
+            continue;
+        };
+        let child = node(&j.child, &j.path)?;
+        let (parent_node, ground) = match &j.parent {
+            PointRef::Ground => {
+                let g = model.add_node(&format!("ground.{}", j.name), model.nodes[child.index()].position);
+                model.add_support(Support::clamp(g));
+                (g, Some(g))
+            }
+            p => (node(p, &j.path)?, None),
+        };
+        joint_ids.push(Some(model.add_joint(&j.name, parent_node, child, kind.clone())));
+        ground_nodes.push(ground);
+        entities.push((j.path.clone(), j.name.clone()));
+    }
+    for d in &m.drivers {
+        let Some(joint) = joint_ids[d.joint] else {
+            return Err(located(study, &d.path, "a fixed joint cannot be driven"));
+        };
+        model.add_driver(
+            &d.name,
+            DriverTarget::Joint {
+                joint,
+                coordinate: d.coordinate,
+            },
+            d.motion.clone(),
+        );
+        entities.push((d.path.clone(), d.name.clone()));
+    }
+    if let Some((_, g)) = &m.gravity {
+        model.gravity = *g;
+    }
+    for l in &m.loads {
+        let n = node(&l.at, &l.path)?;
+        for (kind, value) in &l.values {
+            model.add_load(Load {
+                node: n,
+                kind: *kind,
+                axes: l.axes,
+                value: *value,
+                time: l.time.clone(),
+            });
+        }
+    }
+    // Sensors.
+    let mut groups = Vec::new();
+    let xyz = |what: &str, unit: &str| -> Vec<String> {
+        ["x", "y", "z"].iter().map(|c| format!("{what}_{c} [{unit}]")).collect()
+    };
+    for s in &m.sensors {
+        let kinds: Vec<(String, SensorKind)>;
+        let single = |k: SensorKind| vec![(s.name.clone(), k)];
+        let joint_unit = |j: usize, c: usize, rate: bool| -> String {
+            let angle = match &m.joints[j].kind {
+                Some(JointKind::Prismatic { .. }) => false,
+                Some(JointKind::Cylindrical { .. }) => c == 1,
+                Some(JointKind::Planar { .. }) => c == 2,
+                _ => true,
+            };
+            match (angle, rate) {
+                (true, false) => "rad".into(),
+                (true, true) => "rad/s".into(),
+                (false, false) => "m".into(),
+                (false, true) => "m/s".into(),
+            }
+        };
+        let columns: Vec<String> = match &s.target {
+            SensorTarget::Position(p) => {
+                kinds = single(SensorKind::NodePosition {
+                    node: node(p, &s.path)?,
+                });
+                xyz("position", "m")
+            }
+            SensorTarget::Displacement(p) => {
+                kinds = single(SensorKind::NodeDisplacement {
+                    node: node(p, &s.path)?,
+                });
+                xyz("displacement", "m")
+            }
+            SensorTarget::RelativePosition(p, r) => {
+                kinds = single(SensorKind::RelativePosition {
+                    node: node(p, &s.path)?,
+                    reference: node(r, &s.path)?,
+                });
+                xyz("relative_position", "m")
+            }
+            SensorTarget::Rotation(p) => {
+                kinds = single(SensorKind::NodeRotation {
+                    node: node(p, &s.path)?,
+                });
+                xyz("rotation", "rad")
+            }
+            SensorTarget::Velocity(p) => {
+                kinds = single(SensorKind::NodeVelocity {
+                    node: node(p, &s.path)?,
+                });
+                xyz("velocity", "m/s")
+            }
+            SensorTarget::AngularVelocity(p) => {
+                kinds = single(SensorKind::NodeAngularVelocity {
+                    node: node(p, &s.path)?,
+                });
+                xyz("angular_velocity", "rad/s")
+            }
+            SensorTarget::Deflection { of, chord, normal } => {
+                kinds = single(SensorKind::LineDistance {
+                    node: node(of, &s.path)?,
+                    a: node(&chord[0], &s.path)?,
+                    b: node(&chord[1], &s.path)?,
+                    normal: *normal,
+                });
+                vec!["deflection [m]".into()]
+            }
+            SensorTarget::JointCoordinate(j, c) | SensorTarget::JointRate(j, c) => {
+                let rate = matches!(s.target, SensorTarget::JointRate(..));
+                let Some(joint) = joint_ids[*j] else {
+                    return Err(located(study, &s.path, "a fixed joint has no coordinate"));
+                };
+                kinds = single(if rate {
+                    SensorKind::JointRate { joint, coordinate: *c }
+                } else {
+                    SensorKind::JointCoordinate { joint, coordinate: *c }
+                });
+                vec![format!(
+                    "{} {c} [{}]",
+                    if rate { "rate" } else { "coordinate" },
+                    joint_unit(*j, *c, rate)
+                )]
+            }
+            SensorTarget::Modal(b) => {
+                kinds = single(SensorKind::ModalCoordinates {
+                    body: mbs::BodyId(*b as u32),
+                });
+                (1..=bodies[*b].reduced.n_modes)
+                    .map(|k| format!("eta_{k} [-]"))
+                    .collect()
+            }
+            SensorTarget::Reaction(at) => {
+                let n = match at {
+                    ReactionAt::Point(p) => node(p, &s.path)?,
+                    ReactionAt::GroundJoint(j) => match ground_nodes[*j] {
+                        Some(g) => g,
+                        None => return Err(located(study, &s.path, "the joint has no ground node")),
+                    },
+                };
+                kinds = single(SensorKind::Reaction { node: n });
+                ["Fx [N]", "Fy [N]", "Fz [N]", "Mx [N m]", "My [N m]", "Mz [N m]"]
+                    .map(String::from)
+                    .to_vec()
+            }
+            SensorTarget::DriverEffort(d) => {
+                kinds = single(SensorKind::DriverEffort { driver: *d });
+                let dr = &m.drivers[*d];
+                let unit = if joint_unit(dr.joint, dr.coordinate, false) == "rad" {
+                    "N m"
+                } else {
+                    "N"
+                };
+                vec![format!("effort [{unit}]")]
+            }
+            SensorTarget::Energy => {
+                kinds = vec![
+                    (format!("{}.kinetic", s.name), SensorKind::KineticEnergy),
+                    (format!("{}.strain", s.name), SensorKind::StrainEnergy),
+                    (format!("{}.gravity", s.name), SensorKind::GravityPotential),
+                ];
+                ["kinetic [J]", "strain [J]", "gravity potential [J]"]
+                    .map(String::from)
+                    .to_vec()
+            }
+            SensorTarget::Momentum => {
+                kinds = vec![
+                    (format!("{}.linear", s.name), SensorKind::LinearMomentum),
+                    (format!("{}.angular", s.name), SensorKind::AngularMomentum),
+                ];
+                [
+                    "px [kg m/s]",
+                    "py [kg m/s]",
+                    "pz [kg m/s]",
+                    "Lx [kg m^2/s]",
+                    "Ly [kg m^2/s]",
+                    "Lz [kg m^2/s]",
+                ]
+                .map(String::from)
+                .to_vec()
+            }
+        };
+        let mbs_names = kinds.iter().map(|(n, _)| n.clone()).collect();
+        for (n, k) in kinds {
+            model.add_sensor(&n, k);
+        }
+        groups.push(SensorGroup {
+            name: s.name.clone(),
+            mbs_names,
+            columns,
+        });
+    }
+    for c in &m.initial {
+        match c {
+            InitialSpec::Joint {
+                path,
+                joint,
+                coordinate,
+                value,
+                rate,
+            } => {
+                let Some(j) = joint_ids[*joint] else {
+                    return Err(located(study, path, "a fixed joint has no coordinate"));
+                };
+                if let Some(v) = value {
+                    model.initial.push(InitialCondition::JointValue {
+                        joint: j,
+                        coordinate: *coordinate,
+                        value: *v,
+                    });
+                }
+                if let Some(r) = rate {
+                    model.initial.push(InitialCondition::JointRate {
+                        joint: j,
+                        coordinate: *coordinate,
+                        rate: *r,
+                    });
+                }
+            }
+            InitialSpec::Point {
+                path,
+                at,
+                velocity,
+                angular_velocity,
+            } => model.initial.push(InitialCondition::NodeVelocity {
+                node: node(at, path)?,
+                velocity: *velocity,
+                angular_velocity: *angular_velocity,
+            }),
+        }
+    }
+    Ok(BuiltMechanism {
+        model,
+        groups,
+        bodies,
+        rigid,
+        entities,
+        reductions,
+    })
+}
+
+impl BuiltMechanism {
+    /// `System::new`, with a model error located at the first entity it names.
+    pub fn system(&self, study: &Study) -> Result<System, BoxError> {
+        System::new(&self.model).map_err(|e| {
+            let text = e.to_string();
+            let hit = self.entities.iter().find(|(_, name)| {
+                text.contains(&format!("'{name}'"))
+                    || text.contains(&format!("{name},"))
+                    || text.contains(&format!("{name}]"))
+            });
+            match hit {
+                Some((path, _)) => located(study, path, format!("the mechanism cannot be assembled: {text}")),
+                None => format!(
+                    "{}: the mechanism cannot be assembled: {text}",
+                    study.source.path.display()
+                )
+                .into(),
+            }
+        })
+    }
+
+    /// Model size for the summary.
+    pub fn size(&self, sys: &System) -> serde_json::Value {
+        json!({
+            "nodes": self.model.nodes.len(),
+            "flexible_bodies": self.bodies.len(),
+            "rigid_bodies": self.rigid.len(),
+            "joints": self.model.joints.len(),
+            "drivers": self.model.drivers.len(),
+            "unknowns": sys.n_dof(),
+            "system_nonzeros": sys.nnz(),
+            "modes_kept": self.bodies.iter().map(|b| json!({"body": b.name, "modes": b.reduced.n_modes, "coordinates": b.reduced.n_coordinates()})).collect::<Vec<_>>(),
+            "reductions": self.reductions,
+        })
+    }
+}
+
+/// Sensor CSV files written row by row.
+pub struct SensorFiles {
+    files: Vec<(std::io::BufWriter<std::fs::File>, Vec<usize>)>,
+    /// Values kept for the plots: per group, (x, rows).
+    pub history: Vec<(Vec<f64>, Vec<Vec<f64>>)>,
+    pub paths: Vec<String>,
+}
+
+impl SensorFiles {
+    /// Creates `<dir>/<sensor>.csv` for every group, with `x_label` as the first column.
+    pub fn create(
+        dir: &Path,
+        prefix: &str,
+        groups: &[SensorGroup],
+        record: &mbs::SensorRecord,
+        x_label: &str,
+    ) -> Result<Self, BoxError> {
+        let mut offsets = Vec::new();
+        let mut at = 0;
+        for w in &record.widths {
+            offsets.push(at);
+            at += w;
+        }
+        let mut files = Vec::new();
+        let mut paths = Vec::new();
+        for g in groups {
+            let cols: Vec<usize> = g
+                .mbs_names
+                .iter()
+                .flat_map(|n| {
+                    let k = record.names.iter().position(|x| x == n).unwrap_or(0);
+                    offsets[k]..offsets[k] + record.widths[k]
+                })
+                .collect();
+            let path = dir.join(format!("{}.csv", g.name));
+            let f = std::fs::File::create(&path).context(|| format!("cannot create {}", path.display()))?;
+            let mut w = std::io::BufWriter::new(f);
+            let mut header = vec![x_label.to_string()];
+            header.extend(g.columns.iter().cloned());
+            writeln!(w, "{}", header.join(",")).context(|| format!("cannot write {}", path.display()))?;
+            files.push((w, cols));
+            paths.push(format!("{prefix}/{}.csv", g.name));
+        }
+        let history = vec![(Vec::new(), Vec::new()); groups.len()];
+        Ok(Self { files, history, paths })
+    }
+
+    /// Writes the last row of `record` (x = `x`) to every file and flushes.
+    pub fn write_last(&mut self, x: f64, record: &mbs::SensorRecord) -> Result<(), BoxError> {
+        let Some(row) = record.rows.last() else {
+            return Ok(());
+        };
+        for (k, (w, cols)) in self.files.iter_mut().enumerate() {
+            let values: Vec<f64> = cols.iter().map(|&c| row[c]).collect();
+            let mut line = num(x);
+            for v in &values {
+                line.push(',');
+                line.push_str(&num(*v));
+            }
+            writeln!(w, "{line}")
+                .and_then(|_| w.flush())
+                .context(|| "cannot write a sensor file".to_string())?;
+            self.history[k].0.push(x);
+            self.history[k].1.push(values);
+        }
+        Ok(())
+    }
+}
+
+/// The deformed meshes of every body at the output times (module docs).
+pub struct MeshWriter {
+    dir: PathBuf,
+    prefix: String,
+    mesh: VtuMesh,
+    /// Per flexible body: superelement, first point, last frame.
+    flexible: Vec<(Superelement, usize, Option<Frame>)>,
+    /// Per rigid body: first point.
+    rigid: Vec<usize>,
+    entries: Vec<(f64, String)>,
+    pub files: Vec<String>,
+}
+
+impl MeshWriter {
+    pub fn new(dir: &Path, prefix: &str, b: &BuiltMechanism) -> Result<Self, BoxError> {
+        let mut mesh = VtuMesh::default();
+        let mut flexible = Vec::new();
+        for body in &b.bodies {
+            let first = mesh.points.len();
+            let se = Superelement::new(
+                &body.reduced,
+                body.frame,
+                superelement::MassVariant::Exact,
+                superelement::Damping::none(),
+            )
+            .context(|| format!("body '{}': cannot build the superelement for drawing", body.name))?;
+            match (&body.reduced.mesh, &body.mesh) {
+                (Some(shapes), Some(fe)) => {
+                    for x in &shapes.nodes {
+                        let p = body.placement * Point3::from(*x);
+                        mesh.points.push([p.x, p.y, p.z]);
+                    }
+                    for (t, c, r) in &fe.cells {
+                        mesh.cells.push((*t, c.iter().map(|i| i + first).collect(), *r));
+                    }
+                }
+                (Some(shapes), None) => {
+                    for (i, x) in shapes.nodes.iter().enumerate() {
+                        let p = body.placement * Point3::from(*x);
+                        mesh.points.push([p.x, p.y, p.z]);
+                        mesh.cells.push((1, vec![first + i], CellRole::Element));
+                    }
+                }
+                // No mesh shapes: the interfaces, joined to the first.
+                _ => {
+                    for (k, i) in body.reduced.interfaces.iter().enumerate() {
+                        let p = body.placement * Point3::from(i.position);
+                        mesh.points.push([p.x, p.y, p.z]);
+                        mesh.cells.push((1, vec![first + k], CellRole::InterfaceNode));
+                        if k > 0 {
+                            mesh.cells.push((3, vec![first, first + k], CellRole::Element));
+                        }
+                    }
+                }
+            }
+            flexible.push((se, first, None));
+        }
+        let mut rigid = Vec::new();
+        for nodes in &b.rigid {
+            let first = mesh.points.len();
+            for (k, n) in nodes.iter().enumerate() {
+                let p = b.model.nodes[n.index()].position;
+                mesh.points.push([p.x, p.y, p.z]);
+                mesh.cells.push((1, vec![first + k], CellRole::InterfaceNode));
+                if k > 0 {
+                    mesh.cells.push((3, vec![first, first + k], CellRole::Element));
+                }
+            }
+            rigid.push(first);
+        }
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            prefix: prefix.to_string(),
+            mesh,
+            flexible,
+            rigid,
+            entries: Vec::new(),
+            files: Vec::new(),
+        })
+    }
+
+    /// Writes the meshes at `state` (modal coordinates from the last row of `record`).
+    pub fn write(
+        &mut self,
+        t: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+        record: &mbs::SensorRecord,
+    ) -> Result<(), BoxError> {
+        let motions = sys.node_motions(state);
+        let mut u = vec![[0.0; 3]; self.mesh.points.len()];
+        let mut offset = 0;
+        let mut eta_at = BTreeMap::new();
+        for (k, (n, w)) in record.names.iter().zip(&record.widths).enumerate() {
+            let _ = k;
+            if let Some(body) = n.strip_prefix(HIDDEN) {
+                eta_at.insert(body.to_string(), (offset, *w));
+            }
+            offset += w;
+        }
+        let row = record.rows.last();
+        for (body, (se, first, last)) in b.bodies.iter().zip(self.flexible.iter_mut()) {
+            let first = *first;
+            let eta: Vec<f64> = match (eta_at.get(&body.name), row) {
+                (Some((o, w)), Some(row)) => row[*o..*o + *w].to_vec(),
+                _ => vec![0.0; body.reduced.n_modes],
+            };
+            let N = body.nodes.len();
+            let frame0 =
+                last.unwrap_or_else(|| Frame::new(body.placement * se.frame_origin(), body.placement.rotation));
+            let bs = superelement::BodyState {
+                r: body.nodes.iter().map(|n| motions[n.index()].r).collect(),
+                R: body
+                    .nodes
+                    .iter()
+                    .map(|n| motions[n.index()].R * body.placement.rotation)
+                    .collect(),
+                v: vec![Vector3::zeros(); N],
+                omega: vec![Vector3::zeros(); N],
+                eta_dot: vec![0.0; eta.len()],
+                eta,
+                frame: frame0,
+            };
+            let kin = se
+                .kinematics(&bs)
+                .context(|| format!("body '{}': floating frame for the mesh at t = {t}", body.name))?;
+            *last = Some(kin.frame);
+            match se.recover_mesh(&kin) {
+                Some(ms) => {
+                    for (i, p) in ms.positions.iter().enumerate() {
+                        let x = &self.mesh.points[first + i];
+                        u[first + i] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+                    }
+                }
+                None => {
+                    for (k, n) in body.nodes.iter().enumerate() {
+                        let p = motions[n.index()].r;
+                        let x = &self.mesh.points[first + k];
+                        u[first + k] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+                    }
+                }
+            }
+        }
+        for (nodes, first) in b.rigid.iter().zip(&self.rigid) {
+            for (k, n) in nodes.iter().enumerate() {
+                let p = motions[n.index()].r;
+                let x = &self.mesh.points[first + k];
+                u[first + k] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+            }
+        }
+        let values: Vec<f64> = u.iter().flatten().copied().collect();
+        let name = format!("mechanism_{:05}.vtu", self.entries.len());
+        let path = self.dir.join(&name);
+        write_vtu(
+            &path,
+            &self.mesh,
+            &[PointField {
+                name: "displacement",
+                components: 3,
+                values: &values,
+            }],
+        )
+        .context(|| format!("cannot write {}", path.display()))?;
+        self.files.push(format!("{}/{name}", self.prefix));
+        self.entries.push((t, name));
+        let pvd = self.dir.join("mechanism.pvd");
+        write_pvd(&pvd, &self.entries).context(|| format!("cannot write {}", pvd.display()))?;
+        if self.entries.len() == 1 {
+            self.files.push(format!("{}/mechanism.pvd", self.prefix));
+        }
+        Ok(())
+    }
+}
+
+/// What a multibody analysis produced, for the summary.
+pub struct MbsOutcome {
+    pub free_dofs: usize,
+    pub report: Vec<String>,
+    pub results: serde_json::Value,
+    pub files: Vec<String>,
+    /// A solver failure after partial results were written.
+    pub failure: Option<String>,
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::with_draw_target(Some(len), indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} ({elapsed} < {eta})") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message(what.to_string());
+    bar
+}
+
+/// Runs one analysis of the mechanism into `dir` (files listed relative to its parent as
+/// `prefix/...`).
+pub fn run_analysis(
+    study: &Study,
+    analysis: &MbsAnalysis,
+    b: &BuiltMechanism,
+    dir: &Path,
+    prefix: &str,
+) -> Result<MbsOutcome, BoxError> {
+    let sys = b.system(study)?;
+    let n = sys.n_dof();
+    let mut out = MbsOutcome {
+        free_dofs: n,
+        report: vec![format!(
+            "mechanism: {} nodes, {} flexible and {} rigid bodies, {} joints, {n} unknowns",
+            b.model.nodes.len(),
+            b.bodies.len(),
+            b.rigid.len(),
+            b.model.joints.len()
+        )],
+        results: json!({}),
+        files: Vec::new(),
+        failure: None,
+    };
+    let output = &study.mechanism.output;
+    let t0 = Instant::now();
+    match analysis {
+        MbsAnalysis::Equilibrium {
+            steps,
+            tolerance,
+            max_iterations,
+            time,
+        } => {
+            let mut settings = mbs::StaticSettings::new(*steps);
+            settings.tolerance = *tolerance;
+            settings.max_iterations = *max_iterations;
+            settings.time = *time;
+            let (sol, failure) = match mbs::solve_static(&sys, sys.initial_state(), &settings) {
+                Ok(s) => (s, None),
+                Err(inc) => (inc.partial, Some(inc.error)),
+            };
+            let mut files = SensorFiles::create(dir, prefix, &b.groups, &sol.sensors, "load factor [-]")?;
+            let mut rec = sys.sensor_record();
+            for (t, row) in sol.sensors.times.iter().zip(&sol.sensors.rows) {
+                rec.times.push(*t);
+                rec.rows.push(row.clone());
+                files.write_last(*t, &rec)?;
+            }
+            out.files.extend(files.paths.clone());
+            let mut mw = MeshWriter::new(dir, prefix, b)?;
+            mw.write(1.0, &sys, &sol.state, b, &rec)?;
+            out.files.extend(mw.files.clone());
+            let iterations: usize = sol.steps.iter().map(|s| s.residuals.len().saturating_sub(1)).sum();
+            out.report.push(format!(
+                "{} load steps, {iterations} Newton iterations, {} rejected attempts; last relative residual {:.2e}",
+                sol.steps.len(),
+                sol.rejected.len(),
+                sol.steps
+                    .last()
+                    .and_then(|s| s.residuals.last())
+                    .copied()
+                    .unwrap_or(f64::NAN)
+            ));
+            report_last(&mut out.report, b, &files);
+            out.results = json!({
+                "model": b.size(&sys),
+                "load_steps": sol.steps.len(),
+                "newton_iterations": iterations,
+                "rejected_steps": sol.rejected.len(),
+                "load_factor_reached": sol.sensors.times.last().copied().unwrap_or(0.0),
+                "seconds_solving": t0.elapsed().as_secs_f64(),
+            });
+            plots(dir, prefix, &study.mechanism, b, &files, "load factor [-]", &mut out)?;
+            out.failure = failure.map(|e| format!("equilibrium stopped: {e}; the converged load steps are written"));
+        }
+        MbsAnalysis::Dynamic {
+            t_end,
+            dt,
+            rho_inf,
+            tolerance,
+            max_iterations,
+        } => {
+            let mut settings = mbs::DynamicSettings::new(*dt, *t_end, *rho_inf);
+            settings.tolerance = *tolerance;
+            settings.max_iterations = *max_iterations;
+            settings.output_every = output.every;
+            let mut integ = mbs::Integrator::new(&sys, sys.initial_state(), settings)
+                .map_err(|e| format!("the initial accelerations: {e}"))?;
+            let mut rec = sys.sensor_record();
+            integ.record(&mut rec)?;
+            let mut files = SensorFiles::create(dir, prefix, &b.groups, &rec, "t [s]")?;
+            files.write_last(0.0, &rec)?;
+            let mut mw = MeshWriter::new(dir, prefix, b)?;
+            if output.vtu_every.is_some() {
+                mw.write(0.0, &sys, integ.state(), b, &rec)?;
+            }
+            let n_steps = ((t_end / dt) - 1e-9).ceil().max(0.0) as usize;
+            let bar = progress_bar(n_steps as u64, "time integration");
+            let mut iterations = 0usize;
+            let mut max_iter = 0usize;
+            for k in 1..=n_steps {
+                match integ.step() {
+                    Ok(rep) => {
+                        let it = rep.residuals.len().saturating_sub(1);
+                        iterations += it;
+                        max_iter = max_iter.max(it);
+                    }
+                    Err(e) => {
+                        out.failure = Some(format!(
+                            "time integration stopped: {e}; results up to t = {:.6} s (step {}) are written",
+                            integ.state().time(),
+                            k - 1
+                        ));
+                        break;
+                    }
+                }
+                let t = integ.state().time();
+                if k % output.every == 0 || k == n_steps {
+                    integ.record(&mut rec)?;
+                    files.write_last(t, &rec)?;
+                    // Only the last row is needed; keep the record small.
+                    if rec.rows.len() > 1 {
+                        rec.rows.drain(..rec.rows.len() - 1);
+                        rec.times.drain(..rec.times.len() - 1);
+                    }
+                }
+                if let Some(v) = output.vtu_every {
+                    if k % v == 0 || k == n_steps {
+                        if k % output.every != 0 && k != n_steps {
+                            integ.record(&mut rec)?;
+                        }
+                        mw.write(t, &sys, integ.state(), b, &rec)?;
+                    }
+                }
+                bar.inc(1);
+            }
+            bar.finish_and_clear();
+            out.files.extend(files.paths.clone());
+            out.files.extend(mw.files.clone());
+            let steps = integ.steps();
+            out.report.push(format!(
+                "{steps} of {n_steps} steps of {dt} s to t = {:.6} s, {iterations} Newton iterations ({:.2} per step, at most {max_iter}), 0 rejected steps (fixed step)",
+                integ.state().time(),
+                iterations as f64 / steps.max(1) as f64
+            ));
+            report_last(&mut out.report, b, &files);
+            out.results = json!({
+                "model": b.size(&sys),
+                "steps": steps,
+                "steps_planned": n_steps,
+                "t_reached": integ.state().time(),
+                "newton_iterations": iterations,
+                "max_iterations_per_step": max_iter,
+                "rejected_steps": 0,
+                "seconds_solving": t0.elapsed().as_secs_f64(),
+            });
+            plots(dir, prefix, &study.mechanism, b, &files, "t [s]", &mut out)?;
+        }
+        MbsAnalysis::Linearized { modes, about } => {
+            let state = match about {
+                About::Initial => sys.initial_state(),
+                About::Equilibrium => {
+                    mbs::solve_static(&sys, sys.initial_state(), &mbs::StaticSettings::new(1))
+                        .map_err(|e| format!("the equilibrium to linearise about: {}", e.error))?
+                        .state
+                }
+                About::Time { t, dt } => {
+                    let settings = mbs::DynamicSettings::new(*dt, *t, 0.9);
+                    mbs::solve_dynamic(&sys, sys.initial_state(), &settings)
+                        .map_err(|e| format!("the dynamic run up to t = {t} s to linearise about: {}", e.error))?
+                        .final_state
+                }
+            };
+            let s = mbs::spectrum(&sys, &state)?;
+            let path = dir.join("frequencies.csv");
+            let mut csv = crate::output::Csv::new(&["mode", "frequency [Hz]", "omega [rad/s]"]);
+            let shown: Vec<f64> = s.omega.iter().take(*modes).copied().collect();
+            for (k, w) in shown.iter().enumerate() {
+                csv.row(&[(k + 1).to_string(), num(w / (2.0 * std::f64::consts::PI)), num(*w)]);
+            }
+            csv.write(&path)
+                .context(|| format!("cannot write {}", path.display()))?;
+            let path2 = dir.join("state_space.csv");
+            let mut csv =
+                crate::output::Csv::new(&["eigenvalue", "real [1/s]", "imaginary [rad/s]", "damped frequency [Hz]"]);
+            for (k, (re, im)) in s.state_space.iter().enumerate() {
+                csv.row(&[
+                    (k + 1).to_string(),
+                    num(*re),
+                    num(*im),
+                    num(im / (2.0 * std::f64::consts::PI)),
+                ]);
+            }
+            csv.write(&path2)
+                .context(|| format!("cannot write {}", path2.display()))?;
+            out.files.push(format!("{prefix}/frequencies.csv"));
+            out.files.push(format!("{prefix}/state_space.csv"));
+            let hz: Vec<f64> = shown.iter().map(|w| w / (2.0 * std::f64::consts::PI)).collect();
+            out.report.push(format!(
+                "lowest {} frequencies [Hz]: {}",
+                hz.len(),
+                hz.iter().map(|f| format!("{f:.6e}")).collect::<Vec<_>>().join(", ")
+            ));
+            out.results = json!({ "model": b.size(&sys), "frequencies_hz": hz, "about": format!("{about:?}") });
+        }
+    }
+    Ok(out)
+}
+
+/// The last value of every sensor, for the report.
+fn report_last(report: &mut Vec<String>, b: &BuiltMechanism, files: &SensorFiles) {
+    for (g, (x, rows)) in b.groups.iter().zip(&files.history) {
+        if let (Some(x), Some(row)) = (x.last(), rows.last()) {
+            let values: Vec<String> = g
+                .columns
+                .iter()
+                .zip(row)
+                .map(|(c, v)| format!("{c} = {v:.6e}"))
+                .collect();
+            report.push(format!("sensor '{}' at {x:.6}: {}", g.name, values.join(", ")));
+        }
+    }
+}
+
+/// A PNG per sensor: every column against the first.
+fn plots(
+    dir: &Path,
+    prefix: &str,
+    m: &Mechanism,
+    b: &BuiltMechanism,
+    files: &SensorFiles,
+    x_label: &str,
+    out: &mut MbsOutcome,
+) -> Result<(), BoxError> {
+    if !m.output.plots {
+        return Ok(());
+    }
+    for (g, (x, rows)) in b.groups.iter().zip(&files.history) {
+        if x.len() < 2 {
+            continue;
+        }
+        let unit = g
+            .columns
+            .first()
+            .and_then(|c| c.split_once('['))
+            .map(|(_, u)| u.trim_end_matches(']').to_string())
+            .unwrap_or_default();
+        let mut fig = plot::Figure::new(format!("sensor {}", g.name), x_label, format!("{} [{unit}]", g.name));
+        for (k, c) in g.columns.iter().enumerate() {
+            fig.series.push(plot::Series::line(
+                c.clone(),
+                x.clone(),
+                rows.iter().map(|r| r[k]).collect(),
+            ));
+        }
+        let path = dir.join(format!("{}.png", g.name));
+        plot::write_png(&fig, &path).context(|| format!("cannot draw {}", path.display()))?;
+        out.files.push(format!("{prefix}/{}.png", g.name));
+    }
+    Ok(())
+}

@@ -1,0 +1,1504 @@
+//! Validation of the mechanism: `[[bodies]]`, `[[rigid_bodies]]`, `[[point_masses]]`,
+//! `[[springs]]`, `[[supports]]`, `[[joints]]`, `[[drivers]]`, `[[loads]]`, `[[sensors]]`,
+//! `[[initial]]`, `[output]` and the multibody analyses, into a [`Mechanism`] in which every
+//! name is resolved (bodies, interfaces, points, joints, drivers) and every value checked.
+//!
+//! What needs the reduced bodies (interface positions, the tree of joints, unheld
+//! coordinates, rigid loops) is checked by `mbs::System::new` when the study runs;
+//! `crate::mechanism_run` turns those errors back into a located message.
+
+use super::Validator;
+use crate::source::{suggestions, unknown_reference, KeyPath};
+use crate::study_file::*;
+use mbs::{Interpolation, JointKind, LoadAxes, LoadKind, RotationSupport, TimeFunction, TranslationSupport};
+use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
+use reduction::ReducedBody;
+use std::path::PathBuf;
+use superelement::{Damping, MassVariant};
+
+/// Name of the fixed point of the world in `between`, `at`, ...
+pub const GROUND: &str = "ground";
+
+/// A point of the mechanism as named in the file, `"body.point"` or `"ground"`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PointRef {
+    Ground,
+    /// Interface (by name) of flexible body `body` (index into [`Mechanism::bodies`]).
+    Flexible {
+        body: usize,
+        interface: String,
+    },
+    /// Point `point` (index into its `points`) of rigid body `body`.
+    Rigid {
+        body: usize,
+        point: usize,
+    },
+}
+
+/// Where a flexible body's reduced body comes from.
+#[derive(Clone, Debug)]
+pub enum BodySource {
+    /// A part of the study, reduced through the cache when the study runs.
+    Part(usize),
+    /// A reduced-body file, read during validation.
+    File(PathBuf, Box<ReducedBody>),
+}
+
+/// The floating frame of a flexible body, by interface name for the interface-node choice
+/// (resolved against the reduced body when it exists).
+#[derive(Clone, Debug, PartialEq)]
+pub enum FrameSpec {
+    CenterOfMass,
+    InterfaceNode(String),
+    AuxiliaryNode,
+}
+
+#[derive(Clone, Debug)]
+pub struct FlexibleSpec {
+    pub name: String,
+    pub path: KeyPath,
+    pub source: BodySource,
+    pub interfaces: Vec<String>,
+    pub frame: FrameSpec,
+    pub inertia: MassVariant,
+    /// The part's axes in the inertial frame at t = 0.
+    pub placement: Isometry3<f64>,
+    /// Rayleigh factors and one modal ratio for every fixed-interface mode (expanded when the
+    /// number of modes is known).
+    pub damping: Damping,
+    pub modal_ratio: Option<f64>,
+}
+
+#[derive(Clone, Debug)]
+pub struct RigidSpec {
+    pub name: String,
+    pub path: KeyPath,
+    pub mass: f64,
+    pub center_of_mass: Vector3<f64>,
+    pub inertia: Matrix3<f64>,
+    pub points: Vec<(String, Vector3<f64>)>,
+}
+
+#[derive(Clone, Debug)]
+pub struct PointMassSpec {
+    pub name: String,
+    pub path: KeyPath,
+    pub at: PointRef,
+    pub mass: f64,
+}
+
+#[derive(Clone, Debug)]
+pub struct SpringSpec {
+    pub name: String,
+    pub path: KeyPath,
+    pub a: PointRef,
+    /// `None`: the ground point.
+    pub b: Option<PointRef>,
+    pub ground_point: Vector3<f64>,
+    pub stiffness: f64,
+    pub damping: f64,
+    pub rest_length: Option<f64>,
+}
+
+#[derive(Clone, Debug)]
+pub struct SupportSpec {
+    pub path: KeyPath,
+    pub at: PointRef,
+    pub translation: TranslationSupport,
+    pub rotation: RotationSupport,
+}
+
+#[derive(Clone, Debug)]
+pub struct JointSpec {
+    pub name: String,
+    pub path: KeyPath,
+    pub parent: PointRef,
+    pub child: PointRef,
+    /// `None`: a fixed joint (the two points become one node).
+    pub kind: Option<JointKind>,
+    /// The joint had errors (reported): kept so that later references resolve, never run.
+    pub invalid: bool,
+}
+
+#[derive(Clone, Debug)]
+pub struct DriverSpec {
+    pub name: String,
+    pub path: KeyPath,
+    /// Index into [`Mechanism::joints`].
+    pub joint: usize,
+    pub coordinate: usize,
+    pub motion: TimeFunction,
+}
+
+#[derive(Clone, Debug)]
+pub struct PointLoadSpec {
+    pub name: String,
+    pub path: KeyPath,
+    pub at: PointRef,
+    pub axes: LoadAxes,
+    /// Force and/or moment.
+    pub values: Vec<(LoadKind, Vector3<f64>)>,
+    pub time: TimeFunction,
+}
+
+/// What a sensor measures, with its references resolved.
+#[derive(Clone, Debug)]
+pub enum SensorTarget {
+    Position(PointRef),
+    Displacement(PointRef),
+    RelativePosition(PointRef, PointRef),
+    Rotation(PointRef),
+    Velocity(PointRef),
+    AngularVelocity(PointRef),
+    Deflection {
+        of: PointRef,
+        chord: [PointRef; 2],
+        normal: Option<Vector3<f64>>,
+    },
+    JointCoordinate(usize, usize),
+    JointRate(usize, usize),
+    Modal(usize),
+    /// Reaction at a supported point, or at the ground side of a joint to the ground.
+    Reaction(ReactionAt),
+    DriverEffort(usize),
+    Energy,
+    Momentum,
+}
+
+#[derive(Clone, Debug)]
+pub enum ReactionAt {
+    Point(PointRef),
+    GroundJoint(usize),
+}
+
+#[derive(Clone, Debug)]
+pub struct SensorSpec {
+    pub name: String,
+    pub path: KeyPath,
+    pub target: SensorTarget,
+}
+
+#[derive(Clone, Debug)]
+pub enum InitialSpec {
+    Joint {
+        path: KeyPath,
+        joint: usize,
+        coordinate: usize,
+        value: Option<f64>,
+        rate: Option<f64>,
+    },
+    Point {
+        path: KeyPath,
+        at: PointRef,
+        velocity: Vector3<f64>,
+        angular_velocity: Vector3<f64>,
+    },
+}
+
+/// `[output]`.
+#[derive(Clone, Debug)]
+pub struct OutputSpec {
+    pub every: usize,
+    pub vtu_every: Option<usize>,
+    pub plots: bool,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self {
+            every: 1,
+            vtu_every: None,
+            plots: true,
+        }
+    }
+}
+
+/// The validated mechanism.
+#[derive(Clone, Debug, Default)]
+pub struct Mechanism {
+    pub bodies: Vec<FlexibleSpec>,
+    pub rigid_bodies: Vec<RigidSpec>,
+    pub point_masses: Vec<PointMassSpec>,
+    pub springs: Vec<SpringSpec>,
+    pub supports: Vec<SupportSpec>,
+    pub joints: Vec<JointSpec>,
+    pub drivers: Vec<DriverSpec>,
+    pub gravity: Option<(KeyPath, Vector3<f64>)>,
+    pub loads: Vec<PointLoadSpec>,
+    pub sensors: Vec<SensorSpec>,
+    pub initial: Vec<InitialSpec>,
+    pub output: OutputSpec,
+}
+
+impl Mechanism {
+    pub fn is_empty(&self) -> bool {
+        self.bodies.is_empty() && self.rigid_bodies.is_empty() && self.point_masses.is_empty()
+    }
+
+    /// `"body.point"` for messages and node names.
+    pub fn point_name(&self, p: &PointRef) -> String {
+        match p {
+            PointRef::Ground => GROUND.into(),
+            PointRef::Flexible { body, interface } => format!("{}.{interface}", self.bodies[*body].name),
+            PointRef::Rigid { body, point } => {
+                let b = &self.rigid_bodies[*body];
+                format!("{}.{}", b.name, b.points[*point].0)
+            }
+        }
+    }
+}
+
+/// An analysis of the mechanism.
+#[derive(Clone, Debug)]
+pub enum MbsAnalysis {
+    Equilibrium {
+        steps: usize,
+        tolerance: f64,
+        max_iterations: usize,
+        time: f64,
+    },
+    Dynamic {
+        t_end: f64,
+        dt: f64,
+        rho_inf: f64,
+        tolerance: f64,
+        max_iterations: usize,
+    },
+    Linearized {
+        modes: usize,
+        about: About,
+    },
+}
+
+/// The state a linearized analysis is about.
+#[derive(Clone, Debug)]
+pub enum About {
+    Initial,
+    Equilibrium,
+    Time { t: f64, dt: f64 },
+}
+
+fn unit(v: Vector3<f64>) -> Option<Unit<Vector3<f64>>> {
+    (v.norm() > 0.0 && v.iter().all(|x| x.is_finite())).then(|| Unit::new_normalize(v))
+}
+
+impl Validator<'_> {
+    /// The whole mechanism; `parts` are the study's parts by name (None when invalid).
+    pub(super) fn mechanism(&mut self, file: &StudyFile, parts: &[(String, Option<crate::part::Part>)]) -> Mechanism {
+        let mut m = Mechanism::default();
+        let part_names: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
+        let mut names: Vec<String> = Vec::new();
+        for (i, b) in file.bodies.iter().enumerate() {
+            let path = KeyPath::root().key("bodies").index(i);
+            if !self.body_name(&path, &b.name, &mut names) {
+                continue;
+            }
+            if let Some(spec) = self.flexible(&path, b, parts, &part_names) {
+                m.bodies.push(spec);
+            }
+        }
+        for (i, b) in file.rigid_bodies.iter().enumerate() {
+            let path = KeyPath::root().key("rigid_bodies").index(i);
+            if !self.body_name(&path, &b.name, &mut names) {
+                continue;
+            }
+            if let Some(spec) = self.rigid(&path, b) {
+                m.rigid_bodies.push(spec);
+            }
+        }
+        for (i, p) in file.point_masses.iter().enumerate() {
+            let path = KeyPath::root().key("point_masses").index(i);
+            let at = self.point(&path.key("at"), &p.at, &m, false);
+            let mass = self.positive(&path.key("mass"), p.mass, "the mass [kg]");
+            if let (Some(at), Some(mass)) = (at, mass) {
+                m.point_masses.push(PointMassSpec {
+                    name: p.name.clone(),
+                    path,
+                    at,
+                    mass,
+                });
+            }
+        }
+        for (i, s) in file.springs.iter().enumerate() {
+            let path = KeyPath::root().key("springs").index(i);
+            if let Some(spec) = self.spring(&path, s, &m) {
+                m.springs.push(spec);
+            }
+        }
+        for (i, s) in file.supports.iter().enumerate() {
+            let path = KeyPath::root().key("supports").index(i);
+            if let Some(spec) = self.mbs_support(&path, s, &m) {
+                m.supports.push(spec);
+            }
+        }
+        let mut joint_names = Vec::new();
+        for (i, j) in file.joints.iter().enumerate() {
+            let path = KeyPath::root().key("joints").index(i);
+            if joint_names.contains(&j.name) {
+                self.err(
+                    &path.key("name"),
+                    format!("a joint named '{}' is already defined", j.name),
+                );
+                continue;
+            }
+            joint_names.push(j.name.clone());
+            if let Some(spec) = self.joint(&path, j, &m) {
+                m.joints.push(spec);
+            } else {
+                // Keep the index space of later references: a placeholder that never runs.
+                m.joints.push(JointSpec {
+                    name: j.name.clone(),
+                    path,
+                    parent: PointRef::Ground,
+                    child: PointRef::Ground,
+                    kind: None,
+                    invalid: true,
+                });
+            }
+        }
+        for (i, d) in file.drivers.iter().enumerate() {
+            let path = KeyPath::root().key("drivers").index(i);
+            if m.drivers.iter().any(|x| x.name == d.name) {
+                self.err(
+                    &path.key("name"),
+                    format!("a driver named '{}' is already defined", d.name),
+                );
+                continue;
+            }
+            let Some(joint) = self.joint_ref(&path.key("joint"), &d.joint, &m) else {
+                continue;
+            };
+            let coordinate = d.coordinate.unwrap_or(0);
+            if !self.joint_coordinate(&path, &m, joint, coordinate) {
+                continue;
+            }
+            if let Some(motion) = self.time_function(&path.key("function"), &d.function, true) {
+                m.drivers.push(DriverSpec {
+                    name: d.name.clone(),
+                    path,
+                    joint,
+                    coordinate,
+                    motion,
+                });
+            }
+        }
+        for (i, l) in file.loads.iter().enumerate() {
+            let path = KeyPath::root().key("loads").index(i);
+            self.load(&path, l, &mut m);
+        }
+        for (i, s) in file.sensors.iter().enumerate() {
+            let path = KeyPath::root().key("sensors").index(i);
+            if m.sensors.iter().any(|x| x.name == s.name) {
+                self.err(
+                    &path.key("name"),
+                    format!("a sensor named '{}' is already defined", s.name),
+                );
+                continue;
+            }
+            if let Err(e) = super::check_name(&s.name) {
+                self.err(&path.key("name"), e);
+                continue;
+            }
+            if let Some(target) = self.sensor(&path, s, &m) {
+                m.sensors.push(SensorSpec {
+                    name: s.name.clone(),
+                    path,
+                    target,
+                });
+            }
+        }
+        for (i, c) in file.initial.iter().enumerate() {
+            let path = KeyPath::root().key("initial").index(i);
+            if let Some(spec) = self.initial(&path, c, &m) {
+                m.initial.push(spec);
+            }
+        }
+        if let Some(o) = &file.output {
+            let path = KeyPath::root().key("output");
+            let every = o.every.unwrap_or(1);
+            if every == 0 {
+                self.err(&path.key("every"), "`every` must be at least 1 (write every n-th step)");
+            }
+            if o.vtu_every == Some(0) {
+                self.err(
+                    &path.key("vtu_every"),
+                    "`vtu_every` must be at least 1 (leave it out to write no meshes)",
+                );
+            }
+            m.output = OutputSpec {
+                every: every.max(1),
+                vtu_every: o.vtu_every.filter(|n| *n > 0),
+                plots: o.plots.unwrap_or(true),
+            };
+        }
+        m
+    }
+
+    fn body_name(&mut self, path: &KeyPath, name: &str, names: &mut Vec<String>) -> bool {
+        if let Err(e) = super::check_name(name) {
+            self.err(&path.key("name"), e);
+            return false;
+        }
+        if name == GROUND || name.contains('.') {
+            self.err(
+                &path.key("name"),
+                format!("a body cannot be called '{name}' ('{GROUND}' is the fixed world, and '.' separates a body from its point)"),
+            );
+            return false;
+        }
+        if names.iter().any(|n| n == name) {
+            self.err(
+                &path.key("name"),
+                format!("a body named '{name}' is already defined (flexible and rigid bodies share one name space)"),
+            );
+            return false;
+        }
+        names.push(name.to_string());
+        true
+    }
+
+    fn choice<'a>(
+        &mut self,
+        path: &KeyPath,
+        value: &Option<String>,
+        default: &'a str,
+        allowed: &[&'a str],
+        what: &str,
+    ) -> Option<&'a str> {
+        let Some(v) = value else {
+            return Some(default);
+        };
+        match allowed.iter().find(|a| **a == v) {
+            Some(a) => Some(a),
+            None => {
+                let names: Vec<String> = allowed.iter().map(|s| s.to_string()).collect();
+                self.err(path, unknown_reference(what, v, &names));
+                None
+            }
+        }
+    }
+
+    fn flexible(
+        &mut self,
+        path: &KeyPath,
+        b: &BodyFile,
+        parts: &[(String, Option<crate::part::Part>)],
+        part_names: &[String],
+    ) -> Option<FlexibleSpec> {
+        let (source, interfaces, auxiliary) = match (&b.part, &b.file) {
+            (Some(name), None) => {
+                let Some(index) = part_names.iter().position(|n| n == name) else {
+                    self.err(&path.key("part"), unknown_reference("part", name, part_names));
+                    return None;
+                };
+                let part = parts[index].1.as_ref()?;
+                let Some(reduction) = &part.reduction else {
+                    self.err(
+                        &path.key("part"),
+                        format!("part '{name}' has no [parts.reduction]: a flexible body is a reduced part (add modes or cutoff_hz)"),
+                    );
+                    return None;
+                };
+                let index = parts[..index].iter().filter(|(_, p)| p.is_some()).count();
+                let mut names: Vec<String> = part.interfaces.iter().map(|i| i.name.clone()).collect();
+                if reduction.auxiliary_node {
+                    names.push("auxiliary".into());
+                }
+                (BodySource::Part(index), names, reduction.auxiliary_node)
+            }
+            (None, Some(file)) => {
+                let full = self.src.dir().join(file);
+                match reduction::file::read(&full) {
+                    Ok(body) => {
+                        let names = body.interfaces.iter().map(|i| i.name.clone()).collect();
+                        let aux = body.auxiliary_interface.is_some();
+                        (BodySource::File(full, Box::new(body)), names, aux)
+                    }
+                    Err(e) => {
+                        self.err(
+                            &path.key("file"),
+                            format!("cannot read the reduced body {}: {e}", full.display()),
+                        );
+                        return None;
+                    }
+                }
+            }
+            _ => {
+                self.err(path, "give the reduced body by `part` (a part with [parts.reduction]) or by `file` (an .rbody file), one of them");
+                return None;
+            }
+        };
+        let frame = match self.choice(
+            &path.key("frame"),
+            &b.frame,
+            "center-of-mass",
+            &["center-of-mass", "interface-node", "auxiliary-node"],
+            "frame",
+        )? {
+            "interface-node" => {
+                let Some(name) = &b.frame_interface else {
+                    self.err(path, "missing key `frame_interface` (the interface the frame sits at, with frame = \"interface-node\")");
+                    return None;
+                };
+                if !interfaces.contains(name) {
+                    self.err(
+                        &path.key("frame_interface"),
+                        unknown_reference("interface", name, &interfaces),
+                    );
+                    return None;
+                }
+                FrameSpec::InterfaceNode(name.clone())
+            }
+            "auxiliary-node" => {
+                if !auxiliary {
+                    self.err(
+                        &path.key("frame"),
+                        "frame = \"auxiliary-node\" needs a body reduced with an auxiliary node (auxiliary_node = true in its [parts.reduction])",
+                    );
+                    return None;
+                }
+                FrameSpec::AuxiliaryNode
+            }
+            _ => FrameSpec::CenterOfMass,
+        };
+        if b.frame_interface.is_some() && !matches!(frame, FrameSpec::InterfaceNode(_)) {
+            self.err_key(
+                &path.key("frame_interface"),
+                "`frame_interface` applies to frame = \"interface-node\" only",
+            );
+        }
+        let inertia = match self.choice(
+            &path.key("inertia"),
+            &b.inertia,
+            "exact",
+            &["exact", "lumped"],
+            "inertia variant",
+        )? {
+            "lumped" => MassVariant::Lumped,
+            _ => MassVariant::Exact,
+        };
+        let position = match &b.position {
+            Some(p) => self.finite3(&path.key("position"), p, "the position [m]")?,
+            None => Vector3::zeros(),
+        };
+        let rotation = match &b.rotation {
+            Some(r) => self.rotation(&path.key("rotation"), r)?,
+            None => UnitQuaternion::identity(),
+        };
+        let mut damping = Damping::none();
+        let mut modal_ratio = None;
+        if let Some(d) = &b.damping {
+            let dp = path.key("damping");
+            for (key, v) in [("alpha", d.alpha), ("beta", d.beta), ("modal_ratio", d.modal_ratio)] {
+                if let Some(x) = v {
+                    if !(x >= 0.0 && x.is_finite()) {
+                        self.err(&dp.key(key), format!("{key} must be non-negative and finite, got {x}"));
+                        return None;
+                    }
+                }
+            }
+            damping.alpha = d.alpha.unwrap_or(0.0);
+            damping.beta = d.beta.unwrap_or(0.0);
+            modal_ratio = d.modal_ratio;
+        }
+        Some(FlexibleSpec {
+            name: b.name.clone(),
+            path: path.clone(),
+            source,
+            interfaces,
+            frame,
+            inertia,
+            placement: Isometry3::from_parts(Translation3::from(position), rotation),
+            damping,
+            modal_ratio,
+        })
+    }
+
+    fn rotation(&mut self, path: &KeyPath, r: &RotationFile) -> Option<UnitQuaternion<f64>> {
+        let axis = self.finite3(&path.key("axis"), &r.axis, "the rotation axis")?;
+        let Some(axis) = unit(axis) else {
+            self.err(&path.key("axis"), "the rotation axis must not be zero");
+            return None;
+        };
+        if !r.angle_deg.is_finite() {
+            self.err(&path.key("angle_deg"), "the angle must be finite");
+            return None;
+        }
+        Some(UnitQuaternion::from_axis_angle(&axis, r.angle_deg.to_radians()))
+    }
+
+    fn rigid(&mut self, path: &KeyPath, b: &RigidBodyFile) -> Option<RigidSpec> {
+        let mass = self.positive(&path.key("mass"), b.mass, "the mass [kg]");
+        let com = self.finite3(&path.key("center_of_mass"), &b.center_of_mass, "the centre of mass [m]");
+        let J = Matrix3::from_fn(|i, j| b.inertia[i][j]);
+        let mut ok = mass.is_some() && com.is_some();
+        let sym = (J - J.transpose()).abs().max() <= 1e-12 * J.abs().max();
+        // The inertia tensor of a body is symmetric positive semi-definite; its principal
+        // moments obey the triangle inequality (I1 <= I2 + I3), up to round-off of the input.
+        let eig = J.symmetric_eigen().eigenvalues;
+        let tol = 1e-9 * eig.abs().max();
+        let valid = J.iter().all(|x| x.is_finite())
+            && sym
+            && eig.iter().all(|l| *l >= -tol)
+            && (0..3).all(|k| eig[k] <= eig[(k + 1) % 3] + eig[(k + 2) % 3] + tol);
+        if !valid {
+            self.err(
+                &path.key("inertia"),
+                format!("the inertia tensor [kg m^2] must be symmetric with non-negative principal moments that obey I1 <= I2 + I3; principal moments {:.4e}, {:.4e}, {:.4e}", eig[0], eig[1], eig[2]),
+            );
+            ok = false;
+        }
+        let mut points = Vec::new();
+        for (name, p) in &b.points {
+            if name.contains('.') || name.is_empty() {
+                self.err_key(
+                    &path.key("points").key(name),
+                    format!("point name '{name}' must be non-empty without '.'"),
+                );
+                ok = false;
+                continue;
+            }
+            match self.finite3(&path.key("points").key(name), p, "the point [m]") {
+                Some(v) => points.push((name.clone(), v)),
+                None => ok = false,
+            }
+        }
+        ok.then(|| RigidSpec {
+            name: b.name.clone(),
+            path: path.clone(),
+            mass: mass.unwrap_or(0.0),
+            center_of_mass: com.unwrap_or_default(),
+            inertia: J,
+            points,
+        })
+    }
+
+    /// `"body.point"` or `"ground"` (when `ground_ok`).
+    pub(super) fn point(&mut self, path: &KeyPath, text: &str, m: &Mechanism, ground_ok: bool) -> Option<PointRef> {
+        if text == GROUND {
+            if ground_ok {
+                return Some(PointRef::Ground);
+            }
+            self.err(path, format!("'{GROUND}' is not a point of a body here"));
+            return None;
+        }
+        let mut bodies: Vec<String> = m.bodies.iter().map(|b| b.name.clone()).collect();
+        bodies.extend(m.rigid_bodies.iter().map(|b| b.name.clone()));
+        let Some((body, point)) = text.split_once('.') else {
+            let known: Vec<String> = m
+                .bodies
+                .iter()
+                .flat_map(|b| b.interfaces.iter().map(move |i| format!("{}.{i}", b.name)))
+                .chain(
+                    m.rigid_bodies
+                        .iter()
+                        .flat_map(|b| b.points.iter().map(move |(p, _)| format!("{}.{p}", b.name))),
+                )
+                .collect();
+            self.err(
+                path,
+                format!("'{text}' is not a point: write \"body.point\" (an interface of a flexible body or a point of a rigid body){}", suggestions(text, &known, "point")),
+            );
+            return None;
+        };
+        if let Some(b) = m.bodies.iter().position(|b| b.name == body) {
+            let spec = &m.bodies[b];
+            if !spec.interfaces.iter().any(|i| i == point) {
+                self.err(
+                    path,
+                    format!(
+                        "flexible body '{body}' has no interface '{point}'{}",
+                        suggestions(point, &spec.interfaces, "interface")
+                    ),
+                );
+                return None;
+            }
+            return Some(PointRef::Flexible {
+                body: b,
+                interface: point.to_string(),
+            });
+        }
+        if let Some(b) = m.rigid_bodies.iter().position(|b| b.name == body) {
+            let spec = &m.rigid_bodies[b];
+            let names: Vec<String> = spec.points.iter().map(|(n, _)| n.clone()).collect();
+            let Some(k) = names.iter().position(|n| n == point) else {
+                self.err(
+                    path,
+                    format!(
+                        "rigid body '{body}' has no point '{point}'{}",
+                        suggestions(point, &names, "point")
+                    ),
+                );
+                return None;
+            };
+            return Some(PointRef::Rigid { body: b, point: k });
+        }
+        self.err(path, unknown_reference("body", body, &bodies));
+        None
+    }
+
+    fn axis(&mut self, path: &KeyPath, table: &KeyPath, v: &Option<Vec3>, what: &str) -> Option<Vector3<f64>> {
+        let Some(v) = v else {
+            self.err(table, format!("missing key `{}` ({what})", path_key(path)));
+            return None;
+        };
+        let v = self.finite3(path, v, what)?;
+        match unit(v) {
+            Some(u) => Some(u.into_inner()),
+            None => {
+                self.err(path, format!("{what} must not be zero"));
+                None
+            }
+        }
+    }
+
+    fn spring(&mut self, path: &KeyPath, s: &SpringFile, m: &Mechanism) -> Option<SpringSpec> {
+        let a = self.point(&path.key("between").index(0), &s.between[0], m, false);
+        let b = if s.between[1] == GROUND {
+            None
+        } else {
+            Some(self.point(&path.key("between").index(1), &s.between[1], m, false)?)
+        };
+        let ground_point = match (&b, &s.ground_point) {
+            (None, Some(p)) => self.finite3(&path.key("ground_point"), p, "the ground point [m]")?,
+            (None, None) => {
+                self.err(
+                    path,
+                    "missing key `ground_point` (where the spring is attached to the ground, [x, y, z] m)",
+                );
+                return None;
+            }
+            (Some(_), Some(_)) => {
+                self.err_key(
+                    &path.key("ground_point"),
+                    "`ground_point` applies to a spring to \"ground\" only",
+                );
+                return None;
+            }
+            (Some(_), None) => Vector3::zeros(),
+        };
+        let k = s.stiffness;
+        if !(k >= 0.0 && k.is_finite()) {
+            self.err(
+                &path.key("stiffness"),
+                format!("the stiffness [N/m] must be non-negative and finite, got {k}"),
+            );
+            return None;
+        }
+        let c = s.damping.unwrap_or(0.0);
+        if !(c >= 0.0 && c.is_finite()) {
+            self.err(
+                &path.key("damping"),
+                format!("the damping [N s/m] must be non-negative and finite, got {c}"),
+            );
+            return None;
+        }
+        if let Some(l) = s.rest_length {
+            if !(l >= 0.0 && l.is_finite()) {
+                self.err(
+                    &path.key("rest_length"),
+                    format!("the rest length [m] must be non-negative and finite, got {l}"),
+                );
+                return None;
+            }
+        }
+        Some(SpringSpec {
+            name: s.name.clone(),
+            path: path.clone(),
+            a: a?,
+            b,
+            ground_point,
+            stiffness: k,
+            damping: c,
+            rest_length: s.rest_length,
+        })
+    }
+
+    fn mbs_support(&mut self, path: &KeyPath, s: &MbsSupportFile, m: &Mechanism) -> Option<SupportSpec> {
+        let at = self.point(&path.key("at"), &s.at, m, false);
+        let kinds = ["clamp", "pin", "hinge", "slider", "plane"];
+        let kind = self.choice(
+            &path.key("type"),
+            &Some(s.kind.clone()),
+            "clamp",
+            &kinds,
+            "support type",
+        )?;
+        let needs_axis = matches!(kind, "hinge" | "slider" | "plane");
+        if !needs_axis && s.axis.is_some() {
+            self.err_key(
+                &path.key("axis"),
+                format!("`axis` does not apply to a '{kind}' support (only hinge, slider and plane take one)"),
+            );
+            return None;
+        }
+        let axis = if needs_axis {
+            Some(self.axis(&path.key("axis"), path, &s.axis, "the support axis")?)
+        } else {
+            None
+        };
+        let (translation, rotation) = match (kind, axis) {
+            ("pin", _) => (TranslationSupport::Fixed, RotationSupport::Free),
+            ("hinge", Some(axis)) => (TranslationSupport::Fixed, RotationSupport::Axis { axis }),
+            ("slider", Some(direction)) => (TranslationSupport::Line { direction }, RotationSupport::Fixed),
+            ("plane", Some(normal)) => (TranslationSupport::Plane { normal }, RotationSupport::Fixed),
+            _ => (TranslationSupport::Fixed, RotationSupport::Fixed),
+        };
+        Some(SupportSpec {
+            path: path.clone(),
+            at: at?,
+            translation,
+            rotation,
+        })
+    }
+
+    fn joint(&mut self, path: &KeyPath, j: &JointFile, m: &Mechanism) -> Option<JointSpec> {
+        let kinds = [
+            "fixed",
+            "spherical",
+            "revolute",
+            "prismatic",
+            "cylindrical",
+            "universal",
+            "planar",
+        ];
+        let kind = self.choice(&path.key("type"), &Some(j.kind.clone()), "fixed", &kinds, "joint type");
+        let parent = self.point(&path.key("between").index(0), &j.between[0], m, true);
+        let child = self.point(&path.key("between").index(1), &j.between[1], m, true);
+        let kind = kind?;
+        let (parent, child) = (parent?, child?);
+        if parent == child {
+            self.err(&path.key("between"), "a joint connects two different points");
+            return None;
+        }
+        if child == PointRef::Ground && parent != PointRef::Ground && kind != "fixed" {
+            self.err(
+                &path.key("between").index(1),
+                "\"ground\" is the parent of a joint: write it first, between = [\"ground\", \"body.point\"]",
+            );
+            return None;
+        }
+        let axis_keys: &[&str] = match kind {
+            "revolute" | "prismatic" | "cylindrical" | "planar" => &["axis"],
+            "universal" => &["axis", "axis2"],
+            _ => &[],
+        };
+        for (key, v) in [("axis", &j.axis), ("axis2", &j.axis2)] {
+            if v.is_some() && !axis_keys.contains(&key) {
+                self.err_key(&path.key(key), format!("`{key}` does not apply to a {kind} joint"));
+                return None;
+            }
+        }
+        let what = if kind == "planar" {
+            "the normal of the plane"
+        } else {
+            "the joint axis"
+        };
+        let joint_kind = match kind {
+            "fixed" => None,
+            "spherical" => Some(JointKind::Spherical),
+            _ => {
+                let axis = self.axis(&path.key("axis"), path, &j.axis, what)?;
+                Some(match kind {
+                    "revolute" => JointKind::Revolute { axis },
+                    "prismatic" => JointKind::Prismatic { axis },
+                    "cylindrical" => JointKind::Cylindrical { axis },
+                    "planar" => JointKind::Planar { normal: axis },
+                    _ => {
+                        let axis2 = self.axis(
+                            &path.key("axis2"),
+                            path,
+                            &j.axis2,
+                            "the second axis of the universal joint",
+                        )?;
+                        if axis.cross(&axis2).norm() < 1e-6 {
+                            self.err(
+                                &path.key("axis2"),
+                                "the two axes of a universal joint must not be parallel",
+                            );
+                            return None;
+                        }
+                        JointKind::Universal { axis1: axis, axis2 }
+                    }
+                })
+            }
+        };
+        Some(JointSpec {
+            name: j.name.clone(),
+            path: path.clone(),
+            parent,
+            child,
+            kind: joint_kind,
+            invalid: false,
+        })
+    }
+
+    fn joint_ref(&mut self, path: &KeyPath, name: &str, m: &Mechanism) -> Option<usize> {
+        match m.joints.iter().position(|j| j.name == name) {
+            Some(k) => Some(k),
+            None => {
+                let names: Vec<String> = m.joints.iter().map(|j| j.name.clone()).collect();
+                self.err(path, unknown_reference("joint", name, &names));
+                None
+            }
+        }
+    }
+
+    fn joint_coordinate(&mut self, path: &KeyPath, m: &Mechanism, joint: usize, coordinate: usize) -> bool {
+        let j = &m.joints[joint];
+        if j.invalid {
+            // Its own errors are reported already.
+            return false;
+        }
+        let n = j.kind.as_ref().map_or(0, JointKind::n_scalar);
+        if coordinate >= n {
+            let kind = j.kind.as_ref().map_or("fixed", JointKind::name);
+            let at = if n == 0 { path.clone() } else { path.key("coordinate") };
+            self.err(
+                &at,
+                format!(
+                    "joint '{}' ({kind}) has {n} scalar coordinate{}; coordinate {coordinate} does not exist{}",
+                    j.name,
+                    if n == 1 { "" } else { "s" },
+                    if n == 0 {
+                        " (a spherical joint's rotation and a fixed joint cannot be driven or read as a number)"
+                    } else {
+                        ""
+                    }
+                ),
+            );
+            return false;
+        }
+        true
+    }
+
+    fn time_function(&mut self, path: &KeyPath, f: &TimeFunctionFile, driver: bool) -> Option<TimeFunction> {
+        let kinds = ["constant-speed", "ramp", "spin-up", "harmonic", "table"];
+        let kind = self.choice(
+            &path.key("type"),
+            &Some(f.kind.clone()),
+            "table",
+            &kinds,
+            "function type",
+        )?;
+        let allowed: &[&str] = match kind {
+            "constant-speed" => &["type", "speed", "initial"],
+            "ramp" => &["type", "t_start", "t_end", "from", "to", "smooth"],
+            "spin-up" => &["type", "speed", "ramp_time"],
+            "harmonic" => &["type", "amplitude", "frequency_hz", "phase_deg", "offset"],
+            _ => &["type", "t", "value", "file", "interpolation"],
+        };
+        self.only_keys(path, allowed, &format!("a '{kind}' function"));
+        let num = |v: &mut Self, key: &str, x: Option<f64>, default: Option<f64>| -> Option<f64> {
+            match x.or(default) {
+                Some(x) if x.is_finite() => Some(x),
+                Some(x) => {
+                    v.err(&path.key(key), format!("`{key}` must be finite, got {x}"));
+                    None
+                }
+                None => {
+                    v.err(path, format!("missing key `{key}` (a '{kind}' function)"));
+                    None
+                }
+            }
+        };
+        Some(match kind {
+            "constant-speed" => TimeFunction::Linear {
+                initial: num(self, "initial", f.initial, Some(0.0))?,
+                rate: num(self, "speed", f.speed, None)?,
+            },
+            "ramp" => {
+                let t_start = num(self, "t_start", f.t_start, Some(0.0))?;
+                let t_end = num(self, "t_end", f.t_end, None)?;
+                if t_end <= t_start {
+                    self.err(
+                        &path.key("t_end"),
+                        format!("t_end must be after t_start ({t_start} s), got {t_end}"),
+                    );
+                    return None;
+                }
+                let from = num(self, "from", f.from, Some(0.0))?;
+                let to = num(self, "to", f.to, None)?;
+                if f.smooth.unwrap_or(true) {
+                    TimeFunction::SmoothRamp {
+                        t_start,
+                        t_end,
+                        from,
+                        to,
+                    }
+                } else {
+                    TimeFunction::Ramp {
+                        t_start,
+                        t_end,
+                        from,
+                        to,
+                    }
+                }
+            }
+            "spin-up" => {
+                let omega = num(self, "speed", f.speed, None)?;
+                let ramp_time = num(self, "ramp_time", f.ramp_time, None)?;
+                let duration = self.positive(&path.key("ramp_time"), ramp_time, "the ramp time [s]")?;
+                TimeFunction::SpinUp { omega, duration }
+            }
+            "harmonic" => {
+                let frequency = num(self, "frequency_hz", f.frequency_hz, None)?;
+                TimeFunction::Sine {
+                    offset: num(self, "offset", f.offset, Some(0.0))?,
+                    amplitude: num(self, "amplitude", f.amplitude, None)?,
+                    omega: 2.0 * std::f64::consts::PI * frequency,
+                    phase: num(self, "phase_deg", f.phase_deg, Some(0.0))?.to_radians(),
+                }
+            }
+            _ => {
+                let interpolation = match self.choice(
+                    &path.key("interpolation"),
+                    &f.interpolation,
+                    if driver { "cubic" } else { "linear" },
+                    &["linear", "cubic"],
+                    "interpolation",
+                )? {
+                    "cubic" => Interpolation::CubicSpline,
+                    _ => Interpolation::Linear,
+                };
+                let made = match (&f.t, &f.value, &f.file) {
+                    (Some(t), Some(v), None) => {
+                        if t.len() != v.len() {
+                            self.err(&path.key("value"), format!("`t` has {} entries and `value` {}: give one value per time", t.len(), v.len()));
+                            return None;
+                        }
+                        let text: String = t.iter().zip(v).map(|(t, v)| format!("{t:e},{v:e}\n")).collect();
+                        TimeFunction::table_from_csv(&text, interpolation).map_err(|e| (path.key("t"), e.to_string()))
+                    }
+                    (None, None, Some(file)) => {
+                        let full = self.src.dir().join(file);
+                        match std::fs::read_to_string(&full) {
+                            Ok(text) => TimeFunction::table_from_csv(&text, interpolation).map_err(|e| (path.key("file"), format!("{}: {e}", full.display()))),
+                            Err(e) => Err((path.key("file"), format!("cannot read the table {}: {e}", full.display()))),
+                        }
+                    }
+                    _ => Err((path.clone(), "a table needs `t` and `value` (lists of equal length), or `file` (a CSV file of `time, value` rows), one of the two".into())),
+                };
+                match made {
+                    Ok(f) => f,
+                    Err((at, e)) => {
+                        self.err(&at, e);
+                        return None;
+                    }
+                }
+            }
+        })
+    }
+
+    fn load(&mut self, path: &KeyPath, l: &LoadFile, m: &mut Mechanism) {
+        let Some(kind) = self.choice(
+            &path.key("type"),
+            &Some(l.kind.clone()),
+            "point",
+            &["gravity", "point"],
+            "load type",
+        ) else {
+            return;
+        };
+        if kind == "gravity" {
+            self.only_keys(path, &["name", "type", "g"], "a gravity load");
+            let Some(g) = self.require_ref(path, &l.g, "g", "the gravitational acceleration [m/s^2]") else {
+                return;
+            };
+            let Some(g) = self.finite3(&path.key("g"), g, "g [m/s^2]") else {
+                return;
+            };
+            if m.gravity.is_some() {
+                self.err(
+                    path,
+                    "gravity is already defined by another [[loads]]: give one gravity load",
+                );
+                return;
+            }
+            m.gravity = Some((path.clone(), g));
+            return;
+        }
+        self.only_keys(
+            path,
+            &["name", "type", "at", "force", "moment", "axes", "function"],
+            "a point load",
+        );
+        let Some(at_text) = self.require_ref(path, &l.at, "at", "the point loaded, \"body.point\"") else {
+            return;
+        };
+        let Some(at) = self.point(&path.key("at"), at_text, m, false) else {
+            return;
+        };
+        let Some(axes) = self.choice(&path.key("axes"), &l.axes, "global", &["global", "body"], "load axes") else {
+            return;
+        };
+        let axes = if axes == "body" {
+            LoadAxes::Follower
+        } else {
+            LoadAxes::Dead
+        };
+        let mut values = Vec::new();
+        for (key, v, kind) in [
+            ("force", &l.force, LoadKind::Force),
+            ("moment", &l.moment, LoadKind::Moment),
+        ] {
+            if let Some(v) = v {
+                let Some(v) = self.finite3(&path.key(key), v, key) else {
+                    return;
+                };
+                values.push((kind, v));
+            }
+        }
+        if values.is_empty() {
+            self.err(path, "missing key `force` [N] or `moment` [N m]");
+            return;
+        }
+        let time = match &l.function {
+            Some(f) => match self.time_function(&path.key("function"), f, false) {
+                Some(f) => f,
+                None => return,
+            },
+            None => TimeFunction::constant(1.0),
+        };
+        m.loads.push(PointLoadSpec {
+            name: l.name.clone(),
+            path: path.clone(),
+            at,
+            axes,
+            values,
+            time,
+        });
+    }
+
+    fn sensor(&mut self, path: &KeyPath, s: &SensorFile, m: &Mechanism) -> Option<SensorTarget> {
+        let kinds = [
+            "position",
+            "displacement",
+            "relative-position",
+            "rotation",
+            "velocity",
+            "angular-velocity",
+            "deflection",
+            "joint",
+            "joint-rate",
+            "modal",
+            "reaction",
+            "driver-effort",
+            "energy",
+            "momentum",
+        ];
+        let kind = self.choice(
+            &path.key("type"),
+            &Some(s.kind.clone()),
+            "position",
+            &kinds,
+            "sensor type",
+        )?;
+        let allowed: &[&str] = match kind {
+            "relative-position" => &["name", "type", "of", "reference"],
+            "deflection" => &["name", "type", "of", "chord", "normal"],
+            "joint" | "joint-rate" => &["name", "type", "of", "coordinate"],
+            "energy" | "momentum" => &["name", "type"],
+            _ => &["name", "type", "of"],
+        };
+        self.only_keys(path, allowed, &format!("a '{kind}' sensor"));
+        if matches!(kind, "energy" | "momentum") {
+            return Some(if kind == "energy" {
+                SensorTarget::Energy
+            } else {
+                SensorTarget::Momentum
+            });
+        }
+        let of = self.require_ref(path, &s.of, "of", "what the sensor measures")?.clone();
+        let op = path.key("of");
+        Some(match kind {
+            "position" => SensorTarget::Position(self.point(&op, &of, m, false)?),
+            "displacement" => SensorTarget::Displacement(self.point(&op, &of, m, false)?),
+            "rotation" => SensorTarget::Rotation(self.point(&op, &of, m, false)?),
+            "velocity" => SensorTarget::Velocity(self.point(&op, &of, m, false)?),
+            "angular-velocity" => SensorTarget::AngularVelocity(self.point(&op, &of, m, false)?),
+            "relative-position" => {
+                let p = self.point(&op, &of, m, false);
+                let r = self.require_ref(
+                    path,
+                    &s.reference,
+                    "reference",
+                    "the point whose axes the position is seen in",
+                )?;
+                let r = self.point(&path.key("reference"), r, m, false)?;
+                SensorTarget::RelativePosition(p?, r)
+            }
+            "deflection" => {
+                let p = self.point(&op, &of, m, false);
+                let chord = self.require_ref(
+                    path,
+                    &s.chord,
+                    "chord",
+                    "the two points of the chord, [\"body.A\", \"body.B\"]",
+                )?;
+                let a = self.point(&path.key("chord").index(0), &chord[0], m, false);
+                let b = self.point(&path.key("chord").index(1), &chord[1], m, false);
+                let normal = match &s.normal {
+                    Some(n) => Some(self.axis(&path.key("normal"), path, &Some(*n), "the normal")?),
+                    None => None,
+                };
+                SensorTarget::Deflection {
+                    of: p?,
+                    chord: [a?, b?],
+                    normal,
+                }
+            }
+            "joint" | "joint-rate" => {
+                let j = self.joint_ref(&op, &of, m)?;
+                let c = s.coordinate.unwrap_or(0);
+                if !self.joint_coordinate(path, m, j, c) {
+                    return None;
+                }
+                if kind == "joint" {
+                    SensorTarget::JointCoordinate(j, c)
+                } else {
+                    SensorTarget::JointRate(j, c)
+                }
+            }
+            "modal" => match m.bodies.iter().position(|b| b.name == of) {
+                Some(b) => SensorTarget::Modal(b),
+                None => {
+                    let names: Vec<String> = m.bodies.iter().map(|b| b.name.clone()).collect();
+                    self.err(&op, unknown_reference("flexible body", &of, &names));
+                    return None;
+                }
+            },
+            "reaction" => {
+                if let Some(j) = m.joints.iter().position(|j| j.name == of) {
+                    if m.joints[j].parent != PointRef::Ground {
+                        self.err(&op, format!("joint '{of}' is not a joint to the ground; a reaction is measured at a support or at a joint to \"ground\""));
+                        return None;
+                    }
+                    SensorTarget::Reaction(ReactionAt::GroundJoint(j))
+                } else {
+                    let p = self.point(&op, &of, m, false)?;
+                    if !m.supports.iter().any(|s| s.at == p) {
+                        self.err(&op, format!("point '{of}' has no [[supports]]: a reaction is measured at a support or at a joint to \"ground\""));
+                        return None;
+                    }
+                    SensorTarget::Reaction(ReactionAt::Point(p))
+                }
+            }
+            _ => match m.drivers.iter().position(|d| d.name == of) {
+                Some(d) => SensorTarget::DriverEffort(d),
+                None => {
+                    let names: Vec<String> = m.drivers.iter().map(|d| d.name.clone()).collect();
+                    self.err(&op, unknown_reference("driver", &of, &names));
+                    return None;
+                }
+            },
+        })
+    }
+
+    fn initial(&mut self, path: &KeyPath, c: &InitialFile, m: &Mechanism) -> Option<InitialSpec> {
+        match (&c.joint, &c.at) {
+            (Some(joint), None) => {
+                self.only_keys(
+                    path,
+                    &["joint", "coordinate", "value", "rate"],
+                    "an initial joint value",
+                );
+                let j = self.joint_ref(&path.key("joint"), joint, m)?;
+                let coordinate = c.coordinate.unwrap_or(0);
+                if !self.joint_coordinate(path, m, j, coordinate) {
+                    return None;
+                }
+                if c.value.is_none() && c.rate.is_none() {
+                    self.err(
+                        path,
+                        "missing key `value` or `rate` (the joint coordinate's initial value or rate)",
+                    );
+                    return None;
+                }
+                for (key, v) in [("value", c.value), ("rate", c.rate)] {
+                    if v.is_some_and(|x| !x.is_finite()) {
+                        self.err(&path.key(key), format!("`{key}` must be finite"));
+                        return None;
+                    }
+                }
+                Some(InitialSpec::Joint {
+                    path: path.clone(),
+                    joint: j,
+                    coordinate,
+                    value: c.value,
+                    rate: c.rate,
+                })
+            }
+            (None, Some(at)) => {
+                self.only_keys(
+                    path,
+                    &["at", "velocity", "angular_velocity"],
+                    "an initial point velocity",
+                );
+                let at = self.point(&path.key("at"), at, m, false)?;
+                let zero = [0.0; 3];
+                let velocity = self.finite3(
+                    &path.key("velocity"),
+                    c.velocity.as_ref().unwrap_or(&zero),
+                    "the velocity [m/s]",
+                )?;
+                let angular_velocity = self.finite3(
+                    &path.key("angular_velocity"),
+                    c.angular_velocity.as_ref().unwrap_or(&zero),
+                    "the angular velocity [rad/s]",
+                )?;
+                Some(InitialSpec::Point {
+                    path: path.clone(),
+                    at,
+                    velocity,
+                    angular_velocity,
+                })
+            }
+            _ => {
+                self.err(path, "give `joint` (with `value` and/or `rate`) or `at` (with `velocity` and/or `angular_velocity`), one of them");
+                None
+            }
+        }
+    }
+
+    /// A multibody analysis's settings.
+    pub(super) fn mbs_analysis(&mut self, path: &KeyPath, a: &AnalysisFile) -> Option<MbsAnalysis> {
+        let iterations = |v: &mut Self, default: usize| -> Option<usize> {
+            match a.max_iterations {
+                Some(0) => {
+                    v.err(&path.key("max_iterations"), "max_iterations must be at least 1");
+                    None
+                }
+                Some(n) => Some(n),
+                None => Some(default),
+            }
+        };
+        let tolerance = |v: &mut Self, default: f64| -> Option<f64> {
+            match a.tolerance {
+                Some(t) => v.positive(&path.key("tolerance"), t, "the tolerance on the relative residual"),
+                None => Some(default),
+            }
+        };
+        match a.kind {
+            AnalysisKind::Equilibrium => {
+                self.only_keys(
+                    path,
+                    &[
+                        "type",
+                        "name",
+                        "steps",
+                        "tolerance",
+                        "method",
+                        "max_iterations",
+                        "at_time",
+                    ],
+                    "an 'equilibrium' analysis",
+                );
+                if let Some(method) = &a.method {
+                    if method != "newton" {
+                        self.err(
+                            &path.key("method"),
+                            format!("method '{method}' is not available: equilibrium uses Newton with load stepping (`newton`); arc-length continuation is not in the solver yet"),
+                        );
+                        return None;
+                    }
+                }
+                let steps = a.steps.unwrap_or(1);
+                if steps == 0 || steps > 100_000 {
+                    self.err(&path.key("steps"), format!("steps must lie in 1..=100000, got {steps}"));
+                    return None;
+                }
+                let time = match a.at_time {
+                    Some(t) if !t.is_finite() => {
+                        self.err(&path.key("at_time"), "at_time must be finite");
+                        return None;
+                    }
+                    t => t.unwrap_or(0.0),
+                };
+                Some(MbsAnalysis::Equilibrium {
+                    steps,
+                    tolerance: tolerance(self, 1e-10)?,
+                    max_iterations: iterations(self, 25)?,
+                    time,
+                })
+            }
+            AnalysisKind::Dynamic => {
+                self.only_keys(
+                    path,
+                    &["type", "name", "t_end", "dt", "rho_inf", "tolerance", "max_iterations"],
+                    "a 'dynamic' analysis",
+                );
+                let t_end = self.require(path, a.t_end, "t_end", "end time [s]");
+                let dt = self.require(path, a.dt, "dt", "time step [s]");
+                let t_end = self.positive(&path.key("t_end"), t_end?, "t_end [s]")?;
+                let dt = self.positive(&path.key("dt"), dt?, "dt [s]")?;
+                if t_end / dt > 1e7 {
+                    self.err(
+                        &path.key("dt"),
+                        format!("t_end / dt = {:.3e} steps: more than 10 million", t_end / dt),
+                    );
+                    return None;
+                }
+                let rho_inf = a.rho_inf.unwrap_or(0.9);
+                if !(0.0..=1.0).contains(&rho_inf) {
+                    self.err(
+                        &path.key("rho_inf"),
+                        format!("rho_inf (spectral radius at infinity) must lie in [0, 1], got {rho_inf}"),
+                    );
+                    return None;
+                }
+                Some(MbsAnalysis::Dynamic {
+                    t_end,
+                    dt,
+                    rho_inf,
+                    tolerance: tolerance(self, 1e-9)?,
+                    max_iterations: iterations(self, 20)?,
+                })
+            }
+            _ => {
+                self.only_keys(
+                    path,
+                    &["type", "name", "modes", "about", "at_time", "dt"],
+                    "a 'linearized' analysis",
+                );
+                let modes = a.modes.unwrap_or(10);
+                if modes == 0 || modes > super::MAX_MODES {
+                    self.err(
+                        &path.key("modes"),
+                        format!("the number of modes must lie in 1..={}, got {modes}", super::MAX_MODES),
+                    );
+                    return None;
+                }
+                let about = match (a.about.as_deref(), a.at_time) {
+                    (None | Some("initial"), None) => About::Initial,
+                    (Some("equilibrium"), None) => About::Equilibrium,
+                    (None, Some(t)) => {
+                        let t = self.positive(&path.key("at_time"), t, "at_time [s]")?;
+                        let dt =
+                            self.require(path, a.dt, "dt", "the time step [s] of the dynamic run up to at_time")?;
+                        let dt = self.positive(&path.key("dt"), dt, "dt [s]")?;
+                        About::Time { t, dt }
+                    }
+                    (Some(other), None) => {
+                        let names = ["initial".to_string(), "equilibrium".to_string()];
+                        self.err(&path.key("about"), unknown_reference("state", other, &names));
+                        return None;
+                    }
+                    (Some(_), Some(_)) => {
+                        self.err_key(&path.key("at_time"), "give `about` or `at_time`, not both");
+                        return None;
+                    }
+                };
+                Some(MbsAnalysis::Linearized { modes, about })
+            }
+        }
+    }
+}
+
+/// The last key of `path`, for "missing key" messages.
+fn path_key(path: &KeyPath) -> String {
+    match path.0.last() {
+        Some(crate::source::Segment::Key(k)) => k.clone(),
+        _ => String::new(),
+    }
+}

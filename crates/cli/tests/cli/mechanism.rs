@@ -1,0 +1,158 @@
+//! The mechanism in study files: the examples against their references (B1, B3), the results
+//! a dynamic run streams (sensor CSV files with units, VTU/PVD, summary statistics), a solver
+//! failure that keeps its partial results, and the errors only the assembled mechanism shows
+//! (`tests/mechanism/*.toml`: a rigid loop, a coordinate held by nothing).
+
+use crate::support::*;
+use std::path::Path;
+
+/// The last row of a sensor CSV file, as numbers.
+fn last_row(path: &Path) -> Vec<f64> {
+    let (_, rows) = read_csv(path);
+    rows.last().unwrap().iter().map(|c| c.parse().unwrap()).collect()
+}
+
+/// B1, a = 3 (Mattiasson 1981): w/L = 0.60325, u/L = 0.25442, tip rotation 0.98602.
+#[test]
+fn elastica_example_matches_mattiasson() {
+    let dir = examples_copy("mech-elastica");
+    let out = flexmbs(&dir, &["run", "elastica.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let results = dir.join("elastica-results/equilibrium");
+    let (header, _) = read_csv(&results.join("tip.csv"));
+    assert_eq!(
+        header,
+        [
+            "load factor [-]",
+            "displacement_x [m]",
+            "displacement_y [m]",
+            "displacement_z [m]"
+        ]
+    );
+    let d = last_row(&results.join("tip.csv"));
+    let r = last_row(&results.join("tip-rotation.csv"));
+    assert_eq!(d[0], 1.0, "the full load is reached");
+    // Discretisation: four superelements of three cubic beam elements each, static modes only;
+    // the mbs convergence study puts the error of four segments below 1 % (measured 0.6 %).
+    let tol = 1.5e-2;
+    assert_close(d[2], 0.60325, tol, "w/L");
+    assert_close(-d[1], 0.25442, tol, "u/L");
+    assert_close(r[3], 0.98602, tol, "tip rotation");
+}
+
+/// B3 (Simo & Vu-Quoc 1986, P = 300): tip at (58.84, 22.33, 40.08).
+#[test]
+fn bend45_example_matches_simo_vu_quoc() {
+    let dir = examples_copy("mech-bend45");
+    let out = flexmbs(&dir, &["run", "bend45.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let p = last_row(&dir.join("bend45-results/equilibrium/tip.csv"));
+    // Published solutions scatter by 0.5 %; four static-only superelements add about 1 %
+    // (measured 1.1 % on z).
+    let tol = 2e-2;
+    for (k, reference) in [58.84, 22.33, 40.08].iter().enumerate() {
+        assert_close(p[k + 1], *reference, tol, &format!("tip coordinate {k}"));
+    }
+    // The clamp's reaction balances the load P = 300 along z (equilibrium to the solver's
+    // tolerance, 1e-10 relative).
+    let r = last_row(&dir.join("bend45-results/equilibrium/root.csv"));
+    assert_close(r[3], -300.0, 1e-8, "reaction Fz");
+}
+
+/// A short run of the slider-crank: sensor files stream with units, meshes and the summary.
+#[test]
+fn slider_crank_streams_sensors_meshes_and_statistics() {
+    let dir = examples_copy("mech-slider");
+    let out = flexmbs(&dir, &["run", "slider_crank.toml", "--t-end", "0.01"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let results = dir.join("slider_crank-results/run-up");
+    let (header, rows) = read_csv(&results.join("rod-mid.csv"));
+    assert_eq!(header, ["t [s]", "deflection [m]"]);
+    assert_eq!(rows.len(), 101, "t = 0 and 100 steps of 1e-4 s");
+    let (header, _) = read_csv(&results.join("energy.csv"));
+    assert_eq!(header, ["t [s]", "kinetic [J]", "strain [J]", "gravity potential [J]"]);
+    let angle = last_row(&results.join("crank-angle.csv"));
+    // The driver prescribes the crank angle exactly: 150 rad/s * 0.01 s (round-off of t).
+    assert!((angle[1] - 1.5).abs() < 1e-9, "crank angle {}", angle[1]);
+    // vtu_every = 20: t = 0 and steps 20, 40, ..., 100.
+    for k in 0..6 {
+        assert!(results.join(format!("mechanism_{k:05}.vtu")).is_file(), "mesh {k}");
+    }
+    let pvd = std::fs::read_to_string(results.join("mechanism.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 6, "{pvd}");
+    assert!(results.join("rod-mid.png").is_file());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("slider_crank-results/summary.json")).unwrap()).unwrap();
+    let r = &summary["analyses"][0]["results"];
+    assert_eq!(r["steps"], 100);
+    assert_eq!(r["rejected_steps"], 0);
+    assert!(r["newton_iterations"].as_u64().unwrap() >= 100);
+    assert_eq!(r["model"]["unknowns"], 11);
+    assert_eq!(r["model"]["modes_kept"][0]["modes"], 2);
+}
+
+/// A dynamic run whose Newton cannot converge (one iteration allowed, far too tight a
+/// tolerance) stops with exit code 2 and keeps what it computed.
+#[test]
+fn a_solver_failure_keeps_partial_results_and_fails() {
+    let dir = examples_copy("mech-failure");
+    let text = std::fs::read_to_string(dir.join("slider_crank.toml"))
+        .unwrap()
+        .replace("rho_inf = 0.9", "rho_inf = 0.9\nmax_iterations = 1\ntolerance = 1e-30");
+    std::fs::write(dir.join("failing.toml"), text).unwrap();
+    let out = flexmbs(&dir, &["run", "failing.toml"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("Newton did not converge at t = 0.000100 (step 1)"),
+        "{}",
+        out.stderr
+    );
+    assert!(out.stderr.contains("relative residual"), "{}", out.stderr);
+    let results = dir.join("failing-results");
+    let (_, rows) = read_csv(&results.join("run-up/rod-mid.csv"));
+    assert_eq!(rows.len(), 1, "the initial state is written");
+    let summary = std::fs::read_to_string(results.join("summary.json")).unwrap();
+    assert!(summary.contains("\"status\": \"failed\""), "{summary}");
+    assert!(summary.contains("Newton did not converge"), "{summary}");
+}
+
+/// Errors that need the assembled mechanism: reported at the entity named, exit code 2.
+#[test]
+fn mechanism_errors_found_at_run_time_are_located() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mechanism");
+    let dir = scratch("mech-errors");
+    copy_dir(&src, &dir);
+    let out = flexmbs(&dir, &["run", "rigid_loop.toml"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("rigid_loop.toml:1:1: rigid_bodies[0]: the mechanism cannot be assembled: closed loop of rigid bodies and joints"),
+        "{}",
+        out.stderr
+    );
+    assert!(out.stderr.contains("joints [elbow, pivot]"), "{}", out.stderr);
+    let out = flexmbs(&dir, &["run", "unheld.toml"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains(
+            "unheld.toml:8:1: joints[0]: the mechanism cannot be assembled: joint 'pivot' angle is held by nothing"
+        ),
+        "{}",
+        out.stderr
+    );
+}
+
+/// `flexmbs validate` forwards to the validation suite's command line.
+#[test]
+fn validate_forwards_its_arguments() {
+    let dir = scratch("mech-validate");
+    let out = flexmbs(&dir, &["validate", "--help"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("[--quick]"), "{}", out.stdout);
+    let out = flexmbs(&dir, &["validate", "--no-such-option"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("unknown argument '--no-such-option'"),
+        "{}",
+        out.stderr
+    );
+}
