@@ -67,7 +67,7 @@
 //! | Bathe §6.8.2 | linearised buckling $(\hat{\mathbf K}_0 + \mu\Delta\hat{\mathbf K})\boldsymbol\phi = \mathbf 0$ | `mbs::buckling` |
 //! | Zienkiewicz & Xie 1991 | local error estimate and step control | `mbs::Integrator::step_adaptive`, `mbs::solve_dynamic_adaptive` |
 //! | BCA 2012, Alg. 1 | Lie-group generalized-α step | `mbs::Integrator::step` |
-//! | brief §6 | linearised spectrum | `mbs::spectrum` |
+//! | brief §6 | linearised spectrum; each mode's energy by body and node | `mbs::spectrum`, `mbs::mode_energies` |
 //!
 //! # Not implemented
 //!
@@ -76,7 +76,6 @@
 //! * Exact conservation of the momenta of flexible and rigid bodies: generalized-α conserves
 //!   them to second order only (linear forms of the velocities, as the momentum of point
 //!   masses, to round-off); see [`dynamic_solver`], "What is conserved".
-//! * Labels of the linearised modes by the bodies and nodes that carry their energy.
 //! * The spin-up drift at 10 rad/s, $\rho_\infty = 0.9$, $h = 5$ ms (issue 6) is not investigated.
 //! * Arc-length, buckling and the adaptive step are dense or serial where noted ([`buckling`]
 //!   is dense); they are not yet reachable from study files.
@@ -85,7 +84,7 @@
 //!
 //! [`model`] (serde data), [`time_function`], [`node`], [`coordinates`] (the maps and their
 //! derivatives), [`topology`] (the tree and its checks), [`body`] (elements), [`system`]
-//! (assembly), [`static_solver`], [`arc_length`], [`dynamic_solver`], [`linearized`] (spectrum
+//! (assembly), [`static_solver`], [`arc_length`], [`dynamic_solver`], [`linearized`] (spectrum, mode energies
 //! and buckling), [`sensors`], [`error`].
 
 #![allow(non_snake_case)]
@@ -110,7 +109,10 @@ pub use dynamic_solver::{
     Integrator, StepReport, Trajectory,
 };
 pub use error::{Incomplete, ModelError, SolveError};
-pub use linearized::{buckling, linearize, spectrum, Buckling, LinearSpectrum};
+pub use linearized::{
+    buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,
+    NodeEnergy,
+};
 pub use model::{
     Body, BodyId, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind, JointSpring, Load,
     LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor, SensorKind, Spring,

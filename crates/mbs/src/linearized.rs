@@ -14,14 +14,20 @@
 //! so the instantaneous spectrum is not the rotating-frame one: use it for states whose
 //! coordinates are steady.
 //!
+//! [`mode_energies`]: every mode with its frequency, damping ratio, rigid-body flag and the
+//! shares of its strain and kinetic energy carried by each body, spring, point mass and node,
+//! labelled by the dominant ones ("rod (62 % kinetic), node B"; dense as well).
+//!
 //! [`buckling`]: linearised buckling loads about a static state (dense as well).
 
 #![allow(non_snake_case)]
 
 use crate::error::SolveError;
-use crate::system::{Matrices, State, System};
+use crate::model::Body;
+use crate::system::{ElementKind, Matrices, State, System, Workspace};
 use faer::linalg::solvers::Solve;
 use faer::Mat;
+use serde::{Deserialize, Serialize};
 
 /// Eigenvalues of the linearised system.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,12 +49,26 @@ pub fn linearize(system: &System, state: &State) -> Result<Matrices, SolveError>
 /// The spectrum of the linearisation at `state` (module docs).
 pub fn spectrum(system: &System, state: &State) -> Result<LinearSpectrum, SolveError> {
     let m = linearize(system, state)?;
-    let n = system.n_dof();
-    let singular = |what: &str| SolveError::Singular {
-        t: state.time(),
+    let (MK, MC) = reduced_operators(&m, state.time())?;
+    let ev = MK
+        .eigenvalues()
+        .map_err(|_| singular(state.time(), "eigenvalues of M^-1 K did not converge"))?;
+    let mut omega: Vec<f64> = ev.iter().filter(|l| l.re > 0.0).map(|l| l.re.sqrt()).collect();
+    omega.sort_by(f64::total_cmp);
+    let state_space = state_space_eigenvalues(&MK, &MC, state.time())?;
+    Ok(LinearSpectrum { omega, state_space })
+}
+
+fn singular(t: f64, what: &str) -> SolveError {
+    SolveError::Singular {
+        t,
         step: 0,
         what: what.into(),
-    };
+    }
+}
+
+/// $\hat{\mathbf M}^{-1}\hat{\mathbf K}$ and $\hat{\mathbf M}^{-1}\hat{\mathbf C}$ (one LU of $\hat{\mathbf M}$).
+fn reduced_operators(m: &Matrices, t: f64) -> Result<(Mat<f64>, Mat<f64>), SolveError> {
     let lu = m.M.partial_piv_lu();
     let mut MK = m.K.clone();
     lu.solve_in_place(MK.as_mut());
@@ -59,13 +79,14 @@ pub fn spectrum(system: &System, state: &State) -> Result<LinearSpectrum, SolveE
         .chain(MC.col_iter())
         .any(|c| c.iter().any(|x| !x.is_finite()))
     {
-        return Err(singular("mass matrix of the linearisation"));
+        return Err(singular(t, "mass matrix of the linearisation"));
     }
-    let ev = MK
-        .eigenvalues()
-        .map_err(|_| singular("eigenvalues of M^-1 K did not converge"))?;
-    let mut omega: Vec<f64> = ev.iter().filter(|l| l.re > 0.0).map(|l| l.re.sqrt()).collect();
-    omega.sort_by(f64::total_cmp);
+    Ok((MK, MC))
+}
+
+/// State-space eigenvalues $s$ with $\mathrm{Im}\,s \ge 0$, by ascending imaginary part (module docs).
+fn state_space_eigenvalues(MK: &Mat<f64>, MC: &Mat<f64>, t: f64) -> Result<Vec<(f64, f64)>, SolveError> {
+    let n = MK.nrows();
     let A = Mat::from_fn(2 * n, 2 * n, |i, j| match (i < n, j < n) {
         (true, true) => 0.0,
         (true, false) => f64::from(i == j - n),
@@ -74,10 +95,10 @@ pub fn spectrum(system: &System, state: &State) -> Result<LinearSpectrum, SolveE
     });
     let ev = A
         .eigenvalues()
-        .map_err(|_| singular("state-space eigenvalues did not converge"))?;
+        .map_err(|_| singular(t, "state-space eigenvalues did not converge"))?;
     let mut state_space: Vec<(f64, f64)> = ev.iter().filter(|l| l.im >= 0.0).map(|l| (l.re, l.im)).collect();
     state_space.sort_by(|a, b| a.1.total_cmp(&b.1));
-    Ok(LinearSpectrum { omega, state_space })
+    Ok(state_space)
 }
 
 /// Linearised buckling about a static state: the critical load factors and their modes.
@@ -151,4 +172,446 @@ pub fn buckling(system: &System, unloaded: &State, loaded: &State, lambda: f64) 
         load_factors: found.iter().map(|f| f.0).collect(),
         modes,
     })
+}
+
+/// What carries a share of a mode's energy (an element of the assembly, a joint spring, or the
+/// joints' geometric stiffness).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum EnergyCarrier {
+    /// A flexible or rigid body, by name.
+    Body(String),
+    /// A point mass on a node.
+    PointMass { index: usize, node: String },
+    /// A point-to-point spring-damper, by name.
+    Spring(String),
+    /// A follower load's stiffness (a dead load has none).
+    Load { index: usize, node: String },
+    /// A spring on a joint coordinate.
+    JointSpring { joint: String, coordinate: usize },
+    /// The joints' geometric term $\mathbf G_r$ of $\hat{\mathbf K}$ (zero in an unloaded state).
+    JointGeometry,
+}
+
+impl std::fmt::Display for EnergyCarrier {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Body(name) | Self::Spring(name) => write!(f, "{name}"),
+            Self::PointMass { index, node } => write!(f, "point mass {index} on node {node}"),
+            Self::Load { index, node } => write!(f, "load {index} on node {node}"),
+            Self::JointSpring { joint, coordinate } => write!(f, "joint spring {joint}[{coordinate}]"),
+            Self::JointGeometry => write!(f, "joint geometry"),
+        }
+    }
+}
+
+/// A mode's energies in one carrier (body or element): $\boldsymbol\phi_e^T\hat{\mathbf K}_e\boldsymbol\phi_e$,
+/// $\boldsymbol\phi_e^T\hat{\mathbf M}_e\boldsymbol\phi_e$ and their shares of the totals.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CarrierEnergy {
+    pub carrier: EnergyCarrier,
+    /// $\boldsymbol\phi^T\hat{\mathbf K}_e\boldsymbol\phi$ (twice the strain energy at unit amplitude).
+    pub strain: f64,
+    /// $\boldsymbol\phi^T\hat{\mathbf M}_e\boldsymbol\phi$ (twice the kinetic energy at unit velocity amplitude).
+    pub kinetic: f64,
+    pub strain_share: f64,
+    pub kinetic_share: f64,
+    /// Part of `strain`, `kinetic` on a flexible body's modal coordinates (its interior, no node).
+    pub interior_strain: f64,
+    pub interior_kinetic: f64,
+}
+
+/// A mode's energies through one node's ports: $\sum_e \mathbf w_c^T\mathbf y_{e,c}$ (see [`mode_energies`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NodeEnergy {
+    pub node: String,
+    pub strain: f64,
+    pub kinetic: f64,
+    pub strain_share: f64,
+    pub kinetic_share: f64,
+}
+
+/// One linearised mode: frequency, damping and where its energy is.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModeEnergy {
+    /// Real part of the eigenvalue $\omega^2$ of $\hat{\mathbf M}^{-1}\hat{\mathbf K}$.
+    pub omega_squared: f64,
+    /// $\sqrt{\max(\omega^2, 0)}$ [rad/s] and in Hz.
+    pub omega: f64,
+    pub frequency_hz: f64,
+    /// Rigid-body (zero) mode: $|\omega^2| \le 10^{-9}\max(\max_i|\omega_i^2|,\ 1\ \mathrm{s^{-2}})$.
+    pub rigid_body: bool,
+    /// The state-space eigenvalue $s$ matched to this mode (nearest $|s|$ to $\omega$), and
+    /// $\zeta = -\mathrm{Re}\,s/|s|$; `None` for rigid-body modes.
+    pub damped_eigenvalue: Option<(f64, f64)>,
+    pub damping_ratio: Option<f64>,
+    /// $\boldsymbol\phi$: real, mass-normalised ($\boldsymbol\phi^T\hat{\mathbf M}\boldsymbol\phi = 1$) when
+    /// $\boldsymbol\phi^T\hat{\mathbf M}\boldsymbol\phi > 0$, sign such that its largest entry is positive.
+    pub shape: Vec<f64>,
+    /// $\boldsymbol\phi^T\hat{\mathbf K}\boldsymbol\phi$, $\boldsymbol\phi^T\hat{\mathbf M}\boldsymbol\phi$.
+    pub strain: f64,
+    pub kinetic: f64,
+    /// Per carrier (elements with a non-zero share, joint springs, joint geometry).
+    pub carriers: Vec<CarrierEnergy>,
+    /// Per model node (all nodes, model order).
+    pub nodes: Vec<NodeEnergy>,
+    /// "rod (62 % kinetic), node B": the carrier and the node with the largest share of either
+    /// energy (kinetic first on ties; kinetic only for rigid-body modes and modes with
+    /// $\boldsymbol\phi^T\hat{\mathbf K}\boldsymbol\phi \le 0$, whose strain shares are ratios to
+    /// about zero).
+    pub label: String,
+}
+
+/// Every mode of the linearisation at `state` with its energy distribution, by ascending
+/// $\omega^2$ (dense, as [`spectrum`]).
+///
+/// For mode $\boldsymbol\phi$, element $e$ (on its unknowns, [`System::matrices`]' element blocks)
+/// carries $\boldsymbol\phi_e^T\hat{\mathbf K}_e\boldsymbol\phi_e$ and $\boldsymbol\phi_e^T\hat{\mathbf M}_e\boldsymbol\phi_e$;
+/// joint springs $k\phi_s^2$; the joints' geometric term is what remains of
+/// $\boldsymbol\phi^T\hat{\mathbf K}\boldsymbol\phi$, so the carriers' shares sum to 1.
+///
+/// # Derivation
+/// Not in the seed. With the port vector $\mathbf w = [\mathbf J_a\boldsymbol\phi;\ \dots;\ \boldsymbol\phi_\eta]$
+/// (node velocities of the mode, then the body's modal amplitudes) and
+/// $\mathbf y^K = \mathbf K_t\mathbf w + \mathbf C_t\,(\partial\mathbf V/\partial\mathbf q)\boldsymbol\phi +
+/// \mathbf M\,(\partial\mathbf A/\partial\mathbf q)\boldsymbol\phi$, $\mathbf y^M = \mathbf M\mathbf w$ (the element
+/// block of [`System::matrices`] applied to $\boldsymbol\phi$, before $\mathbf J^T$), the element's
+/// $\boldsymbol\phi_e^T\hat{\mathbf K}_e\boldsymbol\phi_e = \sum_a\mathbf w_a^T\mathbf y^K_a + \mathbf w_\eta^T\mathbf y^K_\eta$
+/// exactly, and likewise for $\hat{\mathbf M}_e$. Node $a$ is given $\sum_e\mathbf w_a^T\mathbf y_{e,a}$; the
+/// modal rows go to the body's interior. Nodes, interiors, joint springs and joint geometry sum
+/// to the totals.
+/// A port's share is a split of a quadratic form and can be negative when ports move against
+/// each other. Checked by `tests/unit/linearized.rs`.
+pub fn mode_energies(system: &System, state: &State) -> Result<Vec<ModeEnergy>, SolveError> {
+    let t = state.time();
+    let mut s = state.clone();
+    let mut ws = system.workspace();
+    system.evaluate_into(&mut s, 1.0, true, &mut ws)?;
+    let n = system.n_dof();
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let m = Matrices {
+        F: ws.F.clone(),
+        M: system.dense(&ws.M, n),
+        C: system.dense(&ws.C, n),
+        K: system.dense(&ws.K, n),
+    };
+    let (MK, MC) = reduced_operators(&m, t)?;
+    let state_space = state_space_eigenvalues(&MK, &MC, t)?;
+    let eig = MK
+        .eigen()
+        .map_err(|_| singular(t, "eigenvectors of M^-1 K did not converge"))?;
+    let S = eig.S().column_vector();
+    let U = eig.U();
+    let quad = |A: &Mat<f64>, x: &[f64]| -> f64 {
+        (0..n)
+            .map(|j| x[j] * (0..n).map(|i| x[i] * A[(i, j)]).sum::<f64>())
+            .sum()
+    };
+    // Real mode shapes: a real eigenvalue gives u / (its largest entry). A repeated real
+    // eigenvalue may come back as a complex pair a ± ib with b at round-off: its real invariant
+    // subspace is span{Re u, Im u}, two modes, M-orthonormalised. A truly complex eigenvalue
+    // (follower loads) keeps the real part of the normalised u, once per conjugate pair.
+    let mut found: Vec<(f64, Vec<f64>)> = Vec::with_capacity(n);
+    for i in 0..n {
+        let (l, u) = (S[i], U.col(i));
+        if l.im < 0.0 {
+            continue;
+        }
+        let big = u.iter().fold(u[0], |b, &x| if x.norm() > b.norm() { x } else { b });
+        let unit: Vec<_> = u.iter().map(|&x| x / big).collect();
+        if l.im > 0.0 && l.im <= 1e-6 * l.norm() {
+            let re: Vec<f64> = unit.iter().map(|x| x.re).collect();
+            let im: Vec<f64> = unit.iter().map(|x| x.im).collect();
+            for v in m_orthonormal(&m.M, [re, im]) {
+                found.push((l.re, v));
+            }
+        } else {
+            found.push((l.re, unit.iter().map(|x| x.re).collect()));
+        }
+    }
+    found.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let lambda_max = found.iter().map(|f| f.0.abs()).fold(0.0, f64::max);
+    let mut used = vec![false; state_space.len()];
+    let mut modes = Vec::with_capacity(found.len());
+    for (omega_squared, mut phi) in found {
+        let mass = quad(&m.M, &phi);
+        if mass > 0.0 {
+            phi.iter_mut().for_each(|x| *x /= mass.sqrt());
+        }
+        let big = phi.iter().fold(0.0, |b: f64, &x| if x.abs() > b.abs() { x } else { b });
+        if big < 0.0 {
+            phi.iter_mut().for_each(|x| *x = -*x);
+        }
+        let rigid_body = omega_squared.abs() <= 1e-9 * lambda_max.max(1.0);
+        let omega = omega_squared.max(0.0).sqrt();
+        let (damped_eigenvalue, damping_ratio) = if rigid_body {
+            (None, None)
+        } else {
+            let best = (0..state_space.len()).filter(|&k| !used[k]).min_by(|&a, &b| {
+                let d = |k: usize| (state_space[k].0.hypot(state_space[k].1) - omega).abs();
+                d(a).total_cmp(&d(b))
+            });
+            match best {
+                Some(k) => {
+                    used[k] = true;
+                    let (re, im) = state_space[k];
+                    (Some((re, im)), Some(-re / re.hypot(im)))
+                }
+                None => (None, None),
+            }
+        };
+        let mut mode = distribute(system, &ws, &phi);
+        mode.strain = quad(&m.K, &phi);
+        mode.kinetic = quad(&m.M, &phi);
+        mode.rigid_body = rigid_body;
+        finish_shares(&mut mode);
+        mode.omega_squared = omega_squared;
+        mode.omega = omega;
+        mode.frequency_hz = omega / (2.0 * std::f64::consts::PI);
+        mode.damped_eigenvalue = damped_eigenvalue;
+        mode.damping_ratio = damping_ratio;
+        mode.shape = phi;
+        modes.push(mode);
+    }
+    Ok(modes)
+}
+
+/// The element, joint-spring and node energies of mode `phi` from an evaluated workspace
+/// (frequency fields left for the caller).
+fn distribute(system: &System, ws: &Workspace, phi: &[f64]) -> ModeEnergy {
+    let model = system.model();
+    let map = &system.topo.map;
+    let n = phi.len();
+    let node_name = |a: usize| model.nodes[a].name.clone();
+    let mut nodes: Vec<NodeEnergy> = model
+        .nodes
+        .iter()
+        .map(|nd| NodeEnergy {
+            node: nd.name.clone(),
+            strain: 0.0,
+            kinetic: 0.0,
+            strain_share: 0.0,
+            kinetic_share: 0.0,
+        })
+        .collect();
+    // Per node: w = J phi, dV/dq phi, dA/dq phi (6-vectors).
+    let node_vectors: Vec<[[f64; 6]; 3]> = (0..model.nodes.len())
+        .map(|a| {
+            let d = &ws.derivs[a];
+            let mut v = [[0.0; 6]; 3];
+            for (u, &k) in d.unknown.iter().enumerate() {
+                let id = map.chains[a].cols[k];
+                if id >= n {
+                    continue;
+                }
+                let col = ws.motions[a].col(k);
+                for r in 0..6 {
+                    v[0][r] += col[r] * phi[id];
+                    v[1][r] += d.DV[u][r] * phi[id];
+                    v[2][r] += d.DA[u][r] * phi[id];
+                }
+            }
+            v
+        })
+        .collect();
+    let mut carriers = Vec::new();
+    for (ei, (e, b)) in system.elements.iter().zip(&ws.elems).enumerate() {
+        let dofs = &system.pattern.elem_dofs[ei];
+        let s = dofs.len();
+        let local = |A: &[f64]| -> f64 {
+            (0..s)
+                .map(|c| phi[dofs[c]] * (0..s).map(|r| phi[dofs[r]] * A[c * s + r]).sum::<f64>())
+                .sum()
+        };
+        let (strain, kinetic) = (local(&b.local[2]), local(&b.local[0]));
+        if strain == 0.0 && kinetic == 0.0 {
+            continue;
+        }
+        // Port vectors: w (and dV, dA) of each port, then the modal amplitudes.
+        let N = e.nodes.len();
+        let rows = 6 * N + e.modal.len();
+        let port = |which: usize| -> Vec<f64> {
+            let mut x = vec![0.0; rows];
+            for (ia, &a) in e.nodes.iter().enumerate() {
+                x[6 * ia..6 * ia + 6].copy_from_slice(&node_vectors[a][which]);
+            }
+            if which == 0 {
+                for (i, &d) in e.modal.iter().enumerate() {
+                    x[6 * N + i] = phi[d];
+                }
+            }
+            x
+        };
+        let (w, dv, da) = (port(0), port(1), port(2));
+        let o = &b.out;
+        let times = |A: &Mat<f64>, x: &[f64], r: usize| (0..rows).map(|c| A[(r, c)] * x[c]).sum::<f64>();
+        let mut interior = (0.0, 0.0);
+        for r in 0..rows {
+            let yK = times(&o.K, &w, r) + times(&o.C, &dv, r) + times(&o.M, &da, r);
+            let yM = times(&o.M, &w, r);
+            let (pk, pm) = (w[r] * yK, w[r] * yM);
+            if r < 6 * N {
+                let a = e.nodes[r / 6];
+                nodes[a].strain += pk;
+                nodes[a].kinetic += pm;
+            } else {
+                interior.0 += pk;
+                interior.1 += pm;
+            }
+        }
+        let carrier = match &e.kind {
+            ElementKind::Flexible(i) => EnergyCarrier::Body(model.bodies[system.flexible[*i].body].name().to_string()),
+            ElementKind::Rigid(i) => EnergyCarrier::Body(rigid_name(system, *i)),
+            ElementKind::PointMass(node, _) => EnergyCarrier::PointMass {
+                index: point_mass_index(system, ei),
+                node: node_name(*node),
+            },
+            ElementKind::Spring(i) => EnergyCarrier::Spring(model.springs[*i].name.clone()),
+            ElementKind::Load(i) => EnergyCarrier::Load {
+                index: *i,
+                node: node_name(system.loads[*i].node),
+            },
+        };
+        carriers.push(CarrierEnergy {
+            carrier,
+            strain,
+            kinetic,
+            strain_share: 0.0,
+            kinetic_share: 0.0,
+            interior_strain: interior.0,
+            interior_kinetic: interior.1,
+        });
+    }
+    for (js, &(sc, k, _, _)) in model.joint_springs.iter().zip(&system.joint_springs) {
+        if let crate::coordinates::Slot::Unknown(d) = map.scalars[sc].slot {
+            carriers.push(CarrierEnergy {
+                carrier: EnergyCarrier::JointSpring {
+                    joint: model.joints[js.joint.index()].name.clone(),
+                    coordinate: js.coordinate,
+                },
+                strain: k * phi[d] * phi[d],
+                kinetic: 0.0,
+                strain_share: 0.0,
+                kinetic_share: 0.0,
+                interior_strain: 0.0,
+                interior_kinetic: 0.0,
+            });
+        }
+    }
+    ModeEnergy {
+        omega_squared: 0.0,
+        omega: 0.0,
+        frequency_hz: 0.0,
+        rigid_body: false,
+        damped_eigenvalue: None,
+        damping_ratio: None,
+        shape: Vec::new(),
+        strain: 0.0,
+        kinetic: 0.0,
+        carriers,
+        nodes,
+        label: String::new(),
+    }
+}
+
+/// Adds the joint-geometry remainder, the shares and the label, once `strain` and `kinetic`
+/// hold the totals.
+fn finish_shares(mode: &mut ModeEnergy) {
+    let counted: f64 = mode.carriers.iter().map(|c| c.strain).sum();
+    let geometric = mode.strain - counted;
+    if geometric.abs() > 1e-10 * mode.strain.abs().max(counted.abs()) {
+        mode.carriers.push(CarrierEnergy {
+            carrier: EnergyCarrier::JointGeometry,
+            strain: geometric,
+            kinetic: 0.0,
+            strain_share: 0.0,
+            kinetic_share: 0.0,
+            interior_strain: 0.0,
+            interior_kinetic: 0.0,
+        });
+    }
+    let share = |x: f64, total: f64| if total != 0.0 { x / total } else { 0.0 };
+    let (ks, km) = (mode.strain, mode.kinetic);
+    for c in &mut mode.carriers {
+        c.strain_share = share(c.strain, ks);
+        c.kinetic_share = share(c.kinetic, km);
+    }
+    for nd in &mut mode.nodes {
+        nd.strain_share = share(nd.strain, ks);
+        nd.kinetic_share = share(nd.kinetic, km);
+    }
+    // Largest share of either energy; on ties kinetic first, then the earlier entry. Strain
+    // shares of a rigid-body mode or of a mode with phi^T K phi <= 0 are ratios to (nearly)
+    // zero: such modes are labelled by their kinetic energy only.
+    let use_strain = !mode.rigid_body && mode.strain > 0.0;
+    let dominant = |k: f64, s: f64| {
+        if k >= s || !use_strain {
+            (k, "kinetic")
+        } else {
+            (s, "strain")
+        }
+    };
+    let first_max = |shares: &mut dyn Iterator<Item = (f64, f64)>| {
+        let mut best: Option<(usize, f64, &'static str)> = None;
+        for (i, (k, s)) in shares.enumerate() {
+            let (x, what) = dominant(k, s);
+            if best.is_none_or(|b| x > b.1 || (x == b.1 && what == "kinetic" && b.2 == "strain")) {
+                best = Some((i, x, what));
+            }
+        }
+        best
+    };
+    let best_carrier = first_max(&mut mode.carriers.iter().map(|c| (c.kinetic_share, c.strain_share)))
+        .map(|(i, x, what)| (&mode.carriers[i], (x, what)));
+    let best_node =
+        first_max(&mut mode.nodes.iter().map(|n| (n.kinetic_share, n.strain_share))).map(|b| &mode.nodes[b.0]);
+    mode.label = match (best_carrier, best_node) {
+        (Some((c, (x, what))), Some(nd)) => format!("{} ({:.0} % {what}), node {}", c.carrier, 100.0 * x, nd.node),
+        (Some((c, (x, what))), None) => format!("{} ({:.0} % {what})", c.carrier, 100.0 * x),
+        (None, _) => "no energy".into(),
+    };
+}
+
+fn rigid_name(system: &System, i: usize) -> String {
+    // Rigid elements are built in body order, skipping flexible bodies.
+    system
+        .model()
+        .bodies
+        .iter()
+        .filter(|b| matches!(b, Body::Rigid(_)))
+        .nth(i)
+        .map_or_else(|| format!("rigid body {i}"), |b| b.name().to_string())
+}
+
+fn point_mass_index(system: &System, ei: usize) -> usize {
+    system.elements[..ei]
+        .iter()
+        .filter(|e| matches!(e.kind, ElementKind::PointMass(..)))
+        .count()
+}
+
+/// Two vectors made $\hat{\mathbf M}$-orthonormal by Gram-Schmidt (a vector with no component
+/// left, relative $10^{-8}$, is dropped).
+fn m_orthonormal(M: &Mat<f64>, vectors: [Vec<f64>; 2]) -> Vec<Vec<f64>> {
+    let n = M.nrows();
+    let inner = |x: &[f64], y: &[f64]| -> f64 {
+        (0..n)
+            .map(|j| y[j] * (0..n).map(|i| x[i] * M[(i, j)]).sum::<f64>())
+            .sum()
+    };
+    let mut out: Vec<Vec<f64>> = Vec::new();
+    for mut v in vectors {
+        let before = inner(&v, &v).abs().sqrt();
+        for q in &out {
+            let c = inner(q, &v);
+            v.iter_mut().zip(q).for_each(|(x, y)| *x -= c * y);
+        }
+        let norm = inner(&v, &v);
+        if norm > 0.0 && norm.sqrt() > 1e-8 * before {
+            v.iter_mut().for_each(|x| *x /= norm.sqrt());
+            out.push(v);
+        }
+    }
+    out
 }

@@ -64,3 +64,355 @@ fn axial_preload_changes_the_bending_frequency() {
     // Rayleigh estimate: w^2 changes by about P/P_cr of w^2 * 0.8; here +-15 % in w^2.
     assert!(wt > w0 * 1.03 && wc < w0 * 0.97, "{wt} {w0} {wc}");
 }
+
+/// Independent 2x2 reference: modes of K x = w^2 M x with M = diag(m1, m2), K symmetric, by the
+/// closed form of the characteristic polynomial; returns (w^2, x) ascending, x mass-normalised.
+fn two_dof_modes(m: [f64; 2], K: [[f64; 2]; 2]) -> [(f64, [f64; 2]); 2] {
+    // det(K - l M) = m1 m2 l^2 - (K11 m2 + K22 m1) l + det K
+    let (a, b, c) = (
+        m[0] * m[1],
+        -(K[0][0] * m[1] + K[1][1] * m[0]),
+        K[0][0] * K[1][1] - K[0][1] * K[1][0],
+    );
+    let d = (b * b - 4.0 * a * c).sqrt();
+    let roots = [(-b - d) / (2.0 * a), (-b + d) / (2.0 * a)];
+    roots.map(|l| {
+        // Row 1 of (K - l M) x = 0.
+        let x = [-K[0][1], K[0][0] - l * m[0]];
+        let x = if x[0] == 0.0 && x[1] == 0.0 {
+            [K[1][1] - l * m[1], -K[1][0]]
+        } else {
+            x
+        };
+        let s = (m[0] * x[0] * x[0] + m[1] * x[1] * x[1]).sqrt();
+        (l, [x[0] / s, x[1] / s])
+    })
+}
+
+/// The shares of carriers, and of nodes with the bodies' interiors, joint springs and joint
+/// geometry, sum to 1; the carriers' kinetic energies sum to phi^T M phi, their strain
+/// energies (without the joint geometry) to phi^T K phi minus the geometry.
+fn check_sums(modes: &[mbs::ModeEnergy]) {
+    for (i, m) in modes.iter().enumerate() {
+        let sum = |f: &dyn Fn(&mbs::CarrierEnergy) -> f64| m.carriers.iter().map(f).sum::<f64>();
+        let scale = |f: &dyn Fn(&mbs::CarrierEnergy) -> f64, total: f64| {
+            m.carriers.iter().map(|c| f(c).abs()).sum::<f64>().max(total.abs())
+        };
+        let (scale_k, scale_m) = (scale(&|c| c.strain, m.strain), scale(&|c| c.kinetic, m.kinetic));
+        assert!(
+            (sum(&|c| c.kinetic) - m.kinetic).abs() <= 1e-9 * scale_m,
+            "mode {i}: kinetic {} vs phi^T M phi {}",
+            sum(&|c| c.kinetic),
+            m.kinetic
+        );
+        assert!((sum(&|c| c.strain) - m.strain).abs() <= 1e-9 * scale_k, "mode {i}");
+        if m.kinetic.abs() > 0.0 {
+            assert!((sum(&|c| c.kinetic_share) - 1.0).abs() < 1e-9, "mode {i}");
+        }
+        if m.strain.abs() > 1e-9 * scale_k {
+            assert!((sum(&|c| c.strain_share) - 1.0).abs() < 1e-9, "mode {i}");
+        }
+        // Node ports + interiors + joint-coordinate carriers: the same totals (Derivation of
+        // `mode_energies`).
+        let off_node = |f: &dyn Fn(&mbs::CarrierEnergy) -> f64| {
+            m.carriers
+                .iter()
+                .map(|c| match c.carrier {
+                    mbs::EnergyCarrier::JointSpring { .. } | mbs::EnergyCarrier::JointGeometry => f(c),
+                    _ => 0.0,
+                })
+                .sum::<f64>()
+        };
+        let nk =
+            m.nodes.iter().map(|n| n.kinetic).sum::<f64>() + sum(&|c| c.interior_kinetic) + off_node(&|c| c.kinetic);
+        let ns = m.nodes.iter().map(|n| n.strain).sum::<f64>() + sum(&|c| c.interior_strain) + off_node(&|c| c.strain);
+        assert!(
+            (nk - m.kinetic).abs() <= 1e-9 * scale_m,
+            "mode {i}: nodes {nk} vs {}",
+            m.kinetic
+        );
+        assert!(
+            (ns - m.strain).abs() <= 1e-9 * scale_k,
+            "mode {i}: nodes {ns} vs {}",
+            m.strain
+        );
+    }
+}
+
+/// Two oscillators on x sliders: A light (`m1`) and stiff (`k1`, damper `c1`) at x = 0, B heavy
+/// (`m2`) and soft (`k2`) at x = 3, coupled by a weak spring `kc` along x.
+fn two_oscillators(m1: f64, k1: f64, c1: f64, m2: f64, k2: f64, kc: f64) -> mbs::Model {
+    let mut model = mbs::Model::new("two oscillators");
+    let a = model.add_node("A", Vector3::new(0.0, 0.0, 0.0));
+    let b = model.add_node("B", Vector3::new(3.0, 0.0, 0.0));
+    let spring = |name: &str, a, b, ground: Vector3<f64>, k, c| mbs::Spring {
+        name: name.into(),
+        a,
+        b,
+        ground_point: ground,
+        stiffness: k,
+        damping: c,
+        rest_length: None,
+    };
+    model
+        .springs
+        .push(spring("spring A", a, None, Vector3::new(-1.0, 0.0, 0.0), k1, c1));
+    model
+        .springs
+        .push(spring("spring B", b, None, Vector3::new(4.0, 0.0, 0.0), k2, 0.0));
+    model
+        .springs
+        .push(spring("coupling", a, Some(b), Vector3::zeros(), kc, 0.0));
+    model.point_masses.push(mbs::PointMass { node: a, mass: m1 });
+    model.point_masses.push(mbs::PointMass { node: b, mass: m2 });
+    model.add_support(mbs::Support::slider(a, Vector3::x()));
+    model.add_support(mbs::Support::slider(b, Vector3::x()));
+    model
+}
+
+#[test]
+fn weakly_coupled_spring_masses_are_labelled_by_their_mass_and_node() {
+    // A: light (1 kg) and stiff (1e4 N/m), B: heavy (100 kg) and soft (1 N/m), coupled by a weak
+    // spring (0.01 N/m). Frequencies 100 and 0.1 rad/s.
+    let (m1, k1, m2, k2, kc) = (1.0, 1e4, 100.0, 1.0, 0.01);
+    let model = two_oscillators(m1, k1, 0.0, m2, k2, kc);
+    let sys = System::new(&model).unwrap();
+    let modes = mbs::mode_energies(&sys, &sys.initial_state()).unwrap();
+    check_sums(&modes);
+    let exact = two_dof_modes([m1, m2], [[k1 + kc, -kc], [-kc, k2 + kc]]);
+    assert_eq!(modes.len(), 2);
+    for (mode, (l, x)) in modes.iter().zip(exact) {
+        eprintln!("{:.6} rad/s: {}", mode.omega, mode.label);
+        assert!(
+            (mode.omega_squared - l).abs() < 1e-9 * l,
+            "{} vs {l}",
+            mode.omega_squared
+        );
+        assert!(!mode.rigid_body);
+        // No damping: zeta = 0 to the accuracy of the state-space eigensolver.
+        assert!(mode.damping_ratio.unwrap().abs() < 1e-8);
+        // Energies of the reference mode, element by element: k x^2 and m x^2.
+        let x = if (mode.shape[0] - x[0]).abs() < 1e-6 {
+            x
+        } else {
+            [-x[0], -x[1]]
+        };
+        let reference = [
+            ("spring A", k1 * x[0] * x[0], 0.0),
+            ("spring B", k2 * x[1] * x[1], 0.0),
+            ("coupling", kc * (x[0] - x[1]).powi(2), 0.0),
+        ];
+        for (name, strain, _) in reference {
+            let c = mode
+                .carriers
+                .iter()
+                .find(|c| c.carrier == mbs::EnergyCarrier::Spring(name.into()))
+                .unwrap();
+            assert!((c.strain - strain).abs() < 1e-8 * l, "{name}: {} vs {strain}", c.strain);
+        }
+        for (index, mass, xi) in [(0, m1, x[0]), (1, m2, x[1])] {
+            let c = mode
+                .carriers
+                .iter()
+                .find(|c| matches!(c.carrier, mbs::EnergyCarrier::PointMass { index: i, .. } if i == index))
+                .unwrap();
+            assert!((c.kinetic - mass * xi * xi).abs() < 1e-9, "{}", c.kinetic);
+        }
+    }
+    // The soft heavy oscillator first, the stiff light one second; each mode carries more than
+    // 99.9 % of its kinetic energy in its own mass and node.
+    assert!(
+        modes[0]
+            .label
+            .starts_with("point mass 1 on node B (100 % kinetic), node B"),
+        "{}",
+        modes[0].label
+    );
+    assert!(
+        modes[1]
+            .label
+            .starts_with("point mass 0 on node A (100 % kinetic), node A"),
+        "{}",
+        modes[1].label
+    );
+    assert!(modes[0].nodes[1].kinetic_share > 0.999 && modes[1].nodes[0].kinetic_share > 0.999);
+    // Plain serde data.
+    let json = serde_json::to_string(&modes).unwrap();
+    let back: Vec<mbs::ModeEnergy> = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, modes);
+}
+
+#[test]
+fn two_cantilevers_modes_are_labelled_by_their_beam_and_tip() {
+    // Cantilevers of length 1 and 0.5 (first frequencies 4x apart), each two superelements,
+    // clamped at x = 0; each first bending pair must be labelled by its own beam and tip node.
+    let mut model = mbs::Model::new("two cantilevers");
+    let mut tips = Vec::new();
+    for (name, L, y) in [("long", 1.0, 0.0), ("short", 0.5, 1.0)] {
+        let nodes: Vec<_> = (0..3)
+            .map(|i| model.add_node(&format!("{name} {i}"), Vector3::new(L * i as f64 / 2.0, y, 0.0)))
+            .collect();
+        for i in 0..2 {
+            let a = model.nodes[nodes[i].index()].position;
+            let b = model.nodes[nodes[i + 1].index()].position;
+            let body =
+                crate::fixtures::beam_body(&format!("{name}{i}"), a, b, 4, SIDE, E, RHO, ModeSelection::Count(2));
+            model.add_flexible_body(
+                body,
+                vec![nodes[i], nodes[i + 1]],
+                nalgebra::Isometry3::identity(),
+                superelement::FrameChoice::CenterOfMass,
+                superelement::MassVariant::Exact,
+            );
+        }
+        model.add_support(mbs::Support::clamp(nodes[0]));
+        tips.push(format!("{name} 2"));
+    }
+    let sys = System::new(&model).unwrap();
+    let modes = mbs::mode_energies(&sys, &sys.initial_state()).unwrap();
+    check_sums(&modes);
+    for m in &modes[..4] {
+        eprintln!("{:.3} rad/s, zeta {:?}: {}", m.omega, m.damping_ratio, m.label);
+    }
+    let w1 = omega_1();
+    // Square sections: each bending frequency twice. The long beam's first pair (w1), then the
+    // short beam's (4 w1), below the long beam's second pair (6.27 w1).
+    for (k, (beam, tip, w)) in [(0, ("long", &tips[0], w1)), (2, ("short", &tips[1], 4.0 * w1))] {
+        for m in &modes[k..k + 2] {
+            assert!((m.omega - w).abs() < 1e-3 * w, "{} vs {w}", m.omega);
+            let c = m
+                .carriers
+                .iter()
+                .max_by(|a, b| a.kinetic_share.total_cmp(&b.kinetic_share))
+                .unwrap();
+            assert!(m.label.starts_with(beam), "{}", m.label);
+            assert!(m.label.ends_with(&format!("node {tip}")), "{}", m.label);
+            assert!(matches!(&c.carrier, mbs::EnergyCarrier::Body(n) if n.starts_with(beam)));
+            // The other beam carries nothing (uncoupled but for round-off).
+            let other: f64 = m
+                .carriers
+                .iter()
+                .filter(|c| !matches!(&c.carrier, mbs::EnergyCarrier::Body(n) if n.starts_with(beam)))
+                .map(|c| c.kinetic_share.abs() + c.strain_share.abs())
+                .sum();
+            assert!(other < 1e-8, "{other}");
+        }
+    }
+}
+
+#[test]
+fn mode_energies_of_a_loaded_turning_arm_add_up() {
+    // A rigid arm on a revolute joint carries node P at 0.4 m; a flexible beam hangs from P to a
+    // free tip T; gravity and a joint rate. P's J depends on the joint angle, so the port split
+    // includes C dV/dq and M dA/dq and the joints' geometric term is non-zero: node and
+    // carrier totals must still agree, the carriers' strain equals phi^T K phi less the geometry.
+    let mut model = mbs::Model::new("arm");
+    let o = model.add_node("O", Vector3::zeros());
+    let h = model.add_node("H", Vector3::zeros());
+    let p = model.add_node("P", Vector3::new(0.4, 0.0, 0.0));
+    let t = model.add_node("T", Vector3::new(0.4, -0.5, 0.0));
+    model.add_support(mbs::Support::clamp(o));
+    let joint = model.add_joint("hinge", o, h, mbs::JointKind::Revolute { axis: Vector3::z() });
+    model.add_rigid_body(crate::fixtures::rigid(
+        "arm",
+        h,
+        vec![p],
+        0.5,
+        Vector3::new(0.2, 0.0, 0.0),
+        [1e-4, 7e-3, 7e-3],
+    ));
+    let a = model.nodes[p.index()].position;
+    let b = model.nodes[t.index()].position;
+    let beam = crate::fixtures::beam_body("beam", a, b, 4, SIDE, E, RHO, ModeSelection::Count(2));
+    model.add_flexible_body(
+        beam,
+        vec![p, t],
+        nalgebra::Isometry3::identity(),
+        superelement::FrameChoice::CenterOfMass,
+        superelement::MassVariant::Exact,
+    );
+    model.gravity = Vector3::new(0.0, -9.81, 0.0);
+    model.initial.push(mbs::InitialCondition::JointRate {
+        joint,
+        coordinate: 0,
+        rate: 3.0,
+    });
+    let sys = System::new(&model).unwrap();
+    let modes = mbs::mode_energies(&sys, &sys.initial_state()).unwrap();
+    assert_eq!(modes.len(), sys.n_dof());
+    check_sums(&modes);
+    for m in &modes[..3] {
+        eprintln!("{:.3} rad/s: {}", m.omega, m.label);
+    }
+    let geometry = |m: &mbs::ModeEnergy| {
+        m.carriers
+            .iter()
+            .find(|c| c.carrier == mbs::EnergyCarrier::JointGeometry)
+            .map_or(0.0, |c| c.strain_share)
+    };
+    let largest = modes.iter().map(|m| geometry(m).abs()).fold(0.0, f64::max);
+    eprintln!("largest joint-geometry share {largest:.3e}");
+    assert!(largest > 1e-8, "{largest}");
+    // The pendulum mode (lowest) swings the arm: labelled by a body, with P or T.
+    assert!(
+        modes[0].label.starts_with("arm") || modes[0].label.starts_with("beam"),
+        "{}",
+        modes[0].label
+    );
+}
+
+#[test]
+fn mode_energies_of_a_moving_slider_crank_add_up() {
+    // A moving state of a driven mechanism: node and carrier totals agree.
+    let (model, _, _) = crate::fixtures::slider_crank(2, ModeSelection::Count(2), 150.0);
+    let sys = System::new(&model).unwrap();
+    let modes = mbs::mode_energies(&sys, &sys.initial_state()).unwrap();
+    assert_eq!(modes.len(), sys.n_dof());
+    check_sums(&modes);
+    for m in modes.iter().take(3) {
+        eprintln!("{:.3} rad/s: {}", m.omega, m.label);
+    }
+
+    // The elastic modes of the rod are labelled by a rod segment.
+    let first_elastic = modes.iter().find(|m| !m.rigid_body && m.omega > 1.0).unwrap();
+    assert!(first_elastic.label.starts_with("rod"), "{}", first_elastic.label);
+}
+
+#[test]
+fn free_mass_is_a_rigid_body_mode_and_damping_ratio_is_exact() {
+    // B without its spring or coupling: a free mass on its slider, one zero (rigid-body) mode.
+    // A with a damper c = 2 zeta sqrt(k m): damped eigenvalue -zeta w +- i w sqrt(1 - zeta^2).
+    let (m1, k1, zeta): (f64, f64, f64) = (2.0, 800.0, 0.05);
+    let c1 = 2.0 * zeta * (k1 * m1).sqrt();
+    let model = two_oscillators(m1, k1, c1, 50.0, 0.0, 0.0);
+    let sys = System::new(&model).unwrap();
+    let modes = mbs::mode_energies(&sys, &sys.initial_state()).unwrap();
+    check_sums(&modes);
+    assert_eq!(modes.len(), 2);
+    let (free, spring) = (&modes[0], &modes[1]);
+    eprintln!("{} / {}: zeta {:?}", free.label, spring.label, spring.damping_ratio);
+    assert!(free.rigid_body && free.damping_ratio.is_none() && free.omega_squared.abs() < 1e-9);
+    assert!(
+        free.label.starts_with("point mass 1 on node B (100 % kinetic), node B"),
+        "{}",
+        free.label
+    );
+    let w = (k1 / m1).sqrt();
+    assert!(!spring.rigid_body && (spring.omega - w).abs() < 1e-10 * w);
+    assert!(
+        (spring.damping_ratio.unwrap() - zeta).abs() < 1e-10,
+        "{:?}",
+        spring.damping_ratio
+    );
+    let (re, im) = spring.damped_eigenvalue.unwrap();
+    assert!((re + zeta * w).abs() < 1e-9 * w && (im - w * (1.0 - zeta * zeta).sqrt()).abs() < 1e-9 * w);
+    assert!(
+        spring
+            .label
+            .starts_with("point mass 0 on node A (100 % kinetic), node A"),
+        "{}",
+        spring.label
+    );
+    // Strain energy of the spring mode, all in spring A: phi^T K phi = w^2 (mass-normalised).
+    assert!((spring.strain - w * w).abs() < 1e-9 * w * w);
+}
