@@ -913,12 +913,24 @@ pub fn run_analysis(
             tolerance,
             max_iterations,
             time,
+            arc_length,
         } => {
-            let mut settings = mbs::StaticSettings::new(*steps);
-            settings.tolerance = *tolerance;
-            settings.max_iterations = *max_iterations;
-            settings.time = *time;
-            let (sol, failure) = match mbs::solve_static(&sys, sys.initial_state(), &settings) {
+            let method = if *arc_length {
+                // The first arc spans about 1/steps of the load (the scaled norm weighs the load
+                // factor by 1); the path may take up to 50 times as many steps to pass limit points.
+                let mut s = mbs::ArcLengthSettings::new(1.0 / *steps as f64, 1.0, (50 * *steps).max(1000));
+                s.tolerance = *tolerance;
+                s.max_iterations = *max_iterations;
+                s.time = *time;
+                mbs::StaticMethod::ArcLength(s)
+            } else {
+                let mut s = mbs::StaticSettings::new(*steps);
+                s.tolerance = *tolerance;
+                s.max_iterations = *max_iterations;
+                s.time = *time;
+                mbs::StaticMethod::LoadStepping(s)
+            };
+            let (sol, failure) = match mbs::solve_static_with(&sys, sys.initial_state(), &method) {
                 Ok(s) => (s, None),
                 Err(inc) => (inc.partial, Some(inc.error)),
             };

@@ -256,6 +256,8 @@ pub enum MbsAnalysis {
         tolerance: f64,
         max_iterations: usize,
         time: f64,
+        /// Arc-length continuation (passes limit points) instead of Newton with load stepping.
+        arc_length: bool,
     },
     Dynamic {
         t_end: f64,
@@ -1394,15 +1396,17 @@ impl Validator<'_> {
                     ],
                     "an 'equilibrium' analysis",
                 );
-                if let Some(method) = &a.method {
-                    if method != "newton" {
+                let arc_length = match a.method.as_deref() {
+                    None | Some("newton") => false,
+                    Some("arc-length") => true,
+                    Some(method) => {
                         self.err(
                             &path.key("method"),
-                            format!("method '{method}' is not available: equilibrium uses Newton with load stepping (`newton`); arc-length continuation is not in the solver yet"),
+                            format!("unknown method '{method}': `newton` (load stepping) or `arc-length` (continuation through limit points)"),
                         );
                         return None;
                     }
-                }
+                };
                 let steps = a.steps.unwrap_or(1);
                 if steps == 0 || steps > 100_000 {
                     self.err(&path.key("steps"), format!("steps must lie in 1..=100000, got {steps}"));
@@ -1420,6 +1424,7 @@ impl Validator<'_> {
                     tolerance: tolerance(self, 1e-10)?,
                     max_iterations: iterations(self, 25)?,
                     time,
+                    arc_length,
                 })
             }
             AnalysisKind::Dynamic => {

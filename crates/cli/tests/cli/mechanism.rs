@@ -40,6 +40,32 @@ fn elastica_example_matches_mattiasson() {
     assert_close(r[3], 0.98602, tol, "tip rotation");
 }
 
+/// `method = "arc-length"` follows the same path to the same equilibrium as load stepping: the
+/// converged tip at load factor 1 agrees to the Newton tolerance, and the path has more points.
+#[test]
+fn elastica_by_arc_length_reaches_the_same_tip() {
+    let dir = examples_copy("mech-elastica-arc");
+    let study = std::fs::read_to_string(dir.join("elastica.toml")).unwrap();
+    assert!(
+        study.contains("steps = 4"),
+        "the example's equilibrium analysis changed"
+    );
+    std::fs::write(
+        dir.join("elastica.toml"),
+        study.replace("steps = 4", "steps = 4\nmethod = \"arc-length\""),
+    )
+    .unwrap();
+    let out = flexmbs(&dir, &["run", "elastica.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let (_, rows) = read_csv(&dir.join("elastica-results/equilibrium/tip.csv"));
+    assert!(rows.len() > 2, "a path of several arcs, got {} rows", rows.len());
+    let d = last_row(&dir.join("elastica-results/equilibrium/tip.csv"));
+    assert!((d[0] - 1.0).abs() < 1e-12, "ends at load factor 1, got {}", d[0]);
+    // Same discretisation as `elastica_example_matches_mattiasson` (0.6 % from Mattiasson).
+    assert_close(d[2], 0.60325, 1.5e-2, "w/L");
+    assert_close(-d[1], 0.25442, 1.5e-2, "u/L");
+}
+
 /// B3 (Simo & Vu-Quoc 1986, P = 300): tip at (58.84, 22.33, 40.08).
 #[test]
 fn bend45_example_matches_simo_vu_quoc() {
