@@ -1,1 +1,444 @@
-//! Speed comparisons and scaling studies (issue 9). (Being written.)
+//! Speed comparisons and scaling studies (issue 9).
+//!
+//! The dynamics comparison against Exudyn runs the planar flexible slider-crank of
+//! `benchmarks.md` C2 with the connecting rod as a Craig-Bampton body reduced from a solid
+//! (hex20) bar mesh. Both programs read the same mesh and the same assembled $\mathbf K$,
+//! $\mathbf M$ (exported by the `export_rod` binary in Matrix Market), reduce it with RBE2
+//! interfaces on the two end faces and the same number of fixed-interface modes, and integrate
+//! with generalized-α at the same step. This crate holds the model builder shared by the
+//! binaries (`slider_crank`, `export_rod`); the Exudyn side is `benchmarks/exudyn/`.
+//!
+//! | symbol | meaning | code |
+//! |---|---|---|
+//! | $r$ | crank length, 0.15 m | [`SliderCrank::crank`] |
+//! | $l$ | rod length, 0.30 m | [`SliderCrank::rod`] |
+//! | $\Omega$ | crank speed, 150 rad/s | [`SliderCrank::speed`] |
+//! | $d$ | rod diameter, 6 mm | [`SliderCrank::diameter`] |
+//! | $a$ | side of the square section with the round rod's $I$: $a^4/12 = \pi d^4/64$ | [`SliderCrank::side`] |
+//! | $w$ | midpoint deflection relative to the chord (signed along $\mathbf e_z \times$ chord) | [`chord_distance`] |
+
+#![allow(non_snake_case)]
+
+use fe_model::{
+    add_interface_on_set, box_mesh, solid_model, BeamProperties, BeamSection, BeamTheory, CellKind, FeModel,
+    IsotropicMaterial, MassKind, SpiderKind,
+};
+use mbs::{JointKind, Model, NodeId, RigidBody, SensorKind, Support};
+use nalgebra::{Isometry3, Matrix3, Point3, UnitQuaternion, Vector3};
+use reduction::{reduce, CbSettings, ModeSelection, ReducedBody};
+use superelement::{BodyState, Damping, Frame, FrameChoice, MassVariant, Superelement};
+use thiserror::Error;
+
+/// What can go wrong while building or post-processing the benchmark models.
+#[derive(Debug, Error)]
+pub enum BenchError {
+    #[error("rod mesh: {0}")]
+    Mesh(#[from] fe_model::FeError),
+    #[error("rod material: {0}")]
+    Material(#[from] fe_model::PropertyError),
+    #[error("rod reduction: {0}")]
+    Reduction(#[from] reduction::ReductionError),
+    #[error("rod superelement: {0}")]
+    Superelement(#[from] superelement::SuperelementError),
+    #[error("the rod mesh has no node on the axis at x = {x} m (use an even number of elements along and across)")]
+    NoAxisNode { x: f64 },
+    #[error("the reduced rod '{body}' was saved without mesh shapes; the midpoint needs them")]
+    NoMeshShapes { body: String },
+    #[error("sensor '{name}' is missing from the record")]
+    MissingSensor { name: String },
+    #[error("argument '{arg}': {why}")]
+    Argument { arg: String, why: String },
+}
+
+/// The structured solid mesh of the rod: `kind` cells, `along` divisions along the axis and
+/// `across` in each direction of the square section.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RodMesh {
+    pub kind: CellKind,
+    pub along: usize,
+    pub across: usize,
+}
+
+/// The mechanism of benchmarks.md C2 (all SI).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SliderCrank {
+    pub crank: f64,
+    pub rod: f64,
+    pub speed: f64,
+    pub diameter: f64,
+    pub E: f64,
+    pub nu: f64,
+    pub rho: f64,
+    /// Crank mass and inertia (driven at constant speed: they only change the drive torque).
+    pub crank_mass: f64,
+    pub crank_inertia: [f64; 3],
+}
+
+impl SliderCrank {
+    /// Jonker & Meijaard's values (benchmarks.md C2); Poisson's ratio 0.3 for the solid rod.
+    pub const C2: SliderCrank = SliderCrank {
+        crank: 0.15,
+        rod: 0.30,
+        speed: 150.0,
+        diameter: 0.006,
+        E: 200e9,
+        nu: 0.3,
+        rho: 7870.0,
+        crank_mass: 0.1,
+        crank_inertia: [1e-5, 2e-4, 2e-4],
+    };
+
+    /// Side $a$ of the square section with the round rod's second moment of area:
+    /// $a^4/12 = \pi d^4/64$, so $a = (3\pi/16)^{1/4} d$. (Its area is 3 % above the round
+    /// rod's, so the rod is 3 % heavier; both programs use this same square rod.)
+    pub fn side(&self) -> f64 {
+        (3.0 * std::f64::consts::PI / 16.0).powf(0.25) * self.diameter
+    }
+
+    /// Crank period $2\pi/\Omega$.
+    pub fn period(&self) -> f64 {
+        2.0 * std::f64::consts::PI / self.speed
+    }
+
+    /// Rod angular velocity at the dead centre (rigid mechanism): $-\Omega r/l$.
+    pub fn rod_rate(&self) -> f64 {
+        -self.speed * self.crank / self.rod
+    }
+}
+
+/// The FE model of a rod segment of `length`: a box mesh from x = 0 to `length` with the
+/// section centred on the x axis (so the axis nodes are the section centroids), steel as
+/// given, consistent mass.
+pub fn rod_fe_model(p: &SliderCrank, length: f64, mesh: RodMesh) -> Result<FeModel, BenchError> {
+    let a = p.side();
+    let mut m = box_mesh(mesh.kind, [length, a, a], [mesh.along, mesh.across, mesh.across])?;
+    for x in &mut m.nodes {
+        x.y -= a / 2.0;
+        x.z -= a / 2.0;
+    }
+    let steel = IsotropicMaterial::new("steel", p.E, p.nu, p.rho)?;
+    Ok(solid_model(m, steel, MassKind::Consistent)?)
+}
+
+/// Index of the mesh node at `(x, 0, 0)` (on the axis).
+pub fn axis_node(nodes: &[[f64; 3]], x: f64, scale: f64) -> Result<usize, BenchError> {
+    nodes
+        .iter()
+        .position(|n| (n[0] - x).abs() < 1e-9 * scale && n[1].abs() < 1e-9 * scale && n[2].abs() < 1e-9 * scale)
+        .ok_or(BenchError::NoAxisNode { x })
+}
+
+/// A rod segment reduced with RBE2 interfaces "a" (face x = 0) and "b" (face x = `length`)
+/// at the face centroids, and `modes` fixed-interface modes; mesh shapes kept when `keep_mesh`.
+pub fn rod_body(
+    p: &SliderCrank,
+    length: f64,
+    mesh: RodMesh,
+    modes: ModeSelection,
+    keep_mesh: bool,
+) -> Result<ReducedBody, BenchError> {
+    let mut fe = rod_fe_model(p, length, mesh)?;
+    let a = add_interface_on_set(&mut fe, "a", "x0", None, SpiderKind::Rbe2)?;
+    let b = add_interface_on_set(&mut fe, "b", "x1", None, SpiderKind::Rbe2)?;
+    let mut settings = CbSettings::new(modes);
+    settings.keep_mesh_shapes = keep_mesh;
+    Ok(reduce(&fe, "rod", &[("a".into(), a), ("b".into(), b)], &settings)?)
+}
+
+/// A rod segment of `length` as `elements` Timoshenko beam elements with the solid rod's square
+/// section (side [`SliderCrank::side`]), reduced with interfaces "a" and "b" at its ends: the
+/// beam model of the same rod, for the nonlinear reference (its 6-dof junction nodes add no
+/// stiffness, unlike the rigid end faces of solid segments).
+pub fn beam_rod_body(
+    p: &SliderCrank,
+    length: f64,
+    elements: usize,
+    modes: ModeSelection,
+) -> Result<ReducedBody, BenchError> {
+    let mut fe = FeModel::default();
+    let material = fe.add_material(IsotropicMaterial::new("steel", p.E, p.nu, p.rho)?);
+    let section = fe.add_section(BeamSection::rectangle("square", p.side(), p.side(), p.nu)?);
+    let props = BeamProperties {
+        section,
+        material,
+        orientation: Vector3::y(),
+        theory: BeamTheory::Timoshenko,
+        mass: MassKind::Consistent,
+    };
+    let nodes = fe_model::generate::straight_beam(
+        &mut fe,
+        Point3::origin(),
+        Point3::new(length, 0.0, 0.0),
+        elements,
+        &props,
+        Some("rod"),
+    )?;
+    let mut settings = CbSettings::new(modes);
+    settings.keep_mesh_shapes = false;
+    let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
+    Ok(reduce(&fe, "rod", &ends, &settings)?)
+}
+
+/// The slider-crank model with the rod as `n` identical segments `segment` (reduced from
+/// x = 0 to l/n, interfaces a then b), frame and inertia variant as given. Starts at the
+/// dead centre (crank along x) with the rigid mechanism's velocities. Sensors: "slider"
+/// (position), "A", "B" (rod end positions), "rotA", "rotB" (their rotations), "eta0"
+/// (modal coordinates of the first segment) and, for even `n`, "midpoint" (signed distance of
+/// the middle node from the chord). Returns the model and the rod's nodes.
+pub fn slider_crank_model(
+    p: &SliderCrank,
+    n: usize,
+    segment: &ReducedBody,
+    frame: FrameChoice,
+    mass: MassVariant,
+) -> (Model, Vec<NodeId>) {
+    let z = Vector3::z();
+    let seg = p.rod / n as f64;
+    let mut m = Model::new("slider-crank C2");
+    let o = m.add_node("O", Vector3::zeros());
+    let c0 = m.add_node("crank", Vector3::zeros());
+    let a = m.add_node("A", Vector3::new(p.crank, 0.0, 0.0));
+    let s = m.add_node("slider", Vector3::new(p.crank + p.rod, 0.0, 0.0));
+    let rod: Vec<NodeId> = (0..=n)
+        .map(|i| m.add_node(&format!("rod{i}"), Vector3::new(p.crank + seg * i as f64, 0.0, 0.0)))
+        .collect();
+    m.add_support(Support::clamp(o));
+    let jc = m.add_joint("crank", o, c0, JointKind::Revolute { axis: z });
+    m.add_driver(
+        "crank speed",
+        mbs::DriverTarget::Joint {
+            joint: jc,
+            coordinate: 0,
+        },
+        mbs::TimeFunction::Linear {
+            initial: 0.0,
+            rate: p.speed,
+        },
+    );
+    let [Ix, Iy, Iz] = p.crank_inertia;
+    m.add_rigid_body(RigidBody {
+        name: "crank".into(),
+        reference: c0,
+        nodes: vec![a],
+        mass: p.crank_mass,
+        center_of_mass: Vector3::new(p.crank / 2.0, 0.0, 0.0),
+        inertia: Matrix3::from_diagonal(&Vector3::new(Ix, Iy, Iz)),
+    });
+    for i in 0..n {
+        let mut b = segment.clone();
+        b.name = format!("rod{i}");
+        let place = Isometry3::translation(p.crank + seg * i as f64, 0.0, 0.0);
+        m.add_flexible_body(b, vec![rod[i], rod[i + 1]], place, frame, mass);
+    }
+    let ja = m.add_joint("pin A", a, rod[0], JointKind::Revolute { axis: z });
+    m.add_support(Support::slider(s, Vector3::x()));
+    let jb = m.add_joint("pin B", s, rod[n], JointKind::Revolute { axis: z });
+    m.point_masses.push(mbs::PointMass {
+        node: s,
+        mass: segment.inertia.mass * n as f64 / 2.0,
+    });
+    m.add_sensor("slider", SensorKind::NodePosition { node: s });
+    m.add_sensor("A", SensorKind::NodePosition { node: rod[0] });
+    m.add_sensor("B", SensorKind::NodePosition { node: rod[n] });
+    m.add_sensor("rotA", SensorKind::NodeRotation { node: rod[0] });
+    m.add_sensor("rotB", SensorKind::NodeRotation { node: rod[n] });
+    m.add_sensor("eta0", SensorKind::ModalCoordinates { body: mbs::BodyId(1) });
+    if n % 2 == 0 {
+        m.add_sensor(
+            "midpoint",
+            SensorKind::LineDistance {
+                node: rod[n / 2],
+                a: rod[0],
+                b: rod[n],
+                normal: Some(z),
+            },
+        );
+    }
+    // Rigid-body velocities at the dead centre: the rod turns about B at -Omega r / l.
+    let w_rod = p.rod_rate();
+    let B = Vector3::new(p.crank + p.rod, 0.0, 0.0);
+    for (i, &node) in rod.iter().enumerate().take(n).skip(1) {
+        let r = Vector3::new(p.crank + seg * i as f64, 0.0, 0.0) - B;
+        m.initial.push(mbs::InitialCondition::NodeVelocity {
+            node,
+            velocity: z.cross(&r) * w_rod,
+            angular_velocity: z * w_rod,
+        });
+    }
+    m.initial.push(mbs::InitialCondition::JointRate {
+        joint: ja,
+        coordinate: 0,
+        rate: w_rod - p.speed,
+    });
+    m.initial.push(mbs::InitialCondition::JointRate {
+        joint: jb,
+        coordinate: 0,
+        rate: w_rod,
+    });
+    (m, rod)
+}
+
+/// Signed distance of `p` from the line through `a` and `b`, positive along
+/// $\mathbf e_z \times (\mathbf b - \mathbf a)$ (the same convention as mbs's `LineDistance`
+/// sensor with normal $\mathbf e_z$).
+pub fn chord_distance(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let t = (b - a).normalize();
+    t.cross(&(p - a)).dot(&Vector3::z())
+}
+
+/// Midpoint deflections of a rod made of ONE segment, from the recorded interface poses and
+/// modal coordinates: the deformed mesh is recovered by the superelement
+/// ([`Superelement::recover_mesh`]) and the axis node at mid-length is measured against the
+/// chord through the end-face centre nodes, exactly as the Exudyn script measures its mesh
+/// nodes. `placement` is the rod's placement (a translation).
+pub fn midpoint_from_mesh(
+    body: &ReducedBody,
+    frame: FrameChoice,
+    placement: &Vector3<f64>,
+    record: &mbs::SensorRecord,
+) -> Result<Vec<f64>, BenchError> {
+    let mesh = body.mesh.as_ref().ok_or_else(|| BenchError::NoMeshShapes {
+        body: body.name.clone(),
+    })?;
+    let length = body.interfaces[1].position[0] - body.interfaces[0].position[0];
+    let ends = [
+        axis_node(&mesh.nodes, 0.0, length)?,
+        axis_node(&mesh.nodes, length, length)?,
+    ];
+    let mid = axis_node(&mesh.nodes, length / 2.0, length)?;
+    let se = Superelement::new(body, frame, MassVariant::Exact, Damping::none())?;
+    let series = |name: &str| {
+        record
+            .series(name)
+            .ok_or_else(|| BenchError::MissingSensor { name: name.into() })
+    };
+    let (rA, rB, qA, qB, eta) = (
+        series("A")?,
+        series("B")?,
+        series("rotA")?,
+        series("rotB")?,
+        series("eta0")?,
+    );
+    let v3 = |x: &[f64]| Vector3::new(x[0], x[1], x[2]);
+    let mut out = Vec::with_capacity(rA.len());
+    let mut last = Frame::new(v3(&rA[0]) - placement, UnitQuaternion::identity());
+    for k in 0..rA.len() {
+        // The nodes start with identity orientations (R_k0 = I), so NodeRotation is log R_k.
+        let state = BodyState {
+            r: vec![v3(&rA[k]) - placement, v3(&rB[k]) - placement],
+            R: vec![
+                UnitQuaternion::from_scaled_axis(v3(&qA[k])),
+                UnitQuaternion::from_scaled_axis(v3(&qB[k])),
+            ],
+            v: vec![Vector3::zeros(); 2],
+            omega: vec![Vector3::zeros(); 2],
+            eta: eta[k].clone(),
+            eta_dot: vec![0.0; eta[k].len()],
+            frame: last,
+        };
+        let kin = se.kinematics(&state)?;
+        last = kin.frame;
+        let shape = se.recover_mesh(&kin).ok_or_else(|| BenchError::NoMeshShapes {
+            body: body.name.clone(),
+        })?;
+        let x = &shape.positions;
+        out.push(chord_distance(&x[mid], &x[ends[0]], &x[ends[1]]));
+    }
+    Ok(out)
+}
+
+/// CPU time of this process (all threads, user + system) in seconds, from `/proc/self/stat`
+/// (Linux; clock ticks of 10 ms, so time loops of a second or more), or NaN where it cannot
+/// be read. On a machine shared with other builds the wall time of a loop measures the load
+/// as much as the loop; the CPU time does not.
+pub fn cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
+    };
+    // Fields after the command name (which may hold spaces) start with the state, field 3;
+    // utime and stime are fields 14 and 15.
+    let Some(rest) = stat.rfind(')').map(|k| &stat[k + 1..]) else {
+        return f64::NAN;
+    };
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let tick = |i: usize| fields.get(i).and_then(|f| f.parse::<f64>().ok()).unwrap_or(f64::NAN);
+    // USER_HZ is 100 on every Linux ABI (`getconf CLK_TCK`).
+    (tick(11) + tick(12)) / 100.0
+}
+
+/// Median of a non-empty sample (NaN for an empty one).
+pub fn median(xs: &[f64]) -> f64 {
+    let mut v = xs.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// Command-line options `--name value` of the benchmark binaries.
+pub struct Args {
+    pairs: Vec<(String, String)>,
+}
+
+impl Args {
+    /// Reads `--name value` pairs from the process arguments (a lone `--bench`, which `cargo
+    /// bench` passes, is ignored).
+    pub fn from_env() -> Result<Self, BenchError> {
+        let raw: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+        let mut pairs = Vec::new();
+        let mut it = raw.into_iter();
+        while let Some(k) = it.next() {
+            let name = k.strip_prefix("--").ok_or_else(|| BenchError::Argument {
+                arg: k.clone(),
+                why: "expected --name value".into(),
+            })?;
+            let v = it.next().ok_or_else(|| BenchError::Argument {
+                arg: k.clone(),
+                why: "has no value".into(),
+            })?;
+            pairs.push((name.to_string(), v));
+        }
+        Ok(Self { pairs })
+    }
+
+    /// The value of `--name`, parsed, or `default`.
+    pub fn get<T: std::str::FromStr>(&self, name: &str, default: T) -> Result<T, BenchError> {
+        match self.pairs.iter().rev().find(|(k, _)| k == name) {
+            None => Ok(default),
+            Some((_, v)) => v.parse().map_err(|_| BenchError::Argument {
+                arg: format!("--{name}"),
+                why: format!("cannot read '{v}'"),
+            }),
+        }
+    }
+
+    /// The raw value of `--name`, if given.
+    pub fn text(&self, name: &str) -> Option<&str> {
+        self.pairs
+            .iter()
+            .rev()
+            .find(|(k, _)| k == name)
+            .map(|(_, v)| v.as_str())
+    }
+
+    /// The rod mesh from `--kind hex8|hex20 --along N --across N` (default hex20, 24 x 2 x 2).
+    pub fn rod_mesh(&self) -> Result<RodMesh, BenchError> {
+        let kind = match self.text("kind").unwrap_or("hex20") {
+            "hex8" => CellKind::Hex8,
+            "hex20" => CellKind::Hex20,
+            other => {
+                return Err(BenchError::Argument {
+                    arg: "--kind".into(),
+                    why: format!("'{other}' is not hex8 or hex20"),
+                })
+            }
+        };
+        Ok(RodMesh {
+            kind,
+            along: self.get("along", 24)?,
+            across: self.get("across", 2)?,
+        })
+    }
+}
