@@ -92,8 +92,8 @@ lines = [
     "# Slider-crank (benchmarks.md C2): flexmbs against Exudyn",
     "",
     f"Machine: {cpu_model}, {sh('nproc')} cores, {memory} GB, {platform.system()} {platform.release()}; {sh('rustc --version')}; Python {platform.python_version()}, {versions}.",
-    f"Load average (1 min) at the starts of the runs: {min(loads):.1f} to {max(loads):.1f}, median {statistics.median(loads):.1f} (other helpers' builds on the 2 cores):"
-    " wall times are inflated by the load and noisy, so the speed ratio is taken on the CPU time of the time loop (user + system, all threads, of the process).",
+    f"Load average (1 min) at the starts of the runs: {min(loads):.1f} to {max(loads):.1f}, median {statistics.median(loads):.1f} (above 2, other work shared the 2 cores and wall times are inflated):"
+    " the speed ratio is taken on the CPU time of the time loop (user + system, all threads, of the process).",
     "",
     f"Rod: hex20 bar 24 x 2 x 2 (741 nodes, 2223 dofs), square section with the round rod's I, RBE2 end faces, {modes} fixed-interface modes unless said;"
     f" h = T/400 = {float(h):.4e} s, t_end = {float(t_end):.4f} s, generalized-alpha rho_inf = 0.9, Newton to convergence.",
