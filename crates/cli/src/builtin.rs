@@ -47,7 +47,7 @@ pub fn run(options: &Options) -> Result<(), BoxError> {
         "midpoint deflection from the chord [mm]",
     );
     fig.series.push(plot::Series::line(
-        "flexmbs, 1 superelement, 2 modes",
+        "flexmbs, rod as 4 superelements, 2 modes each",
         angle_deg,
         mm.clone(),
     ));
