@@ -31,10 +31,8 @@
 //! | [`vtu`] | VTK XML unstructured grids and `.pvd` collections |
 //! | [`inspect`] | `flexmbs inspect FILE.rbody` |
 //! | [`examples`] | the built-in example studies of `examples/` |
-//! | [`beam_example`] | the cantilever report against beam theory (the former built-in example) |
 //! | [`builtin`] | `flexmbs run` without a file: the flexible slider-crank (benchmarks.md C2) |
 
-pub mod beam_example;
 pub mod builtin;
 pub mod cache;
 pub mod cli;
