@@ -213,7 +213,7 @@ pub fn c1_spin_up(extent: Extent) -> Result<Vec<Block>> {
     }));
     blocks.push(Block::Grid(Grid {
         title: "C1 refinement: superelements, modes, time step".into(),
-        note: "Peak and final tip deflection in the hub's axes (in-plane), the largest out-of-plane deflection (zero in exact arithmetic), Newton iterations per step and wall-clock cost per step (shared machine).".into(),
+        note: "Peak and final tip deflection in the hub's axes (in-plane), the largest out-of-plane deflection (zero in exact arithmetic), Newton iterations per step and wall-clock cost per step (inflated when the machine is loaded).".into(),
         header: ["w_s [rad/s]", "model", "peak [m]", "at 30 s [m]", "out of plane [m]", "iter/step", "us/step"]
             .iter()
             .map(|s| s.to_string())
@@ -370,7 +370,7 @@ fn crank_study(study: &CrankStudy, extent: Extent) -> Result<(Vec<Row>, Grid, Fi
     let grid = Grid {
         title: format!("{} refinement: superelements, modes, time step", study.id),
         note: format!(
-            "Peak |deflection| in the last revolution (from t = {last_rev:.4} s to {:.4} s), Newton iterations and wall-clock cost per step (shared machine).{}",
+            "Peak |deflection| in the last revolution (from t = {last_rev:.4} s to {:.4} s), Newton iterations and wall-clock cost per step (inflated when the machine is loaded).{}",
             study.end,
             if any_study { "" } else { " Quick run: base level only." }
         ),

@@ -29,8 +29,10 @@ from its validity (our reading of the cause: the tables show the effect). The in
 the spin-up, lumped inertia changes the peak by less than 0.3 %; on the slider-crank (150 rad/s, inertia-dominated \
 rod bending) the lumped variant is 3 % off the exact one with the centre-of-mass frame and 0.8 % with the auxiliary node: \
 (our reading: the lumped mass simplifies the coupling between elastic and rigid motion inside a body, which matters when \
-the body's own rotation drives the deformation). *Cost:* the wall-clock cost per step of identical runs varied by a factor 2-4 on this shared machine, so the \
-us/step columns do not rank the variants; an instruction count (callgrind) would, and was not done. \
+the body's own rotation drives the deformation). *Cost* (wall clock on an idle 2-core machine; single runs, so differences under about 10 % \
+do not rank): lumped inertia costs about two thirds of exact; the auxiliary node adds one interface (6 coordinates \
+per body) and costs 1.7-1.9 times the centre-of-mass frame; the interface-node frame costs about as much per iteration \
+as the centre-of-mass frame but needs more iterations on the slider-crank. \
 (3) *Beam against solid rod.* The hex20 and tet10 rods (RBE2 ends) have the beam rod's mass and agree with each \
 other within 0.02 % (the solid mesh is converged), and deflect about 2 % more than the Euler-Bernoulli beam of the same \
 section. Shear deformation, which the Euler-Bernoulli beam leaves out, accounts for about 0.4 % at this slenderness \
@@ -67,7 +69,7 @@ fn elastica_variants(n: usize) -> Result<Grid> {
     }
     Ok(Grid {
         title: format!("Variants on the elastica, a = {a}, N = {n}"),
-        note: "Max relative error of (w/L, u/L, rotation) against Mattiasson; load steps, Newton iterations and wall-clock microseconds per iteration (System::new included; shared machine). Statics has no inertia, so exact and lumped must agree to the solver tolerance: they do, which checks that the variant switch only touches inertia.".into(),
+        note: "Max relative error of (w/L, u/L, rotation) against Mattiasson; load steps, Newton iterations and wall-clock microseconds per iteration (System::new included; wall clock, so a loaded machine inflates it). Statics has no inertia, so exact and lumped must agree to the solver tolerance: they do, which checks that the variant switch only touches inertia.".into(),
         header: ["frame / inertia", "error", "load steps", "Newton iterations", "us/iteration"]
             .iter()
             .map(|s| s.to_string())
