@@ -1088,15 +1088,47 @@ pub fn run_analysis(
             }
             csv.write(&path2)
                 .context(|| format!("cannot write {}", path2.display()))?;
+            // Which bodies and nodes carry each mode's energy (mbs::mode_energies).
+            let energies = mbs::mode_energies(&sys, &state)?;
+            let path3 = dir.join("modes.csv");
+            let mut csv = crate::output::Csv::new(&[
+                "mode",
+                "frequency [Hz]",
+                "damping ratio [-]",
+                "rigid body [-]",
+                "carried by",
+            ]);
+            for (k, e) in energies.iter().take(*modes).enumerate() {
+                csv.row(&[
+                    (k + 1).to_string(),
+                    num(e.frequency_hz),
+                    e.damping_ratio.map(num).unwrap_or_default(),
+                    u8::from(e.rigid_body).to_string(),
+                    e.label.clone(),
+                ]);
+            }
+            csv.write(&path3)
+                .context(|| format!("cannot write {}", path3.display()))?;
+            for (k, e) in energies.iter().take(*modes).enumerate() {
+                out.report
+                    .push(format!("mode {}: {:.6e} Hz, {}", k + 1, e.frequency_hz, e.label));
+            }
             out.files.push(format!("{prefix}/frequencies.csv"));
             out.files.push(format!("{prefix}/state_space.csv"));
+            out.files.push(format!("{prefix}/modes.csv"));
             let hz: Vec<f64> = shown.iter().map(|w| w / (2.0 * std::f64::consts::PI)).collect();
             out.report.push(format!(
                 "lowest {} frequencies [Hz]: {}",
                 hz.len(),
                 hz.iter().map(|f| format!("{f:.6e}")).collect::<Vec<_>>().join(", ")
             ));
-            out.results = json!({ "model": b.size(&sys), "frequencies_hz": hz, "about": format!("{about:?}") });
+            let labels: Vec<&str> = energies.iter().take(*modes).map(|e| e.label.as_str()).collect();
+            out.results = json!({
+                "model": b.size(&sys),
+                "frequencies_hz": hz,
+                "mode_labels": labels,
+                "about": format!("{about:?}"),
+            });
         }
     }
     Ok(out)

@@ -185,3 +185,43 @@ fn validate_forwards_its_arguments() {
         out.stderr
     );
 }
+
+/// A linearized analysis writes each mode's frequency, damping ratio and the body and node
+/// that carry its energy (`modes.csv`, `mbs::mode_energies`): in the four-bar the coupler is
+/// the only flexible body, so it carries the strain energy of every elastic mode.
+#[test]
+fn linearized_modes_are_labelled_by_body_and_node() {
+    let dir = examples_copy("mech-four-bar-modes");
+    let out = flexmbs(&dir, &["run", "four_bar.toml", "--t-end", "0.01"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let found: Vec<_> = std::fs::read_dir(dir.join("four_bar-results"))
+        .unwrap()
+        .map(|e| e.unwrap().path().join("modes.csv"))
+        .filter(|p| p.is_file())
+        .collect();
+    assert_eq!(found.len(), 1, "one linearized analysis");
+    let (header, rows) = read_csv(&found[0]);
+    assert_eq!(
+        header,
+        [
+            "mode",
+            "frequency [Hz]",
+            "damping ratio [-]",
+            "rigid body [-]",
+            "carried by"
+        ]
+    );
+    assert!(!rows.is_empty());
+    let mut last = 0.0;
+    for r in &rows {
+        let f: f64 = r[1].parse().unwrap();
+        assert!(f >= last, "ascending frequencies");
+        last = f;
+        // The label holds a comma, so the writer quotes it; `read_csv` splits at every comma.
+        let label = r[4..].join(",");
+        let label = label.trim_matches('"');
+        assert!(label.starts_with("coupler ("), "label {label:?}");
+        assert!(label.contains("), node coupler."), "label {label:?}");
+    }
+    assert!(out.stdout.contains("mode 1: "), "{}", out.stdout);
+}
