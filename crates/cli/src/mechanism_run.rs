@@ -401,17 +401,22 @@ pub fn build(study: &Study, cache: &Path) -> Result<BuiltMechanism, BoxError> {
             }
         };
         let columns: Vec<String> = match &s.target {
-            SensorTarget::Position(p) => {
-                kinds = single(SensorKind::NodePosition {
-                    node: node(p, &s.path)?,
-                });
-                xyz("position", "m")
-            }
-            SensorTarget::Displacement(p) => {
-                kinds = single(SensorKind::NodeDisplacement {
-                    node: node(p, &s.path)?,
-                });
-                xyz("displacement", "m")
+            SensorTarget::Position(p)
+            | SensorTarget::Displacement(p)
+            | SensorTarget::Rotation(p)
+            | SensorTarget::Velocity(p)
+            | SensorTarget::AngularVelocity(p) => {
+                // One node, three components: the mbs sensor, the column name and its unit.
+                let node = node(p, &s.path)?;
+                let (kind, what, unit) = match &s.target {
+                    SensorTarget::Position(_) => (SensorKind::NodePosition { node }, "position", "m"),
+                    SensorTarget::Displacement(_) => (SensorKind::NodeDisplacement { node }, "displacement", "m"),
+                    SensorTarget::Rotation(_) => (SensorKind::NodeRotation { node }, "rotation", "rad"),
+                    SensorTarget::Velocity(_) => (SensorKind::NodeVelocity { node }, "velocity", "m/s"),
+                    _ => (SensorKind::NodeAngularVelocity { node }, "angular_velocity", "rad/s"),
+                };
+                kinds = single(kind);
+                xyz(what, unit)
             }
             SensorTarget::RelativePosition(p, r) => {
                 kinds = single(SensorKind::RelativePosition {
@@ -419,24 +424,6 @@ pub fn build(study: &Study, cache: &Path) -> Result<BuiltMechanism, BoxError> {
                     reference: node(r, &s.path)?,
                 });
                 xyz("relative_position", "m")
-            }
-            SensorTarget::Rotation(p) => {
-                kinds = single(SensorKind::NodeRotation {
-                    node: node(p, &s.path)?,
-                });
-                xyz("rotation", "rad")
-            }
-            SensorTarget::Velocity(p) => {
-                kinds = single(SensorKind::NodeVelocity {
-                    node: node(p, &s.path)?,
-                });
-                xyz("velocity", "m/s")
-            }
-            SensorTarget::AngularVelocity(p) => {
-                kinds = single(SensorKind::NodeAngularVelocity {
-                    node: node(p, &s.path)?,
-                });
-                xyz("angular_velocity", "rad/s")
             }
             SensorTarget::Deflection { of, chord, normal } => {
                 kinds = single(SensorKind::LineDistance {
