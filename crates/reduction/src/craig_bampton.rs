@@ -377,6 +377,7 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
             nodes,
             shapes: DenseMatrix::from_faer(S_full.as_ref()),
         }),
+        geometric_stiffness: None,
     })
 }
 

@@ -733,5 +733,7 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         Phi_com,
         auxiliary_interface: meta.auxiliary_interface,
         mesh,
+        // Not in format version 1's arrays yet.
+        geometric_stiffness: None,
     })
 }

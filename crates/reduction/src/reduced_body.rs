@@ -137,6 +137,13 @@ pub struct ReducedBody {
     pub auxiliary_interface: Option<usize>,
     /// Mode shapes on the mesh, when kept.
     pub mesh: Option<MeshModes>,
+    /// Geometric stiffening (optional): $n$ matrices
+    /// $\mathbf G_k$ ($n \times n$, symmetric), the reduced geometric stiffness of the stress
+    /// field of CB coordinate $k$, so the strain energy gains the cubic term
+    /// $U_3 = \tfrac12 \sum_k q_k\, \mathbf q^T \mathbf G_k \mathbf q$ (the second-order part of
+    /// the Green-Lagrange strain under the linear stress). `None`: linear elastic field.
+    #[serde(default)]
+    pub geometric_stiffness: Option<Vec<DenseMatrix>>,
 }
 
 impl ReducedBody {
