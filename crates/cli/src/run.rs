@@ -576,6 +576,7 @@ pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
         modes: reduction.modes,
         keep_mesh_shapes: reduction.keep_mesh_shapes,
         auxiliary_node: built.auxiliary,
+        ..CbSettings::new(reduction.modes)
     };
     // A spinner on stderr naming the stage (hidden when stderr is not a terminal).
     let bar = indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());

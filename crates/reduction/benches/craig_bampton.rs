@@ -65,7 +65,7 @@ fn run_one(size: &str, ordering: FillOrdering) {
         &CbSettings {
             modes: ModeSelection::Count(20),
             keep_mesh_shapes: false,
-            auxiliary_node: None,
+            ..CbSettings::new(ModeSelection::Count(20))
         },
         ordering,
         &mut |stage| {

@@ -39,6 +39,10 @@ pub struct CbSettings {
     /// An interface node placed at the centre of mass, added as the last interface and held
     /// fixed during the reduction (the `auxiliary-node` frame choice, brief §4).
     pub auxiliary_node: Option<NodeId>,
+    /// Compute [`ReducedBody::geometric_stiffness`] (geometric stiffening: the stiffness the
+    /// stress of each CB coordinate adds to every other), for bodies whose axial loads change
+    /// their bending stiffness. Off by default.
+    pub geometric_stiffening: bool,
 }
 
 impl CbSettings {
@@ -48,6 +52,7 @@ impl CbSettings {
             modes,
             keep_mesh_shapes: true,
             auxiliary_node: None,
+            geometric_stiffening: false,
         }
     }
 }
