@@ -16,9 +16,6 @@ pub struct Assembled {
     pub M: SparseColMat<usize, f64>,
 }
 
-/// One thread's stiffness and mass values.
-type ValuePair = (Vec<f64>, Vec<f64>);
-
 /// Stiffness and mass of element `index` in global axes.
 pub fn element_matrices(model: &FeModel, index: usize) -> Result<LocalMatrices, ElementError> {
     let element = &model.elements[index];
@@ -69,9 +66,24 @@ pub fn assemble_into(
     K_values: &mut [f64],
     M_values: &mut [f64],
 ) -> Result<(), FeError> {
+    fill_values(model, pattern, [K_values, M_values], [|m| &m.K_e, |m| &m.M_e])
+}
+
+/// Which element matrix goes into which output of [`fill_values`].
+type Pick = fn(&LocalMatrices) -> &DMatrix<f64>;
+
+/// The parallel element loop of [`assemble_into`] for the element matrices chosen by `picks`,
+/// each added into the output of the same index.
+fn fill_values<const N: usize>(
+    model: &FeModel,
+    pattern: &SystemPattern,
+    outputs: [&mut [f64]; N],
+    picks: [Pick; N],
+) -> Result<(), FeError> {
     let nnz = pattern.nnz();
-    assert_eq!(K_values.len(), nnz, "K values must have the pattern's length");
-    assert_eq!(M_values.len(), nnz, "M values must have the pattern's length");
+    for out in &outputs {
+        assert_eq!(out.len(), nnz, "assembled values must have the pattern's length");
+    }
     assert_eq!(
         pattern.elements.len(),
         model.elements.len(),
@@ -80,30 +92,33 @@ pub fn assemble_into(
     let n_elements = model.elements.len();
     let n_chunks = rayon::current_num_threads().clamp(1, n_elements.max(1));
     let chunk = n_elements.div_ceil(n_chunks).max(1);
-    let fill = |range: std::ops::Range<usize>, K: &mut [f64], M: &mut [f64]| -> Result<(), FeError> {
+    let fill = |range: std::ops::Range<usize>, outs: &mut [&mut [f64]]| -> Result<(), FeError> {
         for e in range {
             let m = element_matrices(model, e)?;
-            scatter(&pattern.elements[e], &m.K_e, K);
-            scatter(&pattern.elements[e], &m.M_e, M);
+            for (out, pick) in outs.iter_mut().zip(&picks) {
+                scatter(&pattern.elements[e], pick(&m), out);
+            }
         }
         Ok(())
     };
-    K_values.fill(0.0);
-    M_values.fill(0.0);
-    let others: Vec<Result<ValuePair, FeError>> = (1..n_chunks)
+    let mut outputs = outputs;
+    for out in outputs.iter_mut() {
+        out.fill(0.0);
+    }
+    let others: Vec<Result<Vec<Vec<f64>>, FeError>> = (1..n_chunks)
         .into_par_iter()
         .map(|t| {
-            let mut K = vec![0.0; nnz];
-            let mut M = vec![0.0; nnz];
-            fill(t * chunk..((t + 1) * chunk).min(n_elements), &mut K, &mut M)?;
-            Ok((K, M))
+            let mut bufs: Vec<Vec<f64>> = (0..N).map(|_| vec![0.0; nnz]).collect();
+            let mut outs: Vec<&mut [f64]> = bufs.iter_mut().map(|b| b.as_mut_slice()).collect();
+            fill(t * chunk..((t + 1) * chunk).min(n_elements), &mut outs)?;
+            Ok(bufs)
         })
         .collect();
-    fill(0..chunk.min(n_elements), K_values, M_values)?;
+    fill(0..chunk.min(n_elements), &mut outputs)?;
     for other in others {
-        let (K, M) = other?;
-        K_values.par_iter_mut().zip(K.par_iter()).for_each(|(a, b)| *a += b);
-        M_values.par_iter_mut().zip(M.par_iter()).for_each(|(a, b)| *a += b);
+        for (out, buf) in outputs.iter_mut().zip(other?) {
+            out.par_iter_mut().zip(buf.par_iter()).for_each(|(a, b)| *a += b);
+        }
     }
     Ok(())
 }
@@ -118,4 +133,12 @@ pub fn assemble(model: &FeModel, pattern: &SystemPattern) -> Result<Assembled, F
         K: SparseColMat::new(pattern.symbolic.clone(), K),
         M: SparseColMat::new(pattern.symbolic.clone(), M),
     })
+}
+
+/// Assembles $\mathbf M$ alone on the free dofs: [`assemble`] without the scatter and the
+/// per-thread buffers of $\mathbf K$ (the mass data of a reduced body need only $\mathbf M$).
+pub fn assemble_mass(model: &FeModel, pattern: &SystemPattern) -> Result<SparseColMat<usize, f64>, FeError> {
+    let mut M = vec![0.0; pattern.nnz()];
+    fill_values(model, pattern, [&mut M], [|m| &m.M_e])?;
+    Ok(SparseColMat::new(pattern.symbolic.clone(), M))
 }

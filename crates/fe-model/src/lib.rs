@@ -10,7 +10,8 @@
 //! elements, supports and linear constraints. [`DofMap`] numbers the independent dofs after
 //! eliminating supports and constraints; [`SystemPattern`] is the symbolic phase of assembly
 //! (done once); [`assemble`] fills the values in parallel. [`solve_static`] and
-//! [`modal_dense`] are the linear analyses of this stage.
+//! [`modal_dense`] are the linear analyses of this stage, with [`linear_buckling`] on the
+//! geometric stiffness of [`geometric`].
 //!
 //! Sparse Cholesky factorisations ([`SparseCholesky`], used here by [`solve_static`] and by
 //! `reduction`) order the unknowns by nested dissection on the node positions for large
@@ -29,6 +30,8 @@
 //! | $\mathbf K,\ \mathbf M$ | `K`, `M` | assembled $\mathbf T^T \mathbf K_{full} \mathbf T$, likewise $\mathbf M$ | [`assemble`] |
 //! | $E, \nu, G, \rho$ | `E()`, `nu()`, `G()`, `rho()` | isotropic material | [`IsotropicMaterial`] |
 //! | $A, I_y, I_z, J, k_y, k_z$ | `A()`, `Iy()`, ... | beam section, shear factors | [`BeamSection`] |
+//! | $\mathbf K_G(\boldsymbol\sigma)$ | `K_G` | geometric (initial-stress) stiffness of the stress field $\boldsymbol\sigma$: $\tfrac12\mathbf u^T\mathbf K_G\mathbf u = \int\boldsymbol\sigma : \tfrac12\nabla\mathbf u^T\nabla\mathbf u\,dV$ | [`geometric`]; McGuire, Gallagher & Ziemian (2000) (9.18) for beams |
+//! | $\lambda$ | `load_factors` | linearised buckling, $\mathbf K\boldsymbol\phi = \lambda(-\mathbf K_G)\boldsymbol\phi$ | [`linear_buckling`] |
 //! | $\omega$ | `omega` | circular eigenfrequency, $\mathbf K \boldsymbol\phi = \omega^2 \mathbf M \boldsymbol\phi$ | [`modal_dense`] |
 //!
 //! Superscripts: every vector is in global axes unless its name ends in `_loc` (element axes).
@@ -41,6 +44,7 @@ pub mod dof;
 pub mod element;
 pub mod error;
 pub mod generate;
+pub mod geometric;
 pub mod interface;
 pub mod mesh;
 pub mod modal;
@@ -58,6 +62,10 @@ pub use box_mesh::{box_mesh, solid_model, solid_model_with_materials};
 pub use dof::{Dof, DofMap, DofStatus};
 pub use element::{Beam2, BeamTheory, Element, LocalMatrices, MassKind, Properties, Solid, SolidKind};
 pub use error::{ElementError, FeError, PropertyError, DOF_NAMES};
+pub use geometric::{
+    assemble_geometric_stiffness, element_dof_slots, element_geometric_stiffness, element_geometric_tensor_into,
+    linear_buckling, packed_pair, BucklingSettings, BucklingSolution,
+};
 pub use interface::{add_interface, add_interface_on_set, Interface, Interfaces, SpiderKind};
 pub use mesh::{Cell, CellId, CellKind, Mesh, NodeId};
 pub use modal::{modal_dense, ModalSolution};

@@ -12,6 +12,9 @@ mod unit {
     mod beam_structure;
     /// Shared fixtures: materials, sections, beam models along skewed axes.
     pub mod common;
+    /// Geometric stiffness: element energies against direct quadrature, symmetry, rigid
+    /// motions, the projected tensor; Euler buckling of beam and hex20 columns.
+    mod geometric;
     /// gmsh reader: fixtures in four encodings agree, inline parse cases, node orderings
     /// against gmsh's reference elements, located errors, no panic on random/cut/mutated input.
     mod gmsh;

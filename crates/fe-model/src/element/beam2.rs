@@ -362,3 +362,89 @@ fn to_global(R: &Matrix3<f64>, A_loc: &Matrix12) -> DMatrix<f64> {
     }
     A
 }
+
+/// Geometric (initial-stress) bending stiffness of one plane under a unit axial force, dofs and
+/// convention as [`bending_stiffness`], from the cubic Hermite shapes (McGuire, Gallagher &
+/// Ziemian, *Matrix Structural Analysis*, 2nd ed. (2000), (9.18); Przemieniecki (1968), the
+/// chapter on stability analysis):
+///
+/// ```text
+///   1 / (30 L) * [  36    3L    -36    3L
+///                   3L   4L^2   -3L   -L^2
+///                  -36   -3L     36   -3L
+///                   3L   -L^2   -3L   4L^2 ]
+/// ```
+///
+/// $= \int_0^L \mathbf N_v'^T \mathbf N_v'\, dx$, the second-order strain $\tfrac12 v'^2$ under
+/// a unit force.
+pub fn bending_geometric_stiffness(L: f64) -> Matrix4<f64> {
+    let c = 1.0 / (30.0 * L);
+    let (s, a, b) = (3.0 * L, 4.0 * L * L, -L * L);
+    c * Matrix4::new(
+        36.0, s, -36.0, s, //
+        s, a, -s, b, //
+        -36.0, -s, 36.0, -s, //
+        s, b, -s, a,
+    )
+}
+
+/// Geometric stiffness $\mathbf K_G^e$ (12x12, global axes, dofs as [`beam2_matrices`]) of a
+/// beam carrying the axial force `N` (tension positive): McGuire, Gallagher & Ziemian (2000)
+/// (9.18) with the axial force only (the terms of the end moments are left out), i.e. the
+/// energy $\tfrac12\int_0^L N\,(u'^2 + v'^2 + w'^2 + \tfrac{I_p}{A}\theta_x'^2)\,dx$ of the
+/// second-order Green-Lagrange strain:
+/// - axial: $\frac{N}{L}[1, -1; -1, 1]$ on $u$;
+/// - torsion: $\frac{N I_p}{A L}[1, -1; -1, 1]$ on $\theta_x$ (a fibre at distance $r$ from
+///   the axis moves $r\theta_x$ sideways; $\int_A r^2 dA = I_p$);
+/// - bending in both planes: $N$ [`bending_geometric_stiffness`].
+///
+/// The Timoshenko element uses the same matrix: its cubic Hermite shapes are the
+/// Euler-Bernoulli ones, not the shear-dependent shapes of its stiffness. With the shear
+/// flexibility in the stiffness this is the energy of Engesser's column, and the buckling load
+/// converges to $P_E/(1 + P_E/(kGA))$ to about $10^{-7}$ (Timoshenko & Gere, *Theory of
+/// Elastic Stability*, 2nd ed. (1961) ch. 2, the effect of shear on the critical load):
+/// `tests/unit/geometric.rs::timoshenko_beam_buckling_converges_to_engessers_shear_reduced_load`.
+///
+/// # Errors
+/// As [`beam2_matrices`] (zero length, orientation along the axis).
+pub fn beam2_geometric_stiffness(
+    beam: &Beam2,
+    element: usize,
+    X: [Point3<f64>; 2],
+    section: &BeamSection,
+    N: f64,
+) -> Result<DMatrix<f64>, ElementError> {
+    let (L, R) = local_axes(beam, element, X)?;
+    let mut K_loc = Matrix12::zeros();
+    let (ka, kt) = (N / L, N * section.Ip() / (section.A() * L));
+    add_bar(&mut K_loc, 0, [[ka, -ka], [-ka, ka]]);
+    add_bar(&mut K_loc, 3, [[kt, -kt], [-kt, kt]]);
+    let bending = N * bending_geometric_stiffness(L);
+    add_plane(&mut K_loc, &bending, false);
+    add_plane(&mut K_loc, &bending, true);
+    Ok(to_global(R.matrix(), &K_loc))
+}
+
+/// Axial force $N = \frac{EA}{L}(\mathbf u_2 - \mathbf u_1)\cdot\mathbf e_x$ of a beam with
+/// element displacements `u_e` (12 values, global axes, dofs as [`beam2_matrices`]): the
+/// linear stress resultant that [`beam2_geometric_stiffness`] takes.
+///
+/// # Errors
+/// As [`beam2_matrices`].
+///
+/// # Panics
+/// If `u_e` does not have 12 entries (a caller's bug, not input).
+pub fn beam2_axial_force(
+    beam: &Beam2,
+    element: usize,
+    X: [Point3<f64>; 2],
+    section: &BeamSection,
+    material: &IsotropicMaterial,
+    u_e: &[f64],
+) -> Result<f64, ElementError> {
+    assert_eq!(u_e.len(), 12, "a beam's element displacements have 12 entries");
+    let (L, R) = local_axes(beam, element, X)?;
+    let e_x = R.matrix().column(0).into_owned();
+    let du = Vector3::new(u_e[6] - u_e[0], u_e[7] - u_e[1], u_e[8] - u_e[2]);
+    Ok(material.E() * section.A() / L * e_x.dot(&du))
+}

@@ -422,3 +422,82 @@ pub fn solid_matrices(
     }
     Ok(LocalMatrices { K_e, M_e })
 }
+
+/// Displacement gradient $\mathbf H = \partial\mathbf u/\partial\mathbf x = \sum_a \mathbf u_a
+/// \mathbf g_a^T$ ($H_{mj} = \partial u_m/\partial x_j$) at a point with physical shape-function
+/// gradients `g`, for element displacements `u_e` ($[u_x, u_y, u_z]$ node by node).
+pub fn displacement_gradient(g: &[Vector3<f64>], u_e: &[f64]) -> Matrix3<f64> {
+    let mut H = Matrix3::zeros();
+    for (a, ga) in g.iter().enumerate() {
+        let u_a = Vector3::new(u_e[3 * a], u_e[3 * a + 1], u_e[3 * a + 2]);
+        H += u_a * ga.transpose();
+    }
+    H
+}
+
+/// Linear stress $\boldsymbol\sigma = \lambda\,\mathrm{tr}(\boldsymbol\varepsilon)\,\mathbf 1 +
+/// 2\mu\,\boldsymbol\varepsilon$ of the displacement gradient $\mathbf H$, with
+/// $\boldsymbol\varepsilon = \tfrac12(\mathbf H + \mathbf H^T)$: the tensor form of
+/// $\mathbf D\boldsymbol\varepsilon$ with [`elasticity_matrix`] (the same $\lambda$, $\mu$ the
+/// stiffness uses; `tests/unit/geometric.rs` checks the two against each other).
+pub fn linear_stress(material: &IsotropicMaterial, H: &Matrix3<f64>) -> Matrix3<f64> {
+    let (lambda, mu) = lame(material);
+    let eps = 0.5 * (H + H.transpose());
+    Matrix3::identity() * (lambda * eps.trace()) + eps * (2.0 * mu)
+}
+
+/// Geometric (initial-stress) stiffness $\mathbf K_G^e = \int \mathbf G^T \mathbf S
+/// \mathbf G\, dV$ of a solid element under the linear stress of the element displacements
+/// `u_e`: $\mathbf G$ ($9 \times 3n$) maps $\mathbf u_e$ to the displacement gradient,
+/// $\mathbf S = \mathrm{blockdiag}(\boldsymbol\sigma, \boldsymbol\sigma, \boldsymbol\sigma)$,
+/// $\boldsymbol\sigma = \mathbf D\boldsymbol\varepsilon(\mathbf u_e)$ at each point of the
+/// stiffness rule (the $\mathbf B_{NL}^T\boldsymbol\tau\mathbf B_{NL}$ term of Bathe, *Finite
+/// Element Procedures* (1996) ch. 6; Cook, Malkus, Plesha & Witt (2002) ch. 18).
+///
+/// # Derivation
+/// $\tfrac12\mathbf v^T\mathbf K_G\mathbf v = \int \boldsymbol\sigma : \tfrac12
+/// \mathbf H_v^T\mathbf H_v\, dV$, the second-order part of the Green-Lagrange strain under
+/// $\boldsymbol\sigma$. With $\mathbf H_v = \sum_a \mathbf v_a\mathbf g_a^T$,
+/// $\boldsymbol\sigma : \mathbf H_v^T\mathbf H_v = \sum_m \sum_{a,b} v_{am}\,
+/// \mathbf g_a^T\boldsymbol\sigma\mathbf g_b\, v_{bm}$, so the block of nodes $a, b$ is
+/// $k_{ab}\mathbf 1_3$ with $k_{ab} = \int \mathbf g_a^T\boldsymbol\sigma\mathbf g_b\, dV$.
+///
+/// # Errors
+/// As [`stiffness`].
+///
+/// # Panics
+/// If `u_e` does not have $3n$ entries (a caller's bug, not input).
+pub fn geometric_stiffness(
+    kind: SolidKind,
+    element: usize,
+    X_e: &[Point3<f64>],
+    material: &IsotropicMaterial,
+    u_e: &[f64],
+) -> Result<DMatrix<f64>, ElementError> {
+    check_node_count(kind, element, X_e)?;
+    let n = kind.node_count();
+    assert_eq!(u_e.len(), 3 * n, "a solid's element displacements have 3 per node");
+    let mut k = DMatrix::zeros(n, n);
+    let rule = kind.stiffness_rule();
+    for (q, (xi, w)) in rule.points.iter().zip(&rule.weights).enumerate() {
+        let p = point_values(kind, element, q, X_e, xi)?;
+        let sigma = linear_stress(material, &displacement_gradient(&p.g, u_e));
+        let f = w * p.det_J;
+        for b in 0..n {
+            let s_gb = sigma * p.g[b];
+            for a in 0..=b {
+                k[(a, b)] += f * p.g[a].dot(&s_gb);
+            }
+        }
+    }
+    mirror_upper(&mut k);
+    let mut K_G = DMatrix::zeros(3 * n, 3 * n);
+    for b in 0..n {
+        for a in 0..n {
+            for i in 0..3 {
+                K_G[(3 * a + i, 3 * b + i)] = k[(a, b)];
+            }
+        }
+    }
+    Ok(K_G)
+}
