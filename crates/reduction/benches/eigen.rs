@@ -15,6 +15,12 @@
 //! `benches/scipy_eigsh.py`, which times scipy's `eigsh(K, M=M, sigma=0, k=20)` on the same
 //! matrices. `REDUCTION_ORDERING=amd|nd|auto` chooses the fill-reducing ordering (`auto`, the
 //! default: nested dissection on the grid's node positions from `fe_model::ordering::ND_MIN_DOFS` dofs).
+//!
+//! Experiments: `REDUCTION_BENCH_BLOCK`, `REDUCTION_BENCH_KRYLOV_DIM`, `REDUCTION_BENCH_TOL` set
+//! `EigenSettings::block_size`, `krylov_dim`, `tolerance`; `REDUCTION_BENCH_SOLVE_RHS=1,2,4,8`
+//! also times one solve with each number of right-hand sides; `REDUCTION_BENCH_SOLVE_ONLY=1,8`
+//! times only the solves, with the parallel subtree solves and then with faer's sequential
+//! supernodal solves, and skips the eigensolver.
 
 #![allow(non_snake_case)]
 
@@ -97,11 +103,39 @@ fn run(ex: usize, ey: usize, ez: usize) {
     let factor =
         ShiftInvert::with_ordering(K.as_ref(), M.as_ref(), 0.0, Some(&points), ordering).expect("factorisation");
     println!("ordering: {:?} (REDUCTION_ORDERING=amd|nd|auto)", factor.ordering());
+    let (subtrees, top) = factor.parallel_subtrees();
+    println!(
+        "triangular solves: {subtrees} subtrees in parallel, {:.1} % of the factor above them",
+        100.0 * top
+    );
     let t_factor = ms(t);
     let cpu_factor = cpu_ms() - cpu;
+    if let Ok(list) = std::env::var("REDUCTION_BENCH_SOLVE_ONLY") {
+        solve_timings(&factor, &list);
+        faer::set_global_parallelism(faer::Par::Seq);
+        println!("with faer's sequential supernodal solves (Par::Seq):");
+        solve_timings(&factor, &list);
+        faer::set_global_parallelism(faer::Par::rayon(0));
+        return;
+    }
     let t = Instant::now();
     let cpu = cpu_ms();
-    let settings = EigenSettings::new(N_MODES, Shift::Zero);
+    // Experiment knobs (unset: the defaults of `EigenSettings::new`).
+    let knob = |name: &str| std::env::var(name).ok().and_then(|v| v.parse::<f64>().ok());
+    let mut settings = EigenSettings::new(N_MODES, Shift::Zero);
+    if let Some(p) = knob("REDUCTION_BENCH_KRYLOV_DIM") {
+        settings.krylov_dim = p as usize;
+    }
+    if let Some(b) = knob("REDUCTION_BENCH_BLOCK") {
+        settings.block_size = b as usize;
+    }
+    if let Some(tol) = knob("REDUCTION_BENCH_TOL") {
+        settings.tolerance = tol;
+    }
+    println!(
+        "settings: krylov_dim {} (0 = automatic), block {}, tolerance {:.0e}",
+        settings.krylov_dim, settings.block_size, settings.tolerance
+    );
     let sol = factor
         .lowest_modes(K.as_ref(), M.as_ref(), &settings)
         .expect("eigensolver");
@@ -128,11 +162,42 @@ fn run(ex: usize, ey: usize, ez: usize) {
     println!("operator applications (L^-T, M, L^-1): {}", sol.operator_applications);
     println!("worst relative residual: {worst:.2e}");
     println!("frequencies (Hz): {}", f.join(" "));
+    let r: Vec<String> = sol.residuals.iter().map(|r| format!("{r:.1e}")).collect();
+    println!("relative residuals: {}", r.join(" "));
+    if let Ok(list) = std::env::var("REDUCTION_BENCH_SOLVE_RHS") {
+        solve_timings(&factor, &list);
+    }
     if let Ok(dir) = std::env::var("REDUCTION_BENCH_MTX_DIR") {
         let mut file = std::fs::File::create(format!("{dir}/eigenvalues_{n}.txt")).unwrap();
         for l in &sol.eigenvalues {
             writeln!(file, "{l:.17e}").unwrap();
         }
+    }
+}
+
+/// Time of one solve $(\mathbf K - \sigma\mathbf M)\mathbf X = \mathbf B$ (forward and backward
+/// triangular solves, the cost of one operator application) with `k` right-hand sides, for
+/// each `k` of the comma-separated `list`: does a block read the factor once for its `k`
+/// vectors? Three repetitions, the fastest (wall) and its CPU time.
+fn solve_timings(factor: &ShiftInvert, list: &str) {
+    let n = factor.nrows();
+    for k in list.split(',').filter_map(|x| x.trim().parse::<usize>().ok()) {
+        let mut best = (f64::INFINITY, 0.0);
+        for _ in 0..3 {
+            let mut X = faer::Mat::<f64>::from_fn(n, k, |i, j| ((i * 31 + j * 17) % 97) as f64 - 48.0);
+            let (t, cpu) = (Instant::now(), cpu_ms());
+            factor.solve_in_place(X.as_mut());
+            let (t, cpu) = (ms(t), cpu_ms() - cpu);
+            if t < best.0 {
+                best = (t, cpu);
+            }
+        }
+        println!(
+            "solve with {k:>2} right-hand sides: {:>8.1} ms wall, {:>8.1} ms CPU, {:>7.1} ms wall per vector",
+            best.0,
+            best.1,
+            best.0 / k as f64
+        );
     }
 }
 

@@ -12,6 +12,7 @@
 
 use crate::eigen::{EigenSettings, Shift, ShiftInvert};
 use crate::error::ReductionError;
+use crate::geometric::reduced_geometric_stiffness;
 use crate::invariants::{inertia_data, inertia_data_from_mass};
 use crate::reduced_body::{DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, FORMAT_VERSION};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
@@ -86,6 +87,9 @@ pub enum Stage {
     Projecting,
     /// Mass data, inertia invariants and the rigid fit $\boldsymbol\Phi_{com}$.
     Invariants,
+    /// The reduced geometric stiffness matrices $\mathbf G_k$ (with
+    /// [`CbSettings::geometric_stiffening`]).
+    GeometricStiffness,
 }
 
 /// The boundary/internal split of the free dofs.
@@ -306,8 +310,9 @@ fn project(
             V[(d, nb + c)] = Phi_i[(i, c)];
         }
     }
-    let KV = K * &V;
-    let MV = M * &V;
+    let par = faer::get_global_parallelism();
+    let KV = crate::eigen::symmetric_times(K, V.as_ref(), par);
+    let MV = crate::eigen::symmetric_times(M, V.as_ref(), par);
     let K_CB = symmetrize(V.transpose() * &KV);
     let M_CB = symmetrize(V.transpose() * &MV);
     Ok(Projection { V, omega, K_CB, M_CB })
@@ -325,6 +330,7 @@ struct BodyParts<'a> {
     Phi_com: Mat<f64>,
     auxiliary_interface: Option<usize>,
     keep_mesh_shapes: bool,
+    geometric_stiffness: Option<Vec<DenseMatrix>>,
 }
 
 fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
@@ -338,6 +344,7 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
         Phi_com,
         auxiliary_interface,
         keep_mesh_shapes,
+        geometric_stiffness,
     } = parts;
     if let Some(aux) = auxiliary_interface {
         let x = nodes[interfaces[aux].1];
@@ -382,7 +389,7 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
             nodes,
             shapes: DenseMatrix::from_faer(S_full.as_ref()),
         }),
-        geometric_stiffness: None,
+        geometric_stiffness,
     })
 }
 
@@ -467,6 +474,12 @@ pub fn reduce_with_progress(
     }
     progress(Stage::Invariants);
     let (inertia, Phi_com) = inertia_data(model, &S_full)?;
+    let geometric_stiffness = if settings.geometric_stiffening {
+        progress(Stage::GeometricStiffness);
+        Some(reduced_geometric_stiffness(model, S_full.as_ref())?)
+    } else {
+        None
+    };
     finish(BodyParts {
         name,
         interfaces: &interfaces,
@@ -477,6 +490,7 @@ pub fn reduce_with_progress(
         Phi_com,
         auxiliary_interface,
         keep_mesh_shapes: settings.keep_mesh_shapes,
+        geometric_stiffness,
     })
 }
 
@@ -541,8 +555,9 @@ pub fn reduce_external(
 /// # Errors
 /// [`ReductionError::ExternalModel`] for inconsistent sizes, a dof listed twice, a node index
 /// out of range or a non-symmetric matrix (with the offending entry);
-/// [`ReductionError::Interface`] for an interface node without its six dofs; and every
-/// error of [`reduce`]'s eigen solution.
+/// [`ReductionError::Interface`] for an interface node without its six dofs;
+/// [`ReductionError::ExternalModel`] with [`CbSettings::geometric_stiffening`] (it needs the
+/// elements); and every error of [`reduce`]'s eigen solution.
 pub fn reduce_external_dofs(
     nodes: &[[f64; 3]],
     K: SparseColMatRef<'_, usize, f64>,
@@ -552,6 +567,12 @@ pub fn reduce_external_dofs(
     interfaces: &[(String, usize)],
     settings: &CbSettings,
 ) -> Result<ReducedBody, ReductionError> {
+    if settings.geometric_stiffening {
+        // G_k needs the stress of each mode, hence the elements: matrices alone do not have it.
+        return Err(ReductionError::ExternalModel {
+            what: "geometric stiffening needs the FE model's elements (use `reduce`); matrices from another code do not carry them".into(),
+        });
+    }
     let n_free = dofs.len();
     for (what, A) in [("K", K), ("M", M)] {
         if A.nrows() != n_free || A.ncols() != n_free {
@@ -623,6 +644,7 @@ pub fn reduce_external_dofs(
         Phi_com,
         auxiliary_interface,
         keep_mesh_shapes: settings.keep_mesh_shapes,
+        geometric_stiffness: None,
     })
 }
 

@@ -21,10 +21,10 @@
 //! serde_json writes the shortest decimal that rounds back to the same `f64` and this crate
 //! enables its `float_roundtrip` feature, so that the reading is correctly rounded.
 //!
-//! # Layout, format version 1
+//! # Layout, format version 2
 //!
 //! ```text
-//! FLEXMBS-RBODY 1\n                         magic and format version: this line never changes shape
+//! FLEXMBS-RBODY 2\n                         magic and format version: this line never changes shape
 //! metadata <bytes> crc32 <8 hex digits>\n   length and CRC-32 of the JSON block
 //! <JSON metadata, <bytes> bytes>\n          Metadata: scalars and the array index
 //! <arrays>                                  f64 little-endian, column-major, back to back
@@ -34,14 +34,21 @@
 //! from the first array, byte count and CRC-32 (IEEE 802.3, the one of zlib and Python's
 //! `binascii.crc32`; see [`crc32`]): `K_CB` and `M_CB` ($n \times n$, $n = 6N + m$), `S_t`,
 //! `S_r` ($3 \times n$), `S_x` ($9 \times n$), the nine `S_bar[kl]` ($n \times n$, $k, l \in
-//! \{x, y, z\}$, entry $3k + l$ of [`InertiaData::S_bar`]), `Phi_com` ($6 \times n$), and with
-//! mesh shapes `mesh.nodes` ($3 \times n_{nodes}$) and `mesh.shapes` ($6 n_{nodes} \times n$).
+//! \{x, y, z\}$, entry $3k + l$ of [`InertiaData::S_bar`]), `Phi_com` ($6 \times n$), with
+//! geometric stiffness (metadata `geometric_stiffness: true`) the $n$ matrices `G[k]`
+//! ($n \times n$, [`ReducedBody::geometric_stiffness`]), and with mesh shapes `mesh.nodes`
+//! ($3 \times n_{nodes}$) and `mesh.shapes` ($6 n_{nodes} \times n$).
 //!
 //! # Versions
 //!
 //! The first line is read before anything else, so a build that meets a newer file says
 //! which version the file has and which it reads, instead of failing somewhere in the JSON.
 //! A change of [`ReducedBody`] or of this layout increments [`FORMAT_VERSION`].
+//!
+//! - Version 1: the layout above without `G[k]`; its metadata has no `geometric_stiffness`
+//!   field. Still read: it gives a body without geometric stiffness, marked with the current
+//!   [`FORMAT_VERSION`] (a version-1 file is a version-2 body without `G`, nothing is lost).
+//! - Version 2: the optional `G[k]` arrays and the metadata field `geometric_stiffness`.
 //!
 //! # Errors
 //!
@@ -79,7 +86,7 @@ pub enum BodyFileProblem {
     /// The format version on the first line is not the one this build reads.
     #[error("{}", version_message(*found, *supported))]
     UnsupportedVersion { found: u64, supported: u32 },
-    /// A header line (1 or 2) is not what format version 1 prescribes.
+    /// A header line (1 or 2) is not what the format prescribes.
     #[error("header line {line}: {what}")]
     Header { line: usize, what: String },
     /// The file ends inside the JSON metadata block.
@@ -91,7 +98,7 @@ pub enum BodyFileProblem {
     /// written. `block` is `metadata` or the array's name.
     #[error("checksum mismatch in {block}: stored crc32 {stored:08x}, computed {computed:08x} (the file was changed or damaged after it was written)")]
     Checksum { block: String, stored: u32, computed: u32 },
-    /// The metadata block is not the JSON of format version 1; `line` and `column` are
+    /// The metadata block is not the JSON of the file's format version; `line` and `column` are
     /// serde_json's, counted in the JSON block (its line 1 is line 3 of the file).
     #[error("malformed metadata JSON at line {line}, column {column} of the block (file line {}): {message}", line + 2)]
     Json {
@@ -120,17 +127,20 @@ pub enum BodyFileProblem {
     Unwritable { what: String },
 }
 
+/// The oldest format version this build reads.
+const OLDEST_READABLE: u32 = 1;
+
 fn version_message(found: u64, supported: u32) -> String {
     if found > supported as u64 {
-        format!("format version {found} is newer than this build, which reads version {supported}: read it with a newer flexmbs, or reduce the body again with this one")
+        format!("format version {found} is newer than this build, which reads versions {OLDEST_READABLE} to {supported}: read it with a newer flexmbs, or reduce the body again with this one")
     } else {
         format!(
-            "format version {found} is not supported: this build reads version {supported} only; reduce the body again"
+            "format version {found} is not supported: this build reads versions {OLDEST_READABLE} to {supported}; reduce the body again"
         )
     }
 }
 
-/// The JSON metadata block of format version 1. Everything that is not a dense array.
+/// The JSON metadata block (format versions 1 and 2). Everything that is not a dense array.
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Metadata {
@@ -146,6 +156,9 @@ struct Metadata {
     auxiliary_interface: Option<usize>,
     /// Number of mesh nodes when mesh shapes are stored.
     mesh_nodes: Option<usize>,
+    /// Whether the `G[k]` arrays are stored (version 2; absent, hence false, in version 1).
+    #[serde(default)]
+    geometric_stiffness: bool,
     arrays: Vec<ArrayEntry>,
 }
 
@@ -194,11 +207,12 @@ pub fn crc32(bytes: &[u8]) -> u32 {
 const AXES: [char; 3] = ['x', 'y', 'z'];
 
 /// Name, rows and columns of every array, in file order, for a body with `n_interfaces`,
-/// `n_modes` and (when mesh shapes are stored) `mesh_nodes`. Checked arithmetic: the counts
-/// may come from a damaged file.
+/// `n_modes`, (when stored) `geometric` stiffness and (when mesh shapes are stored)
+/// `mesh_nodes`. Checked arithmetic: the counts may come from a damaged file.
 fn expected_arrays(
     n_interfaces: usize,
     n_modes: usize,
+    geometric: bool,
     mesh_nodes: Option<usize>,
 ) -> Result<Vec<(String, usize, usize)>, String> {
     let n = n_interfaces
@@ -218,6 +232,9 @@ fn expected_arrays(
         }
     }
     list.push(("Phi_com".to_string(), 6, n));
+    if geometric {
+        list.extend((0..n).map(|k| (format!("G[{k}]"), n, n)));
+    }
     if let Some(nodes) = mesh_nodes {
         let slots = nodes
             .checked_mul(6)
@@ -254,6 +271,9 @@ fn body_arrays(body: &ReducedBody) -> Vec<(String, &DenseMatrix)> {
         list.push((format!("S_bar[{}{}]", AXES[(kl / 3) % 3], AXES[kl % 3]), S));
     }
     list.push(("Phi_com".to_string(), &body.Phi_com));
+    for (k, G_k) in body.geometric_stiffness.iter().flatten().enumerate() {
+        list.push((format!("G[{k}]"), G_k));
+    }
     if let Some(mesh) = &body.mesh {
         list.push(("mesh.shapes".to_string(), &mesh.shapes));
     }
@@ -286,9 +306,19 @@ fn check_writable(body: &ReducedBody) -> Result<(), String> {
             ));
         }
     }
+    if let Some(G) = &body.geometric_stiffness {
+        let n = body.n_coordinates();
+        if G.len() != n {
+            return Err(format!(
+                "geometric stiffness holds {} matrices for n = {n} CB coordinates",
+                G.len()
+            ));
+        }
+    }
     let expected = expected_arrays(
         body.interfaces.len(),
         body.n_modes,
+        body.geometric_stiffness.is_some(),
         body.mesh.as_ref().map(|m| m.nodes.len()),
     )?;
     let expected: Vec<_> = expected
@@ -409,6 +439,7 @@ pub fn to_bytes(body: &ReducedBody, destination: &Path) -> Result<Vec<u8>, Reduc
         inertia_com: body.inertia.inertia_com,
         auxiliary_interface: body.auxiliary_interface,
         mesh_nodes: body.mesh.as_ref().map(|m| m.nodes.len()),
+        geometric_stiffness: body.geometric_stiffness.is_some(),
         arrays: index,
     };
     let json = serde_json::to_vec_pretty(&metadata).map_err(|e| {
@@ -519,7 +550,7 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
             printable(&line1[magic.len()..])
         ),
     })?;
-    if version != FORMAT_VERSION as u64 {
+    if !(OLDEST_READABLE as u64..=FORMAT_VERSION as u64).contains(&version) {
         return Err(BodyFileProblem::UnsupportedVersion {
             found: version,
             supported: FORMAT_VERSION,
@@ -576,11 +607,16 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         message: e.to_string(),
     })?;
     let shape = |what: String| BodyFileProblem::Shape { what };
-    if meta.format_version != FORMAT_VERSION {
+    if meta.format_version as u64 != version {
         return Err(shape(format!(
-            "the metadata says format version {} but the first line says {FORMAT_VERSION}",
+            "the metadata says format version {} but the first line says {version}",
             meta.format_version
         )));
+    }
+    if version == 1 && meta.geometric_stiffness {
+        return Err(shape(
+            "the metadata says geometric_stiffness, which format version 1 does not have".into(),
+        ));
     }
     if meta.fixed_interface_omega.len() != meta.n_modes {
         return Err(shape(format!(
@@ -598,15 +634,26 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         }
     }
 
-    // The index: names, shapes and offsets as format version 1 prescribes, checked before any
+    // The index: names, shapes and offsets as the format prescribes, checked before any
     // allocation so that damaged counts cannot ask for absurd memory.
-    let expected = expected_arrays(meta.interfaces.len(), meta.n_modes, meta.mesh_nodes).map_err(shape)?;
+    let expected = expected_arrays(
+        meta.interfaces.len(),
+        meta.n_modes,
+        meta.geometric_stiffness,
+        meta.mesh_nodes,
+    )
+    .map_err(shape)?;
     if meta.arrays.len() != expected.len() {
         return Err(shape(format!(
-            "the index lists {} arrays; a body with {} interfaces, {} modes and {} holds {}",
+            "the index lists {} arrays; a body with {} interfaces, {} modes, {} and {} holds {}",
             meta.arrays.len(),
             meta.interfaces.len(),
             meta.n_modes,
+            if meta.geometric_stiffness {
+                "geometric stiffness"
+            } else {
+                "no geometric stiffness"
+            },
             if meta.mesh_nodes.is_some() {
                 "mesh shapes"
             } else {
@@ -688,33 +735,37 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         });
     }
 
-    let mut values = values.into_iter();
-    let mut next_matrix = |(rows, cols): (usize, usize)| DenseMatrix {
-        nrows: rows,
-        ncols: cols,
-        data: values.next().expect("one value list per expected array"),
-    };
-    let shapes: Vec<(usize, usize)> = expected.iter().map(|(_, r, c)| (*r, *c)).collect();
-    let K_CB = next_matrix(shapes[0]);
-    let M_CB = next_matrix(shapes[1]);
-    let S_t = next_matrix(shapes[2]);
-    let S_r = next_matrix(shapes[3]);
-    let S_x = next_matrix(shapes[4]);
-    let S_bar = (5..14).map(|k| next_matrix(shapes[k])).collect();
-    let Phi_com = next_matrix(shapes[14]);
+    // In file order (`expected_arrays`), each array taken once.
+    let mut arrays = values
+        .into_iter()
+        .zip(&expected)
+        .map(|(data, (_, rows, cols))| DenseMatrix {
+            nrows: *rows,
+            ncols: *cols,
+            data,
+        });
+    let mut next_matrix = || arrays.next().expect("one value list per expected array");
+    let K_CB = next_matrix();
+    let M_CB = next_matrix();
+    let S_t = next_matrix();
+    let S_r = next_matrix();
+    let S_x = next_matrix();
+    let S_bar = (0..9).map(|_| next_matrix()).collect();
+    let Phi_com = next_matrix();
+    let n = K_CB.nrows;
+    let geometric_stiffness = meta
+        .geometric_stiffness
+        .then(|| (0..n).map(|_| next_matrix()).collect());
     let mesh = meta.mesh_nodes.map(|_| {
-        let nodes = next_matrix(shapes[15])
-            .data
-            .chunks_exact(3)
-            .map(|x| [x[0], x[1], x[2]])
-            .collect();
+        let nodes = next_matrix().data.chunks_exact(3).map(|x| [x[0], x[1], x[2]]).collect();
         MeshModes {
             nodes,
-            shapes: next_matrix(shapes[16]),
+            shapes: next_matrix(),
         }
     });
     Ok(ReducedBody {
-        format_version: meta.format_version,
+        // A version-1 file reads as a current body without geometric stiffness (module docs).
+        format_version: FORMAT_VERSION,
         name: meta.name,
         interfaces: meta.interfaces,
         n_modes: meta.n_modes,
@@ -733,7 +784,6 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         Phi_com,
         auxiliary_interface: meta.auxiliary_interface,
         mesh,
-        // Not in format version 1's arrays yet.
-        geometric_stiffness: None,
+        geometric_stiffness,
     })
 }

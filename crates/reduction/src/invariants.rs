@@ -15,11 +15,13 @@
 //! out of these deformation-dependent terms, and Hermite interpolation sees the scalar field
 //! with zero slopes), averaged over the three directions.
 
+use crate::eigen::symmetric_times;
 use crate::error::ReductionError;
 use crate::reduced_body::{DenseMatrix, InertiaData};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::Mat;
-use fe_model::{assemble, DofMap, FeModel, SystemPattern};
+use fe_model::assembly::assemble_mass;
+use fe_model::{DofMap, FeModel, SystemPattern};
 use nalgebra::{Matrix3, Matrix6, Vector3};
 
 /// The rigid-motion matrix on the dofs whose full slots (`6 node + k`) are `slots`: columns
@@ -52,7 +54,7 @@ pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, 
     bare.constraints.clear();
     let dofs = DofMap::new(&bare).map_err(ReductionError::from_fe)?;
     let pattern = SystemPattern::new(&bare, &dofs);
-    let M = assemble(&bare, &pattern).map_err(ReductionError::from_fe)?.M;
+    let M = assemble_mass(&bare, &pattern).map_err(ReductionError::from_fe)?;
     let slots: Vec<usize> = (0..dofs.n_free())
         .map(|d| dofs.full_slot(fe_model::Dof(d as u32)))
         .collect();
@@ -73,12 +75,14 @@ pub fn inertia_data_from_mass(
     let n_f = slots.len();
     let n = S_full.ncols();
     let S = Mat::from_fn(n_f, n, |d, j| S_full[(slots[d], j)]);
-    let MS = M * &S;
+    let par = faer::get_global_parallelism();
+    // M is symmetric (assembled with both triangles): the gather product reads it once.
+    let MS = symmetric_times(M, S.as_ref(), par);
 
     // Mass and centre of mass from the rigid modes about the origin: with translations T and
     // rotations W, T^T M W = m c~^T (see the module docs).
     let R0 = rigid_modes(slots, nodes, Vector3::zeros());
-    let G0 = R0.transpose() * (M * &R0);
+    let G0 = R0.transpose() * symmetric_times(M, R0.as_ref(), par);
     let mass = (G0[(0, 0)] + G0[(1, 1)] + G0[(2, 2)]) / 3.0;
     if !(mass > 0.0) {
         return Err(ReductionError::MassNotPositiveDefinite {
@@ -88,7 +92,7 @@ pub fn inertia_data_from_mass(
     }
     let c = Vector3::new(G0[(1, 5)], G0[(2, 3)], G0[(0, 4)]) / mass;
     let R = rigid_modes(slots, nodes, c);
-    let MR = M * &R;
+    let MR = symmetric_times(M, R.as_ref(), par);
     let G = R.transpose() * &MR;
     let inertia_com = Matrix3::from_fn(|i, j| G[(3 + i, 3 + j)]);
     let RtMS = R.transpose() * &MS;
@@ -129,7 +133,7 @@ pub fn inertia_data_from_mass(
         let node_c = |r: usize| slots[dofs_c[r]] / 6;
         let F = Mat::from_fn(n_c, 3 * n, |r, col| S_full[(6 * node_c(r) + col / n, col % n)]);
         let X = Mat::from_fn(n_c, 3, |r, k| nodes[node_c(r)][k] - c[k]);
-        let MF = &M_cc * &F;
+        let MF = symmetric_times(M_cc.as_ref(), F.as_ref(), par);
         let G = F.transpose() * &MF;
         let XtMF = X.transpose() * &MF;
         for k in 0..3 {

@@ -26,6 +26,7 @@
 //! | $\mu_k,\ \mathbf y_k$ | `mu`, `Y` | eigenpairs of $\mathbf C$: $\mu_k = 1/(\lambda_k - \sigma)$, $\mathbf y_k = \mathbf L^T\mathbf P\boldsymbol\phi_k$ | Grimes, Lewis & Simon 1994, §2 |
 //! | $\mathbf V_k,\ \mathbf T_k,\ \beta_k$ | `V`, `T`, `beta` | Lanczos basis, projected matrix, coupling: $\mathbf C\mathbf V_k = \mathbf V_k\mathbf T_k + \beta_k\mathbf v_{k+1}\mathbf e_k^T$ | Wu & Simon 2000 |
 //! | $p$ | `krylov_dim` | Krylov subspace dimension, default $\max(2m, m + 32)$ | [`eigen::EigenSettings`] |
+//! | $\mathbf G_k$ | `geometric_stiffness[k]` | reduced geometric stiffness $\mathbf V^T\mathbf K_G(\boldsymbol\sigma(\mathbf V\mathbf e_k))\mathbf V$; strain energy $\tfrac12\mathbf q^T\mathbf K_{CB}\mathbf q + \tfrac12\sum_k q_k\mathbf q^T\mathbf G_k\mathbf q$ | [`geometric`]; `fe_model::geometric` |
 //! | $r_k$ | `residuals[k]` | $\|\mathbf K\boldsymbol\phi_k - \lambda_k\mathbf M\boldsymbol\phi_k\| / \max(\|\mathbf K\boldsymbol\phi_k\|, \lvert\lambda_k - \sigma\rvert\,\|\mathbf M\boldsymbol\phi_k\|)$ | [`eigen::relative_residual`] |
 //!
 //! Vectors are columns; `^T` is transpose. Dof indices in errors are those of the matrices
@@ -36,6 +37,7 @@ pub mod diagnostics;
 pub mod eigen;
 pub mod error;
 pub mod file;
+pub mod geometric;
 pub mod invariants;
 pub mod matrix_market;
 pub mod modal;
@@ -46,6 +48,7 @@ pub use diagnostics::{diagnostics, DiagnosticWarning, Diagnostics, ModeDiagnosti
 pub use eigen::{lowest_modes, EigenSettings, EigenSolution, Shift, ShiftInvert};
 pub use error::ReductionError;
 pub use file::BodyFileProblem;
+pub use geometric::reduced_geometric_stiffness;
 pub use matrix_market::{read_matrix_market, write_matrix_market};
 pub use modal::modal_sparse;
 pub use reduced_body::{DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, FORMAT_VERSION};

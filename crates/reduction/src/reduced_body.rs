@@ -24,8 +24,9 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Version of the reduced-body format this build writes and reads.
-pub const FORMAT_VERSION: u32 = 1;
+/// Version of the reduced-body format this build writes (it also reads version 1, which has
+/// no [`ReducedBody::geometric_stiffness`]). 2: the optional geometric stiffness arrays.
+pub const FORMAT_VERSION: u32 = 2;
 
 /// A dense matrix as plain data (column-major), for files; convert to `faer::Mat` to compute.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -138,8 +139,9 @@ pub struct ReducedBody {
     /// Mode shapes on the mesh, when kept.
     pub mesh: Option<MeshModes>,
     /// Geometric stiffening (optional): $n$ matrices
-    /// $\mathbf G_k$ ($n \times n$, symmetric), the reduced geometric stiffness of the stress
-    /// field of CB coordinate $k$, so the strain energy gains the cubic term
+    /// $\mathbf G_k = \mathbf V^T\mathbf K_G(\boldsymbol\sigma(\mathbf V\mathbf e_k))\mathbf V$
+    /// ($n \times n$, symmetric), the reduced geometric stiffness of the stress field of CB
+    /// coordinate $k$ ([`crate::geometric`]), so the strain energy gains the cubic term
     /// $U_3 = \tfrac12 \sum_k q_k\, \mathbf q^T \mathbf G_k \mathbf q$ (the second-order part of
     /// the Green-Lagrange strain under the linear stress). `None`: linear elastic field.
     #[serde(default)]

@@ -46,6 +46,14 @@ mod matrix_market {
     include!("unit/matrix_market.rs");
 }
 
+/// `reduction::geometric` (geometric stiffening): sum_k w_k G_k against the full model's
+/// V^T K_G V, zero for rigid motions, buckling of clamped reduced beam and hex20 rods
+/// converging to the full model's as modes are added, G in the body file and version-1
+/// files still read; release only: the cost of G.
+mod geometric_stiffening {
+    include!("unit/geometric_stiffening.rs");
+}
+
 /// `reduction::diagnostics`: effective masses from M_CB against a dense solution of the full
 /// model, the sum rule (all modes + what the interface carries = rigid mass, lumped hand
 /// value m/2n), the static residual, and the warnings.
