@@ -115,6 +115,46 @@ pub struct Superelement {
     pub(crate) length: f64,
     pub(crate) frame_settings: FrameSettings,
     pub(crate) mesh: Option<MeshModes>,
+    /// Geometric stiffening $\mathbf G_k$ ([`GeometricStiffness`]); `None`: a linear elastic field.
+    pub(crate) geometric: Option<GeometricStiffness>,
+}
+
+/// The reduced geometric stiffness of a body: $n$ symmetric matrices $\mathbf G_k$ ($n\times n$),
+/// the geometric stiffness of the linear stress field of CB coordinate $k$, and the strain energy
+/// it gives the body in its floating frame ($\mathbf q = \mathbf q^{jj}$):
+///
+/// $$U = \tfrac12\mathbf q^T\mathbf K_{CB}\mathbf q + U_3 + U_4,\qquad
+/// U_3 = \tfrac12\sum_k q_k\,\mathbf q^T\mathbf G_k\mathbf q,\qquad
+/// U_4 = \tfrac12\mathbf b^T\mathbf F\mathbf b,\quad b_m = \tfrac12\mathbf q^T\mathbf G_m\mathbf q,$$
+///
+/// $\mathbf F = \mathbf K_{CB}^+$ (the crate docs, "Geometric stiffening", derive $U_4$ and say why
+/// it is needed). Built from [`ReducedBody::geometric_stiffness`] by [`Superelement::new`], which
+/// checks the count ($n$), the shapes ($n\times n$), finiteness and symmetry and stores the
+/// symmetric part (so the Hessian is exactly symmetric). The force, tangent and energy terms
+/// are in [`crate::forces`] (`GeometricStiffness::gradient_into`, `::energy`).
+#[derive(Clone, Debug)]
+pub struct GeometricStiffness {
+    /// $n$.
+    pub(crate) n: usize,
+    /// The $\mathbf G_k$ stacked column-major, $(\mathbf G_k)_{ij}$ at $i + nj + n^2k$: as an $n^2\times n$
+    /// matrix its column $k$ is $\mathrm{vec}\,\mathbf G_k$, as an $n\times n^2$ matrix it is
+    /// $[\mathbf G_0, \dots, \mathbf G_{n-1}]$, so $\sum_k w_k\mathbf G_k$ and all the $\mathbf G_k\mathbf q$ are one
+    /// matrix-vector product each (`forces.rs`).
+    pub(crate) stack: Vec<f64>,
+    /// $\mathbf F = \mathbf K_{CB}^+$, the pseudo-inverse on the complement of the rigid modes.
+    pub(crate) F: Mat<f64>,
+}
+
+impl GeometricStiffness {
+    /// $\mathbf G_k$ ($k < n$).
+    pub fn matrix(&self, k: usize) -> faer::MatRef<'_, f64> {
+        let n = self.n;
+        faer::MatRef::from_column_major_slice(&self.stack[n * n * k..n * n * (k + 1)], n, n)
+    }
+    /// $\mathbf F = \mathbf K_{CB}^+$.
+    pub fn compliance(&self) -> &Mat<f64> {
+        &self.F
+    }
 }
 
 fn invalid(body: &ReducedBody, what: impl Into<String>) -> SuperelementError {
@@ -153,6 +193,83 @@ fn check_dense(
         ));
     }
     Ok(())
+}
+
+/// Relative asymmetry $|G_{ij} - G_{ji}|$ accepted in a $\mathbf G_k$, against its largest entry:
+/// a projection $\mathbf V^T\mathbf K_\sigma\mathbf V$ in floating point is symmetric to about
+/// $n\,\epsilon$; a transposed or wrongly assembled matrix is off by O(1).
+const G_SYMMETRY_TOL: f64 = 1e-8;
+
+/// Checks [`ReducedBody::geometric_stiffness`] (module docs of [`GeometricStiffness`]).
+fn geometric_stiffness(body: &ReducedBody, n: usize) -> Result<Option<GeometricStiffness>, SuperelementError> {
+    let Some(list) = &body.geometric_stiffness else {
+        return Ok(None);
+    };
+    if list.len() != n {
+        return Err(invalid(
+            body,
+            format!(
+                "geometric_stiffness has {} matrices G_k, expected one per CB coordinate ({n})",
+                list.len()
+            ),
+        ));
+    }
+    let mut stack = Vec::with_capacity(n * n * n);
+    for (k, Gk) in list.iter().enumerate() {
+        let name = format!("geometric stiffness G[{k}]");
+        check_dense(body, &name, Gk, n, n)?;
+        let Gk = Gk.to_faer();
+        let big = (0..n)
+            .flat_map(|j| (0..n).map(move |i| (i, j)))
+            .map(|(i, j)| Gk[(i, j)].abs())
+            .fold(0.0, f64::max);
+        for j in 0..n {
+            for i in 0..j {
+                let (a, b) = (Gk[(i, j)], Gk[(j, i)]);
+                if (a - b).abs() > G_SYMMETRY_TOL * big {
+                    return Err(invalid(
+                        body,
+                        format!("{name} is not symmetric: ({i}, {j}) = {a:e} but ({j}, {i}) = {b:e}"),
+                    ));
+                }
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                stack.push(0.5 * (Gk[(i, j)] + Gk[(j, i)]));
+            }
+        }
+    }
+    let F = rigid_pseudo_inverse(body, n)?;
+    Ok(Some(GeometricStiffness { n, stack, F }))
+}
+
+/// $\mathbf K_{CB}^+$ of a free body: $(\mathbf K_{CB} + \alpha\mathbf P_{rig})^{-1} - \mathbf P_{rig}/\alpha$ with
+/// $\mathbf P_{rig} = \boldsymbol\Phi_{rig}(\boldsymbol\Phi_{rig}^T\boldsymbol\Phi_{rig})^{-1}\boldsymbol\Phi_{rig}^T$
+/// the projector on the rigid modes (3.6) of the undeformed interface set and $\alpha$ the mean
+/// diagonal of $\mathbf K_{CB}$ (the null space of $\mathbf K_{CB}$ is exactly the rigid modes; the
+/// Moore-Penrose inverse, checked by `tests/unit/geometric.rs::compliance_is_the_pseudo_inverse_of_k_cb`).
+fn rigid_pseudo_inverse(body: &ReducedBody, n: usize) -> Result<Mat<f64>, SuperelementError> {
+    use faer::linalg::solvers::DenseSolveCore;
+    let x: Vec<Vector3<f64>> = body.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
+    let R = crate::transform::phi_rig(&x, body.n_modes);
+    let RtR = R.transpose() * &R;
+    let RtR_inv = RtR.partial_piv_lu().inverse();
+    let P = &R * &RtR_inv * R.transpose();
+    let K = body.K_CB.to_faer();
+    let alpha = (0..n).map(|i| K[(i, i)].abs()).sum::<f64>() / n as f64;
+    let A = Mat::from_fn(n, n, |i, j| K[(i, j)] + alpha * P[(i, j)]);
+    let F = A.partial_piv_lu().inverse();
+    if F.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+        return Err(invalid(
+            body,
+            "K_CB has a null space beyond the six rigid motions: the geometric stiffening needs its pseudo-inverse",
+        ));
+    }
+    // (K + alpha P)^-1 = K^+ + P / alpha (P projects on the null space of K).
+    Ok(Mat::from_fn(n, n, |i, j| {
+        0.5 * (F[(i, j)] + F[(j, i)]) - P[(i, j)] / alpha
+    }))
 }
 
 impl Superelement {
@@ -249,6 +366,7 @@ impl Superelement {
                 (positions[k], FrameSolve::AtInterface(k), selection(n, k))
             }
         };
+        let geometric = geometric_stiffness(body, n)?;
         let x: Vec<Vector3<f64>> = positions.iter().map(|p| p - origin).collect();
         let K_CB = body.K_CB.to_faer();
         let M_CB = body.M_CB.to_faer();
@@ -298,6 +416,7 @@ impl Superelement {
             length,
             frame_settings: FrameSettings::default(),
             mesh: body.mesh.clone(),
+            geometric,
         })
     }
 
@@ -358,6 +477,10 @@ impl Superelement {
     /// $\mathbf M_{CB}$.
     pub fn m_cb(&self) -> &Mat<f64> {
         &self.M_CB
+    }
+    /// The geometric stiffness $\mathbf G_k$, when the body has one ([`GeometricStiffness`]).
+    pub fn geometric_stiffness(&self) -> Option<&GeometricStiffness> {
+        self.geometric.as_ref()
     }
     /// The FFR inertia invariants about the frame origin.
     pub fn ffr_inertia(&self) -> &FfrInertia {

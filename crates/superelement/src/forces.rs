@@ -25,11 +25,12 @@
 
 #![allow(non_snake_case)]
 
-use crate::body::Superelement;
+use crate::body::{GeometricStiffness, Superelement};
 use crate::mass::{add_mul3t, matvec, mul3, FfrForce, FfrScratch};
 use crate::so3::{self, skew};
 use crate::transform::{copy_mat, gemm, lambda_right, lambda_t_left, mul_blocks, Blocks, Kinematics};
-use faer::{Accum, Mat};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 use nalgebra::Vector3;
 
 /// Velocity-level quantities shared by all forces of one evaluation.
@@ -192,11 +193,16 @@ pub(crate) struct Scratch {
     pub F6: Vec<f64>,
     pub nu: Vec<f64>,
     pub nu_dot: Vec<f64>,
+    /// Geometric stiffening ([`GeometricScratch`]; empty for a body without $\mathbf G$).
+    pub geometric: GeometricScratch,
 }
 
 impl Scratch {
-    pub fn new(N: usize, n: usize) -> Self {
+    /// Buffers for a body with `N` interfaces and `n` coordinates; `geometric`: the body has
+    /// a geometric stiffness (else its buffers are empty).
+    pub fn new(N: usize, n: usize, geometric: bool) -> Self {
         let m6 = || Mat::zeros(6 + n, n);
+        let ng = if geometric { n } else { 0 };
         Self {
             ffr: FfrForce::zeros(n),
             ffr_scratch: FfrScratch::new(n),
@@ -223,7 +229,136 @@ impl Scratch {
             F6: vec![0.0; 6 + n],
             nu: vec![0.0; 6 + n],
             nu_dot: vec![0.0; 6 + n],
+            geometric: GeometricScratch::new(ng),
         }
+    }
+}
+
+/// Buffers of [`GeometricStiffness`]`::gradient_into` for $n$ coordinates (all empty for $n = 0$).
+#[derive(Clone, Debug)]
+pub(crate) struct GeometricScratch {
+    /// $\mathbf C = [\mathbf G_0\mathbf q, \dots, \mathbf G_{n-1}\mathbf q]$ and $\mathbf S = \sum_k w_k\mathbf G_k$,
+    /// column-major ($n^2$).
+    pub C: Vec<f64>,
+    pub S: Vec<f64>,
+    /// In: $\mathbf K_{CB}$; out: $\mathbf K_{CB} + \mathbf H_G$ ($n\times n$).
+    pub K_g: Mat<f64>,
+    /// $n\times n$ scratch.
+    pub T1: Mat<f64>,
+    pub T2: Mat<f64>,
+    /// $\mathbf b$, $\mathbf p$, $\mathbf w = \mathbf q + \mathbf p$, $\mathbf g_G$ ($n$).
+    pub b: Vec<f64>,
+    pub p: Vec<f64>,
+    pub w: Vec<f64>,
+    pub g_G: Vec<f64>,
+}
+
+impl GeometricScratch {
+    pub fn new(n: usize) -> Self {
+        Self {
+            C: vec![0.0; n * n],
+            S: vec![0.0; n * n],
+            K_g: Mat::zeros(n, n),
+            T1: Mat::zeros(n, n),
+            T2: Mat::zeros(n, n),
+            b: vec![0.0; n],
+            p: vec![0.0; n],
+            w: vec![0.0; n],
+            g_G: vec![0.0; n],
+        }
+    }
+}
+
+impl GeometricStiffness {
+    /// The gradient $\mathbf g_G = \partial(U_3 + U_4)/\partial\mathbf q$ of the geometric strain energy
+    /// ([`GeometricStiffness`]) into `s.g_G` and, with `hessian`, its Hessian $\mathbf H_G$ added to
+    /// `s.K_g`. With $\mathbf C = [\mathbf G_0\mathbf q, \dots, \mathbf G_{n-1}\mathbf q]$, $\mathbf b = \tfrac12\mathbf C^T\mathbf q$,
+    /// $\mathbf p = \mathbf F\mathbf b$ and $\mathbf w = \mathbf q + \mathbf p$ (all left in `s`):
+    ///
+    /// $$\mathbf g_G = \mathbf b + \mathbf C\mathbf w,\qquad
+    /// \mathbf H_G = \mathbf C + \mathbf C^T + \sum_k w_k\mathbf G_k + \mathbf C\mathbf F\mathbf C^T.$$
+    ///
+    /// Cost: two matrix-vector products with the $n^3$ entries of $\mathbf G$ (one without
+    /// `hessian`) and two $n\times n$ products; no allocation.
+    ///
+    /// # Derivation
+    /// By the symmetry of each $\mathbf G_k$, $(\mathbf G_k\mathbf q)_m = C_{mk}$, so
+    /// $U_3 = \tfrac12\mathbf q^T\mathbf C\mathbf q$ and $\partial U_3/\partial q_m = \tfrac12\mathbf q^T\mathbf G_m\mathbf q +
+    /// \sum_k q_k(\mathbf G_k\mathbf q)_m = b_m + (\mathbf C\mathbf q)_m$, with Hessian
+    /// $(\mathbf G_m\mathbf q)_n + (\mathbf G_n\mathbf q)_m + (\sum_k q_k\mathbf G_k)_{mn}$. For
+    /// $U_4 = \tfrac12\mathbf b^T\mathbf F\mathbf b$: $\partial\mathbf b/\partial\mathbf q = \mathbf C^T$, so the gradient is
+    /// $\mathbf C\mathbf F\mathbf b = \mathbf C\mathbf p$ and the Hessian $\mathbf C\mathbf F\mathbf C^T + \sum_m p_m\mathbf G_m$.
+    /// Tested by `tests/unit/geometric.rs::elastic_force_is_the_gradient_of_the_strain_energy` and
+    /// `::tangents_match_fd`.
+    pub(crate) fn gradient_into(&self, q: &[f64], s: &mut GeometricScratch, hessian: bool) {
+        let GeometricScratch {
+            C,
+            S,
+            K_g: K,
+            T1,
+            T2,
+            b,
+            p,
+            w,
+            g_G: g,
+        } = s;
+        let n = q.len();
+        let nn = n * n;
+        // vec C = [G_0 ... G_{n-1}]^T q: entry j + n m is (G_m q)_j (G_m symmetric).
+        let wide = MatRef::from_column_major_slice(&self.stack, n, nn);
+        matmul(
+            MatMut::from_column_major_slice_mut(C, nn, 1),
+            Accum::Replace,
+            wide.transpose(),
+            MatRef::from_column_major_slice(q, n, 1),
+            1.0,
+            Par::Seq,
+        );
+        for (m, bm) in b.iter_mut().enumerate() {
+            *bm = 0.5 * C[n * m..n * (m + 1)].iter().zip(q).map(|(c, x)| c * x).sum::<f64>();
+        }
+        matvec(&self.F, b, p);
+        for ((wi, qi), pi) in w.iter_mut().zip(q).zip(p.iter()) {
+            *wi = qi + pi;
+        }
+        // g = b + C w.
+        g.copy_from_slice(b);
+        for (m, wm) in w.iter().enumerate() {
+            for (gi, c) in g.iter_mut().zip(&C[n * m..n * (m + 1)]) {
+                *gi += c * wm;
+            }
+        }
+        if hessian {
+            // vec S = [vec G_0 ... vec G_{n-1}] w = vec(sum_k w_k G_k).
+            matmul(
+                MatMut::from_column_major_slice_mut(S, nn, 1),
+                Accum::Replace,
+                MatRef::from_column_major_slice(&self.stack, nn, n),
+                MatRef::from_column_major_slice(w, n, 1),
+                1.0,
+                Par::Seq,
+            );
+            for j in 0..n {
+                let col = K.col_as_slice_mut(j);
+                for (i, k) in col.iter_mut().enumerate() {
+                    *k += S[i + n * j] + C[i + n * j] + C[j + n * i];
+                }
+            }
+            // C F C^T = C (F C^T).
+            let Cm = MatRef::from_column_major_slice(C.as_slice(), n, n);
+            gemm(T1, self.F.as_ref(), Cm.transpose(), 1.0, Accum::Replace);
+            gemm(T2, Cm, T1.as_ref(), 1.0, Accum::Replace);
+            add_scaled(K, T2, 1.0);
+        }
+    }
+
+    /// $U_3 + U_4$ at $\mathbf q$ ([`GeometricStiffness`]); allocates (energy checks, sensors).
+    pub(crate) fn energy(&self, q: &[f64]) -> f64 {
+        let mut s = GeometricScratch::new(q.len());
+        self.gradient_into(q, &mut s, false);
+        let (b, p) = (&s.b, &s.p);
+        // U_3 = (1/2) q^T C q = q . b ; U_4 = (1/2) b . p.
+        q.iter().zip(b).map(|(x, y)| x * y).sum::<f64>() + 0.5 * b.iter().zip(p).map(|(x, y)| x * y).sum::<f64>()
     }
 }
 
@@ -258,27 +393,49 @@ pub(crate) fn w_into(x: &[f64], N: usize, out: &mut Mat<f64>) {
 }
 
 impl Superelement {
-    /// Elastic force (4.4) in body axes, $\boldsymbol\rho_{el} = \mathbf B^T\mathbf K_{CB}\mathbf q^{jj}$
+    /// Elastic force (4.4) in body axes, $\boldsymbol\rho_{el} = \mathbf B^T\mathbf f$ with the local
+    /// elastic force $\mathbf f = \mathbf K_{CB}\mathbf q^{jj}$, plus $\mathbf g_G$ with geometric stiffening
     /// ($\mathbf B = \mathbf T_j\boldsymbol\Lambda$; the seed's $\mathbf T_j^T\mathbf K_{CB}\mathbf q^{jj}$ with
-    /// the exact rotation factor), so $\mathbf f_{el} = \bar{\mathbf R}\boldsymbol\Lambda^T\mathbf T_j^T\mathbf K_{CB}\mathbf q^{jj}$.
+    /// the exact rotation factor), so $\mathbf f_{el} = \bar{\mathbf R}\boldsymbol\Lambda^T\mathbf T_j^T\mathbf f$.
     ///
     /// # Derivation
-    /// $\mathbf f_{el}$ is the gradient of $U = \tfrac12\mathbf q^{jjT}\mathbf K_{CB}\mathbf q^{jj}$ in the
-    /// absolute coordinates, because $\delta\mathbf q^{jj} = \mathbf B\bar{\mathbf R}^T\delta\mathbf q$
-    /// exactly ([`crate::transform`]). Its derivative: $\partial\boldsymbol\rho_{el}/\partial\mathbf q^{jj}
-    /// = \partial(\mathbf P^T[\mathbf 0;\mathbf f])/\partial\mathbf q^{jj} + \mathbf B^T\mathbf K_{CB}$,
-    /// $\mathbf f = \mathbf K_{CB}\mathbf q^{jj}$ ([`Kinematics`]`::add_d_pt`). Tested by
-    /// `tests/unit/fd_tangent.rs::elastic_tangent_matches_fd`, `tests/unit/invariance.rs` and
-    /// `tests/unit/energy.rs::gravity_is_the_gradient_of_its_potential`.
+    /// $\mathbf f_{el}$ is the gradient of the strain energy $U(\mathbf q^{jj})$ in the absolute
+    /// coordinates, because $\delta\mathbf q^{jj} = \mathbf B\bar{\mathbf R}^T\delta\mathbf q$ exactly
+    /// ([`crate::transform`]): $\mathbf f = \partial U/\partial\mathbf q^{jj}$. Its derivative:
+    /// $\partial\boldsymbol\rho_{el}/\partial\mathbf q^{jj} = \partial(\mathbf P^T[\mathbf 0;\mathbf f])/\partial\mathbf q^{jj}
+    /// + \mathbf B^T\,\partial\mathbf f/\partial\mathbf q^{jj}$ ([`Kinematics`]`::add_d_pt` for the first term).
+    ///
+    /// * Linear elastic field: $U = \tfrac12\mathbf q^{jjT}\mathbf K_{CB}\mathbf q^{jj}$, $\mathbf f = \mathbf K_{CB}\mathbf q^{jj}$,
+    ///   $\partial\mathbf f/\partial\mathbf q^{jj} = \mathbf K_{CB}$.
+    /// * Geometric stiffening ([`GeometricStiffness`]): $U$ gains $U_3 + U_4$, so
+    ///   $\mathbf f = \mathbf K_{CB}\mathbf q^{jj} + \mathbf g_G$ and $\partial\mathbf f/\partial\mathbf q^{jj} =
+    ///   \mathbf K_{CB} + \mathbf H_G$ ([`GeometricStiffness`]`::gradient_into`). The projector terms are
+    ///   unchanged: they only see $\mathbf f$.
+    ///
+    /// Tested by `tests/unit/fd_tangent.rs::elastic_tangent_matches_fd`, `tests/unit/invariance.rs`,
+    /// `tests/unit/energy.rs::gravity_is_the_gradient_of_its_potential` and, with $\mathbf G$,
+    /// `tests/unit/geometric.rs`.
     pub(crate) fn elastic(&self, kin: &Kinematics, loc: &mut Local, w: &mut Scratch, tangents: bool) {
         matvec(&self.K_CB, &kin.q_jj, &mut w.v1);
+        if let Some(G) = &self.geometric {
+            if tangents {
+                copy_mat(&mut w.geometric.K_g, self.K_CB.as_ref());
+            }
+            G.gradient_into(&kin.q_jj, &mut w.geometric, tangents);
+            add_to(&mut w.v1, &w.geometric.g_G, 1.0);
+        }
         w.F6[..6].fill(0.0);
         w.F6[6..].copy_from_slice(&w.v1);
         kin.pt_vec(&w.F6, &mut loc.rho_el);
         if tangents {
             add_to(&mut loc.F_sum, &w.F6, 1.0);
-            // T^T K_CB; Lambda^T comes once for all terms (`Local::Dq`).
-            kin.tt_mul(self.K_CB.as_ref(), &mut w.six_n, &mut loc.Dq, Accum::Add);
+            // T^T df/dq_jj; Lambda^T comes once for all terms (`Local::Dq`).
+            let K = if self.geometric.is_some() {
+                w.geometric.K_g.as_ref()
+            } else {
+                self.K_CB.as_ref()
+            };
+            kin.tt_mul(K, &mut w.six_n, &mut loc.Dq, Accum::Add);
         }
     }
 

@@ -110,7 +110,7 @@ impl Superelement {
             qd: vec![0.0; n],
             mo: Motion::new(N, n),
             loc: Local::new(n),
-            scratch: Scratch::new(N, n),
+            scratch: Scratch::new(N, n, self.geometric.is_some()),
             KL: Mat::zeros(n, n),
             H: Mat::zeros(n, 3),
             W: Mat::zeros(n, 3),
@@ -311,11 +311,17 @@ impl Superelement {
         Ok(T)
     }
 
-    /// Strain energy $\tfrac12\mathbf q^{jjT}\mathbf K_{CB}\mathbf q^{jj}$.
+    /// Strain energy $U = \tfrac12\mathbf q^{jjT}\mathbf K_{CB}\mathbf q^{jj}$, plus $U_3 + U_4$ for a body
+    /// with geometric stiffening ([`crate::body::GeometricStiffness`]). The elastic force is its
+    /// gradient (`tests/unit/energy.rs`, `tests/unit/geometric.rs`).
     pub fn strain_energy(&self, kin: &Kinematics) -> f64 {
         let mut f = vec![0.0; self.n];
         crate::mass::matvec(&self.K_CB, &kin.q_jj, &mut f);
-        0.5 * f.iter().zip(&kin.q_jj).map(|(a, b)| a * b).sum::<f64>()
+        let U = 0.5 * f.iter().zip(&kin.q_jj).map(|(a, b)| a * b).sum::<f64>();
+        match &self.geometric {
+            Some(G) => U + G.energy(&kin.q_jj),
+            None => U,
+        }
     }
 
     /// Gravity potential $-\mathbf g\cdot(m\mathbf r_j + \mathbf R_j\mathbf s)$, $\mathbf s = m\mathbf d + \mathbf S_t\mathbf q^{jj}$.

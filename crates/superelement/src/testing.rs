@@ -1,7 +1,7 @@
 //! Test helpers shared with the multibody crate (style R13): the one central-difference
-//! helper with its worst-entry report, state perturbations through the exponential map, and
-//! deterministic deformed moving states. With the `testing` feature, `fixtures` builds
-//! reduced beam bodies through `fe-model` and `reduction`.
+//! helper with its worst-entry report, state perturbations through the exponential map,
+//! deterministic deformed moving states and a synthetic geometric stiffness. With the
+//! `testing` feature, `fixtures` builds reduced beam bodies through `fe-model` and `reduction`.
 
 #![allow(non_snake_case)]
 
@@ -244,6 +244,74 @@ pub fn test_state(se: &Superelement, spec: &StateSpec) -> (BodyState, Vec<f64>) 
     (s, acc)
 }
 
+/// Typical magnitudes of the CB coordinates of [`test_state`] at relative deformation
+/// `deformation`: $e L$ for interface displacements, $e$ for elastic rotations and
+/// $e L\sqrt m$ for modal coordinates ($L$: farthest interface from the frame origin, at least
+/// 0.1; $m$: the mass), as [`test_state`] draws them.
+pub fn coordinate_scales(se: &Superelement, deformation: f64) -> Vec<f64> {
+    let L = se
+        .interface_positions()
+        .iter()
+        .map(|x| x.norm())
+        .fold(0.0, f64::max)
+        .max(0.1);
+    let mut s = Vec::with_capacity(se.n_coordinates());
+    for _ in 0..se.n_interfaces() {
+        s.extend([deformation * L; 3]);
+        s.extend([deformation; 3]);
+    }
+    s.extend(vec![deformation * L * se.mass().sqrt(); se.n_modes()]);
+    s
+}
+
+/// A synthetic geometric stiffness for `body` (for [`reduction::ReducedBody::geometric_stiffness`])
+/// with the structure of a physical one: $\mathbf G_m = \sum_l (\mathbf K_{CB})_{ml}\mathbf S_l$ with random
+/// symmetric $(\mathbf S_l)_{ij} = \gamma\,r_{lij}\,s_l/(s_i s_j\sqrt n)$, $r_{lij} = r_{lji}$ uniform in
+/// $[-1, 1)$ ([`Rng`] from `seed`), $s_k$ = `scales[k]` (e.g. [`coordinate_scales`]).
+///
+/// Then $b_m = \tfrac12\mathbf q^T\mathbf G_m\mathbf q = (\mathbf K_{CB}\mathbf p)_m$ with $p_l = \tfrac12\mathbf q^T\mathbf S_l\mathbf q$:
+/// like the work of a quadratic strain on the stresses of the CB coordinates, $\mathbf b$ lies in
+/// the range of $\mathbf K_{CB}$ (rigid motions have no stress), and at coordinates of size $s_k$,
+/// $\mathbf p \approx \gamma\mathbf q$: the geometric tangent is about $\gamma$ times $\mathbf K_{CB}$, the cubic energy
+/// $\gamma$ and the quartic one $\gamma^2$ times the linear one. A test of the geometric terms is neither
+/// dominated by them nor blind to them.
+pub fn synthetic_geometric_stiffness(
+    body: &reduction::ReducedBody,
+    scales: &[f64],
+    gamma: f64,
+    seed: u64,
+) -> Vec<reduction::DenseMatrix> {
+    let n = body.n_coordinates();
+    assert_eq!(scales.len(), n, "one scale per CB coordinate");
+    let mut rng = Rng::new(seed);
+    let S: Vec<Vec<f64>> = (0..n)
+        .map(|l| {
+            let mut S = vec![0.0; n * n];
+            for j in 0..n {
+                for i in 0..=j {
+                    let v = gamma * rng.uniform() * scales[l] / (scales[i] * scales[j] * (n as f64).sqrt());
+                    S[i + n * j] = v;
+                    S[j + n * i] = v;
+                }
+            }
+            S
+        })
+        .collect();
+    let K = &body.K_CB.data;
+    (0..n)
+        .map(|m| {
+            let mut G = reduction::DenseMatrix::zeros(n, n);
+            for (l, Sl) in S.iter().enumerate() {
+                let k = K[m + n * l];
+                for (g, s) in G.data.iter_mut().zip(Sl) {
+                    *g += k * s;
+                }
+            }
+            G
+        })
+        .collect()
+}
+
 /// Reduced beam bodies for tests, built through `fe-model` and `reduction`.
 #[cfg(feature = "testing")]
 pub mod fixtures {
@@ -275,13 +343,25 @@ pub mod fixtures {
         modes: ModeSelection,
         auxiliary: bool,
     ) -> (FeModel, Vec<NodeId>, ReducedBody) {
+        straight_beam_with(a, b, elements, CbSettings::new(modes), auxiliary)
+    }
+
+    /// [`straight_beam`] reduced with `settings` (e.g. with `geometric_stiffening`); its
+    /// `auxiliary_node` is set from `auxiliary`.
+    pub fn straight_beam_with(
+        a: Point3<f64>,
+        b: Point3<f64>,
+        elements: usize,
+        mut settings: CbSettings,
+        auxiliary: bool,
+    ) -> (FeModel, Vec<NodeId>, ReducedBody) {
         let mut model = FeModel::default();
         let axis = b - a;
         let orientation = axis.cross(&Vector3::new(0.3, 0.9, -0.2)).normalize();
         let props = properties(&mut model, orientation);
         let nodes = fe_model::generate::straight_beam(&mut model, a, b, elements, &props, Some("beam")).unwrap();
         let mut ends = vec![nodes[0], nodes[elements]];
-        let mut settings = CbSettings::new(modes);
+        settings.auxiliary_node = None;
         if auxiliary {
             assert!(
                 elements % 2 == 0,
@@ -321,6 +401,11 @@ pub mod fixtures {
     /// with spider interfaces, whose second-order mass invariants are exact (module docs of
     /// `reduction::invariants`).
     pub fn solid_block(modes: ModeSelection) -> (FeModel, Vec<NodeId>, ReducedBody) {
+        solid_block_with(CbSettings::new(modes))
+    }
+
+    /// [`solid_block`] reduced with `settings` (e.g. with `geometric_stiffening`).
+    pub fn solid_block_with(settings: CbSettings) -> (FeModel, Vec<NodeId>, ReducedBody) {
         use fe_model::interface::{add_interface_on_set, SpiderKind};
         let mesh = fe_model::box_mesh::box_mesh(fe_model::CellKind::Hex8, [1.0, 0.2, 0.3], [5, 1, 2]).unwrap();
         let material = IsotropicMaterial::new("aluminium", 70e9, 0.33, 2700.0).unwrap();
@@ -328,7 +413,7 @@ pub mod fixtures {
         let a = add_interface_on_set(&mut model, "a", "x0", None, SpiderKind::Rbe2).unwrap();
         let b = add_interface_on_set(&mut model, "b", "x1", None, SpiderKind::Rbe3).unwrap();
         let interfaces = vec![("a".to_string(), a), ("b".to_string(), b)];
-        let body = reduce(&model, "block", &interfaces, &CbSettings::new(modes)).unwrap();
+        let body = reduce(&model, "block", &interfaces, &settings).unwrap();
         (model, vec![a, b], body)
     }
 }

@@ -13,6 +13,10 @@ mod unit {
     mod fd_tangent;
     /// The frame solve (2.6): convergence from warm and cold starts, errors, explicit frames.
     mod frame;
+    /// Geometric stiffening (the cubic strain energy U_3 of the G_k): gradient, tangents
+    /// against central differences, rigid-motion invariance, errors; G = 0 is bit-identical to
+    /// a body without G.
+    mod geometric;
     /// Rigid motions: zero elastic force, the frame moves with the body, centre-of-mass frame.
     mod invariance;
     /// Small motions reproduce the linear FE model: statics exactly, frequencies to the

@@ -48,7 +48,7 @@ fn assert_ok(rep: FdReport, what: &str) {
 }
 
 /// K_t, C_t and M of `se` at `state` against central differences of the residual.
-fn check_tangents(se: &Superelement, state: &BodyState, acc: &[f64], g: &Vector3<f64>, what: &str) {
+pub(super) fn check_tangents(se: &Superelement, state: &BodyState, acc: &[f64], g: &Vector3<f64>, what: &str) {
     let ev = se.evaluate(state, acc, g).unwrap();
     let mut base = state.clone();
     base.frame = ev.frame;
