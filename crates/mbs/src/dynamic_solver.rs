@@ -43,16 +43,22 @@
 //! momentum of point masses) is conserved to round-off when $\mathbf c^T\mathbf F$ is free of internal
 //! forces. The momenta of a flexible or rigid body in these absolute coordinates are nonlinear
 //! in $(\mathbf q, \dot{\mathbf q})$ (the centre of mass follows the frame (2.6) and the CB shapes;
-//! $\mathbf H$ involves the rotations), so the scheme makes their rates vanish at each $t_{n+1}$
-//! but conserves $\mathbf L$, $\mathbf H$ and the energy to its order, 2 (benchmarks.md C4:
-//! `tests/unit/free_body.rs`). Exact conservation would need an energy-momentum (midpoint-type)
-//! discretisation of the inertia forces instead of generalized-α.
+//! $\mathbf H$ involves the rotations), so the scheme alone makes their rates vanish at each
+//! $t_{n+1}$ but conserves $\mathbf L$, $\mathbf H$ and the energy to its order, 2. On a free, unloaded
+//! model ([`System::rigid_invariance`]) the step therefore ends with the momentum projection of
+//! [`crate::momentum`] (Hairer, Lubich & Wanner, §IV.4; `DynamicSettings::momentum`): the
+//! velocities get the $\hat{\mathbf M}$-orthogonal rigid correction that restores $\mathbf L$ and
+//! $\mathbf H$ of the start, so both are constant to round-off, and the energy still drifts at
+//! order 2 (benchmarks.md C4: `tests/unit/free_body.rs`). The correction is $O(h^3)$ per step and
+//! keeps the order of the trajectory; the initial accelerations are not projected.
 
 #![allow(non_snake_case)]
 
 use crate::error::{Incomplete, SolveError};
+use crate::momentum::MomentumProjection;
 use crate::sensors::SensorRecord;
 use crate::system::{State, System, Workspace};
+use nalgebra::Vector6;
 
 /// Settings of the adaptive step (module docs).
 #[derive(Clone, Debug, PartialEq)]
@@ -101,6 +107,9 @@ pub struct DynamicSettings {
     pub max_iterations: usize,
     /// Record sensors every this many steps (and at the start and the end).
     pub output_every: usize,
+    /// Momentum projection after each step ([`crate::momentum`]): `Auto` (the default) projects
+    /// when the model is free and unloaded ([`System::rigid_invariance`]).
+    pub momentum: MomentumProjection,
 }
 
 impl DynamicSettings {
@@ -112,6 +121,7 @@ impl DynamicSettings {
             tolerance: 1e-9,
             max_iterations: 20,
             output_every: 1,
+            momentum: MomentumProjection::Auto,
         }
     }
 }
@@ -147,6 +157,9 @@ pub struct StepReport {
     pub time: f64,
     /// Relative residual before each correction and at convergence.
     pub residuals: Vec<f64>,
+    /// With the momentum projection: the defect $\mathbf J_0 - \mathbf J$ = $[\Delta\mathbf L;\ \Delta\mathbf H]$
+    /// it corrected ($O(h^3)$, [`crate::momentum`]).
+    pub momentum_defect: Option<[f64; 6]>,
 }
 
 /// A generalized-α integrator over a [`System`], one step at a time.
@@ -163,6 +176,11 @@ pub struct Integrator<'a> {
     prev: State,
     incr: Vec<f64>,
     dx: Vec<f64>,
+    /// The momenta $\mathbf J_0 = [\mathbf L_0;\ \mathbf H_0]$ of the start, when projecting.
+    J0: Option<Vector6<f64>>,
+    /// Corrections the last converged step needed: the next step builds its tangents at once
+    /// for that many iterations instead of first testing the forces alone.
+    last_corrections: usize,
 }
 
 impl<'a> Integrator<'a> {
@@ -190,6 +208,13 @@ impl<'a> Integrator<'a> {
         })?;
         state.acceleration.copy_from_slice(&acc);
         system.evaluate_into(&mut state, 1.0, false, &mut ws)?;
+        let J0 = match settings.momentum {
+            MomentumProjection::Auto if system.rigid_invariance().is_ok() => {
+                let (L, H) = system.momentum(&state)?;
+                Some(Vector6::new(L.x, L.y, L.z, H.x, H.y, H.z))
+            }
+            _ => None,
+        };
         Ok(Self {
             system,
             a: acc,
@@ -201,11 +226,18 @@ impl<'a> Integrator<'a> {
             state,
             incr: vec![0.0; n],
             dx: vec![0.0; n],
+            J0,
+            last_corrections: 0,
         })
     }
 
     pub fn state(&self) -> &State {
         &self.state
+    }
+
+    /// Whether each step ends with the momentum projection ([`crate::momentum`]).
+    pub fn projects_momentum(&self) -> bool {
+        self.J0.is_some()
     }
 
     /// Number of steps taken.
@@ -316,11 +348,15 @@ impl<'a> Integrator<'a> {
         let mut residuals = Vec::new();
         let step = self.steps + 1;
         for it in 0..=self.settings.max_iterations {
-            // After a correction the step has usually converged: test with the forces alone
-            // and build the tangents only when another correction is needed.
-            sys.evaluate_into(&mut st, 1.0, it == 0, &mut self.ws)?;
+            // After a correction the step may have converged: test with the forces alone and
+            // build the tangents only when another correction is needed. Steps of a smooth
+            // motion need about as many corrections as the last one, so up to that count the
+            // tangents come with the forces (a forces-only test there is wasted work).
+            let expect_correction = it == 0 || it < self.last_corrections;
+            sys.evaluate_into(&mut st, 1.0, expect_correction, &mut self.ws)?;
             let mut norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
-            if it > 0 && norm > self.settings.tolerance * self.ws.scale + self.ws.floor && norm.is_finite() {
+            if !expect_correction && norm > self.settings.tolerance * self.ws.scale + self.ws.floor && norm.is_finite()
+            {
                 sys.evaluate_into(&mut st, 1.0, true, &mut self.ws)?;
                 norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
             }
@@ -331,13 +367,26 @@ impl<'a> Integrator<'a> {
             };
             residuals.push(rel);
             if norm <= self.settings.tolerance * self.ws.scale + self.ws.floor {
+                let mut momentum_defect = None;
+                if let Some(J0) = &self.J0 {
+                    // Hairer, Lubich & Wanner §IV.4: project the converged velocities onto
+                    // J(q_{n+1}, v) = J0; the sensors then read the corrected node velocities.
+                    // (Before the update of a_n, so that a failure leaves the step at t_n.)
+                    momentum_defect = Some(sys.project_momentum(&mut st, J0)?.into());
+                    sys.refresh_motions(&mut st, &mut self.ws);
+                }
                 for i in 0..n {
                     self.a[i] =
                         ((1.0 - af) * st.acceleration[i] + af * prev.acceleration[i] - am * self.a[i]) / (1.0 - am);
                 }
                 self.state = st;
                 self.steps += 1;
-                return Ok(StepReport { time: t, residuals });
+                self.last_corrections = it;
+                return Ok(StepReport {
+                    time: t,
+                    residuals,
+                    momentum_defect,
+                });
             }
             if it == self.settings.max_iterations || !rel.is_finite() {
                 // Leave the workspace consistent with the last converged state.

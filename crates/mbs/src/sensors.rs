@@ -12,7 +12,7 @@
 
 use crate::coordinates::Slot;
 use crate::error::SolveError;
-use crate::model::SensorKind;
+use crate::model::{BodyId, SensorKind};
 use crate::system::{unknown, State, System, Workspace};
 use crate::topology::RootRotation;
 use nalgebra::Vector3;
@@ -108,45 +108,26 @@ impl System {
         Ok(e)
     }
 
-    /// Linear momentum and angular momentum about the origin (module docs).
+    /// Linear momentum and angular momentum about the origin (module docs; computed by
+    /// [`crate::momentum`], which the dynamic solver's momentum projection shares).
     pub fn momentum(&self, state: &State) -> Result<(Vector3<f64>, Vector3<f64>), SolveError> {
-        let nodes = self.node_motions(state);
-        let (mut L, mut H) = (Vector3::zeros(), Vector3::zeros());
-        for (i, f) in self.flexible.iter().enumerate() {
-            let bs = self.body_state(i, state, &nodes);
-            let n = f.se.n_coordinates();
-            let ev =
-                f.se.forces(&bs, &vec![0.0; n], &Vector3::zeros())
-                    .map_err(|source| SolveError::Body {
-                        body: self.model.bodies[f.body].name().to_string(),
-                        t: state.time,
-                        source,
-                    })?;
-            let qd = bs.velocity_vector();
-            let p: Vec<f64> = (0..n).map(|r| (0..n).map(|c| ev.mass[(r, c)] * qd[c]).sum()).collect();
-            for (k, &node) in f.nodes.iter().enumerate() {
-                let pf = Vector3::new(p[6 * k], p[6 * k + 1], p[6 * k + 2]);
-                let pm = Vector3::new(p[6 * k + 3], p[6 * k + 4], p[6 * k + 5]);
-                L += pf;
-                H += nodes[node].r.cross(&pf) + pm;
-            }
-        }
-        for r in &self.rigid {
-            let m = &nodes[r.node];
-            let R = m.R.to_rotation_matrix();
-            let b = R * r.c;
-            let IG = R.matrix() * r.J * R.matrix().transpose();
-            let p = (m.v + m.omega.cross(&b)) * r.mass;
-            L += p;
-            H += (m.r + b).cross(&p) + IG * m.omega;
-        }
-        for pm in &self.model.point_masses {
-            let m = &nodes[pm.node.index()];
-            let p = m.v * pm.mass;
-            L += p;
-            H += m.r.cross(&p);
-        }
-        Ok((L, H))
+        let map = self.momentum_map(state)?;
+        let J = self.momentum_at(&map, state, &state.velocity);
+        Ok((J.fixed_rows::<3>(0).into(), J.fixed_rows::<3>(3).into()))
+    }
+
+    /// The superelement of flexible body `body` (`None` for a rigid body or an unknown id): for
+    /// post-processing with [`Self::flexible_body_state`] (mesh recovery, energies, checks).
+    pub fn superelement(&self, body: BodyId) -> Option<&superelement::Superelement> {
+        self.flexible.iter().find(|f| f.body == body.index()).map(|f| &f.se)
+    }
+
+    /// The superelement state of flexible body `body` at `state`: interface positions,
+    /// orientations and velocities from the nodes, modal coordinates and rates, and the last
+    /// floating frame (`None` for a rigid body or an unknown id).
+    pub fn flexible_body_state(&self, body: BodyId, state: &State) -> Option<superelement::BodyState> {
+        let i = self.flexible.iter().position(|f| f.body == body.index())?;
+        Some(self.body_state(i, state, &self.node_motions(state)))
     }
 
     /// The superelement state of flexible element `i`.

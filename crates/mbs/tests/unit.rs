@@ -22,9 +22,16 @@ mod tangent;
 #[path = "unit/pendulum.rs"]
 mod pendulum;
 
-/// Free-floating flexible body (benchmarks.md C4): momentum and energy.
+/// Free-floating flexible body (benchmarks.md C4): momentum to round-off with the projection
+/// (measured by a second path, and on the FE mesh of a solid block), energy and trajectory at
+/// order 2, adaptive steps, no projection when the model is not free.
 #[path = "unit/free_body.rs"]
 mod free_body;
+
+/// The momentum map: rigid velocity fields on every coordinate kind, and a free chain of
+/// superelements with revolute joints keeping its momenta.
+#[path = "unit/momentum.rs"]
+mod momentum;
 
 /// Geometrically nonlinear statics: elastica B1 and roll-up B2 with N superelements (quick
 /// subset), quadratic convergence of Newton.
@@ -53,3 +60,9 @@ mod linearized;
 /// linearised buckling of a column of N superelements against Euler's load.
 #[path = "unit/arc_length.rs"]
 mod arc_length;
+
+/// Geometric stiffening of superelements: linearised buckling of a clamped-free column
+/// against Euler's load, the amplification of a lateral deflection by an axial load, and the
+/// membrane stiffening of a beam clamped at both ends.
+#[path = "unit/geometric.rs"]
+mod geometric;

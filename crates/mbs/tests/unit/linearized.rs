@@ -93,6 +93,13 @@ fn two_dof_modes(m: [f64; 2], K: [[f64; 2]; 2]) -> [(f64, [f64; 2]); 2] {
 /// geometry, sum to 1; the carriers' kinetic energies sum to phi^T M phi, their strain
 /// energies (without the joint geometry) to phi^T K phi minus the geometry.
 fn check_sums(modes: &[mbs::ModeEnergy]) {
+    // The node split of a soft mode's strain energy differences terms of the stiffest parts:
+    // its round-off is relative to the largest strain scale of the system, not of the mode
+    // (the turning arm's pendulum mode: 2e-9 of its own 4.0 against 7e8 for the beam modes).
+    let system_k = modes
+        .iter()
+        .flat_map(|m| m.carriers.iter().map(|c| c.strain.abs()).chain([m.strain.abs()]))
+        .fold(0.0f64, f64::max);
     for (i, m) in modes.iter().enumerate() {
         let sum = |f: &dyn Fn(&mbs::CarrierEnergy) -> f64| m.carriers.iter().map(f).sum::<f64>();
         let scale = |f: &dyn Fn(&mbs::CarrierEnergy) -> f64, total: f64| {
@@ -132,7 +139,7 @@ fn check_sums(modes: &[mbs::ModeEnergy]) {
             m.kinetic
         );
         assert!(
-            (ns - m.strain).abs() <= 1e-9 * scale_k,
+            (ns - m.strain).abs() <= 1e-9 * scale_k + 1e-14 * system_k,
             "mode {i}: nodes {ns} vs {}",
             m.strain
         );
