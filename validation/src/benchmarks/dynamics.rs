@@ -4,7 +4,7 @@
 
 use crate::models::{free_beam, slider_crank_planar, slider_crank_spatial, spin_up, RodModel, Variant};
 use crate::{sci, slope, Block, Extent, Grid, Row, Table};
-use mbs::{solve_dynamic, DynamicSettings, Integrator, Model, System, Trajectory};
+use mbs::{solve_dynamic, DynamicSettings, Integrator, Model, MomentumProjection, System, Trajectory};
 use nalgebra::{UnitQuaternion, Vector3};
 use plot::{Figure, Series};
 use reduction::ModeSelection;
@@ -484,8 +484,14 @@ pub fn c3_spatial_slider_crank(extent: Extent) -> Result<Vec<Block>> {
 
 /// Drifts of linear momentum, angular momentum (relative to their norms) and energy (relative
 /// to the kinetic energy) of the spinning, deformed free beam over `steps` steps of `h`, with
-/// the histories (t, |dL|/|L|, |dH|/|H|, |dE|/T).
-pub fn c4_drifts(variant: Variant, h: f64, steps: usize) -> Result<(f64, f64, f64, Vec<[f64; 4]>)> {
+/// the histories (t, |dL|/|L|, |dH|/|H|, |dE|/T); `momentum` switches the projection of
+/// `mbs::momentum` (`Auto` projects: the beam is free and unloaded).
+pub fn c4_drifts(
+    variant: Variant,
+    h: f64,
+    steps: usize,
+    momentum: MomentumProjection,
+) -> Result<(f64, f64, f64, Vec<[f64; 4]>)> {
     let (model, [a, b]) = free_beam(variant)?;
     let sys = System::new(&model)?;
     let mut s = sys.initial_state();
@@ -517,6 +523,7 @@ pub fn c4_drifts(variant: Variant, h: f64, steps: usize) -> Result<(f64, f64, f6
         s,
         DynamicSettings {
             tolerance: 1e-11,
+            momentum,
             ..DynamicSettings::new(h, h * steps as f64, 1.0)
         },
     )?;
@@ -546,65 +553,108 @@ pub fn c4_free_body(extent: Extent) -> Result<Vec<Block>> {
         Extent::Quick => vec![4e-3, 2e-3],
         Extent::Full => vec![4e-3, 2e-3, 1e-3, 5e-4],
     };
+    // [projected; plain] drifts (dL, dH, dE) per step size.
     let mut drifts = Vec::new();
+    let mut plain = Vec::new();
     let mut histories = Vec::new();
     for &h in &hs {
-        let (dL, dH, dE, hist) = c4_drifts(Variant::REFERENCE, h, (T / h).round() as usize)?;
+        let steps = (T / h).round() as usize;
+        let (dL, dH, dE, hist) = c4_drifts(Variant::REFERENCE, h, steps, MomentumProjection::Auto)?;
         drifts.push([dL, dH, dE]);
         histories.push((h, hist));
+        let (dL, dH, dE, _) = c4_drifts(Variant::REFERENCE, h, steps, MomentumProjection::Off)?;
+        plain.push([dL, dH, dE]);
     }
     // drift ~ h^p: the slope of log(drift) against log(h) is the order p.
-    let order = |k: usize| slope(&hs, &drifts.iter().map(|d| d[k]).collect::<Vec<_>>());
-    let (oL, oH, oE) = (order(0), order(1), order(2));
+    let order = |d: &[[f64; 3]], k: usize| slope(&hs, &d.iter().map(|d| d[k]).collect::<Vec<_>>());
+    let (oE, oL_plain, oH_plain) = (order(&drifts, 2), order(&plain, 0), order(&plain, 1));
+    let worst = |k: usize| drifts.iter().map(|d| d[k]).fold(0.0, f64::max);
     let last = drifts[drifts.len() - 1];
-    let rows = vec![
-        // NOT the issue's target (round-off): see the note. The tolerance checks what the
-        // integrator does reach, a drift falling at its order.
+    // Round-off: the projection puts J(q_{n+1}, v) = J0 in every step up to the rounding of the
+    // sums in J (about 1e-16 of the largest term, and |r_k x p_k| is of the order of |H| here);
+    // the roundings of successive steps do not accumulate, since each step aims at J0 itself.
+    // 1e-12 leaves three orders of magnitude for other machines and longer runs while failing
+    // by seven orders for the unprojected drift (1e-5 to 1e-3).
+    let round_off = 1e-12;
+    let mut rows = vec![
         Row::scaled(
-            format!("max |L - L0| / |L0|, h = {}", hs[hs.len() - 1]),
+            "max |L - L0| / |L0| over all h, projected",
             0.0,
-            last[0],
+            worst(0),
             1.0,
-            1e-3,
+            round_off,
         ),
         Row::scaled(
-            format!("max |H - H0| / |H0|, h = {}", hs[hs.len() - 1]),
+            "max |H - H0| / |H0| over all h, projected",
             0.0,
-            last[1],
+            worst(1),
             1.0,
-            1e-3,
+            round_off,
         ),
+    ];
+    // Every frame choice and inertia variant, projected, at 2 ms.
+    for v in Variant::all() {
+        let (dL, dH, _, _) = c4_drifts(v, 2e-3, (T / 2e-3).round() as usize, MomentumProjection::Auto)?;
+        rows.push(Row::scaled(
+            format!("max of |dL|/|L|, |dH|/|H|, h = 0.002, projected, {}", v.label()),
+            0.0,
+            dL.max(dH),
+            1.0,
+            round_off,
+        ));
+    }
+    rows.extend([
         Row::scaled(
-            format!("max |E - E0| / T0, h = {}", hs[hs.len() - 1]),
+            format!("max |E - E0| / T0, h = {}, projected", hs[hs.len() - 1]),
             0.0,
             last[2],
             1.0,
             1e-3,
         ),
-        // Order 2 expected (generalized-alpha): 1.8 leaves room for the asymptotic regime.
+        // Order 2 expected (generalized-alpha; the projection's rigid correction is O(h^3) per
+        // step): 1.8 leaves room for the pre-asymptotic range.
         Row::scaled(
-            "observed order of the momentum drift (2 expected)",
-            2.0,
-            oL.min(2.0),
-            1.0,
-            0.2,
-        ),
-        Row::scaled(
-            "observed order of the energy drift (2 expected)",
+            "observed order of the energy drift, projected (2 expected)",
             2.0,
             oE.min(2.0),
             1.0,
             0.2,
         ),
-    ];
+        // What the projection removes: plain generalized-alpha drifts at its order.
+        Row::scaled(
+            "observed order of the momentum drift without projection (2 expected)",
+            2.0,
+            oL_plain.min(oH_plain).min(2.0),
+            1.0,
+            0.2,
+        ),
+    ]);
     let grid = Grid {
         title: "C4 drifts against the time step".into(),
-        note: format!("Largest drift over 0.3 s (2.5 periods of the first elastic mode, 0.15 turns). Observed orders: L {oL:.2}, H {oH:.2}, E {oE:.2}."),
-        header: vec!["h [s]".into(), "|dL|/|L|".into(), "|dH|/|H|".into(), "|dE|/T".into()],
+        note: format!("Largest drift over 0.3 s (2.5 periods of the first elastic mode, 0.15 turns), with the momentum projection (mbs::momentum) and without it (plain generalized-alpha). Observed orders: E {oE:.2} projected; L {oL_plain:.2}, H {oH_plain:.2} without projection."),
+        header: vec![
+            "h [s]".into(),
+            "|dL|/|L|".into(),
+            "|dH|/|H|".into(),
+            "|dE|/T".into(),
+            "|dL|/|L| plain".into(),
+            "|dH|/|H| plain".into(),
+            "|dE|/T plain".into(),
+        ],
         rows: hs
             .iter()
-            .zip(&drifts)
-            .map(|(h, d)| vec![format!("{h}"), sci(d[0]), sci(d[1]), sci(d[2])])
+            .zip(drifts.iter().zip(&plain))
+            .map(|(h, (d, p))| {
+                vec![
+                    format!("{h}"),
+                    sci(d[0]),
+                    sci(d[1]),
+                    sci(d[2]),
+                    sci(p[0]),
+                    sci(p[1]),
+                    sci(p[2]),
+                ]
+            })
             .collect(),
     };
     let mut fig = Figure::new("C4 free-floating beam: drifts", "t [s]", "relative drift");
@@ -629,15 +679,20 @@ pub fn c4_free_body(extent: Extent) -> Result<Vec<Block>> {
     conv.y_log = true;
     for (k, what) in ["momentum L", "angular momentum H", "energy"].iter().enumerate() {
         conv.series.push(Series::line_markers(
-            *what,
+            format!("{what}, projected"),
             hs.clone(),
             drifts.iter().map(|d| d[k].max(1e-17)).collect(),
+        ));
+        conv.series.push(Series::line_markers(
+            format!("{what}, plain"),
+            hs.clone(),
+            plain.iter().map(|d| d[k].max(1e-17)).collect(),
         ));
     }
     Ok(vec![
         Block::Table(Table {
             title: "C4 free-floating flexible beam".into(),
-            note: "Beam 1 m, square 50 mm, E = 7e7 (first elastic mode 52 rad/s), one superelement with 2 modes, no supports or loads; initial elastic deformation (the far end moved by 1 cm and turned by 0.02 rad) and a spin (0.5, 1, 3) rad/s with a drift velocity; generalized-alpha rho_inf = 1 over 0.3 s. **Target not met:** the issue asks for momentum conserved to round-off; it drifts at the integrator's order instead (2e-5 to 3e-4 over 0.3 s). Why (mbs/tests/unit/free_body.rs): the equations make the rigid components of the residual vanish at t_{n+1}, but the velocities come from the algorithmic accelerations and the centre of mass is a nonlinear function of the interface coordinates (through the frame and the CB shapes), so the discrete momentum is not an invariant of this scheme. A momentum-conserving scheme would need an energy-momentum integrator; the tolerances below check the order instead.".into(),
+            note: "Beam 1 m, square 50 mm, E = 7e7 (first elastic mode 52 rad/s), one superelement with 2 modes, no supports or loads; initial elastic deformation (the far end moved by 1 cm and turned by 0.02 rad) and a spin (0.5, 1, 3) rad/s with a drift velocity; generalized-alpha rho_inf = 1 over 0.3 s. Linear and angular momentum are constant to round-off by the momentum projection (mbs::momentum; Hairer, Lubich & Wanner, Geometric Numerical Integration, section IV.4), which the dynamic solver applies when the model is free and unloaded: after each step the velocities get the kinetic-energy-orthogonal rigid correction that restores the initial momenta. Why it is needed: generalized-alpha makes the momentum rates vanish at t_{n+1}, but the momenta of superelements in absolute interface coordinates are nonlinear in the coordinates and velocities (the centre of mass follows the frame (2.6) and the CB shapes), so plain generalized-alpha conserves them to its order only (the plain columns below). The correction is O(h^3) per step, so the energy still drifts at order 2 and the trajectory keeps its order (mbs/tests/unit/free_body.rs, which also checks the momenta by a second computation path). Tolerance 1e-12 on the momenta: the rounding of the sums in the momentum (1e-16 of the largest term), with three orders of margin.".into(),
             rows,
         }),
         Block::Grid(grid),
