@@ -46,8 +46,12 @@ configs=(
     "flexmbs, 2 superelements|$bin/slider_crank --segments 2 --modes $modes --h $h --t-end $t_end"
     "flexmbs, 4 superelements|$bin/slider_crank --segments 4 --modes 2 --h $h --t-end $t_end"
     "flexmbs, beam rod, 8 superelements|$bin/slider_crank --rod beam --segments 8 --modes 2 --h $h --t-end $t_end"
+    "flexmbs, 1 superelement, centre of mass, geometric stiffening|$bin/slider_crank --segments 1 --modes $modes --geometric-stiffening --h $h --t-end $t_end"
+    "flexmbs, 1 superelement, centre of mass, 2 modes, geometric stiffening|$bin/slider_crank --segments 1 --modes 2 --geometric-stiffening --h $h --t-end $t_end"
+    "flexmbs, beam rod, 1 superelement, 2 modes, geometric stiffening|$bin/slider_crank --rod beam --segments 1 --modes 2 --geometric-stiffening --h $h --t-end $t_end"
     "Exudyn ObjectFFRFreducedOrder, default Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes $modes --h $h --t-end $t_end"
     "Exudyn ObjectFFRFreducedOrder, modified Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes $modes --h $h --t-end $t_end --modified-newton"
+    "Exudyn ObjectFFRFreducedOrder, 2 modes, default Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes 2 --h $h --t-end $t_end"
 )
 : > "$work/runs.txt"
 for k in "${!configs[@]}"; do echo "$k|${configs[$k]}" >> "$work/configs.txt"; done

@@ -137,23 +137,36 @@ pub fn rod_body(
     modes: ModeSelection,
     keep_mesh: bool,
 ) -> Result<ReducedBody, BenchError> {
+    let mut settings = CbSettings::new(modes);
+    settings.keep_mesh_shapes = keep_mesh;
+    rod_body_with(p, length, mesh, &settings)
+}
+
+/// [`rod_body`] with any reduction settings (e.g. `geometric_stiffening`, which gives the body
+/// the geometric stiffness of its CB coordinates' stresses, so one superelement sees how the
+/// rod's axial force changes its bending stiffness).
+pub fn rod_body_with(
+    p: &SliderCrank,
+    length: f64,
+    mesh: RodMesh,
+    settings: &CbSettings,
+) -> Result<ReducedBody, BenchError> {
     let mut fe = rod_fe_model(p, length, mesh)?;
     let a = add_interface_on_set(&mut fe, "a", "x0", None, SpiderKind::Rbe2)?;
     let b = add_interface_on_set(&mut fe, "b", "x1", None, SpiderKind::Rbe2)?;
-    let mut settings = CbSettings::new(modes);
-    settings.keep_mesh_shapes = keep_mesh;
-    Ok(reduce(&fe, "rod", &[("a".into(), a), ("b".into(), b)], &settings)?)
+    Ok(reduce(&fe, "rod", &[("a".into(), a), ("b".into(), b)], settings)?)
 }
 
 /// A rod segment of `length` as `elements` Timoshenko beam elements with the solid rod's square
 /// section (side [`SliderCrank::side`]), reduced with interfaces "a" and "b" at its ends: the
 /// beam model of the same rod, for the nonlinear reference (its 6-dof junction nodes add no
-/// stiffness, unlike the rigid end faces of solid segments).
+/// stiffness, unlike the rigid end faces of solid segments), reduced with `settings` (as in
+/// [`rod_body_with`]; keep the mesh shapes for the midpoint of a one-segment rod).
 pub fn beam_rod_body(
     p: &SliderCrank,
     length: f64,
     elements: usize,
-    modes: ModeSelection,
+    settings: &CbSettings,
 ) -> Result<ReducedBody, BenchError> {
     let mut fe = FeModel::default();
     let material = fe.add_material(IsotropicMaterial::new("steel", p.E, p.nu, p.rho)?);
@@ -173,10 +186,8 @@ pub fn beam_rod_body(
         &props,
         Some("rod"),
     )?;
-    let mut settings = CbSettings::new(modes);
-    settings.keep_mesh_shapes = false;
     let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
-    Ok(reduce(&fe, "rod", &ends, &settings)?)
+    Ok(reduce(&fe, "rod", &ends, settings)?)
 }
 
 /// The slider-crank model with the rod as `n` identical segments `segment` (reduced from
@@ -383,24 +394,30 @@ pub struct Args {
 }
 
 impl Args {
-    /// Reads `--name value` pairs from the process arguments (a lone `--bench`, which `cargo
-    /// bench` passes, is ignored).
+    /// Reads `--name value` pairs from the process arguments; a `--name` followed by another
+    /// `--option` or by nothing is a flag with the value `true` (e.g. `--geometric-stiffening`).
+    /// A lone `--bench`, which `cargo bench` passes, is ignored.
     pub fn from_env() -> Result<Self, BenchError> {
         let raw: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
         let mut pairs = Vec::new();
-        let mut it = raw.into_iter();
+        let mut it = raw.into_iter().peekable();
         while let Some(k) = it.next() {
             let name = k.strip_prefix("--").ok_or_else(|| BenchError::Argument {
                 arg: k.clone(),
                 why: "expected --name value".into(),
             })?;
-            let v = it.next().ok_or_else(|| BenchError::Argument {
-                arg: k.clone(),
-                why: "has no value".into(),
-            })?;
+            let v = match it.peek() {
+                Some(v) if !v.starts_with("--") => it.next().unwrap_or_default(),
+                _ => "true".to_string(),
+            };
             pairs.push((name.to_string(), v));
         }
         Ok(Self { pairs })
+    }
+
+    /// Whether the flag `--name` was given (`--name`, `--name true` or `--name false`).
+    pub fn flag(&self, name: &str) -> Result<bool, BenchError> {
+        self.get(name, false)
     }
 
     /// The value of `--name`, parsed, or `default`.

@@ -6,26 +6,31 @@
 //! ```text
 //! cargo run --release -p flexmbs-benchmarks --bin slider_crank -- [--h 1e-4] [--t-end T]
 //!     [--modes 4] [--segments 1] [--kind hex20 --along 24 --across 2] [--frame com|node]
-//!     [--rho-inf 0.9] [--rod solid|beam --beam-elements 4] [--csv out.csv] [--reference ref.csv]
+//!     [--rho-inf 0.9] [--rod solid|beam --beam-elements 4] [--geometric-stiffening] [--mass exact|lumped]
+//!     [--csv out.csv] [--reference ref.csv]
 //! ```
 //!
 //! Defaults: h = T/400 with T = 2π/Ω, t_end = 2T. With one segment the midpoint is the mesh's
 //! axis node at mid-length (recovered from the reduced body, as the Exudyn script measures
 //! it); with an even number of segments it is the node between the middle segments (the
 //! `LineDistance` sensor). `--rod beam` replaces each solid segment by Timoshenko beam elements
-//! with the same section (the nonlinear reference: no rigid faces at the junctions). `--csv`
+//! with the same section (the nonlinear reference: no rigid faces at the junctions).
+//! `--geometric-stiffening` reduces the rod with the geometric stiffness of its CB coordinates
+//! (`CbSettings::geometric_stiffening`): each superelement's strain energy gains the cubic term
+//! through which the axial force changes the bending stiffness. `--mass lumped` uses the
+//! seed's lumped inertia variant instead of the exact one. `--csv`
 //! writes `t, w, slider_x`; `--reference` reads such a file (a finer run) and prints the
 //! deflection error against it. The time loop (steps and sensor records) is timed both by the
 //! wall clock and by the process's CPU time ([`flexmbs_benchmarks::cpu_seconds`]), which the
 //! load of a shared machine does not inflate.
 
 use flexmbs_benchmarks::{
-    beam_rod_body, cpu_seconds, median, midpoint_from_mesh, rod_body, slider_crank_model, Args, BenchError, RodMesh,
-    SliderCrank,
+    beam_rod_body, cpu_seconds, median, midpoint_from_mesh, rod_body_with, slider_crank_model, Args, BenchError,
+    RodMesh, SliderCrank,
 };
 use mbs::{DynamicSettings, Integrator, System};
 use nalgebra::Vector3;
-use reduction::ModeSelection;
+use reduction::{CbSettings, ModeSelection};
 use std::fmt::Write as _;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -81,6 +86,17 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             .into())
         }
     };
+    let mass = match args.text("mass").unwrap_or("exact") {
+        "exact" => MassVariant::Exact,
+        "lumped" => MassVariant::Lumped,
+        other => {
+            return Err(BenchError::Argument {
+                arg: "--mass".into(),
+                why: format!("'{other}' is not exact or lumped"),
+            }
+            .into())
+        }
+    };
     if n == 0 || (n != 1 && n % 2 == 1) {
         return Err(BenchError::Argument {
             arg: "--segments".into(),
@@ -101,22 +117,33 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let seg = p.rod / n as f64;
     let t0 = Instant::now();
     let beam = args.text("rod") == Some("beam");
+    let geometric = args.flag("geometric-stiffening")?;
+    let mut settings = CbSettings::new(ModeSelection::Count(modes));
+    // One segment: the midpoint is recovered from the mesh shapes (module docs).
+    settings.keep_mesh_shapes = n == 1;
+    settings.geometric_stiffening = geometric;
     let body = if beam {
-        beam_rod_body(&p, seg, args.get("beam-elements", 4)?, ModeSelection::Count(modes))?
+        beam_rod_body(&p, seg, args.get("beam-elements", 4)?, &settings)?
     } else {
-        rod_body(
+        rod_body_with(
             &p,
             seg,
             RodMesh {
                 along: mesh.along / n,
                 ..mesh
             },
-            ModeSelection::Count(modes),
-            n == 1,
+            &settings,
         )?
     };
+    if geometric && body.geometric_stiffness.is_none() {
+        return Err(BenchError::Argument {
+            arg: "--geometric-stiffening".into(),
+            why: "the reduction returned no geometric stiffness".into(),
+        }
+        .into());
+    }
     let t_reduce = t0.elapsed().as_secs_f64();
-    let (model, _) = slider_crank_model(&p, n, &body, frame, MassVariant::Exact);
+    let (model, _) = slider_crank_model(&p, n, &body, frame, mass);
     let sys = System::new(&model)?;
     let steps = (t_end / h).round() as usize;
     let settings = DynamicSettings::new(h, steps as f64 * h, rho_inf);
@@ -134,7 +161,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     }
     let wall = start.elapsed().as_secs_f64();
     let cpu = cpu_seconds() - cpu_start;
-    let w: Vec<f64> = if n == 1 && !beam {
+    let w: Vec<f64> = if n == 1 {
         midpoint_from_mesh(&body, frame, &Vector3::new(p.crank, 0.0, 0.0), &record)?
     } else {
         record.column("midpoint", 0).ok_or(BenchError::MissingSensor {
@@ -146,13 +173,14 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or(BenchError::MissingSensor { name: "slider".into() })?;
     let peak = w.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     println!(
-        "flexmbs slider-crank: rod {n} x {} ({} coordinates each), {modes} modes, frame {frame:?}, {} unknowns, reduction {t_reduce:.2} s",
+        "flexmbs slider-crank: rod {n} x {} ({} coordinates each), {modes} modes, frame {frame:?}, geometric stiffening {}, {} unknowns, reduction {t_reduce:.2} s",
         if beam {
             format!("{} Timoshenko beams", args.get("beam-elements", 4)?)
         } else {
             format!("{:?} {} x {} x {}", mesh.kind, mesh.along / n, mesh.across, mesh.across)
         },
         body.n_coordinates(),
+        if geometric { "on" } else { "off" },
         sys.n_dof()
     );
     println!(
