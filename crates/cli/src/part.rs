@@ -50,6 +50,8 @@ pub struct Reduction {
     pub modes: ModeSelection,
     pub auxiliary_node: bool,
     pub keep_mesh_shapes: bool,
+    /// `reduction::CbSettings::geometric_stiffening`.
+    pub geometric_stiffening: bool,
 }
 
 /// A node of a part as named in a support or load.

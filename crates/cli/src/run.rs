@@ -562,22 +562,25 @@ pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
         reduction::ModeSelection::CutoffHz(f) => format!("fixed-interface modes below {f} Hz"),
     };
     eprintln!(
-        "flexmbs: part '{}': reducing {n_free} dofs to {} interfaces{} and {modes} ...",
+        "flexmbs: part '{}': reducing {n_free} dofs to {} interfaces{} and {modes}{} ...",
         part.name,
         built.interfaces.len(),
         if built.auxiliary.is_some() {
             " + the auxiliary node"
         } else {
             ""
+        },
+        if reduction.geometric_stiffening {
+            ", with geometric stiffening"
+        } else {
+            ""
         }
     );
     let t = Instant::now();
-    let settings = CbSettings {
-        modes: reduction.modes,
-        keep_mesh_shapes: reduction.keep_mesh_shapes,
-        auxiliary_node: built.auxiliary,
-        ..CbSettings::new(reduction.modes)
-    };
+    let mut settings = CbSettings::new(reduction.modes);
+    settings.keep_mesh_shapes = reduction.keep_mesh_shapes;
+    settings.auxiliary_node = built.auxiliary;
+    settings.geometric_stiffening = reduction.geometric_stiffening;
     // A spinner on stderr naming the stage (hidden when stderr is not a terminal).
     let bar = indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
     bar.enable_steady_tick(std::time::Duration::from_millis(200));

@@ -1252,6 +1252,7 @@ impl Validator<'_> {
             modes,
             auxiliary_node,
             keep_mesh_shapes: r.keep_mesh_shapes.unwrap_or(true),
+            geometric_stiffening: r.geometric_stiffening.unwrap_or(false),
         })
     }
 

@@ -274,6 +274,8 @@ pub struct ReductionFile {
     pub auxiliary_node: Option<bool>,
     /// Keep the mode shapes on the mesh in the reduced-body file (default true).
     pub keep_mesh_shapes: Option<bool>,
+    /// Reduce with the geometric stiffness of the CB coordinates' stresses (default false).
+    pub geometric_stiffening: Option<bool>,
 }
 
 /// `[[analyses]]`: what to compute. `type` says which keys apply.

@@ -1,7 +1,8 @@
 //! The mechanism in study files: the examples against their references (B1, B3), the results
 //! a dynamic run streams (sensor CSV files with units, VTU/PVD, summary statistics), a solver
 //! failure that keeps its partial results, and the errors only the assembled mechanism shows
-//! (`tests/mechanism/*.toml`: a rigid loop, a coordinate held by nothing).
+//! (`tests/mechanism/*.toml`: a rigid loop, a coordinate held by nothing); a column as one
+//! superelement with and without `geometric_stiffening` against the beam-column amplification.
 
 use crate::support::*;
 use std::path::Path;
@@ -224,4 +225,104 @@ fn linearized_modes_are_labelled_by_body_and_node() {
         assert!(label.contains("), node coupler."), "label {label:?}");
     }
     assert!(out.stdout.contains("mode 1: "), "{}", out.stdout);
+}
+
+/// A clamped-free column (EI = 1 N m^2, L = 1 m) as ONE superelement under the axial load
+/// P = 0.4 P_cr and a small lateral tip force H, with and without `geometric_stiffening = true`
+/// in `[parts.reduction]`: with it the lateral tip deflection is the beam-column one,
+/// H L^3/(3 EI) times the exact amplification 3 (tan kL - kL)/(kL)^3 (k^2 = P/EI), within
+/// 1 %; without it the amplification is visibly smaller.
+#[test]
+fn geometric_stiffening_option_amplifies_a_column_deflection() {
+    let pi2 = std::f64::consts::PI.powi(2);
+    let (p, h) = (0.4 * pi2 / 4.0, 1e-3);
+    let study = |geometric: bool| {
+        format!(
+            r#"
+[study]
+title = "column under axial load, one superelement"
+
+[[materials]]
+name = "m"
+E = 1.2e9
+nu = 0.3
+rho = 1000.0
+
+[[sections]]
+name = "square"
+shape = "rectangle"
+b = 0.01
+h = 0.01
+
+[[parts]]
+name = "column"
+material = "m"
+[parts.beam]
+kind = "straight"
+from = [0.0, 0.0, 0.0]
+to = [1.0, 0.0, 0.0]
+elements = 8
+section = "square"
+theory = "euler-bernoulli"
+[[parts.interfaces]]
+name = "a"
+set = "column.start"
+[[parts.interfaces]]
+name = "b"
+set = "column.end"
+[parts.reduction]
+modes = 4
+geometric_stiffening = {geometric}
+
+[[bodies]]
+name = "c"
+part = "column"
+position = [0.0, 0.0, 0.0]
+
+[[supports]]
+at = "c.a"
+type = "clamp"
+
+[[loads]]
+name = "P"
+type = "point"
+at = "c.b"
+force = [{fx}, {h}, 0.0]
+
+[[sensors]]
+name = "tip"
+type = "displacement"
+of = "c.b"
+
+[[analyses]]
+type = "equilibrium"
+steps = 2
+"#,
+            fx = -p
+        )
+    };
+    let kl = p.sqrt();
+    let exact = 3.0 * (kl.tan() - kl) / kl.powi(3);
+    let d0 = h / 3.0;
+    let mut amplification = Vec::new();
+    for geometric in [true, false] {
+        let dir = scratch(&format!("mech-geometric-{geometric}"));
+        std::fs::write(dir.join("column.toml"), study(geometric)).unwrap();
+        let out = flexmbs(&dir, &["run", "column.toml"]);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+        assert_eq!(
+            out.stderr.contains("with geometric stiffening"),
+            geometric,
+            "{}",
+            out.stderr
+        );
+        let d = last_row(&dir.join("column-results/equilibrium/tip.csv"));
+        amplification.push(d[2] / d0);
+    }
+    eprintln!(
+        "amplification with G {}, without {}, exact {exact}",
+        amplification[0], amplification[1]
+    );
+    assert_close(amplification[0], exact, 1e-2, "amplification with geometric stiffening");
+    assert!(amplification[1] < exact - 0.1, "{amplification:?} vs {exact}");
 }
