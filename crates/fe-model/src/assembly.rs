@@ -16,23 +16,35 @@ pub struct Assembled {
     pub M: SparseColMat<usize, f64>,
 }
 
-/// Stiffness and mass of element `index` in global axes.
-pub fn element_matrices(model: &FeModel, index: usize) -> Result<LocalMatrices, ElementError> {
-    let element = &model.elements[index];
-    let mut X_e: Vec<Point3<f64>> = Vec::with_capacity(element.nodes().len());
-    for node in element.nodes() {
-        let x = model.mesh.nodes.get(node.index()).ok_or(ElementError::MissingNode {
-            element: index,
-            node: node.0,
-            count: model.mesh.nodes.len(),
-        })?;
-        X_e.push(*x);
-    }
-    element.local_matrices(index, &X_e, &model.properties())
+/// Reference coordinates of element `index`'s nodes (a missing node is an element error).
+pub(crate) fn element_coordinates(model: &FeModel, index: usize) -> Result<Vec<Point3<f64>>, ElementError> {
+    model.elements[index]
+        .nodes()
+        .iter()
+        .map(|node| {
+            model
+                .mesh
+                .nodes
+                .get(node.index())
+                .copied()
+                .ok_or(ElementError::MissingNode {
+                    element: index,
+                    node: node.0,
+                    count: model.mesh.nodes.len(),
+                })
+        })
+        .collect()
 }
 
-/// $\mathbf T_e^T \mathbf A \mathbf T_e$ added at the element's slots.
-fn scatter(map: &ElementMap, A: &DMatrix<f64>, values: &mut [f64]) {
+/// Stiffness and mass of element `index` in global axes.
+pub fn element_matrices(model: &FeModel, index: usize) -> Result<LocalMatrices, ElementError> {
+    let X_e = element_coordinates(model, index)?;
+    model.elements[index].local_matrices(index, &X_e, &model.properties())
+}
+
+/// $\mathbf T_e^T \mathbf A \mathbf T_e$ added at the element's slots (also the geometric
+/// stiffness's assembly, `geometric.rs`).
+pub(crate) fn scatter(map: &ElementMap, A: &DMatrix<f64>, values: &mut [f64]) {
     let nd = map.dofs.len();
     match &map.transform {
         ElementTransform::Select(position) => {

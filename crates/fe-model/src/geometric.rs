@@ -33,42 +33,19 @@
 
 #![allow(non_snake_case)]
 
-use crate::assembly::assemble;
+use crate::assembly::{assemble, element_coordinates, scatter};
 use crate::dof::DofMap;
 use crate::element::{beam2, solid, Element, SolidKind};
 use crate::error::{ElementError, FeError};
 use crate::model::{FeModel, NodalLoad};
 use crate::ordering::{dof_points, FillOrdering};
-use crate::pattern::{element_slots, ElementMap, ElementTransform, SystemPattern};
+use crate::pattern::{element_slots, SystemPattern};
 use crate::statics::{cholesky, load_vector};
 use faer::sparse::SparseColMat;
 use faer::Mat;
 use nalgebra::{DMatrix, Matrix3, Point3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-
-/// Reference coordinates of element `index`'s nodes.
-///
-/// The same gathering as `assembly::element_matrices` does inline (a shared
-/// `element_coordinates` there is requested; until then this is its one copy).
-fn element_coordinates(model: &FeModel, index: usize) -> Result<Vec<Point3<f64>>, ElementError> {
-    model.elements[index]
-        .nodes()
-        .iter()
-        .map(|node| {
-            model
-                .mesh
-                .nodes
-                .get(node.index())
-                .copied()
-                .ok_or(ElementError::MissingNode {
-                    element: index,
-                    node: node.0,
-                    count: model.mesh.nodes.len(),
-                })
-        })
-        .collect()
-}
 
 /// The full dof slots (`6 node + k`) of an element's local dofs, in its local order: the rows
 /// of a full-slot basis that make $\mathbf V_e$.
@@ -96,33 +73,6 @@ pub fn element_geometric_stiffness(model: &FeModel, index: usize, u_e: &[f64]) -
             let (kind, s) = element.solid().expect("every other kind is a solid");
             let material = props.material(index, s.material)?;
             solid::geometric_stiffness(kind, index, &X_e, material, u_e)
-        }
-    }
-}
-
-/// $\mathbf T_e^T \mathbf A \mathbf T_e$ added at the element's slots of the pattern's values.
-///
-/// The same as `assembly.rs`'s private `scatter`, which is requested as a `pub(crate)` hook;
-/// until then this is its one copy.
-fn scatter(map: &ElementMap, A: &DMatrix<f64>, values: &mut [f64]) {
-    let nd = map.dofs.len();
-    match &map.transform {
-        ElementTransform::Select(position) => {
-            for (b, pb) in position.iter().enumerate() {
-                let Some(c) = pb else { continue };
-                for (a, pa) in position.iter().enumerate() {
-                    let Some(r) = pa else { continue };
-                    values[map.slots[*r as usize + *c as usize * nd]] += A[(a, b)];
-                }
-            }
-        }
-        ElementTransform::Dense(T_e) => {
-            let reduced = T_e.transpose() * A * T_e;
-            for c in 0..nd {
-                for r in 0..nd {
-                    values[map.slots[r + c * nd]] += reduced[(r, c)];
-                }
-            }
         }
     }
 }
