@@ -25,7 +25,8 @@
 //! | $\mathbf C$ | `Operator` | shift-invert operator $\mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T}$, symmetric | [`eigen`] module docs |
 //! | $\mu_k,\ \mathbf y_k$ | `mu`, `Y` | eigenpairs of $\mathbf C$: $\mu_k = 1/(\lambda_k - \sigma)$, $\mathbf y_k = \mathbf L^T\mathbf P\boldsymbol\phi_k$ | Grimes, Lewis & Simon 1994, §2 |
 //! | $\mathbf V_k,\ \mathbf T_k,\ \beta_k$ | `V`, `T`, `beta` | Lanczos basis, projected matrix, coupling: $\mathbf C\mathbf V_k = \mathbf V_k\mathbf T_k + \beta_k\mathbf v_{k+1}\mathbf e_k^T$ | Wu & Simon 2000 |
-//! | $p$ | `krylov_dim` | Krylov subspace dimension, default $\max(2m, m + 32)$ | [`eigen::EigenSettings`] |
+//! | $p$ | `krylov_dim` | Krylov subspace dimension, default $\max(2m, m + 32)$ with single vectors, $\max(2m, m + 32, m + 16b)$ with blocks | [`eigen::EigenSettings`] |
+//! | $b$ | `block_size` | Lanczos block size: $\mathbf C$ applied to $b$ vectors at once (the factor read once for them); automatic: 4 from 100k dofs, else 1, with a single-vector retry if a block run stalls | [`eigen::AUTO_BLOCK_SIZE`], [`eigen::BLOCK_MIN_DOFS`] |
 //! | $\mathbf G_k$ | `geometric_stiffness[k]` | reduced geometric stiffness $\mathbf V^T\mathbf K_G(\boldsymbol\sigma(\mathbf V\mathbf e_k))\mathbf V$; strain energy $\tfrac12\mathbf q^T\mathbf K_{CB}\mathbf q + \tfrac12\sum_k q_k\mathbf q^T\mathbf G_k\mathbf q$ | [`geometric`]; `fe_model::geometric` |
 //! | $r_k$ | `residuals[k]` | $\|\mathbf K\boldsymbol\phi_k - \lambda_k\mathbf M\boldsymbol\phi_k\| / \max(\|\mathbf K\boldsymbol\phi_k\|, \lvert\lambda_k - \sigma\rvert\,\|\mathbf M\boldsymbol\phi_k\|)$ | [`eigen::relative_residual`] |
 //!
