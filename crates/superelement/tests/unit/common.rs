@@ -135,3 +135,16 @@ pub const VARIANTS: [MassVariant; 2] = [MassVariant::Exact, MassVariant::Lumped]
 pub fn gravity() -> Vector3<f64> {
     Vector3::new(0.5, -9.81, 1.3)
 }
+
+/// Resultant force and moment about the origin of interface forces `f` (6 entries per
+/// interface: force, then moment) applied at the interface positions `r`.
+pub fn resultant(f: &[f64], r: &[Vector3<f64>]) -> (Vector3<f64>, Vector3<f64>) {
+    let (mut F, mut Mo) = (Vector3::zeros(), Vector3::zeros());
+    for (k, r_k) in r.iter().enumerate() {
+        let force = Vector3::new(f[6 * k], f[6 * k + 1], f[6 * k + 2]);
+        let moment = Vector3::new(f[6 * k + 3], f[6 * k + 4], f[6 * k + 5]);
+        F += force;
+        Mo += moment + r_k.cross(&force);
+    }
+    (F, Mo)
+}

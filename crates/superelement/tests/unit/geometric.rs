@@ -256,17 +256,7 @@ fn rigid_motion_leaves_the_local_elastic_force_unchanged() {
             for (b, (a, c)) in f0.iter().zip(&f2).enumerate() {
                 assert!((a - c).norm() < 1e-11 * scale, "{name} {frame}: block {b}: {a} vs {c}");
             }
-            let (mut F, mut Mo) = (Vector3::zeros(), Vector3::zeros());
-            for k in 0..N {
-                let f = Vector3::new(ev2.f_elastic[6 * k], ev2.f_elastic[6 * k + 1], ev2.f_elastic[6 * k + 2]);
-                let m = Vector3::new(
-                    ev2.f_elastic[6 * k + 3],
-                    ev2.f_elastic[6 * k + 4],
-                    ev2.f_elastic[6 * k + 5],
-                );
-                F += f;
-                Mo += m + moved.r[k].cross(&f);
-            }
+            let (F, Mo) = resultant(&ev2.f_elastic, &moved.r[..N]);
             assert!(
                 F.norm() < 1e-10 * scale && Mo.norm() < 1e-9 * scale,
                 "{name} {frame}: resultant {F} {Mo}"

@@ -119,18 +119,7 @@ fn rigid_motion_of_a_deformed_state_is_objective() {
                 }
                 // A free body in equilibrium of its elastic forces: they balance (sum of forces
                 // and moments about the origin vanish) in any placement.
-                let mut F = Vector3::zeros();
-                let mut Mo = Vector3::zeros();
-                for k in 0..se.n_interfaces() {
-                    let f = Vector3::new(ev2.f_elastic[6 * k], ev2.f_elastic[6 * k + 1], ev2.f_elastic[6 * k + 2]);
-                    let m = Vector3::new(
-                        ev2.f_elastic[6 * k + 3],
-                        ev2.f_elastic[6 * k + 4],
-                        ev2.f_elastic[6 * k + 5],
-                    );
-                    F += f;
-                    Mo += m + moved.r[k].cross(&f);
-                }
+                let (F, Mo) = resultant(&ev2.f_elastic, &moved.r[..se.n_interfaces()]);
                 assert!(
                     F.norm() < 1e-10 * scale && Mo.norm() < 1e-9 * scale,
                     "{} {frame}: resultant {F} {Mo}",
