@@ -148,3 +148,20 @@ pub fn resultant(f: &[f64], r: &[Vector3<f64>]) -> (Vector3<f64>, Vector3<f64>) 
     }
     (F, Mo)
 }
+
+/// `state` placed rigidly by rotation `Q` then translation `t` (interfaces and the frame's
+/// warm start `frame` alike), for invariance checks.
+pub fn rigidly_moved(
+    state: &superelement::BodyState,
+    frame: &superelement::Frame,
+    Q: &nalgebra::UnitQuaternion<f64>,
+    t: &Vector3<f64>,
+) -> superelement::BodyState {
+    let mut moved = state.clone();
+    for k in 0..state.r.len() {
+        moved.r[k] = t + Q * state.r[k];
+        moved.R[k] = Q * state.R[k];
+    }
+    moved.frame = superelement::Frame::new(t + Q * frame.r, Q * frame.R);
+    moved
+}

@@ -23,7 +23,7 @@ use superelement::testing::fixtures;
 use superelement::testing::{
     check_jacobian, coordinate_scales, perturb_state, synthetic_geometric_stiffness, test_state, StateSpec,
 };
-use superelement::{Damping, Frame, MassVariant, Superelement, SuperelementError};
+use superelement::{Damping, MassVariant, Superelement, SuperelementError};
 
 /// Relative deformation of the test states (as `StateSpec::moving`).
 const DEFORMATION: f64 = 0.02;
@@ -239,12 +239,7 @@ fn rigid_motion_leaves_the_local_elastic_force_unchanged() {
         for (angle, axis) in rotations {
             let Q = UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), f64::to_radians(angle));
             let t = Vector3::new(0.4, 2.0, -3.0);
-            let mut moved = state.clone();
-            for k in 0..N {
-                moved.r[k] = t + Q * state.r[k];
-                moved.R[k] = Q * state.R[k];
-            }
-            moved.frame = Frame::new(t + Q * ev.frame.r, Q * ev.frame.R);
+            let moved = rigidly_moved(&state, &ev.frame, &Q, &t);
             let ev2 = se.evaluate(&moved, &vec![0.0; n], &Vector3::zeros()).unwrap();
             let dq = ev
                 .q_jj

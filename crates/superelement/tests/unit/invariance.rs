@@ -98,12 +98,7 @@ fn rigid_motion_of_a_deformed_state_is_objective() {
             let ev = se.evaluate(&state, &vec![0.0; n], &Vector3::zeros()).unwrap();
             for Q in rotations() {
                 let t = Vector3::new(0.4, 2.0, -3.0);
-                let mut moved = state.clone();
-                for k in 0..se.n_interfaces() {
-                    moved.r[k] = t + Q * state.r[k];
-                    moved.R[k] = Q * state.R[k];
-                }
-                moved.frame = Frame::new(t + Q * ev.frame.r, Q * ev.frame.R);
+                let moved = rigidly_moved(&state, &ev.frame, &Q, &t);
                 let ev2 = se.evaluate(&moved, &vec![0.0; n], &Vector3::zeros()).unwrap();
                 let dq = ev
                     .q_jj
