@@ -483,20 +483,7 @@ impl ShiftInvert {
         settings: &EigenSettings,
         progress: &mut dyn FnMut(usize, usize, usize),
     ) -> Result<EigenSolution, ReductionError> {
-        let automatic_block = settings.block_size == 0 && block_size(settings, self.nrows()) > 1;
-        match self.lowest_modes_once(K, M, settings, progress) {
-            // The automatic block size is a speed choice, not the user's: a block run that
-            // stalls (blocks of 8 did on a 50k-dof body, `AUTO_BLOCK_SIZE`) is repeated with
-            // single vectors, the robust iteration, before giving up.
-            Err(ReductionError::EigenNotConverged { .. }) if automatic_block => {
-                let single = EigenSettings {
-                    block_size: 1,
-                    ..settings.clone()
-                };
-                self.lowest_modes_once(K, M, &single, progress)
-            }
-            result => result,
-        }
+        with_single_vector_retry(settings, self.nrows(), |s| self.lowest_modes_once(K, M, s, progress))
     }
 
     /// One run of [`ShiftInvert::lowest_modes_with_progress`] with the block size of `settings`.
@@ -1339,6 +1326,26 @@ fn check_square_pair(
     Ok(())
 }
 
+/// Runs `solve` with `settings`; when the block size was the automatic choice (`block_size = 0`
+/// on `n` >= [`BLOCK_MIN_DOFS`] dofs) and the run did not converge, runs it again with single
+/// vectors. The automatic block size is a speed choice, not the user's: a block run that stalls
+/// (blocks of 8 did on a 50k-dof body, [`AUTO_BLOCK_SIZE`]) is repeated with the robust
+/// iteration before giving up. A block size the user chose is never changed.
+fn with_single_vector_retry(
+    settings: &EigenSettings,
+    n: usize,
+    mut solve: impl FnMut(&EigenSettings) -> Result<EigenSolution, ReductionError>,
+) -> Result<EigenSolution, ReductionError> {
+    let automatic_block = settings.block_size == 0 && block_size(settings, n) > 1;
+    match solve(settings) {
+        Err(ReductionError::EigenNotConverged { .. }) if automatic_block => solve(&EigenSettings {
+            block_size: 1,
+            ..settings.clone()
+        }),
+        result => result,
+    }
+}
+
 /// The block size $b$ for a problem of size `n` (before clamping to the Krylov dimension):
 /// [`EigenSettings::block_size`], or for `0` [`AUTO_BLOCK_SIZE`] from [`BLOCK_MIN_DOFS`] dofs.
 fn block_size(settings: &EigenSettings, n: usize) -> usize {
@@ -1500,6 +1507,76 @@ fn lower_shifted(
 mod tests {
     use super::*;
     use faer::sparse::Triplet;
+
+    /// The retry rule of `lowest_modes_with_progress`: an automatic block run that does not
+    /// converge is repeated once with single vectors; a block size the user chose, other errors
+    /// and problems below `BLOCK_MIN_DOFS` are not retried. (A real stall needs a 50k-dof body
+    /// and blocks of 8, far too slow for a test: the solver is replaced by a recorder that
+    /// stalls with blocks and converges with single vectors, on the real small problem below.)
+    #[test]
+    fn automatic_block_stall_retries_with_single_vectors() {
+        let n = 200;
+        let K = SparseColMat::<usize, f64>::try_new_from_triplets(
+            n,
+            n,
+            &(0..n).map(|i| Triplet::new(i, i, (i + 1) as f64)).collect::<Vec<_>>(),
+        )
+        .unwrap();
+        let M = SparseColMat::<usize, f64>::try_new_from_triplets(
+            n,
+            n,
+            &(0..n).map(|i| Triplet::new(i, i, 1.0)).collect::<Vec<_>>(),
+        )
+        .unwrap();
+        let stall = || ReductionError::EigenNotConverged {
+            requested: 3,
+            converged: 2,
+            failed_modes: vec![2],
+            worst_residual: 3e-8,
+            tolerance: 1e-10,
+        };
+        // Stalls whenever the effective block size is above 1, else solves for real.
+        let run = |calls: &mut Vec<usize>, s: &EigenSettings, n_claimed: usize| {
+            calls.push(block_size(s, n_claimed));
+            if block_size(s, n_claimed) > 1 {
+                Err(stall())
+            } else {
+                lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(3, Shift::Zero))
+            }
+        };
+        // Automatic on a (claimed) large problem: one block run, then single vectors.
+        let mut calls = Vec::new();
+        let sol = with_single_vector_retry(&EigenSettings::new(3, Shift::Zero), BLOCK_MIN_DOFS, |s| {
+            run(&mut calls, s, BLOCK_MIN_DOFS)
+        })
+        .expect("the single-vector retry converges");
+        assert_eq!(calls, [AUTO_BLOCK_SIZE, 1]);
+        for (k, lambda) in sol.eigenvalues.iter().enumerate() {
+            assert!((lambda - (k + 1) as f64).abs() < 1e-9, "eigenvalue {k}: {lambda}");
+        }
+        // The user's block size: no retry, the stall is reported.
+        let mut calls = Vec::new();
+        let user = EigenSettings {
+            block_size: 4,
+            ..EigenSettings::new(3, Shift::Zero)
+        };
+        let err = with_single_vector_retry(&user, BLOCK_MIN_DOFS, |s| run(&mut calls, s, BLOCK_MIN_DOFS));
+        assert!(matches!(err, Err(ReductionError::EigenNotConverged { .. })), "{err:?}");
+        assert_eq!(calls, [4]);
+        // Automatic below BLOCK_MIN_DOFS is already single-vector: one run.
+        let mut calls = Vec::new();
+        with_single_vector_retry(&EigenSettings::new(3, Shift::Zero), n, |s| run(&mut calls, s, n))
+            .expect("single vectors");
+        assert_eq!(calls, [1]);
+        // Other errors are not retried.
+        let mut calls = 0;
+        let err = with_single_vector_retry(&EigenSettings::new(3, Shift::Zero), BLOCK_MIN_DOFS, |_| {
+            calls += 1;
+            Err(ReductionError::InvalidSettings { what: "test".into() })
+        });
+        assert!(matches!(err, Err(ReductionError::InvalidSettings { .. })), "{err:?}");
+        assert_eq!(calls, 1);
+    }
 
     /// The gather product against faer's sparse-dense product, on a symmetric matrix with
     /// unsorted and repeated entries, for 0, 1 and 5 columns, in parallel and in sequence.
