@@ -81,33 +81,70 @@ fn element_map(element: &Element, dofs: &DofMap) -> ElementMap {
     }
 }
 
+/// The CSC structure (`col_ptr`, sorted `row_idx`) of the union of the elements' dense blocks
+/// `dofs x dofs`, by a counting sort: every element writes its dofs as rows into each of its
+/// dofs' columns (repeats included), then each column is sorted and deduplicated on its own.
+/// At 200k dofs this is about 38M entries: a global sort of (column, row) keys took 1.5-3 s
+/// of the reduction, twice (the model and the mass data's bare model); columns of at most a
+/// few hundred entries sort in cache.
+fn column_structure(n: usize, elements: &[ElementMap]) -> (Vec<usize>, Vec<usize>) {
+    let mut start = vec![0usize; n + 1];
+    for m in elements {
+        for &c in &m.dofs {
+            start[c as usize + 1] += m.dofs.len();
+        }
+    }
+    for j in 0..n {
+        start[j + 1] += start[j];
+    }
+    let mut rows = vec![0u32; start[n]];
+    let mut fill = start[..n].to_vec();
+    for m in elements {
+        for &c in &m.dofs {
+            let f = &mut fill[c as usize];
+            rows[*f..*f + m.dofs.len()].copy_from_slice(&m.dofs);
+            *f += m.dofs.len();
+        }
+    }
+    // One mutable slice per column, sorted and deduplicated in place in parallel.
+    let mut columns: Vec<&mut [u32]> = Vec::with_capacity(n);
+    let mut rest = rows.as_mut_slice();
+    for j in 0..n {
+        let (column, tail) = rest.split_at_mut(start[j + 1] - start[j]);
+        columns.push(column);
+        rest = tail;
+    }
+    let unique: Vec<usize> = columns
+        .par_iter_mut()
+        .map(|column| {
+            column.sort_unstable();
+            let mut k = 0;
+            for i in 0..column.len() {
+                if i == 0 || column[i] != column[k - 1] {
+                    column[k] = column[i];
+                    k += 1;
+                }
+            }
+            k
+        })
+        .collect();
+    let mut col_ptr = vec![0usize; n + 1];
+    for j in 0..n {
+        col_ptr[j + 1] = col_ptr[j] + unique[j];
+    }
+    let mut row_idx = Vec::with_capacity(col_ptr[n]);
+    for (column, &k) in columns.iter().zip(&unique) {
+        row_idx.extend(column[..k].iter().map(|&r| r as usize));
+    }
+    (col_ptr, row_idx)
+}
+
 impl SystemPattern {
     /// Builds the pattern of `model` under the elimination `dofs`.
     pub fn new(model: &FeModel, dofs: &DofMap) -> Self {
         let n = dofs.n_free();
         let mut elements: Vec<ElementMap> = model.elements.par_iter().map(|e| element_map(e, dofs)).collect();
-        // Every (row, col) pair an element touches, as one u64 key = col * n + row, so a
-        // parallel sort gives the CSC structure directly.
-        let mut keys: Vec<u64> = elements
-            .par_iter()
-            .flat_map_iter(|m| {
-                let d = &m.dofs;
-                d.iter()
-                    .flat_map(move |&c| d.iter().map(move |&r| c as u64 * n as u64 + r as u64))
-            })
-            .collect();
-        keys.par_sort_unstable();
-        keys.dedup();
-        let mut col_ptr = vec![0usize; n + 1];
-        let mut row_idx = Vec::with_capacity(keys.len());
-        for &key in &keys {
-            col_ptr[(key / n as u64) as usize + 1] += 1;
-            row_idx.push((key % n as u64) as usize);
-        }
-        drop(keys);
-        for j in 0..n {
-            col_ptr[j + 1] += col_ptr[j];
-        }
+        let (col_ptr, row_idx) = column_structure(n, &elements);
         elements.par_iter_mut().for_each(|m| {
             let nd = m.dofs.len();
             let mut slots = Vec::with_capacity(nd * nd);
@@ -137,5 +174,51 @@ impl SystemPattern {
     /// The symbolic structure, shared by K and M.
     pub fn symbolic(&self) -> &SymbolicSparseColMat<usize> {
         &self.symbolic
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeSet;
+
+    /// The counting sort against the set of (column, row) pairs the elements touch, with
+    /// overlapping elements, repeated pairs, empty columns and an element without dofs.
+    #[test]
+    fn column_structure_is_the_union_of_the_element_blocks() {
+        let n = 50;
+        let mut elements: Vec<ElementMap> = (0..40u32)
+            .map(|e| {
+                let mut dofs: Vec<u32> = (0..1 + e % 7).map(|k| (e * 7 + k * 11) % 45).collect();
+                dofs.sort_unstable();
+                dofs.dedup();
+                ElementMap {
+                    dofs,
+                    transform: ElementTransform::Select(Vec::new()),
+                    slots: Vec::new(),
+                }
+            })
+            .collect();
+        elements.push(ElementMap {
+            dofs: Vec::new(),
+            transform: ElementTransform::Select(Vec::new()),
+            slots: Vec::new(),
+        });
+        let expected: BTreeSet<(usize, usize)> = elements
+            .iter()
+            .flat_map(|m| {
+                m.dofs
+                    .iter()
+                    .flat_map(|&c| m.dofs.iter().map(move |&r| (c as usize, r as usize)))
+            })
+            .collect();
+        let (col_ptr, row_idx) = column_structure(n, &elements);
+        assert_eq!(col_ptr.len(), n + 1);
+        let got: Vec<(usize, usize)> = (0..n)
+            .flat_map(|c| row_idx[col_ptr[c]..col_ptr[c + 1]].iter().map(move |&r| (c, r)))
+            .collect();
+        // Sorted within each column and free of repeats: equal to the ordered set.
+        assert_eq!(got, expected.into_iter().collect::<Vec<_>>());
+        assert!((45..n).all(|c| col_ptr[c] == col_ptr[c + 1]), "columns 45.. are empty");
     }
 }
