@@ -2,7 +2,7 @@
 //! does not reduce its parts again.
 //!
 //! The key is a SHA-256 over: a cache-scheme tag, the flexmbs version (the algorithms may
-//! change between versions), the reduced-body format version, the part's name (it is stored
+//! change between versions), the reduced-body format version and algorithm revision, the part's name (it is stored
 //! in the body), the bytes of its gmsh file if it has one, the whole FE model the reduction
 //! runs on (mesh, elements, materials, sections, spiders: serialised as JSON straight into
 //! the hasher), the interface nodes and the reduction settings. Anything that can change the
@@ -42,6 +42,7 @@ pub fn key(part: &Part, built: &Built, reduction: &Reduction) -> std::io::Result
     field("scheme", SCHEME.as_bytes());
     field("flexmbs", env!("CARGO_PKG_VERSION").as_bytes());
     field("format", reduction::FORMAT_VERSION.to_string().as_bytes());
+    field("algorithms", reduction::ALGORITHM_REVISION.to_string().as_bytes());
     field("part", part.name.as_bytes());
     if let Some(file) = &part.mesh_file {
         field("mesh file", &std::fs::read(file)?);

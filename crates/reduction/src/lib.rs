@@ -52,4 +52,6 @@ pub use file::BodyFileProblem;
 pub use geometric::reduced_geometric_stiffness;
 pub use matrix_market::{read_matrix_market, write_matrix_market};
 pub use modal::modal_sparse;
-pub use reduced_body::{DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, FORMAT_VERSION};
+pub use reduced_body::{
+    DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, ALGORITHM_REVISION, FORMAT_VERSION,
+};

@@ -28,6 +28,12 @@ use serde::{Deserialize, Serialize};
 /// no [`ReducedBody::geometric_stiffness`]). 2: the optional geometric stiffness arrays.
 pub const FORMAT_VERSION: u32 = 2;
 
+/// Revision of the algorithms that compute a [`ReducedBody`], bumped whenever a change can
+/// change a body computed from the same input (not only its file format): caches of reduced
+/// bodies (the CLI's) key on it. 2: the automatic eigensolver block size is never 1
+/// ([`crate::eigen::SMALL_BLOCK_SIZE`]), which finds repeated eigenvalues that single vectors missed.
+pub const ALGORITHM_REVISION: u32 = 2;
+
 /// A dense matrix as plain data (column-major), for files; convert to `faer::Mat` to compute.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DenseMatrix {
