@@ -10,12 +10,21 @@
 //! `REDUCTION_ORDERING=amd,nd` the fill-reducing orderings to compare (`auto` by default).
 //! Without `--bench` (as `cargo test --benches` runs it) a 3k-dof block with both orderings,
 //! so CI checks that it runs.
+//!
+//! With `REDUCTION_CB_MTX_DIR` set, each size then (after its figures are printed) writes the
+//! fixed-interface problem that the reduction's 20 modes solve -- K_ii and M_ii, the block with
+//! both interface nodes clamped -- as `K_<size>.mtx`, `M_<size>.mtx` for scipy's `eigsh`
+//! (`benchmarks/scripts/reduction_vs_scipy.sh`), solves it once more with our eigensolver
+//! alone (time, worst relative residual, written to `eigenvalues_<size>.txt`) and prints a
+//! `RESULT` line for the script.
 
 mod common;
 
 use common::{block, divisions, parse_ordering};
-use fe_model::{DofMap, FillOrdering};
-use reduction::{reduce_with_progress, CbSettings, ModeSelection, Stage};
+use fe_model::{assemble, DofMap, DofMask, FeModel, FillOrdering, NodeId, SystemPattern};
+use reduction::{lowest_modes, reduce_with_progress, write_matrix_market, CbSettings, EigenSettings, ModeSelection};
+use reduction::{ReducedBody, Shift, Stage};
+use std::path::Path;
 use std::time::Instant;
 
 /// CPU seconds (user + system, all threads) of this process so far: less sensitive to the
@@ -113,6 +122,50 @@ fn run_one(size: &str, ordering: FillOrdering) {
         peak_rss_mb(),
         body.fixed_interface_omega[0] / (2.0 * std::f64::consts::PI)
     );
+    if let Ok(dir) = std::env::var("REDUCTION_CB_MTX_DIR") {
+        let peak = peak_rss_mb();
+        let (n_ii, eigen_s, residual, difference) =
+            fixed_interface_problem(size, &model, [a, b], &body, Path::new(&dir));
+        println!(
+            "RESULT size={size} dofs={n_free} interior={n_ii} reduce_s={total:.3} reduce_cpu_s={:.3} peak_mb={peak:.0} eigen_s={eigen_s:.3} worst_residual={residual:.3e} cb_difference={difference:.2e}",
+            cpu_end - marks.first().map_or(cpu_end, |m| m.2)
+        );
+    }
+}
+
+/// Writes K_ii and M_ii (the block with the interface nodes clamped) to `dir`, solves them with
+/// our eigensolver alone and writes its eigenvalues. Returns the interior size, the solve's
+/// wall time, its worst relative residual and the largest relative difference of its
+/// eigenvalues to the reduction's fixed-interface ones.
+fn fixed_interface_problem(
+    size: &str,
+    model: &FeModel,
+    interfaces: [NodeId; 2],
+    body: &ReducedBody,
+    dir: &Path,
+) -> (usize, f64, f64, f64) {
+    let mut clamped = model.clone();
+    for node in interfaces {
+        clamped.add_support(node, DofMask::ALL);
+    }
+    let dofs = DofMap::new(&clamped).unwrap();
+    let m = assemble(&clamped, &SystemPattern::new(&clamped, &dofs)).unwrap();
+    std::fs::create_dir_all(dir).unwrap();
+    write_matrix_market(&dir.join(format!("K_{size}.mtx")), m.K.as_ref()).unwrap();
+    write_matrix_market(&dir.join(format!("M_{size}.mtx")), m.M.as_ref()).unwrap();
+    let t = Instant::now();
+    let sol = lowest_modes(m.K.as_ref(), m.M.as_ref(), &EigenSettings::new(20, Shift::Zero)).unwrap();
+    let eigen_s = t.elapsed().as_secs_f64();
+    let text: String = sol.eigenvalues.iter().map(|l| format!("{l:.17e}\n")).collect();
+    std::fs::write(dir.join(format!("eigenvalues_{size}.txt")), text).unwrap();
+    let residual = sol.residuals.iter().fold(0.0f64, |a, &r| a.max(r));
+    let difference = sol
+        .eigenvalues
+        .iter()
+        .zip(&body.fixed_interface_omega)
+        .map(|(l, w)| (l - w * w).abs() / (w * w))
+        .fold(0.0f64, f64::max);
+    (dofs.n_free(), eigen_s, residual, difference)
 }
 
 fn main() {

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """scipy reference for `benches/eigen.rs`: eigsh(K, M=M, sigma=0, k=20) on the same matrices.
 
-Usage:
+Usage (benchmarks/scripts/reduction_vs_scipy.sh runs it on the Craig-Bampton blocks' K_ii, M_ii):
     REDUCTION_BENCH_MTX_DIR=/tmp/eigmtx cargo bench -p reduction --bench eigen   # writes the .mtx
     python3 crates/reduction/benches/scipy_eigsh.py /tmp/eigmtx [n ...]
 
@@ -69,10 +69,14 @@ def run(folder, n):
     print(f"worst relative residual: {max(res):.2e}")
     print("frequencies (Hz):", " ".join(f"{np.sqrt(max(x, 0.0)) / (2 * np.pi):.2f}" for x in w))
     ours = os.path.join(folder, f"eigenvalues_{n}.txt")
+    rel = float("nan")
     if os.path.exists(ours):
         w_ours = np.loadtxt(ours)
         rel = np.max(np.abs(w_ours - w) / np.abs(w))
         print(f"largest relative difference to reduction's eigenvalues: {rel:.2e}")
+    # One machine-readable line for benchmarks/scripts/reduction_vs_scipy.sh.
+    print(f"RESULT size={n} n={K.shape[0]} eigsh_s={t_eig:.3f} eigsh_cpu_s={cpu:.3f} peak_mb={peak_rss_mb():.0f} "
+          f"worst_residual={max(res):.3e} difference={rel:.3e}")
 
 
 def main():
@@ -82,11 +86,10 @@ def main():
     folder = sys.argv[1]
     sizes = sys.argv[2:]
     if not sizes:
-        sizes = sorted(
-            (re.match(r"K_(\d+)\.mtx", os.path.basename(p)).group(1)
-             for p in glob.glob(os.path.join(folder, "K_*.mtx"))),
-            key=int,
-        )
+        # Names as written by the benches: K_<dofs>.mtx (eigen) or K_<size>.mtx (craig_bampton,
+        # e.g. K_50k.mtx); smallest file first.
+        paths = sorted(glob.glob(os.path.join(folder, "K_*.mtx")), key=os.path.getsize)
+        sizes = [re.match(r"K_(\w+)\.mtx", os.path.basename(p)).group(1) for p in paths]
     for n in sizes:
         run(folder, n)
 
