@@ -117,7 +117,9 @@ pub(crate) struct Local {
     pub Dq: Mat<f64>,
     /// $\partial\boldsymbol\rho/\partial\mathbf y$ of the residual (same deferred $\boldsymbol\Lambda^T$ as `Dq`).
     pub Dy: Mat<f64>,
-    /// $\partial\boldsymbol\rho/\partial\mathbf g^L$ of the residual ($n\times3$).
+    /// $\partial\boldsymbol\rho/\partial\mathbf g^L$ of the residual ($n\times3$); left at zero
+    /// without gravity, where its only use, the term $\partial\boldsymbol\rho/\partial\mathbf g^L\,\tilde{\mathbf g}^L$
+    /// of $\mathbf K_t$, vanishes anyway.
     pub Dg: Mat<f64>,
     /// $\sum\alpha_i\mathbf F_i$ of every term $\mathbf P^T\mathbf F_i$ of the residual: their
     /// $\partial(\mathbf P^T\mathbf F)/\partial\mathbf q^{jj}|_{\mathbf F}$ is linear in $\mathbf F$, so one
@@ -278,8 +280,9 @@ impl GeometricStiffness {
     /// $$\mathbf g_G = \mathbf b + \mathbf C\mathbf w,\qquad
     /// \mathbf H_G = \mathbf C + \mathbf C^T + \sum_k w_k\mathbf G_k + \mathbf C\mathbf F\mathbf C^T.$$
     ///
-    /// Cost: two matrix-vector products with the $n^3$ entries of $\mathbf G$ (one without
-    /// `hessian`) and two $n\times n$ products; no allocation.
+    /// Cost: two column-major matrix-vector products with the $n^3$ entries of $\mathbf G$ (`stack_t`
+    /// for $\mathbf C$, `stack` for $\sum_k w_k\mathbf G_k$; only the first without `hessian`) and two
+    /// $n\times n$ products; no allocation.
     ///
     /// # Derivation
     /// By the symmetry of each $\mathbf G_k$, $(\mathbf G_k\mathbf q)_m = C_{mk}$, so
@@ -304,12 +307,11 @@ impl GeometricStiffness {
         } = s;
         let n = q.len();
         let nn = n * n;
-        // vec C = [G_0 ... G_{n-1}]^T q: entry j + n m is (G_m q)_j (G_m symmetric).
-        let wide = MatRef::from_column_major_slice(&self.stack, n, nn);
+        // vec C: entry j + n m is (G_m q)_j = sum_i (G_m)_ji q_i, a product with `stack_t`.
         matmul(
             MatMut::from_column_major_slice_mut(C, nn, 1),
             Accum::Replace,
-            wide.transpose(),
+            MatRef::from_column_major_slice(&self.stack_t, nn, n),
             MatRef::from_column_major_slice(q, n, 1),
             1.0,
             Par::Seq,
@@ -491,10 +493,8 @@ impl Superelement {
         let I = &self.inertia;
         let g = mo.g;
         if g == Vector3::zeros() {
-            // Zero force; its derivatives are zero too except through g itself.
-            if tangents {
-                self.gravity_dg(kin, loc, w, &(I.d * I.mass + mul3(&I.S_t, &kin.q_jj)));
-            }
+            // Zero force and zero derivatives: the partial in g itself, `Local::Dg`, only enters
+            // K_t as Dg g~ (`tangent.rs`), which vanishes too, so it stays at zero.
             return;
         }
         let s = I.d * I.mass + mul3(&I.S_t, &kin.q_jj);
@@ -649,7 +649,7 @@ impl Superelement {
         w.nu_dot[6 + 6 * N..].copy_from_slice(&w.v2[6 * N..]);
 
         self.inertia
-            .force_into(&kin.q_jj, &w.nu, &w.nu_dot, true, &mut w.ffr, &mut w.ffr_scratch);
+            .force_into(&kin.q_jj, &w.nu, &w.nu_dot, tangents, &mut w.ffr, &mut w.ffr_scratch);
         kin.pt_vec(&w.ffr.F, &mut loc.rho_in);
         // Body-axis mass P^T M_ffr P = Lambda^T X^T (M_ffr X) Lambda.
         kin.mul_x(w.ffr.M.as_ref(), &mut w.t6, &mut w.MX);
@@ -858,6 +858,6 @@ impl Superelement {
             }
         }
         gemm(&mut w.three_n, w.n3a.as_ref().transpose(), M.as_ref(), -1.0, Accum::Add);
-        gemm(&mut loc.Dy, Yr.transpose(), w.three_n.as_ref(), 1.0, Accum::Add);
+        gemm(&mut loc.Dy, kin.YrT.as_ref(), w.three_n.as_ref(), 1.0, Accum::Add);
     }
 }

@@ -108,17 +108,17 @@ pub(crate) enum FrameSolve {
 /// positions `r_loc` $= \mathbf x_k + \mathbf u_k$ and the blocks of $\boldsymbol\Lambda$.
 pub(crate) fn phi_j_psi(Phi_j: faer::MatRef<'_, f64>, r_loc: &[Vector3<f64>], Lambda: &[Matrix3<f64>]) -> Matrix6<f64> {
     let mut G = Matrix6::zeros();
+    let column = |c| Vector6::from_column_slice(crate::transform::col(Phi_j, c));
     for (k, (r, L)) in r_loc.iter().zip(Lambda).enumerate() {
         // Block rows of Psi for interface k: u_k -> [I, -r~], theta_k -> [0, Lambda_k].
         let mr = -skew(r);
-        for a in 0..6 {
-            for c in 0..3 {
-                let pu = Phi_j[(a, 6 * k + c)];
-                G[(a, c)] += pu;
-                for b in 0..3 {
-                    G[(a, 3 + b)] += pu * mr[(c, b)];
-                    G[(a, 3 + b)] += Phi_j[(a, 6 * k + 3 + c)] * L[(c, b)];
-                }
+        for c in 0..3 {
+            let (pu, pt) = (column(6 * k + c), column(6 * k + 3 + c));
+            let mut gc = G.column_mut(c);
+            gc += pu;
+            for b in 0..3 {
+                let mut gb = G.column_mut(3 + b);
+                gb += pu * mr[(c, b)] + pt * L[(c, b)];
             }
         }
     }
@@ -220,8 +220,8 @@ impl Superelement {
         for it in 0..=self.frame_settings.max_iterations {
             local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, q);
             let mut g: Vector6<f64> = Vector6::zeros();
-            for a in 0..6 {
-                g[a] = (0..self.n).map(|c| self.Phi_j[(a, c)] * q[c]).sum();
+            for (c, qc) in q.iter().enumerate() {
+                g += Vector6::from_column_slice(crate::transform::col(self.Phi_j.as_ref(), c)) * *qc;
             }
             residual = (g.fixed_rows::<3>(0).norm() / L).max(g.fixed_rows::<3>(3).norm());
             if !residual.is_finite() {

@@ -108,10 +108,16 @@ pub struct FfrInertia {
     pub S_tilde: Vec<Mat<f64>>,
     /// $\mathbf M_{CB}$.
     pub M_CB: Mat<f64>,
-    /// $[\tilde{\mathbf S}_0; \tilde{\mathbf S}_1; \tilde{\mathbf S}_2]$ ($3n\times n$) and the six
-    /// $\bar{\mathbf S}^{sym}_p$ stacked ($6n\times n$): one product each gives all contractions.
-    tilde_stack: Mat<f64>,
-    sym_stack: Mat<f64>,
+    /// $[\tilde{\mathbf S}_0; \tilde{\mathbf S}_1; \tilde{\mathbf S}_2; \bar{\mathbf S}^{sym}_0; \dots;
+    /// \bar{\mathbf S}^{sym}_5]$ stacked ($9n\times n$): one product with $[\mathbf q, \dot{\mathbf q},
+    /// \ddot{\mathbf q}]$ gives all contractions (the $\bar{\mathbf S}^{sym}\ddot{\mathbf q}$ it adds are
+    /// unused but cheaper than a second call).
+    stack: Mat<f64>,
+    /// $[\mathrm{vec}\,\tilde{\mathbf S}_0, \dots, \mathrm{vec}\,\tilde{\mathbf S}_2, \mathrm{vec}\,\bar{\mathbf S}^{sym}_0,
+    /// \dots, \mathrm{vec}\,\bar{\mathbf S}^{sym}_5]$ ($n^2\times9$): the $\dot{\mathbf q}\dot{\mathbf q}$ block
+    /// of $\partial\mathbf F/\partial\boldsymbol\nu$ and the $\mathbf q\mathbf q$ block of
+    /// $\partial\mathbf F/\partial\mathbf q$ are combinations of these nine matrices: one product.
+    vec_stack: Mat<f64>,
 }
 
 /// $\int\rho\,\mathbf f$ rows of a `DenseMatrix` as a faer matrix.
@@ -154,8 +160,9 @@ impl FfrInertia {
                 Mat::from_fn(n, n, |r, s| S_bar[3 * j + k][(r, s)] - S_bar[3 * k + j][(r, s)])
             })
             .collect();
-        let tilde_stack = Mat::from_fn(3 * n, n, |r, c| S_tilde[r / n][(r % n, c)]);
-        let sym_stack = Mat::from_fn(6 * n, n, |r, c| S_bar_sym[r / n][(r % n, c)]);
+        let nine = |k: usize| if k < 3 { &S_tilde[k] } else { &S_bar_sym[k - 3] };
+        let stack = Mat::from_fn(9 * n, n, |r, c| nine(r / n)[(r % n, c)]);
+        let vec_stack = Mat::from_fn(n * n, 9, |r, k| nine(k)[(r % n, r / n)]);
         Self {
             mass: m,
             d,
@@ -166,8 +173,8 @@ impl FfrInertia {
             S_bar_sym,
             S_tilde,
             M_CB: M_CB.clone(),
-            tilde_stack,
-            sym_stack,
+            stack,
+            vec_stack,
         }
     }
 
@@ -256,10 +263,12 @@ pub struct FfrScratch {
     jq_Om: Mat<f64>,
     jq_Omd: Mat<f64>,
     jqd_Om: Mat<f64>,
-    /// Right-hand sides $[\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}]$ and the stacked products.
+    /// Right-hand sides $[\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}]$ and the stacked product ($9n\times3$).
     rhs: Mat<f64>,
-    tilde_prod: Mat<f64>,
-    sym_prod: Mat<f64>,
+    prod: Mat<f64>,
+    /// Coefficients ($9\times2$) and the two $n\times n$ blocks from `vec_stack` ($n^2\times2$).
+    coef: Mat<f64>,
+    qq: Mat<f64>,
 }
 
 impl FfrScratch {
@@ -274,8 +283,9 @@ impl FfrScratch {
             jq_Omd: Mat::zeros(3, n),
             jqd_Om: Mat::zeros(3, n),
             rhs: Mat::zeros(n, 3),
-            tilde_prod: Mat::zeros(3 * n, 3),
-            sym_prod: Mat::zeros(6 * n, 2),
+            prod: Mat::zeros(9 * n, 3),
+            coef: Mat::zeros(9, 2),
+            qq: Mat::zeros(n * n, 2),
         }
     }
 }
@@ -289,7 +299,9 @@ struct Contractions {
 }
 
 impl FfrInertia {
-    fn contractions(&self, q: &[f64], qd: &[f64], qdd: &[f64], w: &mut FfrScratch) -> Contractions {
+    /// The contractions with $\mathbf q$, $\dot{\mathbf q}$ and, with `with_qdd` (only the partials
+    /// need $\tilde{\mathbf S}_i\ddot{\mathbf q}$), $\ddot{\mathbf q}$.
+    fn contractions(&self, q: &[f64], qd: &[f64], qdd: &[f64], with_qdd: bool, w: &mut FfrScratch) -> Contractions {
         let n = self.n();
         let m = self.mass;
         let s = self.d * m + mul3(&self.S_t, q);
@@ -297,40 +309,25 @@ impl FfrInertia {
         w.rhs.col_as_slice_mut(0).copy_from_slice(q);
         w.rhs.col_as_slice_mut(1).copy_from_slice(qd);
         w.rhs.col_as_slice_mut(2).copy_from_slice(qdd);
-        let par = faer::Par::Seq;
         faer::linalg::matmul::matmul(
-            w.tilde_prod.as_mut(),
+            w.prod.as_mut().subcols_mut(0, 2 + with_qdd as usize),
             faer::Accum::Replace,
-            self.tilde_stack.as_ref(),
-            w.rhs.as_ref(),
+            self.stack.as_ref(),
+            w.rhs.as_ref().subcols(0, 2 + with_qdd as usize),
             1.0,
-            par,
+            faer::Par::Seq,
         );
-        faer::linalg::matmul::matmul(
-            w.sym_prod.as_mut(),
-            faer::Accum::Replace,
-            self.sym_stack.as_ref(),
-            w.rhs.as_ref().subcols(0, 2),
-            1.0,
-            par,
-        );
+        let block = |c: usize, k: usize| &w.prod.col_as_slice(c)[k * n..(k + 1) * n];
         for p in 0..6 {
-            w.sig
-                .col_as_slice_mut(p)
-                .copy_from_slice(&w.sym_prod.col_as_slice(0)[p * n..(p + 1) * n]);
-            w.sigd
-                .col_as_slice_mut(p)
-                .copy_from_slice(&w.sym_prod.col_as_slice(1)[p * n..(p + 1) * n]);
+            w.sig.col_as_slice_mut(p).copy_from_slice(block(0, 3 + p));
+            w.sigd.col_as_slice_mut(p).copy_from_slice(block(1, 3 + p));
         }
         for i in 0..3 {
-            w.tq.col_as_slice_mut(i)
-                .copy_from_slice(&w.tilde_prod.col_as_slice(0)[i * n..(i + 1) * n]);
-            w.tqd
-                .col_as_slice_mut(i)
-                .copy_from_slice(&w.tilde_prod.col_as_slice(1)[i * n..(i + 1) * n]);
-            w.tqdd
-                .col_as_slice_mut(i)
-                .copy_from_slice(&w.tilde_prod.col_as_slice(2)[i * n..(i + 1) * n]);
+            w.tq.col_as_slice_mut(i).copy_from_slice(block(0, i));
+            w.tqd.col_as_slice_mut(i).copy_from_slice(block(1, i));
+            if with_qdd {
+                w.tqdd.col_as_slice_mut(i).copy_from_slice(block(2, i));
+            }
         }
         // X_ab = (S_x)_ab q; J1 = 2 tr(X) I - X - X^T; W_ab = q^T S_bar_ab q = q.sig_ab / 2.
         let mut X = Matrix3::<f64>::zeros();
@@ -390,7 +387,7 @@ impl FfrInertia {
         let n = self.n();
         let zeros = vec![0.0; n];
         let mut w = FfrScratch::new(n);
-        let c = self.contractions(q, &zeros, &zeros, &mut w);
+        let c = self.contractions(q, &zeros, &zeros, false, &mut w);
         let mut M = Mat::zeros(6 + n, 6 + n);
         self.fill_mass(&c, &w, &mut M);
         M
@@ -429,8 +426,9 @@ impl FfrInertia {
         out
     }
 
-    /// $\mathbf F(\mathbf q, \boldsymbol\nu, \dot{\boldsymbol\nu})$ and, when `partials`, its
-    /// derivatives (module docs).
+    /// $\mathbf F(\mathbf q, \boldsymbol\nu, \dot{\boldsymbol\nu})$, $\mathbf M_{ffr}$ and, when `partials`,
+    /// the derivatives $\partial\mathbf F/\partial\boldsymbol\nu$, $\partial\mathbf F/\partial\mathbf q$ (module docs;
+    /// without `partials` those two keep their old values).
     ///
     /// # Derivation
     /// Straight differentiation of the three force blocks of the module docs; with
@@ -466,7 +464,7 @@ impl FfrInertia {
         let v3 = |x: &[f64], o: usize| Vector3::new(x[o], x[o + 1], x[o + 2]);
         let (V, Om, qd) = (v3(nu, 0), v3(nu, 3), &nu[6..]);
         let (Vd, Omd, qdd) = (v3(nu_dot, 0), v3(nu_dot, 3), &nu_dot[6..]);
-        let c = self.contractions(q, qd, qdd, w);
+        let c = self.contractions(q, qd, qdd, partials, w);
         let (s, sd) = (c.s, c.sd);
         let Srw_qd = mul3(&self.S_r, qd) + Self::sw_mul(&w.tq, qd);
         let Srw_qdd = mul3(&self.S_r, qdd) + Self::sw_mul(&w.tq, qdd);
@@ -498,10 +496,11 @@ impl FfrInertia {
             // - 1/2 j_q(Om)^T Om
             add_mul3t(Fq, &w.jq_Om, &Om, -0.5);
         }
+        // The mass matrix is always needed (the residual's M); the partials only for tangents.
+        self.fill_mass(&c, w, &mut out.M);
         if !partials {
             return;
         }
-        self.fill_mass(&c, w, &mut out.M);
 
         let (Ot, Vt, st, sdt) = (skew(&Om), skew(&V), skew(&s), skew(&sd));
         let F_nu = &mut out.F_nu;
@@ -538,16 +537,6 @@ impl FfrInertia {
                 F_nu[(6 + j, 3 + i)] = -2.0 * w.tqd[(j, i)] + cw[i] - jq_Om[(i, j)];
             }
         }
-        for j in 0..n {
-            let s0 = self.S_tilde[0].col_as_slice(j);
-            let s1 = self.S_tilde[1].col_as_slice(j);
-            let s2 = self.S_tilde[2].col_as_slice(j);
-            let o = &mut F_nu.col_as_slice_mut(6 + j)[6..];
-            let (a0, a1, a2) = (-2.0 * Om[0], -2.0 * Om[1], -2.0 * Om[2]);
-            for i in 0..n {
-                o[i] = a0 * s0[i] + a1 * s1[i] + a2 * s2[i];
-            }
-        }
 
         // F_Om rows: j_q(Omd) + jdot_q(Om) + Om~ j_q(Om) and the S_t, Rows terms.
         self.jq(&Omd, &w.sig, true, &mut w.jq_Omd);
@@ -566,25 +555,30 @@ impl FfrInertia {
                 F_q[(3 + i, j)] = fo[i] + w.jq_Omd[(i, j)] + w.tqdd[(j, i)] + w.jqd_Om[(i, j)];
             }
         }
-        // F_q rows: -sum_i Omd_i S~_i - 1/2 sum_ab c_ab S_bar_sym_ab.
+        // The qq blocks, one product with the nine stacked matrices: F_q rows
+        // -sum_i Omd_i S~_i - 1/2 sum_ab c_ab S_bar_sym_ab, and [qd, qd] = -2 sum_i Om_i S~_i of F_nu.
         let on2 = Om.norm_squared();
         let cab = |a: usize, b: usize| if a == b { on2 - Om[a] * Om[a] } else { -Om[a] * Om[b] };
-        let mut wp = [0.0; 6];
+        for i in 0..3 {
+            w.coef[(i, 0)] = -Omd[i];
+            w.coef[(i, 1)] = -2.0 * Om[i];
+        }
         for (p, &(a, b)) in PAIRS.iter().enumerate() {
             // Off-diagonal pairs appear twice in the double sum.
-            wp[p] = -0.5 * cab(a, b) * if a == b { 1.0 } else { 2.0 };
+            w.coef[(3 + p, 0)] = -0.5 * cab(a, b) * if a == b { 1.0 } else { 2.0 };
+            w.coef[(3 + p, 1)] = 0.0;
         }
+        faer::linalg::matmul::matmul(
+            w.qq.as_mut(),
+            faer::Accum::Replace,
+            self.vec_stack.as_ref(),
+            w.coef.as_ref(),
+            1.0,
+            faer::Par::Seq,
+        );
         for j in 0..n {
-            let st: [&[f64]; 3] = std::array::from_fn(|k| self.S_tilde[k].col_as_slice(j));
-            let sb: [&[f64]; 6] = std::array::from_fn(|p| self.S_bar_sym[p].col_as_slice(j));
-            let o = &mut F_q.col_as_slice_mut(j)[6..];
-            for i in 0..n {
-                let mut v = -(Omd[0] * st[0][i] + Omd[1] * st[1][i] + Omd[2] * st[2][i]);
-                for p in 0..6 {
-                    v += wp[p] * sb[p][i];
-                }
-                o[i] = v;
-            }
+            F_q.col_as_slice_mut(j)[6..].copy_from_slice(&w.qq.col_as_slice(0)[j * n..(j + 1) * n]);
+            out.F_nu.col_as_slice_mut(6 + j)[6..].copy_from_slice(&w.qq.col_as_slice(1)[j * n..(j + 1) * n]);
         }
     }
 }

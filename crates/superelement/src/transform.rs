@@ -137,7 +137,8 @@ pub(crate) fn mul_blocks(A: MatRef<'_, f64>, blocks: &Blocks, out: &mut Mat<f64>
     let r = A.nrows();
     for k in 0..N {
         for (off, B) in [(6 * k, &blocks.t[k]), (6 * k + 3, &blocks.r[k])] {
-            let (a0, a1, a2) = (col(A, off), col(A, off + 1), col(A, off + 2));
+            // Slices of exactly r entries: no bounds checks in the loop below.
+            let (a0, a1, a2) = (&col(A, off)[..r], &col(A, off + 1)[..r], &col(A, off + 2)[..r]);
             for j in 0..3 {
                 let (b0, b1, b2) = (B[(0, j)], B[(1, j)], B[(2, j)]);
                 let o = &mut out.col_as_slice_mut(off + j)[..r];
@@ -227,20 +228,26 @@ impl Kinematics {
         }
         self.G_inv = G_inv;
         // Psi rows: u_k -> [I, -r~_k], theta_k -> [0, Lambda_k].
+        // Filled through column slices (faer's checked (i, j) indexing costs more than the copy).
         self.Psi.fill(0.0);
-        for k in 0..N {
-            let mr = -skew(&self.r_loc[k]);
-            for a in 0..3 {
-                self.Psi[(6 * k + a, a)] = 1.0;
-                for b in 0..3 {
-                    self.Psi[(6 * k + a, 3 + b)] = mr[(a, b)];
-                    self.Psi[(6 * k + 3 + a, 3 + b)] = self.Lambda[k][(a, b)];
+        for b in 0..3 {
+            let c = self.Psi.col_as_slice_mut(b);
+            for k in 0..N {
+                c[6 * k + b] = 1.0;
+            }
+            let c = self.Psi.col_as_slice_mut(3 + b);
+            for k in 0..N {
+                let mr = -skew(&self.r_loc[k]);
+                for a in 0..3 {
+                    c[6 * k + a] = mr[(a, b)];
+                    c[6 * k + 3 + a] = self.Lambda[k][(a, b)];
                 }
             }
         }
         for i in 0..6 * N {
+            let c = self.PsiT.col_as_slice_mut(i);
             for a in 0..6 {
-                self.PsiT[(a, i)] = self.Psi[(i, a)];
+                c[a] = self.Psi.col_as_slice(a)[i];
             }
         }
         // Z = G^{-1} Phi_j ; T = I - Psi Z ; P = X Lambda.
@@ -260,15 +267,19 @@ impl Kinematics {
                     c[6 + 6 * k + 3 + i] -= pr[i];
                 }
             }
-            for a in 0..6 {
-                self.ZT[(j, a)] = z[a];
+        }
+        for a in 0..6 {
+            let c = self.ZT.col_as_slice_mut(a);
+            for j in 0..n {
+                c[j] = self.X.col_as_slice(j)[a];
             }
         }
         copy_mat(&mut self.P, self.X.as_ref());
         lambda_right(&self.Lambda, &mut self.P);
-        for j in 0..n {
-            for d in 0..3 {
-                self.YrT[(j, d)] = self.P[(3 + d, j)];
+        for d in 0..3 {
+            let c = self.YrT.col_as_slice_mut(d);
+            for j in 0..n {
+                c[j] = self.P.col_as_slice(j)[3 + d];
             }
         }
         Ok(())
@@ -400,8 +411,8 @@ impl Kinematics {
                 for c in 0..3 {
                     let (b0, b1, b2) = (sign * B[(0, c)], sign * B[(1, c)], sign * B[(2, c)]);
                     let o = out.col_as_slice_mut(c0 + c);
-                    for i in 0..o.len() {
-                        o[i] += b0 * Yr[0][i] + b1 * Yr[1][i] + b2 * Yr[2][i];
+                    for (((o, x), y), z) in o.iter_mut().zip(Yr[0]).zip(Yr[1]).zip(Yr[2]) {
+                        *o += b0 * x + b1 * y + b2 * z;
                     }
                 }
             }
@@ -421,11 +432,11 @@ pub(crate) fn lambda_right(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
         let (c0, rest) = A.as_mut().subcols_mut(6 * k + 3, 3).split_at_col_mut(1);
         let (c1, c2) = rest.split_at_col_mut(1);
         let (a0, a1, a2) = (first_col_mut(c0), first_col_mut(c1), first_col_mut(c2));
-        for i in 0..a0.len() {
-            let (x, y, z) = (a0[i], a1[i], a2[i]);
-            a0[i] = L[(0, 0)] * x + L[(1, 0)] * y + L[(2, 0)] * z;
-            a1[i] = L[(0, 1)] * x + L[(1, 1)] * y + L[(2, 1)] * z;
-            a2[i] = L[(0, 2)] * x + L[(1, 2)] * y + L[(2, 2)] * z;
+        for ((a0, a1), a2) in a0.iter_mut().zip(a1.iter_mut()).zip(a2.iter_mut()) {
+            let (x, y, z) = (*a0, *a1, *a2);
+            *a0 = L[(0, 0)] * x + L[(1, 0)] * y + L[(2, 0)] * z;
+            *a1 = L[(0, 1)] * x + L[(1, 1)] * y + L[(2, 1)] * z;
+            *a2 = L[(0, 2)] * x + L[(1, 2)] * y + L[(2, 2)] * z;
         }
     }
 }
@@ -440,12 +451,12 @@ fn first_col_mut<'a>(m: faer::MatMut<'a, f64>) -> &'a mut [f64] {
 
 /// $\boldsymbol\Lambda^T\mathbf A$ in place: the $\boldsymbol\theta_k$ row blocks times $\mathbf J_l^{-T}(\boldsymbol\theta_k)$.
 pub(crate) fn lambda_t_left(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
+    let N = Lambda.len();
     for j in 0..A.ncols() {
-        let col = A.col_as_slice_mut(j);
-        for (k, L) in Lambda.iter().enumerate() {
-            let r = 6 * k + 3;
-            let v = L.transpose() * Vector3::new(col[r], col[r + 1], col[r + 2]);
-            col[r..r + 3].copy_from_slice(v.as_slice());
+        // Exact 6-chunks (u_k, theta_k): no bounds checks in the block rotations.
+        for (c, L) in A.col_as_slice_mut(j)[..6 * N].chunks_exact_mut(6).zip(Lambda) {
+            let v = L.tr_mul(&Vector3::new(c[3], c[4], c[5]));
+            c[3..].copy_from_slice(v.as_slice());
         }
     }
 }
@@ -598,8 +609,9 @@ pub(crate) fn rotate_matrix(R: &Matrix3<f64>, N: usize, K: &Mat<f64>, out: &mut 
             K.col_as_slice(3 * b + 2),
         );
         for c in 0..3 {
-            let o = out.col_as_slice_mut(3 * b + c);
+            let o = &mut out.col_as_slice_mut(3 * b + c)[..n];
             let (r0, r1, r2) = (R[(c, 0)], R[(c, 1)], R[(c, 2)]);
+            let (k0, k1, k2) = (&k0[..n], &k1[..n], &k2[..n]);
             for i in 0..n {
                 o[i] = k0[i] * r0 + k1[i] * r1 + k2[i] * r2;
             }
@@ -609,10 +621,10 @@ pub(crate) fn rotate_matrix(R: &Matrix3<f64>, N: usize, K: &Mat<f64>, out: &mut 
         out.col_as_slice_mut(j).copy_from_slice(K.col_as_slice(j));
     }
     for j in 0..n {
-        let o = out.col_as_slice_mut(j);
-        for b in 0..nb {
-            let v = R * Vector3::new(o[3 * b], o[3 * b + 1], o[3 * b + 2]);
-            o[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
+        // Exact 3-chunks: no bounds checks in the block rotations.
+        for o in out.col_as_slice_mut(j)[..3 * nb].chunks_exact_mut(3) {
+            let v = R * Vector3::new(o[0], o[1], o[2]);
+            o.copy_from_slice(v.as_slice());
         }
     }
 }

@@ -8,6 +8,8 @@ mod unit {
     pub mod common;
     /// Kinetic energy of rigid motion, power balance of the inertia forces, potentials.
     mod energy;
+    /// The cheap forms of an evaluation against the full one: forces only, reused workspaces.
+    mod evaluation;
     /// Every tangent against central differences: local coordinates, frame Jacobian, FFR
     /// partials, K_t, C_t, M for all frame choices and both inertia variants.
     mod fd_tangent;
