@@ -9,22 +9,27 @@
 //! Run with `cargo bench -p mbs --bench step` (release) or as a test with `cargo test --benches`.
 //! `cargo bench -p mbs --bench step -- crank 2` or `-- chain 128` runs one case (for
 //! `valgrind --tool=callgrind --toggle-collect='mbs::dynamic_solver::Integrator::step'` on a
-//! loaded machine, where instruction counts are the fair comparison).
+//! loaded machine, where instruction counts are the fair comparison). `-- chain N STEPS dense`
+//! (or `sparse`, `modified`) forces the factorisation of the iteration matrix or modified
+//! Newton (how `mbs::DENSE_MAX` was chosen).
 
 #![allow(non_snake_case)]
 
 #[path = "../tests/unit/fixtures.rs"]
 mod fixtures;
 
-use mbs::{DynamicSettings, Integrator, Model, Support, System};
+use mbs::{DynamicSettings, Integrator, LinearSolver, Model, NewtonStrategy, Support, System};
 use nalgebra::{Isometry3, Vector3};
 use reduction::ModeSelection;
 use std::time::Instant;
 use superelement::{FrameChoice, MassVariant};
 
 /// Mean wall time of a step and Newton iterations per step after `warm` steps.
-fn time_steps(sys: &System, h: f64, warm: usize, steps: usize) -> (f64, f64) {
-    let settings = DynamicSettings::new(h, f64::INFINITY, 0.9);
+fn time_steps(sys: &System, h: f64, warm: usize, steps: usize, newton: NewtonStrategy) -> (f64, f64) {
+    let settings = DynamicSettings {
+        newton,
+        ..DynamicSettings::new(h, f64::INFINITY, 0.9)
+    };
     let mut it = Integrator::new(sys, sys.initial_state(), settings).expect("consistent initial accelerations");
     for _ in 0..warm {
         it.step().expect("step");
@@ -73,6 +78,16 @@ fn main() {
         _ => None,
     };
     let steps_arg: Option<usize> = args.get(2).map(|s| s.parse().expect("a number of steps"));
+    let option = args.get(3).map(String::as_str);
+    let solver = match option {
+        Some("dense") => LinearSolver::Dense,
+        Some("sparse") => LinearSolver::Sparse,
+        _ => LinearSolver::Auto,
+    };
+    let newton = match option {
+        Some("modified") => NewtonStrategy::Modified,
+        _ => NewtonStrategy::Full,
+    };
     let run = |case: &str, n: usize| only.is_none_or(|(c, m)| c == case && m == n);
     println!("slider-crank (C2), rod as N superelements with 2 modes, h = T/400:");
     for n in [1, 2, 4] {
@@ -80,9 +95,10 @@ fn main() {
             continue;
         }
         let (model, _, _) = fixtures::slider_crank(n, ModeSelection::Count(2), 150.0);
-        let sys = System::new(&model).unwrap();
+        let mut sys = System::new(&model).unwrap();
+        sys.set_linear_solver(solver);
         let h = 2.0 * std::f64::consts::PI / 150.0 / 400.0;
-        let (us, its) = time_steps(&sys, h, 20, steps_arg.unwrap_or(if quick { 10 } else { 200 }));
+        let (us, its) = time_steps(&sys, h, 20, steps_arg.unwrap_or(if quick { 10 } else { 200 }), newton);
         println!(
             "  N = {n:3}: {:5} unknowns, {us:10.1} µs/step, {its:.2} iterations/step",
             sys.n_dof()
@@ -103,8 +119,9 @@ fn main() {
     let mut n = 1;
     while n <= max {
         if run("chain", n) {
-            let sys = System::new(&chain(n, &body)).unwrap();
-            let (us, its) = time_steps(&sys, 1e-3, 3, steps_arg.unwrap_or(if quick { 3 } else { 20 }));
+            let mut sys = System::new(&chain(n, &body)).unwrap();
+            sys.set_linear_solver(solver);
+            let (us, its) = time_steps(&sys, 1e-3, 3, steps_arg.unwrap_or(if quick { 3 } else { 20 }), newton);
             println!(
                 "  N = {n:3}: {:5} unknowns, {us:10.1} µs/step, {its:.2} iterations/step, {:8.2} µs per superelement-iteration",
                 sys.n_dof(),

@@ -55,6 +55,25 @@ impl ElementOutput {
         }
     }
 
+    /// Zeroes the residual parts and, with `tangents`, the tangents (their size stays that of
+    /// [`Self::zeros`]): the element functions below accumulate into a reused output.
+    pub(crate) fn reset(&mut self, tangents: bool) {
+        for v in [
+            &mut self.residual,
+            &mut self.inertia,
+            &mut self.internal,
+            &mut self.external,
+        ] {
+            v.fill(0.0);
+        }
+        if tangents {
+            for A in [&mut self.M, &mut self.C, &mut self.K] {
+                A.fill(0.0);
+            }
+        }
+        self.frame = None;
+    }
+
     fn finish(&mut self) {
         for i in 0..self.residual.len() {
             self.residual[i] = self.inertia[i] + self.internal[i] - self.external[i];
@@ -222,8 +241,17 @@ pub(crate) struct RigidElement {
 /// \tilde{\mathbf F}\tilde{\mathbf b} + m\tilde{\mathbf b}\mathbf A_b - \widetilde{\mathbf I_G\boldsymbol\alpha} + \mathbf I_G\tilde{\boldsymbol\alpha} +
 /// \tilde{\boldsymbol\omega}(\mathbf I_G\tilde{\boldsymbol\omega} - \widetilde{\mathbf I_G\boldsymbol\omega})$; nothing depends
 /// on $\mathbf r$ or $\mathbf v$. Checked, assembled, by `tests/unit/tangent.rs` (rigid chain and mixed model).
-pub(crate) fn rigid_element(e: &RigidElement, m: &NodeMotion, gravity: &Vector3<f64>, tangents: bool) -> ElementOutput {
-    let mut out = ElementOutput::zeros(6, tangents);
+///
+/// Writes into `out` (6 rows, built by [`ElementOutput::zeros`]), like the other element
+/// functions: an evaluation allocates nothing.
+pub(crate) fn rigid_element(
+    e: &RigidElement,
+    m: &NodeMotion,
+    gravity: &Vector3<f64>,
+    tangents: bool,
+    out: &mut ElementOutput,
+) {
+    out.reset(tangents);
     let R = m.R.to_rotation_matrix();
     let b = R * e.c;
     let IG = R.matrix() * e.J * R.matrix().transpose();
@@ -254,19 +282,23 @@ pub(crate) fn rigid_element(e: &RigidElement, m: &NodeMotion, gravity: &Vector3<
         let Km = skew(&F) * bt + bt * Ab * mass - skew(&(IG * al)) + IG * skew(&al) + wt * (IG * wt - skew(&(IG * w)));
         set3(&mut out.K, 3, 3, &Km);
     }
-    out
 }
 
 /// Point mass: $\mathbf r = [m(\mathbf a - \mathbf g);\ \mathbf 0]$.
-pub(crate) fn point_mass_element(mass: f64, m: &NodeMotion, gravity: &Vector3<f64>, tangents: bool) -> ElementOutput {
-    let mut out = ElementOutput::zeros(6, tangents);
+pub(crate) fn point_mass_element(
+    mass: f64,
+    m: &NodeMotion,
+    gravity: &Vector3<f64>,
+    tangents: bool,
+    out: &mut ElementOutput,
+) {
+    out.reset(tangents);
     put(&mut out.inertia, 0, &(m.a * mass));
     put(&mut out.external, 0, &(gravity * mass));
     out.finish();
     if tangents {
         set3(&mut out.M, 0, 0, &(Matrix3::identity() * mass));
     }
-    out
 }
 
 /// A spring-damper between two nodes (or a node and a fixed point).
@@ -291,19 +323,21 @@ pub(crate) struct SpringElement {
 /// $\partial(f\mathbf e)/\partial\mathbf v_b = c\,\mathbf e\mathbf e^T$; $a$ enters with the opposite sign.
 /// Ports: $a$ (6 rows), then $b$ (6 rows) when $b$ is a node. Checked by
 /// `tests/unit/tangent.rs::flexible_mixed_tangents_match_fd`.
+/// Writes into `out` (6 or 12 rows) and returns the strain energy $\tfrac12k(l - l_0)^2$.
 pub(crate) fn spring_element(
     s: &SpringElement,
     ma: &NodeMotion,
     mb: Option<&NodeMotion>,
     tangents: bool,
-) -> (ElementOutput, f64) {
+    out: &mut ElementOutput,
+) -> f64 {
     let n = if mb.is_some() { 12 } else { 6 };
-    let mut out = ElementOutput::zeros(n, tangents);
+    out.reset(tangents);
     let (xb, vb) = mb.map_or((s.ground, Vector3::zeros()), |m| (m.r, m.v));
     let d = xb - ma.r;
     let l = d.norm();
     if l <= 0.0 {
-        return (out, 0.0);
+        return 0.0;
     }
     let e = d / l;
     let dv = vb - ma.v;
@@ -329,7 +363,14 @@ pub(crate) fn spring_element(
             set3(&mut out.C, 6, 0, &(-Cb));
         }
     }
-    (out, 0.5 * s.k * (l - s.l0) * (l - s.l0))
+    spring_energy(s, ma, mb)
+}
+
+/// Strain energy $\tfrac12k(l - l_0)^2$ of a spring (for the energy sensors).
+pub(crate) fn spring_energy(s: &SpringElement, ma: &NodeMotion, mb: Option<&NodeMotion>) -> f64 {
+    let xb = mb.map_or(s.ground, |m| m.r);
+    let l = (xb - ma.r).norm();
+    0.5 * s.k * (l - s.l0) * (l - s.l0)
 }
 
 /// A nodal load; `local` is its value in node axes for a follower.
@@ -346,8 +387,15 @@ pub(crate) struct LoadElement {
 /// Load $\mathbf f = x(t)\,\mathbf f_0$ (dead) or $x(t)\,\mathbf R\mathbf f_0^{node}$ (follower); residual $-\lambda\mathbf f$.
 /// A follower's tangent is $\partial(-\mathbf f)/\partial\boldsymbol\pi = \tilde{\mathbf f}$ (from
 /// $\delta(\mathbf R\mathbf f_0) = \delta\boldsymbol\pi\times\mathbf f$); a dead load has none.
-pub(crate) fn load_element(l: &LoadElement, m: &NodeMotion, t: f64, lambda: f64, tangents: bool) -> ElementOutput {
-    let mut out = ElementOutput::zeros(6, tangents);
+pub(crate) fn load_element(
+    l: &LoadElement,
+    m: &NodeMotion,
+    t: f64,
+    lambda: f64,
+    tangents: bool,
+    out: &mut ElementOutput,
+) {
+    out.reset(tangents);
     let x = l.time.eval(t).0 * lambda;
     let f = if l.follower { m.R * l.value * x } else { l.value * x };
     let at = if l.moment { 3 } else { 0 };
@@ -356,5 +404,4 @@ pub(crate) fn load_element(l: &LoadElement, m: &NodeMotion, t: f64, lambda: f64,
     if tangents && l.follower {
         set3(&mut out.K, at, 3, &skew(&f));
     }
-    out
 }

@@ -182,6 +182,12 @@ pub struct Motion {
     pub Jw: Vec<Vector3<f64>>,
 }
 
+impl Default for Motion {
+    fn default() -> Self {
+        Self::ground()
+    }
+}
+
 impl Motion {
     pub(crate) fn ground() -> Self {
         let z = Vector3::zeros();
@@ -195,6 +201,22 @@ impl Motion {
             Jv: Vec::new(),
             Jw: Vec::new(),
         }
+    }
+
+    /// Back to the ground frame, keeping the column buffers' capacity.
+    fn reset(&mut self) {
+        let z = Vector3::zeros();
+        (self.p, self.R, self.v, self.w, self.a, self.al) = (z, UnitQuaternion::identity(), z, z, z, z);
+        self.Jv.clear();
+        self.Jw.clear();
+    }
+
+    /// `self = other` without allocating once the column buffers have grown (the derived
+    /// `clone_from` would allocate a fresh copy every time).
+    fn copy_from(&mut self, other: &Motion) {
+        (self.p, self.R, self.v, self.w, self.a, self.al) = (other.p, other.R, other.v, other.w, other.a, other.al);
+        self.Jv.clone_from(&other.Jv);
+        self.Jw.clone_from(&other.Jw);
     }
 
     /// Column $i$ of $\mathbf J_c$ as $[\mathbf J^v; \mathbf J^\omega]$.
@@ -221,18 +243,49 @@ pub(crate) struct Tangent {
 
 impl Tangent {
     fn zero(ncols: usize, with_J: bool) -> Self {
+        let mut t = Self {
+            dp: Vector3::zeros(),
+            dpi: Vector3::zeros(),
+            dv: Vector3::zeros(),
+            dw: Vector3::zeros(),
+            da: Vector3::zeros(),
+            dal: Vector3::zeros(),
+            dJv: Vec::new(),
+            dJw: Vec::new(),
+        };
+        t.reset(ncols, with_J);
+        t
+    }
+
+    /// The zero variation over `ncols` columns, reusing the buffers.
+    fn reset(&mut self, ncols: usize, with_J: bool) {
         let z = Vector3::zeros();
+        (self.dp, self.dpi, self.dv, self.dw, self.da, self.dal) = (z, z, z, z, z, z);
         let n = if with_J { ncols } else { 0 };
-        Self {
-            dp: z,
-            dpi: z,
-            dv: z,
-            dw: z,
-            da: z,
-            dal: z,
-            dJv: vec![z; n],
-            dJw: vec![z; n],
-        }
+        self.dJv.clear();
+        self.dJv.resize(n, z);
+        self.dJw.clear();
+        self.dJw.resize(n, z);
+    }
+
+    /// `self = other`, reusing the buffers.
+    fn copy_from(&mut self, other: &Tangent) {
+        (self.dp, self.dpi, self.dv, self.dw, self.da, self.dal) =
+            (other.dp, other.dpi, other.dv, other.dw, other.da, other.dal);
+        self.dJv.clone_from(&other.dJv);
+        self.dJw.clone_from(&other.dJw);
+    }
+}
+
+/// `(&v[a], &mut v[b])` for `a != b`.
+fn pair_mut<T>(v: &mut [T], a: usize, b: usize) -> (&T, &mut T) {
+    debug_assert_ne!(a, b);
+    if a < b {
+        let (lo, hi) = v.split_at_mut(b);
+        (&lo[a], &mut hi[0])
+    } else {
+        let (lo, hi) = v.split_at_mut(a);
+        (&hi[0], &mut lo[b])
     }
 }
 
@@ -412,6 +465,8 @@ pub(crate) struct NodeDerivatives {
     pub(crate) pos: Vec<Option<Tangent>>,
     /// Tangents in rate directions per column.
     pub(crate) rate: Vec<Option<Tangent>>,
+    /// The moving frame of the node's chain before each operation (scratch of the tangent pass).
+    work: Motion,
 }
 
 fn six(a: &Vector3<f64>, b: &Vector3<f64>) -> [f64; 6] {
@@ -425,91 +480,101 @@ impl CoordinateMap {
     }
 
     /// The value pass for every node (parents first): configuration, velocity,
-    /// acceleration and $\mathbf J$ columns.
+    /// acceleration and $\mathbf J$ columns. Reuses the column buffers of `out` (no allocation
+    /// after the first call).
     pub(crate) fn motions_into(&self, x: &Values, out: &mut [Motion]) {
         for &c in &self.order {
             let chain = &self.chains[c];
-            let mut m = match chain.parent {
-                Some(p) => out[p].clone(),
-                None => Motion::ground(),
+            let m = match chain.parent {
+                Some(p) => {
+                    let (parent, m) = pair_mut(out, p, c);
+                    m.copy_from(parent);
+                    m
+                }
+                None => {
+                    out[c].reset();
+                    &mut out[c]
+                }
             };
             for op in &chain.ops {
-                apply(op, &mut m, self, x);
+                apply(op, m, self, x);
             }
-            out[c] = m;
         }
     }
 
     /// The tangent passes (module docs) for every node. `motions` from
-    /// [`Self::motions_into`].
+    /// [`Self::motions_into`]. Reuses the buffers of `out` (no allocation after the first
+    /// call: a node's columns and unknowns never change).
     pub(crate) fn derivatives_into(&self, x: &Values, motions: &[Motion], out: &mut [NodeDerivatives]) {
         for &c in &self.order {
             let chain = &self.chains[c];
             let ncols = chain.cols.len();
-            let unknown: Vec<usize> = (0..ncols).filter(|&k| chain.cols[k] < self.n_dof).collect();
-            let mut d = NodeDerivatives {
-                unknown: unknown.clone(),
-                ..Default::default()
+            let (parent, d) = match chain.parent {
+                Some(p) => {
+                    let (pd, d) = pair_mut(out, p, c);
+                    (Some(pd), d)
+                }
+                None => (None, &mut out[c]),
             };
+            d.unknown.clear();
+            d.unknown.extend((0..ncols).filter(|&k| chain.cols[k] < self.n_dof));
+            d.pos.resize_with(ncols, || None);
+            d.rate.resize_with(ncols, || None);
+            d.DV.clear();
+            d.DA.clear();
+            d.DAd.clear();
             if chain.root {
                 // J constant: a position variation moves the node along its column, a rate
                 // variation changes its velocity by the column; nothing else.
                 let m = &motions[c];
-                d.pos = vec![None; ncols];
-                d.rate = vec![None; ncols];
-                for &k in &unknown {
-                    let mut tp = Tangent::zero(ncols, true);
+                for &k in &d.unknown {
+                    let tp = d.pos[k].get_or_insert_with(|| Tangent::zero(ncols, true));
+                    tp.reset(ncols, true);
                     tp.dp = m.Jv[k];
                     tp.dpi = m.Jw[k];
-                    let mut tr = Tangent::zero(ncols, false);
+                    let tr = d.rate[k].get_or_insert_with(|| Tangent::zero(ncols, false));
+                    tr.reset(ncols, false);
                     tr.dv = m.Jv[k];
                     tr.dw = m.Jw[k];
-                    d.pos[k] = Some(tp);
-                    d.rate[k] = Some(tr);
                     d.DV.push([0.0; 6]);
                     d.DA.push([0.0; 6]);
                     d.DAd.push([0.0; 6]);
                 }
-                out[c] = d;
                 continue;
             }
             let parent_cols = chain.parent.map_or(0, |p| self.chains[p].cols.len());
-            let mut m = match chain.parent {
-                Some(p) => motions[p].clone(),
-                None => Motion::ground(),
-            };
-            let mut pos: Vec<Option<Tangent>> = vec![None; ncols];
-            let mut rate: Vec<Option<Tangent>> = vec![None; ncols];
-            for &k in &unknown {
-                let (tp, tr) = if k < parent_cols {
-                    let pd = &out[chain.parent.expect("columns from a parent")];
-                    (
-                        pd.pos[k].clone().expect("parent tangent of an unknown column"),
-                        pd.rate[k].clone().expect("parent tangent of an unknown column"),
-                    )
+            match chain.parent {
+                Some(p) => d.work.copy_from(&motions[p]),
+                None => d.work.reset(),
+            }
+            for &k in &d.unknown {
+                let tp = d.pos[k].get_or_insert_with(|| Tangent::zero(parent_cols, true));
+                let tr = d.rate[k].get_or_insert_with(|| Tangent::zero(parent_cols, false));
+                if k < parent_cols {
+                    let pd = parent.expect("columns from a parent");
+                    tp.copy_from(pd.pos[k].as_ref().expect("parent tangent of an unknown column"));
+                    tr.copy_from(pd.rate[k].as_ref().expect("parent tangent of an unknown column"));
                 } else {
-                    (Tangent::zero(parent_cols, true), Tangent::zero(parent_cols, false))
-                };
-                pos[k] = Some(tp);
-                rate[k] = Some(tr);
+                    tp.reset(parent_cols, true);
+                    tr.reset(parent_cols, false);
+                }
             }
             for op in &chain.ops {
-                for &k in &unknown {
-                    apply_tangent(op, &m, pos[k].as_mut().unwrap(), Dir::Position(k), self, x);
-                    apply_tangent(op, &m, rate[k].as_mut().unwrap(), Dir::Rate(k), self, x);
+                for &k in &d.unknown {
+                    let tp = d.pos[k].as_mut().expect("tangent of an unknown column");
+                    apply_tangent(op, &d.work, tp, Dir::Position(k), self, x);
+                    let tr = d.rate[k].as_mut().expect("tangent of an unknown column");
+                    apply_tangent(op, &d.work, tr, Dir::Rate(k), self, x);
                 }
-                apply(op, &mut m, self, x);
+                apply(op, &mut d.work, self, x);
             }
-            for &k in &unknown {
-                let tp = pos[k].as_ref().unwrap();
-                let tr = rate[k].as_ref().unwrap();
+            for &k in &d.unknown {
+                let tp = d.pos[k].as_ref().expect("tangent of an unknown column");
+                let tr = d.rate[k].as_ref().expect("tangent of an unknown column");
                 d.DV.push(six(&tp.dv, &tp.dw));
                 d.DA.push(six(&tp.da, &tp.dal));
                 d.DAd.push(six(&tr.da, &tr.dal));
             }
-            d.pos = pos;
-            d.rate = rate;
-            out[c] = d;
         }
     }
 

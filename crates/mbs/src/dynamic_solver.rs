@@ -24,6 +24,40 @@
 //! frame stays in the state, so the frame solve (2.6) is warm-started from the previous
 //! iteration or step.
 //!
+//! # Newton strategy
+//!
+//! [`DynamicSettings::newton`] chooses how the corrections get their iteration matrix
+//! $\mathbf S = \beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$:
+//!
+//! * [`NewtonStrategy::Full`] (the default): the tangents are evaluated and $\mathbf S$ is
+//!   factorised at every correction (quadratic convergence). After a correction the residual is
+//!   tested with the forces alone, and tangents are evaluated only if another correction is
+//!   needed.
+//! * [`NewtonStrategy::Modified`]: the factorised $\mathbf S$ stays in the workspace across
+//!   corrections and steps, and the iterations evaluate forces only (linear convergence, each
+//!   iteration cheaper). The refresh rule: $\mathbf S$ is rebuilt from new tangents and
+//!   refactorised (i) when there is none for the current $h$ ($\beta'$, $\gamma'$ depend on it: the
+//!   first step, every change of $h$ by the adaptive step, after a failed step), (ii) at once when
+//!   a correction lets the residual grow, and (iii) with the next evaluation (no second
+//!   evaluation of the same iterate) when a correction contracts it by less than
+//!   [`MODIFIED_NEWTON_RATE`], $\|\mathbf F_{k+1}\| > 0.01\|\mathbf F_k\|$; tangents scheduled by (iii)
+//!   that arrive with the converging evaluation are factorised for the next step. A step whose
+//!   modified iterations fail (no convergence in `max_iterations`, a singular matrix, a body
+//!   that cannot be evaluated) is solved again from the predictor with full Newton before
+//!   [`SolveError::NotConverged`] is reported. Both converge to the same tolerance, so their
+//!   trajectories agree to it. [`StepReport::jacobians`] and [`Trajectory::jacobians`] count the
+//!   factorisations.
+//!
+//! Modified Newton pays when a kept matrix contracts strongly and tangents cost much more than
+//! forces. On the slider-crank (benchmarks.md C2, one superelement with geometric stiffening)
+//! the tangents cost 2-3 times the forces and a kept matrix contracts by 0.05-0.2 after a few
+//! steps: it takes 3.5 iterations and 0.55 factorisations per step against full Newton's 2 and
+//! 2, and 13 % (2 modes) to 35 % (4 modes) fewer instructions ([`MODIFIED_NEWTON_RATE`]).
+//!
+//! The iteration matrix is factorised densely (LU with partial pivoting) up to
+//! [`crate::DENSE_MAX`] unknowns and by the sparse LU on the system pattern above
+//! ([`crate::LinearSolver`]).
+//!
 //! # Adaptive step
 //!
 //! [`Integrator::step_adaptive`] and [`solve_dynamic_adaptive`] estimate the local error of the
@@ -34,7 +68,8 @@
 //! ([`System::increment_norm`]). A step with $e >$ `tolerance` is rejected and retried; the next
 //! step is $h\min(2, \max(0.2, 0.9(\mathrm{tol}/e)^{1/3}))$ within `[min_step, max_step]`.
 //! The recursion of $\mathbf a_n$ is the same for any $h$, so the fixed-step path
-//! ([`Integrator::step`]) is unchanged.
+//! ([`Integrator::step`]) is unchanged. With modified Newton every accepted change of $h$
+//! refactorises the iteration matrix (rule (i) above).
 //!
 //! # What is conserved
 //!
@@ -110,7 +145,35 @@ pub struct DynamicSettings {
     /// Momentum projection after each step ([`crate::momentum`]): `Auto` (the default) projects
     /// when the model is free and unloaded ([`System::rigid_invariance`]).
     pub momentum: MomentumProjection,
+    /// Full Newton (the default: tangents and a factorisation at every correction) or modified
+    /// Newton (the factorised iteration matrix kept across corrections and steps; module docs).
+    pub newton: NewtonStrategy,
 }
+
+/// How the Newton corrections of a step get their iteration matrix (module docs, "Newton
+/// strategy").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NewtonStrategy {
+    /// Tangents and a new factorisation at every correction: quadratic convergence.
+    #[default]
+    Full,
+    /// The last factorised iteration matrix is reused across corrections and steps, with
+    /// forces-only evaluations; it is rebuilt when $h$ changes, after a correction that
+    /// contracts the residual by less than [`MODIFIED_NEWTON_RATE`] (or lets it grow), and after
+    /// a failed step. A step that still fails is retried with full Newton before
+    /// [`SolveError::NotConverged`] is reported.
+    Modified,
+}
+
+/// Modified Newton schedules a new iteration matrix when one correction leaves more than this
+/// fraction of the residual, $\|\mathbf F_{k+1}\| > 0.01\|\mathbf F_k\|$ (module docs). Measured on the
+/// slider-crank (benchmarks.md C2, `slider_crank --newton modified --geometric-stiffening`,
+/// callgrind instructions of 800 steps): with 2 modes 0.1 gives 500M (5.5 iterations, 0.10
+/// Jacobians per step), 0.03 423M, 0.01 400M (3.5, 0.56), 0.003 410M (3.1, 0.92), full Newton
+/// 460M; with 4 modes 0.1 538M, 0.03 465M, 0.01 438M, 0.003 454M, full Newton 679M. A matrix
+/// kept over many steps contracts by only 0.05-0.2 there (the rod turns 0.016 rad per step), so
+/// a threshold in 0.1-0.5 costs more evaluations than the Jacobians it saves.
+pub const MODIFIED_NEWTON_RATE: f64 = 0.01;
 
 impl DynamicSettings {
     pub fn new(step: f64, end_time: f64, rho_inf: f64) -> Self {
@@ -122,6 +185,7 @@ impl DynamicSettings {
             max_iterations: 20,
             output_every: 1,
             momentum: MomentumProjection::Auto,
+            newton: NewtonStrategy::Full,
         }
     }
 }
@@ -155,8 +219,12 @@ impl AlphaParameters {
 #[derive(Clone, Debug, PartialEq)]
 pub struct StepReport {
     pub time: f64,
-    /// Relative residual before each correction and at convergence.
+    /// Relative residual before each correction and at convergence (with a fallback from
+    /// modified to full Newton, those of both attempts).
     pub residuals: Vec<f64>,
+    /// Iteration matrices built and factorised in the step (tangents evaluated): one per
+    /// correction with full Newton, the refreshes with modified Newton.
+    pub jacobians: usize,
     /// With the momentum projection: the defect $\mathbf J_0 - \mathbf J$ = $[\Delta\mathbf L;\ \Delta\mathbf H]$
     /// it corrected ($O(h^3)$, [`crate::momentum`]).
     pub momentum_defect: Option<[f64; 6]>,
@@ -172,10 +240,22 @@ pub struct Integrator<'a> {
     p: AlphaParameters,
     ws: Workspace,
     steps: usize,
-    /// Scratch: the state at $t_n$ and the increment.
+    /// Scratch: the state at $t_n$, the iterate of $t_{n+1}$, the increment, the correction and
+    /// $\mathbf a_n$ of an adaptive attempt (sized once: a step allocates only its report).
     prev: State,
+    trial: State,
     incr: Vec<f64>,
     dx: Vec<f64>,
+    a_prev: Vec<f64>,
+    /// The step size of the iteration matrix factorised in the workspace, `None` when there
+    /// is none to reuse (start, failed step): modified Newton refactorises when it differs from
+    /// the current $h$.
+    factor_h: Option<f64>,
+    /// Factorisations in the current step (its [`StepReport::jacobians`]).
+    jacobians: usize,
+    /// Modified Newton: the last correction contracted poorly, so the next evaluation brings
+    /// tangents and the matrix is refactorised.
+    refresh_next: bool,
     /// The momenta $\mathbf J_0 = [\mathbf L_0;\ \mathbf H_0]$ of the start, when projecting.
     J0: Option<Vector6<f64>>,
     /// Corrections the last converged step needed: the next step builds its tangents at once
@@ -223,9 +303,15 @@ impl<'a> Integrator<'a> {
             ws,
             steps: 0,
             prev: state.clone(),
+            trial: state.clone(),
             state,
             incr: vec![0.0; n],
             dx: vec![0.0; n],
+            a_prev: vec![0.0; n],
+            // The workspace holds the factorised mass matrix, not an iteration matrix.
+            factor_h: None,
+            jacobians: 0,
+            refresh_next: false,
             J0,
             last_corrections: 0,
         })
@@ -274,11 +360,13 @@ impl<'a> Integrator<'a> {
         loop {
             let h = self.settings.step.clamp(adaptive.min_step, adaptive.max_step);
             self.settings.step = h;
-            let a_n = self.a.clone();
+            self.a_prev.clone_from(&self.a);
             match self.step() {
                 Ok(report) => {
-                    let e: Vec<f64> = self.a.iter().zip(&a_n).map(|(x, y)| h * h * c * (x - y)).collect();
-                    let error = self.system.increment_norm(&e);
+                    for i in 0..self.dx.len() {
+                        self.dx[i] = h * h * c * (self.a[i] - self.a_prev[i]);
+                    }
+                    let error = self.system.increment_norm(&self.dx);
                     let factor = if error > 0.0 {
                         (0.9 * (adaptive.tolerance / error).cbrt()).clamp(0.2, 2.0)
                     } else {
@@ -295,7 +383,7 @@ impl<'a> Integrator<'a> {
                     }
                     // Rejected: back to t_n.
                     self.state.clone_from(&self.prev);
-                    self.a = a_n;
+                    self.a.clone_from(&self.a_prev);
                     self.steps -= 1;
                     self.settings.step = h * factor;
                 }
@@ -317,8 +405,40 @@ impl<'a> Integrator<'a> {
     }
 
     /// One step of size `settings.step` (module docs). On failure the state is left at the
-    /// last converged step.
+    /// last converged step. With [`NewtonStrategy::Modified`], a step whose modified Newton
+    /// fails is tried again from the predictor with full Newton before the error is reported.
     pub fn step(&mut self) -> Result<StepReport, SolveError> {
+        self.prev.clone_from(&self.state);
+        self.jacobians = 0;
+        let mut residuals = Vec::with_capacity(4);
+        let result = match self.settings.newton {
+            NewtonStrategy::Full => self.attempt(false, &mut residuals),
+            NewtonStrategy::Modified => match self.attempt(true, &mut residuals) {
+                Err(SolveError::NotConverged { .. } | SolveError::Singular { .. } | SolveError::Body { .. }) => {
+                    self.attempt(false, &mut residuals)
+                }
+                other => other,
+            },
+        };
+        match result {
+            Ok(momentum_defect) => Ok(StepReport {
+                time: self.state.time,
+                residuals,
+                jacobians: self.jacobians,
+                momentum_defect,
+            }),
+            Err(e) => {
+                // The factor may belong to a diverged iterate: the next step rebuilds it.
+                self.factor_h = None;
+                Err(e)
+            }
+        }
+    }
+
+    /// One Newton solve of the step from the predictor: full (`modified` false: tangents at
+    /// every correction) or modified (module docs). On success the state is at $t_{n+1}$ and
+    /// the momentum defect is returned; on failure the state is unchanged.
+    fn attempt(&mut self, modified: bool, residuals: &mut Vec<f64>) -> Result<Option<[f64; 6]>, SolveError> {
         let sys = self.system;
         let n = sys.n_dof();
         let h = self.settings.step;
@@ -330,34 +450,42 @@ impl<'a> Integrator<'a> {
         } = self.p;
         let bp = (1.0 - am) / (h * h * b * (1.0 - af));
         let gp = g / (h * b);
-        self.prev.clone_from(&self.state);
         let prev = &self.prev;
         let t = prev.time + h;
         // Predictor: constant acceleration.
-        let mut st = prev.clone();
+        let st = &mut self.trial;
+        st.clone_from(prev);
         st.time = t;
-        let mut a_new = vec![0.0; n];
         for i in 0..n {
             let qdd = prev.acceleration[i];
-            a_new[i] = ((1.0 - af) * qdd + af * prev.acceleration[i] - am * self.a[i]) / (1.0 - am);
-            st.velocity[i] = prev.velocity[i] + h * (1.0 - g) * self.a[i] + h * g * a_new[i];
-            self.incr[i] = h * prev.velocity[i] + h * h * (0.5 - b) * self.a[i] + h * h * b * a_new[i];
+            let a_new = ((1.0 - af) * qdd + af * prev.acceleration[i] - am * self.a[i]) / (1.0 - am);
+            st.velocity[i] = prev.velocity[i] + h * (1.0 - g) * self.a[i] + h * g * a_new;
+            self.incr[i] = h * prev.velocity[i] + h * h * (0.5 - b) * self.a[i] + h * h * b * a_new;
             st.acceleration[i] = qdd;
         }
-        sys.retract_in_place(&mut st, prev, &self.incr);
-        let mut residuals = Vec::new();
+        sys.retract_in_place(st, prev, &self.incr);
         let step = self.steps + 1;
+        let tol = self.settings.tolerance;
+        let mut last_rel = f64::INFINITY;
         for it in 0..=self.settings.max_iterations {
-            // After a correction the step may have converged: test with the forces alone and
-            // build the tangents only when another correction is needed. Steps of a smooth
-            // motion need about as many corrections as the last one, so up to that count the
-            // tangents come with the forces (a forces-only test there is wasted work).
-            let expect_correction = it == 0 || it < self.last_corrections;
-            sys.evaluate_into(&mut st, 1.0, expect_correction, &mut self.ws)?;
+            // Modified Newton keeps a factor built for this h; without one it needs tangents now.
+            let stale = self.factor_h != Some(h);
+            // Full Newton: after a correction the step may have converged, so test with the
+            // forces alone and build the tangents only when another correction is needed.
+            // Steps of a smooth motion need about as many corrections as the last one, so up
+            // to that count the tangents come with the forces (a forces-only test there is
+            // wasted work).
+            let mut with_tangents = if modified {
+                stale || self.refresh_next
+            } else {
+                it == 0 || it < self.last_corrections
+            };
+            sys.evaluate_into(st, 1.0, with_tangents, &mut self.ws)?;
+            let converged = |ws: &Workspace, norm: f64| norm <= tol * ws.scale + ws.floor;
             let mut norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
-            if !expect_correction && norm > self.settings.tolerance * self.ws.scale + self.ws.floor && norm.is_finite()
-            {
-                sys.evaluate_into(&mut st, 1.0, true, &mut self.ws)?;
+            if !modified && !with_tangents && !converged(&self.ws, norm) && norm.is_finite() {
+                sys.evaluate_into(st, 1.0, true, &mut self.ws)?;
+                with_tangents = true;
                 norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
             }
             let rel = if self.ws.scale > 0.0 {
@@ -366,27 +494,35 @@ impl<'a> Integrator<'a> {
                 norm
             };
             residuals.push(rel);
-            if norm <= self.settings.tolerance * self.ws.scale + self.ws.floor {
+            if converged(&self.ws, norm) {
+                if modified && with_tangents {
+                    // Tangents scheduled by a poor contraction arrived with the converging
+                    // evaluation: factorise them for the next step rather than waste them.
+                    sys.iteration_matrix(&mut self.ws, bp, gp, Some(&self.incr));
+                    if sys.factor(&mut self.ws).is_ok() {
+                        self.factor_h = Some(h);
+                        self.jacobians += 1;
+                        self.refresh_next = false;
+                    }
+                }
                 let mut momentum_defect = None;
                 if let Some(J0) = &self.J0 {
                     // Hairer, Lubich & Wanner §IV.4: project the converged velocities onto
                     // J(q_{n+1}, v) = J0; the sensors then read the corrected node velocities.
                     // (Before the update of a_n, so that a failure leaves the step at t_n.)
-                    momentum_defect = Some(sys.project_momentum(&mut st, J0)?.into());
-                    sys.refresh_motions(&mut st, &mut self.ws);
+                    momentum_defect = Some(sys.project_momentum(st, J0)?.into());
+                    sys.refresh_motions(st, &mut self.ws);
                 }
                 for i in 0..n {
                     self.a[i] =
                         ((1.0 - af) * st.acceleration[i] + af * prev.acceleration[i] - am * self.a[i]) / (1.0 - am);
                 }
-                self.state = st;
+                std::mem::swap(&mut self.state, &mut self.trial);
                 self.steps += 1;
-                self.last_corrections = it;
-                return Ok(StepReport {
-                    time: t,
-                    residuals,
-                    momentum_defect,
-                });
+                if !modified {
+                    self.last_corrections = it;
+                }
+                return Ok(momentum_defect);
             }
             if it == self.settings.max_iterations || !rel.is_finite() {
                 // Leave the workspace consistent with the last converged state.
@@ -399,11 +535,33 @@ impl<'a> Integrator<'a> {
                     iterations: it,
                 });
             }
-            sys.iteration_matrix(&mut self.ws, bp, gp, Some(&self.incr));
+            // Full Newton refactorises at every correction; modified Newton when its matrix is
+            // stale or the last correction contracted the residual too little (or it grew).
+            // A poor contraction (rel > rate * last_rel) schedules tangents with the next
+            // evaluation instead of a second evaluation here; a growing residual refreshes now.
+            let refresh = !modified || stale || self.refresh_next || rel > last_rel;
+            if modified && !refresh && rel > MODIFIED_NEWTON_RATE * last_rel {
+                self.refresh_next = true;
+            }
+            if refresh {
+                self.refresh_next = false;
+                if !with_tangents {
+                    sys.evaluate_into(st, 1.0, true, &mut self.ws)?;
+                }
+                sys.iteration_matrix(&mut self.ws, bp, gp, Some(&self.incr));
+                sys.factor(&mut self.ws).map_err(|what| SolveError::Singular {
+                    t,
+                    step,
+                    what: format!("iteration matrix ({what})"),
+                })?;
+                self.factor_h = Some(h);
+                self.jacobians += 1;
+            }
+            last_rel = rel;
             for i in 0..n {
                 self.dx[i] = -self.ws.F[i];
             }
-            sys.solve(&mut self.ws, &mut self.dx)
+            sys.solve_factored(&mut self.ws, &mut self.dx)
                 .map_err(|what| SolveError::Singular {
                     t,
                     step,
@@ -414,7 +572,7 @@ impl<'a> Integrator<'a> {
                 st.velocity[i] += gp * self.dx[i];
                 self.incr[i] += self.dx[i];
             }
-            sys.retract_in_place(&mut st, prev, &self.incr);
+            sys.retract_in_place(st, prev, &self.incr);
         }
         unreachable!("the loop returns at max_iterations")
     }
@@ -426,6 +584,8 @@ pub struct Trajectory {
     pub sensors: SensorRecord,
     /// Newton iterations of each step.
     pub iterations: Vec<usize>,
+    /// Iteration matrices factorised in each step ([`StepReport::jacobians`]).
+    pub jacobians: Vec<usize>,
     pub final_state: State,
 }
 
@@ -439,6 +599,7 @@ fn start_trajectory<'a>(
     let mut traj = Trajectory {
         sensors: system.sensor_record(),
         iterations: Vec::new(),
+        jacobians: Vec::new(),
         final_state: start.clone(),
     };
     let integ = match Integrator::new(system, start, settings.clone()).and_then(|i| {
@@ -465,7 +626,10 @@ pub fn solve_dynamic(
     let every = settings.output_every.max(1);
     for k in 1..=n_steps {
         match integ.step() {
-            Ok(rep) => traj.iterations.push(rep.residuals.len() - 1),
+            Ok(rep) => {
+                traj.iterations.push(rep.residuals.len() - 1);
+                traj.jacobians.push(rep.jacobians);
+            }
             Err(e) => {
                 traj.final_state = integ.state().clone();
                 return Err(fail(e, traj));
@@ -506,7 +670,10 @@ pub fn solve_dynamic_adaptive(
             ..adaptive.clone()
         };
         match integ.step_adaptive(&limits) {
-            Ok(s) => traj.iterations.push(s.report.residuals.len() - 1),
+            Ok(s) => {
+                traj.iterations.push(s.report.residuals.len() - 1);
+                traj.jacobians.push(s.report.jacobians);
+            }
             Err(e) => {
                 traj.final_state = integ.state().clone();
                 return Err(fail(e, traj));

@@ -47,6 +47,8 @@
 //! | $\beta',\ \gamma'$ | `bp`, `gp` | iteration-matrix factors | BCA 2012 |
 //! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration | BCA 2012 |
 //! | $\mathbf T(h\Delta\mathbf q)$ | `System::iteration_matrix` | tangent operator $\mathbf J_l$ of each rotation increment | BCA 2012 |
+//! | $\mathbf S = \beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$ | `Workspace::S`, [`LinearSolver`] | iteration matrix; dense LU up to [`DENSE_MAX`] unknowns, sparse above | BCA 2012 |
+//! | $\lVert\mathbf F_{k+1}\rVert/\lVert\mathbf F_k\rVert$ | [`MODIFIED_NEWTON_RATE`] | contraction above which modified Newton ([`NewtonStrategy`]) refactorises | [`dynamic_solver`] |
 //! | $\mathbf J = [\mathbf L;\ \mathbf H]$ | [`System::momentum`] | linear momentum, angular momentum about the origin: $\mathbf T_{rig}^T\hat{\mathbf M}\dot{\mathbf q}$ | Noether |
 //! | $\mathbf T_{rig}$ | [`System::rigid_velocities`] | $n_{dof}\times6$: independent velocities of the translations along and rotations about $\mathbf e_k$ | [`momentum`] |
 //! | $\mathbf J_0,\ \boldsymbol\lambda$ | `Integrator::J0`, `lambda` | momenta of the start; rigid correction $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ | HLW §IV.4 |
@@ -70,7 +72,7 @@
 //! | Riks 1979, Crisfield 1981 | arc-length continuation (spherical constraint, bordered Newton) | `mbs::solve_arc_length`, `mbs::solve_static_with` |
 //! | Bathe §6.8.2 | linearised buckling $(\hat{\mathbf K}_0 + \mu\Delta\hat{\mathbf K})\boldsymbol\phi = \mathbf 0$ | `mbs::buckling` |
 //! | Zienkiewicz & Xie 1991 | local error estimate and step control | `mbs::Integrator::step_adaptive`, `mbs::solve_dynamic_adaptive` |
-//! | BCA 2012, Alg. 1 | Lie-group generalized-α step | `mbs::Integrator::step` |
+//! | BCA 2012, Alg. 1 | Lie-group generalized-α step; full or modified Newton ([`NewtonStrategy`]) | `mbs::Integrator::step` |
 //! | HLW §IV.4 | momentum projection $(\mathbf T_{rig}^T\hat{\mathbf M}\mathbf T_{rig})\boldsymbol\lambda = \mathbf J_0 - \mathbf J$, $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ on free, unloaded models | `mbs::System::project_momentum` (private, `momentum.rs`) |
 //! | brief §6 | linearised spectrum; each mode's energy by body and node | `mbs::spectrum`, `mbs::mode_energies` |
 //!
@@ -118,7 +120,7 @@ pub mod topology;
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use dynamic_solver::{
     solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters, DynamicSettings,
-    Integrator, StepReport, Trajectory,
+    Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
 };
 pub use error::{Incomplete, ModelError, SolveError};
 pub use linearized::{
@@ -134,5 +136,5 @@ pub use momentum::{ExternalAction, MomentumProjection};
 pub use node::NodeMotion;
 pub use sensors::{Energies, SensorRecord};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
-pub use system::{Matrices, NodeKinematics, State, System};
+pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
 pub use time_function::{Interpolation, TimeFunction};

@@ -98,7 +98,7 @@ impl System {
             e.gravity -= p.mass * g.dot(&m.r);
         }
         for s in &self.springs {
-            e.strain += crate::body::spring_element(s, &nodes[s.a], s.b.map(|b| &nodes[b]), false).1;
+            e.strain += crate::body::spring_energy(s, &nodes[s.a], s.b.map(|b| &nodes[b]));
         }
         for &(s, k, _, rest) in &self.joint_springs {
             let x = state.scalars[s];

@@ -12,9 +12,12 @@
 //!
 //! Style R9: the pattern, the element-to-slot maps and the symbolic LU are built once in
 //! [`System::new`]; each Newton iteration refills values only (`evaluate_into`). Style R8: the
-//! per-element outputs, each superelement's workspace ([`superelement::Superelement::evaluate_into`]),
-//! the element matrices and the iteration matrix live in the analysis' `Workspace`, so an
-//! iteration allocates only in faer's numeric LU and in the small rigid-element outputs.
+//! per-element outputs (every element function writes into its reused output), each
+//! superelement's workspace ([`superelement::Superelement::evaluate_into`]), the node motions
+//! and their derivatives (the coordinate maps reuse their column buffers), the element
+//! matrices, the iteration matrix and its factorisation live in the analysis' `Workspace`, so
+//! an iteration allocates nothing up to [`DENSE_MAX`] unknowns (dense LU in a preallocated
+//! buffer, [`LinearSolver`]) and only in faer's numeric sparse LU above.
 
 #![allow(non_snake_case)]
 
@@ -28,10 +31,12 @@ use crate::model::{Body, InitialCondition, JointId, LoadAxes, LoadKind, Model, N
 use crate::node::NodeMotion;
 use crate::time_function::CompiledFunction;
 use crate::topology::{self, RootRotation, Topology};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
-use faer::Mat;
-use nalgebra::{UnitQuaternion, Vector3};
+use faer::{Mat, Par};
+use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
 use rayon::prelude::*;
 use superelement::{so3, Frame, Superelement};
 
@@ -113,7 +118,7 @@ impl Pattern {
 
 /// The coordinates, velocities and accelerations of a system at one instant, and each
 /// flexible body's last floating frame (the warm start of (2.6)).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct State {
     pub(crate) time: f64,
     /// Every scalar coordinate (unknown and prescribed).
@@ -125,6 +130,30 @@ pub struct State {
     pub(crate) acceleration: Vec<f64>,
     /// Per flexible element.
     pub(crate) frames: Vec<Frame>,
+}
+
+/// `clone_from` reuses the buffers (the derived one would allocate a fresh copy): the
+/// integrator copies states every step.
+impl Clone for State {
+    fn clone(&self) -> Self {
+        Self {
+            time: self.time,
+            scalars: self.scalars.clone(),
+            rotations: self.rotations.clone(),
+            velocity: self.velocity.clone(),
+            acceleration: self.acceleration.clone(),
+            frames: self.frames.clone(),
+        }
+    }
+
+    fn clone_from(&mut self, other: &Self) {
+        self.time = other.time;
+        self.scalars.clone_from(&other.scalars);
+        self.rotations.clone_from(&other.rotations);
+        self.velocity.clone_from(&other.velocity);
+        self.acceleration.clone_from(&other.acceleration);
+        self.frames.clone_from(&other.frames);
+    }
 }
 
 impl State {
@@ -201,8 +230,60 @@ pub(crate) struct Workspace {
     pub parts: Vec<[[f64; 6]; 3]>,
     /// The generalised inertia, internal and external forces ($\mathbf J^T$ of `parts`).
     pub gparts: [Vec<f64>; 3],
-    /// The iteration matrix on the system pattern (values refilled by [`System::solve_ws`]).
-    pub A: Option<SparseColMat<usize, f64>>,
+    /// The factorisation of `S` ([`System::factor`]), kept for more solves ([`System::solve_factored`]).
+    pub factor: Factor,
+}
+
+/// Up to this many unknowns the iteration matrix is factorised densely (LU with partial
+/// pivoting, in place in a preallocated buffer): for small systems the sparse LU's bookkeeping
+/// and allocations cost more than the $O(n^3)$ arithmetic. Measured with callgrind on the chain
+/// bench (`cargo bench -p mbs --bench step -- chain N 10 dense|sparse`, 6 unknowns per
+/// superelement; instructions of factorisations and solves in 13 steps, dense / sparse): 24
+/// unknowns 0.9M / 3.4M, 48 3.1M / 9.9M, 96 13.9M / 19.4M, 192 65.8M / 40.5M. The chain's
+/// banded matrix favours the sparse LU more than most mechanisms do; the crossover there is
+/// near 115 unknowns.
+pub const DENSE_MAX: usize = 96;
+
+/// How [`System`] factorises its iteration matrices (style: a switch is an enum).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LinearSolver {
+    /// Dense LU up to [`DENSE_MAX`] unknowns, sparse LU (symbolic analysis reused) above.
+    #[default]
+    Auto,
+    /// Always the dense LU with partial pivoting (faer `lu_in_place`).
+    Dense,
+    /// Always the sparse LU on the system pattern (faer, symbolic analysis from [`System::new`]).
+    Sparse,
+}
+
+/// The factorisation of the last iteration matrix (or none yet).
+pub(crate) enum Factor {
+    /// No unknowns, or not factorised yet.
+    None,
+    /// Sparse LU of `A` (the matrix on the system pattern, refilled from `S`).
+    Sparse {
+        A: SparseColMat<usize, f64>,
+        lu: Option<Box<Lu<usize, f64>>>,
+    },
+    /// Dense LU in place: `LU` holds $\mathbf L$ (unit lower) and $\mathbf U$, `perm` the row
+    /// permutation; `mem` the scratch of the factorisation and the solves, sized once.
+    Dense {
+        LU: Mat<f64>,
+        perm: Vec<usize>,
+        perm_inv: Vec<usize>,
+        mem: MemBuffer,
+        /// Right-hand sides `mem` has room for (it grows, once, for more).
+        rhs_cols: usize,
+        factored: bool,
+    },
+}
+
+/// Scratch of the dense LU and of its solve for `k` right-hand sides.
+fn dense_scratch(n: usize, k: usize) -> StackReq {
+    StackReq::any_of(&[
+        lu_factor::lu_in_place_scratch::<usize, f64>(n, n, Par::Seq, Default::default()),
+        lu_solve::solve_in_place_scratch::<usize, f64>(n, k, Par::Seq),
+    ])
 }
 
 /// One element's output and the buffers it is computed in (style R8: sized once per analysis).
@@ -238,6 +319,8 @@ pub struct System {
     /// Scale of each unknown for the increment test: the model size for lengths, 1 for
     /// angles, body size times the square root of its mass for modal coordinates.
     pub(crate) dof_scale: Vec<f64>,
+    /// Dense or sparse factorisation of the iteration matrices.
+    pub(crate) linear_solver: LinearSolver,
 }
 
 fn finite(v: f64) -> bool {
@@ -548,6 +631,7 @@ impl System {
             elements,
             pattern,
             dof_scale,
+            linear_solver: LinearSolver::Auto,
         })
     }
 
@@ -918,8 +1002,49 @@ impl System {
                 vec![0.0; self.n_dof()],
                 vec![0.0; self.n_dof()],
             ],
-            A: (nnz > 0).then(|| SparseColMat::new(self.pattern.symbolic.clone(), vec![0.0; nnz])),
+            factor: self.empty_factor(),
         }
+    }
+
+    /// An empty factorisation of the kind [`Self::linear_solver`] picks for this system.
+    fn empty_factor(&self) -> Factor {
+        let n = self.n_dof();
+        if n == 0 {
+            return Factor::None;
+        }
+        let dense = match self.linear_solver {
+            LinearSolver::Auto => n <= DENSE_MAX,
+            LinearSolver::Dense => true,
+            LinearSolver::Sparse => false,
+        };
+        if dense {
+            // Two right-hand sides: Newton's one and the arc-length's bordered pair.
+            let rhs_cols = 2;
+            Factor::Dense {
+                LU: Mat::zeros(n, n),
+                perm: vec![0; n],
+                perm_inv: vec![0; n],
+                mem: MemBuffer::new(dense_scratch(n, rhs_cols)),
+                rhs_cols,
+                factored: false,
+            }
+        } else {
+            Factor::Sparse {
+                A: SparseColMat::new(self.pattern.symbolic.clone(), vec![0.0; self.pattern.nnz()]),
+                lu: None,
+            }
+        }
+    }
+
+    /// Chooses the factorisation of the iteration matrices (default [`LinearSolver::Auto`]);
+    /// applies to the analyses started after the call.
+    pub fn set_linear_solver(&mut self, choice: LinearSolver) {
+        self.linear_solver = choice;
+    }
+
+    /// The factorisation in use ([`Self::set_linear_solver`]).
+    pub fn linear_solver(&self) -> LinearSolver {
+        self.linear_solver
     }
 
     /// Evaluates $\mathbf F$, the reactions and (with `tangents`) $\hat{\mathbf M}$, $\hat{\mathbf C}$,
@@ -1077,7 +1202,8 @@ impl System {
         buf: &mut ElementBuffer,
     ) -> Result<(), SolveError> {
         let map = &self.topo.map;
-        buf.out = match &e.kind {
+        let out = &mut buf.out;
+        match &e.kind {
             ElementKind::Flexible(i) => {
                 let f = &self.flexible[*i];
                 let modal = |k: usize| {
@@ -1086,25 +1212,26 @@ impl System {
                     (state.scalars[s], state.velocity[d], state.acceleration[d])
                 };
                 let flex = buf.flex.as_mut().expect("flexible element buffer");
-                f.element_into(nodes, modal, state.frames[*i], gravity, tangents, flex, &mut buf.out)
+                f.element_into(nodes, modal, state.frames[*i], gravity, tangents, flex, out)
                     .map_err(|source| SolveError::Body {
                         body: self.model.bodies[f.body].name().to_string(),
                         t: state.time,
                         source,
                     })?;
-                return Ok(());
             }
-            ElementKind::Rigid(i) => rigid_element(&self.rigid[*i], &nodes[self.rigid[*i].node], gravity, tangents),
-            ElementKind::PointMass(node, m) => point_mass_element(*m, &nodes[*node], gravity, tangents),
+            ElementKind::Rigid(i) => {
+                rigid_element(&self.rigid[*i], &nodes[self.rigid[*i].node], gravity, tangents, out);
+            }
+            ElementKind::PointMass(node, m) => point_mass_element(*m, &nodes[*node], gravity, tangents, out),
             ElementKind::Spring(i) => {
                 let s = &self.springs[*i];
-                spring_element(s, &nodes[s.a], s.b.map(|b| &nodes[b]), tangents).0
+                spring_element(s, &nodes[s.a], s.b.map(|b| &nodes[b]), tangents, out);
             }
             ElementKind::Load(i) => {
                 let l = &self.loads[*i];
-                load_element(l, &nodes[l.node], state.time, lambda, tangents)
+                load_element(l, &nodes[l.node], state.time, lambda, tangents, out);
             }
-        };
+        }
         Ok(())
     }
 
@@ -1129,66 +1256,64 @@ impl System {
         let pos = &self.pattern.elem_pos[ei];
         let mpos = &self.pattern.elem_modal_pos[ei];
         let N = e.nodes.len();
-        // Columns of each port: (local position, J, DV, DA, DAd) with J etc. as 6-vectors.
-        type PortCol = (usize, [f64; 6], [f64; 6], [f64; 6], [f64; 6]);
-        let ports: Vec<Vec<PortCol>> = e
-            .nodes
-            .iter()
-            .enumerate()
-            .map(|(ia, &a)| {
-                let d = &derivs[a];
-                d.unknown
-                    .iter()
-                    .enumerate()
-                    .map(|(u, &k)| (pos[ia][u], motions[a].col(k), d.DV[u], d.DA[u], d.DAd[u]))
-                    .collect()
-            })
-            .collect();
+        // The unknown columns of port `ia`: (local position, J, DV, DA, DAd) as 6-vectors,
+        // read in place from the node kinematics (nothing is collected: no allocation).
+        let port = |ia: usize| {
+            let a = e.nodes[ia];
+            let d = &derivs[a];
+            d.unknown
+                .iter()
+                .enumerate()
+                .map(move |(u, &k)| (pos[ia][u], motions[a].col(k), d.DV[u], d.DA[u], d.DAd[u]))
+        };
         let (M, C, K) = (&o.M, &o.C, &o.K);
         // Row vector of block (row r of the element matrix, port b) times a port column.
         let rowdot =
             |A: &Mat<f64>, r: usize, b: usize, x: &[f64; 6]| (0..6).map(|j| A[(r, 6 * b + j)] * x[j]).sum::<f64>();
+        let dot6 = |a: &[f64; 6], b: &[f64; 6]| (0..6).map(|i| a[i] * b[i]).sum::<f64>();
         // Rows: node ports.
+        // The 6x6 block (port a, port b) as a fixed-size matrix: one read per entry, then
+        // fixed-size products instead of per-entry indexing of the element matrices.
+        let block = |A: &Mat<f64>, ia: usize, ib: usize| Matrix6::from_fn(|i, j| A[(6 * ia + i, 6 * ib + j)]);
+        let v6 = |x: &[f64; 6]| Vector6::from_column_slice(x);
         for ia in 0..N {
-            for (ib, pb) in ports.iter().enumerate() {
-                for (qb, Jb, DV, DA, DAd) in pb {
-                    // y = block(a, b) * column, for each of the six rows of port a.
-                    let mut yM = [0.0; 6];
-                    let mut yC = [0.0; 6];
-                    let mut yK = [0.0; 6];
-                    for i in 0..6 {
-                        let r = 6 * ia + i;
-                        yM[i] = rowdot(M, r, ib, Jb);
-                        yC[i] = rowdot(C, r, ib, Jb) + rowdot(M, r, ib, DAd);
-                        yK[i] = rowdot(K, r, ib, Jb) + rowdot(C, r, ib, DV) + rowdot(M, r, ib, DA);
-                    }
-                    for (qa, Ja, ..) in &ports[ia] {
-                        let at = qb * s + qa;
-                        Ml[at] += (0..6).map(|i| Ja[i] * yM[i]).sum::<f64>();
-                        Cl[at] += (0..6).map(|i| Ja[i] * yC[i]).sum::<f64>();
-                        Kl[at] += (0..6).map(|i| Ja[i] * yK[i]).sum::<f64>();
+            for ib in 0..N {
+                let (Mab, Cab, Kab) = (block(M, ia, ib), block(C, ia, ib), block(K, ia, ib));
+                for (qb, Jb, DV, DA, DAd) in port(ib) {
+                    // y = block(a, b) * column, for the six rows of port a.
+                    let Jb = v6(&Jb);
+                    let yM = Mab * Jb;
+                    let yC = Cab * Jb + Mab * v6(&DAd);
+                    let yK = Kab * Jb + Cab * v6(&DV) + Mab * v6(&DA);
+                    for (qa, Ja, ..) in port(ia) {
+                        let (at, Ja) = (qb * s + qa, v6(&Ja));
+                        Ml[at] += Ja.dot(&yM);
+                        Cl[at] += Ja.dot(&yC);
+                        Kl[at] += Ja.dot(&yK);
                     }
                 }
             }
             for (j, &qj) in mpos.iter().enumerate() {
                 let c = 6 * N + j;
-                for (qa, Ja, ..) in &ports[ia] {
+                let column = |A: &Mat<f64>| std::array::from_fn::<f64, 6, _>(|i| A[(6 * ia + i, c)]);
+                let (mM, mC, mK) = (column(M), column(C), column(K));
+                for (qa, Ja, ..) in port(ia) {
                     let at = qj * s + qa;
-                    Ml[at] += (0..6).map(|i| Ja[i] * M[(6 * ia + i, c)]).sum::<f64>();
-                    Cl[at] += (0..6).map(|i| Ja[i] * C[(6 * ia + i, c)]).sum::<f64>();
-                    Kl[at] += (0..6).map(|i| Ja[i] * K[(6 * ia + i, c)]).sum::<f64>();
+                    Ml[at] += dot6(&Ja, &mM);
+                    Cl[at] += dot6(&Ja, &mC);
+                    Kl[at] += dot6(&Ja, &mK);
                 }
             }
         }
         // Rows: modal coordinates.
         for (i, &qi) in mpos.iter().enumerate() {
             let r = 6 * N + i;
-            for (ib, pb) in ports.iter().enumerate() {
-                for (qb, Jb, DV, DA, DAd) in pb {
+            for ib in 0..N {
+                for (qb, Jb, DV, DA, DAd) in port(ib) {
                     let at = qb * s + qi;
-                    Ml[at] += rowdot(M, r, ib, Jb);
-                    Cl[at] += rowdot(C, r, ib, Jb) + rowdot(M, r, ib, DAd);
-                    Kl[at] += rowdot(K, r, ib, Jb) + rowdot(C, r, ib, DV) + rowdot(M, r, ib, DA);
+                    Ml[at] += rowdot(M, r, ib, &Jb);
+                    Cl[at] += rowdot(C, r, ib, &Jb) + rowdot(M, r, ib, &DAd);
+                    Kl[at] += rowdot(K, r, ib, &Jb) + rowdot(C, r, ib, &DV) + rowdot(M, r, ib, &DA);
                 }
             }
             for (j, &qj) in mpos.iter().enumerate() {
@@ -1234,17 +1359,95 @@ impl System {
     }
 
     /// Solves $\mathbf S\mathbf X = \mathbf B$ in place for the values `ws.S` on the system pattern;
-    /// `b` holds the right-hand sides column after column (`b.len()` a multiple of `n_dof`).
-    /// The matrix is refilled in `ws.A`: no allocation but faer's numeric LU.
+    /// `b` holds the right-hand sides column after column (`b.len()` a multiple of `n_dof`):
+    /// [`Self::factor`] then [`Self::solve_factored`].
     pub(crate) fn solve(&self, ws: &mut Workspace, b: &mut [f64]) -> Result<(), String> {
+        self.factor(ws)?;
+        self.solve_factored(ws, b)
+    }
+
+    /// Factorises `ws.S` into `ws.factor` (dense or sparse, [`LinearSolver`]); the factor stays
+    /// for later solves (modified Newton reuses it across iterations and steps). The dense
+    /// path allocates nothing; the sparse one allocates in faer's numeric LU.
+    pub(crate) fn factor(&self, ws: &mut Workspace) -> Result<(), String> {
         let n = self.n_dof();
-        let Some(A) = ws.A.as_mut() else { return Ok(()) };
+        match &mut ws.factor {
+            Factor::None => Ok(()),
+            Factor::Sparse { A, lu } => {
+                *lu = None;
+                A.val_mut().copy_from_slice(&ws.S);
+                let f = Lu::try_new_with_symbolic(self.pattern.lu.clone().expect("symbolic LU for n > 0"), A.as_ref())
+                    .map_err(|e| format!("{e:?}"))?;
+                *lu = Some(Box::new(f));
+                Ok(())
+            }
+            Factor::Dense {
+                LU,
+                perm,
+                perm_inv,
+                mem,
+                factored,
+                ..
+            } => {
+                *factored = false;
+                LU.fill(0.0);
+                let cp = self.pattern.symbolic.col_ptr();
+                let ri = self.pattern.symbolic.row_idx();
+                for c in 0..n {
+                    for p in cp[c]..cp[c + 1] {
+                        LU[(ri[p], c)] = ws.S[p];
+                    }
+                }
+                lu_factor::lu_in_place(
+                    LU.as_mut(),
+                    perm,
+                    perm_inv,
+                    Par::Seq,
+                    MemStack::new(mem),
+                    Default::default(),
+                );
+                // faer's partial-pivoting LU does not stop at a zero pivot: refuse it here (the
+                // sparse LU reports the same matrices as singular), naming the unknown.
+                if let Some(i) = (0..n).find(|&i| LU[(i, i)] == 0.0 || !LU[(i, i)].is_finite()) {
+                    return Err(format!("zero pivot at unknown {i} ({})", self.dof_labels()[i]));
+                }
+                *factored = true;
+                Ok(())
+            }
+        }
+    }
+
+    /// Solves with the factorisation of the last [`Self::factor`], in place.
+    pub(crate) fn solve_factored(&self, ws: &mut Workspace, b: &mut [f64]) -> Result<(), String> {
         use faer::linalg::solvers::Solve;
-        A.val_mut().copy_from_slice(&ws.S);
-        let lu = Lu::try_new_with_symbolic(self.pattern.lu.clone().expect("symbolic LU for n > 0"), A.as_ref())
-            .map_err(|e| format!("{e:?}"))?;
+        let n = self.n_dof();
+        if n == 0 {
+            return Ok(());
+        }
         let k = b.len() / n;
-        lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(b, n, k));
+        let rhs = faer::MatMut::from_column_major_slice_mut(b, n, k);
+        match &mut ws.factor {
+            Factor::None => return Ok(()),
+            Factor::Sparse { lu, .. } => lu.as_ref().ok_or("no factorisation")?.solve_in_place(rhs),
+            Factor::Dense {
+                LU,
+                perm,
+                perm_inv,
+                mem,
+                rhs_cols,
+                factored,
+            } => {
+                if !*factored {
+                    return Err("no factorisation".into());
+                }
+                if k > *rhs_cols {
+                    *mem = MemBuffer::new(dense_scratch(n, k));
+                    *rhs_cols = k;
+                }
+                let P = faer::perm::PermRef::new_checked(perm, perm_inv, n);
+                lu_solve::solve_in_place(LU.as_ref(), LU.as_ref(), P, rhs, Par::Seq, MemStack::new(mem));
+            }
+        }
         if b.iter().any(|x| !x.is_finite()) {
             return Err("non-finite solution".into());
         }

@@ -66,3 +66,9 @@ mod arc_length;
 /// membrane stiffening of a beam clamped at both ends.
 #[path = "unit/geometric.rs"]
 mod geometric;
+
+/// Newton strategies (modified against full on the flexible slider-crank, a rigid pendulum,
+/// adaptive steps, failures) and the dense against the sparse LU of the iteration matrix (same
+/// steps, same refusal of a singular matrix).
+#[path = "unit/newton.rs"]
+mod newton;
