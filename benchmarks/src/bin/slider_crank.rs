@@ -7,7 +7,7 @@
 //! cargo run --release -p flexmbs-benchmarks --bin slider_crank -- [--h 1e-4] [--t-end T]
 //!     [--modes 4] [--segments 1] [--kind hex20 --along 24 --across 2] [--frame com|node]
 //!     [--rho-inf 0.9] [--rod solid|beam --beam-elements 4] [--geometric-stiffening] [--mass exact|lumped]
-//!     [--csv out.csv] [--reference ref.csv]
+//!     [--newton full|modified] [--csv out.csv] [--reference ref.csv]
 //! ```
 //!
 //! Defaults: h = T/400 with T = 2π/Ω, t_end = 2T. With one segment the midpoint is the mesh's
@@ -18,7 +18,9 @@
 //! `--geometric-stiffening` reduces the rod with the geometric stiffness of its CB coordinates
 //! (`CbSettings::geometric_stiffening`): each superelement's strain energy gains the cubic term
 //! through which the axial force changes the bending stiffness. `--mass lumped` uses the
-//! seed's lumped inertia variant instead of the exact one. `--csv`
+//! seed's lumped inertia variant instead of the exact one. `--newton modified` keeps the
+//! factorised iteration matrix across corrections and steps (`mbs::NewtonStrategy`); the
+//! Jacobians (factorisations) per step are printed next to the iterations per step. `--csv`
 //! writes `t, w, slider_x`; `--reference` reads such a file (a finer run) and prints the
 //! deflection error against it. The time loop (steps and sensor records) is timed both by the
 //! wall clock and by the process's CPU time ([`flexmbs_benchmarks::cpu_seconds`]), which the
@@ -28,7 +30,7 @@ use flexmbs_benchmarks::{
     beam_rod_body, cpu_seconds, median, midpoint_from_mesh, rod_body_with, slider_crank_model, Args, BenchError,
     RodMesh, SliderCrank,
 };
-use mbs::{DynamicSettings, Integrator, System};
+use mbs::{DynamicSettings, Integrator, NewtonStrategy, System};
 use nalgebra::Vector3;
 use reduction::{CbSettings, ModeSelection};
 use std::fmt::Write as _;
@@ -97,6 +99,17 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             .into())
         }
     };
+    let newton = match args.text("newton").unwrap_or("full") {
+        "full" => NewtonStrategy::Full,
+        "modified" => NewtonStrategy::Modified,
+        other => {
+            return Err(BenchError::Argument {
+                arg: "--newton".into(),
+                why: format!("'{other}' is not full or modified"),
+            }
+            .into())
+        }
+    };
     if n == 0 || (n != 1 && n % 2 == 1) {
         return Err(BenchError::Argument {
             arg: "--segments".into(),
@@ -146,16 +159,21 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let (model, _) = slider_crank_model(&p, n, &body, frame, mass);
     let sys = System::new(&model)?;
     let steps = (t_end / h).round() as usize;
-    let settings = DynamicSettings::new(h, steps as f64 * h, rho_inf);
+    let settings = DynamicSettings {
+        newton,
+        ..DynamicSettings::new(h, steps as f64 * h, rho_inf)
+    };
     let mut it = Integrator::new(&sys, sys.initial_state(), settings)?;
     let mut record = sys.sensor_record();
     it.record(&mut record)?;
     let mut per_step = Vec::with_capacity(steps);
-    let mut iterations = 0usize;
+    let (mut iterations, mut jacobians) = (0usize, 0usize);
     let (start, cpu_start) = (Instant::now(), cpu_seconds());
     for _ in 0..steps {
         let s = Instant::now();
-        iterations += it.step()?.residuals.len() - 1;
+        let report = it.step()?;
+        iterations += report.residuals.len() - 1;
+        jacobians += report.jacobians;
         it.record(&mut record)?;
         per_step.push(s.elapsed().as_secs_f64());
     }
@@ -189,9 +207,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         body.fixed_interface_omega.first().copied().unwrap_or(f64::NAN)
     );
     println!(
-        "h = {h:.6e} s, {steps} steps to t = {:.6} s, rho_inf = {rho_inf}, {:.2} Newton iterations/step",
+        "h = {h:.6e} s, {steps} steps to t = {:.6} s, rho_inf = {rho_inf}, {newton:?} Newton: {:.2} iterations/step, {:.2} Jacobians/step",
         steps as f64 * h,
-        iterations as f64 / steps as f64
+        iterations as f64 / steps as f64,
+        jacobians as f64 / steps as f64
     );
     println!(
         "wall {wall:.4} s; per step: mean {:.3} us, median {:.3} us; {:.0} steps/s; CPU {cpu:.2} s = {:.3} us/step",

@@ -311,6 +311,8 @@ pub struct AnalysisFile {
     pub dt: Option<f64>,
     /// dynamic: spectral radius at infinity of generalized-alpha, in [0, 1].
     pub rho_inf: Option<f64>,
+    /// dynamic: `full` (default) or `modified` Newton (`mbs::NewtonStrategy`).
+    pub newton: Option<String>,
     /// linearized: about `initial` (default), `equilibrium`, or the state at time `at_time`
     /// of a dynamic run with step `dt`; equilibrium: the time at which drivers and load
     /// functions are evaluated (default 0).

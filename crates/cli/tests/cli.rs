@@ -31,6 +31,7 @@ mod vtu;
 mod property;
 
 /// The mechanism: B1 and B3 against their references, streamed results of a dynamic run, a
-/// solver failure with partial results, errors of the assembled mechanism, `validate`.
+/// solver failure with partial results, errors of the assembled mechanism, `validate`, the
+/// modified-Newton option.
 #[path = "cli/mechanism.rs"]
 mod mechanism;

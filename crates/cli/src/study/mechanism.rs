@@ -265,6 +265,8 @@ pub enum MbsAnalysis {
         rho_inf: f64,
         tolerance: f64,
         max_iterations: usize,
+        /// Full or modified Newton (`newton = "full" | "modified"`).
+        newton: mbs::NewtonStrategy,
     },
     Linearized {
         modes: usize,
@@ -1430,7 +1432,16 @@ impl Validator<'_> {
             AnalysisKind::Dynamic => {
                 self.only_keys(
                     path,
-                    &["type", "name", "t_end", "dt", "rho_inf", "tolerance", "max_iterations"],
+                    &[
+                        "type",
+                        "name",
+                        "t_end",
+                        "dt",
+                        "rho_inf",
+                        "tolerance",
+                        "max_iterations",
+                        "newton",
+                    ],
                     "a 'dynamic' analysis",
                 );
                 let t_end = self.require(path, a.t_end, "t_end", "end time [s]");
@@ -1452,12 +1463,24 @@ impl Validator<'_> {
                     );
                     return None;
                 }
+                let newton = match a.newton.as_deref() {
+                    None | Some("full") => mbs::NewtonStrategy::Full,
+                    Some("modified") => mbs::NewtonStrategy::Modified,
+                    Some(other) => {
+                        self.err(
+                            &path.key("newton"),
+                            format!("unknown Newton strategy '{other}': `full` (new tangents at every correction, the default) or `modified` (the factorised iteration matrix kept across corrections and steps)"),
+                        );
+                        return None;
+                    }
+                };
                 Some(MbsAnalysis::Dynamic {
                     t_end,
                     dt,
                     rho_inf,
                     tolerance: tolerance(self, 1e-9)?,
                     max_iterations: iterations(self, 20)?,
+                    newton,
                 })
             }
             _ => {

@@ -2,7 +2,8 @@
 //! a dynamic run streams (sensor CSV files with units, VTU/PVD, summary statistics), a solver
 //! failure that keeps its partial results, and the errors only the assembled mechanism shows
 //! (`tests/mechanism/*.toml`: a rigid loop, a coordinate held by nothing); a column as one
-//! superelement with and without `geometric_stiffening` against the beam-column amplification.
+//! superelement with and without `geometric_stiffening` against the beam-column amplification;
+//! the `newton = "modified"` option against full Newton.
 
 use crate::support::*;
 use std::path::Path;
@@ -144,6 +145,59 @@ fn a_solver_failure_keeps_partial_results_and_fails() {
     let summary = std::fs::read_to_string(results.join("summary.json")).unwrap();
     assert!(summary.contains("\"status\": \"failed\""), "{summary}");
     assert!(summary.contains("Newton did not converge"), "{summary}");
+}
+
+/// `newton = "modified"` in a dynamic analysis: the slider-crank follows the full-Newton run
+/// with fewer factorisations (reported in the summary); an unknown strategy is refused at its
+/// key.
+#[test]
+fn modified_newton_option_follows_full_newton() {
+    let dir = examples_copy("mech-newton");
+    let text = std::fs::read_to_string(dir.join("slider_crank.toml")).unwrap();
+    std::fs::write(
+        dir.join("modified.toml"),
+        text.replace("rho_inf = 0.9", "rho_inf = 0.9\nnewton = \"modified\""),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("typo.toml"),
+        text.replace("rho_inf = 0.9", "rho_inf = 0.9\nnewton = \"modifed\""),
+    )
+    .unwrap();
+    let summary = |name: &str| -> serde_json::Value {
+        let path = dir.join(format!("{name}-results/summary.json"));
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+    };
+    for name in ["slider_crank", "modified"] {
+        let out = flexmbs(&dir, &["run", &format!("{name}.toml"), "--t-end", "0.01"]);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+    }
+    let (full, modified) = (summary("slider_crank"), summary("modified"));
+    let (f, m) = (&full["analyses"][0]["results"], &modified["analyses"][0]["results"]);
+    assert_eq!(
+        (f["newton"].as_str(), m["newton"].as_str()),
+        (Some("full"), Some("modified"))
+    );
+    assert_eq!(m["steps"], 100);
+    // Full Newton factorises at every correction, modified Newton keeps its matrix.
+    assert_eq!(f["jacobians"], f["newton_iterations"]);
+    assert!(
+        m["jacobians"].as_u64().unwrap() < f["jacobians"].as_u64().unwrap() / 2,
+        "{m}"
+    );
+    let deflection = |name: &str| last_row(&dir.join(format!("{name}-results/run-up/rod-mid.csv")))[1];
+    let (wf, wm) = (deflection("slider_crank"), deflection("modified"));
+    // Both stop each step at a relative residual of 1e-9: 100 steps differ by at most
+    // 100 x 1e-9 of the deflection (plus the CSV's printed digits).
+    assert!((wf - wm).abs() <= 1e-7 * wf.abs() + 1e-12, "{wf} vs {wm}");
+    let out = flexmbs(&dir, &["check", "typo.toml"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr
+            .contains("analyses[0].newton: unknown Newton strategy 'modifed'"),
+        "{}",
+        out.stderr
+    );
 }
 
 /// Errors that need the assembled mechanism: reported at the entity named, exit code 2.
