@@ -68,7 +68,7 @@ pub use geometric::{
 };
 pub use interface::{add_interface, add_interface_on_set, Interface, Interfaces, SpiderKind};
 pub use mesh::{Cell, CellId, CellKind, Mesh, NodeId};
-pub use modal::{modal_dense, ModalSolution};
+pub use modal::{modal_dense, scaled_self_adjoint_eigen, ModalSolution};
 pub use model::{BeamProperties, DofMask, FeModel, LinearConstraint, NodalLoad, Support};
 pub use ordering::{
     dof_points, factor_flops, nested_dissection, nested_dissection_with_leaves, symbolic_cholesky, FillOrdering,

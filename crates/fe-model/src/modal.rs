@@ -16,7 +16,7 @@ use crate::error::FeError;
 use crate::model::FeModel;
 use crate::pattern::SystemPattern;
 use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
-use faer::{Mat, Par, Side};
+use faer::{Mat, MatRef, Par, Side};
 use serde::{Deserialize, Serialize};
 
 /// Largest model (free dofs) the dense path accepts: $O(n^3)$ work and $O(n^2)$ memory.
@@ -76,14 +76,12 @@ pub fn modal_dense(model: &FeModel, n_modes: usize) -> Result<ModalSolution, FeE
     let mut Ct = C.transpose().to_owned();
     solve_lower_triangular_in_place(L, Ct.as_mut(), Par::rayon(0));
     let C = Mat::from_fn(n, n, |i, j| 0.5 * (Ct[(i, j)] + Ct[(j, i)]));
-    let evd = C
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| FeError::LinearAlgebra(format!("dense eigen: {e:?}")))?;
+    // Scaled: C has norm 1/(lambda_1 + s), far from 1 (see `scaled_self_adjoint_eigen`).
+    let (S, U) = scaled_self_adjoint_eigen(C.as_ref())?;
     let m = n_modes.min(n);
-    let S = evd.S();
     // The largest mu are the lowest modes; faer sorts ascending.
     let order: Vec<usize> = (0..m).map(|k| n - 1 - k).collect();
-    let mut Y = Mat::from_fn(n, m, |i, k| evd.U()[(i, order[k])]);
+    let mut Y = Mat::from_fn(n, m, |i, k| U[(i, order[k])]);
     // phi = L^{-T} y has phi^T M phi = mu: divide by sqrt(mu) to mass-normalise.
     solve_upper_triangular_in_place(L.transpose(), Y.as_mut(), Par::rayon(0));
     for (k, &j) in order.iter().enumerate() {
@@ -107,4 +105,45 @@ pub fn modal_dense(model: &FeModel, n_modes: usize) -> Result<ModalSolution, FeE
         .map(|j| dofs.expand(&(0..n).map(|i| Y[(i, j)]).collect::<Vec<_>>()))
         .collect();
     Ok(ModalSolution { omega, shapes })
+}
+
+/// Eigenvalues (ascending) and eigenvectors of the dense symmetric `A` (lower triangle read)
+/// by faer's `self_adjoint_eigen`, computed on $2^{-e}\mathbf A$ with $2^e$ the power of two
+/// nearest $\max_{ij}|a_{ij}|$ (exact scaling), eigenvalues scaled back.
+///
+/// Why: from dimension 128 faer 0.24 uses divide and conquer on the tridiagonal matrix, whose
+/// deflation test (`tridiag_evd.rs`, as LAPACK's `dlaed2`) is $8\varepsilon\max(\max_i|d_i|,
+/// \max_i|z_i|)$ with $\mathbf z$ a unit vector: absolute unless $\|\mathbf A\| \gtrsim 1$.
+/// LAPACK's `dstedc` scales the matrix to unit norm before it; faer does not. Our matrices
+/// are far from unit norm: `reduction`'s Lanczos matrix of $\mathbf C$ has norm $\mu_1 = 1/(\lambda_1 -
+/// \sigma)$, $10^{-6}$ for a clamped 1 m aluminium beam in SI units, so every eigenvector came
+/// out with an error of order $\varepsilon$ *absolute*, $\|\mathbf T\mathbf s -
+/// \theta\mathbf s\| \approx 10^{-6}\theta$ for the Ritz values near $10^{-11}$: Lanczos
+/// reported converged pairs (its estimate $\|\mathbf B\mathbf s_{k-b+1:k}\|$ assumes an
+/// exact $\mathbf s$) whose true residuals failed the check on $(\mathbf K, \mathbf M)$,
+/// whatever the restarts (`reduction`'s `tests/unit/eigen.rs::clamped_beam_with_many_modes_matches_dense_reference`).
+/// Large norms suffer too, for a reason not traced in faer's secular-equation solver: on
+/// $\mathbf L_M^{-1}\mathbf K\mathbf L_M^{-T}$ of the same beam (norm $3\cdot 10^{12}$, the
+/// test's dense reference) it gave $\lambda_1$ 0.4 % off at $n = 354$ and a negative
+/// eigenvalue at $n = 1194$; scaled, the residuals are $10^{-14}$. The Rayleigh-Ritz matrix
+/// (norm $\lambda_m$) meets it from $m = 128$. Below dimension 128 faer's QR algorithm is
+/// used, which is scale-invariant.
+pub fn scaled_self_adjoint_eigen(A: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), FeError> {
+    let n = A.nrows();
+    let largest = A.norm_max();
+    if !largest.is_finite() {
+        return Err(FeError::LinearAlgebra(format!("dense eigen: an entry is {largest}")));
+    }
+    // A power of two: the scaling and its inverse are exact.
+    let exponent = if largest > 0.0 {
+        largest.log2().round() as i32
+    } else {
+        0
+    };
+    let scale = 2f64.powi(exponent);
+    let scaled = Mat::<f64>::from_fn(n, n, |i, j| A[(i, j)] / scale);
+    let evd = scaled
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| FeError::LinearAlgebra(format!("dense eigen: {e:?}")))?;
+    Ok(((0..n).map(|k| evd.S()[k] * scale).collect(), evd.U().to_owned()))
 }

@@ -32,7 +32,9 @@ pub const FORMAT_VERSION: u32 = 2;
 /// change a body computed from the same input (not only its file format): caches of reduced
 /// bodies (the CLI's) key on it. 2: the automatic eigensolver block size is never 1
 /// ([`crate::eigen::SMALL_BLOCK_SIZE`]), which finds repeated eigenvalues that single vectors missed.
-pub const ALGORITHM_REVISION: u32 = 2;
+/// 3: the dense eigensolvers inside Lanczos run on scaled matrices
+/// ([`fe_model::scaled_self_adjoint_eigen`]), which made many-mode reductions converge.
+pub const ALGORITHM_REVISION: u32 = 3;
 
 /// A dense matrix as plain data (column-major), for files; convert to `faer::Mat` to compute.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
