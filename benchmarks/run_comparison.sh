@@ -39,31 +39,34 @@ ref_cmd=("$bin/slider_crank" --rod beam --segments 32 --beam-elements 4 --modes 
 echo "reference: ${ref_cmd[*]}"
 "${ref_cmd[@]}" | tee "$work/reference.log"
 
-# name | command (the reference CSV is appended as --reference)
+# name | like-for-like Exudyn row (same modes and Newton variant) | command (the reference CSV is
+# appended as --reference). Exudyn rows name themselves in the second field.
 configs=(
-    "flexmbs, 1 superelement, frame at the centre of mass|$bin/slider_crank --segments 1 --modes $modes --h $h --t-end $t_end"
-    "flexmbs, 1 superelement, frame at interface A (as Exudyn)|$bin/slider_crank --segments 1 --modes $modes --frame node --h $h --t-end $t_end"
-    "flexmbs, 2 superelements|$bin/slider_crank --segments 2 --modes $modes --h $h --t-end $t_end"
-    "flexmbs, 4 superelements|$bin/slider_crank --segments 4 --modes 2 --h $h --t-end $t_end"
-    "flexmbs, beam rod, 8 superelements|$bin/slider_crank --rod beam --segments 8 --modes 2 --h $h --t-end $t_end"
-    "flexmbs, 1 superelement, centre of mass, geometric stiffening|$bin/slider_crank --segments 1 --modes $modes --geometric-stiffening --h $h --t-end $t_end"
-    "flexmbs, 1 superelement, centre of mass, 2 modes, geometric stiffening|$bin/slider_crank --segments 1 --modes 2 --geometric-stiffening --h $h --t-end $t_end"
-    "flexmbs, beam rod, 1 superelement, 2 modes, geometric stiffening|$bin/slider_crank --rod beam --segments 1 --modes 2 --geometric-stiffening --h $h --t-end $t_end"
-    "Exudyn ObjectFFRFreducedOrder, default Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes $modes --h $h --t-end $t_end"
-    "Exudyn ObjectFFRFreducedOrder, modified Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes $modes --h $h --t-end $t_end --modified-newton"
-    "Exudyn ObjectFFRFreducedOrder, 2 modes, default Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes 2 --h $h --t-end $t_end"
+    "flexmbs, 1 superelement, frame at the centre of mass|Exudyn, $modes modes, full Newton|$bin/slider_crank --segments 1 --modes $modes --h $h --t-end $t_end"
+    "flexmbs, 1 superelement, frame at interface A (as Exudyn)|Exudyn, $modes modes, full Newton|$bin/slider_crank --segments 1 --modes $modes --frame node --h $h --t-end $t_end"
+    "flexmbs, 2 superelements|Exudyn, $modes modes, full Newton|$bin/slider_crank --segments 2 --modes $modes --h $h --t-end $t_end"
+    "flexmbs, 4 superelements, 2 modes|Exudyn, 2 modes, full Newton|$bin/slider_crank --segments 4 --modes 2 --h $h --t-end $t_end"
+    "flexmbs, beam rod, 8 superelements, 2 modes|Exudyn, 2 modes, full Newton|$bin/slider_crank --rod beam --segments 8 --modes 2 --h $h --t-end $t_end"
+    "flexmbs, 1 superelement, geometric stiffening|Exudyn, $modes modes, full Newton|$bin/slider_crank --segments 1 --modes $modes --geometric-stiffening --h $h --t-end $t_end"
+    "flexmbs, 1 superelement, geometric stiffening, modified Newton|Exudyn, $modes modes, modified Newton|$bin/slider_crank --segments 1 --modes $modes --geometric-stiffening --newton modified --h $h --t-end $t_end"
+    "flexmbs, 1 superelement, 2 modes, geometric stiffening|Exudyn, 2 modes, full Newton|$bin/slider_crank --segments 1 --modes 2 --geometric-stiffening --h $h --t-end $t_end"
+    "flexmbs, 1 superelement, 2 modes, geometric stiffening, modified Newton|Exudyn, 2 modes, modified Newton|$bin/slider_crank --segments 1 --modes 2 --geometric-stiffening --newton modified --h $h --t-end $t_end"
+    "flexmbs, beam rod, 1 superelement, 2 modes, geometric stiffening|Exudyn, 2 modes, full Newton|$bin/slider_crank --rod beam --segments 1 --modes 2 --geometric-stiffening --h $h --t-end $t_end"
+    "Exudyn ObjectFFRFreducedOrder, $modes modes, full Newton (default)|Exudyn, $modes modes, full Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes $modes --h $h --t-end $t_end"
+    "Exudyn ObjectFFRFreducedOrder, $modes modes, modified Newton|Exudyn, $modes modes, modified Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes $modes --h $h --t-end $t_end --modified-newton"
+    "Exudyn ObjectFFRFreducedOrder, 2 modes, full Newton (default)|Exudyn, 2 modes, full Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes 2 --h $h --t-end $t_end"
+    "Exudyn ObjectFFRFreducedOrder, 2 modes, modified Newton|Exudyn, 2 modes, modified Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes 2 --h $h --t-end $t_end --modified-newton"
 )
 : > "$work/runs.txt"
 for k in "${!configs[@]}"; do echo "$k|${configs[$k]}" >> "$work/configs.txt"; done
 for r in $(seq 1 "$repeats"); do
     for k in "${!configs[@]}"; do
-        name=${configs[$k]%%|*}
-        cmd=${configs[$k]#*|}
+        IFS='|' read -r name match cmd <<< "${configs[$k]}"
         load=$(cut -d' ' -f1 /proc/loadavg)
         out=$($cmd --csv "$work/run_$k.csv" --reference "$work/reference.csv")
         s=$(sed -n 's/^RESULT s_per_step=\([^ ]*\) cpu_per_step=\([^ ]*\) peak_w=\(.*\)$/\1 \2 \3/p' <<< "$out")
         e=$(sed -n 's/^RESULT history_error=\([^ ]*\) peak_error=\(.*\)$/\1 \2/p' <<< "$out")
-        echo "$k|$name|$load|$s|$e" | tee -a "$work/runs.txt"
+        echo "$k|$name|$match|$load|$s|$e" | tee -a "$work/runs.txt"
         [ "$r" = 1 ] && echo "$out" > "$work/log_$k.txt"
     done
 done
@@ -78,15 +81,18 @@ def sh(cmd):
 
 rows = {}
 for line in open(f"{work}/runs.txt"):
-    k, name, load, s, e = line.rstrip("\n").split("|")
+    k, name, match, load, s, e = line.rstrip("\n").split("|")
     wall, cpu, peak = map(float, s.split())
     hist, peak_err = map(float, e.split())
-    r = rows.setdefault(int(k), {"name": name, "wall": [], "cpu": [], "load": [], "peak": peak, "hist": hist, "peak_err": peak_err})
+    r = rows.setdefault(int(k), {"name": name, "match": match, "wall": [], "cpu": [], "load": [], "peak": peak, "hist": hist, "peak_err": peak_err})
     r["wall"].append(wall)
     r["cpu"].append(cpu)
     r["load"].append(float(load))
 exudyn = [k for k in rows if rows[k]["name"].startswith("Exudyn")]
-base = {key: statistics.median(rows[exudyn[0]][key]) for key in ("wall", "cpu")}
+med = lambda k, key: statistics.median(rows[k][key])
+# Like-for-like Exudyn rows by their own key (same modes, same Newton variant).
+twin = {rows[k]["match"]: k for k in exudyn}
+base = exudyn[0]
 ref_peak = float([l for l in open(f"{work}/reference.log") if l.startswith("RESULT")][0].split("peak_w=")[1])
 cpu_model = sh("grep -m1 'model name' /proc/cpuinfo | cut -d: -f2")
 memory = sh("free -g | awk '/Mem/{print $2}'")
@@ -97,21 +103,26 @@ lines = [
     "",
     f"Machine: {cpu_model}, {sh('nproc')} cores, {memory} GB, {platform.system()} {platform.release()}; {sh('rustc --version')}; Python {platform.python_version()}, {versions}.",
     f"Load average (1 min) at the starts of the runs: {min(loads):.1f} to {max(loads):.1f}, median {statistics.median(loads):.1f} (above 2, other work shared the 2 cores and wall times are inflated):"
-    " the speed ratio is taken on the CPU time of the time loop (user + system, all threads, of the process).",
+    " CPU time is the scheduler's run time of the process's threads during the time loop.",
     "",
     f"Rod: hex20 bar 24 x 2 x 2 (741 nodes, 2223 dofs), square section with the round rod's I, RBE2 end faces, {modes} fixed-interface modes unless said;"
     f" h = T/400 = {float(h):.4e} s, t_end = {float(t_end):.4f} s, generalized-alpha rho_inf = 0.9, Newton to convergence.",
     f"Reference: `{ref_cmd.replace(work, '$WORK')}` (the same rod as 32 Timoshenko-beam superelements, h = T/800): peak |w| = {ref_peak * 1e3:.4f} mm.",
     f"Each configuration run {repeats} times, alternating; medians. Per step = the whole time loop (set-up and reduction excluded on both sides) over the steps.",
     "",
-    "| configuration | CPU s/step | steps/CPU-s | speed vs Exudyn (CPU) | wall s/step | peak abs(w) [mm] | max abs(w - w_ref) / max abs(w_ref) | peak error |",
-    "|---|---:|---:|---:|---:|---:|---:|---:|",
+    f"Speed columns: wall time per step against the Exudyn run named ({rows[base]['name']}: the default of both programs),"
+    " and against the like-for-like Exudyn run (same number of modes, same Newton variant; CPU time in brackets).",
+    "",
+    "| configuration | wall s/step | steps/s | CPU s/step | speed vs Exudyn default | vs Exudyn like-for-like (CPU) | peak abs(w) [mm] | max abs(w - w_ref) / max abs(w_ref) | peak error |",
+    "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
 ]
 for k in sorted(rows):
     r = rows[k]
-    c, w = statistics.median(r["cpu"]), statistics.median(r["wall"])
+    c, w = med(k, "cpu"), med(k, "wall")
+    t = twin.get(r["match"])
+    like = f"{med(t, 'wall') / w:.1f}x ({med(t, 'cpu') / c:.1f}x)" if t is not None and t != k else "-"
     lines.append(
-        f"| {r['name']} | {c:.3e} | {1 / c:.0f} | {base['cpu'] / c:.1f}x | {w:.3e} | {r['peak'] * 1e3:.4f} | {r['hist'] * 100:.1f} % | {r['peak_err'] * 100:+.1f} % |"
+        f"| {r['name']} | {w:.3e} | {1 / w:.0f} | {c:.3e} | {med(base, 'wall') / w:.1f}x | {like} | {r['peak'] * 1e3:.4f} | {r['hist'] * 100:.1f} % | {r['peak_err'] * 100:+.1f} % |"
     )
 
 def history(k):
@@ -133,11 +144,19 @@ if same and exudyn:
 lines += ["", f"All of it: `benchmarks/run_comparison.sh {repeats}`. The runs ($WORK is its temporary folder; `$WORK/rod` is written by"
           " `export_rod --out $WORK/rod`):", "", "```sh"]
 for line in open(f"{work}/configs.txt"):
-    k, name, cmd = line.rstrip("\n").split("|")
+    k, name, _match, cmd = line.rstrip("\n").split("|", 3)
     lines.append(f"# {name}")
     lines.append(cmd.replace(work, "$WORK").replace(bin_dir, "target/release") + " --csv $WORK/run.csv --reference $WORK/reference.csv")
 lines += ["```"]
 text = "\n".join(lines) + "\n"
+# The discussion below the marker is written by hand: keep it.
+marker = "<!-- written by hand below: run_comparison.sh keeps it -->"
+try:
+    old = open(out).read()
+    if marker in old:
+        text += "\n" + old[old.index(marker):]
+except FileNotFoundError:
+    pass
 open(out, "w").write(text)
 print(text)
 PY

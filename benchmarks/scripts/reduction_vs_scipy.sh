@@ -72,7 +72,8 @@ lines = [
     "",
     "Problem: hex8 steel block (crates/reduction/benches/common), RBE2 interfaces on both end faces, 20 fixed-interface modes.",
     "Ours: the whole `reduction::reduce` (assembly, factorisation of K_ii, 12 constraint modes, Lanczos, projections,",
-    "inertia invariants), one process per size; 'eigen only': our shift-invert Lanczos alone on K_ii, M_ii.",
+    "inertia invariants), one process per size; 'eigen only': `reduction::lowest_modes` alone on the exported K_ii, M_ii
+(AMD ordering, as the matrices carry no node positions for nested dissection: slower than inside the reduction).",
     "scipy: `eigsh(K_ii, M=M_ii, sigma=0, k=20)` (ARPACK shift-invert, SuperLU) on the same K_ii, M_ii (Matrix Market),",
     "which is only the eigenproblem inside the reduction. Peak memory: peak RSS of each process (ours: up to the end of",
     "the reduction; scipy: including the matrices read). Residual: max_j |K phi - lambda M phi| / |K phi| (scaled as",
