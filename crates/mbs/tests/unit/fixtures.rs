@@ -2,7 +2,9 @@
 #![allow(dead_code)]
 
 use fe_model::{BeamProperties, BeamSection, BeamTheory, FeModel, IsotropicMaterial, MassKind};
-use mbs::{solve_static, JointKind, Model, NodeId, RigidBody, SensorKind, StaticSettings, Support, System};
+use mbs::{
+    solve_static, InitialCondition, JointKind, Model, NodeId, RigidBody, SensorKind, StaticSettings, Support, System,
+};
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 use reduction::{reduce, CbSettings, ModeSelection, ReducedBody};
 use superelement::{FrameChoice, MassVariant};
@@ -337,4 +339,22 @@ pub fn spin_up(n: usize, modes: ModeSelection, omega: f64) -> Model {
         },
     );
     m
+}
+
+/// The fixture pendulum released from rest at `theta0`, with the sensor "theta".
+pub fn released(theta0: f64) -> System {
+    let (mut model, j) = pendulum(1.0, 1.0, 0.01);
+    model.initial.push(InitialCondition::JointValue {
+        joint: j,
+        coordinate: 0,
+        value: theta0,
+    });
+    model.add_sensor(
+        "theta",
+        SensorKind::JointCoordinate {
+            joint: j,
+            coordinate: 0,
+        },
+    );
+    System::new(&model).unwrap()
 }

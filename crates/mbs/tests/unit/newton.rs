@@ -2,10 +2,10 @@
 //! Newton (flexible slider-crank, rigid pendulum, adaptive steps, failures), and the dense LU
 //! against the sparse one (same steps; both refuse a singular mass matrix).
 
-use crate::fixtures::{pendulum, slider_crank};
+use crate::fixtures::{released, slider_crank};
 use mbs::{
-    solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, DynamicSettings, InitialCondition, LinearSolver,
-    NewtonStrategy, SensorKind, SolveError, System, Trajectory,
+    solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, DynamicSettings, LinearSolver, NewtonStrategy, SolveError,
+    System, Trajectory,
 };
 use reduction::ModeSelection;
 
@@ -63,24 +63,6 @@ fn modified_newton_follows_full_newton_on_the_flexible_slider_crank() {
         modified.jacobians
     );
     assert_eq!(modified.jacobians[0], 1, "the first step has no matrix to reuse");
-}
-
-/// The fixture pendulum (rigid body on a revolute joint) released from rest at `theta0`.
-fn released(theta0: f64) -> System {
-    let (mut model, j) = pendulum(1.0, 1.0, 0.01);
-    model.initial.push(InitialCondition::JointValue {
-        joint: j,
-        coordinate: 0,
-        value: theta0,
-    });
-    model.add_sensor(
-        "theta",
-        SensorKind::JointCoordinate {
-            joint: j,
-            coordinate: 0,
-        },
-    );
-    System::new(&model).unwrap()
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! Rigid pendulum on a revolute joint under gravity.
 
-use crate::fixtures::pendulum;
+use crate::fixtures::{pendulum, released};
 use mbs::{solve_dynamic, DynamicSettings, InitialCondition, SensorKind, System};
 use std::f64::consts::PI;
 
@@ -15,24 +15,6 @@ fn elliptic_k(k: f64) -> f64 {
         b = bn;
     }
     PI / (2.0 * a)
-}
-
-/// The fixture pendulum released from rest at `theta0`, with the sensor "theta".
-fn released(theta0: f64) -> System {
-    let (mut model, j) = pendulum(1.0, 1.0, 0.01);
-    model.initial.push(InitialCondition::JointValue {
-        joint: j,
-        coordinate: 0,
-        value: theta0,
-    });
-    model.add_sensor(
-        "theta",
-        SensorKind::JointCoordinate {
-            joint: j,
-            coordinate: 0,
-        },
-    );
-    System::new(&model).unwrap()
 }
 
 /// Angle history of the pendulum released from rest at `theta0`.
