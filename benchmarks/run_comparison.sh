@@ -12,7 +12,7 @@
 # 4. runs each configuration REPEATS times, alternating flexmbs and Exudyn (the machine is
 #    shared: the medians and the load averages are reported);
 # 5. prints the table and writes it, with the machine and the commands, to
-#    benchmarks/results/slider_crank.md.
+#    benchmarks/results/slider_crank.md and into BENCHMARKS.md (benchmarks/scripts/write_section.py).
 #
 # Environment: CARGO_TARGET_DIR (default target), EXUDYN_VENV (default benchmarks/exudyn/.venv),
 # SLIDER_T_END (default 2 crank periods, 800 steps: the one-superelement model with the frame at
@@ -160,4 +160,5 @@ except FileNotFoundError:
 open(out, "w").write(text)
 print(text)
 PY
+python3 "$root/benchmarks/scripts/write_section.py" slider_crank "$results/slider_crank.md" "$root/BENCHMARKS.md"
 echo "work files in $work"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Cost per generalized-alpha step of a cantilever chain of 1..512 beam superelements (issue 9,
 # "scaling"): wraps `cargo bench -p mbs --bench step -- --bench` (crates/mbs/benches/step.rs),
-# fits the cost per superelement-iteration and writes benchmarks/results/chain_scaling.md.
+# fits the cost per superelement-iteration and writes benchmarks/results/chain_scaling.md and the
+# table into BENCHMARKS.md (benchmarks/scripts/write_section.py).
 #
 #   benchmarks/scripts/chain_scaling.sh            (from anywhere; CARGO_TARGET_DIR respected)
 #
@@ -56,3 +57,4 @@ text = "\n".join(lines) + "\n"
 open(out, "w").write(text)
 print(text)
 PY
+python3 "$root/benchmarks/scripts/write_section.py" chain_scaling "$results/chain_scaling.md" "$root/BENCHMARKS.md"

@@ -20,7 +20,7 @@
 # 3. runs crates/reduction/benches/scipy_eigsh.py on the same files (time, CPU, peak RSS of the
 #    process, worst relative residual, largest relative difference to our eigenvalues);
 # 4. prints the table and writes it, with the machine and the commands, to
-#    benchmarks/results/reduction_scipy.md (BENCHMARKS.md quotes it).
+#    benchmarks/results/reduction_scipy.md and into BENCHMARKS.md (benchmarks/scripts/write_section.py).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$root"
@@ -107,4 +107,5 @@ text = "\n".join(lines) + "\n"
 open(out, "w").write(text)
 print(text)
 PY
+python3 "$root/benchmarks/scripts/write_section.py" reduction_scipy "$results/reduction_scipy.md" "$root/BENCHMARKS.md"
 echo "work files in $work"
