@@ -416,9 +416,13 @@ impl Args {
     /// `--option` or by nothing is a flag with the value `true` (e.g. `--geometric-stiffening`).
     /// A lone `--bench`, which `cargo bench` passes, is ignored.
     pub fn from_env() -> Result<Self, BenchError> {
-        let raw: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+        Self::from_args(std::env::args().skip(1))
+    }
+
+    /// [`Self::from_env`] on the given arguments (without the program name).
+    pub fn from_args(args: impl IntoIterator<Item = String>) -> Result<Self, BenchError> {
         let mut pairs = Vec::new();
-        let mut it = raw.into_iter().peekable();
+        let mut it = args.into_iter().filter(|a| a != "--bench").peekable();
         while let Some(k) = it.next() {
             let name = k.strip_prefix("--").ok_or_else(|| BenchError::Argument {
                 arg: k.clone(),
@@ -458,18 +462,26 @@ impl Args {
             .map(|(_, v)| v.as_str())
     }
 
+    /// The value of `--name` among the named `choices` (the first is the default), or an
+    /// error listing them.
+    pub fn choice<T: Copy>(&self, name: &str, choices: &[(&str, T)]) -> Result<T, BenchError> {
+        let given = self.text(name).unwrap_or(choices[0].0);
+        choices
+            .iter()
+            .find(|(key, _)| *key == given)
+            .map(|&(_, value)| value)
+            .ok_or_else(|| BenchError::Argument {
+                arg: format!("--{name}"),
+                why: format!(
+                    "'{given}' is not {}",
+                    choices.iter().map(|(key, _)| *key).collect::<Vec<_>>().join(" or ")
+                ),
+            })
+    }
+
     /// The rod mesh from `--kind hex8|hex20 --along N --across N` (default hex20, 24 x 2 x 2).
     pub fn rod_mesh(&self) -> Result<RodMesh, BenchError> {
-        let kind = match self.text("kind").unwrap_or("hex20") {
-            "hex8" => CellKind::Hex8,
-            "hex20" => CellKind::Hex20,
-            other => {
-                return Err(BenchError::Argument {
-                    arg: "--kind".into(),
-                    why: format!("'{other}' is not hex8 or hex20"),
-                })
-            }
-        };
+        let kind = self.choice("kind", &[("hex20", CellKind::Hex20), ("hex8", CellKind::Hex8)])?;
         Ok(RodMesh {
             kind,
             along: self.get("along", 24)?,

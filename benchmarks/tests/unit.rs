@@ -92,3 +92,24 @@ fn midpoint_of_the_recovered_mesh() {
         "midpoint {w:e} vs beam theory {beam:e}"
     );
 }
+
+/// `Args::choice`: the first choice is the default, a given one is read, anything else is an
+/// error that names the option and the choices.
+#[test]
+fn named_choices_default_read_and_refuse() {
+    use flexmbs_benchmarks::Args;
+    let choices = [("full", 1), ("modified", 2)];
+    let args = |a: &[&str]| Args::from_args(a.iter().map(|s| s.to_string())).unwrap();
+    assert_eq!(args(&[]).choice("newton", &choices).unwrap(), 1);
+    assert_eq!(
+        args(&["--newton", "modified", "--bench"])
+            .choice("newton", &choices)
+            .unwrap(),
+        2
+    );
+    let err = args(&["--newton", "modifed"])
+        .choice("newton", &choices)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err, "argument '--newton': 'modifed' is not full or modified");
+}

@@ -77,39 +77,21 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let n: usize = args.get("segments", 1)?;
     let rho_inf: f64 = args.get("rho-inf", 0.9)?;
     let mesh = args.rod_mesh()?;
-    let frame = match args.text("frame").unwrap_or("com") {
-        "com" => FrameChoice::CenterOfMass,
-        "node" => FrameChoice::InterfaceNode(0),
-        other => {
-            return Err(BenchError::Argument {
-                arg: "--frame".into(),
-                why: format!("'{other}' is not com or node"),
-            }
-            .into())
-        }
-    };
-    let mass = match args.text("mass").unwrap_or("exact") {
-        "exact" => MassVariant::Exact,
-        "lumped" => MassVariant::Lumped,
-        other => {
-            return Err(BenchError::Argument {
-                arg: "--mass".into(),
-                why: format!("'{other}' is not exact or lumped"),
-            }
-            .into())
-        }
-    };
-    let newton = match args.text("newton").unwrap_or("full") {
-        "full" => NewtonStrategy::Full,
-        "modified" => NewtonStrategy::Modified,
-        other => {
-            return Err(BenchError::Argument {
-                arg: "--newton".into(),
-                why: format!("'{other}' is not full or modified"),
-            }
-            .into())
-        }
-    };
+    let frame = args.choice(
+        "frame",
+        &[
+            ("com", FrameChoice::CenterOfMass),
+            ("node", FrameChoice::InterfaceNode(0)),
+        ],
+    )?;
+    let mass = args.choice(
+        "mass",
+        &[("exact", MassVariant::Exact), ("lumped", MassVariant::Lumped)],
+    )?;
+    let newton = args.choice(
+        "newton",
+        &[("full", NewtonStrategy::Full), ("modified", NewtonStrategy::Modified)],
+    )?;
     if n == 0 || (n != 1 && n % 2 == 1) {
         return Err(BenchError::Argument {
             arg: "--segments".into(),
