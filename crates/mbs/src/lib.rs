@@ -21,6 +21,48 @@
 //! * Reactions ([`SensorKind::Reaction`], [`SensorKind::DriverEffort`]) are the residual of the
 //!   removed coordinates: the force (moment) the support or driver applies *to* the model.
 //!
+//! # Quick start
+//!
+//! A pendulum: a ground node, a revolute joint, a rigid bob under gravity, released from
+//! 30 degrees and integrated for half a second with the Lie-group generalized-α method
+//! (theory guide, section 9.2). Energy is conserved to the integrator's accuracy:
+//!
+//! ```
+//! use mbs::{solve_dynamic, DynamicSettings, JointKind, Model, RigidBody, SensorKind, Support, System};
+//! use nalgebra::{Matrix3, Vector3};
+//!
+//! let mut model = Model::new("pendulum");
+//! let ground = model.add_node("ground", Vector3::zeros());
+//! let hinge = model.add_node("hinge", Vector3::zeros());
+//! model.add_support(Support::clamp(ground));
+//! let joint = model.add_joint("hinge", ground, hinge, JointKind::Revolute { axis: Vector3::z() });
+//! model.add_rigid_body(RigidBody {
+//!     name: "bob".into(),
+//!     reference: hinge,
+//!     nodes: vec![],
+//!     mass: 2.0,
+//!     center_of_mass: Vector3::new(0.0, -0.5, 0.0),
+//!     inertia: Matrix3::identity() * 0.01,
+//! });
+//! model.gravity = Vector3::new(0.0, -9.81, 0.0);
+//! model.add_sensor("kinetic", SensorKind::KineticEnergy);
+//! model.add_sensor("potential", SensorKind::GravityPotential);
+//!
+//! let system = System::new(&model)?;
+//! let mut start = system.initial_state();
+//! system.set_joint(&mut start, joint, 0, 30_f64.to_radians(), 0.0);
+//! // h = 1 ms to t = 0.5 s, rho_inf = 1: no numerical damping.
+//! let run = solve_dynamic(&system, start, &DynamicSettings::new(1e-3, 0.5, 1.0)).map_err(|e| e.error)?;
+//! let kinetic = run.sensors.series("kinetic").expect("the kinetic energy sensor");
+//! let potential = run.sensors.series("potential").expect("the potential sensor");
+//! let total = |i: usize| kinetic[i][0] + potential[i][0];
+//! let (first, last) = (total(0), total(kinetic.len() - 1));
+//! // Undamped generalized-alpha at h = 1 ms (omega h = 4e-3): the energy error is of order
+//! // (omega h)^2, far below 1e-3 of the 1.3 J the bob swings through.
+//! assert!((last - first).abs() < 1e-3 * 1.3, "energy {first} -> {last}");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! # Notation
 //!
 //! | symbol | Rust | meaning | source |

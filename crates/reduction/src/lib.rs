@@ -12,6 +12,41 @@
 //! sparse Cholesky factor, and [`ShiftInvert`], the one factorisation of $\mathbf K_{ii}$ that
 //! gives both the constraint modes and the fixed-interface modes.
 //!
+//! # Quick start
+//!
+//! Reduce a beam with interfaces at both ends and two fixed-interface modes. Its fixed
+//! interfaces make it a clamped-clamped beam, whose first frequency is
+//! $(4.7300)^2\sqrt{EI/(\rho AL^4)}$ (theory guide, section 3.2):
+//!
+//! ```
+//! use fe_model::{generate, BeamProperties, BeamSection, BeamTheory, FeModel, IsotropicMaterial, MassKind};
+//! use nalgebra::{Point3, Vector3};
+//! use reduction::{reduce, CbSettings, ModeSelection};
+//!
+//! let mut model = FeModel::default();
+//! let steel = model.add_material(IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0)?);
+//! let square = model.add_section(BeamSection::rectangle("20 mm square", 0.02, 0.02, 0.3)?);
+//! let props = BeamProperties {
+//!     section: square,
+//!     material: steel,
+//!     orientation: Vector3::z(),
+//!     theory: BeamTheory::EulerBernoulli,
+//!     mass: MassKind::Consistent,
+//! };
+//! let nodes = generate::straight_beam(&mut model, Point3::origin(), Point3::new(1.0, 0.0, 0.0), 16, &props, None)?;
+//! let interfaces = vec![("a".to_string(), nodes[0]), ("b".to_string(), nodes[16])];
+//! let body = reduce(&model, "beam", &interfaces, &CbSettings::new(ModeSelection::Count(2)))?;
+//!
+//! assert_eq!(body.n_coordinates(), 12 + 2); // 6 per interface, one per mode
+//! let (ei, rho_a) = (210e9 * 0.02_f64.powi(4) / 12.0, 7850.0 * 0.02 * 0.02);
+//! let omega_1 = 4.73004074_f64.powi(2) * (ei / rho_a).sqrt();
+//! // The discretisation error of 16 cubic elements is about 1e-6; the section's rotary
+//! // inertia, which the Euler-Bernoulli formula leaves out, lowers it by 2e-4 at L/h = 50.
+//! let first = body.fixed_interface_omega[0];
+//! assert!((first / omega_1 - 1.0).abs() < 1e-3, "{first} rad/s against {omega_1}");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! # Notation
 //!
 //! | symbol | Rust | meaning | source |
