@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The slider-crank comparison of issue 9 (benchmarks.md C2): flexmbs against Exudyn on the same
+# The slider-crank comparison (validation problem C2): flexmbs against Exudyn on the same
 # rod mesh and FE matrices, same number of modes, time step and end time.
 #
 #   benchmarks/run_comparison.sh [REPEATS]        (default 5; run from anywhere)

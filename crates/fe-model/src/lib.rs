@@ -54,10 +54,13 @@
 //!
 //! # Notation
 //!
+//! Equation numbers such as (8.2) are those of the theory guide (`docs/theory.md`); other
+//! sources are keys of the bibliography (`docs/bibliography.md`).
+//!
 //! | symbol | Rust | meaning | source |
 //! |---|---|---|---|
 //! | $\mathbf X$ | `X`, `X_e` | reference nodal coordinates (of one element) | |
-//! | $\mathbf u$ | `u` | nodal dofs $[u_x, u_y, u_z, \theta_x, \theta_y, \theta_z]$ per node | brief §2 |
+//! | $\mathbf u$ | `u` | nodal dofs $[u_x, u_y, u_z, \theta_x, \theta_y, \theta_z]$ per node | theory guide §2 |
 //! | $\mathbf T$ | `DofMap` rows | full dofs from independent dofs, $\mathbf u = \mathbf T \mathbf u_f$ | elimination of supports and constraints |
 //! | $\mathbf K_e,\ \mathbf M_e$ | `K_e`, `M_e` | element stiffness and mass, global axes | element modules |
 //! | $\mathbf K,\ \mathbf M$ | `K`, `M` | assembled $\mathbf T^T \mathbf K_{full} \mathbf T$, likewise $\mathbf M$ | [`assemble`] |

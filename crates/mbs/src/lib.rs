@@ -3,7 +3,7 @@
 //! Bodies (AIC-FFR superelements from [`superelement`], rigid bodies, point masses) act on
 //! shared *nodes*; joints, supports and drivers make some node coordinates explicit functions
 //! of others, so the unknowns are independent coordinates only and no Lagrange multipliers
-//! appear (brief §5). Static, dynamic and linearised analyses work on these coordinates.
+//! appear (theory guide §8). Static, dynamic and linearised analyses work on these coordinates.
 //!
 //! ```text
 //! Model (serde data)  --System::new-->  System (coordinate tree, elements, sparse pattern)
@@ -65,18 +65,21 @@
 //!
 //! # Notation
 //!
+//! Equation numbers such as (8.2) are those of the theory guide (`docs/theory.md`); other
+//! sources are keys of the bibliography (`docs/bibliography.md`).
+//!
 //! | symbol | Rust | meaning | source |
 //! |---|---|---|---|
-//! | $\mathbf r_c,\ \mathbf R_c$ | [`NodeMotion`] `r`, `R` | node position, orientation (node axes to inertial) | brief §5 |
+//! | $\mathbf r_c,\ \mathbf R_c$ | [`NodeMotion`] `r`, `R` | node position, orientation (node axes to inertial) | theory guide §8 |
 //! | $\mathbf V_c = [\mathbf v_c; \boldsymbol\omega_c]$ | `v`, `omega` | node velocity, spatial angular velocity ($\dot{\mathbf R} = \tilde{\boldsymbol\omega}\mathbf R$) | so3 |
 //! | $\mathbf A_c = [\mathbf a_c; \boldsymbol\alpha_c]$ | `a`, `alpha` | node acceleration | |
-//! | $\mathbf q$ | [`State`] | independent coordinates: scalars and SO(3) rotations | brief §5 |
+//! | $\mathbf q$ | [`State`] | independent coordinates: scalars and SO(3) rotations | theory guide §8 |
 //! | $\dot{\mathbf q},\ \ddot{\mathbf q}$ | [`State::velocity`], [`State::acceleration`] | rates (spatial $\boldsymbol\omega$ for rotations) | |
 //! | $\mathbf q\oplus\delta\mathbf q$ | [`System::retract`] | scalars added, $\mathbf R \leftarrow \exp(\widetilde{\delta\boldsymbol\pi})\mathbf R$ | so3 |
-//! | $\mathbf J_c$ | [`NodeKinematics`] `J` | $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$ (+ driver columns) | brief §5 |
-//! | $\dot{\mathbf J}_c\dot{\mathbf q}$ | `NodeKinematics::motion.a` at $\ddot{\mathbf q} = 0$ | convective acceleration | brief §5 |
+//! | $\mathbf J_c$ | [`NodeKinematics`] `J` | $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$ (+ driver columns) | theory guide §8 |
+//! | $\dot{\mathbf J}_c\dot{\mathbf q}$ | `NodeKinematics::motion.a` at $\ddot{\mathbf q} = 0$ | convective acceleration | theory guide §8 |
 //! | $\mathbf r_c$ | (internal) | node residual: inertia + internal − external force | |
-//! | $\mathbf F$ | [`System::residual`] | $\sum_c\mathbf J_c^T\mathbf r_c$ (+ modal rows, joint springs) | brief §5 |
+//! | $\mathbf F$ | [`System::residual`] | $\sum_c\mathbf J_c^T\mathbf r_c$ (+ modal rows, joint springs) | theory guide §8 |
 //! | $\mathbf G_r$ | [`System::generalized_force`] | $\partial(\mathbf J^T\mathbf r)/\partial\mathbf q$ at fixed $\mathbf r$: the joints' geometric term | [`coordinates`] |
 //! | $\hat{\mathbf M},\ \hat{\mathbf C},\ \hat{\mathbf K}$ | [`Matrices`] | $\partial\mathbf F/\partial\ddot{\mathbf q}$, $\partial\mathbf F/\partial\dot{\mathbf q}$, $\partial\mathbf F/\partial\mathbf q$ | [`coordinates`] |
 //! | $\mathbf K_t,\ \mathbf C_t,\ \mathbf M$ | `ElementOutput` | element tangents on its node ports | \[S19\], [`body`] |
@@ -103,20 +106,20 @@
 //!
 //! | eq. | meaning | function |
 //! |---|---|---|
-//! | brief §5 | node configurations, velocities, accelerations and $\mathbf J$ from the independent coordinates | `mbs::coordinates::CoordinateMap::motions_into` |
+//! | theory guide §8 | node configurations, velocities, accelerations and $\mathbf J$ from the independent coordinates | `mbs::coordinates::CoordinateMap::motions_into` |
 //! | this crate | $\partial\mathbf V/\partial\mathbf q$, $\partial\mathbf A/\partial\mathbf q$, $\partial\mathbf A/\partial\dot{\mathbf q}$, $\partial\mathbf J/\partial\mathbf q$ | `mbs::coordinates::CoordinateMap::derivatives_into` |
 //! | this crate | geometric term $\mathbf G_r$ | `mbs::coordinates::CoordinateMap::geometric_term` |
-//! | brief §5 | $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q} + \mathbf Q_v - \mathbf Q) = 0$ | `mbs::System::residual` |
+//! | theory guide §8 | $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q} + \mathbf Q_v - \mathbf Q) = 0$ | `mbs::System::residual` |
 //! | this crate | $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$ | `mbs::System::matrices` |
 //! | Newton-Euler | rigid body about its reference node | `mbs::body::rigid_element` |
-//! | (4.3)-(4.4), \[S19\] | flexible body | `mbs::body::FlexibleElement::element` (calls `superelement::Superelement::evaluate`) |
-//! | brief §6 | Newton with load stepping | `mbs::solve_static` |
+//! | (6.4)-(6.7), \[S19\] | flexible body | `mbs::body::FlexibleElement::element` (calls `superelement::Superelement::evaluate`) |
+//! | theory guide §9 | Newton with load stepping | `mbs::solve_static` |
 //! | Riks 1979, Crisfield 1981 | arc-length continuation (spherical constraint, bordered Newton) | `mbs::solve_arc_length`, `mbs::solve_static_with` |
 //! | Bathe §6.8.2 | linearised buckling $(\hat{\mathbf K}_0 + \mu\Delta\hat{\mathbf K})\boldsymbol\phi = \mathbf 0$ | `mbs::buckling` |
 //! | Zienkiewicz & Xie 1991 | local error estimate and step control | `mbs::Integrator::step_adaptive`, `mbs::solve_dynamic_adaptive` |
 //! | BCA 2012, Alg. 1 | Lie-group generalized-α step; full or modified Newton ([`NewtonStrategy`]) | `mbs::Integrator::step` |
 //! | HLW §IV.4 | momentum projection $(\mathbf T_{rig}^T\hat{\mathbf M}\mathbf T_{rig})\boldsymbol\lambda = \mathbf J_0 - \mathbf J$, $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ on free, unloaded models | `mbs::System::project_momentum` (private, `momentum.rs`) |
-//! | brief §6 | linearised spectrum; each mode's energy by body and node | `mbs::spectrum`, `mbs::mode_energies` |
+//! | theory guide §9 | linearised spectrum; each mode's energy by body and node | `mbs::spectrum`, `mbs::mode_energies` |
 //!
 //! # Not implemented
 //!
@@ -127,7 +130,7 @@
 //!   gravity or springs to the ground); a component conserved alone (the angular momentum
 //!   about the vertical under gravity) drifts at the integrator's order, 2.
 //! * A cure for the out-of-plane growth of the spin-up to 10 rad/s with 4 superelements,
-//!   $\rho_\infty \ge 0.8$ and $h$ = 3-10 ms (issue 6): measured in `tests/convergence.rs`
+//!   $\rho_\infty \ge 0.8$ and $h$ = 3-10 ms: measured in `tests/convergence.rs`
 //!   (`spin_up_out_of_plane_growth_study`), it is an instability of the converged discrete map
 //!   in that window (independent of the Newton tolerance; stable at 2.5 ms for every
 //!   $\rho_\infty$, and for 2 or 8 superelements), not a defect of the tangents or the update;

@@ -1,7 +1,7 @@
 //! [`System`]: a checked [`Model`] turned into independent coordinates, elements and a sparse
 //! pattern; [`State`]: the coordinates, velocities and accelerations at one instant.
 //!
-//! The equations in the independent coordinates are (brief §5)
+//! The equations in the independent coordinates are (theory guide §8)
 //! $$\mathbf F(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}, t) = \sum_c\mathbf J_c^T\mathbf r_c + \mathbf r_\eta + \mathbf r_{joint} = \mathbf 0,$$
 //! with $\mathbf r_c$ the residual of all elements at node $c$ evaluated at the node motion
 //! $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$, $\mathbf A_c = \mathbf J_c\ddot{\mathbf q} + \dot{\mathbf J}_c\dot{\mathbf q}$; the same
@@ -117,7 +117,7 @@ impl Pattern {
 }
 
 /// The coordinates, velocities and accelerations of a system at one instant, and each
-/// flexible body's last floating frame (the warm start of (2.6)).
+/// flexible body's last floating frame (the warm start of (4.4)).
 #[derive(Debug, PartialEq)]
 pub struct State {
     pub(crate) time: f64,
@@ -204,7 +204,7 @@ pub struct NodeKinematics {
     pub DAd: Mat<f64>,
 }
 
-/// Buffers of one analysis (style R8): created once, refilled by every evaluation.
+/// Buffers of one analysis: created once, refilled by every evaluation.
 pub(crate) struct Workspace {
     pub motions: Vec<Motion>,
     pub nodes: Vec<NodeMotion>,
@@ -286,7 +286,7 @@ fn dense_scratch(n: usize, k: usize) -> StackReq {
     ])
 }
 
-/// One element's output and the buffers it is computed in (style R8: sized once per analysis).
+/// One element's output and the buffers it is computed in (sized once per analysis).
 /// Below this many elements the element loops run on the calling thread: handing a few
 /// evaluations of 10-20 µs to rayon's pool costs more in wake-ups than it saves. Measured on
 /// 2 cores (`cargo bench -p mbs --bench step`): slider-crank step 273 µs in parallel against

@@ -22,7 +22,7 @@ mod tangent;
 #[path = "unit/pendulum.rs"]
 mod pendulum;
 
-/// Free-floating flexible body (benchmarks.md C4): momentum to round-off with the projection
+/// Free-floating flexible body (validation problem C4): momentum to round-off with the projection
 /// (measured by a second path, and on the FE mesh of a solid block), energy and trajectory at
 /// order 2, adaptive steps, no projection when the model is not free.
 #[path = "unit/free_body.rs"]
@@ -46,12 +46,12 @@ mod errors;
 #[path = "unit/data.rs"]
 mod data;
 
-/// The planar flexible slider-crank (benchmarks.md C2): runs, stays planar, and its slider
+/// The planar flexible slider-crank (validation problem C2): runs, stays planar, and its slider
 /// follows the rigid mechanism with a small elastic correction.
 #[path = "unit/slider_crank.rs"]
 mod slider_crank;
 
-/// Linearised analysis: clamped-free beam frequencies (benchmarks.md A1) from superelements,
+/// Linearised analysis: clamped-free beam frequencies (validation problem A1) from superelements,
 /// and the geometric stiffness of an axial preload.
 #[path = "unit/linearized.rs"]
 mod linearized;

@@ -1,5 +1,5 @@
 //! The reduced-body file, `NAME.rbody`: a [`ReducedBody`] saved once and reused by many
-//! studies (the role of Adams' MNF or Simpack's SID file, brief §1). Reading it back gives a
+//! studies (the role of Adams' MNF or Simpack's SID file, theory guide §1). Reading it back gives a
 //! body identical to the one written, bit for bit in every `f64`.
 //!
 //! # Why one file, half text and half binary

@@ -1,6 +1,6 @@
 //! # reduction: Craig-Bampton reduction of flexible bodies
 //!
-//! The second stage of the flexmbs pipeline (brief §1, §3):
+//! The second stage of the flexmbs pipeline (theory guide §1, §3):
 //!
 //! ```text
 //! FE model (K, M sparse) + interfaces -> constraint modes Psi + fixed-interface modes Phi_i
@@ -49,9 +49,12 @@
 //!
 //! # Notation
 //!
+//! Equation numbers such as (8.2) are those of the theory guide (`docs/theory.md`); other
+//! sources are keys of the bibliography (`docs/bibliography.md`).
+//!
 //! | symbol | Rust | meaning | source |
 //! |---|---|---|---|
-//! | $\mathbf K,\ \mathbf M$ | `K`, `M` | sparse symmetric stiffness ($\succeq 0$) and mass ($\succ 0$), both triangles stored | brief §3 |
+//! | $\mathbf K,\ \mathbf M$ | `K`, `M` | sparse symmetric stiffness ($\succeq 0$) and mass ($\succ 0$), both triangles stored | theory guide §3 |
 //! | $\lambda_k = \omega_k^2,\ \boldsymbol\phi_k$ | `eigenvalues[k]`, `vectors.col(k)` | eigenpair of $\mathbf K\boldsymbol\phi = \lambda\mathbf M\boldsymbol\phi$, ascending, $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf I$ | [`eigen::EigenSolution`] |
 //! | $m$ | `n_modes` | number of lowest modes wanted | [`eigen::EigenSettings`] |
 //! | $\sigma$ | `sigma`, `shift` | spectral shift, $\sigma < \lambda_1$; negative for a free body | [`eigen::Shift`]; Ericsson & Ruhe 1980 |

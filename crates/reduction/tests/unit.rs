@@ -1,4 +1,4 @@
-//! Unit tests of the reduction crate: one binary, one module per area (house style R19).
+//! Unit tests of the reduction crate: one binary, one module per area.
 //! Fast enough for a debug build (the workspace builds tests with opt-level 2).
 
 #![allow(non_snake_case)]
