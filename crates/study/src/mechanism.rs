@@ -213,6 +213,14 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         }
     }
     let node = |p: &PointRef, path: &KeyPath| -> Result<NodeId, BoxError> { Ok(node_of[resolve(p, path)?]) };
+    // Every point of every body has a key (above); a missing one is a bug, reported, never
+    // a silent attachment to another node.
+    let node_of_key = |key: Key| -> Result<NodeId, BoxError> {
+        keys.iter()
+            .position(|x| *x == key)
+            .map(|i| node_of[i])
+            .ok_or_else(|| format!("internal error: point {key:?} of the mechanism has no node").into())
+    };
     for g in grounded {
         model.add_support(Support::clamp(node_of[g]));
     }
@@ -223,8 +231,8 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         let (body, mesh) = (body.clone(), mesh.clone());
         let spec = &m.bodies[b];
         let nodes: Vec<NodeId> = (0..body.interfaces.len())
-            .map(|k| node_of[keys.iter().position(|x| *x == Key::Flexible(b, k)).unwrap_or(0)])
-            .collect();
+            .map(|k| node_of_key(Key::Flexible(b, k)))
+            .collect::<Result<_, _>>()?;
         let frame = match &spec.frame {
             FrameSpec::CenterOfMass => FrameChoice::CenterOfMass,
             FrameSpec::AuxiliaryNode => FrameChoice::AuxiliaryNode,
@@ -278,8 +286,8 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
     let mut rigid = Vec::new();
     for (b, r) in m.rigid_bodies.iter().enumerate() {
         let nodes: Vec<NodeId> = (0..r.points.len())
-            .map(|k| node_of[keys.iter().position(|x| *x == Key::Rigid(b, k)).unwrap_or(0)])
-            .collect();
+            .map(|k| node_of_key(Key::Rigid(b, k)))
+            .collect::<Result<_, _>>()?;
         let (reference, others) = match nodes.split_first() {
             Some((first, rest)) => (*first, rest.to_vec()),
             None => (
