@@ -405,7 +405,7 @@ pub fn run_command(program: &str, args: Vec<String>) -> ExitCode {
         }
     };
     if options.help {
-        print!("{}", usage(program));
+        let _ = std::io::Write::write_all(&mut std::io::stdout(), usage(program).as_bytes());
         return ExitCode::SUCCESS;
     }
     let Options {
@@ -435,7 +435,8 @@ pub fn run_command(program: &str, args: Vec<String>) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    print!("{report}");
+    // A closed stdout (`| head`) drops the text: the report is still written to DIR.
+    let _ = std::io::Write::write_all(&mut std::io::stdout(), report.as_bytes());
     if write {
         if let Err(e) = std::fs::write(dir.join("REPORT.md"), &report) {
             eprintln!("{program}: cannot write {}: {e}", dir.join("REPORT.md").display());

@@ -1,4 +1,4 @@
-//! `flexmbs run` without a file: the flexible planar slider-crank of benchmarks.md C2
+//! `flexmbs run` without a file: the flexible planar slider-crank of validation problem C2
 //! (`examples/slider_crank.toml`, compiled in), run like any study with its results in
 //! `./slider_crank-results/` and the reduced rod cached in `./.flexmbs-cache/`; then a plot
 //! of the rod's midpoint deflection against the crank angle, `slider-crank.png`.
@@ -30,7 +30,7 @@ pub fn run(options: &Options) -> Result<(), BoxError> {
     let cwd = std::env::current_dir().context(|| "cannot read the current folder".to_string())?;
     let source = Source::from_text(&cwd.join("slider_crank.toml"), STUDY.to_string());
     let study = study::parse_and_validate(source)?;
-    eprintln!(
+    crate::tell!(
         "flexmbs: the built-in example: {}",
         study.title.as_deref().unwrap_or("slider-crank")
     );
@@ -67,7 +67,7 @@ pub fn run(options: &Options) -> Result<(), BoxError> {
     let (lo, hi) = last_rev
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), d| (l.min(*d), h.max(*d)));
-    println!("rod midpoint deflection: largest |w| = {peak:.4} mm; over the last revolution {lo:.4} .. {hi:.4} mm");
-    println!("plot: {}", png.display());
+    crate::say!("rod midpoint deflection: largest |w| = {peak:.4} mm; over the last revolution {lo:.4} .. {hi:.4} mm");
+    crate::say!("plot: {}", png.display());
     Ok(())
 }

@@ -11,7 +11,7 @@ flexmbs: from a mesh to the motion of a flexible mechanism
 usage:
   flexmbs run [STUDY.toml]           run the analyses of a study and write a results folder;
                                      without a file, run the built-in example: the flexible
-                                     planar slider-crank (benchmarks.md C2), results in
+                                     planar slider-crank (validation problem C2), results in
                                      ./slider_crank-results/
   flexmbs check STUDY.toml           validate a study file, run nothing
   flexmbs reduce STUDY.toml [--part NAME]
@@ -23,7 +23,7 @@ usage:
                                      the kept modes reach 3 x F)
   flexmbs example [NAME [DIR]]       list the built-in example studies, or write one into DIR
                                      (default: the current folder)
-  flexmbs validate [ARGS]            the validation suite (benchmarks.md): --quick, --no-report,
+  flexmbs validate [ARGS]            the validation suite (docs/validation.md): --quick, --no-report,
                                      --report-dir DIR, --only ID ...
   flexmbs --help | --version
 
@@ -31,10 +31,65 @@ options of run and reduce:
   --out DIR      results folder (default: STUDY-results beside the study file)
   --cache DIR    reduced-body cache (default: .flexmbs-cache beside the study file); a part
                  whose mesh and settings did not change is not reduced again
-  --t-end T      end every dynamic analysis at T seconds at the latest (a short run)
+option of run:
+  --t-end T      end every dynamic analysis at T seconds at the latest (a short run; the
+                 summary says so)
+
+`flexmbs COMMAND --help` shows one command.
 
 The study file format is described in docs/study-file.md. Errors go to stderr with the
 file, line, column and key they are about; the exit code is 0 on success, 2 on any error.";
+
+/// The help of one command (`flexmbs COMMAND --help`).
+pub fn command_help(command: &str) -> Option<&'static str> {
+    Some(match command {
+        "run" => {
+            "\
+usage: flexmbs run [STUDY.toml] [--out DIR] [--cache DIR] [--t-end T]
+
+Validates the study, then runs its analyses in order and writes the results folder
+(default: STUDY-results beside the study file). Without a file, runs the built-in example,
+the flexible planar slider-crank (validation problem C2), into ./slider_crank-results/.
+
+  --out DIR      results folder
+  --cache DIR    reduced-body cache (default: .flexmbs-cache beside the study file)
+  --t-end T      end every dynamic analysis at T seconds at the latest; the summary says so"
+        }
+        "check" => {
+            "\
+usage: flexmbs check STUDY.toml
+
+Validates a study file (every name resolved, every value checked) and runs nothing. Errors
+name the file, line, column and key."
+        }
+        "reduce" => {
+            "\
+usage: flexmbs reduce STUDY.toml [--part NAME] [--out DIR] [--cache DIR]
+
+Reduces the parts that have a [parts.reduction] (or only the one named) to reduced-body
+files (.rbody), through the cache."
+        }
+        "inspect" => {
+            "\
+usage: flexmbs inspect FILE.rbody [--excitation-hz F]
+
+Shows a reduced body: interfaces, mass data, fixed-interface frequencies and modal effective
+masses; with F, whether the kept modes reach 3 x F."
+        }
+        "example" => {
+            "\
+usage: flexmbs example [NAME [DIR]]
+
+Lists the built-in example studies, or writes the one named into DIR (default: the current
+folder)."
+        }
+        _ => return None,
+    })
+}
+
+fn wants_help(args: &[String]) -> bool {
+    args.iter().any(|a| a == "--help" || a == "-h")
+}
 
 /// A command line that cannot be understood: the message and a pointer to `--help`.
 #[derive(Debug)]
@@ -116,7 +171,7 @@ fn one_file(positional: &[String], command: &str, what: &str) -> Result<PathBuf,
 fn load(path: &std::path::Path) -> Result<study::Study, BoxError> {
     let study = study::load(path)?;
     for w in &study.warnings {
-        eprintln!("flexmbs: warning: {w}");
+        crate::tell!("flexmbs: warning: {w}");
     }
     Ok(study)
 }
@@ -124,7 +179,7 @@ fn load(path: &std::path::Path) -> Result<study::Study, BoxError> {
 /// Runs every analysis of `study` into its results folder, progress on the console.
 pub fn run(study: &study::Study, options: &Options) -> Result<study::output::Summary, BoxError> {
     let summary = study::run(study, options, &mut Console::default())?;
-    eprintln!(
+    crate::tell!(
         "flexmbs: {} analyses done in {:.2} s; results in {}",
         summary.analyses.len(),
         summary.total_seconds,
@@ -138,13 +193,24 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
     let Some((command, rest)) = args.split_first() else {
         return Err(usage("no command given"));
     };
+    if let Some(help) = command_help(command).filter(|_| wants_help(rest)) {
+        crate::say!("{help}");
+        return Ok(());
+    }
     match command.as_str() {
+        "help" if !rest.is_empty() => match command_help(&rest[0]) {
+            Some(help) => {
+                crate::say!("{help}");
+                Ok(())
+            }
+            None => Err(usage(format!("no help for '{}'", rest[0]))),
+        },
         "--help" | "-h" | "help" => {
-            println!("{USAGE}");
+            crate::say!("{USAGE}");
             Ok(())
         }
         "--version" | "-V" => {
-            println!("flexmbs {}", env!("CARGO_PKG_VERSION"));
+            crate::say!("flexmbs {}", env!("CARGO_PKG_VERSION"));
             Ok(())
         }
         "run" => {
@@ -172,19 +238,25 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let (positional, _) = parse(rest, &[])?;
             let path = one_file(&positional, "check", "a study file")?;
             let study = load(&path)?;
+            if study.analyses.is_empty() {
+                crate::tell!(
+                    "flexmbs: warning: {} has no [[analyses]]: `flexmbs run` would have nothing to run",
+                    path.display()
+                );
+            }
             let m = &study.mechanism;
             let mechanism = if m.is_empty() {
                 String::new()
             } else {
                 format!(
-                    ", a mechanism of {} flexible and {} rigid bodies, {} joints, {} sensors",
+                    ", a mechanism of {} flexible and {} rigid bodies, {}, {} sensors",
                     m.bodies.len(),
                     m.rigid_bodies.len(),
-                    m.joints.len(),
+                    study::mechanism::joint_count(&study),
                     m.sensors.len()
                 )
             };
-            println!(
+            crate::say!(
                 "{}: valid: {} parts, {} analyses{mechanism}",
                 path.display(),
                 study.parts.len(),
@@ -203,7 +275,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 &mut Console::default(),
             )?;
             for r in written {
-                println!(
+                crate::say!(
                     "part '{}': {} coordinates ({} interfaces, {} modes) -> {}",
                     r.part,
                     r.coordinates,
@@ -226,21 +298,21 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 ),
                 None => None,
             };
-            print!("{}", crate::inspect::inspect(&path, excitation, 3.0)?);
+            crate::say_raw!("{}", crate::inspect::inspect(&path, excitation, 3.0)?);
             Ok(())
         }
         "example" => {
             let (positional, _) = parse(rest, &[])?;
             match positional.as_slice() {
                 [] => {
-                    print!("{}", study::examples::list());
+                    crate::say_raw!("{}", study::examples::list());
                     Ok(())
                 }
                 [name] | [name, _] => {
                     let dir = PathBuf::from(positional.get(1).map_or(".", String::as_str));
                     let study = study::examples::write(name, &dir)?;
-                    println!("{}", study.display());
-                    eprintln!("flexmbs: run it with `flexmbs run {}`", study.display());
+                    crate::say!("{}", study.display());
+                    crate::tell!("flexmbs: run it with `flexmbs run {}`", study.display());
                     Ok(())
                 }
                 [_, _, extra, ..] => Err(usage(format!("unexpected argument '{extra}'"))),

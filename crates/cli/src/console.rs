@@ -9,19 +9,77 @@ use study::output::AnalysisSummary;
 #[derive(Default)]
 pub struct Console {
     bar: Option<indicatif::ProgressBar>,
+    /// Where progress is drawn; `None`: stderr (hidden when it is not a terminal).
+    target: Option<fn() -> indicatif::ProgressDrawTarget>,
 }
 
 impl Console {
+    /// A console drawing its progress to `target` (tests: `ProgressDrawTarget::hidden`).
+    pub fn with_target(target: fn() -> indicatif::ProgressDrawTarget) -> Self {
+        Self {
+            bar: None,
+            target: Some(target),
+        }
+    }
+
+    fn draw_target(&self) -> indicatif::ProgressDrawTarget {
+        self.target.map_or_else(indicatif::ProgressDrawTarget::stderr, |t| t())
+    }
+
     fn finish(&mut self) {
         if let Some(bar) = self.bar.take() {
             bar.finish_and_clear();
+        }
+    }
+
+    /// The progress shown now: the bar's length (`None` for a stage without one) and its
+    /// text.
+    pub fn shown(&self) -> Option<(Option<u64>, String)> {
+        self.bar.as_ref().map(|b| (b.length(), b.message()))
+    }
+
+    /// A spinner with the stage's text: a stage has no length, so no `0/0` bar.
+    fn spinner(&mut self, text: &str) {
+        let is_spinner = self.bar.as_ref().is_some_and(|b| b.length().is_none());
+        if !is_spinner {
+            self.finish();
+            let bar = indicatif::ProgressBar::with_draw_target(None, self.draw_target());
+            if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})") {
+                bar.set_style(style);
+            }
+            bar.enable_steady_tick(std::time::Duration::from_millis(200));
+            self.bar = Some(bar);
+        }
+        if let Some(bar) = &self.bar {
+            bar.set_message(text.to_string());
+        }
+    }
+
+    /// A bar of `total` steps with its text; replaces a stage's spinner or a bar of another
+    /// length.
+    fn steps(&mut self, what: &str, done: u64, total: u64) {
+        if self.bar.as_ref().and_then(|b| b.length()) != Some(total) {
+            self.finish();
+            let bar = indicatif::ProgressBar::with_draw_target(Some(total), self.draw_target());
+            if let Ok(style) =
+                indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} ({elapsed} < {eta})")
+            {
+                bar.set_style(style.progress_chars("=> "));
+            }
+            self.bar = Some(bar);
+        }
+        if let Some(bar) = &self.bar {
+            if bar.message() != what {
+                bar.set_message(what.to_string());
+            }
+            bar.set_position(done);
         }
     }
 }
 
 impl Observer for Console {
     fn begin(&mut self, a: &AnalysisInfo) -> Result<(), BoxError> {
-        eprintln!(
+        crate::tell!(
             "flexmbs: [{}/{}] {} analysis '{}' of {}",
             a.index + 1,
             a.count,
@@ -36,34 +94,14 @@ impl Observer for Console {
         match p {
             Progress::Info(s) => {
                 self.finish();
-                eprintln!("flexmbs: {s}");
+                crate::tell!("flexmbs: {s}");
             }
             Progress::Warning(s) => {
                 self.finish();
-                eprintln!("flexmbs: warning: {s}");
+                crate::tell!("flexmbs: warning: {s}");
             }
-            Progress::Stage(s) => {
-                let bar = self.bar.get_or_insert_with(|| {
-                    let bar = indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
-                    bar.enable_steady_tick(std::time::Duration::from_millis(200));
-                    bar
-                });
-                bar.set_message(s.clone());
-            }
-            Progress::Steps { what, done, total } => {
-                let bar = self.bar.get_or_insert_with(|| {
-                    let bar =
-                        indicatif::ProgressBar::with_draw_target(Some(*total), indicatif::ProgressDrawTarget::stderr());
-                    if let Ok(style) =
-                        indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} ({elapsed} < {eta})")
-                    {
-                        bar.set_style(style.progress_chars("=> "));
-                    }
-                    bar.set_message(what.clone());
-                    bar
-                });
-                bar.set_position(*done);
-            }
+            Progress::Stage(s) => self.spinner(s),
+            Progress::Steps { what, done, total } => self.steps(what, *done, *total),
             Progress::Finished => self.finish(),
         }
     }
@@ -71,9 +109,9 @@ impl Observer for Console {
     fn end(&mut self, a: &AnalysisInfo, s: &AnalysisSummary) -> Result<(), BoxError> {
         self.finish();
         if s.error.is_none() || !s.report.is_empty() {
-            println!("{} '{}' ({}):", a.kind, a.name, a.of);
+            crate::say!("{} '{}' ({}):", a.kind, a.name, a.of);
             for line in &s.report {
-                println!("  {line}");
+                crate::say!("  {line}");
             }
         }
         Ok(())

@@ -2,7 +2,7 @@
 //! way a user does and check its output files, messages and exit codes; the VTU node-order
 //! tests and the bulk of the property test call the library.
 //!
-//! Index (style R19):
+//! Index:
 
 /// Helpers shared by every module: running the binary, scratch folders, reading CSV.
 #[path = "cli/support.rs"]
@@ -31,3 +31,12 @@ mod property;
 /// modified-Newton option.
 #[path = "cli/mechanism.rs"]
 mod mechanism;
+
+/// `--help` of every command, `validate`'s ids, an empty study, a closed pipe, progress.
+#[path = "cli/command_line.rs"]
+mod command_line;
+
+/// The documents stand on their own: links, anchors and named files exist; nothing points
+/// outside the repository.
+#[path = "cli/docs.rs"]
+mod docs;

@@ -27,7 +27,7 @@ use crate::body::{
 };
 use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
 use crate::error::{ModelError, SolveError};
-use crate::model::{Body, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId};
+use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId};
 use crate::node::NodeMotion;
 use crate::time_function::CompiledFunction;
 use crate::topology::{self, RootRotation, Topology};
@@ -856,6 +856,24 @@ impl System {
                 .0
                 .map_or(0.0, |d| self.drivers[d].eval(state.time).1),
         }
+    }
+
+    /// Modal coordinates $\boldsymbol\eta$ and their rates $\dot{\boldsymbol\eta}$ of flexible
+    /// body `body` (empty for a rigid body or a body without fixed-interface modes).
+    pub fn modal_coordinates(&self, state: &State, body: BodyId) -> (Vec<f64>, Vec<f64>) {
+        let Some(scalars) = self.topo.modal_scalars.get(body.index()) else {
+            return (Vec::new(), Vec::new());
+        };
+        scalars
+            .iter()
+            .map(|&s| {
+                let rate = match self.topo.map.scalars[s].slot {
+                    Slot::Unknown(d) => state.velocity[d],
+                    Slot::Prescribed(_) => 0.0,
+                };
+                (state.scalars[s], rate)
+            })
+            .unzip()
     }
 
     /// Re-guesses every flexible body's floating frame from the current node motions (by the

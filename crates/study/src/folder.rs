@@ -143,7 +143,8 @@ impl Observer for ResultsFolder {
         Ok(())
     }
 
-    /// A PNG per sensor: every column against the abscissa.
+    /// A PNG per sensor: every column against the abscissa, on one axis when the columns
+    /// share a unit and a size, else in panels ([`plot_panels`]).
     fn sensors_end(&mut self) -> Result<(), BoxError> {
         let Some(s) = self.stream.take() else {
             return Ok(());
@@ -152,22 +153,34 @@ impl Observer for ResultsFolder {
             return Ok(());
         }
         for (g, rows) in s.groups.iter().zip(&s.rows) {
-            let unit = g
-                .columns
-                .first()
-                .and_then(|c| c.split_once('['))
-                .map(|(_, u)| u.trim_end_matches(']').to_string())
-                .unwrap_or_default();
-            let mut fig = plot::Figure::new(format!("sensor {}", g.name), &s.x_label, format!("{} [{unit}]", g.name));
-            for (k, c) in g.columns.iter().enumerate() {
-                fig.series.push(plot::Series::line(
-                    c.clone(),
-                    s.x.clone(),
-                    rows.iter().map(|r| r[k]).collect(),
-                ));
-            }
+            let columns: Vec<Vec<f64>> = (0..g.columns.len())
+                .map(|k| rows.iter().map(|r| r[k]).collect())
+                .collect();
+            let panels = plot_panels(&g.columns, &columns);
+            let figures: Vec<plot::Figure> = panels
+                .iter()
+                .map(|panel| {
+                    let unit = column_unit(&g.columns[panel[0]]);
+                    let (title, y_label) = if panels.len() == 1 {
+                        (format!("sensor {}", g.name), format!("{} [{unit}]", g.name))
+                    } else {
+                        let names: Vec<&str> = panel.iter().map(|&k| column_name(&g.columns[k])).collect();
+                        (names.join(", "), format!("[{unit}]"))
+                    };
+                    let mut fig = plot::Figure::new(title, &s.x_label, y_label);
+                    for &k in panel {
+                        fig.series.push(plot::Series::line(
+                            g.columns[k].clone(),
+                            s.x.clone(),
+                            columns[k].clone(),
+                        ));
+                    }
+                    fig
+                })
+                .collect();
             let path = self.path(&format!("{}.png", g.name));
-            plot::write_png(&fig, &path).context(|| format!("cannot draw {}", path.display()))?;
+            plot::write_panels_png(&format!("sensor {}", g.name), &figures, &path)
+                .context(|| format!("cannot draw {}", path.display()))?;
         }
         Ok(())
     }
@@ -215,4 +228,66 @@ impl Observer for ResultsFolder {
         s.write(&self.root)
             .context(|| format!("cannot write the summary into {}", self.root.display()))
     }
+}
+
+/// The unit of a column header `name [unit]` ("" without one).
+fn column_unit(header: &str) -> &str {
+    header
+        .split_once('[')
+        .map_or("", |(_, u)| u.trim_end_matches(']').trim())
+}
+
+/// The name of a column header `name [unit]`.
+fn column_name(header: &str) -> &str {
+    header.split_once('[').map_or(header, |(n, _)| n.trim())
+}
+
+/// The columns of a sensor grouped into plot panels: columns share a panel when they have
+/// the same unit and sizes within a factor of 10 (largest |value|), so that a millimetre
+/// deflection is not flattened beside a 10 m position and newtons are not drawn on an axis
+/// of newton metres. Returns the column indices of each panel, in column order.
+///
+/// A column that is zero to round-off (below 1e-9 of the largest column of its unit, such as
+/// the out-of-plane deflection of a planar motion) joins the panel of the smallest other
+/// column of its unit instead of a panel of its own.
+pub fn plot_panels(headers: &[String], columns: &[Vec<f64>]) -> Vec<Vec<usize>> {
+    let size = |c: &[f64]| c.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let largest = |unit: &str| {
+        headers
+            .iter()
+            .zip(columns)
+            .filter(|(h, _)| column_unit(h) == unit)
+            .fold(0.0f64, |m, (_, c)| m.max(size(c)))
+    };
+    let mut panels: Vec<(String, f64, Vec<usize>)> = Vec::new();
+    let mut zeros = Vec::new();
+    for (k, (h, c)) in headers.iter().zip(columns).enumerate() {
+        let (unit, s) = (column_unit(h), size(c));
+        if s <= 1e-9 * largest(unit) && s < largest(unit) {
+            zeros.push((k, unit));
+            continue;
+        }
+        let fits = |ps: f64| {
+            let (lo, hi) = if s < ps { (s, ps) } else { (ps, s) };
+            hi <= 10.0 * lo || hi == 0.0
+        };
+        match panels.iter_mut().find(|(u, ps, _)| u == unit && fits(*ps)) {
+            Some((_, ps, members)) => {
+                *ps = ps.max(s);
+                members.push(k);
+            }
+            None => panels.push((unit.to_string(), s, vec![k])),
+        }
+    }
+    for (k, unit) in zeros {
+        let smallest = panels
+            .iter_mut()
+            .filter(|(u, _, _)| u == unit)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((_, _, members)) = smallest {
+            members.push(k);
+            members.sort_unstable();
+        }
+    }
+    panels.into_iter().map(|(_, _, m)| m).collect()
 }

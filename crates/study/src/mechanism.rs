@@ -33,10 +33,6 @@ use std::sync::Arc;
 use std::time::Instant;
 use superelement::{Frame, FrameChoice, Superelement};
 
-/// Prefix of the sensors added for the mesh recovery (modal coordinates of each body); they
-/// are not written as sensor files.
-const HIDDEN: &str = "__flexmbs_modal.";
-
 /// The mechanism as an `mbs::Model`, with what the outputs need.
 pub struct BuiltMechanism {
     pub model: Model,
@@ -70,6 +66,8 @@ pub struct BodyOut {
     pub placement: Isometry3<f64>,
     pub frame: FrameChoice,
     pub nodes: Vec<NodeId>,
+    /// The body in the multibody model.
+    pub id: mbs::BodyId,
 }
 
 /// Key of a point before merging: flexible (body, interface index) or rigid (body, point).
@@ -263,14 +261,6 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             damping,
         })));
         entities.push((spec.path.clone(), spec.name.clone()));
-        if body.n_modes > 0 {
-            model.add_sensor(
-                &format!("{HIDDEN}{}", spec.name),
-                SensorKind::ModalCoordinates {
-                    body: mbs::BodyId(model.bodies.len() as u32 - 1),
-                },
-            );
-        }
         bodies.push(BodyOut {
             name: spec.name.clone(),
             reduced: body,
@@ -278,6 +268,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             placement: spec.placement,
             frame,
             nodes,
+            id: mbs::BodyId(model.bodies.len() as u32 - 1),
         });
     }
     // Rigid bodies: the mass data about the first point (nodes have the identity orientation,
@@ -731,11 +722,24 @@ impl MeshRecovery {
             }
             rigid.push(first);
         }
+        // Every point in a cell: a point of the body's reduced mesh that no element uses (an
+        // interface node of a spider) gets a vertex cell, so ParaView draws and picks it.
+        let mut used = vec![false; mesh.points.len()];
+        for (_, cell, _) in &mesh.cells {
+            for &i in cell {
+                used[i] = true;
+            }
+        }
+        for (i, _) in used.iter().enumerate().filter(|(_, u)| !**u) {
+            mesh.cells.push((1, vec![i], CellRole::InterfaceNode));
+        }
         Ok(Self { mesh, flexible, rigid })
     }
 
-    /// Sends the deformed meshes at `state` (modal coordinates from the last row of
-    /// `record`) to the observer as a frame of [`Series::Mechanism`] at `t`.
+    /// Sends the deformed meshes at `state` to the observer as a frame of
+    /// [`Series::Mechanism`] at `t`, with the point fields `displacement` (from t = 0, m),
+    /// `rotation` (rotation vector from t = 0, rad), `velocity` (m/s) and `body` (the index of
+    /// the body the point belongs to: flexible bodies first, then rigid bodies, in study order).
     pub fn write(
         &mut self,
         obs: &mut dyn Observer,
@@ -743,27 +747,35 @@ impl MeshRecovery {
         sys: &System,
         state: &mbs::State,
         b: &BuiltMechanism,
-        record: &mbs::SensorRecord,
     ) -> Result<(), BoxError> {
         let motions = sys.node_motions(state);
-        let mut u = vec![[0.0; 3]; self.mesh.points.len()];
-        let mut offset = 0;
-        let mut eta_at = BTreeMap::new();
-        for (k, (n, w)) in record.names.iter().zip(&record.widths).enumerate() {
-            let _ = k;
-            if let Some(body) = n.strip_prefix(HIDDEN) {
-                eta_at.insert(body.to_string(), (offset, *w));
-            }
-            offset += w;
-        }
-        let row = record.rows.last();
-        for (body, (se, first, last)) in b.bodies.iter().zip(self.flexible.iter_mut()) {
+        let n_points = self.mesh.points.len();
+        let mut u = vec![[0.0; 3]; n_points];
+        let mut rot = vec![[0.0; 3]; n_points];
+        let mut vel = vec![[0.0; 3]; n_points];
+        let mut body_of = vec![0.0; n_points];
+        let vec3 = |v: Vector3<f64>| [v.x, v.y, v.z];
+        let ends: Vec<usize> = self
+            .flexible
+            .iter()
+            .map(|f| f.1)
+            .chain(self.rigid.iter().copied())
+            .skip(1)
+            .chain(std::iter::once(n_points))
+            .collect();
+        for (body_index, (body, (se, first, last))) in b.bodies.iter().zip(self.flexible.iter_mut()).enumerate() {
             let first = *first;
-            let eta: Vec<f64> = match (eta_at.get(&body.name), row) {
-                (Some((o, w)), Some(row)) => row[*o..*o + *w].to_vec(),
-                _ => vec![0.0; body.reduced.n_modes],
+            let (eta, eta_dot) = sys.modal_coordinates(state, body.id);
+            let eta = if eta.len() == body.reduced.n_modes {
+                eta
+            } else {
+                vec![0.0; body.reduced.n_modes]
             };
-            let N = body.nodes.len();
+            let eta_dot = if eta_dot.len() == eta.len() {
+                eta_dot
+            } else {
+                vec![0.0; eta.len()]
+            };
             let frame0 =
                 last.unwrap_or_else(|| Frame::new(body.placement * se.frame_origin(), body.placement.rotation));
             let bs = superelement::BodyState {
@@ -773,9 +785,9 @@ impl MeshRecovery {
                     .iter()
                     .map(|n| motions[n.index()].R * body.placement.rotation)
                     .collect(),
-                v: vec![Vector3::zeros(); N],
-                omega: vec![Vector3::zeros(); N],
-                eta_dot: vec![0.0; eta.len()],
+                v: body.nodes.iter().map(|n| motions[n.index()].v).collect(),
+                omega: body.nodes.iter().map(|n| motions[n.index()].omega).collect(),
+                eta_dot,
                 eta,
                 frame: frame0,
             };
@@ -783,39 +795,67 @@ impl MeshRecovery {
                 .kinematics(&bs)
                 .context(|| format!("body '{}': floating frame for the mesh at t = {t}", body.name))?;
             *last = Some(kin.frame);
-            match se.recover_mesh(&kin) {
-                Some(ms) => {
+            match (se.recover_mesh(&kin), se.recover_mesh_velocities(&kin, &bs)) {
+                (Some(ms), Some(vs)) => {
                     for (i, p) in ms.positions.iter().enumerate() {
                         let x = &self.mesh.points[first + i];
                         u[first + i] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+                        let turned = ms.orientations[i] * body.placement.rotation.inverse();
+                        rot[first + i] = vec3(turned.scaled_axis());
+                        vel[first + i] = vec3(vs[i]);
                     }
                 }
-                None => {
+                _ => {
                     for (k, n) in body.nodes.iter().enumerate() {
-                        let p = motions[n.index()].r;
+                        let m = &motions[n.index()];
                         let x = &self.mesh.points[first + k];
-                        u[first + k] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+                        u[first + k] = [m.r.x - x[0], m.r.y - x[1], m.r.z - x[2]];
+                        rot[first + k] = vec3(m.R.scaled_axis());
+                        vel[first + k] = vec3(m.v);
                     }
                 }
             }
+            body_of[first..ends[body_index]].fill(body_index as f64);
         }
-        for (nodes, first) in b.rigid.iter().zip(&self.rigid) {
+        for (j, (nodes, first)) in b.rigid.iter().zip(&self.rigid).enumerate() {
             for (k, n) in nodes.iter().enumerate() {
-                let p = motions[n.index()].r;
+                let m = &motions[n.index()];
                 let x = &self.mesh.points[first + k];
-                u[first + k] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+                u[first + k] = [m.r.x - x[0], m.r.y - x[1], m.r.z - x[2]];
+                rot[first + k] = vec3(m.R.scaled_axis());
+                vel[first + k] = vec3(m.v);
             }
+            let index = b.bodies.len() + j;
+            body_of[*first..ends[index]].fill(index as f64);
         }
-        let values: Vec<f64> = u.iter().flatten().copied().collect();
+        let flat = |f: &[[f64; 3]]| -> Vec<f64> { f.iter().flatten().copied().collect() };
+        let (u, rot, vel) = (flat(&u), flat(&rot), flat(&vel));
         obs.frame(
             Series::Mechanism,
             t,
             &self.mesh,
-            &[PointField {
-                name: "displacement",
-                components: 3,
-                values: &values,
-            }],
+            &[
+                PointField {
+                    name: "displacement",
+                    components: 3,
+                    values: &u,
+                },
+                PointField {
+                    name: "rotation",
+                    components: 3,
+                    values: &rot,
+                },
+                PointField {
+                    name: "velocity",
+                    components: 3,
+                    values: &vel,
+                },
+                PointField {
+                    name: "body",
+                    components: 1,
+                    values: &body_of,
+                },
+            ],
         )
     }
 }
@@ -827,6 +867,19 @@ pub struct MbsOutcome {
     pub results: serde_json::Value,
     /// A solver failure after partial results were written.
     pub failure: Option<String>,
+}
+
+/// "5 joints (3 fixed)": every joint of the study, the fixed ones (which weld two points
+/// into one node and so are no joint of the solver) counted and named as such.
+pub fn joint_count(study: &Study) -> String {
+    let joints = &study.mechanism.joints;
+    let fixed = joints.iter().filter(|j| j.kind.is_none()).count();
+    let plural = if joints.len() == 1 { "" } else { "s" };
+    if fixed > 0 {
+        format!("{} joint{plural} ({fixed} fixed)", joints.len())
+    } else {
+        format!("{} joint{plural}", joints.len())
+    }
 }
 
 /// Runs one analysis of the mechanism, every result to `obs`.
@@ -841,11 +894,11 @@ pub fn run_analysis(
     let mut out = MbsOutcome {
         free_dofs: n,
         report: vec![format!(
-            "mechanism: {} nodes, {} flexible and {} rigid bodies, {} joints, {n} unknowns",
+            "mechanism: {} nodes, {} flexible and {} rigid bodies, {}, {n} unknowns",
             b.model.nodes.len(),
             b.bodies.len(),
             b.rigid.len(),
-            b.model.joints.len()
+            joint_count(study)
         )],
         results: json!({}),
         failure: None,
@@ -887,7 +940,7 @@ pub fn run_analysis(
                 files.sample(obs, *t, &rec)?;
             }
             let mut mw = MeshRecovery::new(b)?;
-            mw.write(obs, 1.0, &sys, &sol.state, b, &rec)?;
+            mw.write(obs, 1.0, &sys, &sol.state, b)?;
             let iterations: usize = sol.steps.iter().map(|s| s.residuals.len().saturating_sub(1)).sum();
             out.report.push(format!(
                 "{} load steps, {iterations} Newton iterations, {} rejected attempts; last relative residual {:.2e}",
@@ -919,7 +972,7 @@ pub fn run_analysis(
             files.sample(obs, 0.0, &rec)?;
             let mut mw = MeshRecovery::new(b)?;
             if output.vtu_every.is_some() {
-                mw.write(obs, 0.0, &sys, integ.state(), b, &rec)?;
+                mw.write(obs, 0.0, &sys, integ.state(), b)?;
             }
             let n_steps = ((t_end / dt) - 1e-9).ceil().max(0.0) as usize;
             let mut iterations = 0usize;
@@ -954,10 +1007,7 @@ pub fn run_analysis(
                 }
                 if let Some(v) = output.vtu_every {
                     if k % v == 0 || k == n_steps {
-                        if k % output.every != 0 && k != n_steps {
-                            integ.record(&mut rec)?;
-                        }
-                        mw.write(obs, t, &sys, integ.state(), b, &rec)?;
+                        mw.write(obs, t, &sys, integ.state(), b)?;
                     }
                 }
                 obs.progress(&Progress::Steps {

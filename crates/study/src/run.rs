@@ -115,11 +115,17 @@ pub fn run(study: &Study, options: &Options, observer: &mut dyn Observer) -> Res
 /// Runs every analysis of `study`, every result to `obs` only (no results folder unless
 /// `obs` writes one); the cache of reduced bodies is used as in [`run`].
 pub fn run_with(study: &Study, options: &Options, obs: &mut dyn Observer) -> Result<Summary, BoxError> {
-    let mut runner = Runner::new(study, options);
     let n = study.analyses.len();
     if n == 0 {
-        obs.progress(&Progress::Info("the study has no [[analyses]]: nothing to run".into()));
+        return Err(format!(
+            "{}: the study has no [[analyses]], so there is nothing to run; add one \
+             (`type = \"static\"`, `\"modal\"`, `\"reduce\"`, `\"equilibrium\"`, `\"dynamic\"` or \
+             `\"linearized\"`, docs/study-file.md)",
+            study.source.path.display()
+        )
+        .into());
     }
+    let mut runner = Runner::new(study, options);
     obs.summary(&runner.summary)?;
     for i in 0..n {
         runner.run_one(i, obs)?;
@@ -168,13 +174,18 @@ impl<'s> Runner<'s> {
         obs.begin(&info)?;
         let t = Instant::now();
         let cache = self.options.cache_dir(study);
+        // (t_end of the study, the --t-end it was cut to) when the option shortened the run.
+        let mut shortened = None;
         let result = match &a.spec {
             AnalysisSpec::Mbs(spec) => {
                 let mut spec = spec.clone();
                 if let (crate::validate::MbsAnalysis::Dynamic { t_end, .. }, Some(limit)) =
                     (&mut spec, self.options.t_end)
                 {
-                    *t_end = t_end.min(limit);
+                    if limit < *t_end {
+                        shortened = Some((*t_end, limit));
+                        *t_end = limit;
+                    }
                 }
                 match self.mechanism(obs) {
                     Ok(built) => crate::mechanism::run_analysis(study, &spec, built, obs).map(|o| Outcome {
@@ -188,6 +199,19 @@ impl<'s> Runner<'s> {
             }
             _ => run_analysis(study, a, &cache, obs),
         };
+        let result = result.map(|mut o| {
+            if let Some((requested, limit)) = shortened {
+                o.report.insert(
+                    0,
+                    format!("shortened by --t-end: run to t = {limit} s instead of the study's t_end = {requested} s"),
+                );
+                if let Some(r) = o.results.as_object_mut() {
+                    r.insert("t_end_study".into(), json!(requested));
+                    r.insert("t_end_option".into(), json!(limit));
+                }
+            }
+            o
+        });
         let files = obs.take_files();
         let summary = &mut self.summary;
         let entry = &mut summary.analyses[i];
@@ -348,8 +372,13 @@ fn run_static(
         .context(|| format!("part '{}': cannot build the FE model", part.name))?;
     let n_free = free_dofs(part, &built)?;
     let loads = Part::nodal_loads(&built, loads);
+    obs.progress(&Progress::Stage(format!(
+        "part '{}': assembling and factorising K ({n_free} dofs)",
+        part.name
+    )));
     let s = fe_model::solve_static(&built.model, &loads)
         .context(|| format!("part '{}': static solution failed", part.name))?;
+    obs.progress(&Progress::Finished);
     let nodes = &built.model.mesh.nodes;
 
     let mut csv = Table::new(
@@ -483,6 +512,11 @@ fn run_modal(
     let dense = dense || modes >= n_free;
     let modes = modes.min(n_free);
     let t = Instant::now();
+    obs.progress(&Progress::Stage(format!(
+        "part '{}': {modes} modes of {n_free} dofs ({})",
+        part.name,
+        if dense { "dense" } else { "sparse shift-invert" }
+    )));
     let (solution, method): (ModalSolution, &str) = if dense {
         (
             fe_model::modal_dense(&built.model, modes)
@@ -494,10 +528,21 @@ fn run_modal(
             .context(|| format!("part '{}': sparse modal analysis failed", part.name))?;
         (s, "sparse shift-invert")
     };
+    obs.progress(&Progress::Finished);
+    // Rigid-body modes at 0 Hz and flagged, never negative (fe_model::ModalSolution).
     let f = solution.frequencies_hz();
-    let mut csv = Table::new("frequencies", &["mode", "frequency [Hz]", "omega [rad/s]"]);
-    for (k, (hz, w)) in f.iter().zip(&solution.omega).enumerate() {
-        csv.row(vec![Cell::from(k + 1), Cell::Num(*hz), Cell::Num(*w)]);
+    let rigid = solution.rigid_body_modes();
+    let mut csv = Table::new(
+        "frequencies",
+        &["mode", "frequency [Hz]", "omega [rad/s]", "rigid body [-]"],
+    );
+    for (k, hz) in f.iter().enumerate() {
+        csv.row(vec![
+            Cell::from(k + 1),
+            Cell::Num(*hz),
+            Cell::Num(2.0 * std::f64::consts::PI * hz),
+            Cell::from(usize::from(rigid[k])),
+        ]);
     }
     obs.table(&csv)?;
     let mesh = VtuMesh::from_model(&built.model, &spiders(part, &built));
@@ -509,15 +554,9 @@ fn run_modal(
         f.len(),
         t.elapsed().as_secs_f64()
     )];
-    // Rigid-body modes come out at round-off level, a few millionths of the elastic ones.
-    let highest = f.iter().fold(0.0f64, |a, b| a.max(b.abs()));
     for (k, hz) in f.iter().enumerate() {
-        let rigid = if hz.abs() < 1e-4 * highest {
-            "  (rigid-body mode)"
-        } else {
-            ""
-        };
-        report.push(format!("mode {:>3}: {:>14} Hz{rigid}", k + 1, sci(*hz)));
+        let label = if rigid[k] { "  (rigid-body mode)" } else { "" };
+        report.push(format!("mode {:>3}: {:>14} Hz{label}", k + 1, sci(*hz)));
     }
     Ok(Outcome {
         free_dofs: n_free,

@@ -4,7 +4,7 @@
 //! so a misspelt key is an error with its line and column). Nothing is resolved: names are
 //! strings, numbers are unchecked. [`crate::validate::validate`] turns a [`StudyFile`] into a
 //! [`crate::validate::Study`] in which every reference is resolved and every value checked,
-//! before any computation (style R12). `docs/study-file.md` documents the same schema for
+//! before any computation. `docs/study-file.md` documents the same schema for
 //! users; keep the two in step.
 //!
 //! Choices are *kind* keys (`type`, `shape`, `kind`) next to flat optional fields rather than
@@ -296,7 +296,7 @@ pub struct AnalysisFile {
     pub modes: Option<usize>,
     /// modal: `auto` (default), `dense` or `sparse`.
     pub solver: Option<SolverFile>,
-    // --- multibody analyses (issue 6) ------------------------------------------------------
+    // --- multibody analyses ---------------------------------------------------------------
     /// equilibrium: load steps.
     pub steps: Option<usize>,
     /// equilibrium, dynamic: Newton tolerance on the relative residual.
@@ -418,7 +418,7 @@ pub struct BodyFile {
     pub frame: Option<String>,
     /// With `frame = "interface-node"`: which interface.
     pub frame_interface: Option<String>,
-    /// `exact` (default) or `lumped` inertia (brief §4).
+    /// `exact` (default) or `lumped` inertia (theory guide §6).
     pub inertia: Option<String>,
     /// Where the part's origin is placed (m), and its rotation.
     pub position: Option<Vec3>,
@@ -428,7 +428,7 @@ pub struct BodyFile {
     pub damping: Option<DampingFile>,
 }
 
-/// A rotation by axis and angle (Euler angles appear nowhere: style, brief §4).
+/// A rotation by axis and angle (Euler angles appear nowhere).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RotationFile {
@@ -502,7 +502,7 @@ pub struct MbsSupportFile {
     pub axis: Option<Vec3>,
 }
 
-/// `[[joints]]`: minimal-coordinate joints (brief §5).
+/// `[[joints]]`: minimal-coordinate joints (theory guide §8).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct JointFile {

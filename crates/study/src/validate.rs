@@ -1,7 +1,6 @@
 //! Validation: from the raw [`StudyFile`] to a [`Study`] in which every reference is
 //! resolved (materials, sections, parts, node sets, interfaces), every value is checked
-//! against its range, and every part's FE model is built, before any analysis runs
-//! (style R12).
+//! against its range, and every part's FE model is built, before any analysis runs.
 //!
 //! The validator collects all the errors it finds rather than stopping at the first, and
 //! each names its file, line, column and key ([`crate::source`]). A reference to something
@@ -159,6 +158,7 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
         src: &source,
         errors: Vec::new(),
         warnings: Vec::new(),
+        failed: Vec::new(),
     };
     let materials = v.materials(&file.materials);
     let sections = v.sections(&file.sections);
@@ -219,6 +219,10 @@ struct Validator<'s> {
     src: &'s Source,
     errors: Vec<StudyError>,
     warnings: Vec<StudyError>,
+    /// Entities that are defined but failed their own checks, as "material:NAME",
+    /// "body:NAME": their errors are reported once, where they are defined, and a reference
+    /// to them elsewhere is not reported again as unknown.
+    failed: Vec<String>,
 }
 
 /// Names become file names (results folders, cache files): keep them portable.
@@ -411,6 +415,12 @@ impl Validator<'_> {
                 None => {}
             }
         }
+        // A material with errors is known, not unknown, to the parts that use it.
+        for m in list {
+            if check_name(&m.name).is_ok() && !out.iter().any(|(n, _)| *n == m.name) {
+                self.failed.push(format!("material:{}", m.name));
+            }
+        }
         Materials(out)
     }
 
@@ -535,7 +545,7 @@ impl Validator<'_> {
 
     fn material<'m>(&mut self, at: &KeyPath, name: &str, materials: &'m Materials) -> Option<&'m IsotropicMaterial> {
         let m = materials.get(name);
-        if m.is_none() {
+        if m.is_none() && !self.failed.contains(&format!("material:{name}")) {
             self.err(at, unknown_reference("material", name, &materials.names()));
         }
         m

@@ -20,6 +20,12 @@ fn example(name: &str) -> PathBuf {
     study::examples::write(name, &scratch(name)).unwrap()
 }
 
+/// The built-in example `name` in a scratch folder of its own, `folder` (tests run in
+/// parallel: two tests must not share one).
+fn example_in(name: &str, folder: &str) -> PathBuf {
+    study::examples::write(name, &scratch(folder)).unwrap()
+}
+
 #[test]
 fn values_are_read_and_set_by_key_path_with_located_errors() {
     let file = example("four_bar");
@@ -163,4 +169,155 @@ fn a_named_load_changed_between_steps_acts_from_the_next_step() {
     let e = a.set_load("push", mbs::LoadKind::Moment, [1.0, 0.0, 0.0]).unwrap_err();
     assert!(e.to_string().contains("no moment"), "{e}");
     let _ = <() as Observer>::take_files(&mut ());
+}
+
+/// An observer that keeps the stages of long computations only.
+#[derive(Default)]
+struct Stages(Vec<String>);
+
+impl Observer for Stages {
+    fn progress(&mut self, p: &study::observer::Progress) {
+        if let study::observer::Progress::Stage(s) = p {
+            self.0.push(s.clone());
+        }
+    }
+}
+
+fn options_in(dir: &Path, t_end: Option<f64>) -> Options {
+    Options {
+        out: Some(dir.join("results")),
+        cache: Some(dir.join("cache")),
+        t_end,
+    }
+}
+
+/// Static and modal analyses of a part say what they are doing, as the reduction does.
+#[test]
+fn static_and_modal_analyses_report_their_stages() {
+    let file = example_in("cantilever", "stages");
+    let study = study::load(&file).unwrap();
+    let mut obs = Stages::default();
+    study::run_with(&study, &options_in(file.parent().unwrap(), None), &mut obs).unwrap();
+    assert!(obs.0.iter().any(|s| s.contains("factorising K")), "{:?}", obs.0);
+    assert!(obs.0.iter().any(|s| s.contains("6 modes of")), "{:?}", obs.0);
+}
+
+/// A study without analyses is an error (exit code 2 in the program), not a silent success.
+#[test]
+fn a_study_without_analyses_is_an_error() {
+    let dir = scratch("empty");
+    let file = dir.join("empty.toml");
+    std::fs::write(&file, "[study]\ntitle = \"nothing to do\"\n").unwrap();
+    let study = study::load(&file).unwrap();
+    let e = study::run_with(&study, &options_in(&dir, None), &mut Recorder::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no [[analyses]]") && e.contains("empty.toml"), "{e}");
+}
+
+/// `--t-end` that shortens a dynamic analysis says so in the report and the summary; fixed
+/// joints are counted among the joints.
+#[test]
+fn the_summary_says_when_t_end_shortened_the_run_and_counts_fixed_joints() {
+    let file = example_in("spin_up", "t-end-spin-up");
+    let study = study::load(&file).unwrap();
+    let mut rec = Recorder::default();
+    study::run_with(&study, &options_in(file.parent().unwrap(), Some(0.02)), &mut rec).unwrap();
+    let s = rec.analyses[0].summary.as_ref().unwrap();
+    assert!(
+        s.report[0].contains("shortened by --t-end") && s.report[0].contains("t_end = 30"),
+        "{:?}",
+        s.report
+    );
+    assert_eq!(s.results["t_end_study"], serde_json::json!(30.0));
+    assert_eq!(s.results["t_end_option"], serde_json::json!(0.02));
+    // Three welds between the four segments and the hub's revolute joint.
+    assert!(
+        s.report.iter().any(|l| l.contains("4 joints (3 fixed)")),
+        "{:?}",
+        s.report
+    );
+    // A --t-end beyond the study's end shortens nothing and says nothing.
+    let mut rec = Recorder::default();
+    let file = example_in("four_bar", "t-end-four-bar");
+    let study = study::load(&file).unwrap();
+    study::run_with(&study, &options_in(file.parent().unwrap(), Some(100.0)), &mut rec).ok();
+    for a in &rec.analyses {
+        if let Some(s) = &a.summary {
+            assert!(!s.report.iter().any(|l| l.contains("shortened")), "{:?}", s.report);
+        }
+    }
+}
+
+/// The numbers of a `DataArray` named `name` in a VTU text.
+fn vtu_array(text: &str, name: &str) -> Option<Vec<f64>> {
+    let start = text.find(&format!("Name=\"{name}\""))?;
+    let body = &text[start..];
+    let open = body.find('>')? + 1;
+    let close = body.find("</DataArray>")?;
+    Some(
+        body[open..close]
+            .split_whitespace()
+            .map(|v| v.parse().unwrap())
+            .collect(),
+    )
+}
+
+/// The mechanism's VTU files carry displacement, rotation, velocity and the body of each
+/// point, and every point belongs to a cell (the spiders' interface nodes included).
+#[test]
+fn mechanism_vtu_has_rotation_velocity_body_and_no_orphan_points() {
+    let file = example_in("four_bar", "vtu-four-bar");
+    let dir = file.parent().unwrap();
+    let study = study::load(&file).unwrap();
+    let mut rec = Recorder::default();
+    study::run(&study, &options_in(dir, Some(0.02)), &mut rec).unwrap();
+    let vtu = dir.join("results/dynamic/mechanism_00002.vtu");
+    let text = std::fs::read_to_string(&vtu).unwrap();
+    let n_points = vtu_array(&text, "displacement").unwrap().len() / 3;
+    for (name, width) in [("rotation", 3), ("velocity", 3), ("body", 1)] {
+        let values = vtu_array(&text, name).unwrap_or_else(|| panic!("no point field {name}"));
+        assert_eq!(values.len(), width * n_points, "{name}");
+    }
+    // Three bodies (the coupler, then the crank and the rocker): every index is used.
+    let body = vtu_array(&text, "body").unwrap();
+    for b in [0.0, 1.0, 2.0] {
+        assert!(body.contains(&b), "body {b} missing");
+    }
+    // The crank turns at up to 20 rad/s: its points move, and rotate about z only.
+    let velocity = vtu_array(&text, "velocity").unwrap();
+    assert!(velocity.iter().any(|v| v.abs() > 1e-6));
+    let connectivity = vtu_array(&text, "connectivity").unwrap();
+    let mut used = vec![false; n_points];
+    for i in connectivity {
+        used[i as usize] = true;
+    }
+    let orphans: Vec<usize> = (0..n_points).filter(|i| !used[*i]).collect();
+    assert!(orphans.is_empty(), "points in no cell: {orphans:?}");
+}
+
+/// A sensor's columns share a plot axis only when they share a unit and a size.
+#[test]
+fn plot_panels_separate_units_and_sizes() {
+    let h = |s: &[&str]| s.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    // The spin-up tip in the hub's axes: x near 10 m, y a deflection of decimetres, z zero to
+    // round-off (drawn with y, not on an axis of its own).
+    let tip = h(&[
+        "relative_position_x [m]",
+        "relative_position_y [m]",
+        "relative_position_z [m]",
+    ]);
+    let panels = study::folder::plot_panels(&tip, &[vec![10.0, 10.0], vec![0.0, -0.4], vec![0.0, 1e-20]]);
+    assert_eq!(panels, vec![vec![0], vec![1, 2]]);
+    // A reaction: forces and moments never share an axis.
+    let reaction = h(&["Fx [N]", "Fy [N]", "Fz [N]", "Mx [N m]", "My [N m]", "Mz [N m]"]);
+    let c = vec![vec![1.0, 2.0]; 6];
+    assert_eq!(
+        study::folder::plot_panels(&reaction, &c),
+        vec![vec![0, 1, 2], vec![3, 4, 5]]
+    );
+    // Energies of one size: one axis.
+    let energy = h(&["kinetic [J]", "strain [J]", "gravity potential [J]"]);
+    let c = vec![vec![0.2, 0.3], vec![0.0, 0.1], vec![0.2, 0.25]];
+    assert_eq!(study::folder::plot_panels(&energy, &c), vec![vec![0, 1, 2]]);
 }

@@ -124,6 +124,7 @@
 //! | $\mathbf M_{ffr}$ | `FfrInertia::mass_matrix` | FFR mass matrix from the invariants | (6.1) |
 //! | $\mathbf Q_v$ | `q_v` | quadratic velocity forces | (6.5) |
 //! | $\mathbf K_t,\ \mathbf C_t$ | `stiffness`, `damping` | $\partial\mathbf r/\partial\mathbf q$, $\partial\mathbf r/\partial\dot{\mathbf q}$ | \[S19\] |
+//! | $\mathbf p_a,\ \mathbf v_a$ | [`Superelement::recover_mesh`], [`Superelement::recover_mesh_velocities`] | position and velocity of mesh node $a$ | (10.1) |
 //!
 //! Superscripts: a quantity without a frame marker is in inertial axes; body-axis quantities
 //! are named in the docs ("body axes", superscript $L$). Vectors are columns.

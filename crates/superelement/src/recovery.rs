@@ -5,7 +5,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::body::Superelement;
+use crate::body::{BodyState, Superelement};
 use crate::so3;
 use crate::transform::Kinematics;
 use nalgebra::{UnitQuaternion, Vector3};
@@ -56,5 +56,35 @@ impl Superelement {
             out.elastic.push(u);
         }
         Some(out)
+    }
+
+    /// The velocity of every mesh node for the configuration `kin` of `state` (whose
+    /// interface velocities and $\dot{\boldsymbol\eta}$ are used), or `None` without mesh
+    /// shapes: $\mathbf v_p = \mathbf v_j + \boldsymbol\omega_j\times(\mathbf p - \mathbf r_j) +
+    /// \mathbf R_j\mathbf S(\mathbf x)\dot{\mathbf q}^{jj}$ (the time derivative of theory guide
+    /// (10.1), frame velocity from (5.4), elastic velocity from (5.5)).
+    ///
+    /// Checked by `tests/unit/recovery.rs` against central differences of positions along a
+    /// motion.
+    pub fn recover_mesh_velocities(&self, kin: &Kinematics, state: &BodyState) -> Option<Vec<Vector3<f64>>> {
+        let mesh = self.mesh.as_ref()?;
+        let S = &mesh.shapes;
+        let n = self.n;
+        let positions = self.recover_mesh(kin)?.positions;
+        let (v_j, omega_j) = self.frame_velocity(kin, state);
+        let qd = self.local_velocity(kin, state);
+        Some(
+            positions
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let mut w = [0.0; 3];
+                    for (slot, wk) in w.iter_mut().enumerate() {
+                        *wk = (0..n).map(|j| S.get(6 * i + slot, j) * qd[j]).sum();
+                    }
+                    v_j + omega_j.cross(&(p - kin.frame.r)) + kin.R_j * Vector3::from(w)
+                })
+                .collect(),
+        )
     }
 }

@@ -42,3 +42,23 @@ fn broken_study_files_are_reported_with_location_key_and_close_matches() {
         check_broken(&f);
     }
 }
+
+/// A material with a wrong value is one error, where it is defined: the parts made of it,
+/// the bodies placed from those parts and the joints and sensors on those bodies are not
+/// reported again as "unknown material" or "unknown body".
+#[test]
+fn a_bad_material_is_one_error_not_a_cascade() {
+    let dir = scratch("cascade");
+    let text = std::fs::read_to_string(examples_dir().join("slider_crank.toml")).unwrap();
+    assert!(text.contains("\nnu = 0.3\n"));
+    std::fs::write(dir.join("nu.toml"), text.replace("\nnu = 0.3\n", "\nnu = 0.6\n")).unwrap();
+    let out = flexmbs(&dir, &["check", "nu.toml"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("is not valid (1 error)"), "{}", out.stderr);
+    assert!(
+        out.stderr.contains("Poisson's ratio nu must lie in (-1, 0.5), got 0.6"),
+        "{}",
+        out.stderr
+    );
+    assert!(!out.stderr.contains("unknown"), "{}", out.stderr);
+}

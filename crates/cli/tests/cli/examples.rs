@@ -11,7 +11,7 @@ fn cantilever_example_matches_beam_theory() {
     assert_eq!(out.code, 0, "{}", out.stderr);
     let results = dir.join("cantilever-results");
 
-    // benchmarks.md A2: tip force P along -z bends about y (Iy = b h^3/12), with shear.
+    // validation problem A2: tip force P along -z bends about y (Iy = b h^3/12), with shear.
     let (L, E, nu, rho, b, h, P): (f64, f64, f64, f64, f64, f64, f64) = (2.0, 210e9, 0.3, 7850.0, 0.02, 0.04, 100.0);
     let (A, Iy, Iz) = (b * h, b * h * h * h / 12.0, h * b * b * b / 12.0);
     let G = E / (2.0 * (1.0 + nu));
@@ -26,7 +26,7 @@ fn cantilever_example_matches_beam_theory() {
         out.stdout
     );
 
-    // benchmarks.md A1: Euler-Bernoulli clamped-free, first mode about z; Timoshenko with
+    // validation problem A1: Euler-Bernoulli clamped-free, first mode about z; Timoshenko with
     // rotary inertia is a little lower (8e-5 here).
     let f1 = 1.875_104_07_f64.powi(2) * (E * Iz / (rho * A * L.powi(4))).sqrt() / (2.0 * std::f64::consts::PI);
     let f = csv_value(&results.join("clamped-modes/frequencies.csv"), "1", "frequency [Hz]");

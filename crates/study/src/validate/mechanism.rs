@@ -299,6 +299,8 @@ impl Validator<'_> {
             }
             if let Some(spec) = self.flexible(&path, b, parts, &part_names) {
                 m.bodies.push(spec);
+            } else {
+                self.failed.push(format!("body:{}", b.name));
             }
         }
         for (i, b) in file.rigid_bodies.iter().enumerate() {
@@ -308,6 +310,8 @@ impl Validator<'_> {
             }
             if let Some(spec) = self.rigid(&path, b) {
                 m.rigid_bodies.push(spec);
+            } else {
+                self.failed.push(format!("body:{}", b.name));
             }
         }
         for (i, p) in file.point_masses.iter().enumerate() {
@@ -737,7 +741,10 @@ impl Validator<'_> {
             };
             return Some(PointRef::Rigid { body: b, point: k });
         }
-        self.err(path, unknown_reference("body", body, &bodies));
+        // A body that failed its own checks was reported where it is defined.
+        if !self.failed.contains(&format!("body:{body}")) {
+            self.err(path, unknown_reference("body", body, &bodies));
+        }
         None
     }
 
@@ -1267,8 +1274,10 @@ impl Validator<'_> {
             "modal" => match m.bodies.iter().position(|b| b.name == of) {
                 Some(b) => SensorTarget::Modal(b),
                 None => {
-                    let names: Vec<String> = m.bodies.iter().map(|b| b.name.clone()).collect();
-                    self.err(&op, unknown_reference("flexible body", &of, &names));
+                    if !self.failed.contains(&format!("body:{of}")) {
+                        let names: Vec<String> = m.bodies.iter().map(|b| b.name.clone()).collect();
+                        self.err(&op, unknown_reference("flexible body", &of, &names));
+                    }
                     return None;
                 }
             },

@@ -49,3 +49,46 @@ fn rigid_placement_moves_the_mesh_rigidly() {
         assert!(mesh.elastic[i].norm() < 1e-13);
     }
 }
+
+/// Mesh node velocities are the time derivatives of the recovered positions: central
+/// differences of positions along the state's own motion (interfaces moved by their
+/// velocities, eta by eta_dot, the frame re-solved) on a deformed, rotated, moving body.
+#[test]
+fn mesh_velocities_are_the_derivatives_of_the_positions() {
+    for fx in all_fixtures() {
+        for frame in frame_choices(&fx.body) {
+            let se = superelement(&fx.body, frame, MassVariant::Exact);
+            let (state, _) = test_state(
+                &se,
+                &StateSpec {
+                    deformation: 0.05,
+                    ..StateSpec::moving(60.0, 7)
+                },
+            );
+            let kin = se.kinematics(&state).unwrap();
+            let v = se
+                .recover_mesh_velocities(&kin, &state)
+                .expect("fixtures keep the mesh shapes");
+            let qd = state.velocity_vector();
+            let at = |h: f64| {
+                let dq: Vec<f64> = qd.iter().map(|x| x * h).collect();
+                let s = superelement::testing::perturb_state(&state, &dq);
+                se.recover_mesh(&se.kinematics(&s).unwrap()).unwrap().positions
+            };
+            let h = 1e-6;
+            let (plus, minus) = (at(h), at(-h));
+            let scale = v.iter().fold(0.0f64, |m, x| m.max(x.norm()));
+            for i in 0..v.len() {
+                let fd = (plus[i] - minus[i]) / (2.0 * h);
+                // Central differences: O(h^2) truncation (1e-12 here) and round-off of about
+                // 1e-16 |p| / h = 1e-10; 1e-6 of the largest speed leaves a wide margin.
+                assert!(
+                    (fd - v[i]).norm() < 1e-6 * scale.max(1.0),
+                    "{} {frame}: node {i}: {v:?} against {fd:?}",
+                    fx.name,
+                    v = v[i]
+                );
+            }
+        }
+    }
+}

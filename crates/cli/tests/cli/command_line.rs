@@ -1,0 +1,116 @@
+//! The rough edges of the command line a new user meets: `--help` of every command, the
+//! validation command's ids and report folder, an empty study, a closed pipe, the progress
+//! display.
+
+use super::support::{flexmbs, scratch};
+use std::io::Read;
+use std::process::{Command, Stdio};
+
+#[test]
+fn every_command_has_help_that_exits_0() {
+    let dir = scratch("command-help");
+    for command in ["run", "check", "reduce", "inspect", "example"] {
+        for flag in ["--help", "-h"] {
+            let out = flexmbs(&dir, &[command, flag]);
+            assert_eq!(out.code, 0, "{command} {flag}: {}", out.stderr);
+            assert!(
+                out.stdout.starts_with(&format!("usage: flexmbs {command}")),
+                "{command} {flag}: {}",
+                out.stdout
+            );
+        }
+    }
+    // `help COMMAND` too, and the run option --t-end is listed for run only.
+    let out = flexmbs(&dir, &["help", "reduce"]);
+    assert_eq!(out.code, 0);
+    assert!(!out.stdout.contains("--t-end"), "{}", out.stdout);
+    let out = flexmbs(&dir, &["run", "--help"]);
+    assert!(out.stdout.contains("--t-end"), "{}", out.stdout);
+    let out = flexmbs(&dir, &["--help"]);
+    let general = out.stdout;
+    let run_only = general
+        .split("option of run:")
+        .nth(1)
+        .expect("an 'option of run' block");
+    assert!(run_only.contains("--t-end"), "{general}");
+    let both = general.split("options of run and reduce:").nth(1).unwrap();
+    let both = both.split("option of run:").next().unwrap();
+    assert!(!both.contains("--t-end"), "{general}");
+    // And validate calls itself by the name it was run as.
+    let out = flexmbs(&dir, &["validate", "--help"]);
+    assert_eq!(out.code, 0);
+    assert!(out.stdout.starts_with("usage: flexmbs validate"), "{}", out.stdout);
+}
+
+#[test]
+fn validate_refuses_an_unknown_id_and_writes_nothing() {
+    let dir = scratch("validate-unknown");
+    let out = flexmbs(&dir, &["validate", "--only", "Z", "--report-dir", "report"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("unknown benchmark id 'Z'"), "{}", out.stderr);
+    assert!(out.stderr.contains("B1"), "{}", out.stderr);
+    assert!(!dir.join("report").exists());
+    assert!(!dir.join("validation-report").exists());
+}
+
+#[test]
+fn running_a_study_without_analyses_exits_2() {
+    let dir = scratch("empty-study");
+    std::fs::write(dir.join("empty.toml"), "[study]\ntitle = \"nothing\"\n").unwrap();
+    let out = flexmbs(&dir, &["run", "empty.toml"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("no [[analyses]]"), "{}", out.stderr);
+    let out = flexmbs(&dir, &["check", "empty.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stderr.contains("no [[analyses]]"), "{}", out.stderr);
+}
+
+/// `flexmbs ... | head` closes the pipe early: the program must not panic (exit 101).
+#[test]
+fn a_closed_stdout_is_not_a_panic() {
+    let dir = scratch("closed-pipe");
+    for args in [
+        &["--help"][..],
+        &["example"][..],
+        &["run", "--help"][..],
+        &["validate", "--help"][..],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_flexmbs"))
+            .args(args)
+            .current_dir(&dir)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Close the reading end before the program writes: every write gets EPIPE.
+        drop(child.stdout.take());
+        let mut stderr = String::new();
+        child.stderr.take().unwrap().read_to_string(&mut stderr).unwrap();
+        let status = child.wait().unwrap();
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert_ne!(status.code(), Some(101), "{args:?}: {stderr}");
+    }
+}
+
+/// A stage shows its text in a spinner (no empty `0/0` bar), and a counted computation after
+/// it gets a real bar of its length.
+#[test]
+fn progress_shows_the_stage_text_and_real_bars() {
+    use study::observer::{Observer, Progress};
+    let mut console = flexmbs::console::Console::with_target(indicatif::ProgressDrawTarget::hidden);
+    console.progress(&Progress::Stage("part 'rod': factorising K_ii (1200 dofs)".into()));
+    assert_eq!(
+        console.shown(),
+        Some((None, "part 'rod': factorising K_ii (1200 dofs)".to_string()))
+    );
+    console.progress(&Progress::Stage("part 'rod': 12 constraint modes".into()));
+    assert_eq!(console.shown().unwrap().1, "part 'rod': 12 constraint modes");
+    console.progress(&Progress::Steps {
+        what: "time integration".into(),
+        done: 3,
+        total: 500,
+    });
+    assert_eq!(console.shown(), Some((Some(500), "time integration".to_string())));
+    console.progress(&Progress::Finished);
+    assert_eq!(console.shown(), None);
+}
