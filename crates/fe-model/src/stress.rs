@@ -226,7 +226,7 @@ pub fn solid_stress_operator(
     Ok(S)
 }
 
-fn solid_material<'a>(model: &'a FeModel, index: usize) -> Result<Option<(SolidKind, &'a IsotropicMaterial)>, FeError> {
+fn solid_material(model: &FeModel, index: usize) -> Result<Option<(SolidKind, &IsotropicMaterial)>, FeError> {
     let Some((kind, solid)) = model.elements[index].solid() else {
         return Ok(None);
     };
