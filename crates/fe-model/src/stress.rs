@@ -358,3 +358,22 @@ pub fn beam_section_forces(
         load_e,
     )?)
 }
+
+/// The extreme-fibre stresses of beams gathered at their nodes: for each node, the largest
+/// magnitude and the largest value over every element end at it (`ends`: node index and the
+/// end's `[max, min]` fibre stress, [`crate::section::BeamSection::fibre_stress_range`]);
+/// `None` at nodes no end names. The equivalent stress of a beam node for plots, shear
+/// stresses of the section not included.
+pub fn fibre_extremes_at_nodes(
+    n_nodes: usize,
+    ends: impl IntoIterator<Item = (usize, [f64; 2])>,
+) -> Vec<Option<[f64; 2]>> {
+    let mut out: Vec<Option<[f64; 2]>> = vec![None; n_nodes];
+    for (node, [max, min]) in ends {
+        let magnitude = max.abs().max(min.abs());
+        let entry = out[node].get_or_insert([magnitude, max]);
+        entry[0] = entry[0].max(magnitude);
+        entry[1] = entry[1].max(max);
+    }
+    out
+}
