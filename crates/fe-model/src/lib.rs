@@ -92,6 +92,7 @@ pub mod quadrature;
 pub mod section;
 pub mod sparse_cholesky;
 pub mod statics;
+pub mod stress;
 
 pub use assembly::{assemble, assemble_into, Assembled};
 pub use box_mesh::{box_mesh, solid_model, solid_model_with_materials};
@@ -111,6 +112,7 @@ pub use ordering::{
 };
 pub use pattern::SystemPattern;
 pub use property::{IsotropicMaterial, MaterialId, SectionId};
-pub use section::BeamSection;
+pub use section::{BeamSection, SectionShape};
 pub use sparse_cholesky::{CholeskyError, SparseCholesky};
 pub use statics::{solve_static, StaticSolution};
+pub use stress::{nodal_stresses, principal_stresses, von_mises, Voigt};

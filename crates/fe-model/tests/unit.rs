@@ -28,4 +28,8 @@ mod unit {
     /// Solid elements (tet4, tet10, hex8, hex20, wedge6): shape functions, patch tests, rigid
     /// modes, mass, box meshes, solid models; cantilever vs Timoshenko; tet4 locking.
     mod solid;
+    /// Stress recovery: the patch test of nodal stresses on every solid kind (one distorted
+    /// element, a distorted mesh), exact extrapolation of linear stresses on quadratic kinds,
+    /// beam section forces against the analytic cantilever under tip load and gravity.
+    mod stress;
 }

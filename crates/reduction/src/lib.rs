@@ -71,6 +71,7 @@
 //! Vectors are columns; `^T` is transpose. Dof indices in errors are those of the matrices
 //! as given, never of the permuted factor.
 #![allow(non_snake_case)]
+pub mod attachment;
 pub mod craig_bampton;
 pub mod diagnostics;
 pub mod eigen;
@@ -81,6 +82,7 @@ pub mod invariants;
 pub mod matrix_market;
 pub mod modal;
 pub mod reduced_body;
+pub mod stress;
 pub use craig_bampton::{partition, reduce, reduce_with_progress, CbSettings, ModeSelection, Partition, Stage};
 pub use craig_bampton::{reduce_external, reduce_external_dofs};
 pub use diagnostics::{diagnostics, DiagnosticWarning, Diagnostics, ModeDiagnostics};
@@ -91,5 +93,6 @@ pub use geometric::reduced_geometric_stiffness;
 pub use matrix_market::{read_matrix_market, write_matrix_market};
 pub use modal::modal_sparse;
 pub use reduced_body::{
-    DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, ALGORITHM_REVISION, FORMAT_VERSION,
+    BeamStressElement, DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes,
+    ALGORITHM_REVISION, FORMAT_VERSION,
 };
