@@ -17,6 +17,9 @@
 //! `reduction`) order the unknowns by nested dissection on the node positions for large
 //! models, by AMD otherwise ([`ordering`], [`FillOrdering`]).
 //!
+//! Meshes come from gmsh ([`mesh::gmsh`]), Abaqus ([`mesh::abaqus`]) and Nastran
+//! ([`mesh::nastran`]) files, or from the generators ([`box_mesh`], [`generate`]).
+//!
 //! What this crate does not do: rotations of bodies, time, reduction.
 //!
 //! # Quick start
@@ -104,6 +107,7 @@ pub use geometric::{
     linear_buckling, packed_pair, BucklingSettings, BucklingSolution,
 };
 pub use interface::{add_interface, add_interface_on_set, Interface, Interfaces, SpiderKind};
+pub use mesh::import::{ImportError, ImportedModel};
 pub use mesh::{Cell, CellId, CellKind, Mesh, NodeId};
 pub use modal::{modal_dense, scaled_self_adjoint_eigen, ModalSolution};
 pub use model::{BeamProperties, DofMask, FeModel, LinearConstraint, NodalLoad, Support};

@@ -18,6 +18,10 @@ mod unit {
     /// gmsh reader: fixtures in four encodings agree, inline parse cases, node orderings
     /// against gmsh's reference elements, located errors, no panic on random/cut/mutated input.
     mod gmsh;
+    /// Abaqus and Nastran readers: the fixtures give gmsh's cells and frequencies, sets,
+    /// materials, spiders and supports; inline cases; located errors; no panic on
+    /// random/cut/mutated input.
+    mod import;
     /// RBE2/RBE3 interface nodes on solids: rigid patch, no added stiffness, bad sets.
     mod interface;
     /// Fill-reducing orderings: nested dissection is a valid permutation, solves as AMD does,

@@ -51,6 +51,11 @@ mod data;
 #[path = "unit/slider_crank.rs"]
 mod slider_crank;
 
+/// A flexible double pendulum whose beams went through MBDyn `.fem` files and back has the
+/// same linearised frequencies to 1e-10.
+#[path = "unit/mbdyn_fem.rs"]
+mod mbdyn_fem;
+
 /// Linearised analysis: clamped-free beam frequencies (validation problem A1) from superelements,
 /// and the geometric stiffness of an axial preload.
 #[path = "unit/linearized.rs"]

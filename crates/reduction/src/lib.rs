@@ -80,6 +80,7 @@ pub mod file;
 pub mod geometric;
 pub mod invariants;
 pub mod matrix_market;
+pub mod mbdyn;
 pub mod modal;
 pub mod reduced_body;
 pub mod stress;
@@ -91,6 +92,7 @@ pub use error::ReductionError;
 pub use file::BodyFileProblem;
 pub use geometric::reduced_geometric_stiffness;
 pub use matrix_market::{read_matrix_market, write_matrix_market};
+pub use mbdyn::{read_mbdyn_fem, write_mbdyn_fem, FemError};
 pub use modal::modal_sparse;
 pub use reduced_body::{
     BeamStressElement, DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes,

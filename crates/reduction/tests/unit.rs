@@ -46,6 +46,13 @@ mod matrix_market {
     include!("unit/matrix_market.rs");
 }
 
+/// `reduction::mbdyn`: MBDyn `.fem` files. The manual's example reads into its stated inertia;
+/// a written file has the layout MBDyn's reader needs; solid and beam bodies come back the
+/// same; malformed files are located; no cut or mutated file panics.
+mod mbdyn {
+    include!("unit/mbdyn.rs");
+}
+
 /// `reduction::geometric` (geometric stiffening): sum_k w_k G_k against the full model's
 /// V^T K_G V, zero for rigid motions, buckling of clamped reduced beam and hex20 rods
 /// converging to the full model's as modes are added, G in the body file and version-1
