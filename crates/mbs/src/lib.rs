@@ -107,10 +107,13 @@ pub mod body;
 pub mod coordinates;
 pub mod dynamic_solver;
 pub mod error;
+pub mod initial;
+pub mod joint_forces;
 pub mod linearized;
 pub mod model;
 pub mod momentum;
 pub mod node;
+pub mod retry;
 pub mod sensors;
 pub mod static_solver;
 pub mod system;
@@ -123,6 +126,7 @@ pub use dynamic_solver::{
     Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
 };
 pub use error::{Incomplete, ModelError, SolveError};
+pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
 pub use linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,
     NodeEnergy,
@@ -134,6 +138,7 @@ pub use model::{
 };
 pub use momentum::{ExternalAction, MomentumProjection};
 pub use node::NodeMotion;
+pub use retry::{solve_dynamic_retrying, RetriedTrajectory, Retry};
 pub use sensors::{Energies, SensorRecord};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
 pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
