@@ -115,6 +115,7 @@ pub mod momentum;
 pub mod node;
 pub mod retry;
 pub mod sensors;
+pub mod stability;
 pub mod static_solver;
 pub mod system;
 pub mod time_function;
@@ -138,8 +139,9 @@ pub use model::{
 };
 pub use momentum::{ExternalAction, MomentumProjection};
 pub use node::NodeMotion;
-pub use retry::{solve_dynamic_retrying, RetriedTrajectory, Retry};
+pub use retry::{solve_dynamic_retrying, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure};
 pub use sensors::{Energies, SensorRecord};
+pub use stability::{stability, Stability};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
 pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
 pub use time_function::{Interpolation, TimeFunction};

@@ -13,7 +13,7 @@
 //! acceleration is carried over), so the retried interval is integrated by the same scheme;
 //! its local error is that of the smaller steps.
 
-use crate::dynamic_solver::{DynamicSettings, Integrator, Trajectory};
+use crate::dynamic_solver::{DynamicSettings, Integrator, StepReport, Trajectory};
 use crate::error::{Incomplete, SolveError};
 use crate::system::{State, System};
 
@@ -22,14 +22,29 @@ use crate::system::{State, System};
 pub struct Retry {
     /// Start $t_n$ of the interval.
     pub time: f64,
-    /// Number of the fixed step (1-based).
-    pub step: usize,
+    /// The step $h$ that failed.
+    pub step: f64,
     /// The smallest step that was tried in it.
     pub smallest_step: f64,
     /// Steps taken to cover the interval.
     pub substeps: usize,
     /// Why the step of size $h$ failed.
     pub cause: SolveError,
+}
+
+/// What [`step_retrying`] took: the report of each step (one, or those of the halved steps)
+/// and the retry, when one was needed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RetriedStep {
+    pub reports: Vec<StepReport>,
+    pub retry: Option<Retry>,
+}
+
+/// A step that failed even at the smallest step: the error and the retry that was attempted.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RetryFailure {
+    pub error: SolveError,
+    pub retry: Option<Retry>,
 }
 
 /// A trajectory with the intervals that were retried.
@@ -46,44 +61,59 @@ fn retriable(e: &SolveError) -> bool {
     )
 }
 
-/// Covers $[t, t + h]$ with halved steps after a failure of the step $h$ (module docs); the
-/// integrator's step size is $h$ again afterwards.
-fn halve_through(
-    integ: &mut Integrator,
-    traj: &mut Trajectory,
-    h: f64,
-    min_step: f64,
-    retry: &mut Retry,
-) -> Result<(), SolveError> {
+/// One step of the integrator's step size $h$; when its Newton iteration fails, the interval
+/// $[t_n, t_n + h]$ is covered by halved steps down to `min_step` (module docs). The
+/// integrator's step size is $h$ again afterwards; on failure its state is the last converged
+/// one.
+pub fn step_retrying(integ: &mut Integrator, min_step: f64) -> Result<RetriedStep, Box<RetryFailure>> {
+    let h = integ.step_size();
+    let cause = match integ.step() {
+        Ok(report) => {
+            return Ok(RetriedStep {
+                reports: vec![report],
+                retry: None,
+            })
+        }
+        Err(e) if retriable(&e) && 0.5 * h >= min_step * (1.0 - 1e-12) => e,
+        Err(error) => return Err(Box::new(RetryFailure { error, retry: None })),
+    };
     let end = integ.state().time() + h;
+    let mut retry = Retry {
+        time: integ.state().time(),
+        step: h,
+        smallest_step: h,
+        substeps: 0,
+        cause,
+    };
+    let mut reports = Vec::new();
     let mut sub = 0.5 * h;
     let result = loop {
         let left = end - integ.state().time();
         if left <= 1e-12 * h {
             break Ok(());
         }
-        if sub < min_step * (1.0 - 1e-12) {
-            break Err(retry.cause.clone());
-        }
         retry.smallest_step = retry.smallest_step.min(sub);
         integ.set_step_size(sub.min(left));
         match integ.step() {
             Ok(rep) => {
-                traj.iterations.push(rep.residuals.len() - 1);
-                traj.jacobians.push(rep.jacobians);
+                reports.push(rep);
                 retry.substeps += 1;
             }
-            Err(e) if retriable(&e) => {
-                if sub * 0.5 < min_step * (1.0 - 1e-12) {
-                    break Err(e);
-                }
-                sub *= 0.5;
-            }
+            Err(e) if retriable(&e) && 0.5 * sub >= min_step * (1.0 - 1e-12) => sub *= 0.5,
             Err(e) => break Err(e),
         }
     };
     integ.set_step_size(h);
-    result
+    match result {
+        Ok(()) => Ok(RetriedStep {
+            reports,
+            retry: Some(retry),
+        }),
+        Err(error) => Err(Box::new(RetryFailure {
+            error,
+            retry: Some(retry),
+        })),
+    }
 }
 
 /// Integrates from `start` to `settings.end_time` with the fixed step `settings.step`,
@@ -121,29 +151,18 @@ pub fn solve_dynamic_retrying(
     let every = settings.output_every.max(1);
     let mut retries = Vec::new();
     for k in 1..=n_steps {
-        match integ.step() {
-            Ok(rep) => {
-                traj.iterations.push(rep.residuals.len() - 1);
-                traj.jacobians.push(rep.jacobians);
-            }
-            Err(cause) if retriable(&cause) => {
-                let mut retry = Retry {
-                    time: integ.state().time(),
-                    step: k,
-                    smallest_step: h,
-                    substeps: 0,
-                    cause,
-                };
-                let r = halve_through(&mut integ, &mut traj, h, min_step, &mut retry);
-                retries.push(retry);
-                if let Err(e) = r {
-                    traj.final_state = integ.state().clone();
-                    return Err(fail(e, traj, retries));
+        match step_retrying(&mut integ, min_step) {
+            Ok(done) => {
+                for rep in &done.reports {
+                    traj.iterations.push(rep.residuals.len() - 1);
+                    traj.jacobians.push(rep.jacobians);
                 }
+                retries.extend(done.retry);
             }
-            Err(e) => {
+            Err(failure) => {
+                retries.extend(failure.retry);
                 traj.final_state = integ.state().clone();
-                return Err(fail(e, traj, retries));
+                return Err(fail(failure.error, traj, retries));
             }
         }
         if k % every == 0 || k == n_steps {
