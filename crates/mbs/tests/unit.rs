@@ -80,3 +80,7 @@ mod newton;
 /// retry of failed fixed steps.
 #[path = "unit/joint_setup.rs"]
 mod joint_setup;
+
+/// An integrator that owns its system; loads changed between steps.
+#[path = "unit/stepping.rs"]
+mod stepping;
