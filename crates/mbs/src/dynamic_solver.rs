@@ -586,6 +586,7 @@ impl<'a> Integrator<'a> {
                     self.a[i] =
                         ((1.0 - af) * st.acceleration[i] + af * prev.acceleration[i] - am * self.a[i]) / (1.0 - am);
                 }
+                sys.accept_step(st);
                 std::mem::swap(&mut self.state, &mut self.trial);
                 self.steps += 1;
                 if !modified {
@@ -660,7 +661,7 @@ pub struct Trajectory {
 
 /// The integrator at `start` (consistent accelerations) and a trajectory holding its first
 /// sensor row: the common start of [`solve_dynamic`] and [`solve_dynamic_adaptive`].
-fn start_trajectory<'a>(
+pub(crate) fn start_trajectory<'a>(
     system: &'a System,
     start: State,
     settings: &DynamicSettings,

@@ -483,7 +483,7 @@ fn distribute(system: &System, ws: &Workspace, phi: &[f64]) -> ModeEnergy {
             interior_kinetic: interior.1,
         });
     }
-    for (js, &(sc, k, _, _)) in model.joint_springs.iter().zip(&system.joint_springs) {
+    for (js, &(sc, k, ..)) in model.joint_springs.iter().zip(&system.joint_springs) {
         if let crate::coordinates::Slot::Unknown(d) = map.scalars[sc].slot {
             carriers.push(CarrierEnergy {
                 carrier: EnergyCarrier::JointSpring {

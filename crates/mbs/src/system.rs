@@ -27,6 +27,8 @@ use crate::body::{
 };
 use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
 use crate::error::{ModelError, SolveError};
+use crate::initial::InitialPlan;
+use crate::joint_forces::{Control, JointForces};
 use crate::model::{Body, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId};
 use crate::node::NodeMotion;
 use crate::time_function::CompiledFunction;
@@ -130,6 +132,8 @@ pub struct State {
     pub(crate) acceleration: Vec<f64>,
     /// Per flexible element.
     pub(crate) frames: Vec<Frame>,
+    /// Per actuator: its controller's state ([`crate::joint_forces`]).
+    pub(crate) controls: Vec<Control>,
 }
 
 /// `clone_from` reuses the buffers (the derived one would allocate a fresh copy): the
@@ -143,6 +147,7 @@ impl Clone for State {
             velocity: self.velocity.clone(),
             acceleration: self.acceleration.clone(),
             frames: self.frames.clone(),
+            controls: self.controls.clone(),
         }
     }
 
@@ -153,6 +158,7 @@ impl Clone for State {
         self.velocity.clone_from(&other.velocity);
         self.acceleration.clone_from(&other.acceleration);
         self.frames.clone_from(&other.frames);
+        self.controls.clone_from(&other.controls);
     }
 }
 
@@ -315,8 +321,12 @@ pub struct System {
     pub(crate) rigid: Vec<RigidElement>,
     pub(crate) springs: Vec<SpringElement>,
     pub(crate) loads: Vec<LoadElement>,
-    /// (scalar, stiffness, damping, rest).
-    pub(crate) joint_springs: Vec<(usize, f64, f64, f64)>,
+    /// (scalar, stiffness, damping, rest, preload).
+    pub(crate) joint_springs: Vec<(usize, f64, f64, f64, f64)>,
+    /// Limits and actuators on joint coordinates.
+    pub(crate) joint_forces: JointForces,
+    /// How each of `model.initial` acts ([`crate::initial`]).
+    pub(crate) initial_plan: Vec<InitialPlan>,
     pub(crate) drivers: Vec<CompiledFunction>,
     pub(crate) elements: Vec<ElementRef>,
     pub(crate) pattern: Pattern,
@@ -477,7 +487,7 @@ impl System {
                     format!("joint coordinate {} does not exist", js.coordinate),
                 )
             })?;
-            joint_springs.push((s, js.stiffness, js.damping, js.rest));
+            joint_springs.push((s, js.stiffness, js.damping, js.rest, js.preload));
         }
         let drivers = model
             .drivers
@@ -501,6 +511,8 @@ impl System {
             }
         }
         topology::held_coordinates(model, &topo)?;
+        let mut joint_forces = JointForces::new(model, &topo)?;
+        let initial_plan = crate::initial::plan(model, &topo)?;
 
         // Elements and the sparse pattern.
         let mut elements = Vec::new();
@@ -562,6 +574,7 @@ impl System {
                 sets.push(u.clone());
             }
         }
+        sets.extend(joint_forces.pattern_sets(&topo));
         let symbolic = Pattern::structure(n, &sets);
         let lu = if n > 0 {
             Some(
@@ -615,6 +628,7 @@ impl System {
                 Slot::Prescribed(_) => None,
             })
             .collect();
+        joint_forces.bind(&topo, |r, c| pattern.slot(r, c));
         let dof_scale = topo
             .dims
             .iter()
@@ -632,6 +646,8 @@ impl System {
             springs,
             loads,
             joint_springs,
+            joint_forces,
+            initial_plan,
             drivers,
             elements,
             pattern,
@@ -718,8 +734,9 @@ impl System {
     }
 
     /// The model's initial configuration at $t = 0$ with its initial conditions applied
-    /// (joint values and rates, node velocities, rigid motion); accelerations zero (the
-    /// dynamic solver computes consistent ones).
+    /// ([`crate::initial`]: joint values and rates move the subtree behind the joint rigidly,
+    /// body velocities, node velocities, rigid motion); accelerations zero (the dynamic solver
+    /// computes consistent ones), controllers at rest.
     pub fn initial_state(&self) -> State {
         let map = &self.topo.map;
         let mut state = State {
@@ -729,60 +746,44 @@ impl System {
             velocity: vec![0.0; map.n_dof],
             acceleration: vec![0.0; map.n_dof],
             frames: Vec::new(),
+            controls: Vec::new(),
         };
         let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
         self.apply_drivers(&mut state, &mut pr, &mut pa);
-        for c in &self.model.initial {
-            match c {
-                InitialCondition::JointValue {
-                    joint,
-                    coordinate,
-                    value,
-                } => {
-                    state.scalars[self.topo.joint_scalars[joint.index()][*coordinate]] = *value;
-                }
-                InitialCondition::JointRate {
-                    joint,
-                    coordinate,
-                    rate,
-                } => {
-                    let s = self.topo.joint_scalars[joint.index()][*coordinate];
-                    state.velocity[unknown(map.scalars[s].slot)] = *rate;
-                }
-                _ => {}
-            }
-        }
+        self.apply_initial(&mut state);
         let motions = self.node_motions(&state);
-        for c in &self.model.initial {
-            match c {
-                InitialCondition::NodeVelocity {
-                    node,
-                    velocity,
-                    angular_velocity,
-                } => {
-                    self.set_root_velocity(&mut state, node.index(), velocity, angular_velocity);
-                }
-                InitialCondition::RigidMotion {
-                    velocity,
-                    angular_velocity,
-                } => {
-                    for n in 0..self.model.nodes.len() {
-                        if self.topo.roots[n].is_some() {
-                            let v = velocity + angular_velocity.cross(&motions[n].r);
-                            self.set_root_velocity(&mut state, n, &v, angular_velocity);
-                        }
-                    }
-                }
-                _ => {}
-            }
-        }
         state.frames = self.flexible.iter().map(|f| rigid_fit(f, &motions)).collect();
+        self.start_controls(&mut state);
         state
+    }
+
+    /// Restarts every controller's integral at zero at the state's time and configuration
+    /// ([`crate::joint_forces`]).
+    pub(crate) fn start_controls(&self, state: &mut State) {
+        let map = &self.topo.map;
+        let mut s = state.clone();
+        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        state.controls = self.joint_forces.start_controls(&values(&s, &pr, &pa), s.time);
+    }
+
+    /// Moves the controllers' integrals to the end of a converged step at `state`
+    /// ([`crate::joint_forces`]); the integrator calls it for every accepted step.
+    pub fn accept_step(&self, state: &mut State) {
+        if self.joint_forces.n_actuators() == 0 {
+            return;
+        }
+        let map = &self.topo.map;
+        let mut s = state.clone();
+        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        self.joint_forces
+            .accept(&values(&s, &pr, &pa), s.time, &mut state.controls);
     }
 
     /// Gives the free coordinates of independent node `n` the velocity $(\mathbf v, \boldsymbol\omega)$
     /// (projected on the free directions).
-    fn set_root_velocity(&self, state: &mut State, n: usize, v: &Vector3<f64>, w: &Vector3<f64>) {
+    pub(crate) fn set_root_velocity(&self, state: &mut State, n: usize, v: &Vector3<f64>, w: &Vector3<f64>) {
         let map = &self.topo.map;
         let Some(rc) = &self.topo.roots[n] else { return };
         for (s, e) in &rc.translation {
@@ -1151,9 +1152,9 @@ impl System {
                 }
             }
         }
-        for &(s, k, c, rest) in &self.joint_springs {
+        for &(s, k, c, rest, preload) in &self.joint_springs {
             let (xv, xd, _) = scalar_values(map, &x, s);
-            let f = k * (xv - rest) + c * xd;
+            let f = preload + k * (xv - rest) + c * xd;
             match map.scalars[s].slot {
                 Slot::Unknown(d) => {
                     ws.F[d] += f;
@@ -1162,8 +1163,16 @@ impl System {
                 Slot::Prescribed(p) => ws.reactions[p] += f,
             }
         }
+        let joint_force_scale = self.joint_forces.add_forces(
+            &self.topo,
+            &x,
+            state.time,
+            &state.controls,
+            &mut ws.F,
+            &mut ws.reactions,
+        );
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        ws.scale = norm(&gparts[0]) + norm(&gparts[1]) + norm(&gparts[2]);
+        ws.scale = norm(&gparts[0]) + norm(&gparts[1]) + norm(&gparts[2]) + joint_force_scale;
         ws.floor = self.residual_floor(&ws.nodes);
         if !tangents {
             self.store_frames(ws, state);
@@ -1199,12 +1208,14 @@ impl System {
             let Kv = &mut ws.K;
             map.geometric_term(c, &ws.derivs[c], &ws.node_res[c], |i, k, g| Kv[slots[k * u + i]] += g);
         }
-        for (&(_, k, c, _), slot) in self.joint_springs.iter().zip(&self.pattern.joint_spring_slots) {
+        for (&(_, k, c, ..), slot) in self.joint_springs.iter().zip(&self.pattern.joint_spring_slots) {
             if let Some(slot) = slot {
                 ws.K[*slot] += k;
                 ws.C[*slot] += c;
             }
         }
+        self.joint_forces
+            .add_tangents(&self.topo, &x, state.time, &state.controls, &mut ws.K, &mut ws.C);
         self.store_frames(ws, state);
         Ok(())
     }
@@ -1527,7 +1538,7 @@ pub(crate) fn values<'a>(s: &'a State, pr: &'a [f64], pa: &'a [f64]) -> Values<'
     }
 }
 
-fn scalar_values(map: &crate::coordinates::CoordinateMap, x: &Values, s: usize) -> (f64, f64, f64) {
+pub(crate) fn scalar_values(map: &crate::coordinates::CoordinateMap, x: &Values, s: usize) -> (f64, f64, f64) {
     let v = x.scalars[s];
     match map.scalars[s].slot {
         Slot::Unknown(d) => (v, x.vel[d], x.acc[d]),

@@ -78,6 +78,14 @@ mod geometric;
 #[path = "unit/newton.rs"]
 mod newton;
 
+/// Initial states that follow the joints (a flexible double pendulum set by joint values and
+/// rates, a free body spun by one line), refused loops, joint springs with preload, limits and
+/// actuators (tangents against central differences; a PID reaching its set-point, the damped
+/// frequency of a torsional spring-damper, a stop), the hand-over from an equilibrium, and the
+/// retry of failed fixed steps.
+#[path = "unit/joint_setup.rs"]
+mod joint_setup;
+
 /// An integrator that owns its system; loads changed between steps.
 #[path = "unit/stepping.rs"]
 mod stepping;
