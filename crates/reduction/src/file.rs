@@ -125,6 +125,12 @@ pub enum BodyFileProblem {
     /// whose own shapes are inconsistent).
     #[error("the body cannot be written: {what}")]
     Unwritable { what: String },
+    /// The file is intact but its data are physically wrong ([`crate::physics`]): no reduction
+    /// produces them.
+    #[error("physically inconsistent data (no reduction produces these; reduce the body again): {}", problems.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("; "))]
+    Physics {
+        problems: Vec<crate::physics::PhysicsProblem>,
+    },
 }
 
 /// The oldest format version this build reads.
@@ -482,8 +488,41 @@ pub fn write(body: &ReducedBody, path: &Path) -> Result<(), ReductionError> {
     })
 }
 
-/// Reads a reduced-body file written by [`write()`].
+/// Reads a reduced-body file written by [`write()`] and checks its physics
+/// ([`crate::physics`]).
 pub fn read(path: &Path) -> Result<ReducedBody, ReductionError> {
+    checked(read_unchecked(path)?, path)
+}
+
+/// Parses the bytes of a reduced-body file and checks its physics ([`crate::physics`]);
+/// `origin` names it in errors. Never panics.
+pub fn from_bytes(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
+    checked(from_bytes_unchecked(bytes, origin)?, origin)
+}
+
+/// `body` if [`crate::physics::physical_problems`] finds nothing, else the error naming them.
+fn checked(body: ReducedBody, origin: &Path) -> Result<ReducedBody, ReductionError> {
+    let problems = crate::physics::physical_problems(&body);
+    if problems.is_empty() {
+        Ok(body)
+    } else {
+        Err(ReductionError::BodyFile {
+            path: PathBuf::from(origin),
+            problem: BodyFileProblem::Physics { problems },
+        })
+    }
+}
+
+/// [`from_bytes`] without the physical checks: for `inspect`, which reports them.
+pub fn from_bytes_unchecked(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
+    parse(bytes).map_err(|problem| ReductionError::BodyFile {
+        path: PathBuf::from(origin),
+        problem,
+    })
+}
+
+/// [`read`] without the physical checks (see [`from_bytes_unchecked`]).
+pub fn read_unchecked(path: &Path) -> Result<ReducedBody, ReductionError> {
     let bytes = std::fs::read(path).map_err(|e| ReductionError::BodyFile {
         path: path.to_path_buf(),
         problem: BodyFileProblem::Io {
@@ -491,15 +530,7 @@ pub fn read(path: &Path) -> Result<ReducedBody, ReductionError> {
             message: e.to_string(),
         },
     })?;
-    from_bytes(&bytes, path)
-}
-
-/// Parses the bytes of a reduced-body file; `origin` names it in errors. Never panics.
-pub fn from_bytes(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
-    parse(bytes).map_err(|problem| ReductionError::BodyFile {
-        path: PathBuf::from(origin),
-        problem,
-    })
+    from_bytes_unchecked(&bytes, path)
 }
 
 /// The next line (without its `\n`) from `start`, looking at most `limit` bytes ahead: header

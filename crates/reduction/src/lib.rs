@@ -42,6 +42,7 @@ pub mod geometric;
 pub mod invariants;
 pub mod matrix_market;
 pub mod modal;
+pub mod physics;
 pub mod reduced_body;
 pub use craig_bampton::{partition, reduce, reduce_with_progress, CbSettings, ModeSelection, Partition, Stage};
 pub use craig_bampton::{reduce_external, reduce_external_dofs};
@@ -52,6 +53,7 @@ pub use file::BodyFileProblem;
 pub use geometric::reduced_geometric_stiffness;
 pub use matrix_market::{read_matrix_market, write_matrix_market};
 pub use modal::modal_sparse;
+pub use physics::{physical_problems, PhysicsProblem};
 pub use reduced_body::{
     DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, ALGORITHM_REVISION, FORMAT_VERSION,
 };
