@@ -72,3 +72,7 @@ mod geometric;
 /// steps, same refusal of a singular matrix).
 #[path = "unit/newton.rs"]
 mod newton;
+
+/// An integrator that owns its system; loads changed between steps.
+#[path = "unit/stepping.rs"]
+mod stepping;
