@@ -890,6 +890,23 @@ impl System {
         d
     }
 
+    /// Rotates the three components of every rotation unknown of `v` from spatial to the body
+    /// axes of the orientations `rotations` ($\mathbf R^T\mathbf v$, `to_body`) or back
+    /// ($\mathbf R\mathbf v$); scalars are left alone.
+    pub(crate) fn rotate_components(&self, rotations: &[UnitQuaternion<f64>], v: &mut [f64], to_body: bool) {
+        for (i, r) in self.topo.map.rotations.iter().enumerate() {
+            let d = r.dof;
+            let x = Vector3::new(v[d], v[d + 1], v[d + 2]);
+            let R = &rotations[i];
+            let y = if to_body {
+                R.inverse_transform_vector(&x)
+            } else {
+                R.transform_vector(&x)
+            };
+            v[d..d + 3].copy_from_slice(y.as_slice());
+        }
+    }
+
     /// `out` = `base` $\oplus$ `dq` (configuration only).
     pub(crate) fn retract_in_place(&self, out: &mut State, base: &State, dq: &[f64]) {
         let map = &self.topo.map;
@@ -1495,24 +1512,47 @@ impl System {
         Ok(())
     }
 
-    /// Combines the iteration matrix $\beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$
-    /// into `ws.S`, where $\mathbf T$ applies $\mathbf J_l(\mathbf h_r)$ to the columns of each rotation
-    /// coordinate ($\mathbf h$: the step's increment $h\Delta\mathbf q$; identity when `None`).
-    pub(crate) fn iteration_matrix(&self, ws: &mut Workspace, beta: f64, gamma: f64, increment: Option<&[f64]>) {
+    /// Combines the iteration matrix into `ws.S`: $\beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} +
+    /// \hat{\mathbf K}$, and with `step` = (the spatial increment $\mathbf h$ of each rotation,
+    /// the iterate of $t_{n+1}$) the exact derivative of the residual with respect to a spatial
+    /// correction $\delta\mathbf h$ of the increment under the body-axis recursion of the
+    /// integrator (`dynamic_solver` module docs): on each rotation's columns
+    /// $\delta\boldsymbol\pi = \mathbf J_l(\mathbf h)\delta\mathbf h$ moves the rotation, and
+    /// $\boldsymbol\omega_s = \mathbf R_{n+1}\boldsymbol\omega_b$, $\dot{\boldsymbol\omega}_s =
+    /// \mathbf R_{n+1}\dot{\boldsymbol\omega}_b$ vary by $\gamma'\mathbf E\delta\mathbf h -
+    /// \tilde{\boldsymbol\omega}_s\mathbf J_l\delta\mathbf h$ and $\beta'\mathbf E\delta\mathbf h -
+    /// \tilde{\dot{\boldsymbol\omega}}_s\mathbf J_l\delta\mathbf h$, $\mathbf E = \exp(\tilde{\mathbf h})$, so the
+    /// columns become $\hat{\mathbf K}\mathbf J_l + \hat{\mathbf C}(\gamma'\mathbf E - \tilde{\boldsymbol\omega}_s\mathbf J_l)
+    /// \;+\; \hat{\mathbf M}(\beta'\mathbf E - \tilde{\dot{\boldsymbol\omega}}_s\mathbf J_l)$.
+    pub(crate) fn iteration_matrix(&self, ws: &mut Workspace, beta: f64, gamma: f64, step: Option<(&[f64], &State)>) {
         for i in 0..ws.S.len() {
             ws.S[i] = beta * ws.M[i] + gamma * ws.C[i] + ws.K[i];
         }
-        let Some(h) = increment else { return };
+        let Some((h, st)) = step else { return };
         let cp = self.pattern.symbolic.col_ptr();
         for r in &self.topo.map.rotations {
             let d = r.dof;
-            let T = so3::left_jacobian(&Vector3::new(h[d], h[d + 1], h[d + 2]));
+            let hv = Vector3::new(h[d], h[d + 1], h[d + 2]);
+            let T = so3::left_jacobian(&hv);
+            let E = so3::exp(&hv).to_rotation_matrix().into_inner();
+            let W = so3::skew(&Vector3::new(st.velocity[d], st.velocity[d + 1], st.velocity[d + 2])) * T;
+            let A = so3::skew(&Vector3::new(
+                st.acceleration[d],
+                st.acceleration[d + 1],
+                st.acceleration[d + 2],
+            )) * T;
             let len = cp[d + 1] - cp[d];
             for t in 0..len {
-                let k = [ws.K[cp[d] + t], ws.K[cp[d + 1] + t], ws.K[cp[d + 2] + t]];
+                let at = |v: &[f64]| [v[cp[d] + t], v[cp[d + 1] + t], v[cp[d + 2] + t]];
+                let (k, c, m) = (at(&ws.K), at(&ws.C), at(&ws.M));
                 for j in 0..3 {
-                    let kt = k[0] * T[(0, j)] + k[1] * T[(1, j)] + k[2] * T[(2, j)];
-                    ws.S[cp[d + j] + t] += kt - k[j];
+                    let mut s = 0.0;
+                    for i in 0..3 {
+                        s += k[i] * T[(i, j)] + (gamma * c[i] + beta * m[i]) * E[(i, j)]
+                            - c[i] * W[(i, j)]
+                            - m[i] * A[(i, j)];
+                    }
+                    ws.S[cp[d + j] + t] = s;
                 }
             }
         }

@@ -82,6 +82,7 @@ pub mod invariants;
 pub mod matrix_market;
 pub mod mbdyn;
 pub mod modal;
+pub mod physics;
 pub mod reduced_body;
 pub mod stress;
 pub use craig_bampton::{partition, reduce, reduce_with_progress, CbSettings, ModeSelection, Partition, Stage};
@@ -94,6 +95,7 @@ pub use geometric::reduced_geometric_stiffness;
 pub use matrix_market::{read_matrix_market, write_matrix_market};
 pub use mbdyn::{read_mbdyn_fem, write_mbdyn_fem, FemError};
 pub use modal::modal_sparse;
+pub use physics::{physical_problems, PhysicsProblem};
 pub use reduced_body::{
     BeamStressElement, DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes,
     ALGORITHM_REVISION, FORMAT_VERSION,

@@ -39,6 +39,13 @@ mod file_format {
     include!("unit/file_format.rs");
 }
 
+/// `reduction::physics`: bodies with valid checksums but physically wrong data (non-symmetric
+/// or indefinite K_CB, non-positive modal mass, metadata against the matrices, coincident or
+/// duplicate interfaces) are refused on load, each problem named; sound bodies pass.
+mod physics {
+    include!("unit/physics.rs");
+}
+
 /// `reduction::matrix_market` and `reduce_external`: exact Matrix Market round trips,
 /// symmetric files expanded, errors with file and line; external K, M and node coordinates
 /// reduce to the body `reduce` gives for the same FE model (beam; solid with RBE2 spiders).
