@@ -20,6 +20,9 @@
 //!   independent nodes.
 //! * Reactions ([`SensorKind::Reaction`], [`SensorKind::DriverEffort`]) are the residual of the
 //!   removed coordinates: the force (moment) the support or driver applies *to* the model.
+//! * Forces the model data do not describe (a controller, a co-simulation partner, a bushing
+//!   law) are [`UserForce`]s: a Rust type gives the wrench on its nodes and, optionally, its
+//!   Jacobians (central differences otherwise), [`System::with_user_forces`].
 //!
 //! # Notation
 //!
@@ -52,6 +55,7 @@
 //! | $\mathbf J = [\mathbf L;\ \mathbf H]$ | [`System::momentum`] | linear momentum, angular momentum about the origin: $\mathbf T_{rig}^T\hat{\mathbf M}\dot{\mathbf q}$ | Noether |
 //! | $\mathbf T_{rig}$ | [`System::rigid_velocities`] | $n_{dof}\times6$: independent velocities of the translations along and rotations about $\mathbf e_k$ | [`momentum`] |
 //! | $\mathbf J_0,\ \boldsymbol\lambda$ | `Integrator::J0`, `lambda` | momenta of the start; rigid correction $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ | HLW §IV.4 |
+//! | $\mathbf f_e$ | [`Wrench`] | a user force's force and moment on a node, inertial | [`user_force`] |
 //!
 //! Vectors are inertial unless said otherwise; rigid-body mass data are in their reference
 //! node's axes. BCA 2012: Brüls, Cardona, Arnold, *Mech. Mach. Theory* 48 (2012). HLW: Hairer,
@@ -75,6 +79,7 @@
 //! | BCA 2012, Alg. 1 | Lie-group generalized-α step; full or modified Newton ([`NewtonStrategy`]) | `mbs::Integrator::step` |
 //! | HLW §IV.4 | momentum projection $(\mathbf T_{rig}^T\hat{\mathbf M}\mathbf T_{rig})\boldsymbol\lambda = \mathbf J_0 - \mathbf J$, $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ on free, unloaded models | `mbs::System::project_momentum` (private, `momentum.rs`) |
 //! | brief §6 | linearised spectrum; each mode's energy by body and node | `mbs::spectrum`, `mbs::mode_energies` |
+//! | this crate | user force: residual $-\lambda\mathbf f_e$, $\mathbf K_t = -\lambda\partial\mathbf f_e/\partial\mathbf x$, $\mathbf C_t = -\lambda\partial\mathbf f_e/\partial\mathbf V$ (central differences when not given) | `mbs::user_force::user_force_element` (private), `mbs::user_force::finite_difference_jacobian` |
 //!
 //! # Not implemented
 //!
@@ -98,7 +103,9 @@
 //! [`model`] (serde data), [`time_function`], [`node`], [`coordinates`] (the maps and their
 //! derivatives), [`topology`] (the tree and its checks), [`body`] (elements), [`system`]
 //! (assembly), [`static_solver`], [`arc_length`], [`dynamic_solver`], [`momentum`] (momenta and
-//! their projection), [`linearized`] (spectrum, mode energies and buckling), [`sensors`], [`error`].
+//! their projection), [`linearized`] (spectrum, mode energies and buckling), [`sensors`], [`error`],
+//! [`user_force`] (forces written in Rust by the user: [`UserForce`], added with
+//! [`System::with_user_forces`]).
 
 #![allow(non_snake_case)]
 
@@ -116,6 +123,7 @@ pub mod static_solver;
 pub mod system;
 pub mod time_function;
 pub mod topology;
+pub mod user_force;
 
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use dynamic_solver::{
@@ -138,3 +146,4 @@ pub use sensors::{Energies, SensorRecord};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
 pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
 pub use time_function::{Interpolation, TimeFunction};
+pub use user_force::{FdSteps, UserForce, Wrench};

@@ -72,3 +72,10 @@ mod geometric;
 /// steps, same refusal of a singular matrix).
 #[path = "unit/newton.rs"]
 mod newton;
+
+/// User-defined forces (the `UserForce` trait): analytic Jacobians against central
+/// differences on deformed, rotated, moving nodes; the assembled tangents with a user force
+/// (analytic or finite-difference Jacobian); a user force equal to a follower load gives the
+/// load's statics and dynamics; non-finite forces and unknown nodes refused by name.
+#[path = "unit/user_force.rs"]
+mod user_force;
