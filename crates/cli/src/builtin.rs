@@ -3,10 +3,10 @@
 //! `./slider_crank-results/` and the reduced rod cached in `./.flexmbs-cache/`; then a plot
 //! of the rod's midpoint deflection against the crank angle, `slider-crank.png`.
 
-use crate::error::{BoxError, ResultExt};
-use crate::run::Options;
-use crate::source::Source;
 use std::path::Path;
+use study::error::{BoxError, ResultExt};
+use study::run::Options;
+use study::source::Source;
 
 /// The study text of the built-in example.
 pub const STUDY: &str = include_str!("../../../examples/slider_crank.toml");
@@ -29,12 +29,12 @@ fn column(path: &Path, k: usize) -> Result<Vec<f64>, BoxError> {
 pub fn run(options: &Options) -> Result<(), BoxError> {
     let cwd = std::env::current_dir().context(|| "cannot read the current folder".to_string())?;
     let source = Source::from_text(&cwd.join("slider_crank.toml"), STUDY.to_string());
-    let study = crate::study::parse_and_validate(source)?;
+    let study = study::parse_and_validate(source)?;
     eprintln!(
         "flexmbs: the built-in example: {}",
         study.title.as_deref().unwrap_or("slider-crank")
     );
-    let summary = crate::run::run(&study, options)?;
+    let summary = crate::cli::run(&study, options)?;
     let out = options.results_dir(&study);
     let dir = out.join(&summary.analyses[0].name);
     let angle = column(&dir.join("crank-angle.csv"), 1)?;

@@ -1,8 +1,9 @@
 //! The command line: parsing the arguments and dispatching to the commands.
 
-use crate::error::BoxError;
-use crate::run::Options;
+use crate::console::Console;
 use std::path::PathBuf;
+use study::error::BoxError;
+use study::run::Options;
 
 pub const USAGE: &str = "\
 flexmbs: from a mesh to the motion of a flexible mechanism
@@ -67,7 +68,7 @@ fn parse(args: &[String], known: &[&str]) -> Result<(Vec<String>, Flags), BoxErr
                 None => (name.to_string(), None),
             };
             if !known.contains(&name.as_str()) {
-                let close = crate::source::close_matches(&name, known.iter().copied());
+                let close = study::source::close_matches(&name, known.iter().copied());
                 let hint = match close.first() {
                     Some(c) => format!("; did you mean --{c}?"),
                     None if known.is_empty() => " (this command takes no options)".to_string(),
@@ -112,12 +113,24 @@ fn one_file(positional: &[String], command: &str, what: &str) -> Result<PathBuf,
     }
 }
 
-fn load(path: &std::path::Path) -> Result<crate::study::Study, BoxError> {
-    let study = crate::study::load(path)?;
+fn load(path: &std::path::Path) -> Result<study::Study, BoxError> {
+    let study = study::load(path)?;
     for w in &study.warnings {
         eprintln!("flexmbs: warning: {w}");
     }
     Ok(study)
+}
+
+/// Runs every analysis of `study` into its results folder, progress on the console.
+pub fn run(study: &study::Study, options: &Options) -> Result<study::output::Summary, BoxError> {
+    let summary = study::run(study, options, &mut Console::default())?;
+    eprintln!(
+        "flexmbs: {} analyses done in {:.2} s; results in {}",
+        summary.analyses.len(),
+        summary.total_seconds,
+        options.results_dir(study).display()
+    );
+    Ok(summary)
 }
 
 /// Runs the command line `args` (without the program name).
@@ -150,7 +163,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 _ => {
                     let path = one_file(&positional, "run", "a study file")?;
                     let study = load(&path)?;
-                    crate::run::run(&study, &run_options)?;
+                    run(&study, &run_options)?;
                     Ok(())
                 }
             }
@@ -183,7 +196,22 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let (positional, options) = parse(rest, &["part", "out", "cache"])?;
             let path = one_file(&positional, "reduce", "a study file")?;
             let study = load(&path)?;
-            crate::run::reduce_command(&study, option(&options, "part"), &run_options(&options))?;
+            let written = study::run::reduce_command(
+                &study,
+                option(&options, "part"),
+                &run_options(&options),
+                &mut Console::default(),
+            )?;
+            for r in written {
+                println!(
+                    "part '{}': {} coordinates ({} interfaces, {} modes) -> {}",
+                    r.part,
+                    r.coordinates,
+                    r.interfaces,
+                    r.modes,
+                    r.path.display()
+                );
+            }
             Ok(())
         }
         "inspect" => {
@@ -205,12 +233,12 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let (positional, _) = parse(rest, &[])?;
             match positional.as_slice() {
                 [] => {
-                    print!("{}", crate::examples::list());
+                    print!("{}", study::examples::list());
                     Ok(())
                 }
                 [name] | [name, _] => {
                     let dir = PathBuf::from(positional.get(1).map_or(".", String::as_str));
-                    let study = crate::examples::write(name, &dir)?;
+                    let study = study::examples::write(name, &dir)?;
                     println!("{}", study.display());
                     eprintln!("flexmbs: run it with `flexmbs run {}`", study.display());
                     Ok(())
@@ -220,7 +248,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
         }
         other => {
             let commands = ["run", "check", "reduce", "inspect", "example", "validate", "help"];
-            let close = crate::source::close_matches(other, commands.iter().copied());
+            let close = study::source::close_matches(other, commands.iter().copied());
             let hint = match close.first() {
                 Some(c) => format!("; did you mean `{c}`?"),
                 None => String::new(),

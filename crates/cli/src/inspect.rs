@@ -2,9 +2,9 @@
 //! using it in a study: size, interfaces, mass data, fixed-interface frequencies and modal
 //! effective masses (`reduction::diagnostics`).
 
-use crate::error::{BoxError, ResultExt};
 use std::fmt::Write as _;
 use std::path::Path;
+use study::error::{BoxError, ResultExt};
 
 /// The report of `inspect`. `excitation_hz`: the highest frequency a study will excite; the
 /// diagnostics then check that the kept modes reach `factor` times it.

@@ -12,7 +12,7 @@ fn main() -> ExitCode {
     match flexmbs::cli::main_with(&args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("{}", flexmbs::error::report(&*e));
+            eprintln!("{}", study::error::report(&*e));
             ExitCode::from(2)
         }
     }

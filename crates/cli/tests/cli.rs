@@ -22,10 +22,6 @@ mod broken;
 #[path = "cli/cache.rs"]
 mod cache;
 
-/// VTK node orders, one test per cell type, and the structure of a written `.vtu`.
-#[path = "cli/vtu.rs"]
-mod vtu;
-
 /// Random and mutated study files (fixed seeds): no panic, exit code 2 with a message.
 #[path = "cli/property.rs"]
 mod property;

@@ -94,6 +94,7 @@ use crate::momentum::MomentumProjection;
 use crate::sensors::SensorRecord;
 use crate::system::{State, System, Workspace};
 use nalgebra::Vector6;
+use std::sync::Arc;
 
 /// Settings of the adaptive step (module docs).
 #[derive(Clone, Debug, PartialEq)]
@@ -230,9 +231,27 @@ pub struct StepReport {
     pub momentum_defect: Option<[f64; 6]>,
 }
 
+/// The system an [`Integrator`] steps: borrowed from the caller, or shared and owned (an
+/// integrator that lives on its own, with loads that can change between steps).
+#[derive(Clone)]
+enum Held<'a> {
+    Borrowed(&'a System),
+    Shared(Arc<System>),
+}
+
+impl std::ops::Deref for Held<'_> {
+    type Target = System;
+    fn deref(&self) -> &System {
+        match self {
+            Held::Borrowed(s) => s,
+            Held::Shared(s) => s,
+        }
+    }
+}
+
 /// A generalized-α integrator over a [`System`], one step at a time.
 pub struct Integrator<'a> {
-    system: &'a System,
+    system: Held<'a>,
     state: State,
     /// The algorithmic acceleration $\mathbf a_n$.
     a: Vec<f64>,
@@ -266,6 +285,37 @@ pub struct Integrator<'a> {
 impl<'a> Integrator<'a> {
     /// Starts at `state` with consistent initial accelerations.
     pub fn new(system: &'a System, state: State, settings: DynamicSettings) -> Result<Self, SolveError> {
+        Self::start(Held::Borrowed(system), state, settings)
+    }
+
+    /// [`Integrator::new`] owning its system: it can outlive the caller's borrow, and
+    /// [`Integrator::system_mut`] changes loads between steps.
+    pub fn new_owned(
+        system: Arc<System>,
+        state: State,
+        settings: DynamicSettings,
+    ) -> Result<Integrator<'static>, SolveError> {
+        Integrator::start(Held::Shared(system), state, settings)
+    }
+
+    /// The system stepped.
+    pub fn system(&self) -> &System {
+        &self.system
+    }
+
+    /// The system, to change between steps (loads: [`System::set_load_value`]); `None` for an
+    /// integrator that borrows its system ([`Integrator::new`]). The next step starts from
+    /// the current state and acceleration with the changed system.
+    pub fn system_mut(&mut self) -> Option<&mut System> {
+        match &mut self.system {
+            Held::Borrowed(_) => None,
+            Held::Shared(s) => Some(Arc::make_mut(s)),
+        }
+    }
+
+    fn start(held: Held<'a>, state: State, settings: DynamicSettings) -> Result<Self, SolveError> {
+        let keep = held.clone();
+        let system: &System = &keep;
         if !(settings.step > 0.0 && settings.step.is_finite() && (0.0..=1.0).contains(&settings.rho_inf)) {
             return Err(SolveError::InvalidSettings {
                 what: format!(
@@ -296,7 +346,7 @@ impl<'a> Integrator<'a> {
             _ => None,
         };
         Ok(Self {
-            system,
+            system: held,
             a: acc,
             p: AlphaParameters::from_rho_inf(settings.rho_inf),
             settings,
@@ -439,7 +489,8 @@ impl<'a> Integrator<'a> {
     /// every correction) or modified (module docs). On success the state is at $t_{n+1}$ and
     /// the momentum defect is returned; on failure the state is unchanged.
     fn attempt(&mut self, modified: bool, residuals: &mut Vec<f64>) -> Result<Option<[f64; 6]>, SolveError> {
-        let sys = self.system;
+        let held = self.system.clone();
+        let sys: &System = &held;
         let n = sys.n_dof();
         let h = self.settings.step;
         let AlphaParameters {

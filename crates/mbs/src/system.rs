@@ -164,6 +164,11 @@ impl State {
     pub fn time(&self) -> f64 {
         self.time
     }
+    /// Every scalar coordinate (joint coordinates, modal coordinates; unknown and
+    /// prescribed) and the node rotations not carried by joints: the configuration.
+    pub fn coordinates(&self) -> (&[f64], &[UnitQuaternion<f64>]) {
+        (&self.scalars, &self.rotations)
+    }
     /// $\dot{\mathbf q}$ in the order of [`System::dof_labels`].
     pub fn velocity(&self) -> &[f64] {
         &self.velocity
@@ -659,6 +664,31 @@ impl System {
     /// The model this system was built from.
     pub fn model(&self) -> &Model {
         &self.model
+    }
+
+    /// Sets the value $\mathbf f_0$ of load `load` (index in `Model::loads`) in its axes: the
+    /// load is $x(t)\,\mathbf f_0$ from now on (a follower's in the node's axes at the start,
+    /// as `Model::loads` gives it). For loads that change between time steps.
+    pub fn set_load_value(&mut self, load: usize, value: Vector3<f64>) -> Result<(), ModelError> {
+        if !value.iter().all(|x| x.is_finite()) {
+            return Err(ModelError::InvalidValue {
+                entity: format!("load {load}"),
+                what: "non-finite value".into(),
+            });
+        }
+        let (Some(l), Some(e)) = (self.model.loads.get_mut(load), self.loads.get_mut(load)) else {
+            return Err(ModelError::InvalidValue {
+                entity: format!("load {load}"),
+                what: format!("there are {} loads", self.model.loads.len()),
+            });
+        };
+        l.value = value;
+        e.value = if e.follower {
+            self.model.nodes[l.node.index()].orientation.inverse() * value
+        } else {
+            value
+        };
+        Ok(())
     }
 
     /// Number of unknowns $\dim\dot{\mathbf q}$.

@@ -79,3 +79,7 @@ mod newton;
 /// load's statics and dynamics; non-finite forces and unknown nodes refused by name.
 #[path = "unit/user_force.rs"]
 mod user_force;
+
+/// An integrator that owns its system; loads changed between steps.
+#[path = "unit/stepping.rs"]
+mod stepping;

@@ -8,8 +8,8 @@
 //! (fast); a sample runs through the binary to check the exit code.
 
 use crate::support::*;
-use flexmbs::source::Source;
 use std::path::Path;
+use study::source::Source;
 
 /// xorshift64*: small, fast, and the same sequence on every platform.
 struct Rng(u64);
@@ -238,12 +238,12 @@ fn bases() -> Vec<String> {
 
 /// Validates `text` in-process; panics (failing the test) only if the program would.
 fn check_in_process(study: &Path, text: String, case: usize) {
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(
-        || match flexmbs::study::parse_and_validate(Source::from_text(study, text.clone())) {
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        match study::parse_and_validate(Source::from_text(study, text.clone())) {
             Ok(_) => None,
             Err(errors) => Some(errors.to_string()),
-        },
-    ));
+        }
+    }));
     match result {
         Ok(Some(message)) => {
             assert!(

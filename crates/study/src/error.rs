@@ -1,4 +1,4 @@
-//! Errors of the program: any error of the libraries, wrapped in the context that says which
+//! Errors of a study run: any error of the libraries, wrapped in the context that says which
 //! part, analysis or file it is about. `main` prints the chain, one cause per line.
 
 use std::fmt;
@@ -43,7 +43,12 @@ impl<T, E: Into<BoxError>> ResultExt<T> for Result<T, E> {
 
 /// The error and its causes, one per line: the report `main` prints.
 pub fn report(e: &(dyn std::error::Error + 'static)) -> String {
-    let mut out = format!("flexmbs: error: {e}");
+    format!("flexmbs: error: {}", chain(e))
+}
+
+/// The error and its causes, one per line, each cause as `caused by: ...`.
+pub fn chain(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut out = e.to_string();
     let mut source = e.source();
     while let Some(s) = source {
         out.push_str(&format!("\n  caused by: {s}"));

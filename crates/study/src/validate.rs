@@ -15,10 +15,10 @@
 use crate::part::{
     mass_kind, model_size, InterfaceSpec, InterfaceTarget, LoadSpec, NodeRef, Part, PartKind, Reduction, SupportSpec,
 };
+use crate::schema::*;
 use crate::source::{
     close_matches, quote_list, suggestions, unknown_reference, KeyPath, Source, StudyError, StudyErrors,
 };
-use crate::study_file::*;
 use fe_model::generate::{beam_arc, frame, straight_beam, Member};
 use fe_model::{
     BeamProperties, BeamSection, BeamTheory, CellKind, DofMask, FeError, FeModel, IsotropicMaterial, NodeId,

@@ -5,11 +5,11 @@
 //!
 //! What needs the reduced bodies (interface positions, the tree of joints, unheld
 //! coordinates, rigid loops) is checked by `mbs::System::new` when the study runs;
-//! `crate::mechanism_run` turns those errors back into a located message.
+//! `crate::mechanism` turns those errors back into a located message.
 
 use super::Validator;
+use crate::schema::*;
 use crate::source::{suggestions, unknown_reference, KeyPath};
-use crate::study_file::*;
 use mbs::{Interpolation, JointKind, LoadAxes, LoadKind, RotationSupport, TimeFunction, TranslationSupport};
 use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
 use reduction::ReducedBody;

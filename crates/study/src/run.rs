@@ -1,15 +1,15 @@
-//! Executes a validated [`Study`] analysis by analysis, writing each one's results as soon
-//! as it is done (`crate::output`), and reduces parts through the cache (`crate::cache`).
-//!
-//! Progress goes to stderr, what the analyses found to stdout (and into `summary.md`).
+//! Executes a validated [`Study`] analysis by analysis, every result to an [`Observer`] as
+//! soon as it is computed, and reduces parts through the cache (`crate::cache`). The
+//! analyses of parts (static, modal, reduce) are here; those of the mechanism in
+//! `crate::mechanism`.
 
 use crate::error::{BoxError, Context, ResultExt};
-use crate::output::{
-    default_results_dir, num, prepare_analysis_dir, AnalysisSummary, Csv, PartSummary, Status, Summary,
-};
+use crate::folder::ResultsFolder;
+use crate::observer::{AnalysisInfo, Cell, Observer, Progress, Series, Table};
+use crate::output::{default_results_dir, AnalysisSummary, PartSummary, Status, Summary};
 use crate::part::{Built, InterfaceTarget, LoadSpec, Part, SupportSpec};
-use crate::study::{Analysis, AnalysisSpec, Solver, Study, DENSE_AUTO_LIMIT};
-use crate::vtu::{six_dof_fields, write_pvd, write_vtu, PointField, VtuMesh};
+use crate::validate::{Analysis, AnalysisSpec, Solver, Study, DENSE_AUTO_LIMIT};
+use crate::vtu::{six_dof_fields, PointField, VtuMesh};
 use fe_model::{DofMap, ModalSolution, NodeId, DOF_NAMES};
 use reduction::{CbSettings, ReducedBody};
 use serde_json::json;
@@ -45,7 +45,6 @@ struct Outcome {
     free_dofs: usize,
     report: Vec<String>,
     results: serde_json::Value,
-    files: Vec<String>,
     /// A solver that stopped after writing part of its results.
     failure: Option<String>,
 }
@@ -60,14 +59,24 @@ fn part_summary(p: &Part) -> PartSummary {
     }
 }
 
-/// Runs every analysis of `study`. Stops at the first that fails, after writing the
-/// summary with the failure.
-pub fn run(study: &Study, options: &Options) -> Result<Summary, BoxError> {
-    let start = Instant::now();
-    let out = options.results_dir(study);
-    std::fs::create_dir_all(&out).context(|| format!("cannot create the results folder {}", out.display()))?;
-    let cache = options.cache_dir(study);
-    let mut summary = Summary {
+/// The analysis `a` (number `index` of the study) as the observer sees it.
+pub fn analysis_info(study: &Study, index: usize) -> AnalysisInfo {
+    let a = &study.analyses[index];
+    AnalysisInfo {
+        index,
+        count: study.analyses.len(),
+        name: a.name.clone(),
+        kind: a.kind_name().into(),
+        of: match a.part {
+            Some(p) => format!("part '{}'", study.parts[p].name),
+            None => "the mechanism".to_string(),
+        },
+    }
+}
+
+/// The summary of `study` before anything ran: every analysis pending.
+pub fn pending_summary(study: &Study) -> Summary {
+    Summary {
         flexmbs_version: env!("CARGO_PKG_VERSION").to_string(),
         study: study.source.path.display().to_string(),
         title: study.title.clone(),
@@ -92,196 +101,202 @@ pub fn run(study: &Study, options: &Options) -> Result<Summary, BoxError> {
             })
             .collect(),
         total_seconds: 0.0,
-    };
-    let write_summary = |s: &Summary| {
-        s.write(&out)
-            .context(|| format!("cannot write the summary into {}", out.display()))
-    };
-    write_summary(&summary)?;
+    }
+}
+
+/// Runs every analysis of `study` into a results folder (`options.out`, or beside the study
+/// file), with `observer` seeing every result too. Stops at the first analysis that fails,
+/// after writing the summary with the failure.
+pub fn run(study: &Study, options: &Options, observer: &mut dyn Observer) -> Result<Summary, BoxError> {
+    let mut folder = ResultsFolder::new(&options.results_dir(study))?;
+    run_with(study, options, &mut (&mut folder, observer))
+}
+
+/// Runs every analysis of `study`, every result to `obs` only (no results folder unless
+/// `obs` writes one); the cache of reduced bodies is used as in [`run`].
+pub fn run_with(study: &Study, options: &Options, obs: &mut dyn Observer) -> Result<Summary, BoxError> {
+    let mut runner = Runner::new(study, options);
     let n = study.analyses.len();
     if n == 0 {
-        eprintln!("flexmbs: the study has no [[analyses]]: nothing to run");
+        obs.progress(&Progress::Info("the study has no [[analyses]]: nothing to run".into()));
     }
-    let mut mechanism: Option<crate::mechanism_run::BuiltMechanism> = None;
-    for (i, a) in study.analyses.iter().enumerate() {
-        let of = match a.part {
-            Some(p) => format!("part '{}'", study.parts[p].name),
-            None => "the mechanism".to_string(),
-        };
-        eprintln!(
-            "flexmbs: [{}/{n}] {} analysis '{}' of {of}",
-            i + 1,
-            a.kind_name(),
-            a.name
-        );
+    obs.summary(&runner.summary)?;
+    for i in 0..n {
+        runner.run_one(i, obs)?;
+    }
+    runner.finish(obs)
+}
+
+/// A study being run analysis by analysis; the mechanism is built once, at its first
+/// analysis, and kept for the next.
+pub struct Runner<'s> {
+    study: &'s Study,
+    options: Options,
+    start: Instant,
+    pub summary: Summary,
+    mechanism: Option<crate::mechanism::BuiltMechanism>,
+}
+
+impl<'s> Runner<'s> {
+    pub fn new(study: &'s Study, options: &Options) -> Self {
+        Self {
+            study,
+            options: options.clone(),
+            start: Instant::now(),
+            summary: pending_summary(study),
+            mechanism: None,
+        }
+    }
+
+    /// The mechanism, built (its bodies reduced through the cache) at the first call.
+    pub fn mechanism(&mut self, obs: &mut dyn Observer) -> Result<&crate::mechanism::BuiltMechanism, BoxError> {
+        if self.mechanism.is_none() {
+            let cache = self.options.cache_dir(self.study);
+            self.mechanism = Some(crate::mechanism::build(self.study, &cache, obs)?);
+        }
+        self.mechanism
+            .as_ref()
+            .ok_or_else(|| "the mechanism could not be built".into())
+    }
+
+    /// Runs analysis `i`; a failure is recorded in the summary and returned with the
+    /// analysis it belongs to.
+    pub fn run_one(&mut self, i: usize, obs: &mut dyn Observer) -> Result<(), BoxError> {
+        let study = self.study;
+        let a = &study.analyses[i];
+        let info = analysis_info(study, i);
+        obs.begin(&info)?;
         let t = Instant::now();
+        let cache = self.options.cache_dir(study);
         let result = match &a.spec {
             AnalysisSpec::Mbs(spec) => {
                 let mut spec = spec.clone();
-                if let (crate::study::MbsAnalysis::Dynamic { t_end, .. }, Some(limit)) = (&mut spec, options.t_end) {
+                if let (crate::validate::MbsAnalysis::Dynamic { t_end, .. }, Some(limit)) =
+                    (&mut spec, self.options.t_end)
+                {
                     *t_end = t_end.min(limit);
                 }
-                run_mbs(study, a, &spec, &out, &cache, &mut mechanism)
+                match self.mechanism(obs) {
+                    Ok(built) => crate::mechanism::run_analysis(study, &spec, built, obs).map(|o| Outcome {
+                        free_dofs: o.free_dofs,
+                        report: o.report,
+                        results: o.results,
+                        failure: o.failure,
+                    }),
+                    Err(e) => Err(e),
+                }
             }
-            _ => run_analysis(study, a, &out, &cache),
+            _ => run_analysis(study, a, &cache, obs),
         };
+        let files = obs.take_files();
+        let summary = &mut self.summary;
         let entry = &mut summary.analyses[i];
         entry.seconds = Some(t.elapsed().as_secs_f64());
-        summary.total_seconds = start.elapsed().as_secs_f64();
+        entry.files = files;
+        summary.total_seconds = self.start.elapsed().as_secs_f64();
+        let where_ = || match &self.options.out {
+            Some(out) => out.display().to_string(),
+            None => self.options.results_dir(study).display().to_string(),
+        };
         match result {
             Ok(o) => {
-                println!("{} '{}' ({of}):", a.kind_name(), a.name);
-                for line in &o.report {
-                    println!("  {line}");
-                }
                 entry.status = Status::Done;
                 entry.free_dofs = Some(o.free_dofs);
                 entry.report = o.report;
                 entry.results = o.results;
-                entry.files = o.files;
                 if let Some(failure) = o.failure {
                     // The solver stopped: what it computed is written; the run fails here.
                     entry.status = Status::Failed;
                     entry.error = Some(failure.clone());
                     summary.status = "failed".into();
-                    write_summary(&summary)?;
+                    let entry = entry.clone();
+                    obs.end(&info, &entry)?;
+                    obs.summary(summary)?;
                     return Err(format!(
-                        "{} analysis '{}' ({}): {failure} in {}",
+                        "{} analysis '{}' ({}): {failure} in {}/{}",
                         a.kind_name(),
                         a.name,
                         study.location(&a.path),
-                        out.join(&a.name).display()
+                        where_(),
+                        a.name
                     )
                     .into());
                 }
-                write_summary(&summary)?;
+                let entry = entry.clone();
+                obs.end(&info, &entry)?;
+                obs.summary(summary)?;
+                Ok(())
             }
             Err(e) => {
                 entry.status = Status::Failed;
-                entry.error = Some(
-                    crate::error::report(&*e)
-                        .trim_start_matches("flexmbs: error: ")
-                        .to_string(),
-                );
+                entry.error = Some(crate::error::chain(&*e));
                 summary.status = "failed".into();
-                write_summary(&summary)?;
-                return Err(Box::new(Context {
+                let entry = entry.clone();
+                obs.end(&info, &entry)?;
+                obs.summary(summary)?;
+                Err(Box::new(Context {
                     message: format!(
                         "{} analysis '{}' ({}) failed; the results of the analyses before it are in {}",
                         a.kind_name(),
                         a.name,
                         study.location(&a.path),
-                        out.display()
+                        where_()
                     ),
                     source: e,
-                }));
+                }))
             }
         }
     }
-    summary.status = "complete".into();
-    summary.total_seconds = start.elapsed().as_secs_f64();
-    write_summary(&summary)?;
-    eprintln!(
-        "flexmbs: {n} analyses done in {:.2} s; results in {}",
-        summary.total_seconds,
-        out.display()
-    );
-    Ok(summary)
-}
 
-/// An analysis of the mechanism; the mechanism is built (and its bodies reduced) once.
-fn run_mbs(
-    study: &Study,
-    a: &Analysis,
-    spec: &crate::study::MbsAnalysis,
-    out: &Path,
-    cache: &Path,
-    mechanism: &mut Option<crate::mechanism_run::BuiltMechanism>,
-) -> Result<Outcome, BoxError> {
-    let dir = out.join(&a.name);
-    prepare_analysis_dir(&dir).context(|| format!("cannot prepare the results folder {}", dir.display()))?;
-    if mechanism.is_none() {
-        *mechanism = Some(crate::mechanism_run::build(study, cache)?);
+    /// Marks the run complete and hands the summary out.
+    pub fn finish(mut self, obs: &mut dyn Observer) -> Result<Summary, BoxError> {
+        self.summary.status = "complete".into();
+        self.summary.total_seconds = self.start.elapsed().as_secs_f64();
+        obs.summary(&self.summary)?;
+        Ok(self.summary)
     }
-    let Some(built) = mechanism.as_ref() else {
-        return Err("the mechanism could not be built".into());
-    };
-    let o = crate::mechanism_run::run_analysis(study, spec, built, &dir, &a.name)?;
-    Ok(Outcome {
-        free_dofs: o.free_dofs,
-        report: o.report,
-        results: o.results,
-        files: o.files,
-        failure: o.failure,
-    })
 }
 
-fn run_analysis(study: &Study, a: &Analysis, out: &Path, cache: &Path) -> Result<Outcome, BoxError> {
-    let dir = out.join(&a.name);
-    prepare_analysis_dir(&dir).context(|| format!("cannot prepare the results folder {}", dir.display()))?;
+fn run_analysis(study: &Study, a: &Analysis, cache: &Path, obs: &mut dyn Observer) -> Result<Outcome, BoxError> {
     let Some(part) = a.part.map(|p| &study.parts[p]) else {
         return Err(format!("analysis '{}' has no part", a.name).into());
     };
-    let mut files = Files {
-        dir: dir.clone(),
-        prefix: a.name.clone(),
-        list: Vec::new(),
-    };
-    let mut o = match &a.spec {
-        AnalysisSpec::Static { supports, loads } => run_static(part, supports, loads, &mut files)?,
+    let o = match &a.spec {
+        AnalysisSpec::Static { supports, loads } => run_static(part, supports, loads, obs)?,
         AnalysisSpec::Modal {
             modes,
             solver,
             supports,
-        } => run_modal(part, *modes, *solver, supports, &mut files)?,
-        AnalysisSpec::Reduce => run_reduce(part, cache, &mut files)?,
+        } => run_modal(part, *modes, *solver, supports, obs)?,
+        AnalysisSpec::Reduce => run_reduce(part, cache, &a.name, obs)?,
         AnalysisSpec::Mbs(_) => return Err(format!("analysis '{}' runs on the mechanism", a.name).into()),
     };
-    o.files = files.list;
     Ok(o)
 }
 
-/// The files of one analysis: written into its folder, listed relative to the results folder.
-struct Files {
-    dir: PathBuf,
-    prefix: String,
-    list: Vec<String>,
-}
-
-impl Files {
-    fn path(&mut self, name: &str) -> PathBuf {
-        self.list.push(format!("{}/{name}", self.prefix));
-        self.dir.join(name)
-    }
-    fn csv(&mut self, name: &str, csv: &Csv) -> Result<(), BoxError> {
-        let p = self.path(name);
-        csv.write(&p).context(|| format!("cannot write {}", p.display()))
-    }
-    fn vtu(&mut self, name: &str, mesh: &VtuMesh, fields: &[PointField<'_>]) -> Result<(), BoxError> {
-        let p = self.path(name);
-        write_vtu(&p, mesh, fields).context(|| format!("cannot write {}", p.display()))
-    }
-    /// A field of six dofs per node, as the point fields "displacement" and "rotation".
-    fn six_dof_vtu(&mut self, name: &str, mesh: &VtuMesh, values: &[[f64; 6]]) -> Result<(), BoxError> {
-        let (u, r) = six_dof_fields(values);
-        let fields = [
-            PointField {
-                name: "displacement",
-                components: 3,
-                values: &u,
-            },
-            PointField {
-                name: "rotation",
-                components: 3,
-                values: &r,
-            },
-        ];
-        self.vtu(name, mesh, &fields)
-    }
-    fn pvd(&mut self, name: &str, entries: &[(f64, String)]) -> Result<(), BoxError> {
-        let p = self.path(name);
-        write_pvd(&p, entries).context(|| format!("cannot write {}", p.display()))
-    }
+/// A field of six dofs per node as one frame with the point fields "displacement" and
+/// "rotation".
+fn six_dof_frame(
+    obs: &mut dyn Observer,
+    series: Series,
+    key: f64,
+    mesh: &VtuMesh,
+    values: &[[f64; 6]],
+) -> Result<(), BoxError> {
+    let (u, r) = six_dof_fields(values);
+    let fields = [
+        PointField {
+            name: "displacement",
+            components: 3,
+            values: &u,
+        },
+        PointField {
+            name: "rotation",
+            components: 3,
+            values: &r,
+        },
+    ];
+    obs.frame(series, key, mesh, &fields)
 }
 
 /// The spider of each solid interface, for drawing (the auxiliary spider on every node is
@@ -326,7 +341,7 @@ fn run_static(
     part: &Part,
     supports: &[SupportSpec],
     loads: &[LoadSpec],
-    files: &mut Files,
+    obs: &mut dyn Observer,
 ) -> Result<Outcome, BoxError> {
     let built = part
         .build(supports, false)
@@ -337,30 +352,36 @@ fn run_static(
         .context(|| format!("part '{}': static solution failed", part.name))?;
     let nodes = &built.model.mesh.nodes;
 
-    let mut csv = Csv::new(&[
-        "node", "tag", "x [m]", "y [m]", "z [m]", "ux [m]", "uy [m]", "uz [m]", "rx [rad]", "ry [rad]", "rz [rad]",
-    ]);
+    let mut csv = Table::new(
+        "displacements",
+        &[
+            "node", "tag", "x [m]", "y [m]", "z [m]", "ux [m]", "uy [m]", "uz [m]", "rx [rad]", "ry [rad]", "rz [rad]",
+        ],
+    );
     let mut max = (0.0, 0usize);
     for (i, u) in s.displacements.iter().enumerate() {
         let norm = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
         if norm > max.0 {
             max = (norm, i);
         }
-        let mut row = vec![i.to_string(), tag(&built, NodeId(i as u32)).to_string()];
-        row.extend([nodes[i].x, nodes[i].y, nodes[i].z].map(num));
-        row.extend(u.map(num));
-        csv.row(&row);
+        let mut row = vec![Cell::from(i), Cell::Int(tag(&built, NodeId(i as u32)) as i64)];
+        row.extend([nodes[i].x, nodes[i].y, nodes[i].z].map(Cell::Num));
+        row.extend(u.map(Cell::Num));
+        csv.row(row);
     }
-    files.csv("displacements.csv", &csv)?;
+    obs.table(&csv)?;
 
-    let mut csv = Csv::new(&[
-        "node", "tag", "Fx [N]", "Fy [N]", "Fz [N]", "Mx [N m]", "My [N m]", "Mz [N m]",
-    ]);
+    let mut csv = Table::new(
+        "reactions",
+        &[
+            "node", "tag", "Fx [N]", "Fy [N]", "Fz [N]", "Mx [N m]", "My [N m]", "Mz [N m]",
+        ],
+    );
     let mut total = [0.0; 6];
     for (node, r) in &s.reactions {
-        let mut row = vec![node.index().to_string(), tag(&built, *node).to_string()];
-        row.extend(r.map(num));
-        csv.row(&row);
+        let mut row = vec![Cell::from(node.index()), Cell::Int(tag(&built, *node) as i64)];
+        row.extend(r.map(Cell::Num));
+        csv.row(row);
         // Moments about the origin: M + x x F.
         let x = nodes[node.index()].coords;
         let m = nalgebra::Vector3::new(r[3], r[4], r[5]) + x.cross(&nalgebra::Vector3::new(r[0], r[1], r[2]));
@@ -369,18 +390,21 @@ fn run_static(
             total[3 + k] += m[k];
         }
     }
-    files.csv("reactions.csv", &csv)?;
+    obs.table(&csv)?;
 
-    let mut csv = Csv::new(&[
-        "interface",
-        "node",
-        "ux [m]",
-        "uy [m]",
-        "uz [m]",
-        "rx [rad]",
-        "ry [rad]",
-        "rz [rad]",
-    ]);
+    let mut csv = Table::new(
+        "interfaces",
+        &[
+            "interface",
+            "node",
+            "ux [m]",
+            "uy [m]",
+            "uz [m]",
+            "rx [rad]",
+            "ry [rad]",
+            "rz [rad]",
+        ],
+    );
     let mut report = vec![format!(
         "solved {n_free} dofs, relative residual {:.1e}",
         s.relative_residual
@@ -396,9 +420,9 @@ fn run_static(
     let mut interfaces = Vec::new();
     for (name, node) in &built.interfaces {
         let u = s.displacements[node.index()];
-        let mut row = vec![name.clone(), node.index().to_string()];
-        row.extend(u.map(num));
-        csv.row(&row);
+        let mut row = vec![Cell::from(name.clone()), Cell::from(node.index())];
+        row.extend(u.map(Cell::Num));
+        csv.row(row);
         report.push(format!(
             "interface '{name}': u = {} m, theta = {} rad",
             vec_text(&u[..3]),
@@ -406,7 +430,7 @@ fn run_static(
         ));
         interfaces.push(json!({ "name": name, "u": &u[..3], "theta": &u[3..] }));
     }
-    files.csv("interfaces.csv", &csv)?;
+    obs.table(&csv)?;
     report.push(format!(
         "sum of reactions: F = {} N, M = {} N m about the origin",
         vec_text(&total[..3]),
@@ -425,8 +449,7 @@ fn run_static(
     }
 
     let mesh = VtuMesh::from_model(&built.model, &spiders(part, &built));
-    files.six_dof_vtu("static.vtu", &mesh, &s.displacements)?;
-    files.pvd("static.pvd", &[(0.0, "static.vtu".into())])?;
+    six_dof_frame(obs, Series::Static, 0.0, &mesh, &s.displacements)?;
     Ok(Outcome {
         free_dofs: n_free,
         report,
@@ -436,7 +459,6 @@ fn run_static(
             "relative_residual": s.relative_residual,
             "interfaces": interfaces,
         }),
-        files: Vec::new(),
         failure: None,
     })
 }
@@ -446,7 +468,7 @@ fn run_modal(
     modes: usize,
     solver: Solver,
     supports: &[SupportSpec],
-    files: &mut Files,
+    obs: &mut dyn Observer,
 ) -> Result<Outcome, BoxError> {
     let built = part
         .build(supports, false)
@@ -473,19 +495,15 @@ fn run_modal(
         (s, "sparse shift-invert")
     };
     let f = solution.frequencies_hz();
-    let mut csv = Csv::new(&["mode", "frequency [Hz]", "omega [rad/s]"]);
+    let mut csv = Table::new("frequencies", &["mode", "frequency [Hz]", "omega [rad/s]"]);
     for (k, (hz, w)) in f.iter().zip(&solution.omega).enumerate() {
-        csv.row(&[(k + 1).to_string(), num(*hz), num(*w)]);
+        csv.row(vec![Cell::from(k + 1), Cell::Num(*hz), Cell::Num(*w)]);
     }
-    files.csv("frequencies.csv", &csv)?;
+    obs.table(&csv)?;
     let mesh = VtuMesh::from_model(&built.model, &spiders(part, &built));
-    let mut entries = Vec::new();
     for (k, shape) in solution.shapes.iter().enumerate() {
-        let name = format!("mode_{:03}.vtu", k + 1);
-        files.six_dof_vtu(&name, &mesh, shape)?;
-        entries.push(((k + 1) as f64, name));
+        six_dof_frame(obs, Series::Modes, (k + 1) as f64, &mesh, shape)?;
     }
-    files.pvd("modes.pvd", &entries)?;
     let mut report = vec![format!(
         "{} modes of {n_free} dofs ({method}, {:.3} s), mass-normalised shapes in modes.pvd",
         f.len(),
@@ -505,7 +523,6 @@ fn run_modal(
         free_dofs: n_free,
         report,
         results: json!({ "solver": method, "frequencies_hz": f }),
-        files: Vec::new(),
         failure: None,
     })
 }
@@ -522,7 +539,7 @@ pub struct Reduced {
 
 /// Reduces `part` (which has a reduction), or reads it from the cache when the same mesh and
 /// settings were reduced before (`crate::cache`).
-pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
+pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<Reduced, BoxError> {
     let Some(reduction) = &part.reduction else {
         return Err(format!("part '{}' has no [parts.reduction]", part.name).into());
     };
@@ -536,11 +553,11 @@ pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
     if file.is_file() {
         match reduction::file::read(&file) {
             Ok(body) if body.name == part.name => {
-                eprintln!(
-                    "flexmbs: part '{}': reduced body found in the cache ({}): same mesh and settings, not reducing again",
+                obs.progress(&Progress::Info(format!(
+                    "part '{}': reduced body found in the cache ({}): same mesh and settings, not reducing again",
                     part.name,
                     file.display()
-                );
+                )));
                 return Ok(Reduced {
                     body,
                     built,
@@ -549,11 +566,13 @@ pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
                     free_dofs: n_free,
                 });
             }
-            Ok(_) => eprintln!(
-                "flexmbs: warning: cache file {} holds another body; reducing again",
+            Ok(_) => obs.progress(&Progress::Warning(format!(
+                "cache file {} holds another body; reducing again",
                 file.display()
-            ),
-            Err(e) => eprintln!("flexmbs: warning: cannot use the cached body ({e}); reducing again"),
+            ))),
+            Err(e) => obs.progress(&Progress::Warning(format!(
+                "cannot use the cached body ({e}); reducing again"
+            ))),
         }
     }
     let modes = match reduction.modes {
@@ -561,8 +580,8 @@ pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
         reduction::ModeSelection::Count(m) => format!("{m} fixed-interface modes"),
         reduction::ModeSelection::CutoffHz(f) => format!("fixed-interface modes below {f} Hz"),
     };
-    eprintln!(
-        "flexmbs: part '{}': reducing {n_free} dofs to {} interfaces{} and {modes}{} ...",
+    obs.progress(&Progress::Info(format!(
+        "part '{}': reducing {n_free} dofs to {} interfaces{} and {modes}{} ...",
         part.name,
         built.interfaces.len(),
         if built.auxiliary.is_some() {
@@ -575,15 +594,12 @@ pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
         } else {
             ""
         }
-    );
+    )));
     let t = Instant::now();
     let mut settings = CbSettings::new(reduction.modes);
     settings.keep_mesh_shapes = reduction.keep_mesh_shapes;
     settings.auxiliary_node = built.auxiliary;
     settings.geometric_stiffening = reduction.geometric_stiffening;
-    // A spinner on stderr naming the stage (hidden when stderr is not a terminal).
-    let bar = indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
-    bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let mut progress = |stage: reduction::Stage| {
         let what = match stage {
             reduction::Stage::Assembling => "assembling K and M".to_string(),
@@ -596,7 +612,7 @@ pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
             reduction::Stage::Invariants => "inertia invariants".to_string(),
             _ => return,
         };
-        bar.set_message(format!("part '{}': {what}", part.name));
+        obs.progress(&Progress::Stage(format!("part '{}': {what}", part.name)));
     };
     let body = reduction::reduce_with_progress(
         &built.model,
@@ -607,22 +623,22 @@ pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
         &mut progress,
     )
     .context(|| format!("part '{}': Craig-Bampton reduction failed", part.name))?;
-    bar.finish_and_clear();
-    eprintln!(
-        "flexmbs: part '{}': reduced in {:.2} s to {} coordinates ({} interfaces, {} modes)",
+    obs.progress(&Progress::Finished);
+    obs.progress(&Progress::Info(format!(
+        "part '{}': reduced in {:.2} s to {} coordinates ({} interfaces, {} modes)",
         part.name,
         t.elapsed().as_secs_f64(),
         body.n_coordinates(),
         body.interfaces.len(),
         body.n_modes
-    );
+    )));
     std::fs::create_dir_all(cache).context(|| format!("cannot create the cache folder {}", cache.display()))?;
     reduction::file::write(&body, &file).context(|| format!("part '{}': cannot write the reduced body", part.name))?;
-    eprintln!(
-        "flexmbs: part '{}': saved to the cache as {}",
+    obs.progress(&Progress::Info(format!(
+        "part '{}': saved to the cache as {}",
         part.name,
         file.display()
-    );
+    )));
     Ok(Reduced {
         body,
         built,
@@ -632,20 +648,19 @@ pub fn reduce_part(part: &Part, cache: &Path) -> Result<Reduced, BoxError> {
     })
 }
 
-fn run_reduce(part: &Part, cache: &Path, files: &mut Files) -> Result<Outcome, BoxError> {
-    let r = reduce_part(part, cache)?;
+fn run_reduce(part: &Part, cache: &Path, analysis: &str, obs: &mut dyn Observer) -> Result<Outcome, BoxError> {
+    let r = reduce_part(part, cache, obs)?;
     let body = &r.body;
     let name = format!("{}.{}", part.name, reduction::file::EXTENSION);
-    let target = files.path(&name);
-    std::fs::copy(&r.file, &target).context(|| format!("cannot copy {} to {}", r.file.display(), target.display()))?;
+    obs.file(&name, &r.file)?;
 
-    let mut csv = Csv::new(&["index", "name", "node", "x [m]", "y [m]", "z [m]"]);
+    let mut csv = Table::new("interfaces", &["index", "name", "node", "x [m]", "y [m]", "z [m]"]);
     for (k, i) in body.interfaces.iter().enumerate() {
-        let mut row = vec![k.to_string(), i.name.clone(), i.node.to_string()];
-        row.extend(i.position.map(num));
-        csv.row(&row);
+        let mut row = vec![Cell::from(k), Cell::from(i.name.clone()), Cell::Int(i64::from(i.node))];
+        row.extend(i.position.map(Cell::Num));
+        csv.row(row);
     }
-    files.csv("interfaces.csv", &csv)?;
+    obs.table(&csv)?;
 
     let d = reduction::diagnostics(body, None, 3.0);
     let mut header = vec!["mode", "frequency [Hz]", "generalized mass [-]"];
@@ -654,70 +669,78 @@ fn run_reduce(part: &Part, cache: &Path, files: &mut Files) -> Result<Outcome, B
         .map(|d| format!("effective mass {d} [% of rigid]"))
         .collect();
     header.extend(labels.iter().map(String::as_str));
-    let mut csv = Csv::new(&header);
+    let mut csv = Table::new("fixed_interface_modes", &header);
     for m in &d.modes {
-        let mut row = vec![m.mode.to_string(), num(m.frequency_hz), num(m.generalized_mass)];
-        row.extend(m.effective_fraction.map(|x| num(100.0 * x)));
-        csv.row(&row);
+        let mut row = vec![
+            Cell::from(m.mode),
+            Cell::Num(m.frequency_hz),
+            Cell::Num(m.generalized_mass),
+        ];
+        row.extend(m.effective_fraction.map(|x| Cell::Num(100.0 * x)));
+        csv.row(row);
     }
-    files.csv("fixed_interface_modes.csv", &csv)?;
+    obs.table(&csv)?;
 
     let i = &body.inertia;
-    let mut csv = Csv::new(&["quantity", "value", "unit"]);
-    csv.row(&["mass".into(), num(i.mass), "kg".into()]);
+    let mut csv = Table::new("mass", &["quantity", "value", "unit"]);
+    csv.row(vec!["mass".into(), Cell::Num(i.mass), "kg".into()]);
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
-        csv.row(&[format!("center of mass {axis}"), num(i.center_of_mass[k]), "m".into()]);
+        csv.row(vec![
+            format!("center of mass {axis}").into(),
+            Cell::Num(i.center_of_mass[k]),
+            "m".into(),
+        ]);
     }
     for (a, ra) in ["x", "y", "z"].iter().enumerate() {
         for (b, rb) in ["x", "y", "z"].iter().enumerate() {
-            csv.row(&[
-                format!("inertia about center of mass J{ra}{rb}"),
-                num(i.inertia_com[a][b]),
+            csv.row(vec![
+                format!("inertia about center of mass J{ra}{rb}").into(),
+                Cell::Num(i.inertia_com[a][b]),
                 "kg m^2".into(),
             ]);
         }
     }
-    files.csv("mass.csv", &csv)?;
+    obs.table(&csv)?;
 
     // The CB shapes on the mesh: the constraint modes, then the fixed-interface modes.
     if let Some(shapes) = &body.mesh {
         let n_nodes = shapes.nodes.len();
         if n_nodes == r.built.model.node_count() {
             let mesh = VtuMesh::from_model(&r.built.model, &spiders(part, &r.built));
-            let mut csv = Csv::new(&["shape", "file", "kind", "interface", "dof", "frequency [Hz]"]);
-            let mut entries = Vec::new();
+            let mut csv = Table::new(
+                "shapes",
+                &["shape", "file", "kind", "interface", "dof", "frequency [Hz]"],
+            );
             for c in 0..shapes.shapes.ncols {
                 let values: Vec<[f64; 6]> = (0..n_nodes)
                     .map(|n| std::array::from_fn(|k| shapes.shapes.get(6 * n + k, c)))
                     .collect();
                 let file = format!("shape_{:03}.vtu", c + 1);
-                files.six_dof_vtu(&file, &mesh, &values)?;
+                six_dof_frame(obs, Series::Shapes, (c + 1) as f64, &mesh, &values)?;
                 let nb = 6 * body.interfaces.len();
                 let row = if c < nb {
                     vec![
-                        (c + 1).to_string(),
-                        file.clone(),
+                        Cell::from(c + 1),
+                        Cell::from(file),
                         "constraint mode".into(),
-                        body.interfaces[c / 6].name.clone(),
+                        body.interfaces[c / 6].name.clone().into(),
                         DOF_NAMES[c % 6].into(),
-                        String::new(),
+                        Cell::Empty,
                     ]
                 } else {
                     let k = c - nb;
                     vec![
-                        (c + 1).to_string(),
-                        file.clone(),
+                        Cell::from(c + 1),
+                        Cell::from(file),
                         "fixed-interface mode".into(),
-                        String::new(),
-                        String::new(),
-                        num(body.fixed_interface_omega[k] / (2.0 * std::f64::consts::PI)),
+                        Cell::Empty,
+                        Cell::Empty,
+                        Cell::Num(body.fixed_interface_omega[k] / (2.0 * std::f64::consts::PI)),
                     ]
                 };
-                csv.row(&row);
-                entries.push(((c + 1) as f64, file));
+                csv.row(row);
             }
-            files.csv("shapes.csv", &csv)?;
-            files.pvd("shapes.pvd", &entries)?;
+            obs.table(&csv)?;
         }
     }
 
@@ -747,7 +770,7 @@ fn run_reduce(part: &Part, cache: &Path, files: &mut Files) -> Result<Outcome, B
             f.iter().map(|x| sci(*x)).collect::<Vec<_>>().join(", ")
         ));
     }
-    report.push(format!("reduced body: {}/{name}", files.prefix));
+    report.push(format!("reduced body: {analysis}/{name}"));
     for w in &d.warnings {
         report.push(format!("warning: {w}"));
     }
@@ -764,14 +787,28 @@ fn run_reduce(part: &Part, cache: &Path, files: &mut Files) -> Result<Outcome, B
             "from_cache": r.from_cache,
             "cache_file": r.file.display().to_string(),
         }),
-        files: Vec::new(),
         failure: None,
     })
 }
 
+/// A reduced body copied into the results folder by [`reduce_command`].
+#[derive(Clone, Debug)]
+pub struct ReducedFile {
+    pub part: String,
+    pub coordinates: usize,
+    pub interfaces: usize,
+    pub modes: usize,
+    pub path: PathBuf,
+}
+
 /// `flexmbs reduce`: reduces every part with a `[parts.reduction]`, or the one named, and
-/// copies the bodies into the results folder. Returns the files written.
-pub fn reduce_command(study: &Study, only: Option<&str>, options: &Options) -> Result<Vec<PathBuf>, BoxError> {
+/// copies the bodies into the results folder.
+pub fn reduce_command(
+    study: &Study,
+    only: Option<&str>,
+    options: &Options,
+    obs: &mut dyn Observer,
+) -> Result<Vec<ReducedFile>, BoxError> {
     let parts: Vec<&Part> = match only {
         Some(name) => {
             let part = &study.parts[study.part(name)?];
@@ -799,19 +836,17 @@ pub fn reduce_command(study: &Study, only: Option<&str>, options: &Options) -> R
     let cache = options.cache_dir(study);
     let mut written = Vec::new();
     for part in parts {
-        let r = reduce_part(part, &cache)?;
+        let r = reduce_part(part, &cache, obs)?;
         let target = out.join(format!("{}.{}", part.name, reduction::file::EXTENSION));
         std::fs::copy(&r.file, &target)
             .context(|| format!("cannot copy {} to {}", r.file.display(), target.display()))?;
-        println!(
-            "part '{}': {} coordinates ({} interfaces, {} modes) -> {}",
-            part.name,
-            r.body.n_coordinates(),
-            r.body.interfaces.len(),
-            r.body.n_modes,
-            target.display()
-        );
-        written.push(target);
+        written.push(ReducedFile {
+            part: part.name.clone(),
+            coordinates: r.body.n_coordinates(),
+            interfaces: r.body.interfaces.len(),
+            modes: r.body.n_modes,
+            path: target,
+        });
     }
     Ok(written)
 }

@@ -11,14 +11,15 @@
 #![allow(non_snake_case)]
 
 use crate::error::{BoxError, ResultExt};
-use crate::output::num;
+use crate::observer::{Cell, Observer, Progress, SensorGroup, SensorStream, Series, Table};
 use crate::run::{reduce_part, Reduced};
+use crate::simulation::{sensor_columns, Simulation};
 use crate::source::KeyPath;
-use crate::study::mechanism::{
-    About, BodySource, FrameSpec, InitialSpec, MbsAnalysis, Mechanism, PointRef, ReactionAt, SensorTarget,
+use crate::validate::mechanism::{
+    About, BodySource, FrameSpec, InitialSpec, MbsAnalysis, PointRef, ReactionAt, SensorTarget,
 };
-use crate::study::Study;
-use crate::vtu::{write_pvd, write_vtu, CellRole, PointField, VtuMesh};
+use crate::validate::Study;
+use crate::vtu::{CellRole, PointField, VtuMesh};
 use mbs::{
     Body, DriverTarget, FlexibleBody, InitialCondition, JointKind, Load, Model, NodeId, PointMass, RigidBody,
     SensorKind, Spring, Support, System,
@@ -27,22 +28,14 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use reduction::ReducedBody;
 use serde_json::json;
 use std::collections::BTreeMap;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 use superelement::{Frame, FrameChoice, Superelement};
 
 /// Prefix of the sensors added for the mesh recovery (modal coordinates of each body); they
 /// are not written as sensor files.
 const HIDDEN: &str = "__flexmbs_modal.";
-
-/// One sensor of the study: the `mbs` sensors it is made of and its CSV columns with units.
-#[derive(Clone, Debug)]
-pub struct SensorGroup {
-    pub name: String,
-    pub mbs_names: Vec<String>,
-    pub columns: Vec<String>,
-}
 
 /// The mechanism as an `mbs::Model`, with what the outputs need.
 pub struct BuiltMechanism {
@@ -57,6 +50,17 @@ pub struct BuiltMechanism {
     pub entities: Vec<(KeyPath, String)>,
     /// Reductions: (part, coordinates, modes, from cache).
     pub reductions: Vec<serde_json::Value>,
+    /// The point loads of the study by name, with their `mbs` loads.
+    pub loads: Vec<NamedLoad>,
+}
+
+/// A `[[loads]]` point load of the study: the indices in `Model::loads` of its force and
+/// moment.
+#[derive(Clone, Debug)]
+pub struct NamedLoad {
+    pub name: String,
+    pub path: KeyPath,
+    pub loads: Vec<(mbs::LoadKind, usize)>,
 }
 
 pub struct BodyOut {
@@ -93,7 +97,7 @@ fn located(study: &Study, path: &KeyPath, message: impl std::fmt::Display) -> Bo
 type ReducedBodies = (Vec<(ReducedBody, Option<VtuMesh>)>, Vec<serde_json::Value>);
 
 /// Reduces (or reads from the cache) every flexible body's part, once per part.
-fn reduce_bodies(study: &Study, cache: &Path) -> Result<ReducedBodies, BoxError> {
+fn reduce_bodies(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<ReducedBodies, BoxError> {
     let mut done: BTreeMap<usize, Reduced> = BTreeMap::new();
     let mut out = Vec::new();
     let mut reductions = Vec::new();
@@ -101,7 +105,7 @@ fn reduce_bodies(study: &Study, cache: &Path) -> Result<ReducedBodies, BoxError>
         match &b.source {
             BodySource::Part(p) => {
                 if !done.contains_key(p) {
-                    let r = reduce_part(&study.parts[*p], cache)?;
+                    let r = reduce_part(&study.parts[*p], cache, obs)?;
                     reductions.push(json!({
                         "part": study.parts[*p].name,
                         "fe_dofs": r.free_dofs,
@@ -124,9 +128,9 @@ fn reduce_bodies(study: &Study, cache: &Path) -> Result<ReducedBodies, BoxError>
 }
 
 /// Builds the `mbs::Model` of the study's mechanism (module docs).
-pub fn build(study: &Study, cache: &Path) -> Result<BuiltMechanism, BoxError> {
+pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<BuiltMechanism, BoxError> {
     let m = &study.mechanism;
-    let (reduced, reductions) = reduce_bodies(study, cache)?;
+    let (reduced, reductions) = reduce_bodies(study, cache, obs)?;
     // Every point, its position and its name.
     let mut keys: Vec<Key> = Vec::new();
     let mut positions: Vec<Vector3<f64>> = Vec::new();
@@ -209,6 +213,14 @@ pub fn build(study: &Study, cache: &Path) -> Result<BuiltMechanism, BoxError> {
         }
     }
     let node = |p: &PointRef, path: &KeyPath| -> Result<NodeId, BoxError> { Ok(node_of[resolve(p, path)?]) };
+    // Every point of every body has a key (above); a missing one is a bug, reported, never
+    // a silent attachment to another node.
+    let node_of_key = |key: Key| -> Result<NodeId, BoxError> {
+        keys.iter()
+            .position(|x| *x == key)
+            .map(|i| node_of[i])
+            .ok_or_else(|| format!("internal error: point {key:?} of the mechanism has no node").into())
+    };
     for g in grounded {
         model.add_support(Support::clamp(node_of[g]));
     }
@@ -219,8 +231,8 @@ pub fn build(study: &Study, cache: &Path) -> Result<BuiltMechanism, BoxError> {
         let (body, mesh) = (body.clone(), mesh.clone());
         let spec = &m.bodies[b];
         let nodes: Vec<NodeId> = (0..body.interfaces.len())
-            .map(|k| node_of[keys.iter().position(|x| *x == Key::Flexible(b, k)).unwrap_or(0)])
-            .collect();
+            .map(|k| node_of_key(Key::Flexible(b, k)))
+            .collect::<Result<_, _>>()?;
         let frame = match &spec.frame {
             FrameSpec::CenterOfMass => FrameChoice::CenterOfMass,
             FrameSpec::AuxiliaryNode => FrameChoice::AuxiliaryNode,
@@ -274,8 +286,8 @@ pub fn build(study: &Study, cache: &Path) -> Result<BuiltMechanism, BoxError> {
     let mut rigid = Vec::new();
     for (b, r) in m.rigid_bodies.iter().enumerate() {
         let nodes: Vec<NodeId> = (0..r.points.len())
-            .map(|k| node_of[keys.iter().position(|x| *x == Key::Rigid(b, k)).unwrap_or(0)])
-            .collect();
+            .map(|k| node_of_key(Key::Rigid(b, k)))
+            .collect::<Result<_, _>>()?;
         let (reference, others) = match nodes.split_first() {
             Some((first, rest)) => (*first, rest.to_vec()),
             None => (
@@ -366,9 +378,12 @@ pub fn build(study: &Study, cache: &Path) -> Result<BuiltMechanism, BoxError> {
     if let Some((_, g)) = &m.gravity {
         model.gravity = *g;
     }
+    let mut loads = Vec::new();
     for l in &m.loads {
         let n = node(&l.at, &l.path)?;
+        let mut ids = Vec::new();
         for (kind, value) in &l.values {
+            ids.push((*kind, model.loads.len()));
             model.add_load(Load {
                 node: n,
                 kind: *kind,
@@ -377,6 +392,11 @@ pub fn build(study: &Study, cache: &Path) -> Result<BuiltMechanism, BoxError> {
                 time: l.time.clone(),
             });
         }
+        loads.push(NamedLoad {
+            name: l.name.clone(),
+            path: l.path.clone(),
+            loads: ids,
+        });
     }
     // Sensors.
     let mut groups = Vec::new();
@@ -564,6 +584,7 @@ pub fn build(study: &Study, cache: &Path) -> Result<BuiltMechanism, BoxError> {
         rigid,
         entities,
         reductions,
+        loads,
     })
 }
 
@@ -604,90 +625,57 @@ impl BuiltMechanism {
     }
 }
 
-/// Sensor CSV files written row by row.
-pub struct SensorFiles {
-    files: Vec<(std::io::BufWriter<std::fs::File>, Vec<usize>)>,
-    /// Values kept for the plots: per group, (x, rows).
-    pub history: Vec<(Vec<f64>, Vec<Vec<f64>>)>,
-    pub paths: Vec<String>,
+/// The sensors of the study picked out of the rows of an `mbs::SensorRecord` and sent to
+/// the observer; the last sample is kept for the report.
+pub struct SensorSampler {
+    /// Per group: its columns in a record row.
+    columns: Vec<Vec<usize>>,
+    /// The abscissa and values of the last sample.
+    pub last: Option<(f64, Vec<Vec<f64>>)>,
 }
 
-impl SensorFiles {
-    /// Creates `<dir>/<sensor>.csv` for every group, with `x_label` as the first column.
-    pub fn create(
-        dir: &Path,
-        prefix: &str,
+impl SensorSampler {
+    /// Starts the sensor stream of `groups` (columns named in `record`), with `x_label` as the
+    /// abscissa.
+    pub fn start(
+        obs: &mut dyn Observer,
         groups: &[SensorGroup],
         record: &mbs::SensorRecord,
         x_label: &str,
+        plots: bool,
     ) -> Result<Self, BoxError> {
-        let mut offsets = Vec::new();
-        let mut at = 0;
-        for w in &record.widths {
-            offsets.push(at);
-            at += w;
-        }
-        let mut files = Vec::new();
-        let mut paths = Vec::new();
-        for g in groups {
-            let cols: Vec<usize> = g
-                .mbs_names
-                .iter()
-                .flat_map(|n| {
-                    let k = record.names.iter().position(|x| x == n).unwrap_or(0);
-                    offsets[k]..offsets[k] + record.widths[k]
-                })
-                .collect();
-            let path = dir.join(format!("{}.csv", g.name));
-            let f = std::fs::File::create(&path).context(|| format!("cannot create {}", path.display()))?;
-            let mut w = std::io::BufWriter::new(f);
-            let mut header = vec![x_label.to_string()];
-            header.extend(g.columns.iter().cloned());
-            writeln!(w, "{}", header.join(",")).context(|| format!("cannot write {}", path.display()))?;
-            files.push((w, cols));
-            paths.push(format!("{prefix}/{}.csv", g.name));
-        }
-        let history = vec![(Vec::new(), Vec::new()); groups.len()];
-        Ok(Self { files, history, paths })
+        let columns = sensor_columns(groups, record)?;
+        obs.sensors(&SensorStream { x_label, groups, plots })?;
+        Ok(Self { columns, last: None })
     }
 
-    /// Writes the last row of `record` (x = `x`) to every file and flushes.
-    pub fn write_last(&mut self, x: f64, record: &mbs::SensorRecord) -> Result<(), BoxError> {
+    /// Sends the last row of `record` (abscissa `x`).
+    pub fn sample(&mut self, obs: &mut dyn Observer, x: f64, record: &mbs::SensorRecord) -> Result<(), BoxError> {
         let Some(row) = record.rows.last() else {
             return Ok(());
         };
-        for (k, (w, cols)) in self.files.iter_mut().enumerate() {
-            let values: Vec<f64> = cols.iter().map(|&c| row[c]).collect();
-            let mut line = num(x);
-            for v in &values {
-                line.push(',');
-                line.push_str(&num(*v));
-            }
-            writeln!(w, "{line}")
-                .and_then(|_| w.flush())
-                .context(|| "cannot write a sensor file".to_string())?;
-            self.history[k].0.push(x);
-            self.history[k].1.push(values);
-        }
+        let values: Vec<Vec<f64>> = self
+            .columns
+            .iter()
+            .map(|cols| cols.iter().map(|&c| row[c]).collect())
+            .collect();
+        obs.sample(x, &values)?;
+        self.last = Some((x, values));
         Ok(())
     }
 }
 
 /// The deformed meshes of every body at the output times (module docs).
-pub struct MeshWriter {
-    dir: PathBuf,
-    prefix: String,
+pub struct MeshRecovery {
     mesh: VtuMesh,
     /// Per flexible body: superelement, first point, last frame.
     flexible: Vec<(Superelement, usize, Option<Frame>)>,
     /// Per rigid body: first point.
     rigid: Vec<usize>,
-    entries: Vec<(f64, String)>,
-    pub files: Vec<String>,
 }
 
-impl MeshWriter {
-    pub fn new(dir: &Path, prefix: &str, b: &BuiltMechanism) -> Result<Self, BoxError> {
+impl MeshRecovery {
+    pub fn new(b: &BuiltMechanism) -> Result<Self, BoxError> {
         let mut mesh = VtuMesh::default();
         let mut flexible = Vec::new();
         for body in &b.bodies {
@@ -743,20 +731,14 @@ impl MeshWriter {
             }
             rigid.push(first);
         }
-        Ok(Self {
-            dir: dir.to_path_buf(),
-            prefix: prefix.to_string(),
-            mesh,
-            flexible,
-            rigid,
-            entries: Vec::new(),
-            files: Vec::new(),
-        })
+        Ok(Self { mesh, flexible, rigid })
     }
 
-    /// Writes the meshes at `state` (modal coordinates from the last row of `record`).
+    /// Sends the deformed meshes at `state` (modal coordinates from the last row of
+    /// `record`) to the observer as a frame of [`Series::Mechanism`] at `t`.
     pub fn write(
         &mut self,
+        obs: &mut dyn Observer,
         t: f64,
         sys: &System,
         state: &mbs::State,
@@ -825,10 +807,9 @@ impl MeshWriter {
             }
         }
         let values: Vec<f64> = u.iter().flatten().copied().collect();
-        let name = format!("mechanism_{:05}.vtu", self.entries.len());
-        let path = self.dir.join(&name);
-        write_vtu(
-            &path,
+        obs.frame(
+            Series::Mechanism,
+            t,
             &self.mesh,
             &[PointField {
                 name: "displacement",
@@ -836,15 +817,6 @@ impl MeshWriter {
                 values: &values,
             }],
         )
-        .context(|| format!("cannot write {}", path.display()))?;
-        self.files.push(format!("{}/{name}", self.prefix));
-        self.entries.push((t, name));
-        let pvd = self.dir.join("mechanism.pvd");
-        write_pvd(&pvd, &self.entries).context(|| format!("cannot write {}", pvd.display()))?;
-        if self.entries.len() == 1 {
-            self.files.push(format!("{}/mechanism.pvd", self.prefix));
-        }
-        Ok(())
     }
 }
 
@@ -853,31 +825,18 @@ pub struct MbsOutcome {
     pub free_dofs: usize,
     pub report: Vec<String>,
     pub results: serde_json::Value,
-    pub files: Vec<String>,
     /// A solver failure after partial results were written.
     pub failure: Option<String>,
 }
 
-/// A progress bar on stderr (hidden when stderr is not a terminal).
-pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::with_draw_target(Some(len), indicatif::ProgressDrawTarget::stderr());
-    if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} ({elapsed} < {eta})") {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar.set_message(what.to_string());
-    bar
-}
-
-/// Runs one analysis of the mechanism into `dir` (files listed relative to its parent as
-/// `prefix/...`).
+/// Runs one analysis of the mechanism, every result to `obs`.
 pub fn run_analysis(
     study: &Study,
     analysis: &MbsAnalysis,
     b: &BuiltMechanism,
-    dir: &Path,
-    prefix: &str,
+    obs: &mut dyn Observer,
 ) -> Result<MbsOutcome, BoxError> {
-    let sys = b.system(study)?;
+    let sys = Arc::new(b.system(study)?);
     let n = sys.n_dof();
     let mut out = MbsOutcome {
         free_dofs: n,
@@ -889,7 +848,6 @@ pub fn run_analysis(
             b.model.joints.len()
         )],
         results: json!({}),
-        files: Vec::new(),
         failure: None,
     };
     let output = &study.mechanism.output;
@@ -921,17 +879,15 @@ pub fn run_analysis(
                 Ok(s) => (s, None),
                 Err(inc) => (inc.partial, Some(inc.error)),
             };
-            let mut files = SensorFiles::create(dir, prefix, &b.groups, &sol.sensors, "load factor [-]")?;
+            let mut files = SensorSampler::start(obs, &b.groups, &sol.sensors, "load factor [-]", output.plots)?;
             let mut rec = sys.sensor_record();
             for (t, row) in sol.sensors.times.iter().zip(&sol.sensors.rows) {
                 rec.times.push(*t);
                 rec.rows.push(row.clone());
-                files.write_last(*t, &rec)?;
+                files.sample(obs, *t, &rec)?;
             }
-            out.files.extend(files.paths.clone());
-            let mut mw = MeshWriter::new(dir, prefix, b)?;
-            mw.write(1.0, &sys, &sol.state, b, &rec)?;
-            out.files.extend(mw.files.clone());
+            let mut mw = MeshRecovery::new(b)?;
+            mw.write(obs, 1.0, &sys, &sol.state, b, &rec)?;
             let iterations: usize = sol.steps.iter().map(|s| s.residuals.len().saturating_sub(1)).sum();
             out.report.push(format!(
                 "{} load steps, {iterations} Newton iterations, {} rejected attempts; last relative residual {:.2e}",
@@ -952,34 +908,20 @@ pub fn run_analysis(
                 "load_factor_reached": sol.sensors.times.last().copied().unwrap_or(0.0),
                 "seconds_solving": t0.elapsed().as_secs_f64(),
             });
-            plots(dir, prefix, &study.mechanism, b, &files, "load factor [-]", &mut out)?;
+            obs.sensors_end()?;
             out.failure = failure.map(|e| format!("equilibrium stopped: {e}; the converged load steps are written"));
         }
-        MbsAnalysis::Dynamic {
-            t_end,
-            dt,
-            rho_inf,
-            tolerance,
-            max_iterations,
-            newton,
-        } => {
-            let mut settings = mbs::DynamicSettings::new(*dt, *t_end, *rho_inf);
-            settings.tolerance = *tolerance;
-            settings.max_iterations = *max_iterations;
-            settings.newton = *newton;
-            settings.output_every = output.every;
-            let mut integ = mbs::Integrator::new(&sys, sys.initial_state(), settings)
-                .map_err(|e| format!("the initial accelerations: {e}"))?;
+        MbsAnalysis::Dynamic { t_end, dt, newton, .. } => {
+            let mut integ = Simulation::with_system(study, Arc::clone(&sys), b, analysis)?;
             let mut rec = sys.sensor_record();
             integ.record(&mut rec)?;
-            let mut files = SensorFiles::create(dir, prefix, &b.groups, &rec, "t [s]")?;
-            files.write_last(0.0, &rec)?;
-            let mut mw = MeshWriter::new(dir, prefix, b)?;
+            let mut files = SensorSampler::start(obs, &b.groups, &rec, "t [s]", output.plots)?;
+            files.sample(obs, 0.0, &rec)?;
+            let mut mw = MeshRecovery::new(b)?;
             if output.vtu_every.is_some() {
-                mw.write(0.0, &sys, integ.state(), b, &rec)?;
+                mw.write(obs, 0.0, &sys, integ.state(), b, &rec)?;
             }
             let n_steps = ((t_end / dt) - 1e-9).ceil().max(0.0) as usize;
-            let bar = progress_bar(n_steps as u64, "time integration");
             let mut iterations = 0usize;
             let mut jacobians = 0usize;
             let mut max_iter = 0usize;
@@ -1003,7 +945,7 @@ pub fn run_analysis(
                 let t = integ.state().time();
                 if k % output.every == 0 || k == n_steps {
                     integ.record(&mut rec)?;
-                    files.write_last(t, &rec)?;
+                    files.sample(obs, t, &rec)?;
                     // Only the last row is needed; keep the record small.
                     if rec.rows.len() > 1 {
                         rec.rows.drain(..rec.rows.len() - 1);
@@ -1015,14 +957,16 @@ pub fn run_analysis(
                         if k % output.every != 0 && k != n_steps {
                             integ.record(&mut rec)?;
                         }
-                        mw.write(t, &sys, integ.state(), b, &rec)?;
+                        mw.write(obs, t, &sys, integ.state(), b, &rec)?;
                     }
                 }
-                bar.inc(1);
+                obs.progress(&Progress::Steps {
+                    what: "time integration".into(),
+                    done: k as u64,
+                    total: n_steps as u64,
+                });
             }
-            bar.finish_and_clear();
-            out.files.extend(files.paths.clone());
-            out.files.extend(mw.files.clone());
+            obs.progress(&Progress::Finished);
             let steps = integ.steps();
             out.report.push(format!(
                 "{steps} of {n_steps} steps of {dt} s to t = {:.6} s, {iterations} Newton iterations ({:.2} per step, at most {max_iter}), 0 rejected steps (fixed step)",
@@ -1051,7 +995,7 @@ pub fn run_analysis(
                 "rejected_steps": 0,
                 "seconds_solving": t0.elapsed().as_secs_f64(),
             });
-            plots(dir, prefix, &study.mechanism, b, &files, "t [s]", &mut out)?;
+            obs.sensors_end()?;
         }
         MbsAnalysis::Linearized { modes, about } => {
             let state = match about {
@@ -1069,55 +1013,55 @@ pub fn run_analysis(
                 }
             };
             let s = mbs::spectrum(&sys, &state)?;
-            let path = dir.join("frequencies.csv");
-            let mut csv = crate::output::Csv::new(&["mode", "frequency [Hz]", "omega [rad/s]"]);
+            let mut csv = Table::new("frequencies", &["mode", "frequency [Hz]", "omega [rad/s]"]);
             let shown: Vec<f64> = s.omega.iter().take(*modes).copied().collect();
             for (k, w) in shown.iter().enumerate() {
-                csv.row(&[(k + 1).to_string(), num(w / (2.0 * std::f64::consts::PI)), num(*w)]);
-            }
-            csv.write(&path)
-                .context(|| format!("cannot write {}", path.display()))?;
-            let path2 = dir.join("state_space.csv");
-            let mut csv =
-                crate::output::Csv::new(&["eigenvalue", "real [1/s]", "imaginary [rad/s]", "damped frequency [Hz]"]);
-            for (k, (re, im)) in s.state_space.iter().enumerate() {
-                csv.row(&[
-                    (k + 1).to_string(),
-                    num(*re),
-                    num(*im),
-                    num(im / (2.0 * std::f64::consts::PI)),
+                csv.row(vec![
+                    Cell::from(k + 1),
+                    Cell::Num(w / (2.0 * std::f64::consts::PI)),
+                    Cell::Num(*w),
                 ]);
             }
-            csv.write(&path2)
-                .context(|| format!("cannot write {}", path2.display()))?;
+            obs.table(&csv)?;
+            let mut csv = Table::new(
+                "state_space",
+                &["eigenvalue", "real [1/s]", "imaginary [rad/s]", "damped frequency [Hz]"],
+            );
+            for (k, (re, im)) in s.state_space.iter().enumerate() {
+                csv.row(vec![
+                    Cell::from(k + 1),
+                    Cell::Num(*re),
+                    Cell::Num(*im),
+                    Cell::Num(im / (2.0 * std::f64::consts::PI)),
+                ]);
+            }
+            obs.table(&csv)?;
             // Which bodies and nodes carry each mode's energy (mbs::mode_energies).
             let energies = mbs::mode_energies(&sys, &state)?;
-            let path3 = dir.join("modes.csv");
-            let mut csv = crate::output::Csv::new(&[
-                "mode",
-                "frequency [Hz]",
-                "damping ratio [-]",
-                "rigid body [-]",
-                "carried by",
-            ]);
+            let mut csv = Table::new(
+                "modes",
+                &[
+                    "mode",
+                    "frequency [Hz]",
+                    "damping ratio [-]",
+                    "rigid body [-]",
+                    "carried by",
+                ],
+            );
             for (k, e) in energies.iter().take(*modes).enumerate() {
-                csv.row(&[
-                    (k + 1).to_string(),
-                    num(e.frequency_hz),
-                    e.damping_ratio.map(num).unwrap_or_default(),
-                    u8::from(e.rigid_body).to_string(),
-                    e.label.clone(),
+                csv.row(vec![
+                    Cell::from(k + 1),
+                    Cell::Num(e.frequency_hz),
+                    e.damping_ratio.map_or(Cell::Empty, Cell::Num),
+                    Cell::from(usize::from(e.rigid_body)),
+                    Cell::from(e.label.clone()),
                 ]);
             }
-            csv.write(&path3)
-                .context(|| format!("cannot write {}", path3.display()))?;
+            obs.table(&csv)?;
             for (k, e) in energies.iter().take(*modes).enumerate() {
                 out.report
                     .push(format!("mode {}: {:.6e} Hz, {}", k + 1, e.frequency_hz, e.label));
             }
-            out.files.push(format!("{prefix}/frequencies.csv"));
-            out.files.push(format!("{prefix}/state_space.csv"));
-            out.files.push(format!("{prefix}/modes.csv"));
             let hz: Vec<f64> = shown.iter().map(|w| w / (2.0 * std::f64::consts::PI)).collect();
             out.report.push(format!(
                 "lowest {} frequencies [Hz]: {}",
@@ -1137,54 +1081,17 @@ pub fn run_analysis(
 }
 
 /// The last value of every sensor, for the report.
-fn report_last(report: &mut Vec<String>, b: &BuiltMechanism, files: &SensorFiles) {
-    for (g, (x, rows)) in b.groups.iter().zip(&files.history) {
-        if let (Some(x), Some(row)) = (x.last(), rows.last()) {
-            let values: Vec<String> = g
-                .columns
-                .iter()
-                .zip(row)
-                .map(|(c, v)| format!("{c} = {v:.6e}"))
-                .collect();
-            report.push(format!("sensor '{}' at {x:.6}: {}", g.name, values.join(", ")));
-        }
-    }
-}
-
-/// A PNG per sensor: every column against the first.
-fn plots(
-    dir: &Path,
-    prefix: &str,
-    m: &Mechanism,
-    b: &BuiltMechanism,
-    files: &SensorFiles,
-    x_label: &str,
-    out: &mut MbsOutcome,
-) -> Result<(), BoxError> {
-    if !m.output.plots {
-        return Ok(());
-    }
-    for (g, (x, rows)) in b.groups.iter().zip(&files.history) {
-        if x.len() < 2 {
-            continue;
-        }
-        let unit = g
+fn report_last(report: &mut Vec<String>, b: &BuiltMechanism, files: &SensorSampler) {
+    let Some((x, rows)) = &files.last else {
+        return;
+    };
+    for (g, row) in b.groups.iter().zip(rows) {
+        let values: Vec<String> = g
             .columns
-            .first()
-            .and_then(|c| c.split_once('['))
-            .map(|(_, u)| u.trim_end_matches(']').to_string())
-            .unwrap_or_default();
-        let mut fig = plot::Figure::new(format!("sensor {}", g.name), x_label, format!("{} [{unit}]", g.name));
-        for (k, c) in g.columns.iter().enumerate() {
-            fig.series.push(plot::Series::line(
-                c.clone(),
-                x.clone(),
-                rows.iter().map(|r| r[k]).collect(),
-            ));
-        }
-        let path = dir.join(format!("{}.png", g.name));
-        plot::write_png(&fig, &path).context(|| format!("cannot draw {}", path.display()))?;
-        out.files.push(format!("{prefix}/{}.png", g.name));
+            .iter()
+            .zip(row)
+            .map(|(c, v)| format!("{c} = {v:.6e}"))
+            .collect();
+        report.push(format!("sensor '{}' at {x:.6}: {}", g.name, values.join(", ")));
     }
-    Ok(())
 }

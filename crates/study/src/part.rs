@@ -264,9 +264,9 @@ pub fn center_of_mass(model: &FeModel) -> Result<(f64, Point3<f64>), FeError> {
 }
 
 /// A `MassKind` from the file's choice.
-pub fn mass_kind(m: Option<crate::study_file::MassFile>) -> MassKind {
+pub fn mass_kind(m: Option<crate::schema::MassFile>) -> MassKind {
     match m {
-        Some(crate::study_file::MassFile::Lumped) => MassKind::Lumped,
+        Some(crate::schema::MassFile::Lumped) => MassKind::Lumped,
         _ => MassKind::Consistent,
     }
 }
