@@ -20,6 +20,9 @@
 //!   independent nodes.
 //! * Reactions ([`SensorKind::Reaction`], [`SensorKind::DriverEffort`]) are the residual of the
 //!   removed coordinates: the force (moment) the support or driver applies *to* the model.
+//! * Forces the model data do not describe (a controller, a co-simulation partner, a bushing
+//!   law) are [`UserForce`]s: a Rust type gives the wrench on its nodes and, optionally, its
+//!   Jacobians (central differences otherwise), [`System::with_user_forces`].
 //!
 //! # Quick start
 //!
@@ -105,6 +108,7 @@
 //! | $K_p,\ K_i,\ K_d,\ z$ | [`Pid`], `Control` | PID gains; integral of $e$ (trapezoidal, moved on by accepted steps) | [`joint_forces`] |
 //! | $\mathbf R_\Delta$ | [`initial`] | rigid rotation of a joint's subtree by an initial joint value | [`initial`] |
 //! | $\hat{\mathbf K}_s$ | [`stability`] | symmetric part of $\hat{\mathbf K}$, scaled by its diagonal; negative eigenvalues: past a critical point | Bathe §6.8 |
+//! | $\mathbf f_e$ | [`Wrench`] | a user force's force and moment on a node, inertial | [`user_force`] |
 //!
 //! Vectors are inertial unless said otherwise; rigid-body mass data are in their reference
 //! node's axes. BCA 2012: Brüls, Cardona, Arnold, *Mech. Mach. Theory* 48 (2012). HLW: Hairer,
@@ -132,6 +136,7 @@
 //! | this crate | joint limits, actuators (time function, PID with trapezoidal integral) and their tangents | `mbs::joint_forces` |
 //! | Bathe (1996) §6.8 | stability of a static state (inertia of $\hat{\mathbf K}_s$) | `mbs::stability` |
 //! | this crate | fixed step retried with halved steps | `mbs::step_retrying`, `mbs::solve_dynamic_retrying` |
+//! | this crate | user force: residual $-\lambda\mathbf f_e$, $\mathbf K_t = -\lambda\partial\mathbf f_e/\partial\mathbf x$, $\mathbf C_t = -\lambda\partial\mathbf f_e/\partial\mathbf V$ (central differences when not given) | `mbs::user_force::user_force_element` (private), `mbs::user_force::finite_difference_jacobian` |
 //!
 //! # Not implemented
 //!
@@ -157,7 +162,9 @@
 //! the joints), [`body`] (elements), [`joint_forces`] (limits and actuators), [`system`]
 //! (assembly), [`static_solver`], [`arc_length`], [`stability`], [`dynamic_solver`], [`retry`]
 //! (halved steps after a failure), [`momentum`] (momenta and their projection), [`linearized`]
-//! (spectrum, mode energies and buckling), [`sensors`], [`error`].
+//! (spectrum, mode energies and buckling), [`sensors`], [`error`],
+//! [`user_force`] (forces written in Rust by the user: [`UserForce`], added with
+//! [`System::with_user_forces`]).
 
 #![allow(non_snake_case)]
 
@@ -179,6 +186,7 @@ pub mod static_solver;
 pub mod system;
 pub mod time_function;
 pub mod topology;
+pub mod user_force;
 
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use dynamic_solver::{
@@ -204,3 +212,4 @@ pub use stability::{stability, Stability};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
 pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
 pub use time_function::{Interpolation, TimeFunction};
+pub use user_force::{FdSteps, UserForce, Wrench};

@@ -33,6 +33,7 @@ use crate::model::{Body, InitialCondition, JointId, LoadAxes, LoadKind, Model, N
 use crate::node::NodeMotion;
 use crate::time_function::CompiledFunction;
 use crate::topology::{self, RootRotation, Topology};
+use crate::user_force::{user_force_element, UserBuffer, UserForce};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
@@ -40,6 +41,7 @@ use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Par};
 use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
 use rayon::prelude::*;
+use std::sync::Arc;
 use superelement::{so3, Frame, Superelement};
 
 /// One element of the assembly: what it is and where it acts.
@@ -50,6 +52,8 @@ pub(crate) enum ElementKind {
     PointMass(usize, f64),
     Spring(usize),
     Load(usize),
+    /// A [`UserForce`] (index into `System::user_forces`).
+    User(usize),
 }
 
 #[derive(Clone, Debug)]
@@ -308,6 +312,7 @@ const PARALLEL_ELEMENTS: usize = 32;
 pub(crate) struct ElementBuffer {
     pub out: ElementOutput,
     pub flex: Option<FlexBuffer>,
+    pub user: Option<UserBuffer>,
     /// $\hat{\mathbf M}_e$, $\hat{\mathbf C}_e$, $\hat{\mathbf K}_e$ on the element's unknowns (column major).
     pub local: [Vec<f64>; 3],
 }
@@ -328,6 +333,8 @@ pub struct System {
     /// How each of `model.initial` acts ([`crate::initial`]).
     pub(crate) initial_plan: Vec<InitialPlan>,
     pub(crate) drivers: Vec<CompiledFunction>,
+    /// User-defined forces ([`System::with_user_forces`]).
+    pub(crate) user_forces: Vec<Arc<dyn UserForce>>,
     pub(crate) elements: Vec<ElementRef>,
     pub(crate) pattern: Pattern,
     /// Flexible element of each body (or `None`).
@@ -345,6 +352,12 @@ fn finite(v: f64) -> bool {
 impl System {
     /// Checks the model and builds the coordinates, elements and sparse pattern.
     pub fn new(model: &Model) -> Result<Self, ModelError> {
+        Self::with_user_forces(model, Vec::new())
+    }
+
+    /// [`Self::new`] with user-defined forces acting on the model's nodes
+    /// ([`crate::user_force`]); a node id out of range is [`ModelError::UnknownNode`].
+    pub fn with_user_forces(model: &Model, user_forces: Vec<Arc<dyn UserForce>>) -> Result<Self, ModelError> {
         topology::check_references(model)?;
         let topo = topology::build(model)?;
         let map = &topo.map;
@@ -554,6 +567,13 @@ impl System {
                 modal: vec![],
             });
         }
+        for (i, u) in user_forces.iter().enumerate() {
+            elements.push(ElementRef {
+                kind: ElementKind::User(i),
+                nodes: crate::user_force::check_nodes(u.as_ref(), model.nodes.len())?,
+                modal: vec![],
+            });
+        }
         let n = map.n_dof;
         let node_unknown: Vec<Vec<usize>> = map
             .chains
@@ -649,6 +669,7 @@ impl System {
             joint_forces,
             initial_plan,
             drivers,
+            user_forces,
             elements,
             pattern,
             dof_scale,
@@ -1040,6 +1061,10 @@ impl System {
                             ElementKind::Flexible(i) => Some(self.flexible[i].buffer()),
                             _ => None,
                         },
+                        user: match e.kind {
+                            ElementKind::User(_) => Some(UserBuffer::new(e.nodes.len())),
+                            _ => None,
+                        },
                         local: [vec![0.0; s * s], vec![0.0; s * s], vec![0.0; s * s]],
                     }
                 })
@@ -1288,6 +1313,11 @@ impl System {
             ElementKind::Load(i) => {
                 let l = &self.loads[*i];
                 load_element(l, &nodes[l.node], state.time, lambda, tangents, out);
+            }
+            ElementKind::User(i) => {
+                let buffer = buf.user.as_mut().expect("user force buffer");
+                let force = self.user_forces[*i].as_ref();
+                user_force_element(force, &e.nodes, nodes, state.time, lambda, tangents, buffer, out)?;
             }
         }
         Ok(())

@@ -86,6 +86,13 @@ mod newton;
 #[path = "unit/joint_setup.rs"]
 mod joint_setup;
 
+/// User-defined forces (the `UserForce` trait): analytic Jacobians against central
+/// differences on deformed, rotated, moving nodes; the assembled tangents with a user force
+/// (analytic or finite-difference Jacobian); a user force equal to a follower load gives the
+/// load's statics and dynamics; non-finite forces and unknown nodes refused by name.
+#[path = "unit/user_force.rs"]
+mod user_force;
+
 /// An integrator that owns its system; loads changed between steps.
 #[path = "unit/stepping.rs"]
 mod stepping;
