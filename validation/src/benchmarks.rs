@@ -2,6 +2,8 @@
 
 /// C1-C4: dynamics.
 pub mod dynamics;
+/// F1: sway buckling of a portal frame against its published characteristic equation.
+pub mod frame_buckling;
 /// A1-A4: linear references (exact or NAFEMS).
 pub mod linear;
 /// B1-B3: geometrically nonlinear statics.

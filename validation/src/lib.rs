@@ -219,6 +219,7 @@ pub fn benchmarks() -> Vec<Benchmark> {
         ("C3", benchmarks::dynamics::c3_spatial_slider_crank),
         ("C4", benchmarks::dynamics::c4_free_body),
         ("V", benchmarks::variants::variants),
+        ("F1", benchmarks::frame_buckling::f1_portal_frame),
     ]
 }
 

@@ -280,7 +280,7 @@ pub fn add_segment(
 }
 
 /// Axis-to-axis rotation taking the FE x axis onto `direction`.
-fn x_onto(direction: Vector3<f64>) -> UnitQuaternion<f64> {
+pub(crate) fn x_onto(direction: Vector3<f64>) -> UnitQuaternion<f64> {
     UnitQuaternion::rotation_between(&Vector3::x(), &direction).unwrap_or_else(|| {
         // Antiparallel: half a turn about z.
         UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI)

@@ -97,8 +97,8 @@ pub struct Properties<'a> {
     pub sections: &'a [BeamSection],
 }
 
-impl Properties<'_> {
-    pub(crate) fn material(&self, element: usize, id: MaterialId) -> Result<&IsotropicMaterial, ElementError> {
+impl<'a> Properties<'a> {
+    pub(crate) fn material(&self, element: usize, id: MaterialId) -> Result<&'a IsotropicMaterial, ElementError> {
         self.materials.get(id.0 as usize).ok_or(ElementError::MissingProperty {
             element,
             what: "material",
@@ -106,7 +106,7 @@ impl Properties<'_> {
             count: self.materials.len(),
         })
     }
-    pub(crate) fn section(&self, element: usize, id: SectionId) -> Result<&BeamSection, ElementError> {
+    pub(crate) fn section(&self, element: usize, id: SectionId) -> Result<&'a BeamSection, ElementError> {
         self.sections.get(id.0 as usize).ok_or(ElementError::MissingProperty {
             element,
             what: "beam section",

@@ -17,6 +17,9 @@
 //! `reduction`) order the unknowns by nested dissection on the node positions for large
 //! models, by AMD otherwise ([`ordering`], [`FillOrdering`]).
 //!
+//! Meshes come from gmsh ([`mesh::gmsh`]), Abaqus ([`mesh::abaqus`]) and Nastran
+//! ([`mesh::nastran`]) files, or from the generators ([`box_mesh`], [`generate`]).
+//!
 //! What this crate does not do: rotations of bodies, time, reduction.
 //!
 //! # Quick start
@@ -92,6 +95,7 @@ pub mod quadrature;
 pub mod section;
 pub mod sparse_cholesky;
 pub mod statics;
+pub mod stress;
 
 pub use assembly::{assemble, assemble_into, Assembled};
 pub use box_mesh::{box_mesh, solid_model, solid_model_with_materials};
@@ -103,6 +107,7 @@ pub use geometric::{
     linear_buckling, packed_pair, BucklingSettings, BucklingSolution,
 };
 pub use interface::{add_interface, add_interface_on_set, Interface, Interfaces, SpiderKind};
+pub use mesh::import::{ImportError, ImportedModel};
 pub use mesh::{Cell, CellId, CellKind, Mesh, NodeId};
 pub use modal::{modal_dense, scaled_self_adjoint_eigen, ModalSolution};
 pub use model::{BeamProperties, DofMask, FeModel, LinearConstraint, NodalLoad, Support};
@@ -111,6 +116,7 @@ pub use ordering::{
 };
 pub use pattern::SystemPattern;
 pub use property::{IsotropicMaterial, MaterialId, SectionId};
-pub use section::BeamSection;
+pub use section::{BeamSection, SectionShape};
 pub use sparse_cholesky::{CholeskyError, SparseCholesky};
 pub use statics::{solve_static, StaticSolution};
+pub use stress::{nodal_stresses, principal_stresses, von_mises, Voigt};

@@ -18,6 +18,10 @@ mod unit {
     /// gmsh reader: fixtures in four encodings agree, inline parse cases, node orderings
     /// against gmsh's reference elements, located errors, no panic on random/cut/mutated input.
     mod gmsh;
+    /// Abaqus and Nastran readers: the fixtures give gmsh's cells and frequencies, sets,
+    /// materials, spiders and supports; inline cases; located errors; no panic on
+    /// random/cut/mutated input.
+    mod import;
     /// RBE2/RBE3 interface nodes on solids: rigid patch, no added stiffness, bad sets.
     mod interface;
     /// Fill-reducing orderings: nested dissection is a valid permutation, solves as AMD does,
@@ -28,4 +32,8 @@ mod unit {
     /// Solid elements (tet4, tet10, hex8, hex20, wedge6): shape functions, patch tests, rigid
     /// modes, mass, box meshes, solid models; cantilever vs Timoshenko; tet4 locking.
     mod solid;
+    /// Stress recovery: the patch test of nodal stresses on every solid kind (one distorted
+    /// element, a distorted mesh), exact extrapolation of linear stresses on quadratic kinds,
+    /// beam section forces against the analytic cantilever under tip load and gravity.
+    mod stress;
 }

@@ -106,6 +106,9 @@ pub enum SolveError {
         t: f64,
         source: SuperelementError,
     },
+    /// A user-defined force ([`crate::UserForce`]) gave a value the solver cannot use.
+    #[error("user force '{name}' at t = {t:.6}: {what}")]
+    UserForce { name: String, t: f64, what: String },
     /// Settings out of range (a negative step, rho_inf outside [0, 1], ...).
     #[error("invalid settings: {what}")]
     InvalidSettings { what: String },

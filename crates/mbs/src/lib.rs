@@ -20,6 +20,9 @@
 //!   independent nodes.
 //! * Reactions ([`SensorKind::Reaction`], [`SensorKind::DriverEffort`]) are the residual of the
 //!   removed coordinates: the force (moment) the support or driver applies *to* the model.
+//! * Forces the model data do not describe (a controller, a co-simulation partner, a bushing
+//!   law) are [`UserForce`]s: a Rust type gives the wrench on its nodes and, optionally, its
+//!   Jacobians (central differences otherwise), [`System::with_user_forces`].
 //!
 //! # Quick start
 //!
@@ -97,6 +100,15 @@
 //! | $\mathbf J = [\mathbf L;\ \mathbf H]$ | [`System::momentum`] | linear momentum, angular momentum about the origin: $\mathbf T_{rig}^T\hat{\mathbf M}\dot{\mathbf q}$ | Noether |
 //! | $\mathbf T_{rig}$ | [`System::rigid_velocities`] | $n_{dof}\times6$: independent velocities of the translations along and rotations about $\mathbf e_k$ | [`momentum`] |
 //! | $\mathbf J_0,\ \boldsymbol\lambda$ | `Integrator::J0`, `lambda` | momenta of the start; rigid correction $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ | HLW §IV.4 |
+//! | $x,\ \dot x$ | [`State`] scalars | a joint coordinate (m or rad) and its rate | [`JointKind`] |
+//! | $Q$ | (internal) | generalised force on a joint coordinate, $\mathbf F \mathrel{-}= Q$ (N or N m) | [`joint_forces`] |
+//! | $k,\ c,\ x_0,\ f_0$ | [`JointSpring`] | joint spring: stiffness, damping, rest value, preload | [`model`] |
+//! | $x_{lo},\ x_{hi},\ d$ | [`JointLimit`] | stop bounds; penetration beyond them | [`joint_forces`] |
+//! | $u,\ r(t),\ y,\ e = r - y$ | [`JointActuator`], [`Pid`] | actuator effort, set-point, measured coordinate, error | [`joint_forces`] |
+//! | $K_p,\ K_i,\ K_d,\ z$ | [`Pid`], `Control` | PID gains; integral of $e$ (trapezoidal, moved on by accepted steps) | [`joint_forces`] |
+//! | $\mathbf R_\Delta$ | [`initial`] | rigid rotation of a joint's subtree by an initial joint value | [`initial`] |
+//! | $\hat{\mathbf K}_s$ | [`stability`] | symmetric part of $\hat{\mathbf K}$, scaled by its diagonal; negative eigenvalues: past a critical point | Bathe §6.8 |
+//! | $\mathbf f_e$ | [`Wrench`] | a user force's force and moment on a node, inertial | [`user_force`] |
 //!
 //! Vectors are inertial unless said otherwise; rigid-body mass data are in their reference
 //! node's axes. BCA 2012: Brüls, Cardona, Arnold, *Mech. Mach. Theory* 48 (2012). HLW: Hairer,
@@ -120,6 +132,11 @@
 //! | BCA 2012, Alg. 1 | Lie-group generalized-α step; full or modified Newton ([`NewtonStrategy`]) | `mbs::Integrator::step` |
 //! | HLW §IV.4 | momentum projection $(\mathbf T_{rig}^T\hat{\mathbf M}\mathbf T_{rig})\boldsymbol\lambda = \mathbf J_0 - \mathbf J$, $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ on free, unloaded models | `mbs::System::project_momentum` (private, `momentum.rs`) |
 //! | theory guide §9 | linearised spectrum; each mode's energy by body and node | `mbs::spectrum`, `mbs::mode_energies` |
+//! | this crate | initial joint values and rates moving the subtree behind the joint rigidly | `mbs::System::initial_state` (`initial.rs`) |
+//! | this crate | joint limits, actuators (time function, PID with trapezoidal integral) and their tangents | `mbs::joint_forces` |
+//! | Bathe (1996) §6.8 | stability of a static state (inertia of $\hat{\mathbf K}_s$) | `mbs::stability` |
+//! | this crate | fixed step retried with halved steps | `mbs::step_retrying`, `mbs::solve_dynamic_retrying` |
+//! | this crate | user force: residual $-\lambda\mathbf f_e$, $\mathbf K_t = -\lambda\partial\mathbf f_e/\partial\mathbf x$, $\mathbf C_t = -\lambda\partial\mathbf f_e/\partial\mathbf V$ (central differences when not given) | `mbs::user_force::user_force_element` (private), `mbs::user_force::finite_difference_jacobian` |
 //!
 //! # Not implemented
 //!
@@ -141,9 +158,13 @@
 //! # Modules
 //!
 //! [`model`] (serde data), [`time_function`], [`node`], [`coordinates`] (the maps and their
-//! derivatives), [`topology`] (the tree and its checks), [`body`] (elements), [`system`]
-//! (assembly), [`static_solver`], [`arc_length`], [`dynamic_solver`], [`momentum`] (momenta and
-//! their projection), [`linearized`] (spectrum, mode energies and buckling), [`sensors`], [`error`].
+//! derivatives), [`topology`] (the tree and its checks), [`initial`] (initial states that follow
+//! the joints), [`body`] (elements), [`joint_forces`] (limits and actuators), [`system`]
+//! (assembly), [`static_solver`], [`arc_length`], [`stability`], [`dynamic_solver`], [`retry`]
+//! (halved steps after a failure), [`momentum`] (momenta and their projection), [`linearized`]
+//! (spectrum, mode energies and buckling), [`sensors`], [`error`],
+//! [`user_force`] (forces written in Rust by the user: [`UserForce`], added with
+//! [`System::with_user_forces`]).
 
 #![allow(non_snake_case)]
 
@@ -152,15 +173,20 @@ pub mod body;
 pub mod coordinates;
 pub mod dynamic_solver;
 pub mod error;
+pub mod initial;
+pub mod joint_forces;
 pub mod linearized;
 pub mod model;
 pub mod momentum;
 pub mod node;
+pub mod retry;
 pub mod sensors;
+pub mod stability;
 pub mod static_solver;
 pub mod system;
 pub mod time_function;
 pub mod topology;
+pub mod user_force;
 
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use dynamic_solver::{
@@ -168,6 +194,7 @@ pub use dynamic_solver::{
     Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
 };
 pub use error::{Incomplete, ModelError, SolveError};
+pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
 pub use linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,
     NodeEnergy,
@@ -179,7 +206,10 @@ pub use model::{
 };
 pub use momentum::{ExternalAction, MomentumProjection};
 pub use node::NodeMotion;
+pub use retry::{solve_dynamic_retrying, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure};
 pub use sensors::{Energies, SensorRecord};
+pub use stability::{stability, Stability};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
 pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
 pub use time_function::{Interpolation, TimeFunction};
+pub use user_force::{FdSteps, UserForce, Wrench};

@@ -188,6 +188,8 @@ pub enum EnergyCarrier {
     Load { index: usize, node: String },
     /// A spring on a joint coordinate.
     JointSpring { joint: String, coordinate: usize },
+    /// A user-defined force's stiffness and damping ([`crate::UserForce`]), by name.
+    UserForce(String),
     /// The joints' geometric term $\mathbf G_r$ of $\hat{\mathbf K}$ (zero in an unloaded state).
     JointGeometry,
 }
@@ -200,6 +202,7 @@ impl std::fmt::Display for EnergyCarrier {
             Self::Load { index, node } => write!(f, "load {index} on node {node}"),
             Self::JointSpring { joint, coordinate } => write!(f, "joint spring {joint}[{coordinate}]"),
             Self::JointGeometry => write!(f, "joint geometry"),
+            Self::UserForce(name) => write!(f, "user force {name}"),
         }
     }
 }
@@ -472,6 +475,7 @@ fn distribute(system: &System, ws: &Workspace, phi: &[f64]) -> ModeEnergy {
                 index: *i,
                 node: node_name(system.loads[*i].node),
             },
+            ElementKind::User(i) => EnergyCarrier::UserForce(system.user_forces[*i].name().to_string()),
         };
         carriers.push(CarrierEnergy {
             carrier,
@@ -483,7 +487,7 @@ fn distribute(system: &System, ws: &Workspace, phi: &[f64]) -> ModeEnergy {
             interior_kinetic: interior.1,
         });
     }
-    for (js, &(sc, k, _, _)) in model.joint_springs.iter().zip(&system.joint_springs) {
+    for (js, &(sc, k, ..)) in model.joint_springs.iter().zip(&system.joint_springs) {
         if let crate::coordinates::Slot::Unknown(d) = map.scalars[sc].slot {
             carriers.push(CarrierEnergy {
                 carrier: EnergyCarrier::JointSpring {

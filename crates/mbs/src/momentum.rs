@@ -101,6 +101,9 @@ pub enum ExternalAction {
     /// A spring or damper is attached to a fixed point.
     #[error("spring '{spring}' is attached to a fixed point")]
     GroundSpring { spring: String },
+    /// A user-defined force acts (it may depend on the absolute position or orientation).
+    #[error("user force '{name}' acts on the model")]
+    UserForce { name: String },
 }
 
 /// The body mass matrices at one configuration: $\mathbf J(\mathbf q, \cdot)$ as a linear map of the
@@ -140,6 +143,11 @@ impl System {
         }
         if let Some(s) = model.springs.iter().find(|s| s.b.is_none()) {
             return Err(ExternalAction::GroundSpring { spring: s.name.clone() });
+        }
+        if let Some(u) = self.user_forces.first() {
+            return Err(ExternalAction::UserForce {
+                name: u.name().to_string(),
+            });
         }
         // Every coordinate that a support or driver removes is prescribed; none is left.
         debug_assert!(self.topo.map.prescribed.is_empty());

@@ -226,6 +226,14 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
             }
             InitialCondition::NodeVelocity { node: n, .. } => node(*n, &who)?,
             InitialCondition::RigidMotion { .. } => {}
+            InitialCondition::BodyVelocity { body, .. } if body.index() >= model.bodies.len() => {
+                return Err(ModelError::UnknownBody {
+                    id: body.0,
+                    count: model.bodies.len(),
+                    referenced_by: who(),
+                });
+            }
+            InitialCondition::BodyVelocity { .. } => {}
         }
     }
     Ok(())

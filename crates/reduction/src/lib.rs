@@ -71,6 +71,7 @@
 //! Vectors are columns; `^T` is transpose. Dof indices in errors are those of the matrices
 //! as given, never of the permuted factor.
 #![allow(non_snake_case)]
+pub mod attachment;
 pub mod craig_bampton;
 pub mod diagnostics;
 pub mod eigen;
@@ -79,8 +80,11 @@ pub mod file;
 pub mod geometric;
 pub mod invariants;
 pub mod matrix_market;
+pub mod mbdyn;
 pub mod modal;
+pub mod physics;
 pub mod reduced_body;
+pub mod stress;
 pub use craig_bampton::{partition, reduce, reduce_with_progress, CbSettings, ModeSelection, Partition, Stage};
 pub use craig_bampton::{reduce_external, reduce_external_dofs};
 pub use diagnostics::{diagnostics, DiagnosticWarning, Diagnostics, ModeDiagnostics};
@@ -89,7 +93,10 @@ pub use error::ReductionError;
 pub use file::BodyFileProblem;
 pub use geometric::reduced_geometric_stiffness;
 pub use matrix_market::{read_matrix_market, write_matrix_market};
+pub use mbdyn::{read_mbdyn_fem, write_mbdyn_fem, FemError};
 pub use modal::modal_sparse;
+pub use physics::{physical_problems, PhysicsProblem};
 pub use reduced_body::{
-    DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, ALGORITHM_REVISION, FORMAT_VERSION,
+    BeamStressElement, DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes,
+    ALGORITHM_REVISION, FORMAT_VERSION,
 };

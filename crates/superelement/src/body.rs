@@ -115,6 +115,8 @@ pub struct Superelement {
     pub(crate) length: f64,
     pub(crate) frame_settings: FrameSettings,
     pub(crate) mesh: Option<MeshModes>,
+    /// The stress of every CB vector, for [`Superelement::recover_stress`].
+    pub(crate) stress: Option<reduction::StressShapes>,
     /// Geometric stiffening $\mathbf G_k$ ([`GeometricStiffness`]); `None`: a linear elastic field.
     pub(crate) geometric: Option<GeometricStiffness>,
 }
@@ -430,6 +432,7 @@ impl Superelement {
             length,
             frame_settings: FrameSettings::default(),
             mesh: body.mesh.clone(),
+            stress: body.stress.clone(),
             geometric,
         })
     }

@@ -231,6 +231,6 @@ pub use body::{BodyState, Damping, GeometricStiffness, Superelement};
 pub use error::SuperelementError;
 pub use frame::{Frame, FrameChoice, FrameSettings};
 pub use mass::{FfrForce, FfrInertia, FfrScratch, MassVariant};
-pub use recovery::MeshState;
+pub use recovery::{BodyStress, MeshState};
 pub use tangent::{Evaluation, Workspace};
 pub use transform::Kinematics;

@@ -453,7 +453,7 @@ fn inverted_or_collapsed_element_is_reported_by_index() {
 /// Moves every interior corner node of a box mesh by a deterministic offset of up to
 /// `fraction` of the cell size, then puts edge nodes back at the midpoints of their corners
 /// (straight edges, so that the isoparametric map stays one the rules integrate well).
-fn distort_interior(mesh: &mut Mesh, fraction: f64, h: f64) {
+pub fn distort_interior(mesh: &mut Mesh, fraction: f64, h: f64) {
     let boundary: std::collections::BTreeSet<NodeId> = mesh.node_sets.values().flatten().copied().collect();
     let mut corner = vec![false; mesh.nodes.len()];
     for cell in &mesh.cells {

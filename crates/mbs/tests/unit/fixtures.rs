@@ -286,6 +286,12 @@ pub fn elastica_tip(n: usize, load: f64, moment: bool) -> ([f64; 3], Vec<mbs::Lo
 /// whose angle follows the spin-up profile to `omega` in 15 s; `n` superelements with `modes`
 /// fixed-interface modes each. Sensor "tip": the tip in the hub's axes.
 pub fn spin_up(n: usize, modes: ModeSelection, omega: f64) -> Model {
+    spin_up_with(n, modes, omega, false)
+}
+
+/// [`spin_up`], with the reduced geometric stiffness of each segment when `stiffening`
+/// (`CbSettings::geometric_stiffening`).
+pub fn spin_up_with(n: usize, modes: ModeSelection, omega: f64, stiffening: bool) -> Model {
     let (L, E, A, I, rho) = (10.0, 7e10, 4e-4, 2e-7, 3000.0);
     let mut fe = FeModel::default();
     let material = fe.add_material(IsotropicMaterial::new("c1", E, 0.3, rho).unwrap());
@@ -309,6 +315,7 @@ pub fn spin_up(n: usize, modes: ModeSelection, omega: f64) -> Model {
     .unwrap();
     let mut settings = CbSettings::new(modes);
     settings.keep_mesh_shapes = false;
+    settings.geometric_stiffening = stiffening;
     let body = reduce(&fe, "seg", &[("a".into(), nodes[0]), ("b".into(), nodes[4])], &settings).unwrap();
     let mut m = Model::new("spin-up");
     let beam: Vec<NodeId> = (0..=n)
