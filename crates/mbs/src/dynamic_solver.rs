@@ -35,7 +35,7 @@
 //! $\omega\pm\Omega$ in the nodes' spatial rotation components, and the scheme's frequency error,
 //! which grows with $\omega h$, then moves the parts of one mode by different phases each step.
 //! The discrete map is no longer the generalized-α map of the linearised motion in the
-//! turning frame, and it pumps energy into that mode. On the spin-up beam (benchmarks.md C1, four
+//! turning frame, and it pumps energy into that mode. On the spin-up beam (validation problem C1, four
 //! superelements, h = 5 ms) the out-of-plane fixed-interface modes of the segments, 346 rad/s
 //! ($\omega h = 1.7$), grew from round-off at 3.4 /s at $\Omega$ = 10 rad/s with $\rho_\infty \ge 0.8$
 //! (more at 15 rad/s, none at 4); the rate was the same for every Newton tolerance and with

@@ -152,7 +152,7 @@ pub fn finite_difference_jacobian(
     dv.copy_from(&buf.dv);
 }
 
-/// The reused buffers of one user force (style R8: sized once per analysis).
+/// The reused buffers of one user force (sized once per analysis).
 #[derive(Clone, Debug)]
 pub(crate) struct UserBuffer {
     /// The force's node motions, gathered from the system's.

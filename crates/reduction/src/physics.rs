@@ -33,7 +33,7 @@
 //!   computed two ways agrees to about $10^{-12}$. The fixed-interface modes are $\mathbf K$- and
 //!   $\mathbf M$-orthogonal, so $\omega_k^2 = K_{\eta_k\eta_k}/M_{\eta_k\eta_k}$ to $10^{-6}$.
 //! - **Interfaces**: distinct names, distinct FE nodes, and no two closer than $10^{-9}$ of the
-//!   body's size (two coincident interfaces make the frame equations (2.6) singular).
+//!   body's size (two coincident interfaces make the frame equations (theory guide (4.4)) singular).
 
 #![allow(non_snake_case)]
 

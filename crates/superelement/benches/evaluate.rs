@@ -22,7 +22,7 @@
 //! callgrind_annotate /tmp/se.out | head -40     # total / 21 = instructions per evaluation
 //! ```
 //!
-//! Instructions per evaluation (gravity on, warm frame), before and after the issue-9 work on
+//! Instructions per evaluation (gravity on, warm frame), before and after the work on
 //! the evaluation (the G_k products as column-major matrix-vector products, forces-only calls
 //! without the FFR partials, one product for the FFR contractions and one for their qq blocks,
 //! no gravity partials without gravity, slice access in the frame and block loops):

@@ -337,7 +337,7 @@ fn crank_study(study: &CrankStudy, extent: Extent) -> Result<(Vec<Row>, Grid, Fi
         }
         for (k, (_, label)) in study.sensors.iter().enumerate() {
             let p: Vec<f64> = peaks.iter().map(|v| v[k]).collect();
-            // The criterion: the two finest levels within 1 %.
+            // The criterion: the two finest levels within 1 %.
             rows.push(Row::new(
                 format!("{label}: peak in the last revolution, two finest {what}"),
                 p[p.len() - 1],

@@ -115,7 +115,7 @@ pub fn a1_cantilever_frequencies(extent: Extent) -> Result<Vec<Table>> {
         tables.push(Table {
             title: format!("A1 beam bending frequencies, {n} Euler-Bernoulli elements"),
             note: "Slender steel beam (L/h = 500, so rotary inertia shifts the 4th mode by < 5e-5) along a skewed axis; \
-                   cubic elements with consistent mass converge as h^4. Tolerance: the issue's 0.1 % from 16 elements on \
+                   cubic elements with consistent mass converge as h^4. Tolerance: the required 0.1 % from 16 elements on \
                    (coarser meshes are reported to show the convergence)."
                 .into(),
             rows,

@@ -1,4 +1,4 @@
-//! Property test (style R17, fixed seeds): no study file, however broken, makes `flexmbs`
+//! Property test (fixed seeds): no study file, however broken, makes `flexmbs`
 //! panic; every invalid one gives exit code 2 and a located message.
 //!
 //! Inputs: random text, random soup of TOML fragments of the schema, and mutations of the

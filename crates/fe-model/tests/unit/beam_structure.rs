@@ -156,7 +156,7 @@ fn bending_frequencies_match_a1_and_converge() {
                 let e = rel(w[i], exact);
                 worst = worst.max(e);
                 if n == 16 {
-                    // 0.1 % is the target; 16 cubic elements reach about 1e-5.
+                    // 0.1 % is the required accuracy; 16 cubic elements reach about 1e-5.
                     assert!(
                         e < 1e-3,
                         "n = {n}, clamped = {clamped}, mode {}: {} vs {exact} ({e:.2e})",

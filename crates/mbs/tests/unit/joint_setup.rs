@@ -153,7 +153,7 @@ fn one_line_gives_a_free_body_its_rigid_spin() {
     let c = Vector3::from(body.inertia.center_of_mass);
     let T = rigid_kinetic_energy(&body, &Matrix3::identity(), &(v + w.cross(&(c - p))), &w);
     let e = sys.energies(&s).unwrap();
-    // Round-off of the mass-matrix products: 1e-10 relative (the criterion).
+    // Round-off of the mass-matrix products: 1e-10 relative (the required accuracy).
     assert!((e.kinetic - T).abs() < 1e-10 * T, "kinetic {} vs rigid {T}", e.kinetic);
     let (v_p, w_p) = sys.body_velocity(&s, BodyId(0), &p);
     assert!((v_p - v).norm() < 1e-12 && (w_p - w).norm() < 1e-12);
@@ -364,7 +364,7 @@ fn a_torsional_spring_damper_has_the_analytic_damped_frequency() {
     assert!((re + c / (2.0 * I)).abs() < 1e-10, "{re}");
     // In time: zero crossings of theta are pi/omega_d apart for any damping. With h = 1 ms and
     // rho_inf = 1 the period error of the trapezoidal rule is (omega h)^2/12 = 3e-7 and the
-    // linear interpolation of the crossings is of the same order: 1e-4 (the bound)
+    // linear interpolation of the crossings is of the same order: 1e-4 (the required bound)
     // holds with margin.
     let (t, th) = theta(&sys, &DynamicSettings::new(1e-3, 12.0, 1.0));
     let crossings: Vec<f64> = (1..th.len())
@@ -424,7 +424,7 @@ fn a_beam_started_from_its_equilibrium_stays_there() {
     };
     let from_equilibrium = run(sys.at_rest(&eq.state, 0.0));
     let drift = from_equilibrium.iter().map(|y| (y - y_eq).abs()).fold(0.0, f64::max);
-    // The bound, 1e-9 m: the equilibrium's residual (1e-13 of the weight) moves the
+    // The required bound, 1e-9 m: the equilibrium's residual (1e-13 of the weight) moves the
     // tip by far less.
     eprintln!("drift from the equilibrium {drift:.3e} m");
     assert!(drift < 1e-9, "drift {drift}");

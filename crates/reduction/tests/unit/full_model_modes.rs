@@ -41,7 +41,7 @@ fn a1_cantilever_through_the_sparse_path() {
     for I in [s.Iy(), s.Iz()] {
         let exact = beta * beta * (E * I / (rho * s.A() * L.powi(4))).sqrt();
         // One of the computed frequencies is this plane's first bending frequency. 0.1 % is
-        // the target; 40 cubic elements are at about 1e-7.
+        // the required accuracy; 40 cubic elements are at about 1e-7.
         let best = modes
             .omega
             .iter()
