@@ -6,14 +6,14 @@
 //! results come back as plain Python data (dicts, lists, numpy arrays) that the pure-Python
 //! `flexmbs.results` module wraps.
 
-use crate::errors::{to_py_err, StudyError};
+use crate::errors::{key_err, to_py_err, StudyError};
 use crate::rbody::ReducedBody;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::path::PathBuf;
-use study::observer::{Cell, Recorded, Recorder};
+use study::observer::{Cell, Observer, Recorded, Recorder};
 
 /// A study: a study file held in memory, read and changed value by value through key paths
 /// (`parts.rod.reduction.modes`, `sections[0].d`, `drivers.crank-speed.function.speed`), with
@@ -111,7 +111,9 @@ fn table_dict<'py>(py: Python<'py>, t: &study::observer::Table) -> PyResult<Boun
     let data = PyDict::new(py);
     for (k, c) in t.columns.iter().enumerate() {
         let cells: Vec<&Cell> = t.rows.iter().filter_map(|r| r.get(k)).collect();
-        let numeric = cells.iter().all(|c| matches!(c, Cell::Int(_) | Cell::Num(_) | Cell::Empty));
+        let numeric = cells
+            .iter()
+            .all(|c| matches!(c, Cell::Int(_) | Cell::Num(_) | Cell::Empty));
         if numeric {
             let v: Vec<f64> = cells.iter().map(|c| c.as_f64().unwrap_or(f64::NAN)).collect();
             data.set_item(c, PyArray1::from_vec(py, v))?;
@@ -151,7 +153,9 @@ fn recorded_dict<'py>(py: Python<'py>, r: &Recorded) -> PyResult<Bound<'py, PyDi
             let groups = PyList::empty(py);
             for (g, rows) in h.groups.iter().zip(&h.rows) {
                 let width = g.columns.len();
-                let values = Array2::from_shape_fn((rows.len(), width), |(i, j)| rows[i].get(j).copied().unwrap_or(f64::NAN));
+                let values = Array2::from_shape_fn((rows.len(), width), |(i, j)| {
+                    rows[i].get(j).copied().unwrap_or(f64::NAN)
+                });
                 let gd = PyDict::new(py);
                 gd.set_item("name", &g.name)?;
                 gd.set_item("columns", &g.columns)?;
@@ -164,7 +168,10 @@ fn recorded_dict<'py>(py: Python<'py>, r: &Recorded) -> PyResult<Bound<'py, PyDi
         None => d.set_item("sensors", py.None())?,
     }
     match &r.summary {
-        Some(s) => d.set_item("summary", json_to_py(py, &serde_json::to_value(s).map_err(to_json_err)?)?)?,
+        Some(s) => d.set_item(
+            "summary",
+            json_to_py(py, &serde_json::to_value(s).map_err(to_json_err)?)?,
+        )?,
         None => d.set_item("summary", py.None())?,
     }
     Ok(d)
@@ -245,7 +252,7 @@ impl Study {
     /// The value at key path `key` (numbers, strings, lists; tables as dicts). Raises
     /// `KeyPathError` for a path that leads nowhere.
     fn get<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Bound<'py, PyAny>> {
-        let v = self.doc.get(key).map_err(|e| to_py_err(py, &*e))?;
+        let v = self.doc.get(key).map_err(|e| key_err(py, &*e, key))?;
         json_to_py(py, &v)
     }
 
@@ -253,7 +260,7 @@ impl Study {
     /// `StudyError` located at the value (file, line, column, key) and is not kept.
     fn set(&mut self, py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
         let text = toml_text(value)?;
-        self.doc.set(key, &text).map_err(|e| to_py_err(py, &*e))
+        self.doc.set(key, &text).map_err(|e| key_err(py, &*e, key))
     }
 
     /// Sets several values (a dict of key path to value), then validates once: for changes that
@@ -262,7 +269,8 @@ impl Study {
         let mut doc = self.doc.clone();
         for (k, v) in values.iter() {
             let key: String = k.extract()?;
-            doc.set_unchecked(&key, &toml_text(&v)?).map_err(|e| to_py_err(py, &*e))?;
+            doc.set_unchecked(&key, &toml_text(&v)?)
+                .map_err(|e| key_err(py, &*e, &key))?;
         }
         doc.study().map_err(|e| to_py_err(py, &e))?;
         self.doc = doc;
@@ -302,15 +310,18 @@ impl Study {
         cache: Option<PathBuf>,
         t_end: Option<f64>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let mut doc = self.doc.clone();
-        if let Some(name) = &analysis {
-            keep_only_analysis(py, &mut doc, name)?;
-        }
-        let st = doc.study().map_err(|e| to_py_err(py, &e))?;
+        let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
+        let only = match &analysis {
+            Some(name) => Some(st.analyses.iter().position(|a| &a.name == name).ok_or_else(|| {
+                let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
+                StudyError::new_err(study::source::unknown_reference("analysis", name, &names))
+            })?),
+            None => None,
+        };
         let opts = options(results_dir, cache, t_end);
         let dir = opts.results_dir(&st);
         let mut recorder = Recorder::default();
-        let outcome = py.detach(|| study::run(&st, &opts, &mut recorder));
+        let outcome = py.detach(|| run_study(&st, &opts, only, &mut recorder));
         let d = PyDict::new(py);
         d.set_item("results_dir", dir.display().to_string())?;
         let analyses = PyList::empty(py);
@@ -372,13 +383,20 @@ impl Study {
     /// cache, as `flexmbs reduce` does without writing a results folder; returns
     /// `{part name: ReducedBody}`.
     #[pyo3(signature = (part=None, cache=None))]
-    fn reduce(&self, py: Python<'_>, part: Option<String>, cache: Option<PathBuf>) -> PyResult<Vec<(String, ReducedBody)>> {
+    fn reduce(
+        &self,
+        py: Python<'_>,
+        part: Option<String>,
+        cache: Option<PathBuf>,
+    ) -> PyResult<Vec<(String, ReducedBody)>> {
         let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
         let opts = options(None, cache, None);
         let cache_dir = opts.cache_dir(&st);
         let targets: Vec<usize> = match &part {
-            Some(name) => vec![st.part(name).map_err(|m| StudyError::new_err(m))?],
-            None => (0..st.parts.len()).filter(|&i| st.parts[i].reduction.is_some()).collect(),
+            Some(name) => vec![st.part(name).map_err(StudyError::new_err)?],
+            None => (0..st.parts.len())
+                .filter(|&i| st.parts[i].reduction.is_some())
+                .collect(),
         };
         let mut out = Vec::new();
         for i in targets {
@@ -430,16 +448,23 @@ impl Study {
     }
 }
 
-/// Removes every analysis but `name` from `doc` (a run of one analysis), or raises
-/// `StudyError` naming the analyses there are.
-fn keep_only_analysis(py: Python<'_>, doc: &mut study::Document, name: &str) -> PyResult<()> {
-    let st = doc.study().map_err(|e| to_py_err(py, &e))?;
-    if !st.analyses.iter().any(|a| a.name == name) {
-        let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
-        return Err(StudyError::new_err(study::source::unknown_reference("analysis", name, &names)));
-    }
-    doc.retain_analyses(|n| n == name).map_err(|e| to_py_err(py, &*e))?;
-    Ok(())
+/// Runs every analysis of `st` (or only analysis `only`) into its results folder, every result
+/// to `recorder` too: `study::run` for all, the same `Runner` for one.
+fn run_study(
+    st: &study::Study,
+    opts: &study::Options,
+    only: Option<usize>,
+    recorder: &mut Recorder,
+) -> Result<study::output::Summary, study::BoxError> {
+    let Some(i) = only else {
+        return study::run(st, opts, recorder);
+    };
+    let mut folder = study::folder::ResultsFolder::new(&opts.results_dir(st))?;
+    let mut obs = (&mut folder, recorder as &mut dyn Observer);
+    let mut runner = study::Runner::new(st, opts);
+    obs.summary(&runner.summary)?;
+    runner.run_one(i, &mut obs)?;
+    runner.finish(&mut obs)
 }
 
 /// A dynamic analysis stepped from Python (`Study.simulation`): `step()`, `advance_to(t)`,
@@ -487,7 +512,8 @@ impl Simulation {
     /// `SolveError` (time, step, residual) and leaves the state at the last converged step.
     fn step(&mut self, py: Python<'_>) -> PyResult<usize> {
         let report = self.sim.step().map_err(|e| to_py_err(py, &e))?;
-        Ok(report.iterations)
+        // The residuals before each correction and at convergence.
+        Ok(report.residuals.len().saturating_sub(1))
     }
 
     /// Steps until the time reaches `t`; returns the number of steps taken.
