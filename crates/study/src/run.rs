@@ -330,16 +330,16 @@ fn run_analysis(study: &Study, a: &Analysis, cache: &Path, obs: &mut dyn Observe
     Ok(o)
 }
 
+/// Stress tensor (6 components), von Mises stress and largest principal stress per node [Pa].
+pub type StressFields = (Vec<[f64; 6]>, Vec<f64>, Vec<f64>);
+
 /// The stress fields of nodal displacements `values` of `model` at its nodes: the Voigt
 /// tensor of the solids (averaged at the nodes, `fe_model::stress`; zero elsewhere), von Mises
 /// and the largest principal stress. Beam nodes carry no tensor; their von Mises and largest
 /// principal stress are the largest magnitude and value of the extreme-fibre axial stress over
 /// the element ends at the node, for sections given by shape (nodal loads only: no load
 /// along the elements).
-pub fn stress_fields(
-    model: &fe_model::FeModel,
-    values: &[[f64; 6]],
-) -> Result<(Vec<[f64; 6]>, Vec<f64>, Vec<f64>), BoxError> {
+pub fn stress_fields(model: &fe_model::FeModel, values: &[[f64; 6]]) -> Result<StressFields, BoxError> {
     let n = model.node_count();
     let mut tensor = vec![[0.0; 6]; n];
     let mut von_mises = vec![0.0; n];
@@ -387,7 +387,7 @@ fn six_dof_frame(
     key: f64,
     mesh: &VtuMesh,
     values: &[[f64; 6]],
-    stress: Option<&(Vec<[f64; 6]>, Vec<f64>, Vec<f64>)>,
+    stress: Option<&StressFields>,
 ) -> Result<(), BoxError> {
     let (u, r) = six_dof_fields(values);
     let mut fields = vec![
