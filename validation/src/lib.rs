@@ -217,6 +217,7 @@ pub fn benchmarks() -> Vec<Benchmark> {
         ("C2", benchmarks::dynamics::c2_slider_crank),
         ("C3", benchmarks::dynamics::c3_spatial_slider_crank),
         ("C4", benchmarks::dynamics::c4_free_body),
+        ("S1", benchmarks::stress::s1_transient_stress),
         ("V", benchmarks::variants::variants),
     ]
 }
