@@ -9,7 +9,9 @@ use study::error::{BoxError, ResultExt};
 /// The report of `inspect`. `excitation_hz`: the highest frequency a study will excite; the
 /// diagnostics then check that the kept modes reach `factor` times it.
 pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<String, BoxError> {
-    let body = reduction::file::read(path).context(|| format!("cannot inspect {}", path.display()))?;
+    // Read without the physical checks so that a refused file can still be looked at; the
+    // checks are reported below.
+    let body = reduction::file::read_unchecked(path).context(|| format!("cannot inspect {}", path.display()))?;
     let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
     let mut s = String::new();
     let _ = writeln!(
@@ -99,5 +101,17 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<S
     }
     let d = reduction::diagnostics(&body, excitation_hz, factor);
     let _ = write!(s, "{d}");
+    let problems = reduction::physical_problems(&body);
+    if problems.is_empty() {
+        let _ = writeln!(
+            s,
+            "physical checks: passed (symmetric K_CB and M_CB, positive masses, K_CB positive semi-definite with only rigid motions free, metadata consistent with the matrices, distinct interfaces)"
+        );
+    } else {
+        let _ = writeln!(s, "physical checks: FAILED, studies refuse this file:");
+        for p in &problems {
+            let _ = writeln!(s, "  - {p}");
+        }
+    }
     Ok(s)
 }

@@ -1,4 +1,4 @@
-//! The closed list of element kinds and their dispatch (style R7).
+//! The closed list of element kinds and their dispatch.
 //!
 //! An element is a pure function of its reference geometry and its properties: it never sees
 //! the system, other elements or the dof numbering. Adding a kind is a compile error at every
@@ -71,7 +71,7 @@ pub struct Beam2 {
 pub enum Element {
     /// 2 nodes x 6 dofs, theory in [`Beam2::theory`].
     Beam2(Beam2),
-    /// 4-node tetrahedron, 3 dofs per node; for contrast only: it locks in bending (brief §2).
+    /// 4-node tetrahedron, 3 dofs per node; for contrast only: it locks in bending (theory guide §2).
     Tet4(Solid),
     /// 10-node tetrahedron, 3 dofs per node.
     Tet10(Solid),

@@ -1,4 +1,4 @@
-//! Craig-Bampton reduction of an FE model with interfaces (brief §3).
+//! Craig-Bampton reduction of an FE model with interfaces (theory guide §3).
 //!
 //! The free dofs of the FE model are split into the boundary set $b$ (the six dofs of every
 //! interface node, interface by interface) and the internal set $i$ (all others). The CB
@@ -42,7 +42,7 @@ pub struct CbSettings {
     /// Keep the CB basis on every mesh node (for output and stress recovery).
     pub keep_mesh_shapes: bool,
     /// An interface node placed at the centre of mass, added as the last interface and held
-    /// fixed during the reduction (the `auxiliary-node` frame choice, brief §4).
+    /// fixed during the reduction (the `auxiliary-node` frame choice, theory guide §4).
     pub auxiliary_node: Option<NodeId>,
     /// Compute [`ReducedBody::geometric_stiffness`] (geometric stiffening: the stiffness the
     /// stress of each CB coordinate adds to every other), for bodies whose axial loads change
@@ -300,7 +300,7 @@ fn project(
             flops: factor.factor_flops(),
             ordering: factor.ordering(),
         });
-        // (brief §3) Psi = -K_ii^{-1} K_ib: 6N solves with the one factor.
+        // (theory guide §3) Psi = -K_ii^{-1} K_ib: 6N solves with the one factor.
         progress(Stage::ConstraintModes { count: nb });
         let mut Psi = -&K_ib;
         factor.solve_in_place(Psi.as_mut());

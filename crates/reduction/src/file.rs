@@ -1,5 +1,5 @@
 //! The reduced-body file, `NAME.rbody`: a [`ReducedBody`] saved once and reused by many
-//! studies (the role of Adams' MNF or Simpack's SID file, brief §1). Reading it back gives a
+//! studies (the role of Adams' MNF or Simpack's SID file, theory guide §1). Reading it back gives a
 //! body identical to the one written, bit for bit in every `f64`.
 //!
 //! # Why one file, half text and half binary
@@ -136,6 +136,12 @@ pub enum BodyFileProblem {
     /// whose own shapes are inconsistent).
     #[error("the body cannot be written: {what}")]
     Unwritable { what: String },
+    /// The file is intact but its data are physically wrong ([`crate::physics`]): no reduction
+    /// produces them.
+    #[error("physically inconsistent data (no reduction produces these; reduce the body again): {}", problems.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("; "))]
+    Physics {
+        problems: Vec<crate::physics::PhysicsProblem>,
+    },
 }
 
 /// The oldest format version this build reads.
@@ -605,16 +611,57 @@ pub fn write(body: &ReducedBody, path: &Path) -> Result<(), ReductionError> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "body".into());
-    let tmp = path.with_file_name(format!(".{file_name}.tmp-{}", std::process::id()));
-    std::fs::write(&tmp, &bytes).map_err(|e| io("write", e))?;
+    // Unique per process and per call, so that concurrent writers (two runs sharing a cache,
+    // two threads of one) never share a temporary file.
+    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = path.with_file_name(format!(".{file_name}.tmp-{}-{n}", std::process::id()));
+    // A failed write (a full disk) leaves no partial temporary behind.
+    std::fs::write(&tmp, &bytes).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io("write", e)
+    })?;
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         io("replace", e)
     })
 }
 
-/// Reads a reduced-body file written by [`write()`].
+/// Reads a reduced-body file written by [`write()`] and checks its physics
+/// ([`crate::physics`]).
 pub fn read(path: &Path) -> Result<ReducedBody, ReductionError> {
+    checked(read_unchecked(path)?, path)
+}
+
+/// Parses the bytes of a reduced-body file and checks its physics ([`crate::physics`]);
+/// `origin` names it in errors. Never panics.
+pub fn from_bytes(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
+    checked(from_bytes_unchecked(bytes, origin)?, origin)
+}
+
+/// `body` if [`crate::physics::physical_problems`] finds nothing, else the error naming them.
+fn checked(body: ReducedBody, origin: &Path) -> Result<ReducedBody, ReductionError> {
+    let problems = crate::physics::physical_problems(&body);
+    if problems.is_empty() {
+        Ok(body)
+    } else {
+        Err(ReductionError::BodyFile {
+            path: PathBuf::from(origin),
+            problem: BodyFileProblem::Physics { problems },
+        })
+    }
+}
+
+/// [`from_bytes`] without the physical checks: for `inspect`, which reports them.
+pub fn from_bytes_unchecked(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
+    parse(bytes).map_err(|problem| ReductionError::BodyFile {
+        path: PathBuf::from(origin),
+        problem,
+    })
+}
+
+/// [`read`] without the physical checks (see [`from_bytes_unchecked`]).
+pub fn read_unchecked(path: &Path) -> Result<ReducedBody, ReductionError> {
     let bytes = std::fs::read(path).map_err(|e| ReductionError::BodyFile {
         path: path.to_path_buf(),
         problem: BodyFileProblem::Io {
@@ -622,15 +669,7 @@ pub fn read(path: &Path) -> Result<ReducedBody, ReductionError> {
             message: e.to_string(),
         },
     })?;
-    from_bytes(&bytes, path)
-}
-
-/// Parses the bytes of a reduced-body file; `origin` names it in errors. Never panics.
-pub fn from_bytes(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
-    parse(bytes).map_err(|problem| ReductionError::BodyFile {
-        path: PathBuf::from(origin),
-        problem,
-    })
+    from_bytes_unchecked(&bytes, path)
 }
 
 /// The next line (without its `\n`) from `start`, looking at most `limit` bytes ahead: header

@@ -238,7 +238,7 @@ pub struct ReducedBody {
     pub inertia: InertiaData,
     /// $6 \times n$: the CB modes evaluated at the centre of mass by the mass-weighted rigid
     /// fit $(\boldsymbol\Phi_R^T \mathbf M \boldsymbol\Phi_R)^{-1} \boldsymbol\Phi_R^T \mathbf M
-    /// \mathbf V$ (brief §4), rows: translation, then rotation.
+    /// \mathbf V$ (theory guide §4), rows: translation, then rotation.
     pub Phi_com: DenseMatrix,
     /// Index of the auxiliary interface at the centre of mass, when the body was reduced with
     /// one (the third frame choice).

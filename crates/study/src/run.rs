@@ -25,6 +25,9 @@ pub struct Options {
     pub cache: Option<PathBuf>,
     /// Ends every dynamic analysis at this time if it is earlier (`--t-end`, for short runs).
     pub t_end: Option<f64>,
+    /// Files in the results folder that flexmbs did not write: refuse (default) or keep
+    /// (`--foreign-files keep`; `crate::folder`).
+    pub foreign: crate::folder::ForeignFiles,
 }
 
 impl Options {
@@ -108,7 +111,8 @@ pub fn pending_summary(study: &Study) -> Summary {
 /// file), with `observer` seeing every result too. Stops at the first analysis that fails,
 /// after writing the summary with the failure.
 pub fn run(study: &Study, options: &Options, observer: &mut dyn Observer) -> Result<Summary, BoxError> {
-    let mut folder = ResultsFolder::new(&options.results_dir(study))?;
+    let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
+    let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
     run_with(study, options, &mut (&mut folder, observer))
 }
 
@@ -208,10 +212,12 @@ impl<'s> Runner<'s> {
                     // The solver stopped: what it computed is written; the run fails here.
                     entry.status = Status::Failed;
                     entry.error = Some(failure.clone());
-                    summary.status = "failed".into();
+                    summary.status = failed_status();
                     let entry = entry.clone();
-                    obs.end(&info, &entry)?;
-                    obs.summary(summary)?;
+                    // The failure is the message; a summary that cannot be written (a full
+                    // disk) must not replace it.
+                    let _ = obs.end(&info, &entry);
+                    let _ = obs.summary(summary);
                     return Err(format!(
                         "{} analysis '{}' ({}): {failure} in {}/{}",
                         a.kind_name(),
@@ -230,10 +236,10 @@ impl<'s> Runner<'s> {
             Err(e) => {
                 entry.status = Status::Failed;
                 entry.error = Some(crate::error::chain(&*e));
-                summary.status = "failed".into();
+                summary.status = failed_status();
                 let entry = entry.clone();
-                obs.end(&info, &entry)?;
-                obs.summary(summary)?;
+                let _ = obs.end(&info, &entry);
+                let _ = obs.summary(summary);
                 Err(Box::new(Context {
                     message: format!(
                         "{} analysis '{}' ({}) failed; the results of the analyses before it are in {}",
@@ -254,6 +260,15 @@ impl<'s> Runner<'s> {
         self.summary.total_seconds = self.start.elapsed().as_secs_f64();
         obs.summary(&self.summary)?;
         Ok(self.summary)
+    }
+}
+
+/// The summary status of a run that stopped: `interrupted` after Ctrl-C, else `failed`.
+fn failed_status() -> String {
+    if crate::interrupt::requested() {
+        "interrupted".into()
+    } else {
+        "failed".into()
     }
 }
 
@@ -642,8 +657,16 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
         .context(|| format!("part '{}': cannot hash its inputs", part.name))?;
     let file = crate::cache::path(cache, &part.name, &key);
     if file.is_file() {
-        match reduction::file::read(&file) {
-            Ok(body) if body.name == part.name => {
+        let recorded = crate::cache::lookup(&file, &key);
+        if recorded.is_none() {
+            obs.progress(&Progress::Warning(format!(
+                "cache file {} does not record the inputs of this reduction (or was changed); reducing again",
+                file.display()
+            )));
+        }
+        match recorded.map(|bytes| reduction::file::from_bytes(&bytes, &file)) {
+            None => {}
+            Some(Ok(body)) if body.name == part.name => {
                 obs.progress(&Progress::Info(format!(
                     "part '{}': reduced body found in the cache ({}): same mesh and settings, not reducing again",
                     part.name,
@@ -657,11 +680,11 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
                     free_dofs: n_free,
                 });
             }
-            Ok(_) => obs.progress(&Progress::Warning(format!(
+            Some(Ok(_)) => obs.progress(&Progress::Warning(format!(
                 "cache file {} holds another body; reducing again",
                 file.display()
             ))),
-            Err(e) => obs.progress(&Progress::Warning(format!(
+            Some(Err(e)) => obs.progress(&Progress::Warning(format!(
                 "cannot use the cached body ({e}); reducing again"
             ))),
         }
@@ -727,6 +750,13 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
     )));
     std::fs::create_dir_all(cache).context(|| format!("cannot create the cache folder {}", cache.display()))?;
     reduction::file::write(&body, &file).context(|| format!("part '{}': cannot write the reduced body", part.name))?;
+    crate::cache::record(&file, &key).context(|| {
+        format!(
+            "part '{}': cannot record the cache key of {}",
+            part.name,
+            file.display()
+        )
+    })?;
     obs.progress(&Progress::Info(format!(
         "part '{}': saved to the cache as {}",
         part.name,
@@ -925,6 +955,12 @@ pub fn reduce_command(
         .into());
     }
     let out = options.results_dir(study);
+    if out.as_os_str().is_empty() {
+        return Err(
+            "the output folder is '' (an empty path): name a folder, e.g. --out bodies, or --out . for the current one"
+                .into(),
+        );
+    }
     std::fs::create_dir_all(&out).context(|| format!("cannot create the results folder {}", out.display()))?;
     let cache = options.cache_dir(study);
     let mut written = Vec::new();
