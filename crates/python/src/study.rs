@@ -111,7 +111,9 @@ fn table_dict<'py>(py: Python<'py>, t: &study::observer::Table) -> PyResult<Boun
     let data = PyDict::new(py);
     for (k, c) in t.columns.iter().enumerate() {
         let cells: Vec<&Cell> = t.rows.iter().filter_map(|r| r.get(k)).collect();
-        let numeric = cells.iter().all(|c| matches!(c, Cell::Int(_) | Cell::Num(_) | Cell::Empty));
+        let numeric = cells
+            .iter()
+            .all(|c| matches!(c, Cell::Int(_) | Cell::Num(_) | Cell::Empty));
         if numeric {
             let v: Vec<f64> = cells.iter().map(|c| c.as_f64().unwrap_or(f64::NAN)).collect();
             data.set_item(c, PyArray1::from_vec(py, v))?;
@@ -151,7 +153,9 @@ fn recorded_dict<'py>(py: Python<'py>, r: &Recorded) -> PyResult<Bound<'py, PyDi
             let groups = PyList::empty(py);
             for (g, rows) in h.groups.iter().zip(&h.rows) {
                 let width = g.columns.len();
-                let values = Array2::from_shape_fn((rows.len(), width), |(i, j)| rows[i].get(j).copied().unwrap_or(f64::NAN));
+                let values = Array2::from_shape_fn((rows.len(), width), |(i, j)| {
+                    rows[i].get(j).copied().unwrap_or(f64::NAN)
+                });
                 let gd = PyDict::new(py);
                 gd.set_item("name", &g.name)?;
                 gd.set_item("columns", &g.columns)?;
@@ -164,7 +168,10 @@ fn recorded_dict<'py>(py: Python<'py>, r: &Recorded) -> PyResult<Bound<'py, PyDi
         None => d.set_item("sensors", py.None())?,
     }
     match &r.summary {
-        Some(s) => d.set_item("summary", json_to_py(py, &serde_json::to_value(s).map_err(to_json_err)?)?)?,
+        Some(s) => d.set_item(
+            "summary",
+            json_to_py(py, &serde_json::to_value(s).map_err(to_json_err)?)?,
+        )?,
         None => d.set_item("summary", py.None())?,
     }
     Ok(d)
@@ -262,7 +269,8 @@ impl Study {
         let mut doc = self.doc.clone();
         for (k, v) in values.iter() {
             let key: String = k.extract()?;
-            doc.set_unchecked(&key, &toml_text(&v)?).map_err(|e| to_py_err(py, &*e))?;
+            doc.set_unchecked(&key, &toml_text(&v)?)
+                .map_err(|e| to_py_err(py, &*e))?;
         }
         doc.study().map_err(|e| to_py_err(py, &e))?;
         self.doc = doc;
@@ -372,13 +380,20 @@ impl Study {
     /// cache, as `flexmbs reduce` does without writing a results folder; returns
     /// `{part name: ReducedBody}`.
     #[pyo3(signature = (part=None, cache=None))]
-    fn reduce(&self, py: Python<'_>, part: Option<String>, cache: Option<PathBuf>) -> PyResult<Vec<(String, ReducedBody)>> {
+    fn reduce(
+        &self,
+        py: Python<'_>,
+        part: Option<String>,
+        cache: Option<PathBuf>,
+    ) -> PyResult<Vec<(String, ReducedBody)>> {
         let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
         let opts = options(None, cache, None);
         let cache_dir = opts.cache_dir(&st);
         let targets: Vec<usize> = match &part {
             Some(name) => vec![st.part(name).map_err(|m| StudyError::new_err(m))?],
-            None => (0..st.parts.len()).filter(|&i| st.parts[i].reduction.is_some()).collect(),
+            None => (0..st.parts.len())
+                .filter(|&i| st.parts[i].reduction.is_some())
+                .collect(),
         };
         let mut out = Vec::new();
         for i in targets {
@@ -436,7 +451,9 @@ fn keep_only_analysis(py: Python<'_>, doc: &mut study::Document, name: &str) -> 
     let st = doc.study().map_err(|e| to_py_err(py, &e))?;
     if !st.analyses.iter().any(|a| a.name == name) {
         let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
-        return Err(StudyError::new_err(study::source::unknown_reference("analysis", name, &names)));
+        return Err(StudyError::new_err(study::source::unknown_reference(
+            "analysis", name, &names,
+        )));
     }
     doc.retain_analyses(|n| n == name).map_err(|e| to_py_err(py, &*e))?;
     Ok(())

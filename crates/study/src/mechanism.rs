@@ -938,11 +938,10 @@ impl MeshRecovery {
                     }
                     // Stresses live on the mesh nodes, drawn only with the mesh shapes.
                     if let Some(Some(st)) = stresses.get(k) {
-                        for i in 0..ms.positions.len().min(st.tensor.len()) {
-                            tensor[first + i] = st.tensor[i];
-                            von_mises[first + i] = st.von_mises[i];
-                            principal[first + i] = st.principal[i];
-                        }
+                        let n = ms.positions.len().min(st.tensor.len());
+                        tensor[first..first + n].copy_from_slice(&st.tensor[..n]);
+                        von_mises[first..first + n].copy_from_slice(&st.von_mises[..n]);
+                        principal[first..first + n].copy_from_slice(&st.principal[..n]);
                     }
                 }
                 None => {

@@ -289,6 +289,9 @@ fn run_analysis(study: &Study, a: &Analysis, cache: &Path, obs: &mut dyn Observe
     Ok(o)
 }
 
+/// Nodal stress fields: Voigt tensor, von Mises and largest principal stress per node.
+pub type StressFields = (Vec<[f64; 6]>, Vec<f64>, Vec<f64>);
+
 /// The stress fields of nodal displacements `values` of `model` at its nodes: the Voigt
 /// tensor of the solids (averaged at the nodes, `fe_model::stress`; zero elsewhere), von Mises
 /// and the largest principal stress. Beam nodes carry no tensor; their von Mises and largest
@@ -346,7 +349,7 @@ fn six_dof_frame(
     key: f64,
     mesh: &VtuMesh,
     values: &[[f64; 6]],
-    stress: Option<&(Vec<[f64; 6]>, Vec<f64>, Vec<f64>)>,
+    stress: Option<&StressFields>,
 ) -> Result<(), BoxError> {
     let (u, r) = six_dof_fields(values);
     let mut fields = vec![
