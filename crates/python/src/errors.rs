@@ -7,12 +7,13 @@
 //! | `FlexmbsError` | base of all below | |
 //! | `ReducedBodyFileError` | a `.rbody` file cannot be read or written | `path` |
 //! | `StudyError` | a study is not valid (as `flexmbs check` reports it) | `file`, `line`, `column`, `key` of the first error; `errors`: every error as a dict of these and `message` |
-//! | `KeyPathError` | a key path leads to no value of the study | `path` |
+//! | `KeyPathError` | a key path leads to no value of the study | `path` (the path asked for), `at` (its part that leads nowhere) |
 //! | `SolveError` | a solver stopped (Newton did not converge, a singular matrix, ...) | `time`, `step`, `residual` (when known); `partial` (results computed before, from `Study.run`) |
 
 use pyo3::create_exception;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
+pub(crate) use study::error::chain;
 
 create_exception!(
     flexmbs,
@@ -37,7 +38,7 @@ create_exception!(
     flexmbs,
     KeyPathError,
     FlexmbsError,
-    "A key path that leads to no value of the study; `path` is the path."
+    "A key path that leads to no value of the study; `path` is the path, `at` its part that leads nowhere."
 );
 create_exception!(
     flexmbs,
@@ -55,22 +56,6 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("KeyPathError", py.get_type::<KeyPathError>())?;
     m.add("SolveError", py.get_type::<SolveError>())?;
     Ok(())
-}
-
-/// The message of an error and of every source below it, joined by ": " (the CLI prints the
-/// same chain).
-pub(crate) fn chain(error: &dyn std::error::Error) -> String {
-    let mut text = error.to_string();
-    let mut source = error.source();
-    while let Some(s) = source {
-        let more = s.to_string();
-        if !text.contains(&more) {
-            text.push_str(": ");
-            text.push_str(&more);
-        }
-        source = s.source();
-    }
-    text
 }
 
 /// A Python exception of class `T` with `message` and the attributes `attrs` set on it.
@@ -159,8 +144,12 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
                 | study::document::PathError::NotTable { path, .. }
                 | study::document::PathError::Value { path, .. } => path.clone(),
             };
-            let path = PyString::new(py, &path).into_any().unbind();
-            return Ok(with_attributes::<KeyPathError>(py, message, &[("path", path)]));
+            let at = PyString::new(py, &path).into_any().unbind();
+            return Ok(with_attributes::<KeyPathError>(
+                py,
+                message,
+                &[("path", at.clone_ref(py)), ("at", at)],
+            ));
         }
         if let Some(s) = e.downcast_ref::<mbs::SolveError>() {
             let (t, step, residual) = match s {
@@ -176,13 +165,23 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
             ];
             return Ok(with_attributes::<SolveError>(py, message, &attrs));
         }
-        if let Some(r) = e.downcast_ref::<reduction::ReductionError>() {
-            if let reduction::ReductionError::BodyFile { path, .. } = r {
-                let path = PyString::new(py, &path.display().to_string()).into_any().unbind();
-                return Ok(with_attributes::<ReducedBodyFileError>(py, message, &[("path", path)]));
-            }
+        if let Some(reduction::ReductionError::BodyFile { path, .. }) = e.downcast_ref::<reduction::ReductionError>() {
+            let path = PyString::new(py, &path.display().to_string()).into_any().unbind();
+            return Ok(with_attributes::<ReducedBodyFileError>(py, message, &[("path", path)]));
         }
         cause = e.source();
     }
     Ok(FlexmbsError::new_err(message))
+}
+
+/// `error` as the package's exception; a `KeyPathError` gets `path` = `key`, the path the
+/// caller asked for (the library names the part of it that leads nowhere, kept as `at`).
+pub(crate) fn key_err(py: Python<'_>, error: &(dyn std::error::Error + 'static), key: &str) -> PyErr {
+    let err = to_py_err(py, error);
+    if err.is_instance_of::<KeyPathError>(py) {
+        if let Err(e) = err.value(py).setattr("path", key) {
+            return e;
+        }
+    }
+    err
 }

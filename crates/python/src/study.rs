@@ -6,7 +6,7 @@
 //! results come back as plain Python data (dicts, lists, numpy arrays) that the pure-Python
 //! `flexmbs.results` module wraps.
 
-use crate::errors::{to_py_err, StudyError};
+use crate::errors::{key_err, to_py_err, StudyError};
 use crate::rbody::ReducedBody;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1};
@@ -186,6 +186,7 @@ fn options(results_dir: Option<PathBuf>, cache: Option<PathBuf>, t_end: Option<f
         out: results_dir,
         cache,
         t_end,
+        foreign: Default::default(),
     }
 }
 
@@ -252,7 +253,7 @@ impl Study {
     /// The value at key path `key` (numbers, strings, lists; tables as dicts). Raises
     /// `KeyPathError` for a path that leads nowhere.
     fn get<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Bound<'py, PyAny>> {
-        let v = self.doc.get(key).map_err(|e| to_py_err(py, &*e))?;
+        let v = self.doc.get(key).map_err(|e| key_err(py, &*e, key))?;
         json_to_py(py, &v)
     }
 
@@ -260,7 +261,7 @@ impl Study {
     /// `StudyError` located at the value (file, line, column, key) and is not kept.
     fn set(&mut self, py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
         let text = toml_text(value)?;
-        self.doc.set(key, &text).map_err(|e| to_py_err(py, &*e))
+        self.doc.set(key, &text).map_err(|e| key_err(py, &*e, key))
     }
 
     /// Sets several values (a dict of key path to value), then validates once: for changes that
@@ -270,7 +271,7 @@ impl Study {
         for (k, v) in values.iter() {
             let key: String = k.extract()?;
             doc.set_unchecked(&key, &toml_text(&v)?)
-                .map_err(|e| to_py_err(py, &*e))?;
+                .map_err(|e| key_err(py, &*e, &key))?;
         }
         doc.study().map_err(|e| to_py_err(py, &e))?;
         self.doc = doc;
@@ -310,15 +311,18 @@ impl Study {
         cache: Option<PathBuf>,
         t_end: Option<f64>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let mut doc = self.doc.clone();
-        if let Some(name) = &analysis {
-            keep_only_analysis(py, &mut doc, name)?;
-        }
-        let st = doc.study().map_err(|e| to_py_err(py, &e))?;
+        let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
+        let only = match &analysis {
+            Some(name) => Some(st.analyses.iter().position(|a| &a.name == name).ok_or_else(|| {
+                let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
+                StudyError::new_err(study::source::unknown_reference("analysis", name, &names))
+            })?),
+            None => None,
+        };
         let opts = options(results_dir, cache, t_end);
         let dir = opts.results_dir(&st);
         let mut recorder = Recorder::default();
-        let outcome = py.detach(|| study::run(&st, &opts, &mut recorder));
+        let outcome = py.detach(|| run_study(&st, &opts, only, &mut recorder));
         let d = PyDict::new(py);
         d.set_item("results_dir", dir.display().to_string())?;
         let analyses = PyList::empty(py);
@@ -390,7 +394,7 @@ impl Study {
         let opts = options(None, cache, None);
         let cache_dir = opts.cache_dir(&st);
         let targets: Vec<usize> = match &part {
-            Some(name) => vec![st.part(name).map_err(|m| StudyError::new_err(m))?],
+            Some(name) => vec![st.part(name).map_err(StudyError::new_err)?],
             None => (0..st.parts.len())
                 .filter(|&i| st.parts[i].reduction.is_some())
                 .collect(),
@@ -445,18 +449,18 @@ impl Study {
     }
 }
 
-/// Removes every analysis but `name` from `doc` (a run of one analysis), or raises
-/// `StudyError` naming the analyses there are.
-fn keep_only_analysis(py: Python<'_>, doc: &mut study::Document, name: &str) -> PyResult<()> {
-    let st = doc.study().map_err(|e| to_py_err(py, &e))?;
-    if !st.analyses.iter().any(|a| a.name == name) {
-        let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
-        return Err(StudyError::new_err(study::source::unknown_reference(
-            "analysis", name, &names,
-        )));
-    }
-    doc.retain_analyses(|n| n == name).map_err(|e| to_py_err(py, &*e))?;
-    Ok(())
+/// Runs every analysis of `st` (or only analysis `only`) into its results folder, every result
+/// to `recorder` too: `study::run` for all, the same `Runner` for one.
+fn run_study(
+    st: &study::Study,
+    opts: &study::Options,
+    only: Option<usize>,
+    recorder: &mut Recorder,
+) -> Result<study::output::Summary, study::BoxError> {
+    let Some(i) = only else {
+        return study::run(st, opts, recorder);
+    };
+    study::run::run_only(st, opts, i, recorder)
 }
 
 /// A dynamic analysis stepped from Python (`Study.simulation`): `step()`, `advance_to(t)`,
@@ -504,7 +508,8 @@ impl Simulation {
     /// `SolveError` (time, step, residual) and leaves the state at the last converged step.
     fn step(&mut self, py: Python<'_>) -> PyResult<usize> {
         let report = self.sim.step().map_err(|e| to_py_err(py, &e))?;
-        Ok(report.iterations)
+        // The residuals before each correction and at convergence.
+        Ok(report.residuals.len().saturating_sub(1))
     }
 
     /// Steps until the time reaches `t`; returns the number of steps taken.

@@ -103,7 +103,7 @@ def test_run_equals_the_program_to_round_off(examples, cli, tmp_path):
         np.testing.assert_array_equal(own, table)
     s = a.sensor("rod-mid")
     assert s.units == ["m"] and len(s.time) == 101
-    assert res.summary["status"] == "done"
+    assert res.summary["status"] == "complete"
     cli_summary = json.loads((tmp_path / "cli" / "summary.json").read_text())
     assert [x["name"] for x in res.summary["analyses"]] == [x["name"] for x in cli_summary["analyses"]]
     assert a.summary["results"] == cli_summary["analyses"][0]["results"]

@@ -1,5 +1,5 @@
 """Parameter sweeps on a local Dask cluster of 2 workers: 9 slider-crank cases (rod diameter x
-crank speed, and one invalid diameter), a failing case recorded in its row, reduced bodies
+slider mass, and one invalid diameter), a failing case recorded in its row, reduced bodies
 shared through the cache."""
 
 import math
@@ -13,8 +13,9 @@ pytest.importorskip("dask.distributed")
 
 
 def variants():
-    cases = flexmbs.grid(**{"sections.rod.d": [0.004, 0.005, 0.006, 0.007], "drivers.crank-speed.function.speed": [120.0, 150.0]})
-    cases.append({"sections.rod.d": -0.006, "drivers.crank-speed.function.speed": 150.0})
+    # The slider's mass does not enter a reduced body: the two masses share each rod.
+    cases = flexmbs.grid(**{"sections.rod.d": [0.004, 0.005, 0.006, 0.007], "rigid_bodies.slider.mass": [0.0333789, 0.1]})
+    cases.append({"sections.rod.d": -0.006, "rigid_bodies.slider.mass": 0.0333789})
     for c in cases:
         # One revolution at 150 rad/s: 420 steps a case.
         c["analyses.run-up.t_end"] = 0.042
@@ -40,20 +41,21 @@ def test_sweep_on_a_local_cluster(examples, tmp_path):
     )
     assert len(table) == 9
     assert list(table["case"]) == list(range(9))
-    errors = list(table["error"])
+    # pandas shows a missing error (None) as NaN.
+    errors = [None if isinstance(e, float) and math.isnan(e) else e for e in table["error"]]
     # The invalid diameter fails in its row, with the validation's located message; the other
     # eight ran.
     assert all(e is None for e in errors[:8]), errors
-    assert "sections[0].d" in errors[8] or "d" in errors[8]
+    assert errors[8].startswith("StudyError") and "slider_crank.toml:" in errors[8] and "sections" in errors[8], errors[8]
     assert math.isnan(table["peak_deflection"][8])
     peaks = np.array(table["peak_deflection"][:8], dtype=float)
     assert np.all(np.isfinite(peaks)) and np.all(peaks > 0)
-    # A thinner rod bends more (at both speeds), and a faster crank bends it more.
+    # A thinner rod bends more, with either slider.
     by_d = peaks.reshape(4, 2)
     assert np.all(np.diff(by_d[:, 1]) < 0) and np.all(np.diff(by_d[:, 0]) < 0)
-    assert np.all(by_d[:, 1] > by_d[:, 0])
-    np.testing.assert_allclose(table["final_angle"][:8], [0.042 * s for s in [120.0, 150.0] * 4], rtol=1e-9)
-    # Four diameters: four reductions in the shared cache, each used by the two speeds.
+    # The driven crank turns 150 rad/s x 0.042 s whatever the case (a check of the output).
+    np.testing.assert_allclose(table["final_angle"][:8], 150.0 * 0.042, rtol=1e-9)
+    # Four diameters: four reductions in the shared cache, each used by the two slider masses.
     assert len(list((tmp_path / "cache").glob("*.rbody"))) == 4
     # Each case wrote its own results folder.
     assert (tmp_path / "sweep" / "case-0000" / "run-up" / "rod-mid.csv").is_file()

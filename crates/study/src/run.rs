@@ -116,6 +116,23 @@ pub fn run(study: &Study, options: &Options, observer: &mut dyn Observer) -> Res
     run_with(study, options, &mut (&mut folder, observer))
 }
 
+/// Runs analysis `index` of `study` alone into its results folder (the other analyses'
+/// files are left as they are), every result to `observer` too.
+pub fn run_only(
+    study: &Study,
+    options: &Options,
+    index: usize,
+    observer: &mut dyn Observer,
+) -> Result<Summary, BoxError> {
+    let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
+    let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
+    let obs: &mut dyn Observer = &mut (&mut folder, observer);
+    let mut runner = Runner::new(study, options);
+    obs.summary(&runner.summary)?;
+    runner.run_one(index, obs)?;
+    runner.finish(obs)
+}
+
 /// Runs every analysis of `study`, every result to `obs` only (no results folder unless
 /// `obs` writes one); the cache of reduced bodies is used as in [`run`].
 pub fn run_with(study: &Study, options: &Options, obs: &mut dyn Observer) -> Result<Summary, BoxError> {
