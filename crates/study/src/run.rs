@@ -315,10 +315,7 @@ pub type StressFields = (Vec<[f64; 6]>, Vec<f64>, Vec<f64>);
 /// principal stress are the largest magnitude and value of the extreme-fibre axial stress over
 /// the element ends at the node, for sections given by shape (nodal loads only: no load
 /// along the elements).
-pub fn stress_fields(
-    model: &fe_model::FeModel,
-    values: &[[f64; 6]],
-) -> Result<(Vec<[f64; 6]>, Vec<f64>, Vec<f64>), BoxError> {
+pub fn stress_fields(model: &fe_model::FeModel, values: &[[f64; 6]]) -> Result<StressFields, BoxError> {
     let n = model.node_count();
     let mut tensor = vec![[0.0; 6]; n];
     let mut von_mises = vec![0.0; n];
