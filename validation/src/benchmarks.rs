@@ -8,6 +8,8 @@ pub mod frame_buckling;
 pub mod linear;
 /// B1-B3: geometrically nonlinear statics.
 pub mod nonlinear_statics;
+/// S1: stress recovery from a reduced body against a full FE transient.
+pub mod stress;
 /// A5: linear transient against the exact modal series.
 pub mod transient;
 /// The AIC-FFR paper's comparison: frame choices x inertia variants, beam rod against solid rod.

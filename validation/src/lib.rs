@@ -218,6 +218,7 @@ pub fn benchmarks() -> Vec<Benchmark> {
         ("C2", benchmarks::dynamics::c2_slider_crank),
         ("C3", benchmarks::dynamics::c3_spatial_slider_crank),
         ("C4", benchmarks::dynamics::c4_free_body),
+        ("S1", benchmarks::stress::s1_transient_stress),
         ("V", benchmarks::variants::variants),
         ("F1", benchmarks::frame_buckling::f1_portal_frame),
     ]

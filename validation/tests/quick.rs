@@ -85,6 +85,13 @@ fn c4_free_body() {
     assert_within(&dynamics::c4_free_body(Extent::Quick).unwrap());
 }
 
+/// S1: the reduced body's stress history (20 modes) within 2 % of the full FE transient's
+/// peak (the truncated modes; measured 0.5 % on the peak, 1.5 % over the history).
+#[test]
+fn s1_transient_stress() {
+    assert_within(&validation::benchmarks::stress::s1_transient_stress(Extent::Quick).unwrap());
+}
+
 /// F1 at N = 8 superelements per member: the critical load of the portal frame within 1 % of
 /// the published characteristic equation (the O(1/N^2) chord error of N = 4 is 2.9 %, so
 /// about 0.7 % at N = 8).

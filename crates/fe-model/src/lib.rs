@@ -71,6 +71,8 @@
 //! | $A, I_y, I_z, J, k_y, k_z$ | `A()`, `Iy()`, ... | beam section, shear factors | [`BeamSection`] |
 //! | $\mathbf K_G(\boldsymbol\sigma)$ | `K_G` | geometric (initial-stress) stiffness of the stress field $\boldsymbol\sigma$: $\tfrac12\mathbf u^T\mathbf K_G\mathbf u = \int\boldsymbol\sigma : \tfrac12\nabla\mathbf u^T\nabla\mathbf u\,dV$ | [`geometric`]; McGuire, Gallagher & Ziemian (2000) (9.18) for beams |
 //! | $\lambda$ | `load_factors` | linearised buckling, $\mathbf K\boldsymbol\phi = \lambda(-\mathbf K_G)\boldsymbol\phi$ | [`linear_buckling`] |
+//! | $\boldsymbol\sigma$ | `Voigt` | stress $[xx, yy, zz, xy, yz, zx]$ at integration points or nodes; $\sigma_{vM}$ von Mises | [`stress`] |
+//! | $N, V_y, V_z, T, M_y, M_z$ | section forces | beam section forces, element axes | [`stress::beam_section_forces`] |
 //! | $\omega$ | `omega` | circular eigenfrequency, $\mathbf K \boldsymbol\phi = \omega^2 \mathbf M \boldsymbol\phi$ | [`modal_dense`] |
 //!
 //! Superscripts: every vector is in global axes unless its name ends in `_loc` (element axes).
