@@ -1186,6 +1186,9 @@ fn build_body(
         auxiliary_interface: None,
         mesh: None,
         geometric_stiffness: None,
+        stress: None,
+        load_points: Vec::new(),
+        attachment_modes: 0,
     };
     Ok((body, notes))
 }
