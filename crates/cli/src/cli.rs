@@ -1,7 +1,7 @@
 //! The command line: parsing the arguments and dispatching to the commands.
 
 use crate::console::Console;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use study::error::BoxError;
 use study::run::Options;
 
@@ -21,6 +21,9 @@ usage:
                                      show a reduced body: interfaces, mass data, fixed-interface
                                      frequencies, modal effective masses (and, with F, whether
                                      the kept modes reach 3 x F)
+  flexmbs export-fem FILE.rbody OUT.fem [--reference INTERFACE]
+                                     write a reduced body as an MBDyn modal element file
+                                     (modal node at the reference interface, default the first)
   flexmbs example [NAME [DIR]]       list the built-in example studies, or write one into DIR
                                      (default: the current folder)
   flexmbs validate [ARGS]            the validation suite (docs/validation.md): --quick, --no-report,
@@ -310,6 +313,33 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             crate::say_raw!("{}", crate::inspect::inspect(&path, excitation, 3.0)?);
             Ok(())
         }
+        "export-fem" => {
+            let (positional, options) = parse(rest, &["reference"])?;
+            let [input, output] = positional.as_slice() else {
+                return Err(usage(
+                    "export-fem needs a reduced-body file (.rbody) and the .fem file to write",
+                ));
+            };
+            let body = reduction::file::read(Path::new(input))?;
+            let reference = match option(&options, "reference") {
+                None => 0,
+                Some(name) => body.interfaces.iter().position(|i| i.name == name).ok_or_else(|| {
+                    let names: Vec<&str> = body.interfaces.iter().map(|i| i.name.as_str()).collect();
+                    usage(format!(
+                        "--reference: the body has no interface '{name}' (interfaces: {})",
+                        names.join(", ")
+                    ))
+                })?,
+            };
+            reduction::mbdyn::write_mbdyn_fem(Path::new(output), &body, reference)?;
+            println!(
+                "{input}: {} interfaces, {} modes -> {output} (MBDyn modal node at interface '{}')",
+                body.interfaces.len(),
+                body.n_modes,
+                body.interfaces[reference].name
+            );
+            Ok(())
+        }
         "example" => {
             let (positional, _) = parse(rest, &[])?;
             match positional.as_slice() {
@@ -328,7 +358,16 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             }
         }
         other => {
-            let commands = ["run", "check", "reduce", "inspect", "example", "validate", "help"];
+            let commands = [
+                "run",
+                "check",
+                "reduce",
+                "inspect",
+                "export-fem",
+                "example",
+                "validate",
+                "help",
+            ];
             let close = study::source::close_matches(other, commands.iter().copied());
             let hint = match close.first() {
                 Some(c) => format!("; did you mean `{c}`?"),

@@ -21,6 +21,7 @@
 //! | [`source`] | spans, key paths, error rendering, close matches |
 //! | [`validate`] | validation `StudyFile` → `Study` (parts, analyses; `validate::mechanism`: the mechanism) |
 //! | [`part`] | a validated part and the FE model an analysis runs on |
+//! | [`matrices`] | a body reduced from another FE code's Matrix Market K and M, node and dof tables |
 //! | [`document`] | a study as an editable document: load from a file or text, get and set values by key path |
 //! | [`run`] | the analyses of parts (static, modal, reduce), the run loop, `flexmbs reduce` |
 //! | [`mechanism`] | the mechanism as an `mbs::Model`; equilibrium, dynamic, linearized |
@@ -39,6 +40,7 @@ pub mod error;
 pub mod examples;
 pub mod folder;
 pub mod interrupt;
+pub mod matrices;
 pub mod mechanism;
 pub mod observer;
 pub mod output;

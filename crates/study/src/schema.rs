@@ -424,9 +424,11 @@ pub struct NodalLoadFile {
 #[serde(deny_unknown_fields)]
 pub struct BodyFile {
     pub name: String,
-    /// A part with a `[parts.reduction]`, or `file`: a reduced-body file.
+    /// A part with a `[parts.reduction]`, or `file`: a reduced-body file (`.rbody`) or an
+    /// MBDyn modal element file (`.fem`), or `matrices`: K and M from another FE code.
     pub part: Option<String>,
     pub file: Option<String>,
+    pub matrices: Option<MatricesFile>,
     /// Floating frame: `center-of-mass` (default), `interface-node`, `auxiliary-node`.
     pub frame: Option<String>,
     /// With `frame = "interface-node"`: which interface.
@@ -439,6 +441,26 @@ pub struct BodyFile {
     /// Damping: `{ alpha = .., beta = .. }` (Rayleigh, on the CB matrices) and/or
     /// `{ modal_ratio = .. }` (the same ratio for every fixed-interface mode).
     pub damping: Option<DampingFile>,
+}
+
+/// `[bodies.matrices]`: a body reduced from another FE code's stiffness and mass (Matrix
+/// Market files) with a node table and a dof table; paths relative to the study file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MatricesFile {
+    pub stiffness: String,
+    pub mass: String,
+    /// Node table: `x y z` per line (m); node k is the k-th data line (0-based).
+    pub nodes: String,
+    /// Dof table: `node dof` per matrix row (dof: ux uy uz rx ry rz).
+    pub dofs: Option<String>,
+    /// Without `dofs`: 3 or 6 dofs per node, in node order.
+    pub dofs_per_node: Option<usize>,
+    /// Interfaces: name = node (0-based index into the node table); each needs six dofs.
+    pub interfaces: BTreeMap<String, usize>,
+    /// Fixed-interface modes: a count, or every mode below `cutoff_hz` (Hz).
+    pub modes: Option<usize>,
+    pub cutoff_hz: Option<f64>,
 }
 
 /// A rotation by axis and angle (Euler angles appear nowhere).

@@ -159,6 +159,7 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
         errors: Vec::new(),
         warnings: Vec::new(),
         failed: Vec::new(),
+        file_spiders: Vec::new(),
     };
     let materials = v.materials(&file.materials);
     let sections = v.sections(&file.sections);
@@ -223,6 +224,9 @@ struct Validator<'s> {
     /// "body:NAME": their errors are reported once, where they are defined, and a reference
     /// to them elsewhere is not reported again as unknown.
     failed: Vec<String>,
+    /// The spiders (RBE2/RBE3) of the part being validated, when its mesh file defines them:
+    /// an interface on one of their node sets takes its kind and node position by default.
+    file_spiders: Vec<fe_model::mesh::import::ImportedSpider>,
 }
 
 /// Names become file names (results folders, cache files): keep them portable.
@@ -608,7 +612,7 @@ impl Validator<'_> {
                 .map(|(m, d)| (m, d, PartKind::Solid, None))
         } else if let Some(mesh) = &p.mesh {
             self.mesh(path, p, mesh, materials, mass)
-                .map(|(m, d, f)| (m, d, PartKind::Solid, Some(f)))
+                .map(|(m, d, f, kind)| (m, d, kind, Some(f)))
         } else {
             None
         };
@@ -928,6 +932,9 @@ impl Validator<'_> {
         }
     }
 
+    /// A part's mesh from a gmsh, Abaqus (`.inp`) or Nastran (`.bdf`, `.nas`, `.dat`) file.
+    /// Abaqus and Nastran files bring their materials, which `material` or `mesh.materials`
+    /// replace; their skipped keywords or cards and approximations become warnings.
     fn mesh(
         &mut self,
         path: &KeyPath,
@@ -935,51 +942,121 @@ impl Validator<'_> {
         m: &MeshFile,
         materials: &Materials,
         mass: fe_model::MassKind,
-    ) -> Option<(FeModel, String, std::path::PathBuf)> {
+    ) -> Option<(FeModel, String, std::path::PathBuf, PartKind)> {
+        use fe_model::mesh::{abaqus, nastran};
         let file = self.src.dir().join(&m.file);
-        let mesh = match fe_model::mesh::gmsh::read(&file) {
-            Ok(mesh) => mesh,
-            Err(e) => {
-                self.err(&path.key("mesh").key("file"), format!("cannot read the mesh: {e}"));
+        let file_key = path.key("mesh").key("file");
+        self.file_spiders.clear();
+        let extension = file.extension().map(|e| e.to_string_lossy().to_lowercase());
+        let (format, imported) = match extension.as_deref() {
+            Some("inp") => ("Abaqus", Some(abaqus::read(&file))),
+            Some("bdf" | "nas" | "dat") => ("Nastran", Some(nastran::read(&file))),
+            _ => ("gmsh", None),
+        };
+        let imported = match imported {
+            Some(Ok(i)) => Some(i),
+            Some(Err(e)) => {
+                self.err(&file_key, format!("cannot read the {format} file: {e}"));
                 return None;
             }
+            None => None,
         };
+        let mesh = match &imported {
+            Some(i) => i.mesh.clone(),
+            None => match fe_model::mesh::gmsh::read(&file) {
+                Ok(mesh) => mesh,
+                Err(e) => {
+                    self.err(&file_key, format!("cannot read the mesh: {e}"));
+                    return None;
+                }
+            },
+        };
+        if let Some(i) = &imported {
+            if let Some(skipped) = i.ignored_summary() {
+                self.warn(&file_key, format!("{format} file: skipped {skipped}"));
+            }
+            for note in &i.notes {
+                self.warn(&file_key, format!("{format} file: {note}"));
+            }
+            self.file_spiders = i.spiders.clone();
+        }
         let volumes = mesh.cells.iter().filter(|c| c.kind.dimension() == 3).count();
-        if volumes == 0 {
+        let beams = imported.as_ref().map_or(0, |i| {
+            i.beam_sections
+                .iter()
+                .filter_map(|s| mesh.cell_sets.get(&s.cell_set))
+                .map(Vec::len)
+                .sum::<usize>()
+        });
+        if volumes == 0 && beams == 0 {
             self.err(
-                &path.key("mesh").key("file"),
+                &file_key,
                 format!(
-                    "{} has no volume cells (tet, hex, wedge): fe-model meshes solids only",
-                    file.display()
+                    "{} has no volume cells (tet, hex, wedge){}: fe-model meshes solids only",
+                    file.display(),
+                    if imported.is_some() {
+                        " and no beams with a beam section"
+                    } else {
+                        ""
+                    }
                 ),
             );
             return None;
         }
+        if volumes > 0 && beams > 0 {
+            self.err(
+                &file_key,
+                "the file has both solid and beam elements; a part is either (split it into two parts)",
+            );
+            return None;
+        }
+        let kind = if beams > 0 { PartKind::Beam } else { PartKind::Solid };
         let description = format!(
-            "gmsh mesh {}, {} nodes, {volumes} volume cells",
+            "{format} mesh {}, {} nodes, {}",
             m.file,
-            mesh.nodes.len()
+            mesh.nodes.len(),
+            if beams > 0 {
+                format!("{beams} beam elements")
+            } else {
+                format!("{volumes} volume cells")
+            }
         );
-        let model = match (&p.material, &m.materials) {
-            (Some(_), Some(_)) => {
+        // The sets that carry a section in the file: a study material replaces theirs.
+        let section_sets: Vec<String> = imported.as_ref().map_or(Vec::new(), |i| {
+            i.solid_sections
+                .iter()
+                .map(|s| s.cell_set.clone())
+                .chain(i.beam_sections.iter().map(|s| s.cell_set.clone()))
+                .collect()
+        });
+        let model = match (&p.material, &m.materials, &imported) {
+            (Some(_), Some(_), _) => {
                 self.err_key(
                     &path.key("mesh").key("materials"),
                     "give the part's `material` or `mesh.materials` (one per physical volume), not both",
                 );
                 return None;
             }
-            (None, None) => {
+            (None, None, Some(i)) => i.to_fe_model(mass, None),
+            (None, None, None) => {
                 self.err(
                     path,
                     "missing key `material` (or `mesh.materials`, a material per physical volume)",
                 );
                 return None;
             }
-            (Some(name), None) => {
+            (Some(name), None, imported) => {
                 let material = self.material(&path.key("material"), name, materials)?.clone();
-                fe_model::solid_model(mesh, material, mass)
+                match imported {
+                    Some(i) if !section_sets.is_empty() => {
+                        let list: Vec<(&str, IsotropicMaterial)> =
+                            section_sets.iter().map(|s| (s.as_str(), material.clone())).collect();
+                        i.to_fe_model(mass, Some(&list))
+                    }
+                    _ => fe_model::solid_model(mesh, material, mass),
+                }
             }
-            (None, Some(map)) => {
+            (None, Some(map), imported) => {
                 let mut list = Vec::new();
                 let sets: Vec<String> = mesh.cell_sets.keys().cloned().collect();
                 for (set, material) in map {
@@ -995,11 +1072,14 @@ impl Validator<'_> {
                 if list.len() != map.len() {
                     return None;
                 }
-                fe_model::solid_model_with_materials(mesh, &list, mass)
+                match imported {
+                    Some(i) => i.to_fe_model(mass, Some(&list)),
+                    None => fe_model::solid_model_with_materials(mesh, &list, mass),
+                }
             }
         };
         match model {
-            Ok(model) => Some((model, description, file)),
+            Ok(model) => Some((model, description, file, kind)),
             Err(e) => {
                 self.err(&path.key("mesh"), e.to_string());
                 None
@@ -1125,9 +1205,17 @@ impl Validator<'_> {
                         &["name", "set", "near", "radius", "spider", "node_position"],
                         "an interface of a solid part (a spider on surface nodes)",
                     );
+                    // A set of one of the file's spiders (RBE2_<eid>, RBE3_<eid>) brings its kind
+                    // and node position.
+                    let file_spider = i
+                        .set
+                        .as_ref()
+                        .and_then(|set| self.file_spiders.iter().find(|s| s.name == *set))
+                        .cloned();
                     let spider = match i.spider {
                         Some(SpiderFile::Rbe2) => Some(SpiderKind::Rbe2),
                         Some(SpiderFile::Rbe3) => Some(SpiderKind::Rbe3),
+                        None if file_spider.is_some() => file_spider.as_ref().map(|s| s.kind),
                         None => {
                             self.err(
                                 &ip,
@@ -1144,7 +1232,7 @@ impl Validator<'_> {
                                 None
                             }
                         },
-                        None => None,
+                        None => file_spider.as_ref().map(|s| s.position),
                     };
                     let surface = match (&i.set, &i.near, i.radius) {
                         (Some(set), None, None) => self.node_set(&ip.key("set"), model, set).map(<[NodeId]>::to_vec),

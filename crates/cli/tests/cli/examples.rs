@@ -206,6 +206,43 @@ fn inspect_shows_a_reduced_body() {
 }
 
 #[test]
+fn export_fem_writes_an_mbdyn_file_that_a_study_reads_back() {
+    let dir = examples_copy("export-fem");
+    let out = flexmbs(&dir, &["reduce", "cantilever.toml", "--out", "bodies"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let out = flexmbs(
+        &dir,
+        &["export-fem", "bodies/beam.rbody", "beam.fem", "--reference", "root"],
+    );
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("modal node at interface 'root'"), "{}", out.stdout);
+    let text = std::fs::read_to_string(dir.join("beam.fem")).unwrap();
+    assert!(text.starts_with("** MBDyn MODAL DATA FILE"));
+    // The .fem file as a body of a study: its exposed nodes are the interfaces.
+    std::fs::write(
+        dir.join("fem.toml"),
+        "[[bodies]]\nname = \"beam\"\nfile = \"beam.fem\"\n",
+    )
+    .unwrap();
+    let out = flexmbs(&dir, &["check", "fem.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    // Usage errors name what is wrong.
+    let out = flexmbs(
+        &dir,
+        &["export-fem", "bodies/beam.rbody", "x.fem", "--reference", "rot"],
+    );
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("no interface 'rot'") && out.stderr.contains("root"),
+        "{}",
+        out.stderr
+    );
+    let out = flexmbs(&dir, &["export-fem", "bodies/beam.rbody"]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("export-fem needs"), "{}", out.stderr);
+}
+
+#[test]
 fn reduce_command_selects_a_part() {
     let dir = examples_copy("reduce-part");
     let out = flexmbs(&dir, &["reduce", "solid_bar.toml", "--part", "block", "--out", "b"]);

@@ -493,7 +493,31 @@ impl Validator<'_> {
         parts: &[(String, Option<crate::part::Part>)],
         part_names: &[String],
     ) -> Option<FlexibleSpec> {
+        if b.matrices.is_some() && (b.part.is_some() || b.file.is_some()) {
+            self.err(
+                path,
+                "give the reduced body by `part`, `file` or `matrices`, one of them",
+            );
+            return None;
+        }
         let (source, interfaces, auxiliary) = match (&b.part, &b.file) {
+            (None, None) if b.matrices.is_some() => {
+                let m = b.matrices.as_ref()?;
+                match crate::matrices::reduce_matrices(&b.name, m, &self.src.dir()) {
+                    Ok(body) => {
+                        let names = body.interfaces.iter().map(|i| i.name.clone()).collect();
+                        (
+                            BodySource::File(self.src.dir().join(&m.stiffness), Box::new(body)),
+                            names,
+                            false,
+                        )
+                    }
+                    Err((key, message)) => {
+                        self.err(&path.key("matrices").key(key), message);
+                        return None;
+                    }
+                }
+            }
             (Some(name), None) => {
                 let Some(index) = part_names.iter().position(|n| n == name) else {
                     self.err(&path.key("part"), unknown_reference("part", name, part_names));
@@ -514,6 +538,23 @@ impl Validator<'_> {
                 }
                 (BodySource::Part(index), names, reduction.auxiliary_node)
             }
+            (None, Some(file)) if file.to_lowercase().ends_with(".fem") => {
+                // An MBDyn modal element file: every exposed node is an interface.
+                let full = self.src.dir().join(file);
+                match reduction::mbdyn::read_mbdyn_fem(&full, None) {
+                    Ok((body, notes)) => {
+                        for note in notes {
+                            self.warn(&path.key("file"), format!("{}: {note}", full.display()));
+                        }
+                        let names = body.interfaces.iter().map(|i| i.name.clone()).collect();
+                        (BodySource::File(full, Box::new(body)), names, false)
+                    }
+                    Err(e) => {
+                        self.err(&path.key("file"), format!("cannot read the MBDyn file: {e}"));
+                        return None;
+                    }
+                }
+            }
             (None, Some(file)) => {
                 let full = self.src.dir().join(file);
                 match reduction::file::read(&full) {
@@ -532,7 +573,7 @@ impl Validator<'_> {
                 }
             }
             _ => {
-                self.err(path, "give the reduced body by `part` (a part with [parts.reduction]) or by `file` (an .rbody file), one of them");
+                self.err(path, "give the reduced body by `part` (a part with [parts.reduction]) or by `file` (an .rbody or MBDyn .fem file), one of them");
                 return None;
             }
         };

@@ -1,0 +1,230 @@
+//! Models from other codes in study files: a part's mesh from Abaqus and Nastran files (with
+//! their materials, sets and spiders), a body from an MBDyn `.fem` file, a body from Matrix
+//! Market matrices.
+
+use fe_model::{modal_dense, DofMap, DofMask, SystemPattern};
+use nalgebra::Point3;
+use std::path::{Path, PathBuf};
+use study::validate::mechanism::BodySource;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("study-import-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn fixture(file: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fe-model/tests/data")
+        .join(file)
+        .display()
+        .to_string()
+}
+
+fn study(dir: &Path, text: &str) -> study::Study {
+    let path = dir.join("study.toml");
+    std::fs::write(&path, text).unwrap();
+    study::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The part's frequencies, clamped at the node set `clamp`, with the interfaces built.
+fn clamped_frequencies(part: &study::part::Part, clamp: &[fe_model::NodeId]) -> Vec<f64> {
+    let mut built = part.build(&[], false).unwrap().model;
+    for &n in clamp {
+        built.add_support(n, DofMask::TRANSLATIONS);
+    }
+    modal_dense(&built, 6).unwrap().omega
+}
+
+const STEEL: &str = "[[materials]]\nname = \"steel\"\nE = 2.1e11\nnu = 0.3\nrho = 7850.0\n";
+
+#[test]
+fn parts_from_abaqus_and_nastran_files_match_the_gmsh_part() {
+    let dir = scratch("parts");
+    let text = format!(
+        "{STEEL}
+[[parts]]
+name = \"gmsh\"
+[parts.mesh]
+file = \"{gmsh}\"
+materials = {{ body = \"steel\" }}
+[[parts.interfaces]]
+name = \"tip\"
+set = \"tip\"
+spider = \"rbe2\"
+node_position = [1.0, 0.1, 0.1]
+
+[[parts]]
+name = \"abaqus\"
+[parts.mesh]
+file = \"{inp}\"
+[[parts.interfaces]]
+name = \"tip\"
+set = \"tip\"
+spider = \"rbe2\"
+node_position = [1.0, 0.1, 0.1]
+
+[[parts]]
+name = \"nastran\"
+[parts.mesh]
+file = \"{bdf}\"
+[[parts.interfaces]]
+name = \"tip\"
+set = \"RBE2_2\"
+",
+        gmsh = fixture("gmsh/hex20_41.msh"),
+        inp = fixture("import/hex20.inp"),
+        bdf = fixture("import/hex20.bdf"),
+    );
+    let s = study(&dir, &text);
+    let [g, a, n] = [&s.parts[0], &s.parts[1], &s.parts[2]];
+    assert!(a.description.starts_with("Abaqus mesh"), "{}", a.description);
+    // The Abaqus file's material (steel, as in the gmsh part) and sets; the Nastran file's
+    // RBE2 gives the interface its kind and position, its SPC1 the clamp set.
+    let f_gmsh = clamped_frequencies(g, &g.base.mesh.node_sets["clamp"]);
+    let f_abaqus = clamped_frequencies(a, &a.base.mesh.node_sets["clamp"]);
+    let f_nastran = clamped_frequencies(n, &n.base.mesh.node_sets["SPC1_1"]);
+    for f in [&f_abaqus, &f_nastran] {
+        for (x, y) in f_gmsh.iter().zip(f) {
+            // The same model read three ways (see fe-model's import tests): round-off only.
+            assert!(((x - y) / x).abs() < 1e-10, "{f_gmsh:?} {f:?}");
+        }
+    }
+    // The skipped cards are warnings: meshio's *HEADING, the EIGRL card.
+    assert!(s.warnings.iter().any(|w| w.contains("*HEADING")), "{:?}", s.warnings);
+    assert!(s.warnings.iter().any(|w| w.contains("EIGRL")), "{:?}", s.warnings);
+
+    // A study material replaces the file's: a softer material lowers every frequency.
+    let soft = text.replace(
+        &format!("file = \"{}\"\n", fixture("import/hex20.inp")),
+        &format!(
+            "file = \"{}\"\n[parts.mesh.materials]\nbody = \"soft\"\n",
+            fixture("import/hex20.inp")
+        ),
+    );
+    let soft = format!("{soft}\n[[materials]]\nname = \"soft\"\nE = 2.1e10\nnu = 0.3\nrho = 7850.0\n");
+    let s2 = study(&dir, &soft);
+    let f_soft = clamped_frequencies(&s2.parts[1], &s2.parts[1].base.mesh.node_sets["clamp"]);
+    // E / 10 scales the frequencies by 1 / sqrt(10).
+    assert!(((f_soft[0] * 10f64.sqrt() - f_abaqus[0]) / f_abaqus[0]).abs() < 1e-9);
+
+    // A malformed file is located by its own file and line, under the study's key.
+    let bad = dir.join("bad.inp");
+    std::fs::write(&bad, "*NODE\n1, 0, 0, x\n").unwrap();
+    let text = format!("{STEEL}\n[[parts]]\nname = \"bad\"\nmaterial = \"steel\"\n[parts.mesh]\nfile = \"bad.inp\"\n");
+    std::fs::write(dir.join("bad.toml"), text).unwrap();
+    let e = study::load(&dir.join("bad.toml")).unwrap_err().to_string();
+    assert!(
+        e.contains("parts[0].mesh.file") && e.contains("bad.inp:2:") && e.contains("'x'"),
+        "{e}"
+    );
+}
+
+/// A free steel beam with interfaces at both ends, and its reduced body.
+fn beam() -> (fe_model::FeModel, Vec<(String, fe_model::NodeId)>) {
+    let mut model = fe_model::FeModel::default();
+    let material = model.add_material(fe_model::IsotropicMaterial::new("steel", 2.1e11, 0.3, 7850.0).unwrap());
+    let section = model.add_section(fe_model::BeamSection::rectangle("r", 0.02, 0.01, 0.3).unwrap());
+    let props = fe_model::BeamProperties {
+        section,
+        material,
+        orientation: nalgebra::Vector3::z(),
+        theory: fe_model::BeamTheory::Timoshenko,
+        mass: fe_model::MassKind::Consistent,
+    };
+    let nodes = fe_model::generate::straight_beam(
+        &mut model,
+        Point3::origin(),
+        Point3::new(1.0, 0.0, 0.0),
+        6,
+        &props,
+        None,
+    )
+    .unwrap();
+    (model, vec![("a".into(), nodes[0]), ("b".into(), nodes[6])])
+}
+
+fn flexible_body(s: &study::Study) -> reduction::ReducedBody {
+    match &s.mechanism.bodies[0].source {
+        BodySource::File(_, body) => (**body).clone(),
+        BodySource::Part(_) => panic!("expected a body read from files"),
+    }
+}
+
+#[test]
+fn bodies_from_an_mbdyn_file_and_from_matrix_market_matrices() {
+    let dir = scratch("bodies");
+    let (model, interfaces) = beam();
+    let mut settings = reduction::CbSettings::new(reduction::ModeSelection::Count(3));
+    settings.keep_mesh_shapes = false;
+    let body = reduction::reduce(&model, "beam", &interfaces, &settings).unwrap();
+
+    // MBDyn: every exposed node is an interface.
+    reduction::mbdyn::write_mbdyn_fem(&dir.join("beam.fem"), &body, 0).unwrap();
+    let s = study(&dir, "[[bodies]]\nname = \"beam\"\nfile = \"beam.fem\"\n");
+    assert_eq!(s.mechanism.bodies[0].interfaces, vec!["a".to_string(), "b".to_string()]);
+    let back = flexible_body(&s);
+    for (w, v) in body.fixed_interface_omega.iter().zip(&back.fixed_interface_omega) {
+        // A change of basis and back (reduction's tests): round-off.
+        assert!(((w - v) / w).abs() < 1e-10);
+    }
+
+    // Matrix Market: K, M on the free dofs, a node table and a dof table.
+    let dofs = DofMap::new(&model).unwrap();
+    let pattern = SystemPattern::new(&model, &dofs);
+    let assembled = fe_model::assemble(&model, &pattern).unwrap();
+    reduction::write_matrix_market(&dir.join("K.mtx"), assembled.K.as_ref()).unwrap();
+    reduction::write_matrix_market(&dir.join("M.mtx"), assembled.M.as_ref()).unwrap();
+    let nodes: String = model
+        .mesh
+        .nodes
+        .iter()
+        .map(|x| format!("{} {} {}\n", x.x, x.y, x.z))
+        .collect();
+    std::fs::write(dir.join("nodes.txt"), format!("# x y z\n{nodes}")).unwrap();
+    let names = ["ux", "uy", "uz", "rx", "ry", "rz"];
+    let table: String = (0..dofs.n_free())
+        .map(|d| {
+            let slot = dofs.full_slot(fe_model::Dof(d as u32));
+            format!("{} {}\n", slot / 6, names[slot % 6])
+        })
+        .collect();
+    std::fs::write(dir.join("dofs.txt"), table).unwrap();
+    let text = format!(
+        "[[bodies]]
+name = \"beam\"
+[bodies.matrices]
+stiffness = \"K.mtx\"
+mass = \"M.mtx\"
+nodes = \"nodes.txt\"
+dofs = \"dofs.txt\"
+interfaces = {{ a = {a}, b = {b} }}
+modes = 3
+",
+        a = interfaces[0].1.index(),
+        b = interfaces[1].1.index()
+    );
+    let s = study(&dir, &text);
+    let from_matrices = flexible_body(&s);
+    let scale = body.K_CB.data.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    for (x, y) in body.K_CB.data.iter().zip(&from_matrices.K_CB.data) {
+        // The same reduction of the same matrices (reduction's matrix_market tests): round-off.
+        assert!((x - y).abs() < 1e-10 * scale, "{x} {y}");
+    }
+    for (w, v) in body
+        .fixed_interface_omega
+        .iter()
+        .zip(&from_matrices.fixed_interface_omega)
+    {
+        assert!(((w - v) / w).abs() < 1e-10);
+    }
+    // A bad table is located by its file and line.
+    std::fs::write(dir.join("nodes.txt"), "0 0 0\n1 x 0\n").unwrap();
+    std::fs::write(dir.join("study.toml"), &text).unwrap();
+    let e = study::load(&dir.join("study.toml")).unwrap_err().to_string();
+    assert!(
+        e.contains("bodies[0].matrices.nodes") && e.contains("nodes.txt:2:"),
+        "{e}"
+    );
+}
