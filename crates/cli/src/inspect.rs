@@ -37,6 +37,34 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<S
             None => "not kept".into(),
         }
     );
+    let _ = writeln!(
+        s,
+        "stress shapes: {}",
+        match &body.stress {
+            Some(st) => {
+                let solids = st.solid_node.iter().filter(|&&b| b).count();
+                format!(
+                    "kept, solid stresses on {solids} nodes, section forces of {} beams",
+                    st.beams.len()
+                )
+            }
+            None => "not kept".into(),
+        }
+    );
+    if !body.load_points.is_empty() {
+        let _ = writeln!(
+            s,
+            "load points (static correction, {} attachment modes among the modes):",
+            body.attachment_modes
+        );
+        for p in &body.load_points {
+            let _ = writeln!(
+                s,
+                "  {:<16} FE node {:>8} at ({:.6e}, {:.6e}, {:.6e}) m",
+                p.name, p.node, p.position[0], p.position[1], p.position[2]
+            );
+        }
+    }
     let i = &body.inertia;
     let _ = writeln!(s, "\nmass data");
     let _ = writeln!(s, "  mass            {:.6e} kg", i.mass);

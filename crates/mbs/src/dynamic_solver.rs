@@ -48,7 +48,7 @@
 //!
 //! The initial accelerations are consistent ($\hat{\mathbf M}\ddot{\mathbf q}_0 = -\mathbf F(\mathbf q_0, \dot{\mathbf q}_0,
 //! \mathbf 0)$; $\mathbf F$ is linear in $\ddot{\mathbf q}$) and $\mathbf a_0 = \ddot{\mathbf q}_0$. Each flexible body's last
-//! frame stays in the state, so the frame solve (2.6) is warm-started from the previous
+//! frame stays in the state, so the frame solve (4.4) is warm-started from the previous
 //! iteration or step.
 //!
 //! # Newton strategy
@@ -76,7 +76,7 @@
 //!   factorisations.
 //!
 //! Modified Newton pays when a kept matrix contracts strongly and tangents cost much more than
-//! forces. On the slider-crank (benchmarks.md C2, one superelement with geometric stiffening)
+//! forces. On the slider-crank (validation problem C2, one superelement with geometric stiffening)
 //! the tangents cost 2-3 times the forces and a kept matrix contracts by 0.05-0.2 after a few
 //! steps: it takes 3.5 iterations and 0.55 factorisations per step against full Newton's 2 and
 //! 2, and 13 % (2 modes) to 35 % (4 modes) fewer instructions ([`MODIFIED_NEWTON_RATE`]).
@@ -104,14 +104,14 @@
 //! momentum that is a constant linear form $\mathbf c^T\dot{\mathbf q}$ of the velocities (the linear
 //! momentum of point masses) is conserved to round-off when $\mathbf c^T\mathbf F$ is free of internal
 //! forces. The momenta of a flexible or rigid body in these absolute coordinates are nonlinear
-//! in $(\mathbf q, \dot{\mathbf q})$ (the centre of mass follows the frame (2.6) and the CB shapes;
+//! in $(\mathbf q, \dot{\mathbf q})$ (the centre of mass follows the frame (4.4) and the CB shapes;
 //! $\mathbf H$ involves the rotations), so the scheme alone makes their rates vanish at each
 //! $t_{n+1}$ but conserves $\mathbf L$, $\mathbf H$ and the energy to its order, 2. On a free, unloaded
 //! model ([`System::rigid_invariance`]) the step therefore ends with the momentum projection of
 //! [`crate::momentum`] (Hairer, Lubich & Wanner, §IV.4; `DynamicSettings::momentum`): the
 //! velocities get the $\hat{\mathbf M}$-orthogonal rigid correction that restores $\mathbf L$ and
 //! $\mathbf H$ of the start, so both are constant to round-off, and the energy still drifts at
-//! order 2 (benchmarks.md C4: `tests/unit/free_body.rs`). The correction is $O(h^3)$ per step and
+//! order 2 (validation problem C4: `tests/unit/free_body.rs`). The correction is $O(h^3)$ per step and
 //! keeps the order of the trajectory; the initial accelerations are not projected.
 
 #![allow(non_snake_case)]
@@ -195,7 +195,7 @@ pub enum NewtonStrategy {
 
 /// Modified Newton schedules a new iteration matrix when one correction leaves more than this
 /// fraction of the residual, $\|\mathbf F_{k+1}\| > 0.01\|\mathbf F_k\|$ (module docs). Measured on the
-/// slider-crank (benchmarks.md C2, `slider_crank --newton modified --geometric-stiffening`,
+/// slider-crank (validation problem C2, `slider_crank --newton modified --geometric-stiffening`,
 /// callgrind instructions of 800 steps): with 2 modes 0.1 gives 500M (5.5 iterations, 0.10
 /// Jacobians per step), 0.03 423M, 0.01 400M (3.5, 0.56), 0.003 410M (3.1, 0.92), full Newton
 /// 460M; with 4 modes 0.1 538M, 0.03 465M, 0.01 438M, 0.003 454M, full Newton 679M. A matrix
@@ -256,6 +256,24 @@ pub struct StepReport {
     /// With the momentum projection: the defect $\mathbf J_0 - \mathbf J$ = $[\Delta\mathbf L;\ \Delta\mathbf H]$
     /// it corrected ($O(h^3)$, [`crate::momentum`]).
     pub momentum_defect: Option<[f64; 6]>,
+}
+
+/// The time at the end of a step of `h` from `t`: $t + h$, rounded to the decimals of $h$
+/// when that moves it by round-off only. A step of 0.005 s then reaches 30 s as 30, not
+/// 29.999999999998316 after 6000 additions; a step with no short decimal form (such as
+/// $T/400$) or a start time off its grid is left as computed.
+pub fn step_end_time(t: f64, h: f64) -> f64 {
+    let sum = t + h;
+    let shown = format!("{h}");
+    let decimals = shown.split_once('.').map_or(0, |(_, d)| d.len());
+    if decimals > 15 || !sum.is_finite() {
+        return sum;
+    }
+    match format!("{sum:.decimals$}").parse::<f64>() {
+        // Round-off of the additions is about 1e-16 of t per step: far below 1e-6 h.
+        Ok(rounded) if (rounded - sum).abs() <= 1e-6 * h.abs() => rounded,
+        _ => sum,
+    }
 }
 
 /// The system an [`Integrator`] steps: borrowed from the caller, or shared and owned (an
@@ -543,7 +561,7 @@ impl<'a> Integrator<'a> {
         let bp = (1.0 - am) / (h * h * b * (1.0 - af));
         let gp = g / (h * b);
         let prev = &self.prev;
-        let t = prev.time + h;
+        let t = step_end_time(prev.time, h);
         // Predictor: constant acceleration.
         let st = &mut self.trial;
         st.clone_from(prev);
@@ -612,6 +630,7 @@ impl<'a> Integrator<'a> {
                 for i in 0..n {
                     self.a[i] = ((1.0 - af) * self.qb[i] + af * self.qb_n[i] - am * self.a[i]) / (1.0 - am);
                 }
+                sys.accept_step(st);
                 std::mem::swap(&mut self.state, &mut self.trial);
                 self.steps += 1;
                 if !modified {
@@ -688,7 +707,7 @@ pub struct Trajectory {
 
 /// The integrator at `start` (consistent accelerations) and a trajectory holding its first
 /// sensor row: the common start of [`solve_dynamic`] and [`solve_dynamic_adaptive`].
-fn start_trajectory<'a>(
+pub(crate) fn start_trajectory<'a>(
     system: &'a System,
     start: State,
     settings: &DynamicSettings,

@@ -53,6 +53,6 @@ pub mod vtu;
 pub use document::Document;
 pub use error::BoxError;
 pub use observer::{Observer, Recorder};
-pub use run::{run, run_with, Options, Runner};
+pub use run::{run, run_only, run_with, Options, Runner};
 pub use simulation::Simulation;
 pub use validate::{load, parse_and_validate, Study};
