@@ -84,6 +84,7 @@ pub mod box_mesh;
 pub mod dof;
 pub mod element;
 pub mod error;
+pub mod fuzz;
 pub mod generate;
 pub mod geometric;
 pub mod interface;

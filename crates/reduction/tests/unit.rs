@@ -46,6 +46,12 @@ mod physics {
     include!("unit/physics.rs");
 }
 
+/// Fuzzing with a fixed budget (`fe_model::fuzz`): mutants of a reduced-body file (metadata
+/// mutants with valid checksums) and of Matrix Market files; none may panic.
+mod fuzz {
+    include!("unit/fuzz.rs");
+}
+
 /// `reduction::matrix_market` and `reduce_external`: exact Matrix Market round trips,
 /// symmetric files expanded, errors with file and line; external K, M and node coordinates
 /// reduce to the body `reduce` gives for the same FE model (beam; solid with RBE2 spiders).

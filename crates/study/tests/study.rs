@@ -543,3 +543,23 @@ fn a_cached_body_is_never_trusted_by_its_name() {
         rec.progress
     );
 }
+
+/// Fuzzing of the study parser and validator with the shared seeded mutator
+/// (`fe_model::fuzz`: numbers replaced by extreme ones, lines moved or cut), a fixed budget per
+/// built-in example: every mutant is a study or an error, never a panic.
+#[test]
+fn study_file_mutants_never_panic() {
+    let mut m = fe_model::fuzz::Mutator::new(0x7374_7564_7966_7a01);
+    for example in study::examples::EXAMPLES {
+        let file = study::examples::write(example.name, &scratch(&format!("fuzz-{}", example.name))).unwrap();
+        let text = std::fs::read(&file).unwrap();
+        for case in 0..fe_model::fuzz::budget(150) {
+            let mutant = String::from_utf8_lossy(&m.mutate(&text)).into_owned();
+            let r = std::panic::catch_unwind(|| match Document::from_text(&mutant, &file) {
+                Ok(doc) => doc.study().map(|_| ()).map_err(|e| e.to_string()),
+                Err(e) => Err(e.to_string()),
+            });
+            assert!(r.is_ok(), "{} mutant {case} panicked:\n{mutant}", example.name);
+        }
+    }
+}

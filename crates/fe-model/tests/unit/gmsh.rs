@@ -987,3 +987,19 @@ fn mutated_fixtures_never_panic() {
         }
     }
 }
+
+/// The shared fuzz mutator (`fe_model::fuzz`: numbers replaced by extreme ones, lines moved,
+/// files cut) over every fixture, a fixed budget per fixture.
+#[test]
+fn fuzz_mutants_of_every_fixture_never_panic() {
+    let mut m = fe_model::fuzz::Mutator::new(0x6d73_6866_757a_7a01);
+    for mesh_name in MESHES {
+        for encoding in ENCODINGS {
+            let original = std::fs::read(fixture_path(mesh_name, encoding)).unwrap();
+            for case in 0..fe_model::fuzz::budget(150) {
+                let bytes = m.mutate(&original);
+                parse_without_panic(&bytes, &|| format!("{mesh_name}_{encoding} fuzz mutant {case}"));
+            }
+        }
+    }
+}
