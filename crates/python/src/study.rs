@@ -13,7 +13,7 @@ use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::path::PathBuf;
-use study::observer::{Cell, Observer, Recorded, Recorder};
+use study::observer::{Cell, Recorded, Recorder};
 
 /// A study: a study file held in memory, read and changed value by value through key paths
 /// (`parts.rod.reduction.modes`, `sections[0].d`, `drivers.crank-speed.function.speed`), with
@@ -186,6 +186,7 @@ fn options(results_dir: Option<PathBuf>, cache: Option<PathBuf>, t_end: Option<f
         out: results_dir,
         cache,
         t_end,
+        foreign: Default::default(),
     }
 }
 
@@ -449,22 +450,17 @@ impl Study {
 }
 
 /// Runs every analysis of `st` (or only analysis `only`) into its results folder, every result
-/// to `recorder` too: `study::run` for all, the same `Runner` for one.
+/// to `recorder` too: the program's `study::run` and `study::run::run_only`.
 fn run_study(
     st: &study::Study,
     opts: &study::Options,
     only: Option<usize>,
     recorder: &mut Recorder,
 ) -> Result<study::output::Summary, study::BoxError> {
-    let Some(i) = only else {
-        return study::run(st, opts, recorder);
-    };
-    let mut folder = study::folder::ResultsFolder::new(&opts.results_dir(st))?;
-    let mut obs = (&mut folder, recorder as &mut dyn Observer);
-    let mut runner = study::Runner::new(st, opts);
-    obs.summary(&runner.summary)?;
-    runner.run_one(i, &mut obs)?;
-    runner.finish(&mut obs)
+    match only {
+        None => study::run(st, opts, recorder),
+        Some(i) => study::run::run_only(st, opts, i, recorder),
+    }
 }
 
 /// A dynamic analysis stepped from Python (`Study.simulation`): `step()`, `advance_to(t)`,
