@@ -450,17 +450,17 @@ impl Study {
 }
 
 /// Runs every analysis of `st` (or only analysis `only`) into its results folder, every result
-/// to `recorder` too: `study::run` for all, the same `Runner` for one.
+/// to `recorder` too: the program's `study::run` and `study::run::run_only`.
 fn run_study(
     st: &study::Study,
     opts: &study::Options,
     only: Option<usize>,
     recorder: &mut Recorder,
 ) -> Result<study::output::Summary, study::BoxError> {
-    let Some(i) = only else {
-        return study::run(st, opts, recorder);
-    };
-    study::run::run_only(st, opts, i, recorder)
+    match only {
+        None => study::run(st, opts, recorder),
+        Some(i) => study::run::run_only(st, opts, i, recorder),
+    }
 }
 
 /// A dynamic analysis stepped from Python (`Study.simulation`): `step()`, `advance_to(t)`,

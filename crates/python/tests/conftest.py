@@ -17,7 +17,8 @@ EXAMPLES = REPO / "examples"
 def examples(tmp_path):
     """A copy of examples/ (studies and meshes) in a fresh temporary folder."""
     dst = tmp_path / "examples"
-    shutil.copytree(EXAMPLES, dst)
+    # Without caches and results a developer's runs may have left there.
+    shutil.copytree(EXAMPLES, dst, ignore=shutil.ignore_patterns(".flexmbs-cache", "*-results", "__pycache__"))
     return dst
 
 

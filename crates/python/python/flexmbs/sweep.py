@@ -18,6 +18,7 @@ object store and dashboard that a sweep of independent cases does not need.
 from __future__ import annotations
 
 import itertools
+import logging
 import math
 import os
 import time
@@ -248,8 +249,14 @@ def sweep(
                 'sweep: client="local" needs Dask distributed (pip install "flexmbs[sweep]"); '
                 "pass client=None to run the cases serially"
             ) from e
+        # Single-threaded workers (a case is one serial solve); the cluster's own log lines
+        # only when something goes wrong.
         own_cluster = LocalCluster(
-            n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None
+            n_workers=n_workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
         )
         client = Client(own_cluster)
     try:
