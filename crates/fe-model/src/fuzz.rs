@@ -40,6 +40,8 @@ impl Mutator {
         Self(seed.max(1))
     }
 
+    /// The next number of the sequence (a generator step, not an `Iterator`: it never ends).
+    #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> u64 {
         self.0 ^= self.0 >> 12;
         self.0 ^= self.0 << 25;
