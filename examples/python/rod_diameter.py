@@ -32,7 +32,7 @@ def main(out: Path):
         {"peak_deflection": flexmbs.peak_abs("rod-mid")},
         client="local",  # or a dask.distributed.Client connected to a cluster
         n_workers=2,
-        results_dir=out.parent / "rod_diameter-results",
+        results_dir=Path("rod_diameter-results"),  # in the current folder
     )
     print(table[["sections.rod.d", "peak_deflection", "error", "seconds"]])
     d = np.asarray(table["sections.rod.d"], dtype=float)
