@@ -1516,7 +1516,7 @@ impl Validator<'_> {
                                 self.err(
                                     &path.key("start"),
                                     format!(
-                                        "{} (an earlier 'equilibrium' or 'dynamic' analysis)",
+                                        "{}; `start` names an earlier 'equilibrium' or 'dynamic' analysis",
                                         unknown_reference("analysis", from, &names)
                                     ),
                                 );
