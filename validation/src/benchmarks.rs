@@ -1,4 +1,4 @@
-//! One module per group of problems of `benchmarks.md`.
+//! One module per group of problems of the validation guide (`docs/validation.md`).
 
 /// C1-C4: dynamics.
 pub mod dynamics;
@@ -10,5 +10,5 @@ pub mod linear;
 pub mod nonlinear_statics;
 /// A5: linear transient against the exact modal series.
 pub mod transient;
-/// The seed's comparison: frame choices x inertia variants, beam rod against solid rod.
+/// The AIC-FFR paper's comparison: frame choices x inertia variants, beam rod against solid rod.
 pub mod variants;

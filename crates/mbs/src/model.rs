@@ -2,7 +2,7 @@
 //!
 //! Nodes carry the configuration (position and orientation). Bodies, masses, springs and
 //! loads act on nodes; supports, joints and drivers decide which node coordinates are
-//! independent (brief §5). A body's interface *is* a node: two bodies sharing a node are welded.
+//! independent (theory guide §8). A body's interface *is* a node: two bodies sharing a node are welded.
 //! Every reference is a newtype id ([`NodeId`], [`BodyId`], [`JointId`]) checked by
 //! [`crate::System::new`], which reports an unknown id with the entity that refers to it.
 //!

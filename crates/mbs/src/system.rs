@@ -1,7 +1,7 @@
 //! [`System`]: a checked [`Model`] turned into independent coordinates, elements and a sparse
 //! pattern; [`State`]: the coordinates, velocities and accelerations at one instant.
 //!
-//! The equations in the independent coordinates are (brief §5)
+//! The equations in the independent coordinates are (theory guide §8)
 //! $$\mathbf F(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}, t) = \sum_c\mathbf J_c^T\mathbf r_c + \mathbf r_\eta + \mathbf r_{joint} = \mathbf 0,$$
 //! with $\mathbf r_c$ the residual of all elements at node $c$ evaluated at the node motion
 //! $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$, $\mathbf A_c = \mathbf J_c\ddot{\mathbf q} + \dot{\mathbf J}_c\dot{\mathbf q}$; the same
@@ -33,6 +33,7 @@ use crate::model::{Body, InitialCondition, JointId, LoadAxes, LoadKind, Model, N
 use crate::node::NodeMotion;
 use crate::time_function::CompiledFunction;
 use crate::topology::{self, RootRotation, Topology};
+use crate::user_force::{user_force_element, UserBuffer, UserForce};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
@@ -40,6 +41,7 @@ use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Par};
 use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
 use rayon::prelude::*;
+use std::sync::Arc;
 use superelement::{so3, Frame, Superelement};
 
 /// One element of the assembly: what it is and where it acts.
@@ -50,6 +52,8 @@ pub(crate) enum ElementKind {
     PointMass(usize, f64),
     Spring(usize),
     Load(usize),
+    /// A [`UserForce`] (index into `System::user_forces`).
+    User(usize),
 }
 
 #[derive(Clone, Debug)]
@@ -119,7 +123,7 @@ impl Pattern {
 }
 
 /// The coordinates, velocities and accelerations of a system at one instant, and each
-/// flexible body's last floating frame (the warm start of (2.6)).
+/// flexible body's last floating frame (the warm start of (4.4)).
 #[derive(Debug, PartialEq)]
 pub struct State {
     pub(crate) time: f64,
@@ -215,7 +219,7 @@ pub struct NodeKinematics {
     pub DAd: Mat<f64>,
 }
 
-/// Buffers of one analysis (style R8): created once, refilled by every evaluation.
+/// Buffers of one analysis: created once, refilled by every evaluation.
 pub(crate) struct Workspace {
     pub motions: Vec<Motion>,
     pub nodes: Vec<NodeMotion>,
@@ -297,7 +301,7 @@ fn dense_scratch(n: usize, k: usize) -> StackReq {
     ])
 }
 
-/// One element's output and the buffers it is computed in (style R8: sized once per analysis).
+/// One element's output and the buffers it is computed in (sized once per analysis).
 /// Below this many elements the element loops run on the calling thread: handing a few
 /// evaluations of 10-20 µs to rayon's pool costs more in wake-ups than it saves. Measured on
 /// 2 cores (`cargo bench -p mbs --bench step`): slider-crank step 273 µs in parallel against
@@ -308,6 +312,7 @@ const PARALLEL_ELEMENTS: usize = 32;
 pub(crate) struct ElementBuffer {
     pub out: ElementOutput,
     pub flex: Option<FlexBuffer>,
+    pub user: Option<UserBuffer>,
     /// $\hat{\mathbf M}_e$, $\hat{\mathbf C}_e$, $\hat{\mathbf K}_e$ on the element's unknowns (column major).
     pub local: [Vec<f64>; 3],
 }
@@ -328,6 +333,8 @@ pub struct System {
     /// How each of `model.initial` acts ([`crate::initial`]).
     pub(crate) initial_plan: Vec<InitialPlan>,
     pub(crate) drivers: Vec<CompiledFunction>,
+    /// User-defined forces ([`System::with_user_forces`]).
+    pub(crate) user_forces: Vec<Arc<dyn UserForce>>,
     pub(crate) elements: Vec<ElementRef>,
     pub(crate) pattern: Pattern,
     /// Flexible element of each body (or `None`).
@@ -345,6 +352,12 @@ fn finite(v: f64) -> bool {
 impl System {
     /// Checks the model and builds the coordinates, elements and sparse pattern.
     pub fn new(model: &Model) -> Result<Self, ModelError> {
+        Self::with_user_forces(model, Vec::new())
+    }
+
+    /// [`Self::new`] with user-defined forces acting on the model's nodes
+    /// ([`crate::user_force`]); a node id out of range is [`ModelError::UnknownNode`].
+    pub fn with_user_forces(model: &Model, user_forces: Vec<Arc<dyn UserForce>>) -> Result<Self, ModelError> {
         topology::check_references(model)?;
         let topo = topology::build(model)?;
         let map = &topo.map;
@@ -554,6 +567,13 @@ impl System {
                 modal: vec![],
             });
         }
+        for (i, u) in user_forces.iter().enumerate() {
+            elements.push(ElementRef {
+                kind: ElementKind::User(i),
+                nodes: crate::user_force::check_nodes(u.as_ref(), model.nodes.len())?,
+                modal: vec![],
+            });
+        }
         let n = map.n_dof;
         let node_unknown: Vec<Vec<usize>> = map
             .chains
@@ -649,6 +669,7 @@ impl System {
             joint_forces,
             initial_plan,
             drivers,
+            user_forces,
             elements,
             pattern,
             dof_scale,
@@ -890,6 +911,23 @@ impl System {
         d
     }
 
+    /// Rotates the three components of every rotation unknown of `v` from spatial to the body
+    /// axes of the orientations `rotations` ($\mathbf R^T\mathbf v$, `to_body`) or back
+    /// ($\mathbf R\mathbf v$); scalars are left alone.
+    pub(crate) fn rotate_components(&self, rotations: &[UnitQuaternion<f64>], v: &mut [f64], to_body: bool) {
+        for (i, r) in self.topo.map.rotations.iter().enumerate() {
+            let d = r.dof;
+            let x = Vector3::new(v[d], v[d + 1], v[d + 2]);
+            let R = &rotations[i];
+            let y = if to_body {
+                R.inverse_transform_vector(&x)
+            } else {
+                R.transform_vector(&x)
+            };
+            v[d..d + 3].copy_from_slice(y.as_slice());
+        }
+    }
+
     /// `out` = `base` $\oplus$ `dq` (configuration only).
     pub(crate) fn retract_in_place(&self, out: &mut State, base: &State, dq: &[f64]) {
         let map = &self.topo.map;
@@ -1021,6 +1059,10 @@ impl System {
                         out: ElementOutput::zeros(rows, true),
                         flex: match e.kind {
                             ElementKind::Flexible(i) => Some(self.flexible[i].buffer()),
+                            _ => None,
+                        },
+                        user: match e.kind {
+                            ElementKind::User(_) => Some(UserBuffer::new(e.nodes.len())),
                             _ => None,
                         },
                         local: [vec![0.0; s * s], vec![0.0; s * s], vec![0.0; s * s]],
@@ -1272,6 +1314,11 @@ impl System {
                 let l = &self.loads[*i];
                 load_element(l, &nodes[l.node], state.time, lambda, tangents, out);
             }
+            ElementKind::User(i) => {
+                let buffer = buf.user.as_mut().expect("user force buffer");
+                let force = self.user_forces[*i].as_ref();
+                user_force_element(force, &e.nodes, nodes, state.time, lambda, tangents, buffer, out)?;
+            }
         }
         Ok(())
     }
@@ -1495,24 +1542,47 @@ impl System {
         Ok(())
     }
 
-    /// Combines the iteration matrix $\beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$
-    /// into `ws.S`, where $\mathbf T$ applies $\mathbf J_l(\mathbf h_r)$ to the columns of each rotation
-    /// coordinate ($\mathbf h$: the step's increment $h\Delta\mathbf q$; identity when `None`).
-    pub(crate) fn iteration_matrix(&self, ws: &mut Workspace, beta: f64, gamma: f64, increment: Option<&[f64]>) {
+    /// Combines the iteration matrix into `ws.S`: $\beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} +
+    /// \hat{\mathbf K}$, and with `step` = (the spatial increment $\mathbf h$ of each rotation,
+    /// the iterate of $t_{n+1}$) the exact derivative of the residual with respect to a spatial
+    /// correction $\delta\mathbf h$ of the increment under the body-axis recursion of the
+    /// integrator (`dynamic_solver` module docs): on each rotation's columns
+    /// $\delta\boldsymbol\pi = \mathbf J_l(\mathbf h)\delta\mathbf h$ moves the rotation, and
+    /// $\boldsymbol\omega_s = \mathbf R_{n+1}\boldsymbol\omega_b$, $\dot{\boldsymbol\omega}_s =
+    /// \mathbf R_{n+1}\dot{\boldsymbol\omega}_b$ vary by $\gamma'\mathbf E\delta\mathbf h -
+    /// \tilde{\boldsymbol\omega}_s\mathbf J_l\delta\mathbf h$ and $\beta'\mathbf E\delta\mathbf h -
+    /// \tilde{\dot{\boldsymbol\omega}}_s\mathbf J_l\delta\mathbf h$, $\mathbf E = \exp(\tilde{\mathbf h})$, so the
+    /// columns become $\hat{\mathbf K}\mathbf J_l + \hat{\mathbf C}(\gamma'\mathbf E - \tilde{\boldsymbol\omega}_s\mathbf J_l)
+    /// \;+\; \hat{\mathbf M}(\beta'\mathbf E - \tilde{\dot{\boldsymbol\omega}}_s\mathbf J_l)$.
+    pub(crate) fn iteration_matrix(&self, ws: &mut Workspace, beta: f64, gamma: f64, step: Option<(&[f64], &State)>) {
         for i in 0..ws.S.len() {
             ws.S[i] = beta * ws.M[i] + gamma * ws.C[i] + ws.K[i];
         }
-        let Some(h) = increment else { return };
+        let Some((h, st)) = step else { return };
         let cp = self.pattern.symbolic.col_ptr();
         for r in &self.topo.map.rotations {
             let d = r.dof;
-            let T = so3::left_jacobian(&Vector3::new(h[d], h[d + 1], h[d + 2]));
+            let hv = Vector3::new(h[d], h[d + 1], h[d + 2]);
+            let T = so3::left_jacobian(&hv);
+            let E = so3::exp(&hv).to_rotation_matrix().into_inner();
+            let W = so3::skew(&Vector3::new(st.velocity[d], st.velocity[d + 1], st.velocity[d + 2])) * T;
+            let A = so3::skew(&Vector3::new(
+                st.acceleration[d],
+                st.acceleration[d + 1],
+                st.acceleration[d + 2],
+            )) * T;
             let len = cp[d + 1] - cp[d];
             for t in 0..len {
-                let k = [ws.K[cp[d] + t], ws.K[cp[d + 1] + t], ws.K[cp[d + 2] + t]];
+                let at = |v: &[f64]| [v[cp[d] + t], v[cp[d + 1] + t], v[cp[d + 2] + t]];
+                let (k, c, m) = (at(&ws.K), at(&ws.C), at(&ws.M));
                 for j in 0..3 {
-                    let kt = k[0] * T[(0, j)] + k[1] * T[(1, j)] + k[2] * T[(2, j)];
-                    ws.S[cp[d + j] + t] += kt - k[j];
+                    let mut s = 0.0;
+                    for i in 0..3 {
+                        s += k[i] * T[(i, j)] + (gamma * c[i] + beta * m[i]) * E[(i, j)]
+                            - c[i] * W[(i, j)]
+                            - m[i] * A[(i, j)];
+                    }
+                    ws.S[cp[d + j] + t] = s;
                 }
             }
         }

@@ -85,6 +85,15 @@ pub const EXAMPLES: &[Example] = &[
             ),
         ],
     },
+    Example {
+        name: "controlled_arm",
+        description:
+            "a flexible arm on a motor hub whose torque a controller sets between steps (dynamic; docs/python.md)",
+        files: &[(
+            "controlled_arm.toml",
+            include_bytes!("../../../examples/controlled_arm.toml"),
+        )],
+    },
 ];
 
 /// The list for `flexmbs example` without a name.

@@ -753,13 +753,74 @@ impl SensorSampler {
     }
 }
 
-/// The deformed meshes of every body at the output times (module docs).
+/// The deformed meshes of every body at the output times (module docs), with the stresses of
+/// the bodies reduced with stress shapes and the hot spot of each.
 pub struct MeshRecovery {
     mesh: VtuMesh,
     /// Per flexible body: superelement, first point, last frame.
     flexible: Vec<(Superelement, usize, Option<Frame>)>,
     /// Per rigid body: first point.
     rigid: Vec<usize>,
+    /// Per flexible body: the largest von Mises stress seen so far.
+    hot: Vec<Option<HotSpot>>,
+}
+
+/// The largest von Mises stress of one body over the output times: value, FE node (index in
+/// the part's mesh), and time (or load factor).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HotSpot {
+    pub von_mises: f64,
+    pub node: usize,
+    pub time: f64,
+}
+
+/// The stress fields of one body at one time, on its mesh nodes, in global axes: Voigt tensor
+/// (zero where none), von Mises and largest principal stress. Beam nodes carry no tensor;
+/// their von Mises and largest principal stress are the largest magnitude and the largest
+/// value of the extreme-fibre axial stress over the element ends at the node (shear stresses
+/// of the section are not included).
+struct NodeStresses {
+    tensor: Vec<[f64; 6]>,
+    von_mises: Vec<f64>,
+    principal: Vec<f64>,
+}
+
+/// The stresses of a body at its nodes from its kinematics, `None` without stress shapes.
+/// `R` turns body axes into global axes.
+fn node_stresses(se: &Superelement, q_jj: &[f64], R: &nalgebra::Matrix3<f64>, n_nodes: usize) -> Option<NodeStresses> {
+    let shapes = se.stress_shapes()?;
+    let stress = se.recover_stress(q_jj)?;
+    let mut out = NodeStresses {
+        tensor: vec![[0.0; 6]; n_nodes],
+        von_mises: vec![0.0; n_nodes],
+        principal: vec![0.0; n_nodes],
+    };
+    for (i, s) in stress.nodal.iter().enumerate().take(n_nodes) {
+        if let Some(s) = s {
+            let g = R * fe_model::stress::tensor(s) * R.transpose();
+            let v = [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]];
+            out.tensor[i] = v;
+            out.von_mises[i] = fe_model::von_mises(&v);
+            out.principal[i] = fe_model::principal_stresses(&v)[0];
+        }
+    }
+    let ends = shapes.beams.iter().zip(&stress.beams).flat_map(|(b, forces)| {
+        forces.iter().enumerate().filter_map(move |(end, f)| {
+            let node = b.nodes[end] as usize;
+            let range = b.section.fibre_stress_range(f)?;
+            (node < n_nodes).then_some((node, range))
+        })
+    });
+    for (i, x) in fe_model::stress::fibre_extremes_at_nodes(n_nodes, ends)
+        .iter()
+        .enumerate()
+    {
+        if let Some([magnitude, largest]) = x {
+            out.von_mises[i] = *magnitude;
+            out.principal[i] = *largest;
+        }
+    }
+    Some(out)
 }
 
 impl MeshRecovery {
@@ -819,49 +880,45 @@ impl MeshRecovery {
             }
             rigid.push(first);
         }
-        Ok(Self { mesh, flexible, rigid })
+        let hot = vec![None; flexible.len()];
+        Ok(Self {
+            mesh,
+            flexible,
+            rigid,
+            hot,
+        })
     }
 
-    /// Sends the deformed meshes at `state` (modal coordinates from the last row of
-    /// `record`) to the observer as a frame of [`Series::Mechanism`] at `t`.
-    pub fn write(
-        &mut self,
-        obs: &mut dyn Observer,
-        t: f64,
-        sys: &System,
-        state: &mbs::State,
-        b: &BuiltMechanism,
-        record: &mbs::SensorRecord,
-    ) -> Result<(), BoxError> {
-        self.write_series(obs, Series::Mechanism, t, sys, state, b, record)
+    /// Whether any body has stress shapes (then the frames carry stress fields).
+    pub fn has_stress(&self) -> bool {
+        self.flexible.iter().any(|(se, _, _)| se.stress_shapes().is_some())
     }
 
-    /// [`Self::write`] as a frame of `series` with key `t`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn write_series(
+    /// The hot spot of each flexible body (`None` without stress shapes or before any output).
+    pub fn hot_spots(&self) -> &[Option<HotSpot>] {
+        &self.hot
+    }
+
+    /// The kinematics of every flexible body at `state` (modal coordinates from the last row
+    /// of `record`), warm-starting each frame from the last.
+    fn kinematics(
         &mut self,
-        obs: &mut dyn Observer,
-        series: Series,
         t: f64,
-        sys: &System,
-        state: &mbs::State,
+        motions: &[mbs::NodeMotion],
         b: &BuiltMechanism,
         record: &mbs::SensorRecord,
-    ) -> Result<(), BoxError> {
-        let motions = sys.node_motions(state);
-        let mut u = vec![[0.0; 3]; self.mesh.points.len()];
+    ) -> Result<Vec<superelement::Kinematics>, BoxError> {
         let mut offset = 0;
         let mut eta_at = BTreeMap::new();
-        for (k, (n, w)) in record.names.iter().zip(&record.widths).enumerate() {
-            let _ = k;
+        for (n, w) in record.names.iter().zip(&record.widths) {
             if let Some(body) = n.strip_prefix(HIDDEN) {
                 eta_at.insert(body.to_string(), (offset, *w));
             }
             offset += w;
         }
         let row = record.rows.last();
-        for (body, (se, first, last)) in b.bodies.iter().zip(self.flexible.iter_mut()) {
-            let first = *first;
+        let mut out = Vec::with_capacity(b.bodies.len());
+        for (body, (se, _, last)) in b.bodies.iter().zip(self.flexible.iter_mut()) {
             let eta: Vec<f64> = match (eta_at.get(&body.name), row) {
                 (Some((o, w)), Some(row)) => row[*o..*o + *w].to_vec(),
                 _ => vec![0.0; body.reduced.n_modes],
@@ -886,18 +943,116 @@ impl MeshRecovery {
                 .kinematics(&bs)
                 .context(|| format!("body '{}': floating frame for the mesh at t = {t}", body.name))?;
             *last = Some(kin.frame);
-            match se.recover_mesh(&kin) {
+            out.push(kin);
+        }
+        Ok(out)
+    }
+
+    /// Every body's stresses from its kinematics, updating the hot spots at time `t`.
+    fn stresses(&mut self, t: f64, kins: &[superelement::Kinematics]) -> Vec<Option<NodeStresses>> {
+        let mut out = Vec::with_capacity(kins.len());
+        for (k, ((se, _, _), kin)) in self.flexible.iter().zip(kins).enumerate() {
+            let n_nodes = se.stress_shapes().map_or(0, |s| {
+                s.solid_node
+                    .len()
+                    .max(s.beams.iter().flat_map(|b| b.nodes).max().map_or(0, |m| m as usize + 1))
+            });
+            let st = node_stresses(se, &kin.q_jj, &kin.R_j, n_nodes);
+            if let Some(st) = &st {
+                if let Some((node, &vm)) = st.von_mises.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
+                    if self.hot[k].is_none_or(|h| vm > h.von_mises) {
+                        self.hot[k] = Some(HotSpot {
+                            von_mises: vm,
+                            node,
+                            time: t,
+                        });
+                    }
+                }
+            }
+            out.push(st);
+        }
+        out
+    }
+
+    /// Updates the hot spots at an output time without writing a frame.
+    pub fn track(
+        &mut self,
+        t: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+        record: &mbs::SensorRecord,
+    ) -> Result<(), BoxError> {
+        if !self.has_stress() {
+            return Ok(());
+        }
+        let motions = sys.node_motions(state);
+        let kins = self.kinematics(t, &motions, b, record)?;
+        self.stresses(t, &kins);
+        Ok(())
+    }
+
+    /// Sends the deformed meshes at `state` (modal coordinates from the last row of
+    /// `record`) to the observer as a frame of [`Series::Mechanism`] at `t`, with the stress
+    /// fields when a body has stress shapes.
+    pub fn write(
+        &mut self,
+        obs: &mut dyn Observer,
+        t: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+        record: &mbs::SensorRecord,
+    ) -> Result<(), BoxError> {
+        self.write_series(obs, Series::Mechanism, t, sys, state, b, record)
+    }
+
+    /// [`Self::write`] as a frame of `series` with key `t` (buckling modes: the mode number).
+    #[allow(clippy::too_many_arguments)]
+    pub fn write_series(
+        &mut self,
+        obs: &mut dyn Observer,
+        series: Series,
+        t: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+        record: &mbs::SensorRecord,
+    ) -> Result<(), BoxError> {
+        let motions = sys.node_motions(state);
+        let n_points = self.mesh.points.len();
+        let mut u = vec![[0.0; 3]; n_points];
+        let kins = self.kinematics(t, &motions, b, record)?;
+        let stresses = if self.has_stress() {
+            self.stresses(t, &kins)
+        } else {
+            Vec::new()
+        };
+        let mut tensor = vec![[0.0; 6]; n_points];
+        let mut von_mises = vec![0.0; n_points];
+        let mut principal = vec![0.0; n_points];
+        for (k, (body, (se, first, _))) in b.bodies.iter().zip(&self.flexible).enumerate() {
+            let first = *first;
+            match se.recover_mesh(&kins[k]) {
                 Some(ms) => {
                     for (i, p) in ms.positions.iter().enumerate() {
                         let x = &self.mesh.points[first + i];
                         u[first + i] = [p.x - x[0], p.y - x[1], p.z - x[2]];
                     }
+                    // Stresses live on the mesh nodes, drawn only with the mesh shapes.
+                    if let Some(Some(st)) = stresses.get(k) {
+                        for i in 0..ms.positions.len().min(st.tensor.len()) {
+                            tensor[first + i] = st.tensor[i];
+                            von_mises[first + i] = st.von_mises[i];
+                            principal[first + i] = st.principal[i];
+                        }
+                    }
                 }
                 None => {
-                    for (k, n) in body.nodes.iter().enumerate() {
+                    for (j, n) in body.nodes.iter().enumerate() {
                         let p = motions[n.index()].r;
-                        let x = &self.mesh.points[first + k];
-                        u[first + k] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+                        let x = &self.mesh.points[first + j];
+                        u[first + j] = [p.x - x[0], p.y - x[1], p.z - x[2]];
                     }
                 }
             }
@@ -910,16 +1065,59 @@ impl MeshRecovery {
             }
         }
         let values: Vec<f64> = u.iter().flatten().copied().collect();
-        obs.frame(
-            series,
-            t,
-            &self.mesh,
-            &[PointField {
-                name: "displacement",
-                components: 3,
-                values: &values,
-            }],
-        )
+        let mut fields = vec![PointField {
+            name: "displacement",
+            components: 3,
+            values: &values,
+        }];
+        let tensor: Vec<f64> = tensor.iter().flatten().copied().collect();
+        if self.has_stress() {
+            fields.push(PointField {
+                name: "stress",
+                components: 6,
+                values: &tensor,
+            });
+            fields.push(PointField {
+                name: "von_mises",
+                components: 1,
+                values: &von_mises,
+            });
+            fields.push(PointField {
+                name: "max_principal",
+                components: 1,
+                values: &principal,
+            });
+        }
+        obs.frame(series, t, &self.mesh, &fields)
+    }
+
+    /// The hot spots as summary entries and report lines, `x` naming the time axis.
+    pub fn hot_spot_summary(&self, b: &BuiltMechanism, x: &str) -> (serde_json::Value, Vec<String>) {
+        let mut entries = Vec::new();
+        let mut lines = Vec::new();
+        for (body, hot) in b.bodies.iter().zip(&self.hot) {
+            let Some(h) = hot else { continue };
+            let position = body.reduced.mesh.as_ref().map(|m| m.nodes[h.node]);
+            entries.push(json!({
+                "body": body.name,
+                "von_mises_Pa": h.von_mises,
+                "node": h.node,
+                "position": position,
+                x: h.time,
+            }));
+            lines.push(format!(
+                "hot spot of body '{}': von Mises {:.6e} Pa at FE node index {}{} at {x} = {:.6}",
+                body.name,
+                h.von_mises,
+                h.node,
+                position.map_or(String::new(), |p| format!(
+                    " ({:.4e}, {:.4e}, {:.4e}) m",
+                    p[0], p[1], p[2]
+                )),
+                h.time
+            ));
+        }
+        (serde_json::Value::Array(entries), lines)
     }
 }
 
@@ -1000,6 +1198,8 @@ pub fn run_analysis(
             }
             let mut mw = MeshRecovery::new(b)?;
             mw.write(obs, 1.0, &sys, &sol.state, b, &rec)?;
+            let (hot_spots, hot_lines) = mw.hot_spot_summary(b, "load_factor");
+            out.report.extend(hot_lines);
             let iterations: usize = sol.steps.iter().map(|s| s.residuals.len().saturating_sub(1)).sum();
             out.report.push(format!(
                 "{} load steps, {iterations} Newton iterations, {} rejected attempts; last relative residual {:.2e}",
@@ -1019,6 +1219,7 @@ pub fn run_analysis(
                 "rejected_steps": sol.rejected.len(),
                 "load_factor_reached": sol.sensors.times.last().copied().unwrap_or(0.0),
                 "seconds_solving": t0.elapsed().as_secs_f64(),
+                "hot_spots": hot_spots,
             });
             obs.sensors_end()?;
             if failure.is_none() {
@@ -1114,6 +1315,10 @@ pub fn run_analysis(
                 if k % output.every == 0 || last {
                     integ.record(&mut rec)?;
                     files.sample(obs, t, &rec)?;
+                    let vtu_now = output.vtu_every.is_some_and(|v| k % v == 0 || k == n_steps);
+                    if !vtu_now {
+                        mw.track(t, &sys, integ.state(), b, &rec)?;
+                    }
                     // Only the last row is needed; keep the record small.
                     if rec.rows.len() > 1 {
                         rec.rows.drain(..rec.rows.len() - 1);
@@ -1172,8 +1377,11 @@ pub fn run_analysis(
                 ));
             }
             report_last(&mut out.report, b, &files);
+            let (hot_spots, hot_lines) = mw.hot_spot_summary(b, "t");
+            out.report.extend(hot_lines);
             out.results = json!({
                 "model": b.size(&sys),
+                "hot_spots": hot_spots,
                 "steps": steps,
                 "steps_planned": if adaptive.is_none() { json!(n_steps) } else { json!(null) },
                 "t_start": t_start,
