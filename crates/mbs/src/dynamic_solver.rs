@@ -776,16 +776,7 @@ pub fn solve_dynamic_adaptive(
     let end = settings.end_time;
     while end - integ.state().time > 1e-12 * end.abs().max(1.0) {
         // Land on the end time: shorten the step that would pass it (or leave a sliver).
-        let left = end - integ.state().time;
-        let h = integ.step_size();
-        if h >= left || 1.5 * h > left {
-            integ.set_step_size(if h >= left { left } else { 0.5 * left });
-        }
-        let limits = AdaptiveSettings {
-            min_step: adaptive.min_step.min(left),
-            ..adaptive.clone()
-        };
-        match integ.step_adaptive(&limits) {
+        match crate::retry::step_adaptive_to(&mut integ, end, adaptive) {
             Ok(s) => {
                 traj.iterations.push(s.report.residuals.len() - 1);
                 traj.jacobians.push(s.report.jacobians);

@@ -152,8 +152,9 @@
 //!   in that window (independent of the Newton tolerance; stable at 2.5 ms for every
 //!   $\rho_\infty$, and for 2 or 8 superelements), not a defect of the tangents or the update;
 //!   $\rho_\infty = 0.5$ or a smaller step avoid it.
-//! * Arc-length, buckling and the adaptive step are dense or serial where noted ([`buckling`]
-//!   is dense); they are not yet reachable from study files.
+//! * Arc-length, buckling and the stability check are dense ([`buckling`], [`stability`]).
+//! * Initial joint values in closed loops (a value that no rigid motion of the loop follows
+//!   is refused; the loop is assembled by an equilibrium instead).
 //!
 //! # Modules
 //!
@@ -206,7 +207,9 @@ pub use model::{
 };
 pub use momentum::{ExternalAction, MomentumProjection};
 pub use node::NodeMotion;
-pub use retry::{solve_dynamic_retrying, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure};
+pub use retry::{
+    solve_dynamic_retrying, step_adaptive_to, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure,
+};
 pub use sensors::{Energies, SensorRecord};
 pub use stability::{stability, Stability};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};

@@ -13,7 +13,7 @@
 //! acceleration is carried over), so the retried interval is integrated by the same scheme;
 //! its local error is that of the smaller steps.
 
-use crate::dynamic_solver::{DynamicSettings, Integrator, StepReport, Trajectory};
+use crate::dynamic_solver::{AdaptiveSettings, AdaptiveStep, DynamicSettings, Integrator, StepReport, Trajectory};
 use crate::error::{Incomplete, SolveError};
 use crate::system::{State, System};
 
@@ -114,6 +114,26 @@ pub fn step_retrying(integ: &mut Integrator, min_step: f64) -> Result<RetriedSte
             retry: Some(retry),
         })),
     }
+}
+
+/// One adaptive step ([`Integrator::step_adaptive`]) that lands on `end`: a step that would
+/// pass it is shortened to it, and one that would leave a sliver of less than half a step is
+/// halved.
+pub fn step_adaptive_to(
+    integ: &mut Integrator,
+    end: f64,
+    adaptive: &AdaptiveSettings,
+) -> Result<AdaptiveStep, SolveError> {
+    let left = end - integ.state().time();
+    let h = integ.step_size();
+    if h >= left || 1.5 * h > left {
+        integ.set_step_size(if h >= left { left } else { 0.5 * left });
+    }
+    let limits = AdaptiveSettings {
+        min_step: adaptive.min_step.min(left),
+        ..adaptive.clone()
+    };
+    integ.step_adaptive(&limits)
 }
 
 /// Integrates from `start` to `settings.end_time` with the fixed step `settings.step`,

@@ -284,3 +284,15 @@ impl System {
         Ok(())
     }
 }
+
+impl System {
+    /// Appends the sensor values at `state` to `rec`, evaluating the forces (reactions and
+    /// efforts) at load factor `lambda`: for states that no integrator holds (a buckling mode
+    /// drawn on the loaded equilibrium).
+    pub fn record_state(&self, state: &State, lambda: f64, rec: &mut SensorRecord) -> Result<(), SolveError> {
+        let mut ws = self.workspace();
+        let mut s = state.clone();
+        self.evaluate_into(&mut s, lambda, false, &mut ws)?;
+        self.record(&s, &ws, rec)
+    }
+}

@@ -65,8 +65,18 @@ pub const EXAMPLES: &[Example] = &[
         )],
     },
     Example {
+        name: "double_pendulum",
+        description:
+            "a double pendulum of two flexible links released from 30 degrees by one [[initial]] line (dynamic)",
+        files: &[(
+            "double_pendulum.toml",
+            include_bytes!("../../../examples/double_pendulum.toml"),
+        )],
+    },
+    Example {
         name: "four_bar",
-        description: "a four-bar whose coupler is a solid from a gmsh mesh (equilibrium, linearized, dynamic)",
+        description:
+            "a four-bar whose coupler is a solid from a gmsh mesh (equilibrium, linearized and dynamic from it)",
         files: &[
             ("four_bar.toml", include_bytes!("../../../examples/four_bar.toml")),
             (

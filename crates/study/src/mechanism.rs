@@ -16,7 +16,8 @@ use crate::run::{reduce_part, Reduced};
 use crate::simulation::{sensor_columns, Simulation};
 use crate::source::KeyPath;
 use crate::validate::mechanism::{
-    About, BodySource, FrameSpec, InitialSpec, MbsAnalysis, PointRef, ReactionAt, SensorTarget,
+    joint_is_angle, About, BodyRef, BodySource, EffortSpec, FrameSpec, InitialSpec, MbsAnalysis, PointRef, ReactionAt,
+    SensorTarget,
 };
 use crate::validate::Study;
 use crate::vtu::{CellRole, PointField, VtuMesh};
@@ -492,6 +493,16 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 };
                 vec![format!("effort [{unit}]")]
             }
+            SensorTarget::ActuatorEffort(a) => {
+                kinds = single(SensorKind::ActuatorEffort { actuator: *a });
+                let ac = &m.actuators[*a];
+                let unit = if joint_is_angle(m, ac.joint, ac.coordinate) {
+                    "N m"
+                } else {
+                    "N"
+                };
+                vec![format!("effort [{unit}]")]
+            }
             SensorTarget::Energy => {
                 kinds = vec![
                     (format!("{}.kinetic", s.name), SensorKind::KineticEnergy),
@@ -566,7 +577,84 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 velocity: *velocity,
                 angular_velocity: *angular_velocity,
             }),
+            InitialSpec::Body {
+                body,
+                velocity,
+                angular_velocity,
+                point,
+                ..
+            } => {
+                // Flexible bodies come first in the model, then the rigid ones.
+                let (id, centre) = match body {
+                    BodyRef::Flexible(k) => {
+                        let c = Point3::from(Vector3::from(bodies[*k].reduced.inertia.center_of_mass));
+                        (*k, (bodies[*k].placement * c).coords)
+                    }
+                    BodyRef::Rigid(k) => (bodies.len() + k, m.rigid_bodies[*k].center_of_mass),
+                };
+                model.initial.push(InitialCondition::BodyVelocity {
+                    body: mbs::BodyId(id as u32),
+                    velocity: *velocity,
+                    angular_velocity: *angular_velocity,
+                    point: point.unwrap_or(centre),
+                });
+            }
         }
+    }
+    let joint_of = |j: usize, path: &KeyPath| -> Result<mbs::JointId, BoxError> {
+        joint_ids[j].ok_or_else(|| located(study, path, "a fixed joint has no coordinate"))
+    };
+    for s in &m.joint_springs {
+        model.joint_springs.push(mbs::JointSpring {
+            joint: joint_of(s.joint, &s.path)?,
+            coordinate: s.coordinate,
+            stiffness: s.stiffness,
+            damping: s.damping,
+            rest: s.rest,
+            preload: s.preload,
+        });
+        entities.push((s.path.clone(), s.name.clone()));
+    }
+    for l in &m.joint_limits {
+        model.joint_limits.push(mbs::JointLimit {
+            name: l.name.clone(),
+            joint: joint_of(l.joint, &l.path)?,
+            coordinate: l.coordinate,
+            lower: l.lower,
+            upper: l.upper,
+            stiffness: l.stiffness,
+            damping: l.damping,
+        });
+        entities.push((l.path.clone(), l.name.clone()));
+    }
+    for a in &m.actuators {
+        let effort = match &a.effort {
+            EffortSpec::Time(f) => mbs::Effort::Time(f.clone()),
+            EffortSpec::Pid {
+                joint,
+                coordinate,
+                setpoint,
+                kp,
+                ki,
+                kd,
+                max_effort,
+            } => mbs::Effort::Pid(mbs::Pid {
+                joint: joint_of(*joint, &a.path)?,
+                coordinate: *coordinate,
+                setpoint: setpoint.clone(),
+                kp: *kp,
+                ki: *ki,
+                kd: *kd,
+                max_effort: *max_effort,
+            }),
+        };
+        model.actuators.push(mbs::JointActuator {
+            name: a.name.clone(),
+            joint: joint_of(a.joint, &a.path)?,
+            coordinate: a.coordinate,
+            effort,
+        });
+        entities.push((a.path.clone(), a.name.clone()));
     }
     Ok(BuiltMechanism {
         model,
@@ -910,6 +998,20 @@ impl MeshRecovery {
         state: &mbs::State,
         b: &BuiltMechanism,
     ) -> Result<(), BoxError> {
+        self.write_series(obs, Series::Mechanism, t, sys, state, b)
+    }
+
+    /// [`Self::write`] as a frame of `series` with key `t` (buckling modes: the mode number).
+    #[allow(clippy::too_many_arguments)]
+    pub fn write_series(
+        &mut self,
+        obs: &mut dyn Observer,
+        series: Series,
+        t: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+    ) -> Result<(), BoxError> {
         let motions = sys.node_motions(state);
         let n_points = self.mesh.points.len();
         let mut u = vec![[0.0; 3]; n_points];
@@ -1020,7 +1122,7 @@ impl MeshRecovery {
                 values: &principal,
             });
         }
-        obs.frame(Series::Mechanism, t, &self.mesh, &fields)
+        obs.frame(series, t, &self.mesh, &fields)
     }
 
     /// The hot spots as summary entries and report lines, `x` naming the time axis.
@@ -1073,13 +1175,17 @@ pub struct MbsOutcome {
     pub results: serde_json::Value,
     /// A solver failure after partial results were written.
     pub failure: Option<String>,
+    /// The final state (equilibrium, dynamic), for analyses that `start` from it.
+    pub final_state: Option<mbs::State>,
 }
 
 /// Runs one analysis of the mechanism, every result to `obs`.
+/// `start`: the final state of the analysis named in its `start` key.
 pub fn run_analysis(
     study: &Study,
     analysis: &MbsAnalysis,
     b: &BuiltMechanism,
+    start: Option<&mbs::State>,
     obs: &mut dyn Observer,
 ) -> Result<MbsOutcome, BoxError> {
     let sys = Arc::new(b.system(study)?);
@@ -1095,6 +1201,7 @@ pub fn run_analysis(
         )],
         results: json!({}),
         failure: None,
+        final_state: None,
     };
     let output = &study.mechanism.output;
     let t0 = Instant::now();
@@ -1121,7 +1228,11 @@ pub fn run_analysis(
                 s.time = *time;
                 mbs::StaticMethod::LoadStepping(s)
             };
-            let (sol, failure) = match mbs::solve_static_with(&sys, sys.initial_state(), &method) {
+            let first = match start {
+                Some(s) => sys.at_rest(s, *time),
+                None => sys.initial_state(),
+            };
+            let (sol, failure) = match mbs::solve_static_with(&sys, first, &method) {
                 Ok(s) => (s, None),
                 Err(inc) => (inc.partial, Some(inc.error)),
             };
@@ -1158,29 +1269,79 @@ pub fn run_analysis(
                 "hot_spots": hot_spots,
             });
             obs.sensors_end()?;
+            if failure.is_none() {
+                out.final_state = Some(sol.state.clone());
+            }
             out.failure = failure.map(|e| format!("equilibrium stopped: {e}; the converged load steps are written"));
         }
-        MbsAnalysis::Dynamic { t_end, dt, newton, .. } => {
-            let mut integ = Simulation::with_system(study, Arc::clone(&sys), b, analysis)?;
+        MbsAnalysis::Dynamic {
+            t_end,
+            dt,
+            newton,
+            dt_min,
+            adaptive,
+            ..
+        } => {
+            let first = dynamic_start(&sys, start);
+            let t_start = first.time();
+            if *t_end <= t_start {
+                return Err(format!(
+                    "t_end = {t_end} s is not after the start at t = {t_start} s (the state of the analysis named in `start`)"
+                )
+                .into());
+            }
+            let mut integ = Simulation::with_start(study, Arc::clone(&sys), b, analysis, first)?;
             let mut rec = sys.sensor_record();
             integ.record(&mut rec)?;
             let mut files = SensorSampler::start(obs, &b.groups, &rec, "t [s]", output.plots)?;
-            files.sample(obs, 0.0, &rec)?;
+            files.sample(obs, t_start, &rec)?;
             let mut mw = MeshRecovery::new(b)?;
             if output.vtu_every.is_some() {
-                mw.write(obs, 0.0, &sys, integ.state(), b)?;
+                mw.write(obs, t_start, &sys, integ.state(), b)?;
             }
-            let n_steps = ((t_end / dt) - 1e-9).ceil().max(0.0) as usize;
+            let n_steps = (((t_end - t_start) / dt) - 1e-9).ceil().max(0.0) as usize;
+            let at_end = |t: f64| t_end - t >= -1e-12 && t_end - t <= 1e-12 * t_end.abs().max(1.0);
             let mut iterations = 0usize;
             let mut jacobians = 0usize;
             let mut max_iter = 0usize;
-            for k in 1..=n_steps {
-                match integ.step() {
-                    Ok(rep) => {
-                        let it = rep.residuals.len().saturating_sub(1);
-                        iterations += it;
-                        jacobians += rep.jacobians;
-                        max_iter = max_iter.max(it);
+            let mut retries: Vec<mbs::Retry> = Vec::new();
+            let mut rejected = 0usize;
+            let (mut h_min, mut h_max) = (f64::INFINITY, 0.0f64);
+            let mut k = 0usize;
+            loop {
+                let done = match adaptive {
+                    None => k >= n_steps,
+                    Some(_) => at_end(integ.time()) || integ.time() >= *t_end,
+                };
+                if done {
+                    break;
+                }
+                k += 1;
+                let t_before = integ.time();
+                let taken: Result<Vec<mbs::StepReport>, mbs::SolveError> = match adaptive {
+                    None => match integ.step_retrying(*dt_min) {
+                        Ok(r) => {
+                            retries.extend(r.retry);
+                            Ok(r.reports)
+                        }
+                        Err(f) => {
+                            retries.extend(f.retry);
+                            Err(f.error)
+                        }
+                    },
+                    Some(ad) => integ.step_adaptive(ad).map(|s| {
+                        rejected += s.rejected;
+                        vec![s.report]
+                    }),
+                };
+                match taken {
+                    Ok(reports) => {
+                        for rep in reports {
+                            let it = rep.residuals.len().saturating_sub(1);
+                            iterations += it;
+                            jacobians += rep.jacobians;
+                            max_iter = max_iter.max(it);
+                        }
                     }
                     Err(e) => {
                         out.failure = Some(format!(
@@ -1191,8 +1352,14 @@ pub fn run_analysis(
                         break;
                     }
                 }
-                let t = integ.state().time();
-                if k % output.every == 0 || k == n_steps {
+                let t = integ.time();
+                h_min = h_min.min(t - t_before);
+                h_max = h_max.max(t - t_before);
+                let last = match adaptive {
+                    None => k == n_steps,
+                    Some(_) => at_end(t),
+                };
+                if k % output.every == 0 || last {
                     integ.record(&mut rec)?;
                     files.sample(obs, t, &rec)?;
                     let vtu_now = output.vtu_every.is_some_and(|v| k % v == 0 || k == n_steps);
@@ -1206,23 +1373,47 @@ pub fn run_analysis(
                     }
                 }
                 if let Some(v) = output.vtu_every {
-                    if k % v == 0 || k == n_steps {
+                    if k % v == 0 || last {
                         mw.write(obs, t, &sys, integ.state(), b)?;
                     }
                 }
+                let (done, total) = match adaptive {
+                    None => (k as u64, n_steps as u64),
+                    Some(_) => ((1000.0 * (t - t_start) / (t_end - t_start)) as u64, 1000),
+                };
                 obs.progress(&Progress::Steps {
                     what: "time integration".into(),
-                    done: k as u64,
-                    total: n_steps as u64,
+                    done,
+                    total,
                 });
             }
             obs.progress(&Progress::Finished);
-            let steps = integ.steps();
-            out.report.push(format!(
-                "{steps} of {n_steps} steps of {dt} s to t = {:.6} s, {iterations} Newton iterations ({:.2} per step, at most {max_iter}), 0 rejected steps (fixed step)",
-                integ.state().time(),
-                iterations as f64 / steps.max(1) as f64
-            ));
+            let steps = k - usize::from(out.failure.is_some());
+            let t_reached = integ.state().time();
+            match adaptive {
+                None => out.report.push(format!(
+                    "{steps} of {n_steps} steps of {dt} s from t = {t_start} to {t_reached:.6} s, {iterations} Newton iterations ({:.2} per step, at most {max_iter})",
+                    iterations as f64 / steps.max(1) as f64
+                )),
+                Some(ad) => out.report.push(format!(
+                    "{steps} adaptive steps from t = {t_start} to {t_reached:.6} s (error tolerance {:.1e}; steps {h_min:.3e} to {h_max:.3e} s), {rejected} rejected and retried, {iterations} Newton iterations",
+                    ad.tolerance
+                )),
+            }
+            if adaptive.is_none() {
+                out.report.push(if retries.is_empty() {
+                    "no step needed retrying (fixed step)".to_string()
+                } else {
+                    let smallest = retries.iter().map(|r| r.smallest_step).fold(f64::INFINITY, f64::min);
+                    let first = &retries[0];
+                    format!(
+                        "{} failed step(s) retried with halved steps (smallest {smallest:.3e} s, dt_min {dt_min:.3e} s); the first at t = {:.6} s: {}",
+                        retries.len(),
+                        first.time,
+                        first.cause
+                    )
+                });
+            }
             if *newton == mbs::NewtonStrategy::Modified {
                 out.report.push(format!(
                     "modified Newton: {jacobians} iteration matrices factorised ({:.2} per step)",
@@ -1236,8 +1427,9 @@ pub fn run_analysis(
                 "model": b.size(&sys),
                 "hot_spots": hot_spots,
                 "steps": steps,
-                "steps_planned": n_steps,
-                "t_reached": integ.state().time(),
+                "steps_planned": if adaptive.is_none() { json!(n_steps) } else { json!(null) },
+                "t_start": t_start,
+                "t_reached": t_reached,
                 "newton_iterations": iterations,
                 "max_iterations_per_step": max_iter,
                 "newton": match newton {
@@ -1245,20 +1437,35 @@ pub fn run_analysis(
                     mbs::NewtonStrategy::Modified => "modified",
                 },
                 "jacobians": jacobians,
-                "rejected_steps": 0,
+                "adaptive": adaptive.is_some(),
+                "smallest_step": if h_min.is_finite() { json!(h_min) } else { json!(null) },
+                "largest_step": h_max,
+                "rejected_steps": rejected,
+                "retried_steps": retries.len(),
+                "retries": retries.iter().map(|r| json!({
+                    "time": r.time,
+                    "step": r.step,
+                    "smallest_step": r.smallest_step,
+                    "substeps": r.substeps,
+                    "cause": r.cause.to_string(),
+                })).collect::<Vec<_>>(),
                 "seconds_solving": t0.elapsed().as_secs_f64(),
             });
             obs.sensors_end()?;
+            if out.failure.is_none() {
+                out.final_state = Some(integ.state().clone());
+            }
         }
         MbsAnalysis::Linearized { modes, about } => {
-            let state = match about {
-                About::Initial => sys.initial_state(),
-                About::Equilibrium => {
+            let state = match (start, about) {
+                (Some(s), _) => s.clone(),
+                (None, About::Initial) => sys.initial_state(),
+                (None, About::Equilibrium) => {
                     mbs::solve_static(&sys, sys.initial_state(), &mbs::StaticSettings::new(1))
                         .map_err(|e| format!("the equilibrium to linearise about: {}", e.error))?
                         .state
                 }
-                About::Time { t, dt } => {
+                (None, About::Time { t, dt }) => {
                     let settings = mbs::DynamicSettings::new(*dt, *t, 0.9);
                     mbs::solve_dynamic(&sys, sys.initial_state(), &settings)
                         .map_err(|e| format!("the dynamic run up to t = {t} s to linearise about: {}", e.error))?
@@ -1326,11 +1533,132 @@ pub fn run_analysis(
                 "model": b.size(&sys),
                 "frequencies_hz": hz,
                 "mode_labels": labels,
-                "about": format!("{about:?}"),
+                "about": if start.is_some() { "start".to_string() } else { format!("{about:?}") },
             });
         }
+        MbsAnalysis::Buckling {
+            modes,
+            steps,
+            tolerance,
+            max_iterations,
+        } => run_buckling(
+            &sys,
+            b,
+            start,
+            [*modes, *steps, *max_iterations],
+            *tolerance,
+            obs,
+            &mut out,
+        )?,
     }
     Ok(out)
+}
+
+/// The first state of a `dynamic` analysis: the initial state, or the final state of the
+/// analysis named in `start` (from an equilibrium: at rest in its configuration at its time).
+pub fn dynamic_start(sys: &System, start: Option<&mbs::State>) -> mbs::State {
+    match start {
+        Some(s) if s.velocity().iter().all(|v| *v == 0.0) => sys.at_rest(s, s.time()),
+        Some(s) => s.clone(),
+        None => sys.initial_state(),
+    }
+}
+
+/// The `buckling` analysis (`mbs::buckling` about the equilibrium under the full load, or the
+/// state of `start`), with the stability of that equilibrium (`mbs::stability`): the load
+/// factors as a table, each mode drawn on the loaded configuration for ParaView.
+fn run_buckling(
+    sys: &System,
+    b: &BuiltMechanism,
+    start: Option<&mbs::State>,
+    [modes, steps, max_iterations]: [usize; 3],
+    tolerance: f64,
+    obs: &mut dyn Observer,
+    out: &mut MbsOutcome,
+) -> Result<(), BoxError> {
+    let unloaded = sys.initial_state();
+    let loaded = match start {
+        Some(s) => s.clone(),
+        None => {
+            let mut settings = mbs::StaticSettings::new(steps);
+            settings.tolerance = tolerance;
+            settings.max_iterations = max_iterations;
+            match mbs::solve_static(sys, unloaded.clone(), &settings) {
+                Ok(sol) => sol.state,
+                Err(inc) => {
+                    let reached = inc.partial.steps.last().map_or(0.0, |s| s.lambda);
+                    out.report.push(format!(
+                        "no equilibrium under the full load: load stepping stopped at load factor {reached:.6}"
+                    ));
+                    out.results = json!({
+                        "model": b.size(sys),
+                        "past_critical_point": true,
+                        "load_factor_reached": reached,
+                    });
+                    out.failure = Some(format!(
+                        "the structure is past a limit point: no equilibrium beyond load factor {reached:.6} ({}); an 'equilibrium' analysis with method = \"arc-length\" follows the path through it",
+                        inc.error
+                    ));
+                    return Ok(());
+                }
+            }
+        }
+    };
+    let stability = mbs::stability(sys, &loaded, 1.0)?;
+    let bk = mbs::buckling(sys, &unloaded, &loaded, 1.0)?;
+    let mut table = Table::new("load_factors", &["mode", "critical load factor [-]"]);
+    for (k, f) in bk.load_factors.iter().take(modes).enumerate() {
+        table.row(vec![Cell::from(k + 1), Cell::Num(*f)]);
+    }
+    obs.table(&table)?;
+    // Each mode on the loaded configuration, its largest displacement a tenth of the model.
+    let mut mw = MeshRecovery::new(b)?;
+    let base = sys.node_motions(&loaded);
+    let size = {
+        let n = base.len().max(1) as f64;
+        let c = base.iter().map(|m| m.r).sum::<Vector3<f64>>() / n;
+        base.iter().map(|m| (m.r - c).norm()).fold(1e-3, f64::max)
+    };
+    for k in 0..bk.load_factors.len().min(modes) {
+        let phi: Vec<f64> = (0..sys.n_dof()).map(|i| bk.modes[(i, k)]).collect();
+        let probe = sys.retract(&loaded, &phi.iter().map(|x| x * 1e-6).collect::<Vec<_>>());
+        let moved = sys
+            .node_motions(&probe)
+            .iter()
+            .zip(&base)
+            .map(|(a, b)| (a.r - b.r).norm())
+            .fold(0.0, f64::max)
+            / 1e-6;
+        let scale = if moved > 0.0 { 0.1 * size / moved } else { 0.0 };
+        let mut state = sys.retract(&loaded, &phi.iter().map(|x| x * scale).collect::<Vec<_>>());
+        sys.reset_frames(&mut state);
+        mw.write_series(obs, Series::Modes, (k + 1) as f64, sys, &state, b)?;
+    }
+    let first = bk.load_factors.iter().copied().find(|f| *f > 0.0);
+    let past = stability.past_critical_point() || first.is_some_and(|f| f < 1.0);
+    out.report.push(format!(
+        "critical load factors: {}",
+        bk.load_factors
+            .iter()
+            .take(modes)
+            .map(|f| format!("{f:.6e}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    if past {
+        out.report.push(format!(
+            "the structure is past a critical point under the full load: {} negative eigenvalue(s) of the tangent stiffness{}",
+            stability.negative,
+            first.map_or(String::new(), |f| format!(", lowest positive critical load factor {f:.6}"))
+        ));
+    }
+    out.results = json!({
+        "model": b.size(sys),
+        "load_factors": bk.load_factors.iter().take(modes).collect::<Vec<_>>(),
+        "past_critical_point": past,
+        "negative_eigenvalues": stability.negative,
+    });
+    Ok(())
 }
 
 /// The last value of every sensor, for the report.

@@ -162,6 +162,8 @@ pub struct Runner<'s> {
     start: Instant,
     pub summary: Summary,
     mechanism: Option<crate::mechanism::BuiltMechanism>,
+    /// The final state of each analysis of the mechanism that ended in one (for `start`).
+    states: Vec<Option<mbs::State>>,
 }
 
 impl<'s> Runner<'s> {
@@ -172,7 +174,13 @@ impl<'s> Runner<'s> {
             start: Instant::now(),
             summary: pending_summary(study),
             mechanism: None,
+            states: vec![None; study.analyses.len()],
         }
+    }
+
+    /// The final state of analysis `i`, once it has run (equilibrium and dynamic analyses).
+    pub fn state(&self, i: usize) -> Option<&mbs::State> {
+        self.states[i].as_ref()
     }
 
     /// The mechanism, built (its bodies reduced through the cache) at the first call.
@@ -208,15 +216,32 @@ impl<'s> Runner<'s> {
                         *t_end = limit;
                     }
                 }
-                match self.mechanism(obs) {
-                    Ok(built) => crate::mechanism::run_analysis(study, &spec, built, obs).map(|o| Outcome {
-                        free_dofs: o.free_dofs,
-                        report: o.report,
-                        results: o.results,
-                        failure: o.failure,
+                let start: Result<Option<mbs::State>, BoxError> = match a.start {
+                    Some(k) => self.states[k].clone().map(Some).ok_or_else(|| {
+                        format!(
+                            "analysis '{}' starts from '{}', which ended in no state",
+                            a.name, study.analyses[k].name
+                        )
+                        .into()
                     }),
-                    Err(e) => Err(e),
-                }
+                    None => Ok(None),
+                };
+                let mut final_state = None;
+                let result = match (start, self.mechanism(obs)) {
+                    (Ok(start), Ok(built)) => crate::mechanism::run_analysis(study, &spec, built, start.as_ref(), obs)
+                        .map(|o| {
+                            final_state = o.final_state;
+                            Outcome {
+                                free_dofs: o.free_dofs,
+                                report: o.report,
+                                results: o.results,
+                                failure: o.failure,
+                            }
+                        }),
+                    (Err(e), _) | (_, Err(e)) => Err(e),
+                };
+                self.states[i] = final_state;
+                result
             }
             _ => run_analysis(study, a, &cache, obs),
         };

@@ -60,6 +60,12 @@ pub struct StudyFile {
     pub sensors: Vec<SensorFile>,
     #[serde(default)]
     pub initial: Vec<InitialFile>,
+    #[serde(default)]
+    pub joint_springs: Vec<JointSpringFile>,
+    #[serde(default)]
+    pub joint_limits: Vec<JointLimitFile>,
+    #[serde(default)]
+    pub actuators: Vec<ActuatorFile>,
     pub output: Option<OutputFile>,
     // ----------------------------------------------------------------------------------------
     #[serde(default)]
@@ -331,6 +337,15 @@ pub struct AnalysisFile {
     /// functions are evaluated (default 0).
     pub about: Option<String>,
     pub at_time: Option<f64>,
+    /// equilibrium, dynamic, linearized, buckling: start from the final state of the earlier
+    /// analysis of this name.
+    pub start: Option<String>,
+    /// dynamic: smallest step (s) of the retry after a failed step and of the adaptive step.
+    pub dt_min: Option<f64>,
+    /// dynamic: largest adaptive step (s).
+    pub dt_max: Option<f64>,
+    /// dynamic: local error tolerance of the adaptive step (selects it).
+    pub error_tolerance: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -342,6 +357,7 @@ pub enum AnalysisKind {
     Equilibrium,
     Dynamic,
     Linearized,
+    Buckling,
 }
 
 impl AnalysisKind {
@@ -353,6 +369,7 @@ impl AnalysisKind {
             AnalysisKind::Equilibrium => "equilibrium",
             AnalysisKind::Dynamic => "dynamic",
             AnalysisKind::Linearized => "linearized",
+            AnalysisKind::Buckling => "buckling",
         }
     }
 }
@@ -646,10 +663,74 @@ pub struct InitialFile {
     pub coordinate: Option<usize>,
     pub value: Option<f64>,
     pub rate: Option<f64>,
-    /// ... or the `velocity` (m/s) and `angular_velocity` (rad/s) of a point.
+    /// The value in degrees (angles only), instead of `value`.
+    pub value_deg: Option<f64>,
+    /// ... or the `velocity` (m/s) and `angular_velocity` (rad/s) of a point ...
     pub at: Option<String>,
     pub velocity: Option<Vec3>,
     pub angular_velocity: Option<Vec3>,
+    /// ... or of a body (and everything attached to it), about `point` (m, default its centre
+    /// of mass).
+    pub body: Option<String>,
+    pub point: Option<Vec3>,
+}
+
+/// `[[joint_springs]]`: a linear or torsional spring-damper on a joint coordinate.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointSpringFile {
+    pub name: String,
+    pub joint: String,
+    pub coordinate: Option<usize>,
+    /// N/m or N m/rad.
+    pub stiffness: Option<f64>,
+    /// N s/m or N m s/rad.
+    pub damping: Option<f64>,
+    /// m or rad (default 0).
+    pub rest: Option<f64>,
+    /// N or N m (default 0).
+    pub preload: Option<f64>,
+}
+
+/// `[[joint_limits]]`: a stop on a joint coordinate.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointLimitFile {
+    pub name: String,
+    pub joint: String,
+    pub coordinate: Option<usize>,
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+    pub stiffness: f64,
+    pub damping: Option<f64>,
+}
+
+/// `[[actuators]]`: a force or torque on a joint coordinate, from a function of time or a PID
+/// law.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ActuatorFile {
+    pub name: String,
+    pub joint: String,
+    pub coordinate: Option<usize>,
+    /// The effort (N or N m) as a function of time ...
+    pub function: Option<TimeFunctionFile>,
+    /// ... or a PID law.
+    pub pid: Option<PidFile>,
+}
+
+/// `pid = { ... }` of an actuator.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PidFile {
+    pub kp: Option<f64>,
+    pub ki: Option<f64>,
+    pub kd: Option<f64>,
+    /// The set-point as a function of time (in the measured coordinate's unit).
+    pub setpoint: TimeFunctionFile,
+    /// A `joint` sensor whose coordinate is measured (default: the actuated coordinate).
+    pub sensor: Option<String>,
+    pub max_effort: Option<f64>,
 }
 
 /// `[output]`: how often the multibody analyses write.

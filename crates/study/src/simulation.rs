@@ -54,6 +54,7 @@ pub fn dynamic_settings(spec: &MbsAnalysis, output_every: usize) -> Option<Dynam
         tolerance,
         max_iterations,
         newton,
+        ..
     } = spec
     else {
         return None;
@@ -80,11 +81,23 @@ impl Simulation {
         b: &BuiltMechanism,
         spec: &MbsAnalysis,
     ) -> Result<Self, BoxError> {
+        let state = system.initial_state();
+        Self::with_start(study, system, b, spec, state)
+    }
+
+    /// [`Simulation::with_system`] from the state `start` (the final state of an earlier
+    /// analysis: the time goes on from its time).
+    pub fn with_start(
+        study: &Study,
+        system: Arc<System>,
+        b: &BuiltMechanism,
+        spec: &MbsAnalysis,
+        state: State,
+    ) -> Result<Self, BoxError> {
         let Some(settings) = dynamic_settings(spec, study.mechanism.output.every) else {
             return Err("a simulation steps a dynamic analysis; this one is not".into());
         };
         let (dt, t_end) = (settings.step, settings.end_time);
-        let state = system.initial_state();
         let record = system.sensor_record();
         let columns = sensor_columns(&b.groups, &record)?;
         let integrator =
@@ -100,7 +113,8 @@ impl Simulation {
     }
 
     /// Builds the mechanism of `study` (bodies reduced through the cache of `options`) and
-    /// starts its dynamic analysis called `analysis`.
+    /// starts its dynamic analysis called `analysis` (from the final state of the analysis
+    /// named in its `start`, which is run first, without output).
     pub fn new(study: &Study, analysis: &str, options: &crate::run::Options) -> Result<Self, BoxError> {
         let Some(a) = study.analyses.iter().find(|a| a.name == analysis) else {
             let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
@@ -110,7 +124,20 @@ impl Simulation {
             return Err(format!("analysis '{analysis}' is not an analysis of the mechanism").into());
         };
         let built = crate::mechanism::build(study, &options.cache_dir(study), &mut ())?;
-        Self::start(study, &built, spec)
+        let system = Arc::new(built.system(study)?);
+        // `start`: run the analyses it names (and theirs), without output, for the state.
+        let mut chain = Vec::new();
+        let mut at = a.start;
+        while let Some(k) = at {
+            chain.push(k);
+            at = study.analyses[k].start;
+        }
+        let mut runner = crate::run::Runner::new(study, options);
+        for &k in chain.iter().rev() {
+            runner.run_one(k, &mut ())?;
+        }
+        let first = crate::mechanism::dynamic_start(&system, a.start.and_then(|k| runner.state(k)));
+        Self::with_start(study, system, &built, spec, first)
     }
 
     /// The time reached.
@@ -135,6 +162,18 @@ impl Simulation {
     /// says where (time, step, residual).
     pub fn step(&mut self) -> Result<StepReport, mbs::SolveError> {
         self.integrator.step()
+    }
+
+    /// One step of the current size; a failed step is retried with halved steps down to
+    /// `min_step` (`mbs::step_retrying`).
+    pub fn step_retrying(&mut self, min_step: f64) -> Result<mbs::RetriedStep, Box<mbs::RetryFailure>> {
+        mbs::step_retrying(&mut self.integrator, min_step)
+    }
+
+    /// One step with the local error control of `adaptive`, landing on the end time
+    /// (`mbs::step_adaptive_to`).
+    pub fn step_adaptive(&mut self, adaptive: &mbs::AdaptiveSettings) -> Result<mbs::AdaptiveStep, mbs::SolveError> {
+        mbs::step_adaptive_to(&mut self.integrator, self.t_end, adaptive)
     }
 
     /// Steps until the time reaches `t` (to a millionth of a step); returns the steps taken.

@@ -78,6 +78,9 @@ pub struct Analysis {
     /// Index into [`Study::parts`]; `None` for the analyses of the mechanism.
     pub part: Option<usize>,
     pub spec: AnalysisSpec,
+    /// `start`: the earlier analysis of the mechanism whose final state this one starts from
+    /// (index into [`Study::analyses`]).
+    pub start: Option<usize>,
 }
 
 impl Analysis {
@@ -89,6 +92,7 @@ impl Analysis {
             AnalysisSpec::Mbs(MbsAnalysis::Equilibrium { .. }) => "equilibrium",
             AnalysisSpec::Mbs(MbsAnalysis::Dynamic { .. }) => "dynamic",
             AnalysisSpec::Mbs(MbsAnalysis::Linearized { .. }) => "linearized",
+            AnalysisSpec::Mbs(MbsAnalysis::Buckling { .. }) => "buckling",
         }
     }
 }
@@ -1623,7 +1627,10 @@ impl Validator<'_> {
                 AnalysisKind::Static => &["type", "name", "part", "supports", "loads"],
                 AnalysisKind::Modal => &["type", "name", "part", "supports", "modes", "solver"],
                 AnalysisKind::Reduce => &["type", "name", "part"],
-                AnalysisKind::Equilibrium | AnalysisKind::Dynamic | AnalysisKind::Linearized => {
+                AnalysisKind::Equilibrium
+                | AnalysisKind::Dynamic
+                | AnalysisKind::Linearized
+                | AnalysisKind::Buckling => {
                     if mechanism.is_empty() {
                         self.err(
                             &path.key("type"),
@@ -1637,11 +1644,54 @@ impl Validator<'_> {
                     let Some(name) = self.analysis_name(&path, a, kind.to_string(), &out) else {
                         continue;
                     };
+                    let start = match &a.start {
+                        None => None,
+                        Some(from) => match out.iter().position(|b| b.name == *from) {
+                            Some(k)
+                                if matches!(
+                                    out[k].spec,
+                                    AnalysisSpec::Mbs(MbsAnalysis::Equilibrium { .. } | MbsAnalysis::Dynamic { .. })
+                                ) =>
+                            {
+                                Some(k)
+                            }
+                            Some(_) => {
+                                self.err(
+                                    &path.key("start"),
+                                    format!("analysis '{from}' ends in no state of the mechanism: `start` names an earlier 'equilibrium' or 'dynamic' analysis"),
+                                );
+                                continue;
+                            }
+                            None => {
+                                let names: Vec<String> = out
+                                    .iter()
+                                    .filter(|b| {
+                                        matches!(
+                                            b.spec,
+                                            AnalysisSpec::Mbs(
+                                                MbsAnalysis::Equilibrium { .. } | MbsAnalysis::Dynamic { .. }
+                                            )
+                                        )
+                                    })
+                                    .map(|b| b.name.clone())
+                                    .collect();
+                                self.err(
+                                    &path.key("start"),
+                                    format!(
+                                        "{}; `start` names an earlier 'equilibrium' or 'dynamic' analysis",
+                                        unknown_reference("analysis", from, &names)
+                                    ),
+                                );
+                                continue;
+                            }
+                        },
+                    };
                     out.push(Analysis {
                         name,
                         path,
                         part: None,
                         spec: AnalysisSpec::Mbs(spec),
+                        start,
                     });
                     continue;
                 }
@@ -1729,6 +1779,7 @@ impl Validator<'_> {
                 path,
                 part: Some(index),
                 spec,
+                start: None,
             });
         }
         out

@@ -7,6 +7,11 @@ use study::observer::{Observer, Recorder};
 use study::run::Options;
 use study::{Document, Simulation};
 
+/// Mechanisms set up in study files (initial states, `start`, actuators, springs, stops,
+/// buckling, adaptive and retried steps) against independent solutions.
+#[path = "study/setup.rs"]
+mod setup;
+
 /// A fresh scratch folder for one test.
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("study-tests-{}-{name}", std::process::id()));
@@ -45,7 +50,7 @@ fn values_are_read_and_set_by_key_path_with_located_errors() {
 
     // A value the validation refuses: file, line, column and key, and the value not kept.
     let e = doc.set("materials.aluminium.E", "-70e9").unwrap_err().to_string();
-    assert!(e.contains("four_bar.toml:13:"), "{e}");
+    assert!(e.contains("four_bar.toml:17:"), "{e}");
     assert!(e.contains("materials[0].E"), "{e}");
     assert_eq!(doc.get("materials.aluminium.E").unwrap(), serde_json::json!(70e9));
     // A key that is not there: the close matches.

@@ -123,13 +123,15 @@ fn slider_crank_streams_sensors_meshes_and_statistics() {
 }
 
 /// A dynamic run whose Newton cannot converge (one iteration allowed, far too tight a
-/// tolerance) stops with exit code 2 and keeps what it computed.
+/// tolerance, no retry with smaller steps: `dt_min = dt`) stops with exit code 2 and keeps
+/// what it computed.
 #[test]
 fn a_solver_failure_keeps_partial_results_and_fails() {
     let dir = examples_copy("mech-failure");
-    let text = std::fs::read_to_string(dir.join("slider_crank.toml"))
-        .unwrap()
-        .replace("rho_inf = 0.9", "rho_inf = 0.9\nmax_iterations = 1\ntolerance = 1e-30");
+    let text = std::fs::read_to_string(dir.join("slider_crank.toml")).unwrap().replace(
+        "rho_inf = 0.9",
+        "rho_inf = 0.9\nmax_iterations = 1\ntolerance = 1e-30\ndt_min = 1e-4",
+    );
     std::fs::write(dir.join("failing.toml"), text).unwrap();
     let out = flexmbs(&dir, &["run", "failing.toml"]);
     assert_eq!(out.code, 2, "{}", out.stderr);

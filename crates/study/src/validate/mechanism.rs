@@ -161,6 +161,8 @@ pub enum SensorTarget {
     /// Reaction at a supported point, or at the ground side of a joint to the ground.
     Reaction(ReactionAt),
     DriverEffort(usize),
+    /// Index into [`Mechanism::actuators`].
+    ActuatorEffort(usize),
     Energy,
     Momentum,
 }
@@ -193,6 +195,75 @@ pub enum InitialSpec {
         velocity: Vector3<f64>,
         angular_velocity: Vector3<f64>,
     },
+    /// A body's rigid velocity about `point` (default: its centre of mass), given to it and to
+    /// everything attached to it.
+    Body {
+        path: KeyPath,
+        body: BodyRef,
+        velocity: Vector3<f64>,
+        angular_velocity: Vector3<f64>,
+        point: Option<Vector3<f64>>,
+    },
+}
+
+/// A flexible body (index into [`Mechanism::bodies`]) or a rigid one (into
+/// [`Mechanism::rigid_bodies`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BodyRef {
+    Flexible(usize),
+    Rigid(usize),
+}
+
+/// `[[joint_springs]]`.
+#[derive(Clone, Debug)]
+pub struct JointSpringSpec {
+    pub name: String,
+    pub path: KeyPath,
+    pub joint: usize,
+    pub coordinate: usize,
+    pub stiffness: f64,
+    pub damping: f64,
+    pub rest: f64,
+    pub preload: f64,
+}
+
+/// `[[joint_limits]]`.
+#[derive(Clone, Debug)]
+pub struct JointLimitSpec {
+    pub name: String,
+    pub path: KeyPath,
+    pub joint: usize,
+    pub coordinate: usize,
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+    pub stiffness: f64,
+    pub damping: f64,
+}
+
+/// What gives an actuator's effort.
+#[derive(Clone, Debug)]
+pub enum EffortSpec {
+    Time(TimeFunction),
+    Pid {
+        /// The measured joint coordinate.
+        joint: usize,
+        coordinate: usize,
+        setpoint: TimeFunction,
+        kp: f64,
+        ki: f64,
+        kd: f64,
+        max_effort: Option<f64>,
+    },
+}
+
+/// `[[actuators]]`.
+#[derive(Clone, Debug)]
+pub struct ActuatorSpec {
+    pub name: String,
+    pub path: KeyPath,
+    pub joint: usize,
+    pub coordinate: usize,
+    pub effort: EffortSpec,
 }
 
 /// `[output]`.
@@ -227,6 +298,9 @@ pub struct Mechanism {
     pub loads: Vec<PointLoadSpec>,
     pub sensors: Vec<SensorSpec>,
     pub initial: Vec<InitialSpec>,
+    pub joint_springs: Vec<JointSpringSpec>,
+    pub joint_limits: Vec<JointLimitSpec>,
+    pub actuators: Vec<ActuatorSpec>,
     pub output: OutputSpec,
 }
 
@@ -267,10 +341,23 @@ pub enum MbsAnalysis {
         max_iterations: usize,
         /// Full or modified Newton (`newton = "full" | "modified"`).
         newton: mbs::NewtonStrategy,
+        /// Smallest step [s]: a failed fixed step is retried with halved steps down to it;
+        /// the adaptive step's lower bound.
+        dt_min: f64,
+        /// The adaptive step (`error_tolerance`, with `dt_max`), or `None`: fixed steps.
+        adaptive: Option<mbs::AdaptiveSettings>,
     },
     Linearized {
         modes: usize,
         about: About,
+    },
+    /// Linearised buckling about the equilibrium under the full load (or the state of
+    /// `start`), `modes` critical load factors.
+    Buckling {
+        modes: usize,
+        steps: usize,
+        tolerance: f64,
+        max_iterations: usize,
     },
 }
 
@@ -280,6 +367,16 @@ pub enum About {
     Initial,
     Equilibrium,
     Time { t: f64, dt: f64 },
+}
+
+/// Whether scalar coordinate `c` of joint `j` is an angle (else a length).
+pub fn joint_is_angle(m: &Mechanism, j: usize, c: usize) -> bool {
+    match &m.joints[j].kind {
+        Some(JointKind::Prismatic { .. }) => false,
+        Some(JointKind::Cylindrical { .. }) => c == 1,
+        Some(JointKind::Planar { .. }) => c == 2,
+        _ => true,
+    }
 }
 
 fn unit(v: Vector3<f64>) -> Option<Unit<Vector3<f64>>> {
@@ -394,6 +491,8 @@ impl Validator<'_> {
             let path = KeyPath::root().key("loads").index(i);
             self.load(&path, l, &mut m);
         }
+        // Before the sensors: an `actuator-effort` sensor names an actuator.
+        self.joint_forces(file, &mut m);
         for (i, s) in file.sensors.iter().enumerate() {
             let path = KeyPath::root().key("sensors").index(i);
             if m.sensors.iter().any(|x| x.name == s.name) {
@@ -1236,6 +1335,7 @@ impl Validator<'_> {
             "modal",
             "reaction",
             "driver-effort",
+            "actuator-effort",
             "energy",
             "momentum",
         ];
@@ -1338,6 +1438,14 @@ impl Validator<'_> {
                     SensorTarget::Reaction(ReactionAt::Point(p))
                 }
             }
+            "actuator-effort" => match m.actuators.iter().position(|a| a.name == of) {
+                Some(a) => SensorTarget::ActuatorEffort(a),
+                None => {
+                    let names: Vec<String> = m.actuators.iter().map(|a| a.name.clone()).collect();
+                    self.err(&op, unknown_reference("actuator", &of, &names));
+                    return None;
+                }
+            },
             _ => match m.drivers.iter().position(|d| d.name == of) {
                 Some(d) => SensorTarget::DriverEffort(d),
                 None => {
@@ -1350,11 +1458,11 @@ impl Validator<'_> {
     }
 
     fn initial(&mut self, path: &KeyPath, c: &InitialFile, m: &Mechanism) -> Option<InitialSpec> {
-        match (&c.joint, &c.at) {
-            (Some(joint), None) => {
+        match (&c.joint, &c.at, &c.body) {
+            (Some(joint), None, None) => {
                 self.only_keys(
                     path,
-                    &["joint", "coordinate", "value", "rate"],
+                    &["joint", "coordinate", "value", "value_deg", "rate"],
                     "an initial joint value",
                 );
                 let j = self.joint_ref(&path.key("joint"), joint, m)?;
@@ -1362,14 +1470,34 @@ impl Validator<'_> {
                 if !self.joint_coordinate(path, m, j, coordinate) {
                     return None;
                 }
-                if c.value.is_none() && c.rate.is_none() {
+                let value = match (c.value, c.value_deg) {
+                    (Some(_), Some(_)) => {
+                        self.err_key(
+                            &path.key("value_deg"),
+                            "give `value` [rad or m] or `value_deg`, not both",
+                        );
+                        return None;
+                    }
+                    (v, None) => v,
+                    (None, Some(deg)) => {
+                        if !joint_is_angle(m, j, coordinate) {
+                            self.err(
+                                &path.key("value_deg"),
+                                format!("coordinate {coordinate} of joint '{joint}' is a length: give `value` [m]"),
+                            );
+                            return None;
+                        }
+                        Some(deg.to_radians())
+                    }
+                };
+                if value.is_none() && c.rate.is_none() {
                     self.err(
                         path,
                         "missing key `value` or `rate` (the joint coordinate's initial value or rate)",
                     );
                     return None;
                 }
-                for (key, v) in [("value", c.value), ("rate", c.rate)] {
+                for (key, v) in [("value", value), ("rate", c.rate)] {
                     if v.is_some_and(|x| !x.is_finite()) {
                         self.err(&path.key(key), format!("`{key}` must be finite"));
                         return None;
@@ -1379,11 +1507,54 @@ impl Validator<'_> {
                     path: path.clone(),
                     joint: j,
                     coordinate,
-                    value: c.value,
+                    value,
                     rate: c.rate,
                 })
             }
-            (None, Some(at)) => {
+            (None, None, Some(body)) => {
+                self.only_keys(
+                    path,
+                    &["body", "velocity", "angular_velocity", "point"],
+                    "an initial body velocity",
+                );
+                let b = if let Some(k) = m.bodies.iter().position(|b| b.name == *body) {
+                    BodyRef::Flexible(k)
+                } else if let Some(k) = m.rigid_bodies.iter().position(|b| b.name == *body) {
+                    BodyRef::Rigid(k)
+                } else {
+                    let names: Vec<String> = m
+                        .bodies
+                        .iter()
+                        .map(|b| b.name.clone())
+                        .chain(m.rigid_bodies.iter().map(|b| b.name.clone()))
+                        .collect();
+                    self.err(&path.key("body"), unknown_reference("body", body, &names));
+                    return None;
+                };
+                let zero = [0.0; 3];
+                let velocity = self.finite3(
+                    &path.key("velocity"),
+                    c.velocity.as_ref().unwrap_or(&zero),
+                    "the velocity [m/s]",
+                )?;
+                let angular_velocity = self.finite3(
+                    &path.key("angular_velocity"),
+                    c.angular_velocity.as_ref().unwrap_or(&zero),
+                    "the angular velocity [rad/s]",
+                )?;
+                let point = match &c.point {
+                    Some(p) => Some(self.finite3(&path.key("point"), p, "the point [m]")?),
+                    None => None,
+                };
+                Some(InitialSpec::Body {
+                    path: path.clone(),
+                    body: b,
+                    velocity,
+                    angular_velocity,
+                    point,
+                })
+            }
+            (None, Some(at), None) => {
                 self.only_keys(
                     path,
                     &["at", "velocity", "angular_velocity"],
@@ -1409,9 +1580,224 @@ impl Validator<'_> {
                 })
             }
             _ => {
-                self.err(path, "give `joint` (with `value` and/or `rate`) or `at` (with `velocity` and/or `angular_velocity`), one of them");
+                self.err(path, "give `joint` (with `value` and/or `rate`), `at` (a point, with `velocity` and/or `angular_velocity`) or `body` (with `velocity`, `angular_velocity` and `point`), one of them");
                 None
             }
+        }
+    }
+
+    /// `[[joint_springs]]`, `[[joint_limits]]` and `[[actuators]]`.
+    fn joint_forces(&mut self, file: &StudyFile, m: &mut Mechanism) {
+        let finite = |v: &mut Self, path: &KeyPath, x: Option<f64>, default: f64, nonnegative: bool, what: &str| {
+            let x = x.unwrap_or(default);
+            if !x.is_finite() || (nonnegative && x < 0.0) {
+                v.err(
+                    path,
+                    format!(
+                        "{what} must be finite{}, got {x}",
+                        if nonnegative { " and >= 0" } else { "" }
+                    ),
+                );
+                return None;
+            }
+            Some(x)
+        };
+        let mut names: Vec<String> = Vec::new();
+        let mut unique = |v: &mut Self, path: &KeyPath, name: &str, what: &str| {
+            if names.iter().any(|n| n == name) {
+                v.err(&path.key("name"), format!("a {what} named '{name}' is already defined"));
+                return false;
+            }
+            names.push(name.to_string());
+            true
+        };
+        for (i, s) in file.joint_springs.iter().enumerate() {
+            let path = KeyPath::root().key("joint_springs").index(i);
+            if !unique(self, &path, &s.name, "joint spring") {
+                continue;
+            }
+            let Some(joint) = self.joint_ref(&path.key("joint"), &s.joint, m) else {
+                continue;
+            };
+            let coordinate = s.coordinate.unwrap_or(0);
+            if !self.joint_coordinate(&path, m, joint, coordinate) {
+                continue;
+            }
+            let k = finite(self, &path.key("stiffness"), s.stiffness, 0.0, true, "the stiffness");
+            let c = finite(self, &path.key("damping"), s.damping, 0.0, true, "the damping");
+            let rest = finite(self, &path.key("rest"), s.rest, 0.0, false, "the rest value");
+            let preload = finite(self, &path.key("preload"), s.preload, 0.0, false, "the preload");
+            let (Some(stiffness), Some(damping), Some(rest), Some(preload)) = (k, c, rest, preload) else {
+                continue;
+            };
+            if stiffness == 0.0 && damping == 0.0 && preload == 0.0 {
+                self.err(&path, "give `stiffness`, `damping` or `preload` (all are zero)");
+                continue;
+            }
+            m.joint_springs.push(JointSpringSpec {
+                name: s.name.clone(),
+                path,
+                joint,
+                coordinate,
+                stiffness,
+                damping,
+                rest,
+                preload,
+            });
+        }
+        for (i, l) in file.joint_limits.iter().enumerate() {
+            let path = KeyPath::root().key("joint_limits").index(i);
+            if !unique(self, &path, &l.name, "joint limit") {
+                continue;
+            }
+            let Some(joint) = self.joint_ref(&path.key("joint"), &l.joint, m) else {
+                continue;
+            };
+            let coordinate = l.coordinate.unwrap_or(0);
+            if !self.joint_coordinate(&path, m, joint, coordinate) {
+                continue;
+            }
+            if l.lower.is_none() && l.upper.is_none() {
+                self.err(
+                    &path,
+                    "give `lower` and/or `upper` (the bounds of the coordinate, m or rad)",
+                );
+                continue;
+            }
+            if let (Some(lo), Some(hi)) = (l.lower, l.upper) {
+                if !(lo < hi) {
+                    self.err(&path.key("upper"), format!("upper ({hi}) must be above lower ({lo})"));
+                    continue;
+                }
+            }
+            if l.lower.is_some_and(|x| !x.is_finite()) || l.upper.is_some_and(|x| !x.is_finite()) {
+                self.err(&path, "the bounds must be finite");
+                continue;
+            }
+            let Some(stiffness) = self.positive(&path.key("stiffness"), l.stiffness, "the stiffness of the stop")
+            else {
+                continue;
+            };
+            let Some(damping) = finite(self, &path.key("damping"), l.damping, 0.0, true, "the damping") else {
+                continue;
+            };
+            m.joint_limits.push(JointLimitSpec {
+                name: l.name.clone(),
+                path,
+                joint,
+                coordinate,
+                lower: l.lower,
+                upper: l.upper,
+                stiffness,
+                damping,
+            });
+        }
+        for (i, a) in file.actuators.iter().enumerate() {
+            let path = KeyPath::root().key("actuators").index(i);
+            if !unique(self, &path, &a.name, "actuator") {
+                continue;
+            }
+            let Some(joint) = self.joint_ref(&path.key("joint"), &a.joint, m) else {
+                continue;
+            };
+            let coordinate = a.coordinate.unwrap_or(0);
+            if !self.joint_coordinate(&path, m, joint, coordinate) {
+                continue;
+            }
+            if m.drivers.iter().any(|d| d.joint == joint && d.coordinate == coordinate) {
+                self.err(
+                    &path.key("joint"),
+                    format!(
+                        "coordinate {coordinate} of joint '{}' is driven: an actuator acts on a free coordinate",
+                        a.joint
+                    ),
+                );
+                continue;
+            }
+            let effort = match (&a.function, &a.pid) {
+                (Some(f), None) => match self.time_function(&path.key("function"), f, false) {
+                    Some(f) => EffortSpec::Time(f),
+                    None => continue,
+                },
+                (None, Some(p)) => {
+                    let pp = path.key("pid");
+                    let (mj, mc) = match &p.sensor {
+                        None => (joint, coordinate),
+                        // The `[[sensors]]` are validated after the actuators (they may name
+                        // one): the joint sensor is read from the file here.
+                        Some(name) => match file.sensors.iter().find(|s| s.name == *name) {
+                            Some(sf) if sf.kind == "joint" => {
+                                let Some(of) = &sf.of else { continue };
+                                let Some(j) = m.joints.iter().position(|j| j.name == *of) else {
+                                    continue;
+                                };
+                                let c = sf.coordinate.unwrap_or(0);
+                                if !self.joint_coordinate(&pp.key("sensor"), m, j, c) {
+                                    continue;
+                                }
+                                (j, c)
+                            }
+                            Some(_) => {
+                                self.err(&pp.key("sensor"), format!("sensor '{name}' is not a 'joint' sensor: the PID law measures a joint coordinate"));
+                                continue;
+                            }
+                            None => {
+                                let names: Vec<String> = file
+                                    .sensors
+                                    .iter()
+                                    .filter(|s| s.kind == "joint")
+                                    .map(|s| s.name.clone())
+                                    .collect();
+                                self.err(&pp.key("sensor"), unknown_reference("joint sensor", name, &names));
+                                continue;
+                            }
+                        },
+                    };
+                    let kp = finite(self, &pp.key("kp"), p.kp, 0.0, true, "kp");
+                    let ki = finite(self, &pp.key("ki"), p.ki, 0.0, true, "ki");
+                    let kd = finite(self, &pp.key("kd"), p.kd, 0.0, true, "kd");
+                    let (Some(kp), Some(ki), Some(kd)) = (kp, ki, kd) else {
+                        continue;
+                    };
+                    if kp == 0.0 && ki == 0.0 && kd == 0.0 {
+                        self.err(&pp, "give at least one of the gains `kp`, `ki`, `kd`");
+                        continue;
+                    }
+                    let max_effort = match p.max_effort {
+                        Some(x) => match self.positive(&pp.key("max_effort"), x, "max_effort") {
+                            Some(x) => Some(x),
+                            None => continue,
+                        },
+                        None => None,
+                    };
+                    let Some(setpoint) = self.time_function(&pp.key("setpoint"), &p.setpoint, true) else {
+                        continue;
+                    };
+                    EffortSpec::Pid {
+                        joint: mj,
+                        coordinate: mc,
+                        setpoint,
+                        kp,
+                        ki,
+                        kd,
+                        max_effort,
+                    }
+                }
+                _ => {
+                    self.err(
+                        &path,
+                        "give `function` (the effort as a function of time) or `pid` (a control law), one of them",
+                    );
+                    continue;
+                }
+            };
+            m.actuators.push(ActuatorSpec {
+                name: a.name.clone(),
+                path,
+                joint,
+                coordinate,
+                effort,
+            });
         }
     }
 
@@ -1445,6 +1831,7 @@ impl Validator<'_> {
                         "method",
                         "max_iterations",
                         "at_time",
+                        "start",
                     ],
                     "an 'equilibrium' analysis",
                 );
@@ -1491,6 +1878,10 @@ impl Validator<'_> {
                         "tolerance",
                         "max_iterations",
                         "newton",
+                        "start",
+                        "dt_min",
+                        "dt_max",
+                        "error_tolerance",
                     ],
                     "a 'dynamic' analysis",
                 );
@@ -1524,6 +1915,43 @@ impl Validator<'_> {
                         return None;
                     }
                 };
+                // Ten halvings of the step by default: a step that fails at dt/1024 is reported.
+                let dt_min = match a.dt_min {
+                    Some(x) => self.positive(&path.key("dt_min"), x, "dt_min [s]")?,
+                    None => dt / 1024.0,
+                };
+                if dt_min > dt {
+                    self.err(
+                        &path.key("dt_min"),
+                        format!("dt_min ({dt_min} s) must not exceed dt ({dt} s)"),
+                    );
+                    return None;
+                }
+                let adaptive = match (a.error_tolerance, a.dt_max) {
+                    (None, None) => None,
+                    (None, Some(_)) => {
+                        self.err_key(
+                            &path.key("dt_max"),
+                            "`dt_max` bounds the adaptive step: give `error_tolerance` too",
+                        );
+                        return None;
+                    }
+                    (Some(tol), dt_max) => {
+                        let tol = self.positive(&path.key("error_tolerance"), tol, "the local error tolerance")?;
+                        let dt_max = match dt_max {
+                            Some(x) => self.positive(&path.key("dt_max"), x, "dt_max [s]")?,
+                            None => t_end,
+                        };
+                        if dt_max < dt_min.max(dt) {
+                            self.err(
+                                &path.key("dt_max"),
+                                format!("dt_max ({dt_max} s) must be at least dt ({dt} s) and dt_min"),
+                            );
+                            return None;
+                        }
+                        Some(mbs::AdaptiveSettings::new(tol, dt_min, dt_max))
+                    }
+                };
                 Some(MbsAnalysis::Dynamic {
                     t_end,
                     dt,
@@ -1531,14 +1959,46 @@ impl Validator<'_> {
                     tolerance: tolerance(self, 1e-9)?,
                     max_iterations: iterations(self, 20)?,
                     newton,
+                    dt_min,
+                    adaptive,
+                })
+            }
+            AnalysisKind::Buckling => {
+                self.only_keys(
+                    path,
+                    &["type", "name", "modes", "steps", "tolerance", "max_iterations", "start"],
+                    "a 'buckling' analysis",
+                );
+                let modes = a.modes.unwrap_or(4);
+                if modes == 0 || modes > super::MAX_MODES {
+                    self.err(
+                        &path.key("modes"),
+                        format!("the number of modes must lie in 1..={}, got {modes}", super::MAX_MODES),
+                    );
+                    return None;
+                }
+                let steps = a.steps.unwrap_or(1);
+                if steps == 0 || steps > 100_000 {
+                    self.err(&path.key("steps"), format!("steps must lie in 1..=100000, got {steps}"));
+                    return None;
+                }
+                Some(MbsAnalysis::Buckling {
+                    modes,
+                    steps,
+                    tolerance: tolerance(self, 1e-10)?,
+                    max_iterations: iterations(self, 25)?,
                 })
             }
             _ => {
                 self.only_keys(
                     path,
-                    &["type", "name", "modes", "about", "at_time", "dt"],
+                    &["type", "name", "modes", "about", "at_time", "dt", "start"],
                     "a 'linearized' analysis",
                 );
+                if a.start.is_some() && (a.about.is_some() || a.at_time.is_some()) {
+                    self.err_key(&path.key("start"), "give `start` or `about`/`at_time`, not both");
+                    return None;
+                }
                 let modes = a.modes.unwrap_or(10);
                 if modes == 0 || modes > super::MAX_MODES {
                     self.err(
