@@ -18,7 +18,7 @@
 //! models, by AMD otherwise ([`ordering`], [`FillOrdering`]).
 //!
 //! Meshes come from gmsh ([`mesh::gmsh`]), Abaqus ([`mesh::abaqus`]) and Nastran
-//! ([`mesh::nastran`]) files, or from the generators ([`box_mesh`], [`generate`]).
+//! ([`mesh::nastran`]) files, or from the generators ([`box_mesh`](mod@box_mesh), [`generate`]).
 //!
 //! What this crate does not do: rotations of bodies, time, reduction.
 //!
