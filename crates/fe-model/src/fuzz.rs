@@ -40,9 +40,8 @@ impl Mutator {
         Self(seed.max(1))
     }
 
-    /// The next number of the sequence (a generator step, not an `Iterator`: it never ends).
-    #[allow(clippy::should_implement_trait)]
-    pub fn next(&mut self) -> u64 {
+    /// The next number of the sequence.
+    pub fn next_u64(&mut self) -> u64 {
         self.0 ^= self.0 >> 12;
         self.0 ^= self.0 << 25;
         self.0 ^= self.0 >> 27;
@@ -51,7 +50,7 @@ impl Mutator {
 
     /// A number in `0..n` (`n` > 0).
     pub fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
+        (self.next_u64() % n.max(1) as u64) as usize
     }
 
     /// A mutant of `input` (module docs).
@@ -68,7 +67,7 @@ impl Mutator {
                 2 => {
                     b.remove(at);
                 }
-                3 => b.insert(at, self.next() as u8),
+                3 => b.insert(at, self.next_u64() as u8),
                 4 | 5 => self.replace_number(&mut b, at),
                 6 => self.line_edit(&mut b, at),
                 7 => b.truncate(at),
