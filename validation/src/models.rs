@@ -47,7 +47,7 @@ pub struct Variant {
 }
 
 impl Variant {
-    /// The default of the suite: frame at the centre of mass [E17], exact inertia.
+    /// The default of the suite: frame at the centre of mass \[E17\], exact inertia.
     pub const REFERENCE: Variant = Variant {
         frame: FrameChoice::CenterOfMass,
         mass: MassVariant::Exact,

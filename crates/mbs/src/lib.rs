@@ -107,7 +107,7 @@
 //! | $u,\ r(t),\ y,\ e = r - y$ | [`JointActuator`], [`Pid`] | actuator effort, set-point, measured coordinate, error | [`joint_forces`] |
 //! | $K_p,\ K_i,\ K_d,\ z$ | [`Pid`], `Control` | PID gains; integral of $e$ (trapezoidal, moved on by accepted steps) | [`joint_forces`] |
 //! | $\mathbf R_\Delta$ | [`initial`] | rigid rotation of a joint's subtree by an initial joint value | [`initial`] |
-//! | $\hat{\mathbf K}_s$ | [`stability`] | symmetric part of $\hat{\mathbf K}$, scaled by its diagonal; negative eigenvalues: past a critical point | Bathe §6.8 |
+//! | $\hat{\mathbf K}_s$ | [`mod@stability`] | symmetric part of $\hat{\mathbf K}$, scaled by its diagonal; negative eigenvalues: past a critical point | Bathe (1996) §6.8 |
 //! | $\mathbf f_e$ | [`Wrench`] | a user force's force and moment on a node, inertial | [`user_force`] |
 //!
 //! Vectors are inertial unless said otherwise; rigid-body mass data are in their reference
@@ -152,7 +152,7 @@
 //!   in that window (independent of the Newton tolerance; stable at 2.5 ms for every
 //!   $\rho_\infty$, and for 2 or 8 superelements), not a defect of the tangents or the update;
 //!   $\rho_\infty = 0.5$ or a smaller step avoid it.
-//! * Arc-length, buckling and the stability check are dense ([`buckling`], [`stability`]).
+//! * Arc-length, buckling and the stability check are dense ([`buckling`], [`stability()`]).
 //! * Initial joint values in closed loops (a value that no rigid motion of the loop follows
 //!   is refused; the loop is assembled by an equilibrium instead).
 //!
@@ -161,7 +161,7 @@
 //! [`model`] (serde data), [`time_function`], [`node`], [`coordinates`] (the maps and their
 //! derivatives), [`topology`] (the tree and its checks), [`initial`] (initial states that follow
 //! the joints), [`body`] (elements), [`joint_forces`] (limits and actuators), [`system`]
-//! (assembly), [`static_solver`], [`arc_length`], [`stability`], [`dynamic_solver`], [`retry`]
+//! (assembly), [`static_solver`], [`arc_length`], [`mod@stability`], [`dynamic_solver`], [`retry`]
 //! (halved steps after a failure), [`momentum`] (momenta and their projection), [`linearized`]
 //! (spectrum, mode energies and buckling), [`sensors`], [`error`],
 //! [`user_force`] (forces written in Rust by the user: [`UserForce`], added with

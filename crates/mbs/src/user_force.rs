@@ -78,9 +78,9 @@ pub type Wrench = [f64; 6];
 /// appreciably: the truncation error is $O(h^2)$, the round-off $O(\varepsilon/h)$.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FdSteps {
-    /// Position step [m].
+    /// Position step \[m\].
     pub position: f64,
-    /// Spatial rotation step [rad].
+    /// Spatial rotation step \[rad\].
     pub rotation: f64,
     /// Velocity step [m/s].
     pub velocity: f64,

@@ -23,7 +23,7 @@
 //! | [`part`] | a validated part and the FE model an analysis runs on |
 //! | [`matrices`] | a body reduced from another FE code's Matrix Market K and M, node and dof tables |
 //! | [`document`] | a study as an editable document: load from a file or text, get and set values by key path |
-//! | [`run`] | the analyses of parts (static, modal, reduce), the run loop, `flexmbs reduce` |
+//! | [`mod@run`] | the analyses of parts (static, modal, reduce), the run loop, `flexmbs reduce` |
 //! | [`mechanism`] | the mechanism as an `mbs::Model`; equilibrium, dynamic, linearized |
 //! | [`simulation`] | a dynamic analysis stepped by the caller: sensors, state, named loads |
 //! | [`observer`] | the output observer trait, result tables, the in-memory [`observer::Recorder`] |

@@ -1,4 +1,4 @@
-//! The analyses of the mechanism: the validated [`Mechanism`] becomes an `mbs::Model` (bodies
+//! The analyses of the mechanism: the validated [`crate::validate::mechanism::Mechanism`] becomes an `mbs::Model` (bodies
 //! reduced through the cache, points merged by fixed joints into nodes, ground nodes for the
 //! joints to the ground), then `mbs::solve_static`, the generalized-α `mbs::Integrator` step
 //! by step, or `mbs::spectrum`.

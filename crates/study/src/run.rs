@@ -355,7 +355,7 @@ fn run_analysis(study: &Study, a: &Analysis, cache: &Path, obs: &mut dyn Observe
     Ok(o)
 }
 
-/// Stress tensor (6 components), von Mises stress and largest principal stress per node [Pa].
+/// Stress tensor (6 components), von Mises stress and largest principal stress per node \[Pa\].
 pub type StressFields = (Vec<[f64; 6]>, Vec<f64>, Vec<f64>);
 
 /// The stress fields of nodal displacements `values` of `model` at its nodes: the Voigt

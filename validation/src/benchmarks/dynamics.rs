@@ -428,7 +428,7 @@ pub fn c2_slider_crank(extent: Extent) -> Result<Vec<Block>> {
     Ok(blocks)
 }
 
-/// Spin-up time of the spatial slider-crank's crank [s] (two revolutions at full speed).
+/// Spin-up time of the spatial slider-crank's crank \[s\] (two revolutions at full speed).
 pub const C3_RAMP: f64 = 0.1;
 
 /// C3: the spatial slider-crank.

@@ -1,4 +1,4 @@
-//! The AIC-FFR paper's comparison: the three frame choices (centre of mass [E17], interface node
+//! The AIC-FFR paper's comparison: the three frame choices (centre of mass \[E17\], interface node
 //! (Cardona & Géradin 1991), auxiliary node (Cardona 2000)) times the two inertia variants
 //! (exact (6.4), lumped (6.6)) on the elastica, the spin-up beam and the slider-crank, with
 //! the accuracy against the reference and the cost per step; and the slider-crank rod from

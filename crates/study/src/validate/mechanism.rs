@@ -341,7 +341,7 @@ pub enum MbsAnalysis {
         max_iterations: usize,
         /// Full or modified Newton (`newton = "full" | "modified"`).
         newton: mbs::NewtonStrategy,
-        /// Smallest step [s]: a failed fixed step is retried with halved steps down to it;
+        /// Smallest step \[s\]: a failed fixed step is retried with halved steps down to it;
         /// the adaptive step's lower bound.
         dt_min: f64,
         /// The adaptive step (`error_tolerance`, with `dt_max`), or `None`: fixed steps.
