@@ -194,7 +194,7 @@ pub fn write_png(figure: &Figure, path: &Path) -> Result<(), PlotError> {
     };
     let root = BitMapBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| write_error(e.to_string()))?;
-    draw_figure(&root, figure, x_range, y_range).map_err(write_error)?;
+    draw_figure(&root, figure, x_range, y_range, 0).map_err(write_error)?;
     // `present` encodes and writes the file; an unwritable path surfaces here (dropping the
     // backend would write too, but would swallow the error).
     root.present().map_err(|e| write_error(e.to_string()))
@@ -235,12 +235,15 @@ pub fn write_panels_png(title: &str, panels: &[Figure], path: &Path) -> Result<(
     let body = root
         .titled(title, (FONT_FAMILY, 26))
         .map_err(|e| write_error(e.to_string()))?;
+    // Colours continue from panel to panel, so each component keeps one colour throughout.
+    let mut first_colour = 0;
     for (area, (panel, y_range)) in body
         .split_evenly((panels.len(), 1))
         .iter()
         .zip(panels.iter().zip(ranges))
     {
-        draw_figure(area, panel, x_all, y_range).map_err(write_error)?;
+        draw_figure(area, panel, x_all, y_range, first_colour).map_err(write_error)?;
+        first_colour += panel.series.len();
     }
     root.present().map_err(|e| write_error(e.to_string()))
 }
@@ -251,6 +254,7 @@ fn draw_figure(
     figure: &Figure,
     x_range: Interval,
     y_range: Interval,
+    first_colour: usize,
 ) -> Result<(), String> {
     let x = axis_span(x_range, figure.x_log);
     let y = axis_span(y_range, figure.y_log);
@@ -258,10 +262,17 @@ fn draw_figure(
     // A tick within round-off of zero on a linear axis is labelled 0, not -2.22e-16.
     let zero = (1e-9 * (x.1 - x.0), 1e-9 * (y.1 - y.0));
     match (figure.x_log, figure.y_log) {
-        (false, false) => draw_chart(root, figure, x.0..x.1, y.0..y.1, zero),
-        (true, false) => draw_chart(root, figure, (x.0..x.1).log_scale(), y.0..y.1, zero),
-        (false, true) => draw_chart(root, figure, x.0..x.1, (y.0..y.1).log_scale(), zero),
-        (true, true) => draw_chart(root, figure, (x.0..x.1).log_scale(), (y.0..y.1).log_scale(), zero),
+        (false, false) => draw_chart(root, figure, x.0..x.1, y.0..y.1, zero, first_colour),
+        (true, false) => draw_chart(root, figure, (x.0..x.1).log_scale(), y.0..y.1, zero, first_colour),
+        (false, true) => draw_chart(root, figure, x.0..x.1, (y.0..y.1).log_scale(), zero, first_colour),
+        (true, true) => draw_chart(
+            root,
+            figure,
+            (x.0..x.1).log_scale(),
+            (y.0..y.1).log_scale(),
+            zero,
+            first_colour,
+        ),
     }
 }
 
@@ -376,6 +387,7 @@ fn draw_chart<XR, YR>(
     x_spec: XR,
     y_spec: YR,
     (x_zero, y_zero): (f64, f64),
+    first_colour: usize,
 ) -> Result<(), String>
 where
     XR: AsRangedCoord<Value = f64>,
@@ -406,7 +418,7 @@ where
         .map_err(|e| e.to_string())?;
     let mut any_label = false;
     for (i, s) in figure.series.iter().enumerate() {
-        let colour = PALETTE[i % PALETTE.len()];
+        let colour = PALETTE[(first_colour + i) % PALETTE.len()];
         let points: Vec<(f64, f64)> = s.x.iter().copied().zip(s.y.iter().copied()).collect();
         let line_style = colour.stroke_width(2);
         let drawn = match s.style {
