@@ -127,7 +127,8 @@ def test_linearized_frequencies_and_mode_labels(examples, cli, tmp_path):
     study_file = examples / "four_bar.toml"
     study = flexmbs.Study.load(study_file)
     name = [a for a in study.analyses if a.startswith("linearized")][0]
-    res = study.run(analysis=name, results_dir=tmp_path / "py")
+    # The linearised analysis starts from the equilibrium before it: run the study (shortened).
+    res = study.run(results_dir=tmp_path / "py", t_end=0.001)
     a = res[name]
     f = a.frequencies
     labels = a.mode_labels
