@@ -707,6 +707,26 @@ impl System {
         Ok(())
     }
 
+    /// Holds actuator `actuator` (index in `Model::actuators`) at the effort `effort` [N on a
+    /// length, N m on an angle] in place of its time function or PID law from the next step
+    /// on, or releases it to its law with `None` ([`crate::joint_forces`], held effort). For
+    /// controllers that close the loop outside the model, between time steps.
+    pub fn set_actuator_effort(&mut self, actuator: usize, effort: Option<f64>) -> Result<(), ModelError> {
+        let entity = || match self.model.actuators.get(actuator) {
+            Some(a) => format!("actuator '{}'", a.name),
+            None => format!("actuator {actuator}"),
+        };
+        self.joint_forces
+            .hold(actuator, effort)
+            .map_err(|what| ModelError::InvalidValue { entity: entity(), what })
+    }
+
+    /// The effort actuator `actuator` is held at by [`System::set_actuator_effort`] (`None`:
+    /// its law acts, or there is no such actuator).
+    pub fn held_actuator_effort(&self, actuator: usize) -> Option<f64> {
+        self.joint_forces.held(actuator)
+    }
+
     /// Number of unknowns $\dim\dot{\mathbf q}$.
     pub fn n_dof(&self) -> usize {
         self.topo.map.n_dof

@@ -10,7 +10,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::error::{BoxError, ResultExt};
+use crate::error::{BoxError, ResultExt, SolverStopped};
 use crate::observer::{Cell, Observer, Progress, SensorGroup, SensorStream, Series, Table};
 use crate::run::{reduce_part, Reduced};
 use crate::simulation::{sensor_columns, Simulation};
@@ -1174,7 +1174,7 @@ pub struct MbsOutcome {
     pub report: Vec<String>,
     pub results: serde_json::Value,
     /// A solver failure after partial results were written.
-    pub failure: Option<String>,
+    pub failure: Option<SolverStopped>,
     /// The final state (equilibrium, dynamic), for analyses that `start` from it.
     pub final_state: Option<mbs::State>,
 }
@@ -1272,7 +1272,11 @@ pub fn run_analysis(
             if failure.is_none() {
                 out.final_state = Some(sol.state.clone());
             }
-            out.failure = failure.map(|e| format!("equilibrium stopped: {e}; the converged load steps are written"));
+            out.failure = failure.map(|e| SolverStopped {
+                message: "equilibrium stopped; the converged load steps are written".into(),
+                step: Some(sol.steps.len() + 1),
+                source: e,
+            });
         }
         MbsAnalysis::Dynamic {
             t_end,
@@ -1344,11 +1348,15 @@ pub fn run_analysis(
                         }
                     }
                     Err(e) => {
-                        out.failure = Some(format!(
-                            "time integration stopped: {e}; results up to t = {:.6} s (step {}) are written",
-                            integ.state().time(),
-                            k - 1
-                        ));
+                        out.failure = Some(SolverStopped {
+                            message: format!(
+                                "time integration stopped; results up to t = {:.6} s (step {}) are written",
+                                integ.state().time(),
+                                k - 1
+                            ),
+                            step: Some(k),
+                            source: e,
+                        });
                         break;
                     }
                 }
@@ -1595,10 +1603,13 @@ fn run_buckling(
                         "past_critical_point": true,
                         "load_factor_reached": reached,
                     });
-                    out.failure = Some(format!(
-                        "the structure is past a limit point: no equilibrium beyond load factor {reached:.6} ({}); an 'equilibrium' analysis with method = \"arc-length\" follows the path through it",
-                        inc.error
-                    ));
+                    out.failure = Some(SolverStopped {
+                        message: format!(
+                            "the structure is past a limit point: no equilibrium beyond load factor {reached:.6}; an 'equilibrium' analysis with method = \"arc-length\" follows the path through it"
+                        ),
+                        step: Some(inc.partial.steps.len() + 1),
+                        source: inc.error,
+                    });
                     return Ok(());
                 }
             }

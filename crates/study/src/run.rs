@@ -3,7 +3,7 @@
 //! analyses of parts (static, modal, reduce) are here; those of the mechanism in
 //! `crate::mechanism`.
 
-use crate::error::{BoxError, Context, ResultExt};
+use crate::error::{AnalysisFailed, BoxError, ResultExt, SolverStopped};
 use crate::folder::ResultsFolder;
 use crate::observer::{AnalysisInfo, Cell, Observer, Progress, Series, Table};
 use crate::output::{default_results_dir, AnalysisSummary, PartSummary, Status, Summary};
@@ -49,7 +49,7 @@ struct Outcome {
     report: Vec<String>,
     results: serde_json::Value,
     /// A solver that stopped after writing part of its results.
-    failure: Option<String>,
+    failure: Option<SolverStopped>,
 }
 
 fn part_summary(p: &Part) -> PartSummary {
@@ -277,22 +277,25 @@ impl<'s> Runner<'s> {
                 if let Some(failure) = o.failure {
                     // The solver stopped: what it computed is written; the run fails here.
                     entry.status = Status::Failed;
-                    entry.error = Some(failure.clone());
+                    entry.error = Some(crate::error::chain(&failure));
                     summary.status = failed_status();
                     let entry = entry.clone();
                     // The failure is the message; a summary that cannot be written (a full
                     // disk) must not replace it.
                     let _ = obs.end(&info, &entry);
                     let _ = obs.summary(summary);
-                    return Err(format!(
-                        "{} analysis '{}' ({}): {failure} in {}/{}",
-                        a.kind_name(),
-                        a.name,
-                        study.location(&a.path),
-                        where_(),
-                        a.name
-                    )
-                    .into());
+                    return Err(Box::new(AnalysisFailed {
+                        analysis: a.name.clone(),
+                        message: format!(
+                            "{} analysis '{}' ({}) stopped; what it computed is in {}/{}",
+                            a.kind_name(),
+                            a.name,
+                            study.location(&a.path),
+                            where_(),
+                            a.name
+                        ),
+                        source: Box::new(failure),
+                    }));
                 }
                 let entry = entry.clone();
                 obs.end(&info, &entry)?;
@@ -306,7 +309,8 @@ impl<'s> Runner<'s> {
                 let entry = entry.clone();
                 let _ = obs.end(&info, &entry);
                 let _ = obs.summary(summary);
-                Err(Box::new(Context {
+                Err(Box::new(AnalysisFailed {
+                    analysis: a.name.clone(),
                     message: format!(
                         "{} analysis '{}' ({}) failed; the results of the analyses before it are in {}",
                         a.kind_name(),

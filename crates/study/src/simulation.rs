@@ -1,8 +1,9 @@
 //! A dynamic analysis of the mechanism stepped by the caller: [`Simulation::step`] or
 //! [`Simulation::advance_to`], and between steps every sensor, the state and the node
-//! motions can be read and the value of named loads changed. The `dynamic` analyses of a
-//! study run (`crate::mechanism::run_analysis`) step the same type, so a script that steps a
-//! simulation to the end gets the numbers the program writes.
+//! motions can be read, the value of named loads changed and actuator efforts held at values
+//! set by the caller. The `dynamic` analyses of a study run (`crate::mechanism::run_analysis`)
+//! step the same type, so a script that steps a simulation to the end gets the numbers the
+//! program writes.
 
 use crate::error::BoxError;
 use crate::mechanism::{BuiltMechanism, NamedLoad};
@@ -255,6 +256,51 @@ impl Simulation {
             .ok_or("the simulation does not own its system")?;
         system.set_load_value(index, nalgebra::Vector3::from(value))?;
         Ok(())
+    }
+
+    /// The names of the study's actuators (`[[actuators]]`), in their order.
+    pub fn actuator_names(&self) -> Vec<&str> {
+        self.system()
+            .model()
+            .actuators
+            .iter()
+            .map(|a| a.name.as_str())
+            .collect()
+    }
+
+    /// The index of actuator `name` in `Model::actuators`.
+    fn actuator(&self, name: &str) -> Result<usize, BoxError> {
+        let names = self.actuator_names();
+        names.iter().position(|n| *n == name).ok_or_else(|| {
+            let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+            crate::source::unknown_reference("actuator", name, &names).into()
+        })
+    }
+
+    /// Holds actuator `name` at `effort` [N on a length, N m on an angle] in place of its
+    /// `function` or `pid` from the next step on (a controller outside the study closes the
+    /// loop); `None` releases it to its law again (a PID resumes from its integral, frozen
+    /// while held). The `actuator-effort` sensors write the held value.
+    pub fn set_actuator(&mut self, name: &str, effort: Option<f64>) -> Result<(), BoxError> {
+        let index = self.actuator(name)?;
+        let system = self
+            .integrator
+            .system_mut()
+            .ok_or("the simulation does not own its system")?;
+        system.set_actuator_effort(index, effort)?;
+        Ok(())
+    }
+
+    /// The effort actuator `name` applies at the current state: the held value, or its law's.
+    pub fn actuator_effort(&self, name: &str) -> Result<f64, BoxError> {
+        let index = self.actuator(name)?;
+        Ok(self.system().actuator_efforts(self.state())[index])
+    }
+
+    /// The effort actuator `name` is held at (`None`: its law acts).
+    pub fn held_actuator(&self, name: &str) -> Result<Option<f64>, BoxError> {
+        let index = self.actuator(name)?;
+        Ok(self.system().held_actuator_effort(index))
     }
 
     /// Records the `mbs` sensors at the current state into `record`.
