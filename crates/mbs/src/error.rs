@@ -112,6 +112,16 @@ pub enum SolveError {
     /// Settings out of range (a negative step, rho_inf outside [0, 1], ...).
     #[error("invalid settings: {what}")]
     InvalidSettings { what: String },
+    /// A sensor read a value that is not finite (inf or NaN): the motion or a force has
+    /// diverged. `component` counts from 0 within the sensor.
+    #[error("sensor '{sensor}' component {component} is {value} at t = {t:.6} (step {step}): the motion or a force is no longer finite")]
+    NonFiniteSensor {
+        sensor: String,
+        component: usize,
+        value: f64,
+        t: f64,
+        step: usize,
+    },
 }
 
 /// A [`SolveError`] with the part of the result computed before it (the converged steps, their

@@ -93,7 +93,9 @@
 //! | $\mathbf e_{n+1}$ | [`Integrator::step_adaptive`] | local error estimate $h^2\lvert\beta-\frac16\rvert(\mathbf a_{n+1}-\mathbf a_n)$ | Zienkiewicz & Xie 1991 |
 //! | $\rho_\infty,\ \alpha_m,\ \alpha_f,\ \beta,\ \gamma$ | [`AlphaParameters`] | generalized-α parameters | Chung & Hulbert 1993 |
 //! | $\beta',\ \gamma'$ | `bp`, `gp` | iteration-matrix factors | BCA 2012 |
-//! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration | BCA 2012 |
+//! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration (body axes for rotations and free nodes' translations) | BCA 2012 |
+//! | $\boldsymbol\omega_b,\ \mathbf v_b$ | `vb` (`dynamic_solver`) | body-axis angular and translational velocity of a node, $\mathbf R^T\boldsymbol\omega_s$, $\mathbf R^T\dot{\mathbf x}$ | [`dynamic_solver`] |
+//! | $\mathrm{Re}\,s$ | [`LinearSpectrum::growing`], [`ModeEnergy::growth_rate`] | growth rate of an unstable mode [1/s] | [`linearized`] |
 //! | $\mathbf T(h\Delta\mathbf q)$ | `System::iteration_matrix` | tangent operator $\mathbf J_l$ of each rotation increment | BCA 2012 |
 //! | $\mathbf S = \beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$ | `Workspace::S`, [`LinearSolver`] | iteration matrix; dense LU up to [`DENSE_MAX`] unknowns, sparse above | BCA 2012 |
 //! | $\lVert\mathbf F_{k+1}\rVert/\lVert\mathbf F_k\rVert$ | [`MODIFIED_NEWTON_RATE`] | contraction above which modified Newton ([`NewtonStrategy`]) refactorises | [`dynamic_solver`] |
@@ -192,8 +194,8 @@ pub mod user_force;
 
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use dynamic_solver::{
-    solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters, DynamicSettings,
-    Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
+    fixed_steps, solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters,
+    DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
 };
 pub use error::{Incomplete, ModelError, SolveError};
 pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};

@@ -30,6 +30,29 @@ pub struct SensorRecord {
 }
 
 impl SensorRecord {
+    /// The first value of the last row that is not finite, as
+    /// [`SolveError::NonFiniteSensor`] at `step` (sensor, component within it, time).
+    pub fn check_last_row(&self, step: usize) -> Result<(), SolveError> {
+        let (Some(row), Some(&t)) = (self.rows.last(), self.times.last()) else {
+            return Ok(());
+        };
+        let Some(k) = row.iter().position(|x| !x.is_finite()) else {
+            return Ok(());
+        };
+        let (mut start, mut i) = (0, 0);
+        while i + 1 < self.widths.len() && start + self.widths[i] <= k {
+            start += self.widths[i];
+            i += 1;
+        }
+        Err(SolveError::NonFiniteSensor {
+            sensor: self.names.get(i).cloned().unwrap_or_default(),
+            component: k - start,
+            value: row[k],
+            t,
+            step,
+        })
+    }
+
     /// Values of sensor `name` at each time.
     pub fn series(&self, name: &str) -> Option<Vec<Vec<f64>>> {
         let i = self.names.iter().position(|n| n == name)?;

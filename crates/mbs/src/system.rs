@@ -332,6 +332,8 @@ pub struct System {
     pub(crate) joint_forces: JointForces,
     /// How each of `model.initial` acts ([`crate::initial`]).
     pub(crate) initial_plan: Vec<InitialPlan>,
+    /// Drivers not zero at $t = 0$ and the nodes assembled with them (`initial::driver_starts`).
+    pub(crate) driver_starts: Vec<crate::initial::DriverStart>,
     pub(crate) drivers: Vec<CompiledFunction>,
     /// User-defined forces ([`System::with_user_forces`]).
     pub(crate) user_forces: Vec<Arc<dyn UserForce>>,
@@ -526,6 +528,7 @@ impl System {
         topology::held_coordinates(model, &topo)?;
         let mut joint_forces = JointForces::new(model, &topo)?;
         let initial_plan = crate::initial::plan(model, &topo)?;
+        let driver_starts = crate::initial::driver_starts(model, &topo, &drivers)?;
 
         // Elements and the sparse pattern.
         let mut elements = Vec::new();
@@ -668,6 +671,7 @@ impl System {
             joint_springs,
             joint_forces,
             initial_plan,
+            driver_starts,
             drivers,
             user_forces,
             elements,

@@ -1303,7 +1303,8 @@ pub fn run_analysis(
             if output.vtu_every.is_some() {
                 mw.write(obs, t_start, &sys, integ.state(), b)?;
             }
-            let n_steps = (((t_end - t_start) / dt) - 1e-9).ceil().max(0.0) as usize;
+            // The last fixed step is shortened to end exactly at t_end (mbs::fixed_steps).
+            let (n_steps, last_step) = mbs::fixed_steps(t_start, *t_end, *dt);
             let at_end = |t: f64| t_end - t >= -1e-12 && t_end - t <= 1e-12 * t_end.abs().max(1.0);
             let mut iterations = 0usize;
             let mut jacobians = 0usize;
@@ -1312,6 +1313,7 @@ pub fn run_analysis(
             let mut rejected = 0usize;
             let (mut h_min, mut h_max) = (f64::INFINITY, 0.0f64);
             let mut k = 0usize;
+            let (mut last_written, mut sensor_failed) = (t_start, false);
             loop {
                 let done = match adaptive {
                     None => k >= n_steps,
@@ -1322,6 +1324,9 @@ pub fn run_analysis(
                 }
                 k += 1;
                 let t_before = integ.time();
+                if adaptive.is_none() && k == n_steps {
+                    integ.set_step_size(last_step.min(*t_end - t_before));
+                }
                 let taken: Result<Vec<mbs::StepReport>, mbs::SolveError> = match adaptive {
                     None => match integ.step_retrying(*dt_min) {
                         Ok(r) => {
@@ -1368,8 +1373,17 @@ pub fn run_analysis(
                     Some(_) => at_end(t),
                 };
                 if k % output.every == 0 || last {
-                    integ.record(&mut rec)?;
+                    if let Err(e) = integ.record(&mut rec) {
+                        // A sensor that is not finite (mbs::SolveError::NonFiniteSensor): the
+                        // rows before it are written, the run is not complete.
+                        out.failure = Some(format!(
+                            "time integration stopped: {e}; results up to t = {last_written:.6} s are written"
+                        ));
+                        sensor_failed = true;
+                        break;
+                    }
                     files.sample(obs, t, &rec)?;
+                    last_written = t;
                     let vtu_now = output.vtu_every.is_some_and(|v| k % v == 0 || k == n_steps);
                     if !vtu_now {
                         mw.track(t, &sys, integ.state(), b)?;
@@ -1396,11 +1410,16 @@ pub fn run_analysis(
                 });
             }
             obs.progress(&Progress::Finished);
-            let steps = k - usize::from(out.failure.is_some());
+            let steps = k - usize::from(out.failure.is_some() && !sensor_failed);
             let t_reached = integ.state().time();
             match adaptive {
                 None => out.report.push(format!(
-                    "{steps} of {n_steps} steps of {dt} s from t = {t_start} to {t_reached:.6} s, {iterations} Newton iterations ({:.2} per step, at most {max_iter})",
+                    "{steps} of {n_steps} steps of {dt} s{} from t = {t_start} to {t_reached:.6} s, {iterations} Newton iterations ({:.2} per step, at most {max_iter})",
+                    if last_step < *dt * (1.0 - 1e-9) {
+                        format!(" (the last shortened to {last_step:.6e} s to end at t_end)")
+                    } else {
+                        String::new()
+                    },
                     iterations as f64 / steps.max(1) as f64
                 )),
                 Some(ad) => out.report.push(format!(
@@ -1514,6 +1533,7 @@ pub fn run_analysis(
                     "damping ratio [-]",
                     "rigid body [-]",
                     "carried by",
+                    "growth rate [1/s]",
                 ],
             );
             for (k, e) in energies.iter().take(*modes).enumerate() {
@@ -1523,9 +1543,33 @@ pub fn run_analysis(
                     e.damping_ratio.map_or(Cell::Empty, Cell::Num),
                     Cell::from(usize::from(e.rigid_body)),
                     Cell::from(e.label.clone()),
+                    e.growth_rate.map_or(Cell::Empty, Cell::Num),
                 ]);
             }
             obs.table(&csv)?;
+            // A growing eigenvalue: the state is not a stable one, whatever the frequencies say.
+            let growing = s.growing();
+            let fastest = growing.iter().map(|g| g.0).fold(0.0, f64::max);
+            if !growing.is_empty() {
+                let unstable: Vec<String> = energies
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, e)| e.unstable)
+                    .map(|(k, _)| (k + 1).to_string())
+                    .collect();
+                let line = format!(
+                    "UNSTABLE: {} state-space eigenvalue(s) with a positive real part (the fastest grows at {fastest:.4e} 1/s: amplitude doubled every {:.4e} s){}; the state linearised about is not a stable equilibrium or steady motion",
+                    growing.len(),
+                    std::f64::consts::LN_2 / fastest,
+                    if unstable.is_empty() {
+                        String::new()
+                    } else {
+                        format!(", modes {}", unstable.join(", "))
+                    }
+                );
+                obs.progress(&Progress::Warning(format!("linearized analysis: {line}")));
+                out.report.insert(0, line);
+            }
             for (k, e) in energies.iter().take(*modes).enumerate() {
                 out.report
                     .push(format!("mode {}: {:.6e} Hz, {}", k + 1, e.frequency_hz, e.label));
@@ -1541,6 +1585,9 @@ pub fn run_analysis(
                 "model": b.size(&sys),
                 "frequencies_hz": hz,
                 "mode_labels": labels,
+                "stable": growing.is_empty(),
+                "growing_eigenvalues": growing.iter().map(|g| json!([g.0, g.1])).collect::<Vec<_>>(),
+                "largest_growth_rate": if growing.is_empty() { json!(null) } else { json!(fastest) },
                 "about": if start.is_some() { "start".to_string() } else { format!("{about:?}") },
             });
         }

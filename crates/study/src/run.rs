@@ -208,23 +208,33 @@ impl<'s> Runner<'s> {
         let result = match &a.spec {
             AnalysisSpec::Mbs(spec) => {
                 let mut spec = spec.clone();
-                if let (crate::validate::MbsAnalysis::Dynamic { t_end, .. }, Some(limit)) =
+                let mut refused = None;
+                if let (crate::validate::MbsAnalysis::Dynamic { t_end, dt, .. }, Some(limit)) =
                     (&mut spec, self.options.t_end)
                 {
+                    if limit < *dt {
+                        refused = Some(format!(
+                            "--t-end {limit} s is shorter than one time step of analysis '{}' (dt = {dt} s)",
+                            a.name
+                        ));
+                    }
                     if limit < *t_end {
                         shortened = Some((*t_end, limit));
                         *t_end = limit;
                     }
                 }
-                let start: Result<Option<mbs::State>, BoxError> = match a.start {
-                    Some(k) => self.states[k].clone().map(Some).ok_or_else(|| {
-                        format!(
-                            "analysis '{}' starts from '{}', which ended in no state",
-                            a.name, study.analyses[k].name
-                        )
-                        .into()
-                    }),
-                    None => Ok(None),
+                let start: Result<Option<mbs::State>, BoxError> = match (refused, a.start) {
+                    (Some(refusal), _) => Err(refusal.into()),
+                    (None, start) => match start {
+                        Some(k) => self.states[k].clone().map(Some).ok_or_else(|| {
+                            format!(
+                                "analysis '{}' starts from '{}', which ended in no state",
+                                a.name, study.analyses[k].name
+                            )
+                            .into()
+                        }),
+                        None => Ok(None),
+                    },
                 };
                 let mut final_state = None;
                 let result = match (start, self.mechanism(obs)) {

@@ -154,6 +154,12 @@ impl Simulation {
         self.t_end
     }
 
+    /// Sets the size of the next steps (a run's last fixed step is shortened to land on its
+    /// end time, `mbs::fixed_steps`).
+    pub fn set_step_size(&mut self, h: f64) {
+        self.integrator.set_step_size(h);
+    }
+
     /// Steps taken.
     pub fn steps(&self) -> usize {
         self.integrator.steps()

@@ -83,3 +83,92 @@ fn a_load_changed_between_steps_acts_from_the_next_step() {
     assert!(a.iter().all(|x| x.abs() < 1e-12), "{a:?}");
     assert!(b.iter().any(|x| *x > 1e-6), "{b:?}");
 }
+
+/// The fixed steps land on the end time: t_end = 0.25 s with h = 0.1 s takes steps of 0.1,
+/// 0.1 and 0.05 s and records t = 0.25 last (it ran a third full step to 0.3 s before); an end
+/// within round-off of a multiple of h adds no sliver.
+#[test]
+fn fixed_steps_end_exactly_at_the_end_time() {
+    assert_eq!(mbs::fixed_steps(0.0, 0.25, 0.1).0, 3);
+    assert!((mbs::fixed_steps(0.0, 0.25, 0.1).1 - 0.05).abs() < 1e-15);
+    // 0.3 / 0.1 = 2.9999999999999996 in floating point: three full steps, no sliver.
+    let (n, last) = mbs::fixed_steps(0.0, 0.3, 0.1);
+    assert!(n == 3 && (last - 0.1).abs() < 1e-12, "{n} {last}");
+    let (model, _) = pendulum(1.0, 1.0, 0.01);
+    let sys = System::new(&model).unwrap();
+    for solve in [0, 1] {
+        let settings = DynamicSettings::new(0.1, 0.25, 0.9);
+        let traj = if solve == 0 {
+            mbs::solve_dynamic(&sys, sys.initial_state(), &settings).unwrap()
+        } else {
+            mbs::solve_dynamic_retrying(&sys, sys.initial_state(), &settings, 0.01)
+                .unwrap()
+                .trajectory
+        };
+        assert_eq!(
+            traj.sensors.times.last().copied(),
+            Some(0.25),
+            "{:?}",
+            traj.sensors.times
+        );
+        assert_eq!(traj.final_state.time(), 0.25);
+        assert_eq!(traj.iterations.len(), 3);
+    }
+}
+
+/// A sensor that reads a value that is not finite stops the run with an error naming the
+/// sensor, the time and the step, and keeps the rows before it: node b, driven along x at
+/// 10 m/s from 1 m before node a, reaches a at t = 0.1 s (step 10), where the distance from
+/// the line a-b is 0/0.
+#[test]
+fn a_sensor_that_is_not_finite_stops_the_run_where_it_happened() {
+    let (mut model, _) = pendulum(1.0, 1.0, 0.01);
+    let hinge = mbs::NodeId(1);
+    let a = model.add_node("a", Vector3::new(0.0, 2.0, 0.0));
+    let b = model.add_node("b", Vector3::new(-1.0, 2.0, 0.0));
+    model.add_support(mbs::Support::clamp(a));
+    model.add_support(mbs::Support {
+        node: b,
+        translation: mbs::TranslationSupport::Components {
+            fixed: [false, true, true],
+        },
+        rotation: mbs::RotationSupport::Fixed,
+    });
+    model.add_driver(
+        "b along x",
+        mbs::DriverTarget::NodeTranslation { node: b, component: 0 },
+        TimeFunction::Linear {
+            initial: 0.0,
+            rate: 10.0,
+        },
+    );
+    model.add_sensor(
+        "chord",
+        mbs::SensorKind::LineDistance {
+            node: hinge,
+            a,
+            b,
+            normal: None,
+        },
+    );
+    let sys = System::new(&model).unwrap();
+    let fail = mbs::solve_dynamic(&sys, sys.initial_state(), &DynamicSettings::new(0.01, 0.2, 0.9)).unwrap_err();
+    match &fail.error {
+        mbs::SolveError::NonFiniteSensor { sensor, t, step, .. } => {
+            assert_eq!((sensor.as_str(), *step), ("chord", 10));
+            assert!((t - 0.1).abs() < 1e-12, "{t}");
+        }
+        e => panic!("{e}"),
+    }
+    let msg = fail.error.to_string();
+    assert!(
+        msg.contains("sensor 'chord'") && msg.contains("t = 0.100000") && msg.contains("step 10"),
+        "{msg}"
+    );
+    // The rows of t = 0 .. 0.09 are finite and kept, the offending one is the last.
+    let times = &fail.partial.sensors.times;
+    assert_eq!(times.len(), 11);
+    assert!(fail.partial.sensors.rows[..10]
+        .iter()
+        .all(|r| r.iter().all(|x| x.is_finite())));
+}

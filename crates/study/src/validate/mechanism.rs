@@ -1896,6 +1896,13 @@ impl Validator<'_> {
                     );
                     return None;
                 }
+                if dt > t_end {
+                    self.err(
+                        &path.key("dt"),
+                        format!("the time step dt = {dt} s is longer than the run (t_end = {t_end} s)"),
+                    );
+                    return None;
+                }
                 let rho_inf = a.rho_inf.unwrap_or(0.9);
                 if !(0.0..=1.0).contains(&rho_inf) {
                     self.err(

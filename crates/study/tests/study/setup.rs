@@ -589,3 +589,104 @@ fn adaptive_steps_match_the_fixed_step_on_the_slider_crank_with_fewer_steps() {
     assert!(n < n_fix, "{n} adaptive steps against {n_fix} fixed");
     assert!(e_d < 2.0 * e_fix && e_s < 2.0 * (s_fix - s_ref).abs(), "{e_d}, {e_s}");
 }
+
+/// The pendulum under gravity with a `dynamic` analysis of `t_end` and `dt`.
+fn swinging(t_end: &str, dt: &str) -> String {
+    format!(
+        "{PENDULUM}
+[[loads]]
+name = \"weight\"
+type = \"gravity\"
+g = [0.0, -9.81, 0.0]
+[[initial]]
+joint = \"pivot\"
+value = 0.5
+[[analyses]]
+type = \"dynamic\"
+t_end = {t_end}
+dt = {dt}
+"
+    )
+}
+
+/// A `t_end` that is not a multiple of `dt` ends exactly at `t_end` with a shortened last step
+/// (it ran a full step past it); a `dt` longer than the run is refused at its key.
+#[test]
+fn a_dynamic_run_ends_exactly_at_t_end() {
+    let (rec, summary, _) = run("t-end-exact", &swinging("0.25", "0.1"));
+    summary.unwrap();
+    assert_eq!(times(&rec, "dynamic"), vec![0.0, 0.1, 0.2, 0.25]);
+    let r = results(&rec, "dynamic");
+    assert_eq!(
+        (r["t_reached"].as_f64(), r["steps"].as_u64()),
+        (Some(0.25), Some(3)),
+        "{r}"
+    );
+    let dir = crate::scratch("dt-longer");
+    let file = dir.join("dt.toml");
+    std::fs::write(&file, swinging("0.05", "0.1")).unwrap();
+    let e = study::error::chain(&*study::load(&file).unwrap_err());
+    assert!(e.contains("dt") && e.contains("longer than the run"), "{e}");
+}
+
+/// `--t-end` that is not a multiple of `dt` ends there too; one shorter than a step is refused
+/// with the analysis named.
+#[test]
+fn the_t_end_option_ends_exactly_there_and_refuses_less_than_a_step() {
+    let dir = crate::scratch("t-end-option");
+    let file = dir.join("p.toml");
+    std::fs::write(&file, swinging("1.0", "0.1")).unwrap();
+    let study = study::load(&file).unwrap();
+    let options = |t_end| Options {
+        out: Some(dir.join("results")),
+        cache: Some(dir.join("cache")),
+        t_end: Some(t_end),
+        foreign: Default::default(),
+    };
+    let mut rec = Recorder::default();
+    study::run_with(&study, &options(0.35), &mut rec).unwrap();
+    assert_eq!(times(&rec, "dynamic").last().copied(), Some(0.35));
+    let mut rec = Recorder::default();
+    let e = study::error::chain(&*study::run_with(&study, &options(0.05), &mut rec).unwrap_err());
+    assert!(
+        e.contains("--t-end 0.05 s is shorter than one time step of analysis 'dynamic'"),
+        "{e}"
+    );
+}
+
+/// An inverted pendulum (gravity up: the bob 1 m above the pivot) linearised about its
+/// start: the summary, the report and the mode labels say it is unstable, with the growth rate
+/// sqrt(m g d / (I_G + m d^2)) = sqrt(9.81 / 1.01) = 3.1166 1/s (it was a stable "0 Hz" mode).
+#[test]
+fn an_inverted_pendulum_is_reported_unstable_in_a_study() {
+    let text = format!(
+        "{PENDULUM}
+[[loads]]
+name = \"weight\"
+type = \"gravity\"
+g = [0.0, 9.81, 0.0]
+[[analyses]]
+type = \"linearized\"
+modes = 1
+"
+    );
+    let (rec, summary, _) = run("inverted", &text);
+    summary.unwrap();
+    let r = results(&rec, "linearized");
+    assert_eq!(r["stable"], serde_json::json!(false), "{r}");
+    // The dense eigensolver on one unknown: exact to round-off.
+    let rate = r["largest_growth_rate"].as_f64().unwrap();
+    assert!((rate - (9.81f64 / 1.01).sqrt()).abs() < 1e-9, "{rate}");
+    assert!(r["mode_labels"][0].as_str().unwrap().starts_with("UNSTABLE"), "{r}");
+    let s = rec.analysis("linearized").unwrap().summary.clone().unwrap();
+    assert!(
+        s.report[0].starts_with("UNSTABLE: 1 state-space eigenvalue"),
+        "{:?}",
+        s.report
+    );
+    assert!(
+        rec.progress.iter().any(|p| p.contains("UNSTABLE")),
+        "{:?}",
+        rec.progress
+    );
+}
