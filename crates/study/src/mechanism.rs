@@ -671,7 +671,7 @@ impl BuiltMechanism {
     /// `System::new`, with a model error located at the first entity it names.
     pub fn system(&self, study: &Study) -> Result<System, BoxError> {
         System::new(&self.model).map_err(|e| {
-            let text = e.to_string();
+            let text = crate::error::sentence(&e);
             let hit = self.entities.iter().find(|(_, name)| {
                 text.contains(&format!("'{name}'"))
                     || text.contains(&format!("{name},"))
@@ -1272,7 +1272,12 @@ pub fn run_analysis(
             if failure.is_none() {
                 out.final_state = Some(sol.state.clone());
             }
-            out.failure = failure.map(|e| format!("equilibrium stopped: {e}; the converged load steps are written"));
+            out.failure = failure.map(|e| {
+                format!(
+                    "equilibrium stopped: {}; the converged load steps are written",
+                    crate::error::sentence(&e)
+                )
+            });
         }
         MbsAnalysis::Dynamic {
             t_end,
@@ -1345,7 +1350,8 @@ pub fn run_analysis(
                     }
                     Err(e) => {
                         out.failure = Some(format!(
-                            "time integration stopped: {e}; results up to t = {:.6} s (step {}) are written",
+                            "time integration stopped: {}; results up to t = {:.6} s (step {}) are written",
+                            crate::error::sentence(&e),
                             integ.state().time(),
                             k - 1
                         ));
