@@ -1,5 +1,6 @@
 //! The command line: parsing the arguments and dispatching to the commands.
 
+pub use crate::console::run;
 use crate::console::Console;
 use std::path::{Path, PathBuf};
 use study::error::BoxError;
@@ -186,18 +187,6 @@ fn load(path: &std::path::Path) -> Result<study::Study, BoxError> {
         crate::tell!("flexmbs: warning: {w}");
     }
     Ok(study)
-}
-
-/// Runs every analysis of `study` into its results folder, progress on the console.
-pub fn run(study: &study::Study, options: &Options) -> Result<study::output::Summary, BoxError> {
-    let summary = study::run(study, options, &mut Console::default())?;
-    crate::tell!(
-        "flexmbs: {} analyses done in {:.2} s; results in {}",
-        summary.analyses.len(),
-        summary.total_seconds,
-        options.results_dir(study).display()
-    );
-    Ok(summary)
 }
 
 /// Runs the command line `args` (without the program name).

@@ -4,6 +4,7 @@
 use study::error::BoxError;
 use study::observer::{AnalysisInfo, Observer, Progress};
 use study::output::AnalysisSummary;
+use study::run::Options;
 
 /// Progress on stderr, reports on stdout.
 #[derive(Default)]
@@ -116,4 +117,16 @@ impl Observer for Console {
         }
         Ok(())
     }
+}
+
+/// Runs every analysis of `study` into its results folder, progress on the console.
+pub fn run(study: &study::Study, options: &Options) -> Result<study::output::Summary, BoxError> {
+    let summary = study::run(study, options, &mut Console::default())?;
+    crate::tell!(
+        "flexmbs: {} analyses done in {:.2} s; results in {}",
+        summary.analyses.len(),
+        summary.total_seconds,
+        options.results_dir(study).display()
+    );
+    Ok(summary)
 }

@@ -78,8 +78,9 @@ pub enum ModelError {
     /// A value out of its range (a negative mass, a zero axis, a table with decreasing times...).
     #[error("{entity}: {what}")]
     InvalidValue { entity: String, what: String },
-    /// The superelement could not be built from the reduced body.
-    #[error("body '{body}': {source}")]
+    /// The superelement could not be built from the reduced body (the cause is the
+    /// source, so a report walking the chain names it once).
+    #[error("body '{body}'")]
     Superelement { body: String, source: SuperelementError },
 }
 
@@ -99,8 +100,9 @@ pub enum SolveError {
     /// The iteration (or mass) matrix could not be factorised.
     #[error("singular {what} at t = {t:.6} (step {step}): a coordinate is free without stiffness or mass, or a mechanism is at a singular configuration")]
     Singular { t: f64, step: usize, what: String },
-    /// A body could not be evaluated (its floating frame did not converge, ...).
-    #[error("body '{body}' at t = {t:.6}: {source}")]
+    /// A body could not be evaluated (its floating frame did not converge, ...); the cause
+    /// is the source, so a report walking the chain names it once.
+    #[error("body '{body}' at t = {t:.6}")]
     Body {
         body: String,
         t: f64,

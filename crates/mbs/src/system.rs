@@ -85,29 +85,7 @@ pub(crate) struct Pattern {
 impl Pattern {
     /// The CSC structure holding every $\text{set}\times\text{set}$ block and the diagonal.
     fn structure(n: usize, sets: &[Vec<usize>]) -> SymbolicSparseColMat<usize> {
-        let mut keys: Vec<u64> = Vec::new();
-        for s in sets {
-            for &c in s {
-                for &r in s {
-                    keys.push(c as u64 * n as u64 + r as u64);
-                }
-            }
-        }
-        for d in 0..n {
-            keys.push(d as u64 * n as u64 + d as u64);
-        }
-        keys.sort_unstable();
-        keys.dedup();
-        let mut col_ptr = vec![0usize; n + 1];
-        let mut row_idx = Vec::with_capacity(keys.len());
-        for &k in &keys {
-            col_ptr[(k / n as u64) as usize + 1] += 1;
-            row_idx.push((k % n as u64) as usize);
-        }
-        for j in 0..n {
-            col_ptr[j + 1] += col_ptr[j];
-        }
-        SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx)
+        fe_model::pattern::block_structure(n, sets, true)
     }
 
     /// Position of entry (r, c) in the values array.

@@ -18,13 +18,13 @@ use rayon::prelude::*;
 /// forces at both ends of every beam ([`fe_model::stress::beam_section_forces`]).
 ///
 /// # Errors
-/// [`ReductionError::Fe`] for an element whose geometry or properties cannot give stresses.
+/// [`ReductionError::Fe`] or [`ReductionError::InvalidFeModel`] for an element whose geometry or properties cannot give stresses.
 pub fn stress_shapes(model: &FeModel, S_full: MatRef<'_, f64>) -> Result<StressShapes, ReductionError> {
     let n = S_full.ncols();
     let basis = DenseMatrix::from_faer(S_full);
     let has_solids = model.elements.iter().any(|e| e.solid().is_some());
     let (nodal, solid_node) = if has_solids {
-        let (sigma, count) = averaged_nodal_stresses(model, &basis.data, n).map_err(ReductionError::from_fe)?;
+        let (sigma, count) = averaged_nodal_stresses(model, &basis.data, n)?;
         (
             Some(DenseMatrix {
                 nrows: 6 * model.node_count(),
@@ -36,25 +36,28 @@ pub fn stress_shapes(model: &FeModel, S_full: MatRef<'_, f64>) -> Result<StressS
     } else {
         (None, Vec::new())
     };
-    let beams: Vec<BeamStressElement> = model
-        .elements
-        .iter()
-        .enumerate()
-        .filter_map(|(e, element)| match element {
-            Element::Beam2(b) => Some((e, b)),
-            _ => None,
-        })
-        .map(|(e, b)| {
-            let section = model.sections.get(b.section.0 as usize).cloned().ok_or_else(|| {
-                ReductionError::Fe(format!("element {e}: beam section {} does not exist", b.section.0))
-            })?;
-            Ok(BeamStressElement {
-                element: e as u32,
-                nodes: [b.nodes[0].0, b.nodes[1].0],
-                section,
+    let beams: Vec<BeamStressElement> =
+        model
+            .elements
+            .iter()
+            .enumerate()
+            .filter_map(|(e, element)| match element {
+                Element::Beam2(b) => Some((e, b)),
+                _ => None,
             })
-        })
-        .collect::<Result<_, ReductionError>>()?;
+            .map(|(e, b)| {
+                let section = model.sections.get(b.section.0 as usize).cloned().ok_or_else(|| {
+                    ReductionError::InvalidFeModel {
+                        what: format!("element {e}: beam section {} does not exist", b.section.0),
+                    }
+                })?;
+                Ok(BeamStressElement {
+                    element: e as u32,
+                    nodes: [b.nodes[0].0, b.nodes[1].0],
+                    section,
+                })
+            })
+            .collect::<Result<_, ReductionError>>()?;
     let rows = 12 * beams.len();
     // Column by column in parallel: each CB vector's section forces on every beam.
     let columns: Vec<Vec<f64>> = (0..n)
@@ -67,7 +70,7 @@ pub fn stress_shapes(model: &FeModel, S_full: MatRef<'_, f64>) -> Result<StressS
                     .iter()
                     .flat_map(|&node| (0..6).map(move |s| S_full[(6 * node as usize + s, k)]))
                     .collect();
-                let s = beam_section_forces(model, b.element as usize, &u_e, None).map_err(ReductionError::from_fe)?;
+                let s = beam_section_forces(model, b.element as usize, &u_e, None)?;
                 col.extend(s.iter().flatten());
             }
             Ok(col)

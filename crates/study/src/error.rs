@@ -70,6 +70,19 @@ pub fn report(e: &(dyn std::error::Error + 'static)) -> String {
     format!("flexmbs: error: {}", chain(e))
 }
 
+/// The error and its causes on one line, `error: cause: cause`: for a message that goes into a
+/// table or a summary rather than a report (each cause once, as the chain holds it).
+pub fn sentence(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut out = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        out.push_str(": ");
+        out.push_str(&s.to_string());
+        source = s.source();
+    }
+    out
+}
+
 /// The error and its causes, one per line, each cause as `caused by: ...`.
 pub fn chain(e: &(dyn std::error::Error + 'static)) -> String {
     let mut out = e.to_string();

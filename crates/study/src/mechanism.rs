@@ -671,7 +671,7 @@ impl BuiltMechanism {
     /// `System::new`, with a model error located at the first entity it names.
     pub fn system(&self, study: &Study) -> Result<System, BoxError> {
         System::new(&self.model).map_err(|e| {
-            let text = e.to_string();
+            let text = crate::error::sentence(&e);
             let hit = self.entities.iter().find(|(_, name)| {
                 text.contains(&format!("'{name}'"))
                     || text.contains(&format!("{name},"))

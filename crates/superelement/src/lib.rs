@@ -223,6 +223,7 @@ pub mod local_coordinates;
 pub mod mass;
 pub mod recovery;
 pub mod so3;
+pub mod state;
 pub mod tangent;
 pub mod testing;
 pub mod transform;

@@ -1611,18 +1611,37 @@ impl Validator<'_> {
             names.push(name.to_string());
             true
         };
-        for (i, s) in file.joint_springs.iter().enumerate() {
-            let path = KeyPath::root().key("joint_springs").index(i);
-            if !unique(self, &path, &s.name, "joint spring") {
-                continue;
+        // The head every joint spring, limit and actuator shares: a name unique among them, a
+        // joint reference and one of its coordinates (default 0). Its path, joint and
+        // coordinate, or None after the error is reported.
+        let mut entry = |v: &mut Self,
+                         m: &Mechanism,
+                         (table, i): (&str, usize),
+                         name: &str,
+                         joint: &str,
+                         coordinate: Option<usize>,
+                         what: &str| {
+            let path = KeyPath::root().key(table).index(i);
+            if !unique(v, &path, name, what) {
+                return None;
             }
-            let Some(joint) = self.joint_ref(&path.key("joint"), &s.joint, m) else {
+            let joint = v.joint_ref(&path.key("joint"), joint, m)?;
+            let coordinate = coordinate.unwrap_or(0);
+            v.joint_coordinate(&path, m, joint, coordinate)
+                .then_some((path, joint, coordinate))
+        };
+        for (i, s) in file.joint_springs.iter().enumerate() {
+            let Some((path, joint, coordinate)) = entry(
+                self,
+                m,
+                ("joint_springs", i),
+                &s.name,
+                &s.joint,
+                s.coordinate,
+                "joint spring",
+            ) else {
                 continue;
             };
-            let coordinate = s.coordinate.unwrap_or(0);
-            if !self.joint_coordinate(&path, m, joint, coordinate) {
-                continue;
-            }
             let k = finite(self, &path.key("stiffness"), s.stiffness, 0.0, true, "the stiffness");
             let c = finite(self, &path.key("damping"), s.damping, 0.0, true, "the damping");
             let rest = finite(self, &path.key("rest"), s.rest, 0.0, false, "the rest value");
@@ -1646,17 +1665,17 @@ impl Validator<'_> {
             });
         }
         for (i, l) in file.joint_limits.iter().enumerate() {
-            let path = KeyPath::root().key("joint_limits").index(i);
-            if !unique(self, &path, &l.name, "joint limit") {
-                continue;
-            }
-            let Some(joint) = self.joint_ref(&path.key("joint"), &l.joint, m) else {
+            let Some((path, joint, coordinate)) = entry(
+                self,
+                m,
+                ("joint_limits", i),
+                &l.name,
+                &l.joint,
+                l.coordinate,
+                "joint limit",
+            ) else {
                 continue;
             };
-            let coordinate = l.coordinate.unwrap_or(0);
-            if !self.joint_coordinate(&path, m, joint, coordinate) {
-                continue;
-            }
             if l.lower.is_none() && l.upper.is_none() {
                 self.err(
                     &path,
@@ -1693,17 +1712,11 @@ impl Validator<'_> {
             });
         }
         for (i, a) in file.actuators.iter().enumerate() {
-            let path = KeyPath::root().key("actuators").index(i);
-            if !unique(self, &path, &a.name, "actuator") {
-                continue;
-            }
-            let Some(joint) = self.joint_ref(&path.key("joint"), &a.joint, m) else {
+            let Some((path, joint, coordinate)) =
+                entry(self, m, ("actuators", i), &a.name, &a.joint, a.coordinate, "actuator")
+            else {
                 continue;
             };
-            let coordinate = a.coordinate.unwrap_or(0);
-            if !self.joint_coordinate(&path, m, joint, coordinate) {
-                continue;
-            }
             if m.drivers.iter().any(|d| d.joint == joint && d.coordinate == coordinate) {
                 self.err(
                     &path.key("joint"),
