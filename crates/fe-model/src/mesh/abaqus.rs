@@ -127,7 +127,7 @@ fn expand(
                     });
                 }
                 let target = path.parent().unwrap_or(Path::new("")).join(input);
-                let data = std::fs::read(&target).map_err(|source| ImportError::Io {
+                let data = crate::input::read(&target).map_err(|source| ImportError::Io {
                     path: target.clone(),
                     source,
                 })?;

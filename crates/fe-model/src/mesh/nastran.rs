@@ -201,7 +201,7 @@ fn read_cards(
                 });
             }
             let target = path.parent().unwrap_or(Path::new("")).join(name);
-            let data = std::fs::read(&target).map_err(|source| ImportError::Io {
+            let data = crate::input::read(&target).map_err(|source| ImportError::Io {
                 path: target.clone(),
                 source,
             })?;
