@@ -45,7 +45,8 @@ option of run:
 `flexmbs COMMAND --help` shows one command.
 
 The study file format is described in docs/study-file.md. Errors go to stderr with the
-file, line, column and key they are about; the exit code is 0 on success, 2 on any error.";
+file, line, column and key they are about; the exit code is 0 on success, 1 when `inspect`
+finds a reduced body that fails its physical checks, 2 on any other error.";
 
 /// The help of one command (`flexmbs COMMAND --help`).
 pub fn command_help(command: &str) -> Option<&'static str> {
@@ -81,7 +82,8 @@ files (.rbody), through the cache."
 usage: flexmbs inspect FILE.rbody [--excitation-hz F]
 
 Shows a reduced body: interfaces, mass data, fixed-interface frequencies and modal effective
-masses; with F, whether the kept modes reach 3 x F."
+masses; with F, whether the kept modes reach 3 x F. Exits with 1 when the body fails its
+physical checks (the report lists them), with 2 when the file cannot be read."
         }
         "example" => {
             "\
@@ -171,6 +173,20 @@ fn run_options(options: &[(String, String)]) -> Result<Options, BoxError> {
     })
 }
 
+/// A command that ran to the end but whose checks failed (exit code 1, not 2).
+#[derive(Debug)]
+pub struct ChecksFailed {
+    pub what: String,
+}
+
+impl std::fmt::Display for ChecksFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.what)
+    }
+}
+
+impl std::error::Error for ChecksFailed {}
+
 fn one_file(positional: &[String], command: &str, what: &str) -> Result<PathBuf, BoxError> {
     match positional {
         [file] => Ok(PathBuf::from(file)),
@@ -240,10 +256,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let path = one_file(&positional, "check", "a study file")?;
             let study = load(&path)?;
             if study.analyses.is_empty() {
-                crate::tell!(
-                    "flexmbs: warning: {} has no [[analyses]]: `flexmbs run` would have nothing to run",
-                    path.display()
-                );
+                return Err(study::run::nothing_to_run(&study));
             }
             let m = &study.mechanism;
             let mechanism = if m.is_empty() {
@@ -299,7 +312,18 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 ),
                 None => None,
             };
-            crate::say_raw!("{}", crate::inspect::inspect(&path, excitation, 3.0)?);
+            let inspection = crate::inspect::inspect(&path, excitation, 3.0)?;
+            crate::say_raw!("{}", inspection.report);
+            if inspection.failed_checks > 0 {
+                return Err(Box::new(ChecksFailed {
+                    what: format!(
+                        "{} fails {} physical check{} (listed above): studies refuse it",
+                        path.display(),
+                        inspection.failed_checks,
+                        if inspection.failed_checks == 1 { "" } else { "s" }
+                    ),
+                }));
+            }
             Ok(())
         }
         "export-fem" => {

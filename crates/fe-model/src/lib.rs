@@ -87,6 +87,7 @@ pub mod error;
 pub mod fuzz;
 pub mod generate;
 pub mod geometric;
+pub mod input;
 pub mod interface;
 pub mod mass_properties;
 pub mod mesh;

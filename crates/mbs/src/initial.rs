@@ -157,6 +157,12 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
                     }),
                 }
             }
+            InitialCondition::NodeVelocity { node, .. } if topo.roots[node.index()].is_none() => {
+                Err(ModelError::InvalidValue {
+                    entity: format!("initial velocity of node '{}'", node_name(node.index())),
+                    what: "the node follows a joint (its velocity is its parent's and the joint's rates), so a velocity given to it would be ignored; give the joint's initial `rate` or the body's velocity instead".into(),
+                })
+            }
             InitialCondition::NodeVelocity { .. } | InitialCondition::RigidMotion { .. } => Ok(InitialPlan::Direct),
         })
         .collect()

@@ -443,7 +443,16 @@ impl System {
             }
             let xa = model.nodes[s.a.index()].position;
             let xb = s.b.map_or(s.ground_point, |b| model.nodes[b.index()].position);
-            let l0 = s.rest_length.unwrap_or((xb - xa).norm());
+            let l = (xb - xa).norm();
+            let l0 = s.rest_length.unwrap_or(l);
+            // A spring whose ends coincide has no direction: with a rest length its force
+            // k (l - l0) would act along the round-off of the end positions.
+            if l0 > 0.0 && l <= 1e-9 * l0 {
+                return Err(invalid(
+                    format!("spring '{}'", s.name),
+                    format!("its ends coincide (length {l:.3e} m) and its rest length is {l0} m: the direction of its force is undefined; place the ends apart (or give rest_length = 0)"),
+                ));
+            }
             springs.push(SpringElement {
                 a: s.a.index(),
                 b: s.b.map(|b| b.index()),

@@ -587,7 +587,7 @@ pub fn from_bytes_unchecked(bytes: &[u8], origin: &Path) -> Result<ReducedBody, 
 
 /// [`read`] without the physical checks (see [`from_bytes_unchecked`]).
 pub fn read_unchecked(path: &Path) -> Result<ReducedBody, ReductionError> {
-    let bytes = std::fs::read(path).map_err(|e| ReductionError::BodyFile {
+    let bytes = fe_model::input::read(path).map_err(|e| ReductionError::BodyFile {
         path: path.to_path_buf(),
         problem: BodyFileProblem::Io {
             action: "read",

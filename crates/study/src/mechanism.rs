@@ -438,10 +438,28 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 xyz("relative_position", "m")
             }
             SensorTarget::Deflection { of, chord, normal } => {
+                let (a, b) = (node(&chord[0], &s.path)?, node(&chord[1], &s.path)?);
+                let (xa, xb) = (model.nodes[a.index()].position, model.nodes[b.index()].position);
+                // Coincident chord points define no line: the "deflection" would be a distance
+                // to a point. 1e-9 of the coordinates' size is round-off.
+                if (xb - xa).norm() <= 1e-9 * xa.norm().max(xb.norm()).max(f64::MIN_POSITIVE) {
+                    return Err(located(
+                        study,
+                        &s.path.key("chord"),
+                        format!(
+                            "the chord's points '{}' and '{}' coincide at ({:.6}, {:.6}, {:.6}): a deflection is measured from the line through two distinct points",
+                            m.point_name(&chord[0]),
+                            m.point_name(&chord[1]),
+                            xa.x,
+                            xa.y,
+                            xa.z
+                        ),
+                    ));
+                }
                 kinds = single(SensorKind::LineDistance {
                     node: node(of, &s.path)?,
-                    a: node(&chord[0], &s.path)?,
-                    b: node(&chord[1], &s.path)?,
+                    a,
+                    b,
                     normal: *normal,
                 });
                 vec!["deflection [m]".into()]
@@ -572,11 +590,16 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 at,
                 velocity,
                 angular_velocity,
-            } => model.initial.push(InitialCondition::NodeVelocity {
-                node: node(at, path)?,
-                velocity: *velocity,
-                angular_velocity: *angular_velocity,
-            }),
+            } => {
+                let n = node(at, path)?;
+                // A refusal of the velocity (a node that follows a joint) names the node.
+                entities.push((path.clone(), model.nodes[n.index()].name.clone()));
+                model.initial.push(InitialCondition::NodeVelocity {
+                    node: n,
+                    velocity: *velocity,
+                    angular_velocity: *angular_velocity,
+                })
+            }
             InitialSpec::Body {
                 body,
                 velocity,

@@ -111,6 +111,10 @@ pub fn pending_summary(study: &Study) -> Summary {
 /// file), with `observer` seeing every result too. Stops at the first analysis that fails,
 /// after writing the summary with the failure.
 pub fn run(study: &Study, options: &Options, observer: &mut dyn Observer) -> Result<Summary, BoxError> {
+    // Refused before the results folder is made.
+    if study.analyses.is_empty() {
+        return Err(nothing_to_run(study));
+    }
     let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
     let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
     run_with(study, options, &mut (&mut folder, observer))
@@ -138,13 +142,7 @@ pub fn run_only(
 pub fn run_with(study: &Study, options: &Options, obs: &mut dyn Observer) -> Result<Summary, BoxError> {
     let n = study.analyses.len();
     if n == 0 {
-        return Err(format!(
-            "{}: the study has no [[analyses]], so there is nothing to run; add one \
-             (`type = \"static\"`, `\"modal\"`, `\"reduce\"`, `\"equilibrium\"`, `\"dynamic\"` or \
-             `\"linearized\"`, docs/study-file.md)",
-            study.source.path.display()
-        )
-        .into());
+        return Err(nothing_to_run(study));
     }
     let mut runner = Runner::new(study, options);
     obs.summary(&runner.summary)?;
@@ -152,6 +150,17 @@ pub fn run_with(study: &Study, options: &Options, obs: &mut dyn Observer) -> Res
         runner.run_one(i, obs)?;
     }
     runner.finish(obs)
+}
+
+/// The error for a study without analyses.
+pub fn nothing_to_run(study: &Study) -> BoxError {
+    format!(
+        "{}: the study has no [[analyses]], so there is nothing to run; add one \
+         (`type = \"static\"`, `\"modal\"`, `\"reduce\"`, `\"equilibrium\"`, `\"dynamic\"`, \
+         `\"linearized\"` or `\"buckling\"`, docs/study-file.md)",
+        study.source.path.display()
+    )
+    .into()
 }
 
 /// A study being run analysis by analysis; the mechanism is built once, at its first

@@ -12,6 +12,11 @@ use study::{Document, Simulation};
 #[path = "study/setup.rs"]
 mod setup;
 
+/// Physically wrong input refused at its entity; named pipes; validation time linear in the
+/// number of entries.
+#[path = "study/input_checks.rs"]
+mod input_checks;
+
 /// A fresh scratch folder for one test.
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("study-tests-{}-{name}", std::process::id()));

@@ -348,7 +348,7 @@ impl std::fmt::Display for Entity {
 
 /// Reads a file for a reader, with the I/O error naming it.
 pub(super) fn read_text(path: &Path) -> Result<Vec<u8>, ImportError> {
-    std::fs::read(path).map_err(|source| ImportError::Io {
+    crate::input::read(path).map_err(|source| ImportError::Io {
         path: path.to_path_buf(),
         source,
     })
@@ -409,7 +409,7 @@ pub(super) fn read_include(
         ));
     }
     let target = path.parent().unwrap_or(Path::new("")).join(name);
-    let data = std::fs::read(&target).map_err(|source| ImportError::Io {
+    let data = crate::input::read(&target).map_err(|source| ImportError::Io {
         path: target.clone(),
         source,
     })?;
