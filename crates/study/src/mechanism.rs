@@ -1399,9 +1399,13 @@ pub fn run_analysis(
                     if let Err(e) = integ.record(&mut rec) {
                         // A sensor that is not finite (mbs::SolveError::NonFiniteSensor): the
                         // rows before it are written, the run is not complete.
-                        out.failure = Some(format!(
-                            "time integration stopped: {e}; results up to t = {last_written:.6} s are written"
-                        ));
+                        out.failure = Some(SolverStopped {
+                            message: format!(
+                                "time integration stopped; results up to t = {last_written:.6} s are written"
+                            ),
+                            step: Some(k),
+                            source: e,
+                        });
                         sensor_failed = true;
                         break;
                     }
