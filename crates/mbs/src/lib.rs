@@ -192,7 +192,7 @@ pub mod user_force;
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use dynamic_solver::{
     solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters, DynamicSettings,
-    Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
+    Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE, PI_INTEGRAL, PI_PROPORTIONAL,
 };
 pub use error::{Incomplete, ModelError, SolveError};
 pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
