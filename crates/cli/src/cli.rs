@@ -38,9 +38,11 @@ options of run and reduce:
   --foreign-files refuse|keep
                  a results folder holding files flexmbs did not write: refuse to run
                  (default) or write beside them; flexmbs deletes only files it wrote
-option of run:
+options of run:
   --t-end T      end every dynamic analysis at T seconds at the latest (a short run; the
                  summary says so)
+  --analysis NAME
+                 run this analysis alone (first the analyses its `start` names, if any)
 
 `flexmbs COMMAND --help` shows one command.
 
@@ -53,7 +55,8 @@ pub fn command_help(command: &str) -> Option<&'static str> {
     Some(match command {
         "run" => {
             "\
-usage: flexmbs run [STUDY.toml] [--out DIR] [--cache DIR] [--t-end T] [--foreign-files refuse|keep]
+usage: flexmbs run [STUDY.toml] [--analysis NAME] [--out DIR] [--cache DIR] [--t-end T]
+                   [--foreign-files refuse|keep]
 
 Validates the study, then runs its analyses in order and writes the results folder
 (default: STUDY-results beside the study file). Without a file, runs the built-in example,
@@ -61,7 +64,11 @@ the flexible planar slider-crank (validation problem C2), into ./slider_crank-re
 
   --out DIR      results folder
   --cache DIR    reduced-body cache (default: .flexmbs-cache beside the study file)
-  --t-end T      end every dynamic analysis at T seconds at the latest; the summary says so"
+  --t-end T      end every dynamic analysis at T seconds at the latest; the summary says so
+  --analysis NAME
+                 run this analysis alone; when its `start` names another analysis, that one
+                 (and the one its `start` names, and so on) runs first and writes its results
+                 too. The other analyses' results are left as they are."
         }
         "check" => {
             "\
@@ -231,7 +238,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             Ok(())
         }
         "run" => {
-            let (positional, options) = parse(rest, &["out", "cache", "t-end", "foreign-files"])?;
+            let (positional, options) = parse(rest, &["out", "cache", "t-end", "foreign-files", "analysis"])?;
             let mut run_options = run_options(&options)?;
             if let Some(v) = option(&options, "t-end") {
                 run_options.t_end = Some(
@@ -242,11 +249,11 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 );
             }
             match positional.as_slice() {
-                [] => crate::builtin::run(&run_options),
+                [] if option(&options, "analysis").is_none() => crate::builtin::run(&run_options),
                 _ => {
                     let path = one_file(&positional, "run", "a study file")?;
                     let study = load(&path)?;
-                    run(&study, &run_options)?;
+                    run(&study, &run_options, option(&options, "analysis"))?;
                     Ok(())
                 }
             }

@@ -110,11 +110,15 @@
 //! Struct. Dyn.* 20; with the algorithmic accelerations of generalized-α):
 //! $\mathbf e_{n+1} = h^2\,|\beta - \tfrac16|\,(\mathbf a_{n+1} - \mathbf a_n)$, the $O(h^3)$ term the
 //! update of $\mathbf q$ misses, measured as $\max_i|e_i|/s_i$ with the unknowns' scales
-//! ([`System::increment_norm`]). A step with $e >$ `tolerance` is rejected and retried; the next
-//! step is $h\min(2, \max(0.2, 0.9(\mathrm{tol}/e)^{1/3}))$ within `[min_step, max_step]`.
-//! The recursion of $\mathbf a_n$ is the same for any $h$, so the fixed-step path
-//! ([`Integrator::step`]) is unchanged. With modified Newton every accepted change of $h$
-//! refactorises the iteration matrix (rule (i) above).
+//! ([`System::increment_norm`]). A step with $e >$ `tolerance` is rejected and retried with
+//! $h\min(0.9, \max(0.2, 0.9(\mathrm{tol}/e)^{1/3}))$; after an accepted one the PI controller
+//! ([`PI_INTEGRAL`], [`PI_PROPORTIONAL`]) sets the next,
+//! $h_{n+1} = 0.9\,h_n(\mathrm{tol}/e_n)^{0.7/3}(e_{n-1}/\mathrm{tol})^{0.4/3}$, growing by at most 2
+//! (not at all right after a rejection) within `[min_step, max_step]`: it follows the error's
+//! trend, so a smoothly varying error is met without the cycle of growth and rejection of the
+//! plain $(\mathrm{tol}/e)^{1/3}$ rule.
+//! The fixed-step path ([`Integrator::step`]) is unchanged. With modified Newton
+//! every accepted change of $h$ refactorises the iteration matrix (rule (i) above).
 //!
 //! # What is conserved
 //!
@@ -141,6 +145,12 @@ use crate::system::{State, System, Workspace};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3, Vector6};
 use std::sync::Arc;
 use superelement::so3;
+
+/// Exponents of the PI step controller (module docs, "Adaptive step"), $h_{n+1} = 0.9\,h_n
+/// (\mathrm{tol}/e_n)^{0.7/k}(e_{n-1}/\mathrm{tol})^{0.4/k}$ for a local error of order $k = 3$
+/// (Gustafsson 1991; Hairer & Wanner, *Solving ODEs II*, §IV.2).
+pub const PI_INTEGRAL: f64 = 0.7 / 3.0;
+pub const PI_PROPORTIONAL: f64 = 0.4 / 3.0;
 
 /// Settings of the adaptive step (module docs).
 #[derive(Clone, Debug, PartialEq)]
@@ -368,6 +378,8 @@ pub struct Integrator<'a> {
     last_corrections: usize,
     /// Free independent nodes whose translations the recursion carries in body axes.
     trans: Vec<BodyTranslation>,
+    /// The error estimate of the last accepted adaptive step (the PI controller's memory).
+    last_error: Option<f64>,
 }
 
 /// The translations of a free independent node (three unknown translations and a free
@@ -547,6 +559,7 @@ impl<'a> Integrator<'a> {
             J0,
             last_corrections: 0,
             trans,
+            last_error: None,
         })
     }
 
@@ -600,12 +613,18 @@ impl<'a> Integrator<'a> {
                         self.dx[i] = h * h * c * (self.a[i] - self.a_prev[i]);
                     }
                     let error = self.system.increment_norm(&self.dx);
-                    let factor = if error > 0.0 {
-                        (0.9 * (adaptive.tolerance / error).cbrt()).clamp(0.2, 2.0)
-                    } else {
-                        2.0
-                    };
                     if error <= adaptive.tolerance || h <= adaptive.min_step {
+                        // PI control of the step (Gustafsson 1991): the error's trend as well
+                        // as its size; no growth right after a rejection.
+                        let factor = if error > 0.0 {
+                            let tol = adaptive.tolerance;
+                            let e0 = self.last_error.unwrap_or(tol);
+                            0.9 * (tol / error).powf(PI_INTEGRAL) * (e0 / tol).powf(PI_PROPORTIONAL)
+                        } else {
+                            2.0
+                        };
+                        let factor = factor.clamp(0.2, if rejected > 0 { 1.0 } else { 2.0 });
+                        self.last_error = Some(error.max(1e-3 * adaptive.tolerance));
                         self.settings.step = (h * factor).clamp(adaptive.min_step, adaptive.max_step);
                         return Ok(AdaptiveStep {
                             report,
@@ -618,9 +637,10 @@ impl<'a> Integrator<'a> {
                     self.state.clone_from(&self.prev);
                     self.a.clone_from(&self.a_prev);
                     self.steps -= 1;
-                    self.settings.step = h * factor;
+                    self.settings.step = h * (0.9 * (adaptive.tolerance / error).cbrt()).clamp(0.2, 0.9);
                 }
                 Err(e @ (SolveError::NotConverged { .. } | SolveError::Singular { .. } | SolveError::Body { .. })) => {
+                    self.a.clone_from(&self.a_prev);
                     if h <= adaptive.min_step {
                         return Err(e);
                     }

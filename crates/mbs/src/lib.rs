@@ -195,7 +195,8 @@ pub mod user_force;
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use dynamic_solver::{
     fixed_steps, solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters,
-    DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
+    DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE, PI_INTEGRAL,
+    PI_PROPORTIONAL,
 };
 pub use error::{Incomplete, ModelError, SolveError};
 pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};

@@ -121,7 +121,9 @@ pub fn run(study: &Study, options: &Options, observer: &mut dyn Observer) -> Res
 }
 
 /// Runs analysis `index` of `study` alone into its results folder (the other analyses'
-/// files are left as they are), every result to `observer` too.
+/// files are left as they are), every result to `observer` too. When its `start` names
+/// another analysis, that one (and the chain of `start`s behind it) runs first and writes
+/// its results too ([`Runner::run_one`]).
 pub fn run_only(
     study: &Study,
     options: &Options,
@@ -204,10 +206,20 @@ impl<'s> Runner<'s> {
     }
 
     /// Runs analysis `i`; a failure is recorded in the summary and returned with the
-    /// analysis it belongs to.
+    /// analysis it belongs to. An analysis whose `start` names one that has not run yet runs
+    /// that one first (and its own `start`, down the chain), with its results recorded as
+    /// usual: running one analysis alone needs no earlier run.
     pub fn run_one(&mut self, i: usize, obs: &mut dyn Observer) -> Result<(), BoxError> {
         let study = self.study;
         let a = &study.analyses[i];
+        // The analysis whose final state is the start, run now when it has not run.
+        let mut prerequisite = None;
+        if let Some(k) = a.start {
+            if self.states[k].is_none() && self.summary.analyses[k].status == crate::output::Status::Pending {
+                self.run_one(k, obs)?;
+                prerequisite = Some(k);
+            }
+        }
         let info = analysis_info(study, i);
         obs.begin(&info)?;
         let t = Instant::now();
@@ -265,6 +277,15 @@ impl<'s> Runner<'s> {
             _ => run_analysis(study, a, &cache, obs),
         };
         let result = result.map(|mut o| {
+            if let Some(k) = prerequisite {
+                o.report.insert(
+                    0,
+                    format!(
+                        "started from the final state of '{}', which was run first for it",
+                        study.analyses[k].name
+                    ),
+                );
+            }
             if let Some((requested, limit)) = shortened {
                 o.report.insert(
                     0,
