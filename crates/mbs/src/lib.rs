@@ -93,7 +93,7 @@
 //! | $\mathbf e_{n+1}$ | [`Integrator::step_adaptive`] | local error estimate $h^2\lvert\beta-\frac16\rvert(\mathbf a_{n+1}-\mathbf a_n)$ | Zienkiewicz & Xie 1991 |
 //! | $\rho_\infty,\ \alpha_m,\ \alpha_f,\ \beta,\ \gamma$ | [`AlphaParameters`] | generalized-α parameters | Chung & Hulbert 1993 |
 //! | $\beta',\ \gamma'$ | `bp`, `gp` | iteration-matrix factors | BCA 2012 |
-//! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration (body axes for rotations and free nodes' translations) | BCA 2012 |
+//! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration (body axes for rotations, and for free nodes' translations with `DynamicSettings::body_axis_translations`) | BCA 2012 |
 //! | $\boldsymbol\omega_b,\ \mathbf v_b$ | `vb` (`dynamic_solver`) | body-axis angular and translational velocity of a node, $\mathbf R^T\boldsymbol\omega_s$, $\mathbf R^T\dot{\mathbf x}$ | [`dynamic_solver`] |
 //! | $\mathrm{Re}\,s$ | [`LinearSpectrum::growing`], [`ModeEnergy::growth_rate`] | growth rate of an unstable mode [1/s] | [`linearized`] |
 //! | $\mathbf T(h\Delta\mathbf q)$ | `System::iteration_matrix` | tangent operator $\mathbf J_l$ of each rotation increment | BCA 2012 |

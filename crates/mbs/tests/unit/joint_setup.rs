@@ -540,7 +540,10 @@ fn driver_not_zero_at_start_in_a_loop_is_refused() {
         initial: 0.01,
         rate: 10.0,
     };
-    let msg = System::new(&model).err().expect("refused").to_string();
+    let Err(e) = System::new(&model) else {
+        panic!("a driver not zero at t = 0 in a loop was accepted")
+    };
+    let msg = e.to_string();
     assert!(
         msg.contains("driver 'crank speed'") && msg.contains("0.01") && msg.contains("closed loop"),
         "{msg}"

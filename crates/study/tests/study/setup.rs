@@ -747,7 +747,7 @@ fn the_t_end_option_ends_exactly_there_and_refuses_less_than_a_step() {
 
 /// An inverted pendulum (gravity up: the bob 1 m above the pivot) linearised about its
 /// start: the summary, the report and the mode labels say it is unstable, with the growth rate
-/// sqrt(m g d / (I_G + m d^2)) = sqrt(9.81 / 1.01) = 3.1166 1/s (it was a stable "0 Hz" mode).
+/// sqrt(m g d / (I_G + m d^2)) = sqrt(9.81 / 1.01) = 3.1165 1/s (it was a stable "0 Hz" mode).
 #[test]
 fn an_inverted_pendulum_is_reported_unstable_in_a_study() {
     let text = format!(
