@@ -14,7 +14,7 @@
 //!   optionally saturated at $|u| \le u_{max}$.
 //! * **Held effort** ([`crate::System::set_actuator_effort`]): a caller (a controller or a
 //!   co-simulation partner outside the model) replaces an actuator's law by a value $u_h$ set
-//!   between time steps, $Q = u_h$, constant within the step (no tangent), until it releases
+//!   between time steps, $Q = u_h$ (no tangent) from the end of the next step, until it releases
 //!   the actuator to its law again. While a PID actuator is held its integral $z$ is frozen
 //!   (no wind-up from an error its own law did not act on); released, the law resumes from it.
 //!

@@ -209,7 +209,7 @@ function = { type = "constant-speed", speed = 0.0 }
 [[actuators]]
 name = "servo"
 joint = "pivot"
-pid = { kp = 50.0, ki = 20.0, kd = 10.0, setpoint = { type = "constant-speed", speed = 0.0, initial = 0.3 } }
+pid = { kp = 50.0, ki = 20.0, kd = 10.0, setpoint = { type = "ramp", t_end = 1.0, to = 0.3 } }
 [[sensors]]
 name = "angle"
 type = "joint"
@@ -228,11 +228,16 @@ t_end = 20.0
 dt = 0.01
 "#;
 
-/// The servo pendulum with gravity `g` (m/s^2, along -y), its PID servo held at zero effort;
-/// a simulation of it.
-fn servo_pendulum(tag: &str, g: f64) -> Simulation {
+/// The servo pendulum with gravity `g` (m/s^2, along -y) and the `motor`'s `function`
+/// (`None`: zero), its PID servo held at zero effort; a simulation of it. Both actuators give
+/// no effort at the start (the servo's set-point starts at zero with zero rate), so the
+/// initial accelerations agree with the held values.
+fn servo_pendulum(tag: &str, g: f64, motor: Option<&str>) -> Simulation {
     let dir = scratch(tag);
-    let text = SERVO_PENDULUM.replace("GRAVITY", &format!("{:?}", -g));
+    let mut text = SERVO_PENDULUM.replace("GRAVITY", &format!("{:?}", -g));
+    if let Some(f) = motor {
+        text = text.replace(r#"function = { type = "constant-speed", speed = 0.0 }"#, f);
+    }
     let doc = Document::from_text(&text, &dir.join("servo.toml")).unwrap();
     let study = doc.study().unwrap();
     let options = Options {
@@ -249,12 +254,17 @@ fn servo_pendulum(tag: &str, g: f64) -> Simulation {
 
 #[test]
 fn a_held_actuator_effort_acts_from_the_next_step_until_released() {
-    // Without gravity a held torque M turns the pendulum as a rigid rotor: theta = M t^2 /
-    // (2 I). Generalized-alpha integrates a constant acceleration exactly, so the only error
-    // is the Newton tolerance's (relative 1e-10 of the forces): 1e-9 rad is far below a
-    // step's change and far above round-off.
-    let mut sim = servo_pendulum("held-actuator", 0.0);
-    let (m, inertia) = (0.2, 1.01);
+    // An effort set between steps is the actuator's value at the end of the next step: the
+    // integrator sees it as a study-file function that changes within that step (here a
+    // linear ramp over the first step, 0 to M), to round-off.
+    let (m, inertia, h) = (0.2, 1.01, 0.01);
+    let mut file = servo_pendulum(
+        "ramped-actuator",
+        0.0,
+        Some(r#"function = { type = "ramp", t_end = 0.01, to = 0.2, smooth = false }"#),
+    );
+    file.advance_to(0.5).unwrap();
+    let mut sim = servo_pendulum("held-actuator", 0.0, None);
     assert_eq!(sim.held_actuator("motor").unwrap(), None);
     sim.set_actuator("motor", Some(m)).unwrap();
     assert_eq!(sim.held_actuator("motor").unwrap(), Some(m));
@@ -263,14 +273,20 @@ fn a_held_actuator_effort_acts_from_the_next_step_until_released() {
     assert_eq!(sim.actuator_effort("motor").unwrap(), m);
     sim.advance_to(0.5).unwrap();
     let theta = sim.sensor("angle").unwrap()[0];
-    let expected = m * 0.25 / (2.0 * inertia);
-    assert!((theta - expected).abs() < 1e-9, "{theta} against {expected}");
-    // Released to its law (zero torque): the rate stays what the held torque gave, M t / I.
+    let reference = file.sensor("angle").unwrap()[0];
+    // The same values at every step end; the Newton iterates may differ in the last bits.
+    assert!((theta - reference).abs() < 1e-12, "{theta} against {reference}");
+    // Without gravity the pendulum turns as a rigid rotor under the torque's ramp over the
+    // first step and M after it: theta = M (t - h/2)^2 / (2 I) + M h^2 / (24 I). The
+    // integrator sees the ramp at its ends only: an error of order M h^2 / I = 2e-5 rad.
+    let t = sim.time();
+    let expected = m * (t - h / 2.0).powi(2) / (2.0 * inertia) + m * h * h / (24.0 * inertia);
+    assert!((theta - expected).abs() < 2e-5, "{theta} against {expected}");
+    // Released: its law (zero) acts again. (The release is stepped in the PD test below.)
     sim.set_actuator("motor", None).unwrap();
+    assert_eq!(sim.held_actuator("motor").unwrap(), None);
     assert_eq!(sim.actuator_effort("motor").unwrap(), 0.0);
-    sim.advance_to(1.0).unwrap();
-    let rate = sim.sensor("rate").unwrap()[0];
-    assert!((rate - m * 0.5 / inertia).abs() < 1e-9, "{rate}");
+    assert_eq!(sim.sensor("torque").unwrap(), vec![0.0]);
     // An unknown actuator is named with the close matches; a non-finite effort is refused.
     let e = sim.set_actuator("motr", Some(1.0)).unwrap_err().to_string();
     assert!(e.contains("motor"), "{e}");
@@ -285,7 +301,7 @@ fn a_pd_loop_closed_outside_the_study_reaches_its_equilibrium_under_gravity() {
     // balances the weight, kp (r - theta) = m g L sin(theta), with an offset a PD cannot
     // remove (solved here by Newton, independently of the simulation).
     let (kp, kd, r, g) = (30.0, 8.0, 0.5, 9.81);
-    let mut sim = servo_pendulum("pd-actuator", g);
+    let mut sim = servo_pendulum("pd-actuator", g, None);
     let mut torque = 0.0;
     while sim.time() < 15.0 {
         let theta = sim.sensor("angle").unwrap()[0];
@@ -305,13 +321,15 @@ fn a_pd_loop_closed_outside_the_study_reaches_its_equilibrium_under_gravity() {
     // (0.01 s against a period of 1.2 s) changes the damping, not the equilibrium.
     assert!((theta - expected).abs() < 1e-8, "{theta} against {expected}");
     assert!((torque - g * expected.sin()).abs() < 1e-6, "{torque}");
-    // The servo was held at zero all along: released, its PID (set-point 0.3 rad, an
-    // integral frozen at zero while held) pulls the pendulum towards 0.3 rad.
+    // The servo was held at zero all along: released, its PID (set-point 0.3 rad since t = 1
+    // s, an integral frozen at zero while held) pulls the pendulum to 0.3 rad.
     sim.set_actuator("motor", Some(0.0)).unwrap();
     sim.set_actuator("servo", None).unwrap();
     sim.advance_to(40.0).unwrap();
     let theta = sim.sensor("angle").unwrap()[0];
-    // The integral removes the steady error (slowest pole about -0.4 1/s: e^-10 left after 25 s).
+    // The integral removes the steady error under gravity (closed-loop poles of I s^3 + kd
+    // s^2 + (kp + m g L cos 0.3) s + ki: the slowest near -0.34 1/s, so e^-8 of the 0.2 rad
+    // error is left after 25 s).
     assert!((theta - 0.3).abs() < 1e-3, "{theta}");
 }
 
