@@ -205,9 +205,9 @@ pub use linearized::{
     NodeEnergy,
 };
 pub use model::{
-    Body, BodyId, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind, JointSpring, Load,
-    LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor, SensorKind, Spring,
-    Support, TranslationSupport,
+    Body, BodyId, BodyLoad, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind,
+    JointSpring, Load, LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor,
+    SensorKind, Spring, Support, TranslationSupport,
 };
 pub use momentum::{ExternalAction, MomentumProjection};
 pub use node::NodeMotion;

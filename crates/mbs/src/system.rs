@@ -29,7 +29,7 @@ use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
 use crate::error::{ModelError, SolveError};
 use crate::initial::InitialPlan;
 use crate::joint_forces::{Control, JointForces};
-use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId};
+use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId, SensorKind};
 use crate::node::NodeMotion;
 use crate::time_function::CompiledFunction;
 use crate::topology::{self, RootRotation, Topology};
@@ -394,6 +394,7 @@ impl System {
                         .map(|i| (0..K.ncols()).map(|j| K[(i, j)].abs()).sum::<f64>())
                         .fold(0.0, f64::max);
                     modal_scale[bi] = size_body(&pos).max(1e-3) * f.reduced.inertia.mass.sqrt();
+                    let loads = body_loads(model, bi, &se, model.nodes[f.nodes[0].index()].orientation * offsets[0])?;
                     flexible.push(FlexibleElement {
                         body: bi,
                         se,
@@ -402,6 +403,7 @@ impl System {
                         modal: topo.modal_scalars[bi].clone(),
                         k_norm,
                         size: 2.0 * size_body(&pos),
+                        loads,
                     });
                 }
                 Body::Rigid(r) => {
@@ -517,6 +519,7 @@ impl System {
         let initial_plan = crate::initial::plan(model, &topo)?;
         let driver_starts = crate::initial::driver_starts(model, &topo, &drivers)?;
 
+        check_stress_sensors(model, &flexible)?;
         // Elements and the sparse pattern.
         let mut elements = Vec::new();
         for (i, f) in flexible.iter().enumerate() {
@@ -1324,12 +1327,21 @@ impl System {
                     (state.scalars[s], state.velocity[d], state.acceleration[d])
                 };
                 let flex = buf.flex.as_mut().expect("flexible element buffer");
-                f.element_into(nodes, modal, state.frames[*i], gravity, tangents, flex, out)
-                    .map_err(|source| SolveError::Body {
-                        body: self.model.bodies[f.body].name().to_string(),
-                        t: state.time,
-                        source,
-                    })?;
+                f.element_into(
+                    nodes,
+                    modal,
+                    state.frames[*i],
+                    gravity,
+                    (state.time, lambda),
+                    tangents,
+                    flex,
+                    out,
+                )
+                .map_err(|source| SolveError::Body {
+                    body: self.model.bodies[f.body].name().to_string(),
+                    t: state.time,
+                    source,
+                })?;
             }
             ElementKind::Rigid(i) => {
                 rigid_element(&self.rigid[*i], &nodes[self.rigid[*i].node], gravity, tangents, out);
@@ -1661,4 +1673,84 @@ fn rigid_fit(f: &FlexibleElement, motions: &[NodeMotion]) -> Frame {
         r += motions[n].r - R * x[k];
     }
     Frame::new(r / f.nodes.len() as f64, R)
+}
+
+/// The loads of `model.body_loads` on flexible body `bi` (superelement `se`, initial body axes
+/// `R0`): each checked (its load point exists, finite values), a follower turned into body axes.
+fn body_loads(
+    model: &Model,
+    bi: usize,
+    se: &Superelement,
+    R0: UnitQuaternion<f64>,
+) -> Result<Vec<(superelement::PointLoad, CompiledFunction)>, ModelError> {
+    let mut out = Vec::new();
+    for (i, l) in model
+        .body_loads
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.body.index() == bi)
+    {
+        let entity = || format!("load {i} on body '{}'", model.bodies[bi].name());
+        let invalid = |what: String| ModelError::InvalidValue { entity: entity(), what };
+        if l.point >= se.load_points().len() {
+            return Err(invalid(format!(
+                "load point {} does not exist (the reduced body has {})",
+                l.point,
+                se.load_points().len()
+            )));
+        }
+        if !l.force.iter().chain(l.moment.iter()).all(|x| x.is_finite()) {
+            return Err(invalid("non-finite force or moment".into()));
+        }
+        let follower = l.axes == LoadAxes::Follower;
+        let (force, moment) = if follower {
+            (R0.inverse() * l.force, R0.inverse() * l.moment)
+        } else {
+            (l.force, l.moment)
+        };
+        let load = superelement::PointLoad {
+            point: l.point,
+            force,
+            moment,
+            follower,
+        };
+        out.push((load, l.time.compile(&entity())?));
+    }
+    Ok(out)
+}
+
+/// Every stress sensor is on a flexible body reduced with stress shapes, at nodes it has.
+fn check_stress_sensors(model: &Model, flexible: &[FlexibleElement]) -> Result<(), ModelError> {
+    for s in &model.sensors {
+        let (body, nodes): (BodyId, &[usize]) = match &s.kind {
+            SensorKind::Stress { body, node } => (*body, std::slice::from_ref(node)),
+            SensorKind::MaxVonMises { body, nodes } => (*body, nodes),
+            _ => continue,
+        };
+        let invalid = |what: String| ModelError::InvalidValue {
+            entity: format!("sensor '{}'", s.name),
+            what,
+        };
+        let name = model.bodies[body.index()].name();
+        let Some(f) = flexible.iter().find(|f| f.body == body.index()) else {
+            return Err(invalid(format!(
+                "body '{name}' is rigid: stresses are measured on flexible bodies"
+            )));
+        };
+        let Some(shapes) = f.se.stress_shapes() else {
+            return Err(invalid(format!(
+                "body '{name}' was reduced without stress shapes (reduce its part with `stress_shapes = true`)"
+            )));
+        };
+        let count = shapes.node_count();
+        if nodes.is_empty() {
+            return Err(invalid("no nodes to measure".into()));
+        }
+        if let Some(k) = nodes.iter().find(|&&k| k >= count) {
+            return Err(invalid(format!(
+                "node {k} is not a node of body '{name}' ({count} mesh nodes)"
+            )));
+        }
+    }
+    Ok(())
 }

@@ -183,6 +183,27 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
     for (i, l) in model.loads.iter().enumerate() {
         node(l.node, &|| format!("load {i}"))?;
     }
+    for (i, l) in model.body_loads.iter().enumerate() {
+        match model.bodies.get(l.body.index()) {
+            Some(Body::Flexible(_)) => {}
+            Some(b) => {
+                return Err(ModelError::InvalidValue {
+                    entity: format!("body load {i}"),
+                    what: format!(
+                        "body '{}' is rigid: loads at load points act on flexible bodies",
+                        b.name()
+                    ),
+                })
+            }
+            None => {
+                return Err(ModelError::UnknownBody {
+                    id: l.body.0,
+                    count: model.bodies.len(),
+                    referenced_by: format!("body load {i}"),
+                })
+            }
+        }
+    }
     for s in &model.sensors {
         let who = || format!("sensor '{}'", s.name);
         match &s.kind {
@@ -202,7 +223,11 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
                 node(*b, &who)?;
             }
             SensorKind::JointCoordinate { joint: j, .. } | SensorKind::JointRate { joint: j, .. } => joint(*j, &who)?,
-            SensorKind::ModalCoordinates { body } if body.index() >= model.bodies.len() => {
+            SensorKind::ModalCoordinates { body }
+            | SensorKind::Stress { body, .. }
+            | SensorKind::MaxVonMises { body, .. }
+                if body.index() >= model.bodies.len() =>
+            {
                 return Err(ModelError::UnknownBody {
                     id: body.0,
                     count: model.bodies.len(),

@@ -96,3 +96,6 @@ mod user_force;
 /// An integrator that owns its system; loads changed between steps.
 #[path = "unit/stepping.rs"]
 mod stepping;
+/// Stresses from a multibody state: the centrifugal axial force of a spinning beam.
+#[path = "unit/stress.rs"]
+mod stress;

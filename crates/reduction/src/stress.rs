@@ -87,3 +87,70 @@ pub fn stress_shapes(model: &FeModel, S_full: MatRef<'_, f64>) -> Result<StressS
         },
     })
 }
+
+/// The stresses of a body at its mesh nodes in global axes: the Voigt tensor $[xx, yy, zz, xy,
+/// yz, zx]$ (zero where none), von Mises and the largest principal stress \[Pa\]. Beam nodes
+/// carry no tensor: their von Mises and largest principal stress are the largest magnitude and
+/// the largest value of the extreme-fibre axial stress over the element ends at the node
+/// ([`fe_model::BeamSection::fibre_stress_range`]; the shear stresses of the section are not
+/// included). Nodes without stress (spider nodes) hold 0.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeStresses {
+    pub tensor: Vec<[f64; 6]>,
+    pub von_mises: Vec<f64>,
+    pub principal: Vec<f64>,
+}
+
+impl StressShapes {
+    /// The number of mesh nodes the shapes cover (solid nodes, beam nodes).
+    pub fn node_count(&self) -> usize {
+        self.solid_node.len().max(
+            self.beams
+                .iter()
+                .flat_map(|b| b.nodes)
+                .max()
+                .map_or(0, |m| m as usize + 1),
+        )
+    }
+
+    /// [`NodeStresses`] for CB coordinates `q` ($\boldsymbol\sigma = \boldsymbol\Sigma\mathbf q$ in
+    /// body axes), turned into global axes by `R` ($\mathbf R\boldsymbol\sigma\mathbf R^T$).
+    ///
+    /// # Panics
+    /// If `q` does not have one value per column (a caller's bug).
+    pub fn node_stresses(&self, q: &[f64], R: &nalgebra::Matrix3<f64>) -> NodeStresses {
+        let n_nodes = self.node_count();
+        let mut out = NodeStresses {
+            tensor: vec![[0.0; 6]; n_nodes],
+            von_mises: vec![0.0; n_nodes],
+            principal: vec![0.0; n_nodes],
+        };
+        for (i, s) in self.nodal_stress(q).iter().enumerate().take(n_nodes) {
+            if let Some(s) = s {
+                let g = R * fe_model::stress::tensor(s) * R.transpose();
+                let v = [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]];
+                out.tensor[i] = v;
+                out.von_mises[i] = fe_model::von_mises(&v);
+                out.principal[i] = fe_model::principal_stresses(&v)[0];
+            }
+        }
+        let forces = self.beam_section_forces(q);
+        let ends = self.beams.iter().zip(&forces).flat_map(|(b, forces)| {
+            forces.iter().enumerate().filter_map(move |(end, f)| {
+                let node = b.nodes[end] as usize;
+                let range = b.section.fibre_stress_range(f)?;
+                (node < n_nodes).then_some((node, range))
+            })
+        });
+        for (i, x) in fe_model::stress::fibre_extremes_at_nodes(n_nodes, ends)
+            .iter()
+            .enumerate()
+        {
+            if let Some([magnitude, largest]) = x {
+                out.von_mises[i] = *magnitude;
+                out.principal[i] = *largest;
+            }
+        }
+        out
+    }
+}

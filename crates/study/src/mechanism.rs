@@ -16,8 +16,8 @@ use crate::run::{reduce_part, Reduced};
 use crate::simulation::{sensor_columns, Simulation};
 use crate::source::KeyPath;
 use crate::validate::mechanism::{
-    joint_is_angle, About, BodyRef, BodySource, EffortSpec, FrameSpec, InitialSpec, MbsAnalysis, PointRef, ReactionAt,
-    SensorTarget,
+    joint_is_angle, About, BodyLoadSpec, BodyRef, BodySource, EffortSpec, FrameSpec, InitialSpec, MbsAnalysis,
+    PointRef, ReactionAt, SensorTarget, StressNodes,
 };
 use crate::validate::Study;
 use crate::vtu::{CellRole, PointField, VtuMesh};
@@ -26,7 +26,7 @@ use mbs::{
     SensorKind, Spring, Support, System,
 };
 use nalgebra::{Isometry3, Point3, Vector3};
-use reduction::ReducedBody;
+use reduction::{NodeStresses, ReducedBody};
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -124,6 +124,162 @@ fn reduce_bodies(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<
         }
     }
     Ok((out, reductions))
+}
+
+/// The `mbs` load of a `[[loads]]` point load at a load point inside a flexible body, its
+/// point name resolved against the body's reduced load points.
+fn body_load(study: &Study, l: &BodyLoadSpec, body: &BodyOut) -> Result<mbs::BodyLoad, BoxError> {
+    let Some(point) = body.reduced.load_points.iter().position(|p| p.name == l.point) else {
+        let interfaces: Vec<&str> = body.reduced.interfaces.iter().map(|i| i.name.as_str()).collect();
+        let points: Vec<&str> = body.reduced.load_points.iter().map(|p| p.name.as_str()).collect();
+        return Err(located(
+            study,
+            &l.path.key("at"),
+            format!(
+                "body '{}' has no interface or load point '{}' (interfaces: {}; load points: {})",
+                body.name,
+                l.point,
+                interfaces.join(", "),
+                if points.is_empty() {
+                    "none: add `load_points` to the part's reduction".to_string()
+                } else {
+                    points.join(", ")
+                }
+            ),
+        ));
+    };
+    Ok(mbs::BodyLoad {
+        body: body.id,
+        point,
+        force: l.force,
+        moment: l.moment,
+        axes: l.axes,
+        time: l.time.clone(),
+    })
+}
+
+/// The `mbs` sensor and CSV columns of a `stress` sensor on flexible body `b` (module docs of
+/// `docs/study-file.md`, `[[sensors]]`): its nodes resolved against the body's mesh.
+fn stress_sensor(
+    study: &Study,
+    path: &KeyPath,
+    b: usize,
+    nodes: &StressNodes,
+    body: &BodyOut,
+) -> Result<(SensorKind, Vec<String>), BoxError> {
+    let Some(shapes) = &body.reduced.stress else {
+        return Err(located(
+            study,
+            &path.key("of"),
+            format!(
+                "body '{}' was reduced without stress shapes: set `stress_shapes = true` in its part's [parts.reduction]",
+                body.name
+            ),
+        ));
+    };
+    let count = shapes.node_count();
+    let part = match &study.mechanism.bodies[b].source {
+        BodySource::Part(p) => Some(&study.parts[*p]),
+        BodySource::File(..) => None,
+    };
+    let id = body.id;
+    match nodes {
+        StressNodes::Index(k) => {
+            if *k >= count {
+                return Err(located(
+                    study,
+                    &path.key("node"),
+                    format!(
+                        "body '{}' has {count} mesh nodes with stresses (0 to {})",
+                        body.name,
+                        count.max(1) - 1
+                    ),
+                ));
+            }
+            Ok((SensorKind::Stress { body: id, node: *k }, stress_columns()))
+        }
+        StressNodes::At(x) => {
+            let positions: Vec<Vector3<f64>> = match (&body.reduced.mesh, part) {
+                (Some(mesh), _) => mesh.nodes.iter().map(|p| Vector3::from(*p)).collect(),
+                (None, Some(part)) => part.base.mesh.nodes.iter().map(|p| p.coords).collect(),
+                (None, None) => {
+                    return Err(located(
+                        study,
+                        &path.key("node_at"),
+                        "the body file has no mesh node positions (reduced without mesh shapes): give `node`",
+                    ))
+                }
+            };
+            let size = positions.iter().map(|p| p.norm()).fold(0.0, f64::max);
+            let nearest = (0..positions.len().min(count))
+                .min_by(|&i, &j| (positions[i] - x).norm().total_cmp(&(positions[j] - x).norm()));
+            match nearest {
+                // The node tolerance of the part's `node_at` keys: round-off of the mesh
+                // coordinates, not a search radius.
+                Some(k) if (positions[k] - x).norm() <= 1e-6 * (1.0 + size) => {
+                    Ok((SensorKind::Stress { body: id, node: k }, stress_columns()))
+                }
+                Some(k) => Err(located(
+                    study,
+                    &path.key("node_at"),
+                    format!(
+                        "no mesh node of body '{}' at ({}, {}, {}) (part axes); the nearest, node {k} at ({}, {}, {}), is {:.3e} m away",
+                        body.name,
+                        x.x,
+                        x.y,
+                        x.z,
+                        positions[k].x,
+                        positions[k].y,
+                        positions[k].z,
+                        (positions[k] - x).norm()
+                    ),
+                )),
+                None => Err(located(study, &path.key("node_at"), "the body has no mesh nodes")),
+            }
+        }
+        StressNodes::Set(name) => {
+            let Some(part) = part else {
+                return Err(located(
+                    study,
+                    &path.key("set"),
+                    "a body read from a file has no node sets: give `node` or `node_at`",
+                ));
+            };
+            let Some(set) = part.base.mesh.node_set(name) else {
+                let known: Vec<&str> = part.base.mesh.node_sets.keys().map(String::as_str).collect();
+                return Err(located(
+                    study,
+                    &path.key("set"),
+                    format!(
+                        "part '{}' has no node set '{name}' (node sets: {})",
+                        part.name,
+                        known.join(", ")
+                    ),
+                ));
+            };
+            let nodes: Vec<usize> = set.iter().map(|n| n.index()).filter(|&k| k < count).collect();
+            if nodes.is_empty() {
+                return Err(located(
+                    study,
+                    &path.key("set"),
+                    format!("node set '{name}' has no node with stresses"),
+                ));
+            }
+            Ok((
+                SensorKind::MaxVonMises { body: id, nodes },
+                vec!["von_mises_max [Pa]".into(), "node [-]".into()],
+            ))
+        }
+    }
+}
+
+/// The columns of a stress sensor at one node.
+fn stress_columns() -> Vec<String> {
+    ["xx", "yy", "zz", "xy", "yz", "zx"]
+        .iter()
+        .map(|c| format!("stress_{c} [Pa]"))
+        .chain(["von_mises [Pa]".into(), "max_principal [Pa]".into()])
+        .collect()
 }
 
 /// Builds the `mbs::Model` of the study's mechanism (module docs).
@@ -390,6 +546,9 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             loads: ids,
         });
     }
+    for l in &m.body_loads {
+        model.body_loads.push(body_load(study, l, &bodies[l.body])?);
+    }
     // Sensors.
     let mut groups = Vec::new();
     let xyz = |what: &str, unit: &str| -> Vec<String> {
@@ -479,6 +638,11 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                     if rate { "rate" } else { "coordinate" },
                     joint_unit(*j, *c, rate)
                 )]
+            }
+            SensorTarget::Stress { body, nodes } => {
+                let (kind, columns) = stress_sensor(study, &s.path, *body, nodes, &bodies[*body])?;
+                kinds = single(kind);
+                columns
             }
             SensorTarget::Modal(b) => {
                 kinds = single(SensorKind::ModalCoordinates {
@@ -788,55 +952,6 @@ pub struct HotSpot {
     pub time: f64,
 }
 
-/// The stress fields of one body at one time, on its mesh nodes, in global axes: Voigt tensor
-/// (zero where none), von Mises and largest principal stress. Beam nodes carry no tensor;
-/// their von Mises and largest principal stress are the largest magnitude and the largest
-/// value of the extreme-fibre axial stress over the element ends at the node (shear stresses
-/// of the section are not included).
-struct NodeStresses {
-    tensor: Vec<[f64; 6]>,
-    von_mises: Vec<f64>,
-    principal: Vec<f64>,
-}
-
-/// The stresses of a body at its nodes from its kinematics, `None` without stress shapes.
-/// `R` turns body axes into global axes.
-fn node_stresses(se: &Superelement, q_jj: &[f64], R: &nalgebra::Matrix3<f64>, n_nodes: usize) -> Option<NodeStresses> {
-    let shapes = se.stress_shapes()?;
-    let stress = se.recover_stress(q_jj)?;
-    let mut out = NodeStresses {
-        tensor: vec![[0.0; 6]; n_nodes],
-        von_mises: vec![0.0; n_nodes],
-        principal: vec![0.0; n_nodes],
-    };
-    for (i, s) in stress.nodal.iter().enumerate().take(n_nodes) {
-        if let Some(s) = s {
-            let g = R * fe_model::stress::tensor(s) * R.transpose();
-            let v = [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]];
-            out.tensor[i] = v;
-            out.von_mises[i] = fe_model::von_mises(&v);
-            out.principal[i] = fe_model::principal_stresses(&v)[0];
-        }
-    }
-    let ends = shapes.beams.iter().zip(&stress.beams).flat_map(|(b, forces)| {
-        forces.iter().enumerate().filter_map(move |(end, f)| {
-            let node = b.nodes[end] as usize;
-            let range = b.section.fibre_stress_range(f)?;
-            (node < n_nodes).then_some((node, range))
-        })
-    });
-    for (i, x) in fe_model::stress::fibre_extremes_at_nodes(n_nodes, ends)
-        .iter()
-        .enumerate()
-    {
-        if let Some([magnitude, largest]) = x {
-            out.von_mises[i] = *magnitude;
-            out.principal[i] = *largest;
-        }
-    }
-    Some(out)
-}
-
 impl MeshRecovery {
     pub fn new(b: &BuiltMechanism) -> Result<Self, BoxError> {
         let mut mesh = VtuMesh::default();
@@ -975,12 +1090,7 @@ impl MeshRecovery {
     ) -> Vec<Option<NodeStresses>> {
         let mut out = Vec::with_capacity(kins.len());
         for (k, ((se, _, _), (kin, _))) in self.flexible.iter().zip(kins).enumerate() {
-            let n_nodes = se.stress_shapes().map_or(0, |s| {
-                s.solid_node
-                    .len()
-                    .max(s.beams.iter().flat_map(|b| b.nodes).max().map_or(0, |m| m as usize + 1))
-            });
-            let st = node_stresses(se, &kin.q_jj, &kin.R_j, n_nodes);
+            let st = se.stress_shapes().map(|s| s.node_stresses(&kin.q_jj, &kin.R_j));
             if let Some(st) = &st {
                 if let Some((node, &vm)) = st.von_mises.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
                     if self.hot[k].is_none_or(|h| vm > h.von_mises) {

@@ -17,6 +17,11 @@ mod setup;
 #[path = "study/input_checks.rs"]
 mod input_checks;
 
+/// Stresses: loads at load points inside a reduced body against the full FE model, read by
+/// `stress` sensors and the VTU stress fields.
+#[path = "study/stress.rs"]
+mod stress;
+
 /// A fresh scratch folder for one test.
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("study-tests-{}-{name}", std::process::id()));

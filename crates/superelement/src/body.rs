@@ -80,6 +80,9 @@ pub struct Superelement {
     pub(crate) mesh: Option<MeshModes>,
     /// The stress of every CB vector, for [`Superelement::recover_stress`].
     pub(crate) stress: Option<reduction::StressShapes>,
+    /// Named load points with their CB shapes ($6\times n$ each, checked), for
+    /// [`Superelement::point_load_into`].
+    pub(crate) load_points: Vec<reduction::LoadPoint>,
     /// Geometric stiffening $\mathbf G_k$ ([`GeometricStiffness`]); `None`: a linear elastic field.
     pub(crate) geometric: Option<GeometricStiffness>,
 }
@@ -395,6 +398,15 @@ impl Superelement {
             }
         };
         let geometric = geometric_stiffness(body, n)?;
+        for lp in &body.load_points {
+            check_dense(body, &format!("the shape of load point '{}'", lp.name), &lp.shape, 6, n)?;
+            if !lp.position.iter().all(|x| x.is_finite()) {
+                return Err(invalid(
+                    body,
+                    format!("load point '{}' has a non-finite position", lp.name),
+                ));
+            }
+        }
         let x: Vec<Vector3<f64>> = positions.iter().map(|p| p - origin).collect();
         let K_CB = body.K_CB.to_faer();
         let M_CB = body.M_CB.to_faer();
@@ -445,6 +457,7 @@ impl Superelement {
             frame_settings: FrameSettings::default(),
             mesh: body.mesh.clone(),
             stress: body.stress.clone(),
+            load_points: body.load_points.clone(),
             geometric,
         })
     }

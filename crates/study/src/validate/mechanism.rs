@@ -141,6 +141,34 @@ pub struct PointLoadSpec {
     pub time: TimeFunction,
 }
 
+/// A `[[loads]]` point load at a load point inside a flexible body (`"body.point"` where
+/// `point` is no interface): the name is resolved against the reduced body's load points when
+/// the study runs (`mechanism::build`).
+#[derive(Clone, Debug)]
+pub struct BodyLoadSpec {
+    pub name: String,
+    pub path: KeyPath,
+    /// Index into [`Mechanism::bodies`].
+    pub body: usize,
+    pub point: String,
+    pub axes: LoadAxes,
+    pub force: Vector3<f64>,
+    pub moment: Vector3<f64>,
+    pub time: TimeFunction,
+}
+
+/// Which mesh nodes a `stress` sensor reads (resolved against the body's mesh when the study
+/// runs).
+#[derive(Clone, Debug, PartialEq)]
+pub enum StressNodes {
+    /// One node by index in the part's mesh (0-based, as the VTU files and the hot spot).
+    Index(usize),
+    /// The mesh node at this position (part axes) \[m\].
+    At(Vector3<f64>),
+    /// The largest von Mises stress over a node set of the part's mesh.
+    Set(String),
+}
+
 /// What a sensor measures, with its references resolved.
 #[derive(Clone, Debug)]
 pub enum SensorTarget {
@@ -165,6 +193,11 @@ pub enum SensorTarget {
     ActuatorEffort(usize),
     Energy,
     Momentum,
+    /// Stresses of flexible body `body` (index into [`Mechanism::bodies`]).
+    Stress {
+        body: usize,
+        nodes: StressNodes,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -296,6 +329,8 @@ pub struct Mechanism {
     pub drivers: Vec<DriverSpec>,
     pub gravity: Option<(KeyPath, Vector3<f64>)>,
     pub loads: Vec<PointLoadSpec>,
+    /// Point loads at load points inside flexible bodies.
+    pub body_loads: Vec<BodyLoadSpec>,
     pub sensors: Vec<SensorSpec>,
     pub initial: Vec<InitialSpec>,
     pub joint_springs: Vec<JointSpringSpec>,
@@ -1303,8 +1338,17 @@ impl Validator<'_> {
         let Some(at_text) = self.require_ref(path, &l.at, "at", "the point loaded, \"body.point\"") else {
             return;
         };
-        let Some(at) = self.point(&path.key("at"), at_text, m, false) else {
-            return;
+        // "body.point" naming no interface of a flexible body: a load point inside it.
+        let inner = at_text.split_once('.').and_then(|(body, point)| {
+            let b = m.bodies.iter().position(|b| b.name == body)?;
+            (!m.bodies[b].interfaces.iter().any(|i| i == point)).then(|| (b, point.to_string()))
+        });
+        let at = match inner {
+            Some(_) => None,
+            None => match self.point(&path.key("at"), at_text, m, false) {
+                Some(at) => Some(at),
+                None => return,
+            },
         };
         let Some(axes) = self.choice(&path.key("axes"), &l.axes, "global", &["global", "body"], "load axes") else {
             return;
@@ -1337,6 +1381,26 @@ impl Validator<'_> {
             },
             None => TimeFunction::constant(1.0),
         };
+        let Some(at) = at else {
+            let (body, point) = inner.expect("a load point when not an interface");
+            let value = |kind| {
+                values
+                    .iter()
+                    .find(|(k, _)| *k == kind)
+                    .map_or(Vector3::zeros(), |v| v.1)
+            };
+            m.body_loads.push(BodyLoadSpec {
+                name: l.name.clone(),
+                path: path.clone(),
+                body,
+                point,
+                axes,
+                force: value(LoadKind::Force),
+                moment: value(LoadKind::Moment),
+                time,
+            });
+            return;
+        };
         m.loads.push(PointLoadSpec {
             name: l.name.clone(),
             path: path.clone(),
@@ -1364,6 +1428,7 @@ impl Validator<'_> {
             "actuator-effort",
             "energy",
             "momentum",
+            "stress",
         ];
         let kind = self.choice(
             &path.key("type"),
@@ -1377,6 +1442,7 @@ impl Validator<'_> {
             "deflection" => &["name", "type", "of", "chord", "normal"],
             "joint" | "joint-rate" => &["name", "type", "of", "coordinate"],
             "energy" | "momentum" => &["name", "type"],
+            "stress" => &["name", "type", "of", "node", "node_at", "set"],
             _ => &["name", "type", "of"],
         };
         self.only_keys(path, allowed, &format!("a '{kind}' sensor"));
@@ -1444,6 +1510,28 @@ impl Validator<'_> {
                 } else {
                     SensorTarget::JointRate(j, c)
                 }
+            }
+            "stress" => {
+                let Some(body) = m.bodies.iter().position(|b| b.name == of) else {
+                    if !self.failed.contains(&format!("body:{of}")) {
+                        let names: Vec<String> = m.bodies.iter().map(|b| b.name.clone()).collect();
+                        self.err(&op, unknown_reference("flexible body", &of, &names));
+                    }
+                    return None;
+                };
+                let nodes = match (s.node, &s.node_at, &s.set) {
+                    (Some(k), None, None) => StressNodes::Index(k),
+                    (None, Some(x), None) => StressNodes::At(self.finite3(&path.key("node_at"), x, "node_at [m]")?),
+                    (None, None, Some(set)) => StressNodes::Set(set.clone()),
+                    _ => {
+                        self.err(
+                            path,
+                            "give the stress sensor's node by `node` (index in the part's mesh), `node_at` = [x, y, z] (part axes) or `set` (a node set: the largest von Mises stress over it), one of them",
+                        );
+                        return None;
+                    }
+                };
+                SensorTarget::Stress { body, nodes }
             }
             "modal" => match self.lookup("flexible", &of) {
                 Some(b) => SensorTarget::Modal(b),

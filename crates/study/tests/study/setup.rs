@@ -26,7 +26,7 @@ fn run(name: &str, text: &str) -> (Recorder, Result<Summary, String>, PathBuf) {
     (rec, summary, file)
 }
 
-fn column(rec: &Recorder, analysis: &str, sensor: &str, c: usize) -> Vec<f64> {
+pub(crate) fn column(rec: &Recorder, analysis: &str, sensor: &str, c: usize) -> Vec<f64> {
     rec.analysis(analysis)
         .unwrap()
         .sensors
