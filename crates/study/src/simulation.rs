@@ -309,8 +309,9 @@ impl Simulation {
         Ok(self.system().held_actuator_effort(index))
     }
 
-    /// Records the `mbs` sensors at the current state into `record`.
-    pub fn record(&self, record: &mut SensorRecord) -> Result<(), BoxError> {
-        Ok(self.integrator.record(record)?)
+    /// Records the `mbs` sensors at the current state into `record`; a sensor value that is not
+    /// finite is [`mbs::SolveError::NonFiniteSensor`] (the row stays in `record`).
+    pub fn record(&self, record: &mut SensorRecord) -> Result<(), mbs::SolveError> {
+        self.integrator.record(record)
     }
 }
