@@ -926,12 +926,12 @@ pub fn solve_dynamic(
 ) -> Result<Trajectory, Box<Incomplete<Trajectory>>> {
     let fail = |error: SolveError, traj: Trajectory| Box::new(Incomplete { error, partial: traj });
     let (mut integ, mut traj) = start_trajectory(system, start, settings)?;
-    let (n_steps, last) = fixed_steps(integ.state().time, settings.end_time, settings.step);
+    let (n_steps, _) = fixed_steps(integ.state().time, settings.end_time, settings.step);
     let every = settings.output_every.max(1);
     for k in 1..=n_steps {
         if k == n_steps {
             // Land on the end time (fixed_steps): the last step may be shorter.
-            integ.set_step_size(last.min(settings.end_time - integ.state().time));
+            integ.set_step_size(settings.end_time - integ.state().time);
         }
         match integ.step() {
             Ok(rep) => {

@@ -1458,7 +1458,7 @@ pub fn run_analysis(
                 k += 1;
                 let t_before = integ.time();
                 if adaptive.is_none() && k == n_steps {
-                    integ.set_step_size(last_step.min(*t_end - t_before));
+                    integ.set_step_size(*t_end - t_before);
                 }
                 let taken: Result<Vec<mbs::StepReport>, mbs::SolveError> = match adaptive {
                     None => match integ.step_retrying(*dt_min) {
