@@ -29,12 +29,12 @@ fn every_command_has_help_that_exits_0() {
     let out = flexmbs(&dir, &["--help"]);
     let general = out.stdout;
     let run_only = general
-        .split("option of run:")
+        .split("options of run:")
         .nth(1)
-        .expect("an 'option of run' block");
+        .expect("an 'options of run' block");
     assert!(run_only.contains("--t-end"), "{general}");
     let both = general.split("options of run and reduce:").nth(1).unwrap();
-    let both = both.split("option of run:").next().unwrap();
+    let both = both.split("options of run:").next().unwrap();
     assert!(!both.contains("--t-end"), "{general}");
     // And validate calls itself by the name it was run as.
     let out = flexmbs(&dir, &["validate", "--help"]);

@@ -227,7 +227,7 @@ fn export_fem_writes_an_mbdyn_file_that_a_study_reads_back() {
     // The .fem file as a body of a study: its exposed nodes are the interfaces.
     std::fs::write(
         dir.join("fem.toml"),
-        "[[bodies]]\nname = \"beam\"\nfile = \"beam.fem\"\n",
+        "[[bodies]]\nname = \"beam\"\nfile = \"beam.fem\"\n\n[[analyses]]\nname = \"modes\"\ntype = \"linearized\"\n",
     )
     .unwrap();
     let out = flexmbs(&dir, &["check", "fem.toml"]);

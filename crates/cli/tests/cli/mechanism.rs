@@ -277,7 +277,8 @@ fn linearized_modes_are_labelled_by_body_and_node() {
             "frequency [Hz]",
             "damping ratio [-]",
             "rigid body [-]",
-            "carried by"
+            "carried by",
+            "growth rate [1/s]"
         ]
     );
     assert!(!rows.is_empty());
@@ -287,7 +288,7 @@ fn linearized_modes_are_labelled_by_body_and_node() {
         assert!(f >= last, "ascending frequencies");
         last = f;
         // The label holds a comma, so the writer quotes it; `read_csv` splits at every comma.
-        let label = r[4..].join(",");
+        let label = r[4..r.len() - 1].join(",");
         let label = label.trim_matches('"');
         assert!(label.starts_with("coupler ("), "label {label:?}");
         assert!(label.contains("), node coupler."), "label {label:?}");

@@ -320,6 +320,8 @@ fn binary_and_deeply_nested_files_fail_cleanly() {
         assert!(out.stderr.contains("deep.toml"), "{}", out.stderr);
     }
     std::fs::write(dir.join("empty.toml"), "").unwrap();
+    // An empty study parses, and is refused for having nothing to run.
     let out = flexmbs(&dir, &["check", "empty.toml"]);
-    assert_eq!(out.code, 0, "an empty study is valid: {}", out.stderr);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("no [[analyses]]"), "{}", out.stderr);
 }

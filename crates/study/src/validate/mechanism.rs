@@ -59,6 +59,9 @@ pub struct FlexibleSpec {
     pub path: KeyPath,
     pub source: BodySource,
     pub interfaces: Vec<String>,
+    /// The named load points inside the body (the part's `load_points`, or the reduced-body
+    /// file's), where `[[loads]]` may act besides the interfaces.
+    pub load_points: Vec<String>,
     pub frame: FrameSpec,
     pub inertia: MassVariant,
     /// The part's axes in the inertial frame at t = 0.
@@ -645,6 +648,7 @@ impl Validator<'_> {
             );
             return None;
         }
+        let mut load_points: Vec<String> = Vec::new();
         let (source, interfaces, auxiliary) = match (&b.part, &b.file) {
             (None, None) if b.matrices.is_some() => {
                 let m = b.matrices.as_ref()?;
@@ -681,6 +685,7 @@ impl Validator<'_> {
                 if reduction.auxiliary_node {
                     names.push("auxiliary".into());
                 }
+                load_points = reduction.load_points.iter().map(|(n, _)| n.clone()).collect();
                 (BodySource::Part(index), names, reduction.auxiliary_node)
             }
             (None, Some(file)) if file.to_lowercase().ends_with(".fem") => {
@@ -706,6 +711,7 @@ impl Validator<'_> {
                     Ok(body) => {
                         let names = body.interfaces.iter().map(|i| i.name.clone()).collect();
                         let aux = body.auxiliary_interface.is_some();
+                        load_points = body.load_points.iter().map(|p| p.name.clone()).collect();
                         (BodySource::File(full, Box::new(body)), names, aux)
                     }
                     Err(e) => {
@@ -815,6 +821,7 @@ impl Validator<'_> {
             path: path.clone(),
             source,
             interfaces,
+            load_points,
             frame,
             inertia,
             placement: Isometry3::from_parts(Translation3::from(position), rotation),
@@ -1343,6 +1350,22 @@ impl Validator<'_> {
             let b = m.bodies.iter().position(|b| b.name == body)?;
             (!m.bodies[b].interfaces.iter().any(|i| i == point)).then(|| (b, point.to_string()))
         });
+        if let Some((b, point)) = &inner {
+            let body = &m.bodies[*b];
+            if !body.load_points.iter().any(|p| p == point) {
+                let mut names = body.interfaces.clone();
+                names.extend(body.load_points.iter().cloned());
+                self.err(
+                    &path.key("at"),
+                    format!(
+                        "flexible body '{}' has no interface or load point '{point}'{}",
+                        body.name,
+                        suggestions(point, &names, "interface or load point")
+                    ),
+                );
+                return;
+            }
+        }
         let at = match inner {
             Some(_) => None,
             None => match self.point(&path.key("at"), at_text, m, false) {
