@@ -108,14 +108,17 @@ pub mod coordinates;
 pub mod dynamic_solver;
 pub mod error;
 pub mod linearized;
+pub mod merge;
 pub mod model;
 pub mod momentum;
 pub mod node;
+pub mod recovery;
 pub mod sensors;
 pub mod static_solver;
 pub mod system;
 pub mod time_function;
 pub mod topology;
+pub mod units;
 
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use dynamic_solver::{
@@ -127,6 +130,7 @@ pub use linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,
     NodeEnergy,
 };
+pub use merge::{weld_points, WeldError};
 pub use model::{
     Body, BodyId, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind, JointSpring, Load,
     LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor, SensorKind, Spring,
@@ -138,3 +142,4 @@ pub use sensors::{Energies, SensorRecord};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
 pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
 pub use time_function::{Interpolation, TimeFunction};
+pub use units::CoordinateQuantity;

@@ -21,8 +21,8 @@ use crate::validate::mechanism::{
 use crate::validate::Study;
 use crate::vtu::{CellRole, PointField, VtuMesh};
 use mbs::{
-    Body, DriverTarget, FlexibleBody, InitialCondition, JointKind, Load, Model, NodeId, PointMass, RigidBody,
-    SensorKind, Spring, Support, System,
+    Body, DriverTarget, FlexibleBody, InitialCondition, Load, Model, NodeId, PointMass, RigidBody, SensorKind, Spring,
+    Support, System,
 };
 use nalgebra::{Isometry3, Point3, Vector3};
 use reduction::ReducedBody;
@@ -31,18 +31,13 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
-use superelement::{Frame, FrameChoice, Superelement};
-
-/// Prefix of the sensors added for the mesh recovery (modal coordinates of each body); they
-/// are not written as sensor files.
-const HIDDEN: &str = "__flexmbs_modal.";
+use superelement::FrameChoice;
 
 /// The mechanism as an `mbs::Model`, with what the outputs need.
 pub struct BuiltMechanism {
     pub model: Model,
     pub groups: Vec<SensorGroup>,
-    /// Per flexible body: the reduced body, its FE mesh for drawing (bodies from parts), and
-    /// the hidden sensor of its modal coordinates.
+    /// Per flexible body: the reduced body and its FE mesh for drawing (bodies from parts).
     pub bodies: Vec<BodyOut>,
     /// Per rigid body: its reference node and point nodes.
     pub rigid: Vec<Vec<NodeId>>,
@@ -64,6 +59,7 @@ pub struct NamedLoad {
 }
 
 pub struct BodyOut {
+    pub id: mbs::BodyId,
     pub name: String,
     pub reduced: ReducedBody,
     pub mesh: Option<VtuMesh>,
@@ -77,14 +73,6 @@ pub struct BodyOut {
 enum Key {
     Flexible(usize, usize),
     Rigid(usize, usize),
-}
-
-fn find(parent: &mut [usize], mut i: usize) -> usize {
-    while parent[i] != i {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    i
 }
 
 /// An error about the entity at `path` of the study, located in the file.
@@ -167,28 +155,17 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             )
         })
     };
-    let size = positions.iter().map(|p| p.norm()).fold(1e-3, f64::max);
-    // Fixed joints merge points into one node.
-    let mut parent: Vec<usize> = (0..keys.len()).collect();
+    // Fixed joints merge points into one node (mbs::weld_points).
     let mut grounded: Vec<usize> = Vec::new();
-    for j in m.joints.iter().filter(|j| j.kind.is_none()) {
+    let mut welds: Vec<(usize, usize)> = Vec::new();
+    let mut weld_joint: Vec<usize> = Vec::new();
+    for (ji, j) in m.joints.iter().enumerate().filter(|(_, j)| j.kind.is_none()) {
         match (&j.parent, &j.child) {
             (PointRef::Ground, PointRef::Ground) => {}
             (PointRef::Ground, p) | (p, PointRef::Ground) => grounded.push(resolve(p, &j.path)?),
             (a, b) => {
-                let (a, b) = (resolve(a, &j.path)?, resolve(b, &j.path)?);
-                let d = (positions[a] - positions[b]).norm();
-                // The points of a fixed joint are one node: they must coincide to round-off of
-                // the placement (a millionth of the model size).
-                if d > 1e-6 * size {
-                    return Err(located(
-                        study,
-                        &j.path,
-                        format!("fixed joint '{}': '{}' and '{}' are {d:.3e} m apart; the points of a fixed joint must coincide", j.name, m.point_name(&j.parent), m.point_name(&j.child)),
-                    ));
-                }
-                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-                parent[rb] = ra;
+                welds.push((resolve(a, &j.path)?, resolve(b, &j.path)?));
+                weld_joint.push(ji);
             }
         }
     }
@@ -196,22 +173,29 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         Key::Flexible(b, i) => format!("{}.{}", m.bodies[*b].name, reduced[*b].0.interfaces[*i].name),
         Key::Rigid(b, i) => format!("{}.{}", m.rigid_bodies[*b].name, m.rigid_bodies[*b].points[*i].0),
     };
+    let points: Vec<mbs::merge::Point> = keys
+        .iter()
+        .zip(&positions)
+        .map(|(k, x)| mbs::merge::Point {
+            name: point_label(k),
+            position: *x,
+        })
+        .collect();
     let mut model = Model::new(study.title.as_deref().unwrap_or("mechanism"));
-    let mut node_of = vec![NodeId(0); keys.len()];
-    let mut class_node: BTreeMap<usize, NodeId> = BTreeMap::new();
-    for i in 0..keys.len() {
-        let r = find(&mut parent, i);
-        if let Some(n) = class_node.get(&r) {
-            node_of[i] = *n;
-            let name = &mut model.nodes[n.index()].name;
-            name.push('=');
-            name.push_str(&point_label(&keys[i]));
-        } else {
-            let n = model.add_node(&point_label(&keys[i]), positions[r]);
-            class_node.insert(r, n);
-            node_of[i] = n;
-        }
-    }
+    let node_of = mbs::weld_points(&mut model, &points, &welds).map_err(|e| {
+        let j = &m.joints[weld_joint[e.weld]];
+        located(
+            study,
+            &j.path,
+            format!(
+                "fixed joint '{}': '{}' and '{}' are {:.3e} m apart; the points of a fixed joint must coincide",
+                j.name,
+                m.point_name(&j.parent),
+                m.point_name(&j.child),
+                e.distance
+            ),
+        )
+    })?;
     let node = |p: &PointRef, path: &KeyPath| -> Result<NodeId, BoxError> { Ok(node_of[resolve(p, path)?]) };
     // Every point of every body has a key (above); a missing one is a bug, reported, never
     // a silent attachment to another node.
@@ -263,15 +247,8 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             damping,
         })));
         entities.push((spec.path.clone(), spec.name.clone()));
-        if body.n_modes > 0 {
-            model.add_sensor(
-                &format!("{HIDDEN}{}", spec.name),
-                SensorKind::ModalCoordinates {
-                    body: mbs::BodyId(model.bodies.len() as u32 - 1),
-                },
-            );
-        }
         bodies.push(BodyOut {
+            id: mbs::BodyId(model.bodies.len() as u32 - 1),
             name: spec.name.clone(),
             reduced: body,
             mesh,
@@ -406,19 +383,12 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
     for s in &m.sensors {
         let kinds: Vec<(String, SensorKind)>;
         let single = |k: SensorKind| vec![(s.name.clone(), k)];
-        let joint_unit = |j: usize, c: usize, rate: bool| -> String {
-            let angle = match &m.joints[j].kind {
-                Some(JointKind::Prismatic { .. }) => false,
-                Some(JointKind::Cylindrical { .. }) => c == 1,
-                Some(JointKind::Planar { .. }) => c == 2,
-                _ => true,
-            };
-            match (angle, rate) {
-                (true, false) => "rad".into(),
-                (true, true) => "rad/s".into(),
-                (false, false) => "m".into(),
-                (false, true) => "m/s".into(),
-            }
+        // A fixed joint has no coordinates (it is a merged node): its unit is never asked for.
+        let quantity = |j: usize, c: usize| -> mbs::CoordinateQuantity {
+            m.joints[j]
+                .kind
+                .as_ref()
+                .map_or(mbs::CoordinateQuantity::Angle, |k| k.coordinate_quantity(c))
         };
         let columns: Vec<String> = match &s.target {
             SensorTarget::Position(p)
@@ -467,7 +437,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 vec![format!(
                     "{} {c} [{}]",
                     if rate { "rate" } else { "coordinate" },
-                    joint_unit(*j, *c, rate)
+                    quantity(*j, *c).unit(rate)
                 )]
             }
             SensorTarget::Modal(b) => {
@@ -494,12 +464,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             SensorTarget::DriverEffort(d) => {
                 kinds = single(SensorKind::DriverEffort { driver: *d });
                 let dr = &m.drivers[*d];
-                let unit = if joint_unit(dr.joint, dr.coordinate, false) == "rad" {
-                    "N m"
-                } else {
-                    "N"
-                };
-                vec![format!("effort [{unit}]")]
+                vec![format!("effort [{}]", quantity(dr.joint, dr.coordinate).effort_unit())]
             }
             SensorTarget::Energy => {
                 kinds = vec![
@@ -668,8 +633,8 @@ impl SensorSampler {
 /// The deformed meshes of every body at the output times (module docs).
 pub struct MeshRecovery {
     mesh: VtuMesh,
-    /// Per flexible body: superelement, first point, last frame.
-    flexible: Vec<(Superelement, usize, Option<Frame>)>,
+    /// Per flexible body: its first point.
+    flexible: Vec<usize>,
     /// Per rigid body: first point.
     rigid: Vec<usize>,
 }
@@ -680,13 +645,6 @@ impl MeshRecovery {
         let mut flexible = Vec::new();
         for body in &b.bodies {
             let first = mesh.points.len();
-            let se = Superelement::new(
-                &body.reduced,
-                body.frame,
-                superelement::MassVariant::Exact,
-                superelement::Damping::none(),
-            )
-            .context(|| format!("body '{}': cannot build the superelement for drawing", body.name))?;
             match (&body.reduced.mesh, &body.mesh) {
                 (Some(shapes), Some(fe)) => {
                     for x in &shapes.nodes {
@@ -716,7 +674,7 @@ impl MeshRecovery {
                     }
                 }
             }
-            flexible.push((se, first, None));
+            flexible.push(first);
         }
         let mut rigid = Vec::new();
         for nodes in &b.rigid {
@@ -734,8 +692,8 @@ impl MeshRecovery {
         Ok(Self { mesh, flexible, rigid })
     }
 
-    /// Sends the deformed meshes at `state` (modal coordinates from the last row of
-    /// `record`) to the observer as a frame of [`Series::Mechanism`] at `t`.
+    /// Sends the deformed meshes at `state` to the observer as a frame of
+    /// [`Series::Mechanism`] at `t`.
     pub fn write(
         &mut self,
         obs: &mut dyn Observer,
@@ -743,60 +701,18 @@ impl MeshRecovery {
         sys: &System,
         state: &mbs::State,
         b: &BuiltMechanism,
-        record: &mbs::SensorRecord,
     ) -> Result<(), BoxError> {
         let motions = sys.node_motions(state);
         let mut u = vec![[0.0; 3]; self.mesh.points.len()];
-        let mut offset = 0;
-        let mut eta_at = BTreeMap::new();
-        for (k, (n, w)) in record.names.iter().zip(&record.widths).enumerate() {
-            let _ = k;
-            if let Some(body) = n.strip_prefix(HIDDEN) {
-                eta_at.insert(body.to_string(), (offset, *w));
-            }
-            offset += w;
-        }
-        let row = record.rows.last();
-        for (body, (se, first, last)) in b.bodies.iter().zip(self.flexible.iter_mut()) {
-            let first = *first;
-            let eta: Vec<f64> = match (eta_at.get(&body.name), row) {
-                (Some((o, w)), Some(row)) => row[*o..*o + *w].to_vec(),
-                _ => vec![0.0; body.reduced.n_modes],
-            };
-            let N = body.nodes.len();
-            let frame0 =
-                last.unwrap_or_else(|| Frame::new(body.placement * se.frame_origin(), body.placement.rotation));
-            let bs = superelement::BodyState {
-                r: body.nodes.iter().map(|n| motions[n.index()].r).collect(),
-                R: body
-                    .nodes
-                    .iter()
-                    .map(|n| motions[n.index()].R * body.placement.rotation)
-                    .collect(),
-                v: vec![Vector3::zeros(); N],
-                omega: vec![Vector3::zeros(); N],
-                eta_dot: vec![0.0; eta.len()],
-                eta,
-                frame: frame0,
-            };
-            let kin = se
-                .kinematics(&bs)
+        for (body, &first) in b.bodies.iter().zip(&self.flexible) {
+            let positions = sys
+                .deformed_mesh(state, body.id)
                 .context(|| format!("body '{}': floating frame for the mesh at t = {t}", body.name))?;
-            *last = Some(kin.frame);
-            match se.recover_mesh(&kin) {
-                Some(ms) => {
-                    for (i, p) in ms.positions.iter().enumerate() {
-                        let x = &self.mesh.points[first + i];
-                        u[first + i] = [p.x - x[0], p.y - x[1], p.z - x[2]];
-                    }
-                }
-                None => {
-                    for (k, n) in body.nodes.iter().enumerate() {
-                        let p = motions[n.index()].r;
-                        let x = &self.mesh.points[first + k];
-                        u[first + k] = [p.x - x[0], p.y - x[1], p.z - x[2]];
-                    }
-                }
+            // A reduced body without mesh shapes is drawn by its interface nodes.
+            let positions = positions.unwrap_or_else(|| body.nodes.iter().map(|n| motions[n.index()].r).collect());
+            for (i, p) in positions.iter().enumerate() {
+                let x = &self.mesh.points[first + i];
+                u[first + i] = [p.x - x[0], p.y - x[1], p.z - x[2]];
             }
         }
         for (nodes, first) in b.rigid.iter().zip(&self.rigid) {
@@ -887,7 +803,7 @@ pub fn run_analysis(
                 files.sample(obs, *t, &rec)?;
             }
             let mut mw = MeshRecovery::new(b)?;
-            mw.write(obs, 1.0, &sys, &sol.state, b, &rec)?;
+            mw.write(obs, 1.0, &sys, &sol.state, b)?;
             let iterations: usize = sol.steps.iter().map(|s| s.residuals.len().saturating_sub(1)).sum();
             out.report.push(format!(
                 "{} load steps, {iterations} Newton iterations, {} rejected attempts; last relative residual {:.2e}",
@@ -919,7 +835,7 @@ pub fn run_analysis(
             files.sample(obs, 0.0, &rec)?;
             let mut mw = MeshRecovery::new(b)?;
             if output.vtu_every.is_some() {
-                mw.write(obs, 0.0, &sys, integ.state(), b, &rec)?;
+                mw.write(obs, 0.0, &sys, integ.state(), b)?;
             }
             let n_steps = ((t_end / dt) - 1e-9).ceil().max(0.0) as usize;
             let mut iterations = 0usize;
@@ -954,10 +870,7 @@ pub fn run_analysis(
                 }
                 if let Some(v) = output.vtu_every {
                     if k % v == 0 || k == n_steps {
-                        if k % output.every != 0 && k != n_steps {
-                            integ.record(&mut rec)?;
-                        }
-                        mw.write(obs, t, &sys, integ.state(), b, &rec)?;
+                        mw.write(obs, t, &sys, integ.state(), b)?;
                     }
                 }
                 obs.progress(&Progress::Steps {
@@ -1006,7 +919,7 @@ pub fn run_analysis(
                         .state
                 }
                 About::Time { t, dt } => {
-                    let settings = mbs::DynamicSettings::new(*dt, *t, 0.9);
+                    let settings = mbs::DynamicSettings::new(*dt, *t, mbs::DynamicSettings::DEFAULT_RHO_INF);
                     mbs::solve_dynamic(&sys, sys.initial_state(), &settings)
                         .map_err(|e| format!("the dynamic run up to t = {t} s to linearise about: {}", e.error))?
                         .final_state

@@ -1423,8 +1423,8 @@ impl Validator<'_> {
                 };
                 Some(MbsAnalysis::Equilibrium {
                     steps,
-                    tolerance: tolerance(self, 1e-10)?,
-                    max_iterations: iterations(self, 25)?,
+                    tolerance: tolerance(self, mbs::StaticSettings::DEFAULT_TOLERANCE)?,
+                    max_iterations: iterations(self, mbs::StaticSettings::DEFAULT_MAX_ITERATIONS)?,
                     time,
                     arc_length,
                 })
@@ -1455,7 +1455,7 @@ impl Validator<'_> {
                     );
                     return None;
                 }
-                let rho_inf = a.rho_inf.unwrap_or(0.9);
+                let rho_inf = a.rho_inf.unwrap_or(mbs::DynamicSettings::DEFAULT_RHO_INF);
                 if !(0.0..=1.0).contains(&rho_inf) {
                     self.err(
                         &path.key("rho_inf"),
@@ -1478,8 +1478,8 @@ impl Validator<'_> {
                     t_end,
                     dt,
                     rho_inf,
-                    tolerance: tolerance(self, 1e-9)?,
-                    max_iterations: iterations(self, 20)?,
+                    tolerance: tolerance(self, mbs::DynamicSettings::DEFAULT_TOLERANCE)?,
+                    max_iterations: iterations(self, mbs::DynamicSettings::DEFAULT_MAX_ITERATIONS)?,
                     newton,
                 })
             }
