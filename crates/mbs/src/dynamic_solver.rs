@@ -680,9 +680,7 @@ pub fn solve_dynamic(
 ) -> Result<Trajectory, Box<Incomplete<Trajectory>>> {
     let fail = |error: SolveError, traj: Trajectory| Box::new(Incomplete { error, partial: traj });
     let (mut integ, mut traj) = start_trajectory(system, start, settings)?;
-    let n_steps = ((settings.end_time - integ.state().time) / settings.step - 1e-9)
-        .ceil()
-        .max(0.0) as usize;
+    let n_steps = integ.steps_to(settings.end_time);
     let every = settings.output_every.max(1);
     for k in 1..=n_steps {
         match integ.step() {

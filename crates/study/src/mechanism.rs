@@ -827,7 +827,7 @@ pub fn run_analysis(
             obs.sensors_end()?;
             out.failure = failure.map(|e| format!("equilibrium stopped: {e}; the converged load steps are written"));
         }
-        MbsAnalysis::Dynamic { t_end, dt, newton, .. } => {
+        MbsAnalysis::Dynamic { dt, newton, .. } => {
             let mut integ = Simulation::with_system(study, Arc::clone(&sys), b, analysis)?;
             let mut rec = sys.sensor_record();
             integ.record(&mut rec)?;
@@ -837,29 +837,11 @@ pub fn run_analysis(
             if output.vtu_every.is_some() {
                 mw.write(obs, 0.0, &sys, integ.state(), b)?;
             }
-            let n_steps = ((t_end / dt) - 1e-9).ceil().max(0.0) as usize;
-            let mut iterations = 0usize;
-            let mut jacobians = 0usize;
-            let mut max_iter = 0usize;
-            for k in 1..=n_steps {
-                match integ.step() {
-                    Ok(rep) => {
-                        let it = rep.residuals.len().saturating_sub(1);
-                        iterations += it;
-                        jacobians += rep.jacobians;
-                        max_iter = max_iter.max(it);
-                    }
-                    Err(e) => {
-                        out.failure = Some(format!(
-                            "time integration stopped: {e}; results up to t = {:.6} s (step {}) are written",
-                            integ.state().time(),
-                            k - 1
-                        ));
-                        break;
-                    }
-                }
+            let n_steps = integ.steps_to_end();
+            let every = output.every;
+            let (totals, failure) = integ.run_steps(n_steps, |k, integ, _| -> Result<(), BoxError> {
                 let t = integ.state().time();
-                if k % output.every == 0 || k == n_steps {
+                if k % every == 0 || k == n_steps {
                     integ.record(&mut rec)?;
                     files.sample(obs, t, &rec)?;
                     // Only the last row is needed; keep the record small.
@@ -878,7 +860,16 @@ pub fn run_analysis(
                     done: k as u64,
                     total: n_steps as u64,
                 });
+                Ok(())
+            })?;
+            if let Some(e) = failure {
+                out.failure = Some(format!(
+                    "time integration stopped: {e}; results up to t = {:.6} s (step {}) are written",
+                    integ.state().time(),
+                    totals.steps
+                ));
             }
+            let (iterations, jacobians, max_iter) = (totals.iterations, totals.jacobians, totals.max_iterations);
             obs.progress(&Progress::Finished);
             let steps = integ.steps();
             out.report.push(format!(

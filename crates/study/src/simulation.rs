@@ -137,6 +137,20 @@ impl Simulation {
         self.integrator.step()
     }
 
+    /// `n_steps` steps with `each` called after every one (`mbs::Integrator::run_steps`).
+    pub fn run_steps<E>(
+        &mut self,
+        n_steps: usize,
+        each: impl FnMut(usize, &mbs::Integrator<'static>, &StepReport) -> Result<(), E>,
+    ) -> Result<(mbs::StepTotals, Option<mbs::SolveError>), E> {
+        self.integrator.run_steps(n_steps, each)
+    }
+
+    /// The number of steps from the current time to the end time of the analysis.
+    pub fn steps_to_end(&self) -> usize {
+        self.integrator.steps_to(self.t_end)
+    }
+
     /// Steps until the time reaches `t` (to a millionth of a step); returns the steps taken.
     pub fn advance_to(&mut self, t: f64) -> Result<usize, mbs::SolveError> {
         let mut n = 0;

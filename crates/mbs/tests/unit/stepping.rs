@@ -83,3 +83,35 @@ fn a_load_changed_between_steps_acts_from_the_next_step() {
     assert!(a.iter().all(|x| x.abs() < 1e-12), "{a:?}");
     assert!(b.iter().any(|x| *x > 1e-6), "{b:?}");
 }
+
+/// `run_steps` is the loop of `solve_dynamic`: the same steps, the same final state to the
+/// bit, the callback after each step in order; a callback error stops it where it is.
+#[test]
+fn streamed_steps_are_the_steps_of_solve_dynamic() {
+    let sys = crate::fixtures::released(0.4);
+    // 0.05 s in steps of 1e-3 s: 50 steps, though 0.05 / 1e-3 rounds to 50.000000000000004.
+    let s = settings();
+    let traj = mbs::solve_dynamic(&sys, sys.initial_state(), &s).unwrap();
+    let mut integ = Integrator::new(&sys, sys.initial_state(), s.clone()).unwrap();
+    let n = integ.steps_to(s.end_time);
+    assert_eq!(n, 50);
+    let mut seen = Vec::new();
+    let (totals, failure) = integ
+        .run_steps(n, |k, i, rep| -> Result<(), ()> {
+            assert_eq!(rep.time, i.state().time());
+            seen.push(k);
+            Ok(())
+        })
+        .unwrap();
+    assert!(failure.is_none());
+    assert_eq!(seen, (1..=50).collect::<Vec<_>>());
+    assert_eq!(totals.steps, 50);
+    assert_eq!(totals.iterations, traj.iterations.iter().sum::<usize>());
+    assert_eq!(integ.state().coordinates().0, traj.final_state.coordinates().0);
+    assert_eq!(integ.state().velocity(), traj.final_state.velocity());
+
+    let mut integ = Integrator::new(&sys, sys.initial_state(), s).unwrap();
+    let stopped = integ.run_steps(n, |k, _, _| if k == 7 { Err(k) } else { Ok(()) });
+    assert_eq!(stopped, Err(7));
+    assert_eq!(integ.steps(), 7);
+}
