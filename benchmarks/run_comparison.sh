@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The slider-crank comparison of issue 9 (benchmarks.md C2): flexmbs against Exudyn on the same
+# The slider-crank comparison (validation problem C2): flexmbs against Exudyn on the same
 # rod mesh and FE matrices, same number of modes, time step and end time.
 #
 #   benchmarks/run_comparison.sh [REPEATS]        (default 5; run from anywhere)
@@ -99,7 +99,7 @@ memory = sh("free -g | awk '/Mem/{print $2}'")
 versions = sh("benchmarks/exudyn/.venv/bin/python -c 'import exudyn, numpy, scipy; print(\"exudyn\", exudyn.__version__, \"numpy\", numpy.__version__, \"scipy\", scipy.__version__)'")
 loads = [x for r in rows.values() for x in r["load"]]
 lines = [
-    "# Slider-crank (benchmarks.md C2): flexmbs against Exudyn",
+    "# Slider-crank (validation problem C2): flexmbs against Exudyn",
     "",
     f"Machine: {cpu_model}, {sh('nproc')} cores, {memory} GB, {platform.system()} {platform.release()}; {sh('rustc --version')}; Python {platform.python_version()}, {versions}.",
     f"Load average (1 min) at the starts of the runs: {min(loads):.1f} to {max(loads):.1f}, median {statistics.median(loads):.1f} (above 2, other work shared the 2 cores and wall times are inflated):"

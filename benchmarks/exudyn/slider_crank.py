@@ -1,4 +1,4 @@
-"""Exudyn side of the slider-crank comparison (benchmarks.md C2, issue 9).
+"""Exudyn side of the slider-crank comparison (validation problem C2).
 
 Builds the planar flexible slider-crank with Exudyn's ObjectFFRFreducedOrder: the rod's
 Hurty-Craig-Bampton modes (RBE2 interfaces on the two end faces, `--modes` fixed-interface

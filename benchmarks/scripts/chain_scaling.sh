@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Cost per generalized-alpha step of a cantilever chain of 1..512 beam superelements (issue 9,
-# "scaling"): wraps `cargo bench -p mbs --bench step -- --bench` (crates/mbs/benches/step.rs),
+# Cost per generalized-alpha step of a cantilever chain of 1..512 beam superelements
+# ("scaling"): wraps `cargo bench -p mbs --bench step -- --bench` (crates/mbs/benches/step.rs),
 # fits the cost per superelement-iteration and writes benchmarks/results/chain_scaling.md and the
 # table into BENCHMARKS.md (benchmarks/scripts/write_section.py).
 #

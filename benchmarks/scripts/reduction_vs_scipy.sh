@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reduction against scipy (issue 9): our whole Craig-Bampton reduction of generated hex8 blocks
+# Reduction against scipy: our whole Craig-Bampton reduction of generated hex8 blocks
 # (RBE2 interfaces on both end faces, 20 fixed-interface modes) against scipy's
 # eigsh(K_ii, M=M_ii, sigma=0, k=20) with shift-invert (SuperLU) on the same fixed-interface
 # matrices -- the eigenproblem inside the reduction, so scipy does strictly less work.

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes a generated table into BENCHMARKS.md (issue 9: the benchmark scripts write their tables
+"""Writes a generated table into BENCHMARKS.md (the benchmark scripts write their tables
 there, with the machine and the commands).
 
     python3 benchmarks/scripts/write_section.py NAME FILE [BENCHMARKS.md]

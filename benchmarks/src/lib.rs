@@ -1,7 +1,7 @@
-//! Speed comparisons and scaling studies (issue 9).
+//! Speed comparisons and scaling studies.
 //!
 //! The dynamics comparison against Exudyn runs the planar flexible slider-crank of
-//! `benchmarks.md` C2 with the connecting rod as a Craig-Bampton body reduced from a solid
+//! validation problem C2 with the connecting rod as a Craig-Bampton body reduced from a solid
 //! (hex20) bar mesh. Both programs read the same mesh and the same assembled $\mathbf K$,
 //! $\mathbf M$ (exported by the `export_rod` binary in Matrix Market), reduce it with RBE2
 //! interfaces on the two end faces and the same number of fixed-interface modes, and integrate
@@ -59,7 +59,7 @@ pub struct RodMesh {
     pub across: usize,
 }
 
-/// The mechanism of benchmarks.md C2 (all SI).
+/// The mechanism of validation problem C2 (all SI).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SliderCrank {
     pub crank: f64,
@@ -75,7 +75,7 @@ pub struct SliderCrank {
 }
 
 impl SliderCrank {
-    /// Jonker & Meijaard's values (benchmarks.md C2); Poisson's ratio 0.3 for the solid rod.
+    /// Jonker & Meijaard's values (validation problem C2); Poisson's ratio 0.3 for the solid rod.
     pub const C2: SliderCrank = SliderCrank {
         crank: 0.15,
         rod: 0.30,

@@ -1,4 +1,4 @@
-//! Checks of the slider-crank benchmark's model builder and midpoint measurement (issue 9).
+//! Checks of the slider-crank benchmark's model builder and midpoint measurement.
 //! The binaries' numbers are compared against Exudyn and a beam reference by
 //! `benchmarks/run_comparison.sh`; these tests pin the pieces those numbers rest on.
 

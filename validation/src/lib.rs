@@ -1,21 +1,22 @@
 //! # validation: flexmbs against published results
 //!
-//! Each problem of `shared/brief/benchmarks.md` is a function that runs the pipeline and
-//! returns a [`Table`] of quantity, reference, ours and relative error, with the tolerance
-//! the method can honestly reach and the reason for it. `cargo run --release -p validation`
-//! prints every table (and `--report` writes `validation/report/REPORT.md`);
+//! Each problem of the validation guide (`docs/validation.md`) is a function that runs the
+//! pipeline and returns a [`Table`] of quantity, reference, ours and relative error, with the
+//! tolerance the method can honestly reach and the reason for it. `flexmbs validate` (or
+//! `cargo run --release -p validation`) prints every table and writes the report
+//! (`./validation-report/REPORT.md` unless `--report-dir` says otherwise);
 //! `tests/quick.rs` runs the quick subset in CI and asserts the tolerances.
 //!
 //! The problems: the linear references A1-A5 (beam and membrane frequencies, cantilever
 //! statics, Craig-Bampton convergence, the linear transient), the geometrically nonlinear
 //! statics B1-B3 (elastica, roll-up, 45-degree bend) and the dynamics C1-C4 (spin-up,
 //! planar and spatial slider-cranks, free-floating body), each with its convergence study,
-//! and the seed's comparison of the frame choices and inertia variants ([`benchmarks::variants`]).
+//! and the AIC-FFR papers' comparison of the frame choices and inertia variants ([`benchmarks::variants`]).
 //! Models are built by library calls in [`models`]; the report's figures are drawn by the
 //! `plot` crate.
 //!
-//! [`run_from_args`] is the command line (`cargo run --release -p validation -- [--quick]
-//! [--no-report] [--only ID...]`); `flexmbs validate` forwards to it.
+//! [`run_command`] is the command line ([`usage`]); `flexmbs validate` forwards to it through
+//! [`run_from_args`].
 
 #![allow(non_snake_case)]
 
@@ -218,14 +219,39 @@ pub fn benchmarks() -> Vec<Benchmark> {
         ("C3", benchmarks::dynamics::c3_spatial_slider_crank),
         ("C4", benchmarks::dynamics::c4_free_body),
         ("V", benchmarks::variants::variants),
+        ("F1", benchmarks::frame_buckling::f1_portal_frame),
     ]
 }
 
-/// Every benchmark whose id is in `only` (all when empty), in report order.
+/// Whether the user's `id` selects the benchmark `benchmark`: the same id in any case, or
+/// one of the problems a grouped id such as `A1-A4` runs together.
+pub fn selects(id: &str, benchmark: &str) -> bool {
+    let id = id.trim().to_ascii_uppercase();
+    let benchmark = benchmark.to_ascii_uppercase();
+    if id == benchmark {
+        return true;
+    }
+    let Some((first, last)) = benchmark.split_once('-') else {
+        return false;
+    };
+    let split = |s: &str| -> Option<(char, u32)> {
+        let mut c = s.chars();
+        let letter = c.next()?;
+        Some((letter, c.as_str().parse().ok()?))
+    };
+    match (split(&id), split(first), split(last)) {
+        (Some((l, n)), Some((l0, n0)), Some((l1, n1))) => l == l0 && l == l1 && (n0..=n1).contains(&n),
+        _ => false,
+    }
+}
+
+/// Every benchmark selected by an id in `only` (all when empty), in report order. An id that
+/// selects no benchmark is an error naming the ids there are, before anything runs.
 pub fn run_all(extent: Extent, only: &[String]) -> Result<Vec<Block>, Box<dyn std::error::Error>> {
+    check_ids(only)?;
     let mut blocks = Vec::new();
     for (id, run) in benchmarks() {
-        if only.is_empty() || only.iter().any(|o| o == id) {
+        if only.is_empty() || only.iter().any(|o| selects(o, id)) {
             let t0 = std::time::Instant::now();
             blocks.extend(run(extent).map_err(|e| format!("{id}: {e}"))?);
             eprintln!("validation: {id} done in {:.1} s", t0.elapsed().as_secs_f64());
@@ -234,12 +260,36 @@ pub fn run_all(extent: Extent, only: &[String]) -> Result<Vec<Block>, Box<dyn st
     Ok(blocks)
 }
 
+/// The ids there are, for messages: `A1 A2 A3 A4 A5 B1 ... V`.
+pub fn benchmark_ids() -> String {
+    benchmarks().iter().map(|b| b.0).collect::<Vec<_>>().join(" ")
+}
+
+/// An error naming every id of `only` that selects no benchmark.
+pub fn check_ids(only: &[String]) -> Result<(), String> {
+    let unknown: Vec<&str> = only
+        .iter()
+        .filter(|o| !benchmarks().iter().any(|(id, _)| selects(o, id)))
+        .map(|o| o.as_str())
+        .collect();
+    if unknown.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "unknown benchmark id{} {}: the ids are {} (A1 to A4 also one by one)",
+            if unknown.len() > 1 { "s" } else { "" },
+            unknown.iter().map(|u| format!("'{u}'")).collect::<Vec<_>>().join(", "),
+            benchmark_ids()
+        ))
+    }
+}
+
 /// The report as Markdown, with the figures written beside it in `dir`.
 pub fn write_report(blocks: &[Block], dir: &Path, command: &str) -> Result<String, Box<dyn std::error::Error>> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let mut report = format!(
-        "# flexmbs validation report\n\nGenerated by `{command}`. Problems: `shared/brief/benchmarks.md`; \
-         every table states its model and why its tolerance is what it is. Timings are wall-clock on \
+        "# flexmbs validation report\n\nGenerated by `{command}`. The problems are defined in the validation guide, \
+         `docs/validation.md`; every table states its model and why its tolerance is what it is. Timings are wall-clock on \
          a shared 2-core machine and are indicative only.\n\n"
     );
     for b in blocks {
@@ -265,75 +315,139 @@ pub fn write_report(blocks: &[Block], dir: &Path, command: &str) -> Result<Strin
     Ok(report)
 }
 
-/// The command line: `[--quick] [--no-report] [--report-dir DIR] [--only ID ...]`. Prints the
-/// report, writes `validation/report/REPORT.md` and the PNGs (unless `--no-report`), and
-/// exits with 1 if a quantity is outside its tolerance, 2 on an error.
-pub fn run_from_args(args: Vec<String>) -> ExitCode {
-    let mut extent = Extent::Full;
-    let mut write = true;
-    let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("report");
-    let mut only = Vec::new();
-    let mut it = args.into_iter();
+/// The report folder when none is given: `validation-report` in the current folder, never the
+/// source tree (the repository's `validation/report/` is written only when asked for with
+/// `--report-dir validation/report`).
+pub const DEFAULT_REPORT_DIR: &str = "validation-report";
+
+/// What the command line asks for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    pub extent: Extent,
+    /// Write the report and its figures (default), or only print it.
+    pub write: bool,
+    pub dir: PathBuf,
+    /// Benchmark ids to run; all when empty.
+    pub only: Vec<String>,
+    pub help: bool,
+}
+
+/// The usage text of `program` (`flexmbs validate` or `validation`).
+pub fn usage(program: &str) -> String {
+    format!(
+        "usage: {program} [--quick] [--no-report] [--report-dir DIR] [--only ID...]\n\n\
+         Runs the benchmark problems of docs/validation.md through the whole pipeline, prints the\n\
+         report and writes it with its figures to DIR/REPORT.md (default: ./{DEFAULT_REPORT_DIR}).\n\n\
+         --quick           the coarse refinement levels only (seconds instead of minutes)\n\
+         --no-report       print the report without writing it\n\
+         --report-dir DIR  where REPORT.md and its PNG figures go\n\
+         --only ID...      the problems to run, separated by spaces or commas: {}\n\n\
+         Exit status: 0 when every quantity is within its tolerance, 1 when one is not, 2 on an error.\n",
+        benchmark_ids()
+    )
+}
+
+/// Parses the arguments after the program name. `--only` takes the ids up to the next
+/// option, so `--only B1 --quick` runs B1 quickly.
+pub fn parse_args(args: &[String]) -> Result<Options, String> {
+    let mut options = Options {
+        extent: Extent::Full,
+        write: true,
+        dir: PathBuf::from(DEFAULT_REPORT_DIR),
+        only: Vec::new(),
+        help: false,
+    };
+    let mut it = args.iter().peekable();
     while let Some(a) = it.next() {
         match a.as_str() {
-            "--quick" => extent = Extent::Quick,
-            "--full" => extent = Extent::Full,
-            // Kept for the old command line: the report is written by default now.
-            "--report" => write = true,
-            "--no-report" => write = false,
+            "--quick" => options.extent = Extent::Quick,
+            "--full" => options.extent = Extent::Full,
+            "--report" => options.write = true,
+            "--no-report" => options.write = false,
             "--report-dir" => match it.next() {
-                Some(d) => dir = PathBuf::from(d),
-                None => {
-                    eprintln!("validation: --report-dir needs a directory");
-                    return ExitCode::from(2);
-                }
+                Some(d) if !d.starts_with("--") => options.dir = PathBuf::from(d),
+                _ => return Err("--report-dir needs a folder".into()),
             },
-            "--only" => only.extend(it.by_ref()),
-            "-h" | "--help" => {
-                println!(
-                    "validation [--quick] [--no-report] [--report-dir DIR] [--only ID ...]\nids: {}",
-                    benchmarks().iter().map(|b| b.0).collect::<Vec<_>>().join(" ")
-                );
-                return ExitCode::SUCCESS;
+            "--only" => {
+                let before = options.only.len();
+                while let Some(id) = it.next_if(|s| !s.starts_with('-')) {
+                    options.only.extend(
+                        id.split(',')
+                            .filter(|s| !s.trim().is_empty())
+                            .map(|s| s.trim().to_string()),
+                    );
+                }
+                if options.only.len() == before {
+                    return Err(format!("--only needs benchmark ids: {}", benchmark_ids()));
+                }
             }
-            other => {
-                eprintln!("validation: unknown argument '{other}' (try --help)");
-                return ExitCode::from(2);
-            }
+            "-h" | "--help" => options.help = true,
+            other => return Err(format!("unknown argument '{other}'")),
         }
     }
-    let blocks = match run_all(extent, &only) {
-        Ok(b) => b,
+    check_ids(&options.only)?;
+    Ok(options)
+}
+
+/// `flexmbs validate`: [`run_command`] under that name.
+pub fn run_from_args(args: Vec<String>) -> ExitCode {
+    run_command("flexmbs validate", args)
+}
+
+/// The command line of `program`: `[--quick] [--no-report] [--report-dir DIR] [--only ID ...]`
+/// ([`usage`]). Prints the report, writes `DIR/REPORT.md` and the PNGs (unless
+/// `--no-report`), and exits with 1 if a quantity is outside its tolerance, 2 on an error.
+pub fn run_command(program: &str, args: Vec<String>) -> ExitCode {
+    let options = match parse_args(&args) {
+        Ok(o) => o,
         Err(e) => {
-            eprintln!("validation: error: {e}");
+            eprintln!("{program}: {e}\n(try {program} --help)");
             return ExitCode::from(2);
         }
     };
-    let command = match extent {
-        Extent::Quick => "cargo run --release -p validation -- --quick",
-        Extent::Full => "cargo run --release -p validation",
+    if options.help {
+        print!("{}", usage(program));
+        return ExitCode::SUCCESS;
+    }
+    let Options {
+        extent,
+        write,
+        dir,
+        only,
+        ..
+    } = options;
+    let blocks = match run_all(extent, &only) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("{program}: error: {e}");
+            return ExitCode::from(2);
+        }
     };
+    let command = std::iter::once(program.to_string())
+        .chain(args)
+        .collect::<Vec<_>>()
+        .join(" ");
     let scratch = std::env::temp_dir().join(format!("validation-figures-{}", std::process::id()));
     let target = if write { dir.clone() } else { scratch };
-    let report = match write_report(&blocks, &target, command) {
+    let report = match write_report(&blocks, &target, &command) {
         Ok(r) => r,
         Err(e) => {
-            eprintln!("validation: error: {e}");
+            eprintln!("{program}: error: {e}");
             return ExitCode::from(2);
         }
     };
     print!("{report}");
     if write {
         if let Err(e) = std::fs::write(dir.join("REPORT.md"), &report) {
-            eprintln!("validation: cannot write {}: {e}", dir.join("REPORT.md").display());
+            eprintln!("{program}: cannot write {}: {e}", dir.join("REPORT.md").display());
             return ExitCode::from(2);
         }
-        eprintln!("validation: wrote {}", dir.join("REPORT.md").display());
+        eprintln!("{program}: wrote {}", dir.join("REPORT.md").display());
     }
     let failures = failures(&blocks);
     if !failures.is_empty() {
         eprintln!(
-            "validation: {} quantities outside their tolerance:\n{}",
+            "{program}: {} quantities outside their tolerance:\n{}",
             failures.len(),
             failures.join("\n")
         );

@@ -1,7 +1,7 @@
-//! `cargo run --release -p validation [-- --quick] [--no-report] [--only ID ...]`: runs the
-//! benchmarks of `benchmarks.md`, prints the report, and writes `validation/report/REPORT.md`
-//! with its PNG figures (see [`validation::run_from_args`]).
+//! `cargo run --release -p validation [-- --quick] [--no-report] [--report-dir DIR] [--only ID ...]`:
+//! the same command as `flexmbs validate` ([`validation::usage`]): runs the problems of the
+//! validation guide, prints the report and writes it with its PNG figures.
 
 fn main() -> std::process::ExitCode {
-    validation::run_from_args(std::env::args().skip(1).collect())
+    validation::run_command("validation", std::env::args().skip(1).collect())
 }

@@ -3,7 +3,7 @@
 //! the elastica cantilever, the 45-degree bend, the spin-up beam, the planar and spatial
 //! slider-cranks and the free-floating beam.
 //!
-//! Every builder takes a [`Variant`] (frame choice and inertia variant), so the seed's
+//! Every builder takes a [`Variant`] (frame choice and inertia variant), so the AIC-FFR paper's
 //! comparison runs the same model six ways. The `auxiliary-node` frame needs an interface at
 //! the centre of mass held fixed in the reduction: segments are meshed with an even number of
 //! elements, the middle node is that interface, and [`add_segment`] gives it its own (free)
@@ -39,7 +39,7 @@ pub enum BuildError {
     },
 }
 
-/// The formulation's switches compared in the report (brief §4).
+/// The formulation's switches compared in the report (theory guide §4).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Variant {
     pub frame: FrameChoice,
@@ -280,7 +280,7 @@ pub fn add_segment(
 }
 
 /// Axis-to-axis rotation taking the FE x axis onto `direction`.
-fn x_onto(direction: Vector3<f64>) -> UnitQuaternion<f64> {
+pub(crate) fn x_onto(direction: Vector3<f64>) -> UnitQuaternion<f64> {
     UnitQuaternion::rotation_between(&Vector3::x(), &direction).unwrap_or_else(|| {
         // Antiparallel: half a turn about z.
         UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI)
@@ -481,7 +481,7 @@ pub fn bend_45(n: usize, elements: usize, variant: Variant) -> Result<(Model, No
     Ok((model, nodes[n]))
 }
 
-/// GJ of the 45-degree bend (benchmarks.md B3).
+/// GJ of the 45-degree bend (validation problem B3).
 pub const BEND_GJ: f64 = 7.05e5;
 
 // ---------------------------------------------------------------------------------------
@@ -504,7 +504,7 @@ pub fn a5_cantilever(
     Ok((model, nodes[n], E * side.powi(4) / 12.0, rho * side * side))
 }
 
-/// The spin-up beam of benchmarks.md C1 (Simo & Vu-Quoc 1986): L = 10 m, EA = 2.8e7 N,
+/// The spin-up beam of validation problem C1 (Simo & Vu-Quoc 1986): L = 10 m, EA = 2.8e7 N,
 /// EI = 1.4e4 N m^2 (both bending planes), rho A = 1.2 kg/m, clamped to a hub on the z axis
 /// whose angle follows the spin-up profile to `omega` in 15 s; `n` superelements with `modes`
 /// fixed-interface modes each. Sensor "tip": the tip in the hub's axes.
@@ -566,7 +566,7 @@ pub enum RodModel {
     Solid { kind: CellKind, divisions: usize },
 }
 
-/// Crank length, rod length, rod diameter, steel E and rho (benchmarks.md C2).
+/// Crank length, rod length, rod diameter, steel E and rho (validation problem C2).
 pub const CRANK: f64 = 0.15;
 pub const ROD: f64 = 0.30;
 pub const ROD_D: f64 = 0.006;
@@ -664,7 +664,7 @@ pub struct SliderCrank {
     pub rod_mass: f64,
 }
 
-/// The planar slider-crank of benchmarks.md C2: rigid crank 0.15 m driven at `speed` rad/s
+/// The planar slider-crank of validation problem C2: rigid crank 0.15 m driven at `speed` rad/s
 /// from the dead centre with the rigid mechanism's velocities, rod 0.30 m as `n` superelements
 /// (`n` even: the midpoint is a node), slider of half the rod's mass on the x axis, pinned
 /// joints about z, no gravity. Sensors "slider" (position) and "midpoint" (signed deflection
@@ -767,7 +767,7 @@ pub fn slider_crank_planar(
 /// Offset of the spatial slider-crank's guide from the crank's plane of rotation (C3).
 pub const GUIDE_OFFSET: f64 = 0.1;
 
-/// The spatial slider-crank of benchmarks.md C3: the crank turns about the y axis in the plane
+/// The spatial slider-crank of validation problem C3: the crank turns about the y axis in the plane
 /// y = 0 (tip at (0.15 cos, 0, -0.15 sin)); the slider moves along the line
 /// (x, 0.1, 0), perpendicular to the crank axis and offset from the crank's plane by 0.1 m.
 /// The rod (same as C2) is joined to the crank by a spherical joint and to the slider by a

@@ -1,4 +1,4 @@
-//! Our side of the slider-crank comparison (benchmarks.md C2; see the crate docs): builds the
+//! Our side of the slider-crank comparison (validation problem C2; see the crate docs): builds the
 //! mechanism with the rod reduced from the solid mesh, integrates it with the Lie-group
 //! generalized-α at a fixed step and prints the wall time per step, the steps per second and
 //! the rod's midpoint deflection relative to its chord.
@@ -18,7 +18,7 @@
 //! `--geometric-stiffening` reduces the rod with the geometric stiffness of its CB coordinates
 //! (`CbSettings::geometric_stiffening`): each superelement's strain energy gains the cubic term
 //! through which the axial force changes the bending stiffness. `--mass lumped` uses the
-//! seed's lumped inertia variant instead of the exact one. `--newton modified` keeps the
+//! AIC-FFR paper's lumped inertia variant instead of the exact one. `--newton modified` keeps the
 //! factorised iteration matrix across corrections and steps (`mbs::NewtonStrategy`); the
 //! Jacobians (factorisations) per step are printed next to the iterations per step. `--csv`
 //! writes `t, w, slider_x`; `--reference` reads such a file (a finer run) and prints the

@@ -32,6 +32,9 @@ options of run and reduce:
   --cache DIR    reduced-body cache (default: .flexmbs-cache beside the study file); a part
                  whose mesh and settings did not change is not reduced again
   --t-end T      end every dynamic analysis at T seconds at the latest (a short run)
+  --foreign-files refuse|keep
+                 a results folder holding files flexmbs did not write: refuse to run
+                 (default) or write beside them; flexmbs deletes only files it wrote
 
 The study file format is described in docs/study-file.md. Errors go to stderr with the
 file, line, column and key they are about; the exit code is 0 on success, 2 on any error.";
@@ -95,12 +98,18 @@ fn option<'a>(options: &'a [(String, String)], name: &str) -> Option<&'a str> {
     options.iter().rev().find(|(n, _)| n == name).map(|(_, v)| v.as_str())
 }
 
-fn run_options(options: &[(String, String)]) -> Options {
-    Options {
+fn run_options(options: &[(String, String)]) -> Result<Options, BoxError> {
+    let foreign = match option(options, "foreign-files") {
+        None | Some("refuse") => study::folder::ForeignFiles::Refuse,
+        Some("keep") => study::folder::ForeignFiles::Keep,
+        Some(other) => return Err(usage(format!("--foreign-files is 'refuse' or 'keep', not '{other}'"))),
+    };
+    Ok(Options {
         out: option(options, "out").map(PathBuf::from),
         cache: option(options, "cache").map(PathBuf::from),
         t_end: None,
-    }
+        foreign,
+    })
 }
 
 fn one_file(positional: &[String], command: &str, what: &str) -> Result<PathBuf, BoxError> {
@@ -148,8 +157,8 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             Ok(())
         }
         "run" => {
-            let (positional, options) = parse(rest, &["out", "cache", "t-end"])?;
-            let mut run_options = run_options(&options);
+            let (positional, options) = parse(rest, &["out", "cache", "t-end", "foreign-files"])?;
+            let mut run_options = run_options(&options)?;
             if let Some(v) = option(&options, "t-end") {
                 run_options.t_end = Some(
                     v.parse::<f64>()
@@ -193,13 +202,13 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             Ok(())
         }
         "reduce" => {
-            let (positional, options) = parse(rest, &["part", "out", "cache"])?;
+            let (positional, options) = parse(rest, &["part", "out", "cache", "foreign-files"])?;
             let path = one_file(&positional, "reduce", "a study file")?;
             let study = load(&path)?;
             let written = study::run::reduce_command(
                 &study,
                 option(&options, "part"),
-                &run_options(&options),
+                &run_options(&options)?,
                 &mut Console::default(),
             )?;
             for r in written {

@@ -9,7 +9,9 @@ use study::error::{BoxError, ResultExt};
 /// The report of `inspect`. `excitation_hz`: the highest frequency a study will excite; the
 /// diagnostics then check that the kept modes reach `factor` times it.
 pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<String, BoxError> {
-    let body = reduction::file::read(path).context(|| format!("cannot inspect {}", path.display()))?;
+    // Read without the physical checks so that a refused file can still be looked at; the
+    // checks are reported below.
+    let body = reduction::file::read_unchecked(path).context(|| format!("cannot inspect {}", path.display()))?;
     let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
     let mut s = String::new();
     let _ = writeln!(
@@ -35,6 +37,34 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<S
             None => "not kept".into(),
         }
     );
+    let _ = writeln!(
+        s,
+        "stress shapes: {}",
+        match &body.stress {
+            Some(st) => {
+                let solids = st.solid_node.iter().filter(|&&b| b).count();
+                format!(
+                    "kept, solid stresses on {solids} nodes, section forces of {} beams",
+                    st.beams.len()
+                )
+            }
+            None => "not kept".into(),
+        }
+    );
+    if !body.load_points.is_empty() {
+        let _ = writeln!(
+            s,
+            "load points (static correction, {} attachment modes among the modes):",
+            body.attachment_modes
+        );
+        for p in &body.load_points {
+            let _ = writeln!(
+                s,
+                "  {:<16} FE node {:>8} at ({:.6e}, {:.6e}, {:.6e}) m",
+                p.name, p.node, p.position[0], p.position[1], p.position[2]
+            );
+        }
+    }
     let i = &body.inertia;
     let _ = writeln!(s, "\nmass data");
     let _ = writeln!(s, "  mass            {:.6e} kg", i.mass);
@@ -71,5 +101,17 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<S
     }
     let d = reduction::diagnostics(&body, excitation_hz, factor);
     let _ = write!(s, "{d}");
+    let problems = reduction::physical_problems(&body);
+    if problems.is_empty() {
+        let _ = writeln!(
+            s,
+            "physical checks: passed (symmetric K_CB and M_CB, positive masses, K_CB positive semi-definite with only rigid motions free, metadata consistent with the matrices, distinct interfaces)"
+        );
+    } else {
+        let _ = writeln!(s, "physical checks: FAILED, studies refuse this file:");
+        for p in &problems {
+            let _ = writeln!(s, "  - {p}");
+        }
+    }
     Ok(s)
 }

@@ -9,6 +9,11 @@ fn main() -> ExitCode {
     if args.first().map(String::as_str) == Some("validate") {
         return validation::run_from_args(args[1..].to_vec());
     }
+    // Ctrl-C: a second one ends the program at once (exit 130), the first asks the run to
+    // stop at its next output step (`study::interrupt`).
+    let flag = study::interrupt::flag();
+    let _ = signal_hook::flag::register_conditional_shutdown(signal_hook::consts::SIGINT, 130, flag.clone());
+    let _ = signal_hook::flag::register(signal_hook::consts::SIGINT, flag);
     match flexmbs::cli::main_with(&args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

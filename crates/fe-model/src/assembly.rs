@@ -1,4 +1,4 @@
-//! Numeric phase of assembly (style R9): element matrices computed in parallel (rayon) and
+//! Numeric phase of assembly: element matrices computed in parallel (rayon) and
 //! added into the values of the pattern's sparse matrices.
 
 use crate::element::LocalMatrices;

@@ -12,7 +12,7 @@
 //! The map is the matrix $\mathbf T$ with $\mathbf u_{full} = \mathbf T \mathbf u_f$, stored by
 //! rows (one short row per full dof). Assembly forms $\mathbf T^T \mathbf K_{full} \mathbf T$
 //! element by element, so supports and spiders are applied by elimination, never by
-//! penalties (brief §2).
+//! penalties (theory guide §2).
 
 use crate::error::{FeError, DOF_NAMES};
 use crate::mesh::NodeId;

@@ -1,4 +1,4 @@
-//! The closed list of element kinds and their dispatch (style R7).
+//! The closed list of element kinds and their dispatch.
 //!
 //! An element is a pure function of its reference geometry and its properties: it never sees
 //! the system, other elements or the dof numbering. Adding a kind is a compile error at every
@@ -71,7 +71,7 @@ pub struct Beam2 {
 pub enum Element {
     /// 2 nodes x 6 dofs, theory in [`Beam2::theory`].
     Beam2(Beam2),
-    /// 4-node tetrahedron, 3 dofs per node; for contrast only: it locks in bending (brief §2).
+    /// 4-node tetrahedron, 3 dofs per node; for contrast only: it locks in bending (theory guide §2).
     Tet4(Solid),
     /// 10-node tetrahedron, 3 dofs per node.
     Tet10(Solid),
@@ -97,8 +97,8 @@ pub struct Properties<'a> {
     pub sections: &'a [BeamSection],
 }
 
-impl Properties<'_> {
-    pub(crate) fn material(&self, element: usize, id: MaterialId) -> Result<&IsotropicMaterial, ElementError> {
+impl<'a> Properties<'a> {
+    pub(crate) fn material(&self, element: usize, id: MaterialId) -> Result<&'a IsotropicMaterial, ElementError> {
         self.materials.get(id.0 as usize).ok_or(ElementError::MissingProperty {
             element,
             what: "material",
@@ -106,7 +106,7 @@ impl Properties<'_> {
             count: self.materials.len(),
         })
     }
-    pub(crate) fn section(&self, element: usize, id: SectionId) -> Result<&BeamSection, ElementError> {
+    pub(crate) fn section(&self, element: usize, id: SectionId) -> Result<&'a BeamSection, ElementError> {
         self.sections.get(id.0 as usize).ok_or(ElementError::MissingProperty {
             element,
             what: "beam section",

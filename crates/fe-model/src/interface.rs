@@ -1,4 +1,4 @@
-//! 6-dof interface nodes on solids, tied to a set of surface nodes by a spider (brief §2):
+//! 6-dof interface nodes on solids, tied to a set of surface nodes by a spider (theory guide §2):
 //! RBE2 (the surface follows the interface node rigidly) or RBE3 (the interface node follows
 //! the weighted mean motion of the surface and adds no stiffness). Both are sets of
 //! [`LinearConstraint`]s, eliminated by [`crate::DofMap`], never penalised.
@@ -137,7 +137,7 @@ pub fn add_interface_on_set(
 /// $\mathbf u_d = \mathbf G_d^{-1}([\mathbf u_m; \boldsymbol\theta_m] - \mathbf G_r \mathbf u_r)$.
 ///
 /// # Derivation
-/// Not in the seed. The constraint set $\{[\mathbf u_m; \boldsymbol\theta_m] = \mathbf G
+/// Not in the AIC-FFR papers. The constraint set $\{[\mathbf u_m; \boldsymbol\theta_m] = \mathbf G
 /// \mathbf u_{surface}\}$ is the same whichever six unknowns it is solved for, so the spider
 /// still adds no stiffness: a free body with RBE3 interfaces keeps its frequencies (checked by
 /// `unit::interface::rbe3_adds_no_stiffness`). The dependent dofs are the columns of $\mathbf G$

@@ -136,4 +136,7 @@ impl Mesh {
             .map(|(i, _)| NodeId(i as u32))
     }
 }
+pub mod abaqus;
 pub mod gmsh;
+pub mod import;
+pub mod nastran;

@@ -25,18 +25,40 @@ pub const DENSE_LIMIT: usize = 6000;
 /// Eigenpairs of a model, lowest first.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ModalSolution {
-    /// Circular frequencies $\omega_n$ [rad/s]; a (numerically) negative $\omega^2$ is
-    /// reported as $-\sqrt{|\omega^2|}$ so that rigid modes stay visible.
+    /// Circular frequencies $\omega_n$ [rad/s] as computed; a (numerically) negative
+    /// $\omega^2$ is kept as $-\sqrt{|\omega^2|}$ here. Reports use
+    /// [`Self::frequencies_hz`] and [`Self::rigid_body_modes`], which show rigid-body modes
+    /// at 0 Hz.
     pub omega: Vec<f64>,
     /// Mode shapes on every node, mass-normalised ($\boldsymbol\phi^T \mathbf M
     /// \boldsymbol\phi = 1$).
     pub shapes: Vec<Vec<[f64; 6]>>,
 }
 
+/// Below this fraction of the highest computed frequency a mode is a rigid-body mode: its
+/// $\omega^2$ is round-off of the factorisation, about $10^{-16}$ of the largest eigenvalue of
+/// the matrices, so its $|\omega|$ is far below $10^{-4}$ of any elastic frequency.
+pub const RIGID_BODY_FRACTION: f64 = 1e-4;
+
 impl ModalSolution {
-    /// Frequencies in Hz.
+    /// Which modes are rigid-body modes: a negative $\omega^2$ (with $\mathbf K \succeq 0$ and
+    /// $\mathbf M \succ 0$ only round-off makes one) or $|\omega|$ below
+    /// [`RIGID_BODY_FRACTION`] of the highest computed frequency.
+    pub fn rigid_body_modes(&self) -> Vec<bool> {
+        let highest = self.omega.iter().fold(0.0f64, |a, w| a.max(*w));
+        self.omega
+            .iter()
+            .map(|&w| w < 0.0 || w.abs() < RIGID_BODY_FRACTION * highest)
+            .collect()
+    }
+
+    /// Frequencies in Hz; rigid-body modes ([`Self::rigid_body_modes`]) are 0, never negative.
     pub fn frequencies_hz(&self) -> Vec<f64> {
-        self.omega.iter().map(|w| w / (2.0 * std::f64::consts::PI)).collect()
+        self.omega
+            .iter()
+            .zip(self.rigid_body_modes())
+            .map(|(w, rigid)| if rigid { 0.0 } else { w / (2.0 * std::f64::consts::PI) })
+            .collect()
     }
 }
 

@@ -1,4 +1,4 @@
-//! Symbolic phase of assembly (style R9): the sparsity pattern of
+//! Symbolic phase of assembly: the sparsity pattern of
 //! $\mathbf K = \mathbf T^T \mathbf K_{full} \mathbf T$ and, for each element, where each of
 //! its entries goes. Computed once per model; a numeric fill ([`crate::assemble_into`]) only
 //! writes values.

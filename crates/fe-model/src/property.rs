@@ -1,4 +1,4 @@
-//! Materials and beam sections: values shared by many elements (style R7), checked once at
+//! Materials and beam sections: values shared by many elements, checked once at
 //! construction so that element kernels can trust them.
 
 use crate::error::PropertyError;

@@ -22,6 +22,23 @@ pub struct BeamSection {
     J: f64,
     ky: f64,
     kz: f64,
+    /// The outline for fibre stresses; [`SectionShape::Unknown`] for a section given by values
+    /// (and in files written before shapes were kept).
+    #[serde(default)]
+    shape: SectionShape,
+}
+
+/// The outline of a section, for the extreme-fibre stresses
+/// ([`BeamSection::fibre_stress_range`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum SectionShape {
+    /// Given by values: no outline, no fibre stresses.
+    #[default]
+    Unknown,
+    /// Solid rectangle, width `b` along local $y$, height `h` along local $z$.
+    Rectangle { b: f64, h: f64 },
+    /// Circular tube (`d_inner = 0`: solid circle).
+    Tube { d_outer: f64, d_inner: f64 },
 }
 
 impl BeamSection {
@@ -51,6 +68,7 @@ impl BeamSection {
             J,
             ky,
             kz,
+            shape: SectionShape::Unknown,
         })
     }
 
@@ -77,7 +95,9 @@ impl BeamSection {
         check_nu(name, nu)?;
         let k = 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu);
         let J = rectangle_torsion_constant(b, h);
-        Self::from_values(name, b * h, b * h.powi(3) / 12.0, h * b.powi(3) / 12.0, J, k, k)
+        let mut section = Self::from_values(name, b * h, b * h.powi(3) / 12.0, h * b.powi(3) / 12.0, J, k, k)?;
+        section.shape = SectionShape::Rectangle { b, h };
+        Ok(section)
     }
 
     /// Solid circle of diameter `d`, with Poisson's ratio `nu` for the shear factor.
@@ -120,7 +140,9 @@ impl BeamSection {
         let k = 6.0 * (1.0 + nu) * q / ((7.0 + 6.0 * nu) * q + (20.0 + 12.0 * nu) * m2);
         let A = pi * (d_outer.powi(2) - d_inner.powi(2)) / 4.0;
         let I = pi * (d_outer.powi(4) - d_inner.powi(4)) / 64.0;
-        Self::from_values(name, A, I, I, 2.0 * I, k, k)
+        let mut section = Self::from_values(name, A, I, I, 2.0 * I, k, k)?;
+        section.shape = SectionShape::Tube { d_outer, d_inner };
+        Ok(section)
     }
 
     pub fn name(&self) -> &str {
@@ -144,6 +166,34 @@ impl BeamSection {
     pub fn kz(&self) -> f64 {
         self.kz
     }
+    /// The outline, when the section was given by shape.
+    pub fn shape(&self) -> &SectionShape {
+        &self.shape
+    }
+
+    /// The largest and smallest axial fibre stress $\sigma_x(y, z) = N/A + M_y z/I_y - M_z
+    /// y/I_z$ over the section's outline for section forces `s` = $[N, V_y, V_z, T, M_y, M_z]$
+    /// (the sign convention of [`crate::element::beam2::beam2_section_forces`]); `None` for a
+    /// section given by values. $\sigma_x$ is linear in $(y, z)$: on a rectangle its extremes
+    /// lie at the corners, on a circle of radius $r$ they are
+    /// $N/A \pm r\sqrt{(M_y/I_y)^2 + (M_z/I_z)^2}$. Shear stresses of $V$ and $T$ are not
+    /// included.
+    pub fn fibre_stress_range(&self, s: &[f64; 6]) -> Option<[f64; 2]> {
+        let n = s[0] / self.A;
+        let (ky, kz) = (s[5] / self.Iz, s[4] / self.Iy);
+        match self.shape {
+            SectionShape::Unknown => None,
+            SectionShape::Rectangle { b, h } => {
+                let bending = 0.5 * b * ky.abs() + 0.5 * h * kz.abs();
+                Some([n + bending, n - bending])
+            }
+            SectionShape::Tube { d_outer, .. } => {
+                let bending = 0.5 * d_outer * (ky * ky + kz * kz).sqrt();
+                Some([n + bending, n - bending])
+            }
+        }
+    }
+
     /// Polar second moment `Iy + Iz`, which sets the torsional rotary inertia.
     pub fn Ip(&self) -> f64 {
         self.Iy + self.Iz

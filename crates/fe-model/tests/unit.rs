@@ -1,5 +1,5 @@
 #![allow(non_snake_case)]
-//! fe-model tests, one binary (style R19). Each module says what belongs in it.
+//! fe-model tests, one binary. Each module says what belongs in it.
 
 mod unit {
     /// Dof numbering, elimination, assembly invariants and the errors of bad input.
@@ -7,7 +7,7 @@ mod unit {
     /// Element level for the 3D beam: symmetry, rigid null space, mass, independent
     /// quadrature of the shape functions, one-element cantilevers, sections, errors.
     mod beam2;
-    /// Structure-level beam tests against `benchmarks.md` A1/A2: statics to round-off,
+    /// Structure-level beam tests against validation problem A1/A2: statics to round-off,
     /// frequencies within 0.1 % and converging, the Timoshenko frequency equation.
     mod beam_structure;
     /// Shared fixtures: materials, sections, beam models along skewed axes.
@@ -18,6 +18,10 @@ mod unit {
     /// gmsh reader: fixtures in four encodings agree, inline parse cases, node orderings
     /// against gmsh's reference elements, located errors, no panic on random/cut/mutated input.
     mod gmsh;
+    /// Abaqus and Nastran readers: the fixtures give gmsh's cells and frequencies, sets,
+    /// materials, spiders and supports; inline cases; located errors; no panic on
+    /// random/cut/mutated input.
+    mod import;
     /// RBE2/RBE3 interface nodes on solids: rigid patch, no added stiffness, bad sets.
     mod interface;
     /// Fill-reducing orderings: nested dissection is a valid permutation, solves as AMD does,
@@ -28,4 +32,8 @@ mod unit {
     /// Solid elements (tet4, tet10, hex8, hex20, wedge6): shape functions, patch tests, rigid
     /// modes, mass, box meshes, solid models; cantilever vs Timoshenko; tet4 locking.
     mod solid;
+    /// Stress recovery: the patch test of nodal stresses on every solid kind (one distorted
+    /// element, a distorted mesh), exact extrapolation of linear stresses on quadratic kinds,
+    /// beam section forces against the analytic cantilever under tip load and gravity.
+    mod stress;
 }

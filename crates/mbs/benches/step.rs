@@ -1,6 +1,6 @@
-//! One generalized-α step (style R20; prints µs, asserts nothing).
+//! One generalized-α step (prints µs, asserts nothing).
 //!
-//! * The planar flexible slider-crank (benchmarks.md C2) with the rod as 1, 2 and 4
+//! * The planar flexible slider-crank (validation problem C2) with the rod as 1, 2 and 4
 //!   superelements (2 modes each).
 //! * A cantilever chain of 1..512 identical beam superelements (static modes only) under
 //!   gravity: the cost per step should grow linearly with the number of superelements (the

@@ -138,7 +138,7 @@ impl FlexibleElement {
         }
     }
 
-    /// Buffers for [`Self::element_into`] (style R8): the superelement's workspace and
+    /// Buffers for [`Self::element_into`]: the superelement's workspace and
     /// output, the body state and the accelerations, sized once.
     pub(crate) fn buffer(&self) -> FlexBuffer {
         let n = self.se.n_coordinates();

@@ -1,6 +1,6 @@
 //! Independent coordinates and the explicit map to every node's configuration, velocity and
 //! acceleration: the Jacobian $\mathbf J$, the convective term $\dot{\mathbf J}\dot{\mathbf q}$ and
-//! the derivatives of both that Newton's tangent needs (brief §5).
+//! the derivatives of both that Newton's tangent needs (theory guide §8).
 //!
 //! # Coordinates
 //!
@@ -46,7 +46,7 @@
 //!
 //! The equations are $\mathbf F = \mathbf J^T\mathbf r(\mathbf x(\mathbf q), \mathbf V(\mathbf q,
 //! \dot{\mathbf q}), \mathbf A(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q})) = 0$ with node residuals
-//! $\mathbf r$ (brief §5: $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q} +
+//! $\mathbf r$ (theory guide §8: $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q} +
 //! \mathbf Q_v - \mathbf Q)$). Node variations are $\delta\mathbf x_c = \mathbf J_c\delta\mathbf q$, so
 //!
 //! $$\frac{\partial\mathbf F}{\partial\mathbf q} = \mathbf G_r + \mathbf J^T\Big(\mathbf K_t\mathbf J +

@@ -11,17 +11,44 @@
 //! (1-\alpha_m)\mathbf a_{n+1} + \alpha_m\mathbf a_n = (1-\alpha_f)\ddot{\mathbf q}_{n+1} + \alpha_f\ddot{\mathbf q}_n,$$
 //!
 //! and $\mathbf F(\mathbf q_{n+1}, \dot{\mathbf q}_{n+1}, \ddot{\mathbf q}_{n+1}, t_{n+1}) = \mathbf 0$, where $\oplus$ adds
-//! scalars and left-multiplies rotations, $\mathbf R \leftarrow \exp(\widetilde{h\Delta\boldsymbol\pi})\mathbf R$
-//! (spatial increments, the superelement's convention). Newton corrects the increment:
-//! $(\beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T)\Delta\mathbf x = -\mathbf F$,
-//! $\ddot{\mathbf q} \mathrel{+}= \beta'\Delta\mathbf x$, $\dot{\mathbf q} \mathrel{+}= \gamma'\Delta\mathbf x$,
-//! $h\Delta\mathbf q \mathrel{+}= \Delta\mathbf x$, with $\beta' = \frac{1-\alpha_m}{h^2\beta(1-\alpha_f)}$,
-//! $\gamma' = \frac{\gamma}{h\beta}$ and $\mathbf T$ the tangent operator $\mathbf J_l(h\Delta\boldsymbol\pi)$ on each
-//! rotation (a variation of the increment moves the rotation by $\mathbf J_l\,\delta$).
+//! scalars and moves rotations in body axes, $\mathbf R_{n+1} = \mathbf R_n\exp(\widetilde{h\Delta\boldsymbol\theta})$,
+//! as in Brüls, Cardona & Arnold: the angular components of $\dot{\mathbf q}$, $\ddot{\mathbf q}$, $\mathbf a$ and
+//! $h\Delta\mathbf q$ in the recursion are body-axis ones, $\boldsymbol\omega_b = \mathbf R^T\boldsymbol\omega_s$ and
+//! $\dot{\boldsymbol\omega}_b = \mathbf R^T\dot{\boldsymbol\omega}_s$ (see "Body axes" below). The state keeps the
+//! spatial ones of the superelement's convention; the same update in spatial terms is
+//! $\mathbf R_{n+1} = \exp(\widetilde{\mathbf R_n h\Delta\boldsymbol\theta})\mathbf R_n$. Newton corrects the
+//! spatial increment $\mathbf h = \mathbf R_n h\Delta\boldsymbol\theta$:
+//! $\mathbf S\Delta\mathbf x = -\mathbf F$, $\ddot{\mathbf q}_b \mathrel{+}= \beta'\mathbf R_n^T\Delta\mathbf x$,
+//! $\dot{\mathbf q}_b \mathrel{+}= \gamma'\mathbf R_n^T\Delta\mathbf x$, $h\Delta\mathbf q \mathrel{+}= \mathbf R_n^T\Delta\mathbf x$
+//! (scalars unrotated), with $\beta' = \frac{1-\alpha_m}{h^2\beta(1-\alpha_f)}$, $\gamma' = \frac{\gamma}{h\beta}$ and
+//! $\mathbf S = \beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}$ with each rotation's columns made the
+//! exact derivative: $\hat{\mathbf K}\mathbf J_l(\mathbf h) + \hat{\mathbf C}(\gamma'\mathbf E - \tilde{\boldsymbol\omega}_s\mathbf J_l)
+//! \;+\; \hat{\mathbf M}(\beta'\mathbf E - \tilde{\dot{\boldsymbol\omega}}_s\mathbf J_l)$, $\mathbf E = \exp(\tilde{\mathbf h})$
+//! (`System::iteration_matrix`).
+//!
+//! # Body axes
+//!
+//! The recursion compares velocities and accelerations of different steps component by
+//! component. With spatial angular velocities it did so in fixed axes, while the modal
+//! coordinates $\boldsymbol\eta$ live in the body's floating frame: in a body turning at
+//! $\Omega$, an elastic mode of frequency $\omega$ appears at $\omega$ in $\boldsymbol\eta$ and at
+//! $\omega\pm\Omega$ in the nodes' spatial rotation components, and the scheme's frequency error,
+//! which grows with $\omega h$, then moves the parts of one mode by different phases each step.
+//! The discrete map is no longer the generalized-α map of the linearised motion in the
+//! turning frame, and it pumps energy into that mode. On the spin-up beam (benchmarks.md C1, four
+//! superelements, h = 5 ms) the out-of-plane fixed-interface modes of the segments, 346 rad/s
+//! ($\omega h = 1.7$), grew from round-off at 3.4 /s at $\Omega$ = 10 rad/s with $\rho_\infty \ge 0.8$
+//! (more at 15 rad/s, none at 4); the rate was the same for every Newton tolerance and with
+//! more Newton corrections (the converged map itself), it vanished at $\omega h = 0.9$ and was
+//! damped by $\rho_\infty = 0.5$; the frozen linearised spectrum showed no growing mode. In body
+//! axes the nodes' rotation components turn with the body, all parts of a mode share its
+//! frequency, and the runs stay at round-off for 100 s at $\rho_\infty$ = 0.8, 0.9 and 1
+//! (`tests/convergence.rs`, `spin_up_steady_rotation_stays_in_plane`). Translations remain in
+//! fixed axes (the R^3 x SO(3) form of the paper).
 //!
 //! The initial accelerations are consistent ($\hat{\mathbf M}\ddot{\mathbf q}_0 = -\mathbf F(\mathbf q_0, \dot{\mathbf q}_0,
 //! \mathbf 0)$; $\mathbf F$ is linear in $\ddot{\mathbf q}$) and $\mathbf a_0 = \ddot{\mathbf q}_0$. Each flexible body's last
-//! frame stays in the state, so the frame solve (2.6) is warm-started from the previous
+//! frame stays in the state, so the frame solve (4.4) is warm-started from the previous
 //! iteration or step.
 //!
 //! # Newton strategy
@@ -49,7 +76,7 @@
 //!   factorisations.
 //!
 //! Modified Newton pays when a kept matrix contracts strongly and tangents cost much more than
-//! forces. On the slider-crank (benchmarks.md C2, one superelement with geometric stiffening)
+//! forces. On the slider-crank (validation problem C2, one superelement with geometric stiffening)
 //! the tangents cost 2-3 times the forces and a kept matrix contracts by 0.05-0.2 after a few
 //! steps: it takes 3.5 iterations and 0.55 factorisations per step against full Newton's 2 and
 //! 2, and 13 % (2 modes) to 35 % (4 modes) fewer instructions ([`MODIFIED_NEWTON_RATE`]).
@@ -77,14 +104,14 @@
 //! momentum that is a constant linear form $\mathbf c^T\dot{\mathbf q}$ of the velocities (the linear
 //! momentum of point masses) is conserved to round-off when $\mathbf c^T\mathbf F$ is free of internal
 //! forces. The momenta of a flexible or rigid body in these absolute coordinates are nonlinear
-//! in $(\mathbf q, \dot{\mathbf q})$ (the centre of mass follows the frame (2.6) and the CB shapes;
+//! in $(\mathbf q, \dot{\mathbf q})$ (the centre of mass follows the frame (4.4) and the CB shapes;
 //! $\mathbf H$ involves the rotations), so the scheme alone makes their rates vanish at each
 //! $t_{n+1}$ but conserves $\mathbf L$, $\mathbf H$ and the energy to its order, 2. On a free, unloaded
 //! model ([`System::rigid_invariance`]) the step therefore ends with the momentum projection of
 //! [`crate::momentum`] (Hairer, Lubich & Wanner, §IV.4; `DynamicSettings::momentum`): the
 //! velocities get the $\hat{\mathbf M}$-orthogonal rigid correction that restores $\mathbf L$ and
 //! $\mathbf H$ of the start, so both are constant to round-off, and the energy still drifts at
-//! order 2 (benchmarks.md C4: `tests/unit/free_body.rs`). The correction is $O(h^3)$ per step and
+//! order 2 (validation problem C4: `tests/unit/free_body.rs`). The correction is $O(h^3)$ per step and
 //! keeps the order of the trajectory; the initial accelerations are not projected.
 
 #![allow(non_snake_case)]
@@ -168,7 +195,7 @@ pub enum NewtonStrategy {
 
 /// Modified Newton schedules a new iteration matrix when one correction leaves more than this
 /// fraction of the residual, $\|\mathbf F_{k+1}\| > 0.01\|\mathbf F_k\|$ (module docs). Measured on the
-/// slider-crank (benchmarks.md C2, `slider_crank --newton modified --geometric-stiffening`,
+/// slider-crank (validation problem C2, `slider_crank --newton modified --geometric-stiffening`,
 /// callgrind instructions of 800 steps): with 2 modes 0.1 gives 500M (5.5 iterations, 0.10
 /// Jacobians per step), 0.03 423M, 0.01 400M (3.5, 0.56), 0.003 410M (3.1, 0.92), full Newton
 /// 460M; with 4 modes 0.1 538M, 0.03 465M, 0.01 438M, 0.003 454M, full Newton 679M. A matrix
@@ -240,6 +267,24 @@ pub struct StepReport {
     pub momentum_defect: Option<[f64; 6]>,
 }
 
+/// The time at the end of a step of `h` from `t`: $t + h$, rounded to the decimals of $h$
+/// when that moves it by round-off only. A step of 0.005 s then reaches 30 s as 30, not
+/// 29.999999999998316 after 6000 additions; a step with no short decimal form (such as
+/// $T/400$) or a start time off its grid is left as computed.
+pub fn step_end_time(t: f64, h: f64) -> f64 {
+    let sum = t + h;
+    let shown = format!("{h}");
+    let decimals = shown.split_once('.').map_or(0, |(_, d)| d.len());
+    if decimals > 15 || !sum.is_finite() {
+        return sum;
+    }
+    match format!("{sum:.decimals$}").parse::<f64>() {
+        // Round-off of the additions is about 1e-16 of t per step: far below 1e-6 h.
+        Ok(rounded) if (rounded - sum).abs() <= 1e-6 * h.abs() => rounded,
+        _ => sum,
+    }
+}
+
 /// The system an [`Integrator`] steps: borrowed from the caller, or shared and owned (an
 /// integrator that lives on its own, with loads that can change between steps).
 #[derive(Clone)]
@@ -275,6 +320,13 @@ pub struct Integrator<'a> {
     incr: Vec<f64>,
     dx: Vec<f64>,
     a_prev: Vec<f64>,
+    /// Body-axis iterates of the step: velocity, acceleration, increment, and the velocity
+    /// and acceleration at $t_n$.
+    vb: Vec<f64>,
+    qb: Vec<f64>,
+    incr_b: Vec<f64>,
+    vb_n: Vec<f64>,
+    qb_n: Vec<f64>,
     /// The step size of the iteration matrix factorised in the workspace, `None` when there
     /// is none to reuse (start, failed step): modified Newton refactorises when it differs from
     /// the current $h$.
@@ -347,6 +399,8 @@ impl<'a> Integrator<'a> {
         })?;
         state.acceleration.copy_from_slice(&acc);
         system.evaluate_into(&mut state, 1.0, false, &mut ws)?;
+        // The recursion of a_n runs in body axes (module docs).
+        system.rotate_components(&state.rotations, &mut acc, true);
         let J0 = match settings.momentum {
             MomentumProjection::Auto if system.rigid_invariance().is_ok() => {
                 let (L, H) = system.momentum(&state)?;
@@ -367,6 +421,11 @@ impl<'a> Integrator<'a> {
             incr: vec![0.0; n],
             dx: vec![0.0; n],
             a_prev: vec![0.0; n],
+            vb: vec![0.0; n],
+            qb: vec![0.0; n],
+            incr_b: vec![0.0; n],
+            vb_n: vec![0.0; n],
+            qb_n: vec![0.0; n],
             // The workspace holds the factorised mass matrix, not an iteration matrix.
             factor_h: None,
             jacobians: 0,
@@ -511,19 +570,23 @@ impl<'a> Integrator<'a> {
         let bp = (1.0 - am) / (h * h * b * (1.0 - af));
         let gp = g / (h * b);
         let prev = &self.prev;
-        let t = prev.time + h;
+        let t = step_end_time(prev.time, h);
         // Predictor: constant acceleration.
         let st = &mut self.trial;
         st.clone_from(prev);
         st.time = t;
+        self.vb_n.copy_from_slice(&prev.velocity);
+        self.qb_n.copy_from_slice(&prev.acceleration);
+        sys.rotate_components(&prev.rotations, &mut self.vb_n, true);
+        sys.rotate_components(&prev.rotations, &mut self.qb_n, true);
         for i in 0..n {
-            let qdd = prev.acceleration[i];
-            let a_new = ((1.0 - af) * qdd + af * prev.acceleration[i] - am * self.a[i]) / (1.0 - am);
-            st.velocity[i] = prev.velocity[i] + h * (1.0 - g) * self.a[i] + h * g * a_new;
-            self.incr[i] = h * prev.velocity[i] + h * h * (0.5 - b) * self.a[i] + h * h * b * a_new;
-            st.acceleration[i] = qdd;
+            let qdd = self.qb_n[i];
+            let a_new = ((1.0 - af) * qdd + af * self.qb_n[i] - am * self.a[i]) / (1.0 - am);
+            self.vb[i] = self.vb_n[i] + h * (1.0 - g) * self.a[i] + h * g * a_new;
+            self.incr_b[i] = h * self.vb_n[i] + h * h * (0.5 - b) * self.a[i] + h * h * b * a_new;
+            self.qb[i] = qdd;
         }
-        sys.retract_in_place(st, prev, &self.incr);
+        to_trial(sys, prev, st, &mut self.incr, &self.incr_b, &self.vb, &self.qb);
         let step = self.steps + 1;
         let tol = self.settings.tolerance;
         let mut last_rel = f64::INFINITY;
@@ -558,7 +621,7 @@ impl<'a> Integrator<'a> {
                 if modified && with_tangents {
                     // Tangents scheduled by a poor contraction arrived with the converging
                     // evaluation: factorise them for the next step rather than waste them.
-                    sys.iteration_matrix(&mut self.ws, bp, gp, Some(&self.incr));
+                    sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, st)));
                     if sys.factor(&mut self.ws).is_ok() {
                         self.factor_h = Some(h);
                         self.jacobians += 1;
@@ -574,9 +637,9 @@ impl<'a> Integrator<'a> {
                     sys.refresh_motions(st, &mut self.ws);
                 }
                 for i in 0..n {
-                    self.a[i] =
-                        ((1.0 - af) * st.acceleration[i] + af * prev.acceleration[i] - am * self.a[i]) / (1.0 - am);
+                    self.a[i] = ((1.0 - af) * self.qb[i] + af * self.qb_n[i] - am * self.a[i]) / (1.0 - am);
                 }
+                sys.accept_step(st);
                 std::mem::swap(&mut self.state, &mut self.trial);
                 self.steps += 1;
                 if !modified {
@@ -608,7 +671,7 @@ impl<'a> Integrator<'a> {
                 if !with_tangents {
                     sys.evaluate_into(st, 1.0, true, &mut self.ws)?;
                 }
-                sys.iteration_matrix(&mut self.ws, bp, gp, Some(&self.incr));
+                sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, st)));
                 sys.factor(&mut self.ws).map_err(|what| SolveError::Singular {
                     t,
                     step,
@@ -627,12 +690,14 @@ impl<'a> Integrator<'a> {
                     step,
                     what: format!("iteration matrix ({what})"),
                 })?;
+            // dx corrects the spatial increment; the body-axis iterates move by R_n^T dx.
+            sys.rotate_components(&prev.rotations, &mut self.dx, true);
             for i in 0..n {
-                st.acceleration[i] += bp * self.dx[i];
-                st.velocity[i] += gp * self.dx[i];
-                self.incr[i] += self.dx[i];
+                self.qb[i] += bp * self.dx[i];
+                self.vb[i] += gp * self.dx[i];
+                self.incr_b[i] += self.dx[i];
             }
-            sys.retract_in_place(st, prev, &self.incr);
+            to_trial(sys, prev, st, &mut self.incr, &self.incr_b, &self.vb, &self.qb);
         }
         unreachable!("the loop returns at max_iterations")
     }
@@ -651,7 +716,7 @@ pub struct Trajectory {
 
 /// The integrator at `start` (consistent accelerations) and a trajectory holding its first
 /// sensor row: the common start of [`solve_dynamic`] and [`solve_dynamic_adaptive`].
-fn start_trajectory<'a>(
+pub(crate) fn start_trajectory<'a>(
     system: &'a System,
     start: State,
     settings: &DynamicSettings,
@@ -744,4 +809,20 @@ pub fn solve_dynamic_adaptive(
     }
     traj.final_state = integ.state().clone();
     Ok(traj)
+}
+
+/// The iterate `st` of $t_{n+1}$ from the body-axis iterates of the step (module docs): the
+/// spatial increment `incr` $= \mathbf R_n\,h\Delta\mathbf q$ on each rotation, the
+/// configuration $\mathbf q_n\oplus$ `incr`, and the spatial velocity and acceleration
+/// $\mathbf R_{n+1}\mathbf v$, $\mathbf R_{n+1}\dot{\mathbf v}$ ($\dot{\boldsymbol\omega}_s =
+/// \mathbf R\dot{\boldsymbol\omega}_b$, as $\boldsymbol\omega_s\times\boldsymbol\omega_s = \mathbf 0$).
+/// Scalars pass unchanged.
+fn to_trial(sys: &System, prev: &State, st: &mut State, incr: &mut [f64], incr_b: &[f64], vb: &[f64], qb: &[f64]) {
+    incr.copy_from_slice(incr_b);
+    sys.rotate_components(&prev.rotations, incr, false);
+    sys.retract_in_place(st, prev, incr);
+    st.velocity.copy_from_slice(vb);
+    st.acceleration.copy_from_slice(qb);
+    sys.rotate_components(&st.rotations, &mut st.velocity, false);
+    sys.rotate_components(&st.rotations, &mut st.acceleration, false);
 }

@@ -31,7 +31,7 @@ pub enum ModelError {
         referenced_by: String,
     },
     /// A closed kinematic loop made of rigid bodies, joints and supports only. Minimal
-    /// coordinates cannot describe it without a constraint equation (brief §5): close the loop
+    /// coordinates cannot describe it without a constraint equation (theory guide §8): close the loop
     /// through a flexible body, whose interface nodes are independent.
     #[error("closed loop of rigid bodies and joints (no flexible body in it): bodies [{}], joints [{}], supported nodes [{}]; minimal coordinates need the loop to close through a flexible body", bodies.join(", "), joints.join(", "), supports.join(", "))]
     RigidLoop {
@@ -106,6 +106,9 @@ pub enum SolveError {
         t: f64,
         source: SuperelementError,
     },
+    /// A user-defined force ([`crate::UserForce`]) gave a value the solver cannot use.
+    #[error("user force '{name}' at t = {t:.6}: {what}")]
+    UserForce { name: String, t: f64, what: String },
     /// Settings out of range (a negative step, rho_inf outside [0, 1], ...).
     #[error("invalid settings: {what}")]
     InvalidSettings { what: String },

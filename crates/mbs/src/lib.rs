@@ -3,7 +3,7 @@
 //! Bodies (AIC-FFR superelements from [`superelement`], rigid bodies, point masses) act on
 //! shared *nodes*; joints, supports and drivers make some node coordinates explicit functions
 //! of others, so the unknowns are independent coordinates only and no Lagrange multipliers
-//! appear (brief §5). Static, dynamic and linearised analyses work on these coordinates.
+//! appear (theory guide §8). Static, dynamic and linearised analyses work on these coordinates.
 //!
 //! ```text
 //! Model (serde data)  --System::new-->  System (coordinate tree, elements, sparse pattern)
@@ -20,21 +20,69 @@
 //!   independent nodes.
 //! * Reactions ([`SensorKind::Reaction`], [`SensorKind::DriverEffort`]) are the residual of the
 //!   removed coordinates: the force (moment) the support or driver applies *to* the model.
+//! * Forces the model data do not describe (a controller, a co-simulation partner, a bushing
+//!   law) are [`UserForce`]s: a Rust type gives the wrench on its nodes and, optionally, its
+//!   Jacobians (central differences otherwise), [`System::with_user_forces`].
+//!
+//! # Quick start
+//!
+//! A pendulum: a ground node, a revolute joint, a rigid bob under gravity, released from
+//! 30 degrees and integrated for half a second with the Lie-group generalized-α method
+//! (theory guide, section 9.2). Energy is conserved to the integrator's accuracy:
+//!
+//! ```
+//! use mbs::{solve_dynamic, DynamicSettings, JointKind, Model, RigidBody, SensorKind, Support, System};
+//! use nalgebra::{Matrix3, Vector3};
+//!
+//! let mut model = Model::new("pendulum");
+//! let ground = model.add_node("ground", Vector3::zeros());
+//! let hinge = model.add_node("hinge", Vector3::zeros());
+//! model.add_support(Support::clamp(ground));
+//! let joint = model.add_joint("hinge", ground, hinge, JointKind::Revolute { axis: Vector3::z() });
+//! model.add_rigid_body(RigidBody {
+//!     name: "bob".into(),
+//!     reference: hinge,
+//!     nodes: vec![],
+//!     mass: 2.0,
+//!     center_of_mass: Vector3::new(0.0, -0.5, 0.0),
+//!     inertia: Matrix3::identity() * 0.01,
+//! });
+//! model.gravity = Vector3::new(0.0, -9.81, 0.0);
+//! model.add_sensor("kinetic", SensorKind::KineticEnergy);
+//! model.add_sensor("potential", SensorKind::GravityPotential);
+//!
+//! let system = System::new(&model)?;
+//! let mut start = system.initial_state();
+//! system.set_joint(&mut start, joint, 0, 30_f64.to_radians(), 0.0);
+//! // h = 1 ms to t = 0.5 s, rho_inf = 1: no numerical damping.
+//! let run = solve_dynamic(&system, start, &DynamicSettings::new(1e-3, 0.5, 1.0)).map_err(|e| e.error)?;
+//! let kinetic = run.sensors.series("kinetic").expect("the kinetic energy sensor");
+//! let potential = run.sensors.series("potential").expect("the potential sensor");
+//! let total = |i: usize| kinetic[i][0] + potential[i][0];
+//! let (first, last) = (total(0), total(kinetic.len() - 1));
+//! // Undamped generalized-alpha at h = 1 ms (omega h = 4e-3): the energy error is of order
+//! // (omega h)^2, far below 1e-3 of the 1.3 J the bob swings through.
+//! assert!((last - first).abs() < 1e-3 * 1.3, "energy {first} -> {last}");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 //!
 //! # Notation
 //!
+//! Equation numbers such as (8.2) are those of the theory guide (`docs/theory.md`); other
+//! sources are keys of the bibliography (`docs/bibliography.md`).
+//!
 //! | symbol | Rust | meaning | source |
 //! |---|---|---|---|
-//! | $\mathbf r_c,\ \mathbf R_c$ | [`NodeMotion`] `r`, `R` | node position, orientation (node axes to inertial) | brief §5 |
+//! | $\mathbf r_c,\ \mathbf R_c$ | [`NodeMotion`] `r`, `R` | node position, orientation (node axes to inertial) | theory guide §8 |
 //! | $\mathbf V_c = [\mathbf v_c; \boldsymbol\omega_c]$ | `v`, `omega` | node velocity, spatial angular velocity ($\dot{\mathbf R} = \tilde{\boldsymbol\omega}\mathbf R$) | so3 |
 //! | $\mathbf A_c = [\mathbf a_c; \boldsymbol\alpha_c]$ | `a`, `alpha` | node acceleration | |
-//! | $\mathbf q$ | [`State`] | independent coordinates: scalars and SO(3) rotations | brief §5 |
+//! | $\mathbf q$ | [`State`] | independent coordinates: scalars and SO(3) rotations | theory guide §8 |
 //! | $\dot{\mathbf q},\ \ddot{\mathbf q}$ | [`State::velocity`], [`State::acceleration`] | rates (spatial $\boldsymbol\omega$ for rotations) | |
 //! | $\mathbf q\oplus\delta\mathbf q$ | [`System::retract`] | scalars added, $\mathbf R \leftarrow \exp(\widetilde{\delta\boldsymbol\pi})\mathbf R$ | so3 |
-//! | $\mathbf J_c$ | [`NodeKinematics`] `J` | $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$ (+ driver columns) | brief §5 |
-//! | $\dot{\mathbf J}_c\dot{\mathbf q}$ | `NodeKinematics::motion.a` at $\ddot{\mathbf q} = 0$ | convective acceleration | brief §5 |
+//! | $\mathbf J_c$ | [`NodeKinematics`] `J` | $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$ (+ driver columns) | theory guide §8 |
+//! | $\dot{\mathbf J}_c\dot{\mathbf q}$ | `NodeKinematics::motion.a` at $\ddot{\mathbf q} = 0$ | convective acceleration | theory guide §8 |
 //! | $\mathbf r_c$ | (internal) | node residual: inertia + internal − external force | |
-//! | $\mathbf F$ | [`System::residual`] | $\sum_c\mathbf J_c^T\mathbf r_c$ (+ modal rows, joint springs) | brief §5 |
+//! | $\mathbf F$ | [`System::residual`] | $\sum_c\mathbf J_c^T\mathbf r_c$ (+ modal rows, joint springs) | theory guide §8 |
 //! | $\mathbf G_r$ | [`System::generalized_force`] | $\partial(\mathbf J^T\mathbf r)/\partial\mathbf q$ at fixed $\mathbf r$: the joints' geometric term | [`coordinates`] |
 //! | $\hat{\mathbf M},\ \hat{\mathbf C},\ \hat{\mathbf K}$ | [`Matrices`] | $\partial\mathbf F/\partial\ddot{\mathbf q}$, $\partial\mathbf F/\partial\dot{\mathbf q}$, $\partial\mathbf F/\partial\mathbf q$ | [`coordinates`] |
 //! | $\mathbf K_t,\ \mathbf C_t,\ \mathbf M$ | `ElementOutput` | element tangents on its node ports | \[S19\], [`body`] |
@@ -52,6 +100,15 @@
 //! | $\mathbf J = [\mathbf L;\ \mathbf H]$ | [`System::momentum`] | linear momentum, angular momentum about the origin: $\mathbf T_{rig}^T\hat{\mathbf M}\dot{\mathbf q}$ | Noether |
 //! | $\mathbf T_{rig}$ | [`System::rigid_velocities`] | $n_{dof}\times6$: independent velocities of the translations along and rotations about $\mathbf e_k$ | [`momentum`] |
 //! | $\mathbf J_0,\ \boldsymbol\lambda$ | `Integrator::J0`, `lambda` | momenta of the start; rigid correction $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ | HLW §IV.4 |
+//! | $x,\ \dot x$ | [`State`] scalars | a joint coordinate (m or rad) and its rate | [`JointKind`] |
+//! | $Q$ | (internal) | generalised force on a joint coordinate, $\mathbf F \mathrel{-}= Q$ (N or N m) | [`joint_forces`] |
+//! | $k,\ c,\ x_0,\ f_0$ | [`JointSpring`] | joint spring: stiffness, damping, rest value, preload | [`model`] |
+//! | $x_{lo},\ x_{hi},\ d$ | [`JointLimit`] | stop bounds; penetration beyond them | [`joint_forces`] |
+//! | $u,\ r(t),\ y,\ e = r - y$ | [`JointActuator`], [`Pid`] | actuator effort, set-point, measured coordinate, error | [`joint_forces`] |
+//! | $K_p,\ K_i,\ K_d,\ z$ | [`Pid`], `Control` | PID gains; integral of $e$ (trapezoidal, moved on by accepted steps) | [`joint_forces`] |
+//! | $\mathbf R_\Delta$ | [`initial`] | rigid rotation of a joint's subtree by an initial joint value | [`initial`] |
+//! | $\hat{\mathbf K}_s$ | [`stability`] | symmetric part of $\hat{\mathbf K}$, scaled by its diagonal; negative eigenvalues: past a critical point | Bathe §6.8 |
+//! | $\mathbf f_e$ | [`Wrench`] | a user force's force and moment on a node, inertial | [`user_force`] |
 //!
 //! Vectors are inertial unless said otherwise; rigid-body mass data are in their reference
 //! node's axes. BCA 2012: Brüls, Cardona, Arnold, *Mech. Mach. Theory* 48 (2012). HLW: Hairer,
@@ -61,20 +118,25 @@
 //!
 //! | eq. | meaning | function |
 //! |---|---|---|
-//! | brief §5 | node configurations, velocities, accelerations and $\mathbf J$ from the independent coordinates | `mbs::coordinates::CoordinateMap::motions_into` |
+//! | theory guide §8 | node configurations, velocities, accelerations and $\mathbf J$ from the independent coordinates | `mbs::coordinates::CoordinateMap::motions_into` |
 //! | this crate | $\partial\mathbf V/\partial\mathbf q$, $\partial\mathbf A/\partial\mathbf q$, $\partial\mathbf A/\partial\dot{\mathbf q}$, $\partial\mathbf J/\partial\mathbf q$ | `mbs::coordinates::CoordinateMap::derivatives_into` |
 //! | this crate | geometric term $\mathbf G_r$ | `mbs::coordinates::CoordinateMap::geometric_term` |
-//! | brief §5 | $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q} + \mathbf Q_v - \mathbf Q) = 0$ | `mbs::System::residual` |
+//! | theory guide §8 | $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q} + \mathbf Q_v - \mathbf Q) = 0$ | `mbs::System::residual` |
 //! | this crate | $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$ | `mbs::System::matrices` |
 //! | Newton-Euler | rigid body about its reference node | `mbs::body::rigid_element` |
-//! | (4.3)-(4.4), \[S19\] | flexible body | `mbs::body::FlexibleElement::element` (calls `superelement::Superelement::evaluate`) |
-//! | brief §6 | Newton with load stepping | `mbs::solve_static` |
+//! | (6.4)-(6.7), \[S19\] | flexible body | `mbs::body::FlexibleElement::element` (calls `superelement::Superelement::evaluate`) |
+//! | theory guide §9 | Newton with load stepping | `mbs::solve_static` |
 //! | Riks 1979, Crisfield 1981 | arc-length continuation (spherical constraint, bordered Newton) | `mbs::solve_arc_length`, `mbs::solve_static_with` |
 //! | Bathe §6.8.2 | linearised buckling $(\hat{\mathbf K}_0 + \mu\Delta\hat{\mathbf K})\boldsymbol\phi = \mathbf 0$ | `mbs::buckling` |
 //! | Zienkiewicz & Xie 1991 | local error estimate and step control | `mbs::Integrator::step_adaptive`, `mbs::solve_dynamic_adaptive` |
 //! | BCA 2012, Alg. 1 | Lie-group generalized-α step; full or modified Newton ([`NewtonStrategy`]) | `mbs::Integrator::step` |
 //! | HLW §IV.4 | momentum projection $(\mathbf T_{rig}^T\hat{\mathbf M}\mathbf T_{rig})\boldsymbol\lambda = \mathbf J_0 - \mathbf J$, $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ on free, unloaded models | `mbs::System::project_momentum` (private, `momentum.rs`) |
-//! | brief §6 | linearised spectrum; each mode's energy by body and node | `mbs::spectrum`, `mbs::mode_energies` |
+//! | theory guide §9 | linearised spectrum; each mode's energy by body and node | `mbs::spectrum`, `mbs::mode_energies` |
+//! | this crate | initial joint values and rates moving the subtree behind the joint rigidly | `mbs::System::initial_state` (`initial.rs`) |
+//! | this crate | joint limits, actuators (time function, PID with trapezoidal integral) and their tangents | `mbs::joint_forces` |
+//! | Bathe (1996) §6.8 | stability of a static state (inertia of $\hat{\mathbf K}_s$) | `mbs::stability` |
+//! | this crate | fixed step retried with halved steps | `mbs::step_retrying`, `mbs::solve_dynamic_retrying` |
+//! | this crate | user force: residual $-\lambda\mathbf f_e$, $\mathbf K_t = -\lambda\partial\mathbf f_e/\partial\mathbf x$, $\mathbf C_t = -\lambda\partial\mathbf f_e/\partial\mathbf V$ (central differences when not given) | `mbs::user_force::user_force_element` (private), `mbs::user_force::finite_difference_jacobian` |
 //!
 //! # Not implemented
 //!
@@ -85,7 +147,7 @@
 //!   gravity or springs to the ground); a component conserved alone (the angular momentum
 //!   about the vertical under gravity) drifts at the integrator's order, 2.
 //! * A cure for the out-of-plane growth of the spin-up to 10 rad/s with 4 superelements,
-//!   $\rho_\infty \ge 0.8$ and $h$ = 3-10 ms (issue 6): measured in `tests/convergence.rs`
+//!   $\rho_\infty \ge 0.8$ and $h$ = 3-10 ms: measured in `tests/convergence.rs`
 //!   (`spin_up_out_of_plane_growth_study`), it is an instability of the converged discrete map
 //!   in that window (independent of the Newton tolerance; stable at 2.5 ms for every
 //!   $\rho_\infty$, and for 2 or 8 superelements), not a defect of the tangents or the update;
@@ -96,9 +158,13 @@
 //! # Modules
 //!
 //! [`model`] (serde data), [`time_function`], [`node`], [`coordinates`] (the maps and their
-//! derivatives), [`topology`] (the tree and its checks), [`body`] (elements), [`system`]
-//! (assembly), [`static_solver`], [`arc_length`], [`dynamic_solver`], [`momentum`] (momenta and
-//! their projection), [`linearized`] (spectrum, mode energies and buckling), [`sensors`], [`error`].
+//! derivatives), [`topology`] (the tree and its checks), [`initial`] (initial states that follow
+//! the joints), [`body`] (elements), [`joint_forces`] (limits and actuators), [`system`]
+//! (assembly), [`static_solver`], [`arc_length`], [`stability`], [`dynamic_solver`], [`retry`]
+//! (halved steps after a failure), [`momentum`] (momenta and their projection), [`linearized`]
+//! (spectrum, mode energies and buckling), [`sensors`], [`error`],
+//! [`user_force`] (forces written in Rust by the user: [`UserForce`], added with
+//! [`System::with_user_forces`]).
 
 #![allow(non_snake_case)]
 
@@ -107,19 +173,24 @@ pub mod body;
 pub mod coordinates;
 pub mod dynamic_solver;
 pub mod error;
+pub mod initial;
+pub mod joint_forces;
 pub mod linearized;
 pub mod merge;
 pub mod model;
 pub mod momentum;
 pub mod node;
 pub mod recovery;
+pub mod retry;
 pub mod sensors;
+pub mod stability;
 pub mod static_solver;
 pub mod streaming;
 pub mod system;
 pub mod time_function;
 pub mod topology;
 pub mod units;
+pub mod user_force;
 
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use dynamic_solver::{
@@ -127,6 +198,7 @@ pub use dynamic_solver::{
     Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
 };
 pub use error::{Incomplete, ModelError, SolveError};
+pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
 pub use linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,
     NodeEnergy,
@@ -139,9 +211,12 @@ pub use model::{
 };
 pub use momentum::{ExternalAction, MomentumProjection};
 pub use node::NodeMotion;
+pub use retry::{solve_dynamic_retrying, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure};
 pub use sensors::{Energies, SensorRecord};
+pub use stability::{stability, Stability};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
 pub use streaming::StepTotals;
 pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
 pub use time_function::{Interpolation, TimeFunction};
 pub use units::CoordinateQuantity;
+pub use user_force::{FdSteps, UserForce, Wrench};

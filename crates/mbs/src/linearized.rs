@@ -1,4 +1,4 @@
-//! Linearised analysis about a state (brief §6): $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$
+//! Linearised analysis about a state (theory guide §9): $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$
 //! of the assembled system ([`System::matrices`]) and the eigenvalues of
 //! $\hat{\mathbf M}\delta\ddot{\mathbf q} + \hat{\mathbf C}\delta\dot{\mathbf q} + \hat{\mathbf K}\delta\mathbf q = \mathbf 0$.
 //!
@@ -188,6 +188,8 @@ pub enum EnergyCarrier {
     Load { index: usize, node: String },
     /// A spring on a joint coordinate.
     JointSpring { joint: String, coordinate: usize },
+    /// A user-defined force's stiffness and damping ([`crate::UserForce`]), by name.
+    UserForce(String),
     /// The joints' geometric term $\mathbf G_r$ of $\hat{\mathbf K}$ (zero in an unloaded state).
     JointGeometry,
 }
@@ -200,6 +202,7 @@ impl std::fmt::Display for EnergyCarrier {
             Self::Load { index, node } => write!(f, "load {index} on node {node}"),
             Self::JointSpring { joint, coordinate } => write!(f, "joint spring {joint}[{coordinate}]"),
             Self::JointGeometry => write!(f, "joint geometry"),
+            Self::UserForce(name) => write!(f, "user force {name}"),
         }
     }
 }
@@ -270,7 +273,7 @@ pub struct ModeEnergy {
 /// $\boldsymbol\phi^T\hat{\mathbf K}\boldsymbol\phi$, so the carriers' shares sum to 1.
 ///
 /// # Derivation
-/// Not in the seed. With the port vector $\mathbf w = [\mathbf J_a\boldsymbol\phi;\ \dots;\ \boldsymbol\phi_\eta]$
+/// Not in the AIC-FFR papers. With the port vector $\mathbf w = [\mathbf J_a\boldsymbol\phi;\ \dots;\ \boldsymbol\phi_\eta]$
 /// (node velocities of the mode, then the body's modal amplitudes) and
 /// $\mathbf y^K = \mathbf K_t\mathbf w + \mathbf C_t\,(\partial\mathbf V/\partial\mathbf q)\boldsymbol\phi +
 /// \mathbf M\,(\partial\mathbf A/\partial\mathbf q)\boldsymbol\phi$, $\mathbf y^M = \mathbf M\mathbf w$ (the element
@@ -472,6 +475,7 @@ fn distribute(system: &System, ws: &Workspace, phi: &[f64]) -> ModeEnergy {
                 index: *i,
                 node: node_name(system.loads[*i].node),
             },
+            ElementKind::User(i) => EnergyCarrier::UserForce(system.user_forces[*i].name().to_string()),
         };
         carriers.push(CarrierEnergy {
             carrier,
@@ -483,7 +487,7 @@ fn distribute(system: &System, ws: &Workspace, phi: &[f64]) -> ModeEnergy {
             interior_kinetic: interior.1,
         });
     }
-    for (js, &(sc, k, _, _)) in model.joint_springs.iter().zip(&system.joint_springs) {
+    for (js, &(sc, k, ..)) in model.joint_springs.iter().zip(&system.joint_springs) {
         if let crate::coordinates::Slot::Unknown(d) = map.scalars[sc].slot {
             carriers.push(CarrierEnergy {
                 carrier: EnergyCarrier::JointSpring {

@@ -2,7 +2,7 @@
 //!
 //! Nodes carry the configuration (position and orientation). Bodies, masses, springs and
 //! loads act on nodes; supports, joints and drivers decide which node coordinates are
-//! independent (brief §5). A body's interface *is* a node: two bodies sharing a node are welded.
+//! independent (theory guide §8). A body's interface *is* a node: two bodies sharing a node are welded.
 //! Every reference is a newtype id ([`NodeId`], [`BodyId`], [`JointId`]) checked by
 //! [`crate::System::new`], which reports an unknown id with the entity that refers to it.
 //!
@@ -10,6 +10,7 @@
 //! directions and loads (dead and follower) are inertial vectors there; rigid-body mass data
 //! are in the axes of their reference node.
 
+use crate::joint_forces::{JointActuator, JointLimit};
 use crate::time_function::TimeFunction;
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
 use reduction::ReducedBody;
@@ -127,7 +128,9 @@ pub struct Spring {
     pub rest_length: Option<f64>,
 }
 
-/// A spring-damper on a joint coordinate: $Q = -k(x - x_0) - c\dot x$.
+/// A spring-damper on a joint coordinate (linear on a length, torsional on an angle):
+/// $Q = -f_0 - k(x - x_0) - c\dot x$, with $f_0$ the preload (the force or moment the spring
+/// exerts against a positive coordinate at its rest value $x_0$).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct JointSpring {
     pub joint: JointId,
@@ -135,6 +138,9 @@ pub struct JointSpring {
     pub stiffness: f64,
     pub damping: f64,
     pub rest: f64,
+    /// $f_0$ (N on a length, N m on an angle).
+    #[serde(default)]
+    pub preload: f64,
 }
 
 /// Which translations of a supported node are removed.
@@ -350,6 +356,9 @@ pub enum SensorKind {
     Reaction { node: NodeId },
     /// Generalised force needed by a driver (1): a torque for an angle, a force for a length.
     DriverEffort { driver: usize },
+    /// Effort $u$ of actuator `actuator` (index in [`Model::actuators`]) (1): a torque on an
+    /// angle, a force on a length.
+    ActuatorEffort { actuator: usize },
     /// Kinetic energy of all bodies and masses (1).
     KineticEnergy,
     /// Strain energy of flexible bodies and springs (1).
@@ -372,13 +381,15 @@ pub struct Sensor {
 /// Initial values that differ from the model's initial configuration at rest.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum InitialCondition {
-    /// A scalar joint coordinate's value (moves the child and everything after it).
+    /// A scalar joint coordinate's value: the child and everything behind it (the subtree
+    /// reached through bodies and joints) turn or slide rigidly with it ([`crate::initial`]).
     JointValue {
         joint: JointId,
         coordinate: usize,
         value: f64,
     },
-    /// A scalar joint coordinate's rate.
+    /// A scalar joint coordinate's rate: the subtree behind the joint gets the matching rigid
+    /// velocity ([`crate::initial`]; in a closed loop, the coordinate alone).
     JointRate {
         joint: JointId,
         coordinate: usize,
@@ -389,6 +400,16 @@ pub enum InitialCondition {
         node: NodeId,
         velocity: Vector3<f64>,
         angular_velocity: Vector3<f64>,
+    },
+    /// A rigid velocity of a body and of everything attached to it by joints and bodies,
+    /// $\mathbf v(\mathbf x) = \mathbf v_p + \boldsymbol\omega\times(\mathbf x - \mathbf p)$ about the
+    /// point $\mathbf p$ (inertial, at the initial configuration). Refused when the body is held
+    /// by the ground (give its joints' rates instead): see [`crate::initial`].
+    BodyVelocity {
+        body: BodyId,
+        velocity: Vector3<f64>,
+        angular_velocity: Vector3<f64>,
+        point: Vector3<f64>,
     },
     /// A rigid motion of the whole model, $\mathbf v = \mathbf v_0 + \boldsymbol\omega\times\mathbf r$,
     /// given to every independent node (free components only).
@@ -407,6 +428,12 @@ pub struct Model {
     pub point_masses: Vec<PointMass>,
     pub springs: Vec<Spring>,
     pub joint_springs: Vec<JointSpring>,
+    /// Stops on joint coordinates ([`crate::joint_forces`]).
+    #[serde(default)]
+    pub joint_limits: Vec<JointLimit>,
+    /// Force and torque actuators on joint coordinates ([`crate::joint_forces`]).
+    #[serde(default)]
+    pub actuators: Vec<JointActuator>,
     pub supports: Vec<Support>,
     pub joints: Vec<Joint>,
     pub drivers: Vec<Driver>,

@@ -22,9 +22,9 @@
 //! momentum that is a constant linear form $\mathbf c^T\dot{\mathbf q}$ of the velocities (the linear
 //! momentum of point masses) is conserved to round-off. The momenta of a flexible or rigid body
 //! in absolute interface coordinates are nonlinear in $(\mathbf q, \dot{\mathbf q})$: the centre of
-//! mass follows the frame (2.6) and the CB shapes, and $\mathbf H$ involves the rotations. The
+//! mass follows the frame (4.4) and the CB shapes, and $\mathbf H$ involves the rotations. The
 //! scheme makes their rates vanish at each $t_{n+1}$ but conserves $\mathbf L$ and $\mathbf H$ to its
-//! order only (2: a drift of $2\cdot10^{-5}$ over 0.3 s at $h = 0.5$ ms on benchmarks.md C4).
+//! order only (2: a drift of $2\cdot10^{-5}$ over 0.3 s at $h = 0.5$ ms on validation problem C4).
 //!
 //! # Projection
 //!
@@ -101,6 +101,9 @@ pub enum ExternalAction {
     /// A spring or damper is attached to a fixed point.
     #[error("spring '{spring}' is attached to a fixed point")]
     GroundSpring { spring: String },
+    /// A user-defined force acts (it may depend on the absolute position or orientation).
+    #[error("user force '{name}' acts on the model")]
+    UserForce { name: String },
 }
 
 /// The body mass matrices at one configuration: $\mathbf J(\mathbf q, \cdot)$ as a linear map of the
@@ -140,6 +143,11 @@ impl System {
         }
         if let Some(s) = model.springs.iter().find(|s| s.b.is_none()) {
             return Err(ExternalAction::GroundSpring { spring: s.name.clone() });
+        }
+        if let Some(u) = self.user_forces.first() {
+            return Err(ExternalAction::UserForce {
+                name: u.name().to_string(),
+            });
         }
         // Every coordinate that a support or driver removes is prescribed; none is left.
         debug_assert!(self.topo.map.prescribed.is_empty());

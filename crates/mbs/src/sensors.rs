@@ -100,10 +100,12 @@ impl System {
         for s in &self.springs {
             e.strain += crate::body::spring_energy(s, &nodes[s.a], s.b.map(|b| &nodes[b]));
         }
-        for &(s, k, _, rest) in &self.joint_springs {
+        for &(s, k, _, rest, preload) in &self.joint_springs {
             let x = state.scalars[s];
-            e.strain += 0.5 * k * (x - rest) * (x - rest);
+            // The preload's potential is linear in the coordinate.
+            e.strain += preload * (x - rest) + 0.5 * k * (x - rest) * (x - rest);
         }
+        e.strain += self.joint_forces.limit_energy(&state.scalars);
         let _ = map;
         Ok(e)
     }
@@ -249,6 +251,7 @@ impl System {
                     let p = map.prescribed.iter().position(|(d, _)| *d == Some(*driver));
                     row.push(p.map_or(f64::NAN, |p| ws.reactions[p]));
                 }
+                SensorKind::ActuatorEffort { actuator } => row.push(self.actuator_efforts(state)[*actuator]),
                 SensorKind::KineticEnergy | SensorKind::StrainEnergy | SensorKind::GravityPotential => {
                     if energies.is_none() {
                         energies = Some(self.energies(state)?);

@@ -1,7 +1,7 @@
 //! [`System`]: a checked [`Model`] turned into independent coordinates, elements and a sparse
 //! pattern; [`State`]: the coordinates, velocities and accelerations at one instant.
 //!
-//! The equations in the independent coordinates are (brief §5)
+//! The equations in the independent coordinates are (theory guide §8)
 //! $$\mathbf F(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}, t) = \sum_c\mathbf J_c^T\mathbf r_c + \mathbf r_\eta + \mathbf r_{joint} = \mathbf 0,$$
 //! with $\mathbf r_c$ the residual of all elements at node $c$ evaluated at the node motion
 //! $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$, $\mathbf A_c = \mathbf J_c\ddot{\mathbf q} + \dot{\mathbf J}_c\dot{\mathbf q}$; the same
@@ -27,10 +27,13 @@ use crate::body::{
 };
 use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
 use crate::error::{ModelError, SolveError};
+use crate::initial::InitialPlan;
+use crate::joint_forces::{Control, JointForces};
 use crate::model::{Body, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId};
 use crate::node::NodeMotion;
 use crate::time_function::CompiledFunction;
 use crate::topology::{self, RootRotation, Topology};
+use crate::user_force::{user_force_element, UserBuffer, UserForce};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
@@ -38,6 +41,7 @@ use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Par};
 use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
 use rayon::prelude::*;
+use std::sync::Arc;
 use superelement::{so3, Frame, Superelement};
 
 /// One element of the assembly: what it is and where it acts.
@@ -48,6 +52,8 @@ pub(crate) enum ElementKind {
     PointMass(usize, f64),
     Spring(usize),
     Load(usize),
+    /// A [`UserForce`] (index into `System::user_forces`).
+    User(usize),
 }
 
 #[derive(Clone, Debug)]
@@ -117,7 +123,7 @@ impl Pattern {
 }
 
 /// The coordinates, velocities and accelerations of a system at one instant, and each
-/// flexible body's last floating frame (the warm start of (2.6)).
+/// flexible body's last floating frame (the warm start of (4.4)).
 #[derive(Debug, PartialEq)]
 pub struct State {
     pub(crate) time: f64,
@@ -130,6 +136,8 @@ pub struct State {
     pub(crate) acceleration: Vec<f64>,
     /// Per flexible element.
     pub(crate) frames: Vec<Frame>,
+    /// Per actuator: its controller's state ([`crate::joint_forces`]).
+    pub(crate) controls: Vec<Control>,
 }
 
 /// `clone_from` reuses the buffers (the derived one would allocate a fresh copy): the
@@ -143,6 +151,7 @@ impl Clone for State {
             velocity: self.velocity.clone(),
             acceleration: self.acceleration.clone(),
             frames: self.frames.clone(),
+            controls: self.controls.clone(),
         }
     }
 
@@ -153,6 +162,7 @@ impl Clone for State {
         self.velocity.clone_from(&other.velocity);
         self.acceleration.clone_from(&other.acceleration);
         self.frames.clone_from(&other.frames);
+        self.controls.clone_from(&other.controls);
     }
 }
 
@@ -209,7 +219,7 @@ pub struct NodeKinematics {
     pub DAd: Mat<f64>,
 }
 
-/// Buffers of one analysis (style R8): created once, refilled by every evaluation.
+/// Buffers of one analysis: created once, refilled by every evaluation.
 pub(crate) struct Workspace {
     pub motions: Vec<Motion>,
     pub nodes: Vec<NodeMotion>,
@@ -291,7 +301,7 @@ fn dense_scratch(n: usize, k: usize) -> StackReq {
     ])
 }
 
-/// One element's output and the buffers it is computed in (style R8: sized once per analysis).
+/// One element's output and the buffers it is computed in (sized once per analysis).
 /// Below this many elements the element loops run on the calling thread: handing a few
 /// evaluations of 10-20 µs to rayon's pool costs more in wake-ups than it saves. Measured on
 /// 2 cores (`cargo bench -p mbs --bench step`): slider-crank step 273 µs in parallel against
@@ -302,6 +312,7 @@ const PARALLEL_ELEMENTS: usize = 32;
 pub(crate) struct ElementBuffer {
     pub out: ElementOutput,
     pub flex: Option<FlexBuffer>,
+    pub user: Option<UserBuffer>,
     /// $\hat{\mathbf M}_e$, $\hat{\mathbf C}_e$, $\hat{\mathbf K}_e$ on the element's unknowns (column major).
     pub local: [Vec<f64>; 3],
 }
@@ -315,9 +326,15 @@ pub struct System {
     pub(crate) rigid: Vec<RigidElement>,
     pub(crate) springs: Vec<SpringElement>,
     pub(crate) loads: Vec<LoadElement>,
-    /// (scalar, stiffness, damping, rest).
-    pub(crate) joint_springs: Vec<(usize, f64, f64, f64)>,
+    /// (scalar, stiffness, damping, rest, preload).
+    pub(crate) joint_springs: Vec<(usize, f64, f64, f64, f64)>,
+    /// Limits and actuators on joint coordinates.
+    pub(crate) joint_forces: JointForces,
+    /// How each of `model.initial` acts ([`crate::initial`]).
+    pub(crate) initial_plan: Vec<InitialPlan>,
     pub(crate) drivers: Vec<CompiledFunction>,
+    /// User-defined forces ([`System::with_user_forces`]).
+    pub(crate) user_forces: Vec<Arc<dyn UserForce>>,
     pub(crate) elements: Vec<ElementRef>,
     pub(crate) pattern: Pattern,
     /// Flexible element of each body (or `None`).
@@ -335,6 +352,12 @@ fn finite(v: f64) -> bool {
 impl System {
     /// Checks the model and builds the coordinates, elements and sparse pattern.
     pub fn new(model: &Model) -> Result<Self, ModelError> {
+        Self::with_user_forces(model, Vec::new())
+    }
+
+    /// [`Self::new`] with user-defined forces acting on the model's nodes
+    /// ([`crate::user_force`]); a node id out of range is [`ModelError::UnknownNode`].
+    pub fn with_user_forces(model: &Model, user_forces: Vec<Arc<dyn UserForce>>) -> Result<Self, ModelError> {
         topology::check_references(model)?;
         let topo = topology::build(model)?;
         let map = &topo.map;
@@ -477,7 +500,7 @@ impl System {
                     format!("joint coordinate {} does not exist", js.coordinate),
                 )
             })?;
-            joint_springs.push((s, js.stiffness, js.damping, js.rest));
+            joint_springs.push((s, js.stiffness, js.damping, js.rest, js.preload));
         }
         let drivers = model
             .drivers
@@ -501,6 +524,8 @@ impl System {
             }
         }
         topology::held_coordinates(model, &topo)?;
+        let mut joint_forces = JointForces::new(model, &topo)?;
+        let initial_plan = crate::initial::plan(model, &topo)?;
 
         // Elements and the sparse pattern.
         let mut elements = Vec::new();
@@ -542,6 +567,13 @@ impl System {
                 modal: vec![],
             });
         }
+        for (i, u) in user_forces.iter().enumerate() {
+            elements.push(ElementRef {
+                kind: ElementKind::User(i),
+                nodes: crate::user_force::check_nodes(u.as_ref(), model.nodes.len())?,
+                modal: vec![],
+            });
+        }
         let n = map.n_dof;
         let node_unknown: Vec<Vec<usize>> = map
             .chains
@@ -562,6 +594,7 @@ impl System {
                 sets.push(u.clone());
             }
         }
+        sets.extend(joint_forces.pattern_sets(&topo));
         let symbolic = Pattern::structure(n, &sets);
         let lu = if n > 0 {
             Some(
@@ -615,6 +648,7 @@ impl System {
                 Slot::Prescribed(_) => None,
             })
             .collect();
+        joint_forces.bind(&topo, |r, c| pattern.slot(r, c));
         let dof_scale = topo
             .dims
             .iter()
@@ -632,7 +666,10 @@ impl System {
             springs,
             loads,
             joint_springs,
+            joint_forces,
+            initial_plan,
             drivers,
+            user_forces,
             elements,
             pattern,
             dof_scale,
@@ -718,8 +755,9 @@ impl System {
     }
 
     /// The model's initial configuration at $t = 0$ with its initial conditions applied
-    /// (joint values and rates, node velocities, rigid motion); accelerations zero (the
-    /// dynamic solver computes consistent ones).
+    /// ([`crate::initial`]: joint values and rates move the subtree behind the joint rigidly,
+    /// body velocities, node velocities, rigid motion); accelerations zero (the dynamic solver
+    /// computes consistent ones), controllers at rest.
     pub fn initial_state(&self) -> State {
         let map = &self.topo.map;
         let mut state = State {
@@ -729,60 +767,44 @@ impl System {
             velocity: vec![0.0; map.n_dof],
             acceleration: vec![0.0; map.n_dof],
             frames: Vec::new(),
+            controls: Vec::new(),
         };
         let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
         self.apply_drivers(&mut state, &mut pr, &mut pa);
-        for c in &self.model.initial {
-            match c {
-                InitialCondition::JointValue {
-                    joint,
-                    coordinate,
-                    value,
-                } => {
-                    state.scalars[self.topo.joint_scalars[joint.index()][*coordinate]] = *value;
-                }
-                InitialCondition::JointRate {
-                    joint,
-                    coordinate,
-                    rate,
-                } => {
-                    let s = self.topo.joint_scalars[joint.index()][*coordinate];
-                    state.velocity[unknown(map.scalars[s].slot)] = *rate;
-                }
-                _ => {}
-            }
-        }
+        self.apply_initial(&mut state);
         let motions = self.node_motions(&state);
-        for c in &self.model.initial {
-            match c {
-                InitialCondition::NodeVelocity {
-                    node,
-                    velocity,
-                    angular_velocity,
-                } => {
-                    self.set_root_velocity(&mut state, node.index(), velocity, angular_velocity);
-                }
-                InitialCondition::RigidMotion {
-                    velocity,
-                    angular_velocity,
-                } => {
-                    for n in 0..self.model.nodes.len() {
-                        if self.topo.roots[n].is_some() {
-                            let v = velocity + angular_velocity.cross(&motions[n].r);
-                            self.set_root_velocity(&mut state, n, &v, angular_velocity);
-                        }
-                    }
-                }
-                _ => {}
-            }
-        }
         state.frames = self.flexible.iter().map(|f| rigid_fit(f, &motions)).collect();
+        self.start_controls(&mut state);
         state
+    }
+
+    /// Restarts every controller's integral at zero at the state's time and configuration
+    /// ([`crate::joint_forces`]).
+    pub(crate) fn start_controls(&self, state: &mut State) {
+        let map = &self.topo.map;
+        let mut s = state.clone();
+        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        state.controls = self.joint_forces.start_controls(&values(&s, &pr, &pa), s.time);
+    }
+
+    /// Moves the controllers' integrals to the end of a converged step at `state`
+    /// ([`crate::joint_forces`]); the integrator calls it for every accepted step.
+    pub fn accept_step(&self, state: &mut State) {
+        if self.joint_forces.n_actuators() == 0 {
+            return;
+        }
+        let map = &self.topo.map;
+        let mut s = state.clone();
+        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        self.joint_forces
+            .accept(&values(&s, &pr, &pa), s.time, &mut state.controls);
     }
 
     /// Gives the free coordinates of independent node `n` the velocity $(\mathbf v, \boldsymbol\omega)$
     /// (projected on the free directions).
-    fn set_root_velocity(&self, state: &mut State, n: usize, v: &Vector3<f64>, w: &Vector3<f64>) {
+    pub(crate) fn set_root_velocity(&self, state: &mut State, n: usize, v: &Vector3<f64>, w: &Vector3<f64>) {
         let map = &self.topo.map;
         let Some(rc) = &self.topo.roots[n] else { return };
         for (s, e) in &rc.translation {
@@ -887,6 +909,23 @@ impl System {
             d[r.dof..r.dof + 3].copy_from_slice(v.as_slice());
         }
         d
+    }
+
+    /// Rotates the three components of every rotation unknown of `v` from spatial to the body
+    /// axes of the orientations `rotations` ($\mathbf R^T\mathbf v$, `to_body`) or back
+    /// ($\mathbf R\mathbf v$); scalars are left alone.
+    pub(crate) fn rotate_components(&self, rotations: &[UnitQuaternion<f64>], v: &mut [f64], to_body: bool) {
+        for (i, r) in self.topo.map.rotations.iter().enumerate() {
+            let d = r.dof;
+            let x = Vector3::new(v[d], v[d + 1], v[d + 2]);
+            let R = &rotations[i];
+            let y = if to_body {
+                R.inverse_transform_vector(&x)
+            } else {
+                R.transform_vector(&x)
+            };
+            v[d..d + 3].copy_from_slice(y.as_slice());
+        }
     }
 
     /// `out` = `base` $\oplus$ `dq` (configuration only).
@@ -1022,6 +1061,10 @@ impl System {
                             ElementKind::Flexible(i) => Some(self.flexible[i].buffer()),
                             _ => None,
                         },
+                        user: match e.kind {
+                            ElementKind::User(_) => Some(UserBuffer::new(e.nodes.len())),
+                            _ => None,
+                        },
                         local: [vec![0.0; s * s], vec![0.0; s * s], vec![0.0; s * s]],
                     }
                 })
@@ -1151,9 +1194,9 @@ impl System {
                 }
             }
         }
-        for &(s, k, c, rest) in &self.joint_springs {
+        for &(s, k, c, rest, preload) in &self.joint_springs {
             let (xv, xd, _) = scalar_values(map, &x, s);
-            let f = k * (xv - rest) + c * xd;
+            let f = preload + k * (xv - rest) + c * xd;
             match map.scalars[s].slot {
                 Slot::Unknown(d) => {
                     ws.F[d] += f;
@@ -1162,8 +1205,16 @@ impl System {
                 Slot::Prescribed(p) => ws.reactions[p] += f,
             }
         }
+        let joint_force_scale = self.joint_forces.add_forces(
+            &self.topo,
+            &x,
+            state.time,
+            &state.controls,
+            &mut ws.F,
+            &mut ws.reactions,
+        );
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        ws.scale = norm(&gparts[0]) + norm(&gparts[1]) + norm(&gparts[2]);
+        ws.scale = norm(&gparts[0]) + norm(&gparts[1]) + norm(&gparts[2]) + joint_force_scale;
         ws.floor = self.residual_floor(&ws.nodes);
         if !tangents {
             self.store_frames(ws, state);
@@ -1199,12 +1250,14 @@ impl System {
             let Kv = &mut ws.K;
             map.geometric_term(c, &ws.derivs[c], &ws.node_res[c], |i, k, g| Kv[slots[k * u + i]] += g);
         }
-        for (&(_, k, c, _), slot) in self.joint_springs.iter().zip(&self.pattern.joint_spring_slots) {
+        for (&(_, k, c, ..), slot) in self.joint_springs.iter().zip(&self.pattern.joint_spring_slots) {
             if let Some(slot) = slot {
                 ws.K[*slot] += k;
                 ws.C[*slot] += c;
             }
         }
+        self.joint_forces
+            .add_tangents(&self.topo, &x, state.time, &state.controls, &mut ws.K, &mut ws.C);
         self.store_frames(ws, state);
         Ok(())
     }
@@ -1260,6 +1313,11 @@ impl System {
             ElementKind::Load(i) => {
                 let l = &self.loads[*i];
                 load_element(l, &nodes[l.node], state.time, lambda, tangents, out);
+            }
+            ElementKind::User(i) => {
+                let buffer = buf.user.as_mut().expect("user force buffer");
+                let force = self.user_forces[*i].as_ref();
+                user_force_element(force, &e.nodes, nodes, state.time, lambda, tangents, buffer, out)?;
             }
         }
         Ok(())
@@ -1484,24 +1542,47 @@ impl System {
         Ok(())
     }
 
-    /// Combines the iteration matrix $\beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$
-    /// into `ws.S`, where $\mathbf T$ applies $\mathbf J_l(\mathbf h_r)$ to the columns of each rotation
-    /// coordinate ($\mathbf h$: the step's increment $h\Delta\mathbf q$; identity when `None`).
-    pub(crate) fn iteration_matrix(&self, ws: &mut Workspace, beta: f64, gamma: f64, increment: Option<&[f64]>) {
+    /// Combines the iteration matrix into `ws.S`: $\beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} +
+    /// \hat{\mathbf K}$, and with `step` = (the spatial increment $\mathbf h$ of each rotation,
+    /// the iterate of $t_{n+1}$) the exact derivative of the residual with respect to a spatial
+    /// correction $\delta\mathbf h$ of the increment under the body-axis recursion of the
+    /// integrator (`dynamic_solver` module docs): on each rotation's columns
+    /// $\delta\boldsymbol\pi = \mathbf J_l(\mathbf h)\delta\mathbf h$ moves the rotation, and
+    /// $\boldsymbol\omega_s = \mathbf R_{n+1}\boldsymbol\omega_b$, $\dot{\boldsymbol\omega}_s =
+    /// \mathbf R_{n+1}\dot{\boldsymbol\omega}_b$ vary by $\gamma'\mathbf E\delta\mathbf h -
+    /// \tilde{\boldsymbol\omega}_s\mathbf J_l\delta\mathbf h$ and $\beta'\mathbf E\delta\mathbf h -
+    /// \tilde{\dot{\boldsymbol\omega}}_s\mathbf J_l\delta\mathbf h$, $\mathbf E = \exp(\tilde{\mathbf h})$, so the
+    /// columns become $\hat{\mathbf K}\mathbf J_l + \hat{\mathbf C}(\gamma'\mathbf E - \tilde{\boldsymbol\omega}_s\mathbf J_l)
+    /// \;+\; \hat{\mathbf M}(\beta'\mathbf E - \tilde{\dot{\boldsymbol\omega}}_s\mathbf J_l)$.
+    pub(crate) fn iteration_matrix(&self, ws: &mut Workspace, beta: f64, gamma: f64, step: Option<(&[f64], &State)>) {
         for i in 0..ws.S.len() {
             ws.S[i] = beta * ws.M[i] + gamma * ws.C[i] + ws.K[i];
         }
-        let Some(h) = increment else { return };
+        let Some((h, st)) = step else { return };
         let cp = self.pattern.symbolic.col_ptr();
         for r in &self.topo.map.rotations {
             let d = r.dof;
-            let T = so3::left_jacobian(&Vector3::new(h[d], h[d + 1], h[d + 2]));
+            let hv = Vector3::new(h[d], h[d + 1], h[d + 2]);
+            let T = so3::left_jacobian(&hv);
+            let E = so3::exp(&hv).to_rotation_matrix().into_inner();
+            let W = so3::skew(&Vector3::new(st.velocity[d], st.velocity[d + 1], st.velocity[d + 2])) * T;
+            let A = so3::skew(&Vector3::new(
+                st.acceleration[d],
+                st.acceleration[d + 1],
+                st.acceleration[d + 2],
+            )) * T;
             let len = cp[d + 1] - cp[d];
             for t in 0..len {
-                let k = [ws.K[cp[d] + t], ws.K[cp[d + 1] + t], ws.K[cp[d + 2] + t]];
+                let at = |v: &[f64]| [v[cp[d] + t], v[cp[d + 1] + t], v[cp[d + 2] + t]];
+                let (k, c, m) = (at(&ws.K), at(&ws.C), at(&ws.M));
                 for j in 0..3 {
-                    let kt = k[0] * T[(0, j)] + k[1] * T[(1, j)] + k[2] * T[(2, j)];
-                    ws.S[cp[d + j] + t] += kt - k[j];
+                    let mut s = 0.0;
+                    for i in 0..3 {
+                        s += k[i] * T[(i, j)] + (gamma * c[i] + beta * m[i]) * E[(i, j)]
+                            - c[i] * W[(i, j)]
+                            - m[i] * A[(i, j)];
+                    }
+                    ws.S[cp[d + j] + t] = s;
                 }
             }
         }
@@ -1527,7 +1608,7 @@ pub(crate) fn values<'a>(s: &'a State, pr: &'a [f64], pa: &'a [f64]) -> Values<'
     }
 }
 
-fn scalar_values(map: &crate::coordinates::CoordinateMap, x: &Values, s: usize) -> (f64, f64, f64) {
+pub(crate) fn scalar_values(map: &crate::coordinates::CoordinateMap, x: &Values, s: usize) -> (f64, f64, f64) {
     let v = x.scalars[s];
     match map.scalars[s].slot {
         Slot::Unknown(d) => (v, x.vel[d], x.acc[d]),

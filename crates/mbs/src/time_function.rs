@@ -1,6 +1,6 @@
 //! Functions of time for drivers and loads: value, first and second derivative.
 //!
-//! A driver feeds a coordinate with $x(t)$, $\dot x(t)$, $\ddot x(t)$ (brief §5: "fed in with its
+//! A driver feeds a coordinate with $x(t)$, $\dot x(t)$, $\ddot x(t)$ (theory guide §8: "fed in with its
 //! velocity and acceleration"), so every function here has exact derivatives; a load is scaled
 //! by $x(t)$ only.
 
@@ -41,7 +41,7 @@ pub enum TimeFunction {
         from: f64,
         to: f64,
     },
-    /// The spin-up angle of benchmarks.md C1 (Simo & Vu-Quoc 1986):
+    /// The spin-up angle of validation problem C1 (Simo & Vu-Quoc 1986):
     /// $\theta = \frac{\omega_s}{T_s}\big(\frac{t^2}{2} + (\frac{T_s}{2\pi})^2(\cos\frac{2\pi t}{T_s} - 1)\big)$
     /// for $t \le T_s$, then $\omega_s(t - T_s/2)$.
     SpinUp { omega: f64, duration: f64 },

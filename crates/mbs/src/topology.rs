@@ -6,7 +6,7 @@
 //! Rigid bodies weld their nodes into *rigid groups* (a node alone is a group too). Joints
 //! connect groups, from the parent node's group to the child node's group. Supports and node
 //! drivers connect a node to the ground. Flexible bodies connect nothing: their interface
-//! nodes stay independent, which is how a loop closes (brief §5).
+//! nodes stay independent, which is how a loop closes (theory guide §8).
 //!
 //! * The undirected graph of nodes and the ground, with an edge per rigid-body attachment, joint
 //!   and grounded node, must be a forest: a cycle is a closed loop of rigid bodies and joints,
@@ -226,6 +226,14 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
             }
             InitialCondition::NodeVelocity { node: n, .. } => node(*n, &who)?,
             InitialCondition::RigidMotion { .. } => {}
+            InitialCondition::BodyVelocity { body, .. } if body.index() >= model.bodies.len() => {
+                return Err(ModelError::UnknownBody {
+                    id: body.0,
+                    count: model.bodies.len(),
+                    referenced_by: who(),
+                });
+            }
+            InitialCondition::BodyVelocity { .. } => {}
         }
     }
     Ok(())

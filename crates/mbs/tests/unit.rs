@@ -22,7 +22,7 @@ mod tangent;
 #[path = "unit/pendulum.rs"]
 mod pendulum;
 
-/// Free-floating flexible body (benchmarks.md C4): momentum to round-off with the projection
+/// Free-floating flexible body (validation problem C4): momentum to round-off with the projection
 /// (measured by a second path, and on the FE mesh of a solid block), energy and trajectory at
 /// order 2, adaptive steps, no projection when the model is not free.
 #[path = "unit/free_body.rs"]
@@ -46,12 +46,17 @@ mod errors;
 #[path = "unit/data.rs"]
 mod data;
 
-/// The planar flexible slider-crank (benchmarks.md C2): runs, stays planar, and its slider
+/// The planar flexible slider-crank (validation problem C2): runs, stays planar, and its slider
 /// follows the rigid mechanism with a small elastic correction.
 #[path = "unit/slider_crank.rs"]
 mod slider_crank;
 
-/// Linearised analysis: clamped-free beam frequencies (benchmarks.md A1) from superelements,
+/// A flexible double pendulum whose beams went through MBDyn `.fem` files and back has the
+/// same linearised frequencies to 1e-10.
+#[path = "unit/mbdyn_fem.rs"]
+mod mbdyn_fem;
+
+/// Linearised analysis: clamped-free beam frequencies (validation problem A1) from superelements,
 /// and the geometric stiffness of an axial preload.
 #[path = "unit/linearized.rs"]
 mod linearized;
@@ -72,6 +77,21 @@ mod geometric;
 /// steps, same refusal of a singular matrix).
 #[path = "unit/newton.rs"]
 mod newton;
+
+/// Initial states that follow the joints (a flexible double pendulum set by joint values and
+/// rates, a free body spun by one line), refused loops, joint springs with preload, limits and
+/// actuators (tangents against central differences; a PID reaching its set-point, the damped
+/// frequency of a torsional spring-damper, a stop), the hand-over from an equilibrium, and the
+/// retry of failed fixed steps.
+#[path = "unit/joint_setup.rs"]
+mod joint_setup;
+
+/// User-defined forces (the `UserForce` trait): analytic Jacobians against central
+/// differences on deformed, rotated, moving nodes; the assembled tangents with a user force
+/// (analytic or finite-difference Jacobian); a user force equal to a follower load gives the
+/// load's statics and dynamics; non-finite forces and unknown nodes refused by name.
+#[path = "unit/user_force.rs"]
+mod user_force;
 
 /// An integrator that owns its system; loads changed between steps.
 #[path = "unit/stepping.rs"]

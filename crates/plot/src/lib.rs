@@ -194,21 +194,75 @@ pub fn write_png(figure: &Figure, path: &Path) -> Result<(), PlotError> {
     };
     let root = BitMapBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| write_error(e.to_string()))?;
+    draw_figure(&root, figure, x_range, y_range).map_err(write_error)?;
+    // `present` encodes and writes the file; an unwritable path surfaces here (dropping the
+    // backend would write too, but would swallow the error).
+    root.present().map_err(|e| write_error(e.to_string()))
+}
+
+/// Height of one panel of [`write_panels_png`], in pixels.
+pub const PANEL_HEIGHT: u32 = 300;
+
+/// Draws `panels` one above the other into one PNG at `path`, each with its own y axis,
+/// label and legend, all sharing the span of x: for a quantity whose components differ in
+/// size or unit (a tip's 10 m position beside its millimetre deflection, a force beside a
+/// moment), which one axis would flatten or mislabel. The PNG is `WIDTH` wide and
+/// `PANEL_HEIGHT` per panel (at least `HEIGHT`); `title` heads the picture. One panel gives
+/// the same picture as [`write_png`].
+pub fn write_panels_png(title: &str, panels: &[Figure], path: &Path) -> Result<(), PlotError> {
+    if panels.is_empty() {
+        return Err(PlotError::Empty { title: title.into() });
+    }
+    if let [one] = panels {
+        return write_png(one, path);
+    }
+    let mut ranges = Vec::with_capacity(panels.len());
+    let mut x_all = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in panels {
+        let (x, y) = data_ranges(p)?;
+        x_all = (x_all.0.min(x.0), x_all.1.max(x.1));
+        ranges.push(y);
+    }
+    register_font()?;
+    let write_error = |message: String| PlotError::Write {
+        title: title.into(),
+        path: path.to_path_buf(),
+        message,
+    };
+    let height = (PANEL_HEIGHT * panels.len() as u32 + 48).max(HEIGHT);
+    let root = BitMapBackend::new(path, (WIDTH, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| write_error(e.to_string()))?;
+    let body = root
+        .titled(title, (FONT_FAMILY, 26))
+        .map_err(|e| write_error(e.to_string()))?;
+    for (area, (panel, y_range)) in body
+        .split_evenly((panels.len(), 1))
+        .iter()
+        .zip(panels.iter().zip(ranges))
+    {
+        draw_figure(area, panel, x_all, y_range).map_err(write_error)?;
+    }
+    root.present().map_err(|e| write_error(e.to_string()))
+}
+
+/// Draws one figure on `root` with the given data ranges.
+fn draw_figure(
+    root: &DrawingArea<BitMapBackend<'_>, Shift>,
+    figure: &Figure,
+    x_range: Interval,
+    y_range: Interval,
+) -> Result<(), String> {
     let x = axis_span(x_range, figure.x_log);
     let y = axis_span(y_range, figure.y_log);
     // The four scale combinations are four coordinate types in plotters: one generic body.
     // A tick within round-off of zero on a linear axis is labelled 0, not -2.22e-16.
     let zero = (1e-9 * (x.1 - x.0), 1e-9 * (y.1 - y.0));
-    let drawn = match (figure.x_log, figure.y_log) {
-        (false, false) => draw_chart(&root, figure, x.0..x.1, y.0..y.1, zero),
-        (true, false) => draw_chart(&root, figure, (x.0..x.1).log_scale(), y.0..y.1, zero),
-        (false, true) => draw_chart(&root, figure, x.0..x.1, (y.0..y.1).log_scale(), zero),
-        (true, true) => draw_chart(&root, figure, (x.0..x.1).log_scale(), (y.0..y.1).log_scale(), zero),
-    };
-    drawn.map_err(write_error)?;
-    // `present` encodes and writes the file; an unwritable path surfaces here (dropping the
-    // backend would write too, but would swallow the error).
-    root.present().map_err(|e| write_error(e.to_string()))
+    match (figure.x_log, figure.y_log) {
+        (false, false) => draw_chart(root, figure, x.0..x.1, y.0..y.1, zero),
+        (true, false) => draw_chart(root, figure, (x.0..x.1).log_scale(), y.0..y.1, zero),
+        (false, true) => draw_chart(root, figure, x.0..x.1, (y.0..y.1).log_scale(), zero),
+        (true, true) => draw_chart(root, figure, (x.0..x.1).log_scale(), (y.0..y.1).log_scale(), zero),
+    }
 }
 
 /// (min, max) of the values on one axis.

@@ -1,7 +1,7 @@
 //! Tests of the plot crate: the PNG decodes with the expected size and has ink where the
 //! title, the axes and the series are; bad input and bad paths are errors, not panics.
 
-use plot::{write_png, Figure, PlotError, Series, HEIGHT, WIDTH};
+use plot::{write_panels_png, write_png, Figure, PlotError, Series, HEIGHT, PANEL_HEIGHT, WIDTH};
 use std::path::PathBuf;
 
 /// A fresh path under the system temp directory, unique per test.
@@ -141,4 +141,47 @@ fn keep_example_pngs_when_asked() {
     if let Ok(dir) = std::env::var("PLOT_TEST_OUT") {
         write_png(&sine_figure(), &PathBuf::from(dir).join("history.png")).unwrap();
     }
+}
+
+/// Components of different size or unit get a panel each, with their own y axis: the
+/// millimetre deflection is drawn over the panel's height, not flattened beside a 10 m
+/// position on a shared axis.
+#[test]
+fn panels_give_each_component_its_own_axis() {
+    let t: Vec<f64> = (0..300).map(|i| i as f64 * 0.1).collect();
+    let mut x = Figure::new("x", "t [s]", "x [m]");
+    x.series
+        .push(Series::line("x [m]", t.clone(), t.iter().map(|_| 10.0).collect()));
+    let mut w = Figure::new("y", "t [s]", "y [m]");
+    w.series.push(Series::line(
+        "y [m]",
+        t.clone(),
+        t.iter().map(|t| -1e-3 * (t / 5.0).sin()).collect(),
+    ));
+    let path = temp_png("panels.png");
+    write_panels_png("sensor tip", &[x, w], &path).unwrap();
+    let (width, height, pixels, _) = decode(&path);
+    assert_eq!(width, WIDTH);
+    assert_eq!(height, (2 * PANEL_HEIGHT + 48).max(HEIGHT));
+    // The second component's curve (tab10 orange) spans most of its panel's height: find the
+    // rows of the lower half that hold orange.
+    let stride = 3 * WIDTH as usize;
+    let orange_rows: Vec<u32> = (height / 2..height)
+        .filter(|&r| {
+            pixels[r as usize * stride..(r as usize + 1) * stride]
+                .chunks(3)
+                .any(|p| p == [255, 127, 14])
+        })
+        .collect();
+    let span = orange_rows.last().unwrap() - orange_rows.first().unwrap();
+    // A sine over its own axis fills about 90 % of the plotting area (about 200 of the
+    // panel's 300 rows); on an axis shared with 10 m it would be a flat line of 2-3 rows.
+    assert!(span > 120, "the small component is flattened: {span} rows");
+    // One panel is the plain figure.
+    write_panels_png("one", &[sine_figure()], &path).unwrap();
+    assert_eq!(decode(&path).1, HEIGHT);
+    assert!(matches!(
+        write_panels_png("none", &[], &path),
+        Err(PlotError::Empty { .. })
+    ));
 }

@@ -3,7 +3,7 @@
 //! `reduction::reduce_with_progress` (factorisation of K_ii, 12 constraint-mode solves,
 //! Lanczos, the projections and the inertia invariants). Prints wall time per stage, the
 //! factor size and the peak RSS; each size runs in its own process, so that its peak RSS is
-//! its own (issue 9: reduction time against mesh size).
+//! its own (reduction time against mesh size).
 //!
 //! `cargo bench -p reduction --bench craig_bampton -- --bench` runs 50k and 200k dofs;
 //! `REDUCTION_CB_SIZES=10k,25k,50k,100k,200k` chooses sizes (also 3k, 600k), and

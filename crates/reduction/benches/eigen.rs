@@ -1,4 +1,4 @@
-//! Sparse eigensolver timings on a clamped hex8 block (brief §3 and house style R20).
+//! Sparse eigensolver timings on a clamped hex8 block (theory guide §3).
 //!
 //! `cargo bench -p reduction --bench eigen` runs the ~50k- and ~200k-dof problems (select with
 //! `REDUCTION_BENCH_SIZES=50k,200k`); `cargo test --benches` runs a ~3k-dof smoke problem so

@@ -1,4 +1,4 @@
-//! Fill-reducing orderings of $\mathbf K_{ii}$ compared (issue 4): faer's AMD against our
+//! Fill-reducing orderings of $\mathbf K_{ii}$ compared: faer's AMD against our
 //! nested dissection (`fe_model::ordering`) with several leaf sizes, on the hex8 blocks of
 //! `benches/craig_bampton.rs` (RBE2 interfaces on both end faces, interface dofs removed as
 //! Craig-Bampton removes them). Prints the ordering time, the factor size and its flops

@@ -1,4 +1,4 @@
-//! Craig-Bampton reduction of an FE model with interfaces (brief §3).
+//! Craig-Bampton reduction of an FE model with interfaces (theory guide §3).
 //!
 //! The free dofs of the FE model are split into the boundary set $b$ (the six dofs of every
 //! interface node, interface by interface) and the internal set $i$ (all others). The CB
@@ -10,11 +10,15 @@
 //! modes and the shift-invert eigensolver ([`ShiftInvert`]).
 //! $\mathbf K_{CB} = \mathbf V^T\mathbf K\mathbf V$, $\mathbf M_{CB} = \mathbf V^T\mathbf M\mathbf V$.
 
+use crate::attachment::attachment_modes;
 use crate::eigen::{EigenSettings, Shift, ShiftInvert};
 use crate::error::ReductionError;
 use crate::geometric::reduced_geometric_stiffness;
 use crate::invariants::{inertia_data, inertia_data_from_mass};
-use crate::reduced_body::{DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, FORMAT_VERSION};
+use crate::reduced_body::{
+    DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes, FORMAT_VERSION,
+};
+use crate::stress::stress_shapes;
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::Mat;
 use fe_model::{assemble, dof_points, DofMap, DofStatus, FeModel, FillOrdering, NodeId, SystemPattern, DOF_NAMES};
@@ -38,12 +42,19 @@ pub struct CbSettings {
     /// Keep the CB basis on every mesh node (for output and stress recovery).
     pub keep_mesh_shapes: bool,
     /// An interface node placed at the centre of mass, added as the last interface and held
-    /// fixed during the reduction (the `auxiliary-node` frame choice, brief §4).
+    /// fixed during the reduction (the `auxiliary-node` frame choice, theory guide §4).
     pub auxiliary_node: Option<NodeId>,
     /// Compute [`ReducedBody::geometric_stiffness`] (geometric stiffening: the stiffness the
     /// stress of each CB coordinate adds to every other), for bodies whose axial loads change
     /// their bending stiffness. Off by default.
     pub geometric_stiffening: bool,
+    /// Compute [`ReducedBody::stress`], the stress of every CB vector (solid nodal stresses,
+    /// beam section forces), for stress recovery. Off by default.
+    pub stress_shapes: bool,
+    /// Named load points (name, FE node) where loads act inside the body: each gets attachment
+    /// modes (static correction, [`crate::attachment`]) appended to the modes, and a
+    /// [`crate::LoadPoint`] in the body.
+    pub load_points: Vec<(String, NodeId)>,
 }
 
 impl CbSettings {
@@ -54,6 +65,8 @@ impl CbSettings {
             keep_mesh_shapes: true,
             auxiliary_node: None,
             geometric_stiffening: false,
+            stress_shapes: false,
+            load_points: Vec::new(),
         }
     }
 }
@@ -228,6 +241,8 @@ struct Projection {
     omega: Vec<f64>,
     K_CB: Mat<f64>,
     M_CB: Mat<f64>,
+    /// How many of the modes (the last) are attachment modes.
+    n_attachment: usize,
 }
 
 /// The core of the reduction, independent of where $\mathbf K$ and $\mathbf M$ came from:
@@ -249,6 +264,7 @@ fn project(
     system: &FreeSystem<'_>,
     p: &Partition,
     modes: ModeSelection,
+    load_dofs: &[usize],
     name: &str,
     progress: &mut dyn FnMut(Stage),
 ) -> Result<Projection, ReductionError> {
@@ -263,8 +279,8 @@ fn project(
     // One factorisation of K_ii for the constraint modes and the fixed-interface modes.
     let (K_ii, K_ib) = split(K, p)?;
     let (M_ii, _) = split(M, p)?;
-    let (Psi, Phi_i, omega) = if ni == 0 {
-        (Mat::zeros(0, nb), Mat::zeros(0, 0), Vec::new())
+    let (Psi, Phi_i, omega, n_attachment) = if ni == 0 {
+        (Mat::zeros(0, nb), Mat::zeros(0, 0), Vec::new(), 0)
     } else {
         progress(Stage::Factorising { internal_dofs: ni });
         let points_i: Vec<[f64; 3]> = p.internal.iter().map(|&d| points[d]).collect();
@@ -284,12 +300,29 @@ fn project(
             flops: factor.factor_flops(),
             ordering: factor.ordering(),
         });
-        // (brief §3) Psi = -K_ii^{-1} K_ib: 6N solves with the one factor.
+        // (theory guide §3) Psi = -K_ii^{-1} K_ib: 6N solves with the one factor.
         progress(Stage::ConstraintModes { count: nb });
         let mut Psi = -&K_ib;
         factor.solve_in_place(Psi.as_mut());
-        let (Phi_i, omega) = fixed_interface_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), modes, ni, progress)?;
-        (Psi, Phi_i, omega)
+        let (mut Phi_i, mut omega) = fixed_interface_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), modes, ni, progress)?;
+        let (X, omega_x) = attachment_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), &Phi_i, load_dofs)?;
+        let n_attachment = X.ncols();
+        if n_attachment > 0 {
+            let m = Phi_i.ncols();
+            Phi_i = Mat::from_fn(
+                ni,
+                m + n_attachment,
+                |i, j| {
+                    if j < m {
+                        Phi_i[(i, j)]
+                    } else {
+                        X[(i, j - m)]
+                    }
+                },
+            );
+            omega.extend(omega_x);
+        }
+        (Psi, Phi_i, omega, n_attachment)
     };
     progress(Stage::Projecting);
     let m = omega.len();
@@ -315,7 +348,13 @@ fn project(
     let MV = crate::eigen::symmetric_times(M, V.as_ref(), par);
     let K_CB = symmetrize(V.transpose() * &KV);
     let M_CB = symmetrize(V.transpose() * &MV);
-    Ok(Projection { V, omega, K_CB, M_CB })
+    Ok(Projection {
+        V,
+        omega,
+        K_CB,
+        M_CB,
+        n_attachment,
+    })
 }
 
 /// The last step shared by [`reduce`] and [`reduce_external`]: checks the auxiliary node
@@ -331,6 +370,8 @@ struct BodyParts<'a> {
     auxiliary_interface: Option<usize>,
     keep_mesh_shapes: bool,
     geometric_stiffness: Option<Vec<DenseMatrix>>,
+    stress: Option<StressShapes>,
+    load_points: &'a [(String, usize)],
 }
 
 fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
@@ -345,6 +386,8 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
         auxiliary_interface,
         keep_mesh_shapes,
         geometric_stiffness,
+        stress,
+        load_points,
     } = parts;
     if let Some(aux) = auxiliary_interface {
         let x = nodes[interfaces[aux].1];
@@ -366,7 +409,22 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
             });
         }
     }
-    let Projection { omega, K_CB, M_CB, .. } = projection;
+    let load_points = load_points
+        .iter()
+        .map(|(name, node)| LoadPoint {
+            name: name.clone(),
+            node: *node as u32,
+            position: nodes[*node],
+            shape: DenseMatrix::from_faer(S_full.subrows(6 * node, 6)),
+        })
+        .collect();
+    let Projection {
+        omega,
+        K_CB,
+        M_CB,
+        n_attachment,
+        ..
+    } = projection;
     Ok(ReducedBody {
         format_version: FORMAT_VERSION,
         name: name.to_string(),
@@ -390,7 +448,55 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
             shapes: DenseMatrix::from_faer(S_full.as_ref()),
         }),
         geometric_stiffness,
+        stress,
+        load_points,
+        attachment_modes: n_attachment,
     })
+}
+
+/// The internal positions of the load points' dofs: every free dof of each point's node
+/// (translations of a solid node; all six of a beam node), for [`attachment_modes`].
+/// `slot(node, k)` is the free dof of slot `k` of `node`, `None` for a slot without one
+/// (inactive, supported or dependent: a dependent slot follows its spider's node).
+fn load_point_dofs(
+    load_points: &[(String, usize)],
+    n_nodes: usize,
+    p: &Partition,
+    slot: &dyn Fn(usize, usize) -> Option<usize>,
+) -> Result<Vec<usize>, ReductionError> {
+    let mut out = Vec::new();
+    for (name, node) in load_points {
+        let bad = |what: String| ReductionError::InvalidSettings {
+            what: format!("load point '{name}': {what}"),
+        };
+        if *node >= n_nodes {
+            return Err(bad(format!(
+                "node {node} does not exist (the model has {n_nodes} nodes)"
+            )));
+        }
+        let before = out.len();
+        for k in 0..6 {
+            if let Some(d) = slot(*node, k) {
+                match p.position[d] {
+                    Err(i) => {
+                        if out.contains(&i) {
+                            return Err(bad("its node is already another load point".into()));
+                        }
+                        out.push(i)
+                    }
+                    Ok(_) => {
+                        return Err(bad(
+                            "its node is an interface; loads there need no static correction".into()
+                        ))
+                    }
+                }
+            }
+        }
+        if out.len() == before {
+            return Err(bad("its node has no free dof (supported, or moved by a spider)".into()));
+        }
+    }
+    Ok(out)
 }
 
 /// Interfaces as (name, node index).
@@ -461,7 +567,15 @@ pub fn reduce_with_progress(
         ordering,
         describe: &describe,
     };
-    let projection = project(&system, &p, settings.modes, name, progress)?;
+    let load_points: NamedNodes = settings
+        .load_points
+        .iter()
+        .map(|(n, node)| (n.clone(), node.index()))
+        .collect();
+    let load_dofs = load_point_dofs(&load_points, model.node_count(), &p, &|node, k| {
+        dofs.free_dof(NodeId(node as u32), k).map(|d| d.index())
+    })?;
+    let projection = project(&system, &p, settings.modes, &load_dofs, name, progress)?;
     let n = projection.V.ncols();
     // The CB basis on every node's six slots: S_full = T V (dependent slots follow their spider).
     let mut S_full = Mat::<f64>::zeros(6 * model.node_count(), n);
@@ -480,6 +594,11 @@ pub fn reduce_with_progress(
     } else {
         None
     };
+    let stress = if settings.stress_shapes {
+        Some(stress_shapes(model, S_full.as_ref())?)
+    } else {
+        None
+    };
     finish(BodyParts {
         name,
         interfaces: &interfaces,
@@ -491,6 +610,8 @@ pub fn reduce_with_progress(
         auxiliary_interface,
         keep_mesh_shapes: settings.keep_mesh_shapes,
         geometric_stiffness,
+        stress,
+        load_points: &load_points,
     })
 }
 
@@ -567,10 +688,11 @@ pub fn reduce_external_dofs(
     interfaces: &[(String, usize)],
     settings: &CbSettings,
 ) -> Result<ReducedBody, ReductionError> {
-    if settings.geometric_stiffening {
-        // G_k needs the stress of each mode, hence the elements: matrices alone do not have it.
+    if settings.geometric_stiffening || settings.stress_shapes {
+        // G_k and the stress shapes need the stress of each mode, hence the elements:
+        // matrices alone do not have it.
         return Err(ReductionError::ExternalModel {
-            what: "geometric stiffening needs the FE model's elements (use `reduce`); matrices from another code do not carry them".into(),
+            what: "geometric stiffening and stress shapes need the FE model's elements (use `reduce`); matrices from another code do not carry them".into(),
         });
     }
     let n_free = dofs.len();
@@ -624,7 +746,13 @@ pub fn reduce_external_dofs(
         ordering: FillOrdering::Auto,
         describe: &describe,
     };
-    let projection = project(&system, &p, settings.modes, name, &mut |_| {})?;
+    let load_points: NamedNodes = settings
+        .load_points
+        .iter()
+        .map(|(n, node)| (n.clone(), node.index()))
+        .collect();
+    let load_dofs = load_point_dofs(&load_points, nodes.len(), &p, &|node, k| slot_dof[6 * node + k])?;
+    let projection = project(&system, &p, settings.modes, &load_dofs, name, &mut |_| {})?;
     let n = projection.V.ncols();
     let mut S_full = Mat::<f64>::zeros(6 * nodes.len(), n);
     for col in 0..n {
@@ -645,6 +773,8 @@ pub fn reduce_external_dofs(
         auxiliary_interface,
         keep_mesh_shapes: settings.keep_mesh_shapes,
         geometric_stiffness: None,
+        stress: None,
+        load_points: &load_points,
     })
 }
 

@@ -20,7 +20,7 @@
 //! The reduced body holds no FE matrices, but $\mathbf M_{CB}$ is enough. Superscripts name its
 //! blocks: $\mathbf M_{CB}^{\eta b}$ is the rows of the modal coordinates $\boldsymbol\eta$
 //! and the columns of the interface coordinates $b$ (`M_CB[6N.., ..6N]`). Let
-//! $\boldsymbol\Phi_{rig}$ ($6N \times 6$) be the rigid modes of the interface set (3.6) about
+//! $\boldsymbol\Phi_{rig}$ ($6N \times 6$) be the rigid modes of the interface set (5.2) about
 //! the centre of mass. In the CB basis $\mathbf V = [\mathbf V_b\ \mathbf V_\eta]$, the motion
 //! $\mathbf V_b\boldsymbol\Phi_{rig}$ is the static response to a rigid motion of the
 //! interfaces; for a body that is free in its FE model, $\mathbf K\mathbf R = \mathbf 0$
@@ -177,7 +177,7 @@ pub struct Diagnostics {
     pub warnings: Vec<DiagnosticWarning>,
 }
 
-/// The rigid modes of the interface set (3.6), undeformed, about `c`: $6N \times 6$,
+/// The rigid modes of the interface set (5.2), undeformed, about `c`: $6N \times 6$,
 /// row-major `[row][direction]`.
 fn phi_rig(body: &ReducedBody, c: [f64; 3]) -> Vec<[f64; 6]> {
     let mut P = vec![[0.0; 6]; 6 * body.interfaces.len()];

@@ -1,6 +1,6 @@
 //! The $m$ lowest eigenpairs of $\mathbf K\boldsymbol\phi = \omega^2\mathbf M\boldsymbol\phi$
 //! for sparse symmetric $\mathbf K \succeq 0$ and $\mathbf M \succ 0$, by shift-invert
-//! Lanczos on a sparse Cholesky factor (brief §3).
+//! Lanczos on a sparse Cholesky factor (theory guide §3).
 //!
 //! # Method
 //!
@@ -316,7 +316,7 @@ pub struct EigenSolution {
 }
 
 /// The $m$ lowest eigenpairs of $\mathbf K\boldsymbol\phi = \lambda\mathbf M\boldsymbol\phi$,
-/// $\lambda = \omega^2$ (brief §3): [`Shift::resolve`], [`ShiftInvert::new`], then
+/// $\lambda = \omega^2$ (theory guide §3): [`Shift::resolve`], [`ShiftInvert::new`], then
 /// [`ShiftInvert::lowest_modes`].
 ///
 /// `K` and `M` are symmetric with both triangles stored (CSC; unsorted row indices are
@@ -338,7 +338,7 @@ pub fn lowest_modes(
 
 /// A Cholesky factorisation $\mathbf P(\mathbf K - \sigma\mathbf M)\mathbf P^T = \mathbf
 /// L\mathbf L^T$, usable both for solves (constraint modes
-/// $\boldsymbol\Psi = -\mathbf K_{ii}^{-1}\mathbf K_{ib}$, brief §3) and for the
+/// $\boldsymbol\Psi = -\mathbf K_{ii}^{-1}\mathbf K_{ib}$, theory guide §3) and for the
 /// shift-invert eigensolver, so that Craig-Bampton needs one factorisation of
 /// $\mathbf K_{ii}$ for both.
 #[derive(Debug)]
@@ -711,7 +711,7 @@ fn rayleigh_ritz(
 /// $$r = \frac{\|\mathbf K\boldsymbol\phi - \lambda\mathbf M\boldsymbol\phi\|_2}
 /// {\max(\|\mathbf K\boldsymbol\phi\|_2,\ |\lambda - \sigma|\,\|\mathbf M\boldsymbol\phi\|_2)}.$$
 ///
-/// For $\sigma = 0$ this is the brief's $\|\mathbf K\boldsymbol\phi - \lambda\mathbf
+/// For $\sigma = 0$ this is the usual $\|\mathbf K\boldsymbol\phi - \lambda\mathbf
 /// M\boldsymbol\phi\| / \|\mathbf K\boldsymbol\phi\|$ with the guard
 /// $|\lambda|\,\|\mathbf M\boldsymbol\phi\|$. For a rigid-body mode ($\lambda \approx 0$,
 /// $\mathbf K\boldsymbol\phi \approx 0$) that guard is itself round-off and the ratio would be

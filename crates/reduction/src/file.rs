@@ -1,5 +1,5 @@
 //! The reduced-body file, `NAME.rbody`: a [`ReducedBody`] saved once and reused by many
-//! studies (the role of Adams' MNF or Simpack's SID file, brief §1). Reading it back gives a
+//! studies (the role of Adams' MNF or Simpack's SID file, theory guide §1). Reading it back gives a
 //! body identical to the one written, bit for bit in every `f64`.
 //!
 //! # Why one file, half text and half binary
@@ -21,10 +21,10 @@
 //! serde_json writes the shortest decimal that rounds back to the same `f64` and this crate
 //! enables its `float_roundtrip` feature, so that the reading is correctly rounded.
 //!
-//! # Layout, format version 2
+//! # Layout, format version 3
 //!
 //! ```text
-//! FLEXMBS-RBODY 2\n                         magic and format version: this line never changes shape
+//! FLEXMBS-RBODY 3\n                         magic and format version: this line never changes shape
 //! metadata <bytes> crc32 <8 hex digits>\n   length and CRC-32 of the JSON block
 //! <JSON metadata, <bytes> bytes>\n          Metadata: scalars and the array index
 //! <arrays>                                  f64 little-endian, column-major, back to back
@@ -36,8 +36,13 @@
 //! `S_r` ($3 \times n$), `S_x` ($9 \times n$), the nine `S_bar[kl]` ($n \times n$, $k, l \in
 //! \{x, y, z\}$, entry $3k + l$ of [`InertiaData::S_bar`]), `Phi_com` ($6 \times n$), with
 //! geometric stiffness (metadata `geometric_stiffness: true`) the $n$ matrices `G[k]`
-//! ($n \times n$, [`ReducedBody::geometric_stiffness`]), and with mesh shapes `mesh.nodes`
-//! ($3 \times n_{nodes}$) and `mesh.shapes` ($6 n_{nodes} \times n$).
+//! ($n \times n$, [`ReducedBody::geometric_stiffness`]), with mesh shapes `mesh.nodes`
+//! ($3 \times n_{nodes}$) and `mesh.shapes` ($6 n_{nodes} \times n$), with stress shapes
+//! (metadata `stress`: the solid node count and the beams with their sections)
+//! `stress.nodal` ($6 n_{nodes} \times n$) and `stress.solid_node` ($1 \times n_{nodes}$, 1
+//! where a solid element holds the node) when the body has solids, then `stress.beams`
+//! ($12 n_{beams} \times n$), and one `load_point[name]` ($6 \times n$) per load point
+//! (metadata `load_points`, [`ReducedBody::load_points`]).
 //!
 //! # Versions
 //!
@@ -49,6 +54,9 @@
 //!   field. Still read: it gives a body without geometric stiffness, marked with the current
 //!   [`FORMAT_VERSION`] (a version-1 file is a version-2 body without `G`, nothing is lost).
 //! - Version 2: the optional `G[k]` arrays and the metadata field `geometric_stiffness`.
+//!   Still read, as a body without stress shapes or load points.
+//! - Version 3: the optional stress shapes, load points and the metadata fields `stress`,
+//!   `load_points`, `attachment_modes`.
 //!
 //! # Errors
 //!
@@ -62,7 +70,10 @@
 #![allow(non_snake_case)]
 
 use crate::error::ReductionError;
-use crate::reduced_body::{DenseMatrix, InertiaData, InterfacePoint, MeshModes, ReducedBody, FORMAT_VERSION};
+use crate::reduced_body::{
+    BeamStressElement, DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes,
+    FORMAT_VERSION,
+};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -125,6 +136,12 @@ pub enum BodyFileProblem {
     /// whose own shapes are inconsistent).
     #[error("the body cannot be written: {what}")]
     Unwritable { what: String },
+    /// The file is intact but its data are physically wrong ([`crate::physics`]): no reduction
+    /// produces them.
+    #[error("physically inconsistent data (no reduction produces these; reduce the body again): {}", problems.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("; "))]
+    Physics {
+        problems: Vec<crate::physics::PhysicsProblem>,
+    },
 }
 
 /// The oldest format version this build reads.
@@ -159,7 +176,39 @@ struct Metadata {
     /// Whether the `G[k]` arrays are stored (version 2; absent, hence false, in version 1).
     #[serde(default)]
     geometric_stiffness: bool,
+    /// Stress shapes (version 3; absent before): the `stress.*` arrays.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    stress: Option<StressMetadata>,
+    /// Load points of static correction (version 3): one `load_point[name]` array each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    load_points: Vec<LoadPointMetadata>,
+    /// How many of the modes are attachment modes (version 3).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    attachment_modes: usize,
     arrays: Vec<ArrayEntry>,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
+/// What the metadata says of the stress shapes ([`StressShapes`]).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StressMetadata {
+    /// Mesh nodes of the solid stress arrays `stress.nodal` and `stress.solid_node`, when stored.
+    nodes: Option<usize>,
+    /// The beams of the rows of `stress.beams`.
+    beams: Vec<BeamStressElement>,
+}
+
+/// A load point without its shape (the array `load_point[name]`).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LoadPointMetadata {
+    name: String,
+    node: u32,
+    position: [f64; 3],
 }
 
 /// One array of the binary section.
@@ -214,6 +263,8 @@ fn expected_arrays(
     n_modes: usize,
     geometric: bool,
     mesh_nodes: Option<usize>,
+    stress: Option<(Option<usize>, usize)>,
+    load_points: &[&str],
 ) -> Result<Vec<(String, usize, usize)>, String> {
     let n = n_interfaces
         .checked_mul(6)
@@ -242,7 +293,50 @@ fn expected_arrays(
         list.push(("mesh.nodes".to_string(), 3, nodes));
         list.push(("mesh.shapes".to_string(), slots, n));
     }
+    if let Some((solid_nodes, beams)) = stress {
+        if let Some(nodes) = solid_nodes {
+            let rows = nodes
+                .checked_mul(6)
+                .ok_or_else(|| format!("6 x {nodes} stress nodes overflows"))?;
+            list.push(("stress.nodal".to_string(), rows, n));
+            list.push(("stress.solid_node".to_string(), 1, nodes));
+        }
+        let rows = beams
+            .checked_mul(12)
+            .ok_or_else(|| format!("12 x {beams} beams overflows"))?;
+        list.push(("stress.beams".to_string(), rows, n));
+    }
+    list.extend(load_points.iter().map(|name| (format!("load_point[{name}]"), 6, n)));
     Ok(list)
+}
+
+/// The arrays of the optional parts of format version 3 (stress shapes, load points), in file
+/// order after the mesh shapes, as owned values.
+fn version3_arrays(body: &ReducedBody) -> Vec<(String, usize, usize, Vec<f64>)> {
+    let mut list = Vec::new();
+    if let Some(stress) = &body.stress {
+        if let Some(nodal) = &stress.nodal {
+            list.push(("stress.nodal".to_string(), nodal.nrows, nodal.ncols, nodal.data.clone()));
+            let flags = stress.solid_node.iter().map(|&b| if b { 1.0 } else { 0.0 }).collect();
+            list.push(("stress.solid_node".to_string(), 1, stress.solid_node.len(), flags));
+        }
+        let f = &stress.beam_forces;
+        list.push(("stress.beams".to_string(), f.nrows, f.ncols, f.data.clone()));
+    }
+    for p in &body.load_points {
+        list.push((
+            format!("load_point[{}]", p.name),
+            p.shape.nrows,
+            p.shape.ncols,
+            p.shape.data.clone(),
+        ));
+    }
+    list
+}
+
+/// The metadata's view of a body's stress shapes: solid nodes and beam count.
+fn stress_counts(stress: Option<&StressMetadata>) -> Option<(Option<usize>, usize)> {
+    stress.map(|s| (s.nodes, s.beams.len()))
 }
 
 /// Why an array of `rows` x `cols` must have that shape, for messages.
@@ -254,6 +348,10 @@ fn shape_rule(name: &str) -> &'static str {
         "Phi_com" => "6 x n with n = 6N + m",
         "mesh.nodes" => "3 x (mesh nodes)",
         "mesh.shapes" => "6 (mesh nodes) x n with n = 6N + m",
+        "stress.nodal" => "6 (stress nodes) x n with n = 6N + m",
+        "stress.solid_node" => "1 x (stress nodes)",
+        "stress.beams" => "12 (beams) x n with n = 6N + m",
+        name if name.starts_with("load_point[") => "6 x n with n = 6N + m",
         _ => "n x n with n = 6N + m (N interfaces, m modes)",
     }
 }
@@ -315,27 +413,49 @@ fn check_writable(body: &ReducedBody) -> Result<(), String> {
             ));
         }
     }
+    if body.attachment_modes > body.n_modes {
+        return Err(format!(
+            "{} attachment modes but only {} modes",
+            body.attachment_modes, body.n_modes
+        ));
+    }
+    let names: Vec<&str> = body.load_points.iter().map(|p| p.name.as_str()).collect();
     let expected = expected_arrays(
         body.interfaces.len(),
         body.n_modes,
         body.geometric_stiffness.is_some(),
         body.mesh.as_ref().map(|m| m.nodes.len()),
+        body.stress
+            .as_ref()
+            .map(|s| (s.nodal.as_ref().map(|_| s.solid_node.len()), s.beams.len())),
+        &names,
     )?;
     let expected: Vec<_> = expected
         .into_iter()
         .filter(|(name, _, _)| name != "mesh.nodes")
         .collect();
-    for ((name, rows, cols), (_, A)) in expected.iter().zip(body_arrays(body)) {
-        if A.nrows != *rows || A.ncols != *cols {
+    let extra = version3_arrays(body);
+    let mut all: Vec<(String, usize, usize, usize)> = body_arrays(body)
+        .into_iter()
+        .map(|(name, A)| (name, A.nrows, A.ncols, A.data.len()))
+        .collect();
+    all.extend(extra.iter().map(|(name, r, c, d)| (name.clone(), *r, *c, d.len())));
+    if all.len() != expected.len() {
+        return Err(format!(
+            "{} arrays where the counts ask for {}",
+            all.len(),
+            expected.len()
+        ));
+    }
+    for ((name, rows, cols), (_, nrows, ncols, len)) in expected.iter().zip(all) {
+        if nrows != *rows || ncols != *cols {
             return Err(format!(
-                "{name} is {} x {} but must be {} = {rows} x {cols}",
-                A.nrows,
-                A.ncols,
+                "{name} is {nrows} x {ncols} but must be {} = {rows} x {cols}",
                 shape_rule(name)
             ));
         }
-        if A.data.len() != rows * cols {
-            return Err(format!("{name} is {rows} x {cols} but holds {} values", A.data.len()));
+        if len != rows * cols {
+            return Err(format!("{name} is {rows} x {cols} but holds {len} values"));
         }
     }
     // JSON has no NaN or infinity: refuse them here rather than write a file that cannot be
@@ -412,6 +532,9 @@ pub fn to_bytes(body: &ReducedBody, destination: &Path) -> Result<Vec<u8>, Reduc
         );
         add(name, S.nrows, S.ncols, &mut S.data.iter().copied());
     }
+    for (name, rows, cols, data) in version3_arrays(body) {
+        add(name, rows, cols, &mut data.into_iter());
+    }
     let mut offset = 0u64;
     let index = arrays
         .iter()
@@ -440,6 +563,20 @@ pub fn to_bytes(body: &ReducedBody, destination: &Path) -> Result<Vec<u8>, Reduc
         auxiliary_interface: body.auxiliary_interface,
         mesh_nodes: body.mesh.as_ref().map(|m| m.nodes.len()),
         geometric_stiffness: body.geometric_stiffness.is_some(),
+        stress: body.stress.as_ref().map(|s| StressMetadata {
+            nodes: s.nodal.as_ref().map(|_| s.solid_node.len()),
+            beams: s.beams.clone(),
+        }),
+        load_points: body
+            .load_points
+            .iter()
+            .map(|p| LoadPointMetadata {
+                name: p.name.clone(),
+                node: p.node,
+                position: p.position,
+            })
+            .collect(),
+        attachment_modes: body.attachment_modes,
         arrays: index,
     };
     let json = serde_json::to_vec_pretty(&metadata).map_err(|e| {
@@ -474,16 +611,57 @@ pub fn write(body: &ReducedBody, path: &Path) -> Result<(), ReductionError> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "body".into());
-    let tmp = path.with_file_name(format!(".{file_name}.tmp-{}", std::process::id()));
-    std::fs::write(&tmp, &bytes).map_err(|e| io("write", e))?;
+    // Unique per process and per call, so that concurrent writers (two runs sharing a cache,
+    // two threads of one) never share a temporary file.
+    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = path.with_file_name(format!(".{file_name}.tmp-{}-{n}", std::process::id()));
+    // A failed write (a full disk) leaves no partial temporary behind.
+    std::fs::write(&tmp, &bytes).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io("write", e)
+    })?;
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         io("replace", e)
     })
 }
 
-/// Reads a reduced-body file written by [`write()`].
+/// Reads a reduced-body file written by [`write()`] and checks its physics
+/// ([`crate::physics`]).
 pub fn read(path: &Path) -> Result<ReducedBody, ReductionError> {
+    checked(read_unchecked(path)?, path)
+}
+
+/// Parses the bytes of a reduced-body file and checks its physics ([`crate::physics`]);
+/// `origin` names it in errors. Never panics.
+pub fn from_bytes(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
+    checked(from_bytes_unchecked(bytes, origin)?, origin)
+}
+
+/// `body` if [`crate::physics::physical_problems`] finds nothing, else the error naming them.
+fn checked(body: ReducedBody, origin: &Path) -> Result<ReducedBody, ReductionError> {
+    let problems = crate::physics::physical_problems(&body);
+    if problems.is_empty() {
+        Ok(body)
+    } else {
+        Err(ReductionError::BodyFile {
+            path: PathBuf::from(origin),
+            problem: BodyFileProblem::Physics { problems },
+        })
+    }
+}
+
+/// [`from_bytes`] without the physical checks: for `inspect`, which reports them.
+pub fn from_bytes_unchecked(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
+    parse(bytes).map_err(|problem| ReductionError::BodyFile {
+        path: PathBuf::from(origin),
+        problem,
+    })
+}
+
+/// [`read`] without the physical checks (see [`from_bytes_unchecked`]).
+pub fn read_unchecked(path: &Path) -> Result<ReducedBody, ReductionError> {
     let bytes = std::fs::read(path).map_err(|e| ReductionError::BodyFile {
         path: path.to_path_buf(),
         problem: BodyFileProblem::Io {
@@ -491,15 +669,7 @@ pub fn read(path: &Path) -> Result<ReducedBody, ReductionError> {
             message: e.to_string(),
         },
     })?;
-    from_bytes(&bytes, path)
-}
-
-/// Parses the bytes of a reduced-body file; `origin` names it in errors. Never panics.
-pub fn from_bytes(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
-    parse(bytes).map_err(|problem| ReductionError::BodyFile {
-        path: PathBuf::from(origin),
-        problem,
-    })
+    from_bytes_unchecked(&bytes, path)
 }
 
 /// The next line (without its `\n`) from `start`, looking at most `limit` bytes ahead: header
@@ -618,6 +788,17 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
             "the metadata says geometric_stiffness, which format version 1 does not have".into(),
         ));
     }
+    if version < 3 && (meta.stress.is_some() || !meta.load_points.is_empty() || meta.attachment_modes > 0) {
+        return Err(shape(format!(
+            "the metadata has stress shapes, load points or attachment modes, which format version {version} does not have"
+        )));
+    }
+    if meta.attachment_modes > meta.n_modes {
+        return Err(shape(format!(
+            "attachment_modes = {} but n_modes = {}",
+            meta.attachment_modes, meta.n_modes
+        )));
+    }
     if meta.fixed_interface_omega.len() != meta.n_modes {
         return Err(shape(format!(
             "{} fixed-interface frequencies for n_modes = {}",
@@ -636,11 +817,14 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
 
     // The index: names, shapes and offsets as the format prescribes, checked before any
     // allocation so that damaged counts cannot ask for absurd memory.
+    let names: Vec<&str> = meta.load_points.iter().map(|p| p.name.as_str()).collect();
     let expected = expected_arrays(
         meta.interfaces.len(),
         meta.n_modes,
         meta.geometric_stiffness,
         meta.mesh_nodes,
+        stress_counts(meta.stress.as_ref()),
+        &names,
     )
     .map_err(shape)?;
     if meta.arrays.len() != expected.len() {
@@ -763,6 +947,31 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
             shapes: next_matrix(),
         }
     });
+    let stress = meta.stress.map(|s| {
+        let (nodal, solid_node) = match s.nodes {
+            Some(_) => (
+                Some(next_matrix()),
+                next_matrix().data.iter().map(|&f| f != 0.0).collect(),
+            ),
+            None => (None, Vec::new()),
+        };
+        StressShapes {
+            nodal,
+            solid_node,
+            beams: s.beams,
+            beam_forces: next_matrix(),
+        }
+    });
+    let load_points = meta
+        .load_points
+        .into_iter()
+        .map(|p| LoadPoint {
+            name: p.name,
+            node: p.node,
+            position: p.position,
+            shape: next_matrix(),
+        })
+        .collect();
     Ok(ReducedBody {
         // A version-1 file reads as a current body without geometric stiffness (module docs).
         format_version: FORMAT_VERSION,
@@ -785,5 +994,8 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         auxiliary_interface: meta.auxiliary_interface,
         mesh,
         geometric_stiffness,
+        stress,
+        load_points,
+        attachment_modes: meta.attachment_modes,
     })
 }

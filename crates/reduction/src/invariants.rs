@@ -1,6 +1,6 @@
-//! Rigid-body inertia and mass-field invariants of a reduced body (brief §3; Shabana,
+//! Rigid-body inertia and mass-field invariants of a reduced body (theory guide §3; Shabana,
 //! *Dynamics of Multibody Systems*, ch. 5), and the mass-weighted rigid fit that evaluates
-//! the CB modes at the centre of mass (brief §4).
+//! the CB modes at the centre of mass (theory guide §4).
 //!
 //! Everything is computed from the consistent mass matrix $\mathbf M_f$ of the body without
 //! supports or spiders, on every element-active dof slot, and from the CB basis on those
@@ -99,7 +99,7 @@ pub fn inertia_data_from_mass(
     let S_t = DenseMatrix::from_faer(RtMS.subrows(0, 3));
     let S_r = DenseMatrix::from_faer(RtMS.subrows(3, 3));
 
-    // (brief §4) Phi_com: the rigid motion that fits each CB mode best in the mass norm.
+    // (theory guide §4) Phi_com: the rigid motion that fits each CB mode best in the mass norm.
     let G6 = Matrix6::from_fn(|i, j| G[(i, j)]);
     let G6_inv = G6
         .try_inverse()

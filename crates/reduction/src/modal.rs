@@ -1,5 +1,5 @@
 //! Full-model modal analysis of an FE model, clamped or free, by the sparse shift-invert
-//! eigensolver (brief §3; [`crate::eigen`]). The dense path `fe_model::modal_dense` serves
+//! eigensolver (theory guide §3; [`crate::eigen`]). The dense path `fe_model::modal_dense` serves
 //! only small models.
 
 use crate::eigen::{EigenSettings, Shift, ShiftInvert};

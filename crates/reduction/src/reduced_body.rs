@@ -24,9 +24,11 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Version of the reduced-body format this build writes (it also reads version 1, which has
-/// no [`ReducedBody::geometric_stiffness`]). 2: the optional geometric stiffness arrays.
-pub const FORMAT_VERSION: u32 = 2;
+/// Version of the reduced-body format this build writes (it also reads versions 1 and 2).
+/// 2: the optional geometric stiffness arrays. 3: the optional stress shapes
+/// ([`ReducedBody::stress`]) and the load points of static correction
+/// ([`ReducedBody::load_points`]).
+pub const FORMAT_VERSION: u32 = 3;
 
 /// Revision of the algorithms that compute a [`ReducedBody`], bumped whenever a change can
 /// change a body computed from the same input (not only its file format): caches of reduced
@@ -121,6 +123,103 @@ pub struct MeshModes {
     pub shapes: DenseMatrix,
 }
 
+/// The stress of every CB vector (column $k$: the stress field of $\mathbf V\mathbf e_k$),
+/// so that a body's stresses are $\boldsymbol\sigma = \boldsymbol\Sigma\mathbf q^{jj}$ for
+/// elastic coordinates $\mathbf q^{jj}$ ([`fe_model::stress`] for the recovery on the
+/// elements: solid stresses extrapolated from the integration points and averaged at the
+/// nodes; beam section forces at the element ends).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StressShapes {
+    /// $6 n_{nodes} \times n$ (row $6i + c$: Voigt component $c$, order $[xx, yy, zz, xy, yz,
+    /// zx]$, of mesh node $i$), body axes; `None` when the body has no solid elements. Zero at
+    /// nodes no solid element contains ([`StressShapes::solid_node`]).
+    pub nodal: Option<DenseMatrix>,
+    /// Whether each mesh node carries a solid stress (empty when `nodal` is `None`).
+    pub solid_node: Vec<bool>,
+    /// The beam elements, in the order of the rows of `beam_forces`.
+    pub beams: Vec<BeamStressElement>,
+    /// $12 n_{beams} \times n$: section forces $[N, V_y, V_z, T, M_y, M_z]$ (element axes) at
+    /// end 1 (rows $12b..12b+6$) and end 2 ($12b+6..12b+12$) of beam $b$.
+    pub beam_forces: DenseMatrix,
+}
+
+impl StressShapes {
+    /// Solid stresses at the mesh nodes for CB coordinates `q` ($n$ values):
+    /// $\boldsymbol\sigma = \boldsymbol\Sigma\mathbf q$, `None` at nodes without a solid
+    /// element and for a body without solids. Column by column (axpy on contiguous columns).
+    ///
+    /// # Panics
+    /// If `q` does not have one value per column (a caller's bug).
+    pub fn nodal_stress(&self, q: &[f64]) -> Vec<Option<[f64; 6]>> {
+        let Some(S) = &self.nodal else {
+            return Vec::new();
+        };
+        let sigma = combine(S, q);
+        self.solid_node
+            .iter()
+            .enumerate()
+            .map(|(i, &solid)| solid.then(|| sigma[6 * i..6 * i + 6].try_into().expect("6 components")))
+            .collect()
+    }
+
+    /// Section forces $[N, V_y, V_z, T, M_y, M_z]$ at both ends of every beam of
+    /// [`StressShapes::beams`] for CB coordinates `q`.
+    ///
+    /// # Panics
+    /// If `q` does not have one value per column (a caller's bug).
+    pub fn beam_section_forces(&self, q: &[f64]) -> Vec<[[f64; 6]; 2]> {
+        let f = combine(&self.beam_forces, q);
+        f.chunks_exact(12)
+            .map(|c| {
+                let mut s = [[0.0; 6]; 2];
+                s[0].copy_from_slice(&c[..6]);
+                s[1].copy_from_slice(&c[6..]);
+                s
+            })
+            .collect()
+    }
+}
+
+/// $\mathbf A\mathbf q$ for a column-major `A`.
+fn combine(A: &DenseMatrix, q: &[f64]) -> Vec<f64> {
+    assert_eq!(q.len(), A.ncols, "one coordinate per column");
+    let mut out = vec![0.0; A.nrows];
+    for (j, &qj) in q.iter().enumerate() {
+        if qj != 0.0 {
+            for (o, a) in out.iter_mut().zip(&A.data[j * A.nrows..(j + 1) * A.nrows]) {
+                *o += a * qj;
+            }
+        }
+    }
+    out
+}
+
+/// A beam element of a body with stress shapes: its FE index and nodes, and its section
+/// (for the extreme-fibre stresses, [`fe_model::BeamSection::fibre_stress_range`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BeamStressElement {
+    pub element: u32,
+    pub nodes: [u32; 2],
+    pub section: fe_model::BeamSection,
+}
+
+/// A named point where loads act inside the body, with the static correction that makes the
+/// quasi-static response to them exact: the reduction appends attachment modes for its dofs
+/// (module [`crate::attachment`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LoadPoint {
+    pub name: String,
+    /// The FE node (index into the FE model's nodes).
+    pub node: u32,
+    /// Undeformed position in body axes.
+    pub position: [f64; 3],
+    /// $6 \times n$: the CB basis at the node's six dof slots (zero rows for the slots a
+    /// solid node does not have), so that a force $\mathbf f$ and moment $\mathbf m$ (body
+    /// axes) at the point do the virtual work $\delta\mathbf q^T\mathbf S_p^T[\mathbf f;
+    /// \mathbf m]$.
+    pub shape: DenseMatrix,
+}
+
 /// A Craig-Bampton reduced body: the data the AIC-FFR superelement reads.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ReducedBody {
@@ -139,7 +238,7 @@ pub struct ReducedBody {
     pub inertia: InertiaData,
     /// $6 \times n$: the CB modes evaluated at the centre of mass by the mass-weighted rigid
     /// fit $(\boldsymbol\Phi_R^T \mathbf M \boldsymbol\Phi_R)^{-1} \boldsymbol\Phi_R^T \mathbf M
-    /// \mathbf V$ (brief §4), rows: translation, then rotation.
+    /// \mathbf V$ (theory guide §4), rows: translation, then rotation.
     pub Phi_com: DenseMatrix,
     /// Index of the auxiliary interface at the centre of mass, when the body was reduced with
     /// one (the third frame choice).
@@ -154,6 +253,22 @@ pub struct ReducedBody {
     /// the Green-Lagrange strain under the linear stress). `None`: linear elastic field.
     #[serde(default)]
     pub geometric_stiffness: Option<Vec<DenseMatrix>>,
+    /// The stress of every CB vector, when kept (optional, like the mesh shapes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stress: Option<StressShapes>,
+    /// Load points with static correction; the last [`ReducedBody::attachment_modes`] of the
+    /// `n_modes` modes are their attachment modes.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub load_points: Vec<LoadPoint>,
+    /// How many of the `n_modes` modes (the last ones) are attachment modes of the load
+    /// points rather than fixed-interface eigenmodes; their entries of
+    /// `fixed_interface_omega` are their Rayleigh frequencies.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub attachment_modes: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 impl ReducedBody {

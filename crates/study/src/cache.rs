@@ -8,6 +8,12 @@
 //! the hasher), the interface nodes and the reduction settings. Anything that can change the
 //! body changes the key; a comment or a reordered key in the study file does not. The file is
 //! `<cache dir>/<part>-<first 16 hex digits>.rbody`.
+//!
+//! A cached file is never trusted by its name: beside it, `<file>.key` records the full key
+//! and the SHA-256 of the file's bytes ([`record`]), and a body is used only when both match
+//! ([`lookup`]) and it passes the reduced-body checks on load; otherwise the part is reduced
+//! again. Both files are written to temporary names and renamed, so two runs sharing a cache
+//! (two studies, or one study twice) never read a partial file.
 
 use crate::part::{Built, Part, Reduction};
 use sha2::{Digest, Sha256};
@@ -66,4 +72,32 @@ pub fn path(dir: &Path, part: &str, key: &str) -> PathBuf {
         &key[..16.min(key.len())],
         reduction::file::EXTENSION
     ))
+}
+
+/// The SHA-256 of `bytes`, as hex.
+fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The key file of a cache file.
+fn key_path(file: &Path) -> PathBuf {
+    let mut name = file.file_name().unwrap_or_default().to_os_string();
+    name.push(".key");
+    file.with_file_name(name)
+}
+
+/// Records that `file` holds the body of `key`: the key and the hash of its bytes.
+pub fn record(file: &Path, key: &str) -> std::io::Result<()> {
+    let bytes = std::fs::read(file)?;
+    let text = format!("key {key}\nsha256 {}\n", sha256_hex(&bytes));
+    crate::output::write_atomic(&key_path(file), text.as_bytes())
+}
+
+/// The bytes of `file` when its key file records `key` and their hash; `None` otherwise (no
+/// key file, another key, a changed file).
+pub fn lookup(file: &Path, key: &str) -> Option<Vec<u8>> {
+    let text = std::fs::read_to_string(key_path(file)).ok()?;
+    let bytes = std::fs::read(file).ok()?;
+    let expected = format!("key {key}\nsha256 {}\n", sha256_hex(&bytes));
+    (text == expected).then_some(bytes)
 }

@@ -2,11 +2,28 @@
 //! PVD collection, sensor streams as CSV files flushed after every row (and a PNG per sensor
 //! at the end), reduced bodies copied, and `summary.json`/`summary.md` rewritten after every
 //! analysis. Layout in `crate::output`.
+//!
+//! # What a run owns, and what it never touches
+//!
+//! - **Manifest** (`.flexmbs-manifest`): every file a run writes is appended to it (one path
+//!   per line, relative to the results folder) *before* the file is created, so an interrupted
+//!   run's files are known too. A run deletes only files listed there: at the start of an
+//!   analysis, the files an earlier run wrote for it (stale plots included); at the start of
+//!   the run, the files of analyses no longer in the study, and their folders when that
+//!   empties them. Nothing else is ever deleted.
+//! - **Foreign files**: a file in an analysis folder, or a `summary.json`/`summary.md`, that
+//!   the manifest does not list was not written by flexmbs. The run refuses to start
+//!   ([`ForeignFiles::Refuse`], the default) or writes beside them, leaving them alone
+//!   ([`ForeignFiles::Keep`], `--foreign-files keep`).
+//! - **Lock** (`.flexmbs-lock`, holding the process id): one run per results folder. A second
+//!   run stops with a message naming the process; a lock whose process no longer exists (a
+//!   run killed hard) is taken over.
 
 use crate::error::{BoxError, ResultExt};
 use crate::observer::{AnalysisInfo, Cell, Observer, SensorGroup, SensorStream, Series, Table};
-use crate::output::{num, prepare_analysis_dir, Csv, Summary};
+use crate::output::{num, Csv, Summary};
 use crate::vtu::{write_pvd, write_vtu, PointField, VtuMesh};
+use std::collections::BTreeSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -15,14 +32,91 @@ struct Stream {
     x_label: String,
     groups: Vec<SensorGroup>,
     plots: bool,
-    files: Vec<std::io::BufWriter<std::fs::File>>,
+    files: Vec<(std::io::BufWriter<std::fs::File>, PathBuf)>,
     x: Vec<f64>,
     rows: Vec<Vec<Vec<f64>>>,
+}
+
+/// Files in the folder that flexmbs did not write (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ForeignFiles {
+    /// Refuse to write into a folder holding them (the default).
+    #[default]
+    Refuse,
+    /// Write beside them; they are never deleted (a file of the same name is replaced).
+    Keep,
+}
+
+/// The manifest of the files flexmbs wrote into a results folder (module docs).
+pub const MANIFEST: &str = ".flexmbs-manifest";
+/// The lock file of a results folder (module docs).
+pub const LOCK: &str = ".flexmbs-lock";
+const MANIFEST_HEADER: &str = "# files written by flexmbs into this results folder; only these are ever deleted by it";
+
+/// The lock of a results folder, released when dropped.
+struct FolderLock(PathBuf);
+
+impl Drop for FolderLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+/// Whether process `pid` exists (Linux: `/proc/<pid>`; elsewhere assumed alive).
+fn process_alive(pid: u32) -> bool {
+    let proc_dir = Path::new("/proc");
+    !proc_dir.is_dir() || proc_dir.join(pid.to_string()).exists()
+}
+
+impl FolderLock {
+    fn acquire(root: &Path) -> Result<Self, BoxError> {
+        let path = root.join(LOCK);
+        for _ in 0..2 {
+            match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+                Ok(mut f) => {
+                    let _ = writeln!(f, "{}", std::process::id());
+                    return Ok(Self(path));
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let text = std::fs::read_to_string(&path).unwrap_or_default();
+                    match text.trim().parse::<u32>() {
+                        Ok(pid) if !process_alive(pid) => {
+                            // A run killed hard left it: take it over.
+                            let _ = std::fs::remove_file(&path);
+                        }
+                        Ok(pid) => {
+                            return Err(format!(
+                                "the results folder {} is in use by another flexmbs run (process {pid}): wait for it to finish or write elsewhere with --out; if no run is active, delete {}",
+                                root.display(),
+                                path.display()
+                            )
+                            .into())
+                        }
+                        Err(_) => {
+                            return Err(format!(
+                                "the results folder {} is locked by another flexmbs run that is starting ({}); if no run is active, delete it",
+                                root.display(),
+                                path.display()
+                            )
+                            .into())
+                        }
+                    }
+                }
+                Err(e) => {
+                    return Err(Box::new(e)).context(|| format!("cannot lock the results folder {}", root.display()))
+                }
+            }
+        }
+        Err(format!("cannot lock the results folder {}", root.display()).into())
+    }
 }
 
 /// Writes a study's results into a folder (module docs).
 pub struct ResultsFolder {
     root: PathBuf,
+    /// Every file of the manifest (relative paths).
+    manifest: BTreeSet<String>,
+    _lock: FolderLock,
     /// The current analysis: its folder and name.
     dir: PathBuf,
     prefix: String,
@@ -43,28 +137,148 @@ fn series_names(s: Series) -> (&'static str, usize, usize, &'static str) {
 }
 
 impl ResultsFolder {
-    /// A results folder at `root`, created now.
-    pub fn new(root: &Path) -> Result<Self, BoxError> {
+    /// A results folder at `root` for a study with the analyses `analyses`, created and
+    /// locked now; refuses foreign files unless `foreign` keeps them, and deletes the files of
+    /// analyses no longer in the study (module docs).
+    pub fn open(root: &Path, analyses: &[String], foreign: ForeignFiles) -> Result<Self, BoxError> {
+        if root.as_os_str().is_empty() {
+            return Err("the results folder is '' (an empty path): name a folder, e.g. --out results, or --out . for the current one".into());
+        }
         std::fs::create_dir_all(root).context(|| format!("cannot create the results folder {}", root.display()))?;
-        Ok(Self {
+        let lock = FolderLock::acquire(root)?;
+        let manifest = read_manifest(root);
+        if foreign == ForeignFiles::Refuse {
+            let found = foreign_files(root, analyses, &manifest);
+            if !found.is_empty() {
+                let shown: Vec<String> = found.iter().take(5).map(|p| p.display().to_string()).collect();
+                return Err(format!(
+                    "the results folder {} holds {} file(s) that flexmbs did not write: {}{}; they are left alone: write elsewhere with --out, or beside them with --foreign-files keep",
+                    root.display(),
+                    found.len(),
+                    shown.join(", "),
+                    if found.len() > 5 { ", ..." } else { "" }
+                )
+                .into());
+            }
+        }
+        let mut folder = Self {
             root: root.to_path_buf(),
+            manifest,
+            _lock: lock,
             dir: root.to_path_buf(),
             prefix: String::new(),
             files: Vec::new(),
             series: Vec::new(),
             stream: None,
-        })
+        };
+        // Analyses removed from the study: their files go, and their folders if that empties them.
+        let current: BTreeSet<&str> = analyses.iter().map(String::as_str).collect();
+        let stale: Vec<String> = folder
+            .manifest
+            .iter()
+            .filter(|f| f.split_once('/').is_some_and(|(a, _)| !current.contains(a)))
+            .cloned()
+            .collect();
+        folder.forget(&stale)?;
+        for dir in stale
+            .iter()
+            .filter_map(|f| f.split_once('/').map(|(a, _)| a))
+            .collect::<BTreeSet<_>>()
+        {
+            let _ = std::fs::remove_dir(root.join(dir));
+        }
+        Ok(folder)
     }
 
     pub fn root(&self) -> &Path {
         &self.root
     }
 
-    /// The path of `name` in the current analysis folder, listed for the summary.
-    fn path(&mut self, name: &str) -> PathBuf {
-        self.files.push(format!("{}/{name}", self.prefix));
-        self.dir.join(name)
+    /// The path of `name` in the current analysis folder, listed for the summary and
+    /// recorded in the manifest before the file is created.
+    fn path(&mut self, name: &str) -> Result<PathBuf, BoxError> {
+        let rel = format!("{}/{name}", self.prefix);
+        self.record(&rel)?;
+        self.files.push(rel);
+        Ok(self.dir.join(name))
     }
+
+    /// Appends `rel` to the manifest (once).
+    fn record(&mut self, rel: &str) -> Result<(), BoxError> {
+        if self.manifest.insert(rel.to_string()) {
+            let path = self.root.join(MANIFEST);
+            let new = !path.exists();
+            let mut f = std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(&path)
+                .context(|| format!("cannot write {}", path.display()))?;
+            let line = if new {
+                format!("{MANIFEST_HEADER}\n{rel}\n")
+            } else {
+                format!("{rel}\n")
+            };
+            f.write_all(line.as_bytes())
+                .context(|| format!("cannot write {}", path.display()))?;
+        }
+        Ok(())
+    }
+
+    /// Deletes the listed files of the manifest and drops them from it.
+    fn forget(&mut self, files: &[String]) -> Result<(), BoxError> {
+        if files.is_empty() {
+            return Ok(());
+        }
+        for f in files {
+            match std::fs::remove_file(self.root.join(f)) {
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => return Err(Box::new(e)).context(|| format!("cannot delete {}", self.root.join(f).display())),
+            }
+            self.manifest.remove(f);
+        }
+        let mut text = format!("{MANIFEST_HEADER}\n");
+        for f in &self.manifest {
+            text.push_str(f);
+            text.push('\n');
+        }
+        let path = self.root.join(MANIFEST);
+        crate::output::write_atomic(&path, text.as_bytes()).context(|| format!("cannot write {}", path.display()))
+    }
+}
+
+/// The manifest of `root` (empty when there is none).
+fn read_manifest(root: &Path) -> BTreeSet<String> {
+    std::fs::read_to_string(root.join(MANIFEST))
+        .unwrap_or_default()
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('#') && !l.split('/').any(|c| c == ".." || c.is_empty()))
+        .map(str::to_string)
+        .collect()
+}
+
+/// Files where a run of `analyses` writes that the manifest does not list: anything in the
+/// analysis folders, and the summary files.
+fn foreign_files(root: &Path, analyses: &[String], manifest: &BTreeSet<String>) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for name in ["summary.json", "summary.md"] {
+        if root.join(name).exists() && !manifest.contains(name) {
+            found.push(root.join(name));
+        }
+    }
+    for a in analyses {
+        let Ok(entries) = std::fs::read_dir(root.join(a)) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let rel = format!("{a}/{}", e.file_name().to_string_lossy());
+            if !manifest.contains(&rel) {
+                found.push(e.path());
+            }
+        }
+    }
+    found
 }
 
 /// A table cell as CSV text: integers as they are, numbers as the shortest decimal that
@@ -85,7 +299,18 @@ impl Observer for ResultsFolder {
         self.files.clear();
         self.series.clear();
         self.stream = None;
-        prepare_analysis_dir(&self.dir).context(|| format!("cannot prepare the results folder {}", self.dir.display()))
+        // The files an earlier run wrote for this analysis (stale plots included), and only those.
+        let prefix = format!("{}/", a.name);
+        let old: Vec<String> = self
+            .manifest
+            .iter()
+            .filter(|f| f.starts_with(&prefix))
+            .cloned()
+            .collect();
+        self.forget(&old)?;
+        crate::interrupt::check()?;
+        std::fs::create_dir_all(&self.dir)
+            .context(|| format!("cannot create the results folder {}", self.dir.display()))
     }
 
     fn table(&mut self, t: &Table) -> Result<(), BoxError> {
@@ -94,20 +319,20 @@ impl Observer for ResultsFolder {
         for r in &t.rows {
             csv.row(&r.iter().map(cell_text).collect::<Vec<_>>());
         }
-        let p = self.path(&format!("{}.csv", t.name));
+        let p = self.path(&format!("{}.csv", t.name))?;
         csv.write(&p).context(|| format!("cannot write {}", p.display()))
     }
 
     fn sensors(&mut self, s: &SensorStream<'_>) -> Result<(), BoxError> {
         let mut files = Vec::new();
         for g in s.groups {
-            let path = self.path(&format!("{}.csv", g.name));
+            let path = self.path(&format!("{}.csv", g.name))?;
             let f = std::fs::File::create(&path).context(|| format!("cannot create {}", path.display()))?;
             let mut w = std::io::BufWriter::new(f);
             let mut header = vec![s.x_label.to_string()];
             header.extend(g.columns.iter().cloned());
             writeln!(w, "{}", header.join(",")).context(|| format!("cannot write {}", path.display()))?;
-            files.push(w);
+            files.push((w, path));
         }
         self.stream = Some(Stream {
             x_label: s.x_label.to_string(),
@@ -121,10 +346,11 @@ impl Observer for ResultsFolder {
     }
 
     fn sample(&mut self, x: f64, values: &[Vec<f64>]) -> Result<(), BoxError> {
+        crate::interrupt::check()?;
         let Some(s) = &mut self.stream else {
             return Ok(());
         };
-        for (k, (w, v)) in s.files.iter_mut().zip(values).enumerate() {
+        for (k, ((w, path), v)) in s.files.iter_mut().zip(values).enumerate() {
             let mut line = num(x);
             for v in v {
                 line.push(',');
@@ -132,7 +358,7 @@ impl Observer for ResultsFolder {
             }
             writeln!(w, "{line}")
                 .and_then(|_| w.flush())
-                .context(|| "cannot write a sensor file".to_string())?;
+                .context(|| format!("cannot write {}", path.display()))?;
             if s.plots {
                 s.rows[k].push(v.clone());
             }
@@ -166,7 +392,7 @@ impl Observer for ResultsFolder {
                     rows.iter().map(|r| r[k]).collect(),
                 ));
             }
-            let path = self.path(&format!("{}.png", g.name));
+            let path = self.path(&format!("{}.png", g.name))?;
             plot::write_png(&fig, &path).context(|| format!("cannot draw {}", path.display()))?;
         }
         Ok(())
@@ -187,12 +413,14 @@ impl Observer for ResultsFolder {
         } else {
             format!("{stem}{index:0digits$}.vtu")
         };
-        let p = self.path(&name);
+        crate::interrupt::check()?;
+        let p = self.path(&name)?;
         write_vtu(&p, mesh, fields).context(|| format!("cannot write {}", p.display()))?;
         self.series[k].1.push((key, name));
         // The collection is rewritten after every frame, so an interrupted run keeps a
         // readable one; it is listed once.
         let path = self.dir.join(pvd);
+        self.record(&format!("{}/{pvd}", self.prefix))?;
         write_pvd(&path, &self.series[k].1).context(|| format!("cannot write {}", path.display()))?;
         if self.series[k].1.len() == 1 {
             self.files.push(format!("{}/{pvd}", self.prefix));
@@ -201,7 +429,7 @@ impl Observer for ResultsFolder {
     }
 
     fn file(&mut self, name: &str, path: &Path) -> Result<(), BoxError> {
-        let target = self.path(name);
+        let target = self.path(name)?;
         std::fs::copy(path, &target)
             .map(|_| ())
             .context(|| format!("cannot copy {} to {}", path.display(), target.display()))
@@ -212,6 +440,8 @@ impl Observer for ResultsFolder {
     }
 
     fn summary(&mut self, s: &Summary) -> Result<(), BoxError> {
+        self.record("summary.json")?;
+        self.record("summary.md")?;
         s.write(&self.root)
             .context(|| format!("cannot write the summary into {}", self.root.display()))
     }

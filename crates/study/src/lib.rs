@@ -38,6 +38,7 @@ pub mod document;
 pub mod error;
 pub mod examples;
 pub mod folder;
+pub mod interrupt;
 pub mod mechanism;
 pub mod observer;
 pub mod output;

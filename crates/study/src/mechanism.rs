@@ -31,7 +31,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
-use superelement::FrameChoice;
+use superelement::{FrameChoice, Superelement};
 
 /// The mechanism as an `mbs::Model`, with what the outputs need.
 pub struct BuiltMechanism {
@@ -630,17 +630,80 @@ impl SensorSampler {
     }
 }
 
-/// The deformed meshes of every body at the output times (module docs).
+/// The deformed meshes of every body at the output times (module docs), with the stresses of
+/// the bodies reduced with stress shapes and the hot spot of each.
 pub struct MeshRecovery {
     mesh: VtuMesh,
-    /// Per flexible body: its first point.
+    /// Per flexible body: its first point (its superelement is the system's).
     flexible: Vec<usize>,
+    /// Whether any body has stress shapes.
+    stress: bool,
     /// Per rigid body: first point.
     rigid: Vec<usize>,
+    /// Per flexible body: the largest von Mises stress seen so far.
+    hot: Vec<Option<HotSpot>>,
+}
+
+/// The largest von Mises stress of one body over the output times: value, FE node (index in
+/// the part's mesh), and time (or load factor).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HotSpot {
+    pub von_mises: f64,
+    pub node: usize,
+    pub time: f64,
+}
+
+/// The stress fields of one body at one time, on its mesh nodes, in global axes: Voigt tensor
+/// (zero where none), von Mises and largest principal stress. Beam nodes carry no tensor;
+/// their von Mises and largest principal stress are the largest magnitude and the largest
+/// value of the extreme-fibre axial stress over the element ends at the node (shear stresses
+/// of the section are not included).
+struct NodeStresses {
+    tensor: Vec<[f64; 6]>,
+    von_mises: Vec<f64>,
+    principal: Vec<f64>,
+}
+
+/// The stresses of a body at its nodes from its kinematics, `None` without stress shapes.
+/// `R` turns body axes into global axes.
+fn node_stresses(se: &Superelement, q_jj: &[f64], R: &nalgebra::Matrix3<f64>, n_nodes: usize) -> Option<NodeStresses> {
+    let shapes = se.stress_shapes()?;
+    let stress = se.recover_stress(q_jj)?;
+    let mut out = NodeStresses {
+        tensor: vec![[0.0; 6]; n_nodes],
+        von_mises: vec![0.0; n_nodes],
+        principal: vec![0.0; n_nodes],
+    };
+    for (i, s) in stress.nodal.iter().enumerate().take(n_nodes) {
+        if let Some(s) = s {
+            let g = R * fe_model::stress::tensor(s) * R.transpose();
+            let v = [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]];
+            out.tensor[i] = v;
+            out.von_mises[i] = fe_model::von_mises(&v);
+            out.principal[i] = fe_model::principal_stresses(&v)[0];
+        }
+    }
+    let ends = shapes.beams.iter().zip(&stress.beams).flat_map(|(b, forces)| {
+        forces.iter().enumerate().filter_map(move |(end, f)| {
+            let node = b.nodes[end] as usize;
+            let range = b.section.fibre_stress_range(f)?;
+            (node < n_nodes).then_some((node, range))
+        })
+    });
+    for (i, x) in fe_model::stress::fibre_extremes_at_nodes(n_nodes, ends)
+        .iter()
+        .enumerate()
+    {
+        if let Some([magnitude, largest]) = x {
+            out.von_mises[i] = *magnitude;
+            out.principal[i] = *largest;
+        }
+    }
+    Some(out)
 }
 
 impl MeshRecovery {
-    pub fn new(b: &BuiltMechanism) -> Result<Self, BoxError> {
+    pub fn new(b: &BuiltMechanism, sys: &System) -> Result<Self, BoxError> {
         let mut mesh = VtuMesh::default();
         let mut flexible = Vec::new();
         for body in &b.bodies {
@@ -689,11 +752,97 @@ impl MeshRecovery {
             }
             rigid.push(first);
         }
-        Ok(Self { mesh, flexible, rigid })
+        let hot = vec![None; flexible.len()];
+        let stress = b
+            .bodies
+            .iter()
+            .any(|body| sys.superelement(body.id).is_some_and(|se| se.stress_shapes().is_some()));
+        Ok(Self {
+            mesh,
+            flexible,
+            stress,
+            rigid,
+            hot,
+        })
     }
 
-    /// Sends the deformed meshes at `state` to the observer as a frame of
-    /// [`Series::Mechanism`] at `t`.
+    /// Whether any body has stress shapes (then the frames carry stress fields).
+    pub fn has_stress(&self) -> bool {
+        self.stress
+    }
+
+    /// The hot spot of each flexible body (`None` without stress shapes or before any output).
+    pub fn hot_spots(&self) -> &[Option<HotSpot>] {
+        &self.hot
+    }
+
+    /// The kinematics of every flexible body at `state` (`mbs::System::body_kinematics`).
+    fn kinematics(
+        &self,
+        t: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+    ) -> Result<Vec<superelement::Kinematics>, BoxError> {
+        let mut out = Vec::with_capacity(b.bodies.len());
+        for body in &b.bodies {
+            let kin = sys
+                .body_kinematics(state, body.id)
+                .context(|| format!("body '{}': floating frame for the mesh at t = {t}", body.name))?
+                .ok_or_else(|| format!("internal error: body '{}' is not flexible in the system", body.name))?;
+            out.push(kin);
+        }
+        Ok(out)
+    }
+
+    /// Every body's stresses from its kinematics, updating the hot spots at time `t`.
+    fn stresses(
+        &mut self,
+        t: f64,
+        sys: &System,
+        b: &BuiltMechanism,
+        kins: &[superelement::Kinematics],
+    ) -> Vec<Option<NodeStresses>> {
+        let mut out = Vec::with_capacity(kins.len());
+        for (k, (body, kin)) in b.bodies.iter().zip(kins).enumerate() {
+            let Some(se) = sys.superelement(body.id) else {
+                out.push(None);
+                continue;
+            };
+            let n_nodes = se.stress_shapes().map_or(0, |s| {
+                s.solid_node
+                    .len()
+                    .max(s.beams.iter().flat_map(|b| b.nodes).max().map_or(0, |m| m as usize + 1))
+            });
+            let st = node_stresses(se, &kin.q_jj, &kin.R_j, n_nodes);
+            if let Some(st) = &st {
+                if let Some((node, &vm)) = st.von_mises.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
+                    if self.hot[k].is_none_or(|h| vm > h.von_mises) {
+                        self.hot[k] = Some(HotSpot {
+                            von_mises: vm,
+                            node,
+                            time: t,
+                        });
+                    }
+                }
+            }
+            out.push(st);
+        }
+        out
+    }
+
+    /// Updates the hot spots at an output time without writing a frame.
+    pub fn track(&mut self, t: f64, sys: &System, state: &mbs::State, b: &BuiltMechanism) -> Result<(), BoxError> {
+        if !self.has_stress() {
+            return Ok(());
+        }
+        let kins = self.kinematics(t, sys, state, b)?;
+        self.stresses(t, sys, b, &kins);
+        Ok(())
+    }
+
+    /// Sends the deformed meshes at `state` to the observer as a frame of [`Series::Mechanism`] at `t`, with the stress
+    /// fields when a body has stress shapes.
     pub fn write(
         &mut self,
         obs: &mut dyn Observer,
@@ -703,16 +852,39 @@ impl MeshRecovery {
         b: &BuiltMechanism,
     ) -> Result<(), BoxError> {
         let motions = sys.node_motions(state);
-        let mut u = vec![[0.0; 3]; self.mesh.points.len()];
-        for (body, &first) in b.bodies.iter().zip(&self.flexible) {
-            let positions = sys
-                .deformed_mesh(state, body.id)
-                .context(|| format!("body '{}': floating frame for the mesh at t = {t}", body.name))?;
-            // A reduced body without mesh shapes is drawn by its interface nodes.
-            let positions = positions.unwrap_or_else(|| body.nodes.iter().map(|n| motions[n.index()].r).collect());
-            for (i, p) in positions.iter().enumerate() {
-                let x = &self.mesh.points[first + i];
-                u[first + i] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+        let n_points = self.mesh.points.len();
+        let mut u = vec![[0.0; 3]; n_points];
+        let kins = self.kinematics(t, sys, state, b)?;
+        let stresses = if self.has_stress() {
+            self.stresses(t, sys, b, &kins)
+        } else {
+            Vec::new()
+        };
+        let mut tensor = vec![[0.0; 6]; n_points];
+        let mut von_mises = vec![0.0; n_points];
+        let mut principal = vec![0.0; n_points];
+        for (k, (body, &first)) in b.bodies.iter().zip(&self.flexible).enumerate() {
+            match sys.superelement(body.id).and_then(|se| se.recover_mesh(&kins[k])) {
+                Some(ms) => {
+                    for (i, p) in ms.positions.iter().enumerate() {
+                        let x = &self.mesh.points[first + i];
+                        u[first + i] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+                    }
+                    // Stresses live on the mesh nodes, drawn only with the mesh shapes.
+                    if let Some(Some(st)) = stresses.get(k) {
+                        let n = ms.positions.len().min(st.tensor.len());
+                        tensor[first..first + n].copy_from_slice(&st.tensor[..n]);
+                        von_mises[first..first + n].copy_from_slice(&st.von_mises[..n]);
+                        principal[first..first + n].copy_from_slice(&st.principal[..n]);
+                    }
+                }
+                None => {
+                    for (j, n) in body.nodes.iter().enumerate() {
+                        let p = motions[n.index()].r;
+                        let x = &self.mesh.points[first + j];
+                        u[first + j] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+                    }
+                }
             }
         }
         for (nodes, first) in b.rigid.iter().zip(&self.rigid) {
@@ -723,16 +895,59 @@ impl MeshRecovery {
             }
         }
         let values: Vec<f64> = u.iter().flatten().copied().collect();
-        obs.frame(
-            Series::Mechanism,
-            t,
-            &self.mesh,
-            &[PointField {
-                name: "displacement",
-                components: 3,
-                values: &values,
-            }],
-        )
+        let mut fields = vec![PointField {
+            name: "displacement",
+            components: 3,
+            values: &values,
+        }];
+        let tensor: Vec<f64> = tensor.iter().flatten().copied().collect();
+        if self.has_stress() {
+            fields.push(PointField {
+                name: "stress",
+                components: 6,
+                values: &tensor,
+            });
+            fields.push(PointField {
+                name: "von_mises",
+                components: 1,
+                values: &von_mises,
+            });
+            fields.push(PointField {
+                name: "max_principal",
+                components: 1,
+                values: &principal,
+            });
+        }
+        obs.frame(Series::Mechanism, t, &self.mesh, &fields)
+    }
+
+    /// The hot spots as summary entries and report lines, `x` naming the time axis.
+    pub fn hot_spot_summary(&self, b: &BuiltMechanism, x: &str) -> (serde_json::Value, Vec<String>) {
+        let mut entries = Vec::new();
+        let mut lines = Vec::new();
+        for (body, hot) in b.bodies.iter().zip(&self.hot) {
+            let Some(h) = hot else { continue };
+            let position = body.reduced.mesh.as_ref().map(|m| m.nodes[h.node]);
+            entries.push(json!({
+                "body": body.name,
+                "von_mises_Pa": h.von_mises,
+                "node": h.node,
+                "position": position,
+                x: h.time,
+            }));
+            lines.push(format!(
+                "hot spot of body '{}': von Mises {:.6e} Pa at FE node index {}{} at {x} = {:.6}",
+                body.name,
+                h.von_mises,
+                h.node,
+                position.map_or(String::new(), |p| format!(
+                    " ({:.4e}, {:.4e}, {:.4e}) m",
+                    p[0], p[1], p[2]
+                )),
+                h.time
+            ));
+        }
+        (serde_json::Value::Array(entries), lines)
     }
 }
 
@@ -802,8 +1017,10 @@ pub fn run_analysis(
                 rec.rows.push(row.clone());
                 files.sample(obs, *t, &rec)?;
             }
-            let mut mw = MeshRecovery::new(b)?;
+            let mut mw = MeshRecovery::new(b, &sys)?;
             mw.write(obs, 1.0, &sys, &sol.state, b)?;
+            let (hot_spots, hot_lines) = mw.hot_spot_summary(b, "load_factor");
+            out.report.extend(hot_lines);
             let iterations: usize = sol.steps.iter().map(|s| s.residuals.len().saturating_sub(1)).sum();
             out.report.push(format!(
                 "{} load steps, {iterations} Newton iterations, {} rejected attempts; last relative residual {:.2e}",
@@ -823,6 +1040,7 @@ pub fn run_analysis(
                 "rejected_steps": sol.rejected.len(),
                 "load_factor_reached": sol.sensors.times.last().copied().unwrap_or(0.0),
                 "seconds_solving": t0.elapsed().as_secs_f64(),
+                "hot_spots": hot_spots,
             });
             obs.sensors_end()?;
             out.failure = failure.map(|e| format!("equilibrium stopped: {e}; the converged load steps are written"));
@@ -833,7 +1051,7 @@ pub fn run_analysis(
             integ.record(&mut rec)?;
             let mut files = SensorSampler::start(obs, &b.groups, &rec, "t [s]", output.plots)?;
             files.sample(obs, 0.0, &rec)?;
-            let mut mw = MeshRecovery::new(b)?;
+            let mut mw = MeshRecovery::new(b, &sys)?;
             if output.vtu_every.is_some() {
                 mw.write(obs, 0.0, &sys, integ.state(), b)?;
             }
@@ -841,19 +1059,21 @@ pub fn run_analysis(
             let every = output.every;
             let (totals, failure) = integ.run_steps(n_steps, |k, integ, _| -> Result<(), BoxError> {
                 let t = integ.state().time();
+                let vtu_now = output.vtu_every.is_some_and(|v| k % v == 0 || k == n_steps);
                 if k % every == 0 || k == n_steps {
                     integ.record(&mut rec)?;
                     files.sample(obs, t, &rec)?;
+                    if !vtu_now {
+                        mw.track(t, &sys, integ.state(), b)?;
+                    }
                     // Only the last row is needed; keep the record small.
                     if rec.rows.len() > 1 {
                         rec.rows.drain(..rec.rows.len() - 1);
                         rec.times.drain(..rec.times.len() - 1);
                     }
                 }
-                if let Some(v) = output.vtu_every {
-                    if k % v == 0 || k == n_steps {
-                        mw.write(obs, t, &sys, integ.state(), b)?;
-                    }
+                if vtu_now {
+                    mw.write(obs, t, &sys, integ.state(), b)?;
                 }
                 obs.progress(&Progress::Steps {
                     what: "time integration".into(),
@@ -884,8 +1104,11 @@ pub fn run_analysis(
                 ));
             }
             report_last(&mut out.report, b, &files);
+            let (hot_spots, hot_lines) = mw.hot_spot_summary(b, "t");
+            out.report.extend(hot_lines);
             out.results = json!({
                 "model": b.size(&sys),
+                "hot_spots": hot_spots,
                 "steps": steps,
                 "steps_planned": n_steps,
                 "t_reached": integ.state().time(),

@@ -6,6 +6,8 @@
 //! ```text
 //! <results>/
 //!   summary.json, summary.md      rewritten after every analysis
+//!   .flexmbs-manifest             the files flexmbs wrote here (crate::folder)
+//!   .flexmbs-lock                 while a run writes here (crate::folder)
 //!   <analysis>/                   one folder per analysis, named by it
 //!     *.csv                       result groups, header "name (unit)"
 //!     *.vtu, *.pvd                ParaView: mesh and displacement fields (crate::vtu)
@@ -26,11 +28,19 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, bytes)?;
-    std::fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
+    // Unique per process and per call (concurrent writers never share a temporary).
+    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = dir.join(format!(".{name}.{}-{n}.tmp", std::process::id()));
+    // On any failure (a full disk: the write; a vanished folder: the rename) no temporary
+    // stays behind, and the error names the file that was being written.
+    let named = |e: std::io::Error| std::io::Error::new(e.kind(), format!("{}: {e}", path.display()));
+    std::fs::write(&tmp, bytes)
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            named(e)
+        })
 }
 
 /// A CSV table built in memory and written at once.
@@ -130,7 +140,7 @@ pub struct Summary {
     pub flexmbs_version: String,
     pub study: String,
     pub title: Option<String>,
-    /// `running`, `complete` or `failed`.
+    /// `running`, `complete`, `failed` or `interrupted` (Ctrl-C; what was written is kept).
     pub status: String,
     pub parts: Vec<PartSummary>,
     pub analyses: Vec<AnalysisSummary>,
@@ -216,22 +226,4 @@ pub fn default_results_dir(study: &Path) -> PathBuf {
         .map(Path::to_path_buf)
         .unwrap_or_default()
         .join(format!("{stem}-results"))
-}
-
-/// Empties the folder of one analysis of the files this program writes there (an earlier
-/// run's modes must not mix with this run's), and creates it.
-pub fn prepare_analysis_dir(dir: &Path) -> std::io::Result<()> {
-    if dir.is_dir() {
-        for entry in std::fs::read_dir(dir)? {
-            let path = entry?.path();
-            let ours = path
-                .extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| matches!(e, "csv" | "vtu" | "pvd" | "rbody"));
-            if ours && path.is_file() {
-                std::fs::remove_file(&path)?;
-            }
-        }
-    }
-    std::fs::create_dir_all(dir)
 }

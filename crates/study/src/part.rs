@@ -52,6 +52,10 @@ pub struct Reduction {
     pub keep_mesh_shapes: bool,
     /// `reduction::CbSettings::geometric_stiffening`.
     pub geometric_stiffening: bool,
+    /// `reduction::CbSettings::stress_shapes`.
+    pub stress_shapes: bool,
+    /// `reduction::CbSettings::load_points`: named nodes of the part's mesh.
+    pub load_points: Vec<(String, NodeId)>,
 }
 
 /// A node of a part as named in a support or load.

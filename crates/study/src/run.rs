@@ -25,6 +25,9 @@ pub struct Options {
     pub cache: Option<PathBuf>,
     /// Ends every dynamic analysis at this time if it is earlier (`--t-end`, for short runs).
     pub t_end: Option<f64>,
+    /// Files in the results folder that flexmbs did not write: refuse (default) or keep
+    /// (`--foreign-files keep`; `crate::folder`).
+    pub foreign: crate::folder::ForeignFiles,
 }
 
 impl Options {
@@ -108,7 +111,8 @@ pub fn pending_summary(study: &Study) -> Summary {
 /// file), with `observer` seeing every result too. Stops at the first analysis that fails,
 /// after writing the summary with the failure.
 pub fn run(study: &Study, options: &Options, observer: &mut dyn Observer) -> Result<Summary, BoxError> {
-    let mut folder = ResultsFolder::new(&options.results_dir(study))?;
+    let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
+    let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
     run_with(study, options, &mut (&mut folder, observer))
 }
 
@@ -208,10 +212,12 @@ impl<'s> Runner<'s> {
                     // The solver stopped: what it computed is written; the run fails here.
                     entry.status = Status::Failed;
                     entry.error = Some(failure.clone());
-                    summary.status = "failed".into();
+                    summary.status = failed_status();
                     let entry = entry.clone();
-                    obs.end(&info, &entry)?;
-                    obs.summary(summary)?;
+                    // The failure is the message; a summary that cannot be written (a full
+                    // disk) must not replace it.
+                    let _ = obs.end(&info, &entry);
+                    let _ = obs.summary(summary);
                     return Err(format!(
                         "{} analysis '{}' ({}): {failure} in {}/{}",
                         a.kind_name(),
@@ -230,10 +236,10 @@ impl<'s> Runner<'s> {
             Err(e) => {
                 entry.status = Status::Failed;
                 entry.error = Some(crate::error::chain(&*e));
-                summary.status = "failed".into();
+                summary.status = failed_status();
                 let entry = entry.clone();
-                obs.end(&info, &entry)?;
-                obs.summary(summary)?;
+                let _ = obs.end(&info, &entry);
+                let _ = obs.summary(summary);
                 Err(Box::new(Context {
                     message: format!(
                         "{} analysis '{}' ({}) failed; the results of the analyses before it are in {}",
@@ -257,6 +263,15 @@ impl<'s> Runner<'s> {
     }
 }
 
+/// The summary status of a run that stopped: `interrupted` after Ctrl-C, else `failed`.
+fn failed_status() -> String {
+    if crate::interrupt::requested() {
+        "interrupted".into()
+    } else {
+        "failed".into()
+    }
+}
+
 fn run_analysis(study: &Study, a: &Analysis, cache: &Path, obs: &mut dyn Observer) -> Result<Outcome, BoxError> {
     let Some(part) = a.part.map(|p| &study.parts[p]) else {
         return Err(format!("analysis '{}' has no part", a.name).into());
@@ -274,17 +289,67 @@ fn run_analysis(study: &Study, a: &Analysis, cache: &Path, obs: &mut dyn Observe
     Ok(o)
 }
 
+/// Nodal stresses of a mesh: Voigt tensors, von Mises and largest principal stress.
+type NodalStress = (Vec<[f64; 6]>, Vec<f64>, Vec<f64>);
+
+/// The stress fields of nodal displacements `values` of `model` at its nodes: the Voigt
+/// tensor of the solids (averaged at the nodes, `fe_model::stress`; zero elsewhere), von Mises
+/// and the largest principal stress. Beam nodes carry no tensor; their von Mises and largest
+/// principal stress are the largest magnitude and value of the extreme-fibre axial stress over
+/// the element ends at the node, for sections given by shape (nodal loads only: no load
+/// along the elements).
+pub fn stress_fields(model: &fe_model::FeModel, values: &[[f64; 6]]) -> Result<NodalStress, BoxError> {
+    let n = model.node_count();
+    let mut tensor = vec![[0.0; 6]; n];
+    let mut von_mises = vec![0.0; n];
+    let mut principal = vec![0.0; n];
+    if model.elements.iter().any(|e| e.solid().is_some()) {
+        for (i, s) in fe_model::stress::nodal_stresses(model, values)?.iter().enumerate() {
+            if let Some(s) = s {
+                tensor[i] = *s;
+                von_mises[i] = fe_model::von_mises(s);
+                principal[i] = fe_model::principal_stresses(s)[0];
+            }
+        }
+    }
+    let mut ends = Vec::new();
+    for (e, element) in model.elements.iter().enumerate() {
+        let fe_model::Element::Beam2(beam) = element else {
+            continue;
+        };
+        let Some(section) = model.sections.get(beam.section.0 as usize) else {
+            continue;
+        };
+        let u_e: Vec<f64> = beam.nodes.iter().flat_map(|node| values[node.index()]).collect();
+        let forces = fe_model::stress::beam_section_forces(model, e, &u_e, None)?;
+        for (end, f) in forces.iter().enumerate() {
+            if let Some(range) = section.fibre_stress_range(f) {
+                ends.push((beam.nodes[end].index(), range));
+            }
+        }
+    }
+    for (i, x) in fe_model::stress::fibre_extremes_at_nodes(n, ends).iter().enumerate() {
+        if let Some([magnitude, largest]) = x {
+            von_mises[i] = *magnitude;
+            principal[i] = *largest;
+        }
+    }
+    Ok((tensor, von_mises, principal))
+}
+
 /// A field of six dofs per node as one frame with the point fields "displacement" and
-/// "rotation".
+/// "rotation", and with `stress` (from [`stress_fields`]) "stress", "von_mises" and
+/// "max_principal".
 fn six_dof_frame(
     obs: &mut dyn Observer,
     series: Series,
     key: f64,
     mesh: &VtuMesh,
     values: &[[f64; 6]],
+    stress: Option<&NodalStress>,
 ) -> Result<(), BoxError> {
     let (u, r) = six_dof_fields(values);
-    let fields = [
+    let mut fields = vec![
         PointField {
             name: "displacement",
             components: 3,
@@ -296,6 +361,26 @@ fn six_dof_frame(
             values: &r,
         },
     ];
+    let tensor: Vec<f64> = stress
+        .map(|s| s.0.iter().flatten().copied().collect())
+        .unwrap_or_default();
+    if let Some((_, von_mises, principal)) = stress {
+        fields.push(PointField {
+            name: "stress",
+            components: 6,
+            values: &tensor,
+        });
+        fields.push(PointField {
+            name: "von_mises",
+            components: 1,
+            values: von_mises,
+        });
+        fields.push(PointField {
+            name: "max_principal",
+            components: 1,
+            values: principal,
+        });
+    }
     obs.frame(series, key, mesh, &fields)
 }
 
@@ -449,11 +534,29 @@ fn run_static(
     }
 
     let mesh = VtuMesh::from_model(&built.model, &spiders(part, &built));
-    six_dof_frame(obs, Series::Static, 0.0, &mesh, &s.displacements)?;
+    let stress = stress_fields(&built.model, &s.displacements)
+        .context(|| format!("part '{}': cannot recover the stresses", part.name))?;
+    let hot = stress
+        .1
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .map(|(i, v)| (i, *v))
+        .unwrap_or((0, 0.0));
+    if hot.1 > 0.0 {
+        report.push(format!(
+            "largest von Mises stress {:.6e} Pa at node {}",
+            hot.1,
+            tag(&built, NodeId(hot.0 as u32))
+        ));
+    }
+    six_dof_frame(obs, Series::Static, 0.0, &mesh, &s.displacements, Some(&stress))?;
     Ok(Outcome {
         free_dofs: n_free,
         report,
         results: json!({
+            "max_von_mises_Pa": hot.1,
+            "max_von_mises_node": tag(&built, NodeId(hot.0 as u32)),
             "max_displacement_m": max.0,
             "max_displacement_node": tag(&built, NodeId(max.1 as u32)),
             "relative_residual": s.relative_residual,
@@ -502,7 +605,10 @@ fn run_modal(
     obs.table(&csv)?;
     let mesh = VtuMesh::from_model(&built.model, &spiders(part, &built));
     for (k, shape) in solution.shapes.iter().enumerate() {
-        six_dof_frame(obs, Series::Modes, (k + 1) as f64, &mesh, shape)?;
+        // The stress of the mass-normalised shape: where each mode strains the part.
+        let stress = stress_fields(&built.model, shape)
+            .context(|| format!("part '{}': cannot recover the stresses of mode {}", part.name, k + 1))?;
+        six_dof_frame(obs, Series::Modes, (k + 1) as f64, &mesh, shape, Some(&stress))?;
     }
     let mut report = vec![format!(
         "{} modes of {n_free} dofs ({method}, {:.3} s), mass-normalised shapes in modes.pvd",
@@ -551,8 +657,16 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
         .context(|| format!("part '{}': cannot hash its inputs", part.name))?;
     let file = crate::cache::path(cache, &part.name, &key);
     if file.is_file() {
-        match reduction::file::read(&file) {
-            Ok(body) if body.name == part.name => {
+        let recorded = crate::cache::lookup(&file, &key);
+        if recorded.is_none() {
+            obs.progress(&Progress::Warning(format!(
+                "cache file {} does not record the inputs of this reduction (or was changed); reducing again",
+                file.display()
+            )));
+        }
+        match recorded.map(|bytes| reduction::file::from_bytes(&bytes, &file)) {
+            None => {}
+            Some(Ok(body)) if body.name == part.name => {
                 obs.progress(&Progress::Info(format!(
                     "part '{}': reduced body found in the cache ({}): same mesh and settings, not reducing again",
                     part.name,
@@ -566,11 +680,11 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
                     free_dofs: n_free,
                 });
             }
-            Ok(_) => obs.progress(&Progress::Warning(format!(
+            Some(Ok(_)) => obs.progress(&Progress::Warning(format!(
                 "cache file {} holds another body; reducing again",
                 file.display()
             ))),
-            Err(e) => obs.progress(&Progress::Warning(format!(
+            Some(Err(e)) => obs.progress(&Progress::Warning(format!(
                 "cannot use the cached body ({e}); reducing again"
             ))),
         }
@@ -600,6 +714,8 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
     settings.keep_mesh_shapes = reduction.keep_mesh_shapes;
     settings.auxiliary_node = built.auxiliary;
     settings.geometric_stiffening = reduction.geometric_stiffening;
+    settings.stress_shapes = reduction.stress_shapes;
+    settings.load_points = reduction.load_points.clone();
     let mut progress = |stage: reduction::Stage| {
         let what = match stage {
             reduction::Stage::Assembling => "assembling K and M".to_string(),
@@ -634,6 +750,13 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
     )));
     std::fs::create_dir_all(cache).context(|| format!("cannot create the cache folder {}", cache.display()))?;
     reduction::file::write(&body, &file).context(|| format!("part '{}': cannot write the reduced body", part.name))?;
+    crate::cache::record(&file, &key).context(|| {
+        format!(
+            "part '{}': cannot record the cache key of {}",
+            part.name,
+            file.display()
+        )
+    })?;
     obs.progress(&Progress::Info(format!(
         "part '{}': saved to the cache as {}",
         part.name,
@@ -716,7 +839,7 @@ fn run_reduce(part: &Part, cache: &Path, analysis: &str, obs: &mut dyn Observer)
                     .map(|n| std::array::from_fn(|k| shapes.shapes.get(6 * n + k, c)))
                     .collect();
                 let file = format!("shape_{:03}.vtu", c + 1);
-                six_dof_frame(obs, Series::Shapes, (c + 1) as f64, &mesh, &values)?;
+                six_dof_frame(obs, Series::Shapes, (c + 1) as f64, &mesh, &values, None)?;
                 let nb = 6 * body.interfaces.len();
                 let row = if c < nb {
                     vec![
@@ -832,6 +955,12 @@ pub fn reduce_command(
         .into());
     }
     let out = options.results_dir(study);
+    if out.as_os_str().is_empty() {
+        return Err(
+            "the output folder is '' (an empty path): name a folder, e.g. --out bodies, or --out . for the current one"
+                .into(),
+        );
+    }
     std::fs::create_dir_all(&out).context(|| format!("cannot create the results folder {}", out.display()))?;
     let cache = options.cache_dir(study);
     let mut written = Vec::new();

@@ -276,6 +276,19 @@ pub struct ReductionFile {
     pub keep_mesh_shapes: Option<bool>,
     /// Reduce with the geometric stiffness of the CB coordinates' stresses (default false).
     pub geometric_stiffening: Option<bool>,
+    /// Keep the stress of every CB vector for stress recovery (default false).
+    pub stress_shapes: Option<bool>,
+    /// Named points inside the body where loads act, with static correction.
+    pub load_points: Option<Vec<LoadPointFile>>,
+}
+
+/// `[[parts.reduction.load_points]]`: a node by `set` (a one-node set) or `node_at`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadPointFile {
+    pub name: String,
+    pub set: Option<String>,
+    pub node_at: Option<Vec3>,
 }
 
 /// `[[analyses]]`: what to compute. `type` says which keys apply.

@@ -605,7 +605,7 @@ impl Validator<'_> {
         let (base, description, kind, mesh_file) = built?;
         let interfaces = self.interfaces(path, p, &base, kind)?;
         let reduction = match &p.reduction {
-            Some(r) => Some(self.reduction(&path.key("reduction"), r, interfaces.len())?),
+            Some(r) => Some(self.reduction(&path.key("reduction"), r, &interfaces, &base)?),
             None => None,
         };
         let part = Part {
@@ -1215,7 +1215,14 @@ impl Validator<'_> {
         ok.then_some(out)
     }
 
-    fn reduction(&mut self, path: &KeyPath, r: &ReductionFile, n_interfaces: usize) -> Option<Reduction> {
+    fn reduction(
+        &mut self,
+        path: &KeyPath,
+        r: &ReductionFile,
+        interfaces: &[InterfaceSpec],
+        model: &FeModel,
+    ) -> Option<Reduction> {
+        let n_interfaces = interfaces.len();
         let modes = match (r.modes, r.cutoff_hz) {
             (Some(_), Some(_)) => {
                 self.err_key(
@@ -1248,11 +1255,68 @@ impl Validator<'_> {
             );
             return None;
         }
+        let mut load_points: Vec<(String, NodeId)> = Vec::new();
+        let mut ok = true;
+        for (k, lp) in r.load_points.iter().flatten().enumerate() {
+            let lpath = path.key("load_points").index(k);
+            if load_points.iter().any(|(n, _)| *n == lp.name) || interfaces.iter().any(|i| i.name == lp.name) {
+                self.err(
+                    &lpath.key("name"),
+                    format!("'{}' already names an interface or load point of this part", lp.name),
+                );
+                ok = false;
+                continue;
+            }
+            let node = match (&lp.set, &lp.node_at) {
+                (Some(set), None) => self.node_set(&lpath.key("set"), model, set).and_then(|nodes| {
+                    if nodes.len() == 1 {
+                        Some(nodes[0])
+                    } else {
+                        self.err(
+                            &lpath.key("set"),
+                            format!("node set '{set}' has {} nodes; a load point is one node", nodes.len()),
+                        );
+                        None
+                    }
+                }),
+                (None, Some(x)) => self.node_at(&lpath.key("node_at"), model, x),
+                _ => {
+                    self.err(
+                        &lpath,
+                        "give the load point's node by `set` (a one-node set) or by `node_at` = [x, y, z], one of them",
+                    );
+                    None
+                }
+            };
+            match node {
+                Some(node)
+                    if interfaces
+                        .iter()
+                        .any(|i| matches!(i.target, InterfaceTarget::BeamNode(b) if b == node)) =>
+                {
+                    self.err(
+                        &lpath,
+                        format!(
+                            "load point '{}' is an interface node; loads there need no static correction",
+                            lp.name
+                        ),
+                    );
+                    ok = false;
+                }
+                Some(node) => load_points.push((lp.name.clone(), node)),
+                None => ok = false,
+            }
+        }
+        if !ok {
+            return None;
+        }
         Some(Reduction {
             modes,
             auxiliary_node,
             keep_mesh_shapes: r.keep_mesh_shapes.unwrap_or(true),
             geometric_stiffening: r.geometric_stiffening.unwrap_or(false),
+            stress_shapes: r.stress_shapes.unwrap_or(false),
+            load_points,
         })
     }
 

@@ -20,6 +20,11 @@ fn example(name: &str) -> PathBuf {
     study::examples::write(name, &scratch(name)).unwrap()
 }
 
+/// The built-in example `name` in a scratch folder of its own, `tag`.
+fn example_as(name: &str, tag: &str) -> PathBuf {
+    study::examples::write(name, &scratch(tag)).unwrap()
+}
+
 #[test]
 fn values_are_read_and_set_by_key_path_with_located_errors() {
     let file = example("four_bar");
@@ -67,6 +72,7 @@ fn a_run_observed_in_memory_matches_its_results_folder() {
         out: Some(out.clone()),
         cache: Some(file.parent().unwrap().join("cache")),
         t_end: None,
+        ..Options::default()
     };
     let mut rec = Recorder::default();
     let summary = study::run(&study, &options, &mut rec).unwrap();
@@ -102,6 +108,7 @@ fn a_simulation_stepped_by_hand_gives_the_numbers_of_the_run() {
         out: Some(dir.join("results")),
         cache: Some(dir.join("cache")),
         t_end: Some(0.02),
+        ..Options::default()
     };
     let mut rec = Recorder::default();
     study::run_with(&study, &options, &mut rec).unwrap();
@@ -137,6 +144,7 @@ fn a_named_load_changed_between_steps_acts_from_the_next_step() {
         out: None,
         cache: Some(file.parent().unwrap().join("cache")),
         t_end: None,
+        ..Options::default()
     };
     let mut a = Simulation::new(&study, &dynamic.name, &options).unwrap();
     let mut b = Simulation::new(&study, &dynamic.name, &options).unwrap();
@@ -163,4 +171,223 @@ fn a_named_load_changed_between_steps_acts_from_the_next_step() {
     let e = a.set_load("push", mbs::LoadKind::Moment, [1.0, 0.0, 0.0]).unwrap_err();
     assert!(e.to_string().contains("no moment"), "{e}");
     let _ = <() as Observer>::take_files(&mut ());
+}
+
+/// Options writing into `<study dir>/results` with the cache in `<study dir>/cache`.
+fn into_results(file: &Path) -> Options {
+    let dir = file.parent().unwrap();
+    Options {
+        out: Some(dir.join("results")),
+        cache: Some(dir.join("cache")),
+        ..Options::default()
+    }
+}
+
+#[test]
+fn a_results_folder_deletes_only_what_flexmbs_wrote() {
+    use study::folder::{ForeignFiles, MANIFEST};
+    let file = example_as("cantilever", "folder-cantilever");
+    let study = study::load(&file).unwrap();
+    let options = into_results(&file);
+    let out = options.out.clone().unwrap();
+    let a = study.analyses[0].name.clone();
+    // A user's own file where an analysis writes: refused, and left alone.
+    std::fs::create_dir_all(out.join(&a)).unwrap();
+    let mine = out.join(&a).join("measurements.csv");
+    std::fs::write(&mine, "t,x\n0,1\n").unwrap();
+    let e = study::run(&study, &options, &mut Recorder::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("measurements.csv") && e.contains("did not write"), "{e}");
+    assert!(e.contains("--foreign-files keep"), "{e}");
+    // Asked to write beside it: it is kept, through two runs.
+    let keep = Options {
+        foreign: ForeignFiles::Keep,
+        ..options.clone()
+    };
+    for _ in 0..2 {
+        study::run(&study, &keep, &mut Recorder::default()).unwrap();
+        assert_eq!(std::fs::read_to_string(&mine).unwrap(), "t,x\n0,1\n");
+    }
+    // Files of an earlier run that this one does not write (a stale plot, the folder of an
+    // analysis removed from the study) go; the manifest knows them.
+    let manifest = out.join(MANIFEST);
+    std::fs::create_dir_all(out.join("removed")).unwrap();
+    std::fs::write(out.join("removed/old.csv"), "x\n").unwrap();
+    std::fs::write(out.join(&a).join("stale.png"), "png").unwrap();
+    let mut text = std::fs::read_to_string(&manifest).unwrap();
+    text.push_str(&format!("removed/old.csv\n{a}/stale.png\n"));
+    std::fs::write(&manifest, text).unwrap();
+    study::run(&study, &keep, &mut Recorder::default()).unwrap();
+    assert!(!out.join("removed").exists());
+    assert!(!out.join(&a).join("stale.png").exists());
+    assert!(mine.is_file());
+    // Without the user's file, the default refuses nothing: every other file is listed.
+    std::fs::remove_file(&mine).unwrap();
+    let summary = study::run(&study, &options, &mut Recorder::default()).unwrap();
+    assert_eq!(summary.status, "complete");
+    // An empty results path is an error, not the current folder.
+    let empty = Options {
+        out: Some(PathBuf::new()),
+        ..options.clone()
+    };
+    let e = study::run(&study, &empty, &mut Recorder::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("''"), "{e}");
+}
+
+#[test]
+fn a_results_folder_in_use_is_refused_and_a_dead_runs_lock_taken_over() {
+    use study::folder::LOCK;
+    let file = example_as("cantilever", "lock-cantilever");
+    let study = study::load(&file).unwrap();
+    let options = into_results(&file);
+    let out = options.out.clone().unwrap();
+    std::fs::create_dir_all(&out).unwrap();
+    // A live process holds it (this one).
+    std::fs::write(out.join(LOCK), format!("{}\n", std::process::id())).unwrap();
+    let e = study::run(&study, &options, &mut Recorder::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("in use by another flexmbs run"), "{e}");
+    assert!(!out.join("summary.json").exists(), "the refused run wrote nothing");
+    // A process that does not exist (above Linux's largest pid, 2^22): taken over, released.
+    std::fs::write(out.join(LOCK), "4294967295\n").unwrap();
+    study::run(&study, &options, &mut Recorder::default()).unwrap();
+    assert!(!out.join(LOCK).exists());
+}
+
+#[test]
+fn a_failed_write_names_its_file_and_leaves_no_temporary() {
+    let dir = scratch("failed-write");
+    // The target is a folder holding a file: the rename fails after the write.
+    std::fs::create_dir_all(dir.join("summary.json/x")).unwrap();
+    let e = study::output::write_atomic(&dir.join("summary.json"), b"{}").unwrap_err();
+    assert!(e.to_string().contains("summary.json"), "{e}");
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert_eq!(
+        left,
+        vec![std::ffi::OsString::from("summary.json")],
+        "temporaries left: {left:?}"
+    );
+    // A full disk (/dev/full) under a sensor file: the error names that file, not the summary.
+    let file = example_as("four_bar", "full-four-bar");
+    let study = study::load(&file).unwrap();
+    let options = Options {
+        t_end: Some(0.01),
+        foreign: study::folder::ForeignFiles::Keep,
+        ..into_results(&file)
+    };
+    let dynamic = study.analyses.iter().find(|a| a.kind_name() == "dynamic").unwrap();
+    let sensor = &study.mechanism.sensors[0].name;
+    let target = options.out.clone().unwrap().join(&dynamic.name);
+    std::fs::create_dir_all(&target).unwrap();
+    std::os::unix::fs::symlink("/dev/full", target.join(format!("{sensor}.csv"))).unwrap();
+    let e = study::error::report(&*study::run(&study, &options, &mut Recorder::default()).unwrap_err());
+    assert!(
+        e.contains(&format!("{sensor}.csv")) && e.contains("No space left"),
+        "{e}"
+    );
+    assert!(!e.contains("cannot write the summary"), "{e}");
+}
+
+#[test]
+fn two_studies_run_concurrently_on_one_cache() {
+    // Two copies of one study in two folders, one cache: both reduce the same parts at the
+    // same time, and both complete with sound cache files.
+    let cache = scratch("shared-cache");
+    let files = [
+        example_as("cantilever", "concurrent-a"),
+        example_as("cantilever", "concurrent-b"),
+    ];
+    let runs: Vec<_> = std::thread::scope(|s| {
+        let handles: Vec<_> = files
+            .iter()
+            .map(|file| {
+                let cache = cache.clone();
+                s.spawn(move || {
+                    let study = study::load(file).unwrap();
+                    let options = Options {
+                        cache: Some(cache),
+                        ..into_results(file)
+                    };
+                    study::run(&study, &options, &mut Recorder::default()).map(|s| s.status)
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    for r in &runs {
+        assert_eq!(r.as_deref().map_err(|e| e.to_string()), Ok("complete"));
+    }
+    for e in std::fs::read_dir(&cache).unwrap().flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        assert!(!name.contains("tmp"), "temporary left in the cache: {name}");
+        if name.ends_with(".rbody") {
+            reduction::file::read(&e.path()).unwrap();
+        }
+    }
+    // Rerun: found in the cache (the key files match).
+    let study = study::load(&files[0]).unwrap();
+    let mut rec = Recorder::default();
+    let options = Options {
+        cache: Some(cache.clone()),
+        ..into_results(&files[0])
+    };
+    study::run(&study, &options, &mut rec).unwrap();
+    assert!(
+        rec.progress.iter().any(|p| p.contains("found in the cache")),
+        "{:?}",
+        rec.progress
+    );
+    // One study twice at once into one results folder: one of them stops at the lock.
+    let runs: Vec<_> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..2)
+            .map(|_| {
+                let (study, options) = (&study, &options);
+                s.spawn(move || study::run(study, options, &mut Recorder::default()).map_err(|e| e.to_string()))
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let refused = runs
+        .iter()
+        .filter(|r| r.as_ref().is_err_and(|e| e.contains("in use")))
+        .count();
+    assert!(
+        refused <= 1 && runs.iter().filter(|r| r.is_ok()).count() >= 1,
+        "{runs:?}"
+    );
+}
+
+#[test]
+fn a_cached_body_is_never_trusted_by_its_name() {
+    let file = example_as("cantilever", "cache-trust");
+    let study = study::load(&file).unwrap();
+    let options = into_results(&file);
+    study::run(&study, &options, &mut Recorder::default()).unwrap();
+    let cache = options.cache.clone().unwrap();
+    let body_file = std::fs::read_dir(&cache)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|e| e == "rbody"))
+        .unwrap();
+    // A different, sound body under the cached name (here: the same one without its mesh
+    // shapes): its bytes no longer match the recorded hash, so the part is reduced again.
+    let mut body = reduction::file::read(&body_file).unwrap();
+    body.mesh = None;
+    reduction::file::write(&body, &body_file).unwrap();
+    let mut rec = Recorder::default();
+    study::run(&study, &options, &mut rec).unwrap();
+    assert!(
+        rec.progress.iter().any(|p| p.contains("does not record the inputs")),
+        "{:?}",
+        rec.progress
+    );
 }

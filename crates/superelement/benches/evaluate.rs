@@ -1,13 +1,13 @@
 //! One evaluation of forces and all tangents (K_t, C_t, M) of a superelement, warm-started
 //! frame, through `evaluate_into` with a reused workspace (the hot-loop form) and through the
 //! allocating `evaluate`. Prints microseconds per evaluation (median of batches); timings are
-//! never asserted (style R20). Run: `cargo bench -p superelement --bench evaluate`.
+//! never asserted. Run: `cargo bench -p superelement --bench evaluate`.
 //!
 //! Cases (a substring of the name as an argument selects cases):
 //!
 //! * `beam22-*`: a 2-interface beam with 10 fixed-interface modes (n = 22), for each frame
 //!   choice and inertia variant, Rayleigh damping, no geometric stiffening;
-//! * `block14-G`, `block16-G`: the slider-crank-like body of issue 9 (a solid rod with two
+//! * `block14-G`, `block16-G`: the slider-crank-like body of the Exudyn comparison (a solid rod with two
 //!   interfaces, 2 or 4 fixed-interface modes, geometric stiffening, frame at the centre of
 //!   mass, `Exact` inertia, no damping): the hex8 block of `testing::fixtures::solid_block_with`;
 //! * `beam72-G`: a large body (2 interfaces, 60 modes, geometric stiffening, centre of mass,
@@ -124,7 +124,7 @@ fn cases(filter: &str) -> Vec<Case> {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     // `cargo bench` passes `--bench`; `cargo test --benches` does not and runs this once as a
-    // smoke test (style R20): keep it short there.
+    // smoke test: keep it short there.
     let quick = !args.iter().any(|a| a == "--bench");
     let profile = args.iter().find_map(|a| a.strip_prefix("--profile=")).map(|p| match p {
         "tangents" => true,

@@ -49,7 +49,7 @@ impl Damping {
 }
 
 /// The state of one body in absolute interface coordinates, with the last frame as the warm
-/// start of (2.6).
+/// start of (4.4).
 ///
 /// Velocities are spatial: $\dot{\mathbf r}_k = \mathbf v_k$, $\dot{\mathbf R}_k =
 /// \tilde{\boldsymbol\omega}_k\mathbf R_k$. The superelement's generalised velocity is
@@ -59,7 +59,7 @@ impl Damping {
 pub struct BodyState {
     /// Interface positions $\mathbf r_k$.
     pub r: Vec<Vector3<f64>>,
-    /// Interface orientations $\mathbf R_k$ (from the FE model's axes, brief §4:
+    /// Interface orientations $\mathbf R_k$ (from the FE model's axes, theory guide §4:
     /// $\mathbf R_{k0} = \mathbf I$).
     pub R: Vec<UnitQuaternion<f64>>,
     /// Interface velocities $\mathbf v_k$.
@@ -70,7 +70,7 @@ pub struct BodyState {
     pub eta: Vec<f64>,
     /// $\dot{\boldsymbol\eta}$.
     pub eta_dot: Vec<f64>,
-    /// The last frame: the Newton start of (2.6). Keep it up to date with the frame returned
+    /// The last frame: the Newton start of (4.4). Keep it up to date with the frame returned
     /// by [`Superelement::solve_frame`] or [`crate::Evaluation::frame`].
     pub frame: Frame,
 }
@@ -103,7 +103,7 @@ pub struct Superelement {
     pub(crate) origin: Vector3<f64>,
     /// Undeformed interface positions from $P_j$, body axes.
     pub(crate) x: Vec<Vector3<f64>>,
-    /// $\boldsymbol\Phi_j$, $6\times n$ (2.6).
+    /// $\boldsymbol\Phi_j$, $6\times n$ (4.4).
     pub(crate) Phi_j: Mat<f64>,
     pub(crate) K_CB: Mat<f64>,
     pub(crate) M_CB: Mat<f64>,
@@ -115,6 +115,8 @@ pub struct Superelement {
     pub(crate) length: f64,
     pub(crate) frame_settings: FrameSettings,
     pub(crate) mesh: Option<MeshModes>,
+    /// The stress of every CB vector, for [`Superelement::recover_stress`].
+    pub(crate) stress: Option<reduction::StressShapes>,
     /// Geometric stiffening $\mathbf G_k$ ([`GeometricStiffness`]); `None`: a linear elastic field.
     pub(crate) geometric: Option<GeometricStiffness>,
 }
@@ -260,7 +262,7 @@ fn geometric_stiffness(body: &ReducedBody, n: usize) -> Result<Option<GeometricS
 
 /// $\mathbf K_{CB}^+$ of a free body: $(\mathbf K_{CB} + \alpha\mathbf P_{rig})^{-1} - \mathbf P_{rig}/\alpha$ with
 /// $\mathbf P_{rig} = \boldsymbol\Phi_{rig}(\boldsymbol\Phi_{rig}^T\boldsymbol\Phi_{rig})^{-1}\boldsymbol\Phi_{rig}^T$
-/// the projector on the rigid modes (3.6) of the undeformed interface set and $\alpha$ the mean
+/// the projector on the rigid modes (5.2) of the undeformed interface set and $\alpha$ the mean
 /// diagonal of $\mathbf K_{CB}$ (the null space of $\mathbf K_{CB}$ is exactly the rigid modes; the
 /// Moore-Penrose inverse, checked by `tests/unit/geometric.rs::compliance_is_the_pseudo_inverse_of_k_cb`).
 fn rigid_pseudo_inverse(body: &ReducedBody, n: usize) -> Result<Mat<f64>, SuperelementError> {
@@ -400,7 +402,7 @@ impl Superelement {
             .map(|v| v.norm())
             .fold(gyration, f64::max)
             .max(f64::MIN_POSITIVE);
-        // (3.9) must be solvable for the undeformed body.
+        // (5.4) must be solvable for the undeformed body.
         let G = phi_j_psi(Phi_j.as_ref(), &x, &vec![Matrix3::identity(); N]);
         match crate::frame::inverse_with_rcond(&G) {
             Some((_, rcond)) if rcond >= crate::frame::RCOND_MIN => {}
@@ -430,6 +432,7 @@ impl Superelement {
             length,
             frame_settings: FrameSettings::default(),
             mesh: body.mesh.clone(),
+            stress: body.stress.clone(),
             geometric,
         })
     }
@@ -480,7 +483,7 @@ impl Superelement {
     pub fn mass(&self) -> f64 {
         self.inertia.mass
     }
-    /// $\boldsymbol\Phi_j$ (2.6).
+    /// $\boldsymbol\Phi_j$ (4.4).
     pub fn phi_j(&self) -> &Mat<f64> {
         &self.Phi_j
     }
@@ -560,7 +563,7 @@ impl Superelement {
         Ok(())
     }
 
-    /// Solves the frame (2.6) and builds the configuration-level matrices (3.6)-(3.11).
+    /// Solves the frame (4.4) and builds the configuration-level matrices (5.2)-(5.6).
     pub fn kinematics(&self, state: &BodyState) -> Result<Kinematics, SuperelementError> {
         let (frame, iterations) = self.solve_frame(state)?;
         self.kinematics_at(state, frame, iterations)
@@ -578,7 +581,7 @@ impl Superelement {
         Kinematics::new(frame, iterations, q, &self.x, self.Phi_j.as_ref())
     }
 
-    /// Velocity of the frame (3.9) in inertial axes: $(\dot{\mathbf r}_j, \boldsymbol\omega_j) =
+    /// Velocity of the frame (5.4) in inertial axes: $(\dot{\mathbf r}_j, \boldsymbol\omega_j) =
     /// \mathrm{diag}(\mathbf R_j,\mathbf R_j)\,\mathbf Z_j\boldsymbol\Lambda\bar{\mathbf R}^T\dot{\mathbf q}$.
     pub fn frame_velocity(&self, kin: &Kinematics, state: &BodyState) -> (Vector3<f64>, Vector3<f64>) {
         let y = kin.rotate(&state.velocity_vector(), false);
@@ -590,7 +593,7 @@ impl Superelement {
         )
     }
 
-    /// Elastic velocity $\dot{\mathbf q}^{jj} = \mathbf T_j\boldsymbol\Lambda\bar{\mathbf R}^T\dot{\mathbf q}$ (3.10).
+    /// Elastic velocity $\dot{\mathbf q}^{jj} = \mathbf T_j\boldsymbol\Lambda\bar{\mathbf R}^T\dot{\mathbf q}$ (5.5).
     pub fn local_velocity(&self, kin: &Kinematics, state: &BodyState) -> Vec<f64> {
         let y = kin.rotate(&state.velocity_vector(), false);
         let B = kin.B();

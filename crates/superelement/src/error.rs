@@ -18,19 +18,30 @@ pub enum SuperelementError {
     /// non-finite values).
     #[error("invalid state: {what}")]
     InvalidState { what: String },
-    /// Newton on $\boldsymbol\Phi_j\mathbf q^{jj} = \mathbf 0$ (2.6) did not reach the
+    /// Newton on $\boldsymbol\Phi_j\mathbf q^{jj} = \mathbf 0$ (4.4) did not reach the
     /// tolerance. `residual` is $\max(|\mathbf g_t|/L, |\mathbf g_r|)$ of the last iterate
     /// ($L$: body size). Usually the warm start (the previous frame) is far from the new state:
     /// take a smaller step, or start from the frame of a nearby state.
-    #[error("frame solve (2.6) did not converge in {iterations} iterations: residual {residual:.3e} > tolerance {tolerance:.3e}")]
+    #[error(
+        "the body's floating frame could not be found (no convergence in {iterations} iterations, \
+         residual {residual:.3e} > {tolerance:.3e}): the body is deformed further than one linear \
+         elastic body can follow, or the step from the last state is too large; take a smaller \
+         time step or more load steps, split the member into more bodies, or check the loads \
+         and units (theory guide, section 4.4)"
+    )]
     FrameNotConverged {
         iterations: usize,
         residual: f64,
         tolerance: f64,
     },
-    /// $\boldsymbol\Phi_j\boldsymbol\Phi_{rig}$ (3.9) is singular: the frame cannot see all
+    /// $\boldsymbol\Phi_j\boldsymbol\Phi_{rig}$ (5.4) is singular: the frame cannot see all
     /// six rigid motions of the (deformed) interface set. `rcond` is the ratio of the smallest
     /// to the largest singular value.
-    #[error("Phi_j Phi_rig is singular (rcond {rcond:.3e}): the frame does not fix all six rigid motions of the deformed body")]
+    #[error(
+        "the body's floating frame is undetermined (condition {rcond:.3e}): its deformed interfaces \
+         no longer fix its six rigid motions, so it is deformed further than one linear elastic \
+         body can follow; split the member into more bodies, or check the loads and units \
+         (theory guide, section 4.4)"
+    )]
     SingularFrame { rcond: f64 },
 }

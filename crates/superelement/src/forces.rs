@@ -1,5 +1,5 @@
 //! Generalised forces of the superelement in body axes, and their partial derivatives:
-//! elastic (4.4), inertial in the two variants (4.3)/(4.4), gravity and damping.
+//! elastic (6.5), inertial in the two variants (6.4)/(6.6), gravity and damping.
 //!
 //! # Body-axis form
 //!
@@ -395,9 +395,9 @@ pub(crate) fn w_into(x: &[f64], N: usize, out: &mut Mat<f64>) {
 }
 
 impl Superelement {
-    /// Elastic force (4.4) in body axes, $\boldsymbol\rho_{el} = \mathbf B^T\mathbf f$ with the local
+    /// Elastic force (6.5) in body axes, $\boldsymbol\rho_{el} = \mathbf B^T\mathbf f$ with the local
     /// elastic force $\mathbf f = \mathbf K_{CB}\mathbf q^{jj}$, plus $\mathbf g_G$ with geometric stiffening
-    /// ($\mathbf B = \mathbf T_j\boldsymbol\Lambda$; the seed's $\mathbf T_j^T\mathbf K_{CB}\mathbf q^{jj}$ with
+    /// ($\mathbf B = \mathbf T_j\boldsymbol\Lambda$; the AIC-FFR paper's $\mathbf T_j^T\mathbf K_{CB}\mathbf q^{jj}$ with
     /// the exact rotation factor), so $\mathbf f_{el} = \bar{\mathbf R}\boldsymbol\Lambda^T\mathbf T_j^T\mathbf f$.
     ///
     /// # Derivation
@@ -442,7 +442,7 @@ impl Superelement {
     }
 
     /// Damping force $\boldsymbol\rho_d = \mathbf B^T\mathbf D\,\dot{\mathbf q}^{jj}$, $\dot{\mathbf q}^{jj} =
-    /// \mathbf B\mathbf y$ (the elastic velocity, (3.10)); [`crate::Damping`] defines $\mathbf D$.
+    /// \mathbf B\mathbf y$ (the elastic velocity, (5.5)); [`crate::Damping`] defines $\mathbf D$.
     ///
     /// # Derivation
     /// The Rayleigh dissipation function $\tfrac12\dot{\mathbf q}^{jjT}\mathbf D\dot{\mathbf q}^{jj}$
@@ -484,7 +484,7 @@ impl Superelement {
     /// The potential is $V = -\mathbf g\cdot(m\mathbf r_j + \mathbf R_j\mathbf s)$ (the deformed centre
     /// of mass is $\mathbf r_j + \mathbf R_j\mathbf s/m$). Its variation in the FFR coordinates is
     /// $-\mathbf Q_g^T[\delta\mathbf r_j^L;\ \delta\boldsymbol\Pi;\ \delta\mathbf q^{jj}]$, transformed by
-    /// $\mathbf P$ ((3.11) in body axes). Partials: $\partial\mathbf Q_g/\partial\mathbf q^{jj} =
+    /// $\mathbf P$ ((5.6) in body axes). Partials: $\partial\mathbf Q_g/\partial\mathbf q^{jj} =
     /// [\mathbf 0;\ -\tilde{\mathbf g}^L\mathbf S_t;\ \mathbf 0]$, $\partial\mathbf Q_g/\partial\mathbf g^L =
     /// [m\mathbf I;\ \tilde{\mathbf s};\ \mathbf S_t^T]$. Tested by `tests/unit/fd_tangent.rs::gravity_tangent_matches_fd`
     /// and `tests/unit/energy.rs::gravity_is_the_gradient_of_its_potential`.
@@ -552,14 +552,14 @@ impl Superelement {
     /// Inertia force of the `Exact` variant: $\boldsymbol\rho_{in} = \mathbf P^T\mathbf F(\mathbf q^{jj},
     /// \boldsymbol\nu, \dot{\boldsymbol\nu})$ ([`crate::mass`]), $\boldsymbol\nu = \mathbf P\mathbf y$,
     /// $\dot{\boldsymbol\nu} = \mathbf P\dot{\mathbf y} + \mathbf X\mathbf N_y\dot{\mathbf q}^{jj}$, and the body-axis
-    /// mass $\mathbf P^T\mathbf M_{ffr}\mathbf P$. In inertial axes this is (4.3):
+    /// mass $\mathbf P^T\mathbf M_{ffr}\mathbf P$. In inertial axes this is (6.4):
     /// $\mathbf A^T\mathbf M_{ffr}\mathbf A\ddot{\mathbf q} + \mathbf A^T(\mathbf M_{ffr}\dot{\mathbf A}\dot{\mathbf q} + \mathbf h)$.
     ///
     /// # Derivation
     /// $\dot{\mathbf y} = \mathbf a + \mathbf W(\mathbf y)\boldsymbol\Omega$ (the body axes turn with
     /// $\boldsymbol\Omega$; $\mathbf W$ stacks $\tilde{\mathbf y}_b$) and $\frac{d}{dt}\mathbf P =
     /// D\mathbf P[\dot{\mathbf q}^{jj}]$, so $\dot{\boldsymbol\nu} = \mathbf P\dot{\mathbf y} + \mathbf X\mathbf N_y\dot{\mathbf q}^{jj}$
-    /// is $\mathbf A\ddot{\mathbf q} + \dot{\mathbf A}\dot{\mathbf q}$ of (4.2) in body axes. The partials,
+    /// is $\mathbf A\ddot{\mathbf q} + \dot{\mathbf A}\dot{\mathbf q}$ of (5.7) in body axes. The partials,
     /// with $\mathbf s = \mathbf Z_j\mathbf N_y\dot{\mathbf q}^{jj}$, $\mathbf c = \dot{\mathbf q}^{jj}$ and
     /// $\mathbf U$ the $n\times3$ stack of $\tilde{\mathbf c}_{u_k}$ and $-D\mathbf J_l^{-1}(\boldsymbol\theta_k)[\mathbf c_{\theta_k}]$:
     ///
@@ -723,12 +723,12 @@ impl Superelement {
     /// Inertia force of the `Lumped` variant.
     ///
     /// # Derivation
-    /// The seed's (4.4) gives the mass matrix $\bar{\mathbf R}\mathbf M_{CB}\bar{\mathbf R}^T$ and
+    /// The AIC-FFR paper's (6.5) gives the mass matrix $\bar{\mathbf R}\mathbf M_{CB}\bar{\mathbf R}^T$ and
     /// leaves $\mathbf Q_v$ to "lumping" the reduced mass. We read this as: the reduced mass is
     /// carried by the interface coordinates themselves, measured in the body axes, i.e. the
     /// kinetic energy is $T_L = \tfrac12\mathbf y^T\mathbf M_{CB}\mathbf y$ with $\mathbf y =
     /// \bar{\mathbf R}^T\dot{\mathbf q}$ (the absolute interface velocities, not the elastic ones).
-    /// Its mass matrix is the seed's, it is exact for any rigid motion (the CB basis reproduces
+    /// Its mass matrix is the AIC-FFR paper's, it is exact for any rigid motion (the CB basis reproduces
     /// rigid motions, so $\boldsymbol\Phi_{rig}^T\mathbf M_{CB}\boldsymbol\Phi_{rig}$ is the rigid
     /// mass matrix), and it differs from the exact $T$ only in how the convective velocity of
     /// the deformed body is interpolated (by the constraint modes from the interfaces). The

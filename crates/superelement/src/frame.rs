@@ -1,5 +1,5 @@
 //! The floating frame $\{\mathbf r_j, \mathbf R_j\}$: the three frame choices and the Newton
-//! solve of $\boldsymbol\Phi_j\mathbf q^{jj} = \mathbf 0$ (2.6), warm-started from the last frame.
+//! solve of $\boldsymbol\Phi_j\mathbf q^{jj} = \mathbf 0$ (4.4), warm-started from the last frame.
 
 #![allow(non_snake_case)]
 
@@ -10,8 +10,8 @@ use crate::so3::{self, skew};
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
-/// Where the floating frame sits and which six equations (2.6) fix it to the body
-/// (brief §4; seed §2, Figs. 4-6). One switch, so that the validation suite can compare them.
+/// Where the floating frame sits and which six equations (4.4) fix it to the body
+/// (theory guide §4.3). One switch, so that the validation suite can compare them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum FrameChoice {
     /// \[E17\]: $\boldsymbol\Phi_j$ = the CB modes evaluated at the undeformed centre of mass by
@@ -63,7 +63,7 @@ impl Frame {
     }
 }
 
-/// Settings of the Newton solve of (2.6).
+/// Settings of the Newton solve of (4.4).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameSettings {
     /// Converged when $\max(|\mathbf g_t|/L,\ |\mathbf g_r|) \le$ `tolerance` $+ 64\epsilon(1 +
@@ -72,7 +72,7 @@ pub struct FrameSettings {
     /// from the origin; $10^{-12}$ is far below any elastic deformation of interest and still
     /// reached in two or three quadratic steps from the previous frame.
     pub tolerance: f64,
-    /// Newton iterations before giving up; from a warm start 2-4 are normal (seed §4), and 30
+    /// Newton iterations before giving up; from a warm start 2-4 are normal ([AIC-FFR] §4), and 30
     /// covers a cold start from a frame half a turn away.
     pub max_iterations: usize,
 }
@@ -86,7 +86,7 @@ impl Default for FrameSettings {
     }
 }
 
-/// Buffers of the Newton solve of (2.6): $\mathbf q^{jj}$ ($n$), $\mathbf r_k^{jj}$ and
+/// Buffers of the Newton solve of (4.4): $\mathbf q^{jj}$ ($n$), $\mathbf r_k^{jj}$ and
 /// $\boldsymbol\Lambda$ blocks ($N$ each).
 pub(crate) struct FrameScratch<'a> {
     pub q: &'a mut [f64],
@@ -103,7 +103,7 @@ pub(crate) enum FrameSolve {
     AtInterface(usize),
 }
 
-/// $\boldsymbol\Phi_j\boldsymbol\Lambda\boldsymbol\Phi_{rig}$ (the 6x6 of (3.9), with the exact
+/// $\boldsymbol\Phi_j\boldsymbol\Lambda\boldsymbol\Phi_{rig}$ (the 6x6 of (5.4), with the exact
 /// rotation factor $\boldsymbol\Lambda$; see [`crate::transform`]), from the deformed local
 /// positions `r_loc` $= \mathbf x_k + \mathbf u_k$ and the blocks of $\boldsymbol\Lambda$.
 pub(crate) fn phi_j_psi(Phi_j: faer::MatRef<'_, f64>, r_loc: &[Vector3<f64>], Lambda: &[Matrix3<f64>]) -> Matrix6<f64> {
@@ -138,13 +138,13 @@ pub(crate) fn inverse_with_rcond(G: &Matrix6<f64>) -> Option<(Matrix6<f64>, f64)
 pub(crate) const RCOND_MIN: f64 = 1e-12;
 
 impl Superelement {
-    /// Solves (2.6) $\boldsymbol\Phi_j\mathbf q^{jj}(\mathbf r_j, \mathbf R_j) = \mathbf 0$ for the frame,
+    /// Solves (4.4) $\boldsymbol\Phi_j\mathbf q^{jj}(\mathbf r_j, \mathbf R_j) = \mathbf 0$ for the frame,
     /// starting from `state.frame` (the last step's frame).
     ///
     /// # Derivation
     /// With the local frame variation $\delta\boldsymbol\Xi = [\mathbf R_j^T\delta\mathbf r_j;\
     /// \mathbf R_j^T\delta\boldsymbol\pi_j]$ and the interface coordinates held,
-    /// $\delta\mathbf q^{jj} = -\boldsymbol\Lambda\boldsymbol\Phi_{rig}\delta\boldsymbol\Xi$ ((3.7) with the exact
+    /// $\delta\mathbf q^{jj} = -\boldsymbol\Lambda\boldsymbol\Phi_{rig}\delta\boldsymbol\Xi$ ((5.3) with the exact
     /// rotation factor, see [`crate::local_coordinates::elastic_rotation`]), so the Jacobian
     /// of $\mathbf g = \boldsymbol\Phi_j\mathbf q^{jj}$ is $-\boldsymbol\Phi_j\boldsymbol\Lambda\boldsymbol\Phi_{rig}$
     /// and the Newton step is $\delta\boldsymbol\Xi = (\boldsymbol\Phi_j\boldsymbol\Lambda\boldsymbol\Phi_{rig})^{-1}\mathbf g$,

@@ -1,9 +1,9 @@
 //! # superelement: the AIC-FFR body
 //!
-//! The absolute-interface-coordinate floating frame of reference superelement of the seed
-//! paper (Schilder, Ellenbroek, de Boer; \[E17\], \[S19\]): from a Craig-Bampton
-//! [`reduction::ReducedBody`] and a state in absolute interface coordinates, the frame (2.6),
-//! the local CB coordinates, the velocity transformation (3.9)-(3.11), the forces (4.3)-(4.4)
+//! The absolute-interface-coordinate floating frame of reference superelement of Ellenbroek
+//! and Schilder (\[E17\], \[S19\], summarised in \[AIC-FFR\]; docs/bibliography.md): from a Craig-Bampton
+//! [`reduction::ReducedBody`] and a state in absolute interface coordinates, the frame (4.4),
+//! the local CB coordinates, the velocity transformation (5.4)-(5.6), the forces (6.4)-(6.7)
 //! and the tangent matrices for Newton, for one body at a time.
 //!
 //! ```text
@@ -12,14 +12,55 @@
 //!     --evaluate / evaluate_into-->  Evaluation { frame, q_jj, residual, M, K_t, C_t, force parts }
 //! ```
 //!
+//! # Quick start
+//!
+//! Turn a reduced beam into a superelement, move it rigidly and check that the elastic
+//! force vanishes (the frame takes the rigid motion; theory guide, section 6.3):
+//!
+//! ```
+//! use fe_model::{generate, BeamProperties, BeamSection, BeamTheory, FeModel, IsotropicMaterial, MassKind};
+//! use nalgebra::{Point3, UnitQuaternion, Vector3};
+//! use reduction::{reduce, CbSettings, ModeSelection};
+//! use superelement::{Damping, Frame, FrameChoice, MassVariant, Superelement};
+//!
+//! let mut model = FeModel::default();
+//! let steel = model.add_material(IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0)?);
+//! let square = model.add_section(BeamSection::rectangle("20 mm square", 0.02, 0.02, 0.3)?);
+//! let props = BeamProperties {
+//!     section: square,
+//!     material: steel,
+//!     orientation: Vector3::z(),
+//!     theory: BeamTheory::EulerBernoulli,
+//!     mass: MassKind::Consistent,
+//! };
+//! let nodes = generate::straight_beam(&mut model, Point3::origin(), Point3::new(1.0, 0.0, 0.0), 4, &props, None)?;
+//! let interfaces = vec![("a".to_string(), nodes[0]), ("b".to_string(), nodes[4])];
+//! let body = reduce(&model, "beam", &interfaces, &CbSettings::new(ModeSelection::Count(2)))?;
+//! let se = Superelement::new(&body, FrameChoice::CenterOfMass, MassVariant::Exact, Damping::none())?;
+//!
+//! // The undeformed body turned by 1 rad about an oblique axis and moved away.
+//! let turned = UnitQuaternion::from_scaled_axis(Vector3::new(0.3, -0.8, 0.5));
+//! let mut state = se.undeformed_state(Frame::identity());
+//! for k in 0..2 {
+//!     state.r[k] = Vector3::new(1.0, 2.0, 3.0) + turned * state.r[k];
+//!     state.R[k] = turned * state.R[k];
+//! }
+//! let accelerations = vec![0.0; se.n_coordinates()];
+//! let evaluation = se.evaluate(&state, &accelerations, &Vector3::zeros())?;
+//! // Round-off of the frame solve (tolerance 1e-12) times the stiffness scale EA = 8.4e7 N.
+//! let largest = evaluation.f_elastic.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
+//! assert!(largest < 1e-3, "elastic force {largest} N on a rigid motion");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! # API
 //!
 //! * [`Superelement::new`]`(&ReducedBody, FrameChoice, MassVariant, Damping)` checks every
 //!   shape and precomputes the invariants about the frame origin.
-//! * [`Superelement::solve_frame`] solves (2.6) from `state.frame` (warm start);
+//! * [`Superelement::solve_frame`] solves (4.4) from `state.frame` (warm start);
 //!   [`Superelement::kinematics`] adds $\mathbf q^{jj}$, $\mathbf Z_j$, $\mathbf T_j$, $\mathbf A$
 //!   ([`Kinematics`]); [`Superelement::frame_velocity`] and [`Superelement::local_velocity`] give
-//!   (3.9) and (3.10) applied to the state's velocities.
+//!   (5.4) and (5.5) applied to the state's velocities.
 //! * [`Superelement::evaluate`] returns the residual $\mathbf r = \mathbf M\ddot{\mathbf q} + \mathbf Q_v +
 //!   \mathbf f_{el} + \mathbf f_d - \mathbf f_g$, its parts and $\mathbf M$, $\mathbf K_t$, $\mathbf C_t$
 //!   as faer matrices; [`Superelement::evaluate_into`] does the same into a reused
@@ -35,12 +76,12 @@
 //! orientations (varied spatially, $\delta\mathbf R_k = \widetilde{\delta\boldsymbol\pi}_k\mathbf R_k$)
 //! and the fixed-interface modal coordinates, which stay independent coordinates of the body.
 //!
-//! ## Where this crate goes beyond the seed
+//! ## Where this crate goes beyond the AIC-FFR papers
 //!
 //! * The CB rotation coordinates are rotation vectors, so their variation carries
-//!   $\mathbf J_l^{-1}(\boldsymbol\theta_k)$ ($\boldsymbol\Lambda$): (3.7)-(3.11) are used in their
-//!   exact form ([`transform`]); for small elastic rotations they are the seed's.
-//! * The `Lumped` inertia of (4.4) is given a kinetic energy, so its $\mathbf Q_v$ is derived
+//!   $\mathbf J_l^{-1}(\boldsymbol\theta_k)$ ($\boldsymbol\Lambda$): (5.3)-(5.6) are used in their
+//!   exact form ([`transform`]); for small elastic rotations they are the AIC-FFR paper's.
+//! * The `Lumped` inertia of (6.6) is given a kinetic energy, so its $\mathbf Q_v$ is derived
 //!   rather than assumed ([`forces`], `lumped_inertia`); the `Exact` inertia is the standard
 //!   FFR one from the inertia invariants ([`mass`]).
 //! * Geometric stiffening (optional, [`GeometricStiffness`]): the strain energy in the floating
@@ -53,32 +94,35 @@
 //!
 //! # Notation
 //!
+//! Equation numbers such as (5.4) are those of the theory guide (`docs/theory.md`); keys in
+//! brackets are those of the bibliography (`docs/bibliography.md`).
+//!
 //! | symbol | Rust | meaning | source |
 //! |---|---|---|---|
-//! | $\{P_j, E_j\}$ → $\mathbf r_j,\ \mathbf R_j$ | [`Frame`] `r`, `R`; `R_j` | floating frame: origin (material point $P_j$), rotation | §2 |
-//! | $\mathbf r_k,\ \mathbf R_k$ | [`BodyState`] `r`, `R` | absolute interface position, orientation | §3 |
+//! | $\{P_j, E_j\}$ → $\mathbf r_j,\ \mathbf R_j$ | [`Frame`] `r`, `R`; `R_j` | floating frame: origin (material point $P_j$), rotation | (4.1) |
+//! | $\mathbf r_k,\ \mathbf R_k$ | [`BodyState`] `r`, `R` | absolute interface position, orientation | (5.1) |
 //! | $\mathbf v_k,\ \boldsymbol\omega_k$ | `v`, `omega` | interface velocity, spatial angular velocity | |
-//! | $\delta\mathbf q^{OO}$ | `dq` | $[\delta\mathbf r_1, \delta\boldsymbol\pi_1, \dots, \delta\boldsymbol\eta]$, spatial | (3.5) |
-//! | $\mathbf x_k$ | `x` | undeformed interface position from $P_j$, body axes | §2 |
-//! | $\mathbf u_k,\ \boldsymbol\theta_k$ | `q_jj` blocks | $\mathbf R_j^T(\mathbf r_k - \mathbf r_j) - \mathbf x_k$, $\log(\mathbf R_j^T\mathbf R_k)$ | brief §4 |
-//! | $\mathbf q^{j,j}$ | `q_jj` | local CB coordinates $[\mathbf u_1, \boldsymbol\theta_1, \dots, \boldsymbol\eta]$ | (2.3) |
-//! | $[\boldsymbol\Phi_j]$ | `Phi_j` | 6 frame-fixing rows, $\boldsymbol\Phi_j\mathbf q^{jj} = 0$ | (2.6) |
-//! | $[\boldsymbol\Phi_{rig}]$ | `Phi_rig` | rigid modes of the deformed interface set | (3.6) |
+//! | $\delta\mathbf q^{OO}$ | `dq` | $[\delta\mathbf r_1, \delta\boldsymbol\pi_1, \dots, \delta\boldsymbol\eta]$, spatial | (5.3) |
+//! | $\mathbf x_k$ | `x` | undeformed interface position from $P_j$, body axes | (4.3) |
+//! | $\mathbf u_k,\ \boldsymbol\theta_k$ | `q_jj` blocks | $\mathbf R_j^T(\mathbf r_k - \mathbf r_j) - \mathbf x_k$, $\log(\mathbf R_j^T\mathbf R_k)$ | (4.3) |
+//! | $\mathbf q^{j,j}$ | `q_jj` | local CB coordinates $[\mathbf u_1, \boldsymbol\theta_1, \dots, \boldsymbol\eta]$ | (4.3) |
+//! | $[\boldsymbol\Phi_j]$ | `Phi_j` | 6 frame-fixing rows, $\boldsymbol\Phi_j\mathbf q^{jj} = 0$ | (4.4) |
+//! | $[\boldsymbol\Phi_{rig}]$ | `Phi_rig` | rigid modes of the deformed interface set | (5.2) |
 //! | $\boldsymbol\Lambda$ | `Lambda` | $\mathrm{diag}(\mathbf I, \mathbf J_l^{-1}(\boldsymbol\theta_k), \dots, \mathbf I)$ | this crate |
-//! | $\mathbf Z_j,\ \mathbf T_j$ | `Z`, `T` | frame and deformation projectors (with $\boldsymbol\Psi = \boldsymbol\Lambda\boldsymbol\Phi_{rig}$) | (3.9)-(3.10) |
-//! | $[\bar{\mathbf R}^j_O]$ | `rotate(.., false)` | block-diagonal $\mathbf R_j^T$ (identity on $\boldsymbol\eta$) | (3.6) |
-//! | $\mathbf A$ | `velocity_transform` | FFR velocities from absolute ones | (3.11) |
+//! | $\mathbf Z_j,\ \mathbf T_j$ | `Z`, `T` | frame and deformation projectors (with $\boldsymbol\Psi = \boldsymbol\Lambda\boldsymbol\Phi_{rig}$) | (5.4)-(5.5) |
+//! | $[\bar{\mathbf R}^j_O]$ | `rotate(.., false)` | block-diagonal $\mathbf R_j^T$ (identity on $\boldsymbol\eta$) | (5.2) |
+//! | $\mathbf A$ | `velocity_transform` | FFR velocities from absolute ones | (5.6) |
 //! | $\mathbf Y,\ \mathbf B$ | `Y`, `B` | $\mathbf Z_j\boldsymbol\Lambda$, $\mathbf T_j\boldsymbol\Lambda$; $\mathbf P = [\mathbf Y; \mathbf B]$ | this crate |
 //! | $\mathbf y,\ \mathbf a$ | `y`, `a` | $\bar{\mathbf R}^T\dot{\mathbf q}$, $\bar{\mathbf R}^T\ddot{\mathbf q}$ | |
 //! | $\boldsymbol\nu = [\mathbf V; \boldsymbol\Omega; \dot{\mathbf q}^{jj}]$ | `nu` | FFR body-axis quasi-velocities | [`mass`] |
-//! | $\mathbf M_{CB},\ \mathbf K_{CB}$ | `M_CB`, `K_CB` | reduced mass, stiffness | (4.4) |
+//! | $\mathbf M_{CB},\ \mathbf K_{CB}$ | `M_CB`, `K_CB` | reduced mass, stiffness | (6.5) |
 //! | $\mathbf G_k$ | [`GeometricStiffness`] `G[k]` | reduced geometric stiffness of the stress of CB coordinate $k$ ($n\times n$, symmetric) | \[WW03\], `reduction` |
 //! | $U_3$ | `GeometricStiffness::energy` | $\tfrac12\sum_k q_k\,\mathbf q^{jjT}\mathbf G_k\mathbf q^{jj}$, cubic strain energy | \[WW03\] |
 //! | $\mathbf b,\ \mathbf p$ | `G_b`, `G_p` | $b_m = \tfrac12\mathbf q^{jjT}\mathbf G_m\mathbf q^{jj}$, $\mathbf p = \mathbf K_{CB}^+\mathbf b$ | this crate |
 //! | $U_4$ | `GeometricStiffness::energy` | $\tfrac12\mathbf b^T\mathbf K_{CB}^+\mathbf b$, projected quartic strain energy | this crate |
 //! | $\mathbf g_G,\ \mathbf H_G$ | `g_G`, `K_g` | gradient and Hessian of $U_3 + U_4$ in $\mathbf q^{jj}$ | this crate |
-//! | $\mathbf M_{ffr}$ | `FfrInertia::mass_matrix` | FFR mass matrix from the invariants | (4.1) |
-//! | $\mathbf Q_v$ | `q_v` | quadratic velocity forces | (4.4) |
+//! | $\mathbf M_{ffr}$ | `FfrInertia::mass_matrix` | FFR mass matrix from the invariants | (6.1) |
+//! | $\mathbf Q_v$ | `q_v` | quadratic velocity forces | (6.5) |
 //! | $\mathbf K_t,\ \mathbf C_t$ | `stiffness`, `damping` | $\partial\mathbf r/\partial\mathbf q$, $\partial\mathbf r/\partial\dot{\mathbf q}$ | \[S19\] |
 //!
 //! Superscripts: a quantity without a frame marker is in inertial axes; body-axis quantities
@@ -88,18 +132,18 @@
 //!
 //! | eq. | meaning | function |
 //! |---|---|---|
-//! | (2.3), brief §4 | local CB coordinates $\mathbf u_k$, $\boldsymbol\theta_k$ | `superelement::local_coordinates::local_coordinates` |
-//! | (2.6) | frame fixed to body, $\boldsymbol\Phi_j\mathbf q^{jj} = 0$ (Newton) | `superelement::Superelement::solve_frame` (`frame.rs`) |
-//! | (3.6) | rigid modes of the deformed interface set | `superelement::transform::phi_rig` |
-//! | (3.9)-(3.10) | $\mathbf Z_j$, $\mathbf T_j$ (exact form, with $\boldsymbol\Lambda$) | `superelement::transform::Kinematics::update` |
-//! | (3.9) | frame velocity | `superelement::Superelement::frame_velocity` (`body.rs`) |
-//! | (3.11) | velocity transformation $\mathbf A$ | `superelement::transform::Kinematics::velocity_transform` |
-//! | (4.1) | FFR mass matrix from the inertia invariants | `superelement::mass::FfrInertia::mass_matrix` |
-//! | (4.3) | FFR inertia force $\mathbf M_{ffr}\dot{\boldsymbol\nu} + \mathbf h$ and partials | `superelement::mass::FfrInertia::force_into` |
-//! | (4.3) | `Exact` inertia in absolute coordinates, $\mathbf A^T(\dots)$ | `superelement::Superelement::exact_inertia` (`forces.rs`) |
-//! | (4.4) | elastic force $\bar{\mathbf R}\mathbf T_j^T\mathbf K_{CB}\mathbf q^{jj}$ (plus $\mathbf g_G$) | `superelement::Superelement::elastic` (`forces.rs`) |
+//! | (4.3) | local CB coordinates $\mathbf u_k$, $\boldsymbol\theta_k$ | `superelement::local_coordinates::local_coordinates` |
+//! | (4.4) | frame fixed to body, $\boldsymbol\Phi_j\mathbf q^{jj} = 0$ (Newton) | `superelement::Superelement::solve_frame` (`frame.rs`) |
+//! | (5.2) | rigid modes of the deformed interface set | `superelement::transform::phi_rig` |
+//! | (5.4)-(5.5) | $\mathbf Z_j$, $\mathbf T_j$ (exact form, with $\boldsymbol\Lambda$) | `superelement::transform::Kinematics::update` |
+//! | (5.4) | frame velocity | `superelement::Superelement::frame_velocity` (`body.rs`) |
+//! | (5.6) | velocity transformation $\mathbf A$ | `superelement::transform::Kinematics::velocity_transform` |
+//! | (6.1) | FFR mass matrix from the inertia invariants | `superelement::mass::FfrInertia::mass_matrix` |
+//! | (6.4) | FFR inertia force $\mathbf M_{ffr}\dot{\boldsymbol\nu} + \mathbf h$ and partials | `superelement::mass::FfrInertia::force_into` |
+//! | (6.4) | `Exact` inertia in absolute coordinates, $\mathbf A^T(\dots)$ | `superelement::Superelement::exact_inertia` (`forces.rs`) |
+//! | (6.5) | elastic force $\bar{\mathbf R}\mathbf T_j^T\mathbf K_{CB}\mathbf q^{jj}$ (plus $\mathbf g_G$) | `superelement::Superelement::elastic` (`forces.rs`) |
 //! | \[WW03\], this crate | geometric stiffening $\mathbf g_G$, $\mathbf H_G$ of $U_3 + U_4$ | `superelement::GeometricStiffness::gradient_into` (`forces.rs`) |
-//! | (4.4) | `Lumped` inertia, $\bar{\mathbf R}\mathbf M_{CB}\bar{\mathbf R}^T$ and its $\mathbf Q_v$ | `superelement::Superelement::lumped_inertia` (`forces.rs`) |
+//! | (6.6) | `Lumped` inertia, $\bar{\mathbf R}\mathbf M_{CB}\bar{\mathbf R}^T$ and its $\mathbf Q_v$ | `superelement::Superelement::lumped_inertia` (`forces.rs`) |
 //! | \[S19\] | tangents $\mathbf K_t$, $\mathbf C_t$, $\mathbf M$ (chain rule to absolute coordinates) | `superelement::Superelement::evaluate_local` (`tangent.rs`) |
 //!
 //! The `forces.rs` and `tangent.rs` functions are crate-private methods of [`Superelement`];
@@ -164,7 +208,7 @@
 //!
 //! # Modules
 //!
-//! [`so3`] rotations; [`local_coordinates`]; [`frame`] (2.6); [`transform`] (3.6)-(3.11) and
+//! [`so3`] rotations; [`local_coordinates`]; [`frame`] (4.4); [`transform`] (5.2)-(5.6) and
 //! their derivatives; [`mass`] FFR inertia; [`forces`] body-axis forces and partials;
 //! [`tangent`] the residual and tangents; [`recovery`] the deformed mesh; [`testing`] helpers.
 
@@ -186,6 +230,6 @@ pub use body::{BodyState, Damping, GeometricStiffness, Superelement};
 pub use error::SuperelementError;
 pub use frame::{Frame, FrameChoice, FrameSettings};
 pub use mass::{FfrForce, FfrInertia, FfrScratch, MassVariant};
-pub use recovery::MeshState;
+pub use recovery::{BodyStress, MeshState};
 pub use tangent::{Evaluation, Workspace};
 pub use transform::Kinematics;

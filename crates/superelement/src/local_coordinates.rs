@@ -1,4 +1,4 @@
-//! Local interface (Craig-Bampton) coordinates from absolute interface coordinates (brief §4):
+//! Local interface (Craig-Bampton) coordinates from absolute interface coordinates (theory guide §4):
 //! $\mathbf u_k = \mathbf R_j^T(\mathbf r_k - \mathbf r_j) - \mathbf x_k$,
 //! $\boldsymbol\theta_k = \log(\mathbf R_j^T\mathbf R_k\mathbf R_{k0}^T)$, and their variation.
 //!
@@ -21,10 +21,10 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 /// Interface displacement $\mathbf u_k = \mathbf R_j^T(\mathbf r_k - \mathbf r_j) - \mathbf x_k$ (body axes).
 ///
 /// # Derivation
-/// Not in the seed in this form ((3.1) is its inverse). With $\delta\mathbf R_j =
+/// Not in the AIC-FFR papers in this form ((5.1) is its inverse). With $\delta\mathbf R_j =
 /// \widetilde{\delta\boldsymbol\pi}_j\mathbf R_j$: $\delta\mathbf u_k = \mathbf R_j^T\delta\mathbf r_k -
 /// [\mathbf I,\ -\tilde{\mathbf r}_k^{jj}]\,[\mathbf R_j^T\delta\mathbf r_j;\ \mathbf R_j^T\delta\boldsymbol\pi_j]$
-/// with $\mathbf r_k^{jj} = \mathbf x_k + \mathbf u_k$: the translation rows of (3.7).
+/// with $\mathbf r_k^{jj} = \mathbf x_k + \mathbf u_k$: the translation rows of (5.3).
 /// Checked by `tests/unit/fd_tangent.rs::local_coordinates_variation`.
 pub fn interface_displacement(frame: &Frame, r_k: &Vector3<f64>, x_k: &Vector3<f64>) -> Vector3<f64> {
     frame.R.inverse_transform_vector(&(r_k - frame.r)) - x_k
@@ -34,11 +34,11 @@ pub fn interface_displacement(frame: &Frame, r_k: &Vector3<f64>, x_k: &Vector3<f
 /// $\mathbf R_{k0} = \mathbf I$ (module docs).
 ///
 /// # Derivation
-/// Not in the seed. With spatial variations $\delta\mathbf R = \widetilde{\delta\boldsymbol\pi}\mathbf R$,
+/// Not in the AIC-FFR papers. With spatial variations $\delta\mathbf R = \widetilde{\delta\boldsymbol\pi}\mathbf R$,
 /// $\delta(\mathbf R_j^T\mathbf R_k) = (\mathbf R_j^T(\delta\boldsymbol\pi_k - \delta\boldsymbol\pi_j))^\sim
 /// \mathbf R_j^T\mathbf R_k$, a left perturbation, so
 /// $\delta\boldsymbol\theta_k = \mathbf J_l^{-1}(\boldsymbol\theta_k)\,\mathbf R_j^T(\delta\boldsymbol\pi_k - \delta\boldsymbol\pi_j)$
-/// ([`so3`] conventions). The seed's (3.4)/(3.7) use the virtual rotation
+/// ([`so3`] conventions). The AIC-FFR paper's (5.1)/(5.3) use the virtual rotation
 /// $\mathbf R_j^T(\delta\boldsymbol\pi_k - \delta\boldsymbol\pi_j)$ in place of $\delta\boldsymbol\theta_k$,
 /// which is the $\mathbf J_l^{-1} = \mathbf I$ (small elastic rotation) limit; this crate keeps
 /// the factor $\boldsymbol\Lambda$ ([`lambda_blocks`]) so that its tangents are exact.
@@ -48,7 +48,7 @@ pub fn elastic_rotation(R_j: &UnitQuaternion<f64>, R_k: &UnitQuaternion<f64>) ->
 }
 
 /// The CB coordinates $\mathbf q^{jj} = [\mathbf u_1, \boldsymbol\theta_1, \dots, \mathbf u_N,
-/// \boldsymbol\theta_N, \boldsymbol\eta]$ (2.3) for the frame `frame`, written to `q_jj`
+/// \boldsymbol\theta_N, \boldsymbol\eta]$ (4.3) for the frame `frame`, written to `q_jj`
 /// ($6N + m$ entries; `x` are the undeformed positions from the frame origin).
 pub fn local_coordinates(
     frame: &Frame,

@@ -46,7 +46,7 @@
 //!
 //! with $\mathbf j_q(\mathbf w) = \partial(\mathbf J(\mathbf q)\mathbf w)/\partial\mathbf q$ and
 //! $\mathbf S_w(\dot{\mathbf q})\dot{\mathbf q} = 0$ ($\tilde{\mathbf S}_i$ skew). This is the
-//! seed's $\mathbf M\ddot{\mathbf q} + \mathbf C\dot{\mathbf q}$ of (4.1) in body-axis
+//! AIC-FFR paper's $\mathbf M\ddot{\mathbf q} + \mathbf C\dot{\mathbf q}$ of (6.1) in body-axis
 //! quasi-velocities. The power balance $\boldsymbol\nu^T\mathbf F = \dot T$ is checked by
 //! `tests/unit/energy.rs`, the partials by `tests/unit/fd_tangent.rs::ffr_partials`.
 
@@ -58,14 +58,14 @@ use nalgebra::{Matrix3, Vector3};
 use reduction::InertiaData;
 use serde::{Deserialize, Serialize};
 
-/// Which inertia the superelement uses (brief §4; seed §4).
+/// Which inertia the superelement uses (theory guide §4; [AIC-FFR] §4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum MassVariant {
     /// The standard FFR mass matrix from the inertia invariants transformed by $\mathbf A$
-    /// (3.11), with the exact quadratic velocity forces (4.3): $\mathbf M = \mathbf A^T\mathbf M_{ffr}\mathbf A$,
+    /// (5.6), with the exact quadratic velocity forces (6.4): $\mathbf M = \mathbf A^T\mathbf M_{ffr}\mathbf A$,
     /// $\mathbf Q_v = \mathbf A^T(\mathbf M_{ffr}\dot{\mathbf A}\dot{\mathbf q} + \mathbf h)$.
     Exact,
-    /// The seed's simplification (4.4): $\mathbf M = \bar{\mathbf R}\mathbf M_{CB}\bar{\mathbf R}^T$,
+    /// The AIC-FFR paper's simplification (6.5): $\mathbf M = \bar{\mathbf R}\mathbf M_{CB}\bar{\mathbf R}^T$,
     /// and $\mathbf Q_v$ from the same "lumped" kinetic energy (see
     /// `Superelement::lumped_inertia` in `forces.rs` for what that means).
     Lumped,

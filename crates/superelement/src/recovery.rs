@@ -1,7 +1,10 @@
 //! Recovery of the deformed FE mesh from the state: every node at
 //! $\mathbf r_j + \mathbf R_j(\mathbf x - \mathbf x_{P_j} + \mathbf S_t\mathbf q^{jj})$ with the CB shapes
 //! of `ReducedBody::mesh` (translation slots), and, for nodes with rotation slots (beams,
-//! spider nodes), orientation $\mathbf R_j\exp(\mathbf S_r\mathbf q^{jj})$.
+//! spider nodes), orientation $\mathbf R_j\exp(\mathbf S_r\mathbf q^{jj})$; and the stresses
+//! $\boldsymbol\sigma = \boldsymbol\Sigma\mathbf q^{jj}$ from the stress shapes of
+//! `ReducedBody::stress` (body axes: the floating frame carries the rigid motion, which adds
+//! no stress).
 
 #![allow(non_snake_case)]
 
@@ -24,7 +27,36 @@ pub struct MeshState {
     pub elastic: Vec<Vector3<f64>>,
 }
 
+/// The stresses of one body, in body axes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyStress {
+    /// Solid stresses at the mesh nodes, Voigt order $[xx, yy, zz, xy, yz, zx]$; `None` at nodes
+    /// without a solid element (empty for a body without solids).
+    pub nodal: Vec<Option<[f64; 6]>>,
+    /// Section forces $[N, V_y, V_z, T, M_y, M_z]$ at both ends of every beam of
+    /// `StressShapes::beams`.
+    pub beams: Vec<[[f64; 6]; 2]>,
+}
+
 impl Superelement {
+    /// The stress shapes, when the body was reduced with them.
+    pub fn stress_shapes(&self) -> Option<&reduction::StressShapes> {
+        self.stress.as_ref()
+    }
+
+    /// The stresses for elastic coordinates $\mathbf q^{jj}$ (those of a [`Kinematics`]), or
+    /// `None` when the body has no stress shapes.
+    ///
+    /// # Panics
+    /// If `q_jj` does not have $n$ entries (a caller's bug).
+    pub fn recover_stress(&self, q_jj: &[f64]) -> Option<BodyStress> {
+        let shapes = self.stress.as_ref()?;
+        Some(BodyStress {
+            nodal: shapes.nodal_stress(q_jj),
+            beams: shapes.beam_section_forces(q_jj),
+        })
+    }
+
     /// The deformed mesh for the configuration `kin`, or `None` when the reduced body was
     /// saved without mesh shapes.
     ///

@@ -8,7 +8,7 @@
 //!   kernels.
 //! * Variations and angular velocities are **spatial**: $\delta\mathbf R =
 //!   \widetilde{\delta\boldsymbol\pi}\,\mathbf R$, $\dot{\mathbf R} = \tilde{\boldsymbol\omega}
-//!   \mathbf R$ (seed (3.2)). A rotation is perturbed as $\mathbf R \leftarrow
+//!   \mathbf R$ (theory guide (1.1)). A rotation is perturbed as $\mathbf R \leftarrow
 //!   \exp(\widetilde{\delta\boldsymbol\pi})\mathbf R$ ([`perturb`]).
 //! * Left Jacobian: $\exp(\boldsymbol\theta + \delta\boldsymbol\theta) = \exp(\mathbf J_l(\boldsymbol\theta)
 //!   \delta\boldsymbol\theta)\exp(\boldsymbol\theta)$ to first order;

@@ -12,7 +12,7 @@
 //! \delta\mathbf r_k$, $\mathbf R_k \leftarrow \exp(\widetilde{\delta\boldsymbol\pi}_k)\mathbf R_k$,
 //! $\boldsymbol\eta \leftarrow \boldsymbol\eta + \delta\boldsymbol\eta$, at fixed spatial velocities
 //! $\mathbf v_k, \boldsymbol\omega_k$ and accelerations; the frame is re-solved (its variation is
-//! $\mathbf Z_j\boldsymbol\Lambda\bar{\mathbf R}^T\delta\mathbf q$, (3.9)).
+//! $\mathbf Z_j\boldsymbol\Lambda\bar{\mathbf R}^T\delta\mathbf q$, (5.4)).
 
 #![allow(non_snake_case)]
 
@@ -31,7 +31,7 @@ use nalgebra::Vector3;
 /// $[\mathbf r_1, \boldsymbol\pi_1, \dots, \mathbf r_N, \boldsymbol\pi_N, \boldsymbol\eta]$.
 #[derive(Clone, Debug)]
 pub struct Evaluation {
-    /// The frame solving (2.6) for this state: store it in the state as the next warm start.
+    /// The frame solving (4.4) for this state: store it in the state as the next warm start.
     pub frame: Frame,
     /// Newton iterations of the frame solve.
     pub frame_iterations: usize,
@@ -44,7 +44,7 @@ pub struct Evaluation {
     pub f_inertia: Vec<f64>,
     /// Quadratic velocity force $\mathbf Q_v = \mathbf f_{in} - \mathbf M\ddot{\mathbf q}$.
     pub q_v: Vec<f64>,
-    /// Elastic force (4.4).
+    /// Elastic force (6.5).
     pub f_elastic: Vec<f64>,
     /// Damping force.
     pub f_damping: Vec<f64>,
@@ -79,7 +79,7 @@ impl Evaluation {
 }
 
 /// Every buffer one evaluation needs, sized for one superelement ([`Superelement::workspace`]):
-/// with [`Superelement::evaluate_into`] a hot loop does not allocate (style R8).
+/// with [`Superelement::evaluate_into`] a hot loop does not allocate.
 #[derive(Clone, Debug)]
 pub struct Workspace {
     pub(crate) kin: Kinematics,
@@ -168,7 +168,7 @@ impl Superelement {
                 what: format!("{} accelerations for {} coordinates", acc.len(), self.n),
             });
         }
-        // The Newton iterates of (2.6) live in the configuration's own buffers, which are
+        // The Newton iterates of (4.4) live in the configuration's own buffers, which are
         // rebuilt for the converged frame right after.
         let mut scratch = FrameScratch {
             q: &mut ws.kin.q_jj,

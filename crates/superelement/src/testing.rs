@@ -1,4 +1,4 @@
-//! Test helpers shared with the multibody crate (style R13): the one central-difference
+//! Test helpers shared with the multibody crate: the one central-difference
 //! helper with its worst-entry report, state perturbations through the exponential map,
 //! deterministic deformed moving states and a synthetic geometric stiffness. With the
 //! `testing` feature, `fixtures` builds reduced beam bodies through `fe-model` and `reduction`.

@@ -1,15 +1,15 @@
-//! The velocity transformation: $\boldsymbol\Phi_{rig}$ (3.6), $\mathbf Z_j$ and $\mathbf T_j$
-//! (3.9)-(3.10), $\mathbf A$ (3.11), with the exact rotation factor $\boldsymbol\Lambda$, and the
+//! The velocity transformation: $\boldsymbol\Phi_{rig}$ (5.2), $\mathbf Z_j$ and $\mathbf T_j$
+//! (5.4)-(5.5), $\mathbf A$ (5.6), with the exact rotation factor $\boldsymbol\Lambda$, and the
 //! derivatives of these maps with respect to the CB coordinates that the tangents need.
 //!
 //! # Exact variations
 //!
 //! The CB rotation coordinates are rotation vectors, $\boldsymbol\theta_k = \log(\mathbf R_j^T\mathbf R_k)$,
-//! whose variation is $\mathbf J_l^{-1}(\boldsymbol\theta_k)$ times the virtual rotation of (3.4)
-//! ([`crate::local_coordinates::elastic_rotation`]). So the exact form of (3.7) is
+//! whose variation is $\mathbf J_l^{-1}(\boldsymbol\theta_k)$ times the virtual rotation of (5.1)
+//! ([`crate::local_coordinates::elastic_rotation`]). So the exact form of (5.3) is
 //! $\delta\mathbf q^{jj} = \boldsymbol\Lambda(\bar{\mathbf R}^T\delta\mathbf q^{OO} - \boldsymbol\Phi_{rig}\delta\boldsymbol\Xi)$,
 //! $\delta\boldsymbol\Xi = [\mathbf R_j^T\delta\mathbf r_j;\ \mathbf R_j^T\delta\boldsymbol\pi_j]$, and
-//! (2.6) gives, with $\boldsymbol\Psi = \boldsymbol\Lambda\boldsymbol\Phi_{rig}$,
+//! (4.4) gives, with $\boldsymbol\Psi = \boldsymbol\Lambda\boldsymbol\Phi_{rig}$,
 //!
 //! $$\mathbf Z_j = (\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}\boldsymbol\Phi_j,\quad
 //! \mathbf T_j = \mathbf I - \boldsymbol\Psi\mathbf Z_j,\quad
@@ -17,14 +17,14 @@
 //! \delta\mathbf q^{jj} = \mathbf T_j\boldsymbol\Lambda\bar{\mathbf R}^T\delta\mathbf q.$$
 //!
 //! For $\boldsymbol\Lambda = \mathbf I$ (undeformed, or small elastic rotations) these are the
-//! seed's (3.9)-(3.10) exactly. Here $\delta\mathbf q = [\delta\mathbf r_1, \delta\boldsymbol\pi_1, \dots,
+//! AIC-FFR paper's (5.4)-(5.5) exactly. Here $\delta\mathbf q = [\delta\mathbf r_1, \delta\boldsymbol\pi_1, \dots,
 //! \delta\mathbf r_N, \delta\boldsymbol\pi_N, \delta\boldsymbol\eta]$ are the superelement's
 //! coordinates: $\boldsymbol\eta$ is independent, so $\boldsymbol\Phi_j$, $\mathbf Z_j$ and
 //! $\mathbf T_j$ carry eta columns and $\bar{\mathbf R}$, $\boldsymbol\Lambda$ an identity eta block.
 //!
 //! We write $\mathbf X = [\mathbf Z_j;\ \mathbf T_j]$ and $\mathbf P = \mathbf X\boldsymbol\Lambda =
 //! [\mathbf Y;\ \mathbf B]$ ($\mathbf Y = \mathbf Z_j\boldsymbol\Lambda$, $\mathbf B = \mathbf T_j\boldsymbol\Lambda$):
-//! $\mathbf A = \mathrm{diag}(\mathbf R_j, \mathbf R_j, \mathbf I)\,\mathbf P\,\bar{\mathbf R}^T$ (3.11),
+//! $\mathbf A = \mathrm{diag}(\mathbf R_j, \mathbf R_j, \mathbf I)\,\mathbf P\,\bar{\mathbf R}^T$ (5.6),
 //! and the FFR quasi-velocities are $\boldsymbol\nu = \mathbf P\mathbf y$ with the interface
 //! velocities in body axes $\mathbf y = \bar{\mathbf R}^T\dot{\mathbf q}$.
 //!
@@ -51,7 +51,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
-/// $\boldsymbol\Phi_{rig}$ (3.6): the $n\times6$ rigid-body modes of the interface set about the
+/// $\boldsymbol\Phi_{rig}$ (5.2): the $n\times6$ rigid-body modes of the interface set about the
 /// frame origin, on the *deformed* local positions $\mathbf r_k^{jj} = \mathbf x_k + \mathbf u_k$:
 /// block rows $[\mathbf I,\ -\tilde{\mathbf r}_k^{jj}]$ (translation) and $[\mathbf 0,\ \mathbf I]$
 /// (rotation) per interface, zero rows for $\boldsymbol\eta$.
@@ -75,13 +75,13 @@ pub fn phi_rig(r_loc: &[Vector3<f64>], n_modes: usize) -> Mat<f64> {
 /// coordinates and the transformation matrices in body axes (module docs).
 #[derive(Clone, Debug)]
 pub struct Kinematics {
-    /// The frame solving (2.6).
+    /// The frame solving (4.4).
     pub frame: Frame,
     /// Newton iterations the frame took (0 for explicit frames).
     pub frame_iterations: usize,
     /// $\mathbf R_j$ as a matrix.
     pub R_j: Matrix3<f64>,
-    /// $\mathbf q^{jj}$ (2.3).
+    /// $\mathbf q^{jj}$ (4.3).
     pub q_jj: Vec<f64>,
     /// Deformed local interface positions $\mathbf r_k^{jj} = \mathbf x_k + \mathbf u_k$.
     pub r_loc: Vec<Vector3<f64>>,
@@ -189,7 +189,7 @@ impl Kinematics {
     }
 
     /// Builds the transformation for the converged `frame` and the CB coordinates `q_jj`
-    /// (3.9)-(3.10) with the exact factor $\boldsymbol\Lambda$ (module docs).
+    /// (5.4)-(5.5) with the exact factor $\boldsymbol\Lambda$ (module docs).
     pub(crate) fn new(
         frame: Frame,
         frame_iterations: usize,
@@ -295,12 +295,12 @@ impl Kinematics {
         self.r_loc.len()
     }
 
-    /// $\mathbf Z_j$ (3.9), $6\times n$.
+    /// $\mathbf Z_j$ (5.4), $6\times n$.
     pub fn Z(&self) -> MatRef<'_, f64> {
         self.X.as_ref().subrows(0, 6)
     }
 
-    /// $\mathbf T_j$ (3.10), $n\times n$.
+    /// $\mathbf T_j$ (5.5), $n\times n$.
     pub fn T(&self) -> MatRef<'_, f64> {
         self.X.as_ref().subrows(6, self.n())
     }
@@ -315,7 +315,7 @@ impl Kinematics {
         self.P.as_ref().subrows(6, self.n())
     }
 
-    /// $\boldsymbol\Phi_{rig}$ (3.6) of this configuration.
+    /// $\boldsymbol\Phi_{rig}$ (5.2) of this configuration.
     pub fn phi_rig(&self) -> Mat<f64> {
         phi_rig(&self.r_loc, self.n() - 6 * self.n_interfaces())
     }
@@ -338,7 +338,7 @@ impl Kinematics {
         }
     }
 
-    /// $\mathbf A$ (3.11) in inertial axes: $(6+n)\times n$, rows $[\delta\mathbf r_j;\ \delta\boldsymbol\pi_j;\ \delta\mathbf q^{jj}]$.
+    /// $\mathbf A$ (5.6) in inertial axes: $(6+n)\times n$, rows $[\delta\mathbf r_j;\ \delta\boldsymbol\pi_j;\ \delta\mathbf q^{jj}]$.
     pub fn velocity_transform(&self) -> Mat<f64> {
         let n = self.n();
         let N = self.n_interfaces();

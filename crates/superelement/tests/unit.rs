@@ -1,4 +1,4 @@
-//! superelement unit tests, one binary (style R19; fast, debug build). Each module says what
+//! superelement unit tests, one binary (fast, debug build). Each module says what
 //! belongs in it; shared fixtures live in `common`, the finite-difference helper in
 //! `superelement::testing`.
 #![allow(non_snake_case)]
@@ -13,7 +13,7 @@ mod unit {
     /// Every tangent against central differences: local coordinates, frame Jacobian, FFR
     /// partials, K_t, C_t, M for all frame choices and both inertia variants.
     mod fd_tangent;
-    /// The frame solve (2.6): convergence from warm and cold starts, errors, explicit frames.
+    /// The frame solve (4.4): convergence from warm and cold starts, errors, explicit frames.
     mod frame;
     /// Geometric stiffening (the cubic strain energy U_3 of the G_k): gradient, tangents
     /// against central differences, rigid-motion invariance, errors; G = 0 is bit-identical to

@@ -1,4 +1,4 @@
-//! The linear references of `benchmarks.md` A: beam frequencies (A1), cantilever statics
+//! The linear references of the validation guide (`docs/validation.md`) A: beam frequencies (A1), cantilever statics
 //! (A2), Craig-Bampton convergence (A3) and NAFEMS FV32 (A4). Every model lies along a
 //! skewed axis (or in a general plane) so that no global axis is special.
 

@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 
 type Result<T> = std::result::Result<T, Box<dyn Error>>;
 
-/// Mattiasson (1981), benchmarks.md B1: a = PL^2/EI -> (w/L, u/L, tip rotation).
+/// Mattiasson (1981), validation problem B1: a = PL^2/EI -> (w/L, u/L, tip rotation).
 pub const ELASTICA: [(f64, [f64; 3]); 4] = [
     (1.0, [0.30172, 0.05643, 0.46135]),
     (2.0, [0.49346, 0.16064, 0.78175]),
@@ -144,7 +144,7 @@ pub fn b1_elastica(extent: Extent) -> Result<Vec<Block>> {
         Block::Heading("B. Geometrically nonlinear statics".into()),
         Block::Table(Table {
             title: format!("B1 elastica (Mattiasson 1981), N = {n_last} superelements"),
-            note: "Cantilever L = 1, square 10 mm (L/r = 346), EI = 1, tip dead force a = PL^2/EI; a chain of N superelements (2 Euler-Bernoulli elements each, static modes only, frame at the centre of mass), Newton with 4 load steps. The tip rotation is the angle of the tip's rotation vector. Tolerance 1e-3 relative (issue 8): the error falls as 1/N^2 (table below).".into(),
+            note: "Cantilever L = 1, square 10 mm (L/r = 346), EI = 1, tip dead force a = PL^2/EI; a chain of N superelements (2 Euler-Bernoulli elements each, static modes only, frame at the centre of mass), Newton with 4 load steps. The tip rotation is the angle of the tip's rotation vector. Tolerance 1e-3 relative: the error falls as 1/N^2 (table below).".into(),
             rows,
         }),
         Block::Grid(Grid {
@@ -243,7 +243,7 @@ pub fn b2_roll_up(extent: Extent) -> Result<Vec<Block>> {
     ])
 }
 
-/// Simo & Vu-Quoc (1986), benchmarks.md B3: load P -> tip position.
+/// Simo & Vu-Quoc (1986), validation problem B3: load P -> tip position.
 pub const BEND: [(f64, [f64; 3]); 3] = [
     (300.0, [58.84, 22.33, 40.08]),
     (450.0, [52.32, 18.62, 48.39]),
@@ -293,7 +293,7 @@ pub fn b3_bend(extent: Extent) -> Result<Vec<Block>> {
             sci(coordinate_errors[2])
         ));
         grid_rows.push(cells);
-        // 1 % (issue 8) of the tip's distance from the clamp: published solutions scatter by
+        // 1 % of the tip's distance from the clamp: published solutions scatter by
         // 0.5 %. Per coordinate, y (the smallest) differs from Simo & Vu-Quoc by up to 1.5 %
         // while N = 8 and 16 agree within 0.2 %: see the grid and the report.
         let distance = reference.iter().map(|c| c * c).sum::<f64>().sqrt();

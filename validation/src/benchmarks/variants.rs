@@ -1,6 +1,6 @@
-//! The seed's comparison: the three frame choices (centre of mass [E17], interface node
+//! The AIC-FFR paper's comparison: the three frame choices (centre of mass [E17], interface node
 //! (Cardona & Géradin 1991), auxiliary node (Cardona 2000)) times the two inertia variants
-//! (exact (4.3), lumped (4.4)) on the elastica, the spin-up beam and the slider-crank, with
+//! (exact (6.4), lumped (6.6)) on the elastica, the spin-up beam and the slider-crank, with
 //! the accuracy against the reference and the cost per step; and the slider-crank rod from
 //! beam elements against hex20 and tet10 meshes of the same rod.
 
@@ -252,7 +252,7 @@ fn beam_vs_solid(revolutions: f64, extent: Extent) -> Result<(Grid, Figure)> {
 /// The comparison, as report blocks.
 pub fn variants(extent: Extent) -> Result<Vec<Block>> {
     let mut blocks = vec![Block::Heading(
-        "The formulation's variants (the seed's comparison)".into(),
+        "The formulation's variants (the AIC-FFR paper's comparison)".into(),
     )];
     blocks.push(Block::Grid(elastica_variants(match extent {
         Extent::Quick => 4,

@@ -177,9 +177,26 @@ fn inspect_shows_a_reduced_body() {
         "tip",
         "Tx",
         "excitation up to 2.0000e1 Hz",
+        "physical checks: passed",
     ] {
         assert!(out.stdout.contains(text), "missing '{text}' in\n{}", out.stdout);
     }
+    // A copy with a negative modal stiffness and valid checksums: inspect names the problem,
+    // a study refuses the file.
+    let mut body = reduction::file::read(&dir.join("bodies/beam.rbody")).unwrap();
+    let i = 12 + 12 * body.K_CB.nrows;
+    body.K_CB.data[i] = -body.K_CB.data[i];
+    reduction::file::write(&body, &dir.join("bodies/bad.rbody")).unwrap();
+    let out = flexmbs(&dir, &["inspect", "bodies/bad.rbody"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    for text in [
+        "physical checks: FAILED",
+        "K_CB is indefinite",
+        "contradicts K_CB and M_CB",
+    ] {
+        assert!(out.stdout.contains(text), "missing '{text}' in\n{}", out.stdout);
+    }
+    assert!(reduction::file::read(&dir.join("bodies/bad.rbody")).is_err());
     let out = flexmbs(&dir, &["inspect", "cantilever.toml"]);
     assert_eq!(out.code, 2);
     assert!(out.stderr.contains("not a reduced-body file"), "{}", out.stderr);

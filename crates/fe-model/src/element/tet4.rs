@@ -1,5 +1,5 @@
 //! 4-node linear tetrahedron (constant strain). Kept for contrast only: it locks in bending
-//! (brief §2), which `tests/unit/solid.rs` states as a test.
+//! (theory guide §2), which `tests/unit/solid.rs` states as a test.
 //!
 //! # Node ordering (gmsh's, used as ours)
 //!

@@ -1,4 +1,4 @@
-//! `Beam2` element-level tests (tier 1 of style R14), plus its one-element analytic checks and
+//! `Beam2` element-level tests (tier 1: the element alone), plus its one-element analytic checks and
 //! the shape constructors of `BeamSection`.
 //!
 //! Covered: symmetry; the six rigid motions as the exact null space of $\mathbf K_e$; mass

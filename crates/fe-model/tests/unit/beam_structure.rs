@@ -1,4 +1,4 @@
-//! Structure level, against analytic solutions (style R14): `benchmarks.md` A1 and A2 on
+//! Structure level, against analytic solutions: validation problem A1 and A2 on
 //! beams along a skewed axis, so that no global axis is special.
 
 use super::common::{along, skewed_axes, skewed_beam};
@@ -285,4 +285,29 @@ fn timoshenko_tip_deflection_tends_to_euler_bernoulli_for_slender_beams() {
             "shear share should fall as 1/L^2, gaps {gaps:?}"
         );
     }
+}
+
+/// A free body's six rigid-body modes are reported at 0 Hz and flagged, never as negative
+/// frequencies (their computed omega^2 is round-off of either sign); the elastic ones are
+/// untouched.
+#[test]
+fn rigid_body_modes_are_zero_not_negative() {
+    let (model, _, _) = skewed_beam(1.0, 0.003, 0.002, 8, BeamTheory::EulerBernoulli, MassKind::Consistent);
+    let modes = modal_dense(&model, 10).unwrap();
+    let rigid = modes.rigid_body_modes();
+    let f = modes.frequencies_hz();
+    assert_eq!(rigid.iter().filter(|r| **r).count(), 6, "{:?}", modes.omega);
+    for k in 0..6 {
+        assert!(
+            rigid[k] && f[k] == 0.0,
+            "mode {k}: {} Hz (omega {})",
+            f[k],
+            modes.omega[k]
+        );
+    }
+    for k in 6..10 {
+        assert!(!rigid[k] && f[k] > 0.0, "mode {k}: {} Hz", f[k]);
+        assert_eq!(f[k], modes.omega[k] / (2.0 * std::f64::consts::PI));
+    }
+    assert!(f.iter().all(|x| *x >= 0.0), "{f:?}");
 }

@@ -1,5 +1,5 @@
 //! Solid elements (tet4, tet10, hex8, hex20, wedge6), box meshes and solid models, in the
-//! three tiers of style R14:
+//! three tiers:
 //! - element level: partition of unity, $N_i(\boldsymbol\xi_j) = \delta_{ij}$, derivatives
 //!   against central differences, symmetry, exactly six rigid modes on a distorted element,
 //!   $\mathbf K_e$ against an independent $\mathbf B^T \mathbf D \mathbf B$, mass sums to
@@ -453,7 +453,7 @@ fn inverted_or_collapsed_element_is_reported_by_index() {
 /// Moves every interior corner node of a box mesh by a deterministic offset of up to
 /// `fraction` of the cell size, then puts edge nodes back at the midpoints of their corners
 /// (straight edges, so that the isoparametric map stays one the rules integrate well).
-fn distort_interior(mesh: &mut Mesh, fraction: f64, h: f64) {
+pub fn distort_interior(mesh: &mut Mesh, fraction: f64, h: f64) {
     let boundary: std::collections::BTreeSet<NodeId> = mesh.node_sets.values().flatten().copied().collect();
     let mut corner = vec![false; mesh.nodes.len()];
     for cell in &mesh.cells {
@@ -737,7 +737,7 @@ fn cantilever_tip_deflection_hex20_and_tet10_within_one_percent_of_timoshenko() 
         // Discretisation: quadratic elements reproduce the cubic bending field nearly exactly;
         // what remains is the clamp (which also stops the shear warping the beam theory lets
         // free, 0.6 % of the deflection here) and the end load's distribution. 1 % is the
-        // brief's bound; measured: hex20 -0.03 %, tet10 -0.07 %.
+        // required accuracy; measured: hex20 -0.03 %, tet10 -0.07 %.
         assert!(
             (ratio - 1.0).abs() < 0.01,
             "{kind:?}: tip deflection / Timoshenko = {ratio:.5}"
@@ -801,7 +801,7 @@ fn cantilever_bending_frequencies_hex20_and_tet10_within_one_percent_of_timoshen
         for (i, (ours, beam)) in f.iter().zip(&reference).enumerate() {
             // Discretisation and 3D effects (clamp, section warping), as for the deflection;
             // the second bending mode (L/h = 1.8 per half wave) is where they show most.
-            // 1 % is the brief's bound; measured: hex20 +0.03 % and +0.2 %, tet10 up to +0.5 %.
+            // 1 % is the required accuracy; measured: hex20 +0.03 % and +0.2 %, tet10 up to +0.5 %.
             assert!(
                 (ours / beam - 1.0).abs() < 0.01,
                 "{kind:?} mode {}: {ours:.4} Hz vs beam {beam:.4} Hz",

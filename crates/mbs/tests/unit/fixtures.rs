@@ -129,7 +129,7 @@ pub fn pendulum(m: f64, d: f64, I_G: f64) -> (Model, mbs::JointId) {
     (model, j)
 }
 
-/// The planar flexible slider-crank of benchmarks.md C2: rigid crank 0.15 m driven at
+/// The planar flexible slider-crank of validation problem C2: rigid crank 0.15 m driven at
 /// `speed` rad/s (constant), steel rod 0.30 m, d = 6 mm, as `n` beam superelements with
 /// `modes` fixed-interface modes each; slider of half the rod's mass on the x axis; pinned
 /// joints about z; no gravity. Starts at the dead centre with the rigid-body velocities
@@ -255,7 +255,7 @@ pub fn slider_crank(n: usize, modes: ModeSelection, speed: f64) -> (Model, Vec<N
     (m, rod_nodes, [ja, jb])
 }
 
-/// Mattiasson's elastica (benchmarks.md B1): a -> (w/L, u/L, tip rotation).
+/// Mattiasson's elastica (validation problem B1): a -> (w/L, u/L, tip rotation).
 pub const ELASTICA: [(f64, [f64; 3]); 7] = [
     (1.0, [0.30172, 0.05643, 0.46135]),
     (2.0, [0.49346, 0.16064, 0.78175]),
@@ -296,11 +296,17 @@ pub fn elastica_tip(n: usize, load: f64, moment: bool) -> ([f64; 3], Vec<mbs::Lo
     try_elastica_tip(n, load, moment).unwrap()
 }
 
-/// The spin-up beam of benchmarks.md C1 (Simo & Vu-Quoc 1986): L = 10 m, EA = 2.8e7 N,
+/// The spin-up beam of validation problem C1 (Simo & Vu-Quoc 1986): L = 10 m, EA = 2.8e7 N,
 /// EI = 1.4e4 N m^2 (both bending planes), rho A = 1.2 kg/m, clamped to a hub on the z axis
 /// whose angle follows the spin-up profile to `omega` in 15 s; `n` superelements with `modes`
 /// fixed-interface modes each. Sensor "tip": the tip in the hub's axes.
 pub fn spin_up(n: usize, modes: ModeSelection, omega: f64) -> Model {
+    spin_up_with(n, modes, omega, false)
+}
+
+/// [`spin_up`], with the reduced geometric stiffness of each segment when `stiffening`
+/// (`CbSettings::geometric_stiffening`).
+pub fn spin_up_with(n: usize, modes: ModeSelection, omega: f64, stiffening: bool) -> Model {
     let (L, E, A, I, rho) = (10.0, 7e10, 4e-4, 2e-7, 3000.0);
     let mut fe = FeModel::default();
     let material = fe.add_material(IsotropicMaterial::new("c1", E, 0.3, rho).unwrap());
@@ -324,6 +330,7 @@ pub fn spin_up(n: usize, modes: ModeSelection, omega: f64) -> Model {
     .unwrap();
     let mut settings = CbSettings::new(modes);
     settings.keep_mesh_shapes = false;
+    settings.geometric_stiffening = stiffening;
     let body = reduce(&fe, "seg", &[("a".into(), nodes[0]), ("b".into(), nodes[4])], &settings).unwrap();
     let mut m = Model::new("spin-up");
     let beam: Vec<NodeId> = (0..=n)

@@ -207,3 +207,23 @@ fn adaptive_step_meets_the_tolerance_and_shrinks_where_the_motion_is_fast() {
     }
     assert!(errors[1].1 > 3 * errors[0].1, "{errors:?}");
 }
+
+/// Output times are the step grid, not a sum of rounded steps: 6000 steps of 0.005 s end at
+/// 30 exactly (adding 0.005 6000 times gives 29.999999999998316), and every time is the
+/// decimal k h.
+#[test]
+fn output_times_do_not_drift() {
+    let sys = released(0.3);
+    let run = solve_dynamic(&sys, sys.initial_state(), &DynamicSettings::new(0.005, 30.0, 0.9)).unwrap();
+    let times = &run.sensors.times;
+    assert_eq!(times.len(), 6001);
+    for (k, t) in times.iter().enumerate() {
+        let grid: f64 = format!("{:.3}", k as f64 * 0.005).parse().unwrap();
+        assert_eq!(*t, grid, "step {k}");
+    }
+    assert_eq!(*times.last().unwrap(), 30.0);
+    // A step without a short decimal form is left as computed (no rounding to a coarser grid).
+    let h = 1.0 / 3.0;
+    assert_eq!(mbs::dynamic_solver::step_end_time(0.0, h), h);
+    assert_eq!(mbs::dynamic_solver::step_end_time(h, h), h + h);
+}

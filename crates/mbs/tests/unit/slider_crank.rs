@@ -1,4 +1,4 @@
-//! The planar flexible slider-crank of benchmarks.md C2.
+//! The planar flexible slider-crank of validation problem C2.
 
 use crate::fixtures::slider_crank;
 use mbs::{solve_dynamic, DynamicSettings, System};

@@ -12,7 +12,7 @@ use superelement::{FrameChoice, MassVariant};
 /// frames, with modes) joined through a rigid body and a revolute joint, a spherical joint to
 /// another rigid body, a spring closing back to the pinned root, a point mass, dead and
 /// follower loads, gravity. Soft (E = 2 MPa) so that inertia and elastic terms are of one order.
-fn mixed() -> Model {
+pub fn mixed() -> Model {
     let mut m = Model::new("mixed");
     let p = [
         Vector3::new(0.0, 0.0, 0.0),
@@ -101,7 +101,7 @@ fn mixed() -> Model {
 
 /// Checks M = dF/dqdd, C = dF/dqd, K = dF/dq at `s` (central differences; rotations perturbed
 /// through exp). `tol`: see the callers.
-fn check_tangents(sys: &System, s: &State, h: f64, tol: f64) {
+pub fn check_tangents(sys: &System, s: &State, h: f64, tol: f64) {
     let mut s0 = s.clone();
     let mats = sys.matrices(&mut s0, 1.0).unwrap();
     let n = sys.n_dof();

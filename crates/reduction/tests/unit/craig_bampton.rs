@@ -62,7 +62,7 @@ fn dense_eigenvalues(K: &DMatrix<f64>, M: &DMatrix<f64>) -> Vec<f64> {
     e
 }
 
-/// Rigid-body modes of the interface set (3.6), undeformed, about point `c`.
+/// Rigid-body modes of the interface set (5.2), undeformed, about point `c`.
 fn phi_rig(body: &ReducedBody, c: Vector3<f64>) -> DMatrix<f64> {
     let n = body.n_coordinates();
     let mut P = DMatrix::zeros(n, 6);
@@ -220,7 +220,7 @@ fn mass_data_and_rigid_fit_at_the_centre_of_mass() {
     let across = m * L * L / 12.0 + rho * I * L;
     let expected = nalgebra::Matrix3::identity() * across + axis * axis.transpose() * (rho * 2.0 * I * L - across);
     assert!((J - expected).amax() < 1e-10 * across, "inertia {J} vs {expected}");
-    // (brief §4) Phi_com Phi_rig = identity for the undeformed body: the fit returns a
+    // (theory guide §4) Phi_com Phi_rig = identity for the undeformed body: the fit returns a
     // rigid motion unchanged. Round-off of the 6x6 inverse.
     let P = dense(&body.Phi_com) * phi_rig(&body, c);
     assert!((P - DMatrix::identity(6, 6)).amax() < 1e-10, "Phi_com Phi_rig != I");
@@ -271,7 +271,7 @@ fn bad_interfaces_give_named_errors() {
     let _ = Mat::<f64>::zeros(1, 1);
 }
 
-/// Issue 4 regression: a beam of two elements has one internal node, whose block holds only
+/// Regression: a beam of two elements has one internal node, whose block holds only
 /// couplings that vanish in exact arithmetic on a skewed axis; the symmetry check judged
 /// their round-off against themselves and refused the matrix.
 #[test]

@@ -1,4 +1,4 @@
-// NAFEMS FV32 (benchmarks.md A4): the cantilevered tapered membrane, in-plane modes of a
+// NAFEMS FV32 (validation problem A4): the cantilevered tapered membrane, in-plane modes of a
 // hex20 solid mesh through the sparse path.
 
 use fe_model::{box_mesh, solid_model, CellKind, DofMask, IsotropicMaterial, MassKind, NodeId};

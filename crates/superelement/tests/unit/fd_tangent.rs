@@ -1,4 +1,4 @@
-//! Every tangent against central differences of its residual (style R13: one helper,
+//! Every tangent against central differences of its residual (one helper,
 //! `superelement::testing::check_jacobian`, reporting the worst entry).
 //!
 //! States are deformed (2% of the body size, 0.02 rad, modal amplitudes alike), rotated by
@@ -210,7 +210,7 @@ fn damping_tangents_match_fd() {
 }
 
 /// d(local coordinates)/d(absolute coordinates) at a fixed frame: Lambda Rbar^T, and
-/// d(local coordinates)/d(frame) = -Lambda Phi_rig (the exact (3.7)).
+/// d(local coordinates)/d(frame) = -Lambda Phi_rig (the exact (5.3)).
 #[test]
 fn local_coordinates_variation() {
     let fx = l_frame();
@@ -284,7 +284,7 @@ fn local_coordinates_variation() {
 
 /// The frame Jacobian: d(Phi_j q_jj)/d(frame) = -Phi_j Lambda Phi_rig, and the frame's and
 /// the local coordinates' response to the absolute coordinates (frame re-solved):
-/// Z_j Lambda Rbar^T and T_j Lambda Rbar^T (3.9)-(3.10).
+/// Z_j Lambda Rbar^T and T_j Lambda Rbar^T (5.4)-(5.5).
 #[test]
 fn frame_jacobian() {
     for fx in all_fixtures() {

@@ -1,12 +1,12 @@
-//! The frame solve (2.6).
+//! The frame solve (4.4).
 
 use super::common::*;
 use nalgebra::Vector3;
 use superelement::testing::{perturb_state, test_state, Rng, StateSpec};
 use superelement::{Damping, Frame, FrameChoice, FrameSettings, MassVariant, Superelement, SuperelementError};
 
-/// Warm-started from the previous step's frame, Newton needs few iterations (seed §4), and
-/// the converged frame satisfies (2.6) to the tolerance.
+/// Warm-started from the previous step's frame, Newton needs few iterations ([AIC-FFR] §4), and
+/// the converged frame satisfies (4.4) to the tolerance.
 #[test]
 fn warm_start_converges_in_a_few_iterations() {
     for fx in [l_frame(), beam_dynamic()] {
@@ -71,7 +71,14 @@ fn non_convergence_is_reported() {
         ) => {
             assert!(residual > tolerance);
             let msg = e.to_string();
-            assert!(msg.contains("did not converge in 1 iterations"), "{msg}");
+            // The message speaks of what the user can change, not of equation numbers.
+            assert!(msg.contains("floating frame could not be found"), "{msg}");
+            assert!(msg.contains("no convergence in 1 iterations"), "{msg}");
+            assert!(msg.contains("smaller") && msg.contains("split the member"), "{msg}");
+            assert!(
+                !msg.contains("(4.4)") && !msg.contains("(2.6)") && !msg.contains("Phi"),
+                "{msg}"
+            );
         }
         other => panic!("expected FrameNotConverged, got {other:?}"),
     }
@@ -150,7 +157,7 @@ fn bad_frame_choices_and_states_are_refused() {
     ));
 }
 
-/// The frame velocity (3.9) and the elastic velocity (3.10) of the state's velocities are the
+/// The frame velocity (5.4) and the elastic velocity (5.5) of the state's velocities are the
 /// time derivatives of the solved frame and of q_jj along the motion (central differences in
 /// time, step 1e-6 s: truncation ~1e-12 relative; 1e-7 leaves room for the round-off of
 /// differencing positions of size ~1).
@@ -203,4 +210,17 @@ fn frame_and_elastic_velocities_are_time_derivatives() {
             }
         }
     }
+}
+
+/// A frame that the interfaces cannot fix is reported in the user's terms: what is wrong with
+/// the body and what to change, without symbols or equation numbers.
+#[test]
+fn singular_frame_message_says_what_to_do() {
+    let msg = SuperelementError::SingularFrame { rcond: 1e-17 }.to_string();
+    assert!(msg.contains("floating frame is undetermined"), "{msg}");
+    assert!(
+        msg.contains("split the member") && msg.contains("loads and units"),
+        "{msg}"
+    );
+    assert!(!msg.contains("Phi") && !msg.contains("(2.6)"), "{msg}");
 }

@@ -49,3 +49,71 @@ fn rigid_placement_moves_the_mesh_rigidly() {
         assert!(mesh.elastic[i].norm() < 1e-13);
     }
 }
+
+/// The hex8 block with stress shapes.
+fn block_with_stress() -> (fe_model::FeModel, reduction::ReducedBody) {
+    let mut settings = reduction::CbSettings::new(reduction::ModeSelection::Count(3));
+    settings.stress_shapes = true;
+    let (model, _, body) = superelement::testing::fixtures::solid_block_with(settings);
+    (model, body)
+}
+
+/// A rigid placement adds no stress, for every frame choice.
+#[test]
+fn rigid_placement_gives_no_stress() {
+    let (_, body) = block_with_stress();
+    for frame in frame_choices(&body) {
+        let se = superelement(&body, frame, MassVariant::Exact);
+        let Q = UnitQuaternion::from_axis_angle(&Unit::new_normalize(Vector3::new(0.3, 1.0, -0.5)), 1.9);
+        let state = se.undeformed_state(Frame::new(Vector3::new(1.0, -2.0, 3.0) + Q * se.frame_origin(), Q));
+        let kin = se.kinematics(&state).unwrap();
+        let stress = se.recover_stress(&kin.q_jj).expect("stress shapes kept");
+        let largest = stress
+            .nodal
+            .iter()
+            .flatten()
+            .flatten()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        // Round-off of the local coordinates (~1e-16 m) times E / size (~1e11 Pa/m).
+        assert!(largest < 1e-3, "{frame}: rigid placement gives {largest:e} Pa");
+    }
+}
+
+/// In a deformed, moving state the recovered stress is the FE stress of the elastic field
+/// $\mathbf S\mathbf q^{jj}$ computed element by element (`fe_model::stress`), not through the
+/// stored shapes.
+#[test]
+fn recovered_stress_is_the_fe_stress_of_the_elastic_field() {
+    let (model, body) = block_with_stress();
+    for frame in frame_choices(&body) {
+        let se = superelement(&body, frame, MassVariant::Exact);
+        let (state, _) = test_state(
+            &se,
+            &StateSpec {
+                deformation: 0.01,
+                ..StateSpec::moving(80.0, 7)
+            },
+        );
+        let kin = se.kinematics(&state).unwrap();
+        let stress = se.recover_stress(&kin.q_jj).unwrap();
+        let mesh = se.recover_mesh(&kin).unwrap();
+        let u: Vec<[f64; 6]> = mesh.elastic.iter().map(|e| [e.x, e.y, e.z, 0.0, 0.0, 0.0]).collect();
+        let direct = fe_model::stress::nodal_stresses(&model, &u).unwrap();
+        let scale = direct.iter().flatten().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 1e3, "{frame}: the state must strain the block ({scale:e} Pa)");
+        for (i, (a, b)) in stress.nodal.iter().zip(&direct).enumerate() {
+            // The interface nodes of the spiders carry no solid element, hence no stress.
+            assert_eq!(a.is_some(), b.is_some(), "{frame}: node {i}");
+            let (Some(a), Some(b)) = (a, b) else { continue };
+            for c in 0..6 {
+                // Two summation orders of the same linear map: round-off of the sums.
+                assert!(
+                    (a[c] - b[c]).abs() < 1e-9 * scale,
+                    "{frame}: node {i} component {c}: {} vs {}",
+                    a[c],
+                    b[c]
+                );
+            }
+        }
+    }
+}

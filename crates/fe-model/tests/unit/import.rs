@@ -1,0 +1,711 @@
+//! Abaqus and Nastran readers (`fe_model::mesh::abaqus`, `fe_model::mesh::nastran`).
+//!
+//! * The fixtures of `tests/data/import` (written by `make_fixtures.py` with meshio from the
+//!   gmsh fixtures) give the gmsh mesh's cells node for node, and the same frequencies of the
+//!   clamped solid with a tip RBE2 spider as the gmsh file, to 1e-10; node sets, materials,
+//!   supports and spiders come through.
+//! * Inline cases: continuation lines, GENERATE, case, *BOUNDARY, beams; Nastran small, large
+//!   and free field, exponent shorthand, CORD2R, THRU, WTMASS, MAT1 from E and G, RBE3,
+//!   elements of the other handedness, cards listed once as ignored.
+//! * Each malformed input gives its located error (file, line, entity): twelve kinds per
+//!   format.
+//! * No panic on random bytes, on every prefix of every fixture, or on mutated fixtures.
+
+use fe_model::mesh::import::{ImportError, ImportedModel};
+use fe_model::mesh::{abaqus, gmsh, nastran};
+use fe_model::{
+    add_interface, modal_dense, solid_model_with_materials, CellKind, DofMask, FeModel, IsotropicMaterial, MassKind,
+    Mesh, NodeId, SpiderKind,
+};
+use nalgebra::Point3;
+use std::path::{Path, PathBuf};
+
+fn data_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
+}
+
+const MESHES: [&str; 5] = ["hex8", "hex20", "tet4", "tet10", "wedge6"];
+
+fn steel() -> IsotropicMaterial {
+    IsotropicMaterial::new("steel", 2.1e11, 0.3, 7850.0).unwrap()
+}
+
+/// The tip centre, where the fixtures' RBE2 puts its independent grid.
+fn tip_centre() -> Point3<f64> {
+    Point3::new(1.0, 0.1, 0.1)
+}
+
+/// The solid clamped at `clamp` with an RBE2 interface at the tip centre on `tip`.
+fn clamped_with_tip(mut model: FeModel, clamp: &[NodeId], tip: &[NodeId]) -> FeModel {
+    for &n in clamp {
+        model.add_support(n, DofMask::TRANSLATIONS);
+    }
+    add_interface(&mut model, "tip", tip, Some(tip_centre()), SpiderKind::Rbe2).unwrap();
+    model
+}
+
+fn frequencies(model: &FeModel) -> Vec<f64> {
+    modal_dense(model, 8).unwrap().omega
+}
+
+fn gmsh_model(name: &str) -> (Mesh, FeModel) {
+    let mesh = gmsh::read(&data_dir().join(format!("gmsh/{name}_41.msh"))).unwrap();
+    let model = solid_model_with_materials(mesh.clone(), &[("body", steel())], MassKind::Consistent).unwrap();
+    let (clamp, tip) = (mesh.node_sets["clamp"].clone(), mesh.node_sets["tip"].clone());
+    (mesh, clamped_with_tip(model, &clamp, &tip))
+}
+
+fn abaqus_fixture(name: &str) -> ImportedModel {
+    abaqus::read(&data_dir().join(format!("import/{name}.inp"))).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn nastran_fixture(file: &str) -> ImportedModel {
+    nastran::read(&data_dir().join(format!("import/{file}"))).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn abaqus_model(imported: &ImportedModel) -> FeModel {
+    let model = imported.to_fe_model(MassKind::Consistent, None).unwrap();
+    let (clamp, tip) = (
+        imported.mesh.node_sets["clamp"].clone(),
+        imported.mesh.node_sets["tip"].clone(),
+    );
+    clamped_with_tip(model, &clamp, &tip)
+}
+
+fn nastran_model(imported: &ImportedModel) -> FeModel {
+    let mut model = imported.to_fe_model(MassKind::Consistent, None).unwrap();
+    for s in &imported.supports {
+        for &n in &s.nodes {
+            model.add_support(n, s.dofs);
+        }
+    }
+    for s in &imported.spiders {
+        add_interface(&mut model, &s.name, &s.surface, Some(s.position), s.kind).unwrap();
+    }
+    model
+}
+
+/// Largest relative difference of two spectra.
+fn spectrum_difference(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).map(|(x, y)| ((x - y) / x).abs()).fold(0.0, f64::max)
+}
+
+/// The volume cells of a mesh, as (kind, nodes).
+fn volume_cells(mesh: &Mesh) -> Vec<(CellKind, Vec<NodeId>)> {
+    mesh.cells
+        .iter()
+        .filter(|c| c.kind.dimension() == 3)
+        .map(|c| (c.kind, c.nodes.clone()))
+        .collect()
+}
+
+// ------------------------------------------------------------------------------------ fixtures
+
+// 1e-10: the models are the same but for coordinates that the Nastran large field rounds to 15
+// digits (tet4's 1/3), a relative change of 1e-15 in the geometry; the frequencies of the
+// gmsh and Abaqus files, which hold the same doubles, agree to round-off.
+const SAME_SPECTRUM: f64 = 1e-10;
+
+#[test]
+fn the_same_solid_gives_the_same_frequencies_from_gmsh_abaqus_and_nastran() {
+    for name in MESHES {
+        let (_, reference) = gmsh_model(name);
+        let f_gmsh = frequencies(&reference);
+        let f_abaqus = frequencies(&abaqus_model(&abaqus_fixture(name)));
+        let f_nastran = frequencies(&nastran_model(&nastran_fixture(&format!("{name}.bdf"))));
+        let d_abaqus = spectrum_difference(&f_gmsh, &f_abaqus);
+        let d_nastran = spectrum_difference(&f_gmsh, &f_nastran);
+        assert!(d_abaqus < SAME_SPECTRUM, "{name}: Abaqus differs by {d_abaqus:e}");
+        assert!(d_nastran < SAME_SPECTRUM, "{name}: Nastran differs by {d_nastran:e}");
+        assert!(f_gmsh[0] > 100.0, "{name}: a clamped steel bar, {f_gmsh:?}");
+    }
+    for (file, name) in [("hex8_small.bdf", "hex8"), ("tet10_free.bdf", "tet10")] {
+        let f_gmsh = frequencies(&gmsh_model(name).1);
+        let f = frequencies(&nastran_model(&nastran_fixture(file)));
+        let d = spectrum_difference(&f_gmsh, &f);
+        assert!(d < SAME_SPECTRUM, "{file}: differs by {d:e}");
+    }
+}
+
+#[test]
+fn fixtures_give_gmsh_cells_node_for_node_and_their_sets_and_materials() {
+    for name in MESHES {
+        let (mesh, _) = gmsh_model(name);
+        let a = abaqus_fixture(name);
+        let n = nastran_fixture(&format!("{name}.bdf"));
+        // meshio keeps node and cell order: the same cells in our ordering.
+        assert_eq!(volume_cells(&a.mesh), volume_cells(&mesh), "{name}: Abaqus cells");
+        assert_eq!(volume_cells(&n.mesh), volume_cells(&mesh), "{name}: Nastran cells");
+        assert_eq!(a.mesh.nodes[..mesh.nodes.len()], mesh.nodes[..], "{name}: Abaqus nodes");
+        // Node sets: Abaqus by name; Nastran as the SPC1 and RBE2 sets.
+        assert_eq!(a.mesh.node_sets["clamp"], mesh.node_sets["clamp"], "{name}");
+        assert_eq!(a.mesh.node_sets["tip"], mesh.node_sets["tip"], "{name}");
+        assert_eq!(n.mesh.node_sets["SPC1_1"], mesh.node_sets["clamp"], "{name}");
+        assert_eq!(n.mesh.node_sets["RBE2_2"], mesh.node_sets["tip"], "{name}");
+        assert_eq!(n.supports.len(), 1);
+        assert_eq!(n.supports[0].dofs, DofMask::TRANSLATIONS);
+        assert_eq!(n.spiders.len(), 1);
+        assert_eq!(n.spiders[0].kind, SpiderKind::Rbe2);
+        assert_eq!(n.spiders[0].position, tip_centre());
+        // Materials and sections.
+        assert_eq!(a.materials, vec![steel()]);
+        assert_eq!(a.solid_sections.len(), 1);
+        assert_eq!(a.solid_sections[0].cell_set, "body");
+        let m = n.material("MAT1_1").unwrap();
+        assert_eq!((m.E(), m.nu(), m.rho()), (2.1e11, 0.3, 7850.0));
+        assert_eq!(n.solid_sections[0].cell_set, "PSOLID_1");
+        // Skipped: meshio's *HEADING; the EIGRL card.
+        assert_eq!(a.ignored.len(), 1, "{name}: {:?}", a.ignored);
+        assert_eq!(a.ignored[0].name, "*HEADING");
+        assert_eq!(n.ignored.len(), 1, "{name}: {:?}", n.ignored);
+        assert_eq!((n.ignored[0].name.as_str(), n.ignored[0].count), ("EIGRL", 1));
+        assert!(n.notes.is_empty(), "{:?}", n.notes);
+    }
+}
+
+// ------------------------------------------------------------------------------------ inline Abaqus
+
+fn abaqus_inline(text: &str) -> Result<ImportedModel, ImportError> {
+    abaqus::parse(text, Path::new("inline.inp"))
+}
+
+const ABAQUS_HEX: &str = "*Node, nset=ALLN
+1, 0, 0, 0
+2, 1, 0, 0
+3, 1, 1, 0
+4, 0, 1, 0
+5, 0, 0, 1
+6, 1, 0, 1
+7, 1, 1, 1
+8, 0, 1, 1
+*element, type=c3d8, elset=Block
+11, 1, 2, 3, 4,
+5, 6, 7, 8
+*nset, nset=Bottom, generate
+1, 4, 1
+*Nset, nset=Top
+5, 6
+7, 8
+*Nset, nset=both
+bottom, TOP
+*Material, name=Alu
+*Elastic
+70e9, 0.33
+*Density
+2700.
+*Solid Section, elset=BLOCK, material=alu
+*Boundary
+bottom, ENCASTRE
+8, 1, 2
+*Step
+*Static
+*Boundary
+top, 3, 3, 0.001
+*End Step
+";
+
+#[test]
+fn abaqus_continuation_generate_case_and_boundaries() {
+    let m = abaqus_inline(ABAQUS_HEX).unwrap();
+    assert_eq!(m.mesh.cells.len(), 1);
+    assert_eq!(m.mesh.cells[0].kind, CellKind::Hex8);
+    assert_eq!(m.mesh.cells[0].tag, 11);
+    let ids = |v: &[u32]| v.iter().map(|&i| NodeId(i)).collect::<Vec<_>>();
+    assert_eq!(m.mesh.node_sets["Bottom"], ids(&[0, 1, 2, 3]));
+    assert_eq!(m.mesh.node_sets["both"], ids(&[0, 1, 2, 3, 4, 5, 6, 7]));
+    assert_eq!(
+        m.mesh.node_sets["Block"],
+        ids(&[0, 1, 2, 3, 4, 5, 6, 7]),
+        "an element set's nodes"
+    );
+    assert_eq!(m.solid_sections[0].cell_set, "Block");
+    assert_eq!(m.solid_sections[0].material, "Alu");
+    assert_eq!(m.supports.len(), 2);
+    assert_eq!(m.supports[0].name, "Bottom");
+    assert_eq!(m.supports[0].dofs, DofMask::ALL);
+    assert_eq!(m.supports[1].nodes, ids(&[7]));
+    assert_eq!(m.supports[1].dofs, DofMask([true, true, false, false, false, false]));
+    // The step (with its non-zero boundary condition) is skipped and listed.
+    assert_eq!(m.ignored.len(), 1);
+    assert!(m.ignored[0].name.starts_with("*STEP"));
+    let model = m.to_fe_model(MassKind::Consistent, None).unwrap();
+    assert_eq!(model.elements.len(), 1);
+    // The study can replace the file's material.
+    let other = IsotropicMaterial::new("steel", 2.1e11, 0.3, 7850.0).unwrap();
+    let model = m
+        .to_fe_model(MassKind::Consistent, Some(&[("Block", other.clone())]))
+        .unwrap();
+    assert_eq!(model.materials, vec![other]);
+}
+
+#[test]
+fn abaqus_beams_get_their_section_and_orientation() {
+    let text = "*NODE
+1, 0., 0., 0.
+2, 0.5, 0., 0.
+3, 1., 0., 0.
+*ELEMENT, TYPE=B31, ELSET=beam
+1, 1, 2
+2, 2, 3
+*MATERIAL, NAME=steel
+*ELASTIC
+2.1e11, 0.3
+*DENSITY
+7850.
+*BEAM SECTION, ELSET=beam, MATERIAL=steel, SECTION=RECT
+0.02, 0.01
+0., 1., 0.
+";
+    let m = abaqus_inline(text).unwrap();
+    let model = m.to_fe_model(MassKind::Consistent, None).unwrap();
+    assert_eq!(model.elements.len(), 2);
+    let s = &model.sections[0];
+    // RECT a, b: a along n1 (local y), b along n2 (local z): Iy = a b^3 / 12.
+    assert!((s.A() - 2e-4).abs() < 1e-18);
+    assert!((s.Iy() - 0.02 * 1e-6 / 12.0).abs() < 1e-20);
+    assert!((s.Iz() - 0.01 * 8e-6 / 12.0).abs() < 1e-20);
+    match &model.elements[0] {
+        fe_model::Element::Beam2(b) => assert_eq!(b.orientation, nalgebra::Vector3::new(0.0, 1.0, 0.0)),
+        other => panic!("{other:?}"),
+    }
+}
+
+// ------------------------------------------------------------------------------------ inline Nastran
+
+fn nastran_inline(text: &str) -> Result<ImportedModel, ImportError> {
+    nastran::parse(text, Path::new("inline.bdf"))
+}
+
+#[test]
+fn nastran_field_formats_shorthand_coordinate_systems_and_lists() {
+    let text = "SOL 103
+CEND
+BEGIN BULK
+$ a tet in a rotated, shifted system: CORD2R 5 with z along basic x
+CORD2R  5               1.      2.      3.      2.      2.      3.
++       1.      2.      4.
+GRID    1       5       0.      0.      0.
+GRID*   2               5               1.0+0           0.
+*       0.
+GRID,3,5,0.,2.-0,0.
+GRID    4       5       0.      0.      3.
+CTETRA  7       1       1       3       2       4
+PSOLID,1,3
+MAT1,3,2.1+11,8.077+10,,7.85-9
+PARAM   WTMASS  1000.
+PARAM   POST    -1
+SPC1    9       123456  1       THRU    3
+FORCE   1       4               1.      1.      0.      0.
+FORCE   1       4               1.      1.      0.      0.
+ENDDATA
+GRID    99      BAD
+";
+    let m = nastran_inline(text).unwrap();
+    // z = B - A = basic x; y = z x (C - A) = basic x x basic z = -basic y; x = y x z = basic z.
+    let x = &m.mesh.nodes;
+    let close = |a: Point3<f64>, b: [f64; 3]| (a - Point3::from(b)).norm() < 1e-12;
+    assert!(close(x[0], [1.0, 2.0, 3.0]), "{:?}", x[0]);
+    assert!(close(x[1], [1.0, 2.0, 4.0]), "local x is basic z: {:?}", x[1]);
+    assert!(close(x[2], [1.0, 0.0, 3.0]), "local y is minus basic y: {:?}", x[2]);
+    assert!(close(x[3], [4.0, 2.0, 3.0]), "local z is basic x: {:?}", x[3]);
+    // The tet (1, 3, 2, 4) has the other handedness and was renumbered.
+    assert_eq!(m.notes.len(), 1, "{:?}", m.notes);
+    let model = m.to_fe_model(MassKind::Consistent, None).unwrap();
+    assert_eq!(model.elements.len(), 1);
+    let mat = m.material("MAT1_3").unwrap();
+    assert!((mat.nu() - (2.1e11 / (2.0 * 8.077e10) - 1.0)).abs() < 1e-15);
+    assert!((mat.rho() - 7.85e-6).abs() < 1e-20, "WTMASS scales RHO: {}", mat.rho());
+    assert_eq!(m.supports[0].nodes, vec![NodeId(0), NodeId(1), NodeId(2)]);
+    assert_eq!(m.supports[0].dofs, DofMask::ALL);
+    let names: Vec<(&str, usize)> = m.ignored.iter().map(|i| (i.name.as_str(), i.count)).collect();
+    assert_eq!(names, vec![("PARAM,POST", 1), ("FORCE", 2)]);
+    assert_eq!(m.ignored[1].first_line, 18);
+}
+
+#[test]
+fn nastran_rbe3_is_an_interpolation_spider_with_a_note() {
+    let mut text = String::from("BEGIN BULK\n");
+    for (i, (y, z)) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].iter().enumerate() {
+        text += &format!("GRID,{},,0.,{y:?},{z:?}\n", i + 1);
+    }
+    text += "GRID,10,,0.,.5,.5\nRBE3,5,,10,123456,1.0,123,1,2,\n,3,4,UM,1,123\n";
+    let m = nastran_inline(&text).unwrap();
+    assert_eq!(m.spiders.len(), 1);
+    let s = &m.spiders[0];
+    assert_eq!((s.name.as_str(), s.kind), ("RBE3_5", SpiderKind::Rbe3));
+    assert_eq!(s.surface, vec![NodeId(0), NodeId(1), NodeId(2), NodeId(3)]);
+    assert_eq!(s.position, Point3::new(0.0, 0.5, 0.5));
+    assert_eq!(m.notes.len(), 2, "UM and the weights: {:?}", m.notes);
+}
+
+// ------------------------------------------------------------------------------------ errors
+
+/// Parses `text`, expects an error at `line` of `file` whose message has every fragment.
+fn expect(result: Result<ImportedModel, ImportError>, file: &str, line: usize, fragments: &[&str]) -> ImportError {
+    let error = match result {
+        Ok(_) => panic!("expected an error with {fragments:?}"),
+        Err(e) => e,
+    };
+    let message = error.to_string();
+    assert!(message.starts_with(&format!("{file}:{line}:")), "{message}");
+    for f in fragments {
+        assert!(message.contains(f), "'{f}' missing from: {message}");
+    }
+    error
+}
+
+const NODES_4: &str = "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n";
+
+#[test]
+fn abaqus_errors_name_file_line_and_entity() {
+    let with = |rest: &str| abaqus_inline(&format!("{NODES_4}{rest}"));
+    // 1. A coordinate that is not a number.
+    let e = expect(
+        abaqus_inline("*NODE\n1, 0, x, 0\n"),
+        "inline.inp",
+        2,
+        &["*NODE 1", "coordinate", "'x'"],
+    );
+    assert!(matches!(e, ImportError::Malformed { .. }));
+    // 2. An element type we do not read.
+    let e = expect(
+        with("*ELEMENT, TYPE=S4R\n1, 1, 2, 3, 4\n"),
+        "inline.inp",
+        6,
+        &["S4R", "C3D4"],
+    );
+    assert!(matches!(e, ImportError::Unsupported { .. }));
+    // 3. An element with a node that does not exist.
+    let e = expect(
+        with("*ELEMENT, TYPE=C3D4\n7, 1, 2, 3, 9\n"),
+        "inline.inp",
+        7,
+        &["element 7", "node 9"],
+    );
+    assert!(matches!(e, ImportError::Undefined { .. }));
+    // 4. A node defined twice.
+    let e = expect(
+        with("*NODE\n2, 5, 5, 5\n"),
+        "inline.inp",
+        7,
+        &["node 2", "twice", "line 3"],
+    );
+    assert!(matches!(e, ImportError::Duplicate { .. }));
+    // 5. Too few nodes for the element type.
+    expect(
+        with("*ELEMENT, TYPE=C3D10\n1, 1, 2, 3, 4\n"),
+        "inline.inp",
+        7,
+        &["element 1", "10 node ids"],
+    );
+    // 6. *ELASTIC before any *MATERIAL.
+    expect(
+        with("*ELASTIC\n1e9, 0.3\n"),
+        "inline.inp",
+        6,
+        &["*ELASTIC", "*MATERIAL"],
+    );
+    // 7. A section naming a material that does not exist.
+    expect(
+        with("*ELEMENT, TYPE=C3D4, ELSET=e\n1, 1, 2, 3, 4\n*SOLID SECTION, ELSET=e, MATERIAL=steel\n"),
+        "inline.inp",
+        8,
+        &["material steel", "not defined"],
+    );
+    // 8. A section on an element set that does not exist.
+    expect(
+        with("*MATERIAL, NAME=m\n*ELASTIC\n1e9, 0.3\n*DENSITY\n1.\n*SOLID SECTION, ELSET=nope, MATERIAL=m\n"),
+        "inline.inp",
+        11,
+        &["element set nope"],
+    );
+    // 9. A node set made of a set that does not exist.
+    expect(with("*NSET, NSET=a\nb\n"), "inline.inp", 7, &["*NSET a", "node set b"]);
+    // 10. GENERATE that never reaches its end.
+    expect(
+        with("*NSET, NSET=a, GENERATE\n1, 4, 2\n"),
+        "inline.inp",
+        7,
+        &["*NSET a", "GENERATE"],
+    );
+    // 11. An *INCLUDE of a file that does not exist names that file.
+    expect_io(with("*INCLUDE, INPUT=missing.inc\n"), "missing.inc");
+    // 12. Parts and assemblies are refused with what to do.
+    expect(with("*PART, NAME=p\n"), "inline.inp", 6, &["*PART", "without them"]);
+    // 13. *ELEMENT without TYPE.
+    expect(
+        with("*ELEMENT\n1, 1, 2, 3, 4\n"),
+        "inline.inp",
+        6,
+        &["*ELEMENT", "TYPE="],
+    );
+    // 14. A material outside its physical range.
+    let e = expect(
+        with("*MATERIAL, NAME=m\n*ELASTIC\n1e9, 0.7\n*DENSITY\n1.\n"),
+        "inline.inp",
+        6,
+        &["*MATERIAL m", "Poisson"],
+    );
+    assert!(matches!(e, ImportError::Property { .. }));
+    // 15. A material without density.
+    expect(
+        with("*MATERIAL, NAME=m\n*ELASTIC\n1e9, 0.3\n"),
+        "inline.inp",
+        6,
+        &["*MATERIAL m", "*DENSITY"],
+    );
+    // 16. A beam section shape we do not read.
+    expect(
+        with("*BEAM SECTION, ELSET=e, MATERIAL=m, SECTION=I\n1,2,3,4,5,6,7\n"),
+        "inline.inp",
+        6,
+        &["SECTION=I", "RECT"],
+    );
+    // 17. A data line before any keyword.
+    expect(abaqus_inline("1, 2, 3\n"), "inline.inp", 1, &["data line"]);
+}
+
+fn expect_io(result: Result<ImportedModel, ImportError>, file: &str) {
+    match result {
+        Err(ImportError::Io { path, .. }) => assert!(path.ends_with(file), "{path:?}"),
+        other => panic!("expected an I/O error on {file}, got {other:?}"),
+    }
+}
+
+#[test]
+fn missing_files_are_named() {
+    expect_io(abaqus::read(Path::new("no/such.inp")), "such.inp");
+    expect_io(nastran::read(Path::new("no/such.bdf")), "such.bdf");
+    expect_io(nastran_inline("INCLUDE 'gone.bdf'\n"), "gone.bdf");
+}
+
+const GRIDS_4: &str = "GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\n";
+
+#[test]
+fn nastran_errors_name_file_line_and_entity() {
+    let with = |rest: &str| nastran_inline(&format!("{GRIDS_4}{rest}"));
+    // 1. A coordinate that is not a number.
+    let e = expect(
+        nastran_inline("GRID,1,,0.,abc,0.\n"),
+        "inline.bdf",
+        1,
+        &["GRID 1", "X2", "'abc'"],
+    );
+    assert!(matches!(e, ImportError::Malformed { .. }));
+    // 2. An element card we refuse (it would change the stiffness).
+    let e = expect(with("CQUAD4,1,1,1,2,3,4\n"), "inline.bdf", 5, &["CQUAD4", "stiffness"]);
+    assert!(matches!(e, ImportError::Unsupported { .. }));
+    // 3. An element with a grid that does not exist.
+    expect(
+        with("CTETRA,1,1,1,2,3,9\nPSOLID,1,1\nMAT1,1,1e9,,.3,1.\n"),
+        "inline.bdf",
+        5,
+        &["element 1", "node 9"],
+    );
+    // 4. A grid defined twice.
+    expect(
+        with("GRID,3,,5.,5.,5.\n"),
+        "inline.bdf",
+        5,
+        &["node 3", "twice", "line 3"],
+    );
+    // 5. A wrong number of grids.
+    expect(
+        with("CHEXA,1,1,1,2,3,4,5,6\n"),
+        "inline.bdf",
+        5,
+        &["CHEXA 1", "8 or 20"],
+    );
+    // 6. An element whose PSOLID does not exist.
+    expect(
+        with("CTETRA,1,8,1,2,3,4\n"),
+        "inline.bdf",
+        5,
+        &["element 1", "PSOLID 8"],
+    );
+    // 7. A PSOLID whose MAT1 does not exist.
+    expect(
+        with("CTETRA,1,8,1,2,3,4\nPSOLID,8,3\n"),
+        "inline.bdf",
+        6,
+        &["PSOLID 8", "MAT1 3"],
+    );
+    // 8. A grid in a coordinate system that does not exist, or is not a CORD2R.
+    expect(
+        nastran_inline("GRID,1,4,0.,0.,0.\n"),
+        "inline.bdf",
+        1,
+        &["GRID 1", "coordinate system 4"],
+    );
+    expect(
+        nastran_inline("CORD2C,4,,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\nGRID,1,4,0.,0.,0.\n"),
+        "inline.bdf",
+        3,
+        &["CORD2C", "only CORD2R"],
+    );
+    // 9. A CORD2R whose points are on a line.
+    expect(
+        nastran_inline("CORD2R,4,,0.,0.,0.,0.,0.,1.\n,0.,0.,2.\nGRID,1,4,0.,0.,0.\n"),
+        "inline.bdf",
+        1,
+        &["CORD2R 4", "not on one line"],
+    );
+    // 10. Bad component digits.
+    expect(with("SPC1,1,127,1\n"), "inline.bdf", 5, &["SPC1 1", "component digits"]);
+    // 11. MAT1 with one constant only, and with three that disagree.
+    expect(with("MAT1,1,1e9\n"), "inline.bdf", 5, &["MAT1 1", "two of E, G, NU"]);
+    expect(with("MAT1,1,1e9,1e9,.3\n"), "inline.bdf", 5, &["MAT1 1", "isotropic"]);
+    // 12. An RBE2 that does not tie all translations.
+    expect(with("RBE2,1,1,12,2,3\n"), "inline.bdf", 5, &["RBE2 1", "123"]);
+    // 13. THRU with a decreasing range.
+    expect(with("SPC1,1,123,4,THRU,2\n"), "inline.bdf", 5, &["SPC1 1", "THRU"]);
+    // 14. A continuation line without a card.
+    expect(nastran_inline("+,1,2\n"), "inline.bdf", 1, &["continuation"]);
+    // 15. A non-zero enforced displacement.
+    expect(with("SPC,1,1,123,0.5\n"), "inline.bdf", 5, &["SPC 1", "non-zero"]);
+    // 16. A support on a grid whose dofs are in a local system.
+    expect(
+        nastran_inline("CORD2R,4,,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\nGRID,1,,0.,0.,0.,4\nSPC1,1,1,1\n"),
+        "inline.bdf",
+        4,
+        &["SPC1 1", "CD = 4"],
+    );
+}
+
+// ------------------------------------------------------------------------------------ no panic
+
+/// xorshift64*: a fixed-seed generator, enough to make test inputs reproducible.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Format {
+    Abaqus,
+    Nastran,
+}
+
+/// Parses `bytes` as if it were the file `origin` (so includes resolve next to it), turning
+/// a panic into a failure that names the input; a model that is read must build.
+fn parse_without_panic(format: Format, bytes: &[u8], origin: &Path, what: &dyn Fn() -> String) {
+    let result = std::panic::catch_unwind(|| match format {
+        Format::Abaqus => abaqus::parse(bytes, origin),
+        Format::Nastran => nastran::parse(bytes, origin),
+    });
+    match result {
+        Ok(Ok(model)) => {
+            let n = model.mesh.nodes.len();
+            assert!(model.mesh.cells.iter().all(|c| c.nodes.iter().all(|id| id.index() < n)));
+            let _ = model.to_fe_model(MassKind::Consistent, None);
+        }
+        Ok(Err(error)) => {
+            let _ = error.to_string();
+        }
+        Err(_) => panic!("parse panicked on {}", what()),
+    }
+}
+
+/// `FE_MODEL_FUZZ_SCALE=100` multiplies the number of random and mutated inputs.
+fn fuzz_scale() -> usize {
+    std::env::var("FE_MODEL_FUZZ_SCALE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1)
+}
+
+fn fixture_files() -> Vec<(Format, PathBuf)> {
+    let dir = data_dir().join("import");
+    let mut out: Vec<(Format, PathBuf)> = MESHES
+        .iter()
+        .flat_map(|m| {
+            [
+                (Format::Abaqus, dir.join(format!("{m}.inp"))),
+                (Format::Nastran, dir.join(format!("{m}.bdf"))),
+            ]
+        })
+        .collect();
+    out.push((Format::Nastran, dir.join("hex8_small.bdf")));
+    out.push((Format::Nastran, dir.join("tet10_free.bdf")));
+    out
+}
+
+#[test]
+fn random_text_never_panics() {
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let headers: [(Format, &str); 6] = [
+        (Format::Abaqus, ""),
+        (Format::Abaqus, "*NODE\n"),
+        (Format::Abaqus, "*NODE\n1,0,0,0\n2,1,0,0\n*ELEMENT, TYPE=C3D4\n"),
+        (Format::Nastran, ""),
+        (Format::Nastran, "GRID    1               0.      0.      0.\n"),
+        (Format::Nastran, "GRID,1,,0.,0.,0.\nCTETRA,1,1,"),
+    ];
+    const ALPHABET: &[u8] = b"0123456789 ,\n-.e+*$=CTRAGIDNEXPSOLMBK";
+    for case in 0..2000 * fuzz_scale() {
+        let (format, header) = headers[case % headers.len()];
+        let mut bytes = header.as_bytes().to_vec();
+        let ascii = rng.below(3) != 0;
+        bytes.extend((0..rng.below(400)).map(|_| {
+            let r = rng.next();
+            if ascii {
+                ALPHABET[(r % ALPHABET.len() as u64) as usize]
+            } else {
+                r as u8
+            }
+        }));
+        parse_without_panic(format, &bytes, Path::new("fuzz"), &|| {
+            format!("random case {case}: {bytes:?}")
+        });
+    }
+}
+
+#[test]
+fn every_prefix_of_every_fixture_is_an_error_or_a_model_never_a_panic() {
+    for (format, path) in fixture_files() {
+        let bytes = std::fs::read(&path).unwrap();
+        // Every 7th cut: the fixtures are a few kilobytes, and neighbouring cuts exercise the
+        // same code.
+        for len in (0..bytes.len()).step_by(7) {
+            parse_without_panic(format, &bytes[..len], &path, &|| {
+                format!("{} cut at {len}", path.display())
+            });
+        }
+    }
+}
+
+#[test]
+fn mutated_fixtures_never_panic() {
+    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    const INTERESTING: &[u8] = b"0123456789-+.,eE *\n$=\xff";
+    for (format, path) in fixture_files() {
+        let original = std::fs::read(&path).unwrap();
+        for case in 0..60 * fuzz_scale() {
+            let mut bytes = original.clone();
+            for _ in 0..1 + rng.below(4) {
+                let at = rng.below(bytes.len());
+                match rng.below(3) {
+                    0 => bytes[at] = INTERESTING[rng.below(INTERESTING.len())],
+                    1 => {
+                        bytes.remove(at);
+                    }
+                    _ => bytes.insert(at, INTERESTING[rng.below(INTERESTING.len())]),
+                }
+                if bytes.is_empty() {
+                    break;
+                }
+            }
+            parse_without_panic(format, &bytes, &path, &|| format!("{} mutation {case}", path.display()));
+        }
+    }
+}

@@ -1,0 +1,294 @@
+//! Initial states that follow the joints ([`crate::InitialCondition`]).
+//!
+//! A joint coordinate is relative: its value turns (or slides) the joint's child with respect
+//! to its parent. For the initial state to mean what it says, everything *behind* the joint
+//! moves with the child as one rigid body: the **subtree** of joint $j$ is the set of nodes
+//! reached from its child through bodies (the interfaces of a flexible body, the nodes of a
+//! rigid body) and other joints, without crossing $j$. With the child's motion from
+//! $\mathbf T_{old}$ to $\mathbf T_{new}$ (rotation $\mathbf R_\Delta = \mathbf R_{new}\mathbf R_{old}^T$),
+//! every independent node $n$ of the subtree is placed at
+//! $$\mathbf r_n' = \mathbf r_{c,new} + \mathbf R_\Delta(\mathbf r_n - \mathbf r_{c,old}),\qquad \mathbf R_n' = \mathbf R_\Delta\mathbf R_n,$$
+//! and a rate adds the child's change of velocity $(\delta\mathbf v_c, \delta\boldsymbol\omega)$ as a
+//! rigid field, $\mathbf v_n \mathrel{+}= \delta\mathbf v_c + \delta\boldsymbol\omega\times(\mathbf r_n - \mathbf r_c)$,
+//! $\boldsymbol\omega_n \mathrel{+}= \delta\boldsymbol\omega$. Dependent nodes follow through their own
+//! joints, whose relative coordinates are unchanged, and modal coordinates stay zero, so the
+//! flexible bodies start undeformed and without strain rate. Joint values are applied first,
+//! then body velocities, then joint rates (additive), then node velocities and the rigid motion
+//! of the whole model, each item in the order given.
+//!
+//! A subtree that reaches the joint's own parent or a node held by the ground (a support or a
+//! node driver) closes a **loop**: no rigid motion of its bodies follows the coordinate. An
+//! initial *value* there is refused (drive the joint to the value and start from an equilibrium
+//! instead); an initial *rate* sets the coordinate alone and the loop's other velocities must be
+//! given (node velocities), as the bodies in the loop otherwise start with a strain rate.
+//!
+//! A body velocity gives the body and everything attached to it (its **component**, through
+//! bodies and joints) the rigid field $\mathbf v(\mathbf x) = \mathbf v_p + \boldsymbol\omega\times(\mathbf x -
+//! \mathbf p)$; a body held by the ground is refused (its motion is its joints' rates).
+
+use crate::coordinates::Slot;
+use crate::error::ModelError;
+use crate::model::{Body, InitialCondition, Model, NodeId};
+use crate::system::{unknown, State, System};
+use crate::topology::{RootRotation, Topology};
+use std::collections::VecDeque;
+
+/// How one initial condition acts (computed once by [`System::new`]).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum InitialPlan {
+    /// A joint value or rate: the free independent nodes of the subtree behind the joint.
+    Subtree(Vec<usize>),
+    /// A joint rate in a closed loop: the coordinate alone.
+    CoordinateOnly,
+    /// A body velocity: the free independent nodes of the body's component.
+    Component(Vec<usize>),
+    /// Node velocities and the rigid motion of the model.
+    Direct,
+}
+
+/// Nodes connected by bodies and joints: neighbours with the joint of the edge (`None` for a body).
+fn adjacency(model: &Model) -> Vec<Vec<(usize, Option<usize>)>> {
+    let mut adj = vec![Vec::new(); model.nodes.len()];
+    let mut link = |a: usize, b: usize, j: Option<usize>| {
+        if a != b {
+            adj[a].push((b, j));
+            adj[b].push((a, j));
+        }
+    };
+    for b in &model.bodies {
+        let nodes: Vec<usize> = match b {
+            Body::Flexible(f) => f.nodes.iter().map(|n| n.index()).collect(),
+            Body::Rigid(r) => std::iter::once(r.reference)
+                .chain(r.nodes.iter().copied())
+                .map(NodeId::index)
+                .collect(),
+        };
+        for &n in nodes.iter().skip(1) {
+            link(nodes[0], n, None);
+        }
+    }
+    for (ji, j) in model.joints.iter().enumerate() {
+        link(j.parent.index(), j.child.index(), Some(ji));
+    }
+    adj
+}
+
+/// An independent node whose six coordinates are all unknowns (free translation and rotation).
+fn free_root(topo: &Topology, n: usize) -> bool {
+    let Some(rc) = &topo.roots[n] else { return false };
+    rc.translation
+        .iter()
+        .all(|(s, _)| matches!(topo.map.scalars[*s].slot, Slot::Unknown(_)))
+        && matches!(rc.rotation, RootRotation::Free(_))
+}
+
+/// The nodes reached from `start` without the edge of joint `skip`; `Err(node)` when one of
+/// them is `stop` or held by the ground (an independent node that is not free).
+fn reach(
+    adj: &[Vec<(usize, Option<usize>)>],
+    topo: &Topology,
+    start: &[usize],
+    skip: Option<usize>,
+    stop: Option<usize>,
+) -> Result<Vec<usize>, usize> {
+    let mut seen = vec![false; adj.len()];
+    let mut queue: VecDeque<usize> = start.iter().copied().collect();
+    let mut out = Vec::new();
+    for &s in start {
+        seen[s] = true;
+    }
+    while let Some(n) = queue.pop_front() {
+        if Some(n) == stop || (topo.roots[n].is_some() && !free_root(topo, n)) {
+            return Err(n);
+        }
+        out.push(n);
+        for &(m, j) in &adj[n] {
+            if j.is_some() && j == skip || seen[m] {
+                continue;
+            }
+            seen[m] = true;
+            queue.push_back(m);
+        }
+    }
+    out.sort_unstable();
+    Ok(out)
+}
+
+/// How each of the model's initial conditions acts; refuses a joint value in a closed loop and a
+/// body velocity on a body held by the ground. References must have been checked.
+pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, ModelError> {
+    let adj = adjacency(model);
+    let roots = |nodes: Vec<usize>| nodes.into_iter().filter(|&n| topo.roots[n].is_some()).collect();
+    let node_name = |n: usize| model.nodes[n].name.clone();
+    model
+        .initial
+        .iter()
+        .map(|c| match c {
+            InitialCondition::JointValue { joint, .. } | InitialCondition::JointRate { joint, .. } => {
+                let j = &model.joints[joint.index()];
+                match reach(&adj, topo, &[j.child.index()], Some(joint.index()), Some(j.parent.index())) {
+                    Ok(nodes) => Ok(InitialPlan::Subtree(roots(nodes))),
+                    Err(_) if matches!(c, InitialCondition::JointRate { .. }) => Ok(InitialPlan::CoordinateOnly),
+                    Err(n) => Err(ModelError::InvalidValue {
+                        entity: format!("initial value of joint '{}'", j.name),
+                        what: format!(
+                            "the joint is in a closed loop (the bodies behind it reach node '{}', {}), so no rigid motion of them follows its value; drive the joint to the value and start from an equilibrium instead",
+                            node_name(n),
+                            if n == j.parent.index() { "its own parent" } else { "held by the ground" }
+                        ),
+                    }),
+                }
+            }
+            InitialCondition::BodyVelocity { body, .. } => {
+                let b = &model.bodies[body.index()];
+                let nodes: Vec<usize> = match b {
+                    Body::Flexible(f) => f.nodes.iter().map(|n| n.index()).collect(),
+                    Body::Rigid(r) => vec![r.reference.index()],
+                };
+                match reach(&adj, topo, &nodes, None, None) {
+                    Ok(nodes) => Ok(InitialPlan::Component(roots(nodes))),
+                    Err(n) => Err(ModelError::InvalidValue {
+                        entity: format!("initial velocity of body '{}'", b.name()),
+                        what: format!(
+                            "the body is held by the ground through node '{}'; give the initial rates of its joints instead",
+                            node_name(n)
+                        ),
+                    }),
+                }
+            }
+            InitialCondition::NodeVelocity { .. } | InitialCondition::RigidMotion { .. } => Ok(InitialPlan::Direct),
+        })
+        .collect()
+}
+
+impl System {
+    /// Applies the model's initial conditions to `state` (module docs).
+    pub(crate) fn apply_initial(&self, state: &mut State) {
+        let map = &self.topo.map;
+        let items = || self.model.initial.iter().zip(&self.initial_plan);
+        for (c, plan) in items() {
+            let InitialCondition::JointValue {
+                joint,
+                coordinate,
+                value,
+            } = c
+            else {
+                continue;
+            };
+            let child = self.model.joints[joint.index()].child.index();
+            let before = self.node_motions(state);
+            state.scalars[self.topo.joint_scalars[joint.index()][*coordinate]] = *value;
+            if let InitialPlan::Subtree(roots) = plan {
+                let after = self.node_motions(state);
+                let (a, b) = (&before[child], &after[child]);
+                let R = b.R * a.R.inverse();
+                for &n in roots {
+                    let m = &before[n];
+                    self.set_node_pose(state, NodeId(n as u32), b.r + R * (m.r - a.r), R * m.R);
+                }
+            }
+        }
+        let motions = self.node_motions(state);
+        for (c, plan) in items() {
+            if let (
+                InitialCondition::BodyVelocity {
+                    velocity,
+                    angular_velocity: w,
+                    point,
+                    ..
+                },
+                InitialPlan::Component(roots),
+            ) = (c, plan)
+            {
+                for &n in roots {
+                    self.set_root_velocity(state, n, &(velocity + w.cross(&(motions[n].r - point))), w);
+                }
+            }
+        }
+        for (c, plan) in items() {
+            let InitialCondition::JointRate {
+                joint,
+                coordinate,
+                rate,
+            } = c
+            else {
+                continue;
+            };
+            let child = self.model.joints[joint.index()].child.index();
+            let before = self.node_motions(state);
+            let s = self.topo.joint_scalars[joint.index()][*coordinate];
+            state.velocity[unknown(map.scalars[s].slot)] = *rate;
+            if let InitialPlan::Subtree(roots) = plan {
+                let after = self.node_motions(state);
+                let (a, b) = (&before[child], &after[child]);
+                let (dv, dw) = (b.v - a.v, b.omega - a.omega);
+                for &n in roots {
+                    let m = &before[n];
+                    let v = m.v + dv + dw.cross(&(m.r - a.r));
+                    self.set_root_velocity(state, n, &v, &(m.omega + dw));
+                }
+            }
+        }
+        let motions = self.node_motions(state);
+        for c in &self.model.initial {
+            match c {
+                InitialCondition::NodeVelocity {
+                    node,
+                    velocity,
+                    angular_velocity,
+                } => {
+                    self.set_root_velocity(state, node.index(), velocity, angular_velocity);
+                }
+                InitialCondition::RigidMotion {
+                    velocity,
+                    angular_velocity,
+                } => {
+                    for n in 0..self.model.nodes.len() {
+                        if self.topo.roots[n].is_some() {
+                            let v = velocity + angular_velocity.cross(&motions[n].r);
+                            self.set_root_velocity(state, n, &v, angular_velocity);
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// A state at rest in the configuration of `state` (elastic coordinates and floating frames
+    /// included) at time `time`: velocities and accelerations zero, controllers' integrals
+    /// restarted. The hand-over from an equilibrium to a dynamic or linearised analysis.
+    pub fn at_rest(&self, state: &State, time: f64) -> State {
+        let mut s = state.clone();
+        s.time = time;
+        s.velocity.iter_mut().for_each(|v| *v = 0.0);
+        s.acceleration.iter_mut().for_each(|a| *a = 0.0);
+        self.start_controls(&mut s);
+        s
+    }
+
+    /// The rigid velocity $(\mathbf v_p, \boldsymbol\omega)$ of a body about the point $\mathbf p$:
+    /// the least-squares fit of $\mathbf v_k = \mathbf v_p + \boldsymbol\omega\times(\mathbf r_k - \mathbf p)$
+    /// to the velocities of its nodes, with $\boldsymbol\omega$ their mean angular velocity (exact for a
+    /// rigid body and for a flexible body without strain rate).
+    pub fn body_velocity(
+        &self,
+        state: &State,
+        body: crate::BodyId,
+        point: &nalgebra::Vector3<f64>,
+    ) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>) {
+        let motions = self.node_motions(state);
+        let nodes: Vec<usize> = match &self.model.bodies[body.index()] {
+            Body::Flexible(f) => f.nodes.iter().map(|n| n.index()).collect(),
+            Body::Rigid(r) => vec![r.reference.index()],
+        };
+        let k = nodes.len() as f64;
+        let w = nodes.iter().map(|&n| motions[n].omega).sum::<nalgebra::Vector3<f64>>() / k;
+        let v = nodes
+            .iter()
+            .map(|&n| motions[n].v - w.cross(&(motions[n].r - point)))
+            .sum::<nalgebra::Vector3<f64>>()
+            / k;
+        (v, w)
+    }
+}

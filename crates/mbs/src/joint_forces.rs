@@ -1,0 +1,493 @@
+//! Forces on joint coordinates besides the joint springs: limits and actuators.
+//!
+//! A joint coordinate $x$ (an angle in rad or a length in m, [`crate::JointKind`]) takes a
+//! generalised force $Q$ (N m or N) in the equations, $\mathbf F \mathrel{-}= Q$ on its row:
+//!
+//! * **Limit** ([`JointLimit`]): a stiff unilateral spring-damper outside $[x_{lo}, x_{hi}]$.
+//!   With the penetration $d = x - x_{lo} < 0$ (or $d = x - x_{hi} > 0$),
+//!   $Q = -(k d + c\dot x)$ while it pushes the coordinate back into the range, and $Q = 0$
+//!   when the damping term would pull it out (the stop does not stick). Tangents
+//!   $\partial\mathbf F/\partial x = k$, $\partial\mathbf F/\partial\dot x = c$ while active.
+//! * **Actuator** ([`JointActuator`]) with an effort $u$ from a time function, $Q = u(t)$, or
+//!   from a PID law on a measured joint coordinate $y$ with the set-point $r(t)$:
+//!   $$e = r - y,\quad u = K_p e + K_i z + K_d(\dot r - \dot y),\quad z(t) = \int_0^t e\,d\tau,$$
+//!   optionally saturated at $|u| \le u_{max}$.
+//!
+//! # The PID integral in time integration
+//!
+//! The integral $z$ is a state of the controller, carried in [`crate::State`] from step to
+//! step. Within a step from $t_n$ to $t$ it follows the trapezoidal rule,
+//! $z(t) = z_n + \tfrac12(t - t_n)(e_n + e(t))$, which makes the effort at $t_{n+1}$ an implicit
+//! function of the new configuration with the tangent
+//! $\partial\mathbf F/\partial y = K_p + \tfrac12 K_i (t - t_n)$, $\partial\mathbf F/\partial\dot y = K_d$
+//! ($y$'s row and the actuated column; zero while saturated). A converged step moves the base
+//! $(t_n, z_n, e_n)$ to its end ([`crate::System::accept_step`], called by the integrator), so
+//! a rejected or retried step restarts from the integral of the last accepted one. In statics
+//! the time does not advance and the integral is held.
+
+#![allow(non_snake_case)]
+
+use crate::coordinates::{Slot, Values};
+use crate::error::ModelError;
+use crate::model::{JointId, Model, SensorKind};
+use crate::time_function::{CompiledFunction, TimeFunction};
+use crate::topology::Topology;
+use serde::{Deserialize, Serialize};
+
+/// A stop on a joint coordinate: a stiff unilateral spring-damper outside `[lower, upper]`
+/// (module docs). Units: m or rad for the bounds, N/m or N m/rad for `stiffness`, N s/m or
+/// N m s/rad for `damping`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointLimit {
+    pub name: String,
+    pub joint: JointId,
+    pub coordinate: usize,
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+    pub stiffness: f64,
+    pub damping: f64,
+}
+
+/// A PID law on a measured joint coordinate (module docs).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pid {
+    /// The measured coordinate $y$ (often the actuated one).
+    pub joint: JointId,
+    pub coordinate: usize,
+    /// $r(t)$, in the measured coordinate's unit.
+    pub setpoint: TimeFunction,
+    pub kp: f64,
+    pub ki: f64,
+    pub kd: f64,
+    /// Saturation $|u| \le u_{max}$ (`None`: none).
+    pub max_effort: Option<f64>,
+}
+
+/// What gives an actuator's effort.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Effort {
+    /// $u = f(t)$ (N or N m).
+    Time(TimeFunction),
+    /// A PID law.
+    Pid(Pid),
+}
+
+/// A force (on a length) or torque (on an angle) acting on a joint coordinate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointActuator {
+    pub name: String,
+    pub joint: JointId,
+    pub coordinate: usize,
+    pub effort: Effort,
+}
+
+/// The state of one actuator's controller: the base $(t_n, z_n, e_n)$ of its integral.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Control {
+    pub t: f64,
+    pub z: f64,
+    pub e: f64,
+}
+
+#[derive(Clone, Debug)]
+struct Limit {
+    scalar: usize,
+    lower: f64,
+    upper: f64,
+    k: f64,
+    c: f64,
+    slot: Option<usize>,
+}
+
+#[derive(Clone, Debug)]
+enum Law {
+    Time(CompiledFunction),
+    Pid {
+        /// Scalar of the measured coordinate.
+        scalar: usize,
+        setpoint: CompiledFunction,
+        kp: f64,
+        ki: f64,
+        kd: f64,
+        max: f64,
+        /// Slot of (actuated row, measured column) when the measured coordinate is unknown.
+        slot: Option<usize>,
+    },
+}
+
+#[derive(Clone, Debug)]
+struct Actuator {
+    /// Unknown of the actuated coordinate.
+    dof: usize,
+    law: Law,
+}
+
+/// The compiled limits and actuators of a system.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct JointForces {
+    limits: Vec<Limit>,
+    actuators: Vec<Actuator>,
+}
+
+/// The effort of a PID law and its derivatives by $y$ and $\dot y$ (zero while saturated).
+struct PidEffort {
+    u: f64,
+    du_dy: f64,
+    du_dyd: f64,
+}
+
+fn nonnegative(x: f64) -> bool {
+    x >= 0.0 && x.is_finite()
+}
+
+impl JointForces {
+    /// Checks the model's limits and actuators and finds their coordinates.
+    pub(crate) fn new(model: &Model, topo: &Topology) -> Result<Self, ModelError> {
+        let map = &topo.map;
+        let scalar = |who: &dyn Fn() -> String, joint: JointId, coordinate: usize| -> Result<usize, ModelError> {
+            let j = model
+                .joints
+                .get(joint.index())
+                .ok_or_else(|| ModelError::UnknownJoint {
+                    id: joint.0,
+                    count: model.joints.len(),
+                    referenced_by: who(),
+                })?;
+            topo.joint_scalars[joint.index()]
+                .get(coordinate)
+                .copied()
+                .ok_or_else(|| ModelError::InvalidValue {
+                    entity: who(),
+                    what: format!(
+                        "joint '{}' ({}) has {} scalar coordinates; coordinate {coordinate} does not exist",
+                        j.name,
+                        j.kind.name(),
+                        j.kind.n_scalar()
+                    ),
+                })
+        };
+        let invalid = |entity: String, what: String| ModelError::InvalidValue { entity, what };
+        let mut limits = Vec::new();
+        for l in &model.joint_limits {
+            let who = || format!("joint limit '{}'", l.name);
+            let s = scalar(&who, l.joint, l.coordinate)?;
+            let (lower, upper) = (l.lower.unwrap_or(f64::NEG_INFINITY), l.upper.unwrap_or(f64::INFINITY));
+            if l.lower.is_none() && l.upper.is_none() {
+                return Err(invalid(who(), "give a lower or an upper bound".into()));
+            }
+            if lower.is_nan() || upper.is_nan() || !(lower < upper) {
+                return Err(invalid(
+                    who(),
+                    format!("lower bound {lower} must be below the upper {upper}"),
+                ));
+            }
+            if !(nonnegative(l.stiffness) && l.stiffness > 0.0 && nonnegative(l.damping)) {
+                return Err(invalid(
+                    who(),
+                    format!(
+                        "stiffness must be positive and damping >= 0, both finite (got {}, {})",
+                        l.stiffness, l.damping
+                    ),
+                ));
+            }
+            limits.push(Limit {
+                scalar: s,
+                lower,
+                upper,
+                k: l.stiffness,
+                c: l.damping,
+                slot: None,
+            });
+        }
+        let mut actuators = Vec::new();
+        for a in &model.actuators {
+            let who = || format!("actuator '{}'", a.name);
+            let s = scalar(&who, a.joint, a.coordinate)?;
+            let Slot::Unknown(dof) = map.scalars[s].slot else {
+                return Err(invalid(
+                    who(),
+                    "its joint coordinate is driven: an actuator acts on a free coordinate (the driver's effort is a sensor)"
+                        .into(),
+                ));
+            };
+            let law = match &a.effort {
+                Effort::Time(f) => Law::Time(f.compile(&who())?),
+                Effort::Pid(p) => {
+                    let measured = scalar(&|| format!("{} (measured coordinate)", who()), p.joint, p.coordinate)?;
+                    let gains = [p.kp, p.ki, p.kd];
+                    if !gains.iter().all(|&g| nonnegative(g)) || gains.iter().all(|&g| g == 0.0) {
+                        return Err(invalid(
+                            who(),
+                            format!(
+                                "PID gains must be finite and >= 0, not all zero (got kp {}, ki {}, kd {})",
+                                p.kp, p.ki, p.kd
+                            ),
+                        ));
+                    }
+                    let max = p.max_effort.unwrap_or(f64::INFINITY);
+                    if !(max > 0.0) {
+                        return Err(invalid(who(), format!("max_effort must be positive (got {max})")));
+                    }
+                    Law::Pid {
+                        scalar: measured,
+                        setpoint: p.setpoint.compile(&format!("{} set-point", who()))?,
+                        kp: p.kp,
+                        ki: p.ki,
+                        kd: p.kd,
+                        max,
+                        slot: None,
+                    }
+                }
+            };
+            actuators.push(Actuator { dof, law });
+        }
+        for sensor in &model.sensors {
+            if let SensorKind::ActuatorEffort { actuator } = sensor.kind {
+                if actuator >= actuators.len() {
+                    return Err(invalid(
+                        format!("sensor '{}'", sensor.name),
+                        format!("actuator {actuator} does not exist ({} actuators)", actuators.len()),
+                    ));
+                }
+            }
+        }
+        Ok(Self { limits, actuators })
+    }
+
+    /// Sets of unknowns coupled by these forces (for the sparse pattern): each PID couples the
+    /// actuated and the measured coordinate.
+    pub(crate) fn pattern_sets(&self, topo: &Topology) -> Vec<Vec<usize>> {
+        let map = &topo.map;
+        let mut sets = Vec::new();
+        for a in &self.actuators {
+            if let Law::Pid { scalar, .. } = &a.law {
+                if let Slot::Unknown(m) = map.scalars[*scalar].slot {
+                    sets.push(vec![a.dof.min(m), a.dof.max(m)]);
+                }
+            }
+        }
+        sets
+    }
+
+    /// Finds the slots of the tangent entries in the system pattern.
+    pub(crate) fn bind(&mut self, topo: &Topology, slot: impl Fn(usize, usize) -> usize) {
+        let map = &topo.map;
+        for l in &mut self.limits {
+            l.slot = match map.scalars[l.scalar].slot {
+                Slot::Unknown(d) => Some(slot(d, d)),
+                Slot::Prescribed(_) => None,
+            };
+        }
+        for a in &mut self.actuators {
+            if let Law::Pid { scalar, slot: s, .. } = &mut a.law {
+                *s = match map.scalars[*scalar].slot {
+                    Slot::Unknown(m) => Some(slot(a.dof, m)),
+                    Slot::Prescribed(_) => None,
+                };
+            }
+        }
+    }
+
+    /// Number of actuators (one controller state each).
+    pub(crate) fn n_actuators(&self) -> usize {
+        self.actuators.len()
+    }
+
+    /// A limit's force $k d + c\dot x$ (the negative of $Q$) and whether it is active.
+    fn limit_force(l: &Limit, x: f64, xd: f64) -> Option<f64> {
+        if x < l.lower {
+            let f = l.k * (x - l.lower) + l.c * xd;
+            (f < 0.0).then_some(f)
+        } else if x > l.upper {
+            let f = l.k * (x - l.upper) + l.c * xd;
+            (f > 0.0).then_some(f)
+        } else {
+            None
+        }
+    }
+
+    /// The PID effort at time `t` for the measured value and rate, with the integral's base.
+    #[allow(clippy::too_many_arguments)]
+    fn pid(
+        setpoint: &CompiledFunction,
+        [kp, ki, kd, max]: [f64; 4],
+        y: f64,
+        yd: f64,
+        t: f64,
+        base: &Control,
+    ) -> PidEffort {
+        let (r, rd, _) = setpoint.eval(t);
+        let e = r - y;
+        let w = 0.5 * (t - base.t);
+        let z = base.z + w * (base.e + e);
+        let u = kp * e + ki * z + kd * (rd - yd);
+        if u.abs() > max {
+            return PidEffort {
+                u: max.copysign(u),
+                du_dy: 0.0,
+                du_dyd: 0.0,
+            };
+        }
+        PidEffort {
+            u,
+            du_dy: -kp - ki * w,
+            du_dyd: -kd,
+        }
+    }
+
+    /// The efforts of all actuators at `t` (for sensors): $u$ of each.
+    pub(crate) fn efforts(&self, map_values: &dyn Fn(usize) -> (f64, f64), t: f64, controls: &[Control]) -> Vec<f64> {
+        self.actuators
+            .iter()
+            .zip(controls)
+            .map(|(a, c)| match &a.law {
+                Law::Time(f) => f.eval(t).0,
+                Law::Pid {
+                    scalar,
+                    setpoint,
+                    kp,
+                    ki,
+                    kd,
+                    max,
+                    ..
+                } => {
+                    let (y, yd) = map_values(*scalar);
+                    Self::pid(setpoint, [*kp, *ki, *kd, *max], y, yd, t, c).u
+                }
+            })
+            .collect()
+    }
+
+    /// Adds the limits' and actuators' terms to $\mathbf F$ (and the reactions of prescribed
+    /// coordinates); returns the norm of these forces, their share of the force scale of the
+    /// convergence test (kept apart: an actuator holding a load cancels it in $\mathbf F$).
+    pub(crate) fn add_forces(
+        &self,
+        topo: &Topology,
+        x: &Values,
+        t: f64,
+        controls: &[Control],
+        F: &mut [f64],
+        reactions: &mut [f64],
+    ) -> f64 {
+        let map = &topo.map;
+        let value = |s: usize| {
+            let (v, d, _) = crate::system::scalar_values(map, x, s);
+            (v, d)
+        };
+        let mut sum = 0.0;
+        for l in &self.limits {
+            let (xv, xd) = value(l.scalar);
+            if let Some(f) = Self::limit_force(l, xv, xd) {
+                sum += f * f;
+                match map.scalars[l.scalar].slot {
+                    Slot::Unknown(d) => F[d] += f,
+                    Slot::Prescribed(p) => reactions[p] += f,
+                }
+            }
+        }
+        for (u, a) in self.efforts(&value, t, controls).into_iter().zip(&self.actuators) {
+            F[a.dof] -= u;
+            sum += u * u;
+        }
+        sum.sqrt()
+    }
+
+    /// Strain energy of the active limits, $\tfrac12 k d^2$ each.
+    pub(crate) fn limit_energy(&self, scalars: &[f64]) -> f64 {
+        self.limits
+            .iter()
+            .map(|l| {
+                let x = scalars[l.scalar];
+                let d = (x - l.lower).min(0.0) + (x - l.upper).max(0.0);
+                0.5 * l.k * d * d
+            })
+            .sum()
+    }
+
+    /// Adds the tangents $\partial\mathbf F/\partial\mathbf q$ to `K` and $\partial\mathbf F/\partial\dot{\mathbf q}$ to
+    /// `C` (values on the system pattern).
+    pub(crate) fn add_tangents(
+        &self,
+        topo: &Topology,
+        x: &Values,
+        t: f64,
+        controls: &[Control],
+        K: &mut [f64],
+        C: &mut [f64],
+    ) {
+        let map = &topo.map;
+        for l in &self.limits {
+            let Some(slot) = l.slot else { continue };
+            let (xv, xd, _) = crate::system::scalar_values(map, x, l.scalar);
+            if Self::limit_force(l, xv, xd).is_some() {
+                K[slot] += l.k;
+                C[slot] += l.c;
+            }
+        }
+        for (a, c) in self.actuators.iter().zip(controls) {
+            if let Law::Pid {
+                scalar,
+                setpoint,
+                kp,
+                ki,
+                kd,
+                max,
+                slot: Some(slot),
+            } = &a.law
+            {
+                let (y, yd, _) = crate::system::scalar_values(map, x, *scalar);
+                let p = Self::pid(setpoint, [*kp, *ki, *kd, *max], y, yd, t, c);
+                // F = -u on the actuated row.
+                K[*slot] -= p.du_dy;
+                C[*slot] -= p.du_dyd;
+            }
+        }
+    }
+
+    /// The controllers' states at the start (`t`, integral zero, the error of the start).
+    pub(crate) fn start_controls(&self, x: &Values, t: f64) -> Vec<Control> {
+        self.actuators
+            .iter()
+            .map(|a| match &a.law {
+                Law::Time(_) => Control {
+                    t,
+                    ..Default::default()
+                },
+                Law::Pid { scalar, setpoint, .. } => Control {
+                    t,
+                    z: 0.0,
+                    e: setpoint.eval(t).0 - x.scalars[*scalar],
+                },
+            })
+            .collect()
+    }
+
+    /// Moves each controller's base to time `t` at the converged values `x` (module docs).
+    pub(crate) fn accept(&self, x: &Values, t: f64, controls: &mut [Control]) {
+        for (a, c) in self.actuators.iter().zip(controls.iter_mut()) {
+            if let Law::Pid { scalar, setpoint, .. } = &a.law {
+                let e = setpoint.eval(t).0 - x.scalars[*scalar];
+                c.z += 0.5 * (t - c.t) * (c.e + e);
+                c.e = e;
+            }
+            c.t = t;
+        }
+    }
+}
+
+impl crate::System {
+    /// The effort $u$ of every actuator at `state` (N on a length, N m on an angle).
+    pub fn actuator_efforts(&self, state: &crate::State) -> Vec<f64> {
+        let map = &self.topo.map;
+        let mut s = state.clone();
+        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let x = crate::system::values(&s, &pr, &pa);
+        let value = |sc: usize| {
+            let (v, d, _) = crate::system::scalar_values(map, &x, sc);
+            (v, d)
+        };
+        self.joint_forces.efforts(&value, s.time, &state.controls)
+    }
+}

@@ -1,0 +1,48 @@
+"""flexmbs: flexible multibody dynamics with superelements, from Python.
+
+- ``Study``: a study file (the format of the ``flexmbs`` program) loaded from a file or TOML
+  text; values read and changed by key path with the program's validation; ``run`` returns
+  ``Results`` (sensors, tables, summary as numpy arrays and dicts); ``reduce`` gives the reduced
+  bodies; ``simulation`` starts a dynamic analysis to step from Python.
+- ``Simulation``: ``step``, ``advance_to``, sensors and state between steps, ``set_load``.
+- ``ReducedBody``: a reduced-body file (``.rbody``) and its matrices, modes and mass data.
+- ``sweep``: many variants of a study in parallel on Dask distributed (optional dependency).
+
+The classes come from the compiled extension ``flexmbs._flexmbs`` (Rust, PyO3). The API
+reference and worked examples are in docs/python.md of the repository.
+"""
+
+from ._flexmbs import (  # noqa: F401
+    FlexmbsError,
+    KeyPathError,
+    ReducedBody,
+    ReducedBodyFileError,
+    Simulation,
+    SolveError,
+    Study,
+    StudyError,
+    __version__,
+)
+from .results import AnalysisResult, Results, Sensor, Table  # noqa: F401
+from .sweep import final, grid, peak_abs, summary_value, sweep  # noqa: F401
+
+__all__ = [
+    "AnalysisResult",
+    "FlexmbsError",
+    "KeyPathError",
+    "ReducedBody",
+    "ReducedBodyFileError",
+    "Results",
+    "Sensor",
+    "Simulation",
+    "SolveError",
+    "Study",
+    "StudyError",
+    "Table",
+    "__version__",
+    "final",
+    "grid",
+    "peak_abs",
+    "summary_value",
+    "sweep",
+]

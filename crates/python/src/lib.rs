@@ -1,0 +1,30 @@
+//! # flexmbs-python: the `flexmbs` Python package's extension module
+//!
+//! `flexmbs._flexmbs`, built by maturin (`pip install ./crates/python`), wraps the library
+//! crates for Python: arrays cross as numpy arrays (rust-numpy), errors as exceptions of the
+//! [`errors`] module. The pure-Python part of the package (`python/flexmbs/`) re-exports these
+//! classes and adds what is better written in Python (the parameter sweep on Dask).
+//!
+//! - [`rbody`]: `ReducedBody`, a reduced-body file (`.rbody`) read, written and inspected.
+//! - [`study`]: `Study` (a study file: values by key path, validation with located errors,
+//!   runs, reductions) and `Simulation` (a dynamic analysis stepped from Python, with named
+//!   loads set between steps).
+//!
+//! The module keeps no state of its own: every class owns plain data of the library crates.
+
+use pyo3::prelude::*;
+
+pub mod errors;
+pub mod rbody;
+pub mod study;
+
+/// The extension module `flexmbs._flexmbs`.
+#[pymodule]
+fn _flexmbs(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    errors::register(m)?;
+    m.add_class::<rbody::ReducedBody>()?;
+    m.add_class::<study::Study>()?;
+    m.add_class::<study::Simulation>()?;
+    Ok(())
+}

@@ -1,0 +1,640 @@
+//! `flexmbs.Study` (a study file as an editable, validated document: [`study::Document`]) and
+//! `flexmbs.Simulation` (a dynamic analysis stepped from Python: [`study::Simulation`]).
+//!
+//! Runs go through the study crate's one path, the one the `flexmbs` program takes: the same
+//! validation and located errors, the same results folder and reduced-body cache. The raw
+//! results come back as plain Python data (dicts, lists, numpy arrays) that the pure-Python
+//! `flexmbs.results` module wraps.
+
+use crate::errors::{to_py_err, StudyError};
+use crate::rbody::ReducedBody;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use std::path::PathBuf;
+use study::observer::{Cell, Recorded, Recorder};
+
+/// A study: a study file held in memory, read and changed value by value through key paths
+/// (`parts.rod.reduction.modes`, `sections[0].d`, `drivers.crank-speed.function.speed`), with
+/// the validation of `flexmbs check` after every change.
+#[pyclass(module = "flexmbs", name = "Study")]
+#[derive(Clone)]
+pub struct Study {
+    doc: study::Document,
+}
+
+/// A Python value as the TOML value text [`study::Document::set`] takes: booleans, integers,
+/// floats (shortest text that reads back to the same `f64`; `nan`, `inf`), strings, lists,
+/// tuples and numpy arrays (as arrays), dicts (as inline tables).
+pub(crate) fn toml_text(value: &Bound<'_, PyAny>) -> PyResult<String> {
+    if value.is_instance_of::<PyBool>() {
+        return Ok(if value.extract::<bool>()? { "true" } else { "false" }.into());
+    }
+    if value.is_instance_of::<PyInt>() {
+        return Ok(value.extract::<i64>()?.to_string());
+    }
+    if value.is_instance_of::<PyFloat>() {
+        return Ok(float_text(value.extract::<f64>()?));
+    }
+    if value.is_instance_of::<PyString>() {
+        let s: String = value.extract()?;
+        // JSON's string escapes (\" \\ \n \t \uXXXX ...) are all valid in a TOML basic string.
+        return Ok(serde_json::to_string(&s).expect("a string serialises"));
+    }
+    if value.is_instance_of::<PyDict>() {
+        let d = value.cast::<PyDict>()?;
+        let mut items = Vec::new();
+        for (k, v) in d.iter() {
+            let k: String = k.extract()?;
+            let bare = !k.is_empty() && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+            let key = if bare {
+                k
+            } else {
+                serde_json::to_string(&k).expect("a string serialises")
+            };
+            items.push(format!("{key} = {}", toml_text(&v)?));
+        }
+        return Ok(format!("{{ {} }}", items.join(", ")));
+    }
+    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        let items: Vec<String> = value.try_iter()?.map(|v| toml_text(&v?)).collect::<PyResult<_>>()?;
+        return Ok(format!("[{}]", items.join(", ")));
+    }
+    // numpy scalars and arrays, and anything else with `tolist` or an index/float conversion.
+    if value.hasattr("tolist")? {
+        let list = value.call_method0("tolist")?;
+        if !list.is(value) {
+            return toml_text(&list);
+        }
+    }
+    if let Ok(i) = value.extract::<i64>() {
+        return Ok(i.to_string());
+    }
+    if let Ok(x) = value.extract::<f64>() {
+        return Ok(float_text(x));
+    }
+    Err(pyo3::exceptions::PyTypeError::new_err(format!(
+        "a study value must be a bool, number, string, list or dict, not {}",
+        value.get_type().name()?
+    )))
+}
+
+/// A float as TOML text: Rust's shortest round-trip text, with TOML's `nan` and `inf`.
+fn float_text(x: f64) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else if x.is_infinite() {
+        if x > 0.0 { "inf" } else { "-inf" }.into()
+    } else {
+        let s = format!("{x:?}");
+        // `1e-5` is valid TOML; `5` (from a whole float) would be an integer: keep a `.0`.
+        if s.contains(['.', 'e', 'E']) {
+            s
+        } else {
+            format!("{s}.0")
+        }
+    }
+}
+
+/// JSON-like data as Python objects (through the json module: numbers, strings, lists, dicts).
+pub(crate) fn json_to_py<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+    let json = py.import("json")?;
+    json.call_method1("loads", (value.to_string(),))
+}
+
+/// The columns of a result table: numbers as a float array, text columns as lists.
+fn table_dict<'py>(py: Python<'py>, t: &study::observer::Table) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("name", &t.name)?;
+    d.set_item("columns", &t.columns)?;
+    let data = PyDict::new(py);
+    for (k, c) in t.columns.iter().enumerate() {
+        let cells: Vec<&Cell> = t.rows.iter().filter_map(|r| r.get(k)).collect();
+        let numeric = cells
+            .iter()
+            .all(|c| matches!(c, Cell::Int(_) | Cell::Num(_) | Cell::Empty));
+        if numeric {
+            let v: Vec<f64> = cells.iter().map(|c| c.as_f64().unwrap_or(f64::NAN)).collect();
+            data.set_item(c, PyArray1::from_vec(py, v))?;
+        } else {
+            let v: Vec<Option<String>> = cells
+                .iter()
+                .map(|c| match c {
+                    Cell::Text(s) => Some(s.clone()),
+                    Cell::Int(i) => Some(i.to_string()),
+                    Cell::Num(x) => Some(x.to_string()),
+                    Cell::Empty => None,
+                })
+                .collect();
+            data.set_item(c, v)?;
+        }
+    }
+    d.set_item("data", data)?;
+    Ok(d)
+}
+
+/// One analysis as recorded: name, kind, tables, sensors (abscissa and a 2-D array of columns
+/// per sensor) and its summary.
+fn recorded_dict<'py>(py: Python<'py>, r: &Recorded) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("name", &r.name)?;
+    d.set_item("kind", &r.kind)?;
+    let tables = PyList::empty(py);
+    for t in &r.tables {
+        tables.append(table_dict(py, t)?)?;
+    }
+    d.set_item("tables", tables)?;
+    match &r.sensors {
+        Some(h) => {
+            let s = PyDict::new(py);
+            s.set_item("x_label", &h.x_label)?;
+            s.set_item("x", PyArray1::from_slice(py, &h.x))?;
+            let groups = PyList::empty(py);
+            for (g, rows) in h.groups.iter().zip(&h.rows) {
+                let width = g.columns.len();
+                let values = Array2::from_shape_fn((rows.len(), width), |(i, j)| {
+                    rows[i].get(j).copied().unwrap_or(f64::NAN)
+                });
+                let gd = PyDict::new(py);
+                gd.set_item("name", &g.name)?;
+                gd.set_item("columns", &g.columns)?;
+                gd.set_item("values", values.into_pyarray(py))?;
+                groups.append(gd)?;
+            }
+            s.set_item("groups", groups)?;
+            d.set_item("sensors", s)?;
+        }
+        None => d.set_item("sensors", py.None())?,
+    }
+    match &r.summary {
+        Some(s) => d.set_item(
+            "summary",
+            json_to_py(py, &serde_json::to_value(s).map_err(to_json_err)?)?,
+        )?,
+        None => d.set_item("summary", py.None())?,
+    }
+    Ok(d)
+}
+
+fn to_json_err(e: serde_json::Error) -> PyErr {
+    crate::errors::FlexmbsError::new_err(format!("cannot convert the summary: {e}"))
+}
+
+fn options(results_dir: Option<PathBuf>, cache: Option<PathBuf>, t_end: Option<f64>) -> study::Options {
+    study::Options {
+        out: results_dir,
+        cache,
+        t_end,
+    }
+}
+
+#[pymethods]
+impl Study {
+    /// Reads and validates the study file at `path`. Raises `StudyError` (with `file`, `line`,
+    /// `column`, `key` and `errors`) when it is not valid.
+    #[staticmethod]
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let doc = study::Document::open(&path).map_err(|e| to_py_err(py, &*e))?;
+        let s = Self { doc };
+        s.validate(py)?;
+        Ok(s)
+    }
+
+    /// A study from TOML `text`. `base_dir` (default: the current folder) anchors the study's
+    /// relative paths (meshes, tables, `.rbody` files, the results folder and the cache);
+    /// `name` is the file name errors and the results folder use (default `study.toml`).
+    #[staticmethod]
+    #[pyo3(signature = (text, base_dir=None, name=None))]
+    fn from_toml(py: Python<'_>, text: &str, base_dir: Option<PathBuf>, name: Option<String>) -> PyResult<Self> {
+        let dir = match base_dir {
+            Some(d) => d,
+            None => std::env::current_dir()?,
+        };
+        let file = name.unwrap_or_else(|| "study.toml".into());
+        let file_name = std::path::Path::new(&file)
+            .file_name()
+            .map(PathBuf::from)
+            .unwrap_or_else(|| PathBuf::from("study.toml"));
+        let doc = study::Document::from_text(text, &dir.join(file_name)).map_err(|e| to_py_err(py, &*e))?;
+        let s = Self { doc };
+        s.validate(py)?;
+        Ok(s)
+    }
+
+    /// The study file this study came from (or the name it was given).
+    #[getter]
+    fn path(&self) -> String {
+        self.doc.path.display().to_string()
+    }
+
+    /// The folder relative paths of the study are taken from.
+    #[getter]
+    fn base_dir(&self) -> String {
+        self.doc
+            .path
+            .parent()
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| ".".into())
+    }
+
+    /// The study as TOML text now (comments and layout of the original kept).
+    #[getter]
+    fn text(&self) -> String {
+        self.doc.text()
+    }
+
+    /// Checks the study as `flexmbs check` does; raises `StudyError` when it is not valid.
+    fn validate(&self, py: Python<'_>) -> PyResult<()> {
+        self.doc.study().map(|_| ()).map_err(|e| to_py_err(py, &e))
+    }
+
+    /// The value at key path `key` (numbers, strings, lists; tables as dicts). Raises
+    /// `KeyPathError` for a path that leads nowhere.
+    fn get<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Bound<'py, PyAny>> {
+        let v = self.doc.get(key).map_err(|e| to_py_err(py, &*e))?;
+        json_to_py(py, &v)
+    }
+
+    /// Sets the value at `key` and validates the study. A value the study refuses raises
+    /// `StudyError` located at the value (file, line, column, key) and is not kept.
+    fn set(&mut self, py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let text = toml_text(value)?;
+        self.doc.set(key, &text).map_err(|e| to_py_err(py, &*e))
+    }
+
+    /// Sets several values (a dict of key path to value), then validates once: for changes that
+    /// are only valid together. On an error, none of them is kept.
+    fn update(&mut self, py: Python<'_>, values: &Bound<'_, PyDict>) -> PyResult<()> {
+        let mut doc = self.doc.clone();
+        for (k, v) in values.iter() {
+            let key: String = k.extract()?;
+            doc.set_unchecked(&key, &toml_text(&v)?)
+                .map_err(|e| to_py_err(py, &*e))?;
+        }
+        doc.study().map_err(|e| to_py_err(py, &e))?;
+        self.doc = doc;
+        Ok(())
+    }
+
+    fn __getitem__<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Bound<'py, PyAny>> {
+        self.get(py, key)
+    }
+
+    fn __setitem__(&mut self, py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        self.set(py, key, value)
+    }
+
+    /// Names of the analyses, in the order they run.
+    #[getter]
+    fn analyses(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        let s = self.doc.study().map_err(|e| to_py_err(py, &e))?;
+        Ok(s.analyses.iter().map(|a| a.name.clone()).collect())
+    }
+
+    /// Names of the parts.
+    #[getter]
+    fn parts(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        let s = self.doc.study().map_err(|e| to_py_err(py, &e))?;
+        Ok(s.parts.iter().map(|p| p.name.clone()).collect())
+    }
+
+    /// [`Study::run`] returning the raw results (dicts and numpy arrays) that
+    /// `flexmbs.results.Results` wraps.
+    #[pyo3(signature = (analysis=None, results_dir=None, cache=None, t_end=None))]
+    fn _run<'py>(
+        &self,
+        py: Python<'py>,
+        analysis: Option<String>,
+        results_dir: Option<PathBuf>,
+        cache: Option<PathBuf>,
+        t_end: Option<f64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let mut doc = self.doc.clone();
+        if let Some(name) = &analysis {
+            keep_only_analysis(py, &mut doc, name)?;
+        }
+        let st = doc.study().map_err(|e| to_py_err(py, &e))?;
+        let opts = options(results_dir, cache, t_end);
+        let dir = opts.results_dir(&st);
+        let mut recorder = Recorder::default();
+        let outcome = py.detach(|| study::run(&st, &opts, &mut recorder));
+        let d = PyDict::new(py);
+        d.set_item("results_dir", dir.display().to_string())?;
+        let analyses = PyList::empty(py);
+        for r in &recorder.analyses {
+            analyses.append(recorded_dict(py, r)?)?;
+        }
+        d.set_item("analyses", analyses)?;
+        d.set_item("messages", &recorder.progress)?;
+        match outcome {
+            Ok(summary) => {
+                d.set_item(
+                    "summary",
+                    json_to_py(py, &serde_json::to_value(&summary).map_err(to_json_err)?)?,
+                )?;
+                Ok(d)
+            }
+            Err(e) => {
+                let err = to_py_err(py, &*e);
+                // The partial results ride on the exception.
+                err.value(py).setattr("partial", d)?;
+                Err(err)
+            }
+        }
+    }
+
+    /// Runs the analyses (all, or the one named `analysis`) as `flexmbs run` does and returns a
+    /// `flexmbs.Results` (sensors, tables and the summary as numpy arrays and dicts): results go
+    /// into the results folder (`results_dir`, default `<study>-results` beside the study file),
+    /// reduced bodies through the cache (`cache`, default `.flexmbs-cache` beside it); `t_end`
+    /// ends every dynamic analysis earlier. A solver failure raises `SolveError` whose `partial`
+    /// holds the `Results` computed before it (also written to the folder).
+    #[pyo3(signature = (analysis=None, results_dir=None, cache=None, t_end=None))]
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        analysis: Option<String>,
+        results_dir: Option<PathBuf>,
+        cache: Option<PathBuf>,
+        t_end: Option<f64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let wrap = |raw: Bound<'py, PyAny>| -> PyResult<Bound<'py, PyAny>> {
+            py.import("flexmbs.results")?.getattr("Results")?.call1((raw,))
+        };
+        match self._run(py, analysis, results_dir, cache, t_end) {
+            Ok(raw) => wrap(raw.into_any()),
+            Err(e) => {
+                let value = e.value(py);
+                if let Ok(partial) = value.getattr("partial") {
+                    if !partial.is_none() {
+                        value.setattr("partial", wrap(partial)?)?;
+                    }
+                }
+                Err(e)
+            }
+        }
+    }
+
+    /// Reduces the parts that have a `[parts.reduction]` (or the one named `part`) through the
+    /// cache, as `flexmbs reduce` does without writing a results folder; returns
+    /// `{part name: ReducedBody}`.
+    #[pyo3(signature = (part=None, cache=None))]
+    fn reduce(
+        &self,
+        py: Python<'_>,
+        part: Option<String>,
+        cache: Option<PathBuf>,
+    ) -> PyResult<Vec<(String, ReducedBody)>> {
+        let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
+        let opts = options(None, cache, None);
+        let cache_dir = opts.cache_dir(&st);
+        let targets: Vec<usize> = match &part {
+            Some(name) => vec![st.part(name).map_err(|m| StudyError::new_err(m))?],
+            None => (0..st.parts.len())
+                .filter(|&i| st.parts[i].reduction.is_some())
+                .collect(),
+        };
+        let mut out = Vec::new();
+        for i in targets {
+            let p = &st.parts[i];
+            let reduced = py
+                .detach(|| study::run::reduce_part(p, &cache_dir, &mut ()))
+                .map_err(|e| to_py_err(py, &*e))?;
+            out.push((p.name.clone(), ReducedBody { body: reduced.body }));
+        }
+        Ok(out)
+    }
+
+    /// Starts the dynamic analysis `analysis` (default: the study's only dynamic analysis) for
+    /// stepping from Python; reduced bodies come through the cache as in a run.
+    #[pyo3(signature = (analysis=None, cache=None))]
+    fn simulation(&self, py: Python<'_>, analysis: Option<String>, cache: Option<PathBuf>) -> PyResult<Simulation> {
+        let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
+        let name = match analysis {
+            Some(n) => n,
+            None => {
+                let dynamic: Vec<&str> = st
+                    .analyses
+                    .iter()
+                    .filter(|a| a.kind_name() == "dynamic")
+                    .map(|a| a.name.as_str())
+                    .collect();
+                match dynamic.as_slice() {
+                    [one] => one.to_string(),
+                    [] => return Err(StudyError::new_err("the study has no dynamic analysis to step")),
+                    many => {
+                        return Err(StudyError::new_err(format!(
+                            "the study has {} dynamic analyses ({}): name one",
+                            many.len(),
+                            many.join(", ")
+                        )))
+                    }
+                }
+            }
+        };
+        let opts = options(None, cache, None);
+        let sim = py
+            .detach(|| study::Simulation::new(&st, &name, &opts))
+            .map_err(|e| to_py_err(py, &*e))?;
+        Ok(Simulation { sim, analysis: name })
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Study({:?})", self.doc.path.display().to_string())
+    }
+}
+
+/// Removes every analysis but `name` from `doc` (a run of one analysis), or raises
+/// `StudyError` naming the analyses there are.
+fn keep_only_analysis(py: Python<'_>, doc: &mut study::Document, name: &str) -> PyResult<()> {
+    let st = doc.study().map_err(|e| to_py_err(py, &e))?;
+    if !st.analyses.iter().any(|a| a.name == name) {
+        let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
+        return Err(StudyError::new_err(study::source::unknown_reference(
+            "analysis", name, &names,
+        )));
+    }
+    doc.retain_analyses(|n| n == name).map_err(|e| to_py_err(py, &*e))?;
+    Ok(())
+}
+
+/// A dynamic analysis stepped from Python (`Study.simulation`): `step()`, `advance_to(t)`,
+/// every sensor and the full state between steps, and the values of named loads set by a
+/// controller.
+#[pyclass(module = "flexmbs", name = "Simulation", unsendable)]
+pub struct Simulation {
+    sim: study::Simulation,
+    analysis: String,
+}
+
+#[pymethods]
+impl Simulation {
+    /// The analysis being stepped.
+    #[getter]
+    fn analysis(&self) -> &str {
+        &self.analysis
+    }
+
+    /// The time reached [s].
+    #[getter]
+    fn time(&self) -> f64 {
+        self.sim.time()
+    }
+
+    /// The analysis' step size [s].
+    #[getter]
+    fn dt(&self) -> f64 {
+        self.sim.step_size()
+    }
+
+    /// The analysis' end time [s] (stepping past it is allowed).
+    #[getter]
+    fn end_time(&self) -> f64 {
+        self.sim.end_time()
+    }
+
+    /// Steps taken.
+    #[getter]
+    fn steps(&self) -> usize {
+        self.sim.steps()
+    }
+
+    /// One time step; returns the Newton iterations it took. A step that fails raises
+    /// `SolveError` (time, step, residual) and leaves the state at the last converged step.
+    fn step(&mut self, py: Python<'_>) -> PyResult<usize> {
+        let report = self.sim.step().map_err(|e| to_py_err(py, &e))?;
+        Ok(report.iterations)
+    }
+
+    /// Steps until the time reaches `t`; returns the number of steps taken.
+    fn advance_to(&mut self, py: Python<'_>, t: f64) -> PyResult<usize> {
+        let sim = &mut self.sim;
+        py.detach(|| sim.advance_to(t)).map_err(|e| to_py_err(py, &e))
+    }
+
+    /// The names of the study's sensors.
+    #[getter]
+    fn sensor_names(&self) -> Vec<String> {
+        self.sim.sensors().iter().map(|g| g.name.clone()).collect()
+    }
+
+    /// Column names (with units) of sensor `name`.
+    fn sensor_columns(&self, py: Python<'_>, name: &str) -> PyResult<Vec<String>> {
+        match self.sim.sensors().iter().find(|g| g.name == name) {
+            Some(g) => Ok(g.columns.clone()),
+            None => self
+                .sim
+                .sensor(name)
+                .map(|_| Vec::new())
+                .map_err(|e| to_py_err(py, &*e)),
+        }
+    }
+
+    /// The values of sensor `name` now (numpy array of its columns).
+    fn sensor<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let v = self.sim.sensor(name).map_err(|e| to_py_err(py, &*e))?;
+        Ok(PyArray1::from_vec(py, v))
+    }
+
+    /// Every sensor now: `{name: numpy array of its columns}`.
+    fn sensors<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let values = self.sim.read().map_err(|e| to_py_err(py, &*e))?;
+        let d = PyDict::new(py);
+        for (g, v) in self.sim.sensors().iter().zip(values) {
+            d.set_item(&g.name, PyArray1::from_vec(py, v))?;
+        }
+        Ok(d)
+    }
+
+    /// The full state: `time`, the unknowns' `labels`, `velocity` and `acceleration`, every
+    /// scalar coordinate (`scalars`: joint and modal coordinates, unknown and prescribed) and the
+    /// free rotations as unit quaternions (`rotations`, n x 4, [w, x, y, z]).
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = self.sim.state();
+        let d = PyDict::new(py);
+        d.set_item("time", s.time())?;
+        d.set_item("labels", self.sim.system().dof_labels().to_vec())?;
+        d.set_item("velocity", PyArray1::from_slice(py, s.velocity()))?;
+        d.set_item("acceleration", PyArray1::from_slice(py, s.acceleration()))?;
+        let (scalars, rotations) = s.coordinates();
+        d.set_item("scalars", PyArray1::from_slice(py, scalars))?;
+        let q = Array2::from_shape_fn((rotations.len(), 4), |(i, k)| {
+            let r = rotations[i];
+            [r.w, r.i, r.j, r.k][k]
+        });
+        d.set_item("rotations", q.into_pyarray(py))?;
+        Ok(d)
+    }
+
+    /// Every node's motion: `names`, `position` (n x 3) [m], `orientation` (n x 4 unit
+    /// quaternions [w, x, y, z], node axes to global), `velocity`, `angular_velocity` (spatial),
+    /// `acceleration`, `angular_acceleration` (n x 3).
+    fn node_motions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let m = self.sim.node_motions();
+        let names: Vec<String> = self.sim.system().model().nodes.iter().map(|n| n.name.clone()).collect();
+        let n = m.len();
+        let d = PyDict::new(py);
+        d.set_item("names", names)?;
+        let v3 = |f: &dyn Fn(&mbs::NodeMotion) -> nalgebra::Vector3<f64>| {
+            Array2::from_shape_fn((n, 3), |(i, k)| f(&m[i])[k])
+        };
+        d.set_item("position", v3(&|x| x.r).into_pyarray(py))?;
+        d.set_item(
+            "orientation",
+            Array2::from_shape_fn((n, 4), |(i, k)| {
+                let q = m[i].R;
+                [q.w, q.i, q.j, q.k][k]
+            })
+            .into_pyarray(py),
+        )?;
+        d.set_item("velocity", v3(&|x| x.v).into_pyarray(py))?;
+        d.set_item("angular_velocity", v3(&|x| x.omega).into_pyarray(py))?;
+        d.set_item("acceleration", v3(&|x| x.a).into_pyarray(py))?;
+        d.set_item("angular_acceleration", v3(&|x| x.alpha).into_pyarray(py))?;
+        Ok(d)
+    }
+
+    /// The names of the study's point loads (those `set_load` can change).
+    #[getter]
+    fn load_names(&self) -> Vec<String> {
+        self.sim.load_names().into_iter().map(String::from).collect()
+    }
+
+    /// Sets the force [N] and/or moment [N m] of point load `name` (in the load's axes, as in
+    /// the study file; the load's time function still multiplies it) from the next step on.
+    #[pyo3(signature = (name, force=None, moment=None))]
+    fn set_load(
+        &mut self,
+        py: Python<'_>,
+        name: &str,
+        force: Option<[f64; 3]>,
+        moment: Option<[f64; 3]>,
+    ) -> PyResult<()> {
+        if force.is_none() && moment.is_none() {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "set_load('{name}'): give force=[fx, fy, fz] and/or moment=[mx, my, mz]"
+            )));
+        }
+        if let Some(f) = force {
+            self.sim
+                .set_load(name, mbs::LoadKind::Force, f)
+                .map_err(|e| to_py_err(py, &*e))?;
+        }
+        if let Some(m) = moment {
+            self.sim
+                .set_load(name, mbs::LoadKind::Moment, m)
+                .map_err(|e| to_py_err(py, &*e))?;
+        }
+        Ok(())
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Simulation(analysis={:?}, time={}, steps={})",
+            self.analysis,
+            self.sim.time(),
+            self.sim.steps()
+        )
+    }
+}

@@ -1,0 +1,151 @@
+"""Studies from Python: values by key path with the program's validation and located errors,
+runs whose results equal the program's to round-off, results folders and the cache."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import flexmbs
+
+
+def read_csv(path):
+    """A sensor CSV of a results folder: header, then rows of numbers."""
+    with open(path) as f:
+        header = f.readline().strip().split(",")
+    return header, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
+def test_get_and_set_values_by_key_path(examples):
+    study = flexmbs.Study.load(examples / "slider_crank.toml")
+    assert study["sections.rod.d"] == 0.006
+    assert study["parts.segment.reduction.modes"] == 2
+    assert study.get("materials[0].E") == 200e9
+    assert study["drivers.crank-speed.function"] == {"type": "constant-speed", "speed": 150.0}
+    study["parts.segment.reduction.modes"] = 3
+    study["sections.rod.d"] = np.float64(0.005)
+    study.set("drivers.crank-speed.function.speed", 120)
+    assert study["parts.segment.reduction.modes"] == 3
+    assert study["sections.rod.d"] == 0.005
+    assert study["drivers.crank-speed.function.speed"] == 120
+    # The text keeps its comments and shows the new values.
+    assert "# Planar flexible slider-crank" in study.text
+    assert "d = 0.005" in study.text
+    assert study.analyses == ["run-up"]
+    assert study.parts == ["segment"]
+
+
+def test_a_refused_value_is_located_and_not_kept(examples):
+    study = flexmbs.Study.load(examples / "slider_crank.toml")
+    with pytest.raises(flexmbs.StudyError) as e:
+        study["materials.steel.E"] = -1.0
+    err = e.value
+    assert isinstance(err, flexmbs.FlexmbsError)
+    assert err.file.endswith("slider_crank.toml")
+    assert err.key == "materials[0].E"
+    # The line and column of the value in the study text as it would be.
+    line = [i + 1 for i, l in enumerate(study.text.splitlines()) if l.startswith("E = ")][0]
+    assert err.line == line and err.column == 5
+    assert len(err.errors) >= 1 and err.errors[0]["message"]
+    assert "E" in str(err)
+    # Not kept: the study still has its own value and is valid.
+    assert study["materials.steel.E"] == 200e9
+    study.validate()
+    # Several values that are only valid together; a failure keeps none of them.
+    with pytest.raises(flexmbs.StudyError):
+        study.update({"parts.segment.reduction.modes": 4, "sections.rod.d": -0.006})
+    assert study["parts.segment.reduction.modes"] == 2
+    study.update({"parts.segment.reduction.modes": 4, "sections.rod.d": 0.007})
+    assert study["sections.rod.d"] == 0.007
+
+
+def test_key_paths_that_lead_nowhere(examples):
+    study = flexmbs.Study.load(examples / "slider_crank.toml")
+    with pytest.raises(flexmbs.KeyPathError) as e:
+        study["sections.nope.d"]
+    assert e.value.path == "sections.nope.d"
+    with pytest.raises(flexmbs.KeyPathError):
+        study["parts[7].reduction"]
+    with pytest.raises(TypeError):
+        study["sections.rod.d"] = object()
+
+
+def test_invalid_files_and_texts_raise_located_errors(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[study]\ntitle = "x"\n\n[[materials]]\nname = "steel"\nE = "stiff"\nnu = 0.3\nrho = 7850.0\n')
+    with pytest.raises(flexmbs.StudyError) as e:
+        flexmbs.Study.load(bad)
+    assert e.value.file == str(bad) and e.value.line == 6
+    with pytest.raises(flexmbs.StudyError) as e:
+        flexmbs.Study.from_toml("[study\n", base_dir=tmp_path, name="typed.toml")
+    assert e.value.file.endswith("typed.toml") and e.value.line == 1
+
+
+def test_run_equals_the_program_to_round_off(examples, cli, tmp_path):
+    # The slider-crank over 0.01 s (100 steps): the program and Python on the same study file.
+    study_file = examples / "slider_crank.toml"
+    cli("run", study_file, "--t-end", "0.01", "--out", tmp_path / "cli", cwd=examples)
+    study = flexmbs.Study.load(study_file)
+    res = study.run(t_end=0.01, results_dir=tmp_path / "py")
+    a = res["run-up"]
+    assert a.kind == "dynamic"
+    for name in ["rod-mid", "slider", "crank-angle", "drive-torque", "energy"]:
+        s = a.sensor(name)
+        header, table = read_csv(tmp_path / "cli" / "run-up" / f"{name}.csv")
+        assert header == ["t [s]", *s.labels]
+        # The same computation in the same library: equal to the last bit, which the CSV's
+        # shortest round-trip numbers keep.
+        np.testing.assert_array_equal(s.time, table[:, 0])
+        np.testing.assert_array_equal(s.values, table[:, 1:])
+        # The Python run wrote the same folder.
+        _, own = read_csv(tmp_path / "py" / "run-up" / f"{name}.csv")
+        np.testing.assert_array_equal(own, table)
+    s = a.sensor("rod-mid")
+    assert s.units == ["m"] and len(s.time) == 101
+    assert res.summary["status"] == "done"
+    cli_summary = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    assert [x["name"] for x in res.summary["analyses"]] == [x["name"] for x in cli_summary["analyses"]]
+    assert a.summary["results"] == cli_summary["analyses"][0]["results"]
+
+
+def test_linearized_frequencies_and_mode_labels(examples, cli, tmp_path):
+    study_file = examples / "four_bar.toml"
+    study = flexmbs.Study.load(study_file)
+    name = [a for a in study.analyses if a.startswith("linearized")][0]
+    res = study.run(analysis=name, results_dir=tmp_path / "py")
+    a = res[name]
+    f = a.frequencies
+    labels = a.mode_labels
+    assert f is not None and len(f) >= 1 and np.all(np.diff(f) >= 0)
+    assert len(labels) == len(f)
+    cli("run", study_file, "--out", tmp_path / "cli", cwd=examples)
+    header, table = read_csv(tmp_path / "cli" / name / "frequencies.csv")
+    col = [i for i, h in enumerate(header) if "[Hz]" in h][0]
+    np.testing.assert_allclose(f, table[:, col], rtol=1e-14)
+
+
+def test_the_cache_is_shared_with_the_program(examples, cli, tmp_path):
+    study_file = examples / "slider_crank.toml"
+    cli("reduce", study_file, cwd=examples)
+    cached = sorted((examples / ".flexmbs-cache").glob("*.rbody"))
+    assert len(cached) == 1
+    stamp = cached[0].stat().st_mtime_ns
+    res = flexmbs.Study.load(study_file).run(t_end=0.001, results_dir=tmp_path / "py")
+    assert any("cache" in m for m in res.messages), res.messages
+    assert sorted((examples / ".flexmbs-cache").glob("*.rbody")) == cached
+    assert cached[0].stat().st_mtime_ns == stamp
+    # A changed reduction setting is a new cache entry.
+    study = flexmbs.Study.load(study_file)
+    study["parts.segment.reduction.modes"] = 3
+    study.run(t_end=0.001, results_dir=tmp_path / "py3")
+    assert len(list((examples / ".flexmbs-cache").glob("*.rbody"))) == 2
+
+
+def test_study_from_text_takes_relative_paths_from_base_dir(examples, tmp_path):
+    text = (examples / "slider_crank.toml").read_text()
+    study = flexmbs.Study.from_toml(text, base_dir=examples, name="copy.toml")
+    assert study.path.endswith("copy.toml")
+    res = study.run(t_end=0.001)
+    assert res.results_dir.startswith(str(examples))
+    assert math.isfinite(res.sensor("rod-mid").values[-1, 0])
