@@ -204,13 +204,22 @@ pub enum NewtonStrategy {
 pub const MODIFIED_NEWTON_RATE: f64 = 0.01;
 
 impl DynamicSettings {
+    /// $\rho_\infty$ when a study gives none: damps the highest frequencies a little (the
+    /// spectral radius of a mode at $\omega h \to \infty$ is 0.9 per step) and keeps second
+    /// order.
+    pub const DEFAULT_RHO_INF: f64 = 0.9;
+    /// Default [`DynamicSettings::tolerance`].
+    pub const DEFAULT_TOLERANCE: f64 = 1e-9;
+    /// Default [`DynamicSettings::max_iterations`].
+    pub const DEFAULT_MAX_ITERATIONS: usize = 20;
+
     pub fn new(step: f64, end_time: f64, rho_inf: f64) -> Self {
         Self {
             step,
             end_time,
             rho_inf,
-            tolerance: 1e-9,
-            max_iterations: 20,
+            tolerance: Self::DEFAULT_TOLERANCE,
+            max_iterations: Self::DEFAULT_MAX_ITERATIONS,
             output_every: 1,
             momentum: MomentumProjection::Auto,
             newton: NewtonStrategy::Full,
@@ -736,9 +745,7 @@ pub fn solve_dynamic(
 ) -> Result<Trajectory, Box<Incomplete<Trajectory>>> {
     let fail = |error: SolveError, traj: Trajectory| Box::new(Incomplete { error, partial: traj });
     let (mut integ, mut traj) = start_trajectory(system, start, settings)?;
-    let n_steps = ((settings.end_time - integ.state().time) / settings.step - 1e-9)
-        .ceil()
-        .max(0.0) as usize;
+    let n_steps = integ.steps_to(settings.end_time);
     let every = settings.output_every.max(1);
     for k in 1..=n_steps {
         match integ.step() {

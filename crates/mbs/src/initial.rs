@@ -27,7 +27,7 @@
 //! \mathbf p)$; a body held by the ground is refused (its motion is its joints' rates).
 
 use crate::coordinates::Slot;
-use crate::error::ModelError;
+use crate::error::{Entity, ModelError};
 use crate::model::{Body, InitialCondition, Model, NodeId};
 use crate::system::{unknown, State, System};
 use crate::topology::{RootRotation, Topology};
@@ -123,7 +123,8 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
     model
         .initial
         .iter()
-        .map(|c| match c {
+        .enumerate()
+        .map(|(i, c)| match c {
             InitialCondition::JointValue { joint, .. } | InitialCondition::JointRate { joint, .. } => {
                 let j = &model.joints[joint.index()];
                 match reach(&adj, topo, &[j.child.index()], Some(joint.index()), Some(j.parent.index())) {
@@ -136,6 +137,7 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
                             node_name(n),
                             if n == j.parent.index() { "its own parent" } else { "held by the ground" }
                         ),
+                        id: Some(Entity::InitialCondition(i)),
                     }),
                 }
             }
@@ -153,6 +155,7 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
                             "the body is held by the ground through node '{}'; give the initial rates of its joints instead",
                             node_name(n)
                         ),
+                        id: Some(Entity::InitialCondition(i)),
                     }),
                 }
             }

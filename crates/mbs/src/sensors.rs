@@ -73,6 +73,7 @@ impl System {
         let map = &self.topo.map;
         let body_err = |f: &crate::body::FlexibleElement, source| SolveError::Body {
             body: self.model.bodies[f.body].name().to_string(),
+            id: crate::model::BodyId(f.body as u32),
             t: state.time,
             source,
         };

@@ -26,7 +26,7 @@ use crate::body::{
     LoadElement, RigidElement, SpringElement,
 };
 use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
-use crate::error::{ModelError, SolveError};
+use crate::error::{Entity, ModelError, SolveError};
 use crate::initial::InitialPlan;
 use crate::joint_forces::{Control, JointForces};
 use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId};
@@ -361,7 +361,7 @@ impl System {
         topology::check_references(model)?;
         let topo = topology::build(model)?;
         let map = &topo.map;
-        let invalid = |entity: String, what: String| ModelError::InvalidValue { entity, what };
+        let invalid = |id: Option<Entity>, entity: String, what: String| ModelError::InvalidValue { entity, what, id };
         let mut flexible = Vec::new();
         let mut rigid = Vec::new();
         // Model size: spread of the nodes, flexible bodies and centres of mass.
@@ -378,16 +378,18 @@ impl System {
                     let N = f.reduced.interfaces.len();
                     if f.nodes.len() != N {
                         return Err(invalid(
+                            Some(Entity::Body(BodyId(bi as u32))),
                             format!("body '{}'", f.name),
                             format!("{} nodes for {N} interfaces", f.nodes.len()),
                         ));
                     }
-                    let se = Superelement::new(&f.reduced, f.frame, f.mass, f.damping.clone()).map_err(|source| {
-                        ModelError::Superelement {
+                    let se = Superelement::shared(Arc::clone(&f.reduced), f.frame, f.mass, f.damping.clone()).map_err(
+                        |source| ModelError::Superelement {
                             body: f.name.clone(),
+                            body_id: BodyId(bi as u32),
                             source,
-                        }
-                    })?;
+                        },
+                    )?;
                     let pos: Vec<Vector3<f64>> =
                         f.reduced.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
                     let tolerance = 1e-6 * (1.0 + size_body(&pos));
@@ -404,6 +406,8 @@ impl System {
                                 node: node.name.clone(),
                                 distance,
                                 tolerance,
+                                body_id: BodyId(bi as u32),
+                                node_id: f.nodes[k],
                             });
                         }
                         offsets.push(node.orientation.inverse() * f.placement.rotation);
@@ -431,6 +435,7 @@ impl System {
                         && r.inertia.iter().all(|x| x.is_finite());
                     if !ok {
                         return Err(invalid(
+                            Some(Entity::Body(BodyId(bi as u32))),
                             format!("rigid body '{}'", r.name),
                             "mass must be finite and >= 0, centre of mass and inertia finite".into(),
                         ));
@@ -448,15 +453,17 @@ impl System {
         for (i, p) in model.point_masses.iter().enumerate() {
             if !(p.mass >= 0.0 && finite(p.mass)) {
                 return Err(invalid(
+                    Some(Entity::PointMass(i)),
                     format!("point mass {i}"),
                     format!("mass must be finite and >= 0, got {}", p.mass),
                 ));
             }
         }
         let mut springs = Vec::new();
-        for s in &model.springs {
+        for (i, s) in model.springs.iter().enumerate() {
             if !(s.stiffness >= 0.0 && s.damping >= 0.0 && finite(s.stiffness) && finite(s.damping)) {
                 return Err(invalid(
+                    Some(Entity::Spring(i)),
                     format!("spring '{}'", s.name),
                     "stiffness and damping must be finite and >= 0".into(),
                 ));
@@ -475,9 +482,13 @@ impl System {
         }
         let mut loads = Vec::new();
         for (i, l) in model.loads.iter().enumerate() {
-            let time = l.time.compile(&format!("load {i}"))?;
+            let time = (l.time.compile(&format!("load {i}"))).map_err(|e| e.with_id(Entity::Load(i)))?;
             if !l.value.iter().all(|x| x.is_finite()) {
-                return Err(invalid(format!("load {i}"), "non-finite value".into()));
+                return Err(invalid(
+                    Some(Entity::Load(i)),
+                    format!("load {i}"),
+                    "non-finite value".into(),
+                ));
             }
             let node = &model.nodes[l.node.index()];
             let (follower, value) = match l.axes {
@@ -496,6 +507,7 @@ impl System {
         for (i, js) in model.joint_springs.iter().enumerate() {
             let s = *topo.joint_scalars[js.joint.index()].get(js.coordinate).ok_or_else(|| {
                 invalid(
+                    Some(Entity::JointSpring(i)),
                     format!("joint spring {i}"),
                     format!("joint coordinate {} does not exist", js.coordinate),
                 )
@@ -505,9 +517,10 @@ impl System {
         let drivers = model
             .drivers
             .iter()
-            .map(|d| d.motion.compile(&format!("driver '{}'", d.name)))
+            .enumerate()
+            .map(|(i, d)| (d.motion.compile(&format!("driver '{}'", d.name))).map_err(|e| e.with_id(Entity::Driver(i))))
             .collect::<Result<Vec<_>, _>>()?;
-        for c in &model.initial {
+        for (i, c) in model.initial.iter().enumerate() {
             if let InitialCondition::JointValue { joint, coordinate, .. }
             | InitialCondition::JointRate { joint, coordinate, .. } = c
             {
@@ -516,6 +529,7 @@ impl System {
                     Some(&s) if matches!(map.scalars[s].slot, Slot::Unknown(_)) => {}
                     _ => {
                         return Err(invalid(
+                            Some(Entity::InitialCondition(i)),
                             format!("initial condition on joint '{}'", j.name),
                             format!("coordinate {coordinate} is not a free coordinate of the joint"),
                         ))
@@ -570,7 +584,7 @@ impl System {
         for (i, u) in user_forces.iter().enumerate() {
             elements.push(ElementRef {
                 kind: ElementKind::User(i),
-                nodes: crate::user_force::check_nodes(u.as_ref(), model.nodes.len())?,
+                nodes: crate::user_force::check_nodes(u.as_ref(), i, model.nodes.len())?,
                 modal: vec![],
             });
         }
@@ -599,7 +613,7 @@ impl System {
         let lu = if n > 0 {
             Some(
                 SymbolicLu::try_new(symbolic.as_ref())
-                    .map_err(|e| invalid("system".into(), format!("symbolic LU failed: {e:?}")))?,
+                    .map_err(|e| invalid(None, "system".into(), format!("symbolic LU failed: {e:?}")))?,
             )
         } else {
             None
@@ -690,12 +704,14 @@ impl System {
             return Err(ModelError::InvalidValue {
                 entity: format!("load {load}"),
                 what: "non-finite value".into(),
+                id: Some(Entity::Load(load)),
             });
         }
         let (Some(l), Some(e)) = (self.model.loads.get_mut(load), self.loads.get_mut(load)) else {
             return Err(ModelError::InvalidValue {
                 entity: format!("load {load}"),
                 what: format!("there are {} loads", self.model.loads.len()),
+                id: None,
             });
         };
         l.value = value;
@@ -1316,6 +1332,7 @@ impl System {
                 f.element_into(nodes, modal, state.frames[*i], gravity, tangents, flex, out)
                     .map_err(|source| SolveError::Body {
                         body: self.model.bodies[f.body].name().to_string(),
+                        id: crate::model::BodyId(f.body as u32),
                         t: state.time,
                         source,
                     })?;
@@ -1335,7 +1352,7 @@ impl System {
             ElementKind::User(i) => {
                 let buffer = buf.user.as_mut().expect("user force buffer");
                 let force = self.user_forces[*i].as_ref();
-                user_force_element(force, &e.nodes, nodes, state.time, lambda, tangents, buffer, out)?;
+                user_force_element(force, *i, &e.nodes, nodes, state.time, lambda, tangents, buffer, out)?;
             }
         }
         Ok(())

@@ -96,3 +96,11 @@ mod user_force;
 /// An integrator that owns its system; loads changed between steps.
 #[path = "unit/stepping.rs"]
 mod stepping;
+
+/// What each joint coordinate measures (units of sensors and efforts).
+#[path = "unit/units.rs"]
+mod units;
+
+/// Modal coordinates and deformed meshes of a state; points welded into nodes.
+#[path = "unit/recovery.rs"]
+mod recovery;

@@ -21,6 +21,21 @@ pub fn beam_body(
     rho: f64,
     modes: ModeSelection,
 ) -> ReducedBody {
+    beam_body_with(name, a, b, elements, side, E, rho, modes, false)
+}
+
+/// [`beam_body`], with the mode shapes on every FE node kept when `keep_mesh_shapes`.
+pub fn beam_body_with(
+    name: &str,
+    a: Vector3<f64>,
+    b: Vector3<f64>,
+    elements: usize,
+    side: f64,
+    E: f64,
+    rho: f64,
+    modes: ModeSelection,
+    keep_mesh_shapes: bool,
+) -> ReducedBody {
     let mut model = FeModel::default();
     let material = model.add_material(IsotropicMaterial::new("steel", E, 0.3, rho).unwrap());
     let section = model.add_section(BeamSection::rectangle("square", side, side, 0.3).unwrap());
@@ -44,7 +59,7 @@ pub fn beam_body(
     .unwrap();
     let interfaces = vec![("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
     let mut settings = CbSettings::new(modes);
-    settings.keep_mesh_shapes = false;
+    settings.keep_mesh_shapes = keep_mesh_shapes;
     let mut body = reduce(&model, name, &interfaces, &settings).unwrap();
     body.name = name.into();
     body

@@ -83,3 +83,76 @@ fn a_load_changed_between_steps_acts_from_the_next_step() {
     assert!(a.iter().all(|x| x.abs() < 1e-12), "{a:?}");
     assert!(b.iter().any(|x| *x > 1e-6), "{b:?}");
 }
+
+/// `run_to` with fixed steps is the loop of `solve_dynamic`: the same steps, the same final
+/// state to the bit, the callback after each step in order; a callback error stops it where it
+/// is.
+#[test]
+fn streamed_steps_are_the_steps_of_solve_dynamic() {
+    let sys = crate::fixtures::released(0.4);
+    // 0.05 s in steps of 1e-3 s: 50 steps, though 0.05 / 1e-3 rounds to 50.000000000000004.
+    let s = settings();
+    let traj = mbs::solve_dynamic(&sys, sys.initial_state(), &s).unwrap();
+    let mut integ = Integrator::new(&sys, sys.initial_state(), s.clone()).unwrap();
+    assert_eq!(integ.steps_to(s.end_time), 50);
+    // min_step = h: a failed step is not retried (there is none here).
+    let fixed = mbs::Stepping::Fixed { min_step: s.step };
+    let mut seen = Vec::new();
+    let (totals, failure) = integ
+        .run_to(s.end_time, &fixed, |done, i| -> Result<(), ()> {
+            assert_eq!(done.time, i.state().time());
+            assert_eq!(done.last, done.k == 50);
+            assert_eq!(done.planned, Some(50));
+            seen.push(done.k);
+            Ok(())
+        })
+        .unwrap();
+    assert!(failure.is_none());
+    assert_eq!(seen, (1..=50).collect::<Vec<_>>());
+    assert_eq!((totals.steps, totals.planned), (50, Some(50)));
+    assert!(totals.retries.is_empty());
+    assert_eq!(totals.iterations, traj.iterations.iter().sum::<usize>());
+    assert_eq!(totals.max_iterations, *traj.iterations.iter().max().unwrap());
+    // Steps of 1e-3 s to the round-off of the times they join.
+    assert!((totals.smallest_step - s.step).abs() < 1e-15 && (totals.largest_step - s.step).abs() < 1e-15);
+    assert_eq!(integ.state().coordinates().0, traj.final_state.coordinates().0);
+    assert_eq!(integ.state().velocity(), traj.final_state.velocity());
+
+    let mut integ = Integrator::new(&sys, sys.initial_state(), s.clone()).unwrap();
+    let stopped = integ.run_to(
+        s.end_time,
+        &fixed,
+        |done, _| if done.k == 7 { Err(done.k) } else { Ok(()) },
+    );
+    assert_eq!(stopped, Err(7));
+    assert_eq!(integ.steps(), 7);
+}
+
+/// Adaptive streaming lands on the end time, and its last step says so.
+#[test]
+fn adaptive_streamed_steps_land_on_the_end_time() {
+    let sys = crate::fixtures::released(0.4);
+    let s = settings();
+    let mut integ = Integrator::new(&sys, sys.initial_state(), s.clone()).unwrap();
+    let adaptive = mbs::Stepping::Adaptive(mbs::AdaptiveSettings::new(1e-4, 1e-6, 1e-2));
+    let mut last = Vec::new();
+    let (totals, failure) = integ
+        .run_to(s.end_time, &adaptive, |done, _| -> Result<(), ()> {
+            assert_eq!(done.planned, None);
+            last.push(done.last);
+            Ok(())
+        })
+        .unwrap();
+    assert!(failure.is_none());
+    assert_eq!(totals.steps, last.len());
+    // Only the final step is the last.
+    assert_eq!(last.iter().filter(|l| **l).count(), 1);
+    assert_eq!(last.last(), Some(&true));
+    // On the end time to the round-off of summed steps.
+    assert!(
+        (integ.state().time() - s.end_time).abs() < 1e-12,
+        "{}",
+        integ.state().time()
+    );
+    assert!(totals.smallest_step <= totals.largest_step);
+}
