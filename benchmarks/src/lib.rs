@@ -23,8 +23,8 @@ use fe_model::{
     add_interface_on_set, box_mesh, solid_model, BeamProperties, BeamSection, BeamTheory, CellKind, FeModel,
     IsotropicMaterial, MassKind, SpiderKind,
 };
-use mbs::{JointKind, Model, NodeId, RigidBody, SensorKind, Support};
-use nalgebra::{Isometry3, Matrix3, Point3, UnitQuaternion, Vector3};
+use mbs::{Model, NodeId, SensorKind};
+use nalgebra::{Point3, UnitQuaternion, Vector3};
 use reduction::{reduce, CbSettings, ModeSelection, ReducedBody};
 use superelement::{BodyState, Damping, Frame, FrameChoice, MassVariant, Superelement};
 use thiserror::Error;
@@ -59,7 +59,9 @@ pub struct RodMesh {
     pub across: usize,
 }
 
-/// The mechanism of validation problem C2 (all SI).
+/// The mechanism of validation problem C2 (all SI): the values of the standard problem
+/// (`models`); the model builder [`slider_crank_model`] takes its geometry and masses from there
+/// and the speed from here, the rod bodies take the section and steel from here.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SliderCrank {
     pub crank: f64,
@@ -77,15 +79,15 @@ pub struct SliderCrank {
 impl SliderCrank {
     /// Jonker & Meijaard's values (validation problem C2); Poisson's ratio 0.3 for the solid rod.
     pub const C2: SliderCrank = SliderCrank {
-        crank: 0.15,
-        rod: 0.30,
+        crank: models::CRANK,
+        rod: models::ROD,
         speed: 150.0,
-        diameter: 0.006,
-        E: 200e9,
+        diameter: models::ROD_D,
+        E: models::STEEL_E,
         nu: 0.3,
-        rho: 7870.0,
-        crank_mass: 0.1,
-        crank_inertia: [1e-5, 2e-4, 2e-4],
+        rho: models::STEEL_RHO,
+        crank_mass: models::CRANK_MASS,
+        crank_inertia: models::CRANK_INERTIA,
     };
 
     /// Side $a$ of the square section with the round rod's second moment of area:
@@ -191,11 +193,13 @@ pub fn beam_rod_body(
 }
 
 /// The slider-crank model with the rod as `n` identical segments `segment` (reduced from
-/// x = 0 to l/n, interfaces a then b), frame and inertia variant as given. Starts at the
-/// dead centre (crank along x) with the rigid mechanism's velocities. Sensors: "slider"
-/// (position), "A", "B" (rod end positions), "rotA", "rotB" (their rotations), "eta0"
-/// (modal coordinates of the first segment) and, for even `n`, "midpoint" (signed distance of
-/// the middle node from the chord). Returns the model and the rod's nodes.
+/// x = 0 to l/n, interfaces a then b), frame and inertia variant as given: the planar
+/// slider-crank of the standard problems ([`models::slider_crank_planar_with`]; crank, rod and
+/// slider of validation problem C2) driven at `p.speed`. Starts at the dead centre (crank along
+/// x) with the rigid mechanism's velocities. Sensors: "slider" (position), for even `n`
+/// "midpoint" (signed distance of the middle node from the chord), and "A", "B" (rod end
+/// positions), "rotA", "rotB" (their rotations), "eta0" (modal coordinates of the first
+/// segment). Returns the model and the rod's nodes.
 pub fn slider_crank_model(
     p: &SliderCrank,
     n: usize,
@@ -203,89 +207,15 @@ pub fn slider_crank_model(
     frame: FrameChoice,
     mass: MassVariant,
 ) -> (Model, Vec<NodeId>) {
-    let z = Vector3::z();
-    let seg = p.rod / n as f64;
-    let mut m = Model::new("slider-crank C2");
-    let o = m.add_node("O", Vector3::zeros());
-    let c0 = m.add_node("crank", Vector3::zeros());
-    let a = m.add_node("A", Vector3::new(p.crank, 0.0, 0.0));
-    let s = m.add_node("slider", Vector3::new(p.crank + p.rod, 0.0, 0.0));
-    let rod: Vec<NodeId> = (0..=n)
-        .map(|i| m.add_node(&format!("rod{i}"), Vector3::new(p.crank + seg * i as f64, 0.0, 0.0)))
-        .collect();
-    m.add_support(Support::clamp(o));
-    let jc = m.add_joint("crank", o, c0, JointKind::Revolute { axis: z });
-    m.add_driver(
-        "crank speed",
-        mbs::DriverTarget::Joint {
-            joint: jc,
-            coordinate: 0,
-        },
-        mbs::TimeFunction::Linear {
-            initial: 0.0,
-            rate: p.speed,
-        },
-    );
-    let [Ix, Iy, Iz] = p.crank_inertia;
-    m.add_rigid_body(RigidBody {
-        name: "crank".into(),
-        reference: c0,
-        nodes: vec![a],
-        mass: p.crank_mass,
-        center_of_mass: Vector3::new(p.crank / 2.0, 0.0, 0.0),
-        inertia: Matrix3::from_diagonal(&Vector3::new(Ix, Iy, Iz)),
-    });
-    for i in 0..n {
-        let mut b = segment.clone();
-        b.name = format!("rod{i}");
-        let place = Isometry3::translation(p.crank + seg * i as f64, 0.0, 0.0);
-        m.add_flexible_body(b, vec![rod[i], rod[i + 1]], place, frame, mass);
-    }
-    let ja = m.add_joint("pin A", a, rod[0], JointKind::Revolute { axis: z });
-    m.add_support(Support::slider(s, Vector3::x()));
-    let jb = m.add_joint("pin B", s, rod[n], JointKind::Revolute { axis: z });
-    m.point_masses.push(mbs::PointMass {
-        node: s,
-        mass: segment.inertia.mass * n as f64 / 2.0,
-    });
-    m.add_sensor("slider", SensorKind::NodePosition { node: s });
+    let segment = models::Segment { body: segment.clone() };
+    let sc = models::slider_crank_planar_with(n, &segment, p.speed, models::Variant { frame, mass });
+    let (mut m, rod) = (sc.model, sc.rod_nodes);
     m.add_sensor("A", SensorKind::NodePosition { node: rod[0] });
     m.add_sensor("B", SensorKind::NodePosition { node: rod[n] });
     m.add_sensor("rotA", SensorKind::NodeRotation { node: rod[0] });
     m.add_sensor("rotB", SensorKind::NodeRotation { node: rod[n] });
+    // Body 0 is the crank, body 1 the first rod segment.
     m.add_sensor("eta0", SensorKind::ModalCoordinates { body: mbs::BodyId(1) });
-    if n % 2 == 0 {
-        m.add_sensor(
-            "midpoint",
-            SensorKind::LineDistance {
-                node: rod[n / 2],
-                a: rod[0],
-                b: rod[n],
-                normal: Some(z),
-            },
-        );
-    }
-    // Rigid-body velocities at the dead centre: the rod turns about B at -Omega r / l.
-    let w_rod = p.rod_rate();
-    let B = Vector3::new(p.crank + p.rod, 0.0, 0.0);
-    for (i, &node) in rod.iter().enumerate().take(n).skip(1) {
-        let r = Vector3::new(p.crank + seg * i as f64, 0.0, 0.0) - B;
-        m.initial.push(mbs::InitialCondition::NodeVelocity {
-            node,
-            velocity: z.cross(&r) * w_rod,
-            angular_velocity: z * w_rod,
-        });
-    }
-    m.initial.push(mbs::InitialCondition::JointRate {
-        joint: ja,
-        coordinate: 0,
-        rate: w_rod - p.speed,
-    });
-    m.initial.push(mbs::InitialCondition::JointRate {
-        joint: jb,
-        coordinate: 0,
-        rate: w_rod,
-    });
     (m, rod)
 }
 

@@ -21,7 +21,7 @@
 #![allow(non_snake_case)]
 
 pub mod benchmarks;
-pub mod models;
+pub use ::models;
 
 use std::fmt::Write;
 use std::path::{Path, PathBuf};

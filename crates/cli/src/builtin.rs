@@ -34,7 +34,7 @@ pub fn run(options: &Options) -> Result<(), BoxError> {
         "flexmbs: the built-in example: {}",
         study.title.as_deref().unwrap_or("slider-crank")
     );
-    let summary = crate::cli::run(&study, options)?;
+    let summary = crate::console::run(&study, options, None)?;
     let out = options.results_dir(&study);
     let dir = out.join(&summary.analyses[0].name);
     let angle = column(&dir.join("crank-angle.csv"), 1)?;

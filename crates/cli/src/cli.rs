@@ -1,5 +1,6 @@
 //! The command line: parsing the arguments and dispatching to the commands.
 
+pub use crate::console::run;
 use crate::console::Console;
 use std::path::{Path, PathBuf};
 use study::error::BoxError;
@@ -37,21 +38,25 @@ options of run and reduce:
   --foreign-files refuse|keep
                  a results folder holding files flexmbs did not write: refuse to run
                  (default) or write beside them; flexmbs deletes only files it wrote
-option of run:
+options of run:
   --t-end T      end every dynamic analysis at T seconds at the latest (a short run; the
                  summary says so)
+  --analysis NAME
+                 run this analysis alone (first the analyses its `start` names, if any)
 
 `flexmbs COMMAND --help` shows one command.
 
 The study file format is described in docs/study-file.md. Errors go to stderr with the
-file, line, column and key they are about; the exit code is 0 on success, 2 on any error.";
+file, line, column and key they are about; the exit code is 0 on success, 1 when `inspect`
+finds a reduced body that fails its physical checks, 2 on any other error.";
 
 /// The help of one command (`flexmbs COMMAND --help`).
 pub fn command_help(command: &str) -> Option<&'static str> {
     Some(match command {
         "run" => {
             "\
-usage: flexmbs run [STUDY.toml] [--out DIR] [--cache DIR] [--t-end T] [--foreign-files refuse|keep]
+usage: flexmbs run [STUDY.toml] [--analysis NAME] [--out DIR] [--cache DIR] [--t-end T]
+                   [--foreign-files refuse|keep]
 
 Validates the study, then runs its analyses in order and writes the results folder
 (default: STUDY-results beside the study file). Without a file, runs the built-in example,
@@ -59,7 +64,11 @@ the flexible planar slider-crank (validation problem C2), into ./slider_crank-re
 
   --out DIR      results folder
   --cache DIR    reduced-body cache (default: .flexmbs-cache beside the study file)
-  --t-end T      end every dynamic analysis at T seconds at the latest; the summary says so"
+  --t-end T      end every dynamic analysis at T seconds at the latest; the summary says so
+  --analysis NAME
+                 run this analysis alone; when its `start` names another analysis, that one
+                 (and the one its `start` names, and so on) runs first and writes its results
+                 too. The other analyses' results are left as they are."
         }
         "check" => {
             "\
@@ -80,7 +89,8 @@ files (.rbody), through the cache."
 usage: flexmbs inspect FILE.rbody [--excitation-hz F]
 
 Shows a reduced body: interfaces, mass data, fixed-interface frequencies and modal effective
-masses; with F, whether the kept modes reach 3 x F."
+masses; with F, whether the kept modes reach 3 x F. Exits with 1 when the body fails its
+physical checks (the report lists them), with 2 when the file cannot be read."
         }
         "example" => {
             "\
@@ -170,6 +180,20 @@ fn run_options(options: &[(String, String)]) -> Result<Options, BoxError> {
     })
 }
 
+/// A command that ran to the end but whose checks failed (exit code 1, not 2).
+#[derive(Debug)]
+pub struct ChecksFailed {
+    pub what: String,
+}
+
+impl std::fmt::Display for ChecksFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.what)
+    }
+}
+
+impl std::error::Error for ChecksFailed {}
+
 fn one_file(positional: &[String], command: &str, what: &str) -> Result<PathBuf, BoxError> {
     match positional {
         [file] => Ok(PathBuf::from(file)),
@@ -186,18 +210,6 @@ fn load(path: &std::path::Path) -> Result<study::Study, BoxError> {
         crate::tell!("flexmbs: warning: {w}");
     }
     Ok(study)
-}
-
-/// Runs every analysis of `study` into its results folder, progress on the console.
-pub fn run(study: &study::Study, options: &Options) -> Result<study::output::Summary, BoxError> {
-    let summary = study::run(study, options, &mut Console::default())?;
-    crate::tell!(
-        "flexmbs: {} analyses done in {:.2} s; results in {}",
-        summary.analyses.len(),
-        summary.total_seconds,
-        options.results_dir(study).display()
-    );
-    Ok(summary)
 }
 
 /// Runs the command line `args` (without the program name).
@@ -226,7 +238,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             Ok(())
         }
         "run" => {
-            let (positional, options) = parse(rest, &["out", "cache", "t-end", "foreign-files"])?;
+            let (positional, options) = parse(rest, &["out", "cache", "t-end", "foreign-files", "analysis"])?;
             let mut run_options = run_options(&options)?;
             if let Some(v) = option(&options, "t-end") {
                 run_options.t_end = Some(
@@ -237,11 +249,11 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 );
             }
             match positional.as_slice() {
-                [] => crate::builtin::run(&run_options),
+                [] if option(&options, "analysis").is_none() => crate::builtin::run(&run_options),
                 _ => {
                     let path = one_file(&positional, "run", "a study file")?;
                     let study = load(&path)?;
-                    run(&study, &run_options)?;
+                    run(&study, &run_options, option(&options, "analysis"))?;
                     Ok(())
                 }
             }
@@ -251,10 +263,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let path = one_file(&positional, "check", "a study file")?;
             let study = load(&path)?;
             if study.analyses.is_empty() {
-                crate::tell!(
-                    "flexmbs: warning: {} has no [[analyses]]: `flexmbs run` would have nothing to run",
-                    path.display()
-                );
+                return Err(study::run::nothing_to_run(&study));
             }
             let m = &study.mechanism;
             let mechanism = if m.is_empty() {
@@ -310,7 +319,18 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 ),
                 None => None,
             };
-            crate::say_raw!("{}", crate::inspect::inspect(&path, excitation, 3.0)?);
+            let inspection = crate::inspect::inspect(&path, excitation, 3.0)?;
+            crate::say_raw!("{}", inspection.report);
+            if inspection.failed_checks > 0 {
+                return Err(Box::new(ChecksFailed {
+                    what: format!(
+                        "{} fails {} physical check{} (listed above): studies refuse it",
+                        path.display(),
+                        inspection.failed_checks,
+                        if inspection.failed_checks == 1 { "" } else { "s" }
+                    ),
+                }));
+            }
             Ok(())
         }
         "export-fem" => {

@@ -4,6 +4,7 @@
 use study::error::BoxError;
 use study::observer::{AnalysisInfo, Observer, Progress};
 use study::output::AnalysisSummary;
+use study::run::Options;
 
 /// Progress on stderr, reports on stdout.
 #[derive(Default)]
@@ -116,4 +117,36 @@ impl Observer for Console {
         }
         Ok(())
     }
+}
+
+/// Runs every analysis of `study` (or only the one named `only`, after the chain of analyses
+/// its `start` names) into its results folder, progress on the console.
+pub fn run(study: &study::Study, options: &Options, only: Option<&str>) -> Result<study::output::Summary, BoxError> {
+    let summary = match only {
+        None => study::run(study, options, &mut Console::default())?,
+        Some(name) => {
+            let Some(i) = study.analyses.iter().position(|a| a.name == name) else {
+                let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
+                return Err(format!(
+                    "{}: --analysis: {}",
+                    study.source.path.display(),
+                    study::source::unknown_reference("analysis", name, &names)
+                )
+                .into());
+            };
+            study::run_only(study, options, i, &mut Console::default())?
+        }
+    };
+    let done = summary
+        .analyses
+        .iter()
+        .filter(|a| a.status == study::output::Status::Done)
+        .count();
+    crate::tell!(
+        "flexmbs: {} analyses done in {:.2} s; results in {}",
+        done,
+        summary.total_seconds,
+        options.results_dir(study).display()
+    );
+    Ok(summary)
 }

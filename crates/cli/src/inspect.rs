@@ -6,9 +6,17 @@ use std::fmt::Write as _;
 use std::path::Path;
 use study::error::{BoxError, ResultExt};
 
+/// What `inspect` found: the report, and how many physical checks failed (the command then
+/// exits with 1 after printing the report).
+#[derive(Debug)]
+pub struct Inspection {
+    pub report: String,
+    pub failed_checks: usize,
+}
+
 /// The report of `inspect`. `excitation_hz`: the highest frequency a study will excite; the
 /// diagnostics then check that the kept modes reach `factor` times it.
-pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<String, BoxError> {
+pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<Inspection, BoxError> {
     // Read without the physical checks so that a refused file can still be looked at; the
     // checks are reported below.
     let body = reduction::file::read_unchecked(path).context(|| format!("cannot inspect {}", path.display()))?;
@@ -113,5 +121,8 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<S
             let _ = writeln!(s, "  - {p}");
         }
     }
-    Ok(s)
+    Ok(Inspection {
+        report: s,
+        failed_checks: problems.len(),
+    })
 }

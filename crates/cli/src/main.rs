@@ -18,7 +18,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             flexmbs::tell!("{}", study::error::report(&*e));
-            ExitCode::from(2)
+            if e.is::<flexmbs::cli::ChecksFailed>() {
+                ExitCode::from(1)
+            } else {
+                ExitCode::from(2)
+            }
         }
     }
 }

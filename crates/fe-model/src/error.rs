@@ -48,7 +48,7 @@ pub enum ElementError {
 }
 
 /// Errors of dof numbering, assembly and linear solution.
-#[derive(Debug, Error)]
+#[derive(Debug, Error, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum FeError {
     #[error(transparent)]

@@ -296,13 +296,10 @@ fn rbe2_constraints(
 }
 
 /// $\mathbf S_s = [\mathbf I, -\tilde{\mathbf r}_s]$: $\mathbf u_m + \boldsymbol\theta_m \times
-/// \mathbf r_s = \mathbf S_s [\mathbf u_m; \boldsymbol\theta_m]$.
+/// \mathbf r_s = \mathbf S_s [\mathbf u_m; \boldsymbol\theta_m]$ (the translation rows of
+/// [`crate::rigid::rigid_motion_block`]).
 fn rigid_map(r: &Vector3<f64>) -> nalgebra::SMatrix<f64, 3, 6> {
-    let mut S = nalgebra::SMatrix::<f64, 3, 6>::zeros();
-    S.fixed_view_mut::<3, 3>(0, 0).fill_with_identity();
-    // -[r]x, since theta x r = -r x theta.
-    S.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-r.cross_matrix()));
-    S
+    crate::rigid::rigid_motion_block(r).fixed_rows::<3>(0).into_owned()
 }
 
 /// A linear definition of a dependent dof: its terms $(node, dof, c)$.

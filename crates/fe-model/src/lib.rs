@@ -87,7 +87,9 @@ pub mod error;
 pub mod fuzz;
 pub mod generate;
 pub mod geometric;
+pub mod input;
 pub mod interface;
+pub mod mass_properties;
 pub mod mesh;
 pub mod modal;
 pub mod model;
@@ -95,6 +97,7 @@ pub mod ordering;
 pub mod pattern;
 pub mod property;
 pub mod quadrature;
+pub mod rigid;
 pub mod section;
 pub mod sparse_cholesky;
 pub mod statics;
@@ -110,6 +113,7 @@ pub use geometric::{
     linear_buckling, packed_pair, BucklingSettings, BucklingSolution,
 };
 pub use interface::{add_interface, add_interface_on_set, Interface, Interfaces, SpiderKind};
+pub use mass_properties::center_of_mass;
 pub use mesh::import::{ImportError, ImportedModel};
 pub use mesh::{Cell, CellId, CellKind, Mesh, NodeId};
 pub use modal::{modal_dense, scaled_self_adjoint_eigen, ModalSolution};

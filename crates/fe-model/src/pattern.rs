@@ -87,11 +87,11 @@ fn element_map(element: &Element, dofs: &DofMap) -> ElementMap {
 /// At 200k dofs this is about 38M entries: a global sort of (column, row) keys took 1.5-3 s
 /// of the reduction, twice (the model and the mass data's bare model); columns of at most a
 /// few hundred entries sort in cache.
-fn column_structure(n: usize, elements: &[ElementMap]) -> (Vec<usize>, Vec<usize>) {
+fn column_structure(n: usize, sets: &[&[u32]]) -> (Vec<usize>, Vec<usize>) {
     let mut start = vec![0usize; n + 1];
-    for m in elements {
-        for &c in &m.dofs {
-            start[c as usize + 1] += m.dofs.len();
+    for dofs in sets {
+        for &c in dofs.iter() {
+            start[c as usize + 1] += dofs.len();
         }
     }
     for j in 0..n {
@@ -99,11 +99,11 @@ fn column_structure(n: usize, elements: &[ElementMap]) -> (Vec<usize>, Vec<usize
     }
     let mut rows = vec![0u32; start[n]];
     let mut fill = start[..n].to_vec();
-    for m in elements {
-        for &c in &m.dofs {
+    for dofs in sets {
+        for &c in dofs.iter() {
             let f = &mut fill[c as usize];
-            rows[*f..*f + m.dofs.len()].copy_from_slice(&m.dofs);
-            *f += m.dofs.len();
+            rows[*f..*f + dofs.len()].copy_from_slice(dofs);
+            *f += dofs.len();
         }
     }
     // One mutable slice per column, sorted and deduplicated in place in parallel.
@@ -139,12 +139,31 @@ fn column_structure(n: usize, elements: &[ElementMap]) -> (Vec<usize>, Vec<usize
     (col_ptr, row_idx)
 }
 
+/// The CSC structure (rows sorted) of the union of the dense blocks $\text{set}\times\text{set}$
+/// of `sets` on `n` unknowns, with the whole diagonal when `diagonal`: the symbolic phase of
+/// any assembly whose elements couple all their unknowns (this crate's elements, the
+/// multibody system's bodies and joints).
+///
+/// # Panics
+/// When an unknown of a set is not below `n`, or `n` exceeds `u32::MAX`.
+pub fn block_structure(n: usize, sets: &[Vec<usize>], diagonal: bool) -> SymbolicSparseColMat<usize> {
+    assert!(u32::try_from(n).is_ok(), "block_structure: {n} unknowns exceed u32");
+    let mut lists: Vec<Vec<u32>> = sets.iter().map(|s| s.iter().map(|&d| d as u32).collect()).collect();
+    if diagonal {
+        lists.extend((0..n as u32).map(|d| vec![d]));
+    }
+    let slices: Vec<&[u32]> = lists.iter().map(Vec::as_slice).collect();
+    let (col_ptr, row_idx) = column_structure(n, &slices);
+    SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx)
+}
+
 impl SystemPattern {
     /// Builds the pattern of `model` under the elimination `dofs`.
     pub fn new(model: &FeModel, dofs: &DofMap) -> Self {
         let n = dofs.n_free();
         let mut elements: Vec<ElementMap> = model.elements.par_iter().map(|e| element_map(e, dofs)).collect();
-        let (col_ptr, row_idx) = column_structure(n, &elements);
+        let sets: Vec<&[u32]> = elements.iter().map(|m| m.dofs.as_slice()).collect();
+        let (col_ptr, row_idx) = column_structure(n, &sets);
         elements.par_iter_mut().for_each(|m| {
             let nd = m.dofs.len();
             let mut slots = Vec::with_capacity(nd * nd);
@@ -212,7 +231,8 @@ mod tests {
                     .flat_map(|&c| m.dofs.iter().map(move |&r| (c as usize, r as usize)))
             })
             .collect();
-        let (col_ptr, row_idx) = column_structure(n, &elements);
+        let sets: Vec<&[u32]> = elements.iter().map(|m| m.dofs.as_slice()).collect();
+        let (col_ptr, row_idx) = column_structure(n, &sets);
         assert_eq!(col_ptr.len(), n + 1);
         let got: Vec<(usize, usize)> = (0..n)
             .flat_map(|c| row_idx[col_ptr[c]..col_ptr[c + 1]].iter().map(move |&r| (c, r)))

@@ -24,6 +24,8 @@ mod unit {
     mod import;
     /// RBE2/RBE3 interface nodes on solids: rigid patch, no added stiffness, bad sets.
     mod interface;
+    /// Mass and centre of mass of a model against the analytic box and cylinder.
+    mod mass_properties;
     /// Fill-reducing orderings: nested dissection is a valid permutation, solves as AMD does,
     /// and gives a smaller factor on a 3D block.
     mod ordering;

@@ -22,7 +22,10 @@ use crate::node::NodeMotion;
 use faer::Mat;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use superelement::so3::skew;
-use superelement::{BodyState, Evaluation, Frame, Superelement, SuperelementError, Workspace as SeWorkspace};
+use superelement::{
+    BodyState, Evaluation, Frame, PointLoad, PointLoadWorkspace, Superelement, SuperelementError,
+    Workspace as SeWorkspace,
+};
 
 /// Residual and tangents of one element on its ports.
 #[derive(Clone, Debug)]
@@ -102,6 +105,8 @@ pub(crate) struct FlexBuffer {
     pub ev: Evaluation,
     pub state: BodyState,
     pub acc: Vec<f64>,
+    /// The buffers of the body's load-point loads (`None` without any).
+    pub loads: Option<PointLoadWorkspace>,
 }
 
 /// A flexible body placed on its nodes.
@@ -117,6 +122,9 @@ pub(crate) struct FlexibleElement {
     /// $\|\mathbf K_{CB}\|_\infty$ and the body size, for the residual's round-off floor.
     pub k_norm: f64,
     pub size: f64,
+    /// Loads at the body's load points: the load at unit factor (dead: inertial; follower:
+    /// body axes) and its time function.
+    pub loads: Vec<(PointLoad, crate::time_function::CompiledFunction)>,
 }
 
 impl FlexibleElement {
@@ -158,19 +166,23 @@ impl FlexibleElement {
                 frame: Frame::identity(),
             },
             acc: vec![0.0; n],
+            loads: (!self.loads.is_empty()).then(|| self.se.point_load_workspace()),
         }
     }
 
     /// [`Self::element`] without allocation: the body state is refilled from the node motions
     /// and `modal(i) = (η_i, η̇_i, η̈_i)`, the superelement evaluates into its workspace
     /// ([`Superelement::evaluate_into`]) and the result is copied into `out`, which must have
-    /// been built for this element (`6N + m` rows).
+    /// been built for this element (`6N + m` rows). The body's load-point loads at time `t`,
+    /// scaled by the load factor `lambda`, are added ([`Superelement::point_load_into`]).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn element_into(
         &self,
         motions: &[NodeMotion],
         modal: impl Fn(usize) -> (f64, f64, f64),
         frame: Frame,
         gravity: &Vector3<f64>,
+        (t, lambda): (f64, f64),
         tangents: bool,
         buf: &mut FlexBuffer,
         out: &mut ElementOutput,
@@ -208,6 +220,27 @@ impl FlexibleElement {
             out.K.copy_from(&ev.stiffness);
         }
         out.frame = Some(ev.frame);
+        if let Some(pl) = buf.loads.as_mut() {
+            for (load, time) in &self.loads {
+                let x = time.eval(t).0 * lambda;
+                if x == 0.0 {
+                    continue;
+                }
+                let scaled = PointLoad {
+                    force: load.force * x,
+                    moment: load.moment * x,
+                    ..*load
+                };
+                self.se.point_load_into(buf.ws.kinematics(), &scaled, tangents, pl)?;
+                for (i, r) in pl.residual.iter().enumerate() {
+                    out.residual[i] += r;
+                    out.external[i] -= r;
+                }
+                if tangents {
+                    out.K += &pl.stiffness;
+                }
+            }
+        }
         Ok(())
     }
 }

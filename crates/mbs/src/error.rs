@@ -30,6 +30,8 @@ pub enum Entity {
     Driver(usize),
     /// Index in `Model::loads`.
     Load(usize),
+    /// Index in `Model::body_loads`.
+    BodyLoad(usize),
     /// Index in `Model::sensors`.
     Sensor(usize),
     /// Index in `Model::initial`.
@@ -151,8 +153,9 @@ pub enum ModelError {
         /// The entity, when the value belongs to one of the model (not to a table read alone).
         id: Option<Entity>,
     },
-    /// The superelement could not be built from the reduced body.
-    #[error("body '{body}': {source}")]
+    /// The superelement could not be built from the reduced body (the cause is the
+    /// source, so a report walking the chain names it once).
+    #[error("body '{body}'")]
     Superelement {
         body: String,
         body_id: BodyId,
@@ -212,8 +215,9 @@ pub enum SolveError {
     /// The iteration (or mass) matrix could not be factorised.
     #[error("singular {what} at t = {t:.6} (step {step}): a coordinate is free without stiffness or mass, or a mechanism is at a singular configuration")]
     Singular { t: f64, step: usize, what: String },
-    /// A body could not be evaluated (its floating frame did not converge, ...).
-    #[error("body '{body}' at t = {t:.6}: {source}")]
+    /// A body could not be evaluated (its floating frame did not converge, ...); the cause
+    /// is the source, so a report walking the chain names it once.
+    #[error("body '{body}' at t = {t:.6}")]
     Body {
         body: String,
         id: BodyId,
@@ -232,6 +236,16 @@ pub enum SolveError {
     /// Settings out of range (a negative step, rho_inf outside [0, 1], ...).
     #[error("invalid settings: {what}")]
     InvalidSettings { what: String },
+    /// A sensor read a value that is not finite (inf or NaN): the motion or a force has
+    /// diverged. `component` counts from 0 within the sensor.
+    #[error("sensor '{sensor}' component {component} is {value} at t = {t:.6} (step {step}): the motion or a force is no longer finite")]
+    NonFiniteSensor {
+        sensor: String,
+        component: usize,
+        value: f64,
+        t: f64,
+        step: usize,
+    },
 }
 
 impl SolveError {

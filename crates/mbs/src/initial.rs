@@ -28,8 +28,9 @@
 
 use crate::coordinates::Slot;
 use crate::error::{Entity, ModelError};
-use crate::model::{Body, InitialCondition, Model, NodeId};
+use crate::model::{Body, DriverTarget, InitialCondition, Model, NodeId};
 use crate::system::{unknown, State, System};
+use crate::time_function::CompiledFunction;
 use crate::topology::{RootRotation, Topology};
 use std::collections::VecDeque;
 
@@ -159,14 +160,139 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
                     }),
                 }
             }
+            InitialCondition::NodeVelocity { node, .. } if topo.roots[node.index()].is_none() => {
+                Err(ModelError::InvalidValue {
+                    entity: format!("initial velocity of node '{}'", node_name(node.index())),
+                    what: "the node follows a joint (its velocity is its parent's and the joint's rates), so a velocity given to it would be ignored; give the joint's initial `rate` or the body's velocity instead".into(),
+                    id: Some(Entity::InitialCondition(i)),
+                })
+            }
             InitialCondition::NodeVelocity { .. } | InitialCondition::RigidMotion { .. } => Ok(InitialPlan::Direct),
         })
         .collect()
 }
 
+/// A driver whose function is not zero at $t = 0$: the mechanism is assembled at its initial
+/// value by moving the free independent nodes behind the driven coordinate rigidly with it
+/// (`roots`), as for an initial joint value (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct DriverStart {
+    /// Index into the prescribed coordinates and the driven scalar.
+    pub prescribed: usize,
+    pub scalar: usize,
+    /// The node the coordinate moves: a joint's child, or the driven node.
+    pub pivot: usize,
+    pub roots: Vec<usize>,
+}
+
+/// The drivers with a non-zero value at $t = 0$ and the nodes that move with them; refuses one
+/// whose driven coordinate closes a loop (no rigid motion of the bodies behind it follows it).
+pub(crate) fn driver_starts(
+    model: &Model,
+    topo: &Topology,
+    drivers: &[CompiledFunction],
+) -> Result<Vec<DriverStart>, ModelError> {
+    let adj = adjacency(model);
+    let mut out = Vec::new();
+    for (p, &(driver, scalar)) in topo.map.prescribed.iter().enumerate() {
+        let Some(d) = driver else { continue };
+        let x0 = drivers[d].eval(0.0).0;
+        if x0 == 0.0 {
+            continue;
+        }
+        let def = &model.drivers[d];
+        let (pivot, reached) = match &def.target {
+            DriverTarget::Joint { joint, .. } => {
+                let j = &model.joints[joint.index()];
+                let r = reach(
+                    &adj,
+                    topo,
+                    &[j.child.index()],
+                    Some(joint.index()),
+                    Some(j.parent.index()),
+                );
+                (j.child.index(), r)
+            }
+            DriverTarget::NodeTranslation { node, .. } | DriverTarget::NodeRotation { node } => {
+                let n = node.index();
+                let start: Vec<usize> = adj[n].iter().map(|&(m, _)| m).filter(|&m| m != n).collect();
+                (n, reach_without(&adj, topo, &start, n))
+            }
+        };
+        match reached {
+            Ok(nodes) => out.push(DriverStart {
+                prescribed: p,
+                scalar,
+                pivot,
+                roots: nodes.into_iter().filter(|&n| topo.roots[n].is_some()).collect(),
+            }),
+            Err(n) => {
+                return Err(ModelError::InvalidDriver {
+                    driver: def.name.clone(),
+                    what: format!(
+                        "its function is {x0} (not zero) at t = 0, and the driven coordinate is in a closed loop (the bodies it moves reach node '{}', {}), so the mechanism cannot be assembled at that value by moving them rigidly; start the function at zero (values are measured from the initial configuration) or model the mechanism in its position at t = 0",
+                        model.nodes[n].name,
+                        if n == pivot { "the driven node itself" } else { "held by the ground or the joint's parent" }
+                    ),
+                    driver_id: d,
+                })
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// [`reach`] from `start` that never enters `blocked` (the driven node itself).
+fn reach_without(
+    adj: &[Vec<(usize, Option<usize>)>],
+    topo: &Topology,
+    start: &[usize],
+    blocked: usize,
+) -> Result<Vec<usize>, usize> {
+    let pruned: Vec<Vec<(usize, Option<usize>)>> = adj
+        .iter()
+        .map(|e| e.iter().copied().filter(|&(m, _)| m != blocked).collect())
+        .collect();
+    reach(&pruned, topo, start, None, None)
+}
+
 impl System {
+    /// Places the nodes behind each driver that is not zero at $t = 0$ ([`DriverStart`]): the
+    /// pivot's motion from the coordinate at zero to its value in `state` (drivers applied),
+    /// carried rigidly to the free nodes behind it, positions and velocities.
+    fn assemble_at_drivers(&self, state: &mut State) {
+        let np = self.topo.map.n_prescribed();
+        for ds in &self.driver_starts {
+            let motions = |s: &State, zero: bool| {
+                let mut s = s.clone();
+                let (mut pr, mut pa) = (vec![0.0; np], vec![0.0; np]);
+                self.apply_drivers(&mut s, &mut pr, &mut pa);
+                if zero {
+                    s.scalars[ds.scalar] = 0.0;
+                    pr[ds.prescribed] = 0.0;
+                }
+                let mut m = vec![crate::coordinates::Motion::ground(); self.model.nodes.len()];
+                self.topo.map.motions_into(&crate::system::values(&s, &pr, &pa), &mut m);
+                m.iter().map(crate::NodeMotion::from).collect::<Vec<_>>()
+            };
+            let (before, after) = (motions(state, true), motions(state, false));
+            let (a, b) = (&before[ds.pivot], &after[ds.pivot]);
+            let R = b.R * a.R.inverse();
+            for &n in &ds.roots {
+                let m = &before[n];
+                let r = b.r + R * (m.r - a.r);
+                // Velocities relative to the pivot are carried along with it.
+                let w = b.omega + R * (m.omega - a.omega);
+                let v = b.v + b.omega.cross(&(r - b.r)) + R * (m.v - a.v - a.omega.cross(&(m.r - a.r)));
+                self.set_node_pose(state, NodeId(n as u32), r, R * m.R);
+                self.set_root_velocity(state, n, &v, &w);
+            }
+        }
+    }
+
     /// Applies the model's initial conditions to `state` (module docs).
     pub(crate) fn apply_initial(&self, state: &mut State) {
+        self.assemble_at_drivers(state);
         let map = &self.topo.map;
         let items = || self.model.initial.iter().zip(&self.initial_plan);
         for (c, plan) in items() {

@@ -12,6 +12,11 @@
 //!   from a PID law on a measured joint coordinate $y$ with the set-point $r(t)$:
 //!   $$e = r - y,\quad u = K_p e + K_i z + K_d(\dot r - \dot y),\quad z(t) = \int_0^t e\,d\tau,$$
 //!   optionally saturated at $|u| \le u_{max}$.
+//! * **Held effort** ([`crate::System::set_actuator_effort`]): a caller (a controller or a
+//!   co-simulation partner outside the model) replaces an actuator's law by a value $u_h$ set
+//!   between time steps, $Q = u_h$ (no tangent) from the end of the next step, until it releases
+//!   the actuator to its law again. While a PID actuator is held its integral $z$ is frozen
+//!   (no wind-up from an error its own law did not act on); released, the law resumes from it.
 //!
 //! # The PID integral in time integration
 //!
@@ -120,6 +125,8 @@ struct Actuator {
     /// Unknown of the actuated coordinate.
     dof: usize,
     law: Law,
+    /// $u_h$: the effort set by the caller in place of the law (module docs).
+    held: Option<f64>,
 }
 
 /// The compiled limits and actuators of a system.
@@ -251,7 +258,7 @@ impl JointForces {
                     }
                 }
             };
-            actuators.push(Actuator { dof, law });
+            actuators.push(Actuator { dof, law, held: None });
         }
         for (i, sensor) in model.sensors.iter().enumerate() {
             if let SensorKind::ActuatorEffort { actuator } = sensor.kind {
@@ -305,6 +312,27 @@ impl JointForces {
         self.actuators.len()
     }
 
+    /// Holds actuator `index` at effort `u` (`Some`), or releases it to its law (`None`).
+    pub(crate) fn hold(&mut self, index: usize, u: Option<f64>) -> Result<(), String> {
+        let n = self.actuators.len();
+        let a = self
+            .actuators
+            .get_mut(index)
+            .ok_or_else(|| format!("there are {n} actuators"))?;
+        if let Some(u) = u {
+            if !u.is_finite() {
+                return Err(format!("the effort must be finite (got {u})"));
+            }
+        }
+        a.held = u;
+        Ok(())
+    }
+
+    /// The effort actuator `index` is held at (`None`: its law acts).
+    pub(crate) fn held(&self, index: usize) -> Option<f64> {
+        self.actuators.get(index).and_then(|a| a.held)
+    }
+
     /// A limit's force $k d + c\dot x$ (the negative of $Q$) and whether it is active.
     fn limit_force(l: &Limit, x: f64, xd: f64) -> Option<f64> {
         if x < l.lower {
@@ -352,17 +380,21 @@ impl JointForces {
         self.actuators
             .iter()
             .zip(controls)
-            .map(|(a, c)| match &a.law {
-                Law::Time(f) => f.eval(t).0,
-                Law::Pid {
-                    scalar,
-                    setpoint,
-                    kp,
-                    ki,
-                    kd,
-                    max,
-                    ..
-                } => {
+            .map(|(a, c)| match (&a.law, a.held) {
+                (_, Some(u)) => u,
+                (Law::Time(f), None) => f.eval(t).0,
+                (
+                    Law::Pid {
+                        scalar,
+                        setpoint,
+                        kp,
+                        ki,
+                        kd,
+                        max,
+                        ..
+                    },
+                    None,
+                ) => {
                     let (y, yd) = map_values(*scalar);
                     Self::pid(setpoint, [*kp, *ki, *kd, *max], y, yd, t, c).u
                 }
@@ -438,6 +470,10 @@ impl JointForces {
             }
         }
         for (a, c) in self.actuators.iter().zip(controls) {
+            if a.held.is_some() {
+                // A held effort does not depend on the configuration.
+                continue;
+            }
             if let Law::Pid {
                 scalar,
                 setpoint,
@@ -480,7 +516,10 @@ impl JointForces {
         for (a, c) in self.actuators.iter().zip(controls.iter_mut()) {
             if let Law::Pid { scalar, setpoint, .. } = &a.law {
                 let e = setpoint.eval(t).0 - x.scalars[*scalar];
-                c.z += 0.5 * (t - c.t) * (c.e + e);
+                // Held: the integral is frozen (module docs).
+                if a.held.is_none() {
+                    c.z += 0.5 * (t - c.t) * (c.e + e);
+                }
                 c.e = e;
             }
             c.t = t;

@@ -93,7 +93,9 @@
 //! | $\mathbf e_{n+1}$ | [`Integrator::step_adaptive`] | local error estimate $h^2\lvert\beta-\frac16\rvert(\mathbf a_{n+1}-\mathbf a_n)$ | Zienkiewicz & Xie 1991 |
 //! | $\rho_\infty,\ \alpha_m,\ \alpha_f,\ \beta,\ \gamma$ | [`AlphaParameters`] | generalized-α parameters | Chung & Hulbert 1993 |
 //! | $\beta',\ \gamma'$ | `bp`, `gp` | iteration-matrix factors | BCA 2012 |
-//! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration | BCA 2012 |
+//! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration (body axes for rotations, and for free nodes' translations with `DynamicSettings::body_axis_translations`) | BCA 2012 |
+//! | $\boldsymbol\omega_b,\ \mathbf v_b$ | `vb` (`dynamic_solver`) | body-axis angular and translational velocity of a node, $\mathbf R^T\boldsymbol\omega_s$, $\mathbf R^T\dot{\mathbf x}$ | [`dynamic_solver`] |
+//! | $\mathrm{Re}\,s$ | [`LinearSpectrum::growing`], [`ModeEnergy::growth_rate`] | growth rate of an unstable mode [1/s] | [`linearized`] |
 //! | $\mathbf T(h\Delta\mathbf q)$ | `System::iteration_matrix` | tangent operator $\mathbf J_l$ of each rotation increment | BCA 2012 |
 //! | $\mathbf S = \beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$ | `Workspace::S`, [`LinearSolver`] | iteration matrix; dense LU up to [`DENSE_MAX`] unknowns, sparse above | BCA 2012 |
 //! | $\lVert\mathbf F_{k+1}\rVert/\lVert\mathbf F_k\rVert$ | [`MODIFIED_NEWTON_RATE`] | contraction above which modified Newton ([`NewtonStrategy`]) refactorises | [`dynamic_solver`] |
@@ -106,6 +108,7 @@
 //! | $x_{lo},\ x_{hi},\ d$ | [`JointLimit`] | stop bounds; penetration beyond them | [`joint_forces`] |
 //! | $u,\ r(t),\ y,\ e = r - y$ | [`JointActuator`], [`Pid`] | actuator effort, set-point, measured coordinate, error | [`joint_forces`] |
 //! | $K_p,\ K_i,\ K_d,\ z$ | [`Pid`], `Control` | PID gains; integral of $e$ (trapezoidal, moved on by accepted steps) | [`joint_forces`] |
+//! | $u_h$ | [`System::set_actuator_effort`] | an actuator's effort held at a value set between steps, in place of its law | [`joint_forces`] |
 //! | $\mathbf R_\Delta$ | [`initial`] | rigid rotation of a joint's subtree by an initial joint value | [`initial`] |
 //! | $\hat{\mathbf K}_s$ | [`mod@stability`] | symmetric part of $\hat{\mathbf K}$, scaled by its diagonal; negative eigenvalues: past a critical point | Bathe (1996) §6.8 |
 //! | $\mathbf f_e$ | [`Wrench`] | a user force's force and moment on a node, inertial | [`user_force`] |
@@ -195,8 +198,9 @@ pub mod user_force;
 
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use dynamic_solver::{
-    solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters, DynamicSettings,
-    Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
+    fixed_steps, solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters,
+    DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE, PI_INTEGRAL,
+    PI_PROPORTIONAL,
 };
 pub use error::{Entity, Incomplete, ModelError, SolveError};
 pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
@@ -206,9 +210,9 @@ pub use linearized::{
 };
 pub use merge::{weld_points, WeldError};
 pub use model::{
-    Body, BodyId, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind, JointSpring, Load,
-    LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor, SensorKind, Spring,
-    Support, TranslationSupport,
+    Body, BodyId, BodyLoad, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind,
+    JointSpring, Load, LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor,
+    SensorKind, Spring, Support, TranslationSupport,
 };
 pub use momentum::{ExternalAction, MomentumProjection};
 pub use node::NodeMotion;
@@ -218,7 +222,7 @@ pub use retry::{
 pub use sensors::{Energies, SensorRecord};
 pub use stability::{stability, Stability};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
-pub use streaming::{StepDone, StepTotals, Stepping};
+pub use streaming::{Interrupted, StepDone, StepTotals, Stepping};
 pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
 pub use time_function::{Interpolation, TimeFunction};
 pub use units::CoordinateQuantity;

@@ -59,6 +59,26 @@ pub fn spectrum(system: &System, state: &State) -> Result<LinearSpectrum, SolveE
     Ok(LinearSpectrum { omega, state_space })
 }
 
+impl LinearSpectrum {
+    /// The state-space eigenvalues with a positive real part beyond round-off,
+    /// $\mathrm{Re}\,s > 10^{-6}\max(\max|s|, 1\ \mathrm{s^{-1}})$: the linearised motion grows
+    /// (an unstable equilibrium, flutter, negative damping). The bound is about
+    /// $\sqrt{\varepsilon}$ of the spectrum's scale: a double zero eigenvalue (a rigid-body mode)
+    /// splits by that much in round-off, and a real growth rate lies far above it.
+    pub fn growing(&self) -> Vec<(f64, f64)> {
+        let big = self.state_space.iter().map(|s| s.0.hypot(s.1)).fold(1.0, f64::max);
+        self.state_space
+            .iter()
+            .copied()
+            .filter(|s| s.0 > GROWTH_TOLERANCE * big)
+            .collect()
+    }
+}
+
+/// Relative bound on $\mathrm{Re}\,s$ above which a state-space eigenvalue grows
+/// ([`LinearSpectrum::growing`], [`ModeEnergy::unstable`]).
+pub const GROWTH_TOLERANCE: f64 = 1e-6;
+
 fn singular(t: f64, what: &str) -> SolveError {
     SolveError::Singular {
         t,
@@ -247,6 +267,14 @@ pub struct ModeEnergy {
     /// $\zeta = -\mathrm{Re}\,s/|s|$; `None` for rigid-body modes.
     pub damped_eigenvalue: Option<(f64, f64)>,
     pub damping_ratio: Option<f64>,
+    /// The mode grows: $\omega^2$ is negative beyond the rigid-body bound (a divergence: the
+    /// equilibrium is unstable, $\omega$ and the frequency are then 0) or its state-space
+    /// eigenvalue has $\mathrm{Re}\,s > 0$ ([`LinearSpectrum::growing`]). The label then starts
+    /// with "UNSTABLE".
+    pub unstable: bool,
+    /// Growth rate of an unstable mode [1/s]: $\sqrt{-\omega^2}$ for a divergence, else
+    /// $\mathrm{Re}\,s$.
+    pub growth_rate: Option<f64>,
     /// $\boldsymbol\phi$: real, mass-normalised ($\boldsymbol\phi^T\hat{\mathbf M}\boldsymbol\phi = 1$) when
     /// $\boldsymbol\phi^T\hat{\mathbf M}\boldsymbol\phi > 0$, sign such that its largest entry is positive.
     pub shape: Vec<f64>,
@@ -335,6 +363,7 @@ pub fn mode_energies(system: &System, state: &State) -> Result<Vec<ModeEnergy>, 
     }
     found.sort_by(|a, b| a.0.total_cmp(&b.0));
     let lambda_max = found.iter().map(|f| f.0.abs()).fold(0.0, f64::max);
+    let s_max = state_space.iter().map(|s| s.0.hypot(s.1)).fold(1.0, f64::max);
     let mut used = vec![false; state_space.len()];
     let mut modes = Vec::with_capacity(found.len());
     for (omega_squared, mut phi) in found {
@@ -351,8 +380,10 @@ pub fn mode_energies(system: &System, state: &State) -> Result<Vec<ModeEnergy>, 
         let (damped_eigenvalue, damping_ratio) = if rigid_body {
             (None, None)
         } else {
+            // |s| = sqrt(|omega^2|): a divergence (omega^2 < 0) is matched to its real s > 0.
+            let target = omega_squared.abs().sqrt();
             let best = (0..state_space.len()).filter(|&k| !used[k]).min_by(|&a, &b| {
-                let d = |k: usize| (state_space[k].0.hypot(state_space[k].1) - omega).abs();
+                let d = |k: usize| (state_space[k].0.hypot(state_space[k].1) - target).abs();
                 d(a).total_cmp(&d(b))
             });
             match best {
@@ -374,6 +405,22 @@ pub fn mode_energies(system: &System, state: &State) -> Result<Vec<ModeEnergy>, 
         mode.frequency_hz = omega / (2.0 * std::f64::consts::PI);
         mode.damped_eigenvalue = damped_eigenvalue;
         mode.damping_ratio = damping_ratio;
+        let growing = damped_eigenvalue.map_or(0.0, |s| s.0);
+        mode.growth_rate = if !rigid_body && omega_squared < 0.0 {
+            Some((-omega_squared).sqrt().max(growing))
+        } else if growing > GROWTH_TOLERANCE * s_max {
+            Some(growing)
+        } else {
+            None
+        };
+        mode.unstable = mode.growth_rate.is_some();
+        if let Some(rate) = mode.growth_rate {
+            mode.label = format!(
+                "UNSTABLE ({} at {rate:.4e} 1/s), {}",
+                if omega_squared < 0.0 { "diverges" } else { "grows" },
+                mode.label
+            );
+        }
         mode.shape = phi;
         modes.push(mode);
     }
@@ -510,6 +557,8 @@ fn distribute(system: &System, ws: &Workspace, phi: &[f64]) -> ModeEnergy {
         rigid_body: false,
         damped_eigenvalue: None,
         damping_ratio: None,
+        unstable: false,
+        growth_rate: None,
         shape: Vec::new(),
         strain: 0.0,
         kinetic: 0.0,

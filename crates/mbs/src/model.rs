@@ -340,6 +340,23 @@ pub struct Load {
     pub time: TimeFunction,
 }
 
+/// A force and moment at a load point inside a flexible body (a named node of its FE model,
+/// reduced with attachment modes: `reduction::LoadPoint`), $\mathbf f(t) = \mathbf f_0\,x(t)$,
+/// $\mathbf m(t) = \mathbf m_0\,x(t)$. It acts on the body's rigid motion and elastic
+/// coordinates through its reduced load vector ([`superelement::point_load`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BodyLoad {
+    pub body: BodyId,
+    /// Index into the body's `ReducedBody::load_points`.
+    pub point: usize,
+    pub force: Vector3<f64>,
+    pub moment: Vector3<f64>,
+    /// `Dead`: fixed inertial direction; `Follower`: the vectors are inertial at the initial
+    /// configuration and turn with the body's floating frame.
+    pub axes: LoadAxes,
+    pub time: TimeFunction,
+}
+
 /// What a sensor measures (each gives a fixed number of values per output time).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum SensorKind {
@@ -389,6 +406,14 @@ pub enum SensorKind {
     LinearMomentum,
     /// Angular momentum about the inertial origin (3).
     AngularMomentum,
+    /// Stress at mesh node `node` of a flexible body reduced with stress shapes (8), global
+    /// axes: the tensor $xx, yy, zz, xy, yz, zx$, von Mises and the largest principal stress
+    /// (`reduction::NodeStresses`; a beam node has no tensor, zeros, and the extreme-fibre
+    /// stresses).
+    Stress { body: BodyId, node: usize },
+    /// The largest von Mises stress over the mesh nodes `nodes` of a flexible body reduced with
+    /// stress shapes, and the node where it occurs (2: value, node index).
+    MaxVonMises { body: BodyId, nodes: Vec<usize> },
 }
 
 /// A named sensor.
@@ -458,6 +483,9 @@ pub struct Model {
     pub joints: Vec<Joint>,
     pub drivers: Vec<Driver>,
     pub loads: Vec<Load>,
+    /// Loads at load points inside flexible bodies.
+    #[serde(default)]
+    pub body_loads: Vec<BodyLoad>,
     /// Gravitational acceleration.
     pub gravity: Vector3<f64>,
     pub sensors: Vec<Sensor>,

@@ -167,10 +167,18 @@ pub fn solve_dynamic_retrying(
         Ok(x) => x,
         Err(inc) => return Err(fail(inc.error, inc.partial, Vec::new())),
     };
-    let n_steps = ((settings.end_time - integ.state().time()) / h - 1e-9).ceil().max(0.0) as usize;
+    let (n_steps, _) = crate::dynamic_solver::fixed_steps(integ.state().time(), settings.end_time, h);
     let every = settings.output_every.max(1);
     let mut retries = Vec::new();
     for k in 1..=n_steps {
+        if k == n_steps {
+            // Land on the end time: the last step may be shorter.
+            integ.set_step_size(crate::dynamic_solver::last_step_size(
+                integ.state().time(),
+                settings.end_time,
+                h,
+            ));
+        }
         match step_retrying(&mut integ, min_step) {
             Ok(done) => {
                 for rep in &done.reports {

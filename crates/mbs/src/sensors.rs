@@ -30,6 +30,29 @@ pub struct SensorRecord {
 }
 
 impl SensorRecord {
+    /// The first value of the last row that is not finite, as
+    /// [`SolveError::NonFiniteSensor`] at `step` (sensor, component within it, time).
+    pub fn check_last_row(&self, step: usize) -> Result<(), SolveError> {
+        let (Some(row), Some(&t)) = (self.rows.last(), self.times.last()) else {
+            return Ok(());
+        };
+        let Some(k) = row.iter().position(|x| !x.is_finite()) else {
+            return Ok(());
+        };
+        let (mut start, mut i) = (0, 0);
+        while i + 1 < self.widths.len() && start + self.widths[i] <= k {
+            start += self.widths[i];
+            i += 1;
+        }
+        Err(SolveError::NonFiniteSensor {
+            sensor: self.names.get(i).cloned().unwrap_or_default(),
+            component: k - start,
+            value: row[k],
+            t,
+            step,
+        })
+    }
+
     /// Values of sensor `name` at each time.
     pub fn series(&self, name: &str) -> Option<Vec<Vec<f64>>> {
         let i = self.names.iter().position(|n| n == name)?;
@@ -119,6 +142,27 @@ impl System {
         Ok((J.fixed_rows::<3>(0).into(), J.fixed_rows::<3>(3).into()))
     }
 
+    /// The stresses at the mesh nodes of flexible body `body` at `state`, in global axes
+    /// (`reduction::StressShapes::node_stresses`); the body's stress shapes are checked by
+    /// [`System::new`] for every stress sensor.
+    fn body_stresses(&self, body: BodyId, state: &State) -> Result<reduction::NodeStresses, SolveError> {
+        let i = self
+            .flexible
+            .iter()
+            .position(|f| f.body == body.index())
+            .expect("stress sensors are on flexible bodies (System::new)");
+        let f = &self.flexible[i];
+        let bs = self.body_state(i, state, &self.node_motions(state));
+        let kin = f.se.kinematics(&bs).map_err(|source| SolveError::Body {
+            body: self.model.bodies[f.body].name().to_string(),
+            id: body,
+            t: state.time,
+            source,
+        })?;
+        let shapes = f.se.stress_shapes().expect("stress shapes (System::new)");
+        Ok(shapes.node_stresses(&kin.q_jj, &kin.R_j))
+    }
+
     /// The superelement of flexible body `body` (`None` for a rigid body or an unknown id): for
     /// post-processing with [`Self::flexible_body_state`] (mesh recovery, energies, checks).
     pub fn superelement(&self, body: BodyId) -> Option<&superelement::Superelement> {
@@ -162,6 +206,8 @@ impl System {
                 | SensorKind::LinearMomentum
                 | SensorKind::AngularMomentum => 3,
                 SensorKind::Reaction { .. } => 6,
+                SensorKind::Stress { .. } => 8,
+                SensorKind::MaxVonMises { .. } => 2,
                 SensorKind::ModalCoordinates { body } => self.topo.modal_scalars[body.index()].len(),
                 _ => 1,
             })
@@ -263,6 +309,22 @@ impl System {
                         SensorKind::StrainEnergy => e.strain,
                         _ => e.gravity,
                     });
+                }
+                SensorKind::Stress { body, node } => {
+                    let st = self.body_stresses(*body, state)?;
+                    row.extend_from_slice(&st.tensor[*node]);
+                    row.push(st.von_mises[*node]);
+                    row.push(st.principal[*node]);
+                }
+                SensorKind::MaxVonMises { body, nodes } => {
+                    let st = self.body_stresses(*body, state)?;
+                    let (node, vm) = nodes
+                        .iter()
+                        .map(|&k| (k, st.von_mises[k]))
+                        .max_by(|a, b| a.1.total_cmp(&b.1))
+                        .unwrap_or((0, f64::NAN));
+                    row.push(vm);
+                    row.push(node as f64);
                 }
                 SensorKind::LinearMomentum | SensorKind::AngularMomentum => {
                     if momentum.is_none() {

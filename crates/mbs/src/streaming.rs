@@ -12,7 +12,7 @@ use crate::retry::{step_adaptive_to, step_retrying, Retry};
 #[derive(Clone, Debug, PartialEq)]
 pub enum Stepping {
     /// Steps of the integrator's step size $h$, as many as [`Integrator::steps_to`] the end
-    /// time; a step whose Newton iteration fails is retried with halved steps down to
+    /// time, the last one shortened to land on it ([`crate::fixed_steps`]); a step whose Newton iteration fails is retried with halved steps down to
     /// `min_step` (`min_step` $= h$: no retry).
     Fixed { min_step: f64 },
     /// Steps under the local error control of the settings, the last one landing on the end
@@ -80,29 +80,36 @@ impl StepTotals {
     }
 }
 
+/// A run of [`Integrator::run_to`] stopped by its callback: the callback's error and the
+/// totals of the steps taken (the last of them included).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Interrupted<E> {
+    pub error: E,
+    pub totals: StepTotals,
+}
+
 impl Integrator<'_> {
-    /// The number of fixed steps from the current time to `end_time`: the last step ends at or
-    /// just past `end_time` (a remainder below $10^{-9}$ steps is round-off of `end_time / h`,
-    /// not a step).
+    /// The number of fixed steps from the current time to `end_time` ([`crate::fixed_steps`]):
+    /// steps of $h$, the last one shortened to end exactly at `end_time`.
     pub fn steps_to(&self, end_time: f64) -> usize {
-        ((end_time - self.state().time()) / self.step_size() - 1e-9)
-            .ceil()
-            .max(0.0) as usize
+        crate::dynamic_solver::fixed_steps(self.state().time(), end_time, self.step_size()).0
     }
 
     /// Steps from the current time to `end_time` as `stepping` says, calling
     /// `each(done, self)` after every step. A solver failure stops the run and is returned with
     /// the totals of the converged steps (the state stays at the last of them); an error of
-    /// the callback stops it and is returned as `Err`.
+    /// the callback stops it and is returned as `Err` with the totals of the steps taken.
     pub fn run_to<E>(
         &mut self,
         end_time: f64,
         stepping: &Stepping,
         mut each: impl FnMut(&StepDone, &Self) -> Result<(), E>,
-    ) -> Result<(StepTotals, Option<SolveError>), E> {
+    ) -> Result<(StepTotals, Option<SolveError>), Box<Interrupted<E>>> {
         let start = self.state().time();
+        let h = self.step_size();
+        // Fixed steps: the last one is shortened to land on the end time (fixed_steps).
         let planned = match stepping {
-            Stepping::Fixed { .. } => Some(self.steps_to(end_time)),
+            Stepping::Fixed { .. } => Some(crate::dynamic_solver::fixed_steps(start, end_time, h).0),
             Stepping::Adaptive(_) => None,
         };
         // An adaptive run ends when the time is on the end time to round-off.
@@ -117,6 +124,10 @@ impl Integrator<'_> {
                 return Ok((totals, None));
             }
             let t_before = self.state().time();
+            let shortened = planned == Some(totals.steps + 1);
+            if shortened {
+                self.set_step_size(crate::dynamic_solver::last_step_size(t_before, end_time, h));
+            }
             let taken = match stepping {
                 Stepping::Fixed { min_step } => match step_retrying(self, *min_step) {
                     Ok(r) => {
@@ -138,6 +149,10 @@ impl Integrator<'_> {
                     Err(e) => Some(e),
                 },
             };
+            if shortened {
+                // The step size stays h for a run continued from here.
+                self.set_step_size(h);
+            }
             if let Some(e) = taken {
                 return Ok((totals, Some(e)));
             }
@@ -149,16 +164,16 @@ impl Integrator<'_> {
                 Some(n) => totals.steps == n,
                 None => at_end(t),
             };
-            each(
-                &StepDone {
-                    k: totals.steps,
-                    last,
-                    planned,
-                    time: t,
-                    start,
-                },
-                self,
-            )?;
+            let done = StepDone {
+                k: totals.steps,
+                last,
+                planned,
+                time: t,
+                start,
+            };
+            if let Err(error) = each(&done, self) {
+                return Err(Box::new(Interrupted { error, totals }));
+            }
         }
     }
 }

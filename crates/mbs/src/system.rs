@@ -29,7 +29,7 @@ use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
 use crate::error::{Entity, ModelError, SolveError};
 use crate::initial::InitialPlan;
 use crate::joint_forces::{Control, JointForces};
-use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId};
+use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId, SensorKind};
 use crate::node::NodeMotion;
 use crate::time_function::CompiledFunction;
 use crate::topology::{self, RootRotation, Topology};
@@ -85,29 +85,7 @@ pub(crate) struct Pattern {
 impl Pattern {
     /// The CSC structure holding every $\text{set}\times\text{set}$ block and the diagonal.
     fn structure(n: usize, sets: &[Vec<usize>]) -> SymbolicSparseColMat<usize> {
-        let mut keys: Vec<u64> = Vec::new();
-        for s in sets {
-            for &c in s {
-                for &r in s {
-                    keys.push(c as u64 * n as u64 + r as u64);
-                }
-            }
-        }
-        for d in 0..n {
-            keys.push(d as u64 * n as u64 + d as u64);
-        }
-        keys.sort_unstable();
-        keys.dedup();
-        let mut col_ptr = vec![0usize; n + 1];
-        let mut row_idx = Vec::with_capacity(keys.len());
-        for &k in &keys {
-            col_ptr[(k / n as u64) as usize + 1] += 1;
-            row_idx.push((k % n as u64) as usize);
-        }
-        for j in 0..n {
-            col_ptr[j + 1] += col_ptr[j];
-        }
-        SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx)
+        fe_model::pattern::block_structure(n, sets, true)
     }
 
     /// Position of entry (r, c) in the values array.
@@ -332,6 +310,8 @@ pub struct System {
     pub(crate) joint_forces: JointForces,
     /// How each of `model.initial` acts ([`crate::initial`]).
     pub(crate) initial_plan: Vec<InitialPlan>,
+    /// Drivers not zero at $t = 0$ and the nodes assembled with them (`initial::driver_starts`).
+    pub(crate) driver_starts: Vec<crate::initial::DriverStart>,
     pub(crate) drivers: Vec<CompiledFunction>,
     /// User-defined forces ([`System::with_user_forces`]).
     pub(crate) user_forces: Vec<Arc<dyn UserForce>>,
@@ -418,6 +398,7 @@ impl System {
                         .map(|i| (0..K.ncols()).map(|j| K[(i, j)].abs()).sum::<f64>())
                         .fold(0.0, f64::max);
                     modal_scale[bi] = size_body(&pos).max(1e-3) * f.reduced.inertia.mass.sqrt();
+                    let loads = body_loads(model, bi, &se, model.nodes[f.nodes[0].index()].orientation * offsets[0])?;
                     flexible.push(FlexibleElement {
                         body: bi,
                         se,
@@ -426,6 +407,7 @@ impl System {
                         modal: topo.modal_scalars[bi].clone(),
                         k_norm,
                         size: 2.0 * size_body(&pos),
+                        loads,
                     });
                 }
                 Body::Rigid(r) => {
@@ -470,7 +452,17 @@ impl System {
             }
             let xa = model.nodes[s.a.index()].position;
             let xb = s.b.map_or(s.ground_point, |b| model.nodes[b.index()].position);
-            let l0 = s.rest_length.unwrap_or((xb - xa).norm());
+            let l = (xb - xa).norm();
+            let l0 = s.rest_length.unwrap_or(l);
+            // A spring whose ends coincide has no direction: with a rest length its force
+            // k (l - l0) would act along the round-off of the end positions.
+            if l0 > 0.0 && l <= 1e-9 * l0 {
+                return Err(invalid(
+                    Some(Entity::Spring(i)),
+                    format!("spring '{}'", s.name),
+                    format!("its ends coincide (length {l:.3e} m) and its rest length is {l0} m: the direction of its force is undefined; place the ends apart (or give rest_length = 0)"),
+                ));
+            }
             springs.push(SpringElement {
                 a: s.a.index(),
                 b: s.b.map(|b| b.index()),
@@ -540,7 +532,9 @@ impl System {
         topology::held_coordinates(model, &topo)?;
         let mut joint_forces = JointForces::new(model, &topo)?;
         let initial_plan = crate::initial::plan(model, &topo)?;
+        let driver_starts = crate::initial::driver_starts(model, &topo, &drivers)?;
 
+        check_stress_sensors(model, &flexible)?;
         // Elements and the sparse pattern.
         let mut elements = Vec::new();
         for (i, f) in flexible.iter().enumerate() {
@@ -682,6 +676,7 @@ impl System {
             joint_springs,
             joint_forces,
             initial_plan,
+            driver_starts,
             drivers,
             user_forces,
             elements,
@@ -721,6 +716,30 @@ impl System {
             value
         };
         Ok(())
+    }
+
+    /// Holds actuator `actuator` (index in `Model::actuators`) at the effort `effort` [N on a
+    /// length, N m on an angle] in place of its time function or PID law from the next step
+    /// on, or releases it to its law with `None` ([`crate::joint_forces`], held effort). For
+    /// controllers that close the loop outside the model, between time steps.
+    pub fn set_actuator_effort(&mut self, actuator: usize, effort: Option<f64>) -> Result<(), ModelError> {
+        let entity = || match self.model.actuators.get(actuator) {
+            Some(a) => format!("actuator '{}'", a.name),
+            None => format!("actuator {actuator}"),
+        };
+        self.joint_forces
+            .hold(actuator, effort)
+            .map_err(|what| ModelError::InvalidValue {
+                entity: entity(),
+                what,
+                id: Some(Entity::Actuator(actuator)),
+            })
+    }
+
+    /// The effort actuator `actuator` is held at by [`System::set_actuator_effort`] (`None`:
+    /// its law acts, or there is no such actuator).
+    pub fn held_actuator_effort(&self, actuator: usize) -> Option<f64> {
+        self.joint_forces.held(actuator)
     }
 
     /// Number of unknowns $\dim\dot{\mathbf q}$.
@@ -1329,13 +1348,22 @@ impl System {
                     (state.scalars[s], state.velocity[d], state.acceleration[d])
                 };
                 let flex = buf.flex.as_mut().expect("flexible element buffer");
-                f.element_into(nodes, modal, state.frames[*i], gravity, tangents, flex, out)
-                    .map_err(|source| SolveError::Body {
-                        body: self.model.bodies[f.body].name().to_string(),
-                        id: crate::model::BodyId(f.body as u32),
-                        t: state.time,
-                        source,
-                    })?;
+                f.element_into(
+                    nodes,
+                    modal,
+                    state.frames[*i],
+                    gravity,
+                    (state.time, lambda),
+                    tangents,
+                    flex,
+                    out,
+                )
+                .map_err(|source| SolveError::Body {
+                    body: self.model.bodies[f.body].name().to_string(),
+                    id: crate::model::BodyId(f.body as u32),
+                    t: state.time,
+                    source,
+                })?;
             }
             ElementKind::Rigid(i) => {
                 rigid_element(&self.rigid[*i], &nodes[self.rigid[*i].node], gravity, tangents, out);
@@ -1667,4 +1695,90 @@ fn rigid_fit(f: &FlexibleElement, motions: &[NodeMotion]) -> Frame {
         r += motions[n].r - R * x[k];
     }
     Frame::new(r / f.nodes.len() as f64, R)
+}
+
+/// The loads of `model.body_loads` on flexible body `bi` (superelement `se`, initial body axes
+/// `R0`): each checked (its load point exists, finite values), a follower turned into body axes.
+fn body_loads(
+    model: &Model,
+    bi: usize,
+    se: &Superelement,
+    R0: UnitQuaternion<f64>,
+) -> Result<Vec<(superelement::PointLoad, CompiledFunction)>, ModelError> {
+    let mut out = Vec::new();
+    for (i, l) in model
+        .body_loads
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.body.index() == bi)
+    {
+        let entity = || format!("load {i} on body '{}'", model.bodies[bi].name());
+        let invalid = |what: String| ModelError::InvalidValue {
+            entity: entity(),
+            what,
+            id: Some(Entity::BodyLoad(i)),
+        };
+        if l.point >= se.load_points().len() {
+            return Err(invalid(format!(
+                "load point {} does not exist (the reduced body has {})",
+                l.point,
+                se.load_points().len()
+            )));
+        }
+        if !l.force.iter().chain(l.moment.iter()).all(|x| x.is_finite()) {
+            return Err(invalid("non-finite force or moment".into()));
+        }
+        let follower = l.axes == LoadAxes::Follower;
+        let (force, moment) = if follower {
+            (R0.inverse() * l.force, R0.inverse() * l.moment)
+        } else {
+            (l.force, l.moment)
+        };
+        let load = superelement::PointLoad {
+            point: l.point,
+            force,
+            moment,
+            follower,
+        };
+        let time = l.time.compile(&entity()).map_err(|e| e.with_id(Entity::BodyLoad(i)))?;
+        out.push((load, time));
+    }
+    Ok(out)
+}
+
+/// Every stress sensor is on a flexible body reduced with stress shapes, at nodes it has.
+fn check_stress_sensors(model: &Model, flexible: &[FlexibleElement]) -> Result<(), ModelError> {
+    for (i, s) in model.sensors.iter().enumerate() {
+        let (body, nodes): (BodyId, &[usize]) = match &s.kind {
+            SensorKind::Stress { body, node } => (*body, std::slice::from_ref(node)),
+            SensorKind::MaxVonMises { body, nodes } => (*body, nodes),
+            _ => continue,
+        };
+        let invalid = |what: String| ModelError::InvalidValue {
+            entity: format!("sensor '{}'", s.name),
+            what,
+            id: Some(Entity::Sensor(i)),
+        };
+        let name = model.bodies[body.index()].name();
+        let Some(f) = flexible.iter().find(|f| f.body == body.index()) else {
+            return Err(invalid(format!(
+                "body '{name}' is rigid: stresses are measured on flexible bodies"
+            )));
+        };
+        let Some(shapes) = f.se.stress_shapes() else {
+            return Err(invalid(format!(
+                "body '{name}' was reduced without stress shapes (reduce its part with `stress_shapes = true`)"
+            )));
+        };
+        let count = shapes.node_count();
+        if nodes.is_empty() {
+            return Err(invalid("no nodes to measure".into()));
+        }
+        if let Some(k) = nodes.iter().find(|&&k| k >= count) {
+            return Err(invalid(format!(
+                "node {k} is not a node of body '{name}' ({count} mesh nodes)"
+            )));
+        }
+    }
+    Ok(())
 }

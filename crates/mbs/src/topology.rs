@@ -192,6 +192,29 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
     for (i, l) in model.loads.iter().enumerate() {
         node(l.node, &|| (format!("load {i}"), Entity::Load(i)))?;
     }
+    for (i, l) in model.body_loads.iter().enumerate() {
+        match model.bodies.get(l.body.index()) {
+            Some(Body::Flexible(_)) => {}
+            Some(b) => {
+                return Err(ModelError::InvalidValue {
+                    entity: format!("body load {i}"),
+                    what: format!(
+                        "body '{}' is rigid: loads at load points act on flexible bodies",
+                        b.name()
+                    ),
+                    id: Some(Entity::BodyLoad(i)),
+                })
+            }
+            None => {
+                return Err(ModelError::UnknownBody {
+                    id: l.body.0,
+                    count: model.bodies.len(),
+                    referenced_by: format!("body load {i}"),
+                    by: Entity::BodyLoad(i),
+                })
+            }
+        }
+    }
     for (i, s) in model.sensors.iter().enumerate() {
         let who = || (format!("sensor '{}'", s.name), Entity::Sensor(i));
         match &s.kind {
@@ -211,7 +234,11 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
                 node(*b, &who)?;
             }
             SensorKind::JointCoordinate { joint: j, .. } | SensorKind::JointRate { joint: j, .. } => joint(*j, &who)?,
-            SensorKind::ModalCoordinates { body } if body.index() >= model.bodies.len() => {
+            SensorKind::ModalCoordinates { body }
+            | SensorKind::Stress { body, .. }
+            | SensorKind::MaxVonMises { body, .. }
+                if body.index() >= model.bodies.len() =>
+            {
                 let (referenced_by, by) = who();
                 return Err(ModelError::UnknownBody {
                     id: body.0,

@@ -187,14 +187,18 @@ fn spin_up_stays_bounded() {
 
 /// C1 after the spin-up: 100 s of steady rotation at 10 and 15 rad/s, N = 4 superelements
 /// with two modes, h = 5 ms, with and without geometric stiffening, for rho_inf = 0.8, 0.9 and
-/// 1 (no numerical damping). The out-of-plane tip motion is zero in exact arithmetic; it must
+/// 1 (no numerical damping); and N = 8 at 10 rad/s with rho_inf = 1, whose axial modes are the
+/// stiffest of the set (omega h of about 40). The out-of-plane tip motion is zero in exact arithmetic; it must
 /// stay at round-off, below 1e-9 m (a run that goes unstable grows from ~1e-20 m by a factor
 /// 1000 every 2 s and passes 1e-9 m within 10 s of the onset; the stable runs stay below
 /// 1e-18 m, so the bound has ten orders of margin on both sides).
 ///
 /// This failed when the generalized-alpha recursion ran on spatial angular velocities
 /// (module docs of `mbs::dynamic_solver`, "Body axes"): the fixed-interface modes of the
-/// 2.5 m segments (about 346 rad/s, omega h = 1.7) grew at 3.4 /s at 10 rad/s.
+/// 2.5 m segments (about 346 rad/s, omega h = 1.7) grew at 3.4 /s at 10 rad/s. With the
+/// rotations in body axes and the translations still in fixed axes, N = 8 at rho_inf = 1 grew
+/// an in-plane (axial) mode and stopped at t = 26.2 s; with the translations in body axes too
+/// (`DynamicSettings::body_axis_translations`) it stays in plane for the 100 s.
 #[test]
 #[cfg_attr(debug_assertions, ignore = "release only: cargo test --release --test convergence")]
 fn spin_up_steady_rotation_stays_in_plane() {
@@ -202,19 +206,22 @@ fn spin_up_steady_rotation_stays_in_plane() {
     for omega in [10.0, 15.0] {
         for stiffening in [false, true] {
             for rho in [0.8, 0.9, 1.0] {
-                cases.push((omega, stiffening, rho));
+                cases.push((4usize, omega, stiffening, rho));
             }
         }
     }
+    cases.push((8, 10.0, false, 1.0));
     let results: Vec<_> = std::thread::scope(|scope| {
         let handles: Vec<_> = cases
             .iter()
-            .map(|&(omega, stiffening, rho)| {
+            .map(|&(n, omega, stiffening, rho)| {
                 scope.spawn(move || {
-                    let model = spin_up_with(4, ModeSelection::Count(2), omega, stiffening);
+                    let model = spin_up_with(n, ModeSelection::Count(2), omega, stiffening);
                     let sys = System::new(&model).unwrap();
                     let settings = DynamicSettings {
                         output_every: 10,
+                        // N = 8 at rho_inf = 1 needs the translations in body axes too.
+                        body_axis_translations: n == 8,
                         ..DynamicSettings::new(0.005, 100.0, rho)
                     };
                     let traj = solve_dynamic(&sys, sys.initial_state(), &settings)
@@ -228,22 +235,22 @@ fn spin_up_steady_rotation_stays_in_plane() {
             .collect();
         handles.into_iter().map(|h| h.join().unwrap()).collect()
     });
-    println!("steady rotation, N = 4, h = 5 ms, 100 s: max |z| of the tip (out of plane)");
-    for ((omega, stiffening, rho), r) in cases.iter().zip(&results) {
+    println!("steady rotation, h = 5 ms, 100 s: max |z| of the tip (out of plane)");
+    for ((n, omega, stiffening, rho), r) in cases.iter().zip(&results) {
         match r {
             Ok((z, y)) => println!(
-                "  {omega:>4} rad/s, stiffening {stiffening:<5}, rho_inf {rho}: max |z| {z:.1e} m, y(100 s) {y:.5} m"
+                "  N = {n}, {omega:>4} rad/s, stiffening {stiffening:<5}, rho_inf {rho}: max |z| {z:.1e} m, y(100 s) {y:.5} m"
             ),
-            Err(e) => println!("  {omega:>4} rad/s, stiffening {stiffening:<5}, rho_inf {rho}: failed: {e}"),
+            Err(e) => println!("  N = {n}, {omega:>4} rad/s, stiffening {stiffening:<5}, rho_inf {rho}: failed: {e}"),
         }
     }
-    for ((omega, stiffening, rho), r) in cases.iter().zip(&results) {
+    for ((n, omega, stiffening, rho), r) in cases.iter().zip(&results) {
         let (z, _) = r
             .as_ref()
-            .unwrap_or_else(|e| panic!("{omega} rad/s, {stiffening}, {rho}: {e}"));
+            .unwrap_or_else(|e| panic!("N = {n}, {omega} rad/s, {stiffening}, {rho}: {e}"));
         assert!(
             *z < 1e-9,
-            "{omega} rad/s, stiffening {stiffening}, rho_inf {rho}: max |z| {z:e}"
+            "N = {n}, {omega} rad/s, stiffening {stiffening}, rho_inf {rho}: max |z| {z:e}"
         );
     }
 }

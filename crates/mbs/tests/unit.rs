@@ -104,3 +104,7 @@ mod units;
 /// Modal coordinates and deformed meshes of a state; points welded into nodes.
 #[path = "unit/recovery.rs"]
 mod recovery;
+
+/// Stresses from a multibody state: the centrifugal axial force of a spinning beam.
+#[path = "unit/stress.rs"]
+mod stress;

@@ -8,7 +8,7 @@
 //! | `ReducedBodyFileError` | a `.rbody` file cannot be read or written | `path` |
 //! | `StudyError` | a study is not valid (as `flexmbs check` reports it) | `file`, `line`, `column`, `key` of the first error; `errors`: every error as a dict of these and `message` |
 //! | `KeyPathError` | a key path leads to no value of the study | `path` (the path asked for), `at` (its part that leads nowhere) |
-//! | `SolveError` | a solver stopped (Newton did not converge, a singular matrix, ...) | `time`, `step`, `residual` (when known); `partial` (results computed before, from `Study.run`) |
+//! | `SolveError` | a solver stopped (Newton did not converge, a singular matrix, ...) | `time` (of the step that failed; the load factor in an equilibrium), `step` (its number), `residual` (the last relative residual when Newton failed), `analysis` (its name); `None` when not known; `partial` (from `Study.run`: the results computed before, also in the results folder) |
 
 use pyo3::create_exception;
 use pyo3::prelude::*;
@@ -44,7 +44,7 @@ create_exception!(
     flexmbs,
     SolveError,
     FlexmbsError,
-    "A solver stopped: `time`, `step` and `residual` say where (None when not known)."
+    "A solver stopped: `time`, `step`, `residual` and `analysis` say where (None when not known); `partial` holds what `Study.run` computed before."
 );
 
 /// Adds the exception classes to the module.
@@ -116,8 +116,18 @@ pub(crate) fn to_py_err(py: Python<'_>, error: &(dyn std::error::Error + 'static
 
 fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResult<PyErr> {
     let message = chain(error);
+    // Where a solver stopped, from the errors around its own: the analysis of a run and the
+    // step number the analysis counts.
+    let mut analysis: Option<String> = None;
+    let mut analysis_step: Option<usize> = None;
     let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(error);
     while let Some(e) = cause {
+        if let Some(a) = e.downcast_ref::<study::error::AnalysisFailed>() {
+            analysis.get_or_insert_with(|| a.analysis.clone());
+        }
+        if let Some(s) = e.downcast_ref::<study::error::SolverStopped>() {
+            analysis_step = analysis_step.or(s.step);
+        }
         if let Some(s) = e.downcast_ref::<study::source::StudyErrors>() {
             let errors = study_error_dicts(py, s)?;
             let first = errors.first().cloned();
@@ -158,10 +168,13 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
                 mbs::SolveError::Body { t, .. } | mbs::SolveError::UserForce { t, .. } => (Some(*t), None, None),
                 _ => (None, None, None),
             };
+            let step = step.or(analysis_step);
             let attrs = [
                 ("time", t.into_pyobject(py)?.into_any().unbind()),
                 ("step", step.into_pyobject(py)?.into_any().unbind()),
                 ("residual", residual.into_pyobject(py)?.into_any().unbind()),
+                ("analysis", analysis.clone().into_pyobject(py)?.into_any().unbind()),
+                ("partial", py.None()),
             ];
             return Ok(with_attributes::<SolveError>(py, message, &attrs));
         }
@@ -172,6 +185,33 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
         cause = e.source();
     }
     Ok(FlexmbsError::new_err(message))
+}
+
+/// A failure of the simulation of analysis `analysis` that has taken `steps` steps, as the
+/// package's exception: a `SolveError` names the analysis, and the step when the solver did
+/// not (the step that failed is the next).
+pub(crate) fn simulation_err(
+    py: Python<'_>,
+    error: &(dyn std::error::Error + 'static),
+    analysis: &str,
+    steps: usize,
+) -> PyErr {
+    let err = to_py_err(py, error);
+    if err.is_instance_of::<SolveError>(py) {
+        let value = err.value(py);
+        let unknown_step = value.getattr("step").map(|s| s.is_none()).unwrap_or(true);
+        let set = value.setattr("analysis", analysis).and_then(|()| {
+            if unknown_step {
+                value.setattr("step", steps + 1)
+            } else {
+                Ok(())
+            }
+        });
+        if let Err(e) = set {
+            return e;
+        }
+    }
+    err
 }
 
 /// `error` as the package's exception; a `KeyPathError` gets `path` = `key`, the path the

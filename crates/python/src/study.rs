@@ -6,7 +6,7 @@
 //! results come back as plain Python data (dicts, lists, numpy arrays) that the pure-Python
 //! `flexmbs.results` module wraps.
 
-use crate::errors::{key_err, to_py_err, StudyError};
+use crate::errors::{key_err, simulation_err, to_py_err, StudyError};
 use crate::rbody::ReducedBody;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1};
@@ -510,9 +510,14 @@ impl Simulation {
     }
 
     /// One time step; returns the Newton iterations it took. A step that fails raises
-    /// `SolveError` (time, step, residual) and leaves the state at the last converged step.
+    /// `SolveError` (`time`, `step`, `residual`, `analysis`) and leaves the state at the last
+    /// converged step: the simulation can go on (with a changed load or actuator, say).
     fn step(&mut self, py: Python<'_>) -> PyResult<usize> {
-        let report = self.sim.step().map_err(|e| to_py_err(py, &e))?;
+        let steps = self.sim.steps();
+        let report = self
+            .sim
+            .step()
+            .map_err(|e| simulation_err(py, &e, &self.analysis, steps))?;
         // The residuals before each correction and at convergence.
         Ok(report.residuals.len().saturating_sub(1))
     }
@@ -520,7 +525,8 @@ impl Simulation {
     /// Steps until the time reaches `t`; returns the number of steps taken.
     fn advance_to(&mut self, py: Python<'_>, t: f64) -> PyResult<usize> {
         let sim = &mut self.sim;
-        py.detach(|| sim.advance_to(t)).map_err(|e| to_py_err(py, &e))
+        let result = py.detach(|| sim.advance_to(t));
+        result.map_err(|e| simulation_err(py, &e, &self.analysis, self.sim.steps()))
     }
 
     /// The names of the study's sensors.
@@ -637,6 +643,35 @@ impl Simulation {
                 .map_err(|e| to_py_err(py, &*e))?;
         }
         Ok(())
+    }
+
+    /// The names of the study's actuators (those `set_actuator` can hold).
+    #[getter]
+    fn actuator_names(&self) -> Vec<String> {
+        self.sim.actuator_names().into_iter().map(String::from).collect()
+    }
+
+    /// Holds actuator `name` at `effort` [N on a length, N m on an angle] in place of its
+    /// `function` or `pid` from the next step on, until `release_actuator(name)` (or
+    /// `set_actuator(name, None)`). The `actuator-effort` sensors write the held value.
+    fn set_actuator(&mut self, py: Python<'_>, name: &str, effort: Option<f64>) -> PyResult<()> {
+        self.sim.set_actuator(name, effort).map_err(|e| to_py_err(py, &*e))
+    }
+
+    /// Releases actuator `name` to its `function` or `pid` (a PID resumes from its integral,
+    /// frozen while held).
+    fn release_actuator(&mut self, py: Python<'_>, name: &str) -> PyResult<()> {
+        self.sim.set_actuator(name, None).map_err(|e| to_py_err(py, &*e))
+    }
+
+    /// The effort [N or N m] actuator `name` applies now: the held value, or its law's.
+    fn actuator_effort(&self, py: Python<'_>, name: &str) -> PyResult<f64> {
+        self.sim.actuator_effort(name).map_err(|e| to_py_err(py, &*e))
+    }
+
+    /// The effort actuator `name` is held at, `None` while its law acts.
+    fn held_actuator(&self, py: Python<'_>, name: &str) -> PyResult<Option<f64>> {
+        self.sim.held_actuator(name).map_err(|e| to_py_err(py, &*e))
     }
 
     fn __repr__(&self) -> String {

@@ -1,6 +1,8 @@
 """Stepping a dynamic analysis from Python: the same numbers as a run, sensors and state
-between steps, named loads set by a controller, the PD loop around a flexible arm, failures."""
+between steps, named loads and actuator efforts set by a controller, the PD loop around a
+flexible arm, failures that say where and keep what was computed."""
 
+import json
 import math
 
 import numpy as np
@@ -131,3 +133,134 @@ def test_a_failed_step_says_where(examples):
     assert f"t = {err.time:.6f}" in str(err)
     # The state stays at the last converged step.
     assert sim.time < err.time
+
+
+# An actuator on the hub's joint, for a controller outside the study: a torque on the joint
+# coordinate (reacted by the ground), zero by its own law.
+DRIVE = """
+[[actuators]]
+name = "drive"
+joint = "motor-axis"
+function = { type = "constant-speed", speed = 0.0 }
+
+[[sensors]]
+name = "drive-torque"
+type = "actuator-effort"
+of = "drive"
+"""
+
+
+def pd_loop(sim, set_torque, t_end, target=1.0, kp=20.0, kd=5.0):
+    """A PD law on the hub angle, computed from the sensors after each step and set for the
+    next; the hub angle, the tip's deflection and the torque at every step."""
+    angle, tip_y, torque = [], [], []
+    while sim.time < t_end - 1e-9:
+        theta = sim.sensor("angle")[0]
+        rate = sim.sensor("rate")[0]
+        tau = kp * (target - theta) - kd * rate
+        set_torque(tau)
+        sim.step()
+        angle.append(theta)
+        tip_y.append(sim.sensor("tip")[1])
+        torque.append(tau)
+    return np.array(angle), np.array(tip_y), np.array(torque)
+
+
+def test_pd_loop_through_an_actuator_effort(examples):
+    """The PD loop closed through an actuator on the hub's joint instead of the point load:
+    the same torque about the same axis, so the same motion; the hub settles at 1 rad."""
+    text = (examples / "controlled_arm.toml").read_text() + DRIVE
+    study = flexmbs.Study.from_toml(text, base_dir=examples, name="controlled_arm.toml")
+    sim = study.simulation()
+    assert sim.actuator_names == ["drive"]
+    assert sim.held_actuator("drive") is None
+    angle, tip_y, torque = pd_loop(sim, lambda tau: sim.set_actuator("drive", tau), 3.0)
+    # The actuator-effort sensor writes the held value: the last torque set.
+    assert sim.held_actuator("drive") == torque[-1]
+    assert sim.sensor("drive-torque")[0] == torque[-1] == sim.actuator_effort("drive")
+    t = np.arange(len(angle)) * sim.dt
+    # Settling as in the loop through the load (J = 0.38 kg m^2, omega_n = 7.3 rad/s, zeta =
+    # 0.9: 2 % in about 0.6 s).
+    assert abs(angle[-1] - 1.0) < 2e-3
+    assert np.max(np.abs(angle[t > 2.0] - 1.0)) < 1e-2
+    # The same loop through the point load `motor` (a moment about the joint's axis at the
+    # joint): equal to the Newton tolerance (relative residual 1e-10 per step, summed over
+    # 1500 steps of a stable loop), far below the 1 rad the hub turns.
+    ref = flexmbs.Study.load(examples / "controlled_arm.toml").simulation()
+    ref_angle, ref_tip, _ = pd_loop(ref, lambda tau: ref.set_load("motor", moment=[0.0, 0.0, tau]), 3.0)
+    np.testing.assert_allclose(angle, ref_angle, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(tip_y, ref_tip, rtol=0, atol=1e-9)
+    # Released: the actuator's own law (zero) acts again, and the hub coasts.
+    sim.release_actuator("drive")
+    assert sim.held_actuator("drive") is None and sim.actuator_effort("drive") == 0.0
+    sim.step()
+    assert sim.sensor("drive-torque")[0] == 0.0
+    # Errors: an actuator the study does not have (the names it has in the message).
+    with pytest.raises(flexmbs.FlexmbsError) as e:
+        sim.set_actuator("drve", 1.0)
+    assert "drive" in str(e.value)
+    with pytest.raises(flexmbs.FlexmbsError) as e:
+        sim.set_actuator("drive", float("nan"))
+    assert "finite" in str(e.value)
+
+
+def failing_arm(examples):
+    """The controlled arm with a motor moment that jumps to 3000 N m at t = 0.05 s, and
+    Newton allowed 4 iterations without smaller steps: the time integration stops at the
+    step after the jump's (t = 0.056 s, step 28: the jump is carried by a step of the
+    table's linear ramp, the hub then spins too fast for 4 iterations)."""
+    study = flexmbs.Study.load(examples / "controlled_arm.toml")
+    study.update(
+        {
+            "loads.motor.moment": [0.0, 0.0, 1.0],
+            "loads.motor.function": {
+                "type": "table",
+                "t": [0.0, 0.0499, 0.05, 1.0],
+                "value": [0.0, 0.0, 3000.0, 3000.0],
+                "interpolation": "linear",
+            },
+            "analyses.motion.max_iterations": 4,
+            "analyses.motion.dt_min": 2e-3,
+        }
+    )
+    return study
+
+
+def test_a_run_that_fails_mid_way_says_where_and_keeps_its_results(examples, tmp_path):
+    study = failing_arm(examples)
+    out = tmp_path / "failing"
+    with pytest.raises(flexmbs.SolveError) as e:
+        study.run(t_end=0.2, results_dir=out)
+    err = e.value
+    # Where: the analysis, the time and number of the step that failed, Newton's residual.
+    assert err.analysis == "motion"
+    assert err.time == pytest.approx(0.056, abs=1e-12)
+    assert err.step == 28
+    assert err.residual is not None and err.residual > 1e-3
+    assert "Newton did not converge at t = 0.056000 (step 28)" in str(err)
+    assert str(out) in str(err)
+    # What was computed before: the 27 converged steps and the start, in the exception ...
+    partial = err.partial["motion"]
+    angle = partial.sensor("angle")
+    assert len(angle.time) == 28 and angle.time[-1] == pytest.approx(0.054, abs=1e-12)
+    assert partial.summary["status"] == "failed"
+    # ... and in the results folder, as the program keeps them.
+    rows = np.loadtxt(out / "motion" / "angle.csv", delimiter=",", skiprows=1, ndmin=2)
+    np.testing.assert_array_equal(rows[:, 0], angle.time)
+    np.testing.assert_array_equal(rows[:, 1], angle.values[:, 0])
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed"
+    assert "Newton did not converge" in summary["analyses"][0]["error"]
+
+
+def test_a_simulation_that_fails_says_where_and_can_go_on(examples):
+    sim = failing_arm(examples).simulation()
+    with pytest.raises(flexmbs.SolveError) as e:
+        sim.advance_to(0.2)
+    err = e.value
+    # The step that failed, as in the run (the same integrator).
+    assert (err.analysis, err.step) == ("motion", 28)
+    assert err.time == pytest.approx(0.056, abs=1e-12) and err.residual > 1e-3
+    assert err.partial is None
+    # The state stays at the last converged step.
+    assert sim.time == pytest.approx(0.054, abs=1e-12) and sim.steps == 27

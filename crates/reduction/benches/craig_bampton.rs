@@ -17,6 +17,15 @@
 //! (`benchmarks/scripts/reduction_vs_scipy.sh`), solves it once more with our eigensolver
 //! alone (time, worst relative residual, written to `eigenvalues_<size>.txt`) and prints a
 //! `RESULT` line for the script.
+//!
+//! With `REDUCTION_CB_EIGENVALUES` set to a directory, each size compares its results with
+//! `cb_eigenvalues_<size>_<ordering>.txt` there: the 20 fixed-interface eigenvalues
+//! $\omega_j^2$ and the free-free eigenvalues of the reduced pair $(\mathbf K_{CB},
+//! \mathbf M_{CB})$ (rigid-body zeros left out), written by the first run, compared by every
+//! later one: it prints the largest relative difference and `MISMATCH` above 1e-10 (a change
+//! of ordering, kernels or eigensolver settings must not change the reduced body).
+
+#![allow(non_snake_case)]
 
 mod common;
 
@@ -44,11 +53,16 @@ fn cpu_seconds() -> f64 {
 }
 
 fn peak_rss_mb() -> f64 {
+    status_mb("VmHWM")
+}
+
+/// A memory figure of `/proc/self/status` (`VmHWM` peak, `VmRSS` current) in MB.
+fn status_mb(field: &str) -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
             s.lines()
-                .find(|l| l.starts_with("VmHWM"))
+                .find(|l| l.starts_with(field))
                 .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
         })
         .map(|kb| kb / 1024.0)
@@ -63,7 +77,7 @@ fn run_one(size: &str, ordering: FillOrdering) {
     let n_free = DofMap::new(&model).unwrap().n_free();
     let t_model = t0.elapsed().as_secs_f64();
     // Stage start times; the eigen iteration reports many times, only its first counts.
-    let mut marks: Vec<(&'static str, f64, f64)> = Vec::new();
+    let mut marks: Vec<(&'static str, f64, f64, f64)> = Vec::new();
     let mut factor = (0usize, 0.0f64, FillOrdering::Auto);
     let mut applications = 0;
     let t1 = Instant::now();
@@ -100,7 +114,7 @@ fn run_one(size: &str, ordering: FillOrdering) {
                 _ => "other",
             };
             if marks.last().map(|m| m.0) != Some(name) {
-                marks.push((name, t, cpu_seconds()));
+                marks.push((name, t, cpu_seconds(), status_mb("VmRSS")));
             }
         },
     )
@@ -108,13 +122,15 @@ fn run_one(size: &str, ordering: FillOrdering) {
     let total = t1.elapsed().as_secs_f64();
     let cpu_end = cpu_seconds();
     let mut stages = String::new();
-    for (k, (name, t, cpu)) in marks.iter().enumerate() {
+    let mut rss = String::new();
+    for (k, (name, t, cpu, mb)) in marks.iter().enumerate() {
+        rss += &format!("{name} {:.0}, ", mb);
         let end = marks.get(k + 1).map_or(total, |m| m.1);
         let cpu_next = marks.get(k + 1).map_or(cpu_end, |m| m.2);
         stages += &format!("{name} {:.2}/{:.2}, ", end - t, cpu_next - cpu);
     }
     println!(
-        "{size:>5} {:<17} {ex} x {ey} x {ez} hex8, {n_free} free dofs: model {t_model:.2} s, reduce {total:.2} s (stage wall/CPU s: {stages}{applications} operator applications), factor {:.1} M values ({:.2} GB, {:.0} Gflop), peak RSS {:.0} MB, f1 = {:.4} Hz",
+        "{size:>5} {:<17} {ex} x {ey} x {ez} hex8, {n_free} free dofs: model {t_model:.2} s, reduce {total:.2} s (stage wall/CPU s: {stages}{applications} operator applications), factor {:.1} M values ({:.2} GB, {:.0} Gflop), peak RSS {:.0} MB (RSS at stage start, MB: {rss}), f1 = {:.4} Hz",
         format!("{:?}", factor.2),
         factor.0 as f64 / 1e6,
         factor.0 as f64 * 8.0 / 1e9,
@@ -122,6 +138,9 @@ fn run_one(size: &str, ordering: FillOrdering) {
         peak_rss_mb(),
         body.fixed_interface_omega[0] / (2.0 * std::f64::consts::PI)
     );
+    if let Ok(dir) = std::env::var("REDUCTION_CB_EIGENVALUES") {
+        compare_eigenvalues(Path::new(&dir), &format!("{size}_{ordering:?}"), &body);
+    }
     if let Ok(dir) = std::env::var("REDUCTION_CB_MTX_DIR") {
         let peak = peak_rss_mb();
         let (n_ii, eigen_s, residual, difference) =
@@ -130,6 +149,67 @@ fn run_one(size: &str, ordering: FillOrdering) {
             "RESULT size={size} dofs={n_free} interior={n_ii} reduce_s={total:.3} reduce_cpu_s={:.3} peak_mb={peak:.0} eigen_s={eigen_s:.3} worst_residual={residual:.3e} cb_difference={difference:.2e}",
             cpu_end - marks.first().map_or(cpu_end, |m| m.2)
         );
+    }
+}
+
+/// The fixed-interface eigenvalues $\omega_j^2$ of `body`, then the eigenvalues of its reduced
+/// pair $(\mathbf K_{CB}, \mathbf M_{CB})$ above $10^{-8}$ of the largest (the rigid-body
+/// zeros are round-off and not comparable relatively), both ascending.
+fn reduced_eigenvalues(body: &ReducedBody) -> Vec<f64> {
+    use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+    let dense = |d: &reduction::DenseMatrix| faer::Mat::from_fn(d.nrows, d.ncols, |i, j| d.data[i + j * d.nrows]);
+    let (K, M) = (dense(&body.K_CB), dense(&body.M_CB));
+    let llt = M.llt(faer::Side::Lower).expect("M_CB is positive definite");
+    // L^-1 K L^-T, symmetric, with the eigenvalues of (K, M).
+    let mut X = K.clone();
+    solve_lower_triangular_in_place(llt.L(), X.as_mut(), faer::Par::Seq);
+    let mut Y = X.transpose().to_owned();
+    solve_lower_triangular_in_place(llt.L(), Y.as_mut(), faer::Par::Seq);
+    let mut free = Y
+        .self_adjoint_eigenvalues(faer::Side::Lower)
+        .expect("dense eigenvalues");
+    let largest = free.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    free.retain(|&l| l > 1e-8 * largest);
+    let mut all: Vec<f64> = body.fixed_interface_omega.iter().map(|w| w * w).collect();
+    all.extend(free);
+    all
+}
+
+/// Writes `dir/cb_eigenvalues_<tag>.txt` from `body` if it does not exist, else prints the
+/// largest relative difference of `body`'s eigenvalues to the file's.
+fn compare_eigenvalues(dir: &Path, tag: &str, body: &ReducedBody) {
+    let values = reduced_eigenvalues(body);
+    let file = dir.join(format!("cb_eigenvalues_{tag}.txt"));
+    match std::fs::read_to_string(&file) {
+        Ok(text) => {
+            let reference: Vec<f64> = text.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            if reference.len() != values.len() {
+                println!(
+                    "eigenvalues MISMATCH: {} values against {} in {}",
+                    values.len(),
+                    reference.len(),
+                    file.display()
+                );
+                return;
+            }
+            let worst = values
+                .iter()
+                .zip(&reference)
+                .map(|(a, b)| (a - b).abs() / b.abs())
+                .fold(0.0f64, f64::max);
+            println!(
+                "eigenvalues: {} values, largest relative difference {worst:.2e} to {}{}",
+                values.len(),
+                file.display(),
+                if worst > 1e-10 { " MISMATCH" } else { "" }
+            );
+        }
+        Err(_) => {
+            std::fs::create_dir_all(dir).unwrap();
+            let text: String = values.iter().map(|v| format!("{v:.17e}\n")).collect();
+            std::fs::write(&file, text).unwrap();
+            println!("eigenvalues: {} values written to {}", values.len(), file.display());
+        }
     }
 }
 

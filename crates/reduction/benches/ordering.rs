@@ -90,6 +90,32 @@ fn main() {
             .unwrap();
             report(format!("ND, leaves <= {leaf}"), t.elapsed().as_secs_f64(), &nd);
         }
+        if let Ok(dir) = std::env::var("REDUCTION_ORDERING_EXPORT") {
+            export_pattern(std::path::Path::new(&dir), size, K_ii.symbolic());
+        }
+        if let Ok(dir) = std::env::var("REDUCTION_ORDERING_IMPORT") {
+            let file = std::path::Path::new(&dir).join(format!("perm_{size}.bin"));
+            match std::fs::read(&file) {
+                Ok(bytes) => {
+                    let fwd: Vec<usize> = bytes
+                        .chunks_exact(8)
+                        .map(|b| u64::from_le_bytes(b.try_into().unwrap()) as usize)
+                        .collect();
+                    assert_eq!(fwd.len(), ni, "{}: one entry per row of K_ii", file.display());
+                    let mut inv = vec![0usize; ni];
+                    fwd.iter().enumerate().for_each(|(k, &d)| inv[d] = k);
+                    let imported = factorize_symbolic_cholesky(
+                        K_ii.symbolic(),
+                        faer::Side::Lower,
+                        SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, ni)),
+                        CholeskySymbolicParams::default(),
+                    )
+                    .unwrap();
+                    report(format!("imported {}", file.display()), 0.0, &imported);
+                }
+                Err(e) => println!("{size:>5} no imported ordering ({}: {e})", file.display()),
+            }
+        }
         if numeric {
             for ordering in [FillOrdering::Amd, FillOrdering::NestedDissection] {
                 let t = Instant::now();
@@ -102,4 +128,37 @@ fn main() {
             }
         }
     }
+}
+
+/// Writes the pattern of `A` without its diagonal, both triangles, as `graph_<size>.bin`:
+/// `n` (u64), `n + 1` row pointers (u64), then the column indices (u32), little-endian; the
+/// adjacency graph that METIS's `METIS_NodeND` orders (`benchmarks/scripts/metis_ordering.py`).
+fn export_pattern(dir: &std::path::Path, size: &str, A: faer::sparse::SymbolicSparseColMatRef<'_, usize>) {
+    let n = A.nrows();
+    let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for j in 0..n {
+        for &i in A.row_idx_of_col_raw(j) {
+            if i != j {
+                adj[i].push(j as u32);
+                adj[j].push(i as u32);
+            }
+        }
+    }
+    let mut bytes = Vec::new();
+    bytes.extend_from_slice(&(n as u64).to_le_bytes());
+    let mut ptr = 0u64;
+    bytes.extend_from_slice(&ptr.to_le_bytes());
+    for row in &mut adj {
+        row.sort_unstable();
+        row.dedup();
+        ptr += row.len() as u64;
+        bytes.extend_from_slice(&ptr.to_le_bytes());
+    }
+    for row in &adj {
+        for &j in row {
+            bytes.extend_from_slice(&j.to_le_bytes());
+        }
+    }
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(dir.join(format!("graph_{size}.bin")), bytes).unwrap();
 }

@@ -550,9 +550,9 @@ pub fn reduce_with_progress(
     let interfaces: Vec<(String, usize)> = interfaces.iter().map(|(n, node)| (n.clone(), node.index())).collect();
     let (interfaces, auxiliary_interface) = with_auxiliary(name, &interfaces, settings.auxiliary_node)?;
     progress(Stage::Assembling);
-    let dofs = DofMap::new(model).map_err(ReductionError::from_fe)?;
+    let dofs = DofMap::new(model)?;
     let pattern = SystemPattern::new(model, &dofs);
-    let a = assemble(model, &pattern).map_err(ReductionError::from_fe)?;
+    let a = assemble(model, &pattern)?;
     let node_ids: Vec<(String, NodeId)> = interfaces.iter().map(|(n, i)| (n.clone(), NodeId(*i as u32))).collect();
     let p = partition(model, &dofs, &node_ids)?;
     let describe = |d: usize| {

@@ -180,28 +180,9 @@ pub struct Diagnostics {
 /// The rigid modes of the interface set (5.2), undeformed, about `c`: $6N \times 6$,
 /// row-major `[row][direction]`.
 fn phi_rig(body: &ReducedBody, c: [f64; 3]) -> Vec<[f64; 6]> {
-    let mut P = vec![[0.0; 6]; 6 * body.interfaces.len()];
-    for (k, interface) in body.interfaces.iter().enumerate() {
-        let r = [0, 1, 2].map(|a| interface.position[a] - c[a]);
-        for a in 0..3 {
-            P[6 * k + a][a] = 1.0;
-            P[6 * k + 3 + a][3 + a] = 1.0;
-        }
-        // A unit rotation about axis a moves the point by e_a x r.
-        for a in 0..3 {
-            let mut e = [0.0; 3];
-            e[a] = 1.0;
-            let e_x_r = [
-                e[1] * r[2] - e[2] * r[1],
-                e[2] * r[0] - e[0] * r[2],
-                e[0] * r[1] - e[1] * r[0],
-            ];
-            for b in 0..3 {
-                P[6 * k + b][3 + a] = e_x_r[b];
-            }
-        }
-    }
-    P
+    let x: Vec<nalgebra::Vector3<f64>> = body.interfaces.iter().map(|p| p.position.into()).collect();
+    let P = fe_model::rigid::rigid_modes(&x, &c.into(), 0);
+    (0..P.nrows()).map(|r| [0, 1, 2, 3, 4, 5].map(|a| P[(r, a)])).collect()
 }
 
 /// The diagnostics table of `body`. `excitation_hz` is the highest frequency the study will

@@ -1,6 +1,7 @@
 //! Errors of the reduction stage. Each says what failed, where (matrix, dof, mode) and what to
 //! do about it.
 
+use crate::reduced_body::{MAGIC, OLDEST_READABLE};
 use thiserror::Error;
 
 /// Errors of the sparse eigensolver and the shift-invert factorisation.
@@ -75,9 +76,13 @@ pub enum ReductionError {
     /// that is not free, the body still free with all interfaces held, ...).
     #[error("interface '{name}': {what}")]
     Interface { name: String, what: String },
-    /// The FE model could not be numbered or assembled.
-    #[error("FE model: {0}")]
-    Fe(String),
+    /// The FE model could not be numbered or assembled: the FE stage's error is the source.
+    #[error("FE model")]
+    Fe(#[from] fe_model::FeError),
+    /// The FE model holds data the reduction cannot use (a beam without its section, a
+    /// non-finite geometric stiffness entry): which, and why.
+    #[error("FE model: {what}")]
+    InvalidFeModel { what: String },
     /// Matrices and node coordinates from another FE code are inconsistent (sizes, dof list,
     /// an unsymmetric entry); see `craig_bampton::reduce_external`.
     #[error("external model: {what}")]
@@ -87,7 +92,7 @@ pub enum ReductionError {
     #[error("reduced-body file {}: {problem}", path.display())]
     BodyFile {
         path: std::path::PathBuf,
-        problem: crate::file::BodyFileProblem,
+        problem: BodyFileProblem,
     },
     /// A Matrix Market file (`matrix_market` module) could not be written or read: which
     /// file, the 1-based line when one is to blame, and what is wrong.
@@ -99,9 +104,73 @@ pub enum ReductionError {
     },
 }
 
-impl ReductionError {
-    /// Wraps an FE-stage error (kept as text: `FeError` is not `Clone`).
-    pub fn from_fe(e: fe_model::FeError) -> Self {
-        ReductionError::Fe(e.to_string())
+/// What is wrong with a reduced-body file; the file itself is named by
+/// [`ReductionError::BodyFile`].
+#[derive(Clone, Debug, PartialEq, Error)]
+#[non_exhaustive]
+pub enum BodyFileProblem {
+    /// The file system refused (`action` is "read", "write", ...).
+    #[error("cannot {action} it: {message}")]
+    Io { action: &'static str, message: String },
+    /// The file does not start with [`crate::file::MAGIC`].
+    #[error("not a reduced-body file: it starts with {found:?}, where a reduced-body file starts with \"{MAGIC} \"")]
+    WrongMagic { found: String },
+    /// The format version on the first line is not the one this build reads.
+    #[error("{}", version_message(*found, *supported))]
+    UnsupportedVersion { found: u64, supported: u32 },
+    /// A header line (1 or 2) is not what the format prescribes.
+    #[error("header line {line}: {what}")]
+    Header { line: usize, what: String },
+    /// The file ends inside the JSON metadata block.
+    #[error(
+        "the metadata block is truncated: the header announces {expected} bytes, the file has {found} after the header"
+    )]
+    TruncatedMetadata { expected: u64, found: u64 },
+    /// A stored CRC-32 does not match the bytes: the file was changed or damaged after it was
+    /// written. `block` is `metadata` or the array's name.
+    #[error("checksum mismatch in {block}: stored crc32 {stored:08x}, computed {computed:08x} (the file was changed or damaged after it was written)")]
+    Checksum { block: String, stored: u32, computed: u32 },
+    /// The metadata block is not the JSON of the file's format version; `line` and `column` are
+    /// serde_json's, counted in the JSON block (its line 1 is line 3 of the file).
+    #[error("malformed metadata JSON at line {line}, column {column} of the block (file line {}): {message}", line + 2)]
+    Json {
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    /// The file ends inside an array.
+    #[error("array {array} is truncated: it needs {expected} bytes from byte {offset} of the array section, the file has {found}")]
+    TruncatedArray {
+        array: String,
+        offset: u64,
+        expected: u64,
+        found: u64,
+    },
+    /// Bytes after the last array.
+    #[error("{count} unexpected bytes after the last array (the index accounts for {expected} bytes of arrays)")]
+    TrailingBytes { count: u64, expected: u64 },
+    /// Shapes or counts that contradict each other (an array that is not $n \times n$, a
+    /// frequency list whose length is not the mode count, an index in the wrong order, ...).
+    #[error("inconsistent data: {what}")]
+    Shape { what: String },
+    /// The body cannot be written (a non-finite scalar, which JSON cannot hold, or a body
+    /// whose own shapes are inconsistent).
+    #[error("the body cannot be written: {what}")]
+    Unwritable { what: String },
+    /// The file is intact but its data are physically wrong ([`crate::physics`]): no reduction
+    /// produces them.
+    #[error("physically inconsistent data (no reduction produces these; reduce the body again): {}", problems.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("; "))]
+    Physics {
+        problems: Vec<crate::physics::PhysicsProblem>,
+    },
+}
+
+fn version_message(found: u64, supported: u32) -> String {
+    if found > supported as u64 {
+        format!("format version {found} is newer than this build, which reads versions {OLDEST_READABLE} to {supported}: read it with a newer flexmbs, or reduce the body again with this one")
+    } else {
+        format!(
+            "format version {found} is not supported: this build reads versions {OLDEST_READABLE} to {supported}; reduce the body again"
+        )
     }
 }

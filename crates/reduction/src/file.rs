@@ -69,93 +69,18 @@
 
 #![allow(non_snake_case)]
 
+pub use crate::error::BodyFileProblem;
 use crate::error::ReductionError;
+pub use crate::reduced_body::MAGIC;
 use crate::reduced_body::{
     BeamStressElement, DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes,
-    FORMAT_VERSION,
+    FORMAT_VERSION, OLDEST_READABLE,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// The first bytes of every reduced-body file, followed by a space and the format version.
-pub const MAGIC: &str = "FLEXMBS-RBODY";
-
 /// The file extension [`write()`] callers should use (not enforced).
 pub const EXTENSION: &str = "rbody";
-
-/// What is wrong with a reduced-body file; the file itself is named by
-/// [`ReductionError::BodyFile`].
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum BodyFileProblem {
-    /// The file system refused (`action` is "read", "write", ...).
-    #[error("cannot {action} it: {message}")]
-    Io { action: &'static str, message: String },
-    /// The file does not start with [`MAGIC`].
-    #[error("not a reduced-body file: it starts with {found:?}, where a reduced-body file starts with \"{MAGIC} \"")]
-    WrongMagic { found: String },
-    /// The format version on the first line is not the one this build reads.
-    #[error("{}", version_message(*found, *supported))]
-    UnsupportedVersion { found: u64, supported: u32 },
-    /// A header line (1 or 2) is not what the format prescribes.
-    #[error("header line {line}: {what}")]
-    Header { line: usize, what: String },
-    /// The file ends inside the JSON metadata block.
-    #[error(
-        "the metadata block is truncated: the header announces {expected} bytes, the file has {found} after the header"
-    )]
-    TruncatedMetadata { expected: u64, found: u64 },
-    /// A stored CRC-32 does not match the bytes: the file was changed or damaged after it was
-    /// written. `block` is `metadata` or the array's name.
-    #[error("checksum mismatch in {block}: stored crc32 {stored:08x}, computed {computed:08x} (the file was changed or damaged after it was written)")]
-    Checksum { block: String, stored: u32, computed: u32 },
-    /// The metadata block is not the JSON of the file's format version; `line` and `column` are
-    /// serde_json's, counted in the JSON block (its line 1 is line 3 of the file).
-    #[error("malformed metadata JSON at line {line}, column {column} of the block (file line {}): {message}", line + 2)]
-    Json {
-        line: usize,
-        column: usize,
-        message: String,
-    },
-    /// The file ends inside an array.
-    #[error("array {array} is truncated: it needs {expected} bytes from byte {offset} of the array section, the file has {found}")]
-    TruncatedArray {
-        array: String,
-        offset: u64,
-        expected: u64,
-        found: u64,
-    },
-    /// Bytes after the last array.
-    #[error("{count} unexpected bytes after the last array (the index accounts for {expected} bytes of arrays)")]
-    TrailingBytes { count: u64, expected: u64 },
-    /// Shapes or counts that contradict each other (an array that is not $n \times n$, a
-    /// frequency list whose length is not the mode count, an index in the wrong order, ...).
-    #[error("inconsistent data: {what}")]
-    Shape { what: String },
-    /// The body cannot be written (a non-finite scalar, which JSON cannot hold, or a body
-    /// whose own shapes are inconsistent).
-    #[error("the body cannot be written: {what}")]
-    Unwritable { what: String },
-    /// The file is intact but its data are physically wrong ([`crate::physics`]): no reduction
-    /// produces them.
-    #[error("physically inconsistent data (no reduction produces these; reduce the body again): {}", problems.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("; "))]
-    Physics {
-        problems: Vec<crate::physics::PhysicsProblem>,
-    },
-}
-
-/// The oldest format version this build reads.
-const OLDEST_READABLE: u32 = 1;
-
-fn version_message(found: u64, supported: u32) -> String {
-    if found > supported as u64 {
-        format!("format version {found} is newer than this build, which reads versions {OLDEST_READABLE} to {supported}: read it with a newer flexmbs, or reduce the body again with this one")
-    } else {
-        format!(
-            "format version {found} is not supported: this build reads versions {OLDEST_READABLE} to {supported}; reduce the body again"
-        )
-    }
-}
 
 /// The JSON metadata block (format versions 1 and 2). Everything that is not a dense array.
 #[derive(Serialize, Deserialize)]
@@ -662,7 +587,7 @@ pub fn from_bytes_unchecked(bytes: &[u8], origin: &Path) -> Result<ReducedBody, 
 
 /// [`read`] without the physical checks (see [`from_bytes_unchecked`]).
 pub fn read_unchecked(path: &Path) -> Result<ReducedBody, ReductionError> {
-    let bytes = std::fs::read(path).map_err(|e| ReductionError::BodyFile {
+    let bytes = fe_model::input::read(path).map_err(|e| ReductionError::BodyFile {
         path: path.to_path_buf(),
         problem: BodyFileProblem::Io {
             action: "read",

@@ -36,7 +36,7 @@ use rayon::prelude::*;
 /// check is that every entry is finite.
 ///
 /// # Errors
-/// [`ReductionError::Fe`] for an element whose geometry or properties give no geometric
+/// [`ReductionError::Fe`] or [`ReductionError::InvalidFeModel`] for an element whose geometry or properties give no geometric
 /// stiffness (naming the element), or a non-finite entry (naming $k$, $l$, $p$).
 pub fn reduced_geometric_stiffness(
     model: &FeModel,
@@ -58,7 +58,7 @@ pub fn reduced_geometric_stiffness(
                 let slots = element_dof_slots(&model.elements[e]);
                 let V_e = DMatrix::from_fn(slots.len(), n, |r, c| S_full[(slots[r], c)]);
                 element_geometric_tensor_into(model, e, &V_e, &mut out)
-                    .map_err(|err| ReductionError::from_fe(FeError::Element(err)))?;
+                    .map_err(|err| ReductionError::Fe(FeError::Element(err)))?;
                 Ok(out)
             },
         )
@@ -70,9 +70,11 @@ pub fn reduced_geometric_stiffness(
                 for l in 0..=p {
                     let value = packed[(packed_pair(l, p), k)];
                     if !value.is_finite() {
-                        return Err(ReductionError::Fe(format!(
-                            "geometric stiffness: entry ({l}, {p}) of G_{k} is {value} (a non-finite basis or material value)"
-                        )));
+                        return Err(ReductionError::InvalidFeModel {
+                            what: format!(
+                                "geometric stiffness: entry ({l}, {p}) of G_{k} is {value} (a non-finite basis or material value)"
+                            ),
+                        });
                     }
                     G_k.data[l + p * n] = value;
                     G_k.data[p + l * n] = value;

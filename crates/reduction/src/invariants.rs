@@ -27,21 +27,10 @@ use nalgebra::{Matrix3, Matrix6, Vector3};
 /// The rigid-motion matrix on the dofs whose full slots (`6 node + k`) are `slots`: columns
 /// are translations along $x, y, z$, then rotations about the axes through `c`.
 fn rigid_modes(slots: &[usize], nodes: &[[f64; 3]], c: Vector3<f64>) -> Mat<f64> {
-    let mut R = Mat::zeros(slots.len(), 6);
-    for (d, &slot) in slots.iter().enumerate() {
-        let (node, k) = (slot / 6, slot % 6);
-        let r = Vector3::from(nodes[node]) - c;
-        if k < 3 {
-            R[(d, k)] = 1.0;
-            for l in 0..3 {
-                // (e_l x r)_k
-                R[(d, 3 + l)] = Vector3::ith(l, 1.0).cross(&r)[k];
-            }
-        } else {
-            R[(d, k)] = 1.0;
-        }
-    }
-    R
+    Mat::from_fn(slots.len(), 6, |d, l| {
+        let (node, k) = (slots[d] / 6, slots[d] % 6);
+        fe_model::rigid::rigid_motion_block(&(Vector3::from(nodes[node]) - c))[(k, l)]
+    })
 }
 
 /// Mass data and the rigid fit $\boldsymbol\Phi_{com} = (\boldsymbol\Phi_R^T\mathbf M
@@ -52,9 +41,9 @@ pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, 
     let mut bare = model.clone();
     bare.supports.clear();
     bare.constraints.clear();
-    let dofs = DofMap::new(&bare).map_err(ReductionError::from_fe)?;
+    let dofs = DofMap::new(&bare)?;
     let pattern = SystemPattern::new(&bare, &dofs);
-    let M = assemble_mass(&bare, &pattern).map_err(ReductionError::from_fe)?;
+    let M = assemble_mass(&bare, &pattern)?;
     let slots: Vec<usize> = (0..dofs.n_free())
         .map(|d| dofs.full_slot(fe_model::Dof(d as u32)))
         .collect();

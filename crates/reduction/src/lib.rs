@@ -92,6 +92,8 @@ pub use craig_bampton::{reduce_external, reduce_external_dofs};
 pub use diagnostics::{diagnostics, DiagnosticWarning, Diagnostics, ModeDiagnostics};
 pub use eigen::{lowest_modes, EigenSettings, EigenSolution, Shift, ShiftInvert};
 pub use error::ReductionError;
+/// The rigid modes of six-dof point sets (fe-model's), re-exported for the superelement.
+pub use fe_model::rigid::{rigid_modes, rigid_motion_block};
 pub use file::BodyFileProblem;
 pub use geometric::reduced_geometric_stiffness;
 pub use matrix_market::{read_matrix_market, write_matrix_market};
@@ -102,3 +104,4 @@ pub use reduced_body::{
     BeamStressElement, DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes,
     ALGORITHM_REVISION, FORMAT_VERSION,
 };
+pub use stress::NodeStresses;

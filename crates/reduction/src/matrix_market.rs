@@ -60,7 +60,7 @@ pub fn write_matrix_market(path: &Path, A: SparseColMatRef<'_, usize, f64>) -> R
 
 /// Reads a Matrix Market file into a sparse matrix with both triangles stored.
 pub fn read_matrix_market(path: &Path) -> Result<SparseColMat<usize, f64>, ReductionError> {
-    let bytes = std::fs::read(path).map_err(|e| ReductionError::MatrixMarket {
+    let bytes = fe_model::input::read(path).map_err(|e| ReductionError::MatrixMarket {
         path: path.to_path_buf(),
         line: None,
         what: format!("cannot read it: {e}"),

@@ -517,7 +517,7 @@ impl<'a> Tokens<'a> {
 /// Reads the `.fem` file at `path` as a reduced body with `interfaces` (labels of exposed
 /// nodes; `None`: every exposed node).
 pub fn read_mbdyn_fem(path: &Path, interfaces: Option<&[String]>) -> Result<(ReducedBody, Vec<String>), FemError> {
-    let bytes = std::fs::read(path).map_err(|source| FemError::Io {
+    let bytes = fe_model::input::read(path).map_err(|source| FemError::Io {
         path: path.to_path_buf(),
         action: "read",
         source,

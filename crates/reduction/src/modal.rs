@@ -16,9 +16,9 @@ pub fn modal_sparse(
     n_modes: usize,
     shift: Shift,
 ) -> Result<(ModalSolution, Vec<f64>), ReductionError> {
-    let dofs = DofMap::new(model).map_err(ReductionError::from_fe)?;
+    let dofs = DofMap::new(model)?;
     let pattern = SystemPattern::new(model, &dofs);
-    let a = assemble(model, &pattern).map_err(ReductionError::from_fe)?;
+    let a = assemble(model, &pattern)?;
     let (K, M) = (a.K.as_ref(), a.M.as_ref());
     // Nested dissection on the node positions for large models (fe_model::ordering).
     let points = dof_points(model, &dofs);

@@ -275,22 +275,8 @@ pub fn physical_problems(body: &ReducedBody) -> Vec<PhysicsProblem> {
 /// a translation $\mathbf t$ and a small rotation $\boldsymbol\theta$ move interface $k$ by
 /// $\mathbf t + \boldsymbol\theta\times\mathbf x_k$ and turn it by $\boldsymbol\theta$.
 fn rigid_modes(body: &ReducedBody) -> DMatrix<f64> {
-    let n = body.n_coordinates();
-    let mut P = DMatrix::zeros(n, 6);
-    for (k, p) in body.interfaces.iter().enumerate() {
-        let x = Vector3::from(p.position);
-        for a in 0..3 {
-            P[(6 * k + a, a)] = 1.0;
-            P[(6 * k + 3 + a, 3 + a)] = 1.0;
-            let mut e = Vector3::zeros();
-            e[a] = 1.0;
-            let ex = e.cross(&x);
-            for b in 0..3 {
-                P[(6 * k + b, 3 + a)] = ex[b];
-            }
-        }
-    }
-    P
+    let x: Vec<Vector3<f64>> = body.interfaces.iter().map(|p| Vector3::from(p.position)).collect();
+    fe_model::rigid::rigid_modes(&x, &Vector3::zeros(), body.n_modes)
 }
 
 /// Mass, centre of mass and inertia from the rigid mass matrix `Mr` $= \boldsymbol\Phi_R^T

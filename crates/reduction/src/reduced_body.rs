@@ -30,6 +30,12 @@ use serde::{Deserialize, Serialize};
 /// ([`ReducedBody::load_points`]).
 pub const FORMAT_VERSION: u32 = 3;
 
+/// The first bytes of every reduced-body file, followed by a space and the format version.
+pub const MAGIC: &str = "FLEXMBS-RBODY";
+
+/// The oldest format version this build reads.
+pub(crate) const OLDEST_READABLE: u32 = 1;
+
 /// Revision of the algorithms that compute a [`ReducedBody`], bumped whenever a change can
 /// change a body computed from the same input (not only its file format): caches of reduced
 /// bodies (the CLI's) key on it. 2: the automatic eigensolver block size is never 1

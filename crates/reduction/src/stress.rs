@@ -18,13 +18,13 @@ use rayon::prelude::*;
 /// forces at both ends of every beam ([`fe_model::stress::beam_section_forces`]).
 ///
 /// # Errors
-/// [`ReductionError::Fe`] for an element whose geometry or properties cannot give stresses.
+/// [`ReductionError::Fe`] or [`ReductionError::InvalidFeModel`] for an element whose geometry or properties cannot give stresses.
 pub fn stress_shapes(model: &FeModel, S_full: MatRef<'_, f64>) -> Result<StressShapes, ReductionError> {
     let n = S_full.ncols();
     let basis = DenseMatrix::from_faer(S_full);
     let has_solids = model.elements.iter().any(|e| e.solid().is_some());
     let (nodal, solid_node) = if has_solids {
-        let (sigma, count) = averaged_nodal_stresses(model, &basis.data, n).map_err(ReductionError::from_fe)?;
+        let (sigma, count) = averaged_nodal_stresses(model, &basis.data, n)?;
         (
             Some(DenseMatrix {
                 nrows: 6 * model.node_count(),
@@ -36,25 +36,28 @@ pub fn stress_shapes(model: &FeModel, S_full: MatRef<'_, f64>) -> Result<StressS
     } else {
         (None, Vec::new())
     };
-    let beams: Vec<BeamStressElement> = model
-        .elements
-        .iter()
-        .enumerate()
-        .filter_map(|(e, element)| match element {
-            Element::Beam2(b) => Some((e, b)),
-            _ => None,
-        })
-        .map(|(e, b)| {
-            let section = model.sections.get(b.section.0 as usize).cloned().ok_or_else(|| {
-                ReductionError::Fe(format!("element {e}: beam section {} does not exist", b.section.0))
-            })?;
-            Ok(BeamStressElement {
-                element: e as u32,
-                nodes: [b.nodes[0].0, b.nodes[1].0],
-                section,
+    let beams: Vec<BeamStressElement> =
+        model
+            .elements
+            .iter()
+            .enumerate()
+            .filter_map(|(e, element)| match element {
+                Element::Beam2(b) => Some((e, b)),
+                _ => None,
             })
-        })
-        .collect::<Result<_, ReductionError>>()?;
+            .map(|(e, b)| {
+                let section = model.sections.get(b.section.0 as usize).cloned().ok_or_else(|| {
+                    ReductionError::InvalidFeModel {
+                        what: format!("element {e}: beam section {} does not exist", b.section.0),
+                    }
+                })?;
+                Ok(BeamStressElement {
+                    element: e as u32,
+                    nodes: [b.nodes[0].0, b.nodes[1].0],
+                    section,
+                })
+            })
+            .collect::<Result<_, ReductionError>>()?;
     let rows = 12 * beams.len();
     // Column by column in parallel: each CB vector's section forces on every beam.
     let columns: Vec<Vec<f64>> = (0..n)
@@ -67,7 +70,7 @@ pub fn stress_shapes(model: &FeModel, S_full: MatRef<'_, f64>) -> Result<StressS
                     .iter()
                     .flat_map(|&node| (0..6).map(move |s| S_full[(6 * node as usize + s, k)]))
                     .collect();
-                let s = beam_section_forces(model, b.element as usize, &u_e, None).map_err(ReductionError::from_fe)?;
+                let s = beam_section_forces(model, b.element as usize, &u_e, None)?;
                 col.extend(s.iter().flatten());
             }
             Ok(col)
@@ -83,4 +86,71 @@ pub fn stress_shapes(model: &FeModel, S_full: MatRef<'_, f64>) -> Result<StressS
             data: columns.into_iter().flatten().collect(),
         },
     })
+}
+
+/// The stresses of a body at its mesh nodes in global axes: the Voigt tensor $[xx, yy, zz, xy,
+/// yz, zx]$ (zero where none), von Mises and the largest principal stress \[Pa\]. Beam nodes
+/// carry no tensor: their von Mises and largest principal stress are the largest magnitude and
+/// the largest value of the extreme-fibre axial stress over the element ends at the node
+/// ([`fe_model::BeamSection::fibre_stress_range`]; the shear stresses of the section are not
+/// included). Nodes without stress (spider nodes) hold 0.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeStresses {
+    pub tensor: Vec<[f64; 6]>,
+    pub von_mises: Vec<f64>,
+    pub principal: Vec<f64>,
+}
+
+impl StressShapes {
+    /// The number of mesh nodes the shapes cover (solid nodes, beam nodes).
+    pub fn node_count(&self) -> usize {
+        self.solid_node.len().max(
+            self.beams
+                .iter()
+                .flat_map(|b| b.nodes)
+                .max()
+                .map_or(0, |m| m as usize + 1),
+        )
+    }
+
+    /// [`NodeStresses`] for CB coordinates `q` ($\boldsymbol\sigma = \boldsymbol\Sigma\mathbf q$ in
+    /// body axes), turned into global axes by `R` ($\mathbf R\boldsymbol\sigma\mathbf R^T$).
+    ///
+    /// # Panics
+    /// If `q` does not have one value per column (a caller's bug).
+    pub fn node_stresses(&self, q: &[f64], R: &nalgebra::Matrix3<f64>) -> NodeStresses {
+        let n_nodes = self.node_count();
+        let mut out = NodeStresses {
+            tensor: vec![[0.0; 6]; n_nodes],
+            von_mises: vec![0.0; n_nodes],
+            principal: vec![0.0; n_nodes],
+        };
+        for (i, s) in self.nodal_stress(q).iter().enumerate().take(n_nodes) {
+            if let Some(s) = s {
+                let g = R * fe_model::stress::tensor(s) * R.transpose();
+                let v = [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]];
+                out.tensor[i] = v;
+                out.von_mises[i] = fe_model::von_mises(&v);
+                out.principal[i] = fe_model::principal_stresses(&v)[0];
+            }
+        }
+        let forces = self.beam_section_forces(q);
+        let ends = self.beams.iter().zip(&forces).flat_map(|(b, forces)| {
+            forces.iter().enumerate().filter_map(move |(end, f)| {
+                let node = b.nodes[end] as usize;
+                let range = b.section.fibre_stress_range(f)?;
+                (node < n_nodes).then_some((node, range))
+            })
+        });
+        for (i, x) in fe_model::stress::fibre_extremes_at_nodes(n_nodes, ends)
+            .iter()
+            .enumerate()
+        {
+            if let Some([magnitude, largest]) = x {
+                out.von_mises[i] = *magnitude;
+                out.principal[i] = *largest;
+            }
+        }
+        out
+    }
 }

@@ -51,7 +51,7 @@ pub fn key(part: &Part, built: &Built, reduction: &Reduction) -> std::io::Result
     field("algorithms", reduction::ALGORITHM_REVISION.to_string().as_bytes());
     field("part", part.name.as_bytes());
     if let Some(file) = &part.mesh_file {
-        field("mesh file", &std::fs::read(file)?);
+        field("mesh file", &fe_model::input::read(file)?);
     }
     // f64 Debug output is the shortest decimal that reads back to the same value: exact.
     field(
@@ -88,7 +88,7 @@ fn key_path(file: &Path) -> PathBuf {
 
 /// Records that `file` holds the body of `key`: the key and the hash of its bytes.
 pub fn record(file: &Path, key: &str) -> std::io::Result<()> {
-    let bytes = std::fs::read(file)?;
+    let bytes = fe_model::input::read(file)?;
     let text = format!("key {key}\nsha256 {}\n", sha256_hex(&bytes));
     crate::output::write_atomic(&key_path(file), text.as_bytes())
 }

@@ -25,6 +25,30 @@ impl std::error::Error for Context {
     }
 }
 
+/// A solver that stopped within an analysis after the results before it were written: what
+/// stopped and what was kept (`message`), the number of the step that failed when the
+/// analysis steps, and the solver's error (time, step, residual).
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct SolverStopped {
+    pub message: String,
+    /// The number of the time or load step that failed (1 = the first).
+    pub step: Option<usize>,
+    #[source]
+    pub source: mbs::SolveError,
+}
+
+/// An analysis of a run that failed: which one, where its results are, and the cause.
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct AnalysisFailed {
+    /// The analysis' name.
+    pub analysis: String,
+    pub message: String,
+    #[source]
+    pub source: BoxError,
+}
+
 /// `.context(|| "what was being done")` on any result.
 pub trait ResultExt<T> {
     fn context(self, message: impl FnOnce() -> String) -> Result<T, BoxError>;
@@ -44,6 +68,19 @@ impl<T, E: Into<BoxError>> ResultExt<T> for Result<T, E> {
 /// The error and its causes, one per line: the report `main` prints.
 pub fn report(e: &(dyn std::error::Error + 'static)) -> String {
     format!("flexmbs: error: {}", chain(e))
+}
+
+/// The error and its causes on one line, `error: cause: cause`: for a message that goes into a
+/// table or a summary rather than a report (each cause once, as the chain holds it).
+pub fn sentence(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut out = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        out.push_str(": ");
+        out.push_str(&s.to_string());
+        source = s.source();
+    }
+    out
 }
 
 /// The error and its causes, one per line, each cause as `caused by: ...`.

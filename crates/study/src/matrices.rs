@@ -17,7 +17,7 @@ use std::path::Path;
 
 /// The data lines of a table: (1-based line, fields).
 fn table(path: &Path) -> Result<Vec<(usize, Vec<String>)>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let text = fe_model::input::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     Ok(text
         .lines()
         .enumerate()

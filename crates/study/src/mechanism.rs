@@ -10,14 +10,14 @@
 
 #![allow(non_snake_case)]
 
-use crate::error::{BoxError, ResultExt};
+use crate::error::{BoxError, ResultExt, SolverStopped};
 use crate::observer::{Cell, Observer, Progress, SensorGroup, SensorStream, Series, Table};
 use crate::run::{reduce_part, Reduced};
 use crate::simulation::{sensor_columns, Simulation};
 use crate::source::KeyPath;
 use crate::validate::mechanism::{
-    joint_is_angle, About, BodyRef, BodySource, EffortSpec, FrameSpec, InitialSpec, MbsAnalysis, PointRef, ReactionAt,
-    SensorTarget,
+    joint_is_angle, About, BodyLoadSpec, BodyRef, BodySource, EffortSpec, FrameSpec, InitialSpec, MbsAnalysis,
+    PointRef, ReactionAt, SensorTarget, StressNodes,
 };
 use crate::validate::Study;
 use crate::vtu::{CellRole, PointField, VtuMesh};
@@ -26,13 +26,13 @@ use mbs::{
     Support, System,
 };
 use nalgebra::{Isometry3, Point3, Vector3};
-use reduction::ReducedBody;
+use reduction::{NodeStresses, ReducedBody};
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
-use superelement::{FrameChoice, Superelement};
+use superelement::FrameChoice;
 
 /// The mechanism as an `mbs::Model`, with what the outputs need.
 pub struct BuiltMechanism {
@@ -117,6 +117,162 @@ fn reduce_bodies(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<
         }
     }
     Ok((out, reductions))
+}
+
+/// The `mbs` load of a `[[loads]]` point load at a load point inside a flexible body, its
+/// point name resolved against the body's reduced load points.
+fn body_load(study: &Study, l: &BodyLoadSpec, body: &BodyOut) -> Result<mbs::BodyLoad, BoxError> {
+    let Some(point) = body.reduced.load_points.iter().position(|p| p.name == l.point) else {
+        let interfaces: Vec<&str> = body.reduced.interfaces.iter().map(|i| i.name.as_str()).collect();
+        let points: Vec<&str> = body.reduced.load_points.iter().map(|p| p.name.as_str()).collect();
+        return Err(located(
+            study,
+            &l.path.key("at"),
+            format!(
+                "body '{}' has no interface or load point '{}' (interfaces: {}; load points: {})",
+                body.name,
+                l.point,
+                interfaces.join(", "),
+                if points.is_empty() {
+                    "none: add `load_points` to the part's reduction".to_string()
+                } else {
+                    points.join(", ")
+                }
+            ),
+        ));
+    };
+    Ok(mbs::BodyLoad {
+        body: body.id,
+        point,
+        force: l.force,
+        moment: l.moment,
+        axes: l.axes,
+        time: l.time.clone(),
+    })
+}
+
+/// The `mbs` sensor and CSV columns of a `stress` sensor on flexible body `b` (module docs of
+/// `docs/study-file.md`, `[[sensors]]`): its nodes resolved against the body's mesh.
+fn stress_sensor(
+    study: &Study,
+    path: &KeyPath,
+    b: usize,
+    nodes: &StressNodes,
+    body: &BodyOut,
+) -> Result<(SensorKind, Vec<String>), BoxError> {
+    let Some(shapes) = &body.reduced.stress else {
+        return Err(located(
+            study,
+            &path.key("of"),
+            format!(
+                "body '{}' was reduced without stress shapes: set `stress_shapes = true` in its part's [parts.reduction]",
+                body.name
+            ),
+        ));
+    };
+    let count = shapes.node_count();
+    let part = match &study.mechanism.bodies[b].source {
+        BodySource::Part(p) => Some(&study.parts[*p]),
+        BodySource::File(..) => None,
+    };
+    let id = body.id;
+    match nodes {
+        StressNodes::Index(k) => {
+            if *k >= count {
+                return Err(located(
+                    study,
+                    &path.key("node"),
+                    format!(
+                        "body '{}' has {count} mesh nodes with stresses (0 to {})",
+                        body.name,
+                        count.max(1) - 1
+                    ),
+                ));
+            }
+            Ok((SensorKind::Stress { body: id, node: *k }, stress_columns()))
+        }
+        StressNodes::At(x) => {
+            let positions: Vec<Vector3<f64>> = match (&body.reduced.mesh, part) {
+                (Some(mesh), _) => mesh.nodes.iter().map(|p| Vector3::from(*p)).collect(),
+                (None, Some(part)) => part.base.mesh.nodes.iter().map(|p| p.coords).collect(),
+                (None, None) => {
+                    return Err(located(
+                        study,
+                        &path.key("node_at"),
+                        "the body file has no mesh node positions (reduced without mesh shapes): give `node`",
+                    ))
+                }
+            };
+            let size = positions.iter().map(|p| p.norm()).fold(0.0, f64::max);
+            let nearest = (0..positions.len().min(count))
+                .min_by(|&i, &j| (positions[i] - x).norm().total_cmp(&(positions[j] - x).norm()));
+            match nearest {
+                // The node tolerance of the part's `node_at` keys: round-off of the mesh
+                // coordinates, not a search radius.
+                Some(k) if (positions[k] - x).norm() <= 1e-6 * (1.0 + size) => {
+                    Ok((SensorKind::Stress { body: id, node: k }, stress_columns()))
+                }
+                Some(k) => Err(located(
+                    study,
+                    &path.key("node_at"),
+                    format!(
+                        "no mesh node of body '{}' at ({}, {}, {}) (part axes); the nearest, node {k} at ({}, {}, {}), is {:.3e} m away",
+                        body.name,
+                        x.x,
+                        x.y,
+                        x.z,
+                        positions[k].x,
+                        positions[k].y,
+                        positions[k].z,
+                        (positions[k] - x).norm()
+                    ),
+                )),
+                None => Err(located(study, &path.key("node_at"), "the body has no mesh nodes")),
+            }
+        }
+        StressNodes::Set(name) => {
+            let Some(part) = part else {
+                return Err(located(
+                    study,
+                    &path.key("set"),
+                    "a body read from a file has no node sets: give `node` or `node_at`",
+                ));
+            };
+            let Some(set) = part.base.mesh.node_set(name) else {
+                let known: Vec<&str> = part.base.mesh.node_sets.keys().map(String::as_str).collect();
+                return Err(located(
+                    study,
+                    &path.key("set"),
+                    format!(
+                        "part '{}' has no node set '{name}' (node sets: {})",
+                        part.name,
+                        known.join(", ")
+                    ),
+                ));
+            };
+            let nodes: Vec<usize> = set.iter().map(|n| n.index()).filter(|&k| k < count).collect();
+            if nodes.is_empty() {
+                return Err(located(
+                    study,
+                    &path.key("set"),
+                    format!("node set '{name}' has no node with stresses"),
+                ));
+            }
+            Ok((
+                SensorKind::MaxVonMises { body: id, nodes },
+                vec!["von_mises_max [Pa]".into(), "node [-]".into()],
+            ))
+        }
+    }
+}
+
+/// The columns of a stress sensor at one node.
+fn stress_columns() -> Vec<String> {
+    ["xx", "yy", "zz", "xy", "yz", "zx"]
+        .iter()
+        .map(|c| format!("stress_{c} [Pa]"))
+        .chain(["von_mises [Pa]".into(), "max_principal [Pa]".into()])
+        .collect()
 }
 
 /// Builds the `mbs::Model` of the study's mechanism (module docs).
@@ -392,6 +548,10 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             loads: ids,
         });
     }
+    for l in &m.body_loads {
+        entities.insert(mbs::Entity::BodyLoad(model.body_loads.len()), l.path.clone());
+        model.body_loads.push(body_load(study, l, &bodies[l.body])?);
+    }
     // Sensors.
     let mut groups = Vec::new();
     let xyz = |what: &str, unit: &str| -> Vec<String> {
@@ -433,10 +593,28 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 xyz("relative_position", "m")
             }
             SensorTarget::Deflection { of, chord, normal } => {
+                let (a, b) = (node(&chord[0], &s.path)?, node(&chord[1], &s.path)?);
+                let (xa, xb) = (model.nodes[a.index()].position, model.nodes[b.index()].position);
+                // Coincident chord points define no line: the "deflection" would be a distance
+                // to a point. 1e-9 of the coordinates' size is round-off.
+                if (xb - xa).norm() <= 1e-9 * xa.norm().max(xb.norm()).max(f64::MIN_POSITIVE) {
+                    return Err(located(
+                        study,
+                        &s.path.key("chord"),
+                        format!(
+                            "the chord's points '{}' and '{}' coincide at ({:.6}, {:.6}, {:.6}): a deflection is measured from the line through two distinct points",
+                            m.point_name(&chord[0]),
+                            m.point_name(&chord[1]),
+                            xa.x,
+                            xa.y,
+                            xa.z
+                        ),
+                    ));
+                }
                 kinds = single(SensorKind::LineDistance {
                     node: node(of, &s.path)?,
-                    a: node(&chord[0], &s.path)?,
-                    b: node(&chord[1], &s.path)?,
+                    a,
+                    b,
                     normal: *normal,
                 });
                 vec!["deflection [m]".into()]
@@ -456,6 +634,11 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                     if rate { "rate" } else { "coordinate" },
                     quantity(*j, *c).unit(rate)
                 )]
+            }
+            SensorTarget::Stress { body, nodes } => {
+                let (kind, columns) = stress_sensor(study, &s.path, *body, nodes, &bodies[*body])?;
+                kinds = single(kind);
+                columns
             }
             SensorTarget::Modal(b) => {
                 kinds = single(SensorKind::ModalCoordinates {
@@ -565,11 +748,14 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 at,
                 velocity,
                 angular_velocity,
-            } => model.initial.push(InitialCondition::NodeVelocity {
-                node: node(at, path)?,
-                velocity: *velocity,
-                angular_velocity: *angular_velocity,
-            }),
+            } => {
+                let n = node(at, path)?;
+                model.initial.push(InitialCondition::NodeVelocity {
+                    node: n,
+                    velocity: *velocity,
+                    angular_velocity: *angular_velocity,
+                })
+            }
             InitialSpec::Body {
                 body,
                 velocity,
@@ -668,7 +854,7 @@ impl BuiltMechanism {
     /// (`mbs::ModelError::entities`) that the study describes.
     pub fn system(&self, study: &Study) -> Result<System, BoxError> {
         System::new(&self.model).map_err(|e| {
-            let message = format!("the mechanism cannot be assembled: {e}");
+            let message = format!("the mechanism cannot be assembled: {}", crate::error::sentence(&e));
             match self.locate(&e.entities()) {
                 Some(path) => located(study, path, message),
                 None => format!("{}: {message}", study.source.path.display()).into(),
@@ -758,55 +944,6 @@ pub struct HotSpot {
     pub von_mises: f64,
     pub node: usize,
     pub time: f64,
-}
-
-/// The stress fields of one body at one time, on its mesh nodes, in global axes: Voigt tensor
-/// (zero where none), von Mises and largest principal stress. Beam nodes carry no tensor;
-/// their von Mises and largest principal stress are the largest magnitude and the largest
-/// value of the extreme-fibre axial stress over the element ends at the node (shear stresses
-/// of the section are not included).
-struct NodeStresses {
-    tensor: Vec<[f64; 6]>,
-    von_mises: Vec<f64>,
-    principal: Vec<f64>,
-}
-
-/// The stresses of a body at its nodes from its kinematics, `None` without stress shapes.
-/// `R` turns body axes into global axes.
-fn node_stresses(se: &Superelement, q_jj: &[f64], R: &nalgebra::Matrix3<f64>, n_nodes: usize) -> Option<NodeStresses> {
-    let shapes = se.stress_shapes()?;
-    let stress = se.recover_stress(q_jj)?;
-    let mut out = NodeStresses {
-        tensor: vec![[0.0; 6]; n_nodes],
-        von_mises: vec![0.0; n_nodes],
-        principal: vec![0.0; n_nodes],
-    };
-    for (i, s) in stress.nodal.iter().enumerate().take(n_nodes) {
-        if let Some(s) = s {
-            let g = R * fe_model::stress::tensor(s) * R.transpose();
-            let v = [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]];
-            out.tensor[i] = v;
-            out.von_mises[i] = fe_model::von_mises(&v);
-            out.principal[i] = fe_model::principal_stresses(&v)[0];
-        }
-    }
-    let ends = shapes.beams.iter().zip(&stress.beams).flat_map(|(b, forces)| {
-        forces.iter().enumerate().filter_map(move |(end, f)| {
-            let node = b.nodes[end] as usize;
-            let range = b.section.fibre_stress_range(f)?;
-            (node < n_nodes).then_some((node, range))
-        })
-    });
-    for (i, x) in fe_model::stress::fibre_extremes_at_nodes(n_nodes, ends)
-        .iter()
-        .enumerate()
-    {
-        if let Some([magnitude, largest]) = x {
-            out.von_mises[i] = *magnitude;
-            out.principal[i] = *largest;
-        }
-    }
-    Some(out)
 }
 
 impl MeshRecovery {
@@ -929,12 +1066,7 @@ impl MeshRecovery {
                 out.push(None);
                 continue;
             };
-            let n_nodes = se.stress_shapes().map_or(0, |s| {
-                s.solid_node
-                    .len()
-                    .max(s.beams.iter().flat_map(|b| b.nodes).max().map_or(0, |m| m as usize + 1))
-            });
-            let st = node_stresses(se, &kin.q_jj, &kin.R_j, n_nodes);
+            let st = se.stress_shapes().map(|s| s.node_stresses(&kin.q_jj, &kin.R_j));
             if let Some(st) = &st {
                 if let Some((node, &vm)) = st.von_mises.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
                     if self.hot[k].is_none_or(|h| vm > h.von_mises) {
@@ -1152,7 +1284,7 @@ pub struct MbsOutcome {
     pub report: Vec<String>,
     pub results: serde_json::Value,
     /// A solver failure after partial results were written.
-    pub failure: Option<String>,
+    pub failure: Option<SolverStopped>,
     /// The final state (equilibrium, dynamic), for analyses that `start` from it.
     pub final_state: Option<mbs::State>,
 }
@@ -1250,7 +1382,11 @@ pub fn run_analysis(
             if failure.is_none() {
                 out.final_state = Some(sol.state.clone());
             }
-            out.failure = failure.map(|e| format!("equilibrium stopped: {e}; the converged load steps are written"));
+            out.failure = failure.map(|e| SolverStopped {
+                message: "equilibrium stopped; the converged load steps are written".into(),
+                step: Some(sol.steps.len() + 1),
+                source: e,
+            });
         }
         MbsAnalysis::Dynamic {
             t_end,
@@ -1281,12 +1417,30 @@ pub fn run_analysis(
                 None => mbs::Stepping::Fixed { min_step: *dt_min },
                 Some(ad) => mbs::Stepping::Adaptive(ad.clone()),
             };
-            let (totals, failure) = integ.run_to(&stepping, |done, integ| -> Result<(), BoxError> {
+            // Fixed steps: the last one is shortened to end exactly at t_end (mbs::fixed_steps,
+            // as Integrator::run_to steps).
+            let (_, last_step) = mbs::fixed_steps(t_start, *t_end, *dt);
+            // Why the callback stopped the run: a sensor that is not finite
+            // (mbs::SolveError::NonFiniteSensor, a solver stop) or a file that cannot be written.
+            enum Halt {
+                Sensor(mbs::SolveError, usize),
+                Output(BoxError),
+            }
+            impl<E: Into<BoxError>> From<E> for Halt {
+                fn from(e: E) -> Self {
+                    Halt::Output(e.into())
+                }
+            }
+            let mut last_written = t_start;
+            let run = integ.run_to(&stepping, |done, integ| -> Result<(), Halt> {
                 let (k, t) = (done.k, done.time);
                 let vtu_now = output.vtu_every.is_some_and(|v| k % v == 0 || done.last);
                 if k % output.every == 0 || done.last {
-                    integ.record(&mut rec)?;
+                    // A sensor that is not finite: the rows before it are written, the run is
+                    // not complete.
+                    integ.record(&mut rec).map_err(|e| Halt::Sensor(e, k))?;
                     files.sample(obs, t, &rec)?;
+                    last_written = t;
                     if !vtu_now {
                         mw.track(t, &sys, integ.state(), b)?;
                     }
@@ -1309,14 +1463,36 @@ pub fn run_analysis(
                     total,
                 });
                 Ok(())
-            })?;
-            if let Some(e) = failure {
-                out.failure = Some(format!(
-                    "time integration stopped: {e}; results up to t = {:.6} s (step {}) are written",
-                    integ.state().time(),
-                    totals.steps
-                ));
-            }
+            });
+            let (totals, failure) = match run {
+                Ok((totals, None)) => (totals, None),
+                Ok((totals, Some(e))) => {
+                    let failure = SolverStopped {
+                        message: format!(
+                            "time integration stopped; results up to t = {:.6} s (step {}) are written",
+                            integ.state().time(),
+                            totals.steps
+                        ),
+                        step: Some(totals.steps + 1),
+                        source: e,
+                    };
+                    (totals, Some(failure))
+                }
+                Err(stop) => match stop.error {
+                    Halt::Output(e) => return Err(e),
+                    Halt::Sensor(e, k) => {
+                        let failure = SolverStopped {
+                            message: format!(
+                                "time integration stopped; results up to t = {last_written:.6} s are written"
+                            ),
+                            step: Some(k),
+                            source: e,
+                        };
+                        (stop.totals, Some(failure))
+                    }
+                },
+            };
+            out.failure = failure;
             obs.progress(&Progress::Finished);
             let mbs::StepTotals {
                 steps,
@@ -1333,7 +1509,12 @@ pub fn run_analysis(
             let t_reached = integ.state().time();
             match adaptive {
                 None => out.report.push(format!(
-                    "{steps} of {n_steps} steps of {dt} s from t = {t_start} to {t_reached:.6} s, {iterations} Newton iterations ({:.2} per step, at most {max_iter})",
+                    "{steps} of {n_steps} steps of {dt} s{} from t = {t_start} to {t_reached:.6} s, {iterations} Newton iterations ({:.2} per step, at most {max_iter})",
+                    if last_step < *dt * (1.0 - 1e-9) {
+                        format!(" (the last shortened to {last_step:.6e} s to end at t_end)")
+                    } else {
+                        String::new()
+                    },
                     iterations as f64 / steps.max(1) as f64
                 )),
                 Some(ad) => out.report.push(format!(
@@ -1447,6 +1628,7 @@ pub fn run_analysis(
                     "damping ratio [-]",
                     "rigid body [-]",
                     "carried by",
+                    "growth rate [1/s]",
                 ],
             );
             for (k, e) in energies.iter().take(*modes).enumerate() {
@@ -1456,9 +1638,33 @@ pub fn run_analysis(
                     e.damping_ratio.map_or(Cell::Empty, Cell::Num),
                     Cell::from(usize::from(e.rigid_body)),
                     Cell::from(e.label.clone()),
+                    e.growth_rate.map_or(Cell::Empty, Cell::Num),
                 ]);
             }
             obs.table(&csv)?;
+            // A growing eigenvalue: the state is not a stable one, whatever the frequencies say.
+            let growing = s.growing();
+            let fastest = growing.iter().map(|g| g.0).fold(0.0, f64::max);
+            if !growing.is_empty() {
+                let unstable: Vec<String> = energies
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, e)| e.unstable)
+                    .map(|(k, _)| (k + 1).to_string())
+                    .collect();
+                let line = format!(
+                    "UNSTABLE: {} state-space eigenvalue(s) with a positive real part (the fastest grows at {fastest:.4e} 1/s: amplitude doubled every {:.4e} s){}; the state linearised about is not a stable equilibrium or steady motion",
+                    growing.len(),
+                    std::f64::consts::LN_2 / fastest,
+                    if unstable.is_empty() {
+                        String::new()
+                    } else {
+                        format!(", modes {}", unstable.join(", "))
+                    }
+                );
+                obs.progress(&Progress::Warning(format!("linearized analysis: {line}")));
+                out.report.insert(0, line);
+            }
             for (k, e) in energies.iter().take(*modes).enumerate() {
                 out.report
                     .push(format!("mode {}: {:.6e} Hz, {}", k + 1, e.frequency_hz, e.label));
@@ -1474,6 +1680,9 @@ pub fn run_analysis(
                 "model": b.size(&sys),
                 "frequencies_hz": hz,
                 "mode_labels": labels,
+                "stable": growing.is_empty(),
+                "growing_eigenvalues": growing.iter().map(|g| json!([g.0, g.1])).collect::<Vec<_>>(),
+                "largest_growth_rate": if growing.is_empty() { json!(null) } else { json!(fastest) },
                 "about": if start.is_some() { "start".to_string() } else { format!("{about:?}") },
             });
         }
@@ -1536,10 +1745,13 @@ fn run_buckling(
                         "past_critical_point": true,
                         "load_factor_reached": reached,
                     });
-                    out.failure = Some(format!(
-                        "the structure is past a limit point: no equilibrium beyond load factor {reached:.6} ({}); an 'equilibrium' analysis with method = \"arc-length\" follows the path through it",
-                        inc.error
-                    ));
+                    out.failure = Some(SolverStopped {
+                        message: format!(
+                            "the structure is past a limit point: no equilibrium beyond load factor {reached:.6}; an 'equilibrium' analysis with method = \"arc-length\" follows the path through it"
+                        ),
+                        step: Some(inc.partial.steps.len() + 1),
+                        source: inc.error,
+                    });
                     return Ok(());
                 }
             }

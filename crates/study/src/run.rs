@@ -3,7 +3,7 @@
 //! analyses of parts (static, modal, reduce) are here; those of the mechanism in
 //! `crate::mechanism`.
 
-use crate::error::{BoxError, Context, ResultExt};
+use crate::error::{AnalysisFailed, BoxError, ResultExt, SolverStopped};
 use crate::folder::ResultsFolder;
 use crate::observer::{AnalysisInfo, Cell, Observer, Progress, Series, Table};
 use crate::output::{default_results_dir, AnalysisSummary, PartSummary, Status, Summary};
@@ -49,7 +49,7 @@ struct Outcome {
     report: Vec<String>,
     results: serde_json::Value,
     /// A solver that stopped after writing part of its results.
-    failure: Option<String>,
+    failure: Option<SolverStopped>,
 }
 
 fn part_summary(p: &Part) -> PartSummary {
@@ -111,13 +111,19 @@ pub fn pending_summary(study: &Study) -> Summary {
 /// file), with `observer` seeing every result too. Stops at the first analysis that fails,
 /// after writing the summary with the failure.
 pub fn run(study: &Study, options: &Options, observer: &mut dyn Observer) -> Result<Summary, BoxError> {
+    // Refused before the results folder is made.
+    if study.analyses.is_empty() {
+        return Err(nothing_to_run(study));
+    }
     let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
     let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
     run_with(study, options, &mut (&mut folder, observer))
 }
 
 /// Runs analysis `index` of `study` alone into its results folder (the other analyses'
-/// files are left as they are), every result to `observer` too.
+/// files are left as they are), every result to `observer` too. When its `start` names
+/// another analysis, that one (and the chain of `start`s behind it) runs first and writes
+/// its results too ([`Runner::run_one`]).
 pub fn run_only(
     study: &Study,
     options: &Options,
@@ -138,13 +144,7 @@ pub fn run_only(
 pub fn run_with(study: &Study, options: &Options, obs: &mut dyn Observer) -> Result<Summary, BoxError> {
     let n = study.analyses.len();
     if n == 0 {
-        return Err(format!(
-            "{}: the study has no [[analyses]], so there is nothing to run; add one \
-             (`type = \"static\"`, `\"modal\"`, `\"reduce\"`, `\"equilibrium\"`, `\"dynamic\"` or \
-             `\"linearized\"`, docs/study-file.md)",
-            study.source.path.display()
-        )
-        .into());
+        return Err(nothing_to_run(study));
     }
     let mut runner = Runner::new(study, options);
     obs.summary(&runner.summary)?;
@@ -152,6 +152,17 @@ pub fn run_with(study: &Study, options: &Options, obs: &mut dyn Observer) -> Res
         runner.run_one(i, obs)?;
     }
     runner.finish(obs)
+}
+
+/// The error for a study without analyses.
+pub fn nothing_to_run(study: &Study) -> BoxError {
+    format!(
+        "{}: the study has no [[analyses]], so there is nothing to run; add one \
+         (`type = \"static\"`, `\"modal\"`, `\"reduce\"`, `\"equilibrium\"`, `\"dynamic\"`, \
+         `\"linearized\"` or `\"buckling\"`, docs/study-file.md)",
+        study.source.path.display()
+    )
+    .into()
 }
 
 /// A study being run analysis by analysis; the mechanism is built once, at its first
@@ -195,10 +206,20 @@ impl<'s> Runner<'s> {
     }
 
     /// Runs analysis `i`; a failure is recorded in the summary and returned with the
-    /// analysis it belongs to.
+    /// analysis it belongs to. An analysis whose `start` names one that has not run yet runs
+    /// that one first (and its own `start`, down the chain), with its results recorded as
+    /// usual: running one analysis alone needs no earlier run.
     pub fn run_one(&mut self, i: usize, obs: &mut dyn Observer) -> Result<(), BoxError> {
         let study = self.study;
         let a = &study.analyses[i];
+        // The analysis whose final state is the start, run now when it has not run.
+        let mut prerequisite = None;
+        if let Some(k) = a.start {
+            if self.states[k].is_none() && self.summary.analyses[k].status == crate::output::Status::Pending {
+                self.run_one(k, obs)?;
+                prerequisite = Some(k);
+            }
+        }
         let info = analysis_info(study, i);
         obs.begin(&info)?;
         let t = Instant::now();
@@ -208,23 +229,33 @@ impl<'s> Runner<'s> {
         let result = match &a.spec {
             AnalysisSpec::Mbs(spec) => {
                 let mut spec = spec.clone();
-                if let (crate::validate::MbsAnalysis::Dynamic { t_end, .. }, Some(limit)) =
+                let mut refused = None;
+                if let (crate::validate::MbsAnalysis::Dynamic { t_end, dt, .. }, Some(limit)) =
                     (&mut spec, self.options.t_end)
                 {
+                    if limit < *dt {
+                        refused = Some(format!(
+                            "--t-end {limit} s is shorter than one time step of analysis '{}' (dt = {dt} s)",
+                            a.name
+                        ));
+                    }
                     if limit < *t_end {
                         shortened = Some((*t_end, limit));
                         *t_end = limit;
                     }
                 }
-                let start: Result<Option<mbs::State>, BoxError> = match a.start {
-                    Some(k) => self.states[k].clone().map(Some).ok_or_else(|| {
-                        format!(
-                            "analysis '{}' starts from '{}', which ended in no state",
-                            a.name, study.analyses[k].name
-                        )
-                        .into()
-                    }),
-                    None => Ok(None),
+                let start: Result<Option<mbs::State>, BoxError> = match (refused, a.start) {
+                    (Some(refusal), _) => Err(refusal.into()),
+                    (None, start) => match start {
+                        Some(k) => self.states[k].clone().map(Some).ok_or_else(|| {
+                            format!(
+                                "analysis '{}' starts from '{}', which ended in no state",
+                                a.name, study.analyses[k].name
+                            )
+                            .into()
+                        }),
+                        None => Ok(None),
+                    },
                 };
                 let mut final_state = None;
                 let result = match (start, self.mechanism(obs)) {
@@ -246,6 +277,15 @@ impl<'s> Runner<'s> {
             _ => run_analysis(study, a, &cache, obs),
         };
         let result = result.map(|mut o| {
+            if let Some(k) = prerequisite {
+                o.report.insert(
+                    0,
+                    format!(
+                        "started from the final state of '{}', which was run first for it",
+                        study.analyses[k].name
+                    ),
+                );
+            }
             if let Some((requested, limit)) = shortened {
                 o.report.insert(
                     0,
@@ -277,22 +317,25 @@ impl<'s> Runner<'s> {
                 if let Some(failure) = o.failure {
                     // The solver stopped: what it computed is written; the run fails here.
                     entry.status = Status::Failed;
-                    entry.error = Some(failure.clone());
+                    entry.error = Some(crate::error::chain(&failure));
                     summary.status = failed_status();
                     let entry = entry.clone();
                     // The failure is the message; a summary that cannot be written (a full
                     // disk) must not replace it.
                     let _ = obs.end(&info, &entry);
                     let _ = obs.summary(summary);
-                    return Err(format!(
-                        "{} analysis '{}' ({}): {failure} in {}/{}",
-                        a.kind_name(),
-                        a.name,
-                        study.location(&a.path),
-                        where_(),
-                        a.name
-                    )
-                    .into());
+                    return Err(Box::new(AnalysisFailed {
+                        analysis: a.name.clone(),
+                        message: format!(
+                            "{} analysis '{}' ({}) stopped; what it computed is in {}/{}",
+                            a.kind_name(),
+                            a.name,
+                            study.location(&a.path),
+                            where_(),
+                            a.name
+                        ),
+                        source: Box::new(failure),
+                    }));
                 }
                 let entry = entry.clone();
                 obs.end(&info, &entry)?;
@@ -306,7 +349,8 @@ impl<'s> Runner<'s> {
                 let entry = entry.clone();
                 let _ = obs.end(&info, &entry);
                 let _ = obs.summary(summary);
-                Err(Box::new(Context {
+                Err(Box::new(AnalysisFailed {
+                    analysis: a.name.clone(),
                     message: format!(
                         "{} analysis '{}' ({}) failed; the results of the analyses before it are in {}",
                         a.kind_name(),

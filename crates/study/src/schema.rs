@@ -639,7 +639,7 @@ pub struct SensorFile {
     pub name: String,
     /// `position`, `displacement`, `relative-position`, `rotation`, `velocity`,
     /// `angular-velocity`, `deflection`, `joint`, `joint-rate`, `modal`, `reaction`,
-    /// `driver-effort`, `energy`, `momentum`.
+    /// `driver-effort`, `energy`, `momentum`, `stress`.
     #[serde(rename = "type")]
     pub kind: String,
     /// `"body.point"`, a body, a joint or a driver.
@@ -652,6 +652,10 @@ pub struct SensorFile {
     pub reference: Option<String>,
     /// Joint, joint-rate: which scalar coordinate (default 0).
     pub coordinate: Option<usize>,
+    /// Stress: a mesh node by index, by position (part axes), or a node set.
+    pub node: Option<usize>,
+    pub node_at: Option<Vec3>,
+    pub set: Option<String>,
 }
 
 /// `[[initial]]`: initial values that differ from the assembled configuration at rest.

@@ -1,8 +1,9 @@
 //! A dynamic analysis of the mechanism stepped by the caller: [`Simulation::step`] or
 //! [`Simulation::advance_to`], and between steps every sensor, the state and the node
-//! motions can be read and the value of named loads changed. The `dynamic` analyses of a
-//! study run (`crate::mechanism::run_analysis`) step the same type, so a script that steps a
-//! simulation to the end gets the numbers the program writes.
+//! motions can be read, the value of named loads changed and actuator efforts held at values
+//! set by the caller. The `dynamic` analyses of a study run (`crate::mechanism::run_analysis`)
+//! step the same type, so a script that steps a simulation to the end gets the numbers the
+//! program writes.
 
 use crate::error::BoxError;
 use crate::mechanism::{BuiltMechanism, NamedLoad};
@@ -153,6 +154,12 @@ impl Simulation {
         self.t_end
     }
 
+    /// Sets the size of the next steps (a run's last fixed step is shortened to land on its
+    /// end time, `mbs::fixed_steps`).
+    pub fn set_step_size(&mut self, h: f64) {
+        self.integrator.set_step_size(h);
+    }
+
     /// Steps taken.
     pub fn steps(&self) -> usize {
         self.integrator.steps()
@@ -182,7 +189,7 @@ impl Simulation {
         &mut self,
         stepping: &mbs::Stepping,
         each: impl FnMut(&mbs::StepDone, &mbs::Integrator<'static>) -> Result<(), E>,
-    ) -> Result<(mbs::StepTotals, Option<mbs::SolveError>), E> {
+    ) -> Result<(mbs::StepTotals, Option<mbs::SolveError>), Box<mbs::Interrupted<E>>> {
         self.integrator.run_to(self.t_end, stepping, each)
     }
 
@@ -267,8 +274,54 @@ impl Simulation {
         Ok(())
     }
 
-    /// Records the `mbs` sensors at the current state into `record`.
-    pub fn record(&self, record: &mut SensorRecord) -> Result<(), BoxError> {
-        Ok(self.integrator.record(record)?)
+    /// The names of the study's actuators (`[[actuators]]`), in their order.
+    pub fn actuator_names(&self) -> Vec<&str> {
+        self.system()
+            .model()
+            .actuators
+            .iter()
+            .map(|a| a.name.as_str())
+            .collect()
+    }
+
+    /// The index of actuator `name` in `Model::actuators`.
+    fn actuator(&self, name: &str) -> Result<usize, BoxError> {
+        let names = self.actuator_names();
+        names.iter().position(|n| *n == name).ok_or_else(|| {
+            let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+            crate::source::unknown_reference("actuator", name, &names).into()
+        })
+    }
+
+    /// Holds actuator `name` at `effort` [N on a length, N m on an angle] in place of its
+    /// `function` or `pid` from the next step on (a controller outside the study closes the
+    /// loop); `None` releases it to its law again (a PID resumes from its integral, frozen
+    /// while held). The `actuator-effort` sensors write the held value.
+    pub fn set_actuator(&mut self, name: &str, effort: Option<f64>) -> Result<(), BoxError> {
+        let index = self.actuator(name)?;
+        let system = self
+            .integrator
+            .system_mut()
+            .ok_or("the simulation does not own its system")?;
+        system.set_actuator_effort(index, effort)?;
+        Ok(())
+    }
+
+    /// The effort actuator `name` applies at the current state: the held value, or its law's.
+    pub fn actuator_effort(&self, name: &str) -> Result<f64, BoxError> {
+        let index = self.actuator(name)?;
+        Ok(self.system().actuator_efforts(self.state())[index])
+    }
+
+    /// The effort actuator `name` is held at (`None`: its law acts).
+    pub fn held_actuator(&self, name: &str) -> Result<Option<f64>, BoxError> {
+        let index = self.actuator(name)?;
+        Ok(self.system().held_actuator_effort(index))
+    }
+
+    /// Records the `mbs` sensors at the current state into `record`; a sensor value that is not
+    /// finite is [`mbs::SolveError::NonFiniteSensor`] (the row stays in `record`).
+    pub fn record(&self, record: &mut SensorRecord) -> Result<(), mbs::SolveError> {
+        self.integrator.record(record)
     }
 }

@@ -160,7 +160,7 @@ impl Source {
     /// Reads `path`. The span tree is built when the text parses as TOML; otherwise errors
     /// point at the spans `toml` reports.
     pub fn read(path: &Path) -> Result<Self, std::io::Error> {
-        let bytes = std::fs::read(path)?;
+        let bytes = fe_model::input::read(path)?;
         let text = match String::from_utf8(bytes) {
             Ok(t) => t,
             Err(e) => {

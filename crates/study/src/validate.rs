@@ -25,6 +25,7 @@ use fe_model::{
 };
 use nalgebra::{Point3, Vector3};
 use reduction::ModeSelection;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 pub mod mechanism;
@@ -162,15 +163,16 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
         src: &source,
         errors: Vec::new(),
         warnings: Vec::new(),
-        failed: Vec::new(),
+        failed: HashSet::new(),
         file_spiders: Vec::new(),
+        index: HashMap::new(),
     };
     let materials = v.materials(&file.materials);
     let sections = v.sections(&file.sections);
     let mut parts: Vec<(String, Option<Part>)> = Vec::new();
     for (i, p) in file.parts.iter().enumerate() {
         let path = KeyPath::root().key("parts").index(i);
-        if parts.iter().any(|(n, _)| *n == p.name) {
+        if v.lookup("part", &p.name).is_some() {
             v.err(
                 &path.key("name"),
                 format!("a part named '{}' is already defined", p.name),
@@ -178,6 +180,7 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
             continue;
         }
         let part = v.part(&path, p, &materials, &sections, file);
+        v.register("part", &p.name, parts.len());
         parts.push((p.name.clone(), part));
     }
     let mechanism = v.mechanism(file, &parts);
@@ -205,9 +208,6 @@ impl Materials {
     fn names(&self) -> Vec<String> {
         self.0.iter().map(|(n, _)| n.clone()).collect()
     }
-    fn get(&self, name: &str) -> Option<&IsotropicMaterial> {
-        self.0.iter().find(|(n, _)| n == name).map(|(_, m)| m)
-    }
 }
 
 /// Sections are built per part, with the Poisson's ratio of the part's material (shear
@@ -227,10 +227,15 @@ struct Validator<'s> {
     /// Entities that are defined but failed their own checks, as "material:NAME",
     /// "body:NAME": their errors are reported once, where they are defined, and a reference
     /// to them elsewhere is not reported again as unknown.
-    failed: Vec<String>,
+    failed: HashSet<String>,
     /// The spiders (RBE2/RBE3) of the part being validated, when its mesh file defines them:
     /// an interface on one of their node sets takes its kind and node position by default.
     file_spiders: Vec<fe_model::mesh::import::ImportedSpider>,
+    /// Where each valid named entity is in its list, by kind ("material", "section", "part",
+    /// "flexible", "rigid", "joint", "driver", "sensor", "actuator") and name: duplicate checks and
+    /// references are one hash look-up each, so validation time grows linearly with the
+    /// number of entries (a linear search per entry made it quadratic).
+    index: HashMap<(&'static str, String), usize>,
 }
 
 /// Names become file names (results folders, cache files): keep them portable.
@@ -264,6 +269,16 @@ fn point(v: &Vec3) -> Point3<f64> {
 }
 
 impl Validator<'_> {
+    /// Records that the entity `name` of `kind` is at `position` in its list.
+    fn register(&mut self, kind: &'static str, name: &str, position: usize) {
+        self.index.entry((kind, name.to_string())).or_insert(position);
+    }
+
+    /// The position of the entity `name` of `kind` in its list.
+    fn lookup(&self, kind: &'static str, name: &str) -> Option<usize> {
+        self.index.get(&(kind, name.to_string())).copied()
+    }
+
     fn err(&mut self, path: &KeyPath, message: impl Into<String>) {
         self.errors.push(StudyError::at(path, message));
     }
@@ -334,13 +349,14 @@ impl Validator<'_> {
 
     fn materials(&mut self, list: &[MaterialFile]) -> Materials {
         let mut out = Vec::new();
+        let mut seen = HashSet::new();
         for (i, m) in list.iter().enumerate() {
             let path = KeyPath::root().key("materials").index(i);
             if let Err(e) = check_name(&m.name) {
                 self.err(&path.key("name"), e);
                 continue;
             }
-            if out.iter().any(|(n, _): &(String, _)| *n == m.name) {
+            if !seen.insert(m.name.as_str()) {
                 self.err(
                     &path.key("name"),
                     format!("a material named '{}' is already defined", m.name),
@@ -418,15 +434,18 @@ impl Validator<'_> {
                 }
             };
             match made {
-                Some(Ok(material)) => out.push((m.name.clone(), material)),
+                Some(Ok(material)) => {
+                    self.register("material", &m.name, out.len());
+                    out.push((m.name.clone(), material));
+                }
                 Some(Err(e)) => self.err(&path, e.to_string()),
                 None => {}
             }
         }
         // A material with errors is known, not unknown, to the parts that use it.
         for m in list {
-            if check_name(&m.name).is_ok() && !out.iter().any(|(n, _)| *n == m.name) {
-                self.failed.push(format!("material:{}", m.name));
+            if check_name(&m.name).is_ok() && self.lookup("material", &m.name).is_none() {
+                self.failed.insert(format!("material:{}", m.name));
             }
         }
         Materials(out)
@@ -434,13 +453,14 @@ impl Validator<'_> {
 
     fn sections<'f>(&mut self, list: &'f [SectionFile]) -> Sections<'f> {
         let mut out: Vec<(String, KeyPath, &'f SectionFile)> = Vec::new();
+        let mut seen = HashSet::new();
         for (i, s) in list.iter().enumerate() {
             let path = KeyPath::root().key("sections").index(i);
             if let Err(e) = check_name(&s.name) {
                 self.err(&path.key("name"), e);
                 continue;
             }
-            if out.iter().any(|(n, _, _)| *n == s.name) {
+            if !seen.insert(s.name.as_str()) {
                 self.err(
                     &path.key("name"),
                     format!("a section named '{}' is already defined", s.name),
@@ -521,6 +541,7 @@ impl Validator<'_> {
                 }
             }
             if ok {
+                self.register("section", &s.name, out.len());
                 out.push((s.name.clone(), path, s));
             }
         }
@@ -529,7 +550,7 @@ impl Validator<'_> {
 
     /// The section `name` built with Poisson's ratio `nu`, or an error at `at`.
     fn section(&mut self, at: &KeyPath, name: &str, sections: &Sections<'_>, nu: f64) -> Option<BeamSection> {
-        let Some((_, path, s)) = sections.0.iter().find(|(n, _, _)| n == name) else {
+        let Some((_, path, s)) = self.lookup("section", name).map(|k| &sections.0[k]) else {
             self.err(at, unknown_reference("section", name, &sections.names()));
             return None;
         };
@@ -552,7 +573,7 @@ impl Validator<'_> {
     }
 
     fn material<'m>(&mut self, at: &KeyPath, name: &str, materials: &'m Materials) -> Option<&'m IsotropicMaterial> {
-        let m = materials.get(name);
+        let m = self.lookup("material", name).map(|k| &materials.0[k].1);
         if m.is_none() && !self.failed.contains(&format!("material:{name}")) {
             self.err(at, unknown_reference("material", name, &materials.names()));
         }
@@ -1591,13 +1612,13 @@ impl Validator<'_> {
     }
 
     /// The analysis's name (`default` without `name`), checked as a file name and unique.
-    fn analysis_name(&mut self, path: &KeyPath, a: &AnalysisFile, default: String, out: &[Analysis]) -> Option<String> {
+    fn analysis_name(&mut self, path: &KeyPath, a: &AnalysisFile, default: String) -> Option<String> {
         let name = a.name.clone().unwrap_or(default);
         if let Err(e) = check_name(&name) {
             self.err(&path.key("name"), e);
             return None;
         }
-        if out.iter().any(|o| o.name == name) {
+        if self.lookup("analysis", &name).is_some() {
             let at = if a.name.is_some() {
                 path.key("name")
             } else {
@@ -1641,12 +1662,12 @@ impl Validator<'_> {
                     let Some(spec) = self.mbs_analysis(&path, a) else {
                         continue;
                     };
-                    let Some(name) = self.analysis_name(&path, a, kind.to_string(), &out) else {
+                    let Some(name) = self.analysis_name(&path, a, kind.to_string()) else {
                         continue;
                     };
                     let start = match &a.start {
                         None => None,
-                        Some(from) => match out.iter().position(|b| b.name == *from) {
+                        Some(from) => match self.lookup("analysis", from) {
                             Some(k)
                                 if matches!(
                                     out[k].spec,
@@ -1686,6 +1707,7 @@ impl Validator<'_> {
                             }
                         },
                     };
+                    self.register("analysis", &name, out.len());
                     out.push(Analysis {
                         name,
                         path,
@@ -1704,7 +1726,7 @@ impl Validator<'_> {
                 );
                 continue;
             };
-            let Some(index) = part_names.iter().position(|n| n == part_name) else {
+            let Some(index) = self.lookup("part", part_name) else {
                 self.err(&path.key("part"), unknown_reference("part", part_name, &part_names));
                 continue;
             };
@@ -1713,7 +1735,7 @@ impl Validator<'_> {
                 continue;
             };
             let index = parts[..index].iter().filter(|(_, p)| p.is_some()).count();
-            let Some(name) = self.analysis_name(&path, a, format!("{kind}-{part_name}"), &out) else {
+            let Some(name) = self.analysis_name(&path, a, format!("{kind}-{part_name}")) else {
                 continue;
             };
             let spec = match a.kind {
@@ -1766,14 +1788,32 @@ impl Validator<'_> {
             // The supports change the spiders (an RBE3 avoids supported dofs, an RBE2 cannot
             // take them): build once to report a conflict here rather than mid-run.
             if let AnalysisSpec::Static { supports, .. } | AnalysisSpec::Modal { supports, .. } = &spec {
-                if let Err(e) = part.build(supports, false) {
-                    self.err(
-                        &path.key("supports"),
-                        format!("with these supports, part '{part_name}': {e}"),
-                    );
-                    continue;
+                let free = part
+                    .build(supports, false)
+                    .and_then(|b| fe_model::DofMap::new(&b.model).map(|d| d.n_free()));
+                match free {
+                    Err(e) => {
+                        self.err(
+                            &path.key("supports"),
+                            format!("with these supports, part '{part_name}': {e}"),
+                        );
+                        continue;
+                    }
+                    Ok(free) => {
+                        // A model has as many modes as free dofs.
+                        if let AnalysisSpec::Modal { modes, .. } = &spec {
+                            if *modes > free {
+                                self.err(
+                                    &path.key("modes"),
+                                    format!("{modes} modes asked, but part '{part_name}' on these supports has {free} free dofs, so at most {free} modes"),
+                                );
+                                continue;
+                            }
+                        }
+                    }
                 }
             }
+            self.register("analysis", &name, out.len());
             out.push(Analysis {
                 name,
                 path,

@@ -5,12 +5,15 @@
 #![allow(non_snake_case)]
 
 use crate::error::SuperelementError;
-use crate::frame::{phi_j_psi, Frame, FrameChoice, FrameSettings, FrameSolve};
+use crate::frame::{FrameProblem, FrameScratch, FrameSettings, FrameSolve};
 use crate::local_coordinates::local_coordinates;
 use crate::mass::{FfrInertia, MassVariant};
+pub use crate::state::BodyState;
+use crate::state::{Frame, FrameChoice};
 use crate::transform::Kinematics;
+use crate::transform::{inverse_with_rcond, phi_j_psi, RCOND_MIN};
 use faer::Mat;
-use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Vector3};
 use reduction::ReducedBody;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -46,46 +49,6 @@ impl Damping {
             beta,
             modal_ratios: Vec::new(),
         }
-    }
-}
-
-/// The state of one body in absolute interface coordinates, with the last frame as the warm
-/// start of (4.4).
-///
-/// Velocities are spatial: $\dot{\mathbf r}_k = \mathbf v_k$, $\dot{\mathbf R}_k =
-/// \tilde{\boldsymbol\omega}_k\mathbf R_k$. The superelement's generalised velocity is
-/// $\dot{\mathbf q} = [\mathbf v_1, \boldsymbol\omega_1, \dots, \mathbf v_N, \boldsymbol\omega_N,
-/// \dot{\boldsymbol\eta}]$, and accelerations are passed in the same order.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct BodyState {
-    /// Interface positions $\mathbf r_k$.
-    pub r: Vec<Vector3<f64>>,
-    /// Interface orientations $\mathbf R_k$ (from the FE model's axes, theory guide §4:
-    /// $\mathbf R_{k0} = \mathbf I$).
-    pub R: Vec<UnitQuaternion<f64>>,
-    /// Interface velocities $\mathbf v_k$.
-    pub v: Vec<Vector3<f64>>,
-    /// Spatial angular velocities $\boldsymbol\omega_k$.
-    pub omega: Vec<Vector3<f64>>,
-    /// Modal coordinates $\boldsymbol\eta$.
-    pub eta: Vec<f64>,
-    /// $\dot{\boldsymbol\eta}$.
-    pub eta_dot: Vec<f64>,
-    /// The last frame: the Newton start of (4.4). Keep it up to date with the frame returned
-    /// by [`Superelement::solve_frame`] or [`crate::Evaluation::frame`].
-    pub frame: Frame,
-}
-
-impl BodyState {
-    /// $\dot{\mathbf q} = [\mathbf v_1, \boldsymbol\omega_1, \dots, \dot{\boldsymbol\eta}]$.
-    pub fn velocity_vector(&self) -> Vec<f64> {
-        let mut qd = Vec::with_capacity(6 * self.r.len() + self.eta.len());
-        for k in 0..self.r.len() {
-            qd.extend_from_slice(self.v[k].as_slice());
-            qd.extend_from_slice(self.omega[k].as_slice());
-        }
-        qd.extend_from_slice(&self.eta_dot);
-        qd
     }
 }
 
@@ -291,6 +254,55 @@ fn rigid_pseudo_inverse(body: &ReducedBody, n: usize) -> Result<Mat<f64>, Supere
 }
 
 impl Superelement {
+    /// Solves (4.4) $\boldsymbol\Phi_j\mathbf q^{jj}(\mathbf r_j, \mathbf R_j) = \mathbf 0$ for the frame,
+    /// starting from `state.frame` (the last step's frame).
+    ///
+    /// # Derivation
+    /// With the local frame variation $\delta\boldsymbol\Xi = [\mathbf R_j^T\delta\mathbf r_j;\
+    /// \mathbf R_j^T\delta\boldsymbol\pi_j]$ and the interface coordinates held,
+    /// $\delta\mathbf q^{jj} = -\boldsymbol\Lambda\boldsymbol\Phi_{rig}\delta\boldsymbol\Xi$ ((5.3) with the exact
+    /// rotation factor, see [`crate::local_coordinates::elastic_rotation`]), so the Jacobian
+    /// of $\mathbf g = \boldsymbol\Phi_j\mathbf q^{jj}$ is $-\boldsymbol\Phi_j\boldsymbol\Lambda\boldsymbol\Phi_{rig}$
+    /// and the Newton step is $\delta\boldsymbol\Xi = (\boldsymbol\Phi_j\boldsymbol\Lambda\boldsymbol\Phi_{rig})^{-1}\mathbf g$,
+    /// applied as $\mathbf r_j \leftarrow \mathbf r_j + \mathbf R_j\delta\boldsymbol\Xi_t$,
+    /// $\mathbf R_j \leftarrow \mathbf R_j\exp(\delta\boldsymbol\Xi_r)$. The eta columns of
+    /// $\boldsymbol\Phi_j$ enter $\mathbf g$ with the given $\boldsymbol\eta$. Checked by
+    /// `tests/unit/fd_tangent.rs::frame_jacobian` and `tests/unit/frame.rs`.
+    ///
+    /// For [`FrameChoice::InterfaceNode`] and [`FrameChoice::AuxiliaryNode`] the solution is
+    /// explicit, $\mathbf r_j = \mathbf r_k$, $\mathbf R_j = \mathbf R_k$.
+    pub fn solve_frame(&self, state: &BodyState) -> Result<(Frame, usize), SuperelementError> {
+        let (mut q, mut r_loc, mut Lambda) = (
+            vec![0.0; self.n],
+            vec![Vector3::zeros(); self.n_interfaces],
+            vec![Matrix3::identity(); self.n_interfaces],
+        );
+        let mut scratch = FrameScratch {
+            q: &mut q,
+            r_loc: &mut r_loc,
+            Lambda: &mut Lambda,
+        };
+        self.solve_frame_in(state, &mut scratch)
+    }
+
+    /// [`Self::solve_frame`] with the Newton iterates in `scratch` (no allocation; the hot loop
+    /// passes buffers of its workspace).
+    pub(crate) fn solve_frame_in(
+        &self,
+        state: &BodyState,
+        scratch: &mut FrameScratch<'_>,
+    ) -> Result<(Frame, usize), SuperelementError> {
+        self.check_state(state)?;
+        let problem = FrameProblem {
+            x: &self.x,
+            Phi_j: self.Phi_j.as_ref(),
+            length: self.length,
+            settings: self.frame_settings,
+            solve: self.frame_solve,
+        };
+        crate::frame::solve_frame_in(&problem, state, scratch)
+    }
+
     /// Builds the superelement of `body` with the given frame, inertia variant and damping,
     /// after checking every shape the formulation relies on. It keeps a copy of `body`;
     /// [`Self::shared`] keeps a shared one.
@@ -397,6 +409,15 @@ impl Superelement {
             }
         };
         let geometric = geometric_stiffness(body, n)?;
+        for lp in &body.load_points {
+            check_dense(body, &format!("the shape of load point '{}'", lp.name), &lp.shape, 6, n)?;
+            if !lp.position.iter().all(|x| x.is_finite()) {
+                return Err(invalid(
+                    body,
+                    format!("load point '{}' has a non-finite position", lp.name),
+                ));
+            }
+        }
         let x: Vec<Vector3<f64>> = positions.iter().map(|p| p - origin).collect();
         let K_CB = body.K_CB.to_faer();
         let M_CB = body.M_CB.to_faer();
@@ -418,8 +439,8 @@ impl Superelement {
             .max(f64::MIN_POSITIVE);
         // (5.4) must be solvable for the undeformed body.
         let G = phi_j_psi(Phi_j.as_ref(), &x, &vec![Matrix3::identity(); N]);
-        match crate::frame::inverse_with_rcond(&G) {
-            Some((_, rcond)) if rcond >= crate::frame::RCOND_MIN => {}
+        match inverse_with_rcond(&G) {
+            Some((_, rcond)) if rcond >= RCOND_MIN => {}
             other => {
                 return Err(bad_choice(format!(
                     "Phi_j Phi_rig of the undeformed body is singular (rcond {:.3e})",

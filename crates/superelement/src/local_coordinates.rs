@@ -10,12 +10,12 @@
 //! **Positions.** $\mathbf x_k$ is the undeformed position of interface $k$ measured from the
 //! frame origin $P_j$ in body axes (not from the FE model's origin): the FE position minus
 //! the FE position of $P_j$ (the centre of mass, interface $k$, or the auxiliary interface;
-//! see [`crate::frame::FrameChoice`]). So $\mathbf r_j$ is where $P_j$ is.
+//! see [`crate::FrameChoice`]). So $\mathbf r_j$ is where $P_j$ is.
 
 #![allow(non_snake_case)]
 
-use crate::frame::Frame;
 use crate::so3;
+use crate::state::Frame;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// Interface displacement $\mathbf u_k = \mathbf R_j^T(\mathbf r_k - \mathbf r_j) - \mathbf x_k$ (body axes).

@@ -44,9 +44,10 @@
 
 #![allow(non_snake_case)]
 
-use crate::frame::Frame;
+use crate::error::SuperelementError;
 use crate::local_coordinates::{theta_of, u_of};
 use crate::so3::{self, skew};
+use crate::state::Frame;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
@@ -56,20 +57,43 @@ use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 /// block rows $[\mathbf I,\ -\tilde{\mathbf r}_k^{jj}]$ (translation) and $[\mathbf 0,\ \mathbf I]$
 /// (rotation) per interface, zero rows for $\boldsymbol\eta$.
 pub fn phi_rig(r_loc: &[Vector3<f64>], n_modes: usize) -> Mat<f64> {
-    let N = r_loc.len();
-    let mut P = Mat::zeros(6 * N + n_modes, 6);
-    for (k, r) in r_loc.iter().enumerate() {
+    let P = reduction::rigid_modes(r_loc, &Vector3::zeros(), n_modes);
+    Mat::from_fn(P.nrows(), 6, |i, j| P[(i, j)])
+}
+
+/// $\boldsymbol\Phi_j\boldsymbol\Lambda\boldsymbol\Phi_{rig}$ (the 6x6 of (5.4), with the exact
+/// rotation factor $\boldsymbol\Lambda$; module docs), from the deformed local
+/// positions `r_loc` $= \mathbf x_k + \mathbf u_k$ and the blocks of $\boldsymbol\Lambda$.
+pub(crate) fn phi_j_psi(Phi_j: faer::MatRef<'_, f64>, r_loc: &[Vector3<f64>], Lambda: &[Matrix3<f64>]) -> Matrix6<f64> {
+    let mut G = Matrix6::zeros();
+    let column = |c| Vector6::from_column_slice(col(Phi_j, c));
+    for (k, (r, L)) in r_loc.iter().zip(Lambda).enumerate() {
+        // Block rows of Psi for interface k: u_k -> [I, -r~], theta_k -> [0, Lambda_k].
         let mr = -skew(r);
-        for i in 0..3 {
-            P[(6 * k + i, i)] = 1.0;
-            P[(6 * k + 3 + i, 3 + i)] = 1.0;
-            for j in 0..3 {
-                P[(6 * k + i, 3 + j)] = mr[(i, j)];
+        for c in 0..3 {
+            let (pu, pt) = (column(6 * k + c), column(6 * k + 3 + c));
+            let mut gc = G.column_mut(c);
+            gc += pu;
+            for b in 0..3 {
+                let mut gb = G.column_mut(3 + b);
+                gb += pu * mr[(c, b)] + pt * L[(c, b)];
             }
         }
     }
-    P
+    G
 }
+
+/// Inverse of a 6x6 with its reciprocal condition number in the 1-norm,
+/// $1/(\|\mathbf G\|_1\|\mathbf G^{-1}\|_1)$; `None` when LU finds it singular.
+pub(crate) fn inverse_with_rcond(G: &Matrix6<f64>) -> Option<(Matrix6<f64>, f64)> {
+    let Gi = G.try_inverse()?;
+    let norm1 = |A: &Matrix6<f64>| (0..6).map(|j| A.column(j).abs().sum()).fold(0.0, f64::max);
+    Some((Gi, 1.0 / (norm1(G) * norm1(&Gi))))
+}
+
+/// Below this reciprocal condition number $\boldsymbol\Phi_j\boldsymbol\Phi_{rig}$ is treated as
+/// singular: about $10^4$ times machine precision, where a solve loses all but four digits.
+pub(crate) const RCOND_MIN: f64 = 1e-12;
 
 /// Everything about one configuration that does not depend on velocities: the frame, the CB
 /// coordinates and the transformation matrices in body axes (module docs).
@@ -196,7 +220,7 @@ impl Kinematics {
         q_jj: Vec<f64>,
         x: &[Vector3<f64>],
         Phi_j: MatRef<'_, f64>,
-    ) -> Result<Self, crate::SuperelementError> {
+    ) -> Result<Self, SuperelementError> {
         let mut kin = Self::empty(x.len(), q_jj.len());
         kin.q_jj = q_jj;
         kin.update(frame, frame_iterations, x, Phi_j)?;
@@ -210,7 +234,7 @@ impl Kinematics {
         frame_iterations: usize,
         x: &[Vector3<f64>],
         Phi_j: MatRef<'_, f64>,
-    ) -> Result<(), crate::SuperelementError> {
+    ) -> Result<(), SuperelementError> {
         let N = x.len();
         let n = self.q_jj.len();
         self.frame = frame;
@@ -220,11 +244,10 @@ impl Kinematics {
             self.r_loc[k] = x[k] + u_of(&self.q_jj, k);
             self.Lambda[k] = so3::left_jacobian_inv(&theta_of(&self.q_jj, k));
         }
-        let G = crate::frame::phi_j_psi(Phi_j, &self.r_loc, &self.Lambda);
-        let (G_inv, rcond) =
-            crate::frame::inverse_with_rcond(&G).ok_or(crate::SuperelementError::SingularFrame { rcond: 0.0 })?;
-        if rcond < crate::frame::RCOND_MIN {
-            return Err(crate::SuperelementError::SingularFrame { rcond });
+        let G = phi_j_psi(Phi_j, &self.r_loc, &self.Lambda);
+        let (G_inv, rcond) = inverse_with_rcond(&G).ok_or(SuperelementError::SingularFrame { rcond: 0.0 })?;
+        if rcond < RCOND_MIN {
+            return Err(SuperelementError::SingularFrame { rcond });
         }
         self.G_inv = G_inv;
         // Psi rows: u_k -> [I, -r~_k], theta_k -> [0, Lambda_k].

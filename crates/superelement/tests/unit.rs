@@ -24,6 +24,8 @@ mod unit {
     /// Small motions reproduce the linear FE model: statics exactly, frequencies to the
     /// accuracy of the modes kept.
     mod linear_limit;
+    /// Loads at load points inside a body: work and tangents against central differences.
+    mod point_load;
     /// Recovery of the deformed mesh.
     mod recovery;
     /// Rotations: exp/log round trips (also near pi), Jacobians and their derivatives vs

@@ -1,7 +1,7 @@
 //! B1-B3: geometrically nonlinear statics through superelements in series: Mattiasson's
 //! elastica, the roll-up into a circle, and the Bathe-Bolourchi 45-degree bend.
 
-use crate::models::{bend_45, elastica_EI, elastica_cantilever, Variant};
+use crate::models::{bend_45, elastica_EI, elastica_cantilever, Variant, MATTIASSON};
 use crate::{sci, slope, Block, Extent, Grid, Row, Table};
 use mbs::{solve_static, StaticSettings, System};
 use nalgebra::Vector3;
@@ -12,12 +12,7 @@ use std::f64::consts::PI;
 type Result<T> = std::result::Result<T, Box<dyn Error>>;
 
 /// Mattiasson (1981), validation problem B1: a = PL^2/EI -> (w/L, u/L, tip rotation).
-pub const ELASTICA: [(f64, [f64; 3]); 4] = [
-    (1.0, [0.30172, 0.05643, 0.46135]),
-    (2.0, [0.49346, 0.16064, 0.78175]),
-    (5.0, [0.71379, 0.38763, 1.21537]),
-    (10.0, [0.81061, 0.55500, 1.43029]),
-];
+pub const ELASTICA: [(f64, [f64; 3]); 4] = [MATTIASSON[0], MATTIASSON[1], MATTIASSON[4], MATTIASSON[6]];
 
 /// Elements per elastica superelement (static modes only: the segment's interface statics
 /// are the FE model's exactly, so the element count inside a segment does not matter for the

@@ -60,9 +60,16 @@ fn running_a_study_without_analyses_exits_2() {
     let out = flexmbs(&dir, &["run", "empty.toml"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("no [[analyses]]"), "{}", out.stderr);
+    // Nothing is created for it.
+    assert!(!dir.join("empty-results").exists());
+    // `check` refuses it too: a study that runs nothing is not a valid study.
     let out = flexmbs(&dir, &["check", "empty.toml"]);
-    assert_eq!(out.code, 0, "{}", out.stderr);
-    assert!(out.stderr.contains("no [[analyses]]"), "{}", out.stderr);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("empty.toml: the study has no [[analyses]]"),
+        "{}",
+        out.stderr
+    );
 }
 
 /// `flexmbs ... | head` closes the pipe early: the program must not panic (exit 101).

@@ -187,8 +187,14 @@ fn inspect_shows_a_reduced_body() {
     let i = 12 + 12 * body.K_CB.nrows;
     body.K_CB.data[i] = -body.K_CB.data[i];
     reduction::file::write(&body, &dir.join("bodies/bad.rbody")).unwrap();
+    // The report is printed in full, and the exit code says the checks failed.
     let out = flexmbs(&dir, &["inspect", "bodies/bad.rbody"]);
-    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert_eq!(out.code, 1, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("physical check") && out.stderr.contains("studies refuse it"),
+        "{}",
+        out.stderr
+    );
     for text in [
         "physical checks: FAILED",
         "K_CB is indefinite",

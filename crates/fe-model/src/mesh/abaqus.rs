@@ -30,8 +30,8 @@
 //! fixtures' geometry (the same solid gives the same frequencies from gmsh and Abaqus files).
 
 use super::import::{
-    excerpt, material, read_text, BeamSectionAssignment, Entity, IgnoredList, ImportError, ImportedModel,
-    ImportedSupport, MeshBuilder, SolidSection,
+    excerpt, malformed, material, node_order, read_include, read_text, unsupported, BeamSectionAssignment, Entity,
+    IgnoredList, ImportError, ImportedModel, ImportedSupport, MeshBuilder, SolidSection,
 };
 use crate::mesh::{CellId, CellKind, NodeId};
 use crate::model::DofMask;
@@ -39,9 +39,6 @@ use crate::section::BeamSection;
 use nalgebra::{Point3, Vector3};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-
-/// Deepest nesting of `*INCLUDE` (a file that includes itself stops here).
-const MAX_INCLUDE_DEPTH: usize = 16;
 
 /// Reads the Abaqus input file at `path` and the files it includes.
 pub fn read(path: &Path) -> Result<ImportedModel, ImportError> {
@@ -60,16 +57,11 @@ pub fn parse(text: impl AsRef<[u8]>, origin: &Path) -> Result<ImportedModel, Imp
 
 /// Our node `i` of an Abaqus element is the Abaqus node `ours_from_abaqus(kind)[i]`.
 pub fn ours_from_abaqus(kind: CellKind) -> &'static [usize] {
-    const IDENTITY: [usize; 20] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19];
     // C3D10: 4-6 on edges 1-2, 2-3, 3-1; 7, 8, 9 on 1-4, 2-4, 3-4; ours has 8 on (3, 2), 9 on (3, 1).
     const TET10: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 9, 8];
     // C3D20: 8-11 bottom ring (0-1, 1-2, 2-3, 3-0), 12-15 top ring, 16-19 vertical edges.
     const HEX20: [usize; 20] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 16, 9, 17, 10, 18, 19, 12, 15, 13, 14];
-    match kind {
-        CellKind::Tet10 => &TET10,
-        CellKind::Hex20 => &HEX20,
-        other => &IDENTITY[..other.node_count()],
-    }
+    node_order(kind, &TET10, &HEX20)
 }
 
 /// The cell kind of an Abaqus element type, if we read it.
@@ -116,21 +108,7 @@ fn expand(
             let keyword = Keyword::parse(trimmed, path, line)?;
             if keyword.name == "INCLUDE" {
                 let input = keyword.required("INPUT", path, line)?;
-                if depth >= MAX_INCLUDE_DEPTH {
-                    return Err(ImportError::Unsupported {
-                        path: path.to_path_buf(),
-                        line,
-                        entity: "*INCLUDE".into(),
-                        what: format!(
-                            "includes nested more than {MAX_INCLUDE_DEPTH} deep (does a file include itself?)"
-                        ),
-                    });
-                }
-                let target = path.parent().unwrap_or(Path::new("")).join(input);
-                let data = std::fs::read(&target).map_err(|source| ImportError::Io {
-                    path: target.clone(),
-                    source,
-                })?;
+                let (target, data) = read_include(path, line, "*INCLUDE", input, depth)?;
                 expand(&data, &target, depth + 1, files, lines)?;
                 continue;
             }
@@ -275,22 +253,11 @@ impl<'a> Reader<'a> {
     }
 
     fn malformed(&self, l: &Line, entity: &str, expected: &str, found: &str) -> ImportError {
-        ImportError::Malformed {
-            path: self.path(l.file).to_path_buf(),
-            line: l.line,
-            entity: entity.to_string(),
-            expected: expected.to_string(),
-            found: excerpt(found),
-        }
+        malformed(self.path(l.file), l.line, entity, expected, found)
     }
 
     fn unsupported(&self, l: &Line, entity: &str, what: String) -> ImportError {
-        ImportError::Unsupported {
-            path: self.path(l.file).to_path_buf(),
-            line: l.line,
-            entity: entity.to_string(),
-            what,
-        }
+        unsupported(self.path(l.file), l.line, entity, what)
     }
 
     fn run(mut self, lines: &[Line]) -> Result<ImportedModel, ImportError> {

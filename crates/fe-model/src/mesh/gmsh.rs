@@ -241,11 +241,22 @@ pub enum MshError {
     /// A valid MSH feature we do not read (partitioned meshes, more than 2^32 nodes).
     #[error("{path}: {at}: {what} is not supported")]
     UnsupportedFeature { path: PathBuf, at: Location, what: String },
+    /// A total of an MSH 4.1 section header (number of nodes or elements, smallest or
+    /// largest tag) disagrees with the blocks that follow it; `at` is the header's value.
+    #[error("{path}: {at}: in section {section}: the header gives {what} = {header}, but the blocks hold {found}")]
+    HeaderMismatch {
+        path: PathBuf,
+        at: Location,
+        section: String,
+        what: String,
+        header: u64,
+        found: u64,
+    },
 }
 
 /// Reads the gmsh file at `path` (MSH 4.1 or 2.2, ASCII or binary) into a [`Mesh`].
 pub fn read(path: &Path) -> Result<Mesh, MshError> {
-    let bytes = std::fs::read(path).map_err(|source| MshError::Io {
+    let bytes = crate::input::read(path).map_err(|source| MshError::Io {
         path: path.to_path_buf(),
         source,
     })?;

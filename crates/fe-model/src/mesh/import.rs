@@ -348,7 +348,7 @@ impl std::fmt::Display for Entity {
 
 /// Reads a file for a reader, with the I/O error naming it.
 pub(super) fn read_text(path: &Path) -> Result<Vec<u8>, ImportError> {
-    std::fs::read(path).map_err(|source| ImportError::Io {
+    crate::input::read(path).map_err(|source| ImportError::Io {
         path: path.to_path_buf(),
         source,
     })
@@ -364,6 +364,68 @@ pub(super) fn excerpt(text: &str) -> String {
         out.push('…');
     }
     out
+}
+
+/// A malformed field at `line` of `path`: what was `expected` and (an excerpt of) what was found.
+pub(super) fn malformed(path: &Path, line: usize, entity: &str, expected: &str, found: &str) -> ImportError {
+    ImportError::Malformed {
+        path: path.to_path_buf(),
+        line,
+        entity: entity.to_string(),
+        expected: expected.to_string(),
+        found: excerpt(found),
+    }
+}
+
+/// A feature of the format that we do not read, at `line` of `path`.
+pub(super) fn unsupported(path: &Path, line: usize, entity: &str, what: String) -> ImportError {
+    ImportError::Unsupported {
+        path: path.to_path_buf(),
+        line,
+        entity: entity.to_string(),
+        what,
+    }
+}
+
+/// Deepest nesting of included files (a file that includes itself stops here).
+pub(super) const MAX_INCLUDE_DEPTH: usize = 16;
+
+/// The file that `line` of `path` includes (`name`, relative to `path`'s folder) at nesting
+/// `depth`: its path and bytes, or the error naming the including line (`entity`: the
+/// keyword or card) or the file that cannot be read.
+pub(super) fn read_include(
+    path: &Path,
+    line: usize,
+    entity: &str,
+    name: &str,
+    depth: usize,
+) -> Result<(PathBuf, Vec<u8>), ImportError> {
+    if depth >= MAX_INCLUDE_DEPTH {
+        return Err(unsupported(
+            path,
+            line,
+            entity,
+            format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (does a file include itself?)"),
+        ));
+    }
+    let target = path.parent().unwrap_or(Path::new("")).join(name);
+    let data = crate::input::read(&target).map_err(|source| ImportError::Io {
+        path: target.clone(),
+        source,
+    })?;
+    Ok((target, data))
+}
+
+/// Our node `i` of a cell of `kind` is the file's node `order[i]`: the given orders of the
+/// quadratic tetrahedron and hexahedron, the file's own order for every other kind (Abaqus
+/// and Nastran order tet4, hex8, wedge6 and lines as gmsh does).
+pub(super) fn node_order(kind: CellKind, tet10: &'static [usize; 10], hex20: &'static [usize; 20]) -> &'static [usize] {
+    const IDENTITY: [usize; 20] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19];
+    match kind {
+        CellKind::Tet10 => tet10,
+        CellKind::Hex20 => hex20,
+        other => &IDENTITY[..other.node_count()],
+    }
 }
 
 /// Records skipped cards or keywords, each once with its count and first place.

@@ -40,8 +40,8 @@
 //! ring the bottom face, then the vertical edges, then the top face ([`ours_from_nastran`]).
 
 use super::import::{
-    excerpt, material, read_text, Entity, IgnoredList, ImportError, ImportedModel, ImportedSpider, ImportedSupport,
-    MeshBuilder, SolidSection,
+    excerpt, malformed, material, node_order, read_include, read_text, unsupported, Entity, IgnoredList, ImportError,
+    ImportedModel, ImportedSpider, ImportedSupport, MeshBuilder, SolidSection,
 };
 use crate::interface::SpiderKind;
 use crate::mesh::{CellId, CellKind, NodeId};
@@ -49,8 +49,6 @@ use crate::model::DofMask;
 use nalgebra::{Matrix3, Point3, Vector3};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-
-const MAX_INCLUDE_DEPTH: usize = 16;
 
 /// Reads the Nastran bulk data file at `path` and the files it includes.
 pub fn read(path: &Path) -> Result<ImportedModel, ImportError> {
@@ -70,15 +68,10 @@ pub fn parse(text: impl AsRef<[u8]>, origin: &Path) -> Result<ImportedModel, Imp
 
 /// Our node `i` of a Nastran element is the Nastran grid `ours_from_nastran(kind)[i]`.
 pub fn ours_from_nastran(kind: CellKind) -> &'static [usize] {
-    const IDENTITY: [usize; 20] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19];
     const TET10: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 9, 8];
     // CHEXA: 9-12 bottom ring (1-2, 2-3, 3-4, 4-1), 13-16 vertical edges, 17-20 top ring.
     const HEX20: [usize; 20] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 12, 9, 13, 10, 14, 15, 16, 19, 17, 18];
-    match kind {
-        CellKind::Tet10 => &TET10,
-        CellKind::Hex20 => &HEX20,
-        other => &IDENTITY[..other.node_count()],
-    }
+    node_order(kind, &TET10, &HEX20)
 }
 
 /// Our node `i` of the mirrored element is node `mirrored(kind)[i]` of the element: the same
@@ -184,27 +177,9 @@ fn read_cards(
         if upper.starts_with("INCLUDE") {
             let name = trimmed[7..].trim().trim_matches(|c| c == '\'' || c == '"').trim();
             if name.is_empty() {
-                return Err(ImportError::Malformed {
-                    path: path.to_path_buf(),
-                    line,
-                    entity: "INCLUDE".into(),
-                    expected: "a quoted file name".into(),
-                    found: excerpt(trimmed),
-                });
+                return Err(malformed(path, line, "INCLUDE", "a quoted file name", trimmed));
             }
-            if depth >= MAX_INCLUDE_DEPTH {
-                return Err(ImportError::Unsupported {
-                    path: path.to_path_buf(),
-                    line,
-                    entity: "INCLUDE".into(),
-                    what: format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (does a file include itself?)"),
-                });
-            }
-            let target = path.parent().unwrap_or(Path::new("")).join(name);
-            let data = std::fs::read(&target).map_err(|source| ImportError::Io {
-                path: target.clone(),
-                source,
-            })?;
+            let (target, data) = read_include(path, line, "INCLUDE", name, depth)?;
             read_cards(&data, &target, depth + 1, files, cards, in_bulk)?;
             continue;
         }
@@ -355,22 +330,11 @@ impl<'a> Reader<'a> {
     }
 
     fn malformed(&self, card: &Card, entity: &str, expected: &str, found: &str) -> ImportError {
-        ImportError::Malformed {
-            path: self.path(card),
-            line: card.line,
-            entity: entity.to_string(),
-            expected: expected.to_string(),
-            found: excerpt(found),
-        }
+        malformed(&self.files[card.file], card.line, entity, expected, found)
     }
 
     fn unsupported(&self, card: &Card, entity: &str, what: String) -> ImportError {
-        ImportError::Unsupported {
-            path: self.path(card),
-            line: card.line,
-            entity: entity.to_string(),
-            what,
-        }
+        unsupported(&self.files[card.file], card.line, entity, what)
     }
 
     /// Field `k` (0 = field 2 of the card), blank past the end.

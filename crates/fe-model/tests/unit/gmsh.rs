@@ -905,13 +905,10 @@ fn other_malformed_input_is_reported() {
 
 // ------------------------------------------------------------------------------------ no panic
 
-/// Fixed seeds, so failures reproduce. `FE_MODEL_FUZZ_SCALE=100` multiplies the number of
+/// Fixed seeds, so failures reproduce. `FLEXMBS_FUZZ_SCALE=100` multiplies the number of
 /// random and mutated inputs to search harder (as PROPTEST_CASES would).
 fn fuzz_scale() -> usize {
-    std::env::var("FE_MODEL_FUZZ_SCALE")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1)
+    fe_model::fuzz::budget(1)
 }
 const RANDOM_INPUTS: usize = 3000;
 const MUTATIONS_PER_FIXTURE: usize = 300;
@@ -1002,4 +999,42 @@ fn fuzz_mutants_of_every_fixture_never_panic() {
             }
         }
     }
+}
+
+/// The totals of the MSH 4.1 `$Nodes` and `$Elements` headers (number of records, smallest
+/// and largest tag) are checked against the blocks; a mismatch names the header's line and
+/// the two numbers, in ASCII and in binary files.
+#[test]
+fn msh41_header_totals_must_match_the_blocks() {
+    // NODES_41 holds nodes 1, 2, 3 (header line 5: `1 3 1 3`).
+    let cases = [
+        ("$Nodes\n1 4 1 3\n", "the number of nodes = 4, but the blocks hold 3"),
+        ("$Nodes\n1 3 0 3\n", "the smallest node tag = 0, but the blocks hold 1"),
+        ("$Nodes\n1 3 1 7\n", "the largest node tag = 7, but the blocks hold 3"),
+    ];
+    for (header, fragment) in cases {
+        let text = format!("{HEADER_41}{}", NODES_41.replacen("$Nodes\n1 3 1 3\n", header, 1));
+        let error = expect_error(text.as_bytes(), Location::Line(5), &["$Nodes", fragment]);
+        assert!(matches!(error, MshError::HeaderMismatch { .. }), "{error}");
+    }
+    let elements = |header: &str| format!("{HEADER_41}{NODES_41}$Elements\n{header}\n2 1 2 1\n1 1 2 3\n$EndElements\n");
+    inline(&elements("1 1 1 1")).unwrap();
+    for (header, fragment) in [
+        ("1 2 1 1", "the number of elements = 2, but the blocks hold 1"),
+        ("1 1 1 5", "the largest element tag = 5, but the blocks hold 1"),
+    ] {
+        let error = expect_error(
+            elements(header).as_bytes(),
+            Location::Line(15),
+            &["$Elements", fragment],
+        );
+        assert!(matches!(error, MshError::HeaderMismatch { .. }), "{error}");
+    }
+    // Binary: the number of nodes after the number of blocks, 8 bytes each, located by byte.
+    let mut bytes = std::fs::read(fixture_path("hex8", "41_bin")).unwrap();
+    let at = bytes.windows(7).position(|w| w == b"$Nodes\n").unwrap() + 7 + 8;
+    let total = u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
+    bytes[at..at + 8].copy_from_slice(&(total + 1).to_le_bytes());
+    let error = expect_error(&bytes, Location::Byte(at), &["the number of nodes"]);
+    assert!(matches!(error, MshError::HeaderMismatch { .. }), "{error}");
 }

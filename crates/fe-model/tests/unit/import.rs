@@ -616,12 +616,10 @@ fn parse_without_panic(format: Format, bytes: &[u8], origin: &Path, what: &dyn F
     }
 }
 
-/// `FE_MODEL_FUZZ_SCALE=100` multiplies the number of random and mutated inputs.
+/// `FLEXMBS_FUZZ_SCALE=100` multiplies the number of random and mutated inputs (the knob of
+/// every fuzz test, `fe_model::fuzz::budget`).
 fn fuzz_scale() -> usize {
-    std::env::var("FE_MODEL_FUZZ_SCALE")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1)
+    fe_model::fuzz::budget(1)
 }
 
 fn fixture_files() -> Vec<(Format, PathBuf)> {
@@ -706,6 +704,28 @@ fn mutated_fixtures_never_panic() {
                 }
             }
             parse_without_panic(format, &bytes, &path, &|| format!("{} mutation {case}", path.display()));
+        }
+    }
+}
+
+/// The shared fuzz mutator (`fe_model::fuzz`: numbers replaced by extreme ones, lines deleted,
+/// duplicated or moved, the file cut), a fixed budget per fixture, as for the gmsh,
+/// reduced-body, Matrix Market and study readers: every Abaqus and Nastran mutant is an error
+/// or a model that builds, never a panic.
+#[test]
+fn shared_fuzz_mutants_of_abaqus_and_nastran_fixtures_never_panic() {
+    let mut m = fe_model::fuzz::Mutator::new(0x6162_6e61_7366_7a01);
+    for (format, path) in fixture_files() {
+        let original = std::fs::read(&path).unwrap();
+        for case in 0..fe_model::fuzz::budget(100) {
+            let bytes = m.mutate(&original);
+            parse_without_panic(format, &bytes, &path, &|| {
+                format!(
+                    "{} fuzz mutant {case}: {:?}",
+                    path.display(),
+                    String::from_utf8_lossy(&bytes)
+                )
+            });
         }
     }
 }

@@ -181,11 +181,12 @@ fn conflicting_trees_are_refused() {
     );
 }
 
-#[test]
-fn geometry_mismatches_are_refused() {
-    let mut m = Model::new("mismatch");
+/// A steel beam body "beam" reduced from (0, 0, 0) to (1, 0, 0), on the nodes a at the
+/// origin and b at `b`, with the frame `frame`.
+fn one_beam(name: &str, b: Vector3<f64>, frame: FrameChoice) -> Model {
+    let mut m = Model::new(name);
     let a = m.add_node("a", Vector3::zeros());
-    let b = m.add_node("b", Vector3::new(1.1, 0.0, 0.0));
+    let b = m.add_node("b", b);
     let body = beam_body(
         "beam",
         Vector3::zeros(),
@@ -196,15 +197,15 @@ fn geometry_mismatches_are_refused() {
         7800.0,
         ModeSelection::StaticOnly,
     );
-    m.add_flexible_body(
-        body,
-        vec![a, b],
-        Isometry3::identity(),
-        FrameChoice::CenterOfMass,
-        MassVariant::Exact,
-    );
+    m.add_flexible_body(body, vec![a, b], Isometry3::identity(), frame, MassVariant::Exact);
+    m
+}
+
+#[test]
+fn geometry_mismatches_are_refused() {
+    let m = one_beam("mismatch", Vector3::new(1.1, 0.0, 0.0), FrameChoice::CenterOfMass);
     assert!(matches!(err(&m), ModelError::InterfaceMismatch { interface: 1, .. }));
-    assert_eq!(err(&m).entities(), [Entity::Body(BodyId(0)), Entity::Node(b)]);
+    assert_eq!(err(&m).entities(), [Entity::Body(BodyId(0)), Entity::Node(NodeId(1))]);
     let mut m = Model::new("apart");
     let a = m.add_node("a", Vector3::zeros());
     let b = m.add_node("b", Vector3::new(0.1, 0.0, 0.0));
@@ -256,4 +257,54 @@ fn invalid_values_carry_their_entity() {
     );
     assert!(matches!(err(&m), ModelError::InvalidValue { .. }));
     assert_eq!(err(&m).entities(), [Entity::Driver(0)]);
+}
+
+/// The error and its causes as a report walking the chain prints them, one per line.
+fn walked(e: &(dyn std::error::Error + 'static)) -> Vec<String> {
+    let mut lines = vec![e.to_string()];
+    let mut source = e.source();
+    while let Some(s) = source {
+        lines.push(s.to_string());
+        source = s.source();
+    }
+    lines
+}
+
+/// A body error keeps the superelement's error as its source and does not repeat it in its
+/// own message, so a report walking the chain names the cause once (and the body once).
+#[test]
+fn body_errors_name_their_cause_once() {
+    let cause = superelement::SuperelementError::SingularFrame { rcond: 1e-17 };
+    let model = ModelError::Superelement {
+        body: "rod".into(),
+        body_id: BodyId(0),
+        source: cause.clone(),
+    };
+    let solve = mbs::SolveError::Body {
+        body: "rod".into(),
+        id: BodyId(0),
+        t: 0.25,
+        source: cause.clone(),
+    };
+    for (e, top) in [
+        (&model as &(dyn std::error::Error + 'static), "body 'rod'"),
+        (&solve, "body 'rod' at t = 0.250000"),
+    ] {
+        let lines = walked(e);
+        assert_eq!(lines, vec![top.to_string(), cause.to_string()]);
+        let all = lines.join("\n");
+        assert_eq!(all.matches("floating frame is undetermined").count(), 1, "{all}");
+    }
+    // A real failure: a body whose frame choice does not fit it is refused with the body named
+    // at the top and the superelement's reason once below it.
+    let mut m = one_beam("bad frame", Vector3::x(), FrameChoice::InterfaceNode(5));
+    m.add_support(Support::clamp(NodeId(0)));
+    let e = err(&m);
+    let lines = walked(&e);
+    assert_eq!(lines.len(), 2, "{lines:?}");
+    assert!(
+        lines[0].contains("'beam'") && !lines[0].contains("does not fit"),
+        "{lines:?}"
+    );
+    assert!(lines[1].contains("does not fit"), "{lines:?}");
 }

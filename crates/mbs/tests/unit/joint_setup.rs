@@ -499,3 +499,53 @@ fn a_column_beyond_eulers_load_is_reported_past_its_critical_point() {
         assert_eq!(s.past_critical_point(), unstable > 0);
     }
 }
+
+/// A hub driven at a constant 0.3 rad from t = 0 (a function not zero at the start) carries a
+/// beam of two superelements clamped to it, no gravity: the mechanism is assembled at the
+/// driver's initial value, so the beam starts turned with the hub, unstrained, and stays at
+/// rest (no effort at the hub). Before, the hub alone was turned: the first segment started bent
+/// (strain energy of order EI theta^2 / L = 1.4e4 * 0.09 / 5 = 250 J) and the beam swung.
+#[test]
+fn driver_not_zero_at_start_assembles_the_mechanism_there() {
+    let mut model = crate::fixtures::spin_up(2, ModeSelection::Count(2), 10.0);
+    model.drivers[0].motion = TimeFunction::Constant { value: 0.3 };
+    model.add_sensor("effort", SensorKind::DriverEffort { driver: 0 });
+    model.add_sensor("strain", SensorKind::StrainEnergy);
+    let sys = System::new(&model).unwrap();
+    let state = sys.initial_state();
+    let e = sys.energies(&state).unwrap();
+    // Round-off of the rigid placement (1e-16 of 10 m lengths) in a stiffness of EA/L ~ 6e6.
+    assert!(e.strain.abs() < 1e-12, "strain energy at the start {}", e.strain);
+    let traj = solve_dynamic(&sys, state, &DynamicSettings::new(0.005, 0.1, 0.9)).unwrap();
+    for (t, row) in traj.sensors.times.iter().zip(traj.sensors.series("tip").unwrap()) {
+        // The tip in the hub's axes stays at (10, 0, 0): the beam turned with the hub and is at
+        // rest; 1e-9 m is round-off of a 10 m beam with margin.
+        assert!(
+            (row[0] - 10.0).abs() < 1e-9 && row[1].abs() < 1e-9,
+            "tip at t = {t}: {row:?}"
+        );
+    }
+    let effort = traj.sensors.series("effort").unwrap();
+    // A static hub carrying an unstrained beam needs no torque (a bent segment gave ~1e3 N m).
+    assert!(effort.iter().all(|r| r[0].abs() < 1e-6), "{effort:?}");
+}
+
+/// A crank that closes a loop (the slider-crank) driven from 0.01 rad: the bodies behind the
+/// crank reach the ground through the slider, so no rigid motion assembles the mechanism at
+/// that angle; the model is refused with the driver's name instead of starting strained.
+#[test]
+fn driver_not_zero_at_start_in_a_loop_is_refused() {
+    let (mut model, _, _) = slider_crank(1, ModeSelection::Count(1), 10.0);
+    model.drivers[0].motion = TimeFunction::Linear {
+        initial: 0.01,
+        rate: 10.0,
+    };
+    let Err(e) = System::new(&model) else {
+        panic!("a driver not zero at t = 0 in a loop was accepted")
+    };
+    let msg = e.to_string();
+    assert!(
+        msg.contains("driver 'crank angle'") && msg.contains("0.01") && msg.contains("closed loop"),
+        "{msg}"
+    );
+}

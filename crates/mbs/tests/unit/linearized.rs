@@ -360,9 +360,15 @@ fn mode_energies_of_a_loaded_turning_arm_add_up() {
     let largest = modes.iter().map(|m| geometry(m).abs()).fold(0.0, f64::max);
     eprintln!("largest joint-geometry share {largest:.3e}");
     assert!(largest > 1e-8, "{largest}");
-    // The pendulum mode (lowest) swings the arm: labelled by a body, with P or T.
+    // The pendulum mode (lowest) swings the arm: labelled by a body, with P or T. About this
+    // moving state its omega^2 is negative (the instantaneous spectrum of a turning arm), so the
+    // label starts with the UNSTABLE notice.
+    let label = modes[0]
+        .label
+        .split_once("1/s), ")
+        .map_or(modes[0].label.as_str(), |(_, l)| l);
     assert!(
-        modes[0].label.starts_with("arm") || modes[0].label.starts_with("beam"),
+        label.starts_with("arm") || label.starts_with("beam"),
         "{}",
         modes[0].label
     );
@@ -422,4 +428,38 @@ fn free_mass_is_a_rigid_body_mode_and_damping_ratio_is_exact() {
     );
     // Strain energy of the spring mode, all in spring A: phi^T K phi = w^2 (mass-normalised).
     assert!((spring.strain - w * w).abs() < 1e-9 * w * w);
+}
+
+/// An inverted pendulum (gravity reversed on the fixture pendulum: the bob 1 m above the
+/// hinge) is an unstable equilibrium: the state space has the real eigenvalue
+/// s = sqrt(m g d / (I_G + m d^2)) = sqrt(9.81 / 1.01) = 3.1165 1/s, and its mode is reported
+/// unstable with that growth rate (it was reported as a stable 0 Hz mode); the hanging
+/// pendulum has no growing eigenvalue.
+#[test]
+fn an_inverted_pendulum_is_reported_unstable() {
+    let (mut model, _) = crate::fixtures::pendulum(1.0, 1.0, 0.01);
+    let rate = (9.81f64 / 1.01).sqrt();
+    let sys = mbs::System::new(&model).unwrap();
+    let state = sys.initial_state();
+    assert!(mbs::spectrum(&sys, &state).unwrap().growing().is_empty());
+    assert!(mbs::mode_energies(&sys, &state).unwrap().iter().all(|m| !m.unstable));
+    model.gravity = -model.gravity;
+    let sys = mbs::System::new(&model).unwrap();
+    let state = sys.initial_state();
+    let growing = mbs::spectrum(&sys, &state).unwrap().growing();
+    // One real eigenvalue; the dense eigensolver is exact to ~1e-14 on this 1-unknown model.
+    assert_eq!(growing.len(), 1, "{growing:?}");
+    assert!(
+        (growing[0].0 - rate).abs() < 1e-10 && growing[0].1.abs() < 1e-10,
+        "{growing:?}"
+    );
+    let modes = mbs::mode_energies(&sys, &state).unwrap();
+    let m = &modes[0];
+    assert!(m.unstable && m.frequency_hz == 0.0, "{m:?}");
+    assert!((m.growth_rate.unwrap() - rate).abs() < 1e-10, "{:?}", m.growth_rate);
+    assert!(
+        m.label.starts_with("UNSTABLE (diverges at 3.1165e0 1/s)"),
+        "{}",
+        m.label
+    );
 }

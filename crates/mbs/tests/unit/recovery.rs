@@ -1,7 +1,7 @@
 //! Results body by body: modal coordinates through `System::modal_coordinates`, the deformed
 //! FE mesh through `System::deformed_mesh`, and points welded into nodes (`weld_points`).
 
-use crate::fixtures::beam_body_with;
+use crate::fixtures::beam_body_with_mesh;
 use mbs::merge::Point;
 use mbs::{solve_static, weld_points, BodyId, Model, SensorKind, StaticSettings, Support, System};
 use nalgebra::{Isometry3, Vector3};
@@ -14,7 +14,7 @@ fn loaded_cantilever(L: f64, side: f64, E: f64, P: f64) -> (System, mbs::State, 
     let mut model = Model::new("cantilever");
     let a = model.add_node("root", Vector3::zeros());
     let b = model.add_node("tip", Vector3::new(L, 0.0, 0.0));
-    let body = beam_body_with(
+    let body = beam_body_with_mesh(
         "beam",
         Vector3::zeros(),
         Vector3::new(L, 0.0, 0.0),
@@ -23,7 +23,6 @@ fn loaded_cantilever(L: f64, side: f64, E: f64, P: f64) -> (System, mbs::State, 
         E,
         7800.0,
         ModeSelection::Count(2),
-        true,
     );
     model.add_flexible_body(
         body,

@@ -124,7 +124,8 @@ fn streamed_steps_are_the_steps_of_solve_dynamic() {
         &fixed,
         |done, _| if done.k == 7 { Err(done.k) } else { Ok(()) },
     );
-    assert_eq!(stopped, Err(7));
+    let stopped = stopped.unwrap_err();
+    assert_eq!((stopped.error, stopped.totals.steps), (7, 7));
     assert_eq!(integ.steps(), 7);
 }
 
@@ -155,4 +156,114 @@ fn adaptive_streamed_steps_land_on_the_end_time() {
         integ.state().time()
     );
     assert!(totals.smallest_step <= totals.largest_step);
+}
+
+/// The fixed steps land on the end time: t_end = 0.25 s with h = 0.1 s takes steps of 0.1,
+/// 0.1 and 0.05 s and records t = 0.25 last (it ran a third full step to 0.3 s before); an end
+/// within round-off of a multiple of h adds no sliver.
+#[test]
+fn fixed_steps_end_exactly_at_the_end_time() {
+    assert_eq!(mbs::fixed_steps(0.0, 0.25, 0.1).0, 3);
+    assert!((mbs::fixed_steps(0.0, 0.25, 0.1).1 - 0.05).abs() < 1e-15);
+    // 0.3 / 0.1 = 2.9999999999999996 in floating point: three full steps, no sliver.
+    let (n, last) = mbs::fixed_steps(0.0, 0.3, 0.1);
+    assert!(n == 3 && (last - 0.1).abs() < 1e-12, "{n} {last}");
+    let (model, _) = pendulum(1.0, 1.0, 0.01);
+    let sys = System::new(&model).unwrap();
+    for solve in [0, 1] {
+        let settings = DynamicSettings::new(0.1, 0.25, 0.9);
+        let traj = if solve == 0 {
+            mbs::solve_dynamic(&sys, sys.initial_state(), &settings).unwrap()
+        } else {
+            mbs::solve_dynamic_retrying(&sys, sys.initial_state(), &settings, 0.01)
+                .unwrap()
+                .trajectory
+        };
+        assert_eq!(
+            traj.sensors.times.last().copied(),
+            Some(0.25),
+            "{:?}",
+            traj.sensors.times
+        );
+        assert_eq!(traj.final_state.time(), 0.25);
+        assert_eq!(traj.iterations.len(), 3);
+    }
+    // Streaming takes the same steps, and leaves the step size at h for a run continued on.
+    let settings = DynamicSettings::new(0.1, 0.25, 0.9);
+    let mut integ = mbs::Integrator::new(&sys, sys.initial_state(), settings).unwrap();
+    assert_eq!(integ.steps_to(0.25), 3);
+    let mut seen = Vec::new();
+    let (totals, failure) = integ
+        .run_to(
+            0.25,
+            &mbs::Stepping::Fixed { min_step: 0.01 },
+            |done, _| -> Result<(), ()> {
+                seen.push((done.time, done.last));
+                Ok(())
+            },
+        )
+        .unwrap();
+    assert!(failure.is_none());
+    assert_eq!((totals.steps, totals.planned), (3, Some(3)));
+    assert_eq!(seen.last(), Some(&(0.25, true)));
+    // The shortened last step is the smallest, 0.05 s to the round-off of the times it joins.
+    assert!((totals.smallest_step - 0.05).abs() < 1e-15, "{}", totals.smallest_step);
+    assert_eq!(integ.step_size(), 0.1);
+}
+
+/// A sensor that reads a value that is not finite stops the run with an error naming the
+/// sensor, the time and the step, and keeps the rows before it: node b, driven along x at
+/// 10 m/s from 1 m before node a, reaches a at t = 0.1 s (step 10), where the distance from
+/// the line a-b is 0/0.
+#[test]
+fn a_sensor_that_is_not_finite_stops_the_run_where_it_happened() {
+    let (mut model, _) = pendulum(1.0, 1.0, 0.01);
+    let hinge = mbs::NodeId(1);
+    let a = model.add_node("a", Vector3::new(0.0, 2.0, 0.0));
+    let b = model.add_node("b", Vector3::new(-1.0, 2.0, 0.0));
+    model.add_support(mbs::Support::clamp(a));
+    model.add_support(mbs::Support {
+        node: b,
+        translation: mbs::TranslationSupport::Components {
+            fixed: [false, true, true],
+        },
+        rotation: mbs::RotationSupport::Fixed,
+    });
+    model.add_driver(
+        "b along x",
+        mbs::DriverTarget::NodeTranslation { node: b, component: 0 },
+        TimeFunction::Linear {
+            initial: 0.0,
+            rate: 10.0,
+        },
+    );
+    model.add_sensor(
+        "chord",
+        mbs::SensorKind::LineDistance {
+            node: hinge,
+            a,
+            b,
+            normal: None,
+        },
+    );
+    let sys = System::new(&model).unwrap();
+    let fail = mbs::solve_dynamic(&sys, sys.initial_state(), &DynamicSettings::new(0.01, 0.2, 0.9)).unwrap_err();
+    match &fail.error {
+        mbs::SolveError::NonFiniteSensor { sensor, t, step, .. } => {
+            assert_eq!((sensor.as_str(), *step), ("chord", 10));
+            assert!((t - 0.1).abs() < 1e-12, "{t}");
+        }
+        e => panic!("{e}"),
+    }
+    let msg = fail.error.to_string();
+    assert!(
+        msg.contains("sensor 'chord'") && msg.contains("t = 0.100000") && msg.contains("step 10"),
+        "{msg}"
+    );
+    // The rows of t = 0 .. 0.09 are finite and kept, the offending one is the last.
+    let times = &fail.partial.sensors.times;
+    assert_eq!(times.len(), 11);
+    assert!(fail.partial.sensors.rows[..10]
+        .iter()
+        .all(|r| r.iter().all(|x| x.is_finite())));
 }

@@ -368,3 +368,15 @@ fn nested_dissection_reduces_as_amd_and_reports_progress() {
         _ => unreachable!("an eigen stage was seen"),
     }
 }
+
+/// An FE-stage failure reaches the caller as the source of the reduction error, typed (a
+/// program can downcast it to read the node and dof), and the reduction's own message does not
+/// repeat it: a report walking the chain prints it once.
+#[test]
+fn fe_errors_are_kept_as_sources() {
+    let cause = fe_model::FeError::Mechanism { node_tag: 7, dof: "uy" };
+    let e = ReductionError::from(cause.clone());
+    let source = std::error::Error::source(&e).expect("the FE error is the source");
+    assert_eq!(source.downcast_ref::<fe_model::FeError>(), Some(&cause));
+    assert!(!e.to_string().contains("node 7"), "{e}");
+}

@@ -141,6 +141,34 @@ pub struct PointLoadSpec {
     pub time: TimeFunction,
 }
 
+/// A `[[loads]]` point load at a load point inside a flexible body (`"body.point"` where
+/// `point` is no interface): the name is resolved against the reduced body's load points when
+/// the study runs (`mechanism::build`).
+#[derive(Clone, Debug)]
+pub struct BodyLoadSpec {
+    pub name: String,
+    pub path: KeyPath,
+    /// Index into [`Mechanism::bodies`].
+    pub body: usize,
+    pub point: String,
+    pub axes: LoadAxes,
+    pub force: Vector3<f64>,
+    pub moment: Vector3<f64>,
+    pub time: TimeFunction,
+}
+
+/// Which mesh nodes a `stress` sensor reads (resolved against the body's mesh when the study
+/// runs).
+#[derive(Clone, Debug, PartialEq)]
+pub enum StressNodes {
+    /// One node by index in the part's mesh (0-based, as the VTU files and the hot spot).
+    Index(usize),
+    /// The mesh node at this position (part axes) \[m\].
+    At(Vector3<f64>),
+    /// The largest von Mises stress over a node set of the part's mesh.
+    Set(String),
+}
+
 /// What a sensor measures, with its references resolved.
 #[derive(Clone, Debug)]
 pub enum SensorTarget {
@@ -165,6 +193,11 @@ pub enum SensorTarget {
     ActuatorEffort(usize),
     Energy,
     Momentum,
+    /// Stresses of flexible body `body` (index into [`Mechanism::bodies`]).
+    Stress {
+        body: usize,
+        nodes: StressNodes,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -296,6 +329,8 @@ pub struct Mechanism {
     pub drivers: Vec<DriverSpec>,
     pub gravity: Option<(KeyPath, Vector3<f64>)>,
     pub loads: Vec<PointLoadSpec>,
+    /// Point loads at load points inside flexible bodies.
+    pub body_loads: Vec<BodyLoadSpec>,
     pub sensors: Vec<SensorSpec>,
     pub initial: Vec<InitialSpec>,
     pub joint_springs: Vec<JointSpringSpec>,
@@ -379,6 +414,14 @@ pub fn joint_is_angle(m: &Mechanism, j: usize, c: usize) -> bool {
     }
 }
 
+/// The smallest Newton tolerance on the relative residual: about 50 machine epsilons, the
+/// round-off left in a residual assembled in double precision.
+pub const MIN_TOLERANCE: f64 = 1e-14;
+
+/// A modal damping ratio from which a warning says it is unusually high (structures have
+/// 0.5 % to 5 %); above 1 (critical) it is refused.
+pub const MODAL_RATIO_WARNING: f64 = 0.2;
+
 fn unit(v: Vector3<f64>) -> Option<Unit<Vector3<f64>>> {
     (v.norm() > 0.0 && v.iter().all(|x| x.is_finite())).then(|| Unit::new_normalize(v))
 }
@@ -388,16 +431,17 @@ impl Validator<'_> {
     pub(super) fn mechanism(&mut self, file: &StudyFile, parts: &[(String, Option<crate::part::Part>)]) -> Mechanism {
         let mut m = Mechanism::default();
         let part_names: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
-        let mut names: Vec<String> = Vec::new();
+        let mut names = std::collections::HashSet::new();
         for (i, b) in file.bodies.iter().enumerate() {
             let path = KeyPath::root().key("bodies").index(i);
             if !self.body_name(&path, &b.name, &mut names) {
                 continue;
             }
             if let Some(spec) = self.flexible(&path, b, parts, &part_names) {
+                self.register("flexible", &b.name, m.bodies.len());
                 m.bodies.push(spec);
             } else {
-                self.failed.push(format!("body:{}", b.name));
+                self.failed.insert(format!("body:{}", b.name));
             }
         }
         for (i, b) in file.rigid_bodies.iter().enumerate() {
@@ -406,9 +450,10 @@ impl Validator<'_> {
                 continue;
             }
             if let Some(spec) = self.rigid(&path, b) {
+                self.register("rigid", &b.name, m.rigid_bodies.len());
                 m.rigid_bodies.push(spec);
             } else {
-                self.failed.push(format!("body:{}", b.name));
+                self.failed.insert(format!("body:{}", b.name));
             }
         }
         for (i, p) in file.point_masses.iter().enumerate() {
@@ -436,17 +481,16 @@ impl Validator<'_> {
                 m.supports.push(spec);
             }
         }
-        let mut joint_names = Vec::new();
         for (i, j) in file.joints.iter().enumerate() {
             let path = KeyPath::root().key("joints").index(i);
-            if joint_names.contains(&j.name) {
+            if self.lookup("joint", &j.name).is_some() {
                 self.err(
                     &path.key("name"),
                     format!("a joint named '{}' is already defined", j.name),
                 );
                 continue;
             }
-            joint_names.push(j.name.clone());
+            self.register("joint", &j.name, m.joints.len());
             if let Some(spec) = self.joint(&path, j, &m) {
                 m.joints.push(spec);
             } else {
@@ -463,7 +507,7 @@ impl Validator<'_> {
         }
         for (i, d) in file.drivers.iter().enumerate() {
             let path = KeyPath::root().key("drivers").index(i);
-            if m.drivers.iter().any(|x| x.name == d.name) {
+            if self.lookup("driver", &d.name).is_some() {
                 self.err(
                     &path.key("name"),
                     format!("a driver named '{}' is already defined", d.name),
@@ -478,6 +522,7 @@ impl Validator<'_> {
                 continue;
             }
             if let Some(motion) = self.time_function(&path.key("function"), &d.function, true) {
+                self.register("driver", &d.name, m.drivers.len());
                 m.drivers.push(DriverSpec {
                     name: d.name.clone(),
                     path,
@@ -495,7 +540,7 @@ impl Validator<'_> {
         self.joint_forces(file, &mut m);
         for (i, s) in file.sensors.iter().enumerate() {
             let path = KeyPath::root().key("sensors").index(i);
-            if m.sensors.iter().any(|x| x.name == s.name) {
+            if self.lookup("sensor", &s.name).is_some() {
                 self.err(
                     &path.key("name"),
                     format!("a sensor named '{}' is already defined", s.name),
@@ -507,6 +552,7 @@ impl Validator<'_> {
                 continue;
             }
             if let Some(target) = self.sensor(&path, s, &m) {
+                self.register("sensor", &s.name, m.sensors.len());
                 m.sensors.push(SensorSpec {
                     name: s.name.clone(),
                     path,
@@ -541,7 +587,7 @@ impl Validator<'_> {
         m
     }
 
-    fn body_name(&mut self, path: &KeyPath, name: &str, names: &mut Vec<String>) -> bool {
+    fn body_name(&mut self, path: &KeyPath, name: &str, names: &mut std::collections::HashSet<String>) -> bool {
         if let Err(e) = super::check_name(name) {
             self.err(&path.key("name"), e);
             return false;
@@ -553,14 +599,14 @@ impl Validator<'_> {
             );
             return false;
         }
-        if names.iter().any(|n| n == name) {
+        if names.contains(name) {
             self.err(
                 &path.key("name"),
                 format!("a body named '{name}' is already defined (flexible and rigid bodies share one name space)"),
             );
             return false;
         }
-        names.push(name.to_string());
+        names.insert(name.to_string());
         true
     }
 
@@ -618,7 +664,7 @@ impl Validator<'_> {
                 }
             }
             (Some(name), None) => {
-                let Some(index) = part_names.iter().position(|n| n == name) else {
+                let Some(index) = self.lookup("part", name) else {
                     self.err(&path.key("part"), unknown_reference("part", name, part_names));
                     return None;
                 };
@@ -745,6 +791,21 @@ impl Validator<'_> {
                     }
                 }
             }
+            if let Some(zeta) = d.modal_ratio {
+                if zeta > 1.0 {
+                    self.err(
+                        &dp.key("modal_ratio"),
+                        format!("modal_ratio is the fraction of critical damping (0.02 for 2 %), got {zeta}: above 1 every mode is overdamped, which no structure is"),
+                    );
+                    return None;
+                }
+                if zeta >= MODAL_RATIO_WARNING {
+                    self.warn(
+                        &dp.key("modal_ratio"),
+                        format!("modal_ratio = {zeta} is {:.0} % of critical damping in every mode; structures have about 0.5 % to 5 % (the ratio is a fraction, not a percentage)", 100.0 * zeta),
+                    );
+                }
+            }
             damping.alpha = d.alpha.unwrap_or(0.0);
             damping.beta = d.beta.unwrap_or(0.0);
             modal_ratio = d.modal_ratio;
@@ -830,8 +891,6 @@ impl Validator<'_> {
             self.err(path, format!("'{GROUND}' is not a point of a body here"));
             return None;
         }
-        let mut bodies: Vec<String> = m.bodies.iter().map(|b| b.name.clone()).collect();
-        bodies.extend(m.rigid_bodies.iter().map(|b| b.name.clone()));
         let Some((body, point)) = text.split_once('.') else {
             let known: Vec<String> = m
                 .bodies
@@ -849,7 +908,7 @@ impl Validator<'_> {
             );
             return None;
         };
-        if let Some(b) = m.bodies.iter().position(|b| b.name == body) {
+        if let Some(b) = self.lookup("flexible", body) {
             let spec = &m.bodies[b];
             if !spec.interfaces.iter().any(|i| i == point) {
                 self.err(
@@ -866,7 +925,7 @@ impl Validator<'_> {
                 interface: point.to_string(),
             });
         }
-        if let Some(b) = m.rigid_bodies.iter().position(|b| b.name == body) {
+        if let Some(b) = self.lookup("rigid", body) {
             let spec = &m.rigid_bodies[b];
             let names: Vec<String> = spec.points.iter().map(|(n, _)| n.clone()).collect();
             let Some(k) = names.iter().position(|n| n == point) else {
@@ -883,6 +942,8 @@ impl Validator<'_> {
         }
         // A body that failed its own checks was reported where it is defined.
         if !self.failed.contains(&format!("body:{body}")) {
+            let mut bodies: Vec<String> = m.bodies.iter().map(|b| b.name.clone()).collect();
+            bodies.extend(m.rigid_bodies.iter().map(|b| b.name.clone()));
             self.err(path, unknown_reference("body", body, &bodies));
         }
         None
@@ -1085,7 +1146,7 @@ impl Validator<'_> {
     }
 
     fn joint_ref(&mut self, path: &KeyPath, name: &str, m: &Mechanism) -> Option<usize> {
-        match m.joints.iter().position(|j| j.name == name) {
+        match self.lookup("joint", name) {
             Some(k) => Some(k),
             None => {
                 let names: Vec<String> = m.joints.iter().map(|j| j.name.clone()).collect();
@@ -1223,7 +1284,7 @@ impl Validator<'_> {
                     }
                     (None, None, Some(file)) => {
                         let full = self.src.dir().join(file);
-                        match std::fs::read_to_string(&full) {
+                        match fe_model::input::read_to_string(&full) {
                             Ok(text) => TimeFunction::table_from_csv(&text, interpolation).map_err(|e| (path.key("file"), format!("{}: {e}", full.display()))),
                             Err(e) => Err((path.key("file"), format!("cannot read the table {}: {e}", full.display()))),
                         }
@@ -1277,8 +1338,17 @@ impl Validator<'_> {
         let Some(at_text) = self.require_ref(path, &l.at, "at", "the point loaded, \"body.point\"") else {
             return;
         };
-        let Some(at) = self.point(&path.key("at"), at_text, m, false) else {
-            return;
+        // "body.point" naming no interface of a flexible body: a load point inside it.
+        let inner = at_text.split_once('.').and_then(|(body, point)| {
+            let b = m.bodies.iter().position(|b| b.name == body)?;
+            (!m.bodies[b].interfaces.iter().any(|i| i == point)).then(|| (b, point.to_string()))
+        });
+        let at = match inner {
+            Some(_) => None,
+            None => match self.point(&path.key("at"), at_text, m, false) {
+                Some(at) => Some(at),
+                None => return,
+            },
         };
         let Some(axes) = self.choice(&path.key("axes"), &l.axes, "global", &["global", "body"], "load axes") else {
             return;
@@ -1311,6 +1381,26 @@ impl Validator<'_> {
             },
             None => TimeFunction::constant(1.0),
         };
+        let Some(at) = at else {
+            let (body, point) = inner.expect("a load point when not an interface");
+            let value = |kind| {
+                values
+                    .iter()
+                    .find(|(k, _)| *k == kind)
+                    .map_or(Vector3::zeros(), |v| v.1)
+            };
+            m.body_loads.push(BodyLoadSpec {
+                name: l.name.clone(),
+                path: path.clone(),
+                body,
+                point,
+                axes,
+                force: value(LoadKind::Force),
+                moment: value(LoadKind::Moment),
+                time,
+            });
+            return;
+        };
         m.loads.push(PointLoadSpec {
             name: l.name.clone(),
             path: path.clone(),
@@ -1338,6 +1428,7 @@ impl Validator<'_> {
             "actuator-effort",
             "energy",
             "momentum",
+            "stress",
         ];
         let kind = self.choice(
             &path.key("type"),
@@ -1351,6 +1442,7 @@ impl Validator<'_> {
             "deflection" => &["name", "type", "of", "chord", "normal"],
             "joint" | "joint-rate" => &["name", "type", "of", "coordinate"],
             "energy" | "momentum" => &["name", "type"],
+            "stress" => &["name", "type", "of", "node", "node_at", "set"],
             _ => &["name", "type", "of"],
         };
         self.only_keys(path, allowed, &format!("a '{kind}' sensor"));
@@ -1390,6 +1482,13 @@ impl Validator<'_> {
                 )?;
                 let a = self.point(&path.key("chord").index(0), &chord[0], m, false);
                 let b = self.point(&path.key("chord").index(1), &chord[1], m, false);
+                if a.is_some() && a == b {
+                    self.err(
+                        &path.key("chord").index(1),
+                        format!("the chord's two points are both '{}': a deflection is measured from the line through two distinct points", chord[1]),
+                    );
+                    return None;
+                }
                 let normal = match &s.normal {
                     Some(n) => Some(self.axis(&path.key("normal"), path, &Some(*n), "the normal")?),
                     None => None,
@@ -1412,7 +1511,29 @@ impl Validator<'_> {
                     SensorTarget::JointRate(j, c)
                 }
             }
-            "modal" => match m.bodies.iter().position(|b| b.name == of) {
+            "stress" => {
+                let Some(body) = m.bodies.iter().position(|b| b.name == of) else {
+                    if !self.failed.contains(&format!("body:{of}")) {
+                        let names: Vec<String> = m.bodies.iter().map(|b| b.name.clone()).collect();
+                        self.err(&op, unknown_reference("flexible body", &of, &names));
+                    }
+                    return None;
+                };
+                let nodes = match (s.node, &s.node_at, &s.set) {
+                    (Some(k), None, None) => StressNodes::Index(k),
+                    (None, Some(x), None) => StressNodes::At(self.finite3(&path.key("node_at"), x, "node_at [m]")?),
+                    (None, None, Some(set)) => StressNodes::Set(set.clone()),
+                    _ => {
+                        self.err(
+                            path,
+                            "give the stress sensor's node by `node` (index in the part's mesh), `node_at` = [x, y, z] (part axes) or `set` (a node set: the largest von Mises stress over it), one of them",
+                        );
+                        return None;
+                    }
+                };
+                SensorTarget::Stress { body, nodes }
+            }
+            "modal" => match self.lookup("flexible", &of) {
                 Some(b) => SensorTarget::Modal(b),
                 None => {
                     if !self.failed.contains(&format!("body:{of}")) {
@@ -1423,7 +1544,7 @@ impl Validator<'_> {
                 }
             },
             "reaction" => {
-                if let Some(j) = m.joints.iter().position(|j| j.name == of) {
+                if let Some(j) = self.lookup("joint", &of) {
                     if m.joints[j].parent != PointRef::Ground {
                         self.err(&op, format!("joint '{of}' is not a joint to the ground; a reaction is measured at a support or at a joint to \"ground\""));
                         return None;
@@ -1438,7 +1559,7 @@ impl Validator<'_> {
                     SensorTarget::Reaction(ReactionAt::Point(p))
                 }
             }
-            "actuator-effort" => match m.actuators.iter().position(|a| a.name == of) {
+            "actuator-effort" => match self.lookup("actuator", &of) {
                 Some(a) => SensorTarget::ActuatorEffort(a),
                 None => {
                     let names: Vec<String> = m.actuators.iter().map(|a| a.name.clone()).collect();
@@ -1446,7 +1567,7 @@ impl Validator<'_> {
                     return None;
                 }
             },
-            _ => match m.drivers.iter().position(|d| d.name == of) {
+            _ => match self.lookup("driver", &of) {
                 Some(d) => SensorTarget::DriverEffort(d),
                 None => {
                     let names: Vec<String> = m.drivers.iter().map(|d| d.name.clone()).collect();
@@ -1517,9 +1638,9 @@ impl Validator<'_> {
                     &["body", "velocity", "angular_velocity", "point"],
                     "an initial body velocity",
                 );
-                let b = if let Some(k) = m.bodies.iter().position(|b| b.name == *body) {
+                let b = if let Some(k) = self.lookup("flexible", body) {
                     BodyRef::Flexible(k)
-                } else if let Some(k) = m.rigid_bodies.iter().position(|b| b.name == *body) {
+                } else if let Some(k) = self.lookup("rigid", body) {
                     BodyRef::Rigid(k)
                 } else {
                     let names: Vec<String> = m
@@ -1602,27 +1723,45 @@ impl Validator<'_> {
             }
             Some(x)
         };
-        let mut names: Vec<String> = Vec::new();
+        let mut names = std::collections::HashSet::new();
         let mut unique = |v: &mut Self, path: &KeyPath, name: &str, what: &str| {
-            if names.iter().any(|n| n == name) {
+            if !names.insert(name.to_string()) {
                 v.err(&path.key("name"), format!("a {what} named '{name}' is already defined"));
                 return false;
             }
-            names.push(name.to_string());
             true
         };
-        for (i, s) in file.joint_springs.iter().enumerate() {
-            let path = KeyPath::root().key("joint_springs").index(i);
-            if !unique(self, &path, &s.name, "joint spring") {
-                continue;
+        // The head every joint spring, limit and actuator shares: a name unique among them, a
+        // joint reference and one of its coordinates (default 0). Its path, joint and
+        // coordinate, or None after the error is reported.
+        let mut entry = |v: &mut Self,
+                         m: &Mechanism,
+                         (table, i): (&str, usize),
+                         name: &str,
+                         joint: &str,
+                         coordinate: Option<usize>,
+                         what: &str| {
+            let path = KeyPath::root().key(table).index(i);
+            if !unique(v, &path, name, what) {
+                return None;
             }
-            let Some(joint) = self.joint_ref(&path.key("joint"), &s.joint, m) else {
+            let joint = v.joint_ref(&path.key("joint"), joint, m)?;
+            let coordinate = coordinate.unwrap_or(0);
+            v.joint_coordinate(&path, m, joint, coordinate)
+                .then_some((path, joint, coordinate))
+        };
+        for (i, s) in file.joint_springs.iter().enumerate() {
+            let Some((path, joint, coordinate)) = entry(
+                self,
+                m,
+                ("joint_springs", i),
+                &s.name,
+                &s.joint,
+                s.coordinate,
+                "joint spring",
+            ) else {
                 continue;
             };
-            let coordinate = s.coordinate.unwrap_or(0);
-            if !self.joint_coordinate(&path, m, joint, coordinate) {
-                continue;
-            }
             let k = finite(self, &path.key("stiffness"), s.stiffness, 0.0, true, "the stiffness");
             let c = finite(self, &path.key("damping"), s.damping, 0.0, true, "the damping");
             let rest = finite(self, &path.key("rest"), s.rest, 0.0, false, "the rest value");
@@ -1646,17 +1785,17 @@ impl Validator<'_> {
             });
         }
         for (i, l) in file.joint_limits.iter().enumerate() {
-            let path = KeyPath::root().key("joint_limits").index(i);
-            if !unique(self, &path, &l.name, "joint limit") {
-                continue;
-            }
-            let Some(joint) = self.joint_ref(&path.key("joint"), &l.joint, m) else {
+            let Some((path, joint, coordinate)) = entry(
+                self,
+                m,
+                ("joint_limits", i),
+                &l.name,
+                &l.joint,
+                l.coordinate,
+                "joint limit",
+            ) else {
                 continue;
             };
-            let coordinate = l.coordinate.unwrap_or(0);
-            if !self.joint_coordinate(&path, m, joint, coordinate) {
-                continue;
-            }
             if l.lower.is_none() && l.upper.is_none() {
                 self.err(
                     &path,
@@ -1693,17 +1832,11 @@ impl Validator<'_> {
             });
         }
         for (i, a) in file.actuators.iter().enumerate() {
-            let path = KeyPath::root().key("actuators").index(i);
-            if !unique(self, &path, &a.name, "actuator") {
-                continue;
-            }
-            let Some(joint) = self.joint_ref(&path.key("joint"), &a.joint, m) else {
+            let Some((path, joint, coordinate)) =
+                entry(self, m, ("actuators", i), &a.name, &a.joint, a.coordinate, "actuator")
+            else {
                 continue;
             };
-            let coordinate = a.coordinate.unwrap_or(0);
-            if !self.joint_coordinate(&path, m, joint, coordinate) {
-                continue;
-            }
             if m.drivers.iter().any(|d| d.joint == joint && d.coordinate == coordinate) {
                 self.err(
                     &path.key("joint"),
@@ -1728,7 +1861,7 @@ impl Validator<'_> {
                         Some(name) => match file.sensors.iter().find(|s| s.name == *name) {
                             Some(sf) if sf.kind == "joint" => {
                                 let Some(of) = &sf.of else { continue };
-                                let Some(j) = m.joints.iter().position(|j| j.name == *of) else {
+                                let Some(j) = self.lookup("joint", of) else {
                                     continue;
                                 };
                                 let c = sf.coordinate.unwrap_or(0);
@@ -1791,6 +1924,7 @@ impl Validator<'_> {
                     continue;
                 }
             };
+            self.register("actuator", &a.name, m.actuators.len());
             m.actuators.push(ActuatorSpec {
                 name: a.name.clone(),
                 path,
@@ -1815,7 +1949,17 @@ impl Validator<'_> {
         };
         let tolerance = |v: &mut Self, default: f64| -> Option<f64> {
             match a.tolerance {
-                Some(t) => v.positive(&path.key("tolerance"), t, "the tolerance on the relative residual"),
+                Some(t) => {
+                    let t = v.positive(&path.key("tolerance"), t, "the tolerance on the relative residual")?;
+                    if !(MIN_TOLERANCE..1.0).contains(&t) {
+                        v.err(
+                            &path.key("tolerance"),
+                            format!("the tolerance on the relative residual must lie in [{MIN_TOLERANCE:e}, 1), got {t:e}: round-off in double precision leaves a relative residual of about 1e-15, so a smaller one is never reached, and 1 or more accepts any state"),
+                        );
+                        return None;
+                    }
+                    Some(t)
+                }
                 None => Some(default),
             }
         };
@@ -1852,8 +1996,11 @@ impl Validator<'_> {
                     return None;
                 }
                 let time = match a.at_time {
-                    Some(t) if !t.is_finite() => {
-                        self.err(&path.key("at_time"), "at_time must be finite");
+                    Some(t) if !(t.is_finite() && t >= 0.0) => {
+                        self.err(
+                            &path.key("at_time"),
+                            format!("at_time [s] must be finite and >= 0 (time starts at 0), got {t}"),
+                        );
                         return None;
                     }
                     t => t.unwrap_or(0.0),
@@ -1893,6 +2040,13 @@ impl Validator<'_> {
                     self.err(
                         &path.key("dt"),
                         format!("t_end / dt = {:.3e} steps: more than 10 million", t_end / dt),
+                    );
+                    return None;
+                }
+                if dt > t_end {
+                    self.err(
+                        &path.key("dt"),
+                        format!("the time step dt = {dt} s is longer than the run (t_end = {t_end} s)"),
                     );
                     return None;
                 }

@@ -26,7 +26,7 @@ fn run(name: &str, text: &str) -> (Recorder, Result<Summary, String>, PathBuf) {
     (rec, summary, file)
 }
 
-fn column(rec: &Recorder, analysis: &str, sensor: &str, c: usize) -> Vec<f64> {
+pub(crate) fn column(rec: &Recorder, analysis: &str, sensor: &str, c: usize) -> Vec<f64> {
     rec.analysis(analysis)
         .unwrap()
         .sensors
@@ -311,6 +311,72 @@ dt = 1e-3
 }
 
 #[test]
+fn one_analysis_run_alone_runs_its_start_chain_first() {
+    // equilibrium -> dynamic from it -> dynamic from that one; the last run alone
+    // (`study::run_only`, the CLI's and Python's single analysis) must give the numbers of the
+    // whole study, with the analyses of its chain run and recorded first.
+    let text = format!(
+        "{CANTILEVER}
+[[loads]]
+name = \"push\"
+type = \"point\"
+at = \"s3.b\"
+force = [0.0, 0.0, 1.0]
+function = {{ type = \"ramp\", t_end = 0.02, to = 1.0 }}
+[[analyses]]
+type = \"equilibrium\"
+name = \"sag\"
+tolerance = 1e-13
+[[analyses]]
+type = \"dynamic\"
+name = \"first\"
+start = \"sag\"
+t_end = 0.03
+dt = 1e-3
+[[analyses]]
+type = \"dynamic\"
+name = \"second\"
+start = \"first\"
+t_end = 0.06
+dt = 1e-3
+"
+    );
+    let (whole, summary, file) = run("chain", &text);
+    summary.unwrap();
+    let study = study::load(&file).unwrap();
+    let dir = file.parent().unwrap();
+    let options = Options {
+        out: Some(dir.join("alone")),
+        cache: Some(dir.join("cache")),
+        t_end: None,
+        foreign: Default::default(),
+    };
+    let mut rec = Recorder::default();
+    let summary = study::run_only(&study, &options, 2, &mut rec)
+        .map_err(|e| study::error::chain(&*e))
+        .unwrap();
+    let names: Vec<&str> = rec.analyses.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["sag", "first", "second"]);
+    assert!(summary.analyses.iter().all(|a| a.status == study::output::Status::Done));
+    let report = &summary.analyses[2].report;
+    assert!(
+        report
+            .iter()
+            .any(|l| l.contains("started from the final state of 'first'")),
+        "{report:?}"
+    );
+    // The same computation in the same order: equal to the last bit.
+    for (analysis, c) in [("second", 1), ("second", 2)] {
+        assert_eq!(column(&rec, analysis, "tip", c), column(&whole, analysis, "tip", c));
+    }
+    // The second run starts where the first ended (the push is on, so it is not the sag).
+    let end_first = *column(&rec, "first", "tip", 2).last().unwrap();
+    assert_eq!(column(&rec, "second", "tip", 2)[0], end_first);
+    assert!(end_first.abs() > 1e-6, "{end_first}");
+    assert!(dir.join("alone/first").is_dir() && dir.join("alone/sag").is_dir());
+}
+
+#[test]
 fn an_euler_column_of_eight_superelements_buckles_at_eulers_load() {
     // Steel, 10 mm square, 1 m, clamped-free; eight superelements of static modes only.
     let (E, a, L): (f64, f64, f64) = (2.1e11, 0.01, 1.0);
@@ -523,69 +589,195 @@ fn a_joint_limit_in_a_study_stops_the_pendulum() {
     assert_eq!(results(&rec, "dynamic")["retried_steps"], serde_json::json!(0));
 }
 
-#[test]
-fn a_failed_fixed_step_is_retried_and_the_summary_says_so() {
-    // One Newton correction per step: enough for the free swing, not for the steps that hit
-    // the stop. With dt_min = dt nothing can be retried and the run stops there.
-    let (_, summary, _) = run("no-retry", &stopped_pendulum("max_iterations = 1\ndt_min = 5e-3"));
-    let e = summary.unwrap_err();
-    assert!(e.contains("Newton did not converge"), "{e}");
-    let (rec, summary, _) = run("retry", &stopped_pendulum("max_iterations = 1"));
-    summary.unwrap();
-    let s = rec.analysis("dynamic").unwrap().summary.clone().unwrap();
-    let retried = s.results["retried_steps"].as_u64().unwrap();
-    eprintln!("{}", s.report.join("\n"));
-    assert!(retried > 0);
-    assert!(s.report.iter().any(|l| l.contains("retried with halved steps")));
-    let lowest = column(&rec, "dynamic", "angle", 0)
-        .into_iter()
-        .fold(f64::INFINITY, f64::min);
-    assert!(lowest > -0.511, "{lowest}");
+/// A shallow two-spring truss (von Mises truss): an apex of 1 kg on a vertical slider, held
+/// by two springs of 1e7 N/m (and 2e4 N s/m) to ground points 1 m to either side and 0.1 m
+/// below; the load on the apex grows to 8 kN in 0.1 s, twice the limit load, and the apex
+/// snaps through to the far side and settles there.
+fn snapping_truss(extra: &str) -> String {
+    let spring = |side: &str, x: f64| {
+        format!(
+            "[[springs]]\nname = \"{side}\"\nbetween = [\"apex.P\", \"ground\"]\nground_point = [{x:?}, 0.0, 0.0]\n\
+             stiffness = 1e7\ndamping = 2e4\n"
+        )
+    };
+    format!(
+        "[[rigid_bodies]]
+name = \"apex\"
+mass = 1.0
+center_of_mass = [0.0, 0.1, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
+points = {{ P = [0.0, 0.1, 0.0] }}
+[[supports]]
+at = \"apex.P\"
+type = \"slider\"
+axis = [0.0, 1.0, 0.0]
+{}{}[[loads]]
+name = \"push\"
+type = \"point\"
+at = \"apex.P\"
+force = [0.0, -8e3, 0.0]
+function = {{ type = \"ramp\", t_end = 0.1, to = 1.0, smooth = false }}
+[[sensors]]
+name = \"apex\"
+type = \"position\"
+of = \"apex.P\"
+[[analyses]]
+type = \"dynamic\"
+t_end = 0.5
+dt = 1e-2
+{extra}
+",
+        spring("left", -1.0),
+        spring("right", 1.0)
+    )
 }
 
 #[test]
-fn adaptive_steps_match_the_fixed_step_on_the_slider_crank_with_fewer_steps() {
-    // The slider-crank example for 1.5 crank turns: the rod's midpoint deflection and the
-    // slider at the end time against a run with a quarter of the example's step.
-    let base = std::str::from_utf8(
-        study::examples::EXAMPLES
-            .iter()
-            .find(|e| e.name == "slider_crank")
-            .unwrap()
-            .files[0]
-            .1,
+fn a_snap_through_the_fixed_step_cannot_take_is_retried_and_the_summary_says_so() {
+    // The limit load of the truss is k y0^3 / (sqrt(27) L0^2) = 3.8 kN (y0 = 0.1 m, L0 the
+    // springs' length). Past it the apex falls through the unstable middle, where the
+    // springs' vertical stiffness is -k y0^2 / L0^2 = -1e5 N/m, while the mass contributes
+    // only about 4 m / h^2 = 4e4 N/m to the iteration matrix at h = 10 ms: the step's Newton
+    // iteration has no well-posed solution to converge to. With dt_min = dt nothing is
+    // retried and the run stops at the snap.
+    let (_, summary, _) = run("snap-no-retry", &snapping_truss("dt_min = 1e-2"));
+    let e = summary.unwrap_err();
+    assert!(e.contains("Newton did not converge at t = 0.12"), "{e}");
+    // With the default dt_min (dt/1024) the step is retried with halved steps.
+    let (rec, summary, _) = run("snap-retry", &snapping_truss(""));
+    summary.unwrap();
+    let s = rec.analysis("dynamic").unwrap().summary.clone().unwrap();
+    eprintln!("{}", s.report.join("\n"));
+    assert_eq!(s.results["retried_steps"], serde_json::json!(1));
+    let retry = &s.results["retries"][0];
+    // Where (the interval [0.11, 0.12] s), how (two steps of 5 ms) and why.
+    assert!((retry["time"].as_f64().unwrap() - 0.11).abs() < 1e-12, "{retry}");
+    assert_eq!(retry["smallest_step"], serde_json::json!(5e-3));
+    assert_eq!(retry["substeps"], serde_json::json!(2));
+    assert!(retry["cause"].as_str().unwrap().contains("Newton did not converge"));
+    assert!(s
+        .report
+        .iter()
+        .any(|l| l.contains("retried with halved steps") && l.contains("t = 0.110000")));
+    // The apex settles on the far side at the static equilibrium under 8 kN:
+    // 2 k (L - L0) y / L = -P with L = sqrt(1 + y^2), solved by bisection.
+    let (k, P, L0) = (1e7, 8e3, (1.0f64 + 0.01).sqrt());
+    let f = |y: f64| 2.0 * k * ((1.0 + y * y).sqrt() - L0) * y / (1.0 + y * y).sqrt() + P;
+    let (mut a, mut b) = (-0.3, -0.1);
+    for _ in 0..100 {
+        let m = 0.5 * (a + b);
+        if f(a) * f(m) <= 0.0 {
+            b = m
+        } else {
+            a = m
+        }
+    }
+    let y = *column(&rec, "dynamic", "apex", 1).last().unwrap();
+    eprintln!("apex at the end {y:.9} m, static equilibrium {a:.9} m");
+    // The motion left 0.4 s after the snap decays as exp(-zeta omega t), zeta omega about
+    // 300 1/s (vertical damping 2 c y^2 / L^2 = 650 N s/m on 1 kg): far below 1e-6 m.
+    // The 10 ms step does not resolve the snap itself (the far side's vibration has
+    // omega h = 4.5); the settled state does not depend on it.
+    assert!((y - a).abs() < 1e-6, "{y} vs {a}");
+}
+
+/// The pendulum under gravity with a `dynamic` analysis of `t_end` and `dt`.
+fn swinging(t_end: &str, dt: &str) -> String {
+    format!(
+        "{PENDULUM}
+[[loads]]
+name = \"weight\"
+type = \"gravity\"
+g = [0.0, -9.81, 0.0]
+[[initial]]
+joint = \"pivot\"
+value = 0.5
+[[analyses]]
+type = \"dynamic\"
+t_end = {t_end}
+dt = {dt}
+"
     )
-    .unwrap()
-    .replace("t_end = 0.126    # three revolutions", "t_end = 0.063")
-    .replace("vtu_every = 20", "");
-    let end = |name: &str, dynamic: &str| {
-        let text = base.replace("dt = 1e-4\nrho_inf = 0.9", dynamic);
-        let (rec, summary, _) = run(name, &text);
-        summary.unwrap();
-        let r = results(&rec, "run-up");
-        (
-            *column(&rec, "run-up", "rod-mid", 0).last().unwrap(),
-            *column(&rec, "run-up", "slider", 0).last().unwrap(),
-            r["steps"].as_u64().unwrap(),
-        )
+}
+
+/// A `t_end` that is not a multiple of `dt` ends exactly at `t_end` with a shortened last step
+/// (it ran a full step past it); a `dt` longer than the run is refused at its key.
+#[test]
+fn a_dynamic_run_ends_exactly_at_t_end() {
+    let (rec, summary, _) = run("t-end-exact", &swinging("0.25", "0.1"));
+    summary.unwrap();
+    assert_eq!(times(&rec, "dynamic"), vec![0.0, 0.1, 0.2, 0.25]);
+    let r = results(&rec, "dynamic");
+    assert_eq!(
+        (r["t_reached"].as_f64(), r["steps"].as_u64()),
+        (Some(0.25), Some(3)),
+        "{r}"
+    );
+    let dir = crate::scratch("dt-longer");
+    let file = dir.join("dt.toml");
+    std::fs::write(&file, swinging("0.05", "0.1")).unwrap();
+    let e = study::error::chain(&*study::load(&file).unwrap_err());
+    assert!(e.contains("dt") && e.contains("longer than the run"), "{e}");
+}
+
+/// `--t-end` that is not a multiple of `dt` ends there too; one shorter than a step is refused
+/// with the analysis named.
+#[test]
+fn the_t_end_option_ends_exactly_there_and_refuses_less_than_a_step() {
+    let dir = crate::scratch("t-end-option");
+    let file = dir.join("p.toml");
+    std::fs::write(&file, swinging("1.0", "0.1")).unwrap();
+    let study = study::load(&file).unwrap();
+    let options = |t_end| Options {
+        out: Some(dir.join("results")),
+        cache: Some(dir.join("cache")),
+        t_end: Some(t_end),
+        foreign: Default::default(),
     };
-    let (d_ref, s_ref, _) = end("sc-ref", "dt = 2.5e-5\nrho_inf = 0.9");
-    let (d_fix, s_fix, n_fix) = end("sc-fixed", "dt = 1e-4\nrho_inf = 0.9");
-    let e_fix = (d_fix - d_ref).abs();
-    eprintln!(
-        "fixed: {n_fix} steps, deflection error {e_fix:.3e} m, slider error {:.3e} m",
-        (s_fix - s_ref).abs()
+    let mut rec = Recorder::default();
+    study::run_with(&study, &options(0.35), &mut rec).unwrap();
+    assert_eq!(times(&rec, "dynamic").last().copied(), Some(0.35));
+    let mut rec = Recorder::default();
+    let e = study::error::chain(&*study::run_with(&study, &options(0.05), &mut rec).unwrap_err());
+    assert!(
+        e.contains("--t-end 0.05 s is shorter than one time step of analysis 'dynamic'"),
+        "{e}"
     );
-    let (d, s, n) = end(
-        "sc-adaptive",
-        "dt = 1e-4\nrho_inf = 0.9\nerror_tolerance = 1e-4\ndt_max = 1e-3",
+}
+
+/// An inverted pendulum (gravity up: the bob 1 m above the pivot) linearised about its
+/// start: the summary, the report and the mode labels say it is unstable, with the growth rate
+/// sqrt(m g d / (I_G + m d^2)) = sqrt(9.81 / 1.01) = 3.1165 1/s (it was a stable "0 Hz" mode).
+#[test]
+fn an_inverted_pendulum_is_reported_unstable_in_a_study() {
+    let text = format!(
+        "{PENDULUM}
+[[loads]]
+name = \"weight\"
+type = \"gravity\"
+g = [0.0, 9.81, 0.0]
+[[analyses]]
+type = \"linearized\"
+modes = 1
+"
     );
-    let (e_d, e_s) = ((d - d_ref).abs(), (s - s_ref).abs());
-    eprintln!("adaptive: {n} steps, deflection error {e_d:.3e} m, slider error {e_s:.3e} m");
-    // Measured: 630 fixed steps give 1.04e-5 m on the deflection and 1.03e-5 m on the slider;
-    // 567 adaptive steps 1.60e-5 and 3.1e-6 m. The crank turns at constant speed, so the
-    // motion keeps one pace and the adaptive step settles near the fixed one: the same
-    // accuracy (within a factor 2 on each quantity) with 10 % fewer steps, no more.
-    assert!(n < n_fix, "{n} adaptive steps against {n_fix} fixed");
-    assert!(e_d < 2.0 * e_fix && e_s < 2.0 * (s_fix - s_ref).abs(), "{e_d}, {e_s}");
+    let (rec, summary, _) = run("inverted", &text);
+    summary.unwrap();
+    let r = results(&rec, "linearized");
+    assert_eq!(r["stable"], serde_json::json!(false), "{r}");
+    // The dense eigensolver on one unknown: exact to round-off.
+    let rate = r["largest_growth_rate"].as_f64().unwrap();
+    assert!((rate - (9.81f64 / 1.01).sqrt()).abs() < 1e-9, "{rate}");
+    assert!(r["mode_labels"][0].as_str().unwrap().starts_with("UNSTABLE"), "{r}");
+    let s = rec.analysis("linearized").unwrap().summary.clone().unwrap();
+    assert!(
+        s.report[0].starts_with("UNSTABLE: 1 state-space eigenvalue"),
+        "{:?}",
+        s.report
+    );
+    assert!(
+        rec.progress.iter().any(|p| p.contains("UNSTABLE")),
+        "{:?}",
+        rec.progress
+    );
 }

@@ -24,7 +24,7 @@ const ANGLES: [f64; 3] = [30.0, 120.0, 170.0];
 
 /// Finite-difference steps for the superelement's coordinates: 1e-6 of the body size for
 /// positions, 1e-6 rad, and 1e-6 of the modal amplitude scale for eta.
-fn steps(se: &Superelement) -> Vec<f64> {
+pub(super) fn steps(se: &Superelement) -> Vec<f64> {
     let L = se
         .interface_positions()
         .iter()
@@ -40,7 +40,7 @@ fn steps(se: &Superelement) -> Vec<f64> {
     h
 }
 
-fn assert_ok(rep: FdReport, what: &str) {
+pub(super) fn assert_ok(rep: FdReport, what: &str) {
     if std::env::var_os("SUPERELEMENT_FD_VERBOSE").is_some() {
         eprintln!("{what}: {rep}");
     }

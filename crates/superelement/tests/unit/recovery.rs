@@ -3,33 +3,46 @@
 use super::common::*;
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 use superelement::testing::{test_state, StateSpec};
-use superelement::{Frame, MassVariant};
+use superelement::{BodyState, Frame, FrameChoice, Kinematics, MassVariant, Superelement};
 
 /// Interface nodes land exactly on the interface coordinates (their CB shapes are unit
 /// vectors), for every frame choice.
 #[test]
 fn interface_nodes_follow_the_interfaces() {
+    each_moving_body(0.1, (120.0, 4), |fx, frame, se, state, kin| {
+        let mesh = se.recover_mesh(kin).expect("fixtures keep the mesh shapes");
+        for (k, node) in fx.interfaces.iter().enumerate() {
+            // Round-off of r_j + R_j (x_k + u_k) against r_k: ~1e-15 of the coordinates.
+            assert!(
+                (mesh.positions[node.index()] - state.r[k]).norm() < 1e-13,
+                "{} {frame}: interface {k}",
+                fx.name
+            );
+            assert!(mesh.orientations[node.index()].angle_to(&state.R[k]) < 1e-13);
+        }
+    });
+}
+
+/// Runs `check` on every fixture body with every frame choice it allows (exact inertia), in a
+/// test state deformed by `deformation` and moving as `StateSpec::moving(speed, seed)`, with
+/// its kinematics.
+fn each_moving_body(
+    deformation: f64,
+    (speed, seed): (f64, u64),
+    mut check: impl FnMut(&Fixture, FrameChoice, &Superelement, &BodyState, &Kinematics),
+) {
     for fx in all_fixtures() {
         for frame in frame_choices(&fx.body) {
             let se = superelement(&fx.body, frame, MassVariant::Exact);
             let (state, _) = test_state(
                 &se,
                 &StateSpec {
-                    deformation: 0.1,
-                    ..StateSpec::moving(120.0, 4)
+                    deformation,
+                    ..StateSpec::moving(speed, seed)
                 },
             );
             let kin = se.kinematics(&state).unwrap();
-            let mesh = se.recover_mesh(&kin).expect("fixtures keep the mesh shapes");
-            for (k, node) in fx.interfaces.iter().enumerate() {
-                // Round-off of r_j + R_j (x_k + u_k) against r_k: ~1e-15 of the coordinates.
-                assert!(
-                    (mesh.positions[node.index()] - state.r[k]).norm() < 1e-13,
-                    "{} {frame}: interface {k}",
-                    fx.name
-                );
-                assert!(mesh.orientations[node.index()].angle_to(&state.R[k]) < 1e-13);
-            }
+            check(fx, frame, &se, &state, &kin);
         }
     }
 }
@@ -55,42 +68,31 @@ fn rigid_placement_moves_the_mesh_rigidly() {
 /// velocities, eta by eta_dot, the frame re-solved) on a deformed, rotated, moving body.
 #[test]
 fn mesh_velocities_are_the_derivatives_of_the_positions() {
-    for fx in all_fixtures() {
-        for frame in frame_choices(&fx.body) {
-            let se = superelement(&fx.body, frame, MassVariant::Exact);
-            let (state, _) = test_state(
-                &se,
-                &StateSpec {
-                    deformation: 0.05,
-                    ..StateSpec::moving(60.0, 7)
-                },
+    each_moving_body(0.05, (60.0, 7), |fx, frame, se, state, kin| {
+        let v = se
+            .recover_mesh_velocities(kin, state)
+            .expect("fixtures keep the mesh shapes");
+        let qd = state.velocity_vector();
+        let at = |h: f64| {
+            let dq: Vec<f64> = qd.iter().map(|x| x * h).collect();
+            let s = superelement::testing::perturb_state(state, &dq);
+            se.recover_mesh(&se.kinematics(&s).unwrap()).unwrap().positions
+        };
+        let h = 1e-6;
+        let (plus, minus) = (at(h), at(-h));
+        let scale = v.iter().fold(0.0f64, |m, x| m.max(x.norm()));
+        for i in 0..v.len() {
+            let fd = (plus[i] - minus[i]) / (2.0 * h);
+            // Central differences: O(h^2) truncation (1e-12 here) and round-off of about
+            // 1e-16 |p| / h = 1e-10; 1e-6 of the largest speed leaves a wide margin.
+            assert!(
+                (fd - v[i]).norm() < 1e-6 * scale.max(1.0),
+                "{} {frame}: node {i}: {v:?} against {fd:?}",
+                fx.name,
+                v = v[i]
             );
-            let kin = se.kinematics(&state).unwrap();
-            let v = se
-                .recover_mesh_velocities(&kin, &state)
-                .expect("fixtures keep the mesh shapes");
-            let qd = state.velocity_vector();
-            let at = |h: f64| {
-                let dq: Vec<f64> = qd.iter().map(|x| x * h).collect();
-                let s = superelement::testing::perturb_state(&state, &dq);
-                se.recover_mesh(&se.kinematics(&s).unwrap()).unwrap().positions
-            };
-            let h = 1e-6;
-            let (plus, minus) = (at(h), at(-h));
-            let scale = v.iter().fold(0.0f64, |m, x| m.max(x.norm()));
-            for i in 0..v.len() {
-                let fd = (plus[i] - minus[i]) / (2.0 * h);
-                // Central differences: O(h^2) truncation (1e-12 here) and round-off of about
-                // 1e-16 |p| / h = 1e-10; 1e-6 of the largest speed leaves a wide margin.
-                assert!(
-                    (fd - v[i]).norm() < 1e-6 * scale.max(1.0),
-                    "{} {frame}: node {i}: {v:?} against {fd:?}",
-                    fx.name,
-                    v = v[i]
-                );
-            }
         }
-    }
+    });
 }
 
 /// The hex8 block with stress shapes.

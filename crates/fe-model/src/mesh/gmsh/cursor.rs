@@ -115,6 +115,17 @@ impl<'a> Cursor<'a> {
         self.truncated(self.data.len(), expected, "end of file".to_string())
     }
 
+    pub(super) fn header_mismatch(&self, pos: usize, what: &str, header: u64, found: u64) -> MshError {
+        MshError::HeaderMismatch {
+            path: self.path.to_path_buf(),
+            at: self.at(pos),
+            section: self.section.clone(),
+            what: what.to_string(),
+            header,
+            found,
+        }
+    }
+
     pub(super) fn malformed(&self, pos: usize, expected: &str, found: String) -> MshError {
         MshError::Malformed {
             path: self.path.to_path_buf(),

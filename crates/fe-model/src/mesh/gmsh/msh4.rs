@@ -92,15 +92,84 @@ fn parametric_count(cur: &Cursor<'_>, dim: (i32, usize), parametric: (i32, usize
     }
 }
 
+/// The totals of a `$Nodes` or `$Elements` header with the position of each value:
+/// the number of records, the smallest and the largest tag.
+struct Header {
+    total: (u64, usize),
+    min: (u64, usize),
+    max: (u64, usize),
+}
+
+/// The records of the blocks as read: their number and the range of their tags.
+#[derive(Default)]
+struct Seen {
+    count: u64,
+    min: u64,
+    max: u64,
+}
+
+impl Seen {
+    fn add(&mut self, tag: u64) {
+        if self.count == 0 {
+            (self.min, self.max) = (tag, tag);
+        } else {
+            self.min = self.min.min(tag);
+            self.max = self.max.max(tag);
+        }
+        self.count += 1;
+    }
+}
+
+impl Header {
+    /// Reads the three totals after the number of blocks.
+    fn read(cur: &mut Cursor<'_>, binary: bool, what: &str) -> Result<Self, MshError> {
+        let value = |cur: &mut Cursor<'_>, expected: &str| -> Result<(u64, usize), MshError> {
+            if binary {
+                let pos = cur.pos();
+                Ok((cur.size(expected)?, pos))
+            } else {
+                cur.number_at::<u64>(expected)
+            }
+        };
+        Ok(Self {
+            total: value(cur, &format!("number of {what}s"))?,
+            min: value(cur, &format!("minimum {what} tag"))?,
+            max: value(cur, &format!("maximum {what} tag"))?,
+        })
+    }
+
+    /// The header's totals against the blocks (gmsh writes them exactly; a file whose totals
+    /// disagree was edited or cut, and its blocks cannot be trusted either). The tag range is
+    /// checked when the section holds records.
+    fn check(&self, cur: &Cursor<'_>, what: &str, seen: &Seen) -> Result<(), MshError> {
+        if self.total.0 != seen.count {
+            return Err(cur.header_mismatch(
+                self.total.1,
+                &format!("the number of {what}s"),
+                self.total.0,
+                seen.count,
+            ));
+        }
+        if seen.count > 0 {
+            if self.min.0 != seen.min {
+                return Err(cur.header_mismatch(self.min.1, &format!("the smallest {what} tag"), self.min.0, seen.min));
+            }
+            if self.max.0 != seen.max {
+                return Err(cur.header_mismatch(self.max.1, &format!("the largest {what} tag"), self.max.0, seen.max));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// `$Nodes`: entity blocks of node tags followed by their coordinates.
 pub(super) fn read_nodes(cur: &mut Cursor<'_>, binary: bool, builder: &mut Builder<'_>) -> Result<(), MshError> {
-    if binary {
+    let mut seen = Seen::default();
+    let header = if binary {
         cur.skip_line();
         let blocks = cur.size("number of entity blocks")?;
-        let total = cur.size("number of nodes")?;
-        cur.size("minimum node tag")?;
-        cur.size("maximum node tag")?;
-        builder.reserve_nodes(cur.capacity(total, MIN_BINARY_NODE_BYTES));
+        let header = Header::read(cur, true, "node")?;
+        builder.reserve_nodes(cur.capacity(header.total.0, MIN_BINARY_NODE_BYTES));
         for _ in 0..blocks {
             let dim = (cur.int("entity dimension")?, cur.pos() - 4);
             cur.int("entity tag")?;
@@ -113,6 +182,7 @@ pub(super) fn read_nodes(cur: &mut Cursor<'_>, binary: bool, builder: &mut Build
             let tags_start = cur.pos();
             let tags = (0..n).map(|_| cur.size("node tag")).collect::<Result<Vec<u64>, _>>()?;
             for (i, &tag) in tags.iter().enumerate() {
+                seen.add(tag);
                 let x = cur.binary_coordinate("x coordinate")?;
                 let y = cur.binary_coordinate("y coordinate")?;
                 let z = cur.binary_coordinate("z coordinate")?;
@@ -120,12 +190,11 @@ pub(super) fn read_nodes(cur: &mut Cursor<'_>, binary: bool, builder: &mut Build
                 builder.add_node(tag, Point3::new(x, y, z), tags_start + 8 * i)?;
             }
         }
+        header
     } else {
         let blocks = cur.number::<u64>("number of entity blocks")?;
-        let total = cur.number::<u64>("number of nodes")?;
-        cur.number::<u64>("minimum node tag")?;
-        cur.number::<u64>("maximum node tag")?;
-        builder.reserve_nodes(cur.capacity(total, MIN_ASCII_NODE_BYTES));
+        let header = Header::read(cur, false, "node")?;
+        builder.reserve_nodes(cur.capacity(header.total.0, MIN_ASCII_NODE_BYTES));
         let mut tags = Vec::new();
         for _ in 0..blocks {
             let dim = cur.number_at::<i32>("entity dimension")?;
@@ -139,6 +208,7 @@ pub(super) fn read_nodes(cur: &mut Cursor<'_>, binary: bool, builder: &mut Build
                 tags.push(cur.number_at::<u64>("node tag")?);
             }
             for &(tag, pos) in &tags {
+                seen.add(tag);
                 let x = cur.coordinate("x coordinate")?;
                 let y = cur.coordinate("y coordinate")?;
                 let z = cur.coordinate("z coordinate")?;
@@ -148,19 +218,20 @@ pub(super) fn read_nodes(cur: &mut Cursor<'_>, binary: bool, builder: &mut Build
                 builder.add_node(tag, Point3::new(x, y, z), pos)?;
             }
         }
-    }
+        header
+    };
+    header.check(cur, "node", &seen)?;
     cur.expect_end("$EndNodes")
 }
 
 /// `$Elements`: entity blocks of one element type each; every element joins its entity.
 pub(super) fn read_elements(cur: &mut Cursor<'_>, binary: bool, builder: &mut Builder<'_>) -> Result<(), MshError> {
     let mut node_tags = Vec::new();
-    if binary {
+    let mut seen = Seen::default();
+    let header = if binary {
         cur.skip_line();
         let blocks = cur.size("number of entity blocks")?;
-        cur.size("number of elements")?;
-        cur.size("minimum element tag")?;
-        cur.size("maximum element tag")?;
+        let header = Header::read(cur, true, "element")?;
         for _ in 0..blocks {
             let dim = cur.int("entity dimension")?;
             let entity = cur.int("entity tag")?;
@@ -178,6 +249,7 @@ pub(super) fn read_elements(cur: &mut Cursor<'_>, binary: bool, builder: &mut Bu
             for _ in 0..n {
                 let pos = cur.pos();
                 let tag = cur.size("element tag")?;
+                seen.add(tag);
                 node_tags.clear();
                 for _ in 0..node_count {
                     node_tags.push(cur.size("node tag")?);
@@ -185,11 +257,10 @@ pub(super) fn read_elements(cur: &mut Cursor<'_>, binary: bool, builder: &mut Bu
                 builder.add_element(tag, element, &node_tags, pos, Some((dim, entity)))?;
             }
         }
+        header
     } else {
         let blocks = cur.number::<u64>("number of entity blocks")?;
-        cur.number::<u64>("number of elements")?;
-        cur.number::<u64>("minimum element tag")?;
-        cur.number::<u64>("maximum element tag")?;
+        let header = Header::read(cur, false, "element")?;
         for _ in 0..blocks {
             let dim = cur.number::<i32>("entity dimension")?;
             let entity = cur.number::<i32>("entity tag")?;
@@ -204,6 +275,7 @@ pub(super) fn read_elements(cur: &mut Cursor<'_>, binary: bool, builder: &mut Bu
             };
             for _ in 0..n {
                 let (tag, pos) = cur.number_at::<u64>("element tag")?;
+                seen.add(tag);
                 node_tags.clear();
                 for _ in 0..node_count {
                     node_tags.push(cur.number::<u64>("node tag")?);
@@ -211,6 +283,8 @@ pub(super) fn read_elements(cur: &mut Cursor<'_>, binary: bool, builder: &mut Bu
                 builder.add_element(tag, element, &node_tags, pos, Some((dim, entity)))?;
             }
         }
-    }
+        header
+    };
+    header.check(cur, "element", &seen)?;
     cur.expect_end("$EndElements")
 }

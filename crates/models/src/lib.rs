@@ -1,13 +1,32 @@
-//! Reusable model builders for the benchmarks, by library calls on `fe_model`, `reduction`
-//! and `mbs`: beam and solid segments reduced by Craig-Bampton, chains of superelements,
-//! the elastica cantilever, the 45-degree bend, the spin-up beam, the planar and spatial
-//! slider-cranks and the free-floating beam.
+//! # models: the standard problems, built once
 //!
-//! Every builder takes a [`Variant`] (frame choice and inertia variant), so the AIC-FFR paper's
-//! comparison runs the same model six ways. The `auxiliary-node` frame needs an interface at
-//! the centre of mass held fixed in the reduction: segments are meshed with an even number of
-//! elements, the middle node is that interface, and [`add_segment`] gives it its own (free)
-//! multibody node.
+//! The problems that the mbs tests, the validation suite (`validation`) and the benchmarks
+//! (`flexmbs-benchmarks`) all need, built by library calls on `fe_model`, `reduction` and
+//! `mbs`: beam and solid segments reduced by Craig-Bampton, chains of superelements, the
+//! elastica cantilever, the 45-degree bend, the linear transient cantilever, the spin-up beam,
+//! the planar and spatial slider-cranks, the free-floating beam and the rigid pendulum. The
+//! problem definitions (ids A1-A5, B1-B3, C1-C4) are those of the validation guide
+//! (`docs/validation.md`).
+//!
+//! Every builder of a flexible model takes a [`Variant`] (frame choice and inertia variant), so
+//! the AIC-FFR paper's comparison runs the same model six ways. The `auxiliary-node` frame
+//! needs an interface at the centre of mass held fixed in the reduction: segments are meshed
+//! with an even number of elements, the middle node is that interface, and [`add_segment`]
+//! gives it its own (free) multibody node.
+//!
+//! The crate sits above `mbs` and below the programs that run problems: it uses the four
+//! solver crates and nothing else of the workspace, so the mbs tests (as a dev-dependency),
+//! the validation suite and the benchmarks can all use it.
+//!
+//! | symbol | meaning | code |
+//! |---|---|---|
+//! | $r$ | crank length, 0.15 m | [`CRANK`] |
+//! | $l$ | rod length, 0.30 m | [`ROD`] |
+//! | $d$ | rod diameter, 6 mm | [`ROD_D`] |
+//! | $a$ | side of the square section with the round rod's $I$: $a^4/12 = \pi d^4/64$ | [`square_rod_side`] |
+//! | $EI$ | bending stiffness of the elastica section | [`elastica_EI`] |
+
+#![allow(non_snake_case)]
 
 use fe_model::interface::{add_interface_on_set, SpiderKind};
 use fe_model::{BeamProperties, BeamSection, BeamTheory, CellKind, FeModel, IsotropicMaterial, MassKind};
@@ -125,16 +144,16 @@ pub struct Segment {
 }
 
 /// Reduces `fe` with interfaces `ends` (and, for the auxiliary-node frame, `middle` as the
-/// auxiliary interface).
+/// auxiliary interface) with `settings` (mesh shapes are not kept: no model here draws them).
 fn reduce_segment(
     fe: &FeModel,
     name: &str,
     ends: &[(String, fe_model::NodeId)],
     middle: fe_model::NodeId,
-    modes: ModeSelection,
+    settings: &CbSettings,
     frame: FrameChoice,
 ) -> Result<Segment, BuildError> {
-    let mut settings = CbSettings::new(modes);
+    let mut settings = settings.clone();
     settings.keep_mesh_shapes = false;
     if frame == FrameChoice::AuxiliaryNode {
         settings.auxiliary_node = Some(middle);
@@ -145,6 +164,32 @@ fn reduce_segment(
     })?;
     body.name = name.into();
     Ok(Segment { body })
+}
+
+/// The FE model of a straight beam from `a` to `b` of exactly `elements` elements: the model
+/// and its nodes, first to last.
+fn straight_beam_fe(
+    name: &str,
+    spec: &BeamSpec,
+    (a, b): (Vector3<f64>, Vector3<f64>),
+    elements: usize,
+    orientation: Vector3<f64>,
+) -> Result<(FeModel, Vec<fe_model::NodeId>), BuildError> {
+    let mut fe = FeModel::default();
+    let props = spec.properties(&mut fe, orientation, name)?;
+    let nodes = fe_model::generate::straight_beam(
+        &mut fe,
+        Point3::from(a),
+        Point3::from(b),
+        elements,
+        &props,
+        Some("beam"),
+    )
+    .map_err(|source| BuildError::Fe {
+        model: name.into(),
+        source,
+    })?;
+    Ok((fe, nodes))
 }
 
 /// A straight beam segment from `a` to `b` (FE axes) of `elements` elements (even, so the
@@ -159,23 +204,55 @@ pub fn beam_segment(
     modes: ModeSelection,
     frame: FrameChoice,
 ) -> Result<Segment, BuildError> {
-    let mut fe = FeModel::default();
-    let props = spec.properties(&mut fe, orientation, name)?;
-    let elements = elements + elements % 2;
-    let nodes = fe_model::generate::straight_beam(
-        &mut fe,
-        Point3::from(a),
-        Point3::from(b),
+    beam_segment_with(
+        name,
+        spec,
+        (a, b),
         elements,
-        &props,
-        Some("beam"),
+        orientation,
+        &CbSettings::new(modes),
+        frame,
     )
-    .map_err(|source| BuildError::Fe {
-        model: name.into(),
-        source,
-    })?;
+}
+
+/// [`beam_segment`] reduced with any `settings` (e.g. `geometric_stiffening`).
+pub fn beam_segment_with(
+    name: &str,
+    spec: &BeamSpec,
+    ends: (Vector3<f64>, Vector3<f64>),
+    elements: usize,
+    orientation: Vector3<f64>,
+    settings: &CbSettings,
+    frame: FrameChoice,
+) -> Result<Segment, BuildError> {
+    let elements = elements + elements % 2;
+    let (fe, nodes) = straight_beam_fe(name, spec, ends, elements, orientation)?;
     let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
-    reduce_segment(&fe, name, &ends, nodes[elements / 2], modes, frame)
+    reduce_segment(&fe, name, &ends, nodes[elements / 2], settings, frame)
+}
+
+/// A straight beam body from `a` to `b` of exactly `elements` elements (odd counts too: no
+/// auxiliary interface), reduced with interfaces "a" and "b" at its ends and `modes`
+/// fixed-interface modes, named `name`.
+pub fn beam_body(
+    name: &str,
+    spec: &BeamSpec,
+    (a, b): (Vector3<f64>, Vector3<f64>),
+    elements: usize,
+    orientation: Vector3<f64>,
+    modes: ModeSelection,
+) -> Result<ReducedBody, BuildError> {
+    let (fe, nodes) = straight_beam_fe(name, spec, (a, b), elements, orientation)?;
+    let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
+    Ok(reduce_segment(
+        &fe,
+        name,
+        &ends,
+        nodes[0],
+        &CbSettings::new(modes),
+        FrameChoice::CenterOfMass,
+    )?
+    .body)
 }
 
 /// A circular-arc beam segment about `center` and `axis` from `start` through `angle`.
@@ -200,7 +277,7 @@ pub fn arc_segment(
             source,
         })?;
     let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
-    reduce_segment(&fe, name, &ends, nodes[elements / 2], modes, frame)
+    reduce_segment(&fe, name, &ends, nodes[elements / 2], &CbSettings::new(modes), frame)
 }
 
 /// A solid rod segment: a box of `length` x `side` x `side` of hex20 or tet10 cells
@@ -255,7 +332,14 @@ pub fn solid_rod_segment(
     } else {
         a
     };
-    reduce_segment(&fe, name, &[("a".into(), a), ("b".into(), b)], middle, modes, frame)
+    reduce_segment(
+        &fe,
+        name,
+        &[("a".into(), a), ("b".into(), b)],
+        middle,
+        &CbSettings::new(modes),
+        frame,
+    )
 }
 
 /// Places `segment` in `model` with `placement` (FE axes to inertial), on the nodes `ends`;
@@ -280,7 +364,7 @@ pub fn add_segment(
 }
 
 /// Axis-to-axis rotation taking the FE x axis onto `direction`.
-pub(crate) fn x_onto(direction: Vector3<f64>) -> UnitQuaternion<f64> {
+pub fn x_onto(direction: Vector3<f64>) -> UnitQuaternion<f64> {
     UnitQuaternion::rotation_between(&Vector3::x(), &direction).unwrap_or_else(|| {
         // Antiparallel: half a turn about z.
         UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI)
@@ -293,10 +377,25 @@ pub fn beam_chain(
     model: &mut Model,
     prefix: &str,
     spec: &BeamSpec,
-    (start, end): (Vector3<f64>, Vector3<f64>),
+    ends: (Vector3<f64>, Vector3<f64>),
     n: usize,
     elements_per_segment: usize,
     modes: ModeSelection,
+    variant: Variant,
+) -> Result<(Vec<NodeId>, Vec<BodyId>), BuildError> {
+    let settings = CbSettings::new(modes);
+    beam_chain_with(model, prefix, spec, ends, n, elements_per_segment, &settings, variant)
+}
+
+/// [`beam_chain`] with the segment reduced with any `settings` (e.g. `geometric_stiffening`).
+pub fn beam_chain_with(
+    model: &mut Model,
+    prefix: &str,
+    spec: &BeamSpec,
+    (start, end): (Vector3<f64>, Vector3<f64>),
+    n: usize,
+    elements_per_segment: usize,
+    settings: &CbSettings,
     variant: Variant,
 ) -> Result<(Vec<NodeId>, Vec<BodyId>), BuildError> {
     let length = (end - start).norm();
@@ -305,14 +404,13 @@ pub fn beam_chain(
     // Orientation vector: any direction not along the axis; z for a beam in the x-y plane.
     let orientation = if e.z.abs() < 0.9 { Vector3::z() } else { Vector3::x() };
     let q = x_onto(e);
-    let segment = beam_segment(
+    let segment = beam_segment_with(
         prefix,
         spec,
-        Vector3::zeros(),
-        Vector3::new(seg, 0.0, 0.0),
+        (Vector3::zeros(), Vector3::new(seg, 0.0, 0.0)),
         elements_per_segment,
         q.inverse() * orientation,
-        modes,
+        settings,
         variant.frame,
     )?;
     let nodes: Vec<NodeId> = (0..=n)
@@ -346,8 +444,42 @@ pub fn rigid(name: &str, reference: NodeId, nodes: Vec<NodeId>, m: f64, c: Vecto
     }
 }
 
+/// The rigid pendulum: ground node clamped at the origin, revolute joint "hinge" about z to the
+/// hinge node, a rigid body "bob" of mass `m` \[kg\] with its centre of mass at distance `d`
+/// \[m\] below the hinge and inertia `I_G` \[kg m^2\] about its centre of mass (all axes),
+/// gravity -y, g = 9.81 m/s^2. Returns the model and the joint.
+pub fn pendulum(m: f64, d: f64, I_G: f64) -> (Model, JointId) {
+    let mut model = Model::new("pendulum");
+    let ground = model.add_node("ground", Vector3::zeros());
+    let hinge = model.add_node("hinge", Vector3::zeros());
+    model.add_support(Support::clamp(ground));
+    let j = model.add_joint("hinge", ground, hinge, JointKind::Revolute { axis: Vector3::z() });
+    model.add_rigid_body(rigid(
+        "bob",
+        hinge,
+        vec![],
+        m,
+        Vector3::new(0.0, -d, 0.0),
+        [I_G, I_G, I_G],
+    ));
+    model.gravity = Vector3::new(0.0, -9.81, 0.0);
+    (model, j)
+}
+
 // ---------------------------------------------------------------------------------------
 // B1, B2: the elastica cantilever.
+
+/// Mattiasson's elastica (validation problem B1): the cantilever's tip under an end load
+/// a = P L^2 / EI -> (w/L, u/L, tip rotation \[rad\]), Mattiasson (1981), table 1.
+pub const MATTIASSON: [(f64, [f64; 3]); 7] = [
+    (1.0, [0.30172, 0.05643, 0.46135]),
+    (2.0, [0.49346, 0.16064, 0.78175]),
+    (3.0, [0.60325, 0.25442, 0.98602]),
+    (4.0, [0.66996, 0.32894, 1.12124]),
+    (5.0, [0.71379, 0.38763, 1.21537]),
+    (7.0, [0.76737, 0.47293, 1.33496]),
+    (10.0, [0.81061, 0.55500, 1.43029]),
+];
 
 /// Square section 10 mm, L = 1, E chosen for EI = 1 N m^2: slenderness L/r = 346 and axial
 /// strain a/(EA) < 1e-4, far below the table's five digits.
@@ -366,8 +498,9 @@ pub fn elastica_cantilever(n: usize, elements: usize, variant: Variant) -> Resul
     Ok((model, tip))
 }
 
-/// A steel-like beam spec with a square section of side `side`, Euler-Bernoulli theory.
-fn square_spec(model: &str, E: f64, rho: f64, side: f64) -> Result<BeamSpec, BuildError> {
+/// A beam spec with a square section of side `side`, Poisson's ratio 0.3, Euler-Bernoulli
+/// theory.
+pub fn square_spec(model: &str, E: f64, rho: f64, side: f64) -> Result<BeamSpec, BuildError> {
     Ok(BeamSpec {
         E,
         nu: 0.3,
@@ -509,6 +642,12 @@ pub fn a5_cantilever(
 /// whose angle follows the spin-up profile to `omega` in 15 s; `n` superelements with `modes`
 /// fixed-interface modes each. Sensor "tip": the tip in the hub's axes.
 pub fn spin_up(n: usize, modes: ModeSelection, omega: f64, variant: Variant) -> Result<Model, BuildError> {
+    spin_up_with(n, &CbSettings::new(modes), omega, variant)
+}
+
+/// [`spin_up`] with the segments reduced with any `settings` (with
+/// `CbSettings::geometric_stiffening`, each segment carries its reduced geometric stiffness).
+pub fn spin_up_with(n: usize, settings: &CbSettings, omega: f64, variant: Variant) -> Result<Model, BuildError> {
     let (L, E, A, I, rho) = (10.0, 7e10, 4e-4, 2e-7, 3000.0);
     let spec = BeamSpec {
         E,
@@ -523,14 +662,14 @@ pub fn spin_up(n: usize, modes: ModeSelection, omega: f64, variant: Variant) -> 
         theory: BeamTheory::EulerBernoulli,
     };
     let mut m = Model::new("spin-up");
-    let (beam, _) = beam_chain(
+    let (beam, _) = beam_chain_with(
         &mut m,
         "b",
         &spec,
         (Vector3::zeros(), Vector3::x() * L),
         n,
         4,
-        modes,
+        settings,
         variant,
     )?;
     m.add_support(Support::hinge(beam[0], Vector3::z()));
@@ -570,8 +709,12 @@ pub enum RodModel {
 pub const CRANK: f64 = 0.15;
 pub const ROD: f64 = 0.30;
 pub const ROD_D: f64 = 0.006;
-const STEEL_E: f64 = 200e9;
-const STEEL_RHO: f64 = 7870.0;
+pub const STEEL_E: f64 = 200e9;
+pub const STEEL_RHO: f64 = 7870.0;
+/// Mass \[kg\] and principal inertia about the centre of mass \[kg m^2\] of the rigid crank
+/// (driven at a given speed or angle: they only change the drive torque).
+pub const CRANK_MASS: f64 = 0.1;
+pub const CRANK_INERTIA: [f64; 3] = [1e-5, 2e-4, 2e-4];
 
 /// Side of the square section with the bending stiffness of the round rod: a^4/12 = pi d^4/64.
 pub fn square_rod_side() -> f64 {
@@ -648,9 +791,9 @@ fn add_crank(m: &mut Model, axis: Vector3<f64>, angle: mbs::TimeFunction) -> (Jo
         "crank",
         c0,
         vec![a],
-        0.1,
+        CRANK_MASS,
         Vector3::new(CRANK / 2.0, 0.0, 0.0),
-        [1e-5, 2e-4, 2e-4],
+        CRANK_INERTIA,
     ));
     (jc, a)
 }
@@ -660,6 +803,8 @@ pub struct SliderCrank {
     pub model: Model,
     pub rod_nodes: Vec<NodeId>,
     pub crank_joint: JointId,
+    /// The joints at the rod's ends: crank pin A, slider B.
+    pub rod_joints: [JointId; 2],
     /// Mass of the whole rod.
     pub rod_mass: f64,
 }
@@ -677,6 +822,14 @@ pub fn slider_crank_planar(
     variant: Variant,
 ) -> Result<SliderCrank, BuildError> {
     let n = n.max(2) + n % 2;
+    let segment = rod_segment(rod, ROD / n as f64, modes, variant.frame)?;
+    Ok(slider_crank_planar_with(n, &segment, speed, variant))
+}
+
+/// [`slider_crank_planar`] with the rod as `n` copies of `segment` (reduced along the FE x axis
+/// from 0 to l/n, interfaces a then b), any `n` from 1: the "midpoint" sensor is added when `n`
+/// is even (the midpoint is then a node).
+pub fn slider_crank_planar_with(n: usize, segment: &Segment, speed: f64, variant: Variant) -> SliderCrank {
     let mut m = Model::new("planar slider-crank");
     let z = Vector3::z();
     let (jc, a) = add_crank(
@@ -689,7 +842,6 @@ pub fn slider_crank_planar(
     );
     let s = m.add_node("slider", Vector3::new(CRANK + ROD, 0.0, 0.0));
     let seg = ROD / n as f64;
-    let segment = rod_segment(rod, seg, modes, variant.frame)?;
     let rod_nodes: Vec<NodeId> = (0..=n)
         .map(|i| m.add_node(&format!("rod{i}"), Vector3::new(CRANK + seg * i as f64, 0.0, 0.0)))
         .collect();
@@ -697,7 +849,7 @@ pub fn slider_crank_planar(
         let place = Isometry3::translation(CRANK + seg * i as f64, 0.0, 0.0);
         add_segment(
             &mut m,
-            &segment,
+            segment,
             &format!("rod{i}"),
             [rod_nodes[i], rod_nodes[i + 1]],
             place,
@@ -713,15 +865,17 @@ pub fn slider_crank_planar(
         mass: rod_mass / 2.0,
     });
     m.add_sensor("slider", SensorKind::NodePosition { node: s });
-    m.add_sensor(
-        "midpoint",
-        SensorKind::LineDistance {
-            node: rod_nodes[n / 2],
-            a: rod_nodes[0],
-            b: rod_nodes[n],
-            normal: Some(z),
-        },
-    );
+    if n % 2 == 0 {
+        m.add_sensor(
+            "midpoint",
+            SensorKind::LineDistance {
+                node: rod_nodes[n / 2],
+                a: rod_nodes[0],
+                b: rod_nodes[n],
+                normal: Some(z),
+            },
+        );
+    }
     // Rigid-body velocities at the dead centre: the rod turns about B at -speed * crank / rod.
     let w_rod = -speed * CRANK / ROD;
     let B = Vector3::new(CRANK + ROD, 0.0, 0.0);
@@ -756,12 +910,13 @@ pub fn slider_crank_planar(
         coordinate: 0,
         rate: w_rod,
     });
-    Ok(SliderCrank {
+    SliderCrank {
         model: m,
         rod_nodes,
         crank_joint: jc,
+        rod_joints: [ja, jb],
         rod_mass,
-    })
+    }
 }
 
 /// Offset of the spatial slider-crank's guide from the crank's plane of rotation (C3).
@@ -819,11 +974,11 @@ pub fn slider_crank_spatial(
         );
     }
     let rod_mass = segment.body.inertia.mass * n as f64;
-    m.add_joint("ball A", a, rod_nodes[0], JointKind::Spherical);
+    let ja = m.add_joint("ball A", a, rod_nodes[0], JointKind::Spherical);
     m.add_support(Support::slider(s, Vector3::x()));
     let axis1 = e.cross(&Vector3::z()).normalize();
     let axis2 = e.cross(&axis1).normalize();
-    m.add_joint("universal B", s, rod_nodes[n], JointKind::Universal { axis1, axis2 });
+    let jb = m.add_joint("universal B", s, rod_nodes[n], JointKind::Universal { axis1, axis2 });
     m.point_masses.push(mbs::PointMass {
         node: s,
         mass: rod_mass / 2.0,
@@ -844,6 +999,7 @@ pub fn slider_crank_spatial(
         model: m,
         rod_nodes,
         crank_joint: jc,
+        rod_joints: [ja, jb],
         rod_mass,
     })
 }

@@ -1,0 +1,205 @@
+//! Input that parses but is physically wrong, refused with an error that names the entity and
+//! where it is in the file; input files that are not regular files; validation time that grows
+//! linearly with the number of entries.
+
+use std::path::Path;
+use study::observer::Recorder;
+use study::run::Options;
+
+/// A rigid pendulum (1 kg, centre of mass 1 m below the pivot) with a second point `P` at its
+/// centre of mass.
+const PENDULUM: &str = r#"
+[[rigid_bodies]]
+name = "bob"
+mass = 1.0
+center_of_mass = [0.0, -1.0, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
+points = { O = [0.0, 0.0, 0.0], P = [0.0, -1.0, 0.0], Q = [0.0, -1.0, 0.0] }
+[[joints]]
+name = "pivot"
+type = "revolute"
+between = ["ground", "bob.O"]
+axis = [0.0, 0.0, 1.0]
+"#;
+
+const DYNAMIC: &str = "
+[[analyses]]
+type = \"dynamic\"
+t_end = 0.01
+dt = 0.01
+";
+
+/// The validation errors of `text` (written as `<name>.toml`), rendered.
+fn check(name: &str, text: &str) -> String {
+    let dir = crate::scratch(name);
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, text).unwrap();
+    match study::load(&file) {
+        Ok(_) => String::new(),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// `text` validated and run in memory; the error of the run.
+fn run_error(name: &str, text: &str) -> String {
+    let dir = crate::scratch(name);
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, text).unwrap();
+    let study = study::load(&file).unwrap();
+    let options = Options {
+        out: Some(dir.join("results")),
+        cache: Some(dir.join("cache")),
+        t_end: None,
+        foreign: Default::default(),
+    };
+    match study::run_with(&study, &options, &mut Recorder::default()) {
+        Ok(_) => String::new(),
+        Err(e) => study::error::chain(&*e),
+    }
+}
+
+/// A spring whose ends coincide has no direction; with a rest length its force would point
+/// along the round-off of the positions. Refused at the spring; a rest length of 0 (a linear
+/// spring k (x_b - x_a)) is accepted.
+#[test]
+fn a_zero_length_spring_with_a_rest_length_is_refused() {
+    let spring = |rest: f64| {
+        format!("{PENDULUM}[[springs]]\nname = \"s\"\nbetween = [\"bob.P\", \"ground\"]\nground_point = [0.0, -1.0, 0.0]\nstiffness = 100.0\nrest_length = {rest:?}\n{DYNAMIC}")
+    };
+    let e = run_error("spring-zero-length", &spring(0.5));
+    assert!(e.contains("springs[0]"), "{e}");
+    assert!(e.contains("spring-zero-length.toml:"), "{e}");
+    assert!(e.contains("spring 's'") && e.contains("ends coincide"), "{e}");
+    assert_eq!(run_error("spring-zero-rest", &spring(0.0)), "");
+}
+
+/// The velocity of a point that follows a joint is the joint's rate: a velocity given to it
+/// would be ignored, so it is refused, at the `[[initial]]` line.
+#[test]
+fn an_initial_velocity_on_a_point_a_joint_moves_is_refused() {
+    let text = format!("{PENDULUM}[[initial]]\nat = \"bob.P\"\nvelocity = [1.0, 0.0, 0.0]\n{DYNAMIC}");
+    let e = run_error("initial-on-joint", &text);
+    assert!(e.contains("initial[0]"), "{e}");
+    assert!(e.contains("follows a joint"), "{e}");
+    // The joint's rate is the way to give it.
+    let text = format!("{PENDULUM}[[initial]]\njoint = \"pivot\"\nrate = 1.0\n{DYNAMIC}");
+    assert_eq!(run_error("initial-rate", &text), "");
+}
+
+/// A deflection sensor measures from the line through its chord's points: the same point
+/// twice is refused by the validator, two points at one place when the mechanism is built.
+#[test]
+fn a_deflection_sensor_with_coincident_chord_points_is_refused() {
+    let sensor = |a: &str, b: &str| {
+        format!("{PENDULUM}[[sensors]]\nname = \"d\"\ntype = \"deflection\"\nof = \"bob.O\"\nchord = [\"{a}\", \"{b}\"]\n{DYNAMIC}")
+    };
+    let e = check("chord-same", &sensor("bob.P", "bob.P"));
+    assert!(e.contains("sensors[0].chord[1]") && e.contains("both 'bob.P'"), "{e}");
+    let e = run_error("chord-coincident", &sensor("bob.P", "bob.Q"));
+    assert!(e.contains("sensors[0].chord") && e.contains("coincide"), "{e}");
+}
+
+/// Values in range for their type but outside what the physics or double precision allow:
+/// a negative `at_time`, a Newton tolerance below round-off or of 1 and more, a modal damping
+/// ratio of 500 % (a ratio above 1, critical, is refused; 20 % and more warns), more modes
+/// than the part has dofs, each located at its key.
+#[test]
+fn values_outside_their_physical_range_are_refused_at_their_key() {
+    let e = check(
+        "at-time",
+        &format!("{PENDULUM}[[analyses]]\ntype = \"equilibrium\"\nat_time = -1.0\n"),
+    );
+    assert!(e.contains("analyses[0].at_time") && e.contains(">= 0"), "{e}");
+    for (tol, ok) in [
+        ("1e-300", false),
+        ("1e-15", false),
+        ("1.0", false),
+        ("1e-14", true),
+        ("1e-6", true),
+    ] {
+        let e = check(
+            "tolerance",
+            &format!("{PENDULUM}[[analyses]]\ntype = \"equilibrium\"\ntolerance = {tol}\n"),
+        );
+        assert_eq!(e.is_empty(), ok, "tolerance {tol}: {e}");
+        if !ok {
+            assert!(e.contains("analyses[0].tolerance") && e.contains("round-off"), "{e}");
+        }
+    }
+    let cantilever =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cantilever.toml")).unwrap();
+    // 20 beam elements on a clamped root: 20 x 6 = 120 free dofs.
+    let modal = cantilever.replace("modes = 6", "modes = 121");
+    assert_ne!(modal, cantilever, "the example's modal analysis asks for 6 modes");
+    let e = check("modes", &modal);
+    assert!(e.contains(".modes") && e.contains("120 free dofs"), "{e}");
+    let ok = check("modes-ok", &cantilever.replace("modes = 6", "modes = 120"));
+    assert!(ok.is_empty(), "{ok}");
+}
+
+/// A modal damping ratio is a fraction of critical damping: 5 (500 %) is refused, 0.3 warns.
+#[test]
+fn a_modal_damping_ratio_above_critical_is_refused() {
+    let four_bar = study::examples::write("four_bar", &crate::scratch("ratio-example")).unwrap();
+    let text = std::fs::read_to_string(&four_bar).unwrap();
+    let mut doc = study::Document::from_text(&text, &four_bar).unwrap();
+    let e = doc
+        .set("bodies[0].damping", "{ modal_ratio = 5.0 }")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("bodies[0].damping.modal_ratio") && e.contains("fraction of critical"),
+        "{e}"
+    );
+    doc.set("bodies[0].damping", "{ modal_ratio = 0.3 }").unwrap();
+    let w = doc.study().unwrap().warnings.join("\n");
+    assert!(w.contains("modal_ratio") && w.contains("30 %"), "{w}");
+}
+
+/// A named pipe as a study or mesh file would block the reader until something writes into
+/// it: both are refused before they are opened.
+#[cfg(unix)]
+#[test]
+fn a_named_pipe_as_study_or_mesh_file_is_refused() {
+    let dir = crate::scratch("fifo");
+    let fifo = dir.join("pipe.toml");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let e = study::load(&fifo).unwrap_err().to_string();
+    assert!(e.contains("named pipe") && e.contains("pipe.toml"), "{e}");
+    let mesh = dir.join("pipe.msh");
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&mesh)
+        .status()
+        .unwrap()
+        .success());
+    let e = fe_model::mesh::gmsh::read(&mesh).unwrap_err().to_string();
+    assert!(e.contains("named pipe") && e.contains("pipe.msh"), "{e}");
+    let text = "[[materials]]\nname = \"steel\"\nE = 210e9\nnu = 0.3\nrho = 7850.0\n[[parts]]\nname = \"p\"\nmaterial = \"steel\"\n[parts.mesh]\nfile = \"pipe.msh\"\n";
+    std::fs::write(dir.join("uses-pipe.toml"), text).unwrap();
+    let e = study::load(&dir.join("uses-pipe.toml")).unwrap_err().to_string();
+    assert!(e.contains("named pipe") && e.contains("parts[0]"), "{e}");
+}
+
+/// Every name is looked up in a hash table, so validation grows linearly with the number of
+/// entries: 80,000 materials (each name checked against all before it, the last a duplicate
+/// of the first) and a part that refers to the last of them. Before, each entry searched the
+/// list of those before it (80,000^2 / 2 = 3.2e9 comparisons, 13.5 s); the time is not
+/// asserted here (a benchmark's job), the test keeps the case that was quadratic.
+#[test]
+fn eighty_thousand_materials_validate_and_a_duplicate_is_found() {
+    let n = 80_000;
+    let mut text = String::with_capacity(n * 60);
+    for i in 0..n {
+        text.push_str(&format!(
+            "[[materials]]\nname = \"m{i}\"\nE = 210e9\nnu = 0.3\nrho = 7850.0\n"
+        ));
+    }
+    text.push_str("[[materials]]\nname = \"m0\"\nE = 210e9\nnu = 0.3\nrho = 7850.0\n");
+    let e = check("many-materials", &text);
+    assert!(
+        e.contains(&format!("materials[{n}].name")) && e.contains("'m0' is already defined"),
+        "{e}"
+    );
+    assert!(e.contains("(1 error)"), "{e}");
+}

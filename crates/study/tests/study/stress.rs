@@ -1,0 +1,177 @@
+//! Stresses in study files: a load at a load point inside a reduced solid body in an
+//! `equilibrium` analysis against the full FE static stress of the same part under the same
+//! load (the static correction makes them agree), read through `stress` sensors at a node and
+//! over a node set, which agree with the mechanism's VTU stress fields of the same state.
+
+use crate::vtu_array;
+use std::path::PathBuf;
+use study::observer::Recorder;
+
+/// `text` written as `<name>.toml` in a scratch folder and run, in memory and into its
+/// results folder (for the VTU files).
+fn run(name: &str, text: &str) -> (Recorder, Result<study::output::Summary, String>, PathBuf) {
+    let dir = crate::scratch(name);
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, text).unwrap();
+    let study = study::load(&file).unwrap();
+    let mut rec = Recorder::default();
+    let summary = study::run(&study, &crate::options_in(&dir, None), &mut rec).map_err(|e| study::error::chain(&*e));
+    (rec, summary, file)
+}
+
+const TIP: [f64; 3] = [2e2, -3e3, 1e3];
+
+/// A clamped steel hex20 bar 1 x 0.1 x 0.1 m: its full FE static analysis under the tip force
+/// `TIP` at the node (1, 0.05, 0.05), and the same part reduced with 2 modes, stress shapes and
+/// a load point "tip" at that node, clamped at its root in a one-body mechanism with the same
+/// force at the load point. `sensors`: extra `[[sensors]]` text.
+fn study(sensors: &str) -> String {
+    let [fx, fy, fz] = TIP;
+    format!(
+        r#"
+[[materials]]
+name = "steel"
+E = 210e9
+nu = 0.3
+rho = 7850.0
+
+[[parts]]
+name = "bar"
+material = "steel"
+
+[parts.box]
+size = [1.0, 0.1, 0.1]
+divisions = [10, 2, 2]
+element = "hex20"
+
+[[parts.interfaces]]
+name = "root"
+set = "x0"
+spider = "rbe2"
+
+[parts.reduction]
+modes = 2
+stress_shapes = true
+load_points = [{{ name = "tip", node_at = [1.0, 0.05, 0.05] }}]
+
+[[bodies]]
+name = "bar"
+part = "bar"
+
+[[supports]]
+at = "bar.root"
+type = "clamp"
+
+[[loads]]
+name = "tip-force"
+type = "point"
+at = "bar.tip"
+force = [{fx}, {fy}, {fz}]
+
+{sensors}
+
+[[analyses]]
+type = "static"
+name = "full"
+part = "bar"
+supports = [{{ at = "root" }}]
+loads = [{{ node_at = [1.0, 0.05, 0.05], force = [{fx}, {fy}, {fz}] }}]
+
+[[analyses]]
+type = "equilibrium"
+name = "reduced"
+"#
+    )
+}
+
+/// The point field `name` of the one VTU file in the results folder of `analysis`.
+fn vtu_field(file: &std::path::Path, analysis: &str, name: &str) -> Vec<f64> {
+    let dir = file.parent().unwrap().join("results").join(analysis);
+    let vtu = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "vtu"))
+        .max()
+        .unwrap_or_else(|| panic!("no VTU file in {}", dir.display()));
+    vtu_array(&std::fs::read_to_string(vtu).unwrap(), name).unwrap_or_else(|| panic!("no point field {name}"))
+}
+
+#[test]
+fn a_load_at_a_load_point_gives_the_full_models_stress_through_stress_sensors() {
+    // First the full model alone, for its ten most stressed nodes.
+    let (_, summary, file) = run("stress-full", &study(""));
+    summary.unwrap();
+    let full = vtu_field(&file, "full", "von_mises");
+    let mut order: Vec<usize> = (0..full.len()).collect();
+    order.sort_by(|&a, &b| full[b].total_cmp(&full[a]));
+    let hot = &order[..10];
+    let mut sensors: String = hot
+        .iter()
+        .map(|k| format!("[[sensors]]\nname = \"n{k}\"\ntype = \"stress\"\nof = \"bar\"\nnode = {k}\n\n"))
+        .collect();
+    sensors.push_str("[[sensors]]\nname = \"top\"\ntype = \"stress\"\nof = \"bar\"\nset = \"y1\"\n");
+    let (rec, summary, file) = run("stress-reduced", &study(&sensors));
+    summary.unwrap();
+    let full = vtu_field(&file, "full", "von_mises");
+    let reduced_vtu = vtu_field(&file, "reduced", "von_mises");
+    let tensor_vtu = vtu_field(&file, "reduced", "stress");
+    let principal_vtu = vtu_field(&file, "reduced", "max_principal");
+    let value = |name: &str, c: usize| *crate::setup::column(&rec, "reduced", name, c).last().unwrap();
+    let mut worst: f64 = 0.0;
+    for &k in hot {
+        let vm = value(&format!("n{k}"), 6);
+        worst = worst.max((vm - full[k]).abs() / full[k]);
+        // The sensor and the VTU field are the same recovery of the same state; the VTU
+        // text keeps about 10 significant digits.
+        assert!(
+            (vm - reduced_vtu[k]).abs() <= 1e-8 * vm,
+            "node {k}: sensor {vm}, VTU {}",
+            reduced_vtu[k]
+        );
+        for c in 0..6 {
+            let s = value(&format!("n{k}"), c);
+            assert!((s - tensor_vtu[6 * k + c]).abs() <= 1e-8 * vm, "node {k} component {c}");
+        }
+        assert!((value(&format!("n{k}"), 7) - principal_vtu[k]).abs() <= 1e-8 * vm);
+    }
+    // The issue's criterion: 1 % at the ten most stressed nodes. With the attachment modes
+    // the reduced static response to a load at the point is exact in the linear theory; what
+    // remains is the geometric nonlinearity of the equilibrium (tip deflection 6e-4 m on 1 m)
+    // and the Newton tolerance.
+    assert!(worst < 1e-2, "worst von Mises error at the ten hot nodes {worst:.3e}");
+    eprintln!(
+        "stress at the ten most stressed nodes, reduced (2 modes + static correction) vs full: worst {worst:.3e}"
+    );
+    // The maximum over the node set: value and node against the VTU field over the same set.
+    let top = value("top", 0);
+    let node = value("top", 1) as usize;
+    assert!((top - reduced_vtu[node]).abs() <= 1e-8 * top);
+    let study = study::load(&file).unwrap();
+    let set = study.parts[0].base.mesh.node_set("y1").unwrap();
+    let best = set.iter().map(|n| reduced_vtu[n.index()]).fold(0.0, f64::max);
+    assert!(
+        (top - best).abs() <= 1e-8 * top,
+        "max over y1: sensor {top}, VTU {best}"
+    );
+}
+
+/// A stress sensor on a body reduced without stress shapes, or at a node it does not have, is
+/// refused when the study runs, naming the sensor's key.
+#[test]
+fn stress_sensors_name_what_is_wrong() {
+    let text = study("[[sensors]]\nname = \"s\"\ntype = \"stress\"\nof = \"bar\"\nnode = 100000\n");
+    let (_, summary, _) = run("stress-bad-node", &text);
+    let e = summary.unwrap_err();
+    assert!(e.contains("sensors[0].node") && e.contains("mesh nodes"), "{e}");
+    let text = study("[[sensors]]\nname = \"s\"\ntype = \"stress\"\nof = \"bar\"\nset = \"nowhere\"\n");
+    let (_, summary, _) = run("stress-bad-set", &text);
+    let e = summary.unwrap_err();
+    assert!(e.contains("no node set 'nowhere'"), "{e}");
+    let text = study("").replace("at = \"bar.tip\"", "at = \"bar.tap\"");
+    let (_, summary, _) = run("stress-bad-point", &text);
+    let e = summary.unwrap_err();
+    assert!(
+        e.contains("no interface or load point 'tap'") && e.contains("load points: tip"),
+        "{e}"
+    );
+}
