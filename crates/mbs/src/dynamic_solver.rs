@@ -241,13 +241,22 @@ pub enum NewtonStrategy {
 pub const MODIFIED_NEWTON_RATE: f64 = 0.01;
 
 impl DynamicSettings {
+    /// $\rho_\infty$ when a study gives none: damps the highest frequencies a little (the
+    /// spectral radius of a mode at $\omega h \to \infty$ is 0.9 per step) and keeps second
+    /// order.
+    pub const DEFAULT_RHO_INF: f64 = 0.9;
+    /// Default [`DynamicSettings::tolerance`].
+    pub const DEFAULT_TOLERANCE: f64 = 1e-9;
+    /// Default [`DynamicSettings::max_iterations`].
+    pub const DEFAULT_MAX_ITERATIONS: usize = 20;
+
     pub fn new(step: f64, end_time: f64, rho_inf: f64) -> Self {
         Self {
             step,
             end_time,
             rho_inf,
-            tolerance: 1e-9,
-            max_iterations: 20,
+            tolerance: Self::DEFAULT_TOLERANCE,
+            max_iterations: Self::DEFAULT_MAX_ITERATIONS,
             output_every: 1,
             momentum: MomentumProjection::Auto,
             newton: NewtonStrategy::Full,
@@ -311,6 +320,18 @@ pub fn step_end_time(t: f64, h: f64) -> f64 {
         // Round-off of the additions is about 1e-16 of t per step: far below 1e-6 h.
         Ok(rounded) if (rounded - sum).abs() <= 1e-6 * h.abs() => rounded,
         _ => sum,
+    }
+}
+
+/// The size of the last fixed step, from `t` to `t_end`, of nominal size `h`: `h` itself when
+/// a step of `h` ends on `t_end` ([`step_end_time`]), so the run takes the steps a caller
+/// stepping by `h` takes, bit for bit; otherwise `t_end - t`, so the step ends on `t_end`
+/// exactly.
+pub fn last_step_size(t: f64, t_end: f64, h: f64) -> f64 {
+    if step_end_time(t, h) == t_end {
+        h
+    } else {
+        t_end - t
     }
 }
 
@@ -931,7 +952,7 @@ pub fn solve_dynamic(
     for k in 1..=n_steps {
         if k == n_steps {
             // Land on the end time (fixed_steps): the last step may be shorter.
-            integ.set_step_size(settings.end_time - integ.state().time);
+            integ.set_step_size(last_step_size(integ.state().time, settings.end_time, settings.step));
         }
         match integ.step() {
             Ok(rep) => {

@@ -2,8 +2,43 @@
 //! [`crate::System`], [`SolveError`] when an analysis stops, and [`Incomplete`], which carries
 //! a `SolveError` together with everything computed before it.
 
+use crate::model::{BodyId, JointId, NodeId};
 use superelement::SuperelementError;
 use thiserror::Error;
+
+/// An entity of a [`crate::Model`] by its id or its index in the model's list, carried by the
+/// errors so that a caller maps an error to its own description of the entity (a line of a
+/// study file) without reading the message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Entity {
+    Node(NodeId),
+    Body(BodyId),
+    Joint(JointId),
+    /// Index in `Model::point_masses`.
+    PointMass(usize),
+    /// Index in `Model::springs`.
+    Spring(usize),
+    /// Index in `Model::joint_springs`.
+    JointSpring(usize),
+    /// Index in `Model::joint_limits`.
+    JointLimit(usize),
+    /// Index in `Model::actuators`.
+    Actuator(usize),
+    /// Index in `Model::supports`.
+    Support(usize),
+    /// Index in `Model::drivers`.
+    Driver(usize),
+    /// Index in `Model::loads`.
+    Load(usize),
+    /// Index in `Model::body_loads`.
+    BodyLoad(usize),
+    /// Index in `Model::sensors`.
+    Sensor(usize),
+    /// Index in `Model::initial`.
+    InitialCondition(usize),
+    /// Index in the user forces given to [`crate::System::with_user_forces`].
+    UserForce(usize),
+}
 
 /// A model that cannot be turned into a system of independent coordinates.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -15,6 +50,8 @@ pub enum ModelError {
         id: u32,
         count: usize,
         referenced_by: String,
+        /// The entity that refers to it.
+        by: Entity,
     },
     /// An entity refers to a body id that is not in `Model::bodies`.
     #[error("{referenced_by} refers to body {id}, but the model has {count} bodies")]
@@ -22,6 +59,8 @@ pub enum ModelError {
         id: u32,
         count: usize,
         referenced_by: String,
+        /// The entity that refers to it.
+        by: Entity,
     },
     /// An entity refers to a joint id that is not in `Model::joints`.
     #[error("{referenced_by} refers to joint {id}, but the model has {count} joints")]
@@ -29,6 +68,8 @@ pub enum ModelError {
         id: u32,
         count: usize,
         referenced_by: String,
+        /// The entity that refers to it.
+        by: Entity,
     },
     /// A closed kinematic loop made of rigid bodies, joints and supports only. Minimal
     /// coordinates cannot describe it without a constraint equation (theory guide §8): close the loop
@@ -38,21 +79,42 @@ pub enum ModelError {
         bodies: Vec<String>,
         joints: Vec<String>,
         supports: Vec<String>,
+        /// The bodies, joints and supported nodes of the loop.
+        ids: Vec<Entity>,
     },
     /// A rigid group (a node, or nodes welded by rigid bodies) is the child of two joints: the
     /// tree of dependent coordinates cannot be oriented. Reverse one of the joints.
     #[error("nodes [{}] (one rigid group) are the child of joints [{}]; a group can have one parent joint: declare one of them the other way round", nodes.join(", "), joints.join(", "))]
-    TwoParentJoints { nodes: Vec<String>, joints: Vec<String> },
+    TwoParentJoints {
+        nodes: Vec<String>,
+        joints: Vec<String>,
+        joint_ids: Vec<JointId>,
+    },
     /// A support (or node driver) acts on a node whose motion follows a joint: its coordinates
     /// are not independent. Support the joint's root instead, or reverse the joint.
     #[error("support on node '{node}', whose motion is given by joint '{joint}'; supports act on independent nodes only (reverse the joint so that '{node}' is its parent)")]
-    SupportOnDependentNode { node: String, joint: String },
+    SupportOnDependentNode {
+        node: String,
+        joint: String,
+        node_id: NodeId,
+        joint_id: JointId,
+    },
     /// Two supports on one node: merge them into one.
     #[error("node '{node}' has {count} supports; give one support per node")]
-    DuplicateSupport { node: String, count: usize },
+    DuplicateSupport {
+        node: String,
+        count: usize,
+        node_id: NodeId,
+        /// The supports on the node.
+        supports: Vec<usize>,
+    },
     /// A coordinate that no body, mass or spring holds: the system matrices would be singular.
     #[error("{coordinate} is held by nothing (no flexible body, mass, inertia or spring moves with it, and it is not supported)")]
-    UnheldCoordinate { coordinate: String },
+    UnheldCoordinate {
+        coordinate: String,
+        /// The independent node, joint or flexible body the coordinate belongs to.
+        owner: Option<Entity>,
+    },
     /// A flexible body's interface does not sit at its node.
     #[error("body '{body}': interface {interface} ('{name}') is {distance:.3e} m from its node '{node}' (placement * x_k must equal the node position within {tolerance:.1e} m)")]
     InterfaceMismatch {
@@ -62,6 +124,8 @@ pub enum ModelError {
         node: String,
         distance: f64,
         tolerance: f64,
+        body_id: BodyId,
+        node_id: NodeId,
     },
     /// Joint nodes that must coincide (spherical, revolute, universal) do not.
     #[error("joint '{joint}' ({kind}): parent '{parent}' and child '{child}' are {distance:.3e} m apart; they must coincide")]
@@ -71,17 +135,68 @@ pub enum ModelError {
         parent: String,
         child: String,
         distance: f64,
+        joint_id: JointId,
     },
     /// A driver's target is not a coordinate that can be driven.
     #[error("driver '{driver}': {what}")]
-    InvalidDriver { driver: String, what: String },
+    InvalidDriver {
+        driver: String,
+        what: String,
+        /// Index in `Model::drivers`.
+        driver_id: usize,
+    },
     /// A value out of its range (a negative mass, a zero axis, a table with decreasing times...).
     #[error("{entity}: {what}")]
-    InvalidValue { entity: String, what: String },
+    InvalidValue {
+        entity: String,
+        what: String,
+        /// The entity, when the value belongs to one of the model (not to a table read alone).
+        id: Option<Entity>,
+    },
     /// The superelement could not be built from the reduced body (the cause is the
     /// source, so a report walking the chain names it once).
     #[error("body '{body}'")]
-    Superelement { body: String, source: SuperelementError },
+    Superelement {
+        body: String,
+        body_id: BodyId,
+        source: SuperelementError,
+    },
+}
+
+impl ModelError {
+    /// This error with `id` as the entity of an [`ModelError::InvalidValue`] that has none (a
+    /// time function checked for the entity that uses it).
+    pub fn with_id(mut self, entity: Entity) -> Self {
+        if let Self::InvalidValue { id: id @ None, .. } = &mut self {
+            *id = Some(entity);
+        }
+        self
+    }
+
+    /// The entities the error is about, the one to point at first (the entity that refers to
+    /// a missing one, the body of an interface, the joint of a dependent support); empty when
+    /// the error belongs to no single entity (a table read alone).
+    pub fn entities(&self) -> Vec<Entity> {
+        match self {
+            Self::UnknownNode { by, .. } | Self::UnknownBody { by, .. } | Self::UnknownJoint { by, .. } => vec![*by],
+            Self::RigidLoop { ids, .. } => ids.clone(),
+            Self::TwoParentJoints { joint_ids, .. } => joint_ids.iter().map(|&j| Entity::Joint(j)).collect(),
+            Self::SupportOnDependentNode { node_id, joint_id, .. } => {
+                vec![Entity::Joint(*joint_id), Entity::Node(*node_id)]
+            }
+            Self::DuplicateSupport { node_id, supports, .. } => supports
+                .iter()
+                .map(|&s| Entity::Support(s))
+                .chain([Entity::Node(*node_id)])
+                .collect(),
+            Self::UnheldCoordinate { owner, .. } => owner.iter().copied().collect(),
+            Self::InterfaceMismatch { body_id, node_id, .. } => vec![Entity::Body(*body_id), Entity::Node(*node_id)],
+            Self::JointNodesApart { joint_id, .. } => vec![Entity::Joint(*joint_id)],
+            Self::InvalidDriver { driver_id, .. } => vec![Entity::Driver(*driver_id)],
+            Self::InvalidValue { id, .. } => id.iter().copied().collect(),
+            Self::Superelement { body_id, .. } => vec![Entity::Body(*body_id)],
+        }
+    }
 }
 
 /// Why an analysis stopped.
@@ -105,12 +220,19 @@ pub enum SolveError {
     #[error("body '{body}' at t = {t:.6}")]
     Body {
         body: String,
+        id: BodyId,
         t: f64,
         source: SuperelementError,
     },
     /// A user-defined force ([`crate::UserForce`]) gave a value the solver cannot use.
     #[error("user force '{name}' at t = {t:.6}: {what}")]
-    UserForce { name: String, t: f64, what: String },
+    UserForce {
+        name: String,
+        /// Index in the user forces of the system.
+        index: usize,
+        t: f64,
+        what: String,
+    },
     /// Settings out of range (a negative step, rho_inf outside [0, 1], ...).
     #[error("invalid settings: {what}")]
     InvalidSettings { what: String },
@@ -124,6 +246,17 @@ pub enum SolveError {
         t: f64,
         step: usize,
     },
+}
+
+impl SolveError {
+    /// The entity the error is about (a body whose frame failed, a user force), if any.
+    pub fn entity(&self) -> Option<Entity> {
+        match self {
+            Self::Body { id, .. } => Some(Entity::Body(*id)),
+            Self::UserForce { index, .. } => Some(Entity::UserForce(*index)),
+            _ => None,
+        }
+    }
 }
 
 /// A [`SolveError`] with the part of the result computed before it (the converged steps, their

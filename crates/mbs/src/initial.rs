@@ -27,7 +27,7 @@
 //! \mathbf p)$; a body held by the ground is refused (its motion is its joints' rates).
 
 use crate::coordinates::Slot;
-use crate::error::ModelError;
+use crate::error::{Entity, ModelError};
 use crate::model::{Body, DriverTarget, InitialCondition, Model, NodeId};
 use crate::system::{unknown, State, System};
 use crate::time_function::CompiledFunction;
@@ -124,7 +124,8 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
     model
         .initial
         .iter()
-        .map(|c| match c {
+        .enumerate()
+        .map(|(i, c)| match c {
             InitialCondition::JointValue { joint, .. } | InitialCondition::JointRate { joint, .. } => {
                 let j = &model.joints[joint.index()];
                 match reach(&adj, topo, &[j.child.index()], Some(joint.index()), Some(j.parent.index())) {
@@ -137,6 +138,7 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
                             node_name(n),
                             if n == j.parent.index() { "its own parent" } else { "held by the ground" }
                         ),
+                        id: Some(Entity::InitialCondition(i)),
                     }),
                 }
             }
@@ -154,6 +156,7 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
                             "the body is held by the ground through node '{}'; give the initial rates of its joints instead",
                             node_name(n)
                         ),
+                        id: Some(Entity::InitialCondition(i)),
                     }),
                 }
             }
@@ -161,6 +164,7 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
                 Err(ModelError::InvalidValue {
                     entity: format!("initial velocity of node '{}'", node_name(node.index())),
                     what: "the node follows a joint (its velocity is its parent's and the joint's rates), so a velocity given to it would be ignored; give the joint's initial `rate` or the body's velocity instead".into(),
+                    id: Some(Entity::InitialCondition(i)),
                 })
             }
             InitialCondition::NodeVelocity { .. } | InitialCondition::RigidMotion { .. } => Ok(InitialPlan::Direct),
@@ -230,6 +234,7 @@ pub(crate) fn driver_starts(
                         model.nodes[n].name,
                         if n == pivot { "the driven node itself" } else { "held by the ground or the joint's parent" }
                     ),
+                    driver_id: d,
                 })
             }
         }

@@ -33,7 +33,7 @@
 #![allow(non_snake_case)]
 
 use crate::coordinates::{Slot, Values};
-use crate::error::ModelError;
+use crate::error::{Entity, ModelError};
 use crate::model::{JointId, Model, SensorKind};
 use crate::time_function::{CompiledFunction, TimeFunction};
 use crate::topology::Topology;
@@ -151,32 +151,39 @@ impl JointForces {
     /// Checks the model's limits and actuators and finds their coordinates.
     pub(crate) fn new(model: &Model, topo: &Topology) -> Result<Self, ModelError> {
         let map = &topo.map;
-        let scalar = |who: &dyn Fn() -> String, joint: JointId, coordinate: usize| -> Result<usize, ModelError> {
-            let j = model
-                .joints
-                .get(joint.index())
-                .ok_or_else(|| ModelError::UnknownJoint {
+        type Who<'a> = &'a dyn Fn() -> (String, Entity);
+        let scalar = |who: Who, joint: JointId, coordinate: usize| -> Result<usize, ModelError> {
+            let j = model.joints.get(joint.index()).ok_or_else(|| {
+                let (referenced_by, by) = who();
+                ModelError::UnknownJoint {
                     id: joint.0,
                     count: model.joints.len(),
-                    referenced_by: who(),
-                })?;
+                    referenced_by,
+                    by,
+                }
+            })?;
             topo.joint_scalars[joint.index()]
                 .get(coordinate)
                 .copied()
                 .ok_or_else(|| ModelError::InvalidValue {
-                    entity: who(),
+                    entity: who().0,
                     what: format!(
                         "joint '{}' ({}) has {} scalar coordinates; coordinate {coordinate} does not exist",
                         j.name,
                         j.kind.name(),
                         j.kind.n_scalar()
                     ),
+                    id: Some(who().1),
                 })
         };
-        let invalid = |entity: String, what: String| ModelError::InvalidValue { entity, what };
+        let invalid = |(entity, id): (String, Entity), what: String| ModelError::InvalidValue {
+            entity,
+            what,
+            id: Some(id),
+        };
         let mut limits = Vec::new();
-        for l in &model.joint_limits {
-            let who = || format!("joint limit '{}'", l.name);
+        for (i, l) in model.joint_limits.iter().enumerate() {
+            let who = || (format!("joint limit '{}'", l.name), Entity::JointLimit(i));
             let s = scalar(&who, l.joint, l.coordinate)?;
             let (lower, upper) = (l.lower.unwrap_or(f64::NEG_INFINITY), l.upper.unwrap_or(f64::INFINITY));
             if l.lower.is_none() && l.upper.is_none() {
@@ -207,8 +214,8 @@ impl JointForces {
             });
         }
         let mut actuators = Vec::new();
-        for a in &model.actuators {
-            let who = || format!("actuator '{}'", a.name);
+        for (i, a) in model.actuators.iter().enumerate() {
+            let who = || (format!("actuator '{}'", a.name), Entity::Actuator(i));
             let s = scalar(&who, a.joint, a.coordinate)?;
             let Slot::Unknown(dof) = map.scalars[s].slot else {
                 return Err(invalid(
@@ -218,9 +225,13 @@ impl JointForces {
                 ));
             };
             let law = match &a.effort {
-                Effort::Time(f) => Law::Time(f.compile(&who())?),
+                Effort::Time(f) => Law::Time(f.compile(&who().0).map_err(|e| e.with_id(who().1))?),
                 Effort::Pid(p) => {
-                    let measured = scalar(&|| format!("{} (measured coordinate)", who()), p.joint, p.coordinate)?;
+                    let measured = scalar(
+                        &|| (format!("{} (measured coordinate)", who().0), who().1),
+                        p.joint,
+                        p.coordinate,
+                    )?;
                     let gains = [p.kp, p.ki, p.kd];
                     if !gains.iter().all(|&g| nonnegative(g)) || gains.iter().all(|&g| g == 0.0) {
                         return Err(invalid(
@@ -237,7 +248,8 @@ impl JointForces {
                     }
                     Law::Pid {
                         scalar: measured,
-                        setpoint: p.setpoint.compile(&format!("{} set-point", who()))?,
+                        setpoint: (p.setpoint.compile(&format!("{} set-point", who().0)))
+                            .map_err(|e| e.with_id(who().1))?,
                         kp: p.kp,
                         ki: p.ki,
                         kd: p.kd,
@@ -248,11 +260,11 @@ impl JointForces {
             };
             actuators.push(Actuator { dof, law, held: None });
         }
-        for sensor in &model.sensors {
+        for (i, sensor) in model.sensors.iter().enumerate() {
             if let SensorKind::ActuatorEffort { actuator } = sensor.kind {
                 if actuator >= actuators.len() {
                     return Err(invalid(
-                        format!("sensor '{}'", sensor.name),
+                        (format!("sensor '{}'", sensor.name), Entity::Sensor(i)),
                         format!("actuator {actuator} does not exist ({} actuators)", actuators.len()),
                     ));
                 }

@@ -180,16 +180,20 @@ pub mod error;
 pub mod initial;
 pub mod joint_forces;
 pub mod linearized;
+pub mod merge;
 pub mod model;
 pub mod momentum;
 pub mod node;
+pub mod recovery;
 pub mod retry;
 pub mod sensors;
 pub mod stability;
 pub mod static_solver;
+pub mod streaming;
 pub mod system;
 pub mod time_function;
 pub mod topology;
+pub mod units;
 pub mod user_force;
 
 pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
@@ -198,12 +202,13 @@ pub use dynamic_solver::{
     DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE, PI_INTEGRAL,
     PI_PROPORTIONAL,
 };
-pub use error::{Incomplete, ModelError, SolveError};
+pub use error::{Entity, Incomplete, ModelError, SolveError};
 pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
 pub use linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,
     NodeEnergy,
 };
+pub use merge::{weld_points, WeldError};
 pub use model::{
     Body, BodyId, BodyLoad, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind,
     JointSpring, Load, LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor,
@@ -217,6 +222,8 @@ pub use retry::{
 pub use sensors::{Energies, SensorRecord};
 pub use stability::{stability, Stability};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
+pub use streaming::{Interrupted, StepDone, StepTotals, Stepping};
 pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
 pub use time_function::{Interpolation, TimeFunction};
+pub use units::CoordinateQuantity;
 pub use user_force::{FdSteps, UserForce, Wrench};

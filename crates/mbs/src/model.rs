@@ -15,7 +15,23 @@ use crate::time_function::TimeFunction;
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
 use reduction::ReducedBody;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 use superelement::{Damping, FrameChoice, MassVariant};
+
+/// Serde of a shared reduced body: written as the body itself, read into a new `Arc`.
+mod shared_body {
+    use reduction::ReducedBody;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+    use std::sync::Arc;
+
+    pub fn serialize<S: Serializer>(body: &Arc<ReducedBody>, s: S) -> Result<S::Ok, S::Error> {
+        body.as_ref().serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Arc<ReducedBody>, D::Error> {
+        ReducedBody::deserialize(d).map(Arc::new)
+    }
+}
 
 /// Index of a node in [`Model::nodes`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -80,7 +96,11 @@ impl Body {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FlexibleBody {
     pub name: String,
-    pub reduced: ReducedBody,
+    /// The reduced body, shared (not copied) with the system built from the model, its
+    /// superelement and every caller that keeps it: a large solid's mesh and stress shapes
+    /// are hundreds of MB.
+    #[serde(with = "shared_body")]
+    pub reduced: Arc<ReducedBody>,
     /// Node of each interface, in the order of `reduced.interfaces`.
     pub nodes: Vec<NodeId>,
     /// Placement of the FE model's axes in the inertial frame at the initial configuration:
@@ -507,12 +527,13 @@ impl Model {
     /// A flexible body with the given placement, frame choice, inertia variant and no damping.
     pub fn add_flexible_body(
         &mut self,
-        reduced: ReducedBody,
+        reduced: impl Into<Arc<ReducedBody>>,
         nodes: Vec<NodeId>,
         placement: Isometry3<f64>,
         frame: FrameChoice,
         mass: MassVariant,
     ) -> BodyId {
+        let reduced = reduced.into();
         let name = reduced.name.clone();
         self.add_body(Body::Flexible(Box::new(FlexibleBody {
             name,

@@ -212,6 +212,7 @@ impl System {
                 f.se.forces(&bs, &vec![0.0; n], &Vector3::zeros())
                     .map_err(|source| SolveError::Body {
                         body: self.model.bodies[f.body].name().to_string(),
+                        id: crate::model::BodyId(f.body as u32),
                         t: state.time,
                         source,
                     })?;

@@ -173,7 +173,11 @@ pub fn solve_dynamic_retrying(
     for k in 1..=n_steps {
         if k == n_steps {
             // Land on the end time: the last step may be shorter.
-            integ.set_step_size(settings.end_time - integ.state().time());
+            integ.set_step_size(crate::dynamic_solver::last_step_size(
+                integ.state().time(),
+                settings.end_time,
+                h,
+            ));
         }
         match step_retrying(&mut integ, min_step) {
             Ok(done) => {

@@ -96,6 +96,7 @@ impl System {
         let map = &self.topo.map;
         let body_err = |f: &crate::body::FlexibleElement, source| SolveError::Body {
             body: self.model.bodies[f.body].name().to_string(),
+            id: crate::model::BodyId(f.body as u32),
             t: state.time,
             source,
         };
@@ -154,6 +155,7 @@ impl System {
         let bs = self.body_state(i, state, &self.node_motions(state));
         let kin = f.se.kinematics(&bs).map_err(|source| SolveError::Body {
             body: self.model.bodies[f.body].name().to_string(),
+            id: body,
             t: state.time,
             source,
         })?;

@@ -47,12 +47,17 @@ pub struct StaticSettings {
 }
 
 impl StaticSettings {
+    /// Default [`StaticSettings::tolerance`] (its docs say why).
+    pub const DEFAULT_TOLERANCE: f64 = 1e-10;
+    /// Default [`StaticSettings::max_iterations`].
+    pub const DEFAULT_MAX_ITERATIONS: usize = 25;
+
     /// The whole load in `steps` equal increments (grown when Newton converges fast).
     pub fn new(steps: usize) -> Self {
         let d = 1.0 / steps.max(1) as f64;
         Self {
-            tolerance: 1e-10,
-            max_iterations: 25,
+            tolerance: Self::DEFAULT_TOLERANCE,
+            max_iterations: Self::DEFAULT_MAX_ITERATIONS,
             max_correction: 1.0,
             initial_increment: d,
             min_increment: 1e-6,

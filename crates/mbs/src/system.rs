@@ -26,7 +26,7 @@ use crate::body::{
     LoadElement, RigidElement, SpringElement,
 };
 use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
-use crate::error::{ModelError, SolveError};
+use crate::error::{Entity, ModelError, SolveError};
 use crate::initial::InitialPlan;
 use crate::joint_forces::{Control, JointForces};
 use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId, SensorKind};
@@ -341,7 +341,7 @@ impl System {
         topology::check_references(model)?;
         let topo = topology::build(model)?;
         let map = &topo.map;
-        let invalid = |entity: String, what: String| ModelError::InvalidValue { entity, what };
+        let invalid = |id: Option<Entity>, entity: String, what: String| ModelError::InvalidValue { entity, what, id };
         let mut flexible = Vec::new();
         let mut rigid = Vec::new();
         // Model size: spread of the nodes, flexible bodies and centres of mass.
@@ -358,16 +358,18 @@ impl System {
                     let N = f.reduced.interfaces.len();
                     if f.nodes.len() != N {
                         return Err(invalid(
+                            Some(Entity::Body(BodyId(bi as u32))),
                             format!("body '{}'", f.name),
                             format!("{} nodes for {N} interfaces", f.nodes.len()),
                         ));
                     }
-                    let se = Superelement::new(&f.reduced, f.frame, f.mass, f.damping.clone()).map_err(|source| {
-                        ModelError::Superelement {
+                    let se = Superelement::shared(Arc::clone(&f.reduced), f.frame, f.mass, f.damping.clone()).map_err(
+                        |source| ModelError::Superelement {
                             body: f.name.clone(),
+                            body_id: BodyId(bi as u32),
                             source,
-                        }
-                    })?;
+                        },
+                    )?;
                     let pos: Vec<Vector3<f64>> =
                         f.reduced.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
                     let tolerance = 1e-6 * (1.0 + size_body(&pos));
@@ -384,6 +386,8 @@ impl System {
                                 node: node.name.clone(),
                                 distance,
                                 tolerance,
+                                body_id: BodyId(bi as u32),
+                                node_id: f.nodes[k],
                             });
                         }
                         offsets.push(node.orientation.inverse() * f.placement.rotation);
@@ -413,6 +417,7 @@ impl System {
                         && r.inertia.iter().all(|x| x.is_finite());
                     if !ok {
                         return Err(invalid(
+                            Some(Entity::Body(BodyId(bi as u32))),
                             format!("rigid body '{}'", r.name),
                             "mass must be finite and >= 0, centre of mass and inertia finite".into(),
                         ));
@@ -430,15 +435,17 @@ impl System {
         for (i, p) in model.point_masses.iter().enumerate() {
             if !(p.mass >= 0.0 && finite(p.mass)) {
                 return Err(invalid(
+                    Some(Entity::PointMass(i)),
                     format!("point mass {i}"),
                     format!("mass must be finite and >= 0, got {}", p.mass),
                 ));
             }
         }
         let mut springs = Vec::new();
-        for s in &model.springs {
+        for (i, s) in model.springs.iter().enumerate() {
             if !(s.stiffness >= 0.0 && s.damping >= 0.0 && finite(s.stiffness) && finite(s.damping)) {
                 return Err(invalid(
+                    Some(Entity::Spring(i)),
                     format!("spring '{}'", s.name),
                     "stiffness and damping must be finite and >= 0".into(),
                 ));
@@ -451,6 +458,7 @@ impl System {
             // k (l - l0) would act along the round-off of the end positions.
             if l0 > 0.0 && l <= 1e-9 * l0 {
                 return Err(invalid(
+                    Some(Entity::Spring(i)),
                     format!("spring '{}'", s.name),
                     format!("its ends coincide (length {l:.3e} m) and its rest length is {l0} m: the direction of its force is undefined; place the ends apart (or give rest_length = 0)"),
                 ));
@@ -466,9 +474,13 @@ impl System {
         }
         let mut loads = Vec::new();
         for (i, l) in model.loads.iter().enumerate() {
-            let time = l.time.compile(&format!("load {i}"))?;
+            let time = (l.time.compile(&format!("load {i}"))).map_err(|e| e.with_id(Entity::Load(i)))?;
             if !l.value.iter().all(|x| x.is_finite()) {
-                return Err(invalid(format!("load {i}"), "non-finite value".into()));
+                return Err(invalid(
+                    Some(Entity::Load(i)),
+                    format!("load {i}"),
+                    "non-finite value".into(),
+                ));
             }
             let node = &model.nodes[l.node.index()];
             let (follower, value) = match l.axes {
@@ -487,6 +499,7 @@ impl System {
         for (i, js) in model.joint_springs.iter().enumerate() {
             let s = *topo.joint_scalars[js.joint.index()].get(js.coordinate).ok_or_else(|| {
                 invalid(
+                    Some(Entity::JointSpring(i)),
                     format!("joint spring {i}"),
                     format!("joint coordinate {} does not exist", js.coordinate),
                 )
@@ -496,9 +509,10 @@ impl System {
         let drivers = model
             .drivers
             .iter()
-            .map(|d| d.motion.compile(&format!("driver '{}'", d.name)))
+            .enumerate()
+            .map(|(i, d)| (d.motion.compile(&format!("driver '{}'", d.name))).map_err(|e| e.with_id(Entity::Driver(i))))
             .collect::<Result<Vec<_>, _>>()?;
-        for c in &model.initial {
+        for (i, c) in model.initial.iter().enumerate() {
             if let InitialCondition::JointValue { joint, coordinate, .. }
             | InitialCondition::JointRate { joint, coordinate, .. } = c
             {
@@ -507,6 +521,7 @@ impl System {
                     Some(&s) if matches!(map.scalars[s].slot, Slot::Unknown(_)) => {}
                     _ => {
                         return Err(invalid(
+                            Some(Entity::InitialCondition(i)),
                             format!("initial condition on joint '{}'", j.name),
                             format!("coordinate {coordinate} is not a free coordinate of the joint"),
                         ))
@@ -563,7 +578,7 @@ impl System {
         for (i, u) in user_forces.iter().enumerate() {
             elements.push(ElementRef {
                 kind: ElementKind::User(i),
-                nodes: crate::user_force::check_nodes(u.as_ref(), model.nodes.len())?,
+                nodes: crate::user_force::check_nodes(u.as_ref(), i, model.nodes.len())?,
                 modal: vec![],
             });
         }
@@ -592,7 +607,7 @@ impl System {
         let lu = if n > 0 {
             Some(
                 SymbolicLu::try_new(symbolic.as_ref())
-                    .map_err(|e| invalid("system".into(), format!("symbolic LU failed: {e:?}")))?,
+                    .map_err(|e| invalid(None, "system".into(), format!("symbolic LU failed: {e:?}")))?,
             )
         } else {
             None
@@ -684,12 +699,14 @@ impl System {
             return Err(ModelError::InvalidValue {
                 entity: format!("load {load}"),
                 what: "non-finite value".into(),
+                id: Some(Entity::Load(load)),
             });
         }
         let (Some(l), Some(e)) = (self.model.loads.get_mut(load), self.loads.get_mut(load)) else {
             return Err(ModelError::InvalidValue {
                 entity: format!("load {load}"),
                 what: format!("there are {} loads", self.model.loads.len()),
+                id: None,
             });
         };
         l.value = value;
@@ -712,7 +729,11 @@ impl System {
         };
         self.joint_forces
             .hold(actuator, effort)
-            .map_err(|what| ModelError::InvalidValue { entity: entity(), what })
+            .map_err(|what| ModelError::InvalidValue {
+                entity: entity(),
+                what,
+                id: Some(Entity::Actuator(actuator)),
+            })
     }
 
     /// The effort actuator `actuator` is held at by [`System::set_actuator_effort`] (`None`:
@@ -1339,6 +1360,7 @@ impl System {
                 )
                 .map_err(|source| SolveError::Body {
                     body: self.model.bodies[f.body].name().to_string(),
+                    id: crate::model::BodyId(f.body as u32),
                     t: state.time,
                     source,
                 })?;
@@ -1358,7 +1380,7 @@ impl System {
             ElementKind::User(i) => {
                 let buffer = buf.user.as_mut().expect("user force buffer");
                 let force = self.user_forces[*i].as_ref();
-                user_force_element(force, &e.nodes, nodes, state.time, lambda, tangents, buffer, out)?;
+                user_force_element(force, *i, &e.nodes, nodes, state.time, lambda, tangents, buffer, out)?;
             }
         }
         Ok(())
@@ -1691,7 +1713,11 @@ fn body_loads(
         .filter(|(_, l)| l.body.index() == bi)
     {
         let entity = || format!("load {i} on body '{}'", model.bodies[bi].name());
-        let invalid = |what: String| ModelError::InvalidValue { entity: entity(), what };
+        let invalid = |what: String| ModelError::InvalidValue {
+            entity: entity(),
+            what,
+            id: Some(Entity::BodyLoad(i)),
+        };
         if l.point >= se.load_points().len() {
             return Err(invalid(format!(
                 "load point {} does not exist (the reduced body has {})",
@@ -1714,14 +1740,15 @@ fn body_loads(
             moment,
             follower,
         };
-        out.push((load, l.time.compile(&entity())?));
+        let time = l.time.compile(&entity()).map_err(|e| e.with_id(Entity::BodyLoad(i)))?;
+        out.push((load, time));
     }
     Ok(out)
 }
 
 /// Every stress sensor is on a flexible body reduced with stress shapes, at nodes it has.
 fn check_stress_sensors(model: &Model, flexible: &[FlexibleElement]) -> Result<(), ModelError> {
-    for s in &model.sensors {
+    for (i, s) in model.sensors.iter().enumerate() {
         let (body, nodes): (BodyId, &[usize]) = match &s.kind {
             SensorKind::Stress { body, node } => (*body, std::slice::from_ref(node)),
             SensorKind::MaxVonMises { body, nodes } => (*body, nodes),
@@ -1730,6 +1757,7 @@ fn check_stress_sensors(model: &Model, flexible: &[FlexibleElement]) -> Result<(
         let invalid = |what: String| ModelError::InvalidValue {
             entity: format!("sensor '{}'", s.name),
             what,
+            id: Some(Entity::Sensor(i)),
         };
         let name = model.bodies[body.index()].name();
         let Some(f) = flexible.iter().find(|f| f.body == body.index()) else {

@@ -92,6 +92,7 @@ impl TimeFunction {
                     return Err(ModelError::InvalidValue {
                         entity: "CSV table".into(),
                         what: format!("line {}: expected two numbers `time, value`, got '{line}'", i + 1),
+                        id: None,
                     })
                 }
             }
@@ -111,6 +112,7 @@ impl TimeFunction {
             Err(ModelError::InvalidValue {
                 entity: entity.into(),
                 what,
+                id: None,
             })
         };
         let finite = |xs: &[f64]| xs.iter().all(|x| x.is_finite());

@@ -23,9 +23,10 @@
 #![allow(non_snake_case)]
 
 use crate::coordinates::{Chain, CoordinateMap, Motion, Op, Rotation, Scalar, Slot, Values};
-use crate::error::ModelError;
+use crate::error::{Entity, ModelError};
 use crate::model::{
-    Body, DriverTarget, InitialCondition, JointKind, Model, NodeId, RotationSupport, SensorKind, TranslationSupport,
+    Body, BodyId, DriverTarget, InitialCondition, JointId, JointKind, Model, NodeId, RotationSupport, SensorKind,
+    TranslationSupport,
 };
 use nalgebra::{UnitQuaternion, Vector3};
 use std::collections::{HashMap, VecDeque};
@@ -58,6 +59,9 @@ pub(crate) struct Topology {
     pub modal_scalars: Vec<Vec<usize>>,
     /// Dimension of each unknown.
     pub dims: Vec<Dimension>,
+    /// The entity each unknown belongs to: the independent node, the joint or the flexible
+    /// body (modal coordinates).
+    pub dof_owners: Vec<Option<Entity>>,
 }
 
 struct UnionFind(Vec<usize>);
@@ -100,12 +104,13 @@ pub(crate) fn perpendicular_pair(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64
     (b1, b2)
 }
 
-fn unit(v: &Vector3<f64>, entity: &str, what: &str) -> Result<Vector3<f64>, ModelError> {
+fn unit(v: &Vector3<f64>, entity: &str, id: Entity, what: &str) -> Result<Vector3<f64>, ModelError> {
     let n = v.norm();
     if !(n > 1e-300) || !n.is_finite() {
         return Err(ModelError::InvalidValue {
             entity: entity.into(),
             what: format!("{what} must be a finite non-zero vector, got {v:?}"),
+            id: Some(id),
         });
     }
     Ok(v / n)
@@ -114,30 +119,34 @@ fn unit(v: &Vector3<f64>, entity: &str, what: &str) -> Result<Vector3<f64>, Mode
 /// Checks every reference of the model to a node, body or joint.
 pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
     let nn = model.nodes.len();
-    let node = |id: NodeId, who: &dyn Fn() -> String| {
+    let node = |id: NodeId, who: &dyn Fn() -> (String, Entity)| {
         if id.index() < nn {
             Ok(())
         } else {
+            let (referenced_by, by) = who();
             Err(ModelError::UnknownNode {
                 id: id.0,
                 count: nn,
-                referenced_by: who(),
+                referenced_by,
+                by,
             })
         }
     };
-    let joint = |j: crate::JointId, who: &dyn Fn() -> String| {
+    let joint = |j: crate::JointId, who: &dyn Fn() -> (String, Entity)| {
         if j.index() < model.joints.len() {
             Ok(())
         } else {
+            let (referenced_by, by) = who();
             Err(ModelError::UnknownJoint {
                 id: j.0,
                 count: model.joints.len(),
-                referenced_by: who(),
+                referenced_by,
+                by,
             })
         }
     };
-    for b in &model.bodies {
-        let who = || format!("body '{}'", b.name());
+    for (bi, b) in model.bodies.iter().enumerate() {
+        let who = || (format!("body '{}'", b.name()), Entity::Body(BodyId(bi as u32)));
         match b {
             Body::Flexible(f) => {
                 for &n in &f.nodes {
@@ -153,35 +162,35 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
         }
     }
     for (i, p) in model.point_masses.iter().enumerate() {
-        node(p.node, &|| format!("point mass {i}"))?;
+        node(p.node, &|| (format!("point mass {i}"), Entity::PointMass(i)))?;
     }
-    for s in &model.springs {
-        let who = || format!("spring '{}'", s.name);
+    for (i, s) in model.springs.iter().enumerate() {
+        let who = || (format!("spring '{}'", s.name), Entity::Spring(i));
         node(s.a, &who)?;
         if let Some(b) = s.b {
             node(b, &who)?;
         }
     }
     for (i, s) in model.supports.iter().enumerate() {
-        node(s.node, &|| format!("support {i}"))?;
+        node(s.node, &|| (format!("support {i}"), Entity::Support(i)))?;
     }
-    for j in &model.joints {
-        let who = || format!("joint '{}'", j.name);
+    for (ji, j) in model.joints.iter().enumerate() {
+        let who = || (format!("joint '{}'", j.name), Entity::Joint(JointId(ji as u32)));
         node(j.parent, &who)?;
         node(j.child, &who)?;
     }
     for (i, s) in model.joint_springs.iter().enumerate() {
-        joint(s.joint, &|| format!("joint spring {i}"))?;
+        joint(s.joint, &|| (format!("joint spring {i}"), Entity::JointSpring(i)))?;
     }
-    for d in &model.drivers {
-        let who = || format!("driver '{}'", d.name);
+    for (i, d) in model.drivers.iter().enumerate() {
+        let who = || (format!("driver '{}'", d.name), Entity::Driver(i));
         match &d.target {
             DriverTarget::Joint { joint: j, .. } => joint(*j, &who)?,
             DriverTarget::NodeTranslation { node: n, .. } | DriverTarget::NodeRotation { node: n } => node(*n, &who)?,
         }
     }
     for (i, l) in model.loads.iter().enumerate() {
-        node(l.node, &|| format!("load {i}"))?;
+        node(l.node, &|| (format!("load {i}"), Entity::Load(i)))?;
     }
     for (i, l) in model.body_loads.iter().enumerate() {
         match model.bodies.get(l.body.index()) {
@@ -193,6 +202,7 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
                         "body '{}' is rigid: loads at load points act on flexible bodies",
                         b.name()
                     ),
+                    id: Some(Entity::BodyLoad(i)),
                 })
             }
             None => {
@@ -200,12 +210,13 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
                     id: l.body.0,
                     count: model.bodies.len(),
                     referenced_by: format!("body load {i}"),
+                    by: Entity::BodyLoad(i),
                 })
             }
         }
     }
-    for s in &model.sensors {
-        let who = || format!("sensor '{}'", s.name);
+    for (i, s) in model.sensors.iter().enumerate() {
+        let who = || (format!("sensor '{}'", s.name), Entity::Sensor(i));
         match &s.kind {
             SensorKind::NodePosition { node: n }
             | SensorKind::NodeDisplacement { node: n }
@@ -228,23 +239,26 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
             | SensorKind::MaxVonMises { body, .. }
                 if body.index() >= model.bodies.len() =>
             {
+                let (referenced_by, by) = who();
                 return Err(ModelError::UnknownBody {
                     id: body.0,
                     count: model.bodies.len(),
-                    referenced_by: who(),
+                    referenced_by,
+                    by,
                 });
             }
             SensorKind::DriverEffort { driver } if *driver >= model.drivers.len() => {
                 return Err(ModelError::InvalidValue {
-                    entity: who(),
+                    entity: who().0,
                     what: format!("driver {driver} does not exist ({} drivers)", model.drivers.len()),
+                    id: Some(Entity::Sensor(i)),
                 });
             }
             _ => {}
         }
     }
-    for c in &model.initial {
-        let who = || "initial condition".to_string();
+    for (i, c) in model.initial.iter().enumerate() {
+        let who = || ("initial condition".to_string(), Entity::InitialCondition(i));
         match c {
             InitialCondition::JointValue { joint: j, .. } | InitialCondition::JointRate { joint: j, .. } => {
                 joint(*j, &who)?
@@ -252,10 +266,12 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
             InitialCondition::NodeVelocity { node: n, .. } => node(*n, &who)?,
             InitialCondition::RigidMotion { .. } => {}
             InitialCondition::BodyVelocity { body, .. } if body.index() >= model.bodies.len() => {
+                let (referenced_by, by) = who();
                 return Err(ModelError::UnknownBody {
                     id: body.0,
                     count: model.bodies.len(),
-                    referenced_by: who(),
+                    referenced_by,
+                    by,
                 });
             }
             InitialCondition::BodyVelocity { .. } => {}
@@ -280,6 +296,11 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         return Err(ModelError::DuplicateSupport {
             node: name(i),
             count: count[i],
+            node_id: NodeId(i as u32),
+            supports: (model.supports.iter().enumerate())
+                .filter(|(_, s)| s.node.index() == i)
+                .map(|(k, _)| k)
+                .collect(),
         });
     }
 
@@ -300,6 +321,7 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
                             j.kind.name(),
                             j.kind.n_scalar()
                         ),
+                        driver_id: di,
                     });
                 }
                 joint_driver.insert((joint.index(), *coordinate), di)
@@ -309,6 +331,7 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
                     return Err(ModelError::InvalidDriver {
                         driver: d.name.clone(),
                         what: format!("translation component {component} (0, 1 or 2)"),
+                        driver_id: di,
                     });
                 }
                 trans_driver.insert((node.index(), *component), di)
@@ -319,6 +342,7 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
             return Err(ModelError::InvalidDriver {
                 driver: d.name.clone(),
                 what: format!("its coordinate is already driven by '{}'", model.drivers[other].name),
+                driver_id: di,
             });
         }
     }
@@ -371,21 +395,38 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
             let mut path = tree_path(&adjacency, a, b);
             path.push(e);
             let (mut bodies, mut joints, mut supports) = (Vec::new(), Vec::new(), Vec::new());
+            // The ids: bodies, then joints, then supported nodes, each by index.
+            let mut ids = [Vec::new(), Vec::new(), Vec::new()];
             for e in path {
                 match e {
-                    Edge::Body(bi) => bodies.push(model.bodies[bi].name().to_string()),
-                    Edge::Joint(ji) => joints.push(model.joints[ji].name.clone()),
-                    Edge::Ground(n) => supports.push(name(n)),
+                    Edge::Body(bi) => {
+                        bodies.push(model.bodies[bi].name().to_string());
+                        ids[0].push(Entity::Body(BodyId(bi as u32)));
+                    }
+                    Edge::Joint(ji) => {
+                        joints.push(model.joints[ji].name.clone());
+                        ids[1].push(Entity::Joint(JointId(ji as u32)));
+                    }
+                    Edge::Ground(n) => {
+                        supports.push(name(n));
+                        ids[2].push(Entity::Node(NodeId(n as u32)));
+                    }
                 }
             }
             for v in [&mut bodies, &mut joints, &mut supports] {
                 v.sort();
                 v.dedup();
             }
+            for v in &mut ids {
+                v.sort();
+                v.dedup();
+            }
+            let ids = ids.concat();
             return Err(ModelError::RigidLoop {
                 bodies,
                 joints,
                 supports,
+                ids,
             });
         }
         adjacency[a].push((b, e));
@@ -412,12 +453,15 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
             return Err(ModelError::TwoParentJoints {
                 nodes: members(*g).into_iter().map(name).collect(),
                 joints: js.iter().map(|&j| model.joints[j].name.clone()).collect(),
+                joint_ids: js.iter().map(|&j| JointId(j as u32)).collect(),
             });
         }
         if let Some(n) = members(*g).into_iter().find(|&n| grounded[n]) {
             return Err(ModelError::SupportOnDependentNode {
                 node: name(n),
                 joint: model.joints[js[0]].name.clone(),
+                node_id: NodeId(n as u32),
+                joint_id: JointId(js[0] as u32),
             });
         }
     }
@@ -479,11 +523,13 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         // Entry node.
         let (parent, ops, own) = match joint {
             None => {
+                b.owner = Some(Entity::Node(NodeId(e as u32)));
                 let (ops, own, rc) = root_chain(model, e, support[e], &trans_driver, &rot_driver, &mut b)?;
                 root_coords[e] = Some(rc);
                 (None, ops, own)
             }
             Some(ji) => {
+                b.owner = Some(Entity::Joint(JointId(ji as u32)));
                 let (mut ops, own, scalars) = joint_chain(model, ji, &joint_driver, &mut b)?;
                 // Column positions continue after the parent's columns (prefix property).
                 let shift = chain_slots[model.joints[ji].parent.index()].len();
@@ -544,6 +590,7 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
     let mut modal_scalars = vec![Vec::new(); model.bodies.len()];
     for (bi, body) in model.bodies.iter().enumerate() {
         if let Body::Flexible(f) = body {
+            b.owner = Some(Entity::Body(BodyId(bi as u32)));
             modal_scalars[bi] = (0..f.reduced.n_modes)
                 .map(|i| {
                     b.scalar(
@@ -585,6 +632,7 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         roots: root_coords,
         modal_scalars,
         dims: b.dims,
+        dof_owners: b.dof_owners,
     })
 }
 
@@ -633,6 +681,9 @@ struct Builder {
     prescribed: Vec<(Option<usize>, usize)>,
     dof_labels: Vec<String>,
     dims: Vec<Dimension>,
+    /// The entity the coordinates allocated now belong to.
+    owner: Option<Entity>,
+    dof_owners: Vec<Option<Entity>>,
 }
 
 /// What a new scalar coordinate is.
@@ -650,6 +701,7 @@ impl Builder {
             Slot::Unknown(_) => {
                 self.n_dof += 1;
                 self.dof_labels.push(label.clone());
+                self.dof_owners.push(self.owner);
                 self.dims.push(dim);
                 Slot::Unknown(self.n_dof - 1)
             }
@@ -676,6 +728,7 @@ impl Builder {
         let dof = self.n_dof;
         for c in ["x", "y", "z"] {
             self.dof_labels.push(format!("{label}, component {c}"));
+            self.dof_owners.push(self.owner);
             self.dims.push(Dimension::Angle);
         }
         self.n_dof += 3;
@@ -701,6 +754,11 @@ fn root_chain(
 ) -> Result<ChainParts, ModelError> {
     let node = &model.nodes[n];
     let entity = format!("support of node '{}'", node.name);
+    let id = model
+        .supports
+        .iter()
+        .position(|s| s.node.index() == n)
+        .map_or(Entity::Node(NodeId(n as u32)), Entity::Support);
     let (ts, rs) = match support {
         Some(s) => (s.translation.clone(), s.rotation.clone()),
         None => (TranslationSupport::Free, RotationSupport::Free),
@@ -713,7 +771,7 @@ fn root_chain(
             ([I[0], I[1], I[2]], [!fixed[0], !fixed[1], !fixed[2]], ["x", "y", "z"])
         }
         TranslationSupport::Line { direction } => {
-            let d = unit(direction, &entity, "the slider direction")?;
+            let d = unit(direction, &entity, id, "the slider direction")?;
             let (b1, b2) = perpendicular_pair(&d);
             (
                 [d, b1, b2],
@@ -722,7 +780,7 @@ fn root_chain(
             )
         }
         TranslationSupport::Plane { normal } => {
-            let nn = unit(normal, &entity, "the plane normal")?;
+            let nn = unit(normal, &entity, id, "the plane normal")?;
             let (b1, b2) = perpendicular_pair(&nn);
             (
                 [b1, b2, nn],
@@ -747,6 +805,7 @@ fn root_chain(
                         "translation component {i} of node '{}' is removed by its support",
                         node.name
                     ),
+                    driver_id: d,
                 })
             }
             (None, true) => Kind::Free,
@@ -774,6 +833,7 @@ fn root_chain(
                     "node '{}' has no rotation axis to drive: give it a support with `RotationSupport::Axis`",
                     node.name
                 ),
+                driver_id: rot_drv.unwrap(),
             })
         }
         RotationSupport::Free => {
@@ -804,7 +864,7 @@ fn root_chain(
             RootRotation::Axes(axes)
         }
         RotationSupport::Axis { axis } => {
-            let a = unit(axis, &entity, "the rotation axis")?;
+            let a = unit(axis, &entity, id, "the rotation axis")?;
             let (b1, b2) = perpendicular_pair(&a);
             let mut axes = [(0, Vector3::zeros()); 3];
             for (i, (e, kind, what)) in [
@@ -845,11 +905,13 @@ fn joint_chain(
 ) -> Result<JointParts, ModelError> {
     let j = &model.joints[ji];
     let entity = format!("joint '{}'", j.name);
+    let id = Entity::Joint(JointId(ji as u32));
     let (p, c) = (&model.nodes[j.parent.index()], &model.nodes[j.child.index()]);
     if j.parent == j.child {
         return Err(ModelError::InvalidValue {
             entity,
             what: "parent and child are the same node".into(),
+            id: Some(id),
         });
     }
     let Rp = p.orientation.inverse();
@@ -867,6 +929,7 @@ fn joint_chain(
             parent: p.name.clone(),
             child: c.name.clone(),
             distance,
+            joint_id: JointId(ji as u32),
         });
     }
     let mut ops = Vec::new();
@@ -910,30 +973,31 @@ fn joint_chain(
             });
         }
         JointKind::Revolute { axis } => {
-            add(b, &mut ops, true, unit(axis, &entity, "the axis")?, "angle");
+            add(b, &mut ops, true, unit(axis, &entity, id, "the axis")?, "angle");
         }
         JointKind::Prismatic { axis } => {
-            add(b, &mut ops, false, unit(axis, &entity, "the axis")?, "displacement");
+            add(b, &mut ops, false, unit(axis, &entity, id, "the axis")?, "displacement");
         }
         JointKind::Cylindrical { axis } => {
-            let a = unit(axis, &entity, "the axis")?;
+            let a = unit(axis, &entity, id, "the axis")?;
             add(b, &mut ops, false, a, "displacement");
             add(b, &mut ops, true, a, "angle");
         }
         JointKind::Universal { axis1, axis2 } => {
-            let a1 = unit(axis1, &entity, "axis1")?;
-            let a2 = unit(axis2, &entity, "axis2")?;
+            let a1 = unit(axis1, &entity, id, "axis1")?;
+            let a2 = unit(axis2, &entity, id, "axis2")?;
             if a1.cross(&a2).norm() < 1e-6 {
                 return Err(ModelError::InvalidValue {
                     entity,
                     what: "the two axes are parallel".into(),
+                    id: Some(id),
                 });
             }
             add(b, &mut ops, true, a1, "angle 1");
             add(b, &mut ops, true, a2, "angle 2");
         }
         JointKind::Planar { normal } => {
-            let n = unit(normal, &entity, "the normal")?;
+            let n = unit(normal, &entity, id, "the normal")?;
             let (b1, b2) = perpendicular_pair(&n);
             add(b, &mut ops, false, b1, "in-plane displacement 1");
             add(b, &mut ops, false, b2, "in-plane displacement 2");
@@ -1023,6 +1087,7 @@ pub(crate) fn held_coordinates(model: &Model, topo: &Topology) -> Result<(), Mod
     if let Some(d) = held.iter().position(|h| !h) {
         return Err(ModelError::UnheldCoordinate {
             coordinate: map.dof_labels[d].clone(),
+            owner: topo.dof_owners[d],
         });
     }
     Ok(())

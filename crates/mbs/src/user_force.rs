@@ -237,6 +237,7 @@ impl UserBuffer {
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn user_force_element(
     force: &dyn UserForce,
+    index: usize,
     nodes: &[usize],
     all: &[NodeMotion],
     t: f64,
@@ -252,6 +253,7 @@ pub(crate) fn user_force_element(
     UserBuffer::eval(force, t, &buf.motions, &mut buf.wrench);
     let refuse = |what: &str| SolveError::UserForce {
         name: force.name().to_string(),
+        index,
         t,
         what: what.to_string(),
     };
@@ -287,7 +289,11 @@ pub(crate) fn user_force_element(
 }
 
 /// The nodes of a user force checked against the model's node count.
-pub(crate) fn check_nodes(force: &dyn UserForce, n_nodes: usize) -> Result<Vec<usize>, crate::ModelError> {
+pub(crate) fn check_nodes(
+    force: &dyn UserForce,
+    index: usize,
+    n_nodes: usize,
+) -> Result<Vec<usize>, crate::ModelError> {
     force
         .nodes()
         .iter()
@@ -299,6 +305,7 @@ pub(crate) fn check_nodes(force: &dyn UserForce, n_nodes: usize) -> Result<Vec<u
                     id: id.0,
                     count: n_nodes,
                     referenced_by: format!("user force '{}'", force.name()),
+                    by: crate::Entity::UserForce(index),
                 })
             }
         })

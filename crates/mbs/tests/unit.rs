@@ -96,6 +96,15 @@ mod user_force;
 /// An integrator that owns its system; loads changed between steps.
 #[path = "unit/stepping.rs"]
 mod stepping;
+
+/// What each joint coordinate measures (units of sensors and efforts).
+#[path = "unit/units.rs"]
+mod units;
+
+/// Modal coordinates and deformed meshes of a state; points welded into nodes.
+#[path = "unit/recovery.rs"]
+mod recovery;
+
 /// Stresses from a multibody state: the centrifugal axial force of a spinning beam.
 #[path = "unit/stress.rs"]
 mod stress;

@@ -405,7 +405,12 @@ impl Study {
             let reduced = py
                 .detach(|| study::run::reduce_part(p, &cache_dir, &mut ()))
                 .map_err(|e| to_py_err(py, &*e))?;
-            out.push((p.name.clone(), ReducedBody { body: reduced.body }));
+            out.push((
+                p.name.clone(),
+                ReducedBody {
+                    body: std::sync::Arc::unwrap_or_clone(reduced.body),
+                },
+            ));
         }
         Ok(out)
     }

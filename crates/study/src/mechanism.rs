@@ -22,8 +22,8 @@ use crate::validate::mechanism::{
 use crate::validate::Study;
 use crate::vtu::{CellRole, PointField, VtuMesh};
 use mbs::{
-    Body, DriverTarget, FlexibleBody, InitialCondition, JointKind, Load, Model, NodeId, PointMass, RigidBody,
-    SensorKind, Spring, Support, System,
+    Body, DriverTarget, FlexibleBody, InitialCondition, Load, Model, NodeId, PointMass, RigidBody, SensorKind, Spring,
+    Support, System,
 };
 use nalgebra::{Isometry3, Point3, Vector3};
 use reduction::{NodeStresses, ReducedBody};
@@ -32,19 +32,19 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
-use superelement::{Frame, FrameChoice, Superelement};
+use superelement::FrameChoice;
 
 /// The mechanism as an `mbs::Model`, with what the outputs need.
 pub struct BuiltMechanism {
     pub model: Model,
     pub groups: Vec<SensorGroup>,
-    /// Per flexible body: the reduced body, its FE mesh for drawing (bodies from parts), and
-    /// the hidden sensor of its modal coordinates.
+    /// Per flexible body: the reduced body and its FE mesh for drawing (bodies from parts).
     pub bodies: Vec<BodyOut>,
     /// Per rigid body: its reference node and point nodes.
     pub rigid: Vec<Vec<NodeId>>,
-    /// `(location, name)` of every named entity, for locating `mbs::ModelError`s.
-    pub entities: Vec<(KeyPath, String)>,
+    /// Where each entity of the model is described in the study (the first description of a
+    /// node: the body it belongs to), for locating `mbs::ModelError`s by their entity ids.
+    pub entities: BTreeMap<mbs::Entity, KeyPath>,
     /// Reductions: (part, coordinates, modes, from cache).
     pub reductions: Vec<serde_json::Value>,
     /// The point loads of the study by name, with their `mbs` loads.
@@ -62,7 +62,8 @@ pub struct NamedLoad {
 
 pub struct BodyOut {
     pub name: String,
-    pub reduced: ReducedBody,
+    /// Shared with the model's body and the system's superelement.
+    pub reduced: Arc<ReducedBody>,
     pub mesh: Option<VtuMesh>,
     pub placement: Isometry3<f64>,
     pub frame: FrameChoice,
@@ -78,14 +79,6 @@ enum Key {
     Rigid(usize, usize),
 }
 
-fn find(parent: &mut [usize], mut i: usize) -> usize {
-    while parent[i] != i {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    i
-}
-
 /// An error about the entity at `path` of the study, located in the file.
 fn located(study: &Study, path: &KeyPath, message: impl std::fmt::Display) -> BoxError {
     format!("{}: {path}: {message}", study.location(path)).into()
@@ -93,7 +86,7 @@ fn located(study: &Study, path: &KeyPath, message: impl std::fmt::Display) -> Bo
 
 /// Each flexible body's reduced body with its FE mesh for drawing, and a summary entry per
 /// reduction.
-type ReducedBodies = (Vec<(ReducedBody, Option<VtuMesh>)>, Vec<serde_json::Value>);
+type ReducedBodies = (Vec<(Arc<ReducedBody>, Option<VtuMesh>)>, Vec<serde_json::Value>);
 
 /// Reduces (or reads from the cache) every flexible body's part, once per part.
 fn reduce_bodies(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<ReducedBodies, BoxError> {
@@ -118,9 +111,9 @@ fn reduce_bodies(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<
                 let r = &done[p];
                 let mesh = (r.body.mesh.as_ref().map(|m| m.nodes.len()) == Some(r.built.model.node_count()))
                     .then(|| VtuMesh::from_model(&r.built.model, &[]));
-                out.push((r.body.clone(), mesh));
+                out.push((Arc::clone(&r.body), mesh));
             }
-            BodySource::File(_, body) => out.push(((**body).clone(), None)),
+            BodySource::File(_, body) => out.push((Arc::clone(body), None)),
         }
     }
     Ok((out, reductions))
@@ -322,28 +315,17 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             )
         })
     };
-    let size = positions.iter().map(|p| p.norm()).fold(1e-3, f64::max);
-    // Fixed joints merge points into one node.
-    let mut parent: Vec<usize> = (0..keys.len()).collect();
+    // Fixed joints merge points into one node (mbs::weld_points).
     let mut grounded: Vec<usize> = Vec::new();
-    for j in m.joints.iter().filter(|j| j.kind.is_none()) {
+    let mut welds: Vec<(usize, usize)> = Vec::new();
+    let mut weld_joint: Vec<usize> = Vec::new();
+    for (ji, j) in m.joints.iter().enumerate().filter(|(_, j)| j.kind.is_none()) {
         match (&j.parent, &j.child) {
             (PointRef::Ground, PointRef::Ground) => {}
             (PointRef::Ground, p) | (p, PointRef::Ground) => grounded.push(resolve(p, &j.path)?),
             (a, b) => {
-                let (a, b) = (resolve(a, &j.path)?, resolve(b, &j.path)?);
-                let d = (positions[a] - positions[b]).norm();
-                // The points of a fixed joint are one node: they must coincide to round-off of
-                // the placement (a millionth of the model size).
-                if d > 1e-6 * size {
-                    return Err(located(
-                        study,
-                        &j.path,
-                        format!("fixed joint '{}': '{}' and '{}' are {d:.3e} m apart; the points of a fixed joint must coincide", j.name, m.point_name(&j.parent), m.point_name(&j.child)),
-                    ));
-                }
-                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-                parent[rb] = ra;
+                welds.push((resolve(a, &j.path)?, resolve(b, &j.path)?));
+                weld_joint.push(ji);
             }
         }
     }
@@ -351,22 +333,29 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         Key::Flexible(b, i) => format!("{}.{}", m.bodies[*b].name, reduced[*b].0.interfaces[*i].name),
         Key::Rigid(b, i) => format!("{}.{}", m.rigid_bodies[*b].name, m.rigid_bodies[*b].points[*i].0),
     };
+    let points: Vec<mbs::merge::Point> = keys
+        .iter()
+        .zip(&positions)
+        .map(|(k, x)| mbs::merge::Point {
+            name: point_label(k),
+            position: *x,
+        })
+        .collect();
     let mut model = Model::new(study.title.as_deref().unwrap_or("mechanism"));
-    let mut node_of = vec![NodeId(0); keys.len()];
-    let mut class_node: BTreeMap<usize, NodeId> = BTreeMap::new();
-    for i in 0..keys.len() {
-        let r = find(&mut parent, i);
-        if let Some(n) = class_node.get(&r) {
-            node_of[i] = *n;
-            let name = &mut model.nodes[n.index()].name;
-            name.push('=');
-            name.push_str(&point_label(&keys[i]));
-        } else {
-            let n = model.add_node(&point_label(&keys[i]), positions[r]);
-            class_node.insert(r, n);
-            node_of[i] = n;
-        }
-    }
+    let node_of = mbs::weld_points(&mut model, &points, &welds).map_err(|e| {
+        let j = &m.joints[weld_joint[e.weld]];
+        located(
+            study,
+            &j.path,
+            format!(
+                "fixed joint '{}': '{}' and '{}' are {:.3e} m apart; the points of a fixed joint must coincide",
+                j.name,
+                m.point_name(&j.parent),
+                m.point_name(&j.child),
+                e.distance
+            ),
+        )
+    })?;
     let node = |p: &PointRef, path: &KeyPath| -> Result<NodeId, BoxError> { Ok(node_of[resolve(p, path)?]) };
     // Every point of every body has a key (above); a missing one is a bug, reported, never
     // a silent attachment to another node.
@@ -379,11 +368,12 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
     for g in grounded {
         model.add_support(Support::clamp(node_of[g]));
     }
-    let mut entities: Vec<(KeyPath, String)> = Vec::new();
+    let mut entities: BTreeMap<mbs::Entity, KeyPath> = BTreeMap::new();
     // Flexible bodies.
     let mut bodies = Vec::new();
     for (b, (body, mesh)) in reduced.iter().enumerate() {
-        let (body, mesh) = (body.clone(), mesh.clone());
+        // One reduced body per part, shared by the bodies made of it, the model and the system.
+        let (body, mesh) = (Arc::clone(body), mesh.clone());
         let spec = &m.bodies[b];
         let nodes: Vec<NodeId> = (0..body.interfaces.len())
             .map(|k| node_of_key(Key::Flexible(b, k)))
@@ -406,18 +396,22 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         if let Some(z) = spec.modal_ratio {
             damping.modal_ratios = vec![z; body.n_modes];
         }
-        let mut reduced_body = body.clone();
-        reduced_body.name = spec.name.clone();
         model.add_body(Body::Flexible(Box::new(FlexibleBody {
             name: spec.name.clone(),
-            reduced: reduced_body,
+            reduced: Arc::clone(&body),
             nodes: nodes.clone(),
             placement: spec.placement,
             frame,
             mass: spec.inertia,
             damping,
         })));
-        entities.push((spec.path.clone(), spec.name.clone()));
+        let id = mbs::BodyId(model.bodies.len() as u32 - 1);
+        entities.insert(mbs::Entity::Body(id), spec.path.clone());
+        for &n in &nodes {
+            entities
+                .entry(mbs::Entity::Node(n))
+                .or_insert_with(|| spec.path.clone());
+        }
         bodies.push(BodyOut {
             name: spec.name.clone(),
             reduced: body,
@@ -425,7 +419,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             placement: spec.placement,
             frame,
             nodes,
-            id: mbs::BodyId(model.bodies.len() as u32 - 1),
+            id,
         });
     }
     // Rigid bodies: the mass data about the first point (nodes have the identity orientation,
@@ -444,7 +438,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             ),
         };
         let c = r.center_of_mass - model.nodes[reference.index()].position;
-        model.add_rigid_body(RigidBody {
+        let id = model.add_rigid_body(RigidBody {
             name: r.name.clone(),
             reference,
             nodes: others.clone(),
@@ -452,18 +446,23 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             center_of_mass: c,
             inertia: r.inertia,
         });
-        entities.push((r.path.clone(), r.name.clone()));
+        entities.insert(mbs::Entity::Body(id), r.path.clone());
         let mut all = vec![reference];
         all.extend(others);
+        for &n in &all {
+            entities.entry(mbs::Entity::Node(n)).or_insert_with(|| r.path.clone());
+        }
         rigid.push(all);
     }
     for p in &m.point_masses {
+        entities.insert(mbs::Entity::PointMass(model.point_masses.len()), p.path.clone());
         model.point_masses.push(PointMass {
             node: node(&p.at, &p.path)?,
             mass: p.mass,
         });
     }
     for s in &m.springs {
+        entities.insert(mbs::Entity::Spring(model.springs.len()), s.path.clone());
         model.springs.push(Spring {
             name: s.name.clone(),
             a: node(&s.a, &s.path)?,
@@ -476,16 +475,15 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             damping: s.damping,
             rest_length: s.rest_length,
         });
-        entities.push((s.path.clone(), s.name.clone()));
     }
     for s in &m.supports {
         let n = node(&s.at, &s.path)?;
+        entities.insert(mbs::Entity::Support(model.supports.len()), s.path.clone());
         model.add_support(Support {
             node: n,
             translation: s.translation.clone(),
             rotation: s.rotation.clone(),
         });
-        entities.push((s.path.clone(), model.nodes[n.index()].name.clone()));
     }
     // Joints (fixed ones are merged nodes, above); a joint to the ground gets a clamped node.
     let mut joint_ids: Vec<Option<mbs::JointId>> = Vec::new();
@@ -500,19 +498,23 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         let (parent_node, ground) = match &j.parent {
             PointRef::Ground => {
                 let g = model.add_node(&format!("ground.{}", j.name), model.nodes[child.index()].position);
+                entities.insert(mbs::Entity::Node(g), j.path.clone());
+                entities.insert(mbs::Entity::Support(model.supports.len()), j.path.clone());
                 model.add_support(Support::clamp(g));
                 (g, Some(g))
             }
             p => (node(p, &j.path)?, None),
         };
-        joint_ids.push(Some(model.add_joint(&j.name, parent_node, child, kind.clone())));
+        let id = model.add_joint(&j.name, parent_node, child, kind.clone());
+        entities.insert(mbs::Entity::Joint(id), j.path.clone());
+        joint_ids.push(Some(id));
         ground_nodes.push(ground);
-        entities.push((j.path.clone(), j.name.clone()));
     }
     for d in &m.drivers {
         let Some(joint) = joint_ids[d.joint] else {
             return Err(located(study, &d.path, "a fixed joint cannot be driven"));
         };
+        entities.insert(mbs::Entity::Driver(model.drivers.len()), d.path.clone());
         model.add_driver(
             &d.name,
             DriverTarget::Joint {
@@ -521,7 +523,6 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             },
             d.motion.clone(),
         );
-        entities.push((d.path.clone(), d.name.clone()));
     }
     if let Some((_, g)) = &m.gravity {
         model.gravity = *g;
@@ -532,6 +533,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         let mut ids = Vec::new();
         for (kind, value) in &l.values {
             ids.push((*kind, model.loads.len()));
+            entities.insert(mbs::Entity::Load(model.loads.len()), l.path.clone());
             model.add_load(Load {
                 node: n,
                 kind: *kind,
@@ -547,6 +549,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         });
     }
     for l in &m.body_loads {
+        entities.insert(mbs::Entity::BodyLoad(model.body_loads.len()), l.path.clone());
         model.body_loads.push(body_load(study, l, &bodies[l.body])?);
     }
     // Sensors.
@@ -557,19 +560,12 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
     for s in &m.sensors {
         let kinds: Vec<(String, SensorKind)>;
         let single = |k: SensorKind| vec![(s.name.clone(), k)];
-        let joint_unit = |j: usize, c: usize, rate: bool| -> String {
-            let angle = match &m.joints[j].kind {
-                Some(JointKind::Prismatic { .. }) => false,
-                Some(JointKind::Cylindrical { .. }) => c == 1,
-                Some(JointKind::Planar { .. }) => c == 2,
-                _ => true,
-            };
-            match (angle, rate) {
-                (true, false) => "rad".into(),
-                (true, true) => "rad/s".into(),
-                (false, false) => "m".into(),
-                (false, true) => "m/s".into(),
-            }
+        // A fixed joint has no coordinates (it is a merged node): its unit is never asked for.
+        let quantity = |j: usize, c: usize| -> mbs::CoordinateQuantity {
+            m.joints[j]
+                .kind
+                .as_ref()
+                .map_or(mbs::CoordinateQuantity::Angle, |k| k.coordinate_quantity(c))
         };
         let columns: Vec<String> = match &s.target {
             SensorTarget::Position(p)
@@ -636,7 +632,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 vec![format!(
                     "{} {c} [{}]",
                     if rate { "rate" } else { "coordinate" },
-                    joint_unit(*j, *c, rate)
+                    quantity(*j, *c).unit(rate)
                 )]
             }
             SensorTarget::Stress { body, nodes } => {
@@ -668,12 +664,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             SensorTarget::DriverEffort(d) => {
                 kinds = single(SensorKind::DriverEffort { driver: *d });
                 let dr = &m.drivers[*d];
-                let unit = if joint_unit(dr.joint, dr.coordinate, false) == "rad" {
-                    "N m"
-                } else {
-                    "N"
-                };
-                vec![format!("effort [{unit}]")]
+                vec![format!("effort [{}]", quantity(dr.joint, dr.coordinate).effort_unit())]
             }
             SensorTarget::ActuatorEffort(a) => {
                 kinds = single(SensorKind::ActuatorEffort { actuator: *a });
@@ -714,6 +705,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         };
         let mbs_names = kinds.iter().map(|(n, _)| n.clone()).collect();
         for (n, k) in kinds {
+            entities.insert(mbs::Entity::Sensor(model.sensors.len()), s.path.clone());
             model.add_sensor(&n, k);
         }
         groups.push(SensorGroup {
@@ -723,6 +715,8 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         });
     }
     for c in &m.initial {
+        let first = model.initial.len();
+        let (InitialSpec::Joint { path, .. } | InitialSpec::Point { path, .. } | InitialSpec::Body { path, .. }) = c;
         match c {
             InitialSpec::Joint {
                 path,
@@ -756,8 +750,6 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 angular_velocity,
             } => {
                 let n = node(at, path)?;
-                // A refusal of the velocity (a node that follows a joint) names the node.
-                entities.push((path.clone(), model.nodes[n.index()].name.clone()));
                 model.initial.push(InitialCondition::NodeVelocity {
                     node: n,
                     velocity: *velocity,
@@ -787,11 +779,15 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 });
             }
         }
+        for i in first..model.initial.len() {
+            entities.insert(mbs::Entity::InitialCondition(i), path.clone());
+        }
     }
     let joint_of = |j: usize, path: &KeyPath| -> Result<mbs::JointId, BoxError> {
         joint_ids[j].ok_or_else(|| located(study, path, "a fixed joint has no coordinate"))
     };
     for s in &m.joint_springs {
+        entities.insert(mbs::Entity::JointSpring(model.joint_springs.len()), s.path.clone());
         model.joint_springs.push(mbs::JointSpring {
             joint: joint_of(s.joint, &s.path)?,
             coordinate: s.coordinate,
@@ -800,9 +796,9 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             rest: s.rest,
             preload: s.preload,
         });
-        entities.push((s.path.clone(), s.name.clone()));
     }
     for l in &m.joint_limits {
+        entities.insert(mbs::Entity::JointLimit(model.joint_limits.len()), l.path.clone());
         model.joint_limits.push(mbs::JointLimit {
             name: l.name.clone(),
             joint: joint_of(l.joint, &l.path)?,
@@ -812,7 +808,6 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             stiffness: l.stiffness,
             damping: l.damping,
         });
-        entities.push((l.path.clone(), l.name.clone()));
     }
     for a in &m.actuators {
         let effort = match &a.effort {
@@ -835,13 +830,13 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
                 max_effort: *max_effort,
             }),
         };
+        entities.insert(mbs::Entity::Actuator(model.actuators.len()), a.path.clone());
         model.actuators.push(mbs::JointActuator {
             name: a.name.clone(),
             joint: joint_of(a.joint, &a.path)?,
             coordinate: a.coordinate,
             effort,
         });
-        entities.push((a.path.clone(), a.name.clone()));
     }
     Ok(BuiltMechanism {
         model,
@@ -855,24 +850,21 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
 }
 
 impl BuiltMechanism {
-    /// `System::new`, with a model error located at the first entity it names.
+    /// `System::new`, with a model error located at the first of its entities
+    /// (`mbs::ModelError::entities`) that the study describes.
     pub fn system(&self, study: &Study) -> Result<System, BoxError> {
         System::new(&self.model).map_err(|e| {
-            let text = crate::error::sentence(&e);
-            let hit = self.entities.iter().find(|(_, name)| {
-                text.contains(&format!("'{name}'"))
-                    || text.contains(&format!("{name},"))
-                    || text.contains(&format!("{name}]"))
-            });
-            match hit {
-                Some((path, _)) => located(study, path, format!("the mechanism cannot be assembled: {text}")),
-                None => format!(
-                    "{}: the mechanism cannot be assembled: {text}",
-                    study.source.path.display()
-                )
-                .into(),
+            let message = format!("the mechanism cannot be assembled: {}", crate::error::sentence(&e));
+            match self.locate(&e.entities()) {
+                Some(path) => located(study, path, message),
+                None => format!("{}: {message}", study.source.path.display()).into(),
             }
         })
+    }
+
+    /// Where the first of `entities` that the study describes is.
+    pub fn locate(&self, entities: &[mbs::Entity]) -> Option<&KeyPath> {
+        entities.iter().find_map(|e| self.entities.get(e))
     }
 
     /// Model size for the summary.
@@ -935,8 +927,10 @@ impl SensorSampler {
 /// the bodies reduced with stress shapes and the hot spot of each.
 pub struct MeshRecovery {
     mesh: VtuMesh,
-    /// Per flexible body: superelement, first point, last frame.
-    flexible: Vec<(Superelement, usize, Option<Frame>)>,
+    /// Per flexible body: its first point (its superelement is the system's).
+    flexible: Vec<usize>,
+    /// Whether any body has stress shapes.
+    stress: bool,
     /// Per rigid body: first point.
     rigid: Vec<usize>,
     /// Per flexible body: the largest von Mises stress seen so far.
@@ -953,18 +947,11 @@ pub struct HotSpot {
 }
 
 impl MeshRecovery {
-    pub fn new(b: &BuiltMechanism) -> Result<Self, BoxError> {
+    pub fn new(b: &BuiltMechanism, sys: &System) -> Result<Self, BoxError> {
         let mut mesh = VtuMesh::default();
         let mut flexible = Vec::new();
         for body in &b.bodies {
             let first = mesh.points.len();
-            let se = Superelement::new(
-                &body.reduced,
-                body.frame,
-                superelement::MassVariant::Exact,
-                superelement::Damping::none(),
-            )
-            .context(|| format!("body '{}': cannot build the superelement for drawing", body.name))?;
             match (&body.reduced.mesh, &body.mesh) {
                 (Some(shapes), Some(fe)) => {
                     for x in &shapes.nodes {
@@ -994,7 +981,7 @@ impl MeshRecovery {
                     }
                 }
             }
-            flexible.push((se, first, None));
+            flexible.push(first);
         }
         let mut rigid = Vec::new();
         for nodes in &b.rigid {
@@ -1021,9 +1008,14 @@ impl MeshRecovery {
             mesh.cells.push((1, vec![i], CellRole::InterfaceNode));
         }
         let hot = vec![None; flexible.len()];
+        let stress = b
+            .bodies
+            .iter()
+            .any(|body| sys.superelement(body.id).is_some_and(|se| se.stress_shapes().is_some()));
         Ok(Self {
             mesh,
             flexible,
+            stress,
             rigid,
             hot,
         })
@@ -1031,7 +1023,7 @@ impl MeshRecovery {
 
     /// Whether any body has stress shapes (then the frames carry stress fields).
     pub fn has_stress(&self) -> bool {
-        self.flexible.iter().any(|(se, _, _)| se.stress_shapes().is_some())
+        self.stress
     }
 
     /// The hot spot of each flexible body (`None` without stress shapes or before any output).
@@ -1039,45 +1031,23 @@ impl MeshRecovery {
         &self.hot
     }
 
-    /// The kinematics of every flexible body at `state`, warm-starting each frame from the
-    /// last, with the body states they were solved for (interface velocities and modal rates
-    /// included, for the mesh velocities).
+    /// The kinematics of every flexible body at `state` (`mbs::System::body_kinematics`), with
+    /// the body states they were solved for (interface velocities and modal rates included, for
+    /// the mesh velocities).
     fn kinematics(
-        &mut self,
+        &self,
         t: f64,
         sys: &System,
         state: &mbs::State,
-        motions: &[mbs::NodeMotion],
         b: &BuiltMechanism,
     ) -> Result<Vec<(superelement::Kinematics, superelement::BodyState)>, BoxError> {
         let mut out = Vec::with_capacity(b.bodies.len());
-        for (body, (se, _, last)) in b.bodies.iter().zip(self.flexible.iter_mut()) {
-            let (eta, eta_dot) = sys.modal_coordinates(state, body.id);
-            let (eta, eta_dot) = if eta.len() == body.reduced.n_modes {
-                (eta, eta_dot)
-            } else {
-                (vec![0.0; body.reduced.n_modes], vec![0.0; body.reduced.n_modes])
-            };
-            let frame0 =
-                last.unwrap_or_else(|| Frame::new(body.placement * se.frame_origin(), body.placement.rotation));
-            let bs = superelement::BodyState {
-                r: body.nodes.iter().map(|n| motions[n.index()].r).collect(),
-                R: body
-                    .nodes
-                    .iter()
-                    .map(|n| motions[n.index()].R * body.placement.rotation)
-                    .collect(),
-                v: body.nodes.iter().map(|n| motions[n.index()].v).collect(),
-                omega: body.nodes.iter().map(|n| motions[n.index()].omega).collect(),
-                eta_dot,
-                eta,
-                frame: frame0,
-            };
-            let kin = se
-                .kinematics(&bs)
-                .context(|| format!("body '{}': floating frame for the mesh at t = {t}", body.name))?;
-            *last = Some(kin.frame);
-            out.push((kin, bs));
+        for body in &b.bodies {
+            let kin = sys
+                .body_kinematics(state, body.id)
+                .context(|| format!("body '{}': floating frame for the mesh at t = {t}", body.name))?
+                .ok_or_else(|| format!("internal error: body '{}' is not flexible in the system", body.name))?;
+            out.push(kin);
         }
         Ok(out)
     }
@@ -1086,10 +1056,16 @@ impl MeshRecovery {
     fn stresses(
         &mut self,
         t: f64,
+        sys: &System,
+        b: &BuiltMechanism,
         kins: &[(superelement::Kinematics, superelement::BodyState)],
     ) -> Vec<Option<NodeStresses>> {
         let mut out = Vec::with_capacity(kins.len());
-        for (k, ((se, _, _), (kin, _))) in self.flexible.iter().zip(kins).enumerate() {
+        for (k, (body, (kin, _))) in b.bodies.iter().zip(kins).enumerate() {
+            let Some(se) = sys.superelement(body.id) else {
+                out.push(None);
+                continue;
+            };
             let st = se.stress_shapes().map(|s| s.node_stresses(&kin.q_jj, &kin.R_j));
             if let Some(st) = &st {
                 if let Some((node, &vm)) = st.von_mises.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
@@ -1112,9 +1088,8 @@ impl MeshRecovery {
         if !self.has_stress() {
             return Ok(());
         }
-        let motions = sys.node_motions(state);
-        let kins = self.kinematics(t, sys, state, &motions, b)?;
-        self.stresses(t, &kins);
+        let kins = self.kinematics(t, sys, state, b)?;
+        self.stresses(t, sys, b, &kins);
         Ok(())
     }
 
@@ -1152,9 +1127,9 @@ impl MeshRecovery {
         let mut vel = vec![[0.0; 3]; n_points];
         let mut body_of = vec![0.0; n_points];
         let vec3 = |v: Vector3<f64>| [v.x, v.y, v.z];
-        let kins = self.kinematics(t, sys, state, &motions, b)?;
+        let kins = self.kinematics(t, sys, state, b)?;
         let stresses = if self.has_stress() {
-            self.stresses(t, &kins)
+            self.stresses(t, sys, b, &kins)
         } else {
             Vec::new()
         };
@@ -1165,16 +1140,18 @@ impl MeshRecovery {
         let ends: Vec<usize> = self
             .flexible
             .iter()
-            .map(|f| f.1)
-            .chain(self.rigid.iter().copied())
+            .chain(&self.rigid)
+            .copied()
             .skip(1)
             .chain(std::iter::once(n_points))
             .collect();
-        for (k, (body, (se, first, _))) in b.bodies.iter().zip(&self.flexible).enumerate() {
-            let first = *first;
+        for (k, (body, &first)) in b.bodies.iter().zip(&self.flexible).enumerate() {
             let (kin, bs) = &kins[k];
-            match (se.recover_mesh(kin), se.recover_mesh_velocities(kin, bs)) {
-                (Some(ms), Some(vs)) => {
+            let recovered = sys
+                .superelement(body.id)
+                .and_then(|se| Some((se.recover_mesh(kin)?, se.recover_mesh_velocities(kin, bs)?)));
+            match recovered {
+                Some((ms, vs)) => {
                     for (i, p) in ms.positions.iter().enumerate() {
                         let x = &self.mesh.points[first + i];
                         u[first + i] = [p.x - x[0], p.y - x[1], p.z - x[2]];
@@ -1376,7 +1353,7 @@ pub fn run_analysis(
                 rec.rows.push(row.clone());
                 files.sample(obs, *t, &rec)?;
             }
-            let mut mw = MeshRecovery::new(b)?;
+            let mut mw = MeshRecovery::new(b, &sys)?;
             mw.write(obs, 1.0, &sys, &sol.state, b)?;
             let (hot_spots, hot_lines) = mw.hot_spot_summary(b, "load_factor");
             out.report.extend(hot_lines);
@@ -1432,99 +1409,38 @@ pub fn run_analysis(
             integ.record(&mut rec)?;
             let mut files = SensorSampler::start(obs, &b.groups, &rec, "t [s]", output.plots)?;
             files.sample(obs, t_start, &rec)?;
-            let mut mw = MeshRecovery::new(b)?;
+            let mut mw = MeshRecovery::new(b, &sys)?;
             if output.vtu_every.is_some() {
                 mw.write(obs, t_start, &sys, integ.state(), b)?;
             }
-            // The last fixed step is shortened to end exactly at t_end (mbs::fixed_steps).
-            let (n_steps, last_step) = mbs::fixed_steps(t_start, *t_end, *dt);
-            let at_end = |t: f64| t_end - t >= -1e-12 && t_end - t <= 1e-12 * t_end.abs().max(1.0);
-            let mut iterations = 0usize;
-            let mut jacobians = 0usize;
-            let mut max_iter = 0usize;
-            let mut retries: Vec<mbs::Retry> = Vec::new();
-            let mut rejected = 0usize;
-            let (mut h_min, mut h_max) = (f64::INFINITY, 0.0f64);
-            let mut k = 0usize;
-            let (mut last_written, mut sensor_failed) = (t_start, false);
-            loop {
-                let done = match adaptive {
-                    None => k >= n_steps,
-                    Some(_) => at_end(integ.time()) || integ.time() >= *t_end,
-                };
-                if done {
-                    break;
+            let stepping = match adaptive {
+                None => mbs::Stepping::Fixed { min_step: *dt_min },
+                Some(ad) => mbs::Stepping::Adaptive(ad.clone()),
+            };
+            // Fixed steps: the last one is shortened to end exactly at t_end (mbs::fixed_steps,
+            // as Integrator::run_to steps).
+            let (_, last_step) = mbs::fixed_steps(t_start, *t_end, *dt);
+            // Why the callback stopped the run: a sensor that is not finite
+            // (mbs::SolveError::NonFiniteSensor, a solver stop) or a file that cannot be written.
+            enum Halt {
+                Sensor(mbs::SolveError, usize),
+                Output(BoxError),
+            }
+            impl<E: Into<BoxError>> From<E> for Halt {
+                fn from(e: E) -> Self {
+                    Halt::Output(e.into())
                 }
-                k += 1;
-                let t_before = integ.time();
-                // Only a last step that is really shorter is changed: an end on the grid of
-                // `dt` is reached by a step of `dt` (its end time rounded to the step's
-                // decimals), so the run takes the same steps as a simulation stepped by hand.
-                if adaptive.is_none() && k == n_steps && *t_end - t_before < *dt * (1.0 - 1e-9) {
-                    integ.set_step_size(*t_end - t_before);
-                }
-                let taken: Result<Vec<mbs::StepReport>, mbs::SolveError> = match adaptive {
-                    None => match integ.step_retrying(*dt_min) {
-                        Ok(r) => {
-                            retries.extend(r.retry);
-                            Ok(r.reports)
-                        }
-                        Err(f) => {
-                            retries.extend(f.retry);
-                            Err(f.error)
-                        }
-                    },
-                    Some(ad) => integ.step_adaptive(ad).map(|s| {
-                        rejected += s.rejected;
-                        vec![s.report]
-                    }),
-                };
-                match taken {
-                    Ok(reports) => {
-                        for rep in reports {
-                            let it = rep.residuals.len().saturating_sub(1);
-                            iterations += it;
-                            jacobians += rep.jacobians;
-                            max_iter = max_iter.max(it);
-                        }
-                    }
-                    Err(e) => {
-                        out.failure = Some(SolverStopped {
-                            message: format!(
-                                "time integration stopped; results up to t = {:.6} s (step {}) are written",
-                                integ.state().time(),
-                                k - 1
-                            ),
-                            step: Some(k),
-                            source: e,
-                        });
-                        break;
-                    }
-                }
-                let t = integ.time();
-                h_min = h_min.min(t - t_before);
-                h_max = h_max.max(t - t_before);
-                let last = match adaptive {
-                    None => k == n_steps,
-                    Some(_) => at_end(t),
-                };
-                if k % output.every == 0 || last {
-                    if let Err(e) = integ.record(&mut rec) {
-                        // A sensor that is not finite (mbs::SolveError::NonFiniteSensor): the
-                        // rows before it are written, the run is not complete.
-                        out.failure = Some(SolverStopped {
-                            message: format!(
-                                "time integration stopped; results up to t = {last_written:.6} s are written"
-                            ),
-                            step: Some(k),
-                            source: e,
-                        });
-                        sensor_failed = true;
-                        break;
-                    }
+            }
+            let mut last_written = t_start;
+            let run = integ.run_to(&stepping, |done, integ| -> Result<(), Halt> {
+                let (k, t) = (done.k, done.time);
+                let vtu_now = output.vtu_every.is_some_and(|v| k % v == 0 || done.last);
+                if k % output.every == 0 || done.last {
+                    // A sensor that is not finite: the rows before it are written, the run is
+                    // not complete.
+                    integ.record(&mut rec).map_err(|e| Halt::Sensor(e, k))?;
                     files.sample(obs, t, &rec)?;
                     last_written = t;
-                    let vtu_now = output.vtu_every.is_some_and(|v| k % v == 0 || k == n_steps);
                     if !vtu_now {
                         mw.track(t, &sys, integ.state(), b)?;
                     }
@@ -1534,23 +1450,62 @@ pub fn run_analysis(
                         rec.times.drain(..rec.times.len() - 1);
                     }
                 }
-                if let Some(v) = output.vtu_every {
-                    if k % v == 0 || last {
-                        mw.write(obs, t, &sys, integ.state(), b)?;
-                    }
+                if vtu_now {
+                    mw.write(obs, t, &sys, integ.state(), b)?;
                 }
-                let (done, total) = match adaptive {
-                    None => (k as u64, n_steps as u64),
-                    Some(_) => ((1000.0 * (t - t_start) / (t_end - t_start)) as u64, 1000),
+                let (done, total) = match done.planned {
+                    Some(n) => (k as u64, n as u64),
+                    None => ((1000.0 * (t - t_start) / (t_end - t_start)) as u64, 1000),
                 };
                 obs.progress(&Progress::Steps {
                     what: "time integration".into(),
                     done,
                     total,
                 });
-            }
+                Ok(())
+            });
+            let (totals, failure) = match run {
+                Ok((totals, None)) => (totals, None),
+                Ok((totals, Some(e))) => {
+                    let failure = SolverStopped {
+                        message: format!(
+                            "time integration stopped; results up to t = {:.6} s (step {}) are written",
+                            integ.state().time(),
+                            totals.steps
+                        ),
+                        step: Some(totals.steps + 1),
+                        source: e,
+                    };
+                    (totals, Some(failure))
+                }
+                Err(stop) => match stop.error {
+                    Halt::Output(e) => return Err(e),
+                    Halt::Sensor(e, k) => {
+                        let failure = SolverStopped {
+                            message: format!(
+                                "time integration stopped; results up to t = {last_written:.6} s are written"
+                            ),
+                            step: Some(k),
+                            source: e,
+                        };
+                        (stop.totals, Some(failure))
+                    }
+                },
+            };
+            out.failure = failure;
             obs.progress(&Progress::Finished);
-            let steps = k - usize::from(out.failure.is_some() && !sensor_failed);
+            let mbs::StepTotals {
+                steps,
+                planned,
+                iterations,
+                jacobians,
+                max_iterations: max_iter,
+                retries,
+                rejected,
+                smallest_step: h_min,
+                largest_step: h_max,
+            } = totals;
+            let n_steps = planned.unwrap_or(0);
             let t_reached = integ.state().time();
             match adaptive {
                 None => out.report.push(format!(
@@ -1594,7 +1549,7 @@ pub fn run_analysis(
                 "model": b.size(&sys),
                 "hot_spots": hot_spots,
                 "steps": steps,
-                "steps_planned": if adaptive.is_none() { json!(n_steps) } else { json!(null) },
+                "steps_planned": planned,
                 "t_start": t_start,
                 "t_reached": t_reached,
                 "newton_iterations": iterations,
@@ -1633,7 +1588,7 @@ pub fn run_analysis(
                         .state
                 }
                 (None, About::Time { t, dt }) => {
-                    let settings = mbs::DynamicSettings::new(*dt, *t, 0.9);
+                    let settings = mbs::DynamicSettings::new(*dt, *t, mbs::DynamicSettings::DEFAULT_RHO_INF);
                     mbs::solve_dynamic(&sys, sys.initial_state(), &settings)
                         .map_err(|e| format!("the dynamic run up to t = {t} s to linearise about: {}", e.error))?
                         .final_state
@@ -1810,7 +1765,7 @@ fn run_buckling(
     }
     obs.table(&table)?;
     // Each mode on the loaded configuration, its largest displacement a tenth of the model.
-    let mut mw = MeshRecovery::new(b)?;
+    let mut mw = MeshRecovery::new(b, sys)?;
     let base = sys.node_motions(&loaded);
     let size = {
         let n = base.len().max(1) as f64;

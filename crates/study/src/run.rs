@@ -760,7 +760,9 @@ fn run_modal(
 
 /// A part reduced through the cache.
 pub struct Reduced {
-    pub body: ReducedBody,
+    /// Shared with the model and the system built from it (a large solid's shapes are
+    /// hundreds of MB).
+    pub body: std::sync::Arc<ReducedBody>,
     pub built: Built,
     /// The cache file.
     pub file: PathBuf,
@@ -798,7 +800,7 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
                     file.display()
                 )));
                 return Ok(Reduced {
-                    body,
+                    body: body.into(),
                     built,
                     file,
                     from_cache: true,
@@ -888,7 +890,7 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
         file.display()
     )));
     Ok(Reduced {
-        body,
+        body: body.into(),
         built,
         file,
         from_cache: false,

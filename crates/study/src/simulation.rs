@@ -183,6 +183,16 @@ impl Simulation {
         mbs::step_adaptive_to(&mut self.integrator, self.t_end, adaptive)
     }
 
+    /// Steps to the end time of the analysis as `stepping` says, with `each` called after
+    /// every step (`mbs::Integrator::run_to`).
+    pub fn run_to<E>(
+        &mut self,
+        stepping: &mbs::Stepping,
+        each: impl FnMut(&mbs::StepDone, &mbs::Integrator<'static>) -> Result<(), E>,
+    ) -> Result<(mbs::StepTotals, Option<mbs::SolveError>), Box<mbs::Interrupted<E>>> {
+        self.integrator.run_to(self.t_end, stepping, each)
+    }
+
     /// Steps until the time reaches `t` (to a millionth of a step); returns the steps taken.
     pub fn advance_to(&mut self, t: f64) -> Result<usize, mbs::SolveError> {
         let mut n = 0;

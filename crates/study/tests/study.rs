@@ -728,3 +728,82 @@ fn study_file_mutants_never_panic() {
         }
     }
 }
+
+/// A model error found when the mechanism is assembled points at the study-file line of the
+/// entity its ids name (`mbs::ModelError::entities`): the closed loop at its first body, the
+/// coordinate held by nothing at its joint.
+#[test]
+fn model_errors_point_at_the_line_of_their_entity() {
+    let dir = scratch("model-errors");
+    let body = |name: &str, points: &str| {
+        format!(
+            "[[rigid_bodies]]\nname = \"{name}\"\nmass = 0.1\ncenter_of_mass = [0.05, 0.0, 0.0]\n\
+             inertia = [[1e-5, 0.0, 0.0], [0.0, 1e-4, 0.0], [0.0, 0.0, 1e-4]]\npoints = {{ {points} }}\n\n"
+        )
+    };
+    let joint = |name: &str, a: &str, b: &str| {
+        format!("[[joints]]\nname = \"{name}\"\ntype = \"revolute\"\nbetween = [\"{a}\", \"{b}\"]\naxis = [0.0, 0.0, 1.0]\n\n")
+    };
+    let error = |name: &str, text: String| -> String {
+        let file = dir.join(name);
+        std::fs::write(&file, text).unwrap();
+        let st = study::load(&file).unwrap();
+        let b = study::mechanism::build(&st, &dir.join("cache"), &mut ()).unwrap();
+        match b.system(&st) {
+            Ok(_) => panic!("{name}: assembled"),
+            Err(e) => e.to_string(),
+        }
+    };
+    // Crank (line 3), coupler (line 10) and a hinge support close a loop of rigid bodies.
+    let text = "# a four-bar without its flexible rocker\n\n".to_string()
+        + &body("crank", "O = [0.0, 0.0, 0.0], A = [0.1, 0.0, 0.0]")
+        + &body("coupler", "A = [0.1, 0.0, 0.0], B = [0.1, 0.2, 0.0]")
+        + "[[supports]]\nat = \"coupler.B\"\ntype = \"hinge\"\naxis = [0.0, 0.0, 1.0]\n\n"
+        + &joint("pivot", "ground", "crank.O")
+        + &joint("elbow", "crank.A", "coupler.A")
+        + "[[analyses]]\ntype = \"equilibrium\"\n";
+    let e = error("rigid_loop.toml", text);
+    assert!(
+        e.contains("rigid_loop.toml:3:1: rigid_bodies[0]: the mechanism cannot be assembled: closed loop"),
+        "{e}"
+    );
+    // A point mass on its pivot: the pivot's angle (joint on line 10) is held by nothing.
+    let text = "# no inertia about the pivot\n\n[[rigid_bodies]]\nname = \"arm\"\nmass = 0.1\n\
+                center_of_mass = [0.0, 0.0, 0.0]\ninertia = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n\
+                points = { O = [0.0, 0.0, 0.0] }\n\n"
+        .to_string()
+        + &joint("pivot", "ground", "arm.O")
+        + "[[analyses]]\ntype = \"dynamic\"\nt_end = 0.01\ndt = 0.001\n";
+    let e = error("unheld.toml", text);
+    assert!(
+        e.contains(
+            "unheld.toml:10:1: joints[0]: the mechanism cannot be assembled: joint 'pivot' angle is held by nothing"
+        ),
+        "{e}"
+    );
+}
+
+/// One reduced body per part, shared, not copied, by the bodies made of it, the model and the
+/// system's superelements: the elastica's four segments are one part.
+#[test]
+fn reduced_bodies_are_shared_not_copied() {
+    use std::sync::Arc;
+    let file = example("elastica");
+    let st = study::load(&file).unwrap();
+    let b = study::mechanism::build(&st, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
+    assert_eq!(b.bodies.len(), 4);
+    let first = Arc::clone(&b.bodies[0].reduced);
+    let sys = b.system(&st).unwrap();
+    for body in &b.bodies {
+        assert!(Arc::ptr_eq(&body.reduced, &first), "{}", body.name);
+        let mbs::Body::Flexible(f) = &b.model.bodies[body.id.index()] else {
+            panic!("{} is not flexible", body.name)
+        };
+        assert!(Arc::ptr_eq(&f.reduced, &first), "{}", body.name);
+        let se = sys.superelement(body.id).unwrap();
+        assert!(Arc::ptr_eq(se.reduced_body(), &first), "{}", body.name);
+    }
+    // The holders: `first` here, per body its output entry, its model body, the system's copy
+    // of the model and its superelement; nothing holds a copy of the data.
+    assert_eq!(Arc::strong_count(&first), 1 + 4 * 4);
+}

@@ -14,8 +14,9 @@ use crate::transform::Kinematics;
 use crate::transform::{inverse_with_rcond, phi_j_psi, RCOND_MIN};
 use faer::Mat;
 use nalgebra::{Matrix3, Vector3};
-use reduction::{MeshModes, ReducedBody};
+use reduction::ReducedBody;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// Damping of the elastic coordinates, acting on the elastic velocity $\dot{\mathbf q}^{jj} =
 /// \mathbf T_j\boldsymbol\Lambda\bar{\mathbf R}^T\dot{\mathbf q}$:
@@ -77,12 +78,10 @@ pub struct Superelement {
     /// Body size $L$ for the frame tolerance.
     pub(crate) length: f64,
     pub(crate) frame_settings: FrameSettings,
-    pub(crate) mesh: Option<MeshModes>,
-    /// The stress of every CB vector, for [`Superelement::recover_stress`].
-    pub(crate) stress: Option<reduction::StressShapes>,
-    /// Named load points with their CB shapes ($6\times n$ each, checked), for
-    /// [`Superelement::point_load_into`].
-    pub(crate) load_points: Vec<reduction::LoadPoint>,
+    /// The reduced body it was built from, shared, not copied: its mesh shapes
+    /// ([`Superelement::recover_mesh`]) and the stress of every CB vector
+    /// ([`Superelement::recover_stress`]) are the largest data of a body.
+    pub(crate) body: Arc<ReducedBody>,
     /// Geometric stiffening $\mathbf G_k$ ([`GeometricStiffness`]); `None`: a linear elastic field.
     pub(crate) geometric: Option<GeometricStiffness>,
 }
@@ -305,13 +304,25 @@ impl Superelement {
     }
 
     /// Builds the superelement of `body` with the given frame, inertia variant and damping,
-    /// after checking every shape the formulation relies on.
+    /// after checking every shape the formulation relies on. It keeps a copy of `body`;
+    /// [`Self::shared`] keeps a shared one.
     pub fn new(
         body: &ReducedBody,
         frame_choice: FrameChoice,
         mass_variant: MassVariant,
         damping: Damping,
     ) -> Result<Self, SuperelementError> {
+        Self::shared(Arc::new(body.clone()), frame_choice, mass_variant, damping)
+    }
+
+    /// [`Self::new`] with the reduced body shared with the caller (a model holding it too).
+    pub fn shared(
+        shared: Arc<ReducedBody>,
+        frame_choice: FrameChoice,
+        mass_variant: MassVariant,
+        damping: Damping,
+    ) -> Result<Self, SuperelementError> {
+        let body: &ReducedBody = &shared;
         let N = body.interfaces.len();
         let m = body.n_modes;
         let n = body.n_coordinates();
@@ -455,11 +466,14 @@ impl Superelement {
             inertia: ffr,
             length,
             frame_settings: FrameSettings::default(),
-            mesh: body.mesh.clone(),
-            stress: body.stress.clone(),
-            load_points: body.load_points.clone(),
+            body: Arc::clone(&shared),
             geometric,
         })
+    }
+
+    /// The reduced body the superelement was built from (shared with the model that holds it).
+    pub fn reduced_body(&self) -> &Arc<ReducedBody> {
+        &self.body
     }
 
     /// Replaces the settings of the frame solve.

@@ -84,7 +84,7 @@ pub struct PointLoadWorkspace {
 impl Superelement {
     /// The load points of the reduced body (name, FE node, position, CB shape).
     pub fn load_points(&self) -> &[reduction::LoadPoint] {
-        &self.load_points
+        &self.body.load_points
     }
 
     /// Buffers for [`Self::point_load_into`].
@@ -118,6 +118,7 @@ impl Superelement {
         ws: &mut PointLoadWorkspace,
     ) -> Result<(), SuperelementError> {
         let lp = self
+            .body
             .load_points
             .get(load.point)
             .ok_or_else(|| SuperelementError::InvalidState {
@@ -125,7 +126,7 @@ impl Superelement {
                     "load point {} of body '{}', which has {}",
                     load.point,
                     self.name,
-                    self.load_points.len()
+                    self.body.load_points.len()
                 ),
             })?;
         let n = self.n;

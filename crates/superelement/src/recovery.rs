@@ -41,7 +41,7 @@ pub struct BodyStress {
 impl Superelement {
     /// The stress shapes, when the body was reduced with them.
     pub fn stress_shapes(&self) -> Option<&reduction::StressShapes> {
-        self.stress.as_ref()
+        self.body.stress.as_ref()
     }
 
     /// The stresses for elastic coordinates $\mathbf q^{jj}$ (those of a [`Kinematics`]), or
@@ -50,7 +50,7 @@ impl Superelement {
     /// # Panics
     /// If `q_jj` does not have $n$ entries (a caller's bug).
     pub fn recover_stress(&self, q_jj: &[f64]) -> Option<BodyStress> {
-        let shapes = self.stress.as_ref()?;
+        let shapes = self.body.stress.as_ref()?;
         Some(BodyStress {
             nodal: shapes.nodal_stress(q_jj),
             beams: shapes.beam_section_forces(q_jj),
@@ -63,7 +63,7 @@ impl Superelement {
     /// Checked by `tests/unit/recovery.rs` (interface nodes land on the interface positions;
     /// a rigid motion moves the mesh rigidly).
     pub fn recover_mesh(&self, kin: &Kinematics) -> Option<MeshState> {
-        let mesh = self.mesh.as_ref()?;
+        let mesh = self.body.mesh.as_ref()?;
         let S = &mesh.shapes;
         let n = self.n;
         let q = &kin.q_jj;
@@ -99,7 +99,7 @@ impl Superelement {
     /// Checked by `tests/unit/recovery.rs` against central differences of positions along a
     /// motion.
     pub fn recover_mesh_velocities(&self, kin: &Kinematics, state: &BodyState) -> Option<Vec<Vector3<f64>>> {
-        let mesh = self.mesh.as_ref()?;
+        let mesh = self.body.mesh.as_ref()?;
         let S = &mesh.shapes;
         let n = self.n;
         let positions = self.recover_mesh(kin)?.positions;

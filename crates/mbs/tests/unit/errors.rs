@@ -1,7 +1,7 @@
 //! Each refused model gives its named error.
 
 use crate::fixtures::{beam_body, rigid};
-use mbs::{DriverTarget, JointKind, Model, ModelError, NodeId, Support, System, TimeFunction};
+use mbs::{BodyId, DriverTarget, Entity, JointId, JointKind, Model, ModelError, NodeId, Support, System, TimeFunction};
 use nalgebra::{Isometry3, Vector3};
 use reduction::ModeSelection;
 use superelement::{FrameChoice, MassVariant};
@@ -76,15 +76,29 @@ fn four_bar(rigid_coupler: bool) -> Model {
 
 #[test]
 fn rigid_loop_is_refused_with_its_members() {
-    match err(&four_bar(true)) {
+    let model = four_bar(true);
+    match err(&model) {
         ModelError::RigidLoop {
             bodies,
             joints,
             supports,
+            ids,
         } => {
             assert_eq!(bodies, ["coupler", "crank", "rocker"]);
             assert_eq!(joints, ["jA", "jB", "jC"]);
             assert_eq!(supports, ["A", "D"]);
+            // The ids name the same entities as the names.
+            let mut named: Vec<String> = ids
+                .iter()
+                .map(|e| match e {
+                    Entity::Body(b) => model.bodies[b.index()].name().to_string(),
+                    Entity::Joint(j) => model.joints[j.index()].name.clone(),
+                    Entity::Node(n) => model.nodes[n.index()].name.clone(),
+                    other => panic!("{other:?}"),
+                })
+                .collect();
+            named.sort();
+            assert_eq!(named, ["A", "D", "coupler", "crank", "jA", "jB", "jC", "rocker"]);
         }
         e => panic!("{e:?}"),
     }
@@ -98,7 +112,10 @@ fn unheld_coordinate_names_node_and_direction() {
     let a = m.add_node("a", Vector3::zeros());
     m.point_masses.push(mbs::PointMass { node: a, mass: 1.0 });
     match err(&m) {
-        ModelError::UnheldCoordinate { coordinate } => assert_eq!(coordinate, "node 'a' rotation, component x"),
+        ModelError::UnheldCoordinate { coordinate, owner } => {
+            assert_eq!(coordinate, "node 'a' rotation, component x");
+            assert_eq!(owner, Some(Entity::Node(a)));
+        }
         e => panic!("{e:?}"),
     }
 }
@@ -109,6 +126,7 @@ fn unknown_references_are_named() {
     let a = m.add_node("a", Vector3::zeros());
     m.add_rigid_body(rigid("r", a, vec![NodeId(7)], 1.0, Vector3::zeros(), [1.0; 3]));
     assert!(matches!(err(&m), ModelError::UnknownNode { id: 7, referenced_by, .. } if referenced_by == "body 'r'"));
+    assert_eq!(err(&m).entities(), [Entity::Body(BodyId(0))]);
     let mut m = Model::new("refs");
     let a = m.add_node("a", Vector3::zeros());
     m.add_rigid_body(rigid("r", a, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
@@ -121,6 +139,7 @@ fn unknown_references_are_named() {
         TimeFunction::constant(0.0),
     );
     assert!(matches!(err(&m), ModelError::UnknownJoint { id: 3, .. }));
+    assert_eq!(err(&m).entities(), [Entity::Driver(0)]);
 }
 
 #[test]
@@ -139,6 +158,9 @@ fn conflicting_trees_are_refused() {
     m.add_joint("j1", n[1], p, JointKind::Spherical);
     m.add_joint("j2", n[2], q, JointKind::Spherical);
     assert!(matches!(err(&m), ModelError::TwoParentJoints { .. }));
+    let mut joints = err(&m).entities();
+    joints.sort();
+    assert_eq!(joints, [Entity::Joint(JointId(0)), Entity::Joint(JointId(1))]);
     // A support on a joint child.
     let mut m = Model::new("support on child");
     let a = m.add_node("a", Vector3::zeros());
@@ -147,11 +169,16 @@ fn conflicting_trees_are_refused() {
     m.add_rigid_body(rigid("rb", b, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
     m.add_joint("j", a, b, JointKind::Spherical);
     m.add_support(Support::pin(b));
-    assert!(matches!(err(&m), ModelError::SupportOnDependentNode { node, joint } if node == "b" && joint == "j"));
+    assert!(matches!(err(&m), ModelError::SupportOnDependentNode { node, joint, .. } if node == "b" && joint == "j"));
+    assert_eq!(err(&m).entities(), [Entity::Joint(JointId(0)), Entity::Node(b)]);
     m.supports.clear();
     m.add_support(Support::pin(a));
     m.add_support(Support::clamp(a));
     assert!(matches!(err(&m), ModelError::DuplicateSupport { count: 2, .. }));
+    assert_eq!(
+        err(&m).entities(),
+        [Entity::Support(0), Entity::Support(1), Entity::Node(a)]
+    );
 }
 
 /// A steel beam body "beam" reduced from (0, 0, 0) to (1, 0, 0), on the nodes a at the
@@ -178,6 +205,7 @@ fn one_beam(name: &str, b: Vector3<f64>, frame: FrameChoice) -> Model {
 fn geometry_mismatches_are_refused() {
     let m = one_beam("mismatch", Vector3::new(1.1, 0.0, 0.0), FrameChoice::CenterOfMass);
     assert!(matches!(err(&m), ModelError::InterfaceMismatch { interface: 1, .. }));
+    assert_eq!(err(&m).entities(), [Entity::Body(BodyId(0)), Entity::Node(NodeId(1))]);
     let mut m = Model::new("apart");
     let a = m.add_node("a", Vector3::zeros());
     let b = m.add_node("b", Vector3::new(0.1, 0.0, 0.0));
@@ -185,6 +213,7 @@ fn geometry_mismatches_are_refused() {
     m.add_joint("hinge", a, b, JointKind::Revolute { axis: Vector3::z() });
     m.add_rigid_body(rigid("r", b, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
     assert!(matches!(err(&m), ModelError::JointNodesApart { .. }));
+    assert_eq!(err(&m).entities(), [Entity::Joint(JointId(0))]);
 }
 
 #[test]
@@ -198,6 +227,7 @@ fn invalid_drivers_are_refused() {
         TimeFunction::constant(1.0),
     );
     assert!(matches!(err(&m), ModelError::InvalidDriver { .. }));
+    assert_eq!(err(&m).entities(), [Entity::Driver(0)]);
     m.drivers.clear();
     m.add_support(Support::clamp(a));
     m.add_driver(
@@ -206,6 +236,27 @@ fn invalid_drivers_are_refused() {
         TimeFunction::constant(1.0),
     );
     assert!(matches!(err(&m), ModelError::InvalidDriver { .. }));
+}
+
+/// Values out of range carry the entity they belong to; a time function checked for a driver
+/// names the driver.
+#[test]
+fn invalid_values_carry_their_entity() {
+    let mut m = Model::new("values");
+    let a = m.add_node("a", Vector3::zeros());
+    m.add_rigid_body(rigid("r", a, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
+    m.point_masses.push(mbs::PointMass { node: a, mass: 1.0 });
+    m.point_masses.push(mbs::PointMass { node: a, mass: -1.0 });
+    assert!(matches!(err(&m), ModelError::InvalidValue { .. }));
+    assert_eq!(err(&m).entities(), [Entity::PointMass(1)]);
+    m.point_masses.clear();
+    m.add_driver(
+        "d",
+        DriverTarget::NodeTranslation { node: a, component: 0 },
+        TimeFunction::constant(f64::NAN),
+    );
+    assert!(matches!(err(&m), ModelError::InvalidValue { .. }));
+    assert_eq!(err(&m).entities(), [Entity::Driver(0)]);
 }
 
 /// The error and its causes as a report walking the chain prints them, one per line.
@@ -226,10 +277,12 @@ fn body_errors_name_their_cause_once() {
     let cause = superelement::SuperelementError::SingularFrame { rcond: 1e-17 };
     let model = ModelError::Superelement {
         body: "rod".into(),
+        body_id: BodyId(0),
         source: cause.clone(),
     };
     let solve = mbs::SolveError::Body {
         body: "rod".into(),
+        id: BodyId(0),
         t: 0.25,
         source: cause.clone(),
     };

@@ -84,6 +84,80 @@ fn a_load_changed_between_steps_acts_from_the_next_step() {
     assert!(b.iter().any(|x| *x > 1e-6), "{b:?}");
 }
 
+/// `run_to` with fixed steps is the loop of `solve_dynamic`: the same steps, the same final
+/// state to the bit, the callback after each step in order; a callback error stops it where it
+/// is.
+#[test]
+fn streamed_steps_are_the_steps_of_solve_dynamic() {
+    let sys = crate::fixtures::released(0.4);
+    // 0.05 s in steps of 1e-3 s: 50 steps, though 0.05 / 1e-3 rounds to 50.000000000000004.
+    let s = settings();
+    let traj = mbs::solve_dynamic(&sys, sys.initial_state(), &s).unwrap();
+    let mut integ = Integrator::new(&sys, sys.initial_state(), s.clone()).unwrap();
+    assert_eq!(integ.steps_to(s.end_time), 50);
+    // min_step = h: a failed step is not retried (there is none here).
+    let fixed = mbs::Stepping::Fixed { min_step: s.step };
+    let mut seen = Vec::new();
+    let (totals, failure) = integ
+        .run_to(s.end_time, &fixed, |done, i| -> Result<(), ()> {
+            assert_eq!(done.time, i.state().time());
+            assert_eq!(done.last, done.k == 50);
+            assert_eq!(done.planned, Some(50));
+            seen.push(done.k);
+            Ok(())
+        })
+        .unwrap();
+    assert!(failure.is_none());
+    assert_eq!(seen, (1..=50).collect::<Vec<_>>());
+    assert_eq!((totals.steps, totals.planned), (50, Some(50)));
+    assert!(totals.retries.is_empty());
+    assert_eq!(totals.iterations, traj.iterations.iter().sum::<usize>());
+    assert_eq!(totals.max_iterations, *traj.iterations.iter().max().unwrap());
+    // Steps of 1e-3 s to the round-off of the times they join.
+    assert!((totals.smallest_step - s.step).abs() < 1e-15 && (totals.largest_step - s.step).abs() < 1e-15);
+    assert_eq!(integ.state().coordinates().0, traj.final_state.coordinates().0);
+    assert_eq!(integ.state().velocity(), traj.final_state.velocity());
+
+    let mut integ = Integrator::new(&sys, sys.initial_state(), s.clone()).unwrap();
+    let stopped = integ.run_to(
+        s.end_time,
+        &fixed,
+        |done, _| if done.k == 7 { Err(done.k) } else { Ok(()) },
+    );
+    let stopped = stopped.unwrap_err();
+    assert_eq!((stopped.error, stopped.totals.steps), (7, 7));
+    assert_eq!(integ.steps(), 7);
+}
+
+/// Adaptive streaming lands on the end time, and its last step says so.
+#[test]
+fn adaptive_streamed_steps_land_on_the_end_time() {
+    let sys = crate::fixtures::released(0.4);
+    let s = settings();
+    let mut integ = Integrator::new(&sys, sys.initial_state(), s.clone()).unwrap();
+    let adaptive = mbs::Stepping::Adaptive(mbs::AdaptiveSettings::new(1e-4, 1e-6, 1e-2));
+    let mut last = Vec::new();
+    let (totals, failure) = integ
+        .run_to(s.end_time, &adaptive, |done, _| -> Result<(), ()> {
+            assert_eq!(done.planned, None);
+            last.push(done.last);
+            Ok(())
+        })
+        .unwrap();
+    assert!(failure.is_none());
+    assert_eq!(totals.steps, last.len());
+    // Only the final step is the last.
+    assert_eq!(last.iter().filter(|l| **l).count(), 1);
+    assert_eq!(last.last(), Some(&true));
+    // On the end time to the round-off of summed steps.
+    assert!(
+        (integ.state().time() - s.end_time).abs() < 1e-12,
+        "{}",
+        integ.state().time()
+    );
+    assert!(totals.smallest_step <= totals.largest_step);
+}
+
 /// The fixed steps land on the end time: t_end = 0.25 s with h = 0.1 s takes steps of 0.1,
 /// 0.1 and 0.05 s and records t = 0.25 last (it ran a third full step to 0.3 s before); an end
 /// within round-off of a multiple of h adds no sliver.
@@ -114,6 +188,27 @@ fn fixed_steps_end_exactly_at_the_end_time() {
         assert_eq!(traj.final_state.time(), 0.25);
         assert_eq!(traj.iterations.len(), 3);
     }
+    // Streaming takes the same steps, and leaves the step size at h for a run continued on.
+    let settings = DynamicSettings::new(0.1, 0.25, 0.9);
+    let mut integ = mbs::Integrator::new(&sys, sys.initial_state(), settings).unwrap();
+    assert_eq!(integ.steps_to(0.25), 3);
+    let mut seen = Vec::new();
+    let (totals, failure) = integ
+        .run_to(
+            0.25,
+            &mbs::Stepping::Fixed { min_step: 0.01 },
+            |done, _| -> Result<(), ()> {
+                seen.push((done.time, done.last));
+                Ok(())
+            },
+        )
+        .unwrap();
+    assert!(failure.is_none());
+    assert_eq!((totals.steps, totals.planned), (3, Some(3)));
+    assert_eq!(seen.last(), Some(&(0.25, true)));
+    // The shortened last step is the smallest, 0.05 s to the round-off of the times it joins.
+    assert!((totals.smallest_step - 0.05).abs() < 1e-15, "{}", totals.smallest_step);
+    assert_eq!(integ.step_size(), 0.1);
 }
 
 /// A sensor that reads a value that is not finite stops the run with an error naming the

@@ -41,7 +41,7 @@ pub enum BodySource {
     /// A part of the study, reduced through the cache when the study runs.
     Part(usize),
     /// A reduced-body file, read during validation.
-    File(PathBuf, Box<ReducedBody>),
+    File(PathBuf, std::sync::Arc<ReducedBody>),
 }
 
 /// The floating frame of a flexible body, by interface name for the interface-node choice
@@ -656,7 +656,7 @@ impl Validator<'_> {
                     Ok(body) => {
                         let names = body.interfaces.iter().map(|i| i.name.clone()).collect();
                         (
-                            BodySource::File(self.src.dir().join(&m.stiffness), Box::new(body)),
+                            BodySource::File(self.src.dir().join(&m.stiffness), std::sync::Arc::new(body)),
                             names,
                             false,
                         )
@@ -697,7 +697,7 @@ impl Validator<'_> {
                             self.warn(&path.key("file"), format!("{}: {note}", full.display()));
                         }
                         let names = body.interfaces.iter().map(|i| i.name.clone()).collect();
-                        (BodySource::File(full, Box::new(body)), names, false)
+                        (BodySource::File(full, std::sync::Arc::new(body)), names, false)
                     }
                     Err(e) => {
                         self.err(&path.key("file"), format!("cannot read the MBDyn file: {e}"));
@@ -712,7 +712,7 @@ impl Validator<'_> {
                         let names = body.interfaces.iter().map(|i| i.name.clone()).collect();
                         let aux = body.auxiliary_interface.is_some();
                         load_points = body.load_points.iter().map(|p| p.name.clone()).collect();
-                        (BodySource::File(full, Box::new(body)), names, aux)
+                        (BodySource::File(full, std::sync::Arc::new(body)), names, aux)
                     }
                     Err(e) => {
                         self.err(
@@ -2030,8 +2030,8 @@ impl Validator<'_> {
                 };
                 Some(MbsAnalysis::Equilibrium {
                     steps,
-                    tolerance: tolerance(self, 1e-10)?,
-                    max_iterations: iterations(self, 25)?,
+                    tolerance: tolerance(self, mbs::StaticSettings::DEFAULT_TOLERANCE)?,
+                    max_iterations: iterations(self, mbs::StaticSettings::DEFAULT_MAX_ITERATIONS)?,
                     time,
                     arc_length,
                 })
@@ -2073,7 +2073,7 @@ impl Validator<'_> {
                     );
                     return None;
                 }
-                let rho_inf = a.rho_inf.unwrap_or(0.9);
+                let rho_inf = a.rho_inf.unwrap_or(mbs::DynamicSettings::DEFAULT_RHO_INF);
                 if !(0.0..=1.0).contains(&rho_inf) {
                     self.err(
                         &path.key("rho_inf"),
@@ -2133,8 +2133,8 @@ impl Validator<'_> {
                     t_end,
                     dt,
                     rho_inf,
-                    tolerance: tolerance(self, 1e-9)?,
-                    max_iterations: iterations(self, 20)?,
+                    tolerance: tolerance(self, mbs::DynamicSettings::DEFAULT_TOLERANCE)?,
+                    max_iterations: iterations(self, mbs::DynamicSettings::DEFAULT_MAX_ITERATIONS)?,
                     newton,
                     dt_min,
                     adaptive,

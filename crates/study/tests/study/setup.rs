@@ -54,7 +54,7 @@ fn results(rec: &Recorder, analysis: &str) -> serde_json::Value {
 fn first_body(file: &std::path::Path) -> (reduction::ReducedBody, nalgebra::Isometry3<f64>) {
     let study = study::load(file).unwrap();
     let b = study::mechanism::build(&study, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
-    (b.bodies[0].reduced.clone(), b.bodies[0].placement)
+    ((*b.bodies[0].reduced).clone(), b.bodies[0].placement)
 }
 
 /// The rigid double pendulum of two bodies of mass m, centre of mass at L/2, inertia I_c
