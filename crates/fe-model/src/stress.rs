@@ -60,7 +60,7 @@ use crate::element::{beam2, hex8, tet4, wedge6, Element, SolidKind};
 use crate::error::{ElementError, FeError};
 use crate::model::FeModel;
 use crate::property::IsotropicMaterial;
-use nalgebra::{DMatrix, Matrix3, Point3, SymmetricEigen};
+use nalgebra::{DMatrix, Matrix3, Point3};
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
@@ -80,12 +80,34 @@ pub fn von_mises(s: &Voigt) -> f64 {
     (0.5 * d + 3.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5])).sqrt()
 }
 
-/// Principal stresses, largest first.
+/// Principal stresses, largest first: the eigenvalues of the symmetric tensor in closed form
+/// (the trigonometric solution of the characteristic cubic: O. K. Smith, Eigenvalues of a
+/// symmetric 3 x 3 matrix, Communications of the ACM 4(4), 1961),
+/// $\sigma_k = \bar\sigma + 2p\cos\left(\tfrac13\arccos\tfrac{\det\mathbf B}{2} +
+/// \tfrac{2\pi j_k}{3}\right)$ with the mean stress $\bar\sigma = \operatorname{tr}\boldsymbol\sigma/3$,
+/// $p = \sqrt{\lVert\boldsymbol\sigma - \bar\sigma\mathbf 1\rVert_F^2/6}$ and
+/// $\mathbf B = (\boldsymbol\sigma - \bar\sigma\mathbf 1)/p$. No iteration: the stress output
+/// evaluates it at every node of a body at every output time. The largest is exact to the
+/// round-off of the largest component; at a double root the other two lose up to the square root
+/// of the machine epsilon, relative (the arccos argument is clamped to $[-1, 1]$).
 pub fn principal_stresses(s: &Voigt) -> [f64; 3] {
-    let e = SymmetricEigen::new(tensor(s)).eigenvalues;
-    let mut p = [e[0], e[1], e[2]];
-    p.sort_by(|a, b| b.total_cmp(a));
-    p
+    let off = s[3] * s[3] + s[4] * s[4] + s[5] * s[5];
+    if off == 0.0 {
+        let mut p = [s[0], s[1], s[2]];
+        p.sort_by(|a, b| b.total_cmp(a));
+        return p;
+    }
+    let mean = (s[0] + s[1] + s[2]) / 3.0;
+    let d = [s[0] - mean, s[1] - mean, s[2] - mean];
+    let p = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + 2.0 * off) / 6.0).sqrt();
+    let b = [d[0] / p, d[1] / p, d[2] / p, s[3] / p, s[4] / p, s[5] / p];
+    // det B for B = [[b0, b3, b5], [b3, b1, b4], [b5, b4, b2]].
+    let det =
+        b[0] * (b[1] * b[2] - b[4] * b[4]) - b[3] * (b[3] * b[2] - b[4] * b[5]) + b[5] * (b[3] * b[4] - b[1] * b[5]);
+    let phi = (0.5 * det).clamp(-1.0, 1.0).acos() / 3.0;
+    let largest = mean + 2.0 * p * phi.cos();
+    let smallest = mean + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    [largest, 3.0 * mean - largest - smallest, smallest]
 }
 
 fn to_voigt(S: &Matrix3<f64>) -> Voigt {

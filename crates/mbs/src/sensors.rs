@@ -142,10 +142,14 @@ impl System {
         Ok((J.fixed_rows::<3>(0).into(), J.fixed_rows::<3>(3).into()))
     }
 
-    /// The stresses at the mesh nodes of flexible body `body` at `state`, in global axes
-    /// (`reduction::StressShapes::node_stresses`); the body's stress shapes are checked by
-    /// [`System::new`] for every stress sensor.
-    fn body_stresses(&self, body: BodyId, state: &State) -> Result<reduction::NodeStresses, SolveError> {
+    /// The stress shapes and kinematics of flexible body `body` at `state`, for its nodal
+    /// stresses (`reduction::StressShapes::node_stresses`, `reduction::StressShapes::von_mises`);
+    /// the body's stress shapes are checked by [`System::new`] for every stress sensor.
+    fn body_stress_state(
+        &self,
+        body: BodyId,
+        state: &State,
+    ) -> Result<(&reduction::StressShapes, superelement::Kinematics), SolveError> {
         let i = self
             .flexible
             .iter()
@@ -160,7 +164,7 @@ impl System {
             source,
         })?;
         let shapes = f.se.stress_shapes().expect("stress shapes (System::new)");
-        Ok(shapes.node_stresses(&kin.q_jj, &kin.R_j))
+        Ok((shapes, kin))
     }
 
     /// The superelement of flexible body `body` (`None` for a rigid body or an unknown id): for
@@ -235,6 +239,8 @@ impl System {
         let mut row = Vec::new();
         let mut energies = None;
         let mut momentum = None;
+        let mut stresses: Vec<(BodyId, reduction::NodeStresses)> = Vec::new();
+        let mut von_mises: Vec<(BodyId, Vec<f64>)> = Vec::new();
         let push3 = |row: &mut Vec<f64>, v: Vector3<f64>| row.extend_from_slice(v.as_slice());
         for s in &self.model.sensors {
             match &s.kind {
@@ -311,16 +317,35 @@ impl System {
                     });
                 }
                 SensorKind::Stress { body, node } => {
-                    let st = self.body_stresses(*body, state)?;
+                    // One recovery per body and row, shared by its stress sensors.
+                    let k = match stresses.iter().position(|(b, _)| b == body) {
+                        Some(k) => k,
+                        None => {
+                            let (shapes, kin) = self.body_stress_state(*body, state)?;
+                            stresses.push((*body, shapes.node_stresses(&kin.q_jj, &kin.R_j)));
+                            stresses.len() - 1
+                        }
+                    };
+                    let st = &stresses[k].1;
                     row.extend_from_slice(&st.tensor[*node]);
                     row.push(st.von_mises[*node]);
                     row.push(st.principal[*node]);
                 }
                 SensorKind::MaxVonMises { body, nodes } => {
-                    let st = self.body_stresses(*body, state)?;
+                    // Von Mises only (invariant under the rotation to global axes), once per
+                    // body and row.
+                    let k = match von_mises.iter().position(|(b, _)| b == body) {
+                        Some(k) => k,
+                        None => {
+                            let (shapes, kin) = self.body_stress_state(*body, state)?;
+                            von_mises.push((*body, shapes.von_mises(&kin.q_jj)));
+                            von_mises.len() - 1
+                        }
+                    };
+                    let vm_all = &von_mises[k].1;
                     let (node, vm) = nodes
                         .iter()
-                        .map(|&k| (k, st.von_mises[k]))
+                        .map(|&k| (k, vm_all[k]))
                         .max_by(|a, b| a.1.total_cmp(&b.1))
                         .unwrap_or((0, f64::NAN));
                     row.push(vm);

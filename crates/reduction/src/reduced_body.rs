@@ -187,7 +187,7 @@ impl StressShapes {
 }
 
 /// $\mathbf A\mathbf q$ for a column-major `A`.
-fn combine(A: &DenseMatrix, q: &[f64]) -> Vec<f64> {
+pub(crate) fn combine(A: &DenseMatrix, q: &[f64]) -> Vec<f64> {
     assert_eq!(q.len(), A.ncols, "one coordinate per column");
     let mut out = vec![0.0; A.nrows];
     for (j, &qj) in q.iter().enumerate() {

@@ -7,7 +7,7 @@
 #![allow(non_snake_case)]
 
 use crate::error::ReductionError;
-use crate::reduced_body::{BeamStressElement, DenseMatrix, StressShapes};
+use crate::reduced_body::{combine, BeamStressElement, DenseMatrix, StressShapes};
 use faer::MatRef;
 use fe_model::stress::{averaged_nodal_stresses, beam_section_forces};
 use fe_model::{Element, FeModel};
@@ -115,6 +115,8 @@ impl StressShapes {
 
     /// [`NodeStresses`] for CB coordinates `q` ($\boldsymbol\sigma = \boldsymbol\Sigma\mathbf q$ in
     /// body axes), turned into global axes by `R` ($\mathbf R\boldsymbol\sigma\mathbf R^T$).
+    /// One matrix-vector product for every node's tensor; von Mises and the principal stresses
+    /// are invariant under the rotation and are taken from the body-axes tensor.
     ///
     /// # Panics
     /// If `q` does not have one value per column (a caller's bug).
@@ -125,14 +127,62 @@ impl StressShapes {
             von_mises: vec![0.0; n_nodes],
             principal: vec![0.0; n_nodes],
         };
-        for (i, s) in self.nodal_stress(q).iter().enumerate().take(n_nodes) {
-            if let Some(s) = s {
-                let g = R * fe_model::stress::tensor(s) * R.transpose();
-                let v = [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]];
-                out.tensor[i] = v;
-                out.von_mises[i] = fe_model::von_mises(&v);
-                out.principal[i] = fe_model::principal_stresses(&v)[0];
+        self.for_each_solid_node(q, |i, s| {
+            let g = R * fe_model::stress::tensor(s) * R.transpose();
+            out.tensor[i] = [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]];
+            out.von_mises[i] = fe_model::von_mises(s);
+            out.principal[i] = fe_model::principal_stresses(s)[0];
+        });
+        for (i, x) in self.beam_extremes(q, n_nodes).iter().enumerate() {
+            if let Some([magnitude, largest]) = x {
+                out.von_mises[i] = *magnitude;
+                out.principal[i] = *largest;
             }
+        }
+        out
+    }
+
+    /// The von Mises stress of every mesh node for CB coordinates `q`, as
+    /// [`NodeStresses::von_mises`] of [`Self::node_stresses`] but without the rotation to global
+    /// axes (von Mises is invariant under it) and without principal stresses: the cheap path of
+    /// a largest-von-Mises output at every step.
+    ///
+    /// # Panics
+    /// If `q` does not have one value per column (a caller's bug).
+    pub fn von_mises(&self, q: &[f64]) -> Vec<f64> {
+        let n_nodes = self.node_count();
+        let mut vm = vec![0.0; n_nodes];
+        self.for_each_solid_node(q, |i, s| vm[i] = fe_model::von_mises(s));
+        for (i, x) in self.beam_extremes(q, n_nodes).iter().enumerate() {
+            if let Some([magnitude, _]) = x {
+                vm[i] = *magnitude;
+            }
+        }
+        vm
+    }
+
+    /// Calls `f(i, sigma_i)` with the body-axes stress of every solid node `i` below the node
+    /// count ($\boldsymbol\sigma = \boldsymbol\Sigma\mathbf q$, one matrix-vector product).
+    fn for_each_solid_node(&self, q: &[f64], mut f: impl FnMut(usize, &[f64; 6])) {
+        let Some(S) = &self.nodal else {
+            return;
+        };
+        let sigma = combine(S, q);
+        for ((i, s), _) in sigma
+            .chunks_exact(6)
+            .enumerate()
+            .zip(&self.solid_node)
+            .filter(|(_, &solid)| solid)
+        {
+            f(i, s.try_into().expect("6 components"));
+        }
+    }
+
+    /// The largest magnitude and the largest value of the beams' extreme-fibre axial stress at
+    /// every node below `n_nodes` (`None` at nodes without a beam end).
+    fn beam_extremes(&self, q: &[f64], n_nodes: usize) -> Vec<Option<[f64; 2]>> {
+        if self.beams.is_empty() {
+            return Vec::new();
         }
         let forces = self.beam_section_forces(q);
         let ends = self.beams.iter().zip(&forces).flat_map(|(b, forces)| {
@@ -142,15 +192,6 @@ impl StressShapes {
                 (node < n_nodes).then_some((node, range))
             })
         });
-        for (i, x) in fe_model::stress::fibre_extremes_at_nodes(n_nodes, ends)
-            .iter()
-            .enumerate()
-        {
-            if let Some([magnitude, largest]) = x {
-                out.von_mises[i] = *magnitude;
-                out.principal[i] = *largest;
-            }
-        }
-        out
+        fe_model::stress::fibre_extremes_at_nodes(n_nodes, ends)
     }
 }

@@ -151,6 +151,42 @@ fn von_mises_and_principal_stresses_of_simple_states() {
     assert!(von_mises(&[7.0, 7.0, 7.0, 0.0, 0.0, 0.0]).abs() < 1e-12);
 }
 
+#[test]
+fn closed_form_principal_stresses_equal_the_iterative_eigenvalues() {
+    // General, repeated (uniaxial in rotated axes, hydrostatic plus tiny shear), and
+    // sign-mixed tensors against nalgebra's iterative symmetric eigensolver.
+    let R = nalgebra::Rotation3::from_scaled_axis(Vector3::new(0.3, -0.7, 1.1));
+    let rotated = |d: [f64; 3]| {
+        let S = R * Matrix3::from_diagonal(&Vector3::from(d)) * R.transpose();
+        [S[(0, 0)], S[(1, 1)], S[(2, 2)], S[(0, 1)], S[(1, 2)], S[(2, 0)]]
+    };
+    let cases = [
+        [120e6, -30e6, 45e6, 17e6, -8e6, 23e6],
+        rotated([250e6, 0.0, 0.0]),
+        rotated([-80e6, -80e6, 40e6]),
+        rotated([5e6, 5e6, 5e6]),
+        [1e8, 1e8, 1e8, 1e-3, 0.0, 2e-3],
+        [-3.0, 2.0, 7.0, 0.0, 0.0, 0.0],
+        [0.0; 6],
+    ];
+    for s in cases {
+        let mut e: Vec<f64> = nalgebra::SymmetricEigen::new(fe_model::stress::tensor(&s))
+            .eigenvalues
+            .iter()
+            .copied()
+            .collect();
+        e.sort_by(|a, b| b.total_cmp(a));
+        let p = principal_stresses(&s);
+        let scale = s.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+        // The largest to a few ulps of the largest component; the other two lose up to
+        // sqrt(machine epsilon) at a double root (the arccos at its end point).
+        assert!((p[0] - e[0]).abs() <= 1e-13 * scale, "{s:?}: {p:?} against {e:?}");
+        for k in 1..3 {
+            assert!((p[k] - e[k]).abs() <= 1e-8 * scale, "{s:?}: {p:?} against {e:?}");
+        }
+    }
+}
+
 /// Clamps node 0 of a beam model.
 fn clamp(model: &mut FeModel, node: NodeId) {
     model.add_support(node, DofMask::ALL);

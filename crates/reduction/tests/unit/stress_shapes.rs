@@ -237,3 +237,41 @@ fn the_body_file_keeps_stress_shapes_and_load_points_and_reads_version_2() {
     let bad = String::from_utf8_lossy(&bytes).into_owned();
     assert!(bad.contains("\"stress\""));
 }
+
+#[test]
+fn fast_node_stresses_equal_the_per_node_rotation_and_eigenvalues_on_a_rotated_deformed_state() {
+    // The per-node formula: rotate every node's tensor to global axes, von Mises of the
+    // rotated tensor, largest eigenvalue by nalgebra's iterative eigensolver.
+    let (model, root, tip) = bar();
+    let body = reduce(&model, "bar", &[("root".to_string(), root)], &settings(6, None)).unwrap();
+    let shapes = body.stress.as_ref().unwrap();
+    let mut q = clamped_static(&body, tip, Vector3::new(2e3, -3e4, 1e4));
+    for (k, x) in q.iter_mut().enumerate().skip(6) {
+        *x += 1e-5 * (k as f64).sin();
+    }
+    let R = *nalgebra::Rotation3::from_scaled_axis(Vector3::new(0.4, -1.2, 0.7)).matrix();
+    let fast = shapes.node_stresses(&q, &R);
+    let vm_only = shapes.von_mises(&q);
+    let sigma = shapes.nodal_stress(&q);
+    let scale = sigma.iter().flatten().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    // Round-off of a rotation and an eigensolver on entries of size `scale`.
+    let tol = 1e-12 * scale;
+    for (i, s) in sigma.iter().enumerate() {
+        let (tensor, vm, principal) = match s {
+            Some(s) => {
+                let g = R * fe_model::stress::tensor(s) * R.transpose();
+                let e = nalgebra::SymmetricEigen::new(g).eigenvalues;
+                let v = [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]];
+                (v, von_mises(&v), e.max())
+            }
+            None => ([0.0; 6], 0.0, 0.0),
+        };
+        for c in 0..6 {
+            assert!((fast.tensor[i][c] - tensor[c]).abs() <= tol, "node {i}");
+        }
+        assert!((fast.von_mises[i] - vm).abs() <= tol, "node {i}");
+        assert!((vm_only[i] - vm).abs() <= tol, "node {i}");
+        assert!((fast.principal[i] - principal).abs() <= tol, "node {i}");
+    }
+    assert!(scale > 1e6, "a deformed state: {scale}");
+}
