@@ -12,7 +12,7 @@
 //! | $\mathbf x_m$, $\mathbf u_m$, $\boldsymbol\theta_m$ | `x_m`, dofs 0..3, 3..6 of the interface node | interface node: position, translation, rotation |
 //! | $\mathbf x_s$, $\mathbf u_s$ | `x_s`, dofs 0..3 of a surface node | surface node $s$ |
 //! | $\mathbf r_s$ | `r` | $\mathbf x_s - \mathbf x_m$ |
-//! | $w_s$ | `weights[s]` | RBE3 weight of surface node $s$ |
+//! | $w_s$ | `weights\[s\]` | RBE3 weight of surface node $s$ |
 //! | $\mathbf S_s$ | `S_s` | $[\mathbf I,\ -\tilde{\mathbf r}_s]$ ($3 \times 6$): rigid motion of the interface seen at $s$ |
 //! | $\mathbf G$ | `G` | RBE3 map $[\mathbf u_m; \boldsymbol\theta_m] = \mathbf G \mathbf u_{surface}$ ($6 \times 3n$) |
 //!

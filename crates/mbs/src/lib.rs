@@ -95,7 +95,7 @@
 //! | $\beta',\ \gamma'$ | `bp`, `gp` | iteration-matrix factors | BCA 2012 |
 //! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration (body axes for rotations, and for free nodes' translations with `DynamicSettings::body_axis_translations`) | BCA 2012 |
 //! | $\boldsymbol\omega_b,\ \mathbf v_b$ | `vb` (`dynamic_solver`) | body-axis angular and translational velocity of a node, $\mathbf R^T\boldsymbol\omega_s$, $\mathbf R^T\dot{\mathbf x}$ | [`dynamic_solver`] |
-//! | $\mathrm{Re}\,s$ | [`LinearSpectrum::growing`], [`ModeEnergy::growth_rate`] | growth rate of an unstable mode [1/s] | [`linearized`] |
+//! | $\mathrm{Re}\,s$ | [`LinearSpectrum::growing`], [`ModeEnergy::growth_rate`] | growth rate of an unstable mode \[1/s\] | [`linearized`] |
 //! | $\mathbf T(h\Delta\mathbf q)$ | `System::iteration_matrix` | tangent operator $\mathbf J_l$ of each rotation increment | BCA 2012 |
 //! | $\mathbf S = \beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$ | `Workspace::S`, [`LinearSolver`] | iteration matrix; dense LU up to [`DENSE_MAX`] unknowns, sparse above | BCA 2012 |
 //! | $\lVert\mathbf F_{k+1}\rVert/\lVert\mathbf F_k\rVert$ | [`MODIFIED_NEWTON_RATE`] | contraction above which modified Newton ([`NewtonStrategy`]) refactorises | [`dynamic_solver`] |

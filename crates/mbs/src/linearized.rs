@@ -32,7 +32,7 @@ use serde::{Deserialize, Serialize};
 /// Eigenvalues of the linearised system.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LinearSpectrum {
-    /// Undamped circular frequencies [rad/s], ascending (only eigenvalues of
+    /// Undamped circular frequencies \[rad/s\], ascending (only eigenvalues of
     /// $\hat{\mathbf M}^{-1}\hat{\mathbf K}$ with positive real part).
     pub omega: Vec<f64>,
     /// State-space eigenvalues $(\mathrm{Re}\,s, \mathrm{Im}\,s)$ with $\mathrm{Im}\,s \ge 0$, by
@@ -258,7 +258,7 @@ pub struct NodeEnergy {
 pub struct ModeEnergy {
     /// Real part of the eigenvalue $\omega^2$ of $\hat{\mathbf M}^{-1}\hat{\mathbf K}$.
     pub omega_squared: f64,
-    /// $\sqrt{\max(\omega^2, 0)}$ [rad/s] and in Hz.
+    /// $\sqrt{\max(\omega^2, 0)}$ \[rad/s\] and in Hz.
     pub omega: f64,
     pub frequency_hz: f64,
     /// Rigid-body (zero) mode: $|\omega^2| \le 10^{-9}\max(\max_i|\omega_i^2|,\ 1\ \mathrm{s^{-2}})$.
@@ -272,7 +272,7 @@ pub struct ModeEnergy {
     /// eigenvalue has $\mathrm{Re}\,s > 0$ ([`LinearSpectrum::growing`]). The label then starts
     /// with "UNSTABLE".
     pub unstable: bool,
-    /// Growth rate of an unstable mode [1/s]: $\sqrt{-\omega^2}$ for a divergence, else
+    /// Growth rate of an unstable mode \[1/s\]: $\sqrt{-\omega^2}$ for a divergence, else
     /// $\mathrm{Re}\,s$.
     pub growth_rate: Option<f64>,
     /// $\boldsymbol\phi$: real, mass-normalised ($\boldsymbol\phi^T\hat{\mathbf M}\boldsymbol\phi = 1$) when

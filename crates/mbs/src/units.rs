@@ -6,9 +6,9 @@ use crate::JointKind;
 /// What a scalar joint coordinate measures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CoordinateQuantity {
-    /// A rotation angle $\theta$ [rad]; its effort is a moment [N m].
+    /// A rotation angle $\theta$ \[rad\]; its effort is a moment \[N m\].
     Angle,
-    /// A translation $s$ [m]; its effort is a force [N].
+    /// A translation $s$ \[m\]; its effort is a force \[N\].
     Length,
 }
 

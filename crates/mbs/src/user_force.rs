@@ -82,9 +82,9 @@ pub struct FdSteps {
     pub position: f64,
     /// Spatial rotation step \[rad\].
     pub rotation: f64,
-    /// Velocity step [m/s].
+    /// Velocity step \[m/s\].
     pub velocity: f64,
-    /// Angular velocity step [rad/s].
+    /// Angular velocity step \[rad/s\].
     pub angular_velocity: f64,
 }
 

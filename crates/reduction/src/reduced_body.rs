@@ -235,7 +235,7 @@ pub struct ReducedBody {
     pub interfaces: Vec<InterfacePoint>,
     /// Number $m$ of fixed-interface (dynamic) modes.
     pub n_modes: usize,
-    /// Circular frequencies [rad/s] of the kept fixed-interface modes, ascending.
+    /// Circular frequencies \[rad/s\] of the kept fixed-interface modes, ascending.
     pub fixed_interface_omega: Vec<f64>,
     /// $\mathbf K_{CB} = \mathbf V^T \mathbf K \mathbf V$, $n \times n$.
     pub K_CB: DenseMatrix,
