@@ -24,8 +24,9 @@ fn run_up(dynamic: &str) -> String {
     let mut in_initial = false;
     for line in text.lines() {
         // The [[initial]] velocities of the constant-speed start go: the run-up starts at rest.
+        // So does the example's [output] table: a run that wants other output gives its own.
         if line.starts_with('[') {
-            in_initial = line.starts_with("[[initial]]");
+            in_initial = line.starts_with("[[initial]]") || line.starts_with("[output]");
         }
         if in_initial || line.starts_with("vtu_every") || line.starts_with("dt =") || line.starts_with("rho_inf") {
             continue;
