@@ -332,6 +332,9 @@ pub struct AnalysisFile {
     pub rho_inf: Option<f64>,
     /// dynamic: `full` (default) or `modified` Newton (`mbs::NewtonStrategy`).
     pub newton: Option<String>,
+    /// dynamic: the axes in which the time integration carries the translations of free
+    /// nodes, `fixed` (default) or `body` (`mbs::DynamicSettings::body_axis_translations`).
+    pub translations: Option<String>,
     /// linearized: about `initial` (default), `equilibrium`, or the state at time `at_time`
     /// of a dynamic run with step `dt`; equilibrium: the time at which drivers and load
     /// functions are evaluated (default 0).

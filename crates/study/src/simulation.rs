@@ -55,6 +55,7 @@ pub fn dynamic_settings(spec: &MbsAnalysis, output_every: usize) -> Option<Dynam
         tolerance,
         max_iterations,
         newton,
+        body_axis_translations,
         ..
     } = spec
     else {
@@ -64,6 +65,7 @@ pub fn dynamic_settings(spec: &MbsAnalysis, output_every: usize) -> Option<Dynam
     settings.tolerance = *tolerance;
     settings.max_iterations = *max_iterations;
     settings.newton = *newton;
+    settings.body_axis_translations = *body_axis_translations;
     settings.output_every = output_every;
     Some(settings)
 }

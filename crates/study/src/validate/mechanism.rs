@@ -379,6 +379,9 @@ pub enum MbsAnalysis {
         max_iterations: usize,
         /// Full or modified Newton (`newton = "full" | "modified"`).
         newton: mbs::NewtonStrategy,
+        /// `translations = "body"`: the free nodes' translations carried in body axes
+        /// (`mbs::DynamicSettings::body_axis_translations`).
+        body_axis_translations: bool,
         /// Smallest step \[s\]: a failed fixed step is retried with halved steps down to it;
         /// the adaptive step's lower bound.
         dt_min: f64,
@@ -2048,6 +2051,7 @@ impl Validator<'_> {
                         "tolerance",
                         "max_iterations",
                         "newton",
+                        "translations",
                         "start",
                         "dt_min",
                         "dt_max",
@@ -2088,6 +2092,17 @@ impl Validator<'_> {
                         self.err(
                             &path.key("newton"),
                             format!("unknown Newton strategy '{other}': `full` (new tangents at every correction, the default) or `modified` (the factorised iteration matrix kept across corrections and steps)"),
+                        );
+                        return None;
+                    }
+                };
+                let body_axis_translations = match a.translations.as_deref() {
+                    None | Some("fixed") => false,
+                    Some("body") => true,
+                    Some(other) => {
+                        self.err(
+                            &path.key("translations"),
+                            format!("unknown translation axes '{other}': `fixed` (the default) or `body` (free nodes' translations in their body axes, for long runs of fast steady rotation)"),
                         );
                         return None;
                     }
@@ -2136,6 +2151,7 @@ impl Validator<'_> {
                     tolerance: tolerance(self, mbs::DynamicSettings::DEFAULT_TOLERANCE)?,
                     max_iterations: iterations(self, mbs::DynamicSettings::DEFAULT_MAX_ITERATIONS)?,
                     newton,
+                    body_axis_translations,
                     dt_min,
                     adaptive,
                 })

@@ -203,3 +203,28 @@ fn eighty_thousand_materials_validate_and_a_duplicate_is_found() {
     );
     assert!(e.contains("(1 error)"), "{e}");
 }
+
+/// `translations = "body"` in a dynamic analysis reaches the integrator (the free nodes'
+/// translations in body axes, for long runs of fast steady rotation); `fixed` is the default and
+/// any other value is refused at its key.
+#[test]
+fn the_translation_axes_of_a_dynamic_analysis_reach_the_integrator() {
+    let settings = |name: &str, key: &str| {
+        let dir = crate::scratch(name);
+        let file = dir.join(format!("{name}.toml"));
+        std::fs::write(&file, format!("{PENDULUM}{DYNAMIC}{key}")).unwrap();
+        let study = study::load(&file).unwrap();
+        let study::validate::AnalysisSpec::Mbs(spec) = &study.analyses[0].spec else {
+            panic!("a dynamic analysis")
+        };
+        study::simulation::dynamic_settings(spec, 1).unwrap()
+    };
+    assert!(!settings("axes-default", "").body_axis_translations);
+    assert!(!settings("axes-fixed", "translations = \"fixed\"\n").body_axis_translations);
+    assert!(settings("axes-body", "translations = \"body\"\n").body_axis_translations);
+    let e = check("axes-bad", &format!("{PENDULUM}{DYNAMIC}translations = \"sideways\"\n"));
+    assert!(
+        e.contains("analyses[0].translations") && e.contains("unknown translation axes 'sideways'"),
+        "{e}"
+    );
+}
