@@ -3,6 +3,8 @@
 #![allow(dead_code)]
 
 use mbs::{solve_static, InitialCondition, Model, NodeId, SensorKind, StaticSettings, Support, System};
+// Not every test binary that includes this file uses every builder.
+#[allow(unused_imports)]
 pub use models::{pendulum, rigid, ELASTICA_E, ELASTICA_SIDE, MATTIASSON as ELASTICA};
 use models::{square_spec, RodModel, Variant};
 use nalgebra::{Isometry3, Vector3};
