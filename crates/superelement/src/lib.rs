@@ -209,9 +209,11 @@
 //!
 //! # Modules
 //!
-//! [`so3`] rotations; [`local_coordinates`]; [`frame`] (4.4); [`transform`] (5.2)-(5.6) and
-//! their derivatives; [`mass`] FFR inertia; [`forces`] body-axis forces and partials;
-//! [`tangent`] the residual and tangents; [`recovery`] the deformed mesh; [`testing`] helpers.
+//! [`so3`] rotations; [`state`] the plain data (frame, frame choice, body state);
+//! [`local_coordinates`]; [`transform`] (5.2)-(5.6) and their derivatives; [`frame`] the Newton
+//! solve of (4.4); [`mass`] FFR inertia; [`body`] the superelement; [`forces`] body-axis forces
+//! and partials; [`tangent`] the residual and tangents; [`recovery`] the deformed mesh;
+//! [`testing`] helpers. Each module uses only the ones before it in this list (no circles).
 
 #![allow(non_snake_case)]
 
