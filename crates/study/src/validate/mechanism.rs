@@ -1604,6 +1604,22 @@ impl Validator<'_> {
         })
     }
 
+    /// The `velocity` and `angular_velocity` of an `[[initial]]` entry (zero when absent).
+    fn initial_velocities(&mut self, path: &KeyPath, c: &InitialFile) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        let zero = [0.0; 3];
+        let velocity = self.finite3(
+            &path.key("velocity"),
+            c.velocity.as_ref().unwrap_or(&zero),
+            "the velocity [m/s]",
+        )?;
+        let angular_velocity = self.finite3(
+            &path.key("angular_velocity"),
+            c.angular_velocity.as_ref().unwrap_or(&zero),
+            "the angular velocity [rad/s]",
+        )?;
+        Some((velocity, angular_velocity))
+    }
+
     fn initial(&mut self, path: &KeyPath, c: &InitialFile, m: &Mechanism) -> Option<InitialSpec> {
         match (&c.joint, &c.at, &c.body) {
             (Some(joint), None, None) => {
@@ -1678,17 +1694,7 @@ impl Validator<'_> {
                     self.err(&path.key("body"), unknown_reference("body", body, &names));
                     return None;
                 };
-                let zero = [0.0; 3];
-                let velocity = self.finite3(
-                    &path.key("velocity"),
-                    c.velocity.as_ref().unwrap_or(&zero),
-                    "the velocity [m/s]",
-                )?;
-                let angular_velocity = self.finite3(
-                    &path.key("angular_velocity"),
-                    c.angular_velocity.as_ref().unwrap_or(&zero),
-                    "the angular velocity [rad/s]",
-                )?;
+                let (velocity, angular_velocity) = self.initial_velocities(path, c)?;
                 let point = match &c.point {
                     Some(p) => Some(self.finite3(&path.key("point"), p, "the point [m]")?),
                     None => None,
@@ -1708,17 +1714,7 @@ impl Validator<'_> {
                     "an initial point velocity",
                 );
                 let at = self.point(&path.key("at"), at, m, false)?;
-                let zero = [0.0; 3];
-                let velocity = self.finite3(
-                    &path.key("velocity"),
-                    c.velocity.as_ref().unwrap_or(&zero),
-                    "the velocity [m/s]",
-                )?;
-                let angular_velocity = self.finite3(
-                    &path.key("angular_velocity"),
-                    c.angular_velocity.as_ref().unwrap_or(&zero),
-                    "the angular velocity [rad/s]",
-                )?;
+                let (velocity, angular_velocity) = self.initial_velocities(path, c)?;
                 Some(InitialSpec::Point {
                     path: path.clone(),
                     at,
