@@ -62,19 +62,32 @@ impl DofMap {
         let mut active = vec![false; n_full];
         for (e, element) in model.elements.iter().enumerate() {
             for &node in element.nodes() {
-                model.check_node(node, &format!("element {e} ({})", element.kind_name()))?;
+                // The context is formatted only for an error: once per node of every element
+                // would dominate the numbering of a large model.
+                if node.index() >= n_nodes {
+                    model.check_node(node, &format!("element {e} ({})", element.kind_name()))?;
+                }
                 for &k in element.node_dofs() {
                     active[6 * node.index() + k] = true;
                 }
             }
         }
         for c in &model.constraints {
-            let context = format!("constraint '{}'", c.name);
-            model.check_node(c.dependent.0, &context)?;
-            active[6 * c.dependent.0.index() + c.dependent.1 as usize] = true;
+            let context = || format!("constraint '{}'", c.name);
+            if c.dependent.0.index() >= n_nodes {
+                model.check_node(c.dependent.0, &context())?;
+            }
+            // A dof index of 6 or more is reported below, with its constraint.
+            if c.dependent.1 < 6 {
+                active[6 * c.dependent.0.index() + c.dependent.1 as usize] = true;
+            }
             for &(node, k, _) in &c.terms {
-                model.check_node(node, &context)?;
-                active[6 * node.index() + k as usize] = true;
+                if node.index() >= n_nodes {
+                    model.check_node(node, &context())?;
+                }
+                if k < 6 {
+                    active[6 * node.index() + k as usize] = true;
+                }
             }
         }
         let mut status: Vec<DofStatus> = active

@@ -35,7 +35,8 @@ use crate::model::{FeModel, LinearConstraint};
 use crate::quadrature;
 use nalgebra::{DMatrix, Matrix3, Matrix6, Point3, Vector3};
 use serde::{Deserialize, Serialize};
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
+use std::sync::OnceLock;
 
 /// How the interface node is tied to its surface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -177,20 +178,14 @@ pub fn add_interface(
     let X: Vec<Point3<f64>> = surface.iter().map(|s| model.mesh.nodes[s.index()]).collect();
     check_carries_six_motions(name, &X, &weights)?;
 
-    // Dofs that cannot be dependent: supported, or dependent on another constraint.
-    let supported: BTreeSet<(NodeId, usize)> = model
-        .supports
-        .iter()
-        .flat_map(|s| (0..6).filter(|&k| s.dofs.0[k]).map(move |k| (s.node, k)))
-        .collect();
-    let dependent: BTreeSet<(NodeId, usize)> = model
-        .constraints
-        .iter()
-        .map(|c| (c.dependent.0, c.dependent.1 as usize))
-        .collect();
+    // Dofs that cannot be dependent: supported, or dependent on another constraint (by dof
+    // slot 6 node + k, so that a spider on every node of a large model stays linear in its size).
+    let dofs = DofSlots::new(model);
+    let supported = |s: NodeId, k: usize| dofs.supported(s, k);
+    let dependent = |s: NodeId, k: usize| dofs.definition(&model.constraints, s, k).is_some();
     for &s in &surface {
         for k in 0..3 {
-            if kind == SpiderKind::Rbe2 && dependent.contains(&(s, k)) {
+            if kind == SpiderKind::Rbe2 && dependent(s, k) {
                 return Err(interface_error(
                     name,
                     format!(
@@ -200,7 +195,7 @@ pub fn add_interface(
                     ),
                 ));
             }
-            if kind == SpiderKind::Rbe2 && supported.contains(&(s, k)) {
+            if kind == SpiderKind::Rbe2 && supported(s, k) {
                 return Err(interface_error(
                     name,
                     format!(
@@ -216,16 +211,12 @@ pub fn add_interface(
     let x_m = at.unwrap_or(centroid);
     // The node the interface will get; added only once nothing can fail.
     let m = NodeId(model.node_count() as u32);
-    let definitions: BTreeMap<(NodeId, u8), Definition> = model
-        .constraints
-        .iter()
-        .map(|c| (c.dependent, c.terms.clone()))
-        .collect();
     let constraints = match kind {
         SpiderKind::Rbe2 => rbe2_constraints(name, m, &x_m, &surface, &X),
         SpiderKind::Rbe3 => {
-            let candidate = |s: NodeId, k: usize| !supported.contains(&(s, k)) && !dependent.contains(&(s, k));
-            rbe3_constraints(name, m, &x_m, &surface, &X, &weights, &definitions, candidate)?
+            let candidate = |s: NodeId, k: usize| !supported(s, k) && !dependent(s, k);
+            let definition = |s: NodeId, k: u8| dofs.definition(&model.constraints, s, k as usize);
+            rbe3_constraints(name, m, &x_m, &surface, &X, &weights, definition, candidate)?
         }
     };
     let added = model.add_node(x_m);
@@ -233,6 +224,44 @@ pub fn add_interface(
     substitute(&mut model.constraints, &constraints);
     model.constraints.extend(constraints);
     Ok(m)
+}
+
+/// The supported dofs and the constraint defining each dependent dof of a model, by dof slot
+/// $6\,node + k$: one pass over the supports and constraints, then constant-time look-ups.
+struct DofSlots {
+    supported: Vec<bool>,
+    /// Index of the (last) constraint whose dependent dof is the slot, `u32::MAX` for none.
+    defined_by: Vec<u32>,
+}
+
+impl DofSlots {
+    fn new(model: &FeModel) -> Self {
+        let slots = 6 * model.node_count();
+        let mut supported = vec![false; slots];
+        for s in model.supports.iter().filter(|s| s.node.index() < model.node_count()) {
+            for k in (0..6).filter(|&k| s.dofs.0[k]) {
+                supported[6 * s.node.index() + k] = true;
+            }
+        }
+        let mut defined_by = vec![u32::MAX; slots];
+        for (i, c) in model.constraints.iter().enumerate() {
+            let slot = 6 * c.dependent.0.index() + c.dependent.1 as usize;
+            if let Some(d) = defined_by.get_mut(slot) {
+                *d = i as u32;
+            }
+        }
+        Self { supported, defined_by }
+    }
+
+    fn supported(&self, node: NodeId, k: usize) -> bool {
+        self.supported.get(6 * node.index() + k).copied().unwrap_or(false)
+    }
+
+    /// The terms of the constraint that defines dof `k` of `node`, if one does.
+    fn definition<'c>(&self, constraints: &'c [LinearConstraint], node: NodeId, k: usize) -> Option<&'c Definition> {
+        let i = *self.defined_by.get(6 * node.index() + k)?;
+        constraints.get(i as usize).map(|c| &c.terms)
+    }
 }
 
 /// Keeps every constraint's right-hand side independent when spiders share surface nodes
@@ -305,18 +334,19 @@ fn rigid_map(r: &Vector3<f64>) -> nalgebra::SMatrix<f64, 3, 6> {
 /// A linear definition of a dependent dof: its terms $(node, dof, c)$.
 type Definition = Vec<(NodeId, u8, f64)>;
 
-/// RBE3 rows by the "UM" elimination (see [`add_interface`]). `definitions` holds the
-/// existing constraints: a surface dof that one of them defines is replaced by its definition
-/// before the dependent dofs are chosen, so the new rows refer to independent dofs only.
+/// RBE3 rows by the "UM" elimination (see [`add_interface`]). `definition` gives the terms of
+/// the existing constraint that defines a dof, if any: a surface dof that one of them defines
+/// is replaced by its definition before the dependent dofs are chosen, so the new rows refer to
+/// independent dofs only. Linear in the number of surface nodes and their definitions' terms.
 #[allow(clippy::too_many_arguments)]
-fn rbe3_constraints(
+fn rbe3_constraints<'d>(
     name: &str,
     m: NodeId,
     x_m: &Point3<f64>,
     surface: &[NodeId],
     X: &[Point3<f64>],
     weights: &[f64],
-    definitions: &BTreeMap<(NodeId, u8), Definition>,
+    definition: impl Fn(NodeId, u8) -> Option<&'d Definition>,
     candidate: impl Fn(NodeId, usize) -> bool,
 ) -> Result<Vec<LinearConstraint>, FeError> {
     let mut A = Matrix6::zeros();
@@ -327,34 +357,36 @@ fn rbe3_constraints(
     let A_inv = A
         .try_inverse()
         .ok_or_else(|| interface_error(name, "the RBE3 normal matrix is singular".into()))?;
-    // Columns of G over independent dofs: [u_m; theta_m] = G u_cols.
+    // Columns of G over independent dofs: [u_m; theta_m] = G u_cols, in first-seen order;
+    // `column_of` maps a dof slot (6 node + k) to its column.
     let mut columns: Vec<(NodeId, u8)> = Vec::new();
-    let mut index: BTreeMap<(NodeId, u8), usize> = BTreeMap::new();
-    let mut entries: Vec<(usize, nalgebra::Vector6<f64>)> = Vec::new();
+    let mut column_of: Vec<u32> = Vec::new();
+    let mut g_columns: Vec<nalgebra::Vector6<f64>> = Vec::new();
     let mut add = |key: (NodeId, u8), g: nalgebra::Vector6<f64>| {
-        let next = columns.len();
-        let c = *index.entry(key).or_insert(next);
-        if c == next {
-            columns.push(key);
+        let slot = 6 * key.0.index() + key.1 as usize;
+        if slot >= column_of.len() {
+            column_of.resize(slot + 1, u32::MAX);
         }
-        entries.push((c, g));
+        if column_of[slot] == u32::MAX {
+            column_of[slot] = columns.len() as u32;
+            columns.push(key);
+            g_columns.push(nalgebra::Vector6::zeros());
+        }
+        g_columns[column_of[slot] as usize] += g;
     };
     for ((&s, x_s), &w) in surface.iter().zip(X).zip(weights) {
         let G_s = w * A_inv * rigid_map(&(x_s - x_m)).transpose();
         for k in 0..3u8 {
             let g = G_s.column(k as usize).into_owned();
-            match definitions.get(&(s, k)) {
+            match definition(s, k) {
                 Some(def) => def.iter().for_each(|&(n2, k2, c)| add((n2, k2), c * g)),
                 None => add((s, k), g),
             }
         }
     }
     let nc = columns.len();
-    let mut G = DMatrix::zeros(6, nc);
-    for (c, g) in entries {
-        let mut col = G.column_mut(c);
-        col += g;
-    }
+    let G = DMatrix::from_iterator(6, nc, g_columns.iter().flat_map(|g| g.iter().copied()));
+    drop(g_columns);
     // Choose six columns by column-pivoted Gram-Schmidt on G with the rotation rows scaled to
     // lengths (they act on translations / length otherwise, and pivoting would be unit-biased).
     // Candidates: this surface's own translations that are free.
@@ -367,11 +399,11 @@ fn rbe3_constraints(
         / w_sum)
         .sqrt()
         .max(f64::MIN_POSITIVE);
-    let own: BTreeSet<NodeId> = surface.iter().copied().collect();
-    let is_candidate = |c: usize| {
-        let (node, k) = columns[c];
-        own.contains(&node) && k < 3 && candidate(node, k as usize)
-    };
+    // `surface` is sorted: membership by binary search, once per column.
+    let is_candidate: Vec<bool> = columns
+        .iter()
+        .map(|&(node, k)| k < 3 && surface.binary_search(&node).is_ok() && candidate(node, k as usize))
+        .collect();
     let mut Q = G.clone();
     for r in 3..6 {
         Q.row_mut(r).scale_mut(ell);
@@ -380,7 +412,7 @@ fn rbe3_constraints(
     let initial = (0..nc).map(|c| Q.column(c).norm()).fold(0.0, f64::max);
     for _ in 0..6 {
         let best = (0..nc)
-            .filter(|&c| !chosen.contains(&c) && is_candidate(c))
+            .filter(|&c| !chosen.contains(&c) && is_candidate[c])
             .map(|c| (c, Q.column(c).norm()))
             .max_by(|a, b| a.1.total_cmp(&b.1));
         // 1e-10: far above the round-off left in a column after orthogonalisation against
@@ -494,34 +526,62 @@ fn surface_centroid_and_weights(model: &FeModel, surface: &[NodeId]) -> (Point3<
         .fold(Vector3::zeros(), |acc, s| acc + model.mesh.nodes[s.index()].coords)
         / surface.len() as f64;
     let equal = (Point3::from(mean), vec![1.0; surface.len()]);
-    let position: BTreeMap<NodeId, usize> = surface.iter().enumerate().map(|(i, &s)| (s, i)).collect();
-    // Faces of solid elements whose nodes all lie in the surface, each once.
-    let mut faces: BTreeMap<Vec<NodeId>, Vec<NodeId>> = BTreeMap::new();
-    for element in &model.elements {
+    // Position of each node in `surface` (`u32::MAX`: not in it), by node index.
+    let mut position = vec![u32::MAX; model.node_count()];
+    for (i, s) in surface.iter().enumerate() {
+        if let Some(p) = position.get_mut(s.index()) {
+            *p = i as u32;
+        }
+    }
+    let in_surface = |n: NodeId| position.get(n.index()).is_some_and(|&p| p != u32::MAX);
+    // Faces of solid elements whose nodes all lie in the surface, each once (as first met,
+    // in element order): sorted by their sorted nodes, a face shared by two elements is
+    // adjacent to its twin. Linear in the number of faces but for the sort, so that a spider
+    // on every node of a model of millions of cells stays cheap.
+    let mut found: Vec<FaceRef> = Vec::new();
+    for (e, element) in model.elements.iter().enumerate() {
         let Some((kind, solid)) = element.solid() else { continue };
-        for face in kind.faces() {
-            let nodes: Vec<NodeId> = face.iter().map(|&a| solid.nodes[a]).collect();
-            if nodes.iter().all(|n| position.contains_key(n)) {
-                let mut key = nodes.clone();
-                key.sort_unstable();
-                faces.entry(key).or_insert(nodes);
+        for (f, face) in kind.faces().iter().enumerate() {
+            if face.len() <= MAX_FACE_NODES && face.iter().all(|&a| in_surface(solid.nodes[a])) {
+                let mut key = [u32::MAX; MAX_FACE_NODES];
+                for (k, &a) in key.iter_mut().zip(face.iter()) {
+                    *k = solid.nodes[a].0;
+                }
+                key[..face.len()].sort_unstable();
+                found.push(FaceRef {
+                    key,
+                    len: face.len() as u8,
+                    element: e as u32,
+                    face: f as u8,
+                });
             }
         }
     }
-    if faces.is_empty() {
+    found.sort_unstable_by(|a, b| a.key().cmp(b.key()).then(a.element.cmp(&b.element)));
+    found.dedup_by(|later, first| later.key() == first.key());
+    if found.is_empty() {
         return equal;
     }
     let mut weights = vec![0.0; surface.len()];
     let mut area = 0.0;
     let mut moment = Vector3::zeros();
-    for nodes in faces.values() {
-        let X: Vec<Point3<f64>> = nodes.iter().map(|n| model.mesh.nodes[n.index()]).collect();
+    let mut nodes: Vec<NodeId> = Vec::with_capacity(MAX_FACE_NODES);
+    let mut X: Vec<Point3<f64>> = Vec::with_capacity(MAX_FACE_NODES);
+    for f in &found {
+        // The face's nodes in the order of the element it was first met in.
+        let Some((kind, solid)) = model.elements[f.element as usize].solid() else {
+            continue;
+        };
+        nodes.clear();
+        nodes.extend(kind.faces()[f.face as usize].iter().map(|&a| solid.nodes[a]));
+        X.clear();
+        X.extend(nodes.iter().map(|n| model.mesh.nodes[n.index()]));
         let (a, first, diag) = face_integrals(&X);
         area += a;
         moment += first;
         let d_sum: f64 = diag.iter().sum();
         for (n, d) in nodes.iter().zip(diag) {
-            weights[position[n]] += a * d / d_sum;
+            weights[position[n.index()] as usize] += a * d / d_sum;
         }
     }
     if weights.iter().any(|&w| !(w > 0.0)) || !(area > 0.0) {
@@ -530,15 +590,36 @@ fn surface_centroid_and_weights(model: &FeModel, surface: &[NodeId]) -> (Point3<
     (Point3::from(moment / area), weights)
 }
 
+/// The most nodes a solid face has (quad8).
+const MAX_FACE_NODES: usize = 8;
+
+/// A face of a solid element found on a surface: its nodes sorted (padded with `u32::MAX`),
+/// the element and the face's index among the element kind's faces.
+struct FaceRef {
+    key: [u32; MAX_FACE_NODES],
+    len: u8,
+    element: u32,
+    face: u8,
+}
+
+impl FaceRef {
+    fn key(&self) -> &[u32] {
+        &self.key[..self.len as usize]
+    }
+}
+
 /// Area $A$, first moment $\int \mathbf x\, dA$, and the face mass diagonal $\int N_i^2 dA$ of
 /// one face (tri3, quad4, tri6 or quad8, by node count; orderings of
 /// [`crate::element::SolidKind::faces`]).
 fn face_integrals(X: &[Point3<f64>]) -> (f64, Vector3<f64>, Vec<f64>) {
     let n = X.len();
-    let rule: quadrature::Rule<2> = match n {
+    // Built once: a spider on every node of a large model integrates millions of faces.
+    static TRIANGLE: OnceLock<quadrature::Rule<2>> = OnceLock::new();
+    static QUADRILATERAL: OnceLock<quadrature::Rule<2>> = OnceLock::new();
+    let rule: &quadrature::Rule<2> = match n {
         // Degree 5 / 3x3 Gauss: exact for N_i^2 on flat faces (degree 4), ample for the rest.
-        3 | 6 => quadrature::triangle(5),
-        _ => quadrature::quadrilateral(3),
+        3 | 6 => TRIANGLE.get_or_init(|| quadrature::triangle(5)),
+        _ => QUADRILATERAL.get_or_init(|| quadrature::quadrilateral(3)),
     };
     let mut area = 0.0;
     let mut first = Vector3::zeros();

@@ -105,12 +105,91 @@ pub struct Built {
     pub auxiliary: Option<NodeId>,
 }
 
+thread_local! {
+    /// Copies of parts' base models made by [`Part::build`] on this thread.
+    static COPIES: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// How many copies of parts' FE models [`Part::build`] has made on this thread so far: one per
+/// static, modal or reduce analysis run; validation ([`Part::check_build`]) makes none. For
+/// tests that the work of a check does not grow with copies of a large mesh.
+pub fn model_copies() -> usize {
+    COPIES.with(|c| c.get())
+}
+
+/// Where the auxiliary interface node goes, found on the base model before anything is added.
+enum AuxiliaryAt {
+    /// The beam node at the centre of mass.
+    Node(NodeId),
+    /// A new node at the centre of mass, tied by an RBE3 spider to every node of the solids.
+    Spider(Point3<f64>),
+}
+
 impl Part {
     /// The FE model with `supports` and the interfaces; with `auxiliary`, also an interface
     /// node at the centre of mass (beams: the node there; solids: an RBE3 spider on every
-    /// node of the solid elements, which adds no stiffness).
+    /// node of the solid elements, which adds no stiffness). Copies the base model once.
     pub fn build(&self, supports: &[SupportSpec], auxiliary: bool) -> Result<Built, FeError> {
+        COPIES.with(|c| c.set(c.get() + 1));
         let mut model = self.base.clone();
+        let (interfaces, auxiliary) = self.build_on(&mut model, supports, auxiliary)?;
+        Ok(Built {
+            model,
+            interfaces,
+            auxiliary,
+        })
+    }
+
+    /// What [`Part::build`] builds, handed to `inspect`, without a copy of the base model: the
+    /// supports, spiders and nodes are added to the base itself and removed again, so that
+    /// checking a study of a large mesh costs no memory beyond the spiders. The base is the
+    /// same after the call, whether the build failed or not.
+    pub fn check_build<R>(
+        &mut self,
+        supports: &[SupportSpec],
+        auxiliary: bool,
+        inspect: impl FnOnce(&Built) -> R,
+    ) -> Result<R, FeError> {
+        let nodes = self.base.node_count();
+        let base_supports = self.base.supports.len();
+        // A spider may rewrite earlier constraints (shared nodes): keep the base's own.
+        let base_constraints = self.base.constraints.clone();
+        let mut model = std::mem::take(&mut self.base);
+        let result = match self.build_on(&mut model, supports, auxiliary) {
+            Ok((interfaces, auxiliary)) => {
+                let built = Built {
+                    model,
+                    interfaces,
+                    auxiliary,
+                };
+                let r = inspect(&built);
+                model = built.model;
+                Ok(r)
+            }
+            Err(e) => Err(e),
+        };
+        model.mesh.nodes.truncate(nodes);
+        model.mesh.node_tags.truncate(nodes);
+        model.supports.truncate(base_supports);
+        model.constraints = base_constraints;
+        self.base = model;
+        result
+    }
+    /// Adds `supports`, the interfaces and, with `auxiliary`, the auxiliary node to `model`
+    /// (the base model or a copy of it): the interface nodes and the auxiliary node.
+    #[allow(clippy::type_complexity)]
+    fn build_on(
+        &self,
+        model: &mut FeModel,
+        supports: &[SupportSpec],
+        auxiliary: bool,
+    ) -> Result<(Vec<(String, NodeId)>, Option<NodeId>), FeError> {
+        // The centre of mass is that of the elements: found before any node is added.
+        let auxiliary = if auxiliary {
+            Some(self.auxiliary_at(model)?)
+        } else {
+            None
+        };
         for s in supports {
             if let NodeRef::Nodes(nodes) = &s.at {
                 for &n in nodes {
@@ -126,7 +205,7 @@ impl Part {
                     surface,
                     kind,
                     node_position,
-                } => fe_model::add_interface(&mut model, &i.name, surface, *node_position, *kind)?,
+                } => fe_model::add_interface(model, &i.name, surface, *node_position, *kind)?,
             };
             interfaces.push((i.name.clone(), node));
         }
@@ -135,20 +214,36 @@ impl Part {
                 model.add_support(interfaces[k].1, s.dofs);
             }
         }
-        let auxiliary = if auxiliary {
-            Some(self.add_auxiliary(&mut model)?)
-        } else {
-            None
+        let auxiliary = match auxiliary {
+            None => None,
+            Some(AuxiliaryAt::Node(node)) => Some(node),
+            Some(AuxiliaryAt::Spider(c)) => {
+                // Every node of the solid elements, marked once each: linear in the model size.
+                let mut used = vec![false; model.node_count()];
+                for e in &model.elements {
+                    for n in e.nodes() {
+                        if let Some(u) = used.get_mut(n.index()) {
+                            *u = true;
+                        }
+                    }
+                }
+                let nodes: Vec<NodeId> = (0..used.len()).filter(|&i| used[i]).map(|i| NodeId(i as u32)).collect();
+                drop(used);
+                Some(fe_model::add_interface(
+                    model,
+                    "auxiliary",
+                    &nodes,
+                    Some(c),
+                    SpiderKind::Rbe3,
+                )?)
+            }
         };
-        Ok(Built {
-            model,
-            interfaces,
-            auxiliary,
-        })
+        Ok((interfaces, auxiliary))
     }
 
-    fn add_auxiliary(&self, model: &mut FeModel) -> Result<NodeId, FeError> {
-        let (mass, c) = center_of_mass(&self.base)?;
+    /// Where the auxiliary node goes on `base` (the part's elements, no interface added yet).
+    fn auxiliary_at(&self, base: &FeModel) -> Result<AuxiliaryAt, FeError> {
+        let (mass, c) = center_of_mass(base)?;
         let bad = |why: String| FeError::Interface {
             name: "auxiliary".into(),
             why,
@@ -158,26 +253,20 @@ impl Part {
         }
         match self.kind {
             PartKind::Beam => {
-                let node = self
-                    .base
+                let node = base
                     .mesh
                     .nearest_node(&c)
                     .ok_or_else(|| bad("the part has no nodes".into()))?;
-                let d = (self.base.mesh.nodes[node.index()] - c).norm();
-                if d > 1e-9 * model_size(&self.base).max(f64::MIN_POSITIVE) {
+                let d = (base.mesh.nodes[node.index()] - c).norm();
+                if d > 1e-9 * model_size(base).max(f64::MIN_POSITIVE) {
                     return Err(bad(format!(
                         "no beam node at the centre of mass ({:.6}, {:.6}, {:.6}); the nearest is {:.3e} m away (use an even number of elements on a symmetric beam)",
                         c.x, c.y, c.z, d
                     )));
                 }
-                Ok(node)
+                Ok(AuxiliaryAt::Node(node))
             }
-            PartKind::Solid => {
-                let mut nodes: Vec<NodeId> = self.base.elements.iter().flat_map(|e| e.nodes().to_vec()).collect();
-                nodes.sort_unstable();
-                nodes.dedup();
-                fe_model::add_interface(model, "auxiliary", &nodes, Some(c), SpiderKind::Rbe3)
-            }
+            PartKind::Solid => Ok(AuxiliaryAt::Spider(c)),
         }
     }
 

@@ -184,7 +184,7 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
         parts.push((p.name.clone(), part));
     }
     let mechanism = v.mechanism(file, &parts);
-    let analyses = v.analyses(&file.analyses, &parts, &mechanism);
+    let analyses = v.analyses(&file.analyses, &mut parts, &mechanism);
     let warnings = v.warnings.iter().map(|w| source.render(w)).collect();
     let errors = std::mem::take(&mut v.errors);
     if !errors.is_empty() {
@@ -647,7 +647,7 @@ impl Validator<'_> {
             Some(r) => Some(self.reduction(&path.key("reduction"), r, &interfaces, &base)?),
             None => None,
         };
-        let part = Part {
+        let mut part = Part {
             name: p.name.clone(),
             path: path.clone(),
             kind,
@@ -660,7 +660,7 @@ impl Validator<'_> {
         // Build the spiders now: a surface that cannot carry an interface is an input error,
         // and should be reported with its key before anything runs.
         let auxiliary = part.reduction.as_ref().is_some_and(|r| r.auxiliary_node);
-        if let Err(e) = part.build(&[], auxiliary) {
+        if let Err(e) = part.check_build(&[], auxiliary, |_| ()) {
             self.fe_error(path, &part, &e);
             return None;
         }
@@ -1636,7 +1636,7 @@ impl Validator<'_> {
     fn analyses(
         &mut self,
         list: &[AnalysisFile],
-        parts: &[(String, Option<Part>)],
+        parts: &mut [(String, Option<Part>)],
         mechanism: &Mechanism,
     ) -> Vec<Analysis> {
         let mut out: Vec<Analysis> = Vec::new();
@@ -1726,15 +1726,15 @@ impl Validator<'_> {
                 );
                 continue;
             };
-            let Some(index) = self.lookup("part", part_name) else {
+            let Some(listed) = self.lookup("part", part_name) else {
                 self.err(&path.key("part"), unknown_reference("part", part_name, &part_names));
                 continue;
             };
             // A part that failed validation has its own errors already.
-            let Some(part) = parts[index].1.as_ref() else {
+            let Some(part) = parts[listed].1.as_ref() else {
                 continue;
             };
-            let index = parts[..index].iter().filter(|(_, p)| p.is_some()).count();
+            let index = parts[..listed].iter().filter(|(_, p)| p.is_some()).count();
             let Some(name) = self.analysis_name(&path, a, format!("{kind}-{part_name}")) else {
                 continue;
             };
@@ -1786,11 +1786,15 @@ impl Validator<'_> {
                 _ => continue,
             };
             // The supports change the spiders (an RBE3 avoids supported dofs, an RBE2 cannot
-            // take them): build once to report a conflict here rather than mid-run.
+            // take them): build once to report a conflict here rather than mid-run (on the
+            // part's own model, restored after: no copy).
             if let AnalysisSpec::Static { supports, .. } | AnalysisSpec::Modal { supports, .. } = &spec {
+                let Some(part) = parts[listed].1.as_mut() else {
+                    continue;
+                };
                 let free = part
-                    .build(supports, false)
-                    .and_then(|b| fe_model::DofMap::new(&b.model).map(|d| d.n_free()));
+                    .check_build(supports, false, |b| fe_model::DofMap::new(&b.model).map(|d| d.n_free()))
+                    .and_then(|free| free);
                 match free {
                     Err(e) => {
                         self.err(

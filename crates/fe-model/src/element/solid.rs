@@ -228,9 +228,36 @@ pub fn point_values(
     let n = kind.node_count();
     let mut N = vec![0.0; n];
     let mut dN = vec![[0.0; 3]; n];
-    kind.shape_functions(xi, &mut N, &mut dN);
+    let (J, det_J) = jacobian(kind, element, point, X_e, xi, &mut N, &mut dN)?;
+    // g_a = J^{-T} dN_a: solve J^T g = dN (J is 3x3 and nonsingular here).
+    let J_inv_T = J
+        .try_inverse()
+        .ok_or(ElementError::NonPositiveJacobian {
+            element,
+            point,
+            det_j: det_J,
+        })?
+        .transpose();
+    let g = dN.iter().map(|d| J_inv_T * Vector3::new(d[0], d[1], d[2])).collect();
+    Ok(PointValues { N, g, det_J })
+}
+
+/// The shape functions `N` and their reference derivatives `dN` at `xi` (written into the
+/// caller's buffers, [`SolidKind::node_count`] long), the Jacobian $\mathbf J$ and its
+/// determinant, checked as [`point_values`] says. For callers that need no gradients (the
+/// mass matrix) and reuse their buffers over the points of a rule.
+fn jacobian(
+    kind: SolidKind,
+    element: usize,
+    point: usize,
+    X_e: &[Point3<f64>],
+    xi: &[f64; 3],
+    N: &mut [f64],
+    dN: &mut [[f64; 3]],
+) -> Result<(Matrix3<f64>, f64), ElementError> {
+    kind.shape_functions(xi, N, dN);
     let mut J = Matrix3::zeros();
-    for a in 0..n {
+    for a in 0..kind.node_count() {
         for i in 0..3 {
             for j in 0..3 {
                 J[(i, j)] += X_e[a][i] * dN[a][j];
@@ -248,17 +275,7 @@ pub fn point_values(
             det_j: det_J,
         });
     }
-    // g_a = J^{-T} dN_a: solve J^T g = dN (J is 3x3 and nonsingular here).
-    let J_inv_T = J
-        .try_inverse()
-        .ok_or(ElementError::NonPositiveJacobian {
-            element,
-            point,
-            det_j: det_J,
-        })?
-        .transpose();
-    let g = dN.iter().map(|d| J_inv_T * Vector3::new(d[0], d[1], d[2])).collect();
-    Ok(PointValues { N, g, det_J })
+    Ok((J, det_J))
 }
 
 fn check_node_count(kind: SolidKind, element: usize, X_e: &[Point3<f64>]) -> Result<(), ElementError> {
@@ -348,12 +365,16 @@ pub fn scalar_mass(
     let n = kind.node_count();
     let mut m = DMatrix::zeros(n, n);
     let rule = kind.mass_rule();
+    // The mass needs no gradients: shape functions and det J only, in buffers reused over
+    // the rule's points (a large model's centre of mass runs this for every element).
+    let mut N = vec![0.0; n];
+    let mut dN = vec![[0.0; 3]; n];
     for (q, (xi, w)) in rule.points.iter().zip(&rule.weights).enumerate() {
-        let p = point_values(kind, element, q, X_e, xi)?;
-        let f = rho * w * p.det_J;
+        let (_, det_J) = jacobian(kind, element, q, X_e, xi, &mut N, &mut dN)?;
+        let f = rho * w * det_J;
         for a in 0..n {
             for b in a..n {
-                m[(a, b)] += f * p.N[a] * p.N[b];
+                m[(a, b)] += f * N[a] * N[b];
             }
         }
     }

@@ -228,3 +228,74 @@ fn the_translation_axes_of_a_dynamic_analysis_reach_the_integrator() {
         "{e}"
     );
 }
+
+/// Checking a study builds each part's spiders on the part's own model and restores it: no
+/// copy of the mesh per analysis (a generated box may have 2,000,000 cells), and the model a
+/// run starts from is the generated one, whatever the checks added. A run copies once per
+/// analysis that builds a model.
+#[test]
+fn checking_a_study_copies_no_model_and_leaves_each_part_as_generated() {
+    let text = r#"
+[[materials]]
+name = "steel"
+E = 210e9
+nu = 0.3
+rho = 7850.0
+
+[[parts]]
+name = "block"
+material = "steel"
+box = { size = [1.0, 0.2, 0.2], divisions = [6, 2, 2], element = "hex8" }
+interfaces = [
+    { name = "root", set = "x0", spider = "rbe2" },
+    { name = "end", set = "x1", spider = "rbe3" },
+]
+reduction = { modes = 4, auxiliary_node = true }
+
+[[analyses]]
+type = "static"
+name = "bend"
+part = "block"
+supports = [{ at = "root" }]
+loads = [{ at = "end", force = [0.0, 0.0, -1000.0] }]
+
+[[analyses]]
+type = "modal"
+name = "free"
+part = "block"
+modes = 8
+
+[[analyses]]
+type = "modal"
+name = "clamped"
+part = "block"
+modes = 4
+supports = [{ at = "end" }]
+
+[[analyses]]
+type = "reduce"
+part = "block"
+"#;
+    let dir = crate::scratch("no-model-copies");
+    let file = dir.join("block.toml");
+    std::fs::write(&file, text).unwrap();
+    let copies = study::part::model_copies();
+    let study = study::load(&file).unwrap();
+    assert_eq!(study::part::model_copies() - copies, 0, "validation copied a model");
+    // The spiders, supports and the auxiliary node of the checks are gone again.
+    let base = &study.parts[0].base;
+    let generated = fe_model::box_mesh(fe_model::CellKind::Hex8, [1.0, 0.2, 0.2], [6, 2, 2]).unwrap();
+    assert_eq!(base.mesh, generated);
+    assert!(base.supports.is_empty() && base.constraints.is_empty());
+    // A run copies the model once per analysis on a part (static, two modal, reduce).
+    let copies = study::part::model_copies();
+    let options = Options {
+        out: Some(dir.join("results")),
+        cache: Some(dir.join("cache")),
+        t_end: None,
+        foreign: Default::default(),
+    };
+    let summary = study::run_with(&study, &options, &mut Recorder::default()).unwrap();
+    assert_eq!(summary.status, "complete");
+    assert_eq!(study::part::model_copies() - copies, 4);
+}
