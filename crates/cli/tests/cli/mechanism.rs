@@ -149,6 +149,54 @@ fn a_solver_failure_keeps_partial_results_and_fails() {
     assert!(summary.contains("Newton did not converge"), "{summary}");
 }
 
+/// Ctrl-C during a dynamic run: the run stops at its next output step, keeps the rows it
+/// wrote, says so, and `summary.json` says `interrupted`, not `running`.
+#[test]
+fn an_interrupted_run_keeps_its_rows_and_its_summary_says_interrupted() {
+    let dir = examples_copy("mech-interrupt");
+    // A run far too long to finish: only the interrupt ends it.
+    let text = std::fs::read_to_string(dir.join("slider_crank.toml"))
+        .unwrap()
+        .replace("t_end = 0.126", "t_end = 1000.0");
+    std::fs::write(dir.join("long.toml"), text).unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_flexmbs"))
+        .args(["run", "long.toml"])
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let results = dir.join("long-results");
+    let csv = results.join("run-up/rod-mid.csv");
+    let rows = |p: &Path| std::fs::read_to_string(p).map(|t| t.lines().count()).unwrap_or(0);
+    // Wait (at most five minutes, a slow shared machine) until the dynamic run has written
+    // a few rows: the interrupt then arrives mid-run.
+    let start = std::time::Instant::now();
+    while rows(&csv) < 5 {
+        assert!(child.try_wait().unwrap().is_none(), "the run ended by itself");
+        assert!(start.elapsed().as_secs() < 300, "no rows after five minutes");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let running = std::fs::read_to_string(results.join("summary.json")).unwrap();
+    assert!(running.contains("\"status\": \"running\""), "{running}");
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("interrupted by the user"), "{stderr}");
+    let summary = std::fs::read_to_string(results.join("summary.json")).unwrap();
+    assert!(summary.contains("\"status\": \"interrupted\""), "{summary}");
+    assert!(!summary.contains("\"running\""), "{summary}");
+    // Every row written is kept, each complete (header plus rows, all of one width).
+    let (header, kept) = read_csv(&csv);
+    assert!(kept.len() >= 4, "{} rows kept", kept.len());
+    assert!(kept.iter().all(|r| r.len() == header.len()), "a partial row was kept");
+}
+
 /// `newton = "modified"` in a dynamic analysis: the slider-crank follows the full-Newton run
 /// with fewer factorisations (reported in the summary); an unknown strategy is refused at its
 /// key.
