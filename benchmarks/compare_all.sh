@@ -13,8 +13,9 @@
 #    reference that is not our model (Exudyn's ANCF cable refined in elements and step);
 # 3. the solid connecting rod against Exudyn's ObjectFFRFreducedOrder (run_comparison.sh).
 #
-# Parts 1 and 2 are benchmarks/scripts/compare_all.py (writes benchmarks/results/compare_all.md
-# and the `compare_all` block of BENCHMARKS.md); part 3 writes the `slider_crank` block. About
+# Parts 1 and 2 are benchmarks/scripts/compare_all.py (each writes
+# benchmarks/results/compare_all_<part>.md and its `compare_all_<part>` block of BENCHMARKS.md);
+# part 3 writes the `slider_crank` block. About
 # 30 minutes with 3 repetitions on an idle 2-core machine; --quick about 5.
 #
 # Environment: CARGO_TARGET_DIR (default target), EXUDYN_VENV (default benchmarks/exudyn/.venv:
@@ -52,7 +53,7 @@ parts=$(tr ',' '\n' <<< "$only" | grep -v '^solid$' | paste -sd, -)
 if [ -n "$parts" ]; then
     "$venv/bin/python" benchmarks/scripts/compare_all.py --root "$root" --bin "$(cd "$target/release" && pwd)" \
         --bench "$bench" --work "$work" --repeats "$repeats" $quick --only "$parts" \
-        --command "benchmarks/compare_all.sh${quick:+ --quick} $repeats"
+        --command "${COMPARE_ONLY:+COMPARE_ONLY=$only }benchmarks/compare_all.sh${quick:+ --quick} $repeats"
 fi
 if grep -qx solid <<< "${only//,/$'\n'}"; then
     benchmarks/run_comparison.sh "$repeats"

@@ -17,9 +17,9 @@ with the venv's Python; see that script for the usage).
    largest step of h = T/400, T/800, ... that brings the extrema within 0.05 % of the
    reference, and the timed runs at that step.
 
-Each timed configuration runs K times, the programs alternating run by run; medians. Writes
-`benchmarks/results/compare_all.md` and, through write_section.py, the `compare_all` block of
-BENCHMARKS.md. The solid-rod comparison against Exudyn's ObjectFFRFreducedOrder is
+Each timed configuration runs K times, the programs alternating run by run; medians. Each part
+writes `benchmarks/results/compare_all_<part>.md` and, through write_section.py, the
+`compare_all_<part>` block of BENCHMARKS.md, so that the parts can also run separately. The solid-rod comparison against Exudyn's ObjectFFRFreducedOrder is
 `benchmarks/run_comparison.sh`, which compare_all.sh runs after this.
 """
 
@@ -394,72 +394,70 @@ def main():
     ap.add_argument("--only", default="reduction,rod")
     ap.add_argument("--command", default="benchmarks/compare_all.sh")
     a = ap.parse_args()
-    parts = a.only.split(",")
-    start, load_start = time.time(), open("/proc/loadavg").read().split()[:3]
-    import exudyn, scipy, pypardiso  # noqa: E401  (versions for the record)
+    import exudyn, scipy  # noqa: E401  (versions for the record)
 
-    out = [
-        "# flexmbs against the fastest alternatives, side by side",
-        "",
-        f"Machine: {machine()}; {sh('rustc --version')}; Python {platform.python_version()}, exudyn {exudyn.__version__},"
+    versions = (
+        f"{sh('rustc --version')}; Python {platform.python_version()}, exudyn {exudyn.__version__},"
         f" scipy {scipy.__version__}, numpy {np.__version__}, pypardiso {sh(sys.executable + ' -m pip show pypardiso | sed -n s/^Version:.//p')},"
-        f" mkl {sh(sys.executable + ' -m pip show mkl | sed -n s/^Version:.//p')}.",
-    ]
-    loads = []
-    body = []
-    if "reduction" in parts:
-        sizes = ["10k"] if a.quick else ["50k", "200k"]
-        lines, l = reduction(a, sizes, a.repeats)
-        loads += l
-        body += [
+        f" mkl {sh(sys.executable + ' -m pip show mkl | sed -n s/^Version:.//p')}"
+    )
+    for part in a.only.split(","):
+        start, load_start = time.time(), open("/proc/loadavg").read().split()[:3]
+        if part == "reduction":
+            sizes = ["10k"] if a.quick else ["50k", "200k"]
+            lines, loads = reduction(a, sizes, a.repeats)
+            body = [
+                "# Reduction against scipy eigsh with MKL PARDISO",
+                "",
+                "Hex8 steel blocks of the craig_bampton bench (2:1:1 bricks; RBE2 interfaces on both end faces), 20 fixed-interface modes."
+                " flexmbs: the whole `reduction::reduce` (assembly, ordering and factorisation of K_ii, 12 constraint modes, Lanczos, projections,"
+                " inertia invariants), one process per run. eigsh + PARDISO: scipy's `eigsh(K_ii, M=M_ii, sigma=0, k=20, tol=...)` with MKL"
+                " PARDISO's Cholesky factor of K_ii (`pypardiso`, matrix type 2, METIS ordering) as the shift-invert operator on the same"
+                " K_ii, M_ii (only the eigenproblem inside the reduction), at ARPACK tolerance 1e-8 and at its default 0 (machine"
+                " precision); its peak RSS includes the matrices read. Factorisation: flexmbs's ordering and factorisation stage; PARDISO's"
+                " Cholesky factorisation of the same K_ii inside the eigsh run, and pypardiso's default LU alone. Eigenvalues: the"
+                " reduction's 20 fixed-interface eigenvalues against eigsh's, largest relative difference over the runs (above 1e-6: eigsh"
+                " returned a wrong set, missing the second copy of a repeated eigenvalue).",
+                "",
+            ] + lines
+        elif part == "rod":
+            report, rows, ours_ref, failed = rod(a, a.repeats)
+            loads = [float(f["load"]) for row in rows.values() for f in row["runs"]]
+            body = [
+                "# Slider-crank C2 rod: beam superelements against Exudyn's beam elements",
+                "",
+                "Validation problem C2 (rigid crank 0.15 m at 150 rad/s from the dead centre, round steel rod d = 6 mm, l = 0.30 m,"
+                " slider of half the rod's mass, no gravity) over 4 revolutions (T = 2π/150 s), generalized-α with ρ∞ = 0.9 and full Newton"
+                " on both sides. Output: the rod's midpoint deflection w from its chord; extrema error: the largest difference of max w and"
+                " min w over the run from the reference's, over the reference's largest |w|. flexmbs: the rod as Euler-Bernoulli beam"
+                " superelements (`slider_crank --rod round`, 8 beam elements reduced per superelement). Exudyn 2D: `ObjectANCFCable2D`"
+                " with a 2D rigid crank and mass-point slider, its default dense solver up to 16 elements and its sparse one beyond."
+                " Exudyn 3D: `ObjectBeamGeometricallyExact` (shear deformable, `NodeRigidBodyRxyz`, sparse solver, shear stiffness k G A)"
+                " with 3D rigid crank and slider and generic joints.",
+                "",
+            ] + rod_tables(report, rows, ours_ref, a.repeats)
+            if failed:
+                body += ["", "Failed at every step tried (Newton did not converge): " + "; ".join(failed) + "."]
+            body += ["", "The runs ($WORK is the script's temporary folder, `$WORK/rod_mesh` written by `export_rod --out $WORK/rod_mesh`):", ""]
+            body += commands(rows, a.work, a.root, a.bin)
+        else:
+            sys.exit(f"--only: unknown part '{part}' (reduction, rod)")
+        load_end = open("/proc/loadavg").read().split()[:3]
+        head = [
+            body[0],
             "",
-            "## Reduction against scipy eigsh with MKL PARDISO",
-            "",
-            "Hex8 steel blocks of the craig_bampton bench (2:1:1 bricks; RBE2 interfaces on both end faces), 20 fixed-interface modes."
-            " flexmbs: the whole `reduction::reduce` (assembly, ordering and factorisation of K_ii, 12 constraint modes, Lanczos, projections,"
-            " inertia invariants), one process per run. eigsh + PARDISO: scipy's `eigsh(K_ii, M=M_ii, sigma=0, k=20, tol=1e-8)` with MKL"
-            " PARDISO's Cholesky factor of K_ii (`pypardiso`, matrix type 2, METIS ordering) as the shift-invert operator on the same"
-            " K_ii, M_ii (only the eigenproblem inside the reduction), at ARPACK tolerance 1e-8 and at its default 0 (machine"
-            " precision); its peak RSS includes the matrices read. Factorisation: flexmbs's ordering and factorisation stage; PARDISO's"
-            " Cholesky factorisation of the same K_ii inside the eigsh run, and pypardiso's default LU alone. Eigenvalues: the"
-            " reduction's 20 fixed-interface eigenvalues against eigsh's, largest relative difference over the runs (above 1e-6: eigsh"
-            " returned a wrong set, missing the second copy of a repeated eigenvalue).",
-            "",
-        ] + lines
-    if "rod" in parts:
-        report, rows, ours_ref, failed = rod(a, a.repeats)
-        loads += [float(f["load"]) for row in rows.values() for f in row["runs"]]
-        body += [
-            "",
-            "## Slider-crank C2 rod: beam superelements against Exudyn's beam elements",
-            "",
-            "Validation problem C2 (rigid crank 0.15 m at 150 rad/s from the dead centre, round steel rod d = 6 mm, l = 0.30 m,"
-            " slider of half the rod's mass, no gravity) over 4 revolutions (T = 2π/150 s), generalized-α with ρ∞ = 0.9 and full Newton"
-            " on both sides. Output: the rod's midpoint deflection w from its chord; extrema error: the largest difference of max w and"
-            " min w over the run from the reference's, over the reference's largest |w|. flexmbs: the rod as Euler-Bernoulli beam"
-            " superelements (`slider_crank --rod round`, 8 beam elements reduced per superelement). Exudyn 2D: `ObjectANCFCable2D`"
-            " with a 2D rigid crank and mass-point slider, its default dense solver up to 16 elements and its sparse one beyond."
-            " Exudyn 3D: `ObjectBeamGeometricallyExact` (shear deformable, `NodeRigidBodyRxyz`, sparse solver, shear stiffness k G A)"
-            " with 3D rigid crank and slider and generic joints.",
-            "",
-        ] + rod_tables(report, rows, ours_ref, a.repeats)
-        if failed:
-            body += ["", "Failed at every step tried (Newton did not converge): " + "; ".join(failed) + "."]
-        body += ["", "The runs ($WORK is the script's temporary folder, `$WORK/rod_mesh` written by `export_rod --out $WORK/rod_mesh`):", ""]
-        body += commands(rows, a.work, a.root, a.bin)
-    load_end = open("/proc/loadavg").read().split()[:3]
-    out += [
-        f"Load average (1, 5, 15 min) at the start {' '.join(load_start)}, at the end {' '.join(load_end)}; at the starts of the runs"
-        f" {min(loads):.1f} to {max(loads):.1f}, median {statistics.median(loads):.1f}"
-        + (" (above 2, other work shared the 2 cores: wall times are inflated, CPU times less so)." if max(loads) > 2 else "."),
-        f"Command: `{a.command}` ({a.repeats} repetitions{', --quick' if a.quick else ''}; {(time.time() - start) / 60:.0f} min).",
-    ]
-    text = "\n".join(out + body) + "\n"
-    path = os.path.join(a.root, "benchmarks/results/compare_all.md")
-    open(path, "w").write(text)
-    print(text)
-    subprocess.run([sys.executable, os.path.join(a.root, "benchmarks/scripts/write_section.py"), "compare_all", path,
-                    os.path.join(a.root, "BENCHMARKS.md")], check=True)
+            f"Machine: {machine()}; {versions}.",
+            f"Load average (1, 5, 15 min) at the start {' '.join(load_start)}, at the end {' '.join(load_end)}; at the starts of the runs"
+            f" {min(loads):.1f} to {max(loads):.1f}, median {statistics.median(loads):.1f}"
+            + (" (above 2, other work shared the 2 cores: wall times are inflated, CPU times less so)." if max(loads) > 2 else "."),
+            f"Command: `{a.command}` ({a.repeats} repetitions{', --quick' if a.quick else ''}; this part {(time.time() - start) / 60:.0f} min).",
+        ]
+        text = "\n".join(head + body[1:]) + "\n"
+        path = os.path.join(a.root, f"benchmarks/results/compare_all_{part}.md")
+        open(path, "w").write(text)
+        print(text, flush=True)
+        subprocess.run([sys.executable, os.path.join(a.root, "benchmarks/scripts/write_section.py"), f"compare_all_{part}", path,
+                        os.path.join(a.root, "BENCHMARKS.md")], check=True)
 
 
 if __name__ == "__main__":
