@@ -7,7 +7,7 @@ there, with the machine and the commands).
 Replaces the lines between `<!-- BEGIN generated: NAME -->` and `<!-- END generated: NAME -->`
 with the contents of FILE, up to FILE's hand-written part (the line starting with
 `<!-- written by hand below`), each heading demoted by two levels so that it nests under
-BENCHMARKS.md's sections. Fails, naming the marker, when the markers are missing.
+BENCHMARKS.md's sections (lines in fenced code blocks, such as shell comments, are kept). Fails, naming the marker, when the markers are missing.
 """
 import sys
 
@@ -22,10 +22,13 @@ def main():
     if begin not in text or end not in text or text.index(begin) > text.index(end):
         sys.exit(f"{target}: no '{begin}' ... '{end}' block to write the {name} table into")
     body = []
+    fenced = False
     for line in open(source):
         if line.startswith("<!-- written by hand below"):
             break
-        body.append("##" + line if line.startswith("#") else line)
+        if line.startswith("```"):
+            fenced = not fenced
+        body.append("##" + line if line.startswith("#") and not fenced else line)
     head, rest = text.split(begin, 1)
     tail = rest.split(end, 1)[1]
     generated = "".join(body).strip("\n")

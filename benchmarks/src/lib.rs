@@ -6,7 +6,9 @@
 //! $\mathbf M$ (exported by the `export_rod` binary in Matrix Market), reduce it with RBE2
 //! interfaces on the two end faces and the same number of fixed-interface modes, and integrate
 //! with generalized-α at the same step. This crate holds the model builder shared by the
-//! binaries (`slider_crank`, `export_rod`); the Exudyn side is `benchmarks/exudyn/`.
+//! binaries (`slider_crank`, `export_rod`); the Exudyn side is `benchmarks/exudyn/`. The same
+//! binary runs the rod as beam superelements ([`beam_rod_body`]): the round Euler-Bernoulli rod
+//! of C2 is what `benchmarks/compare_all.sh` compares with Exudyn's own beam elements.
 //!
 //! | symbol | meaning | code |
 //! |---|---|---|
@@ -159,25 +161,47 @@ pub fn rod_body_with(
     Ok(reduce(&fe, "rod", &[("a".into(), a), ("b".into(), b)], settings)?)
 }
 
-/// A rod segment of `length` as `elements` Timoshenko beam elements with the solid rod's square
-/// section (side [`SliderCrank::side`]), reduced with interfaces "a" and "b" at its ends: the
-/// beam model of the same rod, for the nonlinear reference (its 6-dof junction nodes add no
-/// stiffness, unlike the rigid end faces of solid segments), reduced with `settings` (as in
-/// [`rod_body_with`]; keep the mesh shapes for the midpoint of a one-segment rod).
+/// The section and beam theory of a beam rod ([`beam_rod_body`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BeamRod {
+    /// The solid rod's square section (side [`SliderCrank::side`]), Timoshenko: the beam twin
+    /// of the solid rod.
+    Square,
+    /// The round section of validation problem C2 (diameter [`SliderCrank::diameter`]),
+    /// Euler-Bernoulli as the problem's rod (and as an ANCF cable).
+    Round,
+}
+
+/// A rod segment of `length` as `elements` beam elements of section `rod`, reduced with
+/// interfaces "a" and "b" at its ends: the beam model of the rod, for the nonlinear reference
+/// (its 6-dof junction nodes add no stiffness, unlike the rigid end faces of solid segments),
+/// reduced with `settings` (as in [`rod_body_with`]; keep the mesh shapes for the midpoint of a
+/// one-segment rod).
 pub fn beam_rod_body(
     p: &SliderCrank,
     length: f64,
     elements: usize,
+    rod: BeamRod,
     settings: &CbSettings,
 ) -> Result<ReducedBody, BenchError> {
     let mut fe = FeModel::default();
     let material = fe.add_material(IsotropicMaterial::new("steel", p.E, p.nu, p.rho)?);
-    let section = fe.add_section(BeamSection::rectangle("square", p.side(), p.side(), p.nu)?);
+    let (section, theory) = match rod {
+        BeamRod::Square => (
+            BeamSection::rectangle("square", p.side(), p.side(), p.nu)?,
+            BeamTheory::Timoshenko,
+        ),
+        BeamRod::Round => (
+            BeamSection::circle("round", p.diameter, p.nu)?,
+            BeamTheory::EulerBernoulli,
+        ),
+    };
+    let section = fe.add_section(section);
     let props = BeamProperties {
         section,
         material,
         orientation: Vector3::y(),
-        theory: BeamTheory::Timoshenko,
+        theory,
         mass: MassKind::Consistent,
     };
     let nodes = fe_model::generate::straight_beam(

@@ -72,6 +72,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         ("E", p.E),
         ("nu", p.nu),
         ("rho", p.rho),
+        ("diameter", p.diameter),
         ("crank_mass", p.crank_mass),
         ("crank_Ixx", Ix),
         ("crank_Iyy", Iy),

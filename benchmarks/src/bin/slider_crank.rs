@@ -6,7 +6,7 @@
 //! ```text
 //! cargo run --release -p flexmbs-benchmarks --bin slider_crank -- [--h 1e-4] [--t-end T]
 //!     [--modes 4] [--segments 1] [--kind hex20 --along 24 --across 2] [--frame com|node]
-//!     [--rho-inf 0.9] [--rod solid|beam --beam-elements 4] [--geometric-stiffening] [--mass exact|lumped]
+//!     [--rho-inf 0.9] [--rod solid|beam|round --beam-elements 4] [--geometric-stiffening] [--mass exact|lumped]
 //!     [--newton full|modified] [--csv out.csv] [--reference ref.csv]
 //! ```
 //!
@@ -14,7 +14,9 @@
 //! axis node at mid-length (recovered from the reduced body, as the Exudyn script measures
 //! it); with an even number of segments it is the node between the middle segments (the
 //! `LineDistance` sensor). `--rod beam` replaces each solid segment by Timoshenko beam elements
-//! with the same section (the nonlinear reference: no rigid faces at the junctions).
+//! with the same section (the nonlinear reference: no rigid faces at the junctions); `--rod
+//! round` by Euler-Bernoulli beam elements with the round section of validation problem C2 (the
+//! rod Exudyn's beam elements model in `benchmarks/exudyn/slider_crank_beam.py`).
 //! `--geometric-stiffening` reduces the rod with the geometric stiffness of its CB coordinates
 //! (`CbSettings::geometric_stiffening`): each superelement's strain energy gains the cubic term
 //! through which the axial force changes the bending stiffness. `--mass lumped` uses the
@@ -27,8 +29,8 @@
 //! load of a shared machine does not inflate.
 
 use flexmbs_benchmarks::{
-    beam_rod_body, cpu_seconds, median, midpoint_from_mesh, rod_body_with, slider_crank_model, Args, BenchError,
-    RodMesh, SliderCrank,
+    beam_rod_body, cpu_seconds, median, midpoint_from_mesh, rod_body_with, slider_crank_model, Args, BeamRod,
+    BenchError, RodMesh, SliderCrank,
 };
 use mbs::{DynamicSettings, Integrator, NewtonStrategy, System};
 use nalgebra::Vector3;
@@ -99,7 +101,15 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         }
         .into());
     }
-    if args.text("rod") != Some("beam") && mesh.along % n != 0 {
+    let rod = args.choice(
+        "rod",
+        &[
+            ("solid", None),
+            ("beam", Some(BeamRod::Square)),
+            ("round", Some(BeamRod::Round)),
+        ],
+    )?;
+    if rod.is_none() && mesh.along % n != 0 {
         return Err(BenchError::Argument {
             arg: "--along".into(),
             why: format!(
@@ -111,14 +121,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     }
     let seg = p.rod / n as f64;
     let t0 = Instant::now();
-    let beam = args.text("rod") == Some("beam");
     let geometric = args.flag("geometric-stiffening")?;
     let mut settings = CbSettings::new(ModeSelection::Count(modes));
     // One segment: the midpoint is recovered from the mesh shapes (module docs).
     settings.keep_mesh_shapes = n == 1;
     settings.geometric_stiffening = geometric;
-    let body = if beam {
-        beam_rod_body(&p, seg, args.get("beam-elements", 4)?, &settings)?
+    let body = if let Some(rod) = rod {
+        beam_rod_body(&p, seg, args.get("beam-elements", 4)?, rod, &settings)?
     } else {
         rod_body_with(
             &p,
@@ -174,8 +183,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let peak = w.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     println!(
         "flexmbs slider-crank: rod {n} x {} ({} coordinates each), {modes} modes, frame {frame:?}, geometric stiffening {}, {} unknowns, reduction {t_reduce:.2} s",
-        if beam {
-            format!("{} Timoshenko beams", args.get("beam-elements", 4)?)
+        if let Some(rod) = rod {
+            format!("{} beam elements ({rod:?})", args.get("beam-elements", 4)?)
         } else {
             format!("{:?} {} x {} x {}", mesh.kind, mesh.along / n, mesh.across, mesh.across)
         },

@@ -15,8 +15,10 @@
 //! fixed-interface problem that the reduction's 20 modes solve -- K_ii and M_ii, the block with
 //! both interface nodes clamped -- as `K_<size>.mtx`, `M_<size>.mtx` for scipy's `eigsh`
 //! (`benchmarks/scripts/reduction_vs_scipy.sh`), solves it once more with our eigensolver
-//! alone (time, worst relative residual, written to `eigenvalues_<size>.txt`) and prints a
-//! `RESULT` line for the script.
+//! alone (time, worst relative residual, written to `eigenvalues_<size>.txt`); with
+//! `REDUCTION_CB_EIGEN_ONLY=0` as well it skips that solve and writes the reduction's own 20
+//! fixed-interface eigenvalues there (`benchmarks/compare_all.sh`). Every size ends with a
+//! `RESULT` line for the scripts (time, CPU time, peak RSS, factorisation time).
 //!
 //! With `REDUCTION_CB_EIGENVALUES` set to a directory, each size compares its results with
 //! `cb_eigenvalues_<size>_<ordering>.txt` there: the 20 fixed-interface eigenvalues
@@ -141,15 +143,33 @@ fn run_one(size: &str, ordering: FillOrdering) {
     if let Ok(dir) = std::env::var("REDUCTION_CB_EIGENVALUES") {
         compare_eigenvalues(Path::new(&dir), &format!("{size}_{ordering:?}"), &body);
     }
+    // The factorisation stage (ordering included): wall and CPU seconds.
+    let factor_s = marks
+        .iter()
+        .position(|m| m.0 == "factor")
+        .map_or((f64::NAN, f64::NAN), |k| {
+            let next = marks.get(k + 1);
+            (
+                next.map_or(total, |m| m.1) - marks[k].1,
+                next.map_or(cpu_end, |m| m.2) - marks[k].2,
+            )
+        });
+    let peak = peak_rss_mb();
+    let mut result = format!(
+        "RESULT size={size} dofs={n_free} reduce_s={total:.3} reduce_cpu_s={:.3} peak_mb={peak:.0} factor_s={:.3} factor_cpu_s={:.3}",
+        cpu_end - marks.first().map_or(cpu_end, |m| m.2),
+        factor_s.0,
+        factor_s.1
+    );
     if let Ok(dir) = std::env::var("REDUCTION_CB_MTX_DIR") {
-        let peak = peak_rss_mb();
+        let eigen_only = std::env::var("REDUCTION_CB_EIGEN_ONLY").map_or(true, |v| v != "0");
         let (n_ii, eigen_s, residual, difference) =
-            fixed_interface_problem(size, &model, [a, b], &body, Path::new(&dir));
-        println!(
-            "RESULT size={size} dofs={n_free} interior={n_ii} reduce_s={total:.3} reduce_cpu_s={:.3} peak_mb={peak:.0} eigen_s={eigen_s:.3} worst_residual={residual:.3e} cb_difference={difference:.2e}",
-            cpu_end - marks.first().map_or(cpu_end, |m| m.2)
+            fixed_interface_problem(size, &model, [a, b], &body, Path::new(&dir), eigen_only);
+        result += &format!(
+            " interior={n_ii} eigen_s={eigen_s:.3} worst_residual={residual:.3e} cb_difference={difference:.2e}"
         );
     }
+    println!("{result}");
 }
 
 /// The fixed-interface eigenvalues $\omega_j^2$ of `body`, then the eigenvalues of its reduced
@@ -214,15 +234,18 @@ fn compare_eigenvalues(dir: &Path, tag: &str, body: &ReducedBody) {
 }
 
 /// Writes K_ii and M_ii (the block with the interface nodes clamped) to `dir`, solves them with
-/// our eigensolver alone and writes its eigenvalues. Returns the interior size, the solve's
-/// wall time, its worst relative residual and the largest relative difference of its
-/// eigenvalues to the reduction's fixed-interface ones.
+/// our eigensolver alone (`eigen_only`) and writes its eigenvalues. Returns the interior size,
+/// the solve's wall time, its worst relative residual and the largest relative difference of
+/// its eigenvalues to the reduction's fixed-interface ones. Without `eigen_only` it writes the
+/// reduction's own fixed-interface eigenvalues $\omega_j^2$ instead and returns NaN for the
+/// solve.
 fn fixed_interface_problem(
     size: &str,
     model: &FeModel,
     interfaces: [NodeId; 2],
     body: &ReducedBody,
     dir: &Path,
+    eigen_only: bool,
 ) -> (usize, f64, f64, f64) {
     let mut clamped = model.clone();
     for node in interfaces {
@@ -233,6 +256,15 @@ fn fixed_interface_problem(
     std::fs::create_dir_all(dir).unwrap();
     write_matrix_market(&dir.join(format!("K_{size}.mtx")), m.K.as_ref()).unwrap();
     write_matrix_market(&dir.join(format!("M_{size}.mtx")), m.M.as_ref()).unwrap();
+    if !eigen_only {
+        let text: String = body
+            .fixed_interface_omega
+            .iter()
+            .map(|w| format!("{:.17e}\n", w * w))
+            .collect();
+        std::fs::write(dir.join(format!("eigenvalues_{size}.txt")), text).unwrap();
+        return (dofs.n_free(), f64::NAN, f64::NAN, f64::NAN);
+    }
     let t = Instant::now();
     let sol = lowest_modes(m.K.as_ref(), m.M.as_ref(), &EigenSettings::new(20, Shift::Zero)).unwrap();
     let eigen_s = t.elapsed().as_secs_f64();

@@ -17,8 +17,10 @@ pub fn divisions(size: &str) -> Option<(usize, usize, usize)> {
     })
 }
 
-/// A steel hex8 block of `divisions`, 2:1:1 with cubic elements, with RBE2 interface nodes
-/// on its end faces x = 0 ("root") and x = max ("tip").
+/// A steel hex8 block of `divisions` (ex, ey, ez) elements, 2 ex/ez x ey/ez x 1 m (about
+/// 2.6 x 1 x 1 m at every named size), so each element is a 2:1:1 brick, 2/ez m along x and
+/// 1/ez m across (not a cube), with RBE2 interface nodes on its end faces x = 0 ("root") and
+/// x = max ("tip").
 pub fn block((ex, ey, ez): (usize, usize, usize)) -> (FeModel, NodeId, NodeId) {
     let mesh = box_mesh(
         CellKind::Hex8,

@@ -1,0 +1,280 @@
+"""Exudyn's finite-element rods for the slider-crank (validation problem C2).
+
+The C2 connecting rod (round steel rod, d = 6 mm, l = 0.30 m, E = 200 GPa, rho = 7870 kg/m^3,
+Euler-Bernoulli) as Exudyn's own beam elements instead of a reduced body:
+
+* `--model ancf`: `ObjectANCFCable2D`, the planar ANCF cable (Euler-Bernoulli with axial
+  strain; nodes `NodePoint2DSlope1`), crank `ObjectRigidBody2D`, slider `ObjectMassPoint2D`,
+  pins `RevoluteJoint2D`: the planar model a user of Exudyn builds for this rod.
+* `--model beam3d`: `ObjectBeamGeometricallyExact`, the 3D geometrically exact (shear
+  deformable) beam on `NodeRigidBodyRxyz` nodes, crank and slider 3D rigid bodies and
+  `GenericJoint`s as in slider_crank.py. Its section: EA, GJ, EI of the round rod and rotary
+  inertia rho (J, I, I); the shear stiffness is `--shear-factor` times G A (default 100: the C2
+  rod is Euler-Bernoulli, and with k G A, k = 0.89, shear adds 0.07 % to the rod's bending
+  flexibility, more than the 0.05 % accuracy this comparison asks for).
+
+Mechanism (as slider_crank.py): rigid crank r = 0.15 m driven at 150 rad/s (velocity-level
+coordinate constraint), slider of half the rod's mass on the x axis, start at the dead centre
+with the rigid mechanism's velocities, no gravity; the values are read from `params.txt`
+written by `export_rod --out DIR`. Integrated with Exudyn's generalized-alpha (index 3,
+spectral radius `--rho-inf`) at the fixed step `--h` to `--t-end`, full Newton unless
+`--modified-newton`.
+
+Output as slider_crank.py: the midpoint deflection w from the chord (the middle node against
+the line through the end nodes, positive along e_z x (B - A); `--elements` must be even), the
+wall and CPU time of `SolveDynamic` per step, `RESULT` lines, `--csv` (t, w, slider_x) and
+`--reference` (a CSV of the same columns).
+
+Usage (run.sh makes the virtual environment):
+    run.sh slider_crank_beam.py --params DIR/params.txt --model ancf|beam3d [--elements 4]
+        [--h H] [--t-end T] [--rho-inf 0.9] [--modified-newton] [--sparse] [--csv out.csv]
+        [--reference ref.csv]
+"""
+
+import argparse
+import math
+import sys
+import time
+
+import numpy as np
+
+import exudyn as exu
+from exudyn.itemInterface import (
+    CoordinateConstraint,
+    GenericJoint,
+    MarkerBodyPosition,
+    MarkerBodyRigid,
+    MarkerNodeCoordinate,
+    MarkerNodePosition,
+    MarkerNodeRigid,
+    NodePoint2D,
+    NodePoint2DSlope1,
+    NodePointGround,
+    NodeRigidBody2D,
+    NodeRigidBodyRxyz,
+    ObjectANCFCable2D,
+    ObjectBeamGeometricallyExact,
+    ObjectGround,
+    ObjectJointRevolute2D,
+    ObjectMassPoint2D,
+    ObjectRigidBody,
+    ObjectRigidBody2D,
+    SensorNode,
+)
+
+from slider_crank import chord_distance
+
+
+def read_params(path):
+    params = {}
+    for line in open(path):
+        k, v = line.split()
+        params[k] = float(v)
+    for k in ["crank", "rod", "speed", "diameter", "E", "nu", "rho", "crank_mass", "crank_Izz"]:
+        if k not in params:
+            sys.exit(f"{path}: no '{k}' (written by export_rod)")
+    return params
+
+
+def ancf_model(mbs, p, n):
+    """Planar model: crank, ANCF cable rod of n elements, slider. Returns the rod nodes and the slider node."""
+    r, l, speed = p["crank"], p["rod"], p["speed"]
+    d = p["diameter"]
+    A, I = math.pi * d**2 / 4, math.pi * d**4 / 64
+    rod_mass = p["rho"] * A * l
+    w_rod = -speed * r / l  # rigid mechanism at the dead centre: the rod turns about B
+    ground = mbs.AddObject(ObjectGround())
+    m_ground_coord = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
+
+    # Crank: node at O, centre of mass at r/2, inertia about O; driven at constant speed.
+    m_c = p["crank_mass"]
+    n_crank = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0, 0, 0], initialVelocities=[0, 0, speed]))
+    o_crank = mbs.AddObject(
+        ObjectRigidBody2D(nodeNumber=n_crank, mass=m_c, inertia=p["crank_Izz"] + m_c * (r / 2) ** 2, centerOfMass=[r / 2, 0])
+    )
+    m_o = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[0, 0, 0]))
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[m_o, mbs.AddMarker(MarkerBodyPosition(bodyNumber=o_crank, localPosition=[0, 0, 0]))]))
+    m_angle = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n_crank, coordinate=2))
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[m_ground_coord, m_angle], offset=speed, velocityLevel=True))
+    m_crank_a = mbs.AddMarker(MarkerBodyPosition(bodyNumber=o_crank, localPosition=[r, 0, 0]))
+
+    # Rod: n cable elements from A = (r, 0) to B = (r + l, 0), rigid velocities about B.
+    nodes = []
+    for i in range(n + 1):
+        x = r + l * i / n
+        nodes.append(
+            mbs.AddNode(
+                NodePoint2DSlope1(
+                    referenceCoordinates=[x, 0, 1, 0], initialVelocities=[0, w_rod * (x - r - l), 0, w_rod]
+                )
+            )
+        )
+    for i in range(n):
+        mbs.AddObject(
+            ObjectANCFCable2D(
+                nodeNumbers=[nodes[i], nodes[i + 1]],
+                length=l / n,
+                massPerLength=p["rho"] * A,
+                bendingStiffness=p["E"] * I,
+                axialStiffness=p["E"] * A,
+            )
+        )
+
+    # Slider: a mass point of half the rod's mass on the x axis.
+    n_slider = mbs.AddNode(NodePoint2D(referenceCoordinates=[r + l, 0]))
+    mbs.AddObject(ObjectMassPoint2D(nodeNumber=n_slider, mass=rod_mass / 2))
+    m_slider_y = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n_slider, coordinate=1))
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[m_ground_coord, m_slider_y]))
+    m_slider = mbs.AddMarker(MarkerNodePosition(nodeNumber=n_slider))
+
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[m_crank_a, mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[0]))]))
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[m_slider, mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[-1]))]))
+    return nodes, n_slider, rod_mass
+
+
+def beam3d_model(mbs, p, n, shear_factor):
+    """Spatial model: crank, geometrically exact beam rod of n elements, slider. Returns as ancf_model."""
+    r, l, speed = p["crank"], p["rod"], p["speed"]
+    d, E, nu, rho = p["diameter"], p["E"], p["nu"], p["rho"]
+    A, I = math.pi * d**2 / 4, math.pi * d**4 / 64
+    G = E / (2 * (1 + nu))
+    k_shear = 6 * (1 + nu) / (7 + 6 * nu)  # Cowper's factor of a solid circle
+    rod_mass = rho * A * l
+    w_rod = -speed * r / l
+    section = exu.BeamSection()
+    GA = shear_factor * k_shear * G * A
+    section.stiffnessMatrix = np.diag([E * A, GA, GA, G * 2 * I, E * I, E * I])
+    section.inertia = rho * np.diag([2 * I, I, I])
+    section.massPerLength = rho * A
+
+    ground = mbs.AddObject(ObjectGround())
+    m_ground_coord = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
+    m_c, arm = p["crank_mass"], r / 2
+    n_crank = mbs.AddNode(NodeRigidBodyRxyz(referenceCoordinates=[0] * 6, initialVelocities=[0, 0, 0, 0, 0, speed]))
+    o_crank = mbs.AddObject(
+        ObjectRigidBody(
+            nodeNumber=n_crank,
+            mass=m_c,
+            inertia=[p["crank_Ixx"], p["crank_Iyy"] + m_c * arm**2, p["crank_Izz"] + m_c * arm**2, 0, 0, 0],
+            centerOfMass=[arm, 0, 0],
+        )
+    )
+    m_o = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[0, 0, 0]))
+    m_crank_o = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_crank, localPosition=[0, 0, 0]))
+    mbs.AddObject(GenericJoint(markerNumbers=[m_o, m_crank_o], constrainedAxes=[1, 1, 1, 1, 1, 0]))
+    m_angle = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n_crank, coordinate=5))
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[m_ground_coord, m_angle], offset=speed, velocityLevel=True))
+    m_crank_a = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_crank, localPosition=[r, 0, 0]))
+
+    nodes = []
+    for i in range(n + 1):
+        x = r + l * i / n
+        nodes.append(
+            mbs.AddNode(
+                NodeRigidBodyRxyz(
+                    referenceCoordinates=[x, 0, 0, 0, 0, 0], initialVelocities=[0, w_rod * (x - r - l), 0, 0, 0, w_rod]
+                )
+            )
+        )
+    for i in range(n):
+        mbs.AddObject(ObjectBeamGeometricallyExact(nodeNumbers=[nodes[i], nodes[i + 1]], length=l / n, sectionData=section))
+
+    n_slider = mbs.AddNode(NodeRigidBodyRxyz(referenceCoordinates=[r + l, 0, 0, 0, 0, 0]))
+    o_slider = mbs.AddObject(ObjectRigidBody(nodeNumber=n_slider, mass=rod_mass / 2, inertia=[1e-8, 1e-8, 1e-8, 0, 0, 0]))
+    m_guide = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[r + l, 0, 0]))
+    m_slider = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_slider, localPosition=[0, 0, 0]))
+    mbs.AddObject(GenericJoint(markerNumbers=[m_guide, m_slider], constrainedAxes=[0, 1, 1, 1, 1, 1]))
+
+    pin = [1, 1, 1, 1, 1, 0]
+    mbs.AddObject(GenericJoint(markerNumbers=[m_crank_a, mbs.AddMarker(MarkerNodeRigid(nodeNumber=nodes[0]))], constrainedAxes=pin))
+    mbs.AddObject(GenericJoint(markerNumbers=[m_slider, mbs.AddMarker(MarkerNodeRigid(nodeNumber=nodes[-1]))], constrainedAxes=pin))
+    return nodes, n_slider, rod_mass
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--params", required=True, help="params.txt written by export_rod")
+    ap.add_argument("--model", choices=["ancf", "beam3d"], required=True)
+    ap.add_argument("--elements", type=int, default=4)
+    ap.add_argument("--h", type=float, default=None, help="time step (default T/400)")
+    ap.add_argument("--t-end", type=float, default=None, help="end time (default 2T)")
+    ap.add_argument("--rho-inf", type=float, default=0.9)
+    ap.add_argument("--shear-factor", type=float, default=100.0, help="beam3d: shear stiffness over k G A")
+    ap.add_argument("--modified-newton", action="store_true", help="Exudyn's modified Newton (Jacobian kept)")
+    ap.add_argument("--sparse", action="store_true", help="Exudyn's sparse linear solver (EigenSparse) instead of its dense default")
+    ap.add_argument("--csv")
+    ap.add_argument("--reference")
+    args = ap.parse_args()
+    if args.elements < 2 or args.elements % 2:
+        sys.exit(f"--elements {args.elements}: an even number of at least 2 (the midpoint must be a node)")
+
+    p = read_params(args.params)
+    period = 2 * math.pi / p["speed"]
+    h = args.h if args.h is not None else period / 400
+    t_end = args.t_end if args.t_end is not None else 2 * period
+    steps = int(round(t_end / h))
+
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    if args.model == "ancf":
+        nodes, n_slider, rod_mass = ancf_model(mbs, p, args.elements)
+    else:
+        nodes, n_slider, rod_mass = beam3d_model(mbs, p, args.elements, args.shear_factor)
+    probe = [nodes[0], nodes[len(nodes) // 2], nodes[-1]]
+    sensors = [
+        mbs.AddSensor(SensorNode(nodeNumber=k, outputVariableType=exu.OutputVariableType.Position, storeInternal=True, writeToFile=False))
+        for k in probe + [n_slider]
+    ]
+    mbs.Assemble()
+
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.numberOfSteps = steps
+    ss.timeIntegration.endTime = steps * h
+    ss.timeIntegration.generalizedAlpha.spectralRadius = args.rho_inf
+    ss.timeIntegration.generalizedAlpha.useIndex2Constraints = False
+    ss.timeIntegration.generalizedAlpha.useNewmark = False
+    ss.timeIntegration.newton.useModifiedNewton = args.modified_newton
+    ss.timeIntegration.verboseMode = 0
+    if args.sparse:
+        ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse
+    ss.solution.file.write = False
+    ss.solution.sensors.writePeriod = h
+
+    start, cpu_start = time.perf_counter(), time.process_time()
+    ok = mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+    wall = time.perf_counter() - start
+    cpu = time.process_time() - cpu_start
+    if not ok:
+        sys.exit(f"Exudyn: the dynamic solve of the {args.model} rod with {args.elements} elements, h = {h:.4e} s failed")
+
+    a, mid, b, slider = (mbs.GetSensorStoredData(s) for s in sensors)
+    t = a[:, 0]
+    w = chord_distance(mid[:, 1:4], a[:, 1:4], b[:, 1:4])
+    peak = np.max(np.abs(w))
+    name = {"ancf": "ObjectANCFCable2D", "beam3d": "ObjectBeamGeometricallyExact"}[args.model]
+    it = mbs.sys["dynamicSolver"].it
+    print(
+        f"Exudyn {exu.config.Version()} slider-crank: rod as {args.elements} x {name}, "
+        f"{len(mbs.systemData.GetODE2Coordinates())} ODE2 coordinates, {len(mbs.systemData.GetAECoordinates())} constraint equations, rod mass {rod_mass:.6e} kg"
+    )
+    print(
+        f"h = {h:.6e} s, {steps} steps to t = {steps * h:.6f} s, rho_inf = {args.rho_inf}, modified Newton {args.modified_newton}, "
+        f"{'sparse' if args.sparse else 'dense'} linear solver"
+    )
+    print(f"Newton iterations per step {it.newtonStepsCount / steps:.2f}, Jacobians per step {it.newtonJacobiCount / steps:.2f}")
+    print(f"wall {wall:.4f} s; per step {wall / steps * 1e6:.3f} us; {steps / wall:.0f} steps/s; CPU {cpu:.2f} s = {cpu / steps * 1e6:.3f} us/step")
+    print(f"midpoint deflection: peak |w| = {peak:.6e} m, w(t_end) = {w[-1]:.6e} m")
+    print(f"RESULT s_per_step={wall / steps:.6e} cpu_per_step={cpu / steps:.6e} peak_w={peak:.9e}")
+    if args.csv:
+        np.savetxt(args.csv, np.column_stack([t, w, slider[:, 1]]), delimiter=",", header="t,w,slider_x", comments="", fmt="%.9e")
+    if args.reference:
+        ref = np.loadtxt(args.reference, delimiter=",", skiprows=1)
+        ref_w = np.interp(t, ref[:, 0], ref[:, 1])
+        ref_peak = np.max(np.abs(ref[:, 1]))
+        err = np.max(np.abs(w - ref_w)) / ref_peak
+        print(f"against {args.reference}: max |w - w_ref| / max |w_ref| = {err:.3e}, peak error {(peak - ref_peak) / ref_peak:.3e}")
+        print(f"RESULT history_error={err:.6e} peak_error={(peak - ref_peak) / ref_peak:.6e}")
+
+
+if __name__ == "__main__":
+    main()
