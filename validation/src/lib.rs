@@ -26,6 +26,21 @@ pub use ::models;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Whether tables and [`sci`] print numbers to round-trip precision (`--full-precision`), so
+/// two versions of flexmbs can be compared beyond the report's printed digits
+/// (`validation/scripts/compare_reports.py`).
+static FULL_PRECISION: AtomicBool = AtomicBool::new(false);
+
+/// Print every table value and [`sci`] number with 17 significant digits from now on.
+pub fn set_full_precision(on: bool) {
+    FULL_PRECISION.store(on, Ordering::Relaxed);
+}
+
+fn full_precision() -> bool {
+    FULL_PRECISION.load(Ordering::Relaxed)
+}
 
 /// One compared quantity.
 #[derive(Clone, Debug, PartialEq)]
@@ -88,10 +103,11 @@ impl Table {
             s,
             "| quantity | reference | flexmbs | rel. error | tolerance |\n|---|---:|---:|---:|---:|"
         );
+        let digits = if full_precision() { 16 } else { 6 };
         for r in &self.rows {
             let _ = writeln!(
                 s,
-                "| {} | {:.6e} | {:.6e} | {:.2e} | {} |",
+                "| {} | {:.digits$e} | {:.digits$e} | {:.2e} | {} |",
                 r.quantity,
                 r.reference,
                 r.ours,
@@ -186,9 +202,14 @@ pub fn slope(x: &[f64], err: &[f64]) -> f64 {
         / lx.iter().map(|a| (a - mx) * (a - mx)).sum::<f64>()
 }
 
-/// Number formatting for grids: 3 significant digits in scientific notation.
+/// Number formatting for grids: 3 significant digits in scientific notation (17 with
+/// `--full-precision`).
 pub fn sci(v: f64) -> String {
-    format!("{v:.2e}")
+    if full_precision() {
+        format!("{v:.16e}")
+    } else {
+        format!("{v:.2e}")
+    }
 }
 
 /// How much of each study to run.
@@ -330,18 +351,22 @@ pub struct Options {
     pub dir: PathBuf,
     /// Benchmark ids to run; all when empty.
     pub only: Vec<String>,
+    /// Tables and grid numbers to 17 significant digits (for comparing two versions).
+    pub full_precision: bool,
     pub help: bool,
 }
 
 /// The usage text of `program` (`flexmbs validate` or `validation`).
 pub fn usage(program: &str) -> String {
     format!(
-        "usage: {program} [--quick] [--no-report] [--report-dir DIR] [--only ID...]\n\n\
+        "usage: {program} [--quick] [--no-report] [--report-dir DIR] [--full-precision] [--only ID...]\n\n\
          Runs the benchmark problems of docs/validation.md through the whole pipeline, prints the\n\
          report and writes it with its figures to DIR/REPORT.md (default: ./{DEFAULT_REPORT_DIR}).\n\n\
          --quick           the coarse refinement levels only (seconds instead of minutes)\n\
          --no-report       print the report without writing it\n\
          --report-dir DIR  where REPORT.md and its PNG figures go\n\
+         --full-precision  table values and convergence numbers to 17 significant digits, to\n\
+         \x20                 compare two versions (validation/scripts/compare_reports.py)\n\
          --only ID...      the problems to run, separated by spaces or commas: {}\n\n\
          Exit status: 0 when every quantity is within its tolerance, 1 when one is not, 2 on an error.\n",
         benchmark_ids()
@@ -356,6 +381,7 @@ pub fn parse_args(args: &[String]) -> Result<Options, String> {
         write: true,
         dir: PathBuf::from(DEFAULT_REPORT_DIR),
         only: Vec::new(),
+        full_precision: false,
         help: false,
     };
     let mut it = args.iter().peekable();
@@ -365,6 +391,7 @@ pub fn parse_args(args: &[String]) -> Result<Options, String> {
             "--full" => options.extent = Extent::Full,
             "--report" => options.write = true,
             "--no-report" => options.write = false,
+            "--full-precision" => options.full_precision = true,
             "--report-dir" => match it.next() {
                 Some(d) if !d.starts_with("--") => options.dir = PathBuf::from(d),
                 _ => return Err("--report-dir needs a folder".into()),
@@ -395,7 +422,7 @@ pub fn run_from_args(args: Vec<String>) -> ExitCode {
     run_command("flexmbs validate", args)
 }
 
-/// The command line of `program`: `[--quick] [--no-report] [--report-dir DIR] [--only ID ...]`
+/// The command line of `program`: `[--quick] [--no-report] [--report-dir DIR] [--full-precision] [--only ID ...]`
 /// ([`usage`]). Prints the report, writes `DIR/REPORT.md` and the PNGs (unless
 /// `--no-report`), and exits with 1 if a quantity is outside its tolerance, 2 on an error.
 pub fn run_command(program: &str, args: Vec<String>) -> ExitCode {
@@ -415,8 +442,10 @@ pub fn run_command(program: &str, args: Vec<String>) -> ExitCode {
         write,
         dir,
         only,
+        full_precision,
         ..
     } = options;
+    set_full_precision(full_precision);
     let blocks = match run_all(extent, &only) {
         Ok(b) => b,
         Err(e) => {

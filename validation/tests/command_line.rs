@@ -52,6 +52,28 @@ fn the_default_report_folder_is_in_the_current_folder_not_the_source_tree() {
 }
 
 #[test]
+fn full_precision_prints_tables_to_round_trip_digits() {
+    assert!(!parse_args(&[]).unwrap().full_precision);
+    assert!(parse_args(&args("--full-precision --quick")).unwrap().full_precision);
+    let table = validation::Table {
+        title: "T".into(),
+        note: String::new(),
+        rows: vec![validation::Row::new("q", 1.0 / 3.0, 0.1 + 0.2, 1.0)],
+    };
+    assert!(table.markdown().contains("| q | 3.333333e-1 | 3.000000e-1 |"));
+    validation::set_full_precision(true);
+    let precise = table.markdown();
+    let sci = validation::sci(0.1 + 0.2);
+    validation::set_full_precision(false);
+    // 17 significant digits read back to the same f64.
+    assert!(
+        precise.contains("| q | 3.3333333333333331e-1 | 3.0000000000000004e-1 |"),
+        "{precise}"
+    );
+    assert_eq!(sci.parse::<f64>().unwrap(), 0.1 + 0.2);
+}
+
+#[test]
 fn the_usage_names_the_program_and_every_id() {
     let u = usage("flexmbs validate");
     assert!(u.starts_with("usage: flexmbs validate "), "{u}");

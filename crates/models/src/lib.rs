@@ -143,8 +143,19 @@ pub struct Segment {
     pub body: ReducedBody,
 }
 
+/// Whether a builder keeps the reduced basis on every FE node (`ReducedBody::mesh`, for
+/// deformed meshes and recovered node motions) or only the interface and modal data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshShapes {
+    /// Not kept (the default of the builders: the standard problems draw no meshes, and the
+    /// shapes of a large body cost memory).
+    Drop,
+    Keep,
+}
+
 /// Reduces `fe` with interfaces `ends` (and, for the auxiliary-node frame, `middle` as the
-/// auxiliary interface) with `settings` (mesh shapes are not kept: no model here draws them).
+/// auxiliary interface) with `settings`, the mesh shapes kept as `mesh` says (whatever
+/// `settings.keep_mesh_shapes` holds).
 fn reduce_segment(
     fe: &FeModel,
     name: &str,
@@ -152,9 +163,10 @@ fn reduce_segment(
     middle: fe_model::NodeId,
     settings: &CbSettings,
     frame: FrameChoice,
+    mesh: MeshShapes,
 ) -> Result<Segment, BuildError> {
     let mut settings = settings.clone();
-    settings.keep_mesh_shapes = false;
+    settings.keep_mesh_shapes = mesh == MeshShapes::Keep;
     if frame == FrameChoice::AuxiliaryNode {
         settings.auxiliary_node = Some(middle);
     }
@@ -228,19 +240,33 @@ pub fn beam_segment_with(
     let elements = elements + elements % 2;
     let (fe, nodes) = straight_beam_fe(name, spec, ends, elements, orientation)?;
     let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
-    reduce_segment(&fe, name, &ends, nodes[elements / 2], settings, frame)
+    reduce_segment(&fe, name, &ends, nodes[elements / 2], settings, frame, MeshShapes::Drop)
 }
 
 /// A straight beam body from `a` to `b` of exactly `elements` elements (odd counts too: no
 /// auxiliary interface), reduced with interfaces "a" and "b" at its ends and `modes`
-/// fixed-interface modes, named `name`.
+/// fixed-interface modes, named `name`; mesh shapes are not kept ([`beam_body_with`]).
 pub fn beam_body(
+    name: &str,
+    spec: &BeamSpec,
+    ends: (Vector3<f64>, Vector3<f64>),
+    elements: usize,
+    orientation: Vector3<f64>,
+    modes: ModeSelection,
+) -> Result<ReducedBody, BuildError> {
+    beam_body_with(name, spec, ends, elements, orientation, modes, MeshShapes::Drop)
+}
+
+/// [`beam_body`] with its mesh shapes kept or dropped as `mesh` says (kept: the body's
+/// deformed mesh and every FE node's motion can be recovered).
+pub fn beam_body_with(
     name: &str,
     spec: &BeamSpec,
     (a, b): (Vector3<f64>, Vector3<f64>),
     elements: usize,
     orientation: Vector3<f64>,
     modes: ModeSelection,
+    mesh: MeshShapes,
 ) -> Result<ReducedBody, BuildError> {
     let (fe, nodes) = straight_beam_fe(name, spec, (a, b), elements, orientation)?;
     let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
@@ -251,6 +277,7 @@ pub fn beam_body(
         nodes[0],
         &CbSettings::new(modes),
         FrameChoice::CenterOfMass,
+        mesh,
     )?
     .body)
 }
@@ -277,7 +304,15 @@ pub fn arc_segment(
             source,
         })?;
     let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
-    reduce_segment(&fe, name, &ends, nodes[elements / 2], &CbSettings::new(modes), frame)
+    reduce_segment(
+        &fe,
+        name,
+        &ends,
+        nodes[elements / 2],
+        &CbSettings::new(modes),
+        frame,
+        MeshShapes::Drop,
+    )
 }
 
 /// A solid rod segment: a box of `length` x `side` x `side` of hex20 or tet10 cells
@@ -339,6 +374,7 @@ pub fn solid_rod_segment(
         middle,
         &CbSettings::new(modes),
         frame,
+        MeshShapes::Drop,
     )
 }
 

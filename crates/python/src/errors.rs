@@ -8,7 +8,7 @@
 //! | `ReducedBodyFileError` | a `.rbody` file cannot be read or written | `path` |
 //! | `StudyError` | a study is not valid (as `flexmbs check` reports it) | `file`, `line`, `column`, `key` of the first error; `errors`: every error as a dict of these and `message` |
 //! | `KeyPathError` | a key path leads to no value of the study | `path` (the path asked for), `at` (its part that leads nowhere) |
-//! | `SolveError` | a solver stopped (Newton did not converge, a singular matrix, ...) | `time` (of the step that failed; the load factor in an equilibrium), `step` (its number), `residual` (the last relative residual when Newton failed), `analysis` (its name); `None` when not known; `partial` (from `Study.run`: the results computed before, also in the results folder) |
+//! | `SolveError` | a solver stopped (Newton did not converge, a singular matrix, ...) | `time` (of the step that failed; the load factor in an equilibrium), `step` (its number), `residual` (the last relative residual when Newton failed), `analysis` (its name), `file`, `line`, `column`, `key` (where the study describes the entity the solver failed at: the body whose floating frame failed); `None` when not known; `partial` (from `Study.run`: the results computed before, also in the results folder) |
 
 use pyo3::create_exception;
 use pyo3::prelude::*;
@@ -44,7 +44,7 @@ create_exception!(
     flexmbs,
     SolveError,
     FlexmbsError,
-    "A solver stopped: `time`, `step`, `residual` and `analysis` say where (None when not known); `partial` holds what `Study.run` computed before."
+    "A solver stopped: `time`, `step`, `residual` and `analysis` say where, `file`, `line`, `column` and `key` the study's entity it failed at (None when not known); `partial` holds what `Study.run` computed before."
 );
 
 /// Adds the exception classes to the module.
@@ -120,6 +120,7 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
     // step number the analysis counts.
     let mut analysis: Option<String> = None;
     let mut analysis_step: Option<usize> = None;
+    let mut location: Option<&study::error::Location> = None;
     let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(error);
     while let Some(e) = cause {
         if let Some(a) = e.downcast_ref::<study::error::AnalysisFailed>() {
@@ -127,6 +128,7 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
         }
         if let Some(s) = e.downcast_ref::<study::error::SolverStopped>() {
             analysis_step = analysis_step.or(s.step);
+            location = location.or(s.location.as_ref());
         }
         if let Some(s) = e.downcast_ref::<study::source::StudyErrors>() {
             let errors = study_error_dicts(py, s)?;
@@ -176,7 +178,8 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
                 ("analysis", analysis.clone().into_pyobject(py)?.into_any().unbind()),
                 ("partial", py.None()),
             ];
-            return Ok(with_attributes::<SolveError>(py, message, &attrs));
+            let err = with_attributes::<SolveError>(py, message, &attrs);
+            return Ok(with_location(py, err, location));
         }
         if let Some(reduction::ReductionError::BodyFile { path, .. }) = e.downcast_ref::<reduction::ReductionError>() {
             let path = PyString::new(py, &path.display().to_string()).into_any().unbind();
@@ -187,16 +190,44 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
     Ok(FlexmbsError::new_err(message))
 }
 
+/// `err` with the attributes `file`, `line`, `column` and `key` of `location` (all `None`
+/// without one).
+fn with_location(py: Python<'_>, err: PyErr, location: Option<&study::error::Location>) -> PyErr {
+    let (file, (line, column), key) = match location {
+        Some(at) => (
+            Some(at.file.display().to_string()),
+            at.line_column.unzip(),
+            Some(at.key.to_string()),
+        ),
+        None => (None, (None, None), None),
+    };
+    let value = err.value(py);
+    let set = value
+        .setattr("file", file)
+        .and_then(|()| value.setattr("line", line))
+        .and_then(|()| value.setattr("column", column))
+        .and_then(|()| value.setattr("key", key));
+    match set {
+        Ok(()) => err,
+        Err(e) => e,
+    }
+}
+
 /// A failure of the simulation of analysis `analysis` that has taken `steps` steps, as the
-/// package's exception: a `SolveError` names the analysis, and the step when the solver did
-/// not (the step that failed is the next).
+/// package's exception: a `SolveError` names the analysis, the step when the solver did not
+/// (the step that failed is the next), and where the study describes the entity it failed at
+/// (`location`) when the error itself does not say.
 pub(crate) fn simulation_err(
     py: Python<'_>,
     error: &(dyn std::error::Error + 'static),
     analysis: &str,
     steps: usize,
+    location: Option<&study::error::Location>,
 ) -> PyErr {
-    let err = to_py_err(py, error);
+    let mut err = to_py_err(py, error);
+    if err.is_instance_of::<SolveError>(py) && location.is_some() {
+        err = with_location(py, err, location);
+    }
     if err.is_instance_of::<SolveError>(py) {
         let value = err.value(py);
         let unknown_step = value.getattr("step").map(|s| s.is_none()).unwrap_or(true);

@@ -510,14 +510,15 @@ impl Simulation {
     }
 
     /// One time step; returns the Newton iterations it took. A step that fails raises
-    /// `SolveError` (`time`, `step`, `residual`, `analysis`) and leaves the state at the last
+    /// `SolveError` (`time`, `step`, `residual`, `analysis`; `file`, `line`, `key` of the
+    /// body it failed at) and leaves the state at the last
     /// converged step: the simulation can go on (with a changed load or actuator, say).
     fn step(&mut self, py: Python<'_>) -> PyResult<usize> {
         let steps = self.sim.steps();
         let report = self
             .sim
             .step()
-            .map_err(|e| simulation_err(py, &e, &self.analysis, steps))?;
+            .map_err(|e| simulation_err(py, &e, &self.analysis, steps, self.sim.locate(&e)))?;
         // The residuals before each correction and at convergence.
         Ok(report.residuals.len().saturating_sub(1))
     }
@@ -526,7 +527,7 @@ impl Simulation {
     fn advance_to(&mut self, py: Python<'_>, t: f64) -> PyResult<usize> {
         let sim = &mut self.sim;
         let result = py.detach(|| sim.advance_to(t));
-        result.map_err(|e| simulation_err(py, &e, &self.analysis, self.sim.steps()))
+        result.map_err(|e| simulation_err(py, &e, &self.analysis, self.sim.steps(), self.sim.locate(&e)))
     }
 
     /// The names of the study's sensors.

@@ -1,7 +1,9 @@
 //! Errors of a study run: any error of the libraries, wrapped in the context that says which
 //! part, analysis or file it is about. `main` prints the chain, one cause per line.
 
+use crate::source::KeyPath;
 use std::fmt;
+use std::path::PathBuf;
 
 /// Any error, sendable across threads.
 pub type BoxError = Box<dyn std::error::Error + Send + Sync + 'static>;
@@ -25,15 +27,42 @@ impl std::error::Error for Context {
     }
 }
 
+/// Where an entity is described in the study file: `file:line:column` of its value, and its
+/// key path (`bodies[1]`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Location {
+    pub file: PathBuf,
+    /// 1-based line and column; `None` when the key path is not in the file.
+    pub line_column: Option<(usize, usize)>,
+    pub key: KeyPath,
+}
+
+/// `file:line:col`, or the file alone when the line is not known.
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line_column {
+            Some((l, c)) => write!(f, "{}:{l}:{c}", self.file.display()),
+            None => write!(f, "{}", self.file.display()),
+        }
+    }
+}
+
 /// A solver that stopped within an analysis after the results before it were written: what
 /// stopped and what was kept (`message`), the number of the step that failed when the
-/// analysis steps, and the solver's error (time, step, residual).
+/// analysis steps, where the entity the solver failed at (`mbs::SolveError::entity`: a body
+/// whose frame failed) is described in the study, and the solver's error (time, step,
+/// residual).
 #[derive(Debug, thiserror::Error)]
-#[error("{message}")]
+#[error("{}", match .location {
+    Some(at) => format!("{at}: {}: {}", at.key, .message),
+    None => .message.clone(),
+})]
 pub struct SolverStopped {
     pub message: String,
     /// The number of the time or load step that failed (1 = the first).
     pub step: Option<usize>,
+    /// Where the entity the solver failed at is described, when it is one of the study's.
+    pub location: Option<Location>,
     #[source]
     pub source: mbs::SolveError,
 }

@@ -867,6 +867,28 @@ impl BuiltMechanism {
         entities.iter().find_map(|e| self.entities.get(e))
     }
 
+    /// A solver failure of an analysis, located at the study's description of the entity it
+    /// failed at (`mbs::SolveError::entity`: the body whose floating frame failed), when the
+    /// study describes it.
+    pub fn stopped(
+        &self,
+        study: &Study,
+        message: String,
+        step: Option<usize>,
+        source: mbs::SolveError,
+    ) -> SolverStopped {
+        let location = source
+            .entity()
+            .and_then(|e| self.locate(&[e]))
+            .map(|path| study.at(path));
+        SolverStopped {
+            message,
+            step,
+            location,
+            source,
+        }
+    }
+
     /// Model size for the summary.
     pub fn size(&self, sys: &System) -> serde_json::Value {
         json!({
@@ -1382,10 +1404,9 @@ pub fn run_analysis(
             if failure.is_none() {
                 out.final_state = Some(sol.state.clone());
             }
-            out.failure = failure.map(|e| SolverStopped {
-                message: "equilibrium stopped; the converged load steps are written".into(),
-                step: Some(sol.steps.len() + 1),
-                source: e,
+            out.failure = failure.map(|e| {
+                let message = "equilibrium stopped; the converged load steps are written".into();
+                b.stopped(study, message, Some(sol.steps.len() + 1), e)
             });
         }
         MbsAnalysis::Dynamic {
@@ -1467,27 +1488,20 @@ pub fn run_analysis(
             let (totals, failure) = match run {
                 Ok((totals, None)) => (totals, None),
                 Ok((totals, Some(e))) => {
-                    let failure = SolverStopped {
-                        message: format!(
-                            "time integration stopped; results up to t = {:.6} s (step {}) are written",
-                            integ.state().time(),
-                            totals.steps
-                        ),
-                        step: Some(totals.steps + 1),
-                        source: e,
-                    };
+                    let message = format!(
+                        "time integration stopped; results up to t = {:.6} s (step {}) are written",
+                        integ.state().time(),
+                        totals.steps
+                    );
+                    let failure = b.stopped(study, message, Some(totals.steps + 1), e);
                     (totals, Some(failure))
                 }
                 Err(stop) => match stop.error {
                     Halt::Output(e) => return Err(e),
                     Halt::Sensor(e, k) => {
-                        let failure = SolverStopped {
-                            message: format!(
-                                "time integration stopped; results up to t = {last_written:.6} s are written"
-                            ),
-                            step: Some(k),
-                            source: e,
-                        };
+                        let message =
+                            format!("time integration stopped; results up to t = {last_written:.6} s are written");
+                        let failure = b.stopped(study, message, Some(k), e);
                         (stop.totals, Some(failure))
                     }
                 },
@@ -1692,6 +1706,7 @@ pub fn run_analysis(
             tolerance,
             max_iterations,
         } => run_buckling(
+            study,
             &sys,
             b,
             start,
@@ -1718,6 +1733,7 @@ pub fn dynamic_start(sys: &System, start: Option<&mbs::State>) -> mbs::State {
 /// state of `start`), with the stability of that equilibrium (`mbs::stability`): the load
 /// factors as a table, each mode drawn on the loaded configuration for ParaView.
 fn run_buckling(
+    study: &Study,
     sys: &System,
     b: &BuiltMechanism,
     start: Option<&mbs::State>,
@@ -1745,13 +1761,10 @@ fn run_buckling(
                         "past_critical_point": true,
                         "load_factor_reached": reached,
                     });
-                    out.failure = Some(SolverStopped {
-                        message: format!(
-                            "the structure is past a limit point: no equilibrium beyond load factor {reached:.6}; an 'equilibrium' analysis with method = \"arc-length\" follows the path through it"
-                        ),
-                        step: Some(inc.partial.steps.len() + 1),
-                        source: inc.error,
-                    });
+                    let message = format!(
+                        "the structure is past a limit point: no equilibrium beyond load factor {reached:.6}; an 'equilibrium' analysis with method = \"arc-length\" follows the path through it"
+                    );
+                    out.failure = Some(b.stopped(study, message, Some(inc.partial.steps.len() + 1), inc.error));
                     return Ok(());
                 }
             }

@@ -5,11 +5,12 @@
 //! step the same type, so a script that steps a simulation to the end gets the numbers the
 //! program writes.
 
-use crate::error::BoxError;
+use crate::error::{BoxError, Location};
 use crate::mechanism::{BuiltMechanism, NamedLoad};
 use crate::observer::SensorGroup;
 use crate::validate::{MbsAnalysis, Study};
 use mbs::{DynamicSettings, Integrator, LoadKind, NodeMotion, SensorRecord, State, StepReport, System};
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 /// A generalized-α time integration of the study's mechanism (module docs).
@@ -22,6 +23,8 @@ pub struct Simulation {
     /// The step size and end time of the analysis.
     dt: f64,
     t_end: f64,
+    /// Where the study describes each entity of the model, for [`Simulation::locate`].
+    locations: BTreeMap<mbs::Entity, Location>,
 }
 
 /// Per group: its columns in a row of `record` (the `mbs` sensors it is made of, in order).
@@ -103,8 +106,11 @@ impl Simulation {
         let (dt, t_end) = (settings.step, settings.end_time);
         let record = system.sensor_record();
         let columns = sensor_columns(&b.groups, &record)?;
-        let integrator =
-            Integrator::new_owned(system, state, settings).map_err(|e| format!("the initial accelerations: {e}"))?;
+        let integrator = Integrator::new_owned(system, state, settings).map_err(|e| {
+            let message = "the initial accelerations cannot be solved".to_string();
+            Box::new(b.stopped(study, message, None, e))
+        })?;
+        let locations = b.entities.iter().map(|(e, path)| (*e, study.at(path))).collect();
         Ok(Self {
             integrator,
             groups: b.groups.clone(),
@@ -112,7 +118,14 @@ impl Simulation {
             loads: b.loads.clone(),
             dt,
             t_end,
+            locations,
         })
+    }
+
+    /// Where the study describes the entity a solver error of this simulation is about
+    /// (`mbs::SolveError::entity`: the body whose floating frame failed), if it is one.
+    pub fn locate(&self, error: &mbs::SolveError) -> Option<&Location> {
+        error.entity().and_then(|e| self.locations.get(&e))
     }
 
     /// Builds the mechanism of `study` (bodies reduced through the cache of `options`) and

@@ -114,12 +114,20 @@ pub struct Study {
 impl Study {
     /// `file:line:col` of the value at `path`, for messages about runtime failures.
     pub fn location(&self, path: &KeyPath) -> String {
-        match self.source.locate(path, false) {
-            Some(span) => {
-                let (l, c) = crate::source::line_column(&self.source.text, span.start);
-                format!("{}:{l}:{c}", self.source.path.display())
-            }
-            None => self.source.path.display().to_string(),
+        self.at(path).to_string()
+    }
+
+    /// File, line, column and key path of the value at `path` (no line when the path is
+    /// not in the file).
+    pub fn at(&self, path: &KeyPath) -> crate::error::Location {
+        let line_column = self
+            .source
+            .locate(path, false)
+            .map(|span| crate::source::line_column(&self.source.text, span.start));
+        crate::error::Location {
+            file: self.source.path.clone(),
+            line_column,
+            key: path.clone(),
         }
     }
 

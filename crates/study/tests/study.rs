@@ -807,3 +807,89 @@ fn reduced_bodies_are_shared_not_copied() {
     // of the model and its superelement; nothing holds a copy of the data.
     assert_eq!(Arc::strong_count(&first), 1 + 4 * 4);
 }
+
+/// The elastica example under a tip load 1e6 times its own: Newton's first correction bends
+/// the clamped segment so far that its interfaces no longer fix a floating frame, and the
+/// load stepping gives up at its smallest increment. The solver's error names the body
+/// (`mbs::SolveError::entity`); the run's error is located at that body's `[[bodies]]` entry.
+#[test]
+fn a_solver_failure_at_a_body_is_located_at_the_body_in_the_study_file() {
+    let file = example_as("elastica", "located-solver-failure");
+    let text = std::fs::read_to_string(&file)
+        .unwrap()
+        .replace("force = [0.0, 3.0, 0.0]", "force = [0.0, 3.0e6, 0.0]");
+    std::fs::write(&file, &text).unwrap();
+    let study = study::load(&file).unwrap();
+    let options = Options {
+        out: Some(file.parent().unwrap().join("results")),
+        cache: Some(file.parent().unwrap().join("cache")),
+        ..Options::default()
+    };
+    let e = study::run_with(&study, &options, &mut Recorder::default()).unwrap_err();
+    let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(&*e);
+    let stopped = loop {
+        let c = cause.expect("a SolverStopped in the chain");
+        if let Some(s) = c.downcast_ref::<study::error::SolverStopped>() {
+            break s;
+        }
+        cause = c.source();
+    };
+    let mbs::SolveError::Body { body, .. } = &stopped.source else {
+        panic!("expected a body's frame to fail: {}", study::error::chain(&*e));
+    };
+    let index = study.mechanism.bodies.iter().position(|b| &b.name == body).unwrap();
+    let at = stopped.location.as_ref().expect("the body is located");
+    assert_eq!(at.key.to_string(), format!("bodies[{index}]"));
+    assert_eq!(at.file, file);
+    // The line is the body's entry: its table starts there or its `name` is on it.
+    let (line, _) = at.line_column.unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let entry = lines
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.trim() == "[[bodies]]")
+        .nth(index)
+        .unwrap()
+        .0
+        + 1;
+    assert!(line == entry || line == entry + 1, "line {line}, entry at {entry}");
+    assert_eq!(lines[entry].trim(), format!("name = \"{body}\""));
+    // The message says where, in front of what stopped: `file:line:col: bodies[i]: ...`.
+    let message = study::error::chain(&*e);
+    assert!(
+        message.contains(&format!("{at}: bodies[{index}]: equilibrium stopped")),
+        "{message}"
+    );
+}
+
+/// A simulation stepped by hand locates a solver error at the body it names
+/// (`Simulation::locate`), as the Python package reports it; an error about no entity has no
+/// location.
+#[test]
+fn a_simulation_locates_a_solver_error_at_its_body() {
+    let file = example_as("four_bar", "simulation-locate");
+    let study = study::load(&file).unwrap();
+    let dynamic = study.analyses.iter().find(|a| a.kind_name() == "dynamic").unwrap();
+    let options = Options {
+        out: None,
+        cache: Some(file.parent().unwrap().join("cache")),
+        ..Options::default()
+    };
+    let sim = Simulation::new(&study, &dynamic.name, &options).unwrap();
+    let error = |id: u32| mbs::SolveError::Body {
+        body: "link".into(),
+        id: mbs::BodyId(id),
+        t: 0.0,
+        source: superelement::SuperelementError::SingularFrame { rcond: 0.0 },
+    };
+    let at = sim.locate(&error(0)).expect("body 0 is in the study");
+    assert_eq!(at.key.to_string(), "bodies[0]");
+    assert!(at.line_column.is_some());
+    let not_converged = mbs::SolveError::NotConverged {
+        t: 0.0,
+        step: 1,
+        residual: 1.0,
+        iterations: 20,
+    };
+    assert!(sim.locate(&not_converged).is_none());
+}

@@ -197,6 +197,45 @@ fn an_interrupted_run_keeps_its_rows_and_its_summary_says_interrupted() {
     assert!(kept.iter().all(|r| r.len() == header.len()), "a partial row was kept");
 }
 
+/// A solver that fails at a body (the elastica under 1e6 times its load: the clamped
+/// segment's floating frame is lost in Newton's first correction) is reported at that body's
+/// entry in the study file, as `file:line:col: bodies[i]:` in front of what stopped, and the
+/// converged steps (none here) are kept.
+#[test]
+fn a_solver_failure_at_a_body_names_its_line_in_the_study_file() {
+    let dir = examples_copy("mech-located-failure");
+    let text = std::fs::read_to_string(dir.join("elastica.toml"))
+        .unwrap()
+        .replace("force = [0.0, 3.0, 0.0]", "force = [0.0, 3.0e6, 0.0]");
+    std::fs::write(dir.join("overloaded.toml"), &text).unwrap();
+    let out = flexmbs(&dir, &["run", "overloaded.toml"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    // The body the solver names, and its entry: `[[bodies]]`, then its name (1-based lines
+    // `name_line` and `name_line + 1`).
+    let body = out
+        .stderr
+        .split("body '")
+        .nth(1)
+        .and_then(|s| s.split('\'').next())
+        .unwrap_or_else(|| panic!("no body named: {}", out.stderr));
+    let lines: Vec<&str> = text.lines().collect();
+    let name_line = lines
+        .iter()
+        .position(|l| l.trim() == format!("name = \"{body}\""))
+        .unwrap();
+    assert_eq!(lines[name_line - 1].trim(), "[[bodies]]");
+    let index = lines[..name_line].iter().filter(|l| l.trim() == "[[bodies]]").count() - 1;
+    let located = [name_line, name_line + 1].iter().any(|l| {
+        out.stderr
+            .contains(&format!("overloaded.toml:{l}:1: bodies[{index}]: equilibrium stopped"))
+    });
+    assert!(located, "{}", out.stderr);
+    assert!(out.stderr.contains("floating frame"), "{}", out.stderr);
+    let summary = std::fs::read_to_string(dir.join("overloaded-results/summary.json")).unwrap();
+    assert!(summary.contains("\"status\": \"failed\""), "{summary}");
+    assert!(summary.contains(&format!("bodies[{index}]")), "{summary}");
+}
+
 /// `newton = "modified"` in a dynamic analysis: the slider-crank follows the full-Newton run
 /// with fewer factorisations (reported in the summary); an unknown strategy is refused at its
 /// key.

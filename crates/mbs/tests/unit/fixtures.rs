@@ -5,7 +5,7 @@
 use mbs::{solve_static, InitialCondition, Model, NodeId, SensorKind, StaticSettings, Support, System};
 // Re-exported for the test targets that include this file; each uses a part of them.
 #[allow(unused_imports)]
-pub use models::{pendulum, rigid, ELASTICA_E, ELASTICA_SIDE, MATTIASSON as ELASTICA};
+pub use models::{pendulum, rigid, MeshShapes, ELASTICA_E, ELASTICA_SIDE, MATTIASSON as ELASTICA};
 use models::{square_spec, RodModel, Variant};
 use nalgebra::{Isometry3, Vector3};
 use reduction::{CbSettings, ModeSelection, ReducedBody};
@@ -23,51 +23,23 @@ pub fn beam_body(
     rho: f64,
     modes: ModeSelection,
 ) -> ReducedBody {
+    square_beam(name, (a, b), elements, [side, E, rho], modes, MeshShapes::Drop)
+}
+
+/// The beam of [`beam_body`] (`[side, E, rho]`) by the `models` builder, its mode shapes on
+/// every FE node kept (for deformed meshes) or dropped as `mesh` says.
+pub fn square_beam(
+    name: &str,
+    (a, b): (Vector3<f64>, Vector3<f64>),
+    elements: usize,
+    [side, E, rho]: [f64; 3],
+    modes: ModeSelection,
+    mesh: MeshShapes,
+) -> ReducedBody {
     let spec = square_spec(name, E, rho, side).unwrap();
     // Any orientation off the axis: the section is square.
     let orientation = (b - a).cross(&Vector3::new(0.3, 0.9, -0.2)).normalize();
-    models::beam_body(name, &spec, (a, b), elements, orientation, modes).unwrap()
-}
-
-/// [`beam_body`] with the mode shapes on every FE node kept (for deformed meshes).
-pub fn beam_body_with_mesh(
-    name: &str,
-    a: Vector3<f64>,
-    b: Vector3<f64>,
-    elements: usize,
-    side: f64,
-    E: f64,
-    rho: f64,
-    modes: ModeSelection,
-) -> ReducedBody {
-    use fe_model::{BeamProperties, BeamSection, BeamTheory, FeModel, IsotropicMaterial, MassKind};
-    let mut model = FeModel::default();
-    let material = model.add_material(IsotropicMaterial::new("steel", E, 0.3, rho).unwrap());
-    let section = model.add_section(BeamSection::rectangle("square", side, side, 0.3).unwrap());
-    let axis = b - a;
-    let orientation = axis.cross(&Vector3::new(0.3, 0.9, -0.2)).normalize();
-    let props = BeamProperties {
-        section,
-        material,
-        orientation,
-        theory: BeamTheory::EulerBernoulli,
-        mass: MassKind::Consistent,
-    };
-    let nodes = fe_model::generate::straight_beam(
-        &mut model,
-        nalgebra::Point3::from(a),
-        nalgebra::Point3::from(b),
-        elements,
-        &props,
-        Some("beam"),
-    )
-    .unwrap();
-    let interfaces = vec![("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
-    let mut settings = CbSettings::new(modes);
-    settings.keep_mesh_shapes = true;
-    let mut body = reduction::reduce(&model, name, &interfaces, &settings).unwrap();
-    body.name = name.into();
-    body
+    models::beam_body_with(name, &spec, (a, b), elements, orientation, modes, mesh).unwrap()
 }
 
 /// A cantilever of length `L` along x as `n` beam superelements in series (nodes `n_0..n_N`,

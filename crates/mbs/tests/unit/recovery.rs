@@ -1,7 +1,7 @@
 //! Results body by body: modal coordinates through `System::modal_coordinates`, the deformed
 //! FE mesh through `System::deformed_mesh`, and points welded into nodes (`weld_points`).
 
-use crate::fixtures::beam_body_with_mesh;
+use crate::fixtures::{square_beam, MeshShapes};
 use mbs::merge::Point;
 use mbs::{solve_static, weld_points, BodyId, Model, SensorKind, StaticSettings, Support, System};
 use nalgebra::{Isometry3, Vector3};
@@ -14,15 +14,13 @@ fn loaded_cantilever(L: f64, side: f64, E: f64, P: f64) -> (System, mbs::State, 
     let mut model = Model::new("cantilever");
     let a = model.add_node("root", Vector3::zeros());
     let b = model.add_node("tip", Vector3::new(L, 0.0, 0.0));
-    let body = beam_body_with_mesh(
+    let body = square_beam(
         "beam",
-        Vector3::zeros(),
-        Vector3::new(L, 0.0, 0.0),
+        (Vector3::zeros(), Vector3::new(L, 0.0, 0.0)),
         8,
-        side,
-        E,
-        7800.0,
+        [side, E, 7800.0],
         ModeSelection::Count(2),
+        MeshShapes::Keep,
     );
     model.add_flexible_body(
         body,
