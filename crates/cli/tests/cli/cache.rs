@@ -79,3 +79,72 @@ fn damaged_cache_file_is_replaced() {
     let again = flexmbs(&dir, &["reduce", "cantilever.toml"]);
     assert!(again.stderr.contains("found in the cache"), "{}", again.stderr);
 }
+
+/// Separate processes on one cache and one results folder, as two users or a batch script
+/// would start them: four runs of one study at once, two into their own results folders and
+/// two into a shared one, all on one cache. Every run into its own folder completes; of the
+/// two sharing a folder, one completes and the other either completes after it or stops at
+/// the lock naming the folder (never an interleaved folder); the cache holds only whole
+/// bodies and no temporary.
+#[test]
+fn concurrent_processes_share_one_cache_and_lock_one_results_folder() {
+    let dir = examples_copy("cache-concurrent");
+    let cache = dir.join("shared-cache");
+    let cache_arg = cache.to_string_lossy().to_string();
+    let outs = ["own-a", "own-b", "shared", "shared"];
+    let children: Vec<_> = outs
+        .iter()
+        .map(|out| {
+            std::process::Command::new(env!("CARGO_BIN_EXE_flexmbs"))
+                .args(["run", "solid_bar.toml", "--out", out, "--cache", &cache_arg])
+                .current_dir(&dir)
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let results: Vec<(i32, String)> = children
+        .into_iter()
+        .map(|c| {
+            let o = c.wait_with_output().unwrap();
+            (
+                o.status.code().unwrap_or(-1),
+                String::from_utf8_lossy(&o.stderr).into_owned(),
+            )
+        })
+        .collect();
+    for (code, stderr) in &results[..2] {
+        assert_eq!(*code, 0, "{stderr}");
+    }
+    let shared = &results[2..];
+    assert!(shared.iter().any(|(code, _)| *code == 0), "{shared:?}");
+    for (code, stderr) in shared {
+        assert!(
+            *code == 0 || (*code == 2 && stderr.contains("in use by another flexmbs run")),
+            "{code}: {stderr}"
+        );
+    }
+    // Each folder is one run's: its summary is complete and lists files that exist.
+    for out in ["own-a", "own-b", "shared"] {
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join(out).join("summary.json")).unwrap()).unwrap();
+        assert_eq!(summary["status"], "complete", "{out}");
+        for a in summary["analyses"].as_array().unwrap() {
+            for f in a["files"].as_array().unwrap() {
+                assert!(dir.join(out).join(f.as_str().unwrap()).is_file(), "{out}: {f}");
+            }
+        }
+        assert!(!dir.join(out).join(study::folder::LOCK).exists(), "{out}: lock left");
+    }
+    let mut whole = 0;
+    for e in std::fs::read_dir(&cache).unwrap().flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        assert!(!name.contains("tmp"), "temporary left in the cache: {name}");
+        if name.ends_with(".rbody") {
+            reduction::file::read(&e.path()).unwrap();
+            whole += 1;
+        }
+    }
+    assert_eq!(whole, 2, "one body per part");
+}
