@@ -49,7 +49,7 @@ benchmarks/exudyn/run.sh --help > /dev/null # creates the virtual environment on
 work=$(mktemp -d /tmp/compare_all.XXXXXX)
 "$target/release/export_rod" --out "$work/rod_mesh"
 
-parts=$(tr ',' '\n' <<< "$only" | grep -v '^solid$' | paste -sd, -)
+parts=$(tr ',' '\n' <<< "$only" | { grep -v '^solid$' || true; } | paste -sd, -)
 if [ -n "$parts" ]; then
     "$venv/bin/python" benchmarks/scripts/compare_all.py --root "$root" --bin "$(cd "$target/release" && pwd)" \
         --bench "$bench" --work "$work" --repeats "$repeats" $quick --only "$parts" \
