@@ -13,8 +13,9 @@
 use crate::coordinates::Slot;
 use crate::error::SolveError;
 use crate::model::{BodyId, SensorKind};
-use crate::system::{unknown, State, System, Workspace};
+use crate::system::{unknown, ElementKind, State, System, Workspace};
 use crate::topology::RootRotation;
+use crate::NodeMotion;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use superelement::so3;
@@ -90,22 +91,72 @@ impl Energies {
 impl System {
     /// Kinetic, strain and gravity energy at `state`.
     pub fn energies(&self, state: &State) -> Result<Energies, SolveError> {
-        let nodes = self.node_motions(state);
+        self.energies_with(state, &self.node_motions(state), None)
+    }
+
+    /// [`Self::energies`] at the state a workspace was evaluated at (the sensors of a solver's
+    /// converged state): a flexible body's mass matrix and configuration ($\mathbf q^{jj}$,
+    /// frame) are taken from its last evaluation instead of solving its frame again, when
+    /// that evaluation is of this state (same interface positions and orientations, same
+    /// modal coordinates); the velocities always come from the state.
+    fn energies_in(&self, state: &State, ws: &Workspace) -> Result<Energies, SolveError> {
+        self.energies_with(state, &ws.nodes, Some(ws))
+    }
+
+    fn energies_with(
+        &self,
+        state: &State,
+        nodes: &[NodeMotion],
+        ws: Option<&Workspace>,
+    ) -> Result<Energies, SolveError> {
         let g = self.model.gravity;
         let mut e = Energies::default();
-        let map = &self.topo.map;
         let body_err = |f: &crate::body::FlexibleElement, source| SolveError::Body {
             body: self.model.bodies[f.body].name().to_string(),
             id: crate::model::BodyId(f.body as u32),
             t: state.time,
             source,
         };
+        let evaluated = |i: usize| {
+            let ws = ws?;
+            let e = self
+                .elements
+                .iter()
+                .position(|e| matches!(e.kind, ElementKind::Flexible(k) if k == i))?;
+            let buf = ws.elems[e].flex.as_ref()?;
+            let f = &self.flexible[i];
+            let same = f
+                .nodes
+                .iter()
+                .zip(&f.offsets)
+                .enumerate()
+                .all(|(k, (&n, C))| buf.state.r[k] == nodes[n].r && buf.state.R[k] == nodes[n].R * C)
+                && f.modal.iter().zip(&buf.state.eta).all(|(&s, x)| state.scalars[s] == *x);
+            same.then_some(buf)
+        };
         for (i, f) in self.flexible.iter().enumerate() {
-            let bs = self.body_state(i, state, &nodes);
-            e.kinetic += f.se.kinetic_energy(&bs).map_err(|s| body_err(f, s))?;
-            let kin = f.se.kinematics(&bs).map_err(|s| body_err(f, s))?;
-            e.strain += f.se.strain_energy(&kin);
-            e.gravity += f.se.gravity_potential(&kin, &g);
+            let bs = self.body_state(i, state, nodes);
+            match evaluated(i) {
+                Some(buf) => {
+                    // 1/2 qd^T M qd with the mass matrix of the evaluation at this configuration.
+                    let qd = bs.velocity_vector();
+                    let M = &buf.ev.mass;
+                    let mut T = 0.0;
+                    for (j, qj) in qd.iter().enumerate() {
+                        let Mqj: f64 = M.col_as_slice(j).iter().zip(&qd).map(|(m, q)| m * q).sum();
+                        T += 0.5 * qj * Mqj;
+                    }
+                    e.kinetic += T;
+                    e.strain += f.se.strain_energy_in(&buf.ws);
+                    e.gravity += f.se.gravity_potential(buf.ws.kinematics(), &g);
+                }
+                None => {
+                    e.kinetic += f.se.kinetic_energy(&bs).map_err(|s| body_err(f, s))?;
+                    let kin = f.se.kinematics(&bs).map_err(|s| body_err(f, s))?;
+                    e.strain += f.se.strain_energy(&kin);
+                    e.gravity += f.se.gravity_potential(&kin, &g);
+                }
+            }
         }
         for r in &self.rigid {
             let m = &nodes[r.node];
@@ -130,7 +181,6 @@ impl System {
             e.strain += preload * (x - rest) + 0.5 * k * (x - rest) * (x - rest);
         }
         e.strain += self.joint_forces.limit_energy(&state.scalars);
-        let _ = map;
         Ok(e)
     }
 
@@ -307,7 +357,7 @@ impl System {
                 SensorKind::ActuatorEffort { actuator } => row.push(self.actuator_efforts(state)[*actuator]),
                 SensorKind::KineticEnergy | SensorKind::StrainEnergy | SensorKind::GravityPotential => {
                     if energies.is_none() {
-                        energies = Some(self.energies(state)?);
+                        energies = Some(self.energies_in(state, ws)?);
                     }
                     let e = energies.unwrap();
                     row.push(match s.kind {

@@ -1,6 +1,6 @@
 //! The results folder as an [`Observer`]: tables as CSV, mesh frames as VTU files listed in a
-//! PVD collection, sensor streams as CSV files flushed after every row (and a PNG per sensor
-//! at the end), reduced bodies copied, and `summary.json`/`summary.md` rewritten after every
+//! PVD collection, sensor streams as CSV files written whenever [`FLUSH_INTERVAL`] has passed,
+//! at an interruption and at their end (and a PNG per sensor at the end), reduced bodies copied, and `summary.json`/`summary.md` rewritten after every
 //! analysis. Layout in `crate::output`.
 //!
 //! # What a run owns, and what it never touches
@@ -27,14 +27,34 @@ use std::collections::BTreeSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// Buffered sensor rows are written to their files at the first row after this much wall time
+/// since the last write (and all of them when the stream ends or the run is interrupted): a
+/// program reading the files during a run sees the rows with this delay. A flush per row is a
+/// system call per sensor and step: with the five sensors of a slider-crank study, 5-10 % of
+/// a mechanism step of about 100 µs (BENCHMARKS.md, the slider-crank C2 with a beam rod).
+pub const FLUSH_INTERVAL: std::time::Duration = std::time::Duration::from_millis(200);
+
 /// A sensor stream being written: one CSV per sensor, and the values for the plots.
 struct Stream {
     x_label: String,
     groups: Vec<SensorGroup>,
     plots: bool,
     files: Vec<(std::io::BufWriter<std::fs::File>, PathBuf)>,
+    /// When the files were last flushed ([`FLUSH_INTERVAL`]).
+    flushed: std::time::Instant,
     x: Vec<f64>,
     rows: Vec<Vec<Vec<f64>>>,
+}
+
+impl Stream {
+    /// Writes every buffered row to its file; a failed write names the file.
+    fn flush(&mut self) -> Result<(), BoxError> {
+        for (w, path) in &mut self.files {
+            w.flush().context(|| format!("cannot write {}", path.display()))?;
+        }
+        self.flushed = std::time::Instant::now();
+        Ok(())
+    }
 }
 
 /// Files in the folder that flexmbs did not write (module docs).
@@ -339,6 +359,7 @@ impl Observer for ResultsFolder {
             groups: s.groups.to_vec(),
             plots: s.plots,
             files,
+            flushed: std::time::Instant::now(),
             x: Vec::new(),
             rows: vec![Vec::new(); s.groups.len()],
         });
@@ -346,19 +367,26 @@ impl Observer for ResultsFolder {
     }
 
     fn sample(&mut self, x: f64, values: &[Vec<f64>]) -> Result<(), BoxError> {
-        crate::interrupt::check()?;
+        if let Err(stop) = crate::interrupt::check() {
+            // What was computed before the interruption is kept.
+            if let Some(s) = &mut self.stream {
+                s.flush()?;
+            }
+            return Err(stop);
+        }
         let Some(s) = &mut self.stream else {
             return Ok(());
         };
         for (k, ((w, path), v)) in s.files.iter_mut().zip(values).enumerate() {
-            let mut line = num(x);
-            for v in v {
-                line.push(',');
-                line.push_str(&num(*v));
-            }
-            writeln!(w, "{line}")
-                .and_then(|_| w.flush())
-                .context(|| format!("cannot write {}", path.display()))?;
+            // The cells as `output::num` writes them, straight into the buffer.
+            let mut row = || -> std::io::Result<()> {
+                write!(w, "{x:e}")?;
+                for v in v {
+                    write!(w, ",{v:e}")?;
+                }
+                writeln!(w)
+            };
+            row().context(|| format!("cannot write {}", path.display()))?;
             if s.plots {
                 s.rows[k].push(v.clone());
             }
@@ -366,15 +394,19 @@ impl Observer for ResultsFolder {
         if s.plots {
             s.x.push(x);
         }
+        if s.flushed.elapsed() >= FLUSH_INTERVAL {
+            s.flush()?;
+        }
         Ok(())
     }
 
     /// A PNG per sensor: every column against the abscissa, on one axis when the columns
     /// share a unit and a size, else in panels ([`plot_panels`]).
     fn sensors_end(&mut self) -> Result<(), BoxError> {
-        let Some(s) = self.stream.take() else {
+        let Some(mut s) = self.stream.take() else {
             return Ok(());
         };
+        s.flush()?;
         if !s.plots || s.x.len() < 2 {
             return Ok(());
         }
@@ -520,4 +552,72 @@ pub fn plot_panels(headers: &[String], columns: &[Vec<f64>]) -> Vec<Vec<usize>> 
         }
     }
     panels.into_iter().map(|(_, _, m)| m).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A results folder under the system's temporary folder, removed first.
+    fn scratch(name: &str) -> PathBuf {
+        let root = std::env::temp_dir().join(format!("flexmbs-folder-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        root
+    }
+
+    fn rows_in(path: &Path) -> usize {
+        std::fs::read_to_string(path).unwrap().lines().count() - 1
+    }
+
+    /// Rows are buffered between writes ([`FLUSH_INTERVAL`]): every row is in the file once
+    /// the stream ends, and rows sampled after the interval has passed reach the file while
+    /// the stream is still open.
+    #[test]
+    fn sensor_rows_reach_their_files_after_the_interval_and_at_the_end() {
+        let root = scratch("flush");
+        let mut folder = ResultsFolder::open(&root, &["run".to_string()], ForeignFiles::Refuse).unwrap();
+        let info = AnalysisInfo {
+            index: 0,
+            count: 1,
+            name: "run".into(),
+            kind: "dynamic".into(),
+            of: "the mechanism".into(),
+        };
+        folder.begin(&info).unwrap();
+        let groups = vec![SensorGroup {
+            name: "s".into(),
+            mbs_names: vec!["s".into()],
+            columns: vec!["s [m]".into()],
+        }];
+        folder
+            .sensors(&SensorStream {
+                x_label: "t [s]",
+                groups: &groups,
+                plots: false,
+            })
+            .unwrap();
+        let file = root.join("run").join("s.csv");
+        folder.sample(0.0, &[vec![1.0]]).unwrap();
+        std::thread::sleep(FLUSH_INTERVAL + std::time::Duration::from_millis(50));
+        folder.sample(1.0, &[vec![2.5e-3]]).unwrap();
+        assert_eq!(
+            rows_in(&file),
+            2,
+            "the rows up to the first one after the interval are written"
+        );
+        for k in 2..50 {
+            folder.sample(k as f64, &[vec![-0.5]]).unwrap();
+        }
+        folder.sensors_end().unwrap();
+        let text = std::fs::read_to_string(&file).unwrap();
+        assert_eq!(text.lines().count(), 51, "{text}");
+        assert_eq!(
+            text.lines().nth(2),
+            Some("1e0,2.5e-3"),
+            "cells as output::num writes them"
+        );
+        assert_eq!(num(2.5e-3), "2.5e-3");
+        drop(folder);
+        let _ = std::fs::remove_dir_all(&root);
+    }
 }

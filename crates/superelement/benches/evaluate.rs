@@ -10,6 +10,9 @@
 //! * `block14-G`, `block16-G`: the slider-crank-like body of the Exudyn comparison (a solid rod with two
 //!   interfaces, 2 or 4 fixed-interface modes, geometric stiffening, frame at the centre of
 //!   mass, `Exact` inertia, no damping): the hex8 block of `testing::fixtures::solid_block_with`;
+//! * `beam14-G`: a segment of the slider-crank rod of validation problem C2 as a beam
+//!   superelement (4 Timoshenko elements, 2 interfaces, 2 fixed-interface modes, geometric
+//!   stiffening, centre of mass, `Exact`, no damping): the body the mechanism step evaluates;
 //! * `beam72-G`: a large body (2 interfaces, 60 modes, geometric stiffening, centre of mass,
 //!   `Exact`), to check that the small-n work does not slow big n.
 //!
@@ -104,6 +107,19 @@ fn cases(filter: &str) -> Vec<Case> {
                 se: com_exact(&body),
             });
         }
+    }
+    if wanted("beam14-G") {
+        let (_model, _nodes, body) = fixtures::straight_beam_with(
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(0.15, 0.0, 0.0),
+            4,
+            geometric(2),
+            false,
+        );
+        out.push(Case {
+            name: "beam14-G".into(),
+            se: com_exact(&body),
+        });
     }
     if wanted("beam72-G") {
         let (_model, _nodes, body) = fixtures::straight_beam_with(

@@ -67,7 +67,9 @@
 //!   [`Workspace`] and [`Evaluation`] (no allocation; the hot-loop form);
 //!   [`Superelement::forces`] skips the tangents.
 //! * [`Superelement::kinetic_energy`], [`Superelement::strain_energy`],
-//!   [`Superelement::gravity_potential`]; [`Superelement::recover_mesh`] for the deformed mesh.
+//!   [`Superelement::gravity_potential`]; [`Superelement::strain_energy_in`] reads the strain
+//!   energy off the workspace of the last `evaluate_into` (an energy sensor at every step);
+//!   [`Superelement::recover_mesh`] for the deformed mesh.
 //! * [`testing`]: the central-difference helper, state perturbations through exp, test states,
 //!   and (feature `testing`) reduced-body fixtures.
 //!

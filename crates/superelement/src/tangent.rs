@@ -329,6 +329,27 @@ impl Superelement {
         }
     }
 
+    /// [`Self::strain_energy`] at the configuration of the last [`Self::evaluate_into`] with
+    /// `ws`, from what that evaluation formed: $\tfrac12\mathbf q^{jjT}\mathbf K_{CB}\mathbf q^{jj}$ plus,
+    /// with geometric stiffening, $U_3 + U_4 = \mathbf q^{jjT}\mathbf b + \tfrac12\mathbf b^T\mathbf p$ with
+    /// the evaluation's $\mathbf b$ and $\mathbf p$ ([`crate::body::GeometricStiffness`]), so no product
+    /// with the $n^3$ entries of $\mathbf G$ and no allocation (an energy sensor at every step).
+    /// Checked equal to [`Self::strain_energy`] by `tests/unit/geometric.rs`.
+    pub fn strain_energy_in(&self, ws: &Workspace) -> f64 {
+        let q = &ws.kin.q_jj;
+        let mut U = 0.0;
+        for (j, qj) in q.iter().enumerate() {
+            let kq: f64 = self.K_CB.col_as_slice(j).iter().zip(q).map(|(k, x)| k * x).sum();
+            U += 0.5 * qj * kq;
+        }
+        if self.geometric.is_some() {
+            let g = &ws.scratch.geometric;
+            let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+            U += dot(q, &g.b) + 0.5 * dot(&g.b, &g.p);
+        }
+        U
+    }
+
     /// Gravity potential $-\mathbf g\cdot(m\mathbf r_j + \mathbf R_j\mathbf s)$, $\mathbf s = m\mathbf d + \mathbf S_t\mathbf q^{jj}$.
     pub fn gravity_potential(&self, kin: &Kinematics, gravity: &Vector3<f64>) -> f64 {
         let I = &self.inertia;

@@ -180,6 +180,39 @@ fn elastic_force_is_the_gradient_of_the_strain_energy() {
     }
 }
 
+/// The strain energy from an evaluation's workspace (`strain_energy_in`, the energy sensor's
+/// path) equals `strain_energy` of the same configuration, with and without G, on a deformed,
+/// moving body. Tolerance: the two sum the same terms in a different order (round-off of
+/// sums of about n^2 terms of the size of U).
+#[test]
+fn strain_energy_from_the_workspace_equals_the_direct_one() {
+    for (name, body, frame) in synthetic_cases(1.0) {
+        let linear_body = ReducedBody {
+            geometric_stiffness: None,
+            ..body.clone()
+        };
+        for se in [
+            superelement(&body, frame, MassVariant::Exact),
+            superelement(&linear_body, frame, MassVariant::Exact),
+        ] {
+            let (state, acc) = test_state(&se, &StateSpec::moving(170.0, 13));
+            let mut ws = se.workspace();
+            let mut ev = superelement::Evaluation::zeros(se.n_coordinates());
+            for tangents in [false, true] {
+                se.evaluate_into(&state, &acc, &Vector3::zeros(), tangents, &mut ws, &mut ev)
+                    .unwrap();
+                let direct = se.strain_energy(ws.kinematics());
+                let from_ws = se.strain_energy_in(&ws);
+                assert!(
+                    (from_ws - direct).abs() <= 1e-12 * direct.abs(),
+                    "{name} {frame}: {from_ws:e} against {direct:e}"
+                );
+                assert!(direct > 0.0);
+            }
+        }
+    }
+}
+
 /// K_t, C_t, M of bodies with G against central differences: every fixture and frame choice,
 /// both inertia variants, with gravity and Rayleigh damping (all force kinds at once), and
 /// elastic only at a larger deformation (0.05, 2.5 times the one G is scaled for, with G 0.4
