@@ -81,8 +81,8 @@ pub fn von_mises(s: &Voigt) -> f64 {
 }
 
 /// Principal stresses, largest first: the eigenvalues of the symmetric tensor in closed form
-/// (the trigonometric solution of the characteristic cubic: O. K. Smith, Eigenvalues of a
-/// symmetric 3 x 3 matrix, Communications of the ACM 4(4), 1961),
+/// (the trigonometric solution of the characteristic cubic \[Smith1961\]; theory guide,
+/// results, (10.2)),
 /// $\sigma_k = \bar\sigma + 2p\cos\left(\tfrac13\arccos\tfrac{\det\mathbf B}{2} +
 /// \tfrac{2\pi j_k}{3}\right)$ with the mean stress $\bar\sigma = \operatorname{tr}\boldsymbol\sigma/3$,
 /// $p = \sqrt{\lVert\boldsymbol\sigma - \bar\sigma\mathbf 1\rVert_F^2/6}$ and

@@ -217,6 +217,28 @@ impl System {
         Ok((shapes, kin))
     }
 
+    /// [`Self::body_stress_state`] once per body and sensor row: the kinematics of `body` from
+    /// `cache`, solved and added to it on first use.
+    fn stress_kinematics<'a>(
+        &'a self,
+        body: BodyId,
+        state: &State,
+        cache: &'a mut Vec<(BodyId, superelement::Kinematics)>,
+    ) -> Result<(&'a reduction::StressShapes, &'a superelement::Kinematics), SolveError> {
+        let (shapes, k) = match cache.iter().position(|(b, _)| *b == body) {
+            Some(k) => {
+                let shapes = self.superelement(body).and_then(|se| se.stress_shapes());
+                (shapes.expect("stress shapes (System::new)"), k)
+            }
+            None => {
+                let (shapes, kin) = self.body_stress_state(body, state)?;
+                cache.push((body, kin));
+                (shapes, cache.len() - 1)
+            }
+        };
+        Ok((shapes, &cache[k].1))
+    }
+
     /// The superelement of flexible body `body` (`None` for a rigid body or an unknown id): for
     /// post-processing with [`Self::flexible_body_state`] (mesh recovery, energies, checks).
     pub fn superelement(&self, body: BodyId) -> Option<&superelement::Superelement> {
@@ -289,10 +311,10 @@ impl System {
         let mut row = Vec::new();
         let mut energies = None;
         let mut momentum = None;
-        let mut stresses: Vec<(BodyId, reduction::NodeStresses)> = Vec::new();
-        let mut von_mises: Vec<(BodyId, Vec<f64>)> = Vec::new();
+        // The kinematics of each body with stress sensors, once per row.
+        let mut kinematics: Vec<(BodyId, superelement::Kinematics)> = Vec::new();
         let push3 = |row: &mut Vec<f64>, v: Vector3<f64>| row.extend_from_slice(v.as_slice());
-        for s in &self.model.sensors {
+        for (i, s) in self.model.sensors.iter().enumerate() {
             match &s.kind {
                 SensorKind::NodePosition { node } => push3(&mut row, nodes[node.index()].r),
                 SensorKind::NodeDisplacement { node } => push3(
@@ -367,36 +389,23 @@ impl System {
                     });
                 }
                 SensorKind::Stress { body, node } => {
-                    // One recovery per body and row, shared by its stress sensors.
-                    let k = match stresses.iter().position(|(b, _)| b == body) {
-                        Some(k) => k,
-                        None => {
-                            let (shapes, kin) = self.body_stress_state(*body, state)?;
-                            stresses.push((*body, shapes.node_stresses(&kin.q_jj, &kin.R_j)));
-                            stresses.len() - 1
-                        }
-                    };
-                    let st = &stresses[k].1;
-                    row.extend_from_slice(&st.tensor[*node]);
-                    row.push(st.von_mises[*node]);
-                    row.push(st.principal[*node]);
+                    let (shapes, kin) = self.stress_kinematics(*body, state, &mut kinematics)?;
+                    let (tensor, vm, principal) = shapes.node_stress(*node, &kin.q_jj, &kin.R_j);
+                    row.extend_from_slice(&tensor);
+                    row.push(vm);
+                    row.push(principal);
                 }
-                SensorKind::MaxVonMises { body, nodes } => {
-                    // Von Mises only (invariant under the rotation to global axes), once per
-                    // body and row.
-                    let k = match von_mises.iter().position(|(b, _)| b == body) {
-                        Some(k) => k,
-                        None => {
-                            let (shapes, kin) = self.body_stress_state(*body, state)?;
-                            von_mises.push((*body, shapes.von_mises(&kin.q_jj)));
-                            von_mises.len() - 1
-                        }
-                    };
-                    let vm_all = &von_mises[k].1;
-                    let (node, vm) = nodes
-                        .iter()
-                        .map(|&k| (k, vm_all[k]))
-                        .max_by(|a, b| a.1.total_cmp(&b.1))
+                SensorKind::MaxVonMises { body, .. } => {
+                    // The bounded search over the node set (von Mises is invariant under the
+                    // rotation to global axes; the same maximum as every node's).
+                    let (shapes, kin) = self.stress_kinematics(*body, state, &mut kinematics)?;
+                    let m = self.stress_maxima[i]
+                        .as_ref()
+                        .expect("a search per sensor (System::new)");
+                    let mut reference = m.reference.lock().unwrap_or_else(|e| e.into_inner());
+                    let (node, vm) = m
+                        .search
+                        .maximum(shapes, &kin.q_jj, &mut reference)
                         .unwrap_or((0, f64::NAN));
                     row.push(vm);
                     row.push(node as f64);

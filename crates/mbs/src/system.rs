@@ -323,6 +323,29 @@ pub struct System {
     pub(crate) dof_scale: Vec<f64>,
     /// Dense or sparse factorisation of the iteration matrices.
     pub(crate) linear_solver: LinearSolver,
+    /// Per sensor of `model.sensors`: the bounded search of a largest-von-Mises sensor
+    /// (`None` for other sensors).
+    pub(crate) stress_maxima: Vec<Option<StressMaximum>>,
+}
+
+/// The bounded search of a largest-von-Mises sensor ([`reduction::VonMisesMaximum`]) and its
+/// reference state, kept between output times. The reference only makes the search cheap: any
+/// reference gives the same maximum, so clones and concurrent runs on one system may share or
+/// copy it freely.
+#[derive(Debug)]
+pub(crate) struct StressMaximum {
+    pub search: Arc<reduction::VonMisesMaximum>,
+    pub reference: std::sync::Mutex<reduction::VonMisesReference>,
+}
+
+impl Clone for StressMaximum {
+    fn clone(&self) -> Self {
+        let reference = self.reference.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        Self {
+            search: Arc::clone(&self.search),
+            reference: std::sync::Mutex::new(reference),
+        }
+    }
 }
 
 fn finite(v: f64) -> bool {
@@ -535,6 +558,21 @@ impl System {
         let driver_starts = crate::initial::driver_starts(model, &topo, &drivers)?;
 
         check_stress_sensors(model, &flexible)?;
+        let stress_maxima = model
+            .sensors
+            .iter()
+            .map(|s| match &s.kind {
+                SensorKind::MaxVonMises { body, nodes } => {
+                    let f = flexible.iter().find(|f| f.body == body.index())?;
+                    let shapes = f.se.stress_shapes()?;
+                    Some(StressMaximum {
+                        search: Arc::new(reduction::VonMisesMaximum::new(shapes, nodes)),
+                        reference: Default::default(),
+                    })
+                }
+                _ => None,
+            })
+            .collect();
         // Elements and the sparse pattern.
         let mut elements = Vec::new();
         for (i, f) in flexible.iter().enumerate() {
@@ -683,6 +721,7 @@ impl System {
             pattern,
             dof_scale,
             linear_solver: LinearSolver::Auto,
+            stress_maxima,
         })
     }
 
@@ -715,6 +754,59 @@ impl System {
         } else {
             value
         };
+        Ok(())
+    }
+
+    /// Sets the force or the moment (`kind`) $\mathbf f_0$ of body load `load` (index in
+    /// `Model::body_loads`, a load at a load point inside a flexible body): the load is
+    /// $x(t)\,\mathbf f_0$ from now on, in its axes as `Model::body_loads` gives it (a
+    /// follower's inertial at the initial configuration, turning with the floating frame).
+    /// For loads that change between time steps, as [`Self::set_load_value`].
+    pub fn set_body_load_value(&mut self, load: usize, kind: LoadKind, value: Vector3<f64>) -> Result<(), ModelError> {
+        let Some(l) = self.model.body_loads.get(load) else {
+            return Err(ModelError::InvalidValue {
+                entity: format!("body load {load}"),
+                what: format!("there are {} loads at load points", self.model.body_loads.len()),
+                id: None,
+            });
+        };
+        if !value.iter().all(|x| x.is_finite()) {
+            return Err(ModelError::InvalidValue {
+                entity: format!("load {load} on body '{}'", self.model.bodies[l.body.index()].name()),
+                what: "non-finite value".into(),
+                id: Some(Entity::BodyLoad(load)),
+            });
+        }
+        let body = l.body.index();
+        // The position of the load among its body's (`body_loads` keeps them in model order).
+        let k = self.model.body_loads[..load]
+            .iter()
+            .filter(|m| m.body.index() == body)
+            .count();
+        let f = self
+            .flexible
+            .iter_mut()
+            .find(|f| f.body == body)
+            .expect("body loads are on flexible bodies (System::new)");
+        let (point_load, _) = &mut f.loads[k];
+        // The initial body axes, as `body_loads` turns a follower into them.
+        let R0 = self.model.nodes[f.nodes[0]].orientation * f.offsets[0];
+        let local = if point_load.follower {
+            R0.inverse() * value
+        } else {
+            value
+        };
+        let l = &mut self.model.body_loads[load];
+        match kind {
+            LoadKind::Force => {
+                l.force = value;
+                point_load.force = local;
+            }
+            LoadKind::Moment => {
+                l.moment = value;
+                point_load.moment = local;
+            }
+        }
         Ok(())
     }
 

@@ -3,10 +3,9 @@
 //! A force on a node that is not an interface excites the fixed-interface modes through
 //! $\boldsymbol\Phi_i^T\mathbf f$, and the quasi-static response $\mathbf K_{ii}^{-1}\mathbf f$
 //! converges slowly in the number of modes (the local stress under the load needs the high
-//! modes). The residual-flexibility remedy (modal truncation augmentation: Dickens, Nakagawa &
-//! Wittbrodt, "A critique of mode acceleration and modal truncation augmentation methods for
-//! modal response analysis", Computers & Structures 62 (1997) 985-998; Craig & Kurdila,
-//! *Fundamentals of Structural Dynamics*, 2nd ed. (2006), §14.5 on residual flexibility) adds
+//! modes). The residual-flexibility remedy (modal truncation augmentation \[Dickens1997\];
+//! \[CraigKurdila2006\] §14.5 on residual flexibility; theory guide, point loads inside a
+//! body, (6.10)) adds
 //! the static response to a unit load on each dof of the load point, with the interfaces held
 //! (the attachment modes $\mathbf X = \mathbf K_{ii}^{-1}\mathbf F$), made $\mathbf M$-orthogonal
 //! to the kept modes:

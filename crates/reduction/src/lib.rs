@@ -104,4 +104,4 @@ pub use reduced_body::{
     BeamStressElement, DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes,
     ALGORITHM_REVISION, FORMAT_VERSION,
 };
-pub use stress::NodeStresses;
+pub use stress::{NodeStresses, VonMisesMaximum, VonMisesReference};

@@ -128,10 +128,7 @@ impl StressShapes {
             principal: vec![0.0; n_nodes],
         };
         self.for_each_solid_node(q, |i, s| {
-            let g = R * fe_model::stress::tensor(s) * R.transpose();
-            out.tensor[i] = [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]];
-            out.von_mises[i] = fe_model::von_mises(s);
-            out.principal[i] = fe_model::principal_stresses(s)[0];
+            (out.tensor[i], out.von_mises[i], out.principal[i]) = solid_values(s, R);
         });
         for (i, x) in self.beam_extremes(q, n_nodes).iter().enumerate() {
             if let Some([magnitude, largest]) = x {
@@ -140,6 +137,57 @@ impl StressShapes {
             }
         }
         out
+    }
+
+    /// [`Self::node_stresses`] at mesh node `node` only (tensor in global axes, von Mises,
+    /// largest principal stress), the same values to the bit: one node's rows of
+    /// $\boldsymbol\Sigma$, and the section forces of the beams ending at the node. For a
+    /// sensor at one node.
+    ///
+    /// # Panics
+    /// If `q` does not have one value per column or `node` is not below the node count (a
+    /// caller's bug).
+    pub fn node_stress(&self, node: usize, q: &[f64], R: &nalgebra::Matrix3<f64>) -> ([f64; 6], f64, f64) {
+        let n_nodes = self.node_count();
+        assert!(node < n_nodes, "a node of the body");
+        assert_eq!(q.len(), self.n_coordinates(), "one coordinate per column");
+        let mut out = ([0.0; 6], 0.0, 0.0);
+        if let (Some(S), true) = (&self.nodal, self.solid_node.get(node).copied().unwrap_or(false)) {
+            let mut s = [0.0; 6];
+            for (j, &qj) in q.iter().enumerate() {
+                if qj != 0.0 {
+                    for (c, sc) in s.iter_mut().enumerate() {
+                        *sc += S.data[j * S.nrows + 6 * node + c] * qj;
+                    }
+                }
+            }
+            out = solid_values(&s, R);
+        }
+        let mut ranges = Vec::new();
+        let F = &self.beam_forces;
+        for (b, beam) in self.beams.iter().enumerate() {
+            for end in (0..2).filter(|&end| beam.nodes[end] as usize == node) {
+                let mut f = [0.0; 6];
+                for (c, fc) in f.iter_mut().enumerate() {
+                    for (j, &qj) in q.iter().enumerate() {
+                        if qj != 0.0 {
+                            *fc += F.data[j * F.nrows + 12 * b + 6 * end + c] * qj;
+                        }
+                    }
+                }
+                ranges.extend(beam.section.fibre_stress_range(&f).map(|r| (0, r)));
+            }
+        }
+        if let Some([magnitude, largest]) = fe_model::stress::fibre_extremes_at_nodes(1, ranges)[0] {
+            out.1 = magnitude;
+            out.2 = largest;
+        }
+        out
+    }
+
+    /// The number of CB coordinates the shapes are combined with (their columns).
+    pub fn n_coordinates(&self) -> usize {
+        self.nodal.as_ref().map_or(self.beam_forces.ncols, |S| S.ncols)
     }
 
     /// The von Mises stress of every mesh node for CB coordinates `q`, as
@@ -194,4 +242,359 @@ impl StressShapes {
         });
         fe_model::stress::fibre_extremes_at_nodes(n_nodes, ends)
     }
+}
+
+/// The tensor in global axes ($\mathbf R\boldsymbol\sigma\mathbf R^T$), von Mises and largest
+/// principal stress of the body-axes stress `s` (both invariant under the rotation, taken from
+/// `s`).
+fn solid_values(s: &[f64; 6], R: &nalgebra::Matrix3<f64>) -> ([f64; 6], f64, f64) {
+    let g = R * fe_model::stress::tensor(s) * R.transpose();
+    (
+        [g[(0, 0)], g[(1, 1)], g[(2, 2)], g[(0, 1)], g[(1, 2)], g[(2, 0)]],
+        fe_model::von_mises(s),
+        fe_model::principal_stresses(s)[0],
+    )
+}
+
+/// The largest von Mises stress over a node set of a body at one state, and where it occurs:
+/// a bounded search whose result equals the brute-force maximum over every node of the set
+/// (value bit for bit, node the last of equal maxima in set order, as `Iterator::max_by`), at a
+/// fraction of its cost when the state changes little between calls (the output times of a
+/// run).
+///
+/// The bound (theory guide, results, (10.3)): the von Mises stress is a seminorm of the nodal
+/// stress, $v(\boldsymbol\sigma) =
+/// \lVert\mathbf M^{1/2}\boldsymbol\sigma\rVert$ (Voigt vector, $\mathbf M^{1/2}$ =
+/// $\sqrt{3/2}$ times the deviatoric projector on the normal part, $\sqrt3$ on the shear part),
+/// so that at node $i$, with $\mathbf A_i = \mathbf M^{1/2}\boldsymbol\Sigma_i$ and a
+/// reference state $\mathbf q^{ref}$ whose stresses $v_i^{ref}$ are known,
+/// $$v_i(\mathbf q) \le b_i = v_i^{ref} + c_i\lVert\mathbf T(\mathbf q - \mathbf q^{ref})\rVert + \tau_i,
+/// \qquad c_i = \lVert\mathbf A_i\mathbf T^{-1}\rVert_2,$$
+/// for any invertible $\mathbf T$ ($c_i$ the spectral norm, precomputed per node). The CB
+/// coordinates mix units and cancel each other's stress (an interface displacement and the
+/// modes that bend back), so $\mathbf T$ whitens them by the stress they cause over the whole
+/// set: $\mathbf T = \boldsymbol\Lambda^{1/2}\mathbf V^T$ from $\sum_i\mathbf A_i^T\mathbf A_i =
+/// \mathbf V\boldsymbol\Lambda\mathbf V^T$ (eigenvalues floored at $10^{-12}$ of the largest), so
+/// that $\lVert\mathbf T\mathbf d\rVert$ is the root-sum-square over the set of the von Mises
+/// stress of a change $\mathbf d$. And $\tau_i =
+/// 10^{-12}\lVert\boldsymbol\Sigma_i\rVert_F(\lVert\mathbf q\rVert + \lVert\mathbf
+/// q^{ref}\rVert)$ covering the round-off of both evaluations (about $(n+10)\,\epsilon$ times
+/// the same factor). [`Self::maximum`] evaluates the node that was the maximum at the last call,
+/// whose stress $v^*$ bounds the maximum from below, then every node with $b_i \ge v^*$: the
+/// nodes left out cannot reach the maximum nor tie with it. The reference need not be one
+/// state for all nodes: every node keeps the state it was last evaluated at (its epoch, one per
+/// call), so that the nodes near the maximum, evaluated at most calls, have tight bounds, and
+/// the nodes far below it keep an old reference for many calls
+/// ([`VonMisesReference`]; the nodes of epochs older than the last 64 are evaluated again).
+/// Beam nodes (extreme-fibre stress of
+/// [`StressShapes::von_mises`]) are evaluated at every call.
+///
+/// The node blocks $\boldsymbol\Sigma_i$ of the set are copied node by node (each $6\times n$
+/// block contiguous), so that a node's evaluation reads one block; the products are summed in
+/// the order of [`StressShapes::von_mises`], so that the values are the same to the bit.
+#[derive(Clone, Debug)]
+pub struct VonMisesMaximum {
+    /// The node set (mesh node indices), in the caller's order.
+    nodes: Vec<usize>,
+    /// $n$, the number of CB coordinates.
+    n: usize,
+    /// Per set entry $k$: $\boldsymbol\Sigma_i$ stored coordinate-major (`6 * n * k + 6 * j +
+    /// c`), zero for entries without solid stress.
+    blocks: Vec<f64>,
+    /// Per set entry: whether the node has solid stress.
+    solid: Vec<bool>,
+    /// $\mathbf T$, the whitening of the coordinates ($n\times n$).
+    T: nalgebra::DMatrix<f64>,
+    /// Per set entry: $c_i$ (0 without solid stress).
+    c: Vec<f64>,
+    /// Per set entry: $\lVert\boldsymbol\Sigma_i\rVert_F$ (0 without solid stress).
+    frobenius: Vec<f64>,
+    /// Per set entry: whether a beam ends at the node (its value is the beam's).
+    beam: Vec<bool>,
+}
+
+/// The reference states of a [`VonMisesMaximum`], kept between calls: every set entry's von
+/// Mises stress at the last state it was evaluated at (its *epoch*), the whitened coordinates
+/// $\mathbf T\mathbf q_e$ of the live epochs, and the set entry of the last maximum. Empty
+/// (`Default`) before the first call. Any reference gives the exact maximum; a near one gives
+/// it cheaply.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct VonMisesReference {
+    /// Live epochs, oldest first, the first with id `front`.
+    epochs: std::collections::VecDeque<Epoch>,
+    front: u64,
+    /// Per set entry: its epoch id and its von Mises stress there.
+    epoch_of: Vec<u64>,
+    von_mises: Vec<f64>,
+    last: usize,
+    /// Node evaluations and calls that evaluated every node, so far.
+    evaluations: usize,
+    refreshes: usize,
+}
+
+/// One state at which some set entries were last evaluated.
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Epoch {
+    /// $\mathbf T\mathbf q_e$.
+    tq: Vec<f64>,
+    /// $\lVert\mathbf q_e\rVert$.
+    q_norm: f64,
+    /// The set entries at this epoch.
+    count: usize,
+}
+
+impl VonMisesReference {
+    /// The number of node evaluations over every call so far (the brute force makes the set's
+    /// size per call).
+    pub fn evaluations(&self) -> usize {
+        self.evaluations
+    }
+
+    /// The number of calls that evaluated every node.
+    pub fn refreshes(&self) -> usize {
+        self.refreshes
+    }
+}
+
+/// At most this many epochs are kept; the entries of older ones are evaluated again.
+const MAX_EPOCHS: usize = 64;
+
+/// $\mathbf M^{1/2}$ of the von Mises seminorm in Voigt order: $\sqrt{3/2}$ times the deviatoric
+/// projector on the normal stresses, $\sqrt3$ on the shear stresses.
+fn von_mises_root() -> nalgebra::Matrix6<f64> {
+    let mut m = nalgebra::Matrix6::zeros();
+    let a = 1.5f64.sqrt();
+    for r in 0..3 {
+        for c in 0..3 {
+            m[(r, c)] = a * (if r == c { 1.0 } else { 0.0 } - 1.0 / 3.0);
+        }
+        m[(3 + r, 3 + r)] = 3.0f64.sqrt();
+    }
+    m
+}
+
+impl VonMisesMaximum {
+    /// The search over `nodes` (mesh node indices below [`StressShapes::node_count`]) of a body
+    /// with stress shapes `shapes`.
+    ///
+    /// # Panics
+    /// If a node is not below the node count (a caller's bug: `mbs::System::new` checks the
+    /// nodes of stress sensors).
+    pub fn new(shapes: &StressShapes, nodes: &[usize]) -> Self {
+        let count = shapes.node_count();
+        assert!(nodes.iter().all(|&i| i < count), "nodes of the body");
+        let n = shapes.n_coordinates();
+        let mut beam_node = vec![false; count];
+        for b in &shapes.beams {
+            for &i in &b.nodes {
+                beam_node[i as usize] = true;
+            }
+        }
+        let solid: Vec<bool> = nodes
+            .iter()
+            .map(|&i| shapes.nodal.is_some() && shapes.solid_node.get(i).copied().unwrap_or(false))
+            .collect();
+        // The blocks, coordinate-major, zero for entries without solid stress.
+        let mut blocks = vec![0.0; 6 * n * nodes.len()];
+        if let Some(S) = &shapes.nodal {
+            blocks
+                .par_chunks_mut(6 * n)
+                .zip(nodes.par_iter().zip(&solid))
+                .for_each(|(block, (&i, &solid))| {
+                    if solid {
+                        for j in 0..n {
+                            block[6 * j..6 * j + 6]
+                                .copy_from_slice(&S.data[j * S.nrows + 6 * i..j * S.nrows + 6 * i + 6]);
+                        }
+                    }
+                });
+        }
+        // A_i = M^1/2 Sigma_i; the whitening T = Lambda^1/2 V^T of G = sum_i A_i^T A_i = V Lambda V^T.
+        let root = von_mises_root();
+        let A = |k: usize| {
+            let S = nalgebra::DMatrix::from_column_slice(6, n, &blocks[6 * n * k..6 * n * (k + 1)]);
+            root * S
+        };
+        let G = (0..nodes.len())
+            .into_par_iter()
+            .filter(|&k| solid[k])
+            .map(|k| A(k).tr_mul(&A(k)))
+            .reduce(|| nalgebra::DMatrix::zeros(n, n), |a, b| a + b);
+        let eigen = nalgebra::SymmetricEigen::new(G);
+        let largest = eigen.eigenvalues.max();
+        // Directions of (nearly) no stress keep a floor, so that T is invertible; their columns
+        // of A_i T^-1 stay bounded by 1 (|A v| <= sqrt(lambda) <= sqrt(floor)).
+        let floor = if largest > 0.0 { 1e-12 * largest } else { 1.0 };
+        let scale = eigen.eigenvalues.map(|l| l.max(floor).sqrt());
+        let V = eigen.eigenvectors;
+        let T = nalgebra::DMatrix::from_diagonal(&scale) * V.transpose();
+        let T_inv = V * nalgebra::DMatrix::from_diagonal(&scale.map(|s| 1.0 / s));
+        let bounds: Vec<(f64, f64)> = (0..nodes.len())
+            .into_par_iter()
+            .map(|k| {
+                if !solid[k] {
+                    return (0.0, 0.0);
+                }
+                // c_i = |A_i T^-1|_2: the largest eigenvalue of B B^T (6 x 6).
+                let B = A(k) * &T_inv;
+                let c = nalgebra::SymmetricEigen::new(&B * B.transpose())
+                    .eigenvalues
+                    .max()
+                    .max(0.0)
+                    .sqrt();
+                let f = blocks[6 * n * k..6 * n * (k + 1)]
+                    .iter()
+                    .map(|x| x * x)
+                    .sum::<f64>()
+                    .sqrt();
+                (c, f)
+            })
+            .collect();
+        Self {
+            nodes: nodes.to_vec(),
+            n,
+            blocks,
+            solid,
+            T,
+            c: bounds.iter().map(|b| b.0).collect(),
+            frobenius: bounds.iter().map(|b| b.1).collect(),
+            beam: nodes.iter().map(|&i| beam_node[i]).collect(),
+        }
+    }
+
+    /// The node set.
+    pub fn nodes(&self) -> &[usize] {
+        &self.nodes
+    }
+
+    /// The solid von Mises stress of set entry `k` (0 without solid stress), summed as
+    /// [`StressShapes::von_mises`] sums it.
+    fn solid(&self, k: usize, q: &[f64]) -> f64 {
+        if !self.solid[k] {
+            return 0.0;
+        }
+        let block = &self.blocks[6 * self.n * k..6 * self.n * (k + 1)];
+        let mut s = [0.0; 6];
+        for (col, &qj) in block.chunks_exact(6).zip(q) {
+            if qj != 0.0 {
+                for (sc, a) in s.iter_mut().zip(col) {
+                    *sc += a * qj;
+                }
+            }
+        }
+        fe_model::von_mises(&s)
+    }
+
+    /// The largest von Mises stress over the set for CB coordinates `q` and the mesh node where
+    /// it occurs (the last of equal maxima in set order), `None` for an empty set; `shapes` are
+    /// those the search was built from (for the beams), `reference` the states kept between
+    /// calls (type docs).
+    ///
+    /// # Panics
+    /// If `q` does not have one value per CB coordinate (a caller's bug).
+    pub fn maximum(&self, shapes: &StressShapes, q: &[f64], reference: &mut VonMisesReference) -> Option<(usize, f64)> {
+        assert_eq!(q.len(), self.n, "one value per CB coordinate");
+        let size = self.nodes.len();
+        if size == 0 {
+            return None;
+        }
+        let beams = self
+            .beam
+            .iter()
+            .any(|&b| b)
+            .then(|| shapes.beam_extremes(q, shapes.node_count()));
+        let value = |k: usize| match &beams {
+            Some(x) if self.beam[k] => x[self.nodes[k]].map_or_else(|| self.solid(k, q), |[magnitude, _]| magnitude),
+            _ => self.solid(k, q),
+        };
+        let q_norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let tq = &self.T * nalgebra::DVector::from_column_slice(q);
+        let r = reference;
+        let usable = q_norm.is_finite() && r.epoch_of.len() == size && !r.epochs.is_empty();
+        if !usable {
+            // Every node; the state becomes the one epoch (when finite).
+            let von_mises: Vec<f64> = (0..size).map(value).collect();
+            let (k, vm) = last_maximum((0..size).map(|k| (k, von_mises[k])));
+            r.evaluations += size;
+            r.refreshes += 1;
+            if q_norm.is_finite() {
+                let front = r.front + r.epochs.len() as u64 + 1;
+                *r = VonMisesReference {
+                    epochs: [Epoch {
+                        tq: tq.as_slice().to_vec(),
+                        q_norm,
+                        count: size,
+                    }]
+                    .into(),
+                    front,
+                    epoch_of: vec![front; size],
+                    von_mises,
+                    last: k,
+                    evaluations: r.evaluations,
+                    refreshes: r.refreshes,
+                };
+            }
+            return Some((self.nodes[k], vm));
+        }
+        // This call's epoch; the distance to and the round-off margin of every live one.
+        let now = r.front + r.epochs.len() as u64;
+        let (distance, slack): (Vec<f64>, Vec<f64>) = r
+            .epochs
+            .iter()
+            .map(|e| {
+                let d = tq.iter().zip(&e.tq).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
+                (d, 1e-12 * (q_norm + e.q_norm))
+            })
+            .unzip();
+        r.epochs.push_back(Epoch {
+            tq: tq.as_slice().to_vec(),
+            q_norm,
+            count: 0,
+        });
+        let k0 = r.last.min(size - 1);
+        let lower = value(k0);
+        // The entries whose bound reaches the lower bound, and those of the oldest epochs when
+        // there are too many.
+        let stale = r.front + r.epochs.len().saturating_sub(MAX_EPOCHS) as u64;
+        let candidates: Vec<usize> = (0..size)
+            .filter(|&k| {
+                let e = (r.epoch_of[k] - r.front) as usize;
+                k == k0
+                    || self.beam[k]
+                    || r.epoch_of[k] < stale
+                    || !lower.is_finite()
+                    || r.von_mises[k] + self.c[k] * distance[e] + self.frobenius[k] * slack[e] >= lower
+            })
+            .collect();
+        r.evaluations += candidates.len();
+        if candidates.len() == size {
+            r.refreshes += 1;
+        }
+        let mut best: Option<(usize, f64)> = None;
+        for k in candidates {
+            let vm = if k == k0 { lower } else { value(k) };
+            if best.is_none_or(|b| vm.total_cmp(&b.1).is_ge()) {
+                best = Some((k, vm));
+            }
+            // The entry now has this call's epoch.
+            let e = (r.epoch_of[k] - r.front) as usize;
+            r.epochs[e].count -= 1;
+            r.epoch_of[k] = now;
+            r.von_mises[k] = vm;
+            let last = r.epochs.len() - 1;
+            r.epochs[last].count += 1;
+        }
+        while r.epochs.front().is_some_and(|e| e.count == 0) {
+            r.epochs.pop_front();
+            r.front += 1;
+        }
+        let (k, vm) = best.expect("the lower bound's entry is a candidate");
+        r.last = k;
+        Some((self.nodes[k], vm))
+    }
+}
+
+/// The last of the largest values (`Iterator::max_by` with `total_cmp`) and its index.
+fn last_maximum(values: impl Iterator<Item = (usize, f64)>) -> (usize, f64) {
+    values.max_by(|a, b| a.1.total_cmp(&b.1)).expect("a node")
 }

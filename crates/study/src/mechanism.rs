@@ -51,13 +51,23 @@ pub struct BuiltMechanism {
     pub loads: Vec<NamedLoad>,
 }
 
-/// A `[[loads]]` point load of the study: the indices in `Model::loads` of its force and
-/// moment.
+/// A `[[loads]]` point load of the study and where the model holds its values.
 #[derive(Clone, Debug)]
 pub struct NamedLoad {
     pub name: String,
     pub path: KeyPath,
-    pub loads: Vec<(mbs::LoadKind, usize)>,
+    pub target: LoadTarget,
+}
+
+/// Where the model holds the values of a [`NamedLoad`].
+#[derive(Clone, Debug)]
+pub enum LoadTarget {
+    /// A load at a node: the indices in `Model::loads` of the force and the moment the study
+    /// file gives.
+    Node(Vec<(mbs::LoadKind, usize)>),
+    /// A load at a load point inside a flexible body: its index in `Model::body_loads` (force
+    /// and moment both, zero where the file gives none).
+    Body(usize),
 }
 
 pub struct BodyOut {
@@ -545,10 +555,15 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
         loads.push(NamedLoad {
             name: l.name.clone(),
             path: l.path.clone(),
-            loads: ids,
+            target: LoadTarget::Node(ids),
         });
     }
     for l in &m.body_loads {
+        loads.push(NamedLoad {
+            name: l.name.clone(),
+            path: l.path.clone(),
+            target: LoadTarget::Body(model.body_loads.len()),
+        });
         entities.insert(mbs::Entity::BodyLoad(model.body_loads.len()), l.path.clone());
         model.body_loads.push(body_load(study, l, &bodies[l.body])?);
     }
@@ -957,6 +972,9 @@ pub struct MeshRecovery {
     rigid: Vec<usize>,
     /// Per flexible body: the largest von Mises stress seen so far.
     hot: Vec<Option<HotSpot>>,
+    /// Per flexible body with stress shapes: the bounded search for the largest von Mises
+    /// stress over every node, built at the first output time without a frame.
+    maxima: Vec<Option<(reduction::VonMisesMaximum, reduction::VonMisesReference)>>,
 }
 
 /// The largest von Mises stress of one body over the output times: value, FE node (index in
@@ -1034,12 +1052,14 @@ impl MeshRecovery {
             .bodies
             .iter()
             .any(|body| sys.superelement(body.id).is_some_and(|se| se.stress_shapes().is_some()));
+        let maxima = vec![None; b.bodies.len()];
         Ok(Self {
             mesh,
             flexible,
             stress,
             rigid,
             hot,
+            maxima,
         })
     }
 
@@ -1091,13 +1111,7 @@ impl MeshRecovery {
             let st = se.stress_shapes().map(|s| s.node_stresses(&kin.q_jj, &kin.R_j));
             if let Some(st) = &st {
                 if let Some((node, &vm)) = st.von_mises.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
-                    if self.hot[k].is_none_or(|h| vm > h.von_mises) {
-                        self.hot[k] = Some(HotSpot {
-                            von_mises: vm,
-                            node,
-                            time: t,
-                        });
-                    }
+                    self.update_hot_spot(k, node, vm, t);
                 }
             }
             out.push(st);
@@ -1105,13 +1119,38 @@ impl MeshRecovery {
         out
     }
 
-    /// Updates the hot spots at an output time without writing a frame.
+    /// Body `k`'s hot spot becomes (`node`, `vm`, `t`) when `vm` is above it.
+    fn update_hot_spot(&mut self, k: usize, node: usize, vm: f64, t: f64) {
+        if self.hot[k].is_none_or(|h| vm > h.von_mises) {
+            self.hot[k] = Some(HotSpot {
+                von_mises: vm,
+                node,
+                time: t,
+            });
+        }
+    }
+
+    /// Updates the hot spots at an output time without writing a frame: the largest von
+    /// Mises stress of each body by the bounded search (`reduction::VonMisesMaximum`, the same
+    /// maximum as every node's, at a fraction of its cost).
     pub fn track(&mut self, t: f64, sys: &System, state: &mbs::State, b: &BuiltMechanism) -> Result<(), BoxError> {
         if !self.has_stress() {
             return Ok(());
         }
         let kins = self.kinematics(t, sys, state, b)?;
-        self.stresses(t, sys, b, &kins);
+        for (k, (body, (kin, _))) in b.bodies.iter().zip(&kins).enumerate() {
+            let Some(shapes) = sys.superelement(body.id).and_then(|se| se.stress_shapes()) else {
+                continue;
+            };
+            let (search, reference) = self.maxima[k].get_or_insert_with(|| {
+                let every: Vec<usize> = (0..shapes.node_count()).collect();
+                (reduction::VonMisesMaximum::new(shapes, &every), Default::default())
+            });
+            let maximum = search.maximum(shapes, &kin.q_jj, reference);
+            if let Some((node, vm)) = maximum {
+                self.update_hot_spot(k, node, vm, t);
+            }
+        }
         Ok(())
     }
 

@@ -6,7 +6,7 @@
 //! program writes.
 
 use crate::error::{BoxError, Location};
-use crate::mechanism::{BuiltMechanism, NamedLoad};
+use crate::mechanism::{BuiltMechanism, LoadTarget, NamedLoad};
 use crate::observer::SensorGroup;
 use crate::validate::{MbsAnalysis, Study};
 use mbs::{DynamicSettings, Integrator, LoadKind, NodeMotion, SensorRecord, State, StepReport, System};
@@ -259,33 +259,42 @@ impl Simulation {
         self.integrator.system()
     }
 
-    /// The names of the point loads of the study.
+    /// The names of the point loads of the study (at nodes and at load points inside bodies).
     pub fn load_names(&self) -> Vec<&str> {
         self.loads.iter().map(|l| l.name.as_str()).collect()
     }
 
     /// Sets the force or moment `value` [N or N m, in the load's axes] of the point load
-    /// `name`; from the next step the load is its time function times `value`.
+    /// `name`; from the next step the load is its time function times `value`. A load at a
+    /// node has the force or moment its study file gives (even zero); a load at a load point
+    /// inside a body has both.
     pub fn set_load(&mut self, name: &str, kind: LoadKind, value: [f64; 3]) -> Result<(), BoxError> {
         let Some(l) = self.loads.iter().find(|l| l.name == name) else {
             let names: Vec<String> = self.loads.iter().map(|l| l.name.clone()).collect();
             return Err(crate::source::unknown_reference("load", name, &names).into());
         };
-        let Some(&(_, index)) = l.loads.iter().find(|(k, _)| *k == kind) else {
-            return Err(format!(
-                "load '{name}' has no {} (give it one in the study file, even zero)",
-                match kind {
-                    LoadKind::Force => "force",
-                    LoadKind::Moment => "moment",
-                }
-            )
-            .into());
-        };
+        let target = l.target.clone();
         let system = self
             .integrator
             .system_mut()
             .ok_or("the simulation does not own its system")?;
-        system.set_load_value(index, nalgebra::Vector3::from(value))?;
+        let value = nalgebra::Vector3::from(value);
+        match target {
+            LoadTarget::Node(loads) => {
+                let Some(&(_, index)) = loads.iter().find(|(k, _)| *k == kind) else {
+                    return Err(format!(
+                        "load '{name}' has no {} (give it one in the study file, even zero)",
+                        match kind {
+                            LoadKind::Force => "force",
+                            LoadKind::Moment => "moment",
+                        }
+                    )
+                    .into());
+                };
+                system.set_load_value(index, value)?;
+            }
+            LoadTarget::Body(index) => system.set_body_load_value(index, kind, value)?,
+        }
         Ok(())
     }
 

@@ -4,6 +4,8 @@
 //!
 //! # Derivation
 //!
+//! Theory guide, point loads inside a body, (6.11)-(6.12).
+//!
 //! The load point sits at $\mathbf p = \mathbf r_j + \mathbf R_j\mathbf s$, $\mathbf s =
 //! \mathbf d_p + \mathbf S_u\mathbf q^{jj}$ ($\mathbf d_p$ its undeformed position from the frame
 //! origin, $\mathbf S_u$, $\mathbf S_r$ the translation and rotation rows of its CB shape

@@ -275,3 +275,134 @@ fn fast_node_stresses_equal_the_per_node_rotation_and_eigenvalues_on_a_rotated_d
     }
     assert!(scale > 1e6, "a deformed state: {scale}");
 }
+
+/// A small xorshift generator: reproducible pseudo-random numbers in \[-1, 1\] without a
+/// dependency.
+struct Random(u64);
+
+impl Random {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+/// The largest von Mises stress over `nodes` by every node's (`StressShapes::von_mises`), the
+/// last of equal maxima in set order.
+fn brute_maximum(shapes: &reduction::StressShapes, nodes: &[usize], q: &[f64]) -> (usize, f64) {
+    let vm = shapes.von_mises(q);
+    nodes
+        .iter()
+        .map(|&k| (k, vm[k]))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap()
+}
+
+/// The states of a bounded-search check: random coordinates of size `scale`, then a walk of
+/// small random steps (the bounded path), the reference state repeated exactly, the zero
+/// state (every node ties at 0), large jumps, and a non-finite state at the end.
+fn states(n: usize, scale: &[f64], random: &mut Random) -> Vec<Vec<f64>> {
+    let mut q: Vec<f64> = scale.iter().map(|s| s * random.next()).collect();
+    let mut out = vec![q.clone(), q.clone()];
+    for step in 0..200 {
+        let size = if step % 50 == 49 { 1.0 } else { 0.01 };
+        for (x, s) in q.iter_mut().zip(scale) {
+            *x += size * s * random.next();
+        }
+        out.push(q.clone());
+        if step % 40 == 0 {
+            out.push(q.clone());
+        }
+        if step == 100 {
+            out.push(vec![0.0; n]);
+            out.push(vec![0.0; n]);
+        }
+    }
+    let mut bad = q;
+    bad[n / 2] = f64::NAN;
+    out.push(bad);
+    out
+}
+
+#[test]
+fn the_bounded_largest_von_mises_equals_every_nodes_to_the_bit() {
+    // Solids: the hex20 bar, 6 modes and a load point (9 modal coordinates, 6 interface);
+    // beams: the cantilever. Node sets: every node, and a shuffled subset with the spider's
+    // interface node (no stress: it ties at 0) and a duplicate.
+    let (model, root, tip) = bar();
+    let solid = reduce(&model, "bar", &[("root".to_string(), root)], &settings(6, Some(tip))).unwrap();
+    let (beam_model, nodes, _) = cantilever();
+    let beam = reduce(&beam_model, "beam", &[("root".to_string(), nodes[0])], &settings(4, Some(nodes[10]))).unwrap();
+    let mut random = Random(0x2545_f491_4f6c_dd1d);
+    for body in [&solid, &beam] {
+        let shapes = body.stress.as_ref().unwrap();
+        let count = shapes.node_count();
+        let n = body.n_coordinates();
+        // Interface translations and rotations small, modal coordinates O(1) (mass-normalised):
+        // stresses of similar size from both.
+        let scale: Vec<f64> = (0..n).map(|j| if j < 6 { 1e-4 } else { 1e-3 }).collect();
+        let mut subset: Vec<usize> = (0..count).filter(|k| k % 3 == 1).collect();
+        subset.reverse();
+        subset.push(root.index().min(count - 1));
+        subset.push(subset[0]);
+        let every: Vec<usize> = (0..count).collect();
+        for set in [&every, &subset] {
+            let search = reduction::VonMisesMaximum::new(shapes, set);
+            let mut reference = reduction::VonMisesReference::default();
+            let mut checked = 0;
+            for q in states(n, &scale, &mut random) {
+                let fast = search.maximum(shapes, &q, &mut reference).unwrap();
+                let slow = brute_maximum(shapes, set, &q);
+                assert_eq!(fast.0, slow.0, "{}: node of the maximum", body.name);
+                assert_eq!(fast.1.to_bits(), slow.1.to_bits(), "{}: {} vs {}", body.name, fast.1, slow.1);
+                checked += 1;
+            }
+            let full = checked * set.len();
+            // The walk's small steps skip most nodes: a search that evaluates every node at
+            // every state would be the brute force again.
+            eprintln!(
+                "{}: {} of {} node evaluations, {} references",
+                body.name,
+                reference.evaluations(),
+                full,
+                reference.refreshes()
+            );
+            if body.stress.as_ref().unwrap().nodal.is_some() {
+                assert!(reference.evaluations() < full / 4, "{} of {full}", reference.evaluations());
+            }
+        }
+    }
+    // The zero state ties every node at 0: the last node of the set, as the brute force.
+    let shapes = solid.stress.as_ref().unwrap();
+    let set = [3, 1, 2];
+    let search = reduction::VonMisesMaximum::new(shapes, &set);
+    let zero = vec![0.0; solid.n_coordinates()];
+    let mut reference = reduction::VonMisesReference::default();
+    assert_eq!(search.maximum(shapes, &zero, &mut reference), Some((2, 0.0)));
+    assert_eq!(search.maximum(shapes, &zero, &mut reference), Some((2, 0.0)));
+    assert_eq!(reduction::VonMisesMaximum::new(shapes, &[]).maximum(shapes, &zero, &mut reference), None);
+}
+
+#[test]
+fn one_nodes_stress_equals_every_nodes_to_the_bit() {
+    let (model, root, tip) = bar();
+    let solid = reduce(&model, "bar", &[("root".to_string(), root)], &settings(6, Some(tip))).unwrap();
+    let (beam_model, nodes, _) = cantilever();
+    let beam = reduce(&beam_model, "beam", &[("root".to_string(), nodes[0])], &settings(4, Some(nodes[10]))).unwrap();
+    let mut random = Random(0x9e37_79b9_7f4a_7c15);
+    let R = *nalgebra::Rotation3::from_scaled_axis(Vector3::new(0.4, -1.2, 0.7)).matrix();
+    for body in [&solid, &beam] {
+        let shapes = body.stress.as_ref().unwrap();
+        let q: Vec<f64> = (0..body.n_coordinates()).map(|_| 1e-3 * random.next()).collect();
+        let all = shapes.node_stresses(&q, &R);
+        for i in 0..shapes.node_count() {
+            let (tensor, vm, principal) = shapes.node_stress(i, &q, &R);
+            let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&tensor), bits(&all.tensor[i]), "{} node {i}", body.name);
+            assert_eq!(vm.to_bits(), all.von_mises[i].to_bits(), "{} node {i}", body.name);
+            assert_eq!(principal.to_bits(), all.principal[i].to_bits(), "{} node {i}", body.name);
+        }
+    }
+}

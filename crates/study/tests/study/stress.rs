@@ -181,3 +181,71 @@ fn stress_sensors_name_what_is_wrong() {
         "{e}"
     );
 }
+
+/// A load at a load point inside a body is changed between steps by `Simulation::set_load`
+/// as a load at a node is: doubling the force after three steps gives, to the bit, the run of
+/// a file whose load doubles between the third and the fourth step by its time function.
+#[test]
+fn set_load_changes_a_load_at_a_load_point_between_steps() {
+    let dynamic = "[[analyses]]\ntype = \"dynamic\"\nname = \"shake\"\nt_end = 0.002\ndt = 1e-4\n";
+    let sensor = "[[sensors]]\nname = \"top\"\ntype = \"stress\"\nof = \"bar\"\nset = \"y1\"\n";
+    let simulation = |name: &str, function: &str| {
+        let [fx, fy, fz] = TIP;
+        let force = format!("force = [{fx}, {fy}, {fz}]\n");
+        let text = study(sensor).replace(&force, &format!("{force}{function}")) + dynamic;
+        let dir = crate::scratch(name);
+        let file = dir.join(format!("{name}.toml"));
+        std::fs::write(&file, text).unwrap();
+        let study = study::load(&file).unwrap();
+        study::Simulation::new(&study, "shake", &crate::options_in(&dir, None)).unwrap()
+    };
+    // The factor is 1 up to the third step's end (3e-4 s) and 2 from the fourth's (4e-4 s).
+    let table = "function = { type = \"table\", t = [0.0, 3e-4, 4e-4, 1.0], value = [1.0, 1.0, 2.0, 2.0] }\n";
+    let mut a = simulation("set-load-point-a", "");
+    let mut b = simulation("set-load-point-b", "");
+    let mut d = simulation("set-load-point-d", table);
+    assert!(a.load_names().contains(&"tip-force"), "{:?}", a.load_names());
+    for _ in 0..3 {
+        for s in [&mut a, &mut b, &mut d] {
+            s.step().unwrap();
+        }
+    }
+    b.set_load("tip-force", mbs::LoadKind::Force, TIP.map(|x| 2.0 * x))
+        .unwrap();
+    for _ in 0..10 {
+        for s in [&mut a, &mut b, &mut d] {
+            s.step().unwrap();
+        }
+        assert_eq!(b.read().unwrap(), d.read().unwrap(), "t = {}", b.time());
+    }
+    // And the change acts: the unchanged run is far below (about half the stress).
+    let (va, vb) = (a.sensor("top").unwrap()[0], b.sensor("top").unwrap()[0]);
+    assert!(vb > 1.5 * va, "{va} {vb}");
+    // A load point has a force and a moment; an unknown name and a bad value are named.
+    b.set_load("tip-force", mbs::LoadKind::Moment, [0.0, 0.0, 0.0]).unwrap();
+    let e = b.set_load("tip-forse", mbs::LoadKind::Force, TIP).unwrap_err();
+    assert!(e.to_string().contains("tip-force"), "{e}");
+    let e = b
+        .set_load("tip-force", mbs::LoadKind::Force, [f64::NAN, 0.0, 0.0])
+        .unwrap_err();
+    assert!(e.to_string().contains("non-finite"), "{e}");
+}
+
+/// The hot spot of a dynamic analysis (peak von Mises over every node and output time) is the
+/// same, to the bit, whether every output time writes a VTU frame (every node's stresses) or
+/// none (the bounded search of the largest von Mises).
+#[test]
+fn the_hot_spot_of_a_run_is_the_same_with_and_without_vtu_frames() {
+    let dynamic = "[[analyses]]\ntype = \"dynamic\"\nname = \"shake\"\nt_end = 0.004\ndt = 1e-4\n";
+    let hot = |name: &str, output: &str| {
+        let text = study("") + dynamic + output;
+        let (_, summary, _) = run(name, &text);
+        let summary = summary.unwrap();
+        let a = summary.analyses.iter().find(|a| a.name == "shake").unwrap();
+        a.results["hot_spots"][0].clone()
+    };
+    let framed = hot("hot-spot-vtu", "\n[output]\nvtu_every = 1\n");
+    let tracked = hot("hot-spot-track", "");
+    assert!(framed["von_mises_Pa"].as_f64().unwrap() > 1e6, "{framed}");
+    assert_eq!(framed, tracked);
+}
