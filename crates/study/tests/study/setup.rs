@@ -129,7 +129,7 @@ fn the_double_pendulum_example_with_stiff_links_follows_the_rigid_solution() {
     let scale = kinetic.iter().copied().fold(0.0, f64::max);
     let drift = energy.iter().map(|e| (e - energy[0]).abs()).fold(0.0, f64::max) / scale;
     eprintln!("tip within {worst:.3e} m of the rigid solution over 1 s; energy drift {drift:.3e} of the largest kinetic energy {scale:.4} J");
-    // The bounds: 1 mm, and 1e-4 of the energy of the motion (generalized-alpha with
+    // The required bounds: 1 mm, and 1e-4 of the energy of the motion (generalized-alpha with
     // rho_inf = 0.9 and 1 ms steps dissipates O(h^2) of it at the pendulum's 0.7 Hz).
     assert!(worst < 1e-3, "{worst}");
     assert!(drift < 1e-4, "{drift}");
@@ -196,7 +196,7 @@ dt = 1e-3
     let T = 0.5 * body.inertia.mass * vc.norm_squared() + 0.5 * w.dot(&(I * w));
     let kinetic = column(&rec, "dynamic", "energy", 0)[0];
     eprintln!("kinetic energy {kinetic:.15e} J, rigid motion {T:.15e} J");
-    // Round-off of the mass-matrix products (the bound, 1e-10).
+    // Round-off of the mass-matrix products (the required bound, 1e-10).
     assert!((kinetic - T).abs() < 1e-10 * T, "{kinetic} vs {T}");
     assert!(
         column(&rec, "dynamic", "energy", 1)[0].abs() < 1e-12,
@@ -303,7 +303,7 @@ dt = 1e-3
         .map(|y| (y - y_eq).abs())
         .fold(0.0, f64::max);
     eprintln!("static tip {y_eq:.6e} m; drift from it {drift:.3e} m");
-    // The bound, 1e-9 m.
+    // The required bound, 1e-9 m.
     assert!(drift < 1e-9, "{drift}");
     // Without `start` gravity arrives as a step: the tip overshoots the sag by far.
     let lowest = column(&rec, "from-rest", "tip", 1).into_iter().fold(0.0, f64::min);
@@ -440,7 +440,7 @@ type = "clamp"
     let p_cr = r["load_factors"][0].as_f64().unwrap() * 0.1 * p_euler;
     let err = (p_cr - p_euler) / p_euler;
     eprintln!("P_cr = {p_cr:.5} N, Euler {p_euler:.5} N: error {err:.3e}");
-    // The bound, 0.5 %: eight chord-like superelements are 0.3 % above (1/N^2).
+    // The required bound, 0.5 %: eight chord-like superelements are 0.3 % above (1/N^2).
     assert!(err.abs() < 5e-3, "{err}");
     assert_eq!(r["past_critical_point"], serde_json::json!(false));
     let frames = &rec.analysis("buckling").unwrap().frames;
@@ -547,7 +547,7 @@ modes = 1
         "damped frequency {im:.10} rad/s (analytic {wd:.10}), decay {re:.10} (analytic {:.10})",
         -c / (2.0 * I)
     );
-    // The bound, 1e-4 (the eigensolver gives round-off).
+    // The required bound, 1e-4 (the eigensolver gives round-off).
     assert!((im - wd).abs() < 1e-4 * wd && (re + c / (2.0 * I)).abs() < 1e-4 * c / (2.0 * I));
 }
 

@@ -134,7 +134,7 @@ fn a_load_at_a_load_point_gives_the_full_models_stress_through_stress_sensors() 
         }
         assert!((value(&format!("n{k}"), 7) - principal_vtu[k]).abs() <= 1e-8 * vm);
     }
-    // The criterion: 1 % at the ten most stressed nodes. With the attachment modes
+    // The required accuracy: 1 % at the ten most stressed nodes. With the attachment modes
     // the reduced static response to a load at the point is exact in the linear theory; what
     // remains is the geometric nonlinearity of the equilibrium (tip deflection 6e-4 m on 1 m)
     // and the Newton tolerance.
