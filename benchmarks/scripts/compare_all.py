@@ -286,6 +286,8 @@ def rod(a, repeats):
                     return tried[-2]
                 if e0 > TARGET and e1 > TARGET and e1 > 0.7 * e0:
                     break
+                if e0 <= TARGET and not math.isfinite(e1):  # a finer step failed: keep the coarser
+                    break
         ok = [x for x in tried if x[1] <= TARGET]
         return ok[-1] if ok else min(tried, key=lambda x: x[1])  # (h, inf, None) if every step failed
 
