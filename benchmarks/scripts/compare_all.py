@@ -360,7 +360,7 @@ def rod_tables(report, rows, ours_ref, repeats):
     for name, row in rows.items():
         err = f"{row['err'] * 100:.3f} %"
         err = err if row["err"] <= TARGET else f"**{err}**"
-        ratio = f"{total(fastest) / total(row):.2f}x" if fastest is not None and row["err"] <= TARGET else "-"
+        ratio = f"{total(fastest) / total(row):.3g}x" if fastest is not None and row["err"] <= TARGET else "-"
         lines.append(
             f"| {name} | T/{PERIOD / row['h']:.0f} | {int(round(T_END / row['h']))} | {med(row, 'iterations'):.2f} | {med(row, 's_per_step') * 1e6:.1f} | "
             f"{med(row, 'cpu_per_step') * 1e6:.1f} | {total(row):.3f} | {err} | {row['hist'] * 100:.3f} % | {ratio} |"
