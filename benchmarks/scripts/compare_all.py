@@ -286,6 +286,8 @@ def rod(a, repeats):
                     return tried[-2]
                 if e0 > TARGET and e1 > TARGET and e1 > 0.7 * e0:
                     break
+                if e0 <= TARGET and not math.isfinite(e1):  # a finer step failed: keep the coarser
+                    break
         ok = [x for x in tried if x[1] <= TARGET]
         return ok[-1] if ok else min(tried, key=lambda x: x[1])  # (h, inf, None) if every step failed
 
@@ -358,7 +360,7 @@ def rod_tables(report, rows, ours_ref, repeats):
     for name, row in rows.items():
         err = f"{row['err'] * 100:.3f} %"
         err = err if row["err"] <= TARGET else f"**{err}**"
-        ratio = f"{total(fastest) / total(row):.2f}x" if fastest is not None and row["err"] <= TARGET else "-"
+        ratio = f"{total(fastest) / total(row):.3g}x" if fastest is not None and row["err"] <= TARGET else "-"
         lines.append(
             f"| {name} | T/{PERIOD / row['h']:.0f} | {int(round(T_END / row['h']))} | {med(row, 'iterations'):.2f} | {med(row, 's_per_step') * 1e6:.1f} | "
             f"{med(row, 'cpu_per_step') * 1e6:.1f} | {total(row):.3f} | {err} | {row['hist'] * 100:.3f} % | {ratio} |"
