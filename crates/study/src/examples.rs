@@ -1,6 +1,6 @@
 //! Built-in example studies, `flexmbs example NAME [DIR]`: the files of `examples/` at the
 //! root of the repository, compiled into the program so that it can write them anywhere.
-//! `tests/cli.rs` runs each of them.
+//! The study tests run each of them (`every_example_runs_through_the_library`).
 
 use crate::error::{BoxError, ResultExt};
 use crate::source::unknown_reference;

@@ -359,6 +359,39 @@ fn options_in(dir: &Path, t_end: Option<f64>) -> Options {
     }
 }
 
+/// Every study in `examples/` is a built-in example, and each runs to completion through the
+/// library, whatever is added later: every analysis of the file is recorded, done, with its
+/// summary (dynamic analyses shortened to 10 ms, as `--t-end 0.01` does).
+#[test]
+fn every_example_runs_through_the_library() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let mut on_disk: Vec<String> = std::fs::read_dir(&root)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    on_disk.sort();
+    let mut built_in: Vec<String> = study::examples::EXAMPLES.iter().map(|e| e.name.to_string()).collect();
+    built_in.sort();
+    assert_eq!(on_disk, built_in, "examples/ and the built-in examples differ");
+    for name in &built_in {
+        let file = example_as(name, &format!("every-{name}"));
+        let study = study::load(&file).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let mut seen = Recorder::default();
+        study::run_with(&study, &options_in(file.parent().unwrap(), Some(0.01)), &mut seen)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(seen.analyses.len(), study.analyses.len(), "{name}: analyses recorded");
+        for a in &seen.analyses {
+            let summary = a
+                .summary
+                .as_ref()
+                .unwrap_or_else(|| panic!("{name}/{}: no summary", a.name));
+            assert_eq!(summary.status, study::output::Status::Done, "{name}/{}", a.name);
+        }
+    }
+}
+
 /// Static and modal analyses of a part say what they are doing, as the reduction does.
 #[test]
 fn static_and_modal_analyses_report_their_stages() {

@@ -86,28 +86,6 @@ fn solid_bar_example_runs() {
     assert!(out.stdout.contains("reduce 'reduce-bar'"), "{}", out.stdout);
 }
 
-/// Every study in `examples/` runs to completion (R21), whatever is added later.
-#[test]
-fn every_example_runs() {
-    let dir = examples_copy("every");
-    let mut studies: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .collect();
-    studies.sort();
-    assert!(studies.len() >= 2);
-    for study in studies {
-        let name = study.file_name().unwrap().to_string_lossy().to_string();
-        // A short form: dynamic analyses end at 10 ms.
-        let out = flexmbs(&dir, &["run", &name, "--t-end", "0.01"]);
-        assert_eq!(out.code, 0, "{name}: {}", out.stderr);
-        let stem = name.trim_end_matches(".toml");
-        let summary = std::fs::read_to_string(dir.join(format!("{stem}-results/summary.json"))).unwrap();
-        assert!(summary.contains("\"status\": \"complete\""), "{name}");
-    }
-}
-
 /// The README's command: `flexmbs run` without a file runs the built-in slider-crank (C2)
 /// into `./slider_crank-results/` and draws its deflection plot.
 #[test]
