@@ -330,3 +330,32 @@ loads = [{ at = "beam.end", force = [0.0, 0.0, 1.0] }]
     assert_eq!(summary["analyses"][0]["status"], "done");
     assert_eq!(summary["analyses"][1]["status"], "failed");
 }
+
+/// `inspect` reads the stress shapes back from the file: a beam reduced without them says
+/// "not kept"; with `stress_shapes = true` the section forces of each of its 20 elements are
+/// kept (a beam has no solid nodes).
+#[test]
+fn inspect_says_whether_a_body_keeps_its_stress_shapes() {
+    let dir = examples_copy("inspect-stress");
+    let out = flexmbs(&dir, &["reduce", "cantilever.toml", "--out", "plain"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let out = flexmbs(&dir, &["inspect", "plain/beam.rbody"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("stress shapes: not kept"), "{}", out.stdout);
+    let text = std::fs::read_to_string(dir.join("cantilever.toml")).unwrap().replace(
+        "[parts.reduction]\nmodes = 4",
+        "[parts.reduction]\nmodes = 4\nstress_shapes = true",
+    );
+    assert!(text.contains("stress_shapes = true"));
+    std::fs::write(dir.join("stressed.toml"), text).unwrap();
+    let out = flexmbs(&dir, &["reduce", "stressed.toml", "--out", "kept"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let out = flexmbs(&dir, &["inspect", "kept/beam.rbody"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(
+        out.stdout
+            .contains("stress shapes: kept, solid stresses on 0 nodes, section forces of 20 beams"),
+        "{}",
+        out.stdout
+    );
+}
