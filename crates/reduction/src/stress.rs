@@ -286,6 +286,9 @@ fn solid_values(s: &[f64; 6], R: &nalgebra::Matrix3<f64>) -> ([f64; 6], f64, f64
 /// call), so that the nodes near the maximum, evaluated at most calls, have tight bounds, and
 /// the nodes far below it keep an old reference for many calls
 /// ([`VonMisesReference`]; the nodes of epochs older than the last 64 are evaluated again).
+/// The zero state is a reference too ($v_i(\mathbf 0) = 0$): a node's bound is the smaller of
+/// its epoch's and $c_i\lVert\mathbf T\mathbf q\rVert + 10^{-12}\lVert\boldsymbol\Sigma_i\rVert_F
+/// \lVert\mathbf q\rVert$. Many candidates are evaluated on rayon's threads.
 /// Beam nodes (extreme-fibre stress of
 /// [`StressShapes::von_mises`]) are evaluated at every call.
 ///
@@ -358,6 +361,9 @@ impl VonMisesReference {
 
 /// At most this many epochs are kept; the entries of older ones are evaluated again.
 const MAX_EPOCHS: usize = 64;
+
+/// From this many candidates on, [`VonMisesMaximum::maximum`] evaluates them on rayon's threads.
+const PARALLEL_CANDIDATES: usize = 512;
 
 /// $\mathbf M^{1/2}$ of the von Mises seminorm in Voigt order: $\sqrt{3/2}$ times the deviatoric
 /// projector on the normal stresses, $\sqrt3$ on the shear stresses.
@@ -553,8 +559,12 @@ impl VonMisesMaximum {
         });
         let k0 = r.last.min(size - 1);
         let lower = value(k0);
-        // The entries whose bound reaches the lower bound, and those of the oldest epochs when
-        // there are too many.
+        // Every entry's bound: the smaller of its epoch's (10.3) and the zero state's ($v_i(\mathbf
+        // 0) = 0$: $c_i\lVert\mathbf T\mathbf q\rVert$, tight where the body passes through
+        // zero stress), each widened by its round-off margin. The candidates are the entries whose
+        // bound reaches the lower bound, and those of the oldest epochs when there are too many.
+        let tq_norm = tq.norm();
+        let zero_slack = 1e-12 * q_norm;
         let stale = r.front + r.epochs.len().saturating_sub(MAX_EPOCHS) as u64;
         let candidates: Vec<usize> = (0..size)
             .filter(|&k| {
@@ -563,16 +573,28 @@ impl VonMisesMaximum {
                     || self.beam[k]
                     || r.epoch_of[k] < stale
                     || !lower.is_finite()
-                    || r.von_mises[k] + self.c[k] * distance[e] + self.frobenius[k] * slack[e] >= lower
+                    || (r.von_mises[k] + self.c[k] * distance[e] + self.frobenius[k] * slack[e])
+                        .min(self.c[k] * tq_norm + self.frobenius[k] * zero_slack)
+                        >= lower
             })
             .collect();
-        r.evaluations += candidates.len();
-        if candidates.len() == size {
-            r.refreshes += 1;
-        }
         let mut best: Option<(usize, f64)> = None;
-        for k in candidates {
-            let vm = if k == k0 { lower } else { value(k) };
+        let evaluated = candidates.len();
+        // The candidates' values, in parallel when there are many (each summed as one node's
+        // alone, the same to the bit; few are cheaper on one thread).
+        let values: Vec<f64> = if evaluated >= PARALLEL_CANDIDATES {
+            candidates
+                .par_iter()
+                .with_min_len(PARALLEL_CANDIDATES / 2)
+                .map(|&k| if k == k0 { lower } else { value(k) })
+                .collect()
+        } else {
+            candidates
+                .iter()
+                .map(|&k| if k == k0 { lower } else { value(k) })
+                .collect()
+        };
+        for (k, vm) in candidates.into_iter().zip(values) {
             if best.is_none_or(|b| vm.total_cmp(&b.1).is_ge()) {
                 best = Some((k, vm));
             }
@@ -583,6 +605,10 @@ impl VonMisesMaximum {
             r.von_mises[k] = vm;
             let last = r.epochs.len() - 1;
             r.epochs[last].count += 1;
+        }
+        r.evaluations += evaluated;
+        if evaluated == size {
+            r.refreshes += 1;
         }
         while r.epochs.front().is_some_and(|e| e.count == 0) {
             r.epochs.pop_front();
