@@ -154,13 +154,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let t = Instant::now();
     let search = VonMisesMaximum::new(shapes, &all);
     let t_setup = t.elapsed().as_secs_f64();
-    let (t_bounded, (bounded, reference)) = timed(|| {
+    let (t_bounded, (bounded, (reference, per_state))) = timed(|| {
         let mut reference = VonMisesReference::default();
+        let mut per_state = Vec::with_capacity(STEPS);
         let maxima = states
             .iter()
-            .map(|(q, _)| search.maximum(shapes, q, &mut reference).expect("nodes"))
+            .map(|(q, _)| {
+                let before = reference.evaluations();
+                let m = search.maximum(shapes, q, &mut reference).expect("nodes");
+                per_state.push(reference.evaluations() - before);
+                m
+            })
             .collect::<Vec<_>>();
-        (maxima, reference)
+        (maxima, (reference, per_state))
     });
     for (k, (b, s)) in brute.iter().zip(&bounded).enumerate() {
         if b.0 != s.0 || b.1.to_bits() != s.1.to_bits() {
@@ -247,6 +253,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "  the bounded search evaluated {:.0} nodes per state on average ({} of {STEPS} states every node)",
         reference.evaluations() as f64 / STEPS as f64,
         reference.refreshes()
+    );
+    let mut sorted = per_state.clone();
+    sorted.sort_unstable();
+    let heavy = sorted.iter().rev().take(STEPS / 10).sum::<usize>();
+    println!(
+        "  nodes evaluated per state: median {}, 90th percentile {}, largest {}; the 10 % heaviest states hold {:.0} % of the evaluations",
+        sorted[STEPS / 2],
+        sorted[9 * STEPS / 10],
+        sorted[STEPS - 1],
+        100.0 * heavy as f64 / reference.evaluations() as f64
     );
     println!(
         "VTU frame of the body ({n_points} points, {:.1} MB with stresses): {:.1} ms without the stress fields, {:.1} ms with them: {:.1} ms per frame for the stress fields (output I/O)",

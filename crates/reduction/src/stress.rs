@@ -286,6 +286,14 @@ fn solid_values(s: &[f64; 6], R: &nalgebra::Matrix3<f64>) -> ([f64; 6], f64, f64
 /// call), so that the nodes near the maximum, evaluated at most calls, have tight bounds, and
 /// the nodes far below it keep an old reference for many calls
 /// ([`VonMisesReference`]; the nodes of epochs older than the last 64 are evaluated again).
+/// The zero state is a reference too ($v_i(\mathbf 0) = 0$): a node's bound is the smaller of
+/// its epoch's and $c_i\lVert\mathbf T\mathbf q\rVert + 10^{-12}\lVert\boldsymbol\Sigma_i\rVert_F
+/// \lVert\mathbf q\rVert$. And a change $\mathbf d$ of whitened coordinates splits into its
+/// part along $\mathbf u$, the whitened direction of the first nonzero state, and the rest:
+/// $\lVert\mathbf A_i\mathbf T^{-1}\mathbf d\rVert \le |\mathbf u^T\mathbf d|\,w_i + c_i\lVert\mathbf d -
+/// \mathbf u\mathbf u^T\mathbf d\rVert$ with $w_i$ the node's von Mises stress of $\mathbf
+/// T^{-1}\mathbf u$ (plus its round-off margin), used where smaller than $c_i\lVert\mathbf
+/// d\rVert$. Many candidates are evaluated on rayon's threads.
 /// Beam nodes (extreme-fibre stress of
 /// [`StressShapes::von_mises`]) are evaluated at every call.
 ///
@@ -305,6 +313,8 @@ pub struct VonMisesMaximum {
     solid: Vec<bool>,
     /// $\mathbf T$, the whitening of the coordinates ($n\times n$).
     T: nalgebra::DMatrix<f64>,
+    /// $\mathbf T^{-1}$.
+    T_inv: nalgebra::DMatrix<f64>,
     /// Per set entry: $c_i$ (0 without solid stress).
     c: Vec<f64>,
     /// Per set entry: $\lVert\boldsymbol\Sigma_i\rVert_F$ (0 without solid stress).
@@ -330,6 +340,12 @@ pub struct VonMisesReference {
     /// Node evaluations and calls that evaluated every node, so far.
     evaluations: usize,
     refreshes: usize,
+    /// $\mathbf u$, the unit whitened direction of the first nonzero state ($\mathbf T\mathbf
+    /// q/\lVert\mathbf T\mathbf q\rVert$; empty before), and per set entry the von Mises stress
+    /// of $\mathbf T^{-1}\mathbf u$ with its round-off margin: a change along $\mathbf u$ is
+    /// bounded by it rather than by $c_i$.
+    direction: Vec<f64>,
+    along: Vec<f64>,
 }
 
 /// One state at which some set entries were last evaluated.
@@ -358,6 +374,9 @@ impl VonMisesReference {
 
 /// At most this many epochs are kept; the entries of older ones are evaluated again.
 const MAX_EPOCHS: usize = 64;
+
+/// From this many candidates on, [`VonMisesMaximum::maximum`] evaluates them on rayon's threads.
+const PARALLEL_CANDIDATES: usize = 512;
 
 /// $\mathbf M^{1/2}$ of the von Mises seminorm in Voigt order: $\sqrt{3/2}$ times the deviatoric
 /// projector on the normal stresses, $\sqrt3$ on the shear stresses.
@@ -456,6 +475,7 @@ impl VonMisesMaximum {
             blocks,
             solid,
             T,
+            T_inv,
             c: bounds.iter().map(|b| b.0).collect(),
             frobenius: bounds.iter().map(|b| b.1).collect(),
             beam: nodes.iter().map(|&i| beam_node[i]).collect(),
@@ -532,10 +552,38 @@ impl VonMisesMaximum {
                     last: k,
                     evaluations: r.evaluations,
                     refreshes: r.refreshes,
+                    direction: std::mem::take(&mut r.direction),
+                    along: std::mem::take(&mut r.along),
                 };
             }
             return Some((self.nodes[k], vm));
         }
+        let tq_norm = tq.norm();
+        if (r.along.len() != size || r.direction.len() != self.n) && tq_norm > 0.0 && tq_norm.is_finite() {
+            let u = &tq / tq_norm;
+            let y = &self.T_inv * &u;
+            let y_norm = y.norm();
+            r.along = (0..size)
+                .into_par_iter()
+                .map(|k| self.solid(k, y.as_slice()) + 1e-12 * self.frobenius[k] * y_norm)
+                .collect();
+            r.direction = u.as_slice().to_vec();
+        }
+        let directed = r.along.len() == size && r.direction.len() == self.n;
+        // A change d in whitened coordinates: its component along u and the norm of the rest.
+        let split = |d: &[f64]| -> (f64, f64) {
+            if !directed {
+                return (0.0, f64::INFINITY);
+            }
+            let a: f64 = d.iter().zip(&r.direction).map(|(x, u)| x * u).sum();
+            let rest = d
+                .iter()
+                .zip(&r.direction)
+                .map(|(x, u)| (x - a * u) * (x - a * u))
+                .sum::<f64>()
+                .sqrt();
+            (a.abs(), rest)
+        };
         // This call's epoch; the distance to and the round-off margin of every live one.
         let now = r.front + r.epochs.len() as u64;
         let (distance, slack): (Vec<f64>, Vec<f64>) = r
@@ -546,6 +594,12 @@ impl VonMisesMaximum {
                 (d, 1e-12 * (q_norm + e.q_norm))
             })
             .unzip();
+        let parts: Vec<(f64, f64)> = r
+            .epochs
+            .iter()
+            .map(|e| split(&tq.iter().zip(&e.tq).map(|(a, b)| a - b).collect::<Vec<_>>()))
+            .collect();
+        let zero_parts = split(tq.as_slice());
         r.epochs.push_back(Epoch {
             tq: tq.as_slice().to_vec(),
             q_norm,
@@ -553,26 +607,41 @@ impl VonMisesMaximum {
         });
         let k0 = r.last.min(size - 1);
         let lower = value(k0);
-        // The entries whose bound reaches the lower bound, and those of the oldest epochs when
-        // there are too many.
+        // Every entry's bound: the smaller of its epoch's (10.3) and the zero state's ($v_i(\mathbf
+        // 0) = 0$: $c_i\lVert\mathbf T\mathbf q\rVert$, tight where the body passes through
+        // zero stress), each widened by its round-off margin. The candidates are the entries whose
+        // bound reaches the lower bound, and those of the oldest epochs when there are too many.
+        let zero_slack = 1e-12 * q_norm;
         let stale = r.front + r.epochs.len().saturating_sub(MAX_EPOCHS) as u64;
         let candidates: Vec<usize> = (0..size)
             .filter(|&k| {
                 let e = (r.epoch_of[k] - r.front) as usize;
-                k == k0
-                    || self.beam[k]
-                    || r.epoch_of[k] < stale
-                    || !lower.is_finite()
-                    || r.von_mises[k] + self.c[k] * distance[e] + self.frobenius[k] * slack[e] >= lower
+                k == k0 || self.beam[k] || r.epoch_of[k] < stale || !lower.is_finite() || {
+                    let along = r.along.get(k).copied().unwrap_or(0.0);
+                    let change = |d: f64, (a, rest): (f64, f64)| (self.c[k] * d).min(a * along + self.c[k] * rest);
+                    (r.von_mises[k] + change(distance[e], parts[e]) + self.frobenius[k] * slack[e])
+                        .min(change(tq_norm, zero_parts) + self.frobenius[k] * zero_slack)
+                        >= lower
+                }
             })
             .collect();
-        r.evaluations += candidates.len();
-        if candidates.len() == size {
-            r.refreshes += 1;
-        }
         let mut best: Option<(usize, f64)> = None;
-        for k in candidates {
-            let vm = if k == k0 { lower } else { value(k) };
+        let evaluated = candidates.len();
+        // The candidates' values, in parallel when there are many (each summed as one node's
+        // alone, the same to the bit; few are cheaper on one thread).
+        let values: Vec<f64> = if evaluated >= PARALLEL_CANDIDATES {
+            candidates
+                .par_iter()
+                .with_min_len(PARALLEL_CANDIDATES / 2)
+                .map(|&k| if k == k0 { lower } else { value(k) })
+                .collect()
+        } else {
+            candidates
+                .iter()
+                .map(|&k| if k == k0 { lower } else { value(k) })
+                .collect()
+        };
+        for (k, vm) in candidates.into_iter().zip(values) {
             if best.is_none_or(|b| vm.total_cmp(&b.1).is_ge()) {
                 best = Some((k, vm));
             }
@@ -583,6 +652,10 @@ impl VonMisesMaximum {
             r.von_mises[k] = vm;
             let last = r.epochs.len() - 1;
             r.epochs[last].count += 1;
+        }
+        r.evaluations += evaluated;
+        if evaluated == size {
+            r.refreshes += 1;
         }
         while r.epochs.front().is_some_and(|e| e.count == 0) {
             r.epochs.pop_front();
