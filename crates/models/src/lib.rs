@@ -757,8 +757,9 @@ pub fn square_rod_side() -> f64 {
     ROD_D * (3.0 * std::f64::consts::PI / 16.0).powf(0.25)
 }
 
-/// One rod segment of length `seg` along the FE x axis.
-fn rod_segment(rod: RodModel, seg: f64, modes: ModeSelection, frame: FrameChoice) -> Result<Segment, BuildError> {
+/// One rod segment of length `seg` along the FE x axis (for [`slider_crank_planar_with`] with
+/// any number of segments).
+pub fn rod_segment(rod: RodModel, seg: f64, modes: ModeSelection, frame: FrameChoice) -> Result<Segment, BuildError> {
     let prop_err = |source| BuildError::Property {
         model: "rod".into(),
         source,

@@ -78,7 +78,11 @@ pub fn cantilever(
 /// superelements of 4 elements with `modes` fixed-interface modes each, frame at the centre of
 /// mass and exact inertia. Returns the model, the rod's nodes and the two rod-end joints.
 pub fn slider_crank(n: usize, modes: ModeSelection, speed: f64) -> (Model, Vec<NodeId>, [mbs::JointId; 2]) {
-    let sc = models::slider_crank_planar(n, modes, RodModel::Beam { elements: 4 }, speed, Variant::REFERENCE).unwrap();
+    // Exactly `n` segments (`slider_crank_planar` rounds `n` up to an even count of at least 2,
+    // so that the midpoint is a node): the step bench times the rod as 1, 2 and 4 bodies.
+    let v = Variant::REFERENCE;
+    let segment = models::rod_segment(RodModel::Beam { elements: 4 }, models::ROD / n as f64, modes, v.frame).unwrap();
+    let sc = models::slider_crank_planar_with(n, &segment, speed, v);
     (sc.model, sc.rod_nodes, sc.rod_joints)
 }
 
