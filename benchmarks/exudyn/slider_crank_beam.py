@@ -63,7 +63,7 @@ from exudyn.itemInterface import (
     SensorNode,
 )
 
-from slider_crank import chord_distance
+from slider_crank import chord_distance, report_run
 
 
 def read_params(path):
@@ -262,20 +262,7 @@ def main():
         f"h = {h:.6e} s, {steps} steps to t = {steps * h:.6f} s, rho_inf = {args.rho_inf}, modified Newton {args.modified_newton}, "
         f"{'sparse' if args.sparse else 'dense'} linear solver"
     )
-    print(f"Newton iterations per step {it.newtonStepsCount / steps:.2f}, Jacobians per step {it.newtonJacobiCount / steps:.2f}")
-    print(f"wall {wall:.4f} s; per step {wall / steps * 1e6:.3f} us; {steps / wall:.0f} steps/s; CPU {cpu:.2f} s = {cpu / steps * 1e6:.3f} us/step")
-    print(f"midpoint deflection: peak |w| = {peak:.6e} m, w(t_end) = {w[-1]:.6e} m")
-    print(f"RESULT s_per_step={wall / steps:.6e} cpu_per_step={cpu / steps:.6e} peak_w={peak:.9e}")
-    if args.csv:
-        np.savetxt(args.csv, np.column_stack([t, w, slider[:, 1]]), delimiter=",", header="t,w,slider_x", comments="", fmt="%.9e")
-    if args.reference:
-        ref = np.loadtxt(args.reference, delimiter=",", skiprows=1)
-        ref_w = np.interp(t, ref[:, 0], ref[:, 1])
-        ref_peak = np.max(np.abs(ref[:, 1]))
-        err = np.max(np.abs(w - ref_w)) / ref_peak
-        print(f"against {args.reference}: max |w - w_ref| / max |w_ref| = {err:.3e}, peak error {(peak - ref_peak) / ref_peak:.3e}")
-        print(f"RESULT history_error={err:.6e} peak_error={(peak - ref_peak) / ref_peak:.6e}")
-
+    report_run(args, t, w, slider, peak, wall, cpu, steps, it)
 
 if __name__ == "__main__":
     main()
