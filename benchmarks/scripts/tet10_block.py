@@ -6,13 +6,13 @@ along x with a cylindrical bore of radius 0.25 m through it along y, meshed by g
 (face x = 0) and "tip" (face x = 2.6). MSH 4.1, binary.
 
 Usage: python3 tet10_block.py OUT.msh [MESH_SIZE]   (needs `pip install gmsh`)
-The element size 0.045 m gives about 1.0 M nodal dofs (3 per node)."""
+Element size 0.035 m: 326 358 nodes, 0.98 M nodal dofs (3 per node); 0.042 m: 0.58 M."""
 import sys
 
 import gmsh
 
 out = sys.argv[1]
-h = float(sys.argv[2]) if len(sys.argv) > 2 else 0.045
+h = float(sys.argv[2]) if len(sys.argv) > 2 else 0.035
 L, W, H, R = 2.6, 1.0, 1.0, 0.25
 
 gmsh.initialize()
