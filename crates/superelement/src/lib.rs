@@ -220,6 +220,7 @@
 #![allow(non_snake_case)]
 
 pub mod body;
+pub mod compressed;
 pub mod error;
 pub mod forces;
 pub mod frame;
