@@ -91,6 +91,10 @@ pub struct Compressed {
     pub start: Vec<usize>,
     pub cols: Vec<usize>,
     pub values: Vec<f64>,
+    /// $s$ with $\mathbf A^T = s\mathbf A$ exactly (1: symmetric, -1: skew), if either: then a
+    /// row of $\mathbf A$ is $s$ times a column, and [`Self::scatter_add_at`] writes whole columns
+    /// of a column-major output.
+    pub transpose_sign: Option<f64>,
 }
 
 impl Compressed {
@@ -102,6 +106,9 @@ impl Compressed {
             start: vec![0],
             cols: Vec::new(),
             values: Vec::new(),
+            transpose_sign: [1.0, -1.0]
+                .into_iter()
+                .find(|&sign| (0..A.ncols()).all(|j| (0..A.nrows()).all(|i| A[(j, i)] == sign * A[(i, j)]))),
         };
         for i in 0..A.nrows() {
             let before = out.cols.len();
@@ -167,6 +174,18 @@ impl Compressed {
     #[inline]
     pub fn scatter_add_at(&self, alpha: f64, out: &mut Mat<f64>, r0: usize, c0: usize) {
         if alpha == 0.0 {
+            return;
+        }
+        if let Some(sign) = self.transpose_sign {
+            // Row i of A is sign times column i: add it into column c0 + i.
+            let alpha = sign * alpha;
+            for (r, &i) in self.rows.iter().enumerate() {
+                let o = &mut out.col_as_slice_mut(c0 + i)[r0..];
+                let range = self.start[r]..self.start[r + 1];
+                for (&j, a) in self.cols[range.clone()].iter().zip(&self.values[range]) {
+                    o[j] += alpha * a;
+                }
+            }
             return;
         }
         for (r, &i) in self.rows.iter().enumerate() {

@@ -170,14 +170,26 @@ impl FfrInertia {
         if (stored as f64) <= COMPRESSED_SHARE * (9 * n * n) as f64 {
             S_bar = cleaned;
         }
+        // Exactly symmetric and skew (S_bar_ba = S_bar_ab^T holds to round-off in the data): the
+        // compressed products use it (`Compressed::transpose_sign`).
         let S_bar_sym: Vec<Mat<f64>> = PAIRS
             .iter()
-            .map(|&(a, b)| Mat::from_fn(n, n, |i, j| S_bar[3 * a + b][(i, j)] + S_bar[3 * b + a][(i, j)]))
+            .map(|&(a, b)| {
+                let (ab, ba) = (&S_bar[3 * a + b], &S_bar[3 * b + a]);
+                Mat::from_fn(n, n, |i, j| {
+                    0.5 * ((ab[(i, j)] + ba[(i, j)]) + (ab[(j, i)] + ba[(j, i)]))
+                })
+            })
             .collect();
         let S_tilde: Vec<Mat<f64>> = (0..3)
             .map(|i| {
-                let (j, k) = ((i + 1) % 3, (i + 2) % 3);
-                Mat::from_fn(n, n, |r, s| S_bar[3 * j + k][(r, s)] - S_bar[3 * k + j][(r, s)])
+                let (jk, kj) = (
+                    &S_bar[3 * ((i + 1) % 3) + (i + 2) % 3],
+                    &S_bar[3 * ((i + 2) % 3) + (i + 1) % 3],
+                );
+                Mat::from_fn(n, n, |r, s| {
+                    0.5 * ((jk[(r, s)] - kj[(r, s)]) - (jk[(s, r)] - kj[(s, r)]))
+                })
             })
             .collect();
         let nine = |k: usize| if k < 3 { &S_tilde[k] } else { &S_bar_sym[k - 3] };
