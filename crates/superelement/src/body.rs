@@ -4,7 +4,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::compressed::Compressed;
+use crate::compressed::{Compressed, COMPRESSED_SHARE};
 use crate::error::SuperelementError;
 use crate::frame::{FrameProblem, FrameScratch, FrameSettings, FrameSolve};
 use crate::local_coordinates::local_coordinates;
@@ -174,12 +174,6 @@ fn check_dense(
     }
     Ok(())
 }
-
-/// The share of the dense entries up to which the invariants of a body are used in
-/// compressed form ([`Compressed`]): a compressed product costs about five instructions a
-/// stored entry (index, value, scattered update) against about one an entry for faer's dense
-/// kernels plus their fixed cost, so it pays below about a fifth.
-pub(crate) const COMPRESSED_SHARE: f64 = 0.2;
 
 /// Relative asymmetry $|G_{ij} - G_{ji}|$ accepted in a $\mathbf G_k$, against its largest entry:
 /// a projection $\mathbf V^T\mathbf K_\sigma\mathbf V$ in floating point is symmetric to about
@@ -467,7 +461,7 @@ impl Superelement {
             D[(c, c)] += 2.0 * z * body.fixed_interface_omega[i] * M_CB[(c, c)];
         }
         let damped = damping.alpha > 0.0 || damping.beta > 0.0 || damping.modal_ratios.iter().any(|z| *z > 0.0);
-        let ffr = FfrInertia::new(inertia, &origin, &M_CB, &crate::compressed::coordinate_weights(body));
+        let ffr = FfrInertia::new(inertia, &origin, &M_CB);
         // Body size: farthest interface from the frame origin, or the radius of gyration for a
         // body whose only interface sits at the frame.
         let Ic = Matrix3::from_fn(|i, j| inertia.inertia_com[i][j]);

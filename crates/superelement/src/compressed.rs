@@ -1,28 +1,30 @@
-//! Invariant matrices kept by their nonzero entries.
+//! The reduced geometric stiffnesses kept by their nonzero entries.
 //!
-//! The second-order inertia invariants $\bar{\mathbf S}_{ab}$ ([`crate::mass`]) and the reduced
-//! geometric stiffnesses $\mathbf G_k$ ([`crate::GeometricStiffness`]) are $n\times n$, but for
-//! many bodies most of their entries vanish. A straight beam along a body axis is the common
-//! case: a CB coordinate moves the beam's axis along one body axis only (the axial constraint
-//! modes along the beam, the bending ones across it, the torsional ones not at all), so
-//! $\bar{\mathbf S}_{ab} = \int\rho\,\mathbf S_a^T\mathbf S_b$ couples only the coordinates that move
-//! the axis along $a$ with those along $b$; and only the coordinates that stretch the beam carry
-//! an axial force, so every other $\mathbf G_k$ is zero (on the C2 rod segment, 2 of the 14). A
-//! [`Compressed`] matrix stores the nonzero entries column by column, so the products of an
-//! evaluation cost what is there instead of $n^2$.
+//! A body's $\mathbf G_k$ ([`crate::GeometricStiffness`]) are $n$ matrices of $n\times n$, so the
+//! dense products of an evaluation cost $n^3$; but only the CB coordinates that stress the body
+//! give a nonzero $\mathbf G_k$. A straight beam is the common case: only the coordinates that
+//! stretch it carry an axial force (on the C2 rod segment along $x$, the axial constraint modes
+//! of its two ends: 2 of the 14 $\mathbf G_k$; on a skew beam the six end translations), and the
+//! nonzero ones couple only the bending and torsion coordinates. A [`Compressed`] matrix stores
+//! the nonzero entries row by row, so the products cost what is there.
 //!
-//! **Round-off zeros.** The reduction computes these matrices from solves and products, so the
+//! **Round-off zeros.** The reduction computes the $\mathbf G_k$ from solves and products, so the
 //! entries that vanish in exact arithmetic come out as round-off. Entries are compared by what
 //! they contribute at a typical deformation: with the coordinate weights $c_i$ of
 //! [`coordinate_weights`] (the size of a coordinate that displaces the body by one length unit:
 //! 1 for $\mathbf u_k$, $1/\ell$ for $\boldsymbol\theta_k$ with $\ell$ the radius of gyration,
-//! $\sqrt{m/m_{ii}}$ for $\eta_i$), the entry $(\bar{\mathbf S}_{ab})_{ij}$ counts as
-//! $c_ic_j|(\bar{\mathbf S}_{ab})_{ij}|$ and $(\mathbf G_k)_{ij}$ as $c_ic_jc_k|(\mathbf G_k)_{ij}|$,
+//! $\sqrt{m/m_{ii}}$ for $\eta_i$), $(\mathbf G_k)_{ij}$ counts as $c_ic_jc_k|(\mathbf G_k)_{ij}|$,
 //! which makes the comparison independent of the units of the coordinates. [`clean`] sets the
-//! entries below [`ROUND_OFF`] times the group's largest (the nine $\bar{\mathbf S}_{ab}$, or all
-//! $\mathbf G_k$) to zero once, when the superelement is built, for the dense and the compressed
-//! form alike. `tests/unit/compressed.rs` measures the gap on straight beams along an axis and
-//! skew (2 to 10 modes): what is dropped is round-off, what is kept is a real coupling.
+//! entries below [`ROUND_OFF`] times the largest to zero, once, when the superelement is built,
+//! and only if that leaves the $\mathbf G_k$ sparse enough for the compressed products
+//! ([`COMPRESSED_SHARE`]; else they stay as they are). `tests/unit/compressed.rs` measures the
+//! gap on straight beams along an axis and skew (2 to 10 modes): what is dropped is round-off,
+//! what is kept is a real coupling.
+//!
+//! The second-order inertia invariants $\bar{\mathbf S}_{ab}$ of a straight beam are sparse too
+//! (an eighth of their entries on the C2 rod segment), but their dense products are only
+//! $9n^2$ per vector, and compressed products were measured slower than faer's dense ones at
+//! $n = 14$ (10.1k against 9.4k instructions for the contractions): they stay dense.
 
 #![allow(non_snake_case)]
 
@@ -32,6 +34,12 @@ use faer::{Mat, MatRef};
 /// reduction (module docs): two orders of magnitude above the largest round-off and three below
 /// the smallest real entry measured by `tests/unit/compressed.rs`.
 pub const ROUND_OFF: f64 = 1e-9;
+
+/// The share of the dense entries up to which the invariants of a body are used in
+/// compressed form: a compressed product costs about five instructions a stored entry (index,
+/// value, scattered update) against about one an entry for faer's dense kernels plus their
+/// fixed cost, so it pays below about a fifth.
+pub const COMPRESSED_SHARE: f64 = 0.2;
 
 /// The coordinate weights $c_i$ of a body (module docs): 1 for the interface displacements,
 /// $1/\ell$ for the interface rotations ($\ell = \sqrt{\mathrm{tr}\,\mathbf I_c/m}$), $\sqrt{m/m_{ii}}$
@@ -92,7 +100,7 @@ pub struct Compressed {
     pub cols: Vec<usize>,
     pub values: Vec<f64>,
     /// $s$ with $\mathbf A^T = s\mathbf A$ exactly (1: symmetric, -1: skew), if either: then a
-    /// row of $\mathbf A$ is $s$ times a column, and [`Self::scatter_add_at`] writes whole columns
+    /// row of $\mathbf A$ is $s$ times a column, and [`Self::scatter_add`] writes whole columns
     /// of a column-major output.
     pub transpose_sign: Option<f64>,
 }
@@ -137,50 +145,31 @@ impl Compressed {
         self.values.len()
     }
 
-    /// The full matrix again.
-    pub fn to_dense(&self) -> Mat<f64> {
-        let mut A = Mat::zeros(self.n, self.n);
-        self.scatter_add(1.0, &mut A);
-        A
-    }
-
-    /// `out[t] = A x[t]` for `K` vectors at once (one pass over the entries).
+    /// `out = A x`.
     #[inline]
-    pub fn mul_into<const K: usize>(&self, x: [&[f64]; K], mut out: [&mut [f64]; K]) {
-        for o in out.iter_mut() {
-            o.fill(0.0);
-        }
+    pub fn mul_into(&self, x: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
         for (r, &i) in self.rows.iter().enumerate() {
             let range = self.start[r]..self.start[r + 1];
-            let mut acc = [0.0; K];
-            for (&j, a) in self.cols[range.clone()].iter().zip(&self.values[range]) {
-                for t in 0..K {
-                    acc[t] += a * x[t][j];
-                }
-            }
-            for t in 0..K {
-                out[t][i] = acc[t];
-            }
+            out[i] = self.cols[range.clone()]
+                .iter()
+                .zip(&self.values[range])
+                .map(|(&j, a)| a * x[j])
+                .sum();
         }
     }
 
-    /// `out += alpha * A` for an $n\times n$ `out`.
+    /// `out += alpha * A` for an $n\times n$ column-major `out`.
     #[inline]
     pub fn scatter_add(&self, alpha: f64, out: &mut Mat<f64>) {
-        self.scatter_add_at(alpha, out, 0, 0);
-    }
-
-    /// `out[r0 + i, c0 + j] += alpha * A[i, j]`: `A` added into the block of `out` at (`r0`, `c0`).
-    #[inline]
-    pub fn scatter_add_at(&self, alpha: f64, out: &mut Mat<f64>, r0: usize, c0: usize) {
         if alpha == 0.0 {
             return;
         }
         if let Some(sign) = self.transpose_sign {
-            // Row i of A is sign times column i: add it into column c0 + i.
+            // Row i of A is sign times column i: add it into column i.
             let alpha = sign * alpha;
             for (r, &i) in self.rows.iter().enumerate() {
-                let o = &mut out.col_as_slice_mut(c0 + i)[r0..];
+                let o = out.col_as_slice_mut(i);
                 let range = self.start[r]..self.start[r + 1];
                 for (&j, a) in self.cols[range.clone()].iter().zip(&self.values[range]) {
                     o[j] += alpha * a;
@@ -191,7 +180,7 @@ impl Compressed {
         for (r, &i) in self.rows.iter().enumerate() {
             let range = self.start[r]..self.start[r + 1];
             for (&j, a) in self.cols[range.clone()].iter().zip(&self.values[range]) {
-                out[(r0 + i, c0 + j)] += alpha * a;
+                out[(i, j)] += alpha * a;
             }
         }
     }

@@ -398,7 +398,7 @@ impl GeometricStiffness {
         b.fill(0.0);
         for (m, Gm) in &self.nonzero {
             let Cm = &mut C[n * m..n * (m + 1)];
-            Gm.mul_into([q], [&mut *Cm]);
+            Gm.mul_into(q, Cm);
             b[*m] = 0.5 * Cm.iter().zip(q).map(|(c, x)| c * x).sum::<f64>();
         }
         p.fill(0.0);

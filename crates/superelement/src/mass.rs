@@ -52,8 +52,6 @@
 
 #![allow(non_snake_case)]
 
-use crate::body::COMPRESSED_SHARE;
-use crate::compressed::{clean, Compressed};
 use crate::so3::skew;
 use faer::Mat;
 use nalgebra::{Matrix3, Vector3};
@@ -120,12 +118,6 @@ pub struct FfrInertia {
     /// of $\partial\mathbf F/\partial\boldsymbol\nu$ and the $\mathbf q\mathbf q$ block of
     /// $\partial\mathbf F/\partial\mathbf q$ are combinations of these nine matrices: one product.
     vec_stack: Mat<f64>,
-    /// The same nine matrices by their nonzero entries ([`Compressed`]), in the order of `stack`.
-    nine: Vec<Compressed>,
-    /// Use `nine` instead of `stack` and `vec_stack`: set when the compressed matrices hold at
-    /// most [`COMPRESSED_SHARE`] of the $9n^2$ entries (a straight beam along a body axis holds
-    /// about a tenth of them).
-    pub(crate) compressed: bool,
 }
 
 /// $\int\rho\,\mathbf f$ rows of a `DenseMatrix` as a faer matrix.
@@ -142,9 +134,7 @@ impl FfrInertia {
     /// Checked by `tests/unit/energy.rs::rigid_kinetic_energy_is_exact` (frames off the centre of
     /// mass) and `tests/unit/linear_limit.rs::frequencies_match_fe_to_the_modes_kept` (the
     /// `Exact` mass equals $\mathbf M_{CB}$ at the undeformed state).
-    /// `weights`: the coordinate weights of the body ([`crate::compressed::coordinate_weights`]),
-    /// by which round-off zeros of $\bar{\mathbf S}_{ab}$ are told from real entries.
-    pub fn new(data: &InertiaData, origin: &Vector3<f64>, M_CB: &Mat<f64>, weights: &[f64]) -> Self {
+    pub fn new(data: &InertiaData, origin: &Vector3<f64>, M_CB: &Mat<f64>) -> Self {
         let m = data.mass;
         let c = Vector3::from(data.center_of_mass);
         let d = c - origin;
@@ -159,45 +149,20 @@ impl FfrInertia {
         });
         let Sx_c = dense(&data.S_x);
         let S_x = Mat::from_fn(9, n, |r, j| Sx_c[(r, j)] + d[r / 3] * S_t[(r % 3, j)]);
-        // Without their round-off zeros (`compressed` module docs), if that leaves them sparse
-        // enough for the compressed products; else as they are.
-        let mut S_bar: Vec<Mat<f64>> = data.S_bar.iter().map(dense).collect();
-        let mut cleaned = S_bar.clone();
-        clean(&mut cleaned.iter_mut().collect::<Vec<_>>(), |_, i, j| {
-            weights[i] * weights[j]
-        });
-        let stored: usize = cleaned.iter().map(|A| Compressed::new(A.as_ref()).stored()).sum();
-        if (stored as f64) <= COMPRESSED_SHARE * (9 * n * n) as f64 {
-            S_bar = cleaned;
-        }
-        // Exactly symmetric and skew (S_bar_ba = S_bar_ab^T holds to round-off in the data): the
-        // compressed products use it (`Compressed::transpose_sign`).
+        let S_bar: Vec<Mat<f64>> = data.S_bar.iter().map(dense).collect();
         let S_bar_sym: Vec<Mat<f64>> = PAIRS
             .iter()
-            .map(|&(a, b)| {
-                let (ab, ba) = (&S_bar[3 * a + b], &S_bar[3 * b + a]);
-                Mat::from_fn(n, n, |i, j| {
-                    0.5 * ((ab[(i, j)] + ba[(i, j)]) + (ab[(j, i)] + ba[(j, i)]))
-                })
-            })
+            .map(|&(a, b)| Mat::from_fn(n, n, |i, j| S_bar[3 * a + b][(i, j)] + S_bar[3 * b + a][(i, j)]))
             .collect();
         let S_tilde: Vec<Mat<f64>> = (0..3)
             .map(|i| {
-                let (jk, kj) = (
-                    &S_bar[3 * ((i + 1) % 3) + (i + 2) % 3],
-                    &S_bar[3 * ((i + 2) % 3) + (i + 1) % 3],
-                );
-                Mat::from_fn(n, n, |r, s| {
-                    0.5 * ((jk[(r, s)] - kj[(r, s)]) - (jk[(s, r)] - kj[(s, r)]))
-                })
+                let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+                Mat::from_fn(n, n, |r, s| S_bar[3 * j + k][(r, s)] - S_bar[3 * k + j][(r, s)])
             })
             .collect();
         let nine = |k: usize| if k < 3 { &S_tilde[k] } else { &S_bar_sym[k - 3] };
         let stack = Mat::from_fn(9 * n, n, |r, c| nine(r / n)[(r % n, c)]);
         let vec_stack = Mat::from_fn(n * n, 9, |r, k| nine(k)[(r % n, r / n)]);
-        let nine: Vec<Compressed> = (0..9).map(|k| Compressed::new(nine(k).as_ref())).collect();
-        let stored: usize = nine.iter().map(Compressed::stored).sum();
-        let compressed = (stored as f64) <= COMPRESSED_SHARE * (9 * n * n) as f64;
         Self {
             mass: m,
             d,
@@ -210,15 +175,7 @@ impl FfrInertia {
             M_CB: M_CB.clone(),
             stack,
             vec_stack,
-            nine,
-            compressed,
         }
-    }
-
-    /// The nine matrices of `stack` ($\tilde{\mathbf S}_0, \tilde{\mathbf S}_1, \tilde{\mathbf S}_2,
-    /// \bar{\mathbf S}^{sym}_0, \dots, \bar{\mathbf S}^{sym}_5$) by their nonzero entries.
-    pub fn compressed_invariants(&self) -> &[Compressed] {
-        &self.nine
     }
 
     /// Number of CB coordinates $n$.
@@ -349,33 +306,6 @@ impl FfrInertia {
         let m = self.mass;
         let s = self.d * m + mul3(&self.S_t, q);
         let sd = mul3(&self.S_t, qd);
-        if self.compressed {
-            self.contract_compressed(q, qd, qdd, with_qdd, w);
-        } else {
-            self.contract_dense(q, qd, qdd, with_qdd, w);
-        }
-        // X_ab = (S_x)_ab q; J1 = 2 tr(X) I - X - X^T; W_ab = q^T S_bar_ab q = q.sig_ab / 2.
-        let mut X = Matrix3::<f64>::zeros();
-        let mut Xd = Matrix3::<f64>::zeros();
-        for j in 0..n {
-            let c = self.S_x.col_as_slice(j);
-            for r in 0..9 {
-                X[(r / 3, r % 3)] += c[r] * q[j];
-                Xd[(r / 3, r % 3)] += c[r] * qd[j];
-            }
-        }
-        let W = Matrix3::from_fn(|a, b| 0.5 * dot(q, w.sig.col_as_slice(pair(a, b))));
-        let W3 = Matrix3::from_fn(|a, b| dot(qd, w.sig.col_as_slice(pair(a, b))));
-        let I = Matrix3::identity();
-        let J = self.J0 + I * (2.0 * X.trace()) - X - X.transpose() + I * W.trace() - W;
-        let Jd = I * (2.0 * Xd.trace()) - Xd - Xd.transpose() + I * W3.trace() - W3;
-        Contractions { s, sd, J, Jd }
-    }
-
-    /// The products of the nine matrices with $\mathbf q$, $\dot{\mathbf q}$ (and $\ddot{\mathbf q}$)
-    /// into `w.sig`, `w.sigd`, `w.tq`, `w.tqd`, `w.tqdd`: one dense product with `stack`.
-    fn contract_dense(&self, q: &[f64], qd: &[f64], qdd: &[f64], with_qdd: bool, w: &mut FfrScratch) {
-        let n = self.n();
         w.rhs.col_as_slice_mut(0).copy_from_slice(q);
         w.rhs.col_as_slice_mut(1).copy_from_slice(qd);
         w.rhs.col_as_slice_mut(2).copy_from_slice(qdd);
@@ -399,28 +329,22 @@ impl FfrInertia {
                 w.tqdd.col_as_slice_mut(i).copy_from_slice(block(2, i));
             }
         }
-    }
-
-    /// [`Self::contract_dense`] through the compressed matrices (`nine`).
-    fn contract_compressed(&self, q: &[f64], qd: &[f64], qdd: &[f64], with_qdd: bool, w: &mut FfrScratch) {
-        for p in 0..6 {
-            self.nine[3 + p].mul_into([q, qd], [w.sig.col_as_slice_mut(p), w.sigd.col_as_slice_mut(p)]);
-        }
-        for i in 0..3 {
-            let (tq, tqd, tqdd) = (&mut w.tq, &mut w.tqd, &mut w.tqdd);
-            if with_qdd {
-                self.nine[i].mul_into(
-                    [q, qd, qdd],
-                    [
-                        tq.col_as_slice_mut(i),
-                        tqd.col_as_slice_mut(i),
-                        tqdd.col_as_slice_mut(i),
-                    ],
-                );
-            } else {
-                self.nine[i].mul_into([q, qd], [tq.col_as_slice_mut(i), tqd.col_as_slice_mut(i)]);
+        // X_ab = (S_x)_ab q; J1 = 2 tr(X) I - X - X^T; W_ab = q^T S_bar_ab q = q.sig_ab / 2.
+        let mut X = Matrix3::<f64>::zeros();
+        let mut Xd = Matrix3::<f64>::zeros();
+        for j in 0..n {
+            let c = self.S_x.col_as_slice(j);
+            for r in 0..9 {
+                X[(r / 3, r % 3)] += c[r] * q[j];
+                Xd[(r / 3, r % 3)] += c[r] * qd[j];
             }
         }
+        let W = Matrix3::from_fn(|a, b| 0.5 * dot(q, w.sig.col_as_slice(pair(a, b))));
+        let W3 = Matrix3::from_fn(|a, b| dot(qd, w.sig.col_as_slice(pair(a, b))));
+        let I = Matrix3::identity();
+        let J = self.J0 + I * (2.0 * X.trace()) - X - X.transpose() + I * W.trace() - W;
+        let Jd = I * (2.0 * Xd.trace()) - Xd - Xd.transpose() + I * W3.trace() - W3;
+        Contractions { s, sd, J, Jd }
     }
 
     /// $\mathbf j_q(\mathbf w) = \partial(\mathbf J(\mathbf q)\mathbf w)/\partial\mathbf q$ ($3\times n$):
@@ -643,17 +567,6 @@ impl FfrInertia {
             // Off-diagonal pairs appear twice in the double sum.
             w.coef[(3 + p, 0)] = -0.5 * cab(a, b) * if a == b { 1.0 } else { 2.0 };
             w.coef[(3 + p, 1)] = 0.0;
-        }
-        if self.compressed {
-            for j in 0..n {
-                F_q.col_as_slice_mut(j)[6..].fill(0.0);
-                out.F_nu.col_as_slice_mut(6 + j)[6..].fill(0.0);
-            }
-            for (k, A) in self.nine.iter().enumerate() {
-                A.scatter_add_at(w.coef[(k, 0)], F_q, 6, 0);
-                A.scatter_add_at(w.coef[(k, 1)], &mut out.F_nu, 6, 6);
-            }
-            return;
         }
         faer::linalg::matmul::matmul(
             w.qq.as_mut(),

@@ -244,38 +244,31 @@ pub fn test_state(se: &Superelement, spec: &StateSpec) -> (BodyState, Vec<f64>) 
     (s, acc)
 }
 
-/// Which invariants of a superelement are used in compressed form ([`crate::compressed`]).
+/// How a superelement stores its reduced geometric stiffness ([`crate::compressed`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Compression {
-    /// The nine second-order inertia invariants.
-    pub inertia: bool,
-    /// The reduced geometric stiffness (`None`: the body has none).
+    /// Compressed (`None`: the body has no geometric stiffness).
     pub geometric: Option<bool>,
     /// The $k$ of the nonzero $\mathbf G_k$.
     pub nonzero_G: Vec<usize>,
-    /// Entries stored of the nine inertia invariants and of all $\mathbf G_k$.
-    pub stored: (usize, usize),
+    /// Entries stored of all $\mathbf G_k$ together.
+    pub stored: usize,
 }
 
-/// How `se` stores its invariants.
+/// How `se` stores its reduced geometric stiffness.
 pub fn compression(se: &Superelement) -> Compression {
     let G = se.geometric.as_ref();
     Compression {
-        inertia: se.inertia.compressed,
         geometric: G.map(|G| G.compressed),
         nonzero_G: G.map_or(Vec::new(), |G| G.nonzero.iter().map(|(k, _)| *k).collect()),
-        stored: (
-            se.inertia.compressed_invariants().iter().map(|A| A.stored()).sum(),
-            G.map_or(0, |G| G.nonzero.iter().map(|(_, A)| A.stored()).sum()),
-        ),
+        stored: G.map_or(0, |G| G.nonzero.iter().map(|(_, A)| A.stored()).sum()),
     }
 }
 
-/// A copy of `se` that uses the dense invariants throughout (the general path that the
-/// compressed one is checked against).
+/// A copy of `se` that uses the dense $\mathbf G_k$ (the general path that the compressed one
+/// is checked against).
 pub fn without_compression(se: &Superelement) -> Superelement {
     let mut dense = se.clone();
-    dense.inertia.compressed = false;
     if let Some(G) = dense.geometric.as_mut() {
         G.compressed = false;
     }
