@@ -81,10 +81,7 @@
 //! * [`NewtonStrategy::Full`] (the default): the tangents are evaluated and $\mathbf S$ is
 //!   factorised at every correction (quadratic convergence). After a correction the residual is
 //!   tested with the forces alone, and tangents are evaluated only if another correction is
-//!   needed, unless the last step's convergence predicts one: with its largest ratio
-//!   $c = \rho_{k+1}/\rho_k^2$ of relative residuals, an iterate whose $c\rho_k^2$ is above half the
-//!   tolerance gets forces and tangents in one evaluation ([`NEWTON_PREDICTION_MARGIN`]). The
-//!   choice changes which evaluations are made, never the iterates.
+//!   needed.
 //! * [`NewtonStrategy::Modified`]: the factorised $\mathbf S$ stays in the workspace across
 //!   corrections and steps, and the iterations evaluate forces only (linear convergence, each
 //!   iteration cheaper). The refresh rule: $\mathbf S$ is rebuilt from new tangents and
@@ -232,12 +229,6 @@ pub enum NewtonStrategy {
     /// [`SolveError::NotConverged`] is reported.
     Modified,
 }
-
-/// Full Newton evaluates the forces alone first at an iterate whose residual the quadratic
-/// convergence of the last step predicts below this fraction of the tolerance (else the forces
-/// and tangents together). The prediction $c\rho_k^2$ only chooses which evaluation comes first,
-/// never the iterates; a factor 2 of margin covers the step-to-step scatter of $c$.
-pub const NEWTON_PREDICTION_MARGIN: f64 = 0.5;
 
 /// Modified Newton schedules a new iteration matrix when one correction leaves more than this
 /// fraction of the residual, $\|\mathbf F_{k+1}\| > 0.01\|\mathbf F_k\|$ (module docs). Measured on the
@@ -412,11 +403,9 @@ pub struct Integrator<'a> {
     refresh_next: bool,
     /// The momenta $\mathbf J_0 = [\mathbf L_0;\ \mathbf H_0]$ of the start, when projecting.
     J0: Option<Vector6<f64>>,
-    /// Full Newton's quadratic constant $c$, $\rho_{k+1} \approx c\,\rho_k^2$ for the relative
-    /// residuals $\rho_k$ of a step's iterates: the largest ratio $\rho_{k+1}/\rho_k^2$ over the
-    /// unconverged iterates after a correction of the last step that had one (infinite before). After a correction the forces are evaluated
-    /// alone first only when $c\rho_k^2$ predicts convergence (module docs, "Newton strategy").
-    newton_constant: f64,
+    /// Corrections the last converged step needed: the next step builds its tangents at once
+    /// for that many iterations instead of first testing the forces alone.
+    last_corrections: usize,
     /// Free independent nodes whose translations the recursion carries in body axes.
     trans: Vec<BodyTranslation>,
     /// The error estimate of the last accepted adaptive step (the PI controller's memory).
@@ -602,7 +591,7 @@ impl<'a> Integrator<'a> {
             jacobians: 0,
             refresh_next: false,
             J0,
-            newton_constant: f64::INFINITY,
+            last_corrections: 0,
             trans,
             last_error: None,
         })
@@ -786,21 +775,18 @@ impl<'a> Integrator<'a> {
         let step = self.steps + 1;
         let tol = self.settings.tolerance;
         let mut last_rel = f64::INFINITY;
-        let mut step_constant: f64 = 0.0;
         for it in 0..=self.settings.max_iterations {
             // Modified Newton keeps a factor built for this h; without one it needs tangents now.
             let stale = self.factor_h != Some(h);
             // Full Newton: after a correction the step may have converged, so test with the
             // forces alone and build the tangents only when another correction is needed.
-            // Where the quadratic convergence of the last step predicts that this iterate is
-            // not converged yet, the tangents come with the forces (a forces-only test there
-            // is wasted work); either way the iterates are the same.
+            // Steps of a smooth motion need about as many corrections as the last one, so up
+            // to that count the tangents come with the forces (a forces-only test there is
+            // wasted work).
             let mut with_tangents = if modified {
                 stale || self.refresh_next
             } else {
-                let predicted = self.newton_constant * last_rel * last_rel;
-                let tol_rel = tol + self.ws.floor / self.ws.scale.max(f64::MIN_POSITIVE);
-                it == 0 || !(predicted <= NEWTON_PREDICTION_MARGIN * tol_rel)
+                it == 0 || it < self.last_corrections
             };
             sys.evaluate_into(st, 1.0, with_tangents, &mut self.ws)?;
             let converged = |ws: &Workspace, norm: f64| norm <= tol * ws.scale + ws.floor;
@@ -841,15 +827,10 @@ impl<'a> Integrator<'a> {
                 sys.accept_step(st);
                 std::mem::swap(&mut self.state, &mut self.trial);
                 self.steps += 1;
-                if !modified && step_constant > 0.0 {
-                    self.newton_constant = step_constant;
+                if !modified {
+                    self.last_corrections = it;
                 }
                 return Ok(momentum_defect);
-            }
-            // The converging iterate is left out of c: its residual is often at the
-            // round-off floor, not where the quadratic model puts it.
-            if it > 0 && last_rel > 0.0 && rel.is_finite() {
-                step_constant = step_constant.max(rel / (last_rel * last_rel));
             }
             if it == self.settings.max_iterations || !rel.is_finite() {
                 // Leave the workspace consistent with the last converged state.
