@@ -779,14 +779,16 @@ impl Superelement {
                 }
             }
         }
-        // With Om_q = Z_r N_y and Y_r = Z_r Lambda, both partials share
-        // H = FX + MXNy - (MXNy Psi) Z + MXUW Z_r:
-        //   E  = F_q + FX N_y + MX blocks + MXUW Om_q + MXNy N_y - (MXNy Psi) Z N_y = F_q + MX blocks + H N_y,
-        //   E2 = (FX + MXNy - (MXNy Psi) Z) Lambda + MX blocks2 + MXUW Y_r = H Lambda + MX blocks2,
-        // and Dq += Lambda^T X^T E, Dy += Lambda^T X^T E2 (Lambda^T deferred, `Local::Dq`).
-        // H is built in FX; MXNy Psi = MX (N_y Psi) only involves the 6N interface columns.
-        // H = FX + MXNy - (MXNy Psi) Z + MXUW Z_r = F_nu_q + MX N_y + t6 Z with
-        // t6 = F_nu_6 - F_nu_q Psi - MX (N_y Psi) + [0, MX U] (one product with Z).
+        // With Om_q = Z_r N_y and Y_r = Z_r Lambda, both partials share (F_nu X written FX,
+        // M_ffr X written MX, U the stack of block 3x3s in n3a)
+        // H = FX + MX N_y - (MX N_y Psi) Z + (MX U) Z_r:
+        //   E  = F_q + FX N_y + MX blocks + (MX U) Om_q + MX N_y N_y - (MX N_y Psi) Z N_y
+        //      = F_q + MX blocks + H N_y,
+        //   E2 = (FX + MX N_y - (MX N_y Psi) Z) Lambda + MX blocks2 + (MX U) Y_r = H Lambda + MX blocks2,
+        // and Dq += Lambda^T X^T E, Dy += Lambda^T X^T E2 (`Local::XE`; Lambda^T deferred, `Local::Dq`).
+        // With FX = F_nu_q + (F_nu_6 - F_nu_q Psi) Z, H = F_nu_q + MX N_y + t6 Z where
+        // t6 = F_nu_6 - F_nu_q Psi - MX (N_y Psi) + [0, MX U]: one product with Z; N_y Psi only
+        // involves the 6N interface rows.
         let ni = 6 * N;
         kin.mul_psi(w.ffr.F_nu.as_ref().subcols(6, n), &mut w.t6);
         for c in 0..6 {
