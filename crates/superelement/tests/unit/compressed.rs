@@ -134,6 +134,11 @@ fn the_compressed_evaluation_equals_the_dense_one() {
                 })
             };
             close("residual", &a.residual, &b.residual);
+            let (fa, fb) = (
+                fast.forces(&state, &acc, &g).unwrap(),
+                dense.forces(&state, &acc, &g).unwrap(),
+            );
+            close("residual, forces only", &fa.residual, &fb.residual);
             close("elastic force", &a.f_elastic, &b.f_elastic);
             close("inertia force", &a.f_inertia, &b.f_inertia);
             let (fa, fb) = (flat(&a), flat(&b));
