@@ -142,7 +142,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::error::{Incomplete, SolveError};
+use crate::error::{At, Incomplete, SolveError};
 use crate::momentum::MomentumProjection;
 use crate::sensors::SensorRecord;
 use crate::system::{State, System, Workspace};
@@ -546,7 +546,7 @@ impl<'a> Integrator<'a> {
         let mut acc: Vec<f64> = ws.F.iter().map(|f| -f).collect();
         ws.S.copy_from_slice(&ws.M);
         system.solve(&mut ws, &mut acc).map_err(|what| SolveError::Singular {
-            t: state.time,
+            at: At::Time(state.time),
             step: 0,
             what: format!("mass matrix for the initial accelerations ({what}); every unknown needs mass"),
         })?;
@@ -837,7 +837,7 @@ impl<'a> Integrator<'a> {
                 let mut s = self.state.clone();
                 sys.evaluate_into(&mut s, 1.0, false, &mut self.ws)?;
                 return Err(SolveError::NotConverged {
-                    t,
+                    at: At::Time(t),
                     step,
                     residual: rel,
                     iterations: it,
@@ -858,7 +858,7 @@ impl<'a> Integrator<'a> {
                 }
                 sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, st)));
                 sys.factor(&mut self.ws).map_err(|what| SolveError::Singular {
-                    t,
+                    at: At::Time(t),
                     step,
                     what: format!("iteration matrix ({what})"),
                 })?;
@@ -871,7 +871,7 @@ impl<'a> Integrator<'a> {
             }
             sys.solve_factored(&mut self.ws, &mut self.dx)
                 .map_err(|what| SolveError::Singular {
-                    t,
+                    at: At::Time(t),
                     step,
                     what: format!("iteration matrix ({what})"),
                 })?;

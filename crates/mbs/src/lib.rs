@@ -202,7 +202,7 @@ pub use dynamic_solver::{
     DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE, PI_INTEGRAL,
     PI_PROPORTIONAL,
 };
-pub use error::{Entity, Incomplete, ModelError, SolveError};
+pub use error::{At, Entity, Incomplete, ModelError, SolveError};
 pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
 pub use linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,

@@ -32,7 +32,9 @@ pub struct SensorRecord {
 
 impl SensorRecord {
     /// The first value of the last row that is not finite, as
-    /// [`SolveError::NonFiniteSensor`] at `step` (sensor, component within it, time).
+    /// [`SolveError::NonFiniteSensor`] at `step` (sensor, its index in the record, which is its
+    /// index in `Model::sensors` for a record of [`System::sensor_record`], component within
+    /// it, time).
     pub fn check_last_row(&self, step: usize) -> Result<(), SolveError> {
         let (Some(row), Some(&t)) = (self.rows.last(), self.times.last()) else {
             return Ok(());
@@ -47,9 +49,10 @@ impl SensorRecord {
         }
         Err(SolveError::NonFiniteSensor {
             sensor: self.names.get(i).cloned().unwrap_or_default(),
+            index: i,
             component: k - start,
             value: row[k],
-            t,
+            at: crate::error::At::Time(t),
             step,
         })
     }
@@ -114,8 +117,9 @@ impl System {
         let body_err = |f: &crate::body::FlexibleElement, source| SolveError::Body {
             body: self.model.bodies[f.body].name().to_string(),
             id: crate::model::BodyId(f.body as u32),
-            t: state.time,
-            source,
+            at: crate::error::At::Time(state.time),
+            step: None,
+            source: Box::new(source),
         };
         let evaluated = |i: usize| {
             let ws = ws?;
@@ -210,8 +214,9 @@ impl System {
         let kin = f.se.kinematics(&bs).map_err(|source| SolveError::Body {
             body: self.model.bodies[f.body].name().to_string(),
             id: body,
-            t: state.time,
-            source,
+            at: crate::error::At::Time(state.time),
+            step: None,
+            source: Box::new(source),
         })?;
         let shapes = f.se.stress_shapes().expect("stress shapes (System::new)");
         Ok((shapes, kin))

@@ -558,6 +558,7 @@ impl System {
         let driver_starts = crate::initial::driver_starts(model, &topo, &drivers)?;
 
         check_stress_sensors(model, &flexible)?;
+        check_reaction_sensors(model, &topo)?;
         let stress_maxima = model
             .sensors
             .iter()
@@ -1453,8 +1454,9 @@ impl System {
                 .map_err(|source| SolveError::Body {
                     body: self.model.bodies[f.body].name().to_string(),
                     id: crate::model::BodyId(f.body as u32),
-                    t: state.time,
-                    source,
+                    at: crate::error::At::Time(state.time),
+                    step: None,
+                    source: Box::new(source),
                 })?;
             }
             ElementKind::Rigid(i) => {
@@ -1836,6 +1838,41 @@ fn body_loads(
         out.push((load, time));
     }
     Ok(out)
+}
+
+/// Every reaction sensor is at an independent node that a support or a driver holds in some
+/// direction: the reaction is the residual of its removed coordinates, which a node without
+/// them does not have (a node that follows a joint or a body has no coordinates of its own; a
+/// free node's reaction would be zero by definition, never what was meant).
+fn check_reaction_sensors(model: &Model, topo: &Topology) -> Result<(), ModelError> {
+    for (i, s) in model.sensors.iter().enumerate() {
+        let SensorKind::Reaction { node } = s.kind else {
+            continue;
+        };
+        let held = |sc: &usize| matches!(topo.map.scalars[*sc].slot, Slot::Prescribed(_));
+        let why = match &topo.roots[node.index()] {
+            None => "it follows a joint or a body (it has no coordinates of its own)",
+            Some(rc) => {
+                let rotation_held = match &rc.rotation {
+                    RootRotation::Free(_) => false,
+                    RootRotation::Axes(axes) => axes.iter().any(|(sc, _)| held(sc)),
+                };
+                if rc.translation.iter().any(|(sc, _)| held(sc)) || rotation_held {
+                    continue;
+                }
+                "no support or driver holds it"
+            }
+        };
+        return Err(ModelError::InvalidValue {
+            entity: format!("sensor '{}'", s.name),
+            what: format!(
+                "node '{}' has no reaction: {why}; a reaction is measured at a supported or driven node",
+                model.nodes[node.index()].name
+            ),
+            id: Some(Entity::Sensor(i)),
+        });
+    }
+    Ok(())
 }
 
 /// Every stress sensor is on a flexible body reduced with stress shapes, at nodes it has.

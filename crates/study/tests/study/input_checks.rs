@@ -299,3 +299,114 @@ part = "block"
     assert_eq!(summary.status, "complete");
     assert_eq!(study::part::model_copies() - copies, 4);
 }
+
+/// A cart driven along a rail at 10 m/s from 1 m before a clamped post, on top of the
+/// pendulum (which keeps an unknown): the cart's point `P` reaches the post's point `Q` at
+/// t = 0.1 s, step 10, where the deflection of `post.R` from the line through them is 0/0.
+const CART: &str = r#"
+[[rigid_bodies]]
+name = "cart"
+mass = 1.0
+center_of_mass = [-1.0, 0.0, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
+points = { P = [-1.0, 0.0, 0.0] }
+[[rigid_bodies]]
+name = "post"
+mass = 1.0
+center_of_mass = [0.0, 0.0, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
+points = { Q = [0.0, 0.0, 0.0], R = [0.0, 1.0, 0.0] }
+[[supports]]
+at = "post.Q"
+type = "clamp"
+[[joints]]
+name = "rail"
+type = "prismatic"
+between = ["ground", "cart.P"]
+axis = [1.0, 0.0, 0.0]
+[[drivers]]
+name = "push"
+joint = "rail"
+function = { type = "constant-speed", speed = 10.0 }
+[[sensors]]
+name = "travel"
+type = "joint"
+of = "rail"
+[[sensors]]
+name = "gap"
+type = "deflection"
+of = "post.R"
+chord = ["cart.P", "post.Q"]
+[[analyses]]
+type = "dynamic"
+t_end = 0.2
+dt = 0.01
+"#;
+
+/// A sensor whose value stops being finite stops the run at the sensor's `[[sensors]]` entry
+/// (`file:line:col: sensors[i]: ...`), as a failure at a body is located at the body, and the
+/// message names the sensor, the time and the step.
+#[test]
+fn a_sensor_that_is_not_finite_is_located_at_the_sensor_in_the_study_file() {
+    let text = format!("{PENDULUM}{CART}");
+    let e = run_error("sensor-not-finite", &text);
+    let line = text.lines().position(|l| l == "name = \"gap\"").unwrap() + 1;
+    assert!(
+        e.contains(&format!("sensor-not-finite.toml:{line}:"))
+            || e.contains(&format!("sensor-not-finite.toml:{}:", line - 1)),
+        "line {line}: {e}"
+    );
+    assert!(e.contains("sensors[1]: time integration stopped"), "{e}");
+    assert!(
+        e.contains("sensor 'gap' component 0 is NaN at t = 0.100000 (step 10)"),
+        "{e}"
+    );
+}
+
+/// A reaction is the force a support applies: a sensor on a point no support holds is refused
+/// at the sensor, naming the point.
+#[test]
+fn a_reaction_sensor_at_a_point_without_a_support_is_refused() {
+    let text = format!("{PENDULUM}[[sensors]]\nname = \"r\"\ntype = \"reaction\"\nof = \"bob.P\"\n{DYNAMIC}");
+    let e = check("reaction-unsupported", &text);
+    assert!(
+        e.contains("sensors[0].of") && e.contains("point 'bob.P' has no [[supports]]"),
+        "{e}"
+    );
+    // At the joint to the ground it is the pivot's force.
+    let text = format!("{PENDULUM}[[sensors]]\nname = \"r\"\ntype = \"reaction\"\nof = \"pivot\"\n{DYNAMIC}");
+    assert_eq!(run_error("reaction-pivot", &text), "");
+}
+
+/// An initial velocity at a point is set on the point's free components; a component that is
+/// not zero along a direction its support holds would be dropped without a word, so it is
+/// refused at the `[[initial]]` line with the component named. Zero there is fine.
+#[test]
+fn an_initial_velocity_along_a_held_direction_is_refused() {
+    let wheel = |velocity: &str| {
+        format!(
+            r#"
+[[rigid_bodies]]
+name = "wheel"
+mass = 1.0
+center_of_mass = [0.0, 0.0, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]]
+points = {{ C = [0.0, 0.0, 0.0] }}
+[[supports]]
+at = "wheel.C"
+type = "pin"
+[[initial]]
+at = "wheel.C"
+velocity = {velocity}
+angular_velocity = [0.0, 0.0, 2.0]
+{DYNAMIC}"#
+        )
+    };
+    let e = run_error("initial-held", &wheel("[0.0, 0.5, 0.0]"));
+    assert!(e.contains("initial[0]") && e.contains("initial-held.toml:"), "{e}");
+    assert!(
+        e.contains("velocity component y is 0.5 m/s, but its support holds it"),
+        "{e}"
+    );
+    assert_eq!(run_error("initial-held-zero", &wheel("[0.0, 0.0, 0.0]")), "");
+}
