@@ -276,6 +276,16 @@ fn project(
         describe,
     } = *system;
     let (nb, ni, n_free) = (p.boundary.len(), p.internal.len(), K.nrows());
+    // Before any factorisation: a count the interior cannot give is the user's to change.
+    if let ModeSelection::Count(m) = modes {
+        if m > 0 && m >= ni {
+            return Err(ReductionError::TooManyModes {
+                body: name.into(),
+                requested: m,
+                interior: ni,
+            });
+        }
+    }
     // One factorisation of K_ii for the constraint modes and the fixed-interface modes.
     let (K_ii, K_ib) = split(K, p)?;
     let (M_ii, _) = split(M, p)?;

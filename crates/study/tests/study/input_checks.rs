@@ -410,3 +410,23 @@ angular_velocity = [0.0, 0.0, 2.0]
     );
     assert_eq!(run_error("initial-held-zero", &wheel("[0.0, 0.0, 0.0]")), "");
 }
+
+/// A reduction keeps fixed-interface modes of the interior (the dofs that are not on an
+/// interface): asking for as many as the interior has or more is refused before anything is
+/// solved, naming the part and both counts.
+#[test]
+fn more_reduction_modes_than_interior_dofs_are_refused_with_the_part_named() {
+    let cantilever =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cantilever.toml")).unwrap();
+    // 21 beam nodes, the two ends interfaces: 19 x 6 = 114 interior dofs.
+    let text = cantilever.replace("[parts.reduction]\nmodes = 4", "[parts.reduction]\nmodes = 500");
+    assert_ne!(text, cantilever, "the example reduces with 4 modes");
+    let e = run_error("reduction-modes", &text);
+    assert!(e.contains("part 'beam'"), "{e}");
+    assert!(
+        e.contains("500 fixed-interface modes requested of 'beam', but its interior (the free dofs not on an interface) has 114 dofs, so at most 113 modes"),
+        "{e}"
+    );
+    let e = run_error("reduction-modes-113", &text.replace("modes = 500", "modes = 113"));
+    assert!(!e.contains("fixed-interface modes requested"), "{e}");
+}
