@@ -311,6 +311,21 @@ impl System {
 
     /// Appends the sensor values at `state` (evaluated into `ws`) to `rec`.
     pub(crate) fn record(&self, state: &State, ws: &Workspace, rec: &mut SensorRecord) -> Result<(), SolveError> {
+        let row = self.sensor_row(state, ws, &|_| true)?;
+        rec.times.push(state.time);
+        rec.rows.push(row);
+        Ok(())
+    }
+
+    /// The values of the sensors `wanted` picks (by index in `Model::sensors`) at `state`
+    /// (evaluated into `ws`), side by side in the model's order: the others are not evaluated
+    /// (an energy, a momentum or a stress search costs a pass over the bodies).
+    pub(crate) fn sensor_row(
+        &self,
+        state: &State,
+        ws: &Workspace,
+        wanted: &dyn Fn(usize) -> bool,
+    ) -> Result<Vec<f64>, SolveError> {
         let nodes = &ws.nodes;
         let map = &self.topo.map;
         let mut row = Vec::new();
@@ -319,7 +334,7 @@ impl System {
         // The kinematics of each body with stress sensors, once per row.
         let mut kinematics: Vec<(BodyId, superelement::Kinematics)> = Vec::new();
         let push3 = |row: &mut Vec<f64>, v: Vector3<f64>| row.extend_from_slice(v.as_slice());
-        for (i, s) in self.model.sensors.iter().enumerate() {
+        for (i, s) in self.model.sensors.iter().enumerate().filter(|(i, _)| wanted(*i)) {
             match &s.kind {
                 SensorKind::NodePosition { node } => push3(&mut row, nodes[node.index()].r),
                 SensorKind::NodeDisplacement { node } => push3(
@@ -431,9 +446,7 @@ impl System {
                 }
             }
         }
-        rec.times.push(state.time);
-        rec.rows.push(row);
-        Ok(())
+        Ok(row)
     }
 }
 

@@ -868,6 +868,30 @@ impl System {
         10.0 * f64::EPSILON * sum.sqrt()
     }
 
+    /// Round-off floor of the inertia forces of a time step of size $h$:
+    /// $10\,\varepsilon\,\|\hat{\mathbf M}\mathbf v\|/h$, with $\hat{\mathbf M}$ the mass matrix of the
+    /// workspace's last evaluation with tangents.
+    ///
+    /// The accelerations of a step are differences of velocities over the step, so their
+    /// round-off is $\varepsilon|\mathbf v|/h$ and that of the inertia forces $\varepsilon\|\hat{\mathbf M}\mathbf v\|/h$:
+    /// the generalised momentum over the step, in the units of $\mathbf F$ row by row. A body
+    /// coasting force-free (a rotor at constant speed about a principal axis, a drifting mass)
+    /// has zero inertia, internal and external forces, so $f_{scale}$ vanishes and only this
+    /// floor lets Newton stop at round-off. The factor 10 covers the few roundings of the
+    /// update, the rotations and the gyroscopic terms ($\varepsilon|\mathbf J\boldsymbol\omega||\boldsymbol\omega|$,
+    /// below the momentum term while $|\boldsymbol\omega| h < 1$).
+    pub(crate) fn inertia_floor(&self, ws: &Workspace, v: &[f64], h: f64) -> f64 {
+        let cp = self.pattern.symbolic.col_ptr();
+        let rows = self.pattern.symbolic.row_idx();
+        let mut p = vec![0.0; v.len()];
+        for (c, &vc) in v.iter().enumerate() {
+            for k in cp[c]..cp[c + 1] {
+                p[rows[k]] += ws.M[k] * vc;
+            }
+        }
+        10.0 * f64::EPSILON * p.iter().map(|x| x * x).sum::<f64>().sqrt() / h
+    }
+
     /// $\max_i |\delta q_i|/s_i$ with the unknowns' scales $s_i$ (model size for lengths, 1 for
     /// angles, body size $\times\sqrt{m}$ for modal coordinates).
     pub fn increment_norm(&self, dq: &[f64]) -> f64 {

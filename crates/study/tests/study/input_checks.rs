@@ -430,3 +430,35 @@ fn more_reduction_modes_than_interior_dofs_are_refused_with_the_part_named() {
     let e = run_error("reduction-modes-113", &text.replace("modes = 500", "modes = 113"));
     assert!(!e.contains("fixed-interface modes requested"), "{e}");
 }
+
+/// A simulation's `sensor(name)` evaluates that sensor alone: when the cart's point reaches
+/// the post (t = 0.1 s) the deflection `gap` is 0/0, so reading every sensor fails, naming
+/// `gap` at its `[[sensors]]` entry, while `travel` (the rail coordinate, 10 m/s x 0.1 s) is
+/// still read. Before, `sensor` read them all and failed too.
+#[test]
+fn a_simulation_reads_one_sensor_without_evaluating_the_others() {
+    let dir = crate::scratch("sensor-alone");
+    let file = dir.join("sensor-alone.toml");
+    std::fs::write(&file, format!("{PENDULUM}{CART}")).unwrap();
+    let study = study::load(&file).unwrap();
+    let options = Options {
+        out: None,
+        cache: Some(dir.join("cache")),
+        t_end: None,
+        foreign: Default::default(),
+    };
+    let mut sim = study::Simulation::new(&study, "dynamic", &options).unwrap();
+    sim.step().unwrap();
+    assert_eq!(sim.sensor("gap").unwrap(), sim.read().unwrap()[1]);
+    assert_eq!(sim.sensor("travel").unwrap(), sim.read().unwrap()[0]);
+    sim.advance_to(0.1).unwrap();
+    // 10 m/s for 0.1 s, to the round-off of the time.
+    let travel = sim.sensor("travel").unwrap()[0];
+    assert!((travel - 1.0).abs() < 1e-12, "{travel}");
+    let e = sim.read().unwrap_err();
+    assert!(e.to_string().contains("sensor 'gap'"), "{e}");
+    let e = sim.sensor("gap").unwrap_err();
+    let solve = e.downcast_ref::<mbs::SolveError>().expect("a solver error");
+    let at = sim.locate(solve).expect("located at the sensor");
+    assert_eq!(at.key.to_string(), "sensors[1]");
+}
