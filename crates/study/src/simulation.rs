@@ -235,7 +235,7 @@ impl Simulation {
             .collect())
     }
 
-    /// The columns of sensor `name` at the current state.
+    /// The columns of sensor `name` at the current state; the other sensors are not evaluated.
     pub fn sensor(&self, name: &str) -> Result<Vec<f64>, BoxError> {
         let Some(g) = self.groups.iter().position(|g| g.name == name) else {
             let names: Vec<String> = self.groups.iter().map(|g| g.name.clone()).collect();
