@@ -403,7 +403,7 @@ impl Study {
         for i in targets {
             let p = &st.parts[i];
             let reduced = py
-                .detach(|| study::run::reduce_part(p, &cache_dir, &mut ()))
+                .detach(|| study::run::reduce_part(&st, p, &cache_dir, &mut ()))
                 .map_err(|e| to_py_err(py, &*e))?;
             out.push((
                 p.name.clone(),

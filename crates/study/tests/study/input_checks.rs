@@ -413,7 +413,7 @@ angular_velocity = [0.0, 0.0, 2.0]
 
 /// A reduction keeps fixed-interface modes of the interior (the dofs that are not on an
 /// interface): asking for as many as the interior has or more is refused before anything is
-/// solved, naming the part and both counts.
+/// solved, located at the part's `reduction.modes`, naming the part and both counts.
 #[test]
 fn more_reduction_modes_than_interior_dofs_are_refused_with_the_part_named() {
     let cantilever =
@@ -422,7 +422,12 @@ fn more_reduction_modes_than_interior_dofs_are_refused_with_the_part_named() {
     let text = cantilever.replace("[parts.reduction]\nmodes = 4", "[parts.reduction]\nmodes = 500");
     assert_ne!(text, cantilever, "the example reduces with 4 modes");
     let e = run_error("reduction-modes", &text);
-    assert!(e.contains("part 'beam'"), "{e}");
+    // Located at the key, `file:line:col: parts[0].reduction.modes: part 'beam'`.
+    let line = text.lines().position(|l| l == "modes = 500").unwrap() + 1;
+    assert!(
+        e.contains(&format!("reduction-modes.toml:{line}:")) && e.contains("parts[0].reduction.modes: part 'beam'"),
+        "line {line}: {e}"
+    );
     assert!(
         e.contains("500 fixed-interface modes requested of 'beam', but its interior (the free dofs not on an interface) has 114 dofs, so at most 113 modes"),
         "{e}"
