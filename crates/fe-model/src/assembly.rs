@@ -42,6 +42,12 @@ pub fn element_matrices(model: &FeModel, index: usize) -> Result<LocalMatrices, 
     model.elements[index].local_matrices(index, &X_e, &model.properties())
 }
 
+/// Mass matrix of element `index` in global axes ([`crate::Element::mass_matrix`]).
+pub fn element_mass(model: &FeModel, index: usize) -> Result<DMatrix<f64>, ElementError> {
+    let X_e = element_coordinates(model, index)?;
+    model.elements[index].mass_matrix(index, &X_e, &model.properties())
+}
+
 /// $\mathbf T_e^T \mathbf A \mathbf T_e$ added at the element's slots (also the geometric
 /// stiffness's assembly, `geometric.rs`).
 pub(crate) fn scatter(map: &ElementMap, A: &DMatrix<f64>, values: &mut [f64]) {
@@ -78,19 +84,19 @@ pub fn assemble_into(
     K_values: &mut [f64],
     M_values: &mut [f64],
 ) -> Result<(), FeError> {
-    fill_values(model, pattern, [K_values, M_values], [|m| &m.K_e, |m| &m.M_e])
+    fill_values(model, pattern, [K_values, M_values], |e| {
+        let LocalMatrices { K_e, M_e } = element_matrices(model, e)?;
+        Ok([K_e, M_e])
+    })
 }
 
-/// Which element matrix goes into which output of [`fill_values`].
-type Pick = fn(&LocalMatrices) -> &DMatrix<f64>;
-
-/// The parallel element loop of [`assemble_into`] for the element matrices chosen by `picks`,
-/// each added into the output of the same index.
+/// The parallel element loop of [`assemble_into`]: `matrices(e)` gives element `e`'s
+/// matrices, each added into the output of the same index.
 fn fill_values<const N: usize>(
     model: &FeModel,
     pattern: &SystemPattern,
     outputs: [&mut [f64]; N],
-    picks: [Pick; N],
+    matrices: impl Fn(usize) -> Result<[DMatrix<f64>; N], ElementError> + Sync,
 ) -> Result<(), FeError> {
     let nnz = pattern.nnz();
     for out in &outputs {
@@ -106,9 +112,8 @@ fn fill_values<const N: usize>(
     let chunk = n_elements.div_ceil(n_chunks).max(1);
     let fill = |range: std::ops::Range<usize>, outs: &mut [&mut [f64]]| -> Result<(), FeError> {
         for e in range {
-            let m = element_matrices(model, e)?;
-            for (out, pick) in outs.iter_mut().zip(&picks) {
-                scatter(&pattern.elements[e], pick(&m), out);
+            for (out, A) in outs.iter_mut().zip(matrices(e)?) {
+                scatter(&pattern.elements[e], &A, out);
             }
         }
         Ok(())
@@ -147,10 +152,11 @@ pub fn assemble(model: &FeModel, pattern: &SystemPattern) -> Result<Assembled, F
     })
 }
 
-/// Assembles $\mathbf M$ alone on the free dofs: [`assemble`] without the scatter and the
-/// per-thread buffers of $\mathbf K$ (the mass data of a reduced body need only $\mathbf M$).
+/// Assembles $\mathbf M$ alone on the free dofs: [`assemble`] without computing the element
+/// stiffnesses ([`element_mass`]) and without the scatter and the per-thread buffers of
+/// $\mathbf K$ (the mass data of a reduced body need only $\mathbf M$).
 pub fn assemble_mass(model: &FeModel, pattern: &SystemPattern) -> Result<SparseColMat<usize, f64>, FeError> {
     let mut M = vec![0.0; pattern.nnz()];
-    fill_values(model, pattern, [&mut M], [|m| &m.M_e])?;
+    fill_values(model, pattern, [&mut M], |e| Ok([element_mass(model, e)?]))?;
     Ok(SparseColMat::new(pattern.symbolic.clone(), M))
 }

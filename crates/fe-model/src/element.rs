@@ -203,4 +203,21 @@ impl Element {
             Element::Wedge6(s) => solid_arm(SolidKind::Wedge6, s),
         }
     }
+
+    /// The mass matrix of [`Element::local_matrices`] alone: for solids without computing the
+    /// stiffness (most of the cost of an element's matrices); a beam's are cheap and computed
+    /// together.
+    pub fn mass_matrix(
+        &self,
+        index: usize,
+        X_e: &[Point3<f64>],
+        props: &Properties<'_>,
+    ) -> Result<DMatrix<f64>, ElementError> {
+        match self.solid() {
+            Some((kind, s)) if X_e.len() == self.nodes().len() => {
+                solid::solid_mass(kind, index, X_e, props.material(index, s.material)?, s.mass)
+            }
+            _ => Ok(self.local_matrices(index, X_e, props)?.M_e),
+        }
+    }
 }

@@ -31,28 +31,12 @@
 
 mod common;
 
-use common::{block, divisions, parse_ordering};
+use common::{block, cpu_seconds, divisions, parse_ordering};
 use fe_model::{assemble, DofMap, DofMask, FeModel, FillOrdering, NodeId, SystemPattern};
 use reduction::{lowest_modes, reduce_with_progress, write_matrix_market, CbSettings, EigenSettings, ModeSelection};
 use reduction::{ReducedBody, Shift, Stage};
 use std::path::Path;
 use std::time::Instant;
-
-/// CPU seconds (user + system, all threads) of this process so far: less sensitive to the
-/// load of a shared machine than wall time.
-fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            // Fields after the command name (which may hold spaces) in parentheses.
-            let rest = &s[s.rfind(')')? + 2..];
-            let f: Vec<&str> = rest.split_whitespace().collect();
-            // utime and stime are fields 14 and 15 of stat, 12 and 13 after the name; ticks
-            // of 1/100 s on Linux.
-            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
-        })
-        .unwrap_or(f64::NAN)
-}
 
 fn peak_rss_mb() -> f64 {
     status_mb("VmHWM")

@@ -7,18 +7,23 @@
 //!
 //! `cargo bench -p reduction --bench ordering -- --bench` runs 10k to 200k dofs
 //! (`REDUCTION_CB_SIZES` to choose); without `--bench`, a 3k block.
+//!
+//! `REDUCTION_ORDERING_MESH=<file.msh>` instead analyses a gmsh solid mesh (steel, RBE2
+//! interfaces on its physical surfaces "root" and "tip", as
+//! `benchmarks/scripts/tet10_block.py` writes them) with nested dissection only, symbolic
+//! only: the factor size and flops that `flexmbs reduce` of that mesh will need, before
+//! running it.
 
 #![allow(non_snake_case)]
 
 mod common;
 
-use common::{block, divisions};
+use common::{block, divisions, internal_block};
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering};
-use faer::sparse::{SparseColMat, Triplet};
 use fe_model::{
-    assemble, dof_points, factor_flops, nested_dissection_with_leaves, symbolic_cholesky, DofMap, FillOrdering,
-    SparseCholesky, SystemPattern,
+    add_interface_on_set, assemble, factor_flops, nested_dissection_with_leaves, solid_model, symbolic_cholesky,
+    DofMap, FillOrdering, IsotropicMaterial, MassKind, SparseCholesky, SpiderKind, SystemPattern,
 };
 use std::time::Instant;
 
@@ -32,6 +37,10 @@ fn main() {
         }
     });
     let numeric = std::env::var("REDUCTION_ORDERING_NUMERIC").is_ok();
+    if let Ok(file) = std::env::var("REDUCTION_ORDERING_MESH") {
+        mesh_factor_size(std::path::Path::new(&file));
+        return;
+    }
     println!(
         "reduction/benches/ordering: K_ii of hex8 blocks; load average {}",
         std::fs::read_to_string("/proc/loadavg").unwrap_or_default().trim()
@@ -41,29 +50,8 @@ fn main() {
         let dofs = DofMap::new(&model).unwrap();
         let K = assemble(&model, &SystemPattern::new(&model, &dofs)).unwrap().K;
         // K_ii: the free dofs but the interface nodes' twelve.
-        let mut keep = vec![true; dofs.n_free()];
-        for node in [a, b] {
-            for k in 0..6 {
-                if let Some(d) = dofs.free_dof(node, k) {
-                    keep[d.index()] = false;
-                }
-            }
-        }
-        let internal: Vec<usize> = (0..dofs.n_free()).filter(|&d| keep[d]).collect();
-        let mut position = vec![usize::MAX; dofs.n_free()];
-        internal.iter().enumerate().for_each(|(i, &d)| position[d] = i);
-        let mut triplets = Vec::new();
-        for j in 0..K.ncols() {
-            for (&i, &v) in K.row_idx_of_col_raw(j).iter().zip(K.val_of_col(j)) {
-                if keep[i] && keep[j] {
-                    triplets.push(Triplet::new(position[i], position[j], v));
-                }
-            }
-        }
-        let ni = internal.len();
-        let K_ii = SparseColMat::try_new_from_triplets(ni, ni, &triplets).unwrap();
-        let all_points = dof_points(&model, &dofs);
-        let points: Vec<[f64; 3]> = internal.iter().map(|&d| all_points[d]).collect();
+        let (K_ii, points) = internal_block(&model, &dofs, &K, &[a, b]);
+        let ni = K_ii.nrows();
         let report = |what: String,
                       seconds: f64,
                       symbolic: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>| {
@@ -128,6 +116,35 @@ fn main() {
             }
         }
     }
+}
+
+/// The symbolic factor of $\mathbf K_{ii}$ for a gmsh solid mesh with RBE2 interfaces on its
+/// sets "root" and "tip" (nested dissection): values, memory and flops, and the memory of
+/// $\mathbf K$ itself.
+fn mesh_factor_size(file: &std::path::Path) {
+    let t = Instant::now();
+    let mesh = fe_model::mesh::gmsh::read(file).unwrap();
+    let steel = IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap();
+    let mut model = solid_model(mesh, steel, MassKind::Consistent).unwrap();
+    let a = add_interface_on_set(&mut model, "root", "root", None, SpiderKind::Rbe2).unwrap();
+    let b = add_interface_on_set(&mut model, "tip", "tip", None, SpiderKind::Rbe2).unwrap();
+    let dofs = DofMap::new(&model).unwrap();
+    let K = assemble(&model, &SystemPattern::new(&model, &dofs)).unwrap().K;
+    let nnz = K.compute_nnz();
+    let (K_ii, points) = internal_block(&model, &dofs, &K, &[a, b]);
+    drop((model, K));
+    let ni = K_ii.nrows();
+    let (symbolic, _) = symbolic_cholesky(K_ii.symbolic(), Some(&points), FillOrdering::NestedDissection).unwrap();
+    println!(
+        "{}: {} free dofs, K {nnz} entries ({:.2} GB with indices); K_ii {ni} rows; nested dissection: factor {:.1} M values ({:.2} GB), {:.0} Gflop ({:.0} s)",
+        file.display(),
+        dofs.n_free(),
+        nnz as f64 * 16.0 / 1e9,
+        symbolic.len_val() as f64 / 1e6,
+        symbolic.len_val() as f64 * 8.0 / 1e9,
+        factor_flops(&symbolic) / 1e9,
+        t.elapsed().as_secs_f64()
+    );
 }
 
 /// Writes the pattern of `A` without its diagonal, both triangles, as `graph_<size>.bin`:

@@ -20,7 +20,7 @@ use crate::reduced_body::{
 };
 use crate::stress::stress_shapes;
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
-use faer::Mat;
+use faer::{Mat, MatRef};
 use fe_model::{assemble, dof_points, DofMap, DofStatus, FeModel, FillOrdering, NodeId, SystemPattern, DOF_NAMES};
 use serde::{Deserialize, Serialize};
 
@@ -196,26 +196,75 @@ fn partition_by(
     })
 }
 
-/// The internal-internal block as a sparse matrix and the internal-boundary block dense.
+/// The free-dof matrices split by a [`Partition`]: the internal blocks sparse (both
+/// triangles), the internal-boundary and boundary blocks dense. It is all that [`project`]
+/// needs, so that [`reduce`] frees $\mathbf K$ and $\mathbf M$ of the free dofs (and their
+/// assembly pattern) before the factorisation of $\mathbf K_{ii}$, whose peak memory they
+/// would add to.
+struct Blocks {
+    K_ii: SparseColMat<usize, f64>,
+    M_ii: SparseColMat<usize, f64>,
+    /// $n_i \times n_b$.
+    K_ib: Mat<f64>,
+    M_ib: Mat<f64>,
+    /// $n_b \times n_b$.
+    K_bb: Mat<f64>,
+    M_bb: Mat<f64>,
+}
+
+impl Blocks {
+    fn new(
+        K: SparseColMatRef<'_, usize, f64>,
+        M: SparseColMatRef<'_, usize, f64>,
+        p: &Partition,
+    ) -> Result<Self, ReductionError> {
+        let (K_ii, K_ib, K_bb) = split(K, p)?;
+        let (M_ii, M_ib, M_bb) = split(M, p)?;
+        Ok(Self {
+            K_ii,
+            M_ii,
+            K_ib,
+            M_ib,
+            K_bb,
+            M_bb,
+        })
+    }
+}
+
+/// The internal-internal block as a sparse matrix, the internal-boundary and the
+/// boundary-boundary blocks dense.
 ///
 /// Internal positions increase with the free-dof index, so each column of $\mathbf A_{ii}$
 /// is column `internal[c]` of $\mathbf A$ filtered, in the same row order: no sort.
+#[allow(clippy::type_complexity)]
 fn split(
     A: SparseColMatRef<'_, usize, f64>,
     p: &Partition,
-) -> Result<(SparseColMat<usize, f64>, Mat<f64>), ReductionError> {
+) -> Result<(SparseColMat<usize, f64>, Mat<f64>, Mat<f64>), ReductionError> {
     let (ni, nb) = (p.internal.len(), p.boundary.len());
     let mut A_ib = Mat::zeros(ni, nb);
+    let mut A_bb = Mat::zeros(nb, nb);
     for (c, &col) in p.boundary.iter().enumerate() {
         for (&row, &v) in A.row_idx_of_col_raw(col).iter().zip(A.val_of_col(col)) {
-            if let Err(r) = p.position[row] {
-                A_ib[(r, c)] += v;
+            match p.position[row] {
+                Err(r) => A_ib[(r, c)] += v,
+                Ok(r) => A_bb[(r, c)] += v,
             }
         }
     }
+    let internal_nnz: usize = p
+        .internal
+        .iter()
+        .map(|&col| {
+            A.row_idx_of_col_raw(col)
+                .iter()
+                .filter(|&&row| p.position[row].is_err())
+                .count()
+        })
+        .sum();
     let mut col_ptr = Vec::with_capacity(ni + 1);
-    let mut row_idx = Vec::with_capacity(A.compute_nnz());
-    let mut values = Vec::with_capacity(A.compute_nnz());
+    let mut row_idx = Vec::with_capacity(internal_nnz);
+    let mut values = Vec::with_capacity(internal_nnz);
     col_ptr.push(0);
     for &col in &p.internal {
         for (&row, &v) in A.row_idx_of_col_raw(col).iter().zip(A.val_of_col(col)) {
@@ -229,7 +278,38 @@ fn split(
     // Rows stay in A's order: sorted (and unique) when A's are, as for assembled matrices
     // and those read by `read_matrix_market`.
     let symbolic = SymbolicSparseColMat::new_unsorted_checked(ni, ni, col_ptr, None, row_idx);
-    Ok((SparseColMat::new(symbolic, values), A_ib))
+    Ok((SparseColMat::new(symbolic, values), A_ib, A_bb))
+}
+
+/// $\mathbf V^T\mathbf A\mathbf V$ for the CB basis $\mathbf V = \begin{bmatrix}\mathbf I &
+/// \mathbf 0\\ \boldsymbol\Psi & \boldsymbol\Phi_i\end{bmatrix}$ (boundary rows first,
+/// $\mathbf V_i = [\boldsymbol\Psi\ \boldsymbol\Phi_i]$) from the blocks of $\mathbf A$:
+/// $\mathbf V_i^T(\mathbf A_{ib}\mathbf E + \mathbf A_{ii}\mathbf V_i)$ plus, in the first
+/// $n_b$ rows, $\mathbf A_{bb}\mathbf E + \mathbf A_{ib}^T\mathbf V_i$, with $\mathbf E =
+/// [\mathbf I\ \mathbf 0]$. Not symmetrised.
+fn project_blocks(
+    A_ii: SparseColMatRef<'_, usize, f64>,
+    A_ib: &Mat<f64>,
+    A_bb: &Mat<f64>,
+    V_i: MatRef<'_, f64>,
+    par: faer::Par,
+) -> Mat<f64> {
+    let nb = A_bb.nrows();
+    let n = V_i.ncols();
+    let mut AV_i = crate::eigen::symmetric_times(A_ii, V_i, par);
+    for c in 0..nb {
+        for (a, &v) in AV_i.col_mut(c).iter_mut().zip(A_ib.col(c).iter()) {
+            *a += v;
+        }
+    }
+    let mut P = V_i.transpose() * &AV_i;
+    let top = A_ib.transpose() * V_i;
+    for c in 0..n {
+        for r in 0..nb {
+            P[(r, c)] += top[(r, c)] + if c < nb { A_bb[(r, c)] } else { 0.0 };
+        }
+    }
+    P
 }
 
 /// The CB basis on the free dofs and the reduced matrices: what [`reduce`] and
@@ -249,10 +329,9 @@ struct Projection {
 /// constraint modes and fixed-interface modes from one factorisation of $\mathbf K_{ii}$,
 /// the basis $\mathbf V$ and the projections (module docs). `describe(d)` names free dof `d`
 /// in messages.
-/// The free-dof matrices and how to order and name their dofs, for [`project`].
+/// The free-dof matrices, split, and how to order and name their dofs, for [`project`].
 struct FreeSystem<'a> {
-    K: SparseColMatRef<'a, usize, f64>,
-    M: SparseColMatRef<'a, usize, f64>,
+    blocks: Blocks,
     /// Position of each free dof (its node), for nested dissection.
     points: &'a [[f64; 3]],
     ordering: FillOrdering,
@@ -261,7 +340,7 @@ struct FreeSystem<'a> {
 }
 
 fn project(
-    system: &FreeSystem<'_>,
+    system: FreeSystem<'_>,
     p: &Partition,
     modes: ModeSelection,
     load_dofs: &[usize],
@@ -269,13 +348,20 @@ fn project(
     progress: &mut dyn FnMut(Stage),
 ) -> Result<Projection, ReductionError> {
     let FreeSystem {
-        K,
-        M,
+        blocks,
         points,
         ordering,
         describe,
-    } = *system;
-    let (nb, ni, n_free) = (p.boundary.len(), p.internal.len(), K.nrows());
+    } = system;
+    let Blocks {
+        K_ii,
+        M_ii,
+        K_ib,
+        M_ib,
+        K_bb,
+        M_bb,
+    } = blocks;
+    let (nb, ni, n_free) = (p.boundary.len(), p.internal.len(), p.position.len());
     // Before any factorisation: a count the interior cannot give is the user's to change.
     if let ModeSelection::Count(m) = modes {
         if m > 0 && m >= ni {
@@ -287,8 +373,6 @@ fn project(
         }
     }
     // One factorisation of K_ii for the constraint modes and the fixed-interface modes.
-    let (K_ii, K_ib) = split(K, p)?;
-    let (M_ii, _) = split(M, p)?;
     let (Psi, Phi_i, omega, n_attachment) = if ni == 0 {
         (Mat::zeros(0, nb), Mat::zeros(0, 0), Vec::new(), 0)
     } else {
@@ -337,27 +421,24 @@ fn project(
     progress(Stage::Projecting);
     let m = omega.len();
     let n = nb + m;
-    // V on the free dofs, in the free-dof order of the model.
+    // V_i = [Psi Phi_i], the internal rows of V; the projections from the blocks.
+    let V_i = Mat::<f64>::from_fn(ni, n, |i, c| if c < nb { Psi[(i, c)] } else { Phi_i[(i, c - nb)] });
+    drop((Psi, Phi_i));
+    let par = faer::get_global_parallelism();
+    let K_CB = symmetrize(project_blocks(K_ii.as_ref(), &K_ib, &K_bb, V_i.as_ref(), par));
+    let M_CB = symmetrize(project_blocks(M_ii.as_ref(), &M_ib, &M_bb, V_i.as_ref(), par));
+    drop((K_ii, M_ii));
+    // V on the free dofs, in the free-dof order of the model, column by column (the matrices
+    // are column-major).
     let mut V = Mat::<f64>::zeros(n_free, n);
     for (b, &d) in p.boundary.iter().enumerate() {
         V[(d, b)] = 1.0;
     }
-    // Column by column: the matrices are column-major.
-    for c in 0..nb {
+    for c in 0..n {
         for (i, &d) in p.internal.iter().enumerate() {
-            V[(d, c)] = Psi[(i, c)];
+            V[(d, c)] = V_i[(i, c)];
         }
     }
-    for c in 0..m {
-        for (i, &d) in p.internal.iter().enumerate() {
-            V[(d, nb + c)] = Phi_i[(i, c)];
-        }
-    }
-    let par = faer::get_global_parallelism();
-    let KV = crate::eigen::symmetric_times(K, V.as_ref(), par);
-    let MV = crate::eigen::symmetric_times(M, V.as_ref(), par);
-    let K_CB = symmetrize(V.transpose() * &KV);
-    let M_CB = symmetrize(V.transpose() * &MV);
     Ok(Projection {
         V,
         omega,
@@ -563,6 +644,7 @@ pub fn reduce_with_progress(
     let dofs = DofMap::new(model)?;
     let pattern = SystemPattern::new(model, &dofs);
     let a = assemble(model, &pattern)?;
+    drop(pattern);
     let node_ids: Vec<(String, NodeId)> = interfaces.iter().map(|(n, i)| (n.clone(), NodeId(*i as u32))).collect();
     let p = partition(model, &dofs, &node_ids)?;
     let describe = |d: usize| {
@@ -570,9 +652,12 @@ pub fn reduce_with_progress(
         format!("node {tag} dof {k}")
     };
     let points = dof_points(model, &dofs);
+    // Only the blocks from here on: K and M of the free dofs are freed before the
+    // factorisation.
+    let blocks = Blocks::new(a.K.as_ref(), a.M.as_ref(), &p)?;
+    drop(a);
     let system = FreeSystem {
-        K: a.K.as_ref(),
-        M: a.M.as_ref(),
+        blocks,
         points: &points,
         ordering,
         describe: &describe,
@@ -585,7 +670,7 @@ pub fn reduce_with_progress(
     let load_dofs = load_point_dofs(&load_points, model.node_count(), &p, &|node, k| {
         dofs.free_dof(NodeId(node as u32), k).map(|d| d.index())
     })?;
-    let projection = project(&system, &p, settings.modes, &load_dofs, name, progress)?;
+    let projection = project(system, &p, settings.modes, &load_dofs, name, progress)?;
     let n = projection.V.ncols();
     // The CB basis on every node's six slots: S_full = T V (dependent slots follow their spider).
     let mut S_full = Mat::<f64>::zeros(6 * model.node_count(), n);
@@ -750,8 +835,7 @@ pub fn reduce_external_dofs(
     let describe = |d: usize| format!("node {} (index) dof {}", dofs[d].0, DOF_NAMES[dofs[d].1]);
     let points: Vec<[f64; 3]> = dofs.iter().map(|&(node, _)| nodes[node]).collect();
     let system = FreeSystem {
-        K,
-        M,
+        blocks: Blocks::new(K, M, &p)?,
         points: &points,
         ordering: FillOrdering::Auto,
         describe: &describe,
@@ -762,7 +846,7 @@ pub fn reduce_external_dofs(
         .map(|(n, node)| (n.clone(), node.index()))
         .collect();
     let load_dofs = load_point_dofs(&load_points, nodes.len(), &p, &|node, k| slot_dof[6 * node + k])?;
-    let projection = project(&system, &p, settings.modes, &load_dofs, name, &mut |_| {})?;
+    let projection = project(system, &p, settings.modes, &load_dofs, name, &mut |_| {})?;
     let n = projection.V.ncols();
     let mut S_full = Mat::<f64>::zeros(6 * nodes.len(), n);
     for col in 0..n {

@@ -55,6 +55,8 @@
 //! | symbol | Rust | meaning | source |
 //! |---|---|---|---|
 //! | $\mathbf K,\ \mathbf M$ | `K`, `M` | sparse symmetric stiffness ($\succeq 0$) and mass ($\succ 0$), both triangles stored | theory guide §3 |
+//! | $\mathbf K_{ii},\ \mathbf K_{ib},\ \mathbf K_{bb}$ (and of $\mathbf M$) | `K_ii`, `K_ib`, `K_bb` | blocks of the free-dof matrices on the internal ($i$) and boundary ($b$, the interface nodes' six dofs) dofs; $\mathbf K_{ii}$ sparse, the others dense | [`craig_bampton`] module docs |
+//! | $\mathbf V_i$ | `V_i` | internal rows of the CB basis, $[\boldsymbol\Psi\ \boldsymbol\Phi_i]$ | [`craig_bampton`] module docs |
 //! | $\lambda_k = \omega_k^2,\ \boldsymbol\phi_k$ | `eigenvalues[k]`, `vectors.col(k)` | eigenpair of $\mathbf K\boldsymbol\phi = \lambda\mathbf M\boldsymbol\phi$, ascending, $\boldsymbol\Phi^T\mathbf M\boldsymbol\Phi = \mathbf I$ | [`eigen::EigenSolution`] |
 //! | $m$ | `n_modes` | number of lowest modes wanted | [`eigen::EigenSettings`] |
 //! | $\sigma$ | `sigma`, `shift` | spectral shift, $\sigma < \lambda_1$; negative for a free body | [`eigen::Shift`]; Ericsson & Ruhe 1980 |

@@ -37,7 +37,13 @@
 //! | `beam22-com-exact` | 260.9k -> 251.6k (-3.6 %) | 128.0k -> 93.2k (-27.2 %) |
 //! | `beam72-G` | 2888k -> 2816k (-2.5 %) | 1233k -> 969k (-21.4 %) |
 //!
-//! What is left is spread thin: about 30 faer products per evaluation with tangents, each
+//! Then the compressed geometric stiffness (`superelement::compressed`: of a straight beam's G_k
+//! only the few of the coordinates that stretch it are nonzero, kept by their nonzero entries)
+//! and one X^T pass for all tangent terms: `beam14-G` 169k -> 151.4k with tangents, 67k ->
+//! 61.4k without; `beam72-G` 2816k -> 1904k and 969k -> 584k; `block14-G` 170.0k -> 166.9k,
+//! `beam22-com-exact` 251.6k -> 246.9k (the X^T pass only).
+//!
+//! What is left is spread thin: about 20 faer products per evaluation with tangents, each
 //! about 1.7k instructions of fixed cost (nano-gemm's planning and driver) beside its kernel,
 //! and plain loops compiled for the baseline x86-64 target (two-wide SIMD, no FMA). Replacing
 //! the small products by plain loops was measured slower (2-3 instructions a multiply-add

@@ -4,6 +4,7 @@
 
 #![allow(non_snake_case)]
 
+use crate::compressed::{Compressed, COMPRESSED_SHARE};
 use crate::error::SuperelementError;
 use crate::frame::{FrameProblem, FrameScratch, FrameSettings, FrameSolve};
 use crate::local_coordinates::local_coordinates;
@@ -116,6 +117,12 @@ pub struct GeometricStiffness {
     pub(crate) stack_t: Vec<f64>,
     /// $\mathbf F = \mathbf K_{CB}^+$, the pseudo-inverse on the complement of the rigid modes.
     pub(crate) F: Mat<f64>,
+    /// The nonzero $\mathbf G_k$ with their $k$, by their nonzero entries ([`Compressed`]).
+    pub(crate) nonzero: Vec<(usize, Compressed)>,
+    /// Use `nonzero` instead of `stack`, `stack_t`: set when the compressed matrices hold at
+    /// most [`COMPRESSED_SHARE`] of the $n^3$ entries, where their scalar loops beat the two
+    /// dense products (a straight beam along a body axis: 2 of 14 $\mathbf G_k$ nonzero).
+    pub(crate) compressed: bool,
 }
 
 impl GeometricStiffness {
@@ -187,7 +194,7 @@ fn geometric_stiffness(body: &ReducedBody, n: usize) -> Result<Option<GeometricS
             ),
         ));
     }
-    let mut stack = Vec::with_capacity(n * n * n);
+    let mut G: Vec<Mat<f64>> = Vec::with_capacity(n);
     for (k, Gk) in list.iter().enumerate() {
         let name = format!("geometric stiffness G[{k}]");
         check_dense(body, &name, Gk, n, n)?;
@@ -207,10 +214,30 @@ fn geometric_stiffness(body: &ReducedBody, n: usize) -> Result<Option<GeometricS
                 }
             }
         }
+        G.push(Mat::from_fn(n, n, |i, j| 0.5 * (Gk[(i, j)] + Gk[(j, i)])));
+    }
+    // Without their round-off zeros (`compressed` module docs), if that leaves them sparse
+    // enough for the compressed products; else as they are.
+    let c = crate::compressed::coordinate_weights(body);
+    let mut cleaned = G.clone();
+    crate::compressed::clean(&mut cleaned.iter_mut().collect::<Vec<_>>(), |k, i, j| {
+        c[i] * c[j] * c[k]
+    });
+    let nonzero: Vec<(usize, Compressed)> = cleaned
+        .iter()
+        .enumerate()
+        .map(|(k, Gk)| (k, Compressed::new(Gk.as_ref())))
+        .filter(|(_, Gk)| !Gk.is_zero())
+        .collect();
+    let stored: usize = nonzero.iter().map(|(_, G)| G.stored()).sum();
+    let compressed = (stored as f64) <= COMPRESSED_SHARE * (n * n * n) as f64;
+    if compressed {
+        G = cleaned;
+    }
+    let mut stack = Vec::with_capacity(n * n * n);
+    for Gk in &G {
         for j in 0..n {
-            for i in 0..n {
-                stack.push(0.5 * (Gk[(i, j)] + Gk[(j, i)]));
-            }
+            stack.extend_from_slice(Gk.col_as_slice(j));
         }
     }
     let mut stack_t = vec![0.0; n * n * n];
@@ -222,7 +249,14 @@ fn geometric_stiffness(body: &ReducedBody, n: usize) -> Result<Option<GeometricS
         }
     }
     let F = rigid_pseudo_inverse(body, n)?;
-    Ok(Some(GeometricStiffness { n, stack, stack_t, F }))
+    Ok(Some(GeometricStiffness {
+        n,
+        stack,
+        stack_t,
+        F,
+        nonzero,
+        compressed,
+    }))
 }
 
 /// $\mathbf K_{CB}^+$ of a free body: $(\mathbf K_{CB} + \alpha\mathbf P_{rig})^{-1} - \mathbf P_{rig}/\alpha$ with

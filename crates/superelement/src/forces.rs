@@ -28,7 +28,7 @@
 use crate::body::{GeometricStiffness, Superelement};
 use crate::mass::{add_mul3t, matvec, mul3, FfrForce, FfrScratch};
 use crate::so3::{self, skew};
-use crate::transform::{copy_mat, gemm, lambda_right, lambda_t_left, mul_blocks, Blocks, Kinematics};
+use crate::transform::{col, copy_mat, gemm, lambda_right, lambda_t_left, mul_blocks, Blocks, Kinematics};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use nalgebra::Vector3;
@@ -125,6 +125,11 @@ pub(crate) struct Local {
     /// $\partial(\mathbf P^T\mathbf F)/\partial\mathbf q^{jj}|_{\mathbf F}$ is linear in $\mathbf F$, so one
     /// call of [`Kinematics`]`::add_d_pt` serves them all.
     pub F_sum: Vec<f64>,
+    /// $[\mathbf E_q\ \mathbf E_y]$ ($(6+n)\times2n$): terms of `Dq` and `Dy` still to be multiplied by
+    /// $\mathbf X^T$ (the elastic, gravity and `Exact` inertia terms, all of the form
+    /// $\mathbf X^T\mathbf E$, with $\mathbf T_j^T\mathbf K = \mathbf X^T[\mathbf 0;\ \mathbf K]$):
+    /// [`Local::apply_x_t`] multiplies them in one pass, one pair of products instead of one per term.
+    pub XE: Mat<f64>,
 }
 
 impl Local {
@@ -139,6 +144,18 @@ impl Local {
             Dy: Mat::zeros(n, n),
             Dg: Mat::zeros(n, 3),
             F_sum: vec![0.0; 6 + n],
+            XE: Mat::zeros(6 + n, 2 * n),
+        }
+    }
+
+    /// `Dq` += $\mathbf X^T\mathbf E_q$, `Dy` += $\mathbf X^T\mathbf E_y$ (`XE`); `tmp` is $6\times2n$,
+    /// `out` $n\times2n$.
+    pub fn apply_x_t(&mut self, kin: &Kinematics, tmp: &mut Mat<f64>, out: &mut Mat<f64>) {
+        let n = kin.n();
+        kin.xt_mul(self.XE.as_ref(), tmp, out, Accum::Replace);
+        for j in 0..n {
+            add_to(self.Dq.col_as_slice_mut(j), out.col_as_slice(j), 1.0);
+            add_to(self.Dy.col_as_slice_mut(j), out.col_as_slice(n + j), 1.0);
         }
     }
 
@@ -157,6 +174,7 @@ impl Local {
             self.Dq.fill(0.0);
             self.Dy.fill(0.0);
             self.Dg.fill(0.0);
+            self.XE.fill(0.0);
         }
     }
 }
@@ -173,12 +191,13 @@ pub(crate) struct Scratch {
     pub E2: Mat<f64>,
     /// $(6+n)\times6$.
     pub t6: Mat<f64>,
-    pub t6b: Mat<f64>,
     /// $n\times6$, $6\times n$, $(6+n)\times3$.
     pub n6: Mat<f64>,
     pub six_n: Mat<f64>,
     pub six_three: Mat<f64>,
-    pub MXUW: Mat<f64>,
+    /// $6\times2n$ and $n\times2n$ for [`Local::apply_x_t`].
+    pub six_2n: Mat<f64>,
+    pub n_2n: Mat<f64>,
     /// $n\times n$.
     pub nn1: Mat<f64>,
     pub nn2: Mat<f64>,
@@ -213,11 +232,11 @@ impl Scratch {
             E: m6(),
             E2: m6(),
             t6: Mat::zeros(6 + n, 6),
-            t6b: Mat::zeros(6 + n, 6),
             n6: Mat::zeros(n, 6),
             six_n: Mat::zeros(6, n),
             six_three: Mat::zeros(6, 3),
-            MXUW: Mat::zeros(6 + n, 3),
+            six_2n: Mat::zeros(6, 2 * n),
+            n_2n: Mat::zeros(n, 2 * n),
             nn1: Mat::zeros(n, n),
             nn2: Mat::zeros(n, n),
             n3a: Mat::zeros(n, 3),
@@ -306,6 +325,10 @@ impl GeometricStiffness {
             g_G: g,
         } = s;
         let n = q.len();
+        if self.compressed {
+            self.gradient_compressed(q, s, hessian);
+            return;
+        }
         let nn = n * n;
         // vec C: entry j + n m is (G_m q)_j = sum_i (G_m)_ji q_i, a product with `stack_t`.
         matmul(
@@ -351,6 +374,73 @@ impl GeometricStiffness {
             gemm(T1, self.F.as_ref(), Cm.transpose(), 1.0, Accum::Replace);
             gemm(T2, Cm, T1.as_ref(), 1.0, Accum::Replace);
             add_scaled(K, T2, 1.0);
+        }
+    }
+
+    /// [`Self::gradient_into`] through the nonzero $\mathbf G_k$ only, each on its nonzero rows and
+    /// columns ([`Compressed`]): the columns $\mathbf C_m$, the entries $b_m$ of the zero
+    /// $\mathbf G_m$ are zero, so $\mathbf p = \sum_{m \in nz}\mathbf F_{\cdot m}b_m$,
+    /// $\mathbf g_G = \mathbf b + \sum_{m \in nz}\mathbf C_m w_m$ and $\mathbf C\mathbf F\mathbf C^T =
+    /// \sum_{l \in nz}\mathbf D_l\mathbf C_l^T$ with $\mathbf D_l = \sum_{m \in nz}\mathbf C_m F_{ml}$.
+    /// Equal to the dense path to round-off (`tests/unit/compressed.rs`).
+    fn gradient_compressed(&self, q: &[f64], s: &mut GeometricScratch, hessian: bool) {
+        let GeometricScratch {
+            C,
+            K_g: K,
+            T1,
+            b,
+            p,
+            w,
+            g_G: g,
+            ..
+        } = s;
+        let n = q.len();
+        b.fill(0.0);
+        for (m, Gm) in &self.nonzero {
+            let Cm = &mut C[n * m..n * (m + 1)];
+            Gm.mul_into(q, Cm);
+            b[*m] = 0.5 * Cm.iter().zip(q).map(|(c, x)| c * x).sum::<f64>();
+        }
+        p.fill(0.0);
+        for (m, _) in &self.nonzero {
+            add_to(p, self.F.col_as_slice(*m), b[*m]);
+        }
+        for ((wi, qi), pi) in w.iter_mut().zip(q).zip(p.iter()) {
+            *wi = qi + pi;
+        }
+        g.copy_from_slice(b);
+        for (m, _) in &self.nonzero {
+            add_to(g, &C[n * m..n * (m + 1)], w[*m]);
+        }
+        if !hessian {
+            return;
+        }
+        for (k, Gk) in &self.nonzero {
+            Gk.scatter_add(w[*k], K);
+        }
+        // C + C^T on the nonzero columns m and rows m; D_l = sum_m C_m F_ml in T1's column l.
+        for (m, _) in &self.nonzero {
+            let Cm = &C[n * m..n * (m + 1)];
+            add_to(K.col_as_slice_mut(*m), Cm, 1.0);
+            for (j, c) in Cm.iter().enumerate() {
+                K[(*m, j)] += c;
+            }
+        }
+        for (l, _) in &self.nonzero {
+            let D = T1.col_as_slice_mut(*l);
+            D.fill(0.0);
+            for (m, _) in &self.nonzero {
+                add_to(D, &C[n * m..n * (m + 1)], self.F[(*m, *l)]);
+            }
+        }
+        for j in 0..n {
+            let Kj = K.col_as_slice_mut(j);
+            for (l, _) in &self.nonzero {
+                let c = C[n * l + j];
+                if c != 0.0 {
+                    add_to(Kj, T1.col_as_slice(*l), c);
+                }
+            }
         }
     }
 
@@ -437,7 +527,9 @@ impl Superelement {
             } else {
                 self.K_CB.as_ref()
             };
-            kin.tt_mul(K, &mut w.six_n, &mut loc.Dq, Accum::Add);
+            for j in 0..self.n {
+                add_to(&mut loc.XE.col_as_slice_mut(j)[6..], col(K, j), 1.0);
+            }
         }
     }
 
@@ -517,13 +609,13 @@ impl Superelement {
                     w.three_n[(i, j)] = v[i];
                 }
             }
-            gemm(
-                &mut loc.Dq,
-                kin.ZT.as_ref().subcols(3, 3),
-                w.three_n.as_ref(),
-                1.0,
-                Accum::Add,
-            );
+            // Z_r^T g~ S_t = X^T [0; g~ S_t; 0]: rows 3..6 of E_q.
+            for j in 0..n {
+                let e = loc.XE.col_as_slice_mut(j);
+                for i in 0..3 {
+                    e[3 + i] += w.three_n[(i, j)];
+                }
+            }
             self.gravity_dg(kin, loc, w, &s);
         }
     }
@@ -687,37 +779,57 @@ impl Superelement {
                 }
             }
         }
-        // With Om_q = Z_r N_y and Y_r = Z_r Lambda, both partials share
-        // H = FX + MXNy - (MXNy Psi) Z + MXUW Z_r:
-        //   E  = F_q + FX N_y + MX blocks + MXUW Om_q + MXNy N_y - (MXNy Psi) Z N_y = F_q + MX blocks + H N_y,
-        //   E2 = (FX + MXNy - (MXNy Psi) Z) Lambda + MX blocks2 + MXUW Y_r = H Lambda + MX blocks2,
-        // and Dq += Lambda^T X^T E, Dy += Lambda^T X^T E2 (Lambda^T deferred, `Local::Dq`).
-        // H is built in FX; MXNy Psi = MX (N_y Psi) only involves the 6N interface columns.
-        kin.mul_x(w.ffr.F_nu.as_ref(), &mut w.t6, &mut w.FX);
-        kin.blocks_psi(&mo.n_y, &mut w.n6);
+        // With Om_q = Z_r N_y and Y_r = Z_r Lambda, both partials share (F_nu X written FX,
+        // M_ffr X written MX, U the stack of block 3x3s in n3a)
+        // H = FX + MX N_y - (MX N_y Psi) Z + (MX U) Z_r:
+        //   E  = F_q + FX N_y + MX blocks + (MX U) Om_q + MX N_y N_y - (MX N_y Psi) Z N_y
+        //      = F_q + MX blocks + H N_y,
+        //   E2 = (FX + MX N_y - (MX N_y Psi) Z) Lambda + MX blocks2 + (MX U) Y_r = H Lambda + MX blocks2,
+        // and Dq += Lambda^T X^T E, Dy += Lambda^T X^T E2 (`Local::XE`; Lambda^T deferred, `Local::Dq`).
+        // With FX = F_nu_q + (F_nu_6 - F_nu_q Psi) Z, H = F_nu_q + MX N_y + t6 Z where
+        // t6 = F_nu_6 - F_nu_q Psi - MX (N_y Psi) + [0, MX U]: one product with Z; N_y Psi only
+        // involves the 6N interface rows.
         let ni = 6 * N;
+        kin.mul_psi(w.ffr.F_nu.as_ref().subcols(6, n), &mut w.t6);
+        for c in 0..6 {
+            let a = w.ffr.F_nu.col_as_slice(c);
+            for (t, a) in w.t6.col_as_slice_mut(c).iter_mut().zip(a) {
+                *t = a - *t;
+            }
+        }
+        kin.blocks_psi(&mo.n_y, &mut w.n6);
         gemm(
-            &mut w.t6b,
+            &mut w.t6,
             w.MX.as_ref().subcols(0, ni),
             w.n6.as_ref().subrows(0, ni),
-            1.0,
-            Accum::Replace,
+            -1.0,
+            Accum::Add,
         );
+        matmul(
+            w.t6.as_mut().subcols_mut(3, 3),
+            Accum::Add,
+            w.MX.as_ref(),
+            w.n3a.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        copy_mat(&mut w.FX, w.ffr.F_nu.as_ref().subcols(6, n));
         mul_blocks(w.MX.as_ref(), &mo.n_y, &mut w.FX, Accum::Add);
-        gemm(&mut w.FX, w.t6b.as_ref(), kin.Z(), -1.0, Accum::Add);
-        gemm(&mut w.MXUW, w.MX.as_ref(), w.n3a.as_ref(), 1.0, Accum::Replace);
-        gemm(&mut w.FX, w.MXUW.as_ref(), kin.Z().subrows(3, 3), 1.0, Accum::Add);
+        gemm(&mut w.FX, w.t6.as_ref(), kin.Z(), 1.0, Accum::Add);
 
+        // E_q += F_q + MX blocks + H N_y ; E_y += H Lambda + MX blocks2 (X^T in `Local::apply_x_t`).
         copy_mat(&mut w.E, w.ffr.F_q.as_ref());
         mul_blocks(w.MX.as_ref(), &w.blocks, &mut w.E, Accum::Add);
         mul_blocks(w.FX.as_ref(), &mo.n_y, &mut w.E, Accum::Add);
-        kin.xt_mul(w.E.as_ref(), &mut w.six_n, &mut loc.Dq, Accum::Add);
         add_to(&mut loc.F_sum, &w.ffr.F, 1.0);
 
         copy_mat(&mut w.E2, w.FX.as_ref());
         lambda_right(&kin.Lambda, &mut w.E2);
         mul_blocks(w.MX.as_ref(), &w.blocks2, &mut w.E2, Accum::Add);
-        kin.xt_mul(w.E2.as_ref(), &mut w.six_n, &mut loc.Dy, Accum::Add);
+        for j in 0..n {
+            add_to(loc.XE.col_as_slice_mut(j), w.E.col_as_slice(j), 1.0);
+            add_to(loc.XE.col_as_slice_mut(n + j), w.E2.col_as_slice(j), 1.0);
+        }
     }
 
     /// Inertia force of the `Lumped` variant.

@@ -95,6 +95,8 @@ pub(crate) fn solve_frame_in(
     }
 }
 
+/// Newton from `start`. On success `scratch.q` holds $\mathbf q^{jj}$ at the returned frame
+/// (the last residual was computed there): `Superelement::evaluate_into` uses it as is.
 fn newton_frame(
     p: &FrameProblem<'_>,
     state: &BodyState,

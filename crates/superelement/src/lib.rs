@@ -212,6 +212,7 @@
 //! # Modules
 //!
 //! [`so3`] rotations; [`state`] the plain data (frame, frame choice, body state);
+//! [`compressed`] the geometric stiffness by its nonzero entries;
 //! [`local_coordinates`]; [`transform`] (5.2)-(5.6) and their derivatives; [`frame`] the Newton
 //! solve of (4.4); [`mass`] FFR inertia; [`body`] the superelement; [`forces`] body-axis forces
 //! and partials; [`tangent`] the residual and tangents; [`recovery`] the deformed mesh;
@@ -220,6 +221,7 @@
 #![allow(non_snake_case)]
 
 pub mod body;
+pub mod compressed;
 pub mod error;
 pub mod forces;
 pub mod frame;

@@ -19,7 +19,7 @@
 use crate::body::{BodyState, Superelement};
 use crate::error::SuperelementError;
 use crate::forces::{w_into, Local, Motion, Scratch};
-use crate::frame::{Frame, FrameScratch};
+use crate::frame::{Frame, FrameScratch, FrameSolve};
 use crate::local_coordinates::local_coordinates;
 use crate::mass::MassVariant;
 use crate::so3::skew;
@@ -176,7 +176,11 @@ impl Superelement {
             Lambda: &mut ws.kin.Lambda,
         };
         let (frame, iterations) = self.solve_frame_in(state, &mut scratch)?;
-        local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut ws.kin.q_jj);
+        if self.frame_solve != FrameSolve::Newton {
+            // The Newton solve returns right after computing q_jj at the converged frame
+            // (`frame::newton_frame`); the explicit frames compute none.
+            local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut ws.kin.q_jj);
+        }
         ws.kin.update(frame, iterations, &self.x, self.Phi_j.as_ref())?;
         for k in 0..self.n_interfaces {
             ws.qd[6 * k..6 * k + 3].copy_from_slice(state.v[k].as_slice());
@@ -247,7 +251,9 @@ impl Superelement {
             self.exact_inertia(kin, mo, loc, w, tangents);
         }
         if tangents {
-            // The forces above left out the common left factor Lambda^T (`Local::Dq`).
+            // The forces above left out the common left factors X^T (`Local::XE`) and
+            // Lambda^T (`Local::Dq`).
+            loc.apply_x_t(kin, &mut w.six_2n, &mut w.n_2n);
             loc.apply_lambda_t(&kin.Lambda);
         }
         if self.mass_variant == MassVariant::Lumped {

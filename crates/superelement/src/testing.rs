@@ -244,6 +244,37 @@ pub fn test_state(se: &Superelement, spec: &StateSpec) -> (BodyState, Vec<f64>) 
     (s, acc)
 }
 
+/// How a superelement stores its reduced geometric stiffness ([`crate::compressed`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Compression {
+    /// Compressed (`None`: the body has no geometric stiffness).
+    pub geometric: Option<bool>,
+    /// The $k$ of the nonzero $\mathbf G_k$.
+    pub nonzero_G: Vec<usize>,
+    /// Entries stored of all $\mathbf G_k$ together.
+    pub stored: usize,
+}
+
+/// How `se` stores its reduced geometric stiffness.
+pub fn compression(se: &Superelement) -> Compression {
+    let G = se.geometric.as_ref();
+    Compression {
+        geometric: G.map(|G| G.compressed),
+        nonzero_G: G.map_or(Vec::new(), |G| G.nonzero.iter().map(|(k, _)| *k).collect()),
+        stored: G.map_or(0, |G| G.nonzero.iter().map(|(_, A)| A.stored()).sum()),
+    }
+}
+
+/// A copy of `se` that uses the dense $\mathbf G_k$ (the general path that the compressed one
+/// is checked against).
+pub fn without_compression(se: &Superelement) -> Superelement {
+    let mut dense = se.clone();
+    if let Some(G) = dense.geometric.as_mut() {
+        G.compressed = false;
+    }
+    dense
+}
+
 /// Typical magnitudes of the CB coordinates of [`test_state`] at relative deformation
 /// `deformation`: $e L$ for interface displacements, $e$ for elastic rotations and
 /// $e L\sqrt m$ for modal coordinates ($L$: farthest interface from the frame origin, at least

@@ -6,6 +6,9 @@
 mod unit {
     /// Shared fixtures: reduced bodies (built once per binary), frame choices, variants.
     pub mod common;
+    /// The compressed invariants: what is stored, the round-off threshold, equality with the
+    /// dense path.
+    mod compressed;
     /// Kinetic energy of rigid motion, power balance of the inertia forces, potentials.
     mod energy;
     /// The cheap forms of an evaluation against the full one: forces only, reused workspaces.

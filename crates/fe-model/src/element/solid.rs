@@ -431,6 +431,23 @@ pub fn solid_matrices(
     mass: MassKind,
 ) -> Result<LocalMatrices, ElementError> {
     let K_e = stiffness(kind, element, X_e, material)?;
+    let M_e = solid_mass(kind, element, X_e, material, mass)?;
+    Ok(LocalMatrices { K_e, M_e })
+}
+
+/// The mass matrix of [`solid_matrices`] alone ($3n \times 3n$, the scalar mass in each
+/// direction), without the stiffness's cost: for the mass data of a reduced body.
+///
+/// # Errors
+/// [`ElementError::NonPositiveJacobian`] at a point of the mass rule;
+/// [`ElementError::WrongNodeCount`] if `X_e` does not have the kind's node count.
+pub fn solid_mass(
+    kind: SolidKind,
+    element: usize,
+    X_e: &[Point3<f64>],
+    material: &IsotropicMaterial,
+    mass: MassKind,
+) -> Result<DMatrix<f64>, ElementError> {
     let m = scalar_mass(kind, element, X_e, material.rho(), mass)?;
     let n = kind.node_count();
     let mut M_e = DMatrix::zeros(3 * n, 3 * n);
@@ -441,7 +458,7 @@ pub fn solid_matrices(
             }
         }
     }
-    Ok(LocalMatrices { K_e, M_e })
+    Ok(M_e)
 }
 
 /// Displacement gradient $\mathbf H = \partial\mathbf u/\partial\mathbf x = \sum_a \mathbf u_a

@@ -1,7 +1,8 @@
 //! The generated solid blocks shared by the `craig_bampton` and `ordering` benches.
 
+use faer::sparse::{SparseColMat, Triplet};
 use fe_model::{add_interface_on_set, box_mesh, solid_model, CellKind, FeModel, IsotropicMaterial, MassKind, NodeId};
-use fe_model::{FillOrdering, SpiderKind};
+use fe_model::{dof_points, DofMap, FillOrdering, SpiderKind};
 
 /// Elements (ex, ey, ez) of a named size: dofs ~ 3 (ex+1)(ey+1)(ez+1).
 pub fn divisions(size: &str) -> Option<(usize, usize, usize)> {
@@ -44,4 +45,55 @@ pub fn parse_ordering(s: &str) -> Option<FillOrdering> {
         "nd" => FillOrdering::NestedDissection,
         _ => return None,
     })
+}
+
+/// $\mathbf K_{ii}$: `K` of the free dofs of `model` without the six dofs of each
+/// `interfaces` node (as Craig-Bampton removes them), and the positions of its rows.
+#[allow(dead_code)]
+pub fn internal_block(
+    model: &FeModel,
+    dofs: &DofMap,
+    K: &SparseColMat<usize, f64>,
+    interfaces: &[NodeId],
+) -> (SparseColMat<usize, f64>, Vec<[f64; 3]>) {
+    let mut keep = vec![true; dofs.n_free()];
+    for &node in interfaces {
+        for k in 0..6 {
+            if let Some(d) = dofs.free_dof(node, k) {
+                keep[d.index()] = false;
+            }
+        }
+    }
+    let internal: Vec<usize> = (0..dofs.n_free()).filter(|&d| keep[d]).collect();
+    let mut position = vec![usize::MAX; dofs.n_free()];
+    internal.iter().enumerate().for_each(|(i, &d)| position[d] = i);
+    let mut triplets = Vec::new();
+    for j in 0..K.ncols() {
+        for (&i, &v) in K.row_idx_of_col_raw(j).iter().zip(K.val_of_col(j)) {
+            if keep[i] && keep[j] {
+                triplets.push(Triplet::new(position[i], position[j], v));
+            }
+        }
+    }
+    let ni = internal.len();
+    let K_ii = SparseColMat::try_new_from_triplets(ni, ni, &triplets).unwrap();
+    let all_points = dof_points(model, dofs);
+    (K_ii, internal.iter().map(|&d| all_points[d]).collect())
+}
+
+/// CPU seconds (user + system, all threads) of this process so far: less sensitive to the
+/// load of a shared machine than wall time.
+#[allow(dead_code)]
+pub fn cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            // Fields after the command name (which may hold spaces) in parentheses.
+            let rest = &s[s.rfind(')')? + 2..];
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            // utime and stime are fields 14 and 15 of stat, 12 and 13 after the name; ticks
+            // of 1/100 s on Linux.
+            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
+        })
+        .unwrap_or(f64::NAN)
 }
