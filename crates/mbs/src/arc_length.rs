@@ -28,7 +28,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::error::{Incomplete, SolveError};
+use crate::error::{At, Incomplete, SolveError};
 use crate::static_solver::{newton_static, solve_static, LoadStep, StaticSettings, StaticSolution};
 use crate::system::{State, System, Workspace};
 
@@ -139,7 +139,7 @@ fn arc_step(
         increments: Vec::new(),
     };
     let singular = |what: String| SolveError::Singular {
-        t: lambda_n,
+        at: At::LoadFactor(lambda_n),
         step: 0,
         what: format!("tangent stiffness in the arc-length step ({what})"),
     };
@@ -215,7 +215,7 @@ fn arc_step(
     let iterations = hist.residuals.len().saturating_sub(1);
     let residual = *hist.residuals.last().unwrap_or(&f64::NAN);
     let e = SolveError::NotConverged {
-        t: lambda,
+        at: At::LoadFactor(lambda),
         step: 0,
         residual,
         iterations,
@@ -290,7 +290,7 @@ pub fn solve_arc_length(
                     }
                     // The sensors need the workspace at the recorded state.
                     if let Err(e) = system.evaluate_into(&mut new, hist.lambda, false, &mut ws) {
-                        return Err(fail(e, sol));
+                        return Err(fail(e.in_load_step(hist.lambda, step), sol));
                     }
                 }
                 state = new;
@@ -299,7 +299,7 @@ pub fn solve_arc_length(
                 sol.steps.push(hist);
                 if let Err(e) = system.record(&state, &ws, &mut sol.sensors) {
                     sol.state = state;
-                    return Err(fail(e, sol));
+                    return Err(fail(e.in_load_step(lambda, step), sol));
                 }
                 *sol.sensors.times.last_mut().expect("just recorded") = lambda;
                 previous = Some(dir);
@@ -310,24 +310,11 @@ pub fn solve_arc_length(
             }
             Err(failure) => {
                 let (hist, error) = *failure;
+                let error = error.in_load_step(hist.lambda, step + 1);
                 sol.rejected.push(hist);
                 ds *= 0.5;
                 if ds < settings.min_length {
                     sol.state = state;
-                    let error = match error {
-                        SolveError::NotConverged {
-                            t,
-                            residual,
-                            iterations,
-                            ..
-                        } => SolveError::NotConverged {
-                            t,
-                            step: step + 1,
-                            residual,
-                            iterations,
-                        },
-                        e => e,
-                    };
                     return Err(fail(error, sol));
                 }
             }

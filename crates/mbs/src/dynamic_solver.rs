@@ -142,7 +142,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::error::{Incomplete, SolveError};
+use crate::error::{At, Incomplete, SolveError};
 use crate::momentum::MomentumProjection;
 use crate::sensors::SensorRecord;
 use crate::system::{State, System, Workspace};
@@ -546,7 +546,7 @@ impl<'a> Integrator<'a> {
         let mut acc: Vec<f64> = ws.F.iter().map(|f| -f).collect();
         ws.S.copy_from_slice(&ws.M);
         system.solve(&mut ws, &mut acc).map_err(|what| SolveError::Singular {
-            t: state.time,
+            at: At::Time(state.time),
             step: 0,
             what: format!("mass matrix for the initial accelerations ({what}); every unknown needs mass"),
         })?;
@@ -693,6 +693,28 @@ impl<'a> Integrator<'a> {
         rec.check_last_row(self.steps)
     }
 
+    /// The values of the sensors `which` (indices in `Model::sensors`, ascending) at the
+    /// current state, side by side; the other sensors are not evaluated. A value that is not
+    /// finite is [`SolveError::NonFiniteSensor`], as in [`Self::record`].
+    pub fn sensor_values(&self, which: &[usize]) -> Result<Vec<f64>, SolveError> {
+        let row = self.system.sensor_row(&self.state, &self.ws, &|i| which.contains(&i))?;
+        let all = self.system.sensor_record();
+        let mut picked = SensorRecord {
+            names: which.iter().map(|&i| all.names[i].clone()).collect(),
+            widths: which.iter().map(|&i| all.widths[i]).collect(),
+            times: vec![self.state.time()],
+            rows: vec![row],
+        };
+        // The record's sensor index counts within `which`: back to the model's.
+        picked.check_last_row(self.steps).map_err(|mut e| {
+            if let SolveError::NonFiniteSensor { index, .. } = &mut e {
+                *index = which[*index];
+            }
+            e
+        })?;
+        Ok(picked.rows.pop().expect("one row"))
+    }
+
     /// One step of size `settings.step` (module docs). On failure the state is left at the
     /// last converged step. With [`NewtonStrategy::Modified`], a step whose modified Newton
     /// fails is tried again from the predictor with full Newton before the error is reported.
@@ -774,6 +796,9 @@ impl<'a> Integrator<'a> {
         );
         let step = self.steps + 1;
         let tol = self.settings.tolerance;
+        // The round-off of the inertia forces of this step (from the last mass matrix): the
+        // floor that keeps the test meaningful when every force is zero (a coasting rotor).
+        let inertia_floor = sys.inertia_floor(&self.ws, &prev.velocity, h);
         let mut last_rel = f64::INFINITY;
         for it in 0..=self.settings.max_iterations {
             // Modified Newton keeps a factor built for this h; without one it needs tangents now.
@@ -789,7 +814,7 @@ impl<'a> Integrator<'a> {
                 it == 0 || it < self.last_corrections
             };
             sys.evaluate_into(st, 1.0, with_tangents, &mut self.ws)?;
-            let converged = |ws: &Workspace, norm: f64| norm <= tol * ws.scale + ws.floor;
+            let converged = |ws: &Workspace, norm: f64| norm <= tol * ws.scale + ws.floor + inertia_floor;
             let mut norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
             if !modified && !with_tangents && !converged(&self.ws, norm) && norm.is_finite() {
                 sys.evaluate_into(st, 1.0, true, &mut self.ws)?;
@@ -837,7 +862,7 @@ impl<'a> Integrator<'a> {
                 let mut s = self.state.clone();
                 sys.evaluate_into(&mut s, 1.0, false, &mut self.ws)?;
                 return Err(SolveError::NotConverged {
-                    t,
+                    at: At::Time(t),
                     step,
                     residual: rel,
                     iterations: it,
@@ -858,7 +883,7 @@ impl<'a> Integrator<'a> {
                 }
                 sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, st)));
                 sys.factor(&mut self.ws).map_err(|what| SolveError::Singular {
-                    t,
+                    at: At::Time(t),
                     step,
                     what: format!("iteration matrix ({what})"),
                 })?;
@@ -871,7 +896,7 @@ impl<'a> Integrator<'a> {
             }
             sys.solve_factored(&mut self.ws, &mut self.dx)
                 .map_err(|what| SolveError::Singular {
-                    t,
+                    at: At::Time(t),
                     step,
                     what: format!("iteration matrix ({what})"),
                 })?;

@@ -199,63 +199,166 @@ impl ModelError {
     }
 }
 
+/// Where in an analysis a solver stopped: a time of a dynamic analysis, or a load factor of a
+/// static one (load stepping, arc length, buckling).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum At {
+    /// Time $t$ \[s\].
+    Time(f64),
+    /// Load factor $\lambda$ of a static analysis (1 = the full load).
+    LoadFactor(f64),
+}
+
+impl At {
+    /// The time, when this is one.
+    pub fn time(self) -> Option<f64> {
+        match self {
+            Self::Time(t) => Some(t),
+            Self::LoadFactor(_) => None,
+        }
+    }
+
+    /// The load factor, when this is one.
+    pub fn load_factor(self) -> Option<f64> {
+        match self {
+            Self::LoadFactor(l) => Some(l),
+            Self::Time(_) => None,
+        }
+    }
+
+    /// The time or the load factor.
+    pub fn value(self) -> f64 {
+        match self {
+            Self::Time(x) | Self::LoadFactor(x) => x,
+        }
+    }
+}
+
+/// `t = 0.250000` or `load factor 0.500000`.
+impl std::fmt::Display for At {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Time(t) => write!(f, "t = {t:.6}"),
+            Self::LoadFactor(l) => write!(f, "load factor {l:.6}"),
+        }
+    }
+}
+
 /// Why an analysis stopped.
 #[derive(Debug, Error, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum SolveError {
     /// Newton did not reach the tolerance. `residual` is the last relative residual
-    /// $\|\mathbf F\|/f_{scale}$; for a static analysis `t` is the load factor.
-    #[error("Newton did not converge at t = {t:.6} (step {step}): relative residual {residual:.3e} after {iterations} iterations")]
+    /// $\|\mathbf F\|/f_{scale}$; `step` the time or load step that failed (1 = the first).
+    #[error(
+        "Newton did not converge at {at} (step {step}): relative residual {residual:.3e} after {iterations} iterations"
+    )]
     NotConverged {
-        t: f64,
+        at: At,
         step: usize,
         residual: f64,
         iterations: usize,
     },
     /// The iteration (or mass) matrix could not be factorised.
-    #[error("singular {what} at t = {t:.6} (step {step}): a coordinate is free without stiffness or mass, or a mechanism is at a singular configuration")]
-    Singular { t: f64, step: usize, what: String },
+    #[error("singular {what} at {at} (step {step}): a coordinate is free without stiffness or mass, or a mechanism is at a singular configuration")]
+    Singular { at: At, step: usize, what: String },
     /// A body could not be evaluated (its floating frame did not converge, ...); the cause
-    /// is the source, so a report walking the chain names it once.
-    #[error("body '{body}' at t = {t:.6}")]
+    /// is the source, so a report walking the chain names it once. `step` is the time or load
+    /// step it failed in, when the solver knows it.
+    #[error("body '{body}' at {at}{}", step_suffix(*.step))]
     Body {
         body: String,
         id: BodyId,
-        t: f64,
-        source: SuperelementError,
+        at: At,
+        step: Option<usize>,
+        /// Boxed: the largest variant would otherwise make every `Result` of the solvers large.
+        source: Box<SuperelementError>,
     },
     /// A user-defined force ([`crate::UserForce`]) gave a value the solver cannot use.
-    #[error("user force '{name}' at t = {t:.6}: {what}")]
+    #[error("user force '{name}' at {at}: {what}")]
     UserForce {
         name: String,
         /// Index in the user forces of the system.
         index: usize,
-        t: f64,
+        at: At,
         what: String,
     },
     /// Settings out of range (a negative step, rho_inf outside [0, 1], ...).
     #[error("invalid settings: {what}")]
     InvalidSettings { what: String },
     /// A sensor read a value that is not finite (inf or NaN): the motion or a force has
-    /// diverged. `component` counts from 0 within the sensor.
-    #[error("sensor '{sensor}' component {component} is {value} at t = {t:.6} (step {step}): the motion or a force is no longer finite")]
+    /// diverged. `component` counts from 0 within the sensor; `index` is the sensor's index in
+    /// `Model::sensors`.
+    #[error("sensor '{sensor}' component {component} is {value} at {at} (step {step}): the motion or a force is no longer finite")]
     NonFiniteSensor {
         sensor: String,
+        index: usize,
         component: usize,
         value: f64,
-        t: f64,
+        at: At,
         step: usize,
     },
 }
 
+/// ` (step 3)`, or nothing when the step is not known.
+fn step_suffix(step: Option<usize>) -> String {
+    step.map_or(String::new(), |s| format!(" (step {s})"))
+}
+
 impl SolveError {
-    /// The entity the error is about (a body whose frame failed, a user force), if any.
+    /// The entity the error is about (a body whose frame failed, a user force, a sensor that
+    /// is not finite), if any.
     pub fn entity(&self) -> Option<Entity> {
         match self {
             Self::Body { id, .. } => Some(Entity::Body(*id)),
             Self::UserForce { index, .. } => Some(Entity::UserForce(*index)),
+            Self::NonFiniteSensor { index, .. } => Some(Entity::Sensor(*index)),
             _ => None,
         }
+    }
+
+    /// Where the solver stopped (time or load factor), if the error says.
+    pub fn at(&self) -> Option<At> {
+        match self {
+            Self::NotConverged { at, .. }
+            | Self::Singular { at, .. }
+            | Self::Body { at, .. }
+            | Self::UserForce { at, .. }
+            | Self::NonFiniteSensor { at, .. } => Some(*at),
+            Self::InvalidSettings { .. } => None,
+        }
+    }
+
+    /// The time or load step that failed (1 = the first), if the error says.
+    pub fn step(&self) -> Option<usize> {
+        match self {
+            Self::NotConverged { step, .. } | Self::Singular { step, .. } | Self::NonFiniteSensor { step, .. } => {
+                Some(*step)
+            }
+            Self::Body { step, .. } => *step,
+            Self::UserForce { .. } | Self::InvalidSettings { .. } => None,
+        }
+    }
+
+    /// This error of an evaluation at load factor `lambda` in load step `step` of a static
+    /// analysis: the place becomes [`At::LoadFactor`] (the bodies and forces below the solver
+    /// only know the time at which loads are evaluated) and the step is set.
+    pub(crate) fn in_load_step(mut self, lambda: f64, load_step: usize) -> Self {
+        match &mut self {
+            Self::NotConverged { at, step, .. }
+            | Self::Singular { at, step, .. }
+            | Self::NonFiniteSensor { at, step, .. } => {
+                *at = At::LoadFactor(lambda);
+                *step = load_step;
+            }
+            Self::Body { at, step, .. } => {
+                *at = At::LoadFactor(lambda);
+                *step = Some(load_step);
+            }
+            Self::UserForce { at, .. } => *at = At::LoadFactor(lambda),
+            Self::InvalidSettings { .. } => {}
+        }
+        self
     }
 }
 

@@ -167,9 +167,74 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
                     id: Some(Entity::InitialCondition(i)),
                 })
             }
-            InitialCondition::NodeVelocity { .. } | InitialCondition::RigidMotion { .. } => Ok(InitialPlan::Direct),
+            InitialCondition::NodeVelocity {
+                node,
+                velocity,
+                angular_velocity,
+            } => {
+                held_velocity(model, topo, node.index(), velocity, angular_velocity).map_err(|what| {
+                    ModelError::InvalidValue {
+                        entity: format!("initial velocity of node '{}'", node_name(node.index())),
+                        what,
+                        id: Some(Entity::InitialCondition(i)),
+                    }
+                })?;
+                Ok(InitialPlan::Direct)
+            }
+            InitialCondition::RigidMotion { .. } => Ok(InitialPlan::Direct),
         })
         .collect()
+}
+
+/// Why a velocity $(\mathbf v, \boldsymbol\omega)$ given to independent node `n` cannot be
+/// set: a component that is not zero along a direction its support holds or a driver moves
+/// (only the free components are unknowns, so it would be dropped without a word). Zero
+/// components there are fine; a component counts as zero below $10^{-12}$ of the norm of the
+/// velocity it is part of (the round-off of projecting a velocity along a slider onto the
+/// slider's other directions).
+fn held_velocity(
+    model: &Model,
+    topo: &Topology,
+    n: usize,
+    v: &nalgebra::Vector3<f64>,
+    w: &nalgebra::Vector3<f64>,
+) -> Result<(), String> {
+    let Some(rc) = &topo.roots[n] else { return Ok(()) };
+    let map = &topo.map;
+    let rotation: &[(usize, nalgebra::Vector3<f64>)] = match &rc.rotation {
+        RootRotation::Free(_) => &[],
+        RootRotation::Axes(axes) => axes,
+    };
+    let parts = [
+        (&rc.translation[..], v, "velocity", "m/s"),
+        (rotation, w, "angular velocity", "rad/s"),
+    ];
+    for (&(s, e), given, what, unit) in parts
+        .iter()
+        .flat_map(|&(axes, given, what, unit)| axes.iter().map(move |a| (a, given, what, unit)))
+    {
+        let Slot::Prescribed(p) = map.scalars[s].slot else {
+            continue;
+        };
+        let c = e.dot(given);
+        if c.abs() <= 1e-12 * given.norm() {
+            continue;
+        }
+        let by = match map.prescribed[p].0 {
+            Some(d) => format!("driver '{}' moves it", model.drivers[d].name),
+            None => "its support holds it".into(),
+        };
+        // A held global axis by its name and the given component along it; another held
+        // direction (across a slider, normal to a plane) by its unit vector.
+        let component = match (0..3).find(|&k| (e[k].abs() - 1.0).abs() < 1e-12) {
+            Some(k) => format!("component {} is {}", ["x", "y", "z"][k], given[k]),
+            None => format!("component along [{:.4}, {:.4}, {:.4}] is {c}", e[0], e[1], e[2]),
+        };
+        return Err(format!(
+            "the {what} {component} {unit}, but {by}: give the held components as zero (a driver sets its own rate)"
+        ));
+    }
+    Ok(())
 }
 
 /// A driver whose function is not zero at $t = 0$: the mechanism is assembled at its initial

@@ -86,7 +86,8 @@
 //! | $\mathbf G_r$ | [`System::generalized_force`] | $\partial(\mathbf J^T\mathbf r)/\partial\mathbf q$ at fixed $\mathbf r$: the joints' geometric term | [`coordinates`] |
 //! | $\hat{\mathbf M},\ \hat{\mathbf C},\ \hat{\mathbf K}$ | [`Matrices`] | $\partial\mathbf F/\partial\ddot{\mathbf q}$, $\partial\mathbf F/\partial\dot{\mathbf q}$, $\partial\mathbf F/\partial\mathbf q$ | [`coordinates`] |
 //! | $\mathbf K_t,\ \mathbf C_t,\ \mathbf M$ | `ElementOutput` | element tangents on its node ports | \[S19\], [`body`] |
-//! | $\lambda$ | `lambda` | load factor (statics) | |
+//! | $\lambda$ | `lambda`, [`At::LoadFactor`] | load factor (statics) | |
+//! | $f_{scale}$, floors | `Workspace::scale`, [`System::residual_floor`], `System::inertia_floor` | Newton's test $\lVert\mathbf F\rVert \le \mathrm{tol}\,f_{scale}$ + the round-off of the elastic forces + (time steps) $10\varepsilon\lVert\hat{\mathbf M}\dot{\mathbf q}\rVert/h$ | [`system`] |
 //! | $\mathbf P$ | `arc_length::load_vector` | $-\partial\mathbf F/\partial\lambda$: generalised external force at $\lambda = 1$ | Riks 1979 |
 //! | $\Delta s,\ s_i$ | [`ArcLengthSettings`], `System::dof_scale` | arc length; scale of unknown $i$ in its norm | Crisfield 1981 |
 //! | $\hat{\mathbf K}_0,\ \Delta\hat{\mathbf K},\ \mu$ | [`buckling`] | unloaded tangent, its change to the loaded state, buckling multiplier | Bathe §6.8.2 |
@@ -202,7 +203,7 @@ pub use dynamic_solver::{
     DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE, PI_INTEGRAL,
     PI_PROPORTIONAL,
 };
-pub use error::{Entity, Incomplete, ModelError, SolveError};
+pub use error::{At, Entity, Incomplete, ModelError, SolveError};
 pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
 pub use linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,

@@ -22,7 +22,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::error::SolveError;
+use crate::error::{At, SolveError};
 use crate::model::Body;
 use crate::system::{ElementKind, Matrices, State, System, Workspace};
 use faer::linalg::solvers::Solve;
@@ -81,7 +81,7 @@ pub const GROWTH_TOLERANCE: f64 = 1e-6;
 
 fn singular(t: f64, what: &str) -> SolveError {
     SolveError::Singular {
-        t,
+        at: At::Time(t),
         step: 0,
         what: what.into(),
     }
@@ -143,7 +143,7 @@ pub struct Buckling {
 /// deformation; for a column it is the former, and $\lambda_{cr}$ converges to Euler's load.
 pub fn buckling(system: &System, unloaded: &State, loaded: &State, lambda: f64) -> Result<Buckling, SolveError> {
     let singular = |what: &str| SolveError::Singular {
-        t: lambda,
+        at: At::LoadFactor(lambda),
         step: 0,
         what: what.into(),
     };

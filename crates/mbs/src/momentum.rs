@@ -213,8 +213,9 @@ impl System {
                     .map_err(|source| SolveError::Body {
                         body: self.model.bodies[f.body].name().to_string(),
                         id: crate::model::BodyId(f.body as u32),
-                        t: state.time,
-                        source,
+                        at: crate::error::At::Time(state.time),
+                        step: None,
+                        source: Box::new(source),
                     })?;
             flexible.push(ev.mass);
         }

@@ -22,8 +22,9 @@ impl System {
         let kin = se.kinematics(&bs).map_err(|source| SolveError::Body {
             body: self.model.bodies[body.index()].name().to_string(),
             id: body,
-            t: state.time,
-            source,
+            at: crate::error::At::Time(state.time),
+            step: None,
+            source: Box::new(source),
         })?;
         Ok(Some((kin, bs)))
     }

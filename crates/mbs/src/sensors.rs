@@ -32,7 +32,9 @@ pub struct SensorRecord {
 
 impl SensorRecord {
     /// The first value of the last row that is not finite, as
-    /// [`SolveError::NonFiniteSensor`] at `step` (sensor, component within it, time).
+    /// [`SolveError::NonFiniteSensor`] at `step` (sensor, its index in the record, which is its
+    /// index in `Model::sensors` for a record of [`System::sensor_record`], component within
+    /// it, time).
     pub fn check_last_row(&self, step: usize) -> Result<(), SolveError> {
         let (Some(row), Some(&t)) = (self.rows.last(), self.times.last()) else {
             return Ok(());
@@ -47,9 +49,10 @@ impl SensorRecord {
         }
         Err(SolveError::NonFiniteSensor {
             sensor: self.names.get(i).cloned().unwrap_or_default(),
+            index: i,
             component: k - start,
             value: row[k],
-            t,
+            at: crate::error::At::Time(t),
             step,
         })
     }
@@ -114,8 +117,9 @@ impl System {
         let body_err = |f: &crate::body::FlexibleElement, source| SolveError::Body {
             body: self.model.bodies[f.body].name().to_string(),
             id: crate::model::BodyId(f.body as u32),
-            t: state.time,
-            source,
+            at: crate::error::At::Time(state.time),
+            step: None,
+            source: Box::new(source),
         };
         let evaluated = |i: usize| {
             let ws = ws?;
@@ -210,8 +214,9 @@ impl System {
         let kin = f.se.kinematics(&bs).map_err(|source| SolveError::Body {
             body: self.model.bodies[f.body].name().to_string(),
             id: body,
-            t: state.time,
-            source,
+            at: crate::error::At::Time(state.time),
+            step: None,
+            source: Box::new(source),
         })?;
         let shapes = f.se.stress_shapes().expect("stress shapes (System::new)");
         Ok((shapes, kin))
@@ -306,6 +311,21 @@ impl System {
 
     /// Appends the sensor values at `state` (evaluated into `ws`) to `rec`.
     pub(crate) fn record(&self, state: &State, ws: &Workspace, rec: &mut SensorRecord) -> Result<(), SolveError> {
+        let row = self.sensor_row(state, ws, &|_| true)?;
+        rec.times.push(state.time);
+        rec.rows.push(row);
+        Ok(())
+    }
+
+    /// The values of the sensors `wanted` picks (by index in `Model::sensors`) at `state`
+    /// (evaluated into `ws`), side by side in the model's order: the others are not evaluated
+    /// (an energy, a momentum or a stress search costs a pass over the bodies).
+    pub(crate) fn sensor_row(
+        &self,
+        state: &State,
+        ws: &Workspace,
+        wanted: &dyn Fn(usize) -> bool,
+    ) -> Result<Vec<f64>, SolveError> {
         let nodes = &ws.nodes;
         let map = &self.topo.map;
         let mut row = Vec::new();
@@ -314,7 +334,7 @@ impl System {
         // The kinematics of each body with stress sensors, once per row.
         let mut kinematics: Vec<(BodyId, superelement::Kinematics)> = Vec::new();
         let push3 = |row: &mut Vec<f64>, v: Vector3<f64>| row.extend_from_slice(v.as_slice());
-        for (i, s) in self.model.sensors.iter().enumerate() {
+        for (i, s) in self.model.sensors.iter().enumerate().filter(|(i, _)| wanted(*i)) {
             match &s.kind {
                 SensorKind::NodePosition { node } => push3(&mut row, nodes[node.index()].r),
                 SensorKind::NodeDisplacement { node } => push3(
@@ -426,9 +446,7 @@ impl System {
                 }
             }
         }
-        rec.times.push(state.time);
-        rec.rows.push(row);
-        Ok(())
+        Ok(row)
     }
 }
 

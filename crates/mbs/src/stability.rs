@@ -58,7 +58,7 @@ pub fn stability(system: &System, state: &State, lambda: f64) -> Result<Stabilit
     let ev = Ks
         .self_adjoint_eigenvalues(Side::Lower)
         .map_err(|_| SolveError::Singular {
-            t: lambda,
+            at: crate::error::At::LoadFactor(lambda),
             step: 0,
             what: "eigenvalues of the tangent stiffness did not converge (stability)".into(),
         })?;

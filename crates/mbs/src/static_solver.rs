@@ -15,7 +15,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::error::{Incomplete, SolveError};
+use crate::error::{At, Incomplete, SolveError};
 use crate::sensors::SensorRecord;
 use crate::system::{State, System};
 
@@ -145,7 +145,7 @@ pub(crate) fn newton_static(
             dq[i] = -ws.F[i];
         }
         system.solve(ws, &mut dq).map_err(|what| SolveError::Singular {
-            t: lambda,
+            at: At::LoadFactor(lambda),
             step: 0,
             what: format!("tangent stiffness ({what})"),
         })?;
@@ -191,7 +191,7 @@ pub fn solve_static(
                 sol.steps.push(load_step);
                 if let Err(e) = system.record(&state, &ws, &mut sol.sensors) {
                     sol.state = state;
-                    return Err(fail(e, sol));
+                    return Err(fail(e.in_load_step(lambda, step), sol));
                 }
                 // The record's time column holds the load factor.
                 *sol.sensors.times.last_mut().expect("just recorded") = lambda;
@@ -209,20 +209,23 @@ pub fn solve_static(
                         (
                             h,
                             SolveError::NotConverged {
-                                t: target,
+                                at: At::LoadFactor(target),
                                 step: step + 1,
                                 residual,
                                 iterations,
                             },
                         )
                     }
+                    // A body, a user force or the tangent failed at this load factor: the
+                    // error says so (the parts below the solver only know the time at which
+                    // the loads are evaluated).
                     Err(e) => (
                         LoadStep {
                             lambda: target,
                             residuals: Vec::new(),
                             increments: Vec::new(),
                         },
-                        e,
+                        e.in_load_step(target, step + 1),
                     ),
                 };
                 sol.rejected.push(attempt);

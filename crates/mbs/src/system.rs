@@ -558,6 +558,7 @@ impl System {
         let driver_starts = crate::initial::driver_starts(model, &topo, &drivers)?;
 
         check_stress_sensors(model, &flexible)?;
+        check_reaction_sensors(model, &topo)?;
         let stress_maxima = model
             .sensors
             .iter()
@@ -865,6 +866,30 @@ impl System {
             sum += (s.k * R).powi(2);
         }
         10.0 * f64::EPSILON * sum.sqrt()
+    }
+
+    /// Round-off floor of the inertia forces of a time step of size $h$:
+    /// $10\,\varepsilon\,\|\hat{\mathbf M}\mathbf v\|/h$, with $\hat{\mathbf M}$ the mass matrix of the
+    /// workspace's last evaluation with tangents.
+    ///
+    /// The accelerations of a step are differences of velocities over the step, so their
+    /// round-off is $\varepsilon|\mathbf v|/h$ and that of the inertia forces $\varepsilon\|\hat{\mathbf M}\mathbf v\|/h$:
+    /// the generalised momentum over the step, in the units of $\mathbf F$ row by row. A body
+    /// coasting force-free (a rotor at constant speed about a principal axis, a drifting mass)
+    /// has zero inertia, internal and external forces, so $f_{scale}$ vanishes and only this
+    /// floor lets Newton stop at round-off. The factor 10 covers the few roundings of the
+    /// update, the rotations and the gyroscopic terms ($\varepsilon|\mathbf J\boldsymbol\omega||\boldsymbol\omega|$,
+    /// below the momentum term while $|\boldsymbol\omega| h < 1$).
+    pub(crate) fn inertia_floor(&self, ws: &Workspace, v: &[f64], h: f64) -> f64 {
+        let cp = self.pattern.symbolic.col_ptr();
+        let rows = self.pattern.symbolic.row_idx();
+        let mut p = vec![0.0; v.len()];
+        for (c, &vc) in v.iter().enumerate() {
+            for k in cp[c]..cp[c + 1] {
+                p[rows[k]] += ws.M[k] * vc;
+            }
+        }
+        10.0 * f64::EPSILON * p.iter().map(|x| x * x).sum::<f64>().sqrt() / h
     }
 
     /// $\max_i |\delta q_i|/s_i$ with the unknowns' scales $s_i$ (model size for lengths, 1 for
@@ -1453,8 +1478,9 @@ impl System {
                 .map_err(|source| SolveError::Body {
                     body: self.model.bodies[f.body].name().to_string(),
                     id: crate::model::BodyId(f.body as u32),
-                    t: state.time,
-                    source,
+                    at: crate::error::At::Time(state.time),
+                    step: None,
+                    source: Box::new(source),
                 })?;
             }
             ElementKind::Rigid(i) => {
@@ -1836,6 +1862,41 @@ fn body_loads(
         out.push((load, time));
     }
     Ok(out)
+}
+
+/// Every reaction sensor is at an independent node that a support or a driver holds in some
+/// direction: the reaction is the residual of its removed coordinates, which a node without
+/// them does not have (a node that follows a joint or a body has no coordinates of its own; a
+/// free node's reaction would be zero by definition, never what was meant).
+fn check_reaction_sensors(model: &Model, topo: &Topology) -> Result<(), ModelError> {
+    for (i, s) in model.sensors.iter().enumerate() {
+        let SensorKind::Reaction { node } = s.kind else {
+            continue;
+        };
+        let held = |sc: &usize| matches!(topo.map.scalars[*sc].slot, Slot::Prescribed(_));
+        let why = match &topo.roots[node.index()] {
+            None => "it follows a joint or a body (it has no coordinates of its own)",
+            Some(rc) => {
+                let rotation_held = match &rc.rotation {
+                    RootRotation::Free(_) => false,
+                    RootRotation::Axes(axes) => axes.iter().any(|(sc, _)| held(sc)),
+                };
+                if rc.translation.iter().any(|(sc, _)| held(sc)) || rotation_held {
+                    continue;
+                }
+                "no support or driver holds it"
+            }
+        };
+        return Err(ModelError::InvalidValue {
+            entity: format!("sensor '{}'", s.name),
+            what: format!(
+                "node '{}' has no reaction: {why}; a reaction is measured at a supported or driven node",
+                model.nodes[node.index()].name
+            ),
+            id: Some(Entity::Sensor(i)),
+        });
+    }
+    Ok(())
 }
 
 /// Every stress sensor is on a flexible body reduced with stress shapes, at nodes it has.

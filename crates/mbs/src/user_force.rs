@@ -254,7 +254,7 @@ pub(crate) fn user_force_element(
     let refuse = |what: &str| SolveError::UserForce {
         name: force.name().to_string(),
         index,
-        t,
+        at: crate::error::At::Time(t),
         what: what.to_string(),
     };
     if buf.wrench.iter().flatten().any(|x| !x.is_finite()) {

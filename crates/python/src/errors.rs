@@ -8,7 +8,7 @@
 //! | `ReducedBodyFileError` | a `.rbody` file cannot be read or written | `path` |
 //! | `StudyError` | a study is not valid (as `flexmbs check` reports it) | `file`, `line`, `column`, `key` of the first error; `errors`: every error as a dict of these and `message` |
 //! | `KeyPathError` | a key path leads to no value of the study | `path` (the path asked for), `at` (its part that leads nowhere) |
-//! | `SolveError` | a solver stopped (Newton did not converge, a singular matrix, ...) | `time` (of the step that failed; the load factor in an equilibrium), `step` (its number), `residual` (the last relative residual when Newton failed), `analysis` (its name), `file`, `line`, `column`, `key` (where the study describes the entity the solver failed at: the body whose floating frame failed); `None` when not known; `partial` (from `Study.run`: the results computed before, also in the results folder) |
+//! | `SolveError` | a solver stopped (Newton did not converge, a singular matrix, ...) | `time` (of the step that failed in a dynamic analysis), `load_factor` (of the load step that failed in an equilibrium), `step` (its number), `residual` (the last relative residual when Newton failed), `analysis` (its name), `file`, `line`, `column`, `key` (where the study describes the entity the solver failed at: the body whose floating frame failed); `None` when not known; `partial` (from `Study.run`: the results computed before, also in the results folder) |
 
 use pyo3::create_exception;
 use pyo3::prelude::*;
@@ -44,7 +44,7 @@ create_exception!(
     flexmbs,
     SolveError,
     FlexmbsError,
-    "A solver stopped: `time`, `step`, `residual` and `analysis` say where, `file`, `line`, `column` and `key` the study's entity it failed at (None when not known); `partial` holds what `Study.run` computed before."
+    "A solver stopped: `time` (dynamic) or `load_factor` (equilibrium), `step`, `residual` and `analysis` say where, `file`, `line`, `column` and `key` the study's entity it failed at (None when not known); `partial` holds what `Study.run` computed before."
 );
 
 /// Adds the exception classes to the module.
@@ -164,15 +164,21 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
             ));
         }
         if let Some(s) = e.downcast_ref::<mbs::SolveError>() {
-            let (t, step, residual) = match s {
-                mbs::SolveError::NotConverged { t, step, residual, .. } => (Some(*t), Some(*step), Some(*residual)),
-                mbs::SolveError::Singular { t, step, .. } => (Some(*t), Some(*step), None),
-                mbs::SolveError::Body { t, .. } | mbs::SolveError::UserForce { t, .. } => (Some(*t), None, None),
-                _ => (None, None, None),
+            let residual = match s {
+                mbs::SolveError::NotConverged { residual, .. } => Some(*residual),
+                _ => None,
             };
-            let step = step.or(analysis_step);
+            let at = s.at();
+            let step = s.step().or(analysis_step);
             let attrs = [
-                ("time", t.into_pyobject(py)?.into_any().unbind()),
+                (
+                    "time",
+                    at.and_then(mbs::At::time).into_pyobject(py)?.into_any().unbind(),
+                ),
+                (
+                    "load_factor",
+                    at.and_then(mbs::At::load_factor).into_pyobject(py)?.into_any().unbind(),
+                ),
                 ("step", step.into_pyobject(py)?.into_any().unbind()),
                 ("residual", residual.into_pyobject(py)?.into_any().unbind()),
                 ("analysis", analysis.clone().into_pyobject(py)?.into_any().unbind()),

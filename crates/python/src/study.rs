@@ -403,7 +403,7 @@ impl Study {
         for i in targets {
             let p = &st.parts[i];
             let reduced = py
-                .detach(|| study::run::reduce_part(p, &cache_dir, &mut ()))
+                .detach(|| study::run::reduce_part(&st, p, &cache_dir, &mut ()))
                 .map_err(|e| to_py_err(py, &*e))?;
             out.push((
                 p.name.clone(),
@@ -477,6 +477,17 @@ pub struct Simulation {
     analysis: String,
 }
 
+impl Simulation {
+    /// A failure to read the sensors as the package's exception: a sensor that is not finite
+    /// is a `SolveError` located at the sensor in the study, as a failed step is.
+    fn sensor_err(&self, py: Python<'_>, e: &(dyn std::error::Error + 'static)) -> PyErr {
+        match e.downcast_ref::<mbs::SolveError>() {
+            Some(s) => simulation_err(py, s, &self.analysis, self.sim.steps(), self.sim.locate(s)),
+            None => to_py_err(py, e),
+        }
+    }
+}
+
 #[pymethods]
 impl Simulation {
     /// The analysis being stepped.
@@ -548,15 +559,16 @@ impl Simulation {
         }
     }
 
-    /// The values of sensor `name` now (numpy array of its columns).
+    /// The values of sensor `name` now (numpy array of its columns); only this sensor is
+    /// evaluated.
     fn sensor<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let v = self.sim.sensor(name).map_err(|e| to_py_err(py, &*e))?;
+        let v = self.sim.sensor(name).map_err(|e| self.sensor_err(py, &*e))?;
         Ok(PyArray1::from_vec(py, v))
     }
 
     /// Every sensor now: `{name: numpy array of its columns}`.
     fn sensors<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let values = self.sim.read().map_err(|e| to_py_err(py, &*e))?;
+        let values = self.sim.read().map_err(|e| self.sensor_err(py, &*e))?;
         let d = PyDict::new(py);
         for (g, v) in self.sim.sensors().iter().zip(values) {
             d.set_item(&g.name, PyArray1::from_vec(py, v))?;

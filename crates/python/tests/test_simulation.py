@@ -264,3 +264,167 @@ def test_a_simulation_that_fails_says_where_and_can_go_on(examples):
     assert err.partial is None
     # The state stays at the last converged step.
     assert sim.time == pytest.approx(0.054, abs=1e-12) and sim.steps == 27
+
+
+# A clamped steel hex20 bar 1 x 0.1 x 0.1 m reduced with 2 modes, stress shapes and a load
+# point "tip" at (1, 0.05, 0.05), loaded there by "tip-force" and shaken for 2 ms; "top" is the
+# largest von Mises stress over the node set y1.
+TIP = [2e2, -3e3, 1e3]
+LOAD_POINT_BAR = """
+[[materials]]
+name = "steel"
+E = 210e9
+nu = 0.3
+rho = 7850.0
+
+[[parts]]
+name = "bar"
+material = "steel"
+
+[parts.box]
+size = [1.0, 0.1, 0.1]
+divisions = [10, 2, 2]
+element = "hex20"
+
+[[parts.interfaces]]
+name = "root"
+set = "x0"
+spider = "rbe2"
+
+[parts.reduction]
+modes = 2
+stress_shapes = true
+load_points = [{ name = "tip", node_at = [1.0, 0.05, 0.05] }]
+
+[[bodies]]
+name = "bar"
+part = "bar"
+
+[[supports]]
+at = "bar.root"
+type = "clamp"
+
+[[loads]]
+name = "tip-force"
+type = "point"
+at = "bar.tip"
+force = [%s, %s, %s]
+%s
+[[sensors]]
+name = "top"
+type = "stress"
+of = "bar"
+set = "y1"
+
+[[analyses]]
+type = "dynamic"
+name = "shake"
+t_end = 0.002
+dt = 1e-4
+"""
+
+
+def test_set_load_changes_a_load_at_a_load_point_between_steps(tmp_path):
+    # The tip force doubled from Python after the third step equals the same change written in
+    # the study file as a time function (1 up to 3e-4 s, the third step's end, 2 from 4e-4 s, the
+    # fourth's): the load is evaluated at the end of each step, so both runs see the same
+    # values, to the bit.
+    def simulation(name, function=""):
+        text = LOAD_POINT_BAR % (*TIP, function)
+        study = flexmbs.Study.from_toml(text, base_dir=tmp_path, name=f"{name}.toml")
+        return study.simulation(cache=tmp_path / "cache")
+
+    table = 'function = { type = "table", t = [0.0, 3e-4, 4e-4, 1.0], value = [1.0, 1.0, 2.0, 2.0] }\n'
+    a, b, d = simulation("unchanged"), simulation("changed"), simulation("tabled", table)
+    assert "tip-force" in a.load_names
+    for _ in range(3):
+        for s in (a, b, d):
+            s.step()
+    b.set_load("tip-force", force=[2.0 * x for x in TIP])
+    for _ in range(10):
+        for s in (a, b, d):
+            s.step()
+        assert b.sensors().keys() == d.sensors().keys()
+        for name, values in b.sensors().items():
+            np.testing.assert_array_equal(values, d.sensors()[name], err_msg=f"{name} at t = {b.time}")
+    # And the change acts: the unchanged run is far below (about half the stress).
+    va, vb = a.sensor("top")[0], b.sensor("top")[0]
+    assert vb > 1.5 * va
+    # A load point has a force and a moment; an unknown name and a bad value are named.
+    b.set_load("tip-force", moment=[0.0, 0.0, 0.0])
+    with pytest.raises(flexmbs.FlexmbsError) as e:
+        b.set_load("tip-forse", force=TIP)
+    assert "tip-force" in str(e.value)
+    with pytest.raises(flexmbs.FlexmbsError) as e:
+        b.set_load("tip-force", force=[math.nan, 0.0, 0.0])
+    assert "non-finite" in str(e.value)
+
+
+# A rigid pendulum (keeps an unknown), and a cart driven along a rail at 10 m/s from 1 m
+# before a clamped post: at t = 0.1 s the cart's point P reaches the post's Q, where the
+# deflection of post.R from the line through them ("gap") is 0/0.
+CART = """
+[[rigid_bodies]]
+name = "bob"
+mass = 1.0
+center_of_mass = [0.0, -1.0, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
+points = { O = [0.0, 0.0, 0.0] }
+[[joints]]
+name = "pivot"
+type = "revolute"
+between = ["ground", "bob.O"]
+axis = [0.0, 0.0, 1.0]
+[[rigid_bodies]]
+name = "cart"
+mass = 1.0
+center_of_mass = [-1.0, 0.0, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
+points = { P = [-1.0, 0.0, 0.0] }
+[[rigid_bodies]]
+name = "post"
+mass = 1.0
+center_of_mass = [0.0, 0.0, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
+points = { Q = [0.0, 0.0, 0.0], R = [0.0, 1.0, 0.0] }
+[[supports]]
+at = "post.Q"
+type = "clamp"
+[[joints]]
+name = "rail"
+type = "prismatic"
+between = ["ground", "cart.P"]
+axis = [1.0, 0.0, 0.0]
+[[drivers]]
+name = "push"
+joint = "rail"
+function = { type = "constant-speed", speed = 10.0 }
+[[sensors]]
+name = "travel"
+type = "joint"
+of = "rail"
+[[sensors]]
+name = "gap"
+type = "deflection"
+of = "post.R"
+chord = ["cart.P", "post.Q"]
+[[analyses]]
+type = "dynamic"
+t_end = 0.2
+dt = 0.01
+"""
+
+
+def test_a_sensor_is_read_alone_and_one_that_is_not_finite_is_located(tmp_path):
+    sim = flexmbs.Study.from_toml(CART, base_dir=tmp_path, name="cart.toml").simulation(cache=tmp_path / "cache")
+    sim.advance_to(0.1)
+    # "travel" is read without evaluating "gap", which is no longer finite: 10 m/s x 0.1 s.
+    assert sim.sensor("travel")[0] == pytest.approx(1.0, abs=1e-12)
+    with pytest.raises(flexmbs.SolveError) as e:
+        sim.sensor("gap")
+    err = e.value
+    assert "sensor 'gap'" in str(err) and "t = 0.100000" in str(err)
+    assert err.key == "sensors[1]" and err.line is not None
+    assert err.time == pytest.approx(0.1, abs=1e-12) and err.step == 10
+    with pytest.raises(flexmbs.SolveError):
+        sim.sensors()

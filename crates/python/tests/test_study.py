@@ -127,8 +127,8 @@ def test_linearized_frequencies_and_mode_labels(examples, cli, tmp_path):
     study_file = examples / "four_bar.toml"
     study = flexmbs.Study.load(study_file)
     name = [a for a in study.analyses if a.startswith("linearized")][0]
-    # The linearised analysis starts from the equilibrium before it: run the study (shortened).
-    res = study.run(results_dir=tmp_path / "py", t_end=0.001)
+    # The linearised analysis starts from the equilibrium before it, which runs first.
+    res = study.run(analysis=name, results_dir=tmp_path / "py")
     a = res[name]
     f = a.frequencies
     labels = a.mode_labels
@@ -164,3 +164,21 @@ def test_study_from_text_takes_relative_paths_from_base_dir(examples, tmp_path):
     res = study.run(t_end=0.001)
     assert res.results_dir.startswith(str(examples))
     assert math.isfinite(res.sensor("rod-mid").values[-1, 0])
+
+
+def test_an_equilibrium_that_stops_says_the_load_factor(examples, tmp_path):
+    # The elastica under a tip load a million times its own: Newton's first correction bends
+    # the clamped segment so far that its floating frame is lost, and load stepping gives up.
+    # An equilibrium says where in its own terms: a load factor, no time.
+    study = flexmbs.Study.load(examples / "elastica.toml")
+    study["loads.P.force"] = [0.0, 3.0e6, 0.0]
+    with pytest.raises(flexmbs.SolveError) as e:
+        study.run(results_dir=tmp_path / "res")
+    err = e.value
+    assert err.time is None
+    assert err.load_factor is not None and 0.0 < err.load_factor < 1.0
+    assert err.step is not None and err.step >= 1
+    assert f"at load factor {err.load_factor:.6f} (step {err.step})" in str(err)
+    assert "t = " not in str(err)
+    # Located at the body whose frame was lost.
+    assert err.key.startswith("bodies[") and err.line is not None

@@ -362,6 +362,16 @@ fn project(
         M_bb,
     } = blocks;
     let (nb, ni, n_free) = (p.boundary.len(), p.internal.len(), p.position.len());
+    // Before any factorisation: a count the interior cannot give is the user's to change.
+    if let ModeSelection::Count(m) = modes {
+        if m > 0 && m >= ni {
+            return Err(ReductionError::TooManyModes {
+                body: name.into(),
+                requested: m,
+                interior: ni,
+            });
+        }
+    }
     // One factorisation of K_ii for the constraint modes and the fixed-interface modes.
     let (Psi, Phi_i, omega, n_attachment) = if ni == 0 {
         (Mat::zeros(0, nb), Mat::zeros(0, 0), Vec::new(), 0)

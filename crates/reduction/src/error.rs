@@ -76,6 +76,15 @@ pub enum ReductionError {
     /// that is not free, the body still free with all interfaces held, ...).
     #[error("interface '{name}': {what}")]
     Interface { name: String, what: String },
+    /// More fixed-interface modes asked of body `body` than its interior (the free dofs not on
+    /// an interface) can give: the eigensolver needs fewer modes than dofs, so at most
+    /// `interior - 1`.
+    #[error("{requested} fixed-interface modes requested of '{body}', but its interior (the free dofs not on an interface) has {interior} dofs, so at most {} modes", interior.saturating_sub(1))]
+    TooManyModes {
+        body: String,
+        requested: usize,
+        interior: usize,
+    },
     /// The FE model could not be numbered or assembled: the FE stage's error is the source.
     #[error("FE model")]
     Fe(#[from] fe_model::FeError),

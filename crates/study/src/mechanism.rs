@@ -107,7 +107,7 @@ fn reduce_bodies(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<
         match &b.source {
             BodySource::Part(p) => {
                 if !done.contains_key(p) {
-                    let r = reduce_part(&study.parts[*p], cache, obs)?;
+                    let r = reduce_part(study, &study.parts[*p], cache, obs)?;
                     reductions.push(json!({
                         "part": study.parts[*p].name,
                         "fe_dofs": r.free_dofs,

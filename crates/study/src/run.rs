@@ -393,7 +393,7 @@ fn run_analysis(study: &Study, a: &Analysis, cache: &Path, obs: &mut dyn Observe
             solver,
             supports,
         } => run_modal(part, *modes, *solver, supports, obs)?,
-        AnalysisSpec::Reduce => run_reduce(part, cache, &a.name, obs)?,
+        AnalysisSpec::Reduce => run_reduce(study, part, cache, &a.name, obs)?,
         AnalysisSpec::Mbs(_) => return Err(format!("analysis '{}' runs on the mechanism", a.name).into()),
     };
     Ok(o)
@@ -770,9 +770,10 @@ pub struct Reduced {
     pub free_dofs: usize,
 }
 
-/// Reduces `part` (which has a reduction), or reads it from the cache when the same mesh and
-/// settings were reduced before (`crate::cache`).
-pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<Reduced, BoxError> {
+/// Reduces `part` of `study` (which has a reduction), or reads it from the cache when the
+/// same mesh and settings were reduced before (`crate::cache`). A mode count the part cannot
+/// give is located at its `reduction.modes` in the study file.
+pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<Reduced, BoxError> {
     let Some(reduction) = &part.reduction else {
         return Err(format!("part '{}' has no [parts.reduction]", part.name).into());
     };
@@ -865,7 +866,19 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
         fe_model::FillOrdering::Auto,
         &mut progress,
     )
-    .context(|| format!("part '{}': Craig-Bampton reduction failed", part.name))?;
+    .map_err(|e| -> BoxError {
+        // A mode count the part cannot give is the study's to change: located at the key.
+        let message = if let reduction::ReductionError::TooManyModes { .. } = e {
+            let at = part.path.key("reduction").key("modes");
+            format!("{}: {at}: part '{}'", study.location(&at), part.name)
+        } else {
+            format!("part '{}': Craig-Bampton reduction failed", part.name)
+        };
+        Box::new(crate::error::Context {
+            message,
+            source: e.into(),
+        })
+    })?;
     obs.progress(&Progress::Finished);
     obs.progress(&Progress::Info(format!(
         "part '{}': reduced in {:.2} s to {} coordinates ({} interfaces, {} modes)",
@@ -898,8 +911,14 @@ pub fn reduce_part(part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<
     })
 }
 
-fn run_reduce(part: &Part, cache: &Path, analysis: &str, obs: &mut dyn Observer) -> Result<Outcome, BoxError> {
-    let r = reduce_part(part, cache, obs)?;
+fn run_reduce(
+    study: &Study,
+    part: &Part,
+    cache: &Path,
+    analysis: &str,
+    obs: &mut dyn Observer,
+) -> Result<Outcome, BoxError> {
+    let r = reduce_part(study, part, cache, obs)?;
     let body = &r.body;
     let name = format!("{}.{}", part.name, reduction::file::EXTENSION);
     obs.file(&name, &r.file)?;
@@ -1092,7 +1111,7 @@ pub fn reduce_command(
     let cache = options.cache_dir(study);
     let mut written = Vec::new();
     for part in parts {
-        let r = reduce_part(part, &cache, obs)?;
+        let r = reduce_part(study, part, &cache, obs)?;
         let target = out.join(format!("{}.{}", part.name, reduction::file::EXTENSION));
         std::fs::copy(&r.file, &target)
             .context(|| format!("cannot copy {} to {}", r.file.display(), target.display()))?;

@@ -235,13 +235,24 @@ impl Simulation {
             .collect())
     }
 
-    /// The columns of sensor `name` at the current state.
+    /// The columns of sensor `name` at the current state; the other sensors are not evaluated.
     pub fn sensor(&self, name: &str) -> Result<Vec<f64>, BoxError> {
         let Some(g) = self.groups.iter().position(|g| g.name == name) else {
             let names: Vec<String> = self.groups.iter().map(|g| g.name.clone()).collect();
             return Err(crate::source::unknown_reference("sensor", name, &names).into());
         };
-        Ok(self.read()?.swap_remove(g))
+        // Only this sensor's model sensors are evaluated (they are consecutive in the model).
+        let record = self.integrator.system().sensor_record();
+        let mut which: Vec<usize> = self.groups[g]
+            .mbs_names
+            .iter()
+            .filter_map(|n| record.names.iter().position(|x| x == n))
+            .collect();
+        which.sort_unstable();
+        let values = self.integrator.sensor_values(&which)?;
+        // The group's columns are these values, in the same order.
+        debug_assert_eq!(values.len(), self.columns[g].len());
+        Ok(values)
     }
 
     /// The state: time, coordinates, velocities and accelerations of the unknowns.

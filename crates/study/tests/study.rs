@@ -867,9 +867,25 @@ fn a_solver_failure_at_a_body_is_located_at_the_body_in_the_study_file() {
         }
         cause = c.source();
     };
-    let mbs::SolveError::Body { body, .. } = &stopped.source else {
+    let mbs::SolveError::Body { body, at, step, .. } = &stopped.source else {
         panic!("expected a body's frame to fail: {}", study::error::chain(&*e));
     };
+    // An equilibrium stops at a load factor in a load step, not at a time.
+    let (mbs::At::LoadFactor(lambda), Some(step)) = (at, step) else {
+        panic!("a load factor and step: {at:?} {step:?}");
+    };
+    assert_eq!(Some(*step), stopped.step);
+    let said = format!("body '{body}' at load factor {lambda:.6} (step {step})");
+    assert!(
+        study::error::chain(&*e).contains(&said),
+        "{said}: {}",
+        study::error::chain(&*e)
+    );
+    assert!(
+        !study::error::chain(&*e).contains("t = "),
+        "{}",
+        study::error::chain(&*e)
+    );
     let index = study.mechanism.bodies.iter().position(|b| &b.name == body).unwrap();
     let at = stopped.location.as_ref().expect("the body is located");
     assert_eq!(at.key.to_string(), format!("bodies[{index}]"));
@@ -912,14 +928,15 @@ fn a_simulation_locates_a_solver_error_at_its_body() {
     let error = |id: u32| mbs::SolveError::Body {
         body: "link".into(),
         id: mbs::BodyId(id),
-        t: 0.0,
-        source: superelement::SuperelementError::SingularFrame { rcond: 0.0 },
+        at: mbs::At::Time(0.0),
+        step: None,
+        source: Box::new(superelement::SuperelementError::SingularFrame { rcond: 0.0 }),
     };
     let at = sim.locate(&error(0)).expect("body 0 is in the study");
     assert_eq!(at.key.to_string(), "bodies[0]");
     assert!(at.line_column.is_some());
     let not_converged = mbs::SolveError::NotConverged {
-        t: 0.0,
+        at: mbs::At::Time(0.0),
         step: 1,
         residual: 1.0,
         iterations: 20,

@@ -283,8 +283,9 @@ fn body_errors_name_their_cause_once() {
     let solve = mbs::SolveError::Body {
         body: "rod".into(),
         id: BodyId(0),
-        t: 0.25,
-        source: cause.clone(),
+        at: mbs::At::Time(0.25),
+        step: None,
+        source: Box::new(cause.clone()),
     };
     for (e, top) in [
         (&model as &(dyn std::error::Error + 'static), "body 'rod'"),
@@ -307,4 +308,70 @@ fn body_errors_name_their_cause_once() {
         "{lines:?}"
     );
     assert!(lines[1].contains("does not fit"), "{lines:?}");
+}
+
+/// A reaction is the residual of a node's removed coordinates: a reaction sensor at a node a
+/// joint moves (no coordinates of its own) or at a node no support or driver holds is refused
+/// by name, not recorded as NaN (which would stop a dynamic run) or as a meaningless zero. At
+/// a pinned or hinged node it is accepted.
+#[test]
+fn a_reaction_sensor_needs_a_held_node() {
+    for (node, why) in [(1, "follows a joint or a body"), (4, "no support or driver holds it")] {
+        let mut m = four_bar(false);
+        let free = m.add_node("free", Vector3::new(5.0, 0.0, 0.0));
+        m.add_rigid_body(rigid("lump", free, vec![], 1.0, Vector3::zeros(), [0.1; 3]));
+        let node = if node == 4 { free } else { NodeId(node) };
+        m.add_sensor("r", mbs::SensorKind::Reaction { node });
+        match err(&m) {
+            ModelError::InvalidValue { entity, what, id } => {
+                assert_eq!(entity, "sensor 'r'");
+                assert!(
+                    what.contains(&format!("node '{}' has no reaction", m.nodes[node.index()].name))
+                        && what.contains(why),
+                    "{what}"
+                );
+                assert_eq!(id, Some(Entity::Sensor(0)));
+            }
+            e => panic!("{e:?}"),
+        }
+    }
+    for held in [NodeId(0), NodeId(6)] {
+        let mut m = four_bar(false);
+        m.add_sensor("r", mbs::SensorKind::Reaction { node: held });
+        assert!(System::new(&m).is_ok());
+    }
+}
+
+/// An initial velocity of a node is set on its free components: a component that is not zero
+/// along a direction its support holds (or a driver moves) is refused with the node and the
+/// component named; zero there, and any angular velocity about a free axis, is accepted.
+#[test]
+fn an_initial_node_velocity_along_a_held_direction_is_refused() {
+    let with = |velocity: Vector3<f64>, angular_velocity: Vector3<f64>| {
+        let mut m = four_bar(false);
+        m.initial.push(mbs::InitialCondition::NodeVelocity {
+            node: NodeId(6),
+            velocity,
+            angular_velocity,
+        });
+        m
+    };
+    match err(&with(Vector3::new(0.0, 0.0, 0.0), Vector3::new(1.0, 0.0, 0.0))) {
+        ModelError::InvalidValue { entity, what, id } => {
+            assert_eq!(entity, "initial velocity of node 'D'");
+            assert!(
+                what.contains("angular velocity component x is 1 rad/s, but its support holds it"),
+                "{what}"
+            );
+            assert_eq!(id, Some(Entity::InitialCondition(0)));
+        }
+        e => panic!("{e:?}"),
+    }
+    match err(&with(Vector3::new(0.0, -2.0, 0.0), Vector3::zeros())) {
+        ModelError::InvalidValue { what, .. } => {
+            assert!(what.contains("the velocity component y is -2 m/s"), "{what}")
+        }
+        e => panic!("{e:?}"),
+    }
+    assert!(System::new(&with(Vector3::zeros(), Vector3::new(0.0, 0.0, 3.0))).is_ok());
 }

@@ -136,7 +136,12 @@ fn modified_newton_still_reports_a_step_that_does_not_converge() {
     let err = solve_dynamic(&sys, sys.initial_state(), &settings).unwrap_err();
     let text = err.to_string();
     match err.error {
-        SolveError::NotConverged { t, step, residual, .. } => {
+        SolveError::NotConverged {
+            at: mbs::At::Time(t),
+            step,
+            residual,
+            ..
+        } => {
             assert_eq!(step, 1);
             assert!((t - 0.01).abs() < 1e-15);
             assert!(residual > 0.0 && residual.is_finite());

@@ -143,7 +143,10 @@ fn a_failed_step_returns_the_history_so_far() {
     let err = solve_dynamic(&sys, sys.initial_state(), &settings).unwrap_err();
     match err.error {
         mbs::SolveError::NotConverged {
-            step, iterations, t, ..
+            step,
+            iterations,
+            at: mbs::At::Time(t),
+            ..
         } => {
             assert_eq!((step, iterations), (1, 1));
             assert!((t - 0.01).abs() < 1e-15);

@@ -94,3 +94,55 @@ fn clamp_reaction_balances_the_tip_load() {
         assert!((r[i] - expected[i]).abs() < 1e-8 * P, "reaction {r:?} vs {expected:?}");
     }
 }
+
+/// A static analysis that stops says where in its own terms: the load factor and the load
+/// step, never a time (a dynamic analysis says `t = ...`: `newton.rs`, `user_force.rs`).
+/// Newton allowed one iteration below round-off stops in the first load step at the full
+/// load; a user force that is never finite stops the load stepping at its smallest increment,
+/// named at the load factor of that last attempt. (A body whose floating frame fails in an
+/// equilibrium: the study test `a_solver_failure_at_a_body_is_located_at_the_body_in_the_study_file`.)
+#[test]
+fn a_static_failure_names_the_load_factor_and_the_load_step() {
+    let (mut model, nodes) = cantilever(4, 1.0, SIDE, E, 1000.0, ModeSelection::StaticOnly, 3);
+    let EI = E * SIDE.powi(4) / 12.0;
+    model.add_dead_force(nodes[4], Vector3::new(0.0, 2.0 * EI, 0.0));
+    let sys = System::new(&model).unwrap();
+    let settings = StaticSettings {
+        max_iterations: 1,
+        tolerance: 1e-30,
+        min_increment: 0.6,
+        ..StaticSettings::new(1)
+    };
+    let fail = solve_static(&sys, sys.initial_state(), &settings).unwrap_err();
+    match &fail.error {
+        mbs::SolveError::NotConverged {
+            at: mbs::At::LoadFactor(l),
+            step,
+            ..
+        } => assert_eq!((*l, *step), (1.0, 1)),
+        e => panic!("{e:?}"),
+    }
+    let msg = fail.error.to_string();
+    assert!(
+        msg.contains("at load factor 1.000000 (step 1)") && !msg.contains("t ="),
+        "{msg}"
+    );
+
+    let broken: std::sync::Arc<dyn mbs::UserForce> = std::sync::Arc::new(crate::user_force::Broken {
+        node: [nodes[4]],
+        t_bad: -1.0,
+    });
+    let sys = System::with_user_forces(&model, vec![broken]).unwrap();
+    let fail = solve_static(&sys, sys.initial_state(), &StaticSettings::new(1)).unwrap_err();
+    let tried = fail.partial.rejected.last().unwrap().lambda;
+    assert!(tried < 1e-5, "halved to the smallest increment: {tried}");
+    match &fail.error {
+        mbs::SolveError::UserForce { at, .. } => assert_eq!(*at, mbs::At::LoadFactor(tried)),
+        e => panic!("expected the user force to stop it: {e:?}"),
+    }
+    let msg = fail.error.to_string();
+    assert!(
+        msg.contains(&format!("user force 'broken' at load factor {tried:.6}")) && !msg.contains("t ="),
+        "{msg}"
+    );
+}

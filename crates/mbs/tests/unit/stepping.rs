@@ -249,8 +249,15 @@ fn a_sensor_that_is_not_finite_stops_the_run_where_it_happened() {
     let sys = System::new(&model).unwrap();
     let fail = mbs::solve_dynamic(&sys, sys.initial_state(), &DynamicSettings::new(0.01, 0.2, 0.9)).unwrap_err();
     match &fail.error {
-        mbs::SolveError::NonFiniteSensor { sensor, t, step, .. } => {
-            assert_eq!((sensor.as_str(), *step), ("chord", 10));
+        mbs::SolveError::NonFiniteSensor {
+            sensor,
+            index,
+            at: mbs::At::Time(t),
+            step,
+            ..
+        } => {
+            assert_eq!((sensor.as_str(), *index, *step), ("chord", 0, 10));
+            assert_eq!(fail.error.entity(), Some(mbs::Entity::Sensor(0)));
             assert!((t - 0.1).abs() < 1e-12, "{t}");
         }
         e => panic!("{e}"),

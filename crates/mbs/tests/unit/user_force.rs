@@ -292,9 +292,9 @@ fn user_force_equal_to_a_follower_load_gives_its_results() {
 
 /// A force that becomes NaN after `t_bad`.
 #[derive(Debug)]
-struct Broken {
-    node: [NodeId; 1],
-    t_bad: f64,
+pub(crate) struct Broken {
+    pub(crate) node: [NodeId; 1],
+    pub(crate) t_bad: f64,
 }
 
 impl UserForce for Broken {
@@ -338,7 +338,11 @@ fn bad_user_forces_are_refused_by_name() {
     ));
     let err = solve_dynamic(&sys, sys.initial_state(), &DynamicSettings::new(1e-3, 0.05, 0.9)).unwrap_err();
     match &err.error {
-        SolveError::UserForce { name, t, .. } => {
+        SolveError::UserForce {
+            name,
+            at: mbs::At::Time(t),
+            ..
+        } => {
             assert_eq!(name, "broken");
             assert!((*t - 0.011).abs() < 1e-9, "{t}");
         }

@@ -230,6 +230,33 @@ fn mass_data_and_rigid_fit_at_the_centre_of_mass() {
     assert!((St.view((0, 0), (3, 3)) - nalgebra::Matrix3::identity() * m).amax() < 1e-10 * m);
 }
 
+/// The fixed-interface modes come from the interior (the free dofs not on an interface): a
+/// count it cannot give is refused by body and both counts before anything is factorised
+/// (the eigensolver needs fewer modes than dofs); one fewer is reduced.
+#[test]
+fn more_modes_than_the_interior_has_are_refused_by_name() {
+    // Four elements, interfaces at both ends: 3 interior nodes x 6 = 18 interior dofs.
+    let (model, interfaces, _) = free_beam(4, false);
+    for m in [18, 500] {
+        let e = reduce(&model, "beam", &interfaces, &CbSettings::new(ModeSelection::Count(m))).unwrap_err();
+        assert_eq!(
+            e,
+            ReductionError::TooManyModes {
+                body: "beam".into(),
+                requested: m,
+                interior: 18
+            }
+        );
+        assert!(
+            e.to_string()
+                .contains(&format!("{m} fixed-interface modes requested of 'beam', but its interior (the free dofs not on an interface) has 18 dofs, so at most 17 modes")),
+            "{e}"
+        );
+    }
+    let body = reduce(&model, "beam", &interfaces, &CbSettings::new(ModeSelection::Count(17))).unwrap();
+    assert_eq!(body.n_modes, 17);
+}
+
 #[test]
 fn bad_interfaces_give_named_errors() {
     let (mut model, mut interfaces, nodes) = free_beam(4, false);

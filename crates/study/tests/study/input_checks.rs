@@ -299,3 +299,171 @@ part = "block"
     assert_eq!(summary.status, "complete");
     assert_eq!(study::part::model_copies() - copies, 4);
 }
+
+/// A cart driven along a rail at 10 m/s from 1 m before a clamped post, on top of the
+/// pendulum (which keeps an unknown): the cart's point `P` reaches the post's point `Q` at
+/// t = 0.1 s, step 10, where the deflection of `post.R` from the line through them is 0/0.
+const CART: &str = r#"
+[[rigid_bodies]]
+name = "cart"
+mass = 1.0
+center_of_mass = [-1.0, 0.0, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
+points = { P = [-1.0, 0.0, 0.0] }
+[[rigid_bodies]]
+name = "post"
+mass = 1.0
+center_of_mass = [0.0, 0.0, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
+points = { Q = [0.0, 0.0, 0.0], R = [0.0, 1.0, 0.0] }
+[[supports]]
+at = "post.Q"
+type = "clamp"
+[[joints]]
+name = "rail"
+type = "prismatic"
+between = ["ground", "cart.P"]
+axis = [1.0, 0.0, 0.0]
+[[drivers]]
+name = "push"
+joint = "rail"
+function = { type = "constant-speed", speed = 10.0 }
+[[sensors]]
+name = "travel"
+type = "joint"
+of = "rail"
+[[sensors]]
+name = "gap"
+type = "deflection"
+of = "post.R"
+chord = ["cart.P", "post.Q"]
+[[analyses]]
+type = "dynamic"
+t_end = 0.2
+dt = 0.01
+"#;
+
+/// A sensor whose value stops being finite stops the run at the sensor's `[[sensors]]` entry
+/// (`file:line:col: sensors[i]: ...`), as a failure at a body is located at the body, and the
+/// message names the sensor, the time and the step.
+#[test]
+fn a_sensor_that_is_not_finite_is_located_at_the_sensor_in_the_study_file() {
+    let text = format!("{PENDULUM}{CART}");
+    let e = run_error("sensor-not-finite", &text);
+    let line = text.lines().position(|l| l == "name = \"gap\"").unwrap() + 1;
+    assert!(
+        e.contains(&format!("sensor-not-finite.toml:{line}:"))
+            || e.contains(&format!("sensor-not-finite.toml:{}:", line - 1)),
+        "line {line}: {e}"
+    );
+    assert!(e.contains("sensors[1]: time integration stopped"), "{e}");
+    assert!(
+        e.contains("sensor 'gap' component 0 is NaN at t = 0.100000 (step 10)"),
+        "{e}"
+    );
+}
+
+/// A reaction is the force a support applies: a sensor on a point no support holds is refused
+/// at the sensor, naming the point.
+#[test]
+fn a_reaction_sensor_at_a_point_without_a_support_is_refused() {
+    let text = format!("{PENDULUM}[[sensors]]\nname = \"r\"\ntype = \"reaction\"\nof = \"bob.P\"\n{DYNAMIC}");
+    let e = check("reaction-unsupported", &text);
+    assert!(
+        e.contains("sensors[0].of") && e.contains("point 'bob.P' has no [[supports]]"),
+        "{e}"
+    );
+    // At the joint to the ground it is the pivot's force.
+    let text = format!("{PENDULUM}[[sensors]]\nname = \"r\"\ntype = \"reaction\"\nof = \"pivot\"\n{DYNAMIC}");
+    assert_eq!(run_error("reaction-pivot", &text), "");
+}
+
+/// An initial velocity at a point is set on the point's free components; a component that is
+/// not zero along a direction its support holds would be dropped without a word, so it is
+/// refused at the `[[initial]]` line with the component named. Zero there is fine.
+#[test]
+fn an_initial_velocity_along_a_held_direction_is_refused() {
+    let wheel = |velocity: &str| {
+        format!(
+            r#"
+[[rigid_bodies]]
+name = "wheel"
+mass = 1.0
+center_of_mass = [0.0, 0.0, 0.0]
+inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]]
+points = {{ C = [0.0, 0.0, 0.0] }}
+[[supports]]
+at = "wheel.C"
+type = "pin"
+[[initial]]
+at = "wheel.C"
+velocity = {velocity}
+angular_velocity = [0.0, 0.0, 2.0]
+{DYNAMIC}"#
+        )
+    };
+    let e = run_error("initial-held", &wheel("[0.0, 0.5, 0.0]"));
+    assert!(e.contains("initial[0]") && e.contains("initial-held.toml:"), "{e}");
+    assert!(
+        e.contains("velocity component y is 0.5 m/s, but its support holds it"),
+        "{e}"
+    );
+    assert_eq!(run_error("initial-held-zero", &wheel("[0.0, 0.0, 0.0]")), "");
+}
+
+/// A reduction keeps fixed-interface modes of the interior (the dofs that are not on an
+/// interface): asking for as many as the interior has or more is refused before anything is
+/// solved, located at the part's `reduction.modes`, naming the part and both counts.
+#[test]
+fn more_reduction_modes_than_interior_dofs_are_refused_with_the_part_named() {
+    let cantilever =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cantilever.toml")).unwrap();
+    // 21 beam nodes, the two ends interfaces: 19 x 6 = 114 interior dofs.
+    let text = cantilever.replace("[parts.reduction]\nmodes = 4", "[parts.reduction]\nmodes = 500");
+    assert_ne!(text, cantilever, "the example reduces with 4 modes");
+    let e = run_error("reduction-modes", &text);
+    // Located at the key, `file:line:col: parts[0].reduction.modes: part 'beam'`.
+    let line = text.lines().position(|l| l == "modes = 500").unwrap() + 1;
+    assert!(
+        e.contains(&format!("reduction-modes.toml:{line}:")) && e.contains("parts[0].reduction.modes: part 'beam'"),
+        "line {line}: {e}"
+    );
+    assert!(
+        e.contains("500 fixed-interface modes requested of 'beam', but its interior (the free dofs not on an interface) has 114 dofs, so at most 113 modes"),
+        "{e}"
+    );
+    let e = run_error("reduction-modes-113", &text.replace("modes = 500", "modes = 113"));
+    assert!(!e.contains("fixed-interface modes requested"), "{e}");
+}
+
+/// A simulation's `sensor(name)` evaluates that sensor alone: when the cart's point reaches
+/// the post (t = 0.1 s) the deflection `gap` is 0/0, so reading every sensor fails, naming
+/// `gap` at its `[[sensors]]` entry, while `travel` (the rail coordinate, 10 m/s x 0.1 s) is
+/// still read. Before, `sensor` read them all and failed too.
+#[test]
+fn a_simulation_reads_one_sensor_without_evaluating_the_others() {
+    let dir = crate::scratch("sensor-alone");
+    let file = dir.join("sensor-alone.toml");
+    std::fs::write(&file, format!("{PENDULUM}{CART}")).unwrap();
+    let study = study::load(&file).unwrap();
+    let options = Options {
+        out: None,
+        cache: Some(dir.join("cache")),
+        t_end: None,
+        foreign: Default::default(),
+    };
+    let mut sim = study::Simulation::new(&study, "dynamic", &options).unwrap();
+    sim.step().unwrap();
+    assert_eq!(sim.sensor("gap").unwrap(), sim.read().unwrap()[1]);
+    assert_eq!(sim.sensor("travel").unwrap(), sim.read().unwrap()[0]);
+    sim.advance_to(0.1).unwrap();
+    // 10 m/s for 0.1 s, to the round-off of the time.
+    let travel = sim.sensor("travel").unwrap()[0];
+    assert!((travel - 1.0).abs() < 1e-12, "{travel}");
+    let e = sim.read().unwrap_err();
+    assert!(e.to_string().contains("sensor 'gap'"), "{e}");
+    let e = sim.sensor("gap").unwrap_err();
+    let solve = e.downcast_ref::<mbs::SolveError>().expect("a solver error");
+    let at = sim.locate(solve).expect("located at the sensor");
+    assert_eq!(at.key.to_string(), "sensors[1]");
+}
