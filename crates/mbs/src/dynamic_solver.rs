@@ -144,7 +144,7 @@
 
 use crate::error::{At, Incomplete, SolveError};
 use crate::momentum::MomentumProjection;
-use crate::sensors::SensorRecord;
+use crate::sensors::{PendingRows, SensorRecord};
 use crate::system::{State, System, Workspace};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3, Vector6};
 use std::sync::Arc;
@@ -693,11 +693,34 @@ impl<'a> Integrator<'a> {
         rec.check_last_row(self.steps)
     }
 
+    /// [`Self::record`] for a run that records many rows: the values of largest-von-Mises
+    /// sensors are found for a batch of rows at once ([`System::complete_rows`], the same
+    /// values), so the row waits in `pending` and complete rows reach `rec` in order, a batch
+    /// at a time ([`PendingRows::BATCH`] rows, or sooner when the oldest waited
+    /// [`PendingRows::WAIT`]). The caller completes the rest with [`System::complete_rows`]
+    /// when the run ends, fails or stops. Without such sensors the row reaches `rec` at once.
+    ///
+    /// # Errors
+    /// As [`Self::record`], for the first row of the completed ones with a value that is not
+    /// finite (a largest-von-Mises value is checked when its batch completes).
+    pub fn record_deferred(&self, pending: &mut PendingRows, rec: &mut SensorRecord) -> Result<(), SolveError> {
+        if !self.system.has_deferred_sensors() {
+            return self.record(rec);
+        }
+        let bad = self.system.record_pending(&self.state, &self.ws, self.steps, pending)?;
+        if bad || pending.due() {
+            self.system.complete_rows(pending, rec)?;
+        }
+        Ok(())
+    }
+
     /// The values of the sensors `which` (indices in `Model::sensors`, ascending) at the
     /// current state, side by side; the other sensors are not evaluated. A value that is not
     /// finite is [`SolveError::NonFiniteSensor`], as in [`Self::record`].
     pub fn sensor_values(&self, which: &[usize]) -> Result<Vec<f64>, SolveError> {
-        let row = self.system.sensor_row(&self.state, &self.ws, &|i| which.contains(&i))?;
+        let row = self
+            .system
+            .sensor_row(&self.state, &self.ws, &|i| which.contains(&i), None)?;
         let all = self.system.sensor_record();
         let mut picked = SensorRecord {
             names: which.iter().map(|&i| all.names[i].clone()).collect(),
@@ -970,10 +993,10 @@ pub fn solve_dynamic(
     start: State,
     settings: &DynamicSettings,
 ) -> Result<Trajectory, Box<Incomplete<Trajectory>>> {
-    let fail = |error: SolveError, traj: Trajectory| Box::new(Incomplete { error, partial: traj });
     let (mut integ, mut traj) = start_trajectory(system, start, settings)?;
     let (n_steps, _) = fixed_steps(integ.state().time, settings.end_time, settings.step);
     let every = settings.output_every.max(1);
+    let mut pending = PendingRows::default();
     for k in 1..=n_steps {
         if k == n_steps {
             // Land on the end time (fixed_steps): the last step may be shorter.
@@ -984,19 +1007,41 @@ pub fn solve_dynamic(
                 traj.iterations.push(rep.residuals.len() - 1);
                 traj.jacobians.push(rep.jacobians);
             }
-            Err(e) => {
-                traj.final_state = integ.state().clone();
-                return Err(fail(e, traj));
-            }
+            Err(e) => return Err(stopped(&integ, e, &mut pending, traj)),
         }
         if k % every == 0 || k == n_steps {
-            if let Err(e) = integ.record(&mut traj.sensors) {
-                traj.final_state = integ.state().clone();
-                return Err(fail(e, traj));
+            if let Err(e) = integ.record_deferred(&mut pending, &mut traj.sensors) {
+                return Err(stopped(&integ, e, &mut pending, traj));
             }
         }
     }
+    finished(&integ, &mut pending, traj)
+}
+
+/// The trajectory of a run that stopped with `error`: the rows recorded before it completed
+/// (a row that is not finite among them stops them there, the error stays the run's), the
+/// integrator's state as the final one.
+pub(crate) fn stopped(
+    integ: &Integrator,
+    error: SolveError,
+    pending: &mut PendingRows,
+    mut traj: Trajectory,
+) -> Box<Incomplete<Trajectory>> {
+    let _ = integ.system().complete_rows(pending, &mut traj.sensors);
     traj.final_state = integ.state().clone();
+    Box::new(Incomplete { error, partial: traj })
+}
+
+/// The trajectory of a run that reached its end, its waiting rows completed.
+pub(crate) fn finished(
+    integ: &Integrator,
+    pending: &mut PendingRows,
+    mut traj: Trajectory,
+) -> Result<Trajectory, Box<Incomplete<Trajectory>>> {
+    traj.final_state = integ.state().clone();
+    if let Err(error) = integ.system().complete_rows(pending, &mut traj.sensors) {
+        return Err(Box::new(Incomplete { error, partial: traj }));
+    }
     Ok(traj)
 }
 
@@ -1009,9 +1054,9 @@ pub fn solve_dynamic_adaptive(
     settings: &DynamicSettings,
     adaptive: &AdaptiveSettings,
 ) -> Result<Trajectory, Box<Incomplete<Trajectory>>> {
-    let fail = |error: SolveError, traj: Trajectory| Box::new(Incomplete { error, partial: traj });
     let (mut integ, mut traj) = start_trajectory(system, start, settings)?;
     let end = settings.end_time;
+    let mut pending = PendingRows::default();
     while end - integ.state().time > 1e-12 * end.abs().max(1.0) {
         // Land on the end time: shorten the step that would pass it (or leave a sliver).
         match crate::retry::step_adaptive_to(&mut integ, end, adaptive) {
@@ -1019,18 +1064,13 @@ pub fn solve_dynamic_adaptive(
                 traj.iterations.push(s.report.residuals.len() - 1);
                 traj.jacobians.push(s.report.jacobians);
             }
-            Err(e) => {
-                traj.final_state = integ.state().clone();
-                return Err(fail(e, traj));
-            }
+            Err(e) => return Err(stopped(&integ, e, &mut pending, traj)),
         }
-        if let Err(e) = integ.record(&mut traj.sensors) {
-            traj.final_state = integ.state().clone();
-            return Err(fail(e, traj));
+        if let Err(e) = integ.record_deferred(&mut pending, &mut traj.sensors) {
+            return Err(stopped(&integ, e, &mut pending, traj));
         }
     }
-    traj.final_state = integ.state().clone();
-    Ok(traj)
+    finished(&integ, &mut pending, traj)
 }
 
 /// The iterate `st` of $t_{n+1}$ from the body-axis iterates of the step (module docs): the

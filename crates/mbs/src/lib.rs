@@ -220,7 +220,7 @@ pub use node::NodeMotion;
 pub use retry::{
     solve_dynamic_retrying, step_adaptive_to, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure,
 };
-pub use sensors::{Energies, SensorRecord};
+pub use sensors::{Energies, PendingRows, SensorRecord};
 pub use stability::{stability, Stability};
 pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
 pub use streaming::{Interrupted, StepDone, StepTotals, Stepping};

@@ -170,6 +170,7 @@ pub fn solve_dynamic_retrying(
     let (n_steps, _) = crate::dynamic_solver::fixed_steps(integ.state().time(), settings.end_time, h);
     let every = settings.output_every.max(1);
     let mut retries = Vec::new();
+    let mut pending = crate::sensors::PendingRows::default();
     for k in 1..=n_steps {
         if k == n_steps {
             // Land on the end time: the last step may be shorter.
@@ -189,20 +190,22 @@ pub fn solve_dynamic_retrying(
             }
             Err(failure) => {
                 retries.extend(failure.retry);
-                traj.final_state = integ.state().clone();
-                return Err(fail(failure.error, traj, retries));
+                let stopped = *crate::dynamic_solver::stopped(&integ, failure.error, &mut pending, traj);
+                return Err(fail(stopped.error, stopped.partial, retries));
             }
         }
         if k % every == 0 || k == n_steps {
-            if let Err(e) = integ.record(&mut traj.sensors) {
-                traj.final_state = integ.state().clone();
-                return Err(fail(e, traj, retries));
+            if let Err(e) = integ.record_deferred(&mut pending, &mut traj.sensors) {
+                let stopped = *crate::dynamic_solver::stopped(&integ, e, &mut pending, traj);
+                return Err(fail(stopped.error, stopped.partial, retries));
             }
         }
     }
-    traj.final_state = integ.state().clone();
-    Ok(RetriedTrajectory {
-        trajectory: traj,
-        retries,
-    })
+    match crate::dynamic_solver::finished(&integ, &mut pending, traj) {
+        Ok(trajectory) => Ok(RetriedTrajectory { trajectory, retries }),
+        Err(stopped) => {
+            let stopped = *stopped;
+            Err(fail(stopped.error, stopped.partial, retries))
+        }
+    }
 }

@@ -20,6 +20,61 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use superelement::so3;
 
+/// Sensor rows waiting for the values of their largest-von-Mises sensors
+/// ([`crate::Integrator::record_deferred`], [`System::complete_rows`]). Those values are found
+/// for a batch of rows at once: one search per row reads the body's stress shapes per row,
+/// a batch reads them once.
+#[derive(Clone, Debug, Default)]
+pub struct PendingRows {
+    rows: Vec<PendingRow>,
+    /// When the oldest waiting row was recorded.
+    since: Option<std::time::Instant>,
+}
+
+impl PendingRows {
+    /// Rows held before they are completed.
+    pub const BATCH: usize = 64;
+    /// The longest a row waits (wall time) before it is completed at the next record, so that
+    /// a live sensor file lags a slow run by at most this.
+    pub const WAIT: std::time::Duration = std::time::Duration::from_secs(1);
+
+    /// The number of rows waiting.
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Whether no row waits.
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// Whether the rows should be completed now: a whole batch, or waiting too long.
+    pub(crate) fn due(&self) -> bool {
+        self.rows.len() >= Self::BATCH || self.since.is_some_and(|t| t.elapsed() >= Self::WAIT)
+    }
+}
+
+/// A recorded row whose largest-von-Mises values wait.
+#[derive(Clone, Debug)]
+struct PendingRow {
+    time: f64,
+    /// The step it was recorded at (for a located error).
+    step: usize,
+    row: Vec<f64>,
+    maxima: Vec<DeferredMaximum>,
+}
+
+/// The state of one largest-von-Mises sensor in a waiting row.
+#[derive(Clone, Debug)]
+pub(crate) struct DeferredMaximum {
+    /// Index in `Model::sensors`.
+    sensor: usize,
+    /// Its first column in the row (value, then node).
+    column: usize,
+    /// The body's CB coordinates $\mathbf q^{jj}$.
+    q: Vec<f64>,
+}
+
 /// Sensor values over time: one row per output time, sensors side by side.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SensorRecord {
@@ -311,20 +366,103 @@ impl System {
 
     /// Appends the sensor values at `state` (evaluated into `ws`) to `rec`.
     pub(crate) fn record(&self, state: &State, ws: &Workspace, rec: &mut SensorRecord) -> Result<(), SolveError> {
-        let row = self.sensor_row(state, ws, &|_| true)?;
+        let row = self.sensor_row(state, ws, &|_| true, None)?;
         rec.times.push(state.time);
         rec.rows.push(row);
         Ok(())
     }
 
+    /// Whether a sensor's values are found a batch of rows at once
+    /// ([`crate::Integrator::record_deferred`]): a largest-von-Mises sensor.
+    pub(crate) fn has_deferred_sensors(&self) -> bool {
+        self.stress_maxima.iter().any(Option::is_some)
+    }
+
+    /// [`Self::record`] into `pending`, with the largest-von-Mises values left for
+    /// [`Self::complete_rows`] (placeholders `NaN`). Returns whether the row has a value that
+    /// is not finite among the others (it must then be completed at once).
+    pub(crate) fn record_pending(
+        &self,
+        state: &State,
+        ws: &Workspace,
+        step: usize,
+        pending: &mut PendingRows,
+    ) -> Result<bool, SolveError> {
+        let mut maxima = Vec::new();
+        let row = self.sensor_row(state, ws, &|_| true, Some(&mut maxima))?;
+        let deferred = |c: usize| {
+            maxima
+                .iter()
+                .any(|m: &DeferredMaximum| c == m.column || c == m.column + 1)
+        };
+        let bad = row.iter().enumerate().any(|(c, x)| !x.is_finite() && !deferred(c));
+        pending.since.get_or_insert_with(std::time::Instant::now);
+        pending.rows.push(PendingRow {
+            time: state.time,
+            step,
+            row,
+            maxima,
+        });
+        Ok(bad)
+    }
+
+    /// Completes the rows of `pending` (a record's rows waiting for their largest-von-Mises
+    /// values, [`crate::Integrator::record_deferred`]) and appends them to `rec` in order:
+    /// the maxima of every row of a sensor come from one batched search
+    /// ([`reduction::VonMisesMaximum::maxima`]: the same values, to the bit, as a search per
+    /// row).
+    ///
+    /// # Errors
+    /// [`SolveError::NonFiniteSensor`] for the first row with a value that is not finite (as
+    /// [`crate::Integrator::record`]: that row is the last in `rec`, the later ones are
+    /// dropped).
+    pub fn complete_rows(&self, pending: &mut PendingRows, rec: &mut SensorRecord) -> Result<(), SolveError> {
+        pending.since = None;
+        let mut rows = std::mem::take(&mut pending.rows);
+        let Some(first) = rows.first() else {
+            return Ok(());
+        };
+        // Every row defers the same sensors, in the same order.
+        let deferred: Vec<(usize, usize)> = first.maxima.iter().map(|d| (d.sensor, d.column)).collect();
+        for (m, (sensor, column)) in deferred.into_iter().enumerate() {
+            let search = &self.stress_maxima[sensor]
+                .as_ref()
+                .expect("a search per largest-von-Mises sensor (System::new)")
+                .search;
+            let SensorKind::MaxVonMises { body, .. } = &self.model.sensors[sensor].kind else {
+                unreachable!("deferred values are those of largest-von-Mises sensors");
+            };
+            let shapes = self
+                .superelement(*body)
+                .and_then(|se| se.stress_shapes())
+                .expect("stress shapes (System::new)");
+            let states: Vec<&[f64]> = rows.iter().map(|r| r.maxima[m].q.as_slice()).collect();
+            let (found, _) = search.maxima(shapes, &states);
+            for (r, found) in rows.iter_mut().zip(found) {
+                let (node, vm) = found.unwrap_or((0, f64::NAN));
+                r.row[column] = vm;
+                r.row[column + 1] = node as f64;
+            }
+        }
+        for r in rows {
+            rec.times.push(r.time);
+            rec.rows.push(r.row);
+            rec.check_last_row(r.step)?;
+        }
+        Ok(())
+    }
+
     /// The values of the sensors `wanted` picks (by index in `Model::sensors`) at `state`
     /// (evaluated into `ws`), side by side in the model's order: the others are not evaluated
-    /// (an energy, a momentum or a stress search costs a pass over the bodies).
+    /// (an energy, a momentum or a stress search costs a pass over the bodies). With
+    /// `deferred`, the largest-von-Mises sensors' values are placeholders and their states are
+    /// pushed there ([`Self::complete_rows`]).
     pub(crate) fn sensor_row(
         &self,
         state: &State,
         ws: &Workspace,
         wanted: &dyn Fn(usize) -> bool,
+        mut deferred: Option<&mut Vec<DeferredMaximum>>,
     ) -> Result<Vec<f64>, SolveError> {
         let nodes = &ws.nodes;
         let map = &self.topo.map;
@@ -417,8 +555,18 @@ impl System {
                 }
                 SensorKind::MaxVonMises { body, .. } => {
                     // The bounded search over the node set (von Mises is invariant under the
-                    // rotation to global axes; the same maximum as every node's).
+                    // rotation to global axes; the same maximum as every node's), or its state
+                    // kept for a batch (Self::complete_rows).
                     let (shapes, kin) = self.stress_kinematics(*body, state, &mut kinematics)?;
+                    if let Some(deferred) = deferred.as_deref_mut() {
+                        deferred.push(DeferredMaximum {
+                            sensor: i,
+                            column: row.len(),
+                            q: kin.q_jj.clone(),
+                        });
+                        row.extend([f64::NAN; 2]);
+                        continue;
+                    }
                     let m = self.stress_maxima[i]
                         .as_ref()
                         .expect("a search per sensor (System::new)");

@@ -70,6 +70,7 @@
 //! | $\mathbf G_k$ | `geometric_stiffness[k]` | reduced geometric stiffness $\mathbf V^T\mathbf K_G(\boldsymbol\sigma(\mathbf V\mathbf e_k))\mathbf V$; strain energy $\tfrac12\mathbf q^T\mathbf K_{CB}\mathbf q + \tfrac12\sum_k q_k\mathbf q^T\mathbf G_k\mathbf q$ | [`geometric`]; `fe_model::geometric` |
 //! | $\boldsymbol\Sigma$ | `StressShapes` | stress of every CB vector: solid nodal stresses ($6n_{nodes}\times n$), beam section forces ($12n_{beams}\times n$) | [`stress`] |
 //! | $\mathbf T$, $c_i$ | `VonMisesMaximum` | whitening of the CB coordinates by the von Mises stress they cause over a node set; node $i$'s worst-case von Mises per unit whitened change | [`stress`] |
+//! | $\tilde{\mathbf A}_i$, $\hat v_i$, $m_i$ | `screen`, `screen_chunk_factors` | single-precision $\mathbf M^{1/2}\boldsymbol\Sigma_i$ of the batched search; its von Mises estimate and that estimate's bound (theory guide (10.4)) | [`VonMisesMaximum::maxima`] |
 //! | $\mathbf u$, $w_i$ | `VonMisesReference` | whitened direction of the first nonzero state; node $i$'s von Mises stress of $\mathbf T^{-1}\mathbf u$ | [`stress`] |
 //! | $\mathbf X$, $\hat\omega$ | `attachment_modes` | attachment modes of load points (static correction) and their Rayleigh frequencies | [`attachment`] |
 //! | $r_k$ | `residuals[k]` | $\|\mathbf K\boldsymbol\phi_k - \lambda_k\mathbf M\boldsymbol\phi_k\| / \max(\|\mathbf K\boldsymbol\phi_k\|, \lvert\lambda_k - \sigma\rvert\,\|\mathbf M\boldsymbol\phi_k\|)$ | [`eigen::relative_residual`] |

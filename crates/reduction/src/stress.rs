@@ -321,6 +321,18 @@ pub struct VonMisesMaximum {
     frobenius: Vec<f64>,
     /// Per set entry: whether a beam ends at the node (its value is the beam's).
     beam: Vec<bool>,
+    /// The screening copy of [`Self::maxima`]: per chunk of [`SCREEN_CHUNK`] set entries,
+    /// $\tilde{\mathbf A}_i$ = the single-precision $\mathbf M^{1/2}\boldsymbol\Sigma_i$ of its
+    /// entries as one column-major $6C\times n$ matrix (row $cC + l$: component $c$ of the
+    /// chunk's entry $l$; zero for entries without solid stress, for beam entries and for the
+    /// last chunk's padding).
+    screen: Vec<f32>,
+    /// Per chunk of the screening copy: the largest over its entries of the rounding of the
+    /// copy $\lVert\tilde{\mathbf A}_i - \mathbf A_i\rVert_F$, of $\lVert\tilde{\mathbf
+    /// A}_i\rVert_F$ and of $\lVert\boldsymbol\Sigma_i\rVert_F$ (the chunk's margin).
+    screen_chunk_factors: Vec<[f64; 3]>,
+    /// The set entries where a beam ends (evaluated exactly at every state).
+    beam_entries: Vec<usize>,
 }
 
 /// The reference states of a [`VonMisesMaximum`], kept between calls: every set entry's von
@@ -377,6 +389,14 @@ const MAX_EPOCHS: usize = 64;
 
 /// From this many candidates on, [`VonMisesMaximum::maximum`] evaluates them on rayon's threads.
 const PARALLEL_CANDIDATES: usize = 512;
+
+/// Set entries per chunk of the screening copy ([`VonMisesMaximum::maxima`]): a chunk's
+/// $6C\times n$ single-precision rows (196 kB at $n$ = 32) and its product with a batch of
+/// [`SCREEN_BATCH`] states stay in a core's second-level cache.
+const SCREEN_CHUNK: usize = 256;
+
+/// States screened by one product in [`VonMisesMaximum::maxima`].
+const SCREEN_BATCH: usize = 64;
 
 /// $\mathbf M^{1/2}$ of the von Mises seminorm in Voigt order: $\sqrt{3/2}$ times the deviatoric
 /// projector on the normal stresses, $\sqrt3$ on the shear stresses.
@@ -469,6 +489,40 @@ impl VonMisesMaximum {
                 (c, f)
             })
             .collect();
+        // The screening copy, chunk by chunk: A_i in single precision, component-major within
+        // the chunk, and per entry the norm of the copy and its rounding.
+        let chunks = nodes.len().div_ceil(SCREEN_CHUNK);
+        let rows = 6 * SCREEN_CHUNK;
+        let mut screen = vec![0.0f32; chunks * rows * n];
+        let mut screen_norm = vec![0.0; nodes.len()];
+        let mut screen_rounding = vec![0.0; nodes.len()];
+        screen
+            .par_chunks_mut(rows * n)
+            .zip(screen_norm.par_chunks_mut(SCREEN_CHUNK))
+            .zip(screen_rounding.par_chunks_mut(SCREEN_CHUNK))
+            .enumerate()
+            .for_each(|(chunk, ((block, norm), rounding))| {
+                for l in 0..norm.len() {
+                    let k = chunk * SCREEN_CHUNK + l;
+                    // Beam entries are evaluated at every state; their zero rows screen as 0.
+                    if !solid[k] || beam_node[nodes[k]] {
+                        continue;
+                    }
+                    let a = A(k);
+                    let (mut f, mut e) = (0.0, 0.0);
+                    for j in 0..n {
+                        for c in 0..6 {
+                            let x = a[(c, j)];
+                            let x32 = x as f32;
+                            block[j * rows + c * SCREEN_CHUNK + l] = x32;
+                            f += f64::from(x32) * f64::from(x32);
+                            e += (f64::from(x32) - x) * (f64::from(x32) - x);
+                        }
+                    }
+                    norm[l] = f.sqrt();
+                    rounding[l] = e.sqrt();
+                }
+            });
         Self {
             nodes: nodes.to_vec(),
             n,
@@ -479,6 +533,19 @@ impl VonMisesMaximum {
             c: bounds.iter().map(|b| b.0).collect(),
             frobenius: bounds.iter().map(|b| b.1).collect(),
             beam: nodes.iter().map(|&i| beam_node[i]).collect(),
+            screen_chunk_factors: (0..chunks)
+                .map(|c| {
+                    let r = c * SCREEN_CHUNK..((c + 1) * SCREEN_CHUNK).min(nodes.len());
+                    let largest = |x: &[f64]| x.iter().copied().fold(0.0, f64::max);
+                    [
+                        largest(&screen_rounding[r.clone()]),
+                        largest(&screen_norm[r.clone()]),
+                        largest(&bounds[r].iter().map(|b| b.1).collect::<Vec<_>>()),
+                    ]
+                })
+                .collect(),
+            screen,
+            beam_entries: (0..nodes.len()).filter(|&k| beam_node[nodes[k]]).collect(),
         }
     }
 
@@ -664,6 +731,218 @@ impl VonMisesMaximum {
         let (k, vm) = best.expect("the lower bound's entry is a candidate");
         r.last = k;
         Some((self.nodes[k], vm))
+    }
+}
+
+impl VonMisesMaximum {
+    /// [`Self::maximum`] at each of `states` (CB coordinates), computed together: the same
+    /// node and value at every state, to the bit, without a reference (any order of states).
+    ///
+    /// A batch of states is screened by one matrix product in single precision, which reads
+    /// the set's stress shapes once for the batch rather than once per state (the search of
+    /// [`Self::maximum`] is bound by those reads): $\hat{\mathbf y}_i = \tilde{\mathbf
+    /// A}_i\tilde{\mathbf q}$ and $\hat v_i = \lVert\hat{\mathbf y}_i\rVert$ (in double
+    /// precision from the single-precision products), with $\tilde{\mathbf A}_i$,
+    /// $\tilde{\mathbf q}$ the single-precision $\mathbf A_i = \mathbf M^{1/2}\boldsymbol\Sigma_i$
+    /// and $\mathbf q$. The exact von Mises stress $v_i = \lVert\mathbf A_i\mathbf q\rVert$
+    /// differs from $\hat v_i$ by at most
+    /// $$m_i = \lVert\tilde{\mathbf A}_i - \mathbf A_i\rVert_F\lVert\mathbf q\rVert +
+    /// \lVert\tilde{\mathbf A}_i\rVert_F\,\big(\lVert\tilde{\mathbf q} - \mathbf q\rVert +
+    /// \gamma_n\lVert\tilde{\mathbf q}\rVert\big) + \tau_i,$$
+    /// $\gamma_n = nu/(1 - nu)$ ($u = 2^{-24}$) the bound of an $n$-term single-precision dot
+    /// product in any summation order, applied row by row, and $\tau_i$ the round-off of the
+    /// double-precision evaluation and of $\hat v_i$ (the margin of [`Self::maximum`], plus
+    /// underflow). Each chunk of [`SCREEN_CHUNK`] entries takes the largest of its entries'
+    /// margins, $m_C \ge m_i$. With $L = \max_i(\hat v_i - m_C) \le \max_i v_i$, only the
+    /// entries with $\hat v_i + m_C \ge L$ can reach or tie the maximum; they (usually a
+    /// handful) and the beam entries are evaluated exactly as [`Self::maximum`] evaluates
+    /// them. States the
+    /// screen cannot bound (not finite, or so large that single precision would overflow) are
+    /// evaluated entry by entry.
+    ///
+    /// Returns the maxima and the number of exact entry evaluations they took (the set's size
+    /// per state would be every entry's).
+    ///
+    /// # Panics
+    /// If a state does not have one value per CB coordinate (a caller's bug).
+    pub fn maxima(&self, shapes: &StressShapes, states: &[&[f64]]) -> (Vec<Option<(usize, f64)>>, usize) {
+        assert!(states.iter().all(|q| q.len() == self.n), "one value per CB coordinate");
+        let size = self.nodes.len();
+        if size == 0 {
+            return (vec![None; states.len()], 0);
+        }
+        let mut out = vec![None; states.len()];
+        let mut evaluations = 0;
+        let largest_norm = self.screen_chunk_factors.iter().map(|f| f[1]).fold(0.0, f64::max);
+        let (screened, direct): (Vec<usize>, Vec<usize>) = (0..states.len()).partition(|&s| {
+            let q = states[s];
+            let q_norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+            // Every product and partial sum stays far below f32::MAX (3.4e38).
+            q_norm.is_finite() && q.iter().all(|x| x.abs() < 1e30) && largest_norm * q_norm < 1e30
+        });
+        for s in direct {
+            out[s] = self.maximum(shapes, states[s], &mut VonMisesReference::default());
+            evaluations += size;
+        }
+        for batch in screened.chunks(SCREEN_BATCH) {
+            let found = self.screened_maxima(shapes, &batch.iter().map(|&s| states[s]).collect::<Vec<_>>());
+            for (&s, (m, count)) in batch.iter().zip(found) {
+                out[s] = Some(m);
+                evaluations += count;
+            }
+        }
+        (out, evaluations)
+    }
+
+    /// [`Self::maxima`] of up to [`SCREEN_BATCH`] states that the screen can bound, each with
+    /// its number of exact evaluations.
+    fn screened_maxima(&self, shapes: &StressShapes, states: &[&[f64]]) -> Vec<((usize, f64), usize)> {
+        let (n, size, b) = (self.n, self.nodes.len(), states.len());
+        let u = f64::from(f32::EPSILON) / 2.0;
+        let gamma = n as f64 * u / (1.0 - n as f64 * u);
+        // Q~ (n x b, column-major) and per state ||q||, ||q~ - q||, ||q~||.
+        let mut qt = vec![0.0f32; n * b];
+        let norms: Vec<[f64; 3]> = states
+            .iter()
+            .enumerate()
+            .map(|(s, q)| {
+                let (mut a, mut d, mut t) = (0.0, 0.0, 0.0);
+                for (j, &x) in q.iter().enumerate() {
+                    let x32 = x as f32;
+                    qt[s * n + j] = x32;
+                    a += x * x;
+                    d += (f64::from(x32) - x) * (f64::from(x32) - x);
+                    t += f64::from(x32) * f64::from(x32);
+                }
+                [a.sqrt(), d.sqrt(), t.sqrt()]
+            })
+            .collect();
+        let rows = 6 * SCREEN_CHUNK;
+        let arch = pulp::Arch::new();
+        // Underflow: each of the 2n operations of a single-precision dot product may lose up to
+        // half the smallest subnormal; six components.
+        let underflow = 6f64.sqrt() * 2.0 * n as f64 * 2f64.powi(-150);
+        // Per chunk and state: the chunk's lower bound and its candidates (entry, upper bound),
+        // in set order. One margin per chunk, from the chunk's largest factors: the margins are
+        // about 1e-6 of the stresses, so a uniform one keeps few more candidates and leaves the
+        // pass over the nodes a plain vector loop.
+        let per_chunk: Vec<Vec<ChunkScreen>> = self
+            .screen
+            .par_chunks(rows * n)
+            .zip(&self.screen_chunk_factors)
+            .enumerate()
+            .map_init(
+                || (vec![0.0f32; rows * SCREEN_BATCH], vec![0.0f64; SCREEN_CHUNK]),
+                |(w, v), (chunk, (A, &[rounding, norm, frobenius]))| {
+                    let w = &mut w[..rows * b];
+                    faer::linalg::matmul::matmul(
+                        faer::MatMut::from_column_major_slice_mut(w, rows, b),
+                        faer::Accum::Replace,
+                        MatRef::from_column_major_slice(A, rows, n),
+                        MatRef::from_column_major_slice(&qt, n, b),
+                        1.0f32,
+                        faer::Par::Seq,
+                    );
+                    let first = chunk * SCREEN_CHUNK;
+                    let len = SCREEN_CHUNK.min(size - first);
+                    let v = &mut v[..len];
+                    (0..b)
+                        .map(|s| {
+                            let y = &w[s * rows..(s + 1) * rows];
+                            // v_hat^2 of every entry of the chunk, and the largest, in the
+                            // vector instructions the machine has.
+                            let largest = arch.dispatch(SquaredNorms { y, v: &mut *v }).sqrt();
+                            let [q_norm, q_rounding, qt_norm] = norms[s];
+                            let margin = 1.01
+                                * (rounding * q_norm
+                                    + norm * (q_rounding + gamma * qt_norm)
+                                    + 1e-12 * frobenius * q_norm
+                                    + 1e-15 * largest
+                                    + underflow);
+                            // The chunk's lower bound, and the entries that can reach it with
+                            // both margins (a superset of those reaching the set's bound).
+                            let lower = largest - margin;
+                            let floor = (lower - margin).max(0.0);
+                            let floor = floor * floor;
+                            let candidates = v
+                                .iter()
+                                .enumerate()
+                                .filter(|&(_, &sq)| sq >= floor)
+                                .map(|(l, &sq)| (first + l, sq.sqrt() + margin))
+                                .collect();
+                            (lower, candidates)
+                        })
+                        .collect()
+                },
+            )
+            .collect();
+        (0..b)
+            .into_par_iter()
+            .map(|s| {
+                let q = states[s];
+                let lower = per_chunk.iter().map(|c| c[s].0).fold(f64::NEG_INFINITY, f64::max);
+                let beams = self
+                    .beam
+                    .iter()
+                    .any(|&x| x)
+                    .then(|| shapes.beam_extremes(q, shapes.node_count()));
+                let value = |k: usize| match &beams {
+                    Some(x) if self.beam[k] => {
+                        x[self.nodes[k]].map_or_else(|| self.solid(k, q), |[magnitude, _]| magnitude)
+                    }
+                    _ => self.solid(k, q),
+                };
+                let mut count = 0;
+                // The screened candidates and the beam entries (their screen rows are zero), in
+                // set order.
+                let mut candidates: Vec<usize> = per_chunk
+                    .iter()
+                    .flat_map(|c| &c[s].1)
+                    .filter(|&&(_, upper)| upper >= lower)
+                    .map(|&(k, _)| k)
+                    .collect();
+                if !self.beam_entries.is_empty() {
+                    candidates.extend(&self.beam_entries);
+                    candidates.sort_unstable();
+                    candidates.dedup();
+                }
+                let (k, vm) = last_maximum(candidates.into_iter().map(|k| {
+                    count += 1;
+                    (k, value(k))
+                }));
+                ((self.nodes[k], vm), count)
+            })
+            .collect()
+    }
+}
+
+/// One chunk's screen of one state: its lower bound of the maximum and its candidates (set
+/// entry, upper bound of its value), in set order.
+type ChunkScreen = (f64, Vec<(usize, f64)>);
+
+/// The squared norms $\hat v_l^2 = \sum_c y_{cC + l}^2$ of a chunk's entries from its
+/// single-precision products `y` (component-major, [`SCREEN_CHUNK`] rows a component) into
+/// `v` (one per entry), returning the largest: plain loops that `pulp` compiles for the vector
+/// instructions of the machine (the release target is baseline x86-64).
+struct SquaredNorms<'a> {
+    y: &'a [f32],
+    v: &'a mut [f64],
+}
+
+impl pulp::WithSimd for SquaredNorms<'_> {
+    type Output = f64;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) -> f64 {
+        let Self { y, v } = self;
+        let len = v.len();
+        v.fill(0.0);
+        for c in 0..6 {
+            for (vl, &x) in v.iter_mut().zip(&y[c * SCREEN_CHUNK..c * SCREEN_CHUNK + len]) {
+                *vl += f64::from(x) * f64::from(x);
+            }
+        }
+        v.iter().copied().fold(0.0, f64::max)
     }
 }
 

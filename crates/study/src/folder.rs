@@ -367,15 +367,8 @@ impl Observer for ResultsFolder {
     }
 
     fn sample(&mut self, x: f64, values: &[Vec<f64>]) -> Result<(), BoxError> {
-        if let Err(stop) = crate::interrupt::check() {
-            // What was computed before the interruption is kept.
-            if let Some(s) = &mut self.stream {
-                s.flush()?;
-            }
-            return Err(stop);
-        }
         let Some(s) = &mut self.stream else {
-            return Ok(());
+            return crate::interrupt::check();
         };
         for (k, ((w, path), v)) in s.files.iter_mut().zip(values).enumerate() {
             // The cells as `output::num` writes them, straight into the buffer.
@@ -393,6 +386,11 @@ impl Observer for ResultsFolder {
         }
         if s.plots {
             s.x.push(x);
+        }
+        if let Err(stop) = crate::interrupt::check() {
+            // What was computed before the interruption is kept, this row included.
+            s.flush()?;
+            return Err(stop);
         }
         if s.flushed.elapsed() >= FLUSH_INTERVAL {
             s.flush()?;

@@ -946,9 +946,36 @@ impl SensorSampler {
 
     /// Sends the last row of `record` (abscissa `x`).
     pub fn sample(&mut self, obs: &mut dyn Observer, x: f64, record: &mbs::SensorRecord) -> Result<(), BoxError> {
-        let Some(row) = record.rows.last() else {
-            return Ok(());
-        };
+        match record.rows.last() {
+            Some(row) => self.sample_row(obs, x, row),
+            None => Ok(()),
+        }
+    }
+
+    /// Sends rows `rows` of `record`, each at its time, all of them even when the user asks
+    /// to stop (the folder writes a row, then says so: the first such stop is returned after
+    /// the last row).
+    pub fn sample_rows(
+        &mut self,
+        obs: &mut dyn Observer,
+        record: &mbs::SensorRecord,
+        rows: std::ops::Range<usize>,
+    ) -> Result<(), BoxError> {
+        let mut stop = None;
+        for r in rows {
+            match self.sample_row(obs, record.times[r], &record.rows[r]) {
+                Ok(()) => {}
+                Err(e) if e.is::<crate::interrupt::Interrupted>() => {
+                    stop.get_or_insert(e);
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        stop.map_or(Ok(()), Err)
+    }
+
+    /// Sends one row (abscissa `x`).
+    fn sample_row(&mut self, obs: &mut dyn Observer, x: f64, row: &[f64]) -> Result<(), BoxError> {
         let values: Vec<Vec<f64>> = self
             .columns
             .iter()
@@ -972,9 +999,13 @@ pub struct MeshRecovery {
     rigid: Vec<usize>,
     /// Per flexible body: the largest von Mises stress seen so far.
     hot: Vec<Option<HotSpot>>,
-    /// Per flexible body with stress shapes: the bounded search for the largest von Mises
-    /// stress over every node, built at the first output time without a frame.
-    maxima: Vec<Option<(reduction::VonMisesMaximum, reduction::VonMisesReference)>>,
+    /// Per flexible body with stress shapes: the search for the largest von Mises stress over
+    /// every node, built at the first output time without a frame.
+    maxima: Vec<Option<reduction::VonMisesMaximum>>,
+    /// Output times without a frame whose hot spots wait to be found a batch at a time
+    /// ([`Self::track`]): the time and each body's CB coordinates (`None` without stress
+    /// shapes).
+    tracked: Vec<(f64, Vec<Option<Vec<f64>>>)>,
 }
 
 /// The largest von Mises stress of one body over the output times: value, FE node (index in
@@ -1060,17 +1091,13 @@ impl MeshRecovery {
             rigid,
             hot,
             maxima,
+            tracked: Vec::new(),
         })
     }
 
     /// Whether any body has stress shapes (then the frames carry stress fields).
     pub fn has_stress(&self) -> bool {
         self.stress
-    }
-
-    /// The hot spot of each flexible body (`None` without stress shapes or before any output).
-    pub fn hot_spots(&self) -> &[Option<HotSpot>] {
-        &self.hot
     }
 
     /// The kinematics of every flexible body at `state` (`mbs::System::body_kinematics`), with
@@ -1131,27 +1158,53 @@ impl MeshRecovery {
     }
 
     /// Updates the hot spots at an output time without writing a frame: the largest von
-    /// Mises stress of each body by the bounded search (`reduction::VonMisesMaximum`, the same
-    /// maximum as every node's, at a fraction of its cost).
+    /// Mises stress of each body over every node (`reduction::VonMisesMaximum::maxima`, the
+    /// same maximum as every node's, at a fraction of its cost), found for a batch of output
+    /// times at once: the state waits until a batch is full, a frame is written or the
+    /// summary is made.
     pub fn track(&mut self, t: f64, sys: &System, state: &mbs::State, b: &BuiltMechanism) -> Result<(), BoxError> {
         if !self.has_stress() {
             return Ok(());
         }
         let kins = self.kinematics(t, sys, state, b)?;
-        for (k, (body, (kin, _))) in b.bodies.iter().zip(&kins).enumerate() {
+        let qs = b
+            .bodies
+            .iter()
+            .zip(&kins)
+            .map(|(body, (kin, _))| {
+                let shapes = sys.superelement(body.id).and_then(|se| se.stress_shapes());
+                shapes.map(|_| kin.q_jj.clone())
+            })
+            .collect();
+        self.tracked.push((t, qs));
+        if self.tracked.len() >= mbs::PendingRows::BATCH {
+            self.update_tracked(sys, b);
+        }
+        Ok(())
+    }
+
+    /// The hot spots of the output times waiting in [`Self::track`], in time order.
+    fn update_tracked(&mut self, sys: &System, b: &BuiltMechanism) {
+        let tracked = std::mem::take(&mut self.tracked);
+        if tracked.is_empty() {
+            return;
+        }
+        for (k, body) in b.bodies.iter().enumerate() {
             let Some(shapes) = sys.superelement(body.id).and_then(|se| se.stress_shapes()) else {
                 continue;
             };
-            let (search, reference) = self.maxima[k].get_or_insert_with(|| {
+            let states: Vec<&[f64]> = tracked.iter().filter_map(|(_, qs)| qs[k].as_deref()).collect();
+            let search = self.maxima[k].get_or_insert_with(|| {
                 let every: Vec<usize> = (0..shapes.node_count()).collect();
-                (reduction::VonMisesMaximum::new(shapes, &every), Default::default())
+                reduction::VonMisesMaximum::new(shapes, &every)
             });
-            let maximum = search.maximum(shapes, &kin.q_jj, reference);
-            if let Some((node, vm)) = maximum {
-                self.update_hot_spot(k, node, vm, t);
+            let (found, _) = search.maxima(shapes, &states);
+            for ((t, _), maximum) in tracked.iter().zip(found) {
+                if let Some((node, vm)) = maximum {
+                    self.update_hot_spot(k, node, vm, *t);
+                }
             }
         }
-        Ok(())
     }
 
     /// Sends the deformed meshes at `state` to the observer as a frame of
@@ -1189,6 +1242,8 @@ impl MeshRecovery {
         let mut body_of = vec![0.0; n_points];
         let vec3 = |v: Vector3<f64>| [v.x, v.y, v.z];
         let kins = self.kinematics(t, sys, state, b)?;
+        // The earlier output times first: of equal maxima, the hot spot keeps the first time.
+        self.update_tracked(sys, b);
         let stresses = if self.has_stress() {
             self.stresses(t, sys, b, &kins)
         } else {
@@ -1296,8 +1351,10 @@ impl MeshRecovery {
         obs.frame(series, t, &self.mesh, &fields)
     }
 
-    /// The hot spots as summary entries and report lines, `x` naming the time axis.
-    pub fn hot_spot_summary(&self, b: &BuiltMechanism, x: &str) -> (serde_json::Value, Vec<String>) {
+    /// The hot spots as summary entries and report lines, `x` naming the time axis (the
+    /// output times still waiting in [`Self::track`] included).
+    pub fn hot_spot_summary(&mut self, sys: &System, b: &BuiltMechanism, x: &str) -> (serde_json::Value, Vec<String>) {
+        self.update_tracked(sys, b);
         let mut entries = Vec::new();
         let mut lines = Vec::new();
         for (body, hot) in b.bodies.iter().zip(&self.hot) {
@@ -1416,7 +1473,7 @@ pub fn run_analysis(
             }
             let mut mw = MeshRecovery::new(b, &sys)?;
             mw.write(obs, 1.0, &sys, &sol.state, b)?;
-            let (hot_spots, hot_lines) = mw.hot_spot_summary(b, "load_factor");
+            let (hot_spots, hot_lines) = mw.hot_spot_summary(&sys, b, "load_factor");
             out.report.extend(hot_lines);
             let iterations: usize = sol.steps.iter().map(|s| s.residuals.len().saturating_sub(1)).sum();
             out.report.push(format!(
@@ -1492,22 +1549,59 @@ pub fn run_analysis(
                 }
             }
             let mut last_written = t_start;
+            // Rows whose largest-von-Mises values are found a batch at a time (the rows reach
+            // the files in order, a batch at a time, at most PendingRows::WAIT late).
+            let mut pending = mbs::PendingRows::default();
+            // Completes the waiting rows (all of them with `flush`) and writes every row the
+            // record gained; a sensor that is not finite: the rows before it are written, the
+            // run is not complete. Only the last row is kept, to keep the record small.
+            // `record`: the integrator whose current state is recorded first (else the waiting
+            // rows are completed alone).
+            let mut write_rows = |record: Option<&mbs::Integrator>,
+                                  pending: &mut mbs::PendingRows,
+                                  rec: &mut mbs::SensorRecord,
+                                  files: &mut SensorSampler,
+                                  obs: &mut dyn Observer,
+                                  k: usize|
+             -> Result<(), Halt> {
+                let before = rec.rows.len();
+                let recorded = match record {
+                    Some(integ) => integ.record_deferred(pending, rec),
+                    None => sys.complete_rows(pending, rec),
+                };
+                let good = if recorded.is_err() {
+                    rec.rows.len().saturating_sub(1).max(before)
+                } else {
+                    rec.rows.len()
+                };
+                files.sample_rows(obs, rec, before..good)?;
+                if good > before {
+                    last_written = rec.times[good - 1];
+                }
+                recorded.map_err(|e| {
+                    let step = match &e {
+                        mbs::SolveError::NonFiniteSensor { step, .. } => *step,
+                        _ => k,
+                    };
+                    Halt::Sensor(e, step)
+                })?;
+                if rec.rows.len() > 1 {
+                    rec.rows.drain(..rec.rows.len() - 1);
+                    rec.times.drain(..rec.times.len() - 1);
+                }
+                Ok(())
+            };
             let run = integ.run_to(&stepping, |done, integ| -> Result<(), Halt> {
                 let (k, t) = (done.k, done.time);
                 let vtu_now = output.vtu_every.is_some_and(|v| k % v == 0 || done.last);
+                if crate::interrupt::requested() && !pending.is_empty() {
+                    // A stop asked for: the waiting rows are written first.
+                    write_rows(None, &mut pending, &mut rec, &mut files, obs, k)?;
+                }
                 if k % output.every == 0 || done.last {
-                    // A sensor that is not finite: the rows before it are written, the run is
-                    // not complete.
-                    integ.record(&mut rec).map_err(|e| Halt::Sensor(e, k))?;
-                    files.sample(obs, t, &rec)?;
-                    last_written = t;
+                    write_rows(Some(integ), &mut pending, &mut rec, &mut files, obs, k)?;
                     if !vtu_now {
                         mw.track(t, &sys, integ.state(), b)?;
-                    }
-                    // Only the last row is needed; keep the record small.
-                    if rec.rows.len() > 1 {
-                        rec.rows.drain(..rec.rows.len() - 1);
-                        rec.times.drain(..rec.times.len() - 1);
                     }
                 }
                 if vtu_now {
@@ -1524,6 +1618,25 @@ pub fn run_analysis(
                 });
                 Ok(())
             });
+            // The rows still waiting: a run that ended or failed writes them; a stop asked for
+            // wrote them (above); a file that cannot be written stops here.
+            let run = match run {
+                Ok((totals, failure)) => {
+                    match write_rows(None, &mut pending, &mut rec, &mut files, obs, totals.steps) {
+                        Ok(()) => Ok((totals, failure)),
+                        // The solver's own failure stays the run's.
+                        Err(_) if failure.is_some() => Ok((totals, failure)),
+                        Err(error) => Err(Box::new(mbs::Interrupted { error, totals })),
+                    }
+                }
+                Err(stop) => {
+                    let unwritable = matches!(&stop.error, Halt::Output(e) if !e.is::<crate::interrupt::Interrupted>());
+                    if !unwritable {
+                        let _ = write_rows(None, &mut pending, &mut rec, &mut files, obs, stop.totals.steps);
+                    }
+                    Err(stop)
+                }
+            };
             let (totals, failure) = match run {
                 Ok((totals, None)) => (totals, None),
                 Ok((totals, Some(e))) => {
@@ -1596,7 +1709,7 @@ pub fn run_analysis(
                 ));
             }
             report_last(&mut out.report, b, &files);
-            let (hot_spots, hot_lines) = mw.hot_spot_summary(b, "t");
+            let (hot_spots, hot_lines) = mw.hot_spot_summary(&sys, b, "t");
             out.report.extend(hot_lines);
             out.results = json!({
                 "model": b.size(&sys),

@@ -236,7 +236,8 @@ fn set_load_changes_a_load_at_a_load_point_between_steps() {
 /// none (the bounded search of the largest von Mises).
 #[test]
 fn the_hot_spot_of_a_run_is_the_same_with_and_without_vtu_frames() {
-    let dynamic = "[[analyses]]\ntype = \"dynamic\"\nname = \"shake\"\nt_end = 0.004\ndt = 1e-4\n";
+    // 100 output times: more than one batch of the search (the last one partial).
+    let dynamic = "[[analyses]]\ntype = \"dynamic\"\nname = \"shake\"\nt_end = 0.01\ndt = 1e-4\n";
     let hot = |name: &str, output: &str| {
         let text = study("") + dynamic + output;
         let (_, summary, _) = run(name, &text);
@@ -248,6 +249,58 @@ fn the_hot_spot_of_a_run_is_the_same_with_and_without_vtu_frames() {
     let tracked = hot("hot-spot-track", "");
     assert!(framed["von_mises_Pa"].as_f64().unwrap() > 1e6, "{framed}");
     assert_eq!(framed, tracked);
+}
+
+/// A largest-von-Mises sensor in a dynamic run (its rows completed a batch of output times at
+/// a time) gives at every output time the largest von Mises stress over its node set of that
+/// time's VTU frame (every node's stresses) and its node; and the same values, to the bit, as
+/// the same run stepped by a `Simulation`, which records each row alone. 100 output times:
+/// more than one batch, the last one partial.
+#[test]
+fn a_largest_von_mises_sensor_gives_every_output_times_maximum() {
+    let sensor = "[[sensors]]\nname = \"top\"\ntype = \"stress\"\nof = \"bar\"\nset = \"y1\"\n";
+    let dynamic = "[[analyses]]\ntype = \"dynamic\"\nname = \"shake\"\nt_end = 0.01\ndt = 1e-4\n";
+    let text = study(sensor) + dynamic + "\n[output]\nvtu_every = 1\n";
+    let (rec, summary, file) = run("stress-max-batches", &text);
+    summary.unwrap();
+    let values = crate::setup::column(&rec, "shake", "top", 0);
+    let nodes = crate::setup::column(&rec, "shake", "top", 1);
+    assert_eq!(values.len(), 101, "the start and 100 steps");
+    let dir = file.parent().unwrap().join("results").join("shake");
+    let mut frames: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "vtu"))
+        .collect();
+    frames.sort();
+    assert_eq!(frames.len(), values.len());
+    let study = study::load(&file).unwrap();
+    let set = study.parts[0].base.mesh.node_set("y1").unwrap();
+    for (k, frame) in frames.iter().enumerate() {
+        let vm = vtu_array(&std::fs::read_to_string(frame).unwrap(), "von_mises").unwrap();
+        let best = set.iter().map(|n| vm[n.index()]).fold(0.0, f64::max);
+        // The VTU text keeps about 10 significant digits.
+        assert!(
+            (values[k] - best).abs() <= 1e-8 * best.max(1e-300),
+            "output {k}: sensor {}, VTU {best}",
+            values[k]
+        );
+        let node = nodes[k] as usize;
+        assert!(
+            (vm[node] - best).abs() <= 1e-8 * best.max(1e-300),
+            "output {k}: node {node}"
+        );
+    }
+    assert!(values.iter().fold(0.0f64, |m, v| m.max(*v)) > 1e6, "{values:?}");
+    // The same run stepped, each row recorded alone: the same values to the bit.
+    let mut sim = study::Simulation::new(&study, "shake", &crate::options_in(file.parent().unwrap(), None)).unwrap();
+    assert_eq!(sim.sensor("top").unwrap(), [values[0], nodes[0]]);
+    for k in 1..values.len() {
+        sim.step().unwrap();
+        let row = sim.sensor("top").unwrap();
+        assert_eq!(row[0].to_bits(), values[k].to_bits(), "output {k}");
+        assert_eq!(row[1], nodes[k], "output {k}");
+    }
 }
 
 /// A modal analysis writes the stress of each mass-normalised mode shape: the first bending
