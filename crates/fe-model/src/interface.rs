@@ -26,11 +26,12 @@
 //! $\int N_i^2 dA$ (HRZ lumping, as for [`crate::element::solid::scalar_mass`]). The consistent
 //! $\int N_i\, dA$ would be zero (tri6) or negative (quad8) at the corners of quadratic faces.
 //! A face that two elements share lies inside the solid and does not count (a set that takes
-//! in a layer of nodes below the surface would otherwise weigh that layer as surface too);
-//! a set node on interior faces only keeps weight zero. A set with no boundary face at all
-//! (a section wholly inside the solid) counts its faces once each.
-//! Otherwise (no faces, or surface nodes on no face) the position is the node mean and the
-//! weights are equal.
+//! in a layer of nodes below the surface, as a `near`/`radius` selection does, would
+//! otherwise weigh that layer as surface too). A set node on none of the counted faces (inside
+//! the solid, or at the fringe of a patch that covers its faces in part) keeps weight zero:
+//! the spider follows the surface the whole faces make. A set with no boundary face at all (a
+//! section wholly inside the solid) counts its faces once each. Without any whole face the
+//! position is the node mean and the weights are equal.
 
 #![allow(non_snake_case)]
 
@@ -564,18 +565,12 @@ fn surface_centroid_and_weights(model: &FeModel, surface: &[NodeId]) -> (Point3<
     }
     found.sort_unstable_by(|a, b| a.key().cmp(b.key()).then(a.element.cmp(&b.element)));
     let (boundary, interior) = split_shared_faces(found);
-    // A surface node on no face at all: the set is not made of whole faces.
-    let mut on_face = vec![false; surface.len()];
-    for f in boundary.iter().chain(&interior) {
-        for &n in f.key() {
-            on_face[position[n as usize] as usize] = true;
-        }
-    }
-    if on_face.contains(&false) {
+    // Set nodes on none of these faces (inside the solid, or on a face the set covers in
+    // part) keep weight zero.
+    let found = if boundary.is_empty() { interior } else { boundary };
+    if found.is_empty() {
         return equal;
     }
-    // Nodes on interior faces only (below the surface) keep weight zero.
-    let found = if boundary.is_empty() { interior } else { boundary };
     let mut weights = vec![0.0; surface.len()];
     let mut area = 0.0;
     let mut moment = Vector3::zeros();

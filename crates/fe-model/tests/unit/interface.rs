@@ -189,6 +189,22 @@ fn rbe3_weights_count_boundary_faces_only() {
     let x_m = model.mesh.nodes[m.index()];
     // Round-off of summing 20 face integrals.
     assert!((x_m - Point3::new(1.6, 0.5, 0.5)).norm() <= 1e-14, "interface at {x_m}");
+
+    // The nodes within 0.15 m of the centre of the end face of a hex20 bar 1 x 0.2 x 0.2 m
+    // (a `near`/`radius` set): the whole end face, nodes inside the solid and nodes on the
+    // side faces near the end, whose faces the set covers in part. Only the end face counts:
+    // the interface sits at its centre (before, the nodes off the face sent it to the mean of
+    // all the nodes, 0.03 m inside the bar, with equal weights).
+    let mut model = clamped_box(CellKind::Hex20, [1.0, 0.2, 0.2], [8, 2, 2]);
+    let centre = Point3::new(1.0, 0.1, 0.1);
+    let set: Vec<NodeId> = (0..model.node_count() as u32)
+        .map(NodeId)
+        .filter(|n| (model.mesh.nodes[n.index()] - centre).norm() <= 0.15)
+        .collect();
+    let m = add_interface(&mut model, "end", &set, None, SpiderKind::Rbe3).unwrap();
+    let x_m = model.mesh.nodes[m.index()];
+    // Round-off of the face integrals (exact Gauss rules on flat quad8 faces).
+    assert!((x_m - centre).norm() <= 1e-14, "interface at {x_m}");
 }
 
 /// RBE3 adds no stiffness: a free body keeps its frequencies when RBE3 interfaces are added
