@@ -19,13 +19,19 @@
 //! # Weights and the default position
 //!
 //! When the surface nodes cover whole faces of the model's solid elements (a face whose nodes
-//! all lie in the set counts), the interface node defaults to the area centroid
+//! all lie in the set counts, if it is a boundary face: one that a single element has), the
+//! interface node defaults to the area centroid
 //! $\int \mathbf x\, dA / A$ of those faces, and the RBE3 weights are tributary areas: each
 //! face's area shared among its nodes in proportion to the diagonal of the face mass matrix
 //! $\int N_i^2 dA$ (HRZ lumping, as for [`crate::element::solid::scalar_mass`]). The consistent
 //! $\int N_i\, dA$ would be zero (tri6) or negative (quad8) at the corners of quadratic faces.
-//! Otherwise (no faces, or surface nodes on no face) the position is the node mean and the
-//! weights are equal.
+//! A face that two elements share lies inside the solid and does not count (a set that takes
+//! in a layer of nodes below the surface, as a `near`/`radius` selection does, would
+//! otherwise weigh that layer as surface too). A set node on none of the counted faces (inside
+//! the solid, or at the fringe of a patch that covers its faces in part) keeps weight zero:
+//! the spider follows the surface the whole faces make. A set with no boundary face at all (a
+//! section wholly inside the solid) counts its faces once each. Without any whole face the
+//! position is the node mean and the weights are equal.
 
 #![allow(non_snake_case)]
 
@@ -534,10 +540,10 @@ fn surface_centroid_and_weights(model: &FeModel, surface: &[NodeId]) -> (Point3<
         }
     }
     let in_surface = |n: NodeId| position.get(n.index()).is_some_and(|&p| p != u32::MAX);
-    // Faces of solid elements whose nodes all lie in the surface, each once (as first met,
-    // in element order): sorted by their sorted nodes, a face shared by two elements is
-    // adjacent to its twin. Linear in the number of faces but for the sort, so that a spider
-    // on every node of a model of millions of cells stays cheap.
+    // Faces of solid elements whose nodes all lie in the surface: sorted by their sorted
+    // nodes, a face shared by two elements (an interior face) is adjacent to its twin.
+    // Linear in the number of faces but for the sort, so that a spider on every node of a
+    // model of millions of cells stays cheap.
     let mut found: Vec<FaceRef> = Vec::new();
     for (e, element) in model.elements.iter().enumerate() {
         let Some((kind, solid)) = element.solid() else { continue };
@@ -558,7 +564,10 @@ fn surface_centroid_and_weights(model: &FeModel, surface: &[NodeId]) -> (Point3<
         }
     }
     found.sort_unstable_by(|a, b| a.key().cmp(b.key()).then(a.element.cmp(&b.element)));
-    found.dedup_by(|later, first| later.key() == first.key());
+    let (boundary, interior) = split_shared_faces(found);
+    // Set nodes on none of these faces (inside the solid, or on a face the set covers in
+    // part) keep weight zero.
+    let found = if boundary.is_empty() { interior } else { boundary };
     if found.is_empty() {
         return equal;
     }
@@ -584,10 +593,32 @@ fn surface_centroid_and_weights(model: &FeModel, surface: &[NodeId]) -> (Point3<
             weights[position[n.index()] as usize] += a * d / d_sum;
         }
     }
-    if weights.iter().any(|&w| !(w > 0.0)) || !(area > 0.0) {
+    if weights.iter().any(|&w| !(w >= 0.0 && w.is_finite())) || !(area > 0.0) {
         return equal;
     }
     (Point3::from(moment / area), weights)
+}
+
+/// `sorted` (faces sorted by key) split into the faces only one element has (boundary faces,
+/// which carry the surface's area) and those two elements share (interior faces, once each,
+/// as met first), which lie inside the solid and count only for a section that has no
+/// boundary face at all.
+fn split_shared_faces(sorted: Vec<FaceRef>) -> (Vec<FaceRef>, Vec<FaceRef>) {
+    let mut boundary = Vec::with_capacity(sorted.len());
+    let mut interior = Vec::new();
+    let mut faces = sorted.into_iter().peekable();
+    while let Some(first) = faces.next() {
+        let mut shared = false;
+        while faces.next_if(|twin| twin.key() == first.key()).is_some() {
+            shared = true;
+        }
+        if shared {
+            interior.push(first);
+        } else {
+            boundary.push(first);
+        }
+    }
+    (boundary, interior)
 }
 
 /// The most nodes a solid face has (quad8).

@@ -10,7 +10,7 @@ use crate::mechanism::{BuiltMechanism, LoadTarget, NamedLoad};
 use crate::observer::SensorGroup;
 use crate::validate::{MbsAnalysis, Study};
 use mbs::{DynamicSettings, Integrator, LoadKind, NodeMotion, SensorRecord, State, StepReport, System};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 /// A generalized-α time integration of the study's mechanism (module docs).
@@ -19,6 +19,11 @@ pub struct Simulation {
     groups: Vec<SensorGroup>,
     /// Per sensor group: its columns in a row of the `mbs` sensor record.
     columns: Vec<Vec<usize>>,
+    /// Per sensor group: its `mbs` sensors (indices in `Model::sensors`, ascending), found once
+    /// at set-up so that reading a sensor between steps (a controller's loop) looks nothing up.
+    sensor_indices: Vec<Vec<usize>>,
+    /// The group of each sensor name (the first, should two share one).
+    group_of: HashMap<String, usize>,
     loads: Vec<NamedLoad>,
     /// The step size and end time of the analysis.
     dt: f64,
@@ -27,26 +32,47 @@ pub struct Simulation {
     locations: BTreeMap<mbs::Entity, Location>,
 }
 
-/// Per group: its columns in a row of `record` (the `mbs` sensors it is made of, in order).
+/// Per group: the indices in `record` (for a record of `System::sensor_record`, in
+/// `Model::sensors`) of the `mbs` sensors it is made of, in order. A group naming a sensor
+/// the record lacks is an error naming both.
+pub fn sensor_indices(groups: &[SensorGroup], record: &SensorRecord) -> Result<Vec<Vec<usize>>, BoxError> {
+    let mut index: HashMap<&str, usize> = HashMap::with_capacity(record.names.len());
+    for (k, n) in record.names.iter().enumerate() {
+        index.entry(n.as_str()).or_insert(k);
+    }
+    groups
+        .iter()
+        .map(|g| {
+            g.mbs_names
+                .iter()
+                .map(|n| {
+                    index
+                        .get(n.as_str())
+                        .copied()
+                        .ok_or_else(|| format!("sensor '{}': the model has no sensor '{n}'", g.name).into())
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Per group: its columns in a row of `record` (the `mbs` sensors it is made of, in order;
+/// errors as [`sensor_indices`]).
 pub fn sensor_columns(groups: &[SensorGroup], record: &SensorRecord) -> Result<Vec<Vec<usize>>, BoxError> {
-    let mut offsets = Vec::new();
+    let mut offsets = Vec::with_capacity(record.widths.len());
     let mut at = 0;
     for w in &record.widths {
         offsets.push(at);
         at += w;
     }
-    let mut columns = Vec::new();
-    for g in groups {
-        let mut cols = Vec::new();
-        for n in &g.mbs_names {
-            let Some(k) = record.names.iter().position(|x| x == n) else {
-                return Err(format!("sensor '{}': the model has no sensor '{n}'", g.name).into());
-            };
-            cols.extend(offsets[k]..offsets[k] + record.widths[k]);
-        }
-        columns.push(cols);
-    }
-    Ok(columns)
+    Ok(sensor_indices(groups, record)?
+        .into_iter()
+        .map(|ks| {
+            ks.into_iter()
+                .flat_map(|k| offsets[k]..offsets[k] + record.widths[k])
+                .collect()
+        })
+        .collect())
 }
 
 /// The integrator settings of a `dynamic` analysis.
@@ -106,6 +132,14 @@ impl Simulation {
         let (dt, t_end) = (settings.step, settings.end_time);
         let record = system.sensor_record();
         let columns = sensor_columns(&b.groups, &record)?;
+        let mut sensor_indices = sensor_indices(&b.groups, &record)?;
+        // `Integrator::sensor_values` takes them ascending (a group's sensors are consecutive
+        // in the model and in order, so its columns keep their order).
+        sensor_indices.iter_mut().for_each(|ks| ks.sort_unstable());
+        let mut group_of = HashMap::with_capacity(b.groups.len());
+        for (g, group) in b.groups.iter().enumerate() {
+            group_of.entry(group.name.clone()).or_insert(g);
+        }
         let integrator = Integrator::new_owned(system, state, settings).map_err(|e| {
             let message = "the initial accelerations cannot be solved".to_string();
             Box::new(b.stopped(study, message, None, e))
@@ -115,6 +149,8 @@ impl Simulation {
             integrator,
             groups: b.groups.clone(),
             columns,
+            sensor_indices,
+            group_of,
             loads: b.loads.clone(),
             dt,
             t_end,
@@ -237,19 +273,12 @@ impl Simulation {
 
     /// The columns of sensor `name` at the current state; the other sensors are not evaluated.
     pub fn sensor(&self, name: &str) -> Result<Vec<f64>, BoxError> {
-        let Some(g) = self.groups.iter().position(|g| g.name == name) else {
+        let Some(&g) = self.group_of.get(name) else {
             let names: Vec<String> = self.groups.iter().map(|g| g.name.clone()).collect();
             return Err(crate::source::unknown_reference("sensor", name, &names).into());
         };
         // Only this sensor's model sensors are evaluated (they are consecutive in the model).
-        let record = self.integrator.system().sensor_record();
-        let mut which: Vec<usize> = self.groups[g]
-            .mbs_names
-            .iter()
-            .filter_map(|n| record.names.iter().position(|x| x == n))
-            .collect();
-        which.sort_unstable();
-        let values = self.integrator.sensor_values(&which)?;
+        let values = self.integrator.sensor_values(&self.sensor_indices[g])?;
         // The group's columns are these values, in the same order.
         debug_assert_eq!(values.len(), self.columns[g].len());
         Ok(values)

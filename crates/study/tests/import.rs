@@ -7,11 +7,11 @@ use nalgebra::Point3;
 use std::path::{Path, PathBuf};
 use study::validate::mechanism::BodySource;
 
+/// Study texts built from parameters.
+mod common;
+
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("study-import-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch_dir("import", name)
 }
 
 fn fixture(file: &str) -> String {
@@ -37,46 +37,36 @@ fn clamped_frequencies(part: &study::part::Part, clamp: &[fe_model::NodeId]) -> 
     modal_dense(&built, 6).unwrap().omega
 }
 
-const STEEL: &str = "[[materials]]\nname = \"steel\"\nE = 2.1e11\nnu = 0.3\nrho = 7850.0\n";
+fn steel() -> String {
+    common::material("steel", 2.1e11, 0.3, 7850.0)
+}
+
+/// A `[[parts]]` entry whose mesh is `file` (`mesh`: more `[parts.mesh]` lines) with the
+/// interface `tip` on the node set `set` (`interface`: more of its lines).
+fn mesh_part(name: &str, file: &str, mesh: &str, set: &str, interface: &str) -> String {
+    format!(
+        "[[parts]]\nname = \"{name}\"\n[parts.mesh]\nfile = \"{file}\"\n{mesh}\
+         [[parts.interfaces]]\nname = \"tip\"\nset = \"{set}\"\n{interface}"
+    )
+}
 
 #[test]
 fn parts_from_abaqus_and_nastran_files_match_the_gmsh_part() {
     let dir = scratch("parts");
-    let text = format!(
-        "{STEEL}
-[[parts]]
-name = \"gmsh\"
-[parts.mesh]
-file = \"{gmsh}\"
-materials = {{ body = \"steel\" }}
-[[parts.interfaces]]
-name = \"tip\"
-set = \"tip\"
-spider = \"rbe2\"
-node_position = [1.0, 0.1, 0.1]
-
-[[parts]]
-name = \"abaqus\"
-[parts.mesh]
-file = \"{inp}\"
-[[parts.interfaces]]
-name = \"tip\"
-set = \"tip\"
-spider = \"rbe2\"
-node_position = [1.0, 0.1, 0.1]
-
-[[parts]]
-name = \"nastran\"
-[parts.mesh]
-file = \"{bdf}\"
-[[parts.interfaces]]
-name = \"tip\"
-set = \"RBE2_2\"
-",
-        gmsh = fixture("gmsh/hex20_41.msh"),
-        inp = fixture("import/hex20.inp"),
-        bdf = fixture("import/hex20.bdf"),
-    );
+    let tip = "spider = \"rbe2\"\nnode_position = [1.0, 0.1, 0.1]\n";
+    let text = [
+        steel(),
+        mesh_part(
+            "gmsh",
+            &fixture("gmsh/hex20_41.msh"),
+            "materials = { body = \"steel\" }\n",
+            "tip",
+            tip,
+        ),
+        mesh_part("abaqus", &fixture("import/hex20.inp"), "", "tip", tip),
+        mesh_part("nastran", &fixture("import/hex20.bdf"), "", "RBE2_2", ""),
+    ]
+    .join("\n");
     let s = study(&dir, &text);
     let [g, a, n] = [&s.parts[0], &s.parts[1], &s.parts[2]];
     assert!(a.description.starts_with("Abaqus mesh"), "{}", a.description);
@@ -103,7 +93,7 @@ set = \"RBE2_2\"
             fixture("import/hex20.inp")
         ),
     );
-    let soft = format!("{soft}\n[[materials]]\nname = \"soft\"\nE = 2.1e10\nnu = 0.3\nrho = 7850.0\n");
+    let soft = format!("{soft}\n{}", common::material("soft", 2.1e10, 0.3, 7850.0));
     let s2 = study(&dir, &soft);
     let f_soft = clamped_frequencies(&s2.parts[1], &s2.parts[1].base.mesh.node_sets["clamp"]);
     // E / 10 scales the frequencies by 1 / sqrt(10).
@@ -112,7 +102,10 @@ set = \"RBE2_2\"
     // A malformed file is located by its own file and line, under the study's key.
     let bad = dir.join("bad.inp");
     std::fs::write(&bad, "*NODE\n1, 0, 0, x\n").unwrap();
-    let text = format!("{STEEL}\n[[parts]]\nname = \"bad\"\nmaterial = \"steel\"\n[parts.mesh]\nfile = \"bad.inp\"\n");
+    let text = format!(
+        "{}\n[[parts]]\nname = \"bad\"\nmaterial = \"steel\"\n[parts.mesh]\nfile = \"bad.inp\"\n",
+        steel()
+    );
     std::fs::write(dir.join("bad.toml"), text).unwrap();
     let e = study::load(&dir.join("bad.toml")).unwrap_err().to_string();
     assert!(

@@ -2,10 +2,14 @@
 //! run observed in memory against the results folder it writes, and a simulation stepped by
 //! hand against the `dynamic` analysis of a run.
 
+use common::{dynamic, gravity, pendulum, sensor};
 use std::path::{Path, PathBuf};
 use study::observer::{Observer, Recorder};
 use study::run::Options;
 use study::{Document, Simulation};
+
+/// Study texts built from parameters.
+mod common;
 
 /// Mechanisms set up in study files (initial states, `start`, actuators, springs, stops,
 /// buckling, adaptive and retried steps) against independent solutions.
@@ -24,10 +28,7 @@ mod stress;
 
 /// A fresh scratch folder for one test.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("study-tests-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch_dir("tests", name)
 }
 
 /// The built-in example `name` written into a scratch folder; its study file.
@@ -188,50 +189,31 @@ fn a_named_load_changed_between_steps_acts_from_the_next_step() {
     let _ = <() as Observer>::take_files(&mut ());
 }
 
-/// A rigid pendulum (1 kg at 1 m below its pivot, 0.01 kg m^2 about its centre: I = 1.01
-/// kg m^2 about the pivot) under gravity, with two actuators on its pivot for a controller
-/// outside the study: `motor` (a time function, zero) and `servo` (a PID law).
-const SERVO_PENDULUM: &str = r#"
-[[rigid_bodies]]
-name = "bob"
-mass = 1.0
-center_of_mass = [0.0, -1.0, 0.0]
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
-points = { O = [0.0, 0.0, 0.0] }
-[[joints]]
-name = "pivot"
-type = "revolute"
-between = ["ground", "bob.O"]
-axis = [0.0, 0.0, 1.0]
-[[loads]]
-name = "weight"
-type = "gravity"
-g = [0.0, GRAVITY, 0.0]
-[[actuators]]
+/// The rigid pendulum of `common::pendulum` under gravity `g` (m/s^2, along -y), with two
+/// actuators on its pivot for a controller outside the study: `motor` (`motor`, its law) and
+/// `servo` (a PID law).
+fn servo_pendulum_text(g: f64, motor: &str) -> String {
+    [
+        pendulum(&[]),
+        gravity("weight", [0.0, -g, 0.0]),
+        format!(
+            r#"[[actuators]]
 name = "motor"
 joint = "pivot"
-function = { type = "constant-speed", speed = 0.0 }
+{motor}
 [[actuators]]
 name = "servo"
 joint = "pivot"
-pid = { kp = 50.0, ki = 20.0, kd = 10.0, setpoint = { type = "ramp", t_end = 1.0, to = 0.3 } }
-[[sensors]]
-name = "angle"
-type = "joint"
-of = "pivot"
-[[sensors]]
-name = "rate"
-type = "joint-rate"
-of = "pivot"
-[[sensors]]
-name = "torque"
-type = "actuator-effort"
-of = "motor"
-[[analyses]]
-type = "dynamic"
-t_end = 20.0
-dt = 0.01
-"#;
+pid = {{ kp = 50.0, ki = 20.0, kd = 10.0, setpoint = {{ type = "ramp", t_end = 1.0, to = 0.3 }} }}
+"#
+        ),
+        sensor("angle", "joint", "pivot"),
+        sensor("rate", "joint-rate", "pivot"),
+        sensor("torque", "actuator-effort", "motor"),
+        dynamic("20.0", "0.01"),
+    ]
+    .concat()
+}
 
 /// The servo pendulum with gravity `g` (m/s^2, along -y) and the `motor`'s `function`
 /// (`None`: zero), its PID servo held at zero effort; a simulation of it. Both actuators give
@@ -239,10 +221,10 @@ dt = 0.01
 /// initial accelerations agree with the held values.
 fn servo_pendulum(tag: &str, g: f64, motor: Option<&str>) -> Simulation {
     let dir = scratch(tag);
-    let mut text = SERVO_PENDULUM.replace("GRAVITY", &format!("{:?}", -g));
-    if let Some(f) = motor {
-        text = text.replace(r#"function = { type = "constant-speed", speed = 0.0 }"#, f);
-    }
+    let text = servo_pendulum_text(
+        g,
+        motor.unwrap_or(r#"function = { type = "constant-speed", speed = 0.0 }"#),
+    );
     let doc = Document::from_text(&text, &dir.join("servo.toml")).unwrap();
     let study = doc.study().unwrap();
     let options = Options {
@@ -336,6 +318,37 @@ fn a_pd_loop_closed_outside_the_study_reaches_its_equilibrium_under_gravity() {
     // s^2 + (kp + m g L cos 0.3) s + ki: the slowest near -0.34 1/s, so e^-8 of the 0.2 rad
     // error is left after 25 s).
     assert!((theta - 0.3).abs() < 1e-3, "{theta}");
+}
+
+/// A controller reads sensors by name between steps: each sensor's columns are those of the
+/// full row (`read`), found through the index built when the simulation is set up. An
+/// unknown name is refused with the close matches; a sensor whose model sensor the system
+/// lacks is refused at set-up, naming both.
+#[test]
+fn sensors_read_by_name_are_the_columns_of_the_full_row() {
+    let mut sim = servo_pendulum(
+        "sensor-index",
+        9.81,
+        Some(r#"function = { type = "ramp", t_end = 0.01, to = 0.2, smooth = false }"#),
+    );
+    for _ in 0..3 {
+        sim.step().unwrap();
+    }
+    let row = sim.read().unwrap();
+    for (g, v) in sim.sensors().iter().zip(&row) {
+        assert_eq!(&sim.sensor(&g.name).unwrap(), v, "sensor {}", g.name);
+    }
+    assert!(row[0][0] != 0.0, "the pendulum has moved");
+    let e = sim.sensor("angel").unwrap_err().to_string();
+    assert!(e.contains("angle"), "{e}");
+
+    let mut groups = sim.sensors().to_vec();
+    groups[1].mbs_names.push("nowhere".into());
+    let record = sim.system().sensor_record();
+    let e = study::simulation::sensor_columns(&groups, &record)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sensor 'rate'") && e.contains("no sensor 'nowhere'"), "{e}");
 }
 
 /// An observer that keeps the stages of long computations only.

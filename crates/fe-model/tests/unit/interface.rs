@@ -114,17 +114,7 @@ fn rbe3_interface_follows_the_weighted_least_squares_rigid_fit() {
     let sol = solve_static(&model, &[general_load(m)]).unwrap();
     let set = model.node_set("x1", "test").unwrap().to_vec();
     let w = grid_weights(&model, &set, 0.5, 1.0 / 3.0);
-    let mut A = Matrix6::zeros();
-    let mut b = Vector6::zeros();
-    for (s, w_s) in set.iter().zip(&w) {
-        let r = model.mesh.nodes[s.index()] - x_m;
-        let mut S = SMatrix::<f64, 3, 6>::zeros();
-        S.fixed_view_mut::<3, 3>(0, 0).fill_with_identity();
-        S.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-r.cross_matrix()));
-        A += *w_s * S.transpose() * S;
-        b += *w_s * S.transpose() * translation(&sol.displacements[s.index()]);
-    }
-    let fit = A.lu().solve(&b).unwrap();
+    let fit = weighted_rigid_fit(&model, &set, &w, x_m, &sol.displacements);
     let u_m = Vector6::from_column_slice(&sol.displacements[m.index()]);
     // Round-off: the elimination solves the same six equations, through a 6 x 6 inverse whose
     // condition number is ~ (extent / spacing)^2 ~ 1e2.
@@ -132,6 +122,89 @@ fn rbe3_interface_follows_the_weighted_least_squares_rigid_fit() {
         (u_m - fit).norm() <= 1e-11 * fit.norm(),
         "interface {u_m} vs rigid fit {fit}"
     );
+}
+
+/// The weighted least-squares rigid fit $[\mathbf u_m; \boldsymbol\theta_m]$ about `x_m` of the
+/// translations of the nodes `set` with weights `w`, computed here independently.
+fn weighted_rigid_fit(
+    model: &FeModel,
+    set: &[NodeId],
+    w: &[f64],
+    x_m: Point3<f64>,
+    displacements: &[[f64; 6]],
+) -> Vector6<f64> {
+    let mut A = Matrix6::zeros();
+    let mut b = Vector6::zeros();
+    for (s, w_s) in set.iter().zip(w) {
+        let r = model.mesh.nodes[s.index()] - x_m;
+        let mut S = SMatrix::<f64, 3, 6>::zeros();
+        S.fixed_view_mut::<3, 3>(0, 0).fill_with_identity();
+        S.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-r.cross_matrix()));
+        A += *w_s * S.transpose() * S;
+        b += *w_s * S.transpose() * translation(&displacements[s.index()]);
+    }
+    A.lu().solve(&b).unwrap()
+}
+
+/// A node set that takes in a layer of nodes below the surface (here: every node with x >= 1
+/// of a 2-element bar of unit cubes along x) weighs the boundary faces only: the face x = 1
+/// that the two cubes share lies inside the solid. By hand, each unit face gives a quarter to
+/// each corner: a corner at x = 2 touches the end face and two side faces (3/4), a corner at
+/// x = 1 two side faces only (1/2; counting the shared face would give 3/4, i.e. equal
+/// weights). The area centroid of the end face (area 1, x = 2) and the four sides (area 1
+/// each, x = 1.5) is x = (2 + 4 * 1.5) / 5 = 1.6 (1.5 with the shared face).
+#[test]
+fn rbe3_weights_count_boundary_faces_only() {
+    let mut model = clamped_box(CellKind::Hex8, [2.0, 1.0, 1.0], [2, 1, 1]);
+    let set: Vec<NodeId> = (0..model.node_count() as u32)
+        .map(NodeId)
+        .filter(|n| model.mesh.nodes[n.index()].x > 0.5)
+        .collect();
+    assert_eq!(set.len(), 8);
+    let m = add_interface(&mut model, "tip", &set, None, SpiderKind::Rbe3).unwrap();
+    let x_m = model.mesh.nodes[m.index()];
+    // Round-off of the face integrals (exact Gauss rules on unit squares).
+    assert!((x_m - Point3::new(1.6, 0.5, 0.5)).norm() <= 1e-14, "interface at {x_m}");
+    let w: Vec<f64> = set
+        .iter()
+        .map(|n| if model.mesh.nodes[n.index()].x > 1.5 { 0.75 } else { 0.5 })
+        .collect();
+    let sol = solve_static(&model, &[general_load(m)]).unwrap();
+    let fit = weighted_rigid_fit(&model, &set, &w, x_m, &sol.displacements);
+    let u_m = Vector6::from_column_slice(&sol.displacements[m.index()]);
+    // Round-off, as in the rigid-fit test above; equal weights miss by ~1e-2 relative.
+    assert!(
+        (u_m - fit).norm() <= 1e-11 * fit.norm(),
+        "interface {u_m} vs rigid fit {fit}"
+    );
+
+    // A finer mesh of the same bar: nodes inside the solid (on shared faces only) weigh
+    // nothing, so the default position is the same area centroid, not the node mean (x = 1.5).
+    let mut model = clamped_box(CellKind::Hex8, [2.0, 1.0, 1.0], [4, 2, 2]);
+    let set: Vec<NodeId> = (0..model.node_count() as u32)
+        .map(NodeId)
+        .filter(|n| model.mesh.nodes[n.index()].x > 0.75)
+        .collect();
+    let m = add_interface(&mut model, "tip", &set, None, SpiderKind::Rbe3).unwrap();
+    let x_m = model.mesh.nodes[m.index()];
+    // Round-off of summing 20 face integrals.
+    assert!((x_m - Point3::new(1.6, 0.5, 0.5)).norm() <= 1e-14, "interface at {x_m}");
+
+    // The nodes within 0.15 m of the centre of the end face of a hex20 bar 1 x 0.2 x 0.2 m
+    // (a `near`/`radius` set): the whole end face, nodes inside the solid and nodes on the
+    // side faces near the end, whose faces the set covers in part. Only the end face counts:
+    // the interface sits at its centre (before, the nodes off the face sent it to the mean of
+    // all the nodes, 0.03 m inside the bar, with equal weights).
+    let mut model = clamped_box(CellKind::Hex20, [1.0, 0.2, 0.2], [8, 2, 2]);
+    let centre = Point3::new(1.0, 0.1, 0.1);
+    let set: Vec<NodeId> = (0..model.node_count() as u32)
+        .map(NodeId)
+        .filter(|n| (model.mesh.nodes[n.index()] - centre).norm() <= 0.15)
+        .collect();
+    let m = add_interface(&mut model, "end", &set, None, SpiderKind::Rbe3).unwrap();
+    let x_m = model.mesh.nodes[m.index()];
+    // Round-off of the face integrals (exact Gauss rules on flat quad8 faces).
+    assert!((x_m - centre).norm() <= 1e-14, "interface at {x_m}");
 }
 
 /// RBE3 adds no stiffness: a free body keeps its frequencies when RBE3 interfaces are added

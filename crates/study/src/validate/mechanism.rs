@@ -13,6 +13,7 @@ use crate::source::{suggestions, unknown_reference, KeyPath};
 use mbs::{Interpolation, JointKind, LoadAxes, LoadKind, RotationSupport, TimeFunction, TranslationSupport};
 use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
 use reduction::ReducedBody;
+use std::collections::HashMap;
 use std::path::PathBuf;
 use superelement::{Damping, MassVariant};
 
@@ -1853,6 +1854,12 @@ impl Validator<'_> {
                 damping,
             });
         }
+        // The sensors a PID law may measure, by name (the first of a name; a duplicate is
+        // reported with the sensors): found once, not searched per actuator.
+        let mut sensor_named: HashMap<&str, &SensorFile> = HashMap::with_capacity(file.sensors.len());
+        for s in &file.sensors {
+            sensor_named.entry(s.name.as_str()).or_insert(s);
+        }
         for (i, a) in file.actuators.iter().enumerate() {
             let Some((path, joint, coordinate)) =
                 entry(self, m, ("actuators", i), &a.name, &a.joint, a.coordinate, "actuator")
@@ -1880,7 +1887,7 @@ impl Validator<'_> {
                         None => (joint, coordinate),
                         // The `[[sensors]]` are validated after the actuators (they may name
                         // one): the joint sensor is read from the file here.
-                        Some(name) => match file.sensors.iter().find(|s| s.name == *name) {
+                        Some(name) => match sensor_named.get(name.as_str()) {
                             Some(sf) if sf.kind == "joint" => {
                                 let Some(of) = &sf.of else { continue };
                                 let Some(j) = self.lookup("joint", of) else {

@@ -2,25 +2,13 @@
 //! where it is in the file; input files that are not regular files; validation time that grows
 //! linearly with the number of entries.
 
+use crate::common::{clamp, dynamic, material, pendulum, rigid_body, sensor, Text};
 use std::path::Path;
 use study::observer::Recorder;
 use study::run::Options;
 
-/// A rigid pendulum (1 kg, centre of mass 1 m below the pivot) with a second point `P` at its
-/// centre of mass.
-const PENDULUM: &str = r#"
-[[rigid_bodies]]
-name = "bob"
-mass = 1.0
-center_of_mass = [0.0, -1.0, 0.0]
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
-points = { O = [0.0, 0.0, 0.0], P = [0.0, -1.0, 0.0], Q = [0.0, -1.0, 0.0] }
-[[joints]]
-name = "pivot"
-type = "revolute"
-between = ["ground", "bob.O"]
-axis = [0.0, 0.0, 1.0]
-"#;
+/// The rigid pendulum of `common::pendulum` with points `P` and `Q` at its centre of mass.
+const PENDULUM: Text = Text(|| pendulum(&[("P", [0.0, -1.0, 0.0]), ("Q", [0.0, -1.0, 0.0])]));
 
 const DYNAMIC: &str = "
 [[analyses]]
@@ -46,12 +34,7 @@ fn run_error(name: &str, text: &str) -> String {
     let file = dir.join(format!("{name}.toml"));
     std::fs::write(&file, text).unwrap();
     let study = study::load(&file).unwrap();
-    let options = Options {
-        out: Some(dir.join("results")),
-        cache: Some(dir.join("cache")),
-        t_end: None,
-        foreign: Default::default(),
-    };
+    let options = crate::options_in(&dir, None);
     match study::run_with(&study, &options, &mut Recorder::default()) {
         Ok(_) => String::new(),
         Err(e) => study::error::chain(&*e),
@@ -204,6 +187,46 @@ fn eighty_thousand_materials_validate_and_a_duplicate_is_found() {
     assert!(e.contains("(1 error)"), "{e}");
 }
 
+/// A PID law measures the joint sensor it names, found in a hash table built once, so that
+/// validation grows linearly with the number of actuators: 20,000 PID actuators each
+/// measuring a sensor of its own (before, each searched the list of sensors: 2e8
+/// comparisons; the time is not asserted, the test keeps the case). An unknown name is
+/// refused at `pid.sensor` with the close matches, and so is a sensor of another kind.
+#[test]
+fn twenty_thousand_pid_sensors_are_found_and_unknown_or_wrong_ones_refused() {
+    let n = 20_000;
+    let mut text = String::with_capacity(n * 200);
+    text.push_str(&PENDULUM.to_string());
+    text.push_str(&sensor("rate", "joint-rate", "pivot"));
+    let pid = |i: usize, measured: &str| {
+        format!(
+            "[[actuators]]\nname = \"a{i}\"\njoint = \"pivot\"\n\
+             pid = {{ kp = 1.0, sensor = \"{measured}\", setpoint = {{ type = \"ramp\", t_end = 1.0, to = 0.1 }} }}\n"
+        )
+    };
+    for i in 0..n {
+        text.push_str(&sensor(&format!("s{i}"), "joint", "pivot"));
+        text.push_str(&pid(i, &format!("s{i}")));
+    }
+    text.push_str(&pid(n, "s1999x"));
+    text.push_str(&pid(n + 1, "rate"));
+    let e = check("many-pid-sensors", &text);
+    assert!(
+        e.contains(&format!(
+            "actuators[{n}].pid.sensor: unknown joint sensor 's1999x'; did you mean"
+        )),
+        "{e}"
+    );
+    assert!(
+        e.contains(&format!(
+            "actuators[{}].pid.sensor: sensor 'rate' is not a 'joint' sensor",
+            n + 1
+        )),
+        "{e}"
+    );
+    assert!(e.contains("(2 errors)"), "{e}");
+}
+
 /// `translations = "body"` in a dynamic analysis reaches the integrator (the free nodes'
 /// translations in body axes, for long runs of fast steady rotation); `fixed` is the default and
 /// any other value is refused at its key.
@@ -235,13 +258,8 @@ fn the_translation_axes_of_a_dynamic_analysis_reach_the_integrator() {
 /// analysis that builds a model.
 #[test]
 fn checking_a_study_copies_no_model_and_leaves_each_part_as_generated() {
-    let text = r#"
-[[materials]]
-name = "steel"
-E = 210e9
-nu = 0.3
-rho = 7850.0
-
+    let text = material("steel", 210e9, 0.3, 7850.0)
+        + r#"
 [[parts]]
 name = "block"
 material = "steel"
@@ -278,7 +296,7 @@ part = "block"
 "#;
     let dir = crate::scratch("no-model-copies");
     let file = dir.join("block.toml");
-    std::fs::write(&file, text).unwrap();
+    std::fs::write(&file, &text).unwrap();
     let copies = study::part::model_copies();
     let study = study::load(&file).unwrap();
     assert_eq!(study::part::model_copies() - copies, 0, "validation copied a model");
@@ -289,12 +307,7 @@ part = "block"
     assert!(base.supports.is_empty() && base.constraints.is_empty());
     // A run copies the model once per analysis on a part (static, two modal, reduce).
     let copies = study::part::model_copies();
-    let options = Options {
-        out: Some(dir.join("results")),
-        cache: Some(dir.join("cache")),
-        t_end: None,
-        foreign: Default::default(),
-    };
+    let options = crate::options_in(&dir, None);
     let summary = study::run_with(&study, &options, &mut Recorder::default()).unwrap();
     assert_eq!(summary.status, "complete");
     assert_eq!(study::part::model_copies() - copies, 4);
@@ -303,23 +316,18 @@ part = "block"
 /// A cart driven along a rail at 10 m/s from 1 m before a clamped post, on top of the
 /// pendulum (which keeps an unknown): the cart's point `P` reaches the post's point `Q` at
 /// t = 0.1 s, step 10, where the deflection of `post.R` from the line through them is 0/0.
-const CART: &str = r#"
-[[rigid_bodies]]
-name = "cart"
-mass = 1.0
-center_of_mass = [-1.0, 0.0, 0.0]
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
-points = { P = [-1.0, 0.0, 0.0] }
-[[rigid_bodies]]
-name = "post"
-mass = 1.0
-center_of_mass = [0.0, 0.0, 0.0]
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
-points = { Q = [0.0, 0.0, 0.0], R = [0.0, 1.0, 0.0] }
-[[supports]]
-at = "post.Q"
-type = "clamp"
-[[joints]]
+const CART: Text = Text(|| {
+    [
+        rigid_body("cart", 1.0, [-1.0, 0.0, 0.0], [0.01; 3], &[("P", [-1.0, 0.0, 0.0])]),
+        rigid_body(
+            "post",
+            1.0,
+            [0.0; 3],
+            [0.01; 3],
+            &[("Q", [0.0; 3]), ("R", [0.0, 1.0, 0.0])],
+        ),
+        clamp("post.Q"),
+        r#"[[joints]]
 name = "rail"
 type = "prismatic"
 between = ["ground", "cart.P"]
@@ -328,20 +336,20 @@ axis = [1.0, 0.0, 0.0]
 name = "push"
 joint = "rail"
 function = { type = "constant-speed", speed = 10.0 }
-[[sensors]]
-name = "travel"
-type = "joint"
-of = "rail"
-[[sensors]]
+"#
+        .to_string(),
+        sensor("travel", "joint", "rail"),
+        r#"[[sensors]]
 name = "gap"
 type = "deflection"
 of = "post.R"
 chord = ["cart.P", "post.Q"]
-[[analyses]]
-type = "dynamic"
-t_end = 0.2
-dt = 0.01
-"#;
+"#
+        .to_string(),
+        dynamic("0.2", "0.01"),
+    ]
+    .concat()
+});
 
 /// A sensor whose value stops being finite stops the run at the sensor's `[[sensors]]` entry
 /// (`file:line:col: sensors[i]: ...`), as a failure at a body is located at the body, and the
@@ -349,6 +357,7 @@ dt = 0.01
 #[test]
 fn a_sensor_that_is_not_finite_is_located_at_the_sensor_in_the_study_file() {
     let text = format!("{PENDULUM}{CART}");
+
     let e = run_error("sensor-not-finite", &text);
     let line = text.lines().position(|l| l == "name = \"gap\"").unwrap() + 1;
     assert!(
@@ -386,20 +395,15 @@ fn an_initial_velocity_along_a_held_direction_is_refused() {
     let wheel = |velocity: &str| {
         format!(
             r#"
-[[rigid_bodies]]
-name = "wheel"
-mass = 1.0
-center_of_mass = [0.0, 0.0, 0.0]
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]]
-points = {{ C = [0.0, 0.0, 0.0] }}
-[[supports]]
+{}[[supports]]
 at = "wheel.C"
 type = "pin"
 [[initial]]
 at = "wheel.C"
 velocity = {velocity}
 angular_velocity = [0.0, 0.0, 2.0]
-{DYNAMIC}"#
+{DYNAMIC}"#,
+            rigid_body("wheel", 1.0, [0.0; 3], [0.01, 0.01, 0.02], &[("C", [0.0; 3])])
         )
     };
     let e = run_error("initial-held", &wheel("[0.0, 0.5, 0.0]"));
@@ -448,9 +452,7 @@ fn a_simulation_reads_one_sensor_without_evaluating_the_others() {
     let study = study::load(&file).unwrap();
     let options = Options {
         out: None,
-        cache: Some(dir.join("cache")),
-        t_end: None,
-        foreign: Default::default(),
+        ..crate::options_in(&dir, None)
     };
     let mut sim = study::Simulation::new(&study, "dynamic", &options).unwrap();
     sim.step().unwrap();

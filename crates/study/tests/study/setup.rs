@@ -4,6 +4,10 @@
 //! start where another ended, actuators, springs and stops, buckling, adaptive and retried
 //! time steps, each against an independent solution.
 
+use crate::common::{
+    clamp, dynamic, equilibrium, gravity, linearized, material, named_dynamic, pendulum, rectangle, rigid_body, sensor,
+    two_ended_beam, welded_chain, Text,
+};
 use std::path::PathBuf;
 use study::observer::Recorder;
 use study::output::Summary;
@@ -15,12 +19,7 @@ fn run(name: &str, text: &str) -> (Recorder, Result<Summary, String>, PathBuf) {
     let file = dir.join(format!("{name}.toml"));
     std::fs::write(&file, text).unwrap();
     let study = study::load(&file).unwrap();
-    let options = Options {
-        out: Some(dir.join("results")),
-        cache: Some(dir.join("cache")),
-        t_end: None,
-        foreign: Default::default(),
-    };
+    let options = crate::options_in(&dir, None);
     let mut rec = Recorder::default();
     let summary = study::run_with(&study, &options, &mut rec).map_err(|e| study::error::chain(&*e));
     (rec, summary, file)
@@ -137,35 +136,11 @@ fn the_double_pendulum_example_with_stiff_links_follows_the_rigid_solution() {
 
 #[test]
 fn one_initial_line_spins_a_free_flexible_body_rigidly() {
-    let text = r#"
-[[materials]]
-name = "steel"
-E = 210e9
-nu = 0.3
-rho = 7850.0
-[[sections]]
-name = "bar"
-shape = "rectangle"
-b = 0.02
-h = 0.03
-[[parts]]
-name = "bar"
-material = "steel"
-[parts.beam]
-kind = "straight"
-from = [0.0, 0.0, 0.0]
-to = [0.6, 0.0, 0.0]
-elements = 8
-section = "bar"
-[[parts.interfaces]]
-name = "a"
-set = "bar.start"
-[[parts.interfaces]]
-name = "b"
-set = "bar.end"
-[parts.reduction]
-modes = 3
-[[bodies]]
+    let text = [
+        material("steel", 210e9, 0.3, 7850.0),
+        rectangle("bar", 0.02, 0.03),
+        two_ended_beam("bar", "steel", "bar", 0.6, 8, None, 3),
+        r#"[[bodies]]
 name = "bar"
 part = "bar"
 position = [0.1, 0.2, 0.3]
@@ -177,12 +152,12 @@ point = [0.2, 0.1, 0.0]
 [[sensors]]
 name = "energy"
 type = "energy"
-[[analyses]]
-type = "dynamic"
-t_end = 1e-3
-dt = 1e-3
-"#;
-    let (rec, summary, file) = run("free-spin", text);
+"#
+        .to_string(),
+        dynamic("1e-3", "1e-3"),
+    ]
+    .concat();
+    let (rec, summary, file) = run("free-spin", &text);
     summary.unwrap();
     let (body, place) = first_body(&file);
     let (v, w, p) = (
@@ -205,96 +180,28 @@ dt = 1e-3
 }
 
 /// A cantilever of four superelements (aluminium, 1 m, 10 mm square) under gravity.
-const CANTILEVER: &str = r#"
-[[materials]]
-name = "aluminium"
-E = 70e9
-nu = 0.33
-rho = 2700.0
-[[sections]]
-name = "bar"
-shape = "rectangle"
-b = 0.01
-h = 0.01
-[[parts]]
-name = "segment"
-material = "aluminium"
-[parts.beam]
-kind = "straight"
-from = [0.0, 0.0, 0.0]
-to = [0.25, 0.0, 0.0]
-elements = 4
-section = "bar"
-theory = "euler-bernoulli"
-[[parts.interfaces]]
-name = "a"
-set = "segment.start"
-[[parts.interfaces]]
-name = "b"
-set = "segment.end"
-[parts.reduction]
-modes = 2
-[[bodies]]
-name = "s0"
-part = "segment"
-[[bodies]]
-name = "s1"
-part = "segment"
-position = [0.25, 0.0, 0.0]
-[[bodies]]
-name = "s2"
-part = "segment"
-position = [0.5, 0.0, 0.0]
-[[bodies]]
-name = "s3"
-part = "segment"
-position = [0.75, 0.0, 0.0]
-[[joints]]
-name = "w1"
-type = "fixed"
-between = ["s0.b", "s1.a"]
-[[joints]]
-name = "w2"
-type = "fixed"
-between = ["s1.b", "s2.a"]
-[[joints]]
-name = "w3"
-type = "fixed"
-between = ["s2.b", "s3.a"]
-[[supports]]
-at = "s0.a"
-type = "clamp"
-[[loads]]
-name = "weight"
-type = "gravity"
-g = [0.0, -9.81, 0.0]
-[[sensors]]
-name = "tip"
-type = "position"
-of = "s3.b"
-"#;
+const CANTILEVER: Text = Text(|| {
+    [
+        material("aluminium", 70e9, 0.33, 2700.0),
+        rectangle("bar", 0.01, 0.01),
+        two_ended_beam("segment", "aluminium", "bar", 0.25, 4, Some("euler-bernoulli"), 2),
+        welded_chain("segment", 4, 0.25),
+        clamp("s0.a"),
+        gravity("weight", [0.0, -9.81, 0.0]),
+        sensor("tip", "position", "s3.b"),
+    ]
+    .concat()
+});
 
 #[test]
 fn a_cantilever_started_from_its_equilibrium_stays_there() {
-    let text = format!(
-        "{CANTILEVER}
-[[analyses]]
-type = \"equilibrium\"
-name = \"sag\"
-tolerance = 1e-13
-[[analyses]]
-type = \"dynamic\"
-name = \"from-sag\"
-start = \"sag\"
-t_end = 0.2
-dt = 1e-3
-[[analyses]]
-type = \"dynamic\"
-name = \"from-rest\"
-t_end = 0.2
-dt = 1e-3
-"
-    );
+    let text = [
+        CANTILEVER.to_string(),
+        equilibrium("sag", "1e-13"),
+        named_dynamic("from-sag", Some("sag"), "0.2", "1e-3"),
+        named_dynamic("from-rest", None, "0.2", "1e-3"),
+    ]
+    .concat();
     let (rec, summary, _) = run("hanging", &text);
     summary.unwrap();
     let y_eq = *column(&rec, "sag", "tip", 1).last().unwrap();
@@ -315,41 +222,28 @@ fn one_analysis_run_alone_runs_its_start_chain_first() {
     // equilibrium -> dynamic from it -> dynamic from that one; the last run alone
     // (`study::run_only`, the CLI's and Python's single analysis) must give the numbers of the
     // whole study, with the analyses of its chain run and recorded first.
-    let text = format!(
-        "{CANTILEVER}
-[[loads]]
-name = \"push\"
-type = \"point\"
-at = \"s3.b\"
+    let text = [
+        CANTILEVER.to_string(),
+        r#"[[loads]]
+name = "push"
+type = "point"
+at = "s3.b"
 force = [0.0, 0.0, 1.0]
-function = {{ type = \"ramp\", t_end = 0.02, to = 1.0 }}
-[[analyses]]
-type = \"equilibrium\"
-name = \"sag\"
-tolerance = 1e-13
-[[analyses]]
-type = \"dynamic\"
-name = \"first\"
-start = \"sag\"
-t_end = 0.03
-dt = 1e-3
-[[analyses]]
-type = \"dynamic\"
-name = \"second\"
-start = \"first\"
-t_end = 0.06
-dt = 1e-3
-"
-    );
+function = { type = "ramp", t_end = 0.02, to = 1.0 }
+"#
+        .to_string(),
+        equilibrium("sag", "1e-13"),
+        named_dynamic("first", Some("sag"), "0.03", "1e-3"),
+        named_dynamic("second", Some("first"), "0.06", "1e-3"),
+    ]
+    .concat();
     let (whole, summary, file) = run("chain", &text);
     summary.unwrap();
     let study = study::load(&file).unwrap();
     let dir = file.parent().unwrap();
     let options = Options {
         out: Some(dir.join("alone")),
-        cache: Some(dir.join("cache")),
-        t_end: None,
-        foreign: Default::default(),
+        ..crate::options_in(dir, None)
     };
     let mut rec = Recorder::default();
     let summary = study::run_only(&study, &options, 2, &mut rec)
@@ -381,53 +275,14 @@ fn an_euler_column_of_eight_superelements_buckles_at_eulers_load() {
     // Steel, 10 mm square, 1 m, clamped-free; eight superelements of static modes only.
     let (E, a, L): (f64, f64, f64) = (2.1e11, 0.01, 1.0);
     let p_euler = std::f64::consts::PI.powi(2) * E * a.powi(4) / 12.0 / (4.0 * L * L);
-    let mut text = String::from(
-        r#"
-[[materials]]
-name = "steel"
-E = 2.1e11
-nu = 0.3
-rho = 7800.0
-[[sections]]
-name = "bar"
-shape = "rectangle"
-b = 0.01
-h = 0.01
-[[parts]]
-name = "segment"
-material = "steel"
-[parts.beam]
-kind = "straight"
-from = [0.0, 0.0, 0.0]
-to = [0.125, 0.0, 0.0]
-elements = 2
-section = "bar"
-theory = "euler-bernoulli"
-[[parts.interfaces]]
-name = "a"
-set = "segment.start"
-[[parts.interfaces]]
-name = "b"
-set = "segment.end"
-[parts.reduction]
-modes = 0
-[[supports]]
-at = "s0.a"
-type = "clamp"
-"#,
-    );
-    for i in 0..8 {
-        text += &format!(
-            "[[bodies]]\nname = \"s{i}\"\npart = \"segment\"\nposition = [{}, 0.0, 0.0]\n",
-            0.125 * i as f64
-        );
-        if i > 0 {
-            text += &format!(
-                "[[joints]]\nname = \"w{i}\"\ntype = \"fixed\"\nbetween = [\"s{}.b\", \"s{i}.a\"]\n",
-                i - 1
-            );
-        }
-    }
+    let text = [
+        material("steel", 2.1e11, 0.3, 7800.0),
+        rectangle("bar", 0.01, 0.01),
+        two_ended_beam("segment", "steel", "bar", 0.125, 2, Some("euler-bernoulli"), 0),
+        clamp("s0.a"),
+        welded_chain("segment", 8, 0.125),
+    ]
+    .concat();
     let with_load = |factor: f64| {
         format!(
             "{text}[[loads]]\nname = \"push\"\ntype = \"point\"\nat = \"s7.b\"\nforce = [{}, 0.0, 0.0]\n[[analyses]]\ntype = \"buckling\"\nmodes = 2\n",
@@ -462,35 +317,21 @@ type = "clamp"
     );
 }
 
-/// A rigid pendulum: 1 kg, centre of mass 1 m below the pivot, 0.01 kg m^2 about it (1.01
-/// kg m^2 about the pivot).
-const PENDULUM: &str = r#"
-[[rigid_bodies]]
-name = "bob"
-mass = 1.0
-center_of_mass = [0.0, -1.0, 0.0]
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
-points = { O = [0.0, 0.0, 0.0] }
-[[joints]]
-name = "pivot"
-type = "revolute"
-between = ["ground", "bob.O"]
-axis = [0.0, 0.0, 1.0]
-[[sensors]]
-name = "angle"
-type = "joint"
-of = "pivot"
-"#;
+/// The rigid pendulum of `common::pendulum` with its sensor `angle`.
+const PENDULUM: Text = Text(|| pendulum(&[]) + &sensor("angle", "joint", "pivot"));
+
+/// The pendulum under gravity (9.81 m/s^2 down).
+const HANGING: Text = Text(|| PENDULUM.to_string() + &gravity("weight", [0.0, -9.81, 0.0]));
+
+/// The hanging pendulum released from `angle` \[rad\] by its `[[initial]]` line.
+fn released(angle: f64) -> String {
+    format!("{HANGING}[[initial]]\njoint = \"pivot\"\nvalue = {angle:?}\n")
+}
 
 #[test]
 fn a_pid_actuator_in_a_study_holds_its_set_point() {
     let text = format!(
-        "{PENDULUM}
-[[loads]]
-name = \"weight\"
-type = \"gravity\"
-g = [0.0, -9.81, 0.0]
-[[actuators]]
+        "{HANGING}[[actuators]]
 name = \"motor\"
 joint = \"pivot\"
 pid = {{ kp = 50.0, ki = 200.0, kd = 10.0, sensor = \"angle\", setpoint = {{ type = \"ramp\", t_end = 1.0, to = 0.5 }} }}
@@ -498,13 +339,10 @@ pid = {{ kp = 50.0, ki = 200.0, kd = 10.0, sensor = \"angle\", setpoint = {{ typ
 name = \"torque\"
 type = \"actuator-effort\"
 of = \"motor\"
-[[analyses]]
-type = \"dynamic\"
-t_end = 10.0
-dt = 0.01
-[output]
+{}[output]
 every = 10
-"
+",
+        dynamic("10.0", "0.01")
     );
     let (rec, summary, _) = run("pid", &text);
     summary.unwrap();
@@ -526,10 +364,8 @@ name = \"torsion\"
 joint = \"pivot\"
 stiffness = 4.0
 damping = 0.2
-[[analyses]]
-type = \"linearized\"
-modes = 1
-"
+{}",
+        linearized(1)
     );
     let (rec, summary, _) = run("torsion", &text);
     summary.unwrap();
@@ -554,26 +390,16 @@ modes = 1
 /// The pendulum released from 1.2 rad onto a stop at -0.5 rad.
 fn stopped_pendulum(extra: &str) -> String {
     format!(
-        "{PENDULUM}
-[[loads]]
-name = \"weight\"
-type = \"gravity\"
-g = [0.0, -9.81, 0.0]
-[[initial]]
-joint = \"pivot\"
-value = 1.2
-[[joint_limits]]
+        "{}[[joint_limits]]
 name = \"stop\"
 joint = \"pivot\"
 lower = -0.5
 stiffness = 1e5
 damping = 50.0
-[[analyses]]
-type = \"dynamic\"
-t_end = 1.5
-dt = 5e-3
-{extra}
-"
+{}{extra}
+",
+        released(1.2),
+        dynamic("1.5", "5e-3")
     )
 }
 
@@ -601,13 +427,7 @@ fn snapping_truss(extra: &str) -> String {
         )
     };
     format!(
-        "[[rigid_bodies]]
-name = \"apex\"
-mass = 1.0
-center_of_mass = [0.0, 0.1, 0.0]
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
-points = {{ P = [0.0, 0.1, 0.0] }}
-[[supports]]
+        "{}[[supports]]
 at = \"apex.P\"
 type = \"slider\"
 axis = [0.0, 1.0, 0.0]
@@ -617,18 +437,13 @@ type = \"point\"
 at = \"apex.P\"
 force = [0.0, -8e3, 0.0]
 function = {{ type = \"ramp\", t_end = 0.1, to = 1.0, smooth = false }}
-[[sensors]]
-name = \"apex\"
-type = \"position\"
-of = \"apex.P\"
-[[analyses]]
-type = \"dynamic\"
-t_end = 0.5
-dt = 1e-2
-{extra}
+{}{}{extra}
 ",
+        rigid_body("apex", 1.0, [0.0, 0.1, 0.0], [0.01; 3], &[("P", [0.0, 0.1, 0.0])]),
         spring("left", -1.0),
-        spring("right", 1.0)
+        spring("right", 1.0),
+        sensor("apex", "position", "apex.P"),
+        dynamic("0.5", "1e-2")
     )
 }
 
@@ -683,21 +498,7 @@ fn a_snap_through_the_fixed_step_cannot_take_is_retried_and_the_summary_says_so(
 
 /// The pendulum under gravity with a `dynamic` analysis of `t_end` and `dt`.
 fn swinging(t_end: &str, dt: &str) -> String {
-    format!(
-        "{PENDULUM}
-[[loads]]
-name = \"weight\"
-type = \"gravity\"
-g = [0.0, -9.81, 0.0]
-[[initial]]
-joint = \"pivot\"
-value = 0.5
-[[analyses]]
-type = \"dynamic\"
-t_end = {t_end}
-dt = {dt}
-"
-    )
+    released(0.5) + &dynamic(t_end, dt)
 }
 
 /// A `t_end` that is not a multiple of `dt` ends exactly at `t_end` with a shortened last step
@@ -728,12 +529,7 @@ fn the_t_end_option_ends_exactly_there_and_refuses_less_than_a_step() {
     let file = dir.join("p.toml");
     std::fs::write(&file, swinging("1.0", "0.1")).unwrap();
     let study = study::load(&file).unwrap();
-    let options = |t_end| Options {
-        out: Some(dir.join("results")),
-        cache: Some(dir.join("cache")),
-        t_end: Some(t_end),
-        foreign: Default::default(),
-    };
+    let options = |t_end| crate::options_in(&dir, Some(t_end));
     let mut rec = Recorder::default();
     study::run_with(&study, &options(0.35), &mut rec).unwrap();
     assert_eq!(times(&rec, "dynamic").last().copied(), Some(0.35));
@@ -750,17 +546,7 @@ fn the_t_end_option_ends_exactly_there_and_refuses_less_than_a_step() {
 /// sqrt(m g d / (I_G + m d^2)) = sqrt(9.81 / 1.01) = 3.1165 1/s (it was a stable "0 Hz" mode).
 #[test]
 fn an_inverted_pendulum_is_reported_unstable_in_a_study() {
-    let text = format!(
-        "{PENDULUM}
-[[loads]]
-name = \"weight\"
-type = \"gravity\"
-g = [0.0, 9.81, 0.0]
-[[analyses]]
-type = \"linearized\"
-modes = 1
-"
-    );
+    let text = format!("{PENDULUM}{}{}", gravity("weight", [0.0, 9.81, 0.0]), linearized(1));
     let (rec, summary, _) = run("inverted", &text);
     summary.unwrap();
     let r = results(&rec, "linearized");

@@ -3,6 +3,7 @@
 //! load (the static correction makes them agree), read through `stress` sensors at a node and
 //! over a node set, which agree with the mechanism's VTU stress fields of the same state.
 
+use crate::common::{material, rectangle, BeamPart};
 use crate::vtu_array;
 use std::path::PathBuf;
 use study::observer::Recorder;
@@ -27,14 +28,10 @@ const TIP: [f64; 3] = [2e2, -3e3, 1e3];
 /// force at the load point. `sensors`: extra `[[sensors]]` text.
 fn study(sensors: &str) -> String {
     let [fx, fy, fz] = TIP;
+    let steel = material("steel", 210e9, 0.3, 7850.0);
     format!(
         r#"
-[[materials]]
-name = "steel"
-E = 210e9
-nu = 0.3
-rho = 7850.0
-
+{steel}
 [[parts]]
 name = "bar"
 material = "steel"
@@ -310,44 +307,32 @@ fn a_largest_von_mises_sensor_gives_every_output_times_maximum() {
 /// for unit modal mass: phi''(0) = 2 A b^2, c = b/2.
 #[test]
 fn a_modal_analysis_writes_the_stress_of_each_mode_shape() {
-    let text = r#"
-[[materials]]
-name = "steel"
-E = 210e9
-nu = 0.3
-rho = 7850.0
-
-[[sections]]
-name = "bar"
-shape = "rectangle"
-b = 0.02
-h = 0.04
-
-[[parts]]
-name = "beam"
-material = "steel"
-
-[parts.beam]
-kind = "straight"
-from = [0.0, 0.0, 0.0]
-to = [2.0, 0.0, 0.0]
-elements = 40
-section = "bar"
-orientation = [0.0, 1.0, 0.0]
-theory = "euler-bernoulli"
-
-[[parts.interfaces]]
-name = "root"
-set = "beam.start"
-
-[[analyses]]
+    let text = [
+        material("steel", 210e9, 0.3, 7850.0),
+        rectangle("bar", 0.02, 0.04),
+        BeamPart {
+            name: "beam",
+            material: "steel",
+            section: "bar",
+            length: 2.0,
+            elements: 40,
+            theory: Some("euler-bernoulli"),
+            orientation: Some([0.0, 1.0, 0.0]),
+            interfaces: &[("root", "beam.start")],
+            modes: None,
+        }
+        .toml(),
+        r#"[[analyses]]
 type = "modal"
 name = "modes"
 part = "beam"
 modes = 2
 supports = [{ at = "root" }]
-"#;
-    let (_, summary, file) = run("modal-stress", text);
+"#
+        .to_string(),
+    ]
+    .concat();
+    let (_, summary, file) = run("modal-stress", &text);
     summary.unwrap();
     let vtu = file.parent().unwrap().join("results/modes/mode_001.vtu");
     let text = std::fs::read_to_string(&vtu).unwrap_or_else(|e| panic!("{}: {e}", vtu.display()));
