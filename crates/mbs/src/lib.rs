@@ -176,6 +176,7 @@
 pub mod arc_length;
 pub mod body;
 pub mod coordinates;
+pub mod dense_lu;
 pub mod dynamic_solver;
 pub mod error;
 pub mod initial;
