@@ -165,7 +165,7 @@
 //! [`model`] (serde data), [`time_function`], [`node`], [`coordinates`] (the maps and their
 //! derivatives), [`topology`] (the tree and its checks), [`initial`] (initial states that follow
 //! the joints), [`body`] (elements), [`joint_forces`] (limits and actuators), [`system`]
-//! (assembly), [`static_solver`], [`arc_length`], [`mod@stability`], [`dynamic_solver`], [`retry`]
+//! (assembly), [`dense_lu`] (the LU of small iteration matrices), [`static_solver`], [`arc_length`], [`mod@stability`], [`dynamic_solver`], [`retry`]
 //! (halved steps after a failure), [`momentum`] (momenta and their projection), [`linearized`]
 //! (spectrum, mode energies and buckling), [`sensors`], [`error`],
 //! [`user_force`] (forces written in Rust by the user: [`UserForce`], added with
@@ -176,6 +176,7 @@
 pub mod arc_length;
 pub mod body;
 pub mod coordinates;
+pub mod dense_lu;
 pub mod dynamic_solver;
 pub mod error;
 pub mod initial;

@@ -26,6 +26,7 @@ use crate::body::{
     LoadElement, RigidElement, SpringElement,
 };
 use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
+use crate::dense_lu::{self, SMALL_LU_MAX};
 use crate::error::{Entity, ModelError, SolveError};
 use crate::initial::InitialPlan;
 use crate::joint_forces::{Control, JointForces};
@@ -39,7 +40,7 @@ use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve}
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Par};
-use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{UnitQuaternion, Vector3};
 use rayon::prelude::*;
 use std::sync::Arc;
 use superelement::{so3, Frame, Superelement};
@@ -243,7 +244,8 @@ pub enum LinearSolver {
     /// Dense LU up to [`DENSE_MAX`] unknowns, sparse LU (symbolic analysis reused) above.
     #[default]
     Auto,
-    /// Always the dense LU with partial pivoting (faer `lu_in_place`).
+    /// Always the dense LU with partial pivoting ([`crate::dense_lu`] up to
+    /// [`crate::dense_lu::SMALL_LU_MAX`] unknowns, faer `lu_in_place` above).
     Dense,
     /// Always the sparse LU on the system pattern (faer, symbolic analysis from [`System::new`]).
     Sparse,
@@ -258,7 +260,15 @@ pub(crate) enum Factor {
         A: SparseColMat<usize, f64>,
         lu: Option<Box<Lu<usize, f64>>>,
     },
-    /// Dense LU in place: `LU` holds $\mathbf L$ (unit lower) and $\mathbf U$, `perm` the row
+    /// Dense LU of a small matrix in place ([`crate::dense_lu`], up to
+    /// [`crate::dense_lu::SMALL_LU_MAX`] unknowns): `LU` the factors column major, `piv` the
+    /// row interchanges.
+    Small {
+        LU: Vec<f64>,
+        piv: Vec<usize>,
+        factored: bool,
+    },
+    /// Dense LU in place (faer): `LU` holds $\mathbf L$ (unit lower) and $\mathbf U$, `perm` the row
     /// permutation; `mem` the scratch of the factorisation and the solves, sized once.
     Dense {
         LU: Mat<f64>,
@@ -293,6 +303,9 @@ pub(crate) struct ElementBuffer {
     pub user: Option<UserBuffer>,
     /// $\hat{\mathbf M}_e$, $\hat{\mathbf C}_e$, $\hat{\mathbf K}_e$ on the element's unknowns (column major).
     pub local: [Vec<f64>; 3],
+    /// The element matrices times one unknown's port column, all element rows
+    /// (`System::local_matrices`).
+    pub y: [Vec<f64>; 3],
 }
 
 /// A model ready for analysis.
@@ -1236,6 +1249,7 @@ impl System {
                             _ => None,
                         },
                         local: [vec![0.0; s * s], vec![0.0; s * s], vec![0.0; s * s]],
+                        y: [vec![0.0; rows], vec![0.0; rows], vec![0.0; rows]],
                     }
                 })
                 .collect(),
@@ -1260,7 +1274,13 @@ impl System {
             LinearSolver::Dense => true,
             LinearSolver::Sparse => false,
         };
-        if dense {
+        if dense && n <= SMALL_LU_MAX {
+            Factor::Small {
+                LU: vec![0.0; n * n],
+                piv: vec![0; n],
+                factored: false,
+            }
+        } else if dense {
             // Two right-hand sides: Newton's one and the arc-length's bordered pair.
             let rhs_cols = 2;
             Factor::Dense {
@@ -1396,7 +1416,7 @@ impl System {
         }
         let (motions, derivs) = (&ws.motions, &ws.derivs);
         let local = |(ei, b): (usize, &mut ElementBuffer)| {
-            self.local_matrices(ei, &self.elements[ei], &b.out, motions, derivs, &mut b.local)
+            self.local_matrices(ei, &self.elements[ei], &b.out, motions, derivs, &mut b.local, &mut b.y)
         };
         if self.elements.len() >= PARALLEL_ELEMENTS {
             ws.elems.par_iter_mut().enumerate().for_each(local);
@@ -1508,6 +1528,13 @@ impl System {
     /// (column major), from its port tangents and the node kinematics (module docs of
     /// [`crate::coordinates`]): $\mathbf J^T\mathbf M\mathbf J$, $\mathbf J^T(\mathbf C\mathbf J + \mathbf M\,\partial\mathbf A/\partial\dot{\mathbf q})$,
     /// $\mathbf J^T(\mathbf K\mathbf J + \mathbf C\,\partial\mathbf V/\partial\mathbf q + \mathbf M\,\partial\mathbf A/\partial\mathbf q)$.
+    ///
+    /// Column by column of $\mathbf J$: the element matrices times one unknown's port column
+    /// are formed over all element rows at once (`y`, axpys on the contiguous columns of
+    /// $\mathbf M$, $\mathbf C$, $\mathbf K$, skipping the zero entries of the column, half of them in a
+    /// planar mechanism), then projected on the row ports by $\mathbf J^T$ and read off on the
+    /// modal rows.
+    #[allow(clippy::too_many_arguments)]
     fn local_matrices(
         &self,
         ei: usize,
@@ -1516,6 +1543,7 @@ impl System {
         motions: &[Motion],
         derivs: &[NodeDerivatives],
         local: &mut [Vec<f64>; 3],
+        y: &mut [Vec<f64>; 3],
     ) {
         let s = self.pattern.elem_dofs[ei].len();
         let [Ml, Cl, Kl] = local;
@@ -1525,72 +1553,87 @@ impl System {
         let pos = &self.pattern.elem_pos[ei];
         let mpos = &self.pattern.elem_modal_pos[ei];
         let N = e.nodes.len();
-        // The unknown columns of port `ia`: (local position, J, DV, DA, DAd) as 6-vectors,
-        // read in place from the node kinematics (nothing is collected: no allocation).
-        let port = |ia: usize| {
+        let (M, C, K) = (&o.M, &o.C, &o.K);
+        let ne = M.nrows();
+        let [yM, yC, yK] = y;
+        for v in [&mut *yM, &mut *yC, &mut *yK] {
+            v.resize(ne, 0.0);
+        }
+        let dot6 = |a: &[f64; 6], b: &[f64]| (0..6).map(|i| a[i] * b[i]).sum::<f64>();
+        // The unknown columns of port `ia`: (local position, J) as 6-vectors, read in place
+        // from the node kinematics (nothing is collected: no allocation).
+        let port_j = |ia: usize| {
             let a = e.nodes[ia];
-            let d = &derivs[a];
-            d.unknown
+            derivs[a]
+                .unknown
                 .iter()
                 .enumerate()
-                .map(move |(u, &k)| (pos[ia][u], motions[a].col(k), d.DV[u], d.DA[u], d.DAd[u]))
+                .map(move |(u, &k)| (pos[ia][u], motions[a].col(k)))
         };
-        let (M, C, K) = (&o.M, &o.C, &o.K);
-        // Row vector of block (row r of the element matrix, port b) times a port column.
-        let rowdot =
-            |A: &Mat<f64>, r: usize, b: usize, x: &[f64; 6]| (0..6).map(|j| A[(r, 6 * b + j)] * x[j]).sum::<f64>();
-        let dot6 = |a: &[f64; 6], b: &[f64; 6]| (0..6).map(|i| a[i] * b[i]).sum::<f64>();
-        // Rows: node ports.
-        // The 6x6 block (port a, port b) as a fixed-size matrix: one read per entry, then
-        // fixed-size products instead of per-entry indexing of the element matrices.
-        let block = |A: &Mat<f64>, ia: usize, ib: usize| Matrix6::from_fn(|i, j| A[(6 * ia + i, 6 * ib + j)]);
-        let v6 = |x: &[f64; 6]| Vector6::from_column_slice(x);
-        for ia in 0..N {
-            for ib in 0..N {
-                let (Mab, Cab, Kab) = (block(M, ia, ib), block(C, ia, ib), block(K, ia, ib));
-                for (qb, Jb, DV, DA, DAd) in port(ib) {
-                    // y = block(a, b) * column, for the six rows of port a.
-                    let Jb = v6(&Jb);
-                    let yM = Mab * Jb;
-                    let yC = Cab * Jb + Mab * v6(&DAd);
-                    let yK = Kab * Jb + Cab * v6(&DV) + Mab * v6(&DA);
-                    for (qa, Ja, ..) in port(ia) {
-                        let (at, Ja) = (qb * s + qa, v6(&Ja));
-                        Ml[at] += Ja.dot(&yM);
-                        Cl[at] += Ja.dot(&yC);
-                        Kl[at] += Ja.dot(&yK);
+        // Columns: node ports.
+        for ib in 0..N {
+            let b = e.nodes[ib];
+            let d = &derivs[b];
+            for (u, &k) in d.unknown.iter().enumerate() {
+                let qb = pos[ib][u];
+                let Jb = motions[b].col(k);
+                let (DV, DA, DAd) = (&d.DV[u], &d.DA[u], &d.DAd[u]);
+                for v in [&mut *yM, &mut *yC, &mut *yK] {
+                    v.fill(0.0);
+                }
+                for j in 0..6 {
+                    let (jb, dv, da, dad) = (Jb[j], DV[j], DA[j], DAd[j]);
+                    if jb == 0.0 && dv == 0.0 && da == 0.0 && dad == 0.0 {
+                        continue;
+                    }
+                    let c = 6 * ib + j;
+                    let (mc, cc, kc) = (
+                        &M.col_as_slice(c)[..ne],
+                        &C.col_as_slice(c)[..ne],
+                        &K.col_as_slice(c)[..ne],
+                    );
+                    let (yM, yC, yK) = (&mut yM[..ne], &mut yC[..ne], &mut yK[..ne]);
+                    for i in 0..ne {
+                        yM[i] += mc[i] * jb;
+                        yC[i] += cc[i] * jb + mc[i] * dad;
+                        yK[i] += kc[i] * jb + cc[i] * dv + mc[i] * da;
                     }
                 }
-            }
-            for (j, &qj) in mpos.iter().enumerate() {
-                let c = 6 * N + j;
-                let column = |A: &Mat<f64>| std::array::from_fn::<f64, 6, _>(|i| A[(6 * ia + i, c)]);
-                let (mM, mC, mK) = (column(M), column(C), column(K));
-                for (qa, Ja, ..) in port(ia) {
-                    let at = qj * s + qa;
-                    Ml[at] += dot6(&Ja, &mM);
-                    Cl[at] += dot6(&Ja, &mC);
-                    Kl[at] += dot6(&Ja, &mK);
+                for ia in 0..N {
+                    let r = 6 * ia..6 * ia + 6;
+                    for (qa, Ja) in port_j(ia) {
+                        let at = qb * s + qa;
+                        Ml[at] += dot6(&Ja, &yM[r.clone()]);
+                        Cl[at] += dot6(&Ja, &yC[r.clone()]);
+                        Kl[at] += dot6(&Ja, &yK[r.clone()]);
+                    }
+                }
+                for (i, &qi) in mpos.iter().enumerate() {
+                    let at = qb * s + qi;
+                    Ml[at] += yM[6 * N + i];
+                    Cl[at] += yC[6 * N + i];
+                    Kl[at] += yK[6 * N + i];
                 }
             }
         }
-        // Rows: modal coordinates.
-        for (i, &qi) in mpos.iter().enumerate() {
-            let r = 6 * N + i;
-            for ib in 0..N {
-                for (qb, Jb, DV, DA, DAd) in port(ib) {
-                    let at = qb * s + qi;
-                    Ml[at] += rowdot(M, r, ib, &Jb);
-                    Cl[at] += rowdot(C, r, ib, &Jb) + rowdot(M, r, ib, &DAd);
-                    Kl[at] += rowdot(K, r, ib, &Jb) + rowdot(C, r, ib, &DV) + rowdot(M, r, ib, &DA);
+        // Columns: modal coordinates.
+        for (j, &qj) in mpos.iter().enumerate() {
+            let c = 6 * N + j;
+            let (mc, cc, kc) = (M.col_as_slice(c), C.col_as_slice(c), K.col_as_slice(c));
+            for ia in 0..N {
+                let r = 6 * ia..6 * ia + 6;
+                for (qa, Ja) in port_j(ia) {
+                    let at = qj * s + qa;
+                    Ml[at] += dot6(&Ja, &mc[r.clone()]);
+                    Cl[at] += dot6(&Ja, &cc[r.clone()]);
+                    Kl[at] += dot6(&Ja, &kc[r.clone()]);
                 }
             }
-            for (j, &qj) in mpos.iter().enumerate() {
-                let c = 6 * N + j;
+            for (i, &qi) in mpos.iter().enumerate() {
                 let at = qj * s + qi;
-                Ml[at] += M[(r, c)];
-                Cl[at] += C[(r, c)];
-                Kl[at] += K[(r, c)];
+                Ml[at] += mc[6 * N + i];
+                Cl[at] += cc[6 * N + i];
+                Kl[at] += kc[6 * N + i];
             }
         }
     }
@@ -1650,6 +1693,21 @@ impl System {
                 *lu = Some(Box::new(f));
                 Ok(())
             }
+            Factor::Small { LU, piv, factored } => {
+                *factored = false;
+                LU.fill(0.0);
+                let cp = self.pattern.symbolic.col_ptr();
+                let ri = self.pattern.symbolic.row_idx();
+                for c in 0..n {
+                    for p in cp[c]..cp[c + 1] {
+                        LU[c * n + ri[p]] = ws.S[p];
+                    }
+                }
+                dense_lu::factor(LU, n, piv)
+                    .map_err(|i| format!("zero pivot at unknown {i} ({})", self.dof_labels()[i]))?;
+                *factored = true;
+                Ok(())
+            }
             Factor::Dense {
                 LU,
                 perm,
@@ -1688,16 +1746,34 @@ impl System {
 
     /// Solves with the factorisation of the last [`Self::factor`], in place.
     pub(crate) fn solve_factored(&self, ws: &mut Workspace, b: &mut [f64]) -> Result<(), String> {
-        use faer::linalg::solvers::Solve;
         let n = self.n_dof();
         if n == 0 {
             return Ok(());
         }
+        if let Factor::Small { LU, piv, factored } = &ws.factor {
+            if !*factored {
+                return Err("no factorisation".into());
+            }
+            dense_lu::solve(LU, n, piv, b);
+        } else {
+            self.solve_faer(ws, b)?;
+        }
+        if b.iter().any(|x| !x.is_finite()) {
+            return Err("non-finite solution".into());
+        }
+        Ok(())
+    }
+
+    /// [`Self::solve_factored`] with faer's dense or sparse LU.
+    fn solve_faer(&self, ws: &mut Workspace, b: &mut [f64]) -> Result<(), String> {
+        use faer::linalg::solvers::Solve;
+        let n = self.n_dof();
         let k = b.len() / n;
         let rhs = faer::MatMut::from_column_major_slice_mut(b, n, k);
         match &mut ws.factor {
             Factor::None => return Ok(()),
             Factor::Sparse { lu, .. } => lu.as_ref().ok_or("no factorisation")?.solve_in_place(rhs),
+            Factor::Small { .. } => unreachable!("solved above"),
             Factor::Dense {
                 LU,
                 perm,
@@ -1716,9 +1792,6 @@ impl System {
                 let P = faer::perm::PermRef::new_checked(perm, perm_inv, n);
                 lu_solve::solve_in_place(LU.as_ref(), LU.as_ref(), P, rhs, Par::Seq, MemStack::new(mem));
             }
-        }
-        if b.iter().any(|x| !x.is_finite()) {
-            return Err("non-finite solution".into());
         }
         Ok(())
     }
