@@ -270,7 +270,7 @@ fn solid_values(s: &[f64; 6], R: &nalgebra::Matrix3<f64>) -> ([f64; 6], f64, f64
 /// reference state $\mathbf q^{ref}$ whose stresses $v_i^{ref}$ are known,
 /// $$v_i(\mathbf q) \le b_i = v_i^{ref} + c_i\lVert\mathbf T(\mathbf q - \mathbf q^{ref})\rVert + \tau_i,
 /// \qquad c_i = \lVert\mathbf A_i\mathbf T^{-1}\rVert_2,$$
-/// for any invertible $\mathbf T$ ($c_i$ the spectral norm, precomputed per node). The CB
+/// for any invertible $\mathbf T$ ($c_i$ the spectral norm, computed per node at the first call). The CB
 /// coordinates mix units and cancel each other's stress (an interface displacement and the
 /// modes that bend back), so $\mathbf T$ whitens them by the stress they cause over the whole
 /// set: $\mathbf T = \boldsymbol\Lambda^{1/2}\mathbf V^T$ from $\sum_i\mathbf A_i^T\mathbf A_i =
@@ -311,12 +311,9 @@ pub struct VonMisesMaximum {
     blocks: Vec<f64>,
     /// Per set entry: whether the node has solid stress.
     solid: Vec<bool>,
-    /// $\mathbf T$, the whitening of the coordinates ($n\times n$).
-    T: nalgebra::DMatrix<f64>,
-    /// $\mathbf T^{-1}$.
-    T_inv: nalgebra::DMatrix<f64>,
-    /// Per set entry: $c_i$ (0 without solid stress).
-    c: Vec<f64>,
+    /// The whitening and the bounds of the search of one state at a time ([`Self::maximum`]),
+    /// made at its first call: a run's maxima ([`Self::maxima`]) do not need them.
+    whitened: std::sync::OnceLock<Whitened>,
     /// Per set entry: $\lVert\boldsymbol\Sigma_i\rVert_F$ (0 without solid stress).
     frobenius: Vec<f64>,
     /// Per set entry: whether a beam ends at the node (its value is the beam's).
@@ -333,6 +330,17 @@ pub struct VonMisesMaximum {
     screen_chunk_factors: Vec<[f64; 3]>,
     /// The set entries where a beam ends (evaluated exactly at every state).
     beam_entries: Vec<usize>,
+}
+
+/// The whitening of the CB coordinates of a [`VonMisesMaximum`] and the nodes' bounds in it.
+#[derive(Clone, Debug)]
+struct Whitened {
+    /// $\mathbf T$, the whitening of the coordinates ($n\times n$).
+    T: nalgebra::DMatrix<f64>,
+    /// $\mathbf T^{-1}$.
+    T_inv: nalgebra::DMatrix<f64>,
+    /// Per set entry: $c_i$ (0 without solid stress).
+    c: Vec<f64>,
 }
 
 /// The reference states of a [`VonMisesMaximum`], kept between calls: every set entry's von
@@ -448,46 +456,14 @@ impl VonMisesMaximum {
                     }
                 });
         }
-        // A_i = M^1/2 Sigma_i; the whitening T = Lambda^1/2 V^T of G = sum_i A_i^T A_i = V Lambda V^T.
         let root = von_mises_root();
         let A = |k: usize| {
             let S = nalgebra::DMatrix::from_column_slice(6, n, &blocks[6 * n * k..6 * n * (k + 1)]);
             root * S
         };
-        let G = (0..nodes.len())
-            .into_par_iter()
-            .filter(|&k| solid[k])
-            .map(|k| A(k).tr_mul(&A(k)))
-            .reduce(|| nalgebra::DMatrix::zeros(n, n), |a, b| a + b);
-        let eigen = nalgebra::SymmetricEigen::new(G);
-        let largest = eigen.eigenvalues.max();
-        // Directions of (nearly) no stress keep a floor, so that T is invertible; their columns
-        // of A_i T^-1 stay bounded by 1 (|A v| <= sqrt(lambda) <= sqrt(floor)).
-        let floor = if largest > 0.0 { 1e-12 * largest } else { 1.0 };
-        let scale = eigen.eigenvalues.map(|l| l.max(floor).sqrt());
-        let V = eigen.eigenvectors;
-        let T = nalgebra::DMatrix::from_diagonal(&scale) * V.transpose();
-        let T_inv = V * nalgebra::DMatrix::from_diagonal(&scale.map(|s| 1.0 / s));
-        let bounds: Vec<(f64, f64)> = (0..nodes.len())
-            .into_par_iter()
-            .map(|k| {
-                if !solid[k] {
-                    return (0.0, 0.0);
-                }
-                // c_i = |A_i T^-1|_2: the largest eigenvalue of B B^T (6 x 6).
-                let B = A(k) * &T_inv;
-                let c = nalgebra::SymmetricEigen::new(&B * B.transpose())
-                    .eigenvalues
-                    .max()
-                    .max(0.0)
-                    .sqrt();
-                let f = blocks[6 * n * k..6 * n * (k + 1)]
-                    .iter()
-                    .map(|x| x * x)
-                    .sum::<f64>()
-                    .sqrt();
-                (c, f)
-            })
+        let frobenius: Vec<f64> = blocks
+            .par_chunks(6 * n)
+            .map(|b| b.iter().map(|x| x * x).sum::<f64>().sqrt())
             .collect();
         // The screening copy, chunk by chunk: A_i in single precision, component-major within
         // the chunk, and per entry the norm of the copy and its rounding.
@@ -528,10 +504,7 @@ impl VonMisesMaximum {
             n,
             blocks,
             solid,
-            T,
-            T_inv,
-            c: bounds.iter().map(|b| b.0).collect(),
-            frobenius: bounds.iter().map(|b| b.1).collect(),
+            whitened: std::sync::OnceLock::new(),
             beam: nodes.iter().map(|&i| beam_node[i]).collect(),
             screen_chunk_factors: (0..chunks)
                 .map(|c| {
@@ -540,13 +513,58 @@ impl VonMisesMaximum {
                     [
                         largest(&screen_rounding[r.clone()]),
                         largest(&screen_norm[r.clone()]),
-                        largest(&bounds[r].iter().map(|b| b.1).collect::<Vec<_>>()),
+                        largest(&frobenius[r]),
                     ]
                 })
                 .collect(),
             screen,
             beam_entries: (0..nodes.len()).filter(|&k| beam_node[nodes[k]]).collect(),
+            frobenius,
         }
+    }
+
+    /// $\mathbf A_i = \mathbf M^{1/2}\boldsymbol\Sigma_i$ of set entry `k` ($6\times n$).
+    fn A(&self, k: usize) -> nalgebra::OMatrix<f64, nalgebra::U6, nalgebra::Dyn> {
+        let n = self.n;
+        von_mises_root() * nalgebra::DMatrix::from_column_slice(6, n, &self.blocks[6 * n * k..6 * n * (k + 1)])
+    }
+
+    /// The whitening of the coordinates and every entry's $c_i$ ([`Self::maximum`]).
+    fn whitened(&self) -> &Whitened {
+        self.whitened.get_or_init(|| {
+            let (n, solid) = (self.n, &self.solid);
+            // The whitening T = Lambda^1/2 V^T of G = sum_i A_i^T A_i = V Lambda V^T.
+            let G = (0..self.nodes.len())
+                .into_par_iter()
+                .filter(|&k| solid[k])
+                .map(|k| self.A(k).tr_mul(&self.A(k)))
+                .reduce(|| nalgebra::DMatrix::zeros(n, n), |a, b| a + b);
+            let eigen = nalgebra::SymmetricEigen::new(G);
+            let largest = eigen.eigenvalues.max();
+            // Directions of (nearly) no stress keep a floor, so that T is invertible; their
+            // columns of A_i T^-1 stay bounded by 1 (|A v| <= sqrt(lambda) <= sqrt(floor)).
+            let floor = if largest > 0.0 { 1e-12 * largest } else { 1.0 };
+            let scale = eigen.eigenvalues.map(|l| l.max(floor).sqrt());
+            let V = eigen.eigenvectors;
+            let T = nalgebra::DMatrix::from_diagonal(&scale) * V.transpose();
+            let T_inv = V * nalgebra::DMatrix::from_diagonal(&scale.map(|s| 1.0 / s));
+            let c = (0..self.nodes.len())
+                .into_par_iter()
+                .map(|k| {
+                    if !solid[k] {
+                        return 0.0;
+                    }
+                    // c_i = |A_i T^-1|_2: the largest eigenvalue of B B^T (6 x 6).
+                    let B = self.A(k) * &T_inv;
+                    nalgebra::SymmetricEigen::new(&B * B.transpose())
+                        .eigenvalues
+                        .max()
+                        .max(0.0)
+                        .sqrt()
+                })
+                .collect();
+            Whitened { T, T_inv, c }
+        })
     }
 
     /// The node set.
@@ -595,7 +613,8 @@ impl VonMisesMaximum {
             _ => self.solid(k, q),
         };
         let q_norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let tq = &self.T * nalgebra::DVector::from_column_slice(q);
+        let w = self.whitened();
+        let tq = &w.T * nalgebra::DVector::from_column_slice(q);
         let r = reference;
         let usable = q_norm.is_finite() && r.epoch_of.len() == size && !r.epochs.is_empty();
         if !usable {
@@ -628,7 +647,7 @@ impl VonMisesMaximum {
         let tq_norm = tq.norm();
         if (r.along.len() != size || r.direction.len() != self.n) && tq_norm > 0.0 && tq_norm.is_finite() {
             let u = &tq / tq_norm;
-            let y = &self.T_inv * &u;
+            let y = &w.T_inv * &u;
             let y_norm = y.norm();
             r.along = (0..size)
                 .into_par_iter()
@@ -685,7 +704,7 @@ impl VonMisesMaximum {
                 let e = (r.epoch_of[k] - r.front) as usize;
                 k == k0 || self.beam[k] || r.epoch_of[k] < stale || !lower.is_finite() || {
                     let along = r.along.get(k).copied().unwrap_or(0.0);
-                    let change = |d: f64, (a, rest): (f64, f64)| (self.c[k] * d).min(a * along + self.c[k] * rest);
+                    let change = |d: f64, (a, rest): (f64, f64)| (w.c[k] * d).min(a * along + w.c[k] * rest);
                     (r.von_mises[k] + change(distance[e], parts[e]) + self.frobenius[k] * slack[e])
                         .min(change(tq_norm, zero_parts) + self.frobenius[k] * zero_slack)
                         >= lower
