@@ -26,14 +26,12 @@
 
 #![allow(non_snake_case)]
 
-use fe_model::{add_interface_on_set, box_mesh, solid_model, CellKind, IsotropicMaterial, MassKind, SpiderKind};
 use flexmbs_benchmarks::cpu_seconds;
-use mbs::{solve_dynamic, DynamicSettings, Integrator, Model, SensorKind, Support, System};
-use nalgebra::{Isometry3, Matrix3, Vector3};
+use mbs::{solve_dynamic, DynamicSettings, Integrator, SensorKind, System};
+use nalgebra::{Matrix3, Vector3};
 use reduction::{reduce, CbSettings, ModeSelection, VonMisesMaximum, VonMisesReference};
 use std::time::Instant;
 use study::vtu::{write_vtu, PointField, VtuMesh};
-use superelement::{FrameChoice, MassVariant};
 
 const REPEAT: usize = 3;
 const STEPS: usize = 1000;
@@ -68,14 +66,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         _ => return Err("give nx ny nz, or nothing".into()),
     };
     let load_before = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
-    let mesh = box_mesh::box_mesh(CellKind::Hex8, [1.0, 0.1, 0.1], div)?;
-    let mut fe = solid_model(
-        mesh,
-        IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0)?,
-        MassKind::Consistent,
-    )?;
-    let root = add_interface_on_set(&mut fe, "root", "x0", None, SpiderKind::Rbe2)?;
-    let tip = add_interface_on_set(&mut fe, "tip", "x1", None, SpiderKind::Rbe3)?;
+    let (fe, [root, tip]) = models::steel_bar(div)?;
     let dofs = 3 * fe.mesh.nodes.len();
     let mut settings = CbSettings::new(ModeSelection::Count(20));
     settings.stress_shapes = true;
@@ -85,21 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let nodes = body.stress.as_ref().ok_or("no stress shapes")?.node_count();
 
     let build = |stress: bool| -> Result<System, Box<dyn std::error::Error>> {
-        let mut m = Model::new("bar");
-        let ids: Vec<_> = body
-            .interfaces
-            .iter()
-            .map(|i| m.add_node(&i.name, Vector3::from(i.position)))
-            .collect();
-        let b = m.add_flexible_body(
-            body.clone(),
-            ids.clone(),
-            Isometry3::identity(),
-            FrameChoice::CenterOfMass,
-            MassVariant::Exact,
-        );
-        m.add_support(Support::clamp(ids[0]));
-        m.add_dead_force(ids[1], Vector3::new(0.0, 0.0, -1e4));
+        let (mut m, b, ids) = models::clamped_with_tip_force(&body, Vector3::new(0.0, 0.0, -1e4));
         m.add_sensor("tip", SensorKind::NodeDisplacement { node: ids[1] });
         if stress {
             m.add_sensor(

@@ -378,6 +378,46 @@ pub fn solid_rod_segment(
     )
 }
 
+/// The FE model of a steel bar 1 x 0.1 x 0.1 m of hex8 bricks (`divisions` along x, y, z)
+/// with an RBE2 interface "root" on x = 0 and an RBE3 interface "tip" on x = 1 (the stress
+/// output's benchmark and tests), and those interface nodes.
+pub fn steel_bar(divisions: [usize; 3]) -> Result<(FeModel, [fe_model::NodeId; 2]), BuildError> {
+    let fe_err = |source| BuildError::Fe {
+        model: "bar".into(),
+        source,
+    };
+    let mesh = fe_model::box_mesh::box_mesh(CellKind::Hex8, [1.0, 0.1, 0.1], divisions).map_err(fe_err)?;
+    let steel = IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).map_err(|source| BuildError::Property {
+        model: "bar".into(),
+        source,
+    })?;
+    let mut fe = fe_model::box_mesh::solid_model(mesh, steel, MassKind::Consistent).map_err(fe_err)?;
+    let root = add_interface_on_set(&mut fe, "root", "x0", None, SpiderKind::Rbe2).map_err(fe_err)?;
+    let tip = add_interface_on_set(&mut fe, "tip", "x1", None, SpiderKind::Rbe3).map_err(fe_err)?;
+    Ok((fe, [root, tip]))
+}
+
+/// A one-body model of `body` (two interfaces, centre-of-mass frame, exact mass) clamped at its
+/// first interface with a dead `force` at its second: the model, the body and the two nodes.
+pub fn clamped_with_tip_force(body: &ReducedBody, force: Vector3<f64>) -> (Model, BodyId, [NodeId; 2]) {
+    let mut m = Model::new(&body.name);
+    let ids: Vec<NodeId> = body
+        .interfaces
+        .iter()
+        .map(|i| m.add_node(&i.name, Vector3::from(i.position)))
+        .collect();
+    let b = m.add_flexible_body(
+        body.clone(),
+        ids.clone(),
+        Isometry3::identity(),
+        FrameChoice::CenterOfMass,
+        MassVariant::Exact,
+    );
+    m.add_support(Support::clamp(ids[0]));
+    m.add_dead_force(ids[1], force);
+    (m, b, [ids[0], ids[1]])
+}
+
 /// Places `segment` in `model` with `placement` (FE axes to inertial), on the nodes `ends`;
 /// for the auxiliary-node frame adds the auxiliary node (free, carried by the body alone).
 pub fn add_segment(

@@ -112,35 +112,12 @@ fn a_spinning_beam_carries_the_centrifugal_axial_force() {
 /// force at its tip.
 #[test]
 fn largest_von_mises_rows_found_in_batches_equal_rows_found_one_by_one() {
-    use fe_model::{add_interface_on_set, box_mesh, solid_model, CellKind, IsotropicMaterial, MassKind, SpiderKind};
-    let mesh = box_mesh::box_mesh(CellKind::Hex8, [1.0, 0.1, 0.1], [10, 2, 2]).unwrap();
-    let mut fe = solid_model(
-        mesh,
-        IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap(),
-        MassKind::Consistent,
-    )
-    .unwrap();
-    let root = add_interface_on_set(&mut fe, "root", "x0", None, SpiderKind::Rbe2).unwrap();
-    let tip = add_interface_on_set(&mut fe, "tip", "x1", None, SpiderKind::Rbe3).unwrap();
+    let (fe, [root, tip]) = models::steel_bar([10, 2, 2]).unwrap();
     let mut settings = CbSettings::new(ModeSelection::Count(4));
     settings.stress_shapes = true;
     let body = reduction::reduce(&fe, "bar", &[("root".into(), root), ("tip".into(), tip)], &settings).unwrap();
     let count = body.stress.as_ref().unwrap().node_count();
-    let mut m = Model::new("bar");
-    let ids: Vec<_> = body
-        .interfaces
-        .iter()
-        .map(|i| m.add_node(&i.name, Vector3::from(i.position)))
-        .collect();
-    let b = m.add_flexible_body(
-        body.clone(),
-        ids.clone(),
-        Isometry3::identity(),
-        FrameChoice::CenterOfMass,
-        MassVariant::Exact,
-    );
-    m.add_support(Support::clamp(ids[0]));
-    m.add_dead_force(ids[1], Vector3::new(0.0, 2e3, -1e4));
+    let (mut m, b, ids) = models::clamped_with_tip_force(&body, Vector3::new(0.0, 2e3, -1e4));
     m.add_sensor("tip", mbs::SensorKind::NodeDisplacement { node: ids[1] });
     m.add_sensor(
         "hot",
