@@ -94,7 +94,7 @@ pub mod stress;
 pub use craig_bampton::{partition, reduce, reduce_with_progress, CbSettings, ModeSelection, Partition, Stage};
 pub use craig_bampton::{reduce_external, reduce_external_dofs};
 pub use diagnostics::{diagnostics, DiagnosticWarning, Diagnostics, ModeDiagnostics};
-pub use eigen::{lowest_modes, EigenSettings, EigenSolution, Shift, ShiftInvert};
+pub use eigen::{lowest_modes, EigenSettings, EigenSolution, FactorPrecision, FactorSettings, Shift, ShiftInvert};
 pub use error::ReductionError;
 /// The rigid modes of six-dof point sets (fe-model's), re-exported for the superelement.
 pub use fe_model::rigid::{rigid_modes, rigid_motion_block};
