@@ -420,39 +420,7 @@ fn project(
                     pivot_ratio,
                 }
             }
-            ReductionError::FactorDoesNotFit {
-                precision,
-                factor_values,
-                factor_gb,
-                needed_gb,
-                available_gb,
-                hint,
-                ..
-            } => ReductionError::FactorDoesNotFit {
-                body: format!("part '{name}'"),
-                precision,
-                factor_values,
-                factor_gb,
-                needed_gb,
-                available_gb,
-                hint,
-            },
-            ReductionError::RefinementFailed {
-                what,
-                column,
-                steps,
-                backward_error,
-                target,
-                ..
-            } => ReductionError::RefinementFailed {
-                body: format!("part '{name}'"),
-                what,
-                column,
-                steps,
-                backward_error,
-                target,
-            },
-            other => other,
+            other => other.with_body(&format!("part '{name}'")),
         }
         };
         let factor =

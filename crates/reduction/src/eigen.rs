@@ -26,6 +26,23 @@
 //! 4. Check every pair by its relative residual ([`relative_residual`]) on
 //!    $(\mathbf K, \mathbf M)$ themselves, never by the Krylov estimates.
 //!
+//! ## A factor in single precision
+//!
+//! [`ShiftInvert::with_settings`] can factor in f32 ([`FactorPrecision`]; automatically only
+//! when the double-precision factor would not fit in the available memory): half the bytes,
+//! solves accurate to $\kappa\,\varepsilon_{32}$ only. Every solve is then refined in f64 to a
+//! double-precision solve's backward error ([`ShiftInvert::solve_refined`]: the constraint
+//! modes, the attachment modes and the Lanczos operator alike). The operator $\mathbf C$ below
+//! cannot be refined (its two triangular solves are not a solve with $\mathbf K -
+//! \sigma\mathbf M$), so with an f32 factor the Lanczos runs on
+//! $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$ in the $\mathbf M$ inner product (the private
+//! `WholeOperator`; Grimes, Lewis & Simon 1994, §2): the basis is $\mathbf M$-orthonormal,
+//! $\mathbf M\mathbf V$ is kept beside it (every inner product a dot product, one sparse product
+//! per block step, and the operator's input), the projected matrix
+//! $\mathbf V^T\mathbf M(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M\mathbf V$ is symmetric with
+//! the same $\mu_k$, and its Ritz vectors are the modes themselves (no back-transformation).
+//! Steps 3 and 4 are the same. The double-precision path is unchanged.
+//!
 //! ## The operator: $\mathbf L^{-1}\mathbf M\mathbf L^{-T}$ rather than $(\mathbf K-\sigma\mathbf M)^{-1}\mathbf M$
 //!
 //! $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$ is self-adjoint only in the $\mathbf M$ inner
@@ -899,22 +916,13 @@ fn rayleigh_ritz(
     let symmetrise = |A: Mat<f64>| Mat::<f64>::from_fn(m, m, |i, j| 0.5 * (A[(i, j)] + A[(j, i)]));
     let A = symmetrise(Phi.transpose() * &KPhi);
     let B = symmetrise(Phi.transpose() * &MPhi);
-    let llt = B
-        .llt(Side::Lower)
-        .map_err(|_| ReductionError::MassNotPositiveDefinite {
-            dof: None,
-            why: "Phi^T M Phi of the computed modes is not positive definite".into(),
-        })?;
-    let R = llt.L();
-    // G = R^{-1} A R^{-T}
-    let mut G = A;
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
-    let mut G = G.transpose().to_owned();
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
-    let G = symmetrise(G);
-    let (eigenvalues, mut T) = scaled_self_adjoint_eigen(G.as_ref(), "the Ritz problem")?;
-    // T = R^{-T} S, then the sign convention on the columns of Phi T.
-    faer::linalg::triangular_solve::solve_upper_triangular_in_place(R.transpose(), T.as_mut(), par);
+    let (eigenvalues, mut T) = symmetric_definite_eigen(
+        A,
+        B.as_ref(),
+        "Phi^T M Phi of the computed modes is not positive definite",
+        "the Ritz problem",
+    )?;
+    // The sign convention on the columns of Phi T.
     let mut vectors = Phi * &T;
     for j in 0..m {
         let col = vectors.col(j);
@@ -1124,20 +1132,12 @@ fn dense_whole_eigen(op: &WholeOperator<'_>, m: usize) -> Result<Mat<f64>, Reduc
     op.solve(Z.as_mut(), 0)?;
     let S = &M * &Z;
     let S = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (S[(i, j)] + S[(j, i)]));
-    let llt = M
-        .llt(Side::Lower)
-        .map_err(|_| ReductionError::MassNotPositiveDefinite {
-            dof: None,
-            why: "its dense Cholesky factorisation failed".into(),
-        })?;
-    let R = llt.L();
-    // G = R^{-1} S R^{-T}
-    let mut G = S;
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
-    let mut G = G.transpose().to_owned();
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
-    let G = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (G[(i, j)] + G[(j, i)]));
-    let (values, U) = scaled_self_adjoint_eigen(G.as_ref(), "the shift-invert operator")?;
+    let (values, Y) = symmetric_definite_eigen(
+        S,
+        M.as_ref(),
+        "its dense Cholesky factorisation failed",
+        "the shift-invert operator",
+    )?;
     let mu: Vec<f64> = (0..m).map(|k| values[n - 1 - k]).collect();
     if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
         return Err(ReductionError::MassNotPositiveDefinite {
@@ -1145,9 +1145,40 @@ fn dense_whole_eigen(op: &WholeOperator<'_>, m: usize) -> Result<Mat<f64>, Reduc
             why: format!("the shift-invert operator has the eigenvalue {:.3e} <= 0", mu[bad]),
         });
     }
-    let mut Y = Mat::<f64>::from_fn(n, m, |i, k| U[(i, n - 1 - k)]);
-    faer::linalg::triangular_solve::solve_upper_triangular_in_place(R.transpose(), Y.as_mut(), par);
-    Ok(Y)
+    Ok(Mat::<f64>::from_fn(n, m, |i, k| Y[(i, n - 1 - k)]))
+}
+
+/// The dense symmetric-definite eigenproblem $\mathbf A\mathbf x = \lambda\mathbf B\mathbf x$
+/// ($\mathbf A$, $\mathbf B$ symmetric): with $\mathbf B = \mathbf R\mathbf R^T$ and
+/// $\mathbf R^{-1}\mathbf A\mathbf R^{-T} = \mathbf S\boldsymbol\Lambda\mathbf S^T$, the
+/// eigenvalues ascending and the $\mathbf B$-orthonormal vectors $\mathbf R^{-T}\mathbf S$.
+/// `not_definite` says why a failed Cholesky factorisation of $\mathbf B$ means an indefinite
+/// mass; `what` names the problem for the dense eigensolver's error.
+fn symmetric_definite_eigen(
+    A: Mat<f64>,
+    B: MatRef<'_, f64>,
+    not_definite: &str,
+    what: &str,
+) -> Result<(Vec<f64>, Mat<f64>), ReductionError> {
+    let par = faer::get_global_parallelism();
+    let llt = B
+        .llt(Side::Lower)
+        .map_err(|_| ReductionError::MassNotPositiveDefinite {
+            dof: None,
+            why: not_definite.into(),
+        })?;
+    let R = llt.L();
+    // G = R^{-1} A R^{-T}
+    let mut G = A;
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
+    let mut G = G.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
+    let n = G.nrows();
+    let G = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (G[(i, j)] + G[(j, i)]));
+    let (values, mut T) = scaled_self_adjoint_eigen(G.as_ref(), what)?;
+    // T = R^{-T} S
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(R.transpose(), T.as_mut(), par);
+    Ok((values, T))
 }
 
 /// The error for a failed or singular factorisation of $\mathbf K - \sigma\mathbf M$ at

@@ -204,6 +204,24 @@ pub enum BodyFileProblem {
     },
 }
 
+impl ReductionError {
+    /// The error with `name` as the body in the variants that carry one and were made
+    /// without it ([`ReductionError::FactorDoesNotFit`],
+    /// [`ReductionError::SinglePrecisionBreakdown`], [`ReductionError::RefinementFailed`], as
+    /// `eigen::ShiftInvert` makes them); other errors unchanged.
+    pub fn with_body(mut self, name: &str) -> Self {
+        if let ReductionError::FactorDoesNotFit { body, .. }
+        | ReductionError::SinglePrecisionBreakdown { body, .. }
+        | ReductionError::RefinementFailed { body, .. } = &mut self
+        {
+            if body.is_empty() {
+                *body = name.to_string();
+            }
+        }
+        self
+    }
+}
+
 fn version_message(found: u64, supported: u32) -> String {
     if found > supported as u64 {
         format!("format version {found} is newer than this build, which reads versions {OLDEST_READABLE} to {supported}: read it with a newer flexmbs, or reduce the body again with this one")

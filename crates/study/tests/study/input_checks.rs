@@ -530,7 +530,10 @@ part = "block"
         let reduced = study::run::reduce_part(&study, &study.parts[0], &cache, &mut stages).unwrap();
         let precision = if factor.is_empty() { "double" } else { "single" };
         assert!(
-            stages.0.iter().any(|s| s.contains(&format!("in {precision} precision"))),
+            stages
+                .0
+                .iter()
+                .any(|s| s.contains(&format!("in {precision} precision"))),
             "{:?}",
             stages.0
         );
