@@ -74,6 +74,7 @@ fn run_one(size: &str, ordering: FillOrdering) {
         _ => FactorPrecision::Auto,
     };
     let mut applications = 0;
+    let mut solves = (0usize, 0usize);
     let t1 = Instant::now();
     let body = reduce_with_progress(
         &model,
@@ -101,6 +102,14 @@ fn run_one(size: &str, ordering: FillOrdering) {
                     return;
                 }
                 Stage::ConstraintModes { .. } => "Psi",
+                Stage::Solved {
+                    constraint_steps,
+                    factor_solves,
+                    ..
+                } => {
+                    solves = (constraint_steps, factor_solves);
+                    return;
+                }
                 Stage::EigenIteration { applications: k, .. } => {
                     applications = k;
                     "Lanczos"
@@ -126,8 +135,10 @@ fn run_one(size: &str, ordering: FillOrdering) {
         stages += &format!("{name} {:.2}/{:.2}, ", end - t, cpu_next - cpu);
     }
     println!(
-        "{size:>5} {:<17} {ex} x {ey} x {ez} hex8, {n_free} free dofs: model {t_model:.2} s, reduce {total:.2} s (stage wall/CPU s: {stages}{applications} operator applications), factor {:.1} M values ({:.2} GB in {} precision, {:.0} Gflop), peak RSS {:.0} MB (RSS at stage start, MB: {rss}), f1 = {:.4} Hz",
+        "{size:>5} {:<17} {ex} x {ey} x {ez} hex8, {n_free} free dofs: model {t_model:.2} s, reduce {total:.2} s (stage wall/CPU s: {stages}{applications} operator applications, {} solves with the factor per constraint mode, {:.2} per Lanczos vector), factor {:.1} M values ({:.2} GB in {} precision, {:.0} Gflop), peak RSS {:.0} MB (RSS at stage start, MB: {rss}), f1 = {:.4} Hz",
         format!("{:?}", factor.2),
+        solves.0,
+        solves.1 as f64 / applications.max(1) as f64,
         factor.0 as f64 / 1e6,
         factor.0 as f64 * factor.3.bytes() as f64 / 1e9,
         factor.3.name(),
