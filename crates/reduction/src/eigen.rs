@@ -1156,14 +1156,7 @@ fn dense_whole_eigen(op: &WholeOperator<'_>, m: usize) -> Result<Mat<f64>, Reduc
         "its dense Cholesky factorisation failed",
         "the shift-invert operator",
     )?;
-    let mu: Vec<f64> = (0..m).map(|k| values[n - 1 - k]).collect();
-    if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
-        return Err(ReductionError::MassNotPositiveDefinite {
-            dof: None,
-            why: format!("the shift-invert operator has the eigenvalue {:.3e} <= 0", mu[bad]),
-        });
-    }
-    Ok(Mat::<f64>::from_fn(n, m, |i, k| Y[(i, n - 1 - k)]))
+    largest(&values, Y.as_ref(), m)
 }
 
 /// The dense symmetric-definite eigenproblem $\mathbf A\mathbf x = \lambda\mathbf B\mathbf x$
@@ -1836,8 +1829,15 @@ fn dense_operator_eigen(op: &Operator<'_>, m: usize) -> Result<Mat<f64>, Reducti
     apply_alloc(op, C.as_mut(), Mat::<f64>::identity(n, n).as_ref(), par);
     let C = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (C[(i, j)] + C[(j, i)]));
     let (values, U) = scaled_self_adjoint_eigen(C.as_ref(), "the shift-invert operator")?;
-    // Ascending: the m largest are the last m. (For an indefinite M, a large negative mu is
-    // not picked here; the Rayleigh-Ritz step may still see it.)
+    largest(&values, U.as_ref(), m)
+}
+
+/// The vectors of the `m` largest of the ascending `values` (the columns of `U`), descending,
+/// refused if one of them is not positive (an indefinite $\mathbf M$). For an indefinite
+/// $\mathbf M$, a large negative $\mu$ is not picked here; the Rayleigh-Ritz step may still
+/// see it.
+fn largest(values: &[f64], U: MatRef<'_, f64>, m: usize) -> Result<Mat<f64>, ReductionError> {
+    let n = values.len();
     let mu: Vec<f64> = (0..m).map(|k| values[n - 1 - k]).collect();
     if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
         return Err(ReductionError::MassNotPositiveDefinite {
@@ -1845,7 +1845,7 @@ fn dense_operator_eigen(op: &Operator<'_>, m: usize) -> Result<Mat<f64>, Reducti
             why: format!("the shift-invert operator has the eigenvalue {:.3e} <= 0", mu[bad]),
         });
     }
-    Ok(Mat::<f64>::from_fn(n, m, |i, k| U[(i, n - 1 - k)]))
+    Ok(Mat::<f64>::from_fn(U.nrows(), m, |i, k| U[(i, n - 1 - k)]))
 }
 
 /// [`fe_model::scaled_self_adjoint_eigen`] (faer's dense symmetric eigensolver on the matrix
