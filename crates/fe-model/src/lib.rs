@@ -124,6 +124,6 @@ pub use ordering::{
 pub use pattern::SystemPattern;
 pub use property::{IsotropicMaterial, MaterialId, SectionId};
 pub use section::{BeamSection, SectionShape};
-pub use sparse_cholesky::{CholeskyError, SparseCholesky};
+pub use sparse_cholesky::{available_memory, CholeskyError, Precision, SparseCholesky, SymbolicFactor};
 pub use statics::{solve_static, StaticSolution};
 pub use stress::{nodal_stresses, principal_stresses, von_mises, Voigt};

@@ -14,7 +14,7 @@ use faer::sparse::linalg::cholesky::simplicial::SimplicialLltRef;
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use faer::sparse::linalg::triangular_solve;
-use faer::sparse::SparseColMatRef;
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Accum, Conj, Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
@@ -31,12 +31,232 @@ pub enum CholeskyError {
     Failed(String),
 }
 
+/// Precision of the stored values of $\mathbf L$.
+///
+/// A single-precision factor holds half the bytes; its solves are accurate to about
+/// $\kappa(\mathbf A)\,\varepsilon_{32}$ ($\varepsilon_{32} = 1.2\cdot 10^{-7}$) and need
+/// iterative refinement in double precision to reach a double-precision solve's accuracy
+/// (`reduction::ShiftInvert::solve_refined`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// f64 values.
+    Double,
+    /// f32 values.
+    Single,
+}
+
+impl Precision {
+    /// Bytes per stored value.
+    pub fn bytes(self) -> usize {
+        match self {
+            Precision::Double => 8,
+            Precision::Single => 4,
+        }
+    }
+
+    /// "double" or "single", for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::Double => "double",
+            Precision::Single => "single",
+        }
+    }
+}
+
+/// The values of $\mathbf L$ in their precision.
+#[derive(Debug)]
+enum Values {
+    Double(Vec<f64>),
+    Single(Vec<f32>),
+}
+
+/// The symbolic analysis of [`SparseCholesky`]: the fill-reducing ordering and the pattern of
+/// $\mathbf L$, no values. It tells the size of the factor before any value is computed, so
+/// that the caller can choose the precision ([`SymbolicFactor::numeric_bytes`]) and refuse a
+/// factor that does not fit in memory.
+#[derive(Debug)]
+pub struct SymbolicFactor {
+    symbolic: SymbolicCholesky<usize>,
+    perm_fwd: Vec<usize>,
+    perm_inv: Vec<usize>,
+    ordering: FillOrdering,
+}
+
+impl SymbolicFactor {
+    /// Orders `A` (its lower triangle; see [`symbolic_cholesky`]: `points[d]` the position of
+    /// dof `d`, used by nested dissection) and computes the pattern of $\mathbf L$.
+    ///
+    /// # Errors
+    /// [`CholeskyError::Failed`] for index overflow or `points` of the wrong length.
+    pub fn analyse(
+        A: SymbolicSparseColMatRef<'_, usize>,
+        points: Option<&[[f64; 3]]>,
+        ordering: FillOrdering,
+    ) -> Result<Self, CholeskyError> {
+        let n = A.nrows();
+        let (symbolic, ordering) =
+            symbolic_cholesky(A, points, ordering).map_err(|e| CholeskyError::Failed(e.to_string()))?;
+        let (perm_fwd, perm_inv) = match symbolic.perm() {
+            Some(p) => {
+                let (fwd, inv) = p.arrays();
+                (fwd.to_vec(), inv.to_vec())
+            }
+            None => ((0..n).collect(), (0..n).collect()),
+        };
+        Ok(Self {
+            symbolic,
+            perm_fwd,
+            perm_inv,
+            ordering,
+        })
+    }
+
+    /// Number of values of $\mathbf L$ (supernodal storage includes explicit zeros).
+    pub fn factor_len(&self) -> usize {
+        self.symbolic.len_val()
+    }
+
+    /// Floating-point operations of the numeric factorisation ([`factor_flops`]).
+    pub fn flops(&self) -> f64 {
+        factor_flops(&self.symbolic)
+    }
+
+    /// The ordering used ([`FillOrdering::Amd`] or [`FillOrdering::NestedDissection`]).
+    pub fn ordering(&self) -> FillOrdering {
+        self.ordering
+    }
+
+    /// Bytes that [`SymbolicFactor::factor`] allocates in `precision` for a matrix with
+    /// `stored` stored entries: the values of $\mathbf L$, faer's workspace of the numeric
+    /// factorisation (with the global parallelism), and in single precision the f32 copy of
+    /// the matrix's values.
+    pub fn numeric_bytes(&self, precision: Precision, stored: usize) -> usize {
+        let par = faer::get_global_parallelism();
+        let (scratch, copy) = match precision {
+            Precision::Double => (
+                self.symbolic
+                    .factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+                0,
+            ),
+            Precision::Single => (
+                self.symbolic
+                    .factorize_numeric_llt_scratch::<f32>(par, Default::default()),
+                4 * stored,
+            ),
+        };
+        self.factor_len() * precision.bytes() + scratch.size_bytes() + copy
+    }
+
+    /// The numeric factorisation of `A` (the matrix analysed, lower triangle read) with values
+    /// in `precision`, with faer's global parallelism. In single precision the values of `A`
+    /// are rounded to f32 first.
+    ///
+    /// # Errors
+    /// [`CholeskyError::NonPositivePivot`] with the dof in `A`'s numbering;
+    /// [`CholeskyError::Failed`] for memory.
+    pub fn factor(
+        self,
+        A: SparseColMatRef<'_, usize, f64>,
+        precision: Precision,
+    ) -> Result<SparseCholesky, CholeskyError> {
+        let n = A.nrows();
+        let Self {
+            symbolic,
+            perm_fwd,
+            perm_inv,
+            ordering,
+        } = self;
+        let pivot_error = |index: usize| CholeskyError::NonPositivePivot {
+            dof: perm_fwd[index.min(n.saturating_sub(1))],
+        };
+        let L_values = match precision {
+            Precision::Double => Values::Double(numeric::<f64>(&symbolic, A).map_err(|e| e.map(pivot_error))?),
+            Precision::Single => {
+                let mut values = Vec::new();
+                values.try_reserve_exact(A.val().len()).map_err(|_| {
+                    CholeskyError::Failed(format!(
+                        "out of memory for the single-precision copy of the matrix ({} values)",
+                        A.val().len()
+                    ))
+                })?;
+                values.extend(A.val().iter().map(|&v| v as f32));
+                let A32 = SparseColMatRef::new(A.symbolic(), &values);
+                let L = numeric::<f32>(&symbolic, A32).map_err(|e| e.map(pivot_error))?;
+                Values::Single(L)
+            }
+        };
+        let tree = match symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(s) => SolveTree::new(s, rayon::current_num_threads()),
+            SymbolicCholeskyRaw::Simplicial(_) => None,
+        };
+        Ok(SparseCholesky {
+            symbolic,
+            L_values,
+            perm_fwd,
+            perm_inv,
+            ordering,
+            tree,
+        })
+    }
+}
+
+/// A failed [`numeric`] factorisation: out of memory, or the index of a non-positive pivot
+/// (in the order of the factor).
+enum NumericError {
+    Memory(CholeskyError),
+    Pivot(usize),
+}
+
+impl NumericError {
+    fn map(self, pivot: impl FnOnce(usize) -> CholeskyError) -> CholeskyError {
+        match self {
+            NumericError::Memory(e) => e,
+            NumericError::Pivot(index) => pivot(index),
+        }
+    }
+}
+
+/// faer's numeric LL^T factorisation of `A` on `symbolic`, values of type `T`.
+fn numeric<T: faer::traits::ComplexField + Copy>(
+    symbolic: &SymbolicCholesky<usize>,
+    A: SparseColMatRef<'_, usize, T>,
+) -> Result<Vec<T>, NumericError> {
+    let par = faer::get_global_parallelism();
+    let mut L_values = Vec::new();
+    L_values.try_reserve_exact(symbolic.len_val()).map_err(|_| {
+        NumericError::Memory(CholeskyError::Failed(format!(
+            "out of memory for the factor ({} values)",
+            symbolic.len_val()
+        )))
+    })?;
+    L_values.resize(symbolic.len_val(), T::zero_impl());
+    let mut mem =
+        MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<T>(par, Default::default())).map_err(|_| {
+            NumericError::Memory(CholeskyError::Failed(
+                "out of memory for the factorisation workspace".into(),
+            ))
+        })?;
+    match symbolic.factorize_numeric_llt::<T>(
+        &mut L_values,
+        A,
+        faer::Side::Lower,
+        Default::default(),
+        par,
+        MemStack::new(&mut mem),
+        Default::default(),
+    ) {
+        Ok(_) => Ok(L_values),
+        Err(LltError::NonPositivePivot { index }) => Err(NumericError::Pivot(index)),
+    }
+}
+
 /// $\mathbf P\mathbf A\mathbf P^T = \mathbf L\mathbf L^T$ for a symmetric positive definite
-/// $\mathbf A$ (lower triangle read).
+/// $\mathbf A$ (lower triangle read), with the values of $\mathbf L$ in double or single
+/// precision ([`Precision`]).
 #[derive(Debug)]
 pub struct SparseCholesky {
     symbolic: SymbolicCholesky<usize>,
-    L_values: Vec<f64>,
+    L_values: Values,
     /// `perm_fwd[k]` is the row of $\mathbf A$ at row `k` of the factor.
     perm_fwd: Vec<usize>,
     /// Inverse of `perm_fwd`.
@@ -49,7 +269,8 @@ pub struct SparseCholesky {
 
 impl SparseCholesky {
     /// Orders (see [`symbolic_cholesky`]: `points[d]` the position of dof `d`, used by nested
-    /// dissection) and factors `A` (its lower triangle), with faer's global parallelism.
+    /// dissection) and factors `A` (its lower triangle) in double precision, with faer's
+    /// global parallelism: [`SymbolicFactor::analyse`], then [`SymbolicFactor::factor`].
     ///
     /// # Errors
     /// [`CholeskyError::NonPositivePivot`] with the dof in `A`'s numbering;
@@ -59,53 +280,24 @@ impl SparseCholesky {
         points: Option<&[[f64; 3]]>,
         ordering: FillOrdering,
     ) -> Result<Self, CholeskyError> {
-        let n = A.nrows();
-        let (symbolic, ordering) =
-            symbolic_cholesky(A.symbolic(), points, ordering).map_err(|e| CholeskyError::Failed(e.to_string()))?;
-        let (perm_fwd, perm_inv) = match symbolic.perm() {
-            Some(p) => {
-                let (fwd, inv) = p.arrays();
-                (fwd.to_vec(), inv.to_vec())
-            }
-            None => ((0..n).collect(), (0..n).collect()),
-        };
-        let par = faer::get_global_parallelism();
-        let mut L_values = Vec::new();
-        L_values.try_reserve_exact(symbolic.len_val()).map_err(|_| {
-            CholeskyError::Failed(format!("out of memory for the factor ({} values)", symbolic.len_val()))
-        })?;
-        L_values.resize(symbolic.len_val(), 0.0);
-        let mut mem = MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
-            .map_err(|_| CholeskyError::Failed("out of memory for the factorisation workspace".into()))?;
-        let result = symbolic.factorize_numeric_llt::<f64>(
-            &mut L_values,
-            A,
-            faer::Side::Lower,
-            Default::default(),
-            par,
-            MemStack::new(&mut mem),
-            Default::default(),
-        );
-        match result {
-            Ok(_) => {}
-            Err(LltError::NonPositivePivot { index }) => {
-                return Err(CholeskyError::NonPositivePivot {
-                    dof: perm_fwd[index.min(n.saturating_sub(1))],
-                })
-            }
+        SymbolicFactor::analyse(A.symbolic(), points, ordering)?.factor(A, Precision::Double)
+    }
+
+    /// The precision of the stored values.
+    pub fn precision(&self) -> Precision {
+        match self.L_values {
+            Values::Double(_) => Precision::Double,
+            Values::Single(_) => Precision::Single,
         }
-        let tree = match symbolic.raw() {
-            SymbolicCholeskyRaw::Supernodal(s) => SolveTree::new(s, rayon::current_num_threads()),
-            SymbolicCholeskyRaw::Simplicial(_) => None,
-        };
-        Ok(Self {
-            symbolic,
-            L_values,
-            perm_fwd,
-            perm_inv,
-            ordering,
-            tree,
-        })
+    }
+
+    /// The f64 values; the separate triangular solves exist for a double-precision factor
+    /// only.
+    fn double(&self) -> &[f64] {
+        match &self.L_values {
+            Values::Double(v) => v,
+            Values::Single(_) => panic!("the separate triangular solves need a double-precision factor"),
+        }
     }
 
     /// Dimension $n$.
@@ -115,7 +307,7 @@ impl SparseCholesky {
 
     /// Number of stored values of $\mathbf L$ (supernodal storage includes explicit zeros).
     pub fn factor_len(&self) -> usize {
-        self.L_values.len()
+        self.symbolic.len_val()
     }
 
     /// Floating-point operations of the factorisation ([`factor_flops`]).
@@ -131,7 +323,7 @@ impl SparseCholesky {
             (Some(tree), SymbolicCholeskyRaw::Supernodal(s)) => {
                 let ptr = s.col_ptr_for_val();
                 let top: usize = tree.top.iter().map(|&sn| ptr[sn + 1] - ptr[sn]).sum();
-                (tree.tasks.len(), top as f64 / self.L_values.len().max(1) as f64)
+                (tree.tasks.len(), top as f64 / self.factor_len().max(1) as f64)
             }
             _ => (0, 0.0),
         }
@@ -153,7 +345,9 @@ impl SparseCholesky {
     }
 
     /// Solves $\mathbf A\mathbf X = \mathbf B$ in place (`rhs`: $\mathbf B$ in, $\mathbf X$
-    /// out, original order).
+    /// out, original order). With a single-precision factor the right-hand sides are rounded
+    /// to f32 and solved in f32 (faer's sequential supernodal or simplicial solves): accurate
+    /// to about $\kappa(\mathbf A)\,\varepsilon_{32}$ only.
     ///
     /// # Panics
     /// If `rhs.nrows()` differs from [`Self::nrows`].
@@ -166,15 +360,42 @@ impl SparseCholesky {
             "right-hand side with {n} rows for a factor of {}",
             self.nrows()
         );
-        let mut mem = MemBuffer::new(self.solve_scratch(k, par));
-        let stack = MemStack::new(&mut mem);
-        // P^T L^{-T} L^{-1} P b, through the (parallel) triangular solves.
-        let mut y = faer::Mat::<f64>::from_fn(n, k, |i, j| rhs[(self.perm_fwd[i], j)]);
-        self.l_solve(y.as_mut(), par, stack);
-        self.l_transpose_solve(y.as_mut(), par, stack);
-        for j in 0..k {
-            for i in 0..n {
-                rhs[(self.perm_fwd[i], j)] = y[(i, j)];
+        match &self.L_values {
+            Values::Double(_) => {
+                let mut mem = MemBuffer::new(self.solve_scratch(k, par));
+                let stack = MemStack::new(&mut mem);
+                // P^T L^{-T} L^{-1} P b, through the (parallel) triangular solves.
+                let mut y = faer::Mat::<f64>::from_fn(n, k, |i, j| rhs[(self.perm_fwd[i], j)]);
+                self.l_solve(y.as_mut(), par, stack);
+                self.l_transpose_solve(y.as_mut(), par, stack);
+                for j in 0..k {
+                    for i in 0..n {
+                        rhs[(self.perm_fwd[i], j)] = y[(i, j)];
+                    }
+                }
+            }
+            Values::Single(values) => {
+                let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f32>(k, par));
+                let stack = MemStack::new(&mut mem);
+                let mut y = faer::Mat::<f32>::from_fn(n, k, |i, j| rhs[(self.perm_fwd[i], j)] as f32);
+                match self.symbolic.raw() {
+                    SymbolicCholeskyRaw::Simplicial(s) => {
+                        let L = SimplicialLltRef::<'_, usize, f32>::new(s, values);
+                        let L = SparseColMatRef::new(s.factor(), L.values());
+                        triangular_solve::solve_lower_triangular_in_place(L, Conj::No, y.as_mut(), par);
+                        triangular_solve::solve_lower_triangular_transpose_in_place(L, Conj::No, y.as_mut(), par);
+                    }
+                    SymbolicCholeskyRaw::Supernodal(s) => {
+                        let L = SupernodalLltRef::<'_, usize, f32>::new(s, values);
+                        L.l_solve_with_conj(Conj::No, y.as_mut(), par, stack);
+                        L.l_transpose_solve_with_conj(Conj::No, y.as_mut(), par, stack);
+                    }
+                }
+                for j in 0..k {
+                    for i in 0..n {
+                        rhs[(self.perm_fwd[i], j)] = y[(i, j)] as f64;
+                    }
+                }
             }
         }
     }
@@ -186,25 +407,9 @@ impl SparseCholesky {
 
     /// The diagonal of $\mathbf L$, in the permuted order.
     pub fn pivots(&self) -> Vec<f64> {
-        match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                // The diagonal is the first stored entry of each column of L.
-                let col_ptr = s.col_ptr();
-                (0..s.nrows()).map(|j| self.L_values[col_ptr[j]]).collect()
-            }
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let L = SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values);
-                let mut d = vec![0.0; s.nrows()];
-                for sn in 0..s.n_supernodes() {
-                    let node = L.supernode(sn);
-                    let start = node.start();
-                    let val = node.val();
-                    for k in 0..val.ncols() {
-                        d[start + k] = val[(k, k)];
-                    }
-                }
-                d
-            }
+        match &self.L_values {
+            Values::Double(values) => pivots(&self.symbolic, values),
+            Values::Single(values) => pivots(&self.symbolic, values),
         }
     }
 
@@ -212,13 +417,13 @@ impl SparseCholesky {
     pub fn l_solve(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
-                let L = SimplicialLltRef::<'_, usize, f64>::new(s, &self.L_values);
+                let L = SimplicialLltRef::<'_, usize, f64>::new(s, self.double());
                 let L = SparseColMatRef::new(s.factor(), L.values());
                 triangular_solve::solve_lower_triangular_in_place(L, Conj::No, rhs, par);
             }
             SymbolicCholeskyRaw::Supernodal(s) => match (&self.tree, par) {
-                (Some(tree), Par::Rayon(_)) => tree.l_solve(SupernodalLltRef::new(s, &self.L_values), rhs, par),
-                _ => SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values).l_solve_with_conj(
+                (Some(tree), Par::Rayon(_)) => tree.l_solve(SupernodalLltRef::new(s, self.double()), rhs, par),
+                _ => SupernodalLltRef::<'_, usize, f64>::new(s, self.double()).l_solve_with_conj(
                     Conj::No,
                     rhs,
                     par,
@@ -232,15 +437,15 @@ impl SparseCholesky {
     pub fn l_transpose_solve(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
-                let L = SimplicialLltRef::<'_, usize, f64>::new(s, &self.L_values);
+                let L = SimplicialLltRef::<'_, usize, f64>::new(s, self.double());
                 let L = SparseColMatRef::new(s.factor(), L.values());
                 triangular_solve::solve_lower_triangular_transpose_in_place(L, Conj::No, rhs, par);
             }
             SymbolicCholeskyRaw::Supernodal(s) => match (&self.tree, par) {
                 (Some(tree), Par::Rayon(_)) => {
-                    tree.l_transpose_solve(SupernodalLltRef::new(s, &self.L_values), rhs, par)
+                    tree.l_transpose_solve(SupernodalLltRef::new(s, self.double()), rhs, par)
                 }
-                _ => SupernodalLltRef::<'_, usize, f64>::new(s, &self.L_values).l_transpose_solve_with_conj(
+                _ => SupernodalLltRef::<'_, usize, f64>::new(s, self.double()).l_transpose_solve_with_conj(
                     Conj::No,
                     rhs,
                     par,
@@ -248,6 +453,53 @@ impl SparseCholesky {
                 ),
             },
         }
+    }
+}
+
+/// The diagonal of $\mathbf L$ with values `values` on `symbolic`, in the permuted order, in f64.
+fn pivots<T: faer::traits::RealField + Copy + Into<f64>>(symbolic: &SymbolicCholesky<usize>, values: &[T]) -> Vec<f64> {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            // The diagonal is the first stored entry of each column of L.
+            let col_ptr = s.col_ptr();
+            (0..s.nrows()).map(|j| values[col_ptr[j]].into()).collect()
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let L = SupernodalLltRef::<'_, usize, T>::new(s, values);
+            let mut d = vec![0.0; s.nrows()];
+            for sn in 0..s.n_supernodes() {
+                let node = L.supernode(sn);
+                let start = node.start();
+                let val = node.val();
+                for k in 0..val.ncols() {
+                    d[start + k] = val[(k, k)].into();
+                }
+            }
+            d
+        }
+    }
+}
+
+/// Memory available to this process \[bytes\]: `MemAvailable` of `/proc/meminfo` (free memory
+/// plus the page cache and reclaimable buffers the kernel can give back without swapping), and
+/// within a control group with a memory limit (`/sys/fs/cgroup/memory.max`, cgroup v2) at most
+/// the limit less the group's current use. `None` where neither can be read (not Linux).
+pub fn available_memory() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
+        text.lines().find_map(|line| {
+            let rest = line.strip_prefix("MemAvailable:")?;
+            let kb: u64 = rest.trim().trim_end_matches("kB").trim().parse().ok()?;
+            Some(kb * 1024)
+        })
+    });
+    let read = |path: &str| std::fs::read_to_string(path).ok()?.trim().parse::<u64>().ok();
+    let cgroup = match (read("/sys/fs/cgroup/memory.max"), read("/sys/fs/cgroup/memory.current")) {
+        (Some(max), Some(current)) => Some(max.saturating_sub(current)),
+        _ => None,
+    };
+    match (meminfo, cgroup) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
     }
 }
 
@@ -572,7 +824,7 @@ mod tests {
         };
         let tree = SolveTree::new(s, 2).expect("nested dissection gives supernodes in postorder");
         assert!(tree.tasks.len() >= 2, "{} subtrees", tree.tasks.len());
-        let L = SupernodalLltRef::<'_, usize, f64>::new(s, &chol.L_values);
+        let L = SupernodalLltRef::<'_, usize, f64>::new(s, chol.double());
         let par = Par::rayon(2);
         for k in [1, 3] {
             let B = Mat::<f64>::from_fn(n, k, |i, j| ((i * 7 + j * 13) % 17) as f64 - 8.0);

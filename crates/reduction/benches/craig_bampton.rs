@@ -8,6 +8,9 @@
 //! `cargo bench -p reduction --bench craig_bampton -- --bench` runs 50k and 200k dofs;
 //! `REDUCTION_CB_SIZES=10k,25k,50k,100k,200k` chooses sizes (also 3k, 600k), and
 //! `REDUCTION_ORDERING=amd,nd` the fill-reducing orderings to compare (`auto` by default).
+//! `REDUCTION_CB_FACTOR=single` (or `double`, default `auto`) sets the precision of the
+//! factor of K_ii (`CbSettings::factor`); the line then names the precision and the number of
+//! solves with the factor per operator application (the refinement steps).
 //! Without `--bench` (as `cargo test --benches` runs it) a 3k-dof block with both orderings,
 //! so CI checks that it runs.
 //!
@@ -34,7 +37,7 @@ mod common;
 use common::{block, cpu_seconds, divisions, parse_ordering};
 use fe_model::{assemble, DofMap, DofMask, FeModel, FillOrdering, NodeId, SystemPattern};
 use reduction::{lowest_modes, reduce_with_progress, write_matrix_market, CbSettings, EigenSettings, ModeSelection};
-use reduction::{ReducedBody, Shift, Stage};
+use reduction::{FactorPrecision, ReducedBody, Shift, Stage};
 use std::path::Path;
 use std::time::Instant;
 
@@ -64,8 +67,14 @@ fn run_one(size: &str, ordering: FillOrdering) {
     let t_model = t0.elapsed().as_secs_f64();
     // Stage start times; the eigen iteration reports many times, only its first counts.
     let mut marks: Vec<(&'static str, f64, f64, f64)> = Vec::new();
-    let mut factor = (0usize, 0.0f64, FillOrdering::Auto);
+    let mut factor = (0usize, 0.0f64, FillOrdering::Auto, fe_model::Precision::Double);
+    let precision = match std::env::var("REDUCTION_CB_FACTOR").as_deref() {
+        Ok("single") => FactorPrecision::Single,
+        Ok("double") => FactorPrecision::Double,
+        _ => FactorPrecision::Auto,
+    };
     let mut applications = 0;
+    let mut solves = (0usize, 0usize);
     let t1 = Instant::now();
     let body = reduce_with_progress(
         &model,
@@ -74,6 +83,7 @@ fn run_one(size: &str, ordering: FillOrdering) {
         &CbSettings {
             modes: ModeSelection::Count(20),
             keep_mesh_shapes: false,
+            factor: precision,
             ..CbSettings::new(ModeSelection::Count(20))
         },
         ordering,
@@ -86,11 +96,20 @@ fn run_one(size: &str, ordering: FillOrdering) {
                     factor_len,
                     flops,
                     ordering,
+                    precision,
                 } => {
-                    factor = (factor_len, flops, ordering);
+                    factor = (factor_len, flops, ordering, precision);
                     return;
                 }
                 Stage::ConstraintModes { .. } => "Psi",
+                Stage::Solved {
+                    constraint_steps,
+                    factor_solves,
+                    ..
+                } => {
+                    solves = (constraint_steps, factor_solves);
+                    return;
+                }
                 Stage::EigenIteration { applications: k, .. } => {
                     applications = k;
                     "Lanczos"
@@ -116,10 +135,13 @@ fn run_one(size: &str, ordering: FillOrdering) {
         stages += &format!("{name} {:.2}/{:.2}, ", end - t, cpu_next - cpu);
     }
     println!(
-        "{size:>5} {:<17} {ex} x {ey} x {ez} hex8, {n_free} free dofs: model {t_model:.2} s, reduce {total:.2} s (stage wall/CPU s: {stages}{applications} operator applications), factor {:.1} M values ({:.2} GB, {:.0} Gflop), peak RSS {:.0} MB (RSS at stage start, MB: {rss}), f1 = {:.4} Hz",
+        "{size:>5} {:<17} {ex} x {ey} x {ez} hex8, {n_free} free dofs: model {t_model:.2} s, reduce {total:.2} s (stage wall/CPU s: {stages}{applications} operator applications, {} solves with the factor per constraint mode, {:.2} per Lanczos vector), factor {:.1} M values ({:.2} GB in {} precision, {:.0} Gflop), peak RSS {:.0} MB (RSS at stage start, MB: {rss}), f1 = {:.4} Hz",
         format!("{:?}", factor.2),
+        solves.0,
+        solves.1 as f64 / applications.max(1) as f64,
         factor.0 as f64 / 1e6,
-        factor.0 as f64 * 8.0 / 1e9,
+        factor.0 as f64 * factor.3.bytes() as f64 / 1e9,
+        factor.3.name(),
         factor.1 / 1e9,
         peak_rss_mb(),
         body.fixed_interface_omega[0] / (2.0 * std::f64::consts::PI)

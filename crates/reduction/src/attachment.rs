@@ -40,7 +40,8 @@ use faer::Mat;
 /// their mass norm) are dropped, so fewer than `load_dofs.len()` vectors may come back.
 ///
 /// # Errors
-/// [`ReductionError::InvalidSettings`] if the small eigenproblem fails (non-finite values).
+/// [`ReductionError::InvalidSettings`] if the small eigenproblem fails (non-finite values);
+/// [`ReductionError::RefinementFailed`] from the refined solves of a single-precision factor.
 pub fn attachment_modes(
     factor: &ShiftInvert,
     K_ii: SparseColMatRef<'_, usize, f64>,
@@ -58,7 +59,9 @@ pub fn attachment_modes(
     for (j, &d) in load_dofs.iter().enumerate() {
         X[(d, j)] = 1.0;
     }
-    factor.solve_in_place(X.as_mut());
+    factor.solve_refined(K_ii, M_ii, X.as_mut(), &|| {
+        "the attachment modes of the load points".into()
+    })?;
     // Gram-Schmidt against the modes, twice (Kahan's "twice is enough") for round-off.
     for _ in 0..2 {
         if Phi_i.ncols() > 0 {

@@ -11,7 +11,7 @@
 //! $\mathbf K_{CB} = \mathbf V^T\mathbf K\mathbf V$, $\mathbf M_{CB} = \mathbf V^T\mathbf M\mathbf V$.
 
 use crate::attachment::attachment_modes;
-use crate::eigen::{EigenSettings, Shift, ShiftInvert};
+use crate::eigen::{EigenSettings, FactorPrecision, FactorSettings, Shift, ShiftInvert};
 use crate::error::ReductionError;
 use crate::geometric::reduced_geometric_stiffness;
 use crate::invariants::{inertia_data, inertia_data_from_mass};
@@ -55,6 +55,9 @@ pub struct CbSettings {
     /// modes (static correction, [`crate::attachment`]) appended to the modes, and a
     /// [`crate::LoadPoint`] in the body.
     pub load_points: Vec<(String, NodeId)>,
+    /// The precision of the factor of $\mathbf K_{ii}$ ([`FactorPrecision`]): automatic
+    /// (double precision when it fits in the available memory) by default.
+    pub factor: FactorPrecision,
 }
 
 impl CbSettings {
@@ -67,6 +70,7 @@ impl CbSettings {
             geometric_stiffening: false,
             stress_shapes: false,
             load_points: Vec::new(),
+            factor: FactorPrecision::Auto,
         }
     }
 }
@@ -86,6 +90,8 @@ pub enum Stage {
         factor_len: usize,
         flops: f64,
         ordering: FillOrdering,
+        /// The precision of the factor's values ([`CbSettings::factor`]).
+        precision: fe_model::Precision,
     },
     /// The constraint modes $\boldsymbol\Psi$: `count` solves with the factor.
     ConstraintModes { count: usize },
@@ -95,6 +101,15 @@ pub enum Stage {
         converged: usize,
         wanted: usize,
         applications: usize,
+    },
+    /// The solves are done: the constraint modes took `constraint_steps` solves with the factor
+    /// (per column; more than 1 with a single-precision factor, whose solves are refined), the
+    /// fixed-interface modes `applications` applications of the shift-invert operator and
+    /// `factor_solves` solves with the factor (per vector).
+    Solved {
+        constraint_steps: usize,
+        applications: usize,
+        factor_solves: usize,
     },
     /// The basis $\mathbf V$ and the projections $\mathbf K_{CB}$, $\mathbf M_{CB}$.
     Projecting,
@@ -335,6 +350,8 @@ struct FreeSystem<'a> {
     /// Position of each free dof (its node), for nested dissection.
     points: &'a [[f64; 3]],
     ordering: FillOrdering,
+    /// The precision of the factor of $\mathbf K_{ii}$.
+    factor: FactorPrecision,
     /// Names free dof `d` in messages.
     describe: &'a dyn Fn(usize) -> String,
 }
@@ -351,6 +368,7 @@ fn project(
         blocks,
         points,
         ordering,
+        factor: precision,
         describe,
     } = system;
     let Blocks {
@@ -378,8 +396,12 @@ fn project(
     } else {
         progress(Stage::Factorising { internal_dofs: ni });
         let points_i: Vec<[f64; 3]> = p.internal.iter().map(|&d| points[d]).collect();
-        let factor = ShiftInvert::with_ordering(K_ii.as_ref(), M_ii.as_ref(), 0.0, Some(&points_i), ordering)
-            .map_err(|e| match e {
+        let settings = FactorSettings {
+            precision,
+            reserve_bytes: reserve_bytes(ni, nb, modes),
+        };
+        let name_errors = |e: ReductionError| {
+            match e {
             ReductionError::SingularStiffness { dof, .. } => ReductionError::Interface {
                 name: name.into(),
                 what: format!(
@@ -387,19 +409,47 @@ fn project(
                     describe(p.internal[dof])
                 ),
             },
-            other => other,
-        })?;
+            ReductionError::SinglePrecisionBreakdown { at, pivot_ratio, .. } => {
+                let at = match at.strip_prefix("dof ").and_then(|d| d.parse::<usize>().ok()) {
+                    Some(dof) => describe(p.internal[dof]),
+                    None => at,
+                };
+                ReductionError::SinglePrecisionBreakdown {
+                    body: format!("part '{name}'"),
+                    at,
+                    pivot_ratio,
+                }
+            }
+            other => other.with_body(&format!("part '{name}'")),
+        }
+        };
+        let factor =
+            ShiftInvert::with_settings(K_ii.as_ref(), M_ii.as_ref(), 0.0, Some(&points_i), ordering, &settings)
+                .map_err(name_errors)?;
         progress(Stage::Factorised {
             factor_len: factor.factor_len(),
             flops: factor.factor_flops(),
             ordering: factor.ordering(),
+            precision: factor.precision(),
         });
-        // (theory guide §3) Psi = -K_ii^{-1} K_ib: 6N solves with the one factor.
+        // (theory guide §3) Psi = -K_ii^{-1} K_ib: 6N solves with the one factor, refined to
+        // a double-precision solve's accuracy when the factor is in single precision.
         progress(Stage::ConstraintModes { count: nb });
         let mut Psi = -&K_ib;
-        factor.solve_in_place(Psi.as_mut());
-        let (mut Phi_i, mut omega) = fixed_interface_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), modes, ni, progress)?;
-        let (X, omega_x) = attachment_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), &Phi_i, load_dofs)?;
+        let constraint_steps = factor
+            .solve_refined(K_ii.as_ref(), M_ii.as_ref(), Psi.as_mut(), &|| {
+                "the constraint modes".into()
+            })
+            .map_err(name_errors)?;
+        let (mut Phi_i, mut omega, (applications, factor_solves)) =
+            fixed_interface_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), modes, ni, progress).map_err(name_errors)?;
+        progress(Stage::Solved {
+            constraint_steps,
+            applications,
+            factor_solves,
+        });
+        let (X, omega_x) =
+            attachment_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), &Phi_i, load_dofs).map_err(name_errors)?;
         let n_attachment = X.ncols();
         if n_attachment > 0 {
             let m = Phi_i.ncols();
@@ -446,6 +496,21 @@ fn project(
         M_CB,
         n_attachment,
     })
+}
+
+/// Bytes allocated while the factor of $\mathbf K_{ii}$ ($n_i$ rows) is alive, for
+/// [`FactorSettings::reserve_bytes`]: the constraint modes ($n_b$ columns), the Lanczos basis
+/// and $\mathbf M\mathbf V$ (the automatic Krylov dimension with blocks of 4, plus a block)
+/// and four $n_i \times m$ matrices of the Rayleigh-Ritz step, in f64. A cut-off frequency
+/// counts as 20 modes (its first request asks for 8, then doubles).
+fn reserve_bytes(ni: usize, nb: usize, modes: ModeSelection) -> usize {
+    let m = match modes {
+        ModeSelection::StaticOnly => 0,
+        ModeSelection::Count(m) => m,
+        ModeSelection::CutoffHz(_) => 20,
+    };
+    let basis = if m == 0 { 0 } else { (2 * m).max(m + 64) + 4 };
+    8 * ni * (nb + 2 * basis + 4 * m)
 }
 
 /// The last step shared by [`reduce`] and [`reduce_external`]: checks the auxiliary node
@@ -660,6 +725,7 @@ pub fn reduce_with_progress(
         blocks,
         points: &points,
         ordering,
+        factor: settings.factor,
         describe: &describe,
     };
     let load_points: NamedNodes = settings
@@ -838,6 +904,7 @@ pub fn reduce_external_dofs(
         blocks: Blocks::new(K, M, &p)?,
         points: &points,
         ordering: FillOrdering::Auto,
+        factor: settings.factor,
         describe: &describe,
     };
     let load_points: NamedNodes = settings
@@ -922,7 +989,9 @@ fn symmetrize(A: Mat<f64>) -> Mat<f64> {
     Mat::from_fn(A.nrows(), A.ncols(), |i, j| 0.5 * (A[(i, j)] + A[(j, i)]))
 }
 
-/// The fixed-interface modes by count or cut-off frequency, with their circular frequencies.
+/// The fixed-interface modes by count or cut-off frequency, with their circular frequencies and
+/// the operator applications and solves with the factor they took (over all requests).
+#[allow(clippy::type_complexity)]
 fn fixed_interface_modes(
     factor: &ShiftInvert,
     K_ii: SparseColMatRef<'_, usize, f64>,
@@ -930,9 +999,10 @@ fn fixed_interface_modes(
     selection: ModeSelection,
     ni: usize,
     progress: &mut dyn FnMut(Stage),
-) -> Result<(Mat<f64>, Vec<f64>), ReductionError> {
+) -> Result<(Mat<f64>, Vec<f64>, (usize, usize)), ReductionError> {
+    let mut counts = (0, 0);
     let mut solve = |m: usize| {
-        factor.lowest_modes_with_progress(
+        let s = factor.lowest_modes_with_progress(
             K_ii,
             M_ii,
             &EigenSettings::new(m, Shift::Zero),
@@ -943,18 +1013,20 @@ fn fixed_interface_modes(
                     applications,
                 })
             },
-        )
+        )?;
+        counts.0 += s.operator_applications;
+        counts.1 += s.factor_solves;
+        Ok::<_, ReductionError>(s)
     };
     let to_omega = |lambda: &[f64]| lambda.iter().map(|l| l.max(0.0).sqrt()).collect::<Vec<f64>>();
     match selection {
-        ModeSelection::StaticOnly => Ok((Mat::zeros(ni, 0), Vec::new())),
-        ModeSelection::Count(0) => Ok((Mat::zeros(ni, 0), Vec::new())),
+        ModeSelection::StaticOnly | ModeSelection::Count(0) => Ok((Mat::zeros(ni, 0), Vec::new(), (0, 0))),
         ModeSelection::Count(m) => {
             if m >= ni {
                 return Err(ReductionError::InvalidModeCount { requested: m, n: ni });
             }
             let s = solve(m)?;
-            Ok((s.vectors, to_omega(&s.eigenvalues)))
+            Ok((s.vectors, to_omega(&s.eigenvalues), counts))
         }
         ModeSelection::CutoffHz(f) => {
             if !(f > 0.0 && f.is_finite()) {
@@ -967,13 +1039,13 @@ fn fixed_interface_modes(
             let mut m = 8.min(ni.saturating_sub(1));
             loop {
                 if m == 0 {
-                    return Ok((Mat::zeros(ni, 0), Vec::new()));
+                    return Ok((Mat::zeros(ni, 0), Vec::new(), counts));
                 }
                 let s = solve(m)?;
                 let omega = to_omega(&s.eigenvalues);
                 let keep = omega.iter().take_while(|&&w| w <= cutoff).count();
                 if keep < m || m + 1 >= ni {
-                    return Ok((s.vectors.subcols(0, keep).to_owned(), omega[..keep].to_vec()));
+                    return Ok((s.vectors.subcols(0, keep).to_owned(), omega[..keep].to_vec(), counts));
                 }
                 m = (2 * m).min(ni - 1);
             }

@@ -26,6 +26,23 @@
 //! 4. Check every pair by its relative residual ([`relative_residual`]) on
 //!    $(\mathbf K, \mathbf M)$ themselves, never by the Krylov estimates.
 //!
+//! ## A factor in single precision
+//!
+//! [`ShiftInvert::with_settings`] can factor in f32 ([`FactorPrecision`]; automatically only
+//! when the double-precision factor would not fit in the available memory): half the bytes,
+//! solves accurate to $\kappa\,\varepsilon_{32}$ only. Every solve is then refined in f64 to a
+//! double-precision solve's backward error ([`ShiftInvert::solve_refined`]: the constraint
+//! modes, the attachment modes and the Lanczos operator alike). The operator $\mathbf C$ below
+//! cannot be refined (its two triangular solves are not a solve with $\mathbf K -
+//! \sigma\mathbf M$), so with an f32 factor the Lanczos runs on
+//! $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$ in the $\mathbf M$ inner product (the private
+//! `WholeOperator`; Grimes, Lewis & Simon 1994, §2): the basis is $\mathbf M$-orthonormal,
+//! $\mathbf M\mathbf V$ is kept beside it (every inner product a dot product, one sparse product
+//! per block step, and the operator's input), the projected matrix
+//! $\mathbf V^T\mathbf M(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M\mathbf V$ is symmetric with
+//! the same $\mu_k$, and its Ritz vectors are the modes themselves (no back-transformation).
+//! Steps 3 and 4 are the same. The double-precision path is unchanged.
+//!
 //! ## The operator: $\mathbf L^{-1}\mathbf M\mathbf L^{-T}$ rather than $(\mathbf K-\sigma\mathbf M)^{-1}\mathbf M$
 //!
 //! $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$ is self-adjoint only in the $\mathbf M$ inner
@@ -126,7 +143,7 @@ use faer::matrix_free::LinOp;
 use faer::prelude::*;
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::{Accum, Side};
-use fe_model::{CholeskyError, FillOrdering, SparseCholesky};
+use fe_model::{CholeskyError, FillOrdering, Precision, SymbolicFactor};
 use rayon::prelude::*;
 
 /// Fraction of the median diagonal ratio $K_{ii}/M_{ii}$ used by [`Shift::Auto`]:
@@ -172,6 +189,55 @@ pub const MAX_ATTEMPTS: usize = 3;
 /// subspace dimension): the dense path costs $n$ operator applications and an $O(n^3)$
 /// eigendecomposition.
 pub const DENSE_LIMIT: usize = 2000;
+
+/// Which precision [`ShiftInvert::with_settings`] factors $\mathbf K - \sigma\mathbf M$ in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FactorPrecision {
+    /// Double precision if the factor fits in the available memory
+    /// ([`fe_model::available_memory`], with [`MEMORY_FRACTION`] and the caller's reserve),
+    /// else single precision if that fits, else [`ReductionError::FactorDoesNotFit`].
+    #[default]
+    Auto,
+    /// Always double precision (refused if it does not fit).
+    Double,
+    /// Always single precision, with refined solves (refused if it does not fit).
+    Single,
+}
+
+/// How [`ShiftInvert::with_settings`] factors.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FactorSettings {
+    /// The precision of the factor.
+    pub precision: FactorPrecision,
+    /// Bytes the caller will allocate after the factorisation while the factor is alive (the
+    /// Lanczos basis, the constraint modes), counted against the available memory with the
+    /// factor.
+    pub reserve_bytes: usize,
+}
+
+/// Fraction of [`fe_model::available_memory`] a factor with its workspace and the caller's
+/// reserve may take: the other 10 % are for what the estimate leaves out (the allocator's
+/// overhead, small dense matrices, the page cache other programs keep using).
+pub const MEMORY_FRACTION: f64 = 0.9;
+
+/// A pivot of the single-precision factor with $L_{jj}^2 \le$ this fraction of its diagonal
+/// entry is refused ([`ReductionError::SinglePrecisionBreakdown`]): $10\,\varepsilon_{32}
+/// \approx 1.2\cdot 10^{-6}$. Such a pivot is the difference of numbers a million times
+/// larger, with at most one correct digit in f32, so the factor's solves have no correct
+/// digit in that direction and refinement cannot converge.
+pub const SINGLE_PIVOT_RATIO: f64 = 10.0 * f32::EPSILON as f64;
+
+/// At most this many solves with a single-precision factor per refined solve (LAPACK's
+/// `dsposv` allows 30). Refinement gains about $-\log_{10}(\kappa\varepsilon_{32})$ digits per
+/// step, 3 or more on the meshes measured; a stalled one is stopped earlier, when a
+/// correction does not halve the backward error.
+pub const MAX_REFINEMENT_STEPS: usize = 30;
+
+/// [`ShiftInvert::solve_refined`] stops refining a column whose backward error is at or below
+/// this many $\varepsilon_{64}$: a double-precision Cholesky solve gives a few
+/// $\varepsilon_{64}$ (the 50k and 200k hex8 blocks: 4e-16, 2 $\varepsilon_{64}$, as relative
+/// residual), and a further step cannot gain on the round-off of the residual's evaluation.
+pub const REFINED_FLOOR: f64 = 4.0;
 
 /// The shift $\sigma$ of the spectral transformation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -312,8 +378,14 @@ pub struct EigenSolution {
     pub residuals: Vec<f64>,
     /// The shift $\sigma$ that was used.
     pub shift: f64,
-    /// Number of applications of $\mathbf C$ (one forward and one backward solve each).
+    /// Number of applications of the shift-invert operator, counted per vector ($\mathbf C$:
+    /// one forward and one backward solve each; with a single-precision factor,
+    /// $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$ by refined solves).
     pub operator_applications: usize,
+    /// Number of solves with the factor, per vector: equal to `operator_applications` with a
+    /// double-precision factor; with a single-precision one, the refinement steps of all the
+    /// applications (the first solve included).
+    pub factor_solves: usize,
 }
 
 /// The $m$ lowest eigenpairs of $\mathbf K\boldsymbol\phi = \lambda\mathbf M\boldsymbol\phi$,
@@ -346,7 +418,14 @@ pub fn lowest_modes(
 pub struct ShiftInvert {
     sigma: f64,
     /// $\mathbf P(\mathbf K - \sigma\mathbf M)\mathbf P^T = \mathbf L\mathbf L^T$.
-    factor: SparseCholesky,
+    factor: fe_model::SparseCholesky,
+    /// $\|\mathbf K\|_\infty + |\sigma|\,\|\mathbf M\|_\infty \ge \|\mathbf K - \sigma\mathbf
+    /// M\|_\infty$, for the backward error of refined solves.
+    A_norm: f64,
+    /// Largest number of entries in a column of $\mathbf K$ or $\mathbf M$.
+    max_column: usize,
+    /// Solves with the factor so far (per right-hand side), for [`EigenSolution::factor_solves`].
+    solves: std::sync::atomic::AtomicUsize,
 }
 
 impl ShiftInvert {
@@ -388,6 +467,36 @@ impl ShiftInvert {
         points: Option<&[[f64; 3]]>,
         ordering: FillOrdering,
     ) -> Result<Self, ReductionError> {
+        let settings = FactorSettings {
+            precision: FactorPrecision::Double,
+            reserve_bytes: 0,
+        };
+        Self::with_settings(K, M, sigma, points, ordering, &settings)
+    }
+
+    /// [`ShiftInvert::with_ordering`] with the precision of the factor chosen by `settings`
+    /// ([`FactorPrecision`]): after the symbolic analysis, the bytes of the numeric
+    /// factorisation (values, faer's workspace, the f32 copy of the matrix in single
+    /// precision) plus `settings.reserve_bytes` are compared with [`MEMORY_FRACTION`] of
+    /// [`fe_model::available_memory`] (measured then, so with $\mathbf K$ and $\mathbf M$
+    /// already in memory). Where the available memory cannot be read, nothing is refused and
+    /// [`FactorPrecision::Auto`] takes double precision. A single-precision factor is used
+    /// through refined solves ([`ShiftInvert::solve_refined`]) and the $\mathbf M$-inner-product
+    /// Lanczos (module docs).
+    ///
+    /// # Errors
+    /// Those of [`ShiftInvert::new`]; [`ReductionError::FactorDoesNotFit`] (with an empty
+    /// body name, for the caller to fill in);
+    /// [`ReductionError::SinglePrecisionBreakdown`] for a pivot of the single-precision factor
+    /// that is not positive or below [`SINGLE_PIVOT_RATIO`].
+    pub fn with_settings(
+        K: SparseColMatRef<'_, usize, f64>,
+        M: SparseColMatRef<'_, usize, f64>,
+        sigma: f64,
+        points: Option<&[[f64; 3]]>,
+        ordering: FillOrdering,
+        settings: &FactorSettings,
+    ) -> Result<Self, ReductionError> {
         check_square_pair(K, M)?;
         if !sigma.is_finite() {
             return Err(ReductionError::InvalidSettings {
@@ -410,11 +519,15 @@ impl ShiftInvert {
             shifted.as_ref()
         };
         let A_diag = diagonal(A);
-        let factor = SparseCholesky::new(A, points, ordering).map_err(|e| match e {
-            CholeskyError::NonPositivePivot { dof } => not_positive_definite(dof, 0.0, sigma),
-            other => ReductionError::Factorization(other.to_string()),
+        let failed = |e: CholeskyError| ReductionError::Factorization(e.to_string());
+        let symbolic = SymbolicFactor::analyse(A.symbolic(), points, ordering).map_err(failed)?;
+        let precision = choose_precision(&symbolic, A.val().len(), settings)?;
+        let factor = symbolic.factor(A, precision).map_err(|e| match (e, precision) {
+            (CholeskyError::NonPositivePivot { dof }, Precision::Single) => single_breakdown(dof, 0.0),
+            (CholeskyError::NonPositivePivot { dof }, Precision::Double) => not_positive_definite(dof, 0.0, sigma),
+            (other, _) => failed(other),
         })?;
-        // A positive pivot can still be round-off (see SINGULAR_PIVOT_RATIO).
+        // A positive pivot can still be round-off (see SINGULAR_PIVOT_RATIO, SINGLE_PIVOT_RATIO).
         let perm_fwd = factor.perm_fwd();
         let (worst_index, worst_ratio) = factor
             .pivots()
@@ -423,10 +536,29 @@ impl ShiftInvert {
             .map(|(i, l)| (i, l * l / A_diag[perm_fwd[i]]))
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .unwrap_or((0, 1.0));
-        if worst_ratio.is_nan() || worst_ratio <= SINGULAR_PIVOT_RATIO {
-            return Err(not_positive_definite(perm_fwd[worst_index], worst_ratio, sigma));
+        match precision {
+            Precision::Double if worst_ratio.is_nan() || worst_ratio <= SINGULAR_PIVOT_RATIO => {
+                return Err(not_positive_definite(perm_fwd[worst_index], worst_ratio, sigma));
+            }
+            Precision::Single if worst_ratio.is_nan() || worst_ratio <= SINGLE_PIVOT_RATIO => {
+                return Err(single_breakdown(perm_fwd[worst_index], worst_ratio));
+            }
+            _ => {}
         }
-        Ok(Self { sigma, factor })
+        let max_column =
+            |A: SparseColMatRef<'_, usize, f64>| (0..A.ncols()).map(|j| A.col_range(j).len()).max().unwrap_or(0);
+        Ok(Self {
+            sigma,
+            factor,
+            A_norm: norm_inf(K) + sigma.abs() * norm_inf(M),
+            max_column: max_column(K).max(max_column(M)),
+            solves: std::sync::atomic::AtomicUsize::new(0),
+        })
+    }
+
+    /// The precision of the factor.
+    pub fn precision(&self) -> Precision {
+        self.factor.precision()
     }
 
     /// The fill-reducing ordering used ([`FillOrdering::Amd`] or
@@ -469,6 +601,107 @@ impl ShiftInvert {
     /// If `rhs.nrows()` differs from [`ShiftInvert::nrows`].
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         self.factor.solve_in_place(rhs);
+    }
+
+    /// Solves $(\mathbf K - \sigma\mathbf M)\mathbf X = \mathbf B$ in place to the accuracy of
+    /// a double-precision solve, whatever the factor's precision. With a double-precision
+    /// factor this is [`ShiftInvert::solve_in_place`]. With a single-precision one it is
+    /// iterative refinement (Wilkinson; Moler 1967, J. ACM 14; LAPACK's `dsposv`):
+    /// $\mathbf X_0 = \hat{\mathbf A}^{-1}\mathbf B$ with the f32 factor, then
+    /// $\mathbf R = \mathbf B - (\mathbf K - \sigma\mathbf M)\mathbf X_k$ in f64 with the
+    /// matrices themselves and $\mathbf X_{k+1} = \mathbf X_k + \hat{\mathbf A}^{-1}\mathbf R$,
+    /// column by column, while a correction at least halves the normwise backward error
+    /// $$\eta = \frac{\|\mathbf r\|_\infty}{\|\mathbf A\|_\infty\|\mathbf x\|_\infty +
+    /// \|\mathbf b\|_\infty}$$
+    /// (Rigal & Gaches 1967, J. ACM 14: the smallest relative change of $\mathbf A$ and
+    /// $\mathbf b$ that makes $\mathbf x$ exact) and it is above [`REFINED_FLOOR`]
+    /// $\varepsilon_{64}$. That is a double-precision solve's accuracy: a backward-stable
+    /// Cholesky solve gives $\eta$ of a few $\varepsilon_{64}$, and the refinement stops only
+    /// where the round-off of the residual's own evaluation stops it from falling. Stopping
+    /// earlier, at the bound a double solve *guarantees* ($\eta_{64} = \max(\sqrt n,\ c)\,
+    /// \varepsilon_{64}$, $c$ the most entries in a column plus 2, the test of LAPACK's
+    /// mixed-precision `dsposv`), was not enough: on a 563k-dof tet10 body the Lanczos then
+    /// stalled at residuals of $2.5\cdot 10^{-7}$ on $(\mathbf K, \mathbf M)$ for the lowest
+    /// modes, whose residual is about $\eta\,\lambda_{max}/\lambda_1$. Each column's $\eta$
+    /// falls by about $\kappa(\mathbf A)\,\varepsilon_{32}$ per step; a column that stops
+    /// falling above $\eta_{64}$, or is still above it after [`MAX_REFINEMENT_STEPS`] steps,
+    /// ends in [`ReductionError::RefinementFailed`] naming `what`, the column, the steps and
+    /// $\eta$.
+    ///
+    /// `K` and `M` must be the matrices that were factored. Returns the number of solves with
+    /// the factor (1 for a double-precision factor).
+    ///
+    /// # Errors
+    /// [`ReductionError::RefinementFailed`] (with an empty body name) as above.
+    ///
+    /// # Panics
+    /// If `rhs.nrows()` differs from [`ShiftInvert::nrows`].
+    pub fn solve_refined(
+        &self,
+        K: SparseColMatRef<'_, usize, f64>,
+        M: SparseColMatRef<'_, usize, f64>,
+        mut rhs: MatMut<'_, f64>,
+        what: &dyn Fn() -> String,
+    ) -> Result<usize, ReductionError> {
+        use std::sync::atomic::Ordering::Relaxed;
+        let (n, k) = rhs.shape();
+        if self.precision() == Precision::Double {
+            self.factor.solve_in_place(rhs);
+            self.solves.fetch_add(k, Relaxed);
+            return Ok(1);
+        }
+        let par = faer::get_global_parallelism();
+        let B = rhs.to_owned();
+        let b_norm: Vec<f64> = (0..k).map(|j| B.col(j).norm_max()).collect();
+        let target = (n as f64).sqrt().max(self.max_column as f64 + 2.0) * f64::EPSILON;
+        self.factor.solve_in_place(rhs.rb_mut());
+        let mut steps = 1;
+        let mut previous = vec![f64::INFINITY; k];
+        let mut done = vec![false; k];
+        loop {
+            // R = B - (K - sigma M) X, in f64 with the matrices themselves.
+            let mut R = &B - symmetric_times(K, rhs.rb(), par);
+            if self.sigma != 0.0 {
+                R += symmetric_times(M, rhs.rb(), par) * faer::Scale(self.sigma);
+            }
+            let eta: Vec<f64> = (0..k)
+                .map(|j| R.col(j).norm_max() / (self.A_norm * rhs.rb().col(j).norm_max() + b_norm[j]))
+                .collect();
+            for j in 0..k {
+                if done[j] {
+                    continue;
+                }
+                // Refined while a correction at least halves the backward error, down to the
+                // round-off of its own evaluation: then it is what a double solve gives.
+                let stalled = !(eta[j] <= 0.5 * previous[j]) || steps >= MAX_REFINEMENT_STEPS;
+                if eta[j] <= REFINED_FLOOR * f64::EPSILON || (stalled && eta[j] <= target) {
+                    done[j] = true;
+                } else if stalled {
+                    return Err(ReductionError::RefinementFailed {
+                        body: String::new(),
+                        what: what(),
+                        column: j,
+                        steps,
+                        backward_error: eta[j],
+                        target,
+                    });
+                }
+            }
+            if done.iter().all(|&d| d) {
+                break;
+            }
+            for (j, &d) in done.iter().enumerate() {
+                if d {
+                    R.col_mut(j).fill(0.0);
+                }
+            }
+            self.factor.solve_in_place(R.as_mut());
+            rhs += &R;
+            previous = eta;
+            steps += 1;
+        }
+        self.solves.fetch_add(k * steps, Relaxed);
+        Ok(steps)
     }
 
     /// The $m$ lowest eigenpairs of $(\mathbf K, \mathbf M)$ from this factorisation of
@@ -533,6 +766,13 @@ impl ShiftInvert {
         let m = settings.n_modes;
         let b = block_size(settings, n);
         let op = Operator::new(self, M);
+        let whole = WholeOperator { factor: self, K, M };
+        let krylov = match self.precision() {
+            Precision::Double => Krylov::Split(&op),
+            Precision::Single => Krylov::Whole(&whole),
+        };
+        let solves_before = self.solves.load(std::sync::atomic::Ordering::Relaxed);
+        let solves = || self.solves.load(std::sync::atomic::Ordering::Relaxed) - solves_before;
         if p + 1 >= n {
             if n > DENSE_LIMIT {
                 return Err(ReductionError::InvalidSettings {
@@ -542,16 +782,23 @@ impl ShiftInvert {
                     ),
                 });
             }
-            let Y = dense_operator_eigen(&op, m)?;
+            let Y = match krylov {
+                Krylov::Split(op) => dense_operator_eigen(op, m)?,
+                Krylov::Whole(whole) => dense_whole_eigen(whole, m)?,
+            };
             let mut sol = self.finish(K, M, Y.as_ref(), settings)?;
             sol.operator_applications = n;
+            sol.factor_solves = match krylov {
+                Krylov::Split(_) => n,
+                Krylov::Whole(_) => solves(),
+            };
             return Ok(sol);
         }
 
         progress(0, m, 0);
         // Blocks need room: k > m when the basis is full (p >= m + b), and n > p + b.
         let b = b.min(p - m).min(n - p - 1).max(1);
-        let mut lanczos = Lanczos::new(&op, p, b)?;
+        let mut lanczos = Lanczos::new(krylov, p, b)?;
         let mut krylov_tolerance = settings.tolerance * KRYLOV_TOLERANCE_FACTOR;
         for attempt in 0..MAX_ATTEMPTS {
             let (mu, Y) = match lanczos.run(m, krylov_tolerance, settings.max_restarts, progress)? {
@@ -579,6 +826,10 @@ impl ShiftInvert {
             match self.finish(K, M, Y.as_ref(), settings) {
                 Ok(mut sol) => {
                     sol.operator_applications = lanczos.applications;
+                    sol.factor_solves = match krylov {
+                        Krylov::Split(_) => lanczos.applications,
+                        Krylov::Whole(_) => solves(),
+                    };
                     return Ok(sol);
                 }
                 // Continue Lanczos with the Krylov tolerance lowered by the shortfall (at least
@@ -593,7 +844,9 @@ impl ShiftInvert {
     }
 
     /// Back-transformation $\boldsymbol\Phi = \mathbf P^T\mathbf L^{-T}\mathbf Y$ of the Ritz
-    /// vectors `Y` of $\mathbf C$ (permuted order), Rayleigh-Ritz, residual check.
+    /// vectors `Y` of $\mathbf C$ (permuted order; with a single-precision factor `Y` are the
+    /// Ritz vectors of $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$ and $\boldsymbol\Phi =
+    /// \mathbf Y$), Rayleigh-Ritz, residual check.
     fn finish(
         &self,
         K: SparseColMatRef<'_, usize, f64>,
@@ -602,12 +855,17 @@ impl ShiftInvert {
         settings: &EigenSettings,
     ) -> Result<EigenSolution, ReductionError> {
         let (n, m) = Y.shape();
-        let par = faer::get_global_parallelism();
-        let mut Z = Y.to_owned();
-        let mut mem = MemBuffer::new(self.factor.solve_scratch(m, par));
-        self.factor.l_transpose_solve(Z.as_mut(), par, MemStack::new(&mut mem));
-        let perm_inv = self.factor.perm_inv();
-        let Phi = Mat::<f64>::from_fn(n, m, |i, j| Z[(perm_inv[i], j)]);
+        let Phi = match self.precision() {
+            Precision::Double => {
+                let par = faer::get_global_parallelism();
+                let mut Z = Y.to_owned();
+                let mut mem = MemBuffer::new(self.factor.solve_scratch(m, par));
+                self.factor.l_transpose_solve(Z.as_mut(), par, MemStack::new(&mut mem));
+                let perm_inv = self.factor.perm_inv();
+                Mat::<f64>::from_fn(n, m, |i, j| Z[(perm_inv[i], j)])
+            }
+            Precision::Single => Y.to_owned(),
+        };
         let (eigenvalues, vectors, KPhi, MPhi) = rayleigh_ritz(K, M, Phi.as_ref())?;
         let residuals: Vec<f64> = (0..m)
             .map(|j| relative_residual(KPhi.col(j), MPhi.col(j), eigenvalues[j], self.sigma))
@@ -651,6 +909,7 @@ impl ShiftInvert {
             residuals,
             shift: self.sigma,
             operator_applications: 0,
+            factor_solves: 0,
         })
     }
 }
@@ -675,22 +934,13 @@ fn rayleigh_ritz(
     let symmetrise = |A: Mat<f64>| Mat::<f64>::from_fn(m, m, |i, j| 0.5 * (A[(i, j)] + A[(j, i)]));
     let A = symmetrise(Phi.transpose() * &KPhi);
     let B = symmetrise(Phi.transpose() * &MPhi);
-    let llt = B
-        .llt(Side::Lower)
-        .map_err(|_| ReductionError::MassNotPositiveDefinite {
-            dof: None,
-            why: "Phi^T M Phi of the computed modes is not positive definite".into(),
-        })?;
-    let R = llt.L();
-    // G = R^{-1} A R^{-T}
-    let mut G = A;
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
-    let mut G = G.transpose().to_owned();
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
-    let G = symmetrise(G);
-    let (eigenvalues, mut T) = scaled_self_adjoint_eigen(G.as_ref(), "the Ritz problem")?;
-    // T = R^{-T} S, then the sign convention on the columns of Phi T.
-    faer::linalg::triangular_solve::solve_upper_triangular_in_place(R.transpose(), T.as_mut(), par);
+    let (eigenvalues, mut T) = symmetric_definite_eigen(
+        A,
+        B.as_ref(),
+        "Phi^T M Phi of the computed modes is not positive definite",
+        "the Ritz problem",
+    )?;
+    // The sign convention on the columns of Phi T.
     let mut vectors = Phi * &T;
     for j in 0..m {
         let col = vectors.col(j);
@@ -842,6 +1092,106 @@ impl LinOp<f64> for Operator<'_> {
     }
 }
 
+/// $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$ by whole refined solves
+/// ([`ShiftInvert::solve_refined`]), self-adjoint in the $\mathbf M$ inner product: the
+/// operator of the Lanczos with a single-precision factor (module docs). It is applied to
+/// $\mathbf M\mathbf V$, which the $\mathbf M$-inner-product Lanczos keeps.
+struct WholeOperator<'a> {
+    factor: &'a ShiftInvert,
+    K: SparseColMatRef<'a, usize, f64>,
+    M: SparseColMatRef<'a, usize, f64>,
+}
+
+impl WholeOperator<'_> {
+    /// `x` $\leftarrow (\mathbf K - \sigma\mathbf M)^{-1}$`x` for `x` $= \mathbf M\mathbf v$;
+    /// `first` is the index of the first vector among all applications, for the error.
+    fn solve(&self, x: MatMut<'_, f64>, first: usize) -> Result<(), ReductionError> {
+        let k = x.ncols();
+        self.factor
+            .solve_refined(self.K, self.M, x, &|| {
+                format!(
+                    "the Lanczos operator (K - sigma M)^-1 M, vectors {first} to {}",
+                    first + k - 1
+                )
+            })
+            .map(|_| ())
+    }
+}
+
+/// The operator of [`Lanczos`] and its inner product.
+#[derive(Clone, Copy)]
+enum Krylov<'a> {
+    /// $\mathbf C = \mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T}$, Euclidean inner
+    /// product (double-precision factor).
+    Split(&'a Operator<'a>),
+    /// $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$, $\mathbf M$ inner product
+    /// (single-precision factor).
+    Whole(&'a WholeOperator<'a>),
+}
+
+impl Krylov<'_> {
+    fn nrows(&self) -> usize {
+        match self {
+            Krylov::Split(op) => op.nrows(),
+            Krylov::Whole(op) => op.factor.nrows(),
+        }
+    }
+}
+
+/// The dense path of [`WholeOperator`]: $\mathbf S = \mathbf M(\mathbf K - \sigma\mathbf
+/// M)^{-1}\mathbf M$ from $n$ refined solves, the symmetric-definite problem $\mathbf S\mathbf
+/// y = \mu\mathbf M\mathbf y$ through the dense Cholesky factor of $\mathbf M$, and the $m$
+/// largest $\mu$: their vectors (descending $\mu$) approximate the modes themselves.
+fn dense_whole_eigen(op: &WholeOperator<'_>, m: usize) -> Result<Mat<f64>, ReductionError> {
+    let n = op.factor.nrows();
+    let par = faer::get_global_parallelism();
+    let M = symmetric_times(op.M, Mat::<f64>::identity(n, n).as_ref(), par);
+    let mut Z = M.clone();
+    op.solve(Z.as_mut(), 0)?;
+    let S = &M * &Z;
+    let S = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (S[(i, j)] + S[(j, i)]));
+    let (values, Y) = symmetric_definite_eigen(
+        S,
+        M.as_ref(),
+        "its dense Cholesky factorisation failed",
+        "the shift-invert operator",
+    )?;
+    largest(&values, Y.as_ref(), m)
+}
+
+/// The dense symmetric-definite eigenproblem $\mathbf A\mathbf x = \lambda\mathbf B\mathbf x$
+/// ($\mathbf A$, $\mathbf B$ symmetric): with $\mathbf B = \mathbf R\mathbf R^T$ and
+/// $\mathbf R^{-1}\mathbf A\mathbf R^{-T} = \mathbf S\boldsymbol\Lambda\mathbf S^T$, the
+/// eigenvalues ascending and the $\mathbf B$-orthonormal vectors $\mathbf R^{-T}\mathbf S$.
+/// `not_definite` says why a failed Cholesky factorisation of $\mathbf B$ means an indefinite
+/// mass; `what` names the problem for the dense eigensolver's error.
+fn symmetric_definite_eigen(
+    A: Mat<f64>,
+    B: MatRef<'_, f64>,
+    not_definite: &str,
+    what: &str,
+) -> Result<(Vec<f64>, Mat<f64>), ReductionError> {
+    let par = faer::get_global_parallelism();
+    let llt = B
+        .llt(Side::Lower)
+        .map_err(|_| ReductionError::MassNotPositiveDefinite {
+            dof: None,
+            why: not_definite.into(),
+        })?;
+    let R = llt.L();
+    // G = R^{-1} A R^{-T}
+    let mut G = A;
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
+    let mut G = G.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(R, G.as_mut(), par);
+    let n = G.nrows();
+    let G = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (G[(i, j)] + G[(j, i)]));
+    let (values, mut T) = scaled_self_adjoint_eigen(G.as_ref(), what)?;
+    // T = R^{-T} S
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(R.transpose(), T.as_mut(), par);
+    Ok((values, T))
+}
+
 /// The error for a failed or singular factorisation of $\mathbf K - \sigma\mathbf M$ at
 /// (original) `dof`.
 fn not_positive_definite(dof: usize, pivot_ratio: f64, sigma: f64) -> ReductionError {
@@ -858,6 +1208,66 @@ fn not_positive_definite(dof: usize, pivot_ratio: f64, sigma: f64) -> ReductionE
                 "K or M is indefinite, or the shift is too close to zero for a free body"
             },
         }
+    }
+}
+
+/// The error for a pivot of a single-precision factor at (original) `dof` that is not
+/// positive (`pivot_ratio` 0) or below [`SINGLE_PIVOT_RATIO`].
+fn single_breakdown(dof: usize, pivot_ratio: f64) -> ReductionError {
+    ReductionError::SinglePrecisionBreakdown {
+        body: String::new(),
+        at: format!("dof {dof}"),
+        pivot_ratio,
+    }
+}
+
+/// $\|\mathbf A\|_\infty$, the largest absolute row sum (the column sums of a symmetric matrix).
+fn norm_inf(A: SparseColMatRef<'_, usize, f64>) -> f64 {
+    (0..A.ncols())
+        .map(|j| A.col_range(j).map(|p| A.val()[p].abs()).sum::<f64>())
+        .fold(0.0, f64::max)
+}
+
+/// The precision of the factor for `settings` (see [`ShiftInvert::with_settings`]), from the
+/// symbolic analysis of a matrix with `stored` stored entries.
+fn choose_precision(
+    symbolic: &SymbolicFactor,
+    stored: usize,
+    settings: &FactorSettings,
+) -> Result<Precision, ReductionError> {
+    let needed = |p: Precision| symbolic.numeric_bytes(p, stored) + settings.reserve_bytes;
+    let Some(available) = fe_model::available_memory() else {
+        return Ok(match settings.precision {
+            FactorPrecision::Single => Precision::Single,
+            FactorPrecision::Auto | FactorPrecision::Double => Precision::Double,
+        });
+    };
+    let budget = MEMORY_FRACTION * available as f64;
+    let fits = |p: Precision| needed(p) as f64 <= budget;
+    let refuse = |p: Precision, hint: &'static str| {
+        let gb = |bytes: f64| bytes / 1e9;
+        ReductionError::FactorDoesNotFit {
+            body: String::new(),
+            precision: p.name(),
+            factor_values: symbolic.factor_len() / 1_000_000,
+            factor_gb: gb((symbolic.factor_len() * p.bytes()) as f64),
+            needed_gb: gb(needed(p) as f64),
+            available_gb: gb(budget),
+            hint,
+        }
+    };
+    const SMALLER: &str = "coarsen the mesh, or reduce on a machine with more memory";
+    match settings.precision {
+        FactorPrecision::Double if fits(Precision::Double) => Ok(Precision::Double),
+        FactorPrecision::Double => Err(refuse(
+            Precision::Double,
+            "set factor = \"auto\" or \"single\" to factor in single precision with refined solves",
+        )),
+        FactorPrecision::Single if fits(Precision::Single) => Ok(Precision::Single),
+        FactorPrecision::Single => Err(refuse(Precision::Single, SMALLER)),
+        FactorPrecision::Auto if fits(Precision::Double) => Ok(Precision::Double),
+        FactorPrecision::Auto if fits(Precision::Single) => Ok(Precision::Single),
+        FactorPrecision::Auto => Err(refuse(Precision::Single, SMALLER)),
     }
 }
 
@@ -968,13 +1378,16 @@ struct Ritz {
 /// locking: converged vectors keep being refined, which costs little and avoids the
 /// bookkeeping that breaks faer's version (module docs).
 struct Lanczos<'a> {
-    op: &'a Operator<'a>,
+    op: Krylov<'a>,
     par: Par,
     p: usize,
     /// Block size $b$.
     b: usize,
-    /// $n \times (p + b)$ basis.
+    /// $n \times (p + b)$ basis, orthonormal in the operator's inner product.
     V: Mat<f64>,
+    /// $\mathbf M\mathbf V$ with [`Krylov::Whole`] (the $\mathbf M$ inner products are dot
+    /// products with it, and the operator's input); $0 \times 0$ with [`Krylov::Split`].
+    MV: Mat<f64>,
     /// $p \times p$ projected matrix (arrowhead plus block tridiagonal).
     T: Mat<f64>,
     /// Coupling $\mathbf B$ ($b \times b$, upper triangular) of the next block after the last step.
@@ -993,10 +1406,14 @@ impl<'a> Lanczos<'a> {
     /// Basis of dimension `p` with blocks of `b`, started from $\mathbf C$ applied to a fixed
     /// pseudo-random block (as ARPACK does for shift-invert: it removes the components that
     /// $\mathbf C$ damps, so the start lies in the range of the operator).
-    fn new(op: &'a Operator<'a>, p: usize, b: usize) -> Result<Self, ReductionError> {
+    fn new(op: Krylov<'a>, p: usize, b: usize) -> Result<Self, ReductionError> {
         let n = op.nrows();
         let par = faer::get_global_parallelism();
-        let mem = MemBuffer::try_new(op.apply_scratch(b, par))
+        let scratch = match op {
+            Krylov::Split(op) => op.apply_scratch(b, par),
+            Krylov::Whole(_) => StackReq::EMPTY,
+        };
+        let mem = MemBuffer::try_new(scratch)
             .map_err(|_| ReductionError::Factorization("out of memory for the solve workspace".into()))?;
         let mut this = Self {
             op,
@@ -1004,6 +1421,10 @@ impl<'a> Lanczos<'a> {
             p,
             b,
             V: Mat::zeros(n, p + b),
+            MV: match op {
+                Krylov::Split(_) => Mat::zeros(0, 0),
+                Krylov::Whole(_) => Mat::zeros(n, p + b),
+            },
             T: Mat::zeros(p, p),
             B: Mat::zeros(b, b),
             k: 0,
@@ -1014,12 +1435,19 @@ impl<'a> Lanczos<'a> {
             rng: 0x9E37_79B9_7F4A_7C15,
         };
         let start = Mat::<f64>::from_fn(n, b, |_, _| uniform(&mut this.rng));
-        op.apply(
-            this.V.get_mut(.., 0..b),
-            start.as_ref(),
-            par,
-            MemStack::new(&mut this.mem),
-        );
+        match op {
+            Krylov::Split(op) => op.apply(
+                this.V.get_mut(.., 0..b),
+                start.as_ref(),
+                par,
+                MemStack::new(&mut this.mem),
+            ),
+            Krylov::Whole(op) => {
+                let Mstart = symmetric_times(op.M, start.as_ref(), par);
+                this.V.get_mut(.., 0..b).copy_from(&Mstart);
+                op.solve(this.V.get_mut(.., 0..b), 0)?;
+            }
+        }
         this.applications += b;
         let norm = this.V.get(.., 0..b).norm_l2();
         if !(norm.is_finite() && norm > 0.0) {
@@ -1028,12 +1456,16 @@ impl<'a> Lanczos<'a> {
             )));
         }
         let (mut head, _) = this.V.as_mut().split_at_col_mut(b);
-        let _ = orthonormalise_block(
-            head.rb_mut(),
-            MatRef::from_column_major_slice(&[], n, 0),
-            &mut this.rng,
-            par,
-        );
+        let empty = MatRef::from_column_major_slice(&[], n, 0);
+        match op {
+            Krylov::Split(_) => {
+                let _ = orthonormalise_block(head.rb_mut(), empty, &mut this.rng, par);
+            }
+            Krylov::Whole(op) => {
+                let (mut mhead, _) = this.MV.as_mut().split_at_col_mut(b);
+                let _ = m_orthonormalise_block(head.rb_mut(), mhead.rb_mut(), empty, empty, op.M, &mut this.rng, par);
+            }
+        }
         Ok(this)
     }
 
@@ -1101,8 +1533,13 @@ impl<'a> Lanczos<'a> {
         let (done, mut next) = self.V.as_mut().split_at_col_mut(j + b);
         let done = done.rb();
         let mut W = next.rb_mut().get_mut(.., 0..b);
-        self.op
-            .apply(W.rb_mut(), done.get(.., j..j + b), par, MemStack::new(&mut self.mem));
+        match self.op {
+            Krylov::Split(op) => op.apply(W.rb_mut(), done.get(.., j..j + b), par, MemStack::new(&mut self.mem)),
+            Krylov::Whole(op) => {
+                W.copy_from(self.MV.get(.., j..j + b));
+                op.solve(W.rb_mut(), self.applications)?;
+            }
+        }
         self.applications += b;
         let norm0 = W.norm_l2();
         if !norm0.is_finite() {
@@ -1110,7 +1547,14 @@ impl<'a> Lanczos<'a> {
                 "the shift-invert operator gave a block of norm {norm0}"
             )));
         }
-        let (h, R) = orthonormalise_block(W.rb_mut(), done, &mut self.rng, par);
+        let (h, R) = match self.op {
+            Krylov::Split(_) => orthonormalise_block(W.rb_mut(), done, &mut self.rng, par),
+            Krylov::Whole(op) => {
+                let (Mdone, mut Mnext) = self.MV.as_mut().split_at_col_mut(j + b);
+                let MW = Mnext.rb_mut().get_mut(.., 0..b);
+                m_orthonormalise_block(W.rb_mut(), MW, done, Mdone.rb(), op.M, &mut self.rng, par)
+            }
+        };
         // T_{0..j+b, j..j+b} = V^T C V_blk (the projection), kept symmetric.
         let rows = (j + b).min(self.p);
         for c in 0..b {
@@ -1164,6 +1608,12 @@ impl<'a> Lanczos<'a> {
         self.V.get_mut(.., 0..keep).copy_from(&Vk);
         let next = self.V.get(.., k..k + b).to_owned();
         self.V.get_mut(.., keep..keep + b).copy_from(&next);
+        if let Krylov::Whole(_) = self.op {
+            let MVk = self.MV.get(.., 0..k) * ritz.S.get(.., 0..keep);
+            self.MV.get_mut(.., 0..keep).copy_from(&MVk);
+            let next = self.MV.get(.., k..k + b).to_owned();
+            self.MV.get_mut(.., keep..keep + b).copy_from(&next);
+        }
         // Arrow: B S_{k-b..k, 0..keep}.
         let arrow = &self.B * ritz.S.get(k - b..k, 0..keep);
         self.T.fill(0.0);
@@ -1243,6 +1693,85 @@ fn orthonormalise_block(mut W: MatMut<'_, f64>, V: MatRef<'_, f64>, rng: &mut u6
     (h, R)
 }
 
+/// [`orthonormalise_block`] in the $\mathbf M$ inner product: `W` against the
+/// $\mathbf M$-orthonormal columns of `V` (with `MV` $= \mathbf M\mathbf V$), twice, then within
+/// itself column by column, twice, with $\mathbf M\mathbf w$ carried along so that every inner
+/// product is a dot product; `MW` receives $\mathbf M\mathbf W$ of the result, recomputed
+/// (one sparse product) so that the stored $\mathbf M\mathbf V$ does not drift. Returns
+/// $\mathbf V^T\mathbf M\mathbf W$ and $\mathbf R$ as there; the same re-orthogonalisation
+/// and breakdown rules.
+fn m_orthonormalise_block(
+    mut W: MatMut<'_, f64>,
+    mut MW: MatMut<'_, f64>,
+    V: MatRef<'_, f64>,
+    MV: MatRef<'_, f64>,
+    M: SparseColMatRef<'_, usize, f64>,
+    rng: &mut u64,
+    par: Par,
+) -> (Mat<f64>, Mat<f64>) {
+    let (n, b) = W.shape();
+    let mut h = Mat::<f64>::zeros(V.ncols(), b);
+    for _pass in 0..2 {
+        h += project_out_with(W.rb_mut(), MV, V, par);
+    }
+    let mut MWt = symmetric_times(M, W.rb(), par);
+    let dot = |x: ColRef<'_, f64>, y: ColRef<'_, f64>| x.transpose() * y;
+    // The block's M-norm before the projection: Pythagoras over the coefficients and the rest.
+    let norm0 = (h.squared_norm_l2() + (0..b).map(|c| dot(W.rb().col(c), MWt.col(c))).sum::<f64>())
+        .max(0.0)
+        .sqrt();
+    let mut R = Mat::<f64>::zeros(b, b);
+    for c in 0..b {
+        let (left, mut right) = W.rb_mut().split_at_col_mut(c);
+        let left = left.rb();
+        let (Mleft, mut Mright) = MWt.as_mut().split_at_col_mut(c);
+        let Mleft = Mleft.rb();
+        let mut w = right.rb_mut().get_mut(.., 0..1);
+        let mut mw = Mright.rb_mut().get_mut(.., 0..1);
+        let m_norm = |w: MatRef<'_, f64>, mw: MatRef<'_, f64>| dot(w.col(0), mw.col(0)).max(0.0).sqrt();
+        let norm_in = m_norm(w.rb(), mw.rb());
+        for _pass in 0..2 {
+            let g = project_out_with(w.rb_mut(), Mleft, left, par);
+            matmul(mw.rb_mut(), Accum::Add, Mleft, g.as_ref(), -1.0, Par::Seq);
+            for i in 0..c {
+                R[(i, c)] += g[(i, 0)];
+            }
+        }
+        let mut norm = m_norm(w.rb(), mw.rb());
+        if norm < std::f64::consts::FRAC_1_SQRT_2 * norm_in {
+            let g = project_out_with(w.rb_mut(), MV, V, par);
+            for i in 0..V.ncols() {
+                h[(i, c)] += g[(i, 0)];
+            }
+            mw.copy_from(symmetric_times(M, w.rb(), par));
+            let g = project_out_with(w.rb_mut(), Mleft, left, par);
+            matmul(mw.rb_mut(), Accum::Add, Mleft, g.as_ref(), -1.0, Par::Seq);
+            for i in 0..c {
+                R[(i, c)] += g[(i, 0)];
+            }
+            norm = m_norm(w.rb(), mw.rb());
+        }
+        if norm > BREAKDOWN_RATIO * norm0 && norm.is_finite() {
+            R[(c, c)] = norm;
+        } else {
+            // Invariant subspace: a random direction, M-orthogonal to V and the block so far.
+            for i in 0..n {
+                w[(i, 0)] = uniform(rng);
+            }
+            for _pass in 0..2 {
+                project_out_with(w.rb_mut(), MV, V, par);
+                project_out_with(w.rb_mut(), Mleft, left, par);
+            }
+            mw.copy_from(symmetric_times(M, w.rb(), par));
+            norm = m_norm(w.rb(), mw.rb());
+        }
+        w.col_mut(0).iter_mut().for_each(|x| *x /= norm);
+        mw.col_mut(0).iter_mut().for_each(|x| *x /= norm);
+    }
+    MW.copy_from(symmetric_times(M, W.rb(), par));
+    (h, R)
+}
+
 /// One classical Gram-Schmidt pass: $\mathbf W \leftarrow \mathbf W - \mathbf Q\mathbf G$
 /// with $\mathbf G = \mathbf Q^T\mathbf W$ (orthonormal columns `Q`); returns $\mathbf G$.
 ///
@@ -1250,7 +1779,15 @@ fn orthonormalise_block(mut W: MatMut<'_, f64>, V: MatRef<'_, f64>, rng: &mut u6
 /// cache, summed: $\mathbf Q$ ($n \times$ up to a few hundred) is read once per product.
 /// A parallel dense product on the whole of $\mathbf Q$ packs (copies) it first, which for
 /// this tall, thin shape costs more memory traffic than the product itself.
-fn project_out(mut W: MatMut<'_, f64>, Q: MatRef<'_, f64>, par: Par) -> Mat<f64> {
+fn project_out(W: MatMut<'_, f64>, Q: MatRef<'_, f64>, par: Par) -> Mat<f64> {
+    project_out_with(W, Q, Q, par)
+}
+
+/// [`project_out`] with the coefficients from `P`: $\mathbf G = \mathbf P^T\mathbf W$,
+/// $\mathbf W \leftarrow \mathbf W - \mathbf Q\mathbf G$. With $\mathbf P = \mathbf M\mathbf Q$
+/// and $\mathbf Q$ $\mathbf M$-orthonormal, one Gram-Schmidt pass in the $\mathbf M$ inner
+/// product.
+fn project_out_with(mut W: MatMut<'_, f64>, P: MatRef<'_, f64>, Q: MatRef<'_, f64>, par: Par) -> Mat<f64> {
     let (q, b) = (Q.ncols(), W.ncols());
     let mut G = Mat::<f64>::zeros(q, b);
     if q == 0 {
@@ -1263,17 +1800,17 @@ fn project_out(mut W: MatMut<'_, f64>, Q: MatRef<'_, f64>, par: Par) -> Mat<f64>
     };
     match par {
         Par::Rayon(_) => {
-            G = Q
+            G = P
                 .par_row_chunks(GS_ROWS)
                 .zip(W.rb().par_row_chunks(GS_ROWS))
-                .map(|(Qc, Wc)| partial(Qc, Wc))
+                .map(|(Pc, Wc)| partial(Pc, Wc))
                 .reduce(|| Mat::<f64>::zeros(q, b), |a, c| a + c);
             W.par_row_chunks_mut(GS_ROWS)
                 .zip(Q.par_row_chunks(GS_ROWS))
                 .for_each(|(Wc, Qc)| matmul(Wc, Accum::Add, Qc, G.as_ref(), -1.0, Par::Seq));
         }
         Par::Seq => {
-            matmul(G.as_mut(), Accum::Replace, Q.transpose(), W.rb(), 1.0, Par::Seq);
+            matmul(G.as_mut(), Accum::Replace, P.transpose(), W.rb(), 1.0, Par::Seq);
             matmul(W.rb_mut(), Accum::Add, Q, G.as_ref(), -1.0, Par::Seq);
         }
     }
@@ -1292,8 +1829,15 @@ fn dense_operator_eigen(op: &Operator<'_>, m: usize) -> Result<Mat<f64>, Reducti
     apply_alloc(op, C.as_mut(), Mat::<f64>::identity(n, n).as_ref(), par);
     let C = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (C[(i, j)] + C[(j, i)]));
     let (values, U) = scaled_self_adjoint_eigen(C.as_ref(), "the shift-invert operator")?;
-    // Ascending: the m largest are the last m. (For an indefinite M, a large negative mu is
-    // not picked here; the Rayleigh-Ritz step may still see it.)
+    largest(&values, U.as_ref(), m)
+}
+
+/// The vectors of the `m` largest of the ascending `values` (the columns of `U`), descending,
+/// refused if one of them is not positive (an indefinite $\mathbf M$). For an indefinite
+/// $\mathbf M$, a large negative $\mu$ is not picked here; the Rayleigh-Ritz step may still
+/// see it.
+fn largest(values: &[f64], U: MatRef<'_, f64>, m: usize) -> Result<Mat<f64>, ReductionError> {
+    let n = values.len();
     let mu: Vec<f64> = (0..m).map(|k| values[n - 1 - k]).collect();
     if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
         return Err(ReductionError::MassNotPositiveDefinite {
@@ -1301,7 +1845,7 @@ fn dense_operator_eigen(op: &Operator<'_>, m: usize) -> Result<Mat<f64>, Reducti
             why: format!("the shift-invert operator has the eigenvalue {:.3e} <= 0", mu[bad]),
         });
     }
-    Ok(Mat::<f64>::from_fn(n, m, |i, k| U[(i, n - 1 - k)]))
+    Ok(Mat::<f64>::from_fn(U.nrows(), m, |i, k| U[(i, n - 1 - k)]))
 }
 
 /// [`fe_model::scaled_self_adjoint_eigen`] (faer's dense symmetric eigensolver on the matrix

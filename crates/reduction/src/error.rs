@@ -68,6 +68,36 @@ pub enum ReductionError {
         worst_residual: f64,
         tolerance: f64,
     },
+    /// The Cholesky factor of `K - sigma M` (with the workspace and the vectors the reduction
+    /// allocates after it) needs more memory than is available (`fe_model::available_memory`),
+    /// in the precision the `factor` setting allows: refused before any value is computed.
+    #[error("{body}: the Cholesky factor of K_ii does not fit in memory in {precision} precision: {factor_values} M values, {factor_gb:.1} GB of factor, {needed_gb:.1} GB with the workspace and the vectors, against {available_gb:.1} GB available; {hint}")]
+    FactorDoesNotFit {
+        body: String,
+        precision: &'static str,
+        factor_values: usize,
+        factor_gb: f64,
+        needed_gb: f64,
+        available_gb: f64,
+        hint: &'static str,
+    },
+    /// The single-precision factor broke down (a pivot not positive, or below
+    /// `eigen::SINGLE_PIVOT_RATIO` of its diagonal entry) at `at`: the matrix is singular or
+    /// too poorly conditioned for a factor with about 7 significant digits.
+    #[error("{body}: the single-precision factor of K_ii breaks down at {at} (pivot / diagonal = {pivot_ratio:.3e}): the stiffness is singular there or too poorly conditioned for single precision; set factor = \"double\"")]
+    SinglePrecisionBreakdown { body: String, at: String, pivot_ratio: f64 },
+    /// Iterative refinement with the single-precision factor did not reach a double-precision
+    /// solve's accuracy (`eigen::ShiftInvert::solve_refined`): the residual stopped falling,
+    /// or [`crate::eigen::MAX_REFINEMENT_STEPS`] corrections did not suffice.
+    #[error("{body}: iterative refinement with the single-precision factor fails in {what}, right-hand side {column}: backward error {backward_error:.3e} after {steps} corrections (needed {target:.3e}); the matrix (K_ii in a Craig-Bampton reduction, K - sigma M with a shift) is too poorly conditioned for a single-precision factor: set factor = \"double\"")]
+    RefinementFailed {
+        body: String,
+        what: String,
+        column: usize,
+        steps: usize,
+        backward_error: f64,
+        target: f64,
+    },
     /// The sparse factorisation failed for a reason other than the matrix (out of memory,
     /// index overflow).
     #[error("sparse factorisation failed: {0}")]
@@ -172,6 +202,24 @@ pub enum BodyFileProblem {
     Physics {
         problems: Vec<crate::physics::PhysicsProblem>,
     },
+}
+
+impl ReductionError {
+    /// The error with `name` as the body in the variants that carry one and were made
+    /// without it ([`ReductionError::FactorDoesNotFit`],
+    /// [`ReductionError::SinglePrecisionBreakdown`], [`ReductionError::RefinementFailed`], as
+    /// `eigen::ShiftInvert` makes them); other errors unchanged.
+    pub fn with_body(mut self, name: &str) -> Self {
+        if let ReductionError::FactorDoesNotFit { body, .. }
+        | ReductionError::SinglePrecisionBreakdown { body, .. }
+        | ReductionError::RefinementFailed { body, .. } = &mut self
+        {
+            if body.is_empty() {
+                *body = name.to_string();
+            }
+        }
+        self
+    }
 }
 
 fn version_message(found: u64, supported: u32) -> String {

@@ -63,6 +63,9 @@
 //! | $\mathbf P$ | `perm_fwd`, `perm_inv` | fill-reducing permutation of the factor (AMD or nested dissection) | `fe_model::ordering` |
 //! | $\mathbf L$ | `L_values` | Cholesky factor, $\mathbf P(\mathbf K - \sigma\mathbf M)\mathbf P^T = \mathbf L\mathbf L^T$ | [`eigen::ShiftInvert`] |
 //! | $\mathbf C$ | `Operator` | shift-invert operator $\mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T}$, symmetric | [`eigen`] module docs |
+//! | $\hat{\mathbf L}$ | `Values::Single` | the factor in single precision ([`eigen::FactorPrecision`]): half the bytes, solves accurate to $\kappa\,\varepsilon_{32}$ | `fe_model::SparseCholesky` |
+//! | $\mathbf R,\ \eta$ | `R`, `eta` | refinement residual $\mathbf B - (\mathbf K - \sigma\mathbf M)\mathbf X$ (f64) and normwise backward error $\|\mathbf r\|_\infty / (\|\mathbf A\|_\infty\|\mathbf x\|_\infty + \|\mathbf b\|_\infty)$, refined to $\max(\sqrt n, c)\,\varepsilon_{64}$ | [`eigen::ShiftInvert::solve_refined`]; Rigal & Gaches 1967 |
+//! | $(\mathbf K - \sigma\mathbf M)^{-1}\mathbf M$ | `WholeOperator` | shift-invert operator by whole refined solves, self-adjoint in the $\mathbf M$ inner product (single-precision factor); basis $\mathbf V$ with $\mathbf V^T\mathbf M\mathbf V = \mathbf I$, `MV` $= \mathbf M\mathbf V$ | [`eigen`] module docs |
 //! | $\mu_k,\ \mathbf y_k$ | `mu`, `Y` | eigenpairs of $\mathbf C$: $\mu_k = 1/(\lambda_k - \sigma)$, $\mathbf y_k = \mathbf L^T\mathbf P\boldsymbol\phi_k$ | Grimes, Lewis & Simon 1994, §2 |
 //! | $\mathbf V_k,\ \mathbf T_k,\ \beta_k$ | `V`, `T`, `beta` | Lanczos basis, projected matrix, coupling: $\mathbf C\mathbf V_k = \mathbf V_k\mathbf T_k + \beta_k\mathbf v_{k+1}\mathbf e_k^T$ | Wu & Simon 2000 |
 //! | $p$ | `krylov_dim` | Krylov subspace dimension, default $\max(2m, m + 32)$ with single vectors, $\max(2m, m + 32, m + 16b)$ with blocks | [`eigen::EigenSettings`] |
@@ -95,7 +98,7 @@ pub mod stress;
 pub use craig_bampton::{partition, reduce, reduce_with_progress, CbSettings, ModeSelection, Partition, Stage};
 pub use craig_bampton::{reduce_external, reduce_external_dofs};
 pub use diagnostics::{diagnostics, DiagnosticWarning, Diagnostics, ModeDiagnostics};
-pub use eigen::{lowest_modes, EigenSettings, EigenSolution, Shift, ShiftInvert};
+pub use eigen::{lowest_modes, EigenSettings, EigenSolution, FactorPrecision, FactorSettings, Shift, ShiftInvert};
 pub use error::ReductionError;
 /// The rigid modes of six-dof point sets (fe-model's), re-exported for the superelement.
 pub use fe_model::rigid::{rigid_modes, rigid_motion_block};

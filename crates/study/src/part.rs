@@ -56,6 +56,8 @@ pub struct Reduction {
     pub stress_shapes: bool,
     /// `reduction::CbSettings::load_points`: named nodes of the part's mesh.
     pub load_points: Vec<(String, NodeId)>,
+    /// `reduction::CbSettings::factor`: the precision of the factor of $\mathbf K_{ii}$.
+    pub factor: reduction::FactorPrecision,
 }
 
 /// A node of a part as named in a support or load.

@@ -844,11 +844,28 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
     settings.geometric_stiffening = reduction.geometric_stiffening;
     settings.stress_shapes = reduction.stress_shapes;
     settings.load_points = reduction.load_points.clone();
+    settings.factor = reduction.factor;
     let mut progress = |stage: reduction::Stage| {
         let what = match stage {
             reduction::Stage::Assembling => "assembling K and M".to_string(),
             reduction::Stage::Factorising { internal_dofs } => format!("factorising K_ii ({internal_dofs} dofs)"),
+            reduction::Stage::Factorised {
+                factor_len, precision, ..
+            } => format!(
+                "K_ii factored: {:.1} M values, {:.2} GB in {} precision",
+                factor_len as f64 / 1e6,
+                (factor_len * precision.bytes()) as f64 / 1e9,
+                precision.name()
+            ),
             reduction::Stage::ConstraintModes { count } => format!("{count} constraint modes"),
+            reduction::Stage::Solved {
+                constraint_steps,
+                applications,
+                factor_solves,
+            } if factor_solves > applications => format!(
+                "refined solves with the single-precision factor: {constraint_steps} per constraint mode, {:.2} per Lanczos vector ({applications} vectors)",
+                factor_solves as f64 / applications.max(1) as f64
+            ),
             reduction::Stage::EigenIteration { converged, wanted, .. } => {
                 format!("fixed-interface modes: {converged} of {wanted} converged")
             }

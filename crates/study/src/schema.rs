@@ -286,6 +286,8 @@ pub struct ReductionFile {
     pub stress_shapes: Option<bool>,
     /// Named points inside the body where loads act, with static correction.
     pub load_points: Option<Vec<LoadPointFile>>,
+    /// Precision of the factor of K_ii: "auto" (default), "double" or "single".
+    pub factor: Option<String>,
 }
 
 /// `[[parts.reduction.load_points]]`: a node by `set` (a one-node set) or `node_at`.

@@ -1438,10 +1438,23 @@ impl Validator<'_> {
                 None => ok = false,
             }
         }
+        let factor = match r.factor.as_deref() {
+            None | Some("auto") => reduction::FactorPrecision::Auto,
+            Some("double") => reduction::FactorPrecision::Double,
+            Some("single") => reduction::FactorPrecision::Single,
+            Some(other) => {
+                self.err(
+                    &path.key("factor"),
+                    format!("'{other}' is not a precision of the factor: use \"auto\", \"double\" or \"single\""),
+                );
+                return None;
+            }
+        };
         if !ok {
             return None;
         }
         Some(Reduction {
+            factor,
             modes,
             auxiliary_node,
             keep_mesh_shapes: r.keep_mesh_shapes.unwrap_or(true),

@@ -378,6 +378,15 @@ fn nested_dissection_reduces_as_amd_and_reports_progress() {
                 "Psi"
             }
             Stage::EigenIteration { .. } => "eigen",
+            Stage::Solved {
+                constraint_steps,
+                applications,
+                factor_solves,
+            } => {
+                // Double precision (automatic on a small body): one solve each.
+                assert_eq!((*constraint_steps, *applications), (1, *factor_solves));
+                "solved"
+            }
             Stage::Projecting => "project",
             Stage::Invariants => "invariants",
             _ => "other",
@@ -387,7 +396,7 @@ fn nested_dissection_reduces_as_amd_and_reports_progress() {
     dedup.dedup();
     assert_eq!(
         dedup,
-        ["assemble", "factor", "factored", "Psi", "eigen", "project", "invariants"],
+        ["assemble", "factor", "factored", "Psi", "eigen", "solved", "project", "invariants"],
         "{kinds:?}"
     );
     match stages.iter().rev().find(|s| matches!(s, Stage::EigenIteration { .. })) {
@@ -406,4 +415,76 @@ fn fe_errors_are_kept_as_sources() {
     let source = std::error::Error::source(&e).expect("the FE error is the source");
     assert_eq!(source.downcast_ref::<fe_model::FeError>(), Some(&cause));
     assert!(!e.to_string().contains("node 7"), "{e}");
+}
+
+/// The same block reduced with a single-precision factor of K_ii (refined solves, the
+/// M-inner-product Lanczos) and with a double-precision one: the fixed-interface eigenvalues
+/// agree to 1e-10, the constraint modes and the reduced matrices to the accuracy of the solves
+/// (below), and the stages report the precision and the refinement.
+#[test]
+fn single_precision_reduction_gives_the_double_precision_body() {
+    use reduction::{reduce_with_progress, FactorPrecision, Stage};
+    let (model, interfaces) = block([14, 5, 4]);
+    let mut settings = CbSettings::new(ModeSelection::Count(10));
+    settings.factor = FactorPrecision::Double;
+    let double = reduce(&model, "block", &interfaces, &settings).unwrap();
+    settings.factor = FactorPrecision::Single;
+    let mut stages = Vec::new();
+    let single = reduce_with_progress(
+        &model,
+        "block",
+        &interfaces,
+        &settings,
+        fe_model::FillOrdering::Auto,
+        &mut |s| stages.push(s),
+    )
+    .unwrap();
+    assert!(stages.iter().any(|s| matches!(
+        s,
+        Stage::Factorised {
+            precision: fe_model::Precision::Single,
+            ..
+        }
+    )));
+    let Some(Stage::Solved {
+        constraint_steps,
+        applications,
+        factor_solves,
+    }) = stages.iter().find(|s| matches!(s, Stage::Solved { .. })).copied()
+    else {
+        panic!("no Solved stage: {stages:?}");
+    };
+    // K_ii of the block has a condition number of about 1e4: each f32 solve gains 3 digits,
+    // so 2 to 5 solves reach the double-precision backward error.
+    assert!((2..=5).contains(&constraint_steps), "{constraint_steps} solves per constraint mode");
+    assert!(factor_solves > applications, "{factor_solves} solves, {applications} applications");
+    for (k, (a, b)) in double
+        .fixed_interface_omega
+        .iter()
+        .zip(&single.fixed_interface_omega)
+        .enumerate()
+    {
+        // omega^2 to 1e-10 (Rayleigh quotients of vectors with residuals below 1e-8).
+        assert!((a * a - b * b).abs() <= 1e-10 * a * a, "omega {k}: double {a}, single {b}");
+    }
+    // The constraint modes (the first 12 columns of the mesh shapes) and the static block of
+    // K_CB: both precisions solve to a backward error of a few eps, so they differ by
+    // kappa(K_ii) times that, about 1e-11 relative; 1e-9 leaves a margin for the mesh shapes'
+    // extra products.
+    let nb = 12;
+    let (Sd, Ss) = (&double.mesh.as_ref().unwrap().shapes, &single.mesh.as_ref().unwrap().shapes);
+    let rows = Sd.nrows;
+    let scale = Sd.data[..rows * nb].iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let diff = Sd.data[..rows * nb]
+        .iter()
+        .zip(&Ss.data[..rows * nb])
+        .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+    assert!(diff <= 1e-9 * scale, "constraint modes differ by {:.2e} relative", diff / scale);
+    let (Kd, Ks) = (dense(&double.K_CB), dense(&single.K_CB));
+    let static_diff = (Kd.view((0, 0), (nb, nb)) - Ks.view((0, 0), (nb, nb))).amax();
+    assert!(
+        static_diff <= 1e-9 * Kd.amax(),
+        "static block of K_CB differs by {:.2e}",
+        static_diff / Kd.amax()
+    );
 }

@@ -13,7 +13,7 @@
 
 use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
 use faer::{Mat, MatRef, Side};
-use reduction::eigen::{lowest_modes, EigenSettings, EigenSolution, Shift, ShiftInvert};
+use reduction::eigen::{lowest_modes, EigenSettings, EigenSolution, FactorPrecision, FactorSettings, Shift, ShiftInvert};
 use reduction::ReductionError;
 use std::f64::consts::PI;
 
@@ -934,4 +934,226 @@ fn clamped_beam_with_many_modes_matches_dense_reference() {
         let err = m_orthonormality_error(sol.vectors.as_ref(), M.as_ref());
         assert!(err <= n as f64 * EPS, "{elements} elements, b = {b}: Phi^T M Phi - I = {err:.3e}");
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// Single-precision factor: refined solves and the M-inner-product Lanczos
+// ---------------------------------------------------------------------------------------
+
+/// `ShiftInvert::with_settings` with `precision`, AMD ordering, no reserve.
+fn factor_with(
+    K: &SparseColMat<usize, f64>,
+    M: &SparseColMat<usize, f64>,
+    sigma: f64,
+    precision: FactorPrecision,
+) -> Result<ShiftInvert, ReductionError> {
+    ShiftInvert::with_settings(
+        K.as_ref(),
+        M.as_ref(),
+        sigma,
+        None,
+        fe_model::FillOrdering::Amd,
+        &FactorSettings {
+            precision,
+            reserve_bytes: 0,
+        },
+    )
+}
+
+/// The clamped and the free 3D lattice (1.5k dofs; the free one with the negative shift
+/// $\sigma = -10^{-4}$, so that the refinement's residual takes $\mathbf K - \sigma\mathbf M$
+/// from both matrices, and six rigid modes; $\kappa(\mathbf K - \sigma\mathbf M) \approx
+/// 30/10^{-4}$, fine for f32, where [`Shift::Auto`]'s $10^8$ is not: see
+/// `single_precision_refinement_fails_by_name_on_an_ill_conditioned_matrix`) and a chain small enough for the dense path: the single-precision factor gives
+/// the double-precision eigenvalues to 1e-10, M-orthonormal modes, and refines every
+/// application in a few solves.
+#[test]
+fn single_precision_factor_gives_the_double_precision_modes() {
+    for clamped in [true, false] {
+        let (K, M) = lattice(9, 8, 7, clamped);
+        // The first flexible eigenvalue of the free lattice is above 1e-3.
+        let settings = EigenSettings::new(12, if clamped { Shift::Zero } else { Shift::Value(-1e-4) });
+        let sigma = settings.shift.resolve(K.as_ref(), M.as_ref()).unwrap();
+        let double = factor_with(&K, &M, sigma, FactorPrecision::Double)
+            .unwrap()
+            .lowest_modes(K.as_ref(), M.as_ref(), &settings)
+            .unwrap();
+        let factor = factor_with(&K, &M, sigma, FactorPrecision::Single).unwrap();
+        assert_eq!(factor.precision(), fe_model::Precision::Single);
+        let single = factor.lowest_modes(K.as_ref(), M.as_ref(), &settings).unwrap();
+        let rigid = if clamped { 0 } else { 6 };
+        for j in 0..12 {
+            let (a, b) = (double.eigenvalues[j], single.eigenvalues[j]);
+            if j < rigid {
+                // Rigid modes: both at round-off, eps lambda_max (lambda_max < 30; factor 64 for
+                // the sums, as in lattice_free_six_rigid_modes).
+                assert!(
+                    a.abs() <= 64.0 * EPS * 30.0 && b.abs() <= 64.0 * EPS * 30.0,
+                    "clamped {clamped}, rigid mode {j}: double {a:.3e}, single {b:.3e}"
+                );
+            } else {
+                // Both are Rayleigh quotients of vectors with residuals below 1e-8: their
+                // errors are of the order of the squared residual (1e-16) plus round-off;
+                // 1e-10 is the agreement asked of any change to the reduction.
+                assert!((a - b).abs() <= 1e-10 * a, "clamped {clamped}, mode {j}: double {a}, single {b}");
+            }
+        }
+        // Phi^T M Phi = I from the Rayleigh-Ritz step, as in double precision.
+        let err = m_orthonormality_error(single.vectors.as_ref(), M.as_ref());
+        assert!(err <= 1e-12, "clamped {clamped}: M-orthonormality {err:.2e}");
+        // Refinement ran (more solves than applications), and converged fast: the lattice's
+        // condition number is about 1e3, so each f32 solve gains about 4 digits and 3 to 4
+        // solves reach the double-precision backward error; 5 leaves a margin.
+        assert!(
+            single.factor_solves > single.operator_applications
+                && single.factor_solves <= 5 * single.operator_applications,
+            "clamped {clamped}: {} solves for {} applications",
+            single.factor_solves,
+            single.operator_applications
+        );
+        assert_eq!(double.factor_solves, double.operator_applications);
+    }
+    // The dense path (n <= p + 1) with a single-precision factor: the analytic chain.
+    let (K, M) = chain(30, Ends::FixedFree, Mass::Lumped, 1.0, 1.0);
+    let sol = factor_with(&K, &M, 0.0, FactorPrecision::Single)
+        .unwrap()
+        .lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(3, Shift::Zero))
+        .unwrap();
+    for j in 0..3 {
+        let (lambda, _) = chain_exact(30, Ends::FixedFree, Mass::Lumped, 1.0, 1.0, j);
+        // Rayleigh quotients with residuals below 1e-8, against the closed form: round-off.
+        assert!((sol.eigenvalues[j] - lambda).abs() <= 1e-12 * lambda, "dense path, mode {j}");
+    }
+}
+
+/// A refined solve reaches the double-precision backward error, and agrees with the double
+/// solve to the condition number times it.
+#[test]
+fn refined_solve_reaches_double_precision_accuracy() {
+    let (K, M) = lattice(9, 8, 7, true);
+    let n = K.nrows();
+    let B = Mat::<f64>::from_fn(n, 3, |i, j| ((i * (j + 3)) % 101) as f64 / 50.0 - 1.0);
+    let mut X_d = B.clone();
+    factor_with(&K, &M, 0.0, FactorPrecision::Double).unwrap().solve_in_place(X_d.as_mut());
+    let single = factor_with(&K, &M, 0.0, FactorPrecision::Single).unwrap();
+    let mut X_s = B.clone();
+    let steps = single
+        .solve_refined(K.as_ref(), M.as_ref(), X_s.as_mut(), &|| "test".into())
+        .unwrap();
+    assert!((2..=5).contains(&steps), "{steps} solves");
+    let K_norm = (0..n)
+        .map(|j| K.as_ref().col_range(j).map(|p| K.val()[p].abs()).sum::<f64>())
+        .fold(0.0, f64::max);
+    let max_col = (0..n).map(|j| K.as_ref().col_range(j).len()).max().unwrap();
+    let target = (n as f64).sqrt().max(max_col as f64 + 2.0) * EPS;
+    let R = &B - &K * &X_s;
+    for j in 0..3 {
+        let eta = R.col(j).norm_max() / (K_norm * X_s.col(j).norm_max() + B.col(j).norm_max());
+        assert!(eta <= target, "column {j}: backward error {eta:.2e} > {target:.2e}");
+    }
+    // Both solutions are within kappa * eta of the exact one; kappa(K) of the clamped lattice
+    // is about 1e3 (lambda_max / lambda_min with M = I), eta at most 80 eps: 1e-11 bounds it.
+    let diff = (&X_s - &X_d).norm_max() / X_d.norm_max();
+    assert!(diff <= 1e-11, "refined against double solve: {diff:.2e}");
+}
+
+/// The free lattice shifted by [`Shift::Auto`] ($\sigma = -10^{-8}$ times the median
+/// $K_{ii}/M_{ii}$): $\kappa(\mathbf K - \sigma\mathbf M) \approx 10^8$, so
+/// $\kappa\,\varepsilon_{32} \approx 10$. The f32 factor exists, but refinement stalls (a
+/// correction does not halve the backward error). The solve and the Lanczos say so, naming
+/// what was solved, the column and the step, instead of returning a wrong answer.
+#[test]
+fn single_precision_refinement_fails_by_name_on_an_ill_conditioned_matrix() {
+    let (K, M) = lattice(9, 8, 7, false);
+    let sigma = Shift::Auto.resolve(K.as_ref(), M.as_ref()).unwrap();
+    let factor = factor_with(&K, &M, sigma, FactorPrecision::Single).expect("the f32 pivots stay positive");
+    let mut x = Mat::<f64>::from_fn(K.nrows(), 2, |i, j| 1.0 + ((i + j) % 3) as f64);
+    let err = factor
+        .solve_refined(K.as_ref(), M.as_ref(), x.as_mut(), &|| "the test load".into())
+        .unwrap_err();
+    match &err {
+        ReductionError::RefinementFailed {
+            what,
+            steps,
+            backward_error,
+            target,
+            ..
+        } => {
+            assert_eq!(what, "the test load");
+            assert!(*steps >= 2 && backward_error > target, "{err}");
+        }
+        other => panic!("expected RefinementFailed, got {other}"),
+    }
+    assert!(err.to_string().contains("factor = \"double\""), "{err}");
+    let err = factor
+        .lowest_modes(K.as_ref(), M.as_ref(), &EigenSettings::new(12, Shift::Auto))
+        .unwrap_err();
+    assert!(
+        matches!(&err, ReductionError::RefinementFailed { what, .. } if what.contains("Lanczos")),
+        "{err}"
+    );
+}
+
+/// Two masses joined by a spring $10^9$ times stiffer than their springs to the wall: in f32
+/// $10^9 + 1$ rounds to $10^9$ and the second pivot cancels. The single-precision factor is
+/// refused with the dof and the pivot ratio; the double-precision one is fine.
+#[test]
+fn single_precision_pivot_breakdown_is_located() {
+    let s = 1e9;
+    let K = from_triplets(2, &[(0, 0, 1.0 + s), (1, 1, 1.0 + s), (0, 1, -s), (1, 0, -s)]);
+    let M = from_triplets(2, &[(0, 0, 1.0), (1, 1, 1.0)]);
+    let err = factor_with(&K, &M, 0.0, FactorPrecision::Single).unwrap_err();
+    match &err {
+        ReductionError::SinglePrecisionBreakdown { at, pivot_ratio, .. } => {
+            assert!(at == "dof 0" || at == "dof 1", "{at}");
+            assert!(*pivot_ratio <= reduction::eigen::SINGLE_PIVOT_RATIO, "{pivot_ratio}");
+        }
+        other => panic!("expected SinglePrecisionBreakdown, got {other}"),
+    }
+    assert!(err.to_string().contains("factor = \"double\""), "{err}");
+    factor_with(&K, &M, 0.0, FactorPrecision::Double).expect("pivot ratio 2e-9: fine in double precision");
+}
+
+/// A factor that does not fit in the available memory (here: a reserve larger than any
+/// machine's memory) is refused before any value is computed, in the precision the setting
+/// allows, with the sizes in GB; without the reserve `Auto` takes double precision for a small
+/// matrix.
+#[test]
+fn factor_that_does_not_fit_is_refused_with_its_size() {
+    if fe_model::available_memory().is_none() {
+        return; // not Linux: nothing is refused
+    }
+    let (K, M) = lattice(5, 5, 5, true);
+    for (precision, named) in [
+        (FactorPrecision::Auto, "single"),
+        (FactorPrecision::Double, "double"),
+        (FactorPrecision::Single, "single"),
+    ] {
+        let err = ShiftInvert::with_settings(
+            K.as_ref(),
+            M.as_ref(),
+            0.0,
+            None,
+            fe_model::FillOrdering::Amd,
+            &FactorSettings {
+                precision,
+                reserve_bytes: usize::MAX / 4,
+            },
+        )
+        .unwrap_err();
+        match &err {
+            ReductionError::FactorDoesNotFit {
+                precision: p,
+                needed_gb,
+                available_gb,
+                ..
+            } => {
+                assert_eq!(*p, named, "{precision:?}");
+                assert!(needed_gb > available_gb, "{err}");
+            }
+            other => panic!("{precision:?}: expected FactorDoesNotFit, got {other}"),
+        }
+    }
+    let auto = factor_with(&K, &M, 0.0, FactorPrecision::Auto).unwrap();
+    assert_eq!(auto.precision(), fe_model::Precision::Double);
 }

@@ -469,3 +469,86 @@ fn a_simulation_reads_one_sensor_without_evaluating_the_others() {
     let at = sim.locate(solve).expect("located at the sensor");
     assert_eq!(at.key.to_string(), "sensors[1]");
 }
+
+/// `[parts.reduction] factor`: a value that is not a precision is refused at its key;
+/// `"single"` reaches the reduction (its stages name the single-precision factor and the
+/// refined solves) and gives the default run's fixed-interface frequencies.
+#[test]
+fn the_factor_precision_of_a_reduction_is_checked_and_reaches_the_reduction() {
+    use study::observer::{Observer, Progress};
+    let text = |factor: &str| {
+        format!(
+            r#"
+[[materials]]
+name = "steel"
+E = 210e9
+nu = 0.3
+rho = 7850.0
+
+[[parts]]
+name = "block"
+material = "steel"
+box = {{ size = [1.0, 0.2, 0.2], divisions = [12, 3, 3], element = "hex8" }}
+interfaces = [{{ name = "root", set = "x0", spider = "rbe2" }}]
+reduction = {{ modes = 4{factor} }}
+
+[[analyses]]
+type = "reduce"
+part = "block"
+"#
+        )
+    };
+    let err = check("factor-half", &text(", factor = \"half\""));
+    assert!(
+        err.contains("reduction.factor") && err.contains("'half'") && err.contains("\"single\""),
+        "{err}"
+    );
+    /// The stage lines and the fixed-interface frequencies of the reduced body.
+    #[derive(Default)]
+    struct Stages(Vec<String>);
+    impl Observer for Stages {
+        fn progress(&mut self, p: &Progress) {
+            if let Progress::Stage(s) = p {
+                self.0.push(s.clone());
+            }
+        }
+    }
+    let mut omega = Vec::new();
+    for (name, factor) in [("factor-auto", ""), ("factor-single", ", factor = \"single\"")] {
+        let dir = crate::scratch(name);
+        let file = dir.join("block.toml");
+        std::fs::write(&file, text(factor)).unwrap();
+        let study = study::load(&file).unwrap();
+        assert_eq!(
+            study.parts[0].reduction.as_ref().unwrap().factor,
+            if factor.is_empty() {
+                reduction::FactorPrecision::Auto
+            } else {
+                reduction::FactorPrecision::Single
+            }
+        );
+        let cache = dir.join("cache");
+        let mut stages = Stages::default();
+        let reduced = study::run::reduce_part(&study, &study.parts[0], &cache, &mut stages).unwrap();
+        let precision = if factor.is_empty() { "double" } else { "single" };
+        assert!(
+            stages
+                .0
+                .iter()
+                .any(|s| s.contains(&format!("in {precision} precision"))),
+            "{:?}",
+            stages.0
+        );
+        assert_eq!(
+            stages.0.iter().any(|s| s.contains("refined solves")),
+            !factor.is_empty(),
+            "{:?}",
+            stages.0
+        );
+        omega.push(reduced.body.fixed_interface_omega.clone());
+    }
+    for (a, b) in omega[0].iter().zip(&omega[1]) {
+        // omega^2 to 1e-10, as the reduction's own test of the two precisions.
+        assert!((a * a - b * b).abs() <= 1e-10 * a * a, "double {a}, single {b}");
+    }
+}
