@@ -771,7 +771,7 @@ impl VonMisesMaximum {
     /// $\gamma_n = nu/(1 - nu)$ ($u = 2^{-24}$) the bound of an $n$-term single-precision dot
     /// product in any summation order, applied row by row, and $\tau_i$ the round-off of the
     /// double-precision evaluation and of $\hat v_i$ (the margin of [`Self::maximum`], plus
-    /// underflow). Each chunk of [`SCREEN_CHUNK`] entries takes the largest of its entries'
+    /// underflow). Each chunk of 256 entries takes the largest of its entries'
     /// margins, $m_C \ge m_i$. With $L = \max_i(\hat v_i - m_C) \le \max_i v_i$, only the
     /// entries with $\hat v_i + m_C \ge L$ can reach or tie the maximum; they (usually a
     /// handful) and the beam entries are evaluated exactly as [`Self::maximum`] evaluates
