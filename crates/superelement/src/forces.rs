@@ -29,7 +29,8 @@ use crate::body::{GeometricStiffness, Superelement};
 use crate::mass::{add_mul3t, matvec, mul3, FfrForce, FfrScratch};
 use crate::so3::{self, skew};
 use crate::transform::{
-    col, copy_mat, gemm, lambda_right, lambda_t_left, lambda_t_left_cols, mul_blocks, Blocks, Kinematics,
+    add_mul_blocks_at, col, copy_mat, gemm, lambda_right, lambda_t_left, lambda_t_left_cols, mul_blocks, Blocks,
+    Kinematics,
 };
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
@@ -234,8 +235,6 @@ pub(crate) struct Scratch {
     /// $(6+n)\times n$.
     pub MX: Mat<f64>,
     pub FX: Mat<f64>,
-    pub E: Mat<f64>,
-    pub E2: Mat<f64>,
     /// $(6+n)\times6$.
     pub t6: Mat<f64>,
     /// $n\times6$, $6\times n$, $(6+n)\times3$.
@@ -275,8 +274,6 @@ impl Scratch {
             ffr_scratch: FfrScratch::new(n),
             MX: m6(),
             FX: m6(),
-            E: m6(),
-            E2: m6(),
             t6: Mat::zeros(6 + n, 6),
             n6: Mat::zeros(n, 6),
             six_n: Mat::zeros(6, n),
@@ -865,18 +862,19 @@ impl Superelement {
         gemm(&mut w.FX, w.t6.as_ref(), kin.Z(), 1.0, Accum::Add);
 
         // E_q += F_q + MX blocks + H N_y ; E_y += H Lambda + MX blocks2 (X^T in `Local::apply_x_t`).
-        copy_mat(&mut w.E, w.ffr.F_q.as_ref());
-        mul_blocks(w.MX.as_ref(), &w.blocks, &mut w.E, Accum::Add);
-        mul_blocks(w.FX.as_ref(), &mo.n_y, &mut w.E, Accum::Add);
+        // Both straight into their columns of XE; FX is not needed after E_q.
+        for j in 0..n {
+            add_to(loc.XE.col_as_slice_mut(j), w.ffr.F_q.col_as_slice(j), 1.0);
+        }
+        add_mul_blocks_at(w.MX.as_ref(), &w.blocks, &mut loc.XE, 0);
+        add_mul_blocks_at(w.FX.as_ref(), &mo.n_y, &mut loc.XE, 0);
         add_to(&mut loc.F_sum, &w.ffr.F, 1.0);
 
-        copy_mat(&mut w.E2, w.FX.as_ref());
-        lambda_right(&kin.Lambda, &mut w.E2);
-        mul_blocks(w.MX.as_ref(), &w.blocks2, &mut w.E2, Accum::Add);
+        lambda_right(&kin.Lambda, &mut w.FX);
         for j in 0..n {
-            add_to(loc.XE.col_as_slice_mut(j), w.E.col_as_slice(j), 1.0);
-            add_to(loc.XE.col_as_slice_mut(n + j), w.E2.col_as_slice(j), 1.0);
+            add_to(loc.XE.col_as_slice_mut(n + j), w.FX.col_as_slice(j), 1.0);
         }
+        add_mul_blocks_at(w.MX.as_ref(), &w.blocks2, &mut loc.XE, n);
     }
 
     /// Inertia force of the `Lumped` variant.

@@ -155,10 +155,16 @@ pub(crate) fn col(A: MatRef<'_, f64>, j: usize) -> &[f64] {
 /// `out (+)= A * blocks` for `A` with $n$ columns (eta columns of the product are zero;
 /// with `Accum::Add` they are left as they are).
 pub(crate) fn mul_blocks(A: MatRef<'_, f64>, blocks: &Blocks, out: &mut Mat<f64>, accum: Accum) {
-    let N = blocks.t.len();
     if accum == Accum::Replace {
         out.fill(0.0);
     }
+    add_mul_blocks_at(A, blocks, out, 0);
+}
+
+/// `out[:, c0..c0+n]` += `A * blocks` (as [`mul_blocks`], into the columns from `c0` of a
+/// wider matrix).
+pub(crate) fn add_mul_blocks_at(A: MatRef<'_, f64>, blocks: &Blocks, out: &mut Mat<f64>, c0: usize) {
+    let N = blocks.t.len();
     let r = A.nrows();
     for k in 0..N {
         for (off, B) in [(6 * k, &blocks.t[k]), (6 * k + 3, &blocks.r[k])] {
@@ -166,7 +172,7 @@ pub(crate) fn mul_blocks(A: MatRef<'_, f64>, blocks: &Blocks, out: &mut Mat<f64>
             let (a0, a1, a2) = (&col(A, off)[..r], &col(A, off + 1)[..r], &col(A, off + 2)[..r]);
             for j in 0..3 {
                 let (b0, b1, b2) = (B[(0, j)], B[(1, j)], B[(2, j)]);
-                let o = &mut out.col_as_slice_mut(off + j)[..r];
+                let o = &mut out.col_as_slice_mut(c0 + off + j)[..r];
                 for i in 0..r {
                     o[i] += a0[i] * b0 + a1[i] * b1 + a2[i] * b2;
                 }
