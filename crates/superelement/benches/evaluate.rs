@@ -43,12 +43,21 @@
 //! 61.4k without; `beam72-G` 2816k -> 1904k and 969k -> 584k; `block14-G` 170.0k -> 166.9k,
 //! `beam22-com-exact` 251.6k -> 246.9k (the X^T pass only).
 //!
-//! What is left is spread thin: about 20 faer products per evaluation with tangents, each
+//! Then fewer products per evaluation with tangents (19 -> 11: K^L with one product by Y, the
+//! W(.) products as block loops, one Psi product in the exact inertia partials, M_ffr X and
+//! the gravity partial in the common X^T pass): `beam14-G` 151.4k -> 145.9k, `block14-G`
+//! 166.9k -> 161.5k, `beam22-com-exact` 247.1k -> 243.4k, `beam72-G` 1905k -> 1850k with
+//! tangents; forces only unchanged.
+//!
+//! What is left is spread thin: 11 faer products per evaluation with tangents, each
 //! about 1.7k instructions of fixed cost (nano-gemm's planning and driver) beside its kernel,
 //! and plain loops compiled for the baseline x86-64 target (two-wide SIMD, no FMA). Replacing
 //! the small products by plain loops was measured slower (2-3 instructions a multiply-add
-//! against about 0.7 in faer's kernels); building with `-C target-cpu=x86-64-v3` takes
-//! `block14-G` to 153.9k with tangents and 61.1k without.
+//! against about 0.7 in faer's kernels), and so was a column-loop kernel compiled for AVX2 and
+//! FMA through faer's runtime dispatch (`pulp`): 3.2k instructions for a 14x6x14 product
+//! against faer's 1.7k, winning only on tall thin ones (BENCHMARKS.md). Building with
+//! `-C target-cpu=x86-64-v3` took `block14-G` (at 166.9k then) to 153.9k with tangents and
+//! 61.1k without.
 
 use nalgebra::{Point3, Vector3};
 use reduction::{CbSettings, ModeSelection, ReducedBody};

@@ -28,7 +28,10 @@
 use crate::body::{GeometricStiffness, Superelement};
 use crate::mass::{add_mul3t, matvec, mul3, FfrForce, FfrScratch};
 use crate::so3::{self, skew};
-use crate::transform::{col, copy_mat, gemm, lambda_right, lambda_t_left, mul_blocks, Blocks, Kinematics};
+use crate::transform::{
+    add_mul_blocks_at, col, copy_mat, gemm, lambda_right, lambda_t_left, lambda_t_left_cols, mul_blocks, Blocks,
+    Kinematics,
+};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use nalgebra::Vector3;
@@ -129,7 +132,15 @@ pub(crate) struct Local {
     /// $\mathbf X^T$ (the elastic, gravity and `Exact` inertia terms, all of the form
     /// $\mathbf X^T\mathbf E$, with $\mathbf T_j^T\mathbf K = \mathbf X^T[\mathbf 0;\ \mathbf K]$):
     /// [`Local::apply_x_t`] multiplies them in one pass, one pair of products instead of one per term.
+    /// With tangents the same pass takes two more blocks after these $2n$ columns (`extra` of
+    /// them in use, in the order they were added): $\mathbf M_{ffr}\mathbf X$ of the `Exact` mass
+    /// $\boldsymbol\Lambda^T\mathbf X^T(\mathbf M_{ffr}\mathbf X)\boldsymbol\Lambda$ (`m_col`, $n$ columns) and
+    /// $[\mathbf 0;\ \mathbf S_t^T]$ of the gravity partial $-\boldsymbol\Lambda^T\mathbf T_j^T\mathbf S_t^T$ in `Dg`
+    /// (`g_col`, 3 columns). Width $3n + 3$.
     pub XE: Mat<f64>,
+    pub extra: usize,
+    pub m_col: Option<usize>,
+    pub g_col: Option<usize>,
 }
 
 impl Local {
@@ -144,19 +155,49 @@ impl Local {
             Dy: Mat::zeros(n, n),
             Dg: Mat::zeros(n, 3),
             F_sum: vec![0.0; 6 + n],
-            XE: Mat::zeros(6 + n, 2 * n),
+            XE: Mat::zeros(6 + n, 3 * n + 3),
+            extra: 0,
+            m_col: None,
+            g_col: None,
         }
     }
 
-    /// `Dq` += $\mathbf X^T\mathbf E_q$, `Dy` += $\mathbf X^T\mathbf E_y$ (`XE`); `tmp` is $6\times2n$,
-    /// `out` $n\times2n$.
+    /// `Dq` += $\mathbf X^T\mathbf E_q$, `Dy` += $\mathbf X^T\mathbf E_y$ and, when their blocks are
+    /// in use, `M` $= \boldsymbol\Lambda^T\mathbf X^T(\mathbf M_{ffr}\mathbf X)\boldsymbol\Lambda$ and `Dg`
+    /// $\mathrel{-}= \boldsymbol\Lambda^T\mathbf T_j^T\mathbf S_t^T$ (`XE`); `tmp` is $6\times(3n+3)$, `out`
+    /// $n\times(3n+3)$.
     pub fn apply_x_t(&mut self, kin: &Kinematics, tmp: &mut Mat<f64>, out: &mut Mat<f64>) {
         let n = kin.n();
-        kin.xt_mul(self.XE.as_ref(), tmp, out, Accum::Replace);
+        let width = 2 * n + self.extra;
+        kin.xt_mul(
+            self.XE.as_ref().subcols(0, width),
+            tmp.as_mut().subcols_mut(0, width),
+            out.as_mut().subcols_mut(0, width),
+        );
         for j in 0..n {
             add_to(self.Dq.col_as_slice_mut(j), out.col_as_slice(j), 1.0);
             add_to(self.Dy.col_as_slice_mut(j), out.col_as_slice(n + j), 1.0);
         }
+        lambda_t_left_cols(&kin.Lambda, out, 2 * n..width);
+        if let Some(c) = self.m_col {
+            for j in 0..n {
+                self.M.col_as_slice_mut(j).copy_from_slice(out.col_as_slice(c + j));
+            }
+            lambda_right(&kin.Lambda, &mut self.M);
+        }
+        if let Some(c) = self.g_col {
+            for i in 0..3 {
+                add_to(self.Dg.col_as_slice_mut(i), out.col_as_slice(c + i), -1.0);
+            }
+        }
+    }
+
+    /// The next `k` free columns of `XE` after $[\mathbf E_q\ \mathbf E_y]$ (their docs): the
+    /// index of the first.
+    fn take_columns(&mut self, n: usize, k: usize) -> usize {
+        let c = 2 * n + self.extra;
+        self.extra += k;
+        c
     }
 
     /// Applies the deferred left factor $\boldsymbol\Lambda^T$ to `Dq` and `Dy` (their docs).
@@ -174,7 +215,14 @@ impl Local {
             self.Dq.fill(0.0);
             self.Dy.fill(0.0);
             self.Dg.fill(0.0);
-            self.XE.fill(0.0);
+            // The extra blocks are written in full when taken.
+            let n = self.Dq.ncols();
+            for j in 0..2 * n {
+                self.XE.col_as_slice_mut(j).fill(0.0);
+            }
+            self.extra = 0;
+            self.m_col = None;
+            self.g_col = None;
         }
     }
 }
@@ -187,15 +235,12 @@ pub(crate) struct Scratch {
     /// $(6+n)\times n$.
     pub MX: Mat<f64>,
     pub FX: Mat<f64>,
-    pub E: Mat<f64>,
-    pub E2: Mat<f64>,
     /// $(6+n)\times6$.
     pub t6: Mat<f64>,
     /// $n\times6$, $6\times n$, $(6+n)\times3$.
     pub n6: Mat<f64>,
     pub six_n: Mat<f64>,
-    pub six_three: Mat<f64>,
-    /// $6\times2n$ and $n\times2n$ for [`Local::apply_x_t`].
+    /// $6\times(3n+3)$ and $n\times(3n+3)$ for [`Local::apply_x_t`].
     pub six_2n: Mat<f64>,
     pub n_2n: Mat<f64>,
     /// $n\times n$.
@@ -229,14 +274,11 @@ impl Scratch {
             ffr_scratch: FfrScratch::new(n),
             MX: m6(),
             FX: m6(),
-            E: m6(),
-            E2: m6(),
             t6: Mat::zeros(6 + n, 6),
             n6: Mat::zeros(n, 6),
             six_n: Mat::zeros(6, n),
-            six_three: Mat::zeros(6, 3),
-            six_2n: Mat::zeros(6, 2 * n),
-            n_2n: Mat::zeros(n, 2 * n),
+            six_2n: Mat::zeros(6, 3 * n + 3),
+            n_2n: Mat::zeros(n, 3 * n + 3),
             nn1: Mat::zeros(n, n),
             nn2: Mat::zeros(n, n),
             n3a: Mat::zeros(n, 3),
@@ -616,12 +658,12 @@ impl Superelement {
                     e[3 + i] += w.three_n[(i, j)];
                 }
             }
-            self.gravity_dg(kin, loc, w, &s);
+            self.gravity_dg(kin, loc, &s);
         }
     }
 
     /// $\partial\boldsymbol\rho/\partial\mathbf g^L$ of the residual: $-\mathbf P^T[m\mathbf I;\ \tilde{\mathbf s};\ \mathbf S_t^T]$.
-    fn gravity_dg(&self, kin: &Kinematics, loc: &mut Local, w: &mut Scratch, s: &Vector3<f64>) {
+    fn gravity_dg(&self, kin: &Kinematics, loc: &mut Local, s: &Vector3<f64>) {
         let n = self.n;
         let I = &self.inertia;
         let Y = kin.Y();
@@ -632,13 +674,18 @@ impl Superelement {
             let v = yt * I.mass + st.transpose() * yr;
             for i in 0..3 {
                 loc.Dg[(j, i)] -= v[i];
-                w.n3a[(j, i)] = I.S_t[(i, j)];
             }
         }
-        // - B^T S_t^T = - Lambda^T T^T S_t^T
-        kin.tt_mul(w.n3a.as_ref(), &mut w.six_three, &mut w.n3b, Accum::Replace);
-        lambda_t_left(&kin.Lambda, &mut w.n3b);
-        add_scaled(&mut loc.Dg, &w.n3b, -1.0);
+        // - B^T S_t^T = - Lambda^T T^T S_t^T = - Lambda^T X^T [0; S_t^T], in `Local::apply_x_t`.
+        let c = loc.take_columns(n, 3);
+        loc.g_col = Some(c);
+        for i in 0..3 {
+            let e = loc.XE.col_as_slice_mut(c + i);
+            e[..6].fill(0.0);
+            for j in 0..n {
+                e[6 + j] = I.S_t[(i, j)];
+            }
+        }
     }
 
     /// Inertia force of the `Exact` variant: $\boldsymbol\rho_{in} = \mathbf P^T\mathbf F(\mathbf q^{jj},
@@ -745,11 +792,17 @@ impl Superelement {
         kin.pt_vec(&w.ffr.F, &mut loc.rho_in);
         // Body-axis mass P^T M_ffr P = Lambda^T X^T (M_ffr X) Lambda.
         kin.mul_x(w.ffr.M.as_ref(), &mut w.t6, &mut w.MX);
-        kin.xt_mul(w.MX.as_ref(), &mut w.six_n, &mut loc.M, Accum::Replace);
-        lambda_t_left(&kin.Lambda, &mut loc.M);
-        lambda_right(&kin.Lambda, &mut loc.M);
         if !tangents {
+            kin.xt_mul(w.MX.as_ref(), w.six_n.as_mut(), loc.M.as_mut());
+            lambda_t_left(&kin.Lambda, &mut loc.M);
+            lambda_right(&kin.Lambda, &mut loc.M);
             return;
+        }
+        // With tangents X^T (M_ffr X) comes with the other X^T products (`Local::XE`).
+        let c = loc.take_columns(n, n);
+        loc.m_col = Some(c);
+        for j in 0..n {
+            loc.XE.col_as_slice_mut(c + j).copy_from_slice(w.MX.col_as_slice(j));
         }
         let c = &mo.c;
         let Om_yd = Vector3::new(xi_yd[3], xi_yd[4], xi_yd[5]);
@@ -787,24 +840,17 @@ impl Superelement {
         //   E2 = (FX + MX N_y - (MX N_y Psi) Z) Lambda + MX blocks2 + (MX U) Y_r = H Lambda + MX blocks2,
         // and Dq += Lambda^T X^T E, Dy += Lambda^T X^T E2 (`Local::XE`; Lambda^T deferred, `Local::Dq`).
         // With FX = F_nu_q + (F_nu_6 - F_nu_q Psi) Z, H = F_nu_q + MX N_y + t6 Z where
-        // t6 = F_nu_6 - F_nu_q Psi - MX (N_y Psi) + [0, MX U]: one product with Z; N_y Psi only
-        // involves the 6N interface rows.
-        let ni = 6 * N;
-        kin.mul_psi(w.ffr.F_nu.as_ref().subcols(6, n), &mut w.t6);
+        // t6 = F_nu_6 - (F_nu_q + MX N_y) Psi + [0, MX U]: one product with Z, and one with
+        // Psi for both F_nu_q and MX N_y (F_nu_q + MX N_y is the first part of FX anyway).
+        copy_mat(&mut w.FX, w.ffr.F_nu.as_ref().subcols(6, n));
+        mul_blocks(w.MX.as_ref(), &mo.n_y, &mut w.FX, Accum::Add);
+        kin.mul_psi(w.FX.as_ref(), &mut w.t6);
         for c in 0..6 {
             let a = w.ffr.F_nu.col_as_slice(c);
             for (t, a) in w.t6.col_as_slice_mut(c).iter_mut().zip(a) {
                 *t = a - *t;
             }
         }
-        kin.blocks_psi(&mo.n_y, &mut w.n6);
-        gemm(
-            &mut w.t6,
-            w.MX.as_ref().subcols(0, ni),
-            w.n6.as_ref().subrows(0, ni),
-            -1.0,
-            Accum::Add,
-        );
         matmul(
             w.t6.as_mut().subcols_mut(3, 3),
             Accum::Add,
@@ -813,23 +859,22 @@ impl Superelement {
             1.0,
             Par::Seq,
         );
-        copy_mat(&mut w.FX, w.ffr.F_nu.as_ref().subcols(6, n));
-        mul_blocks(w.MX.as_ref(), &mo.n_y, &mut w.FX, Accum::Add);
         gemm(&mut w.FX, w.t6.as_ref(), kin.Z(), 1.0, Accum::Add);
 
         // E_q += F_q + MX blocks + H N_y ; E_y += H Lambda + MX blocks2 (X^T in `Local::apply_x_t`).
-        copy_mat(&mut w.E, w.ffr.F_q.as_ref());
-        mul_blocks(w.MX.as_ref(), &w.blocks, &mut w.E, Accum::Add);
-        mul_blocks(w.FX.as_ref(), &mo.n_y, &mut w.E, Accum::Add);
+        // Both straight into their columns of XE; FX is not needed after E_q.
+        for j in 0..n {
+            add_to(loc.XE.col_as_slice_mut(j), w.ffr.F_q.col_as_slice(j), 1.0);
+        }
+        add_mul_blocks_at(w.MX.as_ref(), &w.blocks, &mut loc.XE, 0);
+        add_mul_blocks_at(w.FX.as_ref(), &mo.n_y, &mut loc.XE, 0);
         add_to(&mut loc.F_sum, &w.ffr.F, 1.0);
 
-        copy_mat(&mut w.E2, w.FX.as_ref());
-        lambda_right(&kin.Lambda, &mut w.E2);
-        mul_blocks(w.MX.as_ref(), &w.blocks2, &mut w.E2, Accum::Add);
+        lambda_right(&kin.Lambda, &mut w.FX);
         for j in 0..n {
-            add_to(loc.XE.col_as_slice_mut(j), w.E.col_as_slice(j), 1.0);
-            add_to(loc.XE.col_as_slice_mut(n + j), w.E2.col_as_slice(j), 1.0);
+            add_to(loc.XE.col_as_slice_mut(n + j), w.FX.col_as_slice(j), 1.0);
         }
+        add_mul_blocks_at(w.MX.as_ref(), &w.blocks2, &mut loc.XE, n);
     }
 
     /// Inertia force of the `Lumped` variant.

@@ -18,12 +18,12 @@
 
 use crate::body::{BodyState, Superelement};
 use crate::error::SuperelementError;
-use crate::forces::{w_into, Local, Motion, Scratch};
+use crate::forces::{Local, Motion, Scratch};
 use crate::frame::{Frame, FrameScratch, FrameSolve};
 use crate::local_coordinates::local_coordinates;
 use crate::mass::MassVariant;
 use crate::so3::skew;
-use crate::transform::{gemm, lambda_right, rotate_matrix, Kinematics};
+use crate::transform::{add_mul_w, copy_mat, gemm, lambda_right, rotate_matrix, Kinematics};
 use faer::{Accum, Mat};
 use nalgebra::Vector3;
 
@@ -88,8 +88,6 @@ pub struct Workspace {
     pub(crate) loc: Local,
     pub(crate) scratch: Scratch,
     pub(crate) KL: Mat<f64>,
-    pub(crate) H: Mat<f64>,
-    pub(crate) W: Mat<f64>,
     pub(crate) n6: Mat<f64>,
     pub(crate) rho: Vec<f64>,
 }
@@ -112,8 +110,6 @@ impl Superelement {
             loc: Local::new(n),
             scratch: Scratch::new(N, n, self.geometric.is_some()),
             KL: Mat::zeros(n, n),
-            H: Mat::zeros(n, 3),
-            W: Mat::zeros(n, 3),
             n6: Mat::zeros(n, 6),
             rho: vec![0.0; n],
         }
@@ -283,27 +279,31 @@ impl Superelement {
             return;
         }
         kin.add_d_pt(&loc.F_sum, &mut ws.scratch.v1, &mut loc.Dq, 1.0);
-        // K^L = Dq B + (Dy W(y) + M W(a) + Dg g~ - W(rho)) Y_r, with Dq B = (Dq T) Lambda.
-        kin.mul_t(loc.Dq.as_ref(), &mut ws.n6, &mut ws.KL);
-        lambda_right(&kin.Lambda, &mut ws.KL);
-        w_into(&ws.rho, N, &mut ws.H);
-        for j in 0..3 {
-            for h in ws.H.col_as_slice_mut(j) {
-                *h = -*h;
+        // K^L = Dq B + H Y_r, H = Dy W(y) + M W(a) + Dg g~ - W(rho). With B = T Lambda,
+        // T = I - Psi Z and Y = Z Lambda: K^L = Dq Lambda + (-(Dq Psi) + [0, H]) Y, one product
+        // with Y for both terms; H is formed in columns 3..6 of that n x 6 factor (`n6`).
+        kin.mul_psi(loc.Dq.as_ref(), &mut ws.n6);
+        for j in 0..6 {
+            for t in ws.n6.col_as_slice_mut(j) {
+                *t = -*t;
             }
         }
-        w_into(&mo.y, N, &mut ws.W);
-        gemm(&mut ws.H, loc.Dy.as_ref(), ws.W.as_ref(), 1.0, Accum::Add);
-        w_into(&mo.a, N, &mut ws.W);
-        gemm(&mut ws.H, loc.M.as_ref(), ws.W.as_ref(), 1.0, Accum::Add);
-        let gt = skew(&mo.g);
+        for b in 0..2 * N {
+            let S = skew(&Vector3::new(ws.rho[3 * b], ws.rho[3 * b + 1], ws.rho[3 * b + 2]));
+            for c in 0..3 {
+                let h = &mut ws.n6.col_as_slice_mut(3 + c)[3 * b..3 * b + 3];
+                for i in 0..3 {
+                    h[i] -= S[(i, c)];
+                }
+            }
+        }
+        add_mul_w(loc.Dy.as_ref(), &mo.y, 2 * N, 1.0, &mut ws.n6, 3);
+        add_mul_w(loc.M.as_ref(), &mo.a, 2 * N, 1.0, &mut ws.n6, 3);
         // Dg is left at zero without gravity (`forces.rs`, `gravity`), where g~ = 0 anyway.
-        for j in 0..3 {
-            for i in 0..n {
-                ws.H[(i, j)] += loc.Dg[(i, 0)] * gt[(0, j)] + loc.Dg[(i, 1)] * gt[(1, j)] + loc.Dg[(i, 2)] * gt[(2, j)];
-            }
-        }
-        gemm(&mut ws.KL, ws.H.as_ref(), kin.Y().subrows(3, 3), 1.0, Accum::Add);
+        add_mul_w(loc.Dg.as_ref(), mo.g.as_slice(), 1, 1.0, &mut ws.n6, 3);
+        copy_mat(&mut ws.KL, loc.Dq.as_ref());
+        lambda_right(&kin.Lambda, &mut ws.KL);
+        gemm(&mut ws.KL, ws.n6.as_ref(), kin.Y(), 1.0, Accum::Add);
         rotate_matrix(R, N, &ws.KL, &mut out.stiffness);
         rotate_matrix(R, N, &loc.Dy, &mut out.damping);
     }

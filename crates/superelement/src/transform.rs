@@ -49,7 +49,8 @@ use crate::local_coordinates::{theta_of, u_of};
 use crate::so3::{self, skew};
 use crate::state::Frame;
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par};
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
 /// $\boldsymbol\Phi_{rig}$ (5.2): the $n\times6$ rigid-body modes of the interface set about the
@@ -154,10 +155,16 @@ pub(crate) fn col(A: MatRef<'_, f64>, j: usize) -> &[f64] {
 /// `out (+)= A * blocks` for `A` with $n$ columns (eta columns of the product are zero;
 /// with `Accum::Add` they are left as they are).
 pub(crate) fn mul_blocks(A: MatRef<'_, f64>, blocks: &Blocks, out: &mut Mat<f64>, accum: Accum) {
-    let N = blocks.t.len();
     if accum == Accum::Replace {
         out.fill(0.0);
     }
+    add_mul_blocks_at(A, blocks, out, 0);
+}
+
+/// `out[:, c0..c0+n]` += `A * blocks` (as [`mul_blocks`], into the columns from `c0` of a
+/// wider matrix).
+pub(crate) fn add_mul_blocks_at(A: MatRef<'_, f64>, blocks: &Blocks, out: &mut Mat<f64>, c0: usize) {
+    let N = blocks.t.len();
     let r = A.nrows();
     for k in 0..N {
         for (off, B) in [(6 * k, &blocks.t[k]), (6 * k + 3, &blocks.r[k])] {
@@ -165,7 +172,7 @@ pub(crate) fn mul_blocks(A: MatRef<'_, f64>, blocks: &Blocks, out: &mut Mat<f64>
             let (a0, a1, a2) = (&col(A, off)[..r], &col(A, off + 1)[..r], &col(A, off + 2)[..r]);
             for j in 0..3 {
                 let (b0, b1, b2) = (B[(0, j)], B[(1, j)], B[(2, j)]);
-                let o = &mut out.col_as_slice_mut(off + j)[..r];
+                let o = &mut out.col_as_slice_mut(c0 + off + j)[..r];
                 for i in 0..r {
                     o[i] += a0[i] * b0 + a1[i] * b1 + a2[i] * b2;
                 }
@@ -464,6 +471,37 @@ pub(crate) fn lambda_right(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
     }
 }
 
+/// `out[:, c0..c0+3]` $\mathrel{+}= \alpha\,\mathbf A\mathbf W(\mathbf x)$ with $\mathbf W(\mathbf x)$ the stack of
+/// $\tilde{\mathbf x}_b$ over the first `blocks` 3-blocks of `x` (zero below): column block
+/// $b$ of $\mathbf A$ times $\tilde{\mathbf x}_b$, six multiply-adds per row and block, without
+/// forming $\mathbf W$ (a dense product with it costs as much in multiply-adds and more in set-up).
+pub(crate) fn add_mul_w(A: MatRef<'_, f64>, x: &[f64], blocks: usize, alpha: f64, out: &mut Mat<f64>, c0: usize) {
+    let n = out.nrows();
+    let (o0, rest) = out.as_mut().subcols_mut(c0, 3).split_at_col_mut(1);
+    let (o1, o2) = rest.split_at_col_mut(1);
+    let (o0, o1, o2) = (
+        &mut first_col_mut(o0)[..n],
+        &mut first_col_mut(o1)[..n],
+        &mut first_col_mut(o2)[..n],
+    );
+    for b in 0..blocks {
+        let (x1, x2, x3) = (alpha * x[3 * b], alpha * x[3 * b + 1], alpha * x[3 * b + 2]);
+        let (a0, a1, a2) = (&col(A, 3 * b)[..n], &col(A, 3 * b + 1)[..n], &col(A, 3 * b + 2)[..n]);
+        // A x~ : columns a1 x3 - a2 x2, a2 x1 - a0 x3, a0 x2 - a1 x1.
+        for i in 0..n {
+            o0[i] += a1[i] * x3 - a2[i] * x2;
+            o1[i] += a2[i] * x1 - a0[i] * x3;
+            o2[i] += a0[i] * x2 - a1[i] * x1;
+        }
+    }
+}
+
+/// Column `j` of a mutable column-major view as a slice.
+#[inline]
+pub(crate) fn col_mut(A: MatMut<'_, f64>, j: usize) -> &mut [f64] {
+    first_col_mut(A.subcols_mut(j, 1))
+}
+
 /// The first column of a column-major view as a slice.
 fn first_col_mut<'a>(m: faer::MatMut<'a, f64>) -> &'a mut [f64] {
     m.col_mut(0)
@@ -474,8 +512,13 @@ fn first_col_mut<'a>(m: faer::MatMut<'a, f64>) -> &'a mut [f64] {
 
 /// $\boldsymbol\Lambda^T\mathbf A$ in place: the $\boldsymbol\theta_k$ row blocks times $\mathbf J_l^{-T}(\boldsymbol\theta_k)$.
 pub(crate) fn lambda_t_left(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
+    lambda_t_left_cols(Lambda, A, 0..A.ncols());
+}
+
+/// [`lambda_t_left`] on the columns `cols` of `A` only.
+pub(crate) fn lambda_t_left_cols(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>, cols: std::ops::Range<usize>) {
     let N = Lambda.len();
-    for j in 0..A.ncols() {
+    for j in cols {
         // Exact 6-chunks (u_k, theta_k): no bounds checks in the block rotations.
         for (c, L) in A.col_as_slice_mut(j)[..6 * N].chunks_exact_mut(6).zip(Lambda) {
             let v = L.tr_mul(&Vector3::new(c[3], c[4], c[5]));
@@ -491,25 +534,6 @@ impl Kinematics {
     pub(crate) fn mul_psi(&self, A: MatRef<'_, f64>, out: &mut Mat<f64>) {
         let ni = self.Psi.nrows();
         gemm(out, A.subcols(0, ni), self.Psi.as_ref(), 1.0, Accum::Replace);
-    }
-
-    /// `out` $= \mathbf N\boldsymbol\Psi$ ($n\times6$) for a block-diagonal $\mathbf N$ ([`Blocks`]):
-    /// rows $\mathbf N_{u_k}[\mathbf I,\ -\tilde{\mathbf r}_k]$ on $\mathbf u_k$, $[\mathbf 0,\
-    /// \mathbf N_{\theta_k}\boldsymbol\Lambda_k]$ on $\boldsymbol\theta_k$, zero on $\boldsymbol\eta$.
-    pub(crate) fn blocks_psi(&self, blocks: &Blocks, out: &mut Mat<f64>) {
-        out.fill(0.0);
-        for (k, (r, L)) in self.r_loc.iter().zip(&self.Lambda).enumerate() {
-            let (Nt, Nr) = (&blocks.t[k], &blocks.r[k]);
-            let Ntr = -(Nt * skew(r));
-            let NrL = Nr * L;
-            for a in 0..3 {
-                for b in 0..3 {
-                    out[(6 * k + a, b)] = Nt[(a, b)];
-                    out[(6 * k + a, 3 + b)] = Ntr[(a, b)];
-                    out[(6 * k + 3 + a, 3 + b)] = NrL[(a, b)];
-                }
-            }
-        }
     }
 
     /// `out` $= \boldsymbol\Psi^T\mathbf E$ ($6\times k$) for $\mathbf E$ ($n\times k$).
@@ -536,31 +560,29 @@ impl Kinematics {
         gemm(out, tmp.as_ref(), self.Z(), 1.0, Accum::Add);
     }
 
-    /// `out` $(+)= \mathbf X^T\mathbf E$ ($n\times k$) for $\mathbf E$ ($(6+n)\times k$):
-    /// $\mathbf E_q + \mathbf Z_j^T(\mathbf E_6 - \boldsymbol\Psi^T\mathbf E_q)$. `tmp` is $6\times k$.
-    pub(crate) fn xt_mul(&self, E: MatRef<'_, f64>, tmp: &mut Mat<f64>, out: &mut Mat<f64>, accum: Accum) {
+    /// `out` $= \mathbf X^T\mathbf E$ ($n\times k$) for $\mathbf E$ ($(6+n)\times k$):
+    /// $\mathbf E_q + \mathbf Z_j^T(\mathbf E_6 - \boldsymbol\Psi^T\mathbf E_q)$. `tmp` is $6\times k$ (views:
+    /// [`crate::forces::Local::apply_x_t`] multiplies a varying number of columns).
+    pub(crate) fn xt_mul(&self, E: MatRef<'_, f64>, mut tmp: MatMut<'_, f64>, mut out: MatMut<'_, f64>) {
         let n = self.n();
-        self.psi_t_mul(E.subrows(6, n), tmp);
+        let ni = self.Psi.nrows();
+        matmul(
+            tmp.rb_mut(),
+            Accum::Replace,
+            self.PsiT.as_ref(),
+            E.subrows(6, ni),
+            1.0,
+            Par::Seq,
+        );
         for j in 0..E.ncols() {
             let e = col(E, j);
-            let t = tmp.col_as_slice_mut(j);
+            let t = col_mut(tmp.rb_mut(), j);
             for i in 0..6 {
                 t[i] = e[i] - t[i];
             }
+            col_mut(out.rb_mut(), j)[..n].copy_from_slice(&e[6..6 + n]);
         }
-        match accum {
-            Accum::Replace => copy_mat(out, E.subrows(6, n)),
-            Accum::Add => {
-                for j in 0..E.ncols() {
-                    let e = col(E, j);
-                    let o = out.col_as_slice_mut(j);
-                    for i in 0..n {
-                        o[i] += e[6 + i];
-                    }
-                }
-            }
-        }
-        gemm(out, self.ZT.as_ref(), tmp.as_ref(), 1.0, Accum::Add);
+        matmul(out, Accum::Add, self.ZT.as_ref(), tmp.rb(), 1.0, Par::Seq);
     }
 
     /// `out` $(+)= \mathbf T_j^T\mathbf A = \mathbf A - \mathbf Z_j^T(\boldsymbol\Psi^T\mathbf A)$ for $\mathbf A$ ($n\times k$); `tmp` is $6\times k$.
