@@ -23,6 +23,7 @@ use faer::Mat;
 use fe_model::assembly::assemble_mass;
 use fe_model::{DofMap, FeModel, SystemPattern};
 use nalgebra::{Matrix3, Matrix6, Vector3};
+use rayon::prelude::*;
 
 /// The rigid-motion matrix on the dofs whose full slots (`6 node + k`) are `slots`: columns
 /// are translations along $x, y, z$, then rotations about the axes through `c`.
@@ -63,7 +64,7 @@ pub fn inertia_data_from_mass(
 ) -> Result<(InertiaData, Mat<f64>), ReductionError> {
     let n_f = slots.len();
     let n = S_full.ncols();
-    let S = Mat::from_fn(n_f, n, |d, j| S_full[(slots[d], j)]);
+    let S = gather_rows(n_f, n, |d, j| S_full[(slots[d], j)]);
     let par = faer::get_global_parallelism();
     // M is symmetric (assembled with both triangles): the gather product reads it once.
     let MS = symmetric_times(M, S.as_ref(), par);
@@ -120,7 +121,7 @@ pub fn inertia_data_from_mass(
             position[d] = usize::MAX;
         }
         let node_c = |r: usize| slots[dofs_c[r]] / 6;
-        let F = Mat::from_fn(n_c, 3 * n, |r, col| S_full[(6 * node_c(r) + col / n, col % n)]);
+        let F = gather_rows(n_c, 3 * n, |r, col| S_full[(6 * node_c(r) + col / n, col % n)]);
         let X = Mat::from_fn(n_c, 3, |r, k| nodes[node_c(r)][k] - c[k]);
         let MF = symmetric_times(M_cc.as_ref(), F.as_ref(), par);
         let G = F.transpose() * &MF;
@@ -150,6 +151,16 @@ pub fn inertia_data_from_mass(
         },
         Phi_com,
     ))
+}
+
+/// `Mat::from_fn(nrows, ncols, f)` with the columns filled in parallel: for the gathers of
+/// the basis ($\mathbf V$, $\mathbf S$, their rows), millions of entries for a large body.
+pub(crate) fn gather_rows(nrows: usize, ncols: usize, f: impl Fn(usize, usize) -> f64 + Sync) -> Mat<f64> {
+    let mut A = Mat::<f64>::zeros(nrows, ncols);
+    A.par_col_iter_mut()
+        .enumerate()
+        .for_each(|(j, col)| col.iter_mut().enumerate().for_each(|(i, a)| *a = f(i, j)));
+    A
 }
 
 /// The block of `M` on the rows and columns `rows` (sorted ascending), with `position[d]` the
