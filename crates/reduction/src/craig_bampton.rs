@@ -326,8 +326,8 @@ fn project_blocks(
             *a += v;
         }
     }
-    let mut P = V_i.transpose() * &AV_i;
-    let top = A_ib.transpose() * V_i;
+    let mut P = crate::eigen::gram(V_i, AV_i.as_ref(), par);
+    let top = crate::eigen::gram(A_ib.as_ref(), V_i, par);
     for c in 0..n {
         for r in 0..nb {
             P[(r, c)] += top[(r, c)] + if c < nb { A_bb[(r, c)] } else { 0.0 };

@@ -1781,35 +1781,42 @@ fn orthonormalise_block(
 /// this tall, thin shape costs more memory traffic than the product itself.
 fn project_out_with(mut W: MatMut<'_, f64>, P: MatRef<'_, f64>, Q: MatRef<'_, f64>, par: Par) -> Mat<f64> {
     let (q, b) = (Q.ncols(), W.ncols());
-    let mut G = Mat::<f64>::zeros(q, b);
     if q == 0 {
-        return G;
+        return Mat::<f64>::zeros(q, b);
     }
-    let partial = |Qc: MatRef<'_, f64>, Wc: MatRef<'_, f64>| {
-        let mut g = Mat::<f64>::zeros(q, b);
-        matmul(g.as_mut(), Accum::Replace, Qc.transpose(), Wc, 1.0, Par::Seq);
-        g
-    };
+    let G = gram(P, W.rb(), par);
     match par {
-        Par::Rayon(_) => {
-            G = P
-                .par_row_chunks(GS_ROWS)
-                .zip(W.rb().par_row_chunks(GS_ROWS))
-                .map(|(Pc, Wc)| partial(Pc, Wc))
-                .reduce(|| Mat::<f64>::zeros(q, b), |a, c| a + c);
-            W.par_row_chunks_mut(GS_ROWS)
-                .zip(Q.par_row_chunks(GS_ROWS))
-                .for_each(|(Wc, Qc)| matmul(Wc, Accum::Add, Qc, G.as_ref(), -1.0, Par::Seq));
-        }
-        Par::Seq => {
-            matmul(G.as_mut(), Accum::Replace, P.transpose(), W.rb(), 1.0, Par::Seq);
-            matmul(W.rb_mut(), Accum::Add, Q, G.as_ref(), -1.0, Par::Seq);
-        }
+        Par::Rayon(_) => W
+            .par_row_chunks_mut(GS_ROWS)
+            .zip(Q.par_row_chunks(GS_ROWS))
+            .for_each(|(Wc, Qc)| matmul(Wc, Accum::Add, Qc, G.as_ref(), -1.0, Par::Seq)),
+        Par::Seq => matmul(W.rb_mut(), Accum::Add, Q, G.as_ref(), -1.0, Par::Seq),
     }
     G
 }
 
-/// Rows per block of [`project_out_with`]: 1024 rows of a 200-column basis are 1.6 MB.
+/// $\mathbf P^T\mathbf W$ for tall, thin `P` and `W` (the same rows, a few hundred columns
+/// at most): with `par` by blocks of [`GS_ROWS`] rows, each a sequential product on data that
+/// fits in a core's cache, summed. A parallel dense product on the whole packs (copies) both
+/// first, which for this shape costs more memory traffic than the product itself.
+pub(crate) fn gram(P: MatRef<'_, f64>, W: MatRef<'_, f64>, par: Par) -> Mat<f64> {
+    let (q, b) = (P.ncols(), W.ncols());
+    let partial = |Pc: MatRef<'_, f64>, Wc: MatRef<'_, f64>| {
+        let mut g = Mat::<f64>::zeros(q, b);
+        matmul(g.as_mut(), Accum::Replace, Pc.transpose(), Wc, 1.0, Par::Seq);
+        g
+    };
+    match par {
+        Par::Rayon(_) => P
+            .par_row_chunks(GS_ROWS)
+            .zip(W.par_row_chunks(GS_ROWS))
+            .map(|(Pc, Wc)| partial(Pc, Wc))
+            .reduce(|| Mat::<f64>::zeros(q, b), |a, c| a + c),
+        Par::Seq => partial(P, W),
+    }
+}
+
+/// Rows per block of [`project_out_with`] and [`gram`]: 1024 rows of a 200-column basis are 1.6 MB.
 const GS_ROWS: usize = 1024;
 
 /// Small problems: the dense $\mathbf C$ from $n$ applications, its dense

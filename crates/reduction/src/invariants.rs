@@ -15,7 +15,7 @@
 //! out of these deformation-dependent terms, and Hermite interpolation sees the scalar field
 //! with zero slopes), averaged over the three directions.
 
-use crate::eigen::symmetric_times;
+use crate::eigen::{gram, symmetric_times};
 use crate::error::ReductionError;
 use crate::reduced_body::{DenseMatrix, InertiaData};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
@@ -72,7 +72,7 @@ pub fn inertia_data_from_mass(
     // Mass and centre of mass from the rigid modes about the origin: with translations T and
     // rotations W, T^T M W = m c~^T (see the module docs).
     let R0 = rigid_modes(slots, nodes, Vector3::zeros());
-    let G0 = R0.transpose() * symmetric_times(M, R0.as_ref(), par);
+    let G0 = gram(R0.as_ref(), symmetric_times(M, R0.as_ref(), par).as_ref(), par);
     let mass = (G0[(0, 0)] + G0[(1, 1)] + G0[(2, 2)]) / 3.0;
     if !(mass > 0.0) {
         return Err(ReductionError::MassNotPositiveDefinite {
@@ -83,9 +83,9 @@ pub fn inertia_data_from_mass(
     let c = Vector3::new(G0[(1, 5)], G0[(2, 3)], G0[(0, 4)]) / mass;
     let R = rigid_modes(slots, nodes, c);
     let MR = symmetric_times(M, R.as_ref(), par);
-    let G = R.transpose() * &MR;
+    let G = gram(R.as_ref(), MR.as_ref(), par);
     let inertia_com = Matrix3::from_fn(|i, j| G[(3 + i, 3 + j)]);
-    let RtMS = R.transpose() * &MS;
+    let RtMS = gram(R.as_ref(), MS.as_ref(), par);
     let S_t = DenseMatrix::from_faer(RtMS.subrows(0, 3));
     let S_r = DenseMatrix::from_faer(RtMS.subrows(3, 3));
 
@@ -124,8 +124,8 @@ pub fn inertia_data_from_mass(
         let F = gather_rows(n_c, 3 * n, |r, col| S_full[(6 * node_c(r) + col / n, col % n)]);
         let X = Mat::from_fn(n_c, 3, |r, k| nodes[node_c(r)][k] - c[k]);
         let MF = symmetric_times(M_cc.as_ref(), F.as_ref(), par);
-        let G = F.transpose() * &MF;
-        let XtMF = X.transpose() * &MF;
+        let G = gram(F.as_ref(), MF.as_ref(), par);
+        let XtMF = gram(X.as_ref(), MF.as_ref(), par);
         for k in 0..3 {
             for l in 0..3 {
                 S_bar[3 * k + l] += G.submatrix(k * n, l * n, n, n) * faer::Scale(1.0 / 3.0);
