@@ -36,10 +36,10 @@ use crate::error::FeError;
 use crate::model::FeModel;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::perm::PermRef;
-use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
+use faer::sparse::linalg::{amd, SymbolicSupernodalParams};
 use faer::sparse::{SymbolicSparseColMat, SymbolicSparseColMatRef};
 use serde::{Deserialize, Serialize};
 
@@ -61,6 +61,16 @@ pub enum FillOrdering {
 /// On the hex8 blocks of `reduction/benches/ordering.rs`, nested dissection's factor needs
 /// half AMD's flops at 9.4k dofs (1.9 against 3.8 Gflop) and 0.1 against 0.2 Gflop at 2.7k.
 pub const ND_MIN_DOFS: usize = 5_000;
+
+/// Supernode relaxation with nested dissection (faer's `SymbolicSupernodalParams::relax`):
+/// none, only the fundamental supernodes. Relaxed (amalgamated) supernodes store explicit
+/// zeros to make fewer, larger dense blocks; with nested dissection the supernodes of the
+/// separators are large already, and on the hex8 blocks of `reduction/benches/craig_bampton.rs`
+/// faer's default relaxation gave a factor 5 % larger (279.8 M against 266.0 M values at
+/// 203 616 dofs, 39.9 M against 37.5 M at 50 124) for the same 734 Gflop and no faster
+/// factorisation, and every Lanczos solve reads the larger factor. Larger relaxation (merging
+/// up to 64 or 128 columns) made the factor larger again and the factorisation no faster.
+const ND_RELAX: Option<&[(usize, f64)]> = None;
 
 /// Largest part (in vertices, i.e. mesh points) that nested dissection leaves to AMD.
 pub const ND_LEAF_VERTICES: usize = 32;
@@ -92,7 +102,10 @@ pub fn symbolic_cholesky(
                 A,
                 faer::Side::Lower,
                 SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, n)),
-                CholeskySymbolicParams::default(),
+                CholeskySymbolicParams {
+                    supernodal_params: SymbolicSupernodalParams { relax: ND_RELAX },
+                    ..Default::default()
+                },
             )
             .map_err(faer_error)?
         }

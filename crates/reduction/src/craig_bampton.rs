@@ -14,7 +14,7 @@ use crate::attachment::attachment_modes;
 use crate::eigen::{EigenSettings, FactorPrecision, FactorSettings, Shift, ShiftInvert};
 use crate::error::ReductionError;
 use crate::geometric::reduced_geometric_stiffness;
-use crate::invariants::{inertia_data, inertia_data_from_mass};
+use crate::invariants::{gather_rows, inertia_data, inertia_data_from_mass};
 use crate::reduced_body::{
     DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes, FORMAT_VERSION,
 };
@@ -233,8 +233,12 @@ impl Blocks {
         M: SparseColMatRef<'_, usize, f64>,
         p: &Partition,
     ) -> Result<Self, ReductionError> {
-        let (K_ii, K_ib, K_bb) = split(K, p)?;
-        let (M_ii, M_ib, M_bb) = split(M, p)?;
+        let (K_ii, K_ib, K_bb) = split(K, p, false)?;
+        // M shares K's pattern, where a solid's mass couples only equal components: two
+        // thirds of its stored entries are exact zeros, which would take memory beside the
+        // factor and be read by every Lanczos operator application (dropping them changes no
+        // sum).
+        let (M_ii, M_ib, M_bb) = split(M, p, true)?;
         Ok(Self {
             K_ii,
             M_ii,
@@ -250,11 +254,13 @@ impl Blocks {
 /// boundary-boundary blocks dense.
 ///
 /// Internal positions increase with the free-dof index, so each column of $\mathbf A_{ii}$
-/// is column `internal[c]` of $\mathbf A$ filtered, in the same row order: no sort.
+/// is column `internal[c]` of $\mathbf A$ filtered, in the same row order: no sort. With
+/// `drop_zeros`, stored zeros are left out of $\mathbf A_{ii}$.
 #[allow(clippy::type_complexity)]
 fn split(
     A: SparseColMatRef<'_, usize, f64>,
     p: &Partition,
+    drop_zeros: bool,
 ) -> Result<(SparseColMat<usize, f64>, Mat<f64>, Mat<f64>), ReductionError> {
     let (ni, nb) = (p.internal.len(), p.boundary.len());
     let mut A_ib = Mat::zeros(ni, nb);
@@ -273,7 +279,8 @@ fn split(
         .map(|&col| {
             A.row_idx_of_col_raw(col)
                 .iter()
-                .filter(|&&row| p.position[row].is_err())
+                .zip(A.val_of_col(col))
+                .filter(|&(&row, &v)| p.position[row].is_err() && !(drop_zeros && v == 0.0))
                 .count()
         })
         .sum();
@@ -284,8 +291,10 @@ fn split(
     for &col in &p.internal {
         for (&row, &v) in A.row_idx_of_col_raw(col).iter().zip(A.val_of_col(col)) {
             if let Err(r) = p.position[row] {
-                row_idx.push(r);
-                values.push(v);
+                if !(drop_zeros && v == 0.0) {
+                    row_idx.push(r);
+                    values.push(v);
+                }
             }
         }
         col_ptr.push(row_idx.len());
@@ -317,8 +326,8 @@ fn project_blocks(
             *a += v;
         }
     }
-    let mut P = V_i.transpose() * &AV_i;
-    let top = A_ib.transpose() * V_i;
+    let mut P = crate::eigen::gram(V_i, AV_i.as_ref(), par);
+    let top = crate::eigen::gram(A_ib.as_ref(), V_i, par);
     for c in 0..n {
         for r in 0..nb {
             P[(r, c)] += top[(r, c)] + if c < nb { A_bb[(r, c)] } else { 0.0 };
@@ -480,15 +489,16 @@ fn project(
     drop((K_ii, M_ii));
     // V on the free dofs, in the free-dof order of the model, column by column (the matrices
     // are column-major).
-    let mut V = Mat::<f64>::zeros(n_free, n);
-    for (b, &d) in p.boundary.iter().enumerate() {
-        V[(d, b)] = 1.0;
-    }
-    for c in 0..n {
-        for (i, &d) in p.internal.iter().enumerate() {
-            V[(d, c)] = V_i[(i, c)];
+    let V = gather_rows(n_free, n, |d, c| match p.position[d] {
+        Ok(b) => {
+            if b == c {
+                1.0
+            } else {
+                0.0
+            }
         }
-    }
+        Err(i) => V_i[(i, c)],
+    });
     Ok(Projection {
         V,
         omega,
@@ -739,14 +749,13 @@ pub fn reduce_with_progress(
     let projection = project(system, &p, settings.modes, &load_dofs, name, progress)?;
     let n = projection.V.ncols();
     // The CB basis on every node's six slots: S_full = T V (dependent slots follow their spider).
-    let mut S_full = Mat::<f64>::zeros(6 * model.node_count(), n);
-    for col in 0..n {
-        let V_col = projection.V.col(col);
-        for slot in 0..6 * model.node_count() {
-            let (d, c) = dofs.row(slot);
-            S_full[(slot, col)] = d.iter().zip(c).map(|(&dof, &coef)| coef * V_col[dof as usize]).sum();
-        }
-    }
+    let S_full = gather_rows(6 * model.node_count(), n, |slot, col| {
+        let (d, c) = dofs.row(slot);
+        d.iter()
+            .zip(c)
+            .map(|(&dof, &coef)| coef * projection.V[(dof as usize, col)])
+            .sum()
+    });
     progress(Stage::Invariants);
     let (inertia, Phi_com) = inertia_data(model, &S_full)?;
     let geometric_stiffness = if settings.geometric_stiffening {

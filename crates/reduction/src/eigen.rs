@@ -1459,11 +1459,16 @@ impl<'a> Lanczos<'a> {
         let empty = MatRef::from_column_major_slice(&[], n, 0);
         match op {
             Krylov::Split(_) => {
-                let _ = orthonormalise_block(head.rb_mut(), empty, &mut this.rng, par);
+                let _ = orthonormalise_block(head.rb_mut(), empty, None, &mut this.rng, par);
             }
             Krylov::Whole(op) => {
                 let (mut mhead, _) = this.MV.as_mut().split_at_col_mut(b);
-                let _ = m_orthonormalise_block(head.rb_mut(), mhead.rb_mut(), empty, empty, op.M, &mut this.rng, par);
+                let mass = MassProduct {
+                    M: op.M,
+                    MV: empty,
+                    MW: mhead.rb_mut(),
+                };
+                let _ = orthonormalise_block(head.rb_mut(), empty, Some(mass), &mut this.rng, par);
             }
         }
         Ok(this)
@@ -1548,11 +1553,16 @@ impl<'a> Lanczos<'a> {
             )));
         }
         let (h, R) = match self.op {
-            Krylov::Split(_) => orthonormalise_block(W.rb_mut(), done, &mut self.rng, par),
+            Krylov::Split(_) => orthonormalise_block(W.rb_mut(), done, None, &mut self.rng, par),
             Krylov::Whole(op) => {
                 let (Mdone, mut Mnext) = self.MV.as_mut().split_at_col_mut(j + b);
                 let MW = Mnext.rb_mut().get_mut(.., 0..b);
-                m_orthonormalise_block(W.rb_mut(), MW, done, Mdone.rb(), op.M, &mut self.rng, par)
+                let mass = MassProduct {
+                    M: op.M,
+                    MV: Mdone.rb(),
+                    MW,
+                };
+                orthonormalise_block(W.rb_mut(), done, Some(mass), &mut self.rng, par)
             }
         };
         // T_{0..j+b, j..j+b} = V^T C V_blk (the projection), kept symmetric.
@@ -1629,51 +1639,109 @@ impl<'a> Lanczos<'a> {
     }
 }
 
+/// The $\mathbf M$ inner product for [`orthonormalise_block`]: $\mathbf M$, $\mathbf M\mathbf V$
+/// of the basis, and where $\mathbf M\mathbf W$ of the result goes.
+struct MassProduct<'a> {
+    M: SparseColMatRef<'a, usize, f64>,
+    MV: MatRef<'a, f64>,
+    MW: MatMut<'a, f64>,
+}
+
 /// Classical Gram-Schmidt of the block `W` against the orthonormal columns of `V`, done twice
 /// ("twice is enough": Giraud, Langou & Rozložník 2005), then orthonormalised within itself
-/// (Householder QR, $\mathbf W = \mathbf Q\mathbf R$, `W` overwritten by $\mathbf Q$).
-/// Returns the coefficients $\mathbf V^T\mathbf W$ (summed over both passes) and $\mathbf R$.
+/// column by column, twice ($\mathbf W = \mathbf Q\mathbf R$, `W` overwritten by
+/// $\mathbf Q$). Returns the coefficients $\mathbf V^T\mathbf W$ (summed over all passes) and
+/// $\mathbf R$.
+///
+/// In the Euclidean inner product (`mass = None`) or in the $\mathbf M$ inner product
+/// ([`MassProduct`]: `V` $\mathbf M$-orthonormal): then $\mathbf M\mathbf w$ is carried along
+/// so that every inner product is a dot product, the coefficients are $\mathbf V^T\mathbf
+/// M\mathbf W$, and `MW` receives $\mathbf M\mathbf W$ of the result, recomputed (one sparse
+/// product) so that the stored $\mathbf M\mathbf V$ does not drift.
 ///
 /// A column that vanishes to round-off against the others (below [`BREAKDOWN_RATIO`] of the
 /// block's norm: the Krylov space is invariant to working precision) is replaced by a random
 /// direction orthogonal to everything, decoupled ($R_{cc} = 0$), as single-vector Lanczos
 /// restarts after a breakdown.
-fn orthonormalise_block(mut W: MatMut<'_, f64>, V: MatRef<'_, f64>, rng: &mut u64, par: Par) -> (Mat<f64>, Mat<f64>) {
+fn orthonormalise_block(
+    mut W: MatMut<'_, f64>,
+    V: MatRef<'_, f64>,
+    mass: Option<MassProduct<'_>>,
+    rng: &mut u64,
+    par: Par,
+) -> (Mat<f64>, Mat<f64>) {
     let (n, b) = W.shape();
+    // The products with the basis take the coefficients from M V (from V itself, Euclidean).
+    let (M, MV, MW) = match mass {
+        Some(MassProduct { M, MV, MW }) => (Some(M), MV, Some(MW)),
+        None => (None, V, None),
+    };
     let mut h = Mat::<f64>::zeros(V.ncols(), b);
-    let norm0 = W.norm_l2();
+    let euclidean_norm0 = W.norm_l2();
     for _pass in 0..2 {
-        h += project_out(W.rb_mut(), V, par);
+        h += project_out_with(W.rb_mut(), MV, V, par);
     }
+    let mut MWt = M.map(|M| symmetric_times(M, W.rb(), par));
+    let dot = |x: ColRef<'_, f64>, y: ColRef<'_, f64>| x.transpose() * y;
+    let norm0 = match &MWt {
+        // The block's M-norm before the projection: Pythagoras over the coefficients and the rest.
+        Some(MWt) => (h.squared_norm_l2() + (0..b).map(|c| dot(W.rb().col(c), MWt.col(c))).sum::<f64>())
+            .max(0.0)
+            .sqrt(),
+        None => euclidean_norm0,
+    };
+    // The norm of column w, with mw = M w in the M inner product.
+    let norm_of = |w: MatRef<'_, f64>, mw: Option<MatRef<'_, f64>>| match mw {
+        Some(mw) => dot(w.col(0), mw.col(0)).max(0.0).sqrt(),
+        None => w.norm_l2(),
+    };
     // Then column by column within the block (b is a few columns: cheap next to the above).
     let mut R = Mat::<f64>::zeros(b, b);
     for c in 0..b {
         let (left, mut right) = W.rb_mut().split_at_col_mut(c);
         let left = left.rb();
         let mut w = right.rb_mut().get_mut(.., 0..1);
-        let norm_in = w.norm_l2();
+        let (Mleft, mut mw) = match MWt.as_mut() {
+            Some(MWt) => {
+                let (Mleft, Mright) = MWt.as_mut().split_at_col_mut(c);
+                (Mleft.into_const(), Some(Mright.get_mut(.., 0..1)))
+            }
+            None => (left, None),
+        };
+        // w -= left g with g from Mleft, and mw -= Mleft g along with it.
+        let project_left = |w: MatMut<'_, f64>, mw: &mut Option<MatMut<'_, f64>>| {
+            let g = project_out_with(w, Mleft, left, par);
+            if let Some(mw) = mw {
+                matmul(mw.rb_mut(), Accum::Add, Mleft, g.as_ref(), -1.0, Par::Seq);
+            }
+            g
+        };
+        let norm_in = norm_of(w.rb(), mw.as_ref().map(|m| m.rb()));
         for _pass in 0..2 {
-            let g = project_out(w.rb_mut(), left, par);
+            let g = project_left(w.rb_mut(), &mut mw);
             for i in 0..c {
                 R[(i, c)] += g[(i, 0)];
             }
         }
-        let mut norm = w.norm_l2();
+        let mut norm = norm_of(w.rb(), mw.as_ref().map(|m| m.rb()));
         // A column nearly in the span of the earlier ones (a converging block) has lost digits:
         // the round-off of the passes above, relative to what is left, is no longer
         // orthogonal to V. One more pass against V and the block restores it (Daniel, Gragg,
         // Kaufman & Stewart 1976, Math. Comp. 30: reorthogonalise when the norm falls below
         // 1/sqrt(2) of its value before).
         if norm < std::f64::consts::FRAC_1_SQRT_2 * norm_in {
-            let g = project_out(w.rb_mut(), V, par);
+            let g = project_out_with(w.rb_mut(), MV, V, par);
             for i in 0..V.ncols() {
                 h[(i, c)] += g[(i, 0)];
             }
-            let g = project_out(w.rb_mut(), left, par);
+            if let (Some(M), Some(mw)) = (M, mw.as_mut()) {
+                mw.copy_from(symmetric_times(M, w.rb(), par));
+            }
+            let g = project_left(w.rb_mut(), &mut mw);
             for i in 0..c {
                 R[(i, c)] += g[(i, 0)];
             }
-            norm = w.norm_l2();
+            norm = norm_of(w.rb(), mw.as_ref().map(|m| m.rb()));
         }
         if norm > BREAKDOWN_RATIO * norm0 && norm.is_finite() {
             R[(c, c)] = norm;
@@ -1683,141 +1751,72 @@ fn orthonormalise_block(mut W: MatMut<'_, f64>, V: MatRef<'_, f64>, rng: &mut u6
                 w[(i, 0)] = uniform(rng);
             }
             for _pass in 0..2 {
-                project_out(w.rb_mut(), V, par);
-                project_out(w.rb_mut(), left, par);
-            }
-            norm = w.norm_l2();
-        }
-        w.col_mut(0).iter_mut().for_each(|x| *x /= norm);
-    }
-    (h, R)
-}
-
-/// [`orthonormalise_block`] in the $\mathbf M$ inner product: `W` against the
-/// $\mathbf M$-orthonormal columns of `V` (with `MV` $= \mathbf M\mathbf V$), twice, then within
-/// itself column by column, twice, with $\mathbf M\mathbf w$ carried along so that every inner
-/// product is a dot product; `MW` receives $\mathbf M\mathbf W$ of the result, recomputed
-/// (one sparse product) so that the stored $\mathbf M\mathbf V$ does not drift. Returns
-/// $\mathbf V^T\mathbf M\mathbf W$ and $\mathbf R$ as there; the same re-orthogonalisation
-/// and breakdown rules.
-fn m_orthonormalise_block(
-    mut W: MatMut<'_, f64>,
-    mut MW: MatMut<'_, f64>,
-    V: MatRef<'_, f64>,
-    MV: MatRef<'_, f64>,
-    M: SparseColMatRef<'_, usize, f64>,
-    rng: &mut u64,
-    par: Par,
-) -> (Mat<f64>, Mat<f64>) {
-    let (n, b) = W.shape();
-    let mut h = Mat::<f64>::zeros(V.ncols(), b);
-    for _pass in 0..2 {
-        h += project_out_with(W.rb_mut(), MV, V, par);
-    }
-    let mut MWt = symmetric_times(M, W.rb(), par);
-    let dot = |x: ColRef<'_, f64>, y: ColRef<'_, f64>| x.transpose() * y;
-    // The block's M-norm before the projection: Pythagoras over the coefficients and the rest.
-    let norm0 = (h.squared_norm_l2() + (0..b).map(|c| dot(W.rb().col(c), MWt.col(c))).sum::<f64>())
-        .max(0.0)
-        .sqrt();
-    let mut R = Mat::<f64>::zeros(b, b);
-    for c in 0..b {
-        let (left, mut right) = W.rb_mut().split_at_col_mut(c);
-        let left = left.rb();
-        let (Mleft, mut Mright) = MWt.as_mut().split_at_col_mut(c);
-        let Mleft = Mleft.rb();
-        let mut w = right.rb_mut().get_mut(.., 0..1);
-        let mut mw = Mright.rb_mut().get_mut(.., 0..1);
-        let m_norm = |w: MatRef<'_, f64>, mw: MatRef<'_, f64>| dot(w.col(0), mw.col(0)).max(0.0).sqrt();
-        let norm_in = m_norm(w.rb(), mw.rb());
-        for _pass in 0..2 {
-            let g = project_out_with(w.rb_mut(), Mleft, left, par);
-            matmul(mw.rb_mut(), Accum::Add, Mleft, g.as_ref(), -1.0, Par::Seq);
-            for i in 0..c {
-                R[(i, c)] += g[(i, 0)];
-            }
-        }
-        let mut norm = m_norm(w.rb(), mw.rb());
-        if norm < std::f64::consts::FRAC_1_SQRT_2 * norm_in {
-            let g = project_out_with(w.rb_mut(), MV, V, par);
-            for i in 0..V.ncols() {
-                h[(i, c)] += g[(i, 0)];
-            }
-            mw.copy_from(symmetric_times(M, w.rb(), par));
-            let g = project_out_with(w.rb_mut(), Mleft, left, par);
-            matmul(mw.rb_mut(), Accum::Add, Mleft, g.as_ref(), -1.0, Par::Seq);
-            for i in 0..c {
-                R[(i, c)] += g[(i, 0)];
-            }
-            norm = m_norm(w.rb(), mw.rb());
-        }
-        if norm > BREAKDOWN_RATIO * norm0 && norm.is_finite() {
-            R[(c, c)] = norm;
-        } else {
-            // Invariant subspace: a random direction, M-orthogonal to V and the block so far.
-            for i in 0..n {
-                w[(i, 0)] = uniform(rng);
-            }
-            for _pass in 0..2 {
                 project_out_with(w.rb_mut(), MV, V, par);
                 project_out_with(w.rb_mut(), Mleft, left, par);
             }
-            mw.copy_from(symmetric_times(M, w.rb(), par));
-            norm = m_norm(w.rb(), mw.rb());
+            if let (Some(M), Some(mw)) = (M, mw.as_mut()) {
+                mw.copy_from(symmetric_times(M, w.rb(), par));
+            }
+            norm = norm_of(w.rb(), mw.as_ref().map(|m| m.rb()));
         }
         w.col_mut(0).iter_mut().for_each(|x| *x /= norm);
-        mw.col_mut(0).iter_mut().for_each(|x| *x /= norm);
+        if let Some(mw) = mw.as_mut() {
+            mw.rb_mut().col_mut(0).iter_mut().for_each(|x| *x /= norm);
+        }
     }
-    MW.copy_from(symmetric_times(M, W.rb(), par));
+    if let (Some(M), Some(mut MW)) = (M, MW) {
+        MW.copy_from(symmetric_times(M, W.rb(), par));
+    }
     (h, R)
 }
 
 /// One classical Gram-Schmidt pass: $\mathbf W \leftarrow \mathbf W - \mathbf Q\mathbf G$
-/// with $\mathbf G = \mathbf Q^T\mathbf W$ (orthonormal columns `Q`); returns $\mathbf G$.
+/// with $\mathbf G = \mathbf P^T\mathbf W$; returns $\mathbf G$. With $\mathbf P = \mathbf Q$
+/// (orthonormal columns) a pass in the Euclidean inner product, with $\mathbf P = \mathbf
+/// M\mathbf Q$ ($\mathbf Q$ $\mathbf M$-orthonormal) one in the $\mathbf M$ inner product.
 ///
 /// By blocks of [`GS_ROWS`] rows, each a sequential product on data that fits in a core's
 /// cache, summed: $\mathbf Q$ ($n \times$ up to a few hundred) is read once per product.
 /// A parallel dense product on the whole of $\mathbf Q$ packs (copies) it first, which for
 /// this tall, thin shape costs more memory traffic than the product itself.
-fn project_out(W: MatMut<'_, f64>, Q: MatRef<'_, f64>, par: Par) -> Mat<f64> {
-    project_out_with(W, Q, Q, par)
-}
-
-/// [`project_out`] with the coefficients from `P`: $\mathbf G = \mathbf P^T\mathbf W$,
-/// $\mathbf W \leftarrow \mathbf W - \mathbf Q\mathbf G$. With $\mathbf P = \mathbf M\mathbf Q$
-/// and $\mathbf Q$ $\mathbf M$-orthonormal, one Gram-Schmidt pass in the $\mathbf M$ inner
-/// product.
 fn project_out_with(mut W: MatMut<'_, f64>, P: MatRef<'_, f64>, Q: MatRef<'_, f64>, par: Par) -> Mat<f64> {
     let (q, b) = (Q.ncols(), W.ncols());
-    let mut G = Mat::<f64>::zeros(q, b);
     if q == 0 {
-        return G;
+        return Mat::<f64>::zeros(q, b);
     }
-    let partial = |Qc: MatRef<'_, f64>, Wc: MatRef<'_, f64>| {
-        let mut g = Mat::<f64>::zeros(q, b);
-        matmul(g.as_mut(), Accum::Replace, Qc.transpose(), Wc, 1.0, Par::Seq);
-        g
-    };
+    let G = gram(P, W.rb(), par);
     match par {
-        Par::Rayon(_) => {
-            G = P
-                .par_row_chunks(GS_ROWS)
-                .zip(W.rb().par_row_chunks(GS_ROWS))
-                .map(|(Pc, Wc)| partial(Pc, Wc))
-                .reduce(|| Mat::<f64>::zeros(q, b), |a, c| a + c);
-            W.par_row_chunks_mut(GS_ROWS)
-                .zip(Q.par_row_chunks(GS_ROWS))
-                .for_each(|(Wc, Qc)| matmul(Wc, Accum::Add, Qc, G.as_ref(), -1.0, Par::Seq));
-        }
-        Par::Seq => {
-            matmul(G.as_mut(), Accum::Replace, P.transpose(), W.rb(), 1.0, Par::Seq);
-            matmul(W.rb_mut(), Accum::Add, Q, G.as_ref(), -1.0, Par::Seq);
-        }
+        Par::Rayon(_) => W
+            .par_row_chunks_mut(GS_ROWS)
+            .zip(Q.par_row_chunks(GS_ROWS))
+            .for_each(|(Wc, Qc)| matmul(Wc, Accum::Add, Qc, G.as_ref(), -1.0, Par::Seq)),
+        Par::Seq => matmul(W.rb_mut(), Accum::Add, Q, G.as_ref(), -1.0, Par::Seq),
     }
     G
 }
 
-/// Rows per block of [`project_out`]: 1024 rows of a 200-column basis are 1.6 MB.
+/// $\mathbf P^T\mathbf W$ for tall, thin `P` and `W` (the same rows, a few hundred columns
+/// at most): with `par` by blocks of [`GS_ROWS`] rows, each a sequential product on data that
+/// fits in a core's cache, summed. A parallel dense product on the whole packs (copies) both
+/// first, which for this shape costs more memory traffic than the product itself.
+pub(crate) fn gram(P: MatRef<'_, f64>, W: MatRef<'_, f64>, par: Par) -> Mat<f64> {
+    let (q, b) = (P.ncols(), W.ncols());
+    let partial = |Pc: MatRef<'_, f64>, Wc: MatRef<'_, f64>| {
+        let mut g = Mat::<f64>::zeros(q, b);
+        matmul(g.as_mut(), Accum::Replace, Pc.transpose(), Wc, 1.0, Par::Seq);
+        g
+    };
+    match par {
+        Par::Rayon(_) => P
+            .par_row_chunks(GS_ROWS)
+            .zip(W.par_row_chunks(GS_ROWS))
+            .map(|(Pc, Wc)| partial(Pc, Wc))
+            .reduce(|| Mat::<f64>::zeros(q, b), |a, c| a + c),
+        Par::Seq => partial(P, W),
+    }
+}
+
+/// Rows per block of [`project_out_with`] and [`gram`]: 1024 rows of a 200-column basis are 1.6 MB.
 const GS_ROWS: usize = 1024;
 
 /// Small problems: the dense $\mathbf C$ from $n$ applications, its dense

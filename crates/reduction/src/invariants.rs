@@ -15,7 +15,7 @@
 //! out of these deformation-dependent terms, and Hermite interpolation sees the scalar field
 //! with zero slopes), averaged over the three directions.
 
-use crate::eigen::symmetric_times;
+use crate::eigen::{gram, symmetric_times};
 use crate::error::ReductionError;
 use crate::reduced_body::{DenseMatrix, InertiaData};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
@@ -23,6 +23,7 @@ use faer::Mat;
 use fe_model::assembly::assemble_mass;
 use fe_model::{DofMap, FeModel, SystemPattern};
 use nalgebra::{Matrix3, Matrix6, Vector3};
+use rayon::prelude::*;
 
 /// The rigid-motion matrix on the dofs whose full slots (`6 node + k`) are `slots`: columns
 /// are translations along $x, y, z$, then rotations about the axes through `c`.
@@ -63,7 +64,7 @@ pub fn inertia_data_from_mass(
 ) -> Result<(InertiaData, Mat<f64>), ReductionError> {
     let n_f = slots.len();
     let n = S_full.ncols();
-    let S = Mat::from_fn(n_f, n, |d, j| S_full[(slots[d], j)]);
+    let S = gather_rows(n_f, n, |d, j| S_full[(slots[d], j)]);
     let par = faer::get_global_parallelism();
     // M is symmetric (assembled with both triangles): the gather product reads it once.
     let MS = symmetric_times(M, S.as_ref(), par);
@@ -71,7 +72,7 @@ pub fn inertia_data_from_mass(
     // Mass and centre of mass from the rigid modes about the origin: with translations T and
     // rotations W, T^T M W = m c~^T (see the module docs).
     let R0 = rigid_modes(slots, nodes, Vector3::zeros());
-    let G0 = R0.transpose() * symmetric_times(M, R0.as_ref(), par);
+    let G0 = gram(R0.as_ref(), symmetric_times(M, R0.as_ref(), par).as_ref(), par);
     let mass = (G0[(0, 0)] + G0[(1, 1)] + G0[(2, 2)]) / 3.0;
     if !(mass > 0.0) {
         return Err(ReductionError::MassNotPositiveDefinite {
@@ -82,9 +83,9 @@ pub fn inertia_data_from_mass(
     let c = Vector3::new(G0[(1, 5)], G0[(2, 3)], G0[(0, 4)]) / mass;
     let R = rigid_modes(slots, nodes, c);
     let MR = symmetric_times(M, R.as_ref(), par);
-    let G = R.transpose() * &MR;
+    let G = gram(R.as_ref(), MR.as_ref(), par);
     let inertia_com = Matrix3::from_fn(|i, j| G[(3 + i, 3 + j)]);
-    let RtMS = R.transpose() * &MS;
+    let RtMS = gram(R.as_ref(), MS.as_ref(), par);
     let S_t = DenseMatrix::from_faer(RtMS.subrows(0, 3));
     let S_r = DenseMatrix::from_faer(RtMS.subrows(3, 3));
 
@@ -120,11 +121,11 @@ pub fn inertia_data_from_mass(
             position[d] = usize::MAX;
         }
         let node_c = |r: usize| slots[dofs_c[r]] / 6;
-        let F = Mat::from_fn(n_c, 3 * n, |r, col| S_full[(6 * node_c(r) + col / n, col % n)]);
+        let F = gather_rows(n_c, 3 * n, |r, col| S_full[(6 * node_c(r) + col / n, col % n)]);
         let X = Mat::from_fn(n_c, 3, |r, k| nodes[node_c(r)][k] - c[k]);
         let MF = symmetric_times(M_cc.as_ref(), F.as_ref(), par);
-        let G = F.transpose() * &MF;
-        let XtMF = X.transpose() * &MF;
+        let G = gram(F.as_ref(), MF.as_ref(), par);
+        let XtMF = gram(X.as_ref(), MF.as_ref(), par);
         for k in 0..3 {
             for l in 0..3 {
                 S_bar[3 * k + l] += G.submatrix(k * n, l * n, n, n) * faer::Scale(1.0 / 3.0);
@@ -150,6 +151,16 @@ pub fn inertia_data_from_mass(
         },
         Phi_com,
     ))
+}
+
+/// `Mat::from_fn(nrows, ncols, f)` with the columns filled in parallel: for the gathers of
+/// the basis ($\mathbf V$, $\mathbf S$, their rows), millions of entries for a large body.
+pub(crate) fn gather_rows(nrows: usize, ncols: usize, f: impl Fn(usize, usize) -> f64 + Sync) -> Mat<f64> {
+    let mut A = Mat::<f64>::zeros(nrows, ncols);
+    A.par_col_iter_mut()
+        .enumerate()
+        .for_each(|(j, col)| col.iter_mut().enumerate().for_each(|(i, a)| *a = f(i, j)));
+    A
 }
 
 /// The block of `M` on the rows and columns `rows` (sorted ascending), with `position[d]` the
