@@ -50,7 +50,7 @@ pub fn element_mass(model: &FeModel, index: usize) -> Result<DMatrix<f64>, Eleme
 
 /// $\mathbf T_e^T \mathbf A \mathbf T_e$ added at the element's slots (also the geometric
 /// stiffness's assembly, `geometric.rs`).
-pub(crate) fn scatter(map: &ElementMap, A: &DMatrix<f64>, values: &mut [f64]) {
+pub(crate) fn scatter((map, slots): (&ElementMap, &[usize]), A: &DMatrix<f64>, values: &mut [f64]) {
     let nd = map.dofs.len();
     match &map.transform {
         ElementTransform::Select(position) => {
@@ -58,7 +58,7 @@ pub(crate) fn scatter(map: &ElementMap, A: &DMatrix<f64>, values: &mut [f64]) {
                 let Some(c) = pb else { continue };
                 for (a, pa) in position.iter().enumerate() {
                     let Some(r) = pa else { continue };
-                    values[map.slots[*r as usize + *c as usize * nd]] += A[(a, b)];
+                    values[slots[*r as usize + *c as usize * nd]] += A[(a, b)];
                 }
             }
         }
@@ -66,7 +66,7 @@ pub(crate) fn scatter(map: &ElementMap, A: &DMatrix<f64>, values: &mut [f64]) {
             let reduced = T_e.transpose() * A * T_e;
             for c in 0..nd {
                 for r in 0..nd {
-                    values[map.slots[r + c * nd]] += reduced[(r, c)];
+                    values[slots[r + c * nd]] += reduced[(r, c)];
                 }
             }
         }
@@ -113,7 +113,7 @@ fn fill_values<const N: usize>(
     let fill = |range: std::ops::Range<usize>, outs: &mut [&mut [f64]]| -> Result<(), FeError> {
         for e in range {
             for (out, A) in outs.iter_mut().zip(matrices(e)?) {
-                scatter(&pattern.elements[e], &A, out);
+                scatter(pattern.element(e), &A, out);
             }
         }
         Ok(())

@@ -111,7 +111,7 @@ pub fn assemble_geometric_stiffness(
             |mut values, e| -> Result<Vec<f64>, FeError> {
                 let u_e: Vec<f64> = element_slots(&model.elements[e]).iter().map(|&s| u_full[s]).collect();
                 let K_G = element_geometric_stiffness(model, e, &u_e)?;
-                scatter(&pattern.elements[e], &K_G, &mut values);
+                scatter(pattern.element(e), &K_G, &mut values);
                 Ok(values)
             },
         )

@@ -127,10 +127,17 @@ impl SymbolicFactor {
     }
 
     /// Bytes that [`SymbolicFactor::factor`] allocates in `precision` for a matrix with
-    /// `stored` stored entries: the values of $\mathbf L$, faer's workspace of the numeric
-    /// factorisation (with the global parallelism), and in single precision the f32 copy of
-    /// the matrix's values.
+    /// `stored` stored entries: the values of $\mathbf L$ and the workspace
+    /// ([`SymbolicFactor::workspace_bytes`]).
     pub fn numeric_bytes(&self, precision: Precision, stored: usize) -> usize {
+        self.factor_len() * precision.bytes() + self.workspace_bytes(precision, stored)
+    }
+
+    /// Bytes that [`SymbolicFactor::factor`] allocates in `precision` beside the values of
+    /// $\mathbf L$ and frees before it returns: faer's workspace of the numeric factorisation
+    /// (with the global parallelism) and, in single precision, the f32 copy of the matrix's
+    /// `stored` values.
+    pub fn workspace_bytes(&self, precision: Precision, stored: usize) -> usize {
         let par = faer::get_global_parallelism();
         let (scratch, copy) = match precision {
             Precision::Double => (
@@ -144,7 +151,7 @@ impl SymbolicFactor {
                 4 * stored,
             ),
         };
-        self.factor_len() * precision.bytes() + scratch.size_bytes() + copy
+        scratch.size_bytes() + copy
     }
 
     /// The numeric factorisation of `A` (the matrix analysed, lower triangle read) with values

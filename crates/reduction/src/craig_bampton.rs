@@ -19,7 +19,7 @@ use crate::reduced_body::{
     DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes, FORMAT_VERSION,
 };
 use crate::stress::stress_shapes;
-use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Mat, MatRef};
 use fe_model::{assemble, dof_points, DofMap, DofStatus, FeModel, FillOrdering, NodeId, SystemPattern, DOF_NAMES};
 use serde::{Deserialize, Serialize};
@@ -215,10 +215,16 @@ fn partition_by(
 /// triangles), the internal-boundary and boundary blocks dense. It is all that [`project`]
 /// needs, so that [`reduce`] frees $\mathbf K$ and $\mathbf M$ of the free dofs (and their
 /// assembly pattern) before the factorisation of $\mathbf K_{ii}$, whose peak memory they
-/// would add to.
+/// would add to. $\mathbf M_{ii}$ keeps only its nonzero entries (a solid's mass assembled on
+/// the pattern of $\mathbf K$ is two thirds exact zeros), or shares the row indices of
+/// $\mathbf K_{ii}$ when it has the same pattern without zeros.
 struct Blocks {
-    K_ii: SparseColMat<usize, f64>,
-    M_ii: SparseColMat<usize, f64>,
+    /// The pattern of $\mathbf K_{ii}$ and its values.
+    pattern_ii: SymbolicSparseColMat<usize>,
+    K_ii: Vec<f64>,
+    /// The pattern of $\mathbf M_{ii}$ where it is not that of $\mathbf K_{ii}$.
+    M_pattern_ii: Option<SymbolicSparseColMat<usize>>,
+    M_ii: Vec<f64>,
     /// $n_i \times n_b$.
     K_ib: Mat<f64>,
     M_ib: Mat<f64>,
@@ -233,14 +239,21 @@ impl Blocks {
         M: SparseColMatRef<'_, usize, f64>,
         p: &Partition,
     ) -> Result<Self, ReductionError> {
-        let (K_ii, K_ib, K_bb) = split(K, p, false)?;
-        // M shares K's pattern, where a solid's mass couples only equal components: two
-        // thirds of its stored entries are exact zeros, which would take memory beside the
-        // factor and be read by every Lanczos operator application (dropping them changes no
-        // sum).
-        let (M_ii, M_ib, M_bb) = split(M, p, true)?;
+        let (pattern_ii, K_ii, K_ib, K_bb) = split(K, p, true, false)?;
+        // M assembled on K's pattern keeps a solid's exact zeros (its mass couples only equal
+        // components: two thirds of the stored entries), which would take memory beside the
+        // factor and be read by every Lanczos operator application: they are left out
+        // (which changes no sum), unless there are none, when M_ii shares K_ii's row indices.
+        let shared = K.symbolic().col_ptr() == M.symbolic().col_ptr()
+            && K.symbolic().col_nnz().is_none()
+            && M.symbolic().col_nnz().is_none()
+            && K.symbolic().row_idx() == M.symbolic().row_idx()
+            && internal_entries(M, p, true) == internal_entries(M, p, false);
+        let (M_pattern_ii, M_ii, M_ib, M_bb) = split(M, p, !shared, true)?;
         Ok(Self {
+            pattern_ii: pattern_ii.expect("the pattern of K_ii"),
             K_ii,
+            M_pattern_ii,
             M_ii,
             K_ib,
             M_ib,
@@ -248,10 +261,21 @@ impl Blocks {
             M_bb,
         })
     }
+
+    fn K_ii(&self) -> SparseColMatRef<'_, usize, f64> {
+        SparseColMatRef::new(self.pattern_ii.as_ref(), &self.K_ii)
+    }
+
+    fn M_ii(&self) -> SparseColMatRef<'_, usize, f64> {
+        SparseColMatRef::new(
+            self.M_pattern_ii.as_ref().unwrap_or(&self.pattern_ii).as_ref(),
+            &self.M_ii,
+        )
+    }
 }
 
-/// The internal-internal block as a sparse matrix, the internal-boundary and the
-/// boundary-boundary blocks dense.
+/// The internal-internal block as a sparse matrix (its pattern only if `with_pattern`), the
+/// internal-boundary and the boundary-boundary blocks dense.
 ///
 /// Internal positions increase with the free-dof index, so each column of $\mathbf A_{ii}$
 /// is column `internal[c]` of $\mathbf A$ filtered, in the same row order: no sort. With
@@ -260,8 +284,9 @@ impl Blocks {
 fn split(
     A: SparseColMatRef<'_, usize, f64>,
     p: &Partition,
+    with_pattern: bool,
     drop_zeros: bool,
-) -> Result<(SparseColMat<usize, f64>, Mat<f64>, Mat<f64>), ReductionError> {
+) -> Result<(Option<SymbolicSparseColMat<usize>>, Vec<f64>, Mat<f64>, Mat<f64>), ReductionError> {
     let (ni, nb) = (p.internal.len(), p.boundary.len());
     let mut A_ib = Mat::zeros(ni, nb);
     let mut A_bb = Mat::zeros(nb, nb);
@@ -273,8 +298,37 @@ fn split(
             }
         }
     }
-    let internal_nnz: usize = p
-        .internal
+    let internal_nnz = internal_entries(A, p, drop_zeros);
+    let mut col_ptr = Vec::with_capacity(if with_pattern { ni + 1 } else { 0 });
+    let mut row_idx = Vec::with_capacity(if with_pattern { internal_nnz } else { 0 });
+    let mut values = Vec::with_capacity(internal_nnz);
+    if with_pattern {
+        col_ptr.push(0);
+    }
+    for &col in &p.internal {
+        for (&row, &v) in A.row_idx_of_col_raw(col).iter().zip(A.val_of_col(col)) {
+            if let Err(r) = p.position[row] {
+                if !(drop_zeros && v == 0.0) {
+                    if with_pattern {
+                        row_idx.push(r);
+                    }
+                    values.push(v);
+                }
+            }
+        }
+        if with_pattern {
+            col_ptr.push(row_idx.len());
+        }
+    }
+    // Rows stay in A's order: sorted (and unique) when A's are, as for assembled matrices
+    // and those read by `read_matrix_market`.
+    let pattern = with_pattern.then(|| SymbolicSparseColMat::new_unsorted_checked(ni, ni, col_ptr, None, row_idx));
+    Ok((pattern, values, A_ib, A_bb))
+}
+
+/// The stored entries of $\mathbf A_{ii}$ (without the stored zeros if `drop_zeros`).
+fn internal_entries(A: SparseColMatRef<'_, usize, f64>, p: &Partition, drop_zeros: bool) -> usize {
+    p.internal
         .iter()
         .map(|&col| {
             A.row_idx_of_col_raw(col)
@@ -283,26 +337,7 @@ fn split(
                 .filter(|&(&row, &v)| p.position[row].is_err() && !(drop_zeros && v == 0.0))
                 .count()
         })
-        .sum();
-    let mut col_ptr = Vec::with_capacity(ni + 1);
-    let mut row_idx = Vec::with_capacity(internal_nnz);
-    let mut values = Vec::with_capacity(internal_nnz);
-    col_ptr.push(0);
-    for &col in &p.internal {
-        for (&row, &v) in A.row_idx_of_col_raw(col).iter().zip(A.val_of_col(col)) {
-            if let Err(r) = p.position[row] {
-                if !(drop_zeros && v == 0.0) {
-                    row_idx.push(r);
-                    values.push(v);
-                }
-            }
-        }
-        col_ptr.push(row_idx.len());
-    }
-    // Rows stay in A's order: sorted (and unique) when A's are, as for assembled matrices
-    // and those read by `read_matrix_market`.
-    let symbolic = SymbolicSparseColMat::new_unsorted_checked(ni, ni, col_ptr, None, row_idx);
-    Ok((SparseColMat::new(symbolic, values), A_ib, A_bb))
+        .sum()
 }
 
 /// $\mathbf V^T\mathbf A\mathbf V$ for the CB basis $\mathbf V = \begin{bmatrix}\mathbf I &
@@ -380,14 +415,10 @@ fn project(
         factor: precision,
         describe,
     } = system;
+    let (K_ii, M_ii) = (blocks.K_ii(), blocks.M_ii());
     let Blocks {
-        K_ii,
-        M_ii,
-        K_ib,
-        M_ib,
-        K_bb,
-        M_bb,
-    } = blocks;
+        K_ib, M_ib, K_bb, M_bb, ..
+    } = &blocks;
     let (nb, ni, n_free) = (p.boundary.len(), p.internal.len(), p.position.len());
     // Before any factorisation: a count the interior cannot give is the user's to change.
     if let ModeSelection::Count(m) = modes {
@@ -407,7 +438,8 @@ fn project(
         let points_i: Vec<[f64; 3]> = p.internal.iter().map(|&d| points[d]).collect();
         let settings = FactorSettings {
             precision,
-            reserve_bytes: reserve_bytes(ni, nb, modes),
+            reserve_bytes: reserve_bytes(ni, nb, modes, load_dofs.len(), fe_model::Precision::Double),
+            single_reserve_bytes: reserve_bytes(ni, nb, modes, load_dofs.len(), fe_model::Precision::Single),
         };
         let name_errors = |e: ReductionError| {
             match e {
@@ -433,8 +465,8 @@ fn project(
         }
         };
         let factor =
-            ShiftInvert::with_settings(K_ii.as_ref(), M_ii.as_ref(), 0.0, Some(&points_i), ordering, &settings)
-                .map_err(name_errors)?;
+            ShiftInvert::with_settings(K_ii, M_ii, 0.0, Some(&points_i), ordering, &settings).map_err(name_errors)?;
+        drop(points_i);
         progress(Stage::Factorised {
             factor_len: factor.factor_len(),
             flops: factor.factor_flops(),
@@ -444,21 +476,18 @@ fn project(
         // (theory guide §3) Psi = -K_ii^{-1} K_ib: 6N solves with the one factor, refined to
         // a double-precision solve's accuracy when the factor is in single precision.
         progress(Stage::ConstraintModes { count: nb });
-        let mut Psi = -&K_ib;
+        let mut Psi = -K_ib;
         let constraint_steps = factor
-            .solve_refined(K_ii.as_ref(), M_ii.as_ref(), Psi.as_mut(), &|| {
-                "the constraint modes".into()
-            })
+            .solve_refined(K_ii, M_ii, Psi.as_mut(), &|| "the constraint modes".into())
             .map_err(name_errors)?;
         let (mut Phi_i, mut omega, (applications, factor_solves)) =
-            fixed_interface_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), modes, ni, progress).map_err(name_errors)?;
+            fixed_interface_modes(&factor, K_ii, M_ii, modes, ni, progress).map_err(name_errors)?;
         progress(Stage::Solved {
             constraint_steps,
             applications,
             factor_solves,
         });
-        let (X, omega_x) =
-            attachment_modes(&factor, K_ii.as_ref(), M_ii.as_ref(), &Phi_i, load_dofs).map_err(name_errors)?;
+        let (X, omega_x) = attachment_modes(&factor, K_ii, M_ii, &Phi_i, load_dofs).map_err(name_errors)?;
         let n_attachment = X.ncols();
         if n_attachment > 0 {
             let m = Phi_i.ncols();
@@ -484,9 +513,9 @@ fn project(
     let V_i = Mat::<f64>::from_fn(ni, n, |i, c| if c < nb { Psi[(i, c)] } else { Phi_i[(i, c - nb)] });
     drop((Psi, Phi_i));
     let par = faer::get_global_parallelism();
-    let K_CB = symmetrize(project_blocks(K_ii.as_ref(), &K_ib, &K_bb, V_i.as_ref(), par));
-    let M_CB = symmetrize(project_blocks(M_ii.as_ref(), &M_ib, &M_bb, V_i.as_ref(), par));
-    drop((K_ii, M_ii));
+    let K_CB = symmetrize(project_blocks(K_ii, K_ib, K_bb, V_i.as_ref(), par));
+    let M_CB = symmetrize(project_blocks(M_ii, M_ib, M_bb, V_i.as_ref(), par));
+    drop(blocks);
     // V on the free dofs, in the free-dof order of the model, column by column (the matrices
     // are column-major).
     let V = gather_rows(n_free, n, |d, c| match p.position[d] {
@@ -508,19 +537,41 @@ fn project(
     })
 }
 
-/// Bytes allocated while the factor of $\mathbf K_{ii}$ ($n_i$ rows) is alive, for
-/// [`FactorSettings::reserve_bytes`]: the constraint modes ($n_b$ columns), the Lanczos basis
-/// and $\mathbf M\mathbf V$ (the automatic Krylov dimension with blocks of 4, plus a block)
-/// and four $n_i \times m$ matrices of the Rayleigh-Ritz step, in f64. A cut-off frequency
-/// counts as 20 modes (its first request asks for 8, then doubles).
-fn reserve_bytes(ni: usize, nb: usize, modes: ModeSelection) -> usize {
+/// Bytes allocated while the factor of $\mathbf K_{ii}$ ($n_i$ rows) in `precision` is alive,
+/// for [`FactorSettings`]: the most $n_i$-vectors of the three stages held at once. The
+/// constraint modes $\boldsymbol\Psi$ ($n_b$ columns) and the solve's permuted copy; with a
+/// single-precision factor also the right-hand sides, the residuals, the sparse product's
+/// row-major copies and result, and the f32 copy of the solve. Then $\boldsymbol\Psi$ and the
+/// eigensolver's vectors ([`crate::eigen::eigen_vectors`]). Then $\boldsymbol\Psi$, the $m$
+/// modes and the attachment modes of the `load_dofs` load-point dofs with their refined solve
+/// and products. A cut-off frequency counts as 20 modes (its first request asks for 8, then
+/// doubles).
+fn reserve_bytes(
+    ni: usize,
+    nb: usize,
+    modes: ModeSelection,
+    load_dofs: usize,
+    precision: fe_model::Precision,
+) -> usize {
     let m = match modes {
         ModeSelection::StaticOnly => 0,
         ModeSelection::Count(m) => m,
         ModeSelection::CutoffHz(_) => 20,
     };
-    let basis = if m == 0 { 0 } else { (2 * m).max(m + 64) + 4 };
-    8 * ni * (nb + 2 * basis + 4 * m)
+    // Columns a refined solve of k right-hand sides holds beside them.
+    let solve = |k: usize| match precision {
+        fe_model::Precision::Double => k,
+        fe_model::Precision::Single => 5 * k + k.div_ceil(2),
+    };
+    let eigen = if m == 0 {
+        0
+    } else {
+        crate::eigen::eigen_vectors(&EigenSettings::new(m, Shift::Zero), ni, precision)
+    };
+    let columns = (nb + solve(nb))
+        .max(nb + eigen)
+        .max(nb + m + load_dofs + solve(load_dofs).max(2 * load_dofs));
+    8 * ni * columns
 }
 
 /// The last step shared by [`reduce`] and [`reduce_external`]: checks the auxiliary node

@@ -209,15 +209,28 @@ pub enum FactorPrecision {
 pub struct FactorSettings {
     /// The precision of the factor.
     pub precision: FactorPrecision,
-    /// Bytes the caller will allocate after the factorisation while the factor is alive (the
-    /// Lanczos basis, the constraint modes), counted against the available memory with the
-    /// factor.
+    /// Bytes the caller will allocate after the factorisation while a double-precision factor
+    /// is alive (the constraint modes, the Lanczos basis), counted against the available
+    /// memory with the factor.
     pub reserve_bytes: usize,
+    /// The same with a single-precision factor (more: its Lanczos keeps $\mathbf M\mathbf V$
+    /// beside $\mathbf V$, and its refined solves keep the right-hand sides and residuals).
+    pub single_reserve_bytes: usize,
 }
 
-/// Fraction of [`fe_model::available_memory`] a factor with its workspace and the caller's
-/// reserve may take: the other 10 % are for what the estimate leaves out (the allocator's
-/// overhead, small dense matrices, the page cache other programs keep using).
+impl FactorSettings {
+    /// The caller's reserve with a factor in `precision`.
+    fn reserve(&self, precision: Precision) -> usize {
+        match precision {
+            Precision::Double => self.reserve_bytes,
+            Precision::Single => self.single_reserve_bytes,
+        }
+    }
+}
+
+/// Fraction of [`fe_model::available_memory`] a factor with its workspace, or with the
+/// caller's reserve, may take: the other 10 % are for what the estimate leaves out (the
+/// allocator's overhead, small dense matrices, the page cache other programs keep using).
 pub const MEMORY_FRACTION: f64 = 0.9;
 
 /// A pivot of the single-precision factor with $L_{jj}^2 \le$ this fraction of its diagonal
@@ -470,14 +483,16 @@ impl ShiftInvert {
         let settings = FactorSettings {
             precision: FactorPrecision::Double,
             reserve_bytes: 0,
+            single_reserve_bytes: 0,
         };
         Self::with_settings(K, M, sigma, points, ordering, &settings)
     }
 
     /// [`ShiftInvert::with_ordering`] with the precision of the factor chosen by `settings`
-    /// ([`FactorPrecision`]): after the symbolic analysis, the bytes of the numeric
-    /// factorisation (values, faer's workspace, the f32 copy of the matrix in single
-    /// precision) plus `settings.reserve_bytes` are compared with [`MEMORY_FRACTION`] of
+    /// ([`FactorPrecision`]): after the symbolic analysis, the peak the factor brings, its
+    /// values plus the larger of the factorisation's workspace (faer's, and the f32 copy of
+    /// the matrix in single precision; freed when the factorisation returns) and the caller's
+    /// reserve in that precision ([`FactorSettings`]), is compared with [`MEMORY_FRACTION`] of
     /// [`fe_model::available_memory`] (measured then, so with $\mathbf K$ and $\mathbf M$
     /// already in memory). Where the available memory cannot be read, nothing is refused and
     /// [`FactorPrecision::Auto`] takes double precision. A single-precision factor is used
@@ -1235,7 +1250,10 @@ fn choose_precision(
     stored: usize,
     settings: &FactorSettings,
 ) -> Result<Precision, ReductionError> {
-    let needed = |p: Precision| symbolic.numeric_bytes(p, stored) + settings.reserve_bytes;
+    // The workspace is freed before the caller allocates its reserve: the peak is the factor
+    // plus the larger of the two.
+    let needed =
+        |p: Precision| symbolic.factor_len() * p.bytes() + symbolic.workspace_bytes(p, stored).max(settings.reserve(p));
     let Some(available) = fe_model::available_memory() else {
         return Ok(match settings.precision {
             FactorPrecision::Single => Precision::Single,
@@ -1920,6 +1938,33 @@ fn block_size(settings: &EigenSettings, n: usize) -> usize {
         0 => SMALL_BLOCK_SIZE,
         b => b,
     }
+}
+
+/// The most $n$-vectors (f64) [`ShiftInvert::lowest_modes_with_progress`] holds at once for
+/// `settings` on a pencil of size `n` with a factor in `precision`: the basis $\mathbf V$
+/// ($p + b$ columns; with a single-precision factor $\mathbf M\mathbf V$ too) and the larger
+/// of the thick restart's products ($\mathbf V\mathbf S$, and $\mathbf M\mathbf V\mathbf S$,
+/// `keep` columns each) and the last step's $7m$ columns (the Ritz vectors $\mathbf Y$, $\boldsymbol\Phi$,
+/// $\mathbf K\boldsymbol\Phi$, $\mathbf M\boldsymbol\Phi$, the rotated vectors and their two
+/// products; the row-major copies of the sparse products come before the last two). Settings
+/// that [`krylov_dimension`] refuses count 0 (they fail before allocating).
+pub(crate) fn eigen_vectors(settings: &EigenSettings, n: usize, precision: Precision) -> usize {
+    let Ok(p) = krylov_dimension(settings, n) else {
+        return 0;
+    };
+    let m = settings.n_modes;
+    if p + 1 >= n {
+        // The dense path: the operator or mass as n x n matrices, their symmetrised copies
+        // and eigenvectors.
+        return 6 * n + 7 * m;
+    }
+    let b = block_size(settings, n).min(p - m).min(n - p - 1).max(1);
+    let copies = match precision {
+        Precision::Double => 1,
+        Precision::Single => 2,
+    };
+    let keep = (m + (p - m) / 2).min(p - b);
+    copies * (p + b) + (copies * keep).max(7 * m)
 }
 
 /// Checks `settings` for a problem of size `n` and returns the Krylov dimension $p$.

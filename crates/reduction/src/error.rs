@@ -68,10 +68,10 @@ pub enum ReductionError {
         worst_residual: f64,
         tolerance: f64,
     },
-    /// The Cholesky factor of `K - sigma M` (with the workspace and the vectors the reduction
+    /// The Cholesky factor of `K - sigma M` (with its workspace, or the vectors the reduction
     /// allocates after it) needs more memory than is available (`fe_model::available_memory`),
     /// in the precision the `factor` setting allows: refused before any value is computed.
-    #[error("{body}: the Cholesky factor of K_ii does not fit in memory in {precision} precision: {factor_values} M values, {factor_gb:.1} GB of factor, {needed_gb:.1} GB with the workspace and the vectors, against {available_gb:.1} GB available; {hint}")]
+    #[error("{body}: the Cholesky factor of K_ii does not fit in memory in {precision} precision: {factor_values} M values, {factor_gb:.1} GB of factor, {needed_gb:.1} GB at the peak with its workspace or the reduction's vectors, against {available_gb:.1} GB available; {hint}")]
     FactorDoesNotFit {
         body: String,
         precision: &'static str,

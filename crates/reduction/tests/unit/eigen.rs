@@ -956,6 +956,7 @@ fn factor_with(
         &FactorSettings {
             precision,
             reserve_bytes: 0,
+            single_reserve_bytes: 0,
         },
     )
 }
@@ -1124,23 +1125,27 @@ fn factor_that_does_not_fit_is_refused_with_its_size() {
         return; // not Linux: nothing is refused
     }
     let (K, M) = lattice(5, 5, 5, true);
-    for (precision, named) in [
-        (FactorPrecision::Auto, "single"),
-        (FactorPrecision::Double, "double"),
-        (FactorPrecision::Single, "single"),
-    ] {
-        let err = ShiftInvert::with_settings(
+    let refused = |settings: FactorSettings| {
+        ShiftInvert::with_settings(
             K.as_ref(),
             M.as_ref(),
             0.0,
             None,
             fe_model::FillOrdering::Amd,
-            &FactorSettings {
-                precision,
-                reserve_bytes: usize::MAX / 4,
-            },
+            &settings,
         )
-        .unwrap_err();
+        .unwrap_err()
+    };
+    for (precision, named) in [
+        (FactorPrecision::Auto, "single"),
+        (FactorPrecision::Double, "double"),
+        (FactorPrecision::Single, "single"),
+    ] {
+        let err = refused(FactorSettings {
+            precision,
+            reserve_bytes: usize::MAX / 4,
+            single_reserve_bytes: usize::MAX / 4,
+        });
         match &err {
             ReductionError::FactorDoesNotFit {
                 precision: p,
@@ -1153,6 +1158,26 @@ fn factor_that_does_not_fit_is_refused_with_its_size() {
             }
             other => panic!("{precision:?}: expected FactorDoesNotFit, got {other}"),
         }
+    }
+    // The workspace of the factorisation is freed before the caller's vectors are allocated:
+    // with a reserve larger than the workspace, the peak is the factor plus the reserve, the
+    // workspace not added.
+    let reserve = 2 * fe_model::available_memory().unwrap() as usize;
+    let err = refused(FactorSettings {
+        precision: FactorPrecision::Double,
+        reserve_bytes: reserve,
+        single_reserve_bytes: 0,
+    });
+    match &err {
+        ReductionError::FactorDoesNotFit {
+            factor_gb, needed_gb, ..
+        } => {
+            // The GB figures carry f64 round-off (1e-16 relative); the workspace of this
+            // 1.5k-dof factor (kB, 1e-8 of a reserve of tens of GB) would show above 1e-9.
+            let expected = factor_gb + reserve as f64 / 1e9;
+            assert!((needed_gb - expected).abs() < 1e-9 * expected, "{err}: expected {expected} GB");
+        }
+        other => panic!("expected FactorDoesNotFit, got {other}"),
     }
     let auto = factor_with(&K, &M, 0.0, FactorPrecision::Auto).unwrap();
     assert_eq!(auto.precision(), fe_model::Precision::Double);
