@@ -862,10 +862,16 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
                 constraint_steps,
                 applications,
                 factor_solves,
-            } if factor_solves > applications => format!(
-                "refined solves with the single-precision factor: {constraint_steps} per constraint mode, {:.2} per Lanczos vector ({applications} vectors)",
-                factor_solves as f64 / applications.max(1) as f64
-            ),
+            } if factor_solves > applications => {
+                // A figure of the run, not a passing stage: kept in the log (a stage line only
+                // shows on a terminal).
+                obs.progress(&Progress::Info(format!(
+                    "part '{}': refined solves with the single-precision factor: {constraint_steps} per constraint mode, {:.2} per Lanczos vector ({applications} vectors)",
+                    part.name,
+                    factor_solves as f64 / applications.max(1) as f64
+                )));
+                return;
+            }
             reduction::Stage::EigenIteration { converged, wanted, .. } => {
                 format!("fixed-interface modes: {converged} of {wanted} converged")
             }

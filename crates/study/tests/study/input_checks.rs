@@ -471,7 +471,7 @@ fn a_simulation_reads_one_sensor_without_evaluating_the_others() {
 }
 
 /// `[parts.reduction] factor`: a value that is not a precision is refused at its key;
-/// `"single"` reaches the reduction (its stages name the single-precision factor and the
+/// `"single"` reaches the reduction (its progress names the single-precision factor and the
 /// refined solves) and gives the default run's fixed-interface frequencies.
 #[test]
 fn the_factor_precision_of_a_reduction_is_checked_and_reaches_the_reduction() {
@@ -503,12 +503,13 @@ part = "block"
         err.contains("reduction.factor") && err.contains("'half'") && err.contains("\"single\""),
         "{err}"
     );
-    /// The stage lines and the fixed-interface frequencies of the reduced body.
+    /// The stage and information lines (the refined solves are reported as information, so
+    /// that a log keeps them).
     #[derive(Default)]
     struct Stages(Vec<String>);
     impl Observer for Stages {
         fn progress(&mut self, p: &Progress) {
-            if let Progress::Stage(s) = p {
+            if let Progress::Stage(s) | Progress::Info(s) = p {
                 self.0.push(s.clone());
             }
         }
