@@ -1570,6 +1570,26 @@ impl System {
                 .enumerate()
                 .map(move |(u, &k)| (pos[ia][u], motions[a].col(k)))
         };
+        // One column (local column `q`) of the element's M, C, K, given in element
+        // coordinates, into the local matrices: J^T of each port's rows, the modal rows as they
+        // are.
+        let add_column = |[Ml, Cl, Kl]: [&mut [f64]; 3], q: usize, [m, c, k]: [&[f64]; 3]| {
+            for ia in 0..N {
+                let r = 6 * ia..6 * ia + 6;
+                for (qa, Ja) in port_j(ia) {
+                    let at = q * s + qa;
+                    Ml[at] += dot6(&Ja, &m[r.clone()]);
+                    Cl[at] += dot6(&Ja, &c[r.clone()]);
+                    Kl[at] += dot6(&Ja, &k[r.clone()]);
+                }
+            }
+            for (i, &qi) in mpos.iter().enumerate() {
+                let at = q * s + qi;
+                Ml[at] += m[6 * N + i];
+                Cl[at] += c[6 * N + i];
+                Kl[at] += k[6 * N + i];
+            }
+        };
         // Columns: node ports.
         for ib in 0..N {
             let b = e.nodes[ib];
@@ -1599,42 +1619,14 @@ impl System {
                         yK[i] += kc[i] * jb + cc[i] * dv + mc[i] * da;
                     }
                 }
-                for ia in 0..N {
-                    let r = 6 * ia..6 * ia + 6;
-                    for (qa, Ja) in port_j(ia) {
-                        let at = qb * s + qa;
-                        Ml[at] += dot6(&Ja, &yM[r.clone()]);
-                        Cl[at] += dot6(&Ja, &yC[r.clone()]);
-                        Kl[at] += dot6(&Ja, &yK[r.clone()]);
-                    }
-                }
-                for (i, &qi) in mpos.iter().enumerate() {
-                    let at = qb * s + qi;
-                    Ml[at] += yM[6 * N + i];
-                    Cl[at] += yC[6 * N + i];
-                    Kl[at] += yK[6 * N + i];
-                }
+                add_column([&mut *Ml, &mut *Cl, &mut *Kl], qb, [&yM[..], &yC[..], &yK[..]]);
             }
         }
         // Columns: modal coordinates.
         for (j, &qj) in mpos.iter().enumerate() {
             let c = 6 * N + j;
             let (mc, cc, kc) = (M.col_as_slice(c), C.col_as_slice(c), K.col_as_slice(c));
-            for ia in 0..N {
-                let r = 6 * ia..6 * ia + 6;
-                for (qa, Ja) in port_j(ia) {
-                    let at = qj * s + qa;
-                    Ml[at] += dot6(&Ja, &mc[r.clone()]);
-                    Cl[at] += dot6(&Ja, &cc[r.clone()]);
-                    Kl[at] += dot6(&Ja, &kc[r.clone()]);
-                }
-            }
-            for (i, &qi) in mpos.iter().enumerate() {
-                let at = qj * s + qi;
-                Ml[at] += mc[6 * N + i];
-                Cl[at] += cc[6 * N + i];
-                Kl[at] += kc[6 * N + i];
-            }
+            add_column([&mut *Ml, &mut *Cl, &mut *Kl], qj, [mc, cc, kc]);
         }
     }
 
