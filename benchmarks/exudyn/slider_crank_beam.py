@@ -8,11 +8,15 @@ Euler-Bernoulli) as Exudyn's own beam elements instead of a reduced body:
   pins `RevoluteJoint2D`: the planar model a user of Exudyn builds for this rod.
 * `--model beam3d`: `ObjectBeamGeometricallyExact`, the 3D geometrically exact (shear
   deformable) beam on `NodeRigidBodyRxyz` nodes, crank and slider 3D rigid bodies and
-  `GenericJoint`s as in slider_crank.py. Its section: EA, GJ, EI of the round rod and rotary
-  inertia rho (J, I, I); the shear stiffness is `--shear-factor` times k G A (Cowper's k = 0.89;
+  `GenericJoint`s as in slider_crank.py. Its section: EA, GJ, EI of the rod and rotary
+  inertia rho (2I, I, I); the shear stiffness is `--shear-factor` times k G A (Cowper's k = 0.89;
   default 1, the physical rod: shear adds about 0.07 % to its bending flexibility, which the
   Euler-Bernoulli C2 rod lacks; a stiffer shear would remove that, but at 100 k G A Exudyn's
   Newton iteration does not converge at any step tried).
+
+`--section square` replaces the round section by the square one of the solid rod of
+run_comparison.sh (side `side` of params.txt, the round rod's I, 2 % less area and mass): the
+converged ANCF run with it is that comparison's reference.
 
 Mechanism (as slider_crank.py): rigid crank r = 0.15 m driven at 150 rad/s (velocity-level
 coordinate constraint), slider of half the rod's mass on the x axis, start at the dead centre
@@ -28,7 +32,7 @@ wall and CPU time of `SolveDynamic` per step, `RESULT` lines, `--csv` (t, w, sli
 
 Usage (run.sh makes the virtual environment):
     run.sh slider_crank_beam.py --params DIR/params.txt --model ancf|beam3d [--elements 4]
-        [--h H] [--t-end T] [--rho-inf 0.9] [--modified-newton] [--sparse] [--csv out.csv]
+        [--section round|square] [--h H] [--t-end T] [--rho-inf 0.9] [--modified-newton] [--sparse] [--csv out.csv]
         [--reference ref.csv]
 """
 
@@ -77,11 +81,23 @@ def read_params(path):
     return params
 
 
+def section_properties(p):
+    """Area, second moment of area, torsion constant and Cowper's shear factor of the rod's
+    section: `p["section"]` is "round" (diameter `diameter`, validation problem C2) or "square"
+    (side `side`: the solid rod of run_comparison.sh, a hex20 bar with the round rod's I)."""
+    nu = p["nu"]
+    if p["section"] == "round":
+        d = p["diameter"]
+        return math.pi * d**2 / 4, math.pi * d**4 / 64, math.pi * d**4 / 32, 6 * (1 + nu) / (7 + 6 * nu)
+    a = p["side"]
+    # Square: J = 0.1406 a^4 (Saint-Venant, Roark's table 10.1), Cowper's 10 (1 + nu) / (12 + 11 nu).
+    return a**2, a**4 / 12, 0.1406 * a**4, 10 * (1 + nu) / (12 + 11 * nu)
+
+
 def ancf_model(mbs, p, n):
     """Planar model: crank, ANCF cable rod of n elements, slider. Returns the rod nodes and the slider node."""
     r, l, speed = p["crank"], p["rod"], p["speed"]
-    d = p["diameter"]
-    A, I = math.pi * d**2 / 4, math.pi * d**4 / 64
+    A, I, _, _ = section_properties(p)
     rod_mass = p["rho"] * A * l
     w_rod = -speed * r / l  # rigid mechanism at the dead centre: the rod turns about B
     ground = mbs.AddObject(ObjectGround())
@@ -136,15 +152,14 @@ def ancf_model(mbs, p, n):
 def beam3d_model(mbs, p, n, shear_factor):
     """Spatial model: crank, geometrically exact beam rod of n elements, slider. Returns as ancf_model."""
     r, l, speed = p["crank"], p["rod"], p["speed"]
-    d, E, nu, rho = p["diameter"], p["E"], p["nu"], p["rho"]
-    A, I = math.pi * d**2 / 4, math.pi * d**4 / 64
+    E, nu, rho = p["E"], p["nu"], p["rho"]
+    A, I, J, k_shear = section_properties(p)
     G = E / (2 * (1 + nu))
-    k_shear = 6 * (1 + nu) / (7 + 6 * nu)  # Cowper's factor of a solid circle
     rod_mass = rho * A * l
     w_rod = -speed * r / l
     section = exu.BeamSection()
     GA = shear_factor * k_shear * G * A
-    section.stiffnessMatrix = np.diag([E * A, GA, GA, G * 2 * I, E * I, E * I])
+    section.stiffnessMatrix = np.diag([E * A, GA, GA, G * J, E * I, E * I])
     section.inertia = rho * np.diag([2 * I, I, I])
     section.massPerLength = rho * A
 
@@ -197,6 +212,8 @@ def main():
     ap.add_argument("--params", required=True, help="params.txt written by export_rod")
     ap.add_argument("--model", choices=["ancf", "beam3d"], required=True)
     ap.add_argument("--elements", type=int, default=4)
+    ap.add_argument("--section", choices=["round", "square"], default="round",
+                    help="the round rod of C2 (default) or the solid rod's square section (side from params.txt)")
     ap.add_argument("--h", type=float, default=None, help="time step (default T/400)")
     ap.add_argument("--t-end", type=float, default=None, help="end time (default 2T)")
     ap.add_argument("--rho-inf", type=float, default=0.9)
@@ -210,6 +227,9 @@ def main():
         sys.exit(f"--elements {args.elements}: an even number of at least 2 (the midpoint must be a node)")
 
     p = read_params(args.params)
+    if args.section == "square" and "side" not in p:
+        sys.exit(f"{args.params}: no 'side' (written by export_rod), needed by --section square")
+    p["section"] = args.section
     period = 2 * math.pi / p["speed"]
     h = args.h if args.h is not None else period / 400
     t_end = args.t_end if args.t_end is not None else 2 * period

@@ -12,7 +12,8 @@ with the venv's Python; see that script for the usage).
    and the two sets of fixed-interface eigenvalues compared;
 2. rod: the C2 slider-crank with the round rod over 4 crank revolutions. A converged
    reference that is not our model: Exudyn's ANCF cable refined in elements and time step
-   until the rod's extrema change by less than 1e-5 relative. Then, for every configuration
+   until the rod's extrema change by less than 1e-5 relative (ancf_reference.py, which
+   run_comparison.sh runs for the solid rod's square section). Then, for every configuration
    (flexmbs beam superelements; Exudyn's ANCF cable and geometrically exact 3D beam), the
    largest step of h = T/400, T/800, ... that brings the extrema within 0.05 % of the
    reference, and the timed runs at that step.
@@ -35,8 +36,9 @@ import time
 
 import numpy as np
 
+from ancf_reference import converge, extrema, extrema_change, history_error, table
+
 TARGET = 5e-4  # the accuracy asked of every rod row: extrema within 0.05 % of the reference
-REFERENCE_TOL = 1e-5  # the reference's convergence: extrema change under refinement
 REVOLUTIONS = 4
 SPEED = 150.0
 PERIOD = 2 * math.pi / SPEED
@@ -160,27 +162,6 @@ def reduction(a, sizes, repeats):
 # 2. The C2 rod
 
 
-def history(path):
-    d = np.loadtxt(path, delimiter=",", skiprows=1)
-    return d[:, 0], d[:, 1]
-
-
-def extrema(path):
-    _, w = history(path)
-    return np.array([w.max(), w.min()])
-
-
-def extrema_change(e, ref):
-    """Largest change of the extrema (max w, min w) relative to the reference's largest |w|."""
-    return float(np.max(np.abs(e - ref)) / np.max(np.abs(ref)))
-
-
-def history_error(path, ref_path):
-    t, w = history(path)
-    tr, wr = history(ref_path)
-    return float(np.max(np.abs(w - np.interp(t, tr, wr))) / np.max(np.abs(wr)))
-
-
 class Rod:
     def __init__(self, a):
         self.a = a
@@ -229,30 +210,12 @@ def rod(a, repeats):
     report = []
 
     # The reference: Exudyn's ANCF cable refined until the extrema change < REFERENCE_TOL.
-    n, h = 8, PERIOD / 1600
-    # Budget: the finest runs are (2 n_max) elements at h_min and n_max elements at h_min / 2.
-    n_max, h_min = (16, PERIOD / 6400) if a.quick else (32, PERIOD / 25600)
     ancf = lambda n: {"name": f"ref ANCF {n}", "program": "exudyn", "model": "ancf", "elements": n, "sparse": n >= 32}
-    steps = []
-    while True:
-        base = extrema(r.once(ancf(n), h)["csv"])
-        dh = extrema_change(extrema(r.once(ancf(n), h / 2)["csv"]), base)
-        dn = extrema_change(extrema(r.once(ancf(2 * n), h)["csv"]), base)
-        steps.append((n, h, dh, dn))
-        log(f"reference: {n} ANCF elements, h = T/{PERIOD / h:.0f}: halving h changes the extrema by {dh:.1e}, doubling the elements by {dn:.1e}")
-        if max(dh, dn) < REFERENCE_TOL:
-            break
-        refine_h, refine_n = dh >= REFERENCE_TOL and h / 2 >= h_min, dn >= REFERENCE_TOL and 2 * n <= n_max
-        if not (refine_h or refine_n):
-            log("reference: refinement budget reached")
-            break
-        h, n = (h / 2 if refine_h else h), (2 * n if refine_n else n)
-    # The reference: the last level with the step halved (its time-step error is about a third of
-    # dh for a second-order integrator; its element error about dn).
-    ref = r.once(ancf(n), h / 2)
+    steps, n, h_ref = converge(lambda n, h: r.once(ancf(n), h)["csv"], PERIOD, a.quick, log)
+    ref = r.once(ancf(n), h_ref)
     ref_csv, ref_e = ref["csv"], extrema(ref["csv"])
-    log(f"reference: {n} elements, h = T/{PERIOD / (h / 2):.0f}: extrema {ref_e[0] * 1e3:.5f} / {ref_e[1] * 1e3:.5f} mm")
-    report.append(("reference", steps, n, h / 2, ref_e))
+    log(f"reference: {n} elements, h = T/{PERIOD / h_ref:.0f}: extrema {ref_e[0] * 1e3:.5f} / {ref_e[1] * 1e3:.5f} mm")
+    report.append(("reference", steps, n, h_ref, ref_e))
 
     # The configurations, each at the largest step of the ladder that reaches TARGET.
     ladder = [PERIOD / (400 * 2**k) for k in range(4 if a.quick else 6)]
@@ -305,8 +268,8 @@ def rod(a, repeats):
                 chosen[cfg["name"]] = (cfg,) + res
             if res[1] <= TARGET:
                 break
-    # Our 32-superelement reference (the same rod as run_comparison.sh's reference) against Exudyn's.
-    ours_ref = {"name": "flexmbs, 32 beam superelements, 2 modes (reference of run_comparison.sh)", "program": "flexmbs",
+    # Our own converged beam model (32 superelements) against Exudyn's reference.
+    ours_ref = {"name": "flexmbs, 32 beam superelements, 2 modes", "program": "flexmbs",
                 "segments": 32, "modes": 2, "beam_elements": 4, "stiffening": False}
     f32 = r.once(ours_ref, ladder[-2])
     ours_ref_err = extrema_change(extrema(f32["csv"]), ref_e)
@@ -328,21 +291,7 @@ def rod(a, repeats):
 
 def rod_tables(report, rows, ours_ref, repeats):
     _, steps, n_ref, h_ref, ref_e = report[0]
-    lines = [
-        f"**Reference.** Exudyn's `ObjectANCFCable2D` (round rod, Euler-Bernoulli, as C2 defines it), refined from 8 elements at h = T/1600:",
-        "",
-        "| elements | h | extrema change, h halved | extrema change, elements doubled |",
-        "|---:|---|---:|---:|",
-    ]
-    for n, h, dh, dn in steps:
-        lines.append(f"| {n} | T/{PERIOD / h:.0f} = {h:.3e} s | {dh:.1e} | {dn:.1e} |")
-    ok = max(steps[-1][2], steps[-1][3]) < REFERENCE_TOL
-    lines += [
-        "",
-        f"The reference is the run with {n_ref} elements at h = T/{PERIOD / h_ref:.0f} = {h_ref:.3e} s ({int(round(T_END / h_ref))} steps): "
-        f"midpoint deflection extrema {ref_e[0] * 1e3:.5f} mm and {ref_e[1] * 1e3:.5f} mm; "
-        + (f"from the last row's level, halving the step and doubling the elements changed the extrema by less than {REFERENCE_TOL:.0e} relative."
-           if ok else f"**not converged to {REFERENCE_TOL:.0e}**: the refinement budget ended with the changes in the last row."),
+    lines = table(steps, n_ref, h_ref, ref_e, PERIOD, T_END, "round rod, Euler-Bernoulli, as C2 defines it") + [
         "",
         "Rows: every configuration at the largest step of h = T/400, T/800, ... (T/400 = 1.05e-4 s) whose extrema are within"
         f" {TARGET * 100:.2f} % of the reference (or the finest step tried, its error in bold). Per step: the time loop over its steps"
