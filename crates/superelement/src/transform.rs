@@ -275,8 +275,41 @@ impl Kinematics {
         Ok(kin)
     }
 
-    /// Recomputes everything from `self.q_jj` (already filled) and `frame`.
+    /// Recomputes everything from `self.q_jj` (already filled) and `frame` (compiled for the
+    /// machine's vector instructions like the block kernels, `vectorized_kernel`).
     pub(crate) fn update(
+        &mut self,
+        frame: Frame,
+        frame_iterations: usize,
+        x: &[Vector3<f64>],
+        Phi_j: MatRef<'_, f64>,
+    ) -> Result<(), SuperelementError> {
+        struct Update<'a, 'b> {
+            kin: &'b mut Kinematics,
+            frame: Frame,
+            frame_iterations: usize,
+            x: &'a [Vector3<f64>],
+            Phi_j: MatRef<'a, f64>,
+        }
+        impl pulp::WithSimd for Update<'_, '_> {
+            type Output = Result<(), SuperelementError>;
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _simd: S) -> Self::Output {
+                self.kin
+                    .update_body(self.frame, self.frame_iterations, self.x, self.Phi_j)
+            }
+        }
+        pulp::Arch::new().dispatch(Update {
+            kin: self,
+            frame,
+            frame_iterations,
+            x,
+            Phi_j,
+        })
+    }
+
+    #[inline(always)]
+    fn update_body(
         &mut self,
         frame: Frame,
         frame_iterations: usize,
@@ -468,8 +501,34 @@ impl Kinematics {
     /// (\mathbf E^\theta_k - \mathbf Y_r)^T\mathbf K_k\mathbf E^\theta_k$.
     /// Every force of the residual goes through it, so every test of
     /// `tests/unit/fd_tangent.rs` checks it.
-    /// `phi` is scratch of length $n$.
+    /// `phi` is scratch of length $n$. Compiled for the machine's vector instructions like the
+    /// block kernels (`vectorized_kernel`).
     pub(crate) fn add_d_pt(&self, F: &[f64], phi: &mut [f64], out: &mut Mat<f64>, alpha: f64) {
+        struct AddDPt<'a, 'b> {
+            kin: &'a Kinematics,
+            F: &'a [f64],
+            phi: &'b mut [f64],
+            out: &'b mut Mat<f64>,
+            alpha: f64,
+        }
+        impl pulp::WithSimd for AddDPt<'_, '_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _simd: S) {
+                self.kin.add_d_pt_body(self.F, self.phi, self.out, self.alpha)
+            }
+        }
+        pulp::Arch::new().dispatch(AddDPt {
+            kin: self,
+            F,
+            phi,
+            out,
+            alpha,
+        })
+    }
+
+    #[inline(always)]
+    fn add_d_pt_body(&self, F: &[f64], phi: &mut [f64], out: &mut Mat<f64>, alpha: f64) {
         let N = self.n_interfaces();
         self.xt_vec(F, phi);
         let Yr = [
