@@ -561,16 +561,34 @@ impl Kinematics {
 
 /// $\mathbf A\boldsymbol\Lambda$ in place: the $\boldsymbol\theta_k$ column blocks times $\mathbf J_l^{-1}(\boldsymbol\theta_k)$.
 pub(crate) fn lambda_right(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
+    pulp::Arch::new().dispatch(LambdaRight { Lambda, A });
+}
+
+vectorized_kernel!(
+    /// [`lambda_right`].
+    LambdaRight<'a, 'b> { Lambda: &'a [Matrix3<f64>], A: &'b mut Mat<f64> } => lambda_right_body
+);
+
+#[inline(always)]
+fn lambda_right_body(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
+    let r = A.nrows();
     for (k, L) in Lambda.iter().enumerate() {
-        // Row i of the block becomes row_i L: new column c = sum_d L[(d, c)] column d.
+        // Row i of the block becomes row_i L: new column c = sum_d L[(d, c)] column d. The
+        // entries of L in locals and slices of exactly r entries, so that the loop is a plain
+        // vector loop.
+        let l: [[f64; 3]; 3] = std::array::from_fn(|c| std::array::from_fn(|d| L[(d, c)]));
         let (c0, rest) = A.as_mut().subcols_mut(6 * k + 3, 3).split_at_col_mut(1);
         let (c1, c2) = rest.split_at_col_mut(1);
-        let (a0, a1, a2) = (first_col_mut(c0), first_col_mut(c1), first_col_mut(c2));
-        for ((a0, a1), a2) in a0.iter_mut().zip(a1.iter_mut()).zip(a2.iter_mut()) {
-            let (x, y, z) = (*a0, *a1, *a2);
-            *a0 = L[(0, 0)] * x + L[(1, 0)] * y + L[(2, 0)] * z;
-            *a1 = L[(0, 1)] * x + L[(1, 1)] * y + L[(2, 1)] * z;
-            *a2 = L[(0, 2)] * x + L[(1, 2)] * y + L[(2, 2)] * z;
+        let (a0, a1, a2) = (
+            &mut first_col_mut(c0)[..r],
+            &mut first_col_mut(c1)[..r],
+            &mut first_col_mut(c2)[..r],
+        );
+        for i in 0..r {
+            let (x, y, z) = (a0[i], a1[i], a2[i]);
+            a0[i] = l[0][0] * x + l[0][1] * y + l[0][2] * z;
+            a1[i] = l[1][0] * x + l[1][1] * y + l[1][2] * z;
+            a2[i] = l[2][0] * x + l[2][1] * y + l[2][2] * z;
         }
     }
 }
