@@ -827,3 +827,130 @@ fn rotate_matrix_body(R: &Matrix3<f64>, N: usize, K: &Mat<f64>, out: &mut Mat<f6
 pub fn rotation_matrix(R: &UnitQuaternion<f64>) -> Matrix3<f64> {
     R.to_rotation_matrix().into_inner()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Numbers in [-1, 1) from a fixed seed (a linear congruential generator: varied values,
+    /// not statistical quality).
+    fn numbers(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed;
+        move || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    /// The dispatched block kernels against straightforward dense products with the formed
+    /// block-diagonal or stacked operators, on non-square inputs (11 rows, 2 interfaces and 3
+    /// modes: 15 columns; 7 and 5 rows for the odd remainders of the vector loops). Both sides
+    /// sum at most 3 products of numbers of size 1 per entry, in a different order:
+    /// $10^{-14}$ is some 20 times that round-off.
+    #[test]
+    fn vectorized_kernels_match_dense_products() {
+        let tol = 1e-14;
+        for (rows, seed) in [(11, 1), (7, 2), (5, 3)] {
+            let (N, m) = (2, 3);
+            let n = 6 * N + m;
+            let mut r = numbers(seed);
+            let A = Mat::from_fn(rows, n, |_, _| r());
+            let m3 = |r: &mut dyn FnMut() -> f64| Matrix3::from_fn(|_, _| r());
+            let blocks = Blocks {
+                t: (0..N).map(|_| m3(&mut r)).collect(),
+                r: (0..N).map(|_| m3(&mut r)).collect(),
+            };
+            let close = |a: &Mat<f64>, b: &Mat<f64>, what: &str| {
+                for j in 0..a.ncols() {
+                    for i in 0..a.nrows() {
+                        assert!((a[(i, j)] - b[(i, j)]).abs() < tol, "{what} rows {rows} ({i}, {j})");
+                    }
+                }
+            };
+            // add_mul_blocks_at: out[:, c0..c0 + n] += A diag(blocks) (eta columns unchanged).
+            let c0 = 2;
+            let mut D = Mat::<f64>::zeros(n, n);
+            for k in 0..N {
+                for (off, B) in [(6 * k, &blocks.t[k]), (6 * k + 3, &blocks.r[k])] {
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            D[(off + a, off + b)] = B[(a, b)];
+                        }
+                    }
+                }
+            }
+            let start = Mat::from_fn(rows, c0 + n + 1, |_, _| r());
+            let mut out = start.clone();
+            add_mul_blocks_at(A.as_ref(), &blocks, &mut out, c0);
+            let mut expected = start.clone();
+            let AD = &A * &D;
+            for j in 0..n {
+                for i in 0..rows {
+                    expected[(i, c0 + j)] += AD[(i, j)];
+                }
+            }
+            close(&out, &expected, "add_mul_blocks_at");
+            // add_mul_w: out[:, c0..c0 + 3] += alpha A W(x), W the stack of x_b~ over 2N blocks.
+            let x: Vec<f64> = (0..n).map(|_| r()).collect();
+            let alpha = 0.7;
+            let mut W = Mat::<f64>::zeros(n, 3);
+            for b in 0..2 * N {
+                let S = skew(&Vector3::new(x[3 * b], x[3 * b + 1], x[3 * b + 2]));
+                for a in 0..3 {
+                    for c in 0..3 {
+                        W[(3 * b + a, c)] = S[(a, c)];
+                    }
+                }
+            }
+            let mut out = start.clone();
+            add_mul_w(A.as_ref(), &x, 2 * N, alpha, &mut out, c0);
+            let mut expected = start.clone();
+            let AW = &A * &W;
+            for j in 0..3 {
+                for i in 0..rows {
+                    expected[(i, c0 + j)] += alpha * AW[(i, j)];
+                }
+            }
+            close(&out, &expected, "add_mul_w");
+            // lambda_right: the theta_k column blocks times Lambda_k.
+            let mut L = Mat::<f64>::identity(n, n);
+            for k in 0..N {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        L[(6 * k + 3 + a, 6 * k + 3 + b)] = blocks.r[k][(a, b)];
+                    }
+                }
+            }
+            let mut out = A.clone();
+            lambda_right(&blocks.r, &mut out);
+            close(&out, &(&A * &L), "lambda_right");
+        }
+        // rotate_matrix: Rbar K Rbar^T for a square K (n x n, not symmetric).
+        let (N, m) = (2, 3);
+        let n = 6 * N + m;
+        let mut r = numbers(9);
+        let K = Mat::from_fn(n, n, |_, _| r());
+        let R = UnitQuaternion::from_scaled_axis(Vector3::new(0.3, -0.8, 0.5))
+            .to_rotation_matrix()
+            .into_inner();
+        let mut Rbar = Mat::<f64>::identity(n, n);
+        for b in 0..2 * N {
+            for a in 0..3 {
+                for c in 0..3 {
+                    Rbar[(3 * b + a, 3 * b + c)] = R[(a, c)];
+                }
+            }
+        }
+        let mut out = Mat::from_fn(n, n, |_, _| f64::NAN);
+        rotate_matrix(&R, N, &K, &mut out);
+        let expected = &Rbar * &K * Rbar.transpose();
+        for j in 0..n {
+            for i in 0..n {
+                assert!(
+                    (out[(i, j)] - expected[(i, j)]).abs() < 1e-14,
+                    "rotate_matrix ({i}, {j})"
+                );
+            }
+        }
+    }
+}
