@@ -49,6 +49,14 @@
 //! 166.9k -> 161.5k, `beam22-com-exact` 247.1k -> 243.4k, `beam72-G` 1905k -> 1850k with
 //! tangents; forces only unchanged.
 //!
+//! Then the 3-block column kernels, Lambda from the right, the configuration update and the
+//! partial of P^T F compiled for AVX2 through `pulp`'s runtime dispatch (bit-identical
+//! results) and the transposed copies of the update with their column slices taken once:
+//! `beam14-G` 145.9k -> 138.1k with tangents, 61.5k -> 57.6k without; `block14-G` 161.5k ->
+//! 153.7k, 67.5k -> 63.5k; `beam22-com-exact` 243.5k -> 227.8k, 92.6k -> 86.7k; `beam72-G`
+//! 1850k -> 1798k, 585k -> 567k. (The chord steps of the frame solve gain nothing here: these calls start at the
+//! converged frame.)
+//!
 //! What is left is spread thin: 11 faer products per evaluation with tangents, each
 //! about 1.7k instructions of fixed cost (nano-gemm's planning and driver) beside its kernel,
 //! and plain loops compiled for the baseline x86-64 target (two-wide SIMD, no FMA). Replacing

@@ -315,6 +315,7 @@ impl Superelement {
             q: &mut q,
             r_loc: &mut r_loc,
             Lambda: &mut Lambda,
+            last_G_inv: None,
         };
         self.solve_frame_in(state, &mut scratch)
     }

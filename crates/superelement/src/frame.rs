@@ -9,7 +9,7 @@ use crate::so3;
 use crate::state::BodyState;
 pub use crate::state::{Frame, FrameChoice};
 use crate::transform::{col, inverse_with_rcond, phi_j_psi, RCOND_MIN};
-use nalgebra::{Matrix3, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 /// Settings of the Newton solve of (4.4).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,12 +35,23 @@ impl Default for FrameSettings {
 }
 
 /// Buffers of the Newton solve of (4.4): $\mathbf q^{jj}$ ($n$), $\mathbf r_k^{jj}$ and
-/// $\boldsymbol\Lambda$ blocks ($N$ each).
+/// $\boldsymbol\Lambda$ blocks ($N$ each), and the inverse Jacobian
+/// $(\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}$ of the body's last evaluation, if there is one (the
+/// chord steps of [`solve_frame_in`]).
 pub(crate) struct FrameScratch<'a> {
     pub q: &'a mut [f64],
     pub r_loc: &'a mut [Vector3<f64>],
     pub Lambda: &'a mut [Matrix3<f64>],
+    pub last_G_inv: Option<Matrix6<f64>>,
 }
+
+/// A chord step with the last evaluation's Jacobian is kept while each step cuts the residual
+/// at least by this factor; above it the solve changes to Newton for good. The Jacobian
+/// $\boldsymbol\Phi_j\boldsymbol\Lambda\boldsymbol\Phi_{rig}$ depends on the deformation only (not
+/// on the rigid motion), which changes little from one evaluation of a time step to the next,
+/// so chord steps contract by far more than this; from an unrelated configuration they do not,
+/// and Newton takes over after one step.
+const CHORD_CONTRACTION: f64 = 0.01;
 
 /// How the frame is found, decided once from the [`FrameChoice`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,6 +76,11 @@ pub(crate) struct FrameProblem<'a> {
 /// starting from `state.frame` (the last step's frame), with the Newton iterates in `scratch`
 /// (no allocation; the hot loop passes buffers of its workspace). The state is checked by the
 /// caller ([`crate::Superelement::solve_frame`], which derives the step).
+///
+/// From the warm start, when `scratch` carries the inverse Jacobian of the body's last
+/// evaluation, the first steps are chord steps with it (no $\boldsymbol\Lambda$, no
+/// $\boldsymbol\Phi_j\boldsymbol\Psi$, no inverse), for as long as they contract by
+/// [`CHORD_CONTRACTION`]; then Newton. The convergence test is the same either way.
 pub(crate) fn solve_frame_in(
     p: &FrameProblem<'_>,
     state: &BodyState,
@@ -84,23 +100,28 @@ pub(crate) fn solve_frame_in(
                 .R
                 .iter()
                 .any(|R_k| crate::local_coordinates::elastic_rotation(&state.frame.R, R_k).norm() > 1.0);
+            let chord = scratch.last_G_inv.take();
             if warm_is_far {
-                return newton_frame(p, state, guess, scratch);
+                return newton_frame(p, state, guess, None, scratch);
             }
-            newton_frame(p, state, state.frame, scratch).or_else(|e| match newton_frame(p, state, guess, scratch) {
-                Ok(found) => Ok(found),
-                Err(_) => Err(e),
+            newton_frame(p, state, state.frame, chord, scratch).or_else(|e| {
+                match newton_frame(p, state, guess, None, scratch) {
+                    Ok(found) => Ok(found),
+                    Err(_) => Err(e),
+                }
             })
         }
     }
 }
 
-/// Newton from `start`. On success `scratch.q` holds $\mathbf q^{jj}$ at the returned frame
+/// Newton from `start`, after chord steps with `chord` while they contract
+/// ([`solve_frame_in`]). On success `scratch.q` holds $\mathbf q^{jj}$ at the returned frame
 /// (the last residual was computed there): `Superelement::evaluate_into` uses it as is.
 fn newton_frame(
     p: &FrameProblem<'_>,
     state: &BodyState,
     start: Frame,
+    mut chord: Option<Matrix6<f64>>,
     scratch: &mut FrameScratch<'_>,
 ) -> Result<(Frame, usize), SuperelementError> {
     let N = p.x.len();
@@ -108,8 +129,9 @@ fn newton_frame(
     let r_max = state.r.iter().map(|r| r.norm()).fold(0.0, f64::max);
     let tol = p.settings.tolerance + 64.0 * f64::EPSILON * (1.0 + r_max / L);
     let mut frame = start;
-    let FrameScratch { q, r_loc, Lambda } = scratch;
+    let FrameScratch { q, r_loc, Lambda, .. } = scratch;
     let mut residual = f64::INFINITY;
+    let mut last_residual = f64::INFINITY;
     for it in 0..=p.settings.max_iterations {
         local_coordinates(&frame, &state.r, &state.R, p.x, &state.eta, q);
         let mut g: Vector6<f64> = Vector6::zeros();
@@ -126,15 +148,25 @@ fn newton_frame(
         if it == p.settings.max_iterations {
             break;
         }
-        for k in 0..N {
-            r_loc[k] = p.x[k] + u_of(q, k);
-            Lambda[k] = so3::left_jacobian_inv(&crate::local_coordinates::theta_of(q, k));
+        if it > 0 && residual > CHORD_CONTRACTION * last_residual {
+            chord = None;
         }
-        let G = phi_j_psi(p.Phi_j, r_loc, Lambda);
-        let (Gi, rcond) = inverse_with_rcond(&G).ok_or(SuperelementError::SingularFrame { rcond: 0.0 })?;
-        if rcond < RCOND_MIN {
-            return Err(SuperelementError::SingularFrame { rcond });
-        }
+        last_residual = residual;
+        let Gi = match chord {
+            Some(Gi) => Gi,
+            None => {
+                for k in 0..N {
+                    r_loc[k] = p.x[k] + u_of(q, k);
+                    Lambda[k] = so3::left_jacobian_inv(&crate::local_coordinates::theta_of(q, k));
+                }
+                let G = phi_j_psi(p.Phi_j, r_loc, Lambda);
+                let (Gi, rcond) = inverse_with_rcond(&G).ok_or(SuperelementError::SingularFrame { rcond: 0.0 })?;
+                if rcond < RCOND_MIN {
+                    return Err(SuperelementError::SingularFrame { rcond });
+                }
+                Gi
+            }
+        };
         let d = Gi * g;
         let dt = Vector3::new(d[0], d[1], d[2]);
         let dr = Vector3::new(d[3], d[4], d[5]);

@@ -83,6 +83,9 @@ impl Evaluation {
 #[derive(Clone, Debug)]
 pub struct Workspace {
     pub(crate) kin: Kinematics,
+    /// `kin` holds a configuration of this body (its $(\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}$
+    /// starts the next frame solve: `frame::solve_frame_in`).
+    pub(crate) kin_valid: bool,
     pub(crate) qd: Vec<f64>,
     pub(crate) mo: Motion,
     pub(crate) loc: Local,
@@ -105,6 +108,7 @@ impl Superelement {
         let (N, n) = (self.n_interfaces, self.n);
         Workspace {
             kin: Kinematics::empty(N, n),
+            kin_valid: false,
             qd: vec![0.0; n],
             mo: Motion::new(N, n),
             loc: Local::new(n),
@@ -170,7 +174,10 @@ impl Superelement {
             q: &mut ws.kin.q_jj,
             r_loc: &mut ws.kin.r_loc,
             Lambda: &mut ws.kin.Lambda,
+            last_G_inv: ws.kin_valid.then_some(ws.kin.G_inv),
         };
+        // The configuration is rebuilt below; a failure on the way leaves it invalid.
+        ws.kin_valid = false;
         let (frame, iterations) = self.solve_frame_in(state, &mut scratch)?;
         if self.frame_solve != FrameSolve::Newton {
             // The Newton solve returns right after computing q_jj at the converged frame
@@ -178,6 +185,7 @@ impl Superelement {
             local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut ws.kin.q_jj);
         }
         ws.kin.update(frame, iterations, &self.x, self.Phi_j.as_ref())?;
+        ws.kin_valid = true;
         for k in 0..self.n_interfaces {
             ws.qd[6 * k..6 * k + 3].copy_from_slice(state.v[k].as_slice());
             ws.qd[6 * k + 3..6 * k + 6].copy_from_slice(state.omega[k].as_slice());

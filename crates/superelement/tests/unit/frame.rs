@@ -224,3 +224,38 @@ fn singular_frame_message_says_what_to_do() {
     );
     assert!(!msg.contains("Phi") && !msg.contains("(2.6)"), "{msg}");
 }
+
+/// `evaluate_into` with a reused workspace starts the frame solve with chord steps on the
+/// last evaluation's inverse Jacobian: after a small "time step" it finds the frame of a fresh
+/// solve to the solve's tolerance, and from an unrelated configuration (a large deformation
+/// and rotation since the last evaluation), where the chord steps do not contract, it changes
+/// to Newton and still converges.
+#[test]
+fn chord_steps_from_the_last_evaluation_find_the_same_frame() {
+    let g = Vector3::new(0.0, 0.0, -9.81);
+    for fx in [l_frame(), beam_dynamic()] {
+        let se = superelement(&fx.body, FrameChoice::CenterOfMass, MassVariant::Exact);
+        let (state, acc) = test_state(&se, &StateSpec::moving(120.0, 1));
+        let mut ws = se.workspace();
+        let mut out = superelement::Evaluation::zeros(se.n_coordinates());
+        se.evaluate_into(&state, &acc, &g, true, &mut ws, &mut out).unwrap();
+        let mut rng = Rng::new(11);
+        for scale in [1e-3, 0.3] {
+            let dq: Vec<f64> = (0..se.n_coordinates()).map(|_| scale * rng.uniform()).collect();
+            let mut next = perturb_state(&state, &dq);
+            next.frame = out.frame;
+            let (fresh, _) = se.solve_frame(&next).unwrap();
+            se.evaluate_into(&next, &acc, &g, true, &mut ws, &mut out).unwrap();
+            // Both stop at residual 1e-12 (relative to the body size for the position);
+            // a Newton-converged frame is far closer than that to the root, so the two
+            // agree to about the tolerance times the body size (about 1 m here).
+            let (dr, dR) = ((out.frame.r - fresh.r).norm(), out.frame.R.angle_to(&fresh.R));
+            assert!(
+                dr < 1e-11 && dR < 1e-11,
+                "{} step {scale}: {dr:e} m, {dR:e} rad",
+                fx.name
+            );
+            assert!(out.frame_iterations <= 30, "{}: {}", fx.name, out.frame_iterations);
+        }
+    }
+}
