@@ -8,7 +8,7 @@
 //! \qquad \mathcal C = \mathcal R_d \cap [c_s, e_s),\ \mathcal R = \mathcal R_d \cap [c_s, n),$$
 //! then factors its diagonal block $\mathbf L_{s,ss}\mathbf L_{s,ss}^T$ and solves the rows below
 //! it, $\mathbf L_{s,\mathcal R_s} \leftarrow \mathbf L_{s,\mathcal R_s}\mathbf L_{s,ss}^{-T}$
-//! (theory guide, sparse Cholesky factorisation). A supernode reads only its descendants'
+//! (theory guide, linear analyses of a part). A supernode reads only its descendants'
 //! columns and writes only its own, so disjoint subtrees are independent (Liu, "The role of
 //! elimination trees in sparse factorization", SIAM J. Matrix Anal. Appl. 11, 1990): each
 //! subtree runs on one thread with sequential dense kernels, then the supernodes above the
