@@ -387,7 +387,27 @@ fn factor_supernode<T: Real>(
         Ok(_) => {}
         Err(LltError::NonPositivePivot { index }) => return Err(s_start + index),
     }
-    solve_lower_triangular_in_place(Ls_top.rb(), Ls_bottom.transpose_mut(), par);
+    // Each row below the diagonal block is solved on its own: with several threads, ranges of
+    // rows in parallel with sequential kernels (no barriers inside the solve).
+    let rows = Ls_bottom.nrows();
+    if threads < 2 || s_ncols < PARALLEL_GATHER_MIN_COLUMNS || rows < 2 * threads {
+        solve_lower_triangular_in_place(Ls_top.rb(), Ls_bottom.transpose_mut(), par);
+    } else {
+        let ranges = 2 * threads;
+        let mut pieces = Vec::with_capacity(ranges);
+        let mut rest = Ls_bottom;
+        for r in 0..ranges {
+            let take = rest.nrows() / (ranges - r);
+            let (piece, tail) = rest.split_at_row_mut(take);
+            pieces.push(piece);
+            rest = tail;
+        }
+        let Ls_top = Ls_top.rb();
+        pieces
+            .into_par_iter()
+            .with_max_len(1)
+            .for_each(|piece| solve_lower_triangular_in_place(Ls_top, piece.transpose_mut(), Par::Seq));
+    }
     Ok(())
 }
 
