@@ -3,6 +3,18 @@
 //! ordering of [`crate::ordering`], and the separate triangular solves with $\mathbf L$ and
 //! $\mathbf L^T$ that `reduction`'s shift-invert operator needs. Shared by the statics of this
 //! crate and by `reduction::ShiftInvert`.
+//!
+//! The numeric factorisation of a supernodal factor with faer's global parallelism of several
+//! threads is ours (`parallel_llt`): left-looking on faer's symbolic structure, the disjoint
+//! subtrees of the elimination tree in parallel with sequential dense kernels, then the top
+//! separators in order, each with its columns gathered and its rows below the diagonal block
+//! solved by ranges in parallel. faer's supernodal loop (one supernode after another, parallel
+//! only inside the dense kernels, which on two cores spent about a quarter of the CPU time in
+//! thread barriers) factors a simplicial factor, on one thread, and below $10^9$ flops
+//! (about 10 000 dofs of a 3D solid), where both take a few hundredths of a second and the
+//! same CPU time; ours then needs no schedule. Both give the same values to round-off
+//! (faer's dense kernels on the same blocks; at 26 000 dofs of the benchmark blocks they
+//! differ by 1.6e-16 relative to a supernode's norm).
 
 use crate::ordering::{factor_flops, symbolic_cholesky, FillOrdering};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -215,7 +227,8 @@ impl SymbolicFactor {
     }
 
     /// The numeric factorisation of `A` (the matrix analysed, lower triangle read) with values
-    /// in `precision`, with faer's global parallelism. In single precision the values of `A`
+    /// in `precision`, with faer's global parallelism (parallel over subtrees of the
+    /// elimination tree, see the module docs). In single precision the values of `A`
     /// are rounded to f32 first.
     ///
     /// # Errors
