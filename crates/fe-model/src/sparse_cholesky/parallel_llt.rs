@@ -11,15 +11,18 @@
 //! (theory guide, linear analyses of a part). A supernode reads only its descendants'
 //! columns and writes only its own, so disjoint subtrees are independent (Liu, "The role of
 //! elimination trees in sparse factorization", SIAM J. Matrix Anal. Appl. 11, 1990): each
-//! subtree runs on one thread with sequential dense kernels, then the supernodes above the
-//! subtrees (the top separators of a nested dissection, few and large) run in order with all
-//! threads in each dense kernel. faer's own loop runs the supernodes in order and parallelises
-//! only inside the dense kernels, which on small supernodes costs more in synchronisation than
-//! it gains.
+//! subtree runs on one thread with sequential dense kernels. Then the supernodes above the
+//! subtrees (the top separators of a nested dissection, few and large) run in order, each with
+//! its columns gathered by ranges in parallel (the descendants' updates of those columns,
+//! sequential products) and its rows below the diagonal block solved by ranges in parallel;
+//! only the dense Cholesky of the diagonal block is faer's parallel one. faer's own loop runs
+//! the supernodes in order and parallelises only inside the dense kernels, which on two cores
+//! spends about a quarter of the CPU time in thread barriers.
 //!
-//! The supernodes must be in a postorder (faer's symbolic analysis gives one), so that each
-//! subtree is a contiguous range of supernodes and of values and the factor splits into
-//! disjoint mutable slices.
+//! Each subtree of the split must be a contiguous range of supernodes and of values, so that
+//! the factor splits into disjoint mutable slices: [`FactorPlan::new`] checks it (faer's
+//! supernodes are in a near-postorder, which makes the subtrees of the split contiguous on
+//! the meshes measured; where they are not, faer's loop is used).
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch, LltError};
@@ -74,7 +77,7 @@ pub(super) fn supernode_flops(s: &SymbolicSupernodalCholesky<usize>, sn: usize) 
 impl FactorPlan {
     /// The plan for `threads` threads: the supernodal tree split by floating-point operations
     /// ([`super::split_tree`]). `None` if there is nothing to split (one thread, one
-    /// subtree) or the supernodes are not in a postorder.
+    /// subtree) or a subtree of the split is not a contiguous range of supernodes.
     pub(super) fn new(s: &SymbolicSupernodalCholesky<usize>, threads: usize) -> Option<Self> {
         let ns = s.n_supernodes();
         let weight: Vec<usize> = (0..ns).map(|sn| supernode_flops(s, sn)).collect();
