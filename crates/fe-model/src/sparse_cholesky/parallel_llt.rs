@@ -58,6 +58,8 @@ pub(super) struct FactorPlan {
     descendants: Vec<usize>,
     /// The subtrees, each a contiguous range of supernodes, ascending and disjoint.
     pub(super) tasks: Vec<Range<usize>>,
+    /// The floating-point operations of each subtree's columns.
+    task_flops: Vec<usize>,
     /// The other supernodes, ascending.
     pub(super) top: Vec<usize>,
     /// Largest pattern below a diagonal block (rows of the update buffer).
@@ -132,6 +134,7 @@ impl FactorPlan {
         Some(Self {
             descendant_ptr,
             descendants,
+            task_flops: ranges.iter().map(|r| r.clone().map(|sn| weight[sn]).sum()).collect(),
             tasks: ranges,
             top,
 
@@ -436,27 +439,39 @@ pub(super) fn factor<T: Real>(
     let mut chunks = Vec::with_capacity(plan.tasks.len());
     let mut rest = &mut *L_values;
     let mut offset = 0;
-    for range in &plan.tasks {
+    for (t, range) in plan.tasks.iter().enumerate() {
         let (v0, v1) = (col_ptr_val[range.start], col_ptr_val[range.end]);
         let (_, tail) = std::mem::take(&mut rest).split_at_mut(v0 - offset);
         let (chunk, tail) = tail.split_at_mut(v1 - v0);
         rest = tail;
         offset = v1;
-        chunks.push((range.clone(), v0, chunk));
+        chunks.push((t, v0, chunk));
     }
-    let first_failure = chunks
+    // Largest first: each thread takes the largest subtree left when it is free.
+    chunks.sort_by_key(|&(t, ..)| plan.task_flops[t]);
+    let queue = std::sync::Mutex::new(chunks);
+    let first_failure = (0..rayon::current_num_threads().min(plan.tasks.len()))
         .into_par_iter()
         .with_max_len(1)
-        .map(|(range, v0, chunk)| {
+        .filter_map(|_| {
             let mut scratch = Scratch::<T>::new(n, plan.max_columns);
-            for sn in range {
-                let (head, tail) = chunk.split_at_mut(col_ptr_val[sn] - v0);
-                let Ls = &mut tail[..col_ptr_val[sn + 1] - col_ptr_val[sn]];
-                factor_supernode(s, plan, A, sn, head, v0, Ls, &mut scratch, Par::Seq)?;
+            let mut failure: Option<usize> = None;
+            loop {
+                // The lock only to take the next subtree. A poisoned queue (a panic on
+                // another thread) still holds valid slices.
+                let next = queue.lock().unwrap_or_else(|e| e.into_inner()).pop();
+                let Some((t, v0, chunk)) = next else { break };
+                for sn in plan.tasks[t].clone() {
+                    let (head, tail) = chunk.split_at_mut(col_ptr_val[sn] - v0);
+                    let Ls = &mut tail[..col_ptr_val[sn + 1] - col_ptr_val[sn]];
+                    if let Err(index) = factor_supernode(s, plan, A, sn, head, v0, Ls, &mut scratch, Par::Seq) {
+                        failure = Some(failure.map_or(index, |f| f.min(index)));
+                        break;
+                    }
+                }
             }
-            Ok(())
+            failure
         })
-        .filter_map(Result::err)
         .min();
     if let Some(index) = first_failure {
         return Err(index);
