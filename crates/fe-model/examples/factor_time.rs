@@ -1,0 +1,155 @@
+//! Times the numeric sparse Cholesky factorisation of $\mathbf K_{ii}$ of a steel hex8 block
+//! (the blocks of the `craig_bampton` bench of `reduction`: RBE2 interfaces on both end faces,
+//! their twelve dofs removed), nested dissection:
+//!
+//! `cargo run --release -p fe-model --example factor_time -- <size> <method> [runs] [single]`
+//!
+//! `size`: 3k, 10k, 50k, 200k (or `ex,ey,ez` elements); `method`: `faer-seq` (faer's
+//! supernodal loop, one thread), `faer` (faer's loop, dense kernels on all rayon threads),
+//! `subtrees` (ours, parallel over subtrees of the elimination tree; `subtrees:N` split for
+//! `N` threads whatever the pool, e.g. with `RAYON_NUM_THREADS=1`), `default` (what
+//! [`SymbolicFactor::factor`] chooses), or `compare` (faer's and ours, the largest difference
+//! of their values relative to each supernode's norm). Prints wall and CPU seconds (user +
+//! system of all threads, from `/proc/self/stat`) of each factorisation, and the load average.
+
+#![allow(non_snake_case)]
+
+use faer::sparse::{SparseColMat, Triplet};
+use fe_model::{
+    add_interface_on_set, assemble, box_mesh, dof_points, solid_model, CellKind, DofMap, FillOrdering,
+    IsotropicMaterial, MassKind, Precision, SpiderKind, SymbolicFactor, SystemPattern,
+};
+use std::time::Instant;
+
+/// CPU seconds (user + system, all threads) of this process so far.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let Some(close) = stat.rfind(')') else { return f64::NAN };
+    let f: Vec<&str> = stat[close + 2..].split_whitespace().collect();
+    let ticks = |k: usize| f.get(k).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN);
+    (ticks(11) + ticks(12)) / 100.0
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let size = args.first().map(String::as_str).unwrap_or("10k");
+    let method = args.get(1).map(String::as_str).unwrap_or("compare");
+    let runs: usize = args.get(2).and_then(|r| r.parse().ok()).unwrap_or(1);
+    let precision = if args.iter().any(|a| a == "single") {
+        Precision::Single
+    } else {
+        Precision::Double
+    };
+    let (ex, ey, ez) = match size {
+        "3k" => (12, 8, 8),
+        "10k" => (17, 13, 13),
+        "50k" => (30, 23, 23),
+        "200k" => (48, 37, 37),
+        other => {
+            let e: Vec<usize> = other.split(',').filter_map(|v| v.parse().ok()).collect();
+            assert_eq!(e.len(), 3, "size: 3k, 10k, 50k, 200k or ex,ey,ez");
+            (e[0], e[1], e[2])
+        }
+    };
+    let mesh = box_mesh(
+        CellKind::Hex8,
+        [2.0 * ex as f64 / ez as f64, ey as f64 / ez as f64, 1.0],
+        [ex, ey, ez],
+    )
+    .unwrap();
+    let steel = IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap();
+    let mut model = solid_model(mesh, steel, MassKind::Consistent).unwrap();
+    let a = add_interface_on_set(&mut model, "root", "x0", None, SpiderKind::Rbe2).unwrap();
+    let b = add_interface_on_set(&mut model, "tip", "x1", None, SpiderKind::Rbe2).unwrap();
+    let dofs = DofMap::new(&model).unwrap();
+    let K = assemble(&model, &SystemPattern::new(&model, &dofs)).unwrap().K;
+    // K_ii: the free dofs but the interface nodes' twelve, lower triangle.
+    let mut keep = vec![true; dofs.n_free()];
+    for node in [a, b] {
+        for k in 0..6 {
+            if let Some(d) = dofs.free_dof(node, k) {
+                keep[d.index()] = false;
+            }
+        }
+    }
+    let internal: Vec<usize> = (0..dofs.n_free()).filter(|&d| keep[d]).collect();
+    let mut position = vec![usize::MAX; dofs.n_free()];
+    internal.iter().enumerate().for_each(|(i, &d)| position[d] = i);
+    let mut triplets = Vec::new();
+    for j in 0..K.ncols() {
+        for (&i, &v) in K.row_idx_of_col_raw(j).iter().zip(K.val_of_col(j)) {
+            if keep[i] && keep[j] && position[i] >= position[j] {
+                triplets.push(Triplet::new(position[i], position[j], v));
+            }
+        }
+    }
+    let ni = internal.len();
+    let K_ii = SparseColMat::try_new_from_triplets(ni, ni, &triplets).unwrap();
+    let all_points = dof_points(&model, &dofs);
+    let points: Vec<[f64; 3]> = internal.iter().map(|&d| all_points[d]).collect();
+    drop((model, K, triplets));
+    let threads = rayon::current_num_threads();
+    let analyse = |parallel: Option<usize>| {
+        let mut symbolic =
+            SymbolicFactor::analyse(K_ii.symbolic(), Some(&points), FillOrdering::NestedDissection).unwrap();
+        if method != "default" {
+            symbolic.set_parallel_subtrees(parallel);
+        }
+        symbolic
+    };
+    let symbolic = analyse(Some(threads));
+    let (subtrees, top) = symbolic.parallel_subtrees();
+    println!(
+        "{size}: K_ii {ni} rows, factor {:.1} M values, {:.1} Gflop; {subtrees} subtrees for {threads} threads, {:.1} % of the flops above them; load average {}",
+        symbolic.factor_len() as f64 / 1e6,
+        symbolic.flops() / 1e9,
+        100.0 * top,
+        std::fs::read_to_string("/proc/loadavg").unwrap_or_default().trim()
+    );
+    drop(symbolic);
+    if method == "compare" {
+        faer::set_global_parallelism(faer::Par::rayon(threads));
+        let faer_factor = analyse(None).factor(K_ii.as_ref(), precision).unwrap();
+        let ours = analyse(Some(threads)).factor(K_ii.as_ref(), precision).unwrap();
+        println!(
+            "largest difference of the values relative to their supernode's norm: {:.2e}",
+            ours.relative_difference(&faer_factor)
+        );
+        return;
+    }
+    let (par, parallel) = match method {
+        "faer-seq" => (faer::Par::Seq, None),
+        "faer" => (faer::Par::rayon(threads), None),
+        "subtrees" | "default" => (faer::Par::rayon(threads), Some(threads)),
+        // The split for N threads, run on the rayon pool as it is (RAYON_NUM_THREADS=1: the
+        // same operations on one thread).
+        m if m.starts_with("subtrees:") => (faer::Par::rayon(threads), m[9..].parse().ok()),
+        other => panic!("method: faer-seq, faer, subtrees, default or compare, not {other}"),
+    };
+    faer::set_global_parallelism(par);
+    for run in 0..runs {
+        let symbolic = analyse(parallel);
+        let used = symbolic.parallel_subtrees().0;
+        let (t, c) = (Instant::now(), cpu_seconds());
+        let factor = symbolic.factor(K_ii.as_ref(), precision).unwrap();
+        let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+        println!(
+            "{size} {method:<8} {} run {run}: numeric factorisation {wall:6.2} s wall, {cpu:6.2} CPU-s ({used} subtrees); peak RSS {:.0} MB; load {}",
+            precision.name(),
+            peak_rss_mb(),
+            std::fs::read_to_string("/proc/loadavg").unwrap_or_default().split_whitespace().next().unwrap_or("?")
+        );
+        drop(factor);
+    }
+}
+
+/// Peak resident memory of this process \[MB\] (`VmHWM`).
+fn peak_rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+            line.split_whitespace().nth(1)?.parse::<f64>().ok()
+        })
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}
