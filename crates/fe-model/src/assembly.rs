@@ -166,10 +166,10 @@ fn fill_values_in_blocks<const N: usize>(
     Ok(())
 }
 
-/// The columns `columns` of element `map`'s reduced matrix added at its slots, into `values`
-/// holding the pattern's values from position `offset` on: [`scatter`] restricted to those
-/// columns, the entries in the same order. `A` is the element matrix for a selection and
-/// the reduced $\mathbf T_e^T\mathbf A\mathbf T_e$ for a dense transform.
+/// The columns `columns` of element `map`'s reduced matrix $\mathbf T_e^T\mathbf A
+/// \mathbf T_e$ added at its slots, into `values` holding the pattern's values from position
+/// `offset` on, the entries of a column in a fixed order. `A` is the element matrix for a
+/// selection and the reduced matrix for a dense transform.
 fn scatter_columns(
     (map, slots): (&ElementMap, &[usize]),
     A: &DMatrix<f64>,

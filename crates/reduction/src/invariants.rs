@@ -28,7 +28,7 @@ use rayon::prelude::*;
 /// The rigid-motion matrix on the dofs whose full slots (`6 node + k`) are `slots`: columns
 /// are translations along $x, y, z$, then rotations about the axes through `c`.
 fn rigid_modes(slots: &[usize], nodes: &[[f64; 3]], c: Vector3<f64>) -> Mat<f64> {
-    Mat::from_fn(slots.len(), 6, |d, l| {
+    gather_rows(slots.len(), 6, |d, l| {
         let (node, k) = (slots[d] / 6, slots[d] % 6);
         fe_model::rigid::rigid_motion_block(&(Vector3::from(nodes[node]) - c))[(k, l)]
     })
