@@ -33,7 +33,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::assembly::{assemble, element_coordinates, scatter};
+use crate::assembly::{assemble, element_coordinates, fill_values};
 use crate::dof::DofMap;
 use crate::element::{beam2, solid, Element, SolidKind};
 use crate::error::{ElementError, FeError};
@@ -44,7 +44,6 @@ use crate::statics::{cholesky, load_vector};
 use faer::sparse::SparseColMat;
 use faer::Mat;
 use nalgebra::{DMatrix, Matrix3, Point3};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// The full dof slots (`6 node + k`) of an element's local dofs, in its local order: the rows
@@ -99,29 +98,12 @@ pub fn assemble_geometric_stiffness(
         "pattern built for another model"
     );
     let u_full: Vec<f64> = dofs.expand(u).into_iter().flatten().collect();
-    let nnz = pattern.nnz();
-    // One value buffer per piece: as many pieces as threads (a buffer has the size of K).
-    let n_elements = model.elements.len();
-    let piece = n_elements.div_ceil(rayon::current_num_threads().max(1)).max(1);
-    let values = (0..n_elements)
-        .into_par_iter()
-        .with_min_len(piece)
-        .try_fold(
-            || vec![0.0; nnz],
-            |mut values, e| -> Result<Vec<f64>, FeError> {
-                let u_e: Vec<f64> = element_slots(&model.elements[e]).iter().map(|&s| u_full[s]).collect();
-                let K_G = element_geometric_stiffness(model, e, &u_e)?;
-                scatter(pattern.element(e), &K_G, &mut values);
-                Ok(values)
-            },
-        )
-        .try_reduce(
-            || vec![0.0; nnz],
-            |mut a, b| {
-                a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
-                Ok(a)
-            },
-        )?;
+    // The parallel element loop of the assembly: each entry summed in element order.
+    let mut values = vec![0.0; pattern.nnz()];
+    fill_values(model, pattern, [&mut values], |e| {
+        let u_e: Vec<f64> = element_slots(&model.elements[e]).iter().map(|&s| u_full[s]).collect();
+        Ok([element_geometric_stiffness(model, e, &u_e)?])
+    })?;
     Ok(SparseColMat::new(pattern.symbolic.clone(), values))
 }
 

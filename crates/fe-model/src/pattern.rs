@@ -103,15 +103,37 @@ fn column_structure(n: usize, sets: &[&[u32]]) -> (Vec<usize>, Vec<usize>) {
     for j in 0..n {
         start[j + 1] += start[j];
     }
+    // The rows written in parallel by column ranges, each range taking the sets in order
+    // (so each column's list is the same as a sequential pass would write).
     let mut rows = vec![0u32; start[n]];
-    let mut fill = start[..n].to_vec();
-    for dofs in sets {
-        for &c in dofs.iter() {
-            let f = &mut fill[c as usize];
-            rows[*f..*f + dofs.len()].copy_from_slice(dofs);
-            *f += dofs.len();
-        }
+    let spans: Vec<(u32, u32)> = sets
+        .par_iter()
+        .map(|dofs| dofs.iter().fold((u32::MAX, 0), |(lo, hi), &d| (lo.min(d), hi.max(d))))
+        .collect();
+    let bounds = balanced_ranges(&start, COLUMN_RANGES);
+    let mut parts: Vec<(usize, usize, &mut [u32])> = Vec::with_capacity(bounds.len());
+    let mut rest = rows.as_mut_slice();
+    for w in bounds.windows(2) {
+        let (part, tail) = rest.split_at_mut(start[w[1]] - start[w[0]]);
+        parts.push((w[0], w[1], part));
+        rest = tail;
     }
+    parts.par_iter_mut().for_each(|(c0, c1, part)| {
+        let offset = start[*c0];
+        let mut fill = start[*c0..*c1].to_vec();
+        for (dofs, &(lo, hi)) in sets.iter().zip(&spans) {
+            if (hi as usize) < *c0 || lo as usize >= *c1 {
+                continue;
+            }
+            for &c in dofs.iter() {
+                if (*c0..*c1).contains(&(c as usize)) {
+                    let f = &mut fill[c as usize - *c0];
+                    part[*f - offset..*f - offset + dofs.len()].copy_from_slice(dofs);
+                    *f += dofs.len();
+                }
+            }
+        }
+    });
     // One mutable slice per column, sorted and deduplicated in place in parallel.
     let mut columns: Vec<&mut [u32]> = Vec::with_capacity(n);
     let mut rest = rows.as_mut_slice();
@@ -138,11 +160,49 @@ fn column_structure(n: usize, sets: &[&[u32]]) -> (Vec<usize>, Vec<usize>) {
     for j in 0..n {
         col_ptr[j + 1] = col_ptr[j] + unique[j];
     }
-    let mut row_idx = Vec::with_capacity(col_ptr[n]);
-    for (column, &k) in columns.iter().zip(&unique) {
-        row_idx.extend(column[..k].iter().map(|&r| r as usize));
+    // The row indices, column by column in parallel.
+    let mut row_idx = vec![0usize; col_ptr[n]];
+    let mut targets: Vec<&mut [usize]> = Vec::with_capacity(n);
+    let mut rest = row_idx.as_mut_slice();
+    for &k in &unique {
+        let (target, tail) = rest.split_at_mut(k);
+        targets.push(target);
+        rest = tail;
     }
+    targets
+        .par_iter_mut()
+        .zip(columns.par_iter())
+        .for_each(|(target, column)| {
+            for (t, &r) in target.iter_mut().zip(column.iter()) {
+                *t = r as usize;
+            }
+        });
     (col_ptr, row_idx)
+}
+
+/// Column ranges of the parallel fills by columns ([`column_structure`], the assembly's
+/// scatter): fixed (no result depends on them), several per thread so that a busy core does
+/// not hold the others back.
+pub(crate) const COLUMN_RANGES: usize = 32;
+
+/// Bounds $0 = c_0 < c_1 < \dots < c_k = n$ of at most `ranges` column ranges with about
+/// equal numbers of entries, for the column pointers `col_ptr` ($n + 1$ of them).
+pub(crate) fn balanced_ranges(col_ptr: &[usize], ranges: usize) -> Vec<usize> {
+    let n = col_ptr.len() - 1;
+    let nnz = col_ptr[n];
+    let ranges = ranges.clamp(1, n.max(1));
+    let mut bounds = vec![0usize];
+    for k in 1..ranges {
+        let target = nnz * k / ranges;
+        let c = col_ptr.partition_point(|&p| p < target).min(n);
+        if c > *bounds.last().expect("starts with 0") {
+            bounds.push(c);
+        }
+    }
+    if n > 0 && *bounds.last().expect("starts with 0") < n {
+        bounds.push(n);
+    }
+    bounds
 }
 
 /// The CSC structure (rows sorted) of the union of the dense blocks $\text{set}\times\text{set}$
@@ -184,12 +244,16 @@ impl SystemPattern {
             rest = tail;
         }
         elements.par_iter().zip(pieces.par_iter_mut()).for_each(|(m, piece)| {
+            // The element's dofs and each column's rows are both sorted: one merge per column.
             let mut k = 0;
             for &c in &m.dofs {
-                let (a, b) = (col_ptr[c as usize], col_ptr[c as usize + 1]);
-                let column = &row_idx[a..b];
+                let mut p = col_ptr[c as usize];
                 for &r in &m.dofs {
-                    piece[k] = a + column.binary_search(&(r as usize)).expect("entry in pattern");
+                    while row_idx[p] < r as usize {
+                        p += 1;
+                    }
+                    debug_assert_eq!(row_idx[p], r as usize, "entry in pattern");
+                    piece[k] = p;
                     k += 1;
                 }
             }

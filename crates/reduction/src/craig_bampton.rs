@@ -14,7 +14,7 @@ use crate::attachment::attachment_modes;
 use crate::eigen::{EigenSettings, FactorPrecision, FactorSettings, Shift, ShiftInvert};
 use crate::error::ReductionError;
 use crate::geometric::reduced_geometric_stiffness;
-use crate::invariants::{gather_rows, inertia_data, inertia_data_from_mass};
+use crate::invariants::{gather_rows, inertia_data, inertia_data_from_mass, select_entries};
 use crate::reduced_body::{
     DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes, FORMAT_VERSION,
 };
@@ -22,6 +22,7 @@ use crate::stress::stress_shapes;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Mat, MatRef};
 use fe_model::{assemble, dof_points, DofMap, DofStatus, FeModel, FillOrdering, NodeId, SystemPattern, DOF_NAMES};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// How many fixed-interface modes to keep.
@@ -298,38 +299,21 @@ fn split(
             }
         }
     }
-    let internal_nnz = internal_entries(A, p, drop_zeros);
-    let mut col_ptr = Vec::with_capacity(if with_pattern { ni + 1 } else { 0 });
-    let mut row_idx = Vec::with_capacity(if with_pattern { internal_nnz } else { 0 });
-    let mut values = Vec::with_capacity(internal_nnz);
-    if with_pattern {
-        col_ptr.push(0);
-    }
-    for &col in &p.internal {
-        for (&row, &v) in A.row_idx_of_col_raw(col).iter().zip(A.val_of_col(col)) {
-            if let Err(r) = p.position[row] {
-                if !(drop_zeros && v == 0.0) {
-                    if with_pattern {
-                        row_idx.push(r);
-                    }
-                    values.push(v);
-                }
-            }
-        }
-        if with_pattern {
-            col_ptr.push(row_idx.len());
-        }
-    }
-    // Rows stay in A's order: sorted (and unique) when A's are, as for assembled matrices
-    // and those read by `read_matrix_market`.
-    let pattern = with_pattern.then(|| SymbolicSparseColMat::new_unsorted_checked(ni, ni, col_ptr, None, row_idx));
+    // Column by column in parallel (`select_entries`); rows stay in A's order: sorted (and
+    // unique) when A's are, as for assembled matrices and those read by `read_matrix_market`.
+    let A_ii = select_entries(A, ni, &p.internal, |row, v| match p.position[row] {
+        Err(r) if !(drop_zeros && v == 0.0) => Some(r),
+        _ => None,
+    });
+    let (symbolic, values) = A_ii.into_parts();
+    let pattern = with_pattern.then_some(symbolic);
     Ok((pattern, values, A_ib, A_bb))
 }
 
 /// The stored entries of $\mathbf A_{ii}$ (without the stored zeros if `drop_zeros`).
 fn internal_entries(A: SparseColMatRef<'_, usize, f64>, p: &Partition, drop_zeros: bool) -> usize {
     p.internal
-        .iter()
+        .par_iter()
         .map(|&col| {
             A.row_idx_of_col_raw(col)
                 .iter()
@@ -510,7 +494,7 @@ fn project(
     let m = omega.len();
     let n = nb + m;
     // V_i = [Psi Phi_i], the internal rows of V; the projections from the blocks.
-    let V_i = Mat::<f64>::from_fn(ni, n, |i, c| if c < nb { Psi[(i, c)] } else { Phi_i[(i, c - nb)] });
+    let V_i = gather_rows(ni, n, |i, c| if c < nb { Psi[(i, c)] } else { Phi_i[(i, c - nb)] });
     drop((Psi, Phi_i));
     let par = faer::get_global_parallelism();
     let K_CB = symmetrize(project_blocks(K_ii, K_ib, K_bb, V_i.as_ref(), par));
