@@ -170,7 +170,7 @@ impl FlexibleElement {
         }
     }
 
-    /// [`Self::element`] without allocation: the body state is refilled from the node motions
+    /// The element's forces and tangents, without allocation: the body state is refilled from the node motions
     /// and `modal(i) = (η_i, η̇_i, η̈_i)`, the superelement evaluates into its workspace
     /// ([`Superelement::evaluate_into`]) and the result is copied into `out`, which must have
     /// been built for this element (`6N + m` rows). The body's load-point loads at time `t`,

@@ -12,6 +12,11 @@
 //!
 //! The module keeps no state of its own: every class owns plain data of the library crates.
 
+// The doc comments of the Python classes and methods are their Python docstrings, where
+// units are written in brackets (`[m]`, `[Hz]`) as Python users read them; rustdoc would take
+// those for intra-doc links.
+#![allow(rustdoc::broken_intra_doc_links)]
+
 use pyo3::prelude::*;
 
 pub mod errors;

@@ -420,7 +420,7 @@ impl GeometricStiffness {
     }
 
     /// [`Self::gradient_into`] through the nonzero $\mathbf G_k$ only, each on its nonzero rows and
-    /// columns ([`Compressed`]): the columns $\mathbf C_m$, the entries $b_m$ of the zero
+    /// columns ([`Compressed`](crate::compressed::Compressed)): the columns $\mathbf C_m$, the entries $b_m$ of the zero
     /// $\mathbf G_m$ are zero, so $\mathbf p = \sum_{m \in nz}\mathbf F_{\cdot m}b_m$,
     /// $\mathbf g_G = \mathbf b + \sum_{m \in nz}\mathbf C_m w_m$ and $\mathbf C\mathbf F\mathbf C^T =
     /// \sum_{l \in nz}\mathbf D_l\mathbf C_l^T$ with $\mathbf D_l = \sum_{m \in nz}\mathbf C_m F_{ml}$.

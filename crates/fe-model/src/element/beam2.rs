@@ -301,8 +301,8 @@ fn local_stiffness(L: f64, Phi_y: f64, Phi_z: f64, s: &BeamSection, m: &Isotropi
     K
 }
 
-/// Local consistent mass: axial $\frac{\rho A L}{6}[2,1;1,2]$, torsion
-/// $\frac{\rho I_p L}{6}[2,1;1,2]$, and in each plane $\rho A L$ [`bending_mass_translational`]
+/// Local consistent mass: axial $\frac{\rho A L}{6}[2, 1; 1, 2]$, torsion
+/// $\frac{\rho I_p L}{6}[2, 1; 1, 2]$, and in each plane $\rho A L$ [`bending_mass_translational`]
 /// $+\ \rho I$ [`bending_mass_rotary`] with $I = I_z$ for the $x$-$y$ plane and $I_y$ for the
 /// $x$-$z$ plane (Przemieniecki (1968) ch. 11).
 fn local_mass_consistent(L: f64, Phi_y: f64, Phi_z: f64, s: &BeamSection, m: &IsotropicMaterial) -> Matrix12 {
