@@ -53,6 +53,7 @@
 #![allow(non_snake_case)]
 
 use crate::so3::skew;
+use crate::transform::{cols_mut, PackedTall};
 use faer::Mat;
 use nalgebra::{Matrix3, Vector3};
 use reduction::InertiaData;
@@ -118,6 +119,23 @@ pub struct FfrInertia {
     /// of $\partial\mathbf F/\partial\boldsymbol\nu$ and the $\mathbf q\mathbf q$ block of
     /// $\partial\mathbf F/\partial\mathbf q$ are combinations of these nine matrices: one product.
     vec_stack: Mat<f64>,
+    /// `stack` and `vec_stack` packed for small bodies ($n \le$ [`PACKED_MAX_N`]).
+    packed: Option<PackedInvariants>,
+}
+
+/// Largest $n$ whose inertia contractions go through [`PackedTall`]; above, faer's product
+/// (its fixed cost small against the $9n^2$ multiply-adds) is kept.
+const PACKED_MAX_N: usize = 24;
+
+/// The stacked invariants of [`FfrInertia`] packed for [`PackedTall::mul`].
+#[derive(Clone, Debug)]
+struct PackedInvariants {
+    /// Rows $0..3n$ of `stack` ($\tilde{\mathbf S}_i$: with $\mathbf q$, $\dot{\mathbf q}$, $\ddot{\mathbf q}$).
+    tilde: PackedTall,
+    /// Rows $3n..9n$ of `stack` ($\bar{\mathbf S}^{sym}_p$: with $\mathbf q$, $\dot{\mathbf q}$ only).
+    sym: PackedTall,
+    /// `vec_stack`.
+    vec: PackedTall,
 }
 
 /// $\int\rho\,\mathbf f$ rows of a `DenseMatrix` as a faer matrix.
@@ -163,6 +181,11 @@ impl FfrInertia {
         let nine = |k: usize| if k < 3 { &S_tilde[k] } else { &S_bar_sym[k - 3] };
         let stack = Mat::from_fn(9 * n, n, |r, c| nine(r / n)[(r % n, c)]);
         let vec_stack = Mat::from_fn(n * n, 9, |r, k| nine(k)[(r % n, r / n)]);
+        let packed = (n <= PACKED_MAX_N).then(|| PackedInvariants {
+            tilde: PackedTall::new(3 * n, n, |r, c| stack[(r, c)]),
+            sym: PackedTall::new(6 * n, n, |r, c| stack[(3 * n + r, c)]),
+            vec: PackedTall::new(n * n, 9, |r, c| vec_stack[(r, c)]),
+        });
         Self {
             mass: m,
             d,
@@ -175,6 +198,7 @@ impl FfrInertia {
             M_CB: M_CB.clone(),
             stack,
             vec_stack,
+            packed,
         }
     }
 
@@ -306,17 +330,29 @@ impl FfrInertia {
         let m = self.mass;
         let s = self.d * m + mul3(&self.S_t, q);
         let sd = mul3(&self.S_t, qd);
-        w.rhs.col_as_slice_mut(0).copy_from_slice(q);
-        w.rhs.col_as_slice_mut(1).copy_from_slice(qd);
-        w.rhs.col_as_slice_mut(2).copy_from_slice(qdd);
-        faer::linalg::matmul::matmul(
-            w.prod.as_mut().subcols_mut(0, 2 + with_qdd as usize),
-            faer::Accum::Replace,
-            self.stack.as_ref(),
-            w.rhs.as_ref().subcols(0, 2 + with_qdd as usize),
-            1.0,
-            faer::Par::Seq,
-        );
+        if let Some(p) = &self.packed {
+            // The S~_i rows with q, qd and (for the partials) qdd, the S_bar_sym rows with q, qd.
+            let [c0, c1, c2] = cols_mut::<3>(w.prod.as_mut());
+            let ((t0, s0), (t1, s1)) = (c0.split_at_mut(3 * n), c1.split_at_mut(3 * n));
+            if with_qdd {
+                p.tilde.mul([q, qd, qdd], [t0, t1, &mut c2[..3 * n]]);
+            } else {
+                p.tilde.mul([q, qd], [t0, t1]);
+            }
+            p.sym.mul([q, qd], [s0, s1]);
+        } else {
+            w.rhs.col_as_slice_mut(0).copy_from_slice(q);
+            w.rhs.col_as_slice_mut(1).copy_from_slice(qd);
+            w.rhs.col_as_slice_mut(2).copy_from_slice(qdd);
+            faer::linalg::matmul::matmul(
+                w.prod.as_mut().subcols_mut(0, 2 + with_qdd as usize),
+                faer::Accum::Replace,
+                self.stack.as_ref(),
+                w.rhs.as_ref().subcols(0, 2 + with_qdd as usize),
+                1.0,
+                faer::Par::Seq,
+            );
+        }
         let block = |c: usize, k: usize| &w.prod.col_as_slice(c)[k * n..(k + 1) * n];
         for p in 0..6 {
             w.sig.col_as_slice_mut(p).copy_from_slice(block(0, 3 + p));
@@ -568,14 +604,19 @@ impl FfrInertia {
             w.coef[(3 + p, 0)] = -0.5 * cab(a, b) * if a == b { 1.0 } else { 2.0 };
             w.coef[(3 + p, 1)] = 0.0;
         }
-        faer::linalg::matmul::matmul(
-            w.qq.as_mut(),
-            faer::Accum::Replace,
-            self.vec_stack.as_ref(),
-            w.coef.as_ref(),
-            1.0,
-            faer::Par::Seq,
-        );
+        if let Some(p) = &self.packed {
+            let [q0, q1] = cols_mut::<2>(w.qq.as_mut());
+            p.vec.mul([w.coef.col_as_slice(0), w.coef.col_as_slice(1)], [q0, q1]);
+        } else {
+            faer::linalg::matmul::matmul(
+                w.qq.as_mut(),
+                faer::Accum::Replace,
+                self.vec_stack.as_ref(),
+                w.coef.as_ref(),
+                1.0,
+                faer::Par::Seq,
+            );
+        }
         for j in 0..n {
             F_q.col_as_slice_mut(j)[6..].copy_from_slice(&w.qq.col_as_slice(0)[j * n..(j + 1) * n]);
             out.F_nu.col_as_slice_mut(6 + j)[6..].copy_from_slice(&w.qq.col_as_slice(1)[j * n..(j + 1) * n]);
