@@ -972,7 +972,7 @@ mod tests {
             check(&o);
         }
         // No columns: every entry is the empty sum.
-        let mut o = vec![f64::NAN; 6];
+        let mut o = [f64::NAN; 6];
         PackedTall::new(6, 0, |_, _| 1.0).mul([&[][..]], [&mut o[..]]);
         assert!(o.iter().all(|&x| x == 0.0));
     }
