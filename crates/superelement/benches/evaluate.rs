@@ -59,9 +59,10 @@
 //!
 //! Then the two products with the stacked inertia invariants (9n x n by 2-3 columns, n^2 x 9
 //! by 2) by 8-row strips of a packed copy with fused multiply-adds (`transform::PackedTall`,
-//! n <= 24) instead of faer's general gemm path: `beam14-G` 138.1k -> 135.6k with tangents,
-//! 57.6k -> 57.0k without; `block14-G` 153.6k -> 151.2k; `beam22-com-exact` 227.7k -> 220.3k,
-//! 86.7k -> 84.7k; `beam72-G` unchanged (faer's product kept). In time the gain is larger
+//! n <= 24) instead of faer's general gemm path, the contractions read in place from the
+//! product: `beam14-G` 138.1k -> 135.3k with tangents, 57.6k -> 56.7k without; `block14-G`
+//! 153.6k -> 150.7k; `beam22-com-exact` 227.7k -> 219.9k, 86.7k -> 84.2k; `beam72-G`
+//! unchanged (faer's product kept). In time the gain is larger
 //! than in instructions: `beam14-G` 11.0 -> 9.3 us with tangents (BENCHMARKS.md).
 //!
 //! What is left is spread thin: 11 faer products per evaluation with tangents, each
