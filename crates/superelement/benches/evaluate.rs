@@ -57,6 +57,14 @@
 //! 1850k -> 1798k, 585k -> 567k. (The chord steps of the frame solve gain nothing here: these calls start at the
 //! converged frame.)
 //!
+//! Then the two products with the stacked inertia invariants (9n x n by 2-3 columns, n^2 x 9
+//! by 2) by 8-row strips of a packed copy with fused multiply-adds (`transform::PackedTall`,
+//! n <= 24) instead of faer's general gemm path, the contractions read in place from the
+//! product: `beam14-G` 138.1k -> 135.3k with tangents, 57.6k -> 56.7k without; `block14-G`
+//! 153.6k -> 150.7k; `beam22-com-exact` 227.7k -> 219.9k, 86.7k -> 84.2k; `beam72-G`
+//! unchanged (faer's product kept). In time the gain is larger
+//! than in instructions: `beam14-G` 11.0 -> 9.3 us with tangents (BENCHMARKS.md).
+//!
 //! What is left is spread thin: 11 faer products per evaluation with tangents, each
 //! about 1.7k instructions of fixed cost (nano-gemm's planning and driver) beside its kernel,
 //! and plain loops compiled for the baseline x86-64 target (two-wide SIMD, no FMA). Replacing

@@ -53,7 +53,8 @@
 #![allow(non_snake_case)]
 
 use crate::so3::skew;
-use faer::Mat;
+use crate::transform::{col, cols_mut, PackedTall};
+use faer::{Mat, MatRef};
 use nalgebra::{Matrix3, Vector3};
 use reduction::InertiaData;
 use serde::{Deserialize, Serialize};
@@ -118,6 +119,23 @@ pub struct FfrInertia {
     /// of $\partial\mathbf F/\partial\boldsymbol\nu$ and the $\mathbf q\mathbf q$ block of
     /// $\partial\mathbf F/\partial\mathbf q$ are combinations of these nine matrices: one product.
     vec_stack: Mat<f64>,
+    /// `stack` and `vec_stack` packed for small bodies ($n \le$ [`PACKED_MAX_N`]).
+    packed: Option<PackedInvariants>,
+}
+
+/// Largest $n$ whose inertia contractions go through [`PackedTall`]; above, faer's product
+/// (its fixed cost small against the $9n^2$ multiply-adds) is kept.
+const PACKED_MAX_N: usize = 24;
+
+/// The stacked invariants of [`FfrInertia`] packed for [`PackedTall::mul`].
+#[derive(Clone, Debug)]
+struct PackedInvariants {
+    /// Rows $0..3n$ of `stack` ($\tilde{\mathbf S}_i$: with $\mathbf q$, $\dot{\mathbf q}$, $\ddot{\mathbf q}$).
+    tilde: PackedTall,
+    /// Rows $3n..9n$ of `stack` ($\bar{\mathbf S}^{sym}_p$: with $\mathbf q$, $\dot{\mathbf q}$ only).
+    sym: PackedTall,
+    /// `vec_stack`.
+    vec: PackedTall,
 }
 
 /// $\int\rho\,\mathbf f$ rows of a `DenseMatrix` as a faer matrix.
@@ -163,6 +181,11 @@ impl FfrInertia {
         let nine = |k: usize| if k < 3 { &S_tilde[k] } else { &S_bar_sym[k - 3] };
         let stack = Mat::from_fn(9 * n, n, |r, c| nine(r / n)[(r % n, c)]);
         let vec_stack = Mat::from_fn(n * n, 9, |r, k| nine(k)[(r % n, r / n)]);
+        let packed = (n <= PACKED_MAX_N).then(|| PackedInvariants {
+            tilde: PackedTall::new(3 * n, n, |r, c| stack[(r, c)]),
+            sym: PackedTall::new(6 * n, n, |r, c| stack[(3 * n + r, c)]),
+            vec: PackedTall::new(n * n, 9, |r, c| vec_stack[(r, c)]),
+        });
         Self {
             mass: m,
             d,
@@ -175,6 +198,7 @@ impl FfrInertia {
             M_CB: M_CB.clone(),
             stack,
             vec_stack,
+            packed,
         }
     }
 
@@ -252,18 +276,12 @@ impl FfrForce {
 /// its rates, kept between calls so that the hot loop does not allocate.
 #[derive(Clone, Debug)]
 pub struct FfrScratch {
-    /// Columns $\bar{\mathbf S}^{sym}_p\mathbf q$ and $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ ($n\times6$).
-    sig: Mat<f64>,
-    sigd: Mat<f64>,
-    /// Columns $\tilde{\mathbf S}_i\mathbf q$, $\tilde{\mathbf S}_i\dot{\mathbf q}$, $\tilde{\mathbf S}_i\ddot{\mathbf q}$ ($n\times3$).
-    tq: Mat<f64>,
-    tqd: Mat<f64>,
-    tqdd: Mat<f64>,
     /// $\mathbf j_q$ buffers ($3\times n$).
     jq_Om: Mat<f64>,
     jq_Omd: Mat<f64>,
     jqd_Om: Mat<f64>,
-    /// Right-hand sides $[\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}]$ and the stacked product ($9n\times3$).
+    /// Right-hand sides $[\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}]$ and the stacked product ($9n\times3$),
+    /// read in place through `ContractionViews`.
     rhs: Mat<f64>,
     prod: Mat<f64>,
     /// Coefficients ($9\times2$) and the two $n\times n$ blocks from `vec_stack` ($n^2\times2$).
@@ -274,11 +292,6 @@ pub struct FfrScratch {
 impl FfrScratch {
     pub fn new(n: usize) -> Self {
         Self {
-            sig: Mat::zeros(n, 6),
-            sigd: Mat::zeros(n, 6),
-            tq: Mat::zeros(n, 3),
-            tqd: Mat::zeros(n, 3),
-            tqdd: Mat::zeros(n, 3),
             jq_Om: Mat::zeros(3, n),
             jq_Omd: Mat::zeros(3, n),
             jqd_Om: Mat::zeros(3, n),
@@ -286,6 +299,35 @@ impl FfrScratch {
             prod: Mat::zeros(9 * n, 3),
             coef: Mat::zeros(9, 2),
             qq: Mat::zeros(n * n, 2),
+        }
+    }
+}
+
+/// The contractions in the stacked product of [`FfrScratch`], in place (no copies):
+/// $\bar{\mathbf S}^{sym}_p\mathbf q$, $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ ($n\times6$) and
+/// $\tilde{\mathbf S}_i\mathbf q$, $\tilde{\mathbf S}_i\dot{\mathbf q}$, $\tilde{\mathbf S}_i\ddot{\mathbf q}$
+/// ($n\times3$; the last only after a product with $\ddot{\mathbf q}$).
+struct ContractionViews<'a> {
+    sig: MatRef<'a, f64>,
+    sigd: MatRef<'a, f64>,
+    tq: MatRef<'a, f64>,
+    tqd: MatRef<'a, f64>,
+    tqdd: MatRef<'a, f64>,
+}
+
+impl<'a> ContractionViews<'a> {
+    /// Column `c` of the product `prod` with $[\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}]$ holds the
+    /// nine stacked blocks of $n$ entries, so the contractions are column-major views of it.
+    fn of(prod: &'a Mat<f64>, n: usize) -> Self {
+        let view = |c: usize, k0: usize, cols: usize| {
+            MatRef::from_column_major_slice(&prod.col_as_slice(c)[k0 * n..(k0 + cols) * n], n, cols)
+        };
+        Self {
+            sig: view(0, 3, 6),
+            sigd: view(1, 3, 6),
+            tq: view(0, 0, 3),
+            tqd: view(1, 0, 3),
+            tqdd: view(2, 0, 3),
         }
     }
 }
@@ -306,28 +348,28 @@ impl FfrInertia {
         let m = self.mass;
         let s = self.d * m + mul3(&self.S_t, q);
         let sd = mul3(&self.S_t, qd);
-        w.rhs.col_as_slice_mut(0).copy_from_slice(q);
-        w.rhs.col_as_slice_mut(1).copy_from_slice(qd);
-        w.rhs.col_as_slice_mut(2).copy_from_slice(qdd);
-        faer::linalg::matmul::matmul(
-            w.prod.as_mut().subcols_mut(0, 2 + with_qdd as usize),
-            faer::Accum::Replace,
-            self.stack.as_ref(),
-            w.rhs.as_ref().subcols(0, 2 + with_qdd as usize),
-            1.0,
-            faer::Par::Seq,
-        );
-        let block = |c: usize, k: usize| &w.prod.col_as_slice(c)[k * n..(k + 1) * n];
-        for p in 0..6 {
-            w.sig.col_as_slice_mut(p).copy_from_slice(block(0, 3 + p));
-            w.sigd.col_as_slice_mut(p).copy_from_slice(block(1, 3 + p));
-        }
-        for i in 0..3 {
-            w.tq.col_as_slice_mut(i).copy_from_slice(block(0, i));
-            w.tqd.col_as_slice_mut(i).copy_from_slice(block(1, i));
+        if let Some(p) = &self.packed {
+            // The S~_i rows with q, qd and (for the partials) qdd, the S_bar_sym rows with q, qd.
+            let [c0, c1, c2] = cols_mut::<3>(w.prod.as_mut());
+            let ((t0, s0), (t1, s1)) = (c0.split_at_mut(3 * n), c1.split_at_mut(3 * n));
             if with_qdd {
-                w.tqdd.col_as_slice_mut(i).copy_from_slice(block(2, i));
+                p.tilde.mul([q, qd, qdd], [t0, t1, &mut c2[..3 * n]]);
+            } else {
+                p.tilde.mul([q, qd], [t0, t1]);
             }
+            p.sym.mul([q, qd], [s0, s1]);
+        } else {
+            w.rhs.col_as_slice_mut(0).copy_from_slice(q);
+            w.rhs.col_as_slice_mut(1).copy_from_slice(qd);
+            w.rhs.col_as_slice_mut(2).copy_from_slice(qdd);
+            faer::linalg::matmul::matmul(
+                w.prod.as_mut().subcols_mut(0, 2 + with_qdd as usize),
+                faer::Accum::Replace,
+                self.stack.as_ref(),
+                w.rhs.as_ref().subcols(0, 2 + with_qdd as usize),
+                1.0,
+                faer::Par::Seq,
+            );
         }
         // X_ab = (S_x)_ab q; J1 = 2 tr(X) I - X - X^T; W_ab = q^T S_bar_ab q = q.sig_ab / 2.
         let mut X = Matrix3::<f64>::zeros();
@@ -339,8 +381,9 @@ impl FfrInertia {
                 Xd[(r / 3, r % 3)] += c[r] * qd[j];
             }
         }
-        let W = Matrix3::from_fn(|a, b| 0.5 * dot(q, w.sig.col_as_slice(pair(a, b))));
-        let W3 = Matrix3::from_fn(|a, b| dot(qd, w.sig.col_as_slice(pair(a, b))));
+        let sig = ContractionViews::of(&w.prod, n).sig;
+        let W = Matrix3::from_fn(|a, b| 0.5 * dot(q, col(sig, pair(a, b))));
+        let W3 = Matrix3::from_fn(|a, b| dot(qd, col(sig, pair(a, b))));
         let I = Matrix3::identity();
         let J = self.J0 + I * (2.0 * X.trace()) - X - X.transpose() + I * W.trace() - W;
         let Jd = I * (2.0 * Xd.trace()) - Xd - Xd.transpose() + I * W3.trace() - W3;
@@ -353,9 +396,9 @@ impl FfrInertia {
     /// (\bar{\mathbf S}_{ab} + \bar{\mathbf S}_{ba})\mathbf q$. With `with_sx = false` only the
     /// $\boldsymbol\sigma$ part (that is $\partial(\dot{\mathbf J}\mathbf w)/\partial\mathbf q$ when
     /// `sig` holds $\bar{\mathbf S}^{sym}\dot{\mathbf q}$).
-    fn jq(&self, w: &Vector3<f64>, sig: &Mat<f64>, with_sx: bool, out: &mut Mat<f64>) {
+    fn jq(&self, w: &Vector3<f64>, sig: MatRef<'_, f64>, with_sx: bool, out: &mut Mat<f64>) {
         let n = self.n();
-        let sg: [&[f64]; 6] = std::array::from_fn(|p| sig.col_as_slice(p));
+        let sg: [&[f64]; 6] = std::array::from_fn(|p| col(sig, p));
         for j in 0..n {
             let sx = self.S_x.col_as_slice(j);
             let trs = sg[0][j] + sg[1][j] + sg[2][j];
@@ -374,12 +417,8 @@ impl FfrInertia {
 
     /// $\mathbf S_w(\mathbf q)\mathbf x$: component $i$ is $\mathbf q^T\tilde{\mathbf S}_i\mathbf x$
     /// $= -(\tilde{\mathbf S}_i\mathbf q)\cdot\mathbf x$.
-    fn sw_mul(tq: &Mat<f64>, x: &[f64]) -> Vector3<f64> {
-        Vector3::new(
-            -dot(tq.col_as_slice(0), x),
-            -dot(tq.col_as_slice(1), x),
-            -dot(tq.col_as_slice(2), x),
-        )
+    fn sw_mul(tq: MatRef<'_, f64>, x: &[f64]) -> Vector3<f64> {
+        Vector3::new(-dot(col(tq, 0), x), -dot(col(tq, 1), x), -dot(col(tq, 2), x))
     }
 
     /// $\mathbf M_{ffr}(\mathbf q)$ (module docs).
@@ -389,11 +428,11 @@ impl FfrInertia {
         let mut w = FfrScratch::new(n);
         let c = self.contractions(q, &zeros, &zeros, false, &mut w);
         let mut M = Mat::zeros(6 + n, 6 + n);
-        self.fill_mass(&c, &w, &mut M);
+        self.fill_mass(&c, ContractionViews::of(&w.prod, n).tq, &mut M);
         M
     }
 
-    fn fill_mass(&self, c: &Contractions, w: &FfrScratch, M: &mut Mat<f64>) {
+    fn fill_mass(&self, c: &Contractions, tq: MatRef<'_, f64>, M: &mut Mat<f64>) {
         let n = self.n();
         let m = self.mass;
         let st = skew(&c.s);
@@ -407,7 +446,7 @@ impl FfrInertia {
         }
         for j in 0..n {
             for i in 0..3 {
-                let srw = self.S_r[(i, j)] - w.tq[(j, i)];
+                let srw = self.S_r[(i, j)] - tq[(j, i)];
                 M[(i, 6 + j)] = self.S_t[(i, j)];
                 M[(6 + j, i)] = self.S_t[(i, j)];
                 M[(3 + i, 6 + j)] = srw;
@@ -465,9 +504,16 @@ impl FfrInertia {
         let (V, Om, qd) = (v3(nu, 0), v3(nu, 3), &nu[6..]);
         let (Vd, Omd, qdd) = (v3(nu_dot, 0), v3(nu_dot, 3), &nu_dot[6..]);
         let c = self.contractions(q, qd, qdd, partials, w);
+        let ContractionViews {
+            sig,
+            sigd,
+            tq,
+            tqd,
+            tqdd,
+        } = ContractionViews::of(&w.prod, n);
         let (s, sd) = (c.s, c.sd);
-        let Srw_qd = mul3(&self.S_r, qd) + Self::sw_mul(&w.tq, qd);
-        let Srw_qdd = mul3(&self.S_r, qdd) + Self::sw_mul(&w.tq, qdd);
+        let Srw_qd = mul3(&self.S_r, qd) + Self::sw_mul(tq, qd);
+        let Srw_qdd = mul3(&self.S_r, qdd) + Self::sw_mul(tq, qdd);
         let p_V = V * m + Om.cross(&s) + sd;
         let p_Om = s.cross(&V) + c.J * Om + Srw_qd;
         let F_V = Vd * m + Omd.cross(&s) + mul3(&self.S_t, qdd) + Om.cross(&sd) + Om.cross(&p_V);
@@ -475,7 +521,7 @@ impl FfrInertia {
         let F = &mut out.F;
         F[0..3].copy_from_slice(F_V.as_slice());
         F[3..6].copy_from_slice(F_Om.as_slice());
-        self.jq(&Om, &w.sig, true, &mut w.jq_Om);
+        self.jq(&Om, sig, true, &mut w.jq_Om);
         {
             let Fq = &mut F[6..];
             matvec(&self.M_CB, qdd, Fq);
@@ -483,7 +529,6 @@ impl FfrInertia {
             // (S_r + S_w)^T Omd, S_w^T x = -sum_i x_i tq_i.
             add_mul3t(Fq, &self.S_r, &Omd, 1.0);
             add_mul3t(Fq, &self.S_t, &V.cross(&Om), -1.0);
-            let (tq, tqd) = (&w.tq, &w.tqd);
             for j in 0..n {
                 let mut v = 0.0;
                 for i in 0..3 {
@@ -497,7 +542,7 @@ impl FfrInertia {
             add_mul3t(Fq, &w.jq_Om, &Om, -0.5);
         }
         // The mass matrix is always needed (the residual's M); the partials only for tangents.
-        self.fill_mass(&c, w, &mut out.M);
+        self.fill_mass(&c, tq, &mut out.M);
         if !partials {
             return;
         }
@@ -519,9 +564,9 @@ impl FfrInertia {
         for j in 0..n {
             let St = Vector3::new(self.S_t[(0, j)], self.S_t[(1, j)], self.S_t[(2, j)]);
             let Srw = Vector3::new(
-                self.S_r[(0, j)] - w.tq[(j, 0)],
-                self.S_r[(1, j)] - w.tq[(j, 1)],
-                self.S_r[(2, j)] - w.tq[(j, 2)],
+                self.S_r[(0, j)] - tq[(j, 0)],
+                self.S_r[(1, j)] - tq[(j, 1)],
+                self.S_r[(2, j)] - tq[(j, 2)],
             );
             // [V, qd] = 2 Om~ S_t ; [Om, qd] = j_q(Om) + Om~ Srw
             let a = Ot * St * 2.0;
@@ -534,13 +579,13 @@ impl FfrInertia {
                 F_nu[(i, 6 + j)] = a[i];
                 F_nu[(3 + i, 6 + j)] = b[i] + jq_Om[(i, j)];
                 F_nu[(6 + j, i)] = cv[i];
-                F_nu[(6 + j, 3 + i)] = -2.0 * w.tqd[(j, i)] + cw[i] - jq_Om[(i, j)];
+                F_nu[(6 + j, 3 + i)] = -2.0 * tqd[(j, i)] + cw[i] - jq_Om[(i, j)];
             }
         }
 
         // F_Om rows: j_q(Omd) + jdot_q(Om) + Om~ j_q(Om) and the S_t, Rows terms.
-        self.jq(&Omd, &w.sig, true, &mut w.jq_Omd);
-        self.jq(&Om, &w.sigd, false, &mut w.jqd_Om);
+        self.jq(&Omd, sig, true, &mut w.jq_Omd);
+        self.jq(&Om, sigd, false, &mut w.jqd_Om);
         let F_q = &mut out.F_q;
         let A_V = skew(&Omd) + Ot * Ot;
         let A_Om = -skew(&Vd) - Ot * Vt + Vt * Ot;
@@ -548,11 +593,11 @@ impl FfrInertia {
             let St = Vector3::new(self.S_t[(0, j)], self.S_t[(1, j)], self.S_t[(2, j)]);
             let fv = A_V * St;
             let jqO = Vector3::new(jq_Om[(0, j)], jq_Om[(1, j)], jq_Om[(2, j)]);
-            let rows_qd = Vector3::new(w.tqd[(j, 0)], w.tqd[(j, 1)], w.tqd[(j, 2)]);
+            let rows_qd = Vector3::new(tqd[(j, 0)], tqd[(j, 1)], tqd[(j, 2)]);
             let fo = A_Om * St + Ot * (jqO + rows_qd);
             for i in 0..3 {
                 F_q[(i, j)] = fv[i];
-                F_q[(3 + i, j)] = fo[i] + w.jq_Omd[(i, j)] + w.tqdd[(j, i)] + w.jqd_Om[(i, j)];
+                F_q[(3 + i, j)] = fo[i] + w.jq_Omd[(i, j)] + tqdd[(j, i)] + w.jqd_Om[(i, j)];
             }
         }
         // The qq blocks, one product with the nine stacked matrices: F_q rows
@@ -568,14 +613,19 @@ impl FfrInertia {
             w.coef[(3 + p, 0)] = -0.5 * cab(a, b) * if a == b { 1.0 } else { 2.0 };
             w.coef[(3 + p, 1)] = 0.0;
         }
-        faer::linalg::matmul::matmul(
-            w.qq.as_mut(),
-            faer::Accum::Replace,
-            self.vec_stack.as_ref(),
-            w.coef.as_ref(),
-            1.0,
-            faer::Par::Seq,
-        );
+        if let Some(p) = &self.packed {
+            let [q0, q1] = cols_mut::<2>(w.qq.as_mut());
+            p.vec.mul([w.coef.col_as_slice(0), w.coef.col_as_slice(1)], [q0, q1]);
+        } else {
+            faer::linalg::matmul::matmul(
+                w.qq.as_mut(),
+                faer::Accum::Replace,
+                self.vec_stack.as_ref(),
+                w.coef.as_ref(),
+                1.0,
+                faer::Par::Seq,
+            );
+        }
         for j in 0..n {
             F_q.col_as_slice_mut(j)[6..].copy_from_slice(&w.qq.col_as_slice(0)[j * n..(j + 1) * n]);
             out.F_nu.col_as_slice_mut(6 + j)[6..].copy_from_slice(&w.qq.col_as_slice(1)[j * n..(j + 1) * n]);

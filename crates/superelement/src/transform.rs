@@ -239,6 +239,102 @@ pub(crate) fn gemm(out: &mut Mat<f64>, A: MatRef<'_, f64>, B: MatRef<'_, f64>, a
     matmul(out.as_mut(), accum, A, B, alpha, Par::Seq);
 }
 
+/// Rows per strip of [`PackedTall`].
+const STRIP: usize = 8;
+/// Most columns of a [`PackedTall`] (the right-hand sides live in a stack array).
+pub(crate) const PACKED_MAX_K: usize = 32;
+
+/// A tall matrix $\mathbf A$ ($m\times k$, $k \le$ [`PACKED_MAX_K`]) packed for products with
+/// at most 3 columns ([`Self::mul`]): strips of 8 rows, each stored column after column (8
+/// entries per column), the last strip padded with zero rows. For the inertia contractions
+/// of small bodies ([`crate::mass`]): faer's product of such tall, thin operands goes through
+/// its general gemm driver, whose fixed cost is about that of the multiply-adds at $n = 14$.
+#[derive(Clone, Debug)]
+pub(crate) struct PackedTall {
+    m: usize,
+    k: usize,
+    data: Vec<f64>,
+}
+
+impl PackedTall {
+    /// Packs the $m\times k$ matrix with entries `a(i, j)`.
+    pub(crate) fn new(m: usize, k: usize, a: impl Fn(usize, usize) -> f64) -> Self {
+        assert!(k <= PACKED_MAX_K, "PackedTall: {k} columns, at most {PACKED_MAX_K}");
+        let strips = m.div_ceil(STRIP);
+        let mut data = vec![0.0; strips * k * STRIP];
+        for (e, x) in data.iter_mut().enumerate() {
+            let (s, j, i) = (e / (k * STRIP), (e / STRIP) % k, e % STRIP);
+            let r = s * STRIP + i;
+            if r < m {
+                *x = a(r, j);
+            }
+        }
+        Self { m, k, data }
+    }
+
+    /// `out[c]` $= \mathbf A\,$`b[c]` for $c < C \le 3$. Each strip's $8C$ sums stay in
+    /// registers over the whole $k$ loop, compiled for the machine's vector instructions like
+    /// the block kernels (`vectorized_kernel`). Every entry is the sum in the order of $k$
+    /// of fused multiply-adds (`f64::mul_add`, one rounding each: the same result on every
+    /// machine, in hardware where there is FMA).
+    pub(crate) fn mul<const C: usize>(&self, b: [&[f64]; C], out: [&mut [f64]; C]) {
+        struct Mul<'a, 'b, const C: usize> {
+            a: &'a PackedTall,
+            b: [&'a [f64]; C],
+            out: [&'b mut [f64]; C],
+        }
+        impl<const C: usize> pulp::WithSimd for Mul<'_, '_, C> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _simd: S) {
+                self.a.mul_body(self.b, self.out)
+            }
+        }
+        pulp::Arch::new().dispatch(Mul { a: self, b, out });
+    }
+
+    #[inline(always)]
+    fn mul_body<const C: usize>(&self, b: [&[f64]; C], out: [&mut [f64]; C]) {
+        let (m, k) = (self.m, self.k);
+        assert!(b.iter().all(|x| x.len() == k) && out.iter().all(|x| x.len() == m));
+        // The right-hand sides by rows, so that the k loop zips without bounds checks.
+        let mut bt = [[0.0; C]; PACKED_MAX_K];
+        for (j, row) in bt[..k].iter_mut().enumerate() {
+            for c in 0..C {
+                row[c] = b[c][j];
+            }
+        }
+        if k == 0 {
+            for o in out {
+                o.fill(0.0);
+            }
+            return;
+        }
+        for (s, strip) in self.data.chunks_exact(k * STRIP).enumerate() {
+            let mut acc = [[0.0f64; STRIP]; C];
+            for (col, bj) in strip.chunks_exact(STRIP).zip(&bt[..k]) {
+                for c in 0..C {
+                    for (x, a) in acc[c].iter_mut().zip(col) {
+                        *x = a.mul_add(bj[c], *x);
+                    }
+                }
+            }
+            let r = s * STRIP;
+            if r + STRIP <= m {
+                // A fixed length: vector stores, not a call to memcpy.
+                for c in 0..C {
+                    let o: &mut [f64; STRIP] = (&mut out[c][r..r + STRIP]).try_into().expect("a strip");
+                    *o = acc[c];
+                }
+            } else {
+                for c in 0..C {
+                    out[c][r..].copy_from_slice(&acc[c][..m - r]);
+                }
+            }
+        }
+    }
+}
+
 impl Kinematics {
     /// An empty configuration for a body with `N` interfaces and `n` CB coordinates; filled by
     /// [`Self::update`]. Lets hot loops reuse the buffers.
@@ -637,7 +733,7 @@ pub(crate) fn col_mut(A: MatMut<'_, f64>, j: usize) -> &mut [f64] {
 }
 
 /// The first `K` columns of a column-major view as slices.
-fn cols_mut<const K: usize>(A: MatMut<'_, f64>) -> [&mut [f64]; K] {
+pub(crate) fn cols_mut<const K: usize>(A: MatMut<'_, f64>) -> [&mut [f64]; K] {
     let mut rest = Some(A);
     std::array::from_fn(|_| {
         let (first, others) = rest.take().expect("K columns").split_at_col_mut(1);
@@ -840,6 +936,45 @@ mod tests {
             s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
         }
+    }
+
+    /// [`PackedTall::mul`] against faer's product on non-square inputs: $m = 37$ rows (four
+    /// strips of 8 and a padded strip of 5), 5 and 14 columns, 1, 2 and 3 right-hand sides, and
+    /// an empty product. Both sides sum $k \le 14$ products of numbers of size 1 per entry, in
+    /// a different order and rounding (fused multiply-adds here): $10^{-14}$ is some 20 times
+    /// that round-off.
+    #[test]
+    fn packed_tall_product_matches_faer() {
+        for (m, k, seed) in [(37, 5, 21), (37, 14, 22), (8, 3, 23)] {
+            let mut r = numbers(seed);
+            let A = Mat::from_fn(m, k, |_, _| r());
+            let B = Mat::from_fn(k, 3, |_, _| r());
+            let packed = PackedTall::new(m, k, |i, j| A[(i, j)]);
+            let AB = &A * &B;
+            let check = |out: &[Vec<f64>]| {
+                for (c, o) in out.iter().enumerate() {
+                    for (i, x) in o.iter().enumerate() {
+                        assert!((x - AB[(i, c)]).abs() < 1e-14, "m {m} k {k}: column {c} row {i}");
+                    }
+                }
+            };
+            let b = |c: usize| B.col_as_slice(c);
+            let mut o = vec![vec![f64::NAN; m]; 3];
+            let [o0, o1, o2] = &mut o[..] else { unreachable!() };
+            packed.mul([b(0), b(1), b(2)], [&mut o0[..], o1, o2]);
+            check(&o);
+            let mut o = vec![vec![f64::NAN; m]; 2];
+            let [o0, o1] = &mut o[..] else { unreachable!() };
+            packed.mul([b(0), b(1)], [&mut o0[..], o1]);
+            check(&o);
+            let mut o = vec![vec![f64::NAN; m]; 1];
+            packed.mul([b(0)], [&mut o[0][..]]);
+            check(&o);
+        }
+        // No columns: every entry is the empty sum.
+        let mut o = [f64::NAN; 6];
+        PackedTall::new(6, 0, |_, _| 1.0).mul([&[][..]], [&mut o[..]]);
+        assert!(o.iter().all(|&x| x == 0.0));
     }
 
     /// The dispatched block kernels against straightforward dense products with the formed
