@@ -100,6 +100,8 @@ struct Branches {
     roots: Vec<Node>,
     /// The first supernode of the branch of `plan.top[k]`.
     first: Vec<usize>,
+    /// Top supernodes on the longest path from a subtree to a root.
+    depth: usize,
 }
 
 impl Branches {
@@ -131,6 +133,7 @@ impl Branches {
         // Ranges and flops, the top ascending (children before parents).
         let mut first = vec![0usize; top.len()];
         let mut flops = vec![0usize; top.len()];
+        let mut level = vec![0usize; top.len()];
         let task_flops: Vec<usize> = tasks.iter().map(|r| r.clone().map(|sn| weight[sn]).sum()).collect();
         let range = |node: Node, first: &[usize]| match node {
             Node::Task(t) => tasks[t].clone(),
@@ -159,6 +162,14 @@ impl Branches {
                 return None;
             }
             first[k] = start;
+            level[k] = 1 + children[k]
+                .iter()
+                .map(|&c| match c {
+                    Node::Task(_) => 0,
+                    Node::Top(j) => level[j],
+                })
+                .max()
+                .unwrap_or(0);
             flops[k] = weight[top[k]]
                 + children[k]
                     .iter()
@@ -181,7 +192,12 @@ impl Branches {
             c.sort_by_key(size);
         }
         roots.sort_by_key(size);
-        Some(Self { children, roots, first })
+        Some(Self {
+            children,
+            roots,
+            first,
+            depth: level.into_iter().max().unwrap_or(0),
+        })
     }
 }
 
@@ -295,12 +311,15 @@ impl FactorPlan {
 
     /// Bytes that [`factor`] allocates beside the values of $\mathbf L$ with `threads`
     /// threads, for a matrix of dimension `n` with `lower` stored entries in its lower
-    /// triangle: the permuted lower triangle and one task's workspace per thread (the plan's
-    /// own arrays not counted).
+    /// triangle: the permuted lower triangle and one task's workspace per thread, or with
+    /// concurrent branches up to one per level of the top's tree more (a thread waiting
+    /// inside a parallel loop of a top supernode may take another task meanwhile); the plan's
+    /// own arrays not counted.
     pub(super) fn workspace_bytes<T: Real>(&self, n: usize, lower: usize, threads: usize) -> usize {
+        let per_thread = 1 + self.branches.as_ref().map_or(0, |b| b.depth);
         lower * (size_of::<T>() + size_of::<usize>())
             + (n + 1) * size_of::<usize>()
-            + threads.max(1) * self.task_bytes::<T>(n)
+            + threads.max(1) * per_thread * self.task_bytes::<T>(n)
     }
 
     /// Bytes of the plan itself.
