@@ -10,7 +10,10 @@
 //! `N` threads whatever the pool, e.g. with `RAYON_NUM_THREADS=1`), `default` (what
 //! [`SymbolicFactor::factor`] chooses), or `compare` (faer's and ours, the largest difference
 //! of their values relative to each supernode's norm). Prints wall and CPU seconds (user +
-//! system of all threads, from `/proc/self/stat`) of each factorisation, and the load average.
+//! system of all threads, from `/proc/self/stat`) of each factorisation, and the load average;
+//! and per thread the seconds on a core, waiting for one and idle (asleep, no work to take;
+//! `/proc/self/task/*/schedstat`): the idle thread-seconds are the parallel inefficiency
+//! whatever the load, where the wall time on a shared machine says little.
 
 #![allow(non_snake_case)]
 
@@ -130,9 +133,23 @@ fn main() {
     for run in 0..runs {
         let symbolic = analyse(parallel);
         let used = symbolic.parallel_subtrees().0;
-        let (t, c) = (Instant::now(), cpu_seconds());
+        let (t, c, threads_before) = (Instant::now(), cpu_seconds(), thread_times());
         let factor = symbolic.factor(K_ii.as_ref(), precision).unwrap();
         let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+        // Per thread that ran: on a core, waiting for one (the load), idle (asleep: no work).
+        let threads_after = thread_times();
+        let mut idle = 0.0;
+        let mut per_thread = String::new();
+        for (tid, (on, waiting)) in &threads_after {
+            let (on0, waiting0) = threads_before.get(tid).copied().unwrap_or((0.0, 0.0));
+            let (on, waiting) = (on - on0, waiting - waiting0);
+            if on > 0.01 * wall {
+                let asleep = (wall - on - waiting).max(0.0);
+                idle += asleep;
+                per_thread += &format!(" [{on:.2} on a core, {waiting:.2} waiting, {asleep:.2} idle]");
+            }
+        }
+        println!("{size} threads (s):{per_thread}; idle {idle:.2} thread-s");
         println!(
             "{size} {method:<8} {} run {run}: numeric factorisation {wall:6.2} s wall, {cpu:6.2} CPU-s ({used} subtrees); peak RSS {:.0} MB; load {}",
             precision.name(),
@@ -141,6 +158,23 @@ fn main() {
         );
         drop(factor);
     }
+}
+
+/// For each thread of this process: seconds on a core and seconds runnable but waiting for
+/// one (`/proc/self/task/*/schedstat`), by thread id.
+fn thread_times() -> std::collections::HashMap<String, (f64, f64)> {
+    let mut times = std::collections::HashMap::new();
+    for task in std::fs::read_dir("/proc/self/task").into_iter().flatten().flatten() {
+        let stat = std::fs::read_to_string(task.path().join("schedstat")).unwrap_or_default();
+        let f: Vec<f64> = stat.split_whitespace().filter_map(|v| v.parse().ok()).collect();
+        if f.len() >= 2 {
+            times.insert(
+                task.file_name().to_string_lossy().into_owned(),
+                (f[0] / 1e9, f[1] / 1e9),
+            );
+        }
+    }
+    times
 }
 
 /// Peak resident memory of this process \[MB\] (`VmHWM`).

@@ -1081,32 +1081,58 @@ mod tests {
         (SparseColMat::try_new_from_triplets(n, n, &triplets).unwrap(), points)
     }
 
+    /// The analysis of `B` with the subtree-parallel factorisation planned for `threads`
+    /// threads (`None`: faer's loop); with `branched` false, the top run in order after the
+    /// subtrees rather than by concurrent branches.
+    fn analyse_for(
+        B: &SparseColMat<usize, f64>,
+        points: &[[f64; 3]],
+        ordering: FillOrdering,
+        threads: Option<usize>,
+        branched: bool,
+    ) -> (SymbolicFactor, bool) {
+        let mut symbolic = SymbolicFactor::analyse(B.symbolic(), Some(points), ordering).unwrap();
+        let planned = symbolic.set_parallel_subtrees(threads);
+        if !branched {
+            if let Some(plan) = &mut symbolic.plan {
+                plan.run_top_in_order();
+            }
+        }
+        (symbolic, planned)
+    }
+
     /// The factor of the subtree-parallel path and faer's of the same analysis, in
-    /// `precision`, with the split for 2 threads run on 2 threads.
+    /// `precision`, with the split for 2 threads run on 2 threads, the top by concurrent
+    /// branches where they are contiguous (`branched`) or in order; the number of subtrees and
+    /// whether the branches ran concurrently.
     fn both_factors(
         A: &SparseColMat<usize, f64>,
         points: &[[f64; 3]],
         ordering: FillOrdering,
         precision: Precision,
-    ) -> (SparseCholesky, SparseCholesky, usize) {
-        let analyse = |threads| {
-            let mut symbolic = SymbolicFactor::analyse(A.symbolic(), Some(points), ordering).unwrap();
-            let planned = symbolic.set_parallel_subtrees(threads);
-            (symbolic, planned)
-        };
-        let (faer_symbolic, _) = analyse(None);
-        let (ours_symbolic, planned) = analyse(Some(2));
+        branched: bool,
+    ) -> (SparseCholesky, SparseCholesky, usize, bool) {
+        let (faer_symbolic, _) = analyse_for(A, points, ordering, None, true);
+        let (ours_symbolic, planned) = analyse_for(A, points, ordering, Some(2), branched);
         assert!(planned, "a supernodal factor of {} rows should split", A.nrows());
+        let concurrent = ours_symbolic.plan.as_ref().is_some_and(|plan| plan.branched());
         let subtrees = ours_symbolic.parallel_subtrees().0;
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let ours = pool.install(|| ours_symbolic.factor(A.as_ref(), precision).unwrap());
-        (ours, faer_symbolic.factor(A.as_ref(), precision).unwrap(), subtrees)
+        (
+            ours,
+            faer_symbolic.factor(A.as_ref(), precision).unwrap(),
+            subtrees,
+            concurrent,
+        )
     }
 
     /// The subtree-parallel numeric factorisation against faer's supernodal loop on the same
     /// analysis: equal values to round-off, in double and single precision, on a grid
-    /// Laplacian (a balanced nested-dissection tree) and on a matrix whose tree is unbalanced
-    /// (AMD and nested dissection).
+    /// Laplacian (a balanced nested-dissection tree, its root separator of 484 columns large
+    /// enough for the blocked parallel dense Cholesky) and on a matrix whose tree is
+    /// unbalanced (AMD and nested dissection), with the top by concurrent branches and in
+    /// order.
     #[test]
     fn subtree_parallel_factor_matches_faer() {
         let cases = [
@@ -1119,13 +1145,23 @@ mod tests {
             // difference grows with the supernode's depth in the tree; 1e-12 is ~5000 eps64
             // and 2e-4 ~1700 eps32 (a few per cent of the f32 factor's own error
             // kappa * eps32 on these matrices).
-            for (precision, tolerance) in [(Precision::Double, 1e-12), (Precision::Single, 2e-4)] {
-                let (ours, faer, subtrees) = both_factors(A, points, *ordering, precision);
+            for (precision, tolerance, branched) in [
+                (Precision::Double, 1e-12, true),
+                (Precision::Single, 2e-4, true),
+                (Precision::Double, 1e-12, false),
+                (Precision::Single, 2e-4, false),
+            ] {
+                let (ours, faer, subtrees, concurrent) = both_factors(A, points, *ordering, precision, branched);
                 assert!(subtrees >= 2, "{name}: {subtrees} subtrees");
+                // The grid's and the unbalanced matrix's AMD supernodes give contiguous
+                // branches (faer's near-postorder); nested dissection of the unbalanced
+                // matrix does not, which takes the path of the top in order.
+                let expected = branched && *name != "unbalanced, ND";
+                assert_eq!(concurrent, expected, "{name}: the top by concurrent branches");
                 let difference = ours.relative_difference(&faer);
                 assert!(
                     difference <= tolerance,
-                    "{name}, {}: largest difference relative to a supernode's norm {difference:.2e}",
+                    "{name}, {}, branched {branched}: largest difference relative to a supernode's norm {difference:.2e}",
                     precision.name()
                 );
                 // And the solve with it.
@@ -1134,15 +1170,17 @@ mod tests {
                     let mut x = b.clone();
                     ours.solve_in_place(x.as_mut());
                     let r = (A * &x - &b).norm_max() / b.norm_max();
-                    assert!(r < 1e-12, "{name}: relative residual {r:.2e}");
+                    assert!(r < 1e-12, "{name}, branched {branched}: relative residual {r:.2e}");
                 }
             }
         }
     }
 
     /// A non-positive pivot is reported with the dof of the matrix as given, the same as
-    /// faer's sequential loop reports: one in a subtree, one in the top separator, and two
-    /// in different subtrees (the first in the factor's order is reported).
+    /// faer's sequential loop reports: one in a subtree, one in the top separator (in its
+    /// blocked parallel dense Cholesky), and two in different subtrees (the first in the
+    /// factor's order is reported); in double and single precision, the top by concurrent
+    /// branches and in order.
     #[test]
     fn subtree_parallel_factor_reports_the_non_positive_pivot() {
         let (A, points) = grid_laplacian(22);
@@ -1161,19 +1199,22 @@ mod tests {
                     }
                 }
             }
-            let error = |threads| {
-                let mut symbolic =
-                    SymbolicFactor::analyse(B.symbolic(), Some(&points), FillOrdering::NestedDissection).unwrap();
-                symbolic.set_parallel_subtrees(threads);
+            let error = |threads, branched, precision| {
+                let (symbolic, _) = analyse_for(&B, &points, FillOrdering::NestedDissection, threads, branched);
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-                match pool.install(|| symbolic.factor(B.as_ref(), Precision::Double)) {
+                match pool.install(|| symbolic.factor(B.as_ref(), precision)) {
                     Err(CholeskyError::NonPositivePivot { dof }) => dof,
                     other => panic!("dofs {bad:?} negative: {other:?}"),
                 }
             };
-            let (ours, faer) = (error(Some(2)), error(None));
-            assert_eq!(ours, faer, "dofs {bad:?} negative");
-            assert!(bad.contains(&ours), "dofs {bad:?} negative, reported {ours}");
+            for precision in [Precision::Double, Precision::Single] {
+                let faer = error(None, true, precision);
+                for branched in [true, false] {
+                    let ours = error(Some(2), branched, precision);
+                    assert_eq!(ours, faer, "dofs {bad:?} negative, branched {branched}");
+                    assert!(bad.contains(&ours), "dofs {bad:?} negative, reported {ours}");
+                }
+            }
         }
     }
 }
