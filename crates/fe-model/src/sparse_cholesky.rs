@@ -985,22 +985,22 @@ const PANEL_STEP: usize = 128;
 /// a product is not worth a task.
 const PANEL_MIN_ROWS: usize = 256;
 
-/// $\mathbf y \leftarrow$ the forward solve with the panel $\mathbf P = [\mathbf L_{ss};
-/// \mathbf L_{bs}]$ of one supernode ($w$ columns, $w + m$ rows): $\mathbf y_{0:w}$ becomes
+/// $\mathbf y \leftarrow$ the forward solve with the panel $\mathbf L_s = \[\mathbf L_{ss};
+/// \mathbf L_{bs}\]$ of one supernode ($w$ columns, $w + m$ rows): $\mathbf y_{0:w}$ becomes
 /// $\mathbf L_{ss}^{-1}\mathbf y_{0:w}$ and $\mathbf y_{w:w+m}$ has
 /// $\mathbf L_{bs}\mathbf L_{ss}^{-1}\mathbf y_{0:w}$ subtracted. By steps of
 /// [`PANEL_STEP`] columns: the step's diagonal block solved, then all rows below it updated
 /// in row ranges on `threads` threads (a solve with few right-hand sides reads the panel once
 /// and is bound by memory bandwidth, so the rows, not the columns, are split).
-fn panel_forward(P: MatRef<'_, f64>, mut y: MatMut<'_, f64>, threads: usize) {
-    let (rows, w) = P.shape();
+fn panel_forward(Ls: MatRef<'_, f64>, mut y: MatMut<'_, f64>, threads: usize) {
+    let (rows, w) = Ls.shape();
     let mut j0 = 0;
     while j0 < w {
         let jb = PANEL_STEP.min(w - j0);
         let (head, rest) = y.rb_mut().split_at_row_mut(j0 + jb);
         let mut block = head.subrows_mut(j0, jb);
-        solve_lower_triangular_in_place(P.submatrix(j0, j0, jb, jb), block.rb_mut(), Par::Seq);
-        let below = P.submatrix(j0 + jb, j0, rows - j0 - jb, jb);
+        solve_lower_triangular_in_place(Ls.submatrix(j0, j0, jb, jb), block.rb_mut(), Par::Seq);
+        let below = Ls.submatrix(j0 + jb, j0, rows - j0 - jb, jb);
         let pieces = (below.nrows() / PANEL_MIN_ROWS).clamp(1, 4 * threads.max(1));
         if threads < 2 || pieces < 2 {
             matmul(rest, Accum::Add, below, block.rb(), -1.0, Par::Seq);
@@ -1020,15 +1020,15 @@ fn panel_forward(P: MatRef<'_, f64>, mut y: MatMut<'_, f64>, threads: usize) {
 /// [`PANEL_STEP`] columns from the last: the step's rows of $\mathbf y$ updated with the
 /// rows below its diagonal block, the step's columns split on `threads` threads, then its
 /// diagonal block solved.
-fn panel_backward(P: MatRef<'_, f64>, mut y: MatMut<'_, f64>, threads: usize) {
-    let (rows, w) = P.shape();
+fn panel_backward(Ls: MatRef<'_, f64>, mut y: MatMut<'_, f64>, threads: usize) {
+    let (rows, w) = Ls.shape();
     let mut end = w;
     while end > 0 {
         let jb = (end - 1) % PANEL_STEP + 1;
         let j0 = end - jb;
         let (head, rest) = y.rb_mut().split_at_row_mut(end);
         let mut block = head.subrows_mut(j0, jb);
-        let below = P.submatrix(end, j0, rows - end, jb);
+        let below = Ls.submatrix(end, j0, rows - end, jb);
         // Pieces of at least 8 columns and PANEL_MIN_ROWS x PANEL_STEP values.
         let pieces = (below.nrows() * jb / (PANEL_MIN_ROWS * PANEL_STEP))
             .clamp(1, 4 * threads.max(1))
@@ -1042,7 +1042,7 @@ fn panel_backward(P: MatRef<'_, f64>, mut y: MatMut<'_, f64>, threads: usize) {
                 .zip(block.rb_mut().par_row_chunks_mut(chunk))
                 .for_each(|(a, c)| matmul(c, Accum::Add, a.transpose(), rest.rb(), -1.0, Par::Seq));
         }
-        solve_upper_triangular_in_place(P.submatrix(j0, j0, jb, jb).transpose(), block, Par::Seq);
+        solve_upper_triangular_in_place(Ls.submatrix(j0, j0, jb, jb).transpose(), block, Par::Seq);
         end = j0;
     }
 }
@@ -1141,12 +1141,12 @@ mod tests {
     fn panel_solves_match_dense_solves() {
         let (w, m) = (2 * PANEL_STEP + 37, 9 * PANEL_MIN_ROWS + 5);
         // A well-conditioned lower triangle (dominant diagonal) over a full block.
-        let P = Mat::<f64>::from_fn(w + m, w, |i, j| match i.cmp(&j) {
+        let Ls = Mat::<f64>::from_fn(w + m, w, |i, j| match i.cmp(&j) {
             std::cmp::Ordering::Less => 0.0,
             std::cmp::Ordering::Equal => 4.0 + (i % 5) as f64,
             std::cmp::Ordering::Greater => (((i * 31 + j * 17) % 23) as f64 - 11.0) / (11.0 * w as f64),
         });
-        let (Lss, Lbs) = P.as_ref().split_at_row(w);
+        let (Lss, Lbs) = Ls.as_ref().split_at_row(w);
         let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
         for k in [1, 4, 8] {
             let y0 = Mat::<f64>::from_fn(w + m, k, |i, j| ((i * 7 + j * 13) % 19) as f64 - 9.0);
@@ -1162,12 +1162,12 @@ mod tests {
             solve_upper_triangular_in_place(Lss.transpose(), ys.rb_mut(), Par::Seq);
             for threads in 1..=3 {
                 let mut y = y0.clone();
-                pool.install(|| panel_forward(P.as_ref(), y.as_mut(), threads));
+                pool.install(|| panel_forward(Ls.as_ref(), y.as_mut(), threads));
                 let err = (&y - &fwd).norm_max() / fwd.norm_max();
                 // Different summation orders only: round-off of a few hundred terms.
                 assert!(err < 1e-13, "forward, {threads} threads, k = {k}: {err:.2e}");
                 let mut y = y0.clone();
-                pool.install(|| panel_backward(P.as_ref(), y.as_mut(), threads));
+                pool.install(|| panel_backward(Ls.as_ref(), y.as_mut(), threads));
                 let err = (&y - &bwd).norm_max() / bwd.norm_max();
                 assert!(err < 1e-13, "backward, {threads} threads, k = {k}: {err:.2e}");
             }
