@@ -73,6 +73,7 @@
 //! | $\lambda$ | `load_factors` | linearised buckling, $\mathbf K\boldsymbol\phi = \lambda(-\mathbf K_G)\boldsymbol\phi$ | [`linear_buckling`] |
 //! | $\boldsymbol\sigma$ | `Voigt` | stress $[xx, yy, zz, xy, yz, zx]$ at integration points or nodes; $\sigma_{vM}$ von Mises | [`stress`] |
 //! | $N, V_y, V_z, T, M_y, M_z$ | section forces | beam section forces, element axes | [`stress::beam_section_forces`] |
+//! | $\mathbf L$; $\mathbf L_s = \[\mathbf L_{ss}; \mathbf L_{bs}\]$ | `L`; `Ls` | Cholesky factor $\mathbf P\mathbf A\mathbf P^T = \mathbf L\mathbf L^T$; one supernode's columns of it (its panel), the diagonal block over the rows below | [`sparse_cholesky`] |
 //! | $\omega$ | `omega` | circular eigenfrequency, $\mathbf K \boldsymbol\phi = \omega^2 \mathbf M \boldsymbol\phi$ | [`modal_dense`] |
 //!
 //! Superscripts: every vector is in global axes unless its name ends in `_loc` (element axes).

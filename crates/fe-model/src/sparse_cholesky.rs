@@ -895,20 +895,22 @@ impl SolveTree {
                 }
             }
         }
-        // The top, in order (faer's supernodal loop), with all threads on the dense products.
+        // The top, in order, each supernode's panel by row ranges on all threads.
+        let threads = par.degree();
         let mut tmp = Vec::new();
         for &sn in &self.top {
             let node = L.supernode(sn);
-            let (Ls_top, Ls_bot) = node.val().split_at_row(node.val().ncols());
-            let mut x_top = x.rb_mut().subrows_mut(node.start(), Ls_top.nrows());
-            solve_lower_triangular_in_place(Ls_top, x_top.rb_mut(), par);
-            let pattern = node.pattern();
-            tmp.resize(pattern.len() * k, 0.0);
-            let mut u = MatMut::from_column_major_slice_mut(&mut tmp, pattern.len(), k);
-            matmul(u.rb_mut(), Accum::Replace, Ls_bot, x_top.rb(), 1.0, par);
+            let (panel, pattern) = (node.val(), node.pattern());
+            let w = panel.ncols();
+            tmp.clear();
+            tmp.resize(panel.nrows() * k, 0.0);
+            let mut y = MatMut::from_column_major_slice_mut(&mut tmp, panel.nrows(), k);
+            y.rb_mut().subrows_mut(0, w).copy_from(x.rb().subrows(node.start(), w));
+            panel_forward(panel, y.rb_mut(), threads);
+            x.rb_mut().subrows_mut(node.start(), w).copy_from(y.rb().subrows(0, w));
             for j in 0..k {
                 for (idx, &i) in pattern.iter().enumerate() {
-                    x[(i, j)] -= u[(idx, j)];
+                    x[(i, j)] += y[(w + idx, j)];
                 }
             }
         }
@@ -917,22 +919,25 @@ impl SolveTree {
     /// $\mathbf L^T\mathbf x = \mathbf b$ in place.
     fn l_transpose_solve(&self, L: SupernodalLltRef<'_, usize, f64>, mut x: MatMut<'_, f64>, par: Par) {
         let k = x.ncols();
-        // The top first, in reverse order, with all threads on the dense products.
+        // The top first, in reverse order, each supernode's panel by column ranges on all
+        // threads.
+        let threads = par.degree();
         let mut tmp = Vec::new();
         for &sn in self.top.iter().rev() {
             let node = L.supernode(sn);
-            let (Ls_top, Ls_bot) = node.val().split_at_row(node.val().ncols());
-            let pattern = node.pattern();
-            tmp.resize(pattern.len() * k, 0.0);
-            let mut u = MatMut::from_column_major_slice_mut(&mut tmp, pattern.len(), k);
+            let (panel, pattern) = (node.val(), node.pattern());
+            let w = panel.ncols();
+            tmp.clear();
+            tmp.resize(panel.nrows() * k, 0.0);
+            let mut y = MatMut::from_column_major_slice_mut(&mut tmp, panel.nrows(), k);
+            y.rb_mut().subrows_mut(0, w).copy_from(x.rb().subrows(node.start(), w));
             for j in 0..k {
                 for (idx, &i) in pattern.iter().enumerate() {
-                    u[(idx, j)] = x[(i, j)];
+                    y[(w + idx, j)] = x[(i, j)];
                 }
             }
-            let mut x_top = x.rb_mut().subrows_mut(node.start(), Ls_top.nrows());
-            matmul(x_top.rb_mut(), Accum::Add, Ls_bot.transpose(), u.rb(), -1.0, par);
-            solve_upper_triangular_in_place(Ls_top.transpose(), x_top, par);
+            panel_backward(panel, y.rb_mut(), threads);
+            x.rb_mut().subrows_mut(node.start(), w).copy_from(y.rb().subrows(0, w));
         }
         // Then the subtrees, each on its own rows, reading the top's rows.
         let top_values = Mat::<f64>::from_fn(self.top_rows.len(), k, |q, j| x[(self.top_rows[q], j)]);
@@ -972,6 +977,76 @@ impl SolveTree {
     }
 }
 
+/// Columns of a top supernode's panel per step of [`panel_forward`] and [`panel_backward`]:
+/// the diagonal block of each step is solved on one thread, the rows below it by all.
+const PANEL_STEP: usize = 128;
+
+/// Rows (of a panel below a step's diagonal block) per parallel piece at least: below,
+/// a product is not worth a task.
+const PANEL_MIN_ROWS: usize = 256;
+
+/// $\mathbf y \leftarrow$ the forward solve with the panel $\mathbf L_s = \[\mathbf L_{ss};
+/// \mathbf L_{bs}\]$ of one supernode ($w$ columns, $w + m$ rows): $\mathbf y_{0:w}$ becomes
+/// $\mathbf L_{ss}^{-1}\mathbf y_{0:w}$ and $\mathbf y_{w:w+m}$ has
+/// $\mathbf L_{bs}\mathbf L_{ss}^{-1}\mathbf y_{0:w}$ subtracted. By steps of
+/// [`PANEL_STEP`] columns: the step's diagonal block solved, then all rows below it updated
+/// in row ranges on `threads` threads (a solve with few right-hand sides reads the panel once
+/// and is bound by memory bandwidth, so the rows, not the columns, are split).
+fn panel_forward(Ls: MatRef<'_, f64>, mut y: MatMut<'_, f64>, threads: usize) {
+    let (rows, w) = Ls.shape();
+    let mut j0 = 0;
+    while j0 < w {
+        let jb = PANEL_STEP.min(w - j0);
+        let (head, rest) = y.rb_mut().split_at_row_mut(j0 + jb);
+        let mut block = head.subrows_mut(j0, jb);
+        solve_lower_triangular_in_place(Ls.submatrix(j0, j0, jb, jb), block.rb_mut(), Par::Seq);
+        let below = Ls.submatrix(j0 + jb, j0, rows - j0 - jb, jb);
+        let pieces = (below.nrows() / PANEL_MIN_ROWS).clamp(1, 4 * threads.max(1));
+        if threads < 2 || pieces < 2 {
+            matmul(rest, Accum::Add, below, block.rb(), -1.0, Par::Seq);
+        } else {
+            let chunk = below.nrows().div_ceil(pieces);
+            below
+                .par_row_chunks(chunk)
+                .zip(rest.par_row_chunks_mut(chunk))
+                .for_each(|(a, c)| matmul(c, Accum::Add, a, block.rb(), -1.0, Par::Seq));
+        }
+        j0 += jb;
+    }
+}
+
+/// The backward solve with the panel of [`panel_forward`]: $\mathbf y_{0:w} \leftarrow
+/// \mathbf L_{ss}^{-T}(\mathbf y_{0:w} - \mathbf L_{bs}^T\mathbf y_{w:w+m})$. By steps of
+/// [`PANEL_STEP`] columns from the last: the step's rows of $\mathbf y$ updated with the
+/// rows below its diagonal block, the step's columns split on `threads` threads, then its
+/// diagonal block solved.
+fn panel_backward(Ls: MatRef<'_, f64>, mut y: MatMut<'_, f64>, threads: usize) {
+    let (rows, w) = Ls.shape();
+    let mut end = w;
+    while end > 0 {
+        let jb = (end - 1) % PANEL_STEP + 1;
+        let j0 = end - jb;
+        let (head, rest) = y.rb_mut().split_at_row_mut(end);
+        let mut block = head.subrows_mut(j0, jb);
+        let below = Ls.submatrix(end, j0, rows - end, jb);
+        // Pieces of at least 8 columns and PANEL_MIN_ROWS x PANEL_STEP values.
+        let pieces = (below.nrows() * jb / (PANEL_MIN_ROWS * PANEL_STEP))
+            .clamp(1, 4 * threads.max(1))
+            .min(jb / 8);
+        if threads < 2 || pieces < 2 {
+            matmul(block.rb_mut(), Accum::Add, below.transpose(), rest.rb(), -1.0, Par::Seq);
+        } else {
+            let chunk = jb.div_ceil(pieces);
+            below
+                .par_col_chunks(chunk)
+                .zip(block.rb_mut().par_row_chunks_mut(chunk))
+                .for_each(|(a, c)| matmul(c, Accum::Add, a.transpose(), rest.rb(), -1.0, Par::Seq));
+        }
+        solve_upper_triangular_in_place(Ls.submatrix(j0, j0, jb, jb).transpose(), block, Par::Seq);
+        end = j0;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1008,9 +1083,17 @@ mod tests {
     /// solves on the same factor: equal to round-off, for one and several right-hand sides.
     #[test]
     fn tree_solves_match_faer_sequential_solves() {
-        let (A, points) = grid_laplacian(22);
+        // A balanced tree (a cube) and an unbalanced one (a cube, a chain and a small cube).
+        for (A, points) in [grid_laplacian(22), unbalanced(16, 300, 6)] {
+            tree_solves_match(&A, &points);
+        }
+    }
+
+    /// The tree's forward and backward solves on 2 threads against faer's sequential ones,
+    /// for 1, 4 and 8 right-hand sides, and the whole solve against `A`.
+    fn tree_solves_match(A: &SparseColMat<usize, f64>, points: &[[f64; 3]]) {
         let n = A.nrows();
-        let chol = SparseCholesky::new(A.as_ref(), Some(&points), FillOrdering::NestedDissection).unwrap();
+        let chol = SparseCholesky::new(A.as_ref(), Some(points), FillOrdering::NestedDissection).unwrap();
         let SymbolicCholeskyRaw::Supernodal(s) = chol.symbolic.raw() else {
             panic!("a 3D grid of {n} rows should give a supernodal factor");
         };
@@ -1018,7 +1101,7 @@ mod tests {
         assert!(tree.tasks.len() >= 2, "{} subtrees", tree.tasks.len());
         let L = SupernodalLltRef::<'_, usize, f64>::new(s, chol.double());
         let par = Par::rayon(2);
-        for k in [1, 3] {
+        for k in [1, 3, 4, 8] {
             let B = Mat::<f64>::from_fn(n, k, |i, j| ((i * 7 + j * 13) % 17) as f64 - 8.0);
             let mut mem = MemBuffer::new(chol.solve_scratch(k, Par::Seq));
             // Forward.
@@ -1046,8 +1129,49 @@ mod tests {
         let b = Mat::<f64>::from_fn(n, 2, |i, j| ((i * 5 + j) % 11) as f64 - 5.0);
         let mut x = b.clone();
         chol.solve_in_place(x.as_mut());
-        let r = (&A * &x - &b).norm_max() / b.norm_max();
+        let r = (A * &x - &b).norm_max() / b.norm_max();
         assert!(r < 1e-12, "A x = b: relative residual {r:.2e}");
+    }
+
+    /// The blocked panel solves of the top supernodes against faer's dense triangular solves
+    /// and product, sequential, on a panel wider than [`PANEL_STEP`] (a last step of partial
+    /// width) and tall enough for every split, with 1 to 3 threads and 1, 4 and 8 right-hand
+    /// sides.
+    #[test]
+    fn panel_solves_match_dense_solves() {
+        let (w, m) = (2 * PANEL_STEP + 37, 9 * PANEL_MIN_ROWS + 5);
+        // A well-conditioned lower triangle (dominant diagonal) over a full block.
+        let Ls = Mat::<f64>::from_fn(w + m, w, |i, j| match i.cmp(&j) {
+            std::cmp::Ordering::Less => 0.0,
+            std::cmp::Ordering::Equal => 4.0 + (i % 5) as f64,
+            std::cmp::Ordering::Greater => (((i * 31 + j * 17) % 23) as f64 - 11.0) / (11.0 * w as f64),
+        });
+        let (Lss, Lbs) = Ls.as_ref().split_at_row(w);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        for k in [1, 4, 8] {
+            let y0 = Mat::<f64>::from_fn(w + m, k, |i, j| ((i * 7 + j * 13) % 19) as f64 - 9.0);
+            // Forward: y_s <- L_ss^{-1} y_s, y_b <- y_b - L_bs y_s.
+            let mut fwd = y0.clone();
+            let (mut ys, mut yb) = fwd.as_mut().split_at_row_mut(w);
+            solve_lower_triangular_in_place(Lss, ys.rb_mut(), Par::Seq);
+            matmul(yb.rb_mut(), Accum::Add, Lbs, ys.rb(), -1.0, Par::Seq);
+            // Backward: y_s <- L_ss^{-T} (y_s - L_bs^T y_b).
+            let mut bwd = y0.clone();
+            let (mut ys, yb) = bwd.as_mut().split_at_row_mut(w);
+            matmul(ys.rb_mut(), Accum::Add, Lbs.transpose(), yb.rb(), -1.0, Par::Seq);
+            solve_upper_triangular_in_place(Lss.transpose(), ys.rb_mut(), Par::Seq);
+            for threads in 1..=3 {
+                let mut y = y0.clone();
+                pool.install(|| panel_forward(Ls.as_ref(), y.as_mut(), threads));
+                let err = (&y - &fwd).norm_max() / fwd.norm_max();
+                // Different summation orders only: round-off of a few hundred terms.
+                assert!(err < 1e-13, "forward, {threads} threads, k = {k}: {err:.2e}");
+                let mut y = y0.clone();
+                pool.install(|| panel_backward(Ls.as_ref(), y.as_mut(), threads));
+                let err = (&y - &bwd).norm_max() / bwd.norm_max();
+                assert!(err < 1e-13, "backward, {threads} threads, k = {k}: {err:.2e}");
+            }
+        }
     }
 
     /// A 3D grid Laplacian of `e^3` rows and a chain of `c` rows tied to its corner, plus a

@@ -346,7 +346,12 @@ pub struct EigenSettings {
 /// to converge (20 modes at 197k: 71 at $b = 1$, 104 at $b = 4$, 152 at $b = 8$), still far
 /// fewer factor reads (26 or 19 against 71). $b = 8$ is not used: on the 50k-dof
 /// Craig-Bampton block its 19th pair stalled at a residual of $3\cdot 10^{-8}$ through all
-/// [`MAX_ATTEMPTS`] (not understood; $b = 4$ and $b = 1$ reach $10^{-9}$).
+/// [`MAX_ATTEMPTS`] (not understood; $b = 4$ and $b = 1$ reach $10^{-9}$). On the 203 616-dof
+/// Craig-Bampton block (2.13 GB factor, the subtree-parallel solves) $b = 8$ needed 168
+/// vectors (21 block solves) against 116 (29) and a solve with 8 right-hand sides 1.2 times
+/// the CPU time of one with 4; with the longer Gram-Schmidt and $\mathbf M$ products its
+/// Lanczos stage took 40.6 s wall and 19.9 CPU-s against 39.0 s and 19.6 CPU-s at $b = 4$
+/// (one run each, load 10): no gain.
 pub const AUTO_BLOCK_SIZE: usize = 4;
 
 /// From this many dofs [`EigenSettings::block_size`] `= 0` means [`AUTO_BLOCK_SIZE`]. Below,
