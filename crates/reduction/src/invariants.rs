@@ -125,9 +125,13 @@ fn inertia_data_with(
     // `comp` and f_c the field at their nodes. All three fields S_0, S_1, S_2 side by side
     // (F_c, n_c x 3n) make one sparse product and one dense product per direction:
     // S_bar[3k + l] = 1/3 sum_c (F_c^T M_cc F_c)_{kl} and S_x[3k + l] = 1/3 sum_c (X_c^T M_cc F_c)_{kl}.
+    // F_c and X_c depend only on the nodes of the dofs of slot `comp`: where those and M_cc
+    // equal the previous direction's (a solid's mass is the same scalar matrix in each
+    // direction), its products are the same bit for bit and are not computed again.
     let mut S_x = Mat::<f64>::zeros(9, n);
     let mut S_bar: Vec<Mat<f64>> = (0..9).map(|_| Mat::zeros(n, n)).collect();
     let mut position = vec![usize::MAX; n_f];
+    let mut previous: Option<DirectionProducts> = None;
     for comp in 0..3 {
         let dofs_c: Vec<usize> = (0..n_f).filter(|&d| slots[d] % 6 == comp).collect();
         if dofs_c.is_empty() {
@@ -141,12 +145,19 @@ fn inertia_data_with(
         for &d in &dofs_c {
             position[d] = usize::MAX;
         }
-        let node_c = |r: usize| slots[dofs_c[r]] / 6;
-        let F = gather_rows(n_c, 3 * n, |r, col| S_full[(6 * node_c(r) + col / n, col % n)]);
-        let X = Mat::from_fn(n_c, 3, |r, k| nodes[node_c(r)][k] - c[k]);
-        let MF = symmetric_times(M_cc.as_ref(), F.as_ref(), par);
-        let G = gram(F.as_ref(), MF.as_ref(), par);
-        let XtMF = gram(X.as_ref(), MF.as_ref(), par);
+        let nodes_c: Vec<usize> = dofs_c.iter().map(|&d| slots[d] / 6).collect();
+        let same = previous
+            .as_ref()
+            .is_some_and(|p| p.nodes_c == nodes_c && same_matrix(p.M_cc.as_ref(), M_cc.as_ref()));
+        if !same {
+            let F = gather_rows(n_c, 3 * n, |r, col| S_full[(6 * nodes_c[r] + col / n, col % n)]);
+            let X = Mat::from_fn(n_c, 3, |r, k| nodes[nodes_c[r]][k] - c[k]);
+            let MF = symmetric_times(M_cc.as_ref(), F.as_ref(), par);
+            let G = gram(F.as_ref(), MF.as_ref(), par);
+            let XtMF = gram(X.as_ref(), MF.as_ref(), par);
+            previous = Some(DirectionProducts { nodes_c, M_cc, G, XtMF });
+        }
+        let DirectionProducts { G, XtMF, .. } = previous.as_ref().expect("computed above");
         for k in 0..3 {
             for l in 0..3 {
                 S_bar[3 * k + l] += G.submatrix(k * n, l * n, n, n) * faer::Scale(1.0 / 3.0);
@@ -172,6 +183,27 @@ fn inertia_data_with(
         },
         Phi_com,
     ))
+}
+
+/// The products of one direction's scalar fields in [`inertia_data_with`]: the nodes of the
+/// dofs of its translation slot, its block $\mathbf M_{cc}$, $\mathbf F_c^T\mathbf M_{cc}
+/// \mathbf F_c$ and $\mathbf X_c^T\mathbf M_{cc}\mathbf F_c$.
+struct DirectionProducts {
+    nodes_c: Vec<usize>,
+    M_cc: SparseColMat<usize, f64>,
+    G: Mat<f64>,
+    XtMF: Mat<f64>,
+}
+
+/// Whether `A` and `B` have the same shape, stored entries and values, bit for bit.
+fn same_matrix(A: SparseColMatRef<'_, usize, f64>, B: SparseColMatRef<'_, usize, f64>) -> bool {
+    A.nrows() == B.nrows()
+        && A.ncols() == B.ncols()
+        && A.symbolic().col_ptr() == B.symbolic().col_ptr()
+        && A.symbolic().col_nnz() == B.symbolic().col_nnz()
+        && A.symbolic().row_idx() == B.symbolic().row_idx()
+        && A.val().len() == B.val().len()
+        && A.val().par_iter().zip(B.val()).all(|(a, b)| a.to_bits() == b.to_bits())
 }
 
 /// `Mat::from_fn(nrows, ncols, f)` with the columns filled in parallel: for the gathers of
