@@ -291,6 +291,11 @@ impl SystemPattern {
     pub fn symbolic(&self) -> &SymbolicSparseColMat<usize> {
         &self.symbolic
     }
+
+    /// The symbolic structure, the element maps and slots freed.
+    pub fn into_symbolic(self) -> SymbolicSparseColMat<usize> {
+        self.symbolic
+    }
 }
 
 #[cfg(test)]

@@ -20,7 +20,7 @@ use crate::error::ReductionError;
 use crate::reduced_body::{DenseMatrix, InertiaData};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::Mat;
-use fe_model::assembly::assemble_mass;
+use fe_model::assembly::assemble_mass_with_pattern;
 use fe_model::{DofMap, FeModel, SystemPattern};
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use rayon::prelude::*;
@@ -43,14 +43,22 @@ pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, 
     bare.supports.clear();
     bare.constraints.clear();
     let dofs = DofMap::new(&bare)?;
-    let pattern = SystemPattern::new(&bare, &dofs);
-    let M = assemble_mass(&bare, &pattern)?;
-    drop(pattern);
+    let M = assemble_mass_with_pattern(&bare, SystemPattern::new(&bare, &dofs))?;
+    // Only the nonzero entries from here on (see `inertia_data_with`): M itself is freed.
+    let M = nonzero_entries(M.as_ref());
     let slots: Vec<usize> = (0..dofs.n_free())
         .map(|d| dofs.full_slot(fe_model::Dof(d as u32)))
         .collect();
     let nodes: Vec<[f64; 3]> = model.mesh.nodes.iter().map(|x| [x.x, x.y, x.z]).collect();
-    inertia_data_from_mass(M.as_ref(), &slots, &nodes, S_full)
+    inertia_data_nonzero(M.as_ref(), &slots, &nodes, S_full, faer::get_global_parallelism())
+}
+
+/// The stored entries of `M` that are not zero. A solid's mass couples only equal
+/// displacement components: on the stiffness's pattern two thirds of the stored entries are
+/// exact zeros, which the products would read for nothing (leaving them out changes no sum).
+fn nonzero_entries(M: SparseColMatRef<'_, usize, f64>) -> SparseColMat<usize, f64> {
+    let all: Vec<usize> = (0..M.ncols()).collect();
+    select_entries(M, M.nrows(), &all, |r, v| (v != 0.0).then_some(r))
 }
 
 /// [`inertia_data`] from a given mass matrix $\mathbf M$ on the dofs whose full slots
@@ -78,14 +86,19 @@ fn inertia_data_with(
     S_full: &Mat<f64>,
     par: faer::Par,
 ) -> Result<(InertiaData, Mat<f64>), ReductionError> {
+    inertia_data_nonzero(nonzero_entries(M).as_ref(), slots, nodes, S_full, par)
+}
+
+/// [`inertia_data_with`] for a mass matrix `M` without stored zeros ([`nonzero_entries`]).
+fn inertia_data_nonzero(
+    M: SparseColMatRef<'_, usize, f64>,
+    slots: &[usize],
+    nodes: &[[f64; 3]],
+    S_full: &Mat<f64>,
+    par: faer::Par,
+) -> Result<(InertiaData, Mat<f64>), ReductionError> {
     let n_f = slots.len();
     let n = S_full.ncols();
-    // A solid's mass couples only equal displacement components: on the stiffness's pattern
-    // two thirds of the stored entries are exact zeros, which the products would read for
-    // nothing (leaving them out changes no sum).
-    let all: Vec<usize> = (0..M.ncols()).collect();
-    let M_nz = select_entries(M, M.nrows(), &all, |r, v| (v != 0.0).then_some(r));
-    let M = M_nz.as_ref();
     let S = gather_rows(n_f, n, |d, j| S_full[(slots[d], j)]);
     // M is symmetric (assembled with both triangles): the gather product reads it once.
     let MS = symmetric_times(M, S.as_ref(), par);
@@ -262,6 +275,7 @@ pub(crate) fn select_entries(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use fe_model::assembly::assemble_mass;
     use fe_model::{add_interface_on_set, box_mesh, solid_model, CellKind, IsotropicMaterial, MassKind, SpiderKind};
 
     /// The mass data computed in parallel (3 threads: products by rows, Gram products by
