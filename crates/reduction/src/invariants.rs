@@ -333,4 +333,72 @@ mod tests {
             );
         }
     }
+
+    /// The second-order invariants of a solid, whose three directions share one computation
+    /// (their mass blocks are equal), against the straightforward sums over the whole mass
+    /// matrix, direction by direction: $\bar{\mathbf S}_{kl} = \frac13\sum_c
+    /// \mathbf P_c(\mathbf S_k)^T\mathbf M\mathbf P_c(\mathbf S_l)$ and $S_{x,kl} =
+    /// \frac13\sum_c\mathbf P_c(x_k - c_k)^T\mathbf M\mathbf P_c(\mathbf S_l)$, with
+    /// $\mathbf P_c(f)$ the field $f$ in translation slot $c$ of every node.
+    #[test]
+    fn solid_second_order_invariants_equal_the_sums_over_each_direction() {
+        let steel = IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap();
+        let mesh = box_mesh(CellKind::Hex8, [0.8, 0.3, 0.2], [5, 3, 2]).unwrap();
+        let model = solid_model(mesh, steel, MassKind::Consistent).unwrap();
+        let n = 4;
+        let mut state = 11u64;
+        let S_full = Mat::from_fn(6 * model.node_count(), n, |_, _| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        });
+        let (data, _) = inertia_data(&model, &S_full).unwrap();
+        let dofs = DofMap::new(&model).unwrap();
+        let M = assemble_mass(&model, &SystemPattern::new(&model, &dofs)).unwrap();
+        let M = M.to_dense();
+        let n_f = dofs.n_free();
+        let c = data.center_of_mass;
+        // P_c(f): the nodal field f placed in translation slot `comp` of every free dof.
+        let place = |comp: usize, f: &dyn Fn(usize) -> f64| {
+            Mat::from_fn(n_f, 1, |d, _| {
+                let slot = dofs.full_slot(fe_model::Dof(d as u32));
+                if slot % 6 == comp {
+                    f(slot / 6)
+                } else {
+                    0.0
+                }
+            })
+        };
+        let nodes = &model.mesh.nodes;
+        let (mut worst, mut scale) = (0.0f64, 0.0f64);
+        for k in 0..3 {
+            for l in 0..3 {
+                for j in 0..n {
+                    let mut x = 0.0;
+                    for comp in 0..3 {
+                        let g = place(comp, &|node| S_full[(6 * node + l, j)]);
+                        let f = place(comp, &|node| nodes[node][k] - c[k]);
+                        x += (f.transpose() * &M * &g)[(0, 0)] / 3.0;
+                    }
+                    let got = data.S_x.data[(3 * k + l) + 9 * j];
+                    worst = worst.max((got - x).abs());
+                    scale = scale.max(x.abs());
+                    for i in 0..n {
+                        let mut s = 0.0;
+                        for comp in 0..3 {
+                            let f = place(comp, &|node| S_full[(6 * node + k, i)]);
+                            let g = place(comp, &|node| S_full[(6 * node + l, j)]);
+                            s += (f.transpose() * &M * &g)[(0, 0)] / 3.0;
+                        }
+                        let got = data.S_bar[3 * k + l].data[i + n * j];
+                        worst = worst.max((got - s).abs());
+                        scale = scale.max(s.abs());
+                    }
+                }
+            }
+        }
+        // Sums of a few hundred products of order one, in another order: round-off.
+        assert!(worst <= 1e-13 * scale, "worst difference {worst:.3e} of {scale:.3e}");
+    }
 }
