@@ -214,6 +214,20 @@ pub fn assemble(model: &FeModel, pattern: &SystemPattern) -> Result<Assembled, F
     })
 }
 
+/// [`assemble`] taking the pattern, when it is not needed afterwards: its element slots are
+/// freed before $\mathbf M$ copies its structure, and $\mathbf K$ takes the structure itself
+/// (one copy of the row indices fewer: 16.5M of them at 200k dofs).
+pub fn assemble_with_pattern(model: &FeModel, pattern: SystemPattern) -> Result<Assembled, FeError> {
+    let mut K = vec![0.0; pattern.nnz()];
+    let mut M = vec![0.0; pattern.nnz()];
+    assemble_into(model, &pattern, &mut K, &mut M)?;
+    let symbolic = pattern.into_symbolic();
+    Ok(Assembled {
+        M: SparseColMat::new(symbolic.clone(), M),
+        K: SparseColMat::new(symbolic, K),
+    })
+}
+
 /// Assembles $\mathbf M$ alone on the free dofs: [`assemble`] without computing the element
 /// stiffnesses ([`element_mass`]) and without the scatter of $\mathbf K$ (the mass data of a
 /// reduced body need only $\mathbf M$).
@@ -221,6 +235,16 @@ pub fn assemble_mass(model: &FeModel, pattern: &SystemPattern) -> Result<SparseC
     let mut M = vec![0.0; pattern.nnz()];
     fill_values(model, pattern, [&mut M], |e| Ok([element_mass(model, e)?]))?;
     Ok(SparseColMat::new(pattern.symbolic.clone(), M))
+}
+
+/// [`assemble_mass`] taking the pattern, whose structure $\mathbf M$ keeps without a copy.
+pub fn assemble_mass_with_pattern(
+    model: &FeModel,
+    pattern: SystemPattern,
+) -> Result<SparseColMat<usize, f64>, FeError> {
+    let mut M = vec![0.0; pattern.nnz()];
+    fill_values(model, &pattern, [&mut M], |e| Ok([element_mass(model, e)?]))?;
+    Ok(SparseColMat::new(pattern.into_symbolic(), M))
 }
 
 #[cfg(test)]

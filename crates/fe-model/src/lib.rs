@@ -104,7 +104,7 @@ pub mod sparse_cholesky;
 pub mod statics;
 pub mod stress;
 
-pub use assembly::{assemble, assemble_into, Assembled};
+pub use assembly::{assemble, assemble_into, assemble_with_pattern, Assembled};
 pub use box_mesh::{box_mesh, solid_model, solid_model_with_materials};
 pub use dof::{Dof, DofMap, DofStatus};
 pub use element::{Beam2, BeamTheory, Element, LocalMatrices, MassKind, Properties, Solid, SolidKind};

@@ -21,7 +21,9 @@ use crate::reduced_body::{
 use crate::stress::stress_shapes;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Mat, MatRef};
-use fe_model::{assemble, dof_points, DofMap, DofStatus, FeModel, FillOrdering, NodeId, SystemPattern, DOF_NAMES};
+use fe_model::{
+    assemble_with_pattern, dof_points, DofMap, DofStatus, FeModel, FillOrdering, NodeId, SystemPattern, DOF_NAMES,
+};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -752,9 +754,7 @@ pub fn reduce_with_progress(
     let (interfaces, auxiliary_interface) = with_auxiliary(name, &interfaces, settings.auxiliary_node)?;
     progress(Stage::Assembling);
     let dofs = DofMap::new(model)?;
-    let pattern = SystemPattern::new(model, &dofs);
-    let a = assemble(model, &pattern)?;
-    drop(pattern);
+    let a = assemble_with_pattern(model, SystemPattern::new(model, &dofs))?;
     let node_ids: Vec<(String, NodeId)> = interfaces.iter().map(|(n, i)| (n.clone(), NodeId(*i as u32))).collect();
     let p = partition(model, &dofs, &node_ids)?;
     let describe = |d: usize| {

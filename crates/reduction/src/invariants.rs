@@ -20,7 +20,7 @@ use crate::error::ReductionError;
 use crate::reduced_body::{DenseMatrix, InertiaData};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::Mat;
-use fe_model::assembly::assemble_mass;
+use fe_model::assembly::assemble_mass_with_pattern;
 use fe_model::{DofMap, FeModel, SystemPattern};
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use rayon::prelude::*;
@@ -43,14 +43,22 @@ pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, 
     bare.supports.clear();
     bare.constraints.clear();
     let dofs = DofMap::new(&bare)?;
-    let pattern = SystemPattern::new(&bare, &dofs);
-    let M = assemble_mass(&bare, &pattern)?;
-    drop(pattern);
+    let M = assemble_mass_with_pattern(&bare, SystemPattern::new(&bare, &dofs))?;
+    // Only the nonzero entries from here on (see `inertia_data_with`): M itself is freed.
+    let M = nonzero_entries(M.as_ref());
     let slots: Vec<usize> = (0..dofs.n_free())
         .map(|d| dofs.full_slot(fe_model::Dof(d as u32)))
         .collect();
     let nodes: Vec<[f64; 3]> = model.mesh.nodes.iter().map(|x| [x.x, x.y, x.z]).collect();
-    inertia_data_from_mass(M.as_ref(), &slots, &nodes, S_full)
+    inertia_data_nonzero(M.as_ref(), &slots, &nodes, S_full, faer::get_global_parallelism())
+}
+
+/// The stored entries of `M` that are not zero. A solid's mass couples only equal
+/// displacement components: on the stiffness's pattern two thirds of the stored entries are
+/// exact zeros, which the products would read for nothing (leaving them out changes no sum).
+fn nonzero_entries(M: SparseColMatRef<'_, usize, f64>) -> SparseColMat<usize, f64> {
+    let all: Vec<usize> = (0..M.ncols()).collect();
+    select_entries(M, M.nrows(), &all, |r, v| (v != 0.0).then_some(r))
 }
 
 /// [`inertia_data`] from a given mass matrix $\mathbf M$ on the dofs whose full slots
@@ -78,14 +86,19 @@ fn inertia_data_with(
     S_full: &Mat<f64>,
     par: faer::Par,
 ) -> Result<(InertiaData, Mat<f64>), ReductionError> {
+    inertia_data_nonzero(nonzero_entries(M).as_ref(), slots, nodes, S_full, par)
+}
+
+/// [`inertia_data_with`] for a mass matrix `M` without stored zeros ([`nonzero_entries`]).
+fn inertia_data_nonzero(
+    M: SparseColMatRef<'_, usize, f64>,
+    slots: &[usize],
+    nodes: &[[f64; 3]],
+    S_full: &Mat<f64>,
+    par: faer::Par,
+) -> Result<(InertiaData, Mat<f64>), ReductionError> {
     let n_f = slots.len();
     let n = S_full.ncols();
-    // A solid's mass couples only equal displacement components: on the stiffness's pattern
-    // two thirds of the stored entries are exact zeros, which the products would read for
-    // nothing (leaving them out changes no sum).
-    let all: Vec<usize> = (0..M.ncols()).collect();
-    let M_nz = select_entries(M, M.nrows(), &all, |r, v| (v != 0.0).then_some(r));
-    let M = M_nz.as_ref();
     let S = gather_rows(n_f, n, |d, j| S_full[(slots[d], j)]);
     // M is symmetric (assembled with both triangles): the gather product reads it once.
     let MS = symmetric_times(M, S.as_ref(), par);
@@ -125,9 +138,13 @@ fn inertia_data_with(
     // `comp` and f_c the field at their nodes. All three fields S_0, S_1, S_2 side by side
     // (F_c, n_c x 3n) make one sparse product and one dense product per direction:
     // S_bar[3k + l] = 1/3 sum_c (F_c^T M_cc F_c)_{kl} and S_x[3k + l] = 1/3 sum_c (X_c^T M_cc F_c)_{kl}.
+    // F_c and X_c depend only on the nodes of the dofs of slot `comp`: where those and M_cc
+    // equal the previous direction's (a solid's mass is the same scalar matrix in each
+    // direction), its products are the same bit for bit and are not computed again.
     let mut S_x = Mat::<f64>::zeros(9, n);
     let mut S_bar: Vec<Mat<f64>> = (0..9).map(|_| Mat::zeros(n, n)).collect();
     let mut position = vec![usize::MAX; n_f];
+    let mut previous: Option<DirectionProducts> = None;
     for comp in 0..3 {
         let dofs_c: Vec<usize> = (0..n_f).filter(|&d| slots[d] % 6 == comp).collect();
         if dofs_c.is_empty() {
@@ -141,12 +158,19 @@ fn inertia_data_with(
         for &d in &dofs_c {
             position[d] = usize::MAX;
         }
-        let node_c = |r: usize| slots[dofs_c[r]] / 6;
-        let F = gather_rows(n_c, 3 * n, |r, col| S_full[(6 * node_c(r) + col / n, col % n)]);
-        let X = Mat::from_fn(n_c, 3, |r, k| nodes[node_c(r)][k] - c[k]);
-        let MF = symmetric_times(M_cc.as_ref(), F.as_ref(), par);
-        let G = gram(F.as_ref(), MF.as_ref(), par);
-        let XtMF = gram(X.as_ref(), MF.as_ref(), par);
+        let nodes_c: Vec<usize> = dofs_c.iter().map(|&d| slots[d] / 6).collect();
+        let same = previous
+            .as_ref()
+            .is_some_and(|p| p.nodes_c == nodes_c && same_matrix(p.M_cc.as_ref(), M_cc.as_ref()));
+        if !same {
+            let F = gather_rows(n_c, 3 * n, |r, col| S_full[(6 * nodes_c[r] + col / n, col % n)]);
+            let X = Mat::from_fn(n_c, 3, |r, k| nodes[nodes_c[r]][k] - c[k]);
+            let MF = symmetric_times(M_cc.as_ref(), F.as_ref(), par);
+            let G = gram(F.as_ref(), MF.as_ref(), par);
+            let XtMF = gram(X.as_ref(), MF.as_ref(), par);
+            previous = Some(DirectionProducts { nodes_c, M_cc, G, XtMF });
+        }
+        let DirectionProducts { G, XtMF, .. } = previous.as_ref().expect("computed above");
         for k in 0..3 {
             for l in 0..3 {
                 S_bar[3 * k + l] += G.submatrix(k * n, l * n, n, n) * faer::Scale(1.0 / 3.0);
@@ -172,6 +196,27 @@ fn inertia_data_with(
         },
         Phi_com,
     ))
+}
+
+/// The products of one direction's scalar fields in [`inertia_data_with`]: the nodes of the
+/// dofs of its translation slot, its block $\mathbf M_{cc}$, $\mathbf F_c^T\mathbf M_{cc}
+/// \mathbf F_c$ and $\mathbf X_c^T\mathbf M_{cc}\mathbf F_c$.
+struct DirectionProducts {
+    nodes_c: Vec<usize>,
+    M_cc: SparseColMat<usize, f64>,
+    G: Mat<f64>,
+    XtMF: Mat<f64>,
+}
+
+/// Whether `A` and `B` have the same shape, stored entries and values, bit for bit.
+fn same_matrix(A: SparseColMatRef<'_, usize, f64>, B: SparseColMatRef<'_, usize, f64>) -> bool {
+    A.nrows() == B.nrows()
+        && A.ncols() == B.ncols()
+        && A.symbolic().col_ptr() == B.symbolic().col_ptr()
+        && A.symbolic().col_nnz() == B.symbolic().col_nnz()
+        && A.symbolic().row_idx() == B.symbolic().row_idx()
+        && A.val().len() == B.val().len()
+        && A.val().par_iter().zip(B.val()).all(|(a, b)| a.to_bits() == b.to_bits())
 }
 
 /// `Mat::from_fn(nrows, ncols, f)` with the columns filled in parallel: for the gathers of
@@ -230,6 +275,7 @@ pub(crate) fn select_entries(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use fe_model::assembly::assemble_mass;
     use fe_model::{add_interface_on_set, box_mesh, solid_model, CellKind, IsotropicMaterial, MassKind, SpiderKind};
 
     /// The mass data computed in parallel (3 threads: products by rows, Gram products by
@@ -286,5 +332,73 @@ mod tests {
                 a.mass
             );
         }
+    }
+
+    /// The second-order invariants of a solid, whose three directions share one computation
+    /// (their mass blocks are equal), against the straightforward sums over the whole mass
+    /// matrix, direction by direction: $\bar{\mathbf S}_{kl} = \frac13\sum_c
+    /// \mathbf P_c(\mathbf S_k)^T\mathbf M\mathbf P_c(\mathbf S_l)$ and $S_{x,kl} =
+    /// \frac13\sum_c\mathbf P_c(x_k - c_k)^T\mathbf M\mathbf P_c(\mathbf S_l)$, with
+    /// $\mathbf P_c(f)$ the field $f$ in translation slot $c$ of every node.
+    #[test]
+    fn solid_second_order_invariants_equal_the_sums_over_each_direction() {
+        let steel = IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap();
+        let mesh = box_mesh(CellKind::Hex8, [0.8, 0.3, 0.2], [5, 3, 2]).unwrap();
+        let model = solid_model(mesh, steel, MassKind::Consistent).unwrap();
+        let n = 4;
+        let mut state = 11u64;
+        let S_full = Mat::from_fn(6 * model.node_count(), n, |_, _| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        });
+        let (data, _) = inertia_data(&model, &S_full).unwrap();
+        let dofs = DofMap::new(&model).unwrap();
+        let M = assemble_mass(&model, &SystemPattern::new(&model, &dofs)).unwrap();
+        let M = M.to_dense();
+        let n_f = dofs.n_free();
+        let c = data.center_of_mass;
+        // P_c(f): the nodal field f placed in translation slot `comp` of every free dof.
+        let place = |comp: usize, f: &dyn Fn(usize) -> f64| {
+            Mat::from_fn(n_f, 1, |d, _| {
+                let slot = dofs.full_slot(fe_model::Dof(d as u32));
+                if slot % 6 == comp {
+                    f(slot / 6)
+                } else {
+                    0.0
+                }
+            })
+        };
+        let nodes = &model.mesh.nodes;
+        let (mut worst, mut scale) = (0.0f64, 0.0f64);
+        for k in 0..3 {
+            for l in 0..3 {
+                for j in 0..n {
+                    let mut x = 0.0;
+                    for comp in 0..3 {
+                        let g = place(comp, &|node| S_full[(6 * node + l, j)]);
+                        let f = place(comp, &|node| nodes[node][k] - c[k]);
+                        x += (f.transpose() * &M * &g)[(0, 0)] / 3.0;
+                    }
+                    let got = data.S_x.data[(3 * k + l) + 9 * j];
+                    worst = worst.max((got - x).abs());
+                    scale = scale.max(x.abs());
+                    for i in 0..n {
+                        let mut s = 0.0;
+                        for comp in 0..3 {
+                            let f = place(comp, &|node| S_full[(6 * node + k, i)]);
+                            let g = place(comp, &|node| S_full[(6 * node + l, j)]);
+                            s += (f.transpose() * &M * &g)[(0, 0)] / 3.0;
+                        }
+                        let got = data.S_bar[3 * k + l].data[i + n * j];
+                        worst = worst.max((got - s).abs());
+                        scale = scale.max(s.abs());
+                    }
+                }
+            }
+        }
+        // Sums of a few hundred products of order one, in another order: round-off.
+        assert!(worst <= 1e-13 * scale, "worst difference {worst:.3e} of {scale:.3e}");
     }
 }
