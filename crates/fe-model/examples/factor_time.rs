@@ -17,21 +17,11 @@
 
 #![allow(non_snake_case)]
 
-use faer::sparse::{SparseColMat, Triplet};
-use fe_model::{
-    add_interface_on_set, assemble, box_mesh, dof_points, solid_model, CellKind, DofMap, FillOrdering,
-    IsotropicMaterial, MassKind, Precision, SpiderKind, SymbolicFactor, SystemPattern,
-};
-use std::time::Instant;
+#[path = "common/mod.rs"]
+mod common;
 
-/// CPU seconds (user + system, all threads) of this process so far.
-fn cpu_seconds() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let Some(close) = stat.rfind(')') else { return f64::NAN };
-    let f: Vec<&str> = stat[close + 2..].split_whitespace().collect();
-    let ticks = |k: usize| f.get(k).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN);
-    (ticks(11) + ticks(12)) / 100.0
-}
+use fe_model::{FillOrdering, Precision, SymbolicFactor};
+use std::time::Instant;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -43,54 +33,9 @@ fn main() {
     } else {
         Precision::Double
     };
-    let (ex, ey, ez) = match size {
-        "3k" => (12, 8, 8),
-        "10k" => (17, 13, 13),
-        "50k" => (30, 23, 23),
-        "200k" => (48, 37, 37),
-        other => {
-            let e: Vec<usize> = other.split(',').filter_map(|v| v.parse().ok()).collect();
-            assert_eq!(e.len(), 3, "size: 3k, 10k, 50k, 200k or ex,ey,ez");
-            (e[0], e[1], e[2])
-        }
-    };
-    let mesh = box_mesh(
-        CellKind::Hex8,
-        [2.0 * ex as f64 / ez as f64, ey as f64 / ez as f64, 1.0],
-        [ex, ey, ez],
-    )
-    .unwrap();
-    let steel = IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap();
-    let mut model = solid_model(mesh, steel, MassKind::Consistent).unwrap();
-    let a = add_interface_on_set(&mut model, "root", "x0", None, SpiderKind::Rbe2).unwrap();
-    let b = add_interface_on_set(&mut model, "tip", "x1", None, SpiderKind::Rbe2).unwrap();
-    let dofs = DofMap::new(&model).unwrap();
-    let K = assemble(&model, &SystemPattern::new(&model, &dofs)).unwrap().K;
-    // K_ii: the free dofs but the interface nodes' twelve, lower triangle.
-    let mut keep = vec![true; dofs.n_free()];
-    for node in [a, b] {
-        for k in 0..6 {
-            if let Some(d) = dofs.free_dof(node, k) {
-                keep[d.index()] = false;
-            }
-        }
-    }
-    let internal: Vec<usize> = (0..dofs.n_free()).filter(|&d| keep[d]).collect();
-    let mut position = vec![usize::MAX; dofs.n_free()];
-    internal.iter().enumerate().for_each(|(i, &d)| position[d] = i);
-    let mut triplets = Vec::new();
-    for j in 0..K.ncols() {
-        for (&i, &v) in K.row_idx_of_col_raw(j).iter().zip(K.val_of_col(j)) {
-            if keep[i] && keep[j] && position[i] >= position[j] {
-                triplets.push(Triplet::new(position[i], position[j], v));
-            }
-        }
-    }
-    let ni = internal.len();
-    let K_ii = SparseColMat::try_new_from_triplets(ni, ni, &triplets).unwrap();
-    let all_points = dof_points(&model, &dofs);
-    let points: Vec<[f64; 3]> = internal.iter().map(|&d| all_points[d]).collect();
-    drop((model, K, triplets));
+    let (ex, ey, ez) = common::elements(size);
+    let (K_ii, points) = common::block(ex, ey, ez);
+    let ni = K_ii.nrows();
     let threads = rayon::current_num_threads();
     let analyse = |parallel: Option<usize>| {
         let mut symbolic =
@@ -133,9 +78,9 @@ fn main() {
     for run in 0..runs {
         let symbolic = analyse(parallel);
         let used = symbolic.parallel_subtrees().0;
-        let (t, c, threads_before) = (Instant::now(), cpu_seconds(), thread_times());
+        let (t, c, threads_before) = (Instant::now(), common::cpu_seconds(), thread_times());
         let factor = symbolic.factor(K_ii.as_ref(), precision).unwrap();
-        let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+        let (wall, cpu) = (t.elapsed().as_secs_f64(), common::cpu_seconds() - c);
         // Per thread that ran: on a core, waiting for one (the load), idle (asleep: no work).
         let threads_after = thread_times();
         let mut idle = 0.0;
