@@ -315,7 +315,10 @@ fn numeric<T: Real>(
             symbolic.len_val()
         )))
     })?;
-    L_values.resize(symbolic.len_val(), T::zero_impl());
+    // Zeroed by all threads: the kernel maps and clears each new page at its first write
+    // (half a million 4 kB pages at 200k dofs), which on one thread took a noticeable part of
+    // the stage (BENCHMARKS, fresh pages).
+    L_values.par_extend(rayon::iter::repeat_n(T::zero_impl(), symbolic.len_val()));
     if let (Some(plan), SymbolicCholeskyRaw::Supernodal(s), Par::Rayon(_)) = (plan, symbolic.raw(), par) {
         let A = permuted_lower(symbolic, A)?;
         return match parallel_llt::factor(s, plan, A.as_ref(), &mut L_values, par) {
@@ -361,8 +364,9 @@ fn permuted_lower<T: Real>(
     let (mut values, mut row_idx) = (Vec::new(), Vec::new());
     values.try_reserve_exact(lower).map_err(|_| memory())?;
     row_idx.try_reserve_exact(lower).map_err(|_| memory())?;
-    values.resize(lower, T::zero_impl());
-    row_idx.resize(lower, 0usize);
+    // Zeroed by all threads, as the factor's values (fresh pages).
+    values.par_extend(rayon::iter::repeat_n(T::zero_impl(), lower));
+    row_idx.par_extend(rayon::iter::repeat_n(0usize, lower));
     let mut col_ptr = vec![0usize; n + 1];
     let identity: Vec<usize>;
     let perm = match symbolic.perm() {
