@@ -17,6 +17,10 @@
 # 5. prints the table and writes it, with the machine and the commands, to
 #    benchmarks/results/slider_crank.md and into BENCHMARKS.md (benchmarks/scripts/write_section.py).
 #
+# Exudyn runs its fast module (EXUDYN_MODULE=fast: exudynCPPfast of the same wheel, no range
+# checks, AVX2; the same results), and each program's Newton variant is named in the row:
+# Exudyn's time integration defaults to modified Newton, flexmbs's to full Newton.
+#
 # Environment: CARGO_TARGET_DIR (default target), EXUDYN_VENV (default benchmarks/exudyn/.venv),
 # SLIDER_T_END (default 2 crank periods, 800 steps: the one-superelement model with the frame at
 # interface A, flexmbs as Exudyn, stops converging at t = 0.097 s, 2.3 periods), SLIDER_MODES (default 4).
@@ -58,10 +62,10 @@ configs=(
     "flexmbs, 1 superelement, 2 modes, geometric stiffening|Exudyn, 2 modes, full Newton|$bin/slider_crank --segments 1 --modes 2 --geometric-stiffening --h $h --t-end $t_end"
     "flexmbs, 1 superelement, 2 modes, geometric stiffening, modified Newton|Exudyn, 2 modes, modified Newton|$bin/slider_crank --segments 1 --modes 2 --geometric-stiffening --newton modified --h $h --t-end $t_end"
     "flexmbs, beam rod, 1 superelement, 2 modes, geometric stiffening|Exudyn, 2 modes, full Newton|$bin/slider_crank --rod beam --segments 1 --modes 2 --geometric-stiffening --h $h --t-end $t_end"
-    "Exudyn ObjectFFRFreducedOrder, $modes modes, full Newton (default)|Exudyn, $modes modes, full Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes $modes --h $h --t-end $t_end"
-    "Exudyn ObjectFFRFreducedOrder, $modes modes, modified Newton|Exudyn, $modes modes, modified Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes $modes --h $h --t-end $t_end --modified-newton"
-    "Exudyn ObjectFFRFreducedOrder, 2 modes, full Newton (default)|Exudyn, 2 modes, full Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes 2 --h $h --t-end $t_end"
-    "Exudyn ObjectFFRFreducedOrder, 2 modes, modified Newton|Exudyn, 2 modes, modified Newton|benchmarks/exudyn/run.sh --mesh $work/rod --modes 2 --h $h --t-end $t_end --modified-newton"
+    "Exudyn ObjectFFRFreducedOrder, $modes modes, modified Newton (default)|Exudyn, $modes modes, modified Newton|env EXUDYN_MODULE=fast benchmarks/exudyn/run.sh --mesh $work/rod --modes $modes --h $h --t-end $t_end --modified-newton"
+    "Exudyn ObjectFFRFreducedOrder, $modes modes, full Newton|Exudyn, $modes modes, full Newton|env EXUDYN_MODULE=fast benchmarks/exudyn/run.sh --mesh $work/rod --modes $modes --h $h --t-end $t_end"
+    "Exudyn ObjectFFRFreducedOrder, 2 modes, modified Newton (default)|Exudyn, 2 modes, modified Newton|env EXUDYN_MODULE=fast benchmarks/exudyn/run.sh --mesh $work/rod --modes 2 --h $h --t-end $t_end --modified-newton"
+    "Exudyn ObjectFFRFreducedOrder, 2 modes, full Newton|Exudyn, 2 modes, full Newton|env EXUDYN_MODULE=fast benchmarks/exudyn/run.sh --mesh $work/rod --modes 2 --h $h --t-end $t_end"
 )
 : > "$work/runs.txt"
 for k in "${!configs[@]}"; do echo "$k|${configs[$k]}" >> "$work/configs.txt"; done
@@ -124,7 +128,8 @@ lines = [
     "",
     f"Each configuration run {repeats} times, alternating; medians. Per step = the whole time loop (set-up and reduction excluded on both sides) over the steps.",
     "",
-    f"Speed columns: wall time per step against the Exudyn run named ({rows[base]['name']}: the default of both programs),"
+    f"Speed columns: wall time per step against the Exudyn run named ({rows[base]['name']}: Exudyn's default, its time"
+    " integration keeps the Jacobian unless `newton.useModifiedNewton` is turned off; full Newton is flexmbs's default),"
     " and against the like-for-like Exudyn run (same number of modes, same Newton variant; CPU time in brackets).",
     "",
     "| configuration | wall s/step | steps/s | CPU s/step | speed vs Exudyn default | vs Exudyn like-for-like (CPU) | peak abs(w) [mm] | max abs(w - w_ref) / max abs(w_ref) | peak error |",

@@ -23,7 +23,9 @@ coordinate constraint), slider of half the rod's mass on the x axis, start at th
 with the rigid mechanism's velocities, no gravity; the values are read from `params.txt`
 written by `export_rod --out DIR`. Integrated with Exudyn's generalized-alpha (index 3,
 spectral radius `--rho-inf`) at the fixed step `--h` to `--t-end`, full Newton unless
-`--modified-newton`.
+`--modified-newton` (Exudyn's own default for time integration is modified Newton:
+`timeIntegration.newton.useModifiedNewton` is on, the Jacobian kept across steps and rebuilt
+when the contraction is worse than `modifiedNewtonContractivity` = 0.5).
 
 Output as slider_crank.py: the midpoint deflection w from the chord (the middle node against
 the line through the end nodes, positive along e_z x (B - A); `--elements` must be even), the
