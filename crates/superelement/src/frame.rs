@@ -95,17 +95,21 @@ pub(crate) fn solve_frame_in(
             // use it when the warm start implies an elastic rotation above 1 rad (far
             // beyond the small-strain range of the formulation), and retry from it when
             // Newton fails from the warm start.
-            let guess = Frame::new(state.r[0] - state.R[0] * p.x[0], state.R[0]);
+            let guess = || Frame::new(state.r[0] - state.R[0] * p.x[0], state.R[0]);
+            // The angle of R_j^T R_k exceeds 1 rad where the scalar part of the quaternion
+            // product, the dot product of the two unit quaternions, is below cos(1/2) in
+            // magnitude (no logarithm needed).
+            let cos_half = 0.5f64.cos();
             let warm_is_far = state
                 .R
                 .iter()
-                .any(|R_k| crate::local_coordinates::elastic_rotation(&state.frame.R, R_k).norm() > 1.0);
+                .any(|R_k| state.frame.R.coords.dot(&R_k.coords).abs() < cos_half);
             let chord = scratch.last_G_inv.take();
             if warm_is_far {
-                return newton_frame(p, state, guess, None, scratch);
+                return newton_frame(p, state, guess(), None, scratch);
             }
             newton_frame(p, state, state.frame, chord, scratch).or_else(|e| {
-                match newton_frame(p, state, guess, None, scratch) {
+                match newton_frame(p, state, guess(), None, scratch) {
                     Ok(found) => Ok(found),
                     Err(_) => Err(e),
                 }
