@@ -138,10 +138,16 @@ fn newton_frame(
     let mut last_residual = f64::INFINITY;
     for it in 0..=p.settings.max_iterations {
         local_coordinates(&frame, &state.r, &state.R, p.x, &state.eta, q);
-        let mut g: Vector6<f64> = Vector6::zeros();
+        // g = Phi_j q by columns of fixed length (a plain loop; the same sums in the same
+        // order as with nalgebra's vectors).
+        let mut ga = [0.0f64; 6];
         for (c, qc) in q.iter().enumerate() {
-            g += Vector6::from_column_slice(col(p.Phi_j, c)) * *qc;
+            let phi: &[f64; 6] = col(p.Phi_j, c)[..6].try_into().expect("6 rows");
+            for a in 0..6 {
+                ga[a] += phi[a] * qc;
+            }
         }
+        let g = Vector6::from(ga);
         residual = (g.fixed_rows::<3>(0).norm() / L).max(g.fixed_rows::<3>(3).norm());
         if !residual.is_finite() {
             break;

@@ -51,7 +51,7 @@ use crate::state::Frame;
 use faer::linalg::matmul::matmul;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
-use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3};
 
 /// $\boldsymbol\Phi_{rig}$ (5.2): the $n\times6$ rigid-body modes of the interface set about the
 /// frame origin, on the *deformed* local positions $\mathbf r_k^{jj} = \mathbf x_k + \mathbf u_k$:
@@ -65,23 +65,29 @@ pub fn phi_rig(r_loc: &[Vector3<f64>], n_modes: usize) -> Mat<f64> {
 /// $\boldsymbol\Phi_j\boldsymbol\Lambda\boldsymbol\Phi_{rig}$ (the 6x6 of (5.4), with the exact
 /// rotation factor $\boldsymbol\Lambda$; module docs), from the deformed local
 /// positions `r_loc` $= \mathbf x_k + \mathbf u_k$ and the blocks of $\boldsymbol\Lambda$.
+#[inline]
 pub(crate) fn phi_j_psi(Phi_j: faer::MatRef<'_, f64>, r_loc: &[Vector3<f64>], Lambda: &[Matrix3<f64>]) -> Matrix6<f64> {
-    let mut G = Matrix6::zeros();
-    let column = |c| Vector6::from_column_slice(col(Phi_j, c));
+    // Columns of G as arrays and of Phi_j as fixed-length slices: plain loops the compiler
+    // unrolls and vectorises (the same sums in the same order as with nalgebra's vectors).
+    let mut G = [[0.0f64; 6]; 6];
+    let column = |c| -> &[f64; 6] { col(Phi_j, c)[..6].try_into().expect("6 rows") };
     for (k, (r, L)) in r_loc.iter().zip(Lambda).enumerate() {
         // Block rows of Psi for interface k: u_k -> [I, -r~], theta_k -> [0, Lambda_k].
         let mr = -skew(r);
         for c in 0..3 {
             let (pu, pt) = (column(6 * k + c), column(6 * k + 3 + c));
-            let mut gc = G.column_mut(c);
-            gc += pu;
+            for i in 0..6 {
+                G[c][i] += pu[i];
+            }
             for b in 0..3 {
-                let mut gb = G.column_mut(3 + b);
-                gb += pu * mr[(c, b)] + pt * L[(c, b)];
+                let (m, l) = (mr[(c, b)], L[(c, b)]);
+                for i in 0..6 {
+                    G[3 + b][i] += pu[i] * m + pt[i] * l;
+                }
             }
         }
     }
-    G
+    Matrix6::from_fn(|i, j| G[j][i])
 }
 
 /// Inverse of a 6x6 with its reciprocal condition number in the 1-norm,
@@ -497,11 +503,22 @@ impl Kinematics {
             }
         }
         // Z = G^{-1} Phi_j (and its transpose), Y = Z Lambda.
-        let zt = cols_mut::<6>(self.ZT.as_mut());
+        // By columns of fixed length: z = sum_c G^{-1}[:, c] phi_c, as nalgebra's product sums.
+        let gi: [[f64; 6]; 6] = std::array::from_fn(|c| std::array::from_fn(|a| G_inv[(a, c)]));
+        let zt = cols_mut::<6>(self.ZT.as_mut()).map(|c| &mut c[..n]);
         for j in 0..n {
-            let z = G_inv * Vector6::from_column_slice(col(Phi_j, j));
-            self.X.col_as_slice_mut(j)[..6].copy_from_slice(z.as_slice());
-            self.P.col_as_slice_mut(j)[..6].copy_from_slice(z.as_slice());
+            let phi: &[f64; 6] = col(Phi_j, j)[..6].try_into().expect("6 rows");
+            let mut z = [0.0; 6];
+            for a in 0..6 {
+                z[a] = gi[0][a] * phi[0];
+            }
+            for c in 1..6 {
+                for a in 0..6 {
+                    z[a] += gi[c][a] * phi[c];
+                }
+            }
+            self.X.col_as_slice_mut(j)[..6].copy_from_slice(&z);
+            self.P.col_as_slice_mut(j)[..6].copy_from_slice(&z);
             for a in 0..6 {
                 zt[a][j] = z[a];
             }
