@@ -569,21 +569,23 @@ impl Kinematics {
     fn form_tangent_part(&mut self) {
         let N = self.n_interfaces();
         let n = self.n();
+        let (r_loc, Lambda) = (&self.r_loc, &self.Lambda);
         for j in 0..n {
-            let c = self.X.col_as_slice_mut(j);
-            let zt = Vector3::new(c[0], c[1], c[2]);
-            let zr = Vector3::new(c[3], c[4], c[5]);
-            c[6..].fill(0.0);
-            c[6 + j] = 1.0;
-            for k in 0..N {
-                let pu = zt + zr.cross(&self.r_loc[k]);
-                let pr = self.Lambda[k] * zr;
-                for i in 0..3 {
-                    c[6 + 6 * k + i] -= pu[i];
-                    c[6 + 6 * k + 3 + i] -= pr[i];
+            let (z, t) = self.X.col_as_slice_mut(j)[..6 + n].split_at_mut(6);
+            let (z0, z1, z2, w0, w1, w2) = (z[0], z[1], z[2], z[3], z[4], z[5]);
+            // Exact 6-chunks (u_k, theta_k): -(z_t + z_r x r_k) and -Lambda_k z_r, no bounds
+            // checks; the sums as nalgebra's cross and matrix-vector products form them.
+            for ((o, r), L) in t[..6 * N].chunks_exact_mut(6).zip(r_loc).zip(Lambda) {
+                o[0] = -(z0 + (w1 * r[2] - w2 * r[1]));
+                o[1] = -(z1 + (w2 * r[0] - w0 * r[2]));
+                o[2] = -(z2 + (w0 * r[1] - w1 * r[0]));
+                for a in 0..3 {
+                    o[3 + a] = -(L[(a, 0)] * w0 + L[(a, 1)] * w1 + L[(a, 2)] * w2);
                 }
             }
-            self.P.col_as_slice_mut(j)[6..].copy_from_slice(&c[6..]);
+            t[6 * N..].fill(0.0);
+            t[j] += 1.0;
+            self.P.col_as_slice_mut(j)[6..6 + n].copy_from_slice(t);
         }
         lambda_right_rows(&self.Lambda, &mut self.P, 6..6 + n);
         let yrt = cols_mut::<3>(self.YrT.as_mut());
