@@ -69,9 +69,9 @@
 //! T_j, B rows nor Y_r^T), the Psi products by 3x3 blocks (`transform::psi_product`) and plain
 //! fixed-length column loops in the update and the frame residual, and the 6x6 inverse by 3x3
 //! blocks; the calls alternate between two nearby states since then (a repeated state reuses
-//! the configuration it formed): `beam14-G` 135.3k -> 129.0k with tangents, 56.7k -> 46.2k
-//! without; `block14-G` 150.8k -> 144.6k, 62.6k -> 52.2k; `beam22-com-exact` 220.0k -> 209.4k,
-//! 84.2k -> 68.8k; `beam72-G` 1798k -> 1768k, 566k -> 518k.
+//! the configuration it formed): `beam14-G` 135.3k -> 127.9k with tangents, 56.7k -> 46.2k
+//! without; `block14-G` 150.8k -> 143.5k, 62.6k -> 52.1k; `beam22-com-exact` 220.0k -> 207.7k,
+//! 84.2k -> 69.0k; `beam72-G` 1798k -> 1762k, 566k -> 518k.
 //!
 //! What is left is spread thin: 11 faer products per evaluation with tangents, each
 //! about 1.7k instructions of fixed cost (nano-gemm's planning and driver) beside its kernel,
