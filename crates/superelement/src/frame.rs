@@ -95,17 +95,21 @@ pub(crate) fn solve_frame_in(
             // use it when the warm start implies an elastic rotation above 1 rad (far
             // beyond the small-strain range of the formulation), and retry from it when
             // Newton fails from the warm start.
-            let guess = Frame::new(state.r[0] - state.R[0] * p.x[0], state.R[0]);
+            let guess = || Frame::new(state.r[0] - state.R[0] * p.x[0], state.R[0]);
+            // The angle of R_j^T R_k exceeds 1 rad where the scalar part of the quaternion
+            // product, the dot product of the two unit quaternions, is below cos(1/2) in
+            // magnitude (no logarithm needed).
+            let cos_half = 0.5f64.cos();
             let warm_is_far = state
                 .R
                 .iter()
-                .any(|R_k| crate::local_coordinates::elastic_rotation(&state.frame.R, R_k).norm() > 1.0);
+                .any(|R_k| state.frame.R.coords.dot(&R_k.coords).abs() < cos_half);
             let chord = scratch.last_G_inv.take();
             if warm_is_far {
-                return newton_frame(p, state, guess, None, scratch);
+                return newton_frame(p, state, guess(), None, scratch);
             }
             newton_frame(p, state, state.frame, chord, scratch).or_else(|e| {
-                match newton_frame(p, state, guess, None, scratch) {
+                match newton_frame(p, state, guess(), None, scratch) {
                     Ok(found) => Ok(found),
                     Err(_) => Err(e),
                 }
@@ -134,10 +138,16 @@ fn newton_frame(
     let mut last_residual = f64::INFINITY;
     for it in 0..=p.settings.max_iterations {
         local_coordinates(&frame, &state.r, &state.R, p.x, &state.eta, q);
-        let mut g: Vector6<f64> = Vector6::zeros();
+        // g = Phi_j q by columns of fixed length (a plain loop; the same sums in the same
+        // order as with nalgebra's vectors).
+        let mut ga = [0.0f64; 6];
         for (c, qc) in q.iter().enumerate() {
-            g += Vector6::from_column_slice(col(p.Phi_j, c)) * *qc;
+            let phi: &[f64; 6] = col(p.Phi_j, c)[..6].try_into().expect("6 rows");
+            for a in 0..6 {
+                ga[a] += phi[a] * qc;
+            }
         }
+        let g = Vector6::from(ga);
         residual = (g.fixed_rows::<3>(0).norm() / L).max(g.fixed_rows::<3>(3).norm());
         if !residual.is_finite() {
             break;

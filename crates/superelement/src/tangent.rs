@@ -184,7 +184,8 @@ impl Superelement {
             // (`frame::newton_frame`); the explicit frames compute none.
             local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut ws.kin.q_jj);
         }
-        ws.kin.update(frame, iterations, &self.x, self.Phi_j.as_ref())?;
+        ws.kin
+            .update(frame, iterations, &self.x, self.Phi_j.as_ref(), tangents)?;
         ws.kin_valid = true;
         for k in 0..self.n_interfaces {
             ws.qd[6 * k..6 * k + 3].copy_from_slice(state.v[k].as_slice());

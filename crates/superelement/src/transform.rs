@@ -51,7 +51,7 @@ use crate::state::Frame;
 use faer::linalg::matmul::matmul;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
-use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3};
 
 /// $\boldsymbol\Phi_{rig}$ (5.2): the $n\times6$ rigid-body modes of the interface set about the
 /// frame origin, on the *deformed* local positions $\mathbf r_k^{jj} = \mathbf x_k + \mathbf u_k$:
@@ -65,31 +65,72 @@ pub fn phi_rig(r_loc: &[Vector3<f64>], n_modes: usize) -> Mat<f64> {
 /// $\boldsymbol\Phi_j\boldsymbol\Lambda\boldsymbol\Phi_{rig}$ (the 6x6 of (5.4), with the exact
 /// rotation factor $\boldsymbol\Lambda$; module docs), from the deformed local
 /// positions `r_loc` $= \mathbf x_k + \mathbf u_k$ and the blocks of $\boldsymbol\Lambda$.
+#[inline]
 pub(crate) fn phi_j_psi(Phi_j: faer::MatRef<'_, f64>, r_loc: &[Vector3<f64>], Lambda: &[Matrix3<f64>]) -> Matrix6<f64> {
-    let mut G = Matrix6::zeros();
-    let column = |c| Vector6::from_column_slice(col(Phi_j, c));
+    // Columns of G as arrays and of Phi_j as fixed-length slices: plain loops the compiler
+    // unrolls and vectorises (the same sums in the same order as with nalgebra's vectors).
+    let mut G = [[0.0f64; 6]; 6];
+    let column = |c| -> &[f64; 6] { col(Phi_j, c)[..6].try_into().expect("6 rows") };
     for (k, (r, L)) in r_loc.iter().zip(Lambda).enumerate() {
         // Block rows of Psi for interface k: u_k -> [I, -r~], theta_k -> [0, Lambda_k].
         let mr = -skew(r);
         for c in 0..3 {
             let (pu, pt) = (column(6 * k + c), column(6 * k + 3 + c));
-            let mut gc = G.column_mut(c);
-            gc += pu;
+            for i in 0..6 {
+                G[c][i] += pu[i];
+            }
             for b in 0..3 {
-                let mut gb = G.column_mut(3 + b);
-                gb += pu * mr[(c, b)] + pt * L[(c, b)];
+                let (m, l) = (mr[(c, b)], L[(c, b)]);
+                for i in 0..6 {
+                    G[3 + b][i] += pu[i] * m + pt[i] * l;
+                }
             }
         }
     }
-    G
+    Matrix6::from_fn(|i, j| G[j][i])
 }
 
 /// Inverse of a 6x6 with its reciprocal condition number in the 1-norm,
-/// $1/(\|\mathbf G\|_1\|\mathbf G^{-1}\|_1)$; `None` when LU finds it singular.
+/// $1/(\|\mathbf G\|_1\|\mathbf G^{-1}\|_1)$; `None` when it is singular. By $3\times3$ blocks
+/// ([`block_inverse`]) where its leading block is well conditioned, else by nalgebra's LU.
 pub(crate) fn inverse_with_rcond(G: &Matrix6<f64>) -> Option<(Matrix6<f64>, f64)> {
-    let Gi = G.try_inverse()?;
+    let Gi = block_inverse(G).or_else(|| G.try_inverse())?;
     let norm1 = |A: &Matrix6<f64>| (0..6).map(|j| A.column(j).abs().sum()).fold(0.0, f64::max);
     Some((Gi, 1.0 / (norm1(G) * norm1(&Gi))))
+}
+
+/// $\mathbf G^{-1}$ by its $3\times3$ blocks $\mathbf G = [\mathbf A,\ \mathbf B;\ \mathbf C,\ \mathbf D]$: with the
+/// Schur complement $\mathbf S = \mathbf D - \mathbf C\mathbf A^{-1}\mathbf B$,
+/// $\mathbf G^{-1} = [\mathbf A^{-1} + \mathbf A^{-1}\mathbf B\mathbf S^{-1}\mathbf C\mathbf A^{-1},\
+/// -\mathbf A^{-1}\mathbf B\mathbf S^{-1};\ -\mathbf S^{-1}\mathbf C\mathbf A^{-1},\ \mathbf S^{-1}]$, two
+/// closed-form $3\times3$ inverses and six $3\times3$ products (a quarter of the LU inverse's
+/// instructions). For $\boldsymbol\Phi_j\boldsymbol\Psi$ the leading block is
+/// $\sum_k\boldsymbol\Phi_j^{t,u_k}$, independent of the deformation and the identity (to round-off)
+/// for the frames of this crate, so no pivoting is needed; `None` (the caller's LU instead) when
+/// $\mathbf A$ is singular or its 1-norm condition number exceeds $10^4$ (where skipping the row
+/// interchanges could cost digits), or $\mathbf S$ is singular.
+fn block_inverse(G: &Matrix6<f64>) -> Option<Matrix6<f64>> {
+    let A: Matrix3<f64> = G.fixed_view::<3, 3>(0, 0).into_owned();
+    let B: Matrix3<f64> = G.fixed_view::<3, 3>(0, 3).into_owned();
+    let C: Matrix3<f64> = G.fixed_view::<3, 3>(3, 0).into_owned();
+    let D: Matrix3<f64> = G.fixed_view::<3, 3>(3, 3).into_owned();
+    let Ai = A.try_inverse()?;
+    let norm1 = |M: &Matrix3<f64>| (0..3).map(|j| M.column(j).abs().sum()).fold(0.0, f64::max);
+    if !(norm1(&A) * norm1(&Ai) <= 1e4) {
+        return None;
+    }
+    let AiB = Ai * B;
+    let CAi = C * Ai;
+    let Si = (D - C * AiB).try_inverse()?;
+    let top_right = -(AiB * Si);
+    let bottom_left = -(Si * CAi);
+    let top_left = Ai - top_right * CAi;
+    let mut Gi = Matrix6::zeros();
+    Gi.fixed_view_mut::<3, 3>(0, 0).copy_from(&top_left);
+    Gi.fixed_view_mut::<3, 3>(0, 3).copy_from(&top_right);
+    Gi.fixed_view_mut::<3, 3>(3, 0).copy_from(&bottom_left);
+    Gi.fixed_view_mut::<3, 3>(3, 3).copy_from(&Si);
+    Some(Gi)
 }
 
 /// Below this reciprocal condition number $\boldsymbol\Phi_j\boldsymbol\Phi_{rig}$ is treated as
@@ -114,19 +155,36 @@ pub struct Kinematics {
     pub Lambda: Vec<Matrix3<f64>>,
     /// $(\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}$.
     pub G_inv: Matrix6<f64>,
-    /// $\mathbf X = [\mathbf Z_j;\ \mathbf T_j]$, $(6+n)\times n$.
-    pub X: Mat<f64>,
-    /// $\mathbf P = \mathbf X\boldsymbol\Lambda = [\mathbf Y;\ \mathbf B]$, $(6+n)\times n$.
-    pub P: Mat<f64>,
+    /// $\mathbf X = [\mathbf Z_j;\ \mathbf T_j]$, $(6+n)\times n$. Its $\mathbf T_j$ rows are
+    /// formed only by the updates for tangents ([`Self::update`]; [`Self::T`]).
+    pub(crate) X: Mat<f64>,
+    /// $\mathbf P = \mathbf X\boldsymbol\Lambda = [\mathbf Y;\ \mathbf B]$, $(6+n)\times n$; its
+    /// $\mathbf B$ rows as those of $\mathbf X$.
+    pub(crate) P: Mat<f64>,
     /// Explicit copies for faer's products, filled by [`Self::update`] with the fields above
-    /// (faer's small kernels are fastest on contiguous column-major operands, and a dense
-    /// $6N\times6$ product beats a block loop): $\mathbf Z_j^T$ ($n\times6$), the interface rows of
-    /// $\boldsymbol\Psi = \boldsymbol\Lambda\boldsymbol\Phi_{rig}$ ($6N\times6$; its eta rows are zero) and
-    /// their transpose, $\mathbf Y_r^T$ ($n\times3$).
+    /// (faer's small kernels are fastest on contiguous column-major operands): $\mathbf Z_j^T$
+    /// ($n\times6$), the transpose of the interface rows of $\boldsymbol\Psi =
+    /// \boldsymbol\Lambda\boldsymbol\Phi_{rig}$ ($6\times6N$; its eta rows are zero; products with
+    /// $\boldsymbol\Psi$ itself go by 3x3 blocks, [`psi_product`]) and $\mathbf Y_r^T$ ($n\times3$,
+    /// with tangents only).
     pub(crate) ZT: Mat<f64>,
     pub(crate) YrT: Mat<f64>,
-    pub(crate) Psi: Mat<f64>,
     pub(crate) PsiT: Mat<f64>,
+    /// What is formed for the configuration `frame`, `q_formed`.
+    formed: Formed,
+    /// $\mathbf q^{jj}$ of the formed configuration (`q_jj` is overwritten by the frame solve
+    /// before [`Self::update`]).
+    q_formed: Vec<f64>,
+}
+
+/// How much of a configuration [`Kinematics::update`] has formed: the forces need
+/// $\mathbf Z_j$, $\mathbf Y$ and $\boldsymbol\Psi$ only; $\mathbf T_j$, $\mathbf B$ and
+/// $\mathbf Y_r^T$ serve the tangents and the public accessors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Formed {
+    Nothing,
+    Forces,
+    All,
 }
 
 /// A block-diagonal operator on $\mathbf q^{jj}$: a $3\times3$ block on each $\mathbf u_k$ and on
@@ -351,8 +409,9 @@ impl Kinematics {
             P: Mat::zeros(6 + n, n),
             ZT: Mat::zeros(n, 6),
             YrT: Mat::zeros(n, 3),
-            Psi: Mat::zeros(6 * N, 6),
             PsiT: Mat::zeros(6, 6 * N),
+            formed: Formed::Nothing,
+            q_formed: vec![0.0; n],
         }
     }
 
@@ -367,40 +426,46 @@ impl Kinematics {
     ) -> Result<Self, SuperelementError> {
         let mut kin = Self::empty(x.len(), q_jj.len());
         kin.q_jj = q_jj;
-        kin.update(frame, frame_iterations, x, Phi_j)?;
+        kin.update(frame, frame_iterations, x, Phi_j, true)?;
         Ok(kin)
     }
 
-    /// Recomputes everything from `self.q_jj` (already filled) and `frame` (compiled for the
-    /// machine's vector instructions like the block kernels, `vectorized_kernel`).
+    /// The configuration of `frame` and `self.q_jj` (already filled): $\boldsymbol\Lambda$,
+    /// $(\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}$, $\mathbf Z_j$, $\mathbf Y$ and $\boldsymbol\Psi$, and with
+    /// `complete` also $\mathbf T_j$, $\mathbf B$ and $\mathbf Y_r^T$ (the forces read none of
+    /// these three). When `frame` and $\mathbf q^{jj}$ are those of the last update (to the bit:
+    /// a second evaluation of the same state, as for tangents after a forces-only test) only
+    /// what is missing is formed. Compiled for the machine's vector instructions like the block
+    /// kernels (`vectorized_kernel`).
     pub(crate) fn update(
         &mut self,
         frame: Frame,
         frame_iterations: usize,
         x: &[Vector3<f64>],
         Phi_j: MatRef<'_, f64>,
+        complete: bool,
     ) -> Result<(), SuperelementError> {
         struct Update<'a, 'b> {
             kin: &'b mut Kinematics,
             frame: Frame,
-            frame_iterations: usize,
             x: &'a [Vector3<f64>],
             Phi_j: MatRef<'a, f64>,
+            complete: bool,
         }
         impl pulp::WithSimd for Update<'_, '_> {
             type Output = Result<(), SuperelementError>;
             #[inline(always)]
             fn with_simd<S: pulp::Simd>(self, _simd: S) -> Self::Output {
-                self.kin
-                    .update_body(self.frame, self.frame_iterations, self.x, self.Phi_j)
+                self.kin.update_body(self.frame, self.x, self.Phi_j, self.complete)
             }
         }
+        self.frame_iterations = frame_iterations;
         pulp::Arch::new().dispatch(Update {
             kin: self,
             frame,
-            frame_iterations,
             x,
             Phi_j,
+            complete,
         })
     }
 
@@ -408,14 +473,41 @@ impl Kinematics {
     fn update_body(
         &mut self,
         frame: Frame,
-        frame_iterations: usize,
+        x: &[Vector3<f64>],
+        Phi_j: MatRef<'_, f64>,
+        complete: bool,
+    ) -> Result<(), SuperelementError> {
+        let bits = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits());
+        let same = self.formed != Formed::Nothing
+            && bits(self.frame.r.as_slice(), frame.r.as_slice())
+            && bits(self.frame.R.coords.as_slice(), frame.R.coords.as_slice())
+            && bits(&self.q_jj, &self.q_formed);
+        if !same {
+            self.formed = Formed::Nothing;
+            self.form_forces_part(frame, x, Phi_j)?;
+            self.q_formed.copy_from_slice(&self.q_jj);
+            self.formed = Formed::Forces;
+        }
+        if complete && self.formed != Formed::All {
+            self.form_tangent_part();
+            self.formed = Formed::All;
+        }
+        Ok(())
+    }
+
+    /// $\mathbf R_j$, $\mathbf r_k^{jj}$, $\boldsymbol\Lambda$, $(\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}$,
+    /// $\boldsymbol\Psi^T$, the $\mathbf Z_j$ rows of $\mathbf X$ and $\mathbf Z_j^T$,
+    /// the $\mathbf Y$ rows of $\mathbf P$.
+    #[inline(always)]
+    fn form_forces_part(
+        &mut self,
+        frame: Frame,
         x: &[Vector3<f64>],
         Phi_j: MatRef<'_, f64>,
     ) -> Result<(), SuperelementError> {
         let N = x.len();
         let n = self.q_jj.len();
         self.frame = frame;
-        self.frame_iterations = frame_iterations;
         self.R_j = frame.R.to_rotation_matrix().into_inner();
         for k in 0..N {
             self.r_loc[k] = x[k] + u_of(&self.q_jj, k);
@@ -427,58 +519,75 @@ impl Kinematics {
             return Err(SuperelementError::SingularFrame { rcond });
         }
         self.G_inv = G_inv;
-        // Psi rows: u_k -> [I, -r~_k], theta_k -> [0, Lambda_k].
-        // Filled through column slices (faer's checked (i, j) indexing costs more than the copy).
-        self.Psi.fill(0.0);
-        for b in 0..3 {
-            let c = self.Psi.col_as_slice_mut(b);
-            for k in 0..N {
-                c[6 * k + b] = 1.0;
+        // Psi^T: column 6k + a (row u_k,a of Psi) is [e_a; (-r~_k) row a], column 6k + 3 + a
+        // (row theta_k,a) is [0; Lambda_k row a].
+        for k in 0..N {
+            let mr = -skew(&self.r_loc[k]);
+            for a in 0..3 {
+                let c = self.PsiT.col_as_slice_mut(6 * k + a);
+                c[..3].fill(0.0);
+                c[a] = 1.0;
+                for b in 0..3 {
+                    c[3 + b] = mr[(a, b)];
+                }
+                let c = self.PsiT.col_as_slice_mut(6 * k + 3 + a);
+                c[..3].fill(0.0);
+                for b in 0..3 {
+                    c[3 + b] = self.Lambda[k][(a, b)];
+                }
             }
-            let c = self.Psi.col_as_slice_mut(3 + b);
-            for k in 0..N {
-                let mr = -skew(&self.r_loc[k]);
+        }
+        // Z = G^{-1} Phi_j (and its transpose), Y = Z Lambda.
+        // By columns of fixed length: z = sum_c G^{-1}[:, c] phi_c, as nalgebra's product sums.
+        let gi: [[f64; 6]; 6] = std::array::from_fn(|c| std::array::from_fn(|a| G_inv[(a, c)]));
+        let zt = cols_mut::<6>(self.ZT.as_mut()).map(|c| &mut c[..n]);
+        for j in 0..n {
+            let phi: &[f64; 6] = col(Phi_j, j)[..6].try_into().expect("6 rows");
+            let mut z = [0.0; 6];
+            for a in 0..6 {
+                z[a] = gi[0][a] * phi[0];
+            }
+            for c in 1..6 {
+                for a in 0..6 {
+                    z[a] += gi[c][a] * phi[c];
+                }
+            }
+            self.X.col_as_slice_mut(j)[..6].copy_from_slice(&z);
+            self.P.col_as_slice_mut(j)[..6].copy_from_slice(&z);
+            for a in 0..6 {
+                zt[a][j] = z[a];
+            }
+        }
+        lambda_right_rows(&self.Lambda, &mut self.P, 0..6);
+        Ok(())
+    }
+
+    /// The $\mathbf T_j = \mathbf I - \boldsymbol\Psi\mathbf Z_j$ rows of $\mathbf X$, the
+    /// $\mathbf B = \mathbf T_j\boldsymbol\Lambda$ rows of $\mathbf P$ and $\mathbf Y_r^T$, from the
+    /// forces part.
+    #[inline(always)]
+    fn form_tangent_part(&mut self) {
+        let N = self.n_interfaces();
+        let n = self.n();
+        let (r_loc, Lambda) = (&self.r_loc, &self.Lambda);
+        for j in 0..n {
+            let (z, t) = self.X.col_as_slice_mut(j)[..6 + n].split_at_mut(6);
+            let (z0, z1, z2, w0, w1, w2) = (z[0], z[1], z[2], z[3], z[4], z[5]);
+            // Exact 6-chunks (u_k, theta_k): -(z_t + z_r x r_k) and -Lambda_k z_r, no bounds
+            // checks; the sums as nalgebra's cross and matrix-vector products form them.
+            for ((o, r), L) in t[..6 * N].chunks_exact_mut(6).zip(r_loc).zip(Lambda) {
+                o[0] = -(z0 + (w1 * r[2] - w2 * r[1]));
+                o[1] = -(z1 + (w2 * r[0] - w0 * r[2]));
+                o[2] = -(z2 + (w0 * r[1] - w1 * r[0]));
                 for a in 0..3 {
-                    c[6 * k + a] = mr[(a, b)];
-                    c[6 * k + 3 + a] = self.Lambda[k][(a, b)];
+                    o[3 + a] = -(L[(a, 0)] * w0 + L[(a, 1)] * w1 + L[(a, 2)] * w2);
                 }
             }
+            t[6 * N..].fill(0.0);
+            t[j] += 1.0;
+            self.P.col_as_slice_mut(j)[6..6 + n].copy_from_slice(t);
         }
-        // The transposed copies with their column slices taken once (not per entry).
-        let psi: [&[f64]; 6] = std::array::from_fn(|a| self.Psi.col_as_slice(a));
-        for i in 0..6 * N {
-            let c = self.PsiT.col_as_slice_mut(i);
-            for a in 0..6 {
-                c[a] = psi[a][i];
-            }
-        }
-        // Z = G^{-1} Phi_j ; T = I - Psi Z ; P = X Lambda.
-        for j in 0..n {
-            let z = G_inv * Vector6::from_column_slice(col(Phi_j, j));
-            let zt = Vector3::new(z[0], z[1], z[2]);
-            let zr = Vector3::new(z[3], z[4], z[5]);
-            let c = self.X.col_as_slice_mut(j);
-            c[..6].copy_from_slice(z.as_slice());
-            c[6..].fill(0.0);
-            c[6 + j] = 1.0;
-            for k in 0..N {
-                let pu = zt + zr.cross(&self.r_loc[k]);
-                let pr = self.Lambda[k] * zr;
-                for i in 0..3 {
-                    c[6 + 6 * k + i] -= pu[i];
-                    c[6 + 6 * k + 3 + i] -= pr[i];
-                }
-            }
-        }
-        let zt = cols_mut::<6>(self.ZT.as_mut());
-        for j in 0..n {
-            let x = self.X.col_as_slice(j);
-            for a in 0..6 {
-                zt[a][j] = x[a];
-            }
-        }
-        copy_mat(&mut self.P, self.X.as_ref());
-        lambda_right(&self.Lambda, &mut self.P);
+        lambda_right_rows(&self.Lambda, &mut self.P, 6..6 + n);
         let yrt = cols_mut::<3>(self.YrT.as_mut());
         for j in 0..n {
             let p = self.P.col_as_slice(j);
@@ -486,7 +595,6 @@ impl Kinematics {
                 yrt[d][j] = p[3 + d];
             }
         }
-        Ok(())
     }
 
     /// Number of CB coordinates $n$.
@@ -504,8 +612,11 @@ impl Kinematics {
         self.X.as_ref().subrows(0, 6)
     }
 
-    /// $\mathbf T_j$ (5.5), $n\times n$.
+    /// $\mathbf T_j$ (5.5), $n\times n$. Formed by [`crate::Superelement::kinematics`] and by
+    /// evaluations with tangents, not by forces-only evaluations (panics there: reading it
+    /// is a programming error, not a user's).
     pub fn T(&self) -> MatRef<'_, f64> {
+        self.assert_complete("T_j");
         self.X.as_ref().subrows(6, self.n())
     }
 
@@ -514,9 +625,18 @@ impl Kinematics {
         self.P.as_ref().subrows(0, 6)
     }
 
-    /// $\mathbf B = \mathbf T_j\boldsymbol\Lambda = \partial\mathbf q^{jj}/\partial(\bar{\mathbf R}^T\mathbf q)$.
+    /// $\mathbf B = \mathbf T_j\boldsymbol\Lambda = \partial\mathbf q^{jj}/\partial(\bar{\mathbf R}^T\mathbf q)$;
+    /// formed as [`Self::T`].
     pub fn B(&self) -> MatRef<'_, f64> {
+        self.assert_complete("B");
         self.P.as_ref().subrows(6, self.n())
+    }
+
+    fn assert_complete(&self, what: &str) {
+        assert!(
+            self.formed == Formed::All,
+            "Kinematics: {what} is formed by evaluations with tangents, not by forces-only ones"
+        );
     }
 
     /// $\boldsymbol\Phi_{rig}$ (5.2) of this configuration.
@@ -534,12 +654,14 @@ impl Kinematics {
 
     /// [`Self::rotate`] into `out`.
     pub fn rotate_into(&self, x: &[f64], forward: bool, out: &mut [f64]) {
-        out.copy_from_slice(x);
+        let m = 6 * self.n_interfaces();
         let R = if forward { self.R_j } else { self.R_j.transpose() };
-        for b in 0..2 * self.n_interfaces() {
-            let v = R * Vector3::new(x[3 * b], x[3 * b + 1], x[3 * b + 2]);
-            out[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
+        // Exact 3-chunks: no bounds checks in the block rotations.
+        for (o, x) in out[..m].chunks_exact_mut(3).zip(x[..m].chunks_exact(3)) {
+            let v = R * Vector3::new(x[0], x[1], x[2]);
+            o.copy_from_slice(v.as_slice());
         }
+        out[m..].copy_from_slice(&x[m..]);
     }
 
     /// $\mathbf A$ (5.6) in inertial axes: $(6+n)\times n$, rows $[\delta\mathbf r_j;\ \delta\boldsymbol\pi_j;\ \delta\mathbf q^{jj}]$.
@@ -657,34 +779,122 @@ impl Kinematics {
 
 /// $\mathbf A\boldsymbol\Lambda$ in place: the $\boldsymbol\theta_k$ column blocks times $\mathbf J_l^{-1}(\boldsymbol\theta_k)$.
 pub(crate) fn lambda_right(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
-    pulp::Arch::new().dispatch(LambdaRight { Lambda, A });
+    let rows = 0..A.nrows();
+    pulp::Arch::new().dispatch(LambdaRight { Lambda, A, rows });
 }
 
 vectorized_kernel!(
     /// [`lambda_right`].
-    LambdaRight<'a, 'b> { Lambda: &'a [Matrix3<f64>], A: &'b mut Mat<f64> } => lambda_right_body
+    LambdaRight<'a, 'b> { Lambda: &'a [Matrix3<f64>], A: &'b mut Mat<f64>, rows: std::ops::Range<usize> } => lambda_right_rows
 );
 
+/// [`lambda_right`] on the rows `rows` of `A` only (inlined into its caller's vector code).
 #[inline(always)]
-fn lambda_right_body(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
-    let r = A.nrows();
+fn lambda_right_rows(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>, rows: std::ops::Range<usize>) {
     for (k, L) in Lambda.iter().enumerate() {
         // Row i of the block becomes row_i L: new column c = sum_d L[(d, c)] column d. The
-        // entries of L in locals and slices of exactly r entries, so that the loop is a plain
+        // entries of L in locals and slices of the same length, so that the loop is a plain
         // vector loop.
         let l: [[f64; 3]; 3] = std::array::from_fn(|c| std::array::from_fn(|d| L[(d, c)]));
         let (c0, rest) = A.as_mut().subcols_mut(6 * k + 3, 3).split_at_col_mut(1);
         let (c1, c2) = rest.split_at_col_mut(1);
         let (a0, a1, a2) = (
-            &mut first_col_mut(c0)[..r],
-            &mut first_col_mut(c1)[..r],
-            &mut first_col_mut(c2)[..r],
+            &mut first_col_mut(c0)[rows.clone()],
+            &mut first_col_mut(c1)[rows.clone()],
+            &mut first_col_mut(c2)[rows.clone()],
         );
-        for i in 0..r {
+        for i in 0..rows.len() {
             let (x, y, z) = (a0[i], a1[i], a2[i]);
             a0[i] = l[0][0] * x + l[0][1] * y + l[0][2] * z;
             a1[i] = l[1][0] * x + l[1][1] * y + l[1][2] * z;
             a2[i] = l[2][0] * x + l[2][1] * y + l[2][2] * z;
+        }
+    }
+}
+
+/// `out` $= \mathbf S - \mathbf A\boldsymbol\Psi$ (with `sub` $= \mathbf S$, $r\times6$) or $\mathbf A\boldsymbol\Psi$
+/// (without) for $\mathbf A$ ($r\times$ at least $6N$; only its $6N$ interface columns enter),
+/// $\boldsymbol\Psi$ by its 3x3 blocks $[\mathbf I,\ -\tilde{\mathbf r}_k;\ \mathbf 0,\ \boldsymbol\Lambda_k]$: per
+/// row and interface 3 additions and 15 multiply-adds ($-\tilde{\mathbf r}_k$ has a zero diagonal), in
+/// one pass over $\mathbf A$'s columns, compiled for the machine's vector instructions like the block
+/// kernels (`vectorized_kernel`). A dense product with the formed $6N\times6$ $\boldsymbol\Psi$ costs
+/// twice the multiply-adds and faer's fixed cost of a product.
+pub(crate) fn psi_product(
+    r_loc: &[Vector3<f64>],
+    Lambda: &[Matrix3<f64>],
+    A: MatRef<'_, f64>,
+    sub: Option<MatRef<'_, f64>>,
+    out: MatMut<'_, f64>,
+) {
+    pulp::Arch::new().dispatch(PsiProduct {
+        r_loc,
+        Lambda,
+        A,
+        sub,
+        out,
+    });
+}
+
+/// [`psi_product`].
+struct PsiProduct<'a, 'b> {
+    r_loc: &'a [Vector3<f64>],
+    Lambda: &'a [Matrix3<f64>],
+    A: MatRef<'a, f64>,
+    sub: Option<MatRef<'a, f64>>,
+    out: MatMut<'b, f64>,
+}
+
+impl pulp::WithSimd for PsiProduct<'_, '_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let Self {
+            r_loc,
+            Lambda,
+            A,
+            sub,
+            out,
+        } = self;
+        let r = A.nrows();
+        let mut o = cols_mut::<6>(out);
+        let sign = match sub {
+            Some(S) => {
+                for (c, o) in o.iter_mut().enumerate() {
+                    o[..r].copy_from_slice(&col(S, c)[..r]);
+                }
+                -1.0
+            }
+            None => {
+                for o in o.iter_mut() {
+                    o[..r].fill(0.0);
+                }
+                1.0
+            }
+        };
+        let [o0, o1, o2, o3, o4, o5] = &mut o;
+        let (o0, o1, o2, o3, o4, o5) = (
+            &mut o0[..r],
+            &mut o1[..r],
+            &mut o2[..r],
+            &mut o3[..r],
+            &mut o4[..r],
+            &mut o5[..r],
+        );
+        for (k, (x, L)) in r_loc.iter().zip(Lambda).enumerate() {
+            // Columns 3 + b of -r~ : (0, -x3, x2), (x3, 0, -x1), (-x2, x1, 0).
+            let (x1, x2, x3) = (sign * x[0], sign * x[1], sign * x[2]);
+            let l: [[f64; 3]; 3] = std::array::from_fn(|b| std::array::from_fn(|a| sign * L[(a, b)]));
+            let a: [&[f64]; 6] = std::array::from_fn(|c| &col(A, 6 * k + c)[..r]);
+            for i in 0..r {
+                let (u0, u1, u2) = (a[0][i], a[1][i], a[2][i]);
+                let (t0, t1, t2) = (a[3][i], a[4][i], a[5][i]);
+                o0[i] += sign * u0;
+                o1[i] += sign * u1;
+                o2[i] += sign * u2;
+                o3[i] += u2 * x2 - u1 * x3 + t0 * l[0][0] + t1 * l[0][1] + t2 * l[0][2];
+                o4[i] += u0 * x3 - u2 * x1 + t0 * l[1][0] + t1 * l[1][1] + t2 * l[1][2];
+                o5[i] += u1 * x1 - u0 * x2 + t0 * l[2][0] + t1 * l[2][1] + t2 * l[2][2];
+            }
         }
     }
 }
@@ -770,42 +980,66 @@ pub(crate) fn lambda_t_left_cols(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>, cols
 impl Kinematics {
     /// `out` $= \mathbf A\boldsymbol\Psi$ ($r\times6$) for $\mathbf A$ ($r\times n$), $\boldsymbol\Psi =
     /// \boldsymbol\Lambda\boldsymbol\Phi_{rig}$ (rows $[\mathbf I,\ -\tilde{\mathbf r}_k]$ and $[\mathbf 0,\
-    /// \boldsymbol\Lambda_k]$): only the $6N$ interface columns of $\mathbf A$ enter.
+    /// \boldsymbol\Lambda_k]$): only the $6N$ interface columns of $\mathbf A$ enter, by 3x3 blocks
+    /// ([`psi_product`]).
     pub(crate) fn mul_psi(&self, A: MatRef<'_, f64>, out: &mut Mat<f64>) {
-        let ni = self.Psi.nrows();
-        gemm(out, A.subcols(0, ni), self.Psi.as_ref(), 1.0, Accum::Replace);
+        psi_product(&self.r_loc, &self.Lambda, A, None, out.as_mut());
     }
 
     /// `out` $= \boldsymbol\Psi^T\mathbf E$ ($6\times k$) for $\mathbf E$ ($n\times k$).
     pub(crate) fn psi_t_mul(&self, E: MatRef<'_, f64>, out: &mut Mat<f64>) {
-        let ni = self.Psi.nrows();
+        let ni = self.PsiT.ncols();
         gemm(out, self.PsiT.as_ref(), E.subrows(0, ni), 1.0, Accum::Replace);
+    }
+
+    /// `start` $- \boldsymbol\Psi^T\mathbf e$ for one column $\mathbf e$ (its interface
+    /// entries): $\sum_k[\mathbf e_{u_k};\ \mathbf r_k\times\mathbf e_{u_k} + \boldsymbol\Lambda_k^T\mathbf e_{\theta_k}]$
+    /// subtracted block by block.
+    #[inline(always)]
+    fn psi_t_col(&self, e: &[f64], start: [f64; 6]) -> [f64; 6] {
+        let mut t = start;
+        // Exact 6-chunks (u_k, theta_k): no bounds checks.
+        for ((c, r), L) in e[..6 * self.r_loc.len()]
+            .chunks_exact(6)
+            .zip(&self.r_loc)
+            .zip(&self.Lambda)
+        {
+            let eu = Vector3::new(c[0], c[1], c[2]);
+            let et = Vector3::new(c[3], c[4], c[5]);
+            let w = r.cross(&eu) + L.tr_mul(&et);
+            for i in 0..3 {
+                t[i] -= eu[i];
+                t[3 + i] -= w[i];
+            }
+        }
+        t
     }
 
     /// `out` $= \mathbf A\mathbf X$ ($r\times n$) for $\mathbf A$ ($r\times(6+n)$), with
     /// $\mathbf X = [\mathbf 0; \mathbf I] + [\mathbf I_6; -\boldsymbol\Psi]\mathbf Z_j$:
-    /// $\mathbf A_{\cdot q} + (\mathbf A_{\cdot 6} - \mathbf A_{\cdot q}\boldsymbol\Psi)\mathbf Z_j$.
-    /// `tmp` is $r\times6$.
+    /// $\mathbf A_{\cdot q} + (\mathbf A_{\cdot 6} - \mathbf A_{\cdot q}\boldsymbol\Psi)\mathbf Z_j$, the
+    /// bracket in one pass of 3x3 blocks ([`psi_product`]). `tmp` is $r\times6$.
     pub(crate) fn mul_x(&self, A: MatRef<'_, f64>, tmp: &mut Mat<f64>, out: &mut Mat<f64>) {
         let n = self.n();
-        self.mul_psi(A.subcols(6, n), tmp);
-        for c in 0..6 {
-            let a = col(A, c);
-            let t = tmp.col_as_slice_mut(c);
-            for i in 0..t.len() {
-                t[i] = a[i] - t[i];
-            }
-        }
+        psi_product(
+            &self.r_loc,
+            &self.Lambda,
+            A.subcols(6, n),
+            Some(A.subcols(0, 6)),
+            tmp.as_mut(),
+        );
         copy_mat(out, A.subcols(6, n));
         gemm(out, tmp.as_ref(), self.Z(), 1.0, Accum::Add);
     }
 
     /// `out` $= \mathbf X^T\mathbf E$ ($n\times k$) for $\mathbf E$ ($(6+n)\times k$):
     /// $\mathbf E_q + \mathbf Z_j^T(\mathbf E_6 - \boldsymbol\Psi^T\mathbf E_q)$. `tmp` is $6\times k$ (views:
-    /// [`crate::forces::Local::apply_x_t`] multiplies a varying number of columns).
+    /// [`crate::forces::Local::apply_x_t`] multiplies a varying number of columns). The bracket
+    /// by a product with the formed $\boldsymbol\Psi^T$: column by column in 3x3 blocks
+    /// ([`Self::psi_t_col`]) it costs more (rows are not contiguous).
     pub(crate) fn xt_mul(&self, E: MatRef<'_, f64>, mut tmp: MatMut<'_, f64>, mut out: MatMut<'_, f64>) {
         let n = self.n();
-        let ni = self.Psi.nrows();
+        let ni = self.PsiT.ncols();
         matmul(
             tmp.rb_mut(),
             Accum::Replace,
@@ -851,20 +1085,14 @@ impl Kinematics {
     /// $\mathbf X^T\mathbf f$ for a vector $\mathbf f \in \mathbb R^{6+n}$.
     pub(crate) fn xt_vec(&self, f: &[f64], out: &mut [f64]) {
         let n = self.n();
-        let mut t = [0.0; 6];
-        t.copy_from_slice(&f[..6]);
-        for (k, (r, L)) in self.r_loc.iter().zip(&self.Lambda).enumerate() {
-            let eu = Vector3::new(f[6 + 6 * k], f[7 + 6 * k], f[8 + 6 * k]);
-            let et = Vector3::new(f[9 + 6 * k], f[10 + 6 * k], f[11 + 6 * k]);
-            let w = r.cross(&eu) + L.transpose() * et;
-            for i in 0..3 {
-                t[i] -= eu[i];
-                t[3 + i] -= w[i];
-            }
-        }
+        let t = self.psi_t_col(&f[6..], std::array::from_fn(|i| f[i]));
+        // Z_j^T t by the columns of Z_j^T (contiguous, no per-column slice look-up), summed in
+        // the order of a as a dot product per row would.
+        let zt: [&[f64]; 6] = std::array::from_fn(|a| &col(self.ZT.as_ref(), a)[..n]);
+        let (out, f) = (&mut out[..n], &f[6..6 + n]);
         for j in 0..n {
-            let z = self.X.col_as_slice(j);
-            out[j] = f[6 + j] + (0..6).map(|a| z[a] * t[a]).sum::<f64>();
+            let z = [zt[0][j], zt[1][j], zt[2][j], zt[3][j], zt[4][j], zt[5][j]];
+            out[j] = f[j] + (z[0] * t[0] + z[1] * t[1] + z[2] * t[2] + z[3] * t[3] + z[4] * t[4] + z[5] * t[5]);
         }
     }
 
@@ -936,6 +1164,216 @@ mod tests {
             s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
         }
+    }
+
+    /// The frame, $\mathbf q^{jj}$, $\mathbf x_k$, $\boldsymbol\Phi_j$ and the dense
+    /// $[\boldsymbol\Psi, \boldsymbol\Lambda, \mathbf X]$ of [`random_configuration`].
+    type RandomConfiguration = (Frame, Vec<f64>, Vec<Vector3<f64>>, Mat<f64>, [Mat<f64>; 3]);
+
+    /// A configuration with $N = 2$ interfaces and 3 modes ($n = 15$) from random numbers:
+    /// positions of size 1, elastic rotations of about 0.3 rad (so that $\boldsymbol\Lambda$ is
+    /// far from the identity), a random $\boldsymbol\Phi_j$; and its dense $\boldsymbol\Psi$
+    /// ($n\times6$), $\boldsymbol\Lambda$ ($n\times n$) and $\mathbf X$ ($(6+n)\times n$) formed
+    /// entry by entry from their definitions (module docs).
+    fn random_configuration(seed: u64) -> RandomConfiguration {
+        let (N, m) = (2, 3);
+        let n = 6 * N + m;
+        let mut r = numbers(seed);
+        let x: Vec<Vector3<f64>> = (0..N).map(|_| Vector3::new(r(), r(), r())).collect();
+        let q: Vec<f64> = (0..n)
+            .map(|i| if i % 6 >= 3 && i < 6 * N { 0.3 * r() } else { 0.1 * r() })
+            .collect();
+        let Phi_j = Mat::from_fn(6, n, |_, _| r());
+        let frame = Frame::new(
+            Vector3::new(r(), r(), r()),
+            UnitQuaternion::from_scaled_axis(Vector3::new(0.4, -0.7, 0.2)),
+        );
+        let r_loc: Vec<Vector3<f64>> = (0..N).map(|k| x[k] + u_of(&q, k)).collect();
+        let Lam: Vec<Matrix3<f64>> = (0..N).map(|k| so3::left_jacobian_inv(&theta_of(&q, k))).collect();
+        let mut Psi = Mat::<f64>::zeros(n, 6);
+        let mut L = Mat::<f64>::identity(n, n);
+        for k in 0..N {
+            let mr = -skew(&r_loc[k]);
+            for a in 0..3 {
+                Psi[(6 * k + a, a)] = 1.0;
+                for b in 0..3 {
+                    Psi[(6 * k + a, 3 + b)] = mr[(a, b)];
+                    Psi[(6 * k + 3 + a, 3 + b)] = Lam[k][(a, b)];
+                    L[(6 * k + 3 + a, 6 * k + 3 + b)] = Lam[k][(a, b)];
+                }
+            }
+        }
+        let G = &Phi_j * &Psi;
+        let Z = faer::prelude::Solve::solve(&G.as_ref().partial_piv_lu(), &Phi_j);
+        let T = Mat::<f64>::identity(n, n) - &Psi * &Z;
+        let X = Mat::from_fn(6 + n, n, |i, j| if i < 6 { Z[(i, j)] } else { T[(i - 6, j)] });
+        (frame, q, x, Phi_j, [Psi, L, X])
+    }
+
+    fn assert_close(a: MatRef<'_, f64>, b: MatRef<'_, f64>, tol: f64, what: &str) {
+        assert_eq!((a.nrows(), a.ncols()), (b.nrows(), b.ncols()), "{what}: shapes");
+        for j in 0..a.ncols() {
+            for i in 0..a.nrows() {
+                assert!(
+                    (a[(i, j)] - b[(i, j)]).abs() < tol,
+                    "{what} ({i}, {j}): {} against {}",
+                    a[(i, j)],
+                    b[(i, j)]
+                );
+            }
+        }
+    }
+
+    /// [`Kinematics::update`] and the products with $\mathbf X$, $\mathbf X^T$, $\mathbf P^T$ and
+    /// $\boldsymbol\Psi$ against dense matrices formed from their definitions, on a random
+    /// configuration with non-square operands (7 and 11 rows, 4 columns): the forces-only
+    /// update forms the $\mathbf Z_j$ and $\mathbf Y$ rows as the complete one does; a complete
+    /// update of the same configuration adds the rest to the bit; a new configuration is formed
+    /// anew. Entries are sums of at most 20 products of numbers of size about
+    /// $\|\mathbf Z_j\| \lesssim 10$, summed in other orders than the dense products (and the
+    /// dense $\mathbf Z_j$ from another factorisation): $10^{-12}$ is some 100 times that
+    /// round-off.
+    #[test]
+    fn configuration_products_match_dense() {
+        let tol = 1e-12;
+        let (frame, q, x, Phi_j, [Psi, L, X]) = random_configuration(31);
+        let n = q.len();
+        let N = x.len();
+        let full = Kinematics::new(frame, 2, q.clone(), &x, Phi_j.as_ref()).unwrap();
+        let P = &X * &L;
+        assert_close(full.X.as_ref(), X.as_ref(), tol, "X");
+        assert_close(full.P.as_ref(), P.as_ref(), tol, "P");
+        assert_close(full.ZT.as_ref(), X.as_ref().subrows(0, 6).transpose(), tol, "Z^T");
+        assert_close(full.YrT.as_ref(), P.as_ref().subrows(3, 3).transpose(), tol, "Y_r^T");
+        assert_close(
+            full.PsiT.as_ref(),
+            Psi.as_ref().subrows(0, 6 * N).transpose(),
+            tol,
+            "Psi^T",
+        );
+        // Forces-only, then complete, then a new configuration.
+        let mut kin = Kinematics::empty(N, n);
+        kin.q_jj.copy_from_slice(&q);
+        kin.update(frame, 2, &x, Phi_j.as_ref(), false).unwrap();
+        assert_eq!(kin.formed, Formed::Forces);
+        assert_close(
+            kin.X.as_ref().subrows(0, 6),
+            X.as_ref().subrows(0, 6),
+            tol,
+            "Z (forces)",
+        );
+        assert_close(
+            kin.P.as_ref().subrows(0, 6),
+            P.as_ref().subrows(0, 6),
+            tol,
+            "Y (forces)",
+        );
+        kin.update(frame, 0, &x, Phi_j.as_ref(), true).unwrap();
+        assert_eq!(kin.formed, Formed::All);
+        assert_eq!(kin.frame_iterations, 0);
+        for (a, b) in [
+            (&kin.X, &full.X),
+            (&kin.P, &full.P),
+            (&kin.ZT, &full.ZT),
+            (&kin.YrT, &full.YrT),
+        ] {
+            assert!(a == b, "the completed configuration differs from the complete one");
+        }
+        // Another frame and q (same x and Phi_j): formed anew, as a fresh configuration.
+        let (frame2, q2, ..) = random_configuration(32);
+        kin.q_jj.copy_from_slice(&q2);
+        kin.update(frame2, 1, &x, Phi_j.as_ref(), false).unwrap();
+        assert_eq!(kin.formed, Formed::Forces);
+        let fresh = Kinematics::new(frame2, 1, q2, &x, Phi_j.as_ref()).unwrap();
+        assert!(kin.X.as_ref().subrows(0, 6) == fresh.X.as_ref().subrows(0, 6));
+        assert!(kin.P.as_ref().subrows(0, 6) == fresh.P.as_ref().subrows(0, 6));
+        assert!(kin.ZT == fresh.ZT && kin.PsiT == fresh.PsiT && kin.G_inv == fresh.G_inv);
+
+        // Products, on the complete configuration.
+        let mut r = numbers(33);
+        let kin = &full;
+        for rows in [7, 11] {
+            let A = Mat::from_fn(rows, 6 + n, |_, _| r());
+            let mut tmp = Mat::zeros(rows, 6);
+            psi_product(&kin.r_loc, &kin.Lambda, A.as_ref().subcols(6, n), None, tmp.as_mut());
+            assert_close(tmp.as_ref(), (A.as_ref().subcols(6, n) * &Psi).as_ref(), tol, "A Psi");
+            let mut out = Mat::zeros(rows, n);
+            kin.mul_x(A.as_ref(), &mut tmp, &mut out);
+            assert_close(out.as_ref(), (&A * &X).as_ref(), tol, "A X");
+        }
+        let E = Mat::from_fn(6 + n, 4, |_, _| r());
+        let (mut tmp, mut out) = (Mat::zeros(6, 4), Mat::zeros(n, 4));
+        kin.xt_mul(E.as_ref(), tmp.as_mut(), out.as_mut());
+        assert_close(out.as_ref(), (X.transpose() * &E).as_ref(), tol, "X^T E");
+        let f: Vec<f64> = (0..6 + n).map(|_| r()).collect();
+        let fm = Mat::from_fn(6 + n, 1, |i, _| f[i]);
+        let mut v = vec![0.0; n];
+        kin.xt_vec(&f, &mut v);
+        assert_close(
+            Mat::from_fn(n, 1, |i, _| v[i]).as_ref(),
+            (X.transpose() * &fm).as_ref(),
+            tol,
+            "X^T f",
+        );
+        kin.pt_vec(&f, &mut v);
+        assert_close(
+            Mat::from_fn(n, 1, |i, _| v[i]).as_ref(),
+            (P.transpose() * &fm).as_ref(),
+            tol,
+            "P^T f",
+        );
+        // rotate_into: Rbar x and Rbar^T x.
+        let R = kin.R_j;
+        for forward in [true, false] {
+            let Rb = if forward { R } else { R.transpose() };
+            kin.rotate_into(&f[..n], forward, &mut v);
+            for i in 0..n {
+                let expected = if i < 6 * N {
+                    let b = i / 3;
+                    (0..3).map(|c| Rb[(i % 3, c)] * f[3 * b + c]).sum::<f64>()
+                } else {
+                    f[i]
+                };
+                assert!((v[i] - expected).abs() < 1e-15, "rotate_into {forward} entry {i}");
+            }
+        }
+    }
+
+    /// [`inverse_with_rcond`] by blocks against nalgebra's LU inverse: random 6x6 matrices with a
+    /// leading block near the identity (as $\boldsymbol\Phi_j\boldsymbol\Psi$) and with a general
+    /// well-conditioned one agree within $10^{-13}$ (entries of size 1, condition numbers below
+    /// 100: some 100 times round-off); a matrix with a singular leading block (a block
+    /// permutation) takes the LU path and is inverted exactly; a singular matrix gives `None`.
+    #[test]
+    fn block_inverse_matches_lu() {
+        let mut r = numbers(41);
+        for near_identity in [true, false, true, false] {
+            let G = Matrix6::from_fn(|i, j| {
+                let base = if near_identity && i < 3 && j < 3 && i == j {
+                    1.0
+                } else {
+                    0.0
+                };
+                let scale = if near_identity && i < 3 && j < 3 { 1e-3 } else { 0.5 };
+                base + scale * r() + if i == j { 2.0 } else { 0.0 }
+            });
+            let (Gi, rcond) = inverse_with_rcond(&G).unwrap();
+            let lu = G.try_inverse().unwrap();
+            assert!((Gi - lu).abs().max() < 1e-13, "{G}");
+            assert!(rcond > 1e-2 && rcond <= 1.0);
+        }
+        let mut P = Matrix6::zeros();
+        for i in 0..3 {
+            P[(i, 3 + i)] = 1.0;
+            P[(3 + i, i)] = 2.0;
+        }
+        assert!(block_inverse(&P).is_none());
+        let (Pi, _) = inverse_with_rcond(&P).unwrap();
+        assert_eq!(P * Pi, Matrix6::identity());
+        let mut S = Matrix6::identity();
+        S[(5, 5)] = 0.0;
+        S[(4, 5)] = 1.0;
+        assert!(inverse_with_rcond(&S).is_none_or(|(_, rcond)| rcond < RCOND_MIN));
     }
 
     /// [`PackedTall::mul`] against faer's product on non-square inputs: $m = 37$ rows (four
