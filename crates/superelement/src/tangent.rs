@@ -18,7 +18,7 @@
 
 use crate::body::{BodyState, Superelement};
 use crate::error::SuperelementError;
-use crate::forces::{Local, Motion, Scratch};
+use crate::forces::{Level, Local, Motion, Scratch};
 use crate::frame::{Frame, FrameScratch, FrameSolve};
 use crate::local_coordinates::local_coordinates;
 use crate::mass::MassVariant;
@@ -42,7 +42,8 @@ pub struct Evaluation {
     pub residual: Vec<f64>,
     /// Inertia force $\mathbf M\ddot{\mathbf q} + \mathbf Q_v$.
     pub f_inertia: Vec<f64>,
-    /// Quadratic velocity force $\mathbf Q_v = \mathbf f_{in} - \mathbf M\ddot{\mathbf q}$.
+    /// Quadratic velocity force $\mathbf Q_v = \mathbf f_{in} - \mathbf M\ddot{\mathbf q}$ (not updated by
+    /// [`Superelement::residual_into`]).
     pub q_v: Vec<f64>,
     /// Elastic force (6.5).
     pub f_elastic: Vec<f64>,
@@ -50,7 +51,7 @@ pub struct Evaluation {
     pub f_damping: Vec<f64>,
     /// Gravity (a load: it enters the residual with a minus sign).
     pub f_gravity: Vec<f64>,
-    /// $\mathbf M$.
+    /// $\mathbf M$ (not updated by [`Superelement::residual_into`]).
     pub mass: Mat<f64>,
     /// $\mathbf K_t = \partial\mathbf r/\partial\mathbf q$ (not updated by [`Superelement::forces`]).
     pub stiffness: Mat<f64>,
@@ -153,13 +154,45 @@ impl Superelement {
     /// tangent-only partials is formed (the FFR $\partial\mathbf F/\partial\boldsymbol\nu$,
     /// $\partial\mathbf F/\partial\mathbf q$, the geometric Hessian $\mathbf H_G$, $\mathbf N_y$): about 30 % fewer
     /// instructions (`benches/evaluate.rs`; checked equal to the full evaluation by
-    /// `tests/unit/evaluation.rs`).
+    /// `tests/unit/evaluation.rs`). [`Self::residual_into`] skips the mass matrix too.
     pub fn evaluate_into(
         &self,
         state: &BodyState,
         acc: &[f64],
         gravity: &Vector3<f64>,
         tangents: bool,
+        ws: &mut Workspace,
+        out: &mut Evaluation,
+    ) -> Result<(), SuperelementError> {
+        let level = if tangents { Level::Tangents } else { Level::Mass };
+        self.evaluate_level(state, acc, gravity, level, ws, out)
+    }
+
+    /// The residual alone, the hot-loop form of a Newton iteration that reuses its iteration
+    /// matrix: into `out` go `residual`, `f_inertia`, `f_elastic`, `f_damping`, `f_gravity`,
+    /// `frame`, `frame_iterations` and `q_jj`; `mass`, `q_v`, `stiffness` and `damping` keep their
+    /// old values. Neither the FFR mass matrix nor the body-axis mass $\mathbf P^T\mathbf M_{ffr}\mathbf P$
+    /// nor its rotation is formed, and the inertia contractions skip those only the partials
+    /// need (`benches/evaluate.rs`, `--profile=residual`). The forces equal those of
+    /// [`Self::evaluate_into`] to round-off (`tests/unit/evaluation.rs`); the workspace holds the
+    /// same configuration afterwards ([`Self::strain_energy_in`], [`Self::kinetic_energy_in`]).
+    pub fn residual_into(
+        &self,
+        state: &BodyState,
+        acc: &[f64],
+        gravity: &Vector3<f64>,
+        ws: &mut Workspace,
+        out: &mut Evaluation,
+    ) -> Result<(), SuperelementError> {
+        self.evaluate_level(state, acc, gravity, Level::Forces, ws, out)
+    }
+
+    fn evaluate_level(
+        &self,
+        state: &BodyState,
+        acc: &[f64],
+        gravity: &Vector3<f64>,
+        level: Level,
         ws: &mut Workspace,
         out: &mut Evaluation,
     ) -> Result<(), SuperelementError> {
@@ -191,7 +224,7 @@ impl Superelement {
             ws.qd[6 * k + 3..6 * k + 6].copy_from_slice(state.omega[k].as_slice());
         }
         ws.qd[6 * self.n_interfaces..].copy_from_slice(&state.eta_dot);
-        self.evaluate_local(acc, gravity, tangents, ws, out);
+        self.evaluate_local(acc, gravity, level, ws, out);
         Ok(())
     }
 
@@ -208,7 +241,8 @@ impl Superelement {
         ws.kin = kin.clone();
         ws.qd.copy_from_slice(qd);
         let mut out = Evaluation::zeros(self.n);
-        self.evaluate_local(acc, gravity, tangents, &mut ws, &mut out);
+        let level = if tangents { Level::Tangents } else { Level::Mass };
+        self.evaluate_local(acc, gravity, level, &mut ws, &mut out);
         out
     }
 
@@ -236,10 +270,11 @@ impl Superelement {
         &self,
         acc: &[f64],
         gravity: &Vector3<f64>,
-        tangents: bool,
+        level: Level,
         ws: &mut Workspace,
         out: &mut Evaluation,
     ) {
+        let tangents = level.tangents();
         let n = self.n;
         let N = self.n_interfaces;
         let kin = &ws.kin;
@@ -252,7 +287,7 @@ impl Superelement {
         self.damping_force(kin, mo, loc, w, tangents);
         self.gravity(kin, mo, loc, w, tangents);
         if self.mass_variant == MassVariant::Exact {
-            self.exact_inertia(kin, mo, loc, w, tangents);
+            self.exact_inertia(kin, mo, loc, w, level);
         }
         if tangents {
             // The forces above left out the common left factors X^T (`Local::XE`) and
@@ -261,23 +296,25 @@ impl Superelement {
             loc.apply_lambda_t(&kin.Lambda);
         }
         if self.mass_variant == MassVariant::Lumped {
-            self.lumped_inertia(kin, mo, loc, w, tangents);
+            self.lumped_inertia(kin, mo, loc, w, level);
         }
         for i in 0..n {
             ws.rho[i] = loc.rho_in[i] + loc.rho_el[i] + loc.rho_d[i] - loc.rho_g[i];
         }
         let R = &kin.R_j;
-        rotate_matrix(R, N, &loc.M, &mut out.mass);
         kin.rotate_into(&loc.rho_in, true, &mut out.f_inertia);
         kin.rotate_into(&loc.rho_el, true, &mut out.f_elastic);
         kin.rotate_into(&loc.rho_d, true, &mut out.f_damping);
         kin.rotate_into(&loc.rho_g, true, &mut out.f_gravity);
         kin.rotate_into(&ws.rho, true, &mut out.residual);
-        out.q_v.copy_from_slice(&out.f_inertia);
-        for j in 0..n {
-            let a = acc[j];
-            for (q, m) in out.q_v.iter_mut().zip(out.mass.col_as_slice(j)) {
-                *q -= m * a;
+        if level.mass() {
+            rotate_matrix(R, N, &loc.M, &mut out.mass);
+            out.q_v.copy_from_slice(&out.f_inertia);
+            for j in 0..n {
+                let a = acc[j];
+                for (q, m) in out.q_v.iter_mut().zip(out.mass.col_as_slice(j)) {
+                    *q -= m * a;
+                }
             }
         }
         out.frame = kin.frame;
@@ -362,6 +399,41 @@ impl Superelement {
             U += dot(q, &g.b) + 0.5 * dot(&g.b, &g.p);
         }
         U
+    }
+
+    /// [`Self::kinetic_energy`] at the configuration of the last evaluation with `ws`
+    /// ([`Self::evaluate_into`] or [`Self::residual_into`], which forms no mass matrix) for the
+    /// velocities `qd` (the order of [`BodyState::velocity_vector`]), without the $n\times n$ mass
+    /// in absolute coordinates: with $\mathbf y = \bar{\mathbf R}^T\dot{\mathbf q}$ it is
+    /// $\tfrac12\boldsymbol\nu^T\mathbf M_{ffr}\boldsymbol\nu$, $\boldsymbol\nu = \mathbf P\mathbf y$
+    /// (`Exact`; $\mathbf M = \bar{\mathbf R}\mathbf P^T\mathbf M_{ffr}\mathbf P\bar{\mathbf R}^T$), or
+    /// $\tfrac12\mathbf y^T\mathbf M_{CB}\mathbf y$ (`Lumped`). Allocates a few small buffers (an energy
+    /// sensor). Checked equal to [`Self::kinetic_energy`] by `tests/unit/evaluation.rs`.
+    pub fn kinetic_energy_in(&self, ws: &Workspace, qd: &[f64]) -> Result<f64, SuperelementError> {
+        if qd.len() != self.n {
+            return Err(SuperelementError::InvalidState {
+                what: format!("{} velocities for {} coordinates", qd.len(), self.n),
+            });
+        }
+        let kin = &ws.kin;
+        let y = kin.rotate(qd, false);
+        let quadratic = |M: &Mat<f64>, v: &[f64]| {
+            let mut T = 0.0;
+            for (j, vj) in v.iter().enumerate() {
+                let Mv: f64 = M.col_as_slice(j).iter().zip(v).map(|(m, x)| m * x).sum();
+                T += 0.5 * vj * Mv;
+            }
+            T
+        };
+        Ok(match self.mass_variant {
+            MassVariant::Lumped => quadratic(&self.M_CB, &y),
+            MassVariant::Exact => {
+                let nu: Vec<f64> = (0..6 + self.n)
+                    .map(|i| (0..self.n).map(|j| kin.P[(i, j)] * y[j]).sum())
+                    .collect();
+                quadratic(&self.inertia.mass_matrix(&kin.q_jj), &nu)
+            }
+        })
     }
 
     /// Gravity potential $-\mathbf g\cdot(m\mathbf r_j + \mathbf R_j\mathbf s)$, $\mathbf s = m\mathbf d + \mathbf S_t\mathbf q^{jj}$.
