@@ -298,15 +298,21 @@ impl Superelement {
         if self.mass_variant == MassVariant::Lumped {
             self.lumped_inertia(kin, mo, loc, w, level);
         }
-        for i in 0..n {
-            ws.rho[i] = loc.rho_in[i] + loc.rho_el[i] + loc.rho_d[i] - loc.rho_g[i];
-        }
         let R = &kin.R_j;
         kin.rotate_into(&loc.rho_in, true, &mut out.f_inertia);
         kin.rotate_into(&loc.rho_el, true, &mut out.f_elastic);
         kin.rotate_into(&loc.rho_d, true, &mut out.f_damping);
         kin.rotate_into(&loc.rho_g, true, &mut out.f_gravity);
-        kin.rotate_into(&ws.rho, true, &mut out.residual);
+        // The residual from its rotated parts (one rotation fewer); the tangents need it in body
+        // axes too.
+        for i in 0..n {
+            out.residual[i] = out.f_inertia[i] + out.f_elastic[i] + out.f_damping[i] - out.f_gravity[i];
+        }
+        if tangents {
+            for i in 0..n {
+                ws.rho[i] = loc.rho_in[i] + loc.rho_el[i] + loc.rho_d[i] - loc.rho_g[i];
+            }
+        }
         if level.mass() {
             rotate_matrix(R, N, &loc.M, &mut out.mass);
             out.q_v.copy_from_slice(&out.f_inertia);
