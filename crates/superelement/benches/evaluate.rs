@@ -66,6 +66,13 @@
 //! unchanged (faer's product kept). In time the gain is larger
 //! than in instructions: `beam14-G` 11.0 -> 9.3 us with tangents (BENCHMARKS.md).
 //!
+//! Then the residual alone (`residual_into`: no FFR mass matrix, no body-axis mass and no
+//! rotation of it, only the inertia contractions the force needs) for the Newton iterations
+//! without tangents, against the forces-only call before (`--profile=forces` then):
+//! `beam14-G` 56.7k -> 36.9k; `block14-G` 62.7k -> 42.9k; `beam22-com-exact` 84.3k -> 52.0k;
+//! `beam72-G` 566k -> 391k. The FFR force's column sums in one pass made the forces with the
+//! mass 56.7k -> 54.0k and the tangents 135.3k -> 134.2k (`beam14-G`).
+//!
 //! What is left is spread thin: 11 faer products per evaluation with tangents, each
 //! about 1.7k instructions of fixed cost (nano-gemm's planning and driver) beside its kernel,
 //! and plain loops compiled for the baseline x86-64 target (two-wide SIMD, no FMA). Replacing
