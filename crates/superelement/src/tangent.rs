@@ -422,7 +422,10 @@ impl Superelement {
             });
         }
         let kin = &ws.kin;
-        let y = kin.rotate(qd, false);
+        // y, and nu = [xi; c] as the evaluation forms them (from the frame rows of P, the
+        // deformed interface positions and Lambda).
+        let mut mo = Motion::new(self.n_interfaces, self.n);
+        mo.update(kin, qd, &vec![0.0; self.n], &Vector3::zeros(), false);
         let quadratic = |M: &Mat<f64>, v: &[f64]| {
             let mut T = 0.0;
             for (j, vj) in v.iter().enumerate() {
@@ -432,11 +435,9 @@ impl Superelement {
             T
         };
         Ok(match self.mass_variant {
-            MassVariant::Lumped => quadratic(&self.M_CB, &y),
+            MassVariant::Lumped => quadratic(&self.M_CB, &mo.y),
             MassVariant::Exact => {
-                let nu: Vec<f64> = (0..6 + self.n)
-                    .map(|i| (0..self.n).map(|j| kin.P[(i, j)] * y[j]).sum())
-                    .collect();
+                let nu: Vec<f64> = mo.xi.iter().chain(&mo.c).copied().collect();
                 quadratic(&self.inertia.mass_matrix(&kin.q_jj), &nu)
             }
         })
