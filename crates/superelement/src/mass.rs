@@ -308,7 +308,8 @@ impl FfrScratch {
 /// The contractions in the stacked product of [`FfrScratch`], in place (no copies):
 /// $\bar{\mathbf S}^{sym}_p\mathbf q$, $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ ($n\times6$) and
 /// $\tilde{\mathbf S}_i\mathbf q$, $\tilde{\mathbf S}_i\dot{\mathbf q}$, $\tilde{\mathbf S}_i\ddot{\mathbf q}$
-/// ($n\times3$; the last only after a product with $\ddot{\mathbf q}$).
+/// ($n\times3$; $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ and $\tilde{\mathbf S}_i\ddot{\mathbf q}$ only after
+/// the contractions for the partials, `FfrInertia::contractions`).
 struct ContractionViews<'a> {
     sig: MatRef<'a, f64>,
     sigd: MatRef<'a, f64>,
