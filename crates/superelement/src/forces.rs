@@ -29,8 +29,8 @@ use crate::body::{GeometricStiffness, Superelement};
 use crate::mass::{add_mul3t, matvec, mul3, FfrForce, FfrScratch};
 use crate::so3::{self, skew};
 use crate::transform::{
-    add_mul_blocks_at, col, copy_mat, gemm, lambda_right, lambda_t_left, lambda_t_left_cols, mul_blocks, Blocks,
-    Kinematics,
+    add_mul_blocks_at, col, copy_mat, gemm, lambda_right, lambda_t_left, lambda_t_left_cols, mul_blocks, sub_mul_psi,
+    Blocks, Kinematics,
 };
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
@@ -868,13 +868,8 @@ impl Superelement {
         // Psi for both F_nu_q and MX N_y (F_nu_q + MX N_y is the first part of FX anyway).
         copy_mat(&mut w.FX, w.ffr.F_nu.as_ref().subcols(6, n));
         mul_blocks(w.MX.as_ref(), &mo.n_y, &mut w.FX, Accum::Add);
-        kin.mul_psi(w.FX.as_ref(), &mut w.t6);
-        for c in 0..6 {
-            let a = w.ffr.F_nu.col_as_slice(c);
-            for (t, a) in w.t6.col_as_slice_mut(c).iter_mut().zip(a) {
-                *t = a - *t;
-            }
-        }
+        copy_mat(&mut w.t6, w.ffr.F_nu.as_ref().subcols(0, 6));
+        sub_mul_psi(w.FX.as_ref(), &kin.r_loc, &kin.Lambda, &mut w.t6);
         matmul(
             w.t6.as_mut().subcols_mut(3, 3),
             Accum::Add,

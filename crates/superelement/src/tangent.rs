@@ -23,7 +23,7 @@ use crate::frame::{Frame, FrameScratch, FrameSolve};
 use crate::local_coordinates::local_coordinates;
 use crate::mass::MassVariant;
 use crate::so3::skew;
-use crate::transform::{add_mul_w, copy_mat, gemm, lambda_right, rotate_matrix, Kinematics};
+use crate::transform::{add_mul_w, gemm, rotate_matrix, rotate_stiffness, sub_mul_psi, Kinematics};
 use faer::{Accum, Mat};
 use nalgebra::Vector3;
 
@@ -333,12 +333,8 @@ impl Superelement {
         // K^L = Dq B + H Y_r, H = Dy W(y) + M W(a) + Dg g~ - W(rho). With B = T Lambda,
         // T = I - Psi Z and Y = Z Lambda: K^L = Dq Lambda + (-(Dq Psi) + [0, H]) Y, one product
         // with Y for both terms; H is formed in columns 3..6 of that n x 6 factor (`n6`).
-        kin.mul_psi(loc.Dq.as_ref(), &mut ws.n6);
-        for j in 0..6 {
-            for t in ws.n6.col_as_slice_mut(j) {
-                *t = -*t;
-            }
-        }
+        ws.n6.fill(0.0);
+        sub_mul_psi(loc.Dq.as_ref(), &kin.r_loc, &kin.Lambda, &mut ws.n6);
         for b in 0..2 * N {
             let S = skew(&Vector3::new(ws.rho[3 * b], ws.rho[3 * b + 1], ws.rho[3 * b + 2]));
             for c in 0..3 {
@@ -352,10 +348,9 @@ impl Superelement {
         add_mul_w(loc.M.as_ref(), &mo.a, 2 * N, 1.0, &mut ws.n6, 3);
         // Dg is left at zero without gravity (`forces.rs`, `gravity`), where g~ = 0 anyway.
         add_mul_w(loc.Dg.as_ref(), mo.g.as_slice(), 1, 1.0, &mut ws.n6, 3);
-        copy_mat(&mut ws.KL, loc.Dq.as_ref());
-        lambda_right(&kin.Lambda, &mut ws.KL);
-        gemm(&mut ws.KL, ws.n6.as_ref(), kin.Y(), 1.0, Accum::Add);
-        rotate_matrix(R, N, &ws.KL, &mut out.stiffness);
+        // K^L = Dq Lambda + n6 Y: the product here, Dq Lambda inside the rotation.
+        gemm(&mut ws.KL, ws.n6.as_ref(), kin.Y(), 1.0, Accum::Replace);
+        rotate_stiffness(R, &kin.Lambda, &loc.Dq, &ws.KL, &mut out.stiffness);
         rotate_matrix(R, N, &loc.Dy, &mut out.damping);
     }
 
