@@ -420,20 +420,27 @@ impl FfrInertia {
     /// `sig` holds $\bar{\mathbf S}^{sym}\dot{\mathbf q}$).
     fn jq(&self, w: &Vector3<f64>, sig: MatRef<'_, f64>, with_sx: bool, out: &mut Mat<f64>) {
         let n = self.n();
-        let sg: [&[f64]; 6] = std::array::from_fn(|p| col(sig, p));
+        let sg: [&[f64]; 6] = std::array::from_fn(|p| &col(sig, p)[..n]);
+        let (w0, w1, w2) = (w[0], w[1], w[2]);
         for j in 0..n {
-            let sx = self.S_x.col_as_slice(j);
-            let trs = sg[0][j] + sg[1][j] + sg[2][j];
-            let trx = if with_sx { sx[0] + sx[4] + sx[8] } else { 0.0 };
-            let o = out.col_as_slice_mut(j);
-            for i in 0..3 {
-                let mut v = w[i] * (2.0 * trx + trs);
-                for b in 0..3 {
-                    let x = if with_sx { sx[3 * i + b] + sx[3 * b + i] } else { 0.0 };
-                    v -= w[b] * (x + sg[pair(i, b)][j]);
-                }
-                o[i] = v;
+            // The symmetric a = sigma + S_x + S_x^T of column j (in the order of `PAIRS`) and
+            // tr(sigma) + 2 tr(S_x), unrolled: row i is w_i tr - (a w)_i.
+            let mut a = [sg[0][j], sg[1][j], sg[2][j], sg[3][j], sg[4][j], sg[5][j]];
+            let mut tr = a[0] + a[1] + a[2];
+            if with_sx {
+                let sx = &self.S_x.col_as_slice(j)[..9];
+                tr += 2.0 * (sx[0] + sx[4] + sx[8]);
+                a[0] += 2.0 * sx[0];
+                a[1] += 2.0 * sx[4];
+                a[2] += 2.0 * sx[8];
+                a[3] += sx[1] + sx[3];
+                a[4] += sx[2] + sx[6];
+                a[5] += sx[5] + sx[7];
             }
+            let o = &mut out.col_as_slice_mut(j)[..3];
+            o[0] = w0 * tr - (w0 * a[0] + w1 * a[3] + w2 * a[4]);
+            o[1] = w1 * tr - (w0 * a[3] + w1 * a[1] + w2 * a[5]);
+            o[2] = w2 * tr - (w0 * a[4] + w1 * a[5] + w2 * a[2]);
         }
     }
 

@@ -1233,6 +1233,35 @@ mod tests {
             let mut out = A.clone();
             lambda_right(&blocks.r, &mut out);
             close(&out, &(&A * &L), "lambda_right");
+            // lambda_t_left_cols: Lambda^T from the left on columns 1..4 of an n-row matrix.
+            let B = Mat::from_fn(n, 5, |_, _| r());
+            let mut out = B.clone();
+            lambda_t_left_cols(&blocks.r, &mut out, 1..4);
+            let LtB = L.transpose() * &B;
+            let mut expected = B.clone();
+            for j in 1..4 {
+                for i in 0..n {
+                    expected[(i, j)] = LtB[(i, j)];
+                }
+            }
+            close(&out, &expected, "lambda_t_left_cols");
+            // sub_mul_psi: out -= A Psi, Psi's rows [I, -r~_k] (u_k) and [0, Lambda_k] (theta_k).
+            let r_loc: Vec<Vector3<f64>> = (0..N).map(|_| Vector3::new(r(), r(), r())).collect();
+            let mut Psi = Mat::<f64>::zeros(n, 6);
+            for k in 0..N {
+                let mr = -skew(&r_loc[k]);
+                for a in 0..3 {
+                    Psi[(6 * k + a, a)] = 1.0;
+                    for b in 0..3 {
+                        Psi[(6 * k + a, 3 + b)] = mr[(a, b)];
+                        Psi[(6 * k + 3 + a, 3 + b)] = blocks.r[k][(a, b)];
+                    }
+                }
+            }
+            let start6 = Mat::from_fn(rows, 6, |_, _| r());
+            let mut out = start6.clone();
+            sub_mul_psi(A.as_ref(), &r_loc, &blocks.r, &mut out);
+            close(&out, &(&start6 - &A * &Psi), "sub_mul_psi");
         }
         // rotate_matrix: Rbar K Rbar^T for a square K (n x n, not symmetric).
         let (N, m) = (2, 3);
@@ -1258,6 +1287,28 @@ mod tests {
                 assert!(
                     (out[(i, j)] - expected[(i, j)]).abs() < 1e-14,
                     "rotate_matrix ({i}, {j})"
+                );
+            }
+        }
+        // rotate_stiffness: Rbar (Dq Lambda + G) Rbar^T.
+        let G = Mat::from_fn(n, n, |_, _| r());
+        let Lambda: Vec<Matrix3<f64>> = (0..N).map(|_| Matrix3::from_fn(|_, _| r())).collect();
+        let mut L = Mat::<f64>::identity(n, n);
+        for k in 0..N {
+            for a in 0..3 {
+                for b in 0..3 {
+                    L[(6 * k + 3 + a, 6 * k + 3 + b)] = Lambda[k][(a, b)];
+                }
+            }
+        }
+        let mut out = Mat::from_fn(n, n, |_, _| f64::NAN);
+        rotate_stiffness(&R, &Lambda, &K, &G, &mut out);
+        let expected = &Rbar * (&K * &L + &G) * Rbar.transpose();
+        for j in 0..n {
+            for i in 0..n {
+                assert!(
+                    (out[(i, j)] - expected[(i, j)]).abs() < 1e-14,
+                    "rotate_stiffness ({i}, {j})"
                 );
             }
         }
