@@ -205,8 +205,14 @@ impl FlexibleElement {
             buf.acc[6 * N + i] = xdd;
         }
         bs.frame = frame;
-        self.se
-            .evaluate_into(bs, &buf.acc, gravity, tangents, &mut buf.ws, &mut buf.ev)?;
+        // Without tangents only the forces are read below: the residual alone forms no mass
+        // matrix (the energy sensor takes T from the workspace, `kinetic_energy_in`).
+        if tangents {
+            self.se
+                .evaluate_into(bs, &buf.acc, gravity, true, &mut buf.ws, &mut buf.ev)?;
+        } else {
+            self.se.residual_into(bs, &buf.acc, gravity, &mut buf.ws, &mut buf.ev)?;
+        }
         let ev = &buf.ev;
         out.residual.copy_from_slice(&ev.residual);
         out.inertia.copy_from_slice(&ev.f_inertia);

@@ -153,8 +153,8 @@ impl System {
     }
 
     /// [`Self::energies`] at the state a workspace was evaluated at (the sensors of a solver's
-    /// converged state): a flexible body's mass matrix and configuration ($\mathbf q^{jj}$,
-    /// frame) are taken from its last evaluation instead of solving its frame again, when
+    /// converged state): a flexible body's configuration ($\mathbf q^{jj}$, frame, the
+    /// transformations) is taken from its last evaluation instead of solving its frame again, when
     /// that evaluation is of this state (same interface positions and orientations, same
     /// modal coordinates); the velocities always come from the state.
     fn energies_in(&self, state: &State, ws: &Workspace) -> Result<Energies, SolveError> {
@@ -197,15 +197,10 @@ impl System {
             let bs = self.body_state(i, state, nodes);
             match evaluated(i) {
                 Some(buf) => {
-                    // 1/2 qd^T M qd with the mass matrix of the evaluation at this configuration.
+                    // 1/2 qd^T M qd at the configuration of the evaluation (a forces-only one
+                    // forms no mass matrix: `kinetic_energy_in` needs none).
                     let qd = bs.velocity_vector();
-                    let M = &buf.ev.mass;
-                    let mut T = 0.0;
-                    for (j, qj) in qd.iter().enumerate() {
-                        let Mqj: f64 = M.col_as_slice(j).iter().zip(&qd).map(|(m, q)| m * q).sum();
-                        T += 0.5 * qj * Mqj;
-                    }
-                    e.kinetic += T;
+                    e.kinetic += f.se.kinetic_energy_in(&buf.ws, &qd).map_err(|s| body_err(f, s))?;
                     e.strain += f.se.strain_energy_in(&buf.ws);
                     e.gravity += f.se.gravity_potential(buf.ws.kinematics(), &g);
                 }

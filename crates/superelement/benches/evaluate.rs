@@ -16,8 +16,9 @@
 //! * `beam72-G`: a large body (2 interfaces, 60 modes, geometric stiffening, centre of mass,
 //!   `Exact`), to check that the small-n work does not slow big n.
 //!
-//! Instruction counts (repeatable on a loaded machine): `--profile=tangents` or
-//! `--profile=forces` runs 1 + 20 evaluations of each selected case and nothing else, e.g.
+//! Instruction counts (repeatable on a loaded machine): `--profile=tangents`,
+//! `--profile=forces` (forces and the mass matrix) or `--profile=residual` (`residual_into`,
+//! the forces alone) runs 1 + 20 evaluations of each selected case and nothing else, e.g.
 //!
 //! ```text
 //! valgrind --tool=callgrind --callgrind-out-file=/tmp/se.out '--toggle-collect=*evaluate_into*' \
@@ -72,6 +73,13 @@
 //! the configuration it formed): `beam14-G` 135.3k -> 127.9k with tangents, 56.7k -> 46.2k
 //! without; `block14-G` 150.8k -> 143.5k, 62.6k -> 52.1k; `beam22-com-exact` 220.0k -> 207.7k,
 //! 84.2k -> 69.0k; `beam72-G` 1798k -> 1762k, 566k -> 518k.
+//!
+//! Then the residual alone (`residual_into`: no FFR mass matrix, no body-axis mass and no
+//! rotation of it, only the inertia contractions the force needs) for the Newton iterations
+//! without tangents, against the forces-only call before (`--profile=forces` then):
+//! `beam14-G` 56.7k -> 36.9k; `block14-G` 62.7k -> 42.9k; `beam22-com-exact` 84.3k -> 52.0k;
+//! `beam72-G` 566k -> 391k. The FFR force's column sums in one pass made the forces with the
+//! mass 56.7k -> 54.0k and the tangents 135.3k -> 134.2k (`beam14-G`).
 //!
 //! What is left is spread thin: 11 faer products per evaluation with tangents, each
 //! about 1.7k instructions of fixed cost (nano-gemm's planning and driver) beside its kernel,
@@ -182,9 +190,8 @@ fn main() {
     // smoke test: keep it short there.
     let quick = !args.iter().any(|a| a == "--bench");
     let profile = args.iter().find_map(|a| a.strip_prefix("--profile=")).map(|p| match p {
-        "tangents" => true,
-        "forces" => false,
-        other => panic!("--profile=tangents or --profile=forces, got {other}"),
+        "tangents" | "forces" | "residual" => p.to_string(),
+        other => panic!("--profile=tangents, --profile=forces or --profile=residual, got {other}"),
     });
     let filter = args.iter().find(|a| !a.starts_with("--")).map_or("", |s| s.as_str());
     let g = Vector3::new(0.0, 0.0, -9.81);
@@ -201,27 +208,33 @@ fn main() {
         let states = [state, other];
         let mut ws = se.workspace();
         let mut out = superelement::Evaluation::zeros(se.n_coordinates());
-        if let Some(tangents) = profile {
+        if let Some(profile) = &profile {
             for i in 0..=PROFILE_CALLS {
-                se.evaluate_into(&states[i % 2], &acc, &g, tangents, &mut ws, &mut out)
-                    .unwrap();
+                let state = &states[i % 2];
+                match profile.as_str() {
+                    "residual" => se.residual_into(state, &acc, &g, &mut ws, &mut out).unwrap(),
+                    p => se
+                        .evaluate_into(state, &acc, &g, p == "tangents", &mut ws, &mut out)
+                        .unwrap(),
+                }
             }
-            println!(
-                "{name}: {} calls of evaluate_into (tangents: {tangents})",
-                PROFILE_CALLS + 1
-            );
+            println!("{name}: {} evaluations ({profile})", PROFILE_CALLS + 1);
             continue;
         }
         // Many short batches: on a loaded machine the fastest batches are the uninterrupted ones.
         let (batches, per) = if quick { (1, 2) } else { (400, 25) };
         let mut sink = 0.0;
-        let mut time = |tangents: bool, sink: &mut f64| {
+        // `Some(tangents)`: `evaluate_into`; `None`: `residual_into`.
+        let mut time = |tangents: Option<bool>, sink: &mut f64| {
             let mut times = Vec::with_capacity(batches);
             for _ in 0..batches {
                 let t = Instant::now();
                 for i in 0..per {
-                    se.evaluate_into(&states[i % 2], &acc, &g, tangents, &mut ws, &mut out)
-                        .unwrap();
+                    let state = &states[i % 2];
+                    match tangents {
+                        Some(t) => se.evaluate_into(state, &acc, &g, t, &mut ws, &mut out).unwrap(),
+                        None => se.residual_into(state, &acc, &g, &mut ws, &mut out).unwrap(),
+                    }
                     *sink += out.residual[0];
                 }
                 times.push(t.elapsed().as_secs_f64() * 1e6 / per as f64);
@@ -229,8 +242,9 @@ fn main() {
             times.sort_by(|a, b| a.partial_cmp(b).unwrap());
             (times[times.len() / 2], times[0])
         };
-        let (all, all_min) = time(true, &mut sink);
-        let (forces, _) = time(false, &mut sink);
+        let (all, all_min) = time(Some(true), &mut sink);
+        let (forces, _) = time(Some(false), &mut sink);
+        let (residual, _) = time(None, &mut sink);
         let alloc = {
             let t = Instant::now();
             for _ in 0..per {
@@ -239,7 +253,7 @@ fn main() {
             t.elapsed().as_secs_f64() * 1e6 / per as f64
         };
         println!(
-            "  {name:<18} N = {}, m = {:>3}, n = {:>3}  forces + K_t, C_t, M: {all:6.1} us (median; min {all_min:.1})   forces + M only: {forces:6.1} us   allocating evaluate(): {alloc:6.1} us   [{sink:.1e}]",
+            "  {name:<18} N = {}, m = {:>3}, n = {:>3}  forces + K_t, C_t, M: {all:6.1} us (median; min {all_min:.1})   forces + M only: {forces:6.1} us   residual only: {residual:6.1} us   allocating evaluate(): {alloc:6.1} us   [{sink:.1e}]",
             se.n_interfaces(),
             se.n_modes(),
             se.n_coordinates(),

@@ -29,12 +29,34 @@ use crate::body::{GeometricStiffness, Superelement};
 use crate::mass::{add_mul3t, matvec, mul3, FfrForce, FfrScratch};
 use crate::so3::{self, skew};
 use crate::transform::{
-    add_mul_blocks_at, col, copy_mat, gemm, lambda_right, lambda_t_left, lambda_t_left_cols, mul_blocks, Blocks,
-    Kinematics,
+    add_mul_blocks_at, col, copy_mat, gemm, lambda_right, lambda_t_left, lambda_t_left_cols, mul_blocks, sub_mul_psi,
+    Blocks, Kinematics,
 };
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use nalgebra::Vector3;
+
+/// What one evaluation forms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Level {
+    /// The residual and its force parts only (`Superelement::residual_into`): no mass matrix,
+    /// no $n\times n$ work beyond $\mathbf M_{CB}\ddot{\mathbf q}$, $\mathbf K_{CB}\mathbf q^{jj}$ and the
+    /// inertia contractions.
+    Forces,
+    /// The forces and the mass matrix (`Superelement::evaluate_into` without tangents).
+    Mass,
+    /// The forces, the mass matrix and the tangents $\mathbf K_t$, $\mathbf C_t$.
+    Tangents,
+}
+
+impl Level {
+    pub fn tangents(self) -> bool {
+        self == Level::Tangents
+    }
+    pub fn mass(self) -> bool {
+        self != Level::Forces
+    }
+}
 
 /// Velocity-level quantities shared by all forces of one evaluation.
 #[derive(Clone, Debug)]
@@ -714,16 +736,12 @@ impl Superelement {
     ///   \mathbf X(\mathbf U + \boldsymbol\Lambda\mathbf W(\mathbf y))\mathbf Y_r + \mathbf X\mathbf N_y\mathbf B$.
     ///
     /// All products go through $\mathbf M_{ffr}\mathbf X$ and $\mathbf F_\nu\mathbf X$ (module docs, Cost).
+    /// At [`Level::Forces`] only $\boldsymbol\rho_{in} = \mathbf P^T\mathbf F$ is formed
+    /// ([`crate::mass::FfrInertia::force_only_into`]): no $\mathbf M_{ffr}$, no body-axis mass.
     /// Tested by `tests/unit/fd_tangent.rs::tangents_match_fd` and `::inertia_tangents_match_fd`
     /// (Exact, every frame choice) and `tests/unit/energy.rs` (power balance, rigid kinetic energy).
-    pub(crate) fn exact_inertia(
-        &self,
-        kin: &Kinematics,
-        mo: &Motion,
-        loc: &mut Local,
-        w: &mut Scratch,
-        tangents: bool,
-    ) {
+    pub(crate) fn exact_inertia(&self, kin: &Kinematics, mo: &Motion, loc: &mut Local, w: &mut Scratch, level: Level) {
+        let tangents = level.tangents();
         let n = self.n;
         let N = self.n_interfaces;
         let Om = mo.omega();
@@ -787,6 +805,12 @@ impl Superelement {
         }
         w.nu_dot[6 + 6 * N..].copy_from_slice(&w.v2[6 * N..]);
 
+        if !level.mass() {
+            self.inertia
+                .force_only_into(&kin.q_jj, &w.nu, &w.nu_dot, &mut w.ffr, &mut w.ffr_scratch);
+            kin.pt_vec(&w.ffr.F, &mut loc.rho_in);
+            return;
+        }
         self.inertia
             .force_into(&kin.q_jj, &w.nu, &w.nu_dot, tangents, &mut w.ffr, &mut w.ffr_scratch);
         kin.pt_vec(&w.ffr.F, &mut loc.rho_in);
@@ -844,13 +868,8 @@ impl Superelement {
         // Psi for both F_nu_q and MX N_y (F_nu_q + MX N_y is the first part of FX anyway).
         copy_mat(&mut w.FX, w.ffr.F_nu.as_ref().subcols(6, n));
         mul_blocks(w.MX.as_ref(), &mo.n_y, &mut w.FX, Accum::Add);
-        kin.mul_psi(w.FX.as_ref(), &mut w.t6);
-        for c in 0..6 {
-            let a = w.ffr.F_nu.col_as_slice(c);
-            for (t, a) in w.t6.col_as_slice_mut(c).iter_mut().zip(a) {
-                *t = a - *t;
-            }
-        }
+        copy_mat(&mut w.t6, w.ffr.F_nu.as_ref().subcols(0, 6));
+        sub_mul_psi(w.FX.as_ref(), &kin.r_loc, &kin.Lambda, &mut w.t6);
         matmul(
             w.t6.as_mut().subcols_mut(3, 3),
             Accum::Add,
@@ -910,14 +929,7 @@ impl Superelement {
     /// \tilde{\mathbf p}^L_{\theta_k}\mathbf E^\theta_k]_k + \mathbf Y_r^T(\mathbf W(\mathbf p^L)^T - \mathbf W(\mathbf y)^T\mathbf M_{CB})$.
     /// Tested by `tests/unit/fd_tangent.rs::tangents_match_fd`, `::inertia_tangents_match_fd`
     /// (Lumped) and `tests/unit/energy.rs`.
-    pub(crate) fn lumped_inertia(
-        &self,
-        kin: &Kinematics,
-        mo: &Motion,
-        loc: &mut Local,
-        w: &mut Scratch,
-        tangents: bool,
-    ) {
+    pub(crate) fn lumped_inertia(&self, kin: &Kinematics, mo: &Motion, loc: &mut Local, w: &mut Scratch, level: Level) {
         let n = self.n;
         let N = self.n_interfaces;
         let M = &self.M_CB;
@@ -958,8 +970,10 @@ impl Superelement {
         for j in 0..n {
             rho[j] -= Y[(3, j)] * wtp[0] + Y[(4, j)] * wtp[1] + Y[(5, j)] * wtp[2];
         }
-        copy_mat(&mut loc.M, M.as_ref());
-        if !tangents {
+        if level.mass() {
+            copy_mat(&mut loc.M, M.as_ref());
+        }
+        if !level.tangents() {
             return;
         }
         // n3a = W(y), n3b = W(p), n3c = M W(y) - W(p).

@@ -65,10 +65,14 @@
 //!   \mathbf f_{el} + \mathbf f_d - \mathbf f_g$, its parts and $\mathbf M$, $\mathbf K_t$, $\mathbf C_t$
 //!   as faer matrices; [`Superelement::evaluate_into`] does the same into a reused
 //!   [`Workspace`] and [`Evaluation`] (no allocation; the hot-loop form);
-//!   [`Superelement::forces`] skips the tangents.
+//!   [`Superelement::forces`] skips the tangents; [`Superelement::residual_into`] computes the
+//!   residual and its force parts alone (no mass matrix: the Newton iterations that reuse an
+//!   iteration matrix).
 //! * [`Superelement::kinetic_energy`], [`Superelement::strain_energy`],
 //!   [`Superelement::gravity_potential`]; [`Superelement::strain_energy_in`] reads the strain
-//!   energy off the workspace of the last `evaluate_into` (an energy sensor at every step);
+//!   energy off the workspace of the last `evaluate_into` (an energy sensor at every step),
+//!   [`Superelement::kinetic_energy_in`] the kinetic energy at its configuration (also after a
+//!   `residual_into`, which forms no mass matrix);
 //!   [`Superelement::recover_mesh`] for the deformed mesh.
 //! * [`testing`]: the central-difference helper, state perturbations through exp, test states,
 //!   and (feature `testing`) reduced-body fixtures.
@@ -143,6 +147,8 @@
 //! | (5.6) | velocity transformation $\mathbf A$ | `superelement::transform::Kinematics::velocity_transform` |
 //! | (6.1) | FFR mass matrix from the inertia invariants | `superelement::mass::FfrInertia::mass_matrix` |
 //! | (6.4) | FFR inertia force $\mathbf M_{ffr}\dot{\boldsymbol\nu} + \mathbf h$ and partials | `superelement::mass::FfrInertia::force_into` |
+//! | (6.4) | the FFR inertia force alone, without $\mathbf M_{ffr}$ and with the contractions the force needs ($12n^2$ multiply-adds) | `superelement::mass::FfrInertia::force_only_into` |
+//! | (6.4)-(6.7) | the residual $\bar{\mathbf R}\mathbf P^T(\dots)$ and its parts without any mass matrix | `superelement::Superelement::residual_into` (`tangent.rs`) |
 //! | (6.4) | `Exact` inertia in absolute coordinates, $\mathbf A^T(\dots)$ | `superelement::Superelement::exact_inertia` (`forces.rs`) |
 //! | (6.5) | elastic force $\bar{\mathbf R}\mathbf T_j^T\mathbf K_{CB}\mathbf q^{jj}$ (plus $\mathbf g_G$) | `superelement::Superelement::elastic` (`forces.rs`) |
 //! | \[WW03\], this crate | geometric stiffening $\mathbf g_G$, $\mathbf H_G$ of $U_3 + U_4$ | `superelement::GeometricStiffness::gradient_into` (`forces.rs`) |

@@ -211,20 +211,22 @@ impl FfrInertia {
 /// $\mathbf A\mathbf x$ for a $3\times n$ matrix.
 #[inline]
 pub(crate) fn mul3(A: &Mat<f64>, x: &[f64]) -> Vector3<f64> {
-    let mut r = Vector3::zeros();
+    let mut r = [0.0; 3];
     for (j, xj) in x.iter().enumerate() {
-        r[0] += A[(0, j)] * xj;
-        r[1] += A[(1, j)] * xj;
-        r[2] += A[(2, j)] * xj;
+        let a = &A.col_as_slice(j)[..3];
+        r[0] += a[0] * xj;
+        r[1] += a[1] * xj;
+        r[2] += a[2] * xj;
     }
-    r
+    Vector3::from(r)
 }
 
 /// $\mathbf A^T\mathbf w$ for a $3\times n$ matrix, added to `out` times `alpha`.
 #[inline]
 pub(crate) fn add_mul3t(out: &mut [f64], A: &Mat<f64>, w: &Vector3<f64>, alpha: f64) {
     for (j, o) in out.iter_mut().enumerate() {
-        *o += alpha * (A[(0, j)] * w[0] + A[(1, j)] * w[1] + A[(2, j)] * w[2]);
+        let a = &A.col_as_slice(j)[..3];
+        *o += alpha * (a[0] * w[0] + a[1] * w[1] + a[2] * w[2]);
     }
 }
 
@@ -306,7 +308,8 @@ impl FfrScratch {
 /// The contractions in the stacked product of [`FfrScratch`], in place (no copies):
 /// $\bar{\mathbf S}^{sym}_p\mathbf q$, $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ ($n\times6$) and
 /// $\tilde{\mathbf S}_i\mathbf q$, $\tilde{\mathbf S}_i\dot{\mathbf q}$, $\tilde{\mathbf S}_i\ddot{\mathbf q}$
-/// ($n\times3$; the last only after a product with $\ddot{\mathbf q}$).
+/// ($n\times3$; $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ and $\tilde{\mathbf S}_i\ddot{\mathbf q}$ only after
+/// the contractions for the partials, `FfrInertia::contractions`).
 struct ContractionViews<'a> {
     sig: MatRef<'a, f64>,
     sigd: MatRef<'a, f64>,
@@ -341,49 +344,68 @@ struct Contractions {
 }
 
 impl FfrInertia {
-    /// The contractions with $\mathbf q$, $\dot{\mathbf q}$ and, with `with_qdd` (only the partials
-    /// need $\tilde{\mathbf S}_i\ddot{\mathbf q}$), $\ddot{\mathbf q}$.
-    fn contractions(&self, q: &[f64], qd: &[f64], qdd: &[f64], with_qdd: bool, w: &mut FfrScratch) -> Contractions {
+    /// The contractions $\bar{\mathbf S}^{sym}_p\mathbf q$, $\tilde{\mathbf S}_i\mathbf q$, $\tilde{\mathbf S}_i\dot{\mathbf q}$
+    /// and, with `partials` (only the partials need them), $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ and
+    /// $\tilde{\mathbf S}_i\ddot{\mathbf q}$: $12n^2$ multiply-adds for the force alone, $21n^2$ with the partials.
+    fn contractions(&self, q: &[f64], qd: &[f64], qdd: &[f64], partials: bool, w: &mut FfrScratch) -> Contractions {
         let n = self.n();
         let m = self.mass;
-        let s = self.d * m + mul3(&self.S_t, q);
-        let sd = mul3(&self.S_t, qd);
         if let Some(p) = &self.packed {
-            // The S~_i rows with q, qd and (for the partials) qdd, the S_bar_sym rows with q, qd.
+            // The S~_i rows with q, qd and (for the partials) qdd, the S_bar_sym rows with q and
+            // (for the partials) qd.
             let [c0, c1, c2] = cols_mut::<3>(w.prod.as_mut());
             let ((t0, s0), (t1, s1)) = (c0.split_at_mut(3 * n), c1.split_at_mut(3 * n));
-            if with_qdd {
+            if partials {
                 p.tilde.mul([q, qd, qdd], [t0, t1, &mut c2[..3 * n]]);
+                p.sym.mul([q, qd], [s0, s1]);
             } else {
                 p.tilde.mul([q, qd], [t0, t1]);
+                p.sym.mul([q], [s0]);
             }
-            p.sym.mul([q, qd], [s0, s1]);
         } else {
             w.rhs.col_as_slice_mut(0).copy_from_slice(q);
             w.rhs.col_as_slice_mut(1).copy_from_slice(qd);
             w.rhs.col_as_slice_mut(2).copy_from_slice(qdd);
             faer::linalg::matmul::matmul(
-                w.prod.as_mut().subcols_mut(0, 2 + with_qdd as usize),
+                w.prod.as_mut().subcols_mut(0, 2 + partials as usize),
                 faer::Accum::Replace,
                 self.stack.as_ref(),
-                w.rhs.as_ref().subcols(0, 2 + with_qdd as usize),
+                w.rhs.as_ref().subcols(0, 2 + partials as usize),
                 1.0,
                 faer::Par::Seq,
             );
         }
-        // X_ab = (S_x)_ab q; J1 = 2 tr(X) I - X - X^T; W_ab = q^T S_bar_ab q = q.sig_ab / 2.
-        let mut X = Matrix3::<f64>::zeros();
-        let mut Xd = Matrix3::<f64>::zeros();
+        // X_ab = (S_x)_ab q (row 3a + b of S_x), Xd = (S_x)_ab qd, S_t q and S_t qd in one pass
+        // over the columns; J1 = 2 tr(X) I - X - X^T.
+        let (q, qd) = (&q[..n], &qd[..n]);
+        let (mut x, mut xd, mut t, mut td) = ([0.0; 9], [0.0; 9], [0.0; 3], [0.0; 3]);
         for j in 0..n {
-            let c = self.S_x.col_as_slice(j);
+            let (a, b) = (q[j], qd[j]);
+            let c = &self.S_x.col_as_slice(j)[..9];
             for r in 0..9 {
-                X[(r / 3, r % 3)] += c[r] * q[j];
-                Xd[(r / 3, r % 3)] += c[r] * qd[j];
+                x[r] += c[r] * a;
+                xd[r] += c[r] * b;
+            }
+            let c = &self.S_t.col_as_slice(j)[..3];
+            for r in 0..3 {
+                t[r] += c[r] * a;
+                td[r] += c[r] * b;
             }
         }
+        let s = self.d * m + Vector3::from(t);
+        let sd = Vector3::from(td);
+        let X = Matrix3::from_fn(|a, b| x[3 * a + b]);
+        let Xd = Matrix3::from_fn(|a, b| xd[3 * a + b]);
+        // W_ab = q^T S_bar_ab q = q.sig_ab / 2 and W3_ab = qd.sig_ab on the six pairs.
         let sig = ContractionViews::of(&w.prod, n).sig;
-        let W = Matrix3::from_fn(|a, b| 0.5 * dot(q, col(sig, pair(a, b))));
-        let W3 = Matrix3::from_fn(|a, b| dot(qd, col(sig, pair(a, b))));
+        let (mut wp, mut w3p) = ([0.0; 6], [0.0; 6]);
+        for p in 0..6 {
+            let c = &col(sig, p)[..n];
+            wp[p] = 0.5 * dot(q, c);
+            w3p[p] = dot(qd, c);
+        }
+        let W = Matrix3::from_fn(|a, b| wp[pair(a, b)]);
+        let W3 = Matrix3::from_fn(|a, b| w3p[pair(a, b)]);
         let I = Matrix3::identity();
         let J = self.J0 + I * (2.0 * X.trace()) - X - X.transpose() + I * W.trace() - W;
         let Jd = I * (2.0 * Xd.trace()) - Xd - Xd.transpose() + I * W3.trace() - W3;
@@ -398,27 +420,28 @@ impl FfrInertia {
     /// `sig` holds $\bar{\mathbf S}^{sym}\dot{\mathbf q}$).
     fn jq(&self, w: &Vector3<f64>, sig: MatRef<'_, f64>, with_sx: bool, out: &mut Mat<f64>) {
         let n = self.n();
-        let sg: [&[f64]; 6] = std::array::from_fn(|p| col(sig, p));
+        let sg: [&[f64]; 6] = std::array::from_fn(|p| &col(sig, p)[..n]);
+        let (w0, w1, w2) = (w[0], w[1], w[2]);
         for j in 0..n {
-            let sx = self.S_x.col_as_slice(j);
-            let trs = sg[0][j] + sg[1][j] + sg[2][j];
-            let trx = if with_sx { sx[0] + sx[4] + sx[8] } else { 0.0 };
-            let o = out.col_as_slice_mut(j);
-            for i in 0..3 {
-                let mut v = w[i] * (2.0 * trx + trs);
-                for b in 0..3 {
-                    let x = if with_sx { sx[3 * i + b] + sx[3 * b + i] } else { 0.0 };
-                    v -= w[b] * (x + sg[pair(i, b)][j]);
-                }
-                o[i] = v;
+            // The symmetric a = sigma + S_x + S_x^T of column j (in the order of `PAIRS`) and
+            // tr(sigma) + 2 tr(S_x), unrolled: row i is w_i tr - (a w)_i.
+            let mut a = [sg[0][j], sg[1][j], sg[2][j], sg[3][j], sg[4][j], sg[5][j]];
+            let mut tr = a[0] + a[1] + a[2];
+            if with_sx {
+                let sx = &self.S_x.col_as_slice(j)[..9];
+                tr += 2.0 * (sx[0] + sx[4] + sx[8]);
+                a[0] += 2.0 * sx[0];
+                a[1] += 2.0 * sx[4];
+                a[2] += 2.0 * sx[8];
+                a[3] += sx[1] + sx[3];
+                a[4] += sx[2] + sx[6];
+                a[5] += sx[5] + sx[7];
             }
+            let o = &mut out.col_as_slice_mut(j)[..3];
+            o[0] = w0 * tr - (w0 * a[0] + w1 * a[3] + w2 * a[4]);
+            o[1] = w1 * tr - (w0 * a[3] + w1 * a[1] + w2 * a[5]);
+            o[2] = w2 * tr - (w0 * a[4] + w1 * a[5] + w2 * a[2]);
         }
-    }
-
-    /// $\mathbf S_w(\mathbf q)\mathbf x$: component $i$ is $\mathbf q^T\tilde{\mathbf S}_i\mathbf x$
-    /// $= -(\tilde{\mathbf S}_i\mathbf q)\cdot\mathbf x$.
-    fn sw_mul(tq: MatRef<'_, f64>, x: &[f64]) -> Vector3<f64> {
-        Vector3::new(-dot(col(tq, 0), x), -dot(col(tq, 1), x), -dot(col(tq, 2), x))
     }
 
     /// $\mathbf M_{ffr}(\mathbf q)$ (module docs).
@@ -498,6 +521,29 @@ impl FfrInertia {
         out: &mut FfrForce,
         w: &mut FfrScratch,
     ) {
+        self.force_impl(q, nu, nu_dot, true, partials, out, w);
+    }
+
+    /// $\mathbf F(\mathbf q, \boldsymbol\nu, \dot{\boldsymbol\nu})$ alone into `out.F` (`out.M` and the
+    /// partials keep their old values): the residual of a forces-only evaluation, which never
+    /// forms $\mathbf M_{ffr}$ ([`Self::force_into`] for the formulas). Equal to the force of
+    /// [`Self::force_into`] to round-off (`tests/unit/evaluation.rs`).
+    pub fn force_only_into(&self, q: &[f64], nu: &[f64], nu_dot: &[f64], out: &mut FfrForce, w: &mut FfrScratch) {
+        self.force_impl(q, nu, nu_dot, false, false, out, w);
+    }
+
+    /// [`Self::force_into`] with $\mathbf M_{ffr}$ on request (`mass`).
+    #[allow(clippy::too_many_arguments)]
+    fn force_impl(
+        &self,
+        q: &[f64],
+        nu: &[f64],
+        nu_dot: &[f64],
+        mass: bool,
+        partials: bool,
+        out: &mut FfrForce,
+        w: &mut FfrScratch,
+    ) {
         let n = self.n();
         let m = self.mass;
         let v3 = |x: &[f64], o: usize| Vector3::new(x[o], x[o + 1], x[o + 2]);
@@ -512,37 +558,75 @@ impl FfrInertia {
             tqdd,
         } = ContractionViews::of(&w.prod, n);
         let (s, sd) = (c.s, c.sd);
-        let Srw_qd = mul3(&self.S_r, qd) + Self::sw_mul(tq, qd);
-        let Srw_qdd = mul3(&self.S_r, qdd) + Self::sw_mul(tq, qdd);
+        if partials {
+            self.jq(&Om, sig, true, &mut w.jq_Om);
+        }
+        // F_q = M_CB qdd + S_t^T (Vd - V x Om) + (S_r + S_w)^T Omd + 2 S_w(qd)^T Om
+        //     - 1/2 j_q(Om)^T Om, in one pass over the columns that also sums S_t qdd, S_r qd,
+        // S_r qdd, S_w(q) qd and S_w(q) qdd for F_V, F_Om: S_w(x)^T y = -sum_i y_i S~_i x,
+        // (S_w(q) x)_i = -(S~_i q).x, and j_q(Om)^T Om (`Self::jq`) = sum_ab 2 c_ab (S_x)_ab +
+        // sum_p k_p sig_p with c_ab = delta_ab |Om|^2 - Om_a Om_b and k_p = c_ab, twice for
+        // a != b (the partials form j_q(Om) anyway and take it from there).
+        let (qd, qdd) = (&qd[..n], &qdd[..n]);
+        let F = &mut out.F;
+        let Fq = &mut F[6..6 + n];
+        matvec(&self.M_CB, qdd, Fq);
+        let a = Vd - V.cross(&Om);
+        let o2 = Om.norm_squared();
+        let cab = |a: usize, b: usize| if a == b { o2 - Om[a] * Om[a] } else { -Om[a] * Om[b] };
+        let kx: [f64; 9] = std::array::from_fn(|r| 2.0 * cab(r / 3, r % 3));
+        let ks: [f64; 6] = std::array::from_fn(|p| {
+            let (a, b) = PAIRS[p];
+            cab(a, b) * if a == b { 1.0 } else { 2.0 }
+        });
+        let sg: [&[f64]; 6] = std::array::from_fn(|p| &col(sig, p)[..n]);
+        let t: [&[f64]; 3] = std::array::from_fn(|i| &col(tq, i)[..n]);
+        let td: [&[f64]; 3] = std::array::from_fn(|i| &col(tqd, i)[..n]);
+        let (mut St_qdd, mut Sr_qd, mut Sr_qdd, mut Sw_qd, mut Sw_qdd) =
+            ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
+        for (j, f) in Fq.iter_mut().enumerate() {
+            let st = &self.S_t.col_as_slice(j)[..3];
+            let sr = &self.S_r.col_as_slice(j)[..3];
+            let (x, xx) = (qd[j], qdd[j]);
+            let mut v = 0.0;
+            for i in 0..3 {
+                v += st[i] * a[i] + sr[i] * Omd[i] - Omd[i] * t[i][j] - 2.0 * Om[i] * td[i][j];
+                St_qdd[i] += st[i] * xx;
+                Sr_qd[i] += sr[i] * x;
+                Sr_qdd[i] += sr[i] * xx;
+                Sw_qd[i] -= t[i][j] * x;
+                Sw_qdd[i] -= t[i][j] * xx;
+            }
+            let mut jo = 0.0;
+            if partials {
+                let jq = &w.jq_Om.col_as_slice(j)[..3];
+                for i in 0..3 {
+                    jo += jq[i] * Om[i];
+                }
+            } else {
+                let sx = &self.S_x.col_as_slice(j)[..9];
+                for r in 0..9 {
+                    jo += kx[r] * sx[r];
+                }
+                for p in 0..6 {
+                    jo += ks[p] * sg[p][j];
+                }
+            }
+            *f += v - 0.5 * jo;
+        }
+        let v3a = Vector3::from;
+        let Srw_qd = v3a(Sr_qd) + v3a(Sw_qd);
+        let Srw_qdd = v3a(Sr_qdd) + v3a(Sw_qdd);
         let p_V = V * m + Om.cross(&s) + sd;
         let p_Om = s.cross(&V) + c.J * Om + Srw_qd;
-        let F_V = Vd * m + Omd.cross(&s) + mul3(&self.S_t, qdd) + Om.cross(&sd) + Om.cross(&p_V);
+        let F_V = Vd * m + Omd.cross(&s) + v3a(St_qdd) + Om.cross(&sd) + Om.cross(&p_V);
         let F_Om = s.cross(&Vd) + c.J * Omd + Srw_qdd + sd.cross(&V) + c.Jd * Om + Om.cross(&p_Om) + V.cross(&p_V);
-        let F = &mut out.F;
         F[0..3].copy_from_slice(F_V.as_slice());
         F[3..6].copy_from_slice(F_Om.as_slice());
-        self.jq(&Om, sig, true, &mut w.jq_Om);
-        {
-            let Fq = &mut F[6..];
-            matvec(&self.M_CB, qdd, Fq);
-            add_mul3t(Fq, &self.S_t, &Vd, 1.0);
-            // (S_r + S_w)^T Omd, S_w^T x = -sum_i x_i tq_i.
-            add_mul3t(Fq, &self.S_r, &Omd, 1.0);
-            add_mul3t(Fq, &self.S_t, &V.cross(&Om), -1.0);
-            for j in 0..n {
-                let mut v = 0.0;
-                for i in 0..3 {
-                    v -= Omd[i] * tq[(j, i)];
-                    // 2 S_w(qd)^T Om
-                    v -= 2.0 * Om[i] * tqd[(j, i)];
-                }
-                Fq[j] += v;
-            }
-            // - 1/2 j_q(Om)^T Om
-            add_mul3t(Fq, &w.jq_Om, &Om, -0.5);
+        // The residual's M (not for a forces-only evaluation); the partials only for tangents.
+        if mass {
+            self.fill_mass(&c, tq, &mut out.M);
         }
-        // The mass matrix is always needed (the residual's M); the partials only for tangents.
-        self.fill_mass(&c, tq, &mut out.M);
         if !partials {
             return;
         }

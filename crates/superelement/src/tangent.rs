@@ -18,12 +18,12 @@
 
 use crate::body::{BodyState, Superelement};
 use crate::error::SuperelementError;
-use crate::forces::{Local, Motion, Scratch};
+use crate::forces::{Level, Local, Motion, Scratch};
 use crate::frame::{Frame, FrameScratch, FrameSolve};
 use crate::local_coordinates::local_coordinates;
 use crate::mass::MassVariant;
 use crate::so3::skew;
-use crate::transform::{add_mul_w, copy_mat, gemm, lambda_right, rotate_matrix, Kinematics};
+use crate::transform::{add_mul_w, gemm, rotate_matrix, rotate_stiffness, sub_mul_psi, Kinematics};
 use faer::{Accum, Mat};
 use nalgebra::Vector3;
 
@@ -42,7 +42,8 @@ pub struct Evaluation {
     pub residual: Vec<f64>,
     /// Inertia force $\mathbf M\ddot{\mathbf q} + \mathbf Q_v$.
     pub f_inertia: Vec<f64>,
-    /// Quadratic velocity force $\mathbf Q_v = \mathbf f_{in} - \mathbf M\ddot{\mathbf q}$.
+    /// Quadratic velocity force $\mathbf Q_v = \mathbf f_{in} - \mathbf M\ddot{\mathbf q}$ (not updated by
+    /// [`Superelement::residual_into`]).
     pub q_v: Vec<f64>,
     /// Elastic force (6.5).
     pub f_elastic: Vec<f64>,
@@ -50,7 +51,7 @@ pub struct Evaluation {
     pub f_damping: Vec<f64>,
     /// Gravity (a load: it enters the residual with a minus sign).
     pub f_gravity: Vec<f64>,
-    /// $\mathbf M$.
+    /// $\mathbf M$ (not updated by [`Superelement::residual_into`]).
     pub mass: Mat<f64>,
     /// $\mathbf K_t = \partial\mathbf r/\partial\mathbf q$ (not updated by [`Superelement::forces`]).
     pub stiffness: Mat<f64>,
@@ -153,13 +154,45 @@ impl Superelement {
     /// tangent-only partials is formed (the FFR $\partial\mathbf F/\partial\boldsymbol\nu$,
     /// $\partial\mathbf F/\partial\mathbf q$, the geometric Hessian $\mathbf H_G$, $\mathbf N_y$): about 30 % fewer
     /// instructions (`benches/evaluate.rs`; checked equal to the full evaluation by
-    /// `tests/unit/evaluation.rs`).
+    /// `tests/unit/evaluation.rs`). [`Self::residual_into`] skips the mass matrix too.
     pub fn evaluate_into(
         &self,
         state: &BodyState,
         acc: &[f64],
         gravity: &Vector3<f64>,
         tangents: bool,
+        ws: &mut Workspace,
+        out: &mut Evaluation,
+    ) -> Result<(), SuperelementError> {
+        let level = if tangents { Level::Tangents } else { Level::Mass };
+        self.evaluate_level(state, acc, gravity, level, ws, out)
+    }
+
+    /// The residual alone, the hot-loop form of a Newton iteration that reuses its iteration
+    /// matrix: into `out` go `residual`, `f_inertia`, `f_elastic`, `f_damping`, `f_gravity`,
+    /// `frame`, `frame_iterations` and `q_jj`; `mass`, `q_v`, `stiffness` and `damping` keep their
+    /// old values. Neither the FFR mass matrix nor the body-axis mass $\mathbf P^T\mathbf M_{ffr}\mathbf P$
+    /// nor its rotation is formed, and the inertia contractions skip those only the partials
+    /// need (`benches/evaluate.rs`, `--profile=residual`). The forces equal those of
+    /// [`Self::evaluate_into`] to round-off (`tests/unit/evaluation.rs`); the workspace holds the
+    /// same configuration afterwards ([`Self::strain_energy_in`], [`Self::kinetic_energy_in`]).
+    pub fn residual_into(
+        &self,
+        state: &BodyState,
+        acc: &[f64],
+        gravity: &Vector3<f64>,
+        ws: &mut Workspace,
+        out: &mut Evaluation,
+    ) -> Result<(), SuperelementError> {
+        self.evaluate_level(state, acc, gravity, Level::Forces, ws, out)
+    }
+
+    fn evaluate_level(
+        &self,
+        state: &BodyState,
+        acc: &[f64],
+        gravity: &Vector3<f64>,
+        level: Level,
         ws: &mut Workspace,
         out: &mut Evaluation,
     ) -> Result<(), SuperelementError> {
@@ -185,14 +218,14 @@ impl Superelement {
             local_coordinates(&frame, &state.r, &state.R, &self.x, &state.eta, &mut ws.kin.q_jj);
         }
         ws.kin
-            .update(frame, iterations, &self.x, self.Phi_j.as_ref(), tangents)?;
+            .update(frame, iterations, &self.x, self.Phi_j.as_ref(), level.tangents())?;
         ws.kin_valid = true;
         for k in 0..self.n_interfaces {
             ws.qd[6 * k..6 * k + 3].copy_from_slice(state.v[k].as_slice());
             ws.qd[6 * k + 3..6 * k + 6].copy_from_slice(state.omega[k].as_slice());
         }
         ws.qd[6 * self.n_interfaces..].copy_from_slice(&state.eta_dot);
-        self.evaluate_local(acc, gravity, tangents, ws, out);
+        self.evaluate_local(acc, gravity, level, ws, out);
         Ok(())
     }
 
@@ -209,7 +242,8 @@ impl Superelement {
         ws.kin = kin.clone();
         ws.qd.copy_from_slice(qd);
         let mut out = Evaluation::zeros(self.n);
-        self.evaluate_local(acc, gravity, tangents, &mut ws, &mut out);
+        let level = if tangents { Level::Tangents } else { Level::Mass };
+        self.evaluate_local(acc, gravity, level, &mut ws, &mut out);
         out
     }
 
@@ -237,10 +271,11 @@ impl Superelement {
         &self,
         acc: &[f64],
         gravity: &Vector3<f64>,
-        tangents: bool,
+        level: Level,
         ws: &mut Workspace,
         out: &mut Evaluation,
     ) {
+        let tangents = level.tangents();
         let n = self.n;
         let N = self.n_interfaces;
         let kin = &ws.kin;
@@ -253,7 +288,7 @@ impl Superelement {
         self.damping_force(kin, mo, loc, w, tangents);
         self.gravity(kin, mo, loc, w, tangents);
         if self.mass_variant == MassVariant::Exact {
-            self.exact_inertia(kin, mo, loc, w, tangents);
+            self.exact_inertia(kin, mo, loc, w, level);
         }
         if tangents {
             // The forces above left out the common left factors X^T (`Local::XE`) and
@@ -262,23 +297,31 @@ impl Superelement {
             loc.apply_lambda_t(&kin.Lambda);
         }
         if self.mass_variant == MassVariant::Lumped {
-            self.lumped_inertia(kin, mo, loc, w, tangents);
-        }
-        for i in 0..n {
-            ws.rho[i] = loc.rho_in[i] + loc.rho_el[i] + loc.rho_d[i] - loc.rho_g[i];
+            self.lumped_inertia(kin, mo, loc, w, level);
         }
         let R = &kin.R_j;
-        rotate_matrix(R, N, &loc.M, &mut out.mass);
         kin.rotate_into(&loc.rho_in, true, &mut out.f_inertia);
         kin.rotate_into(&loc.rho_el, true, &mut out.f_elastic);
         kin.rotate_into(&loc.rho_d, true, &mut out.f_damping);
         kin.rotate_into(&loc.rho_g, true, &mut out.f_gravity);
-        kin.rotate_into(&ws.rho, true, &mut out.residual);
-        out.q_v.copy_from_slice(&out.f_inertia);
-        for j in 0..n {
-            let a = acc[j];
-            for (q, m) in out.q_v.iter_mut().zip(out.mass.col_as_slice(j)) {
-                *q -= m * a;
+        // The residual from its rotated parts (one rotation fewer); the tangents need it in body
+        // axes too.
+        for i in 0..n {
+            out.residual[i] = out.f_inertia[i] + out.f_elastic[i] + out.f_damping[i] - out.f_gravity[i];
+        }
+        if tangents {
+            for i in 0..n {
+                ws.rho[i] = loc.rho_in[i] + loc.rho_el[i] + loc.rho_d[i] - loc.rho_g[i];
+            }
+        }
+        if level.mass() {
+            rotate_matrix(R, N, &loc.M, &mut out.mass);
+            out.q_v.copy_from_slice(&out.f_inertia);
+            for j in 0..n {
+                let a = acc[j];
+                for (q, m) in out.q_v.iter_mut().zip(out.mass.col_as_slice(j)) {
+                    *q -= m * a;
+                }
             }
         }
         out.frame = kin.frame;
@@ -291,12 +334,8 @@ impl Superelement {
         // K^L = Dq B + H Y_r, H = Dy W(y) + M W(a) + Dg g~ - W(rho). With B = T Lambda,
         // T = I - Psi Z and Y = Z Lambda: K^L = Dq Lambda + (-(Dq Psi) + [0, H]) Y, one product
         // with Y for both terms; H is formed in columns 3..6 of that n x 6 factor (`n6`).
-        kin.mul_psi(loc.Dq.as_ref(), &mut ws.n6);
-        for j in 0..6 {
-            for t in ws.n6.col_as_slice_mut(j) {
-                *t = -*t;
-            }
-        }
+        ws.n6.fill(0.0);
+        sub_mul_psi(loc.Dq.as_ref(), &kin.r_loc, &kin.Lambda, &mut ws.n6);
         for b in 0..2 * N {
             let S = skew(&Vector3::new(ws.rho[3 * b], ws.rho[3 * b + 1], ws.rho[3 * b + 2]));
             for c in 0..3 {
@@ -310,10 +349,9 @@ impl Superelement {
         add_mul_w(loc.M.as_ref(), &mo.a, 2 * N, 1.0, &mut ws.n6, 3);
         // Dg is left at zero without gravity (`forces.rs`, `gravity`), where g~ = 0 anyway.
         add_mul_w(loc.Dg.as_ref(), mo.g.as_slice(), 1, 1.0, &mut ws.n6, 3);
-        copy_mat(&mut ws.KL, loc.Dq.as_ref());
-        lambda_right(&kin.Lambda, &mut ws.KL);
-        gemm(&mut ws.KL, ws.n6.as_ref(), kin.Y(), 1.0, Accum::Add);
-        rotate_matrix(R, N, &ws.KL, &mut out.stiffness);
+        // K^L = Dq Lambda + n6 Y: the product here, Dq Lambda inside the rotation.
+        gemm(&mut ws.KL, ws.n6.as_ref(), kin.Y(), 1.0, Accum::Replace);
+        rotate_stiffness(R, &kin.Lambda, &loc.Dq, &ws.KL, &mut out.stiffness);
         rotate_matrix(R, N, &loc.Dy, &mut out.damping);
     }
 
@@ -363,6 +401,42 @@ impl Superelement {
             U += dot(q, &g.b) + 0.5 * dot(&g.b, &g.p);
         }
         U
+    }
+
+    /// [`Self::kinetic_energy`] at the configuration of the last evaluation with `ws`
+    /// ([`Self::evaluate_into`] or [`Self::residual_into`], which forms no mass matrix) for the
+    /// velocities `qd` (the order of [`BodyState::velocity_vector`]), without the $n\times n$ mass
+    /// in absolute coordinates: with $\mathbf y = \bar{\mathbf R}^T\dot{\mathbf q}$ it is
+    /// $\tfrac12\boldsymbol\nu^T\mathbf M_{ffr}\boldsymbol\nu$, $\boldsymbol\nu = \mathbf P\mathbf y$
+    /// (`Exact`; $\mathbf M = \bar{\mathbf R}\mathbf P^T\mathbf M_{ffr}\mathbf P\bar{\mathbf R}^T$), or
+    /// $\tfrac12\mathbf y^T\mathbf M_{CB}\mathbf y$ (`Lumped`). Allocates a few small buffers (an energy
+    /// sensor). Checked equal to [`Self::kinetic_energy`] by `tests/unit/evaluation.rs`.
+    pub fn kinetic_energy_in(&self, ws: &Workspace, qd: &[f64]) -> Result<f64, SuperelementError> {
+        if qd.len() != self.n {
+            return Err(SuperelementError::InvalidState {
+                what: format!("{} velocities for {} coordinates", qd.len(), self.n),
+            });
+        }
+        let kin = &ws.kin;
+        // y, and nu = [xi; c] as the evaluation forms them (from the frame rows of P, the
+        // deformed interface positions and Lambda).
+        let mut mo = Motion::new(self.n_interfaces, self.n);
+        mo.update(kin, qd, &vec![0.0; self.n], &Vector3::zeros(), false);
+        let quadratic = |M: &Mat<f64>, v: &[f64]| {
+            let mut T = 0.0;
+            for (j, vj) in v.iter().enumerate() {
+                let Mv: f64 = M.col_as_slice(j).iter().zip(v).map(|(m, x)| m * x).sum();
+                T += 0.5 * vj * Mv;
+            }
+            T
+        };
+        Ok(match self.mass_variant {
+            MassVariant::Lumped => quadratic(&self.M_CB, &mo.y),
+            MassVariant::Exact => {
+                let nu: Vec<f64> = mo.xi.iter().chain(&mo.c).copied().collect();
+                quadratic(&self.inertia.mass_matrix(&kin.q_jj), &nu)
+            }
+        })
     }
 
     /// Gravity potential $-\mathbf g\cdot(m\mathbf r_j + \mathbf R_j\mathbf s)$, $\mathbf s = m\mathbf d + \mathbf S_t\mathbf q^{jj}$.

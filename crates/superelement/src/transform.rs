@@ -798,17 +798,27 @@ fn lambda_right_rows(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>, rows: std::ops::
         let l: [[f64; 3]; 3] = std::array::from_fn(|c| std::array::from_fn(|d| L[(d, c)]));
         let (c0, rest) = A.as_mut().subcols_mut(6 * k + 3, 3).split_at_col_mut(1);
         let (c1, c2) = rest.split_at_col_mut(1);
-        let (a0, a1, a2) = (
+        mix3(
             &mut first_col_mut(c0)[rows.clone()],
             &mut first_col_mut(c1)[rows.clone()],
             &mut first_col_mut(c2)[rows.clone()],
+            &l,
         );
-        for i in 0..rows.len() {
-            let (x, y, z) = (a0[i], a1[i], a2[i]);
-            a0[i] = l[0][0] * x + l[0][1] * y + l[0][2] * z;
-            a1[i] = l[1][0] * x + l[1][1] * y + l[1][2] * z;
-            a2[i] = l[2][0] * x + l[2][1] * y + l[2][2] * z;
-        }
+    }
+}
+
+/// Row by row, $[a_0, a_1, a_2] \leftarrow [a_0, a_1, a_2]$ times the $3\times3$ whose column $c$ is `l[c]`.
+/// Its own function so that the three columns are distinct arguments, which lets the loop
+/// vectorise (as one function body over slices of the same matrix it stayed scalar).
+#[inline(always)]
+fn mix3(a0: &mut [f64], a1: &mut [f64], a2: &mut [f64], l: &[[f64; 3]; 3]) {
+    let r = a0.len();
+    let (a1, a2) = (&mut a1[..r], &mut a2[..r]);
+    for i in 0..r {
+        let (x, y, z) = (a0[i], a1[i], a2[i]);
+        a0[i] = l[0][0] * x + l[0][1] * y + l[0][2] * z;
+        a1[i] = l[1][0] * x + l[1][1] * y + l[1][2] * z;
+        a2[i] = l[2][0] * x + l[2][1] * y + l[2][2] * z;
     }
 }
 
@@ -927,12 +937,89 @@ fn add_mul_w_body(A: MatRef<'_, f64>, x: &[f64], blocks: usize, alpha: f64, out:
     for b in 0..blocks {
         let (x1, x2, x3) = (alpha * x[3 * b], alpha * x[3 * b + 1], alpha * x[3 * b + 2]);
         let (a0, a1, a2) = (&col(A, 3 * b)[..n], &col(A, 3 * b + 1)[..n], &col(A, 3 * b + 2)[..n]);
-        // A x~ : columns a1 x3 - a2 x2, a2 x1 - a0 x3, a0 x2 - a1 x1.
-        for i in 0..n {
-            o0[i] += a1[i] * x3 - a2[i] * x2;
-            o1[i] += a2[i] * x1 - a0[i] * x3;
-            o2[i] += a0[i] * x2 - a1[i] * x1;
+        add_mul_skew(o0, o1, o2, a0, a1, a2, [x1, x2, x3]);
+    }
+}
+
+/// $[\mathbf o_0, \mathbf o_1, \mathbf o_2] \mathrel{+}= [\mathbf a_0, \mathbf a_1, \mathbf a_2]\tilde{\mathbf x}$:
+/// columns $\mathbf a_1x_3 - \mathbf a_2x_2$, $\mathbf a_2x_1 - \mathbf a_0x_3$, $\mathbf a_0x_2 - \mathbf a_1x_1$
+/// (its own function, so that the outputs are distinct arguments and the loop vectorises).
+#[inline(always)]
+fn add_mul_skew(
+    o0: &mut [f64],
+    o1: &mut [f64],
+    o2: &mut [f64],
+    a0: &[f64],
+    a1: &[f64],
+    a2: &[f64],
+    [x1, x2, x3]: [f64; 3],
+) {
+    let n = o0.len();
+    let (o1, o2, a0, a1, a2) = (&mut o1[..n], &mut o2[..n], &a0[..n], &a1[..n], &a2[..n]);
+    for i in 0..n {
+        o0[i] += a1[i] * x3 - a2[i] * x2;
+        o1[i] += a2[i] * x1 - a0[i] * x3;
+        o2[i] += a0[i] * x2 - a1[i] * x1;
+    }
+}
+
+/// `out` $\mathrel{-}= \mathbf A\boldsymbol\Psi$ ($r\times6$) for $\mathbf A$ ($r\times n$, only its $6N$
+/// interface columns enter), $\boldsymbol\Psi$ from its blocks (rows $[\mathbf I,\ -\tilde{\mathbf r}_k]$ for
+/// $\mathbf u_k$ and $[\mathbf 0,\ \boldsymbol\Lambda_k]$ for $\boldsymbol\theta_k$, `r_loc` and `Lambda` of the
+/// configuration): the first three columns are sums of the $\mathbf u_k$ columns, the last three
+/// two $3\times3$ block products per interface. Replaces a dense product with $\boldsymbol\Psi$
+/// (`Kinematics::mul_psi`) and the subtraction after it where the tangents need
+/// $\mathbf B - \mathbf A\boldsymbol\Psi$: a third of its multiply-adds are with the zero and identity
+/// blocks, and its fixed cost is that of the rest at $n = 14$.
+pub(crate) fn sub_mul_psi(A: MatRef<'_, f64>, r_loc: &[Vector3<f64>], Lambda: &[Matrix3<f64>], out: &mut Mat<f64>) {
+    pulp::Arch::new().dispatch(SubMulPsi { A, r_loc, Lambda, out });
+}
+
+vectorized_kernel!(
+    /// [`sub_mul_psi`].
+    SubMulPsi<'a, 'b> { A: MatRef<'a, f64>, r_loc: &'a [Vector3<f64>], Lambda: &'a [Matrix3<f64>], out: &'b mut Mat<f64> } => sub_mul_psi_body
+);
+
+#[inline(always)]
+fn sub_mul_psi_body(A: MatRef<'_, f64>, r_loc: &[Vector3<f64>], Lambda: &[Matrix3<f64>], out: &mut Mat<f64>) {
+    let r = A.nrows();
+    for (k, (x, L)) in r_loc.iter().zip(Lambda).enumerate() {
+        let mr = -skew(x);
+        let (u0, u1, u2) = (col(A, 6 * k), col(A, 6 * k + 1), col(A, 6 * k + 2));
+        let (t0, t1, t2) = (col(A, 6 * k + 3), col(A, 6 * k + 4), col(A, 6 * k + 5));
+        for (c, u) in [u0, u1, u2].into_iter().enumerate() {
+            sub_combination(
+                &mut out.col_as_slice_mut(c)[..r],
+                [u, u, u, u, u, u],
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                1,
+            );
         }
+        for e in 0..3 {
+            sub_combination(
+                &mut out.col_as_slice_mut(3 + e)[..r],
+                [u0, u1, u2, t0, t1, t2],
+                [mr[(0, e)], mr[(1, e)], mr[(2, e)], L[(0, e)], L[(1, e)], L[(2, e)]],
+                6,
+            );
+        }
+    }
+}
+
+/// `o` $\mathrel{-}= \sum_{a < m} w_a\mathbf x_a$ over the length of `o` ($m$ = 1 or 6); its own function
+/// so that the slices are distinct arguments and the loop vectorises without overlap checks.
+#[inline(always)]
+fn sub_combination(o: &mut [f64], x: [&[f64]; 6], w: [f64; 6], m: usize) {
+    let r = o.len();
+    let (x0, x1, x2, x3, x4, x5) = (&x[0][..r], &x[1][..r], &x[2][..r], &x[3][..r], &x[4][..r], &x[5][..r]);
+    if m == 1 {
+        for i in 0..r {
+            o[i] -= x0[i];
+        }
+        return;
+    }
+    for i in 0..r {
+        o[i] -= (x0[i] * w[0] + x1[i] * w[1] + x2[i] * w[2]) + (x3[i] * w[3] + x4[i] * w[4] + x5[i] * w[5]);
     }
 }
 
@@ -967,12 +1054,17 @@ pub(crate) fn lambda_t_left(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>) {
 
 /// [`lambda_t_left`] on the columns `cols` of `A` only.
 pub(crate) fn lambda_t_left_cols(Lambda: &[Matrix3<f64>], A: &mut Mat<f64>, cols: std::ops::Range<usize>) {
-    let N = Lambda.len();
-    for j in cols {
-        // Exact 6-chunks (u_k, theta_k): no bounds checks in the block rotations.
-        for (c, L) in A.col_as_slice_mut(j)[..6 * N].chunks_exact_mut(6).zip(Lambda) {
-            let v = L.tr_mul(&Vector3::new(c[3], c[4], c[5]));
-            c[3..].copy_from_slice(v.as_slice());
+    // Block by block, the entries of L^T in locals for all columns.
+    for (k, L) in Lambda.iter().enumerate() {
+        let l: [f64; 9] = std::array::from_fn(|e| L[(e % 3, e / 3)]);
+        for j in cols.clone() {
+            let c: &mut [f64; 3] = (&mut A.col_as_slice_mut(j)[6 * k + 3..6 * k + 6])
+                .try_into()
+                .expect("a 3-block");
+            let (x, y, z) = (c[0], c[1], c[2]);
+            c[0] = l[0] * x + l[1] * y + l[2] * z;
+            c[1] = l[3] * x + l[4] * y + l[5] * z;
+            c[2] = l[6] * x + l[7] * y + l[8] * z;
         }
     }
 }
@@ -1138,12 +1230,94 @@ fn rotate_matrix_body(R: &Matrix3<f64>, N: usize, K: &Mat<f64>, out: &mut Mat<f6
     for j in 3 * nb..n {
         out.col_as_slice_mut(j).copy_from_slice(K.col_as_slice(j));
     }
-    for j in 0..n {
+    rotate_rows(R, nb, out);
+}
+
+/// The second pass of [`rotate_matrix`]: the first `nb` 3-blocks of every column of `out` turned
+/// by $\mathbf R$ in place.
+#[inline(always)]
+fn rotate_rows(R: &Matrix3<f64>, nb: usize, out: &mut Mat<f64>) {
+    for j in 0..out.ncols() {
         // Exact 3-chunks: no bounds checks in the block rotations.
         for o in out.col_as_slice_mut(j)[..3 * nb].chunks_exact_mut(3) {
             let v = R * Vector3::new(o[0], o[1], o[2]);
             o.copy_from_slice(v.as_slice());
         }
+    }
+}
+
+/// The stiffness in absolute axes from its two body-axis parts, `out` $= \bar{\mathbf R}(\mathbf D_q
+/// \boldsymbol\Lambda + \mathbf G)\bar{\mathbf R}^T$, without forming $\mathbf D_q\boldsymbol\Lambda + \mathbf G$: the
+/// column pass of [`rotate_matrix`] takes both, $\mathbf D_q$'s $\boldsymbol\theta_k$ column blocks times
+/// $\boldsymbol\Lambda_k\mathbf R^T$ (its $\mathbf u_k$ blocks and $\mathbf G$'s times $\mathbf R^T$), then the
+/// row pass turns the result in place. Saves the copy of $\mathbf D_q$ and the pass of
+/// [`lambda_right`] over it.
+pub(crate) fn rotate_stiffness(
+    R: &Matrix3<f64>,
+    Lambda: &[Matrix3<f64>],
+    Dq: &Mat<f64>,
+    G: &Mat<f64>,
+    out: &mut Mat<f64>,
+) {
+    pulp::Arch::new().dispatch(RotateStiffness { R, Lambda, Dq, G, out });
+}
+
+struct RotateStiffness<'a, 'b> {
+    R: &'a Matrix3<f64>,
+    Lambda: &'a [Matrix3<f64>],
+    Dq: &'a Mat<f64>,
+    G: &'a Mat<f64>,
+    out: &'b mut Mat<f64>,
+}
+
+impl pulp::WithSimd for RotateStiffness<'_, '_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let Self { R, Lambda, Dq, G, out } = self;
+        let n = Dq.nrows();
+        let N = Lambda.len();
+        let Rt = R.transpose();
+        for b in 0..2 * N {
+            // The factor on Dq's block: Lambda_k R^T for theta_k, R^T for u_k.
+            let F = if b % 2 == 1 { Lambda[b / 2] * Rt } else { Rt };
+            let d = [
+                Dq.col_as_slice(3 * b),
+                Dq.col_as_slice(3 * b + 1),
+                Dq.col_as_slice(3 * b + 2),
+            ];
+            let g = [
+                G.col_as_slice(3 * b),
+                G.col_as_slice(3 * b + 1),
+                G.col_as_slice(3 * b + 2),
+            ];
+            for c in 0..3 {
+                set_combination(
+                    &mut out.col_as_slice_mut(3 * b + c)[..n],
+                    [d[0], d[1], d[2], g[0], g[1], g[2]],
+                    [F[(0, c)], F[(1, c)], F[(2, c)], Rt[(0, c)], Rt[(1, c)], Rt[(2, c)]],
+                );
+            }
+        }
+        for j in 6 * N..n {
+            let (d, g) = (&Dq.col_as_slice(j)[..n], &G.col_as_slice(j)[..n]);
+            let o = &mut out.col_as_slice_mut(j)[..n];
+            for i in 0..n {
+                o[i] = d[i] + g[i];
+            }
+        }
+        rotate_rows(R, 2 * N, out);
+    }
+}
+
+/// `o` $= \sum_{a < 6} w_a\mathbf x_a$ over the length of `o` (its own function, so that the slices
+/// are distinct arguments and the loop vectorises without overlap checks).
+#[inline(always)]
+fn set_combination(o: &mut [f64], x: [&[f64]; 6], w: [f64; 6]) {
+    let r = o.len();
+    let (x0, x1, x2, x3, x4, x5) = (&x[0][..r], &x[1][..r], &x[2][..r], &x[3][..r], &x[4][..r], &x[5][..r]);
+    for i in 0..r {
+        o[i] = (x0[i] * w[0] + x1[i] * w[1] + x2[i] * w[2]) + (x3[i] * w[3] + x4[i] * w[4] + x5[i] * w[5]);
     }
 }
 
@@ -1497,6 +1671,35 @@ mod tests {
             let mut out = A.clone();
             lambda_right(&blocks.r, &mut out);
             close(&out, &(&A * &L), "lambda_right");
+            // lambda_t_left_cols: Lambda^T from the left on columns 1..4 of an n-row matrix.
+            let B = Mat::from_fn(n, 5, |_, _| r());
+            let mut out = B.clone();
+            lambda_t_left_cols(&blocks.r, &mut out, 1..4);
+            let LtB = L.transpose() * &B;
+            let mut expected = B.clone();
+            for j in 1..4 {
+                for i in 0..n {
+                    expected[(i, j)] = LtB[(i, j)];
+                }
+            }
+            close(&out, &expected, "lambda_t_left_cols");
+            // sub_mul_psi: out -= A Psi, Psi's rows [I, -r~_k] (u_k) and [0, Lambda_k] (theta_k).
+            let r_loc: Vec<Vector3<f64>> = (0..N).map(|_| Vector3::new(r(), r(), r())).collect();
+            let mut Psi = Mat::<f64>::zeros(n, 6);
+            for k in 0..N {
+                let mr = -skew(&r_loc[k]);
+                for a in 0..3 {
+                    Psi[(6 * k + a, a)] = 1.0;
+                    for b in 0..3 {
+                        Psi[(6 * k + a, 3 + b)] = mr[(a, b)];
+                        Psi[(6 * k + 3 + a, 3 + b)] = blocks.r[k][(a, b)];
+                    }
+                }
+            }
+            let start6 = Mat::from_fn(rows, 6, |_, _| r());
+            let mut out = start6.clone();
+            sub_mul_psi(A.as_ref(), &r_loc, &blocks.r, &mut out);
+            close(&out, &(&start6 - &A * &Psi), "sub_mul_psi");
         }
         // rotate_matrix: Rbar K Rbar^T for a square K (n x n, not symmetric).
         let (N, m) = (2, 3);
@@ -1522,6 +1725,28 @@ mod tests {
                 assert!(
                     (out[(i, j)] - expected[(i, j)]).abs() < 1e-14,
                     "rotate_matrix ({i}, {j})"
+                );
+            }
+        }
+        // rotate_stiffness: Rbar (Dq Lambda + G) Rbar^T.
+        let G = Mat::from_fn(n, n, |_, _| r());
+        let Lambda: Vec<Matrix3<f64>> = (0..N).map(|_| Matrix3::from_fn(|_, _| r())).collect();
+        let mut L = Mat::<f64>::identity(n, n);
+        for k in 0..N {
+            for a in 0..3 {
+                for b in 0..3 {
+                    L[(6 * k + 3 + a, 6 * k + 3 + b)] = Lambda[k][(a, b)];
+                }
+            }
+        }
+        let mut out = Mat::from_fn(n, n, |_, _| f64::NAN);
+        rotate_stiffness(&R, &Lambda, &K, &G, &mut out);
+        let expected = &Rbar * (&K * &L + &G) * Rbar.transpose();
+        for j in 0..n {
+            for i in 0..n {
+                assert!(
+                    (out[(i, j)] - expected[(i, j)]).abs() < 1e-14,
+                    "rotate_stiffness ({i}, {j})"
                 );
             }
         }

@@ -1,6 +1,7 @@
 //! The cheap forms of an evaluation against the full one: `forces` (no tangents: the FFR
 //! partials, the geometric Hessian and the gravity partials are skipped) gives the residual,
-//! its parts and the mass matrix of `evaluate`; a workspace reused across states and across
+//! its parts and the mass matrix of `evaluate`; `residual_into` (no mass matrix either) gives
+//! the residual and its parts, and `kinetic_energy_in` after it the kinetic energy; a workspace reused across states and across
 //! forces-only and full calls (`evaluate_into`, the hot-loop form) gives exactly the result of a
 //! fresh `evaluate`, so no buffer that a forces-only call leaves stale is read by a later call.
 //! Every fixture, frame choice and inertia variant, with damping, with and without gravity, and
@@ -8,9 +9,9 @@
 
 use super::common::*;
 use faer::Mat;
-use nalgebra::Vector3;
-use reduction::ReducedBody;
-use superelement::testing::{coordinate_scales, synthetic_geometric_stiffness, test_state, StateSpec};
+use nalgebra::{Point3, Vector3};
+use reduction::{CbSettings, ModeSelection, ReducedBody};
+use superelement::testing::{coordinate_scales, fixtures, synthetic_geometric_stiffness, test_state, StateSpec};
 use superelement::{Damping, Evaluation, FrameChoice, MassVariant, Superelement};
 
 /// Every (name, superelement) to check: all fixtures x frames x variants with Rayleigh
@@ -31,6 +32,7 @@ fn cases() -> Vec<(String, Superelement)> {
         7,
     ));
     bodies.push(("solid-block-G".into(), with_g));
+    bodies.extend(beams());
     let mut out = Vec::new();
     for (name, body) in &bodies {
         for frame in frame_choices(body) {
@@ -41,6 +43,26 @@ fn cases() -> Vec<(String, Superelement)> {
         }
     }
     out
+}
+
+/// Beams of the sizes the mechanism and the benchmarks use: a segment of the C2 rod (4
+/// elements, 2 modes, n = 14) with the geometric stiffness of its reduction, a 22-coordinate
+/// beam and a 32-coordinate one with geometric stiffness (n > 24: the inertia contractions go
+/// through faer's product instead of the packed one).
+fn beams() -> Vec<(String, ReducedBody)> {
+    let beam = |elements, modes, geometric| {
+        let settings = CbSettings {
+            geometric_stiffening: geometric,
+            ..CbSettings::new(ModeSelection::Count(modes))
+        };
+        let b = Point3::new(0.9, 0.2, -0.1);
+        fixtures::straight_beam_with(Point3::origin(), b, elements, settings, false).2
+    };
+    vec![
+        ("beam14-G".into(), beam(4, 2, true)),
+        ("beam22".into(), beam(20, 10, false)),
+        ("beam32-G".into(), beam(20, 20, true)),
+    ]
 }
 
 /// Largest |a - b| over the entries, against the largest |a|.
@@ -118,6 +140,25 @@ fn a_reused_workspace_gives_the_fresh_result() {
         for ((what, x), (_, y)) in forces_and_mass(&out).into_iter().zip(forces_and_mass(&fresh)) {
             assert!(x == y, "{name}: {what} differs after reuse");
         }
+        // The same with a residual-only call in the middle.
+        let mut ws_residual = se.workspace();
+        let mut after_residual = Evaluation::zeros(se.n_coordinates());
+        se.evaluate_into(&a, &acc_a, &g, true, &mut ws_residual, &mut after_residual)
+            .unwrap();
+        se.residual_into(&b, &acc_b, &g, &mut ws_residual, &mut after_residual)
+            .unwrap();
+        se.evaluate_into(&b, &acc_b, &g, true, &mut ws_residual, &mut after_residual)
+            .unwrap();
+        for ((what, x), (_, y)) in forces_and_mass(&after_residual)
+            .into_iter()
+            .zip(forces_and_mass(&fresh))
+        {
+            assert!(x == y, "{name}: {what} differs after a residual-only call");
+        }
+        assert!(
+            mat_entries(&after_residual.stiffness) == mat_entries(&fresh.stiffness),
+            "{name}: K_t differs after a residual-only call"
+        );
         assert!(
             mat_entries(&out.stiffness) == mat_entries(&fresh.stiffness),
             "{name}: K_t differs after reuse"
@@ -126,5 +167,78 @@ fn a_reused_workspace_gives_the_fresh_result() {
             mat_entries(&out.damping) == mat_entries(&fresh.damping),
             "{name}: C_t differs after reuse"
         );
+    }
+}
+
+/// `residual_into` forms no mass matrix and skips the contractions only the mass and the
+/// partials need: its residual and force parts are those of `evaluate` to round-off, and
+/// `mass`, `q_v`, `K_t`, `C_t` of the output keep the values they had. Deformed, rotated and
+/// moving states, every case of `cases` (the C2 rod's segment `beam14-G` among them), with and
+/// without gravity.
+#[test]
+fn residual_only_matches_the_full_evaluation() {
+    for (name, se) in cases() {
+        let n = se.n_coordinates();
+        for g in [gravity(), Vector3::zeros()] {
+            let (state, acc) = test_state(&se, &StateSpec::moving(75.0, 3));
+            let full = se.evaluate(&state, &acc, &g).unwrap();
+            let mut ws = se.workspace();
+            let mut cheap = Evaluation::zeros(n);
+            let sentinel = 0.125;
+            for A in [&mut cheap.mass, &mut cheap.stiffness, &mut cheap.damping] {
+                A.fill(sentinel);
+            }
+            cheap.q_v.fill(sentinel);
+            se.residual_into(&state, &acc, &g, &mut ws, &mut cheap).unwrap();
+            assert_eq!(full.frame, cheap.frame, "{name}: frame");
+            // The residual is a sum of parts computed in a different order (the inertia force
+            // without M_ffr): round-off of the largest part, a few hundred ulp.
+            let largest = [&full.f_inertia, &full.f_elastic, &full.f_damping, &full.f_gravity]
+                .iter()
+                .flat_map(|v| v.iter())
+                .fold(0.0f64, |m, x| m.max(x.abs()));
+            for (what, a, b) in [
+                ("residual", &full.residual, &cheap.residual),
+                ("f_inertia", &full.f_inertia, &cheap.f_inertia),
+                ("f_elastic", &full.f_elastic, &cheap.f_elastic),
+                ("f_damping", &full.f_damping, &cheap.f_damping),
+                ("f_gravity", &full.f_gravity, &cheap.f_gravity),
+                ("q_jj", &full.q_jj, &cheap.q_jj),
+            ] {
+                let d = a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+                let scale = if what == "q_jj" {
+                    a.iter().fold(f64::MIN_POSITIVE, |m, x| m.max(x.abs()))
+                } else {
+                    largest.max(f64::MIN_POSITIVE)
+                };
+                assert!(
+                    d <= 1e-13 * scale,
+                    "{name}, g = {g:?}: {what} differs by {d:e} (scale {scale:e})"
+                );
+            }
+            for (what, A) in [
+                ("mass", &cheap.mass),
+                ("K_t", &cheap.stiffness),
+                ("C_t", &cheap.damping),
+            ] {
+                assert!(
+                    mat_entries(A).iter().all(|x| *x == sentinel),
+                    "{name}: residual_into wrote {what}"
+                );
+            }
+            assert!(
+                cheap.q_v.iter().all(|x| *x == sentinel),
+                "{name}: residual_into wrote q_v"
+            );
+            // The kinetic energy from the workspace of a residual-only call, against the one of
+            // the full mass matrix (another summation order: round-off of T).
+            let qd = state.velocity_vector();
+            let T = se.kinetic_energy(&state).unwrap();
+            let T_ws = se.kinetic_energy_in(&ws, &qd).unwrap();
+            assert!(
+                (T - T_ws).abs() <= 1e-12 * T,
+                "{name}: kinetic energy {T_ws} against {T}"
+            );
+        }
     }
 }
