@@ -410,6 +410,90 @@ pub struct Integrator<'a> {
     trans: Vec<BodyTranslation>,
     /// The error estimate of the last accepted adaptive step (the PI controller's memory).
     last_error: Option<f64>,
+    /// Free independent nodes whose unknowns modified Newton turns with the node
+    /// ([`CoRotated`]), and their rotations at the iterate of the factorised matrix.
+    corotated: Vec<CoRotated>,
+    factor_rotations: Vec<UnitQuaternion<f64>>,
+}
+
+/// A free independent node (its own rotation coordinate) whose unknowns modified Newton turns
+/// with the node (module docs, "Newton strategy"): the kept factor of $\mathbf S_f$, built where
+/// the node's rotation was $\mathbf R_f$, is used as $\mathbf T\mathbf S_f\mathbf T^T$ with
+/// $\mathbf Q = \mathbf R\mathbf R_f^T$ on the node's rotation unknowns and on its translations
+/// when all three are unknown.
+#[derive(Clone, Debug)]
+struct CoRotated {
+    /// The node's rotation coordinate and its first unknown.
+    rot: usize,
+    rdof: usize,
+    /// The unknowns of its three translations, along the columns of $\mathbf B$ (inertial
+    /// axes), $\mathbf B$ and $\mathbf B^{-1}$.
+    translation: Option<([usize; 3], Matrix3<f64>, Matrix3<f64>)>,
+}
+
+/// Every free independent node of `system` ([`CoRotated`]).
+fn corotated_nodes(system: &System) -> Vec<CoRotated> {
+    let map = &system.topo.map;
+    system
+        .topo
+        .roots
+        .iter()
+        .flatten()
+        .filter_map(|rc| {
+            let crate::topology::RootRotation::Free(rot) = rc.rotation else {
+                return None;
+            };
+            let mut dofs = [0; 3];
+            let mut free = true;
+            for (k, (sc, _)) in rc.translation.iter().enumerate() {
+                match map.scalars[*sc].slot {
+                    crate::coordinates::Slot::Unknown(d) => dofs[k] = d,
+                    crate::coordinates::Slot::Prescribed(_) => free = false,
+                }
+            }
+            let B = Matrix3::from_columns(&[rc.translation[0].1, rc.translation[1].1, rc.translation[2].1]);
+            let translation = if free {
+                B.try_inverse().map(|Bi| (dofs, B, Bi))
+            } else {
+                None
+            };
+            Some(CoRotated {
+                rot,
+                rdof: map.rotations[rot].dof,
+                translation,
+            })
+        })
+        .collect()
+}
+
+/// Turns the residual `v` of the current iterate (rotations `R`) into the axes of the kept
+/// factor (`to_factor`: $\mathbf T^T$; rotations `Rf` of the factorised iterate) or a
+/// correction solved there back ($\mathbf T$): $\mathbf Q^T$ and $\mathbf Q$ on a node's
+/// rotation rows, $\mathbf B^T\mathbf Q^T\mathbf B^{-T}$ and $\mathbf B^{-1}\mathbf Q\mathbf B$ on its
+/// translation rows ($\mathbf F$ is the generalised force along the columns of $\mathbf B$, the
+/// correction the coordinates along them).
+fn corotate(
+    nodes: &[CoRotated],
+    R: &[UnitQuaternion<f64>],
+    Rf: &[UnitQuaternion<f64>],
+    v: &mut [f64],
+    to_factor: bool,
+) {
+    for (c, Rf) in nodes.iter().zip(Rf) {
+        let Q = (R[c.rot] * Rf.inverse()).to_rotation_matrix().into_inner();
+        let r = [c.rdof, c.rdof + 1, c.rdof + 2];
+        let w = get3(v, &r);
+        set3(v, &r, &if to_factor { Q.transpose() * w } else { Q * w });
+        if let Some((d, B, Bi)) = &c.translation {
+            let x = get3(v, d);
+            let y = if to_factor {
+                B.transpose() * (Q.transpose() * (Bi.transpose() * x))
+            } else {
+                Bi * (Q * (B * x))
+            };
+            set3(v, d, &y);
+        }
+    }
 }
 
 /// The translations of a free independent node (three unknown translations and a free
@@ -594,6 +678,8 @@ impl<'a> Integrator<'a> {
             last_corrections: 0,
             trans,
             last_error: None,
+            corotated: corotated_nodes(system),
+            factor_rotations: Vec::new(),
         })
     }
 
@@ -861,6 +947,9 @@ impl<'a> Integrator<'a> {
                     // evaluation: factorise them for the next step rather than waste them.
                     sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, st)));
                     if sys.factor(&mut self.ws).is_ok() {
+                        self.factor_rotations.clear();
+                        self.factor_rotations
+                            .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
                         self.factor_h = Some(h);
                         self.jacobians += 1;
                         self.refresh_next = false;
@@ -915,6 +1004,9 @@ impl<'a> Integrator<'a> {
                     step,
                     what: format!("iteration matrix ({what})"),
                 })?;
+                self.factor_rotations.clear();
+                self.factor_rotations
+                    .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
                 self.factor_h = Some(h);
                 self.jacobians += 1;
             }
@@ -922,12 +1014,33 @@ impl<'a> Integrator<'a> {
             for i in 0..n {
                 self.dx[i] = -self.ws.F[i];
             }
+            // A kept factor was built where the free nodes stood turned by R R_f^T less: solve
+            // in its axes (module docs, "Newton strategy"). A fresh one is at this iterate.
+            let turn = modified && !refresh;
+            if turn {
+                corotate(
+                    &self.corotated,
+                    &st.rotations,
+                    &self.factor_rotations,
+                    &mut self.dx,
+                    true,
+                );
+            }
             sys.solve_factored(&mut self.ws, &mut self.dx)
                 .map_err(|what| SolveError::Singular {
                     at: At::Time(t),
                     step,
                     what: format!("iteration matrix ({what})"),
                 })?;
+            if turn {
+                corotate(
+                    &self.corotated,
+                    &st.rotations,
+                    &self.factor_rotations,
+                    &mut self.dx,
+                    false,
+                );
+            }
             // dx corrects the spatial increment; the body-axis iterates move by R_n^T dx, and a
             // translation's so that the SE(3) update moves the node by dx exactly.
             sys.rotate_components(&prev.rotations, &mut self.dx, true);
