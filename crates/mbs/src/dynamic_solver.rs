@@ -635,31 +635,18 @@ struct BodyTranslation {
     rdof: usize,
 }
 
-/// Every free independent node of `system` ([`BodyTranslation`]).
+/// Every free independent node of `system` whose three translations are unknown
+/// ([`BodyTranslation`]).
 fn body_translations(system: &System) -> Vec<BodyTranslation> {
-    let map = &system.topo.map;
-    system
-        .topo
-        .roots
-        .iter()
-        .flatten()
-        .filter_map(|rc| {
-            let crate::topology::RootRotation::Free(rot) = rc.rotation else {
-                return None;
-            };
-            let mut dofs = [0; 3];
-            for (k, (sc, _)) in rc.translation.iter().enumerate() {
-                match map.scalars[*sc].slot {
-                    crate::coordinates::Slot::Unknown(d) => dofs[k] = d,
-                    crate::coordinates::Slot::Prescribed(_) => return None,
-                }
-            }
-            let B = Matrix3::from_columns(&[rc.translation[0].1, rc.translation[1].1, rc.translation[2].1]);
+    corotated_nodes(system)
+        .into_iter()
+        .filter_map(|c| {
+            let (dofs, B, _) = c.translation?;
             Some(BodyTranslation {
                 dofs,
                 B,
-                rot,
-                rdof: map.rotations[rot].dof,
+                rot: c.rot,
+                rdof: c.rdof,
             })
         })
         .collect()
