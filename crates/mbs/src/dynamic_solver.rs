@@ -473,35 +473,45 @@ pub struct Integrator<'a> {
 pub const PREDICTOR_WINDOW: usize = 8;
 
 /// The body-axis accelerations $\ddot{\mathbf q}_b$ at the starts of the last accepted steps
-/// of one size $h$, oldest first (the predictor's data, module docs "Predictor").
+/// of one size $h$ (the predictor's data, module docs "Predictor"): component by component,
+/// the last `len` values oldest first (`values[i * W1 + j]`, `W1` = [`PREDICTOR_WINDOW`] + 1),
+/// so that a fit reads one contiguous slice.
 #[derive(Clone, Debug, Default)]
 struct AccelerationHistory {
-    rows: std::collections::VecDeque<Vec<f64>>,
+    values: Vec<f64>,
+    len: usize,
     h: Option<f64>,
 }
 
 impl AccelerationHistory {
+    const W1: usize = PREDICTOR_WINDOW + 1;
+
     /// Forgets the steps (after a rejected step: the state went back).
     fn clear(&mut self) {
-        self.rows.clear();
+        self.len = 0;
         self.h = None;
     }
 
     /// Adds the start accelerations `x` of an accepted step of size `h` (a new size starts a
-    /// new history). Allocates only until the window is full.
+    /// new history). Allocates only at the first step.
     fn push(&mut self, x: &[f64], h: f64) {
-        if self.h != Some(h) {
-            self.rows.clear();
+        if self.h != Some(h) || self.values.len() != x.len() * Self::W1 {
+            self.values.clear();
+            self.values.resize(x.len() * Self::W1, 0.0);
+            self.len = 0;
             self.h = Some(h);
         }
-        let mut row = if self.rows.len() > PREDICTOR_WINDOW {
-            self.rows.pop_front().expect("a full window")
-        } else {
-            Vec::with_capacity(x.len())
-        };
-        row.clear();
-        row.extend_from_slice(x);
-        self.rows.push_back(row);
+        let w = Self::W1;
+        if self.len == w {
+            for col in self.values.chunks_exact_mut(w) {
+                col.copy_within(1.., 0);
+            }
+            self.len -= 1;
+        }
+        for (col, &xi) in self.values.chunks_exact_mut(w).zip(x) {
+            col[self.len] = xi;
+        }
+        self.len += 1;
     }
 
     /// The predicted $\ddot q_{b,i}$ at the end of a step of size `h` whose start value is
@@ -510,21 +520,24 @@ impl AccelerationHistory {
     /// change of one step there; `x` itself (constant acceleration) without a full window of
     /// steps of size `h` or when the fit is singular.
     fn predict(&self, i: usize, x: f64, h: f64) -> f64 {
-        let k = self.rows.len();
-        if self.h != Some(h) || k <= PREDICTOR_WINDOW {
+        let w = Self::W1;
+        if self.h != Some(h) || self.len < w {
             return x;
         }
-        let value = |j: usize| if j == k { x } else { self.rows[j][i] };
+        let v = &self.values[i * w..(i + 1) * w];
         let (mut s11, mut s12, mut s22, mut b1, mut b2, mut change) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
-        for j in 1..k {
-            let (x2, x1, y) = (value(j - 1), value(j), value(j + 1));
+        let mut add = |x2: f64, x1: f64, y: f64| {
             s11 += x1 * x1;
             s12 += x1 * x2;
             s22 += x2 * x2;
             b1 += x1 * y;
             b2 += x2 * y;
             change = change.max((y - x1).abs());
+        };
+        for t in v.windows(3) {
+            add(t[0], t[1], t[2]);
         }
+        add(v[w - 2], v[w - 1], x);
         let det = s11 * s22 - s12 * s12;
         // A window of (nearly) collinear values (a constant, a zero) has no unique fit.
         if !(det > 1e-12 * s11 * s22) {
@@ -532,7 +545,7 @@ impl AccelerationHistory {
         }
         let c1 = (b1 * s22 - b2 * s12) / det;
         let c2 = (s11 * b2 - s12 * b1) / det;
-        let p = c1 * x + c2 * value(k - 1);
+        let p = c1 * x + c2 * v[w - 1];
         if (p - x).abs() <= 2.0 * change {
             p
         } else {
@@ -1402,14 +1415,14 @@ mod tests {
         }
         assert_eq!(hist.predict(0, ramp(k), 2e-3), ramp(k));
         hist.push(&[ramp(k)], 2e-3);
-        assert_eq!(hist.rows.len(), 1, "a new step size starts a new history");
+        assert_eq!(hist.len, 1, "a new step size starts a new history");
         hist.clear();
         assert_eq!(hist.predict(0, 5.0, 2e-3), 5.0);
         // The window keeps its length.
         for j in 0..3 * k {
             hist.push(&[ramp(j)], 1e-3);
         }
-        assert_eq!(hist.rows.len(), PREDICTOR_WINDOW + 1);
+        assert_eq!(hist.len, PREDICTOR_WINDOW + 1);
     }
 
     #[test]
