@@ -131,7 +131,7 @@
 //! ($c_1 = 2$, $c_2 = -1$), kept within twice the largest change of one step in the window.
 //! On the C2 rod the accelerations of the interface rotation and of the modal coordinates
 //! are dominated by a vibration at $\omega h \approx 1.4$ (consecutive values nearly
-//! uncorrelated): linear extrapolation doubles their predictor error and takes 2.42 instead of
+//! uncorrelated): linear extrapolation makes their predictor error a third larger and takes 2.42 instead of
 //! 2.19 corrections per step, the fit divides it by 7-17 (from the recorded accelerations) and
 //! leaves the residual after the first correction 6 times smaller (it is quadratic in the
 //! predictor's error), so most steps converge after 2 corrections: 2.00 per step. Modified
@@ -139,7 +139,9 @@
 //! matrix's rate, from the first residual, which the fit does not lower there (the joint
 //! coordinates' accelerations, several frequencies mixed, dominate it); with the fit it took
 //! 3.75 iterations and 0.47 factorisations per step against 3.44 and 0.58.
-//! The predictor changes only where Newton starts: both converge to the same tolerance.
+//! The predictor changes only where Newton starts: both converge to the same tolerance. A
+//! change of $h$ (the adaptive step, the halved steps of a retried one, the last step that
+//! lands on the end time) and a rejected step start the window again.
 //!
 //! The iteration matrix is factorised densely (LU with partial pivoting) up to
 //! [`crate::DENSE_MAX`] unknowns and by the sparse LU on the system pattern above
