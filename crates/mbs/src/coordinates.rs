@@ -303,13 +303,18 @@ pub(crate) fn apply(op: &Op, m: &mut Motion, map: &CoordinateMap, x: &Values) {
             debug_assert_eq!(*col, m.Jv.len());
             let (s, sd, sdd) = x.scalar(map, *coord);
             let n = m.R * axis;
-            let wn = m.w.cross(&n);
-            m.p += n * s;
-            m.a += n * sdd + wn * (2.0 * sd) + (m.al.cross(&n) + m.w.cross(&wn)) * s;
-            m.v += n * sd + wn * s;
-            for k in 0..m.Jv.len() {
-                let c = m.Jw[k].cross(&n) * s;
-                m.Jv[k] += c;
+            // A held coordinate (a support's zero translation) only adds its column.
+            if s != 0.0 || sd != 0.0 || sdd != 0.0 {
+                let wn = m.w.cross(&n);
+                m.p += n * s;
+                m.a += n * sdd + wn * (2.0 * sd) + (m.al.cross(&n) + m.w.cross(&wn)) * s;
+                m.v += n * sd + wn * s;
+            }
+            if s != 0.0 {
+                for k in 0..m.Jv.len() {
+                    let c = m.Jw[k].cross(&n) * s;
+                    m.Jv[k] += c;
+                }
             }
             m.Jv.push(n);
             m.Jw.push(Vector3::zeros());
@@ -318,8 +323,10 @@ pub(crate) fn apply(op: &Op, m: &mut Motion, map: &CoordinateMap, x: &Values) {
             debug_assert_eq!(*col, m.Jv.len());
             let (th, thd, thdd) = x.scalar(map, *coord);
             let n = m.R * axis;
-            m.al += n * thdd + m.w.cross(&n) * thd;
-            m.w += n * thd;
+            if thd != 0.0 || thdd != 0.0 {
+                m.al += n * thdd + m.w.cross(&n) * thd;
+                m.w += n * thd;
+            }
             if th != 0.0 {
                 m.R = so3::exp(&(n * th)) * m.R;
             }
@@ -327,16 +334,21 @@ pub(crate) fn apply(op: &Op, m: &mut Motion, map: &CoordinateMap, x: &Values) {
             m.Jw.push(n);
         }
         Op::Offset { d, C } => {
-            let b = m.R * d;
-            let wb = m.w.cross(&b);
-            m.p += b;
-            m.a += m.al.cross(&b) + m.w.cross(&wb);
-            m.v += wb;
-            for k in 0..m.Jv.len() {
-                let c = m.Jw[k].cross(&b);
-                m.Jv[k] += c;
+            // The closing `Offset(0, R0)` of an independent node only turns the frame.
+            if *d != Vector3::zeros() {
+                let b = m.R * d;
+                let wb = m.w.cross(&b);
+                m.p += b;
+                m.a += m.al.cross(&b) + m.w.cross(&wb);
+                m.v += wb;
+                for k in 0..m.Jv.len() {
+                    let c = m.Jw[k].cross(&b);
+                    m.Jv[k] += c;
+                }
             }
-            m.R *= C;
+            if *C != UnitQuaternion::identity() {
+                m.R *= C;
+            }
         }
         Op::FreeRotation { rot, col } => {
             debug_assert_eq!(*col, m.Jv.len());

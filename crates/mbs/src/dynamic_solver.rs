@@ -97,11 +97,51 @@
 //!   trajectories agree to it. [`StepReport::jacobians`] and [`Trajectory::jacobians`] count the
 //!   factorisations.
 //!
+//! A kept matrix was built where the mechanism stood some steps before, and the iteration
+//! matrix of a turning body turns with it: in the spatial unknowns of a free node (the
+//! interface between two superelements) $\mathbf S \approx \mathbf T\mathbf S_f\mathbf T^T$, with
+//! $\mathbf T$ the node's rotation since the factorisation, $\mathbf Q = \mathbf R\mathbf R_f^T$, on
+//! its rotation and translation unknowns (scalar joint and modal coordinates do not turn).
+//! Modified Newton therefore solves in the kept factor's axes,
+//! $\Delta\mathbf x = \mathbf T\mathbf S_f^{-1}\mathbf T^T(-\mathbf F)$ (`corotate`, free nodes with their
+//! own rotation coordinate; fixed-axis translations of a free node $\mathbf B^{-1}\mathbf Q\mathbf B$).
+//! Any matrix that contracts gives the same solution; this one contracts more. On the
+//! slider-crank with the rod as two beam superelements (validation problem C2, 13 unknowns,
+//! the rod turning 0.008 rad per step) a kept matrix contracted the residual by about 0.012
+//! per correction a step after its factorisation, just above [`MODIFIED_NEWTON_RATE`], so
+//! 0.91 factorisations per step were needed; turned, it contracts by 0.004-0.006 after the
+//! first correction, and the run takes 0.58 factorisations per step at the same 3.44
+//! iterations (0.747M instead of 0.822M instructions per step).
+//!
 //! Modified Newton pays when a kept matrix contracts strongly and tangents cost much more than
 //! forces. On the slider-crank (validation problem C2, one superelement with geometric stiffening)
 //! the tangents cost 2-3 times the forces and a kept matrix contracts by 0.05-0.2 after a few
 //! steps: it takes 3.5 iterations and 0.55 factorisations per step against full Newton's 2 and
 //! 2, and 13 % (2 modes) to 35 % (4 modes) fewer instructions ([`MODIFIED_NEWTON_RATE`]).
+//!
+//! # Predictor
+//!
+//! A step starts from constant accelerations, $\ddot{\mathbf q}_{n+1} = \ddot{\mathbf q}_n$ (body
+//! axes), with $\mathbf a_{n+1}$, $\dot{\mathbf q}_{n+1}$ and $h\Delta\mathbf q$ from the recursion.
+//! Full Newton extrapolates instead once [`PREDICTOR_WINDOW`] + 1 steps of the current $h$
+//! are known: each component from its last two values,
+//! $\ddot q_{n+1} = c_1\ddot q_n + c_2\ddot q_{n-1}$, with $c_1$, $c_2$ fitted by least squares to
+//! the window (`AccelerationHistory::predict`), the recursion of a sampled oscillation
+//! ($c_1 = 2\cos\omega h$, $c_2 = -1$) as well as linear extrapolation of a smooth motion
+//! ($c_1 = 2$, $c_2 = -1$), kept within twice the largest change of one step in the window.
+//! On the C2 rod the accelerations of the interface rotation and of the modal coordinates
+//! are dominated by a vibration at $\omega h \approx 1.4$ (consecutive values nearly
+//! uncorrelated): linear extrapolation makes their predictor error a third larger and takes 2.42 instead of
+//! 2.19 corrections per step, the fit divides it by 7-17 (from the recorded accelerations) and
+//! leaves the residual after the first correction 6 times smaller (it is quadratic in the
+//! predictor's error), so most steps converge after 2 corrections: 2.00 per step. Modified
+//! Newton keeps the constant predictor: its corrections contract linearly, by the kept
+//! matrix's rate, from the first residual, which the fit does not lower there (the joint
+//! coordinates' accelerations, several frequencies mixed, dominate it); with the fit it took
+//! 3.75 iterations and 0.47 factorisations per step against 3.44 and 0.58.
+//! The predictor changes only where Newton starts: both converge to the same tolerance. A
+//! change of $h$ (the adaptive step, the halved steps of a retried one, the last step that
+//! lands on the end time) and a rejected step start the window again.
 //!
 //! The iteration matrix is factorised densely (LU with partial pivoting) up to
 //! [`crate::DENSE_MAX`] unknowns and by the sparse LU on the system pattern above
@@ -238,6 +278,17 @@ pub enum NewtonStrategy {
 /// 460M; with 4 modes 0.1 538M, 0.03 465M, 0.01 438M, 0.003 454M, full Newton 679M. A matrix
 /// kept over many steps contracts by only 0.05-0.2 there (the rod turns 0.016 rad per step), so
 /// a threshold in 0.1-0.5 costs more evaluations than the Jacobians it saves.
+///
+/// Retuned with the kept matrix turned with the free nodes (module docs) on the rod as two beam
+/// superelements (13 unknowns, 1600 steps; iterations / factorisations per step): 0.003
+/// 3.03 / 0.98, 0.005 3.14 / 0.89, 0.007 3.27 / 0.75, 0.01 3.44 / 0.58, 0.015 3.70 / 0.42, 0.02
+/// 3.92 / 0.33, 0.03 4.22 / 0.23, 0.1 5.40 / 0.08. A refresh (tangents, iteration matrix, LU)
+/// costs 1.6 forces-only system evaluations there (callgrind: 139k instructions per forces-only
+/// evaluation, 220k more per refresh), so a step costs 5.37 evaluations at 0.01 and 0.015,
+/// 5.45 at 0.02 and 5.47 at 0.007; with forces 40 % cheaper (a refresh at 1.2 evaluations)
+/// 0.01 stays the cheapest (5.14 against 5.17 and 5.20). A looser threshold for the first
+/// correction alone, whose contraction the predictor's nonlinearity limits, cost more (0.02:
+/// 4.00 / 0.43). The rule counts evaluations, never time, so a run is reproducible.
 pub const MODIFIED_NEWTON_RATE: f64 = 0.01;
 
 impl DynamicSettings {
@@ -410,6 +461,179 @@ pub struct Integrator<'a> {
     trans: Vec<BodyTranslation>,
     /// The error estimate of the last accepted adaptive step (the PI controller's memory).
     last_error: Option<f64>,
+    /// Free independent nodes whose unknowns modified Newton turns with the node
+    /// ([`CoRotated`]), and their rotations at the iterate of the factorised matrix.
+    corotated: Vec<CoRotated>,
+    factor_rotations: Vec<UnitQuaternion<f64>>,
+    /// The start accelerations of the last steps (the full-Newton predictor's data).
+    history: AccelerationHistory,
+}
+
+/// Steps of one size whose start accelerations the full-Newton predictor fits (module docs,
+/// "Predictor"). On the slider-crank (validation problem C2) windows of 6, 12 and 20 steps
+/// gave the same Newton iterations.
+pub const PREDICTOR_WINDOW: usize = 8;
+
+/// The body-axis accelerations $\ddot{\mathbf q}_b$ at the starts of the last accepted steps
+/// of one size $h$ (the predictor's data, module docs "Predictor"): component by component,
+/// the last `len` values oldest first (`values[i * W1 + j]`, `W1` = [`PREDICTOR_WINDOW`] + 1),
+/// so that a fit reads one contiguous slice.
+#[derive(Clone, Debug, Default)]
+struct AccelerationHistory {
+    values: Vec<f64>,
+    len: usize,
+    h: Option<f64>,
+}
+
+impl AccelerationHistory {
+    const W1: usize = PREDICTOR_WINDOW + 1;
+
+    /// Forgets the steps (after a rejected step: the state went back).
+    fn clear(&mut self) {
+        self.len = 0;
+        self.h = None;
+    }
+
+    /// Adds the start accelerations `x` of an accepted step of size `h` (a new size starts a
+    /// new history). Allocates only at the first step.
+    fn push(&mut self, x: &[f64], h: f64) {
+        if self.h != Some(h) || self.values.len() != x.len() * Self::W1 {
+            self.values.clear();
+            self.values.resize(x.len() * Self::W1, 0.0);
+            self.len = 0;
+            self.h = Some(h);
+        }
+        let w = Self::W1;
+        if self.len == w {
+            for col in self.values.chunks_exact_mut(w) {
+                col.copy_within(1.., 0);
+            }
+            self.len -= 1;
+        }
+        for (col, &xi) in self.values.chunks_exact_mut(w).zip(x) {
+            col[self.len] = xi;
+        }
+        self.len += 1;
+    }
+
+    /// The predicted $\ddot q_{b,i}$ at the end of a step of size `h` whose start value is
+    /// `x`: $c_1x_n + c_2x_{n-1}$ with $c_1$, $c_2$ the least-squares fit of
+    /// $x_{k+1} \approx c_1x_k + c_2x_{k-1}$ over the window, kept within twice the largest
+    /// change of one step there; `x` itself (constant acceleration) without a full window of
+    /// steps of size `h` or when the fit is singular.
+    fn predict(&self, i: usize, x: f64, h: f64) -> f64 {
+        let w = Self::W1;
+        if self.h != Some(h) || self.len < w {
+            return x;
+        }
+        let v = &self.values[i * w..(i + 1) * w];
+        let (mut s11, mut s12, mut s22, mut b1, mut b2, mut change) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        let mut add = |x2: f64, x1: f64, y: f64| {
+            s11 += x1 * x1;
+            s12 += x1 * x2;
+            s22 += x2 * x2;
+            b1 += x1 * y;
+            b2 += x2 * y;
+            change = change.max((y - x1).abs());
+        };
+        for t in v.windows(3) {
+            add(t[0], t[1], t[2]);
+        }
+        add(v[w - 2], v[w - 1], x);
+        let det = s11 * s22 - s12 * s12;
+        // A window of (nearly) collinear values (a constant, a zero) has no unique fit.
+        if !(det > 1e-12 * s11 * s22) {
+            return x;
+        }
+        let c1 = (b1 * s22 - b2 * s12) / det;
+        let c2 = (s11 * b2 - s12 * b1) / det;
+        let p = c1 * x + c2 * v[w - 1];
+        if (p - x).abs() <= 2.0 * change {
+            p
+        } else {
+            x
+        }
+    }
+}
+
+/// A free independent node (its own rotation coordinate) whose unknowns modified Newton turns
+/// with the node (module docs, "Newton strategy"): the kept factor of $\mathbf S_f$, built where
+/// the node's rotation was $\mathbf R_f$, is used as $\mathbf T\mathbf S_f\mathbf T^T$ with
+/// $\mathbf Q = \mathbf R\mathbf R_f^T$ on the node's rotation unknowns and on its translations
+/// when all three are unknown.
+#[derive(Clone, Debug)]
+struct CoRotated {
+    /// The node's rotation coordinate and its first unknown.
+    rot: usize,
+    rdof: usize,
+    /// The unknowns of its three translations, along the columns of $\mathbf B$ (inertial
+    /// axes), $\mathbf B$ and $\mathbf B^{-1}$.
+    translation: Option<([usize; 3], Matrix3<f64>, Matrix3<f64>)>,
+}
+
+/// Every free independent node of `system` ([`CoRotated`]).
+fn corotated_nodes(system: &System) -> Vec<CoRotated> {
+    let map = &system.topo.map;
+    system
+        .topo
+        .roots
+        .iter()
+        .flatten()
+        .filter_map(|rc| {
+            let crate::topology::RootRotation::Free(rot) = rc.rotation else {
+                return None;
+            };
+            let mut dofs = [0; 3];
+            let mut free = true;
+            for (k, (sc, _)) in rc.translation.iter().enumerate() {
+                match map.scalars[*sc].slot {
+                    crate::coordinates::Slot::Unknown(d) => dofs[k] = d,
+                    crate::coordinates::Slot::Prescribed(_) => free = false,
+                }
+            }
+            let B = Matrix3::from_columns(&[rc.translation[0].1, rc.translation[1].1, rc.translation[2].1]);
+            let translation = if free {
+                B.try_inverse().map(|Bi| (dofs, B, Bi))
+            } else {
+                None
+            };
+            Some(CoRotated {
+                rot,
+                rdof: map.rotations[rot].dof,
+                translation,
+            })
+        })
+        .collect()
+}
+
+/// Turns the residual `v` of the current iterate (rotations `R`) into the axes of the kept
+/// factor (`to_factor`: $\mathbf T^T$; rotations `Rf` of the factorised iterate) or a
+/// correction solved there back ($\mathbf T$): $\mathbf Q^T$ and $\mathbf Q$ on a node's
+/// rotation rows, $\mathbf B^T\mathbf Q^T\mathbf B^{-T}$ and $\mathbf B^{-1}\mathbf Q\mathbf B$ on its
+/// translation rows ($\mathbf F$ is the generalised force along the columns of $\mathbf B$, the
+/// correction the coordinates along them).
+fn corotate(
+    nodes: &[CoRotated],
+    R: &[UnitQuaternion<f64>],
+    Rf: &[UnitQuaternion<f64>],
+    v: &mut [f64],
+    to_factor: bool,
+) {
+    for (c, Rf) in nodes.iter().zip(Rf) {
+        let Q = (R[c.rot] * Rf.inverse()).to_rotation_matrix().into_inner();
+        let r = [c.rdof, c.rdof + 1, c.rdof + 2];
+        let w = get3(v, &r);
+        set3(v, &r, &if to_factor { Q.transpose() * w } else { Q * w });
+        if let Some((d, B, Bi)) = &c.translation {
+            let x = get3(v, d);
+            let y = if to_factor {
+                B.transpose() * (Q.transpose() * (Bi.transpose() * x))
+            } else {
+                Bi * (Q * (B * x))
+            };
+            set3(v, d, &y);
+        }
+    }
 }
 
 /// The translations of a free independent node (three unknown translations and a free
@@ -426,31 +650,18 @@ struct BodyTranslation {
     rdof: usize,
 }
 
-/// Every free independent node of `system` ([`BodyTranslation`]).
+/// Every free independent node of `system` whose three translations are unknown
+/// ([`BodyTranslation`]).
 fn body_translations(system: &System) -> Vec<BodyTranslation> {
-    let map = &system.topo.map;
-    system
-        .topo
-        .roots
-        .iter()
-        .flatten()
-        .filter_map(|rc| {
-            let crate::topology::RootRotation::Free(rot) = rc.rotation else {
-                return None;
-            };
-            let mut dofs = [0; 3];
-            for (k, (sc, _)) in rc.translation.iter().enumerate() {
-                match map.scalars[*sc].slot {
-                    crate::coordinates::Slot::Unknown(d) => dofs[k] = d,
-                    crate::coordinates::Slot::Prescribed(_) => return None,
-                }
-            }
-            let B = Matrix3::from_columns(&[rc.translation[0].1, rc.translation[1].1, rc.translation[2].1]);
+    corotated_nodes(system)
+        .into_iter()
+        .filter_map(|c| {
+            let (dofs, B, _) = c.translation?;
             Some(BodyTranslation {
                 dofs,
                 B,
-                rot,
-                rdof: map.rotations[rot].dof,
+                rot: c.rot,
+                rdof: c.rdof,
             })
         })
         .collect()
@@ -594,6 +805,9 @@ impl<'a> Integrator<'a> {
             last_corrections: 0,
             trans,
             last_error: None,
+            corotated: corotated_nodes(system),
+            factor_rotations: Vec::new(),
+            history: AccelerationHistory::default(),
         })
     }
 
@@ -669,6 +883,7 @@ impl<'a> Integrator<'a> {
                     }
                     // Rejected: back to t_n.
                     self.state.clone_from(&self.prev);
+                    self.history.clear();
                     self.a.clone_from(&self.a_prev);
                     self.steps -= 1;
                     self.settings.step = h * (0.9 * (adaptive.tolerance / error).cbrt()).clamp(0.2, 0.9);
@@ -792,7 +1007,8 @@ impl<'a> Integrator<'a> {
         let gp = g / (h * b);
         let prev = &self.prev;
         let t = step_end_time(prev.time, h);
-        // Predictor: constant acceleration.
+        // Predictor: constant acceleration (modified Newton), or extrapolated from the last
+        // steps (full Newton; module docs, "Predictor").
         let st = &mut self.trial;
         st.clone_from(prev);
         st.time = t;
@@ -806,7 +1022,11 @@ impl<'a> Integrator<'a> {
             &mut self.qb_n,
         );
         for i in 0..n {
-            let qdd = self.qb_n[i];
+            let qdd = if modified {
+                self.qb_n[i]
+            } else {
+                self.history.predict(i, self.qb_n[i], h)
+            };
             let a_new = ((1.0 - af) * qdd + af * self.qb_n[i] - am * self.a[i]) / (1.0 - am);
             self.vb[i] = self.vb_n[i] + h * (1.0 - g) * self.a[i] + h * g * a_new;
             self.incr_b[i] = h * self.vb_n[i] + h * h * (0.5 - b) * self.a[i] + h * h * b * a_new;
@@ -861,6 +1081,9 @@ impl<'a> Integrator<'a> {
                     // evaluation: factorise them for the next step rather than waste them.
                     sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, st)));
                     if sys.factor(&mut self.ws).is_ok() {
+                        self.factor_rotations.clear();
+                        self.factor_rotations
+                            .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
                         self.factor_h = Some(h);
                         self.jacobians += 1;
                         self.refresh_next = false;
@@ -878,6 +1101,7 @@ impl<'a> Integrator<'a> {
                     self.a[i] = ((1.0 - af) * self.qb[i] + af * self.qb_n[i] - am * self.a[i]) / (1.0 - am);
                 }
                 sys.accept_step(st);
+                self.history.push(&self.qb_n, h);
                 std::mem::swap(&mut self.state, &mut self.trial);
                 self.steps += 1;
                 if !modified {
@@ -915,6 +1139,9 @@ impl<'a> Integrator<'a> {
                     step,
                     what: format!("iteration matrix ({what})"),
                 })?;
+                self.factor_rotations.clear();
+                self.factor_rotations
+                    .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
                 self.factor_h = Some(h);
                 self.jacobians += 1;
             }
@@ -922,12 +1149,33 @@ impl<'a> Integrator<'a> {
             for i in 0..n {
                 self.dx[i] = -self.ws.F[i];
             }
+            // A kept factor was built where the free nodes stood turned by R R_f^T less: solve
+            // in its axes (module docs, "Newton strategy"). A fresh one is at this iterate.
+            let turn = modified && !refresh;
+            if turn {
+                corotate(
+                    &self.corotated,
+                    &st.rotations,
+                    &self.factor_rotations,
+                    &mut self.dx,
+                    true,
+                );
+            }
             sys.solve_factored(&mut self.ws, &mut self.dx)
                 .map_err(|what| SolveError::Singular {
                     at: At::Time(t),
                     step,
                     what: format!("iteration matrix ({what})"),
                 })?;
+            if turn {
+                corotate(
+                    &self.corotated,
+                    &st.rotations,
+                    &self.factor_rotations,
+                    &mut self.dx,
+                    false,
+                );
+            }
             // dx corrects the spatial increment; the body-axis iterates move by R_n^T dx, and a
             // translation's so that the SE(3) update moves the node by dx exactly.
             sys.rotate_components(&prev.rotations, &mut self.dx, true);
@@ -1118,5 +1366,125 @@ fn to_trial(
             &p.dofs,
             &(p.B.transpose() * R.transform_vector(&a)),
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A history of `k` steps of size `h` with values `x(j)`, and the next value predicted from
+    /// `x(k)`.
+    fn predicted(x: impl Fn(usize) -> f64, k: usize, h: f64) -> f64 {
+        let mut hist = AccelerationHistory::default();
+        for j in 0..k {
+            hist.push(&[x(j)], h);
+        }
+        hist.predict(0, x(k), h)
+    }
+
+    #[test]
+    fn the_predictor_continues_an_oscillation_and_a_ramp() {
+        let k = PREDICTOR_WINDOW + 1;
+        // A sampled oscillation at omega h = 1.4 (consecutive values nearly uncorrelated):
+        // x_{n+1} = 2 cos(omega h) x_n - x_{n-1} holds exactly, so the fit finds it; the
+        // tolerance is the round-off of the normal equations on values of order 1 (1e-12).
+        let w = 1.4;
+        let osc = |j: usize| (w * j as f64 + 0.3).sin() + 0.5 * (w * j as f64).cos();
+        let p = predicted(osc, k, 1e-3);
+        assert!((p - osc(k + 1)).abs() < 1e-12, "{p} vs {}", osc(k + 1));
+        // Constant acceleration is off by a step's swing (0.23 here).
+        assert!((osc(k) - osc(k + 1)).abs() > 0.2);
+        // A linear ramp (smooth motion): extrapolated exactly (c1 = 2, c2 = -1).
+        let ramp = |j: usize| 3.0 + 0.25 * j as f64;
+        let p = predicted(ramp, k, 1e-3);
+        assert!((p - ramp(k + 1)).abs() < 1e-12, "{p}");
+    }
+
+    #[test]
+    fn the_predictor_falls_back_to_constant_acceleration() {
+        let k = PREDICTOR_WINDOW + 1;
+        let ramp = |j: usize| 1.0 + j as f64;
+        // Too few steps.
+        assert_eq!(predicted(ramp, k - 1, 1e-3), ramp(k - 1));
+        // A constant (and a zero) window has no unique fit.
+        assert_eq!(predicted(|_| 2.0, k, 1e-3), 2.0);
+        assert_eq!(predicted(|_| 0.0, k, 1e-3), 0.0);
+        // A step of another size, and a history cleared by a rejected step.
+        let mut hist = AccelerationHistory::default();
+        for j in 0..k {
+            hist.push(&[ramp(j)], 1e-3);
+        }
+        assert_eq!(hist.predict(0, ramp(k), 2e-3), ramp(k));
+        hist.push(&[ramp(k)], 2e-3);
+        assert_eq!(hist.len, 1, "a new step size starts a new history");
+        hist.clear();
+        assert_eq!(hist.predict(0, 5.0, 2e-3), 5.0);
+        // The window keeps its length.
+        for j in 0..3 * k {
+            hist.push(&[ramp(j)], 1e-3);
+        }
+        assert_eq!(hist.len, PREDICTOR_WINDOW + 1);
+    }
+
+    #[test]
+    fn the_predictor_stays_within_twice_the_largest_change() {
+        // x_j = (-3)^j + 2^j follows x_{n+1} = -x_n + 6 x_{n-1} exactly, so the fit would
+        // predict x_{k+1}, a change of about 4 * 3^k from x_k, beyond twice the largest change
+        // in the window (about 8/3 * 3^k): the prediction is held at the constant one.
+        let k = PREDICTOR_WINDOW + 1;
+        let x = |j: usize| (-3.0f64).powi(j as i32) + 2.0f64.powi(j as i32);
+        assert_eq!(predicted(x, k, 1e-3), x(k));
+        // A growth the bound admits (roots 1.2 and -0.5) is extrapolated: round-off 1e-12.
+        let y = |j: usize| 1.2f64.powi(j as i32) + (-0.5f64).powi(j as i32);
+        let p = predicted(y, k, 1e-3);
+        assert!((p - y(k + 1)).abs() < 1e-12 * y(k + 1).abs(), "{p} vs {}", y(k + 1));
+    }
+
+    #[test]
+    fn corotation_solves_with_the_turned_matrix() {
+        // A free node's 6 unknowns (translations along a non-orthonormal basis B, then the
+        // rotation) and an uncoupled scalar: the kept matrix S_f, built where the node stood at
+        // R_f, is S_x in inertial axes, P^T S_x P with P = diag(B, I). The same matrix turned
+        // rigidly by Q = R R_f^T is P^T diag(Q, Q) S_x diag(Q, Q)^T P; solving it must equal
+        // T S_f^-1 T^T (`corotate` around the kept solve). Round-off of a 7 x 7 LU on a
+        // well-conditioned matrix and of the 3 x 3 products: 1e-12 relative.
+        use nalgebra::{DMatrix, DVector, Matrix6};
+        let B = Matrix3::new(1.0, 0.2, 0.0, 0.0, 1.0, 0.1, 0.3, 0.0, 1.0);
+        let node = CoRotated {
+            rot: 0,
+            rdof: 3,
+            translation: Some(([0, 1, 2], B, B.try_inverse().unwrap())),
+        };
+        let Rf = [UnitQuaternion::from_euler_angles(0.1, -0.4, 0.7)];
+        let R = [UnitQuaternion::from_euler_angles(0.3, 0.2, -0.5)];
+        let Q = (R[0] * Rf[0].inverse()).to_rotation_matrix().into_inner();
+        let A = Matrix6::from_fn(|i, j| ((i * 7 + j * 3) % 5) as f64 * 0.1 + if i == j { 4.0 } else { 0.0 });
+        let Sx = A + A.transpose();
+        let mut P = Matrix6::identity();
+        P.fixed_view_mut::<3, 3>(0, 0).copy_from(&B);
+        let mut G = Matrix6::zeros();
+        G.fixed_view_mut::<3, 3>(0, 0).copy_from(&Q);
+        G.fixed_view_mut::<3, 3>(3, 3).copy_from(&Q);
+        let embed = |S6: Matrix6<f64>| {
+            let mut S = DMatrix::zeros(7, 7);
+            S.view_mut((0, 0), (6, 6)).copy_from(&S6);
+            S[(6, 6)] = 2.5;
+            S
+        };
+        let Sf = embed(P.transpose() * Sx * P);
+        let Snow = embed(P.transpose() * G * Sx * G.transpose() * P);
+        let F = DVector::from_vec(vec![0.3, -1.2, 0.8, 2.0, -0.4, 0.9, 1.7]);
+        let exact = Snow.clone().lu().solve(&F).unwrap();
+        let mut v: Vec<f64> = F.iter().copied().collect();
+        corotate(std::slice::from_ref(&node), &R, &Rf, &mut v, true);
+        let solved = Sf.clone().lu().solve(&DVector::from_vec(v)).unwrap();
+        let mut v: Vec<f64> = solved.iter().copied().collect();
+        corotate(std::slice::from_ref(&node), &R, &Rf, &mut v, false);
+        let err = (DVector::from_vec(v) - &exact).norm() / exact.norm();
+        assert!(err < 1e-12, "{err:.3e}");
+        // Without the turn the kept matrix solves a different system.
+        let unturned = Sf.lu().solve(&F).unwrap();
+        assert!((unturned - exact).norm() > 1e-3);
     }
 }

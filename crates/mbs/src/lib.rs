@@ -100,6 +100,8 @@
 //! | $\mathbf T(h\Delta\mathbf q)$ | `System::iteration_matrix` | tangent operator $\mathbf J_l$ of each rotation increment | BCA 2012 |
 //! | $\mathbf S = \beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$ | `Workspace::S`, [`LinearSolver`] | iteration matrix; dense LU up to [`DENSE_MAX`] unknowns, sparse above | BCA 2012 |
 //! | $\lVert\mathbf F_{k+1}\rVert/\lVert\mathbf F_k\rVert$ | [`MODIFIED_NEWTON_RATE`] | contraction above which modified Newton ([`NewtonStrategy`]) refactorises | [`dynamic_solver`] |
+//! | $\mathbf S_f,\ \mathbf R_f,\ \mathbf Q = \mathbf R\mathbf R_f^T,\ \mathbf T$ | `Integrator::factor_rotations`, `corotate` | modified Newton's kept iteration matrix, a free node's rotation where it was built, the node's turn since, and the block rotation $\mathbf S \approx \mathbf T\mathbf S_f\mathbf T^T$ | [`dynamic_solver`] |
+//! | $c_1,\ c_2$ | `AccelerationHistory::predict`, [`PREDICTOR_WINDOW`] | least-squares coefficients of the full-Newton predictor $\ddot q_{n+1} = c_1\ddot q_n + c_2\ddot q_{n-1}$ | [`dynamic_solver`] |
 //! | $\mathbf J = [\mathbf L;\ \mathbf H]$ | [`System::momentum`] | linear momentum, angular momentum about the origin: $\mathbf T_{rig}^T\hat{\mathbf M}\dot{\mathbf q}$ | Noether |
 //! | $\mathbf T_{rig}$ | [`System::rigid_velocities`] | $n_{dof}\times6$: independent velocities of the translations along and rotations about $\mathbf e_k$ | [`momentum`] |
 //! | $\mathbf J_0,\ \boldsymbol\lambda$ | `Integrator::J0`, `lambda` | momenta of the start; rigid correction $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ | HLW §IV.4 |
@@ -202,7 +204,7 @@ pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, Sta
 pub use dynamic_solver::{
     fixed_steps, solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters,
     DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE, PI_INTEGRAL,
-    PI_PROPORTIONAL,
+    PI_PROPORTIONAL, PREDICTOR_WINDOW,
 };
 pub use error::{At, Entity, Incomplete, ModelError, SolveError};
 pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
