@@ -1364,15 +1364,11 @@ mod tests {
         );
         let r_loc: Vec<Vector3<f64>> = (0..N).map(|k| x[k] + u_of(&q, k)).collect();
         let Lam: Vec<Matrix3<f64>> = (0..N).map(|k| so3::left_jacobian_inv(&theta_of(&q, k))).collect();
-        let mut Psi = Mat::<f64>::zeros(n, 6);
+        let Psi = dense_psi(&r_loc, &Lam, n);
         let mut L = Mat::<f64>::identity(n, n);
         for k in 0..N {
-            let mr = -skew(&r_loc[k]);
             for a in 0..3 {
-                Psi[(6 * k + a, a)] = 1.0;
                 for b in 0..3 {
-                    Psi[(6 * k + a, 3 + b)] = mr[(a, b)];
-                    Psi[(6 * k + 3 + a, 3 + b)] = Lam[k][(a, b)];
                     L[(6 * k + 3 + a, 6 * k + 3 + b)] = Lam[k][(a, b)];
                 }
             }
@@ -1382,6 +1378,23 @@ mod tests {
         let T = Mat::<f64>::identity(n, n) - &Psi * &Z;
         let X = Mat::from_fn(6 + n, n, |i, j| if i < 6 { Z[(i, j)] } else { T[(i - 6, j)] });
         (frame, q, x, Phi_j, [Psi, L, X])
+    }
+
+    /// The formed $n\times6$ $\boldsymbol\Psi$: rows $[\mathbf I,\ -\tilde{\mathbf r}_k]$ ($\mathbf u_k$) and
+    /// $[\mathbf 0,\ \boldsymbol\Lambda_k]$ ($\boldsymbol\theta_k$) of each interface, zero modal rows.
+    fn dense_psi(r_loc: &[Vector3<f64>], Lambda: &[Matrix3<f64>], n: usize) -> Mat<f64> {
+        let mut Psi = Mat::<f64>::zeros(n, 6);
+        for (k, (r, L)) in r_loc.iter().zip(Lambda).enumerate() {
+            let mr = -skew(r);
+            for a in 0..3 {
+                Psi[(6 * k + a, a)] = 1.0;
+                for b in 0..3 {
+                    Psi[(6 * k + a, 3 + b)] = mr[(a, b)];
+                    Psi[(6 * k + 3 + a, 3 + b)] = L[(a, b)];
+                }
+            }
+        }
+        Psi
     }
 
     fn assert_close(a: MatRef<'_, f64>, b: MatRef<'_, f64>, tol: f64, what: &str) {
@@ -1685,17 +1698,7 @@ mod tests {
             close(&out, &expected, "lambda_t_left_cols");
             // sub_mul_psi: out -= A Psi, Psi's rows [I, -r~_k] (u_k) and [0, Lambda_k] (theta_k).
             let r_loc: Vec<Vector3<f64>> = (0..N).map(|_| Vector3::new(r(), r(), r())).collect();
-            let mut Psi = Mat::<f64>::zeros(n, 6);
-            for k in 0..N {
-                let mr = -skew(&r_loc[k]);
-                for a in 0..3 {
-                    Psi[(6 * k + a, a)] = 1.0;
-                    for b in 0..3 {
-                        Psi[(6 * k + a, 3 + b)] = mr[(a, b)];
-                        Psi[(6 * k + 3 + a, 3 + b)] = blocks.r[k][(a, b)];
-                    }
-                }
-            }
+            let Psi = dense_psi(&r_loc, &blocks.r[..N], n);
             let start6 = Mat::from_fn(rows, 6, |_, _| r());
             let mut out = start6.clone();
             sub_mul_psi(A.as_ref(), &r_loc, &blocks.r, &mut out);
