@@ -444,6 +444,70 @@ impl FfrInertia {
         }
     }
 
+    /// The kinetic energy $\tfrac12\boldsymbol\nu^T\mathbf M_{ffr}(\mathbf q)\boldsymbol\nu$,
+    /// $\boldsymbol\nu = [\boldsymbol\xi_v;\ \boldsymbol\xi_\omega;\ \mathbf c]$, by the blocks of
+    /// [`Self::mass_matrix`] without forming it: $m\,\mathbf v\cdot\mathbf v - 2\mathbf v\cdot(\mathbf s\times
+    /// \boldsymbol\omega) + 2\mathbf v\cdot\mathbf S_t\mathbf c + \boldsymbol\omega\cdot\mathbf J\boldsymbol\omega +
+    /// 2\boldsymbol\omega\cdot(\mathbf S_r - (\tilde{\mathbf S}\mathbf q)^T)\mathbf c + \mathbf c^T\mathbf M_{CB}\mathbf c$, halved,
+    /// with the contractions of $\mathbf q$ alone (an energy sensor at every step: one small
+    /// allocation, no scratch of the force). Checked equal to the quadratic form with
+    /// [`Self::mass_matrix`] by `tests/unit/evaluation.rs` (through `kinetic_energy_in`).
+    pub fn kinetic_energy(&self, q: &[f64], nu: &[f64]) -> f64 {
+        let n = self.n();
+        let m = self.mass;
+        // The stacked product with q alone: S~_i q (3n) then S_bar_sym q (6n), as one column
+        // of `contractions`' product.
+        let mut prod = vec![0.0; 9 * n];
+        if let Some(p) = &self.packed {
+            let (t0, s0) = prod.split_at_mut(3 * n);
+            p.tilde.mul([q], [t0]);
+            p.sym.mul([q], [s0]);
+        } else {
+            faer::linalg::matmul::matmul(
+                faer::MatMut::from_column_major_slice_mut(&mut prod, 9 * n, 1),
+                faer::Accum::Replace,
+                self.stack.as_ref(),
+                faer::MatRef::from_column_major_slice(&q[..n], n, 1),
+                1.0,
+                faer::Par::Seq,
+            );
+        }
+        let q = &q[..n];
+        let (mut x, mut t) = ([0.0; 9], [0.0; 3]);
+        for (j, a) in q.iter().enumerate() {
+            let c = &self.S_x.col_as_slice(j)[..9];
+            for r in 0..9 {
+                x[r] += c[r] * a;
+            }
+            let c = &self.S_t.col_as_slice(j)[..3];
+            for r in 0..3 {
+                t[r] += c[r] * a;
+            }
+        }
+        let s = self.d * m + Vector3::from(t);
+        let X = Matrix3::from_fn(|a, b| x[3 * a + b]);
+        let wp: [f64; 6] = std::array::from_fn(|p| 0.5 * dot(q, &prod[(3 + p) * n..(4 + p) * n]));
+        let W = Matrix3::from_fn(|a, b| wp[pair(a, b)]);
+        let I = Matrix3::identity();
+        let J = self.J0 + I * (2.0 * X.trace()) - X - X.transpose() + I * W.trace() - W;
+        let v = Vector3::new(nu[0], nu[1], nu[2]);
+        let om = Vector3::new(nu[3], nu[4], nu[5]);
+        let c = &nu[6..6 + n];
+        let mut T2 = m * v.dot(&v) - 2.0 * v.dot(&s.cross(&om)) + om.dot(&(J * om));
+        for (j, cj) in c.iter().enumerate() {
+            let st = self.S_t.col_as_slice(j);
+            let sr = self.S_r.col_as_slice(j);
+            // Column j of S_r - (S~ q)^T: (S~ q) is n x 3, column i at prod[i n..].
+            let mut coupling = 0.0;
+            for i in 0..3 {
+                coupling += v[i] * st[i] + om[i] * (sr[i] - prod[i * n + j]);
+            }
+            let mcb: f64 = self.M_CB.col_as_slice(j)[..n].iter().zip(c).map(|(a, b)| a * b).sum();
+            T2 += cj * (2.0 * coupling + mcb);
+        }
+        0.5 * T2
+    }
+
     /// $\mathbf M_{ffr}(\mathbf q)$ (module docs).
     pub fn mass_matrix(&self, q: &[f64]) -> Mat<f64> {
         let n = self.n();

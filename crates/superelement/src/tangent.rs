@@ -434,7 +434,7 @@ impl Superelement {
             MassVariant::Lumped => quadratic(&self.M_CB, &mo.y),
             MassVariant::Exact => {
                 let nu: Vec<f64> = mo.xi.iter().chain(&mo.c).copied().collect();
-                quadratic(&self.inertia.mass_matrix(&kin.q_jj), &nu)
+                self.inertia.kinetic_energy(&kin.q_jj, &nu)
             }
         })
     }
