@@ -579,8 +579,9 @@ fn linear_momentum_is_exact_when_it_is_linear_in_the_velocities() {
     assert!(dH > 1e-8 && (dH / dH2).log2() > 1.7, "{dH} {dH2}");
 }
 
-/// The energy sensors of a run read a flexible body's mass matrix and configuration from the
-/// integrator's last evaluation: they must equal `System::energies` of the recorded state, which
+/// The energy sensors of a run read a flexible body's configuration from the integrator's last
+/// evaluation (the kinetic energy by the blocks of the floating-frame mass, which a residual-only
+/// evaluation does not form): they must equal `System::energies` of the recorded state, which
 /// solves the body's frame and evaluates it afresh. The momentum projection changes the
 /// velocities after that evaluation (the velocities must come from the state), and the beam
 /// is deformed and spinning. Tolerance: the two paths evaluate the same frame (the stored one,
