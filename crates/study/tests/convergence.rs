@@ -122,8 +122,8 @@ fn adaptive_steps_reach_the_fixed_steps_accuracy_with_fewer_steps_on_the_slider_
     // 1260 fixed steps, 4.22e-6 m; tolerance 3.5e-6, 842 + 2 rejected steps, 4.58e-6 m (33 %
     // fewer; 4e-6 gives 829 + 4 steps and 4.67e-6 m, just above the 10 %; 3e-6 947 + 6 steps
     // and 3.46e-6 m). The step sequence of the PI controller follows differences at the Newton
-    // tolerance (a new predictor moved 4e-6 from 4.21e-6 to 4.67e-6 m), hence the finer grid. The crank runs slowly at first and the
-    // step grows there; at full speed it is about the fixed one. At constant crank speed from
+    // tolerance (the fitted predictor of full Newton moved 4e-6 from 4.21e-6 to 4.67e-6 m),
+    // hence the finer grid. The crank runs slowly at first and the step grows there; at full speed it is about the fixed one. At constant crank speed from
     // the start (the example as it is) the pace is uniform and the adaptive step gains nothing
     // over the fixed one at equal error (2729 against 2520 steps at 1.5e-5 m).
     let (tol, n, rejected, e) = best.expect("no tolerance reached the fixed step's error");
