@@ -407,9 +407,18 @@ impl FfrInertia {
         let W = Matrix3::from_fn(|a, b| wp[pair(a, b)]);
         let W3 = Matrix3::from_fn(|a, b| w3p[pair(a, b)]);
         let I = Matrix3::identity();
-        let J = self.J0 + I * (2.0 * X.trace()) - X - X.transpose() + I * W.trace() - W;
+        let J = self.deformed_J(&X, &W);
         let Jd = I * (2.0 * Xd.trace()) - Xd - Xd.transpose() + I * W3.trace() - W3;
         Contractions { s, sd, J, Jd }
+    }
+
+    /// $\mathbf J(\mathbf q) = \mathbf J_0 + 2\,\mathrm{tr}(\mathbf X)\mathbf I - \mathbf X - \mathbf X^T +
+    /// \mathrm{tr}(\mathbf W)\mathbf I - \mathbf W$ from $\mathbf X_{ab} = (\mathbf S_x)_{ab}\mathbf q$ and
+    /// $\mathbf W_{ab} = \mathbf q^T\bar{\mathbf S}_{ab}\mathbf q$ (the force's contractions and the
+    /// kinetic energy share it).
+    fn deformed_J(&self, X: &Matrix3<f64>, W: &Matrix3<f64>) -> Matrix3<f64> {
+        let I = Matrix3::identity();
+        self.J0 + I * (2.0 * X.trace()) - X - X.transpose() + I * W.trace() - W
     }
 
     /// $\mathbf j_q(\mathbf w) = \partial(\mathbf J(\mathbf q)\mathbf w)/\partial\mathbf q$ ($3\times n$):
@@ -488,8 +497,7 @@ impl FfrInertia {
         let X = Matrix3::from_fn(|a, b| x[3 * a + b]);
         let wp: [f64; 6] = std::array::from_fn(|p| 0.5 * dot(q, &prod[(3 + p) * n..(4 + p) * n]));
         let W = Matrix3::from_fn(|a, b| wp[pair(a, b)]);
-        let I = Matrix3::identity();
-        let J = self.J0 + I * (2.0 * X.trace()) - X - X.transpose() + I * W.trace() - W;
+        let J = self.deformed_J(&X, &W);
         let v = Vector3::new(nu[0], nu[1], nu[2]);
         let om = Vector3::new(nu[3], nu[4], nu[5]);
         let c = &nu[6..6 + n];
