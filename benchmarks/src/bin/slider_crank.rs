@@ -7,7 +7,7 @@
 //! cargo run --release -p flexmbs-benchmarks --bin slider_crank -- [--h 1e-4] [--t-end T]
 //!     [--modes 4] [--segments 1] [--kind hex20 --along 24 --across 2] [--frame com|node]
 //!     [--rho-inf 0.9] [--rod solid|beam|round --beam-elements 4] [--geometric-stiffening] [--mass exact|lumped]
-//!     [--newton full|modified] [--csv out.csv] [--reference ref.csv]
+//!     [--newton full|modified] [--tolerance 1e-9] [--csv out.csv] [--reference ref.csv]
 //! ```
 //!
 //! Defaults: h = T/400 with T = 2π/Ω, t_end = 2T. With one segment the midpoint is the mesh's
@@ -22,7 +22,8 @@
 //! through which the axial force changes the bending stiffness. `--mass lumped` uses the
 //! AIC-FFR paper's lumped inertia variant instead of the exact one. `--newton modified` keeps the
 //! factorised iteration matrix across corrections and steps (`mbs::NewtonStrategy`); the
-//! Jacobians (factorisations) per step are printed next to the iterations per step. `--csv`
+//! Jacobians (factorisations) per step are printed next to the iterations per step.
+//! `--tolerance` sets Newton's relative tolerance (`DynamicSettings::tolerance`). `--csv`
 //! writes `t, w, slider_x`; `--reference` reads such a file (a finer run) and prints the
 //! deflection error against it. The time loop (steps and sensor records) is timed both by the
 //! wall clock and by the process's CPU time ([`flexmbs_benchmarks::cpu_seconds`]), which the
@@ -152,6 +153,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let steps = (t_end / h).round() as usize;
     let settings = DynamicSettings {
         newton,
+        tolerance: args.get("tolerance", DynamicSettings::DEFAULT_TOLERANCE)?,
         ..DynamicSettings::new(h, steps as f64 * h, rho_inf)
     };
     let mut it = Integrator::new(&sys, sys.initial_state(), settings)?;
