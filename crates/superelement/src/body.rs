@@ -668,9 +668,20 @@ impl Superelement {
     }
 
     /// Elastic velocity $\dot{\mathbf q}^{jj} = \mathbf T_j\boldsymbol\Lambda\bar{\mathbf R}^T\dot{\mathbf q}$ (5.5).
+    /// Any kinematics of the state will do: after a forces-only evaluation, which leaves
+    /// $\mathbf B$ out, a completed copy is formed.
     pub fn local_velocity(&self, kin: &Kinematics, state: &BodyState) -> Vec<f64> {
         let y = kin.rotate(&state.velocity_vector(), false);
-        let B = kin.B();
+        let completed;
+        let B = match kin.B() {
+            Some(B) => B,
+            None => {
+                let mut k = kin.clone();
+                k.complete();
+                completed = k;
+                completed.B_rows()
+            }
+        };
         (0..self.n)
             .map(|i| (0..self.n).map(|j| B[(i, j)] * y[j]).sum())
             .collect()

@@ -182,7 +182,7 @@ impl Superelement {
             Accum::Add,
         );
         // K^L = Dq B + (Df f~ + Dm m~ - W(rho)) Y_r.
-        gemm(&mut ws.KL, ws.Dq.as_ref(), kin.B(), 1.0, Accum::Replace);
+        gemm(&mut ws.KL, ws.Dq.as_ref(), kin.B_rows(), 1.0, Accum::Replace);
         w_into(&ws.rho, N, &mut ws.H);
         for j in 0..3 {
             for h in ws.H.col_as_slice_mut(j) {

@@ -98,7 +98,17 @@ pub struct Workspace {
 
 impl Workspace {
     /// The configuration of the last evaluation (frame, $\mathbf q^{jj}$, $\mathbf Z_j$, $\mathbf T_j$, ...).
+    /// After a forces-only evaluation ([`crate::Superelement::residual_into`]) $\mathbf T_j$ and
+    /// $\mathbf B$ are not formed ([`Kinematics::T`] is `None`); [`Self::complete_kinematics`]
+    /// forms them.
     pub fn kinematics(&self) -> &Kinematics {
+        &self.kin
+    }
+
+    /// [`Self::kinematics`] with $\mathbf T_j$, $\mathbf B$ and $\mathbf Y_r^T$ formed
+    /// ([`Kinematics::complete`]).
+    pub fn complete_kinematics(&mut self) -> &Kinematics {
+        self.kin.complete();
         &self.kin
     }
 }

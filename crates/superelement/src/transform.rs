@@ -612,12 +612,11 @@ impl Kinematics {
         self.X.as_ref().subrows(0, 6)
     }
 
-    /// $\mathbf T_j$ (5.5), $n\times n$. Formed by [`crate::Superelement::kinematics`] and by
-    /// evaluations with tangents, not by forces-only evaluations (panics there: reading it
-    /// is a programming error, not a user's).
-    pub fn T(&self) -> MatRef<'_, f64> {
-        self.assert_complete("T_j");
-        self.X.as_ref().subrows(6, self.n())
+    /// $\mathbf T_j$ (5.5), $n\times n$: formed by [`crate::Superelement::kinematics`] and by
+    /// evaluations with tangents; `None` after a forces-only evaluation (the forces do not read
+    /// it), until [`Self::complete`].
+    pub fn T(&self) -> Option<MatRef<'_, f64>> {
+        self.is_complete().then(|| self.X.as_ref().subrows(6, self.n()))
     }
 
     /// $\mathbf Y = \mathbf Z_j\boldsymbol\Lambda$: body-axis frame velocity from body-axis interface velocities.
@@ -626,17 +625,30 @@ impl Kinematics {
     }
 
     /// $\mathbf B = \mathbf T_j\boldsymbol\Lambda = \partial\mathbf q^{jj}/\partial(\bar{\mathbf R}^T\mathbf q)$;
-    /// formed as [`Self::T`].
-    pub fn B(&self) -> MatRef<'_, f64> {
-        self.assert_complete("B");
+    /// `None` where [`Self::T`] is.
+    pub fn B(&self) -> Option<MatRef<'_, f64>> {
+        self.is_complete().then(|| self.B_rows())
+    }
+
+    /// The rows of $\mathbf B$ for the tangents, which always follow a complete update.
+    pub(crate) fn B_rows(&self) -> MatRef<'_, f64> {
+        debug_assert!(self.is_complete(), "B read after a forces-only update");
         self.P.as_ref().subrows(6, self.n())
     }
 
-    fn assert_complete(&self, what: &str) {
-        assert!(
-            self.formed == Formed::All,
-            "Kinematics: {what} is formed by evaluations with tangents, not by forces-only ones"
-        );
+    /// Whether $\mathbf T_j$, $\mathbf B$ and $\mathbf Y_r^T$ are formed (not after a
+    /// forces-only evaluation, [`crate::Superelement::residual_into`]).
+    pub fn is_complete(&self) -> bool {
+        self.formed == Formed::All
+    }
+
+    /// Forms $\mathbf T_j$, $\mathbf B$ and $\mathbf Y_r^T$ of the configuration held if a
+    /// forces-only evaluation left them out (3.6k instructions for 14 coordinates).
+    pub fn complete(&mut self) {
+        if self.formed == Formed::Forces {
+            self.form_tangent_part();
+            self.formed = Formed::All;
+        }
     }
 
     /// $\boldsymbol\Phi_{rig}$ (5.2) of this configuration.

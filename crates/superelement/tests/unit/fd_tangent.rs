@@ -324,7 +324,7 @@ fn frame_jacobian() {
                 vec![dt.x, dt.y, dt.z, dr.x, dr.y, dr.z]
             });
             assert_ok(rep, &format!("{} {frame_choice}", fx.name));
-            let Br = rotate_cols(kin.B(), &kin);
+            let Br = rotate_cols(kin.B().expect("complete kinematics"), &kin);
             let rep = check_jacobian("dq_jj/dq", Br.as_ref(), &h, |d| {
                 se.kinematics(&perturb_state(&base, d)).unwrap().q_jj
             });

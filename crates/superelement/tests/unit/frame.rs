@@ -111,7 +111,7 @@ fn interface_frames_are_explicit() {
                 &kin.q_jj[6 * k..6 * k + 6]
             );
             // T_j has zero rows for that interface: its modes are dropped.
-            let T = kin.T();
+            let T = kin.T().expect("complete kinematics");
             for i in 6 * k..6 * k + 6 {
                 assert!((0..se.n_coordinates()).all(|j| T[(i, j)].abs() < 1e-14));
             }
@@ -256,6 +256,52 @@ fn chord_steps_from_the_last_evaluation_find_the_same_frame() {
                 fx.name
             );
             assert!(out.frame_iterations <= 30, "{}: {}", fx.name, out.frame_iterations);
+        }
+    }
+}
+
+/// A forces-only evaluation leaves T_j and B out of the workspace's kinematics: the accessors
+/// say so (`None`) instead of handing out stale rows, the elastic velocity of those kinematics
+/// is still right, and completing them forms the same rows as a full kinematics.
+#[test]
+fn forces_only_kinematics_say_what_they_lack_and_complete_to_the_full_rows() {
+    for fx in all_fixtures() {
+        let se = superelement(&fx.body, FrameChoice::CenterOfMass, MassVariant::Exact);
+        let (state, acc) = test_state(&se, &StateSpec::moving(120.0, 6));
+        let full = se.kinematics(&state).unwrap();
+        let expected = se.local_velocity(&full, &state);
+        let mut ws = se.workspace();
+        let mut out = superelement::Evaluation::zeros(se.n_coordinates());
+        se.residual_into(&state, &acc, &Vector3::zeros(), &mut ws, &mut out)
+            .unwrap();
+        let kin = ws.kinematics();
+        assert!(
+            !kin.is_complete() && kin.T().is_none() && kin.B().is_none(),
+            "{}",
+            fx.name
+        );
+        let qd = se.local_velocity(kin, &state);
+        let scale = expected.iter().fold(f64::MIN_POSITIVE, |m, x| m.max(x.abs()));
+        for (a, b) in qd.iter().zip(&expected) {
+            assert!((a - b).abs() <= 1e-12 * scale, "{}: {a} vs {b}", fx.name);
+        }
+        let kin = ws.complete_kinematics();
+        assert!(kin.is_complete(), "{}", fx.name);
+        for (A, B) in [
+            (kin.T().unwrap(), full.T().unwrap()),
+            (kin.B().unwrap(), full.B().unwrap()),
+        ] {
+            for j in 0..A.ncols() {
+                for i in 0..A.nrows() {
+                    assert!(
+                        (A[(i, j)] - B[(i, j)]).abs() <= 1e-12 * (1.0 + B[(i, j)].abs()),
+                        "{}: ({i}, {j}) {} vs {}",
+                        fx.name,
+                        A[(i, j)],
+                        B[(i, j)]
+                    );
+                }
+            }
         }
     }
 }
