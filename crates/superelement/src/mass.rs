@@ -396,7 +396,15 @@ impl FfrInertia {
     /// and, with `partials` (only the partials need them), $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ and
     /// $\tilde{\mathbf S}_i\ddot{\mathbf q}$: $12n^2$ multiply-adds for the force alone, $21n^2$ with the partials.
     #[inline(always)]
-    fn contractions(&self, q: &[f64], qd: &[f64], qdd: &[f64], partials: bool, w: &mut FfrScratch) -> Contractions {
+    fn contractions<S: pulp::Simd>(
+        &self,
+        simd: S,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        partials: bool,
+        w: &mut FfrScratch,
+    ) -> Contractions {
         let n = self.n();
         let m = self.mass;
         if let Some(p) = &self.packed {
@@ -427,7 +435,7 @@ impl FfrInertia {
         // X_ab = (S_x)_ab q (row 3a + b of S_x), Xd = (S_x)_ab qd, S_t q, S_t qd and the S_r,
         // S_t products of F in one pass over the columns; J1 = 2 tr(X) I - X - X^T.
         let (q, qd) = (&q[..n], &qd[..n]);
-        let [pq, pqd, pqdd] = self.small_products([q, qd, &qdd[..n]]);
+        let [pq, pqd, pqdd] = self.small_products(simd, [q, qd, &qdd[..n]]);
         let v3 = |p: &[f64; SMALL], r: usize| Vector3::new(p[r], p[r + 1], p[r + 2]);
         let s = self.d * m + v3(&pq, 0);
         let sd = v3(&pqd, 0);
@@ -458,15 +466,19 @@ impl FfrInertia {
     }
 
     /// $[\mathbf S_t; \mathbf S_r; \mathbf S_x]\mathbf x_c$ for the right-hand sides `x` ($n$ each),
-    /// by the columns of `small`: rows 0-2, 3-5 and 6-14 of each result.
+    /// by the columns of `small`: rows 0-2, 3-5 and 6-14 of each result. In `simd`'s vectors
+    /// (four-wide with AVX2); each entry is the same sum of fused multiply-adds in the order of
+    /// the columns whatever the vector width (`pulp::Scalar` gives the same bits).
     #[inline(always)]
-    fn small_products<const C: usize>(&self, x: [&[f64]; C]) -> [[f64; SMALL]; C] {
-        // One right-hand side at a time: its SMALL sums stay in registers over all columns.
+    fn small_products<S: pulp::Simd, const C: usize>(&self, simd: S, x: [&[f64]; C]) -> [[f64; SMALL]; C] {
         let mut acc = [[0.0f64; SMALL]; C];
         for (a, x) in acc.iter_mut().zip(x) {
+            let (a, _) = S::as_mut_simd_f64s(a);
             for (col, xj) in self.small.iter().zip(x) {
-                for r in 0..SMALL {
-                    a[r] = col[r].mul_add(*xj, a[r]);
+                let (col, _) = S::as_simd_f64s(col);
+                let b = simd.splat_f64s(*xj);
+                for (a, c) in a.iter_mut().zip(col) {
+                    *a = simd.mul_add_f64s(*c, b, *a);
                 }
             }
         }
@@ -543,7 +555,7 @@ impl FfrInertia {
             );
         }
         let q = &q[..n];
-        let [pq] = self.small_products([q]);
+        let [pq] = self.small_products(pulp::Scalar::new(), [q]);
         let s = self.d * m + Vector3::new(pq[0], pq[1], pq[2]);
         let X = Matrix3::from_fn(|a, b| pq[6 + 3 * a + b]);
         let wp: [f64; 6] = std::array::from_fn(|p| 0.5 * dot(q, &prod[(3 + p) * n..(4 + p) * n]));
@@ -572,7 +584,7 @@ impl FfrInertia {
         let n = self.n();
         let zeros = vec![0.0; n];
         let mut w = FfrScratch::new(n);
-        let c = self.contractions(q, &zeros, &zeros, false, &mut w);
+        let c = self.contractions(pulp::Scalar::new(), q, &zeros, &zeros, false, &mut w);
         let mut M = Mat::zeros(6 + n, 6 + n);
         self.fill_mass(&c, ContractionViews::of(&w.prod, n).tq, &mut M);
         M
@@ -683,7 +695,7 @@ impl FfrInertia {
         impl pulp::WithSimd for Force<'_, '_> {
             type Output = ();
             #[inline(always)]
-            fn with_simd<S: pulp::Simd>(self, _simd: S) {
+            fn with_simd<S: pulp::Simd>(self, simd: S) {
                 let Self {
                     inertia,
                     q,
@@ -694,7 +706,7 @@ impl FfrInertia {
                     out,
                     w,
                 } = self;
-                inertia.force_body(q, nu, nu_dot, mass, partials, out, w)
+                inertia.force_body(simd, q, nu, nu_dot, mass, partials, out, w)
             }
         }
         pulp::Arch::new().dispatch(Force {
@@ -711,8 +723,9 @@ impl FfrInertia {
 
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn force_body(
+    fn force_body<S: pulp::Simd>(
         &self,
+        simd: S,
         q: &[f64],
         nu: &[f64],
         nu_dot: &[f64],
@@ -726,7 +739,7 @@ impl FfrInertia {
         let v3 = |x: &[f64], o: usize| Vector3::new(x[o], x[o + 1], x[o + 2]);
         let (V, Om, qd) = (v3(nu, 0), v3(nu, 3), &nu[6..]);
         let (Vd, Omd, qdd) = (v3(nu_dot, 0), v3(nu_dot, 3), &nu_dot[6..]);
-        let c = self.contractions(q, qd, qdd, partials, w);
+        let c = self.contractions(simd, q, qd, qdd, partials, w);
         let ContractionViews {
             sig,
             sigd,
