@@ -55,8 +55,8 @@ pub fn log(q: &UnitQuaternion<f64>) -> Vector3<f64> {
     let (w, v) = if q.w < 0.0 { (-q.w, -q.imag()) } else { (q.w, q.imag()) };
     let s2 = v.norm_squared();
     // 2 atan2(s, w) / s = (2 / w) atan(x) / x with x = s / w. Below x^2 = 1/64 (angles up to
-    // 0.25 rad: the elastic rotations of the local coordinates, every frame correction) by
-    // the series of atan(x) / x in x^2 (`atan_x_over_x`), which needs neither atan2 nor the
+    // 0.25 rad: the elastic rotations of the local coordinates in every frame solve) by the
+    // series of atan(x) / x in x^2 (`atan_x_over_x`), which needs neither atan2 nor the
     // square root: about a fifth of the instructions.
     let f = if s2 < LOG_SERIES_X2 * (w * w) {
         let iw = 1.0 / w;
