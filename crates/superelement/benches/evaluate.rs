@@ -89,6 +89,12 @@
 //! 1796k -> 1762k; forces and M 54.0k -> 52.3k and the residual alone 36.9k -> 36.1k
 //! (`beam14-G`).
 //!
+//! Then the FFR force's products with [S_t; S_r; S_x] by 16-entry columns in pulp's vectors
+//! and its transposed product by rows, the force compiled for AVX2, and log below 0.25 rad by
+//! the atan(x)/x series: the residual alone (`--profile=residual`) `beam14-G` 27.0k -> 23.9k,
+//! `block14-G` 33.1k -> 29.9k, `beam22-com-exact` 38.2k -> 32.2k, `beam72-G` 349k -> 318k; with
+//! tangents `beam14-G` 120.7k -> 121.7k, `beam72-G` 1742k -> 1733k (BENCHMARKS.md).
+//!
 //! What is left is spread thin: 11 faer products per evaluation with tangents, each
 //! about 1.7k instructions of fixed cost (nano-gemm's planning and driver) beside its kernel,
 //! and plain loops compiled for the baseline x86-64 target (two-wide SIMD, no FMA). Replacing

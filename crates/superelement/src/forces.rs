@@ -88,18 +88,20 @@ impl Motion {
     }
 
     pub fn update(&mut self, kin: &Kinematics, qd: &[f64], qdd: &[f64], g: &Vector3<f64>, tangents: bool) {
-        let n = kin.n();
         let N = kin.n_interfaces();
         kin.rotate_into(qd, false, &mut self.y);
         kin.rotate_into(qdd, false, &mut self.a);
         self.g = kin.R_j.transpose() * g;
-        self.xi = [0.0; 6];
-        for j in 0..n {
-            let p = kin.P.col_as_slice(j);
+        // The sums in a local array (in registers, not through `self`), column slices of fixed
+        // length.
+        let mut xi = [0.0; 6];
+        for (j, yj) in self.y.iter().enumerate() {
+            let p: &[f64; 6] = kin.P.col_as_slice(j)[..6].try_into().expect("6 frame rows");
             for i in 0..6 {
-                self.xi[i] += p[i] * self.y[j];
+                xi[i] += p[i] * yj;
             }
         }
+        self.xi = xi;
         // c = Lambda y - Psi xi, block by block.
         let (xt, xr) = (
             Vector3::new(self.xi[0], self.xi[1], self.xi[2]),
@@ -758,10 +760,10 @@ impl Superelement {
         w.nu[..6].copy_from_slice(&mo.xi);
         w.nu[6..].copy_from_slice(&mo.c);
         let mut xi_yd = [0.0; 6];
-        for j in 0..n {
-            let p = kin.P.col_as_slice(j);
+        for (j, yj) in w.v2.iter().enumerate() {
+            let p: &[f64; 6] = kin.P.col_as_slice(j)[..6].try_into().expect("6 frame rows");
             for i in 0..6 {
-                xi_yd[i] += p[i] * w.v2[j];
+                xi_yd[i] += p[i] * yj;
             }
         }
         // N_y c and its Z-image s.
@@ -781,10 +783,10 @@ impl Superelement {
             }
             w.v1[6 * N..].fill(0.0);
         }
-        for j in 0..6 * N {
-            let z = kin.X.col_as_slice(j);
+        for (j, vj) in w.v1[..6 * N].iter().enumerate() {
+            let z: &[f64; 6] = kin.X.col_as_slice(j)[..6].try_into().expect("6 frame rows");
             for i in 0..6 {
-                s[i] += z[i] * w.v1[j];
+                s[i] += z[i] * vj;
             }
         }
         // nu_dot: top = xi_yd + s ; bottom = Lambda ydot - Psi xi_yd + (N_y c) - Psi s.

@@ -121,7 +121,20 @@ pub struct FfrInertia {
     vec_stack: Mat<f64>,
     /// `stack` and `vec_stack` packed for small bodies ($n \le$ [`PACKED_MAX_N`]).
     packed: Option<PackedInvariants>,
+    /// $[\mathbf S_t; \mathbf S_r; \mathbf S_x]$ column by column, 15 rows padded to [`SMALL`]:
+    /// the force's products with $\mathbf q$, $\dot{\mathbf q}$, $\ddot{\mathbf q}$ by one pass over
+    /// the columns each ([`Self::small_products`]; their sums in fused multiply-adds, the same on
+    /// every machine).
+    small: Vec<[f64; SMALL]>,
+    /// The same 15 rows row by row ($15n$): the transposed product $\mathbf S_t^T\mathbf a +
+    /// \mathbf S_r^T\dot{\boldsymbol\Omega} + \sum_r k_r(\mathbf S_x)_r$ of the force as 15
+    /// contiguous row updates.
+    small_rows: Vec<f64>,
 }
+
+/// Entries per column of [`FfrInertia`]`::small`: $\mathbf S_t$ (rows 0-2), $\mathbf S_r$ (3-5),
+/// $\mathbf S_x$ (6-14), a zero.
+const SMALL: usize = 16;
 
 /// Largest $n$ whose inertia contractions go through [`PackedTall`]; above, faer's product
 /// (its fixed cost small against the $9n^2$ multiply-adds) is kept.
@@ -186,6 +199,20 @@ impl FfrInertia {
             sym: PackedTall::new(6 * n, n, |r, c| stack[(3 * n + r, c)]),
             vec: PackedTall::new(n * n, 9, |r, c| vec_stack[(r, c)]),
         });
+        let small = (0..n)
+            .map(|j| {
+                let mut c = [0.0; SMALL];
+                for i in 0..3 {
+                    c[i] = S_t[(i, j)];
+                    c[3 + i] = S_r[(i, j)];
+                }
+                for r in 0..9 {
+                    c[6 + r] = S_x[(r, j)];
+                }
+                c
+            })
+            .collect::<Vec<_>>();
+        let small_rows = (0..SMALL - 1).flat_map(|r| small.iter().map(move |c| c[r])).collect();
         Self {
             mass: m,
             d,
@@ -199,6 +226,8 @@ impl FfrInertia {
             stack,
             vec_stack,
             packed,
+            small,
+            small_rows,
         }
     }
 
@@ -244,9 +273,24 @@ pub(crate) fn matvec(A: &Mat<f64>, x: &[f64], out: &mut [f64]) {
     }
 }
 
-#[inline]
+/// $\mathbf a\cdot\mathbf b$ over the shorter length: two partial sums of fused multiply-adds
+/// over the pairs of entries (one two-wide vector), the odd last entry added after.
+#[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    let len = a.len().min(b.len());
+    let (a, b) = (&a[..len], &b[..len]);
+    let mut p = [0.0f64; 2];
+    let (ca, cb) = (a.chunks_exact(2), b.chunks_exact(2));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        p[0] = x[0].mul_add(y[0], p[0]);
+        p[1] = x[1].mul_add(y[1], p[1]);
+    }
+    let mut sum = p[0] + p[1];
+    for (x, y) in ra.iter().zip(rb) {
+        sum = x.mul_add(*y, sum);
+    }
+    sum
 }
 
 /// The FFR inertia force and, on request, its partial derivatives (module docs).
@@ -341,13 +385,26 @@ struct Contractions {
     sd: Vector3<f64>,
     J: Matrix3<f64>,
     Jd: Matrix3<f64>,
+    /// $\mathbf S_r\dot{\mathbf q}$, $\mathbf S_t\ddot{\mathbf q}$, $\mathbf S_r\ddot{\mathbf q}$.
+    sr_qd: Vector3<f64>,
+    st_qdd: Vector3<f64>,
+    sr_qdd: Vector3<f64>,
 }
 
 impl FfrInertia {
     /// The contractions $\bar{\mathbf S}^{sym}_p\mathbf q$, $\tilde{\mathbf S}_i\mathbf q$, $\tilde{\mathbf S}_i\dot{\mathbf q}$
     /// and, with `partials` (only the partials need them), $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ and
     /// $\tilde{\mathbf S}_i\ddot{\mathbf q}$: $12n^2$ multiply-adds for the force alone, $21n^2$ with the partials.
-    fn contractions(&self, q: &[f64], qd: &[f64], qdd: &[f64], partials: bool, w: &mut FfrScratch) -> Contractions {
+    #[inline(always)]
+    fn contractions<S: pulp::Simd>(
+        &self,
+        simd: S,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        partials: bool,
+        w: &mut FfrScratch,
+    ) -> Contractions {
         let n = self.n();
         let m = self.mass;
         if let Some(p) = &self.packed {
@@ -375,27 +432,15 @@ impl FfrInertia {
                 faer::Par::Seq,
             );
         }
-        // X_ab = (S_x)_ab q (row 3a + b of S_x), Xd = (S_x)_ab qd, S_t q and S_t qd in one pass
-        // over the columns; J1 = 2 tr(X) I - X - X^T.
+        // X_ab = (S_x)_ab q (row 3a + b of S_x), Xd = (S_x)_ab qd, S_t q, S_t qd and the S_r,
+        // S_t products of F in one pass over the columns; J1 = 2 tr(X) I - X - X^T.
         let (q, qd) = (&q[..n], &qd[..n]);
-        let (mut x, mut xd, mut t, mut td) = ([0.0; 9], [0.0; 9], [0.0; 3], [0.0; 3]);
-        for j in 0..n {
-            let (a, b) = (q[j], qd[j]);
-            let c = &self.S_x.col_as_slice(j)[..9];
-            for r in 0..9 {
-                x[r] += c[r] * a;
-                xd[r] += c[r] * b;
-            }
-            let c = &self.S_t.col_as_slice(j)[..3];
-            for r in 0..3 {
-                t[r] += c[r] * a;
-                td[r] += c[r] * b;
-            }
-        }
-        let s = self.d * m + Vector3::from(t);
-        let sd = Vector3::from(td);
-        let X = Matrix3::from_fn(|a, b| x[3 * a + b]);
-        let Xd = Matrix3::from_fn(|a, b| xd[3 * a + b]);
+        let [pq, pqd, pqdd] = self.small_products(simd, [q, qd, &qdd[..n]]);
+        let v3 = |p: &[f64; SMALL], r: usize| Vector3::new(p[r], p[r + 1], p[r + 2]);
+        let s = self.d * m + v3(&pq, 0);
+        let sd = v3(&pqd, 0);
+        let X = Matrix3::from_fn(|a, b| pq[6 + 3 * a + b]);
+        let Xd = Matrix3::from_fn(|a, b| pqd[6 + 3 * a + b]);
         // W_ab = q^T S_bar_ab q = q.sig_ab / 2 and W3_ab = qd.sig_ab on the six pairs.
         let sig = ContractionViews::of(&w.prod, n).sig;
         let (mut wp, mut w3p) = ([0.0; 6], [0.0; 6]);
@@ -409,7 +454,35 @@ impl FfrInertia {
         let I = Matrix3::identity();
         let J = self.deformed_J(&X, &W);
         let Jd = I * (2.0 * Xd.trace()) - Xd - Xd.transpose() + I * W3.trace() - W3;
-        Contractions { s, sd, J, Jd }
+        Contractions {
+            s,
+            sd,
+            J,
+            Jd,
+            sr_qd: v3(&pqd, 3),
+            st_qdd: v3(&pqdd, 0),
+            sr_qdd: v3(&pqdd, 3),
+        }
+    }
+
+    /// $[\mathbf S_t; \mathbf S_r; \mathbf S_x]\mathbf x_c$ for the right-hand sides `x` ($n$ each),
+    /// by the columns of `small`: rows 0-2, 3-5 and 6-14 of each result. In `simd`'s vectors
+    /// (four-wide with AVX2); each entry is the same sum of fused multiply-adds in the order of
+    /// the columns whatever the vector width (`pulp::Scalar` gives the same bits).
+    #[inline(always)]
+    fn small_products<S: pulp::Simd, const C: usize>(&self, simd: S, x: [&[f64]; C]) -> [[f64; SMALL]; C] {
+        let mut acc = [[0.0f64; SMALL]; C];
+        for (a, x) in acc.iter_mut().zip(x) {
+            let (a, _) = S::as_mut_simd_f64s(a);
+            for (col, xj) in self.small.iter().zip(x) {
+                let (col, _) = S::as_simd_f64s(col);
+                let b = simd.splat_f64s(*xj);
+                for (a, c) in a.iter_mut().zip(col) {
+                    *a = simd.mul_add_f64s(*c, b, *a);
+                }
+            }
+        }
+        acc
     }
 
     /// $\mathbf J(\mathbf q) = \mathbf J_0 + 2\,\mathrm{tr}(\mathbf X)\mathbf I - \mathbf X - \mathbf X^T +
@@ -482,19 +555,9 @@ impl FfrInertia {
             );
         }
         let q = &q[..n];
-        let (mut x, mut t) = ([0.0; 9], [0.0; 3]);
-        for (j, a) in q.iter().enumerate() {
-            let c = &self.S_x.col_as_slice(j)[..9];
-            for r in 0..9 {
-                x[r] += c[r] * a;
-            }
-            let c = &self.S_t.col_as_slice(j)[..3];
-            for r in 0..3 {
-                t[r] += c[r] * a;
-            }
-        }
-        let s = self.d * m + Vector3::from(t);
-        let X = Matrix3::from_fn(|a, b| x[3 * a + b]);
+        let [pq] = self.small_products(pulp::Scalar::new(), [q]);
+        let s = self.d * m + Vector3::new(pq[0], pq[1], pq[2]);
+        let X = Matrix3::from_fn(|a, b| pq[6 + 3 * a + b]);
         let wp: [f64; 6] = std::array::from_fn(|p| 0.5 * dot(q, &prod[(3 + p) * n..(4 + p) * n]));
         let W = Matrix3::from_fn(|a, b| wp[pair(a, b)]);
         let J = self.deformed_J(&X, &W);
@@ -521,7 +584,7 @@ impl FfrInertia {
         let n = self.n();
         let zeros = vec![0.0; n];
         let mut w = FfrScratch::new(n);
-        let c = self.contractions(q, &zeros, &zeros, false, &mut w);
+        let c = self.contractions(pulp::Scalar::new(), q, &zeros, &zeros, false, &mut w);
         let mut M = Mat::zeros(6 + n, 6 + n);
         self.fill_mass(&c, ContractionViews::of(&w.prod, n).tq, &mut M);
         M
@@ -604,10 +667,65 @@ impl FfrInertia {
         self.force_impl(q, nu, nu_dot, false, false, out, w);
     }
 
-    /// [`Self::force_into`] with $\mathbf M_{ffr}$ on request (`mass`).
+    /// [`Self::force_into`] with $\mathbf M_{ffr}$ on request (`mass`). Compiled for the machine's
+    /// vector instructions like the block kernels of [`crate::transform`] (`pulp`'s runtime
+    /// dispatch; AVX2 and FMA where the machine has them), so that its column loops and fused
+    /// multiply-adds run on vector hardware.
     #[allow(clippy::too_many_arguments)]
     fn force_impl(
         &self,
+        q: &[f64],
+        nu: &[f64],
+        nu_dot: &[f64],
+        mass: bool,
+        partials: bool,
+        out: &mut FfrForce,
+        w: &mut FfrScratch,
+    ) {
+        struct Force<'a, 'b> {
+            inertia: &'a FfrInertia,
+            q: &'a [f64],
+            nu: &'a [f64],
+            nu_dot: &'a [f64],
+            mass: bool,
+            partials: bool,
+            out: &'b mut FfrForce,
+            w: &'b mut FfrScratch,
+        }
+        impl pulp::WithSimd for Force<'_, '_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, simd: S) {
+                let Self {
+                    inertia,
+                    q,
+                    nu,
+                    nu_dot,
+                    mass,
+                    partials,
+                    out,
+                    w,
+                } = self;
+                inertia.force_body(simd, q, nu, nu_dot, mass, partials, out, w)
+            }
+        }
+        pulp::Arch::new().dispatch(Force {
+            inertia: self,
+            q,
+            nu,
+            nu_dot,
+            mass,
+            partials,
+            out,
+            w,
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn force_body<S: pulp::Simd>(
+        &self,
+        simd: S,
         q: &[f64],
         nu: &[f64],
         nu_dot: &[f64],
@@ -621,7 +739,7 @@ impl FfrInertia {
         let v3 = |x: &[f64], o: usize| Vector3::new(x[o], x[o + 1], x[o + 2]);
         let (V, Om, qd) = (v3(nu, 0), v3(nu, 3), &nu[6..]);
         let (Vd, Omd, qdd) = (v3(nu_dot, 0), v3(nu_dot, 3), &nu_dot[6..]);
-        let c = self.contractions(q, qd, qdd, partials, w);
+        let c = self.contractions(simd, q, qd, qdd, partials, w);
         let ContractionViews {
             sig,
             sigd,
@@ -634,11 +752,11 @@ impl FfrInertia {
             self.jq(&Om, sig, true, &mut w.jq_Om);
         }
         // F_q = M_CB qdd + S_t^T (Vd - V x Om) + (S_r + S_w)^T Omd + 2 S_w(qd)^T Om
-        //     - 1/2 j_q(Om)^T Om, in one pass over the columns that also sums S_t qdd, S_r qd,
-        // S_r qdd, S_w(q) qd and S_w(q) qdd for F_V, F_Om: S_w(x)^T y = -sum_i y_i S~_i x,
-        // (S_w(q) x)_i = -(S~_i q).x, and j_q(Om)^T Om (`Self::jq`) = sum_ab 2 c_ab (S_x)_ab +
-        // sum_p k_p sig_p with c_ab = delta_ab |Om|^2 - Om_a Om_b and k_p = c_ab, twice for
-        // a != b (the partials form j_q(Om) anyway and take it from there).
+        //     - 1/2 j_q(Om)^T Om. With S_w(x)^T y = -sum_i y_i S~_i x, (S_w(q) x)_i = -(S~_i q).x
+        // and j_q(Om)^T Om (`Self::jq`) = sum_ab 2 c_ab (S_x)_ab + sum_p k_p sig_p, c_ab =
+        // delta_ab |Om|^2 - Om_a Om_b, k_p = c_ab twice for a != b: [S_t; S_r; S_x]^T [a; Omd; -c]
+        // by its rows (`small_rows`), then the columns of the contractions S~_i q, S~_i qd,
+        // sig_p combined, each a loop over j.
         let (qd, qdd) = (&qd[..n], &qdd[..n]);
         let F = &mut out.F;
         let Fq = &mut F[6..6 + n];
@@ -646,52 +764,41 @@ impl FfrInertia {
         let a = Vd - V.cross(&Om);
         let o2 = Om.norm_squared();
         let cab = |a: usize, b: usize| if a == b { o2 - Om[a] * Om[a] } else { -Om[a] * Om[b] };
-        let kx: [f64; 9] = std::array::from_fn(|r| 2.0 * cab(r / 3, r % 3));
+        let mut wt = [0.0; SMALL - 1];
+        for i in 0..3 {
+            wt[i] = a[i];
+            wt[3 + i] = Omd[i];
+        }
+        for r in 0..9 {
+            wt[6 + r] = -cab(r / 3, r % 3);
+        }
+        for (row, w) in self.small_rows.chunks_exact(n).zip(wt) {
+            for (f, x) in Fq.iter_mut().zip(row) {
+                *f = x.mul_add(w, *f);
+            }
+        }
         let ks: [f64; 6] = std::array::from_fn(|p| {
             let (a, b) = PAIRS[p];
-            cab(a, b) * if a == b { 1.0 } else { 2.0 }
+            -0.5 * cab(a, b) * if a == b { 1.0 } else { 2.0 }
         });
         let sg: [&[f64]; 6] = std::array::from_fn(|p| &col(sig, p)[..n]);
         let t: [&[f64]; 3] = std::array::from_fn(|i| &col(tq, i)[..n]);
         let td: [&[f64]; 3] = std::array::from_fn(|i| &col(tqd, i)[..n]);
-        let (mut St_qdd, mut Sr_qd, mut Sr_qdd, mut Sw_qd, mut Sw_qdd) =
-            ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
-        for (j, f) in Fq.iter_mut().enumerate() {
-            let st = &self.S_t.col_as_slice(j)[..3];
-            let sr = &self.S_r.col_as_slice(j)[..3];
-            let (x, xx) = (qd[j], qdd[j]);
-            let mut v = 0.0;
-            for i in 0..3 {
-                v += st[i] * a[i] + sr[i] * Omd[i] - Omd[i] * t[i][j] - 2.0 * Om[i] * td[i][j];
-                St_qdd[i] += st[i] * xx;
-                Sr_qd[i] += sr[i] * x;
-                Sr_qdd[i] += sr[i] * xx;
-                Sw_qd[i] -= t[i][j] * x;
-                Sw_qdd[i] -= t[i][j] * xx;
-            }
-            let mut jo = 0.0;
-            if partials {
-                let jq = &w.jq_Om.col_as_slice(j)[..3];
-                for i in 0..3 {
-                    jo += jq[i] * Om[i];
-                }
-            } else {
-                let sx = &self.S_x.col_as_slice(j)[..9];
-                for r in 0..9 {
-                    jo += kx[r] * sx[r];
-                }
-                for p in 0..6 {
-                    jo += ks[p] * sg[p][j];
-                }
-            }
-            *f += v - 0.5 * jo;
+        let (ct, cd) = (-Omd, Om * -2.0);
+        for j in 0..n {
+            let v = (ct[0] * t[0][j] + ct[1] * t[1][j] + ct[2] * t[2][j])
+                + (cd[0] * td[0][j] + cd[1] * td[1][j] + cd[2] * td[2][j]);
+            let o = (ks[0] * sg[0][j] + ks[1] * sg[1][j] + ks[2] * sg[2][j])
+                + (ks[3] * sg[3][j] + ks[4] * sg[4][j] + ks[5] * sg[5][j]);
+            Fq[j] += v + o;
         }
-        let v3a = Vector3::from;
-        let Srw_qd = v3a(Sr_qd) + v3a(Sw_qd);
-        let Srw_qdd = v3a(Sr_qdd) + v3a(Sw_qdd);
+        let Sw_qd = -Vector3::new(dot(t[0], qd), dot(t[1], qd), dot(t[2], qd));
+        let Sw_qdd = -Vector3::new(dot(t[0], qdd), dot(t[1], qdd), dot(t[2], qdd));
+        let Srw_qd = c.sr_qd + Sw_qd;
+        let Srw_qdd = c.sr_qdd + Sw_qdd;
         let p_V = V * m + Om.cross(&s) + sd;
         let p_Om = s.cross(&V) + c.J * Om + Srw_qd;
-        let F_V = Vd * m + Omd.cross(&s) + v3a(St_qdd) + Om.cross(&sd) + Om.cross(&p_V);
+        let F_V = Vd * m + Omd.cross(&s) + c.st_qdd + Om.cross(&sd) + Om.cross(&p_V);
         let F_Om = s.cross(&Vd) + c.J * Omd + Srw_qdd + sd.cross(&V) + c.Jd * Om + Om.cross(&p_Om) + V.cross(&p_V);
         F[0..3].copy_from_slice(F_V.as_slice());
         F[3..6].copy_from_slice(F_Om.as_slice());

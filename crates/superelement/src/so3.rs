@@ -53,15 +53,46 @@ pub fn exp(theta: &Vector3<f64>) -> UnitQuaternion<f64> {
 pub fn log(q: &UnitQuaternion<f64>) -> Vector3<f64> {
     let q = q.quaternion();
     let (w, v) = if q.w < 0.0 { (-q.w, -q.imag()) } else { (q.w, q.imag()) };
-    let s = v.norm();
-    // 2 atan2(s, w) / s; below s = 1e-6 the series 2/w (1 - s^2/(3 w^2)) is exact to
-    // round-off (next term s^4/(5 w^4) < 1e-24).
-    let f = if s < 1e-6 {
-        2.0 / w * (1.0 - s * s / (3.0 * w * w))
+    let s2 = v.norm_squared();
+    // 2 atan2(s, w) / s = (2 / w) atan(x) / x with x = s / w. Below x^2 = 1/64 (angles up to
+    // 0.25 rad: the elastic rotations of the local coordinates in every frame solve) by the
+    // series of atan(x) / x in x^2 (`atan_x_over_x`), which needs neither atan2 nor the
+    // square root: about a fifth of the instructions.
+    let f = if s2 < LOG_SERIES_X2 * (w * w) {
+        let iw = 1.0 / w;
+        2.0 * iw * atan_x_over_x(s2 * iw * iw)
     } else {
+        let s = s2.sqrt();
         2.0 * s.atan2(w) / s
     };
     v * f
+}
+
+/// Largest $x^2 = |\mathbf v|^2/w^2$ at which [`log`] takes the series ([`atan_x_over_x`]).
+const LOG_SERIES_X2: f64 = 1.0 / 64.0;
+
+/// $\arctan(x)/x = \sum_k (-1)^k x^{2k}/(2k+1)$ from $x^2 < 1/64$, to $x^{16}$ by Horner: the first
+/// term left out, $x^{18}/19 < 3\cdot10^{-18}$, is below half an ulp of the sum (about 1), so
+/// the result is the function to round-off (checked against `atan` by
+/// `tests/unit/so3.rs::log_series_matches_atan2`).
+#[inline]
+fn atan_x_over_x(x2: f64) -> f64 {
+    const C: [f64; 9] = [
+        1.0,
+        -1.0 / 3.0,
+        1.0 / 5.0,
+        -1.0 / 7.0,
+        1.0 / 9.0,
+        -1.0 / 11.0,
+        1.0 / 13.0,
+        -1.0 / 15.0,
+        1.0 / 17.0,
+    ];
+    let mut p = C[8];
+    for c in C[..8].iter().rev() {
+        p = c + x2 * p;
+    }
+    p
 }
 
 /// $\exp$ as a rotation matrix.
@@ -113,29 +144,18 @@ pub fn right_jacobian(theta: &Vector3<f64>) -> Matrix3<f64> {
 /// about $6\epsilon/t^6/\delta(0) \approx 3\cdot10^{-10}$ relative to cancellation at $t = 0.5$;
 /// both are far below what multiplies them ($\gamma$ and $\delta$ enter with $t^2$ and $t^4$).
 fn jinv_coefficients(t: f64) -> (f64, f64, f64) {
-    // b_k: coefficient of t^{2k} in beta(t) = (1 - (t/2) cot(t/2)) / t^2.
-    const B: [f64; 7] = [
-        1.0 / 12.0,
-        1.0 / 720.0,
-        1.0 / 30240.0,
-        1.0 / 1209600.0,
-        1.0 / 47900160.0,
-        691.0 / 1307674368000.0,
-        7.0 / (6.0 * 87178291200.0),
-    ];
+    let beta = jinv_beta(t);
     if t < 0.5 {
         let t2 = t * t;
-        let mut beta = 0.0;
         let mut gamma = 0.0;
         let mut delta = 0.0;
         let mut p = 1.0; // t^{2k}
         for k in 0..7 {
-            beta += B[k] * p;
             if k + 1 < 7 {
-                gamma += 2.0 * (k + 1) as f64 * B[k + 1] * p;
+                gamma += 2.0 * (k + 1) as f64 * JINV_B[k + 1] * p;
             }
             if k + 2 < 7 {
-                delta += 4.0 * (k + 1) as f64 * (k + 2) as f64 * B[k + 2] * p;
+                delta += 4.0 * (k + 1) as f64 * (k + 2) as f64 * JINV_B[k + 2] * p;
             }
             p *= t2;
         }
@@ -144,17 +164,44 @@ fn jinv_coefficients(t: f64) -> (f64, f64, f64) {
         let c = 1.0 / (0.5 * t).tan();
         let c2 = 1.0 + c * c;
         let (t2, t3, t4) = (t * t, t * t * t, t * t * t * t);
-        let beta = 1.0 / t2 - c / (2.0 * t);
         let d1 = -2.0 / t3 + c2 / (4.0 * t) + c / (2.0 * t2);
         let d2 = 6.0 / t4 - c * c2 / (4.0 * t) - c2 / (2.0 * t2) - c / t3;
         (beta, d1 / t, d2 / t2 - d1 / t3)
     }
 }
 
+/// $b_k$: the coefficient of $t^{2k}$ in $\beta(t) = (1 - \frac t2\cot\frac t2)/t^2$.
+const JINV_B: [f64; 7] = [
+    1.0 / 12.0,
+    1.0 / 720.0,
+    1.0 / 30240.0,
+    1.0 / 1209600.0,
+    1.0 / 47900160.0,
+    691.0 / 1307674368000.0,
+    7.0 / (6.0 * 87178291200.0),
+];
+
+/// $\beta(t)$ of [`jinv_coefficients`] alone ($\mathbf J_l^{-1}$ needs no more).
+fn jinv_beta(t: f64) -> f64 {
+    if t < 0.5 {
+        let t2 = t * t;
+        let mut beta = 0.0;
+        let mut p = 1.0; // t^{2k}
+        for b in JINV_B {
+            beta += b * p;
+            p *= t2;
+        }
+        beta
+    } else {
+        let c = 1.0 / (0.5 * t).tan();
+        1.0 / (t * t) - c / (2.0 * t)
+    }
+}
+
 /// $\mathbf J_l^{-1}(\boldsymbol\theta) = \mathbf I - \tfrac12\tilde{\boldsymbol\theta} +
 /// \beta(t)\tilde{\boldsymbol\theta}^2$.
 pub fn left_jacobian_inv(theta: &Vector3<f64>) -> Matrix3<f64> {
-    let (beta, _, _) = jinv_coefficients(theta.norm());
+    let beta = jinv_beta(theta.norm());
     let S = skew(theta);
     Matrix3::identity() - S * 0.5 + S * S * beta
 }

@@ -391,3 +391,31 @@ fn ffr_partials() {
         .fold(0.0, f64::max);
     assert!(diff == 0.0);
 }
+
+/// The force is linear in the accelerations with the mass matrix as factor: F(q, nu, nu_dot) -
+/// F(q, nu, 0) = M_ffr(q) nu_dot, with M_ffr formed entry by entry from the invariants
+/// (`FfrInertia::mass_matrix`) and the force by its column kernels (the packed invariant
+/// products, the row updates of the transposed product), to round-off.
+#[test]
+fn ffr_force_is_linear_in_the_accelerations_with_the_mass_matrix() {
+    let fx = l_frame();
+    let se = superelement(&fx.body, superelement::FrameChoice::CenterOfMass, MassVariant::Exact);
+    let I = se.ffr_inertia();
+    let n = se.n_coordinates();
+    let mut rng = superelement::testing::Rng::new(23);
+    let q: Vec<f64> = (0..n).map(|_| 0.05 * rng.uniform()).collect();
+    let nu: Vec<f64> = (0..6 + n).map(|_| 3.0 * rng.uniform()).collect();
+    let nud: Vec<f64> = (0..6 + n).map(|_| 9.0 * rng.uniform()).collect();
+    let F = I.force(&q, &nu, &nud, false).F;
+    let F0 = I.force(&q, &nu, &vec![0.0; 6 + n], false).F;
+    let M = I.mass_matrix(&q);
+    for i in 0..6 + n {
+        let (mut lin, mut scale) = (0.0, F[i].abs() + F0[i].abs());
+        for j in 0..6 + n {
+            lin += M[(i, j)] * nud[j];
+            scale += (M[(i, j)] * nud[j]).abs();
+        }
+        let gap = (F[i] - F0[i] - lin).abs();
+        assert!(gap <= 1e-14 * scale, "row {i}: {gap:e} of {scale:e}");
+    }
+}
