@@ -977,7 +977,8 @@ impl<'a> Integrator<'a> {
     pub fn step(&mut self) -> Result<StepReport, SolveError> {
         self.prev.clone_from(&self.state);
         self.jacobians = 0;
-        let mut residuals = Vec::with_capacity(4);
+        // Room for the usual few corrections (a longer history grows once).
+        let mut residuals = Vec::with_capacity(8);
         let result = match self.settings.newton {
             NewtonStrategy::Full => self.attempt(false, &mut residuals),
             NewtonStrategy::Modified => match self.attempt(true, &mut residuals) {

@@ -310,6 +310,8 @@ pub(crate) struct ElementBuffer {
     /// The element matrices times one unknown's port column, all element rows
     /// (`System::local_matrices`).
     pub y: [Vec<f64>; 3],
+    /// The ports' unknown columns of $\mathbf J$ (`System::local_matrices`).
+    pub ports: Vec<(usize, usize, [f64; 6])>,
 }
 
 /// A model ready for analysis.
@@ -1244,6 +1246,7 @@ impl System {
 
     pub(crate) fn workspace(&self) -> Workspace {
         let nn = self.model.nodes.len();
+        let n = self.n_dof();
         let np = self.topo.map.n_prescribed();
         let nnz = self.pattern.nnz();
         Workspace {
@@ -1281,6 +1284,12 @@ impl System {
                         },
                         local: [vec![0.0; s * s], vec![0.0; s * s], vec![0.0; s * s]],
                         y: [vec![0.0; rows], vec![0.0; rows], vec![0.0; rows]],
+                        ports: Vec::with_capacity(
+                            e.nodes
+                                .iter()
+                                .map(|&a| self.topo.map.chains[a].cols.iter().filter(|&&c| c < n).count())
+                                .sum(),
+                        ),
                     }
                 })
                 .collect(),
@@ -1470,7 +1479,16 @@ impl System {
         }
         let (motions, derivs) = (&ws.motions, &ws.derivs);
         let local = |(ei, b): (usize, &mut ElementBuffer)| {
-            self.local_matrices(ei, &self.elements[ei], &b.out, motions, derivs, &mut b.local, &mut b.y)
+            self.local_matrices(
+                ei,
+                &self.elements[ei],
+                &b.out,
+                motions,
+                derivs,
+                &mut b.local,
+                &mut b.y,
+                &mut b.ports,
+            )
         };
         if self.elements.len() >= PARALLEL_ELEMENTS {
             ws.elems.par_iter_mut().enumerate().for_each(local);
@@ -1619,6 +1637,7 @@ impl System {
         derivs: &[NodeDerivatives],
         local: &mut [Vec<f64>; 3],
         y: &mut [Vec<f64>; 3],
+        ports: &mut Vec<(usize, usize, [f64; 6])>,
     ) {
         let s = self.pattern.elem_dofs[ei].len();
         let [Ml, Cl, Kl] = local;
@@ -1634,29 +1653,32 @@ impl System {
         for v in [&mut *yM, &mut *yC, &mut *yK] {
             v.resize(ne, 0.0);
         }
-        let dot6 = |a: &[f64; 6], b: &[f64]| (0..6).map(|i| a[i] * b[i]).sum::<f64>();
-        // The unknown columns of port `ia`: (local position, J) as 6-vectors, read in place
-        // from the node kinematics (nothing is collected: no allocation).
-        let port_j = |ia: usize| {
-            let a = e.nodes[ia];
-            derivs[a]
-                .unknown
-                .iter()
-                .enumerate()
-                .map(move |(u, &k)| (pos[ia][u], motions[a].col(k)))
+        let dot6 = |a: &[f64; 6], b: &[f64]| {
+            let b: &[f64; 6] = b.try_into().expect("six rows per port");
+            (0..6).map(|i| a[i] * b[i]).sum::<f64>()
         };
+        // The unknown columns of the ports, port by port: (local position, first row of the
+        // port, J column), gathered once for all the columns below (a reused buffer).
+        ports.clear();
+        for (ia, &a) in e.nodes.iter().enumerate() {
+            let d = &derivs[a];
+            ports.extend(
+                d.unknown
+                    .iter()
+                    .zip(&pos[ia])
+                    .map(|(&k, &qa)| (qa, 6 * ia, motions[a].col(k))),
+            );
+        }
+        let ports = &ports[..];
         // One column (local column `q`) of the element's M, C, K, given in element
         // coordinates, into the local matrices: J^T of each port's rows, the modal rows as they
         // are.
         let add_column = |[Ml, Cl, Kl]: [&mut [f64]; 3], q: usize, [m, c, k]: [&[f64]; 3]| {
-            for ia in 0..N {
-                let r = 6 * ia..6 * ia + 6;
-                for (qa, Ja) in port_j(ia) {
-                    let at = q * s + qa;
-                    Ml[at] += dot6(&Ja, &m[r.clone()]);
-                    Cl[at] += dot6(&Ja, &c[r.clone()]);
-                    Kl[at] += dot6(&Ja, &k[r.clone()]);
-                }
+            for &(qa, r, Ja) in ports {
+                let at = q * s + qa;
+                Ml[at] += dot6(&Ja, &m[r..r + 6]);
+                Cl[at] += dot6(&Ja, &c[r..r + 6]);
+                Kl[at] += dot6(&Ja, &k[r..r + 6]);
             }
             for (i, &qi) in mpos.iter().enumerate() {
                 let at = q * s + qi;
