@@ -513,6 +513,9 @@ pub(crate) struct NodeDerivatives {
     pub(crate) rate: Vec<Option<Tangent>>,
     /// The moving frame of the node's chain before each operation (scratch of the tangent pass).
     work: Motion,
+    /// `unknown`, `pos` and `rate` sized for the node's chain by an earlier call (and, for an
+    /// independent node, its derivatives formed: they are constant like its columns).
+    sized: bool,
 }
 
 fn six(a: &Vector3<f64>, b: &Vector3<f64>) -> [f64; 6] {
@@ -615,10 +618,16 @@ impl CoordinateMap {
                 }
                 None => (None, &mut out[c]),
             };
-            d.unknown.clear();
-            d.unknown.extend((0..ncols).filter(|&k| chain.cols[k] < self.n_dof));
-            d.pos.resize_with(ncols, || None);
-            d.rate.resize_with(ncols, || None);
+            if !d.sized {
+                d.unknown.clear();
+                d.unknown.extend((0..ncols).filter(|&k| chain.cols[k] < self.n_dof));
+                d.pos.resize_with(ncols, || None);
+                d.rate.resize_with(ncols, || None);
+                d.sized = true;
+            } else if chain.root {
+                // Formed by an earlier call from the constant columns: nothing changed.
+                continue;
+            }
             d.DV.clear();
             d.DA.clear();
             d.DAd.clear();
