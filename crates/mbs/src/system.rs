@@ -5,7 +5,8 @@
 //! $$\mathbf F(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}, t) = \sum_c\mathbf J_c^T\mathbf r_c + \mathbf r_\eta + \mathbf r_{joint} = \mathbf 0,$$
 //! with $\mathbf r_c$ the residual of all elements at node $c$ evaluated at the node motion
 //! $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$, $\mathbf A_c = \mathbf J_c\ddot{\mathbf q} + \dot{\mathbf J}_c\dot{\mathbf q}$; the same
-//! sums over the prescribed columns are the reactions. Their derivatives $\hat{\mathbf M} =
+//! sums over the prescribed columns are the reactions (formed when a sensor reads them).
+//! Their derivatives $\hat{\mathbf M} =
 //! \partial\mathbf F/\partial\ddot{\mathbf q}$, $\hat{\mathbf C} = \partial\mathbf F/\partial\dot{\mathbf q}$,
 //! $\hat{\mathbf K} = \partial\mathbf F/\partial\mathbf q$ are assembled into one sparse pattern
 //! ([`crate::coordinates`] gives the formulas).
@@ -17,7 +18,8 @@
 //! and their derivatives (the coordinate maps reuse their column buffers), the element
 //! matrices, the iteration matrix and its factorisation live in the analysis' `Workspace`, so
 //! an iteration allocates nothing up to [`DENSE_MAX`] unknowns (dense LU in a preallocated
-//! buffer, [`LinearSolver`]) and only in faer's numeric sparse LU above.
+//! buffer, [`LinearSolver`]) and only in faer's numeric sparse LU above. The motions of the
+//! nodes driven by time alone are kept while the time stays (`System::update_motions`).
 
 #![allow(non_snake_case)]
 
