@@ -81,6 +81,8 @@ pub(crate) struct Pattern {
     pub elem_slots: Vec<Vec<usize>>,
     /// Per node: slots of (unknown column i, unknown column k) for the geometric term.
     pub node_slots: Vec<Vec<usize>>,
+    /// Per node: (position among its columns, unknown) of each unknown column.
+    pub node_unknown_cols: Vec<Vec<(usize, usize)>>,
     /// Slot of each joint spring's diagonal entry (when its coordinate is unknown).
     pub joint_spring_slots: Vec<Option<usize>>,
 }
@@ -691,6 +693,11 @@ impl System {
             elem_modal_pos: Vec::new(),
             elem_slots: Vec::new(),
             node_slots: vec![Vec::new(); model.nodes.len()],
+            node_unknown_cols: map
+                .chains
+                .iter()
+                .map(|ch| ch.cols.iter().copied().enumerate().filter(|&(_, id)| id < n).collect())
+                .collect(),
             joint_spring_slots: Vec::new(),
         };
         for (e, dofs) in elements.iter().zip(sets.iter().take(n_elem_sets)) {
@@ -1430,22 +1437,20 @@ impl System {
                 gparts[2][d] += o.external[base + i];
             }
         }
+        let dot = |col: &[f64; 6], r: &[f64; 6]| (0..6).map(|i| col[i] * r[i]).sum::<f64>();
         for c in 0..nn {
             let m = &ws.motions[c];
             let (res, pc) = (&ws.node_res[c], &parts[c]);
-            for (k, &id) in map.chains[c].cols.iter().enumerate() {
-                if id >= n && !self.reactions_read {
-                    continue;
-                }
+            for &(k, id) in &self.pattern.node_unknown_cols[c] {
                 let col = m.col(k);
-                let dot = |r: &[f64; 6]| (0..6).map(|i| col[i] * r[i]).sum::<f64>();
-                if id < n {
-                    ws.F[id] += dot(res);
-                    for p in 0..3 {
-                        gparts[p][id] += dot(&pc[p]);
-                    }
-                } else {
-                    ws.reactions[id - n] += dot(res);
+                ws.F[id] += dot(&col, res);
+                for p in 0..3 {
+                    gparts[p][id] += dot(&col, &pc[p]);
+                }
+            }
+            if self.reactions_read {
+                for (k, &id) in map.chains[c].cols.iter().enumerate().filter(|(_, &id)| id >= n) {
+                    ws.reactions[id - n] += dot(&m.col(k), res);
                 }
             }
         }
