@@ -216,8 +216,8 @@ impl FlexibleElement {
         let ev = &buf.ev;
         out.residual.copy_from_slice(&ev.residual);
         out.inertia.copy_from_slice(&ev.f_inertia);
-        for i in 0..out.internal.len() {
-            out.internal[i] = ev.f_elastic[i] + ev.f_damping[i];
+        for ((o, e), d) in out.internal.iter_mut().zip(&ev.f_elastic).zip(&ev.f_damping) {
+            *o = e + d;
         }
         out.external.copy_from_slice(&ev.f_gravity);
         if tangents {

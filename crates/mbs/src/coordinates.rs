@@ -205,10 +205,15 @@ impl Motion {
 
     /// Back to the ground frame, keeping the column buffers' capacity.
     fn reset(&mut self) {
-        let z = Vector3::zeros();
-        (self.p, self.R, self.v, self.w, self.a, self.al) = (z, UnitQuaternion::identity(), z, z, z, z);
+        self.reset_values();
         self.Jv.clear();
         self.Jw.clear();
+    }
+
+    /// Back to the ground frame's configuration, velocity and acceleration, keeping the columns.
+    fn reset_values(&mut self) {
+        let z = Vector3::zeros();
+        (self.p, self.R, self.v, self.w, self.a, self.al) = (z, UnitQuaternion::identity(), z, z, z, z);
     }
 
     /// `self = other` without allocating once the column buffers have grown (the derived
@@ -296,12 +301,17 @@ enum Dir {
     Rate(usize),
 }
 
-/// Applies one operation to the motion (the value pass).
-pub(crate) fn apply(op: &Op, m: &mut Motion, map: &CoordinateMap, x: &Values) {
+/// Applies one operation to the motion (the value pass); without `with_J` the columns of
+/// $\mathbf J$ are left alone (an independent node's, constant, kept from an earlier pass) and
+/// a held coordinate costs nothing.
+pub(crate) fn apply(op: &Op, m: &mut Motion, map: &CoordinateMap, x: &Values, with_J: bool) {
     match op {
         Op::Translate { axis, coord, col } => {
-            debug_assert_eq!(*col, m.Jv.len());
+            debug_assert!(!with_J || *col == m.Jv.len());
             let (s, sd, sdd) = x.scalar(map, *coord);
+            if !with_J && s == 0.0 && sd == 0.0 && sdd == 0.0 {
+                return;
+            }
             let n = m.R * axis;
             // A held coordinate (a support's zero translation) only adds its column.
             if s != 0.0 || sd != 0.0 || sdd != 0.0 {
@@ -309,6 +319,9 @@ pub(crate) fn apply(op: &Op, m: &mut Motion, map: &CoordinateMap, x: &Values) {
                 m.p += n * s;
                 m.a += n * sdd + wn * (2.0 * sd) + (m.al.cross(&n) + m.w.cross(&wn)) * s;
                 m.v += n * sd + wn * s;
+            }
+            if !with_J {
+                return;
             }
             if s != 0.0 {
                 for k in 0..m.Jv.len() {
@@ -320,8 +333,11 @@ pub(crate) fn apply(op: &Op, m: &mut Motion, map: &CoordinateMap, x: &Values) {
             m.Jw.push(Vector3::zeros());
         }
         Op::Rotate { axis, coord, col } => {
-            debug_assert_eq!(*col, m.Jv.len());
+            debug_assert!(!with_J || *col == m.Jv.len());
             let (th, thd, thdd) = x.scalar(map, *coord);
+            if !with_J && th == 0.0 && thd == 0.0 && thdd == 0.0 {
+                return;
+            }
             let n = m.R * axis;
             if thd != 0.0 || thdd != 0.0 {
                 m.al += n * thdd + m.w.cross(&n) * thd;
@@ -330,8 +346,10 @@ pub(crate) fn apply(op: &Op, m: &mut Motion, map: &CoordinateMap, x: &Values) {
             if th != 0.0 {
                 m.R = so3::exp(&(n * th)) * m.R;
             }
-            m.Jv.push(Vector3::zeros());
-            m.Jw.push(n);
+            if with_J {
+                m.Jv.push(Vector3::zeros());
+                m.Jw.push(n);
+            }
         }
         Op::Offset { d, C } => {
             // The closing `Offset(0, R0)` of an independent node only turns the frame.
@@ -341,9 +359,11 @@ pub(crate) fn apply(op: &Op, m: &mut Motion, map: &CoordinateMap, x: &Values) {
                 m.p += b;
                 m.a += m.al.cross(&b) + m.w.cross(&wb);
                 m.v += wb;
-                for k in 0..m.Jv.len() {
-                    let c = m.Jw[k].cross(&b);
-                    m.Jv[k] += c;
+                if with_J {
+                    for k in 0..m.Jv.len() {
+                        let c = m.Jw[k].cross(&b);
+                        m.Jv[k] += c;
+                    }
                 }
             }
             if *C != UnitQuaternion::identity() {
@@ -351,11 +371,14 @@ pub(crate) fn apply(op: &Op, m: &mut Motion, map: &CoordinateMap, x: &Values) {
             }
         }
         Op::FreeRotation { rot, col } => {
-            debug_assert_eq!(*col, m.Jv.len());
+            debug_assert!(!with_J || *col == m.Jv.len());
             let d = map.rotations[*rot].dof;
             m.R = x.rotations[*rot];
             m.w = Vector3::new(x.vel[d], x.vel[d + 1], x.vel[d + 2]);
             m.al = Vector3::new(x.acc[d], x.acc[d + 1], x.acc[d + 2]);
+            if !with_J {
+                return;
+            }
             for w in m.Jw.iter_mut() {
                 *w = Vector3::zeros();
             }
@@ -462,6 +485,17 @@ fn apply_tangent(op: &Op, m: &Motion, t: &mut Tangent, dir: Dir, map: &Coordinat
     }
 }
 
+/// Which node motions [`CoordinateMap::motions_update`] can keep: the nodes whose chains
+/// (their own and their ancestors') read prescribed coordinates only are functions of time.
+#[derive(Clone, Debug)]
+pub(crate) struct MotionCache {
+    time_only: Vec<bool>,
+    /// The time of the motions (bits), `None` before the first pass.
+    time: Option<u64>,
+    /// Per node: recomputed by the last pass.
+    pub changed: Vec<bool>,
+}
+
 /// Kinematic derivatives of one node, per unknown column (in the node's column order).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct NodeDerivatives {
@@ -479,6 +513,9 @@ pub(crate) struct NodeDerivatives {
     pub(crate) rate: Vec<Option<Tangent>>,
     /// The moving frame of the node's chain before each operation (scratch of the tangent pass).
     work: Motion,
+    /// `unknown`, `pos` and `rate` sized for the node's chain by an earlier call (and, for an
+    /// independent node, its derivatives formed: they are constant like its columns).
+    sized: bool,
 }
 
 fn six(a: &Vector3<f64>, b: &Vector3<f64>) -> [f64; 6] {
@@ -495,21 +532,74 @@ impl CoordinateMap {
     /// acceleration and $\mathbf J$ columns. Reuses the column buffers of `out` (no allocation
     /// after the first call).
     pub(crate) fn motions_into(&self, x: &Values, out: &mut [Motion]) {
+        self.motion_pass(x, out, None);
+    }
+
+    /// An empty [`MotionCache`] for this map's nodes (the first [`Self::motions_update`]
+    /// computes every node).
+    pub(crate) fn motion_cache(&self) -> MotionCache {
+        let mut time_only = vec![false; self.chains.len()];
         for &c in &self.order {
             let chain = &self.chains[c];
+            let own = chain.ops.iter().all(|op| match op {
+                Op::Translate { coord, .. } | Op::Rotate { coord, .. } => {
+                    matches!(self.scalars[*coord].slot, Slot::Prescribed(_))
+                }
+                Op::FreeRotation { .. } => false,
+                Op::Offset { .. } => true,
+            });
+            time_only[c] = own && chain.parent.is_none_or(|p| time_only[p]);
+        }
+        MotionCache {
+            time_only,
+            time: None,
+            changed: vec![true; self.chains.len()],
+        }
+    }
+
+    /// [`Self::motions_into`] at time `t` into the motions of the last call with the same
+    /// `cache`, recomputing the nodes that hang on unknowns and, when `t` changed, those
+    /// driven by time alone: within a time step a driven crank and what it carries are
+    /// computed once. `cache.changed` tells which nodes were recomputed.
+    pub(crate) fn motions_update(&self, x: &Values, t: f64, out: &mut [Motion], cache: &mut MotionCache) {
+        let same_time = cache.time == Some(t.to_bits());
+        for (changed, &time_only) in cache.changed.iter_mut().zip(&cache.time_only) {
+            *changed = !(same_time && time_only);
+        }
+        // After a first pass the independent nodes' constant columns are in `out`.
+        let keep_root_columns = cache.time.is_some();
+        self.motion_pass(x, out, Some((&cache.changed, keep_root_columns)));
+        cache.time = Some(t.to_bits());
+    }
+
+    /// The value pass of [`Self::motions_into`]; with `which` = (nodes, keep) only the nodes
+    /// marked, and with `keep` the independent nodes' columns of $\mathbf J$ (constant) left as
+    /// they are in `out` ([`Self::motions_update`]).
+    fn motion_pass(&self, x: &Values, out: &mut [Motion], which: Option<(&[bool], bool)>) {
+        let keep_root_columns = which.is_some_and(|(_, keep)| keep);
+        for &c in &self.order {
+            let chain = &self.chains[c];
+            if which.is_some_and(|(w, _)| !w[c]) {
+                continue;
+            }
+            let with_J = !(chain.root && keep_root_columns);
             let m = match chain.parent {
                 Some(p) => {
                     let (parent, m) = pair_mut(out, p, c);
                     m.copy_from(parent);
                     m
                 }
-                None => {
+                None if with_J => {
                     out[c].reset();
+                    &mut out[c]
+                }
+                None => {
+                    out[c].reset_values();
                     &mut out[c]
                 }
             };
             for op in &chain.ops {
-                apply(op, m, self, x);
+                apply(op, m, self, x, with_J);
             }
         }
     }
@@ -528,10 +618,16 @@ impl CoordinateMap {
                 }
                 None => (None, &mut out[c]),
             };
-            d.unknown.clear();
-            d.unknown.extend((0..ncols).filter(|&k| chain.cols[k] < self.n_dof));
-            d.pos.resize_with(ncols, || None);
-            d.rate.resize_with(ncols, || None);
+            if !d.sized {
+                d.unknown.clear();
+                d.unknown.extend((0..ncols).filter(|&k| chain.cols[k] < self.n_dof));
+                d.pos.resize_with(ncols, || None);
+                d.rate.resize_with(ncols, || None);
+                d.sized = true;
+            } else if chain.root {
+                // Formed by an earlier call from the constant columns: nothing changed.
+                continue;
+            }
             d.DV.clear();
             d.DA.clear();
             d.DAd.clear();
@@ -578,7 +674,7 @@ impl CoordinateMap {
                     let tr = d.rate[k].as_mut().expect("tangent of an unknown column");
                     apply_tangent(op, &d.work, tr, Dir::Rate(k), self, x);
                 }
-                apply(op, &mut d.work, self, x);
+                apply(op, &mut d.work, self, x, true);
             }
             for &k in &d.unknown {
                 let tp = d.pos[k].as_ref().expect("tangent of an unknown column");

@@ -361,9 +361,19 @@ pub struct StepReport {
 /// 29.999999999998316 after 6000 additions; a step with no short decimal form (such as
 /// $T/400$) or a start time off its grid is left as computed.
 pub fn step_end_time(t: f64, h: f64) -> f64 {
-    let sum = t + h;
+    step_end_time_with(t, h, step_decimals(h))
+}
+
+/// The decimals of the shortest form of `h` that [`step_end_time`] rounds to (formatted once
+/// per step size by the integrator, not once per step).
+fn step_decimals(h: f64) -> usize {
     let shown = format!("{h}");
-    let decimals = shown.split_once('.').map_or(0, |(_, d)| d.len());
+    shown.split_once('.').map_or(0, |(_, d)| d.len())
+}
+
+/// [`step_end_time`] with the decimals of `h` given ([`step_decimals`]).
+fn step_end_time_with(t: f64, h: f64, decimals: usize) -> f64 {
+    let sum = t + h;
     if decimals > 15 || !sum.is_finite() {
         return sum;
     }
@@ -467,6 +477,8 @@ pub struct Integrator<'a> {
     factor_rotations: Vec<UnitQuaternion<f64>>,
     /// The start accelerations of the last steps (the full-Newton predictor's data).
     history: AccelerationHistory,
+    /// The step size of the last step and its decimals ([`step_end_time`]).
+    step_decimals: (f64, usize),
 }
 
 /// Steps of one size whose start accelerations the full-Newton predictor fits (module docs,
@@ -808,6 +820,7 @@ impl<'a> Integrator<'a> {
             corotated: corotated_nodes(system),
             factor_rotations: Vec::new(),
             history: AccelerationHistory::default(),
+            step_decimals: (f64::NAN, 0),
         })
     }
 
@@ -964,7 +977,8 @@ impl<'a> Integrator<'a> {
     pub fn step(&mut self) -> Result<StepReport, SolveError> {
         self.prev.clone_from(&self.state);
         self.jacobians = 0;
-        let mut residuals = Vec::with_capacity(4);
+        // Room for the usual few corrections (a longer history grows once).
+        let mut residuals = Vec::with_capacity(8);
         let result = match self.settings.newton {
             NewtonStrategy::Full => self.attempt(false, &mut residuals),
             NewtonStrategy::Modified => match self.attempt(true, &mut residuals) {
@@ -1006,7 +1020,10 @@ impl<'a> Integrator<'a> {
         let bp = (1.0 - am) / (h * h * b * (1.0 - af));
         let gp = g / (h * b);
         let prev = &self.prev;
-        let t = step_end_time(prev.time, h);
+        if self.step_decimals.0 != h {
+            self.step_decimals = (h, step_decimals(h));
+        }
+        let t = step_end_time_with(prev.time, h, self.step_decimals.1);
         // Predictor: constant acceleration (modified Newton), or extrapolated from the last
         // steps (full Newton; module docs, "Predictor").
         let st = &mut self.trial;
@@ -1046,7 +1063,7 @@ impl<'a> Integrator<'a> {
         let tol = self.settings.tolerance;
         // The round-off of the inertia forces of this step (from the last mass matrix): the
         // floor that keeps the test meaningful when every force is zero (a coasting rotor).
-        let inertia_floor = sys.inertia_floor(&self.ws, &prev.velocity, h);
+        let inertia_floor = sys.inertia_floor(&mut self.ws, &prev.velocity, h);
         let mut last_rel = f64::INFINITY;
         for it in 0..=self.settings.max_iterations {
             // Modified Newton keeps a factor built for this h; without one it needs tangents now.

@@ -65,7 +65,7 @@
 use crate::coordinates::Slot;
 use crate::error::SolveError;
 use crate::model::{RotationSupport, TranslationSupport};
-use crate::system::{unknown, values, State, System, Workspace};
+use crate::system::{unknown, State, System, Workspace};
 use crate::topology::RootRotation;
 use faer::Mat;
 use nalgebra::{Matrix6, Vector3, Vector6};
@@ -310,10 +310,6 @@ impl System {
     /// Refills the node motions of `ws` from `state` (after the velocities changed outside an
     /// evaluation), so that recorded sensors see the corrected velocities.
     pub(crate) fn refresh_motions(&self, state: &mut State, ws: &mut Workspace) {
-        self.apply_drivers(state, &mut ws.presc_rate, &mut ws.presc_acc);
-        let x = values(state, &ws.presc_rate, &ws.presc_acc);
-        self.topo.map.motions_into(&x, &mut ws.motions);
-        ws.nodes.clear();
-        ws.nodes.extend(ws.motions.iter().map(crate::NodeMotion::from));
+        self.update_motions(state, ws);
     }
 }

@@ -5,7 +5,8 @@
 //! $$\mathbf F(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q}, t) = \sum_c\mathbf J_c^T\mathbf r_c + \mathbf r_\eta + \mathbf r_{joint} = \mathbf 0,$$
 //! with $\mathbf r_c$ the residual of all elements at node $c$ evaluated at the node motion
 //! $\mathbf V_c = \mathbf J_c\dot{\mathbf q}$, $\mathbf A_c = \mathbf J_c\ddot{\mathbf q} + \dot{\mathbf J}_c\dot{\mathbf q}$; the same
-//! sums over the prescribed columns are the reactions. Their derivatives $\hat{\mathbf M} =
+//! sums over the prescribed columns are the reactions (formed when a sensor reads them).
+//! Their derivatives $\hat{\mathbf M} =
 //! \partial\mathbf F/\partial\ddot{\mathbf q}$, $\hat{\mathbf C} = \partial\mathbf F/\partial\dot{\mathbf q}$,
 //! $\hat{\mathbf K} = \partial\mathbf F/\partial\mathbf q$ are assembled into one sparse pattern
 //! ([`crate::coordinates`] gives the formulas).
@@ -17,7 +18,8 @@
 //! and their derivatives (the coordinate maps reuse their column buffers), the element
 //! matrices, the iteration matrix and its factorisation live in the analysis' `Workspace`, so
 //! an iteration allocates nothing up to [`DENSE_MAX`] unknowns (dense LU in a preallocated
-//! buffer, [`LinearSolver`]) and only in faer's numeric sparse LU above.
+//! buffer, [`LinearSolver`]) and only in faer's numeric sparse LU above. The motions of the
+//! nodes driven by time alone are kept while the time stays (`System::update_motions`).
 
 #![allow(non_snake_case)]
 
@@ -25,7 +27,7 @@ use crate::body::{
     load_element, point_mass_element, rigid_element, spring_element, ElementOutput, FlexBuffer, FlexibleElement,
     LoadElement, RigidElement, SpringElement,
 };
-use crate::coordinates::{Motion, NodeDerivatives, Slot, Values};
+use crate::coordinates::{Motion, MotionCache, NodeDerivatives, Slot, Values};
 use crate::dense_lu::{self, SMALL_LU_MAX};
 use crate::error::{Entity, ModelError, SolveError};
 use crate::initial::InitialPlan;
@@ -79,6 +81,8 @@ pub(crate) struct Pattern {
     pub elem_slots: Vec<Vec<usize>>,
     /// Per node: slots of (unknown column i, unknown column k) for the geometric term.
     pub node_slots: Vec<Vec<usize>>,
+    /// Per node: (position among its columns, unknown) of each unknown column.
+    pub node_unknown_cols: Vec<Vec<(usize, usize)>>,
     /// Slot of each joint spring's diagonal entry (when its coordinate is unknown).
     pub joint_spring_slots: Vec<Option<usize>>,
 }
@@ -201,6 +205,8 @@ pub struct NodeKinematics {
 /// Buffers of one analysis: created once, refilled by every evaluation.
 pub(crate) struct Workspace {
     pub motions: Vec<Motion>,
+    /// Which of `motions` are current ([`System::update_motions`]).
+    pub motion_cache: MotionCache,
     pub nodes: Vec<NodeMotion>,
     pub derivs: Vec<NodeDerivatives>,
     pub node_res: Vec<[f64; 6]>,
@@ -226,6 +232,8 @@ pub(crate) struct Workspace {
     pub gparts: [Vec<f64>; 3],
     /// The factorisation of `S` ([`System::factor`]), kept for more solves ([`System::solve_factored`]).
     pub factor: Factor,
+    /// Scratch of [`System::inertia_floor`]: $\hat{\mathbf M}\mathbf v$.
+    pub momentum: Vec<f64>,
 }
 
 /// Up to this many unknowns the iteration matrix is factorised densely (LU with partial
@@ -306,6 +314,8 @@ pub(crate) struct ElementBuffer {
     /// The element matrices times one unknown's port column, all element rows
     /// (`System::local_matrices`).
     pub y: [Vec<f64>; 3],
+    /// The ports' unknown columns of $\mathbf J$ (`System::local_matrices`).
+    pub ports: Vec<(usize, usize, [f64; 6])>,
 }
 
 /// A model ready for analysis.
@@ -339,6 +349,13 @@ pub struct System {
     /// Per sensor of `model.sensors`: the bounded search of a largest-von-Mises sensor
     /// (`None` for other sensors).
     pub(crate) stress_maxima: Vec<Option<StressMaximum>>,
+    /// Whether a sensor reads the reactions (`Reaction`, `DriverEffort`): without one the
+    /// evaluations leave `Workspace::reactions` at zero.
+    pub(crate) reactions_read: bool,
+    /// Per element: whether evaluations compute it. Without a sensor of the reactions a rigid
+    /// body, point mass, spring or load on nodes without unknowns (a driven crank) is skipped:
+    /// its forces reach the prescribed coordinates only.
+    pub(crate) evaluated: Vec<bool>,
 }
 
 /// The bounded search of a largest-von-Mises sensor ([`reduction::VonMisesMaximum`]) and its
@@ -572,6 +589,10 @@ impl System {
 
         check_stress_sensors(model, &flexible)?;
         check_reaction_sensors(model, &topo)?;
+        let reactions_read = model
+            .sensors
+            .iter()
+            .any(|s| matches!(s.kind, SensorKind::Reaction { .. } | SensorKind::DriverEffort { .. }));
         let stress_maxima = model
             .sensors
             .iter()
@@ -672,6 +693,11 @@ impl System {
             elem_modal_pos: Vec::new(),
             elem_slots: Vec::new(),
             node_slots: vec![Vec::new(); model.nodes.len()],
+            node_unknown_cols: map
+                .chains
+                .iter()
+                .map(|ch| ch.cols.iter().copied().enumerate().filter(|&(_, id)| id < n).collect())
+                .collect(),
             joint_spring_slots: Vec::new(),
         };
         for (e, dofs) in elements.iter().zip(sets.iter().take(n_elem_sets)) {
@@ -709,6 +735,17 @@ impl System {
             })
             .collect();
         joint_forces.bind(&topo, |r, c| pattern.slot(r, c));
+        let evaluated = elements
+            .iter()
+            .zip(&pattern.elem_dofs)
+            .map(|(e, dofs)| {
+                let passive = matches!(
+                    e.kind,
+                    ElementKind::Rigid(_) | ElementKind::PointMass(..) | ElementKind::Spring(_) | ElementKind::Load(_)
+                );
+                reactions_read || !passive || !dofs.is_empty()
+            })
+            .collect();
         let dof_scale = topo
             .dims
             .iter()
@@ -736,6 +773,8 @@ impl System {
             dof_scale,
             linear_solver: LinearSolver::Auto,
             stress_maxima,
+            reactions_read,
+            evaluated,
         })
     }
 
@@ -893,10 +932,12 @@ impl System {
     /// floor lets Newton stop at round-off. The factor 10 covers the few roundings of the
     /// update, the rotations and the gyroscopic terms ($\varepsilon|\mathbf J\boldsymbol\omega||\boldsymbol\omega|$,
     /// below the momentum term while $|\boldsymbol\omega| h < 1$).
-    pub(crate) fn inertia_floor(&self, ws: &Workspace, v: &[f64], h: f64) -> f64 {
+    pub(crate) fn inertia_floor(&self, ws: &mut Workspace, v: &[f64], h: f64) -> f64 {
         let cp = self.pattern.symbolic.col_ptr();
         let rows = self.pattern.symbolic.row_idx();
-        let mut p = vec![0.0; v.len()];
+        let p = &mut ws.momentum;
+        p.clear();
+        p.resize(v.len(), 0.0);
         for (c, &vc) in v.iter().enumerate() {
             for k in cp[c]..cp[c + 1] {
                 p[rows[k]] += ws.M[k] * vc;
@@ -1214,10 +1255,12 @@ impl System {
 
     pub(crate) fn workspace(&self) -> Workspace {
         let nn = self.model.nodes.len();
+        let n = self.n_dof();
         let np = self.topo.map.n_prescribed();
         let nnz = self.pattern.nnz();
         Workspace {
             motions: vec![Motion::ground(); nn],
+            motion_cache: self.topo.map.motion_cache(),
             nodes: Vec::with_capacity(nn),
             derivs: vec![NodeDerivatives::default(); nn],
             node_res: vec![[0.0; 6]; nn],
@@ -1250,6 +1293,12 @@ impl System {
                         },
                         local: [vec![0.0; s * s], vec![0.0; s * s], vec![0.0; s * s]],
                         y: [vec![0.0; rows], vec![0.0; rows], vec![0.0; rows]],
+                        ports: Vec::with_capacity(
+                            e.nodes
+                                .iter()
+                                .map(|&a| self.topo.map.chains[a].cols.iter().filter(|&&c| c < n).count())
+                                .sum(),
+                        ),
                     }
                 })
                 .collect(),
@@ -1260,6 +1309,7 @@ impl System {
                 vec![0.0; self.n_dof()],
             ],
             factor: self.empty_factor(),
+            momentum: Vec::with_capacity(self.n_dof()),
         }
     }
 
@@ -1322,24 +1372,29 @@ impl System {
     ) -> Result<(), SolveError> {
         let map = &self.topo.map;
         let n = map.n_dof;
-        self.apply_drivers(state, &mut ws.presc_rate, &mut ws.presc_acc);
+        self.update_motions(state, ws);
         let x = values(state, &ws.presc_rate, &ws.presc_acc);
-        map.motions_into(&x, &mut ws.motions);
-        ws.nodes.clear();
-        ws.nodes.extend(ws.motions.iter().map(NodeMotion::from));
         let gravity = self.model.gravity * lambda;
         let nodes = &ws.nodes;
         let st: &State = state;
-        let eval = |(e, b): (&ElementRef, &mut ElementBuffer)| {
+        let eval = |((e, b), &evaluated): ((&ElementRef, &mut ElementBuffer), &bool)| {
+            if !evaluated {
+                return Ok(());
+            }
             self.element_output(e, st, nodes, &gravity, lambda, tangents, b)
         };
         if self.elements.len() >= PARALLEL_ELEMENTS {
             self.elements
                 .par_iter()
                 .zip(ws.elems.par_iter_mut())
+                .zip(self.evaluated.par_iter())
                 .try_for_each(eval)?;
         } else {
-            self.elements.iter().zip(ws.elems.iter_mut()).try_for_each(eval)?;
+            self.elements
+                .iter()
+                .zip(ws.elems.iter_mut())
+                .zip(&self.evaluated)
+                .try_for_each(eval)?;
         }
         // Node residuals and their parts.
         let nn = self.model.nodes.len();
@@ -1352,14 +1407,27 @@ impl System {
         ws.reactions.iter_mut().for_each(|f| *f = 0.0);
         let gparts = &mut ws.gparts;
         gparts.iter_mut().for_each(|g| g.iter_mut().for_each(|x| *x = 0.0));
-        for (e, o) in self.elements.iter().zip(ws.elems.iter().map(|b| &b.out)) {
+        // Rows `6 ia..6 ia + 6` of `v` added to `acc`.
+        let add_port = |acc: &mut [f64; 6], v: &[f64], ia: usize| {
+            let v: &[f64; 6] = v[6 * ia..6 * ia + 6].try_into().expect("six rows per port");
+            for i in 0..6 {
+                acc[i] += v[i];
+            }
+        };
+        for ((e, b), _) in self
+            .elements
+            .iter()
+            .zip(&ws.elems)
+            .zip(&self.evaluated)
+            .filter(|(_, &evaluated)| evaluated)
+        {
+            let o = &b.out;
             for (ia, &a) in e.nodes.iter().enumerate() {
-                for i in 0..6 {
-                    ws.node_res[a][i] += o.residual[6 * ia + i];
-                    parts[a][0][i] += o.inertia[6 * ia + i];
-                    parts[a][1][i] += o.internal[6 * ia + i];
-                    parts[a][2][i] += o.external[6 * ia + i];
-                }
+                add_port(&mut ws.node_res[a], &o.residual, ia);
+                let pa = &mut parts[a];
+                add_port(&mut pa[0], &o.inertia, ia);
+                add_port(&mut pa[1], &o.internal, ia);
+                add_port(&mut pa[2], &o.external, ia);
             }
             let base = 6 * e.nodes.len();
             for (i, &d) in e.modal.iter().enumerate() {
@@ -1369,18 +1437,20 @@ impl System {
                 gparts[2][d] += o.external[base + i];
             }
         }
+        let dot = |col: &[f64; 6], r: &[f64; 6]| (0..6).map(|i| col[i] * r[i]).sum::<f64>();
         for c in 0..nn {
             let m = &ws.motions[c];
-            for (k, &id) in map.chains[c].cols.iter().enumerate() {
+            let (res, pc) = (&ws.node_res[c], &parts[c]);
+            for &(k, id) in &self.pattern.node_unknown_cols[c] {
                 let col = m.col(k);
-                let dot = |r: &[f64; 6]| (0..6).map(|i| col[i] * r[i]).sum::<f64>();
-                if id < n {
-                    ws.F[id] += dot(&ws.node_res[c]);
-                    for p in 0..3 {
-                        gparts[p][id] += dot(&parts[c][p]);
-                    }
-                } else {
-                    ws.reactions[id - n] += dot(&ws.node_res[c]);
+                ws.F[id] += dot(&col, res);
+                for p in 0..3 {
+                    gparts[p][id] += dot(&col, &pc[p]);
+                }
+            }
+            if self.reactions_read {
+                for (k, &id) in map.chains[c].cols.iter().enumerate().filter(|(_, &id)| id >= n) {
+                    ws.reactions[id - n] += dot(&m.col(k), res);
                 }
             }
         }
@@ -1416,7 +1486,16 @@ impl System {
         }
         let (motions, derivs) = (&ws.motions, &ws.derivs);
         let local = |(ei, b): (usize, &mut ElementBuffer)| {
-            self.local_matrices(ei, &self.elements[ei], &b.out, motions, derivs, &mut b.local, &mut b.y)
+            self.local_matrices(
+                ei,
+                &self.elements[ei],
+                &b.out,
+                motions,
+                derivs,
+                &mut b.local,
+                &mut b.y,
+                &mut b.ports,
+            )
         };
         if self.elements.len() >= PARALLEL_ELEMENTS {
             ws.elems.par_iter_mut().enumerate().for_each(local);
@@ -1424,11 +1503,11 @@ impl System {
             ws.elems.iter_mut().enumerate().for_each(local);
         }
         for (ei, b) in ws.elems.iter().enumerate() {
-            let l = &b.local;
-            for (q, &slot) in self.pattern.elem_slots[ei].iter().enumerate() {
-                ws.M[slot] += l[0][q];
-                ws.C[slot] += l[1][q];
-                ws.K[slot] += l[2][q];
+            let [lm, lc, lk] = &b.local;
+            for (&slot, ((m, c), k)) in self.pattern.elem_slots[ei].iter().zip(lm.iter().zip(lc).zip(lk)) {
+                ws.M[slot] += m;
+                ws.C[slot] += c;
+                ws.K[slot] += k;
             }
         }
         for c in 0..nn {
@@ -1450,6 +1529,27 @@ impl System {
             .add_tangents(&self.topo, &x, state.time, &state.controls, &mut ws.K, &mut ws.C);
         self.store_frames(ws, state);
         Ok(())
+    }
+
+    /// The drivers at the state's time into the state and the workspace, and the node motions
+    /// (`ws.motions`, `ws.nodes`) at the state: the nodes driven by time alone are kept while
+    /// the time stays ([`crate::coordinates::CoordinateMap::motions_update`]).
+    pub(crate) fn update_motions(&self, state: &mut State, ws: &mut Workspace) {
+        self.apply_drivers(state, &mut ws.presc_rate, &mut ws.presc_acc);
+        let x = values(state, &ws.presc_rate, &ws.presc_acc);
+        self.topo
+            .map
+            .motions_update(&x, state.time, &mut ws.motions, &mut ws.motion_cache);
+        if ws.nodes.len() != ws.motions.len() {
+            ws.nodes.clear();
+            ws.nodes.extend(ws.motions.iter().map(NodeMotion::from));
+            return;
+        }
+        for ((n, m), &changed) in ws.nodes.iter_mut().zip(&ws.motions).zip(&ws.motion_cache.changed) {
+            if changed {
+                *n = NodeMotion::from(m);
+            }
+        }
     }
 
     /// The flexible elements' new floating frames into the state (the next warm starts).
@@ -1544,6 +1644,7 @@ impl System {
         derivs: &[NodeDerivatives],
         local: &mut [Vec<f64>; 3],
         y: &mut [Vec<f64>; 3],
+        ports: &mut Vec<(usize, usize, [f64; 6])>,
     ) {
         let s = self.pattern.elem_dofs[ei].len();
         let [Ml, Cl, Kl] = local;
@@ -1559,29 +1660,32 @@ impl System {
         for v in [&mut *yM, &mut *yC, &mut *yK] {
             v.resize(ne, 0.0);
         }
-        let dot6 = |a: &[f64; 6], b: &[f64]| (0..6).map(|i| a[i] * b[i]).sum::<f64>();
-        // The unknown columns of port `ia`: (local position, J) as 6-vectors, read in place
-        // from the node kinematics (nothing is collected: no allocation).
-        let port_j = |ia: usize| {
-            let a = e.nodes[ia];
-            derivs[a]
-                .unknown
-                .iter()
-                .enumerate()
-                .map(move |(u, &k)| (pos[ia][u], motions[a].col(k)))
+        let dot6 = |a: &[f64; 6], b: &[f64]| {
+            let b: &[f64; 6] = b.try_into().expect("six rows per port");
+            (0..6).map(|i| a[i] * b[i]).sum::<f64>()
         };
+        // The unknown columns of the ports, port by port: (local position, first row of the
+        // port, J column), gathered once for all the columns below (a reused buffer).
+        ports.clear();
+        for (ia, &a) in e.nodes.iter().enumerate() {
+            let d = &derivs[a];
+            ports.extend(
+                d.unknown
+                    .iter()
+                    .zip(&pos[ia])
+                    .map(|(&k, &qa)| (qa, 6 * ia, motions[a].col(k))),
+            );
+        }
+        let ports = &ports[..];
         // One column (local column `q`) of the element's M, C, K, given in element
         // coordinates, into the local matrices: J^T of each port's rows, the modal rows as they
         // are.
         let add_column = |[Ml, Cl, Kl]: [&mut [f64]; 3], q: usize, [m, c, k]: [&[f64]; 3]| {
-            for ia in 0..N {
-                let r = 6 * ia..6 * ia + 6;
-                for (qa, Ja) in port_j(ia) {
-                    let at = q * s + qa;
-                    Ml[at] += dot6(&Ja, &m[r.clone()]);
-                    Cl[at] += dot6(&Ja, &c[r.clone()]);
-                    Kl[at] += dot6(&Ja, &k[r.clone()]);
-                }
+            for &(qa, r, Ja) in ports {
+                let at = q * s + qa;
+                Ml[at] += dot6(&Ja, &m[r..r + 6]);
+                Cl[at] += dot6(&Ja, &c[r..r + 6]);
+                Kl[at] += dot6(&Ja, &k[r..r + 6]);
             }
             for (i, &qi) in mpos.iter().enumerate() {
                 let at = q * s + qi;
