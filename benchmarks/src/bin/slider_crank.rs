@@ -6,7 +6,8 @@
 //! ```text
 //! cargo run --release -p flexmbs-benchmarks --bin slider_crank -- [--h 1e-4] [--t-end T]
 //!     [--modes 4] [--segments 1] [--kind hex20 --along 24 --across 2] [--frame com|node]
-//!     [--rho-inf 0.9] [--rod solid|beam|round --beam-elements 4] [--geometric-stiffening] [--mass exact|lumped]
+//!     [--rho-inf 0.9] [--rod solid|beam|round --beam-elements 4] [--geometric-stiffening]
+//!     [--inertia-correction] [--mass exact|lumped]
 //!     [--newton full|modified] [--tolerance 1e-9] [--csv out.csv] [--reference ref.csv]
 //! ```
 //!
@@ -19,7 +20,10 @@
 //! rod Exudyn's beam elements model in `benchmarks/exudyn/slider_crank_beam.py`).
 //! `--geometric-stiffening` reduces the rod with the geometric stiffness of its CB coordinates
 //! (`CbSettings::geometric_stiffening`): each superelement's strain energy gains the cubic term
-//! through which the axial force changes the bending stiffness. `--mass lumped` uses the
+//! through which the axial force changes the bending stiffness. `--inertia-correction` adds the
+//! static correction for the interfaces' inertia to the modes (`CbSettings::inertia_correction`:
+//! the rod's axial force under its own inertia in the span whatever the number of modes).
+//! `--mass lumped` uses the
 //! AIC-FFR paper's lumped inertia variant instead of the exact one. `--newton modified` keeps the
 //! factorised iteration matrix across corrections and steps (`mbs::NewtonStrategy`); the
 //! Jacobians (factorisations) per step are printed next to the iterations per step.
@@ -127,6 +131,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     // One segment: the midpoint is recovered from the mesh shapes (module docs).
     settings.keep_mesh_shapes = n == 1;
     settings.geometric_stiffening = geometric;
+    settings.inertia_correction = args.flag("inertia-correction")?;
     let body = if let Some(rod) = rod {
         beam_rod_body(&p, seg, args.get("beam-elements", 4)?, rod, &settings)?
     } else {

@@ -20,9 +20,18 @@
 //! $\mathbf K_{ii}^{-1}\mathbf F$ exactly: the static response to any load at the points,
 //! hence its stress, is exact whatever the number of modes.
 //!
+//! The same correction serves the interfaces' own inertia ([`CbSettings::inertia_correction`](crate::CbSettings)):
+//! when the interfaces accelerate, the interior carries the inertia load
+//! $-(\mathbf M_{ii}\boldsymbol\Psi + \mathbf M_{ib})\ddot{\mathbf u}_b$ of the constraint modes,
+//! whose quasi-static response (the axial force of a rod under its own distributed inertia)
+//! the fixed-interface modes represent only as a slowly converging series (theory guide,
+//! static correction for the interfaces' inertia, (3.10)). With
+//! $\mathbf F = \mathbf M_{ii}\boldsymbol\Psi + \mathbf M_{ib}$ the span holds that response
+//! exactly.
+//!
 //! | symbol | Rust | meaning |
 //! |---|---|---|
-//! | $\mathbf F$ | `unit` | unit loads on the load points' internal dofs, $n_i \times k$ |
+//! | $\mathbf F$ | `loads` | unit loads on the load points' internal dofs and the constraint modes' inertia loads, $n_i \times k$ |
 //! | $\mathbf X$, $\hat{\mathbf X}$ | `X` | attachment modes, then made orthogonal |
 //! | $\hat\omega$ | `omega` | their Rayleigh frequencies |
 
@@ -33,34 +42,31 @@ use crate::error::ReductionError;
 use faer::sparse::SparseColMatRef;
 use faer::Mat;
 
-/// The attachment modes for unit loads on the internal dofs `load_dofs` (positions in the
-/// internal numbering), orthogonalised against the $\mathbf M$-orthonormal modes `Phi_i` and
-/// among themselves (module docs): returned $\mathbf M$-orthonormal with their circular
-/// frequencies, ascending. Directions already in the span of the modes (to $10^{-10}$ of
-/// their mass norm) are dropped, so fewer than `load_dofs.len()` vectors may come back.
+/// The static correction vectors of the interior loads `loads` (columns: unit loads on
+/// load-point dofs, inertia loads of the constraint modes), $\mathbf X = \mathbf K_{ii}^{-1}\mathbf F$,
+/// orthogonalised against the $\mathbf M$-orthonormal modes `Phi_i` and among themselves
+/// (module docs): returned $\mathbf M$-orthonormal with their circular frequencies,
+/// ascending. Directions already in the span of the modes (to $10^{-10}$ of their mass norm)
+/// are dropped, so fewer than `loads.ncols()` vectors may come back.
 ///
 /// # Errors
 /// [`ReductionError::InvalidSettings`] if the small eigenproblem fails (non-finite values);
 /// [`ReductionError::RefinementFailed`] from the refined solves of a single-precision factor.
-pub fn attachment_modes(
+pub fn static_correction(
     factor: &ShiftInvert,
     K_ii: SparseColMatRef<'_, usize, f64>,
     M_ii: SparseColMatRef<'_, usize, f64>,
     Phi_i: &Mat<f64>,
-    load_dofs: &[usize],
+    loads: Mat<f64>,
 ) -> Result<(Mat<f64>, Vec<f64>), ReductionError> {
-    let ni = K_ii.nrows();
-    let k = load_dofs.len();
+    let (ni, k) = loads.shape();
     if k == 0 {
         return Ok((Mat::zeros(ni, 0), Vec::new()));
     }
     let par = faer::get_global_parallelism();
-    let mut X = Mat::<f64>::zeros(ni, k);
-    for (j, &d) in load_dofs.iter().enumerate() {
-        X[(d, j)] = 1.0;
-    }
+    let mut X = loads;
     factor.solve_refined(K_ii, M_ii, X.as_mut(), &|| {
-        "the attachment modes of the load points".into()
+        "the static correction vectors (attachment modes)".into()
     })?;
     // Gram-Schmidt against the modes, twice (Kahan's "twice is enough") for round-off.
     for _ in 0..2 {
@@ -76,7 +82,7 @@ pub fn attachment_modes(
     let Mr = X.transpose() * &MX;
     let sym = |A: &Mat<f64>| Mat::from_fn(k, k, |i, j| 0.5 * (A[(i, j)] + A[(j, i)]));
     let fail = |what: String| ReductionError::InvalidSettings {
-        what: format!("load-point attachment modes: {what}"),
+        what: format!("static correction vectors (attachment modes): {what}"),
     };
     // Whiten M_r, dropping directions the modes already span.
     let (mu, Q) = fe_model::scaled_self_adjoint_eigen(sym(&Mr).as_ref()).map_err(|e| fail(e.to_string()))?;

@@ -10,8 +10,8 @@
 //! modes and the shift-invert eigensolver ([`ShiftInvert`]).
 //! $\mathbf K_{CB} = \mathbf V^T\mathbf K\mathbf V$, $\mathbf M_{CB} = \mathbf V^T\mathbf M\mathbf V$.
 
-use crate::attachment::attachment_modes;
-use crate::eigen::{EigenSettings, FactorPrecision, FactorSettings, Shift, ShiftInvert};
+use crate::attachment::static_correction;
+use crate::eigen::{symmetric_times, EigenSettings, FactorPrecision, FactorSettings, Shift, ShiftInvert};
 use crate::error::ReductionError;
 use crate::geometric::reduced_geometric_stiffness;
 use crate::invariants::{gather_rows, inertia_data, inertia_data_from_mass, select_entries};
@@ -58,6 +58,14 @@ pub struct CbSettings {
     /// modes (static correction, [`crate::attachment`]) appended to the modes, and a
     /// [`crate::LoadPoint`] in the body.
     pub load_points: Vec<(String, NodeId)>,
+    /// Static correction for the interfaces' inertia: append to the modes the static
+    /// response of the interior to the inertia of each constraint mode,
+    /// $\mathbf K_{ii}^{-1}(\mathbf M_{ii}\boldsymbol\Psi + \mathbf M_{ib})$ ([`crate::attachment`],
+    /// theory guide (3.10)), so that the quasi-static stress of the body's own inertia under
+    /// any acceleration of its interfaces (the axial force along a connecting rod) is in the
+    /// span whatever the number of modes. Up to $6N$ more coordinates; with geometric
+    /// stiffening it makes the result converge monotonically in the modes. Off by default.
+    pub inertia_correction: bool,
     /// The precision of the factor of $\mathbf K_{ii}$ ([`FactorPrecision`]): automatic
     /// (double precision when it fits in the available memory) by default.
     pub factor: FactorPrecision,
@@ -73,6 +81,7 @@ impl CbSettings {
             geometric_stiffening: false,
             stress_shapes: false,
             load_points: Vec::new(),
+            inertia_correction: false,
             factor: FactorPrecision::Auto,
         }
     }
@@ -366,7 +375,7 @@ struct Projection {
     omega: Vec<f64>,
     K_CB: Mat<f64>,
     M_CB: Mat<f64>,
-    /// How many of the modes (the last) are attachment modes.
+    /// How many of the modes (the last) are static correction vectors.
     n_attachment: usize,
 }
 
@@ -391,6 +400,7 @@ fn project(
     p: &Partition,
     modes: ModeSelection,
     load_dofs: &[usize],
+    inertia_correction: bool,
     name: &str,
     progress: &mut dyn FnMut(Stage),
 ) -> Result<Projection, ReductionError> {
@@ -406,6 +416,9 @@ fn project(
         K_ib, M_ib, K_bb, M_bb, ..
     } = &blocks;
     let (nb, ni, n_free) = (p.boundary.len(), p.internal.len(), p.position.len());
+    // Static correction: one load per load-point dof, one per constraint mode with the
+    // inertia correction.
+    let n_loads = load_dofs.len() + if inertia_correction { nb } else { 0 };
     // Before any factorisation: a count the interior cannot give is the user's to change.
     if let ModeSelection::Count(m) = modes {
         if m > 0 && m >= ni {
@@ -424,8 +437,8 @@ fn project(
         let points_i: Vec<[f64; 3]> = p.internal.iter().map(|&d| points[d]).collect();
         let settings = FactorSettings {
             precision,
-            reserve_bytes: reserve_bytes(ni, nb, modes, load_dofs.len(), fe_model::Precision::Double),
-            single_reserve_bytes: reserve_bytes(ni, nb, modes, load_dofs.len(), fe_model::Precision::Single),
+            reserve_bytes: reserve_bytes(ni, nb, modes, n_loads, fe_model::Precision::Double),
+            single_reserve_bytes: reserve_bytes(ni, nb, modes, n_loads, fe_model::Precision::Single),
         };
         let name_errors = |e: ReductionError| {
             match e {
@@ -473,7 +486,16 @@ fn project(
             applications,
             factor_solves,
         });
-        let (X, omega_x) = attachment_modes(&factor, K_ii, M_ii, &Phi_i, load_dofs).map_err(name_errors)?;
+        // F = [unit loads on the load-point dofs, M_ii Psi + M_ib] (theory guide (6.10), (3.10)).
+        let mut F = Mat::<f64>::zeros(ni, n_loads);
+        for (j, &d) in load_dofs.iter().enumerate() {
+            F[(d, j)] = 1.0;
+        }
+        if inertia_correction {
+            let inertia = symmetric_times(M_ii, Psi.as_ref(), faer::get_global_parallelism()) + M_ib;
+            F.subcols_mut(load_dofs.len(), nb).copy_from(&inertia);
+        }
+        let (X, omega_x) = static_correction(&factor, K_ii, M_ii, &Phi_i, F).map_err(name_errors)?;
         let n_attachment = X.ncols();
         if n_attachment > 0 {
             let m = Phi_i.ncols();
@@ -529,16 +551,10 @@ fn project(
 /// single-precision factor also the right-hand sides, the residuals, the sparse product's
 /// row-major copies and result, and the f32 copy of the solve. Then $\boldsymbol\Psi$ and the
 /// eigensolver's vectors ([`crate::eigen::eigen_vectors`]). Then $\boldsymbol\Psi$, the $m$
-/// modes and the attachment modes of the `load_dofs` load-point dofs with their refined solve
-/// and products. A cut-off frequency counts as 20 modes (its first request asks for 8, then
+/// modes and the `n_loads` static correction vectors (load-point dofs, constraint modes'
+/// inertia) with their refined solve and products. A cut-off frequency counts as 20 modes (its first request asks for 8, then
 /// doubles).
-fn reserve_bytes(
-    ni: usize,
-    nb: usize,
-    modes: ModeSelection,
-    load_dofs: usize,
-    precision: fe_model::Precision,
-) -> usize {
+fn reserve_bytes(ni: usize, nb: usize, modes: ModeSelection, n_loads: usize, precision: fe_model::Precision) -> usize {
     let m = match modes {
         ModeSelection::StaticOnly => 0,
         ModeSelection::Count(m) => m,
@@ -556,7 +572,7 @@ fn reserve_bytes(
     };
     let columns = (nb + solve(nb))
         .max(nb + eigen)
-        .max(nb + m + load_dofs + solve(load_dofs).max(2 * load_dofs));
+        .max(nb + m + n_loads + solve(n_loads).max(2 * n_loads));
     8 * ni * columns
 }
 
@@ -658,7 +674,7 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
 }
 
 /// The internal positions of the load points' dofs: every free dof of each point's node
-/// (translations of a solid node; all six of a beam node), for [`attachment_modes`].
+/// (translations of a solid node; all six of a beam node), for [`static_correction`].
 /// `slot(node, k)` is the free dof of slot `k` of `node`, `None` for a slot without one
 /// (inactive, supported or dependent: a dependent slot follows its spider's node).
 fn load_point_dofs(
@@ -781,7 +797,15 @@ pub fn reduce_with_progress(
     let load_dofs = load_point_dofs(&load_points, model.node_count(), &p, &|node, k| {
         dofs.free_dof(NodeId(node as u32), k).map(|d| d.index())
     })?;
-    let projection = project(system, &p, settings.modes, &load_dofs, name, progress)?;
+    let projection = project(
+        system,
+        &p,
+        settings.modes,
+        &load_dofs,
+        settings.inertia_correction,
+        name,
+        progress,
+    )?;
     let n = projection.V.ncols();
     // The CB basis on every node's six slots: S_full = T V (dependent slots follow their spider).
     let S_full = gather_rows(6 * model.node_count(), n, |slot, col| {
@@ -957,7 +981,15 @@ pub fn reduce_external_dofs(
         .map(|(n, node)| (n.clone(), node.index()))
         .collect();
     let load_dofs = load_point_dofs(&load_points, nodes.len(), &p, &|node, k| slot_dof[6 * node + k])?;
-    let projection = project(system, &p, settings.modes, &load_dofs, name, &mut |_| {})?;
+    let projection = project(
+        system,
+        &p,
+        settings.modes,
+        &load_dofs,
+        settings.inertia_correction,
+        name,
+        &mut |_| {},
+    )?;
     let n = projection.V.ncols();
     let mut S_full = Mat::<f64>::zeros(6 * nodes.len(), n);
     for col in 0..n {

@@ -266,9 +266,10 @@ pub struct ReducedBody {
     /// `n_modes` modes are their attachment modes.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub load_points: Vec<LoadPoint>,
-    /// How many of the `n_modes` modes (the last ones) are attachment modes of the load
-    /// points rather than fixed-interface eigenmodes; their entries of
-    /// `fixed_interface_omega` are their Rayleigh frequencies.
+    /// How many of the `n_modes` modes (the last ones) are static correction vectors (the
+    /// attachment modes of the load points, and with [`CbSettings::inertia_correction`](crate::CbSettings)
+    /// those of the constraint modes' inertia) rather than fixed-interface eigenmodes; their
+    /// entries of `fixed_interface_omega` are their Rayleigh frequencies.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub attachment_modes: usize,
 }

@@ -60,20 +60,27 @@ pub fn key(part: &Part, built: &Built, reduction: &Reduction) -> std::io::Result
     );
     // The factor's precision is left out: both precisions give the same body (eigenvalues to
     // 1e-10, solves refined to double precision), so a body reduced with one serves the other,
-    // and keys of studies without the key stay what they were.
+    // and keys of studies without the key stay what they were. The inertia correction enters
+    // only when it is on, for the same reason: a body reduced without it keeps its key.
     let Reduction {
         modes,
         auxiliary_node,
         keep_mesh_shapes,
         geometric_stiffening,
+        inertia_correction,
         stress_shapes,
         load_points,
         factor: _,
     } = reduction;
+    let inertia_correction = if *inertia_correction {
+        ", inertia_correction: true"
+    } else {
+        ""
+    };
     field(
         "reduction",
         format!(
-            "Reduction {{ modes: {modes:?}, auxiliary_node: {auxiliary_node:?}, keep_mesh_shapes: {keep_mesh_shapes:?}, geometric_stiffening: {geometric_stiffening:?}, stress_shapes: {stress_shapes:?}, load_points: {load_points:?} }}"
+            "Reduction {{ modes: {modes:?}, auxiliary_node: {auxiliary_node:?}, keep_mesh_shapes: {keep_mesh_shapes:?}, geometric_stiffening: {geometric_stiffening:?}, stress_shapes: {stress_shapes:?}, load_points: {load_points:?}{inertia_correction} }}"
         )
         .as_bytes(),
     );

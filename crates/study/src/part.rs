@@ -52,6 +52,8 @@ pub struct Reduction {
     pub keep_mesh_shapes: bool,
     /// `reduction::CbSettings::geometric_stiffening`.
     pub geometric_stiffening: bool,
+    /// `reduction::CbSettings::inertia_correction`.
+    pub inertia_correction: bool,
     /// `reduction::CbSettings::stress_shapes`.
     pub stress_shapes: bool,
     /// `reduction::CbSettings::load_points`: named nodes of the part's mesh.

@@ -823,11 +823,16 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
         reduction::ModeSelection::CutoffHz(f) => format!("fixed-interface modes below {f} Hz"),
     };
     obs.progress(&Progress::Info(format!(
-        "part '{}': reducing {n_free} dofs to {} interfaces{} and {modes}{} ...",
+        "part '{}': reducing {n_free} dofs to {} interfaces{} and {modes}{}{} ...",
         part.name,
         built.interfaces.len(),
         if built.auxiliary.is_some() {
             " + the auxiliary node"
+        } else {
+            ""
+        },
+        if reduction.inertia_correction {
+            " + the static correction for the interfaces' inertia"
         } else {
             ""
         },
@@ -842,6 +847,7 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
     settings.keep_mesh_shapes = reduction.keep_mesh_shapes;
     settings.auxiliary_node = built.auxiliary;
     settings.geometric_stiffening = reduction.geometric_stiffening;
+    settings.inertia_correction = reduction.inertia_correction;
     settings.stress_shapes = reduction.stress_shapes;
     settings.load_points = reduction.load_points.clone();
     settings.factor = reduction.factor;

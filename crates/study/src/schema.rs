@@ -282,6 +282,8 @@ pub struct ReductionFile {
     pub keep_mesh_shapes: Option<bool>,
     /// Reduce with the geometric stiffness of the CB coordinates' stresses (default false).
     pub geometric_stiffening: Option<bool>,
+    /// Append the static response to the interfaces' inertia to the modes (default false).
+    pub inertia_correction: Option<bool>,
     /// Keep the stress of every CB vector for stress recovery (default false).
     pub stress_shapes: Option<bool>,
     /// Named points inside the body where loads act, with static correction.

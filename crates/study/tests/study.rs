@@ -12,7 +12,8 @@ use study::{Document, Simulation};
 mod common;
 
 /// Mechanisms set up in study files (initial states, `start`, actuators, springs, stops,
-/// buckling, adaptive and retried steps) against independent solutions.
+/// buckling, adaptive and retried steps, a reduction's inertia correction) against independent
+/// solutions.
 #[path = "study/setup.rs"]
 mod setup;
 

@@ -2,7 +2,7 @@
 
 //! Mechanisms set up in study files: initial states that follow the joints, analyses that
 //! start where another ended, actuators, springs and stops, buckling, adaptive and retried
-//! time steps, each against an independent solution.
+//! time steps, a reduction's inertia correction, each against an independent solution.
 
 use crate::common::{
     clamp, dynamic, equilibrium, gravity, linearized, material, named_dynamic, pendulum, rectangle, rigid_body, sensor,
@@ -566,4 +566,135 @@ fn an_inverted_pendulum_is_reported_unstable_in_a_study() {
         "{:?}",
         rec.progress
     );
+}
+
+/// `[parts.reduction] inertia_correction` on the spin-up beam of validation problem C1 as one
+/// stiffened superelement (8 elements, 2 modes, to t = 6 s): a wrong type is refused at its
+/// key and line; the key reaches the reduction (12 more coordinates for the 2 interfaces: the
+/// static responses to the inertia of the 12 constraint modes) and the cache key (a body
+/// reduced without it is not reused for a part that asks for it, and each is found again).
+/// The centrifugal axial force is quadratic along the beam; the 2 bending modes leave it the
+/// linear force of the constraint modes, and the geometric stiffening sees the difference in
+/// the tip's deflection in the hub's axes: by 2.1e-3 m (0.57 %). With the correction the force
+/// is in the span, and the 2-mode body follows the same body with 41 modes (all but one mode
+/// of its 42 interior dofs: the FE beam) to 8e-7 m on 0.37 m.
+#[test]
+fn the_inertia_correction_of_a_reduction_reaches_the_reduction_the_cache_and_the_result() {
+    let text = |modes: usize, correction: &str| {
+        format!(
+            r#"{}[[sections]]
+name = "c1"
+shape = "values"
+A = 4e-4
+Iy = 2e-7
+Iz = 2e-7
+J = 4e-7
+
+[[parts]]
+name = "beam"
+material = "c1"
+[parts.beam]
+kind = "straight"
+from = [0.0, 0.0, 0.0]
+to = [10.0, 0.0, 0.0]
+elements = 8
+section = "c1"
+theory = "euler-bernoulli"
+[[parts.interfaces]]
+name = "a"
+set = "beam.start"
+[[parts.interfaces]]
+name = "b"
+set = "beam.end"
+[parts.reduction]
+modes = {modes}
+geometric_stiffening = true
+{correction}
+
+[[bodies]]
+name = "b"
+part = "beam"
+
+[[joints]]
+name = "hub"
+type = "revolute"
+between = ["ground", "b.a"]
+axis = [0.0, 0.0, 1.0]
+
+[[drivers]]
+name = "spin-up"
+joint = "hub"
+function = {{ type = "spin-up", speed = 4.0, ramp_time = 15.0 }}
+
+[[sensors]]
+name = "tip"
+type = "relative-position"
+of = "b.b"
+reference = "b.a"
+
+[[analyses]]
+type = "dynamic"
+t_end = 6.0
+dt = 0.02
+"#,
+            material("c1", 7e10, 0.3, 3000.0)
+        )
+    };
+    // A wrong type: the file, the line of the key, the key and what it takes.
+    let dir = crate::scratch("inertia-correction-type");
+    let file = dir.join("wrong.toml");
+    let wrong = text(2, "inertia_correction = 3");
+    std::fs::write(&file, &wrong).unwrap();
+    let e = study::load(&file).unwrap_err().to_string();
+    let line = wrong.lines().position(|l| l.starts_with("inertia_correction")).unwrap() + 1;
+    assert!(e.contains(&format!("wrong.toml:{line}:")), "{e}");
+    assert!(e.contains("parts[0].reduction.inertia_correction"), "{e}");
+    assert!(e.contains("expected a boolean"), "{e}");
+
+    // One cache for all: each reduced once, then found again; the corrected body is never
+    // the one reduced without the correction.
+    let dir = crate::scratch("inertia-correction");
+    let cache = dir.join("cache");
+    let load = |name: &str, modes: usize, correction: &str| {
+        let file = dir.join(format!("{name}.toml"));
+        std::fs::write(&file, text(modes, correction)).unwrap();
+        study::load(&file).unwrap()
+    };
+    let plain = load("plain", 2, "");
+    let corrected = load("corrected", 2, "inertia_correction = true");
+    let full = load("full", 41, "");
+    assert!(!plain.parts[0].reduction.as_ref().unwrap().inertia_correction);
+    assert!(corrected.parts[0].reduction.as_ref().unwrap().inertia_correction);
+    let reduce = |study: &study::Study| study::run::reduce_part(study, &study.parts[0], &cache, &mut ()).unwrap();
+    let (p, c) = (reduce(&plain), reduce(&corrected));
+    assert!(!p.from_cache && !c.from_cache);
+    assert_ne!(p.file, c.file);
+    assert_eq!(p.body.n_coordinates(), 12 + 2);
+    assert_eq!(c.body.n_coordinates(), p.body.n_coordinates() + 12);
+    let (p2, c2) = (reduce(&plain), reduce(&corrected));
+    assert!(p2.from_cache && c2.from_cache);
+    assert_eq!((p2.file, c2.file), (p.file, c.file));
+    assert_eq!(c2.body.n_coordinates(), c.body.n_coordinates());
+
+    // The tip's deflection in the hub's axes.
+    let deflection = |study: &study::Study, name: &str| {
+        let options = Options {
+            cache: Some(cache.clone()),
+            ..crate::options_in(&dir.join(name), None)
+        };
+        let mut rec = Recorder::default();
+        study::run_with(study, &options, &mut rec).unwrap();
+        column(&rec, "dynamic", "tip", 1)
+    };
+    let (wp, wc, wf) = (
+        deflection(&plain, "plain"),
+        deflection(&corrected, "corrected"),
+        deflection(&full, "full"),
+    );
+    let largest = |w: &[f64]| w.iter().zip(&wf).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let peak = wf.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let (ep, ec) = (largest(&wp), largest(&wc));
+    assert!(peak > 0.3, "{peak}");
+    assert!(ep > 4e-3 * peak, "without the correction {ep} m of {peak} m");
+    assert!(ec < 5e-6 * peak, "with the correction {ec} m of {peak} m");
 }
