@@ -103,3 +103,18 @@ def test_the_body_equals_the_one_flexmbs_reduce_writes(examples, segment, cli):
     cli("reduce", examples / "slider_crank.toml", cwd=examples)
     written = flexmbs.ReducedBody.load(examples / "slider_crank-results" / "segment.rbody")
     assert written == segment
+
+
+def test_the_inertia_correction_is_a_reduction_key(examples):
+    """`inertia_correction = true` in a part's reduction (the static correction for the
+    interfaces' inertia) appends 6 vectors per interface after the fixed-interface modes; the
+    coordinates before them, and their matrices, are those of the body without it."""
+    study = flexmbs.Study.load(examples / "slider_crank.toml")
+    plain = dict(study.reduce())["segment"]
+    study["parts.segment.reduction.inertia_correction"] = True
+    corrected = dict(study.reduce())["segment"]
+    assert plain.n_coordinates == 14 and corrected.n_coordinates == 26
+    for A, B in [(corrected.K_CB, plain.K_CB), (corrected.M_CB, plain.M_CB)]:
+        np.testing.assert_allclose(A[:14, :14], B, rtol=0, atol=1e-9 * np.abs(B).max())
+    # The appended vectors carry mass and stiffness of their own.
+    assert np.abs(corrected.M_CB[14:, 14:]).max() > 0.0 and np.abs(corrected.K_CB[14:, 14:]).max() > 0.0
