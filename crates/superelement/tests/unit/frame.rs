@@ -281,6 +281,8 @@ fn forces_only_kinematics_say_what_they_lack_and_complete_to_the_full_rows() {
             fx.name
         );
         let qd = se.local_velocity(kin, &state);
+        // The same formulas on the same frame and q_jj, but the rows of a forces-only update
+        // then completed, against a full update: round-off of sums of a few dozen products.
         let scale = expected.iter().fold(f64::MIN_POSITIVE, |m, x| m.max(x.abs()));
         for (a, b) in qd.iter().zip(&expected) {
             assert!((a - b).abs() <= 1e-12 * scale, "{}: {a} vs {b}", fx.name);
