@@ -398,12 +398,12 @@ struct FreeSystem<'a> {
 fn project(
     system: FreeSystem<'_>,
     p: &Partition,
-    modes: ModeSelection,
+    settings: &CbSettings,
     load_dofs: &[usize],
-    inertia_correction: bool,
     name: &str,
     progress: &mut dyn FnMut(Stage),
 ) -> Result<Projection, ReductionError> {
+    let (modes, inertia_correction) = (settings.modes, settings.inertia_correction);
     let FreeSystem {
         blocks,
         points,
@@ -797,15 +797,7 @@ pub fn reduce_with_progress(
     let load_dofs = load_point_dofs(&load_points, model.node_count(), &p, &|node, k| {
         dofs.free_dof(NodeId(node as u32), k).map(|d| d.index())
     })?;
-    let projection = project(
-        system,
-        &p,
-        settings.modes,
-        &load_dofs,
-        settings.inertia_correction,
-        name,
-        progress,
-    )?;
+    let projection = project(system, &p, settings, &load_dofs, name, progress)?;
     let n = projection.V.ncols();
     // The CB basis on every node's six slots: S_full = T V (dependent slots follow their spider).
     let S_full = gather_rows(6 * model.node_count(), n, |slot, col| {
@@ -981,15 +973,7 @@ pub fn reduce_external_dofs(
         .map(|(n, node)| (n.clone(), node.index()))
         .collect();
     let load_dofs = load_point_dofs(&load_points, nodes.len(), &p, &|node, k| slot_dof[6 * node + k])?;
-    let projection = project(
-        system,
-        &p,
-        settings.modes,
-        &load_dofs,
-        settings.inertia_correction,
-        name,
-        &mut |_| {},
-    )?;
+    let projection = project(system, &p, settings, &load_dofs, name, &mut |_| {})?;
     let n = projection.V.ncols();
     let mut S_full = Mat::<f64>::zeros(6 * nodes.len(), n);
     for col in 0..n {
