@@ -288,6 +288,20 @@ fn rigid_pseudo_inverse(body: &ReducedBody, n: usize) -> Result<Mat<f64>, Supere
 }
 
 impl Superelement {
+    /// The same body evaluated as a planar one, in its FE model's xy-plane: 3 coordinates per
+    /// interface instead of 6, the out-of-plane rows and columns of every output zero.
+    pub fn into_planar(self) -> Result<Self, SuperelementError> {
+        Err(SuperelementError::NotPlanar {
+            body: self.name.clone(),
+            what: "planar evaluation is not implemented".into(),
+        })
+    }
+
+    /// Whether [`Self::into_planar`] made this a planar body.
+    pub fn is_planar(&self) -> bool {
+        false
+    }
+
     /// Solves (4.4) $\boldsymbol\Phi_j\mathbf q^{jj}(\mathbf r_j, \mathbf R_j) = \mathbf 0$ for the frame,
     /// starting from `state.frame` (the last step's frame).
     ///

@@ -44,4 +44,9 @@ pub enum SuperelementError {
          (theory guide, section 4.4)"
     )]
     SingularFrame { rcond: f64 },
+    /// The body cannot be evaluated as a planar one ([`crate::Superelement::into_planar`]):
+    /// its reduced matrices couple the FE model's xy-plane to the out-of-plane motion, or a
+    /// state left the plane. `what` names the interface, mode or coupling.
+    #[error("body '{body}' is not planar: {what}")]
+    NotPlanar { body: String, what: String },
 }
