@@ -85,6 +85,8 @@ pub struct Superelement {
     pub(crate) body: Arc<ReducedBody>,
     /// Geometric stiffening $\mathbf G_k$ ([`GeometricStiffness`]); `None`: a linear elastic field.
     pub(crate) geometric: Option<GeometricStiffness>,
+    /// The in-plane data of a planar body ([`Self::into_planar`]); `None`: a spatial body.
+    pub(crate) planar: Option<Arc<crate::planar::PlanarBody>>,
 }
 
 /// The reduced geometric stiffness of a body: $n$ symmetric matrices $\mathbf G_k$ ($n\times n$),
@@ -289,17 +291,30 @@ fn rigid_pseudo_inverse(body: &ReducedBody, n: usize) -> Result<Mat<f64>, Supere
 
 impl Superelement {
     /// The same body evaluated as a planar one, in its FE model's xy-plane: 3 coordinates per
-    /// interface instead of 6, the out-of-plane rows and columns of every output zero.
-    pub fn into_planar(self) -> Result<Self, SuperelementError> {
-        Err(SuperelementError::NotPlanar {
-            body: self.name.clone(),
-            what: "planar evaluation is not implemented".into(),
-        })
+    /// interface instead of 6, the out-of-plane rows and columns of every output zero
+    /// ([`crate::planar`]). Every method keeps its signature and the $6N + m$ layout; the planar
+    /// kernel reads x, y of $\mathbf r_k$, $\mathbf v_k$, the angle about z of $\mathbf R_k$ and
+    /// $\omega_z$ (the out-of-plane velocity and acceleration components are not read), and each
+    /// evaluation checks that the state lies in the plane.
+    ///
+    /// # Errors
+    /// [`SuperelementError::NotPlanar`], naming the interface, mode or matrix, when the body's
+    /// interfaces and frame origin are not in one plane z = const, a reduced matrix ($\mathbf K_{CB}$,
+    /// $\mathbf M_{CB}$, $\boldsymbol\Phi_j$, the inertia invariants $\mathbf S_t$, $\mathbf S_r$,
+    /// $\mathbf S_x$, the $\mathbf G_k$) couples the in-plane coordinates with the out-of-plane
+    /// ones by more than [`crate::planar::COUPLING_TOL`] of its largest entry (a mode out of the
+    /// plane, an unsupported internal out-of-plane dof, a beam whose section axes are not the
+    /// plane's), the inertia is `Lumped` or the frame is the auxiliary node.
+    pub fn into_planar(mut self) -> Result<Self, SuperelementError> {
+        if self.planar.is_none() {
+            self.planar = Some(Arc::new(self.build_planar()?));
+        }
+        Ok(self)
     }
 
     /// Whether [`Self::into_planar`] made this a planar body.
     pub fn is_planar(&self) -> bool {
-        false
+        self.planar.is_some()
     }
 
     /// Solves (4.4) $\boldsymbol\Phi_j\mathbf q^{jj}(\mathbf r_j, \mathbf R_j) = \mathbf 0$ for the frame,
@@ -320,6 +335,9 @@ impl Superelement {
     /// For [`FrameChoice::InterfaceNode`] and [`FrameChoice::AuxiliaryNode`] the solution is
     /// explicit, $\mathbf r_j = \mathbf r_k$, $\mathbf R_j = \mathbf R_k$.
     pub fn solve_frame(&self, state: &BodyState) -> Result<(Frame, usize), SuperelementError> {
+        if self.is_planar() {
+            return self.planar_solve_frame(state);
+        }
         let (mut q, mut r_loc, mut Lambda) = (
             vec![0.0; self.n],
             vec![Vector3::zeros(); self.n_interfaces],
@@ -517,6 +535,7 @@ impl Superelement {
             frame_settings: FrameSettings::default(),
             body: Arc::clone(&shared),
             geometric,
+            planar: None,
         })
     }
 
@@ -652,6 +671,9 @@ impl Superelement {
     }
 
     /// Solves the frame (4.4) and builds the configuration-level matrices (5.2)-(5.6).
+    ///
+    /// For a planar body the frame is the planar one and the matrices those of the spatial
+    /// body at that configuration (complete, in the $6N + m$ layout).
     pub fn kinematics(&self, state: &BodyState) -> Result<Kinematics, SuperelementError> {
         let (frame, iterations) = self.solve_frame(state)?;
         self.kinematics_at(state, frame, iterations)
@@ -672,6 +694,15 @@ impl Superelement {
     /// Velocity of the frame (5.4) in inertial axes: $(\dot{\mathbf r}_j, \boldsymbol\omega_j) =
     /// \mathrm{diag}(\mathbf R_j,\mathbf R_j)\,\mathbf Z_j\boldsymbol\Lambda\bar{\mathbf R}^T\dot{\mathbf q}$.
     pub fn frame_velocity(&self, kin: &Kinematics, state: &BodyState) -> (Vector3<f64>, Vector3<f64>) {
+        if self.is_planar() {
+            // The planar frame velocity (x, y and the rate about z); a singular configuration
+            // cannot come from a successful evaluation: its velocity is reported as NaN.
+            let xi = self
+                .planar_velocities(kin, state)
+                .map(|(xi, _)| xi)
+                .unwrap_or([f64::NAN; 3]);
+            return (kin.R_j * Vector3::new(xi[0], xi[1], 0.0), Vector3::new(0.0, 0.0, xi[2]));
+        }
         let y = kin.rotate(&state.velocity_vector(), false);
         let Y = kin.Y();
         let xi: Vec<f64> = (0..6).map(|a| (0..self.n).map(|j| Y[(a, j)] * y[j]).sum()).collect();
@@ -685,6 +716,18 @@ impl Superelement {
     /// Any kinematics of the state will do: after a forces-only evaluation, which leaves
     /// $\mathbf B$ out, a completed copy is formed.
     pub fn local_velocity(&self, kin: &Kinematics, state: &BodyState) -> Vec<f64> {
+        if self.is_planar() {
+            let mut out = vec![0.0; self.n];
+            match self.planar_velocities(kin, state) {
+                Ok((_, zeta)) => {
+                    for (&g, z) in self.planar_body().index.iter().zip(zeta) {
+                        out[g] = z;
+                    }
+                }
+                Err(_) => out.fill(f64::NAN),
+            }
+            return out;
+        }
         let y = kin.rotate(&state.velocity_vector(), false);
         let completed;
         let B = match kin.B() {

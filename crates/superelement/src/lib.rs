@@ -228,11 +228,13 @@
 
 pub mod body;
 pub mod compressed;
+pub(crate) mod dual;
 pub mod error;
 pub mod forces;
 pub mod frame;
 pub mod local_coordinates;
 pub mod mass;
+pub mod planar;
 pub mod point_load;
 pub mod recovery;
 pub mod so3;

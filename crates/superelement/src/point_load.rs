@@ -119,6 +119,12 @@ impl Superelement {
         tangents: bool,
         ws: &mut PointLoadWorkspace,
     ) -> Result<(), SuperelementError> {
+        if self.is_planar() {
+            return Err(self.not_planar(format!(
+                "point loads (load point {}) have no planar evaluation",
+                load.point
+            )));
+        }
         let lp = self
             .body
             .load_points

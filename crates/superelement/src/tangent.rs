@@ -94,10 +94,17 @@ pub struct Workspace {
     pub(crate) KL: Mat<f64>,
     pub(crate) n6: Mat<f64>,
     pub(crate) rho: Vec<f64>,
+    /// The buffers of a planar body ([`crate::planar`]).
+    pub(crate) planar: Option<Box<crate::planar::PlanarWorkspace>>,
 }
 
 impl Workspace {
     /// The configuration of the last evaluation (frame, $\mathbf q^{jj}$, $\mathbf Z_j$, $\mathbf T_j$, ...).
+    /// For a planar body ([`crate::Superelement::into_planar`]) the evaluation sets the frame,
+    /// $\mathbf R_j$, $\mathbf q^{jj}$ (the $6N + m$ layout), $\mathbf r_k^{jj}$ and
+    /// $\boldsymbol\Lambda$ only: [`Kinematics::is_complete`] is false, and
+    /// [`Self::complete_kinematics`] forms every matrix (those of the spatial body at that
+    /// configuration); read [`Kinematics::Z`] and [`Kinematics::Y`] after it.
     /// After a forces-only evaluation ([`crate::Superelement::residual_into`]) $\mathbf T_j$ and
     /// $\mathbf B$ are not formed ([`Kinematics::T`] is `None`); [`Self::complete_kinematics`]
     /// forms them.
@@ -117,8 +124,13 @@ impl Superelement {
     /// Buffers for [`Self::evaluate_into`].
     pub fn workspace(&self) -> Workspace {
         let (N, n) = (self.n_interfaces, self.n);
+        let mut kin = Kinematics::empty(N, n);
+        let planar = self.planar.as_ref().map(|pb| {
+            kin.set_source(&self.x, &self.Phi_j);
+            Box::new(crate::planar::PlanarWorkspace::new(pb.N, pb.n))
+        });
         Workspace {
-            kin: Kinematics::empty(N, n),
+            kin,
             kin_valid: false,
             qd: vec![0.0; n],
             mo: Motion::new(N, n),
@@ -127,6 +139,7 @@ impl Superelement {
             KL: Mat::zeros(n, n),
             n6: Mat::zeros(n, 6),
             rho: vec![0.0; n],
+            planar,
         }
     }
 
@@ -211,6 +224,12 @@ impl Superelement {
                 what: format!("{} accelerations for {} coordinates", acc.len(), self.n),
             });
         }
+        if self.is_planar() {
+            if ws.planar.is_none() {
+                *ws = self.workspace();
+            }
+            return self.planar_evaluate(state, acc, gravity, level, ws, out);
+        }
         // The Newton iterates of (4.4) live in the configuration's own buffers, which are
         // rebuilt for the converged frame right after.
         let mut scratch = FrameScratch {
@@ -248,6 +267,43 @@ impl Superelement {
         gravity: &Vector3<f64>,
         tangents: bool,
     ) -> Evaluation {
+        if self.is_planar() {
+            // The state of the configuration: interfaces placed by the frame and q_jj.
+            let N = self.n_interfaces;
+            let mut state = BodyState {
+                r: Vec::with_capacity(N),
+                R: Vec::with_capacity(N),
+                v: Vec::with_capacity(N),
+                omega: Vec::with_capacity(N),
+                eta: kin.q_jj[6 * N..].to_vec(),
+                eta_dot: qd[6 * N..].to_vec(),
+                frame: kin.frame,
+            };
+            for k in 0..N {
+                let u = Vector3::new(kin.q_jj[6 * k], kin.q_jj[6 * k + 1], kin.q_jj[6 * k + 2]);
+                let th = Vector3::new(kin.q_jj[6 * k + 3], kin.q_jj[6 * k + 4], kin.q_jj[6 * k + 5]);
+                state.r.push(kin.frame.r + kin.R_j * (self.x[k] + u));
+                state.R.push(kin.frame.R * crate::so3::exp(&th));
+                state.v.push(Vector3::new(qd[6 * k], qd[6 * k + 1], qd[6 * k + 2]));
+                state
+                    .omega
+                    .push(Vector3::new(qd[6 * k + 3], qd[6 * k + 4], qd[6 * k + 5]));
+            }
+            let mut ws = self.workspace();
+            let mut out = Evaluation::zeros(self.n);
+            let level = if tangents { Level::Tangents } else { Level::Mass };
+            // A configuration of this body solves its frame at once from its own frame; a
+            // failure (a kinematics of another body) gives NaN outputs, never other numbers.
+            if self
+                .planar_evaluate(&state, acc, gravity, level, &mut ws, &mut out)
+                .is_err()
+            {
+                for v in [&mut out.residual, &mut out.f_inertia, &mut out.q_v, &mut out.f_elastic] {
+                    v.fill(f64::NAN);
+                }
+            }
+            return out;
+        }
         let mut ws = self.workspace();
         ws.kin = kin.clone();
         ws.qd.copy_from_slice(qd);
@@ -367,6 +423,13 @@ impl Superelement {
 
     /// Kinetic energy $\tfrac12\dot{\mathbf q}^T\mathbf M\dot{\mathbf q}$ of the chosen inertia variant.
     pub fn kinetic_energy(&self, state: &BodyState) -> Result<f64, SuperelementError> {
+        if self.is_planar() {
+            let (frame, _) = self.solve_frame(state)?;
+            let kin = self.kinematics_at(state, frame, 0)?;
+            let q = self.planar_q(&kin.q_jj);
+            let y = self.planar_y(&frame, &state.velocity_vector());
+            return self.planar_kinetic(&q, &y);
+        }
         let kin = self.kinematics(state)?;
         let qd = state.velocity_vector();
         let ev = self.evaluate_kinematics(&kin, &qd, &vec![0.0; self.n], &Vector3::zeros(), false);
@@ -383,6 +446,9 @@ impl Superelement {
     /// with geometric stiffening ([`crate::body::GeometricStiffness`]). The elastic force is its
     /// gradient (`tests/unit/energy.rs`, `tests/unit/geometric.rs`).
     pub fn strain_energy(&self, kin: &Kinematics) -> f64 {
+        if self.is_planar() {
+            return self.planar_strain_energy(&self.planar_q(&kin.q_jj));
+        }
         let mut f = vec![0.0; self.n];
         crate::mass::matvec(&self.K_CB, &kin.q_jj, &mut f);
         let U = 0.5 * f.iter().zip(&kin.q_jj).map(|(a, b)| a * b).sum::<f64>();
@@ -399,6 +465,22 @@ impl Superelement {
     /// with the $n^3$ entries of $\mathbf G$ and no allocation (an energy sensor at every step).
     /// Checked equal to [`Self::strain_energy`] by `tests/unit/geometric.rs`.
     pub fn strain_energy_in(&self, ws: &Workspace) -> f64 {
+        if let (true, Some(pw)) = (self.is_planar(), &ws.planar) {
+            let b = &pw.f;
+            let q = &b.qjj;
+            let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+            // fe = K q + b + sum_k (q_k + p_k) G_k q: U = q.(K q)/2 + q.b + b.p/2.
+            let pb = self.planar_body();
+            let mut U = 0.0;
+            for (j, qj) in q.iter().enumerate() {
+                let kq: f64 = pb.K[pb.n * j..pb.n * (j + 1)].iter().zip(q).map(|(k, x)| k * x).sum();
+                U += 0.5 * qj * kq;
+            }
+            if pb.geometric.is_some() {
+                U += dot(q, &b.b) + 0.5 * dot(&b.b, &b.p);
+            }
+            return U;
+        }
         let q = &ws.kin.q_jj;
         let mut U = 0.0;
         for (j, qj) in q.iter().enumerate() {
@@ -427,6 +509,11 @@ impl Superelement {
                 what: format!("{} velocities for {} coordinates", qd.len(), self.n),
             });
         }
+        if self.is_planar() {
+            let q = self.planar_q(&ws.kin.q_jj);
+            let y = self.planar_y(&ws.kin.frame, qd);
+            return self.planar_kinetic(&q, &y);
+        }
         let kin = &ws.kin;
         // y, and nu = [xi; c] as the evaluation forms them (from the frame rows of P, the
         // deformed interface positions and Lambda).
@@ -450,7 +537,17 @@ impl Superelement {
     }
 
     /// Gravity potential $-\mathbf g\cdot(m\mathbf r_j + \mathbf R_j\mathbf s)$, $\mathbf s = m\mathbf d + \mathbf S_t\mathbf q^{jj}$.
+    ///
+    /// A planar body sees the x, y components of gravity only (a z component does no work in
+    /// the plane).
     pub fn gravity_potential(&self, kin: &Kinematics, gravity: &Vector3<f64>) -> f64 {
+        let in_plane;
+        let gravity = if self.is_planar() {
+            in_plane = Vector3::new(gravity.x, gravity.y, 0.0);
+            &in_plane
+        } else {
+            gravity
+        };
         let I = &self.inertia;
         let s: Vector3<f64> = I.d * I.mass + crate::mass::mul3(&I.S_t, &kin.q_jj);
         -gravity.dot(&(kin.frame.r * I.mass + kin.R_j * s))

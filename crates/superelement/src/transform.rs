@@ -172,10 +172,16 @@ pub struct Kinematics {
     pub(crate) PsiT: Mat<f64>,
     /// What is formed for the configuration `frame`, `q_formed`.
     formed: Formed,
+    /// A planar body's $\mathbf x_k$ and $\boldsymbol\Phi_j$, with which [`Self::complete`] forms
+    /// the matrices a planar evaluation leaves out ([`Formed::Planar`]).
+    source: Option<std::sync::Arc<PlanarSource>>,
     /// $\mathbf q^{jj}$ of the formed configuration (`q_jj` is overwritten by the frame solve
     /// before [`Self::update`]).
     q_formed: Vec<f64>,
 }
+
+/// A planar body's $\mathbf x_k$ and $\boldsymbol\Phi_j$ (`Kinematics::source`).
+type PlanarSource = (Vec<Vector3<f64>>, Mat<f64>);
 
 /// How much of a configuration [`Kinematics::update`] has formed: the forces need
 /// $\mathbf Z_j$, $\mathbf Y$ and $\boldsymbol\Psi$ only; $\mathbf T_j$, $\mathbf B$ and
@@ -185,6 +191,9 @@ enum Formed {
     Nothing,
     Forces,
     All,
+    /// A planar evaluation set the frame, $\mathbf R_j$, $\mathbf q^{jj}$, $\mathbf r_k^{jj}$ and
+    /// $\boldsymbol\Lambda$ only.
+    Planar,
 }
 
 /// A block-diagonal operator on $\mathbf q^{jj}$: a $3\times3$ block on each $\mathbf u_k$ and on
@@ -412,7 +421,27 @@ impl Kinematics {
             PsiT: Mat::zeros(6, 6 * N),
             formed: Formed::Nothing,
             q_formed: vec![0.0; n],
+            source: None,
         }
+    }
+
+    /// Keeps a planar body's $\mathbf x_k$ and $\boldsymbol\Phi_j$ for [`Self::complete`].
+    pub(crate) fn set_source(&mut self, x: &[Vector3<f64>], Phi_j: &Mat<f64>) {
+        self.source = Some(std::sync::Arc::new((x.to_vec(), Phi_j.clone())));
+    }
+
+    /// The configuration of a planar evaluation: frame, $\mathbf R_j$, $\mathbf q^{jj}$ (the
+    /// $6N + m$ layout), $\mathbf r_k^{jj}$ and $\boldsymbol\Lambda$ ([`Formed::Planar`]).
+    pub(crate) fn set_planar(&mut self, frame: Frame, frame_iterations: usize, q_jj: &[f64], x: &[Vector3<f64>]) {
+        self.frame = frame;
+        self.frame_iterations = frame_iterations;
+        self.R_j = frame.R.to_rotation_matrix().into_inner();
+        self.q_jj.copy_from_slice(q_jj);
+        for k in 0..x.len() {
+            self.r_loc[k] = x[k] + u_of(&self.q_jj, k);
+            self.Lambda[k] = so3::left_jacobian_inv(&theta_of(&self.q_jj, k));
+        }
+        self.formed = Formed::Planar;
     }
 
     /// Builds the transformation for the converged `frame` and the CB coordinates `q_jj`
@@ -645,6 +674,16 @@ impl Kinematics {
     /// Forms $\mathbf T_j$, $\mathbf B$ and $\mathbf Y_r^T$ of the configuration held if a
     /// forces-only evaluation left them out (3.6k instructions for 14 coordinates).
     pub fn complete(&mut self) {
+        if self.formed == Formed::Planar {
+            if let Some(src) = self.source.clone() {
+                self.formed = Formed::Nothing;
+                let (frame, it) = (self.frame, self.frame_iterations);
+                // Singular only where the planar evaluation was too (it succeeded): then the
+                // matrices stay unformed (`T`, `B` None).
+                let _ = self.update(frame, it, &src.0, src.1.as_ref(), true);
+            }
+            return;
+        }
         if self.formed == Formed::Forces {
             self.form_tangent_part();
             self.formed = Formed::All;

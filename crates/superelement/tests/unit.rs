@@ -27,6 +27,9 @@ mod unit {
     /// Small motions reproduce the linear FE model: statics exactly, frequencies to the
     /// accuracy of the modes kept.
     mod linear_limit;
+    /// The planar body against the in-plane block of the spatial one, its tangents against
+    /// central differences, its errors.
+    mod planar;
     /// Loads at load points inside a body: work and tangents against central differences.
     mod point_load;
     /// Recovery of the deformed mesh.

@@ -1,0 +1,1212 @@
+//! The planar AIC-FFR body: the superelement evaluated in its FE model's xy-plane
+//! ([`crate::Superelement::into_planar`]; theory guide, "Planar bodies").
+//!
+//! # Coordinates
+//!
+//! A planar body keeps, of the $6N + m$ coordinates of the spatial one, the index set
+//! $\mathcal I$ = {x, y and the rotation about z of every interface} $\cup$ {modes}: $3N + m$
+//! coordinates $\mathbf q = [\mathbf r_1, \varphi_1, \dots, \mathbf r_N, \varphi_N, \boldsymbol\eta]$,
+//! $\mathbf r_k \in \mathbb R^2$, $\varphi_k$ the angle of $\mathbf R_k$ about z. The floating frame
+//! is $\mathbf r_j \in \mathbb R^2$, $\varphi_j$, with $\mathbf R_j = \mathbf R(\varphi_j)$, and the
+//! local CB coordinates are
+//!
+//! $$\mathbf u_k = \mathbf R_j^T(\mathbf r_k - \mathbf r_j) - \mathbf x_k,\qquad
+//! \theta_k = \varphi_k - \varphi_j \ \text{(wrapped to } (-\pi, \pi]),$$
+//!
+//! so $\boldsymbol\Lambda = \mathbf I$ exactly. With $\boldsymbol\rho_k = \mathbf x_k + \mathbf u_k$,
+//! $\mathbf E = [0, -1; 1, 0]$ and the local frame variation $\delta\boldsymbol\Xi =
+//! [\mathbf R_j^T\delta\mathbf r_j;\ \delta\varphi_j]$: $\delta\mathbf q^{jj} = \bar{\mathbf R}^T\delta\mathbf q -
+//! \boldsymbol\Psi\delta\boldsymbol\Xi$, $\boldsymbol\Psi$ with rows $[\mathbf I_2,\ \mathbf E\boldsymbol\rho_k]$
+//! on $\mathbf u_k$ and $[0, 0, 1]$ on $\theta_k$ (the planar $\boldsymbol\Phi_{rig}$ of (5.2)); (4.4)
+//! (3 rows of $\boldsymbol\Phi_j$) gives $\mathbf Z_j = (\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}\boldsymbol\Phi_j$,
+//! $\mathbf T_j = \mathbf I - \boldsymbol\Psi\mathbf Z_j$ and $\mathbf P = [\mathbf Z_j; \mathbf T_j]$ as in 3D.
+//!
+//! # Accelerations
+//!
+//! With $\mathbf y = \bar{\mathbf R}^T\dot{\mathbf q}$, $\boldsymbol\nu = [\mathbf V; \Omega; \dot{\mathbf q}^{jj}]
+//! = \mathbf P\mathbf y$. Differentiating in time ($\dot{\boldsymbol\Psi}$ holds $\mathbf E\dot{\mathbf u}_k$,
+//! $\dot{\mathbf R}_j^T = -\Omega\mathbf E\mathbf R_j^T$) gives $\dot{\mathbf P}\mathbf y = -\mathbf P\mathbf w$,
+//! $\mathbf w_{u_k} = \Omega\mathbf E\dot{\mathbf u}_k$, hence
+//!
+//! $$\dot{\boldsymbol\nu} = \mathbf P\bar{\mathbf y},\qquad \bar{\mathbf y}_{u_k} = \mathbf R_j^T\mathbf a_k -
+//! \Omega\mathbf E(\mathbf y_{u_k} + \dot{\mathbf u}_k),\quad \bar{\mathbf y}_{\theta_k} = \ddot\varphi_k,\quad
+//! \bar{\mathbf y}_\eta = \ddot{\boldsymbol\eta}.$$
+//!
+//! # Forces
+//!
+//! The kinetic energy is the spatial one (`crate::mass`) restricted to planar motion:
+//! $T = \tfrac12 m|\mathbf V|^2 + \Omega\,\mathbf V\cdot\mathbf E\mathbf s + \mathbf V\cdot\mathbf S_t\dot{\mathbf q} +
+//! \tfrac12 J\Omega^2 + \Omega\,\mathbf c\cdot\dot{\mathbf q} + \tfrac12\dot{\mathbf q}^T\mathbf M_{CB}\dot{\mathbf q}$
+//! with $\mathbf s = m\mathbf d + \mathbf S_t\mathbf q$ (x, y rows), $J = J_{0,zz} + 2\mathbf a\cdot\mathbf q +
+//! \mathbf q^T\mathbf W\mathbf q$ ($\mathbf a = (\mathbf S_x)_{xx} + (\mathbf S_x)_{yy}$, $\mathbf W = \bar{\mathbf S}_{xx} +
+//! \bar{\mathbf S}_{yy}$), $\mathbf c = (\mathbf S_r)_z^T - \tilde{\mathbf S}_z\mathbf q$. Lagrange's equations in
+//! $(\mathbf r_j, \varphi_j, \mathbf q^{jj})$ (true coordinates in the plane) give the body-axis force
+//!
+//! * $F_V = m\dot{\mathbf V} + \mathbf E\mathbf s\,\dot\Omega + \mathbf E\dot{\mathbf s}\,\Omega + \mathbf S_t\ddot{\mathbf q} + \Omega\mathbf E\mathbf p_V$, $\mathbf p_V = m\mathbf V + \mathbf E\mathbf s\,\Omega + \dot{\mathbf s}$,
+//! * $F_\Omega = \dot{\mathbf V}\cdot\mathbf E\mathbf s + J\dot\Omega + \mathbf c\cdot\ddot{\mathbf q} + \dot J\Omega + \Omega\,\mathbf V\cdot\mathbf s$,
+//! * $\mathbf F_q = \mathbf S_t^T(\dot{\mathbf V} + \Omega\mathbf E\mathbf V) + \mathbf c\,\dot\Omega + \mathbf M_{CB}\ddot{\mathbf q} - 2\Omega\tilde{\mathbf S}_z\dot{\mathbf q} - \Omega^2(\mathbf a + \mathbf W\mathbf q)$,
+//!
+//! the z rows of (6.4) on a planar motion. With the elastic force $\mathbf K_{CB}\mathbf q + \mathbf g_G$
+//! (7.4)-(7.5), damping $\mathbf D\dot{\mathbf q}^{jj}$ (6.8) and gravity (x, y components; a z
+//! component does no work in the plane and is ignored), the residual is $\bar{\mathbf R}\mathbf P^T\mathbf F$.
+//!
+//! # Tangents
+//!
+//! The residual is one generic function of $(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q})$ ([`Scalar`]);
+//! $\mathbf K_t$, $\mathbf C_t$ and $\mathbf M$ are its derivatives by forward-mode dual numbers
+//! ([`crate::dual`]), exact to round-off. The frame enters through the implicit function: one
+//! Newton correction $\delta\boldsymbol\Xi = (\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}\boldsymbol\Phi_j\mathbf q^{jj}$ in
+//! dual numbers at the converged frame (value part zero) carries its exact derivative. Checked
+//! against the spatial body (`tests/unit/planar.rs`) and central differences.
+
+#![allow(non_snake_case)]
+
+use crate::body::{BodyState, Superelement};
+use crate::dual::{Dual, Scalar};
+use crate::error::SuperelementError;
+use crate::forces::Level;
+use crate::frame::{Frame, FrameChoice, FrameSolve};
+use crate::mass::MassVariant;
+use crate::tangent::{Evaluation, Workspace};
+use crate::transform::{Kinematics, RCOND_MIN};
+use faer::Mat;
+use nalgebra::{UnitQuaternion, Vector3};
+use std::f64::consts::PI;
+
+/// Width of the dual numbers of the tangent passes: directions per pass.
+const WIDTH: usize = 8;
+
+/// Relative size of a coupling between the in-plane and out-of-plane sets accepted by
+/// [`Superelement::into_planar`] (against the largest entry of the matrix).
+pub const COUPLING_TOL: f64 = 1e-9;
+
+/// Out-of-plane tilt of an interface orientation (about the x or y axis, radians) and offset of
+/// an interface from the plane (relative to the body size) accepted in a state.
+pub const STATE_TOL: f64 = 1e-9;
+
+/// The 3D dof of in-plane interface dof `c` (x, y, rotation about z).
+const IN_PLANE: [usize; 3] = [0, 1, 5];
+
+/// The in-plane data of a planar body, precomputed by [`Superelement::into_planar`].
+#[derive(Clone, Debug)]
+pub(crate) struct PlanarBody {
+    pub N: usize,
+    pub n: usize,
+    /// Planar index -> index of the $6N + m$ layout.
+    pub index: Vec<usize>,
+    /// $\mathbf x_k$ (x, y).
+    pub x: Vec<[f64; 2]>,
+    /// Columns of $\boldsymbol\Phi_j$ (rows x, y, rz).
+    pub Phi: Vec<[f64; 3]>,
+    /// $\sum_k$ of the $u_{k,x}$ and $u_{k,y}$ columns of $\boldsymbol\Phi_j$.
+    pub sum_u: [[f64; 3]; 2],
+    /// Column-major $n\times n$.
+    pub K: Vec<f64>,
+    pub M: Vec<f64>,
+    pub D: Vec<f64>,
+    pub damped: bool,
+    pub mass: f64,
+    pub d: [f64; 2],
+    pub J0: f64,
+    /// $\mathbf S_t$ x, y rows by column.
+    pub St: Vec<[f64; 2]>,
+    /// $(\mathbf S_r)_z$.
+    pub Srz: Vec<f64>,
+    /// $(\mathbf S_x)_{xx} + (\mathbf S_x)_{yy}$.
+    pub a: Vec<f64>,
+    /// $\bar{\mathbf S}_{xx} + \bar{\mathbf S}_{yy}$, column-major.
+    pub W: Vec<f64>,
+    /// $\tilde{\mathbf S}_z = \bar{\mathbf S}_{xy} - \bar{\mathbf S}_{yx}$, column-major.
+    pub Sz: Vec<f64>,
+    pub geometric: Option<PlanarGeometric>,
+}
+
+/// The planar $\mathbf G_k$ ($k \in \mathcal I$, restricted to $\mathcal I\times\mathcal I$) by their
+/// nonzero entries, and $\mathbf F$ = the pseudo-inverse of the planar $\mathbf K_{CB}$.
+#[derive(Clone, Debug)]
+pub(crate) struct PlanarGeometric {
+    /// $(i, j, k, (\mathbf G_k)_{ij})$.
+    pub entries: Vec<(u32, u32, u32, f64)>,
+    pub F: Vec<f64>,
+}
+
+/// Buffers of one generic evaluation.
+#[derive(Clone, Debug)]
+pub(crate) struct Buf<S> {
+    pub q: Vec<S>,
+    pub qd: Vec<S>,
+    pub qdd: Vec<S>,
+    pub qjj: Vec<S>,
+    pub rho: Vec<[S; 2]>,
+    pub y: Vec<S>,
+    pub ybar: Vec<S>,
+    pub zeta: Vec<S>,
+    pub zetad: Vec<S>,
+    pub Wq: Vec<S>,
+    pub Sq: Vec<S>,
+    pub Sz: Vec<S>,
+    pub fq: Vec<S>,
+    pub fe: Vec<S>,
+    pub fd: Vec<S>,
+    pub fg: Vec<S>,
+    pub b: Vec<S>,
+    pub p: Vec<S>,
+    pub out: Vec<S>,
+    /// The parts (f64 pass only): inertia, elastic, damping, gravity.
+    pub parts: [Vec<S>; 4],
+    pub Gi: [[S; 3]; 3],
+    pub R: (S, S),
+    pub frame_r: [S; 2],
+    pub frame_phi: S,
+}
+
+impl<S: Scalar> Buf<S> {
+    fn new(N: usize, n: usize) -> Self {
+        let z = || vec![S::cst(0.0); n];
+        Self {
+            q: z(),
+            qd: z(),
+            qdd: z(),
+            qjj: z(),
+            rho: vec![[S::cst(0.0); 2]; N],
+            y: z(),
+            ybar: z(),
+            zeta: z(),
+            zetad: z(),
+            Wq: z(),
+            Sq: z(),
+            Sz: z(),
+            fq: z(),
+            fe: z(),
+            fd: z(),
+            fg: z(),
+            b: z(),
+            p: z(),
+            out: z(),
+            parts: [z(), z(), z(), z()],
+            Gi: [[S::cst(0.0); 3]; 3],
+            R: (S::cst(0.0), S::cst(1.0)),
+            frame_r: [S::cst(0.0); 2],
+            frame_phi: S::cst(0.0),
+        }
+    }
+}
+
+/// The planar part of a [`Workspace`].
+#[derive(Clone, Debug)]
+pub(crate) struct PlanarWorkspace {
+    pub f: Buf<f64>,
+    pub d: Buf<Dual<WIDTH>>,
+    /// Interface positions (x, y) and raw angles of the state.
+    pub pos: Vec<[f64; 2]>,
+    pub phi: Vec<f64>,
+    /// Planar tangents, column-major $n\times n$: $\mathbf K_t$, $\mathbf C_t$, $\mathbf M$.
+    pub mats: [Vec<f64>; 3],
+    /// The converged frame, its iterations, and whether `f` holds a configuration.
+    pub frame: ([f64; 2], f64),
+    pub iterations: usize,
+    pub valid: bool,
+}
+
+impl PlanarWorkspace {
+    pub fn new(N: usize, n: usize) -> Self {
+        Self {
+            f: Buf::new(N, n),
+            d: Buf::new(N, n),
+            pos: vec![[0.0; 2]; N],
+            phi: vec![0.0; N],
+            mats: [vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]],
+            frame: ([0.0; 2], 0.0),
+            iterations: 0,
+            valid: false,
+        }
+    }
+}
+
+/// $x$ wrapped to $(-\pi, \pi]$.
+#[inline]
+pub(crate) fn wrap(x: f64) -> f64 {
+    let t = (x + PI).rem_euclid(2.0 * PI) - PI;
+    if t <= -PI {
+        t + 2.0 * PI
+    } else {
+        t
+    }
+}
+
+/// The angle about z of a rotation (atan2 of its first column).
+#[inline]
+pub(crate) fn angle_of(R: &UnitQuaternion<f64>) -> f64 {
+    let (x, y, z, w) = (R.coords[0], R.coords[1], R.coords[2], R.coords[3]);
+    let c0 = w * w + x * x - y * y - z * z;
+    let c1 = 2.0 * (x * y + w * z);
+    c1.atan2(c0)
+}
+
+/// The rotation by `phi` about z.
+pub(crate) fn rotation_z(phi: f64) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_axis_angle(&Vector3::z_axis(), phi)
+}
+
+/// $\mathbf G^{-1}$ of a $3\times3$ (rows) and its determinant.
+#[inline(always)]
+fn inv3<S: Scalar>(G: &[[S; 3]; 3]) -> ([[S; 3]; 3], S) {
+    let c = |r0: usize, c0: usize, r1: usize, c1: usize| G[r0][c0] * G[r1][c1] - G[r0][c1] * G[r1][c0];
+    let c00 = c(1, 1, 2, 2);
+    let c01 = c(1, 2, 2, 0);
+    let c02 = c(1, 0, 2, 1);
+    let det = G[0][0] * c00 + G[0][1] * c01 + G[0][2] * c02;
+    let id = det.recip();
+    let inv = [
+        [c00 * id, c(0, 2, 2, 1) * id, c(0, 1, 1, 2) * id],
+        [c01 * id, c(0, 0, 2, 2) * id, c(0, 2, 1, 0) * id],
+        [c02 * id, c(0, 1, 2, 0) * id, c(0, 0, 1, 1) * id],
+    ];
+    (inv, det)
+}
+
+/// $\mathbf A\mathbf v$ for a column-major $n\times n$ `A`, into `out`.
+#[inline(always)]
+fn matvec<S: Scalar>(A: &[f64], v: &[S], out: &mut [S]) {
+    let n = v.len();
+    out.fill(S::cst(0.0));
+    for (j, vj) in v.iter().enumerate() {
+        let col = &A[n * j..n * (j + 1)];
+        for (o, a) in out.iter_mut().zip(col) {
+            *o = o.mul_add_f(*vj, *a);
+        }
+    }
+}
+
+#[inline(always)]
+fn dot<S: Scalar>(a: &[S], b: &[S]) -> S {
+    let mut s = S::cst(0.0);
+    for (x, y) in a.iter().zip(b) {
+        s += *x * *y;
+    }
+    s
+}
+
+impl PlanarBody {
+    /// $\boldsymbol\Phi_j\mathbf v$ (3 rows).
+    #[inline(always)]
+    fn phi_mul<S: Scalar>(&self, v: &[S]) -> [S; 3] {
+        let mut g = [S::cst(0.0); 3];
+        for (c, vc) in self.Phi.iter().zip(v) {
+            for a in 0..3 {
+                g[a] = g[a].mul_add_f(*vc, c[a]);
+            }
+        }
+        g
+    }
+
+    /// $\mathbf q^{jj}$ and $\boldsymbol\rho_k$ for the frame in `b` (`frame_r`, `R`, `frame_phi`).
+    #[inline(always)]
+    fn local<S: Scalar>(&self, b: &mut Buf<S>) {
+        let (s, c) = b.R;
+        for k in 0..self.N {
+            let dx = b.q[3 * k] - b.frame_r[0];
+            let dy = b.q[3 * k + 1] - b.frame_r[1];
+            let rx = c * dx + s * dy;
+            let ry = c * dy - s * dx;
+            b.rho[k] = [rx, ry];
+            b.qjj[3 * k] = rx - S::cst(self.x[k][0]);
+            b.qjj[3 * k + 1] = ry - S::cst(self.x[k][1]);
+            b.qjj[3 * k + 2] = b.q[3 * k + 2] - b.frame_phi;
+        }
+        for i in 3 * self.N..self.n {
+            b.qjj[i] = b.q[i];
+        }
+    }
+
+    /// $\boldsymbol\Phi_j\boldsymbol\Psi$ for the deformed positions `rho` (rows).
+    #[inline(always)]
+    fn phi_psi<S: Scalar>(&self, rho: &[[S; 2]]) -> [[S; 3]; 3] {
+        let mut col2 = [S::cst(0.0); 3];
+        for (k, r) in rho.iter().enumerate() {
+            let (px, py, pt) = (&self.Phi[3 * k], &self.Phi[3 * k + 1], &self.Phi[3 * k + 2]);
+            for a in 0..3 {
+                col2[a] += r[0] * py[a] - r[1] * px[a] + S::cst(pt[a]);
+            }
+        }
+        std::array::from_fn(|a| [S::cst(self.sum_u[0][a]), S::cst(self.sum_u[1][a]), col2[a]])
+    }
+
+    /// $\boldsymbol\zeta = \mathbf v - \boldsymbol\Psi\boldsymbol\xi$ into `out`.
+    #[inline(always)]
+    fn minus_psi<S: Scalar>(&self, rho: &[[S; 2]], v: &[S], xi: &[S; 3], out: &mut [S]) {
+        for (k, r) in rho.iter().enumerate() {
+            out[3 * k] = v[3 * k] - (xi[0] - xi[2] * r[1]);
+            out[3 * k + 1] = v[3 * k + 1] - (xi[1] + xi[2] * r[0]);
+            out[3 * k + 2] = v[3 * k + 2] - xi[2];
+        }
+        out[3 * self.N..].copy_from_slice(&v[3 * self.N..]);
+    }
+
+    /// $\bar{\mathbf R}\mathbf P^T[\mathbf f_\xi; \mathbf f_\zeta]$ into `out`:
+    /// $\mathbf f_\zeta + \boldsymbol\Phi_j^T\mathbf G^{-T}(\mathbf f_\xi - \boldsymbol\Psi^T\mathbf f_\zeta)$, rotated.
+    #[inline(always)]
+    fn project<S: Scalar>(&self, rho: &[[S; 2]], Gi: &[[S; 3]; 3], R: (S, S), fxi: [S; 3], fz: &[S], out: &mut [S]) {
+        let mut h = fxi;
+        for (k, r) in rho.iter().enumerate() {
+            let (fx, fy, ft) = (fz[3 * k], fz[3 * k + 1], fz[3 * k + 2]);
+            h[0] -= fx;
+            h[1] -= fy;
+            h[2] -= r[0] * fy - r[1] * fx + ft;
+        }
+        let l: [S; 3] = std::array::from_fn(|c| Gi[0][c] * h[0] + Gi[1][c] * h[1] + Gi[2][c] * h[2]);
+        for (i, (o, ph)) in out.iter_mut().zip(&self.Phi).enumerate() {
+            *o = fz[i] + l[0] * ph[0] + l[1] * ph[1] + l[2] * ph[2];
+        }
+        let (s, c) = R;
+        for k in 0..self.N {
+            let (x, y) = (out[3 * k], out[3 * k + 1]);
+            out[3 * k] = c * x - s * y;
+            out[3 * k + 1] = s * x + c * y;
+        }
+    }
+
+    /// The generic residual: `b.q`, `b.qd`, `b.qdd` (planar absolute coordinates, velocities,
+    /// accelerations) at the converged frame `frame` (with `Gi0` = its
+    /// $(\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}$ for the implicit derivative) into `b.out`, and with
+    /// `parts` the four force parts into `b.parts`.
+    #[inline(always)]
+    pub(crate) fn core<S: Scalar>(
+        &self,
+        b: &mut Buf<S>,
+        frame: ([f64; 2], f64),
+        solve: FrameSolve,
+        Gi0: &[[f64; 3]; 3],
+        gravity: [f64; 2],
+        parts: bool,
+    ) {
+        let N = self.N;
+        let n = self.n;
+        // The frame: explicit at an interface, else the converged one plus (dual numbers) its
+        // implicit derivative.
+        match solve {
+            FrameSolve::AtInterface(k) => {
+                b.frame_r = [b.q[3 * k], b.q[3 * k + 1]];
+                b.frame_phi = b.q[3 * k + 2];
+                b.R = b.frame_phi.sin_cos();
+            }
+            FrameSolve::Newton => {
+                b.frame_r = [S::cst(frame.0[0]), S::cst(frame.0[1])];
+                b.frame_phi = S::cst(frame.1);
+                let (s0, c0) = frame.1.sin_cos();
+                b.R = (S::cst(s0), S::cst(c0));
+                if S::DUAL {
+                    self.local(b);
+                    let g = self.phi_mul(&b.qjj);
+                    let d: [S; 3] = std::array::from_fn(|a| {
+                        (g[0] * Gi0[a][0] + g[1] * Gi0[a][1] + g[2] * Gi0[a][2]).infinitesimal()
+                    });
+                    b.frame_r[0] += d[0] * c0 - d[1] * s0;
+                    b.frame_r[1] += d[0] * s0 + d[1] * c0;
+                    b.frame_phi += d[2];
+                    b.R = b.frame_phi.sin_cos();
+                }
+            }
+        }
+        self.local(b);
+        let (s, c) = b.R;
+        // y and a in body axes (a into ybar).
+        for k in 0..N {
+            let (vx, vy) = (b.qd[3 * k], b.qd[3 * k + 1]);
+            b.y[3 * k] = c * vx + s * vy;
+            b.y[3 * k + 1] = c * vy - s * vx;
+            b.y[3 * k + 2] = b.qd[3 * k + 2];
+            let (ax, ay) = (b.qdd[3 * k], b.qdd[3 * k + 1]);
+            b.ybar[3 * k] = c * ax + s * ay;
+            b.ybar[3 * k + 1] = c * ay - s * ax;
+            b.ybar[3 * k + 2] = b.qdd[3 * k + 2];
+        }
+        for i in 3 * N..n {
+            b.y[i] = b.qd[i];
+            b.ybar[i] = b.qdd[i];
+        }
+        let (Gi, _) = inv3(&self.phi_psi(&b.rho));
+        b.Gi = Gi;
+        let py = self.phi_mul(&b.y);
+        let xi: [S; 3] = std::array::from_fn(|a| Gi[a][0] * py[0] + Gi[a][1] * py[1] + Gi[a][2] * py[2]);
+        self.minus_psi(&b.rho, &b.y, &xi, &mut b.zeta);
+        let om = xi[2];
+        for k in 0..N {
+            let (yx, yy) = (b.y[3 * k], b.y[3 * k + 1]);
+            let (zx, zy) = (b.zeta[3 * k], b.zeta[3 * k + 1]);
+            b.ybar[3 * k] += om * (yy + zy);
+            b.ybar[3 * k + 1] -= om * (yx + zx);
+        }
+        let pa = self.phi_mul(&b.ybar);
+        let xid: [S; 3] = std::array::from_fn(|a| Gi[a][0] * pa[0] + Gi[a][1] * pa[1] + Gi[a][2] * pa[2]);
+        self.minus_psi(&b.rho, &b.ybar, &xid, &mut b.zetad);
+
+        // FFR inertia (module docs).
+        let q = &b.qjj;
+        let m = self.mass;
+        let mut sv = [S::cst(m * self.d[0]), S::cst(m * self.d[1])];
+        let mut sd = [S::cst(0.0); 2];
+        let mut std_ = [S::cst(0.0); 2];
+        for (i, st) in self.St.iter().enumerate() {
+            for a in 0..2 {
+                sv[a] = sv[a].mul_add_f(q[i], st[a]);
+                sd[a] = sd[a].mul_add_f(b.zeta[i], st[a]);
+                std_[a] = std_[a].mul_add_f(b.zetad[i], st[a]);
+            }
+        }
+        matvec(&self.W, q, &mut b.Wq);
+        matvec(&self.Sz, q, &mut b.Sq);
+        matvec(&self.Sz, &b.zeta, &mut b.Sz);
+        let mut J = S::cst(self.J0);
+        let mut Jd = S::cst(0.0);
+        let mut cz = S::cst(0.0);
+        for i in 0..n {
+            let ai = S::cst(self.a[i]);
+            J += (ai * 2.0 + b.Wq[i]) * q[i];
+            Jd += (ai + b.Wq[i]) * b.zeta[i] * 2.0;
+            // c = S_rz - S~_z q.
+            cz += (S::cst(self.Srz[i]) - b.Sq[i]) * b.zetad[i];
+        }
+        let (V, Vd) = ([xi[0], xi[1]], [xid[0], xid[1]]);
+        let omd = xid[2];
+        let Es = [-sv[1], sv[0]];
+        let Esd = [-sd[1], sd[0]];
+        let pV = [V[0] * m + Es[0] * om + sd[0], V[1] * m + Es[1] * om + sd[1]];
+        let EpV = [-pV[1], pV[0]];
+        let FV: [S; 2] = std::array::from_fn(|a| Vd[a] * m + Es[a] * omd + Esd[a] * om + std_[a] + om * EpV[a]);
+        let FO = Vd[0] * Es[0] + Vd[1] * Es[1] + J * omd + cz + Jd * om + om * (V[0] * sv[0] + V[1] * sv[1]);
+        let Vt = [Vd[0] - om * V[1], Vd[1] + om * V[0]];
+        matvec(&self.M, &b.zetad, &mut b.fq);
+        let om2 = om * om;
+        let two_om = om * 2.0;
+        for i in 0..n {
+            let st = &self.St[i];
+            let ci = S::cst(self.Srz[i]) - b.Sq[i];
+            b.fq[i] +=
+                Vt[0] * st[0] + Vt[1] * st[1] + ci * omd - two_om * b.Sz[i] - om2 * (S::cst(self.a[i]) + b.Wq[i]);
+        }
+        // Elastic force with geometric stiffening.
+        matvec(&self.K, q, &mut b.fe);
+        if let Some(G) = &self.geometric {
+            b.b.fill(S::cst(0.0));
+            for &(i, j, k, v) in &G.entries {
+                let (i, j, k) = (i as usize, j as usize, k as usize);
+                b.b[k] = b.b[k].mul_add_f(q[i] * q[j], 0.5 * v);
+            }
+            matvec(&G.F, &b.b, &mut b.p);
+            for (fe, bi) in b.fe.iter_mut().zip(&b.b) {
+                *fe += *bi;
+            }
+            for &(i, j, k, v) in &G.entries {
+                let (i, j, k) = (i as usize, j as usize, k as usize);
+                b.fe[i] = b.fe[i].mul_add_f((q[k] + b.p[k]) * q[j], v);
+            }
+        }
+        // Damping.
+        if self.damped {
+            matvec(&self.D, &b.zeta, &mut b.fd);
+        }
+        // Gravity (x, y).
+        let gL = [c * gravity[0] + s * gravity[1], c * gravity[1] - s * gravity[0]];
+        let Fg = [gL[0] * m, gL[1] * m, Es[0] * gL[0] + Es[1] * gL[1]];
+        for (f, st) in b.fg.iter_mut().zip(&self.St) {
+            *f = gL[0] * st[0] + gL[1] * st[1];
+        }
+        let FI = [FV[0], FV[1], FO];
+        let R = b.R;
+        if parts {
+            let zero = [S::cst(0.0); 3];
+            let [pi, pe, pd, pg] = &mut b.parts;
+            self.project(&b.rho, &Gi, R, FI, &b.fq, pi);
+            self.project(&b.rho, &Gi, R, zero, &b.fe, pe);
+            if self.damped {
+                self.project(&b.rho, &Gi, R, zero, &b.fd, pd);
+            } else {
+                pd.fill(S::cst(0.0));
+            }
+            self.project(&b.rho, &Gi, R, Fg, &b.fg, pg);
+            for i in 0..n {
+                b.out[i] = pi[i] + pe[i] + pd[i] - pg[i];
+            }
+        } else {
+            for i in 0..n {
+                let mut f = b.fq[i] + b.fe[i] - b.fg[i];
+                if self.damped {
+                    f += b.fd[i];
+                }
+                b.fq[i] = f;
+            }
+            let fxi = [FI[0] - Fg[0], FI[1] - Fg[1], FI[2] - Fg[2]];
+            self.project(&b.rho, &Gi, R, fxi, &b.fq, &mut b.out);
+        }
+    }
+
+    /// The planar $\boldsymbol\Phi_j\boldsymbol\Psi$ inverse at `rho` with its 1-norm reciprocal
+    /// condition number.
+    fn inverse_with_rcond(&self, rho: &[[f64; 2]]) -> Result<[[f64; 3]; 3], SuperelementError> {
+        let G = self.phi_psi(rho);
+        let (Gi, det) = inv3(&G);
+        let norm1 = |A: &[[f64; 3]; 3]| {
+            (0..3)
+                .map(|c| (0..3).map(|r| A[r][c].abs()).sum::<f64>())
+                .fold(0.0, f64::max)
+        };
+        if det == 0.0 || !det.is_finite() {
+            return Err(SuperelementError::SingularFrame { rcond: 0.0 });
+        }
+        let rcond = 1.0 / (norm1(&G) * norm1(&Gi));
+        if !(rcond >= RCOND_MIN) {
+            return Err(SuperelementError::SingularFrame { rcond });
+        }
+        Ok(Gi)
+    }
+}
+
+impl Superelement {
+    pub(crate) fn planar_body(&self) -> &PlanarBody {
+        self.planar.as_deref().expect("a planar body")
+    }
+
+    /// Checks that `state` lies in the plane (NotPlanar naming the interface) and reads the
+    /// positions into `r` and the angles into `phi`.
+    pub(crate) fn read_planar(
+        &self,
+        state: &BodyState,
+        r: &mut [[f64; 2]],
+        phi: &mut [f64],
+    ) -> Result<f64, SuperelementError> {
+        self.check_state(state)?;
+        let z0 = state.r[0].z;
+        let mut r_max: f64 = 0.0;
+        for k in 0..self.n_interfaces {
+            let R = &state.R[k];
+            let tilt = 2.0 * R.coords[0].hypot(R.coords[1]);
+            let name = &self.body.interfaces[k].name;
+            if !(tilt <= STATE_TOL) {
+                return Err(self.not_planar(format!(
+                    "the orientation of interface '{name}' is tilted {tilt:.3e} rad out of the xy-plane"
+                )));
+            }
+            let dz = state.r[k].z - z0;
+            if !(dz.abs() <= STATE_TOL * self.length + 64.0 * f64::EPSILON * state.r[k].z.abs()) {
+                return Err(self.not_planar(format!(
+                    "interface '{name}' is {dz:.3e} m out of the plane z = {z0} of the first interface"
+                )));
+            }
+            r[k] = [state.r[k].x, state.r[k].y];
+            phi[k] = angle_of(R);
+            r_max = r_max.max(state.r[k].norm());
+        }
+        Ok(r_max)
+    }
+
+    pub(crate) fn not_planar(&self, what: String) -> SuperelementError {
+        SuperelementError::NotPlanar {
+            body: self.name.clone(),
+            what,
+        }
+    }
+
+    /// Solves the planar frame (4.4) from the warm start (the frame of `warm`): positions `r`,
+    /// angles `phi`, modal coordinates `eta`; `q` and `rho` are Newton buffers.
+    pub(crate) fn planar_frame(
+        &self,
+        r: &[[f64; 2]],
+        phi: &[f64],
+        eta: &[f64],
+        r_max: f64,
+        warm: &Frame,
+        b: &mut Buf<f64>,
+    ) -> Result<(([f64; 2], f64), usize), SuperelementError> {
+        let pb = self.planar_body();
+        match self.frame_solve {
+            FrameSolve::AtInterface(k) => Ok(((r[k], phi[k]), 0)),
+            FrameSolve::Newton => {
+                let x0 = pb.x[0];
+                let guess = || {
+                    let (s, c) = phi[0].sin_cos();
+                    (
+                        [r[0][0] - (c * x0[0] - s * x0[1]), r[0][1] - (s * x0[0] + c * x0[1])],
+                        phi[0],
+                    )
+                };
+                let warm = ([warm.r.x, warm.r.y], angle_of(&warm.R));
+                let far = phi.iter().any(|p| wrap(p - warm.1).abs() > 1.0);
+                if far {
+                    return self.planar_newton(r, phi, eta, r_max, guess(), b);
+                }
+                self.planar_newton(r, phi, eta, r_max, warm, b)
+                    .or_else(|e| self.planar_newton(r, phi, eta, r_max, guess(), b).map_err(|_| e))
+            }
+        }
+    }
+
+    fn planar_newton(
+        &self,
+        r: &[[f64; 2]],
+        phi: &[f64],
+        eta: &[f64],
+        r_max: f64,
+        start: ([f64; 2], f64),
+        b: &mut Buf<f64>,
+    ) -> Result<(([f64; 2], f64), usize), SuperelementError> {
+        let pb = self.planar_body();
+        let N = pb.N;
+        let L = self.length;
+        let settings = self.frame_settings;
+        let tol = settings.tolerance + 64.0 * f64::EPSILON * (1.0 + r_max / L);
+        let (mut rj, mut pj) = start;
+        let mut residual = f64::INFINITY;
+        for it in 0..=settings.max_iterations {
+            let (s, c) = pj.sin_cos();
+            for k in 0..N {
+                let dx = r[k][0] - rj[0];
+                let dy = r[k][1] - rj[1];
+                let rx = c * dx + s * dy;
+                let ry = c * dy - s * dx;
+                b.rho[k] = [rx, ry];
+                b.qjj[3 * k] = rx - pb.x[k][0];
+                b.qjj[3 * k + 1] = ry - pb.x[k][1];
+                b.qjj[3 * k + 2] = wrap(phi[k] - pj);
+            }
+            b.qjj[3 * N..].copy_from_slice(eta);
+            let g = pb.phi_mul(&b.qjj);
+            residual = (g[0].hypot(g[1]) / L).max(g[2].abs());
+            if !residual.is_finite() {
+                break;
+            }
+            if residual <= tol {
+                return Ok(((rj, pj), it));
+            }
+            if it == settings.max_iterations {
+                break;
+            }
+            let Gi = pb.inverse_with_rcond(&b.rho)?;
+            let d: [f64; 3] = std::array::from_fn(|a| Gi[a][0] * g[0] + Gi[a][1] * g[1] + Gi[a][2] * g[2]);
+            rj[0] += c * d[0] - s * d[1];
+            rj[1] += s * d[0] + c * d[1];
+            pj += d[2];
+        }
+        Err(SuperelementError::FrameNotConverged {
+            iterations: settings.max_iterations,
+            residual,
+            tolerance: tol,
+        })
+    }
+
+    /// The 3D frame of a planar one.
+    pub(crate) fn frame_3d(&self, frame: ([f64; 2], f64), z: f64) -> Frame {
+        Frame::new(Vector3::new(frame.0[0], frame.0[1], z), rotation_z(frame.1))
+    }
+
+    /// Planar [`Superelement::solve_frame`].
+    pub(crate) fn planar_solve_frame(&self, state: &BodyState) -> Result<(Frame, usize), SuperelementError> {
+        let pb = self.planar_body();
+        let mut r = vec![[0.0; 2]; pb.N];
+        let mut phi = vec![0.0; pb.N];
+        let r_max = self.read_planar(state, &mut r, &mut phi)?;
+        let mut b = Buf::<f64>::new(pb.N, pb.n);
+        let (frame, it) = self.planar_frame(&r, &phi, &state.eta, r_max, &state.frame, &mut b)?;
+        Ok((self.frame_3d(frame, state.r[0].z - self.x[0].z), it))
+    }
+
+    /// The planar evaluation behind [`Superelement::evaluate_into`] and
+    /// [`Superelement::residual_into`].
+    pub(crate) fn planar_evaluate(
+        &self,
+        state: &BodyState,
+        acc: &[f64],
+        gravity: &Vector3<f64>,
+        level: Level,
+        ws: &mut Workspace,
+        out: &mut Evaluation,
+    ) -> Result<(), SuperelementError> {
+        let pb = self.planar_body();
+        let pw = ws.planar.as_deref_mut().expect("a planar workspace");
+        pw.valid = false;
+        let N = pb.N;
+        let r_max = self.read_planar(state, &mut pw.pos, &mut pw.phi)?;
+        let (frame, iterations) = self.planar_frame(&pw.pos, &pw.phi, &state.eta, r_max, &state.frame, &mut pw.f)?;
+        let rs = &pw.pos;
+        let z = state.r[0].z - self.x[0].z;
+        let b = &mut pw.f;
+        for k in 0..N {
+            b.q[3 * k] = rs[k][0];
+            b.q[3 * k + 1] = rs[k][1];
+            b.q[3 * k + 2] = frame.1 + wrap(pw.phi[k] - frame.1);
+            b.qd[3 * k] = state.v[k].x;
+            b.qd[3 * k + 1] = state.v[k].y;
+            b.qd[3 * k + 2] = state.omega[k].z;
+        }
+        if let FrameSolve::AtInterface(k) = self.frame_solve {
+            // The explicit frame: the interface's angle itself.
+            b.q[3 * k + 2] = frame.1;
+        }
+        b.q[3 * N..].copy_from_slice(&state.eta);
+        b.qd[3 * N..].copy_from_slice(&state.eta_dot);
+        for (i, &g) in pb.index.iter().enumerate() {
+            b.qdd[i] = acc[g];
+        }
+        let g2 = [gravity.x, gravity.y];
+        let Gi0 = [[0.0; 3]; 3];
+        pb.core(b, frame, self.frame_solve, &Gi0, g2, true);
+        let Gi0 = b.Gi;
+        // Outputs in the 6N + m layout.
+        let n3 = self.n;
+        for v in [
+            &mut out.residual,
+            &mut out.f_inertia,
+            &mut out.f_elastic,
+            &mut out.f_damping,
+            &mut out.f_gravity,
+            &mut out.q_jj,
+        ] {
+            v.fill(0.0);
+        }
+        for (i, &g) in pb.index.iter().enumerate() {
+            out.f_inertia[g] = b.parts[0][i];
+            out.f_elastic[g] = b.parts[1][i];
+            out.f_damping[g] = b.parts[2][i];
+            out.f_gravity[g] = b.parts[3][i];
+            out.residual[g] = b.out[i];
+            out.q_jj[g] = b.qjj[i];
+        }
+        let frame3 = self.frame_3d(frame, z);
+        out.frame = frame3;
+        out.frame_iterations = iterations;
+        pw.frame = frame;
+        pw.iterations = iterations;
+        pw.valid = true;
+        // Tangents by dual numbers: q (kind 0), qd (1), qdd (2).
+        let kinds: &[usize] = match level {
+            Level::Forces => &[],
+            Level::Mass => &[2],
+            Level::Tangents => &[0, 1, 2],
+        };
+        let n = pb.n;
+        for &kind in kinds {
+            let mut start = 0;
+            while start < n {
+                let end = (start + WIDTH).min(n);
+                let (f, d) = (&pw.f, &mut pw.d);
+                for i in 0..n {
+                    d.q[i] = Dual::cst(f.q[i]);
+                    d.qd[i] = Dual::cst(f.qd[i]);
+                    d.qdd[i] = Dual::cst(f.qdd[i]);
+                }
+                let seeds = match kind {
+                    0 => &mut d.q,
+                    1 => &mut d.qd,
+                    _ => &mut d.qdd,
+                };
+                for (s, i) in (start..end).enumerate() {
+                    seeds[i].d[s] = 1.0;
+                }
+                pb.core(d, frame, self.frame_solve, &Gi0, g2, false);
+                let mat = &mut pw.mats[kind];
+                for (s, j) in (start..end).enumerate() {
+                    for i in 0..n {
+                        mat[i + n * j] = d.out[i].d[s];
+                    }
+                }
+                start = end;
+            }
+        }
+        let scatter = |src: &[f64], dst: &mut Mat<f64>| {
+            dst.fill(0.0);
+            for (j, &gj) in pb.index.iter().enumerate() {
+                let col = dst.col_as_slice_mut(gj);
+                for (i, &gi) in pb.index.iter().enumerate() {
+                    col[gi] = src[i + n * j];
+                }
+            }
+        };
+        if level.mass() {
+            scatter(&pw.mats[2], &mut out.mass);
+            out.q_v.copy_from_slice(&out.f_inertia);
+            for (j, &gj) in pb.index.iter().enumerate() {
+                let a = acc[gj];
+                for (i, &gi) in pb.index.iter().enumerate() {
+                    out.q_v[gi] -= pw.mats[2][i + n * j] * a;
+                }
+            }
+        }
+        if level.tangents() {
+            scatter(&pw.mats[0], &mut out.stiffness);
+            scatter(&pw.mats[1], &mut out.damping);
+        }
+        debug_assert_eq!(out.q_jj.len(), n3);
+        ws.kin.set_planar(frame3, iterations, &out.q_jj, &self.x);
+        ws.kin_valid = false;
+        Ok(())
+    }
+
+    /// Planar kinetic energy $\tfrac12\boldsymbol\nu^T\mathbf M_{ffr}\boldsymbol\nu$ at local
+    /// coordinates `qjj` (planar) for body-axis velocities `y` (planar): forms $\boldsymbol\nu$
+    /// from the configuration.
+    pub(crate) fn planar_kinetic(&self, qjj: &[f64], y: &[f64]) -> Result<f64, SuperelementError> {
+        let pb = self.planar_body();
+        let n = pb.n;
+        let rho: Vec<[f64; 2]> = (0..pb.N)
+            .map(|k| [pb.x[k][0] + qjj[3 * k], pb.x[k][1] + qjj[3 * k + 1]])
+            .collect();
+        let Gi = pb.inverse_with_rcond(&rho)?;
+        let py = pb.phi_mul(y);
+        let xi: [f64; 3] = std::array::from_fn(|a| Gi[a][0] * py[0] + Gi[a][1] * py[1] + Gi[a][2] * py[2]);
+        let mut zeta = vec![0.0; n];
+        pb.minus_psi(&rho, y, &xi, &mut zeta);
+        let m = pb.mass;
+        let mut s = [m * pb.d[0], m * pb.d[1]];
+        let mut stz = [0.0; 2];
+        for (i, st) in pb.St.iter().enumerate() {
+            for a in 0..2 {
+                s[a] += st[a] * qjj[i];
+                stz[a] += st[a] * zeta[i];
+            }
+        }
+        let mut Wq = vec![0.0; n];
+        let mut Sq = vec![0.0; n];
+        let mut Mz = vec![0.0; n];
+        matvec(&pb.W, qjj, &mut Wq);
+        matvec(&pb.Sz, qjj, &mut Sq);
+        matvec(&pb.M, &zeta, &mut Mz);
+        let J = pb.J0 + (0..n).map(|i| (2.0 * pb.a[i] + Wq[i]) * qjj[i]).sum::<f64>();
+        let cz: f64 = (0..n).map(|i| (pb.Srz[i] - Sq[i]) * zeta[i]).sum();
+        let (V, om) = ([xi[0], xi[1]], xi[2]);
+        let Es = [-s[1], s[0]];
+        Ok(0.5 * m * (V[0] * V[0] + V[1] * V[1])
+            + om * (V[0] * Es[0] + V[1] * Es[1])
+            + V[0] * stz[0]
+            + V[1] * stz[1]
+            + 0.5 * J * om * om
+            + om * cz
+            + 0.5 * dot(&zeta, &Mz))
+    }
+
+    /// The planar local coordinates of a 3D-layout $\mathbf q^{jj}$.
+    pub(crate) fn planar_q(&self, q3: &[f64]) -> Vec<f64> {
+        self.planar_body().index.iter().map(|&g| q3[g]).collect()
+    }
+
+    /// $\bar{\mathbf R}^T\dot{\mathbf q}$ (planar) of a 3D-layout velocity vector, for the frame
+    /// angle of `frame`.
+    pub(crate) fn planar_y(&self, frame: &Frame, qd3: &[f64]) -> Vec<f64> {
+        let pb = self.planar_body();
+        let (s, c) = angle_of(&frame.R).sin_cos();
+        let mut y: Vec<f64> = pb.index.iter().map(|&g| qd3[g]).collect();
+        for k in 0..pb.N {
+            let (vx, vy) = (y[3 * k], y[3 * k + 1]);
+            y[3 * k] = c * vx + s * vy;
+            y[3 * k + 1] = c * vy - s * vx;
+        }
+        y
+    }
+
+    /// Planar strain energy at planar local coordinates `q`.
+    pub(crate) fn planar_strain_energy(&self, q: &[f64]) -> f64 {
+        let pb = self.planar_body();
+        let n = pb.n;
+        let mut f = vec![0.0; n];
+        matvec(&pb.K, q, &mut f);
+        let mut U = 0.5 * dot(q, &f);
+        if let Some(G) = &pb.geometric {
+            let mut b = vec![0.0; n];
+            for &(i, j, k, v) in &G.entries {
+                b[k as usize] += 0.5 * v * q[i as usize] * q[j as usize];
+            }
+            let mut p = vec![0.0; n];
+            matvec(&G.F, &b, &mut p);
+            U += dot(q, &b) + 0.5 * dot(&b, &p);
+        }
+        U
+    }
+
+    /// Planar frame velocity and elastic velocity (planar) at the configuration `kin` for the
+    /// state's velocities.
+    pub(crate) fn planar_velocities(
+        &self,
+        kin: &Kinematics,
+        state: &BodyState,
+    ) -> Result<([f64; 3], Vec<f64>), SuperelementError> {
+        let pb = self.planar_body();
+        let q = self.planar_q(&kin.q_jj);
+        let y = self.planar_y(&kin.frame, &state.velocity_vector());
+        let rho: Vec<[f64; 2]> = (0..pb.N)
+            .map(|k| [pb.x[k][0] + q[3 * k], pb.x[k][1] + q[3 * k + 1]])
+            .collect();
+        let Gi = pb.inverse_with_rcond(&rho)?;
+        let py = pb.phi_mul(&y);
+        let xi: [f64; 3] = std::array::from_fn(|a| Gi[a][0] * py[0] + Gi[a][1] * py[1] + Gi[a][2] * py[2]);
+        let mut zeta = vec![0.0; pb.n];
+        pb.minus_psi(&rho, &y, &xi, &mut zeta);
+        Ok((xi, zeta))
+    }
+
+    /// Builds the planar data (the checks of [`Superelement::into_planar`]).
+    pub(crate) fn build_planar(&self) -> Result<PlanarBody, SuperelementError> {
+        let N = self.n_interfaces;
+        let m = self.n_modes;
+        let n3 = self.n;
+        let names: Vec<String> = self.body.interfaces.iter().map(|i| i.name.clone()).collect();
+        const DOF: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
+        let entity = |g: usize| -> String {
+            if g < 6 * N {
+                format!("interface '{}' dof {}", names[g / 6], DOF[g % 6])
+            } else {
+                format!("mode {}", g - 6 * N)
+            }
+        };
+        // Out-of-plane parity of a 3D coordinate: z, rx, ry of an interface.
+        let odd = |g: usize| g < 6 * N && matches!(g % 6, 2..=4);
+        if self.mass_variant == MassVariant::Lumped {
+            return Err(self.not_planar("the Lumped inertia has no planar evaluation (use the Exact inertia)".into()));
+        }
+        if self.frame_choice == FrameChoice::AuxiliaryNode {
+            return Err(self.not_planar(
+                "the auxiliary-node frame has no planar evaluation (use the centre of mass or an interface node)"
+                    .into(),
+            ));
+        }
+        // The interfaces and the frame origin in one plane z = const.
+        let z = self.origin.z;
+        for (k, p) in self.body.interfaces.iter().enumerate() {
+            let dz = p.position[2] - z;
+            if !(dz.abs() <= COUPLING_TOL * self.length) {
+                return Err(self.not_planar(format!(
+                    "interface '{}' is at z = {} but the frame origin (the {}) at z = {z} ({dz:.3e} m apart): the interfaces and the frame origin must lie in one plane z = const",
+                    names[k], p.position[2], self.frame_choice
+                )));
+            }
+        }
+        // Entries that couple the in-plane and out-of-plane sets (odd parity under z -> -z)
+        // must vanish against the matrix's largest entry.
+        let check = |what: &str,
+                     rows: usize,
+                     cols: usize,
+                     get: &dyn Fn(usize, usize) -> f64,
+                     row_odd: &dyn Fn(usize) -> bool,
+                     col_odd: &dyn Fn(usize) -> bool,
+                     row_name: &dyn Fn(usize) -> String,
+                     col_name: &dyn Fn(usize) -> String|
+         -> Result<(), SuperelementError> {
+            let mut big: f64 = 0.0;
+            let mut worst = (0.0, 0, 0);
+            for j in 0..cols {
+                for i in 0..rows {
+                    let v = get(i, j).abs();
+                    big = big.max(v);
+                    if row_odd(i) != col_odd(j) && v > worst.0 {
+                        worst = (v, i, j);
+                    }
+                }
+            }
+            if worst.0 > COUPLING_TOL * big {
+                return Err(self.not_planar(format!(
+                    "{what} couples {} with {} (entry {:.3e}, {:.3e} of its largest)",
+                    row_name(worst.1),
+                    col_name(worst.2),
+                    get(worst.1, worst.2),
+                    worst.0 / big
+                )));
+            }
+            Ok(())
+        };
+        let coord = |g: usize| entity(g);
+        check("K_CB", n3, n3, &|i, j| self.K_CB[(i, j)], &odd, &odd, &coord, &coord)?;
+        check("M_CB", n3, n3, &|i, j| self.M_CB[(i, j)], &odd, &odd, &coord, &coord)?;
+        let frame_row = |r: usize| format!("the frame condition row {}", DOF[r]);
+        let odd_row = |r: usize| matches!(r, 2..=4);
+        check(
+            "Phi_j",
+            6,
+            n3,
+            &|i, j| self.Phi_j[(i, j)],
+            &odd_row,
+            &odd,
+            &frame_row,
+            &coord,
+        )?;
+        let I = &self.inertia;
+        let axis = |r: usize| format!("the {} component", ["x", "y", "z"][r]);
+        // S_t: the z row is out of plane; S_r: the x, y rows.
+        check(
+            "the inertia invariant S_t",
+            3,
+            n3,
+            &|i, j| I.S_t[(i, j)],
+            &|r| r == 2,
+            &odd,
+            &axis,
+            &coord,
+        )?;
+        check(
+            "the inertia invariant S_r",
+            3,
+            n3,
+            &|i, j| I.S_r[(i, j)],
+            &|r| r != 2,
+            &odd,
+            &axis,
+            &coord,
+        )?;
+        let pair_name = |r: usize| format!("the {}{} component", ["x", "y", "z"][r / 3], ["x", "y", "z"][r % 3]);
+        check(
+            "the inertia invariant S_x",
+            9,
+            n3,
+            &|i, j| I.S_x[(i, j)],
+            &|r| (r / 3 == 2) != (r % 3 == 2),
+            &odd,
+            &pair_name,
+            &coord,
+        )?;
+        if let Some(G) = &self.geometric {
+            let n = n3;
+            // G as an n^2 x n matrix: row i + n j, column k.
+            check(
+                "the geometric stiffness G",
+                n * n,
+                n,
+                &|r, k| G.stack[r + n * n * k],
+                &|r| odd(r % n) != odd(r / n),
+                &odd,
+                &|r| format!("({}, {})", entity(r % n), entity(r / n)),
+                &|k| format!("G of {}", entity(k)),
+            )?;
+        }
+        let c0 = self.inertia.d;
+        if !(c0.z.abs() <= COUPLING_TOL * self.length) {
+            return Err(self.not_planar(format!(
+                "the centre of mass is {:.3e} m off the plane of the interfaces",
+                c0.z
+            )));
+        }
+        // The planar index set and the restricted data.
+        let mut index = Vec::with_capacity(3 * N + m);
+        for k in 0..N {
+            for c in IN_PLANE {
+                index.push(6 * k + c);
+            }
+        }
+        index.extend(6 * N..6 * N + m);
+        let n = index.len();
+        let restrict = |A: &dyn Fn(usize, usize) -> f64| -> Vec<f64> {
+            let mut v = vec![0.0; n * n];
+            for (j, &gj) in index.iter().enumerate() {
+                for (i, &gi) in index.iter().enumerate() {
+                    v[i + n * j] = A(gi, gj);
+                }
+            }
+            v
+        };
+        let Phi: Vec<[f64; 3]> = index
+            .iter()
+            .map(|&g| [self.Phi_j[(0, g)], self.Phi_j[(1, g)], self.Phi_j[(5, g)]])
+            .collect();
+        let mut sum_u = [[0.0; 3]; 2];
+        for k in 0..N {
+            for c in 0..2 {
+                for a in 0..3 {
+                    sum_u[c][a] += Phi[3 * k + c][a];
+                }
+            }
+        }
+        let geometric = match &self.geometric {
+            None => None,
+            Some(G) => {
+                let mut entries = Vec::new();
+                for (k, &gk) in index.iter().enumerate() {
+                    let Gk = G.matrix(gk);
+                    for (j, &gj) in index.iter().enumerate() {
+                        for (i, &gi) in index.iter().enumerate() {
+                            let v = Gk[(gi, gj)];
+                            if v != 0.0 {
+                                entries.push((i as u32, j as u32, k as u32, v));
+                            }
+                        }
+                    }
+                }
+                let F = self.planar_pseudo_inverse(&index)?;
+                // The planar pseudo-inverse against the restricted spatial one (equal when the
+                // blocks decouple).
+                let F3 = &G.F;
+                let big = F.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                let mut worst: f64 = 0.0;
+                for (j, &gj) in index.iter().enumerate() {
+                    for (i, &gi) in index.iter().enumerate() {
+                        worst = worst.max((F[i + n * j] - F3[(gi, gj)]).abs());
+                    }
+                }
+                if worst > 1e-6 * big {
+                    return Err(self.not_planar(format!(
+                        "the pseudo-inverse of the planar K_CB differs from the in-plane block of the spatial one by {:.3e} of its largest entry",
+                        worst / big
+                    )));
+                }
+                Some(PlanarGeometric { entries, F })
+            }
+        };
+        let ffr = &self.inertia;
+        let x: Vec<[f64; 2]> = self.x.iter().map(|v| [v.x, v.y]).collect();
+        Ok(PlanarBody {
+            N,
+            n,
+            x,
+            Phi,
+            sum_u,
+            K: restrict(&|i, j| self.K_CB[(i, j)]),
+            M: restrict(&|i, j| self.M_CB[(i, j)]),
+            D: restrict(&|i, j| self.D[(i, j)]),
+            damped: self.damped,
+            mass: ffr.mass,
+            d: [ffr.d.x, ffr.d.y],
+            J0: ffr.J0[(2, 2)],
+            St: index.iter().map(|&g| [ffr.S_t[(0, g)], ffr.S_t[(1, g)]]).collect(),
+            Srz: index.iter().map(|&g| ffr.S_r[(2, g)]).collect(),
+            a: index.iter().map(|&g| ffr.S_x[(0, g)] + ffr.S_x[(4, g)]).collect(),
+            W: restrict(&|i, j| 0.5 * (ffr.S_bar_sym[0][(i, j)] + ffr.S_bar_sym[1][(i, j)])),
+            Sz: restrict(&|i, j| ffr.S_tilde[2][(i, j)]),
+            geometric,
+            index,
+        })
+    }
+
+    /// $\mathbf K_{CB}^+$ of the planar $\mathbf K_{CB}$ (the in-plane block), as the spatial
+    /// `rigid_pseudo_inverse` with the three planar rigid modes.
+    fn planar_pseudo_inverse(&self, index: &[usize]) -> Result<Vec<f64>, SuperelementError> {
+        use faer::linalg::solvers::DenseSolveCore;
+        let n = index.len();
+        let N = self.n_interfaces;
+        let R = Mat::from_fn(n, 3, |i, c| {
+            if i >= 3 * N {
+                return 0.0;
+            }
+            let (k, d) = (i / 3, i % 3);
+            let p = self.body.interfaces[k].position;
+            match (d, c) {
+                (0, 0) | (1, 1) | (2, 2) => 1.0,
+                (0, 2) => -p[1],
+                (1, 2) => p[0],
+                _ => 0.0,
+            }
+        });
+        let RtR = R.transpose() * &R;
+        let P = &R * RtR.partial_piv_lu().inverse() * R.transpose();
+        let K = Mat::from_fn(n, n, |i, j| self.K_CB[(index[i], index[j])]);
+        let alpha = (0..n).map(|i| K[(i, i)].abs()).sum::<f64>() / n as f64;
+        let A = Mat::from_fn(n, n, |i, j| K[(i, j)] + alpha * P[(i, j)]);
+        let F = A.partial_piv_lu().inverse();
+        if F.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+            return Err(
+                self.not_planar("the planar K_CB has a null space beyond the three planar rigid motions".into())
+            );
+        }
+        let mut out = vec![0.0; n * n];
+        for j in 0..n {
+            for i in 0..n {
+                out[i + n * j] = 0.5 * (F[(i, j)] + F[(j, i)]) - P[(i, j)] / alpha;
+            }
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,416 @@
+//! The planar body ([`Superelement::into_planar`]) against the spatial one: on planar states
+//! (deformed, turned by more than 1 rad about z, moving, with modal coordinates, rates,
+//! accelerations and gravity in the plane) its residual, force parts, M, C_t and K_t equal the
+//! in-plane rows and columns of the spatial body's (the same reduced body), and its
+//! out-of-plane rows are zero; its tangents against central differences; rigid motion; the
+//! NotPlanar errors.
+//!
+//! Tolerance of the comparison: the two evaluations form the same quantities by different
+//! sums (3 coordinates per interface against 6, dual numbers against the closed-form tangents,
+//! two frame solves each converged to 1e-12); the differences measured are up to 8e-14 of each
+//! block's largest entry (`SUPERELEMENT_FD_VERBOSE=1` prints them), and 1e-10 leaves room for
+//! the frame tolerance.
+
+use fe_model::{DofMask, FeModel, NodeId};
+use nalgebra::{Point3, UnitQuaternion, Vector3};
+use reduction::{reduce, CbSettings, ModeSelection, ReducedBody};
+use std::sync::OnceLock;
+use superelement::testing::{check_jacobian, fixtures, perturb_state, perturb_velocity, FdReport, Rng};
+use superelement::{BodyState, Damping, Frame, FrameChoice, MassVariant, Superelement, SuperelementError};
+
+const TOL: f64 = 1e-10;
+
+/// A beam in the plane z = 0.05 (section axis along z), 4 elements, interfaces at both ends,
+/// 2 fixed-interface modes and geometric stiffening; with `supported`, the out-of-plane dofs of
+/// its internal nodes held, so its modes are in-plane.
+fn planar_beam(supported: bool) -> ReducedBody {
+    let mut model = FeModel::default();
+    let props = fixtures::properties(&mut model, Vector3::z());
+    let nodes: Vec<NodeId> = fe_model::generate::straight_beam(
+        &mut model,
+        Point3::new(0.1, -0.2, 0.05),
+        Point3::new(1.0, 0.3, 0.05),
+        4,
+        &props,
+        Some("beam"),
+    )
+    .unwrap();
+    if supported {
+        for n in &nodes[1..4] {
+            model.add_support(*n, DofMask([false, false, true, true, true, false]));
+        }
+    }
+    let interfaces = vec![("a".to_string(), nodes[0]), ("b".to_string(), nodes[4])];
+    let settings = CbSettings {
+        geometric_stiffening: true,
+        ..CbSettings::new(ModeSelection::Count(2))
+    };
+    reduce(&model, "rod", &interfaces, &settings).unwrap()
+}
+
+fn body() -> &'static ReducedBody {
+    static B: OnceLock<ReducedBody> = OnceLock::new();
+    B.get_or_init(|| planar_beam(true))
+}
+
+fn damping() -> Damping {
+    Damping {
+        alpha: 0.3,
+        beta: 2e-4,
+        modal_ratios: vec![0.02, 0.05],
+    }
+}
+
+/// The spatial body and the planar one built from the same reduced body.
+fn pair(frame: FrameChoice) -> (Superelement, Superelement) {
+    let se = Superelement::new(body(), frame, MassVariant::Exact, damping()).unwrap();
+    let planar = se.clone().into_planar().unwrap();
+    assert!(planar.is_planar() && !se.is_planar());
+    (se, planar)
+}
+
+fn rot_z(a: f64) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_axis_angle(&Vector3::z_axis(), a)
+}
+
+/// A planar state: the body turned by `angle` about z at z = 0.25, deformed in the plane (2 %
+/// of its size, 0.02 rad, modal amplitudes alike), moving (3 rad/s), with accelerations.
+fn planar_state(se: &Superelement, angle: f64, seed: u64) -> (BodyState, Vec<f64>) {
+    let mut rng = Rng::new(seed);
+    let N = se.n_interfaces();
+    let m = se.n_modes();
+    let L = se.interface_positions().iter().map(|x| x.norm()).fold(0.0, f64::max);
+    let R0 = rot_z(angle);
+    let frame = Frame::new(Vector3::new(0.3, -0.7, 0.25), R0);
+    let spin = 3.0;
+    let e = 0.02;
+    let planar = |s: f64, rng: &mut Rng| Vector3::new(rng.uniform() * s, rng.uniform() * s, 0.0);
+    let v0 = planar(spin * L, &mut rng);
+    let mut s = se.rigid_state(frame, v0, Vector3::new(0.0, 0.0, spin));
+    for k in 0..N {
+        s.r[k] += R0 * planar(e * L, &mut rng);
+        s.R[k] = rot_z(rng.uniform() * e) * s.R[k];
+        s.v[k] += planar(spin * e * L, &mut rng);
+        s.omega[k].z += rng.uniform() * spin * e;
+    }
+    let eta_scale = e * L * se.mass().sqrt();
+    for i in 0..m {
+        s.eta[i] = rng.uniform() * eta_scale;
+        s.eta_dot[i] = rng.uniform() * eta_scale * spin;
+    }
+    let mut acc = vec![0.0; 6 * N + m];
+    for k in 0..N {
+        let a = planar(spin * spin * L, &mut rng);
+        acc[6 * k] = a.x;
+        acc[6 * k + 1] = a.y;
+        acc[6 * k + 5] = rng.uniform() * spin * spin;
+    }
+    for i in 0..m {
+        acc[6 * N + i] = rng.uniform() * eta_scale * spin * spin;
+    }
+    (s, acc)
+}
+
+/// The in-plane index set of the 6N + m layout.
+fn in_plane(se: &Superelement) -> Vec<usize> {
+    let N = se.n_interfaces();
+    let mut idx: Vec<usize> = (0..N).flat_map(|k| [6 * k, 6 * k + 1, 6 * k + 5]).collect();
+    idx.extend(6 * N..6 * N + se.n_modes());
+    idx
+}
+
+fn verbose(what: &str, planar: &[f64], spatial: &[f64], big: f64, keep: impl Fn(usize) -> bool) {
+    if std::env::var_os("SUPERELEMENT_FD_VERBOSE").is_some() {
+        let worst = (0..planar.len())
+            .filter(|&i| keep(i))
+            .map(|i| (planar[i] - spatial[i]).abs())
+            .fold(0.0, f64::max);
+        eprintln!("{what}: largest difference {:.3e} of the largest entry", worst / big);
+    }
+}
+
+fn assert_vec(what: &str, planar: &[f64], spatial: &[f64], idx: &[usize]) {
+    let big = idx.iter().map(|&i| spatial[i].abs()).fold(0.0, f64::max);
+    verbose(what, planar, spatial, big, |i| idx.contains(&i));
+    for i in 0..planar.len() {
+        if idx.contains(&i) {
+            let e = (planar[i] - spatial[i]).abs();
+            assert!(
+                e <= TOL * big,
+                "{what}[{i}]: planar {:e}, spatial {:e} (difference {:.3e} of {big:.3e})",
+                planar[i],
+                spatial[i],
+                e / big
+            );
+        } else {
+            assert_eq!(planar[i], 0.0, "{what}[{i}] out of plane");
+        }
+    }
+}
+
+fn assert_mat(what: &str, planar: &faer::Mat<f64>, spatial: &faer::Mat<f64>, idx: &[usize]) {
+    let big = idx
+        .iter()
+        .flat_map(|&i| idx.iter().map(move |&j| (i, j)))
+        .map(|(i, j)| spatial[(i, j)].abs())
+        .fold(0.0, f64::max);
+    let flat = |m: &faer::Mat<f64>| {
+        m.col_iter()
+            .flat_map(|c| c.iter().copied().collect::<Vec<_>>())
+            .collect::<Vec<f64>>()
+    };
+    let n = planar.nrows();
+    verbose(what, &flat(planar), &flat(spatial), big, |r| {
+        idx.contains(&(r % n)) && idx.contains(&(r / n))
+    });
+    for j in 0..planar.ncols() {
+        for i in 0..planar.nrows() {
+            if idx.contains(&i) && idx.contains(&j) {
+                let e = (planar[(i, j)] - spatial[(i, j)]).abs();
+                assert!(
+                    e <= TOL * big,
+                    "{what}({i}, {j}): planar {:e}, spatial {:e} (difference {:.3e} of {big:.3e})",
+                    planar[(i, j)],
+                    spatial[(i, j)],
+                    e / big
+                );
+            } else {
+                assert_eq!(planar[(i, j)], 0.0, "{what}({i}, {j}) out of plane");
+            }
+        }
+    }
+}
+
+#[test]
+fn planar_body_equals_the_in_plane_block_of_the_spatial_one() {
+    let g = Vector3::new(1.5, -9.81, 0.0);
+    for frame in [
+        FrameChoice::CenterOfMass,
+        FrameChoice::InterfaceNode(0),
+        FrameChoice::InterfaceNode(1),
+    ] {
+        let (se, planar) = pair(frame);
+        let idx = in_plane(&se);
+        for (angle, seed) in [(1.3, 1), (-2.6, 2), (3.1, 3)] {
+            let (state, acc) = planar_state(&se, angle, seed);
+            let a = se.evaluate(&state, &acc, &g).unwrap();
+            let b = planar.evaluate(&state, &acc, &g).unwrap();
+            let what = |s: &str| format!("{s} ({frame}, {angle} rad)");
+            assert_vec(&what("residual"), &b.residual, &a.residual, &idx);
+            assert_vec(&what("f_inertia"), &b.f_inertia, &a.f_inertia, &idx);
+            assert_vec(&what("q_v"), &b.q_v, &a.q_v, &idx);
+            assert_vec(&what("f_elastic"), &b.f_elastic, &a.f_elastic, &idx);
+            assert_vec(&what("f_damping"), &b.f_damping, &a.f_damping, &idx);
+            assert_vec(&what("f_gravity"), &b.f_gravity, &a.f_gravity, &idx);
+            assert_vec(&what("q_jj"), &b.q_jj, &a.q_jj, &idx);
+            assert_mat(&what("M"), &b.mass, &a.mass, &idx);
+            assert_mat(&what("C_t"), &b.damping, &a.damping, &idx);
+            assert_mat(&what("K_t"), &b.stiffness, &a.stiffness, &idx);
+            assert!((b.frame.r - a.frame.r).norm() <= 1e-12, "{}", what("frame origin"));
+            assert!(b.frame.R.angle_to(&a.frame.R) <= 1e-12, "{}", what("frame rotation"));
+            // Energies.
+            let (T3, Tp) = (
+                se.kinetic_energy(&state).unwrap(),
+                planar.kinetic_energy(&state).unwrap(),
+            );
+            assert!(
+                (T3 - Tp).abs() <= 1e-12 * T3,
+                "{}: {T3} vs {Tp}",
+                what("kinetic energy")
+            );
+            let kin3 = se.kinematics(&state).unwrap();
+            let kinp = planar.kinematics(&state).unwrap();
+            let (U3, Up) = (se.strain_energy(&kin3), planar.strain_energy(&kinp));
+            assert!((U3 - Up).abs() <= 1e-9 * U3, "{}: {U3} vs {Up}", what("strain energy"));
+            let (V3, Vp) = (se.gravity_potential(&kin3, &g), planar.gravity_potential(&kinp, &g));
+            assert!(
+                (V3 - Vp).abs() <= 1e-12 * V3.abs(),
+                "{}: {V3} vs {Vp}",
+                what("gravity potential")
+            );
+            // Frame and elastic velocities.
+            let (v3, w3) = se.frame_velocity(&kin3, &state);
+            let (vp, wp) = planar.frame_velocity(&kinp, &state);
+            assert!((v3 - vp).norm() <= 1e-10 * v3.norm() && (w3 - wp).norm() <= 1e-10 * w3.norm());
+            let (c3, cp) = (se.local_velocity(&kin3, &state), planar.local_velocity(&kinp, &state));
+            assert_vec(&what("local velocity"), &cp, &c3, &idx);
+        }
+    }
+}
+
+#[test]
+fn planar_workspace_paths_agree_with_evaluate() {
+    let g = Vector3::new(1.5, -9.81, 0.0);
+    let (se, planar) = pair(FrameChoice::CenterOfMass);
+    let (state, acc) = planar_state(&se, 1.3, 4);
+    let full = planar.evaluate(&state, &acc, &g).unwrap();
+    let mut ws = planar.workspace();
+    let mut out = superelement::Evaluation::zeros(planar.n_coordinates());
+    planar.residual_into(&state, &acc, &g, &mut ws, &mut out).unwrap();
+    assert_eq!(out.residual, full.residual, "residual_into");
+    assert_eq!(out.f_elastic, full.f_elastic);
+    // The energy sensors read the workspace.
+    let kin = planar.kinematics(&state).unwrap();
+    let U = planar.strain_energy(&kin);
+    assert!((planar.strain_energy_in(&ws) - U).abs() <= 1e-12 * U);
+    let T = planar.kinetic_energy(&state).unwrap();
+    let Tin = planar.kinetic_energy_in(&ws, &state.velocity_vector()).unwrap();
+    assert!((T - Tin).abs() <= 1e-12 * T);
+    // The workspace's configuration: no matrices until completed, then the spatial body's.
+    assert!(!ws.kinematics().is_complete() && ws.kinematics().T().is_none());
+    assert_eq!(ws.kinematics().q_jj, full.q_jj);
+    let kin3 = se.kinematics(&state).unwrap();
+    let done = ws.complete_kinematics();
+    let (T3, Tw) = (kin3.T().unwrap(), done.T().unwrap());
+    for j in 0..T3.ncols() {
+        for i in 0..T3.nrows() {
+            assert!((T3[(i, j)] - Tw[(i, j)]).abs() <= 1e-9, "T({i}, {j})");
+        }
+    }
+    // A z component of gravity does no work in the plane: ignored.
+    let with_z = planar.evaluate(&state, &acc, &Vector3::new(1.5, -9.81, 4.0)).unwrap();
+    assert_eq!(with_z.residual, full.residual);
+}
+
+/// The planar coordinates' finite-difference steps and their 6N + m slots.
+fn planar_steps(se: &Superelement) -> (Vec<usize>, Vec<f64>) {
+    let idx = in_plane(se);
+    let L = se.interface_positions().iter().map(|x| x.norm()).fold(0.0, f64::max);
+    let N = se.n_interfaces();
+    let h = idx
+        .iter()
+        .map(|&i| {
+            if i >= 6 * N {
+                1e-6 * L * se.mass().sqrt()
+            } else if i % 6 == 5 {
+                1e-6
+            } else {
+                1e-6 * L
+            }
+        })
+        .collect();
+    (idx, h)
+}
+
+fn sub(m: &faer::Mat<f64>, idx: &[usize]) -> faer::Mat<f64> {
+    faer::Mat::from_fn(idx.len(), idx.len(), |i, j| m[(idx[i], idx[j])])
+}
+
+fn ok(rep: FdReport, what: &str) {
+    if std::env::var_os("SUPERELEMENT_FD_VERBOSE").is_some() {
+        eprintln!("{what}: {rep}");
+    }
+    // The tolerance of `fd_tangent.rs` (steps 1e-6: truncation and round-off about 1e-9).
+    assert!(rep.worst <= 1e-6, "{what}\n{rep}");
+}
+
+#[test]
+fn planar_tangents_match_central_differences() {
+    let g = Vector3::new(1.5, -9.81, 0.0);
+    for frame in [FrameChoice::CenterOfMass, FrameChoice::InterfaceNode(1)] {
+        let (_, se) = pair(frame);
+        let (idx, h) = planar_steps(&se);
+        let n3 = se.n_coordinates();
+        let scatter = |d: &[f64]| {
+            let mut v = vec![0.0; n3];
+            for (&i, x) in idx.iter().zip(d) {
+                v[i] = *x;
+            }
+            v
+        };
+        let pick = |r: Vec<f64>| idx.iter().map(|&i| r[i]).collect::<Vec<f64>>();
+        for (angle, seed) in [(1.3, 5), (-2.9, 6)] {
+            let (mut state, acc) = planar_state(&se, angle, seed);
+            let ev = se.evaluate(&state, &acc, &g).unwrap();
+            state.frame = ev.frame;
+            let what = format!("{frame}, {angle} rad");
+            let rep = check_jacobian("K_t", sub(&ev.stiffness, &idx).as_ref(), &h, |d| {
+                pick(
+                    se.evaluate(&perturb_state(&state, &scatter(d)), &acc, &g)
+                        .unwrap()
+                        .residual,
+                )
+            });
+            ok(rep, &what);
+            // Quadratic in the velocities, linear in the accelerations: unit steps are exact.
+            let unit = vec![1.0; idx.len()];
+            let rep = check_jacobian("C_t", sub(&ev.damping, &idx).as_ref(), &unit, |d| {
+                pick(
+                    se.evaluate(&perturb_velocity(&state, &scatter(d)), &acc, &g)
+                        .unwrap()
+                        .residual,
+                )
+            });
+            ok(rep, &what);
+            let rep = check_jacobian("M", sub(&ev.mass, &idx).as_ref(), &unit, |d| {
+                let a: Vec<f64> = acc.iter().zip(scatter(d)).map(|(a, d)| a + d).collect();
+                pick(se.evaluate(&state, &a, &g).unwrap().residual)
+            });
+            ok(rep, &what);
+        }
+    }
+}
+
+#[test]
+fn rigid_planar_motion_has_no_elastic_force() {
+    let (_, se) = pair(FrameChoice::CenterOfMass);
+    let frame = Frame::new(Vector3::new(2.0, -1.0, 0.25), rot_z(2.2));
+    let state = se.rigid_state(frame, Vector3::new(0.5, 0.2, 0.0), Vector3::new(0.0, 0.0, 4.0));
+    let acc = vec![0.0; se.n_coordinates()];
+    let ev = se.evaluate(&state, &acc, &Vector3::zeros()).unwrap();
+    // Round-off of the frame solve (1e-12) times the stiffness scale EA = 1e8 N.
+    let largest = ev.f_elastic.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
+    assert!(largest < 1e-3, "elastic force {largest} N on a rigid motion");
+    assert!((ev.frame.R.angle_to(&rot_z(2.2))) < 1e-12);
+}
+
+fn not_planar(e: SuperelementError) -> String {
+    match e {
+        SuperelementError::NotPlanar { what, .. } => what,
+        other => panic!("expected NotPlanar, got {other}"),
+    }
+}
+
+#[test]
+fn bodies_that_are_not_planar_are_refused_naming_the_coupling() {
+    let exact =
+        |b: &ReducedBody| Superelement::new(b, FrameChoice::CenterOfMass, MassVariant::Exact, Damping::none()).unwrap();
+    // A beam out of the xy-plane.
+    let skew = fixtures::straight_beam(
+        Point3::new(0.1, -0.2, 0.05),
+        Point3::new(1.0, 0.3, 0.45),
+        4,
+        ModeSelection::Count(2),
+        false,
+    )
+    .2;
+    let what = not_planar(exact(&skew).into_planar().unwrap_err());
+    assert!(
+        what.contains("interface 'end0'") && what.contains("one plane"),
+        "{what}"
+    );
+    // In the plane but with its internal out-of-plane dofs free: a mode bends out of plane.
+    let free = planar_beam(false);
+    let what = not_planar(exact(&free).into_planar().unwrap_err());
+    assert!(what.contains("mode") && what.contains("of its largest"), "{what}");
+    // The Lumped inertia.
+    let lumped = Superelement::new(body(), FrameChoice::CenterOfMass, MassVariant::Lumped, Damping::none()).unwrap();
+    assert!(not_planar(lumped.into_planar().unwrap_err()).contains("Lumped"));
+}
+
+#[test]
+fn a_state_out_of_the_plane_is_refused_naming_the_interface() {
+    let (se, planar) = pair(FrameChoice::CenterOfMass);
+    let (state, acc) = planar_state(&se, 1.3, 7);
+    let mut tilted = state.clone();
+    tilted.R[1] = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 1e-4) * tilted.R[1];
+    let what = not_planar(planar.evaluate(&tilted, &acc, &Vector3::zeros()).unwrap_err());
+    assert!(what.contains("interface 'b'") && what.contains("tilted"), "{what}");
+    let mut lifted = state.clone();
+    lifted.r[1].z += 1e-4;
+    let what = not_planar(planar.evaluate(&lifted, &acc, &Vector3::zeros()).unwrap_err());
+    assert!(
+        what.contains("interface 'b'") && what.contains("out of the plane"),
+        "{what}"
+    );
+}
