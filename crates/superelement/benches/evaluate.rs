@@ -13,6 +13,11 @@
 //! * `beam14-G`: a segment of the slider-crank rod of validation problem C2 as a beam
 //!   superelement (4 Timoshenko elements, 2 interfaces, 2 fixed-interface modes, geometric
 //!   stiffening, centre of mass, `Exact`, no damping): the body the mechanism step evaluates;
+//! * `beam14-G-xy`, `beam14-G-planar`: the same segment (0.15 m) in the xy-plane with the
+//!   section axis along z and the out-of-plane dofs of its internal nodes supported
+//!   (`testing::fixtures::planar_beam`), evaluated as a spatial body and as a planar one
+//!   (`Superelement::into_planar`: 8 coordinates instead of 14), on planar states
+//!   (`testing::planar_test_state`) under in-plane gravity;
 //! * `beam72-G`: a large body (2 interfaces, 60 modes, geometric stiffening, centre of mass,
 //!   `Exact`), to check that the small-n work does not slow big n.
 //!
@@ -108,7 +113,7 @@
 use nalgebra::{Point3, Vector3};
 use reduction::{CbSettings, ModeSelection, ReducedBody};
 use std::time::Instant;
-use superelement::testing::{fixtures, test_state, StateSpec};
+use superelement::testing::{fixtures, planar_test_state, test_state, StateSpec};
 use superelement::{Damping, FrameChoice, MassVariant, Superelement};
 
 /// Evaluations per case of `--profile` (after one warm-up call).
@@ -117,6 +122,8 @@ const PROFILE_CALLS: usize = 20;
 struct Case {
     name: String,
     se: Superelement,
+    /// Planar states (`testing::planar_test_state`) and in-plane gravity.
+    planar: bool,
 }
 
 /// The cases whose name contains `filter` (all for an empty filter); bodies are reduced only
@@ -147,7 +154,7 @@ fn cases(filter: &str) -> Vec<Case> {
                 let name = format!("beam22-{f}-{m}");
                 if wanted(&name) {
                     let se = Superelement::new(&body, frame, mass, damping.clone()).unwrap();
-                    out.push(Case { name, se });
+                    out.push(Case { name, se, planar: false });
                 }
             }
         }
@@ -166,6 +173,7 @@ fn cases(filter: &str) -> Vec<Case> {
             out.push(Case {
                 name,
                 se: com_exact(&body),
+                planar: false,
             });
         }
     }
@@ -180,7 +188,31 @@ fn cases(filter: &str) -> Vec<Case> {
         out.push(Case {
             name: "beam14-G".into(),
             se: com_exact(&body),
+            planar: false,
         });
+    }
+    if wanted("beam14-G-xy") || wanted("beam14-G-planar") {
+        let (_model, _nodes, body) = fixtures::planar_beam(
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(0.15, 0.0, 0.0),
+            4,
+            geometric(2),
+            true,
+        );
+        if wanted("beam14-G-xy") {
+            out.push(Case {
+                name: "beam14-G-xy".into(),
+                se: com_exact(&body),
+                planar: true,
+            });
+        }
+        if wanted("beam14-G-planar") {
+            out.push(Case {
+                name: "beam14-G-planar".into(),
+                se: com_exact(&body).into_planar().unwrap(),
+                planar: true,
+            });
+        }
     }
     if wanted("beam72-G") {
         let (_model, _nodes, body) = fixtures::straight_beam_with(
@@ -193,6 +225,7 @@ fn cases(filter: &str) -> Vec<Case> {
         out.push(Case {
             name: "beam72-G".into(),
             se: com_exact(&body),
+            planar: false,
         });
     }
     out
@@ -208,13 +241,21 @@ fn main() {
         other => panic!("--profile=tangents, --profile=forces or --profile=residual, got {other}"),
     });
     let filter = args.iter().find(|a| !a.starts_with("--")).map_or("", |s| s.as_str());
-    let g = Vector3::new(0.0, 0.0, -9.81);
-    for Case { name, se } in cases(filter) {
+    for Case { name, se, planar } in cases(filter) {
+        let g = if planar {
+            Vector3::new(0.0, -9.81, 0.0)
+        } else {
+            Vector3::new(0.0, 0.0, -9.81)
+        };
         // Two nearby states (the last interface 1 um apart), each with its converged frame,
         // taken in turn: every call forms a new configuration, as in a time integration (a
         // repeated state would reuse the last call's), and its frame solve stops at the test
         // of the warm start.
-        let (mut state, acc) = test_state(&se, &StateSpec::moving(120.0, 1));
+        let (mut state, acc) = if planar {
+            planar_test_state(&se, 120f64.to_radians(), 1)
+        } else {
+            test_state(&se, &StateSpec::moving(120.0, 1))
+        };
         state.frame = se.solve_frame(&state).unwrap().0;
         let mut other = state.clone();
         other.r[se.n_interfaces() - 1].x += 1e-6;

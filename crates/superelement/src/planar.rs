@@ -155,6 +155,13 @@ pub(crate) struct Buf<S> {
     /// The parts (f64 pass only): inertia, elastic, damping, gravity.
     pub parts: [Vec<S>; 4],
     pub Gi: [[S; 3]; 3],
+    /// $\boldsymbol\xi = [\mathbf V; \Omega]$, $\mathbf s$, $\dot{\mathbf s}$, $J$, $\dot J$ of the
+    /// last evaluation (the closed-form $\mathbf M$ and $\mathbf C_t$ read them).
+    pub xi: [S; 3],
+    pub sv: [S; 2],
+    pub sd: [S; 2],
+    pub J: S,
+    pub Jd: S,
     pub R: (S, S),
     pub frame_r: [S; 2],
     pub frame_phi: S,
@@ -185,6 +192,11 @@ impl<S: Scalar> Buf<S> {
             out: z(),
             parts: [z(), z(), z(), z()],
             Gi: [[S::cst(0.0); 3]; 3],
+            xi: [S::cst(0.0); 3],
+            sv: [S::cst(0.0); 2],
+            sd: [S::cst(0.0); 2],
+            J: S::cst(0.0),
+            Jd: S::cst(0.0),
             R: (S::cst(0.0), S::cst(1.0)),
             frame_r: [S::cst(0.0); 2],
             frame_phi: S::cst(0.0),
@@ -202,6 +214,15 @@ pub(crate) struct PlanarWorkspace {
     pub phi: Vec<f64>,
     /// Planar tangents, column-major $n\times n$: $\mathbf K_t$, $\mathbf C_t$, $\mathbf M$.
     pub mats: [Vec<f64>; 3],
+    /// $\mathbf P$, $\mathbf M_{ffr}\mathbf P$ and $\partial\mathbf F/\partial\boldsymbol\nu\,\mathbf P$
+    /// ($(3 + n)\times n$), $\mathbf M_{ffr}$ ($(3 + n)^2$), $\partial\bar{\mathbf y}/\partial\mathbf y$ and
+    /// $\mathbf D\mathbf T_j$ ($n\times n$), column-major.
+    pub P: Vec<f64>,
+    pub MP: Vec<f64>,
+    pub FP: Vec<f64>,
+    pub Mffr: Vec<f64>,
+    pub Ybar: Vec<f64>,
+    pub DT: Vec<f64>,
     /// The converged frame, its iterations, and whether `f` holds a configuration.
     pub frame: ([f64; 2], f64),
     pub iterations: usize,
@@ -216,6 +237,12 @@ impl PlanarWorkspace {
             pos: vec![[0.0; 2]; N],
             phi: vec![0.0; N],
             mats: [vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]],
+            P: vec![0.0; (3 + n) * n],
+            MP: vec![0.0; (3 + n) * n],
+            FP: vec![0.0; (3 + n) * n],
+            Mffr: vec![0.0; (3 + n) * (3 + n)],
+            Ybar: vec![0.0; n * n],
+            DT: vec![0.0; n * n],
             frame: ([0.0; 2], 0.0),
             iterations: 0,
             valid: false,
@@ -467,6 +494,11 @@ impl PlanarBody {
             // c = S_rz - S~_z q.
             cz += (S::cst(self.Srz[i]) - b.Sq[i]) * b.zetad[i];
         }
+        b.xi = xi;
+        b.sv = sv;
+        b.sd = sd;
+        b.J = J;
+        b.Jd = Jd;
         let (V, Vd) = ([xi[0], xi[1]], [xid[0], xid[1]]);
         let omd = xid[2];
         let Es = [-sv[1], sv[0]];
@@ -539,6 +571,274 @@ impl PlanarBody {
             let fxi = [FI[0] - Fg[0], FI[1] - Fg[1], FI[2] - Fg[2]];
             self.project(&b.rho, &Gi, R, fxi, &b.fq, &mut b.out);
         }
+    }
+
+    /// $\mathbf K_t$ (planar, `pw.mats[0]`): the derivative of the residual in the planar
+    /// coordinates by dual numbers, [`WIDTH`] directions per pass, compiled for the machine's
+    /// vector instructions.
+    fn stiffness_pass(
+        &self,
+        pw: &mut PlanarWorkspace,
+        frame: ([f64; 2], f64),
+        solve: FrameSolve,
+        Gi0: &[[f64; 3]; 3],
+        gravity: [f64; 2],
+    ) {
+        struct Pass<'a> {
+            pb: &'a PlanarBody,
+            pw: &'a mut PlanarWorkspace,
+            frame: ([f64; 2], f64),
+            solve: FrameSolve,
+            Gi0: &'a [[f64; 3]; 3],
+            gravity: [f64; 2],
+        }
+        impl pulp::WithSimd for Pass<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _simd: S) {
+                let Pass {
+                    pb,
+                    pw,
+                    frame,
+                    solve,
+                    Gi0,
+                    gravity,
+                } = self;
+                let n = pb.n;
+                let mut start = 0;
+                while start < n {
+                    let end = (start + WIDTH).min(n);
+                    let (f, d) = (&pw.f, &mut pw.d);
+                    for i in 0..n {
+                        d.q[i] = Dual::cst(f.q[i]);
+                        d.qd[i] = Dual::cst(f.qd[i]);
+                        d.qdd[i] = Dual::cst(f.qdd[i]);
+                    }
+                    for (s, i) in (start..end).enumerate() {
+                        d.q[i].d[s] = 1.0;
+                    }
+                    pb.core(d, frame, solve, Gi0, gravity, false);
+                    let mat = &mut pw.mats[0];
+                    for (s, j) in (start..end).enumerate() {
+                        for i in 0..n {
+                            mat[i + n * j] = d.out[i].d[s];
+                        }
+                    }
+                    start = end;
+                }
+            }
+        }
+        pulp::Arch::new().dispatch(Pass {
+            pb: self,
+            pw,
+            frame,
+            solve,
+            Gi0,
+            gravity,
+        });
+    }
+
+    /// $\mathbf M = \bar{\mathbf R}\mathbf P^T\mathbf M_{ffr}\mathbf P\bar{\mathbf R}^T$ into `pw.mats[2]`
+    /// and, with `damping`, $\mathbf C_t = \bar{\mathbf R}[\mathbf P^T(\partial\mathbf F/\partial\boldsymbol\nu\,\mathbf P +
+    /// \mathbf M_{ffr}\mathbf P\,\partial\bar{\mathbf y}/\partial\mathbf y) + \mathbf T_j^T\mathbf D\mathbf T_j]\bar{\mathbf R}^T$
+    /// into `pw.mats[1]`, at the configuration and velocities of the last `core` pass in `pw.f`
+    /// (module docs: $\mathbf F$ is linear in $\dot{\boldsymbol\nu}$ with the matrix $\mathbf M_{ffr}$,
+    /// $\dot{\boldsymbol\nu} = \mathbf P\bar{\mathbf y}$, and the velocity terms of $\mathbf F$ are
+    /// differentiated below).
+    fn mass_damping(&self, pw: &mut PlanarWorkspace, damping: bool) {
+        let n = self.n;
+        let N = self.N;
+        let r = 3 + n;
+        let b = &pw.f;
+        let Gi = &b.Gi;
+        // P column by column: xi_j = Gi Phi_j, zeta_j = e_j - Psi xi_j.
+        for j in 0..n {
+            let ph = &self.Phi[j];
+            let col = &mut pw.P[r * j..r * (j + 1)];
+            let xi: [f64; 3] = std::array::from_fn(|a| Gi[a][0] * ph[0] + Gi[a][1] * ph[1] + Gi[a][2] * ph[2]);
+            col[..3].copy_from_slice(&xi);
+            let z = &mut col[3..];
+            for k in 0..N {
+                let rho = b.rho[k];
+                z[3 * k] = -(xi[0] - xi[2] * rho[1]);
+                z[3 * k + 1] = -(xi[1] + xi[2] * rho[0]);
+                z[3 * k + 2] = -xi[2];
+            }
+            z[3 * N..].fill(0.0);
+            z[j] += 1.0;
+        }
+        // M_ffr (module docs).
+        let m = self.mass;
+        let Es = [-b.sv[1], b.sv[0]];
+        let M = &mut pw.Mffr;
+        M.fill(0.0);
+        M[0] = m;
+        M[1 + r] = m;
+        M[2 * r] = Es[0];
+        M[1 + 2 * r] = Es[1];
+        M[2] = Es[0];
+        M[2 + r] = Es[1];
+        M[2 + 2 * r] = b.J;
+        for i in 0..n {
+            let c = r * (3 + i);
+            let ci = self.Srz[i] - b.Sq[i];
+            M[c] = self.St[i][0];
+            M[c + 1] = self.St[i][1];
+            M[c + 2] = ci;
+            M[3 + i] = self.St[i][0];
+            M[3 + i + r] = self.St[i][1];
+            M[3 + i + 2 * r] = ci;
+            for l in 0..n {
+                M[c + 3 + l] = self.M[l + n * i];
+            }
+        }
+        // M_ffr P, then M = P^T (M_ffr P).
+        let mul = |A: &[f64], B: &[f64], rows: usize, inner: usize, cols: usize, out: &mut [f64]| {
+            for j in 0..cols {
+                let o = &mut out[rows * j..rows * (j + 1)];
+                o.fill(0.0);
+                for (l, &bl) in B[inner * j..inner * (j + 1)].iter().enumerate() {
+                    for (x, a) in o.iter_mut().zip(&A[rows * l..rows * (l + 1)]) {
+                        *x += a * bl;
+                    }
+                }
+            }
+        };
+        // out = A^T B for column-major A (inner x rows), B (inner x cols).
+        let mul_tn = |A: &[f64], B: &[f64], rows: usize, inner: usize, cols: usize, out: &mut [f64], add: bool| {
+            for j in 0..cols {
+                for i in 0..rows {
+                    let s: f64 = A[inner * i..inner * (i + 1)]
+                        .iter()
+                        .zip(&B[inner * j..inner * (j + 1)])
+                        .map(|(a, b)| a * b)
+                        .sum();
+                    if add {
+                        out[i + rows * j] += s;
+                    } else {
+                        out[i + rows * j] = s;
+                    }
+                }
+            }
+        };
+        mul(&pw.Mffr, &pw.P, r, r, n, &mut pw.MP);
+        mul_tn(&pw.P, &pw.MP, n, r, n, &mut pw.mats[2], false);
+        let (s, c) = b.R;
+        let rotate = |A: &mut [f64]| {
+            // Rbar A Rbar^T: the 2x2 blocks of rows and of columns of each interface.
+            for j in 0..n {
+                for k in 0..N {
+                    let (x, y) = (A[3 * k + n * j], A[3 * k + 1 + n * j]);
+                    A[3 * k + n * j] = c * x - s * y;
+                    A[3 * k + 1 + n * j] = s * x + c * y;
+                }
+            }
+            for k in 0..N {
+                for i in 0..n {
+                    let (x, y) = (A[i + n * 3 * k], A[i + n * (3 * k + 1)]);
+                    A[i + n * 3 * k] = c * x - s * y;
+                    A[i + n * (3 * k + 1)] = s * x + c * y;
+                }
+            }
+        };
+        if damping {
+            // dF/dnu P: the velocity terms of F differentiated (module docs), by rows of P.
+            let [V0, V1, om] = b.xi;
+            let (sv, sd) = (b.sv, b.sd);
+            let pV = [V0 * m + Es[0] * om + sd[0], V1 * m + Es[1] * om + sd[1]];
+            let EpV = [-pV[1], pV[0]];
+            let Esd = [-sd[1], sd[0]];
+            let EV = [-V1, V0];
+            // F_V by Omega: E sd + E pV - Omega s.
+            let fvo = [Esd[0] + EpV[0] - om * sv[0], Esd[1] + EpV[1] - om * sv[1]];
+            let foo = b.Jd + V0 * sv[0] + V1 * sv[1];
+            for j in 0..n {
+                let p = &pw.P[r * j..r * (j + 1)];
+                let (pv0, pv1, po) = (p[0], p[1], p[2]);
+                let pz = &p[3..];
+                let o = &mut pw.FP[r * j..r * (j + 1)];
+                // F_V.
+                let mut f0 = -om * m * pv1 + fvo[0] * po;
+                let mut f1 = om * m * pv0 + fvo[1] * po;
+                // F_Omega.
+                let mut fo = om * (sv[0] * pv0 + sv[1] * pv1) + foo * po;
+                for i in 0..n {
+                    let st = self.St[i];
+                    let aw = self.a[i] + b.Wq[i];
+                    // 2 Omega E St_i zeta_i.
+                    f0 += -2.0 * om * st[1] * pz[i];
+                    f1 += 2.0 * om * st[0] * pz[i];
+                    fo += 2.0 * om * aw * pz[i];
+                }
+                o[0] = f0;
+                o[1] = f1;
+                o[2] = fo;
+                // F_q.
+                for i in 0..n {
+                    let st = self.St[i];
+                    let aw = self.a[i] + b.Wq[i];
+                    let dq_do = st[0] * EV[0] + st[1] * EV[1] - 2.0 * b.Sz[i] - 2.0 * om * aw;
+                    o[3 + i] = om * (st[1] * pv0 - st[0] * pv1) + dq_do * po;
+                }
+                // -2 Omega S~_z zeta.
+                for l in 0..n {
+                    let f = -2.0 * om * pz[l];
+                    let col = &self.Sz[n * l..n * (l + 1)];
+                    for (x, sz) in o[3..].iter_mut().zip(col) {
+                        *x += f * sz;
+                    }
+                }
+            }
+            // d ybar / d y (module docs): rows u_k only.
+            pw.Ybar.fill(0.0);
+            for j in 0..n {
+                let p = &pw.P[r * j..r * (j + 1)];
+                let col = &mut pw.Ybar[n * j..n * (j + 1)];
+                for k in 0..N {
+                    let w = [
+                        b.y[3 * k] + b.zeta[3 * k],
+                        b.y[3 * k + 1] + b.zeta[3 * k + 1],
+                    ];
+                    let e = |i: usize| p[3 + i] + if i == j { 1.0 } else { 0.0 };
+                    col[3 * k] = w[1] * p[2] + om * e(3 * k + 1);
+                    col[3 * k + 1] = -w[0] * p[2] - om * e(3 * k);
+                }
+            }
+            // FP += M_ffr P Ybar.
+            for j in 0..n {
+                for l in 0..n {
+                    let y = pw.Ybar[l + n * j];
+                    if y != 0.0 {
+                        let (src, dst) = (&pw.MP[r * l..r * (l + 1)], j);
+                        for i in 0..r {
+                            pw.FP[i + r * dst] += src[i] * y;
+                        }
+                    }
+                }
+            }
+            mul_tn(&pw.P, &pw.FP, n, r, n, &mut pw.mats[1], false);
+            if self.damped {
+                // T^T D T, T = rows 3.. of P.
+                for j in 0..n {
+                    let t = &pw.P[r * j + 3..r * (j + 1)];
+                    let o = &mut pw.DT[n * j..n * (j + 1)];
+                    o.fill(0.0);
+                    for (l, &tl) in t.iter().enumerate() {
+                        for (x, d) in o.iter_mut().zip(&self.D[n * l..n * (l + 1)]) {
+                            *x += d * tl;
+                        }
+                    }
+                }
+                for j in 0..n {
+                    for i in 0..n {
+                        let s: f64 = (0..n).map(|l| pw.P[r * i + 3 + l] * pw.DT[l + n * j]).sum();
+                        pw.mats[1][i + n * j] += s;
+                    }
+                }
+            }
+            rotate(&mut pw.mats[1]);
+        }
+        rotate(&mut pw.mats[2]);
     }
 
     /// The planar $\boldsymbol\Phi_j\boldsymbol\Psi$ inverse at `rho` with its 1-norm reciprocal
@@ -777,41 +1077,14 @@ impl Superelement {
         pw.frame = frame;
         pw.iterations = iterations;
         pw.valid = true;
-        // Tangents by dual numbers: q (kind 0), qd (1), qdd (2).
-        let kinds: &[usize] = match level {
-            Level::Forces => &[],
-            Level::Mass => &[2],
-            Level::Tangents => &[0, 1, 2],
-        };
-        let n = pb.n;
-        for &kind in kinds {
-            let mut start = 0;
-            while start < n {
-                let end = (start + WIDTH).min(n);
-                let (f, d) = (&pw.f, &mut pw.d);
-                for i in 0..n {
-                    d.q[i] = Dual::cst(f.q[i]);
-                    d.qd[i] = Dual::cst(f.qd[i]);
-                    d.qdd[i] = Dual::cst(f.qdd[i]);
-                }
-                let seeds = match kind {
-                    0 => &mut d.q,
-                    1 => &mut d.qd,
-                    _ => &mut d.qdd,
-                };
-                for (s, i) in (start..end).enumerate() {
-                    seeds[i].d[s] = 1.0;
-                }
-                pb.core(d, frame, self.frame_solve, &Gi0, g2, false);
-                let mat = &mut pw.mats[kind];
-                for (s, j) in (start..end).enumerate() {
-                    for i in 0..n {
-                        mat[i + n * j] = d.out[i].d[s];
-                    }
-                }
-                start = end;
-            }
+        // M and C_t in closed form, K_t by dual numbers.
+        if level.mass() {
+            pb.mass_damping(pw, level.tangents());
         }
+        if level.tangents() {
+            pb.stiffness_pass(pw, frame, self.frame_solve, &Gi0, g2);
+        }
+        let n = pb.n;
         let scatter = |src: &[f64], dst: &mut Mat<f64>| {
             dst.fill(0.0);
             for (j, &gj) in pb.index.iter().enumerate() {

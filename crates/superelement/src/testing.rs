@@ -245,6 +245,46 @@ pub fn test_state(se: &Superelement, spec: &StateSpec) -> (BodyState, Vec<f64>) 
 }
 
 /// How a superelement stores its reduced geometric stiffness ([`crate::compressed`]).
+/// A state of a planar body ([`Superelement::into_planar`]) for tests and benches: the
+/// undeformed body turned by `angle` (rad) about z with its frame origin at (0.3, -0.7, 0.25),
+/// deformed in the plane (2 % of the body size, 0.02 rad, modal amplitudes alike), moving
+/// (3 rad/s about z, in-plane velocities, modal rates), and in-plane accelerations in the
+/// $6N + m$ layout (zero out of plane).
+pub fn planar_test_state(se: &Superelement, angle: f64, seed: u64) -> (BodyState, Vec<f64>) {
+    let mut rng = Rng::new(seed);
+    let N = se.n_interfaces();
+    let m = se.n_modes();
+    let L = se.interface_positions().iter().map(|x| x.norm()).fold(0.0, f64::max).max(0.1);
+    let R0 = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), angle);
+    let frame = Frame::new(Vector3::new(0.3, -0.7, 0.25), R0);
+    let (spin, e) = (3.0, 0.02);
+    let planar = |s: f64, rng: &mut Rng| Vector3::new(rng.uniform() * s, rng.uniform() * s, 0.0);
+    let v0 = planar(spin * L, &mut rng);
+    let mut s = se.rigid_state(frame, v0, Vector3::new(0.0, 0.0, spin));
+    for k in 0..N {
+        s.r[k] += R0 * planar(e * L, &mut rng);
+        s.R[k] = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), rng.uniform() * e) * s.R[k];
+        s.v[k] += planar(spin * e * L, &mut rng);
+        s.omega[k].z += rng.uniform() * spin * e;
+    }
+    let eta_scale = e * L * se.mass().sqrt();
+    for i in 0..m {
+        s.eta[i] = rng.uniform() * eta_scale;
+        s.eta_dot[i] = rng.uniform() * eta_scale * spin;
+    }
+    let mut acc = vec![0.0; 6 * N + m];
+    for k in 0..N {
+        let a = planar(spin * spin * L, &mut rng);
+        acc[6 * k] = a.x;
+        acc[6 * k + 1] = a.y;
+        acc[6 * k + 5] = rng.uniform() * spin * spin;
+    }
+    for i in 0..m {
+        acc[6 * N + i] = rng.uniform() * eta_scale * spin * spin;
+    }
+    (s, acc)
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Compression {
     /// Compressed (`None`: the body has no geometric stiffness).
@@ -406,6 +446,33 @@ pub mod fixtures {
             // The reduction appends the auxiliary interface last.
             ends.push(nodes[elements / 2]);
         }
+        (model, ends, body)
+    }
+
+    /// A straight beam of `elements` elements from `a` to `b` in a plane z = const (section
+    /// axis along z) with interfaces at both ends: with `supported`, the out-of-plane dofs (uz,
+    /// rx, ry) of its internal nodes are held, so that its fixed-interface modes are in-plane and
+    /// it can be evaluated as a planar body ([`crate::Superelement::into_planar`]). Returns the FE
+    /// model, the interface nodes and the reduced body (name "rod", interfaces "a" and "b").
+    pub fn planar_beam(
+        a: Point3<f64>,
+        b: Point3<f64>,
+        elements: usize,
+        settings: CbSettings,
+        supported: bool,
+    ) -> (FeModel, Vec<NodeId>, ReducedBody) {
+        assert_eq!(a.z, b.z, "a planar beam lies in a plane z = const");
+        let mut model = FeModel::default();
+        let props = properties(&mut model, Vector3::z());
+        let nodes = fe_model::generate::straight_beam(&mut model, a, b, elements, &props, Some("beam")).unwrap();
+        if supported {
+            for n in &nodes[1..elements] {
+                model.add_support(*n, fe_model::DofMask([false, false, true, true, true, false]));
+            }
+        }
+        let ends = vec![nodes[0], nodes[elements]];
+        let interfaces = vec![("a".to_string(), ends[0]), ("b".to_string(), ends[1])];
+        let body = reduce(&model, "rod", &interfaces, &settings).unwrap();
         (model, ends, body)
     }
 

@@ -11,41 +11,30 @@
 //! block's largest entry (`SUPERELEMENT_FD_VERBOSE=1` prints them), and 1e-10 leaves room for
 //! the frame tolerance.
 
-use fe_model::{DofMask, FeModel, NodeId};
 use nalgebra::{Point3, UnitQuaternion, Vector3};
-use reduction::{reduce, CbSettings, ModeSelection, ReducedBody};
+use reduction::{CbSettings, ModeSelection, ReducedBody};
 use std::sync::OnceLock;
-use superelement::testing::{check_jacobian, fixtures, perturb_state, perturb_velocity, FdReport, Rng};
+use superelement::testing::{check_jacobian, fixtures, perturb_state, perturb_velocity, planar_test_state, FdReport};
 use superelement::{BodyState, Damping, Frame, FrameChoice, MassVariant, Superelement, SuperelementError};
 
 const TOL: f64 = 1e-10;
 
-/// A beam in the plane z = 0.05 (section axis along z), 4 elements, interfaces at both ends,
-/// 2 fixed-interface modes and geometric stiffening; with `supported`, the out-of-plane dofs of
-/// its internal nodes held, so its modes are in-plane.
+/// A beam in the plane z = 0.05, 4 elements, interfaces at both ends, 2 fixed-interface modes
+/// and geometric stiffening; with `supported`, the out-of-plane dofs of its internal nodes held,
+/// so its modes are in-plane.
 fn planar_beam(supported: bool) -> ReducedBody {
-    let mut model = FeModel::default();
-    let props = fixtures::properties(&mut model, Vector3::z());
-    let nodes: Vec<NodeId> = fe_model::generate::straight_beam(
-        &mut model,
-        Point3::new(0.1, -0.2, 0.05),
-        Point3::new(1.0, 0.3, 0.05),
-        4,
-        &props,
-        Some("beam"),
-    )
-    .unwrap();
-    if supported {
-        for n in &nodes[1..4] {
-            model.add_support(*n, DofMask([false, false, true, true, true, false]));
-        }
-    }
-    let interfaces = vec![("a".to_string(), nodes[0]), ("b".to_string(), nodes[4])];
     let settings = CbSettings {
         geometric_stiffening: true,
         ..CbSettings::new(ModeSelection::Count(2))
     };
-    reduce(&model, "rod", &interfaces, &settings).unwrap()
+    fixtures::planar_beam(
+        Point3::new(0.1, -0.2, 0.05),
+        Point3::new(1.0, 0.3, 0.05),
+        4,
+        settings,
+        supported,
+    )
+    .2
 }
 
 fn body() -> &'static ReducedBody {
@@ -73,42 +62,8 @@ fn rot_z(a: f64) -> UnitQuaternion<f64> {
     UnitQuaternion::from_axis_angle(&Vector3::z_axis(), a)
 }
 
-/// A planar state: the body turned by `angle` about z at z = 0.25, deformed in the plane (2 %
-/// of its size, 0.02 rad, modal amplitudes alike), moving (3 rad/s), with accelerations.
 fn planar_state(se: &Superelement, angle: f64, seed: u64) -> (BodyState, Vec<f64>) {
-    let mut rng = Rng::new(seed);
-    let N = se.n_interfaces();
-    let m = se.n_modes();
-    let L = se.interface_positions().iter().map(|x| x.norm()).fold(0.0, f64::max);
-    let R0 = rot_z(angle);
-    let frame = Frame::new(Vector3::new(0.3, -0.7, 0.25), R0);
-    let spin = 3.0;
-    let e = 0.02;
-    let planar = |s: f64, rng: &mut Rng| Vector3::new(rng.uniform() * s, rng.uniform() * s, 0.0);
-    let v0 = planar(spin * L, &mut rng);
-    let mut s = se.rigid_state(frame, v0, Vector3::new(0.0, 0.0, spin));
-    for k in 0..N {
-        s.r[k] += R0 * planar(e * L, &mut rng);
-        s.R[k] = rot_z(rng.uniform() * e) * s.R[k];
-        s.v[k] += planar(spin * e * L, &mut rng);
-        s.omega[k].z += rng.uniform() * spin * e;
-    }
-    let eta_scale = e * L * se.mass().sqrt();
-    for i in 0..m {
-        s.eta[i] = rng.uniform() * eta_scale;
-        s.eta_dot[i] = rng.uniform() * eta_scale * spin;
-    }
-    let mut acc = vec![0.0; 6 * N + m];
-    for k in 0..N {
-        let a = planar(spin * spin * L, &mut rng);
-        acc[6 * k] = a.x;
-        acc[6 * k + 1] = a.y;
-        acc[6 * k + 5] = rng.uniform() * spin * spin;
-    }
-    for i in 0..m {
-        acc[6 * N + i] = rng.uniform() * eta_scale * spin * spin;
-    }
-    (s, acc)
+    planar_test_state(se, angle, seed)
 }
 
 /// The in-plane index set of the 6N + m layout.
