@@ -154,7 +154,11 @@ fn cases(filter: &str) -> Vec<Case> {
                 let name = format!("beam22-{f}-{m}");
                 if wanted(&name) {
                     let se = Superelement::new(&body, frame, mass, damping.clone()).unwrap();
-                    out.push(Case { name, se, planar: false });
+                    out.push(Case {
+                        name,
+                        se,
+                        planar: false,
+                    });
                 }
             }
         }

@@ -214,15 +214,14 @@ pub(crate) struct PlanarWorkspace {
     pub phi: Vec<f64>,
     /// Planar tangents, column-major $n\times n$: $\mathbf K_t$, $\mathbf C_t$, $\mathbf M$.
     pub mats: [Vec<f64>; 3],
-    /// $\mathbf P$, $\mathbf M_{ffr}\mathbf P$ and $\partial\mathbf F/\partial\boldsymbol\nu\,\mathbf P$
-    /// ($(3 + n)\times n$), $\mathbf M_{ffr}$ ($(3 + n)^2$), $\partial\bar{\mathbf y}/\partial\mathbf y$ and
-    /// $\mathbf D\mathbf T_j$ ($n\times n$), column-major.
-    pub P: Vec<f64>,
-    pub MP: Vec<f64>,
-    pub FP: Vec<f64>,
-    pub Mffr: Vec<f64>,
-    pub Ybar: Vec<f64>,
-    pub DT: Vec<f64>,
+    /// Buffers of the closed-form $\mathbf M$ and $\mathbf C_t$ (`PlanarBody::mass_damping`):
+    /// $\mathbf Z_j$, the coupling rows $\mathbf A_{\xi\zeta}$ and a scratch ($3n$ each), $6n$ and
+    /// $\max(n^2, 6n)$.
+    pub Z: Vec<f64>,
+    pub Bx: Vec<f64>,
+    pub scratch: Vec<f64>,
+    pub six: Vec<f64>,
+    pub big: Vec<f64>,
     /// The converged frame, its iterations, and whether `f` holds a configuration.
     pub frame: ([f64; 2], f64),
     pub iterations: usize,
@@ -237,12 +236,11 @@ impl PlanarWorkspace {
             pos: vec![[0.0; 2]; N],
             phi: vec![0.0; N],
             mats: [vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]],
-            P: vec![0.0; (3 + n) * n],
-            MP: vec![0.0; (3 + n) * n],
-            FP: vec![0.0; (3 + n) * n],
-            Mffr: vec![0.0; (3 + n) * (3 + n)],
-            Ybar: vec![0.0; n * n],
-            DT: vec![0.0; n * n],
+            Z: vec![0.0; 3 * n],
+            Bx: vec![0.0; 3 * n],
+            scratch: vec![0.0; 3 * n],
+            six: vec![0.0; 6 * n],
+            big: vec![0.0; (n * n).max(6 * n)],
             frame: ([0.0; 2], 0.0),
             iterations: 0,
             valid: false,
@@ -290,6 +288,29 @@ fn inv3<S: Scalar>(G: &[[S; 3]; 3]) -> ([[S; 3]; 3], S) {
         [c02 * id, c(0, 1, 2, 0) * id, c(0, 0, 1, 1) * id],
     ];
     (inv, det)
+}
+
+/// $\bar{\mathbf R}\mathbf A\bar{\mathbf R}^T$ of a column-major $n\times n$ `A` in place: the
+/// $2\times2$ blocks of rows and of columns of each interface, `R` = $(\sin, \cos)$ of the frame.
+#[inline(always)]
+fn rotate(A: &mut [f64], n: usize, N: usize, R: (f64, f64)) {
+    let (s, c) = R;
+    for j in 0..n {
+        let col = &mut A[n * j..n * (j + 1)];
+        for k in 0..N {
+            let (x, y) = (col[3 * k], col[3 * k + 1]);
+            col[3 * k] = c * x - s * y;
+            col[3 * k + 1] = s * x + c * y;
+        }
+    }
+    for k in 0..N {
+        let (cx, cy) = A[n * 3 * k..n * (3 * k + 2)].split_at_mut(n);
+        for (x, y) in cx.iter_mut().zip(cy.iter_mut()) {
+            let (a, b) = (*x, *y);
+            *x = c * a - s * b;
+            *y = s * a + c * b;
+        }
+    }
 }
 
 /// $\mathbf A\mathbf v$ for a column-major $n\times n$ `A`, into `out`.
@@ -639,206 +660,240 @@ impl PlanarBody {
     }
 
     /// $\mathbf M = \bar{\mathbf R}\mathbf P^T\mathbf M_{ffr}\mathbf P\bar{\mathbf R}^T$ into `pw.mats[2]`
-    /// and, with `damping`, $\mathbf C_t = \bar{\mathbf R}[\mathbf P^T(\partial\mathbf F/\partial\boldsymbol\nu\,\mathbf P +
-    /// \mathbf M_{ffr}\mathbf P\,\partial\bar{\mathbf y}/\partial\mathbf y) + \mathbf T_j^T\mathbf D\mathbf T_j]\bar{\mathbf R}^T$
+    /// and, with `damping`, $\mathbf C_t = \bar{\mathbf R}[\mathbf P^T\,\partial\mathbf F/\partial\boldsymbol\nu\,\mathbf P +
+    /// \mathbf P^T\mathbf M_{ffr}\mathbf P\,\partial\bar{\mathbf y}/\partial\mathbf y + \mathbf T_j^T\mathbf D\mathbf T_j]\bar{\mathbf R}^T$
     /// into `pw.mats[1]`, at the configuration and velocities of the last `core` pass in `pw.f`
     /// (module docs: $\mathbf F$ is linear in $\dot{\boldsymbol\nu}$ with the matrix $\mathbf M_{ffr}$,
     /// $\dot{\boldsymbol\nu} = \mathbf P\bar{\mathbf y}$, and the velocity terms of $\mathbf F$ are
-    /// differentiated below).
+    /// differentiated below). With $\mathbf P = \mathbf E_0 + \mathbf Q\mathbf Z_j$, $\mathbf E_0 = [\mathbf 0;
+    /// \mathbf I]$, $\mathbf Q = [\mathbf I_3; -\boldsymbol\Psi]$, each $\mathbf P^T\mathbf A\mathbf P$ is the
+    /// $\zeta\zeta$ block of $\mathbf A$ plus rank-3 terms through the 3 rows of $\mathbf Z_j$
+    /// ([`Self::congruence`]).
     fn mass_damping(&self, pw: &mut PlanarWorkspace, damping: bool) {
+        struct Pass<'a> {
+            pb: &'a PlanarBody,
+            pw: &'a mut PlanarWorkspace,
+            damping: bool,
+        }
+        impl pulp::WithSimd for Pass<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _simd: S) {
+                self.pb.mass_damping_body(self.pw, self.damping);
+            }
+        }
+        pulp::Arch::new().dispatch(Pass { pb: self, pw, damping });
+    }
+
+    #[inline(always)]
+    fn mass_damping_body(&self, pw: &mut PlanarWorkspace, damping: bool) {
         let n = self.n;
         let N = self.N;
-        let r = 3 + n;
         let b = &pw.f;
         let Gi = &b.Gi;
-        // P column by column: xi_j = Gi Phi_j, zeta_j = e_j - Psi xi_j.
-        for j in 0..n {
-            let ph = &self.Phi[j];
-            let col = &mut pw.P[r * j..r * (j + 1)];
-            let xi: [f64; 3] = std::array::from_fn(|a| Gi[a][0] * ph[0] + Gi[a][1] * ph[1] + Gi[a][2] * ph[2]);
-            col[..3].copy_from_slice(&xi);
-            let z = &mut col[3..];
-            for k in 0..N {
-                let rho = b.rho[k];
-                z[3 * k] = -(xi[0] - xi[2] * rho[1]);
-                z[3 * k + 1] = -(xi[1] + xi[2] * rho[0]);
-                z[3 * k + 2] = -xi[2];
+        // Z_j = Gi Phi_j, by rows (3 x n).
+        let Z = &mut pw.Z;
+        for (j, ph) in self.Phi.iter().enumerate() {
+            for a in 0..3 {
+                Z[a * n + j] = Gi[a][0] * ph[0] + Gi[a][1] * ph[1] + Gi[a][2] * ph[2];
             }
-            z[3 * N..].fill(0.0);
-            z[j] += 1.0;
         }
-        // M_ffr (module docs).
+        let Z = &pw.Z[..3 * n];
+        let rho = &b.rho;
         let m = self.mass;
         let Es = [-b.sv[1], b.sv[0]];
-        let M = &mut pw.Mffr;
-        M.fill(0.0);
-        M[0] = m;
-        M[1 + r] = m;
-        M[2 * r] = Es[0];
-        M[1 + 2 * r] = Es[1];
-        M[2] = Es[0];
-        M[2 + r] = Es[1];
-        M[2 + 2 * r] = b.J;
+        // M_ffr: the frame block A, the coupling rows Bx (S_t x, y and c), the M_CB block.
+        let A = [[m, 0.0, Es[0]], [0.0, m, Es[1]], [Es[0], Es[1], b.J]];
+        let Bx = &mut pw.Bx;
         for i in 0..n {
-            let c = r * (3 + i);
-            let ci = self.Srz[i] - b.Sq[i];
-            M[c] = self.St[i][0];
-            M[c + 1] = self.St[i][1];
-            M[c + 2] = ci;
-            M[3 + i] = self.St[i][0];
-            M[3 + i + r] = self.St[i][1];
-            M[3 + i + 2 * r] = ci;
-            for l in 0..n {
-                M[c + 3 + l] = self.M[l + n * i];
-            }
+            Bx[i] = self.St[i][0];
+            Bx[n + i] = self.St[i][1];
+            Bx[2 * n + i] = self.Srz[i] - b.Sq[i];
         }
-        // M_ffr P, then M = P^T (M_ffr P).
-        let mul = |A: &[f64], B: &[f64], rows: usize, inner: usize, cols: usize, out: &mut [f64]| {
-            for j in 0..cols {
-                let o = &mut out[rows * j..rows * (j + 1)];
-                o.fill(0.0);
-                for (l, &bl) in B[inner * j..inner * (j + 1)].iter().enumerate() {
-                    for (x, a) in o.iter_mut().zip(&A[rows * l..rows * (l + 1)]) {
-                        *x += a * bl;
-                    }
-                }
-            }
-        };
-        // out = A^T B for column-major A (inner x rows), B (inner x cols).
-        let mul_tn = |A: &[f64], B: &[f64], rows: usize, inner: usize, cols: usize, out: &mut [f64], add: bool| {
-            for j in 0..cols {
-                for i in 0..rows {
-                    let s: f64 = A[inner * i..inner * (i + 1)]
-                        .iter()
-                        .zip(&B[inner * j..inner * (j + 1)])
-                        .map(|(a, b)| a * b)
-                        .sum();
-                    if add {
-                        out[i + rows * j] += s;
-                    } else {
-                        out[i + rows * j] = s;
-                    }
-                }
-            }
-        };
-        mul(&pw.Mffr, &pw.P, r, r, n, &mut pw.MP);
-        mul_tn(&pw.P, &pw.MP, n, r, n, &mut pw.mats[2], false);
-        let (s, c) = b.R;
-        let rotate = |A: &mut [f64]| {
-            // Rbar A Rbar^T: the 2x2 blocks of rows and of columns of each interface.
-            for j in 0..n {
-                for k in 0..N {
-                    let (x, y) = (A[3 * k + n * j], A[3 * k + 1 + n * j]);
-                    A[3 * k + n * j] = c * x - s * y;
-                    A[3 * k + 1 + n * j] = s * x + c * y;
-                }
-            }
-            for k in 0..N {
-                for i in 0..n {
-                    let (x, y) = (A[i + n * 3 * k], A[i + n * (3 * k + 1)]);
-                    A[i + n * 3 * k] = c * x - s * y;
-                    A[i + n * (3 * k + 1)] = s * x + c * y;
-                }
-            }
-        };
+        let Bx = &pw.Bx[..3 * n];
+        Self::congruence(n, N, rho, Z, &A, Bx, &self.M, &mut pw.scratch, &mut pw.mats[2]);
         if damping {
-            // dF/dnu P: the velocity terms of F differentiated (module docs), by rows of P.
+            // dF/dnu (module docs), nu = [V; Omega; zeta].
             let [V0, V1, om] = b.xi;
             let (sv, sd) = (b.sv, b.sd);
             let pV = [V0 * m + Es[0] * om + sd[0], V1 * m + Es[1] * om + sd[1]];
-            let EpV = [-pV[1], pV[0]];
-            let Esd = [-sd[1], sd[0]];
-            let EV = [-V1, V0];
-            // F_V by Omega: E sd + E pV - Omega s.
-            let fvo = [Esd[0] + EpV[0] - om * sv[0], Esd[1] + EpV[1] - om * sv[1]];
-            let foo = b.Jd + V0 * sv[0] + V1 * sv[1];
-            for j in 0..n {
-                let p = &pw.P[r * j..r * (j + 1)];
-                let (pv0, pv1, po) = (p[0], p[1], p[2]);
-                let pz = &p[3..];
-                let o = &mut pw.FP[r * j..r * (j + 1)];
-                // F_V.
-                let mut f0 = -om * m * pv1 + fvo[0] * po;
-                let mut f1 = om * m * pv0 + fvo[1] * po;
-                // F_Omega.
-                let mut fo = om * (sv[0] * pv0 + sv[1] * pv1) + foo * po;
-                for i in 0..n {
-                    let st = self.St[i];
-                    let aw = self.a[i] + b.Wq[i];
-                    // 2 Omega E St_i zeta_i.
-                    f0 += -2.0 * om * st[1] * pz[i];
-                    f1 += 2.0 * om * st[0] * pz[i];
-                    fo += 2.0 * om * aw * pz[i];
+            let fvo = [-sd[1] - pV[1] - om * sv[0], sd[0] + pV[0] - om * sv[1]];
+            let Fxx = [
+                [0.0, -om * m, fvo[0]],
+                [om * m, 0.0, fvo[1]],
+                [om * sv[0], om * sv[1], b.Jd + V0 * sv[0] + V1 * sv[1]],
+            ];
+            // Fxz (3 x n by rows) and Fzx (n x 3 by columns) in DT's first 6n entries.
+            let (Fxz, rest) = pw.big.split_at_mut(3 * n);
+            let Fzx = &mut rest[..3 * n];
+            for i in 0..n {
+                let st = self.St[i];
+                let aw = self.a[i] + b.Wq[i];
+                Fxz[i] = -2.0 * om * st[1];
+                Fxz[n + i] = 2.0 * om * st[0];
+                Fxz[2 * n + i] = 2.0 * om * aw;
+                Fzx[i] = om * st[1];
+                Fzx[n + i] = -om * st[0];
+                Fzx[2 * n + i] = st[0] * -V1 + st[1] * V0 - 2.0 * b.Sz[i] - 2.0 * om * aw;
+            }
+            // P^T F P = Fzz + L Z + Z^T (U + Cf Z): L = Fzx - Fzz Psi, U = Fxz - Psi^T Fzz,
+            // Cf = Fxx - Fxz Psi - Psi^T Fzx + Psi^T Fzz Psi, with Fzz = -2 Omega S~_z.
+            let f = -2.0 * om;
+            // Fzz Psi (n x 3, by rows) and Psi^T Fzz (3 x n, by columns) in Ybar's 6n entries.
+            let (FzzPsi, PsiFzz) = pw.six.split_at_mut(3 * n);
+            for i in 0..n {
+                let (mut g, mut h) = ([0.0; 3], [0.0; 3]);
+                for (k, r) in rho.iter().enumerate() {
+                    // Row i of S~_z at the interface columns, and column i at the interface rows.
+                    let a = |l: usize| self.Sz[i + n * l];
+                    let c = |l: usize| self.Sz[l + n * i];
+                    let (ax, ay, at) = (a(3 * k), a(3 * k + 1), a(3 * k + 2));
+                    let (cx, cy, ct) = (c(3 * k), c(3 * k + 1), c(3 * k + 2));
+                    g[0] += ax;
+                    g[1] += ay;
+                    g[2] += -r[1] * ax + r[0] * ay + at;
+                    h[0] += cx;
+                    h[1] += cy;
+                    h[2] += -r[1] * cx + r[0] * cy + ct;
                 }
-                o[0] = f0;
-                o[1] = f1;
-                o[2] = fo;
-                // F_q.
-                for i in 0..n {
-                    let st = self.St[i];
-                    let aw = self.a[i] + b.Wq[i];
-                    let dq_do = st[0] * EV[0] + st[1] * EV[1] - 2.0 * b.Sz[i] - 2.0 * om * aw;
-                    o[3 + i] = om * (st[1] * pv0 - st[0] * pv1) + dq_do * po;
-                }
-                // -2 Omega S~_z zeta.
-                for l in 0..n {
-                    let f = -2.0 * om * pz[l];
-                    let col = &self.Sz[n * l..n * (l + 1)];
-                    for (x, sz) in o[3..].iter_mut().zip(col) {
-                        *x += f * sz;
-                    }
+                for d in 0..3 {
+                    FzzPsi[3 * i + d] = f * g[d];
+                    PsiFzz[d * n + i] = f * h[d];
                 }
             }
-            // d ybar / d y (module docs): rows u_k only.
-            pw.Ybar.fill(0.0);
-            for j in 0..n {
-                let p = &pw.P[r * j..r * (j + 1)];
-                let col = &mut pw.Ybar[n * j..n * (j + 1)];
-                for k in 0..N {
-                    let w = [
-                        b.y[3 * k] + b.zeta[3 * k],
-                        b.y[3 * k + 1] + b.zeta[3 * k + 1],
-                    ];
-                    let e = |i: usize| p[3 + i] + if i == j { 1.0 } else { 0.0 };
-                    col[3 * k] = w[1] * p[2] + om * e(3 * k + 1);
-                    col[3 * k + 1] = -w[0] * p[2] - om * e(3 * k);
-                }
-            }
-            // FP += M_ffr P Ybar.
-            for j in 0..n {
-                for l in 0..n {
-                    let y = pw.Ybar[l + n * j];
-                    if y != 0.0 {
-                        let (src, dst) = (&pw.MP[r * l..r * (l + 1)], j);
-                        for i in 0..r {
-                            pw.FP[i + r * dst] += src[i] * y;
+            let mut Cf = Fxx;
+            for (k, r) in rho.iter().enumerate() {
+                let psi = [[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]], [0.0, 0.0, 1.0]];
+                for (d, l) in (3 * k..3 * k + 3).enumerate() {
+                    for a in 0..3 {
+                        for c in 0..3 {
+                            Cf[a][c] += psi[d][a] * (FzzPsi[3 * l + c] - Fzx[c * n + l]) - Fxz[a * n + l] * psi[d][c];
                         }
                     }
                 }
             }
-            mul_tn(&pw.P, &pw.FP, n, r, n, &mut pw.mats[1], false);
-            if self.damped {
-                // T^T D T, T = rows 3.. of P.
-                for j in 0..n {
-                    let t = &pw.P[r * j + 3..r * (j + 1)];
-                    let o = &mut pw.DT[n * j..n * (j + 1)];
-                    o.fill(0.0);
-                    for (l, &tl) in t.iter().enumerate() {
-                        for (x, d) in o.iter_mut().zip(&self.D[n * l..n * (l + 1)]) {
-                            *x += d * tl;
-                        }
+            let [_, C, Mloc] = &mut pw.mats;
+            for j in 0..n {
+                let z = [Z[j], Z[n + j], Z[2 * n + j]];
+                let h: [f64; 3] = std::array::from_fn(|a| {
+                    Fxz[a * n + j] - PsiFzz[a * n + j] + Cf[a][0] * z[0] + Cf[a][1] * z[1] + Cf[a][2] * z[2]
+                });
+                let col = &mut C[n * j..n * (j + 1)];
+                let sz = &self.Sz[n * j..n * (j + 1)];
+                for i in 0..n {
+                    let mut v = f * sz[i] + Z[i] * h[0] + Z[n + i] * h[1] + Z[2 * n + i] * h[2];
+                    for a in 0..3 {
+                        v += (Fzx[a * n + i] - FzzPsi[3 * i + a]) * z[a];
                     }
+                    col[i] = v;
                 }
-                for j in 0..n {
+            }
+            // + (P^T M_ffr P) dybar/dy, nonzero in the u_k rows only (module docs): row u_k,x is
+            // w_y P_Omega + Omega (I + T)_{u_k,y}, row u_k,y is -w_x P_Omega - Omega (I + T)_{u_k,x},
+            // w = y_u_k + zeta_u_k, P_Omega the Omega row of Z, T = I - Psi Z.
+            for j in 0..n {
+                let pO = Z[2 * n + j];
+                let col = &mut C[n * j..n * (j + 1)];
+                for (k, r) in rho.iter().enumerate() {
+                    let (ix, iy) = (3 * k, 3 * k + 1);
+                    let two = |i: usize| if i == j { 2.0 } else { 0.0 };
+                    let ex = two(ix) - (Z[j] - pO * r[1]);
+                    let ey = two(iy) - (Z[n + j] + pO * r[0]);
+                    let w = [b.y[ix] + b.zeta[ix], b.y[iy] + b.zeta[iy]];
+                    let yx = w[1] * pO + om * ey;
+                    let yy = -w[0] * pO - om * ex;
+                    let (cx, cy) = (&Mloc[n * ix..n * (ix + 1)], &Mloc[n * iy..n * (iy + 1)]);
                     for i in 0..n {
-                        let s: f64 = (0..n).map(|l| pw.P[r * i + 3 + l] * pw.DT[l + n * j]).sum();
-                        pw.mats[1][i + n * j] += s;
+                        col[i] += cx[i] * yx + cy[i] * yy;
                     }
                 }
             }
-            rotate(&mut pw.mats[1]);
+            if self.damped {
+                // + T^T D T: the congruence with A_xixi = 0, A_xizeta = 0.
+                let zero_rows = &mut pw.Bx[..3 * n];
+                zero_rows.fill(0.0);
+                Self::congruence(
+                    n,
+                    N,
+                    rho,
+                    Z,
+                    &[[0.0; 3]; 3],
+                    &pw.Bx[..3 * n],
+                    &self.D,
+                    &mut pw.six,
+                    &mut pw.big,
+                );
+                for (c, d) in pw.mats[1].iter_mut().zip(&pw.big) {
+                    *c += d;
+                }
+            }
+            rotate(&mut pw.mats[1], n, N, b.R);
         }
-        rotate(&mut pw.mats[2]);
+        rotate(&mut pw.mats[2], n, N, b.R);
+    }
+
+    /// $\mathbf P^T\mathbf A\mathbf P$ of a symmetric $(3 + n)^2$ matrix with blocks $\mathbf A_{\xi\xi}$ (`A`),
+    /// $\mathbf A_{\xi\zeta}$ (`Bx`, 3 rows of $n$) and $\mathbf A_{\zeta\zeta}$ (`Mzz`, column-major) into
+    /// `out` ($n\times n$): $\mathbf A_{\zeta\zeta} + \mathbf B^T\mathbf Z + \mathbf Z^T(\mathbf B + \mathbf C\mathbf Z)$ with
+    /// $\mathbf B = \mathbf A_{\xi\zeta} - \boldsymbol\Psi^T\mathbf A_{\zeta\zeta}$, $\mathbf C = \mathbf A_{\xi\xi} -
+    /// \mathbf A_{\xi\zeta}\boldsymbol\Psi - \boldsymbol\Psi^T\mathbf A_{\xi\zeta}^T + \boldsymbol\Psi^T\mathbf A_{\zeta\zeta}\boldsymbol\Psi$
+    /// ($\mathbf Z$: `Z`, 3 rows of $n$; `scratch` $\ge 3n$).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn congruence(
+        n: usize,
+        N: usize,
+        rho: &[[f64; 2]],
+        Z: &[f64],
+        A: &[[f64; 3]; 3],
+        Bx: &[f64],
+        Mzz: &[f64],
+        scratch: &mut [f64],
+        out: &mut [f64],
+    ) {
+        // B = Bx - Psi^T Mzz (rows), by the columns of the symmetric Mzz.
+        let B = &mut scratch[..3 * n];
+        for j in 0..n {
+            let col = &Mzz[n * j..n * (j + 1)];
+            let mut g = [0.0; 3];
+            for (k, r) in rho.iter().enumerate() {
+                let (x, y, t) = (col[3 * k], col[3 * k + 1], col[3 * k + 2]);
+                g[0] += x;
+                g[1] += y;
+                g[2] += -r[1] * x + r[0] * y + t;
+            }
+            for a in 0..3 {
+                B[a * n + j] = Bx[a * n + j] - g[a];
+            }
+        }
+        // C = A - Bx Psi - (Bx Psi)^T + Psi^T Mzz Psi = A - Bx Psi - Psi^T B.
+        let mut C = *A;
+        for (k, r) in rho.iter().enumerate() {
+            let psi = [[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]], [0.0, 0.0, 1.0]];
+            for (d, l) in (3 * k..3 * k + 3).enumerate() {
+                for a in 0..3 {
+                    for c in 0..3 {
+                        C[a][c] -= Bx[a * n + l] * psi[d][c] + psi[d][a] * B[c * n + l];
+                    }
+                }
+            }
+        }
+        let _ = N;
+        for j in 0..n {
+            let (z0, z1, z2) = (Z[j], Z[n + j], Z[2 * n + j]);
+            let h: [f64; 3] = std::array::from_fn(|a| B[a * n + j] + C[a][0] * z0 + C[a][1] * z1 + C[a][2] * z2);
+            let col = &mut out[n * j..n * (j + 1)];
+            let mz = &Mzz[n * j..n * (j + 1)];
+            for i in 0..n {
+                col[i] = mz[i]
+                    + B[i] * z0
+                    + B[n + i] * z1
+                    + B[2 * n + i] * z2
+                    + Z[i] * h[0]
+                    + Z[n + i] * h[1]
+                    + Z[2 * n + i] * h[2];
+            }
+        }
     }
 
     /// The planar $\boldsymbol\Phi_j\boldsymbol\Psi$ inverse at `rho` with its 1-norm reciprocal

@@ -254,7 +254,12 @@ pub fn planar_test_state(se: &Superelement, angle: f64, seed: u64) -> (BodyState
     let mut rng = Rng::new(seed);
     let N = se.n_interfaces();
     let m = se.n_modes();
-    let L = se.interface_positions().iter().map(|x| x.norm()).fold(0.0, f64::max).max(0.1);
+    let L = se
+        .interface_positions()
+        .iter()
+        .map(|x| x.norm())
+        .fold(0.0, f64::max)
+        .max(0.1);
     let R0 = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), angle);
     let frame = Frame::new(Vector3::new(0.3, -0.7, 0.25), R0);
     let (spin, e) = (3.0, 0.02);
