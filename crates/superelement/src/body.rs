@@ -9,6 +9,7 @@ use crate::error::SuperelementError;
 use crate::frame::{FrameProblem, FrameScratch, FrameSettings, FrameSolve};
 use crate::local_coordinates::local_coordinates;
 use crate::mass::{FfrInertia, MassVariant};
+use crate::planar::{angle_of, rotation_z, wrap, Buf, PlanarBody, STATE_TOL};
 pub use crate::state::BodyState;
 use crate::state::{Frame, FrameChoice};
 use crate::transform::Kinematics;
@@ -307,7 +308,30 @@ impl Superelement {
     /// plane's), the inertia is `Lumped` or the frame is the auxiliary node.
     pub fn into_planar(mut self) -> Result<Self, SuperelementError> {
         if self.planar.is_none() {
-            self.planar = Some(Arc::new(self.build_planar()?));
+            let input = crate::planar::PlanarInput {
+                name: &self.name,
+                body: &self.body,
+                n_interfaces: self.n_interfaces,
+                n_modes: self.n_modes,
+                n: self.n,
+                frame_choice: self.frame_choice,
+                mass_variant: self.mass_variant,
+                origin: self.origin,
+                x: &self.x,
+                length: self.length,
+                K_CB: &self.K_CB,
+                M_CB: &self.M_CB,
+                D: &self.D,
+                damped: self.damped,
+                Phi_j: &self.Phi_j,
+                inertia: &self.inertia,
+                geometric: self.geometric.as_ref().map(|G| crate::planar::GeometricView {
+                    n: G.n,
+                    stack: &G.stack,
+                    F: &G.F,
+                }),
+            };
+            self.planar = Some(Arc::new(input.build()?));
         }
         Ok(self)
     }
@@ -742,6 +766,136 @@ impl Superelement {
         (0..self.n)
             .map(|i| (0..self.n).map(|j| B[(i, j)] * y[j]).sum())
             .collect()
+    }
+}
+
+/// The planar glue ([`crate::planar`]): reading a planar state, the planar frame, the planar
+/// parts of 3D-layout vectors.
+impl Superelement {
+    pub(crate) fn planar_body(&self) -> &PlanarBody {
+        self.planar.as_deref().expect("a planar body")
+    }
+
+    /// Checks that `state` lies in the plane (NotPlanar naming the interface) and reads the
+    /// positions into `r` and the angles into `phi`.
+    pub(crate) fn read_planar(
+        &self,
+        state: &BodyState,
+        r: &mut [[f64; 2]],
+        phi: &mut [f64],
+    ) -> Result<f64, SuperelementError> {
+        self.check_state(state)?;
+        let z0 = state.r[0].z;
+        let mut r_max: f64 = 0.0;
+        for k in 0..self.n_interfaces {
+            let R = &state.R[k];
+            let tilt = 2.0 * R.coords[0].hypot(R.coords[1]);
+            let name = &self.body.interfaces[k].name;
+            if !(tilt <= STATE_TOL) {
+                return Err(self.not_planar(format!(
+                    "the orientation of interface '{name}' is tilted {tilt:.3e} rad out of the xy-plane"
+                )));
+            }
+            let dz = state.r[k].z - z0;
+            if !(dz.abs() <= STATE_TOL * self.length + 64.0 * f64::EPSILON * state.r[k].z.abs()) {
+                return Err(self.not_planar(format!(
+                    "interface '{name}' is {dz:.3e} m out of the plane z = {z0} of the first interface"
+                )));
+            }
+            r[k] = [state.r[k].x, state.r[k].y];
+            phi[k] = angle_of(R);
+            r_max = r_max.max(state.r[k].norm());
+        }
+        Ok(r_max)
+    }
+
+    pub(crate) fn not_planar(&self, what: String) -> SuperelementError {
+        SuperelementError::NotPlanar {
+            body: self.name.clone(),
+            what,
+        }
+    }
+
+    /// Solves the planar frame (4.4) from the warm start (the frame of `warm`): positions `r`,
+    /// angles `phi`, modal coordinates `eta`; `q` and `rho` are Newton buffers.
+    pub(crate) fn planar_frame(
+        &self,
+        r: &[[f64; 2]],
+        phi: &[f64],
+        eta: &[f64],
+        r_max: f64,
+        warm: &Frame,
+        b: &mut Buf<f64>,
+    ) -> Result<(([f64; 2], f64), usize), SuperelementError> {
+        let pb = self.planar_body();
+        match self.frame_solve {
+            FrameSolve::AtInterface(k) => Ok(((r[k], phi[k]), 0)),
+            FrameSolve::Newton => {
+                let x0 = pb.x[0];
+                let guess = || {
+                    let (s, c) = phi[0].sin_cos();
+                    (
+                        [r[0][0] - (c * x0[0] - s * x0[1]), r[0][1] - (s * x0[0] + c * x0[1])],
+                        phi[0],
+                    )
+                };
+                let warm = ([warm.r.x, warm.r.y], angle_of(&warm.R));
+                let far = phi.iter().any(|p| wrap(p - warm.1).abs() > 1.0);
+                let (L, settings) = (self.length, self.frame_settings);
+                if far {
+                    return pb.newton(r, phi, eta, r_max, guess(), L, settings, b);
+                }
+                pb.newton(r, phi, eta, r_max, warm, L, settings, b)
+                    .or_else(|e| pb.newton(r, phi, eta, r_max, guess(), L, settings, b).map_err(|_| e))
+            }
+        }
+    }
+
+    /// The 3D frame of a planar one.
+    pub(crate) fn frame_3d(&self, frame: ([f64; 2], f64), z: f64) -> Frame {
+        Frame::new(Vector3::new(frame.0[0], frame.0[1], z), rotation_z(frame.1))
+    }
+
+    /// Planar [`Superelement::solve_frame`].
+    pub(crate) fn planar_solve_frame(&self, state: &BodyState) -> Result<(Frame, usize), SuperelementError> {
+        let pb = self.planar_body();
+        let mut r = vec![[0.0; 2]; pb.N];
+        let mut phi = vec![0.0; pb.N];
+        let r_max = self.read_planar(state, &mut r, &mut phi)?;
+        let mut b = Buf::<f64>::new(pb.N, pb.n);
+        let (frame, it) = self.planar_frame(&r, &phi, &state.eta, r_max, &state.frame, &mut b)?;
+        Ok((self.frame_3d(frame, state.r[0].z - self.x[0].z), it))
+    }
+
+    /// The planar local coordinates of a 3D-layout $\mathbf q^{jj}$.
+    pub(crate) fn planar_q(&self, q3: &[f64]) -> Vec<f64> {
+        self.planar_body().index.iter().map(|&g| q3[g]).collect()
+    }
+
+    /// $\bar{\mathbf R}^T\dot{\mathbf q}$ (planar) of a 3D-layout velocity vector, for the frame
+    /// angle of `frame`.
+    pub(crate) fn planar_y(&self, frame: &Frame, qd3: &[f64]) -> Vec<f64> {
+        let pb = self.planar_body();
+        let (s, c) = angle_of(&frame.R).sin_cos();
+        let mut y: Vec<f64> = pb.index.iter().map(|&g| qd3[g]).collect();
+        for k in 0..pb.N {
+            let (vx, vy) = (y[3 * k], y[3 * k + 1]);
+            y[3 * k] = c * vx + s * vy;
+            y[3 * k + 1] = c * vy - s * vx;
+        }
+        y
+    }
+
+    /// Frame velocity (x, y, rate about z) and elastic velocity (planar) at the configuration
+    /// `kin` for the state's velocities.
+    pub(crate) fn planar_velocities(
+        &self,
+        kin: &Kinematics,
+        state: &BodyState,
+    ) -> Result<([f64; 3], Vec<f64>), SuperelementError> {
+        let q = self.planar_q(&kin.q_jj);
+        let y = self.planar_y(&kin.frame, &state.velocity_vector());
+        self.planar_body().velocities(&q, &y)
     }
 }
 

@@ -74,6 +74,9 @@
 //!   [`Superelement::kinetic_energy_in`] the kinetic energy at its configuration (also after a
 //!   `residual_into`, which forms no mass matrix);
 //!   [`Superelement::recover_mesh`] for the deformed mesh.
+//! * [`Superelement::into_planar`] makes a body reduced in its FE model's xy-plane a planar one
+//!   ([`planar`]): $3N + m$ coordinates evaluated behind the same methods and the same
+//!   $6N + m$ layout (out-of-plane rows and columns zero), about half the instructions.
 //! * [`testing`]: the central-difference helper, state perturbations through exp, test states,
 //!   and (feature `testing`) reduced-body fixtures.
 //!
@@ -130,6 +133,11 @@
 //! | $\mathbf M_{ffr}$ | `FfrInertia::mass_matrix` | FFR mass matrix from the invariants | (6.1) |
 //! | $\mathbf Q_v$ | `q_v` | quadratic velocity forces | (6.5) |
 //! | $\mathbf K_t,\ \mathbf C_t$ | `stiffness`, `damping` | $\partial\mathbf r/\partial\mathbf q$, $\partial\mathbf r/\partial\dot{\mathbf q}$ | \[S19\] |
+//! | $\mathcal I$ | `PlanarBody::index` | planar index set: x, y, rz of every interface and the modes ($3N + m$) | [`planar`] |
+//! | $\varphi_k,\ \varphi_j$ | `angle_of` | angle about z of $\mathbf R_k$, $\mathbf R_j$ (planar body) | [`planar`] |
+//! | $\mathbf E$ | | $[0, -1;\ 1, 0]$, the planar cross product with $\mathbf e_z$ | [`planar`] |
+//! | $\boldsymbol\rho_k$ | `rho` | deformed local interface position (planar $\mathbf r_k^{jj}$) | [`planar`] |
+//! | $\bar{\mathbf y}$ | `ybar` | $\dot{\boldsymbol\nu} = \mathbf P\bar{\mathbf y}$ (planar body) | (7.6) |
 //! | $\mathbf p_a,\ \mathbf v_a$ | [`Superelement::recover_mesh`], [`Superelement::recover_mesh_velocities`] | position and velocity of mesh node $a$ | (10.1) |
 //!
 //! Superscripts: a quantity without a frame marker is in inertial axes; body-axis quantities
@@ -154,6 +162,7 @@
 //! | \[WW03\], this crate | geometric stiffening $\mathbf g_G$, $\mathbf H_G$ of $U_3 + U_4$ | `superelement::GeometricStiffness::gradient_into` (`forces.rs`) |
 //! | (6.6) | `Lumped` inertia, $\bar{\mathbf R}\mathbf M_{CB}\bar{\mathbf R}^T$ and its $\mathbf Q_v$ | `superelement::Superelement::lumped_inertia` (`forces.rs`) |
 //! | \[S19\] | tangents $\mathbf K_t$, $\mathbf C_t$, $\mathbf M$ (chain rule to absolute coordinates) | `superelement::Superelement::evaluate_local` (`tangent.rs`) |
+//! | (7.6)-(7.8) | the planar body: residual, closed-form $\mathbf M$, $\mathbf C_t$, $\mathbf K_t$ by dual numbers | `superelement::planar::PlanarBody::core`, `mass_damping`, `stiffness_pass`; `Superelement::planar_evaluate` (`tangent.rs`) |
 //!
 //! The `forces.rs` and `tangent.rs` functions are crate-private methods of [`Superelement`];
 //! [`Superelement::evaluate`] is their public entry point.
@@ -220,7 +229,8 @@
 //! [`so3`] rotations; [`state`] the plain data (frame, frame choice, body state);
 //! [`compressed`] the geometric stiffness by its nonzero entries;
 //! [`local_coordinates`]; [`transform`] (5.2)-(5.6) and their derivatives; [`frame`] the Newton
-//! solve of (4.4); [`mass`] FFR inertia; [`body`] the superelement; [`forces`] body-axis forces
+//! solve of (4.4); [`mass`] FFR inertia; [`planar`] the planar kernel (with the dual numbers of
+//! `dual`); [`body`] the superelement; [`forces`] body-axis forces
 //! and partials; [`tangent`] the residual and tangents; [`recovery`] the deformed mesh;
 //! [`testing`] helpers. Each module uses only the ones before it in this list (no circles).
 

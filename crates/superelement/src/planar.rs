@@ -52,25 +52,27 @@
 //!
 //! # Tangents
 //!
-//! The residual is one generic function of $(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q})$ ([`Scalar`]);
-//! $\mathbf K_t$, $\mathbf C_t$ and $\mathbf M$ are its derivatives by forward-mode dual numbers
-//! ([`crate::dual`]), exact to round-off. The frame enters through the implicit function: one
-//! Newton correction $\delta\boldsymbol\Xi = (\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}\boldsymbol\Phi_j\mathbf q^{jj}$ in
-//! dual numbers at the converged frame (value part zero) carries its exact derivative. Checked
+//! The residual is one generic function of $(\mathbf q, \dot{\mathbf q}, \ddot{\mathbf q})$
+//! (`PlanarBody::core` over the scalar trait `Scalar`: `f64` for the forces, the dual numbers of
+//! `dual.rs` for $\mathbf K_t$, exact to round-off). The frame enters through the implicit
+//! function: one Newton correction $\delta\boldsymbol\Xi = (\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}\boldsymbol\Phi_j\mathbf q^{jj}$
+//! in dual numbers at the converged frame (value part zero) carries its exact derivative.
+//! $\mathbf F$ is linear in $\dot{\boldsymbol\nu}$ with the matrix $\mathbf M_{ffr}$ (theory guide
+//! (7.7)), so $\mathbf M = \bar{\mathbf R}\mathbf P^T\mathbf M_{ffr}\mathbf P\bar{\mathbf R}^T$, and $\mathbf C_t$
+//! follows from the velocity terms of $\mathbf F$ and $\partial\bar{\mathbf y}/\partial\mathbf y$: both in
+//! closed form (`PlanarBody::mass_damping`), cheaper than a dual pass each. Checked
 //! against the spatial body (`tests/unit/planar.rs`) and central differences.
 
 #![allow(non_snake_case)]
 
-use crate::body::{BodyState, Superelement};
 use crate::dual::{Dual, Scalar};
 use crate::error::SuperelementError;
-use crate::forces::Level;
-use crate::frame::{Frame, FrameChoice, FrameSolve};
-use crate::mass::MassVariant;
-use crate::tangent::{Evaluation, Workspace};
-use crate::transform::{Kinematics, RCOND_MIN};
+use crate::frame::{FrameChoice, FrameSettings, FrameSolve};
+use crate::mass::{FfrInertia, MassVariant};
+use crate::transform::RCOND_MIN;
 use faer::Mat;
 use nalgebra::{UnitQuaternion, Vector3};
+use reduction::ReducedBody;
 use std::f64::consts::PI;
 
 /// Width of the dual numbers of the tangent passes: directions per pass.
@@ -168,7 +170,7 @@ pub(crate) struct Buf<S> {
 }
 
 impl<S: Scalar> Buf<S> {
-    fn new(N: usize, n: usize) -> Self {
+    pub(crate) fn new(N: usize, n: usize) -> Self {
         let z = || vec![S::cst(0.0); n];
         Self {
             q: z(),
@@ -597,7 +599,7 @@ impl PlanarBody {
     /// $\mathbf K_t$ (planar, `pw.mats[0]`): the derivative of the residual in the planar
     /// coordinates by dual numbers, [`WIDTH`] directions per pass, compiled for the machine's
     /// vector instructions.
-    fn stiffness_pass(
+    pub(crate) fn stiffness_pass(
         &self,
         pw: &mut PlanarWorkspace,
         frame: ([f64; 2], f64),
@@ -669,7 +671,7 @@ impl PlanarBody {
     /// \mathbf I]$, $\mathbf Q = [\mathbf I_3; -\boldsymbol\Psi]$, each $\mathbf P^T\mathbf A\mathbf P$ is the
     /// $\zeta\zeta$ block of $\mathbf A$ plus rank-3 terms through the 3 rows of $\mathbf Z_j$
     /// ([`Self::congruence`]).
-    fn mass_damping(&self, pw: &mut PlanarWorkspace, damping: bool) {
+    pub(crate) fn mass_damping(&self, pw: &mut PlanarWorkspace, damping: bool) {
         struct Pass<'a> {
             pb: &'a PlanarBody,
             pw: &'a mut PlanarWorkspace,
@@ -915,100 +917,25 @@ impl PlanarBody {
         }
         Ok(Gi)
     }
-}
 
-impl Superelement {
-    pub(crate) fn planar_body(&self) -> &PlanarBody {
-        self.planar.as_deref().expect("a planar body")
-    }
-
-    /// Checks that `state` lies in the plane (NotPlanar naming the interface) and reads the
-    /// positions into `r` and the angles into `phi`.
-    pub(crate) fn read_planar(
-        &self,
-        state: &BodyState,
-        r: &mut [[f64; 2]],
-        phi: &mut [f64],
-    ) -> Result<f64, SuperelementError> {
-        self.check_state(state)?;
-        let z0 = state.r[0].z;
-        let mut r_max: f64 = 0.0;
-        for k in 0..self.n_interfaces {
-            let R = &state.R[k];
-            let tilt = 2.0 * R.coords[0].hypot(R.coords[1]);
-            let name = &self.body.interfaces[k].name;
-            if !(tilt <= STATE_TOL) {
-                return Err(self.not_planar(format!(
-                    "the orientation of interface '{name}' is tilted {tilt:.3e} rad out of the xy-plane"
-                )));
-            }
-            let dz = state.r[k].z - z0;
-            if !(dz.abs() <= STATE_TOL * self.length + 64.0 * f64::EPSILON * state.r[k].z.abs()) {
-                return Err(self.not_planar(format!(
-                    "interface '{name}' is {dz:.3e} m out of the plane z = {z0} of the first interface"
-                )));
-            }
-            r[k] = [state.r[k].x, state.r[k].y];
-            phi[k] = angle_of(R);
-            r_max = r_max.max(state.r[k].norm());
-        }
-        Ok(r_max)
-    }
-
-    pub(crate) fn not_planar(&self, what: String) -> SuperelementError {
-        SuperelementError::NotPlanar {
-            body: self.name.clone(),
-            what,
-        }
-    }
-
-    /// Solves the planar frame (4.4) from the warm start (the frame of `warm`): positions `r`,
-    /// angles `phi`, modal coordinates `eta`; `q` and `rho` are Newton buffers.
-    pub(crate) fn planar_frame(
-        &self,
-        r: &[[f64; 2]],
-        phi: &[f64],
-        eta: &[f64],
-        r_max: f64,
-        warm: &Frame,
-        b: &mut Buf<f64>,
-    ) -> Result<(([f64; 2], f64), usize), SuperelementError> {
-        let pb = self.planar_body();
-        match self.frame_solve {
-            FrameSolve::AtInterface(k) => Ok(((r[k], phi[k]), 0)),
-            FrameSolve::Newton => {
-                let x0 = pb.x[0];
-                let guess = || {
-                    let (s, c) = phi[0].sin_cos();
-                    (
-                        [r[0][0] - (c * x0[0] - s * x0[1]), r[0][1] - (s * x0[0] + c * x0[1])],
-                        phi[0],
-                    )
-                };
-                let warm = ([warm.r.x, warm.r.y], angle_of(&warm.R));
-                let far = phi.iter().any(|p| wrap(p - warm.1).abs() > 1.0);
-                if far {
-                    return self.planar_newton(r, phi, eta, r_max, guess(), b);
-                }
-                self.planar_newton(r, phi, eta, r_max, warm, b)
-                    .or_else(|e| self.planar_newton(r, phi, eta, r_max, guess(), b).map_err(|_| e))
-            }
-        }
-    }
-
-    fn planar_newton(
+    /// The Newton solve of the planar (4.4) from `start` for positions `r`, angles `phi`,
+    /// modal coordinates `eta` (`r_max`: the largest $|\mathbf r_k|$, body size `length`), with
+    /// the tolerance logic and errors of the spatial solve; `b` holds the iterates.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn newton(
         &self,
         r: &[[f64; 2]],
         phi: &[f64],
         eta: &[f64],
         r_max: f64,
         start: ([f64; 2], f64),
+        length: f64,
+        settings: FrameSettings,
         b: &mut Buf<f64>,
     ) -> Result<(([f64; 2], f64), usize), SuperelementError> {
-        let pb = self.planar_body();
+        let pb = self;
         let N = pb.N;
-        let L = self.length;
-        let settings = self.frame_settings;
+        let L = length;
         let tol = settings.tolerance + 64.0 * f64::EPSILON * (1.0 + r_max / L);
         let (mut rj, mut pj) = start;
         let mut residual = f64::INFINITY;
@@ -1049,131 +976,11 @@ impl Superelement {
         })
     }
 
-    /// The 3D frame of a planar one.
-    pub(crate) fn frame_3d(&self, frame: ([f64; 2], f64), z: f64) -> Frame {
-        Frame::new(Vector3::new(frame.0[0], frame.0[1], z), rotation_z(frame.1))
-    }
-
-    /// Planar [`Superelement::solve_frame`].
-    pub(crate) fn planar_solve_frame(&self, state: &BodyState) -> Result<(Frame, usize), SuperelementError> {
-        let pb = self.planar_body();
-        let mut r = vec![[0.0; 2]; pb.N];
-        let mut phi = vec![0.0; pb.N];
-        let r_max = self.read_planar(state, &mut r, &mut phi)?;
-        let mut b = Buf::<f64>::new(pb.N, pb.n);
-        let (frame, it) = self.planar_frame(&r, &phi, &state.eta, r_max, &state.frame, &mut b)?;
-        Ok((self.frame_3d(frame, state.r[0].z - self.x[0].z), it))
-    }
-
-    /// The planar evaluation behind [`Superelement::evaluate_into`] and
-    /// [`Superelement::residual_into`].
-    pub(crate) fn planar_evaluate(
-        &self,
-        state: &BodyState,
-        acc: &[f64],
-        gravity: &Vector3<f64>,
-        level: Level,
-        ws: &mut Workspace,
-        out: &mut Evaluation,
-    ) -> Result<(), SuperelementError> {
-        let pb = self.planar_body();
-        let pw = ws.planar.as_deref_mut().expect("a planar workspace");
-        pw.valid = false;
-        let N = pb.N;
-        let r_max = self.read_planar(state, &mut pw.pos, &mut pw.phi)?;
-        let (frame, iterations) = self.planar_frame(&pw.pos, &pw.phi, &state.eta, r_max, &state.frame, &mut pw.f)?;
-        let rs = &pw.pos;
-        let z = state.r[0].z - self.x[0].z;
-        let b = &mut pw.f;
-        for k in 0..N {
-            b.q[3 * k] = rs[k][0];
-            b.q[3 * k + 1] = rs[k][1];
-            b.q[3 * k + 2] = frame.1 + wrap(pw.phi[k] - frame.1);
-            b.qd[3 * k] = state.v[k].x;
-            b.qd[3 * k + 1] = state.v[k].y;
-            b.qd[3 * k + 2] = state.omega[k].z;
-        }
-        if let FrameSolve::AtInterface(k) = self.frame_solve {
-            // The explicit frame: the interface's angle itself.
-            b.q[3 * k + 2] = frame.1;
-        }
-        b.q[3 * N..].copy_from_slice(&state.eta);
-        b.qd[3 * N..].copy_from_slice(&state.eta_dot);
-        for (i, &g) in pb.index.iter().enumerate() {
-            b.qdd[i] = acc[g];
-        }
-        let g2 = [gravity.x, gravity.y];
-        let Gi0 = [[0.0; 3]; 3];
-        pb.core(b, frame, self.frame_solve, &Gi0, g2, true);
-        let Gi0 = b.Gi;
-        // Outputs in the 6N + m layout.
-        let n3 = self.n;
-        for v in [
-            &mut out.residual,
-            &mut out.f_inertia,
-            &mut out.f_elastic,
-            &mut out.f_damping,
-            &mut out.f_gravity,
-            &mut out.q_jj,
-        ] {
-            v.fill(0.0);
-        }
-        for (i, &g) in pb.index.iter().enumerate() {
-            out.f_inertia[g] = b.parts[0][i];
-            out.f_elastic[g] = b.parts[1][i];
-            out.f_damping[g] = b.parts[2][i];
-            out.f_gravity[g] = b.parts[3][i];
-            out.residual[g] = b.out[i];
-            out.q_jj[g] = b.qjj[i];
-        }
-        let frame3 = self.frame_3d(frame, z);
-        out.frame = frame3;
-        out.frame_iterations = iterations;
-        pw.frame = frame;
-        pw.iterations = iterations;
-        pw.valid = true;
-        // M and C_t in closed form, K_t by dual numbers.
-        if level.mass() {
-            pb.mass_damping(pw, level.tangents());
-        }
-        if level.tangents() {
-            pb.stiffness_pass(pw, frame, self.frame_solve, &Gi0, g2);
-        }
-        let n = pb.n;
-        let scatter = |src: &[f64], dst: &mut Mat<f64>| {
-            dst.fill(0.0);
-            for (j, &gj) in pb.index.iter().enumerate() {
-                let col = dst.col_as_slice_mut(gj);
-                for (i, &gi) in pb.index.iter().enumerate() {
-                    col[gi] = src[i + n * j];
-                }
-            }
-        };
-        if level.mass() {
-            scatter(&pw.mats[2], &mut out.mass);
-            out.q_v.copy_from_slice(&out.f_inertia);
-            for (j, &gj) in pb.index.iter().enumerate() {
-                let a = acc[gj];
-                for (i, &gi) in pb.index.iter().enumerate() {
-                    out.q_v[gi] -= pw.mats[2][i + n * j] * a;
-                }
-            }
-        }
-        if level.tangents() {
-            scatter(&pw.mats[0], &mut out.stiffness);
-            scatter(&pw.mats[1], &mut out.damping);
-        }
-        debug_assert_eq!(out.q_jj.len(), n3);
-        ws.kin.set_planar(frame3, iterations, &out.q_jj, &self.x);
-        ws.kin_valid = false;
-        Ok(())
-    }
-
     /// Planar kinetic energy $\tfrac12\boldsymbol\nu^T\mathbf M_{ffr}\boldsymbol\nu$ at local
     /// coordinates `qjj` (planar) for body-axis velocities `y` (planar): forms $\boldsymbol\nu$
     /// from the configuration.
-    pub(crate) fn planar_kinetic(&self, qjj: &[f64], y: &[f64]) -> Result<f64, SuperelementError> {
-        let pb = self.planar_body();
+    pub(crate) fn kinetic(&self, qjj: &[f64], y: &[f64]) -> Result<f64, SuperelementError> {
+        let pb = self;
         let n = pb.n;
         let rho: Vec<[f64; 2]> = (0..pb.N)
             .map(|k| [pb.x[k][0] + qjj[3 * k], pb.x[k][1] + qjj[3 * k + 1]])
@@ -1211,28 +1018,9 @@ impl Superelement {
             + 0.5 * dot(&zeta, &Mz))
     }
 
-    /// The planar local coordinates of a 3D-layout $\mathbf q^{jj}$.
-    pub(crate) fn planar_q(&self, q3: &[f64]) -> Vec<f64> {
-        self.planar_body().index.iter().map(|&g| q3[g]).collect()
-    }
-
-    /// $\bar{\mathbf R}^T\dot{\mathbf q}$ (planar) of a 3D-layout velocity vector, for the frame
-    /// angle of `frame`.
-    pub(crate) fn planar_y(&self, frame: &Frame, qd3: &[f64]) -> Vec<f64> {
-        let pb = self.planar_body();
-        let (s, c) = angle_of(&frame.R).sin_cos();
-        let mut y: Vec<f64> = pb.index.iter().map(|&g| qd3[g]).collect();
-        for k in 0..pb.N {
-            let (vx, vy) = (y[3 * k], y[3 * k + 1]);
-            y[3 * k] = c * vx + s * vy;
-            y[3 * k + 1] = c * vy - s * vx;
-        }
-        y
-    }
-
     /// Planar strain energy at planar local coordinates `q`.
-    pub(crate) fn planar_strain_energy(&self, q: &[f64]) -> f64 {
-        let pb = self.planar_body();
+    pub(crate) fn strain_energy(&self, q: &[f64]) -> f64 {
+        let pb = self;
         let n = pb.n;
         let mut f = vec![0.0; n];
         matvec(&pb.K, q, &mut f);
@@ -1249,29 +1037,67 @@ impl Superelement {
         U
     }
 
-    /// Planar frame velocity and elastic velocity (planar) at the configuration `kin` for the
-    /// state's velocities.
-    pub(crate) fn planar_velocities(
-        &self,
-        kin: &Kinematics,
-        state: &BodyState,
-    ) -> Result<([f64; 3], Vec<f64>), SuperelementError> {
-        let pb = self.planar_body();
-        let q = self.planar_q(&kin.q_jj);
-        let y = self.planar_y(&kin.frame, &state.velocity_vector());
+    /// Frame velocity $\boldsymbol\xi = \mathbf Z_j\mathbf y$ and elastic velocity $\mathbf T_j\mathbf y$ at
+    /// the planar local coordinates `q` for the body-axis velocities `y`.
+    pub(crate) fn velocities(&self, q: &[f64], y: &[f64]) -> Result<([f64; 3], Vec<f64>), SuperelementError> {
+        let pb = self;
         let rho: Vec<[f64; 2]> = (0..pb.N)
             .map(|k| [pb.x[k][0] + q[3 * k], pb.x[k][1] + q[3 * k + 1]])
             .collect();
         let Gi = pb.inverse_with_rcond(&rho)?;
-        let py = pb.phi_mul(&y);
+        let py = pb.phi_mul(y);
         let xi: [f64; 3] = std::array::from_fn(|a| Gi[a][0] * py[0] + Gi[a][1] * py[1] + Gi[a][2] * py[2]);
         let mut zeta = vec![0.0; pb.n];
-        pb.minus_psi(&rho, &y, &xi, &mut zeta);
+        pb.minus_psi(&rho, y, &xi, &mut zeta);
         Ok((xi, zeta))
     }
+}
 
-    /// Builds the planar data (the checks of [`Superelement::into_planar`]).
-    pub(crate) fn build_planar(&self) -> Result<PlanarBody, SuperelementError> {
+/// What [`PlanarInput::build`] reads of a spatial superelement.
+pub(crate) struct PlanarInput<'a> {
+    pub name: &'a str,
+    pub body: &'a ReducedBody,
+    pub n_interfaces: usize,
+    pub n_modes: usize,
+    pub n: usize,
+    pub frame_choice: FrameChoice,
+    pub mass_variant: MassVariant,
+    pub origin: Vector3<f64>,
+    pub x: &'a [Vector3<f64>],
+    pub length: f64,
+    pub K_CB: &'a Mat<f64>,
+    pub M_CB: &'a Mat<f64>,
+    pub D: &'a Mat<f64>,
+    pub damped: bool,
+    pub Phi_j: &'a Mat<f64>,
+    pub inertia: &'a FfrInertia,
+    pub geometric: Option<GeometricView<'a>>,
+}
+
+/// The spatial $\mathbf G_k$ (stacked column-major, `GeometricStiffness::stack`) and $\mathbf F$.
+pub(crate) struct GeometricView<'a> {
+    pub n: usize,
+    pub stack: &'a [f64],
+    pub F: &'a Mat<f64>,
+}
+
+impl GeometricView<'_> {
+    fn matrix(&self, k: usize) -> faer::MatRef<'_, f64> {
+        let n = self.n;
+        faer::MatRef::from_column_major_slice(&self.stack[n * n * k..n * n * (k + 1)], n, n)
+    }
+}
+
+impl PlanarInput<'_> {
+    pub(crate) fn not_planar(&self, what: String) -> SuperelementError {
+        SuperelementError::NotPlanar {
+            body: self.name.to_string(),
+            what,
+        }
+    }
+
+    /// The planar data, after the checks of [`crate::Superelement::into_planar`].
+    pub(crate) fn build(&self) -> Result<PlanarBody, SuperelementError> {
         let N = self.n_interfaces;
         let m = self.n_modes;
         let n3 = self.n;
@@ -1454,7 +1280,7 @@ impl Superelement {
                         }
                     }
                 }
-                let F = self.planar_pseudo_inverse(&index)?;
+                let F = self.pseudo_inverse(&index)?;
                 // The planar pseudo-inverse against the restricted spatial one (equal when the
                 // blocks decouple).
                 let F3 = &G.F;
@@ -1501,7 +1327,7 @@ impl Superelement {
 
     /// $\mathbf K_{CB}^+$ of the planar $\mathbf K_{CB}$ (the in-plane block), as the spatial
     /// `rigid_pseudo_inverse` with the three planar rigid modes.
-    fn planar_pseudo_inverse(&self, index: &[usize]) -> Result<Vec<f64>, SuperelementError> {
+    fn pseudo_inverse(&self, index: &[usize]) -> Result<Vec<f64>, SuperelementError> {
         use faer::linalg::solvers::DenseSolveCore;
         let n = index.len();
         let N = self.n_interfaces;

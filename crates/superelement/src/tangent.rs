@@ -22,6 +22,7 @@ use crate::forces::{Level, Local, Motion, Scratch};
 use crate::frame::{Frame, FrameScratch, FrameSolve};
 use crate::local_coordinates::local_coordinates;
 use crate::mass::MassVariant;
+use crate::planar::wrap;
 use crate::so3::skew;
 use crate::transform::{add_mul_w, gemm, rotate_matrix, rotate_stiffness, sub_mul_psi, Kinematics};
 use faer::{Accum, Mat};
@@ -121,6 +122,110 @@ impl Workspace {
 }
 
 impl Superelement {
+    /// The planar evaluation behind [`Superelement::evaluate_into`] and
+    /// [`Superelement::residual_into`].
+    pub(crate) fn planar_evaluate(
+        &self,
+        state: &BodyState,
+        acc: &[f64],
+        gravity: &Vector3<f64>,
+        level: Level,
+        ws: &mut Workspace,
+        out: &mut Evaluation,
+    ) -> Result<(), SuperelementError> {
+        let pb = self.planar_body();
+        let pw = ws.planar.as_deref_mut().expect("a planar workspace");
+        pw.valid = false;
+        let N = pb.N;
+        let r_max = self.read_planar(state, &mut pw.pos, &mut pw.phi)?;
+        let (frame, iterations) = self.planar_frame(&pw.pos, &pw.phi, &state.eta, r_max, &state.frame, &mut pw.f)?;
+        let rs = &pw.pos;
+        let z = state.r[0].z - self.x[0].z;
+        let b = &mut pw.f;
+        for k in 0..N {
+            b.q[3 * k] = rs[k][0];
+            b.q[3 * k + 1] = rs[k][1];
+            b.q[3 * k + 2] = frame.1 + wrap(pw.phi[k] - frame.1);
+            b.qd[3 * k] = state.v[k].x;
+            b.qd[3 * k + 1] = state.v[k].y;
+            b.qd[3 * k + 2] = state.omega[k].z;
+        }
+        if let FrameSolve::AtInterface(k) = self.frame_solve {
+            // The explicit frame: the interface's angle itself.
+            b.q[3 * k + 2] = frame.1;
+        }
+        b.q[3 * N..].copy_from_slice(&state.eta);
+        b.qd[3 * N..].copy_from_slice(&state.eta_dot);
+        for (i, &g) in pb.index.iter().enumerate() {
+            b.qdd[i] = acc[g];
+        }
+        let g2 = [gravity.x, gravity.y];
+        let Gi0 = [[0.0; 3]; 3];
+        pb.core(b, frame, self.frame_solve, &Gi0, g2, true);
+        let Gi0 = b.Gi;
+        // Outputs in the 6N + m layout.
+        let n3 = self.n;
+        for v in [
+            &mut out.residual,
+            &mut out.f_inertia,
+            &mut out.f_elastic,
+            &mut out.f_damping,
+            &mut out.f_gravity,
+            &mut out.q_jj,
+        ] {
+            v.fill(0.0);
+        }
+        for (i, &g) in pb.index.iter().enumerate() {
+            out.f_inertia[g] = b.parts[0][i];
+            out.f_elastic[g] = b.parts[1][i];
+            out.f_damping[g] = b.parts[2][i];
+            out.f_gravity[g] = b.parts[3][i];
+            out.residual[g] = b.out[i];
+            out.q_jj[g] = b.qjj[i];
+        }
+        let frame3 = self.frame_3d(frame, z);
+        out.frame = frame3;
+        out.frame_iterations = iterations;
+        pw.frame = frame;
+        pw.iterations = iterations;
+        pw.valid = true;
+        // M and C_t in closed form, K_t by dual numbers.
+        if level.mass() {
+            pb.mass_damping(pw, level.tangents());
+        }
+        if level.tangents() {
+            pb.stiffness_pass(pw, frame, self.frame_solve, &Gi0, g2);
+        }
+        let n = pb.n;
+        let scatter = |src: &[f64], dst: &mut Mat<f64>| {
+            dst.fill(0.0);
+            for (j, &gj) in pb.index.iter().enumerate() {
+                let col = dst.col_as_slice_mut(gj);
+                for (i, &gi) in pb.index.iter().enumerate() {
+                    col[gi] = src[i + n * j];
+                }
+            }
+        };
+        if level.mass() {
+            scatter(&pw.mats[2], &mut out.mass);
+            out.q_v.copy_from_slice(&out.f_inertia);
+            for (j, &gj) in pb.index.iter().enumerate() {
+                let a = acc[gj];
+                for (i, &gi) in pb.index.iter().enumerate() {
+                    out.q_v[gi] -= pw.mats[2][i + n * j] * a;
+                }
+            }
+        }
+        if level.tangents() {
+            scatter(&pw.mats[0], &mut out.stiffness);
+            scatter(&pw.mats[1], &mut out.damping);
+        }
+        debug_assert_eq!(out.q_jj.len(), n3);
+        ws.kin.set_planar(frame3, iterations, &out.q_jj, &self.x);
+        ws.kin_valid = false;
+        Ok(())
+    }
+
     /// Buffers for [`Self::evaluate_into`].
     pub fn workspace(&self) -> Workspace {
         let (N, n) = (self.n_interfaces, self.n);
@@ -428,7 +533,7 @@ impl Superelement {
             let kin = self.kinematics_at(state, frame, 0)?;
             let q = self.planar_q(&kin.q_jj);
             let y = self.planar_y(&frame, &state.velocity_vector());
-            return self.planar_kinetic(&q, &y);
+            return self.planar_body().kinetic(&q, &y);
         }
         let kin = self.kinematics(state)?;
         let qd = state.velocity_vector();
@@ -447,7 +552,7 @@ impl Superelement {
     /// gradient (`tests/unit/energy.rs`, `tests/unit/geometric.rs`).
     pub fn strain_energy(&self, kin: &Kinematics) -> f64 {
         if self.is_planar() {
-            return self.planar_strain_energy(&self.planar_q(&kin.q_jj));
+            return self.planar_body().strain_energy(&self.planar_q(&kin.q_jj));
         }
         let mut f = vec![0.0; self.n];
         crate::mass::matvec(&self.K_CB, &kin.q_jj, &mut f);
@@ -512,7 +617,7 @@ impl Superelement {
         if self.is_planar() {
             let q = self.planar_q(&ws.kin.q_jj);
             let y = self.planar_y(&ws.kin.frame, qd);
-            return self.planar_kinetic(&q, &y);
+            return self.planar_body().kinetic(&q, &y);
         }
         let kin = &ws.kin;
         // y, and nu = [xi; c] as the evaluation forms them (from the frame rows of P, the
