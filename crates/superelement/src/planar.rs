@@ -596,6 +596,33 @@ impl PlanarBody {
         }
     }
 
+    /// [`Self::core`] in `f64` with the force parts (the residual of an evaluation), compiled for
+    /// the machine's vector instructions.
+    pub(crate) fn forces(&self, b: &mut Buf<f64>, frame: ([f64; 2], f64), solve: FrameSolve, gravity: [f64; 2]) {
+        struct Pass<'a> {
+            pb: &'a PlanarBody,
+            b: &'a mut Buf<f64>,
+            frame: ([f64; 2], f64),
+            solve: FrameSolve,
+            gravity: [f64; 2],
+        }
+        impl pulp::WithSimd for Pass<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _simd: S) {
+                let Gi0 = [[0.0; 3]; 3];
+                self.pb.core(self.b, self.frame, self.solve, &Gi0, self.gravity, true);
+            }
+        }
+        pulp::Arch::new().dispatch(Pass {
+            pb: self,
+            b,
+            frame,
+            solve,
+            gravity,
+        });
+    }
+
     /// $\mathbf K_t$ (planar, `pw.mats[0]`): the derivative of the residual in the planar
     /// coordinates by dual numbers, [`WIDTH`] directions per pass, compiled for the machine's
     /// vector instructions.
@@ -774,20 +801,31 @@ impl PlanarBody {
                     }
                 }
             }
+            // L = Fzx - Fzz Psi (3 columns of n) into Bx, free after the mass.
+            let L = &mut pw.Bx[..3 * n];
+            for a in 0..3 {
+                for i in 0..n {
+                    L[a * n + i] = Fzx[a * n + i] - FzzPsi[3 * i + a];
+                }
+            }
+            let (l0, rest) = pw.Bx[..3 * n].split_at(n);
+            let (l1, l2) = rest.split_at(n);
+            let (y0, rest) = Z.split_at(n);
+            let (y1, y2) = rest.split_at(n);
             let [_, C, Mloc] = &mut pw.mats;
-            for j in 0..n {
-                let z = [Z[j], Z[n + j], Z[2 * n + j]];
+            for (j, (col, sz)) in C[..n * n].chunks_exact_mut(n).zip(self.Sz.chunks_exact(n)).enumerate() {
+                let z = [y0[j], y1[j], y2[j]];
                 let h: [f64; 3] = std::array::from_fn(|a| {
                     Fxz[a * n + j] - PsiFzz[a * n + j] + Cf[a][0] * z[0] + Cf[a][1] * z[1] + Cf[a][2] * z[2]
                 });
-                let col = &mut C[n * j..n * (j + 1)];
-                let sz = &self.Sz[n * j..n * (j + 1)];
-                for i in 0..n {
-                    let mut v = f * sz[i] + Z[i] * h[0] + Z[n + i] * h[1] + Z[2 * n + i] * h[2];
-                    for a in 0..3 {
-                        v += (Fzx[a * n + i] - FzzPsi[3 * i + a]) * z[a];
-                    }
-                    col[i] = v;
+                for (i, o) in col.iter_mut().enumerate() {
+                    *o = f * sz[i]
+                        + y0[i] * h[0]
+                        + y1[i] * h[1]
+                        + y2[i] * h[2]
+                        + l0[i] * z[0]
+                        + l1[i] * z[1]
+                        + l2[i] * z[2];
                 }
             }
             // + (P^T M_ffr P) dybar/dy, nonzero in the u_k rows only (module docs): row u_k,x is
@@ -805,8 +843,8 @@ impl PlanarBody {
                     let yx = w[1] * pO + om * ey;
                     let yy = -w[0] * pO - om * ex;
                     let (cx, cy) = (&Mloc[n * ix..n * (ix + 1)], &Mloc[n * iy..n * (iy + 1)]);
-                    for i in 0..n {
-                        col[i] += cx[i] * yx + cy[i] * yy;
+                    for ((o, x), y) in col.iter_mut().zip(cx).zip(cy) {
+                        *o += x * yx + y * yy;
                     }
                 }
             }
@@ -881,19 +919,16 @@ impl PlanarBody {
             }
         }
         let _ = N;
-        for j in 0..n {
-            let (z0, z1, z2) = (Z[j], Z[n + j], Z[2 * n + j]);
+        // The rows of B and Z as slices of length n (no bounds checks in the loop).
+        let (b0, rest) = B.split_at(n);
+        let (b1, b2) = rest.split_at(n);
+        let (y0, rest) = Z[..3 * n].split_at(n);
+        let (y1, y2) = rest.split_at(n);
+        for (j, (col, mz)) in out[..n * n].chunks_exact_mut(n).zip(Mzz.chunks_exact(n)).enumerate() {
+            let (z0, z1, z2) = (y0[j], y1[j], y2[j]);
             let h: [f64; 3] = std::array::from_fn(|a| B[a * n + j] + C[a][0] * z0 + C[a][1] * z1 + C[a][2] * z2);
-            let col = &mut out[n * j..n * (j + 1)];
-            let mz = &Mzz[n * j..n * (j + 1)];
-            for i in 0..n {
-                col[i] = mz[i]
-                    + B[i] * z0
-                    + B[n + i] * z1
-                    + B[2 * n + i] * z2
-                    + Z[i] * h[0]
-                    + Z[n + i] * h[1]
-                    + Z[2 * n + i] * h[2];
+            for (i, o) in col.iter_mut().enumerate() {
+                *o = mz[i] + b0[i] * z0 + b1[i] * z1 + b2[i] * z2 + y0[i] * h[0] + y1[i] * h[1] + y2[i] * h[2];
             }
         }
     }

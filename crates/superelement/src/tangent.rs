@@ -160,8 +160,7 @@ impl Superelement {
             b.qdd[i] = acc[g];
         }
         let g2 = [gravity.x, gravity.y];
-        let Gi0 = [[0.0; 3]; 3];
-        pb.core(b, frame, self.frame_solve, &Gi0, g2, true);
+        pb.forces(b, frame, self.frame_solve, g2);
         let Gi0 = b.Gi;
         // Outputs in the 6N + m layout.
         let n3 = self.n;
