@@ -862,7 +862,7 @@ impl Superelement {
         let mut r = vec![[0.0; 2]; pb.N];
         let mut phi = vec![0.0; pb.N];
         let r_max = self.read_planar(state, &mut r, &mut phi)?;
-        let mut b = Buf::<f64>::new(pb.N, pb.n);
+        let mut b = Buf::<f64>::new(pb.N, pb.n, 0);
         let (frame, it) = self.planar_frame(&r, &phi, &state.eta, r_max, &state.frame, &mut b)?;
         Ok((self.frame_3d(frame, state.r[0].z - self.x[0].z), it))
     }

@@ -127,9 +127,45 @@ pub(crate) struct PlanarBody {
 /// nonzero entries, and $\mathbf F$ = the pseudo-inverse of the planar $\mathbf K_{CB}$.
 #[derive(Clone, Debug)]
 pub(crate) struct PlanarGeometric {
-    /// $(i, j, k, (\mathbf G_k)_{ij})$.
-    pub entries: Vec<(u32, u32, u32, f64)>,
+    /// The nonzero $\mathbf G_k$: $k$ and its entries $(i, j, (\mathbf G_k)_{ij})$.
+    pub groups: Vec<(usize, Vec<(u32, u32, f64)>)>,
     pub F: Vec<f64>,
+}
+
+impl PlanarGeometric {
+    /// $\mathbf g_G$ of $U_3 + U_4$ added to `fe`, with $\mathbf b$ and $\mathbf p = \mathbf F\mathbf b$ into `b`,
+    /// `p`: $\mathbf g_G = \mathbf b + \sum_k (q_k + p_k)\mathbf G_k\mathbf q$, $b_k = \tfrac12\mathbf q^T\mathbf G_k\mathbf q$,
+    /// with the products $\mathbf G_k\mathbf q$ of the nonzero $\mathbf G_k$ formed once (`gq`, one $n$-block
+    /// each).
+    #[inline(always)]
+    fn gradient<S: Scalar>(&self, q: &[S], b: &mut [S], p: &mut [S], gq: &mut [S], fe: &mut [S]) {
+        let n = q.len();
+        b.fill(S::cst(0.0));
+        for ((k, entries), g) in self.groups.iter().zip(gq.chunks_exact_mut(n)) {
+            g.fill(S::cst(0.0));
+            for &(i, j, v) in entries {
+                let (i, j) = (i as usize, j as usize);
+                g[i] = g[i].mul_add_f(q[j], v);
+            }
+            b[*k] = dot(q, g) * 0.5;
+        }
+        p.fill(S::cst(0.0));
+        for (k, _) in &self.groups {
+            let col = &self.F[n * k..n * (k + 1)];
+            for (pi, f) in p.iter_mut().zip(col) {
+                *pi = pi.mul_add_f(b[*k], *f);
+            }
+        }
+        for (k, _) in &self.groups {
+            fe[*k] += b[*k];
+        }
+        for ((k, _), g) in self.groups.iter().zip(gq.chunks_exact(n)) {
+            let t = q[*k] + p[*k];
+            for (f, gi) in fe.iter_mut().zip(g) {
+                *f += t * *gi;
+            }
+        }
+    }
 }
 
 /// Buffers of one generic evaluation.
@@ -153,6 +189,8 @@ pub(crate) struct Buf<S> {
     pub fg: Vec<S>,
     pub b: Vec<S>,
     pub p: Vec<S>,
+    /// $\mathbf G_k\mathbf q$ of the nonzero $\mathbf G_k$ ([`PlanarGeometric::gradient`]).
+    pub gq: Vec<S>,
     pub out: Vec<S>,
     /// The parts (f64 pass only): inertia, elastic, damping, gravity.
     pub parts: [Vec<S>; 4],
@@ -170,7 +208,7 @@ pub(crate) struct Buf<S> {
 }
 
 impl<S: Scalar> Buf<S> {
-    pub(crate) fn new(N: usize, n: usize) -> Self {
+    pub(crate) fn new(N: usize, n: usize, groups: usize) -> Self {
         let z = || vec![S::cst(0.0); n];
         Self {
             q: z(),
@@ -191,6 +229,7 @@ impl<S: Scalar> Buf<S> {
             fg: z(),
             b: z(),
             p: z(),
+            gq: vec![S::cst(0.0); n * groups],
             out: z(),
             parts: [z(), z(), z(), z()],
             Gi: [[S::cst(0.0); 3]; 3],
@@ -231,10 +270,12 @@ pub(crate) struct PlanarWorkspace {
 }
 
 impl PlanarWorkspace {
-    pub fn new(N: usize, n: usize) -> Self {
+    pub fn new(pb: &PlanarBody) -> Self {
+        let (N, n) = (pb.N, pb.n);
+        let groups = pb.geometric.as_ref().map_or(0, |G| G.groups.len());
         Self {
-            f: Buf::new(N, n),
-            d: Buf::new(N, n),
+            f: Buf::new(N, n, groups),
+            d: Buf::new(N, n, groups),
             pos: vec![[0.0; 2]; N],
             phi: vec![0.0; N],
             mats: [vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]],
@@ -319,6 +360,18 @@ fn rotate(A: &mut [f64], n: usize, N: usize, R: (f64, f64)) {
 #[inline(always)]
 fn matvec<S: Scalar>(A: &[f64], v: &[S], out: &mut [S]) {
     let n = v.len();
+    if S::DUAL {
+        // Row by row: each dual sum stays in registers (the columns would load and store the
+        // output's derivative parts at every term).
+        for (i, o) in out.iter_mut().enumerate() {
+            let mut acc = S::cst(0.0);
+            for (j, vj) in v.iter().enumerate() {
+                acc = acc.mul_add_f(*vj, A[i + n * j]);
+            }
+            *o = acc;
+        }
+        return;
+    }
     out.fill(S::cst(0.0));
     for (j, vj) in v.iter().enumerate() {
         let col = &A[n * j..n * (j + 1)];
@@ -543,19 +596,7 @@ impl PlanarBody {
         // Elastic force with geometric stiffening.
         matvec(&self.K, q, &mut b.fe);
         if let Some(G) = &self.geometric {
-            b.b.fill(S::cst(0.0));
-            for &(i, j, k, v) in &G.entries {
-                let (i, j, k) = (i as usize, j as usize, k as usize);
-                b.b[k] = b.b[k].mul_add_f(q[i] * q[j], 0.5 * v);
-            }
-            matvec(&G.F, &b.b, &mut b.p);
-            for (fe, bi) in b.fe.iter_mut().zip(&b.b) {
-                *fe += *bi;
-            }
-            for &(i, j, k, v) in &G.entries {
-                let (i, j, k) = (i as usize, j as usize, k as usize);
-                b.fe[i] = b.fe[i].mul_add_f((q[k] + b.p[k]) * q[j], v);
-            }
+            G.gradient(q, &mut b.b, &mut b.p, &mut b.gq, &mut b.fe);
         }
         // Damping.
         if self.damped {
@@ -1061,12 +1102,10 @@ impl PlanarBody {
         matvec(&pb.K, q, &mut f);
         let mut U = 0.5 * dot(q, &f);
         if let Some(G) = &pb.geometric {
-            let mut b = vec![0.0; n];
-            for &(i, j, k, v) in &G.entries {
-                b[k as usize] += 0.5 * v * q[i as usize] * q[j as usize];
-            }
-            let mut p = vec![0.0; n];
-            matvec(&G.F, &b, &mut p);
+            // U_3 + U_4 = q.b + b.p/2 (`GeometricStiffness`).
+            let (mut b, mut p) = (vec![0.0; n], vec![0.0; n]);
+            let (mut gq, mut fe) = (vec![0.0; n * G.groups.len()], vec![0.0; n]);
+            G.gradient(q, &mut b, &mut p, &mut gq, &mut fe);
             U += dot(q, &b) + 0.5 * dot(&b, &p);
         }
         U
@@ -1303,16 +1342,20 @@ impl PlanarInput<'_> {
         let geometric = match &self.geometric {
             None => None,
             Some(G) => {
-                let mut entries = Vec::new();
+                let mut groups = Vec::new();
                 for (k, &gk) in index.iter().enumerate() {
                     let Gk = G.matrix(gk);
+                    let mut entries = Vec::new();
                     for (j, &gj) in index.iter().enumerate() {
                         for (i, &gi) in index.iter().enumerate() {
                             let v = Gk[(gi, gj)];
                             if v != 0.0 {
-                                entries.push((i as u32, j as u32, k as u32, v));
+                                entries.push((i as u32, j as u32, v));
                             }
                         }
+                    }
+                    if !entries.is_empty() {
+                        groups.push((k, entries));
                     }
                 }
                 let F = self.pseudo_inverse(&index)?;
@@ -1332,7 +1375,7 @@ impl PlanarInput<'_> {
                         worst / big
                     )));
                 }
-                Some(PlanarGeometric { entries, F })
+                Some(PlanarGeometric { groups, F })
             }
         };
         let ffr = &self.inertia;

@@ -231,7 +231,7 @@ impl Superelement {
         let mut kin = Kinematics::empty(N, n);
         let planar = self.planar.as_ref().map(|pb| {
             kin.set_source(&self.x, &self.Phi_j);
-            Box::new(crate::planar::PlanarWorkspace::new(pb.N, pb.n))
+            Box::new(crate::planar::PlanarWorkspace::new(pb))
         });
         Workspace {
             kin,
