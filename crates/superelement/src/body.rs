@@ -789,9 +789,11 @@ impl Superelement {
         let mut r_max: f64 = 0.0;
         for k in 0..self.n_interfaces {
             let R = &state.R[k];
-            let tilt = 2.0 * R.coords[0].hypot(R.coords[1]);
             let name = &self.body.interfaces[k].name;
-            if !(tilt <= STATE_TOL) {
+            // The tilt out of the plane, 2 |(q_x, q_y)| of the quaternion, by its square.
+            let tilt2 = 4.0 * (R.coords[0] * R.coords[0] + R.coords[1] * R.coords[1]);
+            if !(tilt2 <= STATE_TOL * STATE_TOL) {
+                let tilt = tilt2.sqrt();
                 return Err(self.not_planar(format!(
                     "the orientation of interface '{name}' is tilted {tilt:.3e} rad out of the xy-plane"
                 )));

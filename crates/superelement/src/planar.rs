@@ -294,6 +294,9 @@ impl PlanarWorkspace {
 /// $x$ wrapped to $(-\pi, \pi]$.
 #[inline]
 pub(crate) fn wrap(x: f64) -> f64 {
+    if x > -PI && x <= PI {
+        return x;
+    }
     let t = (x + PI).rem_euclid(2.0 * PI) - PI;
     if t <= -PI {
         t + 2.0 * PI

@@ -214,13 +214,29 @@ fn planar_workspace_paths_agree_with_evaluate() {
     // The workspace's configuration: no matrices until completed, then the spatial body's.
     assert!(!ws.kinematics().is_complete() && ws.kinematics().T().is_none());
     assert_eq!(ws.kinematics().q_jj, full.q_jj);
+    // The deformed mesh from the workspace's configuration, against the spatial body's.
     let kin3 = se.kinematics(&state).unwrap();
+    match (se.recover_mesh(&kin3), planar.recover_mesh(ws.kinematics())) {
+        (Some(a), Some(b)) => {
+            for (p, q) in a.positions.iter().zip(&b.positions) {
+                assert!((p - q).norm() <= 1e-12, "recovered mesh: {p} vs {q}");
+            }
+        }
+        _ => panic!("the planar beam keeps its mesh shapes"),
+    }
     let done = ws.complete_kinematics();
     let (T3, Tw) = (kin3.T().unwrap(), done.T().unwrap());
     for j in 0..T3.ncols() {
         for i in 0..T3.nrows() {
             assert!((T3[(i, j)] - Tw[(i, j)]).abs() <= 1e-9, "T({i}, {j})");
         }
+    }
+    // The evaluation at a given configuration (the state rebuilt from its frame and q_jj: the
+    // interface positions to round-off, 1e-16 of the body size, times the stiffness).
+    let at = planar.evaluate_kinematics(&kin, &state.velocity_vector(), &acc, &g, true);
+    let big = full.residual.iter().fold(0.0_f64, |m, r| m.max(r.abs()));
+    for (a, b) in at.residual.iter().zip(&full.residual) {
+        assert!((a - b).abs() <= 1e-9 * big, "evaluate_kinematics: {a} vs {b}");
     }
     // A z component of gravity does no work in the plane: ignored.
     let with_z = planar.evaluate(&state, &acc, &Vector3::new(1.5, -9.81, 4.0)).unwrap();
