@@ -123,12 +123,15 @@ pub(crate) struct PlanarBody {
     pub geometric: Option<PlanarGeometric>,
 }
 
+/// The nonzero entries $(i, j, (\mathbf G_k)_{ij})$ of one $\mathbf G_k$.
+pub(crate) type Entries = Vec<(u32, u32, f64)>;
+
 /// The planar $\mathbf G_k$ ($k \in \mathcal I$, restricted to $\mathcal I\times\mathcal I$) by their
 /// nonzero entries, and $\mathbf F$ = the pseudo-inverse of the planar $\mathbf K_{CB}$.
 #[derive(Clone, Debug)]
 pub(crate) struct PlanarGeometric {
     /// The nonzero $\mathbf G_k$: $k$ and its entries $(i, j, (\mathbf G_k)_{ij})$.
-    pub groups: Vec<(usize, Vec<(u32, u32, f64)>)>,
+    pub groups: Vec<(usize, Entries)>,
     pub F: Vec<f64>,
 }
 
