@@ -76,7 +76,8 @@
 //!   [`Superelement::recover_mesh`] for the deformed mesh.
 //! * [`Superelement::into_planar`] makes a body reduced in its FE model's xy-plane a planar one
 //!   ([`planar`]): $3N + m$ coordinates evaluated behind the same methods and the same
-//!   $6N + m$ layout (out-of-plane rows and columns zero), about half the instructions.
+//!   $6N + m$ layout (out-of-plane rows and columns zero), at 40-45 % of the spatial body's
+//!   instructions (`benches/evaluate.rs`).
 //! * [`testing`]: the central-difference helper, state perturbations through exp, test states,
 //!   and (feature `testing`) reduced-body fixtures.
 //!
