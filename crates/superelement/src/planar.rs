@@ -387,6 +387,31 @@ fn matvec<S: Scalar>(A: &[f64], v: &[S], out: &mut [S]) {
     }
 }
 
+/// Three matrix-vector products with one vector, `out[c] = A[c] v` ([`matvec`]); for dual numbers
+/// in one pass over the rows, each term of `v` loaded once.
+#[inline(always)]
+fn matvec3<S: Scalar>(A: [&[f64]; 3], v: &[S], out: [&mut [S]; 3]) {
+    let n = v.len();
+    if S::DUAL {
+        let [o0, o1, o2] = out;
+        for i in 0..n {
+            let mut acc = [S::cst(0.0); 3];
+            for (j, vj) in v.iter().enumerate() {
+                for c in 0..3 {
+                    acc[c] = acc[c].mul_add_f(*vj, A[c][i + n * j]);
+                }
+            }
+            o0[i] = acc[0];
+            o1[i] = acc[1];
+            o2[i] = acc[2];
+        }
+        return;
+    }
+    for (a, o) in A.into_iter().zip(out) {
+        matvec(a, v, o);
+    }
+}
+
 #[inline(always)]
 fn dot<S: Scalar>(a: &[S], b: &[S]) -> S {
     let mut s = S::cst(0.0);
@@ -563,8 +588,7 @@ impl PlanarBody {
                 std_[a] = std_[a].mul_add_f(b.zetad[i], st[a]);
             }
         }
-        matvec(&self.W, q, &mut b.Wq);
-        matvec(&self.Sz, q, &mut b.Sq);
+        matvec3([&self.W, &self.Sz, &self.K], q, [&mut b.Wq, &mut b.Sq, &mut b.fe]);
         matvec(&self.Sz, &b.zeta, &mut b.Sz);
         let mut J = S::cst(self.J0);
         let mut Jd = S::cst(0.0);
@@ -599,8 +623,7 @@ impl PlanarBody {
             b.fq[i] +=
                 Vt[0] * st[0] + Vt[1] * st[1] + ci * omd - two_om * b.Sz[i] - om2 * (S::cst(self.a[i]) + b.Wq[i]);
         }
-        // Elastic force with geometric stiffening.
-        matvec(&self.K, q, &mut b.fe);
+        // Elastic force with geometric stiffening (K q formed above).
         if let Some(G) = &self.geometric {
             G.gradient(q, &mut b.b, &mut b.p, &mut b.gq, &mut b.fe);
         }
