@@ -385,3 +385,27 @@ fn a_state_out_of_the_plane_is_refused_naming_the_interface() {
         "{what}"
     );
 }
+
+#[test]
+fn the_planar_frame_solve_converges_from_a_cold_start_and_reports_failure_as_the_spatial_one() {
+    let (_, planar) = pair(FrameChoice::CenterOfMass);
+    let (state, acc) = planar_state(&planar, 2.5, 8);
+    let solved = planar.solve_frame(&state).unwrap().0;
+    // A cold start (the identity frame, 2.5 rad away): the fallback start from interface 0.
+    let mut cold = state.clone();
+    cold.frame = Frame::identity();
+    let (frame, iterations) = planar.solve_frame(&cold).unwrap();
+    assert!((frame.r - solved.r).norm() <= 1e-12 && frame.R.angle_to(&solved.R) <= 1e-12);
+    assert!(iterations > 0);
+    // No iterations allowed from a start off the solution: the spatial solve's error.
+    let strict = planar.clone().with_frame_settings(superelement::FrameSettings {
+        tolerance: 1e-12,
+        max_iterations: 0,
+    });
+    let mut off = state.clone();
+    off.frame = Frame::new(solved.r + Vector3::new(1e-3, 0.0, 0.0), solved.R);
+    match strict.evaluate(&off, &acc, &Vector3::zeros()) {
+        Err(SuperelementError::FrameNotConverged { .. }) => {}
+        other => panic!("expected FrameNotConverged, got {other:?}"),
+    }
+}
