@@ -266,10 +266,6 @@ pub(crate) struct PlanarWorkspace {
     pub scratch: Vec<f64>,
     pub six: Vec<f64>,
     pub big: Vec<f64>,
-    /// The converged frame, its iterations, and whether `f` holds a configuration.
-    pub frame: ([f64; 2], f64),
-    pub iterations: usize,
-    pub valid: bool,
 }
 
 impl PlanarWorkspace {
@@ -287,9 +283,6 @@ impl PlanarWorkspace {
             scratch: vec![0.0; 3 * n],
             six: vec![0.0; 6 * n],
             big: vec![0.0; (n * n).max(6 * n)],
-            frame: ([0.0; 2], 0.0),
-            iterations: 0,
-            valid: false,
         }
     }
 }
@@ -810,7 +803,7 @@ impl PlanarBody {
             Bx[2 * n + i] = self.Srz[i] - b.Sq[i];
         }
         let Bx = &pw.Bx[..3 * n];
-        Self::congruence(n, N, rho, Z, &A, Bx, &self.M, &mut pw.scratch, &mut pw.mats[2]);
+        Self::congruence(n, rho, Z, &A, Bx, &self.M, &mut pw.scratch, &mut pw.mats[2]);
         if damping {
             // dF/dnu (module docs), nu = [V; Omega; zeta].
             let [V0, V1, om] = b.xi;
@@ -822,7 +815,7 @@ impl PlanarBody {
                 [om * m, 0.0, fvo[1]],
                 [om * sv[0], om * sv[1], b.Jd + V0 * sv[0] + V1 * sv[1]],
             ];
-            // Fxz (3 x n by rows) and Fzx (n x 3 by columns) in DT's first 6n entries.
+            // Fxz (3 x n by rows) and Fzx (n x 3 by columns) in the first 6n entries of `big`.
             let (Fxz, rest) = pw.big.split_at_mut(3 * n);
             let Fzx = &mut rest[..3 * n];
             for i in 0..n {
@@ -838,7 +831,7 @@ impl PlanarBody {
             // P^T F P = Fzz + L Z + Z^T (U + Cf Z): L = Fzx - Fzz Psi, U = Fxz - Psi^T Fzz,
             // Cf = Fxx - Fxz Psi - Psi^T Fzx + Psi^T Fzz Psi, with Fzz = -2 Omega S~_z.
             let f = -2.0 * om;
-            // Fzz Psi (n x 3, by rows) and Psi^T Fzz (3 x n, by columns) in Ybar's 6n entries.
+            // Fzz Psi (n x 3, by rows) and Psi^T Fzz (3 x n, by columns) in `six`.
             let (FzzPsi, PsiFzz) = pw.six.split_at_mut(3 * n);
             for i in 0..n {
                 let (mut g, mut h) = ([0.0; 3], [0.0; 3]);
@@ -924,7 +917,6 @@ impl PlanarBody {
                 zero_rows.fill(0.0);
                 Self::congruence(
                     n,
-                    N,
                     rho,
                     Z,
                     &[[0.0; 3]; 3],
@@ -952,7 +944,6 @@ impl PlanarBody {
     #[inline(always)]
     fn congruence(
         n: usize,
-        N: usize,
         rho: &[[f64; 2]],
         Z: &[f64],
         A: &[[f64; 3]; 3],
@@ -988,7 +979,6 @@ impl PlanarBody {
                 }
             }
         }
-        let _ = N;
         // The rows of B and Z as slices of length n (no bounds checks in the loop).
         let (b0, rest) = B.split_at(n);
         let (b1, b2) = rest.split_at(n);

@@ -135,7 +135,6 @@ impl Superelement {
     ) -> Result<(), SuperelementError> {
         let pb = self.planar_body();
         let pw = ws.planar.as_deref_mut().expect("a planar workspace");
-        pw.valid = false;
         let N = pb.N;
         let r_max = self.read_planar(state, &mut pw.pos, &mut pw.phi)?;
         let (frame, iterations) = self.planar_frame(&pw.pos, &pw.phi, &state.eta, r_max, &state.frame, &mut pw.f)?;
@@ -185,9 +184,6 @@ impl Superelement {
         let frame3 = self.frame_3d(frame, z);
         out.frame = frame3;
         out.frame_iterations = iterations;
-        pw.frame = frame;
-        pw.iterations = iterations;
-        pw.valid = true;
         // M and C_t in closed form, K_t by dual numbers.
         if level.mass() {
             pb.mass_damping(pw, level.tangents());
