@@ -43,10 +43,15 @@ fn body() -> &'static ReducedBody {
 }
 
 fn damping() -> Damping {
+    damping_for(2)
+}
+
+/// Rayleigh damping and a modal ratio for each of `modes` modes.
+fn damping_for(modes: usize) -> Damping {
     Damping {
         alpha: 0.3,
         beta: 2e-4,
-        modal_ratios: vec![0.02, 0.05],
+        modal_ratios: (0..modes).map(|i| 0.02 + 0.03 * i as f64).collect(),
     }
 }
 
@@ -191,6 +196,36 @@ fn planar_body_equals_the_in_plane_block_of_the_spatial_one() {
             assert_vec(&what("local velocity"), &cp, &c3, &idx);
         }
     }
+}
+
+/// A body of 10 planar coordinates (4 modes): the tangent pass by dual numbers takes two passes
+/// of 8 directions.
+#[test]
+fn planar_body_with_more_coordinates_than_one_dual_pass() {
+    let settings = CbSettings {
+        geometric_stiffening: true,
+        ..CbSettings::new(ModeSelection::Count(4))
+    };
+    let body = fixtures::planar_beam(
+        Point3::new(0.1, -0.2, 0.05),
+        Point3::new(1.0, 0.3, 0.05),
+        4,
+        settings,
+        true,
+    )
+    .2;
+    let se = Superelement::new(&body, FrameChoice::CenterOfMass, MassVariant::Exact, damping_for(4)).unwrap();
+    let planar = se.clone().into_planar().unwrap();
+    let idx = in_plane(&se);
+    assert_eq!(idx.len(), 10);
+    let g = Vector3::new(1.5, -9.81, 0.0);
+    let (state, acc) = planar_state(&se, 2.2, 9);
+    let a = se.evaluate(&state, &acc, &g).unwrap();
+    let b = planar.evaluate(&state, &acc, &g).unwrap();
+    assert_vec("residual (10 coordinates)", &b.residual, &a.residual, &idx);
+    assert_mat("M (10 coordinates)", &b.mass, &a.mass, &idx);
+    assert_mat("C_t (10 coordinates)", &b.damping, &a.damping, &idx);
+    assert_mat("K_t (10 coordinates)", &b.stiffness, &a.stiffness, &idx);
 }
 
 #[test]
