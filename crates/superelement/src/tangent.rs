@@ -105,7 +105,7 @@ impl Workspace {
     /// $\mathbf R_j$, $\mathbf q^{jj}$ (the $6N + m$ layout), $\mathbf r_k^{jj}$ and
     /// $\boldsymbol\Lambda$ only: [`Kinematics::is_complete`] is false, and
     /// [`Self::complete_kinematics`] forms every matrix (those of the spatial body at that
-    /// configuration); read [`Kinematics::Z`] and [`Kinematics::Y`] after it.
+    /// configuration); [`Kinematics::Z`] and [`Kinematics::Y`] are NaN before it.
     /// After a forces-only evaluation ([`crate::Superelement::residual_into`]) $\mathbf T_j$ and
     /// $\mathbf B$ are not formed ([`Kinematics::T`] is `None`); [`Self::complete_kinematics`]
     /// forms them.

@@ -433,6 +433,14 @@ impl Kinematics {
     /// The configuration of a planar evaluation: frame, $\mathbf R_j$, $\mathbf q^{jj}$ (the
     /// $6N + m$ layout), $\mathbf r_k^{jj}$ and $\boldsymbol\Lambda$ ([`Formed::Planar`]).
     pub(crate) fn set_planar(&mut self, frame: Frame, frame_iterations: usize, q_jj: &[f64], x: &[Vector3<f64>]) {
+        if self.formed != Formed::Planar {
+            // Z_j and Y are not formed for a planar configuration: NaN until `complete`, never
+            // the numbers of another configuration.
+            for j in 0..self.q_jj.len() {
+                self.X.col_as_slice_mut(j)[..6].fill(f64::NAN);
+                self.P.col_as_slice_mut(j)[..6].fill(f64::NAN);
+            }
+        }
         self.frame = frame;
         self.frame_iterations = frame_iterations;
         self.R_j = frame.R.to_rotation_matrix().into_inner();
@@ -636,7 +644,8 @@ impl Kinematics {
         self.r_loc.len()
     }
 
-    /// $\mathbf Z_j$ (5.4), $6\times n$.
+    /// $\mathbf Z_j$ (5.4), $6\times n$. After a planar evaluation
+    /// ([`crate::Superelement::into_planar`]) NaN until [`Self::complete`].
     pub fn Z(&self) -> MatRef<'_, f64> {
         self.X.as_ref().subrows(0, 6)
     }
@@ -649,6 +658,7 @@ impl Kinematics {
     }
 
     /// $\mathbf Y = \mathbf Z_j\boldsymbol\Lambda$: body-axis frame velocity from body-axis interface velocities.
+    /// After a planar evaluation NaN until [`Self::complete`], like [`Self::Z`].
     pub fn Y(&self) -> MatRef<'_, f64> {
         self.P.as_ref().subrows(0, 6)
     }

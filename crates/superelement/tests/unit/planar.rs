@@ -248,6 +248,7 @@ fn planar_workspace_paths_agree_with_evaluate() {
     assert!((T - Tin).abs() <= 1e-12 * T);
     // The workspace's configuration: no matrices until completed, then the spatial body's.
     assert!(!ws.kinematics().is_complete() && ws.kinematics().T().is_none());
+    assert!(ws.kinematics().Z()[(0, 0)].is_nan() && ws.kinematics().Y()[(5, 0)].is_nan());
     assert_eq!(ws.kinematics().q_jj, full.q_jj);
     // The deformed mesh from the workspace's configuration, against the spatial body's.
     let kin3 = se.kinematics(&state).unwrap();
@@ -260,6 +261,12 @@ fn planar_workspace_paths_agree_with_evaluate() {
         _ => panic!("the planar beam keeps its mesh shapes"),
     }
     let done = ws.complete_kinematics();
+    let (Z3, Zw) = (kin3.Z(), done.Z());
+    for j in 0..Z3.ncols() {
+        for i in 0..6 {
+            assert!((Z3[(i, j)] - Zw[(i, j)]).abs() <= 1e-9, "Z({i}, {j})");
+        }
+    }
     let (T3, Tw) = (kin3.T().unwrap(), done.T().unwrap());
     for j in 0..T3.ncols() {
         for i in 0..T3.nrows() {
