@@ -2,14 +2,52 @@
 //! frame choice and inertia variant, for instruction counts under callgrind:
 //! `valgrind --tool=callgrind --toggle-collect='*evaluate_into*' target/release/examples/profile_evaluate exact com 1000`.
 //! Instruction counts are reliable on a loaded machine, where timings are not.
+//!
+//! `profile_evaluate planar planar|spatial COUNT`: the C2 rod segment in the xy-plane
+//! (`testing::fixtures::planar_beam`, 4 elements, 2 modes, geometric stiffening, centre of mass)
+//! as a planar body or the same body evaluated spatially, on a planar state, `evaluate_into` with
+//! tangents and `residual_into` in turn.
 
 use nalgebra::{Point3, Vector3};
 use reduction::ModeSelection;
-use superelement::testing::{fixtures, test_state, StateSpec};
+use superelement::testing::{fixtures, planar_test_state, test_state, StateSpec};
 use superelement::{Damping, FrameChoice, MassVariant, Superelement};
+
+/// The planar rows (module docs).
+fn planar(args: &[String]) {
+    let settings = reduction::CbSettings {
+        geometric_stiffening: true,
+        ..reduction::CbSettings::new(ModeSelection::Count(2))
+    };
+    let body = fixtures::planar_beam(Point3::origin(), Point3::new(0.15, 0.0, 0.0), 4, settings, true).2;
+    let spatial = Superelement::new(&body, FrameChoice::CenterOfMass, MassVariant::Exact, Damping::none()).unwrap();
+    let se = match args.get(2).map(String::as_str) {
+        Some("spatial") => spatial,
+        _ => spatial.into_planar().unwrap(),
+    };
+    let count: usize = args.get(3).and_then(|c| c.parse().ok()).unwrap_or(1000);
+    let g = Vector3::new(0.0, -9.81, 0.0);
+    let (mut state, acc) = planar_test_state(&se, 2.0, 1);
+    state.frame = se.solve_frame(&state).unwrap().0;
+    let mut ws = se.workspace();
+    let mut out = superelement::Evaluation::zeros(se.n_coordinates());
+    let mut sink = 0.0;
+    for _ in 0..count {
+        se.evaluate_into(&state, &acc, &g, true, &mut ws, &mut out).unwrap();
+        se.residual_into(&state, &acc, &g, &mut ws, &mut out).unwrap();
+        sink += out.residual[0] + out.stiffness[(0, 0)];
+    }
+    println!(
+        "{count} evaluations of the planar rod segment (planar: {}): [{sink:.3e}]",
+        se.is_planar()
+    );
+}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(String::as_str) == Some("planar") {
+        return planar(&args);
+    }
     let mass = match args.get(1).map(String::as_str) {
         Some("lumped") => MassVariant::Lumped,
         _ => MassVariant::Exact,
