@@ -50,8 +50,9 @@ fn error(model: &Model) -> ModelError {
 }
 
 /// Half a crank revolution at 150 rad/s, h = T/400: the planar evaluation is the in-plane
-/// block of the 3D one on the same coordinates (the out-of-plane ones supported), so the two
-/// runs agree to the Newton tolerance (relative residual 1e-9 ~ 1e-9 of the deflection).
+/// block of the 3D one on the same coordinates (the out-of-plane ones supported), so Newton
+/// takes the same iterations and the two runs agree to round-off (measured: 3e-16 m on a
+/// peak of 4.6e-3 m); asserted to 1e-9 of the peak, far below the Newton tolerance.
 #[test]
 fn the_planar_slider_crank_agrees_with_the_same_mechanism_in_3d() {
     let period = 2.0 * std::f64::consts::PI / 150.0;
@@ -72,8 +73,8 @@ fn the_planar_slider_crank_agrees_with_the_same_mechanism_in_3d() {
     let dw = w2.iter().zip(&w3).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     let dx = x2.iter().zip(&x3).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     eprintln!("planar against 3D: midpoint {dw:.3e} m of {peak:.3e} m, slider {dx:.3e} m");
-    assert!(dw < 1e-6 * peak, "midpoint {dw:.3e} of {peak:.3e}");
-    assert!(dx < 1e-9, "slider {dx:.3e}");
+    assert!(dw < 1e-9 * peak, "midpoint {dw:.3e} of {peak:.3e}");
+    assert!(dx < 1e-12, "slider {dx:.3e}");
 }
 
 #[test]

@@ -106,8 +106,8 @@ fn a_planar_body_on_a_node_that_can_leave_the_plane_is_refused_at_the_body() {
 
 /// The planar run against the same study with the bodies evaluated in 3D (`planar = false` on
 /// each body: the same planar parts and supports, so the same unknowns): the planar evaluation
-/// is the in-plane block of the 3D one, the midpoint deflection agrees to the Newton
-/// tolerance over a quarter revolution.
+/// is the in-plane block of the 3D one, so Newton takes the same iterations and the midpoint
+/// deflection agrees to round-off over a quarter revolution (asserted to 1e-9 of the peak).
 #[test]
 fn the_planar_slider_crank_study_agrees_with_its_bodies_evaluated_in_3d() {
     let dir = crate::scratch("planar-run");
@@ -134,6 +134,7 @@ fn the_planar_slider_crank_study_agrees_with_its_bodies_evaluated_in_3d() {
         .iter()
         .zip(&spatial)
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    eprintln!("planar against 3D: midpoint {worst:.3e} m of {peak:.3e} m");
     assert!(peak > 1e-4, "{peak}");
-    assert!(worst < 1e-6 * peak, "{worst:.3e} of {peak:.3e}");
+    assert!(worst < 1e-9 * peak, "{worst:.3e} of {peak:.3e}");
 }
