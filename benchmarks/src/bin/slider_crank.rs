@@ -207,7 +207,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         } else {
             format!("{:?} {} x {} x {}", mesh.kind, mesh.along / n, mesh.across, mesh.across)
         },
-        body.n_coordinates(),
+        if planar {
+            // 3 of the 6 coordinates of each interface are evaluated in the plane.
+            format!("{}; {} in the plane", body.n_coordinates(), body.n_coordinates() - 3 * body.interfaces.len())
+        } else {
+            body.n_coordinates().to_string()
+        },
         if geometric { "on" } else { "off" },
         sys.n_dof()
     );
