@@ -200,7 +200,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or(BenchError::MissingSensor { name: "slider".into() })?;
     let peak = w.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     println!(
-        "flexmbs slider-crank: {}rod {n} x {} ({} coordinates each), {modes} modes, frame {frame:?}, geometric stiffening {}, {} unknowns, reduction {t_reduce:.2} s",
+        "flexmbs slider-crank: {}rod {n} x {} ({} each), {modes} modes, frame {frame:?}, geometric stiffening {}, {} unknowns, reduction {t_reduce:.2} s",
         if planar { "planar " } else { "" },
         if let Some(rod) = rod {
             format!("{} beam elements ({rod:?})", args.get("beam-elements", 4)?)
@@ -209,9 +209,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         },
         if planar {
             // 3 of the 6 coordinates of each interface are evaluated in the plane.
-            format!("{}; {} in the plane", body.n_coordinates(), body.n_coordinates() - 3 * body.interfaces.len())
+            format!(
+                "{} coordinates, {} in the plane",
+                body.n_coordinates(),
+                body.n_coordinates() - 3 * body.interfaces.len()
+            )
         } else {
-            body.n_coordinates().to_string()
+            format!("{} coordinates", body.n_coordinates())
         },
         if geometric { "on" } else { "off" },
         sys.n_dof()
