@@ -7,7 +7,7 @@
 //! cargo run --release -p flexmbs-benchmarks --bin slider_crank -- [--h 1e-4] [--t-end T]
 //!     [--modes 4] [--segments 1] [--kind hex20 --along 24 --across 2] [--frame com|node]
 //!     [--rho-inf 0.9] [--rod solid|beam|round --beam-elements 4] [--geometric-stiffening]
-//!     [--inertia-correction] [--mass exact|lumped]
+//!     [--inertia-correction] [--planar] [--mass exact|lumped]
 //!     [--newton full|modified] [--tolerance 1e-9] [--csv out.csv] [--reference ref.csv]
 //! ```
 //!
@@ -23,6 +23,12 @@
 //! through which the axial force changes the bending stiffness. `--inertia-correction` adds the
 //! static correction for the interfaces' inertia to the modes (`CbSettings::inertia_correction`:
 //! the rod's axial force under its own inertia in the span whatever the number of modes).
+//! `--planar` makes it a 2D mechanism: the rod segments are reduced as planar parts
+//! (`CbSettings::planar`: the out-of-plane dofs of their interior supported, so `--modes m` are
+//! the first m in-plane modes, where the 3D rod's alternate in-plane and out-of-plane bending),
+//! the bodies are evaluated in the plane (`FlexibleBody::planar`: 3 coordinates per interface)
+//! and the free nodes between the segments are supported to the plane
+//! (`models::confine_to_plane`); beam rods only.
 //! `--mass lumped` uses the
 //! AIC-FFR paper's lumped inertia variant instead of the exact one. `--newton modified` keeps the
 //! factorised iteration matrix across corrections and steps (`mbs::NewtonStrategy`); the
@@ -132,6 +138,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     settings.keep_mesh_shapes = n == 1;
     settings.geometric_stiffening = geometric;
     settings.inertia_correction = args.flag("inertia-correction")?;
+    let planar = args.flag("planar")?;
+    settings.planar = planar;
     let body = if let Some(rod) = rod {
         beam_rod_body(&p, seg, args.get("beam-elements", 4)?, rod, &settings)?
     } else {
@@ -153,7 +161,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .into());
     }
     let t_reduce = t0.elapsed().as_secs_f64();
-    let (model, _) = slider_crank_model(&p, n, &body, frame, mass);
+    let (mut model, _) = slider_crank_model(&p, n, &body, frame, mass);
+    if planar {
+        models::confine_to_plane(&mut model);
+    }
     let sys = System::new(&model)?;
     let steps = (t_end / h).round() as usize;
     let settings = DynamicSettings {
@@ -189,13 +200,19 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or(BenchError::MissingSensor { name: "slider".into() })?;
     let peak = w.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     println!(
-        "flexmbs slider-crank: rod {n} x {} ({} coordinates each), {modes} modes, frame {frame:?}, geometric stiffening {}, {} unknowns, reduction {t_reduce:.2} s",
+        "flexmbs slider-crank: {}rod {n} x {} ({} coordinates each), {modes} modes, frame {frame:?}, geometric stiffening {}, {} unknowns, reduction {t_reduce:.2} s",
+        if planar { "planar " } else { "" },
         if let Some(rod) = rod {
             format!("{} beam elements ({rod:?})", args.get("beam-elements", 4)?)
         } else {
             format!("{:?} {} x {} x {}", mesh.kind, mesh.along / n, mesh.across, mesh.across)
         },
-        body.n_coordinates(),
+        if planar {
+            // 3 of the 6 coordinates of each interface are evaluated in the plane.
+            format!("{}; {} in the plane", body.n_coordinates(), body.n_coordinates() - 3 * body.interfaces.len())
+        } else {
+            body.n_coordinates().to_string()
+        },
         if geometric { "on" } else { "off" },
         sys.n_dof()
     );
@@ -260,7 +277,14 @@ fn main() -> ExitCode {
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("slider_crank: {e}");
+            // The whole chain: a model error names the body, its source what is wrong with it.
+            let mut text = format!("slider_crank: {e}");
+            let mut source = e.source();
+            while let Some(s) = source {
+                text += &format!(": {s}");
+                source = s.source();
+            }
+            eprintln!("{text}");
             ExitCode::from(2)
         }
     }

@@ -475,6 +475,10 @@ pub struct Integrator<'a> {
     /// ([`CoRotated`]), and their rotations at the iterate of the factorised matrix.
     corotated: Vec<CoRotated>,
     factor_rotations: Vec<UnitQuaternion<f64>>,
+    /// Nodes held in a plane and turning about its normal ([`PlaneRotated`]), and their
+    /// angles at the iterate of the factorised matrix.
+    plane_rotated: Vec<PlaneRotated>,
+    factor_angles: Vec<f64>,
     /// The start accelerations of the last steps (the full-Newton predictor's data).
     history: AccelerationHistory,
     /// The step size of the last step and its decimals ([`step_end_time`]).
@@ -645,6 +649,73 @@ fn corotate(
             };
             set3(v, d, &y);
         }
+    }
+}
+
+/// An independent node held in a plane and turning about its normal (a
+/// `TranslationSupport::Plane` with the `RotationSupport::Axis` along the same normal: the
+/// node between two planar bodies), whose two in-plane translation unknowns modified Newton
+/// turns with the node as [`CoRotated`] turns a free node's: $\mathbf Q$ is the rotation by
+/// $\theta - \theta_f$ about the normal, which leaves the rotation unknown as it is.
+#[derive(Clone, Debug)]
+struct PlaneRotated {
+    /// The scalar coordinate of the rotation about the normal (an unknown).
+    angle: usize,
+    /// The unknowns of the two in-plane translations, along the orthonormal pair
+    /// $\mathbf b_1$, $\mathbf b_2$ of the support.
+    dofs: [usize; 2],
+    /// $(\mathbf b_1\times\mathbf b_2)\cdot\mathbf a$ for the rotation axis $\mathbf a$: $\pm 1$.
+    sign: f64,
+}
+
+/// Every node of `system` held in a plane and turning about its normal ([`PlaneRotated`]).
+fn plane_rotated_nodes(system: &System) -> Vec<PlaneRotated> {
+    use crate::coordinates::Slot;
+    let map = &system.topo.map;
+    system
+        .topo
+        .roots
+        .iter()
+        .flatten()
+        .filter_map(|rc| {
+            let crate::topology::RootRotation::Axes(axes) = &rc.rotation else {
+                return None;
+            };
+            let (angle, a) = axes[2];
+            let Slot::Unknown(_) = map.scalars[angle].slot else {
+                return None;
+            };
+            let unknown = |k: usize| match map.scalars[rc.translation[k].0].slot {
+                Slot::Unknown(d) => Some(d),
+                Slot::Prescribed(_) => None,
+            };
+            let (d1, d2) = (unknown(0)?, unknown(1)?);
+            if unknown(2).is_some() {
+                return None;
+            }
+            let (b1, b2) = (rc.translation[0].1, rc.translation[1].1);
+            let sign = b1.cross(&b2).dot(&a);
+            let orthonormal =
+                (b1.norm() - 1.0).abs() < 1e-12 && (b2.norm() - 1.0).abs() < 1e-12 && b1.dot(&b2).abs() < 1e-12;
+            (orthonormal && (sign.abs() - 1.0).abs() < 1e-12).then_some(PlaneRotated {
+                angle,
+                dofs: [d1, d2],
+                sign: sign.signum(),
+            })
+        })
+        .collect()
+}
+
+/// [`corotate`] for the nodes held in a plane: the rotation by $\theta - \theta_f$ about the
+/// normal on their in-plane translation rows, its transpose into the factor's axes.
+fn corotate_in_plane(nodes: &[PlaneRotated], angles: &[f64], factor: &[f64], v: &mut [f64], to_factor: bool) {
+    for (c, theta_f) in nodes.iter().zip(factor) {
+        let delta = c.sign * (angles[c.angle] - theta_f);
+        let (s, co) = if to_factor { (-delta).sin_cos() } else { delta.sin_cos() };
+        let [i, j] = c.dofs;
+        let (x, y) = (v[i], v[j]);
+        v[i] = co * x - s * y;
+        v[j] = s * x + co * y;
     }
 }
 
@@ -819,6 +890,8 @@ impl<'a> Integrator<'a> {
             last_error: None,
             corotated: corotated_nodes(system),
             factor_rotations: Vec::new(),
+            plane_rotated: plane_rotated_nodes(system),
+            factor_angles: Vec::new(),
             history: AccelerationHistory::default(),
             step_decimals: (f64::NAN, 0),
         })
@@ -1101,6 +1174,9 @@ impl<'a> Integrator<'a> {
                         self.factor_rotations.clear();
                         self.factor_rotations
                             .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
+                        self.factor_angles.clear();
+                        self.factor_angles
+                            .extend(self.plane_rotated.iter().map(|c| st.scalars[c.angle]));
                         self.factor_h = Some(h);
                         self.jacobians += 1;
                         self.refresh_next = false;
@@ -1159,6 +1235,9 @@ impl<'a> Integrator<'a> {
                 self.factor_rotations.clear();
                 self.factor_rotations
                     .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
+                self.factor_angles.clear();
+                self.factor_angles
+                    .extend(self.plane_rotated.iter().map(|c| st.scalars[c.angle]));
                 self.factor_h = Some(h);
                 self.jacobians += 1;
             }
@@ -1177,6 +1256,13 @@ impl<'a> Integrator<'a> {
                     &mut self.dx,
                     true,
                 );
+                corotate_in_plane(
+                    &self.plane_rotated,
+                    &st.scalars,
+                    &self.factor_angles,
+                    &mut self.dx,
+                    true,
+                );
             }
             sys.solve_factored(&mut self.ws, &mut self.dx)
                 .map_err(|what| SolveError::Singular {
@@ -1189,6 +1275,13 @@ impl<'a> Integrator<'a> {
                     &self.corotated,
                     &st.rotations,
                     &self.factor_rotations,
+                    &mut self.dx,
+                    false,
+                );
+                corotate_in_plane(
+                    &self.plane_rotated,
+                    &st.scalars,
+                    &self.factor_angles,
                     &mut self.dx,
                     false,
                 );
@@ -1503,5 +1596,44 @@ mod tests {
         // Without the turn the kept matrix solves a different system.
         let unturned = Sf.lu().solve(&F).unwrap();
         assert!((unturned - exact).norm() > 1e-3);
+    }
+
+    #[test]
+    fn corotation_in_the_plane_is_the_free_nodes_restricted_to_the_plane() {
+        // A node held in the plane of normal a, turning about a: its in-plane translation
+        // rows turned by `corotate_in_plane` equal those of a free node with the orthonormal
+        // basis B = [b1 b2 a] turned by `corotate` (Q = R R_f^T, R = exp(theta a)), whose
+        // normal component stays zero; both directions, and both orientations of the pair.
+        // The two are different sums of the same products: round-off, 1e-14.
+        let a = Vector3::new(0.2, -0.3, 0.9).normalize();
+        let (b1, b2) = crate::topology::perpendicular_pair(&a);
+        let (theta, theta_f) = (0.7, -0.25);
+        let R = [UnitQuaternion::from_scaled_axis(a * theta)];
+        let Rf = [UnitQuaternion::from_scaled_axis(a * theta_f)];
+        for (p1, p2) in [(b1, b2), (b2, b1)] {
+            let B = Matrix3::from_columns(&[p1, p2, p1.cross(&p2)]);
+            let free = CoRotated {
+                rot: 0,
+                rdof: 3,
+                translation: Some(([0, 1, 2], B, B.try_inverse().unwrap())),
+            };
+            let planar = PlaneRotated {
+                angle: 0,
+                dofs: [0, 1],
+                sign: p1.cross(&p2).dot(&a).signum(),
+            };
+            for to_factor in [true, false] {
+                let mut v3 = vec![0.8, -1.3, 0.0, 0.0, 0.0, 0.0];
+                corotate(std::slice::from_ref(&free), &R, &Rf, &mut v3, to_factor);
+                let mut v2 = vec![0.8, -1.3];
+                corotate_in_plane(std::slice::from_ref(&planar), &[theta], &[theta_f], &mut v2, to_factor);
+                assert!(v3[2].abs() < 1e-14, "{v3:?}");
+                assert!(
+                    (v2[0] - v3[0]).abs() < 1e-14 && (v2[1] - v3[1]).abs() < 1e-14,
+                    "{v2:?} {v3:?}"
+                );
+                assert!((v2[0] - 0.8).abs() > 0.1, "turned");
+            }
+        }
     }
 }

@@ -153,6 +153,17 @@ pub enum ModelError {
         /// The entity, when the value belongs to one of the model (not to a table read alone).
         id: Option<Entity>,
     },
+    /// A node of a planar flexible body can leave the global xy-plane (or turn about another
+    /// axis than z): `what` says what lets it ([`crate::planar`]). The body gives its
+    /// out-of-plane coordinates no stiffness or mass.
+    #[error("body '{body}' is planar, but its node '{node}' can leave the xy-plane: {what}")]
+    LeavesPlane {
+        body: String,
+        node: String,
+        what: String,
+        body_id: BodyId,
+        node_id: NodeId,
+    },
     /// The superelement could not be built from the reduced body (the cause is the
     /// source, so a report walking the chain names it once).
     #[error("body '{body}'")]
@@ -195,6 +206,7 @@ impl ModelError {
             Self::InvalidDriver { driver_id, .. } => vec![Entity::Driver(*driver_id)],
             Self::InvalidValue { id, .. } => id.iter().copied().collect(),
             Self::Superelement { body_id, .. } => vec![Entity::Body(*body_id)],
+            Self::LeavesPlane { body_id, node_id, .. } => vec![Entity::Body(*body_id), Entity::Node(*node_id)],
         }
     }
 }

@@ -170,6 +170,7 @@
 //! (assembly), [`dense_lu`] (the LU of small iteration matrices), [`static_solver`], [`arc_length`], [`mod@stability`], [`dynamic_solver`], [`retry`]
 //! (halved steps after a failure), [`momentum`] (momenta and their projection), [`linearized`]
 //! (spectrum, mode energies and buckling), [`sensors`], [`error`],
+//! [`mod@planar`] (the checks of planar flexible bodies),
 //! [`user_force`] (forces written in Rust by the user: [`UserForce`], added with
 //! [`System::with_user_forces`]).
 
@@ -188,6 +189,7 @@ pub mod merge;
 pub mod model;
 pub mod momentum;
 pub mod node;
+pub mod planar;
 pub mod recovery;
 pub mod retry;
 pub mod sensors;

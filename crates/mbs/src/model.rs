@@ -109,6 +109,13 @@ pub struct FlexibleBody {
     pub frame: FrameChoice,
     pub mass: MassVariant,
     pub damping: Damping,
+    /// Evaluated as a planar body in the global xy-plane
+    /// (`superelement::Superelement::into_planar`: the in-plane coordinates of its interfaces
+    /// and its modes only): for a body reduced as a planar part (`reduction::CbSettings::planar`)
+    /// whose nodes the supports and joints keep in the plane, and whose placement is a rotation
+    /// about z; [`crate::System::new`] checks both ([`crate::planar`]). Off by default.
+    #[serde(default)]
+    pub planar: bool,
 }
 
 /// A rigid body with mass properties about its reference node.
@@ -543,6 +550,7 @@ impl Model {
             frame,
             mass,
             damping: Damping::none(),
+            planar: false,
         })))
     }
 

@@ -416,13 +416,18 @@ impl System {
                             format!("{} nodes for {N} interfaces", f.nodes.len()),
                         ));
                     }
-                    let se = Superelement::shared(Arc::clone(&f.reduced), f.frame, f.mass, f.damping.clone()).map_err(
-                        |source| ModelError::Superelement {
-                            body: f.name.clone(),
-                            body_id: BodyId(bi as u32),
-                            source,
-                        },
-                    )?;
+                    let superelement_error = |source| ModelError::Superelement {
+                        body: f.name.clone(),
+                        body_id: BodyId(bi as u32),
+                        source,
+                    };
+                    let mut se = Superelement::shared(Arc::clone(&f.reduced), f.frame, f.mass, f.damping.clone())
+                        .map_err(superelement_error)?;
+                    if f.planar {
+                        // The model's confinement first: it names the node, whatever the body.
+                        crate::planar::check_planar_body(model, bi, f)?;
+                        se = se.into_planar().map_err(superelement_error)?;
+                    }
                     let pos: Vec<Vector3<f64>> =
                         f.reduced.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
                     let tolerance = 1e-6 * (1.0 + size_body(&pos));

@@ -51,6 +51,11 @@ mod data;
 #[path = "unit/slider_crank.rs"]
 mod slider_crank;
 
+/// Planar flexible bodies: the C2 slider-crank evaluated in the plane agrees with the same
+/// mechanism in 3D; a planar body whose node can leave the plane is refused by name.
+#[path = "unit/planar.rs"]
+mod planar;
+
 /// A flexible double pendulum whose beams went through MBDyn `.fem` files and back has the
 /// same linearised frequencies to 1e-10.
 #[path = "unit/mbdyn_fem.rs"]

@@ -30,7 +30,7 @@
 
 use fe_model::interface::{add_interface_on_set, SpiderKind};
 use fe_model::{BeamProperties, BeamSection, BeamTheory, CellKind, FeModel, IsotropicMaterial, MassKind};
-use mbs::{BodyId, JointId, JointKind, Model, NodeId, RigidBody, SensorKind, Support};
+use mbs::{Body, BodyId, JointId, JointKind, Model, NodeId, RigidBody, SensorKind, Support};
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use reduction::{reduce, CbSettings, ModeSelection, ReducedBody};
 use superelement::{FrameChoice, MassVariant};
@@ -328,6 +328,30 @@ pub fn solid_rod_segment(
     modes: ModeSelection,
     frame: FrameChoice,
 ) -> Result<Segment, BuildError> {
+    solid_rod_segment_with(
+        name,
+        kind,
+        material,
+        length,
+        side,
+        divisions,
+        &CbSettings::new(modes),
+        frame,
+    )
+}
+
+/// [`solid_rod_segment`] reduced with any `settings`.
+#[allow(clippy::too_many_arguments)]
+pub fn solid_rod_segment_with(
+    name: &str,
+    kind: CellKind,
+    material: IsotropicMaterial,
+    length: f64,
+    side: f64,
+    divisions: [usize; 3],
+    settings: &CbSettings,
+    frame: FrameChoice,
+) -> Result<Segment, BuildError> {
     let fe_err = |source| BuildError::Fe {
         model: name.into(),
         source,
@@ -372,7 +396,7 @@ pub fn solid_rod_segment(
         name,
         &[("a".into(), a), ("b".into(), b)],
         middle,
-        &CbSettings::new(modes),
+        settings,
         frame,
         MeshShapes::Drop,
     )
@@ -800,6 +824,17 @@ pub fn square_rod_side() -> f64 {
 /// One rod segment of length `seg` along the FE x axis (for [`slider_crank_planar_with`] with
 /// any number of segments).
 pub fn rod_segment(rod: RodModel, seg: f64, modes: ModeSelection, frame: FrameChoice) -> Result<Segment, BuildError> {
+    rod_segment_with(rod, seg, &CbSettings::new(modes), frame)
+}
+
+/// [`rod_segment`] reduced with any `settings` (e.g. `planar`, for a rod evaluated in the
+/// plane of the mechanism: [`confine_to_plane`]).
+pub fn rod_segment_with(
+    rod: RodModel,
+    seg: f64,
+    settings: &CbSettings,
+    frame: FrameChoice,
+) -> Result<Segment, BuildError> {
     let prop_err = |source| BuildError::Property {
         model: "rod".into(),
         source,
@@ -820,27 +855,26 @@ pub fn rod_segment(rod: RodModel, seg: f64, modes: ModeSelection, frame: FrameCh
                 section,
                 theory: BeamTheory::EulerBernoulli,
             };
-            beam_segment(
+            beam_segment_with(
                 "rod",
                 &spec,
-                Vector3::zeros(),
-                Vector3::new(seg, 0.0, 0.0),
+                (Vector3::zeros(), Vector3::new(seg, 0.0, 0.0)),
                 elements,
                 Vector3::y(),
-                modes,
+                settings,
                 frame,
             )
         }
         RodModel::Solid { kind, divisions } => {
             let across = if kind == CellKind::Tet10 { 2 } else { 1 };
-            solid_rod_segment(
+            solid_rod_segment_with(
                 "rod",
                 kind,
                 IsotropicMaterial::new("steel", STEEL_E, 0.3, STEEL_RHO).map_err(prop_err)?,
                 seg,
                 square_rod_side(),
                 [divisions, across, across],
-                modes,
+                settings,
                 frame,
             )
         }
@@ -993,6 +1027,41 @@ pub fn slider_crank_planar_with(n: usize, segment: &Segment, speed: f64, variant
         crank_joint: jc,
         rod_joints: [ja, jb],
         rod_mass,
+    }
+}
+
+/// Makes a mechanism in the global xy-plane a planar one: every flexible body is evaluated in
+/// the plane ([`mbs::FlexibleBody::planar`]; its part must be reduced planar,
+/// `reduction::CbSettings::planar`), and every node of a flexible body that nothing else holds
+/// (no support, no parent joint, no rigid body: the nodes between the segments of a rod, the
+/// auxiliary nodes) is supported to the plane: translation in the plane through it, rotation
+/// about z. The joints and supports already there must keep the other nodes in the plane
+/// (`mbs::System::new` checks it).
+pub fn confine_to_plane(model: &mut Model) {
+    let mut free: Vec<NodeId> = Vec::new();
+    for body in &mut model.bodies {
+        if let Body::Flexible(f) = body {
+            f.planar = true;
+            free.extend(&f.nodes);
+        }
+    }
+    free.sort();
+    free.dedup();
+    let held = |n: &NodeId| {
+        model.supports.iter().any(|s| s.node == *n)
+            || model.joints.iter().any(|j| j.child == *n)
+            || model.bodies.iter().any(|b| match b {
+                Body::Rigid(r) => r.reference == *n || r.nodes.contains(n),
+                Body::Flexible(_) => false,
+            })
+    };
+    let free: Vec<NodeId> = free.into_iter().filter(|n| !held(n)).collect();
+    for node in free {
+        model.add_support(Support {
+            node,
+            translation: mbs::TranslationSupport::Plane { normal: Vector3::z() },
+            rotation: mbs::RotationSupport::Axis { axis: Vector3::z() },
+        });
     }
 }
 

@@ -120,3 +120,26 @@ def test_the_inertia_correction_is_a_reduction_key(examples):
         np.testing.assert_array_equal(A[:14, :14], B)
     # The appended vectors carry mass and stiffness of their own.
     assert np.abs(corrected.M_CB[14:, 14:]).max() > 0.0 and np.abs(corrected.K_CB[14:, 14:]).max() > 0.0
+
+
+def test_planar_is_a_reduction_key(examples):
+    """`planar = true` in a part's reduction (the part reduced with the out-of-plane dofs of
+    its interior supported): the same coordinates, every mode bends in the xy-plane, and the
+    out-of-plane dofs of the interfaces do not couple to the in-plane ones or to the modes. The
+    round rod's 3D reduction keeps one in-plane and one out-of-plane mode of equal frequency;
+    the planar one the first two in-plane modes."""
+    study = flexmbs.Study.load(examples / "slider_crank.toml")
+    spatial = dict(study.reduce())["segment"]
+    study["parts.segment.reduction.planar"] = True
+    planar = dict(study.reduce())["segment"]
+    assert planar.n_coordinates == spatial.n_coordinates == 14
+    w3, w2 = spatial.fixed_interface_omega, planar.fixed_interface_omega
+    assert abs(w3[1] - w3[0]) < 1e-6 * w3[0]
+    assert abs(w2[0] - w3[0]) < 1e-9 * w3[0] and w2[1] > 2.5 * w2[0]
+    out = [6 * k + d for k in range(2) for d in (2, 3, 4)]
+    inside = [i for i in range(14) if i not in out]
+    for A in (planar.K_CB, planar.M_CB):
+        assert np.abs(A[np.ix_(out, inside)]).max() == 0.0
+    # Mode shapes on the mesh: no out-of-plane component.
+    shapes = planar.mode_shapes
+    assert shapes is not None and np.abs(shapes[:, 2:5, :]).max() == 0.0

@@ -69,6 +69,14 @@ pub struct CbSettings {
     /// The precision of the factor of $\mathbf K_{ii}$ ([`FactorPrecision`]): automatic
     /// (double precision when it fits in the available memory) by default.
     pub factor: FactorPrecision,
+    /// Reduce a planar part: a beam model lying in one plane $z = z_0$ of its FE axes, whose
+    /// out-of-plane dofs $u_z, \theta_x, \theta_y$ are supported on every node that is not an
+    /// interface ([`planar_model`]), so that every fixed-interface mode (and every static
+    /// correction vector) moves in the xy-plane. The interfaces keep their six dofs; by the
+    /// plane's symmetry the in-plane and out-of-plane blocks of $\mathbf K_{CB}$, $\mathbf M_{CB}$
+    /// do not couple, which the reduction checks ([`ReductionError::NotPlanar`]). For bodies
+    /// evaluated in the plane (`superelement::Superelement::into_planar`). Off by default.
+    pub planar: bool,
 }
 
 impl CbSettings {
@@ -83,8 +91,110 @@ impl CbSettings {
             load_points: Vec::new(),
             inertia_correction: false,
             factor: FactorPrecision::Auto,
+            planar: false,
         }
     }
+}
+
+/// The in-plane dofs $u_x, u_y, \theta_z$ of an interface, in the order of its six.
+pub const IN_PLANE_DOFS: [usize; 3] = [0, 1, 5];
+/// The out-of-plane dofs $u_z, \theta_x, \theta_y$ of a node.
+pub const OUT_OF_PLANE_DOFS: [usize; 3] = [2, 3, 4];
+
+/// The FE model of a planar part ([`CbSettings::planar`]): `model` with the out-of-plane dofs
+/// $u_z, \theta_x, \theta_y$ supported on every node that is not in `interfaces` (dofs a
+/// spider defines are left to it). `name` names the body in errors.
+///
+/// # Errors
+/// [`ReductionError::NotPlanar`] when the model has an element that is not a beam (a solid
+/// has no planar reduction here) or its nodes do not lie in one plane $z = z_0$ (to
+/// $10^{-9}$ of the model's size), naming the element or node.
+pub fn planar_model(model: &FeModel, name: &str, interfaces: &[NodeId]) -> Result<FeModel, ReductionError> {
+    let not_planar = |what: String| ReductionError::NotPlanar {
+        body: name.into(),
+        what,
+    };
+    if let Some(e) = model
+        .elements
+        .iter()
+        .position(|e| !matches!(e, fe_model::Element::Beam2(_)))
+    {
+        return Err(not_planar(format!(
+            "element {} is not a beam: a planar reduction needs a beam model in its xy-plane",
+            e + 1
+        )));
+    }
+    let nodes = &model.mesh.nodes;
+    let tag = |node: usize| model.mesh.node_tags.get(node).copied().unwrap_or(node as u64 + 1);
+    if let Some(first) = nodes.first() {
+        let size = nodes
+            .iter()
+            .map(|x| (x - first).norm())
+            .fold(0.0f64, f64::max)
+            .max(1e-300);
+        if let Some(k) = nodes.iter().position(|x| !((x.z - first.z).abs() <= 1e-9 * size)) {
+            return Err(not_planar(format!(
+                "node {} is at z = {} but node {} at z = {}: a planar part lies in one plane z = const of its FE axes",
+                tag(k),
+                nodes[k].z,
+                tag(0),
+                first.z
+            )));
+        }
+    }
+    let dependent: std::collections::HashSet<(u32, usize)> = model
+        .constraints
+        .iter()
+        .map(|c| (c.dependent.0 .0, c.dependent.1 as usize))
+        .collect();
+    let mut planar = model.clone();
+    for node in 0..nodes.len() {
+        let id = NodeId(node as u32);
+        if interfaces.contains(&id) {
+            continue;
+        }
+        let mut mask = [false; 6];
+        for k in OUT_OF_PLANE_DOFS {
+            mask[k] = !dependent.contains(&(node as u32, k));
+        }
+        planar.add_support(id, fe_model::DofMask(mask));
+    }
+    Ok(planar)
+}
+
+/// Checks that the in-plane dofs of the interfaces (and the modes) do not couple to the
+/// out-of-plane ones in $\mathbf K_{CB}$ and $\mathbf M_{CB}$ (to $10^{-9}$ of the geometric
+/// mean of the two diagonal entries): the check of a planar reduction.
+fn check_planar(name: &str, interfaces: &[(String, usize)], K: &Mat<f64>, M: &Mat<f64>) -> Result<(), ReductionError> {
+    let nb = 6 * interfaces.len();
+    let out: Vec<usize> = (0..nb).filter(|r| OUT_OF_PLANE_DOFS.contains(&(r % 6))).collect();
+    let inside: Vec<usize> = (0..K.ncols()).filter(|c| !out.contains(c)).collect();
+    for (what, A) in [("K_CB", K), ("M_CB", M)] {
+        for &r in &out {
+            for &c in &inside {
+                let scale = (A[(r, r)].abs() * A[(c, c)].abs()).sqrt();
+                if !(A[(r, c)].abs() <= 1e-9 * scale) {
+                    let coordinate = |i: usize| {
+                        if i < nb {
+                            format!("dof {} of interface '{}'", DOF_NAMES[i % 6], interfaces[i / 6].0)
+                        } else {
+                            format!("mode {}", i - nb + 1)
+                        }
+                    };
+                    return Err(ReductionError::NotPlanar {
+                        body: name.into(),
+                        what: format!(
+                            "{what} couples {} to {} ({:.3e} of their diagonal entries): the beams' sections are not symmetric about the plane (a principal axis along z)",
+                            coordinate(r),
+                            coordinate(c),
+                            A[(r, c)].abs() / scale
+                        ),
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A stage of [`reduce_with_progress`], reported as it starts (or, for
@@ -768,6 +878,14 @@ pub fn reduce_with_progress(
 ) -> Result<ReducedBody, ReductionError> {
     let interfaces: Vec<(String, usize)> = interfaces.iter().map(|(n, node)| (n.clone(), node.index())).collect();
     let (interfaces, auxiliary_interface) = with_auxiliary(name, &interfaces, settings.auxiliary_node)?;
+    let planar;
+    let model = if settings.planar {
+        let nodes: Vec<NodeId> = interfaces.iter().map(|(_, i)| NodeId(*i as u32)).collect();
+        planar = planar_model(model, name, &nodes)?;
+        &planar
+    } else {
+        model
+    };
     progress(Stage::Assembling);
     let dofs = DofMap::new(model)?;
     let a = assemble_with_pattern(model, SystemPattern::new(model, &dofs))?;
@@ -798,6 +916,9 @@ pub fn reduce_with_progress(
         dofs.free_dof(NodeId(node as u32), k).map(|d| d.index())
     })?;
     let projection = project(system, &p, settings, &load_dofs, name, progress)?;
+    if settings.planar {
+        check_planar(name, &interfaces, &projection.K_CB, &projection.M_CB)?;
+    }
     let n = projection.V.ncols();
     // The CB basis on every node's six slots: S_full = T V (dependent slots follow their spider).
     let S_full = gather_rows(6 * model.node_count(), n, |slot, col| {
@@ -909,6 +1030,11 @@ pub fn reduce_external_dofs(
     interfaces: &[(String, usize)],
     settings: &CbSettings,
 ) -> Result<ReducedBody, ReductionError> {
+    if settings.planar {
+        return Err(ReductionError::ExternalModel {
+            what: "a planar reduction needs the FE model's elements and nodes (use `reduce`)".into(),
+        });
+    }
     if settings.geometric_stiffening || settings.stress_shapes {
         // G_k and the stress shapes need the stress of each mode, hence the elements:
         // matrices alone do not have it.

@@ -115,6 +115,11 @@ pub enum ReductionError {
         requested: usize,
         interior: usize,
     },
+    /// A planar reduction (`CbSettings::planar`) of body `body` is impossible: an element
+    /// that is not a beam, a node off the plane of the others, or a coupling of the in-plane
+    /// and out-of-plane coordinates (named).
+    #[error("body '{body}' cannot be reduced as a planar part: {what}")]
+    NotPlanar { body: String, what: String },
     /// The FE model could not be numbered or assembled: the FE stage's error is the source.
     #[error("FE model")]
     Fe(#[from] fe_model::FeError),

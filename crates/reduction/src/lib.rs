@@ -96,7 +96,7 @@ pub mod physics;
 pub mod reduced_body;
 pub mod stress;
 pub use craig_bampton::{partition, reduce, reduce_with_progress, CbSettings, ModeSelection, Partition, Stage};
-pub use craig_bampton::{reduce_external, reduce_external_dofs};
+pub use craig_bampton::{planar_model, reduce_external, reduce_external_dofs, IN_PLANE_DOFS, OUT_OF_PLANE_DOFS};
 pub use diagnostics::{diagnostics, DiagnosticWarning, Diagnostics, ModeDiagnostics};
 pub use eigen::{lowest_modes, EigenSettings, EigenSolution, FactorPrecision, FactorSettings, Shift, ShiftInvert};
 pub use error::ReductionError;

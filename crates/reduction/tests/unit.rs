@@ -90,3 +90,11 @@ mod diagnostics {
 mod stress_shapes {
     include!("unit/stress_shapes.rs");
 }
+
+/// `CbSettings::planar`: a beam in its FE xy-plane reduced with the out-of-plane dofs of its
+/// interior supported equals the 3D reduction with them supported by hand, keeps the 3D
+/// beam's in-plane modes, decouples the plane in K_CB and M_CB; what cannot be planar is
+/// refused by name.
+mod planar {
+    include!("unit/planar.rs");
+}

@@ -60,14 +60,16 @@ pub fn key(part: &Part, built: &Built, reduction: &Reduction) -> std::io::Result
     );
     // The factor's precision is left out: both precisions give the same body (eigenvalues to
     // 1e-10, solves refined to double precision), so a body reduced with one serves the other,
-    // and keys of studies without the key stay what they were. The inertia correction enters
-    // only when it is on, for the same reason: a body reduced without it keeps its key.
+    // and keys of studies without the key stay what they were. The inertia correction and the
+    // planar reduction enter only when they are on, for the same reason: a body reduced
+    // without them keeps its key.
     let Reduction {
         modes,
         auxiliary_node,
         keep_mesh_shapes,
         geometric_stiffening,
         inertia_correction,
+        planar,
         stress_shapes,
         load_points,
         factor: _,
@@ -77,10 +79,11 @@ pub fn key(part: &Part, built: &Built, reduction: &Reduction) -> std::io::Result
     } else {
         ""
     };
+    let planar = if *planar { ", planar: true" } else { "" };
     field(
         "reduction",
         format!(
-            "Reduction {{ modes: {modes:?}, auxiliary_node: {auxiliary_node:?}, keep_mesh_shapes: {keep_mesh_shapes:?}, geometric_stiffening: {geometric_stiffening:?}, stress_shapes: {stress_shapes:?}, load_points: {load_points:?}{inertia_correction} }}"
+            "Reduction {{ modes: {modes:?}, auxiliary_node: {auxiliary_node:?}, keep_mesh_shapes: {keep_mesh_shapes:?}, geometric_stiffening: {geometric_stiffening:?}, stress_shapes: {stress_shapes:?}, load_points: {load_points:?}{inertia_correction}{planar} }}"
         )
         .as_bytes(),
     );

@@ -414,6 +414,7 @@ pub fn build(study: &Study, cache: &Path, obs: &mut dyn Observer) -> Result<Buil
             frame,
             mass: spec.inertia,
             damping,
+            planar: spec.planar,
         })));
         let id = mbs::BodyId(model.bodies.len() as u32 - 1);
         entities.insert(mbs::Entity::Body(id), spec.path.clone());

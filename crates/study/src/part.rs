@@ -54,6 +54,8 @@ pub struct Reduction {
     pub geometric_stiffening: bool,
     /// `reduction::CbSettings::inertia_correction`.
     pub inertia_correction: bool,
+    /// `reduction::CbSettings::planar` (and the default of `planar` for its bodies).
+    pub planar: bool,
     /// `reduction::CbSettings::stress_shapes`.
     pub stress_shapes: bool,
     /// `reduction::CbSettings::load_points`: named nodes of the part's mesh.

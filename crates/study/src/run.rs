@@ -823,7 +823,7 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
         reduction::ModeSelection::CutoffHz(f) => format!("fixed-interface modes below {f} Hz"),
     };
     obs.progress(&Progress::Info(format!(
-        "part '{}': reducing {n_free} dofs to {} interfaces{} and {modes}{}{} ...",
+        "part '{}': reducing {n_free} dofs to {} interfaces{} and {modes}{}{}{} ...",
         part.name,
         built.interfaces.len(),
         if built.auxiliary.is_some() {
@@ -833,6 +833,11 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
         },
         if reduction.inertia_correction {
             " + the static correction for the interfaces' inertia"
+        } else {
+            ""
+        },
+        if reduction.planar {
+            ", planar (in-plane modes)"
         } else {
             ""
         },
@@ -848,6 +853,7 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
     settings.auxiliary_node = built.auxiliary;
     settings.geometric_stiffening = reduction.geometric_stiffening;
     settings.inertia_correction = reduction.inertia_correction;
+    settings.planar = reduction.planar;
     settings.stress_shapes = reduction.stress_shapes;
     settings.load_points = reduction.load_points.clone();
     settings.factor = reduction.factor;

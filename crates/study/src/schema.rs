@@ -284,6 +284,9 @@ pub struct ReductionFile {
     pub geometric_stiffening: Option<bool>,
     /// Append the static response to the interfaces' inertia to the modes (default false).
     pub inertia_correction: Option<bool>,
+    /// Reduce a beam part lying in its xy-plane as a planar part, its bodies evaluated in the
+    /// plane (default false).
+    pub planar: Option<bool>,
     /// Keep the stress of every CB vector for stress recovery (default false).
     pub stress_shapes: Option<bool>,
     /// Named points inside the body where loads act, with static correction.
@@ -465,6 +468,8 @@ pub struct BodyFile {
     /// Damping: `{ alpha = .., beta = .. }` (Rayleigh, on the CB matrices) and/or
     /// `{ modal_ratio = .. }` (the same ratio for every fixed-interface mode).
     pub damping: Option<DampingFile>,
+    /// Evaluate the body in the global xy-plane (default: its part's `planar`).
+    pub planar: Option<bool>,
 }
 
 /// `[bodies.matrices]`: a body reduced from another FE code's stiffness and mass (Matrix
@@ -555,7 +560,7 @@ pub struct SpringFile {
 pub struct MbsSupportFile {
     /// `"body.point"`.
     pub at: String,
-    /// `clamp`, `pin`, `hinge` (with `axis`), `slider` (with `axis`), `plane` (with `axis`, the normal).
+    /// `clamp`, `pin`, `hinge` (with `axis`), `slider` (with `axis`), `plane` (with `axis`, the normal), `planar` (with `axis`, the normal: also the rotation about it free).
     #[serde(rename = "type")]
     pub kind: String,
     pub axis: Option<Vec3>,

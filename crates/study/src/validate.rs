@@ -1460,6 +1460,7 @@ impl Validator<'_> {
             keep_mesh_shapes: r.keep_mesh_shapes.unwrap_or(true),
             geometric_stiffening: r.geometric_stiffening.unwrap_or(false),
             inertia_correction: r.inertia_correction.unwrap_or(false),
+            planar: r.planar.unwrap_or(false),
             stress_shapes: r.stress_shapes.unwrap_or(false),
             load_points,
         })

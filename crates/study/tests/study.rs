@@ -17,6 +17,12 @@ mod common;
 #[path = "study/setup.rs"]
 mod setup;
 
+/// Planar parts and bodies: the keys reach the reduction, the cache and the bodies; a planar
+/// body that could leave the plane is refused at the body; the planar slider-crank agrees
+/// with its bodies evaluated in 3D.
+#[path = "study/planar.rs"]
+mod planar;
+
 /// Physically wrong input refused at its entity; named pipes; validation time linear in the
 /// number of entries.
 #[path = "study/input_checks.rs"]

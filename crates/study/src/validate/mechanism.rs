@@ -71,6 +71,8 @@ pub struct FlexibleSpec {
     /// number of modes is known).
     pub damping: Damping,
     pub modal_ratio: Option<f64>,
+    /// `mbs::FlexibleBody::planar`: the body's `planar`, else its part's reduction's.
+    pub planar: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -653,6 +655,7 @@ impl Validator<'_> {
             return None;
         }
         let mut load_points: Vec<String> = Vec::new();
+        let mut planar_part = false;
         let (source, interfaces, auxiliary) = match (&b.part, &b.file) {
             (None, None) if b.matrices.is_some() => {
                 let m = b.matrices.as_ref()?;
@@ -690,6 +693,7 @@ impl Validator<'_> {
                     names.push("auxiliary".into());
                 }
                 load_points = reduction.load_points.iter().map(|(n, _)| n.clone()).collect();
+                planar_part = reduction.planar;
                 (BodySource::Part(index), names, reduction.auxiliary_node)
             }
             (None, Some(file)) if file.to_lowercase().ends_with(".fem") => {
@@ -831,6 +835,7 @@ impl Validator<'_> {
             placement: Isometry3::from_parts(Translation3::from(position), rotation),
             damping,
             modal_ratio,
+            planar: b.planar.unwrap_or(planar_part),
         })
     }
 
@@ -1039,7 +1044,7 @@ impl Validator<'_> {
 
     fn mbs_support(&mut self, path: &KeyPath, s: &MbsSupportFile, m: &Mechanism) -> Option<SupportSpec> {
         let at = self.point(&path.key("at"), &s.at, m, false);
-        let kinds = ["clamp", "pin", "hinge", "slider", "plane"];
+        let kinds = ["clamp", "pin", "hinge", "slider", "plane", "planar"];
         let kind = self.choice(
             &path.key("type"),
             &Some(s.kind.clone()),
@@ -1047,11 +1052,11 @@ impl Validator<'_> {
             &kinds,
             "support type",
         )?;
-        let needs_axis = matches!(kind, "hinge" | "slider" | "plane");
+        let needs_axis = matches!(kind, "hinge" | "slider" | "plane" | "planar");
         if !needs_axis && s.axis.is_some() {
             self.err_key(
                 &path.key("axis"),
-                format!("`axis` does not apply to a '{kind}' support (only hinge, slider and plane take one)"),
+                format!("`axis` does not apply to a '{kind}' support (only hinge, slider, plane and planar take one)"),
             );
             return None;
         }
@@ -1065,6 +1070,10 @@ impl Validator<'_> {
             ("hinge", Some(axis)) => (TranslationSupport::Fixed, RotationSupport::Axis { axis }),
             ("slider", Some(direction)) => (TranslationSupport::Line { direction }, RotationSupport::Fixed),
             ("plane", Some(normal)) => (TranslationSupport::Plane { normal }, RotationSupport::Fixed),
+            ("planar", Some(normal)) => (
+                TranslationSupport::Plane { normal },
+                RotationSupport::Axis { axis: normal },
+            ),
             _ => (TranslationSupport::Fixed, RotationSupport::Fixed),
         };
         Some(SupportSpec {
