@@ -183,6 +183,8 @@ class Rod:
                 args.append("--geometric-stiffening")
             if cfg.get("modified"):
                 args += ["--newton", "modified"]
+            if cfg.get("planar"):
+                args.append("--planar")
             return self.flexmbs + args + common
         args = ["--model", cfg["model"], "--elements", str(cfg["elements"])]
         if cfg.get("sparse"):
@@ -229,15 +231,21 @@ def rod(a, repeats):
     # Each program's modified Newton (the factorised iteration matrix kept across iterations and
     # steps) is a row of its own: it is the fastest choice on both sides.
     modified = lambda mod: ", modified Newton" if mod else ""
-    flex = lambda s, m, st=True, mod=False: {
-        "name": f"flexmbs, {s} beam superelement{'s' if s > 1 else ''}, {m} modes{', geometric stiffening' if st else ''}{modified(mod)}",
-        "program": "flexmbs", "segments": s, "modes": m, "beam_elements": 8, "stiffening": st, "modified": mod,
+    flex = lambda s, m, st=True, mod=False, planar=False: {
+        "name": f"flexmbs, {s}{' planar' if planar else ''} beam superelement{'s' if s > 1 else ''}, {m} mode{'s' if m != 1 else ''}{', geometric stiffening' if st else ''}{modified(mod)}",
+        "program": "flexmbs", "segments": s, "modes": m, "beam_elements": 8, "stiffening": st, "modified": mod, "planar": planar,
     }
     exu = lambda model, n, sparse=False, mod=False: {
         "name": f"Exudyn {'ObjectANCFCable2D' if model == 'ancf' else 'ObjectBeamGeometricallyExact'}, {n} elements{modified(mod)}",
         "program": "exudyn", "model": model, "elements": n, "sparse": sparse, "modified": mod,
     }
+    # The planar rows evaluate the rod in the plane of the mechanism (`--planar`: in-plane modes
+    # only, 3 coordinates per interface); the spatial rows' 2 modes of the round rod are one
+    # in-plane and one out-of-plane bending mode, so 2 spatial segments with 2 modes are the
+    # planar ones with 1 mode.
     configs = [flex(1, 2), flex(1, 4), flex(2, 2), flex(2, 2, mod=True), flex(2, 4), flex(2, 4, mod=True), flex(1, 4, False),
+               flex(1, 3, planar=True, mod=True), flex(1, 4, planar=True, mod=True),
+               flex(2, 1, planar=True), flex(2, 1, planar=True, mod=True),
                exu("ancf", 4), exu("ancf", 4, mod=True)]
     # Exudyn's models: the smallest element count that can reach TARGET.
     families = [("ancf", [4, 8, 16, 32]), ("beam3d", [32, 64] if a.quick else [32, 64, 128])]
