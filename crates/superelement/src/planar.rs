@@ -79,7 +79,7 @@ use std::f64::consts::PI;
 const WIDTH: usize = 8;
 
 /// Relative size of a coupling between the in-plane and out-of-plane sets accepted by
-/// [`Superelement::into_planar`] (against the largest entry of the matrix).
+/// [`crate::Superelement::into_planar`] (against the largest entry of the matrix).
 pub const COUPLING_TOL: f64 = 1e-9;
 
 /// Out-of-plane tilt of an interface orientation (about the x or y axis, radians) and offset of
@@ -89,7 +89,7 @@ pub const STATE_TOL: f64 = 1e-9;
 /// The 3D dof of in-plane interface dof `c` (x, y, rotation about z).
 const IN_PLANE: [usize; 3] = [0, 1, 5];
 
-/// The in-plane data of a planar body, precomputed by [`Superelement::into_planar`].
+/// The in-plane data of a planar body, precomputed by [`crate::Superelement::into_planar`].
 #[derive(Clone, Debug)]
 pub(crate) struct PlanarBody {
     pub N: usize,
@@ -248,7 +248,7 @@ impl<S: Scalar> Buf<S> {
     }
 }
 
-/// The planar part of a [`Workspace`].
+/// The planar part of a [`crate::Workspace`].
 #[derive(Clone, Debug)]
 pub(crate) struct PlanarWorkspace {
     pub f: Buf<f64>,
