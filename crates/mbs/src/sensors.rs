@@ -194,17 +194,18 @@ impl System {
             same.then_some(buf)
         };
         for (i, f) in self.flexible.iter().enumerate() {
-            let bs = self.body_state(i, state, nodes);
             match evaluated(i) {
                 Some(buf) => {
                     // 1/2 qd^T M qd at the configuration of the evaluation (a forces-only one
-                    // forms no mass matrix: `kinetic_energy_in` needs none).
-                    let qd = bs.velocity_vector();
+                    // forms no mass matrix: `kinetic_energy_in` needs none). The velocities
+                    // alone, not a whole body state: this runs at every recorded step.
+                    let qd = self.body_velocities(i, state, nodes);
                     e.kinetic += f.se.kinetic_energy_in(&buf.ws, &qd).map_err(|s| body_err(f, s))?;
                     e.strain += f.se.strain_energy_in(&buf.ws);
                     e.gravity += f.se.gravity_potential(buf.ws.kinematics(), &g);
                 }
                 None => {
+                    let bs = self.body_state(i, state, nodes);
                     e.kinetic += f.se.kinetic_energy(&bs).map_err(|s| body_err(f, s))?;
                     let kin = f.se.kinematics(&bs).map_err(|s| body_err(f, s))?;
                     e.strain += f.se.strain_energy(&kin);
@@ -319,6 +320,21 @@ impl System {
             .map(|&s| state.velocity[unknown(map.scalars[s].slot)])
             .collect();
         f.body_state(nodes, &eta, &eta_d, state.frames[i])
+    }
+
+    /// The body's velocities $\dot{\mathbf q} = [\mathbf v_1, \boldsymbol\omega_1, \dots, \dot{\boldsymbol\eta}]$
+    /// ($6N + m$, the layout of [`superelement::BodyState::velocity_vector`]) from the node
+    /// motions and the modal rates.
+    fn body_velocities(&self, i: usize, state: &State, nodes: &[crate::NodeMotion]) -> Vec<f64> {
+        let f = &self.flexible[i];
+        let map = &self.topo.map;
+        let mut qd = Vec::with_capacity(6 * f.nodes.len() + f.modal.len());
+        for &n in &f.nodes {
+            qd.extend_from_slice(nodes[n].v.as_slice());
+            qd.extend_from_slice(nodes[n].omega.as_slice());
+        }
+        qd.extend(f.modal.iter().map(|&s| state.velocity[unknown(map.scalars[s].slot)]));
+        qd
     }
 
     /// A record with this system's sensor names and widths, no rows.
