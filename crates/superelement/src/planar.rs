@@ -123,6 +123,13 @@ pub(crate) struct PlanarBody {
     pub geometric: Option<PlanarGeometric>,
 }
 
+/// A planar frame: position (x, y) and angle about z.
+pub(crate) type Frame2 = ([f64; 2], f64);
+
+/// A solved planar frame: the frame, the iterations and, after a Newton solve, $(\sin, \cos)$
+/// of its angle.
+pub(crate) type Solved2 = (Frame2, usize, Option<(f64, f64)>);
+
 /// The nonzero entries $(i, j, (\mathbf G_k)_{ij})$ of one $\mathbf G_k$.
 pub(crate) type Entries = Vec<(u32, u32, f64)>;
 
@@ -266,6 +273,9 @@ pub(crate) struct PlanarWorkspace {
     pub scratch: Vec<f64>,
     pub six: Vec<f64>,
     pub big: Vec<f64>,
+    /// The last warm-start orientation read (quaternion coordinates) and its angle about z
+    /// ([`Self::warm_angle`]).
+    pub warm: ([f64; 4], f64),
 }
 
 impl PlanarWorkspace {
@@ -283,7 +293,19 @@ impl PlanarWorkspace {
             scratch: vec![0.0; 3 * n],
             six: vec![0.0; 6 * n],
             big: vec![0.0; (n * n).max(6 * n)],
+            warm: ([f64::NAN; 4], f64::NAN),
         }
+    }
+
+    /// [`angle_of`] the warm-start orientation `R`, kept for the next call: the evaluations of
+    /// one time step share their warm start (the frame of the last step), so one atan2 serves
+    /// them all, to the bit.
+    pub fn warm_angle(&mut self, R: &UnitQuaternion<f64>) -> f64 {
+        let c = [R.coords[0], R.coords[1], R.coords[2], R.coords[3]];
+        if c != self.warm.0 {
+            self.warm = (c, angle_of(R));
+        }
+        self.warm.1
     }
 }
 
@@ -495,13 +517,16 @@ impl PlanarBody {
 
     /// The generic residual: `b.q`, `b.qd`, `b.qdd` (planar absolute coordinates, velocities,
     /// accelerations) at the converged frame `frame` (with `Gi0` = its
-    /// $(\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}$ for the implicit derivative) into `b.out`, and with
-    /// `parts` the four force parts into `b.parts`.
+    /// $(\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}$ for the implicit derivative; `sc`: $(\sin, \cos)$ of
+    /// the frame angle when known, [`Self::newton`]) into `b.out`, and with `parts` the four force
+    /// parts into `b.parts`.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(crate) fn core<S: Scalar>(
         &self,
         b: &mut Buf<S>,
         frame: ([f64; 2], f64),
+        sc: Option<(f64, f64)>,
         solve: FrameSolve,
         Gi0: &[[f64; 3]; 3],
         gravity: [f64; 2],
@@ -520,7 +545,7 @@ impl PlanarBody {
             FrameSolve::Newton => {
                 b.frame_r = [S::cst(frame.0[0]), S::cst(frame.0[1])];
                 b.frame_phi = S::cst(frame.1);
-                let (s0, c0) = frame.1.sin_cos();
+                let (s0, c0) = sc.unwrap_or_else(|| frame.1.sin_cos());
                 b.R = (S::cst(s0), S::cst(c0));
                 if S::DUAL {
                     self.local(b);
@@ -661,11 +686,19 @@ impl PlanarBody {
 
     /// [`Self::core`] in `f64` with the force parts (the residual of an evaluation), compiled for
     /// the machine's vector instructions.
-    pub(crate) fn forces(&self, b: &mut Buf<f64>, frame: ([f64; 2], f64), solve: FrameSolve, gravity: [f64; 2]) {
+    pub(crate) fn forces(
+        &self,
+        b: &mut Buf<f64>,
+        frame: ([f64; 2], f64),
+        sc: Option<(f64, f64)>,
+        solve: FrameSolve,
+        gravity: [f64; 2],
+    ) {
         struct Pass<'a> {
             pb: &'a PlanarBody,
             b: &'a mut Buf<f64>,
             frame: ([f64; 2], f64),
+            sc: Option<(f64, f64)>,
             solve: FrameSolve,
             gravity: [f64; 2],
         }
@@ -674,13 +707,15 @@ impl PlanarBody {
             #[inline(always)]
             fn with_simd<S: pulp::Simd>(self, _simd: S) {
                 let Gi0 = [[0.0; 3]; 3];
-                self.pb.core(self.b, self.frame, self.solve, &Gi0, self.gravity, true);
+                self.pb
+                    .core(self.b, self.frame, self.sc, self.solve, &Gi0, self.gravity, true);
             }
         }
         pulp::Arch::new().dispatch(Pass {
             pb: self,
             b,
             frame,
+            sc,
             solve,
             gravity,
         });
@@ -693,6 +728,7 @@ impl PlanarBody {
         &self,
         pw: &mut PlanarWorkspace,
         frame: ([f64; 2], f64),
+        sc: Option<(f64, f64)>,
         solve: FrameSolve,
         Gi0: &[[f64; 3]; 3],
         gravity: [f64; 2],
@@ -701,6 +737,7 @@ impl PlanarBody {
             pb: &'a PlanarBody,
             pw: &'a mut PlanarWorkspace,
             frame: ([f64; 2], f64),
+            sc: Option<(f64, f64)>,
             solve: FrameSolve,
             Gi0: &'a [[f64; 3]; 3],
             gravity: [f64; 2],
@@ -713,6 +750,7 @@ impl PlanarBody {
                     pb,
                     pw,
                     frame,
+                    sc,
                     solve,
                     Gi0,
                     gravity,
@@ -730,7 +768,7 @@ impl PlanarBody {
                     for (s, i) in (start..end).enumerate() {
                         d.q[i].d[s] = 1.0;
                     }
-                    pb.core(d, frame, solve, Gi0, gravity, false);
+                    pb.core(d, frame, sc, solve, Gi0, gravity, false);
                     let mat = &mut pw.mats[0];
                     for (s, j) in (start..end).enumerate() {
                         for i in 0..n {
@@ -745,6 +783,7 @@ impl PlanarBody {
             pb: self,
             pw,
             frame,
+            sc,
             solve,
             Gi0,
             gravity,
@@ -1015,7 +1054,9 @@ impl PlanarBody {
 
     /// The Newton solve of the planar (4.4) from `start` for positions `r`, angles `phi`,
     /// modal coordinates `eta` (`r_max`: the largest $|\mathbf r_k|$, body size `length`), with
-    /// the tolerance logic and errors of the spatial solve; `b` holds the iterates.
+    /// the tolerance logic and errors of the spatial solve; `b` holds the iterates. Returns the
+    /// frame, the iterations and $(\sin, \cos)$ of the frame angle (formed by the last
+    /// iteration's test; [`Self::core`] reads them).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn newton(
         &self,
@@ -1027,7 +1068,7 @@ impl PlanarBody {
         length: f64,
         settings: FrameSettings,
         b: &mut Buf<f64>,
-    ) -> Result<(([f64; 2], f64), usize), SuperelementError> {
+    ) -> Result<(Frame2, usize, (f64, f64)), SuperelementError> {
         let pb = self;
         let N = pb.N;
         let L = length;
@@ -1048,12 +1089,15 @@ impl PlanarBody {
             }
             b.qjj[3 * N..].copy_from_slice(eta);
             let g = pb.phi_mul(&b.qjj);
-            residual = (g[0].hypot(g[1]) / L).max(g[2].abs());
+            // |g_t| by the square root of the sum of squares (hypot where that overflows).
+            let t2 = g[0] * g[0] + g[1] * g[1];
+            let gt = if t2.is_finite() { t2.sqrt() } else { g[0].hypot(g[1]) };
+            residual = (gt / L).max(g[2].abs());
             if !residual.is_finite() {
                 break;
             }
             if residual <= tol {
-                return Ok(((rj, pj), it));
+                return Ok(((rj, pj), it, (s, c)));
             }
             if it == settings.max_iterations {
                 break;

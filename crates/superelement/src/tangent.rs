@@ -137,7 +137,9 @@ impl Superelement {
         let pw = ws.planar.as_deref_mut().expect("a planar workspace");
         let N = pb.N;
         let r_max = self.read_planar(state, &mut pw.pos, &mut pw.phi)?;
-        let (frame, iterations) = self.planar_frame(&pw.pos, &pw.phi, &state.eta, r_max, &state.frame, &mut pw.f)?;
+        let warm_angle = pw.warm_angle(&state.frame.R);
+        let (frame, iterations, sc) =
+            self.planar_frame(&pw.pos, &pw.phi, &state.eta, r_max, &state.frame, warm_angle, &mut pw.f)?;
         let rs = &pw.pos;
         let z = state.r[0].z - self.x[0].z;
         let b = &mut pw.f;
@@ -159,7 +161,7 @@ impl Superelement {
             b.qdd[i] = acc[g];
         }
         let g2 = [gravity.x, gravity.y];
-        pb.forces(b, frame, self.frame_solve, g2);
+        pb.forces(b, frame, sc, self.frame_solve, g2);
         let Gi0 = b.Gi;
         // Outputs in the 6N + m layout.
         let n3 = self.n;
@@ -189,7 +191,7 @@ impl Superelement {
             pb.mass_damping(pw, level.tangents());
         }
         if level.tangents() {
-            pb.stiffness_pass(pw, frame, self.frame_solve, &Gi0, g2);
+            pb.stiffness_pass(pw, frame, sc, self.frame_solve, &Gi0, g2);
         }
         let n = pb.n;
         let scatter = |src: &[f64], dst: &mut Mat<f64>| {
