@@ -78,6 +78,11 @@ use std::f64::consts::PI;
 /// Width of the dual numbers of the tangent passes: directions per pass.
 const WIDTH: usize = 8;
 
+/// Width of the single tangent pass of a body with more than [`WIDTH`] and at most this many
+/// planar coordinates (one pass of 12 directions costs less than two of 8; every direction is
+/// computed alike whatever the width, so $\mathbf K_t$ is the same to the bit).
+const WIDE: usize = 12;
+
 /// Relative size of a coupling between the in-plane and out-of-plane sets accepted by
 /// [`Superelement::into_planar`] (against the largest entry of the matrix).
 pub const COUPLING_TOL: f64 = 1e-9;
@@ -260,6 +265,8 @@ impl<S: Scalar> Buf<S> {
 pub(crate) struct PlanarWorkspace {
     pub f: Buf<f64>,
     pub d: Buf<Dual<WIDTH>>,
+    /// The buffers of the single [`WIDE`] pass, for $[`WIDTH`] < n \le$ [`WIDE`].
+    pub wide: Option<Buf<Dual<WIDE>>>,
     /// Interface positions (x, y) and raw angles of the state.
     pub pos: Vec<[f64; 2]>,
     pub phi: Vec<f64>,
@@ -285,6 +292,7 @@ impl PlanarWorkspace {
         Self {
             f: Buf::new(N, n, groups),
             d: Buf::new(N, n, groups),
+            wide: (n > WIDTH && n <= WIDE).then(|| Buf::new(N, n, groups)),
             pos: vec![[0.0; 2]; N],
             phi: vec![0.0; N],
             mats: [vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]],
@@ -722,8 +730,8 @@ impl PlanarBody {
     }
 
     /// $\mathbf K_t$ (planar, `pw.mats[0]`): the derivative of the residual in the planar
-    /// coordinates by dual numbers, [`WIDTH`] directions per pass, compiled for the machine's
-    /// vector instructions.
+    /// coordinates by dual numbers, [`WIDTH`] directions per pass (one pass of [`WIDE`] for
+    /// $n \le$ [`WIDE`]), compiled for the machine's vector instructions.
     pub(crate) fn stiffness_pass(
         &self,
         pw: &mut PlanarWorkspace,
@@ -755,27 +763,11 @@ impl PlanarBody {
                     Gi0,
                     gravity,
                 } = self;
-                let n = pb.n;
-                let mut start = 0;
-                while start < n {
-                    let end = (start + WIDTH).min(n);
-                    let (f, d) = (&pw.f, &mut pw.d);
-                    for i in 0..n {
-                        d.q[i] = Dual::cst(f.q[i]);
-                        d.qd[i] = Dual::cst(f.qd[i]);
-                        d.qdd[i] = Dual::cst(f.qdd[i]);
-                    }
-                    for (s, i) in (start..end).enumerate() {
-                        d.q[i].d[s] = 1.0;
-                    }
-                    pb.core(d, frame, sc, solve, Gi0, gravity, false);
-                    let mat = &mut pw.mats[0];
-                    for (s, j) in (start..end).enumerate() {
-                        for i in 0..n {
-                            mat[i + n * j] = d.out[i].d[s];
-                        }
-                    }
-                    start = end;
+                let PlanarWorkspace { f, d, wide, mats, .. } = pw;
+                let mat = &mut mats[0];
+                match wide {
+                    Some(w) => pb.dual_passes(f, w, mat, frame, sc, solve, Gi0, gravity),
+                    None => pb.dual_passes(f, d, mat, frame, sc, solve, Gi0, gravity),
                 }
             }
         }
@@ -788,6 +780,43 @@ impl PlanarBody {
             Gi0,
             gravity,
         });
+    }
+
+    /// The passes of [`Self::stiffness_pass`] in dual numbers of width `W` (buffers `d`) at the
+    /// configuration of `f`, $\mathbf K_t$ into `mat`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn dual_passes<const W: usize>(
+        &self,
+        f: &Buf<f64>,
+        d: &mut Buf<Dual<W>>,
+        mat: &mut [f64],
+        frame: ([f64; 2], f64),
+        sc: Option<(f64, f64)>,
+        solve: FrameSolve,
+        Gi0: &[[f64; 3]; 3],
+        gravity: [f64; 2],
+    ) {
+        let n = self.n;
+        let mut start = 0;
+        while start < n {
+            let end = (start + W).min(n);
+            for i in 0..n {
+                d.q[i] = Dual::cst(f.q[i]);
+                d.qd[i] = Dual::cst(f.qd[i]);
+                d.qdd[i] = Dual::cst(f.qdd[i]);
+            }
+            for (s, i) in (start..end).enumerate() {
+                d.q[i].d[s] = 1.0;
+            }
+            self.core(d, frame, sc, solve, Gi0, gravity, false);
+            for (s, j) in (start..end).enumerate() {
+                for i in 0..n {
+                    mat[i + n * j] = d.out[i].d[s];
+                }
+            }
+            start = end;
+        }
     }
 
     /// $\mathbf M = \bar{\mathbf R}\mathbf P^T\mathbf M_{ffr}\mathbf P\bar{\mathbf R}^T$ into `pw.mats[2]`
