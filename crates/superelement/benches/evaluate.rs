@@ -124,6 +124,7 @@
 //! | wrap without fmod, the tilt by its square | 10.4k | 16.9k | 47.5k |
 //! | K_CB q, W q, S~_z q in one pass for dual numbers | 10.4k | 16.9k | 47.1k |
 //! | the frame angle's sin, cos from the frame solve, \|g_t\| without hypot | 10.3k | 16.8k | 47.0k |
+//! | the residual pass on slices of its buffers (no vector reloads through the buffer struct) | 9.8k | 16.3k | 45.9k |
 //!
 //! In time (medians of 400 batches, three alternating runs on a loaded machine): residual 1.3
 //! against 3.2 us, forces and M 2.0 against 5.1 us, with tangents 5.7 against 12.8-14.2 us. The

@@ -569,40 +569,77 @@ impl PlanarBody {
             }
         }
         self.local(b);
-        let (s, c) = b.R;
+        // The buffers as separate slices (no reloads of the vectors through `b` in the loops).
+        let Buf {
+            qd,
+            qdd,
+            qjj,
+            rho,
+            y,
+            ybar,
+            zeta,
+            zetad,
+            Wq,
+            Sq,
+            Sz,
+            fq,
+            fe,
+            fd,
+            fg,
+            b: bv,
+            p: pv,
+            gq,
+            out,
+            parts: pparts,
+            Gi: bGi,
+            xi: bxi,
+            sv: bsv,
+            sd: bsd,
+            J: bJ,
+            Jd: bJd,
+            R: bR,
+            ..
+        } = b;
+        let (qd, qdd, qjj, rho) = (&qd[..n], &qdd[..n], &qjj[..n], &rho[..N]);
+        let (y, ybar, zeta, zetad) = (&mut y[..n], &mut ybar[..n], &mut zeta[..n], &mut zetad[..n]);
+        let (Wq, Sq, Sz, fq) = (&mut Wq[..n], &mut Sq[..n], &mut Sz[..n], &mut fq[..n]);
+        let (fe, fd, fg, out) = (&mut fe[..n], &mut fd[..n], &mut fg[..n], &mut out[..n]);
+        let (s, c) = *bR;
         // y and a in body axes (a into ybar).
         for k in 0..N {
-            let (vx, vy) = (b.qd[3 * k], b.qd[3 * k + 1]);
-            b.y[3 * k] = c * vx + s * vy;
-            b.y[3 * k + 1] = c * vy - s * vx;
-            b.y[3 * k + 2] = b.qd[3 * k + 2];
-            let (ax, ay) = (b.qdd[3 * k], b.qdd[3 * k + 1]);
-            b.ybar[3 * k] = c * ax + s * ay;
-            b.ybar[3 * k + 1] = c * ay - s * ax;
-            b.ybar[3 * k + 2] = b.qdd[3 * k + 2];
+            let (vx, vy) = (qd[3 * k], qd[3 * k + 1]);
+            y[3 * k] = c * vx + s * vy;
+            y[3 * k + 1] = c * vy - s * vx;
+            y[3 * k + 2] = qd[3 * k + 2];
+            let (ax, ay) = (qdd[3 * k], qdd[3 * k + 1]);
+            ybar[3 * k] = c * ax + s * ay;
+            ybar[3 * k + 1] = c * ay - s * ax;
+            ybar[3 * k + 2] = qdd[3 * k + 2];
         }
+        // The modal rows (a few: a loop, not a memcpy call).
+        #[allow(clippy::manual_memcpy)]
         for i in 3 * N..n {
-            b.y[i] = b.qd[i];
-            b.ybar[i] = b.qdd[i];
+            y[i] = qd[i];
+            ybar[i] = qdd[i];
         }
-        let (Gi, _) = inv3(&self.phi_psi(&b.rho));
-        b.Gi = Gi;
-        let py = self.phi_mul(&b.y);
+        let (Gi, _) = inv3(&self.phi_psi(rho));
+        *bGi = Gi;
+        let py = self.phi_mul(y);
         let xi: [S; 3] = std::array::from_fn(|a| Gi[a][0] * py[0] + Gi[a][1] * py[1] + Gi[a][2] * py[2]);
-        self.minus_psi(&b.rho, &b.y, &xi, &mut b.zeta);
+        self.minus_psi(rho, y, &xi, zeta);
         let om = xi[2];
         for k in 0..N {
-            let (yx, yy) = (b.y[3 * k], b.y[3 * k + 1]);
-            let (zx, zy) = (b.zeta[3 * k], b.zeta[3 * k + 1]);
-            b.ybar[3 * k] += om * (yy + zy);
-            b.ybar[3 * k + 1] -= om * (yx + zx);
+            let (yx, yy) = (y[3 * k], y[3 * k + 1]);
+            let (zx, zy) = (zeta[3 * k], zeta[3 * k + 1]);
+            ybar[3 * k] += om * (yy + zy);
+            ybar[3 * k + 1] -= om * (yx + zx);
         }
-        let pa = self.phi_mul(&b.ybar);
+        let pa = self.phi_mul(ybar);
         let xid: [S; 3] = std::array::from_fn(|a| Gi[a][0] * pa[0] + Gi[a][1] * pa[1] + Gi[a][2] * pa[2]);
-        self.minus_psi(&b.rho, &b.ybar, &xid, &mut b.zetad);
+        self.minus_psi(rho, ybar, &xid, zetad);
 
         // FFR inertia (module docs).
-        let q = &b.qjj;
+        let q = qjj;
         let m = self.mass;
         let mut sv = [S::cst(m * self.d[0]), S::cst(m * self.d[1])];
         let mut sd = [S::cst(0.0); 2];
@@ -610,27 +647,27 @@ impl PlanarBody {
         for (i, st) in self.St.iter().enumerate() {
             for a in 0..2 {
                 sv[a] = sv[a].mul_add_f(q[i], st[a]);
-                sd[a] = sd[a].mul_add_f(b.zeta[i], st[a]);
-                std_[a] = std_[a].mul_add_f(b.zetad[i], st[a]);
+                sd[a] = sd[a].mul_add_f(zeta[i], st[a]);
+                std_[a] = std_[a].mul_add_f(zetad[i], st[a]);
             }
         }
-        matvec3([&self.W, &self.Sz, &self.K], q, [&mut b.Wq, &mut b.Sq, &mut b.fe]);
-        matvec(&self.Sz, &b.zeta, &mut b.Sz);
+        matvec3([&self.W, &self.Sz, &self.K], q, [Wq, Sq, fe]);
+        matvec(&self.Sz, zeta, Sz);
         let mut J = S::cst(self.J0);
         let mut Jd = S::cst(0.0);
         let mut cz = S::cst(0.0);
         for i in 0..n {
             let ai = S::cst(self.a[i]);
-            J += (ai * 2.0 + b.Wq[i]) * q[i];
-            Jd += (ai + b.Wq[i]) * b.zeta[i] * 2.0;
+            J += (ai * 2.0 + Wq[i]) * q[i];
+            Jd += (ai + Wq[i]) * zeta[i] * 2.0;
             // c = S_rz - S~_z q.
-            cz += (S::cst(self.Srz[i]) - b.Sq[i]) * b.zetad[i];
+            cz += (S::cst(self.Srz[i]) - Sq[i]) * zetad[i];
         }
-        b.xi = xi;
-        b.sv = sv;
-        b.sd = sd;
-        b.J = J;
-        b.Jd = Jd;
+        *bxi = xi;
+        *bsv = sv;
+        *bsd = sd;
+        *bJ = J;
+        *bJd = Jd;
         let (V, Vd) = ([xi[0], xi[1]], [xid[0], xid[1]]);
         let omd = xid[2];
         let Es = [-sv[1], sv[0]];
@@ -640,55 +677,54 @@ impl PlanarBody {
         let FV: [S; 2] = std::array::from_fn(|a| Vd[a] * m + Es[a] * omd + Esd[a] * om + std_[a] + om * EpV[a]);
         let FO = Vd[0] * Es[0] + Vd[1] * Es[1] + J * omd + cz + Jd * om + om * (V[0] * sv[0] + V[1] * sv[1]);
         let Vt = [Vd[0] - om * V[1], Vd[1] + om * V[0]];
-        matvec(&self.M, &b.zetad, &mut b.fq);
+        matvec(&self.M, zetad, fq);
         let om2 = om * om;
         let two_om = om * 2.0;
         for i in 0..n {
             let st = &self.St[i];
-            let ci = S::cst(self.Srz[i]) - b.Sq[i];
-            b.fq[i] +=
-                Vt[0] * st[0] + Vt[1] * st[1] + ci * omd - two_om * b.Sz[i] - om2 * (S::cst(self.a[i]) + b.Wq[i]);
+            let ci = S::cst(self.Srz[i]) - Sq[i];
+            fq[i] += Vt[0] * st[0] + Vt[1] * st[1] + ci * omd - two_om * Sz[i] - om2 * (S::cst(self.a[i]) + Wq[i]);
         }
         // Elastic force with geometric stiffening (K q formed above).
         if let Some(G) = &self.geometric {
-            G.gradient(q, &mut b.b, &mut b.p, &mut b.gq, &mut b.fe);
+            G.gradient(q, bv, pv, gq, fe);
         }
         // Damping.
         if self.damped {
-            matvec(&self.D, &b.zeta, &mut b.fd);
+            matvec(&self.D, zeta, fd);
         }
         // Gravity (x, y).
         let gL = [c * gravity[0] + s * gravity[1], c * gravity[1] - s * gravity[0]];
         let Fg = [gL[0] * m, gL[1] * m, Es[0] * gL[0] + Es[1] * gL[1]];
-        for (f, st) in b.fg.iter_mut().zip(&self.St) {
+        for (f, st) in fg.iter_mut().zip(&self.St) {
             *f = gL[0] * st[0] + gL[1] * st[1];
         }
         let FI = [FV[0], FV[1], FO];
-        let R = b.R;
+        let R = *bR;
         if parts {
             let zero = [S::cst(0.0); 3];
-            let [pi, pe, pd, pg] = &mut b.parts;
-            self.project(&b.rho, &Gi, R, FI, &b.fq, pi);
-            self.project(&b.rho, &Gi, R, zero, &b.fe, pe);
+            let [pi, pe, pd, pg] = pparts;
+            self.project(rho, &Gi, R, FI, fq, pi);
+            self.project(rho, &Gi, R, zero, fe, pe);
             if self.damped {
-                self.project(&b.rho, &Gi, R, zero, &b.fd, pd);
+                self.project(rho, &Gi, R, zero, fd, pd);
             } else {
                 pd.fill(S::cst(0.0));
             }
-            self.project(&b.rho, &Gi, R, Fg, &b.fg, pg);
+            self.project(rho, &Gi, R, Fg, fg, pg);
             for i in 0..n {
-                b.out[i] = pi[i] + pe[i] + pd[i] - pg[i];
+                out[i] = pi[i] + pe[i] + pd[i] - pg[i];
             }
         } else {
             for i in 0..n {
-                let mut f = b.fq[i] + b.fe[i] - b.fg[i];
+                let mut f = fq[i] + fe[i] - fg[i];
                 if self.damped {
-                    f += b.fd[i];
+                    f += fd[i];
                 }
-                b.fq[i] = f;
+                fq[i] = f;
             }
             let fxi = [FI[0] - Fg[0], FI[1] - Fg[1], FI[2] - Fg[2]];
-            self.project(&b.rho, &Gi, R, fxi, &b.fq, &mut b.out);
+            self.project(rho, &Gi, R, fxi, fq, out);
         }
     }
 
