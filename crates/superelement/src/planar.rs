@@ -1140,6 +1140,8 @@ impl PlanarBody {
         let tol = settings.tolerance + 64.0 * f64::EPSILON * (1.0 + r_max / L);
         let (mut rj, mut pj) = start;
         let mut residual = f64::INFINITY;
+        let (rho, qjj) = (&mut b.rho[..N], &mut b.qjj[..pb.n]);
+        qjj[3 * N..].copy_from_slice(eta);
         for it in 0..=settings.max_iterations {
             let (s, c) = pj.sin_cos();
             for k in 0..N {
@@ -1147,13 +1149,12 @@ impl PlanarBody {
                 let dy = r[k][1] - rj[1];
                 let rx = c * dx + s * dy;
                 let ry = c * dy - s * dx;
-                b.rho[k] = [rx, ry];
-                b.qjj[3 * k] = rx - pb.x[k][0];
-                b.qjj[3 * k + 1] = ry - pb.x[k][1];
-                b.qjj[3 * k + 2] = wrap(phi[k] - pj);
+                rho[k] = [rx, ry];
+                qjj[3 * k] = rx - pb.x[k][0];
+                qjj[3 * k + 1] = ry - pb.x[k][1];
+                qjj[3 * k + 2] = wrap(phi[k] - pj);
             }
-            b.qjj[3 * N..].copy_from_slice(eta);
-            let g = pb.phi_mul(&b.qjj);
+            let g = pb.phi_mul(qjj);
             // |g_t| by the square root of the sum of squares (hypot where that overflows).
             let t2 = g[0] * g[0] + g[1] * g[1];
             let gt = if t2.is_finite() { t2.sqrt() } else { g[0].hypot(g[1]) };
@@ -1167,7 +1168,7 @@ impl PlanarBody {
             if it == settings.max_iterations {
                 break;
             }
-            let Gi = pb.inverse_with_rcond(&b.rho)?;
+            let Gi = pb.inverse_with_rcond(rho)?;
             let d: [f64; 3] = std::array::from_fn(|a| Gi[a][0] * g[0] + Gi[a][1] * g[1] + Gi[a][2] * g[2]);
             rj[0] += c * d[0] - s * d[1];
             rj[1] += s * d[0] + c * d[1];

@@ -175,13 +175,25 @@ impl Superelement {
         ] {
             v.fill(0.0);
         }
-        for (i, &g) in pb.index.iter().enumerate() {
-            out.f_inertia[g] = b.parts[0][i];
-            out.f_elastic[g] = b.parts[1][i];
-            out.f_damping[g] = b.parts[2][i];
-            out.f_gravity[g] = b.parts[3][i];
-            out.residual[g] = b.out[i];
-            out.q_jj[g] = b.qjj[i];
+        {
+            // Slices, not the vectors through `out` and `b` at every entry.
+            let [p0, p1, p2, p3] = &b.parts;
+            let (fi, fe, fd, fg) = (
+                &mut out.f_inertia[..],
+                &mut out.f_elastic[..],
+                &mut out.f_damping[..],
+                &mut out.f_gravity[..],
+            );
+            let (res, qj) = (&mut out.residual[..], &mut out.q_jj[..]);
+            let (bo, bq) = (&b.out[..], &b.qjj[..]);
+            for (i, &g) in pb.index.iter().enumerate() {
+                fi[g] = p0[i];
+                fe[g] = p1[i];
+                fd[g] = p2[i];
+                fg[g] = p3[i];
+                res[g] = bo[i];
+                qj[g] = bq[i];
+            }
         }
         let frame3 = self.frame_3d(frame, z);
         out.frame = frame3;
