@@ -887,6 +887,9 @@ impl PlanarBody {
         let N = self.N;
         let b = &pw.f;
         let Gi = &b.Gi;
+        // The vectors read in the loops as slices, taken once.
+        let (St, Srz, sa, Szm) = (&self.St[..n], &self.Srz[..n], &self.a[..n], &self.Sz[..n * n]);
+        let (Sq, Wq, bSz, by, bzeta) = (&b.Sq[..n], &b.Wq[..n], &b.Sz[..n], &b.y[..n], &b.zeta[..n]);
         // Z_j = Gi Phi_j, by rows (3 x n).
         let Z = &mut pw.Z;
         for (j, ph) in self.Phi.iter().enumerate() {
@@ -902,9 +905,9 @@ impl PlanarBody {
         let A = [[m, 0.0, Es[0]], [0.0, m, Es[1]], [Es[0], Es[1], b.J]];
         let Bx = &mut pw.Bx;
         for i in 0..n {
-            Bx[i] = self.St[i][0];
-            Bx[n + i] = self.St[i][1];
-            Bx[2 * n + i] = self.Srz[i] - b.Sq[i];
+            Bx[i] = St[i][0];
+            Bx[n + i] = St[i][1];
+            Bx[2 * n + i] = Srz[i] - Sq[i];
         }
         let Bx = &pw.Bx[..3 * n];
         Self::congruence(n, rho, Z, &A, Bx, &self.M, &mut pw.scratch, &mut pw.mats[2]);
@@ -923,14 +926,14 @@ impl PlanarBody {
             let (Fxz, rest) = pw.big.split_at_mut(3 * n);
             let Fzx = &mut rest[..3 * n];
             for i in 0..n {
-                let st = self.St[i];
-                let aw = self.a[i] + b.Wq[i];
+                let st = St[i];
+                let aw = sa[i] + Wq[i];
                 Fxz[i] = -2.0 * om * st[1];
                 Fxz[n + i] = 2.0 * om * st[0];
                 Fxz[2 * n + i] = 2.0 * om * aw;
                 Fzx[i] = om * st[1];
                 Fzx[n + i] = -om * st[0];
-                Fzx[2 * n + i] = st[0] * -V1 + st[1] * V0 - 2.0 * b.Sz[i] - 2.0 * om * aw;
+                Fzx[2 * n + i] = st[0] * -V1 + st[1] * V0 - 2.0 * bSz[i] - 2.0 * om * aw;
             }
             // P^T F P = Fzz + L Z + Z^T (U + Cf Z): L = Fzx - Fzz Psi, U = Fxz - Psi^T Fzz,
             // Cf = Fxx - Fxz Psi - Psi^T Fzx + Psi^T Fzz Psi, with Fzz = -2 Omega S~_z.
@@ -941,8 +944,8 @@ impl PlanarBody {
                 let (mut g, mut h) = ([0.0; 3], [0.0; 3]);
                 for (k, r) in rho.iter().enumerate() {
                     // Row i of S~_z at the interface columns, and column i at the interface rows.
-                    let a = |l: usize| self.Sz[i + n * l];
-                    let c = |l: usize| self.Sz[l + n * i];
+                    let a = |l: usize| Szm[i + n * l];
+                    let c = |l: usize| Szm[l + n * i];
                     let (ax, ay, at) = (a(3 * k), a(3 * k + 1), a(3 * k + 2));
                     let (cx, cy, ct) = (c(3 * k), c(3 * k + 1), c(3 * k + 2));
                     g[0] += ax;
@@ -980,7 +983,7 @@ impl PlanarBody {
             let (y0, rest) = Z.split_at(n);
             let (y1, y2) = rest.split_at(n);
             let [_, C, Mloc] = &mut pw.mats;
-            for (j, (col, sz)) in C[..n * n].chunks_exact_mut(n).zip(self.Sz.chunks_exact(n)).enumerate() {
+            for (j, (col, sz)) in C[..n * n].chunks_exact_mut(n).zip(Szm.chunks_exact(n)).enumerate() {
                 let z = [y0[j], y1[j], y2[j]];
                 let h: [f64; 3] = std::array::from_fn(|a| {
                     Fxz[a * n + j] - PsiFzz[a * n + j] + Cf[a][0] * z[0] + Cf[a][1] * z[1] + Cf[a][2] * z[2]
@@ -1006,7 +1009,7 @@ impl PlanarBody {
                     let two = |i: usize| if i == j { 2.0 } else { 0.0 };
                     let ex = two(ix) - (Z[j] - pO * r[1]);
                     let ey = two(iy) - (Z[n + j] + pO * r[0]);
-                    let w = [b.y[ix] + b.zeta[ix], b.y[iy] + b.zeta[iy]];
+                    let w = [by[ix] + bzeta[ix], by[iy] + bzeta[iy]];
                     let yx = w[1] * pO + om * ey;
                     let yy = -w[0] * pO - om * ex;
                     let (cx, cy) = (&Mloc[n * ix..n * (ix + 1)], &Mloc[n * iy..n * (iy + 1)]);
