@@ -280,8 +280,8 @@ pub(crate) struct PlanarWorkspace {
     pub scratch: Vec<f64>,
     pub six: Vec<f64>,
     pub big: Vec<f64>,
-    /// The last warm-start orientation read (quaternion coordinates) and its angle about z
-    /// ([`Self::warm_angle`]).
+    /// The last warm-start orientation read or frame orientation returned (quaternion
+    /// coordinates) and its angle about z ([`Self::warm_angle`]).
     pub warm: ([f64; 4], f64),
 }
 
@@ -305,15 +305,22 @@ impl PlanarWorkspace {
         }
     }
 
-    /// [`angle_of`] the warm-start orientation `R`, kept for the next call: the evaluations of
-    /// one time step share their warm start (the frame of the last step), so one atan2 serves
-    /// them all, to the bit.
+    /// The angle about z of the warm-start orientation `R`: when `R` is (to the bit) the
+    /// orientation of the frame this workspace last returned ([`Self::returned`]; a system
+    /// passes each evaluation's frame back as the next warm start) that frame's angle, else
+    /// [`angle_of`] `R` (kept for the next call). The two differ by round-off only.
     pub fn warm_angle(&mut self, R: &UnitQuaternion<f64>) -> f64 {
         let c = [R.coords[0], R.coords[1], R.coords[2], R.coords[3]];
         if c != self.warm.0 {
             self.warm = (c, angle_of(R));
         }
         self.warm.1
+    }
+
+    /// Records the frame orientation `R` = [`rotation_z`]`(phi)` an evaluation returned, for
+    /// [`Self::warm_angle`] (`phi` wrapped to $(-\pi, \pi]$ as [`angle_of`]).
+    pub fn returned(&mut self, R: &UnitQuaternion<f64>, phi: f64) {
+        self.warm = ([R.coords[0], R.coords[1], R.coords[2], R.coords[3]], wrap(phi));
     }
 }
 

@@ -196,6 +196,7 @@ impl Superelement {
             }
         }
         let frame3 = self.frame_3d(frame, z);
+        pw.returned(&frame3.R, frame.1);
         out.frame = frame3;
         out.frame_iterations = iterations;
         // M and C_t in closed form, K_t by dual numbers.
