@@ -123,12 +123,18 @@
 //! | G_k q once per nonzero G_k, dual products by rows | 10.7k | 17.2k | 47.8k |
 //! | wrap without fmod, the tilt by its square | 10.4k | 16.9k | 47.5k |
 //! | K_CB q, W q, S~_z q in one pass for dual numbers | 10.4k | 16.9k | 47.1k |
+//! | the frame angle's sin, cos from the frame solve, \|g_t\| without hypot | 10.3k | 16.8k | 47.0k |
+//! | the residual pass on slices of its buffers (no vector reloads through the buffer struct) | 9.8k | 16.3k | 45.9k |
+//! | the frame Newton, the output scatter and the closed-form M, C_t on slices too | 9.7k | 16.2k | 45.4k |
 //!
-//! In time (medians of 400 batches, three alternating runs on a loaded machine): residual 1.3
-//! against 3.2 us, forces and M 2.0 against 5.1 us, with tangents 5.7 against 12.8-14.2 us. The
-//! tangent pass by dual numbers ($\mathbf K_t$, 8 directions) is 20.3k of the 47.1k, the closed-form
-//! $\mathbf M$ and $\mathbf C_t$ 11.5k, the residual pass 6.9k; the rest is the frame solve,
-//! reading the state and writing the $6N + m$ layout.
+//! In time (at the 47.1k row; medians of 400 batches, three alternating runs on a loaded
+//! machine): residual 1.3 against 3.2 us, forces and M 2.0 against 5.1 us, with tangents 5.7
+//! against 12.8-14.2 us. The tangent pass by dual numbers ($\mathbf K_t$, 8 directions) is 19.6k
+//! of the 45.4k, the closed-form $\mathbf M$ and $\mathbf C_t$ 11.1k, the residual pass 6.3k; the
+//! rest is the frame solve, reading the state and writing the $6N + m$ layout. A body of 9 to
+//! 12 planar coordinates takes one tangent pass of 12 directions instead of two of 8: the C2
+//! rod as one segment with 3 modes (9 coordinates) 41.9k -> 27.0k for $\mathbf K_t$, 72.1k ->
+//! 57.2k with tangents.
 
 use nalgebra::{Point3, Vector3};
 use reduction::{CbSettings, ModeSelection, ReducedBody};

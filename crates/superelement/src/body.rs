@@ -9,7 +9,7 @@ use crate::error::SuperelementError;
 use crate::frame::{FrameProblem, FrameScratch, FrameSettings, FrameSolve};
 use crate::local_coordinates::local_coordinates;
 use crate::mass::{FfrInertia, MassVariant};
-use crate::planar::{angle_of, rotation_z, wrap, Buf, PlanarBody, STATE_TOL};
+use crate::planar::{angle_of, rotation_z, wrap, Buf, PlanarBody, Solved2, STATE_TOL};
 pub use crate::state::BodyState;
 use crate::state::{Frame, FrameChoice};
 use crate::transform::Kinematics;
@@ -818,8 +818,11 @@ impl Superelement {
         }
     }
 
-    /// Solves the planar frame (4.4) from the warm start (the frame of `warm`): positions `r`,
-    /// angles `phi`, modal coordinates `eta`; `q` and `rho` are Newton buffers.
+    /// Solves the planar frame (4.4) from the warm start (the frame of `warm`, its angle
+    /// `warm_angle`): positions `r`, angles `phi`, modal coordinates `eta`; `b` holds the Newton
+    /// iterates. Returns the frame, the iterations and, after a Newton solve, $(\sin, \cos)$ of
+    /// the frame angle.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn planar_frame(
         &self,
         r: &[[f64; 2]],
@@ -827,11 +830,12 @@ impl Superelement {
         eta: &[f64],
         r_max: f64,
         warm: &Frame,
+        warm_angle: f64,
         b: &mut Buf<f64>,
-    ) -> Result<(([f64; 2], f64), usize), SuperelementError> {
+    ) -> Result<Solved2, SuperelementError> {
         let pb = self.planar_body();
         match self.frame_solve {
-            FrameSolve::AtInterface(k) => Ok(((r[k], phi[k]), 0)),
+            FrameSolve::AtInterface(k) => Ok(((r[k], phi[k]), 0, None)),
             FrameSolve::Newton => {
                 let x0 = pb.x[0];
                 let guess = || {
@@ -841,14 +845,16 @@ impl Superelement {
                         phi[0],
                     )
                 };
-                let warm = ([warm.r.x, warm.r.y], angle_of(&warm.R));
+                let warm = ([warm.r.x, warm.r.y], warm_angle);
                 let far = phi.iter().any(|p| wrap(p - warm.1).abs() > 1.0);
                 let (L, settings) = (self.length, self.frame_settings);
-                if far {
-                    return pb.newton(r, phi, eta, r_max, guess(), L, settings, b);
-                }
-                pb.newton(r, phi, eta, r_max, warm, L, settings, b)
-                    .or_else(|e| pb.newton(r, phi, eta, r_max, guess(), L, settings, b).map_err(|_| e))
+                let solved = if far {
+                    pb.newton(r, phi, eta, r_max, guess(), L, settings, b)
+                } else {
+                    pb.newton(r, phi, eta, r_max, warm, L, settings, b)
+                        .or_else(|e| pb.newton(r, phi, eta, r_max, guess(), L, settings, b).map_err(|_| e))
+                };
+                solved.map(|(frame, it, sc)| (frame, it, Some(sc)))
             }
         }
     }
@@ -865,7 +871,8 @@ impl Superelement {
         let mut phi = vec![0.0; pb.N];
         let r_max = self.read_planar(state, &mut r, &mut phi)?;
         let mut b = Buf::<f64>::new(pb.N, pb.n, 0);
-        let (frame, it) = self.planar_frame(&r, &phi, &state.eta, r_max, &state.frame, &mut b)?;
+        let warm_angle = angle_of(&state.frame.R);
+        let (frame, it, _) = self.planar_frame(&r, &phi, &state.eta, r_max, &state.frame, warm_angle, &mut b)?;
         Ok((self.frame_3d(frame, state.r[0].z - self.x[0].z), it))
     }
 

@@ -76,8 +76,8 @@
 //!   [`Superelement::recover_mesh`] for the deformed mesh.
 //! * [`Superelement::into_planar`] makes a body reduced in its FE model's xy-plane a planar one
 //!   ([`planar`]): $3N + m$ coordinates evaluated behind the same methods and the same
-//!   $6N + m$ layout (out-of-plane rows and columns zero), at 40-45 % of the spatial body's
-//!   instructions for the residual and the mass, 38 % with the tangents (`benches/evaluate.rs`).
+//!   $6N + m$ layout (out-of-plane rows and columns zero), at 41 % of the spatial body's
+//!   instructions for the residual and the mass, 37 % with the tangents (`benches/evaluate.rs`).
 //! * [`testing`]: the central-difference helper, state perturbations through exp, test states,
 //!   and (feature `testing`) reduced-body fixtures.
 //!

@@ -78,6 +78,11 @@ use std::f64::consts::PI;
 /// Width of the dual numbers of the tangent passes: directions per pass.
 const WIDTH: usize = 8;
 
+/// Width of the single tangent pass of a body with more than [`WIDTH`] and at most this many
+/// planar coordinates (one pass of 12 directions costs less than two of 8; every direction is
+/// computed alike whatever the width, so $\mathbf K_t$ is the same to the bit).
+const WIDE: usize = 12;
+
 /// Relative size of a coupling between the in-plane and out-of-plane sets accepted by
 /// [`crate::Superelement::into_planar`] (against the largest entry of the matrix).
 pub const COUPLING_TOL: f64 = 1e-9;
@@ -122,6 +127,13 @@ pub(crate) struct PlanarBody {
     pub Sz: Vec<f64>,
     pub geometric: Option<PlanarGeometric>,
 }
+
+/// A planar frame: position (x, y) and angle about z.
+pub(crate) type Frame2 = ([f64; 2], f64);
+
+/// A solved planar frame: the frame, the iterations and, after a Newton solve, $(\sin, \cos)$
+/// of its angle.
+pub(crate) type Solved2 = (Frame2, usize, Option<(f64, f64)>);
 
 /// The nonzero entries $(i, j, (\mathbf G_k)_{ij})$ of one $\mathbf G_k$.
 pub(crate) type Entries = Vec<(u32, u32, f64)>;
@@ -253,6 +265,8 @@ impl<S: Scalar> Buf<S> {
 pub(crate) struct PlanarWorkspace {
     pub f: Buf<f64>,
     pub d: Buf<Dual<WIDTH>>,
+    /// The buffers of the single [`WIDE`] pass, for $[`WIDTH`] < n \le$ [`WIDE`].
+    pub wide: Option<Buf<Dual<WIDE>>>,
     /// Interface positions (x, y) and raw angles of the state.
     pub pos: Vec<[f64; 2]>,
     pub phi: Vec<f64>,
@@ -266,6 +280,9 @@ pub(crate) struct PlanarWorkspace {
     pub scratch: Vec<f64>,
     pub six: Vec<f64>,
     pub big: Vec<f64>,
+    /// The last warm-start orientation read or frame orientation returned (quaternion
+    /// coordinates) and its angle about z ([`Self::warm_angle`]).
+    pub warm: ([f64; 4], f64),
 }
 
 impl PlanarWorkspace {
@@ -275,6 +292,7 @@ impl PlanarWorkspace {
         Self {
             f: Buf::new(N, n, groups),
             d: Buf::new(N, n, groups),
+            wide: (n > WIDTH && n <= WIDE).then(|| Buf::new(N, n, groups)),
             pos: vec![[0.0; 2]; N],
             phi: vec![0.0; N],
             mats: [vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]],
@@ -283,7 +301,26 @@ impl PlanarWorkspace {
             scratch: vec![0.0; 3 * n],
             six: vec![0.0; 6 * n],
             big: vec![0.0; (n * n).max(6 * n)],
+            warm: ([f64::NAN; 4], f64::NAN),
         }
+    }
+
+    /// The angle about z of the warm-start orientation `R`: when `R` is (to the bit) the
+    /// orientation of the frame this workspace last returned ([`Self::returned`]; a system
+    /// passes each evaluation's frame back as the next warm start) that frame's angle, else
+    /// [`angle_of`] `R` (kept for the next call). The two differ by round-off only.
+    pub fn warm_angle(&mut self, R: &UnitQuaternion<f64>) -> f64 {
+        let c = [R.coords[0], R.coords[1], R.coords[2], R.coords[3]];
+        if c != self.warm.0 {
+            self.warm = (c, angle_of(R));
+        }
+        self.warm.1
+    }
+
+    /// Records the frame orientation `R` = [`rotation_z`]`(phi)` an evaluation returned, for
+    /// [`Self::warm_angle`] (`phi` wrapped to $(-\pi, \pi]$ as [`angle_of`]).
+    pub fn returned(&mut self, R: &UnitQuaternion<f64>, phi: f64) {
+        self.warm = ([R.coords[0], R.coords[1], R.coords[2], R.coords[3]], wrap(phi));
     }
 }
 
@@ -495,13 +532,16 @@ impl PlanarBody {
 
     /// The generic residual: `b.q`, `b.qd`, `b.qdd` (planar absolute coordinates, velocities,
     /// accelerations) at the converged frame `frame` (with `Gi0` = its
-    /// $(\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}$ for the implicit derivative) into `b.out`, and with
-    /// `parts` the four force parts into `b.parts`.
+    /// $(\boldsymbol\Phi_j\boldsymbol\Psi)^{-1}$ for the implicit derivative; `sc`: $(\sin, \cos)$ of
+    /// the frame angle when known, [`Self::newton`]) into `b.out`, and with `parts` the four force
+    /// parts into `b.parts`.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(crate) fn core<S: Scalar>(
         &self,
         b: &mut Buf<S>,
         frame: ([f64; 2], f64),
+        sc: Option<(f64, f64)>,
         solve: FrameSolve,
         Gi0: &[[f64; 3]; 3],
         gravity: [f64; 2],
@@ -520,7 +560,7 @@ impl PlanarBody {
             FrameSolve::Newton => {
                 b.frame_r = [S::cst(frame.0[0]), S::cst(frame.0[1])];
                 b.frame_phi = S::cst(frame.1);
-                let (s0, c0) = frame.1.sin_cos();
+                let (s0, c0) = sc.unwrap_or_else(|| frame.1.sin_cos());
                 b.R = (S::cst(s0), S::cst(c0));
                 if S::DUAL {
                     self.local(b);
@@ -536,40 +576,77 @@ impl PlanarBody {
             }
         }
         self.local(b);
-        let (s, c) = b.R;
+        // The buffers as separate slices (no reloads of the vectors through `b` in the loops).
+        let Buf {
+            qd,
+            qdd,
+            qjj,
+            rho,
+            y,
+            ybar,
+            zeta,
+            zetad,
+            Wq,
+            Sq,
+            Sz,
+            fq,
+            fe,
+            fd,
+            fg,
+            b: bv,
+            p: pv,
+            gq,
+            out,
+            parts: pparts,
+            Gi: bGi,
+            xi: bxi,
+            sv: bsv,
+            sd: bsd,
+            J: bJ,
+            Jd: bJd,
+            R: bR,
+            ..
+        } = b;
+        let (qd, qdd, qjj, rho) = (&qd[..n], &qdd[..n], &qjj[..n], &rho[..N]);
+        let (y, ybar, zeta, zetad) = (&mut y[..n], &mut ybar[..n], &mut zeta[..n], &mut zetad[..n]);
+        let (Wq, Sq, Sz, fq) = (&mut Wq[..n], &mut Sq[..n], &mut Sz[..n], &mut fq[..n]);
+        let (fe, fd, fg, out) = (&mut fe[..n], &mut fd[..n], &mut fg[..n], &mut out[..n]);
+        let (s, c) = *bR;
         // y and a in body axes (a into ybar).
         for k in 0..N {
-            let (vx, vy) = (b.qd[3 * k], b.qd[3 * k + 1]);
-            b.y[3 * k] = c * vx + s * vy;
-            b.y[3 * k + 1] = c * vy - s * vx;
-            b.y[3 * k + 2] = b.qd[3 * k + 2];
-            let (ax, ay) = (b.qdd[3 * k], b.qdd[3 * k + 1]);
-            b.ybar[3 * k] = c * ax + s * ay;
-            b.ybar[3 * k + 1] = c * ay - s * ax;
-            b.ybar[3 * k + 2] = b.qdd[3 * k + 2];
+            let (vx, vy) = (qd[3 * k], qd[3 * k + 1]);
+            y[3 * k] = c * vx + s * vy;
+            y[3 * k + 1] = c * vy - s * vx;
+            y[3 * k + 2] = qd[3 * k + 2];
+            let (ax, ay) = (qdd[3 * k], qdd[3 * k + 1]);
+            ybar[3 * k] = c * ax + s * ay;
+            ybar[3 * k + 1] = c * ay - s * ax;
+            ybar[3 * k + 2] = qdd[3 * k + 2];
         }
+        // The modal rows (a few: a loop, not a memcpy call).
+        #[allow(clippy::manual_memcpy)]
         for i in 3 * N..n {
-            b.y[i] = b.qd[i];
-            b.ybar[i] = b.qdd[i];
+            y[i] = qd[i];
+            ybar[i] = qdd[i];
         }
-        let (Gi, _) = inv3(&self.phi_psi(&b.rho));
-        b.Gi = Gi;
-        let py = self.phi_mul(&b.y);
+        let (Gi, _) = inv3(&self.phi_psi(rho));
+        *bGi = Gi;
+        let py = self.phi_mul(y);
         let xi: [S; 3] = std::array::from_fn(|a| Gi[a][0] * py[0] + Gi[a][1] * py[1] + Gi[a][2] * py[2]);
-        self.minus_psi(&b.rho, &b.y, &xi, &mut b.zeta);
+        self.minus_psi(rho, y, &xi, zeta);
         let om = xi[2];
         for k in 0..N {
-            let (yx, yy) = (b.y[3 * k], b.y[3 * k + 1]);
-            let (zx, zy) = (b.zeta[3 * k], b.zeta[3 * k + 1]);
-            b.ybar[3 * k] += om * (yy + zy);
-            b.ybar[3 * k + 1] -= om * (yx + zx);
+            let (yx, yy) = (y[3 * k], y[3 * k + 1]);
+            let (zx, zy) = (zeta[3 * k], zeta[3 * k + 1]);
+            ybar[3 * k] += om * (yy + zy);
+            ybar[3 * k + 1] -= om * (yx + zx);
         }
-        let pa = self.phi_mul(&b.ybar);
+        let pa = self.phi_mul(ybar);
         let xid: [S; 3] = std::array::from_fn(|a| Gi[a][0] * pa[0] + Gi[a][1] * pa[1] + Gi[a][2] * pa[2]);
-        self.minus_psi(&b.rho, &b.ybar, &xid, &mut b.zetad);
+        self.minus_psi(rho, ybar, &xid, zetad);
 
         // FFR inertia (module docs).
-        let q = &b.qjj;
+        let q = qjj;
         let m = self.mass;
         let mut sv = [S::cst(m * self.d[0]), S::cst(m * self.d[1])];
         let mut sd = [S::cst(0.0); 2];
@@ -577,27 +654,27 @@ impl PlanarBody {
         for (i, st) in self.St.iter().enumerate() {
             for a in 0..2 {
                 sv[a] = sv[a].mul_add_f(q[i], st[a]);
-                sd[a] = sd[a].mul_add_f(b.zeta[i], st[a]);
-                std_[a] = std_[a].mul_add_f(b.zetad[i], st[a]);
+                sd[a] = sd[a].mul_add_f(zeta[i], st[a]);
+                std_[a] = std_[a].mul_add_f(zetad[i], st[a]);
             }
         }
-        matvec3([&self.W, &self.Sz, &self.K], q, [&mut b.Wq, &mut b.Sq, &mut b.fe]);
-        matvec(&self.Sz, &b.zeta, &mut b.Sz);
+        matvec3([&self.W, &self.Sz, &self.K], q, [Wq, Sq, fe]);
+        matvec(&self.Sz, zeta, Sz);
         let mut J = S::cst(self.J0);
         let mut Jd = S::cst(0.0);
         let mut cz = S::cst(0.0);
         for i in 0..n {
             let ai = S::cst(self.a[i]);
-            J += (ai * 2.0 + b.Wq[i]) * q[i];
-            Jd += (ai + b.Wq[i]) * b.zeta[i] * 2.0;
+            J += (ai * 2.0 + Wq[i]) * q[i];
+            Jd += (ai + Wq[i]) * zeta[i] * 2.0;
             // c = S_rz - S~_z q.
-            cz += (S::cst(self.Srz[i]) - b.Sq[i]) * b.zetad[i];
+            cz += (S::cst(self.Srz[i]) - Sq[i]) * zetad[i];
         }
-        b.xi = xi;
-        b.sv = sv;
-        b.sd = sd;
-        b.J = J;
-        b.Jd = Jd;
+        *bxi = xi;
+        *bsv = sv;
+        *bsd = sd;
+        *bJ = J;
+        *bJd = Jd;
         let (V, Vd) = ([xi[0], xi[1]], [xid[0], xid[1]]);
         let omd = xid[2];
         let Es = [-sv[1], sv[0]];
@@ -607,65 +684,72 @@ impl PlanarBody {
         let FV: [S; 2] = std::array::from_fn(|a| Vd[a] * m + Es[a] * omd + Esd[a] * om + std_[a] + om * EpV[a]);
         let FO = Vd[0] * Es[0] + Vd[1] * Es[1] + J * omd + cz + Jd * om + om * (V[0] * sv[0] + V[1] * sv[1]);
         let Vt = [Vd[0] - om * V[1], Vd[1] + om * V[0]];
-        matvec(&self.M, &b.zetad, &mut b.fq);
+        matvec(&self.M, zetad, fq);
         let om2 = om * om;
         let two_om = om * 2.0;
         for i in 0..n {
             let st = &self.St[i];
-            let ci = S::cst(self.Srz[i]) - b.Sq[i];
-            b.fq[i] +=
-                Vt[0] * st[0] + Vt[1] * st[1] + ci * omd - two_om * b.Sz[i] - om2 * (S::cst(self.a[i]) + b.Wq[i]);
+            let ci = S::cst(self.Srz[i]) - Sq[i];
+            fq[i] += Vt[0] * st[0] + Vt[1] * st[1] + ci * omd - two_om * Sz[i] - om2 * (S::cst(self.a[i]) + Wq[i]);
         }
         // Elastic force with geometric stiffening (K q formed above).
         if let Some(G) = &self.geometric {
-            G.gradient(q, &mut b.b, &mut b.p, &mut b.gq, &mut b.fe);
+            G.gradient(q, bv, pv, gq, fe);
         }
         // Damping.
         if self.damped {
-            matvec(&self.D, &b.zeta, &mut b.fd);
+            matvec(&self.D, zeta, fd);
         }
         // Gravity (x, y).
         let gL = [c * gravity[0] + s * gravity[1], c * gravity[1] - s * gravity[0]];
         let Fg = [gL[0] * m, gL[1] * m, Es[0] * gL[0] + Es[1] * gL[1]];
-        for (f, st) in b.fg.iter_mut().zip(&self.St) {
+        for (f, st) in fg.iter_mut().zip(&self.St) {
             *f = gL[0] * st[0] + gL[1] * st[1];
         }
         let FI = [FV[0], FV[1], FO];
-        let R = b.R;
+        let R = *bR;
         if parts {
             let zero = [S::cst(0.0); 3];
-            let [pi, pe, pd, pg] = &mut b.parts;
-            self.project(&b.rho, &Gi, R, FI, &b.fq, pi);
-            self.project(&b.rho, &Gi, R, zero, &b.fe, pe);
+            let [pi, pe, pd, pg] = pparts;
+            self.project(rho, &Gi, R, FI, fq, pi);
+            self.project(rho, &Gi, R, zero, fe, pe);
             if self.damped {
-                self.project(&b.rho, &Gi, R, zero, &b.fd, pd);
+                self.project(rho, &Gi, R, zero, fd, pd);
             } else {
                 pd.fill(S::cst(0.0));
             }
-            self.project(&b.rho, &Gi, R, Fg, &b.fg, pg);
+            self.project(rho, &Gi, R, Fg, fg, pg);
             for i in 0..n {
-                b.out[i] = pi[i] + pe[i] + pd[i] - pg[i];
+                out[i] = pi[i] + pe[i] + pd[i] - pg[i];
             }
         } else {
             for i in 0..n {
-                let mut f = b.fq[i] + b.fe[i] - b.fg[i];
+                let mut f = fq[i] + fe[i] - fg[i];
                 if self.damped {
-                    f += b.fd[i];
+                    f += fd[i];
                 }
-                b.fq[i] = f;
+                fq[i] = f;
             }
             let fxi = [FI[0] - Fg[0], FI[1] - Fg[1], FI[2] - Fg[2]];
-            self.project(&b.rho, &Gi, R, fxi, &b.fq, &mut b.out);
+            self.project(rho, &Gi, R, fxi, fq, out);
         }
     }
 
     /// [`Self::core`] in `f64` with the force parts (the residual of an evaluation), compiled for
     /// the machine's vector instructions.
-    pub(crate) fn forces(&self, b: &mut Buf<f64>, frame: ([f64; 2], f64), solve: FrameSolve, gravity: [f64; 2]) {
+    pub(crate) fn forces(
+        &self,
+        b: &mut Buf<f64>,
+        frame: ([f64; 2], f64),
+        sc: Option<(f64, f64)>,
+        solve: FrameSolve,
+        gravity: [f64; 2],
+    ) {
         struct Pass<'a> {
             pb: &'a PlanarBody,
             b: &'a mut Buf<f64>,
             frame: ([f64; 2], f64),
+            sc: Option<(f64, f64)>,
             solve: FrameSolve,
             gravity: [f64; 2],
         }
@@ -674,25 +758,28 @@ impl PlanarBody {
             #[inline(always)]
             fn with_simd<S: pulp::Simd>(self, _simd: S) {
                 let Gi0 = [[0.0; 3]; 3];
-                self.pb.core(self.b, self.frame, self.solve, &Gi0, self.gravity, true);
+                self.pb
+                    .core(self.b, self.frame, self.sc, self.solve, &Gi0, self.gravity, true);
             }
         }
         pulp::Arch::new().dispatch(Pass {
             pb: self,
             b,
             frame,
+            sc,
             solve,
             gravity,
         });
     }
 
     /// $\mathbf K_t$ (planar, `pw.mats[0]`): the derivative of the residual in the planar
-    /// coordinates by dual numbers, [`WIDTH`] directions per pass, compiled for the machine's
-    /// vector instructions.
+    /// coordinates by dual numbers, [`WIDTH`] directions per pass (one pass of [`WIDE`] for
+    /// $n \le$ [`WIDE`]), compiled for the machine's vector instructions.
     pub(crate) fn stiffness_pass(
         &self,
         pw: &mut PlanarWorkspace,
         frame: ([f64; 2], f64),
+        sc: Option<(f64, f64)>,
         solve: FrameSolve,
         Gi0: &[[f64; 3]; 3],
         gravity: [f64; 2],
@@ -701,6 +788,7 @@ impl PlanarBody {
             pb: &'a PlanarBody,
             pw: &'a mut PlanarWorkspace,
             frame: ([f64; 2], f64),
+            sc: Option<(f64, f64)>,
             solve: FrameSolve,
             Gi0: &'a [[f64; 3]; 3],
             gravity: [f64; 2],
@@ -713,31 +801,16 @@ impl PlanarBody {
                     pb,
                     pw,
                     frame,
+                    sc,
                     solve,
                     Gi0,
                     gravity,
                 } = self;
-                let n = pb.n;
-                let mut start = 0;
-                while start < n {
-                    let end = (start + WIDTH).min(n);
-                    let (f, d) = (&pw.f, &mut pw.d);
-                    for i in 0..n {
-                        d.q[i] = Dual::cst(f.q[i]);
-                        d.qd[i] = Dual::cst(f.qd[i]);
-                        d.qdd[i] = Dual::cst(f.qdd[i]);
-                    }
-                    for (s, i) in (start..end).enumerate() {
-                        d.q[i].d[s] = 1.0;
-                    }
-                    pb.core(d, frame, solve, Gi0, gravity, false);
-                    let mat = &mut pw.mats[0];
-                    for (s, j) in (start..end).enumerate() {
-                        for i in 0..n {
-                            mat[i + n * j] = d.out[i].d[s];
-                        }
-                    }
-                    start = end;
+                let PlanarWorkspace { f, d, wide, mats, .. } = pw;
+                let mat = &mut mats[0];
+                match wide {
+                    Some(w) => pb.dual_passes(f, w, mat, frame, sc, solve, Gi0, gravity),
+                    None => pb.dual_passes(f, d, mat, frame, sc, solve, Gi0, gravity),
                 }
             }
         }
@@ -745,10 +818,48 @@ impl PlanarBody {
             pb: self,
             pw,
             frame,
+            sc,
             solve,
             Gi0,
             gravity,
         });
+    }
+
+    /// The passes of [`Self::stiffness_pass`] in dual numbers of width `W` (buffers `d`) at the
+    /// configuration of `f`, $\mathbf K_t$ into `mat`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn dual_passes<const W: usize>(
+        &self,
+        f: &Buf<f64>,
+        d: &mut Buf<Dual<W>>,
+        mat: &mut [f64],
+        frame: ([f64; 2], f64),
+        sc: Option<(f64, f64)>,
+        solve: FrameSolve,
+        Gi0: &[[f64; 3]; 3],
+        gravity: [f64; 2],
+    ) {
+        let n = self.n;
+        let mut start = 0;
+        while start < n {
+            let end = (start + W).min(n);
+            for i in 0..n {
+                d.q[i] = Dual::cst(f.q[i]);
+                d.qd[i] = Dual::cst(f.qd[i]);
+                d.qdd[i] = Dual::cst(f.qdd[i]);
+            }
+            for (s, i) in (start..end).enumerate() {
+                d.q[i].d[s] = 1.0;
+            }
+            self.core(d, frame, sc, solve, Gi0, gravity, false);
+            for (s, j) in (start..end).enumerate() {
+                for i in 0..n {
+                    mat[i + n * j] = d.out[i].d[s];
+                }
+            }
+            start = end;
+        }
     }
 
     /// $\mathbf M = \bar{\mathbf R}\mathbf P^T\mathbf M_{ffr}\mathbf P\bar{\mathbf R}^T$ into `pw.mats[2]`
@@ -783,6 +894,9 @@ impl PlanarBody {
         let N = self.N;
         let b = &pw.f;
         let Gi = &b.Gi;
+        // The vectors read in the loops as slices, taken once.
+        let (St, Srz, sa, Szm) = (&self.St[..n], &self.Srz[..n], &self.a[..n], &self.Sz[..n * n]);
+        let (Sq, Wq, bSz, by, bzeta) = (&b.Sq[..n], &b.Wq[..n], &b.Sz[..n], &b.y[..n], &b.zeta[..n]);
         // Z_j = Gi Phi_j, by rows (3 x n).
         let Z = &mut pw.Z;
         for (j, ph) in self.Phi.iter().enumerate() {
@@ -798,9 +912,9 @@ impl PlanarBody {
         let A = [[m, 0.0, Es[0]], [0.0, m, Es[1]], [Es[0], Es[1], b.J]];
         let Bx = &mut pw.Bx;
         for i in 0..n {
-            Bx[i] = self.St[i][0];
-            Bx[n + i] = self.St[i][1];
-            Bx[2 * n + i] = self.Srz[i] - b.Sq[i];
+            Bx[i] = St[i][0];
+            Bx[n + i] = St[i][1];
+            Bx[2 * n + i] = Srz[i] - Sq[i];
         }
         let Bx = &pw.Bx[..3 * n];
         Self::congruence(n, rho, Z, &A, Bx, &self.M, &mut pw.scratch, &mut pw.mats[2]);
@@ -819,14 +933,14 @@ impl PlanarBody {
             let (Fxz, rest) = pw.big.split_at_mut(3 * n);
             let Fzx = &mut rest[..3 * n];
             for i in 0..n {
-                let st = self.St[i];
-                let aw = self.a[i] + b.Wq[i];
+                let st = St[i];
+                let aw = sa[i] + Wq[i];
                 Fxz[i] = -2.0 * om * st[1];
                 Fxz[n + i] = 2.0 * om * st[0];
                 Fxz[2 * n + i] = 2.0 * om * aw;
                 Fzx[i] = om * st[1];
                 Fzx[n + i] = -om * st[0];
-                Fzx[2 * n + i] = st[0] * -V1 + st[1] * V0 - 2.0 * b.Sz[i] - 2.0 * om * aw;
+                Fzx[2 * n + i] = st[0] * -V1 + st[1] * V0 - 2.0 * bSz[i] - 2.0 * om * aw;
             }
             // P^T F P = Fzz + L Z + Z^T (U + Cf Z): L = Fzx - Fzz Psi, U = Fxz - Psi^T Fzz,
             // Cf = Fxx - Fxz Psi - Psi^T Fzx + Psi^T Fzz Psi, with Fzz = -2 Omega S~_z.
@@ -837,8 +951,8 @@ impl PlanarBody {
                 let (mut g, mut h) = ([0.0; 3], [0.0; 3]);
                 for (k, r) in rho.iter().enumerate() {
                     // Row i of S~_z at the interface columns, and column i at the interface rows.
-                    let a = |l: usize| self.Sz[i + n * l];
-                    let c = |l: usize| self.Sz[l + n * i];
+                    let a = |l: usize| Szm[i + n * l];
+                    let c = |l: usize| Szm[l + n * i];
                     let (ax, ay, at) = (a(3 * k), a(3 * k + 1), a(3 * k + 2));
                     let (cx, cy, ct) = (c(3 * k), c(3 * k + 1), c(3 * k + 2));
                     g[0] += ax;
@@ -876,7 +990,7 @@ impl PlanarBody {
             let (y0, rest) = Z.split_at(n);
             let (y1, y2) = rest.split_at(n);
             let [_, C, Mloc] = &mut pw.mats;
-            for (j, (col, sz)) in C[..n * n].chunks_exact_mut(n).zip(self.Sz.chunks_exact(n)).enumerate() {
+            for (j, (col, sz)) in C[..n * n].chunks_exact_mut(n).zip(Szm.chunks_exact(n)).enumerate() {
                 let z = [y0[j], y1[j], y2[j]];
                 let h: [f64; 3] = std::array::from_fn(|a| {
                     Fxz[a * n + j] - PsiFzz[a * n + j] + Cf[a][0] * z[0] + Cf[a][1] * z[1] + Cf[a][2] * z[2]
@@ -902,7 +1016,7 @@ impl PlanarBody {
                     let two = |i: usize| if i == j { 2.0 } else { 0.0 };
                     let ex = two(ix) - (Z[j] - pO * r[1]);
                     let ey = two(iy) - (Z[n + j] + pO * r[0]);
-                    let w = [b.y[ix] + b.zeta[ix], b.y[iy] + b.zeta[iy]];
+                    let w = [by[ix] + bzeta[ix], by[iy] + bzeta[iy]];
                     let yx = w[1] * pO + om * ey;
                     let yy = -w[0] * pO - om * ex;
                     let (cx, cy) = (&Mloc[n * ix..n * (ix + 1)], &Mloc[n * iy..n * (iy + 1)]);
@@ -1015,7 +1129,9 @@ impl PlanarBody {
 
     /// The Newton solve of the planar (4.4) from `start` for positions `r`, angles `phi`,
     /// modal coordinates `eta` (`r_max`: the largest $|\mathbf r_k|$, body size `length`), with
-    /// the tolerance logic and errors of the spatial solve; `b` holds the iterates.
+    /// the tolerance logic and errors of the spatial solve; `b` holds the iterates. Returns the
+    /// frame, the iterations and $(\sin, \cos)$ of the frame angle (formed by the last
+    /// iteration's test; [`Self::core`] reads them).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn newton(
         &self,
@@ -1027,13 +1143,15 @@ impl PlanarBody {
         length: f64,
         settings: FrameSettings,
         b: &mut Buf<f64>,
-    ) -> Result<(([f64; 2], f64), usize), SuperelementError> {
+    ) -> Result<(Frame2, usize, (f64, f64)), SuperelementError> {
         let pb = self;
         let N = pb.N;
         let L = length;
         let tol = settings.tolerance + 64.0 * f64::EPSILON * (1.0 + r_max / L);
         let (mut rj, mut pj) = start;
         let mut residual = f64::INFINITY;
+        let (rho, qjj) = (&mut b.rho[..N], &mut b.qjj[..pb.n]);
+        qjj[3 * N..].copy_from_slice(eta);
         for it in 0..=settings.max_iterations {
             let (s, c) = pj.sin_cos();
             for k in 0..N {
@@ -1041,24 +1159,26 @@ impl PlanarBody {
                 let dy = r[k][1] - rj[1];
                 let rx = c * dx + s * dy;
                 let ry = c * dy - s * dx;
-                b.rho[k] = [rx, ry];
-                b.qjj[3 * k] = rx - pb.x[k][0];
-                b.qjj[3 * k + 1] = ry - pb.x[k][1];
-                b.qjj[3 * k + 2] = wrap(phi[k] - pj);
+                rho[k] = [rx, ry];
+                qjj[3 * k] = rx - pb.x[k][0];
+                qjj[3 * k + 1] = ry - pb.x[k][1];
+                qjj[3 * k + 2] = wrap(phi[k] - pj);
             }
-            b.qjj[3 * N..].copy_from_slice(eta);
-            let g = pb.phi_mul(&b.qjj);
-            residual = (g[0].hypot(g[1]) / L).max(g[2].abs());
+            let g = pb.phi_mul(qjj);
+            // |g_t| by the square root of the sum of squares (hypot where that overflows).
+            let t2 = g[0] * g[0] + g[1] * g[1];
+            let gt = if t2.is_finite() { t2.sqrt() } else { g[0].hypot(g[1]) };
+            residual = (gt / L).max(g[2].abs());
             if !residual.is_finite() {
                 break;
             }
             if residual <= tol {
-                return Ok(((rj, pj), it));
+                return Ok(((rj, pj), it, (s, c)));
             }
             if it == settings.max_iterations {
                 break;
             }
-            let Gi = pb.inverse_with_rcond(&b.rho)?;
+            let Gi = pb.inverse_with_rcond(rho)?;
             let d: [f64; 3] = std::array::from_fn(|a| Gi[a][0] * g[0] + Gi[a][1] * g[1] + Gi[a][2] * g[2]);
             rj[0] += c * d[0] - s * d[1];
             rj[1] += s * d[0] + c * d[1];

@@ -137,7 +137,9 @@ impl Superelement {
         let pw = ws.planar.as_deref_mut().expect("a planar workspace");
         let N = pb.N;
         let r_max = self.read_planar(state, &mut pw.pos, &mut pw.phi)?;
-        let (frame, iterations) = self.planar_frame(&pw.pos, &pw.phi, &state.eta, r_max, &state.frame, &mut pw.f)?;
+        let warm_angle = pw.warm_angle(&state.frame.R);
+        let (frame, iterations, sc) =
+            self.planar_frame(&pw.pos, &pw.phi, &state.eta, r_max, &state.frame, warm_angle, &mut pw.f)?;
         let rs = &pw.pos;
         let z = state.r[0].z - self.x[0].z;
         let b = &mut pw.f;
@@ -159,7 +161,7 @@ impl Superelement {
             b.qdd[i] = acc[g];
         }
         let g2 = [gravity.x, gravity.y];
-        pb.forces(b, frame, self.frame_solve, g2);
+        pb.forces(b, frame, sc, self.frame_solve, g2);
         let Gi0 = b.Gi;
         // Outputs in the 6N + m layout.
         let n3 = self.n;
@@ -173,15 +175,28 @@ impl Superelement {
         ] {
             v.fill(0.0);
         }
-        for (i, &g) in pb.index.iter().enumerate() {
-            out.f_inertia[g] = b.parts[0][i];
-            out.f_elastic[g] = b.parts[1][i];
-            out.f_damping[g] = b.parts[2][i];
-            out.f_gravity[g] = b.parts[3][i];
-            out.residual[g] = b.out[i];
-            out.q_jj[g] = b.qjj[i];
+        {
+            // Slices, not the vectors through `out` and `b` at every entry.
+            let [p0, p1, p2, p3] = &b.parts;
+            let (fi, fe, fd, fg) = (
+                &mut out.f_inertia[..],
+                &mut out.f_elastic[..],
+                &mut out.f_damping[..],
+                &mut out.f_gravity[..],
+            );
+            let (res, qj) = (&mut out.residual[..], &mut out.q_jj[..]);
+            let (bo, bq) = (&b.out[..], &b.qjj[..]);
+            for (i, &g) in pb.index.iter().enumerate() {
+                fi[g] = p0[i];
+                fe[g] = p1[i];
+                fd[g] = p2[i];
+                fg[g] = p3[i];
+                res[g] = bo[i];
+                qj[g] = bq[i];
+            }
         }
         let frame3 = self.frame_3d(frame, z);
+        pw.returned(&frame3.R, frame.1);
         out.frame = frame3;
         out.frame_iterations = iterations;
         // M and C_t in closed form, K_t by dual numbers.
@@ -189,7 +204,7 @@ impl Superelement {
             pb.mass_damping(pw, level.tangents());
         }
         if level.tangents() {
-            pb.stiffness_pass(pw, frame, self.frame_solve, &Gi0, g2);
+            pb.stiffness_pass(pw, frame, sc, self.frame_solve, &Gi0, g2);
         }
         let n = pb.n;
         let scatter = |src: &[f64], dst: &mut Mat<f64>| {

@@ -202,30 +202,34 @@ fn planar_body_equals_the_in_plane_block_of_the_spatial_one() {
 /// of 8 directions.
 #[test]
 fn planar_body_with_more_coordinates_than_one_dual_pass() {
-    let settings = CbSettings {
-        geometric_stiffening: true,
-        ..CbSettings::new(ModeSelection::Count(4))
-    };
-    let body = fixtures::planar_beam(
-        Point3::new(0.1, -0.2, 0.05),
-        Point3::new(1.0, 0.3, 0.05),
-        4,
-        settings,
-        true,
-    )
-    .2;
-    let se = Superelement::new(&body, FrameChoice::CenterOfMass, MassVariant::Exact, damping_for(4)).unwrap();
-    let planar = se.clone().into_planar().unwrap();
-    let idx = in_plane(&se);
-    assert_eq!(idx.len(), 10);
-    let g = Vector3::new(1.5, -9.81, 0.0);
-    let (state, acc) = planar_state(&se, 2.2, 9);
-    let a = se.evaluate(&state, &acc, &g).unwrap();
-    let b = planar.evaluate(&state, &acc, &g).unwrap();
-    assert_vec("residual (10 coordinates)", &b.residual, &a.residual, &idx);
-    assert_mat("M (10 coordinates)", &b.mass, &a.mass, &idx);
-    assert_mat("C_t (10 coordinates)", &b.damping, &a.damping, &idx);
-    assert_mat("K_t (10 coordinates)", &b.stiffness, &a.stiffness, &idx);
+    // 10 planar coordinates: one wide dual pass; 14: two passes of 8 directions.
+    for modes in [4, 8] {
+        let settings = CbSettings {
+            geometric_stiffening: true,
+            ..CbSettings::new(ModeSelection::Count(modes))
+        };
+        let body = fixtures::planar_beam(
+            Point3::new(0.1, -0.2, 0.05),
+            Point3::new(1.0, 0.3, 0.05),
+            4,
+            settings,
+            true,
+        )
+        .2;
+        let se = Superelement::new(&body, FrameChoice::CenterOfMass, MassVariant::Exact, damping_for(modes)).unwrap();
+        let planar = se.clone().into_planar().unwrap();
+        let idx = in_plane(&se);
+        assert_eq!(idx.len(), 6 + modes);
+        let g = Vector3::new(1.5, -9.81, 0.0);
+        let (state, acc) = planar_state(&se, 2.2, 9);
+        let a = se.evaluate(&state, &acc, &g).unwrap();
+        let b = planar.evaluate(&state, &acc, &g).unwrap();
+        let what = |m: &str| format!("{m} ({} coordinates)", 6 + modes);
+        assert_vec(&what("residual"), &b.residual, &a.residual, &idx);
+        assert_mat(&what("M"), &b.mass, &a.mass, &idx);
+        assert_mat(&what("C_t"), &b.damping, &a.damping, &idx);
+        assert_mat(&what("K_t"), &b.stiffness, &a.stiffness, &idx);
+    }
 }
 
 #[test]
