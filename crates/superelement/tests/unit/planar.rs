@@ -166,6 +166,7 @@ fn planar_body_equals_the_in_plane_block_of_the_spatial_one() {
             assert_mat(&what("M"), &b.mass, &a.mass, &idx);
             assert_mat(&what("C_t"), &b.damping, &a.damping, &idx);
             assert_mat(&what("K_t"), &b.stiffness, &a.stiffness, &idx);
+            // Both frame solves converge to the tolerance of section 4.4, 1e-12.
             assert!((b.frame.r - a.frame.r).norm() <= 1e-12, "{}", what("frame origin"));
             assert!(b.frame.R.angle_to(&a.frame.R) <= 1e-12, "{}", what("frame rotation"));
             // Energies.
@@ -181,6 +182,8 @@ fn planar_body_equals_the_in_plane_block_of_the_spatial_one() {
             let kin3 = se.kinematics(&state).unwrap();
             let kinp = planar.kinematics(&state).unwrap();
             let (U3, Up) = (se.strain_energy(&kin3), planar.strain_energy(&kinp));
+            // U is quadratic in a small q_jj that agrees to the frame tolerance (1e-12 of the body
+            // size): its relative error is that over the relative deformation, 1e-9 with margin.
             assert!((U3 - Up).abs() <= 1e-9 * U3, "{}: {U3} vs {Up}", what("strain energy"));
             let (V3, Vp) = (se.gravity_potential(&kin3, &g), planar.gravity_potential(&kinp, &g));
             assert!(
@@ -191,6 +194,7 @@ fn planar_body_equals_the_in_plane_block_of_the_spatial_one() {
             // Frame and elastic velocities.
             let (v3, w3) = se.frame_velocity(&kin3, &state);
             let (vp, wp) = planar.frame_velocity(&kinp, &state);
+            // The same products by different sums, as the residual (module docs): 1e-10.
             assert!((v3 - vp).norm() <= 1e-10 * v3.norm() && (w3 - wp).norm() <= 1e-10 * w3.norm());
             let (c3, cp) = (se.local_velocity(&kin3, &state), planar.local_velocity(&kinp, &state));
             assert_vec(&what("local velocity"), &cp, &c3, &idx);
@@ -246,6 +250,7 @@ fn planar_workspace_paths_agree_with_evaluate() {
     // The energy sensors read the workspace.
     let kin = planar.kinematics(&state).unwrap();
     let U = planar.strain_energy(&kin);
+    // The same workspace read by the same arithmetic: round-off of one sum, 1e-12.
     assert!((planar.strain_energy_in(&ws) - U).abs() <= 1e-12 * U);
     let T = planar.kinetic_energy(&state).unwrap();
     let Tin = planar.kinetic_energy_in(&ws, &state.velocity_vector()).unwrap();
@@ -259,6 +264,7 @@ fn planar_workspace_paths_agree_with_evaluate() {
     match (se.recover_mesh(&kin3), planar.recover_mesh(ws.kinematics())) {
         (Some(a), Some(b)) => {
             for (p, q) in a.positions.iter().zip(&b.positions) {
+                // q_jj and the frame agree to 1e-12 (the frame tolerance), so the points do.
                 assert!((p - q).norm() <= 1e-12, "recovered mesh: {p} vs {q}");
             }
         }
@@ -268,6 +274,8 @@ fn planar_workspace_paths_agree_with_evaluate() {
     let (Z3, Zw) = (kin3.Z(), done.Z());
     for j in 0..Z3.ncols() {
         for i in 0..6 {
+            // Formed from frames that agree to 1e-12 through the inverse of Phi_j Psi: 1e-9 leaves
+            // three orders for its condition.
             assert!((Z3[(i, j)] - Zw[(i, j)]).abs() <= 1e-9, "Z({i}, {j})");
         }
     }
@@ -282,6 +290,7 @@ fn planar_workspace_paths_agree_with_evaluate() {
     let at = planar.evaluate_kinematics(&kin, &state.velocity_vector(), &acc, &g, true);
     let big = full.residual.iter().fold(0.0_f64, |m, r| m.max(r.abs()));
     for (a, b) in at.residual.iter().zip(&full.residual) {
+        // As Z and T above: frames agreeing to 1e-12 through the inverse of Phi_j Psi.
         assert!((a - b).abs() <= 1e-9 * big, "evaluate_kinematics: {a} vs {b}");
     }
     // A z component of gravity does no work in the plane: ignored.
@@ -378,6 +387,7 @@ fn rigid_planar_motion_has_no_elastic_force() {
     // Round-off of the frame solve (1e-12) times the stiffness scale EA = 1e8 N.
     let largest = ev.f_elastic.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
     assert!(largest < 1e-3, "elastic force {largest} N on a rigid motion");
+    // The frame solve's tolerance, 1e-12.
     assert!((ev.frame.R.angle_to(&rot_z(2.2))) < 1e-12);
 }
 
@@ -441,6 +451,7 @@ fn the_planar_frame_solve_converges_from_a_cold_start_and_reports_failure_as_the
     let mut cold = state.clone();
     cold.frame = Frame::identity();
     let (frame, iterations) = planar.solve_frame(&cold).unwrap();
+    // The frame solve's tolerance, 1e-12.
     assert!((frame.r - solved.r).norm() <= 1e-12 && frame.R.angle_to(&solved.R) <= 1e-12);
     assert!(iterations > 0);
     // No iterations allowed from a start off the solution: the spatial solve's error.
