@@ -76,10 +76,13 @@ fn a_planar_reduction_is_the_beam_with_its_out_of_plane_dofs_supported() {
     let by_hand = reduce(&held, "beam", &interfaces, &settings(4, false)).unwrap();
     assert_eq!(planar.n_coordinates(), 12 + 4);
     for (a, b) in planar.fixed_interface_omega.iter().zip(&by_hand.fixed_interface_omega) {
+        // The same supported model reduced twice, the same eigenproblem: equal to the
+        // eigensolver's convergence, well within 1e-10.
         assert!(relative(*a, *b) < 1e-10, "{a} against {b}");
     }
     let scale = (0..16).map(|i| by_hand.K_CB.get(i, i).abs()).fold(0.0, f64::max);
     for (x, y) in planar.K_CB.data.iter().zip(&by_hand.K_CB.data) {
+        // Equal matrices from the same factor; round-off of the projections, far below 1e-10.
         assert!((x - y).abs() <= 1e-10 * scale, "K_CB {x} against {y}");
     }
     // The mass data do not see the supports (they are the unsupported body's).
@@ -106,6 +109,8 @@ fn a_planar_reduction_keeps_the_in_plane_modes_of_the_3d_beam_and_decouples_the_
                 .sqrt()
         };
         let (inside, out) = (norm(IN_PLANE_DOFS), norm(OUT_OF_PLANE_DOFS));
+        // The 3D beam's modes are in-plane or out-of-plane by the plane's symmetry, up to the
+        // eigensolver's convergence in a degenerate pair: 1e-9 of the mode's norm.
         assert!(inside.min(out) < 1e-9 * inside.max(out), "mode {j} mixes the families: {inside} {out}");
         if inside > out {
             in_plane.push(*omega);
@@ -113,6 +118,8 @@ fn a_planar_reduction_keeps_the_in_plane_modes_of_the_3d_beam_and_decouples_the_
     }
     assert!(in_plane.len() >= m, "{in_plane:?}");
     for (a, b) in planar.fixed_interface_omega.iter().zip(&in_plane) {
+        // As above: the planar and the 3D eigenproblems share their in-plane eigenvalues, to the
+        // eigensolver's convergence, 1e-10.
         assert!(relative(*a, *b) < 1e-10, "{a} against the 3D in-plane {b}");
     }
     // All modes of the planar body are in-plane.
@@ -123,6 +130,7 @@ fn a_planar_reduction_keeps_the_in_plane_modes_of_the_3d_beam_and_decouples_the_
         }
     }
     let (k, mm) = (coupling(&planar, &planar.K_CB), coupling(&planar, &planar.M_CB));
+    // The symmetry makes the coupling blocks exactly zero; 1e-12 allows round-off only.
     assert!(k < 1e-12 && mm < 1e-12, "K_CB {k:.3e}, M_CB {mm:.3e}");
     // The geometric stiffness is computed on the planar basis too.
     assert_eq!(planar.geometric_stiffness.as_ref().unwrap().len(), 12 + m);
