@@ -88,40 +88,78 @@ fn process_alive(pid: u32) -> bool {
     !proc_dir.is_dir() || proc_dir.join(pid.to_string()).exists()
 }
 
+/// How long a run waits for the process id in a lock file another run has just created: the
+/// file is created empty (atomically, so that only one run gets it) and its id written right
+/// after, so a run starting at the same moment can find it empty for a few microseconds.
+const LOCK_PID_WAIT: std::time::Duration = std::time::Duration::from_millis(1000);
+
+/// What a run found in a lock file another run holds.
+enum LockHolder {
+    /// The process id written in it.
+    Process(u32),
+    /// The file was removed while being read: the other run has ended.
+    Released,
+    /// No process id appeared within [`LOCK_PID_WAIT`].
+    Unnamed,
+}
+
+/// Reads the lock file at `path` until it holds a process id, is removed, or
+/// [`LOCK_PID_WAIT`] has passed.
+fn read_lock_holder(path: &Path) -> LockHolder {
+    let start = std::time::Instant::now();
+    loop {
+        match std::fs::read_to_string(path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return LockHolder::Released,
+            Ok(text) => {
+                if let Ok(pid) = text.trim().parse::<u32>() {
+                    return LockHolder::Process(pid);
+                }
+            }
+            Err(_) => {}
+        }
+        if start.elapsed() >= LOCK_PID_WAIT {
+            return LockHolder::Unnamed;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
+
 impl FolderLock {
+    /// Creates the lock file with this process's id; a lock held by a live process (or one
+    /// that never names its process) is refused, a dead process's lock or a lock released
+    /// meanwhile is taken (a few attempts, as other runs may be taking it at the same time).
     fn acquire(root: &Path) -> Result<Self, BoxError> {
         let path = root.join(LOCK);
-        for _ in 0..2 {
+        for _ in 0..4 {
             match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
                 Ok(mut f) => {
                     let _ = writeln!(f, "{}", std::process::id());
                     return Ok(Self(path));
                 }
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let text = std::fs::read_to_string(&path).unwrap_or_default();
-                    match text.trim().parse::<u32>() {
-                        Ok(pid) if !process_alive(pid) => {
-                            // A run killed hard left it: take it over.
-                            let _ = std::fs::remove_file(&path);
-                        }
-                        Ok(pid) => {
-                            return Err(format!(
-                                "the results folder {} is in use by another flexmbs run (process {pid}): wait for it to finish or write elsewhere with --out; if no run is active, delete {}",
-                                root.display(),
-                                path.display()
-                            )
-                            .into())
-                        }
-                        Err(_) => {
-                            return Err(format!(
-                                "the results folder {} is locked by another flexmbs run that is starting ({}); if no run is active, delete it",
-                                root.display(),
-                                path.display()
-                            )
-                            .into())
-                        }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => match read_lock_holder(&path) {
+                    LockHolder::Released => {}
+                    LockHolder::Process(pid) if !process_alive(pid) => {
+                        // A run killed hard left it: take it over.
+                        let _ = std::fs::remove_file(&path);
                     }
-                }
+                    LockHolder::Process(pid) => {
+                        return Err(format!(
+                            "the results folder {} is in use by another flexmbs run (process {pid}): wait for it to finish or write elsewhere with --out; if no run is active, delete {}",
+                            root.display(),
+                            path.display()
+                        )
+                        .into())
+                    }
+                    LockHolder::Unnamed => {
+                        return Err(format!(
+                            "the results folder {} is in use by another flexmbs run that has not written its process id into {} within {} ms; if no run is active, delete it",
+                            root.display(),
+                            path.display(),
+                            LOCK_PID_WAIT.as_millis()
+                        )
+                        .into())
+                    }
+                },
                 Err(e) => {
                     return Err(Box::new(e)).context(|| format!("cannot lock the results folder {}", root.display()))
                 }

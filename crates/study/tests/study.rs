@@ -626,6 +626,36 @@ fn a_results_folder_in_use_is_refused_and_a_dead_runs_lock_taken_over() {
     std::fs::write(out.join(LOCK), "4294967295\n").unwrap();
     study::run(&study, &options, &mut Recorder::default()).unwrap();
     assert!(!out.join(LOCK).exists());
+    // A run that has just created the lock and not yet written its id (two runs starting at
+    // once): the second waits for the id and names the process.
+    std::fs::write(out.join(LOCK), "").unwrap();
+    let lock = out.join(LOCK);
+    let writer = std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        std::fs::write(lock, format!("{}\n", std::process::id())).unwrap();
+    });
+    let e = study::run(&study, &options, &mut Recorder::default())
+        .unwrap_err()
+        .to_string();
+    writer.join().unwrap();
+    assert!(e.contains(&format!("(process {})", std::process::id())), "{e}");
+    // The lock is released while the run waits for its id: the run takes the folder.
+    std::fs::write(out.join(LOCK), "").unwrap();
+    let lock = out.join(LOCK);
+    let remover = std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        std::fs::remove_file(lock).unwrap();
+    });
+    study::run(&study, &options, &mut Recorder::default()).unwrap();
+    remover.join().unwrap();
+    assert!(!out.join(LOCK).exists());
+    // A lock that never names its process is refused after the wait, naming the lock file.
+    std::fs::write(out.join(LOCK), "").unwrap();
+    let e = study::run(&study, &options, &mut Recorder::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("has not written its process id") && e.contains(LOCK), "{e}");
+    std::fs::remove_file(out.join(LOCK)).unwrap();
 }
 
 #[test]
