@@ -1233,6 +1233,32 @@ impl PlanarBody {
             + 0.5 * dot(&zeta, &Mz))
     }
 
+    /// [`Self::kinetic`] from what the last `f64` pass of [`Self::core`] left in `b` (its
+    /// $\boldsymbol\xi$, $\mathbf s$, $\mathbf S_t^T\boldsymbol\zeta$, $J$, $\tilde{\mathbf S}_z\mathbf q$,
+    /// $\boldsymbol\zeta$), for the velocities of that pass: one product with $\mathbf M$, no
+    /// allocation (an energy sensor at every step). The caller checks that the velocities are
+    /// the pass's.
+    pub(crate) fn kinetic_in(&self, b: &Buf<f64>) -> f64 {
+        let n = self.n;
+        let (zeta, Sq) = (&b.zeta[..n], &b.Sq[..n]);
+        let (V, om) = ([b.xi[0], b.xi[1]], b.xi[2]);
+        let Es = [-b.sv[1], b.sv[0]];
+        let mut cz = 0.0;
+        let mut zMz = 0.0;
+        for (j, zj) in zeta.iter().enumerate() {
+            cz += (self.Srz[j] - Sq[j]) * zj;
+            let Mz: f64 = self.M[n * j..n * (j + 1)].iter().zip(zeta).map(|(m, z)| m * z).sum();
+            zMz += zj * Mz;
+        }
+        0.5 * self.mass * (V[0] * V[0] + V[1] * V[1])
+            + om * (V[0] * Es[0] + V[1] * Es[1])
+            + V[0] * b.sd[0]
+            + V[1] * b.sd[1]
+            + 0.5 * b.J * om * om
+            + om * cz
+            + 0.5 * zMz
+    }
+
     /// Planar strain energy at planar local coordinates `q`.
     pub(crate) fn strain_energy(&self, q: &[f64]) -> f64 {
         let pb = self;

@@ -625,6 +625,13 @@ impl Superelement {
             });
         }
         if self.is_planar() {
+            // The evaluation's own velocities (an energy sensor after a step): from its buffers.
+            if let Some(pw) = &ws.planar {
+                let pb = self.planar_body();
+                if pb.index.iter().zip(&pw.f.qd).all(|(&g, v)| qd[g] == *v) {
+                    return Ok(pb.kinetic_in(&pw.f));
+                }
+            }
             let q = self.planar_q(&ws.kin.q_jj);
             let y = self.planar_y(&ws.kin.frame, qd);
             return self.planar_body().kinetic(&q, &y);

@@ -255,6 +255,23 @@ fn planar_workspace_paths_agree_with_evaluate() {
     let T = planar.kinetic_energy(&state).unwrap();
     let Tin = planar.kinetic_energy_in(&ws, &state.velocity_vector()).unwrap();
     assert!((T - Tin).abs() <= 1e-12 * T);
+    // The same velocities are read from the evaluation's buffers, other ones recomputed: both
+    // equal the spatial body's kinetic energy (the same state; sums in another order, 1e-12).
+    let T3 = se.kinetic_energy(&state).unwrap();
+    assert!((Tin - T3).abs() <= 1e-12 * T3, "{Tin} vs {T3}");
+    let mut faster = state.clone();
+    for k in 0..faster.v.len() {
+        faster.v[k] *= 1.7;
+        faster.omega[k] *= -0.6;
+    }
+    faster.eta_dot.iter_mut().for_each(|x| *x *= 2.5);
+    let T_other = planar.kinetic_energy_in(&ws, &faster.velocity_vector()).unwrap();
+    let T3_other = se.kinetic_energy(&faster).unwrap();
+    assert!(
+        (T_other - T3_other).abs() <= 1e-12 * T3_other,
+        "{T_other} vs {T3_other}"
+    );
+    assert!((T_other - Tin).abs() > 1e-3 * Tin, "other velocities, another energy");
     // The workspace's configuration: no matrices until completed, then the spatial body's.
     assert!(!ws.kinematics().is_complete() && ws.kinematics().T().is_none());
     assert!(ws.kinematics().Z()[(0, 0)].is_nan() && ws.kinematics().Y()[(5, 0)].is_nan());
