@@ -169,7 +169,8 @@ fn planar_body_equals_the_in_plane_block_of_the_spatial_one() {
             // Both frame solves converge to the tolerance of section 4.4, 1e-12.
             assert!((b.frame.r - a.frame.r).norm() <= 1e-12, "{}", what("frame origin"));
             assert!(b.frame.R.angle_to(&a.frame.R) <= 1e-12, "{}", what("frame rotation"));
-            // Energies.
+            // Energies. T is formed from velocities that agree to round-off (the frames to 1e-12
+            // enter only through sin and cos of an angle that is the same to 1e-16): 1e-12.
             let (T3, Tp) = (
                 se.kinetic_energy(&state).unwrap(),
                 planar.kinetic_energy(&state).unwrap(),
@@ -185,6 +186,8 @@ fn planar_body_equals_the_in_plane_block_of_the_spatial_one() {
             // U is quadratic in a small q_jj that agrees to the frame tolerance (1e-12 of the body
             // size): its relative error is that over the relative deformation, 1e-9 with margin.
             assert!((U3 - Up).abs() <= 1e-9 * U3, "{}: {U3} vs {Up}", what("strain energy"));
+            // V is linear in the frame origin and q_jj, which agree to 1e-12 of the body size; the
+            // potential is of the size m g L, so its relative error is 1e-12.
             let (V3, Vp) = (se.gravity_potential(&kin3, &g), planar.gravity_potential(&kinp, &g));
             assert!(
                 (V3 - Vp).abs() <= 1e-12 * V3.abs(),
@@ -254,6 +257,7 @@ fn planar_workspace_paths_agree_with_evaluate() {
     assert!((planar.strain_energy_in(&ws) - U).abs() <= 1e-12 * U);
     let T = planar.kinetic_energy(&state).unwrap();
     let Tin = planar.kinetic_energy_in(&ws, &state.velocity_vector()).unwrap();
+    // The same formula on the same frame solve, its terms summed in another order: 1e-12.
     assert!((T - Tin).abs() <= 1e-12 * T);
     // The same velocities are read from the evaluation's buffers, other ones recomputed: both
     // equal the spatial body's kinetic energy (the same state; sums in another order, 1e-12).
@@ -271,6 +275,8 @@ fn planar_workspace_paths_agree_with_evaluate() {
         (T_other - T3_other).abs() <= 1e-12 * T3_other,
         "{T_other} vs {T3_other}"
     );
+    // Velocities scaled by 1.7, -0.6 and 2.5 change T by tens of per cent: 1e-3 only proves the
+    // recomputed path was taken.
     assert!((T_other - Tin).abs() > 1e-3 * Tin, "other velocities, another energy");
     // The workspace's configuration: no matrices until completed, then the spatial body's.
     assert!(!ws.kinematics().is_complete() && ws.kinematics().T().is_none());
