@@ -201,18 +201,23 @@ impl StateSpec {
     }
 }
 
+/// The size $L$ of `se` that the test states and steps scale with: its farthest interface from
+/// the frame origin, at least 0.1.
+pub fn body_size(se: &Superelement) -> f64 {
+    se.interface_positions()
+        .iter()
+        .map(|x| x.norm())
+        .fold(0.0, f64::max)
+        .max(0.1)
+}
+
 /// A deformed, rotated, moving state of `se` and accelerations for it (module docs). The warm
 /// start is the rigid placement, a few percent of the body size away from the solution.
 pub fn test_state(se: &Superelement, spec: &StateSpec) -> (BodyState, Vec<f64>) {
     let mut rng = Rng::new(spec.seed);
     let N = se.n_interfaces();
     let m = se.n_modes();
-    let L = se
-        .interface_positions()
-        .iter()
-        .map(|x| x.norm())
-        .fold(0.0, f64::max)
-        .max(0.1);
+    let L = body_size(se);
     let R0 = UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(spec.axis), spec.angle_deg.to_radians());
     let r0 = Vector3::new(0.3, -0.7, 1.1) * L;
     let frame = Frame::new(r0, R0);
@@ -244,7 +249,6 @@ pub fn test_state(se: &Superelement, spec: &StateSpec) -> (BodyState, Vec<f64>) 
     (s, acc)
 }
 
-/// How a superelement stores its reduced geometric stiffness ([`crate::compressed`]).
 /// A state of a planar body ([`Superelement::into_planar`]) for tests and benches: the
 /// undeformed body turned by `angle` (rad) about z with its frame origin at (0.3, -0.7, 0.25),
 /// deformed in the plane (2 % of the body size, 0.02 rad, modal amplitudes alike), moving
@@ -254,12 +258,7 @@ pub fn planar_test_state(se: &Superelement, angle: f64, seed: u64) -> (BodyState
     let mut rng = Rng::new(seed);
     let N = se.n_interfaces();
     let m = se.n_modes();
-    let L = se
-        .interface_positions()
-        .iter()
-        .map(|x| x.norm())
-        .fold(0.0, f64::max)
-        .max(0.1);
+    let L = body_size(se);
     let R0 = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), angle);
     let frame = Frame::new(Vector3::new(0.3, -0.7, 0.25), R0);
     let (spin, e) = (3.0, 0.02);
@@ -290,6 +289,7 @@ pub fn planar_test_state(se: &Superelement, angle: f64, seed: u64) -> (BodyState
     (s, acc)
 }
 
+/// How a superelement stores its reduced geometric stiffness ([`crate::compressed`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Compression {
     /// Compressed (`None`: the body has no geometric stiffness).
@@ -325,12 +325,7 @@ pub fn without_compression(se: &Superelement) -> Superelement {
 /// $e L\sqrt m$ for modal coordinates ($L$: farthest interface from the frame origin, at least
 /// 0.1; $m$: the mass), as [`test_state`] draws them.
 pub fn coordinate_scales(se: &Superelement, deformation: f64) -> Vec<f64> {
-    let L = se
-        .interface_positions()
-        .iter()
-        .map(|x| x.norm())
-        .fold(0.0, f64::max)
-        .max(0.1);
+    let L = body_size(se);
     let mut s = Vec::with_capacity(se.n_coordinates());
     for _ in 0..se.n_interfaces() {
         s.extend([deformation * L; 3]);

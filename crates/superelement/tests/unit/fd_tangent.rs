@@ -16,7 +16,9 @@ use nalgebra::{Matrix3, Vector3};
 use reduction::ReducedBody;
 use superelement::local_coordinates::{elastic_rotation, interface_displacement};
 use superelement::so3;
-use superelement::testing::{check_jacobian, perturb_state, perturb_velocity, test_state, FdReport, StateSpec};
+use superelement::testing::{
+    check_jacobian, coordinate_scales, perturb_state, perturb_velocity, test_state, FdReport, StateSpec,
+};
 use superelement::{BodyState, Damping, Frame, MassVariant, Superelement};
 
 const TOL: f64 = 1e-6;
@@ -25,19 +27,7 @@ const ANGLES: [f64; 3] = [30.0, 120.0, 170.0];
 /// Finite-difference steps for the superelement's coordinates: 1e-6 of the body size for
 /// positions, 1e-6 rad, and 1e-6 of the modal amplitude scale for eta.
 pub(super) fn steps(se: &Superelement) -> Vec<f64> {
-    let L = se
-        .interface_positions()
-        .iter()
-        .map(|x| x.norm())
-        .fold(0.0, f64::max)
-        .max(0.1);
-    let mut h = Vec::new();
-    for _ in 0..se.n_interfaces() {
-        h.extend([1e-6 * L; 3]);
-        h.extend([1e-6; 3]);
-    }
-    h.extend(vec![1e-6 * L * se.mass().sqrt(); se.n_modes()]);
-    h
+    coordinate_scales(se, 1e-6)
 }
 
 pub(super) fn assert_ok(rep: FdReport, what: &str) {

@@ -324,20 +324,8 @@ fn planar_workspace_paths_agree_with_evaluate() {
 /// The planar coordinates' finite-difference steps and their 6N + m slots.
 fn planar_steps(se: &Superelement) -> (Vec<usize>, Vec<f64>) {
     let idx = in_plane(se);
-    let L = se.interface_positions().iter().map(|x| x.norm()).fold(0.0, f64::max);
-    let N = se.n_interfaces();
-    let h = idx
-        .iter()
-        .map(|&i| {
-            if i >= 6 * N {
-                1e-6 * L * se.mass().sqrt()
-            } else if i % 6 == 5 {
-                1e-6
-            } else {
-                1e-6 * L
-            }
-        })
-        .collect();
+    let all = super::fd_tangent::steps(se);
+    let h = idx.iter().map(|&i| all[i]).collect();
     (idx, h)
 }
 
