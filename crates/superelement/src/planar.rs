@@ -1216,21 +1216,10 @@ impl PlanarBody {
         }
         let mut Wq = vec![0.0; n];
         let mut Sq = vec![0.0; n];
-        let mut Mz = vec![0.0; n];
         matvec(&pb.W, qjj, &mut Wq);
         matvec(&pb.Sz, qjj, &mut Sq);
-        matvec(&pb.M, &zeta, &mut Mz);
         let J = pb.J0 + (0..n).map(|i| (2.0 * pb.a[i] + Wq[i]) * qjj[i]).sum::<f64>();
-        let cz: f64 = (0..n).map(|i| (pb.Srz[i] - Sq[i]) * zeta[i]).sum();
-        let (V, om) = ([xi[0], xi[1]], xi[2]);
-        let Es = [-s[1], s[0]];
-        Ok(0.5 * m * (V[0] * V[0] + V[1] * V[1])
-            + om * (V[0] * Es[0] + V[1] * Es[1])
-            + V[0] * stz[0]
-            + V[1] * stz[1]
-            + 0.5 * J * om * om
-            + om * cz
-            + 0.5 * dot(&zeta, &Mz))
+        Ok(pb.kinetic_of(xi, s, stz, J, &Sq, &zeta))
     }
 
     /// [`Self::kinetic`] from what the last `f64` pass of [`Self::core`] left in `b` (its
@@ -1240,9 +1229,16 @@ impl PlanarBody {
     /// the pass's.
     pub(crate) fn kinetic_in(&self, b: &Buf<f64>) -> f64 {
         let n = self.n;
-        let (zeta, Sq) = (&b.zeta[..n], &b.Sq[..n]);
-        let (V, om) = ([b.xi[0], b.xi[1]], b.xi[2]);
-        let Es = [-b.sv[1], b.sv[0]];
+        self.kinetic_of(b.xi, b.sv, b.sd, b.J, &b.Sq[..n], &b.zeta[..n])
+    }
+
+    /// $\tfrac12\boldsymbol\nu^T\mathbf M_{ffr}\boldsymbol\nu$ (7.7) from $\boldsymbol\xi = [\mathbf V;
+    /// \Omega]$, $\mathbf s$, $\mathbf S_t^T\boldsymbol\zeta$ (`stz`), $J$, $\tilde{\mathbf S}_z\mathbf q$ (`Sq`)
+    /// and $\boldsymbol\zeta$: the blocks of (7.7) without forming it, one product with $\mathbf M$.
+    fn kinetic_of(&self, xi: [f64; 3], s: [f64; 2], stz: [f64; 2], J: f64, Sq: &[f64], zeta: &[f64]) -> f64 {
+        let n = self.n;
+        let (V, om) = ([xi[0], xi[1]], xi[2]);
+        let Es = [-s[1], s[0]];
         let mut cz = 0.0;
         let mut zMz = 0.0;
         for (j, zj) in zeta.iter().enumerate() {
@@ -1252,9 +1248,9 @@ impl PlanarBody {
         }
         0.5 * self.mass * (V[0] * V[0] + V[1] * V[1])
             + om * (V[0] * Es[0] + V[1] * Es[1])
-            + V[0] * b.sd[0]
-            + V[1] * b.sd[1]
-            + 0.5 * b.J * om * om
+            + V[0] * stz[0]
+            + V[1] * stz[1]
+            + 0.5 * J * om * om
             + om * cz
             + 0.5 * zMz
     }
