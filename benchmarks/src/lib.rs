@@ -218,7 +218,7 @@ pub fn beam_rod_body(
 
 /// The slider-crank model with the rod as `n` identical segments `segment` (reduced from
 /// x = 0 to l/n, interfaces a then b), frame and inertia variant as given: the planar
-/// slider-crank of the standard problems ([`models::slider_crank_planar_with`]; crank, rod and
+/// slider-crank of the standard problems ([`models::slider_crank_planar`]; crank, rod and
 /// slider of validation problem C2) driven at `p.speed`. Starts at the dead centre (crank along
 /// x) with the rigid mechanism's velocities. Sensors: "slider" (position), for even `n`
 /// "midpoint" (signed distance of the middle node from the chord), and "A", "B" (rod end
@@ -232,7 +232,9 @@ pub fn slider_crank_model(
     mass: MassVariant,
 ) -> (Model, Vec<NodeId>) {
     let segment = models::Segment { body: segment.clone() };
-    let sc = models::slider_crank_planar_with(n, &segment, p.speed, models::Variant { frame, mass });
+    let variant = models::Variant { frame, mass };
+    let sc = models::slider_crank_planar(&models::SliderCrankPlanar::of_segment(n, &segment, p.speed, variant))
+        .expect("a segment reduced elsewhere is only placed");
     let (mut m, rod) = (sc.model, sc.rod_nodes);
     m.add_sensor("A", SensorKind::NodePosition { node: rod[0] });
     m.add_sensor("B", SensorKind::NodePosition { node: rod[n] });

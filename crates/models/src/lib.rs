@@ -204,80 +204,113 @@ fn straight_beam_fe(
     Ok((fe, nodes))
 }
 
-/// A straight beam segment from `a` to `b` (FE axes) of `elements` elements (even, so the
-/// middle node exists for the auxiliary-node frame), interfaces at both ends.
-pub fn beam_segment(
-    name: &str,
-    spec: &BeamSpec,
-    a: Vector3<f64>,
-    b: Vector3<f64>,
-    elements: usize,
-    orientation: Vector3<f64>,
-    modes: ModeSelection,
-    frame: FrameChoice,
-) -> Result<Segment, BuildError> {
-    beam_segment_with(
-        name,
-        spec,
-        (a, b),
-        elements,
-        orientation,
-        &CbSettings::new(modes),
-        frame,
+/// A straight beam segment from `ends.0` to `ends.1` (FE axes) of `elements` elements
+/// (rounded up to even, so the middle node exists for the auxiliary-node frame), interfaces
+/// "a" and "b" at its ends: the parameters of [`beam_segment`].
+#[derive(Clone, Debug)]
+pub struct BeamSegment<'a> {
+    pub name: &'a str,
+    pub spec: &'a BeamSpec,
+    pub ends: (Vector3<f64>, Vector3<f64>),
+    pub elements: usize,
+    /// The beam elements' orientation vector (FE axes).
+    pub orientation: Vector3<f64>,
+    /// The reduction's settings (e.g. `geometric_stiffening`); mesh shapes are not kept.
+    pub settings: CbSettings,
+    pub frame: FrameChoice,
+}
+
+impl<'a> BeamSegment<'a> {
+    /// A segment reduced with `modes` fixed-interface modes and the default settings,
+    /// for the centre-of-mass frame.
+    pub fn new(
+        name: &'a str,
+        spec: &'a BeamSpec,
+        ends: (Vector3<f64>, Vector3<f64>),
+        elements: usize,
+        orientation: Vector3<f64>,
+        modes: ModeSelection,
+    ) -> Self {
+        BeamSegment {
+            name,
+            spec,
+            ends,
+            elements,
+            orientation,
+            settings: CbSettings::new(modes),
+            frame: FrameChoice::CenterOfMass,
+        }
+    }
+}
+
+/// The straight beam segment `p` reduced ([`BeamSegment`]).
+pub fn beam_segment(p: &BeamSegment<'_>) -> Result<Segment, BuildError> {
+    let elements = p.elements + p.elements % 2;
+    let (fe, nodes) = straight_beam_fe(p.name, p.spec, p.ends, elements, p.orientation)?;
+    let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
+    reduce_segment(
+        &fe,
+        p.name,
+        &ends,
+        nodes[elements / 2],
+        &p.settings,
+        p.frame,
+        MeshShapes::Drop,
     )
 }
 
-/// [`beam_segment`] reduced with any `settings` (e.g. `geometric_stiffening`).
-pub fn beam_segment_with(
-    name: &str,
-    spec: &BeamSpec,
-    ends: (Vector3<f64>, Vector3<f64>),
-    elements: usize,
-    orientation: Vector3<f64>,
-    settings: &CbSettings,
-    frame: FrameChoice,
-) -> Result<Segment, BuildError> {
-    let elements = elements + elements % 2;
-    let (fe, nodes) = straight_beam_fe(name, spec, ends, elements, orientation)?;
-    let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
-    reduce_segment(&fe, name, &ends, nodes[elements / 2], settings, frame, MeshShapes::Drop)
+/// A straight beam body from `ends.0` to `ends.1` of exactly `elements` elements (odd
+/// counts too: no auxiliary interface), reduced with interfaces "a" and "b" at its ends and
+/// `modes` fixed-interface modes for the centre-of-mass frame, named `name`: the parameters
+/// of [`beam_body`].
+#[derive(Clone, Debug)]
+pub struct BeamBody<'a> {
+    pub name: &'a str,
+    pub spec: &'a BeamSpec,
+    pub ends: (Vector3<f64>, Vector3<f64>),
+    pub elements: usize,
+    /// The beam elements' orientation vector.
+    pub orientation: Vector3<f64>,
+    pub modes: ModeSelection,
+    /// Kept: the body's deformed mesh and every FE node's motion can be recovered.
+    pub mesh: MeshShapes,
 }
 
-/// A straight beam body from `a` to `b` of exactly `elements` elements (odd counts too: no
-/// auxiliary interface), reduced with interfaces "a" and "b" at its ends and `modes`
-/// fixed-interface modes, named `name`; mesh shapes are not kept ([`beam_body_with`]).
-pub fn beam_body(
-    name: &str,
-    spec: &BeamSpec,
-    ends: (Vector3<f64>, Vector3<f64>),
-    elements: usize,
-    orientation: Vector3<f64>,
-    modes: ModeSelection,
-) -> Result<ReducedBody, BuildError> {
-    beam_body_with(name, spec, ends, elements, orientation, modes, MeshShapes::Drop)
+impl<'a> BeamBody<'a> {
+    /// A body without its mesh shapes.
+    pub fn new(
+        name: &'a str,
+        spec: &'a BeamSpec,
+        ends: (Vector3<f64>, Vector3<f64>),
+        elements: usize,
+        orientation: Vector3<f64>,
+        modes: ModeSelection,
+    ) -> Self {
+        BeamBody {
+            name,
+            spec,
+            ends,
+            elements,
+            orientation,
+            modes,
+            mesh: MeshShapes::Drop,
+        }
+    }
 }
 
-/// [`beam_body`] with its mesh shapes kept or dropped as `mesh` says (kept: the body's
-/// deformed mesh and every FE node's motion can be recovered).
-pub fn beam_body_with(
-    name: &str,
-    spec: &BeamSpec,
-    (a, b): (Vector3<f64>, Vector3<f64>),
-    elements: usize,
-    orientation: Vector3<f64>,
-    modes: ModeSelection,
-    mesh: MeshShapes,
-) -> Result<ReducedBody, BuildError> {
-    let (fe, nodes) = straight_beam_fe(name, spec, (a, b), elements, orientation)?;
+/// The straight beam body `p` reduced ([`BeamBody`]).
+pub fn beam_body(p: &BeamBody<'_>) -> Result<ReducedBody, BuildError> {
+    let elements = p.elements;
+    let (fe, nodes) = straight_beam_fe(p.name, p.spec, p.ends, elements, p.orientation)?;
     let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
     Ok(reduce_segment(
         &fe,
-        name,
+        p.name,
         &ends,
         nodes[0],
-        &CbSettings::new(modes),
+        &CbSettings::new(p.modes),
         FrameChoice::CenterOfMass,
-        mesh,
+        p.mesh,
     )?
     .body)
 }
@@ -316,55 +349,62 @@ pub fn arc_segment(
 }
 
 /// A solid rod segment: a box of `length` x `side` x `side` of hex20 or tet10 cells
-/// (`divisions` along the length, one or two across), RBE2 interfaces at the centroids of the
-/// end faces. The FE axes put the rod's axis on the x axis (the box is shifted by -side/2).
-pub fn solid_rod_segment(
-    name: &str,
-    kind: CellKind,
-    material: IsotropicMaterial,
-    length: f64,
-    side: f64,
-    divisions: [usize; 3],
-    modes: ModeSelection,
-    frame: FrameChoice,
-) -> Result<Segment, BuildError> {
-    solid_rod_segment_with(
-        name,
-        kind,
-        material,
-        length,
-        side,
-        divisions,
-        &CbSettings::new(modes),
-        frame,
-    )
+/// (`divisions` along the length, rounded up to even, one or two across), RBE2 interfaces at
+/// the centroids of the end faces. The FE axes put the rod's axis on the x axis (the box is
+/// shifted by -side/2). The parameters of [`solid_rod_segment`].
+#[derive(Clone, Debug)]
+pub struct SolidRod<'a> {
+    pub name: &'a str,
+    pub kind: CellKind,
+    pub material: IsotropicMaterial,
+    pub length: f64,
+    pub side: f64,
+    pub divisions: [usize; 3],
+    /// The reduction's settings; mesh shapes are not kept.
+    pub settings: CbSettings,
+    pub frame: FrameChoice,
 }
 
-/// [`solid_rod_segment`] reduced with any `settings`.
-#[allow(clippy::too_many_arguments)]
-pub fn solid_rod_segment_with(
-    name: &str,
-    kind: CellKind,
-    material: IsotropicMaterial,
-    length: f64,
-    side: f64,
-    divisions: [usize; 3],
-    settings: &CbSettings,
-    frame: FrameChoice,
-) -> Result<Segment, BuildError> {
+impl<'a> SolidRod<'a> {
+    /// A rod reduced with `modes` fixed-interface modes and the default settings, for the
+    /// centre-of-mass frame.
+    pub fn new(
+        name: &'a str,
+        kind: CellKind,
+        material: IsotropicMaterial,
+        (length, side): (f64, f64),
+        divisions: [usize; 3],
+        modes: ModeSelection,
+    ) -> Self {
+        SolidRod {
+            name,
+            kind,
+            material,
+            length,
+            side,
+            divisions,
+            settings: CbSettings::new(modes),
+            frame: FrameChoice::CenterOfMass,
+        }
+    }
+}
+
+/// The solid rod segment `p` meshed and reduced ([`SolidRod`]).
+pub fn solid_rod_segment(p: &SolidRod<'_>) -> Result<Segment, BuildError> {
     let fe_err = |source| BuildError::Fe {
-        model: name.into(),
+        model: p.name.into(),
         source,
     };
-    let mut divisions = divisions;
+    let (length, side) = (p.length, p.side);
+    let mut divisions = p.divisions;
     // An even count along the length puts a node layer at mid-length for the auxiliary node.
     divisions[0] += divisions[0] % 2;
-    let mut mesh = fe_model::box_mesh::box_mesh(kind, [length, side, side], divisions).map_err(fe_err)?;
-    for p in mesh.nodes.iter_mut() {
-        p.y -= side / 2.0;
-        p.z -= side / 2.0;
+    let mut mesh = fe_model::box_mesh::box_mesh(p.kind, [length, side, side], divisions).map_err(fe_err)?;
+    for x in mesh.nodes.iter_mut() {
+        x.y -= side / 2.0;
+        x.z -= side / 2.0;
     }
-    let mut fe = fe_model::box_mesh::solid_model(mesh, material, MassKind::Consistent).map_err(fe_err)?;
+    let mut fe = fe_model::box_mesh::solid_model(mesh, p.material.clone(), MassKind::Consistent).map_err(fe_err)?;
     let a = add_interface_on_set(&mut fe, "a", "x0", Some(Point3::origin()), SpiderKind::Rbe2).map_err(fe_err)?;
     let b = add_interface_on_set(
         &mut fe,
@@ -375,7 +415,7 @@ pub fn solid_rod_segment_with(
     )
     .map_err(fe_err)?;
     // The auxiliary interface: an RBE3 (no added stiffness) on the mid-length node layer.
-    let middle = if frame == FrameChoice::AuxiliaryNode {
+    let middle = if p.frame == FrameChoice::AuxiliaryNode {
         let layer: Vec<fe_model::NodeId> = (0..fe.mesh.nodes.len())
             .filter(|&i| (fe.mesh.nodes[i].x - length / 2.0).abs() < 1e-9 * length)
             .map(|i| fe_model::NodeId(i as u32))
@@ -393,11 +433,11 @@ pub fn solid_rod_segment_with(
     };
     reduce_segment(
         &fe,
-        name,
+        p.name,
         &[("a".into(), a), ("b".into(), b)],
         middle,
-        settings,
-        frame,
+        &p.settings,
+        p.frame,
         MeshShapes::Drop,
     )
 }
@@ -471,48 +511,61 @@ pub fn x_onto(direction: Vector3<f64>) -> UnitQuaternion<f64> {
     })
 }
 
-/// A straight chain of `n` identical beam segments from `start` to `end` (one reduction,
-/// placed `n` times): the nodes `n_0..n_N` and the bodies.
-pub fn beam_chain(
-    model: &mut Model,
-    prefix: &str,
-    spec: &BeamSpec,
-    ends: (Vector3<f64>, Vector3<f64>),
-    n: usize,
-    elements_per_segment: usize,
-    modes: ModeSelection,
-    variant: Variant,
-) -> Result<(Vec<NodeId>, Vec<BodyId>), BuildError> {
-    let settings = CbSettings::new(modes);
-    beam_chain_with(model, prefix, spec, ends, n, elements_per_segment, &settings, variant)
+/// A straight chain of `n` identical beam segments from `ends.0` to `ends.1` (one reduction,
+/// placed `n` times), nodes named `prefix0..prefixN`: the parameters of [`beam_chain`].
+#[derive(Clone, Debug)]
+pub struct BeamChain<'a> {
+    pub prefix: &'a str,
+    pub spec: &'a BeamSpec,
+    pub ends: (Vector3<f64>, Vector3<f64>),
+    pub n: usize,
+    pub elements_per_segment: usize,
+    /// The segment's reduction settings (e.g. `geometric_stiffening`).
+    pub settings: CbSettings,
+    pub variant: Variant,
 }
 
-/// [`beam_chain`] with the segment reduced with any `settings` (e.g. `geometric_stiffening`).
-pub fn beam_chain_with(
-    model: &mut Model,
-    prefix: &str,
-    spec: &BeamSpec,
-    (start, end): (Vector3<f64>, Vector3<f64>),
-    n: usize,
-    elements_per_segment: usize,
-    settings: &CbSettings,
-    variant: Variant,
-) -> Result<(Vec<NodeId>, Vec<BodyId>), BuildError> {
+impl<'a> BeamChain<'a> {
+    /// A chain of segments reduced with `modes` fixed-interface modes and the default
+    /// settings, in the reference variant.
+    pub fn new(
+        prefix: &'a str,
+        spec: &'a BeamSpec,
+        ends: (Vector3<f64>, Vector3<f64>),
+        n: usize,
+        elements_per_segment: usize,
+        modes: ModeSelection,
+    ) -> Self {
+        BeamChain {
+            prefix,
+            spec,
+            ends,
+            n,
+            elements_per_segment,
+            settings: CbSettings::new(modes),
+            variant: Variant::REFERENCE,
+        }
+    }
+}
+
+/// Adds the chain `p` to `model` ([`BeamChain`]): the nodes `n_0..n_N` and the bodies.
+pub fn beam_chain(model: &mut Model, p: &BeamChain<'_>) -> Result<(Vec<NodeId>, Vec<BodyId>), BuildError> {
+    let (prefix, (start, end), n, variant) = (p.prefix, p.ends, p.n, p.variant);
     let length = (end - start).norm();
     let e = (end - start) / length;
     let seg = length / n as f64;
     // Orientation vector: any direction not along the axis; z for a beam in the x-y plane.
     let orientation = if e.z.abs() < 0.9 { Vector3::z() } else { Vector3::x() };
     let q = x_onto(e);
-    let segment = beam_segment_with(
-        prefix,
-        spec,
-        (Vector3::zeros(), Vector3::new(seg, 0.0, 0.0)),
-        elements_per_segment,
-        q.inverse() * orientation,
-        settings,
-        variant.frame,
-    )?;
+    let segment = beam_segment(&BeamSegment {
+        name: prefix,
+        spec: p.spec,
+        ends: (Vector3::zeros(), Vector3::new(seg, 0.0, 0.0)),
+        elements: p.elements_per_segment,
+        orientation: q.inverse() * orientation,
+        settings: p.settings.clone(),
+        frame: variant.frame,
+    })?;
     let nodes: Vec<NodeId> = (0..=n)
         .map(|i| model.add_node(&format!("{prefix}{i}"), start + e * (seg * i as f64)))
         .collect();
@@ -624,16 +677,11 @@ fn cantilever(
     variant: Variant,
 ) -> Result<(Model, Vec<NodeId>), BuildError> {
     let mut model = Model::new(name);
-    let (nodes, _) = beam_chain(
-        &mut model,
-        "n",
-        spec,
-        (Vector3::zeros(), Vector3::x()),
-        n,
-        elements,
-        modes,
+    let chain = BeamChain {
         variant,
-    )?;
+        ..BeamChain::new("n", spec, (Vector3::zeros(), Vector3::x()), n, elements, modes)
+    };
+    let (nodes, _) = beam_chain(&mut model, &chain)?;
     model.add_support(Support::clamp(nodes[0]));
     Ok((model, nodes))
 }
@@ -739,15 +787,34 @@ pub fn a5_cantilever(
 
 /// The spin-up beam of validation problem C1 (Simo & Vu-Quoc 1986): L = 10 m, EA = 2.8e7 N,
 /// EI = 1.4e4 N m^2 (both bending planes), rho A = 1.2 kg/m, clamped to a hub on the z axis
-/// whose angle follows the spin-up profile to `omega` in 15 s; `n` superelements with `modes`
-/// fixed-interface modes each. Sensor "tip": the tip in the hub's axes.
-pub fn spin_up(n: usize, modes: ModeSelection, omega: f64, variant: Variant) -> Result<Model, BuildError> {
-    spin_up_with(n, &CbSettings::new(modes), omega, variant)
+/// whose angle follows the spin-up profile to `omega` in 15 s; `n` superelements reduced with
+/// `settings` (with `CbSettings::geometric_stiffening`, each segment carries its reduced
+/// geometric stiffness). The parameters of [`spin_up`].
+#[derive(Clone, Debug)]
+pub struct SpinUp {
+    pub n: usize,
+    pub settings: CbSettings,
+    /// Final hub speed \[rad/s\].
+    pub omega: f64,
+    pub variant: Variant,
 }
 
-/// [`spin_up`] with the segments reduced with any `settings` (with
-/// `CbSettings::geometric_stiffening`, each segment carries its reduced geometric stiffness).
-pub fn spin_up_with(n: usize, settings: &CbSettings, omega: f64, variant: Variant) -> Result<Model, BuildError> {
+impl SpinUp {
+    /// `n` superelements with `modes` fixed-interface modes each and the default settings,
+    /// in the reference variant.
+    pub fn new(n: usize, modes: ModeSelection, omega: f64) -> Self {
+        SpinUp {
+            n,
+            settings: CbSettings::new(modes),
+            omega,
+            variant: Variant::REFERENCE,
+        }
+    }
+}
+
+/// The spin-up model `p` ([`SpinUp`]). Sensor "tip": the tip in the hub's axes.
+pub fn spin_up(p: &SpinUp) -> Result<Model, BuildError> {
+    let n = p.n;
     let (L, E, A, I, rho) = (10.0, 7e10, 4e-4, 2e-7, 3000.0);
     let spec = BeamSpec {
         E,
@@ -762,21 +829,24 @@ pub fn spin_up_with(n: usize, settings: &CbSettings, omega: f64, variant: Varian
         theory: BeamTheory::EulerBernoulli,
     };
     let mut m = Model::new("spin-up");
-    let (beam, _) = beam_chain_with(
-        &mut m,
-        "b",
-        &spec,
-        (Vector3::zeros(), Vector3::x() * L),
+    let chain = BeamChain {
+        prefix: "b",
+        spec: &spec,
+        ends: (Vector3::zeros(), Vector3::x() * L),
         n,
-        4,
-        settings,
-        variant,
-    )?;
+        elements_per_segment: 4,
+        settings: p.settings.clone(),
+        variant: p.variant,
+    };
+    let (beam, _) = beam_chain(&mut m, &chain)?;
     m.add_support(Support::hinge(beam[0], Vector3::z()));
     m.add_driver(
         "hub",
         mbs::DriverTarget::NodeRotation { node: beam[0] },
-        mbs::TimeFunction::SpinUp { omega, duration: 15.0 },
+        mbs::TimeFunction::SpinUp {
+            omega: p.omega,
+            duration: 15.0,
+        },
     );
     m.add_sensor(
         "tip",
@@ -821,27 +891,40 @@ pub fn square_rod_side() -> f64 {
     ROD_D * (3.0 * std::f64::consts::PI / 16.0).powf(0.25)
 }
 
-/// One rod segment of length `seg` along the FE x axis (for [`slider_crank_planar_with`] with
-/// any number of segments).
-pub fn rod_segment(rod: RodModel, seg: f64, modes: ModeSelection, frame: FrameChoice) -> Result<Segment, BuildError> {
-    rod_segment_with(rod, seg, &CbSettings::new(modes), frame)
+/// One rod segment of length `seg` along the FE x axis (for [`slider_crank_planar`] with
+/// any number of segments): the parameters of [`rod_segment`].
+#[derive(Clone, Debug)]
+pub struct RodSegment {
+    pub rod: RodModel,
+    pub seg: f64,
+    /// The reduction's settings (e.g. `planar`, for a rod evaluated in the plane of the
+    /// mechanism: [`confine_to_plane`]).
+    pub settings: CbSettings,
+    pub frame: FrameChoice,
 }
 
-/// [`rod_segment`] reduced with any `settings` (e.g. `planar`, for a rod evaluated in the
-/// plane of the mechanism: [`confine_to_plane`]).
-pub fn rod_segment_with(
-    rod: RodModel,
-    seg: f64,
-    settings: &CbSettings,
-    frame: FrameChoice,
-) -> Result<Segment, BuildError> {
+impl RodSegment {
+    /// A segment reduced with `modes` fixed-interface modes and the default settings, for
+    /// the `frame`.
+    pub fn new(rod: RodModel, seg: f64, modes: ModeSelection, frame: FrameChoice) -> Self {
+        RodSegment {
+            rod,
+            seg,
+            settings: CbSettings::new(modes),
+            frame,
+        }
+    }
+}
+
+/// The rod segment `p` reduced ([`RodSegment`]).
+pub fn rod_segment(p: &RodSegment) -> Result<Segment, BuildError> {
     let prop_err = |source| BuildError::Property {
         model: "rod".into(),
         source,
     };
-    match rod {
+    match p.rod {
         RodModel::Beam { elements } | RodModel::SquareBeam { elements } => {
-            let section = match rod {
+            let section = match p.rod {
                 RodModel::Beam { .. } => BeamSection::circle("rod", ROD_D, 0.3).map_err(prop_err)?,
                 _ => {
                     let a = square_rod_side();
@@ -855,28 +938,28 @@ pub fn rod_segment_with(
                 section,
                 theory: BeamTheory::EulerBernoulli,
             };
-            beam_segment_with(
-                "rod",
-                &spec,
-                (Vector3::zeros(), Vector3::new(seg, 0.0, 0.0)),
+            beam_segment(&BeamSegment {
+                name: "rod",
+                spec: &spec,
+                ends: (Vector3::zeros(), Vector3::new(p.seg, 0.0, 0.0)),
                 elements,
-                Vector3::y(),
-                settings,
-                frame,
-            )
+                orientation: Vector3::y(),
+                settings: p.settings.clone(),
+                frame: p.frame,
+            })
         }
         RodModel::Solid { kind, divisions } => {
             let across = if kind == CellKind::Tet10 { 2 } else { 1 };
-            solid_rod_segment_with(
-                "rod",
+            solid_rod_segment(&SolidRod {
+                name: "rod",
                 kind,
-                IsotropicMaterial::new("steel", STEEL_E, 0.3, STEEL_RHO).map_err(prop_err)?,
-                seg,
-                square_rod_side(),
-                [divisions, across, across],
-                settings,
-                frame,
-            )
+                material: IsotropicMaterial::new("steel", STEEL_E, 0.3, STEEL_RHO).map_err(prop_err)?,
+                length: p.seg,
+                side: square_rod_side(),
+                divisions: [divisions, across, across],
+                settings: p.settings.clone(),
+                frame: p.frame,
+            })
         }
     }
 }
@@ -920,27 +1003,67 @@ pub struct SliderCrank {
     pub rod_mass: f64,
 }
 
-/// The planar slider-crank of validation problem C2: rigid crank 0.15 m driven at `speed` rad/s
-/// from the dead centre with the rigid mechanism's velocities, rod 0.30 m as `n` superelements
-/// (`n` even: the midpoint is a node), slider of half the rod's mass on the x axis, pinned
-/// joints about z, no gravity. Sensors "slider" (position) and "midpoint" (signed deflection
-/// of the midpoint from the chord, in the plane).
-pub fn slider_crank_planar(
-    n: usize,
-    modes: ModeSelection,
-    rod: RodModel,
-    speed: f64,
-    variant: Variant,
-) -> Result<SliderCrank, BuildError> {
-    let n = n.max(2) + n % 2;
-    let segment = rod_segment(rod, ROD / n as f64, modes, variant.frame)?;
-    Ok(slider_crank_planar_with(n, &segment, speed, variant))
+/// Where the planar slider-crank's rod comes from.
+#[derive(Clone, Copy, Debug)]
+pub enum PlanarRod<'a> {
+    /// `rod` reduced here with `modes` fixed-interface modes, as an even number of segments
+    /// (at least 2): the midpoint is a node.
+    Reduced { rod: RodModel, modes: ModeSelection },
+    /// Copies of a segment reduced along the FE x axis from 0 to l/n (interfaces a then b),
+    /// any number of them from 1.
+    Segment(&'a Segment),
 }
 
-/// [`slider_crank_planar`] with the rod as `n` copies of `segment` (reduced along the FE x axis
-/// from 0 to l/n, interfaces a then b), any `n` from 1: the "midpoint" sensor is added when `n`
-/// is even (the midpoint is then a node).
-pub fn slider_crank_planar_with(n: usize, segment: &Segment, speed: f64, variant: Variant) -> SliderCrank {
+/// The planar slider-crank of validation problem C2: rigid crank 0.15 m driven at `speed` rad/s
+/// from the dead centre with the rigid mechanism's velocities, rod 0.30 m as `n` superelements,
+/// slider of half the rod's mass on the x axis, pinned joints about z, no gravity. Sensors
+/// "slider" (position) and, when `n` is even, "midpoint" (signed deflection of the midpoint
+/// from the chord, in the plane). The parameters of [`slider_crank_planar`].
+#[derive(Clone, Copy, Debug)]
+pub struct SliderCrankPlanar<'a> {
+    pub n: usize,
+    pub rod: PlanarRod<'a>,
+    pub speed: f64,
+    pub variant: Variant,
+}
+
+impl<'a> SliderCrankPlanar<'a> {
+    /// The rod `rod` reduced with `modes` fixed-interface modes, as `n` segments rounded up
+    /// to an even count of at least 2.
+    pub fn reduced(n: usize, rod: RodModel, modes: ModeSelection, speed: f64, variant: Variant) -> Self {
+        SliderCrankPlanar {
+            n,
+            rod: PlanarRod::Reduced { rod, modes },
+            speed,
+            variant,
+        }
+    }
+
+    /// The rod as `n` copies of `segment`.
+    pub fn of_segment(n: usize, segment: &'a Segment, speed: f64, variant: Variant) -> Self {
+        SliderCrankPlanar {
+            n,
+            rod: PlanarRod::Segment(segment),
+            speed,
+            variant,
+        }
+    }
+}
+
+/// The planar slider-crank `p` ([`SliderCrankPlanar`]).
+pub fn slider_crank_planar(p: &SliderCrankPlanar<'_>) -> Result<SliderCrank, BuildError> {
+    match p.rod {
+        PlanarRod::Reduced { rod, modes } => {
+            let n = p.n.max(2) + p.n % 2;
+            let segment = rod_segment(&RodSegment::new(rod, ROD / n as f64, modes, p.variant.frame))?;
+            Ok(planar_with_segment(n, &segment, p.speed, p.variant))
+        }
+        PlanarRod::Segment(segment) => Ok(planar_with_segment(p.n, segment, p.speed, p.variant)),
+    }
+}
+
+/// The planar slider-crank with the rod as `n` copies of `segment`.
+fn planar_with_segment(n: usize, segment: &Segment, speed: f64, variant: Variant) -> SliderCrank {
     let mut m = Model::new("planar slider-crank");
     let z = Vector3::z();
     let (jc, a) = add_crank(
@@ -1104,7 +1227,7 @@ pub fn slider_crank_spatial(
     let e = (B - A).normalize();
     let q = x_onto(e);
     let seg = ROD / n as f64;
-    let segment = rod_segment(rod, seg, modes, variant.frame)?;
+    let segment = rod_segment(&RodSegment::new(rod, seg, modes, variant.frame))?;
     let rod_nodes: Vec<NodeId> = (0..=n)
         .map(|i| m.add_node(&format!("rod{i}"), A + e * (seg * i as f64)))
         .collect();
@@ -1159,16 +1282,18 @@ pub fn slider_crank_spatial(
 pub fn free_beam(variant: Variant) -> Result<(Model, [NodeId; 2]), BuildError> {
     let spec = square_spec("free beam", 7e7, 2700.0, 0.05)?;
     let mut m = Model::new("free beam");
-    let (nodes, _) = beam_chain(
-        &mut m,
-        "f",
-        &spec,
-        (Vector3::zeros(), Vector3::x()),
-        1,
-        6,
-        ModeSelection::Count(2),
+    let chain = BeamChain {
         variant,
-    )?;
+        ..BeamChain::new(
+            "f",
+            &spec,
+            (Vector3::zeros(), Vector3::x()),
+            1,
+            6,
+            ModeSelection::Count(2),
+        )
+    };
+    let (nodes, _) = beam_chain(&mut m, &chain)?;
     for (name, kind) in [
         ("L", SensorKind::LinearMomentum),
         ("H", SensorKind::AngularMomentum),

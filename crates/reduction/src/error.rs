@@ -156,7 +156,7 @@ pub enum BodyFileProblem {
     /// The file system refused (`action` is "read", "write", ...).
     #[error("cannot {action} it: {message}")]
     Io { action: &'static str, message: String },
-    /// The file does not start with [`crate::file::MAGIC`].
+    /// The file does not start with [`crate::io::rbody::MAGIC`].
     #[error("not a reduced-body file: it starts with {found:?}, where a reduced-body file starts with \"{MAGIC} \"")]
     WrongMagic { found: String },
     /// The format version on the first line is not the one this build reads.

@@ -86,11 +86,9 @@ pub mod craig_bampton;
 pub mod diagnostics;
 pub mod eigen;
 pub mod error;
-pub mod file;
 pub mod geometric;
 pub mod invariants;
-pub mod matrix_market;
-pub mod mbdyn;
+pub mod io;
 pub mod modal;
 pub mod physics;
 pub mod reduced_body;
@@ -102,8 +100,12 @@ pub use eigen::{lowest_modes, EigenSettings, EigenSolution, FactorPrecision, Fac
 pub use error::ReductionError;
 /// The rigid modes of six-dof point sets (fe-model's), re-exported for the superelement.
 pub use fe_model::rigid::{rigid_modes, rigid_motion_block};
-pub use file::BodyFileProblem;
 pub use geometric::reduced_geometric_stiffness;
+/// [`io::rbody`] under the short path the other crates name, `reduction::file`.
+pub use io::rbody as file;
+pub use io::rbody::BodyFileProblem;
+/// [`io::matrix_market`] and [`io::mbdyn`] under their short paths.
+pub use io::{matrix_market, mbdyn};
 pub use matrix_market::{read_matrix_market, write_matrix_market};
 pub use mbdyn::{read_mbdyn_fem, write_mbdyn_fem, FemError};
 pub use modal::modal_sparse;

@@ -1,7 +1,7 @@
 //! Physical checks of a [`ReducedBody`]: a file whose checksums are valid can still hold data
 //! no reduction produces (an edited matrix, metadata copied from another body). The
 //! superelement would use it silently: wrong frequencies, negative strain energy. These
-//! checks run on every load ([`crate::file::read`], [`crate::file::from_bytes`]) and in
+//! checks run on every load ([`crate::io::rbody::read`], [`crate::io::rbody::from_bytes`]) and in
 //! `flexmbs inspect`.
 //!
 //! # What is checked, and why each tolerance is that size

@@ -618,42 +618,12 @@ impl VonMisesMaximum {
         let r = reference;
         let usable = q_norm.is_finite() && r.epoch_of.len() == size && !r.epochs.is_empty();
         if !usable {
-            // Every node; the state becomes the one epoch (when finite).
-            let von_mises: Vec<f64> = (0..size).map(value).collect();
-            let (k, vm) = last_maximum((0..size).map(|k| (k, von_mises[k])));
-            r.evaluations += size;
-            r.refreshes += 1;
-            if q_norm.is_finite() {
-                let front = r.front + r.epochs.len() as u64 + 1;
-                *r = VonMisesReference {
-                    epochs: [Epoch {
-                        tq: tq.as_slice().to_vec(),
-                        q_norm,
-                        count: size,
-                    }]
-                    .into(),
-                    front,
-                    epoch_of: vec![front; size],
-                    von_mises,
-                    last: k,
-                    evaluations: r.evaluations,
-                    refreshes: r.refreshes,
-                    direction: std::mem::take(&mut r.direction),
-                    along: std::mem::take(&mut r.along),
-                };
-            }
+            let (k, vm) = self.restart(r, (0..size).map(value).collect(), q_norm, &tq);
             return Some((self.nodes[k], vm));
         }
         let tq_norm = tq.norm();
         if (r.along.len() != size || r.direction.len() != self.n) && tq_norm > 0.0 && tq_norm.is_finite() {
-            let u = &tq / tq_norm;
-            let y = &w.T_inv * &u;
-            let y_norm = y.norm();
-            r.along = (0..size)
-                .into_par_iter()
-                .map(|k| self.solid(k, y.as_slice()) + 1e-12 * self.frobenius[k] * y_norm)
-                .collect();
-            r.direction = u.as_slice().to_vec();
+            self.set_direction(r, &tq, tq_norm);
         }
         let directed = r.along.len() == size && r.direction.len() == self.n;
         // A change d in whitened coordinates: its component along u and the norm of the rest.
@@ -750,6 +720,57 @@ impl VonMisesMaximum {
         let (k, vm) = best.expect("the lower bound's entry is a candidate");
         r.last = k;
         Some((self.nodes[k], vm))
+    }
+
+    /// [`Self::maximum`] without a usable reference: every node's value `von_mises` taken,
+    /// and the state (when finite) becomes the reference's one epoch. The maximum's entry and
+    /// value.
+    fn restart(
+        &self,
+        r: &mut VonMisesReference,
+        von_mises: Vec<f64>,
+        q_norm: f64,
+        tq: &nalgebra::DVector<f64>,
+    ) -> (usize, f64) {
+        let size = von_mises.len();
+        let (k, vm) = last_maximum((0..size).map(|k| (k, von_mises[k])));
+        r.evaluations += size;
+        r.refreshes += 1;
+        if q_norm.is_finite() {
+            let front = r.front + r.epochs.len() as u64 + 1;
+            *r = VonMisesReference {
+                epochs: [Epoch {
+                    tq: tq.as_slice().to_vec(),
+                    q_norm,
+                    count: size,
+                }]
+                .into(),
+                front,
+                epoch_of: vec![front; size],
+                von_mises,
+                last: k,
+                evaluations: r.evaluations,
+                refreshes: r.refreshes,
+                direction: std::mem::take(&mut r.direction),
+                along: std::mem::take(&mut r.along),
+            };
+        }
+        (k, vm)
+    }
+
+    /// The reference's whitened direction $\mathbf u = \mathbf T\mathbf q / \lVert\mathbf
+    /// T\mathbf q\rVert$ and every node's von Mises stress along it, $w_i$.
+    fn set_direction(&self, r: &mut VonMisesReference, tq: &nalgebra::DVector<f64>, tq_norm: f64) {
+        let w = self.whitened();
+        let size = self.nodes.len();
+        let u = tq / tq_norm;
+        let y = &w.T_inv * &u;
+        let y_norm = y.norm();
+        r.along = (0..size)
+            .into_par_iter()
+            .map(|k| self.solid(k, y.as_slice()) + 1e-12 * self.frobenius[k] * y_norm)
+            .collect();
+        r.direction = u.as_slice().to_vec();
     }
 }
 

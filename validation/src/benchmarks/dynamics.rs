@@ -2,7 +2,9 @@
 //! convergence under refinement of superelements, modes and time step; C4 checks the
 //! conservation of momentum and energy.
 
-use crate::models::{free_beam, slider_crank_planar, slider_crank_spatial, spin_up, RodModel, Variant};
+use crate::models::{
+    free_beam, slider_crank_planar, slider_crank_spatial, spin_up, RodModel, SliderCrankPlanar, SpinUp, Variant,
+};
 use crate::{sci, slope, Block, Extent, Grid, Row, Table};
 use mbs::{solve_dynamic, DynamicSettings, Integrator, Model, MomentumProjection, System, Trajectory};
 use nalgebra::{UnitQuaternion, Vector3};
@@ -110,7 +112,7 @@ pub fn c1_spin_up(extent: Extent) -> Result<Vec<Block>> {
         // One run per level: (N, modes, h); the three studies vary one each around the base.
         let mut level = |n: usize, m: usize, h: f64| -> Result<(f64, Run)> {
             let r = run(
-                &spin_up(n, ModeSelection::Count(m), omega, Variant::REFERENCE)?,
+                &spin_up(&SpinUp::new(n, ModeSelection::Count(m), omega))?,
                 &c1_settings(h),
             )?;
             let peak = r.peak_after("tip", 1, 0.0)?;
@@ -384,13 +386,13 @@ fn crank_study(study: &CrankStudy, extent: Extent) -> Result<(Vec<Row>, Grid, Fi
 pub fn c2_slider_crank(extent: Extent) -> Result<Vec<Block>> {
     let period = 2.0 * PI / CRANK_SPEED;
     let build = |l: Level| -> Result<Model> {
-        Ok(slider_crank_planar(
+        Ok(slider_crank_planar(&SliderCrankPlanar::reduced(
             l.n,
-            ModeSelection::Count(l.modes),
             RodModel::Beam { elements: 4 },
+            ModeSelection::Count(l.modes),
             CRANK_SPEED,
             Variant::REFERENCE,
-        )?
+        ))?
         .model)
     };
     let revolutions = match extent {

@@ -13,7 +13,7 @@
 //! static modes only), linearised buckling (`mbs::buckling`) about the equilibrium under a
 //! tenth of that load.
 
-use crate::models::{add_segment, beam_segment, x_onto, BeamSpec, BuildError, Variant};
+use crate::models::{add_segment, beam_segment, x_onto, BeamSegment, BeamSpec, BuildError, Variant};
 use crate::{Block, Extent, Grid, Row, Table};
 use fe_model::{BeamSection, BeamTheory};
 use mbs::{buckling, solve_static, Model, NodeId, StaticSettings, Support, System};
@@ -83,16 +83,18 @@ pub fn portal_frame(n: usize, p: f64) -> std::result::Result<Model, BuildError> 
     for k in 0..3 {
         let e = (corners[k + 1] - corners[k]).normalize();
         let q = x_onto(e);
-        let segment = beam_segment(
-            &format!("member{k}"),
-            &spec,
-            Vector3::zeros(),
-            Vector3::new(seg, 0.0, 0.0),
-            2,
-            q.inverse() * Vector3::z(),
-            ModeSelection::StaticOnly,
-            Variant::REFERENCE.frame,
-        )?;
+        let name = format!("member{k}");
+        let segment = beam_segment(&BeamSegment {
+            frame: Variant::REFERENCE.frame,
+            ..BeamSegment::new(
+                &name,
+                &spec,
+                (Vector3::zeros(), Vector3::new(seg, 0.0, 0.0)),
+                2,
+                q.inverse() * Vector3::z(),
+                ModeSelection::StaticOnly,
+            )
+        })?;
         for i in 0..n {
             let at = k * n + i;
             let placement = Isometry3::from_parts(Translation3::from(corners[k] + e * (seg * i as f64)), q);

@@ -6,7 +6,7 @@
 
 use crate::benchmarks::dynamics::{run, CRANK_SPEED};
 use crate::benchmarks::nonlinear_statics::{elastica_tip, ELASTICA};
-use crate::models::{slider_crank_planar, spin_up, RodModel, Variant};
+use crate::models::{slider_crank_planar, spin_up, RodModel, SliderCrankPlanar, SpinUp, Variant};
 use crate::{sci, Block, Extent, Grid};
 use fe_model::CellKind;
 use mbs::DynamicSettings;
@@ -85,10 +85,7 @@ fn spin_up_variants(omega: f64, end: f64) -> Result<(Grid, Figure)> {
         output_every: 10,
         ..DynamicSettings::new(0.005, end, 0.5)
     };
-    let reference = run(
-        &spin_up(8, ModeSelection::Count(2), omega, Variant::REFERENCE)?,
-        &settings,
-    )?;
+    let reference = run(&spin_up(&SpinUp::new(8, ModeSelection::Count(2), omega))?, &settings)?;
     let ref_peak = reference.peak_after("tip", 1, 0.0)?;
     let ref_y = reference.column("tip", 1)?;
     let mut rows = Vec::new();
@@ -99,9 +96,12 @@ fn spin_up_variants(omega: f64, end: f64) -> Result<(Grid, Figure)> {
     );
     for v in Variant::all() {
         let mut cells = vec![v.label()];
-        match spin_up(4, ModeSelection::Count(2), omega, v)
-            .map_err(|e| e.into())
-            .and_then(|m| run(&m, &settings))
+        match spin_up(&SpinUp {
+            variant: v,
+            ..SpinUp::new(4, ModeSelection::Count(2), omega)
+        })
+        .map_err(|e| e.into())
+        .and_then(|m| run(&m, &settings))
         {
             Ok(r) => {
                 let y = r.column("tip", 1)?;
@@ -144,7 +144,14 @@ fn slider_crank_variants(revolutions: f64) -> Result<Grid> {
     };
     let beam = RodModel::Beam { elements: 4 };
     let reference = run(
-        &slider_crank_planar(8, ModeSelection::Count(2), beam, CRANK_SPEED, Variant::REFERENCE)?.model,
+        &slider_crank_planar(&SliderCrankPlanar::reduced(
+            8,
+            beam,
+            ModeSelection::Count(2),
+            CRANK_SPEED,
+            Variant::REFERENCE,
+        ))?
+        .model,
         &settings,
     )?;
     let from = end - period;
@@ -152,9 +159,15 @@ fn slider_crank_variants(revolutions: f64) -> Result<Grid> {
     let mut rows = Vec::new();
     for v in Variant::all() {
         let mut cells = vec![v.label()];
-        match slider_crank_planar(4, ModeSelection::Count(2), beam, CRANK_SPEED, v)
-            .map_err(|e| e.into())
-            .and_then(|m| run(&m.model, &settings))
+        match slider_crank_planar(&SliderCrankPlanar::reduced(
+            4,
+            beam,
+            ModeSelection::Count(2),
+            CRANK_SPEED,
+            v,
+        ))
+        .map_err(|e| e.into())
+        .and_then(|m| run(&m.model, &settings))
         {
             Ok(r) => {
                 let peak = r.peak_after("midpoint", 0, from)?;
@@ -219,7 +232,13 @@ fn beam_vs_solid(revolutions: f64, extent: Extent) -> Result<(Grid, Figure)> {
     let from = end - period;
     for (label, rod) in rods {
         let t0 = std::time::Instant::now();
-        let crank = slider_crank_planar(2, ModeSelection::Count(2), rod, CRANK_SPEED, Variant::REFERENCE)?;
+        let crank = slider_crank_planar(&SliderCrankPlanar::reduced(
+            2,
+            rod,
+            ModeSelection::Count(2),
+            CRANK_SPEED,
+            Variant::REFERENCE,
+        ))?;
         let build = t0.elapsed().as_secs_f64();
         let r = run(&crank.model, &settings)?;
         let peak = r.peak_after("midpoint", 0, from)?;

@@ -8,7 +8,7 @@ use mbs::{solve_static, InitialCondition, Model, NodeId, SensorKind, StaticSetti
 pub use models::{pendulum, rigid, MeshShapes, ELASTICA_E, ELASTICA_SIDE, MATTIASSON as ELASTICA};
 use models::{square_spec, RodModel, Variant};
 use nalgebra::{Isometry3, Vector3};
-use reduction::{CbSettings, ModeSelection, ReducedBody};
+use reduction::{ModeSelection, ReducedBody};
 use superelement::{FrameChoice, MassVariant};
 
 /// A straight Euler-Bernoulli beam from `a` to `b` of `elements` elements with a square section
@@ -39,7 +39,11 @@ pub fn square_beam(
     let spec = square_spec(name, E, rho, side).unwrap();
     // Any orientation off the axis: the section is square.
     let orientation = (b - a).cross(&Vector3::new(0.3, 0.9, -0.2)).normalize();
-    models::beam_body_with(name, &spec, (a, b), elements, orientation, modes, mesh).unwrap()
+    let body = models::BeamBody {
+        mesh,
+        ..models::BeamBody::new(name, &spec, (a, b), elements, orientation, modes)
+    };
+    models::beam_body(&body).unwrap()
 }
 
 /// A cantilever of length `L` along x as `n` beam superelements in series (nodes `n_0..n_N`,
@@ -81,8 +85,9 @@ pub fn slider_crank(n: usize, modes: ModeSelection, speed: f64) -> (Model, Vec<N
     // Exactly `n` segments (`slider_crank_planar` rounds `n` up to an even count of at least 2,
     // so that the midpoint is a node): the step bench times the rod as 1, 2 and 4 bodies.
     let v = Variant::REFERENCE;
-    let segment = models::rod_segment(RodModel::Beam { elements: 4 }, models::ROD / n as f64, modes, v.frame).unwrap();
-    let sc = models::slider_crank_planar_with(n, &segment, speed, v);
+    let rod = models::RodSegment::new(RodModel::Beam { elements: 4 }, models::ROD / n as f64, modes, v.frame);
+    let segment = models::rod_segment(&rod).unwrap();
+    let sc = models::slider_crank_planar(&models::SliderCrankPlanar::of_segment(n, &segment, speed, v)).unwrap();
     (sc.model, sc.rod_nodes, sc.rod_joints)
 }
 
@@ -121,9 +126,9 @@ pub fn spin_up(n: usize, modes: ModeSelection, omega: f64) -> Model {
 /// [`spin_up`], with the reduced geometric stiffness of each segment when `stiffening`
 /// (`CbSettings::geometric_stiffening`).
 pub fn spin_up_with(n: usize, modes: ModeSelection, omega: f64, stiffening: bool) -> Model {
-    let mut settings = CbSettings::new(modes);
-    settings.geometric_stiffening = stiffening;
-    models::spin_up_with(n, &settings, omega, Variant::REFERENCE).unwrap()
+    let mut p = models::SpinUp::new(n, modes, omega);
+    p.settings.geometric_stiffening = stiffening;
+    models::spin_up(&p).unwrap()
 }
 
 /// The fixture pendulum released from rest at `theta0`, with the sensor "theta".

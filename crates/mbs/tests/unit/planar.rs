@@ -20,14 +20,14 @@ fn c2(n: usize, planar: bool) -> (Model, Vec<mbs::NodeId>) {
         ..CbSettings::new(ModeSelection::Count(2))
     };
     let v = Variant::REFERENCE;
-    let segment = models::rod_segment_with(
-        RodModel::Beam { elements: 4 },
-        models::ROD / n as f64,
-        &settings,
-        v.frame,
-    )
+    let segment = models::rod_segment(&models::RodSegment {
+        rod: RodModel::Beam { elements: 4 },
+        seg: models::ROD / n as f64,
+        settings,
+        frame: v.frame,
+    })
     .unwrap();
-    let mut sc = models::slider_crank_planar_with(n, &segment, 150.0, v);
+    let mut sc = models::slider_crank_planar(&models::SliderCrankPlanar::of_segment(n, &segment, 150.0, v)).unwrap();
     models::confine_to_plane(&mut sc.model);
     if !planar {
         for body in &mut sc.model.bodies {

@@ -208,7 +208,6 @@ pub fn to_mbdyn_fem(body: &ReducedBody, reference: usize, origin: &Path) -> Resu
     }
     let n = body.n_coordinates();
     let keep: Vec<usize> = (0..n).filter(|&j| j / 6 != reference || j >= 6 * N).collect();
-    let nx = keep.len();
     let x_r = Vector3::from(body.interfaces[reference].position);
     let inertia = &body.inertia;
     let c = Vector3::from(inertia.center_of_mass);
@@ -230,6 +229,31 @@ pub fn to_mbdyn_fem(body: &ReducedBody, reference: usize, origin: &Path) -> Resu
     let P = |j: usize| Matrix3::from_fn(|k, l| S_x[(3 * k + l, j)] + c_O[k] * field_t(j)[l]);
     let Q = |j: usize, k: usize| Matrix3::from_fn(|a, b| S_bar[3 * a + b][(j, k)]);
 
+    let X2 = second_moment(body, x_r, &P);
+
+    let field3: Vec<Vector3<f64>> = keep.iter().map(|&k| field_t(k)).collect();
+
+    // int rho x about O of the translational field (for beams not m c, which the rotations'
+    // inertia coupling enters): P(T_a)(k, a) with T_a the rigid translation along a.
+    let first_moment = Vector3::from_fn(|k, _| {
+        (0..3)
+            .map(|a| (0..N).map(|i| P(6 * i + a)[(k, a)]).sum::<f64>())
+            .sum::<f64>()
+            / 3.0
+    });
+
+    // Writing to a String cannot fail: the writers ignore the results of `writeln!`.
+    let mut f = String::new();
+    write_flexmbs_lines(&mut f, body, reference, x_r, first_moment, &X2, &field3);
+    write_geometry_records(&mut f, body, &keep, x_r);
+    write_inertia_records(&mut f, body, x_r, &keep, [&M, &K, &S_t, &S_rO], &P, &Q);
+    let _ = writeln!(f, "** END OF FILE");
+    Ok(f)
+}
+
+/// $\int\rho\,\mathbf x\mathbf x^T$ about the frame origin `x_r` of the translational field,
+/// from the moments `P` of the Craig-Bampton coordinates.
+fn second_moment(body: &ReducedBody, x_r: Vector3<f64>, P: &dyn Fn(usize) -> Matrix3<f64>) -> Matrix3<f64> {
     // int rho x x^T about O of the translational field, from the rigid rotations written as
     // Craig-Bampton coordinates (rigid motion is exact in the constraint modes):
     // P(theta_alpha)(k, l) = eps_{l alpha j} X2_kj, so X2_kj = 1/2 sum eps_{l alpha j} P(k, l).
@@ -252,22 +276,26 @@ pub fn to_mbdyn_fem(body: &ReducedBody, reference: usize, origin: &Path) -> Resu
             }
         }
     }
+    X2
+}
 
-    let field3: Vec<Vector3<f64>> = keep.iter().map(|&k| field_t(k)).collect();
+/// A value as the file writes it: the shortest exponent form that reads back exactly.
+fn e(v: f64) -> String {
+    format!("{v:e}")
+}
 
-    // int rho x about O of the translational field (for beams not m c, which the rotations'
-    // inertia coupling enters): P(T_a)(k, a) with T_a the rigid translation along a.
-    let first_moment = Vector3::from_fn(|k, _| {
-        (0..3)
-            .map(|a| (0..N).map(|i| P(6 * i + a)[(k, a)]).sum::<f64>())
-            .sum::<f64>()
-            / 3.0
-    });
-
-    let mut f = String::new();
-    let e = |v: f64| format!("{v:e}");
-    let w = &mut f;
-    // Writing to a String cannot fail.
+/// The `** FLEXMBS` comment lines: name, frame origin, first and second moments and the
+/// translational field's invariant, which MBDyn skips and [`read_mbdyn_fem`] reads back.
+fn write_flexmbs_lines(
+    w: &mut String,
+    body: &ReducedBody,
+    reference: usize,
+    x_r: Vector3<f64>,
+    first_moment: Vector3<f64>,
+    X2: &Matrix3<f64>,
+    field3: &[Vector3<f64>],
+) {
+    use std::fmt::Write;
     let _ = writeln!(w, "** MBDyn MODAL DATA FILE");
     let _ = writeln!(
         w,
@@ -293,6 +321,13 @@ pub fn to_mbdyn_fem(body: &ReducedBody, reference: usize, origin: &Path) -> Resu
             let _ = writeln!(w, "** FLEXMBS FIELD INVARIANT 3 {a} {} {}", 8 * chunk, values.join(" "));
         }
     }
+}
+
+/// Records 1 to 8: header, node list, initial values, node coordinates from the frame
+/// origin, and the mode shapes of the kept coordinates `keep`.
+fn write_geometry_records(w: &mut String, body: &ReducedBody, keep: &[usize], x_r: Vector3<f64>) {
+    use std::fmt::Write;
+    let (N, nx) = (body.interfaces.len(), keep.len());
     let _ = writeln!(w, "** RECORD GROUP 1, HEADER");
     let _ = writeln!(
         w,
@@ -325,9 +360,27 @@ pub fn to_mbdyn_fem(body: &ReducedBody, reference: usize, origin: &Path) -> Resu
         }
     }
     let _ = writeln!(w, "**");
-    for (record, what, A) in [(9, "MODAL MASS MATRIX", &M), (10, "MODAL STIFFNESS MATRIX", &K)] {
+}
+
+/// Records 9 to 18: modal mass and stiffness, global inertia and the invariants, with `A`
+/// the matrices `M_CB`, `K_CB`, `S_t` and `S_r` about the frame origin.
+fn write_inertia_records(
+    w: &mut String,
+    body: &ReducedBody,
+    x_r: Vector3<f64>,
+    keep: &[usize],
+    A: [&DMatrix<f64>; 4],
+    P: &dyn Fn(usize) -> Matrix3<f64>,
+    Q: &dyn Fn(usize, usize) -> Matrix3<f64>,
+) {
+    use std::fmt::Write;
+    let [M, K, S_t, S_rO] = A;
+    let inertia = &body.inertia;
+    let c_O = Vector3::from(inertia.center_of_mass) - x_r;
+    let nx = keep.len();
+    for (record, what, A) in [(9, "MODAL MASS MATRIX", M), (10, "MODAL STIFFNESS MATRIX", K)] {
         let _ = writeln!(w, "** RECORD GROUP {record}, {what}. COLUMN-MAJOR FORM");
-        for &a in &keep {
+        for &a in keep {
             let row: Vec<String> = keep.iter().map(|&b| e(A[(a, b)])).collect();
             let _ = writeln!(w, "{}", row.join(" "));
         }
@@ -340,7 +393,7 @@ pub fn to_mbdyn_fem(body: &ReducedBody, reference: usize, origin: &Path) -> Resu
         let _ = writeln!(w, "{} {} {}", e(row[0]), e(row[1]), e(row[2]));
     }
     let _ = writeln!(w, "**");
-    for (record, what, A) in [(14, "INVARIANT 3", &S_t), (15, "INVARIANT 4", &S_rO)] {
+    for (record, what, A) in [(14, "INVARIANT 3", S_t), (15, "INVARIANT 4", S_rO)] {
         let _ = writeln!(w, "** RECORD GROUP {record}, {what}");
         for a in 0..3 {
             let row: Vec<String> = keep.iter().map(|&j| e(A[(a, j)])).collect();
@@ -352,7 +405,7 @@ pub fn to_mbdyn_fem(body: &ReducedBody, reference: usize, origin: &Path) -> Resu
     let _ = writeln!(w, "** RECORD GROUP 16, INVARIANT 8");
     for a in 0..3 {
         let mut row = Vec::with_capacity(3 * nx);
-        for &j in &keep {
+        for &j in keep {
             let Pj = P(j);
             let inv8 = Matrix3::identity() * Pj.trace() - Pj.transpose();
             row.extend((0..3).map(|b| e(inv8[(a, b)])));
@@ -365,8 +418,8 @@ pub fn to_mbdyn_fem(body: &ReducedBody, reference: usize, origin: &Path) -> Resu
     for a in 0..3 {
         let (b, c) = ((a + 1) % 3, (a + 2) % 3);
         let mut row = Vec::with_capacity(nx * nx);
-        for &j in &keep {
-            for &k in &keep {
+        for &j in keep {
+            for &k in keep {
                 let q = Q(j, k);
                 row.push(e(q[(b, c)] - q[(c, b)]));
             }
@@ -378,8 +431,8 @@ pub fn to_mbdyn_fem(body: &ReducedBody, reference: usize, origin: &Path) -> Resu
     let _ = writeln!(w, "** RECORD GROUP 18, INVARIANT 9");
     for a in 0..3 {
         let mut row = Vec::with_capacity(3 * nx * nx);
-        for &j in &keep {
-            for &k in &keep {
+        for &j in keep {
+            for &k in keep {
                 let inv9 = Q(k, j) - Matrix3::identity() * Q(j, k).trace();
                 row.extend((0..3).map(|b| e(inv9[(a, b)])));
             }
@@ -387,8 +440,6 @@ pub fn to_mbdyn_fem(body: &ReducedBody, reference: usize, origin: &Path) -> Resu
         let _ = writeln!(w, "{}", row.join(" "));
     }
     let _ = writeln!(w, "**");
-    let _ = writeln!(w, "** END OF FILE");
-    Ok(f)
 }
 
 /// Writes `body` to `path` as an MBDyn `.fem` file with interface `reference` held.
@@ -538,75 +589,7 @@ pub fn parse_mbdyn_fem(
         line,
         what,
     };
-    // Split into records: (number, header line, value tokens with lines).
-    let mut records: Vec<RawRecord<'_>> = Vec::new();
-    let mut r = Records::default();
-    for (k, line) in text.lines().enumerate() {
-        let n = k + 1;
-        let t = line.trim();
-        if let Some(rest) = t.strip_prefix("** RECORD GROUP ") {
-            let digits: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
-            let number: u32 = digits
-                .parse()
-                .map_err(|_| structure(n, format!("cannot read the record number of '{}'", excerpt(t))))?;
-            records.push((number, n, Vec::new()));
-        } else if t.starts_with("** END OF FILE") {
-            break;
-        } else if let Some(rest) = t.strip_prefix("** FLEXMBS ") {
-            let words: Vec<&str> = rest.split_whitespace().collect();
-            match words.as_slice() {
-                ["BODY", name] => r.name = Some(name.to_string()),
-                ["FIRST", "MOMENT", values @ ..] => {
-                    let v: Vec<f64> = values.iter().filter_map(|s| s.parse().ok()).collect();
-                    if v.len() != 3 || v.iter().any(|c: &f64| !c.is_finite()) {
-                        return Err(structure(
-                            n,
-                            format!("cannot read the first moment in '{}'", excerpt(t)),
-                        ));
-                    }
-                    r.first_moment = Some(Vector3::new(v[0], v[1], v[2]));
-                }
-                ["SECOND", "MOMENT", values @ ..] => {
-                    let v: Vec<f64> = values.iter().filter_map(|s| s.parse().ok()).collect();
-                    if v.len() != 9 || v.iter().any(|c: &f64| !c.is_finite()) {
-                        return Err(structure(
-                            n,
-                            format!("cannot read the second moment in '{}'", excerpt(t)),
-                        ));
-                    }
-                    r.second_moment = Some(Matrix3::from_row_slice(&v));
-                }
-                ["FIELD", "INVARIANT", "3", a, first, values @ ..] => {
-                    let (Ok(a), Ok(first)) = (a.parse::<usize>(), first.parse::<usize>()) else {
-                        return Err(structure(n, format!("cannot read '{}'", excerpt(t))));
-                    };
-                    for (k, v) in values.iter().enumerate() {
-                        match v.parse::<f64>() {
-                            Ok(v) if v.is_finite() && a < 3 => r.field3.push((a, first + k, v)),
-                            _ => return Err(structure(n, format!("cannot read '{}'", excerpt(t)))),
-                        }
-                    }
-                }
-                ["ORIGIN", x, y, z] => {
-                    let v: Vec<f64> = [x, y, z].iter().filter_map(|s| s.parse().ok()).collect();
-                    if v.len() != 3 || v.iter().any(|c: &f64| !c.is_finite()) {
-                        return Err(structure(n, format!("cannot read the origin in '{}'", excerpt(t))));
-                    }
-                    r.origin = Vector3::new(v[0], v[1], v[2]);
-                }
-                _ => {}
-            }
-        } else if t.starts_with("**") || t.is_empty() {
-            continue;
-        } else if let Some(last) = records.last_mut() {
-            last.2.extend(t.split_whitespace().map(|w| (n, w)));
-        } else {
-            return Err(structure(
-                n,
-                format!("data before the first RECORD GROUP: '{}'", excerpt(t)),
-            ));
-        }
-    }
+    let (records, mut r) = split_records(&text, origin)?;
     let mut notes = Vec::new();
     for (number, header_line, items) in records {
         if r.seen.contains(&number) {
@@ -626,119 +609,7 @@ pub fn parse_mbdyn_fem(
             at: 0,
             header_line,
         };
-        let (nn, nm) = (r.n_nodes, r.n_modes);
-        match number {
-            1 => {
-                tk.next("the revision (REV0)")?;
-                r.n_nodes = tk.count("the number of nodes")?;
-                let normal = tk.count("the number of normal modes")?;
-                let attached = tk.count("the number of attached modes")?;
-                let constraint = tk.count("the number of constraint modes")?;
-                let rejected = tk.count("the number of rejected modes")?;
-                if rejected > 0 {
-                    return Err(structure(
-                        header_line,
-                        "rejected modes (NREJECTED > 0) are not read".into(),
-                    ));
-                }
-                r.n_modes = normal + attached + constraint;
-                if r.n_nodes == 0 {
-                    return Err(structure(header_line, "the file has no nodes".into()));
-                }
-            }
-            2 => {
-                for _ in 0..nn {
-                    r.labels.push(tk.next("a node label")?.1.to_string());
-                }
-            }
-            3 | 4 => {
-                for _ in 0..nm {
-                    if tk.real("an initial modal value")? != 0.0 && number == 3 {
-                        notes.push("the initial modal displacements (RECORD GROUP 3) are not used".to_string());
-                    }
-                }
-            }
-            5..=7 => {
-                let axis = (number - 5) as usize;
-                for _ in 0..nn {
-                    let v = tk.real("a node coordinate")?;
-                    r.xyz[axis].push(v);
-                }
-            }
-            8 => {
-                let mut s = DMatrix::zeros(6 * nn, nm);
-                for j in 0..nm {
-                    for i in 0..6 * nn {
-                        s[(i, j)] = tk.real("a mode shape value")?;
-                    }
-                }
-                r.shapes = Some(s);
-            }
-            9 => r.M = Some(tk.matrix(nm, nm, "a modal mass value")?),
-            10 => r.K = Some(tk.matrix(nm, nm, "a modal stiffness value")?),
-            11 => {
-                let mut lumped = Vec::with_capacity(nn);
-                for _ in 0..nn {
-                    let mut v = [0.0; 6];
-                    for x in v.iter_mut() {
-                        *x = tk.real("a lumped mass value")?;
-                    }
-                    lumped.push(v);
-                }
-                r.lumped = Some(lumped);
-            }
-            12 => {
-                let m = tk.real("the mass")?;
-                let c = Vector3::new(tk.real("x_cg")?, tk.real("y_cg")?, tk.real("z_cg")?);
-                let J = tk.matrix(3, 3, "an inertia value")?;
-                let J = Matrix3::from_fn(|i, j| J[(i, j)]);
-                r.global = Some((m, c, J));
-            }
-            13 => {
-                tk.matrix(nm, nm, "a modal damping value")?;
-                notes.push("the modal damping (RECORD GROUP 13) is not used".to_string());
-            }
-            14 => r.inv3 = Some(tk.matrix(3, nm, "a value of invariant 3")?),
-            15 => r.inv4 = Some(tk.matrix(3, nm, "a value of invariant 4")?),
-            16 => {
-                let mut v = vec![Matrix3::zeros(); nm];
-                for a in 0..3 {
-                    for m in v.iter_mut() {
-                        for b in 0..3 {
-                            m[(a, b)] = tk.real("a value of invariant 8")?;
-                        }
-                    }
-                }
-                r.inv8 = Some(v);
-            }
-            17 => {
-                // Invariant 5 is the antisymmetric part of what invariant 9 gives; read to check its size.
-                tk.matrix(3, nm * nm, "a value of invariant 5")?;
-            }
-            18 => {
-                let mut v = vec![vec![Matrix3::zeros(); nm]; nm];
-                for a in 0..3 {
-                    for row in v.iter_mut() {
-                        for m in row.iter_mut() {
-                            for b in 0..3 {
-                                m[(a, b)] = tk.real("a value of invariant 9")?;
-                            }
-                        }
-                    }
-                }
-                r.inv9 = Some(v);
-            }
-            19 => {
-                notes.push("the stress stiffening matrices (RECORD GROUP 19) are not used".to_string());
-                tk.at = tk.items.len();
-            }
-            other => {
-                return Err(structure(
-                    header_line,
-                    format!("RECORD GROUP {other} is not a record of the format (1-19)"),
-                ));
-            }
-        }
+        read_record(&mut r, &mut tk, &mut notes)?;
         tk.done()?;
     }
     for (needed, what) in [
@@ -761,6 +632,221 @@ pub fn parse_mbdyn_fem(
     build_body(r, origin, interfaces, notes)
 }
 
+/// The text split into records (number, header line, value tokens with their lines), and the
+/// `FLEXMBS` comment lines read into `Records`.
+fn split_records<'a>(text: &'a str, origin: &Path) -> Result<(Vec<RawRecord<'a>>, Records), FemError> {
+    let structure = |line: usize, what: String| FemError::Structure {
+        path: origin.to_path_buf(),
+        line,
+        what,
+    };
+    // Split into records: (number, header line, value tokens with lines).
+    let mut records: Vec<RawRecord<'_>> = Vec::new();
+    let mut r = Records::default();
+    for (k, line) in text.lines().enumerate() {
+        let n = k + 1;
+        let t = line.trim();
+        if let Some(rest) = t.strip_prefix("** RECORD GROUP ") {
+            let digits: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
+            let number: u32 = digits
+                .parse()
+                .map_err(|_| structure(n, format!("cannot read the record number of '{}'", excerpt(t))))?;
+            records.push((number, n, Vec::new()));
+        } else if t.starts_with("** END OF FILE") {
+            break;
+        } else if let Some(rest) = t.strip_prefix("** FLEXMBS ") {
+            read_flexmbs_line(&mut r, rest, t, n, origin)?;
+        } else if t.starts_with("**") || t.is_empty() {
+            continue;
+        } else if let Some(last) = records.last_mut() {
+            last.2.extend(t.split_whitespace().map(|w| (n, w)));
+        } else {
+            return Err(structure(
+                n,
+                format!("data before the first RECORD GROUP: '{}'", excerpt(t)),
+            ));
+        }
+    }
+    Ok((records, r))
+}
+
+/// A `** FLEXMBS` comment line `t` (line `n`, `rest` after the prefix) into `r`.
+fn read_flexmbs_line(r: &mut Records, rest: &str, t: &str, n: usize, origin: &Path) -> Result<(), FemError> {
+    let structure = |line: usize, what: String| FemError::Structure {
+        path: origin.to_path_buf(),
+        line,
+        what,
+    };
+    let words: Vec<&str> = rest.split_whitespace().collect();
+    match words.as_slice() {
+        ["BODY", name] => r.name = Some(name.to_string()),
+        ["FIRST", "MOMENT", values @ ..] => {
+            let v: Vec<f64> = values.iter().filter_map(|s| s.parse().ok()).collect();
+            if v.len() != 3 || v.iter().any(|c: &f64| !c.is_finite()) {
+                return Err(structure(
+                    n,
+                    format!("cannot read the first moment in '{}'", excerpt(t)),
+                ));
+            }
+            r.first_moment = Some(Vector3::new(v[0], v[1], v[2]));
+        }
+        ["SECOND", "MOMENT", values @ ..] => {
+            let v: Vec<f64> = values.iter().filter_map(|s| s.parse().ok()).collect();
+            if v.len() != 9 || v.iter().any(|c: &f64| !c.is_finite()) {
+                return Err(structure(
+                    n,
+                    format!("cannot read the second moment in '{}'", excerpt(t)),
+                ));
+            }
+            r.second_moment = Some(Matrix3::from_row_slice(&v));
+        }
+        ["FIELD", "INVARIANT", "3", a, first, values @ ..] => {
+            let (Ok(a), Ok(first)) = (a.parse::<usize>(), first.parse::<usize>()) else {
+                return Err(structure(n, format!("cannot read '{}'", excerpt(t))));
+            };
+            for (k, v) in values.iter().enumerate() {
+                match v.parse::<f64>() {
+                    Ok(v) if v.is_finite() && a < 3 => r.field3.push((a, first + k, v)),
+                    _ => return Err(structure(n, format!("cannot read '{}'", excerpt(t)))),
+                }
+            }
+        }
+        ["ORIGIN", x, y, z] => {
+            let v: Vec<f64> = [x, y, z].iter().filter_map(|s| s.parse().ok()).collect();
+            if v.len() != 3 || v.iter().any(|c: &f64| !c.is_finite()) {
+                return Err(structure(n, format!("cannot read the origin in '{}'", excerpt(t))));
+            }
+            r.origin = Vector3::new(v[0], v[1], v[2]);
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// The values of one record into `r` (the header's counts give the sizes of the others).
+fn read_record(r: &mut Records, tk: &mut Tokens<'_>, notes: &mut Vec<String>) -> Result<(), FemError> {
+    let (number, header_line, path) = (tk.record, tk.header_line, tk.path);
+    let structure = |line: usize, what: String| FemError::Structure {
+        path: path.to_path_buf(),
+        line,
+        what,
+    };
+    let (nn, nm) = (r.n_nodes, r.n_modes);
+    match number {
+        1 => {
+            tk.next("the revision (REV0)")?;
+            r.n_nodes = tk.count("the number of nodes")?;
+            let normal = tk.count("the number of normal modes")?;
+            let attached = tk.count("the number of attached modes")?;
+            let constraint = tk.count("the number of constraint modes")?;
+            let rejected = tk.count("the number of rejected modes")?;
+            if rejected > 0 {
+                return Err(structure(
+                    header_line,
+                    "rejected modes (NREJECTED > 0) are not read".into(),
+                ));
+            }
+            r.n_modes = normal + attached + constraint;
+            if r.n_nodes == 0 {
+                return Err(structure(header_line, "the file has no nodes".into()));
+            }
+        }
+        2 => {
+            for _ in 0..nn {
+                r.labels.push(tk.next("a node label")?.1.to_string());
+            }
+        }
+        3 | 4 => {
+            for _ in 0..nm {
+                if tk.real("an initial modal value")? != 0.0 && number == 3 {
+                    notes.push("the initial modal displacements (RECORD GROUP 3) are not used".to_string());
+                }
+            }
+        }
+        5..=7 => {
+            let axis = (number - 5) as usize;
+            for _ in 0..nn {
+                let v = tk.real("a node coordinate")?;
+                r.xyz[axis].push(v);
+            }
+        }
+        8 => {
+            let mut s = DMatrix::zeros(6 * nn, nm);
+            for j in 0..nm {
+                for i in 0..6 * nn {
+                    s[(i, j)] = tk.real("a mode shape value")?;
+                }
+            }
+            r.shapes = Some(s);
+        }
+        9 => r.M = Some(tk.matrix(nm, nm, "a modal mass value")?),
+        10 => r.K = Some(tk.matrix(nm, nm, "a modal stiffness value")?),
+        11 => {
+            let mut lumped = Vec::with_capacity(nn);
+            for _ in 0..nn {
+                let mut v = [0.0; 6];
+                for x in v.iter_mut() {
+                    *x = tk.real("a lumped mass value")?;
+                }
+                lumped.push(v);
+            }
+            r.lumped = Some(lumped);
+        }
+        12 => {
+            let m = tk.real("the mass")?;
+            let c = Vector3::new(tk.real("x_cg")?, tk.real("y_cg")?, tk.real("z_cg")?);
+            let J = tk.matrix(3, 3, "an inertia value")?;
+            let J = Matrix3::from_fn(|i, j| J[(i, j)]);
+            r.global = Some((m, c, J));
+        }
+        13 => {
+            tk.matrix(nm, nm, "a modal damping value")?;
+            notes.push("the modal damping (RECORD GROUP 13) is not used".to_string());
+        }
+        14 => r.inv3 = Some(tk.matrix(3, nm, "a value of invariant 3")?),
+        15 => r.inv4 = Some(tk.matrix(3, nm, "a value of invariant 4")?),
+        16 => {
+            let mut v = vec![Matrix3::zeros(); nm];
+            for a in 0..3 {
+                for m in v.iter_mut() {
+                    for b in 0..3 {
+                        m[(a, b)] = tk.real("a value of invariant 8")?;
+                    }
+                }
+            }
+            r.inv8 = Some(v);
+        }
+        17 => {
+            // Invariant 5 is the antisymmetric part of what invariant 9 gives; read to check its size.
+            tk.matrix(3, nm * nm, "a value of invariant 5")?;
+        }
+        18 => {
+            let mut v = vec![vec![Matrix3::zeros(); nm]; nm];
+            for a in 0..3 {
+                for row in v.iter_mut() {
+                    for m in row.iter_mut() {
+                        for b in 0..3 {
+                            m[(a, b)] = tk.real("a value of invariant 9")?;
+                        }
+                    }
+                }
+            }
+            r.inv9 = Some(v);
+        }
+        19 => {
+            notes.push("the stress stiffening matrices (RECORD GROUP 19) are not used".to_string());
+            tk.at = tk.items.len();
+        }
+        other => {
+            return Err(structure(
+                header_line,
+                format!("RECORD GROUP {other} is not a record of the format (1-19)"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn excerpt(t: &str) -> String {
     t.chars().take(40).collect()
 }
@@ -780,43 +866,151 @@ fn build_body(
     let y: Vec<Vector3<f64>> = (0..nn)
         .map(|i| Vector3::new(r.xyz[0][i], r.xyz[1][i], r.xyz[2][i]))
         .collect();
-    let shapes = r.shapes.unwrap_or_else(|| DMatrix::zeros(6 * nn, nx));
-    let M_x = r.M.unwrap_or_else(|| DMatrix::zeros(nx, nx));
-    let K_x = r.K.unwrap_or_else(|| DMatrix::zeros(nx, nx));
-    // Mass data about the frame origin O: from records 12, 14-18, or from the lumped masses.
-    let lumped_data = r.lumped.as_ref().map(|lumped| {
-        let mut m = 0.0;
-        let mut first = Vector3::zeros();
-        let mut J_O = Matrix3::zeros();
-        let mut inv3 = DMatrix::zeros(3, nx);
-        let mut inv4 = DMatrix::zeros(3, nx);
-        let mut P = vec![Matrix3::zeros(); nx];
-        let mut Q = vec![vec![Matrix3::zeros(); nx]; nx];
-        for (i, l) in lumped.iter().enumerate() {
-            let (mi, Ji) = (l[0], Matrix3::from_diagonal(&Vector3::new(l[3], l[4], l[5])));
-            m += mi;
-            first += y[i] * mi;
-            J_O += Ji - tilde(&y[i]) * tilde(&y[i]) * mi;
-            let phi_t = |j: usize| Vector3::new(shapes[(6 * i, j)], shapes[(6 * i + 1, j)], shapes[(6 * i + 2, j)]);
-            let phi_r = |j: usize| Vector3::new(shapes[(6 * i + 3, j)], shapes[(6 * i + 4, j)], shapes[(6 * i + 5, j)]);
-            for j in 0..nx {
-                let t = phi_t(j);
-                let v4 = tilde(&y[i]) * t * mi + Ji * phi_r(j);
-                for a in 0..3 {
-                    inv3[(a, j)] += mi * t[a];
-                    inv4[(a, j)] += v4[a];
-                }
-                P[j] += y[i] * t.transpose() * mi;
-                for k in 0..nx {
-                    Q[j][k] += t * phi_t(k).transpose() * mi;
-                }
+    let shapes = r.shapes.clone().unwrap_or_else(|| DMatrix::zeros(6 * nn, nx));
+    let M_x = r.M.clone().unwrap_or_else(|| DMatrix::zeros(nx, nx));
+    let K_x = r.K.clone().unwrap_or_else(|| DMatrix::zeros(nx, nx));
+    let modal = modal_inertia(&r, &y, &shapes, &mut notes, &body_error)?;
+    let rigid = RigidMoments::new(&r, &modal);
+    let (M_a, K_a) = joint_matrices(&modal, &rigid, &M_x, &K_x);
+    let data = joint_mass_data(&modal, &rigid);
+
+    // Interfaces: the chosen exposed nodes.
+    let chosen = chosen_nodes(&r.labels, interfaces, nn, &body_error)?;
+    let na = 6 + nx;
+    let nb = 6 * chosen.len();
+    if nb > na {
+        return Err(body_error(format!(
+            "{} interfaces need {nb} coordinates, but the rigid motions and {nx} modes give {na}",
+            chosen.len()
+        )));
+    }
+    let B = interface_values(&chosen, &y, &shapes, nx);
+    let (mut T_b, Z) = interface_null_space(&B, &body_error)?;
+    let (omega, V) = fixed_interface_modes(&Z, &K_a, &M_a, &mut T_b, &body_error)?;
+    let nz = Z.ncols();
+    let mut T = DMatrix::zeros(na, nb + nz);
+    T.view_mut((0, 0), (na, nb)).copy_from(&T_b);
+    if nz > 0 {
+        T.view_mut((0, nb), (na, nz)).copy_from(&(&Z * &V));
+    }
+    let sym = |A: DMatrix<f64>| (&A + A.transpose()) * 0.5;
+    let K_CB = sym(T.transpose() * &K_a * &T);
+    let M_CB = sym(T.transpose() * &M_a * &T);
+    let (inertia, Phi_com) = reduced_inertia(&data, &T, &modal, &rigid, r.origin, &body_error)?;
+    let name = r.name.clone().unwrap_or_else(|| {
+        origin
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "mbdyn".into())
+    });
+    let body = ReducedBody {
+        format_version: FORMAT_VERSION,
+        name,
+        interfaces: chosen
+            .iter()
+            .map(|&i| InterfacePoint {
+                name: r.labels[i].clone(),
+                node: i as u32,
+                position: (y[i] + r.origin).into(),
+            })
+            .collect(),
+        n_modes: nz,
+        fixed_interface_omega: omega,
+        K_CB: dense(&K_CB),
+        M_CB: dense(&M_CB),
+        inertia,
+        Phi_com: dense(&Phi_com),
+        auxiliary_interface: None,
+        mesh: None,
+        geometric_stiffness: None,
+        stress: None,
+        load_points: Vec::new(),
+        attachment_modes: 0,
+    };
+    Ok((body, notes))
+}
+
+/// Mass data about the frame origin $O$ summed from the lumped masses at the exposed nodes
+/// (record 11), as MBDyn does without records 12 and 14-18.
+struct LumpedData {
+    m: f64,
+    c_O: Vector3<f64>,
+    J_O: Matrix3<f64>,
+    inv3: DMatrix<f64>,
+    inv4: DMatrix<f64>,
+    P: Vec<Matrix3<f64>>,
+    Q: Vec<Vec<Matrix3<f64>>>,
+}
+
+fn lumped_data(lumped: &[[f64; 6]], y: &[Vector3<f64>], shapes: &DMatrix<f64>, nx: usize) -> LumpedData {
+    let mut m = 0.0;
+    let mut first = Vector3::zeros();
+    let mut J_O = Matrix3::zeros();
+    let mut inv3 = DMatrix::zeros(3, nx);
+    let mut inv4 = DMatrix::zeros(3, nx);
+    let mut P = vec![Matrix3::zeros(); nx];
+    let mut Q = vec![vec![Matrix3::zeros(); nx]; nx];
+    for (i, l) in lumped.iter().enumerate() {
+        let (mi, Ji) = (l[0], Matrix3::from_diagonal(&Vector3::new(l[3], l[4], l[5])));
+        m += mi;
+        first += y[i] * mi;
+        J_O += Ji - tilde(&y[i]) * tilde(&y[i]) * mi;
+        let phi_t = |j: usize| Vector3::new(shapes[(6 * i, j)], shapes[(6 * i + 1, j)], shapes[(6 * i + 2, j)]);
+        let phi_r = |j: usize| Vector3::new(shapes[(6 * i + 3, j)], shapes[(6 * i + 4, j)], shapes[(6 * i + 5, j)]);
+        for j in 0..nx {
+            let t = phi_t(j);
+            let v4 = tilde(&y[i]) * t * mi + Ji * phi_r(j);
+            for a in 0..3 {
+                inv3[(a, j)] += mi * t[a];
+                inv4[(a, j)] += v4[a];
+            }
+            P[j] += y[i] * t.transpose() * mi;
+            for k in 0..nx {
+                Q[j][k] += t * phi_t(k).transpose() * mi;
             }
         }
-        (m, first / m.max(f64::MIN_POSITIVE), J_O, inv3, inv4, P, Q)
-    });
+    }
+    LumpedData {
+        m,
+        c_O: first / m.max(f64::MIN_POSITIVE),
+        J_O,
+        inv3,
+        inv4,
+        P,
+        Q,
+    }
+}
+
+/// The body's mass and the modes' mass data about the frame origin $O$, from records 12 and
+/// 14-18, or from the lumped masses of record 11; what is missing is zero (with a note).
+struct ModalInertia {
+    m: f64,
+    /// Centre of mass from $O$.
+    c_O: Vector3<f64>,
+    J_com: Matrix3<f64>,
+    /// Invariants 3 and 4 ($3 \times n_x$).
+    inv3: DMatrix<f64>,
+    inv4: DMatrix<f64>,
+    /// $\mathbf P_j = \int\rho\,\mathbf x\mathbf S_j^T$ and $\mathbf Q_{jk} = \int\rho\,\mathbf S_j\mathbf S_k^T$ of the modes.
+    P: Vec<Matrix3<f64>>,
+    Q: Vec<Vec<Matrix3<f64>>>,
+    /// $\int\rho\,\mathbf S$ of the translational field ($3 \times n_x$).
+    field3: DMatrix<f64>,
+}
+
+fn modal_inertia(
+    r: &Records,
+    y: &[Vector3<f64>],
+    shapes: &DMatrix<f64>,
+    notes: &mut Vec<String>,
+    body_error: &dyn Fn(String) -> FemError,
+) -> Result<ModalInertia, FemError> {
+    let nx = r.n_modes;
+    // Mass data about the frame origin O: from records 12, 14-18, or from the lumped masses.
+    let lumped_data = r.lumped.as_ref().map(|lumped| lumped_data(lumped, y, shapes, nx));
     let (m, c_O, J_com) = match (&r.global, &lumped_data) {
         (Some(g), _) => *g,
-        (None, Some((m, c, J_O, ..))) => (*m, *c, J_O + tilde(c) * tilde(c) * *m),
+        (None, Some(d)) => (d.m, d.c_O, d.J_O + tilde(&d.c_O) * tilde(&d.c_O) * d.m),
         (None, None) => {
             return Err(body_error(
                 "the file has no inertia: neither RECORD GROUP 12 (global inertia) nor 11 (lumped masses)".into(),
@@ -826,15 +1020,15 @@ fn build_body(
     if !(m > 0.0) {
         return Err(body_error(format!("the mass is {m:e}; a body needs a positive mass")));
     }
-    let inv3 = r.inv3.clone().or_else(|| lumped_data.as_ref().map(|d| d.3.clone()));
-    let inv4 = r.inv4.clone().or_else(|| lumped_data.as_ref().map(|d| d.4.clone()));
+    let inv3 = r.inv3.clone().or_else(|| lumped_data.as_ref().map(|d| d.inv3.clone()));
+    let inv4 = r.inv4.clone().or_else(|| lumped_data.as_ref().map(|d| d.inv4.clone()));
     let P = match (&r.inv8, &lumped_data) {
         // P_j^T = tr(P_j) I - Inv8_j, with tr(P_j) = tr(Inv8_j) / 2.
         (Some(inv8), _) => inv8
             .iter()
             .map(|v| (Matrix3::identity() * (v.trace() / 2.0) - v).transpose())
             .collect(),
-        (None, Some(d)) => d.5.clone(),
+        (None, Some(d)) => d.P.clone(),
         (None, None) => vec![Matrix3::zeros(); nx],
     };
     let Q = match (&r.inv9, &lumped_data) {
@@ -846,7 +1040,7 @@ fn build_body(
                     .collect()
             })
             .collect(),
-        (None, Some(d)) => d.6.clone(),
+        (None, Some(d)) => d.Q.clone(),
         (None, None) => vec![vec![Matrix3::zeros(); nx]; nx],
     };
     if inv3.is_none() || inv4.is_none() {
@@ -867,16 +1061,52 @@ fn build_body(
             field3[(a, k)] = v;
         }
     }
+    Ok(ModalInertia {
+        m,
+        c_O,
+        J_com,
+        inv3,
+        inv4,
+        P,
+        Q,
+        field3,
+    })
+}
 
-    // The joint basis [rigid motions of the frame (t, theta about O), modes]: n_a = 6 + n_x.
+/// The rigid body's moments about the frame origin $O$: $\mathbf J_O$, and of the
+/// translational field $\int\rho\,\mathbf x$ (`X1`) and $\int\rho\,\mathbf x\mathbf x^T$ (`X2`).
+struct RigidMoments {
+    J_O: Matrix3<f64>,
+    X1: Vector3<f64>,
+    X2: Matrix3<f64>,
+}
+
+impl RigidMoments {
+    fn new(r: &Records, modal: &ModalInertia) -> RigidMoments {
+        let (m, c_O) = (modal.m, modal.c_O);
+        let J_O = modal.J_com - tilde(&c_O) * tilde(&c_O) * m;
+        // int rho x x^T about O (translational field): from the file, or from J_O (which includes
+        // any rotary inertia of beam sections).
+        let X2 = r
+            .second_moment
+            .unwrap_or_else(|| Matrix3::identity() * (J_O.trace() / 2.0) - J_O);
+        let X1 = r.first_moment.unwrap_or(c_O * m);
+        RigidMoments { J_O, X1, X2 }
+    }
+}
+
+/// Mass and stiffness of the joint basis [rigid motions of the frame (t, theta about O),
+/// modes]: $n_a = 6 + n_x$ columns.
+fn joint_matrices(
+    modal: &ModalInertia,
+    rigid: &RigidMoments,
+    M_x: &DMatrix<f64>,
+    K_x: &DMatrix<f64>,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let (m, c_O, J_O) = (modal.m, modal.c_O, rigid.J_O);
+    let (inv3, inv4) = (&modal.inv3, &modal.inv4);
+    let nx = M_x.nrows();
     let na = 6 + nx;
-    let J_O = J_com - tilde(&c_O) * tilde(&c_O) * m;
-    // int rho x x^T about O (translational field): from the file, or from J_O (which includes
-    // any rotary inertia of beam sections).
-    let X2 = r
-        .second_moment
-        .unwrap_or_else(|| Matrix3::identity() * (J_O.trace() / 2.0) - J_O);
-    let X1 = r.first_moment.unwrap_or(c_O * m);
     let mut M_a = DMatrix::zeros(na, na);
     let mut K_a = DMatrix::zeros(na, na);
     for a in 0..3 {
@@ -893,9 +1123,18 @@ fn build_body(
             M_a[(6 + j, 3 + a)] = inv4[(a, j)];
         }
     }
-    M_a.view_mut((6, 6), (nx, nx)).copy_from(&M_x);
-    K_a.view_mut((6, 6), (nx, nx)).copy_from(&K_x);
-    // Mass data of the joint basis.
+    M_a.view_mut((6, 6), (nx, nx)).copy_from(M_x);
+    K_a.view_mut((6, 6), (nx, nx)).copy_from(K_x);
+    (M_a, K_a)
+}
+
+/// The [`MassData`] of the joint basis (see [`joint_matrices`]).
+fn joint_mass_data(modal: &ModalInertia, rigid: &RigidMoments) -> MassData {
+    let (m, c_O) = (modal.m, modal.c_O);
+    let (J_O, X1, X2) = (rigid.J_O, rigid.X1, rigid.X2);
+    let (inv3, inv4, P, field3) = (&modal.inv3, &modal.inv4, &modal.P, &modal.field3);
+    let nx = P.len();
+    let na = 6 + nx;
     let mut S_t = DMatrix::zeros(3, na);
     let mut S_rO = DMatrix::zeros(3, na);
     let mut Pa = vec![Matrix3::zeros(); na];
@@ -916,7 +1155,7 @@ fn build_body(
         Pa[al] = Matrix3::from_fn(|k, l| if l == al { X1[k] } else { 0.0 });
         Pa[3 + al] = Matrix3::from_fn(|k, l| (0..3).map(|j| levi_civita(l, al, j) * X2[(k, j)]).sum());
     }
-    Pa[6..].copy_from_slice(&P);
+    Pa[6..].copy_from_slice(P);
     // Q(c1, c2)(a, b) = int rho S_c1,a S_c2,b.
     let field_rigid = |col: usize| -> Box<dyn Fn(usize, usize) -> f64> {
         // Returns, for a rigid column and component a, the coefficient of x_j (j < 3) or of 1 (j = 3).
@@ -976,42 +1215,46 @@ fn build_body(
         for k in 0..nx {
             for a in 0..3 {
                 for b in 0..3 {
-                    Qa[a][b][(6 + j, 6 + k)] = Q[j][k][(a, b)];
+                    Qa[a][b][(6 + j, 6 + k)] = modal.Q[j][k][(a, b)];
                 }
             }
         }
     }
-    let data = MassData {
+    MassData {
         S_t,
         S_rO,
         P: Pa,
         Q: Qa,
-    };
+    }
+}
 
-    // Interfaces: the chosen exposed nodes.
-    let chosen: Vec<usize> = match interfaces {
-        None => (0..nn).collect(),
+/// The exposed nodes that become interfaces: those labelled `interfaces`, else all.
+fn chosen_nodes(
+    labels: &[String],
+    interfaces: Option<&[String]>,
+    nn: usize,
+    body_error: &dyn Fn(String) -> FemError,
+) -> Result<Vec<usize>, FemError> {
+    match interfaces {
+        None => Ok((0..nn).collect()),
         Some(names) => names
             .iter()
             .map(|name| {
-                r.labels.iter().position(|l| l == name).ok_or_else(|| {
+                labels.iter().position(|l| l == name).ok_or_else(|| {
                     body_error(format!(
                         "no exposed node is labelled '{name}' (labels: {})",
-                        r.labels.join(", ")
+                        labels.join(", ")
                     ))
                 })
             })
-            .collect::<Result<_, _>>()?,
-    };
-    let nb = 6 * chosen.len();
-    if nb > na {
-        return Err(body_error(format!(
-            "{} interfaces need {nb} coordinates, but the rigid motions and {nx} modes give {na}",
-            chosen.len()
-        )));
+            .collect(),
     }
-    // B: interface values of the joint basis.
-    let mut B = DMatrix::zeros(nb, na);
+}
+
+/// $\mathbf B$: the interface values ($6 N \times n_a$) of the joint basis.
+fn interface_values(chosen: &[usize], y: &[Vector3<f64>], shapes: &DMatrix<f64>, nx: usize) -> DMatrix<f64> {
+    let nb = 6 * chosen.len();
+    let mut B = DMatrix::zeros(nb, 6 + nx);
     for (q, &i) in chosen.iter().enumerate() {
         for a in 0..3 {
             B[(6 * q + a, a)] = 1.0;
@@ -1026,6 +1269,16 @@ fn build_body(
             }
         }
     }
+    B
+}
+
+/// $\mathbf B^+ = \mathbf B^T(\mathbf B\mathbf B^T)^{-1}$ and an orthonormal basis $\mathbf Z$ of
+/// the null space of $\mathbf B$; an error unless $\mathbf B$ has full row rank.
+fn interface_null_space(
+    B: &DMatrix<f64>,
+    body_error: &dyn Fn(String) -> FemError,
+) -> Result<(DMatrix<f64>, DMatrix<f64>), FemError> {
+    let (nb, na) = B.shape();
     // B has full row rank unless two interfaces cannot move independently with these modes.
     let singular_values = B.transpose().singular_values();
     let s_max = singular_values.max();
@@ -1036,11 +1289,11 @@ fn build_body(
         )));
     }
     let Bt = B.transpose();
-    let BBt_inv = (&B * &Bt)
+    let BBt_inv = (B * &Bt)
         .try_inverse()
         .ok_or_else(|| body_error("the interface values are singular".into()))?;
     // The null space Z of B: the projector's columns, orthonormalised (Gram-Schmidt, twice).
-    let proj = DMatrix::<f64>::identity(na, na) - &Bt * &BBt_inv * &B;
+    let proj = DMatrix::<f64>::identity(na, na) - &Bt * &BBt_inv * B;
     let mut Z_cols: Vec<nalgebra::DVector<f64>> = Vec::new();
     for e in 0..na {
         if Z_cols.len() == na - nb {
@@ -1069,57 +1322,76 @@ fn build_body(
     } else {
         DMatrix::from_columns(&Z_cols)
     };
-    let mut T_b = &Bt * &BBt_inv;
-    let K_zz = Z.transpose() * &K_a * &Z;
-    let M_zz = Z.transpose() * &M_a * &Z;
-    let (omega, V) = if nz == 0 {
-        (Vec::new(), DMatrix::zeros(0, 0))
-    } else {
-        let chol = K_zz.clone().cholesky().ok_or_else(|| {
-            body_error("with the interfaces held, the modal stiffness is not positive definite: the body can still move without straining (choose other interfaces)".into())
-        })?;
-        // Static condensation: interface coordinates with zero generalised force on Z.
-        T_b -= &Z * chol.solve(&(Z.transpose() * &K_a * &T_b));
-        let L = M_zz
-            .clone()
-            .cholesky()
-            .ok_or_else(|| body_error("with the interfaces held, the modal mass is not positive definite".into()))?;
-        // K_zz v = w^2 M_zz v: with M = L L^T, (L^-1 K L^-T) u = w^2 u, v = L^-T u.
-        let Linv = L
-            .l()
-            .try_inverse()
-            .ok_or_else(|| body_error("the modal mass cannot be inverted".into()))?;
-        let A = &Linv * &K_zz * Linv.transpose();
-        let A = (&A + A.transpose()) * 0.5;
-        let eig = nalgebra::SymmetricEigen::new(A);
-        let mut order: Vec<usize> = (0..nz).collect();
-        order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-        let mut V = DMatrix::zeros(nz, nz);
-        let mut omega = Vec::with_capacity(nz);
-        for (k, &o) in order.iter().enumerate() {
-            let v = Linv.transpose() * eig.eigenvectors.column(o);
-            // Sign: the largest coefficient on the joint basis positive.
-            let full = &Z * &v;
-            let big = full
-                .iter()
-                .copied()
-                .fold(0.0f64, |acc, x| if x.abs() > acc.abs() { x } else { acc });
-            let v = if big < 0.0 { -v } else { v };
-            V.set_column(k, &v);
-            omega.push(eig.eigenvalues[o].max(0.0).sqrt());
-        }
-        (omega, V)
-    };
-    let mut T = DMatrix::zeros(na, nb + nz);
-    T.view_mut((0, 0), (na, nb)).copy_from(&T_b);
-    if nz > 0 {
-        T.view_mut((0, nb), (na, nz)).copy_from(&(&Z * &V));
+    Ok((&Bt * &BBt_inv, Z))
+}
+
+/// The fixed-interface modes in the null space `Z` (coefficients `V`, mass-normalised, each
+/// signed so that its largest coefficient on the joint basis is positive) and their
+/// frequencies; condenses `T_b` statically onto them (zero generalised force on `Z`).
+fn fixed_interface_modes(
+    Z: &DMatrix<f64>,
+    K_a: &DMatrix<f64>,
+    M_a: &DMatrix<f64>,
+    T_b: &mut DMatrix<f64>,
+    body_error: &dyn Fn(String) -> FemError,
+) -> Result<(Vec<f64>, DMatrix<f64>), FemError> {
+    let nz = Z.ncols();
+    let K_zz = Z.transpose() * K_a * Z;
+    let M_zz = Z.transpose() * M_a * Z;
+    if nz == 0 {
+        return Ok((Vec::new(), DMatrix::zeros(0, 0)));
     }
-    let sym = |A: DMatrix<f64>| (&A + A.transpose()) * 0.5;
-    let K_CB = sym(T.transpose() * &K_a * &T);
-    let M_CB = sym(T.transpose() * &M_a * &T);
-    let d = data.transform(&T);
-    let n = nb + nz;
+    let chol = K_zz.clone().cholesky().ok_or_else(|| {
+        body_error("with the interfaces held, the modal stiffness is not positive definite: the body can still move without straining (choose other interfaces)".into())
+    })?;
+    // Static condensation: interface coordinates with zero generalised force on Z.
+    *T_b -= Z * chol.solve(&(Z.transpose() * K_a * &*T_b));
+    let L = M_zz
+        .clone()
+        .cholesky()
+        .ok_or_else(|| body_error("with the interfaces held, the modal mass is not positive definite".into()))?;
+    // K_zz v = w^2 M_zz v: with M = L L^T, (L^-1 K L^-T) u = w^2 u, v = L^-T u.
+    let Linv = L
+        .l()
+        .try_inverse()
+        .ok_or_else(|| body_error("the modal mass cannot be inverted".into()))?;
+    let A = &Linv * &K_zz * Linv.transpose();
+    let A = (&A + A.transpose()) * 0.5;
+    let eig = nalgebra::SymmetricEigen::new(A);
+    let mut order: Vec<usize> = (0..nz).collect();
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let mut V = DMatrix::zeros(nz, nz);
+    let mut omega = Vec::with_capacity(nz);
+    for (k, &o) in order.iter().enumerate() {
+        let v = Linv.transpose() * eig.eigenvectors.column(o);
+        // Sign: the largest coefficient on the joint basis positive.
+        let full = Z * &v;
+        let big = full
+            .iter()
+            .copied()
+            .fold(0.0f64, |acc, x| if x.abs() > acc.abs() { x } else { acc });
+        let v = if big < 0.0 { -v } else { v };
+        V.set_column(k, &v);
+        omega.push(eig.eigenvalues[o].max(0.0).sqrt());
+    }
+    Ok((omega, V))
+}
+
+/// The inertia data and $\boldsymbol\Phi_{com}$ of the Craig-Bampton basis $\mathbf T$ (columns
+/// of the joint basis), the centre of mass moved by the frame origin `origin`.
+fn reduced_inertia(
+    data: &MassData,
+    T: &DMatrix<f64>,
+    modal: &ModalInertia,
+    rigid: &RigidMoments,
+    origin: Vector3<f64>,
+    body_error: &dyn Fn(String) -> FemError,
+) -> Result<(InertiaData, DMatrix<f64>), FemError> {
+    let (m, c_O, J_com, X1) = (modal.m, modal.c_O, modal.J_com, rigid.X1);
+    let nx = modal.P.len();
+    let na = 6 + nx;
+    let d = data.transform(T);
+    let n = T.ncols();
     let S_r = &d.S_rO - tilde_dyn(&c_O) * &d.S_t;
     // int rho S of the translational field for the joint basis: m e_a, e_a x X1, the modes'.
     let mut field_a = DMatrix::zeros(3, na);
@@ -1130,8 +1402,8 @@ fn build_body(
             field_a[(b, 3 + a)] = rot[b];
         }
     }
-    field_a.view_mut((0, 6), (3, nx)).copy_from(&field3);
-    let field_new = &field_a * &T;
+    field_a.view_mut((0, 6), (3, nx)).copy_from(&modal.field3);
+    let field_new = &field_a * T;
     let S_x = DMatrix::from_fn(9, n, |row, j| {
         let (k, l) = (row / 3, row % 3);
         d.P[j][(k, l)] - c_O[k] * field_new[(l, j)]
@@ -1147,48 +1419,19 @@ fn build_body(
             (0..3).map(|k| J_inv[(i - 3, k)] * S_r[(k, j)]).sum()
         }
     });
-    let c = c_O + r.origin;
-    let name = r.name.clone().unwrap_or_else(|| {
-        origin
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "mbdyn".into())
-    });
-    let body = ReducedBody {
-        format_version: FORMAT_VERSION,
-        name,
-        interfaces: chosen
-            .iter()
-            .map(|&i| InterfacePoint {
-                name: r.labels[i].clone(),
-                node: i as u32,
-                position: (y[i] + r.origin).into(),
-            })
-            .collect(),
-        n_modes: nz,
-        fixed_interface_omega: omega,
-        K_CB: dense(&K_CB),
-        M_CB: dense(&M_CB),
-        inertia: InertiaData {
-            mass: m,
-            center_of_mass: c.into(),
-            inertia_com: [
-                [J_com[(0, 0)], J_com[(0, 1)], J_com[(0, 2)]],
-                [J_com[(1, 0)], J_com[(1, 1)], J_com[(1, 2)]],
-                [J_com[(2, 0)], J_com[(2, 1)], J_com[(2, 2)]],
-            ],
-            S_t: dense(&d.S_t),
-            S_r: dense(&S_r),
-            S_x: dense(&S_x),
-            S_bar,
-        },
-        Phi_com: dense(&Phi_com),
-        auxiliary_interface: None,
-        mesh: None,
-        geometric_stiffness: None,
-        stress: None,
-        load_points: Vec::new(),
-        attachment_modes: 0,
+    let c = c_O + origin;
+    let inertia = InertiaData {
+        mass: m,
+        center_of_mass: c.into(),
+        inertia_com: [
+            [J_com[(0, 0)], J_com[(0, 1)], J_com[(0, 2)]],
+            [J_com[(1, 0)], J_com[(1, 1)], J_com[(1, 2)]],
+            [J_com[(2, 0)], J_com[(2, 1)], J_com[(2, 2)]],
+        ],
+        S_t: dense(&d.S_t),
+        S_r: dense(&S_r),
+        S_x: dense(&S_x),
+        S_bar,
     };
-    Ok((body, notes))
+    Ok((inertia, Phi_com))
 }

@@ -626,7 +626,16 @@ fn printable(bytes: &[u8]) -> String {
 }
 
 fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
-    // Line 1: magic and version, read before anything else (module docs, "Versions").
+    let (version, next) = read_version(bytes)?;
+    let (meta, json_end) = read_metadata(bytes, next)?;
+    check_metadata(&meta, version)?;
+    let (expected, values) = read_arrays(&meta, &bytes[json_end + 1..])?;
+    Ok(assemble(meta, &expected, values))
+}
+
+/// Line 1: magic and version, read before anything else (module docs, "Versions"); the
+/// version and where line 2 starts.
+fn read_version(bytes: &[u8]) -> Result<(u64, usize), BodyFileProblem> {
     let magic = format!("{MAGIC} ");
     if !bytes.starts_with(magic.as_bytes()) {
         return Err(BodyFileProblem::WrongMagic {
@@ -652,7 +661,12 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         });
     }
 
-    // Line 2: `metadata <bytes> crc32 <hex>`.
+    Ok((version, next))
+}
+
+/// Line 2 (`metadata <bytes> crc32 <hex>`, starting at `next`) and the JSON block it
+/// announces: the metadata and where the block ends (at its newline).
+fn read_metadata(bytes: &[u8], next: usize) -> Result<(Metadata, usize), BodyFileProblem> {
     let line2_error = |what: String| BodyFileProblem::Header { line: 2, what };
     let (line2, json_start) =
         header_line(bytes, next, 128).ok_or_else(|| line2_error("no end of line within 128 bytes".into()))?;
@@ -701,6 +715,11 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         column: e.column(),
         message: e.to_string(),
     })?;
+    Ok((meta, json_end))
+}
+
+/// The metadata's counts agree with each other and with the file's `version`.
+fn check_metadata(meta: &Metadata, version: u64) -> Result<(), BodyFileProblem> {
     let shape = |what: String| BodyFileProblem::Shape { what };
     if meta.format_version as u64 != version {
         return Err(shape(format!(
@@ -739,7 +758,17 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
             )));
         }
     }
+    Ok(())
+}
 
+/// The array index checked against the arrays the metadata implies, and the arrays read
+/// from `binary` (what follows the metadata block), each against its checksum.
+#[allow(clippy::type_complexity)]
+fn read_arrays(
+    meta: &Metadata,
+    binary: &[u8],
+) -> Result<(Vec<(String, usize, usize)>, Vec<Vec<f64>>), BodyFileProblem> {
+    let shape = |what: String| BodyFileProblem::Shape { what };
     // The index: names, shapes and offsets as the format prescribes, checked before any
     // allocation so that damaged counts cannot ask for absurd memory.
     let names: Vec<&str> = meta.load_points.iter().map(|p| p.name.as_str()).collect();
@@ -771,7 +800,6 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
             expected.len()
         )));
     }
-    let binary = &bytes[json_end + 1..];
     let mut offset = 0u64;
     let mut values: Vec<Vec<f64>> = Vec::with_capacity(expected.len());
     for (k, (entry, (name, rows, cols))) in meta.arrays.iter().zip(&expected).enumerate() {
@@ -843,11 +871,15 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
             expected: offset,
         });
     }
+    Ok((expected, values))
+}
 
+/// The body of the checked metadata and arrays.
+fn assemble(meta: Metadata, expected: &[(String, usize, usize)], values: Vec<Vec<f64>>) -> ReducedBody {
     // In file order (`expected_arrays`), each array taken once.
     let mut arrays = values
         .into_iter()
-        .zip(&expected)
+        .zip(expected)
         .map(|(data, (_, rows, cols))| DenseMatrix {
             nrows: *rows,
             ncols: *cols,
@@ -897,7 +929,7 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
             shape: next_matrix(),
         })
         .collect();
-    Ok(ReducedBody {
+    ReducedBody {
         // A version-1 file reads as a current body without geometric stiffness (module docs).
         format_version: FORMAT_VERSION,
         name: meta.name,
@@ -922,5 +954,5 @@ fn parse(bytes: &[u8]) -> Result<ReducedBody, BodyFileProblem> {
         stress,
         load_points,
         attachment_modes: meta.attachment_modes,
-    })
+    }
 }
