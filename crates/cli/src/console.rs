@@ -2,8 +2,8 @@
 //! stderr (hidden when stderr is not a terminal), and what each analysis found on stdout.
 
 use study::error::BoxError;
-use study::observer::{AnalysisInfo, Observer, Progress};
-use study::output::AnalysisSummary;
+use study::output::observer::{AnalysisInfo, Observer, Progress};
+use study::output::summary::AnalysisSummary;
 use study::run::Options;
 
 /// Progress on stderr, reports on stdout.
@@ -121,7 +121,11 @@ impl Observer for Console {
 
 /// Runs every analysis of `study` (or only the one named `only`, after the chain of analyses
 /// its `start` names) into its results folder, progress on the console.
-pub fn run(study: &study::Study, options: &Options, only: Option<&str>) -> Result<study::output::Summary, BoxError> {
+pub fn run(
+    study: &study::Study,
+    options: &Options,
+    only: Option<&str>,
+) -> Result<study::output::summary::Summary, BoxError> {
     let summary = match only {
         None => study::run(study, options, &mut Console::default())?,
         Some(name) => {
@@ -130,7 +134,7 @@ pub fn run(study: &study::Study, options: &Options, only: Option<&str>) -> Resul
                 return Err(format!(
                     "{}: --analysis: {}",
                     study.source.path.display(),
-                    study::source::unknown_reference("analysis", name, &names)
+                    study::input::source::unknown_reference("analysis", name, &names)
                 )
                 .into());
             };
@@ -140,7 +144,7 @@ pub fn run(study: &study::Study, options: &Options, only: Option<&str>) -> Resul
     let done = summary
         .analyses
         .iter()
-        .filter(|a| a.status == study::output::Status::Done)
+        .filter(|a| a.status == study::output::summary::Status::Done)
         .count();
     crate::tell!(
         "flexmbs: {} analyses done in {:.2} s; results in {}",

@@ -13,7 +13,7 @@ use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::path::PathBuf;
-use study::observer::{Cell, Recorded, Recorder};
+use study::output::observer::{Cell, Recorded, Recorder};
 
 /// A study: a study file held in memory, read and changed value by value through key paths
 /// (`parts.rod.reduction.modes`, `sections[0].d`, `drivers.crank-speed.function.speed`), with
@@ -104,7 +104,7 @@ pub(crate) fn json_to_py<'py>(py: Python<'py>, value: &serde_json::Value) -> PyR
 }
 
 /// The columns of a result table: numbers as a float array, text columns as lists.
-fn table_dict<'py>(py: Python<'py>, t: &study::observer::Table) -> PyResult<Bound<'py, PyDict>> {
+fn table_dict<'py>(py: Python<'py>, t: &study::output::observer::Table) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("name", &t.name)?;
     d.set_item("columns", &t.columns)?;
@@ -315,7 +315,7 @@ impl Study {
         let only = match &analysis {
             Some(name) => Some(st.analyses.iter().position(|a| &a.name == name).ok_or_else(|| {
                 let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
-                StudyError::new_err(study::source::unknown_reference("analysis", name, &names))
+                StudyError::new_err(study::input::source::unknown_reference("analysis", name, &names))
             })?),
             None => None,
         };
@@ -461,7 +461,7 @@ fn run_study(
     opts: &study::Options,
     only: Option<usize>,
     recorder: &mut Recorder,
-) -> Result<study::output::Summary, study::BoxError> {
+) -> Result<study::output::summary::Summary, study::BoxError> {
     match only {
         None => study::run(st, opts, recorder),
         Some(i) => study::run::run_only(st, opts, i, recorder),

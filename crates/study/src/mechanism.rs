@@ -1,4 +1,4 @@
-//! The analyses of the mechanism: the validated [`crate::validate::mechanism::Mechanism`] becomes an `mbs::Model` (bodies
+//! The analyses of the mechanism: the validated [`crate::input::validate::mechanism::Mechanism`] becomes an `mbs::Model` (bodies
 //! reduced through the cache, points merged by fixed joints into nodes, ground nodes for the
 //! joints to the ground), then `mbs::solve_static`, the generalized-α `mbs::Integrator` step
 //! by step, or `mbs::spectrum`.
@@ -11,16 +11,16 @@
 #![allow(non_snake_case)]
 
 use crate::error::{BoxError, ResultExt, SolverStopped};
-use crate::observer::{Cell, Observer, Progress, SensorGroup, SensorStream, Series, Table};
-use crate::run::{reduce_part, Reduced};
-use crate::simulation::{sensor_columns, Simulation};
-use crate::source::KeyPath;
-use crate::validate::mechanism::{
+use crate::input::source::KeyPath;
+use crate::input::validate::mechanism::{
     joint_is_angle, About, BodyLoadSpec, BodyRef, BodySource, EffortSpec, FrameSpec, InitialSpec, MbsAnalysis,
     PointRef, ReactionAt, SensorTarget, StressNodes,
 };
-use crate::validate::Study;
-use crate::vtu::{CellRole, PointField, VtuMesh};
+use crate::input::validate::Study;
+use crate::output::observer::{Cell, Observer, Progress, SensorGroup, SensorStream, Series, Table};
+use crate::output::vtu::{CellRole, PointField, VtuMesh};
+use crate::run::{reduce_part, Reduced};
+use crate::simulation::{sensor_columns, Simulation};
 use mbs::{
     Body, DriverTarget, FlexibleBody, InitialCondition, Load, Model, NodeId, PointMass, RigidBody, SensorKind, Spring,
     Support, System,

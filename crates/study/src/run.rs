@@ -4,12 +4,12 @@
 //! `crate::mechanism`.
 
 use crate::error::{AnalysisFailed, BoxError, ResultExt, SolverStopped};
-use crate::folder::ResultsFolder;
-use crate::observer::{AnalysisInfo, Cell, Observer, Progress, Series, Table};
-use crate::output::{default_results_dir, AnalysisSummary, PartSummary, Status, Summary};
-use crate::part::{Built, InterfaceTarget, LoadSpec, Part, SupportSpec};
-use crate::validate::{Analysis, AnalysisSpec, Solver, Study, DENSE_AUTO_LIMIT};
-use crate::vtu::{six_dof_fields, PointField, VtuMesh};
+use crate::input::part::{Built, InterfaceTarget, LoadSpec, Part, SupportSpec};
+use crate::input::validate::{Analysis, AnalysisSpec, Solver, Study, DENSE_AUTO_LIMIT};
+use crate::output::folder::ResultsFolder;
+use crate::output::observer::{AnalysisInfo, Cell, Observer, Progress, Series, Table};
+use crate::output::summary::{default_results_dir, AnalysisSummary, PartSummary, Status, Summary};
+use crate::output::vtu::{six_dof_fields, PointField, VtuMesh};
 use fe_model::{DofMap, ModalSolution, NodeId, DOF_NAMES};
 use reduction::{CbSettings, ReducedBody};
 use serde_json::json;
@@ -26,8 +26,8 @@ pub struct Options {
     /// Ends every dynamic analysis at this time if it is earlier (`--t-end`, for short runs).
     pub t_end: Option<f64>,
     /// Files in the results folder that flexmbs did not write: refuse (default) or keep
-    /// (`--foreign-files keep`; `crate::folder`).
-    pub foreign: crate::folder::ForeignFiles,
+    /// (`--foreign-files keep`; `crate::output::folder`).
+    pub foreign: crate::output::folder::ForeignFiles,
 }
 
 impl Options {
@@ -215,7 +215,7 @@ impl<'s> Runner<'s> {
         // The analysis whose final state is the start, run now when it has not run.
         let mut prerequisite = None;
         if let Some(k) = a.start {
-            if self.states[k].is_none() && self.summary.analyses[k].status == crate::output::Status::Pending {
+            if self.states[k].is_none() && self.summary.analyses[k].status == crate::output::summary::Status::Pending {
                 self.run_one(k, obs)?;
                 prerequisite = Some(k);
             }
@@ -230,7 +230,7 @@ impl<'s> Runner<'s> {
             AnalysisSpec::Mbs(spec) => {
                 let mut spec = spec.clone();
                 let mut refused = None;
-                if let (crate::validate::MbsAnalysis::Dynamic { t_end, dt, .. }, Some(limit)) =
+                if let (crate::input::validate::MbsAnalysis::Dynamic { t_end, dt, .. }, Some(limit)) =
                     (&mut spec, self.options.t_end)
                 {
                     if limit < *dt {

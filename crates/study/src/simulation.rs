@@ -6,9 +6,9 @@
 //! program writes.
 
 use crate::error::{BoxError, Location};
+use crate::input::validate::{MbsAnalysis, Study};
 use crate::mechanism::{BuiltMechanism, LoadTarget, NamedLoad};
-use crate::observer::SensorGroup;
-use crate::validate::{MbsAnalysis, Study};
+use crate::output::observer::SensorGroup;
 use mbs::{DynamicSettings, Integrator, LoadKind, NodeMotion, SensorRecord, State, StepReport, System};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
@@ -170,9 +170,9 @@ impl Simulation {
     pub fn new(study: &Study, analysis: &str, options: &crate::run::Options) -> Result<Self, BoxError> {
         let Some(a) = study.analyses.iter().find(|a| a.name == analysis) else {
             let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
-            return Err(crate::source::unknown_reference("analysis", analysis, &names).into());
+            return Err(crate::input::source::unknown_reference("analysis", analysis, &names).into());
         };
-        let crate::validate::AnalysisSpec::Mbs(spec) = &a.spec else {
+        let crate::input::validate::AnalysisSpec::Mbs(spec) = &a.spec else {
             return Err(format!("analysis '{analysis}' is not an analysis of the mechanism").into());
         };
         let built = crate::mechanism::build(study, &options.cache_dir(study), &mut ())?;
@@ -275,7 +275,7 @@ impl Simulation {
     pub fn sensor(&self, name: &str) -> Result<Vec<f64>, BoxError> {
         let Some(&g) = self.group_of.get(name) else {
             let names: Vec<String> = self.groups.iter().map(|g| g.name.clone()).collect();
-            return Err(crate::source::unknown_reference("sensor", name, &names).into());
+            return Err(crate::input::source::unknown_reference("sensor", name, &names).into());
         };
         // Only this sensor's model sensors are evaluated (they are consecutive in the model).
         let values = self.integrator.sensor_values(&self.sensor_indices[g])?;
@@ -311,7 +311,7 @@ impl Simulation {
     pub fn set_load(&mut self, name: &str, kind: LoadKind, value: [f64; 3]) -> Result<(), BoxError> {
         let Some(l) = self.loads.iter().find(|l| l.name == name) else {
             let names: Vec<String> = self.loads.iter().map(|l| l.name.clone()).collect();
-            return Err(crate::source::unknown_reference("load", name, &names).into());
+            return Err(crate::input::source::unknown_reference("load", name, &names).into());
         };
         let target = l.target.clone();
         let system = self
@@ -353,7 +353,7 @@ impl Simulation {
         let names = self.actuator_names();
         names.iter().position(|n| *n == name).ok_or_else(|| {
             let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
-            crate::source::unknown_reference("actuator", name, &names).into()
+            crate::input::source::unknown_reference("actuator", name, &names).into()
         })
     }
 

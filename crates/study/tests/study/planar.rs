@@ -2,7 +2,7 @@
 //! the `planar` support), on the planar slider-crank of
 //! `benchmarks/studies/slider_crank_beam_rod_planar.toml`.
 
-use study::observer::Recorder;
+use study::output::observer::Recorder;
 
 /// The benchmark's planar slider-crank study, to `t_end`, with `edit` applied to its text.
 fn text(t_end: f64, edit: impl Fn(String) -> String) -> String {

@@ -9,8 +9,8 @@ use crate::common::{
     two_ended_beam, welded_chain, Text,
 };
 use std::path::PathBuf;
-use study::observer::Recorder;
-use study::output::Summary;
+use study::output::observer::Recorder;
+use study::output::summary::Summary;
 use study::run::Options;
 
 /// `text` written as `<name>.toml` in a scratch folder, loaded, and run in memory.
@@ -96,7 +96,7 @@ fn the_double_pendulum_example_with_stiff_links_follows_the_rigid_solution() {
     // The example with links a thousand times stiffer (the rigid limit), released from 30
     // degrees by its one [[initial]] line, for 1 s.
     let text = std::str::from_utf8(
-        study::examples::EXAMPLES
+        study::input::examples::EXAMPLES
             .iter()
             .find(|e| e.name == "double_pendulum")
             .unwrap()
@@ -251,7 +251,10 @@ function = { type = "ramp", t_end = 0.02, to = 1.0 }
         .unwrap();
     let names: Vec<&str> = rec.analyses.iter().map(|a| a.name.as_str()).collect();
     assert_eq!(names, ["sag", "first", "second"]);
-    assert!(summary.analyses.iter().all(|a| a.status == study::output::Status::Done));
+    assert!(summary
+        .analyses
+        .iter()
+        .all(|a| a.status == study::output::summary::Status::Done));
     let report = &summary.analyses[2].report;
     assert!(
         report

@@ -9,7 +9,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::source::KeyPath;
+use crate::input::source::KeyPath;
 use fe_model::mass_properties::center_of_mass;
 use fe_model::{DofMask, FeError, FeModel, MassKind, NodalLoad, NodeId, SpiderKind};
 use nalgebra::{Point3, Vector3};
@@ -314,9 +314,9 @@ pub fn model_size(model: &FeModel) -> f64 {
 }
 
 /// A `MassKind` from the file's choice.
-pub fn mass_kind(m: Option<crate::schema::MassFile>) -> MassKind {
+pub fn mass_kind(m: Option<crate::input::schema::MassFile>) -> MassKind {
     match m {
-        Some(crate::schema::MassFile::Lumped) => MassKind::Lumped,
+        Some(crate::input::schema::MassFile::Lumped) => MassKind::Lumped,
         _ => MassKind::Consistent,
     }
 }
