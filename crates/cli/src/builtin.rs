@@ -6,7 +6,7 @@
 use std::path::Path;
 use study::error::{BoxError, ResultExt};
 use study::input::source::Source;
-use study::run::Options;
+use study::Options;
 
 /// The study text of the built-in example.
 pub const STUDY: &str = include_str!("../../../examples/slider_crank.toml");

@@ -4,7 +4,7 @@ pub use crate::console::run;
 use crate::console::Console;
 use std::path::{Path, PathBuf};
 use study::error::BoxError;
-use study::run::Options;
+use study::Options;
 
 pub const USAGE: &str = "\
 flexmbs: from a mesh to the motion of a flexible mechanism
@@ -263,7 +263,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let path = one_file(&positional, "check", "a study file")?;
             let study = load(&path)?;
             if study.analyses.is_empty() {
-                return Err(study::run::nothing_to_run(&study));
+                return Err(study::nothing_to_run(&study));
             }
             let m = &study.mechanism;
             let mechanism = if m.is_empty() {
@@ -273,7 +273,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                     ", a mechanism of {} flexible and {} rigid bodies, {}, {} sensors",
                     m.bodies.len(),
                     m.rigid_bodies.len(),
-                    study::mechanism::joint_count(&study),
+                    study::joint_count(&study),
                     m.sensors.len()
                 )
             };
@@ -289,7 +289,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let (positional, options) = parse(rest, &["part", "out", "cache", "foreign-files"])?;
             let path = one_file(&positional, "reduce", "a study file")?;
             let study = load(&path)?;
-            let written = study::run::reduce_command(
+            let written = study::reduce_command(
                 &study,
                 option(&options, "part"),
                 &run_options(&options)?,

@@ -4,7 +4,7 @@
 use study::error::BoxError;
 use study::output::observer::{AnalysisInfo, Observer, Progress};
 use study::output::summary::AnalysisSummary;
-use study::run::Options;
+use study::Options;
 
 /// Progress on stderr, reports on stdout.
 #[derive(Default)]

@@ -403,7 +403,7 @@ impl Study {
         for i in targets {
             let p = &st.parts[i];
             let reduced = py
-                .detach(|| study::run::reduce_part(&st, p, &cache_dir, &mut ()))
+                .detach(|| study::reduce_part(&st, p, &cache_dir, &mut ()))
                 .map_err(|e| to_py_err(py, &*e))?;
             out.push((
                 p.name.clone(),
@@ -455,7 +455,7 @@ impl Study {
 }
 
 /// Runs every analysis of `st` (or only analysis `only`) into its results folder, every result
-/// to `recorder` too: the program's `study::run` and `study::run::run_only`.
+/// to `recorder` too: the program's `study::run` and `study::run_only`.
 fn run_study(
     st: &study::Study,
     opts: &study::Options,
@@ -464,7 +464,7 @@ fn run_study(
 ) -> Result<study::output::summary::Summary, study::BoxError> {
     match only {
         None => study::run(st, opts, recorder),
-        Some(i) => study::run::run_only(st, opts, i, recorder),
+        Some(i) => study::run_only(st, opts, i, recorder),
     }
 }
 

@@ -26,18 +26,23 @@
 //! | [`error`] | the boxed error with context and its report |
 //! | [`interrupt`] | Ctrl-C: a stop requested at the next output step |
 
-pub mod cache;
 pub mod error;
 pub mod input;
 pub mod interrupt;
-pub mod mechanism;
 pub mod output;
-pub mod run;
-pub mod simulation;
+
+pub(crate) mod build;
+pub(crate) mod run;
 
 pub use error::BoxError;
 pub use input::document::Document;
 pub use input::validate::{load, parse_and_validate, Study};
 pub use output::observer::{Observer, Recorder};
-pub use run::{run, run_only, run_with, Options, Runner};
-pub use simulation::Simulation;
+pub use run::{run, run_only, run_with, Options, Runner, Simulation};
+
+// What the command line, the Python package and the tests use beyond the facade.
+pub use build::{joint_count, BuiltMechanism};
+pub use run::nothing_to_run;
+pub use run::reduce::{build_mechanism, reduce_command, reduce_part, Reduced, ReducedFile};
+pub use run::sensors::sensor_columns;
+pub use run::simulation::dynamic_settings;

@@ -9,7 +9,7 @@
 //! interpolated to the run's output times).
 
 use study::output::observer::Recorder;
-use study::run::Options;
+use study::Options;
 
 /// The slider-crank example with its crank run up from rest to 150 rad/s in 0.1 s (the spin-up
 /// profile of validation problem C1) instead of turning at constant speed from the start, and

@@ -5,7 +5,7 @@
 use common::{dynamic, gravity, pendulum, sensor};
 use std::path::{Path, PathBuf};
 use study::output::observer::{Observer, Recorder};
-use study::run::Options;
+use study::Options;
 use study::{Document, Simulation};
 
 /// Study texts built from parameters.
@@ -352,9 +352,7 @@ fn sensors_read_by_name_are_the_columns_of_the_full_row() {
     let mut groups = sim.sensors().to_vec();
     groups[1].mbs_names.push("nowhere".into());
     let record = sim.system().sensor_record();
-    let e = study::simulation::sensor_columns(&groups, &record)
-        .unwrap_err()
-        .to_string();
+    let e = study::sensor_columns(&groups, &record).unwrap_err().to_string();
     assert!(e.contains("sensor 'rate'") && e.contains("no sensor 'nowhere'"), "{e}");
 }
 
@@ -839,7 +837,7 @@ fn model_errors_point_at_the_line_of_their_entity() {
         let file = dir.join(name);
         std::fs::write(&file, text).unwrap();
         let st = study::load(&file).unwrap();
-        let b = study::mechanism::build(&st, &dir.join("cache"), &mut ()).unwrap();
+        let b = study::build_mechanism(&st, &dir.join("cache"), &mut ()).unwrap();
         match b.system(&st) {
             Ok(_) => panic!("{name}: assembled"),
             Err(e) => e.to_string(),
@@ -881,7 +879,7 @@ fn reduced_bodies_are_shared_not_copied() {
     use std::sync::Arc;
     let file = example("elastica");
     let st = study::load(&file).unwrap();
-    let b = study::mechanism::build(&st, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
+    let b = study::build_mechanism(&st, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
     assert_eq!(b.bodies.len(), 4);
     let first = Arc::clone(&b.bodies[0].reduced);
     let sys = b.system(&st).unwrap();

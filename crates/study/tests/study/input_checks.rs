@@ -5,7 +5,7 @@
 use crate::common::{clamp, dynamic, material, pendulum, rigid_body, sensor, Text};
 use std::path::Path;
 use study::output::observer::Recorder;
-use study::run::Options;
+use study::Options;
 
 /// The rigid pendulum of `common::pendulum` with points `P` and `Q` at its centre of mass.
 const PENDULUM: Text = Text(|| pendulum(&[("P", [0.0, -1.0, 0.0]), ("Q", [0.0, -1.0, 0.0])]));
@@ -240,7 +240,7 @@ fn the_translation_axes_of_a_dynamic_analysis_reach_the_integrator() {
         let study::input::validate::AnalysisSpec::Mbs(spec) = &study.analyses[0].spec else {
             panic!("a dynamic analysis")
         };
-        study::simulation::dynamic_settings(spec, 1).unwrap()
+        study::dynamic_settings(spec, 1).unwrap()
     };
     assert!(!settings("axes-default", "").body_axis_translations);
     assert!(!settings("axes-fixed", "translations = \"fixed\"\n").body_axis_translations);
@@ -534,7 +534,7 @@ part = "block"
         );
         let cache = dir.join("cache");
         let mut stages = Stages::default();
-        let reduced = study::run::reduce_part(&study, &study.parts[0], &cache, &mut stages).unwrap();
+        let reduced = study::reduce_part(&study, &study.parts[0], &cache, &mut stages).unwrap();
         let precision = if factor.is_empty() { "double" } else { "single" };
         assert!(
             stages

@@ -65,7 +65,7 @@ fn the_planar_key_reaches_the_reduction_the_cache_and_the_bodies() {
     assert!(one_in_3d.mechanism.bodies[0].planar && !one_in_3d.mechanism.bodies[1].planar);
 
     let cache = dir.join("cache");
-    let reduce = |study: &study::Study| study::run::reduce_part(study, &study.parts[0], &cache, &mut ()).unwrap();
+    let reduce = |study: &study::Study| study::reduce_part(study, &study.parts[0], &cache, &mut ()).unwrap();
     let (p, s) = (reduce(&planar), reduce(&spatial));
     assert!(!p.from_cache && !s.from_cache);
     assert_ne!(p.file, s.file);

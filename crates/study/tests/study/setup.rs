@@ -11,7 +11,7 @@ use crate::common::{
 use std::path::PathBuf;
 use study::output::observer::Recorder;
 use study::output::summary::Summary;
-use study::run::Options;
+use study::Options;
 
 /// `text` written as `<name>.toml` in a scratch folder, loaded, and run in memory.
 fn run(name: &str, text: &str) -> (Recorder, Result<Summary, String>, PathBuf) {
@@ -52,7 +52,7 @@ fn results(rec: &Recorder, analysis: &str) -> serde_json::Value {
 /// The reduced body of the first flexible body of the study at `file` (mass data).
 fn first_body(file: &std::path::Path) -> (reduction::ReducedBody, nalgebra::Isometry3<f64>) {
     let study = study::load(file).unwrap();
-    let b = study::mechanism::build(&study, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
+    let b = study::build_mechanism(&study, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
     ((*b.bodies[0].reduced).clone(), b.bodies[0].placement)
 }
 
@@ -668,7 +668,7 @@ dt = 0.02
     let full = load("full", 41, "");
     assert!(!plain.parts[0].reduction.as_ref().unwrap().inertia_correction);
     assert!(corrected.parts[0].reduction.as_ref().unwrap().inertia_correction);
-    let reduce = |study: &study::Study| study::run::reduce_part(study, &study.parts[0], &cache, &mut ()).unwrap();
+    let reduce = |study: &study::Study| study::reduce_part(study, &study.parts[0], &cache, &mut ()).unwrap();
     let (p, c) = (reduce(&plain), reduce(&corrected));
     assert!(!p.from_cache && !c.from_cache);
     assert_ne!(p.file, c.file);
