@@ -1,15 +1,16 @@
-//! The analyses of the mechanism: `mbs::solve_static`, the generalized-α `mbs::Integrator`
-//! step by step, `mbs::spectrum` or `mbs::buckling` on the built mechanism.
+//! The analyses of the mechanism: `mbs::solve_static` (equilibrium), the generalized-α
+//! time integration (dynamic, [`super::dynamic`]), `mbs::spectrum` (linearized) and
+//! `mbs::buckling` on the built mechanism, each from the state its `start` names.
 //!
 //! Results stream as they are computed: one CSV file per sensor (header with units), flushed
 //! after every row, and the deformed meshes of every body (`mechanism_NNNNN.vtu`, listed in
 //! `mechanism.pvd`, rewritten after each) at the output times, so an interrupted run keeps
 //! them. A solver failure keeps what was written and reports time, step and residual.
 
+use super::dynamic::dynamic;
 use super::mesh::MeshRecovery;
 use super::outcome::Outcome;
-use super::sensors::SensorSampler;
-use super::simulation::{dynamic_start, Simulation};
+use super::sensors::{report_last, SensorSampler};
 use crate::build::{joint_count, BuiltMechanism};
 use crate::error::BoxError;
 use crate::input::validate::mechanism::{About, MbsAnalysis};
@@ -45,8 +46,6 @@ pub fn run_analysis(
         failure: None,
         final_state: None,
     };
-    let output = &study.mechanism.output;
-    let t0 = Instant::now();
     match analysis {
         MbsAnalysis::Equilibrium {
             steps,
@@ -55,417 +54,11 @@ pub fn run_analysis(
             time,
             arc_length,
         } => {
-            let method = if *arc_length {
-                // The first arc spans about 1/steps of the load (the scaled norm weighs the load
-                // factor by 1); the path may take up to 50 times as many steps to pass limit points.
-                let mut s = mbs::ArcLengthSettings::new(1.0 / *steps as f64, 1.0, (50 * *steps).max(1000));
-                s.tolerance = *tolerance;
-                s.max_iterations = *max_iterations;
-                s.time = *time;
-                mbs::StaticMethod::ArcLength(s)
-            } else {
-                let mut s = mbs::StaticSettings::new(*steps);
-                s.tolerance = *tolerance;
-                s.max_iterations = *max_iterations;
-                s.time = *time;
-                mbs::StaticMethod::LoadStepping(s)
-            };
-            let first = match start {
-                Some(s) => sys.at_rest(s, *time),
-                None => sys.initial_state(),
-            };
-            let (sol, failure) = match mbs::solve_static_with(&sys, first, &method) {
-                Ok(s) => (s, None),
-                Err(inc) => (inc.partial, Some(inc.error)),
-            };
-            let mut files = SensorSampler::start(obs, &b.groups, &sol.sensors, "load factor [-]", output.plots)?;
-            let mut rec = sys.sensor_record();
-            for (t, row) in sol.sensors.times.iter().zip(&sol.sensors.rows) {
-                rec.times.push(*t);
-                rec.rows.push(row.clone());
-                files.sample(obs, *t, &rec)?;
-            }
-            let mut mw = MeshRecovery::new(b, &sys)?;
-            mw.write(obs, 1.0, &sys, &sol.state, b)?;
-            let (hot_spots, hot_lines) = mw.hot_spot_summary(&sys, b, "load_factor");
-            out.report.extend(hot_lines);
-            let iterations: usize = sol.steps.iter().map(|s| s.residuals.len().saturating_sub(1)).sum();
-            out.report.push(format!(
-                "{} load steps, {iterations} Newton iterations, {} rejected attempts; last relative residual {:.2e}",
-                sol.steps.len(),
-                sol.rejected.len(),
-                sol.steps
-                    .last()
-                    .and_then(|s| s.residuals.last())
-                    .copied()
-                    .unwrap_or(f64::NAN)
-            ));
-            report_last(&mut out.report, b, &files);
-            out.results = json!({
-                "model": b.size(&sys),
-                "load_steps": sol.steps.len(),
-                "newton_iterations": iterations,
-                "rejected_steps": sol.rejected.len(),
-                "load_factor_reached": sol.sensors.times.last().copied().unwrap_or(0.0),
-                "seconds_solving": t0.elapsed().as_secs_f64(),
-                "hot_spots": hot_spots,
-            });
-            obs.sensors_end()?;
-            if failure.is_none() {
-                out.final_state = Some(sol.state.clone());
-            }
-            out.failure = failure.map(|e| {
-                let message = "equilibrium stopped; the converged load steps are written".into();
-                b.stopped(study, message, Some(sol.steps.len() + 1), e)
-            });
+            let method = static_method(*steps, *tolerance, *max_iterations, *time, *arc_length);
+            equilibrium(study, &sys, b, (&method, *time), start, obs, &mut out)?
         }
-        MbsAnalysis::Dynamic {
-            t_end,
-            dt,
-            newton,
-            dt_min,
-            adaptive,
-            ..
-        } => {
-            let first = dynamic_start(&sys, start);
-            let t_start = first.time();
-            if *t_end <= t_start {
-                return Err(format!(
-                    "t_end = {t_end} s is not after the start at t = {t_start} s (the state of the analysis named in `start`)"
-                )
-                .into());
-            }
-            let mut integ = Simulation::with_start(study, Arc::clone(&sys), b, analysis, first)?;
-            let mut rec = sys.sensor_record();
-            integ.record(&mut rec)?;
-            let mut files = SensorSampler::start(obs, &b.groups, &rec, "t [s]", output.plots)?;
-            files.sample(obs, t_start, &rec)?;
-            let mut mw = MeshRecovery::new(b, &sys)?;
-            if output.vtu_every.is_some() {
-                mw.write(obs, t_start, &sys, integ.state(), b)?;
-            }
-            let stepping = match adaptive {
-                None => mbs::Stepping::Fixed { min_step: *dt_min },
-                Some(ad) => mbs::Stepping::Adaptive(ad.clone()),
-            };
-            // Fixed steps: the last one is shortened to end exactly at t_end (mbs::fixed_steps,
-            // as Integrator::run_to steps).
-            let (_, last_step) = mbs::fixed_steps(t_start, *t_end, *dt);
-            // Why the callback stopped the run: a sensor that is not finite
-            // (mbs::SolveError::NonFiniteSensor, a solver stop) or a file that cannot be written.
-            enum Halt {
-                Sensor(mbs::SolveError, usize),
-                Output(BoxError),
-            }
-            impl<E: Into<BoxError>> From<E> for Halt {
-                fn from(e: E) -> Self {
-                    Halt::Output(e.into())
-                }
-            }
-            let mut last_written = t_start;
-            // Rows whose largest-von-Mises values are found a batch at a time (the rows reach
-            // the files in order, a batch at a time, at most PendingRows::WAIT late).
-            let mut pending = mbs::PendingRows::default();
-            // Completes the waiting rows (all of them with `flush`) and writes every row the
-            // record gained; a sensor that is not finite: the rows before it are written, the
-            // run is not complete. Only the last row is kept, to keep the record small.
-            // `record`: the integrator whose current state is recorded first (else the waiting
-            // rows are completed alone).
-            let mut write_rows = |record: Option<&mbs::Integrator>,
-                                  pending: &mut mbs::PendingRows,
-                                  rec: &mut mbs::SensorRecord,
-                                  files: &mut SensorSampler,
-                                  obs: &mut dyn Observer,
-                                  k: usize|
-             -> Result<(), Halt> {
-                let before = rec.rows.len();
-                let recorded = match record {
-                    Some(integ) => integ.record_deferred(pending, rec),
-                    None => sys.complete_rows(pending, rec),
-                };
-                let good = if recorded.is_err() {
-                    rec.rows.len().saturating_sub(1).max(before)
-                } else {
-                    rec.rows.len()
-                };
-                files.sample_rows(obs, rec, before..good)?;
-                if good > before {
-                    last_written = rec.times[good - 1];
-                }
-                recorded.map_err(|e| {
-                    let step = match &e {
-                        mbs::SolveError::NonFiniteSensor { step, .. } => *step,
-                        _ => k,
-                    };
-                    Halt::Sensor(e, step)
-                })?;
-                if rec.rows.len() > 1 {
-                    rec.rows.drain(..rec.rows.len() - 1);
-                    rec.times.drain(..rec.times.len() - 1);
-                }
-                Ok(())
-            };
-            let run = integ.run_to(&stepping, |done, integ| -> Result<(), Halt> {
-                let (k, t) = (done.k, done.time);
-                let vtu_now = output.vtu_every.is_some_and(|v| k % v == 0 || done.last);
-                if crate::interrupt::requested() && !pending.is_empty() {
-                    // A stop asked for: the waiting rows are written first.
-                    write_rows(None, &mut pending, &mut rec, &mut files, obs, k)?;
-                }
-                if k % output.every == 0 || done.last {
-                    write_rows(Some(integ), &mut pending, &mut rec, &mut files, obs, k)?;
-                    if !vtu_now {
-                        mw.track(t, &sys, integ.state(), b)?;
-                    }
-                }
-                if vtu_now {
-                    mw.write(obs, t, &sys, integ.state(), b)?;
-                }
-                let (done, total) = match done.planned {
-                    Some(n) => (k as u64, n as u64),
-                    None => ((1000.0 * (t - t_start) / (t_end - t_start)) as u64, 1000),
-                };
-                obs.progress(&Progress::Steps {
-                    what: "time integration".into(),
-                    done,
-                    total,
-                });
-                Ok(())
-            });
-            // The rows still waiting: a run that ended or failed writes them; a stop asked for
-            // wrote them (above); a file that cannot be written stops here.
-            let run = match run {
-                Ok((totals, failure)) => {
-                    match write_rows(None, &mut pending, &mut rec, &mut files, obs, totals.steps) {
-                        Ok(()) => Ok((totals, failure)),
-                        // The solver's own failure stays the run's.
-                        Err(_) if failure.is_some() => Ok((totals, failure)),
-                        Err(error) => Err(Box::new(mbs::Interrupted { error, totals })),
-                    }
-                }
-                Err(stop) => {
-                    let unwritable = matches!(&stop.error, Halt::Output(e) if !e.is::<crate::interrupt::Interrupted>());
-                    if !unwritable {
-                        let _ = write_rows(None, &mut pending, &mut rec, &mut files, obs, stop.totals.steps);
-                    }
-                    Err(stop)
-                }
-            };
-            let (totals, failure) = match run {
-                Ok((totals, None)) => (totals, None),
-                Ok((totals, Some(e))) => {
-                    let message = format!(
-                        "time integration stopped; results up to t = {:.6} s (step {}) are written",
-                        integ.state().time(),
-                        totals.steps
-                    );
-                    let failure = b.stopped(study, message, Some(totals.steps + 1), e);
-                    (totals, Some(failure))
-                }
-                Err(stop) => match stop.error {
-                    Halt::Output(e) => return Err(e),
-                    Halt::Sensor(e, k) => {
-                        let message =
-                            format!("time integration stopped; results up to t = {last_written:.6} s are written");
-                        let failure = b.stopped(study, message, Some(k), e);
-                        (stop.totals, Some(failure))
-                    }
-                },
-            };
-            out.failure = failure;
-            obs.progress(&Progress::Finished);
-            let mbs::StepTotals {
-                steps,
-                planned,
-                iterations,
-                jacobians,
-                max_iterations: max_iter,
-                retries,
-                rejected,
-                smallest_step: h_min,
-                largest_step: h_max,
-            } = totals;
-            let n_steps = planned.unwrap_or(0);
-            let t_reached = integ.state().time();
-            match adaptive {
-                None => out.report.push(format!(
-                    "{steps} of {n_steps} steps of {dt} s{} from t = {t_start} to {t_reached:.6} s, {iterations} Newton iterations ({:.2} per step, at most {max_iter})",
-                    if last_step < *dt * (1.0 - 1e-9) {
-                        format!(" (the last shortened to {last_step:.6e} s to end at t_end)")
-                    } else {
-                        String::new()
-                    },
-                    iterations as f64 / steps.max(1) as f64
-                )),
-                Some(ad) => out.report.push(format!(
-                    "{steps} adaptive steps from t = {t_start} to {t_reached:.6} s (error tolerance {:.1e}; steps {h_min:.3e} to {h_max:.3e} s), {rejected} rejected and retried, {iterations} Newton iterations",
-                    ad.tolerance
-                )),
-            }
-            if adaptive.is_none() {
-                out.report.push(if retries.is_empty() {
-                    "no step needed retrying (fixed step)".to_string()
-                } else {
-                    let smallest = retries.iter().map(|r| r.smallest_step).fold(f64::INFINITY, f64::min);
-                    let first = &retries[0];
-                    format!(
-                        "{} failed step(s) retried with halved steps (smallest {smallest:.3e} s, dt_min {dt_min:.3e} s); the first at t = {:.6} s: {}",
-                        retries.len(),
-                        first.time,
-                        first.cause
-                    )
-                });
-            }
-            if *newton == mbs::NewtonStrategy::Modified {
-                out.report.push(format!(
-                    "modified Newton: {jacobians} iteration matrices factorised ({:.2} per step)",
-                    jacobians as f64 / steps.max(1) as f64
-                ));
-            }
-            report_last(&mut out.report, b, &files);
-            let (hot_spots, hot_lines) = mw.hot_spot_summary(&sys, b, "t");
-            out.report.extend(hot_lines);
-            out.results = json!({
-                "model": b.size(&sys),
-                "hot_spots": hot_spots,
-                "steps": steps,
-                "steps_planned": planned,
-                "t_start": t_start,
-                "t_reached": t_reached,
-                "newton_iterations": iterations,
-                "max_iterations_per_step": max_iter,
-                "newton": match newton {
-                    mbs::NewtonStrategy::Full => "full",
-                    mbs::NewtonStrategy::Modified => "modified",
-                },
-                "jacobians": jacobians,
-                "adaptive": adaptive.is_some(),
-                "smallest_step": if h_min.is_finite() { json!(h_min) } else { json!(null) },
-                "largest_step": h_max,
-                "rejected_steps": rejected,
-                "retried_steps": retries.len(),
-                "retries": retries.iter().map(|r| json!({
-                    "time": r.time,
-                    "step": r.step,
-                    "smallest_step": r.smallest_step,
-                    "substeps": r.substeps,
-                    "cause": r.cause.to_string(),
-                })).collect::<Vec<_>>(),
-                "seconds_solving": t0.elapsed().as_secs_f64(),
-            });
-            obs.sensors_end()?;
-            if out.failure.is_none() {
-                out.final_state = Some(integ.state().clone());
-            }
-        }
-        MbsAnalysis::Linearized { modes, about } => {
-            let state = match (start, about) {
-                (Some(s), _) => s.clone(),
-                (None, About::Initial) => sys.initial_state(),
-                (None, About::Equilibrium) => {
-                    mbs::solve_static(&sys, sys.initial_state(), &mbs::StaticSettings::new(1))
-                        .map_err(|e| format!("the equilibrium to linearise about: {}", e.error))?
-                        .state
-                }
-                (None, About::Time { t, dt }) => {
-                    let settings = mbs::DynamicSettings::new(*dt, *t, mbs::DynamicSettings::DEFAULT_RHO_INF);
-                    mbs::solve_dynamic(&sys, sys.initial_state(), &settings)
-                        .map_err(|e| format!("the dynamic run up to t = {t} s to linearise about: {}", e.error))?
-                        .final_state
-                }
-            };
-            let s = mbs::spectrum(&sys, &state)?;
-            let mut csv = Table::new("frequencies", &["mode", "frequency [Hz]", "omega [rad/s]"]);
-            let shown: Vec<f64> = s.omega.iter().take(*modes).copied().collect();
-            for (k, w) in shown.iter().enumerate() {
-                csv.row(vec![
-                    Cell::from(k + 1),
-                    Cell::Num(w / (2.0 * std::f64::consts::PI)),
-                    Cell::Num(*w),
-                ]);
-            }
-            obs.table(&csv)?;
-            let mut csv = Table::new(
-                "state_space",
-                &["eigenvalue", "real [1/s]", "imaginary [rad/s]", "damped frequency [Hz]"],
-            );
-            for (k, (re, im)) in s.state_space.iter().enumerate() {
-                csv.row(vec![
-                    Cell::from(k + 1),
-                    Cell::Num(*re),
-                    Cell::Num(*im),
-                    Cell::Num(im / (2.0 * std::f64::consts::PI)),
-                ]);
-            }
-            obs.table(&csv)?;
-            // Which bodies and nodes carry each mode's energy (mbs::mode_energies).
-            let energies = mbs::mode_energies(&sys, &state)?;
-            let mut csv = Table::new(
-                "modes",
-                &[
-                    "mode",
-                    "frequency [Hz]",
-                    "damping ratio [-]",
-                    "rigid body [-]",
-                    "carried by",
-                    "growth rate [1/s]",
-                ],
-            );
-            for (k, e) in energies.iter().take(*modes).enumerate() {
-                csv.row(vec![
-                    Cell::from(k + 1),
-                    Cell::Num(e.frequency_hz),
-                    e.damping_ratio.map_or(Cell::Empty, Cell::Num),
-                    Cell::from(usize::from(e.rigid_body)),
-                    Cell::from(e.label.clone()),
-                    e.growth_rate.map_or(Cell::Empty, Cell::Num),
-                ]);
-            }
-            obs.table(&csv)?;
-            // A growing eigenvalue: the state is not a stable one, whatever the frequencies say.
-            let growing = s.growing();
-            let fastest = growing.iter().map(|g| g.0).fold(0.0, f64::max);
-            if !growing.is_empty() {
-                let unstable: Vec<String> = energies
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, e)| e.unstable)
-                    .map(|(k, _)| (k + 1).to_string())
-                    .collect();
-                let line = format!(
-                    "UNSTABLE: {} state-space eigenvalue(s) with a positive real part (the fastest grows at {fastest:.4e} 1/s: amplitude doubled every {:.4e} s){}; the state linearised about is not a stable equilibrium or steady motion",
-                    growing.len(),
-                    std::f64::consts::LN_2 / fastest,
-                    if unstable.is_empty() {
-                        String::new()
-                    } else {
-                        format!(", modes {}", unstable.join(", "))
-                    }
-                );
-                obs.progress(&Progress::Warning(format!("linearized analysis: {line}")));
-                out.report.insert(0, line);
-            }
-            for (k, e) in energies.iter().take(*modes).enumerate() {
-                out.report
-                    .push(format!("mode {}: {:.6e} Hz, {}", k + 1, e.frequency_hz, e.label));
-            }
-            let hz: Vec<f64> = shown.iter().map(|w| w / (2.0 * std::f64::consts::PI)).collect();
-            out.report.push(format!(
-                "lowest {} frequencies [Hz]: {}",
-                hz.len(),
-                hz.iter().map(|f| format!("{f:.6e}")).collect::<Vec<_>>().join(", ")
-            ));
-            let labels: Vec<&str> = energies.iter().take(*modes).map(|e| e.label.as_str()).collect();
-            out.results = json!({
-                "model": b.size(&sys),
-                "frequencies_hz": hz,
-                "mode_labels": labels,
-                "stable": growing.is_empty(),
-                "growing_eigenvalues": growing.iter().map(|g| json!([g.0, g.1])).collect::<Vec<_>>(),
-                "largest_growth_rate": if growing.is_empty() { json!(null) } else { json!(fastest) },
-                "about": if start.is_some() { "start".to_string() } else { format!("{about:?}") },
-            });
-        }
+        MbsAnalysis::Dynamic { .. } => dynamic(study, &sys, b, analysis, start, obs, &mut out)?,
+        MbsAnalysis::Linearized { modes, about } => linearized(&sys, b, *modes, about, start, obs, &mut out)?,
         MbsAnalysis::Buckling {
             modes,
             steps,
@@ -483,6 +76,223 @@ pub fn run_analysis(
         )?,
     }
     Ok(out)
+}
+
+/// The load stepping (or arc-length continuation, `arc_length`) of an `equilibrium` analysis.
+fn static_method(
+    steps: usize,
+    tolerance: f64,
+    max_iterations: usize,
+    time: f64,
+    arc_length: bool,
+) -> mbs::StaticMethod {
+    if arc_length {
+        // The first arc spans about 1/steps of the load (the scaled norm weighs the load
+        // factor by 1); the path may take up to 50 times as many steps to pass limit points.
+        let mut s = mbs::ArcLengthSettings::new(1.0 / steps as f64, 1.0, (50 * steps).max(1000));
+        s.tolerance = tolerance;
+        s.max_iterations = max_iterations;
+        s.time = time;
+        mbs::StaticMethod::ArcLength(s)
+    } else {
+        let mut s = mbs::StaticSettings::new(steps);
+        s.tolerance = tolerance;
+        s.max_iterations = max_iterations;
+        s.time = time;
+        mbs::StaticMethod::LoadStepping(s)
+    }
+}
+
+/// The `equilibrium` analysis: `method` from `start` (at rest at time `time`) or the initial
+/// state; the final state when every load step converged.
+fn equilibrium(
+    study: &Study,
+    sys: &Arc<System>,
+    b: &BuiltMechanism,
+    (method, time): (&mbs::StaticMethod, f64),
+    start: Option<&mbs::State>,
+    obs: &mut dyn Observer,
+    out: &mut Outcome,
+) -> Result<(), BoxError> {
+    let output = &study.mechanism.output;
+    let t0 = Instant::now();
+    let first = match start {
+        Some(s) => sys.at_rest(s, time),
+        None => sys.initial_state(),
+    };
+    let (sol, failure) = match mbs::solve_static_with(sys, first, method) {
+        Ok(s) => (s, None),
+        Err(inc) => (inc.partial, Some(inc.error)),
+    };
+    let mut files = SensorSampler::start(obs, &b.groups, &sol.sensors, "load factor [-]", output.plots)?;
+    let mut rec = sys.sensor_record();
+    for (t, row) in sol.sensors.times.iter().zip(&sol.sensors.rows) {
+        rec.times.push(*t);
+        rec.rows.push(row.clone());
+        files.sample(obs, *t, &rec)?;
+    }
+    let mut mw = MeshRecovery::new(b, sys)?;
+    mw.write(obs, 1.0, sys, &sol.state, b)?;
+    let (hot_spots, hot_lines) = mw.hot_spot_summary(sys, b, "load_factor");
+    out.report.extend(hot_lines);
+    let iterations: usize = sol.steps.iter().map(|s| s.residuals.len().saturating_sub(1)).sum();
+    out.report.push(format!(
+        "{} load steps, {iterations} Newton iterations, {} rejected attempts; last relative residual {:.2e}",
+        sol.steps.len(),
+        sol.rejected.len(),
+        sol.steps
+            .last()
+            .and_then(|s| s.residuals.last())
+            .copied()
+            .unwrap_or(f64::NAN)
+    ));
+    report_last(&mut out.report, b, &files);
+    out.results = json!({
+        "model": b.size(sys),
+        "load_steps": sol.steps.len(),
+        "newton_iterations": iterations,
+        "rejected_steps": sol.rejected.len(),
+        "load_factor_reached": sol.sensors.times.last().copied().unwrap_or(0.0),
+        "seconds_solving": t0.elapsed().as_secs_f64(),
+        "hot_spots": hot_spots,
+    });
+    obs.sensors_end()?;
+    if failure.is_none() {
+        out.final_state = Some(sol.state.clone());
+    }
+    out.failure = failure.map(|e| {
+        let message = "equilibrium stopped; the converged load steps are written".into();
+        b.stopped(study, message, Some(sol.steps.len() + 1), e)
+    });
+
+    Ok(())
+}
+
+/// The state a `linearized` analysis linearises about: that of `start`, else the initial
+/// state, the equilibrium or the state of a dynamic run to a time, as `about` says.
+fn linearization_state(sys: &System, about: &About, start: Option<&mbs::State>) -> Result<mbs::State, BoxError> {
+    Ok(match (start, about) {
+        (Some(s), _) => s.clone(),
+        (None, About::Initial) => sys.initial_state(),
+        (None, About::Equilibrium) => {
+            mbs::solve_static(sys, sys.initial_state(), &mbs::StaticSettings::new(1))
+                .map_err(|e| format!("the equilibrium to linearise about: {}", e.error))?
+                .state
+        }
+        (None, About::Time { t, dt }) => {
+            let settings = mbs::DynamicSettings::new(*dt, *t, mbs::DynamicSettings::DEFAULT_RHO_INF);
+            mbs::solve_dynamic(sys, sys.initial_state(), &settings)
+                .map_err(|e| format!("the dynamic run up to t = {t} s to linearise about: {}", e.error))?
+                .final_state
+        }
+    })
+}
+
+/// The `linearized` analysis: the `modes` lowest frequencies and state-space eigenvalues
+/// about the state of [`linearization_state`], with the bodies and nodes that carry each
+/// mode.
+fn linearized(
+    sys: &System,
+    b: &BuiltMechanism,
+    modes: usize,
+    about: &About,
+    start: Option<&mbs::State>,
+    obs: &mut dyn Observer,
+    out: &mut Outcome,
+) -> Result<(), BoxError> {
+    let state = linearization_state(sys, about, start)?;
+    let s = mbs::spectrum(sys, &state)?;
+    let mut csv = Table::new("frequencies", &["mode", "frequency [Hz]", "omega [rad/s]"]);
+    let shown: Vec<f64> = s.omega.iter().take(modes).copied().collect();
+    for (k, w) in shown.iter().enumerate() {
+        csv.row(vec![
+            Cell::from(k + 1),
+            Cell::Num(w / (2.0 * std::f64::consts::PI)),
+            Cell::Num(*w),
+        ]);
+    }
+    obs.table(&csv)?;
+    let mut csv = Table::new(
+        "state_space",
+        &["eigenvalue", "real [1/s]", "imaginary [rad/s]", "damped frequency [Hz]"],
+    );
+    for (k, (re, im)) in s.state_space.iter().enumerate() {
+        csv.row(vec![
+            Cell::from(k + 1),
+            Cell::Num(*re),
+            Cell::Num(*im),
+            Cell::Num(im / (2.0 * std::f64::consts::PI)),
+        ]);
+    }
+    obs.table(&csv)?;
+    // Which bodies and nodes carry each mode's energy (mbs::mode_energies).
+    let energies = mbs::mode_energies(sys, &state)?;
+    let mut csv = Table::new(
+        "modes",
+        &[
+            "mode",
+            "frequency [Hz]",
+            "damping ratio [-]",
+            "rigid body [-]",
+            "carried by",
+            "growth rate [1/s]",
+        ],
+    );
+    for (k, e) in energies.iter().take(modes).enumerate() {
+        csv.row(vec![
+            Cell::from(k + 1),
+            Cell::Num(e.frequency_hz),
+            e.damping_ratio.map_or(Cell::Empty, Cell::Num),
+            Cell::from(usize::from(e.rigid_body)),
+            Cell::from(e.label.clone()),
+            e.growth_rate.map_or(Cell::Empty, Cell::Num),
+        ]);
+    }
+    obs.table(&csv)?;
+    // A growing eigenvalue: the state is not a stable one, whatever the frequencies say.
+    let growing = s.growing();
+    let fastest = growing.iter().map(|g| g.0).fold(0.0, f64::max);
+    if !growing.is_empty() {
+        let unstable: Vec<String> = energies
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| e.unstable)
+            .map(|(k, _)| (k + 1).to_string())
+            .collect();
+        let line = format!(
+            "UNSTABLE: {} state-space eigenvalue(s) with a positive real part (the fastest grows at {fastest:.4e} 1/s: amplitude doubled every {:.4e} s){}; the state linearised about is not a stable equilibrium or steady motion",
+            growing.len(),
+            std::f64::consts::LN_2 / fastest,
+            if unstable.is_empty() {
+                String::new()
+            } else {
+                format!(", modes {}", unstable.join(", "))
+            }
+        );
+        obs.progress(&Progress::Warning(format!("linearized analysis: {line}")));
+        out.report.insert(0, line);
+    }
+    for (k, e) in energies.iter().take(modes).enumerate() {
+        out.report
+            .push(format!("mode {}: {:.6e} Hz, {}", k + 1, e.frequency_hz, e.label));
+    }
+    let hz: Vec<f64> = shown.iter().map(|w| w / (2.0 * std::f64::consts::PI)).collect();
+    out.report.push(format!(
+        "lowest {} frequencies [Hz]: {}",
+        hz.len(),
+        hz.iter().map(|f| format!("{f:.6e}")).collect::<Vec<_>>().join(", ")
+    ));
+    let labels: Vec<&str> = energies.iter().take(modes).map(|e| e.label.as_str()).collect();
+    out.results = json!({
+        "model": b.size(sys),
+        "frequencies_hz": hz,
+        "mode_labels": labels,
+        "stable": growing.is_empty(),
+        "growing_eigenvalues": growing.iter().map(|g| json!([g.0, g.1])).collect::<Vec<_>>(),
+        "largest_growth_rate": if growing.is_empty() { json!(null) } else { json!(fastest) },
+        "about": if start.is_some() { "start".to_string() } else { format!("{about:?}") },
+    });
+    Ok(())
 }
 
 /// The `buckling` analysis (`mbs::buckling` about the equilibrium under the full load, or the
@@ -581,20 +391,4 @@ fn run_buckling(
         "negative_eigenvalues": stability.negative,
     });
     Ok(())
-}
-
-/// The last value of every sensor, for the report.
-fn report_last(report: &mut Vec<String>, b: &BuiltMechanism, files: &SensorSampler) {
-    let Some((x, rows)) = &files.last else {
-        return;
-    };
-    for (g, row) in b.groups.iter().zip(rows) {
-        let values: Vec<String> = g
-            .columns
-            .iter()
-            .zip(row)
-            .map(|(c, v)| format!("{c} = {v:.6e}"))
-            .collect();
-        report.push(format!("sensor '{}' at {x:.6}: {}", g.name, values.join(", ")));
-    }
 }

@@ -7,12 +7,14 @@
 //! | [`part`] | the analyses of parts: static, modal, reduce |
 //! | [`reduce`] | the cached reduction service: parts reduced through [`cache`], `flexmbs reduce` |
 //! | [`cache`] | reduced bodies cached by a hash of what produced them |
-//! | [`mechanism`] | the analyses of the mechanism: equilibrium, dynamic, linearized, buckling |
+//! | [`mechanism`] | the analyses of the mechanism: equilibrium, linearized, buckling |
+//! | [`dynamic`] | the dynamic analysis: time integration, rows and meshes at the output times |
 //! | [`simulation`] | a dynamic analysis stepped by the caller |
 //! | [`sensors`] | sensor columns and the stream of samples |
 //! | [`mesh`] | the deformed meshes of the mechanism, stresses and hot spots |
 
 pub mod cache;
+pub mod dynamic;
 pub mod mechanism;
 pub mod mesh;
 pub mod options;

@@ -1,6 +1,7 @@
 //! The sensors of the study picked out of the `mbs` sensor record: their columns and the
 //! stream of samples to the observer.
 
+use crate::build::BuiltMechanism;
 use crate::error::BoxError;
 use crate::output::observer::{Observer, SensorGroup, SensorStream};
 use mbs::SensorRecord;
@@ -113,5 +114,21 @@ impl SensorSampler {
         obs.sample(x, &values)?;
         self.last = Some((x, values));
         Ok(())
+    }
+}
+
+/// The last value of every sensor, for the report.
+pub fn report_last(report: &mut Vec<String>, b: &BuiltMechanism, files: &SensorSampler) {
+    let Some((x, rows)) = &files.last else {
+        return;
+    };
+    for (g, row) in b.groups.iter().zip(rows) {
+        let values: Vec<String> = g
+            .columns
+            .iter()
+            .zip(row)
+            .map(|(c, v)| format!("{c} = {v:.6e}"))
+            .collect();
+        report.push(format!("sensor '{}' at {x:.6}: {}", g.name, values.join(", ")));
     }
 }
