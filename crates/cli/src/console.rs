@@ -126,21 +126,9 @@ pub fn run(
     options: &Options,
     only: Option<&str>,
 ) -> Result<study::output::summary::Summary, BoxError> {
-    let summary = match only {
-        None => study::run(study, options, &mut Console::default())?,
-        Some(name) => {
-            let Some(i) = study.analyses.iter().position(|a| a.name == name) else {
-                let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
-                return Err(format!(
-                    "{}: --analysis: {}",
-                    study.source.path.display(),
-                    study::input::source::unknown_reference("analysis", name, &names)
-                )
-                .into());
-            };
-            study::run_only(study, options, i, &mut Console::default())?
-        }
-    };
+    let selection =
+        study::Selection::of(study, only).map_err(|e| format!("{}: --analysis: {e}", study.source.path.display()))?;
+    let summary = study::run_selected(study, options, selection, &mut Console::default())?;
     let done = summary
         .analyses
         .iter()

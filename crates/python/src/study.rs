@@ -312,17 +312,11 @@ impl Study {
         t_end: Option<f64>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
-        let only = match &analysis {
-            Some(name) => Some(st.analyses.iter().position(|a| &a.name == name).ok_or_else(|| {
-                let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
-                StudyError::new_err(study::input::source::unknown_reference("analysis", name, &names))
-            })?),
-            None => None,
-        };
+        let selection = study::Selection::of(&st, analysis.as_deref()).map_err(StudyError::new_err)?;
         let opts = options(results_dir, cache, t_end);
         let dir = opts.results_dir(&st);
         let mut recorder = Recorder::default();
-        let outcome = py.detach(|| run_study(&st, &opts, only, &mut recorder));
+        let outcome = py.detach(|| study::run_selected(&st, &opts, selection, &mut recorder));
         let d = PyDict::new(py);
         d.set_item("results_dir", dir.display().to_string())?;
         let analyses = PyList::empty(py);
@@ -451,20 +445,6 @@ impl Study {
 
     fn __repr__(&self) -> String {
         format!("Study({:?})", self.doc.path.display().to_string())
-    }
-}
-
-/// Runs every analysis of `st` (or only analysis `only`) into its results folder, every result
-/// to `recorder` too: the program's `study::run` and `study::run_only`.
-fn run_study(
-    st: &study::Study,
-    opts: &study::Options,
-    only: Option<usize>,
-    recorder: &mut Recorder,
-) -> Result<study::output::summary::Summary, study::BoxError> {
-    match only {
-        None => study::run(st, opts, recorder),
-        Some(i) => study::run_only(st, opts, i, recorder),
     }
 }
 

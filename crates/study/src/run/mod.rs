@@ -9,6 +9,7 @@
 //! | [`cache`] | reduced bodies cached by a hash of what produced them |
 //! | [`mechanism`] | the analyses of the mechanism: equilibrium, linearized, buckling |
 //! | [`dynamic`] | the dynamic analysis: time integration, rows and meshes at the output times |
+//! | [`selection`] | analyses picked by name, or all of them |
 //! | [`simulation`] | a dynamic analysis stepped by the caller |
 //! | [`sensors`] | sensor columns and the stream of samples |
 //! | [`mesh`] | the deformed meshes of the mechanism, stresses and hot spots |
@@ -22,11 +23,13 @@ pub mod outcome;
 pub mod part;
 pub mod reduce;
 pub mod runner;
+pub mod selection;
 pub mod sensors;
 pub mod simulation;
 
 pub use options::Options;
 pub use runner::Runner;
+pub use selection::Selection;
 pub use simulation::Simulation;
 
 use crate::error::BoxError;
@@ -83,6 +86,20 @@ pub fn run_with(study: &Study, options: &Options, obs: &mut dyn Observer) -> Res
     runner.finish(obs)
 }
 
+/// Runs the analyses `selection` picks: every one ([`run`]) or one ([`run_only`]), into the
+/// results folder, every result to `observer` too.
+pub fn run_selected(
+    study: &Study,
+    options: &Options,
+    selection: Selection,
+    observer: &mut dyn Observer,
+) -> Result<Summary, BoxError> {
+    match selection {
+        Selection::All => run(study, options, observer),
+        Selection::One(i) => run_only(study, options, i, observer),
+    }
+}
+
 /// The error for a study without analyses.
 pub fn nothing_to_run(study: &Study) -> BoxError {
     format!(
@@ -99,10 +116,7 @@ impl Simulation {
     /// starts its dynamic analysis called `analysis` (from the final state of the analysis
     /// named in its `start`, which the runner runs first, without output).
     pub fn new(study: &Study, analysis: &str, options: &Options) -> Result<Self, BoxError> {
-        let Some(i) = study.analyses.iter().position(|a| a.name == analysis) else {
-            let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
-            return Err(crate::input::source::unknown_reference("analysis", analysis, &names).into());
-        };
+        let i = study.analysis(analysis)?;
         let a = &study.analyses[i];
         let AnalysisSpec::Mbs(spec) = &a.spec else {
             return Err(format!("analysis '{analysis}' is not an analysis of the mechanism").into());
