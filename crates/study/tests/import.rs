@@ -30,7 +30,7 @@ fn study(dir: &Path, text: &str) -> study::Study {
 
 /// The part's frequencies, clamped at the node set `clamp`, with the interfaces built.
 fn clamped_frequencies(part: &study::input::part::Part, clamp: &[fe_model::NodeId]) -> Vec<f64> {
-    let mut built = part.build(&[], false).unwrap().model;
+    let mut built = part.build(&[]).unwrap().model;
     for &n in clamp {
         built.add_support(n, DofMask::TRANSLATIONS);
     }

@@ -163,7 +163,7 @@ fn run_static(
     obs: &mut dyn Observer,
 ) -> Result<Outcome, BoxError> {
     let built = part
-        .build(supports, false)
+        .build(supports)
         .context(|| format!("part '{}': cannot build the FE model", part.name))?;
     let n_free = free_dofs(part, &built)?;
     let loads = Part::nodal_loads(&built, loads);
@@ -314,7 +314,7 @@ fn run_modal(
     obs: &mut dyn Observer,
 ) -> Result<Outcome, BoxError> {
     let built = part
-        .build(supports, false)
+        .build(supports)
         .context(|| format!("part '{}': cannot build the FE model", part.name))?;
     let n_free = free_dofs(part, &built)?;
     let dense = match solver {

@@ -44,7 +44,7 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
         return Err(format!("part '{}' has no [parts.reduction]", part.name).into());
     };
     let built = part
-        .build(&[], reduction.auxiliary_node)
+        .build_for_reduction(reduction)
         .context(|| format!("part '{}': cannot build the FE model", part.name))?;
     let n_free = free_dofs(part, &built)?;
     let key = super::cache::key(part, &built, reduction)
