@@ -14,6 +14,9 @@ pub struct Example {
     pub files: &'static [(&'static str, &'static [u8])],
 }
 
+/// The study file of the slider-crank example, which `flexmbs run` without a file runs.
+pub const SLIDER_CRANK: &str = include_str!("../../../../examples/slider_crank.toml");
+
 pub const EXAMPLES: &[Example] = &[
     Example {
         name: "cantilever",
@@ -54,10 +57,7 @@ pub const EXAMPLES: &[Example] = &[
         name: "slider_crank",
         description:
             "C2: planar flexible slider-crank at 150 rad/s, rod midpoint deflection (dynamic); `flexmbs run` runs it",
-        files: &[(
-            "slider_crank.toml",
-            include_bytes!("../../../../examples/slider_crank.toml"),
-        )],
+        files: &[("slider_crank.toml", SLIDER_CRANK.as_bytes())],
     },
     Example {
         name: "slider_crank_spatial",
