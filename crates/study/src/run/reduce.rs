@@ -5,7 +5,7 @@
 use super::options::Options;
 use crate::build::{BuiltMechanism, ReducedBodies};
 use crate::error::{BoxError, ResultExt};
-use crate::input::part::{Built, Part};
+use crate::input::part::{Built, Part, Reduction};
 use crate::input::validate::mechanism::BodySource;
 use crate::input::validate::Study;
 use crate::output::observer::{Observer, Progress};
@@ -50,115 +50,19 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
     let key = super::cache::key(part, &built, reduction)
         .context(|| format!("part '{}': cannot hash its inputs", part.name))?;
     let file = super::cache::path(cache, &part.name, &key);
-    if file.is_file() {
-        let recorded = super::cache::lookup(&file, &key);
-        if recorded.is_none() {
-            obs.progress(&Progress::Warning(format!(
-                "cache file {} does not record the inputs of this reduction (or was changed); reducing again",
-                file.display()
-            )));
-        }
-        match recorded.map(|bytes| reduction::file::from_bytes(&bytes, &file)) {
-            None => {}
-            Some(Ok(body)) if body.name == part.name => {
-                obs.progress(&Progress::Info(format!(
-                    "part '{}': reduced body found in the cache ({}): same mesh and settings, not reducing again",
-                    part.name,
-                    file.display()
-                )));
-                return Ok(Reduced {
-                    body: body.into(),
-                    built,
-                    file,
-                    from_cache: true,
-                    free_dofs: n_free,
-                });
-            }
-            Some(Ok(_)) => obs.progress(&Progress::Warning(format!(
-                "cache file {} holds another body; reducing again",
-                file.display()
-            ))),
-            Some(Err(e)) => obs.progress(&Progress::Warning(format!(
-                "cannot use the cached body ({e}); reducing again"
-            ))),
-        }
+    if let Some(body) = from_cache(part, &file, &key, obs) {
+        return Ok(Reduced {
+            body: body.into(),
+            built,
+            file,
+            from_cache: true,
+            free_dofs: n_free,
+        });
     }
-    let modes = match reduction.modes {
-        reduction::ModeSelection::StaticOnly => "static modes only".to_string(),
-        reduction::ModeSelection::Count(m) => format!("{m} fixed-interface modes"),
-        reduction::ModeSelection::CutoffHz(f) => format!("fixed-interface modes below {f} Hz"),
-    };
-    obs.progress(&Progress::Info(format!(
-        "part '{}': reducing {n_free} dofs to {} interfaces{} and {modes}{}{}{} ...",
-        part.name,
-        built.interfaces.len(),
-        if built.auxiliary.is_some() {
-            " + the auxiliary node"
-        } else {
-            ""
-        },
-        if reduction.inertia_correction {
-            " + the static correction for the interfaces' inertia"
-        } else {
-            ""
-        },
-        if reduction.planar {
-            ", planar (in-plane modes)"
-        } else {
-            ""
-        },
-        if reduction.geometric_stiffening {
-            ", with geometric stiffening"
-        } else {
-            ""
-        }
-    )));
+    announce(part, reduction, &built, n_free, obs);
     let t = Instant::now();
-    let mut settings = CbSettings::new(reduction.modes);
-    settings.keep_mesh_shapes = reduction.keep_mesh_shapes;
-    settings.auxiliary_node = built.auxiliary;
-    settings.geometric_stiffening = reduction.geometric_stiffening;
-    settings.inertia_correction = reduction.inertia_correction;
-    settings.planar = reduction.planar;
-    settings.stress_shapes = reduction.stress_shapes;
-    settings.load_points = reduction.load_points.clone();
-    settings.factor = reduction.factor;
-    let mut progress = |stage: reduction::Stage| {
-        let what = match stage {
-            reduction::Stage::Assembling => "assembling K and M".to_string(),
-            reduction::Stage::Factorising { internal_dofs } => format!("factorising K_ii ({internal_dofs} dofs)"),
-            reduction::Stage::Factorised {
-                factor_len, precision, ..
-            } => format!(
-                "K_ii factored: {:.1} M values, {:.2} GB in {} precision",
-                factor_len as f64 / 1e6,
-                (factor_len * precision.bytes()) as f64 / 1e9,
-                precision.name()
-            ),
-            reduction::Stage::ConstraintModes { count } => format!("{count} constraint modes"),
-            reduction::Stage::Solved {
-                constraint_steps,
-                applications,
-                factor_solves,
-            } if factor_solves > applications => {
-                // A figure of the run, not a passing stage: kept in the log (a stage line only
-                // shows on a terminal).
-                obs.progress(&Progress::Info(format!(
-                    "part '{}': refined solves with the single-precision factor: {constraint_steps} per constraint mode, {:.2} per Lanczos vector ({applications} vectors)",
-                    part.name,
-                    factor_solves as f64 / applications.max(1) as f64
-                )));
-                return;
-            }
-            reduction::Stage::EigenIteration { converged, wanted, .. } => {
-                format!("fixed-interface modes: {converged} of {wanted} converged")
-            }
-            reduction::Stage::Projecting => "projecting K_CB, M_CB".to_string(),
-            reduction::Stage::Invariants => "inertia invariants".to_string(),
-            _ => return,
-        };
-        obs.progress(&Progress::Stage(format!("part '{}': {what}", part.name)));
-    };
+    let settings = cb_settings(reduction, &built);
+    let mut progress = |stage: reduction::Stage| reduction_stage(&part.name, stage, obs);
     let body = reduction::reduce_with_progress(
         &built.model,
         &part.name,
@@ -189,9 +93,154 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
         body.interfaces.len(),
         body.n_modes
     )));
+    save(part, &body, cache, &file, &key, obs)?;
+    Ok(Reduced {
+        body: body.into(),
+        built,
+        file,
+        from_cache: false,
+        free_dofs: n_free,
+    })
+}
+
+/// The body of `part` in the cache file `file` when the file records `key` and holds that
+/// part; a cache file that cannot be used is reported, and reduced again.
+fn from_cache(part: &Part, file: &Path, key: &str, obs: &mut dyn Observer) -> Option<ReducedBody> {
+    if !file.is_file() {
+        return None;
+    }
+    let recorded = super::cache::lookup(file, key);
+    if recorded.is_none() {
+        obs.progress(&Progress::Warning(format!(
+            "cache file {} does not record the inputs of this reduction (or was changed); reducing again",
+            file.display()
+        )));
+    }
+    match recorded.map(|bytes| reduction::file::from_bytes(&bytes, file)) {
+        None => None,
+        Some(Ok(body)) if body.name == part.name => {
+            obs.progress(&Progress::Info(format!(
+                "part '{}': reduced body found in the cache ({}): same mesh and settings, not reducing again",
+                part.name,
+                file.display()
+            )));
+            Some(body)
+        }
+        Some(Ok(_)) => {
+            obs.progress(&Progress::Warning(format!(
+                "cache file {} holds another body; reducing again",
+                file.display()
+            )));
+            None
+        }
+        Some(Err(e)) => {
+            obs.progress(&Progress::Warning(format!(
+                "cannot use the cached body ({e}); reducing again"
+            )));
+            None
+        }
+    }
+}
+
+/// Says what `reduction` of `part` (`n_free` dofs, built as `built`) is about to do.
+fn announce(part: &Part, reduction: &Reduction, built: &Built, n_free: usize, obs: &mut dyn Observer) {
+    let modes = match reduction.modes {
+        reduction::ModeSelection::StaticOnly => "static modes only".to_string(),
+        reduction::ModeSelection::Count(m) => format!("{m} fixed-interface modes"),
+        reduction::ModeSelection::CutoffHz(f) => format!("fixed-interface modes below {f} Hz"),
+    };
+    obs.progress(&Progress::Info(format!(
+        "part '{}': reducing {n_free} dofs to {} interfaces{} and {modes}{}{}{} ...",
+        part.name,
+        built.interfaces.len(),
+        if built.auxiliary.is_some() {
+            " + the auxiliary node"
+        } else {
+            ""
+        },
+        if reduction.inertia_correction {
+            " + the static correction for the interfaces' inertia"
+        } else {
+            ""
+        },
+        if reduction.planar {
+            ", planar (in-plane modes)"
+        } else {
+            ""
+        },
+        if reduction.geometric_stiffening {
+            ", with geometric stiffening"
+        } else {
+            ""
+        }
+    )));
+}
+
+/// The Craig-Bampton settings of `reduction` on the model `built`.
+fn cb_settings(reduction: &Reduction, built: &Built) -> CbSettings {
+    let mut settings = CbSettings::new(reduction.modes);
+    settings.keep_mesh_shapes = reduction.keep_mesh_shapes;
+    settings.auxiliary_node = built.auxiliary;
+    settings.geometric_stiffening = reduction.geometric_stiffening;
+    settings.inertia_correction = reduction.inertia_correction;
+    settings.planar = reduction.planar;
+    settings.stress_shapes = reduction.stress_shapes;
+    settings.load_points = reduction.load_points.clone();
+    settings.factor = reduction.factor;
+    settings
+}
+
+/// Shows a stage of the reduction of part `part`; the single-precision refinement is a
+/// figure of the run, kept in the log.
+fn reduction_stage(part: &str, stage: reduction::Stage, obs: &mut dyn Observer) {
+    let what = match stage {
+        reduction::Stage::Assembling => "assembling K and M".to_string(),
+        reduction::Stage::Factorising { internal_dofs } => format!("factorising K_ii ({internal_dofs} dofs)"),
+        reduction::Stage::Factorised {
+            factor_len, precision, ..
+        } => format!(
+            "K_ii factored: {:.1} M values, {:.2} GB in {} precision",
+            factor_len as f64 / 1e6,
+            (factor_len * precision.bytes()) as f64 / 1e9,
+            precision.name()
+        ),
+        reduction::Stage::ConstraintModes { count } => format!("{count} constraint modes"),
+        reduction::Stage::Solved {
+            constraint_steps,
+            applications,
+            factor_solves,
+        } if factor_solves > applications => {
+            // A figure of the run, not a passing stage: kept in the log (a stage line only
+            // shows on a terminal).
+            obs.progress(&Progress::Info(format!(
+                "part '{}': refined solves with the single-precision factor: {constraint_steps} per constraint mode, {:.2} per Lanczos vector ({applications} vectors)",
+                part,
+                factor_solves as f64 / applications.max(1) as f64
+            )));
+            return;
+        }
+        reduction::Stage::EigenIteration { converged, wanted, .. } => {
+            format!("fixed-interface modes: {converged} of {wanted} converged")
+        }
+        reduction::Stage::Projecting => "projecting K_CB, M_CB".to_string(),
+        reduction::Stage::Invariants => "inertia invariants".to_string(),
+        _ => return,
+    };
+    obs.progress(&Progress::Stage(format!("part '{}': {what}", part)));
+}
+
+/// Writes the reduced `body` to the cache `file` (in the folder `cache`) with its `key`.
+fn save(
+    part: &Part,
+    body: &ReducedBody,
+    cache: &Path,
+    file: &Path,
+    key: &str,
+    obs: &mut dyn Observer,
+) -> Result<(), BoxError> {
     std::fs::create_dir_all(cache).context(|| format!("cannot create the cache folder {}", cache.display()))?;
-    reduction::file::write(&body, &file).context(|| format!("part '{}': cannot write the reduced body", part.name))?;
-    super::cache::record(&file, &key).context(|| {
+    reduction::file::write(body, file).context(|| format!("part '{}': cannot write the reduced body", part.name))?;
+    super::cache::record(file, key).context(|| {
         format!(
             "part '{}': cannot record the cache key of {}",
             part.name,
@@ -203,13 +252,7 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
         part.name,
         file.display()
     )));
-    Ok(Reduced {
-        body: body.into(),
-        built,
-        file,
-        from_cache: false,
-        free_dofs: n_free,
-    })
+    Ok(())
 }
 
 /// Reduces (or reads from the cache) every flexible body's part, once per part.
