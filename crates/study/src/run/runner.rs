@@ -1,10 +1,11 @@
 //! The [`Runner`]: a study run analysis by analysis into an observer, with its summary.
 
 use super::options::Options;
+use super::outcome::Outcome;
 use crate::build::BuiltMechanism;
 use crate::error::{AnalysisFailed, BoxError};
 use crate::input::part::Part;
-use crate::input::validate::{AnalysisSpec, Study};
+use crate::input::validate::{AnalysisSpec, MbsAnalysis, Study};
 use crate::output::observer::{AnalysisInfo, Observer};
 use crate::output::summary::{AnalysisSummary, PartSummary, Status, Summary};
 use serde_json::json;
@@ -130,7 +131,7 @@ impl<'s> Runner<'s> {
         // The analysis whose final state is the start, run now when it has not run.
         let mut prerequisite = None;
         if let Some(k) = a.start {
-            if self.states[k].is_none() && self.summary.analyses[k].status == crate::output::summary::Status::Pending {
+            if self.states[k].is_none() && self.summary.analyses[k].status == Status::Pending {
                 self.run_one(k, obs)?;
                 prerequisite = Some(k);
             }
@@ -138,71 +139,76 @@ impl<'s> Runner<'s> {
         let info = analysis_info(study, i);
         obs.begin(&info)?;
         let t = Instant::now();
-        let cache = self.options.cache_dir(study);
-        // (t_end of the study, the --t-end it was cut to) when the option shortened the run.
-        let mut shortened = None;
-        let result = match &a.spec {
-            AnalysisSpec::Mbs(spec) => {
-                let mut spec = spec.clone();
-                let mut refused = None;
-                if let (crate::input::validate::MbsAnalysis::Dynamic { t_end, dt, .. }, Some(limit)) =
-                    (&mut spec, self.options.t_end)
-                {
-                    if limit < *dt {
-                        refused = Some(format!(
-                            "--t-end {limit} s is shorter than one time step of analysis '{}' (dt = {dt} s)",
-                            a.name
-                        ));
-                    }
-                    if limit < *t_end {
-                        shortened = Some((*t_end, limit));
-                        *t_end = limit;
-                    }
-                }
-                let start: Result<Option<mbs::State>, BoxError> = match (refused, a.start) {
-                    (Some(refusal), _) => Err(refusal.into()),
-                    (None, start) => match start {
-                        Some(k) => self.states[k].clone().map(Some).ok_or_else(|| {
-                            format!(
-                                "analysis '{}' starts from '{}', which ended in no state",
-                                a.name, study.analyses[k].name
-                            )
-                            .into()
-                        }),
-                        None => Ok(None),
-                    },
-                };
-                let mut result = match (start, self.mechanism(obs)) {
-                    (Ok(start), Ok(built)) => super::mechanism::run_analysis(study, &spec, built, start.as_ref(), obs),
-                    (Err(e), _) | (_, Err(e)) => Err(e),
-                };
-                self.states[i] = result.as_mut().ok().and_then(|o| o.final_state.take());
-                result
+        let (result, shortened) = match &a.spec {
+            AnalysisSpec::Mbs(spec) => self.run_mechanism(i, spec, obs),
+            _ => {
+                let cache = self.options.cache_dir(study);
+                (super::part::run_analysis(study, a, &cache, obs), None)
             }
-            _ => super::part::run_analysis(study, a, &cache, obs),
         };
-        let result = result.map(|mut o| {
-            if let Some(k) = prerequisite {
-                o.report.insert(
-                    0,
+        let result = result.map(|o| annotate(study, o, prerequisite, shortened));
+        self.record(i, &info, t, result, obs)
+    }
+
+    /// Runs analysis `i` of the mechanism, `spec` cut to `--t-end`, from the state its
+    /// `start` names; keeps its final state. Returns with the outcome the study's `t_end` and
+    /// the `--t-end` it was cut to, when the option shortened the run.
+    fn run_mechanism(
+        &mut self,
+        i: usize,
+        spec: &MbsAnalysis,
+        obs: &mut dyn Observer,
+    ) -> (Result<Outcome, BoxError>, Option<(f64, f64)>) {
+        let study = self.study;
+        let a = &study.analyses[i];
+        let mut shortened = None;
+        let mut spec = spec.clone();
+        let mut refused = None;
+        if let (MbsAnalysis::Dynamic { t_end, dt, .. }, Some(limit)) = (&mut spec, self.options.t_end) {
+            if limit < *dt {
+                refused = Some(format!(
+                    "--t-end {limit} s is shorter than one time step of analysis '{}' (dt = {dt} s)",
+                    a.name
+                ));
+            }
+            if limit < *t_end {
+                shortened = Some((*t_end, limit));
+                *t_end = limit;
+            }
+        }
+        let start: Result<Option<mbs::State>, BoxError> = match (refused, a.start) {
+            (Some(refusal), _) => Err(refusal.into()),
+            (None, start) => match start {
+                Some(k) => self.states[k].clone().map(Some).ok_or_else(|| {
                     format!(
-                        "started from the final state of '{}', which was run first for it",
-                        study.analyses[k].name
-                    ),
-                );
-            }
-            if let Some((requested, limit)) = shortened {
-                o.report.insert(
-                    0,
-                    format!("shortened by --t-end: run to t = {limit} s instead of the study's t_end = {requested} s"),
-                );
-                if let Some(r) = o.results.as_object_mut() {
-                    r.insert("t_end_study".into(), json!(requested));
-                    r.insert("t_end_option".into(), json!(limit));
-                }
-            }
-            o
-        });
+                        "analysis '{}' starts from '{}', which ended in no state",
+                        a.name, study.analyses[k].name
+                    )
+                    .into()
+                }),
+                None => Ok(None),
+            },
+        };
+        let mut result = match (start, self.mechanism(obs)) {
+            (Ok(start), Ok(built)) => super::mechanism::run_analysis(study, &spec, built, start.as_ref(), obs),
+            (Err(e), _) | (_, Err(e)) => Err(e),
+        };
+        self.states[i] = result.as_mut().ok().and_then(|o| o.final_state.take());
+        (result, shortened)
+    }
+
+    /// Records the outcome `result` of analysis `i` (`info`, begun at `t`) in the summary
+    /// and tells `obs`; a failure is returned with the analysis it belongs to.
+    fn record(
+        &mut self,
+        i: usize,
+        info: &AnalysisInfo,
+        t: Instant,
+        result: Result<Outcome, BoxError>,
+        obs: &mut dyn Observer,
+    ) -> Result<(), BoxError> {
+        let study = self.study;
+        let a = &study.analyses[i];
         let files = obs.take_files();
         let summary = &mut self.summary;
         let entry = &mut summary.analyses[i];
@@ -227,7 +233,7 @@ impl<'s> Runner<'s> {
                     let entry = entry.clone();
                     // The failure is the message; a summary that cannot be written (a full
                     // disk) must not replace it.
-                    let _ = obs.end(&info, &entry);
+                    let _ = obs.end(info, &entry);
                     let _ = obs.summary(summary);
                     return Err(Box::new(AnalysisFailed {
                         analysis: a.name.clone(),
@@ -243,7 +249,7 @@ impl<'s> Runner<'s> {
                     }));
                 }
                 let entry = entry.clone();
-                obs.end(&info, &entry)?;
+                obs.end(info, &entry)?;
                 obs.summary(summary)?;
                 Ok(())
             }
@@ -252,7 +258,7 @@ impl<'s> Runner<'s> {
                 entry.error = Some(crate::error::chain(&*e));
                 summary.status = failed_status();
                 let entry = entry.clone();
-                let _ = obs.end(&info, &entry);
+                let _ = obs.end(info, &entry);
                 let _ = obs.summary(summary);
                 Err(Box::new(AnalysisFailed {
                     analysis: a.name.clone(),
@@ -285,4 +291,29 @@ fn failed_status() -> String {
     } else {
         "failed".into()
     }
+}
+
+/// The report of outcome `o` with what the run changed: the analysis that was run first for
+/// its start (`prerequisite`), and the `t_end` of the study cut by `--t-end` (`shortened`).
+fn annotate(study: &Study, mut o: Outcome, prerequisite: Option<usize>, shortened: Option<(f64, f64)>) -> Outcome {
+    if let Some(k) = prerequisite {
+        o.report.insert(
+            0,
+            format!(
+                "started from the final state of '{}', which was run first for it",
+                study.analyses[k].name
+            ),
+        );
+    }
+    if let Some((requested, limit)) = shortened {
+        o.report.insert(
+            0,
+            format!("shortened by --t-end: run to t = {limit} s instead of the study's t_end = {requested} s"),
+        );
+        if let Some(r) = o.results.as_object_mut() {
+            r.insert("t_end_study".into(), json!(requested));
+            r.insert("t_end_option".into(), json!(limit));
+        }
+    }
+    o
 }
