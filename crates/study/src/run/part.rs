@@ -1,7 +1,7 @@
 //! The analyses of parts: static, modal and reduce, on the FE model of one part.
 
 use super::outcome::Outcome;
-use super::reduce::{free_dofs, reduce_part};
+use super::reduce::{free_dofs, reduce_part, Reduced};
 use crate::error::{BoxError, ResultExt};
 use crate::input::part::{Built, InterfaceTarget, LoadSpec, Part, SupportSpec};
 use crate::input::validate::{Analysis, AnalysisSpec, Solver, Study, DENSE_AUTO_LIMIT};
@@ -195,26 +195,7 @@ fn run_static(
     }
     obs.table(&csv)?;
 
-    let mut csv = Table::new(
-        "reactions",
-        &[
-            "node", "tag", "Fx [N]", "Fy [N]", "Fz [N]", "Mx [N m]", "My [N m]", "Mz [N m]",
-        ],
-    );
-    let mut total = [0.0; 6];
-    for (node, r) in &s.reactions {
-        let mut row = vec![Cell::from(node.index()), Cell::Int(tag(&built, *node) as i64)];
-        row.extend(r.map(Cell::Num));
-        csv.row(row);
-        // Moments about the origin: M + x x F.
-        let x = nodes[node.index()].coords;
-        let m = nalgebra::Vector3::new(r[3], r[4], r[5]) + x.cross(&nalgebra::Vector3::new(r[0], r[1], r[2]));
-        for k in 0..3 {
-            total[k] += r[k];
-            total[3 + k] += m[k];
-        }
-    }
-    obs.table(&csv)?;
+    let total = reactions(obs, &built, &s.reactions)?;
 
     let mut csv = Table::new(
         "interfaces",
@@ -304,6 +285,33 @@ fn run_static(
         failure: None,
         final_state: None,
     })
+}
+
+/// The table of the support reactions of a static solution on `built`, and their sum: the
+/// forces, then the moments about the origin.
+fn reactions(obs: &mut dyn Observer, built: &Built, reactions: &[(NodeId, [f64; 6])]) -> Result<[f64; 6], BoxError> {
+    let nodes = &built.model.mesh.nodes;
+    let mut csv = Table::new(
+        "reactions",
+        &[
+            "node", "tag", "Fx [N]", "Fy [N]", "Fz [N]", "Mx [N m]", "My [N m]", "Mz [N m]",
+        ],
+    );
+    let mut total = [0.0; 6];
+    for (node, r) in reactions {
+        let mut row = vec![Cell::from(node.index()), Cell::Int(tag(built, *node) as i64)];
+        row.extend(r.map(Cell::Num));
+        csv.row(row);
+        // Moments about the origin: M + x x F.
+        let x = nodes[node.index()].coords;
+        let m = nalgebra::Vector3::new(r[3], r[4], r[5]) + x.cross(&nalgebra::Vector3::new(r[0], r[1], r[2]));
+        for k in 0..3 {
+            total[k] += r[k];
+            total[3 + k] += m[k];
+        }
+    }
+    obs.table(&csv)?;
+    Ok(total)
 }
 
 fn run_modal(
@@ -445,46 +453,7 @@ fn run_reduce(
     obs.table(&csv)?;
 
     // The CB shapes on the mesh: the constraint modes, then the fixed-interface modes.
-    if let Some(shapes) = &body.mesh {
-        let n_nodes = shapes.nodes.len();
-        if n_nodes == r.built.model.node_count() {
-            let mesh = VtuMesh::from_model(&r.built.model, &spiders(part, &r.built));
-            let mut csv = Table::new(
-                "shapes",
-                &["shape", "file", "kind", "interface", "dof", "frequency [Hz]"],
-            );
-            for c in 0..shapes.shapes.ncols {
-                let values: Vec<[f64; 6]> = (0..n_nodes)
-                    .map(|n| std::array::from_fn(|k| shapes.shapes.get(6 * n + k, c)))
-                    .collect();
-                let file = format!("shape_{:03}.vtu", c + 1);
-                six_dof_frame(obs, Series::Shapes, (c + 1) as f64, &mesh, &values, None)?;
-                let nb = 6 * body.interfaces.len();
-                let row = if c < nb {
-                    vec![
-                        Cell::from(c + 1),
-                        Cell::from(file),
-                        "constraint mode".into(),
-                        body.interfaces[c / 6].name.clone().into(),
-                        DOF_NAMES[c % 6].into(),
-                        Cell::Empty,
-                    ]
-                } else {
-                    let k = c - nb;
-                    vec![
-                        Cell::from(c + 1),
-                        Cell::from(file),
-                        "fixed-interface mode".into(),
-                        Cell::Empty,
-                        Cell::Empty,
-                        Cell::Num(body.fixed_interface_omega[k] / (2.0 * std::f64::consts::PI)),
-                    ]
-                };
-                csv.row(row);
-            }
-            obs.table(&csv)?;
-        }
-    }
+    cb_shapes(obs, part, &r)?;
 
     let f: Vec<f64> = body
         .fixed_interface_omega
@@ -532,4 +501,51 @@ fn run_reduce(
         failure: None,
         final_state: None,
     })
+}
+
+/// The CB shapes of the reduced part `r` on its mesh, each a frame, with the table that says
+/// what each is: the constraint modes, then the fixed-interface modes.
+fn cb_shapes(obs: &mut dyn Observer, part: &Part, r: &Reduced) -> Result<(), BoxError> {
+    let body = &r.body;
+    if let Some(shapes) = &body.mesh {
+        let n_nodes = shapes.nodes.len();
+        if n_nodes == r.built.model.node_count() {
+            let mesh = VtuMesh::from_model(&r.built.model, &spiders(part, &r.built));
+            let mut csv = Table::new(
+                "shapes",
+                &["shape", "file", "kind", "interface", "dof", "frequency [Hz]"],
+            );
+            for c in 0..shapes.shapes.ncols {
+                let values: Vec<[f64; 6]> = (0..n_nodes)
+                    .map(|n| std::array::from_fn(|k| shapes.shapes.get(6 * n + k, c)))
+                    .collect();
+                let file = format!("shape_{:03}.vtu", c + 1);
+                six_dof_frame(obs, Series::Shapes, (c + 1) as f64, &mesh, &values, None)?;
+                let nb = 6 * body.interfaces.len();
+                let row = if c < nb {
+                    vec![
+                        Cell::from(c + 1),
+                        Cell::from(file),
+                        "constraint mode".into(),
+                        body.interfaces[c / 6].name.clone().into(),
+                        DOF_NAMES[c % 6].into(),
+                        Cell::Empty,
+                    ]
+                } else {
+                    let k = c - nb;
+                    vec![
+                        Cell::from(c + 1),
+                        Cell::from(file),
+                        "fixed-interface mode".into(),
+                        Cell::Empty,
+                        Cell::Empty,
+                        Cell::Num(body.fixed_interface_omega[k] / (2.0 * std::f64::consts::PI)),
+                    ]
+                };
+                csv.row(row);
+            }
+            obs.table(&csv)?;
+        }
+    }
+    Ok(())
 }
