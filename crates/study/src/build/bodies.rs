@@ -1,8 +1,8 @@
 //! Bodies: the flexible bodies on the nodes of their interfaces, the rigid bodies on the nodes
 //! of their points, and the point masses, springs and supports at nodes.
 
-use super::points::Key;
-use super::{located, BodyOut, Builder};
+use super::builder::{Builder, Key};
+use super::mechanism::{located, BodyOut};
 use crate::error::BoxError;
 use crate::input::validate::mechanism::FrameSpec;
 use mbs::{Body, FlexibleBody, NodeId, PointMass, RigidBody, Spring, Support};

@@ -1,6 +1,7 @@
 //! Initial states: joint coordinates and rates, point and body velocities at t = 0.
 
-use super::{located, Builder};
+use super::builder::Builder;
+use super::mechanism::located;
 use crate::error::BoxError;
 use crate::input::validate::mechanism::{BodyRef, InitialSpec};
 use mbs::InitialCondition;

@@ -1,7 +1,8 @@
 //! Joints and what acts on their coordinates: drivers, joint springs, joint limits and
 //! actuators.
 
-use super::{located, Builder};
+use super::builder::Builder;
+use super::mechanism::located;
 use crate::error::BoxError;
 use crate::input::source::KeyPath;
 use crate::input::validate::mechanism::{EffortSpec, PointRef};

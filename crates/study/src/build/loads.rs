@@ -1,7 +1,8 @@
 //! Loads: gravity, the point loads at nodes and the point loads at load points inside
 //! flexible bodies, each with the name the study gives it.
 
-use super::{located, BodyOut, Builder, LoadTarget, NamedLoad};
+use super::builder::Builder;
+use super::mechanism::{located, BodyOut, LoadTarget, NamedLoad};
 use crate::error::BoxError;
 use crate::input::validate::mechanism::BodyLoadSpec;
 use crate::input::validate::Study;

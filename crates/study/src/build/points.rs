@@ -1,7 +1,8 @@
 //! Points and nodes: every point of every body, merged by the fixed joints into the model's
 //! nodes (`mbs::weld_points`), the points fixed to the ground clamped.
 
-use super::{located, Builder, FlexibleSources};
+use super::builder::{Builder, Key};
+use super::mechanism::{located, FlexibleSources};
 use crate::error::BoxError;
 use crate::input::source::KeyPath;
 use crate::input::validate::mechanism::PointRef;
@@ -9,13 +10,6 @@ use crate::input::validate::Study;
 use mbs::{Model, NodeId, Support};
 use nalgebra::{Point3, Vector3};
 use std::collections::BTreeMap;
-
-/// Key of a point before merging: flexible (body, interface index) or rigid (body, point).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub(super) enum Key {
-    Flexible(usize, usize),
-    Rigid(usize, usize),
-}
 
 /// The points fixed to the ground by fixed joints, the pairs of points welded into one node,
 /// and the joint of each weld (indices in the study's joints).

@@ -1,7 +1,8 @@
 //! Sensors: each sensor of the study as the `mbs` sensors it is made of and the columns of
 //! its group in the outputs.
 
-use super::{located, BodyOut, Builder};
+use super::builder::Builder;
+use super::mechanism::{located, BodyOut};
 use crate::error::BoxError;
 use crate::input::source::KeyPath;
 use crate::input::validate::mechanism::{
