@@ -5,11 +5,20 @@
 //! validation suite). It owns the path
 //!
 //! ```text
-//! STUDY.toml --serde--> StudyFile --validate--> Study --build--> mbs::Model --run--> Observer
-//!  (input/schema)        raw, unchecked  (input/validate)     (mechanism.rs)   (run, output)
-//!                                     every reference resolved,                  CSV/VTU/PNG folder
-//!                                     every value checked                        (output/folder), vectors
+//! STUDY.toml --serde--> StudyFile --validate--> Study --build--> BuiltMechanism --run--> Observer
+//!  (input/schema)       raw, unchecked (input/validate) (build/)  mbs::Model with   (run/)   (output/)
+//!                                  every reference resolved,     names, sensors,            CSV/VTU/PNG folder,
+//!                                  every value checked           loads                      vectors in memory
 //! ```
+//!
+//! The modules stand in that order: `input <- build <- run -> output`. `input` reads and
+//! checks a study file into a [`Study`]; `build` turns a study and its reduced bodies into the
+//! mechanism and never runs anything (of `output` it uses only two data types: the sensor
+//! groups and the VTU mesh of a body); `run` reduces parts through the cache, asks `build` for
+//! the mechanism, runs the analyses and streams every result into an [`Observer`] of
+//! `output`, which knows nothing of how results are made. [`error`] and [`interrupt`] sit
+//! below them all (an error's location uses the key paths of `input::source`, which uses
+//! nothing of the crate).
 //!
 //! Nothing runs until the whole study has been validated: a misspelt material name is
 //! reported, with its file, line, column, key and the close matches, before any mesh is
@@ -18,13 +27,17 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`input`] | the study file: schema, sources and spans, validation, parts, documents, examples |
-//! | [`mod@run`] | the analyses of parts (static, modal, reduce), the run loop, `flexmbs reduce` |
-//! | [`mechanism`] | the mechanism as an `mbs::Model`; equilibrium, dynamic, linearized |
-//! | [`simulation`] | a dynamic analysis stepped by the caller: sensors, state, named loads |
-//! | [`cache`] | reduced bodies cached by a hash of what produced them |
+//! | `build` | the mechanism as an `mbs::Model`, concern by concern: points and nodes, bodies, joints, loads, sensors, initial states |
+//! | `run` | the [`Runner`] and its start chain, the analyses of parts and of the mechanism, the cached reduction service, the [`Simulation`] stepped by the caller |
 //! | [`output`] | the observer, the results folder (CSV, VTU/PVD, PNG, summary) |
 //! | [`error`] | the boxed error with context and its report |
 //! | [`interrupt`] | Ctrl-C: a stop requested at the next output step |
+//!
+//! The face of the crate is this module: a study loaded ([`load`], [`parse_and_validate`],
+//! [`Document`]), run ([`run()`], [`run_with`], [`run_only`], [`run_selected`] with a
+//! [`Selection`], a [`Runner`] analysis by analysis) or stepped ([`Simulation`]), its results
+//! to an [`Observer`] such as the [`Recorder`]. `build` and `run` are private; the few of their
+//! items that the command line, the Python package and the tests use are re-exported here.
 
 pub mod error;
 pub mod input;

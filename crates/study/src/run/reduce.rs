@@ -36,9 +36,9 @@ pub struct Reduced {
     pub free_dofs: usize,
 }
 
-/// Reduces `part` of `study` (which has a reduction), or reads it from the cache when the
-/// same mesh and settings were reduced before ([`super::cache`]). A mode count the part cannot
-/// give is located at its `reduction.modes` in the study file.
+/// Reduces `part` of `study` (which has a reduction), or reads it from the cache
+/// (`run::cache`) when the same mesh and settings were reduced before. A mode count the part
+/// cannot give is located at its `reduction.modes` in the study file.
 pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Observer) -> Result<Reduced, BoxError> {
     let Some(reduction) = &part.reduction else {
         return Err(format!("part '{}' has no [parts.reduction]", part.name).into());

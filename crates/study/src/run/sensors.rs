@@ -32,7 +32,7 @@ pub fn sensor_indices(groups: &[SensorGroup], record: &SensorRecord) -> Result<V
 }
 
 /// Per group: its columns in a row of `record` (the `mbs` sensors it is made of, in order;
-/// errors as [`sensor_indices`]).
+/// errors as `sensor_indices`).
 pub fn sensor_columns(groups: &[SensorGroup], record: &SensorRecord) -> Result<Vec<Vec<usize>>, BoxError> {
     let mut offsets = Vec::with_capacity(record.widths.len());
     let mut at = 0;
