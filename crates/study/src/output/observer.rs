@@ -1,5 +1,5 @@
 //! The output observer: everything an analysis produces goes through [`Observer`] as plain
-//! data, as soon as it is computed. The analyses (`crate::run`, `crate::mechanism`) never
+//! data, as soon as it is computed. The analyses (`crate::run`) never
 //! write a file themselves.
 //!
 //! | observer | where | what it does with the results |

@@ -1,9 +1,10 @@
 //! A dynamic analysis of the mechanism stepped by the caller: [`Simulation::step`] or
 //! [`Simulation::advance_to`], and between steps every sensor, the state and the node
 //! motions can be read, the value of named loads changed and actuator efforts held at values
-//! set by the caller. The `dynamic` analyses of a study run (`crate::mechanism::run_analysis`)
+//! set by the caller. The `dynamic` analyses of a study run (`run::dynamic`)
 //! step the same type, so a script that steps a simulation to the end gets the numbers the
-//! program writes.
+//! program writes. [`Simulation::new`] (in `run`) builds the mechanism and asks the
+//! [`super::Runner`] for the state its `start` names.
 
 use super::sensors::{sensor_columns, sensor_indices};
 use crate::build::{BuiltMechanism, LoadTarget, NamedLoad};
