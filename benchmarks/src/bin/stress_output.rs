@@ -19,7 +19,7 @@
 //!   (`VonMisesMaximum::maxima`), whose maxima are checked equal to the brute-force ones, bit
 //!   for bit, as is the run's sensor column;
 //! * the writing of the three VTU stress fields (tensor, von Mises, largest principal) per
-//!   frame: a frame of the body with and without them (`study::vtu::write_vtu`, ASCII), the
+//!   frame: a frame of the body with and without them (`study::output::vtu::write_vtu`, ASCII), the
 //!   difference. That is output I/O, paid per VTU frame (`vtu_every`), not per sensor row.
 //!
 //! Usage: `cargo run --release -p flexmbs-benchmarks --bin stress_output [nx ny nz]`.
@@ -31,7 +31,7 @@ use mbs::{solve_dynamic, DynamicSettings, Integrator, SensorKind, System};
 use nalgebra::{Matrix3, Vector3};
 use reduction::{reduce, CbSettings, ModeSelection, VonMisesMaximum, VonMisesReference};
 use std::time::Instant;
-use study::vtu::{write_vtu, PointField, VtuMesh};
+use study::output::vtu::{write_vtu, PointField, VtuMesh};
 
 const REPEAT: usize = 3;
 const STEPS: usize = 1000;

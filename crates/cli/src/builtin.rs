@@ -5,11 +5,11 @@
 
 use std::path::Path;
 use study::error::{BoxError, ResultExt};
-use study::run::Options;
-use study::source::Source;
+use study::input::source::Source;
+use study::Options;
 
-/// The study text of the built-in example.
-pub const STUDY: &str = include_str!("../../../examples/slider_crank.toml");
+/// The study text of the built-in example: the library's copy of the slider-crank example.
+pub const STUDY: &str = study::input::examples::SLIDER_CRANK;
 
 /// Reads column `k` (after the header) of a CSV file written by the run.
 fn column(path: &Path, k: usize) -> Result<Vec<f64>, BoxError> {

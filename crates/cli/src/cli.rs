@@ -4,7 +4,7 @@ pub use crate::console::run;
 use crate::console::Console;
 use std::path::{Path, PathBuf};
 use study::error::BoxError;
-use study::run::Options;
+use study::Options;
 
 pub const USAGE: &str = "\
 flexmbs: from a mesh to the motion of a flexible mechanism
@@ -139,7 +139,7 @@ fn parse(args: &[String], known: &[&str]) -> Result<(Vec<String>, Flags), BoxErr
                 None => (name.to_string(), None),
             };
             if !known.contains(&name.as_str()) {
-                let close = study::source::close_matches(&name, known.iter().copied());
+                let close = study::input::source::close_matches(&name, known.iter().copied());
                 let hint = match close.first() {
                     Some(c) => format!("; did you mean --{c}?"),
                     None if known.is_empty() => " (this command takes no options)".to_string(),
@@ -168,8 +168,8 @@ fn option<'a>(options: &'a [(String, String)], name: &str) -> Option<&'a str> {
 
 fn run_options(options: &[(String, String)]) -> Result<Options, BoxError> {
     let foreign = match option(options, "foreign-files") {
-        None | Some("refuse") => study::folder::ForeignFiles::Refuse,
-        Some("keep") => study::folder::ForeignFiles::Keep,
+        None | Some("refuse") => study::output::folder::ForeignFiles::Refuse,
+        Some("keep") => study::output::folder::ForeignFiles::Keep,
         Some(other) => return Err(usage(format!("--foreign-files is 'refuse' or 'keep', not '{other}'"))),
     };
     Ok(Options {
@@ -263,7 +263,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let path = one_file(&positional, "check", "a study file")?;
             let study = load(&path)?;
             if study.analyses.is_empty() {
-                return Err(study::run::nothing_to_run(&study));
+                return Err(study::nothing_to_run(&study));
             }
             let m = &study.mechanism;
             let mechanism = if m.is_empty() {
@@ -273,7 +273,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                     ", a mechanism of {} flexible and {} rigid bodies, {}, {} sensors",
                     m.bodies.len(),
                     m.rigid_bodies.len(),
-                    study::mechanism::joint_count(&study),
+                    study::joint_count(&study),
                     m.sensors.len()
                 )
             };
@@ -289,7 +289,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let (positional, options) = parse(rest, &["part", "out", "cache", "foreign-files"])?;
             let path = one_file(&positional, "reduce", "a study file")?;
             let study = load(&path)?;
-            let written = study::run::reduce_command(
+            let written = study::reduce_command(
                 &study,
                 option(&options, "part"),
                 &run_options(&options)?,
@@ -364,12 +364,12 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let (positional, _) = parse(rest, &[])?;
             match positional.as_slice() {
                 [] => {
-                    crate::say_raw!("{}", study::examples::list());
+                    crate::say_raw!("{}", study::input::examples::list());
                     Ok(())
                 }
                 [name] | [name, _] => {
                     let dir = PathBuf::from(positional.get(1).map_or(".", String::as_str));
-                    let study = study::examples::write(name, &dir)?;
+                    let study = study::input::examples::write(name, &dir)?;
                     crate::say!("{}", study.display());
                     crate::tell!("flexmbs: run it with `flexmbs run {}`", study.display());
                     Ok(())
@@ -388,7 +388,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 "validate",
                 "help",
             ];
-            let close = study::source::close_matches(other, commands.iter().copied());
+            let close = study::input::source::close_matches(other, commands.iter().copied());
             let hint = match close.first() {
                 Some(c) => format!("; did you mean `{c}`?"),
                 None => String::new(),

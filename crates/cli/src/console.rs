@@ -2,9 +2,9 @@
 //! stderr (hidden when stderr is not a terminal), and what each analysis found on stdout.
 
 use study::error::BoxError;
-use study::observer::{AnalysisInfo, Observer, Progress};
-use study::output::AnalysisSummary;
-use study::run::Options;
+use study::output::observer::{AnalysisInfo, Observer, Progress};
+use study::output::summary::AnalysisSummary;
+use study::Options;
 
 /// Progress on stderr, reports on stdout.
 #[derive(Default)]
@@ -121,26 +121,18 @@ impl Observer for Console {
 
 /// Runs every analysis of `study` (or only the one named `only`, after the chain of analyses
 /// its `start` names) into its results folder, progress on the console.
-pub fn run(study: &study::Study, options: &Options, only: Option<&str>) -> Result<study::output::Summary, BoxError> {
-    let summary = match only {
-        None => study::run(study, options, &mut Console::default())?,
-        Some(name) => {
-            let Some(i) = study.analyses.iter().position(|a| a.name == name) else {
-                let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
-                return Err(format!(
-                    "{}: --analysis: {}",
-                    study.source.path.display(),
-                    study::source::unknown_reference("analysis", name, &names)
-                )
-                .into());
-            };
-            study::run_only(study, options, i, &mut Console::default())?
-        }
-    };
+pub fn run(
+    study: &study::Study,
+    options: &Options,
+    only: Option<&str>,
+) -> Result<study::output::summary::Summary, BoxError> {
+    let selection =
+        study::Selection::of(study, only).map_err(|e| format!("{}: --analysis: {e}", study.source.path.display()))?;
+    let summary = study::run_selected(study, options, selection, &mut Console::default())?;
     let done = summary
         .analyses
         .iter()
-        .filter(|a| a.status == study::output::Status::Done)
+        .filter(|a| a.status == study::output::summary::Status::Done)
         .count();
     crate::tell!(
         "flexmbs: {} analyses done in {:.2} s; results in {}",

@@ -45,4 +45,4 @@ pub mod cli;
 pub mod console;
 pub mod inspect;
 
-pub use study::{error, examples, source, vtu};
+pub use study::{error, input::examples, input::source, output::vtu};

@@ -76,8 +76,8 @@ pub(crate) fn with_attributes<T: pyo3::PyTypeInfo>(
 
 /// The errors of a study's validation as dicts (`file`, `line`, `column`, `key`, `message`);
 /// `line` and `column` are 1-based, `None` when the error is about the file as a whole.
-fn study_error_dicts<'py>(py: Python<'py>, e: &study::source::StudyErrors) -> PyResult<Vec<Bound<'py, PyDict>>> {
-    use study::source::{line_column, Anchor};
+fn study_error_dicts<'py>(py: Python<'py>, e: &study::input::source::StudyErrors) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    use study::input::source::{line_column, Anchor};
     let src = &e.source;
     e.errors
         .iter()
@@ -130,7 +130,7 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
             analysis_step = analysis_step.or(s.step);
             location = location.or(s.location.as_ref());
         }
-        if let Some(s) = e.downcast_ref::<study::source::StudyErrors>() {
+        if let Some(s) = e.downcast_ref::<study::input::source::StudyErrors>() {
             let errors = study_error_dicts(py, s)?;
             let first = errors.first().cloned();
             let get = |k: &str| -> PyResult<Py<PyAny>> {
@@ -148,13 +148,13 @@ fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResul
             ];
             return Ok(with_attributes::<StudyError>(py, s.to_string(), &attrs));
         }
-        if let Some(p) = e.downcast_ref::<study::document::PathError>() {
+        if let Some(p) = e.downcast_ref::<study::input::document::PathError>() {
             let path = match p {
-                study::document::PathError::Malformed { path, .. }
-                | study::document::PathError::Missing { path, .. }
-                | study::document::PathError::Index { path, .. }
-                | study::document::PathError::NotTable { path, .. }
-                | study::document::PathError::Value { path, .. } => path.clone(),
+                study::input::document::PathError::Malformed { path, .. }
+                | study::input::document::PathError::Missing { path, .. }
+                | study::input::document::PathError::Index { path, .. }
+                | study::input::document::PathError::NotTable { path, .. }
+                | study::input::document::PathError::Value { path, .. } => path.clone(),
             };
             let at = PyString::new(py, &path).into_any().unbind();
             return Ok(with_attributes::<KeyPathError>(

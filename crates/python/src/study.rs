@@ -13,7 +13,7 @@ use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::path::PathBuf;
-use study::observer::{Cell, Recorded, Recorder};
+use study::output::observer::{Cell, Recorded, Recorder};
 
 /// A study: a study file held in memory, read and changed value by value through key paths
 /// (`parts.rod.reduction.modes`, `sections[0].d`, `drivers.crank-speed.function.speed`), with
@@ -104,7 +104,7 @@ pub(crate) fn json_to_py<'py>(py: Python<'py>, value: &serde_json::Value) -> PyR
 }
 
 /// The columns of a result table: numbers as a float array, text columns as lists.
-fn table_dict<'py>(py: Python<'py>, t: &study::observer::Table) -> PyResult<Bound<'py, PyDict>> {
+fn table_dict<'py>(py: Python<'py>, t: &study::output::observer::Table) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("name", &t.name)?;
     d.set_item("columns", &t.columns)?;
@@ -312,17 +312,11 @@ impl Study {
         t_end: Option<f64>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
-        let only = match &analysis {
-            Some(name) => Some(st.analyses.iter().position(|a| &a.name == name).ok_or_else(|| {
-                let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
-                StudyError::new_err(study::source::unknown_reference("analysis", name, &names))
-            })?),
-            None => None,
-        };
+        let selection = study::Selection::of(&st, analysis.as_deref()).map_err(StudyError::new_err)?;
         let opts = options(results_dir, cache, t_end);
         let dir = opts.results_dir(&st);
         let mut recorder = Recorder::default();
-        let outcome = py.detach(|| run_study(&st, &opts, only, &mut recorder));
+        let outcome = py.detach(|| study::run_selected(&st, &opts, selection, &mut recorder));
         let d = PyDict::new(py);
         d.set_item("results_dir", dir.display().to_string())?;
         let analyses = PyList::empty(py);
@@ -403,7 +397,7 @@ impl Study {
         for i in targets {
             let p = &st.parts[i];
             let reduced = py
-                .detach(|| study::run::reduce_part(&st, p, &cache_dir, &mut ()))
+                .detach(|| study::reduce_part(&st, p, &cache_dir, &mut ()))
                 .map_err(|e| to_py_err(py, &*e))?;
             out.push((
                 p.name.clone(),
@@ -451,20 +445,6 @@ impl Study {
 
     fn __repr__(&self) -> String {
         format!("Study({:?})", self.doc.path.display().to_string())
-    }
-}
-
-/// Runs every analysis of `st` (or only analysis `only`) into its results folder, every result
-/// to `recorder` too: the program's `study::run` and `study::run::run_only`.
-fn run_study(
-    st: &study::Study,
-    opts: &study::Options,
-    only: Option<usize>,
-    recorder: &mut Recorder,
-) -> Result<study::output::Summary, study::BoxError> {
-    match only {
-        None => study::run(st, opts, recorder),
-        Some(i) => study::run::run_only(st, opts, i, recorder),
     }
 }
 

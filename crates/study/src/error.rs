@@ -1,7 +1,7 @@
 //! Errors of a study run: any error of the libraries, wrapped in the context that says which
 //! part, analysis or file it is about. `main` prints the chain, one cause per line.
 
-use crate::source::KeyPath;
+use crate::input::source::KeyPath;
 use std::fmt;
 use std::path::PathBuf;
 

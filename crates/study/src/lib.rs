@@ -5,11 +5,20 @@
 //! validation suite). It owns the path
 //!
 //! ```text
-//! STUDY.toml --serde--> StudyFile --validate--> Study --build--> mbs::Model --run--> Observer
-//!  (schema.rs)        raw, unchecked  (validate*, part.rs)     (mechanism.rs)   (run.rs, observer.rs)
-//!                                     every reference resolved,                  CSV/VTU/PNG folder
-//!                                     every value checked                        (folder.rs), vectors
+//! STUDY.toml --serde--> StudyFile --validate--> Study --build--> BuiltMechanism --run--> Observer
+//!  (input/schema)       raw, unchecked (input/validate) (build/)  mbs::Model with   (run/)   (output/)
+//!                                  every reference resolved,     names, sensors,            CSV/VTU/PNG folder,
+//!                                  every value checked           loads                      vectors in memory
 //! ```
+//!
+//! The modules stand in that order: `input <- build <- run -> output`. `input` reads and
+//! checks a study file into a [`Study`]; `build` turns a study and its reduced bodies into the
+//! mechanism and never runs anything (of `output` it uses only two data types: the sensor
+//! groups and the VTU mesh of a body); `run` reduces parts through the cache, asks `build` for
+//! the mechanism, runs the analyses and streams every result into an [`Observer`] of
+//! `output`, which knows nothing of how results are made. [`error`] and [`interrupt`] sit
+//! below them all (an error's location uses the key paths of `input::source`, which uses
+//! nothing of the crate).
 //!
 //! Nothing runs until the whole study has been validated: a misspelt material name is
 //! reported, with its file, line, column, key and the close matches, before any mesh is
@@ -17,44 +26,36 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`schema`] | the serde schema of a study file, raw: every key |
-//! | [`source`] | spans, key paths, error rendering, close matches |
-//! | [`validate`] | validation `StudyFile` → `Study` (parts, analyses; `validate::mechanism`: the mechanism) |
-//! | [`part`] | a validated part and the FE model an analysis runs on |
-//! | [`matrices`] | a body reduced from another FE code's Matrix Market K and M, node and dof tables |
-//! | [`document`] | a study as an editable document: load from a file or text, get and set values by key path |
-//! | [`mod@run`] | the analyses of parts (static, modal, reduce), the run loop, `flexmbs reduce` |
-//! | [`mechanism`] | the mechanism as an `mbs::Model`; equilibrium, dynamic, linearized |
-//! | [`simulation`] | a dynamic analysis stepped by the caller: sensors, state, named loads |
-//! | [`observer`] | the output observer trait, result tables, the in-memory [`observer::Recorder`] |
-//! | [`folder`] | the results folder observer: CSV, VTU/PVD, PNG, summary |
-//! | [`cache`] | reduced bodies cached by a hash of what produced them |
-//! | [`output`] | CSV text, summary types, results-folder layout |
-//! | [`vtu`] | VTK XML unstructured grids and `.pvd` collections |
-//! | [`examples`] | the built-in example studies of `examples/` |
+//! | [`input`] | the study file: schema, sources and spans, validation, parts, documents, examples |
+//! | `build` | the mechanism as an `mbs::Model`, concern by concern: points and nodes, bodies, joints, loads, sensors, initial states |
+//! | `run` | the [`Runner`] and its start chain, the analyses of parts and of the mechanism, the cached reduction service, the [`Simulation`] stepped by the caller |
+//! | [`output`] | the observer, the results folder (CSV, VTU/PVD, PNG, summary) |
 //! | [`error`] | the boxed error with context and its report |
+//! | [`interrupt`] | Ctrl-C: a stop requested at the next output step |
+//!
+//! The face of the crate is this module: a study loaded ([`load`], [`parse_and_validate`],
+//! [`Document`]), run ([`run()`], [`run_with`], [`run_only`], [`run_selected`] with a
+//! [`Selection`], a [`Runner`] analysis by analysis) or stepped ([`Simulation`]), its results
+//! to an [`Observer`] such as the [`Recorder`]. `build` and `run` are private; the few of their
+//! items that the command line, the Python package and the tests use are re-exported here.
 
-pub mod cache;
-pub mod document;
 pub mod error;
-pub mod examples;
-pub mod folder;
+pub mod input;
 pub mod interrupt;
-pub mod matrices;
-pub mod mechanism;
-pub mod observer;
 pub mod output;
-pub mod part;
-pub mod run;
-pub mod schema;
-pub mod simulation;
-pub mod source;
-pub mod validate;
-pub mod vtu;
 
-pub use document::Document;
+pub(crate) mod build;
+pub(crate) mod run;
+
 pub use error::BoxError;
-pub use observer::{Observer, Recorder};
-pub use run::{run, run_only, run_with, Options, Runner};
-pub use simulation::Simulation;
-pub use validate::{load, parse_and_validate, Study};
+pub use input::document::Document;
+pub use input::validate::{load, parse_and_validate, Study};
+pub use output::observer::{Observer, Recorder};
+pub use run::{run, run_only, run_selected, run_with, Options, Runner, Selection, Simulation};
+
+// What the command line, the Python package and the tests use beyond the facade.
+pub use build::{joint_count, BuiltMechanism};
+pub use run::nothing_to_run;
+pub use run::reduce::{build_mechanism, reduce_command, reduce_part, Reduced, ReducedFile};
+pub use run::sensors::sensor_columns;
+pub use run::simulation::dynamic_settings;

@@ -8,14 +8,14 @@
 //! run's error is the largest deviation from it over the whole run (the reference linearly
 //! interpolated to the run's output times).
 
-use study::observer::Recorder;
-use study::run::Options;
+use study::output::observer::Recorder;
+use study::Options;
 
 /// The slider-crank example with its crank run up from rest to 150 rad/s in 0.1 s (the spin-up
 /// profile of validation problem C1) instead of turning at constant speed from the start, and
 /// `dynamic` as the time-step keys of its analysis.
 fn run_up(dynamic: &str) -> String {
-    let example = study::examples::EXAMPLES
+    let example = study::input::examples::EXAMPLES
         .iter()
         .find(|e| e.name == "slider_crank")
         .unwrap();

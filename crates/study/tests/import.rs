@@ -5,7 +5,7 @@
 use fe_model::{modal_dense, DofMap, DofMask, SystemPattern};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
-use study::validate::mechanism::BodySource;
+use study::input::validate::mechanism::BodySource;
 
 /// Study texts built from parameters.
 mod common;
@@ -29,8 +29,8 @@ fn study(dir: &Path, text: &str) -> study::Study {
 }
 
 /// The part's frequencies, clamped at the node set `clamp`, with the interfaces built.
-fn clamped_frequencies(part: &study::part::Part, clamp: &[fe_model::NodeId]) -> Vec<f64> {
-    let mut built = part.build(&[], false).unwrap().model;
+fn clamped_frequencies(part: &study::input::part::Part, clamp: &[fe_model::NodeId]) -> Vec<f64> {
+    let mut built = part.build(&[]).unwrap().model;
     for &n in clamp {
         built.add_support(n, DofMask::TRANSLATIONS);
     }

@@ -4,8 +4,8 @@
 
 use common::{dynamic, gravity, pendulum, sensor};
 use std::path::{Path, PathBuf};
-use study::observer::{Observer, Recorder};
-use study::run::Options;
+use study::output::observer::{Observer, Recorder};
+use study::Options;
 use study::{Document, Simulation};
 
 /// Study texts built from parameters.
@@ -40,12 +40,12 @@ fn scratch(name: &str) -> PathBuf {
 
 /// The built-in example `name` written into a scratch folder; its study file.
 fn example(name: &str) -> PathBuf {
-    study::examples::write(name, &scratch(name)).unwrap()
+    study::input::examples::write(name, &scratch(name)).unwrap()
 }
 
 /// The built-in example `name` in a scratch folder of its own, `tag`.
 fn example_as(name: &str, tag: &str) -> PathBuf {
-    study::examples::write(name, &scratch(tag)).unwrap()
+    study::input::examples::write(name, &scratch(tag)).unwrap()
 }
 
 #[test]
@@ -352,9 +352,7 @@ fn sensors_read_by_name_are_the_columns_of_the_full_row() {
     let mut groups = sim.sensors().to_vec();
     groups[1].mbs_names.push("nowhere".into());
     let record = sim.system().sensor_record();
-    let e = study::simulation::sensor_columns(&groups, &record)
-        .unwrap_err()
-        .to_string();
+    let e = study::sensor_columns(&groups, &record).unwrap_err().to_string();
     assert!(e.contains("sensor 'rate'") && e.contains("no sensor 'nowhere'"), "{e}");
 }
 
@@ -363,8 +361,8 @@ fn sensors_read_by_name_are_the_columns_of_the_full_row() {
 struct Stages(Vec<String>);
 
 impl Observer for Stages {
-    fn progress(&mut self, p: &study::observer::Progress) {
-        if let study::observer::Progress::Stage(s) = p {
+    fn progress(&mut self, p: &study::output::observer::Progress) {
+        if let study::output::observer::Progress::Stage(s) = p {
             self.0.push(s.clone());
         }
     }
@@ -392,7 +390,10 @@ fn every_example_runs_through_the_library() {
         .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
         .collect();
     on_disk.sort();
-    let mut built_in: Vec<String> = study::examples::EXAMPLES.iter().map(|e| e.name.to_string()).collect();
+    let mut built_in: Vec<String> = study::input::examples::EXAMPLES
+        .iter()
+        .map(|e| e.name.to_string())
+        .collect();
     built_in.sort();
     assert_eq!(on_disk, built_in, "examples/ and the built-in examples differ");
     for name in &built_in {
@@ -407,7 +408,12 @@ fn every_example_runs_through_the_library() {
                 .summary
                 .as_ref()
                 .unwrap_or_else(|| panic!("{name}/{}: no summary", a.name));
-            assert_eq!(summary.status, study::output::Status::Done, "{name}/{}", a.name);
+            assert_eq!(
+                summary.status,
+                study::output::summary::Status::Done,
+                "{name}/{}",
+                a.name
+            );
         }
     }
 }
@@ -528,19 +534,19 @@ fn plot_panels_separate_units_and_sizes() {
         "relative_position_y [m]",
         "relative_position_z [m]",
     ]);
-    let panels = study::folder::plot_panels(&tip, &[vec![10.0, 10.0], vec![0.0, -0.4], vec![0.0, 1e-20]]);
+    let panels = study::output::folder::plot_panels(&tip, &[vec![10.0, 10.0], vec![0.0, -0.4], vec![0.0, 1e-20]]);
     assert_eq!(panels, vec![vec![0], vec![1, 2]]);
     // A reaction: forces and moments never share an axis.
     let reaction = h(&["Fx [N]", "Fy [N]", "Fz [N]", "Mx [N m]", "My [N m]", "Mz [N m]"]);
     let c = vec![vec![1.0, 2.0]; 6];
     assert_eq!(
-        study::folder::plot_panels(&reaction, &c),
+        study::output::folder::plot_panels(&reaction, &c),
         vec![vec![0, 1, 2], vec![3, 4, 5]]
     );
     // Energies of one size: one axis.
     let energy = h(&["kinetic [J]", "strain [J]", "gravity potential [J]"]);
     let c = vec![vec![0.2, 0.3], vec![0.0, 0.1], vec![0.2, 0.25]];
-    assert_eq!(study::folder::plot_panels(&energy, &c), vec![vec![0, 1, 2]]);
+    assert_eq!(study::output::folder::plot_panels(&energy, &c), vec![vec![0, 1, 2]]);
 }
 
 /// Options writing into `<study dir>/results` with the cache in `<study dir>/cache`.
@@ -555,7 +561,7 @@ fn into_results(file: &Path) -> Options {
 
 #[test]
 fn a_results_folder_deletes_only_what_flexmbs_wrote() {
-    use study::folder::{ForeignFiles, MANIFEST};
+    use study::output::folder::{ForeignFiles, MANIFEST};
     let file = example_as("cantilever", "folder-cantilever");
     let study = study::load(&file).unwrap();
     let options = into_results(&file);
@@ -609,7 +615,7 @@ fn a_results_folder_deletes_only_what_flexmbs_wrote() {
 
 #[test]
 fn a_results_folder_in_use_is_refused_and_a_dead_runs_lock_taken_over() {
-    use study::folder::LOCK;
+    use study::output::folder::LOCK;
     let file = example_as("cantilever", "lock-cantilever");
     let study = study::load(&file).unwrap();
     let options = into_results(&file);
@@ -663,7 +669,7 @@ fn a_failed_write_names_its_file_and_leaves_no_temporary() {
     let dir = scratch("failed-write");
     // The target is a folder holding a file: the rename fails after the write.
     std::fs::create_dir_all(dir.join("summary.json/x")).unwrap();
-    let e = study::output::write_atomic(&dir.join("summary.json"), b"{}").unwrap_err();
+    let e = study::output::summary::write_atomic(&dir.join("summary.json"), b"{}").unwrap_err();
     assert!(e.to_string().contains("summary.json"), "{e}");
     let left: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
@@ -680,7 +686,7 @@ fn a_failed_write_names_its_file_and_leaves_no_temporary() {
     let study = study::load(&file).unwrap();
     let options = Options {
         t_end: Some(0.01),
-        foreign: study::folder::ForeignFiles::Keep,
+        foreign: study::output::folder::ForeignFiles::Keep,
         ..into_results(&file)
     };
     let dynamic = study.analyses.iter().find(|a| a.kind_name() == "dynamic").unwrap();
@@ -798,8 +804,8 @@ fn a_cached_body_is_never_trusted_by_its_name() {
 #[test]
 fn study_file_mutants_never_panic() {
     let mut m = fe_model::fuzz::Mutator::new(0x7374_7564_7966_7a01);
-    for example in study::examples::EXAMPLES {
-        let file = study::examples::write(example.name, &scratch(&format!("fuzz-{}", example.name))).unwrap();
+    for example in study::input::examples::EXAMPLES {
+        let file = study::input::examples::write(example.name, &scratch(&format!("fuzz-{}", example.name))).unwrap();
         let text = std::fs::read(&file).unwrap();
         for case in 0..fe_model::fuzz::budget(150) {
             let mutant = String::from_utf8_lossy(&m.mutate(&text)).into_owned();
@@ -831,7 +837,7 @@ fn model_errors_point_at_the_line_of_their_entity() {
         let file = dir.join(name);
         std::fs::write(&file, text).unwrap();
         let st = study::load(&file).unwrap();
-        let b = study::mechanism::build(&st, &dir.join("cache"), &mut ()).unwrap();
+        let b = study::build_mechanism(&st, &dir.join("cache"), &mut ()).unwrap();
         match b.system(&st) {
             Ok(_) => panic!("{name}: assembled"),
             Err(e) => e.to_string(),
@@ -873,7 +879,7 @@ fn reduced_bodies_are_shared_not_copied() {
     use std::sync::Arc;
     let file = example("elastica");
     let st = study::load(&file).unwrap();
-    let b = study::mechanism::build(&st, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
+    let b = study::build_mechanism(&st, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
     assert_eq!(b.bodies.len(), 4);
     let first = Arc::clone(&b.bodies[0].reduced);
     let sys = b.system(&st).unwrap();

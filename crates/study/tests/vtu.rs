@@ -1,12 +1,12 @@
 //! Our node orders (gmsh's) mapped into VTK's. Each test takes the reference nodes of one
-//! element kind from `fe_model`, permutes them with `study::vtu::vtk_cell`, and compares
+//! element kind from `fe_model`, permutes them with `study::output::vtu::vtk_cell`, and compares
 //! them with VTK's definition of the cell: the parametric coordinates of its cell class
 //! (`GetParametricCoords` of vtkHexahedron, vtkQuadraticHexahedron, vtkTetra,
 //! vtkQuadraticTetra, vtkWedge in VTK 9.7), and for the wedge also its documented orientation
-//! (`study::vtu` module docs).
+//! (`study::output::vtu` module docs).
 
 use fe_model::{CellKind, NodeId, SolidKind};
-use study::vtu::{vtk_cell, vtu_text, PointField, VtuMesh};
+use study::output::vtu::{vtk_cell, vtu_text, PointField, VtuMesh};
 
 /// VTK's hexahedron corners in [0, 1]^3.
 const VTK_HEX: [[f64; 3]; 8] = [

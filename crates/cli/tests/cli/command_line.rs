@@ -103,7 +103,7 @@ fn a_closed_stdout_is_not_a_panic() {
 /// it gets a real bar of its length.
 #[test]
 fn progress_shows_the_stage_text_and_real_bars() {
-    use study::observer::{Observer, Progress};
+    use study::output::observer::{Observer, Progress};
     let mut console = flexmbs::console::Console::with_target(indicatif::ProgressDrawTarget::hidden);
     console.progress(&Progress::Stage("part 'rod': factorising K_ii (1200 dofs)".into()));
     assert_eq!(

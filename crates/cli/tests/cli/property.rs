@@ -9,7 +9,7 @@
 
 use crate::support::*;
 use std::path::Path;
-use study::source::Source;
+use study::input::source::Source;
 
 /// xorshift64*: small, fast, and the same sequence on every platform.
 struct Rng(u64);

@@ -4,8 +4,8 @@
 
 use crate::common::{clamp, dynamic, material, pendulum, rigid_body, sensor, Text};
 use std::path::Path;
-use study::observer::Recorder;
-use study::run::Options;
+use study::output::observer::Recorder;
+use study::Options;
 
 /// The rigid pendulum of `common::pendulum` with points `P` and `Q` at its centre of mass.
 const PENDULUM: Text = Text(|| pendulum(&[("P", [0.0, -1.0, 0.0]), ("Q", [0.0, -1.0, 0.0])]));
@@ -123,7 +123,7 @@ fn values_outside_their_physical_range_are_refused_at_their_key() {
 /// A modal damping ratio is a fraction of critical damping: 5 (500 %) is refused, 0.3 warns.
 #[test]
 fn a_modal_damping_ratio_above_critical_is_refused() {
-    let four_bar = study::examples::write("four_bar", &crate::scratch("ratio-example")).unwrap();
+    let four_bar = study::input::examples::write("four_bar", &crate::scratch("ratio-example")).unwrap();
     let text = std::fs::read_to_string(&four_bar).unwrap();
     let mut doc = study::Document::from_text(&text, &four_bar).unwrap();
     let e = doc
@@ -237,10 +237,10 @@ fn the_translation_axes_of_a_dynamic_analysis_reach_the_integrator() {
         let file = dir.join(format!("{name}.toml"));
         std::fs::write(&file, format!("{PENDULUM}{DYNAMIC}{key}")).unwrap();
         let study = study::load(&file).unwrap();
-        let study::validate::AnalysisSpec::Mbs(spec) = &study.analyses[0].spec else {
+        let study::input::validate::AnalysisSpec::Mbs(spec) = &study.analyses[0].spec else {
             panic!("a dynamic analysis")
         };
-        study::simulation::dynamic_settings(spec, 1).unwrap()
+        study::dynamic_settings(spec, 1).unwrap()
     };
     assert!(!settings("axes-default", "").body_axis_translations);
     assert!(!settings("axes-fixed", "translations = \"fixed\"\n").body_axis_translations);
@@ -297,20 +297,24 @@ part = "block"
     let dir = crate::scratch("no-model-copies");
     let file = dir.join("block.toml");
     std::fs::write(&file, &text).unwrap();
-    let copies = study::part::model_copies();
+    let copies = study::input::part::model_copies();
     let study = study::load(&file).unwrap();
-    assert_eq!(study::part::model_copies() - copies, 0, "validation copied a model");
+    assert_eq!(
+        study::input::part::model_copies() - copies,
+        0,
+        "validation copied a model"
+    );
     // The spiders, supports and the auxiliary node of the checks are gone again.
     let base = &study.parts[0].base;
     let generated = fe_model::box_mesh(fe_model::CellKind::Hex8, [1.0, 0.2, 0.2], [6, 2, 2]).unwrap();
     assert_eq!(base.mesh, generated);
     assert!(base.supports.is_empty() && base.constraints.is_empty());
     // A run copies the model once per analysis on a part (static, two modal, reduce).
-    let copies = study::part::model_copies();
+    let copies = study::input::part::model_copies();
     let options = crate::options_in(&dir, None);
     let summary = study::run_with(&study, &options, &mut Recorder::default()).unwrap();
     assert_eq!(summary.status, "complete");
-    assert_eq!(study::part::model_copies() - copies, 4);
+    assert_eq!(study::input::part::model_copies() - copies, 4);
 }
 
 /// A cart driven along a rail at 10 m/s from 1 m before a clamped post, on top of the
@@ -475,7 +479,7 @@ fn a_simulation_reads_one_sensor_without_evaluating_the_others() {
 /// refined solves) and gives the default run's fixed-interface frequencies.
 #[test]
 fn the_factor_precision_of_a_reduction_is_checked_and_reaches_the_reduction() {
-    use study::observer::{Observer, Progress};
+    use study::output::observer::{Observer, Progress};
     let text = |factor: &str| {
         format!(
             r#"
@@ -530,7 +534,7 @@ part = "block"
         );
         let cache = dir.join("cache");
         let mut stages = Stages::default();
-        let reduced = study::run::reduce_part(&study, &study.parts[0], &cache, &mut stages).unwrap();
+        let reduced = study::reduce_part(&study, &study.parts[0], &cache, &mut stages).unwrap();
         let precision = if factor.is_empty() { "double" } else { "single" };
         assert!(
             stages

@@ -2,7 +2,7 @@
 //! the `planar` support), on the planar slider-crank of
 //! `benchmarks/studies/slider_crank_beam_rod_planar.toml`.
 
-use study::observer::Recorder;
+use study::output::observer::Recorder;
 
 /// The benchmark's planar slider-crank study, to `t_end`, with `edit` applied to its text.
 fn text(t_end: f64, edit: impl Fn(String) -> String) -> String {
@@ -65,7 +65,7 @@ fn the_planar_key_reaches_the_reduction_the_cache_and_the_bodies() {
     assert!(one_in_3d.mechanism.bodies[0].planar && !one_in_3d.mechanism.bodies[1].planar);
 
     let cache = dir.join("cache");
-    let reduce = |study: &study::Study| study::run::reduce_part(study, &study.parts[0], &cache, &mut ()).unwrap();
+    let reduce = |study: &study::Study| study::reduce_part(study, &study.parts[0], &cache, &mut ()).unwrap();
     let (p, s) = (reduce(&planar), reduce(&spatial));
     assert!(!p.from_cache && !s.from_cache);
     assert_ne!(p.file, s.file);

@@ -9,9 +9,9 @@ use crate::common::{
     two_ended_beam, welded_chain, Text,
 };
 use std::path::PathBuf;
-use study::observer::Recorder;
-use study::output::Summary;
-use study::run::Options;
+use study::output::observer::Recorder;
+use study::output::summary::Summary;
+use study::Options;
 
 /// `text` written as `<name>.toml` in a scratch folder, loaded, and run in memory.
 fn run(name: &str, text: &str) -> (Recorder, Result<Summary, String>, PathBuf) {
@@ -52,7 +52,7 @@ fn results(rec: &Recorder, analysis: &str) -> serde_json::Value {
 /// The reduced body of the first flexible body of the study at `file` (mass data).
 fn first_body(file: &std::path::Path) -> (reduction::ReducedBody, nalgebra::Isometry3<f64>) {
     let study = study::load(file).unwrap();
-    let b = study::mechanism::build(&study, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
+    let b = study::build_mechanism(&study, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
     ((*b.bodies[0].reduced).clone(), b.bodies[0].placement)
 }
 
@@ -96,7 +96,7 @@ fn the_double_pendulum_example_with_stiff_links_follows_the_rigid_solution() {
     // The example with links a thousand times stiffer (the rigid limit), released from 30
     // degrees by its one [[initial]] line, for 1 s.
     let text = std::str::from_utf8(
-        study::examples::EXAMPLES
+        study::input::examples::EXAMPLES
             .iter()
             .find(|e| e.name == "double_pendulum")
             .unwrap()
@@ -251,7 +251,10 @@ function = { type = "ramp", t_end = 0.02, to = 1.0 }
         .unwrap();
     let names: Vec<&str> = rec.analyses.iter().map(|a| a.name.as_str()).collect();
     assert_eq!(names, ["sag", "first", "second"]);
-    assert!(summary.analyses.iter().all(|a| a.status == study::output::Status::Done));
+    assert!(summary
+        .analyses
+        .iter()
+        .all(|a| a.status == study::output::summary::Status::Done));
     let report = &summary.analyses[2].report;
     assert!(
         report
@@ -665,7 +668,7 @@ dt = 0.02
     let full = load("full", 41, "");
     assert!(!plain.parts[0].reduction.as_ref().unwrap().inertia_correction);
     assert!(corrected.parts[0].reduction.as_ref().unwrap().inertia_correction);
-    let reduce = |study: &study::Study| study::run::reduce_part(study, &study.parts[0], &cache, &mut ()).unwrap();
+    let reduce = |study: &study::Study| study::reduce_part(study, &study.parts[0], &cache, &mut ()).unwrap();
     let (p, c) = (reduce(&plain), reduce(&corrected));
     assert!(!p.from_cache && !c.from_cache);
     assert_ne!(p.file, c.file);

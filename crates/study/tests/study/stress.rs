@@ -6,11 +6,11 @@
 use crate::common::{material, rectangle, BeamPart};
 use crate::vtu_array;
 use std::path::PathBuf;
-use study::observer::Recorder;
+use study::output::observer::Recorder;
 
 /// `text` written as `<name>.toml` in a scratch folder and run, in memory and into its
 /// results folder (for the VTU files).
-fn run(name: &str, text: &str) -> (Recorder, Result<study::output::Summary, String>, PathBuf) {
+fn run(name: &str, text: &str) -> (Recorder, Result<study::output::summary::Summary, String>, PathBuf) {
     let dir = crate::scratch(name);
     let file = dir.join(format!("{name}.toml"));
     std::fs::write(&file, text).unwrap();

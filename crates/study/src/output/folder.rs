@@ -20,9 +20,9 @@
 //!   run killed hard) is taken over.
 
 use crate::error::{BoxError, ResultExt};
-use crate::observer::{AnalysisInfo, Cell, Observer, SensorGroup, SensorStream, Series, Table};
-use crate::output::{num, Csv, Summary};
-use crate::vtu::{write_pvd, write_vtu, PointField, VtuMesh};
+use crate::output::observer::{AnalysisInfo, Cell, Observer, SensorGroup, SensorStream, Series, Table};
+use crate::output::summary::{num, Csv, Summary};
+use crate::output::vtu::{write_pvd, write_vtu, PointField, VtuMesh};
 use std::collections::BTreeSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -301,7 +301,8 @@ impl ResultsFolder {
             text.push('\n');
         }
         let path = self.root.join(MANIFEST);
-        crate::output::write_atomic(&path, text.as_bytes()).context(|| format!("cannot write {}", path.display()))
+        crate::output::summary::write_atomic(&path, text.as_bytes())
+            .context(|| format!("cannot write {}", path.display()))
     }
 }
 

@@ -207,7 +207,7 @@ pub fn vtu_text(mesh: &VtuMesh, fields: &[PointField<'_>]) -> String {
 
 /// Writes a `.vtu` file.
 pub fn write_vtu(path: &Path, mesh: &VtuMesh, fields: &[PointField<'_>]) -> std::io::Result<()> {
-    crate::output::write_atomic(path, vtu_text(mesh, fields).as_bytes())
+    crate::output::summary::write_atomic(path, vtu_text(mesh, fields).as_bytes())
 }
 
 /// Writes a `.pvd` collection: each entry a step value and a file name relative to the
@@ -223,5 +223,5 @@ pub fn write_pvd(path: &Path, entries: &[(f64, String)]) -> std::io::Result<()> 
         );
     }
     s.push_str("  </Collection>\n</VTKFile>\n");
-    crate::output::write_atomic(path, s.as_bytes())
+    crate::output::summary::write_atomic(path, s.as_bytes())
 }

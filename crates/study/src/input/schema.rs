@@ -2,8 +2,8 @@
 //!
 //! Every struct here is plain data that mirrors the file one to one (`deny_unknown_fields`,
 //! so a misspelt key is an error with its line and column). Nothing is resolved: names are
-//! strings, numbers are unchecked. [`crate::validate::validate`] turns a [`StudyFile`] into a
-//! [`crate::validate::Study`] in which every reference is resolved and every value checked,
+//! strings, numbers are unchecked. [`crate::input::validate::validate`] turns a [`StudyFile`] into a
+//! [`crate::input::validate::Study`] in which every reference is resolved and every value checked,
 //! before any computation. `docs/study-file.md` documents the same schema for
 //! users; keep the two in step.
 //!
@@ -19,7 +19,7 @@
 //! The sections `bodies`, `rigid_bodies`, `point_masses`, `springs`, `supports`, `joints`,
 //! `drivers`, `loads`, `sensors`, `initial`, `output` and the analyses `equilibrium`,
 //! `dynamic` and `linearized` are the multibody part of a study (the mechanism), validated by
-//! `crate::validate::mechanism` and run by `crate::mechanism` on the `mbs` crate.
+//! `crate::input::validate::mechanism` and run by `crate::mechanism` on the `mbs` crate.
 
 use serde::Deserialize;
 use std::collections::BTreeMap;

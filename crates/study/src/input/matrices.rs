@@ -11,7 +11,7 @@
 //!   `ux uy uz rx ry rz` (or 0-5). Without it every node has `dofs_per_node` (3 or 6) dofs in
 //!   node order.
 
-use crate::schema::MatricesFile;
+use crate::input::schema::MatricesFile;
 use reduction::{CbSettings, ModeSelection, ReducedBody};
 use std::path::Path;
 

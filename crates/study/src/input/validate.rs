@@ -3,7 +3,7 @@
 //! against its range, and every part's FE model is built, before any analysis runs.
 //!
 //! The validator collects all the errors it finds rather than stopping at the first, and
-//! each names its file, line, column and key ([`crate::source`]). A reference to something
+//! each names its file, line, column and key ([`crate::input::source`]). A reference to something
 //! undefined lists the close matches. Nothing here panics on any input: the property test
 //! `tests/cli.rs::random_and_mutated_study_files_fail_cleanly` feeds it random and mutated
 //! files.
@@ -11,11 +11,11 @@
 // Material constants keep their physical names (E, G), as in fe_model.
 #![allow(non_snake_case)]
 
-use crate::part::{
+use crate::input::part::{
     mass_kind, model_size, InterfaceSpec, InterfaceTarget, LoadSpec, NodeRef, Part, PartKind, Reduction, SupportSpec,
 };
-use crate::schema::*;
-use crate::source::{
+use crate::input::schema::*;
+use crate::input::source::{
     close_matches, quote_list, suggestions, unknown_reference, KeyPath, Source, StudyError, StudyErrors,
 };
 use fe_model::generate::{beam_arc, frame, straight_beam, Member};
@@ -123,7 +123,7 @@ impl Study {
         let line_column = self
             .source
             .locate(path, false)
-            .map(|span| crate::source::line_column(&self.source.text, span.start));
+            .map(|span| crate::input::source::line_column(&self.source.text, span.start));
         crate::error::Location {
             file: self.source.path.clone(),
             line_column,

@@ -1,10 +1,10 @@
 //! The output observer: everything an analysis produces goes through [`Observer`] as plain
-//! data, as soon as it is computed. The analyses (`crate::run`, `crate::mechanism`) never
+//! data, as soon as it is computed. The analyses (`crate::run`) never
 //! write a file themselves.
 //!
 //! | observer | where | what it does with the results |
 //! |---|---|---|
-//! | [`ResultsFolder`](crate::folder::ResultsFolder) | this crate | CSV, VTU/PVD, PNG and `summary.json/.md` in a results folder |
+//! | [`ResultsFolder`](crate::output::folder::ResultsFolder) | this crate | CSV, VTU/PVD, PNG and `summary.json/.md` in a results folder |
 //! | [`Recorder`] | this crate | keeps everything in vectors (tests, scripting) |
 //! | the console of `flexmbs` | the program | progress bars and the report on stdout |
 //!
@@ -16,8 +16,8 @@
 //! analysis with the whole run so far.
 
 use crate::error::BoxError;
-use crate::output::{AnalysisSummary, Summary};
-use crate::vtu::{PointField, VtuMesh};
+use crate::output::summary::{AnalysisSummary, Summary};
+use crate::output::vtu::{PointField, VtuMesh};
 use std::path::Path;
 
 /// One cell of a result table.

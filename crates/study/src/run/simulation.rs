@@ -1,14 +1,16 @@
 //! A dynamic analysis of the mechanism stepped by the caller: [`Simulation::step`] or
 //! [`Simulation::advance_to`], and between steps every sensor, the state and the node
 //! motions can be read, the value of named loads changed and actuator efforts held at values
-//! set by the caller. The `dynamic` analyses of a study run (`crate::mechanism::run_analysis`)
+//! set by the caller. The `dynamic` analyses of a study run (`run::dynamic`)
 //! step the same type, so a script that steps a simulation to the end gets the numbers the
-//! program writes.
+//! program writes. [`Simulation::new`] (in `run`) builds the mechanism and asks the
+//! [`super::Runner`] for the state its `start` names.
 
+use super::sensors::{sensor_columns, sensor_indices};
+use crate::build::{BuiltMechanism, LoadTarget, NamedLoad};
 use crate::error::{BoxError, Location};
-use crate::mechanism::{BuiltMechanism, LoadTarget, NamedLoad};
-use crate::observer::SensorGroup;
-use crate::validate::{MbsAnalysis, Study};
+use crate::input::validate::{MbsAnalysis, Study};
+use crate::output::observer::SensorGroup;
 use mbs::{DynamicSettings, Integrator, LoadKind, NodeMotion, SensorRecord, State, StepReport, System};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
@@ -30,49 +32,6 @@ pub struct Simulation {
     t_end: f64,
     /// Where the study describes each entity of the model, for [`Simulation::locate`].
     locations: BTreeMap<mbs::Entity, Location>,
-}
-
-/// Per group: the indices in `record` (for a record of `System::sensor_record`, in
-/// `Model::sensors`) of the `mbs` sensors it is made of, in order. A group naming a sensor
-/// the record lacks is an error naming both.
-pub fn sensor_indices(groups: &[SensorGroup], record: &SensorRecord) -> Result<Vec<Vec<usize>>, BoxError> {
-    let mut index: HashMap<&str, usize> = HashMap::with_capacity(record.names.len());
-    for (k, n) in record.names.iter().enumerate() {
-        index.entry(n.as_str()).or_insert(k);
-    }
-    groups
-        .iter()
-        .map(|g| {
-            g.mbs_names
-                .iter()
-                .map(|n| {
-                    index
-                        .get(n.as_str())
-                        .copied()
-                        .ok_or_else(|| format!("sensor '{}': the model has no sensor '{n}'", g.name).into())
-                })
-                .collect()
-        })
-        .collect()
-}
-
-/// Per group: its columns in a row of `record` (the `mbs` sensors it is made of, in order;
-/// errors as [`sensor_indices`]).
-pub fn sensor_columns(groups: &[SensorGroup], record: &SensorRecord) -> Result<Vec<Vec<usize>>, BoxError> {
-    let mut offsets = Vec::with_capacity(record.widths.len());
-    let mut at = 0;
-    for w in &record.widths {
-        offsets.push(at);
-        at += w;
-    }
-    Ok(sensor_indices(groups, record)?
-        .into_iter()
-        .map(|ks| {
-            ks.into_iter()
-                .flat_map(|k| offsets[k]..offsets[k] + record.widths[k])
-                .collect()
-        })
-        .collect())
 }
 
 /// The integrator settings of a `dynamic` analysis.
@@ -164,34 +123,6 @@ impl Simulation {
         error.entity().and_then(|e| self.locations.get(&e))
     }
 
-    /// Builds the mechanism of `study` (bodies reduced through the cache of `options`) and
-    /// starts its dynamic analysis called `analysis` (from the final state of the analysis
-    /// named in its `start`, which is run first, without output).
-    pub fn new(study: &Study, analysis: &str, options: &crate::run::Options) -> Result<Self, BoxError> {
-        let Some(a) = study.analyses.iter().find(|a| a.name == analysis) else {
-            let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
-            return Err(crate::source::unknown_reference("analysis", analysis, &names).into());
-        };
-        let crate::validate::AnalysisSpec::Mbs(spec) = &a.spec else {
-            return Err(format!("analysis '{analysis}' is not an analysis of the mechanism").into());
-        };
-        let built = crate::mechanism::build(study, &options.cache_dir(study), &mut ())?;
-        let system = Arc::new(built.system(study)?);
-        // `start`: run the analyses it names (and theirs), without output, for the state.
-        let mut chain = Vec::new();
-        let mut at = a.start;
-        while let Some(k) = at {
-            chain.push(k);
-            at = study.analyses[k].start;
-        }
-        let mut runner = crate::run::Runner::new(study, options);
-        for &k in chain.iter().rev() {
-            runner.run_one(k, &mut ())?;
-        }
-        let first = crate::mechanism::dynamic_start(&system, a.start.and_then(|k| runner.state(k)));
-        Self::with_start(study, system, &built, spec, first)
-    }
-
     /// The time reached.
     pub fn time(&self) -> f64 {
         self.integrator.state().time()
@@ -275,7 +206,7 @@ impl Simulation {
     pub fn sensor(&self, name: &str) -> Result<Vec<f64>, BoxError> {
         let Some(&g) = self.group_of.get(name) else {
             let names: Vec<String> = self.groups.iter().map(|g| g.name.clone()).collect();
-            return Err(crate::source::unknown_reference("sensor", name, &names).into());
+            return Err(crate::input::source::unknown_reference("sensor", name, &names).into());
         };
         // Only this sensor's model sensors are evaluated (they are consecutive in the model).
         let values = self.integrator.sensor_values(&self.sensor_indices[g])?;
@@ -311,7 +242,7 @@ impl Simulation {
     pub fn set_load(&mut self, name: &str, kind: LoadKind, value: [f64; 3]) -> Result<(), BoxError> {
         let Some(l) = self.loads.iter().find(|l| l.name == name) else {
             let names: Vec<String> = self.loads.iter().map(|l| l.name.clone()).collect();
-            return Err(crate::source::unknown_reference("load", name, &names).into());
+            return Err(crate::input::source::unknown_reference("load", name, &names).into());
         };
         let target = l.target.clone();
         let system = self
@@ -353,7 +284,7 @@ impl Simulation {
         let names = self.actuator_names();
         names.iter().position(|n| *n == name).ok_or_else(|| {
             let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
-            crate::source::unknown_reference("actuator", name, &names).into()
+            crate::input::source::unknown_reference("actuator", name, &names).into()
         })
     }
 
@@ -387,5 +318,15 @@ impl Simulation {
     /// finite is [`mbs::SolveError::NonFiniteSensor`] (the row stays in `record`).
     pub fn record(&self, record: &mut SensorRecord) -> Result<(), mbs::SolveError> {
         self.integrator.record(record)
+    }
+}
+
+/// The first state of a `dynamic` analysis: the initial state, or the final state of the
+/// analysis named in `start` (from an equilibrium: at rest in its configuration at its time).
+pub fn dynamic_start(sys: &System, start: Option<&mbs::State>) -> mbs::State {
+    match start {
+        Some(s) if s.velocity().iter().all(|v| *v == 0.0) => sys.at_rest(s, s.time()),
+        Some(s) => s.clone(),
+        None => sys.initial_state(),
     }
 }

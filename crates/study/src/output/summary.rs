@@ -6,11 +6,11 @@
 //! ```text
 //! <results>/
 //!   summary.json, summary.md      rewritten after every analysis
-//!   .flexmbs-manifest             the files flexmbs wrote here (crate::folder)
-//!   .flexmbs-lock                 while a run writes here (crate::folder)
+//!   .flexmbs-manifest             the files flexmbs wrote here (crate::output::folder)
+//!   .flexmbs-lock                 while a run writes here (crate::output::folder)
 //!   <analysis>/                   one folder per analysis, named by it
 //!     *.csv                       result groups, header "name (unit)"
-//!     *.vtu, *.pvd                ParaView: mesh and displacement fields (crate::vtu)
+//!     *.vtu, *.pvd                ParaView: mesh and displacement fields (crate::output::vtu)
 //!     <part>.rbody                reduce: the reduced body
 //! ```
 

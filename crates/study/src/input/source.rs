@@ -2,7 +2,7 @@
 //! key paths such as `parts[0].interfaces[1].set`, and the rendering of errors with file,
 //! line, column, key and the offending line.
 //!
-//! The serde schema ([`crate::schema`]) holds no positions. An error found by the
+//! The serde schema ([`crate::input::schema`]) holds no positions. An error found by the
 //! validator carries the [`KeyPath`] of the value it is about; [`Source::locate`] finds that
 //! path's span in a span tree built once from `toml`'s spanned document
 //! ([`toml::de::DeTable`]). A parse or type error from `toml` carries a span; the tree gives

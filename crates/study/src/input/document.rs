@@ -8,8 +8,8 @@
 //! `analyses.run.t_end`, `joints[2].kind`.
 
 use crate::error::BoxError;
-use crate::source::{KeyPath, Segment, Source, StudyErrors};
-use crate::validate::{parse_and_validate, Study};
+use crate::input::source::{KeyPath, Segment, Source, StudyErrors};
+use crate::input::validate::{parse_and_validate, Study};
 use std::path::{Path, PathBuf};
 
 /// A key path that does not lead to a value, or a value that cannot be written there.
@@ -278,7 +278,7 @@ impl Document {
                 .collect(),
             _ => Vec::new(),
         };
-        let close = crate::source::close_matches(key, keys.iter().map(String::as_str));
+        let close = crate::input::source::close_matches(key, keys.iter().map(String::as_str));
         let hint = match close.first() {
             Some(c) => format!("; did you mean '{c}'?"),
             None if keys.is_empty() => String::new(),

@@ -15,7 +15,7 @@
 //! again. Both files are written to temporary names and renamed, so two runs sharing a cache
 //! (two studies, or one study twice) never read a partial file.
 
-use crate::part::{Built, Part, Reduction};
+use crate::input::part::{Built, Part, Reduction};
 use sha2::{Digest, Sha256};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -118,7 +118,7 @@ fn key_path(file: &Path) -> PathBuf {
 pub fn record(file: &Path, key: &str) -> std::io::Result<()> {
     let bytes = fe_model::input::read(file)?;
     let text = format!("key {key}\nsha256 {}\n", sha256_hex(&bytes));
-    crate::output::write_atomic(&key_path(file), text.as_bytes())
+    crate::output::summary::write_atomic(&key_path(file), text.as_bytes())
 }
 
 /// The bytes of `file` when its key file records `key` and their hash; `None` otherwise (no

@@ -1,6 +1,6 @@
 //! A validated part: its FE model (mesh, elements, properties), its interfaces resolved to
-//! nodes, and how to reduce it; and the one function that turns these into the FE model an
-//! analysis or a reduction runs on ([`Part::build`]).
+//! nodes, and how to reduce it; and the functions that turn these into the FE model an
+//! analysis or a reduction runs on ([`Part::build`], [`Part::build_for_reduction`]).
 //!
 //! Supports and interfaces are added in a fixed order: supports on mesh nodes, then the
 //! interface spiders, then supports on interface nodes. An RBE3 spider must know which
@@ -9,7 +9,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::source::KeyPath;
+use crate::input::source::KeyPath;
 use fe_model::mass_properties::center_of_mass;
 use fe_model::{DofMask, FeError, FeModel, MassKind, NodalLoad, NodeId, SpiderKind};
 use nalgebra::{Point3, Vector3};
@@ -112,12 +112,13 @@ pub struct Built {
 }
 
 thread_local! {
-    /// Copies of parts' base models made by [`Part::build`] on this thread.
+    /// Copies of parts' base models made by [`Part::build`] and [`Part::build_for_reduction`] on
+    /// this thread.
     static COPIES: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
 
-/// How many copies of parts' FE models [`Part::build`] has made on this thread so far: one per
-/// static, modal or reduce analysis run; validation ([`Part::check_build`]) makes none. For
+/// How many copies of parts' FE models [`Part::build`] and [`Part::build_for_reduction`] have
+/// made on this thread so far: one per static, modal or reduce analysis run; validation ([`Part::check_build`]) makes none. For
 /// tests that the work of a check does not grow with copies of a large mesh.
 pub fn model_copies() -> usize {
     COPIES.with(|c| c.get())
@@ -132,10 +133,22 @@ enum AuxiliaryAt {
 }
 
 impl Part {
-    /// The FE model with `supports` and the interfaces; with `auxiliary`, also an interface
-    /// node at the centre of mass (beams: the node there; solids: an RBE3 spider on every
-    /// node of the solid elements, which adds no stiffness). Copies the base model once.
-    pub fn build(&self, supports: &[SupportSpec], auxiliary: bool) -> Result<Built, FeError> {
+    /// The FE model a static or modal analysis runs on: the part with `supports` and the
+    /// interfaces. Copies the base model once.
+    pub fn build(&self, supports: &[SupportSpec]) -> Result<Built, FeError> {
+        self.build_copy(supports, false)
+    }
+
+    /// The FE model `reduction` reduces: the part with its interfaces and, when the reduction
+    /// asks for one, an auxiliary interface node at the centre of mass (beams: the node there;
+    /// solids: an RBE3 spider on every node of the solid elements, which adds no stiffness).
+    /// Copies the base model once.
+    pub fn build_for_reduction(&self, reduction: &Reduction) -> Result<Built, FeError> {
+        self.build_copy(&[], reduction.auxiliary_node)
+    }
+
+    /// [`Part::build`] with `supports`, and the auxiliary node with `auxiliary`.
+    fn build_copy(&self, supports: &[SupportSpec], auxiliary: bool) -> Result<Built, FeError> {
         COPIES.with(|c| c.set(c.get() + 1));
         let mut model = self.base.clone();
         let (interfaces, auxiliary) = self.build_on(&mut model, supports, auxiliary)?;
@@ -314,9 +327,9 @@ pub fn model_size(model: &FeModel) -> f64 {
 }
 
 /// A `MassKind` from the file's choice.
-pub fn mass_kind(m: Option<crate::schema::MassFile>) -> MassKind {
+pub fn mass_kind(m: Option<crate::input::schema::MassFile>) -> MassKind {
     match m {
-        Some(crate::schema::MassFile::Lumped) => MassKind::Lumped,
+        Some(crate::input::schema::MassFile::Lumped) => MassKind::Lumped,
         _ => MassKind::Consistent,
     }
 }

@@ -3,7 +3,7 @@
 //! The study tests run each of them (`every_example_runs_through_the_library`).
 
 use crate::error::{BoxError, ResultExt};
-use crate::source::unknown_reference;
+use crate::input::source::unknown_reference;
 use std::path::{Path, PathBuf};
 
 /// One example: its name, what it shows, and its files (path relative to the folder it is
@@ -14,20 +14,26 @@ pub struct Example {
     pub files: &'static [(&'static str, &'static [u8])],
 }
 
+/// The study file of the slider-crank example, which `flexmbs run` without a file runs.
+pub const SLIDER_CRANK: &str = include_str!("../../../../examples/slider_crank.toml");
+
 pub const EXAMPLES: &[Example] = &[
     Example {
         name: "cantilever",
         description: "a steel beam: statics and modes against beam theory, reduced with an interface at each end",
-        files: &[("cantilever.toml", include_bytes!("../../../examples/cantilever.toml"))],
+        files: &[(
+            "cantilever.toml",
+            include_bytes!("../../../../examples/cantilever.toml"),
+        )],
     },
     Example {
         name: "solid_bar",
         description: "solid bars (a gmsh tet10 mesh and a generated hex20 box) reduced with RBE2 and RBE3 interfaces",
         files: &[
-            ("solid_bar.toml", include_bytes!("../../../examples/solid_bar.toml")),
+            ("solid_bar.toml", include_bytes!("../../../../examples/solid_bar.toml")),
             (
                 "meshes/bar_tet10.msh",
-                include_bytes!("../../../examples/meshes/bar_tet10.msh"),
+                include_bytes!("../../../../examples/meshes/bar_tet10.msh"),
             ),
         ],
     },
@@ -35,33 +41,30 @@ pub const EXAMPLES: &[Example] = &[
         name: "elastica",
         description:
             "B1: Mattiasson's elastica, a cantilever of four superelements under a large tip force (equilibrium)",
-        files: &[("elastica.toml", include_bytes!("../../../examples/elastica.toml"))],
+        files: &[("elastica.toml", include_bytes!("../../../../examples/elastica.toml"))],
     },
     Example {
         name: "bend45",
         description: "B3: the Bathe-Bolourchi 45-degree bend under an out-of-plane tip force (equilibrium)",
-        files: &[("bend45.toml", include_bytes!("../../../examples/bend45.toml"))],
+        files: &[("bend45.toml", include_bytes!("../../../../examples/bend45.toml"))],
     },
     Example {
         name: "spin_up",
         description: "C1: spin-up of a flexible beam by a driven hub, tip seen from the hub (dynamic)",
-        files: &[("spin_up.toml", include_bytes!("../../../examples/spin_up.toml"))],
+        files: &[("spin_up.toml", include_bytes!("../../../../examples/spin_up.toml"))],
     },
     Example {
         name: "slider_crank",
         description:
             "C2: planar flexible slider-crank at 150 rad/s, rod midpoint deflection (dynamic); `flexmbs run` runs it",
-        files: &[(
-            "slider_crank.toml",
-            include_bytes!("../../../examples/slider_crank.toml"),
-        )],
+        files: &[("slider_crank.toml", SLIDER_CRANK.as_bytes())],
     },
     Example {
         name: "slider_crank_spatial",
         description: "C3: spatial slider-crank, crank axis offset 0.1 m from the guide (dynamic)",
         files: &[(
             "slider_crank_spatial.toml",
-            include_bytes!("../../../examples/slider_crank_spatial.toml"),
+            include_bytes!("../../../../examples/slider_crank_spatial.toml"),
         )],
     },
     Example {
@@ -70,7 +73,7 @@ pub const EXAMPLES: &[Example] = &[
             "a double pendulum of two flexible links released from 30 degrees by one [[initial]] line (dynamic)",
         files: &[(
             "double_pendulum.toml",
-            include_bytes!("../../../examples/double_pendulum.toml"),
+            include_bytes!("../../../../examples/double_pendulum.toml"),
         )],
     },
     Example {
@@ -78,10 +81,10 @@ pub const EXAMPLES: &[Example] = &[
         description:
             "a four-bar whose coupler is a solid from a gmsh mesh (equilibrium, linearized and dynamic from it)",
         files: &[
-            ("four_bar.toml", include_bytes!("../../../examples/four_bar.toml")),
+            ("four_bar.toml", include_bytes!("../../../../examples/four_bar.toml")),
             (
                 "meshes/link_hex8.msh",
-                include_bytes!("../../../examples/meshes/link_hex8.msh"),
+                include_bytes!("../../../../examples/meshes/link_hex8.msh"),
             ),
         ],
     },
@@ -91,7 +94,7 @@ pub const EXAMPLES: &[Example] = &[
             "a flexible arm on a motor hub whose torque a controller sets between steps (dynamic; docs/python.md)",
         files: &[(
             "controlled_arm.toml",
-            include_bytes!("../../../examples/controlled_arm.toml"),
+            include_bytes!("../../../../examples/controlled_arm.toml"),
         )],
     },
 ];

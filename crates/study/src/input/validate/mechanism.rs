@@ -8,8 +8,8 @@
 //! `crate::mechanism` turns those errors back into a located message.
 
 use super::Validator;
-use crate::schema::*;
-use crate::source::{suggestions, unknown_reference, KeyPath};
+use crate::input::schema::*;
+use crate::input::source::{suggestions, unknown_reference, KeyPath};
 use mbs::{Interpolation, JointKind, LoadAxes, LoadKind, RotationSupport, TimeFunction, TranslationSupport};
 use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
 use reduction::ReducedBody;
@@ -437,7 +437,11 @@ fn unit(v: Vector3<f64>) -> Option<Unit<Vector3<f64>>> {
 
 impl Validator<'_> {
     /// The whole mechanism; `parts` are the study's parts by name (None when invalid).
-    pub(super) fn mechanism(&mut self, file: &StudyFile, parts: &[(String, Option<crate::part::Part>)]) -> Mechanism {
+    pub(super) fn mechanism(
+        &mut self,
+        file: &StudyFile,
+        parts: &[(String, Option<crate::input::part::Part>)],
+    ) -> Mechanism {
         let mut m = Mechanism::default();
         let part_names: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
         let mut names = std::collections::HashSet::new();
@@ -644,7 +648,7 @@ impl Validator<'_> {
         &mut self,
         path: &KeyPath,
         b: &BodyFile,
-        parts: &[(String, Option<crate::part::Part>)],
+        parts: &[(String, Option<crate::input::part::Part>)],
         part_names: &[String],
     ) -> Option<FlexibleSpec> {
         if b.matrices.is_some() && (b.part.is_some() || b.file.is_some()) {
@@ -659,7 +663,7 @@ impl Validator<'_> {
         let (source, interfaces, auxiliary) = match (&b.part, &b.file) {
             (None, None) if b.matrices.is_some() => {
                 let m = b.matrices.as_ref()?;
-                match crate::matrices::reduce_matrices(&b.name, m, &self.src.dir()) {
+                match crate::input::matrices::reduce_matrices(&b.name, m, &self.src.dir()) {
                     Ok(body) => {
                         let names = body.interfaces.iter().map(|i| i.name.clone()).collect();
                         (
@@ -2241,7 +2245,7 @@ impl Validator<'_> {
 /// The last key of `path`, for "missing key" messages.
 fn path_key(path: &KeyPath) -> String {
     match path.0.last() {
-        Some(crate::source::Segment::Key(k)) => k.clone(),
+        Some(crate::input::source::Segment::Key(k)) => k.clone(),
         _ => String::new(),
     }
 }

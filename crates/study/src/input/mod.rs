@@ -1,0 +1,20 @@
+//! The input wing: a study file read, checked and resolved into a [`validate::Study`] before
+//! anything is built or run.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`schema`] | the serde schema of a study file, raw: every key |
+//! | [`source`] | spans, key paths, error rendering, close matches |
+//! | [`validate`] | validation `StudyFile` → `Study` (parts, analyses; `validate::mechanism`: the mechanism) |
+//! | [`part`] | a validated part and the FE model an analysis runs on |
+//! | [`matrices`] | a body reduced from another FE code's Matrix Market K and M, node and dof tables |
+//! | [`document`] | a study as an editable document: load from a file or text, get and set values by key path |
+//! | [`examples`] | the built-in example studies of `examples/` |
+
+pub mod document;
+pub mod examples;
+pub mod matrices;
+pub mod part;
+pub mod schema;
+pub mod source;
+pub mod validate;

@@ -1,0 +1,409 @@
+//! The deformed meshes of every body of the mechanism at the output times, with the stresses
+//! of the bodies reduced with stress shapes and the hot spot of each.
+
+#![allow(non_snake_case)]
+
+use crate::build::BuiltMechanism;
+use crate::error::{BoxError, ResultExt};
+use crate::output::observer::{Observer, Series};
+use crate::output::vtu::{CellRole, PointField, VtuMesh};
+use mbs::System;
+use nalgebra::{Point3, Vector3};
+use reduction::NodeStresses;
+use serde_json::json;
+
+/// The deformed meshes of every body at the output times (module docs), with the stresses of
+/// the bodies reduced with stress shapes and the hot spot of each.
+pub struct MeshRecovery {
+    mesh: VtuMesh,
+    /// Per flexible body: its first point (its superelement is the system's).
+    flexible: Vec<usize>,
+    /// Whether any body has stress shapes.
+    stress: bool,
+    /// Per rigid body: first point.
+    rigid: Vec<usize>,
+    /// Per flexible body: the largest von Mises stress seen so far.
+    hot: Vec<Option<HotSpot>>,
+    /// Per flexible body with stress shapes: the search for the largest von Mises stress over
+    /// every node, built at the first output time without a frame.
+    maxima: Vec<Option<reduction::VonMisesMaximum>>,
+    /// Output times without a frame whose hot spots wait to be found a batch at a time
+    /// ([`Self::track`]): the time and each body's CB coordinates (`None` without stress
+    /// shapes).
+    tracked: Vec<(f64, Vec<Option<Vec<f64>>>)>,
+}
+
+/// The largest von Mises stress of one body over the output times: value, FE node (index in
+/// the part's mesh), and time (or load factor).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HotSpot {
+    pub von_mises: f64,
+    pub node: usize,
+    pub time: f64,
+}
+
+impl MeshRecovery {
+    pub fn new(b: &BuiltMechanism, sys: &System) -> Result<Self, BoxError> {
+        let mut mesh = VtuMesh::default();
+        let mut flexible = Vec::new();
+        for body in &b.bodies {
+            let first = mesh.points.len();
+            match (&body.reduced.mesh, &body.mesh) {
+                (Some(shapes), Some(fe)) => {
+                    for x in &shapes.nodes {
+                        let p = body.placement * Point3::from(*x);
+                        mesh.points.push([p.x, p.y, p.z]);
+                    }
+                    for (t, c, r) in &fe.cells {
+                        mesh.cells.push((*t, c.iter().map(|i| i + first).collect(), *r));
+                    }
+                }
+                (Some(shapes), None) => {
+                    for (i, x) in shapes.nodes.iter().enumerate() {
+                        let p = body.placement * Point3::from(*x);
+                        mesh.points.push([p.x, p.y, p.z]);
+                        mesh.cells.push((1, vec![first + i], CellRole::Element));
+                    }
+                }
+                // No mesh shapes: the interfaces, joined to the first.
+                _ => {
+                    for (k, i) in body.reduced.interfaces.iter().enumerate() {
+                        let p = body.placement * Point3::from(i.position);
+                        mesh.points.push([p.x, p.y, p.z]);
+                        mesh.cells.push((1, vec![first + k], CellRole::InterfaceNode));
+                        if k > 0 {
+                            mesh.cells.push((3, vec![first, first + k], CellRole::Element));
+                        }
+                    }
+                }
+            }
+            flexible.push(first);
+        }
+        let mut rigid = Vec::new();
+        for nodes in &b.rigid {
+            let first = mesh.points.len();
+            for (k, n) in nodes.iter().enumerate() {
+                let p = b.model.nodes[n.index()].position;
+                mesh.points.push([p.x, p.y, p.z]);
+                mesh.cells.push((1, vec![first + k], CellRole::InterfaceNode));
+                if k > 0 {
+                    mesh.cells.push((3, vec![first, first + k], CellRole::Element));
+                }
+            }
+            rigid.push(first);
+        }
+        // Every point in a cell: a point of the body's reduced mesh that no element uses (an
+        // interface node of a spider) gets a vertex cell, so ParaView draws and picks it.
+        let mut used = vec![false; mesh.points.len()];
+        for (_, cell, _) in &mesh.cells {
+            for &i in cell {
+                used[i] = true;
+            }
+        }
+        for (i, _) in used.iter().enumerate().filter(|(_, u)| !**u) {
+            mesh.cells.push((1, vec![i], CellRole::InterfaceNode));
+        }
+        let hot = vec![None; flexible.len()];
+        let stress = b
+            .bodies
+            .iter()
+            .any(|body| sys.superelement(body.id).is_some_and(|se| se.stress_shapes().is_some()));
+        let maxima = vec![None; b.bodies.len()];
+        Ok(Self {
+            mesh,
+            flexible,
+            stress,
+            rigid,
+            hot,
+            maxima,
+            tracked: Vec::new(),
+        })
+    }
+
+    /// Whether any body has stress shapes (then the frames carry stress fields).
+    pub fn has_stress(&self) -> bool {
+        self.stress
+    }
+
+    /// The kinematics of every flexible body at `state` (`mbs::System::body_kinematics`), with
+    /// the body states they were solved for (interface velocities and modal rates included, for
+    /// the mesh velocities).
+    fn kinematics(
+        &self,
+        t: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+    ) -> Result<Vec<(superelement::Kinematics, superelement::BodyState)>, BoxError> {
+        let mut out = Vec::with_capacity(b.bodies.len());
+        for body in &b.bodies {
+            let kin = sys
+                .body_kinematics(state, body.id)
+                .context(|| format!("body '{}': floating frame for the mesh at t = {t}", body.name))?
+                .ok_or_else(|| format!("internal error: body '{}' is not flexible in the system", body.name))?;
+            out.push(kin);
+        }
+        Ok(out)
+    }
+
+    /// Every body's stresses from its kinematics, updating the hot spots at time `t`.
+    fn stresses(
+        &mut self,
+        t: f64,
+        sys: &System,
+        b: &BuiltMechanism,
+        kins: &[(superelement::Kinematics, superelement::BodyState)],
+    ) -> Vec<Option<NodeStresses>> {
+        let mut out = Vec::with_capacity(kins.len());
+        for (k, (body, (kin, _))) in b.bodies.iter().zip(kins).enumerate() {
+            let Some(se) = sys.superelement(body.id) else {
+                out.push(None);
+                continue;
+            };
+            let st = se.stress_shapes().map(|s| s.node_stresses(&kin.q_jj, &kin.R_j));
+            if let Some(st) = &st {
+                if let Some((node, &vm)) = st.von_mises.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
+                    self.update_hot_spot(k, node, vm, t);
+                }
+            }
+            out.push(st);
+        }
+        out
+    }
+
+    /// Body `k`'s hot spot becomes (`node`, `vm`, `t`) when `vm` is above it.
+    fn update_hot_spot(&mut self, k: usize, node: usize, vm: f64, t: f64) {
+        if self.hot[k].is_none_or(|h| vm > h.von_mises) {
+            self.hot[k] = Some(HotSpot {
+                von_mises: vm,
+                node,
+                time: t,
+            });
+        }
+    }
+
+    /// Updates the hot spots at an output time without writing a frame: the largest von
+    /// Mises stress of each body over every node (`reduction::VonMisesMaximum::maxima`, the
+    /// same maximum as every node's, at a fraction of its cost), found for a batch of output
+    /// times at once: the state waits until a batch is full, a frame is written or the
+    /// summary is made.
+    pub fn track(&mut self, t: f64, sys: &System, state: &mbs::State, b: &BuiltMechanism) -> Result<(), BoxError> {
+        if !self.has_stress() {
+            return Ok(());
+        }
+        let kins = self.kinematics(t, sys, state, b)?;
+        let qs = b
+            .bodies
+            .iter()
+            .zip(&kins)
+            .map(|(body, (kin, _))| {
+                let shapes = sys.superelement(body.id).and_then(|se| se.stress_shapes());
+                shapes.map(|_| kin.q_jj.clone())
+            })
+            .collect();
+        self.tracked.push((t, qs));
+        if self.tracked.len() >= mbs::PendingRows::BATCH {
+            self.update_tracked(sys, b);
+        }
+        Ok(())
+    }
+
+    /// The hot spots of the output times waiting in [`Self::track`], in time order.
+    fn update_tracked(&mut self, sys: &System, b: &BuiltMechanism) {
+        let tracked = std::mem::take(&mut self.tracked);
+        if tracked.is_empty() {
+            return;
+        }
+        for (k, body) in b.bodies.iter().enumerate() {
+            let Some(shapes) = sys.superelement(body.id).and_then(|se| se.stress_shapes()) else {
+                continue;
+            };
+            let states: Vec<&[f64]> = tracked.iter().filter_map(|(_, qs)| qs[k].as_deref()).collect();
+            let search = self.maxima[k].get_or_insert_with(|| {
+                let every: Vec<usize> = (0..shapes.node_count()).collect();
+                reduction::VonMisesMaximum::new(shapes, &every)
+            });
+            let (found, _) = search.maxima(shapes, &states);
+            for ((t, _), maximum) in tracked.iter().zip(found) {
+                if let Some((node, vm)) = maximum {
+                    self.update_hot_spot(k, node, vm, *t);
+                }
+            }
+        }
+    }
+
+    /// Sends the deformed meshes at `state` to the observer as a frame of
+    /// [`Series::Mechanism`] at `t`, with the point fields `displacement` (from t = 0, m),
+    /// `rotation` (rotation vector from t = 0, rad), `velocity` (m/s) and `body` (the index of
+    /// the body the point belongs to: flexible bodies first, then rigid bodies, in study
+    /// order), and the stress fields when a body has stress shapes.
+    pub fn write(
+        &mut self,
+        obs: &mut dyn Observer,
+        t: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+    ) -> Result<(), BoxError> {
+        self.write_series(obs, Series::Mechanism, t, sys, state, b)
+    }
+
+    /// [`Self::write`] as a frame of `series` with key `t` (buckling modes: the mode number).
+    #[allow(clippy::too_many_arguments)]
+    pub fn write_series(
+        &mut self,
+        obs: &mut dyn Observer,
+        series: Series,
+        t: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+    ) -> Result<(), BoxError> {
+        let motions = sys.node_motions(state);
+        let n_points = self.mesh.points.len();
+        let mut u = vec![[0.0; 3]; n_points];
+        let mut rot = vec![[0.0; 3]; n_points];
+        let mut vel = vec![[0.0; 3]; n_points];
+        let mut body_of = vec![0.0; n_points];
+        let vec3 = |v: Vector3<f64>| [v.x, v.y, v.z];
+        let kins = self.kinematics(t, sys, state, b)?;
+        // The earlier output times first: of equal maxima, the hot spot keeps the first time.
+        self.update_tracked(sys, b);
+        let stresses = if self.has_stress() {
+            self.stresses(t, sys, b, &kins)
+        } else {
+            Vec::new()
+        };
+        let mut tensor = vec![[0.0; 6]; n_points];
+        let mut von_mises = vec![0.0; n_points];
+        let mut principal = vec![0.0; n_points];
+        // The first point of every body, flexible then rigid, and the end of the last.
+        let ends: Vec<usize> = self
+            .flexible
+            .iter()
+            .chain(&self.rigid)
+            .copied()
+            .skip(1)
+            .chain(std::iter::once(n_points))
+            .collect();
+        for (k, (body, &first)) in b.bodies.iter().zip(&self.flexible).enumerate() {
+            let (kin, bs) = &kins[k];
+            let recovered = sys
+                .superelement(body.id)
+                .and_then(|se| Some((se.recover_mesh(kin)?, se.recover_mesh_velocities(kin, bs)?)));
+            match recovered {
+                Some((ms, vs)) => {
+                    for (i, p) in ms.positions.iter().enumerate() {
+                        let x = &self.mesh.points[first + i];
+                        u[first + i] = [p.x - x[0], p.y - x[1], p.z - x[2]];
+                        let turned = ms.orientations[i] * body.placement.rotation.inverse();
+                        rot[first + i] = vec3(turned.scaled_axis());
+                        vel[first + i] = vec3(vs[i]);
+                    }
+                    // Stresses live on the mesh nodes, drawn only with the mesh shapes.
+                    if let Some(Some(st)) = stresses.get(k) {
+                        let n = ms.positions.len().min(st.tensor.len());
+                        tensor[first..first + n].copy_from_slice(&st.tensor[..n]);
+                        von_mises[first..first + n].copy_from_slice(&st.von_mises[..n]);
+                        principal[first..first + n].copy_from_slice(&st.principal[..n]);
+                    }
+                }
+                _ => {
+                    for (j, n) in body.nodes.iter().enumerate() {
+                        let m = &motions[n.index()];
+                        let x = &self.mesh.points[first + j];
+                        u[first + j] = [m.r.x - x[0], m.r.y - x[1], m.r.z - x[2]];
+                        rot[first + j] = vec3(m.R.scaled_axis());
+                        vel[first + j] = vec3(m.v);
+                    }
+                }
+            }
+            body_of[first..ends[k]].fill(k as f64);
+        }
+        for (j, (nodes, first)) in b.rigid.iter().zip(&self.rigid).enumerate() {
+            for (k, n) in nodes.iter().enumerate() {
+                let m = &motions[n.index()];
+                let x = &self.mesh.points[first + k];
+                u[first + k] = [m.r.x - x[0], m.r.y - x[1], m.r.z - x[2]];
+                rot[first + k] = vec3(m.R.scaled_axis());
+                vel[first + k] = vec3(m.v);
+            }
+            let index = b.bodies.len() + j;
+            body_of[*first..ends[index]].fill(index as f64);
+        }
+        let flat = |f: &[[f64; 3]]| -> Vec<f64> { f.iter().flatten().copied().collect() };
+        let (u, rot, vel) = (flat(&u), flat(&rot), flat(&vel));
+        let mut fields = vec![
+            PointField {
+                name: "displacement",
+                components: 3,
+                values: &u,
+            },
+            PointField {
+                name: "rotation",
+                components: 3,
+                values: &rot,
+            },
+            PointField {
+                name: "velocity",
+                components: 3,
+                values: &vel,
+            },
+            PointField {
+                name: "body",
+                components: 1,
+                values: &body_of,
+            },
+        ];
+        let tensor: Vec<f64> = tensor.iter().flatten().copied().collect();
+        if self.has_stress() {
+            fields.push(PointField {
+                name: "stress",
+                components: 6,
+                values: &tensor,
+            });
+            fields.push(PointField {
+                name: "von_mises",
+                components: 1,
+                values: &von_mises,
+            });
+            fields.push(PointField {
+                name: "max_principal",
+                components: 1,
+                values: &principal,
+            });
+        }
+        obs.frame(series, t, &self.mesh, &fields)
+    }
+
+    /// The hot spots as summary entries and report lines, `x` naming the time axis (the
+    /// output times still waiting in [`Self::track`] included).
+    pub fn hot_spot_summary(&mut self, sys: &System, b: &BuiltMechanism, x: &str) -> (serde_json::Value, Vec<String>) {
+        self.update_tracked(sys, b);
+        let mut entries = Vec::new();
+        let mut lines = Vec::new();
+        for (body, hot) in b.bodies.iter().zip(&self.hot) {
+            let Some(h) = hot else { continue };
+            let position = body.reduced.mesh.as_ref().map(|m| m.nodes[h.node]);
+            entries.push(json!({
+                "body": body.name,
+                "von_mises_Pa": h.von_mises,
+                "node": h.node,
+                "position": position,
+                x: h.time,
+            }));
+            lines.push(format!(
+                "hot spot of body '{}': von Mises {:.6e} Pa at FE node index {}{} at {x} = {:.6}",
+                body.name,
+                h.von_mises,
+                h.node,
+                position.map_or(String::new(), |p| format!(
+                    " ({:.4e}, {:.4e}, {:.4e}) m",
+                    p[0], p[1], p[2]
+                )),
+                h.time
+            ));
+        }
+        (serde_json::Value::Array(entries), lines)
+    }
+}

@@ -1,0 +1,130 @@
+//! Executes a validated [`Study`] analysis by analysis, every result to an [`Observer`] as
+//! soon as it is computed.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`runner`] | the [`Runner`]: the run loop, the summary, the mechanism built once, the start chain |
+//! | [`part`] | the analyses of parts: static, modal, reduce |
+//! | [`reduce`] | the cached reduction service: parts reduced through [`cache`], `flexmbs reduce` |
+//! | [`cache`] | reduced bodies cached by a hash of what produced them |
+//! | [`mechanism`] | the analyses of the mechanism: equilibrium, linearized, buckling |
+//! | [`dynamic`] | the dynamic analysis: time integration, rows and meshes at the output times |
+//! | [`selection`] | analyses picked by name, or all of them |
+//! | [`simulation`] | a dynamic analysis stepped by the caller |
+//! | [`sensors`] | sensor columns and the stream of samples |
+//! | [`mesh`] | the deformed meshes of the mechanism, stresses and hot spots |
+
+pub mod cache;
+pub mod dynamic;
+pub mod mechanism;
+pub mod mesh;
+pub mod options;
+pub mod outcome;
+pub mod part;
+pub mod reduce;
+pub mod runner;
+pub mod selection;
+pub mod sensors;
+pub mod simulation;
+
+pub use options::Options;
+pub use runner::Runner;
+pub use selection::Selection;
+pub use simulation::Simulation;
+
+use crate::error::BoxError;
+use crate::input::validate::{AnalysisSpec, Study};
+use crate::output::folder::ResultsFolder;
+use crate::output::observer::Observer;
+use crate::output::summary::Summary;
+use std::sync::Arc;
+
+/// Runs every analysis of `study` into a results folder (`options.out`, or beside the study
+/// file), with `observer` seeing every result too. Stops at the first analysis that fails,
+/// after writing the summary with the failure.
+pub fn run(study: &Study, options: &Options, observer: &mut dyn Observer) -> Result<Summary, BoxError> {
+    // Refused before the results folder is made.
+    if study.analyses.is_empty() {
+        return Err(nothing_to_run(study));
+    }
+    let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
+    let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
+    run_with(study, options, &mut (&mut folder, observer))
+}
+
+/// Runs analysis `index` of `study` alone into its results folder (the other analyses'
+/// files are left as they are), every result to `observer` too. When its `start` names
+/// another analysis, that one (and the chain of `start`s behind it) runs first and writes
+/// its results too ([`Runner::run_one`]).
+pub fn run_only(
+    study: &Study,
+    options: &Options,
+    index: usize,
+    observer: &mut dyn Observer,
+) -> Result<Summary, BoxError> {
+    let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
+    let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
+    let obs: &mut dyn Observer = &mut (&mut folder, observer);
+    let mut runner = Runner::new(study, options);
+    obs.summary(&runner.summary)?;
+    runner.run_one(index, obs)?;
+    runner.finish(obs)
+}
+
+/// Runs every analysis of `study`, every result to `obs` only (no results folder unless
+/// `obs` writes one); the cache of reduced bodies is used as in [`run`].
+pub fn run_with(study: &Study, options: &Options, obs: &mut dyn Observer) -> Result<Summary, BoxError> {
+    let n = study.analyses.len();
+    if n == 0 {
+        return Err(nothing_to_run(study));
+    }
+    let mut runner = Runner::new(study, options);
+    obs.summary(&runner.summary)?;
+    for i in 0..n {
+        runner.run_one(i, obs)?;
+    }
+    runner.finish(obs)
+}
+
+/// Runs the analyses `selection` picks: every one ([`run`]) or one ([`run_only`]), into the
+/// results folder, every result to `observer` too.
+pub fn run_selected(
+    study: &Study,
+    options: &Options,
+    selection: Selection,
+    observer: &mut dyn Observer,
+) -> Result<Summary, BoxError> {
+    match selection {
+        Selection::All => run(study, options, observer),
+        Selection::One(i) => run_only(study, options, i, observer),
+    }
+}
+
+/// The error for a study without analyses.
+pub fn nothing_to_run(study: &Study) -> BoxError {
+    format!(
+        "{}: the study has no [[analyses]], so there is nothing to run; add one \
+         (`type = \"static\"`, `\"modal\"`, `\"reduce\"`, `\"equilibrium\"`, `\"dynamic\"`, \
+         `\"linearized\"` or `\"buckling\"`, docs/study-file.md)",
+        study.source.path.display()
+    )
+    .into()
+}
+
+impl Simulation {
+    /// Builds the mechanism of `study` (bodies reduced through the cache of `options`) and
+    /// starts its dynamic analysis called `analysis` (from the final state of the analysis
+    /// named in its `start`, which the runner runs first, without output).
+    pub fn new(study: &Study, analysis: &str, options: &Options) -> Result<Self, BoxError> {
+        let i = study.analysis(analysis)?;
+        let a = &study.analyses[i];
+        let AnalysisSpec::Mbs(spec) = &a.spec else {
+            return Err(format!("analysis '{analysis}' is not an analysis of the mechanism").into());
+        };
+        let mut runner = Runner::new(study, options);
+        let system = Arc::new(runner.mechanism(&mut ())?.system(study)?);
+        let start = runner.start_state(i)?;
+        let first = simulation::dynamic_start(&system, start.as_ref());
+        Self::with_start(study, system, runner.mechanism(&mut ())?, spec, first)
+    }
+}
