@@ -2,7 +2,7 @@
 //! [`crate::System`], [`SolveError`] when an analysis stops, and [`Incomplete`], which carries
 //! a `SolveError` together with everything computed before it.
 
-use crate::model::{BodyId, JointId, NodeId};
+use crate::ids::{BodyId, JointId, NodeId};
 use superelement::SuperelementError;
 use thiserror::Error;
 

@@ -182,6 +182,7 @@ pub mod coordinates;
 pub mod dense_lu;
 pub mod dynamic_solver;
 pub mod error;
+pub mod ids;
 pub mod initial;
 pub mod joint_forces;
 pub mod linearized;
@@ -209,16 +210,15 @@ pub use dynamic_solver::{
     PI_PROPORTIONAL, PREDICTOR_WINDOW,
 };
 pub use error::{At, Entity, Incomplete, ModelError, SolveError};
-pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
 pub use linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,
     NodeEnergy,
 };
 pub use merge::{weld_points, WeldError};
 pub use model::{
-    Body, BodyId, BodyLoad, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind,
-    JointSpring, Load, LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor,
-    SensorKind, Spring, Support, TranslationSupport,
+    Body, BodyId, BodyLoad, Driver, DriverTarget, Effort, FlexibleBody, InitialCondition, Joint, JointActuator,
+    JointId, JointKind, JointLimit, JointSpring, Load, LoadAxes, LoadKind, Model, Node, NodeId, Pid, PointMass,
+    RigidBody, RotationSupport, Sensor, SensorKind, Spring, Support, TranslationSupport,
 };
 pub use momentum::{ExternalAction, MomentumProjection};
 pub use node::NodeMotion;

@@ -10,7 +10,7 @@
 //! directions and loads (dead and follower) are inertial vectors there; rigid-body mass data
 //! are in the axes of their reference node.
 
-use crate::joint_forces::{JointActuator, JointLimit};
+pub use crate::ids::{BodyId, JointId, NodeId};
 use crate::time_function::TimeFunction;
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
 use reduction::ReducedBody;
@@ -30,37 +30,6 @@ mod shared_body {
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Arc<ReducedBody>, D::Error> {
         ReducedBody::deserialize(d).map(Arc::new)
-    }
-}
-
-/// Index of a node in [`Model::nodes`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(transparent)]
-pub struct NodeId(pub u32);
-
-/// Index of a body in [`Model::bodies`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(transparent)]
-pub struct BodyId(pub u32);
-
-/// Index of a joint in [`Model::joints`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(transparent)]
-pub struct JointId(pub u32);
-
-impl NodeId {
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
-impl BodyId {
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
-impl JointId {
-    pub fn index(self) -> usize {
-        self.0 as usize
     }
 }
 
@@ -614,4 +583,51 @@ impl Model {
             kind,
         });
     }
+}
+
+/// A stop on a joint coordinate: a stiff unilateral spring-damper outside `[lower, upper]`
+/// ([`crate::joint_forces`]). Units: m or rad for the bounds, N/m or N m/rad for `stiffness`, N s/m or
+/// N m s/rad for `damping`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointLimit {
+    pub name: String,
+    pub joint: JointId,
+    pub coordinate: usize,
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+    pub stiffness: f64,
+    pub damping: f64,
+}
+
+/// A PID law on a measured joint coordinate ([`crate::joint_forces`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pid {
+    /// The measured coordinate $y$ (often the actuated one).
+    pub joint: JointId,
+    pub coordinate: usize,
+    /// $r(t)$, in the measured coordinate's unit.
+    pub setpoint: TimeFunction,
+    pub kp: f64,
+    pub ki: f64,
+    pub kd: f64,
+    /// Saturation $|u| \le u_{max}$ (`None`: none).
+    pub max_effort: Option<f64>,
+}
+
+/// What gives an actuator's effort.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Effort {
+    /// $u = f(t)$ (N or N m).
+    Time(TimeFunction),
+    /// A PID law.
+    Pid(Pid),
+}
+
+/// A force (on a length) or torque (on an angle) acting on a joint coordinate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointActuator {
+    pub name: String,
+    pub joint: JointId,
+    pub coordinate: usize,
+    pub effort: Effort,
 }
