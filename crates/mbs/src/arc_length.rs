@@ -29,8 +29,9 @@
 #![allow(non_snake_case)]
 
 use crate::error::{At, Incomplete, SolveError};
+use crate::state::State;
 use crate::static_solver::{newton_static, solve_static, LoadStep, StaticSettings, StaticSolution};
-use crate::system::{State, System, Workspace};
+use crate::system::{System, Workspace};
 
 /// Settings of [`solve_arc_length`].
 #[derive(Clone, Debug, PartialEq)]

@@ -187,7 +187,8 @@
 use crate::error::{At, Incomplete, SolveError};
 use crate::momentum::MomentumProjection;
 use crate::sensors::{PendingRows, SensorRecord};
-use crate::system::{State, System, Workspace};
+use crate::state::State;
+use crate::system::{System, Workspace};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3, Vector6};
 use std::sync::Arc;
 use superelement::so3;

@@ -26,10 +26,12 @@
 //! bodies and joints) the rigid field $\mathbf v(\mathbf x) = \mathbf v_p + \boldsymbol\omega\times(\mathbf x -
 //! \mathbf p)$; a body held by the ground is refused (its motion is its joints' rates).
 
+use crate::coordinates::unknown;
 use crate::coordinates::Slot;
 use crate::error::{Entity, ModelError};
 use crate::model::{Body, DriverTarget, InitialCondition, Model, NodeId};
-use crate::system::{unknown, State, System};
+use crate::state::State;
+use crate::system::System;
 use crate::time_function::CompiledFunction;
 use crate::topology::{RootRotation, Topology};
 use std::collections::VecDeque;
@@ -337,7 +339,9 @@ impl System {
                     pr[ds.prescribed] = 0.0;
                 }
                 let mut m = vec![crate::coordinates::Motion::ground(); self.model.nodes.len()];
-                self.topo.map.motions_into(&crate::system::values(&s, &pr, &pa), &mut m);
+                self.topo
+                    .map
+                    .motions_into(&crate::coordinates::values(&s, &pr, &pa), &mut m);
                 m.iter().map(crate::NodeMotion::from).collect::<Vec<_>>()
             };
             let (before, after) = (motions(state, true), motions(state, false));

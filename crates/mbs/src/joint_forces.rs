@@ -36,16 +36,9 @@ use crate::coordinates::{Slot, Values};
 use crate::error::{Entity, ModelError};
 use crate::ids::JointId;
 use crate::model::{Effort, Model, SensorKind};
+use crate::state::Control;
 use crate::time_function::CompiledFunction;
 use crate::topology::Topology;
-
-/// The state of one actuator's controller: the base $(t_n, z_n, e_n)$ of its integral.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct Control {
-    pub t: f64,
-    pub z: f64,
-    pub e: f64,
-}
 
 #[derive(Clone, Debug)]
 struct Limit {
@@ -369,7 +362,7 @@ impl JointForces {
     ) -> f64 {
         let map = &topo.map;
         let value = |s: usize| {
-            let (v, d, _) = crate::system::scalar_values(map, x, s);
+            let (v, d, _) = crate::coordinates::scalar_values(map, x, s);
             (v, d)
         };
         let mut sum = 0.0;
@@ -416,7 +409,7 @@ impl JointForces {
         let map = &topo.map;
         for l in &self.limits {
             let Some(slot) = l.slot else { continue };
-            let (xv, xd, _) = crate::system::scalar_values(map, x, l.scalar);
+            let (xv, xd, _) = crate::coordinates::scalar_values(map, x, l.scalar);
             if Self::limit_force(l, xv, xd).is_some() {
                 K[slot] += l.k;
                 C[slot] += l.c;
@@ -437,7 +430,7 @@ impl JointForces {
                 slot: Some(slot),
             } = &a.law
             {
-                let (y, yd, _) = crate::system::scalar_values(map, x, *scalar);
+                let (y, yd, _) = crate::coordinates::scalar_values(map, x, *scalar);
                 let p = Self::pid(setpoint, [*kp, *ki, *kd, *max], y, yd, t, c);
                 // F = -u on the actuated row.
                 K[*slot] -= p.du_dy;
@@ -487,9 +480,9 @@ impl crate::System {
         let mut s = state.clone();
         let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
         self.apply_drivers(&mut s, &mut pr, &mut pa);
-        let x = crate::system::values(&s, &pr, &pa);
+        let x = crate::coordinates::values(&s, &pr, &pa);
         let value = |sc: usize| {
-            let (v, d, _) = crate::system::scalar_values(map, &x, sc);
+            let (v, d, _) = crate::coordinates::scalar_values(map, &x, sc);
             (v, d)
         };
         self.joint_forces.efforts(&value, s.time, &state.controls)

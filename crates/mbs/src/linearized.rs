@@ -24,7 +24,8 @@
 
 use crate::error::{At, SolveError};
 use crate::model::Body;
-use crate::system::{ElementKind, Matrices, State, System, Workspace};
+use crate::state::State;
+use crate::system::{ElementKind, Matrices, System, Workspace};
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 use serde::{Deserialize, Serialize};

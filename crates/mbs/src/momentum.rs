@@ -62,10 +62,12 @@
 
 #![allow(non_snake_case)]
 
+use crate::coordinates::unknown;
 use crate::coordinates::Slot;
 use crate::error::SolveError;
 use crate::model::{RotationSupport, TranslationSupport};
-use crate::system::{unknown, State, System, Workspace};
+use crate::state::State;
+use crate::system::{System, Workspace};
 use crate::topology::RootRotation;
 use faer::Mat;
 use nalgebra::{Matrix6, Vector3, Vector6};

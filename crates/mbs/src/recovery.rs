@@ -6,7 +6,8 @@
 
 use crate::error::SolveError;
 use crate::model::BodyId;
-use crate::system::{State, System};
+use crate::state::State;
+use crate::system::System;
 use nalgebra::Vector3;
 use superelement::{BodyState, Kinematics};
 

@@ -15,7 +15,8 @@
 
 use crate::dynamic_solver::{AdaptiveSettings, AdaptiveStep, DynamicSettings, Integrator, StepReport, Trajectory};
 use crate::error::{Incomplete, SolveError};
-use crate::system::{State, System};
+use crate::state::State;
+use crate::system::System;
 
 /// One interval of the fixed step that needed smaller steps.
 #[derive(Clone, Debug, PartialEq)]

@@ -10,10 +10,12 @@
 
 #![allow(non_snake_case)]
 
+use crate::coordinates::unknown;
 use crate::coordinates::Slot;
 use crate::error::SolveError;
 use crate::model::{BodyId, SensorKind};
-use crate::system::{unknown, ElementKind, State, System, Workspace};
+use crate::state::State;
+use crate::system::{ElementKind, System, Workspace};
 use crate::topology::RootRotation;
 use crate::NodeMotion;
 use nalgebra::Vector3;

@@ -11,7 +11,8 @@
 //! eigensolver (faer's is not scale-invariant).
 
 use crate::error::SolveError;
-use crate::system::{State, System};
+use crate::state::State;
+use crate::system::System;
 use faer::{Mat, Side};
 
 /// The inertia of the tangent stiffness at a static state.

@@ -17,7 +17,8 @@
 
 use crate::error::{At, Incomplete, SolveError};
 use crate::sensors::SensorRecord;
-use crate::system::{State, System};
+use crate::state::State;
+use crate::system::System;
 
 /// Settings of [`solve_static`].
 #[derive(Clone, Debug, PartialEq)]

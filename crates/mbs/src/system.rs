@@ -27,13 +27,14 @@ use crate::body::{
     load_element, point_mass_element, rigid_element, spring_element, ElementOutput, FlexBuffer, FlexibleElement,
     LoadElement, RigidElement, SpringElement,
 };
-use crate::coordinates::{Motion, MotionCache, NodeDerivatives, Slot, Values};
+use crate::coordinates::{scalar_values, unknown, values, Motion, MotionCache, NodeDerivatives, Slot};
 use crate::dense_lu::{self, SMALL_LU_MAX};
 use crate::error::{Entity, ModelError, SolveError};
 use crate::initial::InitialPlan;
-use crate::joint_forces::{Control, JointForces};
+use crate::joint_forces::JointForces;
 use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId, SensorKind};
 use crate::node::NodeMotion;
+use crate::state::State;
 use crate::time_function::CompiledFunction;
 use crate::topology::{self, RootRotation, Topology};
 use crate::user_force::{user_force_element, UserBuffer, UserForce};
@@ -102,79 +103,6 @@ impl Pattern {
 
     pub(crate) fn nnz(&self) -> usize {
         self.symbolic.row_idx().len()
-    }
-}
-
-/// The coordinates, velocities and accelerations of a system at one instant, and each
-/// flexible body's last floating frame (the warm start of (4.4)).
-#[derive(Debug, PartialEq)]
-pub struct State {
-    pub(crate) time: f64,
-    /// Every scalar coordinate (unknown and prescribed).
-    pub(crate) scalars: Vec<f64>,
-    pub(crate) rotations: Vec<UnitQuaternion<f64>>,
-    /// $\dot{\mathbf q}$ (unknowns).
-    pub(crate) velocity: Vec<f64>,
-    /// $\ddot{\mathbf q}$ (unknowns).
-    pub(crate) acceleration: Vec<f64>,
-    /// Per flexible element.
-    pub(crate) frames: Vec<Frame>,
-    /// Per actuator: its controller's state ([`crate::joint_forces`]).
-    pub(crate) controls: Vec<Control>,
-}
-
-/// `clone_from` reuses the buffers (the derived one would allocate a fresh copy): the
-/// integrator copies states every step.
-impl Clone for State {
-    fn clone(&self) -> Self {
-        Self {
-            time: self.time,
-            scalars: self.scalars.clone(),
-            rotations: self.rotations.clone(),
-            velocity: self.velocity.clone(),
-            acceleration: self.acceleration.clone(),
-            frames: self.frames.clone(),
-            controls: self.controls.clone(),
-        }
-    }
-
-    fn clone_from(&mut self, other: &Self) {
-        self.time = other.time;
-        self.scalars.clone_from(&other.scalars);
-        self.rotations.clone_from(&other.rotations);
-        self.velocity.clone_from(&other.velocity);
-        self.acceleration.clone_from(&other.acceleration);
-        self.frames.clone_from(&other.frames);
-        self.controls.clone_from(&other.controls);
-    }
-}
-
-impl State {
-    pub fn time(&self) -> f64 {
-        self.time
-    }
-    /// Every scalar coordinate (joint coordinates, modal coordinates; unknown and
-    /// prescribed) and the node rotations not carried by joints: the configuration.
-    pub fn coordinates(&self) -> (&[f64], &[UnitQuaternion<f64>]) {
-        (&self.scalars, &self.rotations)
-    }
-    /// $\dot{\mathbf q}$ in the order of [`System::dof_labels`].
-    pub fn velocity(&self) -> &[f64] {
-        &self.velocity
-    }
-    /// $\ddot{\mathbf q}$.
-    pub fn acceleration(&self) -> &[f64] {
-        &self.acceleration
-    }
-    pub fn velocity_mut(&mut self) -> &mut [f64] {
-        &mut self.velocity
-    }
-    pub fn acceleration_mut(&mut self) -> &mut [f64] {
-        &mut self.acceleration
-    }
-    /// Sets the time (prescribed coordinates follow at the next evaluation).
-    pub fn set_time(&mut self, t: f64) {
-        self.time = t;
     }
 }
 
@@ -1941,33 +1869,6 @@ impl System {
                 }
             }
         }
-    }
-}
-
-/// The unknown index of a slot known to be unknown.
-pub(crate) fn unknown(slot: Slot) -> usize {
-    match slot {
-        Slot::Unknown(d) => d,
-        Slot::Prescribed(_) => unreachable!("modal and initial-condition coordinates are unknowns"),
-    }
-}
-
-pub(crate) fn values<'a>(s: &'a State, pr: &'a [f64], pa: &'a [f64]) -> Values<'a> {
-    Values {
-        scalars: &s.scalars,
-        rotations: &s.rotations,
-        vel: &s.velocity,
-        acc: &s.acceleration,
-        presc_rate: pr,
-        presc_acc: pa,
-    }
-}
-
-pub(crate) fn scalar_values(map: &crate::coordinates::CoordinateMap, x: &Values, s: usize) -> (f64, f64, f64) {
-    let v = x.scalars[s];
-    match map.scalars[s].slot {
-        Slot::Unknown(d) => (v, x.vel[d], x.acc[d]),
-        Slot::Prescribed(p) => (v, x.presc_rate[p], x.presc_acc[p]),
     }
 }
 
