@@ -176,62 +176,47 @@
 
 #![allow(non_snake_case)]
 
-pub mod arc_length;
-pub mod body;
-pub mod coordinates;
-pub mod dense_lu;
-pub mod dynamic_solver;
+pub mod assembly;
 pub mod error;
 pub mod ids;
-pub mod initial;
-pub mod joint_forces;
-pub mod linearized;
-pub mod merge;
 pub mod model;
-pub mod momentum;
 pub mod node;
-pub mod planar;
-pub mod recovery;
-pub mod retry;
-pub mod sensors;
-pub mod stability;
+pub mod solvers;
 pub mod state;
-pub mod static_solver;
-pub mod streaming;
-pub mod system;
-pub mod time_function;
-pub mod topology;
-pub mod units;
-pub mod user_force;
 
-pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
-pub use dynamic_solver::{
+/// The paths of the modules before they were grouped, kept for the callers that name them.
+pub use model::{merge, user_force};
+pub use solvers::dynamic as dynamic_solver;
+
+pub use assembly::system::momentum::{ExternalAction, MomentumProjection};
+pub use assembly::system::sensors::{Energies, PendingRows, SensorRecord};
+pub use assembly::system::{LinearSolver, Matrices, NodeKinematics, System, DENSE_MAX};
+pub use error::{At, Entity, Incomplete, ModelError, SolveError};
+pub use ids::{BodyId, JointId, NodeId};
+pub use model::merge::{weld_points, WeldError};
+pub use model::time_function::{Interpolation, TimeFunction};
+pub use model::units::CoordinateQuantity;
+pub use model::user_force::{FdSteps, UserForce, Wrench};
+pub use model::{
+    Body, BodyLoad, Driver, DriverTarget, Effort, FlexibleBody, InitialCondition, Joint, JointActuator, JointKind,
+    JointLimit, JointSpring, Load, LoadAxes, LoadKind, Model, Node, Pid, PointMass, RigidBody, RotationSupport, Sensor,
+    SensorKind, Spring, Support, TranslationSupport,
+};
+pub use node::NodeMotion;
+pub use solvers::arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
+pub use solvers::dynamic::retry::{
+    solve_dynamic_retrying, step_adaptive_to, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure,
+};
+pub use solvers::dynamic::streaming::{Interrupted, StepDone, StepTotals, Stepping};
+pub use solvers::dynamic::{
     fixed_steps, solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters,
     DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE, PI_INTEGRAL,
     PI_PROPORTIONAL, PREDICTOR_WINDOW,
 };
-pub use error::{At, Entity, Incomplete, ModelError, SolveError};
-pub use linearized::{
+pub use solvers::linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,
     NodeEnergy,
 };
-pub use merge::{weld_points, WeldError};
-pub use model::{
-    Body, BodyId, BodyLoad, Driver, DriverTarget, Effort, FlexibleBody, InitialCondition, Joint, JointActuator,
-    JointId, JointKind, JointLimit, JointSpring, Load, LoadAxes, LoadKind, Model, Node, NodeId, Pid, PointMass,
-    RigidBody, RotationSupport, Sensor, SensorKind, Spring, Support, TranslationSupport,
-};
-pub use momentum::{ExternalAction, MomentumProjection};
-pub use node::NodeMotion;
-pub use retry::{
-    solve_dynamic_retrying, step_adaptive_to, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure,
-};
-pub use sensors::{Energies, PendingRows, SensorRecord};
-pub use stability::{stability, Stability};
+pub use solvers::stability::{stability, Stability};
+pub use solvers::static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
 pub use state::State;
-pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
-pub use streaming::{Interrupted, StepDone, StepTotals, Stepping};
-pub use system::{LinearSolver, Matrices, NodeKinematics, System, DENSE_MAX};
-pub use time_function::{Interpolation, TimeFunction};
-pub use units::CoordinateQuantity;
-pub use user_force::{FdSteps, UserForce, Wrench};

@@ -20,7 +20,7 @@ pub struct State {
     pub(crate) acceleration: Vec<f64>,
     /// Per flexible element.
     pub(crate) frames: Vec<Frame>,
-    /// Per actuator: its controller's state ([`crate::joint_forces`]).
+    /// Per actuator: its controller's state ([`crate::assembly::joint_forces`]).
     pub(crate) controls: Vec<Control>,
 }
 

@@ -32,13 +32,13 @@
 
 #![allow(non_snake_case)]
 
-use crate::coordinates::{Slot, Values};
+use crate::assembly::coordinates::{Slot, Values};
+use crate::assembly::topology::Topology;
 use crate::error::{Entity, ModelError};
 use crate::ids::JointId;
+use crate::model::time_function::CompiledFunction;
 use crate::model::{Effort, Model, SensorKind};
 use crate::state::Control;
-use crate::time_function::CompiledFunction;
-use crate::topology::Topology;
 
 #[derive(Clone, Debug)]
 struct Limit {
@@ -362,7 +362,7 @@ impl JointForces {
     ) -> f64 {
         let map = &topo.map;
         let value = |s: usize| {
-            let (v, d, _) = crate::coordinates::scalar_values(map, x, s);
+            let (v, d, _) = crate::assembly::coordinates::scalar_values(map, x, s);
             (v, d)
         };
         let mut sum = 0.0;
@@ -409,7 +409,7 @@ impl JointForces {
         let map = &topo.map;
         for l in &self.limits {
             let Some(slot) = l.slot else { continue };
-            let (xv, xd, _) = crate::coordinates::scalar_values(map, x, l.scalar);
+            let (xv, xd, _) = crate::assembly::coordinates::scalar_values(map, x, l.scalar);
             if Self::limit_force(l, xv, xd).is_some() {
                 K[slot] += l.k;
                 C[slot] += l.c;
@@ -430,7 +430,7 @@ impl JointForces {
                 slot: Some(slot),
             } = &a.law
             {
-                let (y, yd, _) = crate::coordinates::scalar_values(map, x, *scalar);
+                let (y, yd, _) = crate::assembly::coordinates::scalar_values(map, x, *scalar);
                 let p = Self::pid(setpoint, [*kp, *ki, *kd, *max], y, yd, t, c);
                 // F = -u on the actuated row.
                 K[*slot] -= p.du_dy;
@@ -470,21 +470,5 @@ impl JointForces {
             }
             c.t = t;
         }
-    }
-}
-
-impl crate::System {
-    /// The effort $u$ of every actuator at `state` (N on a length, N m on an angle).
-    pub fn actuator_efforts(&self, state: &crate::State) -> Vec<f64> {
-        let map = &self.topo.map;
-        let mut s = state.clone();
-        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
-        self.apply_drivers(&mut s, &mut pr, &mut pa);
-        let x = crate::coordinates::values(&s, &pr, &pa);
-        let value = |sc: usize| {
-            let (v, d, _) = crate::coordinates::scalar_values(map, &x, sc);
-            (v, d)
-        };
-        self.joint_forces.efforts(&value, s.time, &state.controls)
     }
 }

@@ -124,7 +124,7 @@ pub(crate) struct FlexibleElement {
     pub size: f64,
     /// Loads at the body's load points: the load at unit factor (dead: inertial; follower:
     /// body axes) and its time function.
-    pub loads: Vec<(PointLoad, crate::time_function::CompiledFunction)>,
+    pub loads: Vec<(PointLoad, crate::model::time_function::CompiledFunction)>,
 }
 
 impl FlexibleElement {
@@ -427,7 +427,7 @@ pub(crate) struct LoadElement {
     pub follower: bool,
     /// Dead: the inertial value; follower: the value in node axes.
     pub value: Vector3<f64>,
-    pub time: crate::time_function::CompiledFunction,
+    pub time: crate::model::time_function::CompiledFunction,
 }
 
 /// Load $\mathbf f = x(t)\,\mathbf f_0$ (dead) or $x(t)\,\mathbf R\mathbf f_0^{node}$ (follower); residual $-\lambda\mathbf f$.

@@ -28,10 +28,10 @@
 
 #![allow(non_snake_case)]
 
+use crate::assembly::system::{System, Workspace};
 use crate::error::{At, Incomplete, SolveError};
+use crate::solvers::static_solver::{newton_static, solve_static, LoadStep, StaticSettings, StaticSolution};
 use crate::state::State;
-use crate::static_solver::{newton_static, solve_static, LoadStep, StaticSettings, StaticSolution};
-use crate::system::{System, Workspace};
 
 /// Settings of [`solve_arc_length`].
 #[derive(Clone, Debug, PartialEq)]

@@ -176,7 +176,7 @@
 //! $\mathbf H$ involves the rotations), so the scheme alone makes their rates vanish at each
 //! $t_{n+1}$ but conserves $\mathbf L$, $\mathbf H$ and the energy to its order, 2. On a free, unloaded
 //! model ([`System::rigid_invariance`]) the step therefore ends with the momentum projection of
-//! [`crate::momentum`] (Hairer, Lubich & Wanner, §IV.4; `DynamicSettings::momentum`): the
+//! [`crate::assembly::system::momentum`] (Hairer, Lubich & Wanner, §IV.4; `DynamicSettings::momentum`): the
 //! velocities get the $\hat{\mathbf M}$-orthogonal rigid correction that restores $\mathbf L$ and
 //! $\mathbf H$ of the start, so both are constant to round-off, and the energy still drifts at
 //! order 2 (validation problem C4: `tests/unit/free_body.rs`). The correction is $O(h^3)$ per step and
@@ -184,11 +184,14 @@
 
 #![allow(non_snake_case)]
 
+pub mod retry;
+pub mod streaming;
+
+use crate::assembly::system::momentum::MomentumProjection;
+use crate::assembly::system::sensors::{PendingRows, SensorRecord};
+use crate::assembly::system::{System, Workspace};
 use crate::error::{At, Incomplete, SolveError};
-use crate::momentum::MomentumProjection;
-use crate::sensors::{PendingRows, SensorRecord};
 use crate::state::State;
-use crate::system::{System, Workspace};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3, Vector6};
 use std::sync::Arc;
 use superelement::so3;
@@ -246,7 +249,7 @@ pub struct DynamicSettings {
     pub max_iterations: usize,
     /// Record sensors every this many steps (and at the start and the end).
     pub output_every: usize,
-    /// Momentum projection after each step ([`crate::momentum`]): `Auto` (the default) projects
+    /// Momentum projection after each step ([`crate::assembly::system::momentum`]): `Auto` (the default) projects
     /// when the model is free and unloaded ([`System::rigid_invariance`]).
     pub momentum: MomentumProjection,
     /// Full Newton (the default: tangents and a factorisation at every correction) or modified
@@ -355,7 +358,7 @@ pub struct StepReport {
     /// correction with full Newton, the refreshes with modified Newton.
     pub jacobians: usize,
     /// With the momentum projection: the defect $\mathbf J_0 - \mathbf J$ = $[\Delta\mathbf L;\ \Delta\mathbf H]$
-    /// it corrected ($O(h^3)$, [`crate::momentum`]).
+    /// it corrected ($O(h^3)$, [`crate::assembly::system::momentum`]).
     pub momentum_defect: Option<[f64; 6]>,
 }
 
@@ -599,15 +602,15 @@ fn corotated_nodes(system: &System) -> Vec<CoRotated> {
         .iter()
         .flatten()
         .filter_map(|rc| {
-            let crate::topology::RootRotation::Free(rot) = rc.rotation else {
+            let crate::assembly::topology::RootRotation::Free(rot) = rc.rotation else {
                 return None;
             };
             let mut dofs = [0; 3];
             let mut free = true;
             for (k, (sc, _)) in rc.translation.iter().enumerate() {
                 match map.scalars[*sc].slot {
-                    crate::coordinates::Slot::Unknown(d) => dofs[k] = d,
-                    crate::coordinates::Slot::Prescribed(_) => free = false,
+                    crate::assembly::coordinates::Slot::Unknown(d) => dofs[k] = d,
+                    crate::assembly::coordinates::Slot::Prescribed(_) => free = false,
                 }
             }
             let B = Matrix3::from_columns(&[rc.translation[0].1, rc.translation[1].1, rc.translation[2].1]);
@@ -673,7 +676,7 @@ struct PlaneRotated {
 
 /// Every node of `system` held in a plane and turning about its normal ([`PlaneRotated`]).
 fn plane_rotated_nodes(system: &System) -> Vec<PlaneRotated> {
-    use crate::coordinates::Slot;
+    use crate::assembly::coordinates::Slot;
     let map = &system.topo.map;
     system
         .topo
@@ -681,7 +684,7 @@ fn plane_rotated_nodes(system: &System) -> Vec<PlaneRotated> {
         .iter()
         .flatten()
         .filter_map(|rc| {
-            let crate::topology::RootRotation::Axes(axes) = &rc.rotation else {
+            let crate::assembly::topology::RootRotation::Axes(axes) = &rc.rotation else {
                 return None;
             };
             let (angle, a) = axes[2];
@@ -904,7 +907,7 @@ impl<'a> Integrator<'a> {
         &self.state
     }
 
-    /// Whether each step ends with the momentum projection ([`crate::momentum`]).
+    /// Whether each step ends with the momentum projection ([`crate::assembly::system::momentum`]).
     pub fn projects_momentum(&self) -> bool {
         self.J0.is_some()
     }
@@ -1425,7 +1428,7 @@ pub fn solve_dynamic_adaptive(
     let mut pending = PendingRows::default();
     while end - integ.state().time > 1e-12 * end.abs().max(1.0) {
         // Land on the end time: shorten the step that would pass it (or leave a sliver).
-        match crate::retry::step_adaptive_to(&mut integ, end, adaptive) {
+        match crate::solvers::dynamic::retry::step_adaptive_to(&mut integ, end, adaptive) {
             Ok(s) => {
                 traj.iterations.push(s.report.residuals.len() - 1);
                 traj.jacobians.push(s.report.jacobians);
@@ -1609,7 +1612,7 @@ mod tests {
         // normal component stays zero; both directions, and both orientations of the pair.
         // The two are different sums of the same products: round-off, 1e-14.
         let a = Vector3::new(0.2, -0.3, 0.9).normalize();
-        let (b1, b2) = crate::topology::perpendicular_pair(&a);
+        let (b1, b2) = crate::assembly::topology::perpendicular_pair(&a);
         let (theta, theta_f) = (0.7, -0.25);
         let R = [UnitQuaternion::from_scaled_axis(a * theta)];
         let Rf = [UnitQuaternion::from_scaled_axis(a * theta_f)];

@@ -9,7 +9,7 @@
 //! Their derivatives $\hat{\mathbf M} =
 //! \partial\mathbf F/\partial\ddot{\mathbf q}$, $\hat{\mathbf C} = \partial\mathbf F/\partial\dot{\mathbf q}$,
 //! $\hat{\mathbf K} = \partial\mathbf F/\partial\mathbf q$ are assembled into one sparse pattern
-//! ([`crate::coordinates`] gives the formulas).
+//! ([`crate::assembly::coordinates`] gives the formulas).
 //!
 //! Style R9: the pattern, the element-to-slot maps and the symbolic LU are built once in
 //! [`System::new`]; each Newton iteration refills values only (`evaluate_into`). Style R8: the
@@ -23,21 +23,26 @@
 
 #![allow(non_snake_case)]
 
-use crate::body::{
+mod initial_state;
+pub mod momentum;
+pub mod recovery;
+pub mod sensors;
+
+use crate::assembly::body::{
     load_element, point_mass_element, rigid_element, spring_element, ElementOutput, FlexBuffer, FlexibleElement,
     LoadElement, RigidElement, SpringElement,
 };
-use crate::coordinates::{scalar_values, unknown, values, Motion, MotionCache, NodeDerivatives, Slot};
-use crate::dense_lu::{self, SMALL_LU_MAX};
+use crate::assembly::coordinates::{scalar_values, unknown, values, Motion, MotionCache, NodeDerivatives, Slot};
+use crate::assembly::dense_lu::{self, SMALL_LU_MAX};
+use crate::assembly::initial::InitialPlan;
+use crate::assembly::joint_forces::JointForces;
+use crate::assembly::topology::{self, RootRotation, Topology};
 use crate::error::{Entity, ModelError, SolveError};
-use crate::initial::InitialPlan;
-use crate::joint_forces::JointForces;
+use crate::model::time_function::CompiledFunction;
+use crate::model::user_force::{user_force_element, UserBuffer, UserForce};
 use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId, SensorKind};
 use crate::node::NodeMotion;
 use crate::state::State;
-use crate::time_function::CompiledFunction;
-use crate::topology::{self, RootRotation, Topology};
-use crate::user_force::{user_force_element, UserBuffer, UserForce};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
@@ -180,8 +185,8 @@ pub enum LinearSolver {
     /// Dense LU up to [`DENSE_MAX`] unknowns, sparse LU (symbolic analysis reused) above.
     #[default]
     Auto,
-    /// Always the dense LU with partial pivoting ([`crate::dense_lu`] up to
-    /// [`crate::dense_lu::SMALL_LU_MAX`] unknowns, faer `lu_in_place` above).
+    /// Always the dense LU with partial pivoting ([`crate::assembly::dense_lu`] up to
+    /// [`crate::assembly::dense_lu::SMALL_LU_MAX`] unknowns, faer `lu_in_place` above).
     Dense,
     /// Always the sparse LU on the system pattern (faer, symbolic analysis from [`System::new`]).
     Sparse,
@@ -196,8 +201,8 @@ pub(crate) enum Factor {
         A: SparseColMat<usize, f64>,
         lu: Option<Box<Lu<usize, f64>>>,
     },
-    /// Dense LU of a small matrix in place ([`crate::dense_lu`], up to
-    /// [`crate::dense_lu::SMALL_LU_MAX`] unknowns): `LU` the factors column major, `piv` the
+    /// Dense LU of a small matrix in place ([`crate::assembly::dense_lu`], up to
+    /// [`crate::assembly::dense_lu::SMALL_LU_MAX`] unknowns): `LU` the factors column major, `piv` the
     /// row interchanges.
     Small {
         LU: Vec<f64>,
@@ -259,10 +264,10 @@ pub struct System {
     pub(crate) joint_springs: Vec<(usize, f64, f64, f64, f64)>,
     /// Limits and actuators on joint coordinates.
     pub(crate) joint_forces: JointForces,
-    /// How each of `model.initial` acts ([`crate::initial`]).
+    /// How each of `model.initial` acts ([`crate::assembly::initial`]).
     pub(crate) initial_plan: Vec<InitialPlan>,
     /// Drivers not zero at $t = 0$ and the nodes assembled with them (`initial::driver_starts`).
-    pub(crate) driver_starts: Vec<crate::initial::DriverStart>,
+    pub(crate) driver_starts: Vec<crate::assembly::initial::DriverStart>,
     pub(crate) drivers: Vec<CompiledFunction>,
     /// User-defined forces ([`System::with_user_forces`]).
     pub(crate) user_forces: Vec<Arc<dyn UserForce>>,
@@ -317,7 +322,7 @@ impl System {
     }
 
     /// [`Self::new`] with user-defined forces acting on the model's nodes
-    /// ([`crate::user_force`]); a node id out of range is [`ModelError::UnknownNode`].
+    /// ([`crate::model::user_force`]); a node id out of range is [`ModelError::UnknownNode`].
     pub fn with_user_forces(model: &Model, user_forces: Vec<Arc<dyn UserForce>>) -> Result<Self, ModelError> {
         topology::check_references(model)?;
         let topo = topology::build(model)?;
@@ -353,7 +358,7 @@ impl System {
                         .map_err(superelement_error)?;
                     if f.planar {
                         // The model's confinement first: it names the node, whatever the body.
-                        crate::planar::check_planar_body(model, bi, f)?;
+                        crate::assembly::planar::check_planar_body(model, bi, f)?;
                         se = se.into_planar().map_err(superelement_error)?;
                     }
                     let pos: Vec<Vector3<f64>> =
@@ -517,8 +522,8 @@ impl System {
         }
         topology::held_coordinates(model, &topo)?;
         let mut joint_forces = JointForces::new(model, &topo)?;
-        let initial_plan = crate::initial::plan(model, &topo)?;
-        let driver_starts = crate::initial::driver_starts(model, &topo, &drivers)?;
+        let initial_plan = crate::assembly::initial::plan(model, &topo)?;
+        let driver_starts = crate::assembly::initial::driver_starts(model, &topo, &drivers)?;
 
         check_stress_sensors(model, &flexible)?;
         check_reaction_sensors(model, &topo)?;
@@ -584,7 +589,7 @@ impl System {
         for (i, u) in user_forces.iter().enumerate() {
             elements.push(ElementRef {
                 kind: ElementKind::User(i),
-                nodes: crate::user_force::check_nodes(u.as_ref(), i, model.nodes.len())?,
+                nodes: crate::model::user_force::check_nodes(u.as_ref(), i, model.nodes.len())?,
                 modal: vec![],
             });
         }
@@ -798,7 +803,7 @@ impl System {
 
     /// Holds actuator `actuator` (index in `Model::actuators`) at the effort `effort` [N on a
     /// length, N m on an angle] in place of its time function or PID law from the next step
-    /// on, or releases it to its law with `None` ([`crate::joint_forces`], held effort). For
+    /// on, or releases it to its law with `None` ([`crate::assembly::joint_forces`], held effort). For
     /// controllers that close the loop outside the model, between time steps.
     pub fn set_actuator_effort(&mut self, actuator: usize, effort: Option<f64>) -> Result<(), ModelError> {
         let entity = || match self.model.actuators.get(actuator) {
@@ -818,6 +823,20 @@ impl System {
     /// its law acts, or there is no such actuator).
     pub fn held_actuator_effort(&self, actuator: usize) -> Option<f64> {
         self.joint_forces.held(actuator)
+    }
+
+    /// The effort $u$ of every actuator at `state` (N on a length, N m on an angle).
+    pub fn actuator_efforts(&self, state: &State) -> Vec<f64> {
+        let map = &self.topo.map;
+        let mut s = state.clone();
+        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let x = values(&s, &pr, &pa);
+        let value = |sc: usize| {
+            let (v, d, _) = scalar_values(map, &x, sc);
+            (v, d)
+        };
+        self.joint_forces.efforts(&value, s.time, &state.controls)
     }
 
     /// Number of unknowns $\dim\dot{\mathbf q}$.
@@ -894,7 +913,7 @@ impl System {
     }
 
     /// The model's initial configuration at $t = 0$ with its initial conditions applied
-    /// ([`crate::initial`]: joint values and rates move the subtree behind the joint rigidly,
+    /// ([`crate::assembly::initial`]: joint values and rates move the subtree behind the joint rigidly,
     /// body velocities, node velocities, rigid motion); accelerations zero (the dynamic solver
     /// computes consistent ones), controllers at rest.
     pub fn initial_state(&self) -> State {
@@ -918,7 +937,7 @@ impl System {
     }
 
     /// Restarts every controller's integral at zero at the state's time and configuration
-    /// ([`crate::joint_forces`]).
+    /// ([`crate::assembly::joint_forces`]).
     pub(crate) fn start_controls(&self, state: &mut State) {
         let map = &self.topo.map;
         let mut s = state.clone();
@@ -928,7 +947,7 @@ impl System {
     }
 
     /// Moves the controllers' integrals to the end of a converged step at `state`
-    /// ([`crate::joint_forces`]); the integrator calls it for every accepted step.
+    /// ([`crate::assembly::joint_forces`]); the integrator calls it for every accepted step.
     pub fn accept_step(&self, state: &mut State) {
         if self.joint_forces.n_actuators() == 0 {
             return;
@@ -1466,7 +1485,7 @@ impl System {
 
     /// The drivers at the state's time into the state and the workspace, and the node motions
     /// (`ws.motions`, `ws.nodes`) at the state: the nodes driven by time alone are kept while
-    /// the time stays ([`crate::coordinates::CoordinateMap::motions_update`]).
+    /// the time stays ([`crate::assembly::coordinates::CoordinateMap::motions_update`]).
     pub(crate) fn update_motions(&self, state: &mut State, ws: &mut Workspace) {
         self.apply_drivers(state, &mut ws.presc_rate, &mut ws.presc_acc);
         let x = values(state, &ws.presc_rate, &ws.presc_acc);
@@ -1559,7 +1578,7 @@ impl System {
 
     /// The element's $\hat{\mathbf M}_e$, $\hat{\mathbf C}_e$, $\hat{\mathbf K}_e$ on its unknown dofs
     /// (column major), from its port tangents and the node kinematics (module docs of
-    /// [`crate::coordinates`]): $\mathbf J^T\mathbf M\mathbf J$, $\mathbf J^T(\mathbf C\mathbf J + \mathbf M\,\partial\mathbf A/\partial\dot{\mathbf q})$,
+    /// [`crate::assembly::coordinates`]): $\mathbf J^T\mathbf M\mathbf J$, $\mathbf J^T(\mathbf C\mathbf J + \mathbf M\,\partial\mathbf A/\partial\dot{\mathbf q})$,
     /// $\mathbf J^T(\mathbf K\mathbf J + \mathbf C\,\partial\mathbf V/\partial\mathbf q + \mathbf M\,\partial\mathbf A/\partial\mathbf q)$.
     ///
     /// Column by column of $\mathbf J$: the element matrices times one unknown's port column

@@ -62,13 +62,13 @@
 
 #![allow(non_snake_case)]
 
-use crate::coordinates::unknown;
-use crate::coordinates::Slot;
+use crate::assembly::coordinates::unknown;
+use crate::assembly::coordinates::Slot;
+use crate::assembly::system::{System, Workspace};
+use crate::assembly::topology::RootRotation;
 use crate::error::SolveError;
 use crate::model::{RotationSupport, TranslationSupport};
 use crate::state::State;
-use crate::system::{System, Workspace};
-use crate::topology::RootRotation;
 use faer::Mat;
 use nalgebra::{Matrix6, Vector3, Vector6};
 
@@ -160,7 +160,7 @@ impl System {
     /// translation along $\mathbf e_k$ (column $k$) and rotation about $\mathbf e_k$ through the origin
     /// (column $3 + k$), at the configuration of `state` (module docs).
     ///
-    /// Which coordinate carries what, from the maps of [`crate::coordinates`]: an independent
+    /// Which coordinate carries what, from the maps of [`crate::assembly::coordinates`]: an independent
     /// node's translations are inertial ($\mathbf r = \mathbf r_0 + \sum_i s_i\mathbf e_i$ along its
     /// support basis), so $\dot s_i = \mathbf e_i\cdot(\mathbf v + \boldsymbol\omega\times\mathbf r)$; every
     /// SO(3) coordinate (an independent node's orientation, a spherical joint's child) is absolute

@@ -10,13 +10,18 @@
 //! directions and loads (dead and follower) are inertial vectors there; rigid-body mass data
 //! are in the axes of their reference node.
 
+pub mod merge;
+pub mod time_function;
+pub mod units;
+pub mod user_force;
+
 pub use crate::ids::{BodyId, JointId, NodeId};
-use crate::time_function::TimeFunction;
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
 use reduction::ReducedBody;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 use superelement::{Damping, FrameChoice, MassVariant};
+use time_function::TimeFunction;
 
 /// Serde of a shared reduced body: written as the body itself, read into a new `Arc`.
 mod shared_body {
@@ -82,7 +87,7 @@ pub struct FlexibleBody {
     /// (`superelement::Superelement::into_planar`: the in-plane coordinates of its interfaces
     /// and its modes only): for a body reduced as a planar part (`reduction::CbSettings::planar`)
     /// whose nodes the supports and joints keep in the plane, and whose placement is a rotation
-    /// about z; [`crate::System::new`] checks both ([`crate::planar`]). Off by default.
+    /// about z; [`crate::System::new`] checks both ([`crate::assembly::planar`]). Off by default.
     #[serde(default)]
     pub planar: bool,
 }
@@ -403,14 +408,14 @@ pub struct Sensor {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum InitialCondition {
     /// A scalar joint coordinate's value: the child and everything behind it (the subtree
-    /// reached through bodies and joints) turn or slide rigidly with it ([`crate::initial`]).
+    /// reached through bodies and joints) turn or slide rigidly with it ([`crate::assembly::initial`]).
     JointValue {
         joint: JointId,
         coordinate: usize,
         value: f64,
     },
     /// A scalar joint coordinate's rate: the subtree behind the joint gets the matching rigid
-    /// velocity ([`crate::initial`]; in a closed loop, the coordinate alone).
+    /// velocity ([`crate::assembly::initial`]; in a closed loop, the coordinate alone).
     JointRate {
         joint: JointId,
         coordinate: usize,
@@ -425,7 +430,7 @@ pub enum InitialCondition {
     /// A rigid velocity of a body and of everything attached to it by joints and bodies,
     /// $\mathbf v(\mathbf x) = \mathbf v_p + \boldsymbol\omega\times(\mathbf x - \mathbf p)$ about the
     /// point $\mathbf p$ (inertial, at the initial configuration). Refused when the body is held
-    /// by the ground (give its joints' rates instead): see [`crate::initial`].
+    /// by the ground (give its joints' rates instead): see [`crate::assembly::initial`].
     BodyVelocity {
         body: BodyId,
         velocity: Vector3<f64>,
@@ -449,10 +454,10 @@ pub struct Model {
     pub point_masses: Vec<PointMass>,
     pub springs: Vec<Spring>,
     pub joint_springs: Vec<JointSpring>,
-    /// Stops on joint coordinates ([`crate::joint_forces`]).
+    /// Stops on joint coordinates ([`crate::assembly::joint_forces`]).
     #[serde(default)]
     pub joint_limits: Vec<JointLimit>,
-    /// Force and torque actuators on joint coordinates ([`crate::joint_forces`]).
+    /// Force and torque actuators on joint coordinates ([`crate::assembly::joint_forces`]).
     #[serde(default)]
     pub actuators: Vec<JointActuator>,
     pub supports: Vec<Support>,
@@ -586,7 +591,7 @@ impl Model {
 }
 
 /// A stop on a joint coordinate: a stiff unilateral spring-damper outside `[lower, upper]`
-/// ([`crate::joint_forces`]). Units: m or rad for the bounds, N/m or N m/rad for `stiffness`, N s/m or
+/// ([`crate::assembly::joint_forces`]). Units: m or rad for the bounds, N/m or N m/rad for `stiffness`, N s/m or
 /// N m s/rad for `damping`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct JointLimit {
@@ -599,7 +604,7 @@ pub struct JointLimit {
     pub damping: f64,
 }
 
-/// A PID law on a measured joint coordinate ([`crate::joint_forces`]).
+/// A PID law on a measured joint coordinate ([`crate::assembly::joint_forces`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Pid {
     /// The measured coordinate $y$ (often the actuated one).

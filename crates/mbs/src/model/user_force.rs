@@ -48,7 +48,7 @@
 //! }
 //! ```
 //!
-//! The momentum projection of free models ([`crate::momentum`]) is off with a user force: it
+//! The momentum projection of free models ([`crate::assembly::system::momentum`]) is off with a user force: it
 //! cannot know whether the force is an internal one.
 //!
 //! # Notation
@@ -62,7 +62,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::body::ElementOutput;
+use crate::assembly::body::ElementOutput;
 use crate::error::SolveError;
 use crate::model::NodeId;
 use crate::node::NodeMotion;

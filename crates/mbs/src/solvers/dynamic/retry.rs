@@ -13,10 +13,10 @@
 //! acceleration is carried over), so the retried interval is integrated by the same scheme;
 //! its local error is that of the smaller steps.
 
-use crate::dynamic_solver::{AdaptiveSettings, AdaptiveStep, DynamicSettings, Integrator, StepReport, Trajectory};
+use crate::assembly::system::System;
 use crate::error::{Incomplete, SolveError};
+use crate::solvers::dynamic::{AdaptiveSettings, AdaptiveStep, DynamicSettings, Integrator, StepReport, Trajectory};
 use crate::state::State;
-use crate::system::System;
 
 /// One interval of the fixed step that needed smaller steps.
 #[derive(Clone, Debug, PartialEq)]
@@ -164,18 +164,18 @@ pub fn solve_dynamic_retrying(
         };
         return Err(fail(error, trajectory, Vec::new()));
     }
-    let (mut integ, mut traj) = match crate::dynamic_solver::start_trajectory(system, start, settings) {
+    let (mut integ, mut traj) = match crate::solvers::dynamic::start_trajectory(system, start, settings) {
         Ok(x) => x,
         Err(inc) => return Err(fail(inc.error, inc.partial, Vec::new())),
     };
-    let (n_steps, _) = crate::dynamic_solver::fixed_steps(integ.state().time(), settings.end_time, h);
+    let (n_steps, _) = crate::solvers::dynamic::fixed_steps(integ.state().time(), settings.end_time, h);
     let every = settings.output_every.max(1);
     let mut retries = Vec::new();
-    let mut pending = crate::sensors::PendingRows::default();
+    let mut pending = crate::assembly::system::sensors::PendingRows::default();
     for k in 1..=n_steps {
         if k == n_steps {
             // Land on the end time: the last step may be shorter.
-            integ.set_step_size(crate::dynamic_solver::last_step_size(
+            integ.set_step_size(crate::solvers::dynamic::last_step_size(
                 integ.state().time(),
                 settings.end_time,
                 h,
@@ -191,18 +191,18 @@ pub fn solve_dynamic_retrying(
             }
             Err(failure) => {
                 retries.extend(failure.retry);
-                let stopped = *crate::dynamic_solver::stopped(&integ, failure.error, &mut pending, traj);
+                let stopped = *crate::solvers::dynamic::stopped(&integ, failure.error, &mut pending, traj);
                 return Err(fail(stopped.error, stopped.partial, retries));
             }
         }
         if k % every == 0 || k == n_steps {
             if let Err(e) = integ.record_deferred(&mut pending, &mut traj.sensors) {
-                let stopped = *crate::dynamic_solver::stopped(&integ, e, &mut pending, traj);
+                let stopped = *crate::solvers::dynamic::stopped(&integ, e, &mut pending, traj);
                 return Err(fail(stopped.error, stopped.partial, retries));
             }
         }
     }
-    match crate::dynamic_solver::finished(&integ, &mut pending, traj) {
+    match crate::solvers::dynamic::finished(&integ, &mut pending, traj) {
         Ok(trajectory) => Ok(RetriedTrajectory { trajectory, retries }),
         Err(stopped) => {
             let stopped = *stopped;

@@ -6,7 +6,7 @@
 //! stiffness and mass from it. Its nodes must therefore stay in the global xy-plane, turning
 //! about $z$ only, for all time, whatever the loads: otherwise an out-of-plane coordinate that
 //! only the body holds would leave the system matrices singular. A node is confined to the
-//! plane when its rigid group (the nodes welded to it by rigid bodies, [`crate::topology`])
+//! plane when its rigid group (the nodes welded to it by rigid bodies, [`crate::assembly::topology`])
 //! is either
 //!
 //! * independent and supported in $z$ and in the rotations about $x$ and $y$: translation

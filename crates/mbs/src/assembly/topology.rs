@@ -22,7 +22,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::coordinates::{Chain, CoordinateMap, Motion, Op, Rotation, Scalar, Slot, Values};
+use crate::assembly::coordinates::{Chain, CoordinateMap, Motion, Op, Rotation, Scalar, Slot, Values};
 use crate::error::{Entity, ModelError};
 use crate::model::{
     Body, BodyId, DriverTarget, InitialCondition, JointId, JointKind, Model, NodeId, RotationSupport, SensorKind,
@@ -743,7 +743,7 @@ impl Builder {
 type ChainParts = (Vec<Op>, Vec<Slot>, RootCoordinates);
 
 /// The chain of an independent node: `Offset(r0)`, translations along the support basis,
-/// the rotation, `Offset(0, R0)` (see [`crate::coordinates`]).
+/// the rotation, `Offset(0, R0)` (see [`crate::assembly::coordinates`]).
 fn root_chain(
     model: &Model,
     n: usize,
