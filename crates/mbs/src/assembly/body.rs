@@ -18,6 +18,8 @@
 
 #![allow(non_snake_case)]
 
+use crate::error::SolveError;
+use crate::model::user_force::{UserBuffer, UserForce};
 use crate::node::NodeMotion;
 use faer::Mat;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
@@ -450,4 +452,62 @@ pub(crate) fn load_element(
     if tangents && l.follower {
         set3(&mut out.K, at, 3, &skew(&f));
     }
+}
+
+/// The user force's element output on its node ports: external part $\lambda\mathbf f_e$,
+/// residual $-\lambda\mathbf f_e$, $\mathbf K = -\lambda\,\partial\mathbf f_e/\partial\mathbf x$,
+/// $\mathbf C = -\lambda\,\partial\mathbf f_e/\partial\mathbf V$ (no mass). A non-finite force or
+/// Jacobian is refused with [`SolveError::UserForce`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn user_force_element(
+    force: &dyn UserForce,
+    index: usize,
+    nodes: &[usize],
+    all: &[NodeMotion],
+    t: f64,
+    lambda: f64,
+    tangents: bool,
+    buf: &mut UserBuffer,
+    out: &mut ElementOutput,
+) -> Result<(), SolveError> {
+    out.reset(tangents);
+    for (m, &n) in buf.motions.iter_mut().zip(nodes) {
+        *m = all[n];
+    }
+    UserBuffer::eval(force, t, &buf.motions, &mut buf.wrench);
+    let refuse = |what: &str| SolveError::UserForce {
+        name: force.name().to_string(),
+        index,
+        at: crate::error::At::Time(t),
+        what: what.to_string(),
+    };
+    if buf.wrench.iter().flatten().any(|x| !x.is_finite()) {
+        return Err(refuse("the force is not finite"));
+    }
+    for (a, w) in buf.wrench.iter().enumerate() {
+        for i in 0..6 {
+            out.external[6 * a + i] = lambda * w[i];
+            out.residual[6 * a + i] = -lambda * w[i];
+        }
+    }
+    if !tangents {
+        return Ok(());
+    }
+    buf.dx.fill(0.0);
+    buf.dv.fill(0.0);
+    if !force.jacobian(t, &buf.motions, buf.dx.as_mut(), buf.dv.as_mut()) {
+        buf.fd_jacobian(force, t);
+    }
+    let n = 6 * nodes.len();
+    for c in 0..n {
+        for r in 0..n {
+            let (k, d) = (buf.dx[(r, c)], buf.dv[(r, c)]);
+            if !(k.is_finite() && d.is_finite()) {
+                return Err(refuse("its Jacobian is not finite"));
+            }
+            out.K[(r, c)] = -lambda * k;
+            out.C[(r, c)] = -lambda * d;
+        }
+    }
+    Ok(())
 }

@@ -29,8 +29,8 @@ pub mod recovery;
 pub mod sensors;
 
 use crate::assembly::body::{
-    load_element, point_mass_element, rigid_element, spring_element, ElementOutput, FlexBuffer, FlexibleElement,
-    LoadElement, RigidElement, SpringElement,
+    load_element, point_mass_element, rigid_element, spring_element, user_force_element, ElementOutput, FlexBuffer,
+    FlexibleElement, LoadElement, RigidElement, SpringElement,
 };
 use crate::assembly::coordinates::{scalar_values, unknown, values, Motion, MotionCache, NodeDerivatives, Slot};
 use crate::assembly::dense_lu::{self, SMALL_LU_MAX};
@@ -39,7 +39,7 @@ use crate::assembly::joint_forces::JointForces;
 use crate::assembly::topology::{self, RootRotation, Topology};
 use crate::error::{Entity, ModelError, SolveError};
 use crate::model::time_function::CompiledFunction;
-use crate::model::user_force::{user_force_element, UserBuffer, UserForce};
+use crate::model::user_force::{UserBuffer, UserForce};
 use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId, SensorKind};
 use crate::node::NodeMotion;
 use crate::state::State;
