@@ -205,13 +205,13 @@ pub use model::{
 pub use node::NodeMotion;
 pub use solvers::arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
 pub use solvers::dynamic::retry::{
-    solve_dynamic_retrying, step_adaptive_to, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure,
+    solve_dynamic_retrying, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure,
 };
 pub use solvers::dynamic::streaming::{Interrupted, StepDone, StepTotals, Stepping};
 pub use solvers::dynamic::{
-    fixed_steps, solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters,
-    DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE, PI_INTEGRAL,
-    PI_PROPORTIONAL, PREDICTOR_WINDOW,
+    fixed_steps, solve_dynamic, solve_dynamic_adaptive, step_adaptive_to, AdaptiveSettings, AdaptiveStep,
+    AlphaParameters, DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
+    PI_INTEGRAL, PI_PROPORTIONAL, PREDICTOR_WINDOW,
 };
 pub use solvers::linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,
