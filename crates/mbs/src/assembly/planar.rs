@@ -52,7 +52,7 @@ pub(crate) fn check_planar_body(model: &Model, bi: usize, body: &FlexibleBody) -
                 "it is planar, but its placement turns the FE model's z axis onto {}: the placement of a planar body must be a rotation about z (its FE xy-plane onto the global one)",
                 vector(&e_z)
             ),
-            id: Some(crate::Entity::Body(BodyId(bi as u32))),
+            id: Some(crate::error::Entity::Body(BodyId(bi as u32))),
         });
     }
     let confinement = Confinement::new(model);

@@ -132,7 +132,7 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
             })
         }
     };
-    let joint = |j: crate::JointId, who: &dyn Fn() -> (String, Entity)| {
+    let joint = |j: crate::ids::JointId, who: &dyn Fn() -> (String, Entity)| {
         if j.index() < model.joints.len() {
             Ok(())
         } else {

@@ -233,7 +233,7 @@ pub(crate) fn check_nodes(
     force: &dyn UserForce,
     index: usize,
     n_nodes: usize,
-) -> Result<Vec<usize>, crate::ModelError> {
+) -> Result<Vec<usize>, crate::error::ModelError> {
     force
         .nodes()
         .iter()
@@ -241,11 +241,11 @@ pub(crate) fn check_nodes(
             if id.index() < n_nodes {
                 Ok(id.index())
             } else {
-                Err(crate::ModelError::UnknownNode {
+                Err(crate::error::ModelError::UnknownNode {
                     id: id.0,
                     count: n_nodes,
                     referenced_by: format!("user force '{}'", force.name()),
-                    by: crate::Entity::UserForce(index),
+                    by: crate::error::Entity::UserForce(index),
                 })
             }
         })

@@ -58,8 +58,8 @@ impl ArcLengthSettings {
     /// Arc length `initial_length`, up to `lambda_end` or `max_steps` steps.
     pub fn new(initial_length: f64, lambda_end: f64, max_steps: usize) -> Self {
         Self {
-            tolerance: crate::StaticSettings::DEFAULT_TOLERANCE,
-            max_iterations: crate::StaticSettings::DEFAULT_MAX_ITERATIONS,
+            tolerance: StaticSettings::DEFAULT_TOLERANCE,
+            max_iterations: StaticSettings::DEFAULT_MAX_ITERATIONS,
             initial_length,
             min_length: initial_length * 1e-4,
             max_length: initial_length * 10.0,

@@ -27,7 +27,7 @@ impl System {
                 self.topo
                     .map
                     .motions_into(&crate::assembly::coordinates::values(&s, &pr, &pa), &mut m);
-                m.iter().map(crate::NodeMotion::from).collect::<Vec<_>>()
+                m.iter().map(crate::node::NodeMotion::from).collect::<Vec<_>>()
             };
             let (before, after) = (motions(state, true), motions(state, false));
             let (a, b) = (&before[ds.pivot], &after[ds.pivot]);
@@ -157,7 +157,7 @@ impl System {
     pub fn body_velocity(
         &self,
         state: &State,
-        body: crate::BodyId,
+        body: crate::ids::BodyId,
         point: &nalgebra::Vector3<f64>,
     ) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>) {
         let motions = self.node_motions(state);

@@ -121,7 +121,7 @@ impl System {
     /// action found.
     pub fn rigid_invariance(&self) -> Result<(), ExternalAction> {
         let model = &self.model;
-        let name = |n: crate::NodeId| model.nodes[n.index()].name.clone();
+        let name = |n: crate::ids::NodeId| model.nodes[n.index()].name.clone();
         for s in &model.supports {
             let translation_free = match &s.translation {
                 TranslationSupport::Free => true,

@@ -16,8 +16,8 @@ use crate::assembly::system::{ElementKind, System, Workspace};
 use crate::assembly::topology::RootRotation;
 use crate::error::SolveError;
 use crate::model::{BodyId, SensorKind};
+use crate::node::NodeMotion;
 use crate::state::State;
-use crate::NodeMotion;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use superelement::so3;
@@ -312,7 +312,7 @@ impl System {
     }
 
     /// The superelement state of flexible element `i`.
-    pub(crate) fn body_state(&self, i: usize, state: &State, nodes: &[crate::NodeMotion]) -> superelement::BodyState {
+    pub(crate) fn body_state(&self, i: usize, state: &State, nodes: &[NodeMotion]) -> superelement::BodyState {
         let f = &self.flexible[i];
         let map = &self.topo.map;
         let eta: Vec<f64> = f.modal.iter().map(|&s| state.scalars[s]).collect();
@@ -327,7 +327,7 @@ impl System {
     /// The body's velocities $\dot{\mathbf q} = [\mathbf v_1, \boldsymbol\omega_1, \dots, \dot{\boldsymbol\eta}]$
     /// ($6N + m$, the layout of [`superelement::BodyState::velocity_vector`]) from the node
     /// motions and the modal rates.
-    fn body_velocities(&self, i: usize, state: &State, nodes: &[crate::NodeMotion]) -> Vec<f64> {
+    fn body_velocities(&self, i: usize, state: &State, nodes: &[NodeMotion]) -> Vec<f64> {
         let f = &self.flexible[i];
         let map = &self.topo.map;
         let mut qd = Vec::with_capacity(6 * f.nodes.len() + f.modal.len());
