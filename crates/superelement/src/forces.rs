@@ -43,7 +43,7 @@ pub(crate) enum Level {
     /// no $n\times n$ work beyond $\mathbf M_{CB}\ddot{\mathbf q}$, $\mathbf K_{CB}\mathbf q^{jj}$ and the
     /// inertia contractions.
     Forces,
-    /// The forces and the mass matrix (`Superelement::evaluate_into` without tangents).
+    /// The forces and the mass matrix (`Superelement::forces_into`).
     Mass,
     /// The forces, the mass matrix and the tangents $\mathbf K_t$, $\mathbf C_t$.
     Tangents,

@@ -210,8 +210,7 @@ impl FlexibleElement {
         // Without tangents only the forces are read below: the residual alone forms no mass
         // matrix (the energy sensor takes T from the workspace, `kinetic_energy_in`).
         if tangents {
-            self.se
-                .evaluate_into(bs, &buf.acc, gravity, true, &mut buf.ws, &mut buf.ev)?;
+            self.se.evaluate_into(bs, &buf.acc, gravity, &mut buf.ws, &mut buf.ev)?;
         } else {
             self.se.residual_into(bs, &buf.acc, gravity, &mut buf.ws, &mut buf.ev)?;
         }
