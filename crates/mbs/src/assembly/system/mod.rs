@@ -32,7 +32,9 @@ use crate::assembly::body::{
     load_element, point_mass_element, rigid_element, spring_element, user_force_element, ElementOutput, FlexBuffer,
     FlexibleElement, LoadElement, RigidElement, SpringElement,
 };
-use crate::assembly::coordinates::{scalar_values, unknown, values, Motion, MotionCache, NodeDerivatives, Slot};
+use crate::assembly::coordinates::{
+    scalar_values, unknown, values, CoordinateMap, Motion, MotionCache, NodeDerivatives, Slot,
+};
 use crate::assembly::dense_lu::{self, SMALL_LU_MAX};
 use crate::assembly::initial::InitialPlan;
 use crate::assembly::joint_forces::JointForces;
@@ -52,6 +54,9 @@ use nalgebra::{UnitQuaternion, Vector3};
 use rayon::prelude::*;
 use std::sync::Arc;
 use superelement::{so3, Frame, Superelement};
+
+/// A joint spring on its scalar: (scalar, $k$, $c$, $x_0$, $f_0$).
+pub(crate) type JointSpringScalar = (usize, f64, f64, f64, f64);
 
 /// One element of the assembly: what it is and where it acts.
 #[derive(Clone, Debug)]
@@ -94,6 +99,99 @@ pub(crate) struct Pattern {
 }
 
 impl Pattern {
+    /// The sparse pattern of the elements, the nodes' own blocks, the joint springs and the
+    /// joint forces, with the symbolic LU and the slots of each (the joint forces bound to it).
+    fn build(
+        model: &Model,
+        topo: &Topology,
+        elements: &[ElementRef],
+        joint_springs: &[JointSpringScalar],
+        joint_forces: &mut JointForces,
+    ) -> Result<Self, ModelError> {
+        let map = &topo.map;
+        let n = map.n_dof;
+        let node_unknown: Vec<Vec<usize>> = map
+            .chains
+            .iter()
+            .map(|c| c.cols.iter().copied().filter(|&id| id < n).collect())
+            .collect();
+        let mut sets: Vec<Vec<usize>> = Vec::new();
+        for e in elements {
+            let mut s: Vec<usize> = e.nodes.iter().flat_map(|&a| node_unknown[a].iter().copied()).collect();
+            s.extend(&e.modal);
+            s.sort_unstable();
+            s.dedup();
+            sets.push(s);
+        }
+        let n_elem_sets = sets.len();
+        for (c, u) in node_unknown.iter().enumerate() {
+            if !map.chains[c].root {
+                sets.push(u.clone());
+            }
+        }
+        sets.extend(joint_forces.pattern_sets(topo));
+        let symbolic = Pattern::structure(n, &sets);
+        let lu = if n > 0 {
+            Some(
+                SymbolicLu::try_new(symbolic.as_ref())
+                    .map_err(|e| invalid(None, "system".into(), format!("symbolic LU failed: {e:?}")))?,
+            )
+        } else {
+            None
+        };
+        let mut pattern = Pattern {
+            symbolic,
+            lu,
+            elem_dofs: Vec::new(),
+            elem_pos: Vec::new(),
+            elem_modal_pos: Vec::new(),
+            elem_slots: Vec::new(),
+            node_slots: vec![Vec::new(); model.nodes.len()],
+            node_unknown_cols: map
+                .chains
+                .iter()
+                .map(|ch| ch.cols.iter().copied().enumerate().filter(|&(_, id)| id < n).collect())
+                .collect(),
+            joint_spring_slots: Vec::new(),
+        };
+        for (e, dofs) in elements.iter().zip(sets.iter().take(n_elem_sets)) {
+            let find = |d: usize| dofs.binary_search(&d).expect("dof of the element");
+            let pos = e
+                .nodes
+                .iter()
+                .map(|&a| node_unknown[a].iter().map(|&d| find(d)).collect())
+                .collect();
+            let modal_pos = e.modal.iter().map(|&d| find(d)).collect();
+            let slots = dofs
+                .iter()
+                .flat_map(|&c| dofs.iter().map(move |&r| (r, c)))
+                .map(|(r, c)| pattern.slot(r, c))
+                .collect();
+            pattern.elem_dofs.push(dofs.clone());
+            pattern.elem_pos.push(pos);
+            pattern.elem_modal_pos.push(modal_pos);
+            pattern.elem_slots.push(slots);
+        }
+        for (c, u) in node_unknown.iter().enumerate() {
+            if !map.chains[c].root {
+                pattern.node_slots[c] = u
+                    .iter()
+                    .flat_map(|&k| u.iter().map(move |&i| (i, k)))
+                    .map(|(i, k)| pattern.slot(i, k))
+                    .collect();
+            }
+        }
+        pattern.joint_spring_slots = joint_springs
+            .iter()
+            .map(|&(s, ..)| match map.scalars[s].slot {
+                Slot::Unknown(d) => Some(pattern.slot(d, d)),
+                Slot::Prescribed(_) => None,
+            })
+            .collect();
+        joint_forces.bind(topo, |r, c| pattern.slot(r, c));
+        Ok(pattern)
+    }
+
     /// The CSC structure holding every $\text{set}\times\text{set}$ block and the diagonal.
     fn structure(n: usize, sets: &[Vec<usize>]) -> SymbolicSparseColMat<usize> {
         fe_model::pattern::block_structure(n, sets, true)
@@ -261,7 +359,7 @@ pub struct System {
     pub(crate) springs: Vec<SpringElement>,
     pub(crate) loads: Vec<LoadElement>,
     /// (scalar, stiffness, damping, rest, preload).
-    pub(crate) joint_springs: Vec<(usize, f64, f64, f64, f64)>,
+    pub(crate) joint_springs: Vec<JointSpringScalar>,
     /// Limits and actuators on joint coordinates.
     pub(crate) joint_forces: JointForces,
     /// How each of `model.initial` acts ([`crate::assembly::initial`]).
@@ -326,200 +424,18 @@ impl System {
     pub fn with_user_forces(model: &Model, user_forces: Vec<Arc<dyn UserForce>>) -> Result<Self, ModelError> {
         topology::check_references(model)?;
         let topo = topology::build(model)?;
-        let map = &topo.map;
-        let invalid = |id: Option<Entity>, entity: String, what: String| ModelError::InvalidValue { entity, what, id };
-        let mut flexible = Vec::new();
-        let mut rigid = Vec::new();
-        // Model size: spread of the nodes, flexible bodies and centres of mass.
-        let centroid = model.nodes.iter().map(|n| n.position).sum::<Vector3<f64>>() / model.nodes.len().max(1) as f64;
-        let mut size = model
-            .nodes
-            .iter()
-            .map(|n| (n.position - centroid).norm())
-            .fold(1e-3, f64::max);
-        let mut modal_scale = vec![1.0; model.bodies.len()];
-        for (bi, body) in model.bodies.iter().enumerate() {
-            match body {
-                Body::Flexible(f) => {
-                    let N = f.reduced.interfaces.len();
-                    if f.nodes.len() != N {
-                        return Err(invalid(
-                            Some(Entity::Body(BodyId(bi as u32))),
-                            format!("body '{}'", f.name),
-                            format!("{} nodes for {N} interfaces", f.nodes.len()),
-                        ));
-                    }
-                    let superelement_error = |source| ModelError::Superelement {
-                        body: f.name.clone(),
-                        body_id: BodyId(bi as u32),
-                        source,
-                    };
-                    let mut se = Superelement::shared(Arc::clone(&f.reduced), f.frame, f.mass, f.damping.clone())
-                        .map_err(superelement_error)?;
-                    if f.planar {
-                        // The model's confinement first: it names the node, whatever the body.
-                        crate::assembly::planar::check_planar_body(model, bi, f)?;
-                        se = se.into_planar().map_err(superelement_error)?;
-                    }
-                    let pos: Vec<Vector3<f64>> =
-                        f.reduced.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
-                    let tolerance = 1e-6 * (1.0 + size_body(&pos));
-                    let mut offsets = Vec::with_capacity(N);
-                    for k in 0..N {
-                        let node = &model.nodes[f.nodes[k].index()];
-                        let x = f.placement.transform_point(&pos[k].into()).coords;
-                        let distance = (x - node.position).norm();
-                        if !(distance <= tolerance) {
-                            return Err(ModelError::InterfaceMismatch {
-                                body: f.name.clone(),
-                                interface: k,
-                                name: f.reduced.interfaces[k].name.clone(),
-                                node: node.name.clone(),
-                                distance,
-                                tolerance,
-                                body_id: BodyId(bi as u32),
-                                node_id: f.nodes[k],
-                            });
-                        }
-                        offsets.push(node.orientation.inverse() * f.placement.rotation);
-                    }
-                    size = size.max(2.0 * size_body(&pos));
-                    let K = se.k_cb();
-                    let k_norm = (0..K.nrows())
-                        .map(|i| (0..K.ncols()).map(|j| K[(i, j)].abs()).sum::<f64>())
-                        .fold(0.0, f64::max);
-                    modal_scale[bi] = size_body(&pos).max(1e-3) * f.reduced.inertia.mass.sqrt();
-                    let loads = body_loads(model, bi, &se, model.nodes[f.nodes[0].index()].orientation * offsets[0])?;
-                    flexible.push(FlexibleElement {
-                        body: bi,
-                        se,
-                        nodes: f.nodes.iter().map(|n| n.index()).collect(),
-                        offsets,
-                        modal: topo.modal_scalars[bi].clone(),
-                        k_norm,
-                        size: 2.0 * size_body(&pos),
-                        loads,
-                    });
-                }
-                Body::Rigid(r) => {
-                    let ok = r.mass >= 0.0
-                        && finite(r.mass)
-                        && r.center_of_mass.iter().all(|x| x.is_finite())
-                        && r.inertia.iter().all(|x| x.is_finite());
-                    if !ok {
-                        return Err(invalid(
-                            Some(Entity::Body(BodyId(bi as u32))),
-                            format!("rigid body '{}'", r.name),
-                            "mass must be finite and >= 0, centre of mass and inertia finite".into(),
-                        ));
-                    }
-                    size = size.max(r.center_of_mass.norm());
-                    rigid.push(RigidElement {
-                        node: r.reference.index(),
-                        mass: r.mass,
-                        c: r.center_of_mass,
-                        J: (r.inertia + r.inertia.transpose()) * 0.5,
-                    });
-                }
-            }
-        }
-        for (i, p) in model.point_masses.iter().enumerate() {
-            if !(p.mass >= 0.0 && finite(p.mass)) {
-                return Err(invalid(
-                    Some(Entity::PointMass(i)),
-                    format!("point mass {i}"),
-                    format!("mass must be finite and >= 0, got {}", p.mass),
-                ));
-            }
-        }
-        let mut springs = Vec::new();
-        for (i, s) in model.springs.iter().enumerate() {
-            if !(s.stiffness >= 0.0 && s.damping >= 0.0 && finite(s.stiffness) && finite(s.damping)) {
-                return Err(invalid(
-                    Some(Entity::Spring(i)),
-                    format!("spring '{}'", s.name),
-                    "stiffness and damping must be finite and >= 0".into(),
-                ));
-            }
-            let xa = model.nodes[s.a.index()].position;
-            let xb = s.b.map_or(s.ground_point, |b| model.nodes[b.index()].position);
-            let l = (xb - xa).norm();
-            let l0 = s.rest_length.unwrap_or(l);
-            // A spring whose ends coincide has no direction: with a rest length its force
-            // k (l - l0) would act along the round-off of the end positions.
-            if l0 > 0.0 && l <= 1e-9 * l0 {
-                return Err(invalid(
-                    Some(Entity::Spring(i)),
-                    format!("spring '{}'", s.name),
-                    format!("its ends coincide (length {l:.3e} m) and its rest length is {l0} m: the direction of its force is undefined; place the ends apart (or give rest_length = 0)"),
-                ));
-            }
-            springs.push(SpringElement {
-                a: s.a.index(),
-                b: s.b.map(|b| b.index()),
-                ground: s.ground_point,
-                k: s.stiffness,
-                c: s.damping,
-                l0,
-            });
-        }
-        let mut loads = Vec::new();
-        for (i, l) in model.loads.iter().enumerate() {
-            let time = (l.time.compile(&format!("load {i}"))).map_err(|e| e.with_id(Entity::Load(i)))?;
-            if !l.value.iter().all(|x| x.is_finite()) {
-                return Err(invalid(
-                    Some(Entity::Load(i)),
-                    format!("load {i}"),
-                    "non-finite value".into(),
-                ));
-            }
-            let node = &model.nodes[l.node.index()];
-            let (follower, value) = match l.axes {
-                LoadAxes::Dead => (false, l.value),
-                LoadAxes::Follower => (true, node.orientation.inverse() * l.value),
-            };
-            loads.push(LoadElement {
-                node: l.node.index(),
-                moment: l.kind == LoadKind::Moment,
-                follower,
-                value,
-                time,
-            });
-        }
-        let mut joint_springs = Vec::new();
-        for (i, js) in model.joint_springs.iter().enumerate() {
-            let s = *topo.joint_scalars[js.joint.index()].get(js.coordinate).ok_or_else(|| {
-                invalid(
-                    Some(Entity::JointSpring(i)),
-                    format!("joint spring {i}"),
-                    format!("joint coordinate {} does not exist", js.coordinate),
-                )
-            })?;
-            joint_springs.push((s, js.stiffness, js.damping, js.rest, js.preload));
-        }
-        let drivers = model
-            .drivers
-            .iter()
-            .enumerate()
-            .map(|(i, d)| (d.motion.compile(&format!("driver '{}'", d.name))).map_err(|e| e.with_id(Entity::Driver(i))))
-            .collect::<Result<Vec<_>, _>>()?;
-        for (i, c) in model.initial.iter().enumerate() {
-            if let InitialCondition::JointValue { joint, coordinate, .. }
-            | InitialCondition::JointRate { joint, coordinate, .. } = c
-            {
-                let j = &model.joints[joint.index()];
-                match topo.joint_scalars[joint.index()].get(*coordinate) {
-                    Some(&s) if matches!(map.scalars[s].slot, Slot::Unknown(_)) => {}
-                    _ => {
-                        return Err(invalid(
-                            Some(Entity::InitialCondition(i)),
-                            format!("initial condition on joint '{}'", j.name),
-                            format!("coordinate {coordinate} is not a free coordinate of the joint"),
-                        ))
-                    }
-                }
-            }
-        }
+        let Bodies {
+            flexible,
+            rigid,
+            size,
+            modal_scale,
+        } = body_elements(model, &topo)?;
+        check_point_masses(model)?;
+        let springs = spring_elements(model)?;
+        let loads = load_elements(model)?;
+        let joint_springs = joint_spring_scalars(model, &topo)?;
+        let drivers = compile_drivers(model)?;
+        check_initial_coordinates(model, &topo)?;
         topology::held_coordinates(model, &topo)?;
         let mut joint_forces = JointForces::new(model, &topo)?;
         let initial_plan = crate::assembly::initial::plan(model, &topo)?;
@@ -531,148 +447,9 @@ impl System {
             .sensors
             .iter()
             .any(|s| matches!(s.kind, SensorKind::Reaction { .. } | SensorKind::DriverEffort { .. }));
-        let stress_maxima = model
-            .sensors
-            .iter()
-            .map(|s| match &s.kind {
-                SensorKind::MaxVonMises { body, nodes } => {
-                    let f = flexible.iter().find(|f| f.body == body.index())?;
-                    let shapes = f.se.stress_shapes()?;
-                    Some(StressMaximum {
-                        search: Arc::new(reduction::VonMisesMaximum::new(shapes, nodes)),
-                        reference: Default::default(),
-                    })
-                }
-                _ => None,
-            })
-            .collect();
-        // Elements and the sparse pattern.
-        let mut elements = Vec::new();
-        for (i, f) in flexible.iter().enumerate() {
-            let modal = f.modal.iter().map(|&s| unknown(map.scalars[s].slot)).collect();
-            elements.push(ElementRef {
-                kind: ElementKind::Flexible(i),
-                nodes: f.nodes.clone(),
-                modal,
-            });
-        }
-        for (i, r) in rigid.iter().enumerate() {
-            elements.push(ElementRef {
-                kind: ElementKind::Rigid(i),
-                nodes: vec![r.node],
-                modal: vec![],
-            });
-        }
-        for p in &model.point_masses {
-            elements.push(ElementRef {
-                kind: ElementKind::PointMass(p.node.index(), p.mass),
-                nodes: vec![p.node.index()],
-                modal: vec![],
-            });
-        }
-        for (i, s) in springs.iter().enumerate() {
-            let mut nodes = vec![s.a];
-            nodes.extend(s.b);
-            elements.push(ElementRef {
-                kind: ElementKind::Spring(i),
-                nodes,
-                modal: vec![],
-            });
-        }
-        for (i, l) in loads.iter().enumerate() {
-            elements.push(ElementRef {
-                kind: ElementKind::Load(i),
-                nodes: vec![l.node],
-                modal: vec![],
-            });
-        }
-        for (i, u) in user_forces.iter().enumerate() {
-            elements.push(ElementRef {
-                kind: ElementKind::User(i),
-                nodes: crate::model::user_force::check_nodes(u.as_ref(), i, model.nodes.len())?,
-                modal: vec![],
-            });
-        }
-        let n = map.n_dof;
-        let node_unknown: Vec<Vec<usize>> = map
-            .chains
-            .iter()
-            .map(|c| c.cols.iter().copied().filter(|&id| id < n).collect())
-            .collect();
-        let mut sets: Vec<Vec<usize>> = Vec::new();
-        for e in &elements {
-            let mut s: Vec<usize> = e.nodes.iter().flat_map(|&a| node_unknown[a].iter().copied()).collect();
-            s.extend(&e.modal);
-            s.sort_unstable();
-            s.dedup();
-            sets.push(s);
-        }
-        let n_elem_sets = sets.len();
-        for (c, u) in node_unknown.iter().enumerate() {
-            if !map.chains[c].root {
-                sets.push(u.clone());
-            }
-        }
-        sets.extend(joint_forces.pattern_sets(&topo));
-        let symbolic = Pattern::structure(n, &sets);
-        let lu = if n > 0 {
-            Some(
-                SymbolicLu::try_new(symbolic.as_ref())
-                    .map_err(|e| invalid(None, "system".into(), format!("symbolic LU failed: {e:?}")))?,
-            )
-        } else {
-            None
-        };
-        let mut pattern = Pattern {
-            symbolic,
-            lu,
-            elem_dofs: Vec::new(),
-            elem_pos: Vec::new(),
-            elem_modal_pos: Vec::new(),
-            elem_slots: Vec::new(),
-            node_slots: vec![Vec::new(); model.nodes.len()],
-            node_unknown_cols: map
-                .chains
-                .iter()
-                .map(|ch| ch.cols.iter().copied().enumerate().filter(|&(_, id)| id < n).collect())
-                .collect(),
-            joint_spring_slots: Vec::new(),
-        };
-        for (e, dofs) in elements.iter().zip(sets.iter().take(n_elem_sets)) {
-            let find = |d: usize| dofs.binary_search(&d).expect("dof of the element");
-            let pos = e
-                .nodes
-                .iter()
-                .map(|&a| node_unknown[a].iter().map(|&d| find(d)).collect())
-                .collect();
-            let modal_pos = e.modal.iter().map(|&d| find(d)).collect();
-            let slots = dofs
-                .iter()
-                .flat_map(|&c| dofs.iter().map(move |&r| (r, c)))
-                .map(|(r, c)| pattern.slot(r, c))
-                .collect();
-            pattern.elem_dofs.push(dofs.clone());
-            pattern.elem_pos.push(pos);
-            pattern.elem_modal_pos.push(modal_pos);
-            pattern.elem_slots.push(slots);
-        }
-        for (c, u) in node_unknown.iter().enumerate() {
-            if !map.chains[c].root {
-                pattern.node_slots[c] = u
-                    .iter()
-                    .flat_map(|&k| u.iter().map(move |&i| (i, k)))
-                    .map(|(i, k)| pattern.slot(i, k))
-                    .collect();
-            }
-        }
-        pattern.joint_spring_slots = joint_springs
-            .iter()
-            .map(|&(s, ..)| match map.scalars[s].slot {
-                Slot::Unknown(d) => Some(pattern.slot(d, d)),
-                Slot::Prescribed(_) => None,
-            })
-            .collect();
-        joint_forces.bind(&topo, |r, c| pattern.slot(r, c));
+        let stress_maxima = stress_maxima(model, &flexible);
+        let elements = element_refs(model, &topo.map, &flexible, &rigid, &springs, &loads, &user_forces)?;
+        let pattern = Pattern::build(model, &topo, &elements, &joint_springs, &mut joint_forces)?;
         let evaluated = elements
             .iter()
             .zip(&pattern.elem_dofs)
@@ -684,15 +461,7 @@ impl System {
                 reactions_read || !passive || !dofs.is_empty()
             })
             .collect();
-        let dof_scale = topo
-            .dims
-            .iter()
-            .map(|d| match d {
-                topology::Dimension::Length => size,
-                topology::Dimension::Angle => 1.0,
-                topology::Dimension::Modal(b) => modal_scale[*b],
-            })
-            .collect();
+        let dof_scale = dof_scales(&topo, size, &modal_scale);
         Ok(Self {
             model: model.clone(),
             topo,
@@ -1322,18 +1091,32 @@ impl System {
         tangents: bool,
         ws: &mut Workspace,
     ) -> Result<(), SolveError> {
-        let map = &self.topo.map;
-        let n = map.n_dof;
         self.update_motions(state, ws);
-        let x = values(state, &ws.presc_rate, &ws.presc_acc);
+        self.element_outputs(state, lambda, tangents, ws)?;
+        self.assemble_residual(state, ws);
+        if tangents {
+            self.assemble_tangents(state, ws);
+        }
+        self.store_frames(ws, state);
+        Ok(())
+    }
+
+    /// Every element that is evaluated at `state` (loads and gravity scaled by `lambda`) into
+    /// its buffer in `ws`, in parallel on large models.
+    fn element_outputs(
+        &self,
+        state: &State,
+        lambda: f64,
+        tangents: bool,
+        ws: &mut Workspace,
+    ) -> Result<(), SolveError> {
         let gravity = self.model.gravity * lambda;
         let nodes = &ws.nodes;
-        let st: &State = state;
         let eval = |((e, b), &evaluated): ((&ElementRef, &mut ElementBuffer), &bool)| {
             if !evaluated {
                 return Ok(());
             }
-            self.element_output(e, st, nodes, &gravity, lambda, tangents, b)
+            self.element_output(e, state, nodes, &gravity, lambda, tangents, b)
         };
         if self.elements.len() >= PARALLEL_ELEMENTS {
             self.elements
@@ -1348,6 +1131,15 @@ impl System {
                 .zip(&self.evaluated)
                 .try_for_each(eval)?;
         }
+        Ok(())
+    }
+
+    /// $\mathbf F$, its inertia, internal and external parts, the reactions, the residual's
+    /// scale and floor from the element outputs, the joint springs and the joint forces.
+    fn assemble_residual(&self, state: &State, ws: &mut Workspace) {
+        let map = &self.topo.map;
+        let n = map.n_dof;
+        let x = values(state, &ws.presc_rate, &ws.presc_acc);
         // Node residuals and their parts.
         let nn = self.model.nodes.len();
         let parts = &mut ws.parts;
@@ -1428,10 +1220,14 @@ impl System {
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
         ws.scale = norm(&gparts[0]) + norm(&gparts[1]) + norm(&gparts[2]) + joint_force_scale;
         ws.floor = self.residual_floor(&ws.nodes);
-        if !tangents {
-            self.store_frames(ws, state);
-            return Ok(());
-        }
+    }
+
+    /// $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$ from the elements' port matrices, the
+    /// geometric terms of the node residuals, the joint springs and the joint forces.
+    fn assemble_tangents(&self, state: &State, ws: &mut Workspace) {
+        let map = &self.topo.map;
+        let nn = self.model.nodes.len();
+        let x = values(state, &ws.presc_rate, &ws.presc_acc);
         map.derivatives_into(&x, &ws.motions, &mut ws.derivs);
         for v in [&mut ws.M, &mut ws.C, &mut ws.K] {
             v.iter_mut().for_each(|x| *x = 0.0);
@@ -1479,8 +1275,6 @@ impl System {
         }
         self.joint_forces
             .add_tangents(&self.topo, &x, state.time, &state.controls, &mut ws.K, &mut ws.C);
-        self.store_frames(ws, state);
-        Ok(())
     }
 
     /// The drivers at the state's time into the state and the workspace, and the node motions
@@ -1889,6 +1683,344 @@ impl System {
             }
         }
     }
+}
+
+/// The elements of the bodies and the model's size (spread of the nodes, flexible bodies and
+/// centres of mass), with the scale of each body's modal coordinates.
+struct Bodies {
+    flexible: Vec<FlexibleElement>,
+    rigid: Vec<RigidElement>,
+    size: f64,
+    modal_scale: Vec<f64>,
+}
+
+fn invalid(id: Option<Entity>, entity: String, what: String) -> ModelError {
+    ModelError::InvalidValue { entity, what, id }
+}
+
+/// The flexible and rigid bodies checked (interfaces on their nodes, finite mass data) and
+/// turned into elements.
+fn body_elements(model: &Model, topo: &Topology) -> Result<Bodies, ModelError> {
+    let mut flexible = Vec::new();
+    let mut rigid = Vec::new();
+    // Model size: spread of the nodes, flexible bodies and centres of mass.
+    let centroid = model.nodes.iter().map(|n| n.position).sum::<Vector3<f64>>() / model.nodes.len().max(1) as f64;
+    let mut size = model
+        .nodes
+        .iter()
+        .map(|n| (n.position - centroid).norm())
+        .fold(1e-3, f64::max);
+    let mut modal_scale = vec![1.0; model.bodies.len()];
+    for (bi, body) in model.bodies.iter().enumerate() {
+        match body {
+            Body::Flexible(f) => {
+                let N = f.reduced.interfaces.len();
+                if f.nodes.len() != N {
+                    return Err(invalid(
+                        Some(Entity::Body(BodyId(bi as u32))),
+                        format!("body '{}'", f.name),
+                        format!("{} nodes for {N} interfaces", f.nodes.len()),
+                    ));
+                }
+                let superelement_error = |source| ModelError::Superelement {
+                    body: f.name.clone(),
+                    body_id: BodyId(bi as u32),
+                    source,
+                };
+                let mut se = Superelement::shared(Arc::clone(&f.reduced), f.frame, f.mass, f.damping.clone())
+                    .map_err(superelement_error)?;
+                if f.planar {
+                    // The model's confinement first: it names the node, whatever the body.
+                    crate::assembly::planar::check_planar_body(model, bi, f)?;
+                    se = se.into_planar().map_err(superelement_error)?;
+                }
+                let pos: Vec<Vector3<f64>> = f.reduced.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
+                let tolerance = 1e-6 * (1.0 + size_body(&pos));
+                let mut offsets = Vec::with_capacity(N);
+                for k in 0..N {
+                    let node = &model.nodes[f.nodes[k].index()];
+                    let x = f.placement.transform_point(&pos[k].into()).coords;
+                    let distance = (x - node.position).norm();
+                    if !(distance <= tolerance) {
+                        return Err(ModelError::InterfaceMismatch {
+                            body: f.name.clone(),
+                            interface: k,
+                            name: f.reduced.interfaces[k].name.clone(),
+                            node: node.name.clone(),
+                            distance,
+                            tolerance,
+                            body_id: BodyId(bi as u32),
+                            node_id: f.nodes[k],
+                        });
+                    }
+                    offsets.push(node.orientation.inverse() * f.placement.rotation);
+                }
+                size = size.max(2.0 * size_body(&pos));
+                let K = se.k_cb();
+                let k_norm = (0..K.nrows())
+                    .map(|i| (0..K.ncols()).map(|j| K[(i, j)].abs()).sum::<f64>())
+                    .fold(0.0, f64::max);
+                modal_scale[bi] = size_body(&pos).max(1e-3) * f.reduced.inertia.mass.sqrt();
+                let loads = body_loads(model, bi, &se, model.nodes[f.nodes[0].index()].orientation * offsets[0])?;
+                flexible.push(FlexibleElement {
+                    body: bi,
+                    se,
+                    nodes: f.nodes.iter().map(|n| n.index()).collect(),
+                    offsets,
+                    modal: topo.modal_scalars[bi].clone(),
+                    k_norm,
+                    size: 2.0 * size_body(&pos),
+                    loads,
+                });
+            }
+            Body::Rigid(r) => {
+                let ok = r.mass >= 0.0
+                    && finite(r.mass)
+                    && r.center_of_mass.iter().all(|x| x.is_finite())
+                    && r.inertia.iter().all(|x| x.is_finite());
+                if !ok {
+                    return Err(invalid(
+                        Some(Entity::Body(BodyId(bi as u32))),
+                        format!("rigid body '{}'", r.name),
+                        "mass must be finite and >= 0, centre of mass and inertia finite".into(),
+                    ));
+                }
+                size = size.max(r.center_of_mass.norm());
+                rigid.push(RigidElement {
+                    node: r.reference.index(),
+                    mass: r.mass,
+                    c: r.center_of_mass,
+                    J: (r.inertia + r.inertia.transpose()) * 0.5,
+                });
+            }
+        }
+    }
+    Ok(Bodies {
+        flexible,
+        rigid,
+        size,
+        modal_scale,
+    })
+}
+
+/// Every point mass finite and not negative.
+fn check_point_masses(model: &Model) -> Result<(), ModelError> {
+    for (i, p) in model.point_masses.iter().enumerate() {
+        if !(p.mass >= 0.0 && finite(p.mass)) {
+            return Err(invalid(
+                Some(Entity::PointMass(i)),
+                format!("point mass {i}"),
+                format!("mass must be finite and >= 0, got {}", p.mass),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The springs checked (finite, not negative, a direction at the start) as elements.
+fn spring_elements(model: &Model) -> Result<Vec<SpringElement>, ModelError> {
+    let mut springs = Vec::new();
+    for (i, s) in model.springs.iter().enumerate() {
+        if !(s.stiffness >= 0.0 && s.damping >= 0.0 && finite(s.stiffness) && finite(s.damping)) {
+            return Err(invalid(
+                Some(Entity::Spring(i)),
+                format!("spring '{}'", s.name),
+                "stiffness and damping must be finite and >= 0".into(),
+            ));
+        }
+        let xa = model.nodes[s.a.index()].position;
+        let xb = s.b.map_or(s.ground_point, |b| model.nodes[b.index()].position);
+        let l = (xb - xa).norm();
+        let l0 = s.rest_length.unwrap_or(l);
+        // A spring whose ends coincide has no direction: with a rest length its force
+        // k (l - l0) would act along the round-off of the end positions.
+        if l0 > 0.0 && l <= 1e-9 * l0 {
+            return Err(invalid(
+                Some(Entity::Spring(i)),
+                format!("spring '{}'", s.name),
+                format!("its ends coincide (length {l:.3e} m) and its rest length is {l0} m: the direction of its force is undefined; place the ends apart (or give rest_length = 0)"),
+            ));
+        }
+        springs.push(SpringElement {
+            a: s.a.index(),
+            b: s.b.map(|b| b.index()),
+            ground: s.ground_point,
+            k: s.stiffness,
+            c: s.damping,
+            l0,
+        });
+    }
+    Ok(springs)
+}
+
+/// The node loads checked (finite) as elements, a follower's value in its node's axes.
+fn load_elements(model: &Model) -> Result<Vec<LoadElement>, ModelError> {
+    let mut loads = Vec::new();
+    for (i, l) in model.loads.iter().enumerate() {
+        let time = (l.time.compile(&format!("load {i}"))).map_err(|e| e.with_id(Entity::Load(i)))?;
+        if !l.value.iter().all(|x| x.is_finite()) {
+            return Err(invalid(
+                Some(Entity::Load(i)),
+                format!("load {i}"),
+                "non-finite value".into(),
+            ));
+        }
+        let node = &model.nodes[l.node.index()];
+        let (follower, value) = match l.axes {
+            LoadAxes::Dead => (false, l.value),
+            LoadAxes::Follower => (true, node.orientation.inverse() * l.value),
+        };
+        loads.push(LoadElement {
+            node: l.node.index(),
+            moment: l.kind == LoadKind::Moment,
+            follower,
+            value,
+            time,
+        });
+    }
+    Ok(loads)
+}
+
+/// Each joint spring as (scalar, $k$, $c$, $x_0$, $f_0$).
+fn joint_spring_scalars(model: &Model, topo: &Topology) -> Result<Vec<JointSpringScalar>, ModelError> {
+    let mut joint_springs = Vec::new();
+    for (i, js) in model.joint_springs.iter().enumerate() {
+        let s = *topo.joint_scalars[js.joint.index()].get(js.coordinate).ok_or_else(|| {
+            invalid(
+                Some(Entity::JointSpring(i)),
+                format!("joint spring {i}"),
+                format!("joint coordinate {} does not exist", js.coordinate),
+            )
+        })?;
+        joint_springs.push((s, js.stiffness, js.damping, js.rest, js.preload));
+    }
+    Ok(joint_springs)
+}
+
+/// The drivers' time functions.
+fn compile_drivers(model: &Model) -> Result<Vec<CompiledFunction>, ModelError> {
+    model
+        .drivers
+        .iter()
+        .enumerate()
+        .map(|(i, d)| (d.motion.compile(&format!("driver '{}'", d.name))).map_err(|e| e.with_id(Entity::Driver(i))))
+        .collect::<Result<Vec<_>, _>>()
+}
+
+/// Every initial joint value or rate is on a free coordinate of its joint.
+fn check_initial_coordinates(model: &Model, topo: &Topology) -> Result<(), ModelError> {
+    let map = &topo.map;
+    for (i, c) in model.initial.iter().enumerate() {
+        if let InitialCondition::JointValue { joint, coordinate, .. }
+        | InitialCondition::JointRate { joint, coordinate, .. } = c
+        {
+            let j = &model.joints[joint.index()];
+            match topo.joint_scalars[joint.index()].get(*coordinate) {
+                Some(&s) if matches!(map.scalars[s].slot, Slot::Unknown(_)) => {}
+                _ => {
+                    return Err(invalid(
+                        Some(Entity::InitialCondition(i)),
+                        format!("initial condition on joint '{}'", j.name),
+                        format!("coordinate {coordinate} is not a free coordinate of the joint"),
+                    ))
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The search of each maximum-stress sensor (`None` for the other sensors).
+fn stress_maxima(model: &Model, flexible: &[FlexibleElement]) -> Vec<Option<StressMaximum>> {
+    model
+        .sensors
+        .iter()
+        .map(|s| match &s.kind {
+            SensorKind::MaxVonMises { body, nodes } => {
+                let f = flexible.iter().find(|f| f.body == body.index())?;
+                let shapes = f.se.stress_shapes()?;
+                Some(StressMaximum {
+                    search: Arc::new(reduction::VonMisesMaximum::new(shapes, nodes)),
+                    reference: Default::default(),
+                })
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// One [`ElementRef`] per element, in the order of the assembly: flexible and rigid bodies,
+/// point masses, springs, loads, user forces.
+fn element_refs(
+    model: &Model,
+    map: &CoordinateMap,
+    flexible: &[FlexibleElement],
+    rigid: &[RigidElement],
+    springs: &[SpringElement],
+    loads: &[LoadElement],
+    user_forces: &[Arc<dyn UserForce>],
+) -> Result<Vec<ElementRef>, ModelError> {
+    // Elements and the sparse pattern.
+    let mut elements = Vec::new();
+    for (i, f) in flexible.iter().enumerate() {
+        let modal = f.modal.iter().map(|&s| unknown(map.scalars[s].slot)).collect();
+        elements.push(ElementRef {
+            kind: ElementKind::Flexible(i),
+            nodes: f.nodes.clone(),
+            modal,
+        });
+    }
+    for (i, r) in rigid.iter().enumerate() {
+        elements.push(ElementRef {
+            kind: ElementKind::Rigid(i),
+            nodes: vec![r.node],
+            modal: vec![],
+        });
+    }
+    for p in &model.point_masses {
+        elements.push(ElementRef {
+            kind: ElementKind::PointMass(p.node.index(), p.mass),
+            nodes: vec![p.node.index()],
+            modal: vec![],
+        });
+    }
+    for (i, s) in springs.iter().enumerate() {
+        let mut nodes = vec![s.a];
+        nodes.extend(s.b);
+        elements.push(ElementRef {
+            kind: ElementKind::Spring(i),
+            nodes,
+            modal: vec![],
+        });
+    }
+    for (i, l) in loads.iter().enumerate() {
+        elements.push(ElementRef {
+            kind: ElementKind::Load(i),
+            nodes: vec![l.node],
+            modal: vec![],
+        });
+    }
+    for (i, u) in user_forces.iter().enumerate() {
+        elements.push(ElementRef {
+            kind: ElementKind::User(i),
+            nodes: crate::model::user_force::check_nodes(u.as_ref(), i, model.nodes.len())?,
+            modal: vec![],
+        });
+    }
+    Ok(elements)
+}
+
+/// The scale of each unknown in the norms (`System::dof_scale`): the model size for a length,
+/// 1 for an angle, the body's modal scale for a modal coordinate.
+fn dof_scales(topo: &Topology, size: f64, modal_scale: &[f64]) -> Vec<f64> {
+    topo.dims
+        .iter()
+        .map(|d| match d {
+            topology::Dimension::Length => size,
+            topology::Dimension::Angle => 1.0,
+            topology::Dimension::Modal(b) => modal_scale[*b],
+        })
+        .collect()
 }
 
 /// Largest distance of the interface positions from their centroid.
