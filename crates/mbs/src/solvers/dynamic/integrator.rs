@@ -904,7 +904,6 @@ impl<'a> Integrator<'a> {
     fn attempt(&mut self, modified: bool, residuals: &mut Vec<f64>) -> Result<Option<[f64; 6]>, SolveError> {
         let held = self.system.clone();
         let sys: &System = &held;
-        let n = sys.n_dof();
         let h = self.settings.step;
         let AlphaParameters {
             alpha_m: am,
@@ -914,13 +913,113 @@ impl<'a> Integrator<'a> {
         } = self.p;
         let bp = (1.0 - am) / (h * h * b * (1.0 - af));
         let gp = g / (h * b);
-        let prev = &self.prev;
         if self.step_decimals.0 != h {
             self.step_decimals = (h, step_decimals(h));
         }
-        let t = step_end_time_with(prev.time, h, self.step_decimals.1);
-        // Predictor: constant acceleration (modified Newton), or extrapolated from the last
-        // steps (full Newton; module docs, "Predictor").
+        let t = step_end_time_with(self.prev.time, h, self.step_decimals.1);
+        self.predict(sys, modified, h, t);
+        let step = self.steps + 1;
+        let tol = self.settings.tolerance;
+        // The round-off of the inertia forces of this step (from the last mass matrix): the
+        // floor that keeps the test meaningful when every force is zero (a coasting rotor).
+        let inertia_floor = sys.inertia_floor(&mut self.ws, &self.prev.velocity, h);
+        let mut last_rel = f64::INFINITY;
+        for it in 0..=self.settings.max_iterations {
+            // Modified Newton keeps a factor built for this h; without one it needs tangents now.
+            let stale = self.factor_h != Some(h);
+            // Full Newton: after a correction the step may have converged, so test with the
+            // forces alone and build the tangents only when another correction is needed.
+            // Steps of a smooth motion need about as many corrections as the last one, so up
+            // to that count the tangents come with the forces (a forces-only test there is
+            // wasted work).
+            let mut with_tangents = if modified {
+                stale || self.refresh_next
+            } else {
+                it == 0 || it < self.last_corrections
+            };
+            sys.evaluate_into(&mut self.trial, 1.0, with_tangents, &mut self.ws)?;
+            let converged = |ws: &Workspace, norm: f64| norm <= tol * ws.scale + ws.floor + inertia_floor;
+            let mut norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if !modified && !with_tangents && !converged(&self.ws, norm) && norm.is_finite() {
+                sys.evaluate_into(&mut self.trial, 1.0, true, &mut self.ws)?;
+                with_tangents = true;
+                norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
+            }
+            let rel = if self.ws.scale > 0.0 {
+                norm / self.ws.scale
+            } else {
+                norm
+            };
+            residuals.push(rel);
+            if converged(&self.ws, norm) {
+                if modified && with_tangents {
+                    // Tangents scheduled by a poor contraction arrived with the converging
+                    // evaluation: factorise them for the next step rather than waste them.
+                    sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, &self.trial)));
+                    if sys.factor(&mut self.ws).is_ok() {
+                        self.keep_factor(h);
+                        self.refresh_next = false;
+                    }
+                }
+                return self.accept(sys, modified, it, h);
+            }
+            if it == self.settings.max_iterations || !rel.is_finite() {
+                // Leave the workspace consistent with the last converged state.
+                let mut s = self.state.clone();
+                sys.evaluate_into(&mut s, 1.0, false, &mut self.ws)?;
+                return Err(SolveError::NotConverged {
+                    at: At::Time(t),
+                    step,
+                    residual: rel,
+                    iterations: it,
+                });
+            }
+            // Full Newton refactorises at every correction; modified Newton when its matrix is
+            // stale or the last correction contracted the residual too little (or it grew).
+            // A poor contraction (rel > rate * last_rel) schedules tangents with the next
+            // evaluation instead of a second evaluation here; a growing residual refreshes now.
+            let refresh = !modified || stale || self.refresh_next || rel > last_rel;
+            if modified && !refresh && rel > MODIFIED_NEWTON_RATE * last_rel {
+                self.refresh_next = true;
+            }
+            if refresh {
+                self.refresh_next = false;
+                if !with_tangents {
+                    sys.evaluate_into(&mut self.trial, 1.0, true, &mut self.ws)?;
+                }
+                sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, &self.trial)));
+                sys.factor(&mut self.ws).map_err(|what| SolveError::Singular {
+                    at: At::Time(t),
+                    step,
+                    what: format!("iteration matrix ({what})"),
+                })?;
+                self.keep_factor(h);
+            }
+            last_rel = rel;
+            // A kept factor was built where the free nodes stood turned by R R_f^T less: solve
+            // in its axes (module docs, "Newton strategy"). A fresh one is at this iterate.
+            self.correct(sys, modified && !refresh, bp, gp)
+                .map_err(|what| SolveError::Singular {
+                    at: At::Time(t),
+                    step,
+                    what: format!("iteration matrix ({what})"),
+                })?;
+        }
+        unreachable!("the loop returns at max_iterations")
+    }
+
+    /// The predictor of the step to `t`: constant acceleration (modified Newton), or
+    /// extrapolated from the last steps (full Newton; module docs, "Predictor"), into the
+    /// body-axis iterates and the trial state.
+    fn predict(&mut self, sys: &System, modified: bool, h: f64, t: f64) {
+        let n = sys.n_dof();
+        let AlphaParameters {
+            alpha_m: am,
+            alpha_f: af,
+            gamma: g,
+            beta: b,
+        } = self.p;
+        let prev = &self.prev;
         let st = &mut self.trial;
         st.clone_from(prev);
         st.time = t;
@@ -954,187 +1053,123 @@ impl<'a> Integrator<'a> {
             &self.vb,
             &self.qb,
         );
-        let step = self.steps + 1;
-        let tol = self.settings.tolerance;
-        // The round-off of the inertia forces of this step (from the last mass matrix): the
-        // floor that keeps the test meaningful when every force is zero (a coasting rotor).
-        let inertia_floor = sys.inertia_floor(&mut self.ws, &prev.velocity, h);
-        let mut last_rel = f64::INFINITY;
-        for it in 0..=self.settings.max_iterations {
-            // Modified Newton keeps a factor built for this h; without one it needs tangents now.
-            let stale = self.factor_h != Some(h);
-            // Full Newton: after a correction the step may have converged, so test with the
-            // forces alone and build the tangents only when another correction is needed.
-            // Steps of a smooth motion need about as many corrections as the last one, so up
-            // to that count the tangents come with the forces (a forces-only test there is
-            // wasted work).
-            let mut with_tangents = if modified {
-                stale || self.refresh_next
-            } else {
-                it == 0 || it < self.last_corrections
-            };
-            sys.evaluate_into(st, 1.0, with_tangents, &mut self.ws)?;
-            let converged = |ws: &Workspace, norm: f64| norm <= tol * ws.scale + ws.floor + inertia_floor;
-            let mut norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
-            if !modified && !with_tangents && !converged(&self.ws, norm) && norm.is_finite() {
-                sys.evaluate_into(st, 1.0, true, &mut self.ws)?;
-                with_tangents = true;
-                norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
-            }
-            let rel = if self.ws.scale > 0.0 {
-                norm / self.ws.scale
-            } else {
-                norm
-            };
-            residuals.push(rel);
-            if converged(&self.ws, norm) {
-                if modified && with_tangents {
-                    // Tangents scheduled by a poor contraction arrived with the converging
-                    // evaluation: factorise them for the next step rather than waste them.
-                    sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, st)));
-                    if sys.factor(&mut self.ws).is_ok() {
-                        self.factor_rotations.clear();
-                        self.factor_rotations
-                            .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
-                        self.factor_angles.clear();
-                        self.factor_angles
-                            .extend(self.plane_rotated.iter().map(|c| st.scalars[c.angle]));
-                        self.factor_h = Some(h);
-                        self.jacobians += 1;
-                        self.refresh_next = false;
-                    }
-                }
-                let mut momentum_defect = None;
-                if let Some(J0) = &self.J0 {
-                    // Hairer, Lubich & Wanner §IV.4: project the converged velocities onto
-                    // J(q_{n+1}, v) = J0; the sensors then read the corrected node velocities.
-                    // (Before the update of a_n, so that a failure leaves the step at t_n.)
-                    momentum_defect = Some(sys.project_momentum(st, J0)?.into());
-                    sys.refresh_motions(st, &mut self.ws);
-                }
-                for i in 0..n {
-                    self.a[i] = ((1.0 - af) * self.qb[i] + af * self.qb_n[i] - am * self.a[i]) / (1.0 - am);
-                }
-                sys.accept_step(st);
-                self.history.push(&self.qb_n, h);
-                std::mem::swap(&mut self.state, &mut self.trial);
-                self.steps += 1;
-                if !modified {
-                    self.last_corrections = it;
-                }
-                return Ok(momentum_defect);
-            }
-            if it == self.settings.max_iterations || !rel.is_finite() {
-                // Leave the workspace consistent with the last converged state.
-                let mut s = self.state.clone();
-                sys.evaluate_into(&mut s, 1.0, false, &mut self.ws)?;
-                return Err(SolveError::NotConverged {
-                    at: At::Time(t),
-                    step,
-                    residual: rel,
-                    iterations: it,
-                });
-            }
-            // Full Newton refactorises at every correction; modified Newton when its matrix is
-            // stale or the last correction contracted the residual too little (or it grew).
-            // A poor contraction (rel > rate * last_rel) schedules tangents with the next
-            // evaluation instead of a second evaluation here; a growing residual refreshes now.
-            let refresh = !modified || stale || self.refresh_next || rel > last_rel;
-            if modified && !refresh && rel > MODIFIED_NEWTON_RATE * last_rel {
-                self.refresh_next = true;
-            }
-            if refresh {
-                self.refresh_next = false;
-                if !with_tangents {
-                    sys.evaluate_into(st, 1.0, true, &mut self.ws)?;
-                }
-                sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, st)));
-                sys.factor(&mut self.ws).map_err(|what| SolveError::Singular {
-                    at: At::Time(t),
-                    step,
-                    what: format!("iteration matrix ({what})"),
-                })?;
-                self.factor_rotations.clear();
-                self.factor_rotations
-                    .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
-                self.factor_angles.clear();
-                self.factor_angles
-                    .extend(self.plane_rotated.iter().map(|c| st.scalars[c.angle]));
-                self.factor_h = Some(h);
-                self.jacobians += 1;
-            }
-            last_rel = rel;
-            for i in 0..n {
-                self.dx[i] = -self.ws.F[i];
-            }
-            // A kept factor was built where the free nodes stood turned by R R_f^T less: solve
-            // in its axes (module docs, "Newton strategy"). A fresh one is at this iterate.
-            let turn = modified && !refresh;
-            if turn {
-                corotate(
-                    &self.corotated,
-                    &st.rotations,
-                    &self.factor_rotations,
-                    &mut self.dx,
-                    true,
-                );
-                corotate_in_plane(
-                    &self.plane_rotated,
-                    &st.scalars,
-                    &self.factor_angles,
-                    &mut self.dx,
-                    true,
-                );
-            }
-            sys.solve_factored(&mut self.ws, &mut self.dx)
-                .map_err(|what| SolveError::Singular {
-                    at: At::Time(t),
-                    step,
-                    what: format!("iteration matrix ({what})"),
-                })?;
-            if turn {
-                corotate(
-                    &self.corotated,
-                    &st.rotations,
-                    &self.factor_rotations,
-                    &mut self.dx,
-                    false,
-                );
-                corotate_in_plane(
-                    &self.plane_rotated,
-                    &st.scalars,
-                    &self.factor_angles,
-                    &mut self.dx,
-                    false,
-                );
-            }
-            // dx corrects the spatial increment; the body-axis iterates move by R_n^T dx, and a
-            // translation's so that the SE(3) update moves the node by dx exactly.
-            sys.rotate_components(&prev.rotations, &mut self.dx, true);
-            for p in &self.trans {
-                let r = [p.rdof, p.rdof + 1, p.rdof + 2];
-                let theta = get3(&self.incr_b, &r) + get3(&self.dx, &r);
-                let target = p.B * (get3(&self.incr, &p.dofs) + get3(&self.dx, &p.dofs));
-                let u = so3::left_jacobian_inv(&theta) * prev.rotations[p.rot].inverse_transform_vector(&target);
-                set3(&mut self.dx, &p.dofs, &(u - get3(&self.incr_b, &p.dofs)));
-            }
-            for i in 0..n {
-                self.qb[i] += bp * self.dx[i];
-                self.vb[i] += gp * self.dx[i];
-                self.incr_b[i] += self.dx[i];
-            }
-            to_trial(
-                sys,
-                &self.trans,
-                prev,
-                st,
-                &mut self.incr,
-                &self.incr_b,
-                &self.vb,
-                &self.qb,
+    }
+
+    /// Keeps the factorised iteration matrix of step size `h` with the rotations and in-plane
+    /// angles it was built at (modified Newton turns it with them, module docs).
+    fn keep_factor(&mut self, h: f64) {
+        let st = &self.trial;
+        self.factor_rotations.clear();
+        self.factor_rotations
+            .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
+        self.factor_angles.clear();
+        self.factor_angles
+            .extend(self.plane_rotated.iter().map(|c| st.scalars[c.angle]));
+        self.factor_h = Some(h);
+        self.jacobians += 1;
+    }
+
+    /// The converged trial state becomes the state at $t_{n+1}$: the momentum projection (if
+    /// any), the algorithmic accelerations, the controllers and the predictor's history moved
+    /// on. Returns the momentum defect.
+    fn accept(&mut self, sys: &System, modified: bool, it: usize, h: f64) -> Result<Option<[f64; 6]>, SolveError> {
+        let n = sys.n_dof();
+        let AlphaParameters {
+            alpha_m: am,
+            alpha_f: af,
+            ..
+        } = self.p;
+        let st = &mut self.trial;
+        let mut momentum_defect = None;
+        if let Some(J0) = &self.J0 {
+            // Hairer, Lubich & Wanner §IV.4: project the converged velocities onto
+            // J(q_{n+1}, v) = J0; the sensors then read the corrected node velocities.
+            // (Before the update of a_n, so that a failure leaves the step at t_n.)
+            momentum_defect = Some(sys.project_momentum(st, J0)?.into());
+            sys.refresh_motions(st, &mut self.ws);
+        }
+        for i in 0..n {
+            self.a[i] = ((1.0 - af) * self.qb[i] + af * self.qb_n[i] - am * self.a[i]) / (1.0 - am);
+        }
+        sys.accept_step(st);
+        self.history.push(&self.qb_n, h);
+        std::mem::swap(&mut self.state, &mut self.trial);
+        self.steps += 1;
+        if !modified {
+            self.last_corrections = it;
+        }
+        Ok(momentum_defect)
+    }
+
+    /// One Newton correction $\Delta\mathbf x = -\mathbf S^{-1}\mathbf F$ from the factorised
+    /// iteration matrix (in its own axes when `turn`: a kept factor), applied to the body-axis
+    /// iterates and the trial state. Fails with the solver's message.
+    fn correct(&mut self, sys: &System, turn: bool, bp: f64, gp: f64) -> Result<(), String> {
+        let n = sys.n_dof();
+        let prev = &self.prev;
+        let st = &mut self.trial;
+        for i in 0..n {
+            self.dx[i] = -self.ws.F[i];
+        }
+        if turn {
+            corotate(
+                &self.corotated,
+                &st.rotations,
+                &self.factor_rotations,
+                &mut self.dx,
+                true,
+            );
+            corotate_in_plane(
+                &self.plane_rotated,
+                &st.scalars,
+                &self.factor_angles,
+                &mut self.dx,
+                true,
             );
         }
-        unreachable!("the loop returns at max_iterations")
+        sys.solve_factored(&mut self.ws, &mut self.dx)?;
+        if turn {
+            corotate(
+                &self.corotated,
+                &st.rotations,
+                &self.factor_rotations,
+                &mut self.dx,
+                false,
+            );
+            corotate_in_plane(
+                &self.plane_rotated,
+                &st.scalars,
+                &self.factor_angles,
+                &mut self.dx,
+                false,
+            );
+        }
+        // dx corrects the spatial increment; the body-axis iterates move by R_n^T dx, and a
+        // translation's so that the SE(3) update moves the node by dx exactly.
+        sys.rotate_components(&prev.rotations, &mut self.dx, true);
+        for p in &self.trans {
+            let r = [p.rdof, p.rdof + 1, p.rdof + 2];
+            let theta = get3(&self.incr_b, &r) + get3(&self.dx, &r);
+            let target = p.B * (get3(&self.incr, &p.dofs) + get3(&self.dx, &p.dofs));
+            let u = so3::left_jacobian_inv(&theta) * prev.rotations[p.rot].inverse_transform_vector(&target);
+            set3(&mut self.dx, &p.dofs, &(u - get3(&self.incr_b, &p.dofs)));
+        }
+        for i in 0..n {
+            self.qb[i] += bp * self.dx[i];
+            self.vb[i] += gp * self.dx[i];
+            self.incr_b[i] += self.dx[i];
+        }
+        to_trial(
+            sys,
+            &self.trans,
+            prev,
+            st,
+            &mut self.incr,
+            &self.incr_b,
+            &self.vb,
+            &self.qb,
+        );
+        Ok(())
     }
 }
 
