@@ -245,7 +245,11 @@ impl FlexibleElement {
                     moment: load.moment * x,
                     ..*load
                 };
-                self.se.point_load_into(buf.ws.kinematics(), &scaled, tangents, pl)?;
+                if tangents {
+                    self.se.point_load_into(buf.ws.kinematics(), &scaled, pl)?;
+                } else {
+                    self.se.point_load_residual_into(buf.ws.kinematics(), &scaled, pl)?;
+                }
                 for (i, r) in pl.residual.iter().enumerate() {
                     out.residual[i] += r;
                     out.external[i] -= r;
