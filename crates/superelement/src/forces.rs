@@ -89,8 +89,8 @@ impl Motion {
 
     pub fn update(&mut self, kin: &Kinematics, qd: &[f64], qdd: &[f64], g: &Vector3<f64>, tangents: bool) {
         let N = kin.n_interfaces();
-        kin.rotate_into(qd, false, &mut self.y);
-        kin.rotate_into(qdd, false, &mut self.a);
+        kin.to_body_into(qd, &mut self.y);
+        kin.to_body_into(qdd, &mut self.a);
         self.g = kin.R_j.transpose() * g;
         // The sums in a local array (in registers, not through `self`), column slices of fixed
         // length.

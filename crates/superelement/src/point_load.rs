@@ -185,7 +185,7 @@ impl Superelement {
         }
         kin.pt_vec(Q, &mut ws.rho);
         ws.rho.iter_mut().for_each(|r| *r = -*r);
-        kin.rotate_into(&ws.rho, true, &mut ws.residual);
+        kin.to_inertial_into(&ws.rho, &mut ws.residual);
         if !tangents {
             return Ok(());
         }

@@ -510,10 +510,10 @@ impl Superelement {
             self.lumped_inertia(kin, mo, loc, w, level);
         }
         let R = &kin.R_j;
-        kin.rotate_into(&loc.rho_in, true, &mut out.f_inertia);
-        kin.rotate_into(&loc.rho_el, true, &mut out.f_elastic);
-        kin.rotate_into(&loc.rho_d, true, &mut out.f_damping);
-        kin.rotate_into(&loc.rho_g, true, &mut out.f_gravity);
+        kin.to_inertial_into(&loc.rho_in, &mut out.f_inertia);
+        kin.to_inertial_into(&loc.rho_el, &mut out.f_elastic);
+        kin.to_inertial_into(&loc.rho_d, &mut out.f_damping);
+        kin.to_inertial_into(&loc.rho_g, &mut out.f_gravity);
         // The residual from its rotated parts (one rotation fewer); the tangents need it in body
         // axes too.
         for i in 0..n {
