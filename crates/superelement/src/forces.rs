@@ -813,8 +813,13 @@ impl Superelement {
             kin.pt_vec(&w.ffr.F, &mut loc.rho_in);
             return;
         }
-        self.inertia
-            .force_into(&kin.q_jj, &w.nu, &w.nu_dot, tangents, &mut w.ffr, &mut w.ffr_scratch);
+        if tangents {
+            self.inertia
+                .force_with_partials_into(&kin.q_jj, &w.nu, &w.nu_dot, &mut w.ffr, &mut w.ffr_scratch);
+        } else {
+            self.inertia
+                .force_into(&kin.q_jj, &w.nu, &w.nu_dot, &mut w.ffr, &mut w.ffr_scratch);
+        }
         kin.pt_vec(&w.ffr.F, &mut loc.rho_in);
         // Body-axis mass P^T M_ffr P = Lambda^T X^T (M_ffr X) Lambda.
         kin.mul_x(w.ffr.M.as_ref(), &mut w.t6, &mut w.MX);
