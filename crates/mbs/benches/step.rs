@@ -8,7 +8,7 @@
 //!
 //! Run with `cargo bench -p mbs --bench step` (release) or as a test with `cargo test --benches`.
 //! `cargo bench -p mbs --bench step -- crank 2` or `-- chain 128` runs one case (for
-//! `valgrind --tool=callgrind --toggle-collect='mbs::dynamic_solver::Integrator::step'` on a
+//! `valgrind --tool=callgrind --toggle-collect='mbs::solvers::dynamic::integrator::Integrator::step'` on a
 //! loaded machine, where instruction counts are the fair comparison). `-- chain N STEPS dense`
 //! (or `sparse`, `modified`) forces the factorisation of the iteration matrix or modified
 //! Newton (how `mbs::DENSE_MAX` was chosen).

@@ -2,7 +2,7 @@
 //! [`crate::System`], [`SolveError`] when an analysis stops, and [`Incomplete`], which carries
 //! a `SolveError` together with everything computed before it.
 
-use crate::model::{BodyId, JointId, NodeId};
+use crate::ids::{BodyId, JointId, NodeId};
 use superelement::SuperelementError;
 use thiserror::Error;
 
@@ -154,7 +154,7 @@ pub enum ModelError {
         id: Option<Entity>,
     },
     /// A node of a planar flexible body can leave the global xy-plane (or turn about another
-    /// axis than z): `what` says what lets it ([`crate::planar`]). The body gives its
+    /// axis than z): `what` says what lets it ([`crate::assembly::planar`]). The body gives its
     /// out-of-plane coordinates no stiffness or mass.
     #[error("body '{body}' is planar, but its node '{node}' can leave the xy-plane: {what}")]
     LeavesPlane {

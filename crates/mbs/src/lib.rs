@@ -14,7 +14,7 @@
 //!
 //! * A body's interface *is* a node: bodies sharing a node are welded. A flexible body's nodes
 //!   stay independent, which is how a kinematic loop closes; a loop of rigid bodies and joints
-//!   only is refused ([`ModelError::RigidLoop`], [`topology`]).
+//!   only is refused ([`ModelError::RigidLoop`], [`topology`](assembly::topology)).
 //! * Joints are directed, parent node to child node: the child's configuration follows from the
 //!   parent's and the joint coordinates ([`JointKind`]). Supports and node drivers act on
 //!   independent nodes.
@@ -83,11 +83,11 @@
 //! | $\dot{\mathbf J}_c\dot{\mathbf q}$ | `NodeKinematics::motion.a` at $\ddot{\mathbf q} = 0$ | convective acceleration | theory guide §8 |
 //! | $\mathbf r_c$ | (internal) | node residual: inertia + internal − external force | |
 //! | $\mathbf F$ | [`System::residual`] | $\sum_c\mathbf J_c^T\mathbf r_c$ (+ modal rows, joint springs) | theory guide §8 |
-//! | $\mathbf G_r$ | [`System::generalized_force`] | $\partial(\mathbf J^T\mathbf r)/\partial\mathbf q$ at fixed $\mathbf r$: the joints' geometric term | [`coordinates`] |
-//! | $\hat{\mathbf M},\ \hat{\mathbf C},\ \hat{\mathbf K}$ | [`Matrices`] | $\partial\mathbf F/\partial\ddot{\mathbf q}$, $\partial\mathbf F/\partial\dot{\mathbf q}$, $\partial\mathbf F/\partial\mathbf q$ | [`coordinates`] |
-//! | $\mathbf K_t,\ \mathbf C_t,\ \mathbf M$ | `ElementOutput` | element tangents on its node ports | \[S19\], [`body`] |
+//! | $\mathbf G_r$ | [`System::generalized_force`] | $\partial(\mathbf J^T\mathbf r)/\partial\mathbf q$ at fixed $\mathbf r$: the joints' geometric term | [`coordinates`](assembly::coordinates) |
+//! | $\hat{\mathbf M},\ \hat{\mathbf C},\ \hat{\mathbf K}$ | [`Matrices`] | $\partial\mathbf F/\partial\ddot{\mathbf q}$, $\partial\mathbf F/\partial\dot{\mathbf q}$, $\partial\mathbf F/\partial\mathbf q$ | [`coordinates`](assembly::coordinates) |
+//! | $\mathbf K_t,\ \mathbf C_t,\ \mathbf M$ | `ElementOutput` | element tangents on its node ports | \[S19\], [`body`](assembly::body) |
 //! | $\lambda$ | `lambda`, [`At::LoadFactor`] | load factor (statics) | |
-//! | $f_{scale}$, floors | `Workspace::scale`, [`System::residual_floor`], `System::inertia_floor` | Newton's test $\lVert\mathbf F\rVert \le \mathrm{tol}\,f_{scale}$ + the round-off of the elastic forces + (time steps) $10\varepsilon\lVert\hat{\mathbf M}\dot{\mathbf q}\rVert/h$ | [`system`] |
+//! | $f_{scale}$, floors | `Workspace::scale`, [`System::residual_floor`], `System::inertia_floor` | Newton's test $\lVert\mathbf F\rVert \le \mathrm{tol}\,f_{scale}$ + the round-off of the elastic forces + (time steps) $10\varepsilon\lVert\hat{\mathbf M}\dot{\mathbf q}\rVert/h$ | [`system`](assembly::system) |
 //! | $\mathbf P$ | `arc_length::load_vector` | $-\partial\mathbf F/\partial\lambda$: generalised external force at $\lambda = 1$ | Riks 1979 |
 //! | $\Delta s,\ s_i$ | [`ArcLengthSettings`], `System::dof_scale` | arc length; scale of unknown $i$ in its norm | Crisfield 1981 |
 //! | $\hat{\mathbf K}_0,\ \Delta\hat{\mathbf K},\ \mu$ | [`buckling`] | unloaded tangent, its change to the loaded state, buckling multiplier | Bathe §6.8.2 |
@@ -95,25 +95,25 @@
 //! | $\rho_\infty,\ \alpha_m,\ \alpha_f,\ \beta,\ \gamma$ | [`AlphaParameters`] | generalized-α parameters | Chung & Hulbert 1993 |
 //! | $\beta',\ \gamma'$ | `bp`, `gp` | iteration-matrix factors | BCA 2012 |
 //! | $\mathbf a_n$ | `Integrator::a` | algorithmic acceleration (body axes for rotations, and for free nodes' translations with `DynamicSettings::body_axis_translations`) | BCA 2012 |
-//! | $\boldsymbol\omega_b,\ \mathbf v_b$ | `vb` (`dynamic_solver`) | body-axis angular and translational velocity of a node, $\mathbf R^T\boldsymbol\omega_s$, $\mathbf R^T\dot{\mathbf x}$ | [`dynamic_solver`] |
-//! | $\mathrm{Re}\,s$ | [`LinearSpectrum::growing`], [`ModeEnergy::growth_rate`] | growth rate of an unstable mode \[1/s\] | [`linearized`] |
+//! | $\boldsymbol\omega_b,\ \mathbf v_b$ | `vb` (`solvers::dynamic`) | body-axis angular and translational velocity of a node, $\mathbf R^T\boldsymbol\omega_s$, $\mathbf R^T\dot{\mathbf x}$ | [`solvers::dynamic`] |
+//! | $\mathrm{Re}\,s$ | [`LinearSpectrum::growing`], [`ModeEnergy::growth_rate`] | growth rate of an unstable mode \[1/s\] | [`linearized`](solvers::linearized) |
 //! | $\mathbf T(h\Delta\mathbf q)$ | `System::iteration_matrix` | tangent operator $\mathbf J_l$ of each rotation increment | BCA 2012 |
 //! | $\mathbf S = \beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$ | `Workspace::S`, [`LinearSolver`] | iteration matrix; dense LU up to [`DENSE_MAX`] unknowns, sparse above | BCA 2012 |
-//! | $\lVert\mathbf F_{k+1}\rVert/\lVert\mathbf F_k\rVert$ | [`MODIFIED_NEWTON_RATE`] | contraction above which modified Newton ([`NewtonStrategy`]) refactorises | [`dynamic_solver`] |
-//! | $\mathbf S_f,\ \mathbf R_f,\ \mathbf Q = \mathbf R\mathbf R_f^T,\ \mathbf T$ | `Integrator::factor_rotations`, `corotate` | modified Newton's kept iteration matrix, a free node's rotation where it was built, the node's turn since, and the block rotation $\mathbf S \approx \mathbf T\mathbf S_f\mathbf T^T$ | [`dynamic_solver`] |
-//! | $c_1,\ c_2$ | `AccelerationHistory::predict`, [`PREDICTOR_WINDOW`] | least-squares coefficients of the full-Newton predictor $\ddot q_{n+1} = c_1\ddot q_n + c_2\ddot q_{n-1}$ | [`dynamic_solver`] |
+//! | $\lVert\mathbf F_{k+1}\rVert/\lVert\mathbf F_k\rVert$ | [`MODIFIED_NEWTON_RATE`] | contraction above which modified Newton ([`NewtonStrategy`]) refactorises | [`solvers::dynamic`] |
+//! | $\mathbf S_f,\ \mathbf R_f,\ \mathbf Q = \mathbf R\mathbf R_f^T,\ \mathbf T$ | `Integrator::factor_rotations`, `corotate` | modified Newton's kept iteration matrix, a free node's rotation where it was built, the node's turn since, and the block rotation $\mathbf S \approx \mathbf T\mathbf S_f\mathbf T^T$ | [`solvers::dynamic`] |
+//! | $c_1,\ c_2$ | `AccelerationHistory::predict`, [`PREDICTOR_WINDOW`] | least-squares coefficients of the full-Newton predictor $\ddot q_{n+1} = c_1\ddot q_n + c_2\ddot q_{n-1}$ | [`solvers::dynamic`] |
 //! | $\mathbf J = [\mathbf L;\ \mathbf H]$ | [`System::momentum`] | linear momentum, angular momentum about the origin: $\mathbf T_{rig}^T\hat{\mathbf M}\dot{\mathbf q}$ | Noether |
-//! | $\mathbf T_{rig}$ | [`System::rigid_velocities`] | $n_{dof}\times6$: independent velocities of the translations along and rotations about $\mathbf e_k$ | [`momentum`] |
+//! | $\mathbf T_{rig}$ | [`System::rigid_velocities`] | $n_{dof}\times6$: independent velocities of the translations along and rotations about $\mathbf e_k$ | [`momentum`](assembly::system::momentum) |
 //! | $\mathbf J_0,\ \boldsymbol\lambda$ | `Integrator::J0`, `lambda` | momenta of the start; rigid correction $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ | HLW §IV.4 |
 //! | $x,\ \dot x$ | [`State`] scalars | a joint coordinate (m or rad) and its rate | [`JointKind`] |
-//! | $Q$ | (internal) | generalised force on a joint coordinate, $\mathbf F \mathrel{-}= Q$ (N or N m) | [`joint_forces`] |
+//! | $Q$ | (internal) | generalised force on a joint coordinate, $\mathbf F \mathrel{-}= Q$ (N or N m) | [`joint_forces`](assembly::joint_forces) |
 //! | $k,\ c,\ x_0,\ f_0$ | [`JointSpring`] | joint spring: stiffness, damping, rest value, preload | [`model`] |
-//! | $x_{lo},\ x_{hi},\ d$ | [`JointLimit`] | stop bounds; penetration beyond them | [`joint_forces`] |
-//! | $u,\ r(t),\ y,\ e = r - y$ | [`JointActuator`], [`Pid`] | actuator effort, set-point, measured coordinate, error | [`joint_forces`] |
-//! | $K_p,\ K_i,\ K_d,\ z$ | [`Pid`], `Control` | PID gains; integral of $e$ (trapezoidal, moved on by accepted steps) | [`joint_forces`] |
-//! | $u_h$ | [`System::set_actuator_effort`] | an actuator's effort held at a value set between steps, in place of its law | [`joint_forces`] |
-//! | $\mathbf R_\Delta$ | [`initial`] | rigid rotation of a joint's subtree by an initial joint value | [`initial`] |
-//! | $\hat{\mathbf K}_s$ | [`mod@stability`] | symmetric part of $\hat{\mathbf K}$, scaled by its diagonal; negative eigenvalues: past a critical point | Bathe (1996) §6.8 |
+//! | $x_{lo},\ x_{hi},\ d$ | [`JointLimit`] | stop bounds; penetration beyond them | [`joint_forces`](assembly::joint_forces) |
+//! | $u,\ r(t),\ y,\ e = r - y$ | [`JointActuator`], [`Pid`] | actuator effort, set-point, measured coordinate, error | [`joint_forces`](assembly::joint_forces) |
+//! | $K_p,\ K_i,\ K_d,\ z$ | [`Pid`], `Control` | PID gains; integral of $e$ (trapezoidal, moved on by accepted steps) | [`joint_forces`](assembly::joint_forces) |
+//! | $u_h$ | [`System::set_actuator_effort`] | an actuator's effort held at a value set between steps, in place of its law | [`joint_forces`](assembly::joint_forces) |
+//! | $\mathbf R_\Delta$ | [`initial`](assembly::initial) | rigid rotation of a joint's subtree by an initial joint value | [`initial`](assembly::initial) |
+//! | $\hat{\mathbf K}_s$ | [`stability`](mod@solvers::stability) | symmetric part of $\hat{\mathbf K}$, scaled by its diagonal; negative eigenvalues: past a critical point | Bathe (1996) §6.8 |
 //! | $\mathbf f_e$ | [`Wrench`] | a user force's force and moment on a node, inertial | [`user_force`] |
 //!
 //! Vectors are inertial unless said otherwise; rigid-body mass data are in their reference
@@ -124,32 +124,32 @@
 //!
 //! | eq. | meaning | function |
 //! |---|---|---|
-//! | theory guide §8 | node configurations, velocities, accelerations and $\mathbf J$ from the independent coordinates | `mbs::coordinates::CoordinateMap::motions_into` |
-//! | this crate | $\partial\mathbf V/\partial\mathbf q$, $\partial\mathbf A/\partial\mathbf q$, $\partial\mathbf A/\partial\dot{\mathbf q}$, $\partial\mathbf J/\partial\mathbf q$ | `mbs::coordinates::CoordinateMap::derivatives_into` |
-//! | this crate | geometric term $\mathbf G_r$ | `mbs::coordinates::CoordinateMap::geometric_term` |
+//! | theory guide §8 | node configurations, velocities, accelerations and $\mathbf J$ from the independent coordinates | `mbs::assembly::coordinates::CoordinateMap::motions_into` |
+//! | this crate | $\partial\mathbf V/\partial\mathbf q$, $\partial\mathbf A/\partial\mathbf q$, $\partial\mathbf A/\partial\dot{\mathbf q}$, $\partial\mathbf J/\partial\mathbf q$ | `mbs::assembly::coordinates::CoordinateMap::derivatives_into` |
+//! | this crate | geometric term $\mathbf G_r$ | `mbs::assembly::coordinates::CoordinateMap::geometric_term` |
 //! | theory guide §8 | $\mathbf J^T(\mathbf M\mathbf J\ddot{\mathbf q} + \mathbf M\dot{\mathbf J}\dot{\mathbf q} + \mathbf Q_v - \mathbf Q) = 0$ | `mbs::System::residual` |
 //! | this crate | $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$ | `mbs::System::matrices` |
-//! | Newton-Euler | rigid body about its reference node | `mbs::body::rigid_element` |
-//! | (6.4)-(6.7), \[S19\] | flexible body | `mbs::body::FlexibleElement::element` (calls `superelement::Superelement::evaluate`) |
+//! | Newton-Euler | rigid body about its reference node | `mbs::assembly::body::rigid_element` |
+//! | (6.4)-(6.7), \[S19\] | flexible body | `mbs::assembly::body::FlexibleElement::element` (calls `superelement::Superelement::evaluate`) |
 //! | theory guide §9 | Newton with load stepping | `mbs::solve_static` |
 //! | Riks 1979, Crisfield 1981 | arc-length continuation (spherical constraint, bordered Newton) | `mbs::solve_arc_length`, `mbs::solve_static_with` |
 //! | Bathe §6.8.2 | linearised buckling $(\hat{\mathbf K}_0 + \mu\Delta\hat{\mathbf K})\boldsymbol\phi = \mathbf 0$ | `mbs::buckling` |
 //! | Zienkiewicz & Xie 1991 | local error estimate and step control | `mbs::Integrator::step_adaptive`, `mbs::solve_dynamic_adaptive` |
 //! | BCA 2012, Alg. 1 | Lie-group generalized-α step; full or modified Newton ([`NewtonStrategy`]) | `mbs::Integrator::step` |
-//! | HLW §IV.4 | momentum projection $(\mathbf T_{rig}^T\hat{\mathbf M}\mathbf T_{rig})\boldsymbol\lambda = \mathbf J_0 - \mathbf J$, $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ on free, unloaded models | `mbs::System::project_momentum` (private, `momentum.rs`) |
+//! | HLW §IV.4 | momentum projection $(\mathbf T_{rig}^T\hat{\mathbf M}\mathbf T_{rig})\boldsymbol\lambda = \mathbf J_0 - \mathbf J$, $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ on free, unloaded models | `mbs::System::project_momentum` (crate-private, `assembly/system/momentum.rs`) |
 //! | theory guide §9 | linearised spectrum; each mode's energy by body and node | `mbs::spectrum`, `mbs::mode_energies` |
-//! | this crate | initial joint values and rates moving the subtree behind the joint rigidly | `mbs::System::initial_state` (`initial.rs`) |
-//! | this crate | joint limits, actuators (time function, PID with trapezoidal integral) and their tangents | `mbs::joint_forces` |
+//! | this crate | initial joint values and rates moving the subtree behind the joint rigidly | `mbs::System::initial_state` (`assembly/system/initial_state.rs`) |
+//! | this crate | joint limits, actuators (time function, PID with trapezoidal integral) and their tangents | `mbs::assembly::joint_forces` |
 //! | Bathe (1996) §6.8 | stability of a static state (inertia of $\hat{\mathbf K}_s$) | `mbs::stability` |
 //! | this crate | fixed step retried with halved steps | `mbs::step_retrying`, `mbs::solve_dynamic_retrying` |
-//! | this crate | user force: residual $-\lambda\mathbf f_e$, $\mathbf K_t = -\lambda\partial\mathbf f_e/\partial\mathbf x$, $\mathbf C_t = -\lambda\partial\mathbf f_e/\partial\mathbf V$ (central differences when not given) | `mbs::user_force::user_force_element` (private), `mbs::user_force::finite_difference_jacobian` |
+//! | this crate | user force: residual $-\lambda\mathbf f_e$, $\mathbf K_t = -\lambda\partial\mathbf f_e/\partial\mathbf x$, $\mathbf C_t = -\lambda\partial\mathbf f_e/\partial\mathbf V$ (central differences when not given) | `mbs::assembly::body::user_force_element` (crate-private), `mbs::user_force::finite_difference_jacobian` |
 //!
 //! # Not implemented
 //!
 //! * Joints reversed automatically (a tree that can only be built by reversing a joint is
 //!   refused with a message saying so).
 //! * Momentum conservation on models that are not free: the momentum projection
-//!   ([`momentum`]) acts only when all six momenta are conserved (no supports, drivers, loads,
+//!   ([`momentum`](assembly::system::momentum)) acts only when all six momenta are conserved (no supports, drivers, loads,
 //!   gravity or springs to the ground); a component conserved alone (the angular momentum
 //!   about the vertical under gravity) drifts at the integrator's order, 2.
 //! * A cure for the out-of-plane growth of the spin-up to 10 rad/s with 4 superelements,
@@ -164,72 +164,59 @@
 //!
 //! # Modules
 //!
-//! [`model`] (serde data), [`time_function`], [`node`], [`coordinates`] (the maps and their
-//! derivatives), [`topology`] (the tree and its checks), [`initial`] (initial states that follow
-//! the joints), [`body`] (elements), [`joint_forces`] (limits and actuators), [`system`]
-//! (assembly), [`dense_lu`] (the LU of small iteration matrices), [`static_solver`], [`arc_length`], [`mod@stability`], [`dynamic_solver`], [`retry`]
-//! (halved steps after a failure), [`momentum`] (momenta and their projection), [`linearized`]
-//! (spectrum, mode energies and buckling), [`sensors`], [`error`],
-//! [`mod@planar`] (the checks of planar flexible bodies),
-//! [`user_force`] (forces written in Rust by the user: [`UserForce`], added with
-//! [`System::with_user_forces`]).
+//! Leaves first; a module uses only those above it.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`ids`], [`state`], [`node`] | entity ids; [`State`]; node motions (plain data) |
+//! | [`error`] | [`ModelError`], [`SolveError`], [`Incomplete`] |
+//! | [`model`] | the serde data, [`time_function`](model::time_function), [`user_force`](model::user_force) ([`UserForce`], added with [`System::with_user_forces`]), [`units`](model::units), [`merge`](model::merge) |
+//! | [`assembly`] | [`coordinates`](assembly::coordinates) (the maps and their derivatives), [`dense_lu`](assembly::dense_lu) (the LU of small iteration matrices), [`planar`](mod@assembly::planar) (the checks of planar flexible bodies), [`body`](assembly::body) (elements), [`topology`](assembly::topology) (the tree and its checks), [`initial`](assembly::initial) (how initial conditions act), [`joint_forces`](assembly::joint_forces) (limits and actuators), [`system`](assembly::system) ([`System`]: construction, assembly, initial states, sensors, momenta, recovery) |
+//! | [`solvers`] | [`static_solver`](solvers::static_solver), [`arc_length`](solvers::arc_length), [`stability`](mod@solvers::stability), [`linearized`](solvers::linearized) (spectrum, mode energies and buckling), [`dynamic`](solvers::dynamic) (the integrator, its runs, [`retry`](solvers::dynamic::retry) with halved steps after a failure, [`streaming`](solvers::dynamic::streaming)) |
 
 #![allow(non_snake_case)]
 
-pub mod arc_length;
-pub mod body;
-pub mod coordinates;
-pub mod dense_lu;
-pub mod dynamic_solver;
+pub mod assembly;
 pub mod error;
-pub mod initial;
-pub mod joint_forces;
-pub mod linearized;
-pub mod merge;
+pub mod ids;
 pub mod model;
-pub mod momentum;
 pub mod node;
-pub mod planar;
-pub mod recovery;
-pub mod retry;
-pub mod sensors;
-pub mod stability;
-pub mod static_solver;
-pub mod streaming;
-pub mod system;
-pub mod time_function;
-pub mod topology;
-pub mod units;
-pub mod user_force;
+pub mod solvers;
+pub mod state;
 
-pub use arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
-pub use dynamic_solver::{
-    fixed_steps, solve_dynamic, solve_dynamic_adaptive, AdaptiveSettings, AdaptiveStep, AlphaParameters,
-    DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE, PI_INTEGRAL,
-    PI_PROPORTIONAL, PREDICTOR_WINDOW,
-};
+/// The paths of the modules before they were grouped, kept for the callers that name them.
+pub use model::{merge, user_force};
+pub use solvers::dynamic as dynamic_solver;
+
+pub use assembly::system::momentum::{ExternalAction, MomentumProjection};
+pub use assembly::system::sensors::{Energies, PendingRows, SensorRecord};
+pub use assembly::system::{LinearSolver, Matrices, NodeKinematics, System, DENSE_MAX};
 pub use error::{At, Entity, Incomplete, ModelError, SolveError};
-pub use joint_forces::{Effort, JointActuator, JointLimit, Pid};
-pub use linearized::{
+pub use ids::{BodyId, JointId, NodeId};
+pub use model::merge::{weld_points, WeldError};
+pub use model::time_function::{Interpolation, TimeFunction};
+pub use model::units::CoordinateQuantity;
+pub use model::user_force::{FdSteps, UserForce, Wrench};
+pub use model::{
+    Body, BodyLoad, Driver, DriverTarget, Effort, FlexibleBody, InitialCondition, Joint, JointActuator, JointKind,
+    JointLimit, JointSpring, Load, LoadAxes, LoadKind, Model, Node, Pid, PointMass, RigidBody, RotationSupport, Sensor,
+    SensorKind, Spring, Support, TranslationSupport,
+};
+pub use node::NodeMotion;
+pub use solvers::arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};
+pub use solvers::dynamic::retry::{
+    solve_dynamic_retrying, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure,
+};
+pub use solvers::dynamic::streaming::{Interrupted, StepDone, StepTotals, Stepping};
+pub use solvers::dynamic::{
+    fixed_steps, solve_dynamic, solve_dynamic_adaptive, step_adaptive_to, AdaptiveSettings, AdaptiveStep,
+    AlphaParameters, DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
+    PI_INTEGRAL, PI_PROPORTIONAL, PREDICTOR_WINDOW,
+};
+pub use solvers::linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,
     NodeEnergy,
 };
-pub use merge::{weld_points, WeldError};
-pub use model::{
-    Body, BodyId, BodyLoad, Driver, DriverTarget, FlexibleBody, InitialCondition, Joint, JointId, JointKind,
-    JointSpring, Load, LoadAxes, LoadKind, Model, Node, NodeId, PointMass, RigidBody, RotationSupport, Sensor,
-    SensorKind, Spring, Support, TranslationSupport,
-};
-pub use momentum::{ExternalAction, MomentumProjection};
-pub use node::NodeMotion;
-pub use retry::{
-    solve_dynamic_retrying, step_adaptive_to, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure,
-};
-pub use sensors::{Energies, PendingRows, SensorRecord};
-pub use stability::{stability, Stability};
-pub use static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
-pub use streaming::{Interrupted, StepDone, StepTotals, Stepping};
-pub use system::{LinearSolver, Matrices, NodeKinematics, State, System, DENSE_MAX};
-pub use time_function::{Interpolation, TimeFunction};
-pub use units::CoordinateQuantity;
-pub use user_force::{FdSteps, UserForce, Wrench};
+pub use solvers::stability::{stability, Stability};
+pub use solvers::static_solver::{solve_static, LoadStep, StaticSettings, StaticSolution};
+pub use state::State;

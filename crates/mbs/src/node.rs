@@ -2,7 +2,6 @@
 //! accelerations (inertial axes; angular velocity and acceleration spatial, $\dot{\mathbf R} =
 //! \tilde{\boldsymbol\omega}\mathbf R$).
 
-use crate::coordinates::Motion;
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -15,17 +14,4 @@ pub struct NodeMotion {
     pub omega: Vector3<f64>,
     pub a: Vector3<f64>,
     pub alpha: Vector3<f64>,
-}
-
-impl From<&Motion> for NodeMotion {
-    fn from(m: &Motion) -> Self {
-        Self {
-            r: m.p,
-            R: m.R,
-            v: m.v,
-            omega: m.w,
-            a: m.a,
-            alpha: m.al,
-        }
-    }
 }

@@ -194,7 +194,7 @@ fn spin_up_stays_bounded() {
 /// 1e-18 m, so the bound has ten orders of margin on both sides).
 ///
 /// This failed when the generalized-alpha recursion ran on spatial angular velocities
-/// (module docs of `mbs::dynamic_solver`, "Body axes"): the fixed-interface modes of the
+/// (module docs of `mbs::solvers::dynamic`, "Body axes"): the fixed-interface modes of the
 /// 2.5 m segments (about 346 rad/s, omega h = 1.7) grew at 3.4 /s at 10 rad/s. With the
 /// rotations in body axes and the translations still in fixed axes, N = 8 at rho_inf = 1 grew
 /// an in-plane (axial) mode and stopped at t = 26.2 s; with the translations in body axes too

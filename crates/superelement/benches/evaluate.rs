@@ -43,6 +43,17 @@ use superelement::{Damping, FrameChoice, MassVariant, Superelement};
 /// Evaluations per case of `--profile` (after one warm-up call).
 const PROFILE_CALLS: usize = 20;
 
+/// The evaluation a timed batch calls.
+#[derive(Clone, Copy)]
+enum Call {
+    /// `evaluate_into`: forces, mass matrix and tangents.
+    Evaluate,
+    /// `forces_into`: forces and mass matrix.
+    Forces,
+    /// `residual_into`: the residual and its force parts.
+    Residual,
+}
+
 struct Case {
     name: String,
     se: Superelement,
@@ -196,9 +207,8 @@ fn main() {
                 let state = &states[i % 2];
                 match profile.as_str() {
                     "residual" => se.residual_into(state, &acc, &g, &mut ws, &mut out).unwrap(),
-                    p => se
-                        .evaluate_into(state, &acc, &g, p == "tangents", &mut ws, &mut out)
-                        .unwrap(),
+                    "tangents" => se.evaluate_into(state, &acc, &g, &mut ws, &mut out).unwrap(),
+                    _ => se.forces_into(state, &acc, &g, &mut ws, &mut out).unwrap(),
                 }
             }
             println!("{name}: {} evaluations ({profile})", PROFILE_CALLS + 1);
@@ -207,16 +217,16 @@ fn main() {
         // Many short batches: on a loaded machine the fastest batches are the uninterrupted ones.
         let (batches, per) = if quick { (1, 2) } else { (400, 25) };
         let mut sink = 0.0;
-        // `Some(tangents)`: `evaluate_into`; `None`: `residual_into`.
-        let mut time = |tangents: Option<bool>, sink: &mut f64| {
+        let mut time = |call: Call, sink: &mut f64| {
             let mut times = Vec::with_capacity(batches);
             for _ in 0..batches {
                 let t = Instant::now();
                 for i in 0..per {
                     let state = &states[i % 2];
-                    match tangents {
-                        Some(t) => se.evaluate_into(state, &acc, &g, t, &mut ws, &mut out).unwrap(),
-                        None => se.residual_into(state, &acc, &g, &mut ws, &mut out).unwrap(),
+                    match call {
+                        Call::Evaluate => se.evaluate_into(state, &acc, &g, &mut ws, &mut out).unwrap(),
+                        Call::Forces => se.forces_into(state, &acc, &g, &mut ws, &mut out).unwrap(),
+                        Call::Residual => se.residual_into(state, &acc, &g, &mut ws, &mut out).unwrap(),
                     }
                     *sink += out.residual[0];
                 }
@@ -225,9 +235,9 @@ fn main() {
             times.sort_by(|a, b| a.partial_cmp(b).unwrap());
             (times[times.len() / 2], times[0])
         };
-        let (all, all_min) = time(Some(true), &mut sink);
-        let (forces, _) = time(Some(false), &mut sink);
-        let (residual, _) = time(None, &mut sink);
+        let (all, all_min) = time(Call::Evaluate, &mut sink);
+        let (forces, _) = time(Call::Forces, &mut sink);
+        let (residual, _) = time(Call::Residual, &mut sink);
         let alloc = {
             let t = Instant::now();
             for _ in 0..per {

@@ -33,7 +33,7 @@ fn planar(args: &[String]) {
     let mut out = superelement::Evaluation::zeros(se.n_coordinates());
     let mut sink = 0.0;
     for _ in 0..count {
-        se.evaluate_into(&state, &acc, &g, true, &mut ws, &mut out).unwrap();
+        se.evaluate_into(&state, &acc, &g, &mut ws, &mut out).unwrap();
         se.residual_into(&state, &acc, &g, &mut ws, &mut out).unwrap();
         sink += out.residual[0] + out.stiffness[(0, 0)];
     }
@@ -86,7 +86,7 @@ fn main() {
     if let Some(path) = args.get(4) {
         // All outputs, for before/after comparisons of a refactoring.
         let mut text = String::new();
-        se.evaluate_into(&state, &acc, &g, true, &mut ws, &mut out).unwrap();
+        se.evaluate_into(&state, &acc, &g, &mut ws, &mut out).unwrap();
         for v in [&out.residual, &out.q_v, &out.f_elastic, &out.f_damping, &out.f_gravity] {
             for x in v.iter() {
                 text += &format!("{x:.17e}\n");
@@ -103,7 +103,7 @@ fn main() {
     }
     let mut sink = 0.0;
     for _ in 0..count {
-        se.evaluate_into(&state, &acc, &g, true, &mut ws, &mut out).unwrap();
+        se.evaluate_into(&state, &acc, &g, &mut ws, &mut out).unwrap();
         sink += out.residual[0] + out.stiffness[(0, 0)];
     }
     println!("{count} evaluations of {frame} {mass:?}: [{sink:.3e}]");

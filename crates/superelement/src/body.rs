@@ -727,7 +727,7 @@ impl Superelement {
                 .unwrap_or([f64::NAN; 3]);
             return (kin.R_j * Vector3::new(xi[0], xi[1], 0.0), Vector3::new(0.0, 0.0, xi[2]));
         }
-        let y = kin.rotate(&state.velocity_vector(), false);
+        let y = kin.to_body(&state.velocity_vector());
         let Y = kin.Y();
         let xi: Vec<f64> = (0..6).map(|a| (0..self.n).map(|j| Y[(a, j)] * y[j]).sum()).collect();
         (
@@ -752,7 +752,7 @@ impl Superelement {
             }
             return out;
         }
-        let y = kin.rotate(&state.velocity_vector(), false);
+        let y = kin.to_body(&state.velocity_vector());
         let completed;
         let B = match kin.B() {
             Some(B) => B,

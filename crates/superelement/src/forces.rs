@@ -43,7 +43,7 @@ pub(crate) enum Level {
     /// no $n\times n$ work beyond $\mathbf M_{CB}\ddot{\mathbf q}$, $\mathbf K_{CB}\mathbf q^{jj}$ and the
     /// inertia contractions.
     Forces,
-    /// The forces and the mass matrix (`Superelement::evaluate_into` without tangents).
+    /// The forces and the mass matrix (`Superelement::forces_into`).
     Mass,
     /// The forces, the mass matrix and the tangents $\mathbf K_t$, $\mathbf C_t$.
     Tangents,
@@ -89,8 +89,8 @@ impl Motion {
 
     pub fn update(&mut self, kin: &Kinematics, qd: &[f64], qdd: &[f64], g: &Vector3<f64>, tangents: bool) {
         let N = kin.n_interfaces();
-        kin.rotate_into(qd, false, &mut self.y);
-        kin.rotate_into(qdd, false, &mut self.a);
+        kin.to_body_into(qd, &mut self.y);
+        kin.to_body_into(qdd, &mut self.a);
         self.g = kin.R_j.transpose() * g;
         // The sums in a local array (in registers, not through `self`), column slices of fixed
         // length.
@@ -813,8 +813,13 @@ impl Superelement {
             kin.pt_vec(&w.ffr.F, &mut loc.rho_in);
             return;
         }
-        self.inertia
-            .force_into(&kin.q_jj, &w.nu, &w.nu_dot, tangents, &mut w.ffr, &mut w.ffr_scratch);
+        if tangents {
+            self.inertia
+                .force_with_partials_into(&kin.q_jj, &w.nu, &w.nu_dot, &mut w.ffr, &mut w.ffr_scratch);
+        } else {
+            self.inertia
+                .force_into(&kin.q_jj, &w.nu, &w.nu_dot, &mut w.ffr, &mut w.ffr_scratch);
+        }
         kin.pt_vec(&w.ffr.F, &mut loc.rho_in);
         // Body-axis mass P^T M_ffr P = Lambda^T X^T (M_ffr X) Lambda.
         kin.mul_x(w.ffr.M.as_ref(), &mut w.t6, &mut w.MX);

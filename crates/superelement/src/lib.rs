@@ -65,7 +65,8 @@
 //!   \mathbf f_{el} + \mathbf f_d - \mathbf f_g$, its parts and $\mathbf M$, $\mathbf K_t$, $\mathbf C_t$
 //!   as faer matrices; [`Superelement::evaluate_into`] does the same into a reused
 //!   [`Workspace`] and [`Evaluation`] (no allocation; the hot-loop form);
-//!   [`Superelement::forces`] skips the tangents; [`Superelement::residual_into`] computes the
+//!   [`Superelement::forces`] and [`Superelement::forces_into`] skip the tangents (left NaN);
+//!   [`Superelement::residual_into`] computes the
 //!   residual and its force parts alone (no mass matrix: the Newton iterations that reuse an
 //!   iteration matrix).
 //! * [`Superelement::kinetic_energy`], [`Superelement::strain_energy`],

@@ -615,17 +615,25 @@ impl FfrInertia {
     }
 
     /// Allocating form of [`Self::force_into`].
-    pub fn force(&self, q: &[f64], nu: &[f64], nu_dot: &[f64], partials: bool) -> FfrForce {
+    pub fn force(&self, q: &[f64], nu: &[f64], nu_dot: &[f64]) -> FfrForce {
         let n = self.n();
         let mut out = FfrForce::zeros(n);
         let mut w = FfrScratch::new(n);
-        self.force_into(q, nu, nu_dot, partials, &mut out, &mut w);
+        self.force_into(q, nu, nu_dot, &mut out, &mut w);
         out
     }
 
-    /// $\mathbf F(\mathbf q, \boldsymbol\nu, \dot{\boldsymbol\nu})$, $\mathbf M_{ffr}$ and, when `partials`,
-    /// the derivatives $\partial\mathbf F/\partial\boldsymbol\nu$, $\partial\mathbf F/\partial\mathbf q$ (module docs;
-    /// without `partials` those two keep their old values).
+    /// Allocating form of [`Self::force_with_partials_into`].
+    pub fn force_with_partials(&self, q: &[f64], nu: &[f64], nu_dot: &[f64]) -> FfrForce {
+        let n = self.n();
+        let mut out = FfrForce::zeros(n);
+        let mut w = FfrScratch::new(n);
+        self.force_with_partials_into(q, nu, nu_dot, &mut out, &mut w);
+        out
+    }
+
+    /// $\mathbf F(\mathbf q, \boldsymbol\nu, \dot{\boldsymbol\nu})$, $\mathbf M_{ffr}$ and the derivatives
+    /// $\partial\mathbf F/\partial\boldsymbol\nu$, $\partial\mathbf F/\partial\mathbf q$ (module docs).
     ///
     /// # Derivation
     /// Straight differentiation of the three force blocks of the module docs; with
@@ -647,16 +655,21 @@ impl FfrInertia {
     /// \tilde{\mathbf V}\tilde{\boldsymbol\Omega}\mathbf S_t$, with $\dot{\mathbf j}_q(\mathbf w) =
     /// \partial(\dot{\mathbf J}\mathbf w)/\partial\mathbf q$. Checked by
     /// `tests/unit/fd_tangent.rs::ffr_partials`.
-    pub fn force_into(
+    pub fn force_with_partials_into(
         &self,
         q: &[f64],
         nu: &[f64],
         nu_dot: &[f64],
-        partials: bool,
         out: &mut FfrForce,
         w: &mut FfrScratch,
     ) {
-        self.force_impl(q, nu, nu_dot, true, partials, out, w);
+        self.force_impl(q, nu, nu_dot, true, true, out, w);
+    }
+
+    /// [`Self::force_with_partials_into`] without the derivatives: $\mathbf F$ and $\mathbf M_{ffr}$
+    /// (`out.F_nu`, `out.F_q` keep their old values).
+    pub fn force_into(&self, q: &[f64], nu: &[f64], nu_dot: &[f64], out: &mut FfrForce, w: &mut FfrScratch) {
+        self.force_impl(q, nu, nu_dot, true, false, out, w);
     }
 
     /// $\mathbf F(\mathbf q, \boldsymbol\nu, \dot{\boldsymbol\nu})$ alone into `out.F` (`out.M` and the

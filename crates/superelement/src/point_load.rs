@@ -106,13 +106,36 @@ impl Superelement {
         }
     }
 
-    /// The residual share of `load` (module docs) at the configuration `kin` into `ws.residual`,
-    /// and with `tangents` its derivative into `ws.stiffness`. Several loads on one body: call
-    /// once per load and add.
+    /// The residual share of `load` (module docs) at the configuration `kin` into `ws.residual`
+    /// and its derivative into `ws.stiffness`. Several loads on one body: call once per load and
+    /// add.
     ///
     /// # Errors
     /// [`SuperelementError::InvalidState`] if the body has no load point `load.point`.
     pub fn point_load_into(
+        &self,
+        kin: &Kinematics,
+        load: &PointLoad,
+        ws: &mut PointLoadWorkspace,
+    ) -> Result<(), SuperelementError> {
+        self.point_load_level(kin, load, true, ws)
+    }
+
+    /// [`Self::point_load_into`] without the derivative: `ws.residual` only (`ws.stiffness` is
+    /// not written), what a Newton iteration that reuses its iteration matrix reads.
+    ///
+    /// # Errors
+    /// [`SuperelementError::InvalidState`] if the body has no load point `load.point`.
+    pub fn point_load_residual_into(
+        &self,
+        kin: &Kinematics,
+        load: &PointLoad,
+        ws: &mut PointLoadWorkspace,
+    ) -> Result<(), SuperelementError> {
+        self.point_load_level(kin, load, false, ws)
+    }
+
+    fn point_load_level(
         &self,
         kin: &Kinematics,
         load: &PointLoad,
@@ -162,7 +185,7 @@ impl Superelement {
         }
         kin.pt_vec(Q, &mut ws.rho);
         ws.rho.iter_mut().for_each(|r| *r = -*r);
-        kin.rotate_into(&ws.rho, true, &mut ws.residual);
+        kin.to_inertial_into(&ws.rho, &mut ws.residual);
         if !tangents {
             return Ok(());
         }

@@ -4,7 +4,8 @@
 //! $\mathbf C_t = \partial\mathbf r/\partial\dot{\mathbf q}$, $\mathbf M = \partial\mathbf r/\partial\ddot{\mathbf q}$.
 //!
 //! Naming rule: `evaluate` returns forces and tangents together (they share every
-//! intermediate); `*_force`-style pieces live in [`crate::forces`].
+//! intermediate), `forces` the forces and the mass matrix without the tangents (left NaN),
+//! `residual` the residual and its force parts alone; `*_force`-style pieces live in [`crate::forces`].
 //!
 //! # Variations
 //!
@@ -54,9 +55,11 @@ pub struct Evaluation {
     pub f_gravity: Vec<f64>,
     /// $\mathbf M$ (not updated by [`Superelement::residual_into`]).
     pub mass: Mat<f64>,
-    /// $\mathbf K_t = \partial\mathbf r/\partial\mathbf q$ (not updated by [`Superelement::forces`]).
+    /// $\mathbf K_t = \partial\mathbf r/\partial\mathbf q$ (NaN after [`Superelement::forces_into`], which
+    /// does not form it; not updated by [`Superelement::residual_into`]).
     pub stiffness: Mat<f64>,
-    /// $\mathbf C_t = \partial\mathbf r/\partial\dot{\mathbf q}$ (not updated by [`Superelement::forces`]).
+    /// $\mathbf C_t = \partial\mathbf r/\partial\dot{\mathbf q}$ (NaN after [`Superelement::forces_into`];
+    /// not updated by [`Superelement::residual_into`]).
     pub damping: Mat<f64>,
 }
 
@@ -269,11 +272,13 @@ impl Superelement {
     ) -> Result<Evaluation, SuperelementError> {
         let mut ws = self.workspace();
         let mut out = Evaluation::zeros(self.n);
-        self.evaluate_into(state, acc, gravity, true, &mut ws, &mut out)?;
+        self.evaluate_into(state, acc, gravity, &mut ws, &mut out)?;
         Ok(out)
     }
 
-    /// Forces only (no tangents; cheaper, for explicit integrators and energy checks).
+    /// The forces and the mass matrix without the tangents (cheaper, for explicit integrators
+    /// and energy checks): `stiffness` and `damping` are NaN. Allocates; see
+    /// [`Self::forces_into`].
     pub fn forces(
         &self,
         state: &BodyState,
@@ -282,28 +287,41 @@ impl Superelement {
     ) -> Result<Evaluation, SuperelementError> {
         let mut ws = self.workspace();
         let mut out = Evaluation::zeros(self.n);
-        self.evaluate_into(state, acc, gravity, false, &mut ws, &mut out)?;
+        self.forces_into(state, acc, gravity, &mut ws, &mut out)?;
         Ok(out)
     }
 
     /// [`Self::evaluate`] into reused buffers: `ws` from [`Self::workspace`], `out` from
-    /// [`Evaluation::zeros`]. With `tangents = false` only the forces and the mass matrix are
-    /// computed (`out.stiffness`, `out.damping` keep their old values), and none of the
-    /// tangent-only partials is formed (the FFR $\partial\mathbf F/\partial\boldsymbol\nu$,
-    /// $\partial\mathbf F/\partial\mathbf q$, the geometric Hessian $\mathbf H_G$, $\mathbf N_y$): about 30 % fewer
-    /// instructions (`benches/evaluate.rs`; checked equal to the full evaluation by
-    /// `tests/unit/evaluation.rs`). [`Self::residual_into`] skips the mass matrix too.
+    /// [`Evaluation::zeros`]: the forces, the mass matrix and the tangents.
     pub fn evaluate_into(
         &self,
         state: &BodyState,
         acc: &[f64],
         gravity: &Vector3<f64>,
-        tangents: bool,
         ws: &mut Workspace,
         out: &mut Evaluation,
     ) -> Result<(), SuperelementError> {
-        let level = if tangents { Level::Tangents } else { Level::Mass };
-        self.evaluate_level(state, acc, gravity, level, ws, out)
+        self.evaluate_level(state, acc, gravity, Level::Tangents, ws, out)
+    }
+
+    /// [`Self::forces`] into reused buffers: the forces and the mass matrix only, none of the
+    /// tangent-only partials formed (the FFR $\partial\mathbf F/\partial\boldsymbol\nu$,
+    /// $\partial\mathbf F/\partial\mathbf q$, the geometric Hessian $\mathbf H_G$, $\mathbf N_y$): about 30 % fewer
+    /// instructions than [`Self::evaluate_into`] (`benches/evaluate.rs`; checked equal to the full
+    /// evaluation by `tests/unit/evaluation.rs`). `out.stiffness` and `out.damping` are filled
+    /// with NaN, so that tangents of an earlier call cannot be read as this state's.
+    /// [`Self::residual_into`] skips the mass matrix too.
+    pub fn forces_into(
+        &self,
+        state: &BodyState,
+        acc: &[f64],
+        gravity: &Vector3<f64>,
+        ws: &mut Workspace,
+        out: &mut Evaluation,
+    ) -> Result<(), SuperelementError> {
+        out.stiffness.fill(f64::NAN);
+        out.damping.fill(f64::NAN);
+        self.evaluate_level(state, acc, gravity, Level::Mass, ws, out)
     }
 
     /// The residual alone, the hot-loop form of a Newton iteration that reuses its iteration
@@ -374,13 +392,26 @@ impl Superelement {
     }
 
     /// [`Self::evaluate`] for a configuration already solved ([`Self::kinematics`]); allocates.
-    pub fn evaluate_kinematics(
+    pub fn evaluate_kinematics(&self, kin: &Kinematics, qd: &[f64], acc: &[f64], gravity: &Vector3<f64>) -> Evaluation {
+        self.kinematics_level(kin, qd, acc, gravity, Level::Tangents)
+    }
+
+    /// [`Self::forces`] for a configuration already solved ([`Self::kinematics`]): the forces and
+    /// the mass matrix, `stiffness` and `damping` NaN; allocates.
+    pub fn forces_kinematics(&self, kin: &Kinematics, qd: &[f64], acc: &[f64], gravity: &Vector3<f64>) -> Evaluation {
+        let mut out = self.kinematics_level(kin, qd, acc, gravity, Level::Mass);
+        out.stiffness.fill(f64::NAN);
+        out.damping.fill(f64::NAN);
+        out
+    }
+
+    fn kinematics_level(
         &self,
         kin: &Kinematics,
         qd: &[f64],
         acc: &[f64],
         gravity: &Vector3<f64>,
-        tangents: bool,
+        level: Level,
     ) -> Evaluation {
         if self.is_planar() {
             // The state of the configuration: interfaces placed by the frame and q_jj.
@@ -406,7 +437,6 @@ impl Superelement {
             }
             let mut ws = self.workspace();
             let mut out = Evaluation::zeros(self.n);
-            let level = if tangents { Level::Tangents } else { Level::Mass };
             // A configuration of this body solves its frame at once from its own frame; a
             // failure (a kinematics of another body) gives NaN outputs, never other numbers.
             if self
@@ -423,7 +453,6 @@ impl Superelement {
         ws.kin = kin.clone();
         ws.qd.copy_from_slice(qd);
         let mut out = Evaluation::zeros(self.n);
-        let level = if tangents { Level::Tangents } else { Level::Mass };
         self.evaluate_local(acc, gravity, level, &mut ws, &mut out);
         out
     }
@@ -481,10 +510,10 @@ impl Superelement {
             self.lumped_inertia(kin, mo, loc, w, level);
         }
         let R = &kin.R_j;
-        kin.rotate_into(&loc.rho_in, true, &mut out.f_inertia);
-        kin.rotate_into(&loc.rho_el, true, &mut out.f_elastic);
-        kin.rotate_into(&loc.rho_d, true, &mut out.f_damping);
-        kin.rotate_into(&loc.rho_g, true, &mut out.f_gravity);
+        kin.to_inertial_into(&loc.rho_in, &mut out.f_inertia);
+        kin.to_inertial_into(&loc.rho_el, &mut out.f_elastic);
+        kin.to_inertial_into(&loc.rho_d, &mut out.f_damping);
+        kin.to_inertial_into(&loc.rho_g, &mut out.f_gravity);
         // The residual from its rotated parts (one rotation fewer); the tangents need it in body
         // axes too.
         for i in 0..n {
@@ -547,7 +576,7 @@ impl Superelement {
         }
         let kin = self.kinematics(state)?;
         let qd = state.velocity_vector();
-        let ev = self.evaluate_kinematics(&kin, &qd, &vec![0.0; self.n], &Vector3::zeros(), false);
+        let ev = self.forces_kinematics(&kin, &qd, &vec![0.0; self.n], &Vector3::zeros());
         let mut T = 0.0;
         for j in 0..self.n {
             for i in 0..self.n {

@@ -705,18 +705,35 @@ impl Kinematics {
         phi_rig(&self.r_loc, self.n() - 6 * self.n_interfaces())
     }
 
-    /// $\bar{\mathbf R}^T\mathbf x$ (or $\bar{\mathbf R}\mathbf x$ with `forward`): rotates each 3-block of
-    /// the interface part, leaves the eta part.
-    pub fn rotate(&self, x: &[f64], forward: bool) -> Vec<f64> {
+    /// $\bar{\mathbf R}\mathbf x$: each 3-block of the interface part turned from body axes to
+    /// inertial axes, the eta part left.
+    pub fn to_inertial(&self, x: &[f64]) -> Vec<f64> {
         let mut out = vec![0.0; x.len()];
-        self.rotate_into(x, forward, &mut out);
+        self.to_inertial_into(x, &mut out);
         out
     }
 
-    /// [`Self::rotate`] into `out`.
-    pub fn rotate_into(&self, x: &[f64], forward: bool, out: &mut [f64]) {
+    /// [`Self::to_inertial`] into `out`.
+    pub fn to_inertial_into(&self, x: &[f64], out: &mut [f64]) {
+        self.rotate_blocks(&self.R_j, x, out);
+    }
+
+    /// $\bar{\mathbf R}^T\mathbf x$: each 3-block of the interface part turned from inertial axes
+    /// to body axes, the eta part left.
+    pub fn to_body(&self, x: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; x.len()];
+        self.to_body_into(x, &mut out);
+        out
+    }
+
+    /// [`Self::to_body`] into `out`.
+    pub fn to_body_into(&self, x: &[f64], out: &mut [f64]) {
+        self.rotate_blocks(&self.R_j.transpose(), x, out);
+    }
+
+    /// Each 3-block of the interface part of `x` turned by `R` into `out`, the eta part copied.
+    fn rotate_blocks(&self, R: &Matrix3<f64>, x: &[f64], out: &mut [f64]) {
         let m = 6 * self.n_interfaces();
-        let R = if forward { self.R_j } else { self.R_j.transpose() };
         // Exact 3-chunks: no bounds checks in the block rotations.
         for (o, x) in out[..m].chunks_exact_mut(3).zip(x[..m].chunks_exact(3)) {
             let v = R * Vector3::new(x[0], x[1], x[2]);
@@ -1570,11 +1587,15 @@ mod tests {
             tol,
             "P^T f",
         );
-        // rotate_into: Rbar x and Rbar^T x.
+        // to_inertial_into, to_body_into: Rbar x and Rbar^T x.
         let R = kin.R_j;
         for forward in [true, false] {
             let Rb = if forward { R } else { R.transpose() };
-            kin.rotate_into(&f[..n], forward, &mut v);
+            if forward {
+                kin.to_inertial_into(&f[..n], &mut v);
+            } else {
+                kin.to_body_into(&f[..n], &mut v);
+            }
             for i in 0..n {
                 let expected = if i < 6 * N {
                     let b = i / 3;

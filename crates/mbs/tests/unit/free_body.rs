@@ -72,7 +72,7 @@ pub fn body_momentum(sys: &System, body: BodyId, state: &State) -> (Vector3<f64>
             (L, H)
         }
         _ => {
-            let y = kin.rotate(&bs.velocity_vector(), false);
+            let y = kin.to_body(&bs.velocity_vector());
             let M = se.m_cb();
             let p = |i: usize| (0..y.len()).map(|j| M[(i, j)] * y[j]).sum::<f64>();
             let (mut L, mut H) = (Vector3::zeros(), Vector3::zeros());

@@ -126,28 +126,25 @@ fn a_reused_workspace_gives_the_fresh_result() {
         let (b, acc_b) = test_state(&se, &StateSpec::moving(140.0, 12));
         let mut ws = se.workspace();
         let mut out = Evaluation::zeros(se.n_coordinates());
-        se.evaluate_into(&a, &acc_a, &g, true, &mut ws, &mut out).unwrap();
-        se.evaluate_into(&b, &acc_b, &g, false, &mut ws, &mut out).unwrap();
-        se.evaluate_into(&b, &acc_b, &g, true, &mut ws, &mut out).unwrap();
+        se.evaluate_into(&a, &acc_a, &g, &mut ws, &mut out).unwrap();
+        se.forces_into(&b, &acc_b, &g, &mut ws, &mut out).unwrap();
+        se.evaluate_into(&b, &acc_b, &g, &mut ws, &mut out).unwrap();
         let mut ws_fresh = se.workspace();
         let mut fresh = Evaluation::zeros(se.n_coordinates());
-        se.evaluate_into(&a, &acc_a, &g, false, &mut ws_fresh, &mut fresh)
-            .unwrap();
-        se.evaluate_into(&b, &acc_b, &g, false, &mut ws_fresh, &mut fresh)
-            .unwrap();
-        se.evaluate_into(&b, &acc_b, &g, true, &mut ws_fresh, &mut fresh)
-            .unwrap();
+        se.forces_into(&a, &acc_a, &g, &mut ws_fresh, &mut fresh).unwrap();
+        se.forces_into(&b, &acc_b, &g, &mut ws_fresh, &mut fresh).unwrap();
+        se.evaluate_into(&b, &acc_b, &g, &mut ws_fresh, &mut fresh).unwrap();
         for ((what, x), (_, y)) in forces_and_mass(&out).into_iter().zip(forces_and_mass(&fresh)) {
             assert!(x == y, "{name}: {what} differs after reuse");
         }
         // The same with a residual-only call in the middle.
         let mut ws_residual = se.workspace();
         let mut after_residual = Evaluation::zeros(se.n_coordinates());
-        se.evaluate_into(&a, &acc_a, &g, true, &mut ws_residual, &mut after_residual)
+        se.evaluate_into(&a, &acc_a, &g, &mut ws_residual, &mut after_residual)
             .unwrap();
         se.residual_into(&b, &acc_b, &g, &mut ws_residual, &mut after_residual)
             .unwrap();
-        se.evaluate_into(&b, &acc_b, &g, true, &mut ws_residual, &mut after_residual)
+        se.evaluate_into(&b, &acc_b, &g, &mut ws_residual, &mut after_residual)
             .unwrap();
         for ((what, x), (_, y)) in forces_and_mass(&after_residual)
             .into_iter()

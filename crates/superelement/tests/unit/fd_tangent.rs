@@ -356,22 +356,22 @@ fn ffr_partials() {
     let q: Vec<f64> = (0..n).map(|_| 0.05 * rng.uniform()).collect();
     let nu: Vec<f64> = (0..6 + n).map(|_| 3.0 * rng.uniform()).collect();
     let nud: Vec<f64> = (0..6 + n).map(|_| 9.0 * rng.uniform()).collect();
-    let F = I.force(&q, &nu, &nud, true);
+    let F = I.force_with_partials(&q, &nu, &nud);
     let h = vec![1e-6; n];
     let rep = check_jacobian("dF/dq", F.F_q.as_ref(), &h, |d| {
         let qq: Vec<f64> = q.iter().zip(d).map(|(a, b)| a + b).collect();
-        I.force(&qq, &nu, &nud, false).F
+        I.force(&qq, &nu, &nud).F
     });
     assert_ok(rep, "ffr");
     let h = vec![1e-6; 6 + n];
     let rep = check_jacobian("dF/dnu", F.F_nu.as_ref(), &h, |d| {
         let v: Vec<f64> = nu.iter().zip(d).map(|(a, b)| a + b).collect();
-        I.force(&q, &v, &nud, false).F
+        I.force(&q, &v, &nud).F
     });
     assert_ok(rep, "ffr");
     let rep = check_jacobian("dF/dnudot", F.M.as_ref(), &h, |d| {
         let v: Vec<f64> = nud.iter().zip(d).map(|(a, b)| a + b).collect();
-        I.force(&q, &nu, &v, false).F
+        I.force(&q, &nu, &v).F
     });
     assert_ok(rep, "ffr");
     let M = I.mass_matrix(&q);
@@ -396,8 +396,8 @@ fn ffr_force_is_linear_in_the_accelerations_with_the_mass_matrix() {
     let q: Vec<f64> = (0..n).map(|_| 0.05 * rng.uniform()).collect();
     let nu: Vec<f64> = (0..6 + n).map(|_| 3.0 * rng.uniform()).collect();
     let nud: Vec<f64> = (0..6 + n).map(|_| 9.0 * rng.uniform()).collect();
-    let F = I.force(&q, &nu, &nud, false).F;
-    let F0 = I.force(&q, &nu, &vec![0.0; 6 + n], false).F;
+    let F = I.force(&q, &nu, &nud).F;
+    let F0 = I.force(&q, &nu, &vec![0.0; 6 + n]).F;
     let M = I.mass_matrix(&q);
     for i in 0..6 + n {
         let (mut lin, mut scale) = (0.0, F[i].abs() + F0[i].abs());

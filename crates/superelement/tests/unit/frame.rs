@@ -238,14 +238,14 @@ fn chord_steps_from_the_last_evaluation_find_the_same_frame() {
         let (state, acc) = test_state(&se, &StateSpec::moving(120.0, 1));
         let mut ws = se.workspace();
         let mut out = superelement::Evaluation::zeros(se.n_coordinates());
-        se.evaluate_into(&state, &acc, &g, true, &mut ws, &mut out).unwrap();
+        se.evaluate_into(&state, &acc, &g, &mut ws, &mut out).unwrap();
         let mut rng = Rng::new(11);
         for scale in [1e-3, 0.3] {
             let dq: Vec<f64> = (0..se.n_coordinates()).map(|_| scale * rng.uniform()).collect();
             let mut next = perturb_state(&state, &dq);
             next.frame = out.frame;
             let (fresh, _) = se.solve_frame(&next).unwrap();
-            se.evaluate_into(&next, &acc, &g, true, &mut ws, &mut out).unwrap();
+            se.evaluate_into(&next, &acc, &g, &mut ws, &mut out).unwrap();
             // Both stop at residual 1e-12 (relative to the body size for the position);
             // a Newton-converged frame is far closer than that to the root, so the two
             // agree to about the tolerance times the body size (about 1 m here).

@@ -310,7 +310,7 @@ fn planar_workspace_paths_agree_with_evaluate() {
     }
     // The evaluation at a given configuration (the state rebuilt from its frame and q_jj: the
     // interface positions to round-off, 1e-16 of the body size, times the stiffness).
-    let at = planar.evaluate_kinematics(&kin, &state.velocity_vector(), &acc, &g, true);
+    let at = planar.evaluate_kinematics(&kin, &state.velocity_vector(), &acc, &g);
     let big = full.residual.iter().fold(0.0_f64, |m, r| m.max(r.abs()));
     for (a, b) in at.residual.iter().zip(&full.residual) {
         // As Z and T above: frames agreeing to 1e-12 through the inverse of Phi_j Psi.

@@ -64,7 +64,11 @@ fn residual(
 ) -> (Vec<f64>, faer::Mat<f64>) {
     let kin = se.kinematics(state).unwrap();
     let mut ws = se.point_load_workspace();
-    se.point_load_into(&kin, l, tangents, &mut ws).unwrap();
+    if tangents {
+        se.point_load_into(&kin, l, &mut ws).unwrap();
+    } else {
+        se.point_load_residual_into(&kin, l, &mut ws).unwrap();
+    }
     (ws.residual, ws.stiffness)
 }
 

@@ -13,9 +13,12 @@
 //! acceleration is carried over), so the retried interval is integrated by the same scheme;
 //! its local error is that of the smaller steps.
 
-use crate::dynamic_solver::{AdaptiveSettings, AdaptiveStep, DynamicSettings, Integrator, StepReport, Trajectory};
+use super::integrator::{fixed_steps, last_step_size, DynamicSettings, Integrator, StepReport};
+use super::trajectory::{finished, start_trajectory, stopped, Trajectory};
+use crate::assembly::system::sensors::PendingRows;
+use crate::assembly::system::System;
 use crate::error::{Incomplete, SolveError};
-use crate::system::{State, System};
+use crate::state::State;
 
 /// One interval of the fixed step that needed smaller steps.
 #[derive(Clone, Debug, PartialEq)]
@@ -116,26 +119,6 @@ pub fn step_retrying(integ: &mut Integrator, min_step: f64) -> Result<RetriedSte
     }
 }
 
-/// One adaptive step ([`Integrator::step_adaptive`]) that lands on `end`: a step that would
-/// pass it is shortened to it, and one that would leave a sliver of less than half a step is
-/// halved.
-pub fn step_adaptive_to(
-    integ: &mut Integrator,
-    end: f64,
-    adaptive: &AdaptiveSettings,
-) -> Result<AdaptiveStep, SolveError> {
-    let left = end - integ.state().time();
-    let h = integ.step_size();
-    if h >= left || 1.5 * h > left {
-        integ.set_step_size(if h >= left { left } else { 0.5 * left });
-    }
-    let limits = AdaptiveSettings {
-        min_step: adaptive.min_step.min(left),
-        ..adaptive.clone()
-    };
-    integ.step_adaptive(&limits)
-}
-
 /// Integrates from `start` to `settings.end_time` with the fixed step `settings.step`,
 /// retrying failed steps with halved steps down to `min_step` (module docs).
 pub fn solve_dynamic_retrying(
@@ -163,22 +146,18 @@ pub fn solve_dynamic_retrying(
         };
         return Err(fail(error, trajectory, Vec::new()));
     }
-    let (mut integ, mut traj) = match crate::dynamic_solver::start_trajectory(system, start, settings) {
+    let (mut integ, mut traj) = match start_trajectory(system, start, settings) {
         Ok(x) => x,
         Err(inc) => return Err(fail(inc.error, inc.partial, Vec::new())),
     };
-    let (n_steps, _) = crate::dynamic_solver::fixed_steps(integ.state().time(), settings.end_time, h);
+    let (n_steps, _) = fixed_steps(integ.state().time(), settings.end_time, h);
     let every = settings.output_every.max(1);
     let mut retries = Vec::new();
-    let mut pending = crate::sensors::PendingRows::default();
+    let mut pending = PendingRows::default();
     for k in 1..=n_steps {
         if k == n_steps {
             // Land on the end time: the last step may be shorter.
-            integ.set_step_size(crate::dynamic_solver::last_step_size(
-                integ.state().time(),
-                settings.end_time,
-                h,
-            ));
+            integ.set_step_size(last_step_size(integ.state().time(), settings.end_time, h));
         }
         match step_retrying(&mut integ, min_step) {
             Ok(done) => {
@@ -190,18 +169,18 @@ pub fn solve_dynamic_retrying(
             }
             Err(failure) => {
                 retries.extend(failure.retry);
-                let stopped = *crate::dynamic_solver::stopped(&integ, failure.error, &mut pending, traj);
+                let stopped = *stopped(&integ, failure.error, &mut pending, traj);
                 return Err(fail(stopped.error, stopped.partial, retries));
             }
         }
         if k % every == 0 || k == n_steps {
             if let Err(e) = integ.record_deferred(&mut pending, &mut traj.sensors) {
-                let stopped = *crate::dynamic_solver::stopped(&integ, e, &mut pending, traj);
+                let stopped = *stopped(&integ, e, &mut pending, traj);
                 return Err(fail(stopped.error, stopped.partial, retries));
             }
         }
     }
-    match crate::dynamic_solver::finished(&integ, &mut pending, traj) {
+    match finished(&integ, &mut pending, traj) {
         Ok(trajectory) => Ok(RetriedTrajectory { trajectory, retries }),
         Err(stopped) => {
             let stopped = *stopped;

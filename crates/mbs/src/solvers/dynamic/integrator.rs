@@ -1,193 +1,13 @@
-//! Generalized-α time integration on the Lie group of the coordinates (Chung & Hulbert 1993;
-//! Brüls, Cardona & Arnold 2012, *Mech. Mach. Theory* 48, "Lie group generalized-α time
-//! integration of constrained flexible multibody systems", Algorithm 1 without constraints).
-//!
-//! With the step $h$, the user's spectral radius at infinity $\rho_\infty\in[0, 1]$ and
-//! $\alpha_m = \frac{2\rho_\infty - 1}{\rho_\infty + 1}$, $\alpha_f = \frac{\rho_\infty}{\rho_\infty + 1}$,
-//! $\gamma = \tfrac12 + \alpha_f - \alpha_m$, $\beta = \tfrac14(\gamma + \tfrac12)^2$:
-//!
-//! $$\mathbf q_{n+1} = \mathbf q_n\oplus h\Delta\mathbf q_n,\quad h\Delta\mathbf q_n = h\dot{\mathbf q}_n + h^2(\tfrac12 - \beta)\mathbf a_n + h^2\beta\mathbf a_{n+1},$$
-//! $$\dot{\mathbf q}_{n+1} = \dot{\mathbf q}_n + h(1-\gamma)\mathbf a_n + h\gamma\mathbf a_{n+1},\quad
-//! (1-\alpha_m)\mathbf a_{n+1} + \alpha_m\mathbf a_n = (1-\alpha_f)\ddot{\mathbf q}_{n+1} + \alpha_f\ddot{\mathbf q}_n,$$
-//!
-//! and $\mathbf F(\mathbf q_{n+1}, \dot{\mathbf q}_{n+1}, \ddot{\mathbf q}_{n+1}, t_{n+1}) = \mathbf 0$, where $\oplus$ adds
-//! scalars and moves rotations in body axes, $\mathbf R_{n+1} = \mathbf R_n\exp(\widetilde{h\Delta\boldsymbol\theta})$,
-//! as in Brüls, Cardona & Arnold: the angular components of $\dot{\mathbf q}$, $\ddot{\mathbf q}$, $\mathbf a$ and
-//! $h\Delta\mathbf q$ in the recursion are body-axis ones, $\boldsymbol\omega_b = \mathbf R^T\boldsymbol\omega_s$ and
-//! $\dot{\boldsymbol\omega}_b = \mathbf R^T\dot{\boldsymbol\omega}_s$ (see "Body axes" below). The state keeps the
-//! spatial ones of the superelement's convention; the same update in spatial terms is
-//! $\mathbf R_{n+1} = \exp(\widetilde{\mathbf R_n h\Delta\boldsymbol\theta})\mathbf R_n$. Newton corrects the
-//! spatial increment $\mathbf h = \mathbf R_n h\Delta\boldsymbol\theta$:
-//! $\mathbf S\Delta\mathbf x = -\mathbf F$, $\ddot{\mathbf q}_b \mathrel{+}= \beta'\mathbf R_n^T\Delta\mathbf x$,
-//! $\dot{\mathbf q}_b \mathrel{+}= \gamma'\mathbf R_n^T\Delta\mathbf x$, $h\Delta\mathbf q \mathrel{+}= \mathbf R_n^T\Delta\mathbf x$
-//! (scalars unrotated), with $\beta' = \frac{1-\alpha_m}{h^2\beta(1-\alpha_f)}$, $\gamma' = \frac{\gamma}{h\beta}$ and
-//! $\mathbf S = \beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}$ with each rotation's columns made the
-//! exact derivative: $\hat{\mathbf K}\mathbf J_l(\mathbf h) + \hat{\mathbf C}(\gamma'\mathbf E - \tilde{\boldsymbol\omega}_s\mathbf J_l)
-//! \;+\; \hat{\mathbf M}(\beta'\mathbf E - \tilde{\dot{\boldsymbol\omega}}_s\mathbf J_l)$, $\mathbf E = \exp(\tilde{\mathbf h})$
-//! (`System::iteration_matrix`).
-//!
-//! # Body axes
-//!
-//! The recursion compares velocities and accelerations of different steps component by
-//! component. With spatial angular velocities it did so in fixed axes, while the modal
-//! coordinates $\boldsymbol\eta$ live in the body's floating frame: in a body turning at
-//! $\Omega$, an elastic mode of frequency $\omega$ appears at $\omega$ in $\boldsymbol\eta$ and at
-//! $\omega\pm\Omega$ in the nodes' spatial rotation components, and the scheme's frequency error,
-//! which grows with $\omega h$, then moves the parts of one mode by different phases each step.
-//! The discrete map is no longer the generalized-α map of the linearised motion in the
-//! turning frame, and it pumps energy into that mode. On the spin-up beam (validation problem C1, four
-//! superelements, h = 5 ms) the out-of-plane fixed-interface modes of the segments, 346 rad/s
-//! ($\omega h = 1.7$), grew from round-off at 3.4 /s at $\Omega$ = 10 rad/s with $\rho_\infty \ge 0.8$
-//! (more at 15 rad/s, none at 4); the rate was the same for every Newton tolerance and with
-//! more Newton corrections (the converged map itself), it vanished at $\omega h = 0.9$ and was
-//! damped by $\rho_\infty = 0.5$; the frozen linearised spectrum showed no growing mode. In body
-//! axes the nodes' rotation components turn with the body, all parts of a mode share its
-//! frequency, and the runs stay at round-off for 100 s at $\rho_\infty$ = 0.8, 0.9 and 1
-//! (`tests/convergence.rs`, `spin_up_steady_rotation_stays_in_plane`).
-//!
-//! With [`DynamicSettings::body_axis_translations`], the translations of a free independent
-//! node (three unknown translations and a free rotation: the interfaces of a floating chain of
-//! superelements) are carried the same way, as the SE(3) form of the paper: $\mathbf v_b = \mathbf R^T\dot{\mathbf x}$ with the node's
-//! rotation, the recursion's acceleration $\dot{\mathbf v}_b = \mathbf R^T\ddot{\mathbf x} -
-//! \boldsymbol\omega_b\times\mathbf v_b$, and the update
-//! $\mathbf x_{n+1} = \mathbf x_n + \mathbf R_n\mathbf J_l(h\Delta\boldsymbol\theta_b)\,h\Delta\mathbf u_b$
-//! ($\mathbf J_l$ the left Jacobian of SO(3), the translation of the SE(3) exponential), which is
-//! second-order consistent with $\dot{\mathbf x} = \mathbf R\mathbf v_b$. A steady rotation then has
-//! constant $\mathbf v_b$ and zero $\dot{\mathbf v}_b$, and an axial mode of a turning member appears in
-//! $\mathbf v_b$ at its own frequency only. With the translations in fixed axes, the spin-up beam
-//! with eight superelements (axial modes at $\omega h \approx 40$) grew an in-plane mode at
-//! $\rho_\infty = 1$ and stopped at t = 26.2 s; in body axes it runs the 100 s. Newton still
-//! corrects the spatial increment: a correction $\Delta\mathbf x$ of a translation moves the
-//! node by exactly $\Delta\mathbf x$ ($h\Delta\mathbf u_b = \mathbf J_l^{-1}\mathbf R_n^T(\mathbf x_{n+1} -
-//! \mathbf x_n)$), and the iteration matrix keeps its fixed-axis translation columns, which differ
-//! from the exact derivative by $O(h\Omega)$ in the velocity and acceleration (about 3 Newton
-//! iterations per step on the spin-up beam). Translations of supported or dependent nodes
-//! (joint coordinates) stay scalars. The option is off by default (the R^3 x SO(3) form, the
-//! translations in fixed axes): on the free flexible beam of validation problem C4 the
-//! energy drift with it fell only from 9.1e-7 to 3.1e-7 between h = 2 and 1 ms (order 1.6,
-//! against 2 in fixed axes), and modified Newton refactorises more often with the inexact
-//! translation columns.
-//!
-//! The initial accelerations are consistent ($\hat{\mathbf M}\ddot{\mathbf q}_0 = -\mathbf F(\mathbf q_0, \dot{\mathbf q}_0,
-//! \mathbf 0)$; $\mathbf F$ is linear in $\ddot{\mathbf q}$) and $\mathbf a_0 = \ddot{\mathbf q}_0$. Each flexible body's last
-//! frame stays in the state, so the frame solve (4.4) is warm-started from the previous
-//! iteration or step.
-//!
-//! # Newton strategy
-//!
-//! [`DynamicSettings::newton`] chooses how the corrections get their iteration matrix
-//! $\mathbf S = \beta'\hat{\mathbf M} + \gamma'\hat{\mathbf C} + \hat{\mathbf K}\mathbf T$:
-//!
-//! * [`NewtonStrategy::Full`] (the default): the tangents are evaluated and $\mathbf S$ is
-//!   factorised at every correction (quadratic convergence). After a correction the residual is
-//!   tested with the forces alone, and tangents are evaluated only if another correction is
-//!   needed.
-//! * [`NewtonStrategy::Modified`]: the factorised $\mathbf S$ stays in the workspace across
-//!   corrections and steps, and the iterations evaluate forces only (linear convergence, each
-//!   iteration cheaper). The refresh rule: $\mathbf S$ is rebuilt from new tangents and
-//!   refactorised (i) when there is none for the current $h$ ($\beta'$, $\gamma'$ depend on it: the
-//!   first step, every change of $h$ by the adaptive step, after a failed step), (ii) at once when
-//!   a correction lets the residual grow, and (iii) with the next evaluation (no second
-//!   evaluation of the same iterate) when a correction contracts it by less than
-//!   [`MODIFIED_NEWTON_RATE`], $\|\mathbf F_{k+1}\| > 0.01\|\mathbf F_k\|$; tangents scheduled by (iii)
-//!   that arrive with the converging evaluation are factorised for the next step. A step whose
-//!   modified iterations fail (no convergence in `max_iterations`, a singular matrix, a body
-//!   that cannot be evaluated) is solved again from the predictor with full Newton before
-//!   [`SolveError::NotConverged`] is reported. Both converge to the same tolerance, so their
-//!   trajectories agree to it. [`StepReport::jacobians`] and [`Trajectory::jacobians`] count the
-//!   factorisations.
-//!
-//! A kept matrix was built where the mechanism stood some steps before, and the iteration
-//! matrix of a turning body turns with it: in the spatial unknowns of a free node (the
-//! interface between two superelements) $\mathbf S \approx \mathbf T\mathbf S_f\mathbf T^T$, with
-//! $\mathbf T$ the node's rotation since the factorisation, $\mathbf Q = \mathbf R\mathbf R_f^T$, on
-//! its rotation and translation unknowns (scalar joint and modal coordinates do not turn).
-//! Modified Newton therefore solves in the kept factor's axes,
-//! $\Delta\mathbf x = \mathbf T\mathbf S_f^{-1}\mathbf T^T(-\mathbf F)$ (`corotate`, free nodes with their
-//! own rotation coordinate; fixed-axis translations of a free node $\mathbf B^{-1}\mathbf Q\mathbf B$;
-//! `corotate_in_plane`, a node held in a plane and turning about its normal, the node between
-//! two planar bodies: the rotation by $\theta - \theta_f$ on its two in-plane translations).
-//! Any matrix that contracts gives the same solution; this one contracts more. On the
-//! slider-crank with the rod as two beam superelements (validation problem C2, 13 unknowns,
-//! the rod turning 0.008 rad per step) a kept matrix contracted the residual by about 0.012
-//! per correction a step after its factorisation, just above [`MODIFIED_NEWTON_RATE`], so
-//! 0.91 factorisations per step were needed; turned, it contracts by 0.004-0.006 after the
-//! first correction, and the run takes 0.58 factorisations per step at the same 3.44
-//! iterations (0.747M instead of 0.822M instructions per step).
-//!
-//! Modified Newton pays when a kept matrix contracts strongly and tangents cost much more than
-//! forces. On the slider-crank (validation problem C2, one superelement with geometric stiffening)
-//! the tangents cost 2-3 times the forces and a kept matrix contracts by 0.05-0.2 after a few
-//! steps: it takes 3.5 iterations and 0.55 factorisations per step against full Newton's 2 and
-//! 2, and 13 % (2 modes) to 35 % (4 modes) fewer instructions ([`MODIFIED_NEWTON_RATE`]).
-//!
-//! # Predictor
-//!
-//! A step starts from constant accelerations, $\ddot{\mathbf q}_{n+1} = \ddot{\mathbf q}_n$ (body
-//! axes), with $\mathbf a_{n+1}$, $\dot{\mathbf q}_{n+1}$ and $h\Delta\mathbf q$ from the recursion.
-//! Full Newton extrapolates instead once [`PREDICTOR_WINDOW`] + 1 steps of the current $h$
-//! are known: each component from its last two values,
-//! $\ddot q_{n+1} = c_1\ddot q_n + c_2\ddot q_{n-1}$, with $c_1$, $c_2$ fitted by least squares to
-//! the window (`AccelerationHistory::predict`), the recursion of a sampled oscillation
-//! ($c_1 = 2\cos\omega h$, $c_2 = -1$) as well as linear extrapolation of a smooth motion
-//! ($c_1 = 2$, $c_2 = -1$), kept within twice the largest change of one step in the window.
-//! On the C2 rod the accelerations of the interface rotation and of the modal coordinates
-//! are dominated by a vibration at $\omega h \approx 1.4$ (consecutive values nearly
-//! uncorrelated): linear extrapolation makes their predictor error a third larger and takes 2.42 instead of
-//! 2.19 corrections per step, the fit divides it by 7-17 (from the recorded accelerations) and
-//! leaves the residual after the first correction 6 times smaller (it is quadratic in the
-//! predictor's error), so most steps converge after 2 corrections: 2.00 per step. Modified
-//! Newton keeps the constant predictor: its corrections contract linearly, by the kept
-//! matrix's rate, from the first residual, which the fit does not lower there (the joint
-//! coordinates' accelerations, several frequencies mixed, dominate it); with the fit it took
-//! 3.75 iterations and 0.47 factorisations per step against 3.44 and 0.58.
-//! The predictor changes only where Newton starts: both converge to the same tolerance. A
-//! change of $h$ (the adaptive step, the halved steps of a retried one, the last step that
-//! lands on the end time) and a rejected step start the window again.
-//!
-//! The iteration matrix is factorised densely (LU with partial pivoting) up to
-//! [`crate::DENSE_MAX`] unknowns and by the sparse LU on the system pattern above
-//! ([`crate::LinearSolver`]).
-//!
-//! # Adaptive step
-//!
-//! [`Integrator::step_adaptive`] and [`solve_dynamic_adaptive`] estimate the local error of the
-//! configuration by the Newmark-family estimate (Zienkiewicz & Xie 1991, *Earthquake Eng.
-//! Struct. Dyn.* 20; with the algorithmic accelerations of generalized-α):
-//! $\mathbf e_{n+1} = h^2\,|\beta - \tfrac16|\,(\mathbf a_{n+1} - \mathbf a_n)$, the $O(h^3)$ term the
-//! update of $\mathbf q$ misses, measured as $\max_i|e_i|/s_i$ with the unknowns' scales
-//! ([`System::increment_norm`]). A step with $e >$ `tolerance` is rejected and retried with
-//! $h\min(0.9, \max(0.2, 0.9(\mathrm{tol}/e)^{1/3}))$; after an accepted one the PI controller
-//! ([`PI_INTEGRAL`], [`PI_PROPORTIONAL`]) sets the next,
-//! $h_{n+1} = 0.9\,h_n(\mathrm{tol}/e_n)^{0.7/3}(e_{n-1}/\mathrm{tol})^{0.4/3}$, growing by at most 2
-//! (not at all right after a rejection) within `[min_step, max_step]`: it follows the error's
-//! trend, so a smoothly varying error is met without the cycle of growth and rejection of the
-//! plain $(\mathrm{tol}/e)^{1/3}$ rule.
-//! The fixed-step path ([`Integrator::step`]) is unchanged. With modified Newton
-//! every accepted change of $h$ refactorises the iteration matrix (rule (i) above).
-//!
-//! # What is conserved
-//!
-//! The updates of $\dot{\mathbf q}$ and $\mathbf q$ are linear in the algorithmic accelerations, so a
-//! momentum that is a constant linear form $\mathbf c^T\dot{\mathbf q}$ of the velocities (the linear
-//! momentum of point masses) is conserved to round-off when $\mathbf c^T\mathbf F$ is free of internal
-//! forces. The momenta of a flexible or rigid body in these absolute coordinates are nonlinear
-//! in $(\mathbf q, \dot{\mathbf q})$ (the centre of mass follows the frame (4.4) and the CB shapes;
-//! $\mathbf H$ involves the rotations), so the scheme alone makes their rates vanish at each
-//! $t_{n+1}$ but conserves $\mathbf L$, $\mathbf H$ and the energy to its order, 2. On a free, unloaded
-//! model ([`System::rigid_invariance`]) the step therefore ends with the momentum projection of
-//! [`crate::momentum`] (Hairer, Lubich & Wanner, §IV.4; `DynamicSettings::momentum`): the
-//! velocities get the $\hat{\mathbf M}$-orthogonal rigid correction that restores $\mathbf L$ and
-//! $\mathbf H$ of the start, so both are constant to round-off, and the energy still drifts at
-//! order 2 (validation problem C4: `tests/unit/free_body.rs`). The correction is $O(h^3)$ per step and
-//! keeps the order of the trajectory; the initial accelerations are not projected.
+//! The generalized-α integrator ([`Integrator`]) and its settings: one step, fixed or adaptive,
+//! from the state at $t_n$ (the method is described in the docs of [`crate::solvers::dynamic`]).
 
 #![allow(non_snake_case)]
 
-use crate::error::{At, Incomplete, SolveError};
-use crate::momentum::MomentumProjection;
-use crate::sensors::{PendingRows, SensorRecord};
-use crate::system::{State, System, Workspace};
+use crate::assembly::system::momentum::MomentumProjection;
+use crate::assembly::system::sensors::{PendingRows, SensorRecord};
+use crate::assembly::system::{System, Workspace};
+use crate::error::{At, SolveError};
+use crate::state::State;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3, Vector6};
 use std::sync::Arc;
 use superelement::so3;
@@ -245,7 +65,7 @@ pub struct DynamicSettings {
     pub max_iterations: usize,
     /// Record sensors every this many steps (and at the start and the end).
     pub output_every: usize,
-    /// Momentum projection after each step ([`crate::momentum`]): `Auto` (the default) projects
+    /// Momentum projection after each step ([`crate::assembly::system::momentum`]): `Auto` (the default) projects
     /// when the model is free and unloaded ([`System::rigid_invariance`]).
     pub momentum: MomentumProjection,
     /// Full Newton (the default: tangents and a factorisation at every correction) or modified
@@ -354,7 +174,7 @@ pub struct StepReport {
     /// correction with full Newton, the refreshes with modified Newton.
     pub jacobians: usize,
     /// With the momentum projection: the defect $\mathbf J_0 - \mathbf J$ = $[\Delta\mathbf L;\ \Delta\mathbf H]$
-    /// it corrected ($O(h^3)$, [`crate::momentum`]).
+    /// it corrected ($O(h^3)$, [`crate::assembly::system::momentum`]).
     pub momentum_defect: Option<[f64; 6]>,
 }
 
@@ -598,15 +418,15 @@ fn corotated_nodes(system: &System) -> Vec<CoRotated> {
         .iter()
         .flatten()
         .filter_map(|rc| {
-            let crate::topology::RootRotation::Free(rot) = rc.rotation else {
+            let crate::assembly::topology::RootRotation::Free(rot) = rc.rotation else {
                 return None;
             };
             let mut dofs = [0; 3];
             let mut free = true;
             for (k, (sc, _)) in rc.translation.iter().enumerate() {
                 match map.scalars[*sc].slot {
-                    crate::coordinates::Slot::Unknown(d) => dofs[k] = d,
-                    crate::coordinates::Slot::Prescribed(_) => free = false,
+                    crate::assembly::coordinates::Slot::Unknown(d) => dofs[k] = d,
+                    crate::assembly::coordinates::Slot::Prescribed(_) => free = false,
                 }
             }
             let B = Matrix3::from_columns(&[rc.translation[0].1, rc.translation[1].1, rc.translation[2].1]);
@@ -672,7 +492,7 @@ struct PlaneRotated {
 
 /// Every node of `system` held in a plane and turning about its normal ([`PlaneRotated`]).
 fn plane_rotated_nodes(system: &System) -> Vec<PlaneRotated> {
-    use crate::coordinates::Slot;
+    use crate::assembly::coordinates::Slot;
     let map = &system.topo.map;
     system
         .topo
@@ -680,7 +500,7 @@ fn plane_rotated_nodes(system: &System) -> Vec<PlaneRotated> {
         .iter()
         .flatten()
         .filter_map(|rc| {
-            let crate::topology::RootRotation::Axes(axes) = &rc.rotation else {
+            let crate::assembly::topology::RootRotation::Axes(axes) = &rc.rotation else {
                 return None;
             };
             let (angle, a) = axes[2];
@@ -903,7 +723,7 @@ impl<'a> Integrator<'a> {
         &self.state
     }
 
-    /// Whether each step ends with the momentum projection ([`crate::momentum`]).
+    /// Whether each step ends with the momentum projection ([`crate::assembly::system::momentum`]).
     pub fn projects_momentum(&self) -> bool {
         self.J0.is_some()
     }
@@ -1084,7 +904,6 @@ impl<'a> Integrator<'a> {
     fn attempt(&mut self, modified: bool, residuals: &mut Vec<f64>) -> Result<Option<[f64; 6]>, SolveError> {
         let held = self.system.clone();
         let sys: &System = &held;
-        let n = sys.n_dof();
         let h = self.settings.step;
         let AlphaParameters {
             alpha_m: am,
@@ -1094,13 +913,113 @@ impl<'a> Integrator<'a> {
         } = self.p;
         let bp = (1.0 - am) / (h * h * b * (1.0 - af));
         let gp = g / (h * b);
-        let prev = &self.prev;
         if self.step_decimals.0 != h {
             self.step_decimals = (h, step_decimals(h));
         }
-        let t = step_end_time_with(prev.time, h, self.step_decimals.1);
-        // Predictor: constant acceleration (modified Newton), or extrapolated from the last
-        // steps (full Newton; module docs, "Predictor").
+        let t = step_end_time_with(self.prev.time, h, self.step_decimals.1);
+        self.predict(sys, modified, h, t);
+        let step = self.steps + 1;
+        let tol = self.settings.tolerance;
+        // The round-off of the inertia forces of this step (from the last mass matrix): the
+        // floor that keeps the test meaningful when every force is zero (a coasting rotor).
+        let inertia_floor = sys.inertia_floor(&mut self.ws, &self.prev.velocity, h);
+        let mut last_rel = f64::INFINITY;
+        for it in 0..=self.settings.max_iterations {
+            // Modified Newton keeps a factor built for this h; without one it needs tangents now.
+            let stale = self.factor_h != Some(h);
+            // Full Newton: after a correction the step may have converged, so test with the
+            // forces alone and build the tangents only when another correction is needed.
+            // Steps of a smooth motion need about as many corrections as the last one, so up
+            // to that count the tangents come with the forces (a forces-only test there is
+            // wasted work).
+            let mut with_tangents = if modified {
+                stale || self.refresh_next
+            } else {
+                it == 0 || it < self.last_corrections
+            };
+            sys.evaluate_into(&mut self.trial, 1.0, with_tangents, &mut self.ws)?;
+            let converged = |ws: &Workspace, norm: f64| norm <= tol * ws.scale + ws.floor + inertia_floor;
+            let mut norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if !modified && !with_tangents && !converged(&self.ws, norm) && norm.is_finite() {
+                sys.evaluate_into(&mut self.trial, 1.0, true, &mut self.ws)?;
+                with_tangents = true;
+                norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
+            }
+            let rel = if self.ws.scale > 0.0 {
+                norm / self.ws.scale
+            } else {
+                norm
+            };
+            residuals.push(rel);
+            if converged(&self.ws, norm) {
+                if modified && with_tangents {
+                    // Tangents scheduled by a poor contraction arrived with the converging
+                    // evaluation: factorise them for the next step rather than waste them.
+                    sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, &self.trial)));
+                    if sys.factor(&mut self.ws).is_ok() {
+                        self.keep_factor(h);
+                        self.refresh_next = false;
+                    }
+                }
+                return self.accept(sys, modified, it, h);
+            }
+            if it == self.settings.max_iterations || !rel.is_finite() {
+                // Leave the workspace consistent with the last converged state.
+                let mut s = self.state.clone();
+                sys.evaluate_into(&mut s, 1.0, false, &mut self.ws)?;
+                return Err(SolveError::NotConverged {
+                    at: At::Time(t),
+                    step,
+                    residual: rel,
+                    iterations: it,
+                });
+            }
+            // Full Newton refactorises at every correction; modified Newton when its matrix is
+            // stale or the last correction contracted the residual too little (or it grew).
+            // A poor contraction (rel > rate * last_rel) schedules tangents with the next
+            // evaluation instead of a second evaluation here; a growing residual refreshes now.
+            let refresh = !modified || stale || self.refresh_next || rel > last_rel;
+            if modified && !refresh && rel > MODIFIED_NEWTON_RATE * last_rel {
+                self.refresh_next = true;
+            }
+            if refresh {
+                self.refresh_next = false;
+                if !with_tangents {
+                    sys.evaluate_into(&mut self.trial, 1.0, true, &mut self.ws)?;
+                }
+                sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, &self.trial)));
+                sys.factor(&mut self.ws).map_err(|what| SolveError::Singular {
+                    at: At::Time(t),
+                    step,
+                    what: format!("iteration matrix ({what})"),
+                })?;
+                self.keep_factor(h);
+            }
+            last_rel = rel;
+            // A kept factor was built where the free nodes stood turned by R R_f^T less: solve
+            // in its axes (module docs, "Newton strategy"). A fresh one is at this iterate.
+            self.correct(sys, modified && !refresh, bp, gp)
+                .map_err(|what| SolveError::Singular {
+                    at: At::Time(t),
+                    step,
+                    what: format!("iteration matrix ({what})"),
+                })?;
+        }
+        unreachable!("the loop returns at max_iterations")
+    }
+
+    /// The predictor of the step to `t`: constant acceleration (modified Newton), or
+    /// extrapolated from the last steps (full Newton; module docs, "Predictor"), into the
+    /// body-axis iterates and the trial state.
+    fn predict(&mut self, sys: &System, modified: bool, h: f64, t: f64) {
+        let n = sys.n_dof();
+        let AlphaParameters {
+            alpha_m: am,
+            alpha_f: af,
+            gamma: g,
+            beta: b,
+        } = self.p;
+        let prev = &self.prev;
         let st = &mut self.trial;
         st.clone_from(prev);
         st.time = t;
@@ -1134,308 +1053,124 @@ impl<'a> Integrator<'a> {
             &self.vb,
             &self.qb,
         );
-        let step = self.steps + 1;
-        let tol = self.settings.tolerance;
-        // The round-off of the inertia forces of this step (from the last mass matrix): the
-        // floor that keeps the test meaningful when every force is zero (a coasting rotor).
-        let inertia_floor = sys.inertia_floor(&mut self.ws, &prev.velocity, h);
-        let mut last_rel = f64::INFINITY;
-        for it in 0..=self.settings.max_iterations {
-            // Modified Newton keeps a factor built for this h; without one it needs tangents now.
-            let stale = self.factor_h != Some(h);
-            // Full Newton: after a correction the step may have converged, so test with the
-            // forces alone and build the tangents only when another correction is needed.
-            // Steps of a smooth motion need about as many corrections as the last one, so up
-            // to that count the tangents come with the forces (a forces-only test there is
-            // wasted work).
-            let mut with_tangents = if modified {
-                stale || self.refresh_next
-            } else {
-                it == 0 || it < self.last_corrections
-            };
-            sys.evaluate_into(st, 1.0, with_tangents, &mut self.ws)?;
-            let converged = |ws: &Workspace, norm: f64| norm <= tol * ws.scale + ws.floor + inertia_floor;
-            let mut norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
-            if !modified && !with_tangents && !converged(&self.ws, norm) && norm.is_finite() {
-                sys.evaluate_into(st, 1.0, true, &mut self.ws)?;
-                with_tangents = true;
-                norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
-            }
-            let rel = if self.ws.scale > 0.0 {
-                norm / self.ws.scale
-            } else {
-                norm
-            };
-            residuals.push(rel);
-            if converged(&self.ws, norm) {
-                if modified && with_tangents {
-                    // Tangents scheduled by a poor contraction arrived with the converging
-                    // evaluation: factorise them for the next step rather than waste them.
-                    sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, st)));
-                    if sys.factor(&mut self.ws).is_ok() {
-                        self.factor_rotations.clear();
-                        self.factor_rotations
-                            .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
-                        self.factor_angles.clear();
-                        self.factor_angles
-                            .extend(self.plane_rotated.iter().map(|c| st.scalars[c.angle]));
-                        self.factor_h = Some(h);
-                        self.jacobians += 1;
-                        self.refresh_next = false;
-                    }
-                }
-                let mut momentum_defect = None;
-                if let Some(J0) = &self.J0 {
-                    // Hairer, Lubich & Wanner §IV.4: project the converged velocities onto
-                    // J(q_{n+1}, v) = J0; the sensors then read the corrected node velocities.
-                    // (Before the update of a_n, so that a failure leaves the step at t_n.)
-                    momentum_defect = Some(sys.project_momentum(st, J0)?.into());
-                    sys.refresh_motions(st, &mut self.ws);
-                }
-                for i in 0..n {
-                    self.a[i] = ((1.0 - af) * self.qb[i] + af * self.qb_n[i] - am * self.a[i]) / (1.0 - am);
-                }
-                sys.accept_step(st);
-                self.history.push(&self.qb_n, h);
-                std::mem::swap(&mut self.state, &mut self.trial);
-                self.steps += 1;
-                if !modified {
-                    self.last_corrections = it;
-                }
-                return Ok(momentum_defect);
-            }
-            if it == self.settings.max_iterations || !rel.is_finite() {
-                // Leave the workspace consistent with the last converged state.
-                let mut s = self.state.clone();
-                sys.evaluate_into(&mut s, 1.0, false, &mut self.ws)?;
-                return Err(SolveError::NotConverged {
-                    at: At::Time(t),
-                    step,
-                    residual: rel,
-                    iterations: it,
-                });
-            }
-            // Full Newton refactorises at every correction; modified Newton when its matrix is
-            // stale or the last correction contracted the residual too little (or it grew).
-            // A poor contraction (rel > rate * last_rel) schedules tangents with the next
-            // evaluation instead of a second evaluation here; a growing residual refreshes now.
-            let refresh = !modified || stale || self.refresh_next || rel > last_rel;
-            if modified && !refresh && rel > MODIFIED_NEWTON_RATE * last_rel {
-                self.refresh_next = true;
-            }
-            if refresh {
-                self.refresh_next = false;
-                if !with_tangents {
-                    sys.evaluate_into(st, 1.0, true, &mut self.ws)?;
-                }
-                sys.iteration_matrix(&mut self.ws, bp, gp, Some((&self.incr, st)));
-                sys.factor(&mut self.ws).map_err(|what| SolveError::Singular {
-                    at: At::Time(t),
-                    step,
-                    what: format!("iteration matrix ({what})"),
-                })?;
-                self.factor_rotations.clear();
-                self.factor_rotations
-                    .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
-                self.factor_angles.clear();
-                self.factor_angles
-                    .extend(self.plane_rotated.iter().map(|c| st.scalars[c.angle]));
-                self.factor_h = Some(h);
-                self.jacobians += 1;
-            }
-            last_rel = rel;
-            for i in 0..n {
-                self.dx[i] = -self.ws.F[i];
-            }
-            // A kept factor was built where the free nodes stood turned by R R_f^T less: solve
-            // in its axes (module docs, "Newton strategy"). A fresh one is at this iterate.
-            let turn = modified && !refresh;
-            if turn {
-                corotate(
-                    &self.corotated,
-                    &st.rotations,
-                    &self.factor_rotations,
-                    &mut self.dx,
-                    true,
-                );
-                corotate_in_plane(
-                    &self.plane_rotated,
-                    &st.scalars,
-                    &self.factor_angles,
-                    &mut self.dx,
-                    true,
-                );
-            }
-            sys.solve_factored(&mut self.ws, &mut self.dx)
-                .map_err(|what| SolveError::Singular {
-                    at: At::Time(t),
-                    step,
-                    what: format!("iteration matrix ({what})"),
-                })?;
-            if turn {
-                corotate(
-                    &self.corotated,
-                    &st.rotations,
-                    &self.factor_rotations,
-                    &mut self.dx,
-                    false,
-                );
-                corotate_in_plane(
-                    &self.plane_rotated,
-                    &st.scalars,
-                    &self.factor_angles,
-                    &mut self.dx,
-                    false,
-                );
-            }
-            // dx corrects the spatial increment; the body-axis iterates move by R_n^T dx, and a
-            // translation's so that the SE(3) update moves the node by dx exactly.
-            sys.rotate_components(&prev.rotations, &mut self.dx, true);
-            for p in &self.trans {
-                let r = [p.rdof, p.rdof + 1, p.rdof + 2];
-                let theta = get3(&self.incr_b, &r) + get3(&self.dx, &r);
-                let target = p.B * (get3(&self.incr, &p.dofs) + get3(&self.dx, &p.dofs));
-                let u = so3::left_jacobian_inv(&theta) * prev.rotations[p.rot].inverse_transform_vector(&target);
-                set3(&mut self.dx, &p.dofs, &(u - get3(&self.incr_b, &p.dofs)));
-            }
-            for i in 0..n {
-                self.qb[i] += bp * self.dx[i];
-                self.vb[i] += gp * self.dx[i];
-                self.incr_b[i] += self.dx[i];
-            }
-            to_trial(
-                sys,
-                &self.trans,
-                prev,
-                st,
-                &mut self.incr,
-                &self.incr_b,
-                &self.vb,
-                &self.qb,
+    }
+
+    /// Keeps the factorised iteration matrix of step size `h` with the rotations and in-plane
+    /// angles it was built at (modified Newton turns it with them, module docs).
+    fn keep_factor(&mut self, h: f64) {
+        let st = &self.trial;
+        self.factor_rotations.clear();
+        self.factor_rotations
+            .extend(self.corotated.iter().map(|c| st.rotations[c.rot]));
+        self.factor_angles.clear();
+        self.factor_angles
+            .extend(self.plane_rotated.iter().map(|c| st.scalars[c.angle]));
+        self.factor_h = Some(h);
+        self.jacobians += 1;
+    }
+
+    /// The converged trial state becomes the state at $t_{n+1}$: the momentum projection (if
+    /// any), the algorithmic accelerations, the controllers and the predictor's history moved
+    /// on. Returns the momentum defect.
+    fn accept(&mut self, sys: &System, modified: bool, it: usize, h: f64) -> Result<Option<[f64; 6]>, SolveError> {
+        let n = sys.n_dof();
+        let AlphaParameters {
+            alpha_m: am,
+            alpha_f: af,
+            ..
+        } = self.p;
+        let st = &mut self.trial;
+        let mut momentum_defect = None;
+        if let Some(J0) = &self.J0 {
+            // Hairer, Lubich & Wanner §IV.4: project the converged velocities onto
+            // J(q_{n+1}, v) = J0; the sensors then read the corrected node velocities.
+            // (Before the update of a_n, so that a failure leaves the step at t_n.)
+            momentum_defect = Some(sys.project_momentum(st, J0)?.into());
+            sys.refresh_motions(st, &mut self.ws);
+        }
+        for i in 0..n {
+            self.a[i] = ((1.0 - af) * self.qb[i] + af * self.qb_n[i] - am * self.a[i]) / (1.0 - am);
+        }
+        sys.accept_step(st);
+        self.history.push(&self.qb_n, h);
+        std::mem::swap(&mut self.state, &mut self.trial);
+        self.steps += 1;
+        if !modified {
+            self.last_corrections = it;
+        }
+        Ok(momentum_defect)
+    }
+
+    /// One Newton correction $\Delta\mathbf x = -\mathbf S^{-1}\mathbf F$ from the factorised
+    /// iteration matrix (in its own axes when `turn`: a kept factor), applied to the body-axis
+    /// iterates and the trial state. Fails with the solver's message.
+    fn correct(&mut self, sys: &System, turn: bool, bp: f64, gp: f64) -> Result<(), String> {
+        let n = sys.n_dof();
+        let prev = &self.prev;
+        let st = &mut self.trial;
+        for i in 0..n {
+            self.dx[i] = -self.ws.F[i];
+        }
+        if turn {
+            corotate(
+                &self.corotated,
+                &st.rotations,
+                &self.factor_rotations,
+                &mut self.dx,
+                true,
+            );
+            corotate_in_plane(
+                &self.plane_rotated,
+                &st.scalars,
+                &self.factor_angles,
+                &mut self.dx,
+                true,
             );
         }
-        unreachable!("the loop returns at max_iterations")
+        sys.solve_factored(&mut self.ws, &mut self.dx)?;
+        if turn {
+            corotate(
+                &self.corotated,
+                &st.rotations,
+                &self.factor_rotations,
+                &mut self.dx,
+                false,
+            );
+            corotate_in_plane(
+                &self.plane_rotated,
+                &st.scalars,
+                &self.factor_angles,
+                &mut self.dx,
+                false,
+            );
+        }
+        // dx corrects the spatial increment; the body-axis iterates move by R_n^T dx, and a
+        // translation's so that the SE(3) update moves the node by dx exactly.
+        sys.rotate_components(&prev.rotations, &mut self.dx, true);
+        for p in &self.trans {
+            let r = [p.rdof, p.rdof + 1, p.rdof + 2];
+            let theta = get3(&self.incr_b, &r) + get3(&self.dx, &r);
+            let target = p.B * (get3(&self.incr, &p.dofs) + get3(&self.dx, &p.dofs));
+            let u = so3::left_jacobian_inv(&theta) * prev.rotations[p.rot].inverse_transform_vector(&target);
+            set3(&mut self.dx, &p.dofs, &(u - get3(&self.incr_b, &p.dofs)));
+        }
+        for i in 0..n {
+            self.qb[i] += bp * self.dx[i];
+            self.vb[i] += gp * self.dx[i];
+            self.incr_b[i] += self.dx[i];
+        }
+        to_trial(
+            sys,
+            &self.trans,
+            prev,
+            st,
+            &mut self.incr,
+            &self.incr_b,
+            &self.vb,
+            &self.qb,
+        );
+        Ok(())
     }
-}
-
-/// Result of [`solve_dynamic`].
-#[derive(Clone, Debug)]
-pub struct Trajectory {
-    pub sensors: SensorRecord,
-    /// Newton iterations of each step.
-    pub iterations: Vec<usize>,
-    /// Iteration matrices factorised in each step ([`StepReport::jacobians`]).
-    pub jacobians: Vec<usize>,
-    pub final_state: State,
-}
-
-/// The integrator at `start` (consistent accelerations) and a trajectory holding its first
-/// sensor row: the common start of [`solve_dynamic`] and [`solve_dynamic_adaptive`].
-pub(crate) fn start_trajectory<'a>(
-    system: &'a System,
-    start: State,
-    settings: &DynamicSettings,
-) -> Result<(Integrator<'a>, Trajectory), Box<Incomplete<Trajectory>>> {
-    let mut traj = Trajectory {
-        sensors: system.sensor_record(),
-        iterations: Vec::new(),
-        jacobians: Vec::new(),
-        final_state: start.clone(),
-    };
-    let integ = match Integrator::new(system, start, settings.clone()).and_then(|i| {
-        i.record(&mut traj.sensors)?;
-        Ok(i)
-    }) {
-        Ok(i) => i,
-        Err(error) => return Err(Box::new(Incomplete { error, partial: traj })),
-    };
-    Ok((integ, traj))
-}
-
-/// Integrates from `start` to `settings.end_time` (module docs), recording the sensors.
-pub fn solve_dynamic(
-    system: &System,
-    start: State,
-    settings: &DynamicSettings,
-) -> Result<Trajectory, Box<Incomplete<Trajectory>>> {
-    let (mut integ, mut traj) = start_trajectory(system, start, settings)?;
-    let (n_steps, _) = fixed_steps(integ.state().time, settings.end_time, settings.step);
-    let every = settings.output_every.max(1);
-    let mut pending = PendingRows::default();
-    for k in 1..=n_steps {
-        if k == n_steps {
-            // Land on the end time (fixed_steps): the last step may be shorter.
-            integ.set_step_size(last_step_size(integ.state().time, settings.end_time, settings.step));
-        }
-        match integ.step() {
-            Ok(rep) => {
-                traj.iterations.push(rep.residuals.len() - 1);
-                traj.jacobians.push(rep.jacobians);
-            }
-            Err(e) => return Err(stopped(&integ, e, &mut pending, traj)),
-        }
-        if k % every == 0 || k == n_steps {
-            if let Err(e) = integ.record_deferred(&mut pending, &mut traj.sensors) {
-                return Err(stopped(&integ, e, &mut pending, traj));
-            }
-        }
-    }
-    finished(&integ, &mut pending, traj)
-}
-
-/// The trajectory of a run that stopped with `error`: the rows recorded before it completed
-/// (a row that is not finite among them stops them there, the error stays the run's), the
-/// integrator's state as the final one.
-pub(crate) fn stopped(
-    integ: &Integrator,
-    error: SolveError,
-    pending: &mut PendingRows,
-    mut traj: Trajectory,
-) -> Box<Incomplete<Trajectory>> {
-    let _ = integ.system().complete_rows(pending, &mut traj.sensors);
-    traj.final_state = integ.state().clone();
-    Box::new(Incomplete { error, partial: traj })
-}
-
-/// The trajectory of a run that reached its end, its waiting rows completed.
-pub(crate) fn finished(
-    integ: &Integrator,
-    pending: &mut PendingRows,
-    mut traj: Trajectory,
-) -> Result<Trajectory, Box<Incomplete<Trajectory>>> {
-    traj.final_state = integ.state().clone();
-    if let Err(error) = integ.system().complete_rows(pending, &mut traj.sensors) {
-        return Err(Box::new(Incomplete { error, partial: traj }));
-    }
-    Ok(traj)
-}
-
-/// Integrates from `start` to `settings.end_time` with the adaptive step (module docs),
-/// starting with `settings.step` and recording the sensors after every accepted step
-/// (`output_every` is ignored; the step sizes are the differences of the recorded times).
-pub fn solve_dynamic_adaptive(
-    system: &System,
-    start: State,
-    settings: &DynamicSettings,
-    adaptive: &AdaptiveSettings,
-) -> Result<Trajectory, Box<Incomplete<Trajectory>>> {
-    let (mut integ, mut traj) = start_trajectory(system, start, settings)?;
-    let end = settings.end_time;
-    let mut pending = PendingRows::default();
-    while end - integ.state().time > 1e-12 * end.abs().max(1.0) {
-        // Land on the end time: shorten the step that would pass it (or leave a sliver).
-        match crate::retry::step_adaptive_to(&mut integ, end, adaptive) {
-            Ok(s) => {
-                traj.iterations.push(s.report.residuals.len() - 1);
-                traj.jacobians.push(s.report.jacobians);
-            }
-            Err(e) => return Err(stopped(&integ, e, &mut pending, traj)),
-        }
-        if let Err(e) = integ.record_deferred(&mut pending, &mut traj.sensors) {
-            return Err(stopped(&integ, e, &mut pending, traj));
-        }
-    }
-    finished(&integ, &mut pending, traj)
 }
 
 /// The iterate `st` of $t_{n+1}$ from the body-axis iterates of the step (module docs): the
@@ -1479,6 +1214,26 @@ fn to_trial(
             &(p.B.transpose() * R.transform_vector(&a)),
         );
     }
+}
+
+/// One adaptive step ([`Integrator::step_adaptive`]) that lands on `end`: a step that would
+/// pass it is shortened to it, and one that would leave a sliver of less than half a step is
+/// halved.
+pub fn step_adaptive_to(
+    integ: &mut Integrator,
+    end: f64,
+    adaptive: &AdaptiveSettings,
+) -> Result<AdaptiveStep, SolveError> {
+    let left = end - integ.state().time();
+    let h = integ.step_size();
+    if h >= left || 1.5 * h > left {
+        integ.set_step_size(if h >= left { left } else { 0.5 * left });
+    }
+    let limits = AdaptiveSettings {
+        min_step: adaptive.min_step.min(left),
+        ..adaptive.clone()
+    };
+    integ.step_adaptive(&limits)
 }
 
 #[cfg(test)]
@@ -1608,7 +1363,7 @@ mod tests {
         // normal component stays zero; both directions, and both orientations of the pair.
         // The two are different sums of the same products: round-off, 1e-14.
         let a = Vector3::new(0.2, -0.3, 0.9).normalize();
-        let (b1, b2) = crate::topology::perpendicular_pair(&a);
+        let (b1, b2) = crate::assembly::topology::perpendicular_pair(&a);
         let (theta, theta_f) = (0.7, -0.25);
         let R = [UnitQuaternion::from_scaled_axis(a * theta)];
         let Rf = [UnitQuaternion::from_scaled_axis(a * theta_f)];

@@ -6,7 +6,7 @@
 //! 11.7k instructions per factorisation and 4.9k per solve, against 9.3k and 1.8k for the
 //! textbook right-looking elimination below (Golub & Van Loan, Algorithm 3.4.1, partial
 //! pivoting with the row interchanges recorded as in LAPACK's `ipiv`; callgrind).
-//! [`crate::system`] uses it up to [`SMALL_LU_MAX`] unknowns and faer's kernels above.
+//! [`crate::assembly::system`] uses it up to [`SMALL_LU_MAX`] unknowns and faer's kernels above.
 
 /// Up to this many unknowns the dense iteration matrix is factorised by [`factor`] instead of
 /// faer's blocked LU: the whole matrix (8 KB) stays in the L1 cache, where blocking gains

@@ -6,7 +6,7 @@
 //! stiffness and mass from it. Its nodes must therefore stay in the global xy-plane, turning
 //! about $z$ only, for all time, whatever the loads: otherwise an out-of-plane coordinate that
 //! only the body holds would leave the system matrices singular. A node is confined to the
-//! plane when its rigid group (the nodes welded to it by rigid bodies, [`crate::topology`])
+//! plane when its rigid group (the nodes welded to it by rigid bodies, [`crate::assembly::topology`])
 //! is either
 //!
 //! * independent and supported in $z$ and in the rotations about $x$ and $y$: translation
@@ -52,7 +52,7 @@ pub(crate) fn check_planar_body(model: &Model, bi: usize, body: &FlexibleBody) -
                 "it is planar, but its placement turns the FE model's z axis onto {}: the placement of a planar body must be a rotation about z (its FE xy-plane onto the global one)",
                 vector(&e_z)
             ),
-            id: Some(crate::Entity::Body(BodyId(bi as u32))),
+            id: Some(crate::error::Entity::Body(BodyId(bi as u32))),
         });
     }
     let confinement = Confinement::new(model);

@@ -3,12 +3,12 @@
 //! A joint coordinate $x$ (an angle in rad or a length in m, [`crate::JointKind`]) takes a
 //! generalised force $Q$ (N m or N) in the equations, $\mathbf F \mathrel{-}= Q$ on its row:
 //!
-//! * **Limit** ([`JointLimit`]): a stiff unilateral spring-damper outside $[x_{lo}, x_{hi}]$.
+//! * **Limit** ([`crate::JointLimit`]): a stiff unilateral spring-damper outside $[x_{lo}, x_{hi}]$.
 //!   With the penetration $d = x - x_{lo} < 0$ (or $d = x - x_{hi} > 0$),
 //!   $Q = -(k d + c\dot x)$ while it pushes the coordinate back into the range, and $Q = 0$
 //!   when the damping term would pull it out (the stop does not stick). Tangents
 //!   $\partial\mathbf F/\partial x = k$, $\partial\mathbf F/\partial\dot x = c$ while active.
-//! * **Actuator** ([`JointActuator`]) with an effort $u$ from a time function, $Q = u(t)$, or
+//! * **Actuator** ([`crate::JointActuator`]) with an effort $u$ from a time function, $Q = u(t)$, or
 //!   from a PID law on a measured joint coordinate $y$ with the set-point $r(t)$:
 //!   $$e = r - y,\quad u = K_p e + K_i z + K_d(\dot r - \dot y),\quad z(t) = \int_0^t e\,d\tau,$$
 //!   optionally saturated at $|u| \le u_{max}$.
@@ -32,67 +32,13 @@
 
 #![allow(non_snake_case)]
 
-use crate::coordinates::{Slot, Values};
+use crate::assembly::coordinates::{Slot, Values};
+use crate::assembly::topology::Topology;
 use crate::error::{Entity, ModelError};
-use crate::model::{JointId, Model, SensorKind};
-use crate::time_function::{CompiledFunction, TimeFunction};
-use crate::topology::Topology;
-use serde::{Deserialize, Serialize};
-
-/// A stop on a joint coordinate: a stiff unilateral spring-damper outside `[lower, upper]`
-/// (module docs). Units: m or rad for the bounds, N/m or N m/rad for `stiffness`, N s/m or
-/// N m s/rad for `damping`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct JointLimit {
-    pub name: String,
-    pub joint: JointId,
-    pub coordinate: usize,
-    pub lower: Option<f64>,
-    pub upper: Option<f64>,
-    pub stiffness: f64,
-    pub damping: f64,
-}
-
-/// A PID law on a measured joint coordinate (module docs).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Pid {
-    /// The measured coordinate $y$ (often the actuated one).
-    pub joint: JointId,
-    pub coordinate: usize,
-    /// $r(t)$, in the measured coordinate's unit.
-    pub setpoint: TimeFunction,
-    pub kp: f64,
-    pub ki: f64,
-    pub kd: f64,
-    /// Saturation $|u| \le u_{max}$ (`None`: none).
-    pub max_effort: Option<f64>,
-}
-
-/// What gives an actuator's effort.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum Effort {
-    /// $u = f(t)$ (N or N m).
-    Time(TimeFunction),
-    /// A PID law.
-    Pid(Pid),
-}
-
-/// A force (on a length) or torque (on an angle) acting on a joint coordinate.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct JointActuator {
-    pub name: String,
-    pub joint: JointId,
-    pub coordinate: usize,
-    pub effort: Effort,
-}
-
-/// The state of one actuator's controller: the base $(t_n, z_n, e_n)$ of its integral.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct Control {
-    pub t: f64,
-    pub z: f64,
-    pub e: f64,
-}
+use crate::ids::JointId;
+use crate::model::time_function::CompiledFunction;
+use crate::model::{Effort, Model, SensorKind};
+use crate::state::Control;
 
 #[derive(Clone, Debug)]
 struct Limit {
@@ -416,7 +362,7 @@ impl JointForces {
     ) -> f64 {
         let map = &topo.map;
         let value = |s: usize| {
-            let (v, d, _) = crate::system::scalar_values(map, x, s);
+            let (v, d, _) = crate::assembly::coordinates::scalar_values(map, x, s);
             (v, d)
         };
         let mut sum = 0.0;
@@ -463,7 +409,7 @@ impl JointForces {
         let map = &topo.map;
         for l in &self.limits {
             let Some(slot) = l.slot else { continue };
-            let (xv, xd, _) = crate::system::scalar_values(map, x, l.scalar);
+            let (xv, xd, _) = crate::assembly::coordinates::scalar_values(map, x, l.scalar);
             if Self::limit_force(l, xv, xd).is_some() {
                 K[slot] += l.k;
                 C[slot] += l.c;
@@ -484,7 +430,7 @@ impl JointForces {
                 slot: Some(slot),
             } = &a.law
             {
-                let (y, yd, _) = crate::system::scalar_values(map, x, *scalar);
+                let (y, yd, _) = crate::assembly::coordinates::scalar_values(map, x, *scalar);
                 let p = Self::pid(setpoint, [*kp, *ki, *kd, *max], y, yd, t, c);
                 // F = -u on the actuated row.
                 K[*slot] -= p.du_dy;
@@ -524,21 +470,5 @@ impl JointForces {
             }
             c.t = t;
         }
-    }
-}
-
-impl crate::System {
-    /// The effort $u$ of every actuator at `state` (N on a length, N m on an angle).
-    pub fn actuator_efforts(&self, state: &crate::State) -> Vec<f64> {
-        let map = &self.topo.map;
-        let mut s = state.clone();
-        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
-        self.apply_drivers(&mut s, &mut pr, &mut pa);
-        let x = crate::system::values(&s, &pr, &pa);
-        let value = |sc: usize| {
-            let (v, d, _) = crate::system::scalar_values(map, &x, sc);
-            (v, d)
-        };
-        self.joint_forces.efforts(&value, s.time, &state.controls)
     }
 }

@@ -22,11 +22,11 @@
 
 #![allow(non_snake_case)]
 
-use crate::coordinates::{Chain, CoordinateMap, Motion, Op, Rotation, Scalar, Slot, Values};
+use crate::assembly::coordinates::{Chain, CoordinateMap, Motion, Op, Rotation, Scalar, Slot, Values};
 use crate::error::{Entity, ModelError};
 use crate::model::{
     Body, BodyId, DriverTarget, InitialCondition, JointId, JointKind, Model, NodeId, RotationSupport, SensorKind,
-    TranslationSupport,
+    Support, TranslationSupport,
 };
 use nalgebra::{UnitQuaternion, Vector3};
 use std::collections::{HashMap, VecDeque};
@@ -118,80 +118,105 @@ fn unit(v: &Vector3<f64>, entity: &str, id: Entity, what: &str) -> Result<Vector
 
 /// Checks every reference of the model to a node, body or joint.
 pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
+    check_element_references(model)?;
+    check_body_load_references(model)?;
+    check_sensor_references(model)?;
+    check_initial_references(model)
+}
+
+/// Who refers to an id, for the message and the error's entity.
+type Referrer<'a> = &'a dyn Fn() -> (String, Entity);
+
+/// `id` is a node of the model.
+fn check_node(model: &Model, id: NodeId, who: Referrer) -> Result<(), ModelError> {
     let nn = model.nodes.len();
-    let node = |id: NodeId, who: &dyn Fn() -> (String, Entity)| {
-        if id.index() < nn {
-            Ok(())
-        } else {
-            let (referenced_by, by) = who();
-            Err(ModelError::UnknownNode {
-                id: id.0,
-                count: nn,
-                referenced_by,
-                by,
-            })
-        }
-    };
-    let joint = |j: crate::JointId, who: &dyn Fn() -> (String, Entity)| {
-        if j.index() < model.joints.len() {
-            Ok(())
-        } else {
-            let (referenced_by, by) = who();
-            Err(ModelError::UnknownJoint {
-                id: j.0,
-                count: model.joints.len(),
-                referenced_by,
-                by,
-            })
-        }
-    };
+    if id.index() < nn {
+        Ok(())
+    } else {
+        let (referenced_by, by) = who();
+        Err(ModelError::UnknownNode {
+            id: id.0,
+            count: nn,
+            referenced_by,
+            by,
+        })
+    }
+}
+
+/// `j` is a joint of the model.
+fn check_joint(model: &Model, j: JointId, who: Referrer) -> Result<(), ModelError> {
+    if j.index() < model.joints.len() {
+        Ok(())
+    } else {
+        let (referenced_by, by) = who();
+        Err(ModelError::UnknownJoint {
+            id: j.0,
+            count: model.joints.len(),
+            referenced_by,
+            by,
+        })
+    }
+}
+
+/// The nodes and joints of the bodies, masses, springs, supports, joints, joint springs,
+/// drivers and loads.
+fn check_element_references(model: &Model) -> Result<(), ModelError> {
     for (bi, b) in model.bodies.iter().enumerate() {
         let who = || (format!("body '{}'", b.name()), Entity::Body(BodyId(bi as u32)));
         match b {
             Body::Flexible(f) => {
                 for &n in &f.nodes {
-                    node(n, &who)?;
+                    check_node(model, n, &who)?;
                 }
             }
             Body::Rigid(r) => {
-                node(r.reference, &who)?;
+                check_node(model, r.reference, &who)?;
                 for &n in &r.nodes {
-                    node(n, &who)?;
+                    check_node(model, n, &who)?;
                 }
             }
         }
     }
     for (i, p) in model.point_masses.iter().enumerate() {
-        node(p.node, &|| (format!("point mass {i}"), Entity::PointMass(i)))?;
+        check_node(model, p.node, &|| (format!("point mass {i}"), Entity::PointMass(i)))?;
     }
     for (i, s) in model.springs.iter().enumerate() {
         let who = || (format!("spring '{}'", s.name), Entity::Spring(i));
-        node(s.a, &who)?;
+        check_node(model, s.a, &who)?;
         if let Some(b) = s.b {
-            node(b, &who)?;
+            check_node(model, b, &who)?;
         }
     }
     for (i, s) in model.supports.iter().enumerate() {
-        node(s.node, &|| (format!("support {i}"), Entity::Support(i)))?;
+        check_node(model, s.node, &|| (format!("support {i}"), Entity::Support(i)))?;
     }
     for (ji, j) in model.joints.iter().enumerate() {
         let who = || (format!("joint '{}'", j.name), Entity::Joint(JointId(ji as u32)));
-        node(j.parent, &who)?;
-        node(j.child, &who)?;
+        check_node(model, j.parent, &who)?;
+        check_node(model, j.child, &who)?;
     }
     for (i, s) in model.joint_springs.iter().enumerate() {
-        joint(s.joint, &|| (format!("joint spring {i}"), Entity::JointSpring(i)))?;
+        check_joint(model, s.joint, &|| {
+            (format!("joint spring {i}"), Entity::JointSpring(i))
+        })?;
     }
     for (i, d) in model.drivers.iter().enumerate() {
         let who = || (format!("driver '{}'", d.name), Entity::Driver(i));
         match &d.target {
-            DriverTarget::Joint { joint: j, .. } => joint(*j, &who)?,
-            DriverTarget::NodeTranslation { node: n, .. } | DriverTarget::NodeRotation { node: n } => node(*n, &who)?,
+            DriverTarget::Joint { joint: j, .. } => check_joint(model, *j, &who)?,
+            DriverTarget::NodeTranslation { node: n, .. } | DriverTarget::NodeRotation { node: n } => {
+                check_node(model, *n, &who)?
+            }
         }
     }
     for (i, l) in model.loads.iter().enumerate() {
-        node(l.node, &|| (format!("load {i}"), Entity::Load(i)))?;
+        check_node(model, l.node, &|| (format!("load {i}"), Entity::Load(i)))?;
     }
+    Ok(())
+}
+
+/// Each load at a load point is on a flexible body of the model.
+fn check_body_load_references(model: &Model) -> Result<(), ModelError> {
     for (i, l) in model.body_loads.iter().enumerate() {
         match model.bodies.get(l.body.index()) {
             Some(Body::Flexible(_)) => {}
@@ -215,6 +240,11 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
             }
         }
     }
+    Ok(())
+}
+
+/// The nodes, joints, bodies and drivers the sensors read.
+fn check_sensor_references(model: &Model) -> Result<(), ModelError> {
     for (i, s) in model.sensors.iter().enumerate() {
         let who = || (format!("sensor '{}'", s.name), Entity::Sensor(i));
         match &s.kind {
@@ -223,17 +253,19 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
             | SensorKind::NodeRotation { node: n }
             | SensorKind::NodeVelocity { node: n }
             | SensorKind::NodeAngularVelocity { node: n }
-            | SensorKind::Reaction { node: n } => node(*n, &who)?,
+            | SensorKind::Reaction { node: n } => check_node(model, *n, &who)?,
             SensorKind::RelativePosition { node: n, reference } => {
-                node(*n, &who)?;
-                node(*reference, &who)?;
+                check_node(model, *n, &who)?;
+                check_node(model, *reference, &who)?;
             }
             SensorKind::LineDistance { node: n, a, b, .. } => {
-                node(*n, &who)?;
-                node(*a, &who)?;
-                node(*b, &who)?;
+                check_node(model, *n, &who)?;
+                check_node(model, *a, &who)?;
+                check_node(model, *b, &who)?;
             }
-            SensorKind::JointCoordinate { joint: j, .. } | SensorKind::JointRate { joint: j, .. } => joint(*j, &who)?,
+            SensorKind::JointCoordinate { joint: j, .. } | SensorKind::JointRate { joint: j, .. } => {
+                check_joint(model, *j, &who)?
+            }
             SensorKind::ModalCoordinates { body }
             | SensorKind::Stress { body, .. }
             | SensorKind::MaxVonMises { body, .. }
@@ -257,13 +289,18 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
             _ => {}
         }
     }
+    Ok(())
+}
+
+/// The joints, nodes and bodies of the initial conditions.
+fn check_initial_references(model: &Model) -> Result<(), ModelError> {
     for (i, c) in model.initial.iter().enumerate() {
         let who = || ("initial condition".to_string(), Entity::InitialCondition(i));
         match c {
             InitialCondition::JointValue { joint: j, .. } | InitialCondition::JointRate { joint: j, .. } => {
-                joint(*j, &who)?
+                check_joint(model, *j, &who)?
             }
-            InitialCondition::NodeVelocity { node: n, .. } => node(*n, &who)?,
+            InitialCondition::NodeVelocity { node: n, .. } => check_node(model, *n, &who)?,
             InitialCondition::RigidMotion { .. } => {}
             InitialCondition::BodyVelocity { body, .. } if body.index() >= model.bodies.len() => {
                 let (referenced_by, by) = who();
@@ -280,12 +317,93 @@ pub(crate) fn check_references(model: &Model) -> Result<(), ModelError> {
     Ok(())
 }
 
+/// The support of each node (at most one).
+type Supports<'a> = Vec<Option<&'a Support>>;
+
+/// The driven coordinates: (joint, coordinate), (node, component) and node rotations, each with
+/// its driver.
+#[derive(Default)]
+struct DrivenCoordinates {
+    joint: HashMap<(usize, usize), usize>,
+    translation: HashMap<(usize, usize), usize>,
+    rotation: HashMap<usize, usize>,
+}
+
+/// The rigid bodies' node lists (reference first) and, per node, the rigid bodies on it; the
+/// rigid group (nodes welded by rigid bodies) of each node and the joints into each group.
+struct RigidGroups {
+    nodes: Vec<(usize, Vec<usize>)>,
+    bodies_of: Vec<Vec<usize>>,
+    group: Vec<usize>,
+    incoming: HashMap<usize, Vec<usize>>,
+}
+
+/// The chains and slots of every node, the order they are computed in, the scalars of each
+/// joint and the coordinates of each independent node.
+struct Chains {
+    chains: Vec<Option<Chain>>,
+    chain_slots: Vec<Vec<Slot>>,
+    order: Vec<usize>,
+    joint_scalars: Vec<Vec<usize>>,
+    root_coords: Vec<Option<RootCoordinates>>,
+}
+
 /// Builds the coordinate map (module docs). References must have been checked.
 pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
     let nn = model.nodes.len();
-    let name = |i: usize| model.nodes[i].name.clone();
+    let support = supports_by_node(model)?;
+    let driven = driven_coordinates(model)?;
+    let grounded = grounded_nodes(&support, &driven);
+    let rigid = rigid_groups(model, &grounded)?;
+    let (entry, group_order) = group_order(model, &rigid, &grounded);
+    let mut b = Builder::default();
+    let Chains {
+        chains,
+        chain_slots,
+        order,
+        joint_scalars,
+        root_coords,
+    } = node_chains(model, &support, &driven, &rigid, &entry, &group_order, &mut b)?;
+    debug_assert_eq!(order.len(), nn);
+    let modal_scalars = modal_scalars(model, &mut b);
 
-    // Supports, one per node.
+    let n_dof = b.n_dof;
+    let col_id = |s: &Slot| match *s {
+        Slot::Unknown(d) => d,
+        Slot::Prescribed(p) => n_dof + p,
+    };
+    let chains: Vec<Chain> = chains
+        .into_iter()
+        .zip(&chain_slots)
+        .map(|(c, slots)| {
+            let mut c = c.expect("every node is in a group");
+            c.cols = slots.iter().map(col_id).collect();
+            c
+        })
+        .collect();
+    let map = CoordinateMap {
+        scalars: b.scalars,
+        rotations: b.rotations,
+        n_dof,
+        prescribed: b.prescribed,
+        chains,
+        order,
+        dof_labels: b.dof_labels,
+    };
+    Ok(Topology {
+        map,
+        joint_scalars,
+        roots: root_coords,
+        modal_scalars,
+        dims: b.dims,
+        dof_owners: b.dof_owners,
+    })
+}
+
+/// Each node's support; two on one node are refused.
+fn supports_by_node(model: &Model) -> Result<Supports<'_>, ModelError> {
+    let nn = model.nodes.len();
+    let name = |i: usize| model.nodes[i].name.clone();
     let mut support = vec![None; nn];
     let mut count = vec![0usize; nn];
     for s in &model.supports {
@@ -304,10 +422,12 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         });
     }
 
-    // Driver targets.
-    let mut joint_driver: HashMap<(usize, usize), usize> = HashMap::new();
-    let mut trans_driver: HashMap<(usize, usize), usize> = HashMap::new();
-    let mut rot_driver: HashMap<usize, usize> = HashMap::new();
+    Ok(support)
+}
+
+/// The coordinate each driver drives, checked (it exists, no other driver drives it).
+fn driven_coordinates(model: &Model) -> Result<DrivenCoordinates, ModelError> {
+    let mut driven = DrivenCoordinates::default();
     for (di, d) in model.drivers.iter().enumerate() {
         let dup = match &d.target {
             DriverTarget::Joint { joint, coordinate } => {
@@ -324,7 +444,7 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
                         driver_id: di,
                     });
                 }
-                joint_driver.insert((joint.index(), *coordinate), di)
+                driven.joint.insert((joint.index(), *coordinate), di)
             }
             DriverTarget::NodeTranslation { node, component } => {
                 if *component >= 3 {
@@ -334,9 +454,9 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
                         driver_id: di,
                     });
                 }
-                trans_driver.insert((node.index(), *component), di)
+                driven.translation.insert((node.index(), *component), di)
             }
-            DriverTarget::NodeRotation { node } => rot_driver.insert(node.index(), di),
+            DriverTarget::NodeRotation { node } => driven.rotation.insert(node.index(), di),
         };
         if let Some(other) = dup {
             return Err(ModelError::InvalidDriver {
@@ -346,20 +466,34 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
             });
         }
     }
+    Ok(driven)
+}
+
+/// The nodes the ground holds in some direction: by a support or a node driver.
+fn grounded_nodes(support: &Supports, driven: &DrivenCoordinates) -> Vec<bool> {
+    let nn = support.len();
     let mut grounded = vec![false; nn];
     for i in 0..nn {
         if let Some(s) = support[i] {
             grounded[i] = s.translation != TranslationSupport::Free || s.rotation != RotationSupport::Free;
         }
     }
-    for &(n, _) in trans_driver.keys() {
+    for &(n, _) in driven.translation.keys() {
         grounded[n] = true;
     }
-    for &n in rot_driver.keys() {
+    for &n in driven.rotation.keys() {
         grounded[n] = true;
     }
 
-    // Rigid bodies: node lists (reference first), checked.
+    grounded
+}
+
+/// The rigid bodies' node lists and the rigid groups, checked: no loop of rigid bodies, joints
+/// and the ground, at most one joint into a group, no support in a group that a joint moves.
+fn rigid_groups(model: &Model, grounded: &[bool]) -> Result<RigidGroups, ModelError> {
+    let nn = model.nodes.len();
+    let name = |i: usize| model.nodes[i].name.clone();
+    // Node lists (reference first).
     let mut rigid_nodes: Vec<(usize, Vec<usize>)> = Vec::new();
     for (bi, b) in model.bodies.iter().enumerate() {
         if let Body::Rigid(r) = b {
@@ -373,11 +507,59 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         }
     }
 
-    // Cycle detection on nodes + ground (index nn).
+    check_rigid_loops(model, &rigid_nodes, grounded)?;
+
+    // Groups.
+    let mut groups = UnionFind::new(nn);
+    let mut bodies_of: Vec<Vec<usize>> = vec![Vec::new(); nn];
+    for (k, (_, nodes)) in rigid_nodes.iter().enumerate() {
+        for &n in nodes {
+            groups.union(nodes[0], n);
+            bodies_of[n].push(k);
+        }
+    }
+    let group: Vec<usize> = (0..nn).map(|i| groups.find(i)).collect();
+    let mut incoming: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (ji, j) in model.joints.iter().enumerate() {
+        incoming.entry(group[j.child.index()]).or_default().push(ji);
+    }
+    let members = |g: usize| -> Vec<usize> { (0..nn).filter(|&i| group[i] == g).collect() };
+    for (g, js) in &incoming {
+        if js.len() > 1 {
+            return Err(ModelError::TwoParentJoints {
+                nodes: members(*g).into_iter().map(name).collect(),
+                joints: js.iter().map(|&j| model.joints[j].name.clone()).collect(),
+                joint_ids: js.iter().map(|&j| JointId(j as u32)).collect(),
+            });
+        }
+        if let Some(n) = members(*g).into_iter().find(|&n| grounded[n]) {
+            return Err(ModelError::SupportOnDependentNode {
+                node: name(n),
+                joint: model.joints[js[0]].name.clone(),
+                node_id: NodeId(n as u32),
+                joint_id: JointId(js[0] as u32),
+            });
+        }
+    }
+
+    Ok(RigidGroups {
+        nodes: rigid_nodes,
+        bodies_of,
+        group,
+        incoming,
+    })
+}
+
+/// A loop of rigid bodies, joints and the ground is refused ([`ModelError::RigidLoop`], with the
+/// bodies, joints and supported nodes on it).
+fn check_rigid_loops(model: &Model, rigid_nodes: &[(usize, Vec<usize>)], grounded: &[bool]) -> Result<(), ModelError> {
+    let nn = model.nodes.len();
+    let name = |i: usize| model.nodes[i].name.clone();
+    // On nodes + ground (index nn).
     let mut uf = UnionFind::new(nn + 1);
     let mut adjacency: Vec<Vec<(usize, Edge)>> = vec![Vec::new(); nn + 1];
     let mut edges: Vec<(usize, usize, Edge)> = Vec::new();
-    for (bi, nodes) in &rigid_nodes {
+    for (bi, nodes) in rigid_nodes {
         for &n in &nodes[1..] {
             edges.push((nodes[0], n, Edge::Body(*bi)));
         }
@@ -433,40 +615,21 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         adjacency[b].push((a, e));
     }
 
-    // Rigid groups.
-    let mut groups = UnionFind::new(nn);
-    let mut bodies_of: Vec<Vec<usize>> = vec![Vec::new(); nn];
-    for (k, (_, nodes)) in rigid_nodes.iter().enumerate() {
-        for &n in nodes {
-            groups.union(nodes[0], n);
-            bodies_of[n].push(k);
-        }
-    }
-    let group: Vec<usize> = (0..nn).map(|i| groups.find(i)).collect();
-    let mut incoming: HashMap<usize, Vec<usize>> = HashMap::new();
-    for (ji, j) in model.joints.iter().enumerate() {
-        incoming.entry(group[j.child.index()]).or_default().push(ji);
-    }
-    let members = |g: usize| -> Vec<usize> { (0..nn).filter(|&i| group[i] == g).collect() };
-    for (g, js) in &incoming {
-        if js.len() > 1 {
-            return Err(ModelError::TwoParentJoints {
-                nodes: members(*g).into_iter().map(name).collect(),
-                joints: js.iter().map(|&j| model.joints[j].name.clone()).collect(),
-                joint_ids: js.iter().map(|&j| JointId(j as u32)).collect(),
-            });
-        }
-        if let Some(n) = members(*g).into_iter().find(|&n| grounded[n]) {
-            return Err(ModelError::SupportOnDependentNode {
-                node: name(n),
-                joint: model.joints[js[0]].name.clone(),
-                node_id: NodeId(n as u32),
-                joint_id: JointId(js[0] as u32),
-            });
-        }
-    }
+    Ok(())
+}
 
-    // Entry node of each group and the group order (parents first).
+/// The entry node of each rigid group (the child of the joint into it, else a grounded node,
+/// else a rigid body's reference, else its first node) with that joint, and the groups in
+/// tree order (parents first).
+#[allow(clippy::type_complexity)]
+fn group_order(
+    model: &Model,
+    rigid: &RigidGroups,
+    grounded: &[bool],
+) -> (HashMap<usize, (usize, Option<usize>)>, Vec<usize>) {
+    let nn = model.nodes.len();
+    let (group, incoming, rigid_nodes) = (&rigid.group, &rigid.incoming, &rigid.nodes);
+    let members = |g: usize| -> Vec<usize> { (0..nn).filter(|&i| group[i] == g).collect() };
     let mut entry: HashMap<usize, (usize, Option<usize>)> = HashMap::new();
     for i in 0..nn {
         let g = group[i];
@@ -511,26 +674,39 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         "the joint tree is acyclic after the loop check"
     );
 
-    // Coordinates and chains.
-    let mut b = Builder::default();
+    (entry, group_order)
+}
+
+/// The chain of each node, group by group in tree order: the entry node's from its support or
+/// its joint, the group's other nodes by rigid offsets.
+fn node_chains(
+    model: &Model,
+    support: &Supports,
+    driven: &DrivenCoordinates,
+    rigid: &RigidGroups,
+    entry: &HashMap<usize, (usize, Option<usize>)>,
+    group_order: &[usize],
+    b: &mut Builder,
+) -> Result<Chains, ModelError> {
+    let nn = model.nodes.len();
     let mut chains: Vec<Option<Chain>> = vec![None; nn];
     let mut chain_slots: Vec<Vec<Slot>> = vec![Vec::new(); nn];
     let mut order = Vec::with_capacity(nn);
     let mut joint_scalars = vec![Vec::new(); model.joints.len()];
     let mut root_coords = vec![None; nn];
-    for &g in &group_order {
+    for &g in group_order {
         let (e, joint) = entry[&g];
         // Entry node.
         let (parent, ops, own) = match joint {
             None => {
                 b.owner = Some(Entity::Node(NodeId(e as u32)));
-                let (ops, own, rc) = root_chain(model, e, support[e], &trans_driver, &rot_driver, &mut b)?;
+                let (ops, own, rc) = root_chain(model, e, support[e], &driven.translation, &driven.rotation, b)?;
                 root_coords[e] = Some(rc);
                 (None, ops, own)
             }
             Some(ji) => {
                 b.owner = Some(Entity::Joint(JointId(ji as u32)));
-                let (mut ops, own, scalars) = joint_chain(model, ji, &joint_driver, &mut b)?;
+                let (mut ops, own, scalars) = joint_chain(model, ji, &driven.joint, b)?;
                 // Column positions continue after the parent's columns (prefix property).
                 let shift = chain_slots[model.joints[ji].parent.index()].len();
                 for op in &mut ops {
@@ -555,38 +731,58 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         });
         chain_slots[e] = slots;
         order.push(e);
-        // The group's other nodes, by rigid offsets (breadth first from the entry).
-        let mut queue = VecDeque::from([e]);
-        let mut seen = vec![e];
-        while let Some(u) = queue.pop_front() {
-            for &k in &bodies_of[u] {
-                for &w in &rigid_nodes[k].1 {
-                    if seen.contains(&w) {
-                        continue;
-                    }
-                    seen.push(w);
-                    let (nu, nw) = (&model.nodes[u], &model.nodes[w]);
-                    let Rinv = nu.orientation.inverse();
-                    let op = Op::Offset {
-                        d: Rinv * (nw.position - nu.position),
-                        C: Rinv * nw.orientation,
-                    };
-                    chains[w] = Some(Chain {
-                        parent: Some(u),
-                        ops: vec![op],
-                        cols: Vec::new(),
-                        root: false,
-                    });
-                    chain_slots[w] = chain_slots[u].clone();
-                    order.push(w);
-                    queue.push_back(w);
+        place_rigid_members(model, e, rigid, &mut chains, &mut chain_slots, &mut order);
+    }
+
+    Ok(Chains {
+        chains,
+        chain_slots,
+        order,
+        joint_scalars,
+        root_coords,
+    })
+}
+
+/// The chains of the nodes rigidly attached to `e`, by rigid offsets (breadth first from `e`).
+fn place_rigid_members(
+    model: &Model,
+    e: usize,
+    rigid: &RigidGroups,
+    chains: &mut [Option<Chain>],
+    chain_slots: &mut [Vec<Slot>],
+    order: &mut Vec<usize>,
+) {
+    let mut queue = VecDeque::from([e]);
+    let mut seen = vec![e];
+    while let Some(u) = queue.pop_front() {
+        for &k in &rigid.bodies_of[u] {
+            for &w in &rigid.nodes[k].1 {
+                if seen.contains(&w) {
+                    continue;
                 }
+                seen.push(w);
+                let (nu, nw) = (&model.nodes[u], &model.nodes[w]);
+                let Rinv = nu.orientation.inverse();
+                let op = Op::Offset {
+                    d: Rinv * (nw.position - nu.position),
+                    C: Rinv * nw.orientation,
+                };
+                chains[w] = Some(Chain {
+                    parent: Some(u),
+                    ops: vec![op],
+                    cols: Vec::new(),
+                    root: false,
+                });
+                chain_slots[w] = chain_slots[u].clone();
+                order.push(w);
+                queue.push_back(w);
             }
         }
     }
-    debug_assert_eq!(order.len(), nn);
+}
 
-    // Modal coordinates.
+/// The modal coordinates of each flexible body (unknowns).
+fn modal_scalars(model: &Model, b: &mut Builder) -> Vec<Vec<usize>> {
     let mut modal_scalars = vec![Vec::new(); model.bodies.len()];
     for (bi, body) in model.bodies.iter().enumerate() {
         if let Body::Flexible(f) = body {
@@ -603,37 +799,7 @@ pub(crate) fn build(model: &Model) -> Result<Topology, ModelError> {
         }
     }
 
-    let n_dof = b.n_dof;
-    let col_id = |s: &Slot| match *s {
-        Slot::Unknown(d) => d,
-        Slot::Prescribed(p) => n_dof + p,
-    };
-    let chains: Vec<Chain> = chains
-        .into_iter()
-        .zip(&chain_slots)
-        .map(|(c, slots)| {
-            let mut c = c.expect("every node is in a group");
-            c.cols = slots.iter().map(col_id).collect();
-            c
-        })
-        .collect();
-    let map = CoordinateMap {
-        scalars: b.scalars,
-        rotations: b.rotations,
-        n_dof,
-        prescribed: b.prescribed,
-        chains,
-        order,
-        dof_labels: b.dof_labels,
-    };
-    Ok(Topology {
-        map,
-        joint_scalars,
-        roots: root_coords,
-        modal_scalars,
-        dims: b.dims,
-        dof_owners: b.dof_owners,
-    })
+    modal_scalars
 }
 
 /// Path of edges between `a` and `b` in the forest `adjacency` (breadth first).
@@ -743,11 +909,11 @@ impl Builder {
 type ChainParts = (Vec<Op>, Vec<Slot>, RootCoordinates);
 
 /// The chain of an independent node: `Offset(r0)`, translations along the support basis,
-/// the rotation, `Offset(0, R0)` (see [`crate::coordinates`]).
+/// the rotation, `Offset(0, R0)` (see [`crate::assembly::coordinates`]).
 fn root_chain(
     model: &Model,
     n: usize,
-    support: Option<&crate::model::Support>,
+    support: Option<&Support>,
     trans_driver: &HashMap<(usize, usize), usize>,
     rot_driver: &HashMap<usize, usize>,
     b: &mut Builder,

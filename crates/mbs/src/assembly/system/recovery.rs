@@ -4,9 +4,10 @@
 //! ([`System::superelement`]): nothing is built again to draw a body. The modal coordinates
 //! are [`System::modal_coordinates`].
 
+use crate::assembly::system::System;
 use crate::error::SolveError;
 use crate::model::BodyId;
-use crate::system::{State, System};
+use crate::state::State;
 use nalgebra::Vector3;
 use superelement::{BodyState, Kinematics};
 

@@ -28,9 +28,10 @@
 
 #![allow(non_snake_case)]
 
+use crate::assembly::system::{System, Workspace};
 use crate::error::{At, Incomplete, SolveError};
-use crate::static_solver::{newton_static, solve_static, LoadStep, StaticSettings, StaticSolution};
-use crate::system::{State, System, Workspace};
+use crate::solvers::static_solver::{newton_static, solve_static, LoadStep, StaticSettings, StaticSolution};
+use crate::state::State;
 
 /// Settings of [`solve_arc_length`].
 #[derive(Clone, Debug, PartialEq)]
@@ -57,8 +58,8 @@ impl ArcLengthSettings {
     /// Arc length `initial_length`, up to `lambda_end` or `max_steps` steps.
     pub fn new(initial_length: f64, lambda_end: f64, max_steps: usize) -> Self {
         Self {
-            tolerance: crate::StaticSettings::DEFAULT_TOLERANCE,
-            max_iterations: crate::StaticSettings::DEFAULT_MAX_ITERATIONS,
+            tolerance: StaticSettings::DEFAULT_TOLERANCE,
+            max_iterations: StaticSettings::DEFAULT_MAX_ITERATIONS,
             initial_length,
             min_length: initial_length * 1e-4,
             max_length: initial_length * 10.0,

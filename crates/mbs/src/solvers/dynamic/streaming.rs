@@ -4,9 +4,9 @@
 //! [`crate::step_retrying`]) or adaptive ([`crate::step_adaptive_to`]), both landing on the
 //! end time.
 
-use crate::dynamic_solver::{AdaptiveSettings, Integrator, StepReport};
+use super::integrator::{fixed_steps, last_step_size, step_adaptive_to, AdaptiveSettings, Integrator, StepReport};
+use super::retry::{step_retrying, Retry};
 use crate::error::SolveError;
-use crate::retry::{step_adaptive_to, step_retrying, Retry};
 
 /// How [`Integrator::run_to`] steps.
 #[derive(Clone, Debug, PartialEq)]
@@ -92,7 +92,7 @@ impl Integrator<'_> {
     /// The number of fixed steps from the current time to `end_time` ([`crate::fixed_steps`]):
     /// steps of $h$, the last one shortened to end exactly at `end_time`.
     pub fn steps_to(&self, end_time: f64) -> usize {
-        crate::dynamic_solver::fixed_steps(self.state().time(), end_time, self.step_size()).0
+        fixed_steps(self.state().time(), end_time, self.step_size()).0
     }
 
     /// Steps from the current time to `end_time` as `stepping` says, calling
@@ -109,7 +109,7 @@ impl Integrator<'_> {
         let h = self.step_size();
         // Fixed steps: the last one is shortened to land on the end time (fixed_steps).
         let planned = match stepping {
-            Stepping::Fixed { .. } => Some(crate::dynamic_solver::fixed_steps(start, end_time, h).0),
+            Stepping::Fixed { .. } => Some(fixed_steps(start, end_time, h).0),
             Stepping::Adaptive(_) => None,
         };
         // An adaptive run ends when the time is on the end time to round-off.
@@ -126,7 +126,7 @@ impl Integrator<'_> {
             let t_before = self.state().time();
             let shortened = planned == Some(totals.steps + 1);
             if shortened {
-                self.set_step_size(crate::dynamic_solver::last_step_size(t_before, end_time, h));
+                self.set_step_size(last_step_size(t_before, end_time, h));
             }
             let taken = match stepping {
                 Stepping::Fixed { min_step } => match step_retrying(self, *min_step) {

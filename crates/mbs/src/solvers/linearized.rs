@@ -22,9 +22,10 @@
 
 #![allow(non_snake_case)]
 
+use crate::assembly::system::{ElementKind, Matrices, System, Workspace};
 use crate::error::{At, SolveError};
 use crate::model::Body;
-use crate::system::{ElementKind, Matrices, State, System, Workspace};
+use crate::state::State;
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 use serde::{Deserialize, Serialize};
@@ -535,7 +536,7 @@ fn distribute(system: &System, ws: &Workspace, phi: &[f64]) -> ModeEnergy {
         });
     }
     for (js, &(sc, k, ..)) in model.joint_springs.iter().zip(&system.joint_springs) {
-        if let crate::coordinates::Slot::Unknown(d) = map.scalars[sc].slot {
+        if let crate::assembly::coordinates::Slot::Unknown(d) = map.scalars[sc].slot {
             carriers.push(CarrierEnergy {
                 carrier: EnergyCarrier::JointSpring {
                     joint: model.joints[js.joint.index()].name.clone(),

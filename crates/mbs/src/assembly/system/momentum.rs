@@ -62,11 +62,13 @@
 
 #![allow(non_snake_case)]
 
-use crate::coordinates::Slot;
+use crate::assembly::coordinates::unknown;
+use crate::assembly::coordinates::Slot;
+use crate::assembly::system::{System, Workspace};
+use crate::assembly::topology::RootRotation;
 use crate::error::SolveError;
 use crate::model::{RotationSupport, TranslationSupport};
-use crate::system::{unknown, State, System, Workspace};
-use crate::topology::RootRotation;
+use crate::state::State;
 use faer::Mat;
 use nalgebra::{Matrix6, Vector3, Vector6};
 
@@ -119,7 +121,7 @@ impl System {
     /// action found.
     pub fn rigid_invariance(&self) -> Result<(), ExternalAction> {
         let model = &self.model;
-        let name = |n: crate::NodeId| model.nodes[n.index()].name.clone();
+        let name = |n: crate::ids::NodeId| model.nodes[n.index()].name.clone();
         for s in &model.supports {
             let translation_free = match &s.translation {
                 TranslationSupport::Free => true,
@@ -158,7 +160,7 @@ impl System {
     /// translation along $\mathbf e_k$ (column $k$) and rotation about $\mathbf e_k$ through the origin
     /// (column $3 + k$), at the configuration of `state` (module docs).
     ///
-    /// Which coordinate carries what, from the maps of [`crate::coordinates`]: an independent
+    /// Which coordinate carries what, from the maps of [`crate::assembly::coordinates`]: an independent
     /// node's translations are inertial ($\mathbf r = \mathbf r_0 + \sum_i s_i\mathbf e_i$ along its
     /// support basis), so $\dot s_i = \mathbf e_i\cdot(\mathbf v + \boldsymbol\omega\times\mathbf r)$; every
     /// SO(3) coordinate (an independent node's orientation, a spherical joint's child) is absolute

@@ -15,9 +15,10 @@
 
 #![allow(non_snake_case)]
 
+use crate::assembly::system::sensors::SensorRecord;
+use crate::assembly::system::System;
 use crate::error::{At, Incomplete, SolveError};
-use crate::sensors::SensorRecord;
-use crate::system::{State, System};
+use crate::state::State;
 
 /// Settings of [`solve_static`].
 #[derive(Clone, Debug, PartialEq)]
@@ -109,7 +110,7 @@ pub(crate) fn newton_static(
     state: &mut State,
     lambda: f64,
     settings: &StaticSettings,
-    ws: &mut crate::system::Workspace,
+    ws: &mut crate::assembly::system::Workspace,
 ) -> Result<(LoadStep, bool), SolveError> {
     let mut step = LoadStep {
         lambda,

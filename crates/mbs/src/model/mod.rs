@@ -10,13 +10,18 @@
 //! directions and loads (dead and follower) are inertial vectors there; rigid-body mass data
 //! are in the axes of their reference node.
 
-use crate::joint_forces::{JointActuator, JointLimit};
-use crate::time_function::TimeFunction;
+pub mod merge;
+pub mod time_function;
+pub mod units;
+pub mod user_force;
+
+pub use crate::ids::{BodyId, JointId, NodeId};
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
 use reduction::ReducedBody;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 use superelement::{Damping, FrameChoice, MassVariant};
+use time_function::TimeFunction;
 
 /// Serde of a shared reduced body: written as the body itself, read into a new `Arc`.
 mod shared_body {
@@ -30,37 +35,6 @@ mod shared_body {
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Arc<ReducedBody>, D::Error> {
         ReducedBody::deserialize(d).map(Arc::new)
-    }
-}
-
-/// Index of a node in [`Model::nodes`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(transparent)]
-pub struct NodeId(pub u32);
-
-/// Index of a body in [`Model::bodies`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(transparent)]
-pub struct BodyId(pub u32);
-
-/// Index of a joint in [`Model::joints`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(transparent)]
-pub struct JointId(pub u32);
-
-impl NodeId {
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
-impl BodyId {
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
-impl JointId {
-    pub fn index(self) -> usize {
-        self.0 as usize
     }
 }
 
@@ -113,7 +87,7 @@ pub struct FlexibleBody {
     /// (`superelement::Superelement::into_planar`: the in-plane coordinates of its interfaces
     /// and its modes only): for a body reduced as a planar part (`reduction::CbSettings::planar`)
     /// whose nodes the supports and joints keep in the plane, and whose placement is a rotation
-    /// about z; [`crate::System::new`] checks both ([`crate::planar`]). Off by default.
+    /// about z; [`crate::System::new`] checks both ([`crate::assembly::planar`]). Off by default.
     #[serde(default)]
     pub planar: bool,
 }
@@ -434,14 +408,14 @@ pub struct Sensor {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum InitialCondition {
     /// A scalar joint coordinate's value: the child and everything behind it (the subtree
-    /// reached through bodies and joints) turn or slide rigidly with it ([`crate::initial`]).
+    /// reached through bodies and joints) turn or slide rigidly with it ([`crate::assembly::initial`]).
     JointValue {
         joint: JointId,
         coordinate: usize,
         value: f64,
     },
     /// A scalar joint coordinate's rate: the subtree behind the joint gets the matching rigid
-    /// velocity ([`crate::initial`]; in a closed loop, the coordinate alone).
+    /// velocity ([`crate::assembly::initial`]; in a closed loop, the coordinate alone).
     JointRate {
         joint: JointId,
         coordinate: usize,
@@ -456,7 +430,7 @@ pub enum InitialCondition {
     /// A rigid velocity of a body and of everything attached to it by joints and bodies,
     /// $\mathbf v(\mathbf x) = \mathbf v_p + \boldsymbol\omega\times(\mathbf x - \mathbf p)$ about the
     /// point $\mathbf p$ (inertial, at the initial configuration). Refused when the body is held
-    /// by the ground (give its joints' rates instead): see [`crate::initial`].
+    /// by the ground (give its joints' rates instead): see [`crate::assembly::initial`].
     BodyVelocity {
         body: BodyId,
         velocity: Vector3<f64>,
@@ -480,10 +454,10 @@ pub struct Model {
     pub point_masses: Vec<PointMass>,
     pub springs: Vec<Spring>,
     pub joint_springs: Vec<JointSpring>,
-    /// Stops on joint coordinates ([`crate::joint_forces`]).
+    /// Stops on joint coordinates ([`crate::assembly::joint_forces`]).
     #[serde(default)]
     pub joint_limits: Vec<JointLimit>,
-    /// Force and torque actuators on joint coordinates ([`crate::joint_forces`]).
+    /// Force and torque actuators on joint coordinates ([`crate::assembly::joint_forces`]).
     #[serde(default)]
     pub actuators: Vec<JointActuator>,
     pub supports: Vec<Support>,
@@ -614,4 +588,51 @@ impl Model {
             kind,
         });
     }
+}
+
+/// A stop on a joint coordinate: a stiff unilateral spring-damper outside `[lower, upper]`
+/// ([`crate::assembly::joint_forces`]). Units: m or rad for the bounds, N/m or N m/rad for `stiffness`, N s/m or
+/// N m s/rad for `damping`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointLimit {
+    pub name: String,
+    pub joint: JointId,
+    pub coordinate: usize,
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+    pub stiffness: f64,
+    pub damping: f64,
+}
+
+/// A PID law on a measured joint coordinate ([`crate::assembly::joint_forces`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pid {
+    /// The measured coordinate $y$ (often the actuated one).
+    pub joint: JointId,
+    pub coordinate: usize,
+    /// $r(t)$, in the measured coordinate's unit.
+    pub setpoint: TimeFunction,
+    pub kp: f64,
+    pub ki: f64,
+    pub kd: f64,
+    /// Saturation $|u| \le u_{max}$ (`None`: none).
+    pub max_effort: Option<f64>,
+}
+
+/// What gives an actuator's effort.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Effort {
+    /// $u = f(t)$ (N or N m).
+    Time(TimeFunction),
+    /// A PID law.
+    Pid(Pid),
+}
+
+/// A force (on a length) or torque (on an angle) acting on a joint coordinate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointActuator {
+    pub name: String,
+    pub joint: JointId,
+    pub coordinate: usize,
+    pub effort: Effort,
 }

@@ -10,12 +10,14 @@
 
 #![allow(non_snake_case)]
 
-use crate::coordinates::Slot;
+use crate::assembly::coordinates::unknown;
+use crate::assembly::coordinates::Slot;
+use crate::assembly::system::{ElementKind, System, Workspace};
+use crate::assembly::topology::RootRotation;
 use crate::error::SolveError;
 use crate::model::{BodyId, SensorKind};
-use crate::system::{unknown, ElementKind, State, System, Workspace};
-use crate::topology::RootRotation;
-use crate::NodeMotion;
+use crate::node::NodeMotion;
+use crate::state::State;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use superelement::so3;
@@ -169,7 +171,7 @@ impl System {
     ) -> Result<Energies, SolveError> {
         let g = self.model.gravity;
         let mut e = Energies::default();
-        let body_err = |f: &crate::body::FlexibleElement, source| SolveError::Body {
+        let body_err = |f: &crate::assembly::body::FlexibleElement, source| SolveError::Body {
             body: self.model.bodies[f.body].name().to_string(),
             id: crate::model::BodyId(f.body as u32),
             at: crate::error::At::Time(state.time),
@@ -228,7 +230,7 @@ impl System {
             e.gravity -= p.mass * g.dot(&m.r);
         }
         for s in &self.springs {
-            e.strain += crate::body::spring_energy(s, &nodes[s.a], s.b.map(|b| &nodes[b]));
+            e.strain += crate::assembly::body::spring_energy(s, &nodes[s.a], s.b.map(|b| &nodes[b]));
         }
         for &(s, k, _, rest, preload) in &self.joint_springs {
             let x = state.scalars[s];
@@ -240,7 +242,7 @@ impl System {
     }
 
     /// Linear momentum and angular momentum about the origin (module docs; computed by
-    /// [`crate::momentum`], which the dynamic solver's momentum projection shares).
+    /// [`crate::assembly::system::momentum`], which the dynamic solver's momentum projection shares).
     pub fn momentum(&self, state: &State) -> Result<(Vector3<f64>, Vector3<f64>), SolveError> {
         let map = self.momentum_map(state)?;
         let J = self.momentum_at(&map, state, &state.velocity);
@@ -310,7 +312,7 @@ impl System {
     }
 
     /// The superelement state of flexible element `i`.
-    pub(crate) fn body_state(&self, i: usize, state: &State, nodes: &[crate::NodeMotion]) -> superelement::BodyState {
+    pub(crate) fn body_state(&self, i: usize, state: &State, nodes: &[NodeMotion]) -> superelement::BodyState {
         let f = &self.flexible[i];
         let map = &self.topo.map;
         let eta: Vec<f64> = f.modal.iter().map(|&s| state.scalars[s]).collect();
@@ -325,7 +327,7 @@ impl System {
     /// The body's velocities $\dot{\mathbf q} = [\mathbf v_1, \boldsymbol\omega_1, \dots, \dot{\boldsymbol\eta}]$
     /// ($6N + m$, the layout of [`superelement::BodyState::velocity_vector`]) from the node
     /// motions and the modal rates.
-    fn body_velocities(&self, i: usize, state: &State, nodes: &[crate::NodeMotion]) -> Vec<f64> {
+    fn body_velocities(&self, i: usize, state: &State, nodes: &[NodeMotion]) -> Vec<f64> {
         let f = &self.flexible[i];
         let map = &self.topo.map;
         let mut qd = Vec::with_capacity(6 * f.nodes.len() + f.modal.len());

@@ -71,6 +71,8 @@
 
 #![allow(non_snake_case)]
 
+use crate::node::NodeMotion;
+use crate::state::State;
 use nalgebra::{UnitQuaternion, Vector3};
 use superelement::so3;
 
@@ -709,5 +711,45 @@ impl CoordinateMap {
                 }
             }
         }
+    }
+}
+
+impl From<&Motion> for NodeMotion {
+    fn from(m: &Motion) -> Self {
+        Self {
+            r: m.p,
+            R: m.R,
+            v: m.v,
+            omega: m.w,
+            a: m.a,
+            alpha: m.al,
+        }
+    }
+}
+
+/// The unknown index of a slot known to be unknown.
+pub(crate) fn unknown(slot: Slot) -> usize {
+    match slot {
+        Slot::Unknown(d) => d,
+        Slot::Prescribed(_) => unreachable!("modal and initial-condition coordinates are unknowns"),
+    }
+}
+
+pub(crate) fn values<'a>(s: &'a State, pr: &'a [f64], pa: &'a [f64]) -> Values<'a> {
+    Values {
+        scalars: &s.scalars,
+        rotations: &s.rotations,
+        vel: &s.velocity,
+        acc: &s.acceleration,
+        presc_rate: pr,
+        presc_acc: pa,
+    }
+}
+
+pub(crate) fn scalar_values(map: &CoordinateMap, x: &Values, s: usize) -> (f64, f64, f64) {
+    let v = x.scalars[s];
+    match map.scalars[s].slot {
+        Slot::Unknown(d) => (v, x.vel[d], x.acc[d]),
+        Slot::Prescribed(p) => (v, x.presc_rate[p], x.presc_acc[p]),
     }
 }

@@ -10,8 +10,9 @@
 //! puts lengths, angles and modal coordinates on one scale before the dense symmetric
 //! eigensolver (faer's is not scale-invariant).
 
+use crate::assembly::system::System;
 use crate::error::SolveError;
-use crate::system::{State, System};
+use crate::state::State;
 use faer::{Mat, Side};
 
 /// The inertia of the tangent stiffness at a static state.

@@ -1,7 +1,7 @@
 //! Units of the joint coordinates: which scalar coordinate of a [`JointKind`] is an angle
 //! (radians) and which a length (metres), for sensor headers and driver efforts.
 
-use crate::JointKind;
+use crate::model::JointKind;
 
 /// What a scalar joint coordinate measures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -48,7 +48,7 @@
 //! }
 //! ```
 //!
-//! The momentum projection of free models ([`crate::momentum`]) is off with a user force: it
+//! The momentum projection of free models ([`crate::assembly::system::momentum`]) is off with a user force: it
 //! cannot know whether the force is an internal one.
 //!
 //! # Notation
@@ -62,8 +62,6 @@
 
 #![allow(non_snake_case)]
 
-use crate::body::ElementOutput;
-use crate::error::SolveError;
 use crate::model::NodeId;
 use crate::node::NodeMotion;
 use faer::{Mat, MatMut};
@@ -156,12 +154,12 @@ pub fn finite_difference_jacobian(
 #[derive(Clone, Debug)]
 pub(crate) struct UserBuffer {
     /// The force's node motions, gathered from the system's.
-    motions: Vec<NodeMotion>,
-    wrench: Vec<Wrench>,
+    pub(crate) motions: Vec<NodeMotion>,
+    pub(crate) wrench: Vec<Wrench>,
     plus: Vec<Wrench>,
     minus: Vec<Wrench>,
-    dx: Mat<f64>,
-    dv: Mat<f64>,
+    pub(crate) dx: Mat<f64>,
+    pub(crate) dv: Mat<f64>,
 }
 
 impl UserBuffer {
@@ -186,13 +184,13 @@ impl UserBuffer {
     }
 
     /// `force` at the buffer's motions into `out` (zeroed first).
-    fn eval(force: &dyn UserForce, t: f64, motions: &[NodeMotion], out: &mut [Wrench]) {
+    pub(crate) fn eval(force: &dyn UserForce, t: f64, motions: &[NodeMotion], out: &mut [Wrench]) {
         out.iter_mut().for_each(|w| *w = [0.0; 6]);
         force.force(t, motions, out);
     }
 
     /// Central differences into `dx`, `dv` (column by column: node `b`, slot `j`).
-    fn fd_jacobian(&mut self, force: &dyn UserForce, t: f64) {
+    pub(crate) fn fd_jacobian(&mut self, force: &dyn UserForce, t: f64) {
         let h = force.fd_steps();
         let N = self.motions.len();
         for b in 0..N {
@@ -230,70 +228,12 @@ impl UserBuffer {
     }
 }
 
-/// The user force's element output on its node ports: external part $\lambda\mathbf f_e$,
-/// residual $-\lambda\mathbf f_e$, $\mathbf K = -\lambda\,\partial\mathbf f_e/\partial\mathbf x$,
-/// $\mathbf C = -\lambda\,\partial\mathbf f_e/\partial\mathbf V$ (no mass). A non-finite force or
-/// Jacobian is refused with [`SolveError::UserForce`].
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn user_force_element(
-    force: &dyn UserForce,
-    index: usize,
-    nodes: &[usize],
-    all: &[NodeMotion],
-    t: f64,
-    lambda: f64,
-    tangents: bool,
-    buf: &mut UserBuffer,
-    out: &mut ElementOutput,
-) -> Result<(), SolveError> {
-    out.reset(tangents);
-    for (m, &n) in buf.motions.iter_mut().zip(nodes) {
-        *m = all[n];
-    }
-    UserBuffer::eval(force, t, &buf.motions, &mut buf.wrench);
-    let refuse = |what: &str| SolveError::UserForce {
-        name: force.name().to_string(),
-        index,
-        at: crate::error::At::Time(t),
-        what: what.to_string(),
-    };
-    if buf.wrench.iter().flatten().any(|x| !x.is_finite()) {
-        return Err(refuse("the force is not finite"));
-    }
-    for (a, w) in buf.wrench.iter().enumerate() {
-        for i in 0..6 {
-            out.external[6 * a + i] = lambda * w[i];
-            out.residual[6 * a + i] = -lambda * w[i];
-        }
-    }
-    if !tangents {
-        return Ok(());
-    }
-    buf.dx.fill(0.0);
-    buf.dv.fill(0.0);
-    if !force.jacobian(t, &buf.motions, buf.dx.as_mut(), buf.dv.as_mut()) {
-        buf.fd_jacobian(force, t);
-    }
-    let n = 6 * nodes.len();
-    for c in 0..n {
-        for r in 0..n {
-            let (k, d) = (buf.dx[(r, c)], buf.dv[(r, c)]);
-            if !(k.is_finite() && d.is_finite()) {
-                return Err(refuse("its Jacobian is not finite"));
-            }
-            out.K[(r, c)] = -lambda * k;
-            out.C[(r, c)] = -lambda * d;
-        }
-    }
-    Ok(())
-}
-
 /// The nodes of a user force checked against the model's node count.
 pub(crate) fn check_nodes(
     force: &dyn UserForce,
     index: usize,
     n_nodes: usize,
-) -> Result<Vec<usize>, crate::ModelError> {
+) -> Result<Vec<usize>, crate::error::ModelError> {
     force
         .nodes()
         .iter()
@@ -301,11 +241,11 @@ pub(crate) fn check_nodes(
             if id.index() < n_nodes {
                 Ok(id.index())
             } else {
-                Err(crate::ModelError::UnknownNode {
+                Err(crate::error::ModelError::UnknownNode {
                     id: id.0,
                     count: n_nodes,
                     referenced_by: format!("user force '{}'", force.name()),
-                    by: crate::Entity::UserForce(index),
+                    by: crate::error::Entity::UserForce(index),
                 })
             }
         })

@@ -9,7 +9,7 @@
 //! Their derivatives $\hat{\mathbf M} =
 //! \partial\mathbf F/\partial\ddot{\mathbf q}$, $\hat{\mathbf C} = \partial\mathbf F/\partial\dot{\mathbf q}$,
 //! $\hat{\mathbf K} = \partial\mathbf F/\partial\mathbf q$ are assembled into one sparse pattern
-//! ([`crate::coordinates`] gives the formulas).
+//! ([`crate::assembly::coordinates`] gives the formulas).
 //!
 //! Style R9: the pattern, the element-to-slot maps and the symbolic LU are built once in
 //! [`System::new`]; each Newton iteration refills values only (`evaluate_into`). Style R8: the
@@ -23,20 +23,28 @@
 
 #![allow(non_snake_case)]
 
-use crate::body::{
-    load_element, point_mass_element, rigid_element, spring_element, ElementOutput, FlexBuffer, FlexibleElement,
-    LoadElement, RigidElement, SpringElement,
+mod initial_state;
+pub mod momentum;
+pub mod recovery;
+pub mod sensors;
+
+use crate::assembly::body::{
+    load_element, point_mass_element, rigid_element, spring_element, user_force_element, ElementOutput, FlexBuffer,
+    FlexibleElement, LoadElement, RigidElement, SpringElement,
 };
-use crate::coordinates::{Motion, MotionCache, NodeDerivatives, Slot, Values};
-use crate::dense_lu::{self, SMALL_LU_MAX};
+use crate::assembly::coordinates::{
+    scalar_values, unknown, values, CoordinateMap, Motion, MotionCache, NodeDerivatives, Slot,
+};
+use crate::assembly::dense_lu::{self, SMALL_LU_MAX};
+use crate::assembly::initial::InitialPlan;
+use crate::assembly::joint_forces::JointForces;
+use crate::assembly::topology::{self, RootRotation, Topology};
 use crate::error::{Entity, ModelError, SolveError};
-use crate::initial::InitialPlan;
-use crate::joint_forces::{Control, JointForces};
+use crate::model::time_function::CompiledFunction;
+use crate::model::user_force::{UserBuffer, UserForce};
 use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId, SensorKind};
 use crate::node::NodeMotion;
-use crate::time_function::CompiledFunction;
-use crate::topology::{self, RootRotation, Topology};
-use crate::user_force::{user_force_element, UserBuffer, UserForce};
+use crate::state::State;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
@@ -46,6 +54,9 @@ use nalgebra::{UnitQuaternion, Vector3};
 use rayon::prelude::*;
 use std::sync::Arc;
 use superelement::{so3, Frame, Superelement};
+
+/// A joint spring on its scalar: (scalar, $k$, $c$, $x_0$, $f_0$).
+pub(crate) type JointSpringScalar = (usize, f64, f64, f64, f64);
 
 /// One element of the assembly: what it is and where it acts.
 #[derive(Clone, Debug)]
@@ -88,6 +99,99 @@ pub(crate) struct Pattern {
 }
 
 impl Pattern {
+    /// The sparse pattern of the elements, the nodes' own blocks, the joint springs and the
+    /// joint forces, with the symbolic LU and the slots of each (the joint forces bound to it).
+    fn build(
+        model: &Model,
+        topo: &Topology,
+        elements: &[ElementRef],
+        joint_springs: &[JointSpringScalar],
+        joint_forces: &mut JointForces,
+    ) -> Result<Self, ModelError> {
+        let map = &topo.map;
+        let n = map.n_dof;
+        let node_unknown: Vec<Vec<usize>> = map
+            .chains
+            .iter()
+            .map(|c| c.cols.iter().copied().filter(|&id| id < n).collect())
+            .collect();
+        let mut sets: Vec<Vec<usize>> = Vec::new();
+        for e in elements {
+            let mut s: Vec<usize> = e.nodes.iter().flat_map(|&a| node_unknown[a].iter().copied()).collect();
+            s.extend(&e.modal);
+            s.sort_unstable();
+            s.dedup();
+            sets.push(s);
+        }
+        let n_elem_sets = sets.len();
+        for (c, u) in node_unknown.iter().enumerate() {
+            if !map.chains[c].root {
+                sets.push(u.clone());
+            }
+        }
+        sets.extend(joint_forces.pattern_sets(topo));
+        let symbolic = Pattern::structure(n, &sets);
+        let lu = if n > 0 {
+            Some(
+                SymbolicLu::try_new(symbolic.as_ref())
+                    .map_err(|e| invalid(None, "system".into(), format!("symbolic LU failed: {e:?}")))?,
+            )
+        } else {
+            None
+        };
+        let mut pattern = Pattern {
+            symbolic,
+            lu,
+            elem_dofs: Vec::new(),
+            elem_pos: Vec::new(),
+            elem_modal_pos: Vec::new(),
+            elem_slots: Vec::new(),
+            node_slots: vec![Vec::new(); model.nodes.len()],
+            node_unknown_cols: map
+                .chains
+                .iter()
+                .map(|ch| ch.cols.iter().copied().enumerate().filter(|&(_, id)| id < n).collect())
+                .collect(),
+            joint_spring_slots: Vec::new(),
+        };
+        for (e, dofs) in elements.iter().zip(sets.iter().take(n_elem_sets)) {
+            let find = |d: usize| dofs.binary_search(&d).expect("dof of the element");
+            let pos = e
+                .nodes
+                .iter()
+                .map(|&a| node_unknown[a].iter().map(|&d| find(d)).collect())
+                .collect();
+            let modal_pos = e.modal.iter().map(|&d| find(d)).collect();
+            let slots = dofs
+                .iter()
+                .flat_map(|&c| dofs.iter().map(move |&r| (r, c)))
+                .map(|(r, c)| pattern.slot(r, c))
+                .collect();
+            pattern.elem_dofs.push(dofs.clone());
+            pattern.elem_pos.push(pos);
+            pattern.elem_modal_pos.push(modal_pos);
+            pattern.elem_slots.push(slots);
+        }
+        for (c, u) in node_unknown.iter().enumerate() {
+            if !map.chains[c].root {
+                pattern.node_slots[c] = u
+                    .iter()
+                    .flat_map(|&k| u.iter().map(move |&i| (i, k)))
+                    .map(|(i, k)| pattern.slot(i, k))
+                    .collect();
+            }
+        }
+        pattern.joint_spring_slots = joint_springs
+            .iter()
+            .map(|&(s, ..)| match map.scalars[s].slot {
+                Slot::Unknown(d) => Some(pattern.slot(d, d)),
+                Slot::Prescribed(_) => None,
+            })
+            .collect();
+        joint_forces.bind(topo, |r, c| pattern.slot(r, c));
+        Ok(pattern)
+    }
+
     /// The CSC structure holding every $\text{set}\times\text{set}$ block and the diagonal.
     fn structure(n: usize, sets: &[Vec<usize>]) -> SymbolicSparseColMat<usize> {
         fe_model::pattern::block_structure(n, sets, true)
@@ -102,79 +206,6 @@ impl Pattern {
 
     pub(crate) fn nnz(&self) -> usize {
         self.symbolic.row_idx().len()
-    }
-}
-
-/// The coordinates, velocities and accelerations of a system at one instant, and each
-/// flexible body's last floating frame (the warm start of (4.4)).
-#[derive(Debug, PartialEq)]
-pub struct State {
-    pub(crate) time: f64,
-    /// Every scalar coordinate (unknown and prescribed).
-    pub(crate) scalars: Vec<f64>,
-    pub(crate) rotations: Vec<UnitQuaternion<f64>>,
-    /// $\dot{\mathbf q}$ (unknowns).
-    pub(crate) velocity: Vec<f64>,
-    /// $\ddot{\mathbf q}$ (unknowns).
-    pub(crate) acceleration: Vec<f64>,
-    /// Per flexible element.
-    pub(crate) frames: Vec<Frame>,
-    /// Per actuator: its controller's state ([`crate::joint_forces`]).
-    pub(crate) controls: Vec<Control>,
-}
-
-/// `clone_from` reuses the buffers (the derived one would allocate a fresh copy): the
-/// integrator copies states every step.
-impl Clone for State {
-    fn clone(&self) -> Self {
-        Self {
-            time: self.time,
-            scalars: self.scalars.clone(),
-            rotations: self.rotations.clone(),
-            velocity: self.velocity.clone(),
-            acceleration: self.acceleration.clone(),
-            frames: self.frames.clone(),
-            controls: self.controls.clone(),
-        }
-    }
-
-    fn clone_from(&mut self, other: &Self) {
-        self.time = other.time;
-        self.scalars.clone_from(&other.scalars);
-        self.rotations.clone_from(&other.rotations);
-        self.velocity.clone_from(&other.velocity);
-        self.acceleration.clone_from(&other.acceleration);
-        self.frames.clone_from(&other.frames);
-        self.controls.clone_from(&other.controls);
-    }
-}
-
-impl State {
-    pub fn time(&self) -> f64 {
-        self.time
-    }
-    /// Every scalar coordinate (joint coordinates, modal coordinates; unknown and
-    /// prescribed) and the node rotations not carried by joints: the configuration.
-    pub fn coordinates(&self) -> (&[f64], &[UnitQuaternion<f64>]) {
-        (&self.scalars, &self.rotations)
-    }
-    /// $\dot{\mathbf q}$ in the order of [`System::dof_labels`].
-    pub fn velocity(&self) -> &[f64] {
-        &self.velocity
-    }
-    /// $\ddot{\mathbf q}$.
-    pub fn acceleration(&self) -> &[f64] {
-        &self.acceleration
-    }
-    pub fn velocity_mut(&mut self) -> &mut [f64] {
-        &mut self.velocity
-    }
-    pub fn acceleration_mut(&mut self) -> &mut [f64] {
-        &mut self.acceleration
-    }
-    /// Sets the time (prescribed coordinates follow at the next evaluation).
-    pub fn set_time(&mut self, t: f64) {
-        self.time = t;
     }
 }
 
@@ -252,8 +283,8 @@ pub enum LinearSolver {
     /// Dense LU up to [`DENSE_MAX`] unknowns, sparse LU (symbolic analysis reused) above.
     #[default]
     Auto,
-    /// Always the dense LU with partial pivoting ([`crate::dense_lu`] up to
-    /// [`crate::dense_lu::SMALL_LU_MAX`] unknowns, faer `lu_in_place` above).
+    /// Always the dense LU with partial pivoting ([`crate::assembly::dense_lu`] up to
+    /// [`crate::assembly::dense_lu::SMALL_LU_MAX`] unknowns, faer `lu_in_place` above).
     Dense,
     /// Always the sparse LU on the system pattern (faer, symbolic analysis from [`System::new`]).
     Sparse,
@@ -268,8 +299,8 @@ pub(crate) enum Factor {
         A: SparseColMat<usize, f64>,
         lu: Option<Box<Lu<usize, f64>>>,
     },
-    /// Dense LU of a small matrix in place ([`crate::dense_lu`], up to
-    /// [`crate::dense_lu::SMALL_LU_MAX`] unknowns): `LU` the factors column major, `piv` the
+    /// Dense LU of a small matrix in place ([`crate::assembly::dense_lu`], up to
+    /// [`crate::assembly::dense_lu::SMALL_LU_MAX`] unknowns): `LU` the factors column major, `piv` the
     /// row interchanges.
     Small {
         LU: Vec<f64>,
@@ -328,13 +359,13 @@ pub struct System {
     pub(crate) springs: Vec<SpringElement>,
     pub(crate) loads: Vec<LoadElement>,
     /// (scalar, stiffness, damping, rest, preload).
-    pub(crate) joint_springs: Vec<(usize, f64, f64, f64, f64)>,
+    pub(crate) joint_springs: Vec<JointSpringScalar>,
     /// Limits and actuators on joint coordinates.
     pub(crate) joint_forces: JointForces,
-    /// How each of `model.initial` acts ([`crate::initial`]).
+    /// How each of `model.initial` acts ([`crate::assembly::initial`]).
     pub(crate) initial_plan: Vec<InitialPlan>,
     /// Drivers not zero at $t = 0$ and the nodes assembled with them (`initial::driver_starts`).
-    pub(crate) driver_starts: Vec<crate::initial::DriverStart>,
+    pub(crate) driver_starts: Vec<crate::assembly::initial::DriverStart>,
     pub(crate) drivers: Vec<CompiledFunction>,
     /// User-defined forces ([`System::with_user_forces`]).
     pub(crate) user_forces: Vec<Arc<dyn UserForce>>,
@@ -389,208 +420,26 @@ impl System {
     }
 
     /// [`Self::new`] with user-defined forces acting on the model's nodes
-    /// ([`crate::user_force`]); a node id out of range is [`ModelError::UnknownNode`].
+    /// ([`crate::model::user_force`]); a node id out of range is [`ModelError::UnknownNode`].
     pub fn with_user_forces(model: &Model, user_forces: Vec<Arc<dyn UserForce>>) -> Result<Self, ModelError> {
         topology::check_references(model)?;
         let topo = topology::build(model)?;
-        let map = &topo.map;
-        let invalid = |id: Option<Entity>, entity: String, what: String| ModelError::InvalidValue { entity, what, id };
-        let mut flexible = Vec::new();
-        let mut rigid = Vec::new();
-        // Model size: spread of the nodes, flexible bodies and centres of mass.
-        let centroid = model.nodes.iter().map(|n| n.position).sum::<Vector3<f64>>() / model.nodes.len().max(1) as f64;
-        let mut size = model
-            .nodes
-            .iter()
-            .map(|n| (n.position - centroid).norm())
-            .fold(1e-3, f64::max);
-        let mut modal_scale = vec![1.0; model.bodies.len()];
-        for (bi, body) in model.bodies.iter().enumerate() {
-            match body {
-                Body::Flexible(f) => {
-                    let N = f.reduced.interfaces.len();
-                    if f.nodes.len() != N {
-                        return Err(invalid(
-                            Some(Entity::Body(BodyId(bi as u32))),
-                            format!("body '{}'", f.name),
-                            format!("{} nodes for {N} interfaces", f.nodes.len()),
-                        ));
-                    }
-                    let superelement_error = |source| ModelError::Superelement {
-                        body: f.name.clone(),
-                        body_id: BodyId(bi as u32),
-                        source,
-                    };
-                    let mut se = Superelement::shared(Arc::clone(&f.reduced), f.frame, f.mass, f.damping.clone())
-                        .map_err(superelement_error)?;
-                    if f.planar {
-                        // The model's confinement first: it names the node, whatever the body.
-                        crate::planar::check_planar_body(model, bi, f)?;
-                        se = se.into_planar().map_err(superelement_error)?;
-                    }
-                    let pos: Vec<Vector3<f64>> =
-                        f.reduced.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
-                    let tolerance = 1e-6 * (1.0 + size_body(&pos));
-                    let mut offsets = Vec::with_capacity(N);
-                    for k in 0..N {
-                        let node = &model.nodes[f.nodes[k].index()];
-                        let x = f.placement.transform_point(&pos[k].into()).coords;
-                        let distance = (x - node.position).norm();
-                        if !(distance <= tolerance) {
-                            return Err(ModelError::InterfaceMismatch {
-                                body: f.name.clone(),
-                                interface: k,
-                                name: f.reduced.interfaces[k].name.clone(),
-                                node: node.name.clone(),
-                                distance,
-                                tolerance,
-                                body_id: BodyId(bi as u32),
-                                node_id: f.nodes[k],
-                            });
-                        }
-                        offsets.push(node.orientation.inverse() * f.placement.rotation);
-                    }
-                    size = size.max(2.0 * size_body(&pos));
-                    let K = se.k_cb();
-                    let k_norm = (0..K.nrows())
-                        .map(|i| (0..K.ncols()).map(|j| K[(i, j)].abs()).sum::<f64>())
-                        .fold(0.0, f64::max);
-                    modal_scale[bi] = size_body(&pos).max(1e-3) * f.reduced.inertia.mass.sqrt();
-                    let loads = body_loads(model, bi, &se, model.nodes[f.nodes[0].index()].orientation * offsets[0])?;
-                    flexible.push(FlexibleElement {
-                        body: bi,
-                        se,
-                        nodes: f.nodes.iter().map(|n| n.index()).collect(),
-                        offsets,
-                        modal: topo.modal_scalars[bi].clone(),
-                        k_norm,
-                        size: 2.0 * size_body(&pos),
-                        loads,
-                    });
-                }
-                Body::Rigid(r) => {
-                    let ok = r.mass >= 0.0
-                        && finite(r.mass)
-                        && r.center_of_mass.iter().all(|x| x.is_finite())
-                        && r.inertia.iter().all(|x| x.is_finite());
-                    if !ok {
-                        return Err(invalid(
-                            Some(Entity::Body(BodyId(bi as u32))),
-                            format!("rigid body '{}'", r.name),
-                            "mass must be finite and >= 0, centre of mass and inertia finite".into(),
-                        ));
-                    }
-                    size = size.max(r.center_of_mass.norm());
-                    rigid.push(RigidElement {
-                        node: r.reference.index(),
-                        mass: r.mass,
-                        c: r.center_of_mass,
-                        J: (r.inertia + r.inertia.transpose()) * 0.5,
-                    });
-                }
-            }
-        }
-        for (i, p) in model.point_masses.iter().enumerate() {
-            if !(p.mass >= 0.0 && finite(p.mass)) {
-                return Err(invalid(
-                    Some(Entity::PointMass(i)),
-                    format!("point mass {i}"),
-                    format!("mass must be finite and >= 0, got {}", p.mass),
-                ));
-            }
-        }
-        let mut springs = Vec::new();
-        for (i, s) in model.springs.iter().enumerate() {
-            if !(s.stiffness >= 0.0 && s.damping >= 0.0 && finite(s.stiffness) && finite(s.damping)) {
-                return Err(invalid(
-                    Some(Entity::Spring(i)),
-                    format!("spring '{}'", s.name),
-                    "stiffness and damping must be finite and >= 0".into(),
-                ));
-            }
-            let xa = model.nodes[s.a.index()].position;
-            let xb = s.b.map_or(s.ground_point, |b| model.nodes[b.index()].position);
-            let l = (xb - xa).norm();
-            let l0 = s.rest_length.unwrap_or(l);
-            // A spring whose ends coincide has no direction: with a rest length its force
-            // k (l - l0) would act along the round-off of the end positions.
-            if l0 > 0.0 && l <= 1e-9 * l0 {
-                return Err(invalid(
-                    Some(Entity::Spring(i)),
-                    format!("spring '{}'", s.name),
-                    format!("its ends coincide (length {l:.3e} m) and its rest length is {l0} m: the direction of its force is undefined; place the ends apart (or give rest_length = 0)"),
-                ));
-            }
-            springs.push(SpringElement {
-                a: s.a.index(),
-                b: s.b.map(|b| b.index()),
-                ground: s.ground_point,
-                k: s.stiffness,
-                c: s.damping,
-                l0,
-            });
-        }
-        let mut loads = Vec::new();
-        for (i, l) in model.loads.iter().enumerate() {
-            let time = (l.time.compile(&format!("load {i}"))).map_err(|e| e.with_id(Entity::Load(i)))?;
-            if !l.value.iter().all(|x| x.is_finite()) {
-                return Err(invalid(
-                    Some(Entity::Load(i)),
-                    format!("load {i}"),
-                    "non-finite value".into(),
-                ));
-            }
-            let node = &model.nodes[l.node.index()];
-            let (follower, value) = match l.axes {
-                LoadAxes::Dead => (false, l.value),
-                LoadAxes::Follower => (true, node.orientation.inverse() * l.value),
-            };
-            loads.push(LoadElement {
-                node: l.node.index(),
-                moment: l.kind == LoadKind::Moment,
-                follower,
-                value,
-                time,
-            });
-        }
-        let mut joint_springs = Vec::new();
-        for (i, js) in model.joint_springs.iter().enumerate() {
-            let s = *topo.joint_scalars[js.joint.index()].get(js.coordinate).ok_or_else(|| {
-                invalid(
-                    Some(Entity::JointSpring(i)),
-                    format!("joint spring {i}"),
-                    format!("joint coordinate {} does not exist", js.coordinate),
-                )
-            })?;
-            joint_springs.push((s, js.stiffness, js.damping, js.rest, js.preload));
-        }
-        let drivers = model
-            .drivers
-            .iter()
-            .enumerate()
-            .map(|(i, d)| (d.motion.compile(&format!("driver '{}'", d.name))).map_err(|e| e.with_id(Entity::Driver(i))))
-            .collect::<Result<Vec<_>, _>>()?;
-        for (i, c) in model.initial.iter().enumerate() {
-            if let InitialCondition::JointValue { joint, coordinate, .. }
-            | InitialCondition::JointRate { joint, coordinate, .. } = c
-            {
-                let j = &model.joints[joint.index()];
-                match topo.joint_scalars[joint.index()].get(*coordinate) {
-                    Some(&s) if matches!(map.scalars[s].slot, Slot::Unknown(_)) => {}
-                    _ => {
-                        return Err(invalid(
-                            Some(Entity::InitialCondition(i)),
-                            format!("initial condition on joint '{}'", j.name),
-                            format!("coordinate {coordinate} is not a free coordinate of the joint"),
-                        ))
-                    }
-                }
-            }
-        }
+        let Bodies {
+            flexible,
+            rigid,
+            size,
+            modal_scale,
+        } = body_elements(model, &topo)?;
+        check_point_masses(model)?;
+        let springs = spring_elements(model)?;
+        let loads = load_elements(model)?;
+        let joint_springs = joint_spring_scalars(model, &topo)?;
+        let drivers = compile_drivers(model)?;
+        check_initial_coordinates(model, &topo)?;
         topology::held_coordinates(model, &topo)?;
         let mut joint_forces = JointForces::new(model, &topo)?;
-        let initial_plan = crate::initial::plan(model, &topo)?;
-        let driver_starts = crate::initial::driver_starts(model, &topo, &drivers)?;
+        let initial_plan = crate::assembly::initial::plan(model, &topo)?;
+        let driver_starts = crate::assembly::initial::driver_starts(model, &topo, &drivers)?;
 
         check_stress_sensors(model, &flexible)?;
         check_reaction_sensors(model, &topo)?;
@@ -598,148 +447,9 @@ impl System {
             .sensors
             .iter()
             .any(|s| matches!(s.kind, SensorKind::Reaction { .. } | SensorKind::DriverEffort { .. }));
-        let stress_maxima = model
-            .sensors
-            .iter()
-            .map(|s| match &s.kind {
-                SensorKind::MaxVonMises { body, nodes } => {
-                    let f = flexible.iter().find(|f| f.body == body.index())?;
-                    let shapes = f.se.stress_shapes()?;
-                    Some(StressMaximum {
-                        search: Arc::new(reduction::VonMisesMaximum::new(shapes, nodes)),
-                        reference: Default::default(),
-                    })
-                }
-                _ => None,
-            })
-            .collect();
-        // Elements and the sparse pattern.
-        let mut elements = Vec::new();
-        for (i, f) in flexible.iter().enumerate() {
-            let modal = f.modal.iter().map(|&s| unknown(map.scalars[s].slot)).collect();
-            elements.push(ElementRef {
-                kind: ElementKind::Flexible(i),
-                nodes: f.nodes.clone(),
-                modal,
-            });
-        }
-        for (i, r) in rigid.iter().enumerate() {
-            elements.push(ElementRef {
-                kind: ElementKind::Rigid(i),
-                nodes: vec![r.node],
-                modal: vec![],
-            });
-        }
-        for p in &model.point_masses {
-            elements.push(ElementRef {
-                kind: ElementKind::PointMass(p.node.index(), p.mass),
-                nodes: vec![p.node.index()],
-                modal: vec![],
-            });
-        }
-        for (i, s) in springs.iter().enumerate() {
-            let mut nodes = vec![s.a];
-            nodes.extend(s.b);
-            elements.push(ElementRef {
-                kind: ElementKind::Spring(i),
-                nodes,
-                modal: vec![],
-            });
-        }
-        for (i, l) in loads.iter().enumerate() {
-            elements.push(ElementRef {
-                kind: ElementKind::Load(i),
-                nodes: vec![l.node],
-                modal: vec![],
-            });
-        }
-        for (i, u) in user_forces.iter().enumerate() {
-            elements.push(ElementRef {
-                kind: ElementKind::User(i),
-                nodes: crate::user_force::check_nodes(u.as_ref(), i, model.nodes.len())?,
-                modal: vec![],
-            });
-        }
-        let n = map.n_dof;
-        let node_unknown: Vec<Vec<usize>> = map
-            .chains
-            .iter()
-            .map(|c| c.cols.iter().copied().filter(|&id| id < n).collect())
-            .collect();
-        let mut sets: Vec<Vec<usize>> = Vec::new();
-        for e in &elements {
-            let mut s: Vec<usize> = e.nodes.iter().flat_map(|&a| node_unknown[a].iter().copied()).collect();
-            s.extend(&e.modal);
-            s.sort_unstable();
-            s.dedup();
-            sets.push(s);
-        }
-        let n_elem_sets = sets.len();
-        for (c, u) in node_unknown.iter().enumerate() {
-            if !map.chains[c].root {
-                sets.push(u.clone());
-            }
-        }
-        sets.extend(joint_forces.pattern_sets(&topo));
-        let symbolic = Pattern::structure(n, &sets);
-        let lu = if n > 0 {
-            Some(
-                SymbolicLu::try_new(symbolic.as_ref())
-                    .map_err(|e| invalid(None, "system".into(), format!("symbolic LU failed: {e:?}")))?,
-            )
-        } else {
-            None
-        };
-        let mut pattern = Pattern {
-            symbolic,
-            lu,
-            elem_dofs: Vec::new(),
-            elem_pos: Vec::new(),
-            elem_modal_pos: Vec::new(),
-            elem_slots: Vec::new(),
-            node_slots: vec![Vec::new(); model.nodes.len()],
-            node_unknown_cols: map
-                .chains
-                .iter()
-                .map(|ch| ch.cols.iter().copied().enumerate().filter(|&(_, id)| id < n).collect())
-                .collect(),
-            joint_spring_slots: Vec::new(),
-        };
-        for (e, dofs) in elements.iter().zip(sets.iter().take(n_elem_sets)) {
-            let find = |d: usize| dofs.binary_search(&d).expect("dof of the element");
-            let pos = e
-                .nodes
-                .iter()
-                .map(|&a| node_unknown[a].iter().map(|&d| find(d)).collect())
-                .collect();
-            let modal_pos = e.modal.iter().map(|&d| find(d)).collect();
-            let slots = dofs
-                .iter()
-                .flat_map(|&c| dofs.iter().map(move |&r| (r, c)))
-                .map(|(r, c)| pattern.slot(r, c))
-                .collect();
-            pattern.elem_dofs.push(dofs.clone());
-            pattern.elem_pos.push(pos);
-            pattern.elem_modal_pos.push(modal_pos);
-            pattern.elem_slots.push(slots);
-        }
-        for (c, u) in node_unknown.iter().enumerate() {
-            if !map.chains[c].root {
-                pattern.node_slots[c] = u
-                    .iter()
-                    .flat_map(|&k| u.iter().map(move |&i| (i, k)))
-                    .map(|(i, k)| pattern.slot(i, k))
-                    .collect();
-            }
-        }
-        pattern.joint_spring_slots = joint_springs
-            .iter()
-            .map(|&(s, ..)| match map.scalars[s].slot {
-                Slot::Unknown(d) => Some(pattern.slot(d, d)),
-                Slot::Prescribed(_) => None,
-            })
-            .collect();
-        joint_forces.bind(&topo, |r, c| pattern.slot(r, c));
+        let stress_maxima = stress_maxima(model, &flexible);
+        let elements = element_refs(model, &topo.map, &flexible, &rigid, &springs, &loads, &user_forces)?;
+        let pattern = Pattern::build(model, &topo, &elements, &joint_springs, &mut joint_forces)?;
         let evaluated = elements
             .iter()
             .zip(&pattern.elem_dofs)
@@ -751,15 +461,7 @@ impl System {
                 reactions_read || !passive || !dofs.is_empty()
             })
             .collect();
-        let dof_scale = topo
-            .dims
-            .iter()
-            .map(|d| match d {
-                topology::Dimension::Length => size,
-                topology::Dimension::Angle => 1.0,
-                topology::Dimension::Modal(b) => modal_scale[*b],
-            })
-            .collect();
+        let dof_scale = dof_scales(&topo, size, &modal_scale);
         Ok(Self {
             model: model.clone(),
             topo,
@@ -870,7 +572,7 @@ impl System {
 
     /// Holds actuator `actuator` (index in `Model::actuators`) at the effort `effort` [N on a
     /// length, N m on an angle] in place of its time function or PID law from the next step
-    /// on, or releases it to its law with `None` ([`crate::joint_forces`], held effort). For
+    /// on, or releases it to its law with `None` ([`crate::assembly::joint_forces`], held effort). For
     /// controllers that close the loop outside the model, between time steps.
     pub fn set_actuator_effort(&mut self, actuator: usize, effort: Option<f64>) -> Result<(), ModelError> {
         let entity = || match self.model.actuators.get(actuator) {
@@ -890,6 +592,20 @@ impl System {
     /// its law acts, or there is no such actuator).
     pub fn held_actuator_effort(&self, actuator: usize) -> Option<f64> {
         self.joint_forces.held(actuator)
+    }
+
+    /// The effort $u$ of every actuator at `state` (N on a length, N m on an angle).
+    pub fn actuator_efforts(&self, state: &State) -> Vec<f64> {
+        let map = &self.topo.map;
+        let mut s = state.clone();
+        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let x = values(&s, &pr, &pa);
+        let value = |sc: usize| {
+            let (v, d, _) = scalar_values(map, &x, sc);
+            (v, d)
+        };
+        self.joint_forces.efforts(&value, s.time, &state.controls)
     }
 
     /// Number of unknowns $\dim\dot{\mathbf q}$.
@@ -966,7 +682,7 @@ impl System {
     }
 
     /// The model's initial configuration at $t = 0$ with its initial conditions applied
-    /// ([`crate::initial`]: joint values and rates move the subtree behind the joint rigidly,
+    /// ([`crate::assembly::initial`]: joint values and rates move the subtree behind the joint rigidly,
     /// body velocities, node velocities, rigid motion); accelerations zero (the dynamic solver
     /// computes consistent ones), controllers at rest.
     pub fn initial_state(&self) -> State {
@@ -990,7 +706,7 @@ impl System {
     }
 
     /// Restarts every controller's integral at zero at the state's time and configuration
-    /// ([`crate::joint_forces`]).
+    /// ([`crate::assembly::joint_forces`]).
     pub(crate) fn start_controls(&self, state: &mut State) {
         let map = &self.topo.map;
         let mut s = state.clone();
@@ -1000,7 +716,7 @@ impl System {
     }
 
     /// Moves the controllers' integrals to the end of a converged step at `state`
-    /// ([`crate::joint_forces`]); the integrator calls it for every accepted step.
+    /// ([`crate::assembly::joint_forces`]); the integrator calls it for every accepted step.
     pub fn accept_step(&self, state: &mut State) {
         if self.joint_forces.n_actuators() == 0 {
             return;
@@ -1375,18 +1091,32 @@ impl System {
         tangents: bool,
         ws: &mut Workspace,
     ) -> Result<(), SolveError> {
-        let map = &self.topo.map;
-        let n = map.n_dof;
         self.update_motions(state, ws);
-        let x = values(state, &ws.presc_rate, &ws.presc_acc);
+        self.element_outputs(state, lambda, tangents, ws)?;
+        self.assemble_residual(state, ws);
+        if tangents {
+            self.assemble_tangents(state, ws);
+        }
+        self.store_frames(ws, state);
+        Ok(())
+    }
+
+    /// Every element that is evaluated at `state` (loads and gravity scaled by `lambda`) into
+    /// its buffer in `ws`, in parallel on large models.
+    fn element_outputs(
+        &self,
+        state: &State,
+        lambda: f64,
+        tangents: bool,
+        ws: &mut Workspace,
+    ) -> Result<(), SolveError> {
         let gravity = self.model.gravity * lambda;
         let nodes = &ws.nodes;
-        let st: &State = state;
         let eval = |((e, b), &evaluated): ((&ElementRef, &mut ElementBuffer), &bool)| {
             if !evaluated {
                 return Ok(());
             }
-            self.element_output(e, st, nodes, &gravity, lambda, tangents, b)
+            self.element_output(e, state, nodes, &gravity, lambda, tangents, b)
         };
         if self.elements.len() >= PARALLEL_ELEMENTS {
             self.elements
@@ -1401,6 +1131,15 @@ impl System {
                 .zip(&self.evaluated)
                 .try_for_each(eval)?;
         }
+        Ok(())
+    }
+
+    /// $\mathbf F$, its inertia, internal and external parts, the reactions, the residual's
+    /// scale and floor from the element outputs, the joint springs and the joint forces.
+    fn assemble_residual(&self, state: &State, ws: &mut Workspace) {
+        let map = &self.topo.map;
+        let n = map.n_dof;
+        let x = values(state, &ws.presc_rate, &ws.presc_acc);
         // Node residuals and their parts.
         let nn = self.model.nodes.len();
         let parts = &mut ws.parts;
@@ -1481,10 +1220,14 @@ impl System {
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
         ws.scale = norm(&gparts[0]) + norm(&gparts[1]) + norm(&gparts[2]) + joint_force_scale;
         ws.floor = self.residual_floor(&ws.nodes);
-        if !tangents {
-            self.store_frames(ws, state);
-            return Ok(());
-        }
+    }
+
+    /// $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$ from the elements' port matrices, the
+    /// geometric terms of the node residuals, the joint springs and the joint forces.
+    fn assemble_tangents(&self, state: &State, ws: &mut Workspace) {
+        let map = &self.topo.map;
+        let nn = self.model.nodes.len();
+        let x = values(state, &ws.presc_rate, &ws.presc_acc);
         map.derivatives_into(&x, &ws.motions, &mut ws.derivs);
         for v in [&mut ws.M, &mut ws.C, &mut ws.K] {
             v.iter_mut().for_each(|x| *x = 0.0);
@@ -1532,13 +1275,11 @@ impl System {
         }
         self.joint_forces
             .add_tangents(&self.topo, &x, state.time, &state.controls, &mut ws.K, &mut ws.C);
-        self.store_frames(ws, state);
-        Ok(())
     }
 
     /// The drivers at the state's time into the state and the workspace, and the node motions
     /// (`ws.motions`, `ws.nodes`) at the state: the nodes driven by time alone are kept while
-    /// the time stays ([`crate::coordinates::CoordinateMap::motions_update`]).
+    /// the time stays ([`crate::assembly::coordinates::CoordinateMap::motions_update`]).
     pub(crate) fn update_motions(&self, state: &mut State, ws: &mut Workspace) {
         self.apply_drivers(state, &mut ws.presc_rate, &mut ws.presc_acc);
         let x = values(state, &ws.presc_rate, &ws.presc_acc);
@@ -1631,7 +1372,7 @@ impl System {
 
     /// The element's $\hat{\mathbf M}_e$, $\hat{\mathbf C}_e$, $\hat{\mathbf K}_e$ on its unknown dofs
     /// (column major), from its port tangents and the node kinematics (module docs of
-    /// [`crate::coordinates`]): $\mathbf J^T\mathbf M\mathbf J$, $\mathbf J^T(\mathbf C\mathbf J + \mathbf M\,\partial\mathbf A/\partial\dot{\mathbf q})$,
+    /// [`crate::assembly::coordinates`]): $\mathbf J^T\mathbf M\mathbf J$, $\mathbf J^T(\mathbf C\mathbf J + \mathbf M\,\partial\mathbf A/\partial\dot{\mathbf q})$,
     /// $\mathbf J^T(\mathbf K\mathbf J + \mathbf C\,\partial\mathbf V/\partial\mathbf q + \mathbf M\,\partial\mathbf A/\partial\mathbf q)$.
     ///
     /// Column by column of $\mathbf J$: the element matrices times one unknown's port column
@@ -1944,31 +1685,342 @@ impl System {
     }
 }
 
-/// The unknown index of a slot known to be unknown.
-pub(crate) fn unknown(slot: Slot) -> usize {
-    match slot {
-        Slot::Unknown(d) => d,
-        Slot::Prescribed(_) => unreachable!("modal and initial-condition coordinates are unknowns"),
-    }
+/// The elements of the bodies and the model's size (spread of the nodes, flexible bodies and
+/// centres of mass), with the scale of each body's modal coordinates.
+struct Bodies {
+    flexible: Vec<FlexibleElement>,
+    rigid: Vec<RigidElement>,
+    size: f64,
+    modal_scale: Vec<f64>,
 }
 
-pub(crate) fn values<'a>(s: &'a State, pr: &'a [f64], pa: &'a [f64]) -> Values<'a> {
-    Values {
-        scalars: &s.scalars,
-        rotations: &s.rotations,
-        vel: &s.velocity,
-        acc: &s.acceleration,
-        presc_rate: pr,
-        presc_acc: pa,
-    }
+fn invalid(id: Option<Entity>, entity: String, what: String) -> ModelError {
+    ModelError::InvalidValue { entity, what, id }
 }
 
-pub(crate) fn scalar_values(map: &crate::coordinates::CoordinateMap, x: &Values, s: usize) -> (f64, f64, f64) {
-    let v = x.scalars[s];
-    match map.scalars[s].slot {
-        Slot::Unknown(d) => (v, x.vel[d], x.acc[d]),
-        Slot::Prescribed(p) => (v, x.presc_rate[p], x.presc_acc[p]),
+/// The flexible and rigid bodies checked (interfaces on their nodes, finite mass data) and
+/// turned into elements.
+fn body_elements(model: &Model, topo: &Topology) -> Result<Bodies, ModelError> {
+    let mut flexible = Vec::new();
+    let mut rigid = Vec::new();
+    // Model size: spread of the nodes, flexible bodies and centres of mass.
+    let centroid = model.nodes.iter().map(|n| n.position).sum::<Vector3<f64>>() / model.nodes.len().max(1) as f64;
+    let mut size = model
+        .nodes
+        .iter()
+        .map(|n| (n.position - centroid).norm())
+        .fold(1e-3, f64::max);
+    let mut modal_scale = vec![1.0; model.bodies.len()];
+    for (bi, body) in model.bodies.iter().enumerate() {
+        match body {
+            Body::Flexible(f) => {
+                let N = f.reduced.interfaces.len();
+                if f.nodes.len() != N {
+                    return Err(invalid(
+                        Some(Entity::Body(BodyId(bi as u32))),
+                        format!("body '{}'", f.name),
+                        format!("{} nodes for {N} interfaces", f.nodes.len()),
+                    ));
+                }
+                let superelement_error = |source| ModelError::Superelement {
+                    body: f.name.clone(),
+                    body_id: BodyId(bi as u32),
+                    source,
+                };
+                let mut se = Superelement::shared(Arc::clone(&f.reduced), f.frame, f.mass, f.damping.clone())
+                    .map_err(superelement_error)?;
+                if f.planar {
+                    // The model's confinement first: it names the node, whatever the body.
+                    crate::assembly::planar::check_planar_body(model, bi, f)?;
+                    se = se.into_planar().map_err(superelement_error)?;
+                }
+                let pos: Vec<Vector3<f64>> = f.reduced.interfaces.iter().map(|i| Vector3::from(i.position)).collect();
+                let tolerance = 1e-6 * (1.0 + size_body(&pos));
+                let mut offsets = Vec::with_capacity(N);
+                for k in 0..N {
+                    let node = &model.nodes[f.nodes[k].index()];
+                    let x = f.placement.transform_point(&pos[k].into()).coords;
+                    let distance = (x - node.position).norm();
+                    if !(distance <= tolerance) {
+                        return Err(ModelError::InterfaceMismatch {
+                            body: f.name.clone(),
+                            interface: k,
+                            name: f.reduced.interfaces[k].name.clone(),
+                            node: node.name.clone(),
+                            distance,
+                            tolerance,
+                            body_id: BodyId(bi as u32),
+                            node_id: f.nodes[k],
+                        });
+                    }
+                    offsets.push(node.orientation.inverse() * f.placement.rotation);
+                }
+                size = size.max(2.0 * size_body(&pos));
+                let K = se.k_cb();
+                let k_norm = (0..K.nrows())
+                    .map(|i| (0..K.ncols()).map(|j| K[(i, j)].abs()).sum::<f64>())
+                    .fold(0.0, f64::max);
+                modal_scale[bi] = size_body(&pos).max(1e-3) * f.reduced.inertia.mass.sqrt();
+                let loads = body_loads(model, bi, &se, model.nodes[f.nodes[0].index()].orientation * offsets[0])?;
+                flexible.push(FlexibleElement {
+                    body: bi,
+                    se,
+                    nodes: f.nodes.iter().map(|n| n.index()).collect(),
+                    offsets,
+                    modal: topo.modal_scalars[bi].clone(),
+                    k_norm,
+                    size: 2.0 * size_body(&pos),
+                    loads,
+                });
+            }
+            Body::Rigid(r) => {
+                let ok = r.mass >= 0.0
+                    && finite(r.mass)
+                    && r.center_of_mass.iter().all(|x| x.is_finite())
+                    && r.inertia.iter().all(|x| x.is_finite());
+                if !ok {
+                    return Err(invalid(
+                        Some(Entity::Body(BodyId(bi as u32))),
+                        format!("rigid body '{}'", r.name),
+                        "mass must be finite and >= 0, centre of mass and inertia finite".into(),
+                    ));
+                }
+                size = size.max(r.center_of_mass.norm());
+                rigid.push(RigidElement {
+                    node: r.reference.index(),
+                    mass: r.mass,
+                    c: r.center_of_mass,
+                    J: (r.inertia + r.inertia.transpose()) * 0.5,
+                });
+            }
+        }
     }
+    Ok(Bodies {
+        flexible,
+        rigid,
+        size,
+        modal_scale,
+    })
+}
+
+/// Every point mass finite and not negative.
+fn check_point_masses(model: &Model) -> Result<(), ModelError> {
+    for (i, p) in model.point_masses.iter().enumerate() {
+        if !(p.mass >= 0.0 && finite(p.mass)) {
+            return Err(invalid(
+                Some(Entity::PointMass(i)),
+                format!("point mass {i}"),
+                format!("mass must be finite and >= 0, got {}", p.mass),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The springs checked (finite, not negative, a direction at the start) as elements.
+fn spring_elements(model: &Model) -> Result<Vec<SpringElement>, ModelError> {
+    let mut springs = Vec::new();
+    for (i, s) in model.springs.iter().enumerate() {
+        if !(s.stiffness >= 0.0 && s.damping >= 0.0 && finite(s.stiffness) && finite(s.damping)) {
+            return Err(invalid(
+                Some(Entity::Spring(i)),
+                format!("spring '{}'", s.name),
+                "stiffness and damping must be finite and >= 0".into(),
+            ));
+        }
+        let xa = model.nodes[s.a.index()].position;
+        let xb = s.b.map_or(s.ground_point, |b| model.nodes[b.index()].position);
+        let l = (xb - xa).norm();
+        let l0 = s.rest_length.unwrap_or(l);
+        // A spring whose ends coincide has no direction: with a rest length its force
+        // k (l - l0) would act along the round-off of the end positions.
+        if l0 > 0.0 && l <= 1e-9 * l0 {
+            return Err(invalid(
+                Some(Entity::Spring(i)),
+                format!("spring '{}'", s.name),
+                format!("its ends coincide (length {l:.3e} m) and its rest length is {l0} m: the direction of its force is undefined; place the ends apart (or give rest_length = 0)"),
+            ));
+        }
+        springs.push(SpringElement {
+            a: s.a.index(),
+            b: s.b.map(|b| b.index()),
+            ground: s.ground_point,
+            k: s.stiffness,
+            c: s.damping,
+            l0,
+        });
+    }
+    Ok(springs)
+}
+
+/// The node loads checked (finite) as elements, a follower's value in its node's axes.
+fn load_elements(model: &Model) -> Result<Vec<LoadElement>, ModelError> {
+    let mut loads = Vec::new();
+    for (i, l) in model.loads.iter().enumerate() {
+        let time = (l.time.compile(&format!("load {i}"))).map_err(|e| e.with_id(Entity::Load(i)))?;
+        if !l.value.iter().all(|x| x.is_finite()) {
+            return Err(invalid(
+                Some(Entity::Load(i)),
+                format!("load {i}"),
+                "non-finite value".into(),
+            ));
+        }
+        let node = &model.nodes[l.node.index()];
+        let (follower, value) = match l.axes {
+            LoadAxes::Dead => (false, l.value),
+            LoadAxes::Follower => (true, node.orientation.inverse() * l.value),
+        };
+        loads.push(LoadElement {
+            node: l.node.index(),
+            moment: l.kind == LoadKind::Moment,
+            follower,
+            value,
+            time,
+        });
+    }
+    Ok(loads)
+}
+
+/// Each joint spring as (scalar, $k$, $c$, $x_0$, $f_0$).
+fn joint_spring_scalars(model: &Model, topo: &Topology) -> Result<Vec<JointSpringScalar>, ModelError> {
+    let mut joint_springs = Vec::new();
+    for (i, js) in model.joint_springs.iter().enumerate() {
+        let s = *topo.joint_scalars[js.joint.index()].get(js.coordinate).ok_or_else(|| {
+            invalid(
+                Some(Entity::JointSpring(i)),
+                format!("joint spring {i}"),
+                format!("joint coordinate {} does not exist", js.coordinate),
+            )
+        })?;
+        joint_springs.push((s, js.stiffness, js.damping, js.rest, js.preload));
+    }
+    Ok(joint_springs)
+}
+
+/// The drivers' time functions.
+fn compile_drivers(model: &Model) -> Result<Vec<CompiledFunction>, ModelError> {
+    model
+        .drivers
+        .iter()
+        .enumerate()
+        .map(|(i, d)| (d.motion.compile(&format!("driver '{}'", d.name))).map_err(|e| e.with_id(Entity::Driver(i))))
+        .collect::<Result<Vec<_>, _>>()
+}
+
+/// Every initial joint value or rate is on a free coordinate of its joint.
+fn check_initial_coordinates(model: &Model, topo: &Topology) -> Result<(), ModelError> {
+    let map = &topo.map;
+    for (i, c) in model.initial.iter().enumerate() {
+        if let InitialCondition::JointValue { joint, coordinate, .. }
+        | InitialCondition::JointRate { joint, coordinate, .. } = c
+        {
+            let j = &model.joints[joint.index()];
+            match topo.joint_scalars[joint.index()].get(*coordinate) {
+                Some(&s) if matches!(map.scalars[s].slot, Slot::Unknown(_)) => {}
+                _ => {
+                    return Err(invalid(
+                        Some(Entity::InitialCondition(i)),
+                        format!("initial condition on joint '{}'", j.name),
+                        format!("coordinate {coordinate} is not a free coordinate of the joint"),
+                    ))
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The search of each maximum-stress sensor (`None` for the other sensors).
+fn stress_maxima(model: &Model, flexible: &[FlexibleElement]) -> Vec<Option<StressMaximum>> {
+    model
+        .sensors
+        .iter()
+        .map(|s| match &s.kind {
+            SensorKind::MaxVonMises { body, nodes } => {
+                let f = flexible.iter().find(|f| f.body == body.index())?;
+                let shapes = f.se.stress_shapes()?;
+                Some(StressMaximum {
+                    search: Arc::new(reduction::VonMisesMaximum::new(shapes, nodes)),
+                    reference: Default::default(),
+                })
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// One [`ElementRef`] per element, in the order of the assembly: flexible and rigid bodies,
+/// point masses, springs, loads, user forces.
+fn element_refs(
+    model: &Model,
+    map: &CoordinateMap,
+    flexible: &[FlexibleElement],
+    rigid: &[RigidElement],
+    springs: &[SpringElement],
+    loads: &[LoadElement],
+    user_forces: &[Arc<dyn UserForce>],
+) -> Result<Vec<ElementRef>, ModelError> {
+    // Elements and the sparse pattern.
+    let mut elements = Vec::new();
+    for (i, f) in flexible.iter().enumerate() {
+        let modal = f.modal.iter().map(|&s| unknown(map.scalars[s].slot)).collect();
+        elements.push(ElementRef {
+            kind: ElementKind::Flexible(i),
+            nodes: f.nodes.clone(),
+            modal,
+        });
+    }
+    for (i, r) in rigid.iter().enumerate() {
+        elements.push(ElementRef {
+            kind: ElementKind::Rigid(i),
+            nodes: vec![r.node],
+            modal: vec![],
+        });
+    }
+    for p in &model.point_masses {
+        elements.push(ElementRef {
+            kind: ElementKind::PointMass(p.node.index(), p.mass),
+            nodes: vec![p.node.index()],
+            modal: vec![],
+        });
+    }
+    for (i, s) in springs.iter().enumerate() {
+        let mut nodes = vec![s.a];
+        nodes.extend(s.b);
+        elements.push(ElementRef {
+            kind: ElementKind::Spring(i),
+            nodes,
+            modal: vec![],
+        });
+    }
+    for (i, l) in loads.iter().enumerate() {
+        elements.push(ElementRef {
+            kind: ElementKind::Load(i),
+            nodes: vec![l.node],
+            modal: vec![],
+        });
+    }
+    for (i, u) in user_forces.iter().enumerate() {
+        elements.push(ElementRef {
+            kind: ElementKind::User(i),
+            nodes: crate::model::user_force::check_nodes(u.as_ref(), i, model.nodes.len())?,
+            modal: vec![],
+        });
+    }
+    Ok(elements)
+}
+
+/// The scale of each unknown in the norms (`System::dof_scale`): the model size for a length,
+/// 1 for an angle, the body's modal scale for a modal coordinate.
+fn dof_scales(topo: &Topology, size: f64, modal_scale: &[f64]) -> Vec<f64> {
+    topo.dims
+        .iter()
+        .map(|d| match d {
+            topology::Dimension::Length => size,
+            topology::Dimension::Angle => 1.0,
+            topology::Dimension::Modal(b) => modal_scale[*b],
+        })
+        .collect()
 }
 
 /// Largest distance of the interface positions from their centroid.

@@ -18,6 +18,8 @@
 
 #![allow(non_snake_case)]
 
+use crate::error::SolveError;
+use crate::model::user_force::{UserBuffer, UserForce};
 use crate::node::NodeMotion;
 use faer::Mat;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
@@ -124,7 +126,7 @@ pub(crate) struct FlexibleElement {
     pub size: f64,
     /// Loads at the body's load points: the load at unit factor (dead: inertial; follower:
     /// body axes) and its time function.
-    pub loads: Vec<(PointLoad, crate::time_function::CompiledFunction)>,
+    pub loads: Vec<(PointLoad, crate::model::time_function::CompiledFunction)>,
 }
 
 impl FlexibleElement {
@@ -208,8 +210,7 @@ impl FlexibleElement {
         // Without tangents only the forces are read below: the residual alone forms no mass
         // matrix (the energy sensor takes T from the workspace, `kinetic_energy_in`).
         if tangents {
-            self.se
-                .evaluate_into(bs, &buf.acc, gravity, true, &mut buf.ws, &mut buf.ev)?;
+            self.se.evaluate_into(bs, &buf.acc, gravity, &mut buf.ws, &mut buf.ev)?;
         } else {
             self.se.residual_into(bs, &buf.acc, gravity, &mut buf.ws, &mut buf.ev)?;
         }
@@ -244,7 +245,11 @@ impl FlexibleElement {
                     moment: load.moment * x,
                     ..*load
                 };
-                self.se.point_load_into(buf.ws.kinematics(), &scaled, tangents, pl)?;
+                if tangents {
+                    self.se.point_load_into(buf.ws.kinematics(), &scaled, pl)?;
+                } else {
+                    self.se.point_load_residual_into(buf.ws.kinematics(), &scaled, pl)?;
+                }
                 for (i, r) in pl.residual.iter().enumerate() {
                     out.residual[i] += r;
                     out.external[i] -= r;
@@ -427,7 +432,7 @@ pub(crate) struct LoadElement {
     pub follower: bool,
     /// Dead: the inertial value; follower: the value in node axes.
     pub value: Vector3<f64>,
-    pub time: crate::time_function::CompiledFunction,
+    pub time: crate::model::time_function::CompiledFunction,
 }
 
 /// Load $\mathbf f = x(t)\,\mathbf f_0$ (dead) or $x(t)\,\mathbf R\mathbf f_0^{node}$ (follower); residual $-\lambda\mathbf f$.
@@ -450,4 +455,62 @@ pub(crate) fn load_element(
     if tangents && l.follower {
         set3(&mut out.K, at, 3, &skew(&f));
     }
+}
+
+/// The user force's element output on its node ports: external part $\lambda\mathbf f_e$,
+/// residual $-\lambda\mathbf f_e$, $\mathbf K = -\lambda\,\partial\mathbf f_e/\partial\mathbf x$,
+/// $\mathbf C = -\lambda\,\partial\mathbf f_e/\partial\mathbf V$ (no mass). A non-finite force or
+/// Jacobian is refused with [`SolveError::UserForce`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn user_force_element(
+    force: &dyn UserForce,
+    index: usize,
+    nodes: &[usize],
+    all: &[NodeMotion],
+    t: f64,
+    lambda: f64,
+    tangents: bool,
+    buf: &mut UserBuffer,
+    out: &mut ElementOutput,
+) -> Result<(), SolveError> {
+    out.reset(tangents);
+    for (m, &n) in buf.motions.iter_mut().zip(nodes) {
+        *m = all[n];
+    }
+    UserBuffer::eval(force, t, &buf.motions, &mut buf.wrench);
+    let refuse = |what: &str| SolveError::UserForce {
+        name: force.name().to_string(),
+        index,
+        at: crate::error::At::Time(t),
+        what: what.to_string(),
+    };
+    if buf.wrench.iter().flatten().any(|x| !x.is_finite()) {
+        return Err(refuse("the force is not finite"));
+    }
+    for (a, w) in buf.wrench.iter().enumerate() {
+        for i in 0..6 {
+            out.external[6 * a + i] = lambda * w[i];
+            out.residual[6 * a + i] = -lambda * w[i];
+        }
+    }
+    if !tangents {
+        return Ok(());
+    }
+    buf.dx.fill(0.0);
+    buf.dv.fill(0.0);
+    if !force.jacobian(t, &buf.motions, buf.dx.as_mut(), buf.dv.as_mut()) {
+        buf.fd_jacobian(force, t);
+    }
+    let n = 6 * nodes.len();
+    for c in 0..n {
+        for r in 0..n {
+            let (k, d) = (buf.dx[(r, c)], buf.dv[(r, c)]);
+            if !(k.is_finite() && d.is_finite()) {
+                return Err(refuse("its Jacobian is not finite"));
+            }
+            out.K[(r, c)] = -lambda * k;
+            out.C[(r, c)] = -lambda * d;
+        }
+    }
+    Ok(())
 }
