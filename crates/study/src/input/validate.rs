@@ -11,6 +11,7 @@
 // Material constants keep their physical names (E, G), as in fe_model.
 #![allow(non_snake_case)]
 
+use crate::input::keys;
 use crate::input::part::{
     mass_kind, model_size, InterfaceSpec, InterfaceTarget, LoadSpec, NodeRef, Part, PartKind, Reduction, SupportSpec,
 };
@@ -299,9 +300,11 @@ impl Validator<'_> {
         self.warnings.push(StudyError::at(path, message));
     }
 
-    /// Refuses the keys of the table at `path` that are not in `allowed` (the schema accepts
-    /// the union of the keys of every kind; this checks the kind's own).
-    fn only_keys(&mut self, path: &KeyPath, allowed: &[&str], what: &str) {
+    /// Refuses the keys of the table at `path` that the kind `kind` of the registry's table
+    /// `table` does not take ([`crate::input::keys`]; the schema accepts the union of the keys
+    /// of every kind, this checks the kind's own).
+    fn only_keys(&mut self, path: &KeyPath, table: &str, kind: &str, what: &str) {
+        let allowed = keys::allowed(table, kind);
         for k in self.src.keys(path) {
             if !allowed.contains(&k.as_str()) {
                 let close = close_matches(&k, allowed.iter().copied());
@@ -475,24 +478,14 @@ impl Validator<'_> {
                 );
                 continue;
             }
-            let (keys, what): (&[&str], &str) = match s.shape {
-                SectionShape::Rectangle => (
-                    &["b", "h"],
-                    "a rectangle section (width b along local y, height h along local z, m)",
-                ),
-                SectionShape::Circle => (&["d"], "a circle section (diameter d, m)"),
-                SectionShape::Tube => (
-                    &["d_outer", "d_inner"],
-                    "a tube section (diameters d_outer, d_inner, m)",
-                ),
-                SectionShape::Values => (
-                    &["A", "Iy", "Iz", "J", "ky", "kz"],
-                    "a section by values (A [m^2], Iy, Iz, J [m^4], shear factors ky, kz)",
-                ),
+            let what = match s.shape {
+                SectionShape::Rectangle => "a rectangle section (width b along local y, height h along local z, m)",
+                SectionShape::Circle => "a circle section (diameter d, m)",
+                SectionShape::Tube => "a tube section (diameters d_outer, d_inner, m)",
+                SectionShape::Values => "a section by values (A [m^2], Iy, Iz, J [m^4], shear factors ky, kz)",
             };
-            let mut allowed = vec!["name", "shape"];
-            allowed.extend_from_slice(keys);
-            self.only_keys(&path, &allowed, what);
+            self.only_keys(&path, "sections", s.shape.name(), what);
+            let shape_keys = keys::allowed("sections", s.shape.name());
             let values: [(&str, Option<f64>); 11] = [
                 ("b", s.b),
                 ("h", s.h),
@@ -508,7 +501,7 @@ impl Validator<'_> {
             ];
             let mut ok = true;
             for (key, value) in values {
-                if !keys.contains(&key) {
+                if !shape_keys.contains(&key) {
                     continue;
                 }
                 let optional = matches!(key, "ky" | "kz");
@@ -746,15 +739,12 @@ impl Validator<'_> {
         sections: &Sections<'_>,
         mass: fe_model::MassKind,
     ) -> Option<(FeModel, String)> {
-        let common = ["kind", "section", "theory", "mass"];
-        let (keys, what): (&[&str], &str) = match b.kind {
-            BeamKind::Straight => (&["orientation", "elements", "from", "to"], "a straight beam"),
-            BeamKind::Arc => (&["elements", "center", "start", "axis", "angle_deg"], "an arc"),
-            BeamKind::Frame => (&["orientation", "points", "members"], "a frame"),
+        let what = match b.kind {
+            BeamKind::Straight => "a straight beam",
+            BeamKind::Arc => "an arc",
+            BeamKind::Frame => "a frame",
         };
-        let mut allowed = common.to_vec();
-        allowed.extend_from_slice(keys);
-        self.only_keys(path, &allowed, what);
+        self.only_keys(path, "parts.beam", b.kind.name(), what);
         let theory = Self::theory(b.theory);
         let nu = material.nu();
         let mut model = FeModel::default();
@@ -1206,7 +1196,8 @@ impl Validator<'_> {
                 PartKind::Beam => {
                     self.only_keys(
                         &ip,
-                        &["name", "set", "node_at"],
+                        "parts.interfaces",
+                        "beam",
                         "an interface of a beam part (a beam node)",
                     );
                     match (&i.set, &i.node_at) {
@@ -1235,7 +1226,8 @@ impl Validator<'_> {
                 PartKind::Solid => {
                     self.only_keys(
                         &ip,
-                        &["name", "set", "near", "radius", "spider", "node_position"],
+                        "parts.interfaces",
+                        "solid",
                         "an interface of a solid part (a spider on surface nodes)",
                     );
                     // A set of one of the file's spiders (RBE2_<eid>, RBE3_<eid>) brings its kind
@@ -1667,10 +1659,8 @@ impl Validator<'_> {
         for (i, a) in list.iter().enumerate() {
             let path = KeyPath::root().key("analyses").index(i);
             let kind = a.kind.name();
-            let allowed: &[&str] = match a.kind {
-                AnalysisKind::Static => &["type", "name", "part", "supports", "loads"],
-                AnalysisKind::Modal => &["type", "name", "part", "supports", "modes", "solver"],
-                AnalysisKind::Reduce => &["type", "name", "part"],
+            match a.kind {
+                AnalysisKind::Static | AnalysisKind::Modal | AnalysisKind::Reduce => {}
                 AnalysisKind::Equilibrium
                 | AnalysisKind::Dynamic
                 | AnalysisKind::Linearized
@@ -1740,8 +1730,8 @@ impl Validator<'_> {
                     });
                     continue;
                 }
-            };
-            self.only_keys(&path, allowed, &format!("a '{kind}' analysis"));
+            }
+            self.only_keys(&path, "analyses", kind, &format!("a '{kind}' analysis"));
             let Some(part_name) = &a.part else {
                 self.err(
                     &path,

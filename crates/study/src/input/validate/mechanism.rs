@@ -8,6 +8,7 @@
 //! `crate::mechanism` turns those errors back into a located message.
 
 use super::Validator;
+use crate::input::keys;
 use crate::input::schema::*;
 use crate::input::source::{suggestions, unknown_reference, KeyPath};
 use mbs::{Interpolation, JointKind, LoadAxes, LoadKind, RotationSupport, TimeFunction, TranslationSupport};
@@ -1209,22 +1210,14 @@ impl Validator<'_> {
     }
 
     fn time_function(&mut self, path: &KeyPath, f: &TimeFunctionFile, driver: bool) -> Option<TimeFunction> {
-        let kinds = ["constant-speed", "ramp", "spin-up", "harmonic", "table"];
         let kind = self.choice(
             &path.key("type"),
             &Some(f.kind.clone()),
             "table",
-            &kinds,
+            keys::table("function").kinds,
             "function type",
         )?;
-        let allowed: &[&str] = match kind {
-            "constant-speed" => &["type", "speed", "initial"],
-            "ramp" => &["type", "t_start", "t_end", "from", "to", "smooth"],
-            "spin-up" => &["type", "speed", "ramp_time"],
-            "harmonic" => &["type", "amplitude", "frequency_hz", "phase_deg", "offset"],
-            _ => &["type", "t", "value", "file", "interpolation"],
-        };
-        self.only_keys(path, allowed, &format!("a '{kind}' function"));
+        self.only_keys(path, "function", kind, &format!("a '{kind}' function"));
         let num = |v: &mut Self, key: &str, x: Option<f64>, default: Option<f64>| -> Option<f64> {
             match x.or(default) {
                 Some(x) if x.is_finite() => Some(x),
@@ -1337,7 +1330,7 @@ impl Validator<'_> {
             return;
         };
         if kind == "gravity" {
-            self.only_keys(path, &["name", "type", "g"], "a gravity load");
+            self.only_keys(path, "loads", "gravity", "a gravity load");
             let Some(g) = self.require_ref(path, &l.g, "g", "the gravitational acceleration [m/s^2]") else {
                 return;
             };
@@ -1354,11 +1347,7 @@ impl Validator<'_> {
             m.gravity = Some((path.clone(), g));
             return;
         }
-        self.only_keys(
-            path,
-            &["name", "type", "at", "force", "moment", "axes", "function"],
-            "a point load",
-        );
+        self.only_keys(path, "loads", "point", "a point load");
         let Some(at_text) = self.require_ref(path, &l.at, "at", "the point loaded, \"body.point\"") else {
             return;
         };
@@ -1452,40 +1441,14 @@ impl Validator<'_> {
     }
 
     fn sensor(&mut self, path: &KeyPath, s: &SensorFile, m: &Mechanism) -> Option<SensorTarget> {
-        let kinds = [
-            "position",
-            "displacement",
-            "relative-position",
-            "rotation",
-            "velocity",
-            "angular-velocity",
-            "deflection",
-            "joint",
-            "joint-rate",
-            "modal",
-            "reaction",
-            "driver-effort",
-            "actuator-effort",
-            "energy",
-            "momentum",
-            "stress",
-        ];
         let kind = self.choice(
             &path.key("type"),
             &Some(s.kind.clone()),
             "position",
-            &kinds,
+            keys::table("sensors").kinds,
             "sensor type",
         )?;
-        let allowed: &[&str] = match kind {
-            "relative-position" => &["name", "type", "of", "reference"],
-            "deflection" => &["name", "type", "of", "chord", "normal"],
-            "joint" | "joint-rate" => &["name", "type", "of", "coordinate"],
-            "energy" | "momentum" => &["name", "type"],
-            "stress" => &["name", "type", "of", "node", "node_at", "set"],
-            _ => &["name", "type", "of"],
-        };
-        self.only_keys(path, allowed, &format!("a '{kind}' sensor"));
+        self.only_keys(path, "sensors", kind, &format!("a '{kind}' sensor"));
         if matches!(kind, "energy" | "momentum") {
             return Some(if kind == "energy" {
                 SensorTarget::Energy
@@ -1637,11 +1600,7 @@ impl Validator<'_> {
     fn initial(&mut self, path: &KeyPath, c: &InitialFile, m: &Mechanism) -> Option<InitialSpec> {
         match (&c.joint, &c.at, &c.body) {
             (Some(joint), None, None) => {
-                self.only_keys(
-                    path,
-                    &["joint", "coordinate", "value", "value_deg", "rate"],
-                    "an initial joint value",
-                );
+                self.only_keys(path, "initial", "joint", "an initial joint value");
                 let j = self.joint_ref(&path.key("joint"), joint, m)?;
                 let coordinate = c.coordinate.unwrap_or(0);
                 if !self.joint_coordinate(path, m, j, coordinate) {
@@ -1689,11 +1648,7 @@ impl Validator<'_> {
                 })
             }
             (None, None, Some(body)) => {
-                self.only_keys(
-                    path,
-                    &["body", "velocity", "angular_velocity", "point"],
-                    "an initial body velocity",
-                );
+                self.only_keys(path, "initial", "body", "an initial body velocity");
                 let b = if let Some(k) = self.lookup("flexible", body) {
                     BodyRef::Flexible(k)
                 } else if let Some(k) = self.lookup("rigid", body) {
@@ -1722,11 +1677,7 @@ impl Validator<'_> {
                 })
             }
             (None, Some(at), None) => {
-                self.only_keys(
-                    path,
-                    &["at", "velocity", "angular_velocity"],
-                    "an initial point velocity",
-                );
+                self.only_keys(path, "initial", "point", "an initial point velocity");
                 let at = self.point(&path.key("at"), at, m, false)?;
                 let (velocity, angular_velocity) = self.initial_velocities(path, c)?;
                 Some(InitialSpec::Point {
@@ -2007,20 +1958,7 @@ impl Validator<'_> {
         };
         match a.kind {
             AnalysisKind::Equilibrium => {
-                self.only_keys(
-                    path,
-                    &[
-                        "type",
-                        "name",
-                        "steps",
-                        "tolerance",
-                        "method",
-                        "max_iterations",
-                        "at_time",
-                        "start",
-                    ],
-                    "an 'equilibrium' analysis",
-                );
+                self.only_keys(path, "analyses", "equilibrium", "an 'equilibrium' analysis");
                 let arc_length = match a.method.as_deref() {
                     None | Some("newton") => false,
                     Some("arc-length") => true,
@@ -2056,25 +1994,7 @@ impl Validator<'_> {
                 })
             }
             AnalysisKind::Dynamic => {
-                self.only_keys(
-                    path,
-                    &[
-                        "type",
-                        "name",
-                        "t_end",
-                        "dt",
-                        "rho_inf",
-                        "tolerance",
-                        "max_iterations",
-                        "newton",
-                        "translations",
-                        "start",
-                        "dt_min",
-                        "dt_max",
-                        "error_tolerance",
-                    ],
-                    "a 'dynamic' analysis",
-                );
+                self.only_keys(path, "analyses", "dynamic", "a 'dynamic' analysis");
                 let t_end = self.require(path, a.t_end, "t_end", "end time [s]");
                 let dt = self.require(path, a.dt, "dt", "time step [s]");
                 let t_end = self.positive(&path.key("t_end"), t_end?, "t_end [s]")?;
@@ -2173,11 +2093,7 @@ impl Validator<'_> {
                 })
             }
             AnalysisKind::Buckling => {
-                self.only_keys(
-                    path,
-                    &["type", "name", "modes", "steps", "tolerance", "max_iterations", "start"],
-                    "a 'buckling' analysis",
-                );
+                self.only_keys(path, "analyses", "buckling", "a 'buckling' analysis");
                 let modes = a.modes.unwrap_or(4);
                 if modes == 0 || modes > super::MAX_MODES {
                     self.err(
@@ -2199,11 +2115,7 @@ impl Validator<'_> {
                 })
             }
             _ => {
-                self.only_keys(
-                    path,
-                    &["type", "name", "modes", "about", "at_time", "dt", "start"],
-                    "a 'linearized' analysis",
-                );
+                self.only_keys(path, "analyses", "linearized", "a 'linearized' analysis");
                 if a.start.is_some() && (a.about.is_some() || a.at_time.is_some()) {
                     self.err_key(&path.key("start"), "give `start` or `about`/`at_time`, not both");
                     return None;
