@@ -4,6 +4,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`schema`] | the serde schema of a study file, raw: every key |
+//! | [`keys`] | the registry of the keys: each declared once, with type, unit, default, range and meaning |
 //! | [`source`] | spans, key paths, error rendering, close matches |
 //! | [`validate`] | validation `StudyFile` → `Study` (parts, analyses; `validate::mechanism`: the mechanism) |
 //! | [`part`] | a validated part and the FE model an analysis runs on |
@@ -13,6 +14,7 @@
 
 pub mod document;
 pub mod examples;
+pub mod keys;
 pub mod matrices;
 pub mod part;
 pub mod schema;

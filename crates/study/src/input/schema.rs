@@ -136,6 +136,18 @@ pub enum SectionShape {
     Values,
 }
 
+impl SectionShape {
+    /// The value of `shape`, as in the file.
+    pub fn name(self) -> &'static str {
+        match self {
+            SectionShape::Rectangle => "rectangle",
+            SectionShape::Circle => "circle",
+            SectionShape::Tube => "tube",
+            SectionShape::Values => "values",
+        }
+    }
+}
+
 /// `[[parts]]`: one FE model (a beam structure or a solid), with its interfaces and how to
 /// reduce it. Exactly one of `beam`, `box`, `mesh`.
 #[derive(Debug, Deserialize)]
@@ -195,6 +207,17 @@ pub enum BeamKind {
     Straight,
     Arc,
     Frame,
+}
+
+impl BeamKind {
+    /// The value of `kind`, as in the file.
+    pub fn name(self) -> &'static str {
+        match self {
+            BeamKind::Straight => "straight",
+            BeamKind::Arc => "arc",
+            BeamKind::Frame => "frame",
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

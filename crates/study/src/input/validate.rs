@@ -11,6 +11,7 @@
 // Material constants keep their physical names (E, G), as in fe_model.
 #![allow(non_snake_case)]
 
+use crate::input::keys;
 use crate::input::part::{
     mass_kind, model_size, InterfaceSpec, InterfaceTarget, LoadSpec, NodeRef, Part, PartKind, Reduction, SupportSpec,
 };
@@ -268,6 +269,14 @@ fn check_name(name: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// The beam theory's name, for descriptions.
+fn theory_name(theory: BeamTheory) -> &'static str {
+    match theory {
+        BeamTheory::Timoshenko => "Timoshenko",
+        BeamTheory::EulerBernoulli => "Euler-Bernoulli",
+    }
+}
+
 fn vec3(v: &Vec3) -> Vector3<f64> {
     Vector3::new(v[0], v[1], v[2])
 }
@@ -299,9 +308,11 @@ impl Validator<'_> {
         self.warnings.push(StudyError::at(path, message));
     }
 
-    /// Refuses the keys of the table at `path` that are not in `allowed` (the schema accepts
-    /// the union of the keys of every kind; this checks the kind's own).
-    fn only_keys(&mut self, path: &KeyPath, allowed: &[&str], what: &str) {
+    /// Refuses the keys of the table at `path` that the kind `kind` of the registry's table
+    /// `table` does not take ([`crate::input::keys`]; the schema accepts the union of the keys
+    /// of every kind, this checks the kind's own).
+    fn only_keys(&mut self, path: &KeyPath, table: &str, kind: &str, what: &str) {
+        let allowed = keys::allowed(table, kind);
         for k in self.src.keys(path) {
             if !allowed.contains(&k.as_str()) {
                 let close = close_matches(&k, allowed.iter().copied());
@@ -475,24 +486,14 @@ impl Validator<'_> {
                 );
                 continue;
             }
-            let (keys, what): (&[&str], &str) = match s.shape {
-                SectionShape::Rectangle => (
-                    &["b", "h"],
-                    "a rectangle section (width b along local y, height h along local z, m)",
-                ),
-                SectionShape::Circle => (&["d"], "a circle section (diameter d, m)"),
-                SectionShape::Tube => (
-                    &["d_outer", "d_inner"],
-                    "a tube section (diameters d_outer, d_inner, m)",
-                ),
-                SectionShape::Values => (
-                    &["A", "Iy", "Iz", "J", "ky", "kz"],
-                    "a section by values (A [m^2], Iy, Iz, J [m^4], shear factors ky, kz)",
-                ),
+            let what = match s.shape {
+                SectionShape::Rectangle => "a rectangle section (width b along local y, height h along local z, m)",
+                SectionShape::Circle => "a circle section (diameter d, m)",
+                SectionShape::Tube => "a tube section (diameters d_outer, d_inner, m)",
+                SectionShape::Values => "a section by values (A [m^2], Iy, Iz, J [m^4], shear factors ky, kz)",
             };
-            let mut allowed = vec!["name", "shape"];
-            allowed.extend_from_slice(keys);
-            self.only_keys(&path, &allowed, what);
+            self.only_keys(&path, "sections", s.shape.name(), what);
+            let shape_keys = keys::allowed("sections", s.shape.name());
             let values: [(&str, Option<f64>); 11] = [
                 ("b", s.b),
                 ("h", s.h),
@@ -508,7 +509,7 @@ impl Validator<'_> {
             ];
             let mut ok = true;
             for (key, value) in values {
-                if !keys.contains(&key) {
+                if !shape_keys.contains(&key) {
                     continue;
                 }
                 let optional = matches!(key, "ky" | "kz");
@@ -746,15 +747,12 @@ impl Validator<'_> {
         sections: &Sections<'_>,
         mass: fe_model::MassKind,
     ) -> Option<(FeModel, String)> {
-        let common = ["kind", "section", "theory", "mass"];
-        let (keys, what): (&[&str], &str) = match b.kind {
-            BeamKind::Straight => (&["orientation", "elements", "from", "to"], "a straight beam"),
-            BeamKind::Arc => (&["elements", "center", "start", "axis", "angle_deg"], "an arc"),
-            BeamKind::Frame => (&["orientation", "points", "members"], "a frame"),
+        let what = match b.kind {
+            BeamKind::Straight => "a straight beam",
+            BeamKind::Arc => "an arc",
+            BeamKind::Frame => "a frame",
         };
-        let mut allowed = common.to_vec();
-        allowed.extend_from_slice(keys);
-        self.only_keys(path, &allowed, what);
+        self.only_keys(path, "parts.beam", b.kind.name(), what);
         let theory = Self::theory(b.theory);
         let nu = material.nu();
         let mut model = FeModel::default();
@@ -768,10 +766,7 @@ impl Validator<'_> {
             theory,
             mass,
         };
-        let theory_name = match theory {
-            BeamTheory::Timoshenko => "Timoshenko",
-            BeamTheory::EulerBernoulli => "Euler-Bernoulli",
-        };
+        let theory_name = theory_name(theory);
         let result = match b.kind {
             BeamKind::Straight => {
                 let from = self.require(path, b.from, "from", "first point of the beam [m]");
@@ -821,74 +816,8 @@ impl Validator<'_> {
                 .map(|_| format!("arc of {angle} degrees, {n} {theory_name} elements"))
             }
             BeamKind::Frame => {
-                let points = self.require_ref(path, &b.points, "points", "joint points of the frame [m]");
-                let members = self.require_ref(path, &b.members, "members", "members between the points");
-                let (points, members) = (points?, members?);
-                let mut pts = Vec::with_capacity(points.len());
-                for (i, p) in points.iter().enumerate() {
-                    pts.push(point(&self.finite3(&path.key("points").index(i), p, "a point")?.into()));
-                }
-                if members.is_empty() {
-                    self.err(&path.key("members"), "a frame needs at least one member");
-                    return None;
-                }
-                let mut list = Vec::with_capacity(members.len());
-                let mut total = 0;
-                for (j, m) in members.iter().enumerate() {
-                    let mp = path.key("members").index(j);
-                    let mut bad = false;
-                    for (key, idx) in [("from", m.from), ("to", m.to)] {
-                        if idx >= pts.len() {
-                            self.err(
-                                &mp.key(key),
-                                format!(
-                                    "point {idx} does not exist: the frame has {} points (0-based)",
-                                    pts.len()
-                                ),
-                            );
-                            bad = true;
-                        }
-                    }
-                    if bad {
-                        continue;
-                    }
-                    if m.from == m.to || (pts[m.to] - pts[m.from]).norm() == 0.0 {
-                        self.err(&mp.key("to"), "the member starts and ends at the same point");
-                        continue;
-                    }
-                    let Some(n) = self.element_count(&mp.key("elements"), m.elements) else {
-                        continue;
-                    };
-                    total += n;
-                    let section = match &m.section {
-                        Some(s) => match self.section(&mp.key("section"), s, sections, nu) {
-                            Some(sec) => model.add_section(sec),
-                            None => continue,
-                        },
-                        None => section_id,
-                    };
-                    let axis = pts[m.to] - pts[m.from];
-                    let given = m.orientation.as_ref().or(b.orientation.as_ref());
-                    let at = if m.orientation.is_some() {
-                        mp.key("orientation")
-                    } else {
-                        path.key("orientation")
-                    };
-                    let Some(orientation) = self.orientation(&at, given, &axis) else {
-                        continue;
-                    };
-                    list.push(Member {
-                        from: m.from,
-                        to: m.to,
-                        elements: n,
-                        props: props(orientation, section),
-                    });
-                }
-                if list.len() != members.len() {
-                    return None;
-                }
-                frame(&mut model, &pts, &list, name)
-                    .map(|_| format!("frame of {} members, {total} {theory_name} elements", list.len()))
+                let base = props(Vector3::z(), section_id);
+                self.frame_beam(path, name, b, sections, nu, &mut model, &base)?
             }
         };
         match result {
@@ -898,6 +827,96 @@ impl Validator<'_> {
                 None
             }
         }
+    }
+
+    /// A frame: its points and members (`base`: the properties of a member that overrides
+    /// neither `section` nor `orientation`, but for the orientation); the description, or the
+    /// generator's error.
+    fn frame_beam(
+        &mut self,
+        path: &KeyPath,
+        name: &str,
+        b: &BeamFile,
+        sections: &Sections<'_>,
+        nu: f64,
+        model: &mut FeModel,
+        base: &BeamProperties,
+    ) -> Option<Result<String, FeError>> {
+        let points = self.require_ref(path, &b.points, "points", "joint points of the frame [m]");
+        let members = self.require_ref(path, &b.members, "members", "members between the points");
+        let (points, members) = (points?, members?);
+        let mut pts = Vec::with_capacity(points.len());
+        for (i, p) in points.iter().enumerate() {
+            pts.push(point(&self.finite3(&path.key("points").index(i), p, "a point")?.into()));
+        }
+        if members.is_empty() {
+            self.err(&path.key("members"), "a frame needs at least one member");
+            return None;
+        }
+        let mut list = Vec::with_capacity(members.len());
+        let mut total = 0;
+        for (j, m) in members.iter().enumerate() {
+            let mp = path.key("members").index(j);
+            let mut bad = false;
+            for (key, idx) in [("from", m.from), ("to", m.to)] {
+                if idx >= pts.len() {
+                    self.err(
+                        &mp.key(key),
+                        format!(
+                            "point {idx} does not exist: the frame has {} points (0-based)",
+                            pts.len()
+                        ),
+                    );
+                    bad = true;
+                }
+            }
+            if bad {
+                continue;
+            }
+            if m.from == m.to || (pts[m.to] - pts[m.from]).norm() == 0.0 {
+                self.err(&mp.key("to"), "the member starts and ends at the same point");
+                continue;
+            }
+            let Some(n) = self.element_count(&mp.key("elements"), m.elements) else {
+                continue;
+            };
+            total += n;
+            let section = match &m.section {
+                Some(s) => match self.section(&mp.key("section"), s, sections, nu) {
+                    Some(sec) => model.add_section(sec),
+                    None => continue,
+                },
+                None => base.section,
+            };
+            let axis = pts[m.to] - pts[m.from];
+            let given = m.orientation.as_ref().or(b.orientation.as_ref());
+            let at = if m.orientation.is_some() {
+                mp.key("orientation")
+            } else {
+                path.key("orientation")
+            };
+            let Some(orientation) = self.orientation(&at, given, &axis) else {
+                continue;
+            };
+            list.push(Member {
+                from: m.from,
+                to: m.to,
+                elements: n,
+                props: BeamProperties {
+                    section,
+                    orientation,
+                    ..base.clone()
+                },
+            });
+        }
+        if list.len() != members.len() {
+            return None;
+        }
+        let theory_name = theory_name(base.theory);
+        Some(
+            frame(model, &pts, &list, name)
+                .map(|_| format!("frame of {} members, {total} {theory_name} elements", list.len())),
+        )
     }
 
     fn solid_box(
@@ -976,43 +995,10 @@ impl Validator<'_> {
         materials: &Materials,
         mass: fe_model::MassKind,
     ) -> Option<(FeModel, String, std::path::PathBuf, PartKind)> {
-        use fe_model::mesh::{abaqus, nastran};
         let file = self.src.dir().join(&m.file);
         let file_key = path.key("mesh").key("file");
         self.file_spiders.clear();
-        let extension = file.extension().map(|e| e.to_string_lossy().to_lowercase());
-        let (format, imported) = match extension.as_deref() {
-            Some("inp") => ("Abaqus", Some(abaqus::read(&file))),
-            Some("bdf" | "nas" | "dat") => ("Nastran", Some(nastran::read(&file))),
-            _ => ("gmsh", None),
-        };
-        let imported = match imported {
-            Some(Ok(i)) => Some(i),
-            Some(Err(e)) => {
-                self.err(&file_key, format!("cannot read the {format} file: {e}"));
-                return None;
-            }
-            None => None,
-        };
-        let mesh = match &imported {
-            Some(i) => i.mesh.clone(),
-            None => match fe_model::mesh::gmsh::read(&file) {
-                Ok(mesh) => mesh,
-                Err(e) => {
-                    self.err(&file_key, format!("cannot read the mesh: {e}"));
-                    return None;
-                }
-            },
-        };
-        if let Some(i) = &imported {
-            if let Some(skipped) = i.ignored_summary() {
-                self.warn(&file_key, format!("{format} file: skipped {skipped}"));
-            }
-            for note in &i.notes {
-                self.warn(&file_key, format!("{format} file: {note}"));
-            }
-            self.file_spiders = i.spiders.clone();
-        }
+        let (format, imported, mesh) = self.read_mesh(&file, &file_key)?;
         let volumes = mesh.cells.iter().filter(|c| c.kind.dimension() == 3).count();
         let beams = imported.as_ref().map_or(0, |i| {
             i.beam_sections
@@ -1120,6 +1106,50 @@ impl Validator<'_> {
         }
     }
 
+    /// The mesh file of a part: its format, the model an Abaqus or Nastran file brings (with
+    /// its spiders kept in `file_spiders`), and the mesh.
+    fn read_mesh(
+        &mut self,
+        file: &Path,
+        file_key: &KeyPath,
+    ) -> Option<(&'static str, Option<fe_model::ImportedModel>, fe_model::mesh::Mesh)> {
+        use fe_model::mesh::{abaqus, nastran};
+        let extension = file.extension().map(|e| e.to_string_lossy().to_lowercase());
+        let (format, imported) = match extension.as_deref() {
+            Some("inp") => ("Abaqus", Some(abaqus::read(file))),
+            Some("bdf" | "nas" | "dat") => ("Nastran", Some(nastran::read(file))),
+            _ => ("gmsh", None),
+        };
+        let imported = match imported {
+            Some(Ok(i)) => Some(i),
+            Some(Err(e)) => {
+                self.err(file_key, format!("cannot read the {format} file: {e}"));
+                return None;
+            }
+            None => None,
+        };
+        let mesh = match &imported {
+            Some(i) => i.mesh.clone(),
+            None => match fe_model::mesh::gmsh::read(file) {
+                Ok(mesh) => mesh,
+                Err(e) => {
+                    self.err(file_key, format!("cannot read the mesh: {e}"));
+                    return None;
+                }
+            },
+        };
+        if let Some(i) = &imported {
+            if let Some(skipped) = i.ignored_summary() {
+                self.warn(file_key, format!("{format} file: skipped {skipped}"));
+            }
+            for note in &i.notes {
+                self.warn(file_key, format!("{format} file: {note}"));
+            }
+            self.file_spiders = i.spiders.clone();
+        }
+        Some((format, imported, mesh))
+    }
+
     /// Every node whose position is within `radius` of `c`.
     fn nodes_near(model: &FeModel, c: &Point3<f64>, radius: f64) -> Vec<NodeId> {
         model
@@ -1203,122 +1233,8 @@ impl Validator<'_> {
                 continue;
             }
             let target = match kind {
-                PartKind::Beam => {
-                    self.only_keys(
-                        &ip,
-                        &["name", "set", "node_at"],
-                        "an interface of a beam part (a beam node)",
-                    );
-                    match (&i.set, &i.node_at) {
-                        (Some(set), None) => self.node_set(&ip.key("set"), model, set).and_then(|nodes| {
-                            if nodes.len() == 1 {
-                                Some(InterfaceTarget::BeamNode(nodes[0]))
-                            } else {
-                                self.err(
-                                    &ip.key("set"),
-                                    format!(
-                                        "node set '{set}' has {} nodes; a beam interface is one node (such as '{}.end')",
-                                        nodes.len(),
-                                        p.name
-                                    ),
-                                );
-                                None
-                            }
-                        }),
-                        (None, Some(x)) => self.node_at(&ip.key("node_at"), model, x).map(InterfaceTarget::BeamNode),
-                        _ => {
-                            self.err(&ip, "give the interface's node by `set` (a one-node set such as 'beam.end') or by `node_at` = [x, y, z], one of them");
-                            None
-                        }
-                    }
-                }
-                PartKind::Solid => {
-                    self.only_keys(
-                        &ip,
-                        &["name", "set", "near", "radius", "spider", "node_position"],
-                        "an interface of a solid part (a spider on surface nodes)",
-                    );
-                    // A set of one of the file's spiders (RBE2_<eid>, RBE3_<eid>) brings its kind
-                    // and node position.
-                    let file_spider = i
-                        .set
-                        .as_ref()
-                        .and_then(|set| self.file_spiders.iter().find(|s| s.name == *set))
-                        .cloned();
-                    let spider = match i.spider {
-                        Some(SpiderFile::Rbe2) => Some(SpiderKind::Rbe2),
-                        Some(SpiderFile::Rbe3) => Some(SpiderKind::Rbe3),
-                        None if file_spider.is_some() => file_spider.as_ref().map(|s| s.kind),
-                        None => {
-                            self.err(
-                                &ip,
-                                "missing key `spider` (\"rbe2\": rigid, or \"rbe3\": interpolating)",
-                            );
-                            None
-                        }
-                    };
-                    let node_position = match &i.node_position {
-                        Some(x) => match self.finite3(&ip.key("node_position"), x, "the node position") {
-                            Some(v) => Some(Point3::from(v)),
-                            None => {
-                                ok = false;
-                                None
-                            }
-                        },
-                        None => file_spider.as_ref().map(|s| s.position),
-                    };
-                    let surface = match (&i.set, &i.near, i.radius) {
-                        (Some(set), None, None) => self.node_set(&ip.key("set"), model, set).map(<[NodeId]>::to_vec),
-                        (None, Some(c), Some(r)) => {
-                            let c = self.finite3(&ip.key("near"), c, "`near`");
-                            let r = self.positive(&ip.key("radius"), r, "the radius [m]");
-                            match (c, r) {
-                                (Some(c), Some(r)) => {
-                                    let nodes = Self::nodes_near(model, &Point3::from(c), r);
-                                    if nodes.is_empty() {
-                                        let nearest = model
-                                            .mesh
-                                            .nearest_node(&Point3::from(c))
-                                            .map(|n| (model.mesh.nodes[n.index()] - Point3::from(c)).norm());
-                                        self.err(
-                                            &ip.key("radius"),
-                                            format!(
-                                                "no node within {r} m of {:?}{}",
-                                                [c.x, c.y, c.z],
-                                                nearest.map_or(String::new(), |d| format!(
-                                                    "; the nearest is {d:.3e} m away"
-                                                ))
-                                            ),
-                                        );
-                                        None
-                                    } else {
-                                        Some(nodes)
-                                    }
-                                }
-                                _ => None,
-                            }
-                        }
-                        (None, Some(_), None) => {
-                            self.err(
-                                &ip,
-                                "missing key `radius` (nodes within `radius` of `near` form the surface)",
-                            );
-                            None
-                        }
-                        _ => {
-                            self.err(&ip, "give the surface nodes by `set` (a node set or physical group) or by `near` = [x, y, z] and `radius`, one of them");
-                            None
-                        }
-                    };
-                    match (surface, spider) {
-                        (Some(surface), Some(kind)) => Some(InterfaceTarget::Spider {
-                            surface,
-                            kind,
-                            node_position,
-                        }),
-                        _ => None,
-                    }
-                }
+                PartKind::Beam => self.beam_interface(&ip, p, i, model),
+                PartKind::Solid => self.solid_interface(&ip, i, model, &mut ok),
             };
             match target {
                 Some(target) => out.push(InterfaceSpec {
@@ -1344,6 +1260,138 @@ impl Validator<'_> {
             }
         }
         ok.then_some(out)
+    }
+
+    /// The node of an interface of a beam part: a one-node set or the node at a position.
+    fn beam_interface(
+        &mut self,
+        ip: &KeyPath,
+        p: &PartFile,
+        i: &InterfaceFile,
+        model: &FeModel,
+    ) -> Option<InterfaceTarget> {
+        self.only_keys(
+            ip,
+            "parts.interfaces",
+            "beam",
+            "an interface of a beam part (a beam node)",
+        );
+        match (&i.set, &i.node_at) {
+            (Some(set), None) => self.node_set(&ip.key("set"), model, set).and_then(|nodes| {
+                if nodes.len() == 1 {
+                    Some(InterfaceTarget::BeamNode(nodes[0]))
+                } else {
+                    self.err(
+                        &ip.key("set"),
+                        format!(
+                            "node set '{set}' has {} nodes; a beam interface is one node (such as '{}.end')",
+                            nodes.len(),
+                            p.name
+                        ),
+                    );
+                    None
+                }
+            }),
+            (None, Some(x)) => self
+                .node_at(&ip.key("node_at"), model, x)
+                .map(InterfaceTarget::BeamNode),
+            _ => {
+                self.err(ip, "give the interface's node by `set` (a one-node set such as 'beam.end') or by `node_at` = [x, y, z], one of them");
+                None
+            }
+        }
+    }
+
+    /// The spider of an interface of a solid part: its surface nodes, kind and node position
+    /// (`ok` turns false on an error that leaves the interface usable for further checks).
+    fn solid_interface(
+        &mut self,
+        ip: &KeyPath,
+        i: &InterfaceFile,
+        model: &FeModel,
+        ok: &mut bool,
+    ) -> Option<InterfaceTarget> {
+        self.only_keys(
+            ip,
+            "parts.interfaces",
+            "solid",
+            "an interface of a solid part (a spider on surface nodes)",
+        );
+        // A set of one of the file's spiders (RBE2_<eid>, RBE3_<eid>) brings its kind
+        // and node position.
+        let file_spider = i
+            .set
+            .as_ref()
+            .and_then(|set| self.file_spiders.iter().find(|s| s.name == *set))
+            .cloned();
+        let spider = match i.spider {
+            Some(SpiderFile::Rbe2) => Some(SpiderKind::Rbe2),
+            Some(SpiderFile::Rbe3) => Some(SpiderKind::Rbe3),
+            None if file_spider.is_some() => file_spider.as_ref().map(|s| s.kind),
+            None => {
+                self.err(ip, "missing key `spider` (\"rbe2\": rigid, or \"rbe3\": interpolating)");
+                None
+            }
+        };
+        let node_position = match &i.node_position {
+            Some(x) => match self.finite3(&ip.key("node_position"), x, "the node position") {
+                Some(v) => Some(Point3::from(v)),
+                None => {
+                    *ok = false;
+                    None
+                }
+            },
+            None => file_spider.as_ref().map(|s| s.position),
+        };
+        let surface = match (&i.set, &i.near, i.radius) {
+            (Some(set), None, None) => self.node_set(&ip.key("set"), model, set).map(<[NodeId]>::to_vec),
+            (None, Some(c), Some(r)) => {
+                let c = self.finite3(&ip.key("near"), c, "`near`");
+                let r = self.positive(&ip.key("radius"), r, "the radius [m]");
+                match (c, r) {
+                    (Some(c), Some(r)) => {
+                        let nodes = Self::nodes_near(model, &Point3::from(c), r);
+                        if nodes.is_empty() {
+                            let nearest = model
+                                .mesh
+                                .nearest_node(&Point3::from(c))
+                                .map(|n| (model.mesh.nodes[n.index()] - Point3::from(c)).norm());
+                            self.err(
+                                &ip.key("radius"),
+                                format!(
+                                    "no node within {r} m of {:?}{}",
+                                    [c.x, c.y, c.z],
+                                    nearest.map_or(String::new(), |d| format!("; the nearest is {d:.3e} m away"))
+                                ),
+                            );
+                            None
+                        } else {
+                            Some(nodes)
+                        }
+                    }
+                    _ => None,
+                }
+            }
+            (None, Some(_), None) => {
+                self.err(
+                    ip,
+                    "missing key `radius` (nodes within `radius` of `near` form the surface)",
+                );
+                None
+            }
+            _ => {
+                self.err(ip, "give the surface nodes by `set` (a node set or physical group) or by `near` = [x, y, z] and `radius`, one of them");
+                None
+            }
+        };
+        match (surface, spider) {
+            (Some(surface), Some(kind)) => Some(InterfaceTarget::Spider {
+                surface,
+                kind,
+                node_position,
+            }),
+            _ => None,
+        }
     }
 
     fn reduction(
@@ -1666,189 +1714,196 @@ impl Validator<'_> {
         let part_names: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
         for (i, a) in list.iter().enumerate() {
             let path = KeyPath::root().key("analyses").index(i);
-            let kind = a.kind.name();
-            let allowed: &[&str] = match a.kind {
-                AnalysisKind::Static => &["type", "name", "part", "supports", "loads"],
-                AnalysisKind::Modal => &["type", "name", "part", "supports", "modes", "solver"],
-                AnalysisKind::Reduce => &["type", "name", "part"],
+            let analysis = match a.kind {
+                AnalysisKind::Static | AnalysisKind::Modal | AnalysisKind::Reduce => {
+                    self.part_analysis(path, a, parts, &part_names)
+                }
                 AnalysisKind::Equilibrium
                 | AnalysisKind::Dynamic
                 | AnalysisKind::Linearized
-                | AnalysisKind::Buckling => {
-                    if mechanism.is_empty() {
-                        self.err(
-                            &path.key("type"),
-                            format!("a '{kind}' analysis runs on the mechanism, and the study defines none ([[bodies]], [[rigid_bodies]] or [[point_masses]])"),
-                        );
-                        continue;
-                    }
-                    let Some(spec) = self.mbs_analysis(&path, a) else {
-                        continue;
-                    };
-                    let Some(name) = self.analysis_name(&path, a, kind.to_string()) else {
-                        continue;
-                    };
-                    let start = match &a.start {
-                        None => None,
-                        Some(from) => match self.lookup("analysis", from) {
-                            Some(k)
-                                if matches!(
-                                    out[k].spec,
-                                    AnalysisSpec::Mbs(MbsAnalysis::Equilibrium { .. } | MbsAnalysis::Dynamic { .. })
-                                ) =>
-                            {
-                                Some(k)
-                            }
-                            Some(_) => {
-                                self.err(
-                                    &path.key("start"),
-                                    format!("analysis '{from}' ends in no state of the mechanism: `start` names an earlier 'equilibrium' or 'dynamic' analysis"),
-                                );
-                                continue;
-                            }
-                            None => {
-                                let names: Vec<String> = out
-                                    .iter()
-                                    .filter(|b| {
-                                        matches!(
-                                            b.spec,
-                                            AnalysisSpec::Mbs(
-                                                MbsAnalysis::Equilibrium { .. } | MbsAnalysis::Dynamic { .. }
-                                            )
-                                        )
-                                    })
-                                    .map(|b| b.name.clone())
-                                    .collect();
-                                self.err(
-                                    &path.key("start"),
-                                    format!(
-                                        "{}; `start` names an earlier 'equilibrium' or 'dynamic' analysis",
-                                        unknown_reference("analysis", from, &names)
-                                    ),
-                                );
-                                continue;
-                            }
-                        },
-                    };
-                    self.register("analysis", &name, out.len());
-                    out.push(Analysis {
-                        name,
-                        path,
-                        part: None,
-                        spec: AnalysisSpec::Mbs(spec),
-                        start,
-                    });
-                    continue;
+                | AnalysisKind::Buckling => self.mechanism_analysis(path, a, mechanism, &out),
+            };
+            if let Some(analysis) = analysis {
+                self.register("analysis", &analysis.name, out.len());
+                out.push(analysis);
+            }
+        }
+        out
+    }
+
+    /// An analysis of the mechanism; `done`: the analyses before it, which `start` may name.
+    fn mechanism_analysis(
+        &mut self,
+        path: KeyPath,
+        a: &AnalysisFile,
+        mechanism: &Mechanism,
+        done: &[Analysis],
+    ) -> Option<Analysis> {
+        let kind = a.kind.name();
+        if mechanism.is_empty() {
+            self.err(
+                &path.key("type"),
+                format!("a '{kind}' analysis runs on the mechanism, and the study defines none ([[bodies]], [[rigid_bodies]] or [[point_masses]])"),
+            );
+            return None;
+        }
+        let spec = self.mbs_analysis(&path, a)?;
+        let name = self.analysis_name(&path, a, kind.to_string())?;
+        let start = match &a.start {
+            None => None,
+            Some(from) => match self.lookup("analysis", from) {
+                Some(k)
+                    if matches!(
+                        done[k].spec,
+                        AnalysisSpec::Mbs(MbsAnalysis::Equilibrium { .. } | MbsAnalysis::Dynamic { .. })
+                    ) =>
+                {
+                    Some(k)
                 }
-            };
-            self.only_keys(&path, allowed, &format!("a '{kind}' analysis"));
-            let Some(part_name) = &a.part else {
-                self.err(
-                    &path,
-                    format!("missing key `part` (the part a '{kind}' analysis runs on)"),
-                );
-                continue;
-            };
-            let Some(listed) = self.lookup("part", part_name) else {
-                self.err(&path.key("part"), unknown_reference("part", part_name, &part_names));
-                continue;
-            };
-            // A part that failed validation has its own errors already.
-            let Some(part) = parts[listed].1.as_ref() else {
-                continue;
-            };
-            let index = parts[..listed].iter().filter(|(_, p)| p.is_some()).count();
-            let Some(name) = self.analysis_name(&path, a, format!("{kind}-{part_name}")) else {
-                continue;
-            };
-            let spec = match a.kind {
-                AnalysisKind::Static => {
-                    let supports = self.supports(&path, part, &a.supports);
-                    let loads = self.loads(&path, part, &a.loads);
-                    match (supports, loads) {
-                        (Some(supports), Some(loads)) => AnalysisSpec::Static { supports, loads },
-                        _ => continue,
-                    }
+                Some(_) => {
+                    self.err(
+                        &path.key("start"),
+                        format!("analysis '{from}' ends in no state of the mechanism: `start` names an earlier 'equilibrium' or 'dynamic' analysis"),
+                    );
+                    return None;
                 }
-                AnalysisKind::Modal => {
-                    let supports = self.supports(&path, part, &a.supports);
-                    let Some(modes) = self.require(&path, a.modes, "modes", "number of modes") else {
-                        continue;
-                    };
-                    if modes == 0 || modes > MAX_MODES {
-                        self.err(
-                            &path.key("modes"),
-                            format!("the number of modes must lie in 1..={MAX_MODES}, got {modes}"),
-                        );
-                        continue;
-                    }
-                    let solver = match a.solver {
-                        Some(SolverFile::Dense) => Solver::Dense,
-                        Some(SolverFile::Sparse) => Solver::Sparse,
-                        _ => Solver::Auto,
-                    };
-                    let Some(supports) = supports else {
-                        continue;
-                    };
-                    AnalysisSpec::Modal {
-                        modes,
-                        solver,
-                        supports,
-                    }
+                None => {
+                    let names: Vec<String> = done
+                        .iter()
+                        .filter(|b| {
+                            matches!(
+                                b.spec,
+                                AnalysisSpec::Mbs(MbsAnalysis::Equilibrium { .. } | MbsAnalysis::Dynamic { .. })
+                            )
+                        })
+                        .map(|b| b.name.clone())
+                        .collect();
+                    self.err(
+                        &path.key("start"),
+                        format!(
+                            "{}; `start` names an earlier 'equilibrium' or 'dynamic' analysis",
+                            unknown_reference("analysis", from, &names)
+                        ),
+                    );
+                    return None;
                 }
-                AnalysisKind::Reduce => {
-                    if part.reduction.is_none() {
-                        self.err(
-                            &path.key("part"),
-                            format!("part '{part_name}' has no [parts.reduction] (modes or cut-off frequency) to reduce with"),
-                        );
-                        continue;
-                    }
-                    AnalysisSpec::Reduce
+            },
+        };
+        Some(Analysis {
+            name,
+            path,
+            part: None,
+            spec: AnalysisSpec::Mbs(spec),
+            start,
+        })
+    }
+
+    /// A `static`, `modal` or `reduce` analysis of a part.
+    fn part_analysis(
+        &mut self,
+        path: KeyPath,
+        a: &AnalysisFile,
+        parts: &mut [(String, Option<Part>)],
+        part_names: &[String],
+    ) -> Option<Analysis> {
+        let kind = a.kind.name();
+        self.only_keys(&path, "analyses", kind, &format!("a '{kind}' analysis"));
+        let Some(part_name) = &a.part else {
+            self.err(
+                &path,
+                format!("missing key `part` (the part a '{kind}' analysis runs on)"),
+            );
+            return None;
+        };
+        let Some(listed) = self.lookup("part", part_name) else {
+            self.err(&path.key("part"), unknown_reference("part", part_name, part_names));
+            return None;
+        };
+        // A part that failed validation has its own errors already.
+        let part = parts[listed].1.as_ref()?;
+        let index = parts[..listed].iter().filter(|(_, p)| p.is_some()).count();
+        let name = self.analysis_name(&path, a, format!("{kind}-{part_name}"))?;
+        let spec = match a.kind {
+            AnalysisKind::Static => {
+                let supports = self.supports(&path, part, &a.supports);
+                let loads = self.loads(&path, part, &a.loads);
+                match (supports, loads) {
+                    (Some(supports), Some(loads)) => AnalysisSpec::Static { supports, loads },
+                    _ => return None,
                 }
-                _ => continue,
-            };
-            // The supports change the spiders (an RBE3 avoids supported dofs, an RBE2 cannot
-            // take them): build once to report a conflict here rather than mid-run (on the
-            // part's own model, restored after: no copy).
-            if let AnalysisSpec::Static { supports, .. } | AnalysisSpec::Modal { supports, .. } = &spec {
-                let Some(part) = parts[listed].1.as_mut() else {
-                    continue;
+            }
+            AnalysisKind::Modal => {
+                let supports = self.supports(&path, part, &a.supports);
+                let modes = self.require(&path, a.modes, "modes", "number of modes")?;
+                if modes == 0 || modes > MAX_MODES {
+                    self.err(
+                        &path.key("modes"),
+                        format!("the number of modes must lie in 1..={MAX_MODES}, got {modes}"),
+                    );
+                    return None;
+                }
+                let solver = match a.solver {
+                    Some(SolverFile::Dense) => Solver::Dense,
+                    Some(SolverFile::Sparse) => Solver::Sparse,
+                    _ => Solver::Auto,
                 };
-                let free = part
-                    .check_build(supports, false, |b| fe_model::DofMap::new(&b.model).map(|d| d.n_free()))
-                    .and_then(|free| free);
-                match free {
-                    Err(e) => {
-                        self.err(
-                            &path.key("supports"),
-                            format!("with these supports, part '{part_name}': {e}"),
-                        );
-                        continue;
-                    }
-                    Ok(free) => {
-                        // A model has as many modes as free dofs.
-                        if let AnalysisSpec::Modal { modes, .. } = &spec {
-                            if *modes > free {
-                                self.err(
-                                    &path.key("modes"),
-                                    format!("{modes} modes asked, but part '{part_name}' on these supports has {free} free dofs, so at most {free} modes"),
-                                );
-                                continue;
-                            }
+                let supports = supports?;
+                AnalysisSpec::Modal {
+                    modes,
+                    solver,
+                    supports,
+                }
+            }
+            AnalysisKind::Reduce => {
+                if part.reduction.is_none() {
+                    self.err(
+                        &path.key("part"),
+                        format!(
+                            "part '{part_name}' has no [parts.reduction] (modes or cut-off frequency) to reduce with"
+                        ),
+                    );
+                    return None;
+                }
+                AnalysisSpec::Reduce
+            }
+            _ => return None,
+        };
+        // The supports change the spiders (an RBE3 avoids supported dofs, an RBE2 cannot
+        // take them): build once to report a conflict here rather than mid-run (on the
+        // part's own model, restored after: no copy).
+        if let AnalysisSpec::Static { supports, .. } | AnalysisSpec::Modal { supports, .. } = &spec {
+            let part = parts[listed].1.as_mut()?;
+            let free = part
+                .check_build(supports, false, |b| fe_model::DofMap::new(&b.model).map(|d| d.n_free()))
+                .and_then(|free| free);
+            match free {
+                Err(e) => {
+                    self.err(
+                        &path.key("supports"),
+                        format!("with these supports, part '{part_name}': {e}"),
+                    );
+                    return None;
+                }
+                Ok(free) => {
+                    // A model has as many modes as free dofs.
+                    if let AnalysisSpec::Modal { modes, .. } = &spec {
+                        if *modes > free {
+                            self.err(
+                                &path.key("modes"),
+                                format!("{modes} modes asked, but part '{part_name}' on these supports has {free} free dofs, so at most {free} modes"),
+                            );
+                            return None;
                         }
                     }
                 }
             }
-            self.register("analysis", &name, out.len());
-            out.push(Analysis {
-                name,
-                path,
-                part: Some(index),
-                spec,
-                start: None,
-            });
         }
-        out
+        Some(Analysis {
+            name,
+            path,
+            part: Some(index),
+            spec,
+            start: None,
+        })
     }
 }

@@ -8,12 +8,13 @@
 //! `crate::mechanism` turns those errors back into a located message.
 
 use super::Validator;
+use crate::input::keys;
 use crate::input::schema::*;
 use crate::input::source::{suggestions, unknown_reference, KeyPath};
 use mbs::{Interpolation, JointKind, LoadAxes, LoadKind, RotationSupport, TimeFunction, TranslationSupport};
 use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
 use reduction::ReducedBody;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
 use superelement::{Damping, MassVariant};
 
@@ -435,6 +436,18 @@ fn unit(v: Vector3<f64>) -> Option<Unit<Vector3<f64>>> {
     (v.norm() > 0.0 && v.iter().all(|x| x.is_finite())).then(|| Unit::new_normalize(v))
 }
 
+/// Where a flexible body's reduced body comes from, and what it brings.
+struct BodyOrigin {
+    source: BodySource,
+    /// Its interfaces' names (`auxiliary` too, with an auxiliary node).
+    interfaces: Vec<String>,
+    /// Whether it has an auxiliary node.
+    auxiliary: bool,
+    load_points: Vec<String>,
+    /// The part's `planar` (a body's default).
+    planar_part: bool,
+}
+
 impl Validator<'_> {
     /// The whole mechanism; `parts` are the study's parts by name (None when invalid).
     pub(super) fn mechanism(
@@ -518,61 +531,14 @@ impl Validator<'_> {
                 });
             }
         }
-        for (i, d) in file.drivers.iter().enumerate() {
-            let path = KeyPath::root().key("drivers").index(i);
-            if self.lookup("driver", &d.name).is_some() {
-                self.err(
-                    &path.key("name"),
-                    format!("a driver named '{}' is already defined", d.name),
-                );
-                continue;
-            }
-            let Some(joint) = self.joint_ref(&path.key("joint"), &d.joint, &m) else {
-                continue;
-            };
-            let coordinate = d.coordinate.unwrap_or(0);
-            if !self.joint_coordinate(&path, &m, joint, coordinate) {
-                continue;
-            }
-            if let Some(motion) = self.time_function(&path.key("function"), &d.function, true) {
-                self.register("driver", &d.name, m.drivers.len());
-                m.drivers.push(DriverSpec {
-                    name: d.name.clone(),
-                    path,
-                    joint,
-                    coordinate,
-                    motion,
-                });
-            }
-        }
+        self.drivers(file, &mut m);
         for (i, l) in file.loads.iter().enumerate() {
             let path = KeyPath::root().key("loads").index(i);
             self.load(&path, l, &mut m);
         }
         // Before the sensors: an `actuator-effort` sensor names an actuator.
         self.joint_forces(file, &mut m);
-        for (i, s) in file.sensors.iter().enumerate() {
-            let path = KeyPath::root().key("sensors").index(i);
-            if self.lookup("sensor", &s.name).is_some() {
-                self.err(
-                    &path.key("name"),
-                    format!("a sensor named '{}' is already defined", s.name),
-                );
-                continue;
-            }
-            if let Err(e) = super::check_name(&s.name) {
-                self.err(&path.key("name"), e);
-                continue;
-            }
-            if let Some(target) = self.sensor(&path, s, &m) {
-                self.register("sensor", &s.name, m.sensors.len());
-                m.sensors.push(SensorSpec {
-                    name: s.name.clone(),
-                    path,
-                    target,
-                });
-            }
-        }
+        self.sensors(file, &mut m);
         for (i, c) in file.initial.iter().enumerate() {
             let path = KeyPath::root().key("initial").index(i);
             if let Some(spec) = self.initial(&path, c, &m) {
@@ -598,6 +564,63 @@ impl Validator<'_> {
             };
         }
         m
+    }
+
+    /// `[[drivers]]`: joint coordinates as functions of time.
+    fn drivers(&mut self, file: &StudyFile, m: &mut Mechanism) {
+        for (i, d) in file.drivers.iter().enumerate() {
+            let path = KeyPath::root().key("drivers").index(i);
+            if self.lookup("driver", &d.name).is_some() {
+                self.err(
+                    &path.key("name"),
+                    format!("a driver named '{}' is already defined", d.name),
+                );
+                continue;
+            }
+            let Some(joint) = self.joint_ref(&path.key("joint"), &d.joint, m) else {
+                continue;
+            };
+            let coordinate = d.coordinate.unwrap_or(0);
+            if !self.joint_coordinate(&path, m, joint, coordinate) {
+                continue;
+            }
+            if let Some(motion) = self.time_function(&path.key("function"), &d.function, true) {
+                self.register("driver", &d.name, m.drivers.len());
+                m.drivers.push(DriverSpec {
+                    name: d.name.clone(),
+                    path,
+                    joint,
+                    coordinate,
+                    motion,
+                });
+            }
+        }
+    }
+
+    /// `[[sensors]]`, after the actuators (an `actuator-effort` sensor names one).
+    fn sensors(&mut self, file: &StudyFile, m: &mut Mechanism) {
+        for (i, s) in file.sensors.iter().enumerate() {
+            let path = KeyPath::root().key("sensors").index(i);
+            if self.lookup("sensor", &s.name).is_some() {
+                self.err(
+                    &path.key("name"),
+                    format!("a sensor named '{}' is already defined", s.name),
+                );
+                continue;
+            }
+            if let Err(e) = super::check_name(&s.name) {
+                self.err(&path.key("name"), e);
+                continue;
+            }
+            if let Some(target) = self.sensor(&path, s, m) {
+                self.register("sensor", &s.name, m.sensors.len());
+                m.sensors.push(SensorSpec {
+                    name: s.name.clone(),
+                    path,
+                    target,
+                });
+            }
+        }
     }
 
     fn body_name(&mut self, path: &KeyPath, name: &str, names: &mut std::collections::HashSet<String>) -> bool {
@@ -658,6 +681,66 @@ impl Validator<'_> {
             );
             return None;
         }
+        let BodyOrigin {
+            source,
+            interfaces,
+            auxiliary,
+            load_points,
+            planar_part,
+        } = self.body_origin(path, b, parts, part_names)?;
+        let frame = self.body_frame(path, b, &interfaces, auxiliary)?;
+        if b.frame_interface.is_some() && !matches!(frame, FrameSpec::InterfaceNode(_)) {
+            self.err_key(
+                &path.key("frame_interface"),
+                "`frame_interface` applies to frame = \"interface-node\" only",
+            );
+        }
+        let inertia = match self.choice(
+            &path.key("inertia"),
+            &b.inertia,
+            "exact",
+            &["exact", "lumped"],
+            "inertia variant",
+        )? {
+            "lumped" => MassVariant::Lumped,
+            _ => MassVariant::Exact,
+        };
+        let position = match &b.position {
+            Some(p) => self.finite3(&path.key("position"), p, "the position [m]")?,
+            None => Vector3::zeros(),
+        };
+        let rotation = match &b.rotation {
+            Some(r) => self.rotation(&path.key("rotation"), r)?,
+            None => UnitQuaternion::identity(),
+        };
+        let (damping, modal_ratio) = match &b.damping {
+            Some(d) => self.body_damping(&path.key("damping"), d)?,
+            None => (Damping::none(), None),
+        };
+        Some(FlexibleSpec {
+            name: b.name.clone(),
+            path: path.clone(),
+            source,
+            interfaces,
+            load_points,
+            frame,
+            inertia,
+            placement: Isometry3::from_parts(Translation3::from(position), rotation),
+            damping,
+            modal_ratio,
+            planar: b.planar.unwrap_or(planar_part),
+        })
+    }
+
+    /// Where a flexible body's reduced body comes from (`part`, `file` or `matrices`), with its
+    /// interfaces and load points.
+    fn body_origin(
+        &mut self,
+        path: &KeyPath,
+        b: &BodyFile,
+        parts: &[(String, Option<crate::input::part::Part>)],
+        part_names: &[String],
+    ) -> Option<BodyOrigin> {
         let mut load_points: Vec<String> = Vec::new();
         let mut planar_part = false;
         let (source, interfaces, auxiliary) = match (&b.part, &b.file) {
@@ -740,6 +823,23 @@ impl Validator<'_> {
                 return None;
             }
         };
+        Some(BodyOrigin {
+            source,
+            interfaces,
+            auxiliary,
+            load_points,
+            planar_part,
+        })
+    }
+
+    /// A flexible body's `frame` (and `frame_interface`).
+    fn body_frame(
+        &mut self,
+        path: &KeyPath,
+        b: &BodyFile,
+        interfaces: &[String],
+        auxiliary: bool,
+    ) -> Option<FrameSpec> {
         let frame = match self.choice(
             &path.key("frame"),
             &b.frame,
@@ -755,7 +855,7 @@ impl Validator<'_> {
                 if !interfaces.contains(name) {
                     self.err(
                         &path.key("frame_interface"),
-                        unknown_reference("interface", name, &interfaces),
+                        unknown_reference("interface", name, interfaces),
                     );
                     return None;
                 }
@@ -773,74 +873,38 @@ impl Validator<'_> {
             }
             _ => FrameSpec::CenterOfMass,
         };
-        if b.frame_interface.is_some() && !matches!(frame, FrameSpec::InterfaceNode(_)) {
-            self.err_key(
-                &path.key("frame_interface"),
-                "`frame_interface` applies to frame = \"interface-node\" only",
-            );
-        }
-        let inertia = match self.choice(
-            &path.key("inertia"),
-            &b.inertia,
-            "exact",
-            &["exact", "lumped"],
-            "inertia variant",
-        )? {
-            "lumped" => MassVariant::Lumped,
-            _ => MassVariant::Exact,
-        };
-        let position = match &b.position {
-            Some(p) => self.finite3(&path.key("position"), p, "the position [m]")?,
-            None => Vector3::zeros(),
-        };
-        let rotation = match &b.rotation {
-            Some(r) => self.rotation(&path.key("rotation"), r)?,
-            None => UnitQuaternion::identity(),
-        };
-        let mut damping = Damping::none();
-        let mut modal_ratio = None;
-        if let Some(d) = &b.damping {
-            let dp = path.key("damping");
-            for (key, v) in [("alpha", d.alpha), ("beta", d.beta), ("modal_ratio", d.modal_ratio)] {
-                if let Some(x) = v {
-                    if !(x >= 0.0 && x.is_finite()) {
-                        self.err(&dp.key(key), format!("{key} must be non-negative and finite, got {x}"));
-                        return None;
-                    }
-                }
-            }
-            if let Some(zeta) = d.modal_ratio {
-                if zeta > 1.0 {
-                    self.err(
-                        &dp.key("modal_ratio"),
-                        format!("modal_ratio is the fraction of critical damping (0.02 for 2 %), got {zeta}: above 1 every mode is overdamped, which no structure is"),
-                    );
+        Some(frame)
+    }
+
+    /// A flexible body's `damping`: Rayleigh factors and a modal ratio.
+    fn body_damping(&mut self, dp: &KeyPath, d: &DampingFile) -> Option<(Damping, Option<f64>)> {
+        for (key, v) in [("alpha", d.alpha), ("beta", d.beta), ("modal_ratio", d.modal_ratio)] {
+            if let Some(x) = v {
+                if !(x >= 0.0 && x.is_finite()) {
+                    self.err(&dp.key(key), format!("{key} must be non-negative and finite, got {x}"));
                     return None;
                 }
-                if zeta >= MODAL_RATIO_WARNING {
-                    self.warn(
-                        &dp.key("modal_ratio"),
-                        format!("modal_ratio = {zeta} is {:.0} % of critical damping in every mode; structures have about 0.5 % to 5 % (the ratio is a fraction, not a percentage)", 100.0 * zeta),
-                    );
-                }
             }
-            damping.alpha = d.alpha.unwrap_or(0.0);
-            damping.beta = d.beta.unwrap_or(0.0);
-            modal_ratio = d.modal_ratio;
         }
-        Some(FlexibleSpec {
-            name: b.name.clone(),
-            path: path.clone(),
-            source,
-            interfaces,
-            load_points,
-            frame,
-            inertia,
-            placement: Isometry3::from_parts(Translation3::from(position), rotation),
-            damping,
-            modal_ratio,
-            planar: b.planar.unwrap_or(planar_part),
-        })
+        if let Some(zeta) = d.modal_ratio {
+            if zeta > 1.0 {
+                self.err(
+                    &dp.key("modal_ratio"),
+                    format!("modal_ratio is the fraction of critical damping (0.02 for 2 %), got {zeta}: above 1 every mode is overdamped, which no structure is"),
+                );
+                return None;
+            }
+            if zeta >= MODAL_RATIO_WARNING {
+                self.warn(
+                    &dp.key("modal_ratio"),
+                    format!("modal_ratio = {zeta} is {:.0} % of critical damping in every mode; structures have about 0.5 % to 5 % (the ratio is a fraction, not a percentage)", 100.0 * zeta),
+                );
+            }
+        }
+        let mut damping = Damping::none();
+        damping.alpha = d.alpha.unwrap_or(0.0);
+        damping.beta = d.beta.unwrap_or(0.0);
+        Some((damping, d.modal_ratio))
     }
 
     fn rotation(&mut self, path: &KeyPath, r: &RotationFile) -> Option<UnitQuaternion<f64>> {
@@ -1209,22 +1273,14 @@ impl Validator<'_> {
     }
 
     fn time_function(&mut self, path: &KeyPath, f: &TimeFunctionFile, driver: bool) -> Option<TimeFunction> {
-        let kinds = ["constant-speed", "ramp", "spin-up", "harmonic", "table"];
         let kind = self.choice(
             &path.key("type"),
             &Some(f.kind.clone()),
             "table",
-            &kinds,
+            keys::table("function").kinds,
             "function type",
         )?;
-        let allowed: &[&str] = match kind {
-            "constant-speed" => &["type", "speed", "initial"],
-            "ramp" => &["type", "t_start", "t_end", "from", "to", "smooth"],
-            "spin-up" => &["type", "speed", "ramp_time"],
-            "harmonic" => &["type", "amplitude", "frequency_hz", "phase_deg", "offset"],
-            _ => &["type", "t", "value", "file", "interpolation"],
-        };
-        self.only_keys(path, allowed, &format!("a '{kind}' function"));
+        self.only_keys(path, "function", kind, &format!("a '{kind}' function"));
         let num = |v: &mut Self, key: &str, x: Option<f64>, default: Option<f64>| -> Option<f64> {
             match x.or(default) {
                 Some(x) if x.is_finite() => Some(x),
@@ -1337,7 +1393,7 @@ impl Validator<'_> {
             return;
         };
         if kind == "gravity" {
-            self.only_keys(path, &["name", "type", "g"], "a gravity load");
+            self.only_keys(path, "loads", "gravity", "a gravity load");
             let Some(g) = self.require_ref(path, &l.g, "g", "the gravitational acceleration [m/s^2]") else {
                 return;
             };
@@ -1354,11 +1410,7 @@ impl Validator<'_> {
             m.gravity = Some((path.clone(), g));
             return;
         }
-        self.only_keys(
-            path,
-            &["name", "type", "at", "force", "moment", "axes", "function"],
-            "a point load",
-        );
+        self.only_keys(path, "loads", "point", "a point load");
         let Some(at_text) = self.require_ref(path, &l.at, "at", "the point loaded, \"body.point\"") else {
             return;
         };
@@ -1452,40 +1504,14 @@ impl Validator<'_> {
     }
 
     fn sensor(&mut self, path: &KeyPath, s: &SensorFile, m: &Mechanism) -> Option<SensorTarget> {
-        let kinds = [
-            "position",
-            "displacement",
-            "relative-position",
-            "rotation",
-            "velocity",
-            "angular-velocity",
-            "deflection",
-            "joint",
-            "joint-rate",
-            "modal",
-            "reaction",
-            "driver-effort",
-            "actuator-effort",
-            "energy",
-            "momentum",
-            "stress",
-        ];
         let kind = self.choice(
             &path.key("type"),
             &Some(s.kind.clone()),
             "position",
-            &kinds,
+            keys::table("sensors").kinds,
             "sensor type",
         )?;
-        let allowed: &[&str] = match kind {
-            "relative-position" => &["name", "type", "of", "reference"],
-            "deflection" => &["name", "type", "of", "chord", "normal"],
-            "joint" | "joint-rate" => &["name", "type", "of", "coordinate"],
-            "energy" | "momentum" => &["name", "type"],
-            "stress" => &["name", "type", "of", "node", "node_at", "set"],
-            _ => &["name", "type", "of"],
-        };
-        self.only_keys(path, allowed, &format!("a '{kind}' sensor"));
+        self.only_keys(path, "sensors", kind, &format!("a '{kind}' sensor"));
         if matches!(kind, "energy" | "momentum") {
             return Some(if kind == "energy" {
                 SensorTarget::Energy
@@ -1512,33 +1538,7 @@ impl Validator<'_> {
                 let r = self.point(&path.key("reference"), r, m, false)?;
                 SensorTarget::RelativePosition(p?, r)
             }
-            "deflection" => {
-                let p = self.point(&op, &of, m, false);
-                let chord = self.require_ref(
-                    path,
-                    &s.chord,
-                    "chord",
-                    "the two points of the chord, [\"body.A\", \"body.B\"]",
-                )?;
-                let a = self.point(&path.key("chord").index(0), &chord[0], m, false);
-                let b = self.point(&path.key("chord").index(1), &chord[1], m, false);
-                if a.is_some() && a == b {
-                    self.err(
-                        &path.key("chord").index(1),
-                        format!("the chord's two points are both '{}': a deflection is measured from the line through two distinct points", chord[1]),
-                    );
-                    return None;
-                }
-                let normal = match &s.normal {
-                    Some(n) => Some(self.axis(&path.key("normal"), path, &Some(*n), "the normal")?),
-                    None => None,
-                };
-                SensorTarget::Deflection {
-                    of: p?,
-                    chord: [a?, b?],
-                    normal,
-                }
-            }
+            "deflection" => self.deflection_sensor(path, s, m, &of)?,
             "joint" | "joint-rate" => {
                 let j = self.joint_ref(&op, &of, m)?;
                 let c = s.coordinate.unwrap_or(0);
@@ -1551,28 +1551,7 @@ impl Validator<'_> {
                     SensorTarget::JointRate(j, c)
                 }
             }
-            "stress" => {
-                let Some(body) = m.bodies.iter().position(|b| b.name == of) else {
-                    if !self.failed.contains(&format!("body:{of}")) {
-                        let names: Vec<String> = m.bodies.iter().map(|b| b.name.clone()).collect();
-                        self.err(&op, unknown_reference("flexible body", &of, &names));
-                    }
-                    return None;
-                };
-                let nodes = match (s.node, &s.node_at, &s.set) {
-                    (Some(k), None, None) => StressNodes::Index(k),
-                    (None, Some(x), None) => StressNodes::At(self.finite3(&path.key("node_at"), x, "node_at [m]")?),
-                    (None, None, Some(set)) => StressNodes::Set(set.clone()),
-                    _ => {
-                        self.err(
-                            path,
-                            "give the stress sensor's node by `node` (index in the part's mesh), `node_at` = [x, y, z] (part axes) or `set` (a node set: the largest von Mises stress over it), one of them",
-                        );
-                        return None;
-                    }
-                };
-                SensorTarget::Stress { body, nodes }
-            }
+            "stress" => self.stress_sensor(path, s, m, &of)?,
             "modal" => match self.lookup("flexible", &of) {
                 Some(b) => SensorTarget::Modal(b),
                 None => {
@@ -1583,22 +1562,7 @@ impl Validator<'_> {
                     return None;
                 }
             },
-            "reaction" => {
-                if let Some(j) = self.lookup("joint", &of) {
-                    if m.joints[j].parent != PointRef::Ground {
-                        self.err(&op, format!("joint '{of}' is not a joint to the ground; a reaction is measured at a support or at a joint to \"ground\""));
-                        return None;
-                    }
-                    SensorTarget::Reaction(ReactionAt::GroundJoint(j))
-                } else {
-                    let p = self.point(&op, &of, m, false)?;
-                    if !m.supports.iter().any(|s| s.at == p) {
-                        self.err(&op, format!("point '{of}' has no [[supports]]: a reaction is measured at a support or at a joint to \"ground\""));
-                        return None;
-                    }
-                    SensorTarget::Reaction(ReactionAt::Point(p))
-                }
-            }
+            "reaction" => self.reaction_sensor(path, m, &of)?,
             "actuator-effort" => match self.lookup("actuator", &of) {
                 Some(a) => SensorTarget::ActuatorEffort(a),
                 None => {
@@ -1616,6 +1580,79 @@ impl Validator<'_> {
                 }
             },
         })
+    }
+
+    /// A `deflection` sensor of the point `of`.
+    fn deflection_sensor(&mut self, path: &KeyPath, s: &SensorFile, m: &Mechanism, of: &str) -> Option<SensorTarget> {
+        let p = self.point(&path.key("of"), of, m, false);
+        let chord = self.require_ref(
+            path,
+            &s.chord,
+            "chord",
+            "the two points of the chord, [\"body.A\", \"body.B\"]",
+        )?;
+        let a = self.point(&path.key("chord").index(0), &chord[0], m, false);
+        let b = self.point(&path.key("chord").index(1), &chord[1], m, false);
+        if a.is_some() && a == b {
+            self.err(
+                &path.key("chord").index(1),
+                format!("the chord's two points are both '{}': a deflection is measured from the line through two distinct points", chord[1]),
+            );
+            return None;
+        }
+        let normal = match &s.normal {
+            Some(n) => Some(self.axis(&path.key("normal"), path, &Some(*n), "the normal")?),
+            None => None,
+        };
+        Some(SensorTarget::Deflection {
+            of: p?,
+            chord: [a?, b?],
+            normal,
+        })
+    }
+
+    /// A `stress` sensor of the flexible body `of`.
+    fn stress_sensor(&mut self, path: &KeyPath, s: &SensorFile, m: &Mechanism, of: &str) -> Option<SensorTarget> {
+        let op = path.key("of");
+        let Some(body) = m.bodies.iter().position(|b| b.name == *of) else {
+            if !self.failed.contains(&format!("body:{of}")) {
+                let names: Vec<String> = m.bodies.iter().map(|b| b.name.clone()).collect();
+                self.err(&op, unknown_reference("flexible body", of, &names));
+            }
+            return None;
+        };
+        let nodes = match (s.node, &s.node_at, &s.set) {
+            (Some(k), None, None) => StressNodes::Index(k),
+            (None, Some(x), None) => StressNodes::At(self.finite3(&path.key("node_at"), x, "node_at [m]")?),
+            (None, None, Some(set)) => StressNodes::Set(set.clone()),
+            _ => {
+                self.err(
+                    path,
+                    "give the stress sensor's node by `node` (index in the part's mesh), `node_at` = [x, y, z] (part axes) or `set` (a node set: the largest von Mises stress over it), one of them",
+                );
+                return None;
+            }
+        };
+        Some(SensorTarget::Stress { body, nodes })
+    }
+
+    /// A `reaction` sensor at the supported point or ground joint `of`.
+    fn reaction_sensor(&mut self, path: &KeyPath, m: &Mechanism, of: &str) -> Option<SensorTarget> {
+        let op = path.key("of");
+        if let Some(j) = self.lookup("joint", of) {
+            if m.joints[j].parent != PointRef::Ground {
+                self.err(&op, format!("joint '{of}' is not a joint to the ground; a reaction is measured at a support or at a joint to \"ground\""));
+                return None;
+            }
+            Some(SensorTarget::Reaction(ReactionAt::GroundJoint(j)))
+        } else {
+            let p = self.point(&op, of, m, false)?;
+            if !m.supports.iter().any(|s| s.at == p) {
+                self.err(&op, format!("point '{of}' has no [[supports]]: a reaction is measured at a support or at a joint to \"ground\""));
+                return None;
+            }
+            Some(SensorTarget::Reaction(ReactionAt::Point(p)))
+        }
     }
 
     /// The `velocity` and `angular_velocity` of an `[[initial]]` entry (zero when absent).
@@ -1637,11 +1674,7 @@ impl Validator<'_> {
     fn initial(&mut self, path: &KeyPath, c: &InitialFile, m: &Mechanism) -> Option<InitialSpec> {
         match (&c.joint, &c.at, &c.body) {
             (Some(joint), None, None) => {
-                self.only_keys(
-                    path,
-                    &["joint", "coordinate", "value", "value_deg", "rate"],
-                    "an initial joint value",
-                );
+                self.only_keys(path, "initial", "joint", "an initial joint value");
                 let j = self.joint_ref(&path.key("joint"), joint, m)?;
                 let coordinate = c.coordinate.unwrap_or(0);
                 if !self.joint_coordinate(path, m, j, coordinate) {
@@ -1689,11 +1722,7 @@ impl Validator<'_> {
                 })
             }
             (None, None, Some(body)) => {
-                self.only_keys(
-                    path,
-                    &["body", "velocity", "angular_velocity", "point"],
-                    "an initial body velocity",
-                );
+                self.only_keys(path, "initial", "body", "an initial body velocity");
                 let b = if let Some(k) = self.lookup("flexible", body) {
                     BodyRef::Flexible(k)
                 } else if let Some(k) = self.lookup("rigid", body) {
@@ -1722,11 +1751,7 @@ impl Validator<'_> {
                 })
             }
             (None, Some(at), None) => {
-                self.only_keys(
-                    path,
-                    &["at", "velocity", "angular_velocity"],
-                    "an initial point velocity",
-                );
+                self.only_keys(path, "initial", "point", "an initial point velocity");
                 let at = self.point(&path.key("at"), at, m, false)?;
                 let (velocity, angular_velocity) = self.initial_velocities(path, c)?;
                 Some(InitialSpec::Point {
@@ -1743,53 +1768,69 @@ impl Validator<'_> {
         }
     }
 
-    /// `[[joint_springs]]`, `[[joint_limits]]` and `[[actuators]]`.
+    /// A number that may be left out (then `default`): finite, and with `nonnegative` not
+    /// below zero.
+    fn finite_or(
+        &mut self,
+        path: &KeyPath,
+        x: Option<f64>,
+        default: f64,
+        nonnegative: bool,
+        what: &str,
+    ) -> Option<f64> {
+        let x = x.unwrap_or(default);
+        if !x.is_finite() || (nonnegative && x < 0.0) {
+            self.err(
+                path,
+                format!(
+                    "{what} must be finite{}, got {x}",
+                    if nonnegative { " and >= 0" } else { "" }
+                ),
+            );
+            return None;
+        }
+        Some(x)
+    }
+
+    /// The head every joint spring, limit and actuator shares: a name unique among them
+    /// (`names`), a joint reference and one of its coordinates (default 0). Its path, joint and
+    /// coordinate, or None after the error is reported.
+    #[allow(clippy::too_many_arguments)]
+    fn joint_force_head(
+        &mut self,
+        m: &Mechanism,
+        names: &mut HashSet<String>,
+        (table, i): (&str, usize),
+        name: &str,
+        joint: &str,
+        coordinate: Option<usize>,
+        what: &str,
+    ) -> Option<(KeyPath, usize, usize)> {
+        let path = KeyPath::root().key(table).index(i);
+        if !names.insert(name.to_string()) {
+            self.err(&path.key("name"), format!("a {what} named '{name}' is already defined"));
+            return None;
+        }
+        let joint = self.joint_ref(&path.key("joint"), joint, m)?;
+        let coordinate = coordinate.unwrap_or(0);
+        self.joint_coordinate(&path, m, joint, coordinate)
+            .then_some((path, joint, coordinate))
+    }
+
+    /// `[[joint_springs]]`, `[[joint_limits]]` and `[[actuators]]` (their names unique among
+    /// all three).
     fn joint_forces(&mut self, file: &StudyFile, m: &mut Mechanism) {
-        let finite = |v: &mut Self, path: &KeyPath, x: Option<f64>, default: f64, nonnegative: bool, what: &str| {
-            let x = x.unwrap_or(default);
-            if !x.is_finite() || (nonnegative && x < 0.0) {
-                v.err(
-                    path,
-                    format!(
-                        "{what} must be finite{}, got {x}",
-                        if nonnegative { " and >= 0" } else { "" }
-                    ),
-                );
-                return None;
-            }
-            Some(x)
-        };
-        let mut names = std::collections::HashSet::new();
-        let mut unique = |v: &mut Self, path: &KeyPath, name: &str, what: &str| {
-            if !names.insert(name.to_string()) {
-                v.err(&path.key("name"), format!("a {what} named '{name}' is already defined"));
-                return false;
-            }
-            true
-        };
-        // The head every joint spring, limit and actuator shares: a name unique among them, a
-        // joint reference and one of its coordinates (default 0). Its path, joint and
-        // coordinate, or None after the error is reported.
-        let mut entry = |v: &mut Self,
-                         m: &Mechanism,
-                         (table, i): (&str, usize),
-                         name: &str,
-                         joint: &str,
-                         coordinate: Option<usize>,
-                         what: &str| {
-            let path = KeyPath::root().key(table).index(i);
-            if !unique(v, &path, name, what) {
-                return None;
-            }
-            let joint = v.joint_ref(&path.key("joint"), joint, m)?;
-            let coordinate = coordinate.unwrap_or(0);
-            v.joint_coordinate(&path, m, joint, coordinate)
-                .then_some((path, joint, coordinate))
-        };
+        let mut names = HashSet::new();
+        self.joint_springs(file, m, &mut names);
+        self.joint_limits(file, m, &mut names);
+        self.actuators(file, m, &mut names);
+    }
+
+    fn joint_springs(&mut self, file: &StudyFile, m: &mut Mechanism, names: &mut HashSet<String>) {
         for (i, s) in file.joint_springs.iter().enumerate() {
-            let Some((path, joint, coordinate)) = entry(
-                self,
+            let Some((path, joint, coordinate)) = self.joint_force_head(
                 m,
+                names,
                 ("joint_springs", i),
                 &s.name,
                 &s.joint,
@@ -1798,10 +1839,10 @@ impl Validator<'_> {
             ) else {
                 continue;
             };
-            let k = finite(self, &path.key("stiffness"), s.stiffness, 0.0, true, "the stiffness");
-            let c = finite(self, &path.key("damping"), s.damping, 0.0, true, "the damping");
-            let rest = finite(self, &path.key("rest"), s.rest, 0.0, false, "the rest value");
-            let preload = finite(self, &path.key("preload"), s.preload, 0.0, false, "the preload");
+            let k = self.finite_or(&path.key("stiffness"), s.stiffness, 0.0, true, "the stiffness");
+            let c = self.finite_or(&path.key("damping"), s.damping, 0.0, true, "the damping");
+            let rest = self.finite_or(&path.key("rest"), s.rest, 0.0, false, "the rest value");
+            let preload = self.finite_or(&path.key("preload"), s.preload, 0.0, false, "the preload");
             let (Some(stiffness), Some(damping), Some(rest), Some(preload)) = (k, c, rest, preload) else {
                 continue;
             };
@@ -1820,10 +1861,13 @@ impl Validator<'_> {
                 preload,
             });
         }
+    }
+
+    fn joint_limits(&mut self, file: &StudyFile, m: &mut Mechanism, names: &mut HashSet<String>) {
         for (i, l) in file.joint_limits.iter().enumerate() {
-            let Some((path, joint, coordinate)) = entry(
-                self,
+            let Some((path, joint, coordinate)) = self.joint_force_head(
                 m,
+                names,
                 ("joint_limits", i),
                 &l.name,
                 &l.joint,
@@ -1853,7 +1897,7 @@ impl Validator<'_> {
             else {
                 continue;
             };
-            let Some(damping) = finite(self, &path.key("damping"), l.damping, 0.0, true, "the damping") else {
+            let Some(damping) = self.finite_or(&path.key("damping"), l.damping, 0.0, true, "the damping") else {
                 continue;
             };
             m.joint_limits.push(JointLimitSpec {
@@ -1867,6 +1911,9 @@ impl Validator<'_> {
                 damping,
             });
         }
+    }
+
+    fn actuators(&mut self, file: &StudyFile, m: &mut Mechanism, names: &mut HashSet<String>) {
         // The sensors a PID law may measure, by name (the first of a name; a duplicate is
         // reported with the sensors): found once, not searched per actuator.
         let mut sensor_named: HashMap<&str, &SensorFile> = HashMap::with_capacity(file.sensors.len());
@@ -1875,7 +1922,7 @@ impl Validator<'_> {
         }
         for (i, a) in file.actuators.iter().enumerate() {
             let Some((path, joint, coordinate)) =
-                entry(self, m, ("actuators", i), &a.name, &a.joint, a.coordinate, "actuator")
+                self.joint_force_head(m, names, ("actuators", i), &a.name, &a.joint, a.coordinate, "actuator")
             else {
                 continue;
             };
@@ -1894,70 +1941,10 @@ impl Validator<'_> {
                     Some(f) => EffortSpec::Time(f),
                     None => continue,
                 },
-                (None, Some(p)) => {
-                    let pp = path.key("pid");
-                    let (mj, mc) = match &p.sensor {
-                        None => (joint, coordinate),
-                        // The `[[sensors]]` are validated after the actuators (they may name
-                        // one): the joint sensor is read from the file here.
-                        Some(name) => match sensor_named.get(name.as_str()) {
-                            Some(sf) if sf.kind == "joint" => {
-                                let Some(of) = &sf.of else { continue };
-                                let Some(j) = self.lookup("joint", of) else {
-                                    continue;
-                                };
-                                let c = sf.coordinate.unwrap_or(0);
-                                if !self.joint_coordinate(&pp.key("sensor"), m, j, c) {
-                                    continue;
-                                }
-                                (j, c)
-                            }
-                            Some(_) => {
-                                self.err(&pp.key("sensor"), format!("sensor '{name}' is not a 'joint' sensor: the PID law measures a joint coordinate"));
-                                continue;
-                            }
-                            None => {
-                                let names: Vec<String> = file
-                                    .sensors
-                                    .iter()
-                                    .filter(|s| s.kind == "joint")
-                                    .map(|s| s.name.clone())
-                                    .collect();
-                                self.err(&pp.key("sensor"), unknown_reference("joint sensor", name, &names));
-                                continue;
-                            }
-                        },
-                    };
-                    let kp = finite(self, &pp.key("kp"), p.kp, 0.0, true, "kp");
-                    let ki = finite(self, &pp.key("ki"), p.ki, 0.0, true, "ki");
-                    let kd = finite(self, &pp.key("kd"), p.kd, 0.0, true, "kd");
-                    let (Some(kp), Some(ki), Some(kd)) = (kp, ki, kd) else {
-                        continue;
-                    };
-                    if kp == 0.0 && ki == 0.0 && kd == 0.0 {
-                        self.err(&pp, "give at least one of the gains `kp`, `ki`, `kd`");
-                        continue;
-                    }
-                    let max_effort = match p.max_effort {
-                        Some(x) => match self.positive(&pp.key("max_effort"), x, "max_effort") {
-                            Some(x) => Some(x),
-                            None => continue,
-                        },
-                        None => None,
-                    };
-                    let Some(setpoint) = self.time_function(&pp.key("setpoint"), &p.setpoint, true) else {
-                        continue;
-                    };
-                    EffortSpec::Pid {
-                        joint: mj,
-                        coordinate: mc,
-                        setpoint,
-                        kp,
-                        ki,
-                        kd,
-                        max_effort,
-                    }
-                }
+                (None, Some(p)) => match self.pid_effort(file, &sensor_named, m, &path, (joint, coordinate), p) {
+                    Some(effort) => effort,
+                    None => continue,
+                },
                 _ => {
                     self.err(
                         &path,
@@ -1977,268 +1964,310 @@ impl Validator<'_> {
         }
     }
 
-    /// A multibody analysis's settings.
-    pub(super) fn mbs_analysis(&mut self, path: &KeyPath, a: &AnalysisFile) -> Option<MbsAnalysis> {
-        let iterations = |v: &mut Self, default: usize| -> Option<usize> {
-            match a.max_iterations {
-                Some(0) => {
-                    v.err(&path.key("max_iterations"), "max_iterations must be at least 1");
-                    None
+    /// The PID law of the actuator at `path` on `joint`'s `coordinate` (measured there unless
+    /// it names a `joint` sensor).
+    fn pid_effort(
+        &mut self,
+        file: &StudyFile,
+        sensor_named: &HashMap<&str, &SensorFile>,
+        m: &Mechanism,
+        path: &KeyPath,
+        (joint, coordinate): (usize, usize),
+        p: &PidFile,
+    ) -> Option<EffortSpec> {
+        let pp = path.key("pid");
+        let (mj, mc) = match &p.sensor {
+            None => (joint, coordinate),
+            // The `[[sensors]]` are validated after the actuators (they may name
+            // one): the joint sensor is read from the file here.
+            Some(name) => match sensor_named.get(name.as_str()) {
+                Some(sf) if sf.kind == "joint" => {
+                    let j = self.lookup("joint", sf.of.as_ref()?)?;
+                    let c = sf.coordinate.unwrap_or(0);
+                    if !self.joint_coordinate(&pp.key("sensor"), m, j, c) {
+                        return None;
+                    }
+                    (j, c)
                 }
-                Some(n) => Some(n),
-                None => Some(default),
-            }
+                Some(_) => {
+                    self.err(
+                        &pp.key("sensor"),
+                        format!("sensor '{name}' is not a 'joint' sensor: the PID law measures a joint coordinate"),
+                    );
+                    return None;
+                }
+                None => {
+                    let names: Vec<String> = file
+                        .sensors
+                        .iter()
+                        .filter(|s| s.kind == "joint")
+                        .map(|s| s.name.clone())
+                        .collect();
+                    self.err(&pp.key("sensor"), unknown_reference("joint sensor", name, &names));
+                    return None;
+                }
+            },
         };
-        let tolerance = |v: &mut Self, default: f64| -> Option<f64> {
-            match a.tolerance {
-                Some(t) => {
-                    let t = v.positive(&path.key("tolerance"), t, "the tolerance on the relative residual")?;
-                    if !(MIN_TOLERANCE..1.0).contains(&t) {
-                        v.err(
-                            &path.key("tolerance"),
-                            format!("the tolerance on the relative residual must lie in [{MIN_TOLERANCE:e}, 1), got {t:e}: round-off in double precision leaves a relative residual of about 1e-15, so a smaller one is never reached, and 1 or more accepts any state"),
-                        );
-                        return None;
-                    }
-                    Some(t)
-                }
-                None => Some(default),
-            }
+        let kp = self.finite_or(&pp.key("kp"), p.kp, 0.0, true, "kp");
+        let ki = self.finite_or(&pp.key("ki"), p.ki, 0.0, true, "ki");
+        let kd = self.finite_or(&pp.key("kd"), p.kd, 0.0, true, "kd");
+        let (Some(kp), Some(ki), Some(kd)) = (kp, ki, kd) else {
+            return None;
         };
-        match a.kind {
-            AnalysisKind::Equilibrium => {
-                self.only_keys(
-                    path,
-                    &[
-                        "type",
-                        "name",
-                        "steps",
-                        "tolerance",
-                        "method",
-                        "max_iterations",
-                        "at_time",
-                        "start",
-                    ],
-                    "an 'equilibrium' analysis",
-                );
-                let arc_length = match a.method.as_deref() {
-                    None | Some("newton") => false,
-                    Some("arc-length") => true,
-                    Some(method) => {
-                        self.err(
-                            &path.key("method"),
-                            format!("unknown method '{method}': `newton` (load stepping) or `arc-length` (continuation through limit points)"),
-                        );
-                        return None;
-                    }
-                };
-                let steps = a.steps.unwrap_or(1);
-                if steps == 0 || steps > 100_000 {
-                    self.err(&path.key("steps"), format!("steps must lie in 1..=100000, got {steps}"));
-                    return None;
-                }
-                let time = match a.at_time {
-                    Some(t) if !(t.is_finite() && t >= 0.0) => {
-                        self.err(
-                            &path.key("at_time"),
-                            format!("at_time [s] must be finite and >= 0 (time starts at 0), got {t}"),
-                        );
-                        return None;
-                    }
-                    t => t.unwrap_or(0.0),
-                };
-                Some(MbsAnalysis::Equilibrium {
-                    steps,
-                    tolerance: tolerance(self, mbs::StaticSettings::DEFAULT_TOLERANCE)?,
-                    max_iterations: iterations(self, mbs::StaticSettings::DEFAULT_MAX_ITERATIONS)?,
-                    time,
-                    arc_length,
-                })
-            }
-            AnalysisKind::Dynamic => {
-                self.only_keys(
-                    path,
-                    &[
-                        "type",
-                        "name",
-                        "t_end",
-                        "dt",
-                        "rho_inf",
-                        "tolerance",
-                        "max_iterations",
-                        "newton",
-                        "translations",
-                        "start",
-                        "dt_min",
-                        "dt_max",
-                        "error_tolerance",
-                    ],
-                    "a 'dynamic' analysis",
-                );
-                let t_end = self.require(path, a.t_end, "t_end", "end time [s]");
-                let dt = self.require(path, a.dt, "dt", "time step [s]");
-                let t_end = self.positive(&path.key("t_end"), t_end?, "t_end [s]")?;
-                let dt = self.positive(&path.key("dt"), dt?, "dt [s]")?;
-                if t_end / dt > 1e7 {
-                    self.err(
-                        &path.key("dt"),
-                        format!("t_end / dt = {:.3e} steps: more than 10 million", t_end / dt),
-                    );
-                    return None;
-                }
-                if dt > t_end {
-                    self.err(
-                        &path.key("dt"),
-                        format!("the time step dt = {dt} s is longer than the run (t_end = {t_end} s)"),
-                    );
-                    return None;
-                }
-                let rho_inf = a.rho_inf.unwrap_or(mbs::DynamicSettings::DEFAULT_RHO_INF);
-                if !(0.0..=1.0).contains(&rho_inf) {
-                    self.err(
-                        &path.key("rho_inf"),
-                        format!("rho_inf (spectral radius at infinity) must lie in [0, 1], got {rho_inf}"),
-                    );
-                    return None;
-                }
-                let newton = match a.newton.as_deref() {
-                    None | Some("full") => mbs::NewtonStrategy::Full,
-                    Some("modified") => mbs::NewtonStrategy::Modified,
-                    Some(other) => {
-                        self.err(
-                            &path.key("newton"),
-                            format!("unknown Newton strategy '{other}': `full` (new tangents at every correction, the default) or `modified` (the factorised iteration matrix kept across corrections and steps)"),
-                        );
-                        return None;
-                    }
-                };
-                let body_axis_translations = match a.translations.as_deref() {
-                    None | Some("fixed") => false,
-                    Some("body") => true,
-                    Some(other) => {
-                        self.err(
-                            &path.key("translations"),
-                            format!("unknown translation axes '{other}': `fixed` (the default) or `body` (free nodes' translations in their body axes, for long runs of fast steady rotation)"),
-                        );
-                        return None;
-                    }
-                };
-                // Ten halvings of the step by default: a step that fails at dt/1024 is reported.
-                let dt_min = match a.dt_min {
-                    Some(x) => self.positive(&path.key("dt_min"), x, "dt_min [s]")?,
-                    None => dt / 1024.0,
-                };
-                if dt_min > dt {
-                    self.err(
-                        &path.key("dt_min"),
-                        format!("dt_min ({dt_min} s) must not exceed dt ({dt} s)"),
-                    );
-                    return None;
-                }
-                let adaptive = match (a.error_tolerance, a.dt_max) {
-                    (None, None) => None,
-                    (None, Some(_)) => {
-                        self.err_key(
-                            &path.key("dt_max"),
-                            "`dt_max` bounds the adaptive step: give `error_tolerance` too",
-                        );
-                        return None;
-                    }
-                    (Some(tol), dt_max) => {
-                        let tol = self.positive(&path.key("error_tolerance"), tol, "the local error tolerance")?;
-                        let dt_max = match dt_max {
-                            Some(x) => self.positive(&path.key("dt_max"), x, "dt_max [s]")?,
-                            None => t_end,
-                        };
-                        if dt_max < dt_min.max(dt) {
-                            self.err(
-                                &path.key("dt_max"),
-                                format!("dt_max ({dt_max} s) must be at least dt ({dt} s) and dt_min"),
-                            );
-                            return None;
-                        }
-                        Some(mbs::AdaptiveSettings::new(tol, dt_min, dt_max))
-                    }
-                };
-                Some(MbsAnalysis::Dynamic {
-                    t_end,
-                    dt,
-                    rho_inf,
-                    tolerance: tolerance(self, mbs::DynamicSettings::DEFAULT_TOLERANCE)?,
-                    max_iterations: iterations(self, mbs::DynamicSettings::DEFAULT_MAX_ITERATIONS)?,
-                    newton,
-                    body_axis_translations,
-                    dt_min,
-                    adaptive,
-                })
-            }
-            AnalysisKind::Buckling => {
-                self.only_keys(
-                    path,
-                    &["type", "name", "modes", "steps", "tolerance", "max_iterations", "start"],
-                    "a 'buckling' analysis",
-                );
-                let modes = a.modes.unwrap_or(4);
-                if modes == 0 || modes > super::MAX_MODES {
-                    self.err(
-                        &path.key("modes"),
-                        format!("the number of modes must lie in 1..={}, got {modes}", super::MAX_MODES),
-                    );
-                    return None;
-                }
-                let steps = a.steps.unwrap_or(1);
-                if steps == 0 || steps > 100_000 {
-                    self.err(&path.key("steps"), format!("steps must lie in 1..=100000, got {steps}"));
-                    return None;
-                }
-                Some(MbsAnalysis::Buckling {
-                    modes,
-                    steps,
-                    tolerance: tolerance(self, 1e-10)?,
-                    max_iterations: iterations(self, 25)?,
-                })
-            }
-            _ => {
-                self.only_keys(
-                    path,
-                    &["type", "name", "modes", "about", "at_time", "dt", "start"],
-                    "a 'linearized' analysis",
-                );
-                if a.start.is_some() && (a.about.is_some() || a.at_time.is_some()) {
-                    self.err_key(&path.key("start"), "give `start` or `about`/`at_time`, not both");
-                    return None;
-                }
-                let modes = a.modes.unwrap_or(10);
-                if modes == 0 || modes > super::MAX_MODES {
-                    self.err(
-                        &path.key("modes"),
-                        format!("the number of modes must lie in 1..={}, got {modes}", super::MAX_MODES),
-                    );
-                    return None;
-                }
-                let about = match (a.about.as_deref(), a.at_time) {
-                    (None | Some("initial"), None) => About::Initial,
-                    (Some("equilibrium"), None) => About::Equilibrium,
-                    (None, Some(t)) => {
-                        let t = self.positive(&path.key("at_time"), t, "at_time [s]")?;
-                        let dt =
-                            self.require(path, a.dt, "dt", "the time step [s] of the dynamic run up to at_time")?;
-                        let dt = self.positive(&path.key("dt"), dt, "dt [s]")?;
-                        About::Time { t, dt }
-                    }
-                    (Some(other), None) => {
-                        let names = ["initial".to_string(), "equilibrium".to_string()];
-                        self.err(&path.key("about"), unknown_reference("state", other, &names));
-                        return None;
-                    }
-                    (Some(_), Some(_)) => {
-                        self.err_key(&path.key("at_time"), "give `about` or `at_time`, not both");
-                        return None;
-                    }
-                };
-                Some(MbsAnalysis::Linearized { modes, about })
-            }
+        if kp == 0.0 && ki == 0.0 && kd == 0.0 {
+            self.err(&pp, "give at least one of the gains `kp`, `ki`, `kd`");
+            return None;
         }
+        let max_effort = match p.max_effort {
+            Some(x) => Some(self.positive(&pp.key("max_effort"), x, "max_effort")?),
+            None => None,
+        };
+        let setpoint = self.time_function(&pp.key("setpoint"), &p.setpoint, true)?;
+        Some(EffortSpec::Pid {
+            joint: mj,
+            coordinate: mc,
+            setpoint,
+            kp,
+            ki,
+            kd,
+            max_effort,
+        })
+    }
+
+    /// A multibody analysis's settings: an analysis of the mechanism (`equilibrium`, `dynamic`, `buckling`, `linearized`).
+    pub(super) fn mbs_analysis(&mut self, path: &KeyPath, a: &AnalysisFile) -> Option<MbsAnalysis> {
+        match a.kind {
+            AnalysisKind::Equilibrium => self.equilibrium_analysis(path, a),
+            AnalysisKind::Dynamic => self.dynamic_analysis(path, a),
+            AnalysisKind::Buckling => self.buckling_analysis(path, a),
+            _ => self.linearized_analysis(path, a),
+        }
+    }
+
+    /// `max_iterations` of a multibody analysis, or `default`.
+    fn mbs_iterations(&mut self, path: &KeyPath, a: &AnalysisFile, default: usize) -> Option<usize> {
+        match a.max_iterations {
+            Some(0) => {
+                self.err(&path.key("max_iterations"), "max_iterations must be at least 1");
+                None
+            }
+            Some(n) => Some(n),
+            None => Some(default),
+        }
+    }
+
+    /// `tolerance` of a multibody analysis (on the relative residual), or `default`.
+    fn mbs_tolerance(&mut self, path: &KeyPath, a: &AnalysisFile, default: f64) -> Option<f64> {
+        match a.tolerance {
+            Some(t) => {
+                let t = self.positive(&path.key("tolerance"), t, "the tolerance on the relative residual")?;
+                if !(MIN_TOLERANCE..1.0).contains(&t) {
+                    self.err(
+                        &path.key("tolerance"),
+                        format!("the tolerance on the relative residual must lie in [{MIN_TOLERANCE:e}, 1), got {t:e}: round-off in double precision leaves a relative residual of about 1e-15, so a smaller one is never reached, and 1 or more accepts any state"),
+                    );
+                    return None;
+                }
+                Some(t)
+            }
+            None => Some(default),
+        }
+    }
+
+    fn equilibrium_analysis(&mut self, path: &KeyPath, a: &AnalysisFile) -> Option<MbsAnalysis> {
+        self.only_keys(path, "analyses", "equilibrium", "an 'equilibrium' analysis");
+        let arc_length = match a.method.as_deref() {
+            None | Some("newton") => false,
+            Some("arc-length") => true,
+            Some(method) => {
+                self.err(
+                    &path.key("method"),
+                    format!("unknown method '{method}': `newton` (load stepping) or `arc-length` (continuation through limit points)"),
+                );
+                return None;
+            }
+        };
+        let steps = a.steps.unwrap_or(1);
+        if steps == 0 || steps > 100_000 {
+            self.err(&path.key("steps"), format!("steps must lie in 1..=100000, got {steps}"));
+            return None;
+        }
+        let time = match a.at_time {
+            Some(t) if !(t.is_finite() && t >= 0.0) => {
+                self.err(
+                    &path.key("at_time"),
+                    format!("at_time [s] must be finite and >= 0 (time starts at 0), got {t}"),
+                );
+                return None;
+            }
+            t => t.unwrap_or(0.0),
+        };
+        Some(MbsAnalysis::Equilibrium {
+            steps,
+            tolerance: self.mbs_tolerance(path, a, mbs::StaticSettings::DEFAULT_TOLERANCE)?,
+            max_iterations: self.mbs_iterations(path, a, mbs::StaticSettings::DEFAULT_MAX_ITERATIONS)?,
+            time,
+            arc_length,
+        })
+    }
+
+    fn dynamic_analysis(&mut self, path: &KeyPath, a: &AnalysisFile) -> Option<MbsAnalysis> {
+        self.only_keys(path, "analyses", "dynamic", "a 'dynamic' analysis");
+        let t_end = self.require(path, a.t_end, "t_end", "end time [s]");
+        let dt = self.require(path, a.dt, "dt", "time step [s]");
+        let t_end = self.positive(&path.key("t_end"), t_end?, "t_end [s]")?;
+        let dt = self.positive(&path.key("dt"), dt?, "dt [s]")?;
+        if t_end / dt > 1e7 {
+            self.err(
+                &path.key("dt"),
+                format!("t_end / dt = {:.3e} steps: more than 10 million", t_end / dt),
+            );
+            return None;
+        }
+        if dt > t_end {
+            self.err(
+                &path.key("dt"),
+                format!("the time step dt = {dt} s is longer than the run (t_end = {t_end} s)"),
+            );
+            return None;
+        }
+        let rho_inf = a.rho_inf.unwrap_or(mbs::DynamicSettings::DEFAULT_RHO_INF);
+        if !(0.0..=1.0).contains(&rho_inf) {
+            self.err(
+                &path.key("rho_inf"),
+                format!("rho_inf (spectral radius at infinity) must lie in [0, 1], got {rho_inf}"),
+            );
+            return None;
+        }
+        let newton = match a.newton.as_deref() {
+            None | Some("full") => mbs::NewtonStrategy::Full,
+            Some("modified") => mbs::NewtonStrategy::Modified,
+            Some(other) => {
+                self.err(
+                    &path.key("newton"),
+                    format!("unknown Newton strategy '{other}': `full` (new tangents at every correction, the default) or `modified` (the factorised iteration matrix kept across corrections and steps)"),
+                );
+                return None;
+            }
+        };
+        let body_axis_translations = match a.translations.as_deref() {
+            None | Some("fixed") => false,
+            Some("body") => true,
+            Some(other) => {
+                self.err(
+                    &path.key("translations"),
+                    format!("unknown translation axes '{other}': `fixed` (the default) or `body` (free nodes' translations in their body axes, for long runs of fast steady rotation)"),
+                );
+                return None;
+            }
+        };
+        // Ten halvings of the step by default: a step that fails at dt/1024 is reported.
+        let dt_min = match a.dt_min {
+            Some(x) => self.positive(&path.key("dt_min"), x, "dt_min [s]")?,
+            None => dt / 1024.0,
+        };
+        if dt_min > dt {
+            self.err(
+                &path.key("dt_min"),
+                format!("dt_min ({dt_min} s) must not exceed dt ({dt} s)"),
+            );
+            return None;
+        }
+        let adaptive = match (a.error_tolerance, a.dt_max) {
+            (None, None) => None,
+            (None, Some(_)) => {
+                self.err_key(
+                    &path.key("dt_max"),
+                    "`dt_max` bounds the adaptive step: give `error_tolerance` too",
+                );
+                return None;
+            }
+            (Some(tol), dt_max) => {
+                let tol = self.positive(&path.key("error_tolerance"), tol, "the local error tolerance")?;
+                let dt_max = match dt_max {
+                    Some(x) => self.positive(&path.key("dt_max"), x, "dt_max [s]")?,
+                    None => t_end,
+                };
+                if dt_max < dt_min.max(dt) {
+                    self.err(
+                        &path.key("dt_max"),
+                        format!("dt_max ({dt_max} s) must be at least dt ({dt} s) and dt_min"),
+                    );
+                    return None;
+                }
+                Some(mbs::AdaptiveSettings::new(tol, dt_min, dt_max))
+            }
+        };
+        Some(MbsAnalysis::Dynamic {
+            t_end,
+            dt,
+            rho_inf,
+            tolerance: self.mbs_tolerance(path, a, mbs::DynamicSettings::DEFAULT_TOLERANCE)?,
+            max_iterations: self.mbs_iterations(path, a, mbs::DynamicSettings::DEFAULT_MAX_ITERATIONS)?,
+            newton,
+            body_axis_translations,
+            dt_min,
+            adaptive,
+        })
+    }
+
+    fn buckling_analysis(&mut self, path: &KeyPath, a: &AnalysisFile) -> Option<MbsAnalysis> {
+        self.only_keys(path, "analyses", "buckling", "a 'buckling' analysis");
+        let modes = a.modes.unwrap_or(4);
+        if modes == 0 || modes > super::MAX_MODES {
+            self.err(
+                &path.key("modes"),
+                format!("the number of modes must lie in 1..={}, got {modes}", super::MAX_MODES),
+            );
+            return None;
+        }
+        let steps = a.steps.unwrap_or(1);
+        if steps == 0 || steps > 100_000 {
+            self.err(&path.key("steps"), format!("steps must lie in 1..=100000, got {steps}"));
+            return None;
+        }
+        Some(MbsAnalysis::Buckling {
+            modes,
+            steps,
+            tolerance: self.mbs_tolerance(path, a, 1e-10)?,
+            max_iterations: self.mbs_iterations(path, a, 25)?,
+        })
+    }
+
+    fn linearized_analysis(&mut self, path: &KeyPath, a: &AnalysisFile) -> Option<MbsAnalysis> {
+        self.only_keys(path, "analyses", "linearized", "a 'linearized' analysis");
+        if a.start.is_some() && (a.about.is_some() || a.at_time.is_some()) {
+            self.err_key(&path.key("start"), "give `start` or `about`/`at_time`, not both");
+            return None;
+        }
+        let modes = a.modes.unwrap_or(10);
+        if modes == 0 || modes > super::MAX_MODES {
+            self.err(
+                &path.key("modes"),
+                format!("the number of modes must lie in 1..={}, got {modes}", super::MAX_MODES),
+            );
+            return None;
+        }
+        let about = match (a.about.as_deref(), a.at_time) {
+            (None | Some("initial"), None) => About::Initial,
+            (Some("equilibrium"), None) => About::Equilibrium,
+            (None, Some(t)) => {
+                let t = self.positive(&path.key("at_time"), t, "at_time [s]")?;
+                let dt = self.require(path, a.dt, "dt", "the time step [s] of the dynamic run up to at_time")?;
+                let dt = self.positive(&path.key("dt"), dt, "dt [s]")?;
+                About::Time { t, dt }
+            }
+            (Some(other), None) => {
+                let names = ["initial".to_string(), "equilibrium".to_string()];
+                self.err(&path.key("about"), unknown_reference("state", other, &names));
+                return None;
+            }
+            (Some(_), Some(_)) => {
+                self.err_key(&path.key("at_time"), "give `about` or `at_time`, not both");
+                return None;
+            }
+        };
+        Some(MbsAnalysis::Linearized { modes, about })
     }
 }
 
