@@ -32,7 +32,8 @@ mod property;
 #[path = "cli/mechanism.rs"]
 mod mechanism;
 
-/// `--help` of every command, `validate`'s ids, an empty study, a closed pipe, progress.
+/// `--help` of every command, `validate`'s ids (or, without the `validate` feature, how to
+/// get the suite), an empty study, a closed pipe, progress.
 #[path = "cli/command_line.rs"]
 mod command_line;
 
