@@ -28,7 +28,8 @@ usage:
   flexmbs example [NAME [DIR]]       list the built-in example studies, or write one into DIR
                                      (default: the current folder)
   flexmbs validate [ARGS]            the validation suite (docs/validation.md): --quick, --no-report,
-                                     --report-dir DIR, --only ID ...
+                                     --report-dir DIR, --only ID ... (in a flexmbs built with
+                                     `--features validate`)
   flexmbs --help | --version
 
 options of run and reduce:
@@ -211,6 +212,15 @@ fn load(path: &std::path::Path) -> Result<study::Study, BoxError> {
     }
     Ok(study)
 }
+
+/// What `flexmbs validate` says when the program was built without the validation suite
+/// (the cargo feature `validate`, off by default).
+pub const VALIDATE_NOT_BUILT: &str = "\
+flexmbs: error: this flexmbs was built without the validation suite (docs/validation.md).
+Run the suite's own program, with the same arguments:
+  cargo run --release -p validation -- [--quick] [--no-report] [--report-dir DIR] [--only ID ...]
+or build flexmbs with it:
+  cargo run --release -p flexmbs --features validate -- validate [ARGS]";
 
 /// Runs the command line `args` (without the program name).
 pub fn main_with(args: &[String]) -> Result<(), BoxError> {

@@ -44,5 +44,3 @@ pub mod builtin;
 pub mod cli;
 pub mod console;
 pub mod inspect;
-
-pub use study::{error, input::examples, input::source, output::vtu};

@@ -5,9 +5,8 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    // The validation suite has its own command line and exit codes (1: out of tolerance).
     if args.first().map(String::as_str) == Some("validate") {
-        return validation::run_from_args(args[1..].to_vec());
+        return validate(args[1..].to_vec());
     }
     // Ctrl-C: a second one ends the program at once (exit 130), the first asks the run to
     // stop at its next output step (`study::interrupt`).
@@ -25,4 +24,18 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// `flexmbs validate`: the validation suite, which has its own command line and exit codes
+/// (1: out of tolerance).
+#[cfg(feature = "validate")]
+fn validate(args: Vec<String>) -> ExitCode {
+    validation::run_from_args(args)
+}
+
+/// `flexmbs validate` in a program built without the suite: how to get it.
+#[cfg(not(feature = "validate"))]
+fn validate(_args: Vec<String>) -> ExitCode {
+    flexmbs::tell!("{}", flexmbs::cli::VALIDATE_NOT_BUILT);
+    ExitCode::from(2)
 }

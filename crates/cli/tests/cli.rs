@@ -1,6 +1,7 @@
 //! Tests of the `flexmbs` program. Most run the binary itself (`CARGO_BIN_EXE_flexmbs`) the
 //! way a user does and check its output files, messages and exit codes; the VTU node-order
-//! tests and the bulk of the property test call the library.
+//! tests call the library. What the validation says about a study file is tested in
+//! crates/study.
 //!
 //! Index:
 
@@ -13,18 +14,14 @@ mod support;
 #[path = "cli/examples.rs"]
 mod examples;
 
-/// The corpus `tests/broken/*.toml`: each file lists the messages `flexmbs check` must print
-/// (`# expect:` lines: file:line:col, key, close matches); exit code 2.
-#[path = "cli/broken.rs"]
-mod broken;
-
 /// Reduced bodies are cached: a second run does not reduce again; a change that matters does.
 #[path = "cli/cache.rs"]
 mod cache;
 
-/// Random and mutated study files (fixed seeds): no panic, exit code 2 with a message.
-#[path = "cli/property.rs"]
-mod property;
+/// Invalid study files (the study crate's corpus and generator): exit code 2 and the study
+/// crate's report on stderr, never a panic; binary and deeply nested files.
+#[path = "cli/invalid.rs"]
+mod invalid;
 
 /// The mechanism: B1 and B3 against their references, streamed results of a dynamic run, a
 /// solver failure with partial results, errors of the assembled mechanism, `validate`, the
@@ -32,7 +29,8 @@ mod property;
 #[path = "cli/mechanism.rs"]
 mod mechanism;
 
-/// `--help` of every command, `validate`'s ids, an empty study, a closed pipe, progress.
+/// `--help` of every command, `validate`'s ids (or, without the `validate` feature, how to
+/// get the suite), an empty study, a closed pipe, progress.
 #[path = "cli/command_line.rs"]
 mod command_line;
 

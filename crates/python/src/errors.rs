@@ -8,11 +8,13 @@
 //! | `ReducedBodyFileError` | a `.rbody` file cannot be read or written | `path` |
 //! | `StudyError` | a study is not valid (as `flexmbs check` reports it) | `file`, `line`, `column`, `key` of the first error; `errors`: every error as a dict of these and `message` |
 //! | `KeyPathError` | a key path leads to no value of the study | `path` (the path asked for), `at` (its part that leads nowhere) |
+//! | `UnknownNameError` (also a `KeyError`) | a name the study or the results do not have: an analysis (`Study.run`, `Study.simulation`), a sensor (`Simulation.sensor`, `Results.sensor`) | `name`, `what` (`"analysis"`, `"sensor"`), `matches` (the close names: the message's "did you mean"), `defined` (every name there is) |
 //! | `SolveError` | a solver stopped (Newton did not converge, a singular matrix, ...) | `time` (of the step that failed in a dynamic analysis), `load_factor` (of the load step that failed in an equilibrium), `step` (its number), `residual` (the last relative residual when Newton failed), `analysis` (its name), `file`, `line`, `column`, `key` (where the study describes the entity the solver failed at: the body whose floating frame failed); `None` when not known; `partial` (from `Study.run`: the results computed before, also in the results folder) |
 
 use pyo3::create_exception;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyString};
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyDict, PyList, PyString, PyType};
 pub(crate) use study::error::chain;
 
 create_exception!(
@@ -47,9 +49,93 @@ create_exception!(
     "A solver stopped: `time` (dynamic) or `load_factor` (equilibrium), `step`, `residual` and `analysis` say where, `file`, `line`, `column` and `key` the study's entity it failed at (None when not known); `partial` holds what `Study.run` computed before."
 );
 
+/// `UnknownNameError`, made once: an exception class of PyO3 has one base, and this one has
+/// two, so it is made as Python makes it, by `type(name, bases, namespace)`.
+static UNKNOWN_NAME_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+
+/// The class `UnknownNameError(FlexmbsError, KeyError)`: a `KeyError` to code that looks names
+/// up, the package's error to code that catches those. Its message reads as written (a
+/// `KeyError` would show it quoted, as a key).
+pub(crate) fn unknown_name_error(py: Python<'_>) -> PyResult<&Bound<'_, PyType>> {
+    let ty = UNKNOWN_NAME_ERROR.get_or_try_init(py, || -> PyResult<Py<PyType>> {
+        let namespace = PyDict::new(py);
+        namespace.set_item("__module__", "flexmbs")?;
+        namespace.set_item(
+            "__doc__",
+            "A name the study or the results do not have (an analysis, a sensor); the message says \
+             which names are close. `name`, `what`, `matches` (the close names) and `defined` (every \
+             name there is).",
+        )?;
+        let exception = py.get_type::<pyo3::exceptions::PyException>();
+        namespace.set_item("__str__", exception.getattr("__str__")?)?;
+        let bases = (
+            py.get_type::<FlexmbsError>(),
+            py.get_type::<pyo3::exceptions::PyKeyError>(),
+        );
+        let ty = py.get_type::<PyType>().call1(("UnknownNameError", bases, namespace))?;
+        Ok(ty.cast_into::<PyType>()?.unbind())
+    })?;
+    Ok(ty.bind(py))
+}
+
+/// An `UnknownNameError` for `name`, which is not among the `defined` names of a `what`
+/// (`"analysis"`, `"sensor"`): the library's message for an unknown name, with its "did you
+/// mean", and the names as attributes.
+pub(crate) fn unknown_name(py: Python<'_>, what: &str, name: &str, defined: &[String]) -> PyErr {
+    let message = study::input::source::unknown_reference(what, name, defined);
+    let matches = study::input::source::close_matches(name, defined.iter().map(String::as_str));
+    let ty = match unknown_name_error(py) {
+        Ok(ty) => ty.clone(),
+        Err(e) => return e,
+    };
+    let err = PyErr::from_type(ty, message);
+    let value = err.value(py);
+    let set = value
+        .setattr("name", name)
+        .and_then(|()| value.setattr("what", what))
+        .and_then(|()| value.setattr("matches", matches))
+        .and_then(|()| value.setattr("defined", defined.to_vec()));
+    match set {
+        Ok(()) => err,
+        Err(e) => e,
+    }
+}
+
+/// `unknown_name` for the pure-Python part of the package (`Results.sensor`): the exception
+/// object, for Python to raise.
+#[pyfunction]
+pub(crate) fn _unknown_name_error(py: Python<'_>, what: &str, name: &str, defined: Vec<String>) -> Py<PyAny> {
+    unknown_name(py, what, name, &defined).into_value(py).into_any()
+}
+
+/// `error` from a library call that looked `name` up among the `defined` names of a `what`:
+/// the library reports a name it does not have as a [`study::UnknownName`] (an analysis) or as
+/// its message for an unknown name ([`study::input::source::unknown_reference`], an error
+/// without a cause: a sensor), which becomes an `UnknownNameError`; any other error is
+/// [`to_py_err`]'s.
+pub(crate) fn lookup_err(
+    py: Python<'_>,
+    error: &(dyn std::error::Error + 'static),
+    what: &str,
+    name: &str,
+    defined: &[String],
+) -> PyErr {
+    if let Some(u) = error.downcast_ref::<study::UnknownName>() {
+        return unknown_name(py, u.what, &u.name, &u.defined);
+    }
+    let unknown = study::input::source::unknown_reference(what, name, defined);
+    if error.source().is_none() && error.to_string() == unknown {
+        unknown_name(py, what, name, defined)
+    } else {
+        to_py_err(py, error)
+    }
+}
+
 /// Adds the exception classes to the module.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
+    m.add("UnknownNameError", unknown_name_error(py)?)?;
+    m.add_function(wrap_pyfunction!(_unknown_name_error, m)?)?;
     m.add("FlexmbsError", py.get_type::<FlexmbsError>())?;
     m.add("ReducedBodyFileError", py.get_type::<ReducedBodyFileError>())?;
     m.add("StudyError", py.get_type::<StudyError>())?;

@@ -6,7 +6,7 @@
 //! results come back as plain Python data (dicts, lists, numpy arrays) that the pure-Python
 //! `flexmbs.results` module wraps.
 
-use crate::errors::{key_err, simulation_err, to_py_err, StudyError};
+use crate::errors::{key_err, lookup_err, simulation_err, to_py_err, unknown_name, StudyError};
 use crate::rbody::ReducedBody;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1};
@@ -258,7 +258,9 @@ impl Study {
     }
 
     /// Sets the value at `key` and validates the study. A value the study refuses raises
-    /// `StudyError` located at the value (file, line, column, key) and is not kept.
+    /// `StudyError` located at the value (file, line, column, key) and is not kept. A dict
+    /// given to a table (`study["sections.rod"] = {"name": "rod", "shape": "values", ...}`)
+    /// replaces the whole table, so keys that exclude each other can be switched.
     fn set(&mut self, py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
         let text = toml_text(value)?;
         self.doc.set(key, &text).map_err(|e| key_err(py, &*e, key))
@@ -276,6 +278,17 @@ impl Study {
         doc.study().map_err(|e| to_py_err(py, &e))?;
         self.doc = doc;
         Ok(())
+    }
+
+    /// Removes the value or table at `key` (`del study[key]`) and validates the study. A removal
+    /// the study refuses (a required key, a name still referred to) raises `StudyError` located
+    /// as for `set`, and is not kept; a path that leads nowhere raises `KeyPathError`.
+    fn remove(&mut self, py: Python<'_>, key: &str) -> PyResult<()> {
+        self.doc.remove(key).map_err(|e| key_err(py, &*e, key))
+    }
+
+    fn __delitem__(&mut self, py: Python<'_>, key: &str) -> PyResult<()> {
+        self.remove(py, key)
     }
 
     fn __getitem__<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Bound<'py, PyAny>> {
@@ -312,7 +325,8 @@ impl Study {
         t_end: Option<f64>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
-        let selection = study::Selection::of(&st, analysis.as_deref()).map_err(StudyError::new_err)?;
+        let selection = study::Selection::of(&st, analysis.as_deref())
+            .map_err(|e| unknown_name(py, e.what, &e.name, &e.defined))?;
         let opts = options(results_dir, cache, t_end);
         let dir = opts.results_dir(&st);
         let mut recorder = Recorder::default();
@@ -437,9 +451,10 @@ impl Study {
             }
         };
         let opts = options(None, cache, None);
-        let sim = py
-            .detach(|| study::Simulation::new(&st, &name, &opts))
-            .map_err(|e| to_py_err(py, &*e))?;
+        let sim = py.detach(|| study::Simulation::new(&st, &name, &opts)).map_err(|e| {
+            let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
+            lookup_err(py, &*e, "analysis", &name, &names)
+        })?;
         Ok(Simulation { sim, analysis: name })
     }
 
@@ -542,7 +557,13 @@ impl Simulation {
     /// The values of sensor `name` now (numpy array of its columns); only this sensor is
     /// evaluated.
     fn sensor<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let v = self.sim.sensor(name).map_err(|e| self.sensor_err(py, &*e))?;
+        let v = self
+            .sim
+            .sensor(name)
+            .map_err(|e| match e.downcast_ref::<mbs::SolveError>() {
+                Some(_) => self.sensor_err(py, &*e),
+                None => lookup_err(py, &*e, "sensor", name, &self.sensor_names()),
+            })?;
         Ok(PyArray1::from_vec(py, v))
     }
 

@@ -11,6 +11,8 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[3]
 EXAMPLES = REPO / "examples"
+# Test studies read by both the Rust tests of the study crate and these.
+STUDIES = REPO / "crates" / "study" / "tests" / "studies"
 
 
 @pytest.fixture

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import flexmbs
+from conftest import STUDIES
 
 
 def test_stepping_gives_the_run(examples, tmp_path):
@@ -360,63 +361,10 @@ def test_set_load_changes_a_load_at_a_load_point_between_steps(tmp_path):
     assert "non-finite" in str(e.value)
 
 
-# A rigid pendulum (keeps an unknown), and a cart driven along a rail at 10 m/s from 1 m
-# before a clamped post: at t = 0.1 s the cart's point P reaches the post's Q, where the
-# deflection of post.R from the line through them ("gap") is 0/0.
-CART = """
-[[rigid_bodies]]
-name = "bob"
-mass = 1.0
-center_of_mass = [0.0, -1.0, 0.0]
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
-points = { O = [0.0, 0.0, 0.0] }
-[[joints]]
-name = "pivot"
-type = "revolute"
-between = ["ground", "bob.O"]
-axis = [0.0, 0.0, 1.0]
-[[rigid_bodies]]
-name = "cart"
-mass = 1.0
-center_of_mass = [-1.0, 0.0, 0.0]
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
-points = { P = [-1.0, 0.0, 0.0] }
-[[rigid_bodies]]
-name = "post"
-mass = 1.0
-center_of_mass = [0.0, 0.0, 0.0]
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
-points = { Q = [0.0, 0.0, 0.0], R = [0.0, 1.0, 0.0] }
-[[supports]]
-at = "post.Q"
-type = "clamp"
-[[joints]]
-name = "rail"
-type = "prismatic"
-between = ["ground", "cart.P"]
-axis = [1.0, 0.0, 0.0]
-[[drivers]]
-name = "push"
-joint = "rail"
-function = { type = "constant-speed", speed = 10.0 }
-[[sensors]]
-name = "travel"
-type = "joint"
-of = "rail"
-[[sensors]]
-name = "gap"
-type = "deflection"
-of = "post.R"
-chord = ["cart.P", "post.Q"]
-[[analyses]]
-type = "dynamic"
-t_end = 0.2
-dt = 0.01
-"""
-
-
 def test_a_sensor_is_read_alone_and_one_that_is_not_finite_is_located(tmp_path):
-    sim = flexmbs.Study.from_toml(CART, base_dir=tmp_path, name="cart.toml").simulation(cache=tmp_path / "cache")
+    # The study the study crate's tests read too.
+    cart = (STUDIES / "pendulum_cart.toml").read_text()
+    sim = flexmbs.Study.from_toml(cart, base_dir=tmp_path, name="cart.toml").simulation(cache=tmp_path / "cache")
     sim.advance_to(0.1)
     # "travel" is read without evaluating "gap", which is no longer finite: 10 m/s x 0.1 s.
     assert sim.sensor("travel")[0] == pytest.approx(1.0, abs=1e-12)

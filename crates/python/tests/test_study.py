@@ -164,6 +164,61 @@ def test_study_from_text_takes_relative_paths_from_base_dir(examples, tmp_path):
     res = study.run(t_end=0.001)
     assert res.results_dir.startswith(str(examples))
     assert math.isfinite(res.sensor("rod-mid").values[-1, 0])
+    # A sensor or an analysis the results do not hold: one exception class, a KeyError too,
+    # with the close names.
+    for lookup in (lambda: res.sensor("rod-mdi"), lambda: res.sensor("rod-mdi", analysis="run-up")):
+        with pytest.raises(flexmbs.UnknownNameError) as e:
+            lookup()
+        assert isinstance(e.value, KeyError) and isinstance(e.value, flexmbs.FlexmbsError)
+        assert "did you mean 'rod-mid'?" in str(e.value), str(e.value)
+        assert e.value.name == "rod-mdi" and e.value.what == "sensor" and e.value.matches == ["rod-mid"]
+    with pytest.raises(flexmbs.UnknownNameError) as e:
+        res.sensor("rod-mid", analysis="run-pu")
+    assert e.value.what == "analysis" and "did you mean 'run-up'?" in str(e.value)
+
+
+def test_an_unknown_analysis_is_one_exception_with_the_close_names(examples):
+    study = flexmbs.Study.load(examples / "slider_crank.toml")
+    for call in (lambda: study.run(analysis="run-pu"), lambda: study.simulation(analysis="run-pu")):
+        with pytest.raises(flexmbs.UnknownNameError) as e:
+            call()
+        err = e.value
+        assert isinstance(err, KeyError) and isinstance(err, flexmbs.FlexmbsError)
+        assert str(err).startswith("unknown analysis 'run-pu'; did you mean 'run-up'?"), str(err)
+        assert err.name == "run-pu" and err.what == "analysis"
+        assert err.matches == ["run-up"] and err.defined == study.analyses
+    # A Simulation's sensors alike.
+    sim = study.simulation()
+    with pytest.raises(flexmbs.UnknownNameError) as e:
+        sim.sensor("slidr")
+    assert e.value.matches == ["slider"] and "did you mean 'slider'?" in str(e.value)
+
+
+def test_keys_are_removed_and_tables_replaced(examples):
+    study = flexmbs.Study.load(examples / "slider_crank.toml")
+    # An optional key removed; the default acts.
+    del study["analyses.run-up.rho_inf"]
+    with pytest.raises(flexmbs.KeyPathError):
+        study["analyses.run-up.rho_inf"]
+    # A key the study needs: refused at its table, located, and kept.
+    with pytest.raises(flexmbs.StudyError) as e:
+        del study["sections.rod.d"]
+    assert e.value.file.endswith("slider_crank.toml") and e.value.key.startswith("sections[0]")
+    assert study["sections.rod.d"] == 0.006
+    # A path that leads nowhere.
+    with pytest.raises(flexmbs.KeyPathError) as e:
+        del study["sections.rdo"]
+    assert "did you mean 'rod'" in str(e.value)
+    # A dict replaces the whole table: the section given by `d` switched to one given by values
+    # (key by key, `d` and `A` together would be refused).
+    values = {"name": "rod", "shape": "values", "A": 2.8e-5, "Iy": 6.4e-11, "Iz": 6.4e-11, "J": 1.3e-10}
+    study["sections.rod"] = values
+    assert study["sections.rod"] == values
+    # Re-validated like any set: a refused table is located and not kept.
+    with pytest.raises(flexmbs.StudyError) as e:
+        study["sections.rod"] = {"name": "rod", "shape": "circle", "d": -1.0}
+    assert e.value.key == "sections[0].d", e.value.key
+    assert study["sections.rod"] == values
 
 
 def test_an_equilibrium_that_stops_says_the_load_factor(examples, tmp_path):

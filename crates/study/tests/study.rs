@@ -87,6 +87,52 @@ fn values_are_read_and_set_by_key_path_with_located_errors() {
 }
 
 #[test]
+fn keys_are_removed_and_tables_replaced_by_key_path_with_located_errors() {
+    let file = example("slider_crank");
+    let mut doc = Document::open(&file).unwrap();
+    // A table replaced as a whole: the section given by `d` switched to one given by values,
+    // which `set` key by key could not do (`d` and `A` together are refused).
+    let values = "{ name = \"rod\", shape = \"values\", A = 2.8e-5, Iy = 6.4e-11, Iz = 6.4e-11, J = 1.3e-10 }";
+    doc.set("sections.rod", values).unwrap();
+    assert_eq!(doc.get("sections.rod.A").unwrap(), serde_json::json!(2.8e-5));
+    assert!(doc.get("sections.rod.d").is_err());
+    assert!(doc.text().contains("# The rod, meshed where it sits"));
+    doc.study().unwrap();
+    // A table refused as a whole is not kept, and the error is located.
+    let e = doc
+        .set("sections.rod", "{ name = \"rod\", shape = \"circle\", d = -1.0 }")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("slider_crank.toml:"), "{e}");
+    assert!(e.contains("sections[0].d"), "{e}");
+    assert_eq!(doc.get("sections.rod.A").unwrap(), serde_json::json!(2.8e-5));
+    // Only a table replaces a table.
+    let e = doc.set("sections.rod", "3").unwrap_err().to_string();
+    assert!(e.contains("a table can only be replaced by a table"), "{e}");
+
+    // A key removed; a key the study needs is refused at its table and kept.
+    let mut doc = Document::open(&file).unwrap();
+    doc.remove("analyses.run-up.rho_inf").unwrap();
+    assert!(doc.get("analyses.run-up.rho_inf").is_err());
+    assert!(doc.text().contains("t_end = 0.126    # three revolutions"));
+    let e = doc.remove("sections.rod.d").unwrap_err().to_string();
+    assert!(e.contains("slider_crank.toml:"), "{e}");
+    assert!(e.contains("sections[0]"), "{e}");
+    assert_eq!(doc.get("sections.rod.d").unwrap(), serde_json::json!(0.006));
+    // A path that leads nowhere: the close matches, as for `get` and `set`.
+    let e = doc.remove("sections.rdo").unwrap_err().to_string();
+    assert!(e.contains("did you mean 'rod'"), "{e}");
+    // An element of an array of tables removed by name, and the names it leaves refused.
+    let e = doc.remove("materials.steel").unwrap_err().to_string();
+    assert!(e.contains("unknown material 'steel'"), "{e}");
+    assert!(doc.get("materials.steel").is_ok());
+    let sections = doc.text().matches("[[sections]]").count();
+    doc.set_unchecked("sections[0].name", "\"spare\"").unwrap();
+    doc.remove_unchecked("sections.spare").unwrap();
+    assert_eq!(doc.text().matches("[[sections]]").count(), sections - 1);
+}
+
+#[test]
 fn a_run_observed_in_memory_matches_its_results_folder() {
     let file = example("cantilever");
     let study = study::load(&file).unwrap();

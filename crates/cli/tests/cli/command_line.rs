@@ -36,12 +36,39 @@ fn every_command_has_help_that_exits_0() {
     let both = general.split("options of run and reduce:").nth(1).unwrap();
     let both = both.split("options of run:").next().unwrap();
     assert!(!both.contains("--t-end"), "{general}");
-    // And validate calls itself by the name it was run as.
+}
+
+/// `validate` calls itself by the name it was run as.
+#[cfg(feature = "validate")]
+#[test]
+fn validate_has_help_under_its_own_name() {
+    let dir = scratch("validate-help");
     let out = flexmbs(&dir, &["validate", "--help"]);
     assert_eq!(out.code, 0);
     assert!(out.stdout.starts_with("usage: flexmbs validate"), "{}", out.stdout);
 }
 
+/// Without the `validate` feature the program does not carry the suite, and says how to run it.
+#[cfg(not(feature = "validate"))]
+#[test]
+fn validate_without_the_suite_says_how_to_get_it() {
+    let dir = scratch("validate-not-built");
+    for args in [&["validate"][..], &["validate", "--quick"][..]] {
+        let out = flexmbs(&dir, args);
+        assert_eq!(out.code, 2, "{}", out.stderr);
+        assert!(out.stdout.is_empty(), "{}", out.stdout);
+        assert!(out.stderr.starts_with("flexmbs: error: "), "{}", out.stderr);
+        assert!(
+            out.stderr.contains("cargo run --release -p validation"),
+            "{}",
+            out.stderr
+        );
+        assert!(out.stderr.contains("--features validate"), "{}", out.stderr);
+    }
+    assert!(!dir.join("validation-report").exists());
+}
+
+#[cfg(feature = "validate")]
 #[test]
 fn validate_refuses_an_unknown_id_and_writes_nothing() {
     let dir = scratch("validate-unknown");

@@ -317,6 +317,7 @@ fn mechanism_errors_found_at_run_time_are_located() {
 }
 
 /// `flexmbs validate` forwards to the validation suite's command line.
+#[cfg(feature = "validate")]
 #[test]
 fn validate_forwards_its_arguments() {
     let dir = scratch("mech-validate");

@@ -6,6 +6,9 @@
   bodies; ``simulation`` starts a dynamic analysis to step from Python.
 - ``Simulation``: ``step``, ``advance_to``, sensors and state between steps, ``set_load``.
 - ``ReducedBody``: a reduced-body file (``.rbody``) and its matrices, modes and mass data.
+- Errors: ``FlexmbsError`` and its subclasses ``StudyError``, ``KeyPathError``,
+  ``SolveError``, ``ReducedBodyFileError`` and ``UnknownNameError`` (also a ``KeyError``: an
+  analysis or sensor name that is not there, with the close names).
 - ``sweep``: many variants of a study in parallel on Dask distributed (optional dependency).
 
 The classes come from the compiled extension ``flexmbs._flexmbs`` (Rust, PyO3). The API
@@ -21,6 +24,7 @@ from ._flexmbs import (  # noqa: F401
     SolveError,
     Study,
     StudyError,
+    UnknownNameError,
     __version__,
 )
 from .results import AnalysisResult, Results, Sensor, Table  # noqa: F401
@@ -39,6 +43,7 @@ __all__ = [
     "Study",
     "StudyError",
     "Table",
+    "UnknownNameError",
     "__version__",
     "final",
     "grid",

@@ -11,6 +11,8 @@ from typing import Any, Dict, List, Optional, Union
 
 import numpy as np
 
+from ._flexmbs import _unknown_name_error
+
 __all__ = ["Results", "AnalysisResult", "Sensor", "Table"]
 
 
@@ -90,10 +92,12 @@ class AnalysisResult:
                 self.sensors[g["name"]] = Sensor(g["name"], s["x_label"], s["x"], g["columns"], g["values"])
 
     def sensor(self, name: str) -> Sensor:
+        """Sensor ``name``; ``UnknownNameError`` (a ``KeyError``) with the close names when
+        this analysis did not record it."""
         try:
             return self.sensors[name]
         except KeyError:
-            raise KeyError(f"analysis {self.name!r} has no sensor {name!r}; it has {sorted(self.sensors)}") from None
+            raise _unknown_name_error("sensor", name, list(self.sensors)) from None
 
     @property
     def frequencies(self) -> Optional[np.ndarray]:
@@ -135,19 +139,24 @@ class Results:
             self.analyses[a["name"]] = AnalysisResult(a)
 
     def __getitem__(self, analysis: str) -> AnalysisResult:
+        """Analysis ``analysis``; ``UnknownNameError`` (a ``KeyError``) with the close names
+        when these results do not hold it."""
         try:
             return self.analyses[analysis]
         except KeyError:
-            raise KeyError(f"no analysis {analysis!r} in these results; there are {list(self.analyses)}") from None
+            raise _unknown_name_error("analysis", analysis, list(self.analyses)) from None
 
     def sensor(self, name: str, analysis: Optional[str] = None) -> Sensor:
-        """Sensor ``name`` of ``analysis`` (default: the last analysis that recorded it)."""
+        """Sensor ``name`` of ``analysis`` (default: the last analysis that recorded it);
+        ``UnknownNameError`` (a ``KeyError``) with the close names for a sensor no analysis
+        recorded, or an analysis these results do not hold."""
         if analysis is not None:
             return self[analysis].sensor(name)
         for a in reversed(list(self.analyses.values())):
             if name in a.sensors:
                 return a.sensors[name]
-        raise KeyError(f"no analysis recorded a sensor {name!r}")
+        recorded = sorted({s for a in self.analyses.values() for s in a.sensors})
+        raise _unknown_name_error("sensor", name, recorded)
 
     def __repr__(self) -> str:
         return f"Results({list(self.analyses)}, results_dir={self.results_dir!r})"

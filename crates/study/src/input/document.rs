@@ -220,7 +220,8 @@ impl Document {
     /// Sets the value at `path` to `value`, a TOML value as text (`12`, `"steel"`,
     /// `[0.0, 0.0, -9.81]`, `{ modes = 4 }`), and validates the study. A value the study
     /// refuses is not kept: the errors name the file, line, column and key, as
-    /// `flexmbs check` does. Missing tables on the way are created.
+    /// `flexmbs check` does. Missing tables on the way are created. A table given an inline
+    /// table (`{ name = "rod", shape = "general", A = 1e-4, ... }`) is replaced as a whole.
     pub fn set(&mut self, path: &str, value: &str) -> Result<(), BoxError> {
         let before = self.doc.clone();
         self.set_unchecked(path, value)?;
@@ -251,10 +252,32 @@ impl Document {
                 Segment::Index(i) => &mut item[*i],
             };
         }
-        if item.is_table() || item.is_array_of_tables() {
+        if let toml_edit::Item::Table(old) = item {
+            // A table given as an inline table replaces the whole table (its keys, and the
+            // tables under it), where it stands in the file and with the comments above it.
+            let toml_edit::Value::InlineTable(t) = parsed else {
+                return Err(PathError::Malformed {
+                    path: resolved.to_string(),
+                    why: format!(
+                        "a table can only be replaced by a table, not by a {}",
+                        parsed.type_name()
+                    ),
+                }
+                .into());
+            };
+            let mut table = t.into_table();
+            table.set_implicit(false);
+            *table.decor_mut() = old.decor().clone();
+            if let Some(p) = old.position() {
+                table.set_position(p);
+            }
+            *old = table;
+            return Ok(());
+        }
+        if item.is_array_of_tables() {
             return Err(PathError::Malformed {
                 path: resolved.to_string(),
-                why: "a table cannot be replaced by a value; set its keys one by one".into(),
+                why: "an array of tables cannot be replaced by a value; set its elements one by one".into(),
             }
             .into());
         }
@@ -265,6 +288,61 @@ impl Document {
             *v.decor_mut() = d;
         }
         *item = toml_edit::Item::Value(v);
+        Ok(())
+    }
+
+    /// Removes the value or table at `path` (a key, an element of an array, or an element of
+    /// an array of tables by its index or name) and validates the study. A removal the study
+    /// refuses (a required key, a name still referred to) is not kept: the errors name the
+    /// file, line, column and key, as [`Document::set`]'s do.
+    pub fn remove(&mut self, path: &str) -> Result<(), BoxError> {
+        let before = self.doc.clone();
+        self.remove_unchecked(path)?;
+        if let Err(e) = self.study() {
+            self.doc = before;
+            return Err(Box::new(e));
+        }
+        Ok(())
+    }
+
+    /// Removes the value or table at `path` without validating the study (see
+    /// [`Document::set_unchecked`]).
+    pub fn remove_unchecked(&mut self, path: &str) -> Result<(), BoxError> {
+        let resolved = self.resolve(path)?;
+        let Some((last, parent)) = resolved.0.split_last() else {
+            return Err(PathError::Malformed {
+                path: path.to_string(),
+                why: "the whole study cannot be removed".into(),
+            }
+            .into());
+        };
+        let mut item = self.doc.as_item_mut();
+        for step in parent {
+            item = match step {
+                Segment::Key(k) => &mut item[k.as_str()],
+                Segment::Index(i) => &mut item[*i],
+            };
+        }
+        // `resolve` found the value, so its parent holds it.
+        match (last, item) {
+            (Segment::Key(k), parent) => {
+                parent.as_table_like_mut().and_then(|t| t.remove(k));
+            }
+            (Segment::Index(i), toml_edit::Item::ArrayOfTables(a)) => {
+                a.remove(*i);
+            }
+            (Segment::Index(i), toml_edit::Item::Value(toml_edit::Value::Array(a))) => {
+                a.remove(*i);
+            }
+            (Segment::Index(_), other) => {
+                return Err(PathError::NotTable {
+                    path: resolved.to_string(),
+                    key: path.to_string(),
+                    found: kind_of(other),
+                }
+                .into())
+            }
+        }
         Ok(())
     }
 

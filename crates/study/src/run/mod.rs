@@ -29,7 +29,7 @@ pub mod simulation;
 
 pub use options::Options;
 pub use runner::Runner;
-pub use selection::Selection;
+pub use selection::{Selection, UnknownName};
 pub use simulation::Simulation;
 
 use crate::error::BoxError;

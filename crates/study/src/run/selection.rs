@@ -7,13 +7,35 @@ use crate::input::validate::Study;
 impl Study {
     /// The index of the analysis called `name`; a name the study lacks is an error naming the
     /// close matches ("did you mean").
-    pub fn analysis(&self, name: &str) -> Result<usize, String> {
-        self.analyses.iter().position(|a| a.name == name).ok_or_else(|| {
-            let names: Vec<String> = self.analyses.iter().map(|a| a.name.clone()).collect();
-            unknown_reference("analysis", name, &names)
-        })
+    pub fn analysis(&self, name: &str) -> Result<usize, UnknownName> {
+        self.analyses
+            .iter()
+            .position(|a| a.name == name)
+            .ok_or_else(|| UnknownName {
+                what: "analysis",
+                name: name.to_string(),
+                defined: self.analyses.iter().map(|a| a.name.clone()).collect(),
+            })
     }
 }
+
+/// A name the study lacks: what it was meant to name (`"analysis"`), the name, and every name
+/// defined, so a face can offer the close matches in its own way (Python's
+/// `UnknownNameError`); its message is [`unknown_reference`]'s "did you mean".
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnknownName {
+    pub what: &'static str,
+    pub name: String,
+    pub defined: Vec<String>,
+}
+
+impl std::fmt::Display for UnknownName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&unknown_reference(self.what, &self.name, &self.defined))
+    }
+}
+
+impl std::error::Error for UnknownName {}
 
 /// The analyses a run runs: every one, or one (after the chain of analyses its `start`
 /// names).
@@ -26,7 +48,7 @@ pub enum Selection {
 impl Selection {
     /// Every analysis of `study` (`name` is `None`), or the one called `name`
     /// ([`Study::analysis`]).
-    pub fn of(study: &Study, name: Option<&str>) -> Result<Self, String> {
+    pub fn of(study: &Study, name: Option<&str>) -> Result<Self, UnknownName> {
         match name {
             None => Ok(Self::All),
             Some(name) => study.analysis(name).map(Self::One),

@@ -2,7 +2,7 @@
 //! where it is in the file; input files that are not regular files; validation time that grows
 //! linearly with the number of entries.
 
-use crate::common::{clamp, dynamic, material, pendulum, rigid_body, sensor, Text};
+use crate::common::{material, pendulum, rigid_body, sensor, Text};
 use std::path::Path;
 use study::output::observer::Recorder;
 use study::Options;
@@ -317,50 +317,20 @@ part = "block"
     assert_eq!(study::input::part::model_copies() - copies, 4);
 }
 
-/// A cart driven along a rail at 10 m/s from 1 m before a clamped post, on top of the
-/// pendulum (which keeps an unknown): the cart's point `P` reaches the post's point `Q` at
-/// t = 0.1 s, step 10, where the deflection of `post.R` from the line through them is 0/0.
-const CART: Text = Text(|| {
-    [
-        rigid_body("cart", 1.0, [-1.0, 0.0, 0.0], [0.01; 3], &[("P", [-1.0, 0.0, 0.0])]),
-        rigid_body(
-            "post",
-            1.0,
-            [0.0; 3],
-            [0.01; 3],
-            &[("Q", [0.0; 3]), ("R", [0.0, 1.0, 0.0])],
-        ),
-        clamp("post.Q"),
-        r#"[[joints]]
-name = "rail"
-type = "prismatic"
-between = ["ground", "cart.P"]
-axis = [1.0, 0.0, 0.0]
-[[drivers]]
-name = "push"
-joint = "rail"
-function = { type = "constant-speed", speed = 10.0 }
-"#
-        .to_string(),
-        sensor("travel", "joint", "rail"),
-        r#"[[sensors]]
-name = "gap"
-type = "deflection"
-of = "post.R"
-chord = ["cart.P", "post.Q"]
-"#
-        .to_string(),
-        dynamic("0.2", "0.01"),
-    ]
-    .concat()
-});
+/// The pendulum (which keeps an unknown) and a cart driven along a rail at 10 m/s from 1 m
+/// before a clamped post: the cart's point `P` reaches the post's point `Q` at t = 0.1 s, step
+/// 10, where the deflection of `post.R` from the line through them is 0/0. A study the
+/// Python package's tests read too.
+fn pendulum_cart() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/studies/pendulum_cart.toml")).unwrap()
+}
 
 /// A sensor whose value stops being finite stops the run at the sensor's `[[sensors]]` entry
 /// (`file:line:col: sensors[i]: ...`), as a failure at a body is located at the body, and the
 /// message names the sensor, the time and the step.
 #[test]
 fn a_sensor_that_is_not_finite_is_located_at_the_sensor_in_the_study_file() {
-    let text = format!("{PENDULUM}{CART}");
+    let text = pendulum_cart();
 
     let e = run_error("sensor-not-finite", &text);
     let line = text.lines().position(|l| l == "name = \"gap\"").unwrap() + 1;
@@ -452,7 +422,7 @@ fn more_reduction_modes_than_interior_dofs_are_refused_with_the_part_named() {
 fn a_simulation_reads_one_sensor_without_evaluating_the_others() {
     let dir = crate::scratch("sensor-alone");
     let file = dir.join("sensor-alone.toml");
-    std::fs::write(&file, format!("{PENDULUM}{CART}")).unwrap();
+    std::fs::write(&file, pendulum_cart()).unwrap();
     let study = study::load(&file).unwrap();
     let options = Options {
         out: None,
