@@ -9,6 +9,7 @@
 //! - [`study`]: `Study` (a study file: values by key path, validation with located errors,
 //!   runs, reductions) and `Simulation` (a dynamic analysis stepped from Python, with named
 //!   loads set between steps).
+//! - [`keys`]: `study_keys()`, the study-file keys as the study crate declares them.
 //!
 //! The module keeps no state of its own: every class owns plain data of the library crates.
 
@@ -20,6 +21,7 @@
 use pyo3::prelude::*;
 
 pub mod errors;
+pub mod keys;
 pub mod rbody;
 pub mod study;
 
@@ -31,5 +33,6 @@ fn _flexmbs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<rbody::ReducedBody>()?;
     m.add_class::<study::Study>()?;
     m.add_class::<study::Simulation>()?;
+    m.add_function(wrap_pyfunction!(keys::study_keys, m)?)?;
     Ok(())
 }

@@ -3,6 +3,7 @@ runs whose results equal the program's to round-off, results folders and the cac
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -238,3 +239,28 @@ def test_an_equilibrium_that_stops_says_the_load_factor(examples, tmp_path):
     assert "t = " not in str(err)
     # Located at the body whose frame was lost.
     assert err.key.startswith("bodies[") and err.line is not None
+
+
+
+def test_study_keys_are_the_declarations_the_validator_and_the_docs_use(examples):
+    """`study_keys()` lists the keys the study crate declares once: the keys it gives a
+    circular section are the ones the validator names when it refuses another key there, and
+    the docs' key table of the sections names every key it lists."""
+    keys = flexmbs.study_keys("sections")
+    assert all(k["table"] == "sections" for k in keys)
+    assert len(flexmbs.study_keys()) > len(keys)
+    d = next(k for k in keys if k["name"] == "d")
+    assert d["unit"] == "m" and d["kinds"] == ["circle"] and d["required"] and d["doc"]
+    circle = [k["name"] for k in keys if not k["kinds"] or "circle" in k["kinds"]]
+
+    text = (examples / "slider_crank.toml").read_text()
+    with pytest.raises(flexmbs.StudyError) as refused:
+        flexmbs.Study.from_toml(text.replace("d = 0.006", "d = 0.006\ndiameter = 0.006", 1), base_dir=examples)
+    message = str(refused.value)
+    assert "key `diameter` does not apply" in message
+    assert f"(its keys: {', '.join(circle)})" in message
+
+    docs = (Path(__file__).resolve().parents[3] / "docs" / "study-file.md").read_text()
+    table = docs.split("<!-- keys:sections begin -->")[1].split("<!-- keys:sections end -->")[0]
+    for k in keys:
+        assert f"| `{k['name']}` |" in table

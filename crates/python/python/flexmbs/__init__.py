@@ -9,6 +9,7 @@
 - Errors: ``FlexmbsError`` and its subclasses ``StudyError``, ``KeyPathError``,
   ``SolveError``, ``ReducedBodyFileError`` and ``UnknownNameError`` (also a ``KeyError``: an
   analysis or sensor name that is not there, with the close names).
+- ``study_keys()``: every study-file key with its type, unit, default, range and doc.
 - ``sweep``: many variants of a study in parallel on Dask distributed (optional dependency).
 
 The classes come from the compiled extension ``flexmbs._flexmbs`` (Rust, PyO3). The API
@@ -26,6 +27,7 @@ from ._flexmbs import (  # noqa: F401
     StudyError,
     UnknownNameError,
     __version__,
+    study_keys,
 )
 from .results import AnalysisResult, Results, Sensor, Table  # noqa: F401
 from .sweep import final, grid, peak_abs, summary_value, sweep  # noqa: F401
@@ -48,6 +50,7 @@ __all__ = [
     "final",
     "grid",
     "peak_abs",
+    "study_keys",
     "summary_value",
     "sweep",
 ]

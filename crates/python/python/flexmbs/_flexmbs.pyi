@@ -75,6 +75,13 @@ def _unknown_name_error(what: str, name: str, defined: List[str]) -> UnknownName
     """The ``UnknownNameError`` for ``name`` among the ``defined`` names of a ``what`` (for the
     pure-Python part of the package to raise)."""
 
+def study_keys(table: Optional[str] = None) -> List[Dict[str, Any]]:
+    """The keys of a study file, one dict each: ``table`` (dotted table path, ``""`` for the
+    file's root), ``name``, ``kinds`` (the kinds of the table that take it; empty: all),
+    ``type``, ``unit``, ``required``, ``default`` (as the docs write it; ``""`` when none),
+    ``range`` and ``doc``. With ``table``, only that table's keys. The same declarations give
+    the validator's allowed keys and the key tables of docs/study-file.md."""
+
 class ReducedBody:
     """A reduced flexible body: interfaces, reduced matrices, mass data, fixed-interface modes.
     ``ReducedBody.load(path)`` reads a ``.rbody`` file; every array property returns a fresh
