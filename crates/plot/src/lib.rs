@@ -5,8 +5,8 @@
 //! markers, or both); [`write_png`] draws it with a legend. Time histories use linear axes;
 //! convergence studies use log-log axes, where a rate is a straight line.
 //!
-//! Drawing is pure Rust (plotters' bitmap backend, ab_glyph text, the `image` PNG encoder)
-//! with DejaVu Sans embedded in the crate (`fonts/DejaVuSans.ttf`, licence in
+//! Drawing is pure Rust (plotters' bitmap backend into an RGB buffer, ab_glyph text, the `png`
+//! crate's encoder) with DejaVu Sans embedded in the crate (`fonts/DejaVuSans.ttf`, licence in
 //! `fonts/DejaVuSans-LICENSE.txt`), so a machine without fonts or C libraries draws the same
 //! picture.
 //!
@@ -192,12 +192,41 @@ pub fn write_png(figure: &Figure, path: &Path) -> Result<(), PlotError> {
         path: path.to_path_buf(),
         message,
     };
-    let root = BitMapBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| write_error(e.to_string()))?;
-    draw_figure(&root, figure, x_range, y_range, 0).map_err(write_error)?;
-    // `present` encodes and writes the file; an unwritable path surfaces here (dropping the
-    // backend would write too, but would swallow the error).
-    root.present().map_err(|e| write_error(e.to_string()))
+    let mut pixels = rgb_buffer(WIDTH, HEIGHT);
+    {
+        let root = BitMapBackend::with_buffer(&mut pixels, (WIDTH, HEIGHT)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| write_error(e.to_string()))?;
+        draw_figure(&root, figure, x_range, y_range, 0).map_err(write_error)?;
+        root.present().map_err(|e| write_error(e.to_string()))?;
+    }
+    write_rgb_png(&pixels, WIDTH, HEIGHT, path).map_err(write_error)
+}
+
+/// A zeroed RGB buffer of `width` x `height` pixels for the backend
+/// (the drawing fills it white first).
+fn rgb_buffer(width: u32, height: u32) -> Vec<u8> {
+    vec![0; 3 * width as usize * height as usize]
+}
+
+/// Encodes 8-bit RGB `pixels` as a PNG and writes it to `path`; an unwritable path is the
+/// error. The settings are those of the `image` crate's PNG encoder (default compression,
+/// adaptive filtering), which plotters' `bitmap_encoder` feature would use; the `png` crate
+/// alone keeps `image` and its JPEG and BMP codecs out of the build (about 100 CPU-s of a
+/// cold build).
+fn write_rgb_png(pixels: &[u8], width: u32, height: u32, path: &Path) -> Result<(), String> {
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut bytes, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_compression(png::Compression::Default);
+        encoder.set_filter(png::FilterType::Sub);
+        encoder.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
+        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+        writer.write_image_data(pixels).map_err(|e| e.to_string())?;
+        writer.finish().map_err(|e| e.to_string())?;
+    }
+    std::fs::write(path, bytes).map_err(|e| e.to_string())
 }
 
 /// Height of one panel of [`write_panels_png`], in pixels.
@@ -230,22 +259,26 @@ pub fn write_panels_png(title: &str, panels: &[Figure], path: &Path) -> Result<(
         message,
     };
     let height = (PANEL_HEIGHT * panels.len() as u32 + 48).max(HEIGHT);
-    let root = BitMapBackend::new(path, (WIDTH, height)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| write_error(e.to_string()))?;
-    let body = root
-        .titled(title, (FONT_FAMILY, 26))
-        .map_err(|e| write_error(e.to_string()))?;
-    // Colours continue from panel to panel, so each component keeps one colour throughout.
-    let mut first_colour = 0;
-    for (area, (panel, y_range)) in body
-        .split_evenly((panels.len(), 1))
-        .iter()
-        .zip(panels.iter().zip(ranges))
+    let mut pixels = rgb_buffer(WIDTH, height);
     {
-        draw_figure(area, panel, x_all, y_range, first_colour).map_err(write_error)?;
-        first_colour += panel.series.len();
+        let root = BitMapBackend::with_buffer(&mut pixels, (WIDTH, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| write_error(e.to_string()))?;
+        let body = root
+            .titled(title, (FONT_FAMILY, 26))
+            .map_err(|e| write_error(e.to_string()))?;
+        // Colours continue from panel to panel, so each component keeps one colour throughout.
+        let mut first_colour = 0;
+        for (area, (panel, y_range)) in body
+            .split_evenly((panels.len(), 1))
+            .iter()
+            .zip(panels.iter().zip(ranges))
+        {
+            draw_figure(area, panel, x_all, y_range, first_colour).map_err(write_error)?;
+            first_colour += panel.series.len();
+        }
+        root.present().map_err(|e| write_error(e.to_string()))?;
     }
-    root.present().map_err(|e| write_error(e.to_string()))
+    write_rgb_png(&pixels, WIDTH, height, path).map_err(write_error)
 }
 
 /// Draws one figure on `root` with the given data ranges.
