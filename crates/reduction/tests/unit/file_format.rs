@@ -405,19 +405,8 @@ fn bodies_that_cannot_be_written_are_refused() {
         .contains("2 frequencies for 3 modes"));
 }
 
-/// A small deterministic generator (xorshift64*), so that a failure can be replayed.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
+// xorshift64* with a fixed seed (`fe_model::fuzz::Mutator`), so that a failure can be replayed.
+use fe_model::fuzz::Mutator as Rng;
 
 #[test]
 fn no_truncation_or_byte_change_panics_or_is_accepted() {
@@ -429,7 +418,7 @@ fn no_truncation_or_byte_change_panics_or_is_accepted() {
     }
     // Random changes of 1 to 3 bytes, each to a different value, anywhere: all refused (the
     // checksums cover every byte after line 2, and lines 1 and 2 are canonical text).
-    let mut rng = Rng(0x5EED_F11E);
+    let mut rng = Rng::new(0x5EED_F11E);
     let mut kinds = std::collections::BTreeMap::<String, usize>::new();
     for _ in 0..4000 {
         let mut changed = bytes.clone();
