@@ -92,6 +92,32 @@ def report_run(args, t, w, slider, peak, wall, cpu, steps, it):
         print(f"RESULT history_error={err:.6e} peak_error={(peak - ref_peak) / ref_peak:.6e}")
 
 
+def simulation_settings(steps, h, args):
+    """Exudyn's generalized-alpha (index 3, spectral radius --rho-inf, full Newton unless
+    --modified-newton) for `steps` steps of `h`, silent, sensors stored at every step and no
+    solution file: the settings both Exudyn runs share."""
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.numberOfSteps = steps
+    ss.timeIntegration.endTime = steps * h
+    ss.timeIntegration.generalizedAlpha.spectralRadius = args.rho_inf
+    ss.timeIntegration.generalizedAlpha.useIndex2Constraints = False
+    ss.timeIntegration.generalizedAlpha.useNewmark = False
+    ss.timeIntegration.newton.useModifiedNewton = args.modified_newton
+    ss.timeIntegration.verboseMode = 0
+    ss.solution.file.write = False
+    ss.solution.sensors.writePeriod = h
+    return ss
+
+
+def solve_timed(mbs, ss):
+    """SolveDynamic with the generalized-alpha solver: whether it succeeded, its wall and CPU time."""
+    start, cpu_start = time.perf_counter(), time.process_time()
+    ok = mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+    wall = time.perf_counter() - start
+    cpu = time.process_time() - cpu_start
+    return ok, wall, cpu
+
+
 def add_crank(mbs, ground, m_ground_coordinate, p):
     """The spatial crank: a rigid body of length p["crank"] pinned at O by a GenericJoint and
     driven at p["speed"]. Returns its rigid marker at A (for the rod's pin)."""
@@ -218,23 +244,11 @@ def main():
     )
     mbs.Assemble()
 
-    ss = exu.SimulationSettings()
-    ss.timeIntegration.numberOfSteps = steps
-    ss.timeIntegration.endTime = steps * h
-    ss.timeIntegration.generalizedAlpha.spectralRadius = args.rho_inf
-    ss.timeIntegration.generalizedAlpha.useIndex2Constraints = False
-    ss.timeIntegration.generalizedAlpha.useNewmark = False
-    ss.timeIntegration.newton.useModifiedNewton = args.modified_newton
-    ss.timeIntegration.verboseMode = 0
+    ss = simulation_settings(steps, h, args)
     ss.show.statistics = False
     ss.show.computationTime = False
-    ss.solution.file.write = False
-    ss.solution.sensors.writePeriod = h
 
-    start, cpu_start = time.perf_counter(), time.process_time()
-    ok = mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha)
-    wall = time.perf_counter() - start
-    cpu = time.process_time() - cpu_start
+    ok, wall, cpu = solve_timed(mbs, ss)
     if not ok:
         sys.exit("Exudyn: the dynamic solve failed")
 

@@ -41,7 +41,6 @@ Usage (run.sh makes the virtual environment):
 import argparse
 import math
 import sys
-import time
 
 import numpy as np
 
@@ -67,7 +66,7 @@ from exudyn.itemInterface import (
     SensorNode,
 )
 
-from slider_crank import add_crank, add_slider, chord_distance, report_run
+from slider_crank import add_crank, add_slider, chord_distance, report_run, simulation_settings, solve_timed
 
 
 def read_params(path):
@@ -229,23 +228,11 @@ def main():
     ]
     mbs.Assemble()
 
-    ss = exu.SimulationSettings()
-    ss.timeIntegration.numberOfSteps = steps
-    ss.timeIntegration.endTime = steps * h
-    ss.timeIntegration.generalizedAlpha.spectralRadius = args.rho_inf
-    ss.timeIntegration.generalizedAlpha.useIndex2Constraints = False
-    ss.timeIntegration.generalizedAlpha.useNewmark = False
-    ss.timeIntegration.newton.useModifiedNewton = args.modified_newton
-    ss.timeIntegration.verboseMode = 0
+    ss = simulation_settings(steps, h, args)
     if args.sparse:
         ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse
-    ss.solution.file.write = False
-    ss.solution.sensors.writePeriod = h
 
-    start, cpu_start = time.perf_counter(), time.process_time()
-    ok = mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha)
-    wall = time.perf_counter() - start
-    cpu = time.process_time() - cpu_start
+    ok, wall, cpu = solve_timed(mbs, ss)
     if not ok:
         sys.exit(f"Exudyn: the dynamic solve of the {args.model} rod with {args.elements} elements, h = {h:.4e} s failed")
 
