@@ -92,6 +92,75 @@ def report_run(args, t, w, slider, peak, wall, cpu, steps, it):
         print(f"RESULT history_error={err:.6e} peak_error={(peak - ref_peak) / ref_peak:.6e}")
 
 
+def simulation_settings(steps, h, args):
+    """Exudyn's generalized-alpha (index 3, spectral radius --rho-inf, full Newton unless
+    --modified-newton) for `steps` steps of `h`, silent, sensors stored at every step and no
+    solution file: the settings both Exudyn runs share."""
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.numberOfSteps = steps
+    ss.timeIntegration.endTime = steps * h
+    ss.timeIntegration.generalizedAlpha.spectralRadius = args.rho_inf
+    ss.timeIntegration.generalizedAlpha.useIndex2Constraints = False
+    ss.timeIntegration.generalizedAlpha.useNewmark = False
+    ss.timeIntegration.newton.useModifiedNewton = args.modified_newton
+    ss.timeIntegration.verboseMode = 0
+    ss.solution.file.write = False
+    ss.solution.sensors.writePeriod = h
+    return ss
+
+
+def solve_timed(mbs, ss):
+    """SolveDynamic with the generalized-alpha solver: whether it succeeded, its wall and CPU time."""
+    start, cpu_start = time.perf_counter(), time.process_time()
+    ok = mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+    wall = time.perf_counter() - start
+    cpu = time.process_time() - cpu_start
+    return ok, wall, cpu
+
+
+def add_crank(mbs, ground, m_ground_coordinate, p):
+    """The spatial crank: a rigid body of length p["crank"] pinned at O by a GenericJoint and
+    driven at p["speed"]. Returns its rigid marker at A (for the rod's pin)."""
+    crank, speed = p["crank"], p["speed"]
+    # Crank: rigid, node at O, centre of mass at r/2; inertia about the node (Exudyn's convention).
+    m_c = p["crank_mass"]
+    arm = crank / 2
+    n_crank = mbs.AddNode(NodeRigidBodyRxyz(referenceCoordinates=[0] * 6, initialVelocities=[0, 0, 0, 0, 0, speed]))
+    o_crank = mbs.AddObject(
+        ObjectRigidBody(
+            nodeNumber=n_crank,
+            mass=m_c,
+            inertia=[p["crank_Ixx"], p["crank_Iyy"] + m_c * arm**2, p["crank_Izz"] + m_c * arm**2, 0, 0, 0],
+            centerOfMass=[arm, 0, 0],
+        )
+    )
+    m_o = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[0, 0, 0]))
+    m_crank_o = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_crank, localPosition=[0, 0, 0]))
+    m_crank_a = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_crank, localPosition=[crank, 0, 0]))
+    mbs.AddObject(GenericJoint(markerNumbers=[m_o, m_crank_o], constrainedAxes=[1, 1, 1, 1, 1, 0]))
+    # Constant crank speed: the z rotation (Tait-Bryan xyz, x and y held at zero) has rate Omega.
+    m_crank_angle = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n_crank, coordinate=5))
+    mbs.AddObject(
+        CoordinateConstraint(markerNumbers=[m_ground_coordinate, m_crank_angle], offset=speed, velocityLevel=True)
+    )
+    return m_crank_a
+
+
+def add_slider(mbs, ground, p, slider_mass):
+    """The spatial slider: a rigid body of `slider_mass` on the x axis at crank + rod, rotation
+    held, by a GenericJoint. Returns its node and its rigid marker (for the rod's pin)."""
+    crank, rod = p["crank"], p["rod"]
+    # Slider: mass m_rod / 2 on the x axis, rotation held.
+    n_slider = mbs.AddNode(NodeRigidBodyRxyz(referenceCoordinates=[crank + rod, 0, 0, 0, 0, 0]))
+    o_slider = mbs.AddObject(
+        ObjectRigidBody(nodeNumber=n_slider, mass=slider_mass, inertia=[1e-8, 1e-8, 1e-8, 0, 0, 0])
+    )
+    m_guide = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[crank + rod, 0, 0]))
+    m_slider = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_slider, localPosition=[0, 0, 0]))
+    mbs.AddObject(GenericJoint(markerNumbers=[m_guide, m_slider], constrainedAxes=[0, 1, 1, 1, 1, 1]))
+    return n_slider, m_slider
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--mesh", required=True, help="folder written by export_rod")
@@ -144,36 +213,8 @@ def main():
     ground_node = mbs.AddNode(NodePointGround())
     m_ground_coordinate = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
 
-    # Crank: rigid, node at O, centre of mass at r/2; inertia about the node (Exudyn's convention).
-    m_c = p["crank_mass"]
-    arm = crank / 2
-    n_crank = mbs.AddNode(NodeRigidBodyRxyz(referenceCoordinates=[0] * 6, initialVelocities=[0, 0, 0, 0, 0, speed]))
-    o_crank = mbs.AddObject(
-        ObjectRigidBody(
-            nodeNumber=n_crank,
-            mass=m_c,
-            inertia=[p["crank_Ixx"], p["crank_Iyy"] + m_c * arm**2, p["crank_Izz"] + m_c * arm**2, 0, 0, 0],
-            centerOfMass=[arm, 0, 0],
-        )
-    )
-    m_o = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[0, 0, 0]))
-    m_crank_o = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_crank, localPosition=[0, 0, 0]))
-    m_crank_a = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_crank, localPosition=[crank, 0, 0]))
-    mbs.AddObject(GenericJoint(markerNumbers=[m_o, m_crank_o], constrainedAxes=[1, 1, 1, 1, 1, 0]))
-    # Constant crank speed: the z rotation (Tait-Bryan xyz, x and y held at zero) has rate Omega.
-    m_crank_angle = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n_crank, coordinate=5))
-    mbs.AddObject(
-        CoordinateConstraint(markerNumbers=[m_ground_coordinate, m_crank_angle], offset=speed, velocityLevel=True)
-    )
-
-    # Slider: mass m_rod / 2 on the x axis, rotation held.
-    n_slider = mbs.AddNode(NodeRigidBodyRxyz(referenceCoordinates=[crank + rod, 0, 0, 0, 0, 0]))
-    o_slider = mbs.AddObject(
-        ObjectRigidBody(nodeNumber=n_slider, mass=rod_mass / 2, inertia=[1e-8, 1e-8, 1e-8, 0, 0, 0])
-    )
-    m_guide = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[crank + rod, 0, 0]))
-    m_slider = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_slider, localPosition=[0, 0, 0]))
-    mbs.AddObject(GenericJoint(markerNumbers=[m_guide, m_slider], constrainedAxes=[0, 1, 1, 1, 1, 1]))
+    m_crank_a = add_crank(mbs, ground, m_ground_coordinate, p)
+    n_slider, m_slider = add_slider(mbs, ground, p, rod_mass / 2)
 
     # Pins at the end faces: rigid markers on the face nodes (the faces are rigid in the RBE2 basis).
     def face_marker(face):
@@ -203,23 +244,11 @@ def main():
     )
     mbs.Assemble()
 
-    ss = exu.SimulationSettings()
-    ss.timeIntegration.numberOfSteps = steps
-    ss.timeIntegration.endTime = steps * h
-    ss.timeIntegration.generalizedAlpha.spectralRadius = args.rho_inf
-    ss.timeIntegration.generalizedAlpha.useIndex2Constraints = False
-    ss.timeIntegration.generalizedAlpha.useNewmark = False
-    ss.timeIntegration.newton.useModifiedNewton = args.modified_newton
-    ss.timeIntegration.verboseMode = 0
+    ss = simulation_settings(steps, h, args)
     ss.show.statistics = False
     ss.show.computationTime = False
-    ss.solution.file.write = False
-    ss.solution.sensors.writePeriod = h
 
-    start, cpu_start = time.perf_counter(), time.process_time()
-    ok = mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha)
-    wall = time.perf_counter() - start
-    cpu = time.process_time() - cpu_start
+    ok, wall, cpu = solve_timed(mbs, ss)
     if not ok:
         sys.exit("Exudyn: the dynamic solve failed")
 

@@ -41,7 +41,6 @@ Usage (run.sh makes the virtual environment):
 import argparse
 import math
 import sys
-import time
 
 import numpy as np
 
@@ -50,7 +49,6 @@ from exudyn.itemInterface import (
     CoordinateConstraint,
     GenericJoint,
     MarkerBodyPosition,
-    MarkerBodyRigid,
     MarkerNodeCoordinate,
     MarkerNodePosition,
     MarkerNodeRigid,
@@ -64,12 +62,11 @@ from exudyn.itemInterface import (
     ObjectGround,
     ObjectJointRevolute2D,
     ObjectMassPoint2D,
-    ObjectRigidBody,
     ObjectRigidBody2D,
     SensorNode,
 )
 
-from slider_crank import chord_distance, report_run
+from slider_crank import add_crank, add_slider, chord_distance, report_run, simulation_settings, solve_timed
 
 
 def read_params(path):
@@ -167,22 +164,7 @@ def beam3d_model(mbs, p, n, shear_factor):
 
     ground = mbs.AddObject(ObjectGround())
     m_ground_coord = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
-    m_c, arm = p["crank_mass"], r / 2
-    n_crank = mbs.AddNode(NodeRigidBodyRxyz(referenceCoordinates=[0] * 6, initialVelocities=[0, 0, 0, 0, 0, speed]))
-    o_crank = mbs.AddObject(
-        ObjectRigidBody(
-            nodeNumber=n_crank,
-            mass=m_c,
-            inertia=[p["crank_Ixx"], p["crank_Iyy"] + m_c * arm**2, p["crank_Izz"] + m_c * arm**2, 0, 0, 0],
-            centerOfMass=[arm, 0, 0],
-        )
-    )
-    m_o = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[0, 0, 0]))
-    m_crank_o = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_crank, localPosition=[0, 0, 0]))
-    mbs.AddObject(GenericJoint(markerNumbers=[m_o, m_crank_o], constrainedAxes=[1, 1, 1, 1, 1, 0]))
-    m_angle = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n_crank, coordinate=5))
-    mbs.AddObject(CoordinateConstraint(markerNumbers=[m_ground_coord, m_angle], offset=speed, velocityLevel=True))
-    m_crank_a = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_crank, localPosition=[r, 0, 0]))
+    m_crank_a = add_crank(mbs, ground, m_ground_coord, p)
 
     nodes = []
     for i in range(n + 1):
@@ -197,11 +179,7 @@ def beam3d_model(mbs, p, n, shear_factor):
     for i in range(n):
         mbs.AddObject(ObjectBeamGeometricallyExact(nodeNumbers=[nodes[i], nodes[i + 1]], length=l / n, sectionData=section))
 
-    n_slider = mbs.AddNode(NodeRigidBodyRxyz(referenceCoordinates=[r + l, 0, 0, 0, 0, 0]))
-    o_slider = mbs.AddObject(ObjectRigidBody(nodeNumber=n_slider, mass=rod_mass / 2, inertia=[1e-8, 1e-8, 1e-8, 0, 0, 0]))
-    m_guide = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[r + l, 0, 0]))
-    m_slider = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_slider, localPosition=[0, 0, 0]))
-    mbs.AddObject(GenericJoint(markerNumbers=[m_guide, m_slider], constrainedAxes=[0, 1, 1, 1, 1, 1]))
+    n_slider, m_slider = add_slider(mbs, ground, p, rod_mass / 2)
 
     pin = [1, 1, 1, 1, 1, 0]
     mbs.AddObject(GenericJoint(markerNumbers=[m_crank_a, mbs.AddMarker(MarkerNodeRigid(nodeNumber=nodes[0]))], constrainedAxes=pin))
@@ -250,23 +228,11 @@ def main():
     ]
     mbs.Assemble()
 
-    ss = exu.SimulationSettings()
-    ss.timeIntegration.numberOfSteps = steps
-    ss.timeIntegration.endTime = steps * h
-    ss.timeIntegration.generalizedAlpha.spectralRadius = args.rho_inf
-    ss.timeIntegration.generalizedAlpha.useIndex2Constraints = False
-    ss.timeIntegration.generalizedAlpha.useNewmark = False
-    ss.timeIntegration.newton.useModifiedNewton = args.modified_newton
-    ss.timeIntegration.verboseMode = 0
+    ss = simulation_settings(steps, h, args)
     if args.sparse:
         ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse
-    ss.solution.file.write = False
-    ss.solution.sensors.writePeriod = h
 
-    start, cpu_start = time.perf_counter(), time.process_time()
-    ok = mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha)
-    wall = time.perf_counter() - start
-    cpu = time.process_time() - cpu_start
+    ok, wall, cpu = solve_timed(mbs, ss)
     if not ok:
         sys.exit(f"Exudyn: the dynamic solve of the {args.model} rod with {args.elements} elements, h = {h:.4e} s failed")
 

@@ -189,44 +189,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n_points = vtu.points.len();
     let u: Vec<f64> = (0..3 * n_points).map(|k| 1e-4 * (k as f64).sin()).collect();
     let tensor: Vec<f64> = st.tensor.iter().flatten().copied().collect();
-    let mut base = vec![
-        PointField {
-            name: "displacement",
-            components: 3,
-            values: &u,
-        },
-        PointField {
-            name: "rotation",
-            components: 3,
-            values: &u,
-        },
-        PointField {
-            name: "velocity",
-            components: 3,
-            values: &u,
-        },
-    ];
+    let mut base: Vec<PointField> = [("displacement", 3, &u[..]), ("rotation", 3, &u), ("velocity", 3, &u)]
+        .into_iter()
+        .map(point_field)
+        .collect();
     let dir = std::env::temp_dir().join(format!("flexmbs-stress-output-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let path = dir.join("frame.vtu");
     let (t_vtu_base, _) = timed(|| (0..FRAMES).try_for_each(|_| write_vtu(&path, &vtu, &base)));
-    base.extend([
-        PointField {
-            name: "stress",
-            components: 6,
-            values: &tensor,
-        },
-        PointField {
-            name: "von_mises",
-            components: 1,
-            values: &st.von_mises,
-        },
-        PointField {
-            name: "max_principal",
-            components: 1,
-            values: &st.principal,
-        },
-    ]);
+    base.extend(
+        [
+            ("stress", 6, &tensor[..]),
+            ("von_mises", 1, &st.von_mises[..]),
+            ("max_principal", 1, &st.principal[..]),
+        ]
+        .map(point_field),
+    );
     let (t_vtu_stress, _) = timed(|| (0..FRAMES).try_for_each(|_| write_vtu(&path, &vtu, &base)));
     let size = std::fs::metadata(&path)?.len();
     std::fs::remove_dir_all(&dir)?;
@@ -289,4 +267,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         load_after.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
     Ok(())
+}
+
+/// The VTU point field `name` of `components` values per point.
+fn point_field<'a>((name, components, values): (&'a str, usize, &'a [f64])) -> PointField<'a> {
+    PointField {
+        name,
+        components,
+        values,
+    }
 }

@@ -99,21 +99,21 @@ pub struct Properties<'a> {
 
 impl<'a> Properties<'a> {
     pub(crate) fn material(&self, element: usize, id: MaterialId) -> Result<&'a IsotropicMaterial, ElementError> {
-        self.materials.get(id.0 as usize).ok_or(ElementError::MissingProperty {
-            element,
-            what: "material",
-            index: id.0 as usize,
-            count: self.materials.len(),
-        })
+        entry(self.materials, element, "material", id.0 as usize)
     }
     pub(crate) fn section(&self, element: usize, id: SectionId) -> Result<&'a BeamSection, ElementError> {
-        self.sections.get(id.0 as usize).ok_or(ElementError::MissingProperty {
-            element,
-            what: "beam section",
-            index: id.0 as usize,
-            count: self.sections.len(),
-        })
+        entry(self.sections, element, "beam section", id.0 as usize)
     }
+}
+
+/// Entry `index` of the property table `table` (of `what`s) that element `element` reads.
+fn entry<'a, T>(table: &'a [T], element: usize, what: &'static str, index: usize) -> Result<&'a T, ElementError> {
+    table.get(index).ok_or(ElementError::MissingProperty {
+        element,
+        what,
+        index,
+        count: table.len(),
+    })
 }
 
 impl Element {

@@ -191,21 +191,20 @@ pub fn add_interface(
     let dependent = |s: NodeId, k: usize| dofs.definition(&model.constraints, s, k).is_some();
     for &s in &surface {
         for k in 0..3 {
-            if kind == SpiderKind::Rbe2 && dependent(s, k) {
+            let refusal = if kind != SpiderKind::Rbe2 {
+                None
+            } else if dependent(s, k) {
+                Some("is already dependent on another constraint; an RBE2 spider cannot define it again")
+            } else if supported(s, k) {
+                Some("is supported; an RBE2 spider would make it dependent (support the interface node instead)")
+            } else {
+                None
+            };
+            if let Some(why) = refusal {
                 return Err(interface_error(
                     name,
                     format!(
-                        "surface node {} dof {} is already dependent on another constraint; an RBE2 spider cannot define it again",
-                        model.mesh.node_tags[s.index()],
-                        crate::error::DOF_NAMES[k]
-                    ),
-                ));
-            }
-            if kind == SpiderKind::Rbe2 && supported(s, k) {
-                return Err(interface_error(
-                    name,
-                    format!(
-                        "surface node {} dof {} is supported; an RBE2 spider would make it dependent (support the interface node instead)",
+                        "surface node {} dof {} {why}",
                         model.mesh.node_tags[s.index()],
                         crate::error::DOF_NAMES[k]
                     ),

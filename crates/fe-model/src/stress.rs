@@ -159,12 +159,13 @@ pub fn extrapolation(kind: SolidKind) -> &'static DMatrix<f64> {
     CACHE[k].get_or_init(|| build_extrapolation(kind))
 }
 
-/// Stresses at the points of the kind's stiffness rule for element displacements `u_e`
-/// ($[u_x, u_y, u_z]$ node by node).
+/// The element's stresses extrapolated to its nodes (module docs), in its node order,
+/// before averaging, for element displacements `u_e` ($[u_x, u_y, u_z]$ node by node): the
+/// stresses at the points of the kind's stiffness rule, extrapolated.
 ///
 /// # Errors
 /// As [`crate::element::solid::stiffness`] (inverted element, wrong node count).
-pub fn solid_point_stresses(
+pub fn solid_nodal_stresses(
     kind: SolidKind,
     element: usize,
     X_e: &[Point3<f64>],
@@ -179,7 +180,8 @@ pub fn solid_point_stresses(
             got: X_e.len().min(u_e.len() / 3),
         });
     }
-    kind.stiffness_rule()
+    let at_points = kind
+        .stiffness_rule()
         .points
         .iter()
         .enumerate()
@@ -187,22 +189,7 @@ pub fn solid_point_stresses(
             let p = point_values(kind, element, q, X_e, xi)?;
             Ok(to_voigt(&linear_stress(material, &displacement_gradient(&p.g, u_e))))
         })
-        .collect()
-}
-
-/// The element's stresses extrapolated to its nodes (module docs), in its node order,
-/// before averaging.
-///
-/// # Errors
-/// As [`solid_point_stresses`].
-pub fn solid_nodal_stresses(
-    kind: SolidKind,
-    element: usize,
-    X_e: &[Point3<f64>],
-    material: &IsotropicMaterial,
-    u_e: &[f64],
-) -> Result<Vec<Voigt>, ElementError> {
-    let at_points = solid_point_stresses(kind, element, X_e, material, u_e)?;
+        .collect::<Result<Vec<Voigt>, ElementError>>()?;
     let E = extrapolation(kind);
     Ok((0..E.nrows())
         .map(|a| {
@@ -222,7 +209,7 @@ pub fn solid_nodal_stresses(
 /// once, as the stress shapes of a reduction).
 ///
 /// # Errors
-/// As [`solid_point_stresses`].
+/// As [`solid_nodal_stresses`].
 pub fn solid_stress_operator(
     kind: SolidKind,
     element: usize,

@@ -204,17 +204,37 @@ fn straight_beam_fe(
     Ok((fe, nodes))
 }
 
-/// A straight beam segment from `ends.0` to `ends.1` (FE axes) of `elements` elements
-/// (rounded up to even, so the middle node exists for the auxiliary-node frame), interfaces
-/// "a" and "b" at its ends: the parameters of [`beam_segment`].
+/// The interfaces "a" and "b" at a straight beam's ends.
+type EndInterfaces = [(String, fe_model::NodeId); 2];
+
+/// A straight beam from `ends.0` to `ends.1` (FE axes) of `elements` elements, named `name`:
+/// what [`BeamSegment`] and [`BeamBody`] share.
 #[derive(Clone, Debug)]
-pub struct BeamSegment<'a> {
+pub struct StraightBeam<'a> {
     pub name: &'a str,
     pub spec: &'a BeamSpec,
     pub ends: (Vector3<f64>, Vector3<f64>),
     pub elements: usize,
     /// The beam elements' orientation vector (FE axes).
     pub orientation: Vector3<f64>,
+}
+
+impl StraightBeam<'_> {
+    /// The FE model of the beam with exactly `elements` elements, its nodes first to last,
+    /// and its end interfaces "a" and "b".
+    fn fe(&self, elements: usize) -> Result<(FeModel, Vec<fe_model::NodeId>, EndInterfaces), BuildError> {
+        let (fe, nodes) = straight_beam_fe(self.name, self.spec, self.ends, elements, self.orientation)?;
+        let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
+        Ok((fe, nodes, ends))
+    }
+}
+
+/// A straight beam segment of `beam.elements` elements (rounded up to even, so the middle
+/// node exists for the auxiliary-node frame), interfaces "a" and "b" at its ends: the
+/// parameters of [`beam_segment`].
+#[derive(Clone, Debug)]
+pub struct BeamSegment<'a> {
+    pub beam: StraightBeam<'a>,
     /// The reduction's settings (e.g. `geometric_stiffening`); mesh shapes are not kept.
     pub settings: CbSettings,
     pub frame: FrameChoice,
@@ -232,11 +252,13 @@ impl<'a> BeamSegment<'a> {
         modes: ModeSelection,
     ) -> Self {
         BeamSegment {
-            name,
-            spec,
-            ends,
-            elements,
-            orientation,
+            beam: StraightBeam {
+                name,
+                spec,
+                ends,
+                elements,
+                orientation,
+            },
             settings: CbSettings::new(modes),
             frame: FrameChoice::CenterOfMass,
         }
@@ -245,12 +267,11 @@ impl<'a> BeamSegment<'a> {
 
 /// The straight beam segment `p` reduced ([`BeamSegment`]).
 pub fn beam_segment(p: &BeamSegment<'_>) -> Result<Segment, BuildError> {
-    let elements = p.elements + p.elements % 2;
-    let (fe, nodes) = straight_beam_fe(p.name, p.spec, p.ends, elements, p.orientation)?;
-    let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
+    let elements = p.beam.elements + p.beam.elements % 2;
+    let (fe, nodes, ends) = p.beam.fe(elements)?;
     reduce_segment(
         &fe,
-        p.name,
+        p.beam.name,
         &ends,
         nodes[elements / 2],
         &p.settings,
@@ -259,18 +280,12 @@ pub fn beam_segment(p: &BeamSegment<'_>) -> Result<Segment, BuildError> {
     )
 }
 
-/// A straight beam body from `ends.0` to `ends.1` of exactly `elements` elements (odd
-/// counts too: no auxiliary interface), reduced with interfaces "a" and "b" at its ends and
-/// `modes` fixed-interface modes for the centre-of-mass frame, named `name`: the parameters
-/// of [`beam_body`].
+/// A straight beam body of exactly `beam.elements` elements (odd counts too: no auxiliary
+/// interface), reduced with interfaces "a" and "b" at its ends and `modes` fixed-interface
+/// modes for the centre-of-mass frame: the parameters of [`beam_body`].
 #[derive(Clone, Debug)]
 pub struct BeamBody<'a> {
-    pub name: &'a str,
-    pub spec: &'a BeamSpec,
-    pub ends: (Vector3<f64>, Vector3<f64>),
-    pub elements: usize,
-    /// The beam elements' orientation vector.
-    pub orientation: Vector3<f64>,
+    pub beam: StraightBeam<'a>,
     pub modes: ModeSelection,
     /// Kept: the body's deformed mesh and every FE node's motion can be recovered.
     pub mesh: MeshShapes,
@@ -287,11 +302,13 @@ impl<'a> BeamBody<'a> {
         modes: ModeSelection,
     ) -> Self {
         BeamBody {
-            name,
-            spec,
-            ends,
-            elements,
-            orientation,
+            beam: StraightBeam {
+                name,
+                spec,
+                ends,
+                elements,
+                orientation,
+            },
             modes,
             mesh: MeshShapes::Drop,
         }
@@ -300,12 +317,10 @@ impl<'a> BeamBody<'a> {
 
 /// The straight beam body `p` reduced ([`BeamBody`]).
 pub fn beam_body(p: &BeamBody<'_>) -> Result<ReducedBody, BuildError> {
-    let elements = p.elements;
-    let (fe, nodes) = straight_beam_fe(p.name, p.spec, p.ends, elements, p.orientation)?;
-    let ends = [("a".to_string(), nodes[0]), ("b".to_string(), nodes[elements])];
+    let (fe, nodes, ends) = p.beam.fe(p.beam.elements)?;
     Ok(reduce_segment(
         &fe,
-        p.name,
+        p.beam.name,
         &ends,
         nodes[0],
         &CbSettings::new(p.modes),
@@ -558,11 +573,13 @@ pub fn beam_chain(model: &mut Model, p: &BeamChain<'_>) -> Result<(Vec<NodeId>, 
     let orientation = if e.z.abs() < 0.9 { Vector3::z() } else { Vector3::x() };
     let q = x_onto(e);
     let segment = beam_segment(&BeamSegment {
-        name: prefix,
-        spec: p.spec,
-        ends: (Vector3::zeros(), Vector3::new(seg, 0.0, 0.0)),
-        elements: p.elements_per_segment,
-        orientation: q.inverse() * orientation,
+        beam: StraightBeam {
+            name: prefix,
+            spec: p.spec,
+            ends: (Vector3::zeros(), Vector3::new(seg, 0.0, 0.0)),
+            elements: p.elements_per_segment,
+            orientation: q.inverse() * orientation,
+        },
         settings: p.settings.clone(),
         frame: variant.frame,
     })?;
@@ -939,11 +956,13 @@ pub fn rod_segment(p: &RodSegment) -> Result<Segment, BuildError> {
                 theory: BeamTheory::EulerBernoulli,
             };
             beam_segment(&BeamSegment {
-                name: "rod",
-                spec: &spec,
-                ends: (Vector3::zeros(), Vector3::new(p.seg, 0.0, 0.0)),
-                elements,
-                orientation: Vector3::y(),
+                beam: StraightBeam {
+                    name: "rod",
+                    spec: &spec,
+                    ends: (Vector3::zeros(), Vector3::new(p.seg, 0.0, 0.0)),
+                    elements,
+                    orientation: Vector3::y(),
+                },
                 settings: p.settings.clone(),
                 frame: p.frame,
             })

@@ -26,7 +26,7 @@
 
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use fe_model::FillOrdering;
-use reduction::eigen::{EigenSettings, Shift, ShiftInvert};
+use reduction::eigen::{EigenSettings, FactorSettings, Shift, ShiftInvert};
 use std::io::Write;
 use std::time::Instant;
 
@@ -100,8 +100,15 @@ fn run(ex: usize, ey: usize, ez: usize) {
         Ok("nd") => FillOrdering::NestedDissection,
         _ => FillOrdering::Auto,
     };
-    let factor =
-        ShiftInvert::with_ordering(K.as_ref(), M.as_ref(), 0.0, Some(&points), ordering).expect("factorisation");
+    let factor = ShiftInvert::with_settings(
+        K.as_ref(),
+        M.as_ref(),
+        0.0,
+        Some(&points),
+        ordering,
+        &FactorSettings::DOUBLE,
+    )
+    .expect("factorisation");
     println!("ordering: {:?} (REDUCTION_ORDERING=amd|nd|auto)", factor.ordering());
     let (subtrees, top) = factor.parallel_subtrees();
     println!(

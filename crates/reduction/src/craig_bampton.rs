@@ -499,10 +499,33 @@ struct FreeSystem<'a> {
     /// Position of each free dof (its node), for nested dissection.
     points: &'a [[f64; 3]],
     ordering: FillOrdering,
-    /// The precision of the factor of $\mathbf K_{ii}$.
-    factor: FactorPrecision,
     /// Names free dof `d` in messages.
     describe: &'a dyn Fn(usize) -> String,
+}
+
+impl<'a> FreeSystem<'a> {
+    fn new(
+        blocks: Blocks,
+        points: &'a [[f64; 3]],
+        ordering: FillOrdering,
+        describe: &'a dyn Fn(usize) -> String,
+    ) -> Self {
+        FreeSystem {
+            blocks,
+            points,
+            ordering,
+            describe,
+        }
+    }
+}
+
+/// The nodes of `settings.load_points` as [`load_point_dofs`] reads them.
+fn settings_load_points(settings: &CbSettings) -> NamedNodes {
+    settings
+        .load_points
+        .iter()
+        .map(|(n, node)| (n.clone(), node.index()))
+        .collect()
 }
 
 fn project(
@@ -518,9 +541,9 @@ fn project(
         blocks,
         points,
         ordering,
-        factor: precision,
         describe,
     } = system;
+    let precision = settings.factor;
     let (K_ii, M_ii) = (blocks.K_ii(), blocks.M_ii());
     let Blocks {
         K_ib, M_ib, K_bb, M_bb, ..
@@ -900,18 +923,8 @@ pub fn reduce_with_progress(
     // factorisation.
     let blocks = Blocks::new(a.K.as_ref(), a.M.as_ref(), &p)?;
     drop(a);
-    let system = FreeSystem {
-        blocks,
-        points: &points,
-        ordering,
-        factor: settings.factor,
-        describe: &describe,
-    };
-    let load_points: NamedNodes = settings
-        .load_points
-        .iter()
-        .map(|(n, node)| (n.clone(), node.index()))
-        .collect();
+    let system = FreeSystem::new(blocks, &points, ordering, &describe);
+    let load_points = settings_load_points(settings);
     let load_dofs = load_point_dofs(&load_points, model.node_count(), &p, &|node, k| {
         dofs.free_dof(NodeId(node as u32), k).map(|d| d.index())
     })?;
@@ -1086,18 +1099,8 @@ pub fn reduce_external_dofs(
     )?;
     let describe = |d: usize| format!("node {} (index) dof {}", dofs[d].0, DOF_NAMES[dofs[d].1]);
     let points: Vec<[f64; 3]> = dofs.iter().map(|&(node, _)| nodes[node]).collect();
-    let system = FreeSystem {
-        blocks: Blocks::new(K, M, &p)?,
-        points: &points,
-        ordering: FillOrdering::Auto,
-        factor: settings.factor,
-        describe: &describe,
-    };
-    let load_points: NamedNodes = settings
-        .load_points
-        .iter()
-        .map(|(n, node)| (n.clone(), node.index()))
-        .collect();
+    let system = FreeSystem::new(Blocks::new(K, M, &p)?, &points, FillOrdering::Auto, &describe);
+    let load_points = settings_load_points(settings);
     let load_dofs = load_point_dofs(&load_points, nodes.len(), &p, &|node, k| slot_dof[6 * node + k])?;
     let projection = project(system, &p, settings, &load_dofs, name, &mut |_| {})?;
     let n = projection.V.ncols();

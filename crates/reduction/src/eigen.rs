@@ -7,7 +7,7 @@
 //! 1. Factor $\mathbf P(\mathbf K - \sigma\mathbf M)\mathbf P^T = \mathbf L\mathbf L^T$ with
 //!    faer's sparse Cholesky (fill-reducing permutation $\mathbf P$ by AMD or, given the dof
 //!    positions, nested dissection: `fe_model::ordering`; supernodal or simplicial as faer's
-//!    symbolic analysis chooses): [`ShiftInvert::new`], [`ShiftInvert::with_ordering`].
+//!    symbolic analysis chooses): [`ShiftInvert::new`], [`ShiftInvert::with_settings`].
 //! 2. Find the $m$ largest eigenvalues of the standard symmetric problem for
 //!    $$\mathbf C = \mathbf L^{-1}\mathbf P\mathbf M\mathbf P^T\mathbf L^{-T},$$
 //!    whose eigenpairs are $\mu_k = 1/(\lambda_k - \sigma)$,
@@ -219,6 +219,13 @@ pub struct FactorSettings {
 }
 
 impl FactorSettings {
+    /// A double-precision factor, no reserve.
+    pub const DOUBLE: FactorSettings = FactorSettings {
+        precision: FactorPrecision::Double,
+        reserve_bytes: 0,
+        single_reserve_bytes: 0,
+    };
+
     /// The caller's reserve with a factor in `precision`.
     fn reserve(&self, precision: Precision) -> usize {
         match precision {
@@ -450,7 +457,7 @@ impl ShiftInvert {
     /// Factor $\mathbf K - \sigma\mathbf M$ (faer sparse Cholesky, AMD ordering, the global
     /// parallelism [`faer::get_global_parallelism`]). Only the lower triangle is read by the
     /// factorisation; both must be stored. With $\sigma = 0$, `M` is only checked, not read.
-    /// [`ShiftInvert::with_ordering`] chooses the ordering.
+    /// [`ShiftInvert::with_settings`] chooses the ordering.
     ///
     /// # Errors
     /// - [`ReductionError::DimensionMismatch`]: `K`, `M` not square of the same size.
@@ -467,33 +474,13 @@ impl ShiftInvert {
         M: SparseColMatRef<'_, usize, f64>,
         sigma: f64,
     ) -> Result<Self, ReductionError> {
-        Self::with_ordering(K, M, sigma, None, FillOrdering::Amd)
+        Self::with_settings(K, M, sigma, None, FillOrdering::Amd, &FactorSettings::DOUBLE)
     }
 
     /// [`ShiftInvert::new`] with a chosen fill-reducing ordering (`fe_model::ordering`):
     /// `points[d]` is the position of dof `d` (its node), which nested dissection needs;
     /// [`FillOrdering::Auto`] takes nested dissection for large models with points, AMD
-    /// otherwise.
-    ///
-    /// # Errors
-    /// Those of [`ShiftInvert::new`]; [`ReductionError::Factorization`] if `points` does not
-    /// have one finite entry per row.
-    pub fn with_ordering(
-        K: SparseColMatRef<'_, usize, f64>,
-        M: SparseColMatRef<'_, usize, f64>,
-        sigma: f64,
-        points: Option<&[[f64; 3]]>,
-        ordering: FillOrdering,
-    ) -> Result<Self, ReductionError> {
-        let settings = FactorSettings {
-            precision: FactorPrecision::Double,
-            reserve_bytes: 0,
-            single_reserve_bytes: 0,
-        };
-        Self::with_settings(K, M, sigma, points, ordering, &settings)
-    }
-
-    /// [`ShiftInvert::with_ordering`] with the precision of the factor chosen by `settings`
+    /// otherwise; and with the precision of the factor chosen by `settings`
     /// ([`FactorPrecision`]): after the symbolic analysis, the peak the factor brings, its
     /// values plus the larger of the factorisation's workspace (faer's, and the f32 copy of
     /// the matrix in single precision; freed when the factorisation returns) and the caller's
@@ -505,7 +492,8 @@ impl ShiftInvert {
     /// Lanczos (module docs).
     ///
     /// # Errors
-    /// Those of [`ShiftInvert::new`]; [`ReductionError::FactorDoesNotFit`] (with an empty
+    /// Those of [`ShiftInvert::new`]; [`ReductionError::Factorization`] if `points` does not
+    /// have one finite entry per row; [`ReductionError::FactorDoesNotFit`] (with an empty
     /// body name, for the caller to fill in);
     /// [`ReductionError::SinglePrecisionBreakdown`] for a pivot of the single-precision factor
     /// that is not positive or below [`SINGLE_PIVOT_RATIO`].

@@ -44,7 +44,7 @@ pub fn inertia_data(model: &FeModel, S_full: &Mat<f64>) -> Result<(InertiaData, 
     bare.constraints.clear();
     let dofs = DofMap::new(&bare)?;
     let M = assemble_mass_with_pattern(&bare, SystemPattern::new(&bare, &dofs))?;
-    // Only the nonzero entries from here on (see `inertia_data_with`): M itself is freed.
+    // Only the nonzero entries from here on (see `inertia_data_nonzero`): M itself is freed.
     let M = nonzero_entries(M.as_ref());
     let slots: Vec<usize> = (0..dofs.n_free())
         .map(|d| dofs.full_slot(fe_model::Dof(d as u32)))
@@ -75,21 +75,17 @@ pub fn inertia_data_from_mass(
     nodes: &[[f64; 3]],
     S_full: &Mat<f64>,
 ) -> Result<(InertiaData, Mat<f64>), ReductionError> {
-    inertia_data_with(M, slots, nodes, S_full, faer::get_global_parallelism())
+    inertia_data_nonzero(
+        nonzero_entries(M).as_ref(),
+        slots,
+        nodes,
+        S_full,
+        faer::get_global_parallelism(),
+    )
 }
 
-/// [`inertia_data_from_mass`] with the parallelism `par` of its products.
-fn inertia_data_with(
-    M: SparseColMatRef<'_, usize, f64>,
-    slots: &[usize],
-    nodes: &[[f64; 3]],
-    S_full: &Mat<f64>,
-    par: faer::Par,
-) -> Result<(InertiaData, Mat<f64>), ReductionError> {
-    inertia_data_nonzero(nonzero_entries(M).as_ref(), slots, nodes, S_full, par)
-}
-
-/// [`inertia_data_with`] for a mass matrix `M` without stored zeros ([`nonzero_entries`]).
+/// [`inertia_data_from_mass`] for a mass matrix `M` without stored zeros ([`nonzero_entries`]),
+/// with the parallelism `par` of its products.
 fn inertia_data_nonzero(
     M: SparseColMatRef<'_, usize, f64>,
     slots: &[usize],
@@ -198,7 +194,7 @@ fn inertia_data_nonzero(
     ))
 }
 
-/// The products of one direction's scalar fields in [`inertia_data_with`]: the nodes of the
+/// The products of one direction's scalar fields in [`inertia_data_nonzero`]: the nodes of the
 /// dofs of its translation slot, its block $\mathbf M_{cc}$, $\mathbf F_c^T\mathbf M_{cc}
 /// \mathbf F_c$ and $\mathbf X_c^T\mathbf M_{cc}\mathbf F_c$.
 struct DirectionProducts {
@@ -303,15 +299,15 @@ mod tests {
             let dofs = DofMap::new(&bare).unwrap();
             assert!(dofs.n_free() > 2 * crate::eigen::GS_ROWS, "several row blocks");
             let pattern = SystemPattern::new(&bare, &dofs);
-            let M = assemble_mass(&bare, &pattern).unwrap();
+            let M = nonzero_entries(assemble_mass(&bare, &pattern).unwrap().as_ref());
             let slots: Vec<usize> = (0..dofs.n_free())
                 .map(|d| dofs.full_slot(fe_model::Dof(d as u32)))
                 .collect();
             let nodes: Vec<[f64; 3]> = model.mesh.nodes.iter().map(|x| [x.x, x.y, x.z]).collect();
-            let sequential = inertia_data_with(M.as_ref(), &slots, &nodes, &S_full, faer::Par::Seq).unwrap();
+            let sequential = inertia_data_nonzero(M.as_ref(), &slots, &nodes, &S_full, faer::Par::Seq).unwrap();
             let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
             let parallel = pool
-                .install(|| inertia_data_with(M.as_ref(), &slots, &nodes, &S_full, faer::Par::rayon(3)))
+                .install(|| inertia_data_nonzero(M.as_ref(), &slots, &nodes, &S_full, faer::Par::rayon(3)))
                 .unwrap();
             let (a, b) = (&sequential.0, &parallel.0);
             assert_eq!(a.mass.to_bits(), b.mass.to_bits());

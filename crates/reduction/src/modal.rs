@@ -2,7 +2,7 @@
 //! eigensolver (theory guide §3; [`crate::eigen`]). The dense path `fe_model::modal_dense` serves
 //! only small models.
 
-use crate::eigen::{EigenSettings, Shift, ShiftInvert};
+use crate::eigen::{EigenSettings, FactorSettings, Shift, ShiftInvert};
 use crate::error::ReductionError;
 use fe_model::{assemble, dof_points, DofMap, FeModel, FillOrdering, ModalSolution, SystemPattern};
 
@@ -22,7 +22,14 @@ pub fn modal_sparse(
     let (K, M) = (a.K.as_ref(), a.M.as_ref());
     // Nested dissection on the node positions for large models (fe_model::ordering).
     let points = dof_points(model, &dofs);
-    let factor = ShiftInvert::with_ordering(K, M, shift.resolve(K, M)?, Some(&points), FillOrdering::Auto)?;
+    let factor = ShiftInvert::with_settings(
+        K,
+        M,
+        shift.resolve(K, M)?,
+        Some(&points),
+        FillOrdering::Auto,
+        &FactorSettings::DOUBLE,
+    )?;
     let solution = factor.lowest_modes(K, M, &EigenSettings::new(n_modes, shift))?;
     let n = dofs.n_free();
     let omega = solution

@@ -3,6 +3,11 @@
 
 #![allow(non_snake_case)]
 
+/// Fixtures shared by the areas below: the straight beam models they reduce.
+mod common {
+    include!("unit/common.rs");
+}
+
 /// `reduction::eigen`: the sparse shift-invert eigensolver against analytic chain spectra, a
 /// dense reference, free bodies (negative shift), a 3D lattice, and the error cases.
 mod eigen {

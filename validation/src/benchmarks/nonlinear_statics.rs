@@ -202,20 +202,15 @@ pub fn b2_roll_up(extent: Extent) -> Result<Vec<Block>> {
         // with a factor 2 of margin. At 2 pi the closed circle is exact by symmetry (a regular
         // polygon of exact constant-moment arcs), so round-off: 1e-9.
         let tol = if (b - 2.0 * PI).abs() < 1e-12 { 1e-9 } else { 2e-3 };
-        rows.push(Row::scaled(
-            format!("b = {:.2} pi: w/L, N = {n_last}", b / PI),
-            exact[0],
-            tip[0],
-            1.0,
-            tol,
-        ));
-        rows.push(Row::scaled(
-            format!("b = {:.2} pi: u/L, N = {n_last}", b / PI),
-            exact[1],
-            tip[1],
-            1.0,
-            tol,
-        ));
+        for (k, what) in ["w", "u"].into_iter().enumerate() {
+            rows.push(Row::scaled(
+                format!("b = {:.2} pi: {what}/L, N = {n_last}", b / PI),
+                exact[k],
+                tip[k],
+                1.0,
+                tol,
+            ));
+        }
     }
     let mut header = vec!["b = ML/EI".to_string()];
     header.extend(ns.iter().map(|n| format!("N = {n}")));

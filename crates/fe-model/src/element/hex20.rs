@@ -64,29 +64,31 @@ pub const EDGES: [(usize, usize); 12] = [
     (6, 7),
 ];
 
-/// Reference coordinates of the nodes, in node order.
-pub const REFERENCE_NODES: [[f64; 3]; 20] = [
-    [-1.0, -1.0, -1.0],
-    [1.0, -1.0, -1.0],
-    [1.0, 1.0, -1.0],
-    [-1.0, 1.0, -1.0],
-    [-1.0, -1.0, 1.0],
-    [1.0, -1.0, 1.0],
-    [1.0, 1.0, 1.0],
-    [-1.0, 1.0, 1.0],
-    [0.0, -1.0, -1.0],
-    [-1.0, 0.0, -1.0],
-    [-1.0, -1.0, 0.0],
-    [1.0, 0.0, -1.0],
-    [1.0, -1.0, 0.0],
-    [0.0, 1.0, -1.0],
-    [1.0, 1.0, 0.0],
-    [-1.0, 1.0, 0.0],
-    [0.0, -1.0, 1.0],
-    [-1.0, 0.0, 1.0],
-    [1.0, 0.0, 1.0],
-    [0.0, 1.0, 1.0],
-];
+/// Reference coordinates of the nodes, in node order: the corners of [`super::hex8`], then
+/// the midpoint of each edge of [`EDGES`].
+pub const REFERENCE_NODES: [[f64; 3]; 20] = reference_nodes();
+
+const fn reference_nodes() -> [[f64; 3]; 20] {
+    let corners = super::hex8::REFERENCE_NODES;
+    let mut nodes = [[0.0; 3]; 20];
+    let mut i = 0;
+    while i < 8 {
+        nodes[i] = corners[i];
+        i += 1;
+    }
+    let mut e = 0;
+    while e < EDGES.len() {
+        let (a, b) = EDGES[e];
+        let mut k = 0;
+        while k < 3 {
+            // Exact: the corners' coordinates are +-1.
+            nodes[8 + e][k] = 0.5 * (corners[a][k] + corners[b][k]);
+            k += 1;
+        }
+        e += 1;
+    }
+    nodes
+}
 
 /// Faces as local node lists (8-node quadrilaterals: corners anticlockwise seen from outside,
 /// then the edge nodes of edges (c0,c1), (c1,c2), (c2,c3), (c3,c0)).

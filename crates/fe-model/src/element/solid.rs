@@ -449,16 +449,22 @@ pub fn solid_mass(
     mass: MassKind,
 ) -> Result<DMatrix<f64>, ElementError> {
     let m = scalar_mass(kind, element, X_e, material.rho(), mass)?;
-    let n = kind.node_count();
-    let mut M_e = DMatrix::zeros(3 * n, 3 * n);
-    for a in 0..n {
-        for b in 0..n {
+    Ok(times_identity3(&m))
+}
+
+/// The $3n \times 3n$ matrix $\mathbf m \otimes \mathbf 1_3$ of a scalar $n \times n$ matrix
+/// `m`: block $(a, b)$ is $m_{ab}\mathbf 1_3$ (the same for each displacement component).
+fn times_identity3(m: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = m.nrows();
+    let mut out = DMatrix::zeros(3 * n, 3 * n);
+    for b in 0..n {
+        for a in 0..n {
             for i in 0..3 {
-                M_e[(3 * a + i, 3 * b + i)] = m[(a, b)];
+                out[(3 * a + i, 3 * b + i)] = m[(a, b)];
             }
         }
     }
-    Ok(M_e)
+    out
 }
 
 /// Displacement gradient $\mathbf H = \partial\mathbf u/\partial\mathbf x = \sum_a \mathbf u_a
@@ -529,13 +535,5 @@ pub fn geometric_stiffness(
         }
     }
     mirror_upper(&mut k);
-    let mut K_G = DMatrix::zeros(3 * n, 3 * n);
-    for b in 0..n {
-        for a in 0..n {
-            for i in 0..3 {
-                K_G[(3 * a + i, 3 * b + i)] = k[(a, b)];
-            }
-        }
-    }
-    Ok(K_G)
+    Ok(times_identity3(&k))
 }

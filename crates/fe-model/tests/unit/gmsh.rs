@@ -140,20 +140,8 @@ fn corner_det(x: &[Point3<f64>], a: usize, b: usize, c: usize) -> f64 {
     Matrix3::from_columns(&[x[a] - x[0], x[b] - x[0], x[c] - x[0]]).determinant()
 }
 
-/// xorshift64*: a fixed-seed generator, enough to make test inputs reproducible.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
+// xorshift64* with a fixed seed (`fe_model::fuzz::Mutator`), so that a failure can be replayed.
+use fe_model::fuzz::Mutator as Rng;
 
 /// Parses `bytes`, turning a panic into a test failure that names the input.
 fn parse_without_panic(bytes: &[u8], what: &dyn Fn() -> String) {
@@ -915,7 +903,7 @@ const MUTATIONS_PER_FIXTURE: usize = 300;
 
 #[test]
 fn random_bytes_never_panic() {
-    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut rng = Rng::new(0x9e37_79b9_7f4a_7c15);
     // Plain noise, and noise behind each valid header so that the section readers see it.
     let headers: [&[u8]; 5] = [
         b"",
@@ -932,7 +920,7 @@ fn random_bytes_never_panic() {
         let ascii = rng.below(2) == 0;
         let mut bytes = header.to_vec();
         bytes.extend((0..len).map(|_| {
-            let r = rng.next();
+            let r = rng.next_u64();
             if ascii {
                 ALPHABET[(r % ALPHABET.len() as u64) as usize]
             } else {
@@ -957,7 +945,7 @@ fn every_prefix_of_every_fixture_is_an_error_or_a_mesh_never_a_panic() {
 
 #[test]
 fn mutated_fixtures_never_panic() {
-    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    let mut rng = Rng::new(0x2545_f491_4f6c_dd1d);
     // Replacement bytes that change meaning: digits, signs, separators, markers, large bytes.
     const INTERESTING: &[u8] = b"0123456789-+.e $\n\"\xff\x7f\x80\0";
     for mesh_name in MESHES {
@@ -969,7 +957,7 @@ fn mutated_fixtures_never_panic() {
                     let at = rng.below(bytes.len());
                     match rng.below(4) {
                         0 => bytes[at] = INTERESTING[rng.below(INTERESTING.len())],
-                        1 => bytes[at] = rng.next() as u8,
+                        1 => bytes[at] = rng.next_u64() as u8,
                         2 => {
                             bytes.remove(at);
                         }

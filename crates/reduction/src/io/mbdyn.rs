@@ -496,48 +496,51 @@ struct Tokens<'a> {
 }
 
 impl<'a> Tokens<'a> {
+    /// The error for `found` at `line` where `expected` was.
+    fn malformed(&self, line: usize, expected: String, found: String) -> FemError {
+        FemError::Malformed {
+            path: self.path.to_path_buf(),
+            line,
+            record: self.record,
+            expected,
+            found,
+        }
+    }
+
+    /// The first 40 characters of the value `t`, for a message.
+    fn found(t: &str) -> String {
+        t.chars().take(40).collect()
+    }
+
     fn next(&mut self, expected: &str) -> Result<(usize, &'a str), FemError> {
         match self.items.get(self.at) {
             Some(&item) => {
                 self.at += 1;
                 Ok(item)
             }
-            None => Err(FemError::Malformed {
-                path: self.path.to_path_buf(),
-                line: self.items.last().map_or(self.header_line, |i| i.0),
-                record: self.record,
-                expected: expected.to_string(),
-                found: "the end of the record".into(),
-            }),
+            None => Err(self.malformed(
+                self.items.last().map_or(self.header_line, |i| i.0),
+                expected.to_string(),
+                "the end of the record".into(),
+            )),
         }
     }
 
-    fn real(&mut self, expected: &str) -> Result<f64, FemError> {
+    /// The next value parsed as a `T` that `valid` accepts.
+    fn parsed<T: std::str::FromStr>(&mut self, expected: &str, valid: impl Fn(&T) -> bool) -> Result<T, FemError> {
         let (line, t) = self.next(expected)?;
-        t.parse::<f64>()
+        t.parse::<T>()
             .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| FemError::Malformed {
-                path: self.path.to_path_buf(),
-                line,
-                record: self.record,
-                expected: expected.to_string(),
-                found: t.chars().take(40).collect(),
-            })
+            .filter(valid)
+            .ok_or_else(|| self.malformed(line, expected.to_string(), Self::found(t)))
+    }
+
+    fn real(&mut self, expected: &str) -> Result<f64, FemError> {
+        self.parsed(expected, |v: &f64| v.is_finite())
     }
 
     fn count(&mut self, expected: &str) -> Result<usize, FemError> {
-        let (line, t) = self.next(expected)?;
-        t.parse::<usize>()
-            .ok()
-            .filter(|&v| v <= 1_000_000)
-            .ok_or_else(|| FemError::Malformed {
-                path: self.path.to_path_buf(),
-                line,
-                record: self.record,
-                expected: expected.to_string(),
-                found: t.chars().take(40).collect(),
-            })
+        self.parsed(expected, |&v: &usize| v <= 1_000_000)
     }
 
     fn matrix(&mut self, rows: usize, cols: usize, expected: &str) -> Result<DMatrix<f64>, FemError> {
@@ -554,13 +557,11 @@ impl<'a> Tokens<'a> {
     fn done(&self) -> Result<(), FemError> {
         match self.items.get(self.at) {
             None => Ok(()),
-            Some(&(line, t)) => Err(FemError::Malformed {
-                path: self.path.to_path_buf(),
+            Some(&(line, t)) => Err(self.malformed(
                 line,
-                record: self.record,
-                expected: "the end of the record (the header's counts give its size)".into(),
-                found: t.chars().take(40).collect(),
-            }),
+                "the end of the record (the header's counts give its size)".into(),
+                Self::found(t),
+            )),
         }
     }
 }

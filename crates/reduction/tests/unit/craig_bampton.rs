@@ -6,7 +6,7 @@
 use faer::Mat;
 use fe_model::generate::straight_beam;
 use fe_model::{
-    modal_dense, solve_static, BeamProperties, BeamSection, BeamTheory, DofMask, FeModel, IsotropicMaterial, MassKind,
+    modal_dense, solve_static, BeamProperties, BeamTheory, DofMask, FeModel, IsotropicMaterial, MassKind,
     NodalLoad, NodeId,
 };
 use nalgebra::{DMatrix, Point3, Vector3};
@@ -15,26 +15,7 @@ use reduction::{reduce, CbSettings, ModeSelection, ReducedBody, ReductionError};
 /// A free steel beam along a skewed axis, `n` elements, circular section d = 20 mm, with
 /// interfaces at both ends (and the middle node if `mid`).
 fn free_beam(n: usize, mid: bool) -> (FeModel, Vec<(String, NodeId)>, Vec<NodeId>) {
-    let mut model = FeModel::default();
-    let material = model.add_material(IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap());
-    let section = model.add_section(BeamSection::circle("d20", 0.02, 0.3).unwrap());
-    let axis = Vector3::new(1.0, 0.5, -0.3).normalize();
-    let props = BeamProperties {
-        section,
-        material,
-        orientation: Vector3::z().cross(&axis),
-        theory: BeamTheory::Timoshenko,
-        mass: MassKind::Consistent,
-    };
-    let nodes = straight_beam(
-        &mut model,
-        Point3::new(0.1, 0.2, 0.3),
-        Point3::new(0.1, 0.2, 0.3) + axis,
-        n,
-        &props,
-        None,
-    )
-    .unwrap();
+    let (model, nodes) = super::common::skew_steel_beam(n, super::common::d20(), MassKind::Consistent);
     let mut interfaces = vec![("A".to_string(), nodes[0]), ("B".to_string(), nodes[n])];
     if mid {
         interfaces.push(("M".to_string(), nodes[n / 2]));

@@ -10,12 +10,11 @@
 // mass matrix it is the interface node's own mass, m / (2n) for a uniform beam of n elements
 // clamped at one end: a hand value.
 
-use fe_model::generate::straight_beam;
 use fe_model::{
-    assemble, BeamProperties, BeamSection, BeamTheory, DofMap, DofMask, FeModel, IsotropicMaterial, MassKind, NodeId,
+    assemble, BeamSection, DofMap, DofMask, FeModel, MassKind, NodeId,
     SystemPattern,
 };
-use nalgebra::{DMatrix, Point3, Vector3};
+use nalgebra::{DMatrix, Vector3};
 use reduction::diagnostics::DIRECTIONS;
 use reduction::{diagnostics, reduce, CbSettings, DiagnosticWarning, Diagnostics, ModeSelection, ReducedBody};
 
@@ -23,20 +22,7 @@ use reduction::{diagnostics, reduce, CbSettings, DiagnosticWarning, Diagnostics,
 /// two planes, so every mode is unique), `n` elements along a skewed axis; returns its nodes
 /// in order along the axis.
 fn beam(n: usize, mass: MassKind) -> (FeModel, Vec<NodeId>) {
-    let mut model = FeModel::default();
-    let material = model.add_material(IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap());
-    let section = model.add_section(BeamSection::rectangle("30x20", 0.03, 0.02, 0.3).unwrap());
-    let axis = Vector3::new(1.0, 0.5, -0.3).normalize();
-    let props = BeamProperties {
-        section,
-        material,
-        orientation: Vector3::z().cross(&axis),
-        theory: BeamTheory::Timoshenko,
-        mass,
-    };
-    let p0 = Point3::new(0.1, 0.2, 0.3);
-    let nodes = straight_beam(&mut model, p0, p0 + axis, n, &props, None).unwrap();
-    (model, nodes)
+    super::common::skew_steel_beam(n, BeamSection::rectangle("30x20", 0.03, 0.02, 0.3).unwrap(), mass)
 }
 
 /// Effective masses of every fixed-interface mode of the full FE model, clamped at `clamp`,

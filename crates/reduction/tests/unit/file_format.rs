@@ -3,28 +3,14 @@
 // and what is wrong, and no truncation or random change of a file makes the reader panic or
 // accept it.
 
-use fe_model::generate::straight_beam;
-use fe_model::{BeamProperties, BeamSection, BeamTheory, FeModel, IsotropicMaterial, MassKind, NodeId};
-use nalgebra::{Point3, Vector3};
+use fe_model::{FeModel, MassKind, NodeId};
 use reduction::file::{self, crc32};
 use reduction::{reduce, BodyFileProblem, CbSettings, ModeSelection, ReducedBody, ReductionError};
 use std::path::{Path, PathBuf};
 
 /// A free steel beam, `n` elements (n even), interfaces at both ends.
 fn beam(n: usize) -> (FeModel, Vec<(String, NodeId)>, Vec<NodeId>) {
-    let mut model = FeModel::default();
-    let material = model.add_material(IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap());
-    let section = model.add_section(BeamSection::circle("d20", 0.02, 0.3).unwrap());
-    let axis = Vector3::new(1.0, 0.5, -0.3).normalize();
-    let props = BeamProperties {
-        section,
-        material,
-        orientation: Vector3::z().cross(&axis),
-        theory: BeamTheory::Timoshenko,
-        mass: MassKind::Consistent,
-    };
-    let p0 = Point3::new(0.1, 0.2, 0.3);
-    let nodes = straight_beam(&mut model, p0, p0 + axis, n, &props, None).unwrap();
+    let (model, nodes) = super::common::skew_steel_beam(n, super::common::d20(), MassKind::Consistent);
     let interfaces = vec![("A".to_string(), nodes[0]), ("B".to_string(), nodes[n])];
     (model, interfaces, nodes)
 }
@@ -419,19 +405,8 @@ fn bodies_that_cannot_be_written_are_refused() {
         .contains("2 frequencies for 3 modes"));
 }
 
-/// A small deterministic generator (xorshift64*), so that a failure can be replayed.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
+// xorshift64* with a fixed seed (`fe_model::fuzz::Mutator`), so that a failure can be replayed.
+use fe_model::fuzz::Mutator as Rng;
 
 #[test]
 fn no_truncation_or_byte_change_panics_or_is_accepted() {
@@ -443,7 +418,7 @@ fn no_truncation_or_byte_change_panics_or_is_accepted() {
     }
     // Random changes of 1 to 3 bytes, each to a different value, anywhere: all refused (the
     // checksums cover every byte after line 2, and lines 1 and 2 are canonical text).
-    let mut rng = Rng(0x5EED_F11E);
+    let mut rng = Rng::new(0x5EED_F11E);
     let mut kinds = std::collections::BTreeMap::<String, usize>::new();
     for _ in 0..4000 {
         let mut changed = bytes.clone();

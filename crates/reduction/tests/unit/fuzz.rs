@@ -8,20 +8,17 @@ use reduction::file;
 use std::path::Path;
 
 fn free_body() -> reduction::ReducedBody {
-    use fe_model::generate::straight_beam;
-    use fe_model::{BeamProperties, BeamSection, BeamTheory, FeModel, IsotropicMaterial, MassKind};
+    use super::common::{beam_model, d20, steel};
+    use fe_model::{BeamTheory, MassKind};
     use nalgebra::{Point3, Vector3};
-    let mut model = FeModel::default();
-    let material = model.add_material(IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap());
-    let section = model.add_section(BeamSection::circle("d20", 0.02, 0.3).unwrap());
-    let props = BeamProperties {
-        section,
-        material,
-        orientation: Vector3::y(),
-        theory: BeamTheory::Timoshenko,
-        mass: MassKind::Consistent,
-    };
-    let nodes = straight_beam(&mut model, Point3::origin(), Point3::new(1.0, 0.0, 0.0), 4, &props, None).unwrap();
+    let (model, nodes) = beam_model(
+        steel(),
+        d20(),
+        (BeamTheory::Timoshenko, MassKind::Consistent),
+        Vector3::y(),
+        (Point3::origin(), Point3::new(1.0, 0.0, 0.0)),
+        4,
+    );
     let interfaces = vec![("A".to_string(), nodes[0]), ("B".to_string(), nodes[4])];
     let mut settings = reduction::CbSettings::new(reduction::ModeSelection::Count(2));
     settings.keep_mesh_shapes = true;

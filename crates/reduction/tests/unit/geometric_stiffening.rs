@@ -12,7 +12,7 @@
 use fe_model::generate::straight_beam;
 use fe_model::{
     add_interface_on_set, assemble_geometric_stiffness, box_mesh, linear_buckling, solid_model, BeamProperties,
-    BeamSection, BeamTheory, BucklingSettings, CellKind, DofMap, DofMask, FeModel, IsotropicMaterial, MassKind,
+    BeamSection, BeamTheory, BucklingSettings, CellKind, DofMap, DofMask, FeModel, MassKind,
     NodalLoad, NodeId, SpiderKind, SystemPattern,
 };
 use nalgebra::{DMatrix, Point3, Vector3};
@@ -34,9 +34,7 @@ impl Lcg {
     }
 }
 
-fn steel() -> IsotropicMaterial {
-    IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap()
-}
+use super::common::steel;
 
 /// A beam of `n` elements from `p0` along `axis` (length `L`), rectangular 20 x 30 mm, with
 /// interfaces "a" and "b" at its ends.
@@ -358,17 +356,14 @@ fn the_body_file_keeps_g_and_reads_format_version_1() {
     let v1 = file::read(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cantilever_v1.rbody")).unwrap();
     assert!(v1.geometric_stiffness.is_none());
     assert_eq!(v1.format_version, reduction::FORMAT_VERSION);
-    let mut beam = FeModel::default();
-    let material = beam.add_material(steel());
-    let section = beam.add_section(BeamSection::rectangle("bar-20x40", 0.02, 0.04, 0.3).unwrap());
-    let props = BeamProperties {
-        section,
-        material,
-        orientation: Vector3::y(),
-        theory: BeamTheory::Timoshenko,
-        mass: MassKind::Consistent,
-    };
-    let nodes = straight_beam(&mut beam, Point3::origin(), Point3::new(2.0, 0.0, 0.0), 4, &props, None).unwrap();
+    let (beam, nodes) = super::common::beam_model(
+        steel(),
+        BeamSection::rectangle("bar-20x40", 0.02, 0.04, 0.3).unwrap(),
+        (BeamTheory::Timoshenko, MassKind::Consistent),
+        Vector3::y(),
+        (Point3::origin(), Point3::new(2.0, 0.0, 0.0)),
+        4,
+    );
     let today = reduce(
         &beam,
         "beam",

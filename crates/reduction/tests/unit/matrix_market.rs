@@ -4,13 +4,11 @@
 // and reduced as external matrices, give the body `reduce` gives.
 
 use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
-use fe_model::generate::straight_beam;
 use fe_model::interface::{add_interface_on_set, SpiderKind};
 use fe_model::{
-    assemble, BeamProperties, BeamSection, BeamTheory, CellKind, DofMap, FeModel, IsotropicMaterial, MassKind, NodeId,
+    assemble, CellKind, DofMap, FeModel, IsotropicMaterial, MassKind, NodeId,
     SystemPattern,
 };
-use nalgebra::{Point3, Vector3};
 use reduction::matrix_market::{parse_matrix_market, to_matrix_market};
 use reduction::{
     read_matrix_market, reduce, reduce_external, reduce_external_dofs, write_matrix_market, CbSettings, DenseMatrix,
@@ -20,19 +18,7 @@ use std::path::{Path, PathBuf};
 
 /// A free steel beam along a skewed axis, `n` elements, interfaces at both ends.
 fn free_beam(n: usize) -> (FeModel, Vec<(String, NodeId)>) {
-    let mut model = FeModel::default();
-    let material = model.add_material(IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap());
-    let section = model.add_section(BeamSection::circle("d20", 0.02, 0.3).unwrap());
-    let axis = Vector3::new(1.0, 0.5, -0.3).normalize();
-    let props = BeamProperties {
-        section,
-        material,
-        orientation: Vector3::z().cross(&axis),
-        theory: BeamTheory::Timoshenko,
-        mass: MassKind::Consistent,
-    };
-    let p0 = Point3::new(0.1, 0.2, 0.3);
-    let nodes = straight_beam(&mut model, p0, p0 + axis, n, &props, None).unwrap();
+    let (model, nodes) = super::common::skew_steel_beam(n, super::common::d20(), MassKind::Consistent);
     (model, vec![("A".to_string(), nodes[0]), ("B".to_string(), nodes[n])])
 }
 

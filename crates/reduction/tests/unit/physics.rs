@@ -1,9 +1,7 @@
 // Physical checks of reduced bodies on load (`reduction::physics`): every tampered body below
 // has valid checksums (written by `file::to_bytes`) and was accepted before the checks.
 
-use fe_model::generate::straight_beam;
-use fe_model::{BeamProperties, BeamSection, BeamTheory, DofMask, FeModel, IsotropicMaterial, MassKind};
-use nalgebra::{Point3, Vector3};
+use fe_model::{DofMask, MassKind};
 use reduction::file;
 use reduction::{physical_problems, reduce, BodyFileProblem, CbSettings, ModeSelection, PhysicsProblem, ReducedBody, ReductionError};
 use std::path::Path;
@@ -11,19 +9,7 @@ use std::path::Path;
 /// A free steel beam of 1 m along a skew axis, 6 elements, interfaces at both ends, 3 modes;
 /// `clamped`: its first node supported in the FE model.
 fn beam_body(clamped: bool) -> ReducedBody {
-    let mut model = FeModel::default();
-    let material = model.add_material(IsotropicMaterial::new("steel", 210e9, 0.3, 7850.0).unwrap());
-    let section = model.add_section(BeamSection::circle("d20", 0.02, 0.3).unwrap());
-    let axis = Vector3::new(1.0, 0.5, -0.3).normalize();
-    let props = BeamProperties {
-        section,
-        material,
-        orientation: Vector3::z().cross(&axis),
-        theory: BeamTheory::Timoshenko,
-        mass: MassKind::Consistent,
-    };
-    let p0 = Point3::new(0.1, 0.2, 0.3);
-    let nodes = straight_beam(&mut model, p0, p0 + axis, 6, &props, None).unwrap();
+    let (mut model, nodes) = super::common::skew_steel_beam(6, super::common::d20(), MassKind::Consistent);
     let interfaces = if clamped {
         model.add_support(nodes[0], DofMask::ALL);
         vec![("B".to_string(), nodes[6])]
