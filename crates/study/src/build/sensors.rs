@@ -9,7 +9,7 @@ use crate::input::validate::mechanism::{
     joint_is_angle, BodySource, PointRef, ReactionAt, SensorSpec, SensorTarget, StressNodes,
 };
 use crate::input::validate::Study;
-use crate::output::observer::SensorGroup;
+use crate::sensor_group::SensorGroup;
 use mbs::SensorKind;
 use nalgebra::Vector3;
 

@@ -5,8 +5,9 @@
 
 use crate::build::BuiltMechanism;
 use crate::error::{BoxError, ResultExt};
+use crate::mesh::{CellRole, VtuMesh};
 use crate::output::observer::{Observer, Series};
-use crate::output::vtu::{CellRole, PointField, VtuMesh};
+use crate::output::vtu::PointField;
 use mbs::System;
 use nalgebra::{Point3, Vector3};
 use reduction::NodeStresses;
