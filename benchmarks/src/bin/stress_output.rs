@@ -31,7 +31,7 @@ use mbs::{solve_dynamic, DynamicSettings, Integrator, SensorKind, System};
 use nalgebra::{Matrix3, Vector3};
 use reduction::{reduce, CbSettings, ModeSelection, VonMisesMaximum, VonMisesReference};
 use std::time::Instant;
-use study::output::vtu::{write_vtu, PointField, VtuMesh};
+use study::output::vtu::{motion_fields, stress_fields, write_vtu, PointField, VtuMesh};
 
 const REPEAT: usize = 3;
 const STEPS: usize = 1000;
@@ -189,44 +189,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n_points = vtu.points.len();
     let u: Vec<f64> = (0..3 * n_points).map(|k| 1e-4 * (k as f64).sin()).collect();
     let tensor: Vec<f64> = st.tensor.iter().flatten().copied().collect();
-    let mut base = vec![
-        PointField {
-            name: "displacement",
-            components: 3,
-            values: &u,
-        },
-        PointField {
-            name: "rotation",
-            components: 3,
-            values: &u,
-        },
-        PointField {
-            name: "velocity",
-            components: 3,
-            values: &u,
-        },
-    ];
+    let mut base = Vec::from(motion_fields(&u, &u));
+    base.push(PointField {
+        name: "velocity",
+        components: 3,
+        values: &u,
+    });
     let dir = std::env::temp_dir().join(format!("flexmbs-stress-output-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let path = dir.join("frame.vtu");
     let (t_vtu_base, _) = timed(|| (0..FRAMES).try_for_each(|_| write_vtu(&path, &vtu, &base)));
-    base.extend([
-        PointField {
-            name: "stress",
-            components: 6,
-            values: &tensor,
-        },
-        PointField {
-            name: "von_mises",
-            components: 1,
-            values: &st.von_mises,
-        },
-        PointField {
-            name: "max_principal",
-            components: 1,
-            values: &st.principal,
-        },
-    ]);
+    base.extend(stress_fields(&tensor, &st.von_mises, &st.principal));
     let (t_vtu_stress, _) = timed(|| (0..FRAMES).try_for_each(|_| write_vtu(&path, &vtu, &base)));
     let size = std::fs::metadata(&path)?.len();
     std::fs::remove_dir_all(&dir)?;

@@ -50,6 +50,44 @@ pub struct PointField<'a> {
     pub values: &'a [f64],
 }
 
+/// The fields `displacement` and `rotation` of a frame, three components a node each.
+pub fn motion_fields<'a>(displacement: &'a [f64], rotation: &'a [f64]) -> [PointField<'a>; 2] {
+    [
+        PointField {
+            name: "displacement",
+            components: 3,
+            values: displacement,
+        },
+        PointField {
+            name: "rotation",
+            components: 3,
+            values: rotation,
+        },
+    ]
+}
+
+/// The stress fields of a frame: `stress` (six components a node), `von_mises` and
+/// `max_principal` (one each).
+pub fn stress_fields<'a>(tensor: &'a [f64], von_mises: &'a [f64], principal: &'a [f64]) -> [PointField<'a>; 3] {
+    [
+        PointField {
+            name: "stress",
+            components: 6,
+            values: tensor,
+        },
+        PointField {
+            name: "von_mises",
+            components: 1,
+            values: von_mises,
+        },
+        PointField {
+            name: "max_principal",
+            components: 1,
+            values: principal,
+        },
+    ]
+}
+
 /// The two vector fields of six-dof nodal values: `displacement` and `rotation`.
 pub fn six_dof_fields(values: &[[f64; 6]]) -> (Vec<f64>, Vec<f64>) {
     let u = values.iter().flat_map(|v| [v[0], v[1], v[2]]).collect();
