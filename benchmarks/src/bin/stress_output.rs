@@ -31,7 +31,7 @@ use mbs::{solve_dynamic, DynamicSettings, Integrator, SensorKind, System};
 use nalgebra::{Matrix3, Vector3};
 use reduction::{reduce, CbSettings, ModeSelection, VonMisesMaximum, VonMisesReference};
 use std::time::Instant;
-use study::output::vtu::{write_vtu, PointField, VtuMesh};
+use study::output::vtu::{motion_fields, stress_fields, write_vtu, PointField, VtuMesh};
 
 const REPEAT: usize = 3;
 const STEPS: usize = 1000;
@@ -189,22 +189,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n_points = vtu.points.len();
     let u: Vec<f64> = (0..3 * n_points).map(|k| 1e-4 * (k as f64).sin()).collect();
     let tensor: Vec<f64> = st.tensor.iter().flatten().copied().collect();
-    let mut base: Vec<PointField> = [("displacement", 3, &u[..]), ("rotation", 3, &u), ("velocity", 3, &u)]
-        .into_iter()
-        .map(point_field)
-        .collect();
+    let mut base = Vec::from(motion_fields(&u, &u));
+    base.push(PointField {
+        name: "velocity",
+        components: 3,
+        values: &u,
+    });
     let dir = std::env::temp_dir().join(format!("flexmbs-stress-output-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let path = dir.join("frame.vtu");
     let (t_vtu_base, _) = timed(|| (0..FRAMES).try_for_each(|_| write_vtu(&path, &vtu, &base)));
-    base.extend(
-        [
-            ("stress", 6, &tensor[..]),
-            ("von_mises", 1, &st.von_mises[..]),
-            ("max_principal", 1, &st.principal[..]),
-        ]
-        .map(point_field),
-    );
+    base.extend(stress_fields(&tensor, &st.von_mises, &st.principal));
     let (t_vtu_stress, _) = timed(|| (0..FRAMES).try_for_each(|_| write_vtu(&path, &vtu, &base)));
     let size = std::fs::metadata(&path)?.len();
     std::fs::remove_dir_all(&dir)?;
@@ -267,13 +262,4 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         load_after.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
     Ok(())
-}
-
-/// The VTU point field `name` of `components` values per point.
-fn point_field<'a>((name, components, values): (&'a str, usize, &'a [f64])) -> PointField<'a> {
-    PointField {
-        name,
-        components,
-        values,
-    }
 }

@@ -169,8 +169,8 @@ fn study_error_dicts<'py>(py: Python<'py>, e: &study::input::source::StudyErrors
         .iter()
         .map(|err| {
             let span = match &err.anchor {
-                Anchor::Value(p) => src.locate(p, false),
-                Anchor::Key(p) => src.locate(p, true),
+                Anchor::Value(p) => src.locate(p),
+                Anchor::Key(p) => src.locate_key(p),
                 Anchor::Span(s) => Some(s.clone()),
                 Anchor::File => None,
             };

@@ -13,12 +13,14 @@
 //!
 //! The modules stand in that order: `input <- build <- run -> output`. `input` reads and
 //! checks a study file into a [`Study`]; `build` turns a study and its reduced bodies into the
-//! mechanism and never runs anything (of `output` it uses only two data types: the sensor
-//! groups and the VTU mesh of a body); `run` reduces parts through the cache, asks `build` for
-//! the mechanism, runs the analyses and streams every result into an [`Observer`] of
-//! `output`, which knows nothing of how results are made. [`error`] and [`interrupt`] sit
-//! below them all (an error's location uses the key paths of `input::source`, which uses
-//! nothing of the crate).
+//! mechanism and never runs anything, nor uses anything of `run` or `output`; `run` reduces
+//! parts through the cache, asks `build` for the mechanism, runs the analyses and streams
+//! every result into an [`Observer`] of `output`, which knows nothing of how results are made
+//! (it uses neither `build` nor `run`). The two plain data types that `build` makes and
+//! `output` writes, the sensor groups (`sensor_group`) and the VTU mesh of a body (`mesh`,
+//! re-exported by `output::vtu`), are leaves below `build` and `output` that use nothing of
+//! the crate. [`error`] and [`interrupt`] sit below them all (an error's location uses the key
+//! paths of `input::source`, which uses nothing of the crate).
 //!
 //! Nothing runs until the whole study has been validated: a misspelt material name is
 //! reported, with its file, line, column, key and the close matches, before any mesh is
@@ -45,7 +47,9 @@ pub mod interrupt;
 pub mod output;
 
 pub(crate) mod build;
+pub(crate) mod mesh;
 pub(crate) mod run;
+pub(crate) mod sensor_group;
 
 pub use error::BoxError;
 pub use input::document::Document;

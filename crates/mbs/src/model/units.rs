@@ -13,13 +13,19 @@ pub enum CoordinateQuantity {
 }
 
 impl CoordinateQuantity {
-    /// The SI unit of the coordinate (`rate`: of its time derivative).
-    pub fn unit(self, rate: bool) -> &'static str {
-        match (self, rate) {
-            (Self::Angle, false) => "rad",
-            (Self::Angle, true) => "rad/s",
-            (Self::Length, false) => "m",
-            (Self::Length, true) => "m/s",
+    /// The SI unit of the coordinate.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Self::Angle => "rad",
+            Self::Length => "m",
+        }
+    }
+
+    /// The SI unit of the coordinate's time derivative.
+    pub fn rate_unit(self) -> &'static str {
+        match self {
+            Self::Angle => "rad/s",
+            Self::Length => "m/s",
         }
     }
 

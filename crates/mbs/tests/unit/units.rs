@@ -24,9 +24,9 @@ fn joint_coordinate_quantities_follow_the_joint_docs() {
         let got: Vec<_> = (0..kind.n_scalar()).map(|c| kind.coordinate_quantity(c)).collect();
         assert_eq!(got, expected, "{}", kind.name());
     }
-    assert_eq!(Angle.unit(false), "rad");
-    assert_eq!(Angle.unit(true), "rad/s");
-    assert_eq!(Length.unit(true), "m/s");
+    assert_eq!(Angle.unit(), "rad");
+    assert_eq!(Angle.rate_unit(), "rad/s");
+    assert_eq!(Length.rate_unit(), "m/s");
     assert_eq!(Angle.effort_unit(), "N m");
     assert_eq!(Length.effort_unit(), "N");
 }

@@ -3,7 +3,7 @@
 use super::mechanism::{BodyOut, FlexibleSources, NamedLoad};
 use crate::input::source::KeyPath;
 use crate::input::validate::Study;
-use crate::output::observer::SensorGroup;
+use crate::sensor_group::SensorGroup;
 use mbs::{Model, NodeId};
 use std::collections::BTreeMap;
 

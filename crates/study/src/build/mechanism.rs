@@ -4,8 +4,8 @@
 use crate::error::{BoxError, SolverStopped};
 use crate::input::source::KeyPath;
 use crate::input::validate::Study;
-use crate::output::observer::SensorGroup;
-use crate::output::vtu::VtuMesh;
+use crate::mesh::VtuMesh;
+use crate::sensor_group::SensorGroup;
 use mbs::{Model, NodeId, System};
 use nalgebra::Isometry3;
 use reduction::ReducedBody;

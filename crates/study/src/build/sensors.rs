@@ -9,7 +9,7 @@ use crate::input::validate::mechanism::{
     joint_is_angle, BodySource, PointRef, ReactionAt, SensorSpec, SensorTarget, StressNodes,
 };
 use crate::input::validate::Study;
-use crate::output::observer::SensorGroup;
+use crate::sensor_group::SensorGroup;
 use mbs::SensorKind;
 use nalgebra::Vector3;
 
@@ -179,11 +179,12 @@ impl Builder<'_> {
         } else {
             SensorKind::JointCoordinate { joint, coordinate: c }
         };
-        let column = format!(
-            "{} {c} [{}]",
-            if rate { "rate" } else { "coordinate" },
-            self.quantity(j, c).unit(rate)
-        );
+        let quantity = self.quantity(j, c);
+        let column = if rate {
+            format!("rate {c} [{}]", quantity.rate_unit())
+        } else {
+            format!("coordinate {c} [{}]", quantity.unit())
+        };
         Ok((kind, column))
     }
 

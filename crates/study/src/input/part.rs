@@ -166,6 +166,23 @@ impl Part {
     pub fn check_build<R>(
         &mut self,
         supports: &[SupportSpec],
+        inspect: impl FnOnce(&Built) -> R,
+    ) -> Result<R, FeError> {
+        self.check_build_on(supports, false, inspect)
+    }
+
+    /// What [`Part::build_for_reduction`] builds for the part's own reduction (the auxiliary
+    /// node if it asks for one; none without a reduction), handed to `inspect`, without a copy
+    /// of the base model, as [`Part::check_build`].
+    pub fn check_build_for_reduction<R>(&mut self, inspect: impl FnOnce(&Built) -> R) -> Result<R, FeError> {
+        let auxiliary = self.reduction.as_ref().is_some_and(|r| r.auxiliary_node);
+        self.check_build_on(&[], auxiliary, inspect)
+    }
+
+    /// [`Part::check_build`] with `supports`, and the auxiliary node with `auxiliary`.
+    fn check_build_on<R>(
+        &mut self,
+        supports: &[SupportSpec],
         auxiliary: bool,
         inspect: impl FnOnce(&Built) -> R,
     ) -> Result<R, FeError> {

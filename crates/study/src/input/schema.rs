@@ -19,7 +19,8 @@
 //! The sections `bodies`, `rigid_bodies`, `point_masses`, `springs`, `supports`, `joints`,
 //! `drivers`, `loads`, `sensors`, `initial`, `output` and the analyses `equilibrium`,
 //! `dynamic` and `linearized` are the multibody part of a study (the mechanism), validated by
-//! `crate::input::validate::mechanism` and run by `crate::mechanism` on the `mbs` crate.
+//! `crate::input::validate::mechanism`, built into an `mbs` system by `crate::build` and run
+//! by `crate::run::mechanism`.
 
 use serde::Deserialize;
 use std::collections::BTreeMap;

@@ -243,9 +243,20 @@ impl Source {
         }
     }
 
-    /// The span of the value at `path` (or of its key), falling back to the nearest
-    /// enclosing value that exists.
-    pub fn locate(&self, path: &KeyPath, key: bool) -> Option<Range<usize>> {
+    /// The span of the value at `path`, falling back to the nearest enclosing value that
+    /// exists.
+    pub fn locate(&self, path: &KeyPath) -> Option<Range<usize>> {
+        self.locate_span(path, false)
+    }
+
+    /// The span of the key of the value at `path` (of the value, for an array item, which
+    /// has no key), falling back to the nearest enclosing value that exists.
+    pub fn locate_key(&self, path: &KeyPath) -> Option<Range<usize>> {
+        self.locate_span(path, true)
+    }
+
+    /// [`Source::locate`], or with `key` [`Source::locate_key`].
+    fn locate_span(&self, path: &KeyPath, key: bool) -> Option<Range<usize>> {
         let mut p = path.clone();
         loop {
             if let Some((node, key_span)) = self.node(&p) {
@@ -318,7 +329,7 @@ impl Source {
                     let keys = self.keys(&path);
                     if keys.contains(&field) {
                         path = path.key(&field);
-                        if let Some(s) = self.locate(&path, true) {
+                        if let Some(s) = self.locate_key(&path) {
                             span = s;
                         }
                     }
@@ -336,8 +347,8 @@ impl Source {
     /// `file:line:col: key: message` and the line with a caret under the span.
     pub fn render(&self, e: &StudyError) -> String {
         let span = match &e.anchor {
-            Anchor::Value(p) => self.locate(p, false),
-            Anchor::Key(p) => self.locate(p, true),
+            Anchor::Value(p) => self.locate(p),
+            Anchor::Key(p) => self.locate_key(p),
             Anchor::Span(s) => Some(s.clone()),
             Anchor::File => None,
         };

@@ -123,7 +123,7 @@ impl Study {
     pub fn at(&self, path: &KeyPath) -> crate::error::Location {
         let line_column = self
             .source
-            .locate(path, false)
+            .locate(path)
             .map(|span| crate::input::source::line_column(&self.source.text, span.start));
         crate::error::Location {
             file: self.source.path.clone(),
@@ -668,8 +668,7 @@ impl Validator<'_> {
         };
         // Build the spiders now: a surface that cannot carry an interface is an input error,
         // and should be reported with its key before anything runs.
-        let auxiliary = part.reduction.as_ref().is_some_and(|r| r.auxiliary_node);
-        if let Err(e) = part.check_build(&[], auxiliary, |_| ()) {
+        if let Err(e) = part.check_build_for_reduction(|_| ()) {
             self.fe_error(path, &part, &e);
             return None;
         }
@@ -1874,7 +1873,7 @@ impl Validator<'_> {
         if let AnalysisSpec::Static { supports, .. } | AnalysisSpec::Modal { supports, .. } = &spec {
             let part = parts[listed].1.as_mut()?;
             let free = part
-                .check_build(supports, false, |b| fe_model::DofMap::new(&b.model).map(|d| d.n_free()))
+                .check_build(supports, |b| fe_model::DofMap::new(&b.model).map(|d| d.n_free()))
                 .and_then(|free| free);
             match free {
                 Err(e) => {

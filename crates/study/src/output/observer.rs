@@ -97,14 +97,7 @@ impl Table {
     }
 }
 
-/// One sensor of the study: the `mbs` sensors it is made of and its columns, each named with
-/// its unit (`"deflection [m]"`).
-#[derive(Clone, Debug)]
-pub struct SensorGroup {
-    pub name: String,
-    pub mbs_names: Vec<String>,
-    pub columns: Vec<String>,
-}
+pub use crate::sensor_group::SensorGroup;
 
 /// The name and unit of a column label `"name [unit]"` (unit empty when there is none).
 pub fn split_unit(column: &str) -> (&str, &str) {

@@ -38,91 +38,54 @@
 //! can be checked by eye and by tests, and the meshes this tool writes are small next to the
 //! cost of the analyses that produce them.
 
-use fe_model::{CellKind, Element, FeModel, NodeId};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// `VTK[k] = ours[HEX20_TO_VTK[k]]`. Corners agree; VTK lists the mid-edge nodes of the bottom
-/// face (01, 12, 23, 30), then the top face (45, 56, 67, 74), then the vertical edges (04, 15,
-/// 26, 37); gmsh lists them by lowest corner: 01, 03, 04, 12, 15, 23, 26, 37, 45, 47, 56, 67.
-pub const HEX20_TO_VTK: [usize; 20] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 14, 15];
-
-/// `VTK[k] = ours[TET10_TO_VTK[k]]`: VTK's node 8 is on edge 1-3 and 9 on edge 2-3; gmsh's 8
-/// is on edge 3-2 and 9 on edge 3-1.
-pub const TET10_TO_VTK: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 9, 8];
-
-const IDENTITY: [usize; 20] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19];
-
-/// The VTK cell type of a kind, and the permutation from our node order to VTK's.
-pub fn vtk_cell(kind: CellKind) -> (u8, &'static [usize]) {
-    match kind {
-        CellKind::Line2 => (3, &IDENTITY[..2]),
-        CellKind::Tri3 => (5, &IDENTITY[..3]),
-        CellKind::Quad4 => (9, &IDENTITY[..4]),
-        CellKind::Tet4 => (10, &IDENTITY[..4]),
-        CellKind::Hex8 => (12, &IDENTITY[..8]),
-        CellKind::Wedge6 => (13, &IDENTITY[..6]),
-        CellKind::Tri6 => (22, &IDENTITY[..6]),
-        CellKind::Quad8 => (23, &IDENTITY[..8]),
-        CellKind::Tet10 => (24, &TET10_TO_VTK),
-        CellKind::Hex20 => (25, &HEX20_TO_VTK),
-    }
-}
-
-/// What a VTU cell stands for, written as the cell field `kind` so that ParaView's Threshold
-/// can show elements, spiders and interface nodes apart.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CellRole {
-    Element = 0,
-    SpiderLeg = 1,
-    InterfaceNode = 2,
-}
-
-/// Points and cells in VTK order.
-#[derive(Clone, Debug, Default)]
-pub struct VtuMesh {
-    pub points: Vec<[f64; 3]>,
-    /// VTK type, connectivity in VTK order, role.
-    pub cells: Vec<(u8, Vec<usize>, CellRole)>,
-}
-
-impl VtuMesh {
-    /// The elements of `model` (beams as lines, solids as their kind), and for each
-    /// interface `(node, surface nodes)` a vertex and one line per spider leg.
-    pub fn from_model(model: &FeModel, interfaces: &[(NodeId, Vec<NodeId>)]) -> Self {
-        let points = model.mesh.nodes.iter().map(|p| [p.x, p.y, p.z]).collect();
-        let mut cells = Vec::with_capacity(model.elements.len());
-        for e in &model.elements {
-            let kind = match e {
-                Element::Beam2(_) => CellKind::Line2,
-                other => match other.solid() {
-                    Some((k, _)) => k.cell_kind(),
-                    None => continue,
-                },
-            };
-            cells.push(Self::cell(kind, e.nodes()));
-        }
-        for (node, surface) in interfaces {
-            cells.push((1, vec![node.index()], CellRole::InterfaceNode));
-            for s in surface {
-                cells.push((3, vec![node.index(), s.index()], CellRole::SpiderLeg));
-            }
-        }
-        Self { points, cells }
-    }
-
-    /// One cell of `kind` with nodes in our order.
-    pub fn cell(kind: CellKind, nodes: &[NodeId]) -> (u8, Vec<usize>, CellRole) {
-        let (vtk, perm) = vtk_cell(kind);
-        (vtk, perm.iter().map(|&k| nodes[k].index()).collect(), CellRole::Element)
-    }
-}
+pub use crate::mesh::{vtk_cell, CellRole, VtuMesh, HEX20_TO_VTK, TET10_TO_VTK};
 
 /// A nodal field: name, components per node, values node by node.
 pub struct PointField<'a> {
     pub name: &'a str,
     pub components: usize,
     pub values: &'a [f64],
+}
+
+/// The fields `displacement` and `rotation` of a frame, three components a node each.
+pub fn motion_fields<'a>(displacement: &'a [f64], rotation: &'a [f64]) -> [PointField<'a>; 2] {
+    [
+        PointField {
+            name: "displacement",
+            components: 3,
+            values: displacement,
+        },
+        PointField {
+            name: "rotation",
+            components: 3,
+            values: rotation,
+        },
+    ]
+}
+
+/// The stress fields of a frame: `stress` (six components a node), `von_mises` and
+/// `max_principal` (one each).
+pub fn stress_fields<'a>(tensor: &'a [f64], von_mises: &'a [f64], principal: &'a [f64]) -> [PointField<'a>; 3] {
+    [
+        PointField {
+            name: "stress",
+            components: 6,
+            values: tensor,
+        },
+        PointField {
+            name: "von_mises",
+            components: 1,
+            values: von_mises,
+        },
+        PointField {
+            name: "max_principal",
+            components: 1,
+            values: principal,
+        },
+    ]
 }
 
 /// The two vector fields of six-dof nodal values: `displacement` and `rotation`.

@@ -5,8 +5,9 @@
 
 use crate::build::BuiltMechanism;
 use crate::error::{BoxError, ResultExt};
+use crate::mesh::{CellRole, VtuMesh};
 use crate::output::observer::{Observer, Series};
-use crate::output::vtu::{CellRole, PointField, VtuMesh};
+use crate::output::vtu::{motion_fields, stress_fields, PointField};
 use mbs::System;
 use nalgebra::{Point3, Vector3};
 use reduction::NodeStresses;
@@ -333,17 +334,8 @@ impl MeshRecovery {
         }
         let flat = |f: &[[f64; 3]]| -> Vec<f64> { f.iter().flatten().copied().collect() };
         let (u, rot, vel) = (flat(&u), flat(&rot), flat(&vel));
-        let mut fields = vec![
-            PointField {
-                name: "displacement",
-                components: 3,
-                values: &u,
-            },
-            PointField {
-                name: "rotation",
-                components: 3,
-                values: &rot,
-            },
+        let mut fields = Vec::from(motion_fields(&u, &rot));
+        fields.extend([
             PointField {
                 name: "velocity",
                 components: 3,
@@ -354,24 +346,10 @@ impl MeshRecovery {
                 components: 1,
                 values: &body_of,
             },
-        ];
+        ]);
         let tensor: Vec<f64> = tensor.iter().flatten().copied().collect();
         if self.has_stress() {
-            fields.push(PointField {
-                name: "stress",
-                components: 6,
-                values: &tensor,
-            });
-            fields.push(PointField {
-                name: "von_mises",
-                components: 1,
-                values: &von_mises,
-            });
-            fields.push(PointField {
-                name: "max_principal",
-                components: 1,
-                values: &principal,
-            });
+            fields.extend(stress_fields(&tensor, &von_mises, &principal));
         }
         obs.frame(series, t, &self.mesh, &fields)
     }

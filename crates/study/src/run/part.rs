@@ -5,8 +5,9 @@ use super::reduce::{free_dofs, reduce_part, Reduced};
 use crate::error::{BoxError, ResultExt};
 use crate::input::part::{Built, InterfaceTarget, LoadSpec, Part, SupportSpec};
 use crate::input::validate::{Analysis, AnalysisSpec, Solver, Study, DENSE_AUTO_LIMIT};
+use crate::mesh::VtuMesh;
 use crate::output::observer::{Cell, Observer, Progress, Series, Table};
-use crate::output::vtu::{six_dof_fields, PointField, VtuMesh};
+use crate::output::vtu::{self, motion_fields, six_dof_fields};
 use fe_model::{ModalSolution, NodeId, DOF_NAMES};
 use serde_json::json;
 use std::path::Path;
@@ -89,37 +90,12 @@ fn six_dof_frame(
     stress: Option<&StressFields>,
 ) -> Result<(), BoxError> {
     let (u, r) = six_dof_fields(values);
-    let mut fields = vec![
-        PointField {
-            name: "displacement",
-            components: 3,
-            values: &u,
-        },
-        PointField {
-            name: "rotation",
-            components: 3,
-            values: &r,
-        },
-    ];
+    let mut fields = Vec::from(motion_fields(&u, &r));
     let tensor: Vec<f64> = stress
         .map(|s| s.0.iter().flatten().copied().collect())
         .unwrap_or_default();
     if let Some((_, von_mises, principal)) = stress {
-        fields.push(PointField {
-            name: "stress",
-            components: 6,
-            values: &tensor,
-        });
-        fields.push(PointField {
-            name: "von_mises",
-            components: 1,
-            values: von_mises,
-        });
-        fields.push(PointField {
-            name: "max_principal",
-            components: 1,
-            values: principal,
-        });
+        fields.extend(vtu::stress_fields(&tensor, von_mises, principal));
     }
     obs.frame(series, key, mesh, &fields)
 }

@@ -3,7 +3,8 @@
 
 use crate::build::BuiltMechanism;
 use crate::error::BoxError;
-use crate::output::observer::{Observer, SensorGroup, SensorStream};
+use crate::output::observer::{Observer, SensorStream};
+use crate::sensor_group::SensorGroup;
 use mbs::SensorRecord;
 use std::collections::HashMap;
 

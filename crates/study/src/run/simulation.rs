@@ -10,7 +10,7 @@ use super::sensors::{sensor_columns, sensor_indices};
 use crate::build::{BuiltMechanism, LoadTarget, NamedLoad};
 use crate::error::{BoxError, Location};
 use crate::input::validate::{MbsAnalysis, Study};
-use crate::output::observer::SensorGroup;
+use crate::sensor_group::SensorGroup;
 use mbs::{DynamicSettings, Integrator, LoadKind, NodeMotion, SensorRecord, State, StepReport, System};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;

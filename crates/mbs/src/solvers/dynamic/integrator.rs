@@ -1043,11 +1043,19 @@ impl<'a> Integrator<'a> {
             self.incr_b[i] = h * self.vb_n[i] + h * h * (0.5 - b) * self.a[i] + h * h * b * a_new;
             self.qb[i] = qdd;
         }
+        self.update_trial(sys);
+    }
+
+    /// Keeps the factorised iteration matrix of step size `h` with the rotations and in-plane
+    /// angles it was built at (modified Newton turns it with them, module docs).
+    /// The trial state from the body-axis iterates of the step ([`to_trial`]), in the
+    /// predictor and after each correction alike.
+    fn update_trial(&mut self, sys: &System) {
         to_trial(
             sys,
             &self.trans,
-            prev,
-            st,
+            &self.prev,
+            &mut self.trial,
             &mut self.incr,
             &self.incr_b,
             &self.vb,
@@ -1055,8 +1063,6 @@ impl<'a> Integrator<'a> {
         );
     }
 
-    /// Keeps the factorised iteration matrix of step size `h` with the rotations and in-plane
-    /// angles it was built at (modified Newton turns it with them, module docs).
     fn keep_factor(&mut self, h: f64) {
         let st = &self.trial;
         self.factor_rotations.clear();
@@ -1159,16 +1165,7 @@ impl<'a> Integrator<'a> {
             self.vb[i] += gp * self.dx[i];
             self.incr_b[i] += self.dx[i];
         }
-        to_trial(
-            sys,
-            &self.trans,
-            prev,
-            st,
-            &mut self.incr,
-            &self.incr_b,
-            &self.vb,
-            &self.qb,
-        );
+        self.update_trial(sys);
         Ok(())
     }
 }

@@ -5,7 +5,7 @@
 //!
 //! What needs the reduced bodies (interface positions, the tree of joints, unheld
 //! coordinates, rigid loops) is checked by `mbs::System::new` when the study runs;
-//! `crate::mechanism` turns those errors back into a located message.
+//! `crate::build` (`BuiltMechanism::system`) turns those errors back into a located message.
 
 use super::Validator;
 use crate::input::keys;
@@ -150,7 +150,7 @@ pub struct PointLoadSpec {
 
 /// A `[[loads]]` point load at a load point inside a flexible body (`"body.point"` where
 /// `point` is no interface): the name is resolved against the reduced body's load points when
-/// the study runs (`mechanism::build`).
+/// the study runs (`crate::build`).
 #[derive(Clone, Debug)]
 pub struct BodyLoadSpec {
     pub name: String,
