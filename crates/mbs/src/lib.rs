@@ -170,7 +170,7 @@
 //! |---|---|
 //! | [`ids`], [`state`], [`node`] | entity ids; [`State`]; node motions (plain data) |
 //! | [`error`] | [`ModelError`], [`SolveError`], [`Incomplete`] |
-//! | [`model`] | the serde data, [`time_function`](model::time_function), [`user_force`](model::user_force) ([`UserForce`], added with [`System::with_user_forces`]), [`units`](model::units), [`merge`](model::merge) |
+//! | [`model`] | the serde data, [`time_function`](model::time_function), [`user_force`] ([`UserForce`], added with [`System::with_user_forces`]), [`units`](model::units), [`merge`] |
 //! | [`assembly`] | [`coordinates`](assembly::coordinates) (the maps and their derivatives), [`dense_lu`](assembly::dense_lu) (the LU of small iteration matrices), [`planar`](mod@assembly::planar) (the checks of planar flexible bodies), [`body`](assembly::body) (elements), [`topology`](assembly::topology) (the tree and its checks), [`initial`](assembly::initial) (how initial conditions act), [`joint_forces`](assembly::joint_forces) (limits and actuators), [`system`](assembly::system) ([`System`]: construction, assembly, initial states, sensors, momenta, recovery) |
 //! | [`solvers`] | [`static_solver`](solvers::static_solver), [`arc_length`](solvers::arc_length), [`stability`](mod@solvers::stability), [`linearized`](solvers::linearized) (spectrum, mode energies and buckling), [`dynamic`](solvers::dynamic) (the integrator, its runs, [`retry`](solvers::dynamic::retry) with halved steps after a failure, [`streaming`](solvers::dynamic::streaming)) |
 

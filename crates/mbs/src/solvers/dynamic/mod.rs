@@ -93,7 +93,7 @@
 //!   that arrive with the converging evaluation are factorised for the next step. A step whose
 //!   modified iterations fail (no convergence in `max_iterations`, a singular matrix, a body
 //!   that cannot be evaluated) is solved again from the predictor with full Newton before
-//!   [`SolveError::NotConverged`] is reported. Both converge to the same tolerance, so their
+//!   [`SolveError::NotConverged`](crate::SolveError::NotConverged) is reported. Both converge to the same tolerance, so their
 //!   trajectories agree to it. [`StepReport::jacobians`] and [`Trajectory::jacobians`] count the
 //!   factorisations.
 //!
@@ -156,7 +156,7 @@
 //! Struct. Dyn.* 20; with the algorithmic accelerations of generalized-α):
 //! $\mathbf e_{n+1} = h^2\,|\beta - \tfrac16|\,(\mathbf a_{n+1} - \mathbf a_n)$, the $O(h^3)$ term the
 //! update of $\mathbf q$ misses, measured as $\max_i|e_i|/s_i$ with the unknowns' scales
-//! ([`System::increment_norm`]). A step with $e >$ `tolerance` is rejected and retried with
+//! ([`System::increment_norm`](crate::System::increment_norm)). A step with $e >$ `tolerance` is rejected and retried with
 //! $h\min(0.9, \max(0.2, 0.9(\mathrm{tol}/e)^{1/3}))$; after an accepted one the PI controller
 //! ([`PI_INTEGRAL`], [`PI_PROPORTIONAL`]) sets the next,
 //! $h_{n+1} = 0.9\,h_n(\mathrm{tol}/e_n)^{0.7/3}(e_{n-1}/\mathrm{tol})^{0.4/3}$, growing by at most 2
@@ -175,7 +175,7 @@
 //! in $(\mathbf q, \dot{\mathbf q})$ (the centre of mass follows the frame (4.4) and the CB shapes;
 //! $\mathbf H$ involves the rotations), so the scheme alone makes their rates vanish at each
 //! $t_{n+1}$ but conserves $\mathbf L$, $\mathbf H$ and the energy to its order, 2. On a free, unloaded
-//! model ([`System::rigid_invariance`]) the step therefore ends with the momentum projection of
+//! model ([`System::rigid_invariance`](crate::System::rigid_invariance)) the step therefore ends with the momentum projection of
 //! [`crate::assembly::system::momentum`] (Hairer, Lubich & Wanner, §IV.4; `DynamicSettings::momentum`): the
 //! velocities get the $\hat{\mathbf M}$-orthogonal rigid correction that restores $\mathbf L$ and
 //! $\mathbf H$ of the start, so both are constant to round-off, and the energy still drifts at

@@ -14,7 +14,7 @@ pub struct Trajectory {
     pub sensors: SensorRecord,
     /// Newton iterations of each step.
     pub iterations: Vec<usize>,
-    /// Iteration matrices factorised in each step ([`StepReport::jacobians`]).
+    /// Iteration matrices factorised in each step ([`StepReport::jacobians`](crate::StepReport::jacobians)).
     pub jacobians: Vec<usize>,
     pub final_state: State,
 }
