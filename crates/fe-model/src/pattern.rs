@@ -210,18 +210,17 @@ pub(crate) fn balanced_ranges(col_ptr: &[usize], ranges: usize) -> Vec<usize> {
 }
 
 /// The CSC structure (rows sorted) of the union of the dense blocks $\text{set}\times\text{set}$
-/// of `sets` on `n` unknowns, with the whole diagonal when `diagonal`: the symbolic phase of
+/// of `sets` on `n` unknowns, and the whole diagonal (an unknown no set reaches keeps its
+/// diagonal entry, so a factorisation sees every pivot): the symbolic phase of
 /// any assembly whose elements couple all their unknowns (this crate's elements, the
 /// multibody system's bodies and joints).
 ///
 /// # Panics
 /// When an unknown of a set is not below `n`, or `n` exceeds `u32::MAX`.
-pub fn block_structure(n: usize, sets: &[Vec<usize>], diagonal: bool) -> SymbolicSparseColMat<usize> {
+pub fn block_structure(n: usize, sets: &[Vec<usize>]) -> SymbolicSparseColMat<usize> {
     assert!(u32::try_from(n).is_ok(), "block_structure: {n} unknowns exceed u32");
     let mut lists: Vec<Vec<u32>> = sets.iter().map(|s| s.iter().map(|&d| d as u32).collect()).collect();
-    if diagonal {
-        lists.extend((0..n as u32).map(|d| vec![d]));
-    }
+    lists.extend((0..n as u32).map(|d| vec![d]));
     let slices: Vec<&[u32]> = lists.iter().map(Vec::as_slice).collect();
     let (col_ptr, row_idx) = column_structure(n, &slices);
     SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx)

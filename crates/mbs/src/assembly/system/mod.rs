@@ -194,7 +194,7 @@ impl Pattern {
 
     /// The CSC structure holding every $\text{set}\times\text{set}$ block and the diagonal.
     fn structure(n: usize, sets: &[Vec<usize>]) -> SymbolicSparseColMat<usize> {
-        fe_model::pattern::block_structure(n, sets, true)
+        fe_model::pattern::block_structure(n, sets)
     }
 
     /// Position of entry (r, c) in the values array.
