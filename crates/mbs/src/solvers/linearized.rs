@@ -7,6 +7,12 @@
 //! * Damped (state-space) eigenvalues $s$ of $\begin{bmatrix}\mathbf 0 & \mathbf I\\ -\hat{\mathbf M}^{-1}\hat{\mathbf K} &
 //!   -\hat{\mathbf M}^{-1}\hat{\mathbf C}\end{bmatrix}$, whose imaginary parts are the damped frequencies.
 //!
+//! Both are computed on a scaled problem (unit mass per unknown; the symmetric eigenproblem
+//! when undamped and symmetric; the state-space matrix in a scaled time and balanced otherwise:
+//! `Scaled`, theory guide §9.3), so that the eigensolvers' round-off is that of the spectrum
+//! and a stable state is reported stable whatever the model's size and units
+//! ([`growth_bound`]).
+//!
 //! Dense: meant for models of up to a few hundred unknowns. About a static equilibrium the
 //! result is the small-vibration spectrum, including the geometric stiffness of the preload
 //! (a tensioned beam is stiffer). About a moving state in these inertial absolute coordinates
@@ -75,7 +81,7 @@ pub const GROWTH_TOLERANCE: f64 = 1e-6;
 
 /// The real part above which a state-space eigenvalue of `state_space` grows:
 /// [`GROWTH_TOLERANCE`] $\cdot\max(\max|s|, 1\ \mathrm{s^{-1}})$. The eigenvalues are computed on
-/// the scaled problem ([`Scaled`]), so their round-off is $\varepsilon$ of the spectrum's scale
+/// the scaled problem (theory guide §9.3), so their round-off is $\varepsilon$ of the spectrum's scale
 /// $\max|s|$, except at a double zero eigenvalue (a rigid-body mode), which splits by
 /// $\sqrt\varepsilon\max|s| \approx 1.5\cdot10^{-8}\max|s|$; the bound lies above both and far below
 /// a real growth rate. The floor of 1/s keeps a spectrum of zeros (a free mechanism) from
