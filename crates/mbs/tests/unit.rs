@@ -119,3 +119,8 @@ mod stress;
 /// 1e-6; inverted pendulums unstable at the analytic rate.
 #[path = "unit/scale_invariance.rs"]
 mod scale_invariance;
+
+/// A user force whose Jacobian is 0/0 stops load stepping and arc length with the force and
+/// the load factor named.
+#[path = "unit/non_finite.rs"]
+mod non_finite;
