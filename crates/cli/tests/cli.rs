@@ -29,6 +29,11 @@ mod invalid;
 #[path = "cli/mechanism.rs"]
 mod mechanism;
 
+/// Values that are not finite stop static analyses: an equilibrium whose sensor reads 0/0
+/// fails with exit code 2 and the sensor named.
+#[path = "cli/non_finite.rs"]
+mod non_finite;
+
 /// `--help` of every command, `validate`'s ids (or, without the `validate` feature, how to
 /// get the suite), an empty study, a closed pipe, progress.
 #[path = "cli/command_line.rs"]

@@ -310,6 +310,21 @@ pub enum SolveError {
         at: At,
         step: usize,
     },
+    /// A value the analysis computed is not finite (inf or NaN): `what` is the quantity (the
+    /// residual, a tangent matrix, a Newton correction) and `coordinate` the unknown it belongs
+    /// to ([`crate::System::dof_labels`], `index` its position). A load, a force or the motion
+    /// is no longer finite there; the analysis stops rather than carry it on.
+    #[error(
+        "{what} of {coordinate} is {value} at {at} (step {step}): a load, a force or the motion is no longer finite"
+    )]
+    NonFinite {
+        what: String,
+        coordinate: String,
+        index: usize,
+        value: f64,
+        at: At,
+        step: usize,
+    },
 }
 
 /// ` (step 3)`, or nothing when the step is not known.
@@ -336,7 +351,8 @@ impl SolveError {
             | Self::Singular { at, .. }
             | Self::Body { at, .. }
             | Self::UserForce { at, .. }
-            | Self::NonFiniteSensor { at, .. } => Some(*at),
+            | Self::NonFiniteSensor { at, .. }
+            | Self::NonFinite { at, .. } => Some(*at),
             Self::InvalidSettings { .. } => None,
         }
     }
@@ -344,9 +360,10 @@ impl SolveError {
     /// The time or load step that failed (1 = the first), if the error says.
     pub fn step(&self) -> Option<usize> {
         match self {
-            Self::NotConverged { step, .. } | Self::Singular { step, .. } | Self::NonFiniteSensor { step, .. } => {
-                Some(*step)
-            }
+            Self::NotConverged { step, .. }
+            | Self::Singular { step, .. }
+            | Self::NonFiniteSensor { step, .. }
+            | Self::NonFinite { step, .. } => Some(*step),
             Self::Body { step, .. } => *step,
             Self::UserForce { .. } | Self::InvalidSettings { .. } => None,
         }
@@ -359,7 +376,8 @@ impl SolveError {
         match &mut self {
             Self::NotConverged { at, step, .. }
             | Self::Singular { at, step, .. }
-            | Self::NonFiniteSensor { at, step, .. } => {
+            | Self::NonFiniteSensor { at, step, .. }
+            | Self::NonFinite { at, step, .. } => {
                 *at = At::LoadFactor(lambda);
                 *step = load_step;
             }

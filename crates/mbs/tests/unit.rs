@@ -113,3 +113,14 @@ mod recovery;
 /// Stresses from a multibody state: the centrifugal axial force of a spinning beam.
 #[path = "unit/stress.rs"]
 mod stress;
+
+/// Linearised verdicts and frequencies at every size and in any units: steel cantilevers of
+/// 20 mm, 2 m, 200 m and in mm-t-s units stable with their reduced matrices' frequencies to
+/// 1e-6; inverted pendulums unstable at the analytic rate.
+#[path = "unit/scale_invariance.rs"]
+mod scale_invariance;
+
+/// A user force whose Jacobian is 0/0 stops load stepping and arc length with the force and
+/// the load factor named.
+#[path = "unit/non_finite.rs"]
+mod non_finite;

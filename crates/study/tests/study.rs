@@ -1046,3 +1046,9 @@ fn a_simulation_locates_a_solver_error_at_its_body() {
     };
     assert!(sim.locate(&not_converged).is_none());
 }
+
+/// Linearised verdicts at every size and in any units (steel cantilevers of 20 mm, 2 m, 200 m
+/// and in mm-t-s units against the clamped part's FE modes); sensors that are not finite stop
+/// the equilibrium, buckling and linearised analyses.
+#[path = "study/stability.rs"]
+mod stability;

@@ -30,7 +30,9 @@
 
 use crate::assembly::system::{System, Workspace};
 use crate::error::{At, Incomplete, SolveError};
-use crate::solvers::static_solver::{newton_static, solve_static, LoadStep, StaticSettings, StaticSolution};
+use crate::solvers::static_solver::{
+    check_finite, check_finite_tangent, newton_static, record, solve_static, LoadStep, StaticSettings, StaticSolution,
+};
 use crate::state::State;
 
 /// Settings of [`solve_arc_length`].
@@ -156,6 +158,8 @@ fn arc_step(
     let mut st = base.clone();
     tryit!(system.evaluate_into(&mut st, lambda_n, true, ws), hist);
     let mut t = tryit!(load_vector(system, &mut st, ws1), hist);
+    tryit!(check_finite(system, "load vector", &t, At::LoadFactor(lambda_n)), hist);
+    tryit!(check_finite_tangent(system, ws, At::LoadFactor(lambda_n)), hist);
     ws.S.copy_from_slice(&ws.K);
     tryit!(system.solve(ws, &mut t).map_err(singular), hist);
     let norm_t = (scaled_dot(system, &t, &t) + 1.0).sqrt();
@@ -177,9 +181,7 @@ fn arc_step(
         let dq = system.difference(&st, base);
         dl = lambda - lambda_n;
         let c = scaled_dot(system, &dq, &dq) + dl * dl - ds * ds;
-        if !rel.is_finite() {
-            break;
-        }
+        tryit!(check_finite(system, "residual", &ws.F, At::LoadFactor(lambda)), hist);
         if norm <= settings.tolerance * ws.scale + ws.floor && c.abs() <= 1e-8 * ds * ds {
             hist.lambda = lambda;
             return Ok(ArcPoint {
@@ -197,6 +199,7 @@ fn arc_step(
             ab[i] = -ws.F[i];
             ab[n + i] = P[i];
         }
+        tryit!(check_finite_tangent(system, ws, At::LoadFactor(lambda)), hist);
         ws.S.copy_from_slice(&ws.K);
         tryit!(system.solve(ws, &mut ab).map_err(singular), hist);
         let (a, b) = ab.split_at(n);
@@ -298,11 +301,10 @@ pub fn solve_arc_length(
                 lambda = hist.lambda;
                 let iterations = hist.residuals.len().saturating_sub(1).max(1);
                 sol.steps.push(hist);
-                if let Err(e) = system.record(&state, &ws, &mut sol.sensors) {
+                if let Err(e) = record(system, &state, &ws, lambda, step, &mut sol.sensors) {
                     sol.state = state;
-                    return Err(fail(e.in_load_step(lambda, step), sol));
+                    return Err(fail(e, sol));
                 }
-                *sol.sensors.times.last_mut().expect("just recorded") = lambda;
                 previous = Some(dir);
                 let grow = (settings.target_iterations as f64 / iterations as f64)
                     .sqrt()

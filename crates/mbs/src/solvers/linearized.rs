@@ -7,6 +7,12 @@
 //! * Damped (state-space) eigenvalues $s$ of $\begin{bmatrix}\mathbf 0 & \mathbf I\\ -\hat{\mathbf M}^{-1}\hat{\mathbf K} &
 //!   -\hat{\mathbf M}^{-1}\hat{\mathbf C}\end{bmatrix}$, whose imaginary parts are the damped frequencies.
 //!
+//! Both are computed on a scaled problem (unit mass per unknown; the symmetric eigenproblem
+//! when undamped and symmetric; the state-space matrix in a scaled time and balanced otherwise:
+//! `Scaled`, theory guide §9.3), so that the eigensolvers' round-off is that of the spectrum
+//! and a stable state is reported stable whatever the model's size and units
+//! ([`growth_bound`]).
+//!
 //! Dense: meant for models of up to a few hundred unknowns. About a static equilibrium the
 //! result is the small-vibration spectrum, including the geometric stiffness of the preload
 //! (a tensioned beam is stiffer). About a moving state in these inertial absolute coordinates
@@ -25,9 +31,10 @@
 use crate::assembly::system::{ElementKind, Matrices, System, Workspace};
 use crate::error::{At, SolveError};
 use crate::model::Body;
+use crate::solvers::static_solver::check_finite_matrix;
 use crate::state::State;
 use faer::linalg::solvers::Solve;
-use faer::Mat;
+use faer::{c64, Mat};
 use serde::{Deserialize, Serialize};
 
 /// Eigenvalues of the linearised system.
@@ -50,29 +57,21 @@ pub fn linearize(system: &System, state: &State) -> Result<Matrices, SolveError>
 /// The spectrum of the linearisation at `state` (module docs).
 pub fn spectrum(system: &System, state: &State) -> Result<LinearSpectrum, SolveError> {
     let m = linearize(system, state)?;
-    let (MK, MC) = reduced_operators(&m, state.time())?;
-    let ev = MK
-        .eigenvalues()
-        .map_err(|_| singular(state.time(), "eigenvalues of M^-1 K did not converge"))?;
+    let sc = Scaled::new(system, &m, At::Time(state.time()))?;
+    let ev = sc.undamped_eigenvalues()?;
     let mut omega: Vec<f64> = ev.iter().filter(|l| l.re > 0.0).map(|l| l.re.sqrt()).collect();
     omega.sort_by(f64::total_cmp);
-    let state_space = state_space_eigenvalues(&MK, &MC, state.time())?;
+    let state_space = sc.state_space_eigenvalues(&ev)?;
     Ok(LinearSpectrum { omega, state_space })
 }
 
 impl LinearSpectrum {
     /// The state-space eigenvalues with a positive real part beyond round-off,
-    /// $\mathrm{Re}\,s > 10^{-6}\max(\max|s|, 1\ \mathrm{s^{-1}})$: the linearised motion grows
-    /// (an unstable equilibrium, flutter, negative damping). The bound is about
-    /// $\sqrt{\varepsilon}$ of the spectrum's scale: a double zero eigenvalue (a rigid-body mode)
-    /// splits by that much in round-off, and a real growth rate lies far above it.
+    /// $\mathrm{Re}\,s > 10^{-6}\max(\max|s|, 1\ \mathrm{s^{-1}})$ ([`growth_bound`]): the linearised
+    /// motion grows (an unstable equilibrium, flutter, negative damping).
     pub fn growing(&self) -> Vec<(f64, f64)> {
-        let big = self.state_space.iter().map(|s| s.0.hypot(s.1)).fold(1.0, f64::max);
-        self.state_space
-            .iter()
-            .copied()
-            .filter(|s| s.0 > GROWTH_TOLERANCE * big)
-            .collect()
+        let bound = growth_bound(&self.state_space);
+        self.state_space.iter().copied().filter(|s| s.0 > bound).collect()
     }
 }
 
@@ -80,46 +79,266 @@ impl LinearSpectrum {
 /// ([`LinearSpectrum::growing`], [`ModeEnergy::unstable`]).
 pub const GROWTH_TOLERANCE: f64 = 1e-6;
 
-fn singular(t: f64, what: &str) -> SolveError {
+/// The real part above which a state-space eigenvalue of `state_space` grows:
+/// [`GROWTH_TOLERANCE`] $\cdot\max(\max|s|, 1\ \mathrm{s^{-1}})$. The eigenvalues are computed on
+/// the scaled problem (theory guide §9.3), so their round-off is $\varepsilon$ of the spectrum's scale
+/// $\max|s|$, except at a double zero eigenvalue (a rigid-body mode), which splits by
+/// $\sqrt\varepsilon\max|s| \approx 1.5\cdot10^{-8}\max|s|$; the bound lies above both and far below
+/// a real growth rate. The floor of 1/s keeps a spectrum of zeros (a free mechanism) from
+/// calling round-off growth.
+pub fn growth_bound(state_space: &[(f64, f64)]) -> f64 {
+    GROWTH_TOLERANCE * state_space.iter().map(|s| s.0.hypot(s.1)).fold(1.0, f64::max)
+}
+
+fn singular(at: At, what: &str) -> SolveError {
     SolveError::Singular {
-        at: At::Time(t),
+        at,
         step: 0,
         what: what.into(),
     }
 }
 
-/// $\hat{\mathbf M}^{-1}\hat{\mathbf K}$ and $\hat{\mathbf M}^{-1}\hat{\mathbf C}$ (one LU of $\hat{\mathbf M}$).
-fn reduced_operators(m: &Matrices, t: f64) -> Result<(Mat<f64>, Mat<f64>), SolveError> {
-    let lu = m.M.partial_piv_lu();
-    let mut MK = m.K.clone();
-    lu.solve_in_place(MK.as_mut());
-    let mut MC = m.C.clone();
-    lu.solve_in_place(MC.as_mut());
-    if MK
-        .col_iter()
-        .chain(MC.col_iter())
-        .any(|c| c.iter().any(|x| !x.is_finite()))
-    {
-        return Err(singular(t, "mass matrix of the linearisation"));
-    }
-    Ok((MK, MC))
+/// The linearisation on a common scale (theory guide §9.1): in the coordinates
+/// $\delta\mathbf q = \mathbf D\,\delta\tilde{\mathbf q}$, $\mathbf D = \mathrm{diag}(\hat M_{ii})^{-1/2}$, every unknown
+/// (length, angle or modal coordinate, in any units) has unit mass,
+/// $\tilde{\mathbf M} = \mathbf D\hat{\mathbf M}\mathbf D$, $\tilde{\mathbf C} = \mathbf D\hat{\mathbf C}\mathbf D$,
+/// $\tilde{\mathbf K} = \mathbf D\hat{\mathbf K}\mathbf D$: a congruence, so the eigenvalues are those of
+/// the model, but the dense eigensolvers, whose round-off is $\varepsilon$ times the norm of the
+/// matrix they are given, now see a matrix whose norm is that of the spectrum.
+struct Scaled {
+    /// The diagonal of $\mathbf D$.
+    d: Vec<f64>,
+    M: Mat<f64>,
+    C: Mat<f64>,
+    K: Mat<f64>,
+    /// $\mathbf L$ of $\tilde{\mathbf M} = \mathbf L\mathbf L^T$ when $\tilde{\mathbf M}$ is symmetric positive definite.
+    L: Option<Mat<f64>>,
+    /// $\tilde{\mathbf C} = \mathbf 0$ and $\tilde{\mathbf K}$ symmetric, with $\mathbf L$: the undamped symmetric
+    /// case, solved as the symmetric eigenproblem $\mathbf L^{-1}\tilde{\mathbf K}\mathbf L^{-T}$, whose
+    /// eigenvalues $\omega^2$ are real and give $s = \pm i\omega$ exactly.
+    symmetric: bool,
+    /// Frequency scale $\omega_{ref} = \max_i|\tilde K_{ii}|^{1/2}$ (else $\max_i|\tilde C_{ii}|$, else
+    /// 1/s): the state-space matrix is formed in the time $\omega_{ref}t$.
+    omega_ref: f64,
+    at: At,
 }
 
-/// State-space eigenvalues $s$ with $\mathrm{Im}\,s \ge 0$, by ascending imaginary part (module docs).
-fn state_space_eigenvalues(MK: &Mat<f64>, MC: &Mat<f64>, t: f64) -> Result<Vec<(f64, f64)>, SolveError> {
-    let n = MK.nrows();
-    let A = Mat::from_fn(2 * n, 2 * n, |i, j| match (i < n, j < n) {
-        (true, true) => 0.0,
-        (true, false) => f64::from(i == j - n),
-        (false, true) => -MK[(i - n, j)],
-        (false, false) => -MC[(i - n, j - n)],
-    });
-    let ev = A
-        .eigenvalues()
-        .map_err(|_| singular(t, "state-space eigenvalues did not converge"))?;
-    let mut state_space: Vec<(f64, f64)> = ev.iter().filter(|l| l.im >= 0.0).map(|l| (l.re, l.im)).collect();
-    state_space.sort_by(|a, b| a.1.total_cmp(&b.1));
-    Ok(state_space)
+/// Largest $|A_{ij}|$.
+fn max_abs(A: &Mat<f64>) -> f64 {
+    A.col_iter()
+        .flat_map(|c| c.iter().copied())
+        .fold(0.0, |m, x| m.max(x.abs()))
+}
+
+/// Largest $|A_{ij} - A_{ji}|$.
+fn max_asymmetry(A: &Mat<f64>) -> f64 {
+    let n = A.nrows();
+    (0..n)
+        .flat_map(|j| (0..j).map(move |i| (i, j)))
+        .fold(0.0, |m, (i, j)| m.max((A[(i, j)] - A[(j, i)]).abs()))
+}
+
+impl Scaled {
+    /// The scaled matrices of `m` (its entries finite: else [`SolveError::NonFinite`] naming
+    /// the coordinate).
+    fn new(system: &System, m: &Matrices, at: At) -> Result<Self, SolveError> {
+        for (what, A) in [
+            ("mass matrix", &m.M),
+            ("damping matrix", &m.C),
+            ("tangent stiffness", &m.K),
+        ] {
+            check_finite_matrix(system, what, A, at)?;
+        }
+        let n = m.M.nrows();
+        // Unit mass per unknown; an unknown without mass (held by a spring only) is scaled by
+        // its stiffness instead.
+        let d: Vec<f64> = (0..n)
+            .map(|i| {
+                let (mi, ki) = (m.M[(i, i)], m.K[(i, i)].abs());
+                if mi > 0.0 {
+                    1.0 / mi.sqrt()
+                } else if ki > 0.0 {
+                    1.0 / ki.sqrt()
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let scale = |A: &Mat<f64>| Mat::from_fn(n, n, |i, j| d[i] * A[(i, j)] * d[j]);
+        let (M, C, K) = (scale(&m.M), scale(&m.C), scale(&m.K));
+        let diag = |A: &Mat<f64>| (0..n).map(|i| A[(i, i)].abs()).fold(0.0, f64::max);
+        let omega_ref = [diag(&K).sqrt(), diag(&C), 1.0]
+            .into_iter()
+            .find(|&w| w > 0.0 && w.is_finite())
+            .unwrap_or(1.0);
+        // Symmetric to round-off: the eigenproblem of the symmetric parts is then within
+        // 1e-10 relative of the model's, far below the growth bound.
+        let L = (max_asymmetry(&M) <= 1e-10 * max_abs(&M))
+            .then(|| {
+                let Ms = Mat::from_fn(n, n, |i, j| 0.5 * (M[(i, j)] + M[(j, i)]));
+                Ms.llt(faer::Side::Lower).ok().map(|llt| llt.L().to_owned())
+            })
+            .flatten();
+        let symmetric =
+            L.is_some() && max_abs(&C) == 0.0 && max_asymmetry(&K) <= 1e-10 * max_abs(&K).max(f64::MIN_POSITIVE);
+        Ok(Self {
+            d,
+            M,
+            C,
+            K,
+            L,
+            symmetric,
+            omega_ref,
+            at,
+        })
+    }
+
+    /// $\mathbf L^{-1}\mathbf A\mathbf L^{-T}$ for the symmetric part of `A` (symmetrised).
+    fn congruent(&self, L: &Mat<f64>, A: &Mat<f64>) -> Mat<f64> {
+        use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+        let n = A.nrows();
+        let mut X = Mat::from_fn(n, n, |i, j| 0.5 * (A[(i, j)] + A[(j, i)]));
+        solve_lower_triangular_in_place(L.as_ref(), X.as_mut(), faer::Par::Seq);
+        let mut B = X.transpose().to_owned();
+        solve_lower_triangular_in_place(L.as_ref(), B.as_mut(), faer::Par::Seq);
+        Mat::from_fn(n, n, |i, j| 0.5 * (B[(i, j)] + B[(j, i)]))
+    }
+
+    /// $\tilde{\mathbf M}^{-1}\mathbf A$ (one LU of $\tilde{\mathbf M}$ per call).
+    fn mass_solve(&self, A: &Mat<f64>) -> Result<Mat<f64>, SolveError> {
+        let mut X = A.clone();
+        self.M.partial_piv_lu().solve_in_place(X.as_mut());
+        if X.col_iter().any(|c| c.iter().any(|x| !x.is_finite())) {
+            return Err(singular(self.at, "mass matrix of the linearisation"));
+        }
+        Ok(X)
+    }
+
+    /// The eigenvalues $\omega^2$ of $\hat{\mathbf M}^{-1}\hat{\mathbf K}$ (real for the symmetric case).
+    fn undamped_eigenvalues(&self) -> Result<Vec<c64>, SolveError> {
+        let fail = || singular(self.at, "eigenvalues of M^-1 K did not converge");
+        match (&self.L, self.symmetric) {
+            (Some(L), true) => Ok(self
+                .congruent(L, &self.K)
+                .self_adjoint_eigenvalues(faer::Side::Lower)
+                .map_err(|_| fail())?
+                .into_iter()
+                .map(|x| c64::new(x, 0.0))
+                .collect()),
+            _ => self.mass_solve(&self.K)?.eigenvalues().map_err(|_| fail()),
+        }
+    }
+
+    /// The eigenvalues $\omega^2$ of $\hat{\mathbf M}^{-1}\hat{\mathbf K}$ and their eigenvectors in the
+    /// model's coordinates (columns).
+    fn undamped_modes(&self) -> Result<(Vec<c64>, Mat<c64>), SolveError> {
+        let fail = || singular(self.at, "eigenvectors of M^-1 K did not converge");
+        let n = self.d.len();
+        let (values, U) = match (&self.L, self.symmetric) {
+            (Some(L), true) => {
+                use faer::linalg::triangular_solve::solve_upper_triangular_in_place;
+                let eig = self
+                    .congruent(L, &self.K)
+                    .self_adjoint_eigen(faer::Side::Lower)
+                    .map_err(|_| fail())?;
+                // phi~ = L^-T y.
+                let mut Y = eig.U().to_owned();
+                solve_upper_triangular_in_place(L.transpose(), Y.as_mut(), faer::Par::Seq);
+                let S = eig.S().column_vector();
+                let values = (0..n).map(|i| c64::new(S[i], 0.0)).collect();
+                (values, Mat::from_fn(n, n, |i, j| c64::new(Y[(i, j)], 0.0)))
+            }
+            _ => {
+                let eig = self.mass_solve(&self.K)?.eigen().map_err(|_| fail())?;
+                let S = eig.S().column_vector();
+                ((0..n).map(|i| S[i]).collect(), eig.U().to_owned())
+            }
+        };
+        Ok((values, Mat::from_fn(n, n, |i, j| U[(i, j)] * self.d[i])))
+    }
+
+    /// State-space eigenvalues $s$ with $\mathrm{Im}\,s \ge 0$, by ascending imaginary part (module
+    /// docs). Undamped symmetric case: $s = i\omega$ from the eigenvalues `omega_squared`
+    /// ($\pm\sqrt{-\omega^2}$ for a negative one). Otherwise those of
+    /// $\mathbf A = \begin{bmatrix}\mathbf 0 & \mathbf I\\ -\tilde{\mathbf M}^{-1}\tilde{\mathbf K}/\omega_{ref}^2 &
+    /// -\tilde{\mathbf M}^{-1}\tilde{\mathbf C}/\omega_{ref}\end{bmatrix}$ in the time $\omega_{ref}t$ (both
+    /// rows of blocks of one size), balanced ([`balance`]), times $\omega_{ref}$.
+    fn state_space_eigenvalues(&self, omega_squared: &[c64]) -> Result<Vec<(f64, f64)>, SolveError> {
+        let mut s: Vec<(f64, f64)> = if self.symmetric {
+            omega_squared
+                .iter()
+                .flat_map(|l| {
+                    let r = l.re.abs().sqrt();
+                    if l.re >= 0.0 {
+                        vec![(0.0, r)]
+                    } else {
+                        vec![(r, 0.0), (-r, 0.0)]
+                    }
+                })
+                .collect()
+        } else {
+            let n = self.d.len();
+            let w = self.omega_ref;
+            let (MK, MC) = (self.mass_solve(&self.K)?, self.mass_solve(&self.C)?);
+            let mut A = Mat::from_fn(2 * n, 2 * n, |i, j| match (i < n, j < n) {
+                (true, true) => 0.0,
+                (true, false) => f64::from(i == j - n),
+                (false, true) => -MK[(i - n, j)] / (w * w),
+                (false, false) => -MC[(i - n, j - n)] / w,
+            });
+            balance(&mut A);
+            let ev = A
+                .eigenvalues()
+                .map_err(|_| singular(self.at, "state-space eigenvalues did not converge"))?;
+            ev.iter()
+                .filter(|l| l.im >= 0.0)
+                .map(|l| (w * l.re, w * l.im))
+                .collect()
+        };
+        s.sort_by(|a, b| a.1.total_cmp(&b.1));
+        Ok(s)
+    }
+}
+
+/// Balances `A` in place by a diagonal similarity of powers of 2 (Osborne 1960, Parlett &
+/// Reinsch 1969, LAPACK's `gebal` without permutations): each row and column pair is scaled
+/// until their off-diagonal norms agree within a factor 2. Powers of 2 are exact, so the
+/// eigenvalues are unchanged, while the norm, to which the eigensolver's round-off is
+/// proportional, drops to about that of the spectrum.
+fn balance(A: &mut Mat<f64>) {
+    const RADIX: f64 = 2.0;
+    let n = A.nrows();
+    for _sweep in 0..100 {
+        let mut done = true;
+        for i in 0..n {
+            let c: f64 = (0..n).filter(|&j| j != i).map(|j| A[(j, i)].abs()).sum();
+            let r: f64 = (0..n).filter(|&j| j != i).map(|j| A[(i, j)].abs()).sum();
+            if c == 0.0 || r == 0.0 {
+                continue;
+            }
+            // f: the power of 2 with c f^2 within a factor 2 of r; the pair's norm becomes
+            // c f + r / f.
+            let (mut cf2, mut f) = (c, 1.0);
+            while cf2 < r / RADIX {
+                cf2 *= RADIX * RADIX;
+                f *= RADIX;
+            }
+            while cf2 > r * RADIX {
+                cf2 /= RADIX * RADIX;
+                f /= RADIX;
+            }
+            if (cf2 + r) / f < 0.95 * (c + r) {
+                done = false;
+                for j in 0..n {
+                    A[(i, j)] /= f;
+                    A[(j, i)] *= f;
+                }
+            }
+        }
+        if done {
+            break;
+        }
+    }
 }
 
 /// Linearised buckling about a static state: the critical load factors and their modes.
@@ -154,7 +373,19 @@ pub fn buckling(system: &System, unloaded: &State, loaded: &State, lambda: f64) 
         });
     }
     let K0 = system.matrices(&mut unloaded.clone(), 0.0)?.K;
+    check_finite_matrix(
+        system,
+        "tangent stiffness of the unloaded state",
+        &K0,
+        At::LoadFactor(0.0),
+    )?;
     let Ks = system.matrices(&mut loaded.clone(), lambda)?.K;
+    check_finite_matrix(
+        system,
+        "tangent stiffness of the loaded state",
+        &Ks,
+        At::LoadFactor(lambda),
+    )?;
     let n = system.n_dof();
     let mut A = Mat::from_fn(n, n, |i, j| Ks[(i, j)] - K0[(i, j)]);
     let lu = K0.partial_piv_lu();
@@ -328,13 +559,9 @@ pub fn mode_energies(system: &System, state: &State) -> Result<Vec<ModeEnergy>, 
         C: system.dense(&ws.C, n),
         K: system.dense(&ws.K, n),
     };
-    let (MK, MC) = reduced_operators(&m, t)?;
-    let state_space = state_space_eigenvalues(&MK, &MC, t)?;
-    let eig = MK
-        .eigen()
-        .map_err(|_| singular(t, "eigenvectors of M^-1 K did not converge"))?;
-    let S = eig.S().column_vector();
-    let U = eig.U();
+    let sc = Scaled::new(system, &m, At::Time(t))?;
+    let (S, U) = sc.undamped_modes()?;
+    let state_space = sc.state_space_eigenvalues(&S)?;
     let quad = |A: &Mat<f64>, x: &[f64]| -> f64 {
         (0..n)
             .map(|j| x[j] * (0..n).map(|i| x[i] * A[(i, j)]).sum::<f64>())
@@ -364,7 +591,7 @@ pub fn mode_energies(system: &System, state: &State) -> Result<Vec<ModeEnergy>, 
     }
     found.sort_by(|a, b| a.0.total_cmp(&b.0));
     let lambda_max = found.iter().map(|f| f.0.abs()).fold(0.0, f64::max);
-    let s_max = state_space.iter().map(|s| s.0.hypot(s.1)).fold(1.0, f64::max);
+    let bound = growth_bound(&state_space);
     let mut used = vec![false; state_space.len()];
     let mut modes = Vec::with_capacity(found.len());
     for (omega_squared, mut phi) in found {
@@ -409,7 +636,7 @@ pub fn mode_energies(system: &System, state: &State) -> Result<Vec<ModeEnergy>, 
         let growing = damped_eigenvalue.map_or(0.0, |s| s.0);
         mode.growth_rate = if !rigid_body && omega_squared < 0.0 {
             Some((-omega_squared).sqrt().max(growing))
-        } else if growing > GROWTH_TOLERANCE * s_max {
+        } else if growing > bound {
             Some(growing)
         } else {
             None

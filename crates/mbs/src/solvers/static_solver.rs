@@ -103,8 +103,57 @@ impl StaticSolution {
     }
 }
 
+/// The first entry of `x` (one per unknown) that is not finite, as [`SolveError::NonFinite`]
+/// naming its coordinate ([`System::dof_labels`]): `what` is the quantity ("residual").
+pub(crate) fn check_finite(system: &System, what: &str, x: &[f64], at: At) -> Result<(), SolveError> {
+    match x.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(non_finite(system, what, i, x[i], at)),
+    }
+}
+
+/// The first column of the dense `A` (unknowns by unknowns) with an entry that is not
+/// finite, as [`SolveError::NonFinite`] naming the coordinate of that column (the unknown
+/// whose motion the matrix cannot take).
+pub(crate) fn check_finite_matrix(system: &System, what: &str, A: &faer::Mat<f64>, at: At) -> Result<(), SolveError> {
+    for j in 0..A.ncols() {
+        if let Some(i) = (0..A.nrows()).find(|&i| !A[(i, j)].is_finite()) {
+            return Err(non_finite(system, what, j, A[(i, j)], at));
+        }
+    }
+    Ok(())
+}
+
+/// [`check_finite_matrix`] of the tangent stiffness $\hat{\mathbf K}$ in `ws` (formed densely only
+/// when an entry is not finite).
+pub(crate) fn check_finite_tangent(
+    system: &System,
+    ws: &crate::assembly::system::Workspace,
+    at: At,
+) -> Result<(), SolveError> {
+    if ws.K.iter().all(|x| x.is_finite()) {
+        return Ok(());
+    }
+    check_finite_matrix(system, "tangent stiffness", &system.dense(&ws.K, system.n_dof()), at)
+}
+
+fn non_finite(system: &System, what: &str, index: usize, value: f64, at: At) -> SolveError {
+    SolveError::NonFinite {
+        what: what.into(),
+        coordinate: system
+            .dof_labels()
+            .get(index)
+            .cloned()
+            .unwrap_or_else(|| format!("unknown {index}")),
+        index,
+        value,
+        at,
+        step: 0,
+    }
+}
+
 /// Newton at a fixed load factor from `state`; returns the iteration history and whether it
-/// converged.
+/// converged. A residual or correction that is not finite is [`SolveError::NonFinite`].
 pub(crate) fn newton_static(
     system: &System,
     state: &mut State,
@@ -129,9 +178,7 @@ pub(crate) fn newton_static(
         }
         let rel = if ws.scale > 0.0 { norm / ws.scale } else { norm };
         step.residuals.push(rel);
-        if !rel.is_finite() {
-            return Ok((step, false));
-        }
+        check_finite(system, "residual", &ws.F, At::LoadFactor(lambda))?;
         if norm <= settings.tolerance * ws.scale + ws.floor {
             return Ok((step, true));
         }
@@ -141,6 +188,7 @@ pub(crate) fn newton_static(
         if it == settings.max_iterations {
             return Ok((step, false));
         }
+        check_finite_tangent(system, ws, At::LoadFactor(lambda))?;
         ws.S.copy_from_slice(&ws.K);
         for i in 0..n {
             dq[i] = -ws.F[i];
@@ -161,6 +209,25 @@ pub(crate) fn newton_static(
         system.retract_in_place(state, &base, &dq);
     }
     Ok((step, false))
+}
+
+/// Records the sensors of the converged `state` (evaluated into `ws`) at load factor `lambda`,
+/// load step `step`, in `rec` (time column = load factor). A value that is not finite stops
+/// the analysis with [`SolveError::NonFiniteSensor`], as in a dynamic run
+/// ([`crate::SensorRecord::check_last_row`]); the row stays in `rec` as evidence.
+pub(crate) fn record(
+    system: &System,
+    state: &State,
+    ws: &crate::assembly::system::Workspace,
+    lambda: f64,
+    step: usize,
+    rec: &mut SensorRecord,
+) -> Result<(), SolveError> {
+    let checked = system.record(state, ws, rec).and_then(|()| {
+        *rec.times.last_mut().expect("just recorded") = lambda;
+        rec.check_last_row(step)
+    });
+    checked.map_err(|e| e.in_load_step(lambda, step))
 }
 
 /// Static equilibrium under the full load ($\lambda = 1$) from `start` (module docs).
@@ -190,12 +257,10 @@ pub fn solve_static(
                 lambda = target;
                 let iterations = load_step.residuals.len() - 1;
                 sol.steps.push(load_step);
-                if let Err(e) = system.record(&state, &ws, &mut sol.sensors) {
+                if let Err(e) = record(system, &state, &ws, lambda, step, &mut sol.sensors) {
                     sol.state = state;
-                    return Err(fail(e.in_load_step(lambda, step), sol));
+                    return Err(fail(e, sol));
                 }
-                // The record's time column holds the load factor.
-                *sol.sensors.times.last_mut().expect("just recorded") = lambda;
                 // Large rotation steps of slender bodies take 5-6 iterations (the residual
                 // alternates while the axial strain of a correction settles), so grow up to 6.
                 if iterations <= 6 {

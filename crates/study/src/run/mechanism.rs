@@ -126,7 +126,13 @@ fn equilibrium(
     };
     let mut files = SensorSampler::start(obs, &b.groups, &sol.sensors, "load factor [-]", output.plots)?;
     let mut rec = sys.sensor_record();
-    for (t, row) in sol.sensors.times.iter().zip(&sol.sensors.rows) {
+    // A sensor that is not finite stopped the analysis at its row: the rows before it are
+    // written, as in a dynamic run.
+    let good = match &failure {
+        Some(mbs::SolveError::NonFiniteSensor { .. }) => sol.sensors.rows.len().saturating_sub(1),
+        _ => sol.sensors.rows.len(),
+    };
+    for (t, row) in sol.sensors.times.iter().zip(&sol.sensors.rows).take(good) {
         rec.times.push(*t);
         rec.rows.push(row.clone());
         files.sample(obs, *t, &rec)?;
@@ -162,7 +168,8 @@ fn equilibrium(
     }
     out.failure = failure.map(|e| {
         let message = "equilibrium stopped; the converged load steps are written".into();
-        b.stopped(study, message, Some(sol.steps.len() + 1), e)
+        let step = e.step().filter(|&s| s > 0).unwrap_or(sol.steps.len() + 1);
+        b.stopped(study, message, Some(step), e)
     });
 
     Ok(())
@@ -317,6 +324,18 @@ fn run_buckling(
             settings.max_iterations = max_iterations;
             match mbs::solve_static(sys, unloaded.clone(), &settings) {
                 Ok(sol) => sol.state,
+                // A value that is not finite is no limit point: say what it is.
+                Err(inc)
+                    if matches!(
+                        inc.error,
+                        mbs::SolveError::NonFiniteSensor { .. } | mbs::SolveError::NonFinite { .. }
+                    ) =>
+                {
+                    out.results = json!({ "model": b.size(sys) });
+                    let message = "buckling stopped: the equilibrium under the full load is not finite".into();
+                    out.failure = Some(b.stopped(study, message, Some(inc.partial.steps.len() + 1), inc.error));
+                    return Ok(());
+                }
                 Err(inc) => {
                     let reached = inc.partial.steps.last().map_or(0.0, |s| s.lambda);
                     out.report.push(format!(
