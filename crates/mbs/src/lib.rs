@@ -207,11 +207,11 @@ pub use solvers::arc_length::{solve_arc_length, solve_static_with, ArcLengthSett
 pub use solvers::dynamic::retry::{
     solve_dynamic_retrying, step_retrying, RetriedStep, RetriedTrajectory, Retry, RetryFailure,
 };
-pub use solvers::dynamic::streaming::{Interrupted, StepDone, StepTotals, Stepping};
+pub use solvers::dynamic::streaming::{Interrupted, StepDone, StepTotals, Stepping, Taken};
 pub use solvers::dynamic::{
-    fixed_steps, solve_dynamic, solve_dynamic_adaptive, step_adaptive_to, AdaptiveSettings, AdaptiveStep,
-    AlphaParameters, DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory, MODIFIED_NEWTON_RATE,
-    PI_INTEGRAL, PI_PROPORTIONAL, PREDICTOR_WINDOW,
+    fixed_steps, last_step_size, solve_dynamic, solve_dynamic_adaptive, step_adaptive_to, AdaptiveSettings,
+    AdaptiveStep, AlphaParameters, DynamicSettings, Integrator, NewtonStrategy, StepReport, Trajectory,
+    MODIFIED_NEWTON_RATE, PI_INTEGRAL, PI_PROPORTIONAL, PREDICTOR_WINDOW,
 };
 pub use solvers::linearized::{
     buckling, linearize, mode_energies, spectrum, Buckling, CarrierEnergy, EnergyCarrier, LinearSpectrum, ModeEnergy,

@@ -424,9 +424,17 @@ impl Study {
     }
 
     /// Starts the dynamic analysis `analysis` (default: the study's only dynamic analysis) for
-    /// stepping from Python; reduced bodies come through the cache as in a run.
-    #[pyo3(signature = (analysis=None, cache=None))]
-    fn simulation(&self, py: Python<'_>, analysis: Option<String>, cache: Option<PathBuf>) -> PyResult<Simulation> {
+    /// stepping from Python; reduced bodies come through the cache as in a run. With
+    /// `results_dir`, the simulation writes the results folder of the analysis as it steps
+    /// (the files `run(analysis)` writes), until `finish_results()`.
+    #[pyo3(signature = (analysis=None, cache=None, results_dir=None))]
+    fn simulation(
+        &self,
+        py: Python<'_>,
+        analysis: Option<String>,
+        cache: Option<PathBuf>,
+        results_dir: Option<PathBuf>,
+    ) -> PyResult<Simulation> {
         let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
         let name = match analysis {
             Some(n) => n,
@@ -450,8 +458,13 @@ impl Study {
                 }
             }
         };
-        let opts = options(None, cache, None);
-        let sim = py.detach(|| study::Simulation::new(&st, &name, &opts)).map_err(|e| {
+        let writing = results_dir.is_some();
+        let opts = options(results_dir, cache, None);
+        let sim = py.detach(|| match writing {
+            true => study::Simulation::writing_results(&st, &name, &opts),
+            false => study::Simulation::new(&st, &name, &opts),
+        });
+        let sim = sim.map_err(|e| {
             let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
             lookup_err(py, &*e, "analysis", &name, &names)
         })?;
@@ -515,25 +528,61 @@ impl Simulation {
         self.sim.steps()
     }
 
-    /// One time step; returns the Newton iterations it took. A step that fails raises
-    /// `SolveError` (`time`, `step`, `residual`, `analysis`; `file`, `line`, `key` of the
-    /// body it failed at) and leaves the state at the last
-    /// converged step: the simulation can go on (with a changed load or actuator, say).
-    fn step(&mut self, py: Python<'_>) -> PyResult<usize> {
+    /// One time step under the analysis' step control, as `run()` takes it: a fixed step of
+    /// `dt` whose failure is retried with halved steps down to `dt_min`, or one adaptive
+    /// step; with `dt`, one step of that size (retried likewise), after which the analysis'
+    /// steps go on. Returns the Newton iterations it took (of every substep). A step that
+    /// fails even at the smallest step raises `SolveError` (`time`, `step`, `residual`,
+    /// `analysis`; `file`, `line`, `key` of the body it failed at) and leaves the state at the
+    /// last converged step: the simulation can go on (with a changed load or actuator, say).
+    #[pyo3(signature = (dt=None))]
+    fn step(&mut self, py: Python<'_>, dt: Option<f64>) -> PyResult<usize> {
+        if let Some(h) = dt {
+            if !(h > 0.0 && h.is_finite()) {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "step(dt={h}): the step must be a positive number of seconds"
+                )));
+            }
+        }
         let steps = self.sim.steps();
-        let report = self
-            .sim
-            .step()
-            .map_err(|e| simulation_err(py, &e, &self.analysis, steps, self.sim.locate(&e)))?;
-        // The residuals before each correction and at convergence.
-        Ok(report.residuals.len().saturating_sub(1))
+        let sim = &mut self.sim;
+        let taken = py.detach(|| match dt {
+            Some(h) => sim.step_by(h),
+            None => sim.step(),
+        });
+        let taken =
+            taken.map_err(|f| simulation_err(py, &f.error, &self.analysis, steps, self.sim.locate(&f.error)))?;
+        // The residuals before each correction and at convergence, of every substep.
+        Ok(taken.reports.iter().map(|r| r.residuals.len().saturating_sub(1)).sum())
     }
 
-    /// Steps until the time reaches `t`; returns the number of steps taken.
+    /// Steps (as `step()` does) until the time reaches `t`; returns the number of steps taken.
     fn advance_to(&mut self, py: Python<'_>, t: f64) -> PyResult<usize> {
         let sim = &mut self.sim;
         let result = py.detach(|| sim.advance_to(t));
-        result.map_err(|e| simulation_err(py, &e, &self.analysis, self.sim.steps(), self.sim.locate(&e)))
+        result.map_err(|f| {
+            simulation_err(
+                py,
+                &f.error,
+                &self.analysis,
+                self.sim.steps(),
+                self.sim.locate(&f.error),
+            )
+        })
+    }
+
+    /// Ends the results folder of a simulation started with `results_dir`: writes the rows
+    /// still waiting, the report and the summary (what `run()` writes for the analysis) and
+    /// returns the summary (a dict); `None` when the simulation writes no folder or its
+    /// results have ended. The simulation can step on. A file that could not be written, or
+    /// a sensor that is no longer finite, raises (the summary says `failed`). A simulation
+    /// that is dropped ends its results the same way.
+    fn finish_results<'py>(&mut self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let summary = self.sim.finish_results().map_err(|e| to_py_err(py, &*e))?;
+        match summary {
+            None => Ok(None),
+            Some(s) => Ok(Some(json_to_py(py, &serde_json::to_value(&s).map_err(to_json_err)?)?)),
+        }
     }
 
     /// The names of the study's sensors.

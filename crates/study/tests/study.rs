@@ -167,6 +167,110 @@ fn a_run_observed_in_memory_matches_its_results_folder() {
     }
 }
 
+/// The files below `dir`, by their path relative to it.
+fn files_below(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                todo.push(p);
+            } else {
+                out.push(p.strip_prefix(dir).unwrap().to_path_buf());
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn a_simulation_stepped_to_its_end_writes_the_results_folder_of_the_run() {
+    let file = example_as("slider_crank", "stepped-results");
+    let study = study::load(&file).unwrap();
+    let name = study
+        .analyses
+        .iter()
+        .find(|a| a.kind_name() == "dynamic")
+        .unwrap()
+        .name
+        .clone();
+    let dir = file.parent().unwrap();
+    let options = |out: &str| Options {
+        out: Some(dir.join(out)),
+        cache: Some(dir.join("cache")),
+        t_end: None,
+        ..Options::default()
+    };
+    let run = study::run(&study, &options("run"), &mut ()).unwrap();
+    let mut sim = Simulation::writing_results(&study, &name, &options("stepped")).unwrap();
+    // Until the results end, the summary says the analysis is running.
+    let summary = std::fs::read_to_string(dir.join("stepped/summary.json")).unwrap();
+    assert!(summary.contains("\"running\""), "{summary}");
+    sim.advance_to(sim.end_time()).unwrap();
+    let stepped = sim.finish_results().unwrap().unwrap();
+    assert_eq!(stepped.status, "complete");
+    let (a, b) = (
+        run.analyses.iter().find(|a| a.name == name).unwrap(),
+        stepped.analyses.iter().find(|a| a.name == name).unwrap(),
+    );
+    assert_eq!(a.status, b.status);
+    assert_eq!(a.report, b.report);
+    assert_eq!(a.files, b.files);
+    assert!(!b.files.is_empty());
+    // Every file of the analysis (sensor CSVs and plots, meshes) is the run's, to the byte.
+    let (ra, rb) = (dir.join("run").join(&name), dir.join("stepped").join(&name));
+    let files = files_below(&ra);
+    assert_eq!(files, files_below(&rb));
+    assert!(
+        files.iter().any(|f| f.extension().is_some_and(|e| e == "vtu")),
+        "{files:?}"
+    );
+    for f in &files {
+        assert!(
+            std::fs::read(ra.join(f)).unwrap() == std::fs::read(rb.join(f)).unwrap(),
+            "{}",
+            f.display()
+        );
+    }
+    // Finished once: the simulation steps on without results.
+    assert!(sim.finish_results().unwrap().is_none());
+    sim.step().unwrap();
+}
+
+#[test]
+fn a_simulation_dropped_mid_way_leaves_a_summary_that_says_how_far_it_got() {
+    let file = example_as("four_bar", "stepped-dropped");
+    let study = study::load(&file).unwrap();
+    let name = study
+        .analyses
+        .iter()
+        .find(|a| a.kind_name() == "dynamic")
+        .unwrap()
+        .name
+        .clone();
+    let dir = file.parent().unwrap();
+    let options = options_in(dir, None);
+    let mut sim = Simulation::writing_results(&study, &name, &options).unwrap();
+    for _ in 0..7 {
+        sim.step().unwrap();
+    }
+    let t = sim.time();
+    drop(sim);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("results/summary.json")).unwrap()).unwrap();
+    let entry = summary["analyses"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["name"] == name.as_str())
+        .unwrap();
+    assert_eq!(entry["status"], "done", "{entry}");
+    assert_eq!(entry["results"]["steps"], 7, "{entry}");
+    assert_eq!(entry["results"]["t_reached"].as_f64().unwrap(), t, "{entry}");
+}
+
 #[test]
 fn a_simulation_stepped_by_hand_gives_the_numbers_of_the_run() {
     let file = example("four_bar");

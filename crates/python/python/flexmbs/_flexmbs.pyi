@@ -192,9 +192,13 @@ class Study:
     def reduce(self, part: Optional[str] = None, cache: Optional[_Path] = None) -> List[Tuple[str, ReducedBody]]:
         """Reduces the parts that have a ``[parts.reduction]`` (or the one named ``part``)
         through the cache; ``(part name, ReducedBody)`` pairs."""
-    def simulation(self, analysis: Optional[str] = None, cache: Optional[_Path] = None) -> "Simulation":
+    def simulation(
+        self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None
+    ) -> "Simulation":
         """Starts the dynamic analysis ``analysis`` (default: the only dynamic one) for stepping
-        from Python; ``UnknownNameError`` for a name the study does not have."""
+        from Python; ``UnknownNameError`` for a name the study does not have. With
+        ``results_dir``, the simulation writes the analysis' results folder as it steps, until
+        ``finish_results()``."""
 
 class Simulation:
     """A dynamic analysis stepped from Python (``Study.simulation``)."""
@@ -215,10 +219,17 @@ class Simulation:
     """The names of the study's point loads (those ``set_load`` can change)."""
     actuator_names: Final[List[str]]
     """The names of the study's actuators (those ``set_actuator`` can hold)."""
-    def step(self) -> int:
-        """One time step; returns the Newton iterations it took (``SolveError`` on failure)."""
+    def step(self, dt: Optional[float] = None) -> int:
+        """One time step under the analysis' step control, as ``run()`` takes it (a failed fixed
+        step retried with halved steps down to ``dt_min``, or one adaptive step); with ``dt``,
+        one step of that size. Returns the Newton iterations it took (``SolveError`` on
+        failure)."""
+    def finish_results(self) -> Optional[Dict[str, Any]]:
+        """Ends the results folder of a simulation started with ``results_dir``; returns its
+        summary (``None`` without a folder or once ended)."""
     def advance_to(self, t: float) -> int:
-        """Steps until the time reaches ``t``; returns the number of steps taken."""
+        """Steps (as ``step()`` does) until the time reaches ``t``; returns the number of steps
+        taken."""
     def sensor_columns(self, name: str) -> List[str]:
         """Column names (with units) of sensor ``name``."""
     def sensor(self, name: str) -> _Array:

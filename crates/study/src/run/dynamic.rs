@@ -1,82 +1,18 @@
 //! The `dynamic` analysis: the generalized-α time integration of the mechanism, stepped as a
 //! [`Simulation`], its sensors written a batch of rows at a time and its meshes at the output
-//! times.
+//! times ([`DynamicOutput`]).
 
-use super::mesh::MeshRecovery;
+use super::dynamic_output::{DynamicOutput, Halt};
 use super::outcome::Outcome;
-use super::sensors::{report_last, SensorSampler};
 use super::simulation::{dynamic_start, Simulation};
 use crate::build::BuiltMechanism;
-use crate::error::{BoxError, SolverStopped};
+use crate::error::BoxError;
 use crate::input::validate::mechanism::MbsAnalysis;
 use crate::input::validate::Study;
 use crate::output::observer::{Observer, Progress};
 use mbs::System;
-use serde_json::json;
 use std::sync::Arc;
 use std::time::Instant;
-
-/// Why the callback stopped the run: a sensor that is not finite
-/// (`mbs::SolveError::NonFiniteSensor`, a solver stop) or a file that cannot be written.
-enum Halt {
-    Sensor(mbs::SolveError, usize),
-    Output(BoxError),
-}
-
-impl<E: Into<BoxError>> From<E> for Halt {
-    fn from(e: E) -> Self {
-        Halt::Output(e.into())
-    }
-}
-
-/// The sensor rows on their way to the observer.
-struct Rows<'a> {
-    sys: &'a System,
-    /// Rows whose largest-von-Mises values are found a batch at a time (the rows reach the
-    /// files in order, a batch at a time, at most `PendingRows::WAIT` late).
-    pending: mbs::PendingRows,
-    rec: mbs::SensorRecord,
-    files: SensorSampler,
-    /// The time of the last row written.
-    last_written: f64,
-}
-
-impl Rows<'_> {
-    /// Completes the waiting rows (all of them with `flush`) and writes every row the record
-    /// gained; a sensor that is not finite: the rows before it are written, the run is not
-    /// complete. Only the last row is kept, to keep the record small. `record`: the
-    /// integrator whose current state is recorded first (else the waiting rows are completed
-    /// alone).
-    fn write(&mut self, record: Option<&mbs::Integrator>, obs: &mut dyn Observer, k: usize) -> Result<(), Halt> {
-        let rec = &mut self.rec;
-        let before = rec.rows.len();
-        let recorded = match record {
-            Some(integ) => integ.record_deferred(&mut self.pending, rec),
-            None => self.sys.complete_rows(&mut self.pending, rec),
-        };
-        let good = if recorded.is_err() {
-            rec.rows.len().saturating_sub(1).max(before)
-        } else {
-            rec.rows.len()
-        };
-        self.files.sample_rows(obs, rec, before..good)?;
-        if good > before {
-            self.last_written = rec.times[good - 1];
-        }
-        recorded.map_err(|e| {
-            let step = match &e {
-                mbs::SolveError::NonFiniteSensor { step, .. } => *step,
-                _ => k,
-            };
-            Halt::Sensor(e, step)
-        })?;
-        if rec.rows.len() > 1 {
-            rec.rows.drain(..rec.rows.len() - 1);
-            rec.times.drain(..rec.times.len() - 1);
-        }
-        Ok(())
-    }
-}
 
 /// Runs the `dynamic` analysis `analysis` on the system `sys` of `b` from `start` (module
 /// docs), into `out`.
@@ -89,16 +25,9 @@ pub fn dynamic(
     obs: &mut dyn Observer,
     out: &mut Outcome,
 ) -> Result<(), BoxError> {
-    let MbsAnalysis::Dynamic {
-        t_end,
-        dt_min,
-        adaptive,
-        ..
-    } = analysis
-    else {
+    let MbsAnalysis::Dynamic { t_end, .. } = analysis else {
         return Err("internal error: not a dynamic analysis".into());
     };
-    let output = &study.mechanism.output;
     let t0 = Instant::now();
     let first = dynamic_start(sys, start);
     let t_start = first.time();
@@ -109,251 +38,28 @@ pub fn dynamic(
         .into());
     }
     let mut integ = Simulation::with_start(study, Arc::clone(sys), b, analysis, first)?;
-    let mut rec = sys.sensor_record();
-    integ.record(&mut rec)?;
-    let mut files = SensorSampler::start(obs, &b.groups, &rec, "t [s]", output.plots)?;
-    files.sample(obs, t_start, &rec)?;
-    let mut mw = MeshRecovery::new(b, sys)?;
-    if output.vtu_every.is_some() {
-        mw.write(obs, t_start, sys, integ.state(), b)?;
-    }
-    let stepping = match adaptive {
-        None => mbs::Stepping::Fixed { min_step: *dt_min },
-        Some(ad) => mbs::Stepping::Adaptive(ad.clone()),
-    };
-    let mut rows = Rows {
-        sys,
-        pending: mbs::PendingRows::default(),
-        rec,
-        files,
-        last_written: t_start,
-    };
-    let (totals, failure) = integrate(
-        study,
-        b,
-        &mut integ,
-        &stepping,
-        &mut rows,
-        &mut mw,
-        obs,
-        [t_start, *t_end],
-    )?;
-    out.failure = failure;
-    obs.progress(&Progress::Finished);
-    report(analysis, &integ, &totals, t_start, out);
-    report_last(&mut out.report, b, &rows.files);
-    let (hot_spots, hot_lines) = mw.hot_spot_summary(sys, b, "t");
-    out.report.extend(hot_lines);
-    out.results = results(analysis, b.size(sys), hot_spots, &integ, &totals, t_start, t0);
-    obs.sensors_end()?;
-    if out.failure.is_none() {
-        out.final_state = Some(integ.state().clone());
-    }
-    Ok(())
-}
-
-/// Steps `integ` from `t_start` to `t_end`, writing the sensor rows and the meshes at the
-/// output times: the step totals, and the solver failure that stopped it with what was
-/// written.
-#[allow(clippy::too_many_arguments)]
-fn integrate(
-    study: &Study,
-    b: &BuiltMechanism,
-    integ: &mut Simulation,
-    stepping: &mbs::Stepping,
-    rows: &mut Rows,
-    mw: &mut MeshRecovery,
-    obs: &mut dyn Observer,
-    [t_start, t_end]: [f64; 2],
-) -> Result<(mbs::StepTotals, Option<SolverStopped>), BoxError> {
-    let output = &study.mechanism.output;
-    let sys = rows.sys;
-    let run = integ.run_to(stepping, |done, integ| -> Result<(), Halt> {
-        let (k, t) = (done.k, done.time);
-        let vtu_now = output.vtu_every.is_some_and(|v| k % v == 0 || done.last);
-        if crate::interrupt::requested() && !rows.pending.is_empty() {
-            // A stop asked for: the waiting rows are written first.
-            rows.write(None, obs, k)?;
-        }
-        if k % output.every == 0 || done.last {
-            rows.write(Some(integ), obs, k)?;
-            if !vtu_now {
-                mw.track(t, sys, integ.state(), b)?;
-            }
-        }
-        if vtu_now {
-            mw.write(obs, t, sys, integ.state(), b)?;
-        }
-        let (done, total) = match done.planned {
-            Some(n) => (k as u64, n as u64),
-            None => ((1000.0 * (t - t_start) / (t_end - t_start)) as u64, 1000),
-        };
-        obs.progress(&Progress::Steps {
-            what: "time integration".into(),
-            done,
-            total,
-        });
+    let mut output = DynamicOutput::start(study, b, integ.integrator(), obs, t0)?;
+    let run = integ.run_to(|done, integ| -> Result<(), Halt> {
+        output.after_step(done, integ, b, obs)?;
+        obs.progress(&progress(done, *t_end));
         Ok(())
     });
-    // The rows still waiting: a run that ended or failed writes them; a stop asked for
-    // wrote them (above); a file that cannot be written stops here.
-    let run = match run {
-        Ok((totals, failure)) => match rows.write(None, obs, totals.steps) {
-            Ok(()) => Ok((totals, failure)),
-            // The solver's own failure stays the run's.
-            Err(_) if failure.is_some() => Ok((totals, failure)),
-            Err(error) => Err(Box::new(mbs::Interrupted { error, totals })),
-        },
-        Err(stop) => {
-            let unwritable = matches!(&stop.error, Halt::Output(e) if !e.is::<crate::interrupt::Interrupted>());
-            if !unwritable {
-                let _ = rows.write(None, obs, stop.totals.steps);
-            }
-            Err(stop)
-        }
-    };
-    Ok(match run {
-        Ok((totals, None)) => (totals, None),
-        Ok((totals, Some(e))) => {
-            let message = format!(
-                "time integration stopped; results up to t = {:.6} s (step {}) are written",
-                integ.state().time(),
-                totals.steps
-            );
-            let failure = b.stopped(study, message, Some(totals.steps + 1), e);
-            (totals, Some(failure))
-        }
-        Err(stop) => match stop.error {
-            Halt::Output(e) => return Err(e),
-            Halt::Sensor(e, k) => {
-                let message = format!(
-                    "time integration stopped; results up to t = {:.6} s are written",
-                    rows.last_written
-                );
-                let failure = b.stopped(study, message, Some(k), e);
-                (stop.totals, Some(failure))
-            }
-        },
-    })
+    let (totals, failure) = output.end_rows(study, b, integ.integrator(), run, obs)?;
+    out.failure = failure;
+    obs.progress(&Progress::Finished);
+    output.finish(analysis, b, integ.integrator(), &totals, obs, out)
 }
 
-/// The report lines of the steps taken.
-fn report(analysis: &MbsAnalysis, integ: &Simulation, totals: &mbs::StepTotals, t_start: f64, out: &mut Outcome) {
-    let MbsAnalysis::Dynamic {
-        t_end,
-        dt,
-        newton,
-        dt_min,
-        adaptive,
-        ..
-    } = analysis
-    else {
-        return;
+/// The progress after step `done` of a run to `t_end`: steps of the planned, or the share of
+/// the time span (adaptive steps).
+fn progress(done: &mbs::StepDone, t_end: f64) -> Progress {
+    let (k, total) = match done.planned {
+        Some(n) => (done.k as u64, n as u64),
+        None => ((1000.0 * (done.time - done.start) / (t_end - done.start)) as u64, 1000),
     };
-    // Fixed steps: the last one is shortened to end exactly at t_end (mbs::fixed_steps, as
-    // Integrator::run_to steps).
-    let (_, last_step) = mbs::fixed_steps(t_start, *t_end, *dt);
-    let &mbs::StepTotals {
-        steps,
-        planned,
-        iterations,
-        jacobians,
-        max_iterations: max_iter,
-        ref retries,
-        rejected,
-        smallest_step: h_min,
-        largest_step: h_max,
-    } = totals;
-    let n_steps = planned.unwrap_or(0);
-    let t_reached = integ.state().time();
-    match adaptive {
-        None => out.report.push(format!(
-            "{steps} of {n_steps} steps of {dt} s{} from t = {t_start} to {t_reached:.6} s, {iterations} Newton iterations ({:.2} per step, at most {max_iter})",
-            if last_step < *dt * (1.0 - 1e-9) {
-                format!(" (the last shortened to {last_step:.6e} s to end at t_end)")
-            } else {
-                String::new()
-            },
-            iterations as f64 / steps.max(1) as f64
-        )),
-        Some(ad) => out.report.push(format!(
-            "{steps} adaptive steps from t = {t_start} to {t_reached:.6} s (error tolerance {:.1e}; steps {h_min:.3e} to {h_max:.3e} s), {rejected} rejected and retried, {iterations} Newton iterations",
-            ad.tolerance
-        )),
+    Progress::Steps {
+        what: "time integration".into(),
+        done: k,
+        total,
     }
-    if adaptive.is_none() {
-        out.report.push(if retries.is_empty() {
-            "no step needed retrying (fixed step)".to_string()
-        } else {
-            let smallest = retries.iter().map(|r| r.smallest_step).fold(f64::INFINITY, f64::min);
-            let first = &retries[0];
-            format!(
-                "{} failed step(s) retried with halved steps (smallest {smallest:.3e} s, dt_min {dt_min:.3e} s); the first at t = {:.6} s: {}",
-                retries.len(),
-                first.time,
-                first.cause
-            )
-        });
-    }
-    if *newton == mbs::NewtonStrategy::Modified {
-        out.report.push(format!(
-            "modified Newton: {jacobians} iteration matrices factorised ({:.2} per step)",
-            jacobians as f64 / steps.max(1) as f64
-        ));
-    }
-}
-
-/// The results of the run for the summary.
-fn results(
-    analysis: &MbsAnalysis,
-    model: serde_json::Value,
-    hot_spots: serde_json::Value,
-    integ: &Simulation,
-    totals: &mbs::StepTotals,
-    t_start: f64,
-    t0: Instant,
-) -> serde_json::Value {
-    let (newton, adaptive) = match analysis {
-        MbsAnalysis::Dynamic { newton, adaptive, .. } => (*newton, adaptive.is_some()),
-        _ => (mbs::NewtonStrategy::Full, false),
-    };
-    let &mbs::StepTotals {
-        steps,
-        planned,
-        iterations,
-        jacobians,
-        max_iterations: max_iter,
-        ref retries,
-        rejected,
-        smallest_step: h_min,
-        largest_step: h_max,
-    } = totals;
-    json!({
-        "model": model,
-        "hot_spots": hot_spots,
-        "steps": steps,
-        "steps_planned": planned,
-        "t_start": t_start,
-        "t_reached": integ.state().time(),
-        "newton_iterations": iterations,
-        "max_iterations_per_step": max_iter,
-        "newton": match newton {
-            mbs::NewtonStrategy::Full => "full",
-            mbs::NewtonStrategy::Modified => "modified",
-        },
-        "jacobians": jacobians,
-        "adaptive": adaptive,
-        "smallest_step": if h_min.is_finite() { json!(h_min) } else { json!(null) },
-        "largest_step": h_max,
-        "rejected_steps": rejected,
-        "retried_steps": retries.len(),
-        "retries": retries.iter().map(|r| json!({
-            "time": r.time,
-            "step": r.step,
-            "smallest_step": r.smallest_step,
-            "substeps": r.substeps,
-            "cause": r.cause.to_string(),
-        })).collect::<Vec<_>>(),
-        "seconds_solving": t0.elapsed().as_secs_f64(),
-    })
 }

@@ -11,7 +11,7 @@ use super::dynamic::dynamic;
 use super::mesh::MeshRecovery;
 use super::outcome::Outcome;
 use super::sensors::{report_last, SensorSampler};
-use crate::build::{joint_count, BuiltMechanism};
+use crate::build::BuiltMechanism;
 use crate::error::BoxError;
 use crate::input::validate::mechanism::{About, MbsAnalysis};
 use crate::input::validate::Study;
@@ -32,20 +32,7 @@ pub fn run_analysis(
     obs: &mut dyn Observer,
 ) -> Result<Outcome, BoxError> {
     let sys = Arc::new(b.system(study)?);
-    let n = sys.n_dof();
-    let mut out = Outcome {
-        free_dofs: n,
-        report: vec![format!(
-            "mechanism: {} nodes, {} flexible and {} rigid bodies, {}, {n} unknowns",
-            b.model.nodes.len(),
-            b.bodies.len(),
-            b.rigid.len(),
-            joint_count(study)
-        )],
-        results: json!({}),
-        failure: None,
-        final_state: None,
-    };
+    let mut out = Outcome::of_mechanism(study, b, &sys);
     match analysis {
         MbsAnalysis::Equilibrium {
             steps,

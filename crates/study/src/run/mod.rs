@@ -8,7 +8,8 @@
 //! | [`reduce`] | the cached reduction service: parts reduced through [`cache`], `flexmbs reduce` |
 //! | [`cache`] | reduced bodies cached by a hash of what produced them |
 //! | [`mechanism`] | the analyses of the mechanism: equilibrium, linearized, buckling |
-//! | [`dynamic`] | the dynamic analysis: time integration, rows and meshes at the output times |
+//! | [`dynamic_output`] | a dynamic analysis' rows and meshes at the output times, its report and results |
+//! | [`dynamic`] | the dynamic analysis: the time integration of a run |
 //! | [`selection`] | analyses picked by name, or all of them |
 //! | [`simulation`] | a dynamic analysis stepped by the caller |
 //! | [`sensors`] | sensor columns and the stream of samples |
@@ -16,6 +17,7 @@
 
 pub mod cache;
 pub mod dynamic;
+pub mod dynamic_output;
 pub mod mechanism;
 pub mod mesh;
 pub mod options;
@@ -126,5 +128,51 @@ impl Simulation {
         let start = runner.start_state(i)?;
         let first = simulation::dynamic_start(&system, start.as_ref());
         Self::with_start(study, system, runner.mechanism(&mut ())?, spec, first)
+    }
+
+    /// [`Simulation::new`] writing the results folder of its analysis as it steps (the
+    /// folder of `options`, as `flexmbs run --analysis NAME` writes it): sensor files and
+    /// plots, meshes and the summary, step by step at the output times of the study. The
+    /// results end with [`Simulation::finish_results`] (or when the simulation is dropped),
+    /// and so does the summary, `complete` or `failed`; until then it says `running`.
+    pub fn writing_results(study: &Study, analysis: &str, options: &Options) -> Result<Self, BoxError> {
+        let i = study.analysis(analysis)?;
+        let a = &study.analyses[i];
+        let AnalysisSpec::Mbs(spec) = &a.spec else {
+            return Err(format!("analysis '{analysis}' is not an analysis of the mechanism").into());
+        };
+        let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
+        let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
+        let began = std::time::Instant::now();
+        let mut runner = Runner::new(study, options);
+        let system = Arc::new(runner.mechanism(&mut ())?.system(study)?);
+        let start = runner.start_state(i)?;
+        let first = simulation::dynamic_start(&system, start.as_ref());
+        let mut summary = runner.summary.clone();
+        let built = runner.into_mechanism().ok_or("the mechanism could not be built")?;
+        let mut sim = Self::with_start(study, system, &built, spec, first)?;
+        let info = runner::analysis_info(study, i);
+        folder.summary(&summary)?;
+        folder.begin(&info)?;
+        let output = dynamic_output::DynamicOutput::start(study, &built, sim.integrator(), &mut folder, began)?;
+        summary.status = "running".into();
+        let planned = match simulation::stepping(spec) {
+            Some(mbs::Stepping::Fixed { .. }) => Some(mbs::fixed_steps(sim.time(), sim.end_time(), sim.step_size()).0),
+            _ => None,
+        };
+        sim.keep_results(simulation::Recording {
+            folder,
+            output: Some(output),
+            study: study.clone(),
+            built,
+            index: i,
+            info,
+            spec: spec.clone(),
+            summary,
+            totals: mbs::StepTotals::new(planned),
+            began,
+            halted: None,
+        });
+        Ok(sim)
     }
 }

@@ -1,9 +1,9 @@
 //! The [`Runner`]: a study run analysis by analysis into an observer, with its summary.
 
 use super::options::Options;
-use super::outcome::Outcome;
+use super::outcome::{record_outcome, Outcome, Recorded};
 use crate::build::BuiltMechanism;
-use crate::error::{AnalysisFailed, BoxError};
+use crate::error::BoxError;
 use crate::input::part::Part;
 use crate::input::validate::{AnalysisSpec, MbsAnalysis, Study};
 use crate::output::observer::{AnalysisInfo, Observer};
@@ -208,71 +208,24 @@ impl<'s> Runner<'s> {
         obs: &mut dyn Observer,
     ) -> Result<(), BoxError> {
         let study = self.study;
-        let a = &study.analyses[i];
-        let files = obs.take_files();
-        let summary = &mut self.summary;
-        let entry = &mut summary.analyses[i];
-        entry.seconds = Some(t.elapsed().as_secs_f64());
-        entry.files = files;
-        summary.total_seconds = self.start.elapsed().as_secs_f64();
-        let where_ = || match &self.options.out {
+        self.summary.total_seconds = self.start.elapsed().as_secs_f64();
+        let results_dir = match &self.options.out {
             Some(out) => out.display().to_string(),
             None => self.options.results_dir(study).display().to_string(),
         };
-        match result {
-            Ok(o) => {
-                entry.status = Status::Done;
-                entry.free_dofs = Some(o.free_dofs);
-                entry.report = o.report;
-                entry.results = o.results;
-                if let Some(failure) = o.failure {
-                    // The solver stopped: what it computed is written; the run fails here.
-                    entry.status = Status::Failed;
-                    entry.error = Some(crate::error::chain(&failure));
-                    summary.status = failed_status();
-                    let entry = entry.clone();
-                    // The failure is the message; a summary that cannot be written (a full
-                    // disk) must not replace it.
-                    let _ = obs.end(info, &entry);
-                    let _ = obs.summary(summary);
-                    return Err(Box::new(AnalysisFailed {
-                        analysis: a.name.clone(),
-                        message: format!(
-                            "{} analysis '{}' ({}) stopped; what it computed is in {}/{}",
-                            a.kind_name(),
-                            a.name,
-                            study.location(&a.path),
-                            where_(),
-                            a.name
-                        ),
-                        source: Box::new(failure),
-                    }));
-                }
-                let entry = entry.clone();
-                obs.end(info, &entry)?;
-                obs.summary(summary)?;
-                Ok(())
-            }
-            Err(e) => {
-                entry.status = Status::Failed;
-                entry.error = Some(crate::error::chain(&*e));
-                summary.status = failed_status();
-                let entry = entry.clone();
-                let _ = obs.end(info, &entry);
-                let _ = obs.summary(summary);
-                Err(Box::new(AnalysisFailed {
-                    analysis: a.name.clone(),
-                    message: format!(
-                        "{} analysis '{}' ({}) failed; the results of the analyses before it are in {}",
-                        a.kind_name(),
-                        a.name,
-                        study.location(&a.path),
-                        where_()
-                    ),
-                    source: e,
-                }))
-            }
-        }
+        let at = Recorded {
+            study,
+            index: i,
+            info,
+            seconds: t.elapsed().as_secs_f64(),
+            results_dir,
+        };
+        record_outcome(&mut self.summary, &at, result, obs)
+    }
+
+    /// The mechanism built, handed out (`None` when no analysis of the mechanism ran).
+    pub fn into_mechanism(self) -> Option<BuiltMechanism> {
+        self.mechanism
     }
 
     /// Marks the run complete and hands the summary out.
@@ -281,15 +234,6 @@ impl<'s> Runner<'s> {
         self.summary.total_seconds = self.start.elapsed().as_secs_f64();
         obs.summary(&self.summary)?;
         Ok(self.summary)
-    }
-}
-
-/// The summary status of a run that stopped: `interrupted` after Ctrl-C, else `failed`.
-fn failed_status() -> String {
-    if crate::interrupt::requested() {
-        "interrupted".into()
-    } else {
-        "failed".into()
     }
 }
 

@@ -6,14 +6,20 @@
 //! program writes. [`Simulation::new`] (in `run`) builds the mechanism and asks the
 //! [`super::Runner`] for the state its `start` names.
 
+use super::dynamic_output::{DynamicOutput, Halt};
+use super::outcome::{record_outcome, Outcome, Recorded};
 use super::sensors::{sensor_columns, sensor_indices};
 use crate::build::{BuiltMechanism, LoadTarget, NamedLoad};
 use crate::error::{BoxError, Location};
 use crate::input::validate::{MbsAnalysis, Study};
+use crate::output::folder::ResultsFolder;
+use crate::output::observer::{AnalysisInfo, Observer};
+use crate::output::summary::Summary;
 use crate::sensor_group::SensorGroup;
-use mbs::{DynamicSettings, Integrator, LoadKind, NodeMotion, SensorRecord, State, StepReport, System};
+use mbs::{DynamicSettings, Integrator, LoadKind, NodeMotion, SensorRecord, State, System};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
+use std::time::Instant;
 
 /// A generalized-α time integration of the study's mechanism (module docs).
 pub struct Simulation {
@@ -30,8 +36,103 @@ pub struct Simulation {
     /// The step size and end time of the analysis.
     dt: f64,
     t_end: f64,
+    /// The analysis' step control: fixed steps retried with halved steps down to `dt_min`, or
+    /// adaptive steps (`[analyses.adaptive]`), as in a run.
+    stepping: mbs::Stepping,
+    /// The fixed steps of `dt` to the end time, planned as a run plans them: taken since the
+    /// plan was made and planned in all (the last one is shortened to land on `t_end`).
+    plan: FixedPlan,
     /// Where the study describes each entity of the model, for [`Simulation::locate`].
     locations: BTreeMap<mbs::Entity, Location>,
+    /// The results folder written as the simulation steps ([`Simulation::writing_results`]).
+    recording: Option<Box<Recording>>,
+}
+
+/// The results folder of a simulation that writes one as it steps: the files of a run of its
+/// analysis (sensor CSVs and plots, meshes, summary), written step by step by the run's own
+/// [`DynamicOutput`].
+pub(crate) struct Recording {
+    pub folder: ResultsFolder,
+    /// `None` once the results are finished.
+    pub output: Option<DynamicOutput>,
+    pub study: Study,
+    pub built: BuiltMechanism,
+    pub index: usize,
+    pub info: AnalysisInfo,
+    pub spec: MbsAnalysis,
+    pub summary: Summary,
+    pub totals: mbs::StepTotals,
+    pub began: Instant,
+    /// What stopped the output (a sensor that is not finite, a file that cannot be written):
+    /// the results end there.
+    pub halted: Option<Halt>,
+}
+
+impl Recording {
+    /// Writes the rows still waiting, the report and results of the steps taken, and the
+    /// summary (`complete`, or `failed` with what stopped the output); the results are final.
+    fn finish(&mut self, integ: &mbs::Integrator) -> Result<Summary, BoxError> {
+        let Some(mut output) = self.output.take() else {
+            return Ok(self.summary.clone());
+        };
+        let run = match self.halted.take() {
+            Some(error) => Err(Box::new(mbs::Interrupted {
+                error,
+                totals: self.totals.clone(),
+            })),
+            None => Ok((self.totals.clone(), None)),
+        };
+        let folder = &mut self.folder;
+        let (study, built, spec) = (&self.study, &self.built, &self.spec);
+        let result = || -> Result<Outcome, BoxError> {
+            let (totals, failure) = output.end_rows(study, built, integ, run, folder)?;
+            let mut out = Outcome::of_mechanism(study, built, integ.system());
+            out.failure = failure;
+            output.finish(spec, built, integ, &totals, folder, &mut out)?;
+            Ok(out)
+        };
+        let result = result();
+        let at = Recorded {
+            study,
+            index: self.index,
+            info: &self.info,
+            seconds: self.began.elapsed().as_secs_f64(),
+            results_dir: self.folder.root().display().to_string(),
+        };
+        self.summary.total_seconds = self.began.elapsed().as_secs_f64();
+        record_outcome(&mut self.summary, &at, result, &mut self.folder)?;
+        self.summary.status = "complete".into();
+        self.folder.summary(&self.summary)?;
+        Ok(self.summary.clone())
+    }
+}
+
+/// Fixed steps from a time to the end time ([`mbs::fixed_steps`]), counted as they are taken.
+#[derive(Clone, Copy, Debug)]
+struct FixedPlan {
+    taken: usize,
+    planned: usize,
+}
+
+impl FixedPlan {
+    fn new(t: f64, t_end: f64, h: f64) -> Self {
+        Self {
+            taken: 0,
+            planned: mbs::fixed_steps(t, t_end, h).0,
+        }
+    }
+}
+
+/// The step control of a `dynamic` analysis: fixed steps retried down to `dt_min`, or the
+/// adaptive steps of its `[analyses.adaptive]`.
+pub fn stepping(spec: &MbsAnalysis) -> Option<mbs::Stepping> {
+    match spec {
+        MbsAnalysis::Dynamic { dt_min, adaptive, .. } => Some(match adaptive {
+            None => mbs::Stepping::Fixed { min_step: *dt_min },
+            Some(ad) => mbs::Stepping::Adaptive(ad.clone()),
+        }),
+        _ => None,
+    }
 }
 
 /// The integrator settings of a `dynamic` analysis.
@@ -89,6 +190,8 @@ impl Simulation {
             return Err("a simulation steps a dynamic analysis; this one is not".into());
         };
         let (dt, t_end) = (settings.step, settings.end_time);
+        let stepping = stepping(spec).ok_or("a simulation steps a dynamic analysis; this one is not")?;
+        let plan = FixedPlan::new(state.time(), t_end, dt);
         let record = system.sensor_record();
         let columns = sensor_columns(&b.groups, &record)?;
         let mut sensor_indices = sensor_indices(&b.groups, &record)?;
@@ -113,7 +216,10 @@ impl Simulation {
             loads: b.loads.clone(),
             dt,
             t_end,
+            stepping,
+            plan,
             locations,
+            recording: None,
         })
     }
 
@@ -136,47 +242,140 @@ impl Simulation {
         self.t_end
     }
 
-    /// Sets the size of the next steps (a run's last fixed step is shortened to land on its
-    /// end time, `mbs::fixed_steps`).
+    /// Sets the size `h` of the next steps; the fixed steps to the end time are planned anew
+    /// from the time reached (the last one shortened to land on it).
     pub fn set_step_size(&mut self, h: f64) {
+        self.dt = h;
         self.integrator.set_step_size(h);
+        self.plan = FixedPlan::new(self.time(), self.t_end, h);
     }
 
-    /// Steps taken.
+    /// Steps taken (a retried step's halved steps count one by one).
     pub fn steps(&self) -> usize {
         self.integrator.steps()
     }
 
-    /// One time step. On failure the state stays at the last converged step and the error
-    /// says where (time, step, residual).
-    pub fn step(&mut self) -> Result<StepReport, mbs::SolveError> {
-        self.integrator.step()
+    /// One step under the analysis' step control, as a run takes it: a fixed step of `dt`
+    /// (the last one before the end time shortened to land on it) whose failure is retried
+    /// with halved steps down to `dt_min`, or one adaptive step. On failure the state stays
+    /// at the last converged step and the error says where (time, step, residual).
+    pub fn step(&mut self) -> Result<mbs::Taken, Box<mbs::RetryFailure>> {
+        let h = self.dt;
+        let last = matches!(self.stepping, mbs::Stepping::Fixed { .. }) && self.plan.planned == self.plan.taken + 1;
+        if last {
+            self.integrator
+                .set_step_size(mbs::last_step_size(self.time(), self.t_end, h));
+        }
+        let t_before = self.time();
+        let taken = self.integrator.step_under(&self.stepping, self.t_end);
+        if last {
+            self.integrator.set_step_size(h);
+        }
+        let taken = taken?;
+        self.plan.taken += 1;
+        self.write_step(&taken, t_before)?;
+        Ok(taken)
     }
 
-    /// One step of the current size; a failed step is retried with halved steps down to
-    /// `min_step` (`mbs::step_retrying`).
-    pub fn step_retrying(&mut self, min_step: f64) -> Result<mbs::RetriedStep, Box<mbs::RetryFailure>> {
-        mbs::step_retrying(&mut self.integrator, min_step)
+    /// One step of size `h` (retried with halved steps down to the analysis' smallest step
+    /// when it fails); the steps after it are of the analysis' size again, planned anew to
+    /// the end time.
+    pub fn step_by(&mut self, h: f64) -> Result<mbs::Taken, Box<mbs::RetryFailure>> {
+        let min_step = match &self.stepping {
+            mbs::Stepping::Fixed { min_step } => *min_step,
+            mbs::Stepping::Adaptive(ad) => ad.min_step,
+        };
+        let (before, t_before) = (self.integrator.step_size(), self.time());
+        self.integrator.set_step_size(h);
+        let taken = self.integrator.step_under(
+            &mbs::Stepping::Fixed {
+                min_step: min_step.min(h),
+            },
+            self.t_end,
+        );
+        self.integrator.set_step_size(before);
+        self.plan = FixedPlan::new(self.time(), self.t_end, self.dt);
+        let taken = taken?;
+        self.write_step(&taken, t_before)?;
+        Ok(taken)
     }
 
-    /// One step with the local error control of `adaptive`, landing on the end time
-    /// (`mbs::step_adaptive_to`).
-    pub fn step_adaptive(&mut self, adaptive: &mbs::AdaptiveSettings) -> Result<mbs::AdaptiveStep, mbs::SolveError> {
-        mbs::step_adaptive_to(&mut self.integrator, self.t_end, adaptive)
+    /// Writes the step `taken` from `t_before` into the results folder, if the simulation
+    /// keeps one, at the output times of a run. A sensor that is not finite ends the results
+    /// there (their summary says so) and is returned; a file that cannot be written ends them
+    /// too, and [`Simulation::finish_results`] returns it.
+    fn write_step(&mut self, taken: &mbs::Taken, t_before: f64) -> Result<(), Box<mbs::RetryFailure>> {
+        let Some(rec) = self.recording.as_deref_mut() else {
+            return Ok(());
+        };
+        let Some(output) = rec.output.as_mut() else {
+            return Ok(());
+        };
+        let t = self.integrator.state().time();
+        rec.totals.count(taken.clone(), t - t_before);
+        let done = mbs::StepDone {
+            k: rec.totals.steps,
+            last: self.t_end - t <= 1e-12 * self.t_end.abs().max(1.0),
+            planned: rec.totals.planned,
+            time: t,
+            start: t_before,
+        };
+        let Err(halt) = output.after_step(&done, &self.integrator, &rec.built, &mut rec.folder) else {
+            return Ok(());
+        };
+        let sensor = match &halt {
+            Halt::Sensor(e, _) => Some(e.clone()),
+            Halt::Output(_) => None,
+        };
+        rec.halted = Some(halt);
+        // The summary is written now: a script that stops here leaves a truthful folder.
+        let _ = rec.finish(&self.integrator);
+        match sensor {
+            Some(error) => Err(Box::new(mbs::RetryFailure { error, retry: None })),
+            None => Ok(()),
+        }
     }
 
-    /// Steps to the end time of the analysis as `stepping` says, with `each` called after
-    /// every step (`mbs::Integrator::run_to`).
+    /// The results folder of a simulation that keeps one ([`Simulation::writing_results`]):
+    /// writes the rows still waiting, the report and the summary, and ends the results (the
+    /// simulation can step on without them). `Ok(None)` when the simulation keeps no folder;
+    /// the summary of the results otherwise. A file that could not be written, or the stop
+    /// of a sensor that is not finite, is the error (the summary says `failed`).
+    pub fn finish_results(&mut self) -> Result<Option<Summary>, BoxError> {
+        let Some(mut rec) = self.recording.take() else {
+            return Ok(None);
+        };
+        rec.finish(&self.integrator).map(Some)
+    }
+
+    /// Keeps `recording` as the results folder of the simulation.
+    pub(crate) fn keep_results(&mut self, recording: Recording) {
+        self.recording = Some(Box::new(recording));
+    }
+
+    /// The integrator being stepped.
+    pub fn integrator(&self) -> &mbs::Integrator<'static> {
+        &self.integrator
+    }
+
+    /// Steps to the end time of the analysis under its step control, with `each` called
+    /// after every step (`mbs::Integrator::run_to`).
     pub fn run_to<E>(
         &mut self,
-        stepping: &mbs::Stepping,
         each: impl FnMut(&mbs::StepDone, &mbs::Integrator<'static>) -> Result<(), E>,
     ) -> Result<(mbs::StepTotals, Option<mbs::SolveError>), Box<mbs::Interrupted<E>>> {
-        self.integrator.run_to(self.t_end, stepping, each)
+        let run = self.integrator.run_to(self.t_end, &self.stepping, each);
+        let taken = match &run {
+            Ok((totals, _)) => totals.steps,
+            Err(stop) => stop.totals.steps,
+        };
+        self.plan.taken += taken;
+        run
     }
 
-    /// Steps until the time reaches `t` (to a millionth of a step); returns the steps taken.
-    pub fn advance_to(&mut self, t: f64) -> Result<usize, mbs::SolveError> {
+    /// Steps ([`Simulation::step`]) until the time reaches `t` (to a millionth of a step);
+    /// returns the steps taken.
+    pub fn advance_to(&mut self, t: f64) -> Result<usize, Box<mbs::RetryFailure>> {
         let mut n = 0;
         while self.time() < t - 1e-6 * self.dt {
             self.step()?;
@@ -318,6 +517,15 @@ impl Simulation {
     /// finite is [`mbs::SolveError::NonFiniteSensor`] (the row stays in `record`).
     pub fn record(&self, record: &mut SensorRecord) -> Result<(), mbs::SolveError> {
         self.integrator.record(record)
+    }
+}
+
+impl Drop for Simulation {
+    /// A simulation dropped while it writes results ends them with a truthful summary.
+    fn drop(&mut self) {
+        if let Some(mut rec) = self.recording.take() {
+            let _ = rec.finish(&self.integrator);
+        }
     }
 }
 

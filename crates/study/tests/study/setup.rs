@@ -499,6 +499,50 @@ fn a_snap_through_the_fixed_step_cannot_take_is_retried_and_the_summary_says_so(
     assert!((y - a).abs() < 1e-6, "{y} vs {a}");
 }
 
+#[test]
+fn a_snap_through_stepped_from_a_simulation_is_retried_as_in_the_run_to_the_bit() {
+    // The snap at t = 0.11 s needs a retried step (above): stepped one step at a time, the
+    // simulation takes the run's step control, so it passes the snap and every output row
+    // equals the run's.
+    let shared = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/studies/snapping_truss.toml");
+    let text = std::fs::read_to_string(shared).unwrap();
+    // The shared study is the one the test above builds.
+    assert!(
+        text.ends_with(&snapping_truss("")),
+        "tests/studies/snapping_truss.toml differs"
+    );
+    let (rec, summary, file) = run("snap-stepped", &text);
+    summary.unwrap();
+    let (t_run, y_run) = (times(&rec, "dynamic"), column(&rec, "dynamic", "apex", 1));
+    let study = study::load(&file).unwrap();
+    let options = crate::options_in(file.parent().unwrap(), None);
+    let mut sim = study::Simulation::new(&study, "dynamic", &options).unwrap();
+    let mut retried = 0;
+    for (k, t) in t_run.iter().enumerate().skip(1) {
+        let taken = sim
+            .step()
+            .unwrap_or_else(|f| panic!("step {k} to t = {t}: {}", f.error));
+        retried += usize::from(taken.retry.is_some());
+        assert_eq!(sim.time(), *t, "step {k}");
+        assert_eq!(sim.sensor("apex").unwrap()[1], y_run[k], "apex at t = {t}");
+    }
+    assert_eq!(retried, 1);
+    // One step of a size of its own, then the analysis' steps again: the plan is made anew,
+    // so the steps land on the grid of dt again and on the end time.
+    let mut sim = study::Simulation::new(&study, "dynamic", &options).unwrap();
+    sim.step_by(2.5e-3).unwrap();
+    assert_eq!(sim.time(), 2.5e-3);
+    sim.advance_to(0.5).unwrap();
+    assert!((sim.time() - 0.5).abs() < 1e-15, "{}", sim.time());
+    let y_end = sim.sensor("apex").unwrap()[1];
+    // Another step history, the same settled state (the run's, to its settling, 1e-6 m).
+    assert!(
+        (y_end - y_run.last().unwrap()).abs() < 1e-6,
+        "{y_end} vs {}",
+        y_run.last().unwrap()
+    );
+}
+
 /// The pendulum under gravity with a `dynamic` analysis of `t_end` and `dt`.
 fn swinging(t_end: &str, dt: &str) -> String {
     released(0.5) + &dynamic(t_end, dt)

@@ -5,7 +5,7 @@
 //! end time.
 
 use super::integrator::{fixed_steps, last_step_size, step_adaptive_to, AdaptiveSettings, Integrator, StepReport};
-use super::retry::{step_retrying, Retry};
+use super::retry::{step_retrying, Retry, RetryFailure};
 use crate::error::SolveError;
 
 /// How [`Integrator::run_to`] steps.
@@ -58,7 +58,8 @@ pub struct StepTotals {
 }
 
 impl StepTotals {
-    fn new(planned: Option<usize>) -> Self {
+    /// No step taken yet, `planned` fixed steps to go (`None`: adaptive steps).
+    pub fn new(planned: Option<usize>) -> Self {
         Self {
             steps: 0,
             planned,
@@ -86,6 +87,53 @@ impl StepTotals {
 pub struct Interrupted<E> {
     pub error: E,
     pub totals: StepTotals,
+}
+
+/// What one step of [`Integrator::step_under`] took: the report of each step (one, or those of
+/// the halved steps of a retried fixed step), the retry, and the adaptive attempts rejected.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Taken {
+    pub reports: Vec<StepReport>,
+    pub retry: Option<Retry>,
+    pub rejected: usize,
+}
+
+impl StepTotals {
+    /// Counts a step `taken` of size `h`: its Newton work, its retry and its size.
+    pub fn count(&mut self, taken: Taken, h: f64) {
+        self.retries.extend(taken.retry);
+        self.rejected += taken.rejected;
+        taken.reports.iter().for_each(|rep| self.add(rep));
+        self.steps += 1;
+        self.smallest_step = self.smallest_step.min(h);
+        self.largest_step = self.largest_step.max(h);
+    }
+}
+
+impl Integrator<'_> {
+    /// One step as `stepping` says, of the step size set ([`Integrator::set_step_size`]): a
+    /// fixed step whose Newton iteration fails is retried with halved steps
+    /// ([`crate::step_retrying`]); an adaptive step is under local error control and lands on
+    /// `end_time` ([`crate::step_adaptive_to`]; past `end_time`, the step size set is taken
+    /// as a fixed step). On failure the state stays at the last converged step.
+    pub fn step_under(&mut self, stepping: &Stepping, end_time: f64) -> Result<Taken, Box<RetryFailure>> {
+        match stepping {
+            Stepping::Fixed { min_step } => step_retrying(self, *min_step).map(|r| Taken {
+                reports: r.reports,
+                retry: r.retry,
+                rejected: 0,
+            }),
+            Stepping::Adaptive(ad) if self.state().time() < end_time => match step_adaptive_to(self, end_time, ad) {
+                Ok(s) => Ok(Taken {
+                    reports: vec![s.report],
+                    retry: None,
+                    rejected: s.rejected,
+                }),
+                Err(error) => Err(Box::new(RetryFailure { error, retry: None })),
+            },
+            Stepping::Adaptive(ad) => self.step_under(&Stepping::Fixed { min_step: ad.min_step }, end_time),
+        }
+    }
 }
 
 impl Integrator<'_> {
@@ -128,38 +176,19 @@ impl Integrator<'_> {
             if shortened {
                 self.set_step_size(last_step_size(t_before, end_time, h));
             }
-            let taken = match stepping {
-                Stepping::Fixed { min_step } => match step_retrying(self, *min_step) {
-                    Ok(r) => {
-                        totals.retries.extend(r.retry);
-                        r.reports.iter().for_each(|rep| totals.add(rep));
-                        None
-                    }
-                    Err(f) => {
-                        totals.retries.extend(f.retry);
-                        Some(f.error)
-                    }
-                },
-                Stepping::Adaptive(ad) => match step_adaptive_to(self, end_time, ad) {
-                    Ok(s) => {
-                        totals.rejected += s.rejected;
-                        totals.add(&s.report);
-                        None
-                    }
-                    Err(e) => Some(e),
-                },
-            };
+            let taken = self.step_under(stepping, end_time);
             if shortened {
                 // The step size stays h for a run continued from here.
                 self.set_step_size(h);
             }
-            if let Some(e) = taken {
-                return Ok((totals, Some(e)));
-            }
-            totals.steps += 1;
             let t = self.state().time();
-            totals.smallest_step = totals.smallest_step.min(t - t_before);
-            totals.largest_step = totals.largest_step.max(t - t_before);
+            match taken {
+                Ok(taken) => totals.count(taken, t - t_before),
+                Err(f) => {
+                    totals.retries.extend(f.retry);
+                    return Ok((totals, Some(f.error)));
+                }
+            }
             let last = match planned {
                 Some(n) => totals.steps == n,
                 None => at_end(t),
