@@ -34,8 +34,9 @@ mod free_body;
 mod momentum;
 
 /// The acceleration sensors (uniform circular motion, the pendulum, central differences of
-/// the velocity sensor, zero in statics) and the energy balance (a conservative pendulum, a
-/// driven, damped and loaded one, a prescribed swing), with its order in the step.
+/// the velocity sensor, the trapezoidal rule's velocity increments of a flexible node, zero in
+/// statics) and the energy balance (a conservative pendulum, a driven, damped and loaded one, a
+/// prescribed swing, the flexible slider-crank), with its order in the step.
 #[path = "unit/sensor_accelerations.rs"]
 mod sensor_accelerations;
 
