@@ -200,7 +200,7 @@ pub use model::user_force::{FdSteps, UserForce, Wrench};
 pub use model::{
     Body, BodyLoad, Driver, DriverTarget, Effort, FlexibleBody, InitialCondition, Joint, JointActuator, JointKind,
     JointLimit, JointSpring, Load, LoadAxes, LoadKind, Model, Node, Pid, PointMass, RigidBody, RotationSupport, Sensor,
-    SensorKind, Spring, Support, TranslationSupport,
+    SensorAxes, SensorKind, Spring, Support, TranslationSupport,
 };
 pub use node::NodeMotion;
 pub use solvers::arc_length::{solve_arc_length, solve_static_with, ArcLengthSettings, StaticMethod};

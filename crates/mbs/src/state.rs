@@ -22,6 +22,9 @@ pub struct State {
     pub(crate) frames: Vec<Frame>,
     /// Per actuator: its controller's state ([`crate::assembly::joint_forces`]).
     pub(crate) controls: Vec<Control>,
+    /// The energy-balance sensors' running integrals since the start of the dynamic run
+    /// (`None` outside one, or without such a sensor).
+    pub(crate) account: Option<EnergyAccount>,
 }
 
 /// `clone_from` reuses the buffers (the derived one would allocate a fresh copy): the
@@ -36,6 +39,7 @@ impl Clone for State {
             acceleration: self.acceleration.clone(),
             frames: self.frames.clone(),
             controls: self.controls.clone(),
+            account: self.account,
         }
     }
 
@@ -47,6 +51,7 @@ impl Clone for State {
         self.acceleration.clone_from(&other.acceleration);
         self.frames.clone_from(&other.frames);
         self.controls.clone_from(&other.controls);
+        self.account = other.account;
     }
 }
 
@@ -85,4 +90,19 @@ pub(crate) struct Control {
     pub t: f64,
     pub z: f64,
     pub e: f64,
+}
+
+/// The running time integrals of the energy balance of a dynamic run
+/// (`crate::assembly::system::sensors`): the powers at the last accepted step and their
+/// trapezoid-rule integrals since the start.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct EnergyAccount {
+    /// $T_0 + U_0 + V_0$ at the start of the run.
+    pub e0: f64,
+    /// The time of `power`.
+    pub t: f64,
+    /// The powers at `t`: put in by the actuators, the drivers, the loads; dissipated.
+    pub power: [f64; 4],
+    /// Their integrals from the start to `t`.
+    pub work: [f64; 4],
 }

@@ -33,6 +33,13 @@ mod free_body;
 #[path = "unit/momentum.rs"]
 mod momentum;
 
+/// The acceleration sensors (uniform circular motion, the pendulum, central differences of
+/// the velocity sensor, the trapezoidal rule's velocity increments of a flexible node, zero in
+/// statics) and the energy balance (a conservative pendulum, a driven, damped and loaded one, a
+/// prescribed swing, the flexible slider-crank), with its order in the step.
+#[path = "unit/sensor_accelerations.rs"]
+mod sensor_accelerations;
+
 /// Geometrically nonlinear statics: elastica B1 and roll-up B2 with N superelements (quick
 /// subset), quadratic convergence of Newton.
 #[path = "unit/statics.rs"]

@@ -33,6 +33,11 @@ mod input_checks;
 #[path = "study/stress.rs"]
 mod stress;
 
+/// The acceleration and energy-balance sensors of a study: columns, a pendulum and a crank
+/// against their analytic accelerations, an equilibrium, the balance's order in the step.
+#[path = "study/sensors.rs"]
+mod sensors;
+
 /// A fresh scratch folder for one test.
 fn scratch(name: &str) -> PathBuf {
     common::scratch_dir("tests", name)

@@ -395,6 +395,21 @@ impl JointForces {
             .sum()
     }
 
+    /// The power the limits dissipate, $\sum f\dot x - \frac{d}{dt}\tfrac12 k d^2$ each: the power
+    /// of the force they apply less the rate of the energy [`Self::limit_energy`] counts (the
+    /// damper's $c\dot x$ while in contact, and the spring's share while the force would pull).
+    /// `value(s)` is the value and rate of scalar coordinate `s`.
+    pub(crate) fn limit_dissipation(&self, value: &dyn Fn(usize) -> (f64, f64)) -> f64 {
+        self.limits
+            .iter()
+            .map(|l| {
+                let (x, xd) = value(l.scalar);
+                let d = (x - l.lower).min(0.0) + (x - l.upper).max(0.0);
+                Self::limit_force(l, x, xd).unwrap_or(0.0) * xd - l.k * d * xd
+            })
+            .sum()
+    }
+
     /// Adds the tangents $\partial\mathbf F/\partial\mathbf q$ to `K` and $\partial\mathbf F/\partial\dot{\mathbf q}$ to
     /// `C` (values on the system pattern).
     pub(crate) fn add_tangents(

@@ -253,6 +253,8 @@ fn check_sensor_references(model: &Model) -> Result<(), ModelError> {
             | SensorKind::NodeRotation { node: n }
             | SensorKind::NodeVelocity { node: n }
             | SensorKind::NodeAngularVelocity { node: n }
+            | SensorKind::NodeAcceleration { node: n, .. }
+            | SensorKind::NodeAngularAcceleration { node: n, .. }
             | SensorKind::Reaction { node: n } => check_node(model, *n, &who)?,
             SensorKind::RelativePosition { node: n, reference } => {
                 check_node(model, *n, &who)?;

@@ -338,6 +338,17 @@ pub struct BodyLoad {
     pub time: TimeFunction,
 }
 
+/// The axes a vector sensor reports in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SensorAxes {
+    /// Inertial axes.
+    #[default]
+    Global,
+    /// The node's own axes, turning with it: $\mathbf R^T\mathbf x$ (what an accelerometer
+    /// fixed to the point reads).
+    Node,
+}
+
 /// What a sensor measures (each gives a fixed number of values per output time).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum SensorKind {
@@ -354,6 +365,13 @@ pub enum SensorKind {
     NodeVelocity { node: NodeId },
     /// Spatial $\boldsymbol\omega$ (3).
     NodeAngularVelocity { node: NodeId },
+    /// $\mathbf a = \ddot{\mathbf r}$ (3), from the state's true accelerations
+    /// $\ddot{\mathbf q}$ (not generalized-α's algorithmic ones) through the node kinematics (a
+    /// point carried by a body: $\mathbf a_{node} + \boldsymbol\alpha\times\mathbf r +
+    /// \boldsymbol\omega\times(\boldsymbol\omega\times\mathbf r)$); in global axes or the node's.
+    NodeAcceleration { node: NodeId, axes: SensorAxes },
+    /// Spatial $\boldsymbol\alpha = \dot{\boldsymbol\omega}$ (3), in global axes or the node's.
+    NodeAngularAcceleration { node: NodeId, axes: SensorAxes },
     /// Distance of `node` from the line through `a` and `b` (1): the midpoint deflection of a
     /// rod relative to its chord. With `normal`, signed: $((\mathbf b - \mathbf a)/|\mathbf b - \mathbf a|
     /// \times (\mathbf p - \mathbf a))\cdot\mathbf n$.
@@ -387,6 +405,11 @@ pub enum SensorKind {
     LinearMomentum,
     /// Angular momentum about the inertial origin (3).
     AngularMomentum,
+    /// The energy balance of a dynamic run (8, [`crate::assembly::system::sensors`]): the work
+    /// put in since the run's start by the actuators, the drivers and the loads, the kinetic,
+    /// strain and gravity energies, the energy dissipated by dampers, and the balance error
+    /// $(T + U + V) - (T_0 + U_0 + V_0) - W_{in} + D$.
+    EnergyBalance,
     /// Stress at mesh node `node` of a flexible body reduced with stress shapes (8), global
     /// axes: the tensor $xx, yy, zz, xy, yz, zx$, von Mises and the largest principal stress
     /// (`reduction::NodeStresses`; a beam node has no tensor, zeros, and the extreme-fibre

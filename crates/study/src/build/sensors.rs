@@ -63,6 +63,21 @@ impl Builder<'_> {
                 };
                 (single(kind), xyz(what, unit))
             }
+            SensorTarget::Acceleration(p, axes) | SensorTarget::AngularAcceleration(p, axes) => {
+                let node = self.node(p, &s.path)?;
+                let axes = *axes;
+                let (kind, what, unit) = match &s.target {
+                    SensorTarget::Acceleration(..) => {
+                        (SensorKind::NodeAcceleration { node, axes }, "acceleration", "m/s^2")
+                    }
+                    _ => (
+                        SensorKind::NodeAngularAcceleration { node, axes },
+                        "angular_acceleration",
+                        "rad/s^2",
+                    ),
+                };
+                (single(kind), xyz(what, unit))
+            }
             SensorTarget::RelativePosition(p, r) => {
                 let kind = SensorKind::RelativePosition {
                     node: self.node(p, &s.path)?,
@@ -124,6 +139,7 @@ impl Builder<'_> {
                 )
             }
             SensorTarget::Energy => energy(s),
+            SensorTarget::EnergyBalance => energy_balance(s),
             SensorTarget::Momentum => momentum(s),
         })
     }
@@ -207,6 +223,25 @@ fn energy(s: &SensorSpec) -> Sensor {
     ];
     let columns = ["kinetic [J]", "strain [J]", "gravity potential [J]"];
     (kinds, columns.map(String::from).to_vec())
+}
+
+/// The `mbs` sensor and columns of an `energy-balance` sensor: the work put in, the energies
+/// (named as the `energy` sensor's), the dissipated energy and the balance error.
+fn energy_balance(s: &SensorSpec) -> Sensor {
+    let columns = [
+        "work_actuators [J]",
+        "work_drivers [J]",
+        "work_loads [J]",
+        "kinetic [J]",
+        "strain [J]",
+        "gravity potential [J]",
+        "dissipated [J]",
+        "balance_error [J]",
+    ];
+    (
+        vec![(s.name.clone(), SensorKind::EnergyBalance)],
+        columns.map(String::from).to_vec(),
+    )
 }
 
 /// The `mbs` sensors and columns of a `momentum` sensor: linear and angular.

@@ -675,7 +675,8 @@ pub struct SensorFile {
     pub name: String,
     /// `position`, `displacement`, `relative-position`, `rotation`, `velocity`,
     /// `angular-velocity`, `deflection`, `joint`, `joint-rate`, `modal`, `reaction`,
-    /// `driver-effort`, `energy`, `momentum`, `stress`.
+    /// `driver-effort`, `energy`, `momentum`, `stress`, `acceleration`,
+    /// `angular-acceleration`, `energy-balance`.
     #[serde(rename = "type")]
     pub kind: String,
     /// `"body.point"`, a body, a joint or a driver.
@@ -692,6 +693,8 @@ pub struct SensorFile {
     pub node: Option<usize>,
     pub node_at: Option<Vec3>,
     pub set: Option<String>,
+    /// Acceleration, angular acceleration: `global` (default) or `body` axes.
+    pub axes: Option<String>,
 }
 
 /// `[[initial]]`: initial values that differ from the assembled configuration at rest.

@@ -443,10 +443,13 @@ impl System {
 
         check_stress_sensors(model, &flexible)?;
         check_reaction_sensors(model, &topo)?;
-        let reactions_read = model
-            .sensors
-            .iter()
-            .any(|s| matches!(s.kind, SensorKind::Reaction { .. } | SensorKind::DriverEffort { .. }));
+        let reactions_read = model.sensors.iter().any(|s| {
+            // The energy balance reads the drivers' efforts and the user forces' outputs.
+            matches!(
+                s.kind,
+                SensorKind::Reaction { .. } | SensorKind::DriverEffort { .. } | SensorKind::EnergyBalance
+            )
+        });
         let stress_maxima = stress_maxima(model, &flexible);
         let elements = element_refs(model, &topo.map, &flexible, &rigid, &springs, &loads, &user_forces)?;
         let pattern = Pattern::build(model, &topo, &elements, &joint_springs, &mut joint_forces)?;
@@ -695,6 +698,7 @@ impl System {
             acceleration: vec![0.0; map.n_dof],
             frames: Vec::new(),
             controls: Vec::new(),
+            account: None,
         };
         let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
         self.apply_drivers(&mut state, &mut pr, &mut pa);

@@ -7,6 +7,22 @@
 //!   velocity fields $[\mathbf e; \mathbf 0]$ (linear) and $[\mathbf e\times\mathbf r_k; \mathbf e]$ (angular,
 //!   about the origin) — Noether's conserved quantities of a kinetic energy invariant under
 //!   rigid motions.
+//! * Accelerations read the node motions at the state's true accelerations $\ddot{\mathbf q}$
+//!   (the integrator's algorithmic accelerations $\mathbf a_n$ never reach a state); a node
+//!   carried by a body or a joint gets $\mathbf a_{node} + \boldsymbol\alpha\times\mathbf r +
+//!   \boldsymbol\omega\times(\boldsymbol\omega\times\mathbf r)$ from the coordinate maps
+//!   ([`crate::assembly::coordinates`]). A static state has $\ddot{\mathbf q} = \mathbf 0$.
+//! * Energy balance: with $E = T + U + V$ (kinetic, strain, gravity: [`System::energies`]),
+//!   the exact motion obeys $E - E_0 = W_{in} - D$, with $W_{in} = \int P_{in}\,dt$ the work of
+//!   the actuators ($u\dot x$), the drivers (effort times prescribed rate) and the loads
+//!   ($\mathbf f\cdot\mathbf v + \mathbf m\cdot\boldsymbol\omega$, user forces and loads at
+//!   flexible bodies' load points as $\mathbf Q\cdot\dot{\mathbf q}$), and $D = \int P_d\,dt$ the
+//!   dissipation of the dampers (springs' $c\dot l^2$, joint springs' $c\dot x^2$, the limits,
+//!   the flexible bodies' damping forces $\mathbf f_d\cdot\dot{\mathbf q}$). The powers are
+//!   evaluated at each accepted step and integrated by the trapezoid rule (`EnergyAccount`,
+//!   carried in the [`State`]), so the balance error $E - E_0 - W_{in} + D$ measures the
+//!   integrator's energy error: second order in the step, like generalized-α itself. Outside
+//!   a dynamic run (a static state) no work is counted and $E_0$ is the state's own energy.
 
 #![allow(non_snake_case)]
 
@@ -15,10 +31,11 @@ use crate::assembly::coordinates::Slot;
 use crate::assembly::system::{ElementKind, System, Workspace};
 use crate::assembly::topology::RootRotation;
 use crate::error::SolveError;
+use crate::model::SensorAxes;
 use crate::model::{BodyId, SensorKind};
 use crate::node::NodeMotion;
-use crate::state::State;
-use nalgebra::Vector3;
+use crate::state::{EnergyAccount, State};
+use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use superelement::so3;
 
@@ -352,11 +369,14 @@ impl System {
                 | SensorKind::NodeRotation { .. }
                 | SensorKind::NodeVelocity { .. }
                 | SensorKind::NodeAngularVelocity { .. }
+                | SensorKind::NodeAcceleration { .. }
+                | SensorKind::NodeAngularAcceleration { .. }
                 | SensorKind::LinearMomentum
                 | SensorKind::AngularMomentum => 3,
                 SensorKind::Reaction { .. } => 6,
                 SensorKind::Stress { .. } => 8,
                 SensorKind::MaxVonMises { .. } => 2,
+                SensorKind::EnergyBalance => 8,
                 SensorKind::ModalCoordinates { body } => self.topo.modal_scalars[body.index()].len(),
                 _ => 1,
             })
@@ -502,6 +522,14 @@ impl System {
                 }
                 SensorKind::NodeVelocity { node } => push3(&mut row, nodes[node.index()].v),
                 SensorKind::NodeAngularVelocity { node } => push3(&mut row, nodes[node.index()].omega),
+                SensorKind::NodeAcceleration { node, axes } => {
+                    let m = &nodes[node.index()];
+                    push3(&mut row, in_axes(&m.R, *axes, m.a))
+                }
+                SensorKind::NodeAngularAcceleration { node, axes } => {
+                    let m = &nodes[node.index()];
+                    push3(&mut row, in_axes(&m.R, *axes, m.alpha))
+                }
                 SensorKind::LineDistance { node, a, b, normal } => {
                     let (p, a, b) = (nodes[node.index()].r, nodes[a.index()].r, nodes[b.index()].r);
                     let e = (b - a).normalize();
@@ -559,6 +587,12 @@ impl System {
                         _ => e.gravity,
                     });
                 }
+                SensorKind::EnergyBalance => {
+                    if energies.is_none() {
+                        energies = Some(self.energies_in(state, ws)?);
+                    }
+                    row.extend(balance_row(&energies.unwrap(), state.account.as_ref()));
+                }
                 SensorKind::Stress { body, node } => {
                     let (shapes, kin) = self.stress_kinematics(*body, state, &mut kinematics)?;
                     let (tensor, vm, principal) = shapes.node_stress(*node, &kin.q_jj, &kin.R_j);
@@ -608,6 +642,135 @@ impl System {
             }
         }
         Ok(row)
+    }
+}
+
+/// `x` (global axes) in `axes`, for a node at orientation `R`.
+fn in_axes(R: &UnitQuaternion<f64>, axes: SensorAxes, x: Vector3<f64>) -> Vector3<f64> {
+    match axes {
+        SensorAxes::Global => x,
+        SensorAxes::Node => R.inverse_transform_vector(&x),
+    }
+}
+
+/// The values of an energy-balance sensor (module docs): the work of the actuators, the
+/// drivers and the loads, $T$, $U$, $V$, the dissipated energy, the balance error. Without an
+/// account (a static state) no work, and the state's own energy as $E_0$.
+fn balance_row(e: &Energies, account: Option<&EnergyAccount>) -> [f64; 8] {
+    let (work, e0) = account.map_or(([0.0; 4], e.total()), |a| (a.work, a.e0));
+    let [actuators, drivers, loads, dissipated] = work;
+    let error = e.total() - e0 - (actuators + drivers + loads) + dissipated;
+    [
+        actuators, drivers, loads, e.kinetic, e.strain, e.gravity, dissipated, error,
+    ]
+}
+
+/// The energy account of a dynamic run (module docs, "Energy balance").
+impl System {
+    /// Whether a sensor reads the energy balance (the account is kept only then).
+    fn has_energy_balance(&self) -> bool {
+        self.model
+            .sensors
+            .iter()
+            .any(|s| matches!(s.kind, SensorKind::EnergyBalance))
+    }
+
+    /// Opens the account of a dynamic run starting at `state` (evaluated into `ws`): $E_0$
+    /// and the powers at the start, no work yet. Without an energy-balance sensor, none.
+    pub(crate) fn start_energy_account(&self, state: &mut State, ws: &Workspace) -> Result<(), SolveError> {
+        state.account = None;
+        if self.has_energy_balance() {
+            state.account = Some(EnergyAccount {
+                e0: self.energies_in(state, ws)?.total(),
+                t: state.time,
+                power: self.powers(state, ws),
+                work: [0.0; 4],
+            });
+        }
+        Ok(())
+    }
+
+    /// Moves the account `prev` of the last accepted state on to the accepted `state`
+    /// (evaluated into `ws`): each work grows by the trapezoid rule, $\tfrac h2(P_n + P_{n+1})$.
+    pub(crate) fn advance_energy_account(&self, prev: Option<EnergyAccount>, state: &mut State, ws: &Workspace) {
+        state.account = prev.map(|a| {
+            let power = self.powers(state, ws);
+            let h = state.time - a.t;
+            let work = std::array::from_fn(|k| a.work[k] + 0.5 * h * (a.power[k] + power[k]));
+            EnergyAccount {
+                t: state.time,
+                power,
+                work,
+                ..a
+            }
+        });
+    }
+
+    /// The powers at `state` (evaluated into `ws`, with the reactions summed:
+    /// `System::reactions_read`): put in by the actuators, the drivers and the loads, and
+    /// dissipated (module docs).
+    fn powers(&self, state: &State, ws: &Workspace) -> [f64; 4] {
+        let map = &self.topo.map;
+        let rate = |s: usize| match map.scalars[s].slot {
+            Slot::Unknown(d) => state.velocity[d],
+            Slot::Prescribed(p) => ws.presc_rate[p],
+        };
+        let efforts = self.actuator_efforts(state);
+        let actuators = self
+            .model
+            .actuators
+            .iter()
+            .zip(&efforts)
+            .map(|(a, u)| u * rate(self.topo.joint_scalars[a.joint.index()][a.coordinate]))
+            .sum();
+        let drivers = ws.reactions.iter().zip(&ws.presc_rate).map(|(r, xd)| r * xd).sum();
+        let (loads, body_damping) = self.element_powers(state, ws);
+        let nodes = &ws.nodes;
+        let mut dissipated = body_damping;
+        for s in &self.springs {
+            let (xb, vb) = s.b.map_or((s.ground, Vector3::zeros()), |b| (nodes[b].r, nodes[b].v));
+            let d = xb - nodes[s.a].r;
+            let l = d.norm();
+            if l > 0.0 {
+                let ld = d.dot(&(vb - nodes[s.a].v)) / l;
+                dissipated += s.c * ld * ld;
+            }
+        }
+        for &(s, _, c, _, _) in &self.joint_springs {
+            dissipated += c * rate(s) * rate(s);
+        }
+        dissipated += self.joint_forces.limit_dissipation(&|s| (state.scalars[s], rate(s)));
+        [actuators, drivers, loads, dissipated]
+    }
+
+    /// The power of the loads (nodal loads, user forces, loads at flexible bodies' load
+    /// points) and of the flexible bodies' damping forces, from the element outputs in `ws`:
+    /// each part on the element's ports dotted with the port velocities and modal rates.
+    fn element_powers(&self, state: &State, ws: &Workspace) -> (f64, f64) {
+        let (mut loads, mut damping) = (0.0, 0.0);
+        for (e, b) in self.elements.iter().zip(&ws.elems) {
+            let qd = |i: usize| {
+                let k = i / 6;
+                match e.nodes.get(k) {
+                    Some(&n) if i % 6 < 3 => ws.nodes[n].v[i % 6],
+                    Some(&n) => ws.nodes[n].omega[i % 6 - 3],
+                    None => state.velocity[e.modal[i - 6 * e.nodes.len()]],
+                }
+            };
+            let power = |f: &[f64]| f.iter().enumerate().map(|(i, x)| x * qd(i)).sum::<f64>();
+            match e.kind {
+                ElementKind::Load(_) | ElementKind::User(_) => loads += power(&b.out.external),
+                ElementKind::Flexible(_) => {
+                    let ev = &b.flex.as_ref().expect("a flexible element's buffer").ev;
+                    // The external part is gravity (counted in V) plus the load-point loads.
+                    let point_loads: Vec<f64> = b.out.external.iter().zip(&ev.f_gravity).map(|(x, g)| x - g).collect();
+                    loads += power(&point_loads);
+                    damping += power(&ev.f_damping);
+                }
+                _ => {}
+            }
+        }
+        (loads, damping)
     }
 }
 

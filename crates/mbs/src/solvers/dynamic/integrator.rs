@@ -668,6 +668,7 @@ impl<'a> Integrator<'a> {
         })?;
         state.acceleration.copy_from_slice(&acc);
         system.evaluate_into(&mut state, 1.0, false, &mut ws)?;
+        system.start_energy_account(&mut state, &ws)?;
         // The recursion of a_n runs in body axes (module docs).
         let trans = if settings.body_axis_translations {
             body_translations(system)
@@ -1098,6 +1099,7 @@ impl<'a> Integrator<'a> {
             self.a[i] = ((1.0 - af) * self.qb[i] + af * self.qb_n[i] - am * self.a[i]) / (1.0 - am);
         }
         sys.accept_step(st);
+        sys.advance_energy_account(self.state.account, st, &self.ws);
         self.history.push(&self.qb_n, h);
         std::mem::swap(&mut self.state, &mut self.trial);
         self.steps += 1;

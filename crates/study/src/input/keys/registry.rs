@@ -463,6 +463,9 @@ pub static TABLES: &[Table] = &[
             "energy",
             "momentum",
             "stress",
+            "acceleration",
+            "angular-acceleration",
+            "energy-balance",
         ],
         keys: &[
             key!("name", "string", "", REQ, "unique among the sensors: the results are `<name>.csv` and `<name>.png`, so the name may contain ASCII letters, digits, `-`, `_` and `.`"),
@@ -482,6 +485,8 @@ pub static TABLES: &[Table] = &[
                 "driver-effort",
                 "actuator-effort",
                 "stress",
+                "acceleration",
+                "angular-acceleration",
             ], "the point, body, joint, driver or actuator measured"),
             key!("chord", "[string, string]", "", REQ, kinds ["deflection"], r#"`["a.P", "a.Q"]`: the deflection is the distance of `of` from the line through these points"#),
             key!("normal", VEC3, "", OPT, kinds ["deflection"], "signs the deflection: (chord direction × (p − a)) · normal"),
@@ -490,6 +495,7 @@ pub static TABLES: &[Table] = &[
             key!("node", "integer", "", OPT, kinds ["stress"], "a mesh node by index, 0-based, as in the VTU files and the hot spot of the summary; give `node`, `node_at` or `set`, one of them"),
             key!("node_at", VEC3, "m", OPT, kinds ["stress"], "or the mesh node at this position in part axes"),
             key!("set", "string", "", OPT, kinds ["stress"], "or a node set of the part's mesh"),
+            key!("axes", "string", "", def(r#"`"global"`"#), kinds ["acceleration", "angular-acceleration"], range r#"`"global"`, `"body"`"#, r#"`"global"`: inertial axes; `"body"`: the axes of the point, turning with it (what an accelerometer fixed there reads)"#),
         ],
     },
     Table {

@@ -185,6 +185,9 @@ pub enum SensorTarget {
     Rotation(PointRef),
     Velocity(PointRef),
     AngularVelocity(PointRef),
+    /// The point and the axes (`axes = "body"`: the point's own).
+    Acceleration(PointRef, mbs::SensorAxes),
+    AngularAcceleration(PointRef, mbs::SensorAxes),
     Deflection {
         of: PointRef,
         chord: [PointRef; 2],
@@ -199,6 +202,8 @@ pub enum SensorTarget {
     /// Index into [`Mechanism::actuators`].
     ActuatorEffort(usize),
     Energy,
+    /// Work, energies, dissipation and their balance error over a dynamic run.
+    EnergyBalance,
     Momentum,
     /// Stresses of flexible body `body` (index into [`Mechanism::bodies`]).
     Stress {
@@ -1512,12 +1517,11 @@ impl Validator<'_> {
             "sensor type",
         )?;
         self.only_keys(path, "sensors", kind, &format!("a '{kind}' sensor"));
-        if matches!(kind, "energy" | "momentum") {
-            return Some(if kind == "energy" {
-                SensorTarget::Energy
-            } else {
-                SensorTarget::Momentum
-            });
+        match kind {
+            "energy" => return Some(SensorTarget::Energy),
+            "energy-balance" => return Some(SensorTarget::EnergyBalance),
+            "momentum" => return Some(SensorTarget::Momentum),
+            _ => {}
         }
         let of = self.require_ref(path, &s.of, "of", "what the sensor measures")?.clone();
         let op = path.key("of");
@@ -1527,6 +1531,19 @@ impl Validator<'_> {
             "rotation" => SensorTarget::Rotation(self.point(&op, &of, m, false)?),
             "velocity" => SensorTarget::Velocity(self.point(&op, &of, m, false)?),
             "angular-velocity" => SensorTarget::AngularVelocity(self.point(&op, &of, m, false)?),
+            "acceleration" | "angular-acceleration" => {
+                let p = self.point(&op, &of, m, false);
+                let axes =
+                    match self.choice(&path.key("axes"), &s.axes, "global", &["global", "body"], "sensor axes")? {
+                        "body" => mbs::SensorAxes::Node,
+                        _ => mbs::SensorAxes::Global,
+                    };
+                if kind == "acceleration" {
+                    SensorTarget::Acceleration(p?, axes)
+                } else {
+                    SensorTarget::AngularAcceleration(p?, axes)
+                }
+            }
             "relative-position" => {
                 let p = self.point(&op, &of, m, false);
                 let r = self.require_ref(
