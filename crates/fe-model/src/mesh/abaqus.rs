@@ -25,8 +25,8 @@
 //! # Bounds
 //!
 //! A `GENERATE` range may name at most as many ids as the deck has data lines under `*NODE`
-//! (node sets) or `*ELEMENT` (element sets), and all sets together may list at most 32 times
-//! the nodes and elements (copies of earlier sets counted); a deck with its included files
+//! (node sets) or `*ELEMENT` (element sets), and all sets together (copies of earlier sets
+//! counted), like the `*BOUNDARY` lines on sets, at most 32 times the nodes and elements; a deck with its included files
 //! (each counted every time it is included) holds at most
 //! [`MAX_INCLUDED_FILES`](super::import::MAX_INCLUDED_FILES) files and
 //! [`MAX_EXPANDED_BYTES`](super::import::MAX_EXPANDED_BYTES) bytes. Past a bound the error is
@@ -927,6 +927,20 @@ impl<'a> Reader<'a> {
                 orientation: spec.n1,
             });
         }
+        imported.supports = self.supports()?;
+        imported.mesh = self.builder.mesh;
+        imported.ignored = self.ignored.into_vec();
+        Ok(imported)
+    }
+
+    /// The supports of the `*BOUNDARY` lines. Each line on a set holds a copy of the set's
+    /// nodes, so all of them together may hold at most [`MEMBERS_PER_ID`] times the deck's
+    /// nodes and elements (thousands of lines on a set of millions would otherwise be
+    /// billions of copies).
+    fn supports(&self) -> Result<Vec<ImportedSupport>, ImportError> {
+        let budget = MEMBERS_PER_ID.saturating_mul(self.defined.nodes + self.defined.elements);
+        let mut held = 0usize;
+        let mut supports = Vec::with_capacity(self.boundaries.len());
         for (target, dofs, file, line) in &self.boundaries {
             let path = &self.files[*file];
             let (name, nodes) = match target.parse::<u64>() {
@@ -945,17 +959,29 @@ impl<'a> Reader<'a> {
                             hint: String::new(),
                         });
                     };
-                    (set.name.clone(), self.builder.mesh.node_sets[&set.name].clone())
+                    let nodes = &self.builder.mesh.node_sets[&set.name];
+                    held = held.saturating_add(nodes.len());
+                    if held > budget {
+                        return Err(ImportError::Limit {
+                            path: path.clone(),
+                            line: *line,
+                            entity: format!("*BOUNDARY {}", set.name),
+                            what: format!(
+                                "the *BOUNDARY lines on sets hold more than {budget} nodes ({MEMBERS_PER_ID} times the {} nodes and elements the deck defines)",
+                                self.defined.nodes + self.defined.elements
+                            ),
+                            chain: String::new(),
+                        });
+                    }
+                    (set.name.clone(), nodes.clone())
                 }
             };
-            imported.supports.push(ImportedSupport {
+            supports.push(ImportedSupport {
                 name,
                 nodes,
                 dofs: *dofs,
             });
         }
-        imported.mesh = self.builder.mesh;
-        imported.ignored = self.ignored.into_vec();
-        Ok(imported)
+        Ok(supports)
     }
 }

@@ -757,6 +757,25 @@ fn sets_of_sets_stop_at_the_member_budget() {
 }
 
 #[test]
+fn boundaries_on_sets_stop_at_the_member_budget() {
+    // Each line holds a copy of the set: a million lines on a set of a million nodes would
+    // be 10^12 copies; here 32 times the four nodes (128), passed by the 33rd line.
+    let deck = format!(
+        "{NODES_4}*NSET, NSET=ALL\n1, 2, 3, 4\n*BOUNDARY\n{}",
+        "ALL, ENCASTRE\n".repeat(200)
+    );
+    expect_limit(
+        abaqus_inline(&deck),
+        &["inline.inp:41: *BOUNDARY ALL", "more than 128 nodes"],
+    );
+    let deck = format!(
+        "{NODES_4}*NSET, NSET=ALL\n1, 2, 3, 4\n*BOUNDARY\n{}",
+        "ALL, ENCASTRE\n".repeat(32)
+    );
+    assert_eq!(abaqus_inline(&deck).unwrap().supports.len(), 32);
+}
+
+#[test]
 fn thru_ranges_longer_than_the_deck_are_located_errors_not_allocations() {
     let grids = "GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\n";
     // Eight ranges of 1e8 grids: 800 MB each without the bound.
