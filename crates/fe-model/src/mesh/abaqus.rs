@@ -26,8 +26,8 @@
 //!
 //! A `GENERATE` range may name at most as many ids as the deck has data lines under `*NODE`
 //! (node sets) or `*ELEMENT` (element sets), and all sets together (copies of earlier sets
-//! counted), like the `*BOUNDARY` lines on sets, at most 32 times the nodes and elements; a deck with its included files
-//! (each counted every time it is included) holds at most
+//! counted), like the `*BOUNDARY` lines on sets, at most 32 times the nodes and elements; a
+//! deck with its included files (each counted every time it is included) holds at most
 //! [`MAX_INCLUDED_FILES`](super::import::MAX_INCLUDED_FILES) files and
 //! [`MAX_EXPANDED_BYTES`](super::import::MAX_EXPANDED_BYTES) bytes. Past a bound the error is
 //! [`ImportError::Limit`].
