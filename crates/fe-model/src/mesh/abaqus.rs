@@ -22,6 +22,16 @@
 //! Keywords, parameter names and set or material names are case-insensitive, as in Abaqus;
 //! sets and materials keep the spelling of their first definition.
 //!
+//! # Bounds
+//!
+//! A `GENERATE` range may name at most as many ids as the deck has data lines under `*NODE`
+//! (node sets) or `*ELEMENT` (element sets), and all sets together (copies of earlier sets
+//! counted), like the `*BOUNDARY` lines on sets, at most 32 times the nodes and elements; a
+//! deck with its included files (each counted every time it is included) holds at most
+//! [`MAX_INCLUDED_FILES`](super::import::MAX_INCLUDED_FILES) files and
+//! [`MAX_EXPANDED_BYTES`](super::import::MAX_EXPANDED_BYTES) bytes. Past a bound the error is
+//! [`ImportError::Limit`].
+//!
 //! # Node orderings
 //!
 //! Abaqus orders corners as gmsh does; mid-edge nodes differ (`C3D10`: the last two are
@@ -30,8 +40,8 @@
 //! fixtures' geometry (the same solid gives the same frequencies from gmsh and Abaqus files).
 
 use super::import::{
-    excerpt, malformed, material, node_order, read_include, read_text, unsupported, BeamSectionAssignment, Entity,
-    IgnoredList, ImportError, ImportedModel, ImportedSupport, MeshBuilder, SolidSection,
+    excerpt, malformed, material, node_order, read_text, unsupported, BeamSectionAssignment, Entity, IgnoredList,
+    ImportError, ImportedModel, ImportedSupport, Includes, MeshBuilder, SolidSection,
 };
 use crate::mesh::{CellId, CellKind, NodeId};
 use crate::model::DofMask;
@@ -51,7 +61,9 @@ pub fn read(path: &Path) -> Result<ImportedModel, ImportError> {
 pub fn parse(text: impl AsRef<[u8]>, origin: &Path) -> Result<ImportedModel, ImportError> {
     let mut files = Vec::new();
     let mut lines = Vec::new();
-    expand(text.as_ref(), origin, 0, &mut files, &mut lines)?;
+    let mut includes = Includes::default();
+    includes.start(origin, text.as_ref())?;
+    expand(text.as_ref(), origin, &mut includes, &mut files, &mut lines)?;
     Reader::new(&files).run(&lines)
 }
 
@@ -91,7 +103,7 @@ struct Line {
 fn expand(
     data: &[u8],
     path: &Path,
-    depth: usize,
+    includes: &mut Includes,
     files: &mut Vec<PathBuf>,
     lines: &mut Vec<Line>,
 ) -> Result<(), ImportError> {
@@ -108,8 +120,9 @@ fn expand(
             let keyword = Keyword::parse(trimmed, path, line)?;
             if keyword.name == "INCLUDE" {
                 let input = keyword.required("INPUT", path, line)?;
-                let (target, data) = read_include(path, line, "*INCLUDE", input, depth)?;
-                expand(&data, &target, depth + 1, files, lines)?;
+                let (target, data) = includes.open(path, line, "*INCLUDE", input)?;
+                expand(&data, &target, includes, files, lines)?;
+                includes.close();
                 continue;
             }
         }
@@ -223,6 +236,44 @@ struct Reader<'a> {
     /// (node id or set name, dofs, file, line).
     boundaries: Vec<(String, DofMask, usize, usize)>,
     ignored: IgnoredList,
+    /// Upper bounds of the nodes and the elements the deck defines (the data lines of its
+    /// `*NODE` and `*ELEMENT` keywords), which bound a `GENERATE` range.
+    defined: Defined,
+    /// Set members listed so far, every copy of an earlier set counted
+    /// ([`MEMBERS_PER_ID`]).
+    members: usize,
+}
+
+/// All sets of a deck together may list at most this many times the nodes and elements it
+/// defines: a real deck has a few sets over all of them, and sets of sets of sets would
+/// otherwise double with every line.
+const MEMBERS_PER_ID: usize = 32;
+
+/// The data lines of the `*NODE` (one node each) and `*ELEMENT` (one or more per element)
+/// keywords of a deck.
+#[derive(Default)]
+struct Defined {
+    nodes: usize,
+    elements: usize,
+}
+
+impl Defined {
+    fn count(lines: &[Line]) -> Self {
+        let mut defined = Defined::default();
+        let mut current: Option<&mut usize> = None;
+        for l in lines {
+            if l.text.starts_with('*') {
+                current = match keyword_name(&l.text).as_str() {
+                    "NODE" => Some(&mut defined.nodes),
+                    "ELEMENT" => Some(&mut defined.elements),
+                    _ => None,
+                };
+            } else if let Some(n) = current.as_deref_mut() {
+                *n += 1;
+            }
+        }
+        defined
+    }
 }
 
 /// A beam section before its material is known: the shape and dimensions, and $\mathbf n_1$.
@@ -245,6 +296,8 @@ impl<'a> Reader<'a> {
             beam_sections: Vec::new(),
             boundaries: Vec::new(),
             ignored: IgnoredList::default(),
+            defined: Defined::default(),
+            members: 0,
         }
     }
 
@@ -260,7 +313,18 @@ impl<'a> Reader<'a> {
         unsupported(self.path(l.file), l.line, entity, what)
     }
 
+    fn limit(&self, l: &Line, entity: &str, what: String) -> ImportError {
+        ImportError::Limit {
+            path: self.path(l.file).to_path_buf(),
+            line: l.line,
+            entity: entity.to_string(),
+            what,
+            chain: String::new(),
+        }
+    }
+
     fn run(mut self, lines: &[Line]) -> Result<ImportedModel, ImportError> {
+        self.defined = Defined::count(lines);
         let mut k = 0;
         while k < lines.len() {
             let head = &lines[k];
@@ -471,6 +535,23 @@ impl<'a> Reader<'a> {
                         &l.text,
                     ));
                 }
+                let count = (last - first) / step + 1;
+                let (defined, kind) = if nodes {
+                    (self.defined.nodes, "nodes")
+                } else {
+                    (self.defined.elements, "elements")
+                };
+                if count > defined as u64 {
+                    return Err(self.limit(
+                        l,
+                        &entity,
+                        format!(
+                            "GENERATE '{}' names {count} {kind}, more than the {defined} the deck defines",
+                            l.text
+                        ),
+                    ));
+                }
+                self.count_members(l, &entity, count as usize)?;
                 members.extend((first..=last).step_by(step as usize).map(|id| (id, l.file, l.line)));
                 continue;
             }
@@ -489,12 +570,33 @@ impl<'a> Reader<'a> {
                                 hint: " (members are ids or earlier sets)".into(),
                             });
                         };
-                        members.extend_from_slice(&other.members);
+                        let copied = other.members.len();
+                        self.count_members(l, &entity, copied)?;
+                        let sets = if nodes { &self.node_sets } else { &self.cell_sets };
+                        members.extend_from_slice(&sets[&f.to_uppercase()].members);
                     }
                 }
             }
         }
         self.set_entry(&name, nodes).members.extend(members);
+        Ok(())
+    }
+
+    /// Counts `count` more set members listed on `l`, within [`MEMBERS_PER_ID`] times the
+    /// nodes and elements of the deck.
+    fn count_members(&mut self, l: &Line, entity: &str, count: usize) -> Result<(), ImportError> {
+        let budget = MEMBERS_PER_ID.saturating_mul(self.defined.nodes + self.defined.elements);
+        self.members = self.members.saturating_add(count);
+        if self.members > budget {
+            return Err(self.limit(
+                l,
+                entity,
+                format!(
+                    "the sets list more than {budget} members ({MEMBERS_PER_ID} times the {} nodes and elements the deck defines)",
+                    self.defined.nodes + self.defined.elements
+                ),
+            ));
+        }
         Ok(())
     }
 
@@ -825,6 +927,20 @@ impl<'a> Reader<'a> {
                 orientation: spec.n1,
             });
         }
+        imported.supports = self.supports()?;
+        imported.mesh = self.builder.mesh;
+        imported.ignored = self.ignored.into_vec();
+        Ok(imported)
+    }
+
+    /// The supports of the `*BOUNDARY` lines. Each line on a set holds a copy of the set's
+    /// nodes, so all of them together may hold at most [`MEMBERS_PER_ID`] times the deck's
+    /// nodes and elements (thousands of lines on a set of millions would otherwise be
+    /// billions of copies).
+    fn supports(&self) -> Result<Vec<ImportedSupport>, ImportError> {
+        let budget = MEMBERS_PER_ID.saturating_mul(self.defined.nodes + self.defined.elements);
+        let mut held = 0usize;
+        let mut supports = Vec::with_capacity(self.boundaries.len());
         for (target, dofs, file, line) in &self.boundaries {
             let path = &self.files[*file];
             let (name, nodes) = match target.parse::<u64>() {
@@ -843,17 +959,29 @@ impl<'a> Reader<'a> {
                             hint: String::new(),
                         });
                     };
-                    (set.name.clone(), self.builder.mesh.node_sets[&set.name].clone())
+                    let nodes = &self.builder.mesh.node_sets[&set.name];
+                    held = held.saturating_add(nodes.len());
+                    if held > budget {
+                        return Err(ImportError::Limit {
+                            path: path.clone(),
+                            line: *line,
+                            entity: format!("*BOUNDARY {}", set.name),
+                            what: format!(
+                                "the *BOUNDARY lines on sets hold more than {budget} nodes ({MEMBERS_PER_ID} times the {} nodes and elements the deck defines)",
+                                self.defined.nodes + self.defined.elements
+                            ),
+                            chain: String::new(),
+                        });
+                    }
+                    (set.name.clone(), nodes.clone())
                 }
             };
-            imported.supports.push(ImportedSupport {
+            supports.push(ImportedSupport {
                 name,
                 nodes,
                 dofs: *dofs,
             });
         }
-        imported.mesh = self.builder.mesh;
-        imported.ignored = self.ignored.into_vec();
-        Ok(imported)
+        Ok(supports)
     }
 }

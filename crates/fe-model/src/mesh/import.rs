@@ -303,6 +303,17 @@ pub enum ImportError {
         id: String,
         first_line: usize,
     },
+    /// The deck asks for more than its own size allows: a range of ids longer than the
+    /// nodes or elements the deck defines, more set members or included input than the
+    /// readers' budgets. `chain` is empty in the main file, else the including lines.
+    #[error("{path}:{line}: {entity}: {what}{chain}")]
+    Limit {
+        path: PathBuf,
+        line: usize,
+        entity: String,
+        what: String,
+        chain: String,
+    },
     /// A material or section value outside its physical range.
     #[error("{path}:{line}: {entity}: {source}")]
     Property {
@@ -390,30 +401,123 @@ pub(super) fn unsupported(path: &Path, line: usize, entity: &str, what: String) 
 /// Deepest nesting of included files (a file that includes itself stops here).
 pub(super) const MAX_INCLUDE_DEPTH: usize = 16;
 
-/// The file that `line` of `path` includes (`name`, relative to `path`'s folder) at nesting
-/// `depth`: its path and bytes, or the error naming the including line (`entity`: the
-/// keyword or card) or the file that cannot be read.
-pub(super) fn read_include(
-    path: &Path,
-    line: usize,
-    entity: &str,
-    name: &str,
-    depth: usize,
-) -> Result<(PathBuf, Vec<u8>), ImportError> {
-    if depth >= MAX_INCLUDE_DEPTH {
-        return Err(unsupported(
-            path,
-            line,
-            entity,
-            format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (does a file include itself?)"),
-        ));
+/// Most files a deck may include, counting a file each time it is included: a nesting of a
+/// few small files, each including the next several times, would otherwise multiply into
+/// billions of reads within the depth limit.
+pub const MAX_INCLUDED_FILES: usize = 10_000;
+
+/// Most bytes of input a deck may expand to, the main file and every included file counted
+/// each time it is included: a generous 1 GiB (a solid model at the 2,000,000-cell maximum
+/// of a study takes a few hundred MB); the readers hold every line, a few times its bytes, so
+/// the expanded text bounds their memory.
+pub const MAX_EXPANDED_BYTES: usize = 1 << 30;
+
+/// The budget of a deck's included files: the chain of including lines (for the errors and
+/// the depth), the files opened so far and the bytes read so far, all files counted each
+/// time they are included ([`MAX_INCLUDE_DEPTH`], [`MAX_INCLUDED_FILES`],
+/// [`MAX_EXPANDED_BYTES`]).
+#[derive(Default)]
+pub(super) struct Includes {
+    /// The including lines from the main file to the current one: (file, line).
+    chain: Vec<(PathBuf, usize)>,
+    files: usize,
+    bytes: usize,
+}
+
+impl Includes {
+    /// Counts the main file, `data` read from `path`.
+    pub(super) fn start(&mut self, path: &Path, data: &[u8]) -> Result<(), ImportError> {
+        self.add_bytes(path, 0, "the deck", data.len())
     }
-    let target = path.parent().unwrap_or(Path::new("")).join(name);
-    let data = crate::input::read(&target).map_err(|source| ImportError::Io {
-        path: target.clone(),
-        source,
-    })?;
-    Ok((target, data))
+
+    fn add_bytes(&mut self, path: &Path, line: usize, entity: &str, len: usize) -> Result<(), ImportError> {
+        self.bytes = self.bytes.saturating_add(len);
+        if self.bytes > MAX_EXPANDED_BYTES {
+            return Err(self.limit(
+                path,
+                line,
+                entity,
+                format!("the deck with its included files expands to more than {MAX_EXPANDED_BYTES} bytes"),
+            ));
+        }
+        Ok(())
+    }
+
+    fn limit(&self, path: &Path, line: usize, entity: &str, what: String) -> ImportError {
+        ImportError::Limit {
+            path: path.to_path_buf(),
+            line,
+            entity: entity.to_string(),
+            what,
+            chain: self.chain_text(),
+        }
+    }
+
+    /// The including lines as `a.inp:3 -> b.inc:7`, or empty in the main file.
+    fn chain_text(&self) -> String {
+        if self.chain.is_empty() {
+            return String::new();
+        }
+        let lines: Vec<String> = self.chain.iter().map(|(p, l)| format!("{}:{l}", p.display())).collect();
+        format!(" (included by {})", lines.join(" -> "))
+    }
+
+    /// The file that `line` of `path` includes (`name`, relative to `path`'s folder): its
+    /// path and bytes, or the error naming the including line (`entity`: the keyword or card)
+    /// or the file that cannot be read. Every `open` that succeeds is followed by a
+    /// [`Includes::close`] when the included file has been read.
+    pub(super) fn open(
+        &mut self,
+        path: &Path,
+        line: usize,
+        entity: &str,
+        name: &str,
+    ) -> Result<(PathBuf, Vec<u8>), ImportError> {
+        if self.chain.len() >= MAX_INCLUDE_DEPTH {
+            return Err(unsupported(
+                path,
+                line,
+                entity,
+                format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (does a file include itself?)"),
+            ));
+        }
+        self.files += 1;
+        if self.files > MAX_INCLUDED_FILES {
+            return Err(self.limit(
+                path,
+                line,
+                entity,
+                format!("more than {MAX_INCLUDED_FILES} files included (each counted every time it is included)"),
+            ));
+        }
+        let target = path.parent().unwrap_or(Path::new("")).join(name);
+        // Refused before it is read: a file past the budget is never held in memory.
+        if let Ok(meta) = std::fs::metadata(&target) {
+            let len = usize::try_from(meta.len()).unwrap_or(usize::MAX);
+            if self.bytes.saturating_add(len) > MAX_EXPANDED_BYTES {
+                return Err(self.limit(
+                    path,
+                    line,
+                    entity,
+                    format!(
+                        "'{name}' ({len} bytes) would expand the deck with its included files past {MAX_EXPANDED_BYTES} bytes"
+                    ),
+                ));
+            }
+        }
+        let data = crate::input::read(&target).map_err(|source| ImportError::Io {
+            path: target.clone(),
+            source,
+        })?;
+        self.add_bytes(path, line, entity, data.len())?;
+        self.chain.push((path.to_path_buf(), line));
+        Ok((target, data))
+    }
+
+    /// Ends the file opened last.
+    pub(super) fn close(&mut self) {
+        self.chain.pop();
+    }
 }
 
 /// Our node `i` of a cell of `kind` is the file's node `order[i]`: the given orders of the

@@ -10,9 +10,19 @@
 //! * **Small field**: ten fields of 8 columns; field 1 is the card name (or blank, `+`, `*`
 //!   on a continuation line), fields 2-9 data, field 10 (columns 73-80) a continuation marker.
 //! * **Large field**: the name ends in `*` (`GRID*`); 16-column data fields, four per line; a
-//!   continuation line starts with `*`.
+//!   continuation line starts with `*` (alone or as a marker `*G1`), `+` or a blank.
 //! * **Free field**: fields separated by commas; a continuation line starts with `,`, `+` or
 //!   `*`. Each line carries up to eight data fields (four for a large-field name).
+//!
+//! A continuation line has the field width of the card it continues, whatever its marker.
+//!
+//! # Bounds
+//!
+//! A `G1 THRU G2` range may name at most as many grids as the deck has `GRID` cards, and all
+//! ranges together at most 32 times that; a deck with its included files (each counted every
+//! time it is included) holds at most [`MAX_INCLUDED_FILES`](super::import::MAX_INCLUDED_FILES)
+//! files and [`MAX_EXPANDED_BYTES`](super::import::MAX_EXPANDED_BYTES) bytes. Past a bound
+//! the error is [`ImportError::Limit`].
 //!
 //! Real numbers may use Nastran's exponent shorthand (`1.5-3` is $1.5\times10^{-3}$, `2.+5`)
 //! and `D` exponents. Tabs expand to 8-column stops. `$` starts a comment line.
@@ -40,13 +50,14 @@
 //! ring the bottom face, then the vertical edges, then the top face ([`ours_from_nastran`]).
 
 use super::import::{
-    excerpt, malformed, material, node_order, read_include, read_text, unsupported, Entity, IgnoredList, ImportError,
-    ImportedModel, ImportedSpider, ImportedSupport, MeshBuilder, SolidSection,
+    excerpt, malformed, material, node_order, read_text, unsupported, Entity, IgnoredList, ImportError, ImportedModel,
+    ImportedSpider, ImportedSupport, Includes, MeshBuilder, SolidSection,
 };
 use crate::interface::SpiderKind;
 use crate::mesh::{CellId, CellKind, NodeId};
 use crate::model::DofMask;
 use nalgebra::{Matrix3, Point3, Vector3};
+use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -62,8 +73,16 @@ pub fn parse(text: impl AsRef<[u8]>, origin: &Path) -> Result<ImportedModel, Imp
     let mut files = Vec::new();
     let mut cards = Vec::new();
     let mut in_bulk = None;
-    read_cards(text.as_ref(), origin, 0, &mut files, &mut cards, &mut in_bulk)?;
-    Reader::new(&files).run(&cards)
+    let mut includes = Includes::default();
+    includes.start(origin, text.as_ref())?;
+    let mut deck = Deck {
+        files: &mut files,
+        cards: &mut cards,
+        in_bulk: &mut in_bulk,
+        includes: &mut includes,
+    };
+    read_cards(text.as_ref(), origin, &mut deck)?;
+    Reader::new(&files, &cards).run(&cards)
 }
 
 /// Our node `i` of a Nastran element is the Nastran grid `ours_from_nastran(kind)[i]`.
@@ -110,10 +129,19 @@ const REFUSED: &[&str] = &[
     "PCOMPG",
 ];
 
-/// One card: its name (upper case, without `*`), its data fields (field 2 on), where it starts.
+/// The width of a card's data fields: 8 columns, or 16 for a name ending in `*`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum FieldWidth {
+    Small,
+    Large,
+}
+
+/// One card: its name (upper case, without `*`), its data fields (field 2 on), their width,
+/// where it starts.
 struct Card {
     name: String,
     fields: Vec<String>,
+    width: FieldWidth,
     file: usize,
     line: usize,
 }
@@ -137,34 +165,36 @@ fn columns(line: &str, from: usize, to: usize) -> String {
     line.chars().skip(from).take(to - from).collect()
 }
 
+/// What [`read_cards`] fills, through every included file.
+struct Deck<'a> {
+    files: &'a mut Vec<PathBuf>,
+    cards: &'a mut Vec<Card>,
+    /// `None` until it is known whether the main file has `BEGIN BULK`.
+    in_bulk: &'a mut Option<bool>,
+    includes: &'a mut Includes,
+}
+
 /// Splits the bulk data of `data` (from `path`) into cards, reading `INCLUDE`d files in
-/// place. `in_bulk` is `None` until it is known whether the main file has `BEGIN BULK`.
-fn read_cards(
-    data: &[u8],
-    path: &Path,
-    depth: usize,
-    files: &mut Vec<PathBuf>,
-    cards: &mut Vec<Card>,
-    in_bulk: &mut Option<bool>,
-) -> Result<(), ImportError> {
-    let file = files.len();
-    files.push(path.to_path_buf());
+/// place.
+fn read_cards(data: &[u8], path: &Path, deck: &mut Deck) -> Result<(), ImportError> {
+    let file = deck.files.len();
+    deck.files.push(path.to_path_buf());
     let text = String::from_utf8_lossy(data);
-    if in_bulk.is_none() {
+    if deck.in_bulk.is_none() {
         // Without BEGIN BULK the whole file is bulk data.
         let has_begin = text
             .lines()
             .any(|l| l.trim().to_uppercase().starts_with("BEGIN") && l.to_uppercase().contains("BULK"));
-        *in_bulk = Some(!has_begin);
+        *deck.in_bulk = Some(!has_begin);
     }
     for (k, raw) in text.lines().enumerate() {
         let line = k + 1;
         let raw = expand_tabs(raw);
         let trimmed = raw.trim();
         let upper = trimmed.to_uppercase();
-        if *in_bulk != Some(true) {
+        if *deck.in_bulk != Some(true) {
             if upper.starts_with("BEGIN") && upper.contains("BULK") {
-                *in_bulk = Some(true);
+                *deck.in_bulk = Some(true);
             }
             continue;
         }
@@ -179,66 +209,85 @@ fn read_cards(
             if name.is_empty() {
                 return Err(malformed(path, line, "INCLUDE", "a quoted file name", trimmed));
             }
-            let (target, data) = read_include(path, line, "INCLUDE", name, depth)?;
-            read_cards(&data, &target, depth + 1, files, cards, in_bulk)?;
+            let (target, data) = deck.includes.open(path, line, "INCLUDE", name)?;
+            read_cards(&data, &target, deck)?;
+            deck.includes.close();
             continue;
         }
         let free = raw.contains(',');
-        let (head, data_fields): (String, Vec<String>) = if free {
-            let mut parts = raw.split(',').map(|f| f.trim().to_string());
-            let head = parts.next().unwrap_or_default();
-            let per_line = if head.ends_with('*') { 4 } else { 8 };
-            let mut data: Vec<String> = parts.collect();
-            if data.len() > per_line + 1 {
-                return Err(ImportError::Malformed {
-                    path: path.to_path_buf(),
-                    line,
-                    entity: format!("free-field line of {}", head),
-                    expected: format!("at most {per_line} data fields and a continuation marker"),
-                    found: format!("{} fields", data.len()),
-                });
-            }
-            data.truncate(per_line);
-            data.resize(per_line, String::new());
-            (head, data)
+        let head = if free {
+            raw.split(',').next().unwrap_or_default().trim().to_string()
         } else {
-            let head = columns(&raw, 0, 8).trim().to_string();
-            let large = head.ends_with('*');
-            let data = if large {
-                (0..4)
-                    .map(|i| columns(&raw, 8 + 16 * i, 24 + 16 * i).trim().to_string())
-                    .collect()
-            } else {
-                (0..8)
-                    .map(|i| columns(&raw, 8 + 8 * i, 16 + 8 * i).trim().to_string())
-                    .collect()
-            };
-            (head, data)
+            columns(&raw, 0, 8).trim().to_string()
         };
         let continuation = head.is_empty() || head.starts_with('+') || head.starts_with('*');
         if continuation {
-            match cards.last_mut() {
-                Some(card) => card.fields.extend(data_fields),
-                _ => {
-                    return Err(ImportError::Malformed {
-                        path: path.to_path_buf(),
-                        line,
-                        entity: "continuation line".into(),
-                        expected: "a card before its continuation".into(),
-                        found: excerpt(trimmed),
-                    })
-                }
-            }
+            // A continuation line has the field width of its card, whatever its marker
+            // (`*`, `+`, blank): pre-processors continue `GRID*` with `*G1` or `+G1` lines.
+            let Some(card) = deck.cards.last_mut() else {
+                return Err(ImportError::Malformed {
+                    path: path.to_path_buf(),
+                    line,
+                    entity: "continuation line".into(),
+                    expected: "a card before its continuation".into(),
+                    found: excerpt(trimmed),
+                });
+            };
+            let fields = data_fields(&raw, free, card.width, path, line, &card.name)?;
+            card.fields.extend(fields);
             continue;
         }
-        cards.push(Card {
-            name: head.trim_end_matches('*').to_uppercase(),
-            fields: data_fields,
+        let width = if head.ends_with('*') {
+            FieldWidth::Large
+        } else {
+            FieldWidth::Small
+        };
+        let name = head.trim_end_matches('*').to_uppercase();
+        let fields = data_fields(&raw, free, width, path, line, &name)?;
+        deck.cards.push(Card {
+            name,
+            fields,
+            width,
             file,
             line,
         });
     }
     Ok(())
+}
+
+/// The data fields of one line (`line` of `path`) of card `name`: comma separated if
+/// `free`, else in columns; four per line in large field, eight in small field.
+fn data_fields(
+    raw: &str,
+    free: bool,
+    width: FieldWidth,
+    path: &Path,
+    line: usize,
+    name: &str,
+) -> Result<Vec<String>, ImportError> {
+    let per_line = match width {
+        FieldWidth::Large => 4,
+        FieldWidth::Small => 8,
+    };
+    if !free {
+        let w = 64 / per_line;
+        return Ok((0..per_line)
+            .map(|i| columns(raw, 8 + w * i, 8 + w * (i + 1)).trim().to_string())
+            .collect());
+    }
+    let mut data: Vec<String> = raw.split(',').skip(1).map(|f| f.trim().to_string()).collect();
+    if data.len() > per_line + 1 {
+        return Err(ImportError::Malformed {
+            path: path.to_path_buf(),
+            line,
+            entity: format!("free-field line of {name}"),
+            expected: format!("at most {per_line} data fields and a continuation marker"),
+            found: format!("{} fields", data.len()),
+        });
+    }
+    data.truncate(per_line);
+    data.resize(per_line, String::new());
+    Ok(data)
 }
 
 /// A Nastran real: `1.5`, `1.5E-3`, `1.5D-3`, `1.5-3`, `-2.+5`.
@@ -305,11 +354,21 @@ struct Reader<'a> {
     supports: Vec<Spc>,
     notes: Vec<String>,
     ignored: IgnoredList,
+    /// The number of GRID cards of the deck, which bounds the `THRU` ranges.
+    grid_count: usize,
+    /// The grids that `THRU` ranges have named so far.
+    thru_used: Cell<usize>,
 }
 
+/// All `THRU` ranges of a deck together may name at most this many times its grids (a
+/// support and a spider or two over every grid; a set of billions is a mistake).
+const THRU_PER_GRID: usize = 32;
+
 impl<'a> Reader<'a> {
-    fn new(files: &'a [PathBuf]) -> Self {
+    fn new(files: &'a [PathBuf], cards: &[Card]) -> Self {
         Reader {
+            grid_count: cards.iter().filter(|c| c.name == "GRID").count(),
+            thru_used: Cell::new(0),
             files,
             grids: Vec::new(),
             cord2r: BTreeMap::new(),
@@ -335,6 +394,16 @@ impl<'a> Reader<'a> {
 
     fn unsupported(&self, card: &Card, entity: &str, what: String) -> ImportError {
         unsupported(&self.files[card.file], card.line, entity, what)
+    }
+
+    fn limit(&self, card: &Card, entity: &str, what: String) -> ImportError {
+        ImportError::Limit {
+            path: self.files[card.file].clone(),
+            line: card.line,
+            entity: entity.to_string(),
+            what,
+            chain: String::new(),
+        }
     }
 
     /// Field `k` (0 = field 2 of the card), blank past the end.
@@ -397,8 +466,10 @@ impl<'a> Reader<'a> {
         Ok(DofMask(m))
     }
 
-    /// Grid ids from field `from` on, with `G1 THRU G2` ranges; stops at a field that is not
-    /// an integer or THRU if `stop_at_other`, else that is an error.
+    /// Grid ids from field `from` on, with `G1 THRU G2` ranges. A range may name at most as
+    /// many grids as the deck defines (every grid it names must exist), and all ranges of
+    /// the deck together at most [`THRU_PER_GRID`] times that: the list is as long as the
+    /// deck, never as long as a range claims.
     fn grid_list(&self, card: &Card, from: usize, entity: &str) -> Result<Vec<u64>, ImportError> {
         let mut out = Vec::new();
         let mut k = from;
@@ -412,9 +483,32 @@ impl<'a> Reader<'a> {
                 let (Some(&first), Ok(last)) = (out.last(), Self::field(card, k + 1).parse::<u64>()) else {
                     return Err(self.malformed(card, entity, "'G1 THRU G2' with grid ids", f));
                 };
-                if last < first || last - first > 100_000_000 {
+                if last < first {
                     return Err(self.malformed(card, entity, "'G1 THRU G2' with G1 <= G2", Self::field(card, k + 1)));
                 }
+                let count = last - first + 1;
+                if count > self.grid_count as u64 {
+                    return Err(self.limit(
+                        card,
+                        entity,
+                        format!(
+                            "'{first} THRU {last}' names {count} grids, more than the {} GRIDs the deck defines",
+                            self.grid_count
+                        ),
+                    ));
+                }
+                let used = self.thru_used.get() + count as usize;
+                if used > THRU_PER_GRID * self.grid_count {
+                    return Err(self.limit(
+                        card,
+                        entity,
+                        format!(
+                            "'{first} THRU {last}': the THRU ranges of the deck name more than {THRU_PER_GRID} times its {} GRIDs",
+                            self.grid_count
+                        ),
+                    ));
+                }
+                self.thru_used.set(used);
                 out.extend(first + 1..=last);
                 k += 2;
                 continue;
@@ -551,6 +645,7 @@ impl<'a> Reader<'a> {
                     let trimmed = Card {
                         name: card.name.clone(),
                         fields,
+                        width: card.width,
                         file: card.file,
                         line: card.line,
                     };

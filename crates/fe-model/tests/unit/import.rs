@@ -9,6 +9,13 @@
 //!   elements of the other handedness, cards listed once as ignored.
 //! * Each malformed input gives its located error (file, line, entity): twelve kinds per
 //!   format.
+//! * `hex8_large.bdf` (`to_large_field.py`: `hex8_small.bdf` in large field with `*N<k>`
+//!   continuation markers) and its forms with blank and `+` continuations and commas give the
+//!   small-field twin's mesh, supports, spiders and frequencies.
+//! * Bounds: GENERATE and THRU ranges longer than the deck, sets of sets, included files
+//!   (fifteen files each including the next four times) and an included file past the byte
+//!   budget each give a located limit error after work bounded by the deck, where the
+//!   unbounded readers allocated terabytes or read for minutes.
 //! * No panic on random bytes, on every prefix of every fixture, or on mutated fixtures.
 
 use fe_model::mesh::import::{ImportError, ImportedModel};
@@ -573,6 +580,227 @@ fn nastran_errors_name_file_line_and_entity() {
     );
 }
 
+// ------------------------------------------------------------------------------------ large field
+
+/// `hex8_large.bdf` (every card of `hex8_small.bdf` in large field, `*N<k>` markers in
+/// columns 73-80 and 1-8, as pre-processors write it) in another continuation form: markers
+/// replaced by blanks or by `+`, or the free-field large form with commas.
+fn large_field_variants() -> Vec<(&'static str, String)> {
+    let text = std::fs::read_to_string(data_dir().join("import/hex8_large.bdf")).unwrap();
+    let map = |f: &dyn Fn(&str) -> String| text.lines().map(|l| f(l) + "\n").collect::<String>();
+    let is_card = |l: &str| !(l.starts_with('$') || l == "BEGIN BULK" || l == "ENDDATA");
+    let col = |l: &str, a: usize, b: usize| l.get(a..b.min(l.len())).unwrap_or("").trim().to_string();
+    let blank = map(&|l| match l.strip_prefix("*N") {
+        Some(_) => format!("{:8}{}", "", l.get(8..).unwrap_or("")),
+        None => l.to_string(),
+    });
+    let plus = map(&|l| {
+        let l = l.replace("*N", "+N");
+        if l.starts_with("+N") || !is_card(&l) {
+            l
+        } else {
+            l.replacen("+N", "*N", usize::from(l.len() <= 72))
+        }
+    });
+    let free = map(&|l| {
+        if !is_card(l) {
+            return l.to_string();
+        }
+        let fields: Vec<String> = (0..5).map(|i| col(l, 8 + 16 * i, 24 + 16 * i)).collect();
+        format!("{},{}", col(l, 0, 8), fields.join(","))
+    });
+    vec![
+        ("'*' markers", text.clone()),
+        ("blank continuations", blank),
+        ("'+' markers", plus),
+        ("free field", free),
+    ]
+}
+
+#[test]
+fn large_field_decks_in_every_continuation_form_equal_their_small_field_twin() {
+    let small = nastran_fixture("hex8_small.bdf");
+    let f_small = frequencies(&nastran_model(&small));
+    for (form, text) in large_field_variants() {
+        let large = nastran_inline(&text).unwrap_or_else(|e| panic!("{form}: {e}"));
+        assert_eq!(large.mesh.nodes, small.mesh.nodes, "{form}");
+        assert_eq!(volume_cells(&large.mesh), volume_cells(&small.mesh), "{form}");
+        assert_eq!(large.supports, small.supports, "{form}");
+        assert_eq!(large.spiders, small.spiders, "{form}");
+        let d = spectrum_difference(&f_small, &frequencies(&nastran_model(&large)));
+        assert!(d < SAME_SPECTRUM, "{form}: differs by {d:e}");
+    }
+}
+
+#[test]
+fn a_large_field_continuation_with_a_marker_is_read_in_16_columns() {
+    // Read in 8 columns (as before), the `*G1` line gave X3 blank and CD = '3.5', refused
+    // with "expected CD (an integer) in field 7".
+    let text = "GRID*                  7                             1.5             2.5*G1\n*G1                  3.5               0\n";
+    let m = nastran_inline(text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(m.mesh.nodes, vec![Point3::new(1.5, 2.5, 3.5)]);
+    assert_eq!(m.mesh.node_tags, vec![7]);
+}
+
+// ------------------------------------------------------------------------------------ bounds
+
+/// A folder of its own under the test target's temporary folder.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Fifteen files, each including the next four times: 4^14 (268 million) reads of the last
+/// one without the bound on included files, a located error after 10,000 with it.
+fn include_amplification(dir: &Path, ext: &str, include: &str, leaf: &str) -> PathBuf {
+    for k in 0..15 {
+        let body = if k == 14 {
+            leaf.to_string()
+        } else {
+            include.replace("{}", &format!("f{}.{ext}", k + 1)).repeat(4)
+        };
+        std::fs::write(dir.join(format!("f{k}.{ext}")), body).unwrap();
+    }
+    dir.join(format!("f0.{ext}"))
+}
+
+fn expect_limit(result: Result<ImportedModel, ImportError>, fragments: &[&str]) -> String {
+    let message = match result {
+        Err(e @ ImportError::Limit { .. }) => e.to_string(),
+        other => panic!("expected a limit error with {fragments:?}, got {:?}", other.map(|_| ())),
+    };
+    for f in fragments {
+        assert!(message.contains(f), "'{f}' missing from: {message}");
+    }
+    message
+}
+
+#[test]
+fn include_amplification_stops_at_the_file_budget_with_the_include_chain() {
+    let dir = scratch("include_amplification_abaqus");
+    let main = include_amplification(&dir, "inp", "*INCLUDE, INPUT={}\n", "** leaf\n");
+    let m = expect_limit(
+        abaqus::read(&main),
+        &[
+            "*INCLUDE",
+            "more than 10000 files included",
+            "included by",
+            "/f0.inp:1 -> ",
+            "/f1.inp:1 -> ",
+        ],
+    );
+    assert!(m.starts_with(&dir.display().to_string()), "{m}");
+    let dir = scratch("include_amplification_nastran");
+    let main = include_amplification(&dir, "bdf", "INCLUDE '{}'\n", "$ leaf\n");
+    expect_limit(
+        nastran::read(&main),
+        &["INCLUDE", "more than 10000 files included", "/f0.bdf:1 -> "],
+    );
+}
+
+#[test]
+fn an_included_file_past_the_byte_budget_is_refused_before_it_is_read() {
+    let dir = scratch("include_bytes");
+    // A sparse file: 1 GiB and a byte long, no disk space, never read.
+    let big = std::fs::File::create(dir.join("big.inc")).unwrap();
+    big.set_len((fe_model::mesh::import::MAX_EXPANDED_BYTES + 1) as u64)
+        .unwrap();
+    std::fs::write(dir.join("main.inp"), format!("{NODES_4}*INCLUDE, INPUT=big.inc\n")).unwrap();
+    let m = expect_limit(
+        abaqus::read(&dir.join("main.inp")),
+        &["main.inp:6: *INCLUDE", "'big.inc'", "bytes"],
+    );
+    assert!(!m.contains("included by"), "the main file includes it: {m}");
+    std::fs::write(dir.join("main.bdf"), "GRID,1,,0.,0.,0.\nINCLUDE 'big.inc'\n").unwrap();
+    expect_limit(
+        nastran::read(&dir.join("main.bdf")),
+        &["main.bdf:2: INCLUDE", "'big.inc'"],
+    );
+}
+
+#[test]
+fn generate_ranges_longer_than_the_deck_are_located_errors_not_allocations() {
+    // 1e12 ids: 24 TB of set members without the bound.
+    let deck = format!("{NODES_4}*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*ELSET, ELSET=ALL, GENERATE\n1, 1000000000000\n");
+    expect_limit(
+        abaqus_inline(&deck),
+        &[
+            "inline.inp:9: *ELSET ALL",
+            "GENERATE '1, 1000000000000' names 1000000000000 elements",
+            "the 1 the deck",
+        ],
+    );
+    let deck = format!("{NODES_4}*NSET, NSET=N, GENERATE\n1, 9999999999999, 2\n");
+    expect_limit(
+        abaqus_inline(&deck),
+        &["inline.inp:7: *NSET N", "names 5000000000000 nodes, more than the 4"],
+    );
+    // A range within the deck is read.
+    let deck = format!("{NODES_4}*NSET, NSET=N, GENERATE\n1, 4\n");
+    assert_eq!(abaqus_inline(&deck).unwrap().mesh.node_sets["N"].len(), 4);
+}
+
+#[test]
+fn sets_of_sets_stop_at_the_member_budget() {
+    // Each set twice the one before: 4 * 2^40 members without the bound; 32 times the four
+    // nodes (128) with it, passed by the copies into S5 (8 + 16 + 32 + 64 + 64 of 128).
+    let mut deck = format!("{NODES_4}*NSET, NSET=S0\n1, 2, 3, 4\n");
+    for k in 1..=40 {
+        deck.push_str(&format!("*NSET, NSET=S{k}\nS{}, S{}\n", k - 1, k - 1));
+    }
+    expect_limit(
+        abaqus_inline(&deck),
+        &["inline.inp:17: *NSET S5", "more than 128 members"],
+    );
+}
+
+#[test]
+fn boundaries_on_sets_stop_at_the_member_budget() {
+    // Each line holds a copy of the set: a million lines on a set of a million nodes would
+    // be 10^12 copies; here 32 times the four nodes (128), passed by the 33rd line.
+    let deck = format!(
+        "{NODES_4}*NSET, NSET=ALL\n1, 2, 3, 4\n*BOUNDARY\n{}",
+        "ALL, ENCASTRE\n".repeat(200)
+    );
+    expect_limit(
+        abaqus_inline(&deck),
+        &["inline.inp:41: *BOUNDARY ALL", "more than 128 nodes"],
+    );
+    let deck = format!(
+        "{NODES_4}*NSET, NSET=ALL\n1, 2, 3, 4\n*BOUNDARY\n{}",
+        "ALL, ENCASTRE\n".repeat(32)
+    );
+    assert_eq!(abaqus_inline(&deck).unwrap().supports.len(), 32);
+}
+
+#[test]
+fn thru_ranges_longer_than_the_deck_are_located_errors_not_allocations() {
+    let grids = "GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\n";
+    // Eight ranges of 1e8 grids: 800 MB each without the bound.
+    let deck = format!("{grids}{}", "SPC1,1,123,1,THRU,100000000\n".repeat(8));
+    expect_limit(
+        nastran_inline(&deck),
+        &[
+            "inline.bdf:5: SPC1 1",
+            "'1 THRU 100000000' names 100000000 grids, more than the 4 GRIDs",
+        ],
+    );
+    let deck = format!("{grids}RBE2,9,4,123,1,THRU,5\n");
+    expect_limit(nastran_inline(&deck), &["inline.bdf:5: RBE2 9", "names 5 grids"]);
+    // Many ranges over every grid: at most 32 times the grids together (the 33rd card).
+    let deck = format!("{grids}{}", "SPC1,1,123,1,THRU,4\n".repeat(200));
+    expect_limit(
+        nastran_inline(&deck),
+        &["inline.bdf:37: SPC1 1", "more than 32 times its 4 GRIDs"],
+    );
+    let deck = format!("{grids}{}", "SPC1,1,123,1,THRU,4\n".repeat(32));
+    let supports = nastran_inline(&deck).unwrap().supports;
+    assert_eq!(supports.len(), 32);
+    assert!(supports.iter().all(|s| s.nodes.len() == 4));
+}
+
 // ------------------------------------------------------------------------------------ no panic
 
 // xorshift64* with a fixed seed (`fe_model::fuzz::Mutator`), so that a failure can be replayed.
@@ -622,6 +850,7 @@ fn fixture_files() -> Vec<(Format, PathBuf)> {
         })
         .collect();
     out.push((Format::Nastran, dir.join("hex8_small.bdf")));
+    out.push((Format::Nastran, dir.join("hex8_large.bdf")));
     out.push((Format::Nastran, dir.join("tet10_free.bdf")));
     out
 }
