@@ -267,10 +267,21 @@ fn key_facts(key: &Key) -> String {
 /// table needs depends on its kind; the validator says), each with its registry doc.
 fn typed_dict(t: &Table) -> String {
     let name = typed_dict_name(t.path);
-    let mut out = comment(&format!("`{}` of a study file.", t.header), "");
+    let what = if t.path.is_empty() {
+        "The whole study file: its sections.".to_string()
+    } else {
+        format!("`{}` of a study file.", t.header)
+    };
+    let mut out = comment(&what, "");
     out += &format!("{name} = TypedDict(\n    \"{name}\",\n    {{\n");
     for key in t.keys {
-        out += &comment(&format!("{} ({})", key.doc, key_facts(key)), "        ");
+        let facts = key_facts(key);
+        let text = if facts.is_empty() {
+            key.doc.to_string()
+        } else {
+            format!("{} ({facts})", key.doc)
+        };
+        out += &comment(&text, "        ");
         out += &format!("        \"{}\": {},\n", key.name, python_type(t, key));
     }
     out += "    },\n    total=False,\n)\n\n";

@@ -22,47 +22,47 @@ _Array = npt.NDArray[np.float64]
 
 __version__: str
 
-# `the file` of a study file.
+# The whole study file: its sections.
 StudyFileTable = TypedDict(
     "StudyFileTable",
     {
-        # title and description, for reports ()
+        # title and description, for reports
         "study": StudyTable,
-        # linear elastic materials ()
+        # linear elastic materials
         "materials": List[MaterialsTable],
-        # beam cross-sections ()
+        # beam cross-sections
         "sections": List[SectionsTable],
-        # FE models: generated beams, generated boxes, meshes ()
+        # FE models: generated beams, generated boxes, meshes
         "parts": List[PartsTable],
-        # flexible bodies of the mechanism ()
+        # flexible bodies of the mechanism
         "bodies": List[BodiesTable],
-        # rigid bodies of the mechanism ()
+        # rigid bodies of the mechanism
         "rigid_bodies": List[RigidBodiesTable],
-        # point masses of the mechanism ()
+        # point masses of the mechanism
         "point_masses": List[PointMassesTable],
-        # point-to-point spring-dampers ()
+        # point-to-point spring-dampers
         "springs": List[SpringsTable],
-        # points of the mechanism held by the ground ()
+        # points of the mechanism held by the ground
         "supports": List[SupportsTable],
-        # joints of the mechanism ()
+        # joints of the mechanism
         "joints": List[JointsTable],
-        # joint coordinates given as functions of time ()
+        # joint coordinates given as functions of time
         "drivers": List[DriversTable],
-        # gravity and point loads on the mechanism ()
+        # gravity and point loads on the mechanism
         "loads": List[LoadsTable],
-        # named outputs of the mechanism's analyses ()
+        # named outputs of the mechanism's analyses
         "sensors": List[SensorsTable],
-        # initial values and velocities of the mechanism ()
+        # initial values and velocities of the mechanism
         "initial": List[InitialTable],
-        # spring-dampers on joint coordinates ()
+        # spring-dampers on joint coordinates
         "joint_springs": List[JointSpringsTable],
-        # stops on joint coordinates ()
+        # stops on joint coordinates
         "joint_limits": List[JointLimitsTable],
-        # forces or torques on joint coordinates ()
+        # forces or torques on joint coordinates
         "actuators": List[ActuatorsTable],
-        # how often the mechanism's analyses write ()
+        # how often the mechanism's analyses write
         "output": OutputTable,
-        # what to compute ()
+        # what to compute
         "analyses": List[AnalysesTable],
     },
     total=False,
@@ -72,9 +72,9 @@ StudyFileTable = TypedDict(
 StudyTable = TypedDict(
     "StudyTable",
     {
-        # the study's title, for reports ()
+        # the study's title, for reports
         "title": str,
-        # what the study is about, for reports ()
+        # what the study is about, for reports
         "description": str,
     },
     total=False,
@@ -142,19 +142,19 @@ PartsTable = TypedDict(
         # unique among the parts (required)
         "name": str,
         # the material of every element; required, except for meshes with `mesh.materials` and files
-        # that bring their own ()
+        # that bring their own
         "material": str,
         # the mass matrix (`consistent`, `lumped`; default `consistent`)
         "mass": str,
-        # `[parts.beam]`: a generated beam structure; give `beam`, `box` or `mesh`, exactly one ()
+        # `[parts.beam]`: a generated beam structure; give `beam`, `box` or `mesh`, exactly one
         "beam": PartsBeamTable,
-        # `[parts.box]`: a generated solid box ()
+        # `[parts.box]`: a generated solid box
         "box": PartsBoxTable,
-        # `[parts.mesh]`: a gmsh, Abaqus or Nastran mesh ()
+        # `[parts.mesh]`: a gmsh, Abaqus or Nastran mesh
         "mesh": PartsMeshTable,
-        # `[[parts.interfaces]]`: the 6-dof connection points of the part ()
+        # `[[parts.interfaces]]`: the 6-dof connection points of the part
         "interfaces": List[PartsInterfacesTable],
-        # `[parts.reduction]`: Craig-Bampton settings ()
+        # `[parts.reduction]`: Craig-Bampton settings
         "reduction": PartsReductionTable,
     },
     total=False,
@@ -243,7 +243,7 @@ PartsMeshTable = TypedDict(
         "file": str,
         # a material per physical volume (gmsh) or element set (Abaqus `*ELSET`, Nastran
         # `PSOLID_<pid>`), `{ body = "steel", insert = "brass" }`; every volume (or beam) cell must
-        # be in exactly one of them ()
+        # be in exactly one of them
         "materials": Dict[str, str],
     },
     total=False,
@@ -256,7 +256,7 @@ PartsInterfacesTable = TypedDict(
         # unique in the part (`auxiliary` is reserved) (required)
         "name": str,
         # beams: a node set with one node, such as `"beam.end"`; solids: the surface nodes, a node
-        # set (physical group, Abaqus or Nastran set, or `x0` ... of a box) ()
+        # set (physical group, Abaqus or Nastran set, or `x0` ... of a box)
         "set": str,
         # or every node within `radius` of the point `near` ([m]; for solid)
         "near": List[float],
@@ -346,7 +346,7 @@ PartsReductionTable = TypedDict(
         # to a unit load there with the interfaces held, made orthogonal to the kept modes (residual
         # flexibility). The quasi-static response, and stress, to loads at the points is then exact
         # whatever the number of modes. Not on an interface node (its constraint modes already do
-        # this) ()
+        # this)
         "load_points": List[PartsReductionLoadPointsTable],
         # precision of the sparse Cholesky factor of the interior stiffness $\mathbf K_{ii}$. A
         # single-precision factor takes half the memory (the factor dominates a large body's memory:
@@ -376,7 +376,7 @@ PartsReductionLoadPointsTable = TypedDict(
     {
         # unique in the part; loads name it `body.name` (required)
         "name": str,
-        # a node set with one node ()
+        # a node set with one node
         "set": str,
         # or the node at this position ([m])
         "node_at": List[float],
@@ -475,7 +475,7 @@ AnalysesTable = TypedDict(
 AnalysesSupportsTable = TypedDict(
     "AnalysesSupportsTable",
     {
-        # an interface or a node set of the part (every node of the set is held) ()
+        # an interface or a node set of the part (every node of the set is held)
         "at": str,
         # or the node at this position ([m])
         "node_at": List[float],
@@ -490,7 +490,7 @@ AnalysesSupportsTable = TypedDict(
 AnalysesLoadsTable = TypedDict(
     "AnalysesLoadsTable",
     {
-        # an interface or a one-node set of the part ()
+        # an interface or a one-node set of the part
         "at": str,
         # or the node at this position ([m])
         "node_at": List[float],
@@ -509,29 +509,29 @@ BodiesTable = TypedDict(
         # unique among flexible and rigid bodies; no `.`, not `ground` (required)
         "name": str,
         # a part with `[parts.reduction]` (reduced through the cache); give `part`, `file` or
-        # `matrices`, one of them ()
+        # `matrices`, one of them
         "part": str,
         # or a reduced-body file (`.rbody`) or an MBDyn modal element file (`.fem`: every exposed
-        # node is an interface, named by its label), relative to the study file ()
+        # node is an interface, named by its label), relative to the study file
         "file": str,
-        # or `[bodies.matrices]` below ()
+        # or `[bodies.matrices]` below
         "matrices": BodiesMatricesTable,
         # the floating frame: `interface-node` with `frame_interface = "A"`, `auxiliary-node` for a
         # part reduced with `auxiliary_node = true` (`center-of-mass`, `interface-node`,
         # `auxiliary-node`; default `center-of-mass`)
         "frame": str,
-        # with `frame = "interface-node"`: which interface ()
+        # with `frame = "interface-node"`: which interface
         "frame_interface": str,
         # the inertia terms (theory guide §6) (`exact`, `lumped`; default `exact`)
         "inertia": str,
         # where the part's origin goes: interface `k` sits at `rotation * x_k + position` ([m];
         # default `[0, 0, 0]`)
         "position": List[float],
-        # the part's rotation `{ axis = [..], angle_deg = .. }` ()
+        # the part's rotation `{ axis = [..], angle_deg = .. }`
         "rotation": BodiesRotationTable,
         # `{ alpha = .., beta = .. }` Rayleigh factors [1/s, s] and/or `{ modal_ratio = .. }` [-]
         # (the fraction of critical damping of every fixed-interface mode, 0.02 for 2 %; at most 1,
-        # a warning from 0.2) ()
+        # a warning from 0.2)
         "damping": BodiesDampingTable,
         # `true`: evaluate the body in the global xy-plane, with the in-plane coordinates of its
         # interfaces and its modes only (`false` for a body from a file). Its `rotation` must be
@@ -561,14 +561,14 @@ BodiesMatricesTable = TypedDict(
         # starts a comment line (required)
         "nodes": str,
         # dof table: one line `node dof` per matrix row, `dof` one of `ux uy uz rx ry rz`; give
-        # `dofs` or `dofs_per_node`, one of them ()
+        # `dofs` or `dofs_per_node`, one of them
         "dofs": str,
         # or `3` (solids) / `6` (beams): every node's dofs in node order (3, 6)
         "dofs_per_node": int,
         # `{ a = 0, b = 12 }`: interface name = node (from 0); each needs its six dofs in the
         # matrices (required)
         "interfaces": Dict[str, int],
-        # fixed-interface modes: a count; give `modes` or `cutoff_hz`, one of them ()
+        # fixed-interface modes: a count; give `modes` or `cutoff_hz`, one of them
         "modes": int,
         # or every fixed-interface mode below this frequency ([Hz]; > 0)
         "cutoff_hz": float,
@@ -668,7 +668,7 @@ SupportsTable = TypedDict(
         # nothing else holds in its plane) (`clamp`, `pin`, `hinge`, `slider`, `plane`, `planar`;
         # required)
         "type": str,
-        # the axis of a `hinge` or `slider`, the normal of a `plane` or `planar` support ()
+        # the axis of a `hinge` or `slider`, the normal of a `plane` or `planar` support
         "axis": List[float],
     },
     total=False,
@@ -687,9 +687,9 @@ JointsTable = TypedDict(
         # (required)
         "between": List[str],
         # revolute, prismatic, cylindrical; the normal of a planar joint; the first axis of a
-        # universal joint ()
+        # universal joint
         "axis": List[float],
-        # the second axis of a universal joint (not parallel to `axis`) ()
+        # the second axis of a universal joint (not parallel to `axis`)
         "axis2": List[float],
     },
     total=False,
@@ -885,9 +885,9 @@ JointLimitsTable = TypedDict(
         "joint": str,
         # which scalar coordinate of the joint (default 0)
         "coordinate": int,
-        # [m or rad]: the lower bound; give `lower` and/or `upper` ()
+        # [m or rad]: the lower bound; give `lower` and/or `upper`
         "lower": float,
-        # [m or rad]: the upper bound ()
+        # [m or rad]: the upper bound
         "upper": float,
         # [N/m or N m/rad]: a stop as a stiff one-sided spring-damper, acting only beyond a bound
         # and only pushing back (it does not stick) (> 0; required)
@@ -909,9 +909,9 @@ ActuatorsTable = TypedDict(
         # which scalar coordinate of the joint (one no driver drives) (default 0)
         "coordinate": int,
         # the effort [N or N m] as a function of time (the functions of `[[drivers]]`); give
-        # `function` or `pid`, one of them ()
+        # `function` or `pid`, one of them
         "function": FunctionTable,
-        # or a PID law `{ kp, ki, kd, setpoint, sensor, max_effort }` (below) ()
+        # or a PID law `{ kp, ki, kd, setpoint, sensor, max_effort }` (below)
         "pid": ActuatorsPidTable,
     },
     total=False,
