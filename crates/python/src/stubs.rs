@@ -98,7 +98,7 @@ fn doc_of(object: &Bound<'_, PyAny>) -> PyResult<String> {
     if doc.is_none() {
         return Ok(String::new());
     }
-    doc.extract::<String>().map_err(Into::<PyErr>::into)
+    doc.extract::<String>()
 }
 
 /// `doc` as a docstring at `indent` (a line of its own), or `...` when there is none.
