@@ -11,6 +11,7 @@
 //! | `UnknownNameError` (also a `KeyError`) | a name the study or the results do not have: an analysis (`Study.run`, `Study.simulation`), a sensor (`Simulation.sensor`, `Results.sensor`) | `name`, `what` (`"analysis"`, `"sensor"`), `matches` (the close names: the message's "did you mean"), `defined` (every name there is) |
 //! | `SolveError` | a solver stopped (Newton did not converge, a singular matrix, ...) | `time` (of the step that failed in a dynamic analysis), `load_factor` (of the load step that failed in an equilibrium), `step` (its number), `residual` (the last relative residual when Newton failed), `analysis` (its name), `file`, `line`, `column`, `key` (where the study describes the entity the solver failed at: the body whose floating frame failed); `None` when not known; `partial` (from `Study.run`: the results computed before, also in the results folder) |
 
+use crate::stubs::{Class, Function, Member::Attribute};
 use pyo3::create_exception;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
@@ -47,6 +48,69 @@ create_exception!(
     SolveError,
     FlexmbsError,
     "A solver stopped: `time` (dynamic) or `load_factor` (equilibrium), `step`, `residual` and `analysis` say where, `file`, `line`, `column` and `key` the study's entity it failed at (None when not known); `partial` holds what `Study.run` computed before."
+);
+
+/// The exception classes as the type stubs declare them (their attributes are set on each
+/// raised instance).
+pub(crate) const STUBS: &[Class] = &[
+    Class {
+        name: "FlexmbsError",
+        bases: "Exception",
+        members: &[],
+    },
+    Class {
+        name: "ReducedBodyFileError",
+        bases: "FlexmbsError",
+        members: &[Attribute("path", "str")],
+    },
+    Class {
+        name: "StudyError",
+        bases: "FlexmbsError",
+        members: &[
+            Attribute("file", "Optional[str]"),
+            Attribute("line", "Optional[int]"),
+            Attribute("column", "Optional[int]"),
+            Attribute("key", "Optional[str]"),
+            Attribute("errors", "List[Dict[str, Any]]"),
+        ],
+    },
+    Class {
+        name: "KeyPathError",
+        bases: "FlexmbsError",
+        members: &[Attribute("path", "str"), Attribute("at", "str")],
+    },
+    Class {
+        name: "SolveError",
+        bases: "FlexmbsError",
+        members: &[
+            Attribute("time", "Optional[float]"),
+            Attribute("load_factor", "Optional[float]"),
+            Attribute("step", "Optional[int]"),
+            Attribute("residual", "Optional[float]"),
+            Attribute("analysis", "Optional[str]"),
+            Attribute("file", "Optional[str]"),
+            Attribute("line", "Optional[int]"),
+            Attribute("column", "Optional[int]"),
+            Attribute("key", "Optional[str]"),
+            Attribute("partial", "Optional[Results]"),
+        ],
+    },
+    Class {
+        name: "UnknownNameError",
+        bases: "FlexmbsError, KeyError",
+        members: &[
+            Attribute("name", "str"),
+            Attribute("what", "str"),
+            Attribute("matches", "List[str]"),
+            Attribute("defined", "List[str]"),
+        ],
+    },
+];
+
+/// `_unknown_name_error` as the type stubs declare it.
+pub(crate) const FUNCTION_STUB: Function = Function(
+    "_unknown_name_error",
+    "(what: str, name: str, defined: List[str]) -> UnknownNameError",
 );
 
 /// `UnknownNameError`, made once: an exception class of PyO3 has one base, and this one has

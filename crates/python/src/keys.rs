@@ -1,8 +1,12 @@
 //! `study_keys()`: the study-file keys as the study crate declares them once
 //! (`study::input::keys`), so Python's help on a key is the program's and the docs' own.
 
+use crate::stubs::Function;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+
+/// `study_keys` as the type stubs declare it.
+pub(crate) const STUB: Function = Function("study_keys", "(table: Optional[str] = None) -> List[Dict[str, Any]]");
 
 /// The keys of a study file, one dict each: ``table`` (dotted table path, ``""`` for the
 /// file's root), ``name``, ``kinds`` (the kinds of the table that take it; empty: all),

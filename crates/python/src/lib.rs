@@ -10,6 +10,7 @@
 //!   runs, reductions) and `Simulation` (a dynamic analysis stepped from Python, with named
 //!   loads set between steps).
 //! - [`keys`]: `study_keys()`, the study-file keys as the study crate declares them.
+//! - [`stubs`]: `_stubs()`, the text of the type stubs `flexmbs/_flexmbs.pyi`.
 //!
 //! The module keeps no state of its own: every class owns plain data of the library crates.
 
@@ -23,6 +24,7 @@ use pyo3::prelude::*;
 pub mod errors;
 pub mod keys;
 pub mod rbody;
+pub mod stubs;
 pub mod study;
 
 /// The extension module `flexmbs._flexmbs`.
@@ -34,5 +36,6 @@ fn _flexmbs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<study::Study>()?;
     m.add_class::<study::Simulation>()?;
     m.add_function(wrap_pyfunction!(keys::study_keys, m)?)?;
+    m.add_function(wrap_pyfunction!(stubs::_stubs, m)?)?;
     Ok(())
 }

@@ -9,6 +9,7 @@
 #![allow(non_snake_case)]
 
 use crate::errors::{chain, with_attributes, ReducedBodyFileError};
+use crate::stubs::{Class, Member::*};
 use numpy::ndarray::{Array2, Array3, ShapeBuilder};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
@@ -42,6 +43,35 @@ pub(crate) fn file_error(py: Python<'_>, e: ReductionError, fallback: PathBuf) -
     let path = PyString::new(py, &path.display().to_string()).into_any().unbind();
     with_attributes::<ReducedBodyFileError>(py, chain(&e), &[("path", path)])
 }
+
+/// `ReducedBody` as the type stubs declare it.
+pub(crate) const STUB: Class = Class {
+    name: "ReducedBody",
+    bases: "",
+    members: &[
+        Static("load", "(path: _Path) -> \"ReducedBody\""),
+        Method("save", "(self, path: _Path) -> None"),
+        Property("name", "str"),
+        Property("format_version", "int"),
+        Property("n_modes", "int"),
+        Property("n_coordinates", "int"),
+        Property("interfaces", "List[Dict[str, Any]]"),
+        Property("interface_names", "List[str]"),
+        Property("K_CB", "_Array"),
+        Property("M_CB", "_Array"),
+        Property("mass", "float"),
+        Property("center_of_mass", "_Array"),
+        Property("inertia", "_Array"),
+        Property("invariants", "Dict[str, _Array]"),
+        Property("fixed_interface_omega", "_Array"),
+        Property("fixed_interface_frequencies", "_Array"),
+        Property("mesh_nodes", "Optional[_Array]"),
+        Property("cb_basis", "Optional[_Array]"),
+        Property("mode_shapes", "Optional[_Array]"),
+        Property("geometric_stiffness", "Optional[_Array]"),
+        Method("__eq__", "(self, other: object) -> bool"),
+    ],
+};
 
 #[pymethods]
 impl ReducedBody {

@@ -8,6 +8,7 @@
 
 use crate::errors::{key_err, lookup_err, simulation_err, to_py_err, unknown_name, StudyError};
 use crate::rbody::ReducedBody;
+use crate::stubs::{Class, Member::*};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
@@ -190,6 +191,85 @@ fn options(results_dir: Option<PathBuf>, cache: Option<PathBuf>, t_end: Option<f
     }
 }
 
+/// `Study` as the type stubs declare it.
+pub(crate) const STUB: Class = Class {
+    name: "Study",
+    bases: "",
+    members: &[
+        Static("load", "(path: _Path) -> \"Study\""),
+        Static(
+            "from_toml",
+            "(text: str, base_dir: Optional[_Path] = None, name: Optional[str] = None) -> \"Study\"",
+        ),
+        Property("path", "str"),
+        Property("base_dir", "str"),
+        Property("text", "str"),
+        Property("analyses", "List[str]"),
+        Property("parts", "List[str]"),
+        Method("validate", "(self) -> None"),
+        BySection("get", "(self, key: str) -> Any"),
+        Method("set", "(self, key: str, value: Any) -> None"),
+        Method("update", "(self, values: Dict[str, Any]) -> None"),
+        Method("remove", "(self, key: str) -> None"),
+        BySection("__getitem__", "(self, key: str) -> Any"),
+        Method("__setitem__", "(self, key: str, value: Any) -> None"),
+        Method("__delitem__", "(self, key: str) -> None"),
+        Method(
+            "run",
+            "(self, analysis: Optional[str] = None, results_dir: Optional[_Path] = None, cache: Optional[_Path] = None, t_end: Optional[float] = None) -> Results",
+        ),
+        Method(
+            "reduce",
+            "(self, part: Optional[str] = None, cache: Optional[_Path] = None) -> List[Tuple[str, ReducedBody]]",
+        ),
+        Method(
+            "simulation",
+            "(self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None) -> \"Simulation\"",
+        ),
+    ],
+};
+
+impl Study {
+    /// [`Study::run`]'s raw results (dicts and numpy arrays), which `flexmbs.results.Results`
+    /// wraps; on a failure, the exception with them as `partial`.
+    fn raw_results<'py>(
+        &self,
+        py: Python<'py>,
+        analysis: Option<&str>,
+        opts: &study::Options,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
+        let selection =
+            study::Selection::of(&st, analysis).map_err(|e| unknown_name(py, e.what, &e.name, &e.defined))?;
+        let dir = opts.results_dir(&st);
+        let mut recorder = Recorder::default();
+        let outcome = py.detach(|| study::run_selected(&st, opts, selection, &mut recorder));
+        let d = PyDict::new(py);
+        d.set_item("results_dir", dir.display().to_string())?;
+        let analyses = PyList::empty(py);
+        for r in &recorder.analyses {
+            analyses.append(recorded_dict(py, r)?)?;
+        }
+        d.set_item("analyses", analyses)?;
+        d.set_item("messages", &recorder.progress)?;
+        match outcome {
+            Ok(summary) => {
+                d.set_item(
+                    "summary",
+                    json_to_py(py, &serde_json::to_value(&summary).map_err(to_json_err)?)?,
+                )?;
+                Ok(d)
+            }
+            Err(e) => {
+                let err = to_py_err(py, &*e);
+                // The partial results ride on the exception.
+                err.value(py).setattr("partial", d)?;
+                Err(err)
+            }
+        }
+    }
+}
+
 #[pymethods]
 impl Study {
     /// Reads and validates the study file at `path`. Raises `StudyError` (with `file`, `line`,
@@ -313,49 +393,6 @@ impl Study {
         Ok(s.parts.iter().map(|p| p.name.clone()).collect())
     }
 
-    /// [`Study::run`] returning the raw results (dicts and numpy arrays) that
-    /// `flexmbs.results.Results` wraps.
-    #[pyo3(signature = (analysis=None, results_dir=None, cache=None, t_end=None))]
-    fn _run<'py>(
-        &self,
-        py: Python<'py>,
-        analysis: Option<String>,
-        results_dir: Option<PathBuf>,
-        cache: Option<PathBuf>,
-        t_end: Option<f64>,
-    ) -> PyResult<Bound<'py, PyDict>> {
-        let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
-        let selection = study::Selection::of(&st, analysis.as_deref())
-            .map_err(|e| unknown_name(py, e.what, &e.name, &e.defined))?;
-        let opts = options(results_dir, cache, t_end);
-        let dir = opts.results_dir(&st);
-        let mut recorder = Recorder::default();
-        let outcome = py.detach(|| study::run_selected(&st, &opts, selection, &mut recorder));
-        let d = PyDict::new(py);
-        d.set_item("results_dir", dir.display().to_string())?;
-        let analyses = PyList::empty(py);
-        for r in &recorder.analyses {
-            analyses.append(recorded_dict(py, r)?)?;
-        }
-        d.set_item("analyses", analyses)?;
-        d.set_item("messages", &recorder.progress)?;
-        match outcome {
-            Ok(summary) => {
-                d.set_item(
-                    "summary",
-                    json_to_py(py, &serde_json::to_value(&summary).map_err(to_json_err)?)?,
-                )?;
-                Ok(d)
-            }
-            Err(e) => {
-                let err = to_py_err(py, &*e);
-                // The partial results ride on the exception.
-                err.value(py).setattr("partial", d)?;
-                Err(err)
-            }
-        }
-    }
-
     /// Runs the analyses (all, or the one named `analysis`) as `flexmbs run` does and returns a
     /// `flexmbs.Results` (sensors, tables and the summary as numpy arrays and dicts): results go
     /// into the results folder (`results_dir`, default `<study>-results` beside the study file),
@@ -374,7 +411,8 @@ impl Study {
         let wrap = |raw: Bound<'py, PyAny>| -> PyResult<Bound<'py, PyAny>> {
             py.import("flexmbs.results")?.getattr("Results")?.call1((raw,))
         };
-        match self._run(py, analysis, results_dir, cache, t_end) {
+        let opts = options(results_dir, cache, t_end);
+        match self.raw_results(py, analysis.as_deref(), &opts) {
             Ok(raw) => wrap(raw.into_any()),
             Err(e) => {
                 let value = e.value(py);
@@ -468,7 +506,12 @@ impl Study {
             let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();
             lookup_err(py, &*e, "analysis", &name, &names)
         })?;
-        Ok(Simulation { sim, analysis: name })
+        let end_time = sim.end_time();
+        Ok(Simulation {
+            sim,
+            analysis: name,
+            end_time,
+        })
     }
 
     fn __repr__(&self) -> String {
@@ -482,7 +525,12 @@ impl Study {
 #[pyclass(module = "flexmbs", name = "Simulation", unsendable)]
 pub struct Simulation {
     sim: study::Simulation,
+    /// The analysis being stepped.
+    #[pyo3(get)]
     analysis: String,
+    /// The analysis' end time [s] (stepping past it is allowed).
+    #[pyo3(get)]
+    end_time: f64,
 }
 
 impl Simulation {
@@ -496,14 +544,40 @@ impl Simulation {
     }
 }
 
+/// `Simulation` as the type stubs declare it.
+pub(crate) const SIMULATION_STUB: Class = Class {
+    name: "Simulation",
+    bases: "",
+    members: &[
+        Property("analysis", "str"),
+        Property("time", "float"),
+        Property("dt", "float"),
+        Property("end_time", "float"),
+        Property("steps", "int"),
+        Property("sensor_names", "List[str]"),
+        Property("load_names", "List[str]"),
+        Property("actuator_names", "List[str]"),
+        Method("step", "(self, dt: Optional[float] = None) -> int"),
+        Method("advance_to", "(self, t: float) -> int"),
+        Method("finish_results", "(self) -> Optional[Dict[str, Any]]"),
+        Method("sensor_columns", "(self, name: str) -> List[str]"),
+        Method("sensor", "(self, name: str) -> _Array"),
+        Method("sensors", "(self) -> Dict[str, _Array]"),
+        Method("state", "(self) -> Dict[str, Any]"),
+        Method("node_motions", "(self) -> Dict[str, Any]"),
+        Method(
+            "set_load",
+            "(self, name: str, force: Optional[_Vec3] = None, moment: Optional[_Vec3] = None) -> None",
+        ),
+        Method("set_actuator", "(self, name: str, effort: Optional[float]) -> None"),
+        Method("release_actuator", "(self, name: str) -> None"),
+        Method("actuator_effort", "(self, name: str) -> float"),
+        Method("held_actuator", "(self, name: str) -> Optional[float]"),
+    ],
+};
+
 #[pymethods]
 impl Simulation {
-    /// The analysis being stepped.
-    #[getter]
-    fn analysis(&self) -> &str {
-        &self.analysis
-    }
-
     /// The time reached [s].
     #[getter]
     fn time(&self) -> f64 {
@@ -514,12 +588,6 @@ impl Simulation {
     #[getter]
     fn dt(&self) -> f64 {
         self.sim.step_size()
-    }
-
-    /// The analysis' end time [s] (stepping past it is allowed).
-    #[getter]
-    fn end_time(&self) -> f64 {
-        self.sim.end_time()
     }
 
     /// Steps taken.

@@ -68,7 +68,7 @@ fn a_bad_material_is_one_error_not_a_cascade() {
     let message = study::parse_and_validate(source).unwrap_err().to_string();
     assert!(message.contains("is not valid (1 error)"), "{message}");
     assert!(
-        message.contains("Poisson's ratio nu must lie in (-1, 0.5), got 0.6"),
+        message.contains("materials[0].nu: nu must lie in (-1, 0.5), got 0.6"),
         "{message}"
     );
     assert!(!message.contains("unknown"), "{message}");

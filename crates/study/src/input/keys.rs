@@ -15,10 +15,14 @@
 //!   entry here and every entry a field, so the two cannot drift;
 //! - the Python face lists the keys through [`entries`].
 
+mod check;
 mod markdown;
+mod range;
 mod registry;
 
+pub use check::check;
 pub use markdown::{markdown_table, render_doc, MarkerError};
+pub use range::{Limit, Range, RangeError};
 pub use registry::TABLES;
 
 /// Whether a key must be given, and what it is when it is not.
@@ -72,6 +76,12 @@ impl Key {
     pub fn applies_to(&self, kind: &str) -> bool {
         self.kinds.is_empty() || self.kinds.contains(&kind)
     }
+
+    /// Its range in typed form ([`Range::Any`] for a text the parser does not read, which the
+    /// registry's tests refuse).
+    pub fn range(&self) -> Range {
+        Range::parse(self.range).unwrap_or(Range::Any)
+    }
 }
 
 /// A table of a study file: a section (`[[joints]]`), a sub-table (`[parts.beam]`) or an inline
@@ -94,6 +104,17 @@ pub struct Table {
 }
 
 impl Table {
+    /// A table without kinds.
+    pub const fn plain(path: &'static str, header: &'static str, keys: &'static [Key]) -> Table {
+        Table {
+            path,
+            header,
+            kinds_from: "",
+            kinds: &[],
+            keys,
+        }
+    }
+
     /// The keys the kind `kind` takes, in the registry's order.
     pub fn keys_of(&self, kind: &str) -> Vec<&'static str> {
         self.keys
@@ -120,10 +141,59 @@ pub fn table(path: &str) -> &'static Table {
         .unwrap_or_else(|| panic!("the key registry has no table `{path}`"))
 }
 
+/// Where a function of time (the registry's table `function`) appears: its parent table and
+/// key.
+const FUNCTIONS: &[(&str, &str)] = &[
+    ("drivers", "function"),
+    ("loads", "function"),
+    ("actuators", "function"),
+    ("actuators.pid", "setpoint"),
+];
+
+/// The registry's table under the key `key` of the table at `parent` (`parts` and `beam`:
+/// `parts.beam`; a function of time wherever it appears: `function`).
+pub fn child(parent: &str, key: &str) -> Option<&'static Table> {
+    if FUNCTIONS.contains(&(parent, key)) {
+        return Some(table("function"));
+    }
+    let path = if parent.is_empty() {
+        key.to_string()
+    } else {
+        format!("{parent}.{key}")
+    };
+    TABLES.iter().find(|t| t.path == path)
+}
+
 /// The keys that the kind `kind` of the table at `path` takes (every key of a table without
 /// kinds: pass `""`), in the registry's order.
 pub fn allowed(path: &str, kind: &str) -> Vec<&'static str> {
     table(path).keys_of(kind)
+}
+
+/// Whether the number `x` given for `key` of the table at `path` is in the key's range. Reports
+/// nothing: [`check`] gave the message for the file; the validator asks this to know whether
+/// to build with the value.
+pub fn in_range(path: &str, key: &str, x: f64) -> bool {
+    table(path).key(key).is_none_or(|k| k.range().admits(x))
+}
+
+/// `x` when it is in the range of `key` of the table at `path` ([`in_range`]).
+pub fn ranged(path: &str, key: &str, x: f64) -> Option<f64> {
+    in_range(path, key, x).then_some(x)
+}
+
+/// The names a choice key takes, from its range (`` `auto`, `dense`, `sparse` ``).
+///
+/// # Panics
+/// When the key is not in the registry or its range is no list of names: a typo in the code,
+/// caught by any test that reaches it.
+pub fn names(path: &str, key: &str) -> Vec<&'static str> {
+    let k = table(path)
+        .key(key)
+        .unwrap_or_else(|| panic!("the key registry has no key `{key}` in `{path}`"));
+    let names = k.range().names().to_vec();
+    assert!(!names.is_empty(), "the range of `{path}.{key}` is no list of names");
+    names
 }
 
 /// One key with its table, flat, for faces that list the keys (Python stubs, completion).
@@ -191,6 +261,33 @@ mod tests {
                 assert!(!k.doc.contains('\n'), "the doc of `{}.{}` spans lines", t.path, k.name);
             }
             assert_eq!(t.kinds.is_empty(), t.kinds_from.is_empty(), "table `{}`", t.path);
+        }
+    }
+
+    #[test]
+    fn every_range_of_the_registry_parses() {
+        let unread: Vec<String> = TABLES
+            .iter()
+            .flat_map(|t| t.keys.iter().map(move |k| (t.path, k)))
+            .filter_map(|(path, k)| Range::parse(k.range).err().map(|e| format!("`{path}.{}`: {e}", k.name)))
+            .collect();
+        assert!(unread.is_empty(), "{unread:#?}");
+        // And a numeric range only on a number (or numbers), a choice only on a string.
+        for t in TABLES {
+            for k in t.keys {
+                match k.range() {
+                    Range::Between { .. } | Range::Numbers(_) => assert!(
+                        ["number", "integer"].contains(&k.ty) || k.ty.starts_with('['),
+                        "`{}.{}` ({}) has the numeric range `{}`",
+                        t.path,
+                        k.name,
+                        k.ty,
+                        k.range
+                    ),
+                    Range::Names(_) => assert!(k.ty.starts_with("string"), "`{}.{}`", t.path, k.name),
+                    Range::Any => {}
+                }
+            }
         }
     }
 

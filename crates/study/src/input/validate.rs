@@ -32,13 +32,8 @@ use std::path::Path;
 pub mod mechanism;
 pub use mechanism::{MbsAnalysis, Mechanism};
 
-/// Largest beam element count per generated beam or member: beyond it a typo is likelier
-/// than a model (and the model would not fit the dense paths anyway).
-pub const MAX_BEAM_ELEMENTS: usize = 100_000;
 /// Largest number of solid cells a generated box may have (six tets per brick count six).
 pub const MAX_BOX_CELLS: usize = 2_000_000;
-/// Largest number of modes a modal analysis or a reduction may ask for.
-pub const MAX_MODES: usize = 10_000;
 
 /// A modal analysis's eigensolver.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -176,6 +171,11 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
         file_spiders: Vec::new(),
         index: HashMap::new(),
     };
+    // The registry's own checks (required keys, ranges) once for the whole file; the checks
+    // below add what the registry cannot state.
+    if let Ok(doc) = source.text.parse::<toml::Table>() {
+        v.errors.extend(keys::check(&doc));
+    }
     let materials = v.materials(&file.materials);
     let sections = v.sections(&file.sections);
     let mut parts: Vec<(String, Option<Part>)> = Vec::new();
@@ -332,29 +332,29 @@ impl Validator<'_> {
         }
     }
 
-    /// The value, or a "missing key" error on the table at `path`.
+    /// Whether the numbers `values` of a table of kind `kind` (the registry's table `table`)
+    /// are complete and in range: every required key of the kind given, every given one in
+    /// its range. Reports nothing: [`keys::check`] did.
+    fn complete(&self, table: &str, kind: &str, values: &[(&str, Option<f64>)]) -> bool {
+        let t = keys::table(table);
+        values.iter().all(|(key, value)| {
+            let Some(k) = t.key(key).filter(|k| k.applies_to(kind)) else {
+                return true;
+            };
+            match value {
+                Some(x) => k.range().admits(*x),
+                None => k.presence != keys::Presence::Required,
+            }
+        })
+    }
+
+    /// The value, or a "missing key" error on the table at `path`: for a key the registry
+    /// cannot call required (required by one kind, optional for another, as `dt`).
     fn require<T: Copy>(&mut self, path: &KeyPath, value: Option<T>, key: &str, what: &str) -> Option<T> {
         if value.is_none() {
             self.err(path, format!("missing key `{key}` ({what})"));
         }
         value
-    }
-
-    fn require_ref<'a, T>(&mut self, path: &KeyPath, value: &'a Option<T>, key: &str, what: &str) -> Option<&'a T> {
-        if value.is_none() {
-            self.err(path, format!("missing key `{key}` ({what})"));
-        }
-        value.as_ref()
-    }
-
-    /// A positive, finite value.
-    fn positive(&mut self, path: &KeyPath, value: f64, what: &str) -> Option<f64> {
-        if value > 0.0 && value.is_finite() {
-            Some(value)
-        } else {
-            self.err(path, format!("{what} must be positive and finite, got {value}"));
-            None
-        }
     }
 
     fn finite3(&mut self, path: &KeyPath, v: &Vec3, what: &str) -> Option<Vector3<f64>> {
@@ -382,7 +382,7 @@ impl Validator<'_> {
                 );
                 continue;
             }
-            let E = self.positive(&path.key("E"), m.E, "Young's modulus E [Pa]");
+            let E = keys::ranged("materials", "E", m.E);
             if let Some(E) = E {
                 if E < 1e5 {
                     self.warn(
@@ -393,13 +393,8 @@ impl Validator<'_> {
                     );
                 }
             }
-            let rho_ok = m.rho >= 0.0 && m.rho.is_finite();
-            if !rho_ok {
-                self.err(
-                    &path.key("rho"),
-                    format!("density rho [kg/m^3] must be non-negative and finite, got {}", m.rho),
-                );
-            } else if m.rho > 0.0 && m.rho < 1.0 {
+            let rho_ok = keys::in_range("materials", "rho", m.rho);
+            if rho_ok && m.rho > 0.0 && m.rho < 1.0 {
                 self.warn(
                     &path.key("rho"),
                     format!(
@@ -424,18 +419,14 @@ impl Validator<'_> {
                     continue;
                 }
                 (Some(nu), None) => {
-                    if !(nu > -1.0 && nu < 0.5) {
-                        self.err(
-                            &path.key("nu"),
-                            format!("Poisson's ratio nu must lie in (-1, 0.5), got {nu}"),
-                        );
+                    if !keys::in_range("materials", "nu", nu) {
                         continue;
                     }
                     E.filter(|_| rho_ok)
                         .map(|E| IsotropicMaterial::new(&m.name, E, nu, m.rho))
                 }
                 (None, Some(G)) => {
-                    let Some(G) = self.positive(&path.key("G"), G, "shear modulus G [Pa]") else {
+                    let Some(G) = keys::ranged("materials", "G", G) else {
                         continue;
                     };
                     if let Some(E) = E {
@@ -493,7 +484,6 @@ impl Validator<'_> {
                 SectionShape::Values => "a section by values (A [m^2], Iy, Iz, J [m^4], shear factors ky, kz)",
             };
             self.only_keys(&path, "sections", s.shape.name(), what);
-            let shape_keys = keys::allowed("sections", s.shape.name());
             let values: [(&str, Option<f64>); 11] = [
                 ("b", s.b),
                 ("h", s.h),
@@ -507,39 +497,7 @@ impl Validator<'_> {
                 ("ky", s.ky),
                 ("kz", s.kz),
             ];
-            let mut ok = true;
-            for (key, value) in values {
-                if !shape_keys.contains(&key) {
-                    continue;
-                }
-                let optional = matches!(key, "ky" | "kz");
-                match value {
-                    None if optional => {}
-                    None => {
-                        self.err(&path, format!("missing key `{key}` ({what})"));
-                        ok = false;
-                    }
-                    Some(x) if key == "d_inner" => {
-                        if !(x >= 0.0 && x.is_finite()) {
-                            self.err(
-                                &path.key(key),
-                                format!("d_inner must be non-negative and finite, got {x}"),
-                            );
-                            ok = false;
-                        }
-                    }
-                    Some(x) if optional => {
-                        if !(x > 0.0 && x <= 1.0) {
-                            self.err(
-                                &path.key(key),
-                                format!("shear factor {key} must lie in (0, 1], got {x}"),
-                            );
-                            ok = false;
-                        }
-                    }
-                    Some(x) => ok &= self.positive(&path.key(key), x, key).is_some(),
-                }
-            }
+            let mut ok = self.complete("sections", s.shape.name(), &values);
             if let (SectionShape::Tube, Some(o), Some(i)) = (s.shape, s.d_outer, s.d_inner) {
                 if i >= o {
                     self.err(
@@ -726,17 +684,6 @@ impl Validator<'_> {
         }
     }
 
-    fn element_count(&mut self, path: &KeyPath, n: usize) -> Option<usize> {
-        if n == 0 || n > MAX_BEAM_ELEMENTS {
-            self.err(
-                path,
-                format!("the element count must lie in 1..={MAX_BEAM_ELEMENTS}, got {n}"),
-            );
-            return None;
-        }
-        Some(n)
-    }
-
     fn beam(
         &mut self,
         path: &KeyPath,
@@ -768,11 +715,8 @@ impl Validator<'_> {
         let theory_name = theory_name(theory);
         let result = match b.kind {
             BeamKind::Straight => {
-                let from = self.require(path, b.from, "from", "first point of the beam [m]");
-                let to = self.require(path, b.to, "to", "last point of the beam [m]");
-                let n = self.require(path, b.elements, "elements", "number of elements");
-                let (from, to, n) = (from?, to?, n?);
-                let n = self.element_count(&path.key("elements"), n)?;
+                let (from, to, n) = (b.from?, b.to?, b.elements?);
+                keys::in_range("parts.beam", "elements", n as f64).then_some(())?;
                 let p0 = point(&self.finite3(&path.key("from"), &from, "`from`")?.into());
                 let p1 = point(&self.finite3(&path.key("to"), &to, "`to`")?.into());
                 let axis = p1 - p0;
@@ -785,13 +729,8 @@ impl Validator<'_> {
                     .map(|_| format!("straight beam, {n} {theory_name} elements"))
             }
             BeamKind::Arc => {
-                let center = self.require(path, b.center, "center", "centre of the arc [m]");
-                let start = self.require(path, b.start, "start", "first point of the arc [m]");
-                let axis = self.require(path, b.axis, "axis", "normal of the arc's plane");
-                let angle = self.require(path, b.angle_deg, "angle_deg", "swept angle [deg]");
-                let n = self.require(path, b.elements, "elements", "number of elements");
-                let (center, start, axis, angle, n) = (center?, start?, axis?, angle?, n?);
-                let n = self.element_count(&path.key("elements"), n)?;
+                let (center, start, axis, angle, n) = (b.center?, b.start?, b.axis?, b.angle_deg?, b.elements?);
+                keys::in_range("parts.beam", "elements", n as f64).then_some(())?;
                 let c = point(&self.finite3(&path.key("center"), &center, "`center`")?.into());
                 let s = point(&self.finite3(&path.key("start"), &start, "`start`")?.into());
                 let axis = self.finite3(&path.key("axis"), &axis, "`axis`")?;
@@ -841,9 +780,7 @@ impl Validator<'_> {
         model: &mut FeModel,
         base: &BeamProperties,
     ) -> Option<Result<String, FeError>> {
-        let points = self.require_ref(path, &b.points, "points", "joint points of the frame [m]");
-        let members = self.require_ref(path, &b.members, "members", "members between the points");
-        let (points, members) = (points?, members?);
+        let (points, members) = (b.points.as_ref()?, b.members.as_ref()?);
         let mut pts = Vec::with_capacity(points.len());
         for (i, p) in points.iter().enumerate() {
             pts.push(point(&self.finite3(&path.key("points").index(i), p, "a point")?.into()));
@@ -876,9 +813,10 @@ impl Validator<'_> {
                 self.err(&mp.key("to"), "the member starts and ends at the same point");
                 continue;
             }
-            let Some(n) = self.element_count(&mp.key("elements"), m.elements) else {
+            let n = m.elements;
+            if !keys::in_range("parts.beam.members", "elements", n as f64) {
                 continue;
-            };
+            }
             total += n;
             let section = match &m.section {
                 Some(s) => match self.section(&mp.key("section"), s, sections, nu) {
@@ -925,18 +863,10 @@ impl Validator<'_> {
         material: IsotropicMaterial,
         mass: fe_model::MassKind,
     ) -> Option<(FeModel, String)> {
-        let mut ok = true;
-        for (i, l) in b.size.iter().enumerate() {
-            ok &= self
-                .positive(&path.key("size").index(i), *l, "a box length [m]")
-                .is_some();
-        }
-        for (i, d) in b.divisions.iter().enumerate() {
-            if *d == 0 {
-                self.err(&path.key("divisions").index(i), "a division count must be at least 1");
-                ok = false;
-            }
-        }
+        let ok = b.size.iter().all(|l| keys::in_range("parts.box", "size", *l))
+            && b.divisions
+                .iter()
+                .all(|d| keys::in_range("parts.box", "divisions", *d as f64));
         let origin = match &b.origin {
             Some(o) => self.finite3(&path.key("origin"), o, "the origin")?,
             None => Vector3::zeros(),
@@ -1346,7 +1276,7 @@ impl Validator<'_> {
             (Some(set), None, None) => self.node_set(&ip.key("set"), model, set).map(<[NodeId]>::to_vec),
             (None, Some(c), Some(r)) => {
                 let c = self.finite3(&ip.key("near"), c, "`near`");
-                let r = self.positive(&ip.key("radius"), r, "the radius [m]");
+                let r = keys::ranged("parts.interfaces", "radius", r);
                 match (c, r) {
                     (Some(c), Some(r)) => {
                         let nodes = Self::nodes_near(model, &Point3::from(c), r);
@@ -1414,16 +1344,8 @@ impl Validator<'_> {
                 return None;
             }
             (Some(0), None) => ModeSelection::StaticOnly,
-            (Some(m), None) => {
-                if m > MAX_MODES {
-                    self.err(&path.key("modes"), format!("at most {MAX_MODES} modes, got {m}"));
-                    return None;
-                }
-                ModeSelection::Count(m)
-            }
-            (None, Some(f)) => {
-                ModeSelection::CutoffHz(self.positive(&path.key("cutoff_hz"), f, "the cut-off frequency [Hz]")?)
-            }
+            (Some(m), None) => ModeSelection::Count(keys::ranged("parts.reduction", "modes", m as f64).map(|_| m)?),
+            (None, Some(f)) => ModeSelection::CutoffHz(keys::ranged("parts.reduction", "cutoff_hz", f)?),
         };
         let auxiliary_node = r.auxiliary_node.unwrap_or(false);
         if n_interfaces == 0 && !auxiliary_node {
@@ -1626,10 +1548,15 @@ impl Validator<'_> {
     }
 
     fn loads(&mut self, path: &KeyPath, part: &Part, list: &Option<Vec<NodalLoadFile>>) -> Option<Vec<LoadSpec>> {
-        let Some(list) = list.as_ref().filter(|l| !l.is_empty()) else {
-            self.err(path, "missing key `loads` (a static analysis needs at least one load)");
+        // Missing: the registry's check reported it.
+        let list = list.as_ref()?;
+        if list.is_empty() {
+            self.err(
+                &path.key("loads"),
+                "no loads: a static analysis needs at least one load",
+            );
             return None;
-        };
+        }
         let mut out = Vec::new();
         let mut ok = true;
         for (i, l) in list.iter().enumerate() {
@@ -1807,13 +1734,8 @@ impl Validator<'_> {
     ) -> Option<Analysis> {
         let kind = a.kind.name();
         self.only_keys(&path, "analyses", kind, &format!("a '{kind}' analysis"));
-        let Some(part_name) = &a.part else {
-            self.err(
-                &path,
-                format!("missing key `part` (the part a '{kind}' analysis runs on)"),
-            );
-            return None;
-        };
+        // Missing: the registry's check reported it.
+        let part_name = a.part.as_ref()?;
         let Some(listed) = self.lookup("part", part_name) else {
             self.err(&path.key("part"), unknown_reference("part", part_name, part_names));
             return None;
@@ -1834,13 +1756,7 @@ impl Validator<'_> {
             AnalysisKind::Modal => {
                 let supports = self.supports(&path, part, &a.supports);
                 let modes = self.require(&path, a.modes, "modes", "number of modes")?;
-                if modes == 0 || modes > MAX_MODES {
-                    self.err(
-                        &path.key("modes"),
-                        format!("the number of modes must lie in 1..={MAX_MODES}, got {modes}"),
-                    );
-                    return None;
-                }
+                keys::in_range("analyses", "modes", modes as f64).then_some(())?;
                 let solver = match a.solver {
                     Some(SolverFile::Dense) => Solver::Dense,
                     Some(SolverFile::Sparse) => Solver::Sparse,

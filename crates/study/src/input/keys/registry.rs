@@ -10,12 +10,12 @@ const fn def(value: &'static str) -> Presence {
     Presence::Default(value)
 }
 
-/// `key!(name, type, unit, presence, [kinds [..],] [range "..",] doc)`
+/// `key!(name, type, unit, presence, [kinds [..] or a const array,] [range "..",] doc)`
 macro_rules! key {
-    ($name:literal, $ty:expr, $unit:literal, $presence:expr, $(kinds [$($kind:literal),+ $(,)?],)? $(range $range:literal,)? $doc:literal $(,)?) => {
+    ($name:literal, $ty:expr, $unit:literal, $presence:expr, $(kinds $kinds:expr,)? $(range $range:literal,)? $doc:literal $(,)?) => {
         Key {
             name: $name,
-            kinds: &[$($($kind),+)?],
+            kinds: key!(@kinds $($kinds)?),
             ty: $ty,
             unit: $unit,
             presence: $presence,
@@ -23,20 +23,62 @@ macro_rules! key {
             doc: $doc,
         }
     };
+    (@kinds) => { &[] };
+    (@kinds $kinds:expr) => { &$kinds };
     (@range) => { "" };
     (@range $range:literal) => { $range };
 }
+
+/// `a` followed by `b`, for a kinds list that extends another one.
+const fn concat<const A: usize, const B: usize, const N: usize>(
+    a: [&'static str; A],
+    b: [&'static str; B],
+) -> [&'static str; N] {
+    assert!(A + B == N, "the lengths of the kinds lists do not add up");
+    let mut out = [""; N];
+    let mut i = 0;
+    while i < A {
+        out[i] = a[i];
+        i += 1;
+    }
+    while i < N {
+        out[i] = b[i - A];
+        i += 1;
+    }
+    out
+}
+
+/// The sensors that measure something named by `of` (a point, body, joint, driver, actuator).
+const MEASURED_SENSORS: [&str; 16] = [
+    "position",
+    "displacement",
+    "relative-position",
+    "rotation",
+    "velocity",
+    "angular-velocity",
+    "deflection",
+    "joint",
+    "joint-rate",
+    "modal",
+    "reaction",
+    "driver-effort",
+    "actuator-effort",
+    "stress",
+    "acceleration",
+    "angular-acceleration",
+];
+
+/// Every sensor: the measured ones and those of the whole mechanism.
+const SENSOR_KINDS: [&str; 19] = concat(MEASURED_SENSORS, ["energy", "momentum", "energy-balance"]);
 
 const VEC3: &str = "[x, y, z]";
 
 /// Every table of a study file.
 pub static TABLES: &[Table] = &[
-    Table {
-        path: "",
-        header: "the file",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    Table::plain(
+        "",
+        "the file",
+        &[
             key!("study", "table", "", OPT, "title and description, for reports"),
             key!("materials", "list of tables", "", OPT, "linear elastic materials"),
             key!("sections", "list of tables", "", OPT, "beam cross-sections"),
@@ -57,30 +99,26 @@ pub static TABLES: &[Table] = &[
             key!("output", "table", "", OPT, "how often the mechanism's analyses write"),
             key!("analyses", "list of tables", "", OPT, "what to compute"),
         ],
-    },
-    Table {
-        path: "study",
-        header: "[study]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "study",
+        "[study]",
+        &[
             key!("title", "string", "", OPT, "the study's title, for reports"),
             key!("description", "string", "", OPT, "what the study is about, for reports"),
         ],
-    },
-    Table {
-        path: "materials",
-        header: "[[materials]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "materials",
+        "[[materials]]",
+        &[
             key!("name", "string", "", REQ, "unique among the materials"),
             key!("E", "number", "Pa", REQ, range "> 0", "Young's modulus"),
             key!("nu", "number", "", OPT, range "(-1, 0.5)", "Poisson's ratio; give `nu` or `G`, one of them"),
             key!("G", "number", "Pa", OPT, range "> 0", "or the shear modulus (then nu = E/2G - 1 must be in range)"),
             key!("rho", "number", "kg/m³", REQ, range ">= 0", "density"),
         ],
-    },
+    ),
     Table {
         path: "sections",
         header: "[[sections]]",
@@ -102,12 +140,10 @@ pub static TABLES: &[Table] = &[
             key!("kz", "number", "", def("5/6"), kinds ["values"], range "(0, 1]", "shear factor for shear along local z"),
         ],
     },
-    Table {
-        path: "parts",
-        header: "[[parts]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    Table::plain(
+        "parts",
+        "[[parts]]",
+        &[
             key!("name", "string", "", REQ, "unique among the parts"),
             key!("material", "string", "", OPT, "the material of every element; required, except for meshes with `mesh.materials` and files that bring their own"),
             key!("mass", "string", "", def("`consistent`"), range "`consistent`, `lumped`", "the mass matrix"),
@@ -117,7 +153,7 @@ pub static TABLES: &[Table] = &[
             key!("interfaces", "list of tables", "", OPT, "`[[parts.interfaces]]`: the 6-dof connection points of the part"),
             key!("reduction", "table", "", OPT, "`[parts.reduction]`: Craig-Bampton settings"),
         ],
-    },
+    ),
     Table {
         path: "parts.beam",
         header: "[parts.beam]",
@@ -139,41 +175,35 @@ pub static TABLES: &[Table] = &[
             key!("members", "list of tables", "", REQ, kinds ["frame"], "members `[{ from = 0, to = 1, elements = 4 }, ...]` (below)"),
         ],
     },
-    Table {
-        path: "parts.beam.members",
-        header: "members = [{ ... }]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    Table::plain(
+        "parts.beam.members",
+        "members = [{ ... }]",
+        &[
             key!("from", "integer", "", REQ, "first point (0-based index into `points`)"),
             key!("to", "integer", "", REQ, "last point (0-based index into `points`)"),
             key!("elements", "integer", "", REQ, range "1 to 100000", "number of elements"),
             key!("section", "string", "", def("the beam's `section`"), "the member's section"),
             key!("orientation", VEC3, "", def("the beam's `orientation`"), "a vector in the local x-y plane of the member's elements"),
         ],
-    },
-    Table {
-        path: "parts.box",
-        header: "[parts.box]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "parts.box",
+        "[parts.box]",
+        &[
             key!("size", "[Lx, Ly, Lz]", "m", REQ, range "> 0", "the box's edges along x, y, z"),
-            key!("divisions", "[nx, ny, nz]", "", REQ, range "at most 2,000,000 cells in all", "bricks along each axis"),
+            key!("divisions", "[nx, ny, nz]", "", REQ, range ">= 1", "bricks along each axis, at most 2,000,000 cells in all"),
             key!("element", "string", "", REQ, range "`hex8`, `hex20`, `tet4`, `tet10`, `wedge6`", "`hex8`, `hex20`, `tet4` (six per brick; locks in bending, for contrast), `tet10` (six per brick), `wedge6` (two per brick)"),
             key!("origin", VEC3, "m", def("`[0, 0, 0]`"), "the corner with the lowest coordinates"),
         ],
-    },
-    Table {
-        path: "parts.mesh",
-        header: "[parts.mesh]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "parts.mesh",
+        "[parts.mesh]",
+        &[
             key!("file", "string", "", REQ, "the mesh file, relative to the study file: gmsh `.msh` (MSH 4.1 or 2.2, ASCII or binary), Abaqus `.inp`, or Nastran bulk data `.bdf`, `.nas`, `.dat` (the extension says which)"),
             key!("materials", "{ set = string }", "", OPT, r#"a material per physical volume (gmsh) or element set (Abaqus `*ELSET`, Nastran `PSOLID_<pid>`), `{ body = "steel", insert = "brass" }`; every volume (or beam) cell must be in exactly one of them"#),
         ],
-    },
+    ),
     Table {
         path: "parts.interfaces",
         header: "[[parts.interfaces]]",
@@ -189,13 +219,11 @@ pub static TABLES: &[Table] = &[
             key!("node_position", VEC3, "m", OPT, kinds ["solid"], "where the interface node goes; default: the Nastran RBE's reference grid for its set, else the area centroid of those faces (or the mean of the nodes when the set covers no whole face)"),
         ],
     },
-    Table {
-        path: "parts.reduction",
-        header: "[parts.reduction]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
-            key!("modes", "integer", "", OPT, "number of fixed-interface modes to keep (0: static modes only); fewer than the part's interior dofs (the free dofs not on an interface): a larger count is refused with the part and both counts named. Give `modes` or `cutoff_hz`"),
+    Table::plain(
+        "parts.reduction",
+        "[parts.reduction]",
+        &[
+            key!("modes", "integer", "", OPT, range "0 to 10000", "number of fixed-interface modes to keep (0: static modes only); fewer than the part's interior dofs (the free dofs not on an interface): a larger count is refused with the part and both counts named. Give `modes` or `cutoff_hz`"),
             key!("cutoff_hz", "number", "Hz", OPT, range "> 0", "or keep every fixed-interface mode below this frequency"),
             key!("auxiliary_node", "bool", "", def("`false`"), "`true`: add an interface at the centre of mass, held during the reduction (the `auxiliary-node` frame choice). Beams: the beam node there (use an even number of elements on a symmetric beam); solids: an RBE3 spider on every node"),
             key!("keep_mesh_shapes", "bool", "", def("`true`"), "keep the mode shapes on every mesh node in the reduced-body file (for ParaView and stress recovery)"),
@@ -206,18 +234,16 @@ pub static TABLES: &[Table] = &[
             key!("load_points", "list of tables", "", OPT, r#"points inside the body where loads act, with static correction: `[{ name = "hub", node_at = [x, y, z] }, ...]` or `{ name = ..., set = "a-one-node-set" }`. Each adds one attachment mode per free dof of its node (3 for a solid node, 6 for a beam node): the static response to a unit load there with the interfaces held, made orthogonal to the kept modes (residual flexibility). The quasi-static response, and stress, to loads at the points is then exact whatever the number of modes. Not on an interface node (its constraint modes already do this)"#),
             key!("factor", "string", "", def(r#"`"auto"`"#), range r#"`"auto"`, `"double"`, `"single"`"#, r#"precision of the sparse Cholesky factor of the interior stiffness $\mathbf K_{ii}$. A single-precision factor takes half the memory (the factor dominates a large body's memory: 29 GB in double precision for a 1M-dof tet10 body); its solves are refined in double precision (residual with $\mathbf K_{ii}$ itself, corrections with the factor) to a double-precision solve's accuracy, and the modes come from a Lanczos on $\mathbf K_{ii}^{-1}\mathbf M_{ii}$ in the mass inner product, so the body is the same (eigenvalues to $10^{-10}$) while the eigensolver takes about 3x the CPU time (3 single-precision solves per vector; measured on a 50k-dof block). `"auto"` takes double precision when the factor with the larger of its workspace (freed when the factorisation ends) and the reduction's vectors fits in 90 % of the available memory (`MemAvailable` of `/proc/meminfo`, measured after the symbolic analysis with the stiffness and mass already in memory, and a control group's limit), else single precision. A precision that does not fit is refused before the factorisation, with the factor's size and the memory available in GB; a stiffness too poorly conditioned for single precision (a pivot breaking down, or refinement that stops converging) is refused by name with the advice to use `"double"`. Changing it does not invalidate the cached body"#),
         ],
-    },
-    Table {
-        path: "parts.reduction.load_points",
-        header: "load_points = [{ ... }]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "parts.reduction.load_points",
+        "load_points = [{ ... }]",
+        &[
             key!("name", "string", "", REQ, "unique in the part; loads name it `body.name`"),
             key!("set", "string", "", OPT, "a node set with one node"),
             key!("node_at", VEC3, "m", OPT, "or the node at this position"),
         ],
-    },
+    ),
     Table {
         path: "analyses",
         header: "[[analyses]]",
@@ -235,9 +261,9 @@ pub static TABLES: &[Table] = &[
             key!("t_end", "number", "s", REQ, kinds ["dynamic"], range "> 0", "the end time; with `start`, after the start's time; a `t_end` that is not a multiple of `dt` is reached exactly by a shortened last step"),
             key!("dt", "number", "s", OPT, kinds ["dynamic", "linearized"], range "> 0", "`dynamic`: the time step (required; at most `t_end`, the first step of an adaptive run); `linearized`: with `at_time`, the step of the dynamic run that reaches the state"),
             key!("rho_inf", "number", "", def("0.9"), kinds ["dynamic"], range "[0, 1]", "spectral radius at infinity of generalized-α"),
-            key!("tolerance", "number", "", def("1e-10 (`equilibrium`, `buckling`), 1e-9 (`dynamic`)"), kinds ["equilibrium", "dynamic", "buckling"], range "[1e-14, 1)", "Newton tolerance on the relative residual"),
+            key!("tolerance", "number", "", def("1e-10 (`equilibrium`, `buckling`), 1e-9 (`dynamic`)"), kinds ["equilibrium", "dynamic", "buckling"], range "[1e-14, 1)", "Newton tolerance on the relative residual (round-off in double precision leaves about 1e-15, so a smaller one is never reached; 1 accepts any state)"),
             key!("method", "string", "", def("`newton`"), kinds ["equilibrium"], range "`newton`, `arc-length`", "`newton`: load stepping; `arc-length`: Crisfield's spherical arc-length continuation, which passes limit points (the first arc spans about 1/`steps` of the load and the path ends at load factor 1)"),
-            key!("max_iterations", "integer", "", def("25 (`equilibrium`, `buckling`), 20 (`dynamic`)"), kinds ["equilibrium", "dynamic", "buckling"], "Newton iterations per step"),
+            key!("max_iterations", "integer", "", def("25 (`equilibrium`, `buckling`), 20 (`dynamic`)"), kinds ["equilibrium", "dynamic", "buckling"], range ">= 1", "Newton iterations per step"),
             key!("newton", "string", "", def(r#"`"full"`"#), kinds ["dynamic"], range r#"`"full"`, `"modified"`"#, r#"`"full"`: new tangents at every correction; `"modified"`: the factorised iteration matrix kept across corrections and steps, rebuilt when a correction contracts the residual by less than 100 times, and full Newton for a step that fails"#),
             key!("translations", "string", "", def(r#"`"fixed"`"#), kinds ["dynamic"], range r#"`"fixed"`, `"body"`"#, r#"`"body"`: the translations of free nodes carried in their body axes by the integrator, as rotations always are; for long runs of fast steady rotation, where the fixed-axis form can let a high mode grow at `rho_inf` near 1"#),
             key!("about", "string", "", def(r#"`"initial"`"#), kinds ["linearized"], range r#"`"initial"`, `"equilibrium"`"#, "the state linearised about: the initial configuration, or the static equilibrium; or give `start`, or `at_time` with `dt`"),
@@ -248,35 +274,29 @@ pub static TABLES: &[Table] = &[
             key!("error_tolerance", "number", "", OPT, kinds ["dynamic"], range "> 0", "local error tolerance of the adaptive step (selects it; below)"),
         ],
     },
-    Table {
-        path: "analyses.supports",
-        header: "supports = [{ ... }]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    Table::plain(
+        "analyses.supports",
+        "supports = [{ ... }]",
+        &[
             key!("at", "string", "", OPT, "an interface or a node set of the part (every node of the set is held)"),
             key!("node_at", VEC3, "m", OPT, "or the node at this position"),
-            key!("dofs", "string or list of strings", "", def(r#"`"all"`"#), range r#"`"all"`, `"translations"`, `"rotations"`, or a list such as `["ux", "rz"]`"#, "the held dofs"),
+            key!("dofs", "string or list of strings", "", def(r#"`"all"`"#), range r#"`"all"`, `"translations"`, `"rotations"`"#, r#"the held dofs, or a list of them such as `["ux", "rz"]`"#),
         ],
-    },
-    Table {
-        path: "analyses.loads",
-        header: "loads = [{ ... }]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "analyses.loads",
+        "loads = [{ ... }]",
+        &[
             key!("at", "string", "", OPT, "an interface or a one-node set of the part"),
             key!("node_at", VEC3, "m", OPT, "or the node at this position"),
             key!("force", VEC3, "N", OPT, "force in global axes"),
             key!("moment", VEC3, "N m", OPT, "moment in global axes"),
         ],
-    },
-    Table {
-        path: "bodies",
-        header: "[[bodies]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "bodies",
+        "[[bodies]]",
+        &[
             key!("name", "string", "", REQ, "unique among flexible and rigid bodies; no `.`, not `ground`"),
             key!("part", "string", "", OPT, "a part with `[parts.reduction]` (reduced through the cache); give `part`, `file` or `matrices`, one of them"),
             key!("file", "string", "", OPT, "or a reduced-body file (`.rbody`) or an MBDyn modal element file (`.fem`: every exposed node is an interface, named by its label), relative to the study file"),
@@ -289,13 +309,11 @@ pub static TABLES: &[Table] = &[
             key!("damping", "table", "", OPT, "`{ alpha = .., beta = .. }` Rayleigh factors [1/s, s] and/or `{ modal_ratio = .. }` [-] (the fraction of critical damping of every fixed-interface mode, 0.02 for 2 %; at most 1, a warning from 0.2)"),
             key!("planar", "bool", "", def("its part's `planar`"), r"`true`: evaluate the body in the global xy-plane, with the in-plane coordinates of its interfaces and its modes only (`false` for a body from a file). Its `rotation` must be about $z$, and every point of the body must stay in the xy-plane turning about $z$ only: held by a support (`clamp`, `slider` or `plane`/`planar` with axis in or normal to the plane as fits, `hinge` about $z$) or the child of a joint that keeps it there (revolute about $z$, prismatic along an in-plane axis, planar with normal $z$) whose parent is held so too. A point between two planar bodies that nothing else holds needs a `planar` support with axis $z$. Otherwise the run is refused at the body, naming the point and what lets it leave the plane (a planar body gives the out-of-plane motion no stiffness or mass)"),
         ],
-    },
-    Table {
-        path: "bodies.matrices",
-        header: "[bodies.matrices]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "bodies.matrices",
+        "[bodies.matrices]",
+        &[
             key!("stiffness", "string", "", REQ, "Matrix Market file (`coordinate real`, `general` or `symmetric`) of K [N/m, N m/rad], one row per dof"),
             key!("mass", "string", "", REQ, "Matrix Market file of M [kg, kg m²], one row per dof"),
             key!("nodes", "string", "", REQ, "node table: one line `x y z` [m] per node; node `k` is the `k`-th data line, from 0; `#` starts a comment line"),
@@ -305,58 +323,48 @@ pub static TABLES: &[Table] = &[
             key!("modes", "integer", "", OPT, "fixed-interface modes: a count; give `modes` or `cutoff_hz`, one of them"),
             key!("cutoff_hz", "number", "Hz", OPT, range "> 0", "or every fixed-interface mode below this frequency"),
         ],
-    },
-    Table {
-        path: "bodies.rotation",
-        header: "rotation = { ... }",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "bodies.rotation",
+        "rotation = { ... }",
+        &[
             key!("axis", VEC3, "", REQ, "the axis of the rotation, in global axes"),
             key!("angle_deg", "number", "°", REQ, "the angle, right-handed about `axis`"),
         ],
-    },
-    Table {
-        path: "bodies.damping",
-        header: "damping = { ... }",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "bodies.damping",
+        "damping = { ... }",
+        &[
             key!("alpha", "number", "1/s", OPT, range ">= 0", "Rayleigh mass factor (on the CB matrices)"),
             key!("beta", "number", "s", OPT, range ">= 0", "Rayleigh stiffness factor (on the CB matrices)"),
             key!("modal_ratio", "number", "", OPT, range "[0, 1]", "damping ratio of every fixed-interface mode (0.02 for 2 %; a warning from 0.2)"),
         ],
-    },
-    Table {
-        path: "rigid_bodies",
-        header: "[[rigid_bodies]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "rigid_bodies",
+        "[[rigid_bodies]]",
+        &[
             key!("name", "string", "", REQ, "unique among flexible and rigid bodies"),
             key!("mass", "number", "kg", REQ, range "> 0", "the mass"),
             key!("center_of_mass", VEC3, "m", REQ, "the centre of mass at t = 0"),
             key!("inertia", "3x3 numbers", "kg m²", REQ, "about the centre of mass in global axes at t = 0; symmetric, principal moments non-negative and obeying the triangle inequality"),
             key!("points", "{ name = [x, y, z] }", "m", def("none"), "the body's named points (its nodes), `{ A = [x, y, z], ... }`"),
         ],
-    },
-    Table {
-        path: "point_masses",
-        header: "[[point_masses]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "point_masses",
+        "[[point_masses]]",
+        &[
             key!("name", "string", "", REQ, "unique among the point masses"),
             key!("at", "string", "", REQ, r#"the point, `"body.point"`"#),
             key!("mass", "number", "kg", REQ, range "> 0", "translational inertia only"),
         ],
-    },
-    Table {
-        path: "springs",
-        header: "[[springs]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "springs",
+        "[[springs]]",
+        &[
             key!("name", "string", "", REQ, "unique among the springs"),
             key!("between", "[string, string]", "", REQ, r#"two points, `["a.P", "b.Q"]`, or `["a.P", "ground"]` with `ground_point`"#),
             key!("ground_point", VEC3, "m", OPT, r#"where a spring to `"ground"` is attached"#),
@@ -364,43 +372,37 @@ pub static TABLES: &[Table] = &[
             key!("damping", "number", "N s/m", def("0"), range ">= 0", "the damping"),
             key!("rest_length", "number", "m", def("the initial length"), range ">= 0", "unstretched length"),
         ],
-    },
-    Table {
-        path: "supports",
-        header: "[[supports]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "supports",
+        "[[supports]]",
+        &[
             key!("at", "string", "", REQ, r#"the point held, `"body.point"`"#),
             key!("type", "string", "", REQ, range "`clamp`, `pin`, `hinge`, `slider`, `plane`, `planar`", "`clamp` (all six dofs), `pin` (translations), `hinge` (translations, and rotations but about `axis`), `slider` (translation along `axis` only, rotation held), `plane` (translations in the plane of normal `axis`, rotation held), `planar` (translations in the plane of normal `axis` and the rotation about it: a point of a planar mechanism that nothing else holds in its plane)"),
             key!("axis", VEC3, "", OPT, "the axis of a `hinge` or `slider`, the normal of a `plane` or `planar` support"),
         ],
-    },
-    Table {
-        path: "joints",
-        header: "[[joints]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "joints",
+        "[[joints]]",
+        &[
             key!("name", "string", "", REQ, "unique among the joints"),
             key!("type", "string", "", REQ, range "`fixed`, `spherical`, `revolute`, `prismatic`, `cylindrical`, `universal`, `planar`", "`fixed`: the two points become one (they must coincide; with `ground`, a clamp)"),
             key!("between", "[string, string]", "", REQ, r#"`[parent, child]`: points, or `"ground"` first (a ground node is created at the child)"#),
             key!("axis", VEC3, "", OPT, "revolute, prismatic, cylindrical; the normal of a planar joint; the first axis of a universal joint"),
             key!("axis2", VEC3, "", OPT, "the second axis of a universal joint (not parallel to `axis`)"),
         ],
-    },
-    Table {
-        path: "drivers",
-        header: "[[drivers]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "drivers",
+        "[[drivers]]",
+        &[
             key!("name", "string", "", REQ, "unique among the drivers"),
             key!("joint", "string", "", REQ, "the driven joint"),
             key!("coordinate", "integer", "", def("0"), "which scalar coordinate of the joint (removed from the unknowns)"),
             key!("function", "table", "", REQ, "a function of time, below; value, rate and acceleration are fed in"),
         ],
-    },
+    ),
     Table {
         path: "function",
         header: "function = { ... }",
@@ -446,48 +448,11 @@ pub static TABLES: &[Table] = &[
         path: "sensors",
         header: "[[sensors]]",
         kinds_from: "`type`",
-        kinds: &[
-            "position",
-            "displacement",
-            "relative-position",
-            "rotation",
-            "velocity",
-            "angular-velocity",
-            "deflection",
-            "joint",
-            "joint-rate",
-            "modal",
-            "reaction",
-            "driver-effort",
-            "actuator-effort",
-            "energy",
-            "momentum",
-            "stress",
-            "acceleration",
-            "angular-acceleration",
-            "energy-balance",
-        ],
+        kinds: &SENSOR_KINDS,
         keys: &[
             key!("name", "string", "", REQ, "unique among the sensors: the results are `<name>.csv` and `<name>.png`, so the name may contain ASCII letters, digits, `-`, `_` and `.`"),
             key!("type", "string", "", REQ, "what is measured (below)"),
-            key!("of", "string", "", REQ, kinds [
-                "position",
-                "displacement",
-                "relative-position",
-                "rotation",
-                "velocity",
-                "angular-velocity",
-                "deflection",
-                "joint",
-                "joint-rate",
-                "modal",
-                "reaction",
-                "driver-effort",
-                "actuator-effort",
-                "stress",
-                "acceleration",
-                "angular-acceleration",
-            ], "the point, body, joint, driver or actuator measured"),
+            key!("of", "string", "", REQ, kinds MEASURED_SENSORS, "the point, body, joint, driver or actuator measured"),
             key!("chord", "[string, string]", "", REQ, kinds ["deflection"], r#"`["a.P", "a.Q"]`: the deflection is the distance of `of` from the line through these points"#),
             key!("normal", VEC3, "", OPT, kinds ["deflection"], "signs the deflection: (chord direction × (p − a)) · normal"),
             key!("reference", "string", "", REQ, kinds ["relative-position"], "the point in whose axes the position of `of` is measured"),
@@ -516,55 +481,47 @@ pub static TABLES: &[Table] = &[
             key!("point", VEC3, "m", def("the body's centre of mass at t = 0"), kinds ["body"], "the point about which a body's velocity is given"),
         ],
     },
-    Table {
-        path: "joint_springs",
-        header: "[[joint_springs]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    Table::plain(
+        "joint_springs",
+        "[[joint_springs]]",
+        &[
             key!("name", "string", "", REQ, "unique among the joint springs"),
             key!("joint", "string", "", REQ, "the joint"),
             key!("coordinate", "integer", "", def("0"), "which scalar coordinate of the joint"),
-            key!("stiffness", "number", "", def("0"), "[N/m or N m/rad]: the generalised force on the coordinate x is −(preload + stiffness (x − rest) + damping ẋ), a linear spring on a length and a torsional one on an angle"),
-            key!("damping", "number", "", def("0"), "[N s/m or N m s/rad]"),
+            key!("stiffness", "number", "", def("0"), range ">= 0", "[N/m or N m/rad]: the generalised force on the coordinate x is −(preload + stiffness (x − rest) + damping ẋ), a linear spring on a length and a torsional one on an angle"),
+            key!("damping", "number", "", def("0"), range ">= 0", "[N s/m or N m s/rad]"),
             key!("rest", "number", "", def("0"), "[m or rad]"),
             key!("preload", "number", "", def("0"), "[N or N m]"),
         ],
-    },
-    Table {
-        path: "joint_limits",
-        header: "[[joint_limits]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "joint_limits",
+        "[[joint_limits]]",
+        &[
             key!("name", "string", "", REQ, "unique among the joint limits"),
             key!("joint", "string", "", REQ, "the joint"),
             key!("coordinate", "integer", "", def("0"), "which scalar coordinate of the joint"),
             key!("lower", "number", "", OPT, "[m or rad]: the lower bound; give `lower` and/or `upper`"),
             key!("upper", "number", "", OPT, "[m or rad]: the upper bound"),
-            key!("stiffness", "number", "", REQ, "[N/m or N m/rad]: a stop as a stiff one-sided spring-damper, acting only beyond a bound and only pushing back (it does not stick)"),
-            key!("damping", "number", "", def("0"), "[N s/m or N m s/rad]"),
+            key!("stiffness", "number", "", REQ, range "> 0", "[N/m or N m/rad]: a stop as a stiff one-sided spring-damper, acting only beyond a bound and only pushing back (it does not stick)"),
+            key!("damping", "number", "", def("0"), range ">= 0", "[N s/m or N m s/rad]"),
         ],
-    },
-    Table {
-        path: "actuators",
-        header: "[[actuators]]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "actuators",
+        "[[actuators]]",
+        &[
             key!("name", "string", "", REQ, "unique among the actuators"),
             key!("joint", "string", "", REQ, "the joint"),
             key!("coordinate", "integer", "", def("0"), "which scalar coordinate of the joint (one no driver drives)"),
             key!("function", "table", "", OPT, "the effort [N or N m] as a function of time (the functions of `[[drivers]]`); give `function` or `pid`, one of them"),
             key!("pid", "table", "", OPT, "or a PID law `{ kp, ki, kd, setpoint, sensor, max_effort }` (below)"),
         ],
-    },
-    Table {
-        path: "actuators.pid",
-        header: "pid = { ... }",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "actuators.pid",
+        "pid = { ... }",
+        &[
             key!("kp", "number", "", def("0"), range ">= 0", "proportional gain [N/m on a length, N m/rad on an angle]"),
             key!("ki", "number", "", def("0"), range ">= 0", "integral gain [N/(m s), N m/(rad s)]"),
             key!("kd", "number", "", def("0"), range ">= 0", "derivative gain [N s/m, N m s/rad]"),
@@ -572,16 +529,14 @@ pub static TABLES: &[Table] = &[
             key!("sensor", "string", "", def("the actuated coordinate"), "a `joint` sensor whose coordinate y is measured"),
             key!("max_effort", "number", "", OPT, range "> 0", "[N or N m]: saturates |u|"),
         ],
-    },
-    Table {
-        path: "output",
-        header: "[output]",
-        kinds_from: "",
-        kinds: &[],
-        keys: &[
+    ),
+    Table::plain(
+        "output",
+        "[output]",
+        &[
             key!("every", "integer", "", def("1"), range ">= 1", "write the sensors every n-th step"),
             key!("vtu_every", "integer", "", def("never"), range ">= 1", "write the deformed meshes every n-th step (for dynamic analyses)"),
             key!("plots", "bool", "", def("`true`"), "a PNG per sensor"),
         ],
-    },
+    ),
 ];

@@ -429,10 +429,6 @@ pub fn joint_is_angle(m: &Mechanism, j: usize, c: usize) -> bool {
     }
 }
 
-/// The smallest Newton tolerance on the relative residual: about 50 machine epsilons, the
-/// round-off left in a residual assembled in double precision.
-pub const MIN_TOLERANCE: f64 = 1e-14;
-
 /// A modal damping ratio from which a warning says it is unusually high (structures have
 /// 0.5 % to 5 %); above 1 (critical) it is refused.
 pub const MODAL_RATIO_WARNING: f64 = 0.2;
@@ -490,7 +486,7 @@ impl Validator<'_> {
         for (i, p) in file.point_masses.iter().enumerate() {
             let path = KeyPath::root().key("point_masses").index(i);
             let at = self.point(&path.key("at"), &p.at, &m, false);
-            let mass = self.positive(&path.key("mass"), p.mass, "the mass [kg]");
+            let mass = keys::ranged("point_masses", "mass", p.mass);
             if let (Some(at), Some(mass)) = (at, mass) {
                 m.point_masses.push(PointMassSpec {
                     name: p.name.clone(),
@@ -551,17 +547,8 @@ impl Validator<'_> {
             }
         }
         if let Some(o) = &file.output {
-            let path = KeyPath::root().key("output");
+            // 0 is out of range, reported by the registry's check.
             let every = o.every.unwrap_or(1);
-            if every == 0 {
-                self.err(&path.key("every"), "`every` must be at least 1 (write every n-th step)");
-            }
-            if o.vtu_every == Some(0) {
-                self.err(
-                    &path.key("vtu_every"),
-                    "`vtu_every` must be at least 1 (leave it out to write no meshes)",
-                );
-            }
             m.output = OutputSpec {
                 every: every.max(1),
                 vtu_every: o.vtu_every.filter(|n| *n > 0),
@@ -704,7 +691,7 @@ impl Validator<'_> {
             &path.key("inertia"),
             &b.inertia,
             "exact",
-            &["exact", "lumped"],
+            &keys::names("bodies", "inertia"),
             "inertia variant",
         )? {
             "lumped" => MassVariant::Lumped,
@@ -849,7 +836,7 @@ impl Validator<'_> {
             &path.key("frame"),
             &b.frame,
             "center-of-mass",
-            &["center-of-mass", "interface-node", "auxiliary-node"],
+            &keys::names("bodies", "frame"),
             "frame",
         )? {
             "interface-node" => {
@@ -883,22 +870,11 @@ impl Validator<'_> {
 
     /// A flexible body's `damping`: Rayleigh factors and a modal ratio.
     fn body_damping(&mut self, dp: &KeyPath, d: &DampingFile) -> Option<(Damping, Option<f64>)> {
-        for (key, v) in [("alpha", d.alpha), ("beta", d.beta), ("modal_ratio", d.modal_ratio)] {
-            if let Some(x) = v {
-                if !(x >= 0.0 && x.is_finite()) {
-                    self.err(&dp.key(key), format!("{key} must be non-negative and finite, got {x}"));
-                    return None;
-                }
-            }
+        let values = [("alpha", d.alpha), ("beta", d.beta), ("modal_ratio", d.modal_ratio)];
+        if !self.complete("bodies.damping", "", &values) {
+            return None;
         }
         if let Some(zeta) = d.modal_ratio {
-            if zeta > 1.0 {
-                self.err(
-                    &dp.key("modal_ratio"),
-                    format!("modal_ratio is the fraction of critical damping (0.02 for 2 %), got {zeta}: above 1 every mode is overdamped, which no structure is"),
-                );
-                return None;
-            }
             if zeta >= MODAL_RATIO_WARNING {
                 self.warn(
                     &dp.key("modal_ratio"),
@@ -926,7 +902,7 @@ impl Validator<'_> {
     }
 
     fn rigid(&mut self, path: &KeyPath, b: &RigidBodyFile) -> Option<RigidSpec> {
-        let mass = self.positive(&path.key("mass"), b.mass, "the mass [kg]");
+        let mass = keys::ranged("rigid_bodies", "mass", b.mass);
         let com = self.finite3(&path.key("center_of_mass"), &b.center_of_mass, "the centre of mass [m]");
         let J = Matrix3::from_fn(|i, j| b.inertia[i][j]);
         let mut ok = mass.is_some() && com.is_some();
@@ -1078,30 +1054,14 @@ impl Validator<'_> {
             }
             (Some(_), None) => Vector3::zeros(),
         };
-        let k = s.stiffness;
-        if !(k >= 0.0 && k.is_finite()) {
-            self.err(
-                &path.key("stiffness"),
-                format!("the stiffness [N/m] must be non-negative and finite, got {k}"),
-            );
+        let (k, c) = (s.stiffness, s.damping.unwrap_or(0.0));
+        let values = [
+            ("stiffness", Some(k)),
+            ("damping", Some(c)),
+            ("rest_length", s.rest_length),
+        ];
+        if !self.complete("springs", "", &values) {
             return None;
-        }
-        let c = s.damping.unwrap_or(0.0);
-        if !(c >= 0.0 && c.is_finite()) {
-            self.err(
-                &path.key("damping"),
-                format!("the damping [N s/m] must be non-negative and finite, got {c}"),
-            );
-            return None;
-        }
-        if let Some(l) = s.rest_length {
-            if !(l >= 0.0 && l.is_finite()) {
-                self.err(
-                    &path.key("rest_length"),
-                    format!("the rest length [m] must be non-negative and finite, got {l}"),
-                );
-                return None;
-            }
         }
         Some(SpringSpec {
             name: s.name.clone(),
@@ -1117,7 +1077,7 @@ impl Validator<'_> {
 
     fn mbs_support(&mut self, path: &KeyPath, s: &MbsSupportFile, m: &Mechanism) -> Option<SupportSpec> {
         let at = self.point(&path.key("at"), &s.at, m, false);
-        let kinds = ["clamp", "pin", "hinge", "slider", "plane", "planar"];
+        let kinds = keys::names("supports", "type");
         let kind = self.choice(
             &path.key("type"),
             &Some(s.kind.clone()),
@@ -1158,15 +1118,7 @@ impl Validator<'_> {
     }
 
     fn joint(&mut self, path: &KeyPath, j: &JointFile, m: &Mechanism) -> Option<JointSpec> {
-        let kinds = [
-            "fixed",
-            "spherical",
-            "revolute",
-            "prismatic",
-            "cylindrical",
-            "universal",
-            "planar",
-        ];
+        let kinds = keys::names("joints", "type");
         let kind = self.choice(&path.key("type"), &Some(j.kind.clone()), "fixed", &kinds, "joint type");
         let parent = self.point(&path.key("between").index(0), &j.between[0], m, true);
         let child = self.point(&path.key("between").index(1), &j.between[1], m, true);
@@ -1293,10 +1245,8 @@ impl Validator<'_> {
                     v.err(&path.key(key), format!("`{key}` must be finite, got {x}"));
                     None
                 }
-                None => {
-                    v.err(path, format!("missing key `{key}` (a '{kind}' function)"));
-                    None
-                }
+                // Missing: the registry's check reported it.
+                None => None,
             }
         };
         Some(match kind {
@@ -1335,7 +1285,7 @@ impl Validator<'_> {
             "spin-up" => {
                 let omega = num(self, "speed", f.speed, None)?;
                 let ramp_time = num(self, "ramp_time", f.ramp_time, None)?;
-                let duration = self.positive(&path.key("ramp_time"), ramp_time, "the ramp time [s]")?;
+                let duration = keys::ranged("function", "ramp_time", ramp_time)?;
                 TimeFunction::SpinUp { omega, duration }
             }
             "harmonic" => {
@@ -1352,7 +1302,7 @@ impl Validator<'_> {
                     &path.key("interpolation"),
                     &f.interpolation,
                     if driver { "cubic" } else { "linear" },
-                    &["linear", "cubic"],
+                    &keys::names("function", "interpolation"),
                     "interpolation",
                 )? {
                     "cubic" => Interpolation::CubicSpline,
@@ -1392,14 +1342,15 @@ impl Validator<'_> {
             &path.key("type"),
             &Some(l.kind.clone()),
             "point",
-            &["gravity", "point"],
+            keys::table("loads").kinds,
             "load type",
         ) else {
             return;
         };
         if kind == "gravity" {
             self.only_keys(path, "loads", "gravity", "a gravity load");
-            let Some(g) = self.require_ref(path, &l.g, "g", "the gravitational acceleration [m/s^2]") else {
+            // Missing: the registry's check reported it.
+            let Some(g) = &l.g else {
                 return;
             };
             let Some(g) = self.finite3(&path.key("g"), g, "g [m/s^2]") else {
@@ -1416,7 +1367,7 @@ impl Validator<'_> {
             return;
         }
         self.only_keys(path, "loads", "point", "a point load");
-        let Some(at_text) = self.require_ref(path, &l.at, "at", "the point loaded, \"body.point\"") else {
+        let Some(at_text) = &l.at else {
             return;
         };
         // "body.point" naming no interface of a flexible body: a load point inside it.
@@ -1447,7 +1398,13 @@ impl Validator<'_> {
                 None => return,
             },
         };
-        let Some(axes) = self.choice(&path.key("axes"), &l.axes, "global", &["global", "body"], "load axes") else {
+        let Some(axes) = self.choice(
+            &path.key("axes"),
+            &l.axes,
+            "global",
+            &keys::names("loads", "axes"),
+            "load axes",
+        ) else {
             return;
         };
         let axes = if axes == "body" {
@@ -1523,7 +1480,8 @@ impl Validator<'_> {
             "momentum" => return Some(SensorTarget::Momentum),
             _ => {}
         }
-        let of = self.require_ref(path, &s.of, "of", "what the sensor measures")?.clone();
+        // A required key that is missing: the registry's check reported it.
+        let of = s.of.clone()?;
         let op = path.key("of");
         Some(match kind {
             "position" => SensorTarget::Position(self.point(&op, &of, m, false)?),
@@ -1546,12 +1504,7 @@ impl Validator<'_> {
             }
             "relative-position" => {
                 let p = self.point(&op, &of, m, false);
-                let r = self.require_ref(
-                    path,
-                    &s.reference,
-                    "reference",
-                    "the point whose axes the position is seen in",
-                )?;
+                let r = s.reference.as_ref()?;
                 let r = self.point(&path.key("reference"), r, m, false)?;
                 SensorTarget::RelativePosition(p?, r)
             }
@@ -1602,12 +1555,7 @@ impl Validator<'_> {
     /// A `deflection` sensor of the point `of`.
     fn deflection_sensor(&mut self, path: &KeyPath, s: &SensorFile, m: &Mechanism, of: &str) -> Option<SensorTarget> {
         let p = self.point(&path.key("of"), of, m, false);
-        let chord = self.require_ref(
-            path,
-            &s.chord,
-            "chord",
-            "the two points of the chord, [\"body.A\", \"body.B\"]",
-        )?;
+        let chord = s.chord.as_ref()?;
         let a = self.point(&path.key("chord").index(0), &chord[0], m, false);
         let b = self.point(&path.key("chord").index(1), &chord[1], m, false);
         if a.is_some() && a == b {
@@ -1785,25 +1733,17 @@ impl Validator<'_> {
         }
     }
 
-    /// A number that may be left out (then `default`): finite, and with `nonnegative` not
-    /// below zero.
-    fn finite_or(
-        &mut self,
-        path: &KeyPath,
-        x: Option<f64>,
-        default: f64,
-        nonnegative: bool,
-        what: &str,
-    ) -> Option<f64> {
+    /// A number that may be left out (then `default`), finite. A key with a range in the
+    /// registry: in range, the message given by the registry's check.
+    fn finite_or(&mut self, path: &KeyPath, table: &str, x: Option<f64>, default: f64) -> Option<f64> {
+        let key = path_key(path);
+        let ranged = keys::table(table).key(&key).is_some_and(|k| !k.range.is_empty());
         let x = x.unwrap_or(default);
-        if !x.is_finite() || (nonnegative && x < 0.0) {
-            self.err(
-                path,
-                format!(
-                    "{what} must be finite{}, got {x}",
-                    if nonnegative { " and >= 0" } else { "" }
-                ),
-            );
+        if ranged {
+            return keys::ranged(table, &key, x);
+        }
+        if !x.is_finite() {
+            self.err(path, format!("{key} must be finite, got {x}"));
             return None;
         }
         Some(x)
@@ -1856,10 +1796,10 @@ impl Validator<'_> {
             ) else {
                 continue;
             };
-            let k = self.finite_or(&path.key("stiffness"), s.stiffness, 0.0, true, "the stiffness");
-            let c = self.finite_or(&path.key("damping"), s.damping, 0.0, true, "the damping");
-            let rest = self.finite_or(&path.key("rest"), s.rest, 0.0, false, "the rest value");
-            let preload = self.finite_or(&path.key("preload"), s.preload, 0.0, false, "the preload");
+            let k = self.finite_or(&path.key("stiffness"), "joint_springs", s.stiffness, 0.0);
+            let c = self.finite_or(&path.key("damping"), "joint_springs", s.damping, 0.0);
+            let rest = self.finite_or(&path.key("rest"), "joint_springs", s.rest, 0.0);
+            let preload = self.finite_or(&path.key("preload"), "joint_springs", s.preload, 0.0);
             let (Some(stiffness), Some(damping), Some(rest), Some(preload)) = (k, c, rest, preload) else {
                 continue;
             };
@@ -1910,11 +1850,10 @@ impl Validator<'_> {
                 self.err(&path, "the bounds must be finite");
                 continue;
             }
-            let Some(stiffness) = self.positive(&path.key("stiffness"), l.stiffness, "the stiffness of the stop")
-            else {
+            let Some(stiffness) = keys::ranged("joint_limits", "stiffness", l.stiffness) else {
                 continue;
             };
-            let Some(damping) = self.finite_or(&path.key("damping"), l.damping, 0.0, true, "the damping") else {
+            let Some(damping) = self.finite_or(&path.key("damping"), "joint_limits", l.damping, 0.0) else {
                 continue;
             };
             m.joint_limits.push(JointLimitSpec {
@@ -2025,9 +1964,9 @@ impl Validator<'_> {
                 }
             },
         };
-        let kp = self.finite_or(&pp.key("kp"), p.kp, 0.0, true, "kp");
-        let ki = self.finite_or(&pp.key("ki"), p.ki, 0.0, true, "ki");
-        let kd = self.finite_or(&pp.key("kd"), p.kd, 0.0, true, "kd");
+        let kp = self.finite_or(&pp.key("kp"), "actuators.pid", p.kp, 0.0);
+        let ki = self.finite_or(&pp.key("ki"), "actuators.pid", p.ki, 0.0);
+        let kd = self.finite_or(&pp.key("kd"), "actuators.pid", p.kd, 0.0);
         let (Some(kp), Some(ki), Some(kd)) = (kp, ki, kd) else {
             return None;
         };
@@ -2036,7 +1975,7 @@ impl Validator<'_> {
             return None;
         }
         let max_effort = match p.max_effort {
-            Some(x) => Some(self.positive(&pp.key("max_effort"), x, "max_effort")?),
+            Some(x) => Some(keys::ranged("actuators.pid", "max_effort", x)?),
             None => None,
         };
         let setpoint = self.time_function(&pp.key("setpoint"), &p.setpoint, true)?;
@@ -2062,31 +2001,17 @@ impl Validator<'_> {
     }
 
     /// `max_iterations` of a multibody analysis, or `default`.
-    fn mbs_iterations(&mut self, path: &KeyPath, a: &AnalysisFile, default: usize) -> Option<usize> {
+    fn mbs_iterations(a: &AnalysisFile, default: usize) -> Option<usize> {
         match a.max_iterations {
-            Some(0) => {
-                self.err(&path.key("max_iterations"), "max_iterations must be at least 1");
-                None
-            }
-            Some(n) => Some(n),
+            Some(n) => keys::in_range("analyses", "max_iterations", n as f64).then_some(n),
             None => Some(default),
         }
     }
 
     /// `tolerance` of a multibody analysis (on the relative residual), or `default`.
-    fn mbs_tolerance(&mut self, path: &KeyPath, a: &AnalysisFile, default: f64) -> Option<f64> {
+    fn mbs_tolerance(a: &AnalysisFile, default: f64) -> Option<f64> {
         match a.tolerance {
-            Some(t) => {
-                let t = self.positive(&path.key("tolerance"), t, "the tolerance on the relative residual")?;
-                if !(MIN_TOLERANCE..1.0).contains(&t) {
-                    self.err(
-                        &path.key("tolerance"),
-                        format!("the tolerance on the relative residual must lie in [{MIN_TOLERANCE:e}, 1), got {t:e}: round-off in double precision leaves a relative residual of about 1e-15, so a smaller one is never reached, and 1 or more accepts any state"),
-                    );
-                    return None;
-                }
-                Some(t)
-            }
+            Some(t) => keys::ranged("analyses", "tolerance", t),
             None => Some(default),
         }
     }
@@ -2105,24 +2030,15 @@ impl Validator<'_> {
             }
         };
         let steps = a.steps.unwrap_or(1);
-        if steps == 0 || steps > 100_000 {
-            self.err(&path.key("steps"), format!("steps must lie in 1..=100000, got {steps}"));
-            return None;
-        }
+        keys::in_range("analyses", "steps", steps as f64).then_some(())?;
         let time = match a.at_time {
-            Some(t) if !(t.is_finite() && t >= 0.0) => {
-                self.err(
-                    &path.key("at_time"),
-                    format!("at_time [s] must be finite and >= 0 (time starts at 0), got {t}"),
-                );
-                return None;
-            }
-            t => t.unwrap_or(0.0),
+            Some(t) => keys::ranged("analyses", "at_time", t)?,
+            None => 0.0,
         };
         Some(MbsAnalysis::Equilibrium {
             steps,
-            tolerance: self.mbs_tolerance(path, a, mbs::StaticSettings::DEFAULT_TOLERANCE)?,
-            max_iterations: self.mbs_iterations(path, a, mbs::StaticSettings::DEFAULT_MAX_ITERATIONS)?,
+            tolerance: Self::mbs_tolerance(a, mbs::StaticSettings::DEFAULT_TOLERANCE)?,
+            max_iterations: Self::mbs_iterations(a, mbs::StaticSettings::DEFAULT_MAX_ITERATIONS)?,
             time,
             arc_length,
         })
@@ -2130,10 +2046,11 @@ impl Validator<'_> {
 
     fn dynamic_analysis(&mut self, path: &KeyPath, a: &AnalysisFile) -> Option<MbsAnalysis> {
         self.only_keys(path, "analyses", "dynamic", "a 'dynamic' analysis");
-        let t_end = self.require(path, a.t_end, "t_end", "end time [s]");
+        // `t_end` missing or out of range: the registry's check reported it. `dt` is required
+        // by a dynamic analysis only, which the registry cannot say.
         let dt = self.require(path, a.dt, "dt", "time step [s]");
-        let t_end = self.positive(&path.key("t_end"), t_end?, "t_end [s]")?;
-        let dt = self.positive(&path.key("dt"), dt?, "dt [s]")?;
+        let t_end = keys::ranged("analyses", "t_end", a.t_end?)?;
+        let dt = keys::ranged("analyses", "dt", dt?)?;
         if t_end / dt > 1e7 {
             self.err(
                 &path.key("dt"),
@@ -2149,13 +2066,7 @@ impl Validator<'_> {
             return None;
         }
         let rho_inf = a.rho_inf.unwrap_or(mbs::DynamicSettings::DEFAULT_RHO_INF);
-        if !(0.0..=1.0).contains(&rho_inf) {
-            self.err(
-                &path.key("rho_inf"),
-                format!("rho_inf (spectral radius at infinity) must lie in [0, 1], got {rho_inf}"),
-            );
-            return None;
-        }
+        keys::in_range("analyses", "rho_inf", rho_inf).then_some(())?;
         let newton = match a.newton.as_deref() {
             None | Some("full") => mbs::NewtonStrategy::Full,
             Some("modified") => mbs::NewtonStrategy::Modified,
@@ -2180,7 +2091,7 @@ impl Validator<'_> {
         };
         // Ten halvings of the step by default: a step that fails at dt/1024 is reported.
         let dt_min = match a.dt_min {
-            Some(x) => self.positive(&path.key("dt_min"), x, "dt_min [s]")?,
+            Some(x) => keys::ranged("analyses", "dt_min", x)?,
             None => dt / 1024.0,
         };
         if dt_min > dt {
@@ -2200,9 +2111,9 @@ impl Validator<'_> {
                 return None;
             }
             (Some(tol), dt_max) => {
-                let tol = self.positive(&path.key("error_tolerance"), tol, "the local error tolerance")?;
+                let tol = keys::ranged("analyses", "error_tolerance", tol)?;
                 let dt_max = match dt_max {
-                    Some(x) => self.positive(&path.key("dt_max"), x, "dt_max [s]")?,
+                    Some(x) => keys::ranged("analyses", "dt_max", x)?,
                     None => t_end,
                 };
                 if dt_max < dt_min.max(dt) {
@@ -2219,8 +2130,8 @@ impl Validator<'_> {
             t_end,
             dt,
             rho_inf,
-            tolerance: self.mbs_tolerance(path, a, mbs::DynamicSettings::DEFAULT_TOLERANCE)?,
-            max_iterations: self.mbs_iterations(path, a, mbs::DynamicSettings::DEFAULT_MAX_ITERATIONS)?,
+            tolerance: Self::mbs_tolerance(a, mbs::DynamicSettings::DEFAULT_TOLERANCE)?,
+            max_iterations: Self::mbs_iterations(a, mbs::DynamicSettings::DEFAULT_MAX_ITERATIONS)?,
             newton,
             body_axis_translations,
             dt_min,
@@ -2231,23 +2142,14 @@ impl Validator<'_> {
     fn buckling_analysis(&mut self, path: &KeyPath, a: &AnalysisFile) -> Option<MbsAnalysis> {
         self.only_keys(path, "analyses", "buckling", "a 'buckling' analysis");
         let modes = a.modes.unwrap_or(4);
-        if modes == 0 || modes > super::MAX_MODES {
-            self.err(
-                &path.key("modes"),
-                format!("the number of modes must lie in 1..={}, got {modes}", super::MAX_MODES),
-            );
-            return None;
-        }
+        keys::in_range("analyses", "modes", modes as f64).then_some(())?;
         let steps = a.steps.unwrap_or(1);
-        if steps == 0 || steps > 100_000 {
-            self.err(&path.key("steps"), format!("steps must lie in 1..=100000, got {steps}"));
-            return None;
-        }
+        keys::in_range("analyses", "steps", steps as f64).then_some(())?;
         Some(MbsAnalysis::Buckling {
             modes,
             steps,
-            tolerance: self.mbs_tolerance(path, a, 1e-10)?,
-            max_iterations: self.mbs_iterations(path, a, 25)?,
+            tolerance: Self::mbs_tolerance(a, 1e-10)?,
+            max_iterations: Self::mbs_iterations(a, 25)?,
         })
     }
 
@@ -2258,20 +2160,21 @@ impl Validator<'_> {
             return None;
         }
         let modes = a.modes.unwrap_or(10);
-        if modes == 0 || modes > super::MAX_MODES {
-            self.err(
-                &path.key("modes"),
-                format!("the number of modes must lie in 1..={}, got {modes}", super::MAX_MODES),
-            );
-            return None;
-        }
+        keys::in_range("analyses", "modes", modes as f64).then_some(())?;
         let about = match (a.about.as_deref(), a.at_time) {
             (None | Some("initial"), None) => About::Initial,
             (Some("equilibrium"), None) => About::Equilibrium,
             (None, Some(t)) => {
-                let t = self.positive(&path.key("at_time"), t, "at_time [s]")?;
+                let t = keys::ranged("analyses", "at_time", t)?;
+                if t == 0.0 {
+                    self.err(
+                        &path.key("at_time"),
+                        "at_time [s] must be positive here: the state at 0 is `about = \"initial\"`",
+                    );
+                    return None;
+                }
                 let dt = self.require(path, a.dt, "dt", "the time step [s] of the dynamic run up to at_time")?;
-                let dt = self.positive(&path.key("dt"), dt, "dt [s]")?;
+                let dt = keys::ranged("analyses", "dt", dt)?;
                 About::Time { t, dt }
             }
             (Some(other), None) => {
