@@ -65,7 +65,7 @@ pub fn element_geometric_stiffness(model: &FeModel, index: usize, u_e: &[f64]) -
             let section = props.section(index, b.section)?;
             let material = props.material(index, b.material)?;
             let X = [X_e[0], X_e[1]];
-            let N = beam2::beam2_axial_force(b, index, X, section, material, u_e)?;
+            let N = beam2::beam2_axial_force(b, index, X, material.E() * section.A(), u_e)?;
             beam2::beam2_geometric_stiffness(b, index, X, section, N)
         }
         element => {
@@ -163,7 +163,7 @@ pub fn element_geometric_tensor_into(
             let B = V_e.transpose() * &K_hat * V_e;
             for k in 0..n {
                 let column: Vec<f64> = V_e.column(k).iter().copied().collect();
-                let N_k = beam2::beam2_axial_force(b, index, X, section, material, &column)?;
+                let N_k = beam2::beam2_axial_force(b, index, X, material.E() * section.A(), &column)?;
                 if N_k == 0.0 {
                     continue;
                 }

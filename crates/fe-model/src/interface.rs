@@ -66,32 +66,47 @@ pub struct Interface {
     pub surface: Vec<NodeId>,
 }
 
+/// An interface to add with [`Interfaces::add`]: the arguments of [`add_interface`].
+#[derive(Clone, Copy, Debug)]
+pub struct InterfaceSpec<'a> {
+    pub name: &'a str,
+    /// The surface nodes (repeats are ignored).
+    pub surface: &'a [NodeId],
+    /// Where the interface node goes; `None`: the surface centroid.
+    pub at: Option<Point3<f64>>,
+    pub kind: SpiderKind,
+}
+
+/// The distinct nodes of `nodes`, sorted.
+fn surface_set(nodes: &[NodeId]) -> Vec<NodeId> {
+    let mut surface = nodes.to_vec();
+    surface.sort_unstable();
+    surface.dedup();
+    surface
+}
+
 /// The interfaces of a model, in the order they were added.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Interfaces(pub Vec<Interface>);
 
 impl Interfaces {
-    /// [`add_interface`], and records the interface. Names must be unique.
-    pub fn add(
-        &mut self,
-        model: &mut FeModel,
-        name: &str,
-        surface_nodes: &[NodeId],
-        at: Option<Point3<f64>>,
-        kind: SpiderKind,
-    ) -> Result<NodeId, FeError> {
+    /// [`add_interface`] for `spec`, and records the interface. Names must be unique.
+    pub fn add(&mut self, model: &mut FeModel, spec: InterfaceSpec<'_>) -> Result<NodeId, FeError> {
+        let InterfaceSpec {
+            name,
+            surface,
+            at,
+            kind,
+        } = spec;
         if self.get(name).is_some() {
             return Err(interface_error(name, "an interface of that name already exists".into()));
         }
-        let node = add_interface(model, name, surface_nodes, at, kind)?;
-        let mut surface = surface_nodes.to_vec();
-        surface.sort_unstable();
-        surface.dedup();
+        let node = add_interface(model, name, surface, at, kind)?;
         self.0.push(Interface {
             name: name.to_string(),
             node,
             kind,
-            surface,
+            surface: surface_set(surface),
         });
         Ok(node)
     }
@@ -171,9 +186,7 @@ pub fn add_interface(
     kind: SpiderKind,
 ) -> Result<NodeId, FeError> {
     let context = format!("interface '{name}'");
-    let mut surface = surface_nodes.to_vec();
-    surface.sort_unstable();
-    surface.dedup();
+    let surface = surface_set(surface_nodes);
     if surface.is_empty() {
         return Err(interface_error(name, "the surface node set is empty".into()));
     }

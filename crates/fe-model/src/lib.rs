@@ -113,7 +113,7 @@ pub use geometric::{
     assemble_geometric_stiffness, element_dof_slots, element_geometric_stiffness, element_geometric_tensor_into,
     linear_buckling, packed_pair, BucklingSettings, BucklingSolution,
 };
-pub use interface::{add_interface, add_interface_on_set, Interface, Interfaces, SpiderKind};
+pub use interface::{add_interface, add_interface_on_set, Interface, InterfaceSpec, Interfaces, SpiderKind};
 pub use mass_properties::center_of_mass;
 pub use mesh::import::{ImportError, ImportedModel};
 pub use mesh::{Cell, CellId, CellKind, Mesh, NodeId};

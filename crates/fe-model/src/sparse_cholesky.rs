@@ -594,43 +594,36 @@ impl SparseCholesky {
 
     /// Forward solve $\mathbf L\mathbf x = \mathbf b$ in place (permuted order).
     pub fn l_solve(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
-        match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                let L = SimplicialLltRef::<'_, usize, f64>::new(s, self.double());
-                let L = SparseColMatRef::new(s.factor(), L.values());
-                triangular_solve::solve_lower_triangular_in_place(L, Conj::No, rhs, par);
-            }
-            SymbolicCholeskyRaw::Supernodal(s) => match (&self.tree, par) {
-                (Some(tree), Par::Rayon(_)) => tree.l_solve(SupernodalLltRef::new(s, self.double()), rhs, par),
-                _ => SupernodalLltRef::<'_, usize, f64>::new(s, self.double()).l_solve_with_conj(
-                    Conj::No,
-                    rhs,
-                    par,
-                    stack,
-                ),
-            },
-        }
+        self.triangular_solve(false, rhs, par, stack);
     }
 
     /// Backward solve $\mathbf L^T\mathbf x = \mathbf b$ in place (permuted order).
     pub fn l_transpose_solve(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
+        self.triangular_solve(true, rhs, par, stack);
+    }
+
+    /// [`Self::l_solve`], or [`Self::l_transpose_solve`] with `transpose`: in the factor's own
+    /// storage, by the subtree-parallel solves of the tree where there is one and threads.
+    fn triangular_solve(&self, transpose: bool, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
                 let L = SimplicialLltRef::<'_, usize, f64>::new(s, self.double());
                 let L = SparseColMatRef::new(s.factor(), L.values());
-                triangular_solve::solve_lower_triangular_transpose_in_place(L, Conj::No, rhs, par);
-            }
-            SymbolicCholeskyRaw::Supernodal(s) => match (&self.tree, par) {
-                (Some(tree), Par::Rayon(_)) => {
-                    tree.l_transpose_solve(SupernodalLltRef::new(s, self.double()), rhs, par)
+                if transpose {
+                    triangular_solve::solve_lower_triangular_transpose_in_place(L, Conj::No, rhs, par);
+                } else {
+                    triangular_solve::solve_lower_triangular_in_place(L, Conj::No, rhs, par);
                 }
-                _ => SupernodalLltRef::<'_, usize, f64>::new(s, self.double()).l_transpose_solve_with_conj(
-                    Conj::No,
-                    rhs,
-                    par,
-                    stack,
-                ),
-            },
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let L = SupernodalLltRef::<'_, usize, f64>::new(s, self.double());
+                match (&self.tree, par, transpose) {
+                    (Some(tree), Par::Rayon(_), false) => tree.l_solve(L, rhs, par),
+                    (Some(tree), Par::Rayon(_), true) => tree.l_transpose_solve(L, rhs, par),
+                    (_, _, false) => L.l_solve_with_conj(Conj::No, rhs, par, stack),
+                    (_, _, true) => L.l_transpose_solve_with_conj(Conj::No, rhs, par, stack),
+                }
+            }
         }
     }
 }
@@ -903,15 +896,10 @@ impl SolveTree {
         let threads = par.degree();
         let mut tmp = Vec::new();
         for &sn in &self.top {
-            let node = L.supernode(sn);
-            let (panel, pattern) = (node.val(), node.pattern());
+            let (panel, pattern, start, mut y) = top_block(L, sn, x.rb(), &mut tmp);
             let w = panel.ncols();
-            tmp.clear();
-            tmp.resize(panel.nrows() * k, 0.0);
-            let mut y = MatMut::from_column_major_slice_mut(&mut tmp, panel.nrows(), k);
-            y.rb_mut().subrows_mut(0, w).copy_from(x.rb().subrows(node.start(), w));
             panel_forward(panel, y.rb_mut(), threads);
-            x.rb_mut().subrows_mut(node.start(), w).copy_from(y.rb().subrows(0, w));
+            x.rb_mut().subrows_mut(start, w).copy_from(y.rb().subrows(0, w));
             for j in 0..k {
                 for (idx, &i) in pattern.iter().enumerate() {
                     x[(i, j)] += y[(w + idx, j)];
@@ -928,20 +916,15 @@ impl SolveTree {
         let threads = par.degree();
         let mut tmp = Vec::new();
         for &sn in self.top.iter().rev() {
-            let node = L.supernode(sn);
-            let (panel, pattern) = (node.val(), node.pattern());
+            let (panel, pattern, start, mut y) = top_block(L, sn, x.rb(), &mut tmp);
             let w = panel.ncols();
-            tmp.clear();
-            tmp.resize(panel.nrows() * k, 0.0);
-            let mut y = MatMut::from_column_major_slice_mut(&mut tmp, panel.nrows(), k);
-            y.rb_mut().subrows_mut(0, w).copy_from(x.rb().subrows(node.start(), w));
             for j in 0..k {
                 for (idx, &i) in pattern.iter().enumerate() {
                     y[(w + idx, j)] = x[(i, j)];
                 }
             }
             panel_backward(panel, y.rb_mut(), threads);
-            x.rb_mut().subrows_mut(node.start(), w).copy_from(y.rb().subrows(0, w));
+            x.rb_mut().subrows_mut(start, w).copy_from(y.rb().subrows(0, w));
         }
         // Then the subtrees, each on its own rows, reading the top's rows.
         let top_values = Mat::<f64>::from_fn(self.top_rows.len(), k, |q, j| x[(self.top_rows[q], j)]);
@@ -988,6 +971,26 @@ const PANEL_STEP: usize = 128;
 /// Rows (of a panel below a step's diagonal block) per parallel piece at least: below,
 /// a product is not worth a task.
 const PANEL_MIN_ROWS: usize = 256;
+
+/// The work block of top supernode `sn` of `L` for the columns of `x`, in `tmp`: its panel,
+/// its row pattern below the diagonal block, its first row, and the block $\mathbf y$ with the
+/// diagonal block's rows of `x` on top (the rows below it unset).
+#[allow(clippy::type_complexity)]
+fn top_block<'a, 'b>(
+    L: SupernodalLltRef<'a, usize, f64>,
+    sn: usize,
+    x: MatRef<'_, f64>,
+    tmp: &'b mut Vec<f64>,
+) -> (MatRef<'a, f64>, &'a [usize], usize, MatMut<'b, f64>) {
+    let node = L.supernode(sn);
+    let (panel, pattern) = (node.val(), node.pattern());
+    let w = panel.ncols();
+    tmp.clear();
+    tmp.resize(panel.nrows() * x.ncols(), 0.0);
+    let mut y = MatMut::from_column_major_slice_mut(tmp, panel.nrows(), x.ncols());
+    y.rb_mut().subrows_mut(0, w).copy_from(x.subrows(node.start(), w));
+    (panel, pattern, node.start(), y)
+}
 
 /// $\mathbf y \leftarrow$ the forward solve with the panel $\mathbf L_s = \[\mathbf L_{ss};
 /// \mathbf L_{bs}\]$ of one supernode ($w$ columns, $w + m$ rows): $\mathbf y_{0:w}$ becomes
@@ -1093,6 +1096,14 @@ mod tests {
         }
     }
 
+    /// $\|\mathbf A\mathbf x - \mathbf b\|_\infty / \|\mathbf b\|_\infty$ of the solution
+    /// $\mathbf x$ of $\mathbf A\mathbf x = \mathbf b$ by `chol`.
+    fn relative_residual(A: &SparseColMat<usize, f64>, chol: &SparseCholesky, b: &Mat<f64>) -> f64 {
+        let mut x = b.clone();
+        chol.solve_in_place(x.as_mut());
+        (A * &x - b).norm_max() / b.norm_max()
+    }
+
     /// The tree's forward and backward solves on 2 threads against faer's sequential ones,
     /// for 1, 4 and 8 right-hand sides, and the whole solve against `A`.
     fn tree_solves_match(A: &SparseColMat<usize, f64>, points: &[[f64; 3]]) {
@@ -1108,32 +1119,39 @@ mod tests {
         for k in [1, 3, 4, 8] {
             let B = Mat::<f64>::from_fn(n, k, |i, j| ((i * 7 + j * 13) % 17) as f64 - 8.0);
             let mut mem = MemBuffer::new(chol.solve_scratch(k, Par::Seq));
-            // Forward.
-            let mut x_seq = B.clone();
-            L.l_solve_with_conj(Conj::No, x_seq.as_mut(), Par::Seq, MemStack::new(&mut mem));
-            let mut x_par = B.clone();
-            tree.l_solve(L, x_par.as_mut(), par);
-            let err = (&x_par - &x_seq).norm_max() / x_seq.norm_max();
-            assert!(
-                err < 1e-13,
-                "L x = b, {k} right-hand sides: relative difference {err:.2e}"
+            // Forward and backward: sequential faer, then the tree's.
+            type Sweep<'a> = (
+                &'a str,
+                &'a dyn Fn(MatMut<'_, f64>, &mut MemStack),
+                &'a dyn Fn(MatMut<'_, f64>),
             );
-            // Backward.
-            let mut y_seq = B.clone();
-            L.l_transpose_solve_with_conj(Conj::No, y_seq.as_mut(), Par::Seq, MemStack::new(&mut mem));
-            let mut y_par = B.clone();
-            tree.l_transpose_solve(L, y_par.as_mut(), par);
-            let err = (&y_par - &y_seq).norm_max() / y_seq.norm_max();
-            assert!(
-                err < 1e-13,
-                "L^T x = b, {k} right-hand sides: relative difference {err:.2e}"
-            );
+            let sweeps: [Sweep; 2] = [
+                (
+                    "L x = b",
+                    &|x, stack| L.l_solve_with_conj(Conj::No, x, Par::Seq, stack),
+                    &|x| tree.l_solve(L, x, par),
+                ),
+                (
+                    "L^T x = b",
+                    &|x, stack| L.l_transpose_solve_with_conj(Conj::No, x, Par::Seq, stack),
+                    &|x| tree.l_transpose_solve(L, x, par),
+                ),
+            ];
+            for (what, sequential, parallel) in sweeps {
+                let mut x_seq = B.clone();
+                sequential(x_seq.as_mut(), MemStack::new(&mut mem));
+                let mut x_par = B.clone();
+                parallel(x_par.as_mut());
+                let err = (&x_par - &x_seq).norm_max() / x_seq.norm_max();
+                assert!(
+                    err < 1e-13,
+                    "{what}, {k} right-hand sides: relative difference {err:.2e}"
+                );
+            }
         }
         // The whole solve (permutation and both triangles) against A itself.
         let b = Mat::<f64>::from_fn(n, 2, |i, j| ((i * 5 + j) % 11) as f64 - 5.0);
-        let mut x = b.clone();
-        chol.solve_in_place(x.as_mut());
-        let r = (A * &x - &b).norm_max() / b.norm_max();
+        let r = relative_residual(A, &chol, &b);
         assert!(r < 1e-12, "A x = b: relative residual {r:.2e}");
     }
 
@@ -1295,9 +1313,7 @@ mod tests {
                 // And the solve with it.
                 if precision == Precision::Double {
                     let b = Mat::<f64>::from_fn(A.nrows(), 1, |i, _| ((i * 7) % 13) as f64 - 6.0);
-                    let mut x = b.clone();
-                    ours.solve_in_place(x.as_mut());
-                    let r = (A * &x - &b).norm_max() / b.norm_max();
+                    let r = relative_residual(A, &ours, &b);
                     assert!(r < 1e-12, "{name}, branched {branched}: relative residual {r:.2e}");
                 }
             }

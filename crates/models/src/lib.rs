@@ -241,24 +241,11 @@ pub struct BeamSegment<'a> {
 }
 
 impl<'a> BeamSegment<'a> {
-    /// A segment reduced with `modes` fixed-interface modes and the default settings,
+    /// The segment `beam` reduced with `modes` fixed-interface modes and the default settings,
     /// for the centre-of-mass frame.
-    pub fn new(
-        name: &'a str,
-        spec: &'a BeamSpec,
-        ends: (Vector3<f64>, Vector3<f64>),
-        elements: usize,
-        orientation: Vector3<f64>,
-        modes: ModeSelection,
-    ) -> Self {
+    pub fn new(beam: StraightBeam<'a>, modes: ModeSelection) -> Self {
         BeamSegment {
-            beam: StraightBeam {
-                name,
-                spec,
-                ends,
-                elements,
-                orientation,
-            },
+            beam,
             settings: CbSettings::new(modes),
             frame: FrameChoice::CenterOfMass,
         }
@@ -292,23 +279,10 @@ pub struct BeamBody<'a> {
 }
 
 impl<'a> BeamBody<'a> {
-    /// A body without its mesh shapes.
-    pub fn new(
-        name: &'a str,
-        spec: &'a BeamSpec,
-        ends: (Vector3<f64>, Vector3<f64>),
-        elements: usize,
-        orientation: Vector3<f64>,
-        modes: ModeSelection,
-    ) -> Self {
+    /// The body `beam` reduced with `modes` fixed-interface modes, without its mesh shapes.
+    pub fn new(beam: StraightBeam<'a>, modes: ModeSelection) -> Self {
         BeamBody {
-            beam: StraightBeam {
-                name,
-                spec,
-                ends,
-                elements,
-                orientation,
-            },
+            beam,
             modes,
             mesh: MeshShapes::Drop,
         }

@@ -717,8 +717,9 @@ struct BodyParts<'a> {
     nodes: Vec<[f64; 3]>,
     projection: Projection,
     S_full: Mat<f64>,
-    inertia: InertiaData,
-    Phi_com: Mat<f64>,
+    /// The inertia invariants and the centre-of-mass shapes $\boldsymbol\Phi_{com}$, computed
+    /// together from $\mathbf M$ and the full shapes.
+    inertia: (InertiaData, Mat<f64>),
     auxiliary_interface: Option<usize>,
     keep_mesh_shapes: bool,
     geometric_stiffness: Option<Vec<DenseMatrix>>,
@@ -733,8 +734,7 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
         nodes,
         projection,
         S_full,
-        inertia,
-        Phi_com,
+        inertia: (inertia, Phi_com),
         auxiliary_interface,
         keep_mesh_shapes,
         geometric_stiffness,
@@ -942,7 +942,7 @@ pub fn reduce_with_progress(
             .sum()
     });
     progress(Stage::Invariants);
-    let (inertia, Phi_com) = inertia_data(model, &S_full)?;
+    let inertia = inertia_data(model, &S_full)?;
     let geometric_stiffness = if settings.geometric_stiffening {
         progress(Stage::GeometricStiffness);
         Some(reduced_geometric_stiffness(model, S_full.as_ref())?)
@@ -961,7 +961,6 @@ pub fn reduce_with_progress(
         projection,
         S_full,
         inertia,
-        Phi_com,
         auxiliary_interface,
         keep_mesh_shapes: settings.keep_mesh_shapes,
         geometric_stiffness,
@@ -1111,7 +1110,7 @@ pub fn reduce_external_dofs(
         }
     }
     let slots: Vec<usize> = dofs.iter().map(|&(node, k)| 6 * node + k).collect();
-    let (inertia, Phi_com) = inertia_data_from_mass(M, &slots, nodes, &S_full)?;
+    let inertia = inertia_data_from_mass(M, &slots, nodes, &S_full)?;
     finish(BodyParts {
         name,
         interfaces: &interfaces,
@@ -1119,7 +1118,6 @@ pub fn reduce_external_dofs(
         projection,
         S_full,
         inertia,
-        Phi_com,
         auxiliary_interface,
         keep_mesh_shapes: settings.keep_mesh_shapes,
         geometric_stiffness: None,

@@ -748,107 +748,100 @@ impl ShiftInvert {
         settings: &EigenSettings,
         progress: &mut dyn FnMut(usize, usize, usize),
     ) -> Result<EigenSolution, ReductionError> {
-        with_single_vector_retry(settings, self.nrows(), |s| self.lowest_modes_once(K, M, s, progress))
-    }
-
-    /// One run of [`ShiftInvert::lowest_modes_with_progress`] with the block size of `settings`.
-    fn lowest_modes_once(
-        &self,
-        K: SparseColMatRef<'_, usize, f64>,
-        M: SparseColMatRef<'_, usize, f64>,
-        settings: &EigenSettings,
-        progress: &mut dyn FnMut(usize, usize, usize),
-    ) -> Result<EigenSolution, ReductionError> {
-        let n = self.nrows();
-        check_square_pair(K, M)?;
-        if K.nrows() != n {
-            return Err(ReductionError::DimensionMismatch {
-                what: "K of ShiftInvert::lowest_modes (must be the factored matrix)",
-                expected_rows: n,
-                expected_cols: n,
-                rows: K.nrows(),
-                cols: K.ncols(),
-            });
-        }
-        let p = krylov_dimension(settings, n)?;
-        let m = settings.n_modes;
-        let b = block_size(settings, n);
-        let op = Operator::new(self, M);
-        let whole = WholeOperator { factor: self, K, M };
-        let krylov = match self.precision() {
-            Precision::Double => Krylov::Split(&op),
-            Precision::Single => Krylov::Whole(&whole),
-        };
-        let solves_before = self.solves.load(std::sync::atomic::Ordering::Relaxed);
-        let solves = || self.solves.load(std::sync::atomic::Ordering::Relaxed) - solves_before;
-        if p + 1 >= n {
-            if n > DENSE_LIMIT {
-                return Err(ReductionError::InvalidSettings {
-                    what: format!(
-                        "the Krylov subspace dimension {p} leaves no room in n = {n}: ask for fewer modes or a \
-                         smaller krylov_dim"
-                    ),
+        // One run with the block size of `settings`; a second with single vectors where an
+        // automatic block size did not converge.
+        with_single_vector_retry(settings, self.nrows(), |settings| {
+            let n = self.nrows();
+            check_square_pair(K, M)?;
+            if K.nrows() != n {
+                return Err(ReductionError::DimensionMismatch {
+                    what: "K of ShiftInvert::lowest_modes (must be the factored matrix)",
+                    expected_rows: n,
+                    expected_cols: n,
+                    rows: K.nrows(),
+                    cols: K.ncols(),
                 });
             }
-            let Y = match krylov {
-                Krylov::Split(op) => dense_operator_eigen(op, m)?,
-                Krylov::Whole(whole) => dense_whole_eigen(whole, m)?,
+            let p = krylov_dimension(settings, n)?;
+            let m = settings.n_modes;
+            let b = block_size(settings, n);
+            let op = Operator::new(self, M);
+            let whole = WholeOperator { factor: self, K, M };
+            let krylov = match self.precision() {
+                Precision::Double => Krylov::Split(&op),
+                Precision::Single => Krylov::Whole(&whole),
             };
-            let mut sol = self.finish(K, M, Y.as_ref(), settings)?;
-            sol.operator_applications = n;
-            sol.factor_solves = match krylov {
-                Krylov::Split(_) => n,
-                Krylov::Whole(_) => solves(),
-            };
-            return Ok(sol);
-        }
+            let solves_before = self.solves.load(std::sync::atomic::Ordering::Relaxed);
+            let solves = || self.solves.load(std::sync::atomic::Ordering::Relaxed) - solves_before;
+            if p + 1 >= n {
+                if n > DENSE_LIMIT {
+                    return Err(ReductionError::InvalidSettings {
+                        what: format!(
+                            "the Krylov subspace dimension {p} leaves no room in n = {n}: ask for fewer modes or a \
+                             smaller krylov_dim"
+                        ),
+                    });
+                }
+                let Y = match krylov {
+                    Krylov::Split(op) => dense_operator_eigen(op, m)?,
+                    Krylov::Whole(whole) => dense_whole_eigen(whole, m)?,
+                };
+                let mut sol = self.finish(K, M, Y.as_ref(), settings)?;
+                sol.operator_applications = n;
+                sol.factor_solves = match krylov {
+                    Krylov::Split(_) => n,
+                    Krylov::Whole(_) => solves(),
+                };
+                return Ok(sol);
+            }
 
-        progress(0, m, 0);
-        // Blocks need room: k > m when the basis is full (p >= m + b), and n > p + b.
-        let b = b.min(p - m).min(n - p - 1).max(1);
-        let mut lanczos = Lanczos::new(krylov, p, b)?;
-        let mut krylov_tolerance = settings.tolerance * KRYLOV_TOLERANCE_FACTOR;
-        for attempt in 0..MAX_ATTEMPTS {
-            let (mu, Y) = match lanczos.run(m, krylov_tolerance, settings.max_restarts, progress)? {
-                LanczosOutcome::Converged { mu, Y } => (mu, Y),
-                LanczosOutcome::NotConverged { unconverged } => {
-                    return Err(ReductionError::EigenNotConverged {
-                        requested: m,
-                        converged: m - unconverged.len(),
-                        failed_modes: unconverged,
-                        worst_residual: f64::INFINITY,
-                        tolerance: settings.tolerance,
-                    })
+            progress(0, m, 0);
+            // Blocks need room: k > m when the basis is full (p >= m + b), and n > p + b.
+            let b = b.min(p - m).min(n - p - 1).max(1);
+            let mut lanczos = Lanczos::new(krylov, p, b)?;
+            let mut krylov_tolerance = settings.tolerance * KRYLOV_TOLERANCE_FACTOR;
+            for attempt in 0..MAX_ATTEMPTS {
+                let (mu, Y) = match lanczos.run(m, krylov_tolerance, settings.max_restarts, progress)? {
+                    LanczosOutcome::Converged { mu, Y } => (mu, Y),
+                    LanczosOutcome::NotConverged { unconverged } => {
+                        return Err(ReductionError::EigenNotConverged {
+                            requested: m,
+                            converged: m - unconverged.len(),
+                            failed_modes: unconverged,
+                            worst_residual: f64::INFINITY,
+                            tolerance: settings.tolerance,
+                        })
+                    }
+                };
+                if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
+                    return Err(ReductionError::MassNotPositiveDefinite {
+                        dof: None,
+                        why: format!(
+                            "the shift-invert operator L^-1 M L^-T has the eigenvalue {:.3e} <= 0 among the {m} \
+                             largest in magnitude (Ritz value {bad})",
+                            mu[bad]
+                        ),
+                    });
                 }
-            };
-            if let Some(bad) = mu.iter().position(|&x| x <= 0.0) {
-                return Err(ReductionError::MassNotPositiveDefinite {
-                    dof: None,
-                    why: format!(
-                        "the shift-invert operator L^-1 M L^-T has the eigenvalue {:.3e} <= 0 among the {m} \
-                         largest in magnitude (Ritz value {bad})",
-                        mu[bad]
-                    ),
-                });
+                match self.finish(K, M, Y.as_ref(), settings) {
+                    Ok(mut sol) => {
+                        sol.operator_applications = lanczos.applications;
+                        sol.factor_solves = match krylov {
+                            Krylov::Split(_) => lanczos.applications,
+                            Krylov::Whole(_) => solves(),
+                        };
+                        return Ok(sol);
+                    }
+                    // Continue Lanczos with the Krylov tolerance lowered by the shortfall (at least
+                    // tenfold, at most a millionfold): module docs, "Tolerance".
+                    Err(ReductionError::EigenNotConverged { worst_residual, .. }) if attempt + 1 < MAX_ATTEMPTS => {
+                        krylov_tolerance *= (settings.tolerance / worst_residual).clamp(1e-6, 0.1);
+                    }
+                    Err(e) => return Err(e),
+                }
             }
-            match self.finish(K, M, Y.as_ref(), settings) {
-                Ok(mut sol) => {
-                    sol.operator_applications = lanczos.applications;
-                    sol.factor_solves = match krylov {
-                        Krylov::Split(_) => lanczos.applications,
-                        Krylov::Whole(_) => solves(),
-                    };
-                    return Ok(sol);
-                }
-                // Continue Lanczos with the Krylov tolerance lowered by the shortfall (at least
-                // tenfold, at most a millionfold): module docs, "Tolerance".
-                Err(ReductionError::EigenNotConverged { worst_residual, .. }) if attempt + 1 < MAX_ATTEMPTS => {
-                    krylov_tolerance *= (settings.tolerance / worst_residual).clamp(1e-6, 0.1);
-                }
-                Err(e) => return Err(e),
-            }
-        }
-        unreachable!("the last attempt returns")
+            unreachable!("the last attempt returns")
+        })
     }
 
     /// Back-transformation $\boldsymbol\Phi = \mathbf P^T\mathbf L^{-T}\mathbf Y$ of the Ritz

@@ -391,6 +391,30 @@ struct Contractions {
     sr_qdd: Vector3<f64>,
 }
 
+/// The arguments of one [`FfrInertia::force_impl`], handed to `pulp`'s runtime dispatch, which
+/// calls [`FfrInertia::force_body`] with the machine's vector instructions.
+struct ForceArgs<'a, 'b> {
+    inertia: &'a FfrInertia,
+    q: &'a [f64],
+    nu: &'a [f64],
+    nu_dot: &'a [f64],
+    /// Form $\mathbf M_{ffr}$.
+    mass: bool,
+    /// Form the partials $\partial\mathbf F/\partial\boldsymbol\nu$, $\partial\mathbf F/\partial\mathbf q$.
+    partials: bool,
+    out: &'b mut FfrForce,
+    w: &'b mut FfrScratch,
+}
+
+impl pulp::WithSimd for ForceArgs<'_, '_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) {
+        let inertia = self.inertia;
+        inertia.force_body(simd, self)
+    }
+}
+
 impl FfrInertia {
     /// The contractions $\bar{\mathbf S}^{sym}_p\mathbf q$, $\tilde{\mathbf S}_i\mathbf q$, $\tilde{\mathbf S}_i\dot{\mathbf q}$
     /// and, with `partials` (only the partials need them), $\bar{\mathbf S}^{sym}_p\dot{\mathbf q}$ and
@@ -695,34 +719,7 @@ impl FfrInertia {
         out: &mut FfrForce,
         w: &mut FfrScratch,
     ) {
-        struct Force<'a, 'b> {
-            inertia: &'a FfrInertia,
-            q: &'a [f64],
-            nu: &'a [f64],
-            nu_dot: &'a [f64],
-            mass: bool,
-            partials: bool,
-            out: &'b mut FfrForce,
-            w: &'b mut FfrScratch,
-        }
-        impl pulp::WithSimd for Force<'_, '_> {
-            type Output = ();
-            #[inline(always)]
-            fn with_simd<S: pulp::Simd>(self, simd: S) {
-                let Self {
-                    inertia,
-                    q,
-                    nu,
-                    nu_dot,
-                    mass,
-                    partials,
-                    out,
-                    w,
-                } = self;
-                inertia.force_body(simd, q, nu, nu_dot, mass, partials, out, w)
-            }
-        }
-        pulp::Arch::new().dispatch(Force {
+        pulp::Arch::new().dispatch(ForceArgs {
             inertia: self,
             q,
             nu,
@@ -734,19 +731,10 @@ impl FfrInertia {
         })
     }
 
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn force_body<S: pulp::Simd>(
-        &self,
-        simd: S,
-        q: &[f64],
-        nu: &[f64],
-        nu_dot: &[f64],
-        mass: bool,
-        partials: bool,
-        out: &mut FfrForce,
-        w: &mut FfrScratch,
-    ) {
+    fn force_body<S: pulp::Simd>(&self, simd: S, args: ForceArgs<'_, '_>) {
+        let (q, nu, nu_dot, out, w) = (args.q, args.nu, args.nu_dot, args.out, args.w);
+        let (mass, partials) = (args.mass, args.partials);
         let n = self.n();
         let m = self.mass;
         let v3 = |x: &[f64], o: usize| Vector3::new(x[o], x[o + 1], x[o + 2]);

@@ -797,16 +797,9 @@ impl PlanarBody {
             type Output = ();
             #[inline(always)]
             fn with_simd<S: pulp::Simd>(self, _simd: S) {
-                let Pass {
-                    pb,
-                    pw,
-                    frame,
-                    sc,
-                    solve,
-                    Gi0,
-                    gravity,
-                } = self;
-                let PlanarWorkspace { f, d, wide, mats, .. } = pw;
+                let (pb, frame, sc, solve, Gi0, gravity) =
+                    (self.pb, self.frame, self.sc, self.solve, self.Gi0, self.gravity);
+                let PlanarWorkspace { f, d, wide, mats, .. } = self.pw;
                 let mat = &mut mats[0];
                 match wide {
                     Some(w) => pb.dual_passes(f, w, mat, frame, sc, solve, Gi0, gravity),

@@ -66,19 +66,21 @@ pub struct Evaluation {
 impl Evaluation {
     /// Zeroed output for a body with `n` coordinates.
     pub fn zeros(n: usize) -> Self {
+        let [q_jj, residual, f_inertia, q_v, f_elastic, f_damping, f_gravity] = std::array::from_fn(|_| vec![0.0; n]);
+        let [mass, stiffness, damping] = std::array::from_fn(|_| Mat::zeros(n, n));
         Self {
             frame: Frame::identity(),
             frame_iterations: 0,
-            q_jj: vec![0.0; n],
-            residual: vec![0.0; n],
-            f_inertia: vec![0.0; n],
-            q_v: vec![0.0; n],
-            f_elastic: vec![0.0; n],
-            f_damping: vec![0.0; n],
-            f_gravity: vec![0.0; n],
-            mass: Mat::zeros(n, n),
-            stiffness: Mat::zeros(n, n),
-            damping: Mat::zeros(n, n),
+            q_jj,
+            residual,
+            f_inertia,
+            q_v,
+            f_elastic,
+            f_damping,
+            f_gravity,
+            mass,
+            stiffness,
+            damping,
         }
     }
 }
@@ -124,14 +126,50 @@ impl Workspace {
     }
 }
 
+/// The public entry points of `Superelement::evaluate_level` (one function a [`Level`], not a
+/// level switch, in the API): `into` ones into reused buffers, `alloc` ones allocating them
+/// ([`Superelement::workspace`], [`Evaluation::zeros`]) for an `into` one.
+macro_rules! level_entry_points {
+    () => {};
+    ($(#[$doc:meta])* alloc $alloc:ident => $into:ident; $($rest:tt)*) => {
+        $(#[$doc])*
+        pub fn $alloc(
+            &self,
+            state: &BodyState,
+            acc: &[f64],
+            gravity: &Vector3<f64>,
+        ) -> Result<Evaluation, SuperelementError> {
+            let mut ws = self.workspace();
+            let mut out = Evaluation::zeros(self.n);
+            self.$into(state, acc, gravity, &mut ws, &mut out)?;
+            Ok(out)
+        }
+        level_entry_points! { $($rest)* }
+    };
+    ($(#[$doc:meta])* into $into:ident => $level:expr; $($rest:tt)*) => {
+        $(#[$doc])*
+        pub fn $into(
+            &self,
+            state: &BodyState,
+            acc: &[f64],
+            gravity: &Vector3<f64>,
+            ws: &mut Workspace,
+            out: &mut Evaluation,
+        ) -> Result<(), SuperelementError> {
+            self.evaluate_level(state, acc, gravity, $level, ws, out)
+        }
+        level_entry_points! { $($rest)* }
+    };
+}
+
 impl Superelement {
     /// The planar evaluation behind [`Superelement::evaluate_into`] and
-    /// [`Superelement::residual_into`].
+    /// [`Superelement::residual_into`]; the body sees the in-plane gravity `g2` only.
     pub(crate) fn planar_evaluate(
         &self,
         state: &BodyState,
         acc: &[f64],
-        gravity: &Vector3<f64>,
+        g2: [f64; 2],
         level: Level,
         ws: &mut Workspace,
         out: &mut Evaluation,
@@ -163,7 +201,6 @@ impl Superelement {
         for (i, &g) in pb.index.iter().enumerate() {
             b.qdd[i] = acc[g];
         }
-        let g2 = [gravity.x, gravity.y];
         pb.forces(b, frame, sc, self.frame_solve, g2);
         let Gi0 = b.Gi;
         // Outputs in the 6N + m layout.
@@ -261,86 +298,37 @@ impl Superelement {
         }
     }
 
-    /// Forces and tangents of the body at `state` with accelerations `acc` ($[\mathbf a_1,
-    /// \boldsymbol\alpha_1, \dots, \ddot{\boldsymbol\eta}]$, spatial) under gravity `gravity`.
-    /// The frame is solved from `state.frame`. Allocates; see [`Self::evaluate_into`].
-    pub fn evaluate(
-        &self,
-        state: &BodyState,
-        acc: &[f64],
-        gravity: &Vector3<f64>,
-    ) -> Result<Evaluation, SuperelementError> {
-        let mut ws = self.workspace();
-        let mut out = Evaluation::zeros(self.n);
-        self.evaluate_into(state, acc, gravity, &mut ws, &mut out)?;
-        Ok(out)
-    }
+    level_entry_points! {
+        /// Forces and tangents of the body at `state` with accelerations `acc` ($[\mathbf a_1,
+        /// \boldsymbol\alpha_1, \dots, \ddot{\boldsymbol\eta}]$, spatial) under gravity `gravity`.
+        /// The frame is solved from `state.frame`. Allocates; see [`Self::evaluate_into`].
+        alloc evaluate => evaluate_into;
+        /// [`Self::evaluate`] into reused buffers: `ws` from [`Self::workspace`], `out` from
+        /// [`Evaluation::zeros`]: the forces, the mass matrix and the tangents.
+        into evaluate_into => Level::Tangents;
 
-    /// The forces and the mass matrix without the tangents (cheaper, for explicit integrators
-    /// and energy checks): `stiffness` and `damping` are NaN. Allocates; see
-    /// [`Self::forces_into`].
-    pub fn forces(
-        &self,
-        state: &BodyState,
-        acc: &[f64],
-        gravity: &Vector3<f64>,
-    ) -> Result<Evaluation, SuperelementError> {
-        let mut ws = self.workspace();
-        let mut out = Evaluation::zeros(self.n);
-        self.forces_into(state, acc, gravity, &mut ws, &mut out)?;
-        Ok(out)
-    }
+        /// The forces and the mass matrix without the tangents (cheaper, for explicit integrators
+        /// and energy checks): `stiffness` and `damping` are NaN. Allocates; see
+        /// [`Self::forces_into`].
+        alloc forces => forces_into;
+        /// [`Self::forces`] into reused buffers: the forces and the mass matrix only, none of the
+        /// tangent-only partials formed (the FFR $\partial\mathbf F/\partial\boldsymbol\nu$,
+        /// $\partial\mathbf F/\partial\mathbf q$, the geometric Hessian $\mathbf H_G$, $\mathbf N_y$): about 30 % fewer
+        /// instructions than [`Self::evaluate_into`] (`benches/evaluate.rs`; checked equal to the full
+        /// evaluation by `tests/unit/evaluation.rs`). `out.stiffness` and `out.damping` are filled
+        /// with NaN, so that tangents of an earlier call cannot be read as this state's.
+        /// [`Self::residual_into`] skips the mass matrix too.
+        into forces_into => Level::Mass;
 
-    /// [`Self::evaluate`] into reused buffers: `ws` from [`Self::workspace`], `out` from
-    /// [`Evaluation::zeros`]: the forces, the mass matrix and the tangents.
-    pub fn evaluate_into(
-        &self,
-        state: &BodyState,
-        acc: &[f64],
-        gravity: &Vector3<f64>,
-        ws: &mut Workspace,
-        out: &mut Evaluation,
-    ) -> Result<(), SuperelementError> {
-        self.evaluate_level(state, acc, gravity, Level::Tangents, ws, out)
-    }
-
-    /// [`Self::forces`] into reused buffers: the forces and the mass matrix only, none of the
-    /// tangent-only partials formed (the FFR $\partial\mathbf F/\partial\boldsymbol\nu$,
-    /// $\partial\mathbf F/\partial\mathbf q$, the geometric Hessian $\mathbf H_G$, $\mathbf N_y$): about 30 % fewer
-    /// instructions than [`Self::evaluate_into`] (`benches/evaluate.rs`; checked equal to the full
-    /// evaluation by `tests/unit/evaluation.rs`). `out.stiffness` and `out.damping` are filled
-    /// with NaN, so that tangents of an earlier call cannot be read as this state's.
-    /// [`Self::residual_into`] skips the mass matrix too.
-    pub fn forces_into(
-        &self,
-        state: &BodyState,
-        acc: &[f64],
-        gravity: &Vector3<f64>,
-        ws: &mut Workspace,
-        out: &mut Evaluation,
-    ) -> Result<(), SuperelementError> {
-        out.stiffness.fill(f64::NAN);
-        out.damping.fill(f64::NAN);
-        self.evaluate_level(state, acc, gravity, Level::Mass, ws, out)
-    }
-
-    /// The residual alone, the hot-loop form of a Newton iteration that reuses its iteration
-    /// matrix: into `out` go `residual`, `f_inertia`, `f_elastic`, `f_damping`, `f_gravity`,
-    /// `frame`, `frame_iterations` and `q_jj`; `mass`, `q_v`, `stiffness` and `damping` keep their
-    /// old values. Neither the FFR mass matrix nor the body-axis mass $\mathbf P^T\mathbf M_{ffr}\mathbf P$
-    /// nor its rotation is formed, and the inertia contractions skip those only the partials
-    /// need (`benches/evaluate.rs`, `--profile=residual`). The forces equal those of
-    /// [`Self::evaluate_into`] to round-off (`tests/unit/evaluation.rs`); the workspace holds the
-    /// same configuration afterwards ([`Self::strain_energy_in`], [`Self::kinetic_energy_in`]).
-    pub fn residual_into(
-        &self,
-        state: &BodyState,
-        acc: &[f64],
-        gravity: &Vector3<f64>,
-        ws: &mut Workspace,
-        out: &mut Evaluation,
-    ) -> Result<(), SuperelementError> {
-        self.evaluate_level(state, acc, gravity, Level::Forces, ws, out)
+        /// The residual alone, the hot-loop form of a Newton iteration that reuses its iteration
+        /// matrix: into `out` go `residual`, `f_inertia`, `f_elastic`, `f_damping`, `f_gravity`,
+        /// `frame`, `frame_iterations` and `q_jj`; `mass`, `q_v`, `stiffness` and `damping` keep their
+        /// old values. Neither the FFR mass matrix nor the body-axis mass $\mathbf P^T\mathbf M_{ffr}\mathbf P$
+        /// nor its rotation is formed, and the inertia contractions skip those only the partials
+        /// need (`benches/evaluate.rs`, `--profile=residual`). The forces equal those of
+        /// [`Self::evaluate_into`] to round-off (`tests/unit/evaluation.rs`); the workspace holds the
+        /// same configuration afterwards ([`Self::strain_energy_in`], [`Self::kinetic_energy_in`]).
+        into residual_into => Level::Forces;
     }
 
     fn evaluate_level(
@@ -352,6 +340,11 @@ impl Superelement {
         ws: &mut Workspace,
         out: &mut Evaluation,
     ) -> Result<(), SuperelementError> {
+        if level == Level::Mass {
+            // No tangents are formed: NaN, so that those of an earlier call cannot be read.
+            out.stiffness.fill(f64::NAN);
+            out.damping.fill(f64::NAN);
+        }
         if acc.len() != self.n {
             return Err(SuperelementError::InvalidState {
                 what: format!("{} accelerations for {} coordinates", acc.len(), self.n),
@@ -361,7 +354,7 @@ impl Superelement {
             if ws.planar.is_none() {
                 *ws = self.workspace();
             }
-            return self.planar_evaluate(state, acc, gravity, level, ws, out);
+            return self.planar_evaluate(state, acc, [gravity.x, gravity.y], level, ws, out);
         }
         // The Newton iterates of (4.4) live in the configuration's own buffers, which are
         // rebuilt for the converged frame right after.
@@ -440,7 +433,7 @@ impl Superelement {
             // A configuration of this body solves its frame at once from its own frame; a
             // failure (a kinematics of another body) gives NaN outputs, never other numbers.
             if self
-                .planar_evaluate(&state, acc, gravity, level, &mut ws, &mut out)
+                .planar_evaluate(&state, acc, [gravity.x, gravity.y], level, &mut ws, &mut out)
                 .is_err()
             {
                 for v in [&mut out.residual, &mut out.f_inertia, &mut out.q_v, &mut out.f_elastic] {

@@ -13,7 +13,7 @@
 //! static modes only), linearised buckling (`mbs::buckling`) about the equilibrium under a
 //! tenth of that load.
 
-use crate::models::{add_segment, beam_segment, x_onto, BeamSegment, BeamSpec, BuildError, Variant};
+use crate::models::{add_segment, beam_segment, x_onto, BeamSegment, BeamSpec, BuildError, StraightBeam, Variant};
 use crate::{Block, Extent, Grid, Row, Table};
 use fe_model::{BeamSection, BeamTheory};
 use mbs::{buckling, solve_static, Model, NodeId, StaticSettings, Support, System};
@@ -87,11 +87,13 @@ pub fn portal_frame(n: usize, p: f64) -> std::result::Result<Model, BuildError> 
         let segment = beam_segment(&BeamSegment {
             frame: Variant::REFERENCE.frame,
             ..BeamSegment::new(
-                &name,
-                &spec,
-                (Vector3::zeros(), Vector3::new(seg, 0.0, 0.0)),
-                2,
-                q.inverse() * Vector3::z(),
+                StraightBeam {
+                    name: &name,
+                    spec: &spec,
+                    ends: (Vector3::zeros(), Vector3::new(seg, 0.0, 0.0)),
+                    elements: 2,
+                    orientation: q.inverse() * Vector3::z(),
+                },
                 ModeSelection::StaticOnly,
             )
         })?;

@@ -425,9 +425,11 @@ pub fn beam2_geometric_stiffness(
     Ok(to_global(R.matrix(), &K_loc))
 }
 
-/// Axial force $N = \frac{EA}{L}(\mathbf u_2 - \mathbf u_1)\cdot\mathbf e_x$ of a beam with
-/// element displacements `u_e` (12 values, global axes, dofs as [`beam2_matrices`]): the
-/// linear stress resultant that [`beam2_geometric_stiffness`] takes.
+/// Axial force $N = \frac{EA}{L}(\mathbf u_2 - \mathbf u_1)\cdot\mathbf e_x$ of a beam of
+/// axial stiffness `EA` with element displacements `u_e` (12 values, global axes, dofs as
+/// [`beam2_matrices`]): the linear stress resultant that [`beam2_geometric_stiffness`] takes.
+/// From the end displacements alone, not from the local stiffness as
+/// [`beam2_section_forces`] (equal to round-off).
 ///
 /// # Errors
 /// As [`beam2_matrices`].
@@ -438,15 +440,14 @@ pub fn beam2_axial_force(
     beam: &Beam2,
     element: usize,
     X: [Point3<f64>; 2],
-    section: &BeamSection,
-    material: &IsotropicMaterial,
+    EA: f64,
     u_e: &[f64],
 ) -> Result<f64, ElementError> {
     assert_eq!(u_e.len(), 12, "a beam's element displacements have 12 entries");
     let (L, R) = local_axes(beam, element, X)?;
     let e_x = R.matrix().column(0).into_owned();
     let du = Vector3::new(u_e[6] - u_e[0], u_e[7] - u_e[1], u_e[8] - u_e[2]);
-    Ok(material.E() * section.A() / L * e_x.dot(&du))
+    Ok(EA / L * e_x.dot(&du))
 }
 
 /// Section forces $[N, V_y, V_z, T, M_y, M_z]$ (local axes) at both ends of a beam with

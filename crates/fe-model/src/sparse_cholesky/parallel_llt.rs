@@ -369,16 +369,31 @@ impl<T: Real> Scratch<T> {
     }
 }
 
-/// Columns `columns` (of the supernode's own, from 0) of supernode `sn` before its dense
+/// What one factorisation factors: the symbolic factor, the plan over its tree and `A`, the
+/// lower triangle of $\mathbf P\mathbf A\mathbf P^T$.
+struct Problem<'a, T> {
+    s: &'a SymbolicSupernodalCholesky<usize>,
+    plan: &'a FactorPlan,
+    A: SparseColMatRef<'a, usize, T>,
+}
+
+// By hand: a derive would ask `T: Copy` of the values, not of the references held.
+impl<T> Clone for Problem<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<T> Copy for Problem<'_, T> {}
+
+/// Columns `columns` (of the supernode's own, from 0) of supernode `sn` of `problem` before its dense
 /// factorisation: the entries of `A` minus the updates of the descendants. `Lc` holds
 /// those columns (all rows of the supernode's block, column-major), `head` the values
 /// before the supernode, which start at value `base` of the factor and hold all of its
 /// descendants; `local` maps the rows of the supernode's pattern to rows of its block.
 #[allow(clippy::too_many_arguments)]
 fn gather_columns<T: Real>(
-    s: &SymbolicSupernodalCholesky<usize>,
-    plan: &FactorPlan,
-    A: SparseColMatRef<'_, usize, T>,
+    problem: Problem<'_, T>,
     sn: usize,
     columns: Range<usize>,
     head: &[T],
@@ -388,6 +403,7 @@ fn gather_columns<T: Real>(
     buffers: &mut Buffers<T>,
     par: Par,
 ) {
+    let (s, plan, A) = (problem.s, problem.plan, problem.A);
     let (s_start, s_end) = (s.supernode_begin()[sn], s.supernode_end()[sn]);
     let s_nrows = s_end - s_start + s.supernode(sn).pattern().len();
     let col_ptr_val = s.col_ptr_for_val();
@@ -471,16 +487,13 @@ fn gather_columns<T: Real>(
 /// dense products); larger ones by ranges of columns in parallel.
 const PARALLEL_GATHER_MIN_COLUMNS: usize = 64;
 
-/// Factors supernode `sn` in place: `Ls` its values, `head` the values before them, which
-/// start at value `base` of the factor and hold all of `sn`'s descendants. `A` is the lower
-/// triangle of $\mathbf P\mathbf A\mathbf P^T$. With `par` of several threads the columns
+/// Factors supernode `sn` of `problem` in place: `Ls` its values, `head` the values before
+/// them, which start at value `base` of the factor and hold all of `sn`'s descendants. With `par` of several threads the columns
 /// are gathered by ranges in parallel. Returns the index (in the factor's order) of a
 /// non-positive pivot.
 #[allow(clippy::too_many_arguments)]
 fn factor_supernode<T: Real>(
-    s: &SymbolicSupernodalCholesky<usize>,
-    plan: &FactorPlan,
-    A: SparseColMatRef<'_, usize, T>,
+    problem: Problem<'_, T>,
     sn: usize,
     head: &[T],
     base: usize,
@@ -488,6 +501,7 @@ fn factor_supernode<T: Real>(
     scratch: &mut Scratch<T>,
     par: Par,
 ) -> Result<(), usize> {
+    let s = problem.s;
     let (s_start, s_end) = (s.supernode_begin()[sn], s.supernode_end()[sn]);
     let s_pattern = s.supernode(sn).pattern();
     let s_ncols = s_end - s_start;
@@ -498,9 +512,7 @@ fn factor_supernode<T: Real>(
     let threads = par.degree();
     if threads < 2 || s_ncols < PARALLEL_GATHER_MIN_COLUMNS {
         gather_columns(
-            s,
-            plan,
-            A,
+            problem,
             sn,
             0..s_ncols,
             head,
@@ -525,7 +537,7 @@ fn factor_supernode<T: Real>(
             .into_par_iter()
             .with_max_len(1)
             .for_each_init(Buffers::default, |buffers, (columns, Lc)| {
-                gather_columns(s, plan, A, sn, columns, head, base, Lc, local, buffers, Par::Seq)
+                gather_columns(problem, sn, columns, head, base, Lc, local, buffers, Par::Seq)
             });
     }
     // The diagonal block and the rows below it.
@@ -688,12 +700,11 @@ pub(super) fn factor<T: Real>(
     let n = s.nrows();
     let col_ptr_val = s.col_ptr_for_val();
     assert_eq!(L_values.len(), s.len_val());
+    let problem = Problem { s, plan, A };
     if let Some(branches) = &plan.branches {
         let run = Branched {
-            s,
-            plan,
+            problem,
             branches,
-            A,
             threads: par.degree(),
             scratches: std::sync::Mutex::new(Vec::new()),
             failure: AtomicUsize::new(usize::MAX),
@@ -733,7 +744,7 @@ pub(super) fn factor<T: Real>(
                 for sn in plan.tasks[t].clone() {
                     let (head, tail) = chunk.split_at_mut(col_ptr_val[sn] - v0);
                     let Ls = &mut tail[..col_ptr_val[sn + 1] - col_ptr_val[sn]];
-                    if let Err(index) = factor_supernode(s, plan, A, sn, head, v0, Ls, &mut scratch, Par::Seq) {
+                    if let Err(index) = factor_supernode(problem, sn, head, v0, Ls, &mut scratch, Par::Seq) {
                         failure = Some(failure.map_or(index, |f| f.min(index)));
                         break;
                     }
@@ -749,7 +760,7 @@ pub(super) fn factor<T: Real>(
     for &sn in &plan.top {
         let (head, tail) = L_values.split_at_mut(col_ptr_val[sn]);
         let Ls = &mut tail[..col_ptr_val[sn + 1] - col_ptr_val[sn]];
-        factor_supernode(s, plan, A, sn, head, 0, Ls, &mut scratch, par)?;
+        factor_supernode(problem, sn, head, 0, Ls, &mut scratch, par)?;
     }
     Ok(())
 }
@@ -758,10 +769,8 @@ pub(super) fn factor<T: Real>(
 /// (rayon tasks, the largest first), a top supernode when all of its children are done, with
 /// its column gathers, dense Cholesky and solves split into ranges that free threads take.
 struct Branched<'a, T> {
-    s: &'a SymbolicSupernodalCholesky<usize>,
-    plan: &'a FactorPlan,
+    problem: Problem<'a, T>,
     branches: &'a Branches,
-    A: SparseColMatRef<'a, usize, T>,
     threads: usize,
     /// Workspaces not in use (one per thread at most at a time, but for a thread that
     /// takes another task while it waits inside a parallel loop).
@@ -774,7 +783,7 @@ impl<T: Real> Branched<'_, T> {
     fn scratch(&self) -> Scratch<T> {
         // A poisoned lock (a panic on another thread) still holds valid workspaces.
         let spare = self.scratches.lock().unwrap_or_else(|e| e.into_inner()).pop();
-        spare.unwrap_or_else(|| Scratch::new(self.s.nrows(), self.plan.max_columns))
+        spare.unwrap_or_else(|| Scratch::new(self.problem.s.nrows(), self.problem.plan.max_columns))
     }
 
     fn give_back(&self, scratch: Scratch<T>) {
@@ -784,7 +793,7 @@ impl<T: Real> Branched<'_, T> {
     /// The first supernode of `node`'s branch.
     fn first(&self, node: Node) -> usize {
         match node {
-            Node::Task(t) => self.plan.tasks[t].start,
+            Node::Task(t) => self.problem.plan.tasks[t].start,
             Node::Top(k) => self.branches.first[k],
         }
     }
@@ -792,7 +801,7 @@ impl<T: Real> Branched<'_, T> {
     /// Factors the branches `nodes`, which tile `values` (the factor's values from value
     /// `base`), concurrently. Returns whether all of them succeeded.
     fn nodes(&self, nodes: &[Node], values: &mut [T], base: usize) -> bool {
-        let col_ptr_val = self.s.col_ptr_for_val();
+        let col_ptr_val = self.problem.s.col_ptr_for_val();
         // The slices of the nodes, in the order of their supernodes.
         let mut order: Vec<usize> = (0..nodes.len()).collect();
         order.sort_unstable_by_key(|&i| self.first(nodes[i]));
@@ -830,11 +839,11 @@ impl<T: Real> Branched<'_, T> {
 
     /// Factors the branch of `node`: its values `values` from value `base`.
     fn node(&self, node: Node, values: &mut [T], base: usize) -> bool {
-        let col_ptr_val = self.s.col_ptr_for_val();
+        let col_ptr_val = self.problem.s.col_ptr_for_val();
         let (supernodes, threads) = match node {
-            Node::Task(t) => (self.plan.tasks[t].clone(), 1),
+            Node::Task(t) => (self.problem.plan.tasks[t].clone(), 1),
             Node::Top(k) => {
-                let sn = self.plan.top[k];
+                let sn = self.problem.plan.top[k];
                 let (head, _) = values.split_at_mut(col_ptr_val[sn] - base);
                 if !self.nodes(&self.branches.children[k], head, base) {
                     return false;
@@ -848,7 +857,7 @@ impl<T: Real> Branched<'_, T> {
         for sn in supernodes {
             let (head, tail) = values.split_at_mut(col_ptr_val[sn] - base);
             let Ls = &mut tail[..col_ptr_val[sn + 1] - col_ptr_val[sn]];
-            if let Err(index) = factor_supernode(self.s, self.plan, self.A, sn, head, base, Ls, &mut scratch, par) {
+            if let Err(index) = factor_supernode(self.problem, sn, head, base, Ls, &mut scratch, par) {
                 self.failure.fetch_min(index, Ordering::Relaxed);
                 ok = false;
                 break;

@@ -5,7 +5,7 @@
 
 use super::solid::{lowest_frequencies_hz, material};
 use fe_model::box_mesh::{box_mesh, solid_model};
-use fe_model::interface::{add_interface, add_interface_on_set, Interfaces, SpiderKind};
+use fe_model::interface::{add_interface, add_interface_on_set, InterfaceSpec, Interfaces, SpiderKind};
 use fe_model::{solve_static, CellKind, DofMap, DofMask, FeError, FeModel, MassKind, NodalLoad, NodeId};
 use nalgebra::{Matrix6, Point3, SMatrix, Vector3, Vector6};
 
@@ -357,10 +357,26 @@ fn interfaces_registry_keeps_names_unique() {
     let mut interfaces = Interfaces::default();
     let surface = model.node_set("x1", "test").unwrap().to_vec();
     let a = interfaces
-        .add(&mut model, "tip", &surface, None, SpiderKind::Rbe3)
+        .add(
+            &mut model,
+            InterfaceSpec {
+                name: "tip",
+                surface: &surface,
+                at: None,
+                kind: SpiderKind::Rbe3,
+            },
+        )
         .unwrap();
     let err = interfaces
-        .add(&mut model, "tip", &surface, None, SpiderKind::Rbe2)
+        .add(
+            &mut model,
+            InterfaceSpec {
+                name: "tip",
+                surface: &surface,
+                at: None,
+                kind: SpiderKind::Rbe2,
+            },
+        )
         .unwrap_err();
     assert!(
         err.to_string().contains("interface 'tip'") && err.to_string().contains("already exists"),

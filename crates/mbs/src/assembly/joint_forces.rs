@@ -53,17 +53,46 @@ struct Limit {
 #[derive(Clone, Debug)]
 enum Law {
     Time(CompiledFunction),
-    Pid {
-        /// Scalar of the measured coordinate.
-        scalar: usize,
-        setpoint: CompiledFunction,
-        kp: f64,
-        ki: f64,
-        kd: f64,
-        max: f64,
-        /// Slot of (actuated row, measured column) when the measured coordinate is unknown.
-        slot: Option<usize>,
-    },
+    Pid(Pid),
+}
+
+/// A PID controller of one measured coordinate.
+#[derive(Clone, Debug)]
+struct Pid {
+    /// Scalar of the measured coordinate.
+    scalar: usize,
+    setpoint: CompiledFunction,
+    kp: f64,
+    ki: f64,
+    kd: f64,
+    max: f64,
+    /// Slot of (actuated row, measured column) when the measured coordinate is unknown.
+    slot: Option<usize>,
+}
+
+impl Pid {
+    /// The effort at time `t` for the measured value `y` and rate `yd`, with the integral's
+    /// base.
+    fn effort(&self, y: f64, yd: f64, t: f64, base: &Control) -> PidEffort {
+        let (kp, ki, kd, max) = (self.kp, self.ki, self.kd, self.max);
+        let (r, rd, _) = self.setpoint.eval(t);
+        let e = r - y;
+        let w = 0.5 * (t - base.t);
+        let z = base.z + w * (base.e + e);
+        let u = kp * e + ki * z + kd * (rd - yd);
+        if u.abs() > max {
+            return PidEffort {
+                u: max.copysign(u),
+                du_dy: 0.0,
+                du_dyd: 0.0,
+            };
+        }
+        PidEffort {
+            u,
+            du_dy: -kp - ki * w,
+            du_dyd: -kd,
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -192,7 +221,7 @@ impl JointForces {
                     if !(max > 0.0) {
                         return Err(invalid(who(), format!("max_effort must be positive (got {max})")));
                     }
-                    Law::Pid {
+                    Law::Pid(Pid {
                         scalar: measured,
                         setpoint: (p.setpoint.compile(&format!("{} set-point", who().0)))
                             .map_err(|e| e.with_id(who().1))?,
@@ -201,7 +230,7 @@ impl JointForces {
                         kd: p.kd,
                         max,
                         slot: None,
-                    }
+                    })
                 }
             };
             actuators.push(Actuator { dof, law, held: None });
@@ -225,7 +254,7 @@ impl JointForces {
         let map = &topo.map;
         let mut sets = Vec::new();
         for a in &self.actuators {
-            if let Law::Pid { scalar, .. } = &a.law {
+            if let Law::Pid(Pid { scalar, .. }) = &a.law {
                 if let Slot::Unknown(m) = map.scalars[*scalar].slot {
                     sets.push(vec![a.dof.min(m), a.dof.max(m)]);
                 }
@@ -244,7 +273,7 @@ impl JointForces {
             };
         }
         for a in &mut self.actuators {
-            if let Law::Pid { scalar, slot: s, .. } = &mut a.law {
+            if let Law::Pid(Pid { scalar, slot: s, .. }) = &mut a.law {
                 *s = match map.scalars[*scalar].slot {
                     Slot::Unknown(m) => Some(slot(a.dof, m)),
                     Slot::Prescribed(_) => None,
@@ -292,35 +321,6 @@ impl JointForces {
         }
     }
 
-    /// The PID effort at time `t` for the measured value and rate, with the integral's base.
-    #[allow(clippy::too_many_arguments)]
-    fn pid(
-        setpoint: &CompiledFunction,
-        [kp, ki, kd, max]: [f64; 4],
-        y: f64,
-        yd: f64,
-        t: f64,
-        base: &Control,
-    ) -> PidEffort {
-        let (r, rd, _) = setpoint.eval(t);
-        let e = r - y;
-        let w = 0.5 * (t - base.t);
-        let z = base.z + w * (base.e + e);
-        let u = kp * e + ki * z + kd * (rd - yd);
-        if u.abs() > max {
-            return PidEffort {
-                u: max.copysign(u),
-                du_dy: 0.0,
-                du_dyd: 0.0,
-            };
-        }
-        PidEffort {
-            u,
-            du_dy: -kp - ki * w,
-            du_dyd: -kd,
-        }
-    }
-
     /// The efforts of all actuators at `t` (for sensors): $u$ of each.
     pub(crate) fn efforts(&self, map_values: &dyn Fn(usize) -> (f64, f64), t: f64, controls: &[Control]) -> Vec<f64> {
         self.actuators
@@ -329,20 +329,9 @@ impl JointForces {
             .map(|(a, c)| match (&a.law, a.held) {
                 (_, Some(u)) => u,
                 (Law::Time(f), None) => f.eval(t).0,
-                (
-                    Law::Pid {
-                        scalar,
-                        setpoint,
-                        kp,
-                        ki,
-                        kd,
-                        max,
-                        ..
-                    },
-                    None,
-                ) => {
-                    let (y, yd) = map_values(*scalar);
-                    Self::pid(setpoint, [*kp, *ki, *kd, *max], y, yd, t, c).u
+                (Law::Pid(pid), None) => {
+                    let (y, yd) = map_values(pid.scalar);
+                    pid.effort(y, yd, t, c).u
                 }
             })
             .collect()
@@ -435,18 +424,9 @@ impl JointForces {
                 // A held effort does not depend on the configuration.
                 continue;
             }
-            if let Law::Pid {
-                scalar,
-                setpoint,
-                kp,
-                ki,
-                kd,
-                max,
-                slot: Some(slot),
-            } = &a.law
-            {
-                let (y, yd, _) = crate::assembly::coordinates::scalar_values(map, x, *scalar);
-                let p = Self::pid(setpoint, [*kp, *ki, *kd, *max], y, yd, t, c);
+            if let Law::Pid(pid @ Pid { slot: Some(slot), .. }) = &a.law {
+                let (y, yd, _) = crate::assembly::coordinates::scalar_values(map, x, pid.scalar);
+                let p = pid.effort(y, yd, t, c);
                 // F = -u on the actuated row.
                 K[*slot] -= p.du_dy;
                 C[*slot] -= p.du_dyd;
@@ -463,7 +443,7 @@ impl JointForces {
                     t,
                     ..Default::default()
                 },
-                Law::Pid { scalar, setpoint, .. } => Control {
+                Law::Pid(Pid { scalar, setpoint, .. }) => Control {
                     t,
                     z: 0.0,
                     e: setpoint.eval(t).0 - x.scalars[*scalar],
@@ -475,7 +455,7 @@ impl JointForces {
     /// Moves each controller's base to time `t` at the converged values `x` (module docs).
     pub(crate) fn accept(&self, x: &Values, t: f64, controls: &mut [Control]) {
         for (a, c) in self.actuators.iter().zip(controls.iter_mut()) {
-            if let Law::Pid { scalar, setpoint, .. } = &a.law {
+            if let Law::Pid(Pid { scalar, setpoint, .. }) = &a.law {
                 let e = setpoint.eval(t).0 - x.scalars[*scalar];
                 // Held: the integral is frozen (module docs).
                 if a.held.is_none() {

@@ -143,6 +143,21 @@ fn check_node(model: &Model, id: NodeId, who: Referrer) -> Result<(), ModelError
     }
 }
 
+/// `body` is a body of the model.
+fn check_body(model: &Model, body: BodyId, who: Referrer) -> Result<(), ModelError> {
+    let count = model.bodies.len();
+    if body.index() < count {
+        return Ok(());
+    }
+    let (referenced_by, by) = who();
+    Err(ModelError::UnknownBody {
+        id: body.0,
+        count,
+        referenced_by,
+        by,
+    })
+}
+
 /// `j` is a joint of the model.
 fn check_joint(model: &Model, j: JointId, who: Referrer) -> Result<(), ModelError> {
     if j.index() < model.joints.len() {
@@ -270,17 +285,7 @@ fn check_sensor_references(model: &Model) -> Result<(), ModelError> {
             }
             SensorKind::ModalCoordinates { body }
             | SensorKind::Stress { body, .. }
-            | SensorKind::MaxVonMises { body, .. }
-                if body.index() >= model.bodies.len() =>
-            {
-                let (referenced_by, by) = who();
-                return Err(ModelError::UnknownBody {
-                    id: body.0,
-                    count: model.bodies.len(),
-                    referenced_by,
-                    by,
-                });
-            }
+            | SensorKind::MaxVonMises { body, .. } => check_body(model, *body, &who)?,
             SensorKind::DriverEffort { driver } if *driver >= model.drivers.len() => {
                 return Err(ModelError::InvalidValue {
                     entity: who().0,
@@ -304,16 +309,7 @@ fn check_initial_references(model: &Model) -> Result<(), ModelError> {
             }
             InitialCondition::NodeVelocity { node: n, .. } => check_node(model, *n, &who)?,
             InitialCondition::RigidMotion { .. } => {}
-            InitialCondition::BodyVelocity { body, .. } if body.index() >= model.bodies.len() => {
-                let (referenced_by, by) = who();
-                return Err(ModelError::UnknownBody {
-                    id: body.0,
-                    count: model.bodies.len(),
-                    referenced_by,
-                    by,
-                });
-            }
-            InitialCondition::BodyVelocity { .. } => {}
+            InitialCondition::BodyVelocity { body, .. } => check_body(model, *body, &who)?,
         }
     }
     Ok(())
@@ -892,6 +888,29 @@ impl Builder {
         (s, self.scalars[s].slot)
     }
 
+    /// The three rotation scalars of node `node` about the axes `about` (axis, kind, what the
+    /// scalar is), each with its `Rotate` operation appended to `ops` and its slot to `slots`.
+    fn rotation_axes(
+        &mut self,
+        node: &str,
+        about: [(Vector3<f64>, Kind, &str); 3],
+        ops: &mut Vec<Op>,
+        slots: &mut Vec<Slot>,
+    ) -> RootRotation {
+        let mut axes = [(0, Vector3::zeros()); 3];
+        for (i, (e, kind, what)) in about.into_iter().enumerate() {
+            let (s, slot) = self.new_scalar(kind, format!("node '{node}' {what}"), Dimension::Angle);
+            ops.push(Op::Rotate {
+                axis: e,
+                coord: s,
+                col: slots.len(),
+            });
+            slots.push(slot);
+            axes[i] = (s, e);
+        }
+        RootRotation::Axes(axes)
+    }
+
     fn rotation(&mut self, label: String) -> (usize, [Slot; 3]) {
         let dof = self.n_dof;
         for c in ["x", "y", "z"] {
@@ -931,6 +950,12 @@ fn root_chain(
         Some(s) => (s.translation.clone(), s.rotation.clone()),
         None => (TranslationSupport::Free, RotationSupport::Free),
     };
+    // The unit vector along `v` (the support's `what`) and a perpendicular pair completing it.
+    let unit_frame = |v: &Vector3<f64>, what: &str| {
+        let a = unit(v, &entity, id, what)?;
+        let (b1, b2) = perpendicular_pair(&a);
+        Ok::<_, ModelError>((a, b1, b2))
+    };
     let I = [Vector3::<f64>::x(), Vector3::y(), Vector3::z()];
     let (basis, free, names): ([Vector3<f64>; 3], [bool; 3], [&str; 3]) = match &ts {
         TranslationSupport::Free => ([I[0], I[1], I[2]], [true; 3], ["x", "y", "z"]),
@@ -939,8 +964,7 @@ fn root_chain(
             ([I[0], I[1], I[2]], [!fixed[0], !fixed[1], !fixed[2]], ["x", "y", "z"])
         }
         TranslationSupport::Line { direction } => {
-            let d = unit(direction, &entity, id, "the slider direction")?;
-            let (b1, b2) = perpendicular_pair(&d);
+            let (d, b1, b2) = unit_frame(direction, "the slider direction")?;
             (
                 [d, b1, b2],
                 [true, false, false],
@@ -948,8 +972,7 @@ fn root_chain(
             )
         }
         TranslationSupport::Plane { normal } => {
-            let nn = unit(normal, &entity, id, "the plane normal")?;
-            let (b1, b2) = perpendicular_pair(&nn);
+            let (nn, b1, b2) = unit_frame(normal, "the plane normal")?;
             (
                 [b1, b2, nn],
                 [true, true, false],
@@ -1014,45 +1037,21 @@ fn root_chain(
             RootRotation::Free(r)
         }
         RotationSupport::Fixed => {
-            let mut axes = [(0, Vector3::zeros()); 3];
-            for (i, c) in ["x", "y", "z"].iter().enumerate() {
-                let (s, slot) = b.new_scalar(
-                    Kind::Zero,
-                    format!("node '{}' rotation about {c}", node.name),
-                    Dimension::Angle,
-                );
-                ops.push(Op::Rotate {
-                    axis: I[i],
-                    coord: s,
-                    col: slots.len(),
-                });
-                slots.push(slot);
-                axes[i] = (s, I[i]);
-            }
-            RootRotation::Axes(axes)
+            let about = [
+                (I[0], Kind::Zero, "rotation about x"),
+                (I[1], Kind::Zero, "rotation about y"),
+                (I[2], Kind::Zero, "rotation about z"),
+            ];
+            b.rotation_axes(&node.name, about, &mut ops, &mut slots)
         }
         RotationSupport::Axis { axis } => {
-            let a = unit(axis, &entity, id, "the rotation axis")?;
-            let (b1, b2) = perpendicular_pair(&a);
-            let mut axes = [(0, Vector3::zeros()); 3];
-            for (i, (e, kind, what)) in [
+            let (a, b1, b2) = unit_frame(axis, "the rotation axis")?;
+            let about = [
                 (b1, Kind::Zero, "rotation across the axis (1)"),
                 (b2, Kind::Zero, "rotation across the axis (2)"),
                 (a, rot_drv.map_or(Kind::Free, Kind::Driven), "rotation about its axis"),
-            ]
-            .into_iter()
-            .enumerate()
-            {
-                let (s, slot) = b.new_scalar(kind, format!("node '{}' {what}", node.name), Dimension::Angle);
-                ops.push(Op::Rotate {
-                    axis: e,
-                    coord: s,
-                    col: slots.len(),
-                });
-                slots.push(slot);
-                axes[i] = (s, e);
-            }
-            RootRotation::Axes(axes)
+            ];
+            b.rotation_axes(&node.name, about, &mut ops, &mut slots)
         }
     };
     ops.push(Op::Offset {

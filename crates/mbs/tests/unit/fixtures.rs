@@ -41,7 +41,16 @@ pub fn square_beam(
     let orientation = (b - a).cross(&Vector3::new(0.3, 0.9, -0.2)).normalize();
     let body = models::BeamBody {
         mesh,
-        ..models::BeamBody::new(name, &spec, (a, b), elements, orientation, modes)
+        ..models::BeamBody::new(
+            models::StraightBeam {
+                name,
+                spec: &spec,
+                ends: (a, b),
+                elements,
+                orientation,
+            },
+            modes,
+        )
     };
     models::beam_body(&body).unwrap()
 }

@@ -934,9 +934,8 @@ fn build_body(
 /// Mass data about the frame origin $O$ summed from the lumped masses at the exposed nodes
 /// (record 11), as MBDyn does without records 12 and 14-18.
 struct LumpedData {
-    m: f64,
-    c_O: Vector3<f64>,
-    J_O: Matrix3<f64>,
+    /// $(m, \mathbf c_O, \mathbf J_{com})$, as record 12 gives them.
+    global: (f64, Vector3<f64>, Matrix3<f64>),
     inv3: DMatrix<f64>,
     inv4: DMatrix<f64>,
     P: Vec<Matrix3<f64>>,
@@ -971,10 +970,10 @@ fn lumped_data(lumped: &[[f64; 6]], y: &[Vector3<f64>], shapes: &DMatrix<f64>, n
             }
         }
     }
+    let c_O = first / m.max(f64::MIN_POSITIVE);
+    let J_com = J_O + tilde(&c_O) * tilde(&c_O) * m;
     LumpedData {
-        m,
-        c_O: first / m.max(f64::MIN_POSITIVE),
-        J_O,
+        global: (m, c_O, J_com),
         inv3,
         inv4,
         P,
@@ -1011,7 +1010,7 @@ fn modal_inertia(
     let lumped_data = r.lumped.as_ref().map(|lumped| lumped_data(lumped, y, shapes, nx));
     let (m, c_O, J_com) = match (&r.global, &lumped_data) {
         (Some(g), _) => *g,
-        (None, Some(d)) => (d.m, d.c_O, d.J_O + tilde(&d.c_O) * tilde(&d.c_O) * d.m),
+        (None, Some(d)) => d.global,
         (None, None) => {
             return Err(body_error(
                 "the file has no inertia: neither RECORD GROUP 12 (global inertia) nor 11 (lumped masses)".into(),

@@ -2,6 +2,7 @@
 //! of their points, and the point masses, springs and supports at nodes.
 
 use super::builder::{Builder, Key};
+use super::joints::push_located;
 use super::mechanism::{located, BodyOut};
 use crate::error::BoxError;
 use crate::input::validate::mechanism::FrameSpec;
@@ -113,14 +114,19 @@ impl Builder<'_> {
     pub(super) fn point_elements(&mut self) -> Result<(), BoxError> {
         let m = &self.study.mechanism;
         for p in &m.point_masses {
-            let entity = mbs::Entity::PointMass(self.model.point_masses.len());
-            self.entities.insert(entity, p.path.clone());
-            let node = self.node(&p.at, &p.path)?;
-            self.model.point_masses.push(PointMass { node, mass: p.mass });
+            let point_mass = PointMass {
+                node: self.node(&p.at, &p.path)?,
+                mass: p.mass,
+            };
+            push_located(
+                &mut self.entities,
+                &mut self.model.point_masses,
+                mbs::Entity::PointMass,
+                &p.path,
+                point_mass,
+            );
         }
         for s in &m.springs {
-            let entity = mbs::Entity::Spring(self.model.springs.len());
-            self.entities.insert(entity, s.path.clone());
             let spring = Spring {
                 name: s.name.clone(),
                 a: self.node(&s.a, &s.path)?,
@@ -133,7 +139,13 @@ impl Builder<'_> {
                 damping: s.damping,
                 rest_length: s.rest_length,
             };
-            self.model.springs.push(spring);
+            push_located(
+                &mut self.entities,
+                &mut self.model.springs,
+                mbs::Entity::Spring,
+                &s.path,
+                spring,
+            );
         }
         for s in &m.supports {
             let n = self.node(&s.at, &s.path)?;

@@ -7,6 +7,7 @@ use crate::error::BoxError;
 use crate::input::source::KeyPath;
 use crate::input::validate::mechanism::{EffortSpec, PointRef};
 use mbs::{DriverTarget, NodeId, Support};
+use std::collections::BTreeMap;
 
 impl Builder<'_> {
     /// Joints (fixed ones are merged nodes, [`Builder::new`]); a joint to the ground gets a
@@ -74,8 +75,6 @@ impl Builder<'_> {
     pub(super) fn joint_forces(&mut self) -> Result<(), BoxError> {
         let m = &self.study.mechanism;
         for s in &m.joint_springs {
-            let entity = mbs::Entity::JointSpring(self.model.joint_springs.len());
-            self.entities.insert(entity, s.path.clone());
             let spring = mbs::JointSpring {
                 joint: self.joint_of(s.joint, &s.path)?,
                 coordinate: s.coordinate,
@@ -84,11 +83,10 @@ impl Builder<'_> {
                 rest: s.rest,
                 preload: s.preload,
             };
-            self.model.joint_springs.push(spring);
+            let springs = &mut self.model.joint_springs;
+            push_located(&mut self.entities, springs, mbs::Entity::JointSpring, &s.path, spring);
         }
         for l in &m.joint_limits {
-            let entity = mbs::Entity::JointLimit(self.model.joint_limits.len());
-            self.entities.insert(entity, l.path.clone());
             let limit = mbs::JointLimit {
                 name: l.name.clone(),
                 joint: self.joint_of(l.joint, &l.path)?,
@@ -98,7 +96,8 @@ impl Builder<'_> {
                 stiffness: l.stiffness,
                 damping: l.damping,
             };
-            self.model.joint_limits.push(limit);
+            let limits = &mut self.model.joint_limits;
+            push_located(&mut self.entities, limits, mbs::Entity::JointLimit, &l.path, limit);
         }
         for a in &m.actuators {
             let effort = match &a.effort {
@@ -121,16 +120,28 @@ impl Builder<'_> {
                     max_effort: *max_effort,
                 }),
             };
-            let entity = mbs::Entity::Actuator(self.model.actuators.len());
-            self.entities.insert(entity, a.path.clone());
             let actuator = mbs::JointActuator {
                 name: a.name.clone(),
                 joint: self.joint_of(a.joint, &a.path)?,
                 coordinate: a.coordinate,
                 effort,
             };
-            self.model.actuators.push(actuator);
+            let actuators = &mut self.model.actuators;
+            push_located(&mut self.entities, actuators, mbs::Entity::Actuator, &a.path, actuator);
         }
         Ok(())
     }
+}
+
+/// Pushes `element` onto `list` (one of the model's lists), recording `path` as where the
+/// entity `entity(index)` it becomes is described, so that errors about it are located.
+pub(super) fn push_located<T>(
+    entities: &mut BTreeMap<mbs::Entity, KeyPath>,
+    list: &mut Vec<T>,
+    entity: fn(usize) -> mbs::Entity,
+    path: &KeyPath,
+    element: T,
+) {
+    entities.insert(entity(list.len()), path.clone());
+    list.push(element);
 }

@@ -324,35 +324,25 @@ fn results(
         MbsAnalysis::Dynamic { newton, adaptive, .. } => (*newton, adaptive.is_some()),
         _ => (mbs::NewtonStrategy::Full, false),
     };
-    let &mbs::StepTotals {
-        steps,
-        planned,
-        iterations,
-        jacobians,
-        max_iterations: max_iter,
-        ref retries,
-        rejected,
-        smallest_step: h_min,
-        largest_step: h_max,
-    } = totals;
+    let (retries, h_min) = (&totals.retries, totals.smallest_step);
     json!({
         "model": model,
         "hot_spots": hot_spots,
-        "steps": steps,
-        "steps_planned": planned,
+        "steps": totals.steps,
+        "steps_planned": totals.planned,
         "t_start": t_start,
         "t_reached": integ.state().time(),
-        "newton_iterations": iterations,
-        "max_iterations_per_step": max_iter,
+        "newton_iterations": totals.iterations,
+        "max_iterations_per_step": totals.max_iterations,
         "newton": match newton {
             mbs::NewtonStrategy::Full => "full",
             mbs::NewtonStrategy::Modified => "modified",
         },
-        "jacobians": jacobians,
+        "jacobians": totals.jacobians,
         "adaptive": adaptive,
         "smallest_step": if h_min.is_finite() { json!(h_min) } else { json!(null) },
-        "largest_step": h_max,
-        "rejected_steps": rejected,
+        "largest_step": totals.largest_step,
+        "rejected_steps": totals.rejected,
         "retried_steps": retries.len(),
         "retries": retries.iter().map(|r| json!({
             "time": r.time,

@@ -132,16 +132,22 @@ fn vec_text(v: &[f64]) -> String {
     format!("({})", v.iter().map(|x| sci(*x)).collect::<Vec<_>>().join(", "))
 }
 
+/// The FE model of `part` on `supports` and its number of free dofs.
+fn build_part(part: &Part, supports: &[SupportSpec]) -> Result<(Built, usize), BoxError> {
+    let built = part
+        .build(supports)
+        .context(|| format!("part '{}': cannot build the FE model", part.name))?;
+    let n_free = free_dofs(part, &built)?;
+    Ok((built, n_free))
+}
+
 fn run_static(
     part: &Part,
     supports: &[SupportSpec],
     loads: &[LoadSpec],
     obs: &mut dyn Observer,
 ) -> Result<Outcome, BoxError> {
-    let built = part
-        .build(supports)
-        .context(|| format!("part '{}': cannot build the FE model", part.name))?;
-    let n_free = free_dofs(part, &built)?;
+    let (built, n_free) = build_part(part, supports)?;
     let loads = Part::nodal_loads(&built, loads);
     obs.progress(&Progress::Stage(format!(
         "part '{}': assembling and factorising K ({n_free} dofs)",
@@ -297,10 +303,7 @@ fn run_modal(
     supports: &[SupportSpec],
     obs: &mut dyn Observer,
 ) -> Result<Outcome, BoxError> {
-    let built = part
-        .build(supports)
-        .context(|| format!("part '{}': cannot build the FE model", part.name))?;
-    let n_free = free_dofs(part, &built)?;
+    let (built, n_free) = build_part(part, supports)?;
     let dense = match solver {
         Solver::Dense => true,
         Solver::Sparse => false,

@@ -1311,6 +1311,18 @@ impl System {
         }
     }
 
+    /// `source`, the failure of flexible body `body` (index in the model) at time `t`, under the
+    /// body's name.
+    pub(crate) fn body_error(&self, body: usize, t: f64, source: superelement::SuperelementError) -> SolveError {
+        SolveError::Body {
+            body: self.model.bodies[body].name().to_string(),
+            id: crate::model::BodyId(body as u32),
+            at: crate::error::At::Time(t),
+            step: None,
+            source: Box::new(source),
+        }
+    }
+
     /// One element's output at the node motions, into `buf.out` (flexible bodies evaluate in
     /// their reused superelement workspace).
     #[allow(clippy::too_many_arguments)]
@@ -1345,13 +1357,7 @@ impl System {
                     flex,
                     out,
                 )
-                .map_err(|source| SolveError::Body {
-                    body: self.model.bodies[f.body].name().to_string(),
-                    id: crate::model::BodyId(f.body as u32),
-                    at: crate::error::At::Time(state.time),
-                    step: None,
-                    source: Box::new(source),
-                })?;
+                .map_err(|source| self.body_error(f.body, state.time, source))?;
             }
             ElementKind::Rigid(i) => {
                 rigid_element(&self.rigid[*i], &nodes[self.rigid[*i].node], gravity, tangents, out);

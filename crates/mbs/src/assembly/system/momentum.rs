@@ -212,13 +212,7 @@ impl System {
             let n = f.se.n_coordinates();
             let ev =
                 f.se.forces(&bs, &vec![0.0; n], &Vector3::zeros())
-                    .map_err(|source| SolveError::Body {
-                        body: self.model.bodies[f.body].name().to_string(),
-                        id: crate::model::BodyId(f.body as u32),
-                        at: crate::error::At::Time(state.time),
-                        step: None,
-                        source: Box::new(source),
-                    })?;
+                    .map_err(|source| self.body_error(f.body, state.time, source))?;
             flexible.push(ev.mass);
         }
         Ok(MomentumMap { flexible })

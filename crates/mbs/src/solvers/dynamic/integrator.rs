@@ -148,6 +148,11 @@ pub struct AlphaParameters {
 }
 
 impl AlphaParameters {
+    /// $(\alpha_m, \alpha_f, \gamma, \beta)$, for the step's formulas.
+    fn symbols(&self) -> (f64, f64, f64, f64) {
+        (self.alpha_m, self.alpha_f, self.gamma, self.beta)
+    }
+
     /// Chung & Hulbert's optimal parameters for $\rho_\infty$.
     pub fn from_rho_inf(rho: f64) -> Self {
         let alpha_m = (2.0 * rho - 1.0) / (rho + 1.0);
@@ -409,39 +414,42 @@ struct CoRotated {
     translation: Option<([usize; 3], Matrix3<f64>, Matrix3<f64>)>,
 }
 
+/// What `node` makes of the coordinates of each independent node of `system`, where it makes
+/// something.
+fn root_nodes<T>(
+    system: &System,
+    node: impl FnMut(&crate::assembly::topology::RootCoordinates) -> Option<T>,
+) -> Vec<T> {
+    system.topo.roots.iter().flatten().filter_map(node).collect()
+}
+
 /// Every free independent node of `system` ([`CoRotated`]).
 fn corotated_nodes(system: &System) -> Vec<CoRotated> {
     let map = &system.topo.map;
-    system
-        .topo
-        .roots
-        .iter()
-        .flatten()
-        .filter_map(|rc| {
-            let crate::assembly::topology::RootRotation::Free(rot) = rc.rotation else {
-                return None;
-            };
-            let mut dofs = [0; 3];
-            let mut free = true;
-            for (k, (sc, _)) in rc.translation.iter().enumerate() {
-                match map.scalars[*sc].slot {
-                    crate::assembly::coordinates::Slot::Unknown(d) => dofs[k] = d,
-                    crate::assembly::coordinates::Slot::Prescribed(_) => free = false,
-                }
+    root_nodes(system, |rc| {
+        let crate::assembly::topology::RootRotation::Free(rot) = rc.rotation else {
+            return None;
+        };
+        let mut dofs = [0; 3];
+        let mut free = true;
+        for (k, (sc, _)) in rc.translation.iter().enumerate() {
+            match map.scalars[*sc].slot {
+                crate::assembly::coordinates::Slot::Unknown(d) => dofs[k] = d,
+                crate::assembly::coordinates::Slot::Prescribed(_) => free = false,
             }
-            let B = Matrix3::from_columns(&[rc.translation[0].1, rc.translation[1].1, rc.translation[2].1]);
-            let translation = if free {
-                B.try_inverse().map(|Bi| (dofs, B, Bi))
-            } else {
-                None
-            };
-            Some(CoRotated {
-                rot,
-                rdof: map.rotations[rot].dof,
-                translation,
-            })
+        }
+        let B = Matrix3::from_columns(&[rc.translation[0].1, rc.translation[1].1, rc.translation[2].1]);
+        let translation = if free {
+            B.try_inverse().map(|Bi| (dofs, B, Bi))
+        } else {
+            None
+        };
+        Some(CoRotated {
+            rot,
+            rdof: map.rotations[rot].dof,
+            translation,
         })
-        .collect()
+    })
 }
 
 /// Turns the residual `v` of the current iterate (rotations `R`) into the axes of the kept
@@ -494,38 +502,32 @@ struct PlaneRotated {
 fn plane_rotated_nodes(system: &System) -> Vec<PlaneRotated> {
     use crate::assembly::coordinates::Slot;
     let map = &system.topo.map;
-    system
-        .topo
-        .roots
-        .iter()
-        .flatten()
-        .filter_map(|rc| {
-            let crate::assembly::topology::RootRotation::Axes(axes) = &rc.rotation else {
-                return None;
-            };
-            let (angle, a) = axes[2];
-            let Slot::Unknown(_) = map.scalars[angle].slot else {
-                return None;
-            };
-            let unknown = |k: usize| match map.scalars[rc.translation[k].0].slot {
-                Slot::Unknown(d) => Some(d),
-                Slot::Prescribed(_) => None,
-            };
-            let (d1, d2) = (unknown(0)?, unknown(1)?);
-            if unknown(2).is_some() {
-                return None;
-            }
-            let (b1, b2) = (rc.translation[0].1, rc.translation[1].1);
-            let sign = b1.cross(&b2).dot(&a);
-            let orthonormal =
-                (b1.norm() - 1.0).abs() < 1e-12 && (b2.norm() - 1.0).abs() < 1e-12 && b1.dot(&b2).abs() < 1e-12;
-            (orthonormal && (sign.abs() - 1.0).abs() < 1e-12).then_some(PlaneRotated {
-                angle,
-                dofs: [d1, d2],
-                sign: sign.signum(),
-            })
+    root_nodes(system, |rc| {
+        let crate::assembly::topology::RootRotation::Axes(axes) = &rc.rotation else {
+            return None;
+        };
+        let (angle, a) = axes[2];
+        let Slot::Unknown(_) = map.scalars[angle].slot else {
+            return None;
+        };
+        let unknown = |k: usize| match map.scalars[rc.translation[k].0].slot {
+            Slot::Unknown(d) => Some(d),
+            Slot::Prescribed(_) => None,
+        };
+        let (d1, d2) = (unknown(0)?, unknown(1)?);
+        if unknown(2).is_some() {
+            return None;
+        }
+        let (b1, b2) = (rc.translation[0].1, rc.translation[1].1);
+        let sign = b1.cross(&b2).dot(&a);
+        let orthonormal =
+            (b1.norm() - 1.0).abs() < 1e-12 && (b2.norm() - 1.0).abs() < 1e-12 && b1.dot(&b2).abs() < 1e-12;
+        (orthonormal && (sign.abs() - 1.0).abs() < 1e-12).then_some(PlaneRotated {
+            angle,
+            dofs: [d1, d2],
+            sign: sign.signum(),
         })
-        .collect()
+    })
 }
 
 /// [`corotate`] for the nodes held in a plane: the rotation by $\theta - \theta_f$ about the
@@ -675,9 +677,10 @@ impl<'a> Integrator<'a> {
         } else {
             Vec::new()
         };
-        let mut vb = vec![0.0; n];
-        body_velocity(system, &trans, &state.rotations, &state.velocity, &mut vb);
-        body_acceleration(system, &trans, &state.rotations, &vb, &state.acceleration, &mut acc);
+        // The initial body velocities, for a_0 only (the steps keep theirs in `vb`).
+        let mut vb0 = vec![0.0; n];
+        body_velocity(system, &trans, &state.rotations, &state.velocity, &mut vb0);
+        body_acceleration(system, &trans, &state.rotations, &vb0, &state.acceleration, &mut acc);
         let J0 = match settings.momentum {
             MomentumProjection::Auto if system.rigid_invariance().is_ok() => {
                 let (L, H) = system.momentum(&state)?;
@@ -685,6 +688,8 @@ impl<'a> Integrator<'a> {
             }
             _ => None,
         };
+        // The step's work vectors, one entry an unknown each.
+        let [incr, dx, a_prev, vb, qb, incr_b, vb_n, qb_n] = std::array::from_fn(|_| vec![0.0; n]);
         Ok(Self {
             system: held,
             a: acc,
@@ -695,14 +700,14 @@ impl<'a> Integrator<'a> {
             prev: state.clone(),
             trial: state.clone(),
             state,
-            incr: vec![0.0; n],
-            dx: vec![0.0; n],
-            a_prev: vec![0.0; n],
-            vb: vec![0.0; n],
-            qb: vec![0.0; n],
-            incr_b: vec![0.0; n],
-            vb_n: vec![0.0; n],
-            qb_n: vec![0.0; n],
+            incr,
+            dx,
+            a_prev,
+            vb,
+            qb,
+            incr_b,
+            vb_n,
+            qb_n,
             // The workspace holds the factorised mass matrix, not an iteration matrix.
             factor_h: None,
             jacobians: 0,
@@ -906,12 +911,7 @@ impl<'a> Integrator<'a> {
         let held = self.system.clone();
         let sys: &System = &held;
         let h = self.settings.step;
-        let AlphaParameters {
-            alpha_m: am,
-            alpha_f: af,
-            gamma: g,
-            beta: b,
-        } = self.p;
+        let (am, af, g, b) = self.p.symbols();
         let bp = (1.0 - am) / (h * h * b * (1.0 - af));
         let gp = g / (h * b);
         if self.step_decimals.0 != h {
@@ -1014,12 +1014,7 @@ impl<'a> Integrator<'a> {
     /// body-axis iterates and the trial state.
     fn predict(&mut self, sys: &System, modified: bool, h: f64, t: f64) {
         let n = sys.n_dof();
-        let AlphaParameters {
-            alpha_m: am,
-            alpha_f: af,
-            gamma: g,
-            beta: b,
-        } = self.p;
+        let (am, af, g, b) = self.p.symbols();
         let prev = &self.prev;
         let st = &mut self.trial;
         st.clone_from(prev);
@@ -1119,38 +1114,17 @@ impl<'a> Integrator<'a> {
         for i in 0..n {
             self.dx[i] = -self.ws.F[i];
         }
+        // Into the kept factor's axes (`to_factor`) and back.
+        let turn_dx = |dx: &mut [f64], to_factor: bool| {
+            corotate(&self.corotated, &st.rotations, &self.factor_rotations, dx, to_factor);
+            corotate_in_plane(&self.plane_rotated, &st.scalars, &self.factor_angles, dx, to_factor);
+        };
         if turn {
-            corotate(
-                &self.corotated,
-                &st.rotations,
-                &self.factor_rotations,
-                &mut self.dx,
-                true,
-            );
-            corotate_in_plane(
-                &self.plane_rotated,
-                &st.scalars,
-                &self.factor_angles,
-                &mut self.dx,
-                true,
-            );
+            turn_dx(&mut self.dx, true);
         }
         sys.solve_factored(&mut self.ws, &mut self.dx)?;
         if turn {
-            corotate(
-                &self.corotated,
-                &st.rotations,
-                &self.factor_rotations,
-                &mut self.dx,
-                false,
-            );
-            corotate_in_plane(
-                &self.plane_rotated,
-                &st.scalars,
-                &self.factor_angles,
-                &mut self.dx,
-                false,
-            );
+            turn_dx(&mut self.dx, false);
         }
         // dx corrects the spatial increment; the body-axis iterates move by R_n^T dx, and a
         // translation's so that the SE(3) update moves the node by dx exactly.
