@@ -100,7 +100,7 @@ pub fn dynamic(
     };
     let output = &study.mechanism.output;
     let t0 = Instant::now();
-    let first = dynamic_start(sys, start);
+    let first = dynamic_start(sys, start, study.mechanism.start);
     let t_start = first.time();
     if *t_end <= t_start {
         return Err(format!(
@@ -145,6 +145,12 @@ pub fn dynamic(
     let (hot_spots, hot_lines) = mw.hot_spot_summary(sys, b, "t");
     out.report.extend(hot_lines);
     out.results = results(analysis, b.size(sys), hot_spots, &integ, &totals, t_start, t0);
+    if start.is_none() {
+        let at_rest = study.mechanism.start == crate::input::validate::mechanism::StartChoice::AtRest;
+        let (lines, json) = crate::output::summary::start_section(sys.start_report(), at_rest);
+        out.report.splice(0..0, lines);
+        out.results["start"] = json;
+    }
     obs.sensors_end()?;
     if out.failure.is_none() {
         out.final_state = Some(integ.state().clone());

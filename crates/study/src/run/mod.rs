@@ -124,7 +124,7 @@ impl Simulation {
         let mut runner = Runner::new(study, options);
         let system = Arc::new(runner.mechanism(&mut ())?.system(study)?);
         let start = runner.start_state(i)?;
-        let first = simulation::dynamic_start(&system, start.as_ref());
+        let first = simulation::dynamic_start(&system, start.as_ref(), study.mechanism.start);
         Self::with_start(study, system, runner.mechanism(&mut ())?, spec, first)
     }
 }

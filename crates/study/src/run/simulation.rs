@@ -9,6 +9,7 @@
 use super::sensors::{sensor_columns, sensor_indices};
 use crate::build::{BuiltMechanism, LoadTarget, NamedLoad};
 use crate::error::{BoxError, Location};
+use crate::input::validate::mechanism::StartChoice;
 use crate::input::validate::{MbsAnalysis, Study};
 use crate::sensor_group::SensorGroup;
 use mbs::{DynamicSettings, Integrator, LoadKind, NodeMotion, SensorRecord, State, StepReport, System};
@@ -72,7 +73,7 @@ impl Simulation {
         b: &BuiltMechanism,
         spec: &MbsAnalysis,
     ) -> Result<Self, BoxError> {
-        let state = system.initial_state();
+        let state = initial_state(&system, study.mechanism.start);
         Self::with_start(study, system, b, spec, state)
     }
 
@@ -321,12 +322,22 @@ impl Simulation {
     }
 }
 
-/// The first state of a `dynamic` analysis: the initial state, or the final state of the
-/// analysis named in `start` (from an equilibrium: at rest in its configuration at its time).
-pub fn dynamic_start(sys: &System, start: Option<&mbs::State>) -> mbs::State {
+/// The first state of a `dynamic` analysis: the initial state as `[[initial]] start` chooses
+/// (`choice`), or the final state of the analysis named in `start` (from an equilibrium: at
+/// rest in its configuration at its time).
+pub fn dynamic_start(sys: &System, start: Option<&mbs::State>, choice: StartChoice) -> mbs::State {
     match start {
         Some(s) if s.velocity().iter().all(|v| *v == 0.0) => sys.at_rest(s, s.time()),
         Some(s) => s.clone(),
-        None => sys.initial_state(),
+        None => initial_state(sys, choice),
+    }
+}
+
+/// The mechanism's state at t = 0 as `[[initial]] start` chooses: consistent (the start
+/// analysis of `mbs::System::initial_state`) or at rest.
+pub fn initial_state(sys: &System, choice: StartChoice) -> mbs::State {
+    match choice {
+        StartChoice::Consistent => sys.initial_state(),
+        StartChoice::AtRest => sys.initial_state_at_rest(),
     }
 }
