@@ -138,7 +138,7 @@
 //! | BCA 2012, Alg. 1 | Lie-group generalized-α step; full or modified Newton ([`NewtonStrategy`]) | `mbs::Integrator::step` |
 //! | HLW §IV.4 | momentum projection $(\mathbf T_{rig}^T\hat{\mathbf M}\mathbf T_{rig})\boldsymbol\lambda = \mathbf J_0 - \mathbf J$, $\dot{\mathbf q} \mathrel{+}= \mathbf T_{rig}\boldsymbol\lambda$ on free, unloaded models | `mbs::System::project_momentum` (crate-private, `assembly/system/momentum.rs`) |
 //! | theory guide §9 | linearised spectrum; each mode's energy by body and node | `mbs::spectrum`, `mbs::mode_energies` |
-//! | this crate | initial joint values and rates moving the subtree behind the joint rigidly | `mbs::System::initial_state` (`assembly/system/initial_state.rs`) |
+//! | this crate | initial joint values and rates moving the subtree behind the joint rigidly; the consistent start (position assembly of closed loops, velocity analysis from the drivers' and initial rates) | `mbs::System::initial_state` (`assembly/system/initial_state.rs`) |
 //! | this crate | joint limits, actuators (time function, PID with trapezoidal integral) and their tangents | `mbs::assembly::joint_forces` |
 //! | Bathe (1996) §6.8 | stability of a static state (inertia of $\hat{\mathbf K}_s$) | `mbs::stability` |
 //! | this crate | fixed step retried with halved steps | `mbs::step_retrying`, `mbs::solve_dynamic_retrying` |
@@ -188,6 +188,7 @@ pub mod state;
 pub use model::{merge, user_force};
 pub use solvers::dynamic as dynamic_solver;
 
+pub use assembly::initial::StartReport;
 pub use assembly::system::momentum::{ExternalAction, MomentumProjection};
 pub use assembly::system::sensors::{Energies, PendingRows, SensorRecord};
 pub use assembly::system::{LinearSolver, Matrices, NodeKinematics, System, DENSE_MAX};

@@ -18,6 +18,11 @@ mod kinematics;
 #[path = "unit/tangent.rs"]
 mod tangent;
 
+/// The consistent start: position assembly of closed loops, the velocity analysis against
+/// central differences of it, hand-computed starts, contradicting rates refused.
+#[path = "unit/start.rs"]
+mod start;
+
 /// Rigid pendulum: small- and large-amplitude periods, second-order convergence in time.
 #[path = "unit/pendulum.rs"]
 mod pendulum;

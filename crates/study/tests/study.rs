@@ -17,6 +17,12 @@ mod common;
 #[path = "study/setup.rs"]
 mod setup;
 
+/// The consistent start: the drivers' and initial rates give every body its velocity at t = 0
+/// (C2 by its driver alone, the four-bar from a crank rate, a lever on a harmonic driver);
+/// contradicting rates refused; the start at rest as an explicit choice.
+#[path = "study/start.rs"]
+mod start;
+
 /// Planar parts and bodies: the keys reach the reduction, the cache and the bodies; a planar
 /// body that could leave the plane is refused at the body; the planar slider-crank agrees
 /// with its bodies evaluated in 3D.

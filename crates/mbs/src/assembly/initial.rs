@@ -17,20 +17,41 @@
 //! of the whole model, each item in the order given.
 //!
 //! A subtree that reaches the joint's own parent or a node held by the ground (a support or a
-//! node driver) closes a **loop**: no rigid motion of its bodies follows the coordinate. An
-//! initial *value* there is refused (drive the joint to the value and start from an equilibrium
-//! instead); an initial *rate* sets the coordinate alone and the loop's other velocities must be
-//! given (node velocities), as the bodies in the loop otherwise start with a strain rate.
+//! node driver) closes a **loop**: no rigid motion of its bodies follows the coordinate, which
+//! is then set alone, and the start's analysis below closes the loop.
 //!
 //! A body velocity gives the body and everything attached to it (its **component**, through
 //! bodies and joints) the rigid field $\mathbf v(\mathbf x) = \mathbf v_p + \boldsymbol\omega\times(\mathbf x -
-//! \mathbf p)$; a body held by the ground is refused (its motion is its joints' rates).
+//! \mathbf p)$; for a body held by the ground it is a condition of the velocity analysis alone.
+//!
+//! # The consistent start (`System::new`)
+//!
+//! After these carries, the start is made consistent, as Adams and Simpack do before the first
+//! step. Every flexible body must sit rigidly on its interface nodes (it starts undeformed):
+//! with $a$ its first node, each other node $k$ satisfies
+//! $$\mathbf r_k - \mathbf r_a - \mathbf R_a\mathbf R_{a0}^T(\mathbf r_{k0} - \mathbf r_{a0}) = 0,\qquad
+//! \log\big(\mathbf R_k(\mathbf R_a\mathbf R_{a0}^T\mathbf R_{k0})^T\big) = 0 .$$
+//! **Position assembly**: where this fails (a closed loop at a driver's or an initial value),
+//! Gauss-Newton steps of least change in the unknowns (but the modal coordinates and the
+//! initial joint values) restore it. **Velocity analysis**: the time derivative of the same
+//! conditions, $\mathbf v_k - \mathbf v_a - \boldsymbol\omega_a\times(\mathbf r_k - \mathbf r_a) = 0$,
+//! $\boldsymbol\omega_k - \boldsymbol\omega_a = 0$ (no strain rate; modal rates zero), with the
+//! drivers' rates at $t = 0$ and the initial rates and velocities as further linear conditions
+//! $\mathbf A\dot{\mathbf q} = \mathbf b$: the rates carried above change by the least
+//! $\delta = \mathbf A^+(\mathbf b - \mathbf A\dot{\mathbf q}^0)$ (scaled unknowns). Conditions that no
+//! rates meet (over-determined) are refused naming the drivers and initial conditions involved;
+//! a change of a joint or translation coordinate that the conditions leave open
+//! (under-determined: a mobility that nothing given fixes, moved by what was given) is refused
+//! naming the coordinates. A node whose velocity an initial condition gives is left out of
+//! its body's conditions (the user's strain rate). Where the carries already meet every
+//! condition (trees; starts given in full) nothing changes.
 
 use crate::assembly::coordinates::Slot;
 use crate::assembly::topology::{RootRotation, Topology};
 use crate::error::{Entity, ModelError};
 use crate::model::time_function::CompiledFunction;
 use crate::model::{Body, DriverTarget, InitialCondition, Model, NodeId};
+use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
 /// How one initial condition acts (computed once by [`crate::System::new`]).
@@ -129,16 +150,9 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
                 let j = &model.joints[joint.index()];
                 match reach(&adj, topo, &[j.child.index()], Some(joint.index()), Some(j.parent.index())) {
                     Ok(nodes) => Ok(InitialPlan::Subtree(roots(nodes))),
-                    Err(_) if matches!(c, InitialCondition::JointRate { .. }) => Ok(InitialPlan::CoordinateOnly),
-                    Err(n) => Err(ModelError::InvalidValue {
-                        entity: format!("initial value of joint '{}'", j.name),
-                        what: format!(
-                            "the joint is in a closed loop (the bodies behind it reach node '{}', {}), so no rigid motion of them follows its value; drive the joint to the value and start from an equilibrium instead",
-                            node_name(n),
-                            if n == j.parent.index() { "its own parent" } else { "held by the ground" }
-                        ),
-                        id: Some(Entity::InitialCondition(i)),
-                    }),
+                    // In a closed loop the coordinate is set alone and the start's loop closure
+                    // (`System::new`) places and moves the rest of the loop.
+                    Err(_) => Ok(InitialPlan::CoordinateOnly),
                 }
             }
             InitialCondition::BodyVelocity { body, .. } => {
@@ -147,16 +161,12 @@ pub(crate) fn plan(model: &Model, topo: &Topology) -> Result<Vec<InitialPlan>, M
                     Body::Flexible(f) => f.nodes.iter().map(|n| n.index()).collect(),
                     Body::Rigid(r) => vec![r.reference.index()],
                 };
+                // A body held by the ground moves through its joints: its velocity is a
+                // condition of the start's velocity analysis alone, which solves the joints'
+                // rates from it.
                 match reach(&adj, topo, &nodes, None, None) {
                     Ok(nodes) => Ok(InitialPlan::Component(roots(nodes))),
-                    Err(n) => Err(ModelError::InvalidValue {
-                        entity: format!("initial velocity of body '{}'", b.name()),
-                        what: format!(
-                            "the body is held by the ground through node '{}'; give the initial rates of its joints instead",
-                            node_name(n)
-                        ),
-                        id: Some(Entity::InitialCondition(i)),
-                    }),
+                    Err(_) => Ok(InitialPlan::Direct),
                 }
             }
             InitialCondition::NodeVelocity { node, .. } if topo.roots[node.index()].is_none() => {
@@ -236,9 +246,9 @@ fn held_velocity(
     Ok(())
 }
 
-/// A driver whose function is not zero at $t = 0$: the mechanism is assembled at its initial
-/// value by moving the free independent nodes behind the driven coordinate rigidly with it
-/// (`roots`), as for an initial joint value (module docs).
+/// A driver whose value or rate is not zero at $t = 0$ and whose driven coordinate closes no
+/// loop: the free independent nodes behind the coordinate (`roots`) move rigidly with it, in
+/// position and velocity, as for an initial joint value (module docs).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct DriverStart {
     /// Index into the prescribed coordinates and the driven scalar.
@@ -249,8 +259,8 @@ pub(crate) struct DriverStart {
     pub roots: Vec<usize>,
 }
 
-/// The drivers with a non-zero value at $t = 0$ and the nodes that move with them; refuses one
-/// whose driven coordinate closes a loop (no rigid motion of the bodies behind it follows it).
+/// The drivers with a non-zero value or rate at $t = 0$ outside closed loops and the nodes that
+/// move with them.
 pub(crate) fn driver_starts(
     model: &Model,
     topo: &Topology,
@@ -260,8 +270,8 @@ pub(crate) fn driver_starts(
     let mut out = Vec::new();
     for (p, &(driver, scalar)) in topo.map.prescribed.iter().enumerate() {
         let Some(d) = driver else { continue };
-        let x0 = drivers[d].eval(0.0).0;
-        if x0 == 0.0 {
+        let (x0, xd0, _) = drivers[d].eval(0.0);
+        if x0 == 0.0 && xd0 == 0.0 {
             continue;
         }
         let def = &model.drivers[d];
@@ -283,24 +293,15 @@ pub(crate) fn driver_starts(
                 (n, reach_without(&adj, topo, &start, n))
             }
         };
-        match reached {
-            Ok(nodes) => out.push(DriverStart {
+        // A driven coordinate in a closed loop moves no rigid subtree: the start's loop
+        // closure (`System::new`) assembles the loop at its value and rate instead.
+        if let Ok(nodes) = reached {
+            out.push(DriverStart {
                 prescribed: p,
                 scalar,
                 pivot,
                 roots: nodes.into_iter().filter(|&n| topo.roots[n].is_some()).collect(),
-            }),
-            Err(n) => {
-                return Err(ModelError::InvalidDriver {
-                    driver: def.name.clone(),
-                    what: format!(
-                        "its function is {x0} (not zero) at t = 0, and the driven coordinate is in a closed loop (the bodies it moves reach node '{}', {}), so the mechanism cannot be assembled at that value by moving them rigidly; start the function at zero (values are measured from the initial configuration) or model the mechanism in its position at t = 0",
-                        model.nodes[n].name,
-                        if n == pivot { "the driven node itself" } else { "held by the ground or the joint's parent" }
-                    ),
-                    driver_id: d,
-                })
-            }
+            });
         }
     }
     Ok(out)
@@ -318,4 +319,81 @@ fn reach_without(
         .map(|e| e.iter().copied().filter(|&(m, _)| m != blocked).collect())
         .collect();
     reach(&pruned, topo, start, None, None)
+}
+
+/// The smallest change $\delta$ of the unknowns that makes the start's linear conditions
+/// $\mathbf A(\mathbf x^0 + \delta) = \mathbf b$ hold, in scaled unknowns and rows (both scaled
+/// so that their entries are comparable): $\delta = \mathbf A^+\mathbf r$ with
+/// $\mathbf r = \mathbf b - \mathbf A\mathbf x^0$, the pseudo-inverse from the singular value
+/// decomposition. What is left of $\mathbf r$ (`residual`) is the part no change of the unknowns
+/// reaches: conditions that contradict. An unknown with a component in the null space of
+/// $\mathbf A$ (`free`) is not fixed by the conditions: a change of it is a choice.
+pub(crate) struct LeastChange {
+    pub delta: Vec<f64>,
+    /// $\mathbf A\delta - \mathbf r$ per row.
+    pub residual: Vec<f64>,
+    /// Per unknown: $(\mathbf I - \mathbf A^+\mathbf A)_{ii}$ above round-off.
+    pub free: Vec<bool>,
+}
+
+/// [`LeastChange`] of the `rows` x `cols` matrix `a` (row-major) and the right side `r`.
+pub(crate) fn least_change(a: &[f64], rows: usize, cols: usize, r: &[f64]) -> LeastChange {
+    if rows == 0 || cols == 0 {
+        return LeastChange {
+            delta: vec![0.0; cols],
+            residual: r.iter().map(|x| -x).collect(),
+            free: vec![true; cols],
+        };
+    }
+    let a = nalgebra::DMatrix::from_row_slice(rows, cols, a);
+    let svd = a.clone().svd(true, true);
+    let smax = svd.singular_values.max();
+    // Rank by singular values above round-off of the largest (the conditions are exact:
+    // a loop's Jacobian has exact zeros for its mobility).
+    let tol = 1e-10 * smax;
+    let (u, vt) = (
+        svd.u.as_ref().expect("u computed"),
+        svd.v_t.as_ref().expect("v computed"),
+    );
+    let rv = nalgebra::DVector::from_column_slice(r);
+    let mut delta = nalgebra::DVector::zeros(cols);
+    let mut row_space = vec![0.0; cols];
+    for (k, &s) in svd.singular_values.iter().enumerate() {
+        if s <= tol || s == 0.0 {
+            continue;
+        }
+        let c = u.column(k).dot(&rv) / s;
+        delta += vt.row(k).transpose() * c;
+        for (i, p) in row_space.iter_mut().enumerate() {
+            *p += vt[(k, i)] * vt[(k, i)];
+        }
+    }
+    let residual = (&a * &delta - rv).iter().copied().collect();
+    LeastChange {
+        delta: delta.iter().copied().collect(),
+        residual,
+        free: row_space.iter().map(|p| 1.0 - p > 1e-8).collect(),
+    }
+}
+
+/// What the start (`System::initial_state`) set and how: the consistent start of
+/// `System::new`'s initial position and velocity analysis.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StartReport {
+    /// Each driver's name, value and rate at $t = 0$.
+    pub drivers: Vec<(String, f64, f64)>,
+    /// The initial conditions, each described in the model's names.
+    pub initial: Vec<String>,
+    /// Unknowns whose rate the velocity analysis solved from the drivers and the initial
+    /// conditions (the closed loops and flexible bodies moving rigidly): label and rate.
+    pub solved: Vec<(String, f64)>,
+    /// Unknowns whose position the position assembly moved (closed loops at a driver's or an
+    /// initial value): label and change.
+    pub assembled: Vec<(String, f64)>,
+    /// Unknowns that nothing sets (degrees of freedom without a driver or an initial rate):
+    /// they start at rest, or with the rigid motion an initial condition carries to them.
+    pub unset: Vec<String>,
+    /// Number of modal coordinates: the flexible bodies start undeformed and without strain
+    /// rate (their interface nodes follow the joints rigidly).
+    pub modal: usize,
 }

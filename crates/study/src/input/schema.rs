@@ -716,6 +716,8 @@ pub struct InitialFile {
     /// of mass).
     pub body: Option<String>,
     pub point: Option<Vec3>,
+    /// ... or how the mechanism starts: `"consistent"` (default) or `"at-rest"`.
+    pub start: Option<String>,
 }
 
 /// `[[joint_springs]]`: a linear or torsional spring-damper on a joint coordinate.

@@ -227,3 +227,61 @@ pub fn default_results_dir(study: &Path) -> PathBuf {
         .unwrap_or_default()
         .join(format!("{stem}-results"))
 }
+
+/// The start section of a dynamic analysis that starts at t = 0: how each coordinate got its
+/// position and rate (`mbs::System::start_report`), or the choice to start at rest. Lines for
+/// the report, and the same as JSON for `summary.json`.
+pub fn start_section(report: &mbs::StartReport, at_rest: bool) -> (Vec<String>, serde_json::Value) {
+    let mut lines = Vec::new();
+    let list = |items: &[(String, f64)], unit: &str| {
+        items
+            .iter()
+            .map(|(l, x)| format!("{l} {x:.6e}{unit}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let moving: Vec<&(String, f64, f64)> = report.drivers.iter().filter(|d| d.1 != 0.0 || d.2 != 0.0).collect();
+    if at_rest {
+        lines.push("start: at rest (`[[initial]] start = \"at-rest\"`): every coordinate's rate zero at t = 0 but the drivers', which keep their own".into());
+    } else {
+        lines.push("start: consistent (initial position and velocity analysis at t = 0)".into());
+    }
+    if !moving.is_empty() {
+        let d: Vec<String> = moving
+            .iter()
+            .map(|(n, x, v)| format!("'{n}' value {x:.6e}, rate {v:.6e}"))
+            .collect();
+        lines.push(format!("start: set by drivers: {}", d.join("; ")));
+    }
+    if !report.initial.is_empty() {
+        lines.push(format!("start: set by [[initial]]: {}", report.initial.join("; ")));
+    }
+    if !report.assembled.is_empty() {
+        lines.push(format!(
+            "start: positions assembled (closed loops): {}",
+            list(&report.assembled, "")
+        ));
+    }
+    if !at_rest && !report.solved.is_empty() {
+        lines.push(format!(
+            "start: rates solved (loops closed, flexible bodies moving rigidly): {}",
+            list(&report.solved, "")
+        ));
+    }
+    if report.modal > 0 {
+        lines.push(format!(
+            "start: {} modal coordinates at zero with zero rate (bodies undeformed, no strain rate)",
+            report.modal
+        ));
+    }
+    let json = serde_json::json!({
+        "choice": if at_rest { "at-rest" } else { "consistent" },
+        "drivers": report.drivers.iter().map(|(n, x, v)| serde_json::json!({"name": n, "value": x, "rate": v})).collect::<Vec<_>>(),
+        "initial": report.initial,
+        "assembled": report.assembled.iter().map(|(l, x)| serde_json::json!({"coordinate": l, "change": x})).collect::<Vec<_>>(),
+        "solved": if at_rest { Vec::new() } else { report.solved.iter().map(|(l, x)| serde_json::json!({"coordinate": l, "rate": x})).collect::<Vec<_>>() },
+        "unset": report.unset,
+        "modal_at_rest": report.modal,
+    });
+    (lines, json)
+}

@@ -2,7 +2,7 @@
 //! [`Simulation`], its sensors written a batch of rows at a time and its meshes at the output
 //! times ([`DynamicOutput`]).
 
-use super::dynamic_output::{DynamicOutput, Halt};
+use super::dynamic_output::{add_start_section, DynamicOutput, Halt};
 use super::outcome::Outcome;
 use super::simulation::{dynamic_start, Simulation};
 use crate::build::BuiltMechanism;
@@ -29,7 +29,7 @@ pub fn dynamic(
         return Err("internal error: not a dynamic analysis".into());
     };
     let t0 = Instant::now();
-    let first = dynamic_start(sys, start);
+    let first = dynamic_start(sys, start, study.mechanism.start);
     let t_start = first.time();
     if *t_end <= t_start {
         return Err(format!(
@@ -47,7 +47,11 @@ pub fn dynamic(
     let (totals, failure) = output.end_rows(study, b, integ.integrator(), run, obs)?;
     out.failure = failure;
     obs.progress(&Progress::Finished);
-    output.finish(analysis, b, integ.integrator(), &totals, obs, out)
+    output.finish(analysis, b, integ.integrator(), &totals, obs, out)?;
+    if start.is_none() {
+        add_start_section(study, sys, out);
+    }
+    Ok(())
 }
 
 /// The progress after step `done` of a run to `t_end`: steps of the planned, or the share of

@@ -244,6 +244,16 @@ impl DynamicOutput {
     }
 }
 
+/// The start of the mechanism at t = 0 (what the drivers and `[[initial]]` set and how the
+/// rest was solved) at the top of the report of `out` and in its results, for an analysis
+/// that starts from t = 0 rather than from another analysis.
+pub fn add_start_section(study: &Study, sys: &System, out: &mut Outcome) {
+    let at_rest = study.mechanism.start == crate::input::validate::mechanism::StartChoice::AtRest;
+    let (lines, json) = crate::output::summary::start_section(sys.start_report(), at_rest);
+    out.report.splice(0..0, lines);
+    out.results["start"] = json;
+}
+
 /// The report lines of the steps taken.
 fn report(analysis: &MbsAnalysis, integ: &Integrator, totals: &mbs::StepTotals, t_start: f64, out: &mut Outcome) {
     let MbsAnalysis::Dynamic {

@@ -126,7 +126,7 @@ impl Simulation {
         let mut runner = Runner::new(study, options);
         let system = Arc::new(runner.mechanism(&mut ())?.system(study)?);
         let start = runner.start_state(i)?;
-        let first = simulation::dynamic_start(&system, start.as_ref());
+        let first = simulation::dynamic_start(&system, start.as_ref(), study.mechanism.start);
         Self::with_start(study, system, runner.mechanism(&mut ())?, spec, first)
     }
 
@@ -147,7 +147,7 @@ impl Simulation {
         let mut runner = Runner::new(study, options);
         let system = Arc::new(runner.mechanism(&mut ())?.system(study)?);
         let start = runner.start_state(i)?;
-        let first = simulation::dynamic_start(&system, start.as_ref());
+        let first = simulation::dynamic_start(&system, start.as_ref(), study.mechanism.start);
         let mut summary = runner.summary.clone();
         let built = runner.into_mechanism().ok_or("the mechanism could not be built")?;
         let mut sim = Self::with_start(study, system, &built, spec, first)?;

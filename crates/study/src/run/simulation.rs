@@ -6,11 +6,12 @@
 //! program writes. [`Simulation::new`] (in `run`) builds the mechanism and asks the
 //! [`super::Runner`] for the state its `start` names.
 
-use super::dynamic_output::{DynamicOutput, Halt};
+use super::dynamic_output::{add_start_section, DynamicOutput, Halt};
 use super::outcome::{record_outcome, Outcome, Recorded};
 use super::sensors::{sensor_columns, sensor_indices};
 use crate::build::{BuiltMechanism, LoadTarget, NamedLoad};
 use crate::error::{BoxError, Location};
+use crate::input::validate::mechanism::StartChoice;
 use crate::input::validate::{MbsAnalysis, Study};
 use crate::output::folder::ResultsFolder;
 use crate::output::observer::{AnalysisInfo, Observer};
@@ -83,12 +84,15 @@ impl Recording {
             None => Ok((self.totals.clone(), None)),
         };
         let folder = &mut self.folder;
-        let (study, built, spec) = (&self.study, &self.built, &self.spec);
+        let (study, built, spec, index) = (&self.study, &self.built, &self.spec, self.index);
         let result = || -> Result<Outcome, BoxError> {
             let (totals, failure) = output.end_rows(study, built, integ, run, folder)?;
             let mut out = Outcome::of_mechanism(study, built, integ.system());
             out.failure = failure;
             output.finish(spec, built, integ, &totals, folder, &mut out)?;
+            if study.analyses[index].start.is_none() {
+                add_start_section(study, integ.system(), &mut out);
+            }
             Ok(out)
         };
         let result = result();
@@ -173,7 +177,7 @@ impl Simulation {
         b: &BuiltMechanism,
         spec: &MbsAnalysis,
     ) -> Result<Self, BoxError> {
-        let state = system.initial_state();
+        let state = initial_state(&system, study.mechanism.start);
         Self::with_start(study, system, b, spec, state)
     }
 
@@ -529,12 +533,22 @@ impl Drop for Simulation {
     }
 }
 
-/// The first state of a `dynamic` analysis: the initial state, or the final state of the
-/// analysis named in `start` (from an equilibrium: at rest in its configuration at its time).
-pub fn dynamic_start(sys: &System, start: Option<&mbs::State>) -> mbs::State {
+/// The first state of a `dynamic` analysis: the initial state as `[[initial]] start` chooses
+/// (`choice`), or the final state of the analysis named in `start` (from an equilibrium: at
+/// rest in its configuration at its time).
+pub fn dynamic_start(sys: &System, start: Option<&mbs::State>, choice: StartChoice) -> mbs::State {
     match start {
         Some(s) if s.velocity().iter().all(|v| *v == 0.0) => sys.at_rest(s, s.time()),
         Some(s) => s.clone(),
-        None => sys.initial_state(),
+        None => initial_state(sys, choice),
+    }
+}
+
+/// The mechanism's state at t = 0 as `[[initial]] start` chooses: consistent (the start
+/// analysis of `mbs::System::initial_state`) or at rest.
+pub fn initial_state(sys: &System, choice: StartChoice) -> mbs::State {
+    match choice {
+        StartChoice::Consistent => sys.initial_state(),
+        StartChoice::AtRest => sys.initial_state_at_rest(),
     }
 }

@@ -14,7 +14,7 @@ use study::output::summary::Summary;
 use study::Options;
 
 /// `text` written as `<name>.toml` in a scratch folder, loaded, and run in memory.
-fn run(name: &str, text: &str) -> (Recorder, Result<Summary, String>, PathBuf) {
+pub(crate) fn run(name: &str, text: &str) -> (Recorder, Result<Summary, String>, PathBuf) {
     let dir = crate::scratch(name);
     let file = dir.join(format!("{name}.toml"));
     std::fs::write(&file, text).unwrap();
@@ -35,7 +35,7 @@ pub(crate) fn column(rec: &Recorder, analysis: &str, sensor: &str, c: usize) -> 
         .unwrap()
 }
 
-fn times(rec: &Recorder, analysis: &str) -> Vec<f64> {
+pub(crate) fn times(rec: &Recorder, analysis: &str) -> Vec<f64> {
     rec.analysis(analysis).unwrap().sensors.as_ref().unwrap().x.clone()
 }
 
@@ -50,7 +50,7 @@ fn results(rec: &Recorder, analysis: &str) -> serde_json::Value {
 }
 
 /// The reduced body of the first flexible body of the study at `file` (mass data).
-fn first_body(file: &std::path::Path) -> (reduction::ReducedBody, nalgebra::Isometry3<f64>) {
+pub(crate) fn first_body(file: &std::path::Path) -> (reduction::ReducedBody, nalgebra::Isometry3<f64>) {
     let study = study::load(file).unwrap();
     let b = study::build_mechanism(&study, &file.parent().unwrap().join("cache"), &mut ()).unwrap();
     ((*b.bodies[0].reduced).clone(), b.bodies[0].placement)

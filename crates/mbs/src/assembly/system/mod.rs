@@ -366,6 +366,8 @@ pub struct System {
     pub(crate) initial_plan: Vec<InitialPlan>,
     /// Drivers not zero at $t = 0$ and the nodes assembled with them (`initial::driver_starts`).
     pub(crate) driver_starts: Vec<crate::assembly::initial::DriverStart>,
+    /// The consistent start and how it was made (`initial_state.rs`).
+    pub(crate) start: Option<(State, crate::assembly::initial::StartReport)>,
     pub(crate) drivers: Vec<CompiledFunction>,
     /// User-defined forces ([`System::with_user_forces`]).
     pub(crate) user_forces: Vec<Arc<dyn UserForce>>,
@@ -465,7 +467,7 @@ impl System {
             })
             .collect();
         let dof_scale = dof_scales(&topo, size, &modal_scale);
-        Ok(Self {
+        let mut system = Self {
             model: model.clone(),
             topo,
             flexible,
@@ -476,6 +478,7 @@ impl System {
             joint_forces,
             initial_plan,
             driver_starts,
+            start: None,
             drivers,
             user_forces,
             elements,
@@ -485,7 +488,9 @@ impl System {
             stress_maxima,
             reactions_read,
             evaluated,
-        })
+        };
+        system.start = Some(system.consistent_start()?);
+        Ok(system)
     }
 
     /// The model this system was built from.
@@ -684,29 +689,31 @@ impl System {
         self.pattern.nnz()
     }
 
-    /// The model's initial configuration at $t = 0$ with its initial conditions applied
-    /// ([`crate::assembly::initial`]: joint values and rates move the subtree behind the joint rigidly,
-    /// body velocities, node velocities, rigid motion); accelerations zero (the dynamic solver
-    /// computes consistent ones), controllers at rest.
+    /// The consistent start at $t = 0$ ([`crate::assembly::initial`]): the initial
+    /// configuration with the drivers' and initial values, closed loops assembled, and the
+    /// rates solved from the drivers' and initial rates (every flexible body moving rigidly,
+    /// without strain rate); accelerations zero (the dynamic solver computes consistent ones),
+    /// controllers at rest.
     pub fn initial_state(&self) -> State {
-        let map = &self.topo.map;
-        let mut state = State {
-            time: 0.0,
-            scalars: vec![0.0; map.scalars.len()],
-            rotations: vec![UnitQuaternion::identity(); map.rotations.len()],
-            velocity: vec![0.0; map.n_dof],
-            acceleration: vec![0.0; map.n_dof],
-            frames: Vec::new(),
-            controls: Vec::new(),
-            account: None,
-        };
-        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
-        self.apply_drivers(&mut state, &mut pr, &mut pa);
-        self.apply_initial(&mut state);
-        let motions = self.node_motions(&state);
-        state.frames = self.flexible.iter().map(|f| rigid_fit(f, &motions)).collect();
-        self.start_controls(&mut state);
-        state
+        match &self.start {
+            Some((s, _)) => s.clone(),
+            None => unreachable!("System::new makes the start"),
+        }
+    }
+
+    /// How [`Self::initial_state`] was made: the drivers' values and rates at $t = 0$, the
+    /// initial conditions, the rates solved and the positions assembled.
+    pub fn start_report(&self) -> &crate::assembly::initial::StartReport {
+        match &self.start {
+            Some((_, r)) => r,
+            None => unreachable!("System::new makes the start"),
+        }
+    }
+
+    /// [`Self::initial_state`] at rest: the same configuration with every unknown's rate
+    /// zero (the drivers keep theirs). The explicit choice of a start at rest.
+    pub fn initial_state_at_rest(&self) -> State {
+        self.at_rest(&self.initial_state(), 0.0)
     }
 
     /// Restarts every controller's integral at zero at the state's time and configuration
@@ -1927,6 +1934,11 @@ fn check_initial_coordinates(model: &Model, topo: &Topology) -> Result<(), Model
             let j = &model.joints[joint.index()];
             match topo.joint_scalars[joint.index()].get(*coordinate) {
                 Some(&s) if matches!(map.scalars[s].slot, Slot::Unknown(_)) => {}
+                // A driven coordinate's rate is a condition of the start, checked against the
+                // driver's rate at t = 0.
+                Some(&s)
+                    if matches!(c, InitialCondition::JointRate { .. })
+                        && matches!(map.scalars[s].slot, Slot::Prescribed(p) if map.prescribed[p].0.is_some()) => {}
                 _ => {
                     return Err(invalid(
                         Some(Entity::InitialCondition(i)),
@@ -2041,7 +2053,7 @@ fn size_body(pos: &[Vector3<f64>]) -> f64 {
 
 /// A first guess of a flexible body's frame from its nodes: the orientation of interface 0 and
 /// the origin that fits the undeformed interface positions best (least squares, rotation fixed).
-fn rigid_fit(f: &FlexibleElement, motions: &[NodeMotion]) -> Frame {
+pub(super) fn rigid_fit(f: &FlexibleElement, motions: &[NodeMotion]) -> Frame {
     let R = motions[f.nodes[0]].R * f.offsets[0];
     let x = f.se.interface_positions();
     let mut r = Vector3::zeros();

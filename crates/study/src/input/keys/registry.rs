@@ -466,8 +466,8 @@ pub static TABLES: &[Table] = &[
     Table {
         path: "initial",
         header: "[[initial]]",
-        kinds_from: "which of `joint`, `at`, `body` is given",
-        kinds: &["joint", "point", "body"],
+        kinds_from: "which of `joint`, `at`, `body`, `start` is given",
+        kinds: &["joint", "point", "body", "start"],
         keys: &[
             key!("joint", "string", "", OPT, kinds ["joint"], "a joint whose coordinate gets an initial value and/or rate"),
             key!("coordinate", "integer", "", def("0"), kinds ["joint"], "which scalar coordinate of the joint"),
@@ -479,6 +479,7 @@ pub static TABLES: &[Table] = &[
             key!("velocity", VEC3, "m/s", def("`[0, 0, 0]`"), kinds ["point", "body"], "the velocity in global axes (of the point, or of the body at `point`)"),
             key!("angular_velocity", VEC3, "rad/s", def("`[0, 0, 0]`"), kinds ["point", "body"], "the spatial angular velocity (global axes)"),
             key!("point", VEC3, "m", def("the body's centre of mass at t = 0"), kinds ["body"], "the point about which a body's velocity is given"),
+            key!("start", "string", "", def(r#"`"consistent"`"#), kinds ["start"], range r#"`"consistent"`, `"at-rest"`"#, r#"how the mechanism starts (an entry of its own): `"consistent"`, the closed loops assembled at the drivers' and initial values and every rate solved from the drivers' and initial rates; `"at-rest"`, the same configuration with every coordinate's rate zero (a driver with a rate at t = 0 then starts with an impact)"#),
         ],
     },
     Table::plain(

@@ -329,6 +329,18 @@ impl Default for OutputSpec {
     }
 }
 
+/// How the mechanism starts at t = 0 (`[[initial]] start`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StartChoice {
+    /// The consistent start: the closed loops assembled at the drivers' and initial values,
+    /// every rate solved from the drivers' and initial rates (`mbs::System::initial_state`).
+    #[default]
+    Consistent,
+    /// The same configuration with every coordinate's rate zero; the drivers keep their rates
+    /// (`mbs::System::initial_state_at_rest`).
+    AtRest,
+}
+
 /// The validated mechanism.
 #[derive(Clone, Debug, Default)]
 pub struct Mechanism {
@@ -345,6 +357,8 @@ pub struct Mechanism {
     pub body_loads: Vec<BodyLoadSpec>,
     pub sensors: Vec<SensorSpec>,
     pub initial: Vec<InitialSpec>,
+    /// How the mechanism starts (`[[initial]] start`).
+    pub start: StartChoice,
     pub joint_springs: Vec<JointSpringSpec>,
     pub joint_limits: Vec<JointLimitSpec>,
     pub actuators: Vec<ActuatorSpec>,
@@ -540,8 +554,16 @@ impl Validator<'_> {
         // Before the sensors: an `actuator-effort` sensor names an actuator.
         self.joint_forces(file, &mut m);
         self.sensors(file, &mut m);
+        let mut start_given = false;
         for (i, c) in file.initial.iter().enumerate() {
             let path = KeyPath::root().key("initial").index(i);
+            if let Some(start) = &c.start {
+                if let Some(choice) = self.initial_start(&path, start, start_given) {
+                    m.start = choice;
+                }
+                start_given = true;
+                continue;
+            }
             if let Some(spec) = self.initial(&path, c, &m) {
                 m.initial.push(spec);
             }
@@ -1636,6 +1658,26 @@ impl Validator<'_> {
         Some((velocity, angular_velocity))
     }
 
+    /// An `[[initial]]` entry with `start`: how the mechanism starts, given once.
+    fn initial_start(&mut self, path: &KeyPath, start: &str, again: bool) -> Option<StartChoice> {
+        self.only_keys(path, "initial", "start", "the choice of the start");
+        if again {
+            self.err_key(&path.key("start"), "`start` is given twice in `[[initial]]`");
+            return None;
+        }
+        match start {
+            "consistent" => Some(StartChoice::Consistent),
+            "at-rest" => Some(StartChoice::AtRest),
+            other => {
+                self.err_key(
+                    &path.key("start"),
+                    format!("unknown start \"{other}\": \"consistent\" (the default: the drivers' and initial rates give every body a consistent velocity) or \"at-rest\" (every coordinate's rate zero, the drivers' impact at the first step included)"),
+                );
+                None
+            }
+        }
+    }
+
     fn initial(&mut self, path: &KeyPath, c: &InitialFile, m: &Mechanism) -> Option<InitialSpec> {
         match (&c.joint, &c.at, &c.body) {
             (Some(joint), None, None) => {
@@ -1727,7 +1769,7 @@ impl Validator<'_> {
                 })
             }
             _ => {
-                self.err(path, "give `joint` (with `value` and/or `rate`), `at` (a point, with `velocity` and/or `angular_velocity`) or `body` (with `velocity`, `angular_velocity` and `point`), one of them");
+                self.err(path, "give `joint` (with `value` and/or `rate`), `at` (a point, with `velocity` and/or `angular_velocity`) or `body` (with `velocity`, `angular_velocity` and `point`), one of them; or `start` alone");
                 None
             }
         }
