@@ -16,7 +16,7 @@ use pyo3::prelude::*;
 use study::input::keys::{self, Key, Table, TABLES};
 
 /// One member of a class as the stubs declare it; the docstring is the extension's.
-pub(crate) enum Member {
+pub enum Member {
     /// A read-only property and its Python type: `name: Final[type]`.
     Property(&'static str, &'static str),
     /// A method: its name and its signature after the name, `(self, t: float) -> int`.
@@ -32,7 +32,7 @@ pub(crate) enum Member {
 }
 
 /// A class of the extension as the stubs declare it.
-pub(crate) struct Class {
+pub struct Class {
     pub name: &'static str,
     /// Its bases as written in the stubs (`FlexmbsError, KeyError`); empty: none.
     pub bases: &'static str,

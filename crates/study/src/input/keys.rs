@@ -171,7 +171,7 @@ pub fn allowed(path: &str, kind: &str) -> Vec<&'static str> {
 }
 
 /// Whether the number `x` given for `key` of the table at `path` is in the key's range. Reports
-/// nothing: [`check`] gave the message for the file; the validator asks this to know whether
+/// nothing: [`check()`] gave the message for the file; the validator asks this to know whether
 /// to build with the value.
 pub fn in_range(path: &str, key: &str, x: f64) -> bool {
     table(path).key(key).is_none_or(|k| k.range().admits(x))

@@ -83,7 +83,7 @@ impl Rows {
 }
 
 /// The results of a `dynamic` analysis as it is stepped, to an observer: the sensor rows and
-/// the meshes at the output times. A run writes them step by step ([`dynamic`]), and so does
+/// the meshes at the output times. A run writes them step by step ([`super::dynamic::dynamic`]), and so does
 /// a simulation stepped by its caller that keeps a results folder ([`super::Simulation::writing_results`]).
 pub struct DynamicOutput {
     rows: Rows,

@@ -65,7 +65,7 @@ fn visit(t: &'static Table, value: &toml::Table, at: &KeyPath, errors: &mut Vec<
     }
 }
 
-/// "missing key `h` [m] (with shape = \"rectangle\"): height along local z"; a doc longer
+/// "missing key `h` \[m\] (with shape = \"rectangle\"): height along local z"; a doc longer
 /// than a line of a terminal is left to the documentation.
 fn missing(t: &Table, key: &Key, kind: Option<&str>) -> String {
     let mut m = format!("missing key `{}`", key.name);
@@ -108,7 +108,7 @@ fn numbers(key: &Key, v: &toml::Value, at: &KeyPath, errors: &mut Vec<StudyError
     }
 }
 
-/// "E [Pa] must be positive and finite, got -7", "nu must lie in (-1, 0.5), got 0.5".
+/// "E \[Pa\] must be positive and finite, got -7", "nu must lie in (-1, 0.5), got 0.5".
 fn out_of_range(key: &Key, range: &Range, x: f64) -> String {
     let unit = if key.unit.is_empty() {
         String::new()
