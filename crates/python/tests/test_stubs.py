@@ -172,7 +172,7 @@ def test_mypy_accepts_a_script_that_uses_the_stubs_right(tmp_path, mypy_cache):
     [
         ('    steps_wrong: str = sim.advance_to(0.01)\n', "Incompatible types in assignment"),
         ('    study.run(analysis=3)\n', 'Argument "analysis" to "run" of "Study" has incompatible type "int"'),
-        ('    sim.step(1.0)\n', 'Too many arguments for "step" of "Simulation"'),
+        ('    sim.step("1 ms")\n', 'Argument 1 to "step" of "Simulation" has incompatible type "str"'),
         ('    output["every"] = "often"\n', 'Value of "every" has incompatible type "str"; expected "int"'),
         ('    mats: List[MaterialsTable] = study["output"]\n', "Incompatible types in assignment"),
     ],

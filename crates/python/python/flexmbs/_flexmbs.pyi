@@ -794,7 +794,8 @@ SensorsTable = TypedDict(
         "type": str,
         # the point, body, joint, driver or actuator measured (for position, displacement,
         # relative-position, rotation, velocity, angular-velocity, deflection, joint, joint-rate,
-        # modal, reaction, driver-effort, actuator-effort, stress; required)
+        # modal, reaction, driver-effort, actuator-effort, stress, acceleration,
+        # angular-acceleration; required)
         "of": str,
         # `["a.P", "a.Q"]`: the deflection is the distance of `of` from the line through these
         # points (for deflection; required)
@@ -812,6 +813,10 @@ SensorsTable = TypedDict(
         "node_at": List[float],
         # or a node set of the part's mesh (for stress)
         "set": str,
+        # `"global"`: inertial axes; `"body"`: the axes of the point, turning with it (what an
+        # accelerometer fixed there reads) (`"global"`, `"body"`; for acceleration,
+        # angular-acceleration; default `"global"`)
+        "axes": str,
     },
     total=False,
 )
@@ -847,6 +852,12 @@ InitialTable = TypedDict(
         # the point about which a body's velocity is given ([m]; for body; default the body's centre
         # of mass at t = 0)
         "point": List[float],
+        # how the mechanism starts (an entry of its own): `"consistent"`, the closed loops assembled
+        # at the drivers' and initial values and every rate solved from the drivers' and initial
+        # rates; `"at-rest"`, the same configuration with every coordinate's rate zero (a driver
+        # with a rate at t = 0 then starts with an impact) (`"consistent"`, `"at-rest"`; for start;
+        # default `"consistent"`)
+        "start": str,
     },
     total=False,
 )
@@ -1208,9 +1219,11 @@ class Study:
         """Reduces the parts that have a `[parts.reduction]` (or the one named `part`) through the
         cache, as `flexmbs reduce` does without writing a results folder; returns
         `{part name: ReducedBody}`."""
-    def simulation(self, analysis: Optional[str] = None, cache: Optional[_Path] = None) -> "Simulation":
+    def simulation(self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None) -> "Simulation":
         """Starts the dynamic analysis `analysis` (default: the study's only dynamic analysis) for
-        stepping from Python; reduced bodies come through the cache as in a run."""
+        stepping from Python; reduced bodies come through the cache as in a run. With
+        `results_dir`, the simulation writes the results folder of the analysis as it steps
+        (the files `run(analysis)` writes), until `finish_results()`."""
 
 class Simulation:
     """A dynamic analysis stepped from Python (`Study.simulation`): `step()`, `advance_to(t)`,
@@ -1233,13 +1246,23 @@ class Simulation:
     """The names of the study's point loads (those `set_load` can change)."""
     actuator_names: Final[List[str]]
     """The names of the study's actuators (those `set_actuator` can hold)."""
-    def step(self) -> int:
-        """One time step; returns the Newton iterations it took. A step that fails raises
-        `SolveError` (`time`, `step`, `residual`, `analysis`; `file`, `line`, `key` of the
-        body it failed at) and leaves the state at the last
-        converged step: the simulation can go on (with a changed load or actuator, say)."""
+    def step(self, dt: Optional[float] = None) -> int:
+        """One time step under the analysis' step control, as `run()` takes it: a fixed step of
+        `dt` whose failure is retried with halved steps down to `dt_min`, or one adaptive
+        step; with `dt`, one step of that size (retried likewise), after which the analysis'
+        steps go on. Returns the Newton iterations it took (of every substep). A step that
+        fails even at the smallest step raises `SolveError` (`time`, `step`, `residual`,
+        `analysis`; `file`, `line`, `key` of the body it failed at) and leaves the state at the
+        last converged step: the simulation can go on (with a changed load or actuator, say)."""
     def advance_to(self, t: float) -> int:
-        """Steps until the time reaches `t`; returns the number of steps taken."""
+        """Steps (as `step()` does) until the time reaches `t`; returns the number of steps taken."""
+    def finish_results(self) -> Optional[Dict[str, Any]]:
+        """Ends the results folder of a simulation started with `results_dir`: writes the rows
+        still waiting, the report and the summary (what `run()` writes for the analysis) and
+        returns the summary (a dict); `None` when the simulation writes no folder or its
+        results have ended. The simulation can step on. A file that could not be written, or
+        a sensor that is no longer finite, raises (the summary says `failed`). A simulation
+        that is dropped ends its results the same way."""
     def sensor_columns(self, name: str) -> List[str]:
         """Column names (with units) of sensor `name`."""
     def sensor(self, name: str) -> _Array:
