@@ -233,12 +233,19 @@ pub fn default_results_dir(study: &Path) -> PathBuf {
 /// the report, and the same as JSON for `summary.json`.
 pub fn start_section(report: &mbs::StartReport, at_rest: bool) -> (Vec<String>, serde_json::Value) {
     let mut lines = Vec::new();
+    // The report lists the values above round-off of the largest (the start's solve leaves
+    // components of about 1e-14 of it where the motion has none); summary.json keeps them all.
     let list = |items: &[(String, f64)], unit: &str| {
-        items
+        let big = items.iter().map(|(_, x)| x.abs()).fold(0.0, f64::max);
+        let shown: Vec<String> = items
             .iter()
+            .filter(|(_, x)| x.abs() > 1e-12 * big)
             .map(|(l, x)| format!("{l} {x:.6e}{unit}"))
-            .collect::<Vec<_>>()
-            .join(", ")
+            .collect();
+        match items.len() - shown.len() {
+            0 => shown.join(", "),
+            n => format!("{} ({n} more at round-off)", shown.join(", ")),
+        }
     };
     let moving: Vec<&(String, f64, f64)> = report.drivers.iter().filter(|d| d.1 != 0.0 || d.2 != 0.0).collect();
     if at_rest {
