@@ -196,17 +196,17 @@ fn files_below(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
+/// The name of the first dynamic analysis of `study`.
+fn dynamic_analysis(study: &study::input::validate::Study) -> String {
+    let a = study.analyses.iter().find(|a| a.kind_name() == "dynamic").unwrap();
+    a.name.clone()
+}
+
 #[test]
 fn a_simulation_stepped_to_its_end_writes_the_results_folder_of_the_run() {
     let file = example_as("slider_crank", "stepped-results");
     let study = study::load(&file).unwrap();
-    let name = study
-        .analyses
-        .iter()
-        .find(|a| a.kind_name() == "dynamic")
-        .unwrap()
-        .name
-        .clone();
+    let name = dynamic_analysis(&study);
     let dir = file.parent().unwrap();
     let options = |out: &str| Options {
         out: Some(dir.join(out)),
@@ -254,13 +254,7 @@ fn a_simulation_stepped_to_its_end_writes_the_results_folder_of_the_run() {
 fn a_simulation_dropped_mid_way_leaves_a_summary_that_says_how_far_it_got() {
     let file = example_as("four_bar", "stepped-dropped");
     let study = study::load(&file).unwrap();
-    let name = study
-        .analyses
-        .iter()
-        .find(|a| a.kind_name() == "dynamic")
-        .unwrap()
-        .name
-        .clone();
+    let name = dynamic_analysis(&study);
     let dir = file.parent().unwrap();
     let options = options_in(dir, None);
     let mut sim = Simulation::writing_results(&study, &name, &options).unwrap();

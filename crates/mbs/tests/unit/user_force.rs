@@ -23,14 +23,14 @@ use superelement::testing::Rng;
 /// kind of dependence (positions, orientation, velocity, angular velocity). With `analytic`, it
 /// gives its Jacobians; without, the solver differentiates it.
 #[derive(Debug)]
-struct Bushing {
-    nodes: [NodeId; 2],
-    k: f64,
-    c: f64,
-    g0: Vector3<f64>,
-    n0: Vector3<f64>,
-    mu: f64,
-    analytic: bool,
+pub(crate) struct Bushing {
+    pub nodes: [NodeId; 2],
+    pub k: f64,
+    pub c: f64,
+    pub g0: Vector3<f64>,
+    pub n0: Vector3<f64>,
+    pub mu: f64,
+    pub analytic: bool,
 }
 
 impl Bushing {

@@ -35,7 +35,7 @@ pub use selection::{Selection, UnknownName};
 pub use simulation::Simulation;
 
 use crate::error::BoxError;
-use crate::input::validate::{AnalysisSpec, Study};
+use crate::input::validate::{AnalysisSpec, MbsAnalysis, Study};
 use crate::output::folder::ResultsFolder;
 use crate::output::observer::Observer;
 use crate::output::summary::Summary;
@@ -118,16 +118,8 @@ impl Simulation {
     /// starts its dynamic analysis called `analysis` (from the final state of the analysis
     /// named in its `start`, which the runner runs first, without output).
     pub fn new(study: &Study, analysis: &str, options: &Options) -> Result<Self, BoxError> {
-        let i = study.analysis(analysis)?;
-        let a = &study.analyses[i];
-        let AnalysisSpec::Mbs(spec) = &a.spec else {
-            return Err(format!("analysis '{analysis}' is not an analysis of the mechanism").into());
-        };
-        let mut runner = Runner::new(study, options);
-        let system = Arc::new(runner.mechanism(&mut ())?.system(study)?);
-        let start = runner.start_state(i)?;
-        let first = simulation::dynamic_start(&system, start.as_ref(), study.mechanism.start);
-        Self::with_start(study, system, runner.mechanism(&mut ())?, spec, first)
+        let mut p = Prepared::new(study, analysis, options)?;
+        Self::with_start(study, p.system, p.runner.mechanism(&mut ())?, p.spec, p.first)
     }
 
     /// [`Simulation::new`] writing the results folder of its analysis as it steps (the
@@ -137,29 +129,23 @@ impl Simulation {
     /// and so does the summary, `complete` or `failed`; until then it says `running`.
     pub fn writing_results(study: &Study, analysis: &str, options: &Options) -> Result<Self, BoxError> {
         let i = study.analysis(analysis)?;
-        let a = &study.analyses[i];
-        let AnalysisSpec::Mbs(spec) = &a.spec else {
-            return Err(format!("analysis '{analysis}' is not an analysis of the mechanism").into());
-        };
         let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
         let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
         let began = std::time::Instant::now();
-        let mut runner = Runner::new(study, options);
-        let system = Arc::new(runner.mechanism(&mut ())?.system(study)?);
-        let start = runner.start_state(i)?;
-        let first = simulation::dynamic_start(&system, start.as_ref(), study.mechanism.start);
-        let mut summary = runner.summary.clone();
+        let Prepared {
+            spec,
+            runner,
+            system,
+            first,
+        } = Prepared::new(study, analysis, options)?;
+        let summary = runner.summary.clone();
         let built = runner.into_mechanism().ok_or("the mechanism could not be built")?;
         let mut sim = Self::with_start(study, system, &built, spec, first)?;
         let info = runner::analysis_info(study, i);
         folder.summary(&summary)?;
         folder.begin(&info)?;
         let output = dynamic_output::DynamicOutput::start(study, &built, sim.integrator(), &mut folder, began)?;
-        summary.status = "running".into();
-        let planned = match simulation::stepping(spec) {
-            Some(mbs::Stepping::Fixed { .. }) => Some(mbs::fixed_steps(sim.time(), sim.end_time(), sim.step_size()).0),
-            _ => None,
-        };
+        let planned = sim.planned_steps();
         sim.keep_results(simulation::Recording {
             folder,
             output: Some(output),
@@ -174,5 +160,34 @@ impl Simulation {
             halted: None,
         });
         Ok(sim)
+    }
+}
+
+/// A dynamic analysis of the mechanism ready to step: its spec, the runner that built the
+/// mechanism and ran the analyses its `start` names (without output), the system and the
+/// first state.
+struct Prepared<'s> {
+    spec: &'s MbsAnalysis,
+    runner: Runner<'s>,
+    system: Arc<mbs::System>,
+    first: mbs::State,
+}
+
+impl<'s> Prepared<'s> {
+    fn new(study: &'s Study, analysis: &str, options: &Options) -> Result<Self, BoxError> {
+        let i = study.analysis(analysis)?;
+        let AnalysisSpec::Mbs(spec) = &study.analyses[i].spec else {
+            return Err(format!("analysis '{analysis}' is not an analysis of the mechanism").into());
+        };
+        let mut runner = Runner::new(study, options);
+        let system = Arc::new(runner.mechanism(&mut ())?.system(study)?);
+        let start = runner.start_state(i)?;
+        let first = simulation::dynamic_start(&system, start.as_ref(), study.mechanism.start);
+        Ok(Self {
+            spec,
+            runner,
+            system,
+            first,
+        })
     }
 }

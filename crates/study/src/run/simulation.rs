@@ -357,6 +357,15 @@ impl Simulation {
         self.recording = Some(Box::new(recording));
     }
 
+    /// The fixed steps planned to the end time when the simulation was started (`None`:
+    /// adaptive steps).
+    pub(crate) fn planned_steps(&self) -> Option<usize> {
+        match self.stepping {
+            mbs::Stepping::Fixed { .. } => Some(self.plan.planned),
+            mbs::Stepping::Adaptive(_) => None,
+        }
+    }
+
     /// The integrator being stepped.
     pub fn integrator(&self) -> &mbs::Integrator<'static> {
         &self.integrator

@@ -4,6 +4,7 @@
 //! damped pendulum whose sensors are written every few steps.
 
 use crate::common::{dynamic, equilibrium, gravity, pendulum, sensor};
+use crate::setup::column;
 use study::output::observer::Recorder;
 
 const G: f64 = 9.81;
@@ -12,24 +13,14 @@ const G: f64 = 9.81;
 const I_O: f64 = 1.01;
 const L: f64 = 1.2;
 
-/// `text` run in memory in a scratch folder `name`; the recorder (a failure panics with its
-/// message).
+/// `text` run in memory in a scratch folder `name` (`setup::run`); the recorder (a failure
+/// panics with its message).
 fn run(name: &str, text: &str) -> Recorder {
-    let dir = crate::scratch(name);
-    let file = dir.join(format!("{name}.toml"));
-    std::fs::write(&file, text).unwrap();
-    let study = study::load(&file).unwrap();
-    let options = crate::options_in(&dir, None);
-    let mut rec = Recorder::default();
-    if let Err(e) = study::run_with(&study, &options, &mut rec) {
-        panic!("{}", study::error::chain(&*e));
+    let (rec, summary, _) = crate::setup::run(name, text);
+    if let Err(e) = summary {
+        panic!("{e}");
     }
     rec
-}
-
-fn column(rec: &Recorder, analysis: &str, sensor: &str, c: usize) -> Vec<f64> {
-    let sensors = rec.analysis(analysis).unwrap().sensors.as_ref().unwrap();
-    sensors.column(sensor, c).unwrap()
 }
 
 /// The pendulum with a point `P` at `L` below the pivot and sensors of its angle and rate, the

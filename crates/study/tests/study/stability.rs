@@ -6,15 +6,9 @@
 use study::output::observer::Recorder;
 use study::output::summary::Summary;
 
-/// `text` written as `<name>.toml` in a scratch folder, loaded, and run in memory.
+/// `text` run in memory in a scratch folder `name` (`setup::run`): the recorder and the summary.
 fn run(name: &str, text: &str) -> (Recorder, Result<Summary, String>) {
-    let dir = crate::scratch(name);
-    let file = dir.join(format!("{name}.toml"));
-    std::fs::write(&file, text).unwrap();
-    let study = study::load(&file).unwrap();
-    let options = crate::options_in(&dir, None);
-    let mut rec = Recorder::default();
-    let summary = study::run_with(&study, &options, &mut rec).map_err(|e| study::error::chain(&*e));
+    let (rec, summary, _) = crate::setup::run(name, text);
     (rec, summary)
 }
 
