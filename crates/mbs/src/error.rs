@@ -330,7 +330,7 @@ pub enum SolveError {
     /// `needed` $= $ [`crate::STOP_RESOLUTION`]$/\omega$ (`crate::assembly::joint_forces`,
     /// stops). Refused before the first step.
     #[error(
-        "joint limit '{limit}' on joint '{joint}': stiffness {stiffness:e} on the coordinate's inertia {inertia:e} (kg m^2 on an angle, kg on a length) is a stop of frequency sqrt(k/m) = {frequency:e} rad/s, which only steps of at most {needed:e} s resolve (omega h <= 0.1), but the smallest step is {min_step:e} s (dt_min, or the adaptive min_step): lower the stiffness or the smallest step"
+        "joint limit '{limit}' on joint '{joint}': stiffness {stiffness:e} on the coordinate's inertia {inertia:.4e} (kg m^2 on an angle, kg on a length) is a stop of frequency sqrt(k/m) = {frequency:.4e} rad/s, which only steps of at most {needed:.4e} s resolve (omega h <= 0.1), but the smallest step is {min_step:e} s (dt_min, or the adaptive min_step): lower the stiffness or the smallest step"
     )]
     UnresolvableLimit {
         limit: String,
@@ -346,7 +346,7 @@ pub enum SolveError {
     /// A step in contact with a joint limit's stop was longer than `needed` (see
     /// [`SolveError::UnresolvableLimit`]): it was taken back, to be cut (retried fixed steps,
     /// adaptive steps).
-    #[error("joint limit '{limit}' at {at} (step {step}): a step of {h:e} s in contact with its stop (frequency {frequency:e} rad/s) is longer than the {needed:e} s that resolve it")]
+    #[error("joint limit '{limit}' at {at} (step {step}): a step of {h:.4e} s in contact with its stop (frequency {frequency:.4e} rad/s) is longer than the {needed:.4e} s that resolve it")]
     LimitNotResolved {
         limit: String,
         /// Index in `Model::joint_limits`.
