@@ -325,6 +325,38 @@ pub enum SolveError {
         at: At,
         step: usize,
     },
+    /// A joint limit's stop rings faster than the smallest step allowed can resolve: its
+    /// frequency $\omega = \sqrt{k/m}$ on the coordinate's inertia $m$ needs steps of at most
+    /// `needed` $= $ [`crate::STOP_RESOLUTION`]$/\omega$ (`crate::assembly::joint_forces`,
+    /// stops). Refused before the first step.
+    #[error(
+        "joint limit '{limit}' on joint '{joint}': stiffness {stiffness:e} on the coordinate's inertia {inertia:.4e} (kg m^2 on an angle, kg on a length) is a stop of frequency sqrt(k/m) = {frequency:.4e} rad/s, which only steps of at most {needed:.4e} s resolve (omega h <= 0.1), but the smallest step is {min_step:e} s (dt_min, or the adaptive min_step): lower the stiffness or the smallest step"
+    )]
+    UnresolvableLimit {
+        limit: String,
+        /// Index in `Model::joint_limits`.
+        index: usize,
+        joint: String,
+        stiffness: f64,
+        inertia: f64,
+        frequency: f64,
+        needed: f64,
+        min_step: f64,
+    },
+    /// A step in contact with a joint limit's stop was longer than `needed` (see
+    /// [`SolveError::UnresolvableLimit`]): it was taken back, to be cut (retried fixed steps,
+    /// adaptive steps).
+    #[error("joint limit '{limit}' at {at} (step {step}): a step of {h:.4e} s in contact with its stop (frequency {frequency:.4e} rad/s) is longer than the {needed:.4e} s that resolve it")]
+    LimitNotResolved {
+        limit: String,
+        /// Index in `Model::joint_limits`.
+        index: usize,
+        at: At,
+        step: usize,
+        h: f64,
+        frequency: f64,
+        needed: f64,
+    },
 }
 
 /// ` (step 3)`, or nothing when the step is not known.
@@ -340,6 +372,9 @@ impl SolveError {
             Self::Body { id, .. } => Some(Entity::Body(*id)),
             Self::UserForce { index, .. } => Some(Entity::UserForce(*index)),
             Self::NonFiniteSensor { index, .. } => Some(Entity::Sensor(*index)),
+            Self::UnresolvableLimit { index, .. } | Self::LimitNotResolved { index, .. } => {
+                Some(Entity::JointLimit(*index))
+            }
             _ => None,
         }
     }
@@ -352,8 +387,9 @@ impl SolveError {
             | Self::Body { at, .. }
             | Self::UserForce { at, .. }
             | Self::NonFiniteSensor { at, .. }
-            | Self::NonFinite { at, .. } => Some(*at),
-            Self::InvalidSettings { .. } => None,
+            | Self::NonFinite { at, .. }
+            | Self::LimitNotResolved { at, .. } => Some(*at),
+            Self::InvalidSettings { .. } | Self::UnresolvableLimit { .. } => None,
         }
     }
 
@@ -363,9 +399,10 @@ impl SolveError {
             Self::NotConverged { step, .. }
             | Self::Singular { step, .. }
             | Self::NonFiniteSensor { step, .. }
-            | Self::NonFinite { step, .. } => Some(*step),
+            | Self::NonFinite { step, .. }
+            | Self::LimitNotResolved { step, .. } => Some(*step),
             Self::Body { step, .. } => *step,
-            Self::UserForce { .. } | Self::InvalidSettings { .. } => None,
+            Self::UserForce { .. } | Self::InvalidSettings { .. } | Self::UnresolvableLimit { .. } => None,
         }
     }
 
@@ -377,7 +414,8 @@ impl SolveError {
             Self::NotConverged { at, step, .. }
             | Self::Singular { at, step, .. }
             | Self::NonFiniteSensor { at, step, .. }
-            | Self::NonFinite { at, step, .. } => {
+            | Self::NonFinite { at, step, .. }
+            | Self::LimitNotResolved { at, step, .. } => {
                 *at = At::LoadFactor(lambda);
                 *step = load_step;
             }
@@ -386,7 +424,7 @@ impl SolveError {
                 *step = Some(load_step);
             }
             Self::UserForce { at, .. } => *at = At::LoadFactor(lambda),
-            Self::InvalidSettings { .. } => {}
+            Self::InvalidSettings { .. } | Self::UnresolvableLimit { .. } => {}
         }
         self
     }

@@ -189,6 +189,7 @@ pub use model::{merge, user_force};
 pub use solvers::dynamic as dynamic_solver;
 
 pub use assembly::initial::StartReport;
+pub use assembly::joint_forces::STOP_RESOLUTION;
 pub use assembly::system::momentum::{ExternalAction, MomentumProjection};
 pub use assembly::system::sensors::{Energies, PendingRows, SensorRecord};
 pub use assembly::system::{LinearSolver, Matrices, NodeKinematics, System, DENSE_MAX};

@@ -84,12 +84,26 @@ impl State {
     }
 }
 
-/// The state of one actuator's controller: the base $(t_n, z_n, e_n)$ of its integral.
+/// The state of one actuator's controller: the base $(t_n, z_n, e_n)$ of its integral and the
+/// branch of its saturation the current step is solved on.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Control {
     pub t: f64,
     pub z: f64,
     pub e: f64,
+    pub branch: Branch,
+}
+
+/// The branch of a saturated PID law $u = \mathrm{sat}(v)$ (`crate::assembly::joint_forces`):
+/// undecided (the law as a function of $v$, its kink included), linear ($u = v$), or saturated
+/// at $\pm u_{max}$.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Branch {
+    #[default]
+    Undecided,
+    Linear,
+    Upper,
+    Lower,
 }
 
 /// The running time integrals of the energy balance of a dynamic run

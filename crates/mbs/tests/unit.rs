@@ -136,3 +136,8 @@ mod scale_invariance;
 /// the load factor named.
 #[path = "unit/non_finite.rs"]
 mod non_finite;
+
+/// Saturated PID actuators (Newton through the saturation, the first step after a release)
+/// and joint limits (the energy at the contact onset, stiffnesses no step resolves).
+#[path = "unit/stops.rs"]
+mod stops;

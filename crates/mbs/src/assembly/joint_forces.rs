@@ -11,7 +11,7 @@
 //! * **Actuator** ([`crate::JointActuator`]) with an effort $u$ from a time function, $Q = u(t)$, or
 //!   from a PID law on a measured joint coordinate $y$ with the set-point $r(t)$:
 //!   $$e = r - y,\quad u = K_p e + K_i z + K_d(\dot r - \dot y),\quad z(t) = \int_0^t e\,d\tau,$$
-//!   optionally saturated at $|u| \le u_{max}$.
+//!   optionally saturated at $|u| \le u_{max}$: $u = \mathrm{sat}(v)$ of the linear law $v$ above.
 //! * **Held effort** ([`crate::System::set_actuator_effort`]): a caller (a controller or a
 //!   co-simulation partner outside the model) replaces an actuator's law by a value $u_h$ set
 //!   between time steps, $Q = u_h$ (no tangent) from the end of the next step, until it releases
@@ -29,6 +29,38 @@
 //! $(t_n, z_n, e_n)$ to its end ([`crate::System::accept_step`], called by the integrator), so
 //! a rejected or retried step restarts from the integral of the last accepted one. In statics
 //! the time does not advance and the integral is held.
+//!
+//! # Saturation: one branch per Newton solve
+//!
+//! $\mathrm{sat}(v)$ has a kink at $|v| = u_{max}$, and Newton with its exact piecewise
+//! derivative cycles across it: an iterate on a saturated branch has no PID term in the
+//! iteration matrix, so its correction (inertia alone against a gain $K_p + \gamma' K_d$ many
+//! times larger) overshoots onto the other saturated branch, and back (the residual stays near
+//! its start, e.g. 0.95 after 20 iterations, while the converged effort is far below $u_{max}$).
+//! A smooth saturation would not help: its derivative far out on a branch is as small. So each
+//! step is solved on one *branch* (a `Branch` in the controller's state): linear, $u = v$ with
+//! the tangent above, or saturated, $u = \pm u_{max}$ with zero tangent. On a branch the law is
+//! smooth and its tangent exact, so Newton converges as without a limit. The integrator picks
+//! the branch from $v$ at the predictor ([`JointForces::settle_branches`]) and checks it at the
+//! converged iterate: when $v$ there belongs to another branch, it switches and iterates on,
+//! one branch at a time (from a saturated branch to the linear one, never straight to the
+//! opposite bound: the two saturated solutions can each lie beyond the other's bound). A
+//! converged step is thus on the branch of its own $v$: the exact $\mathrm{sat}(v)$ (for one
+//! coordinate $F$ is monotone in $y$, so at most two switches are made).
+//! Anti-windup, consistent with the zero tangent: over a step solved on a saturated branch the
+//! integral is frozen, $z_{n+1} = z_n$ (conditional integration), so that $u$ depends on nothing
+//! and the controller leaves the saturation as soon as $v$ does. An undecided branch (statics,
+//! the start) evaluates $\mathrm{sat}(v)$ as it comes.
+//!
+//! # Stops that a step resolves
+//!
+//! A limit is a stiff spring: on the coordinate's inertia $m$ (the diagonal of $\mathbf M$ at
+//! the start) it rings at $\omega = \sqrt{k/m}$. A step much longer than $1/\omega$ enters it
+//! deep within one step and the contact's energy is not conserved (the work of a force that
+//! was zero for part of the step). The integrator therefore takes back a step that starts or
+//! ends in a stop with $\omega h > $ [`STOP_RESOLUTION`] and cuts it (retried fixed steps,
+//! adaptive steps), and refuses at the start a stop that the smallest step cannot resolve
+//! ([`crate::SolveError::UnresolvableLimit`]).
 
 #![allow(non_snake_case)]
 
@@ -38,7 +70,13 @@ use crate::error::{Entity, ModelError};
 use crate::ids::JointId;
 use crate::model::time_function::CompiledFunction;
 use crate::model::{Effort, Model, SensorKind};
-use crate::state::Control;
+use crate::state::{Branch, Control};
+
+/// The largest $\omega h$ of a step in contact with a stop (module docs): the entry's
+/// penetration within one step is at most $\dot x h$, holding at most
+/// $\tfrac12 k(\dot x h)^2 = (\omega h)^2\,\tfrac12 m\dot x^2$, 1 % of the impact's kinetic
+/// energy, and a contact of duration $\pi/\omega$ takes some 30 steps.
+pub const STOP_RESOLUTION: f64 = 0.1;
 
 #[derive(Clone, Debug)]
 struct Limit {
@@ -72,25 +110,44 @@ struct Pid {
 
 impl Pid {
     /// The effort at time `t` for the measured value `y` and rate `yd`, with the integral's
-    /// base.
+    /// base, on the base's branch (module docs; undecided: the branch of $v$).
     fn effort(&self, y: f64, yd: f64, t: f64, base: &Control) -> PidEffort {
         let (kp, ki, kd, max) = (self.kp, self.ki, self.kd, self.max);
         let (r, rd, _) = self.setpoint.eval(t);
         let e = r - y;
         let w = 0.5 * (t - base.t);
         let z = base.z + w * (base.e + e);
-        let u = kp * e + ki * z + kd * (rd - yd);
-        if u.abs() > max {
-            return PidEffort {
-                u: max.copysign(u),
-                du_dy: 0.0,
-                du_dyd: 0.0,
-            };
-        }
-        PidEffort {
+        let v = kp * e + ki * z + kd * (rd - yd);
+        let branch = match base.branch {
+            Branch::Undecided => self.branch(v),
+            b => b,
+        };
+        let saturated = |u: f64| PidEffort {
             u,
-            du_dy: -kp - ki * w,
-            du_dyd: -kd,
+            v,
+            du_dy: 0.0,
+            du_dyd: 0.0,
+        };
+        match branch {
+            Branch::Upper => saturated(max),
+            Branch::Lower => saturated(-max),
+            _ => PidEffort {
+                u: v,
+                v,
+                du_dy: -kp - ki * w,
+                du_dyd: -kd,
+            },
+        }
+    }
+
+    /// The branch of $\mathrm{sat}$ the linear law's value `v` lies on.
+    fn branch(&self, v: f64) -> Branch {
+        if v > self.max {
+            Branch::Upper
+        } else if v < -self.max {
+            Branch::Lower
+        } else {
+            Branch::Linear
         }
     }
 }
@@ -111,9 +168,11 @@ pub(crate) struct JointForces {
     actuators: Vec<Actuator>,
 }
 
-/// The effort of a PID law and its derivatives by $y$ and $\dot y$ (zero while saturated).
+/// The effort of a PID law, the linear law's value $v$, and the effort's derivatives by $y$
+/// and $\dot y$ (zero while saturated).
 struct PidEffort {
     u: f64,
+    v: f64,
     du_dy: f64,
     du_dyd: f64,
 }
@@ -447,6 +506,7 @@ impl JointForces {
                     t,
                     z: 0.0,
                     e: setpoint.eval(t).0 - x.scalars[*scalar],
+                    branch: Branch::Undecided,
                 },
             })
             .collect()
@@ -457,13 +517,58 @@ impl JointForces {
         for (a, c) in self.actuators.iter().zip(controls.iter_mut()) {
             if let Law::Pid(Pid { scalar, setpoint, .. }) = &a.law {
                 let e = setpoint.eval(t).0 - x.scalars[*scalar];
-                // Held: the integral is frozen (module docs).
-                if a.held.is_none() {
+                // Held or saturated: the integral is frozen (module docs, anti-windup).
+                let saturated = matches!(c.branch, Branch::Upper | Branch::Lower);
+                if a.held.is_none() && !saturated {
                     c.z += 0.5 * (t - c.t) * (c.e + e);
                 }
                 c.e = e;
             }
             c.t = t;
         }
+    }
+
+    /// Puts each PID actuator's controller on the branch of its linear law's value $v$ at `t`
+    /// (module docs); `value(s)` is the value and rate of scalar coordinate `s`. Returns
+    /// whether a branch changed. A held actuator keeps its branch (its law does not act).
+    pub(crate) fn settle_branches(
+        &self,
+        value: &dyn Fn(usize) -> (f64, f64),
+        t: f64,
+        controls: &mut [Control],
+    ) -> bool {
+        let mut changed = false;
+        for (a, c) in self.actuators.iter().zip(controls.iter_mut()) {
+            if let (Law::Pid(pid), None) = (&a.law, a.held) {
+                let (y, yd) = value(pid.scalar);
+                // One branch at a time: from a saturated branch through the linear one, never
+                // to the opposite bound (both solutions can lie beyond the other's bound, a
+                // cycle, while the linear branch holds the solution).
+                let branch = match (c.branch, pid.branch(pid.effort(y, yd, t, c).v)) {
+                    (Branch::Upper, Branch::Lower) | (Branch::Lower, Branch::Upper) => Branch::Linear,
+                    (_, b) => b,
+                };
+                changed |= branch != c.branch;
+                c.branch = branch;
+            }
+        }
+        changed
+    }
+
+    /// The stops on unknown coordinates, with the inertias `M` (values on the system
+    /// pattern): (limit index, $k$, the diagonal $m$ of $\mathbf M$ on its coordinate).
+    pub(crate) fn stops(&self, M: &[f64]) -> Vec<(usize, f64, f64)> {
+        self.limits
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| l.slot.map(|slot| (i, l.k, M[slot])))
+            .collect()
+    }
+
+    /// Whether limit `index` is penetrated at the scalar coordinates `scalars`.
+    pub(crate) fn penetrated(&self, index: usize, scalars: &[f64]) -> bool {
+        let l = &self.limits[index];
+        let x = scalars[l.scalar];
+        x < l.lower || x > l.upper
     }
 }

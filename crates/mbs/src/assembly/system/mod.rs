@@ -267,6 +267,25 @@ pub(crate) struct Workspace {
     pub momentum: Vec<f64>,
 }
 
+/// A joint limit as a stop of a dynamic run ([`crate::assembly::joint_forces`], stops that a
+/// step resolves): a spring of stiffness $k$ on the coordinate's inertia $m$.
+#[derive(Clone, Debug)]
+pub(crate) struct Stop {
+    /// Index in `Model::joint_limits`.
+    pub index: usize,
+    pub name: String,
+    pub joint: String,
+    pub stiffness: f64,
+    pub inertia: f64,
+}
+
+impl Stop {
+    /// $\omega = \sqrt{k/m}$ [rad/s].
+    pub fn frequency(&self) -> f64 {
+        (self.stiffness / self.inertia).sqrt()
+    }
+}
+
 /// Up to this many unknowns the iteration matrix is factorised densely (LU with partial
 /// pivoting, in place in a preallocated buffer): for small systems the sparse LU's bookkeeping
 /// and allocations cost more than the $O(n^3)$ arithmetic. Measured with callgrind on the chain
@@ -738,6 +757,54 @@ impl System {
         self.apply_drivers(&mut s, &mut pr, &mut pa);
         self.joint_forces
             .accept(&values(&s, &pr, &pa), s.time, &mut state.controls);
+    }
+
+    /// Puts every PID actuator of `state` on the branch of its saturation that its linear
+    /// law's value there lies on ([`crate::assembly::joint_forces`], saturation); returns
+    /// whether a branch changed. The integrator calls it at the predictor and at each converged
+    /// iterate, so that a step is solved on one smooth branch and ends on its own.
+    pub fn settle_actuator_branches(&self, state: &mut State) -> bool {
+        if self.joint_forces.n_actuators() == 0 {
+            return false;
+        }
+        let map = &self.topo.map;
+        let mut s = state.clone();
+        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
+        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let x = values(&s, &pr, &pa);
+        let value = |sc: usize| {
+            let (v, d, _) = scalar_values(map, &x, sc);
+            (v, d)
+        };
+        self.joint_forces.settle_branches(&value, s.time, &mut state.controls)
+    }
+
+    /// The joint limits on unknown coordinates as stops of a dynamic run, with the inertias of
+    /// `ws` (evaluated with tangents): name, joint, stiffness, inertia ([`Stop`]).
+    pub(crate) fn stops(&self, ws: &Workspace) -> Vec<Stop> {
+        self.joint_forces
+            .stops(&ws.M)
+            .into_iter()
+            .map(|(index, stiffness, inertia)| {
+                let l = &self.model.joint_limits[index];
+                Stop {
+                    index,
+                    name: l.name.clone(),
+                    joint: self
+                        .model
+                        .joints
+                        .get(l.joint.index())
+                        .map_or_else(String::new, |j| j.name.clone()),
+                    stiffness,
+                    inertia,
+                }
+            })
+            .collect()
+    }
+
+    /// Whether joint limit `index` is penetrated at `state`.
+    pub(crate) fn limit_penetrated(&self, index: usize, state: &State) -> bool {
+        self.joint_forces.penetrated(index, &state.scalars)
     }
 
     /// Gives the free coordinates of independent node `n` the velocity $(\mathbf v, \boldsymbol\omega)$

@@ -3,9 +3,10 @@
 
 #![allow(non_snake_case)]
 
+use crate::assembly::joint_forces::STOP_RESOLUTION;
 use crate::assembly::system::momentum::MomentumProjection;
 use crate::assembly::system::sensors::{PendingRows, SensorRecord};
-use crate::assembly::system::{System, Workspace};
+use crate::assembly::system::{Stop, System, Workspace};
 use crate::error::{At, SolveError};
 use crate::state::State;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3, Vector6};
@@ -310,6 +311,9 @@ pub struct Integrator<'a> {
     history: AccelerationHistory,
     /// The step size of the last step and its decimals ([`step_end_time`]).
     step_decimals: (f64, usize),
+    /// The joint limits' stops with their inertias at the start (stops that a step resolves,
+    /// [`crate::assembly::joint_forces`]).
+    stops: Vec<Stop>,
 }
 
 /// Steps of one size whose start accelerations the full-Newton predictor fits (module docs,
@@ -661,6 +665,7 @@ impl<'a> Integrator<'a> {
         let mut state = state;
         state.acceleration.iter_mut().for_each(|a| *a = 0.0);
         system.evaluate_into(&mut state, 1.0, true, &mut ws)?;
+        let stops = system.stops(&ws);
         let mut acc: Vec<f64> = ws.F.iter().map(|f| -f).collect();
         ws.S.copy_from_slice(&ws.M);
         system.solve(&mut ws, &mut acc).map_err(|what| SolveError::Singular {
@@ -722,7 +727,73 @@ impl<'a> Integrator<'a> {
             factor_angles: Vec::new(),
             history: AccelerationHistory::default(),
             step_decimals: (f64::NAN, 0),
+            stops,
         })
+    }
+
+    /// Refuses a joint limit whose stop steps of `min_step` and more cannot resolve
+    /// ([`SolveError::UnresolvableLimit`]): the retried fixed steps and the adaptive steps
+    /// check it before they step.
+    pub fn check_stops(&self, min_step: f64) -> Result<(), SolveError> {
+        for stop in &self.stops {
+            let frequency = stop.frequency();
+            let needed = STOP_RESOLUTION / frequency;
+            if !(needed >= min_step) {
+                return Err(SolveError::UnresolvableLimit {
+                    limit: stop.name.clone(),
+                    index: stop.index,
+                    joint: stop.joint.clone(),
+                    stiffness: stop.stiffness,
+                    inertia: stop.inertia,
+                    frequency,
+                    needed,
+                    min_step,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Self::step`], taken back (the state at $t_n$ again) with
+    /// [`SolveError::LimitNotResolved`] when it starts or ends in a stop and is longer than
+    /// resolves it, $\omega h >$ [`STOP_RESOLUTION`] (module docs of
+    /// [`crate::assembly::joint_forces`]), unless it is no longer than `smallest`: the caller
+    /// cuts it.
+    pub(crate) fn step_resolving_stops(&mut self, smallest: f64) -> Result<StepReport, SolveError> {
+        self.a_prev.clone_from(&self.a);
+        let report = self.step()?;
+        let h = self.settings.step;
+        if h <= smallest {
+            return Ok(report);
+        }
+        let unresolved = self.stops.iter().find(|stop| {
+            h * stop.frequency() > STOP_RESOLUTION
+                && (self.system.limit_penetrated(stop.index, &self.prev)
+                    || self.system.limit_penetrated(stop.index, &self.state))
+        });
+        let Some(stop) = unresolved else {
+            return Ok(report);
+        };
+        let error = SolveError::LimitNotResolved {
+            limit: stop.name.clone(),
+            index: stop.index,
+            at: At::Time(self.state.time),
+            step: self.steps,
+            h,
+            frequency: stop.frequency(),
+            needed: STOP_RESOLUTION / stop.frequency(),
+        };
+        self.take_back();
+        Err(error)
+    }
+
+    /// Takes the last accepted step back: the state at $t_n$, its algorithmic accelerations
+    /// (kept in `a_prev` before the step), no predictor history.
+    fn take_back(&mut self) {
+        self.state.clone_from(&self.prev);
+        self.history.clear();
+        self.a.clone_from(&self.a_prev);
+        self.steps -= 1;
     }
 
     pub fn state(&self) -> &State {
@@ -763,13 +834,13 @@ impl<'a> Integrator<'a> {
                 ),
             });
         }
+        self.check_stops(adaptive.min_step)?;
         let c = (self.p.beta - 1.0 / 6.0).abs();
         let mut rejected = 0;
         loop {
             let h = self.settings.step.clamp(adaptive.min_step, adaptive.max_step);
             self.settings.step = h;
-            self.a_prev.clone_from(&self.a);
-            match self.step() {
+            match self.step_resolving_stops(adaptive.min_step) {
                 Ok(report) => {
                     for i in 0..self.dx.len() {
                         self.dx[i] = h * h * c * (self.a[i] - self.a_prev[i]);
@@ -796,13 +867,15 @@ impl<'a> Integrator<'a> {
                         });
                     }
                     // Rejected: back to t_n.
-                    self.state.clone_from(&self.prev);
-                    self.history.clear();
-                    self.a.clone_from(&self.a_prev);
-                    self.steps -= 1;
+                    self.take_back();
                     self.settings.step = h * (0.9 * (adaptive.tolerance / error).cbrt()).clamp(0.2, 0.9);
                 }
-                Err(e @ (SolveError::NotConverged { .. } | SolveError::Singular { .. } | SolveError::Body { .. })) => {
+                Err(
+                    e @ (SolveError::NotConverged { .. }
+                    | SolveError::Singular { .. }
+                    | SolveError::Body { .. }
+                    | SolveError::LimitNotResolved { .. }),
+                ) => {
                     self.a.clone_from(&self.a_prev);
                     if h <= adaptive.min_step {
                         return Err(e);
@@ -919,6 +992,8 @@ impl<'a> Integrator<'a> {
         }
         let t = step_end_time_with(self.prev.time, h, self.step_decimals.1);
         self.predict(sys, modified, h, t);
+        // A saturated PID is solved on the branch of its predictor (joint_forces, saturation).
+        sys.settle_actuator_branches(&mut self.trial);
         let step = self.steps + 1;
         let tol = self.settings.tolerance;
         // The round-off of the inertia forces of this step (from the last mass matrix): the
@@ -946,13 +1021,21 @@ impl<'a> Integrator<'a> {
                 with_tangents = true;
                 norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
             }
+            // Converged on a PID saturation's branch that its own effort has left: switch the
+            // branch and iterate on (joint_forces, saturation).
+            let switched = converged(&self.ws, norm) && sys.settle_actuator_branches(&mut self.trial);
+            if switched {
+                sys.evaluate_into(&mut self.trial, 1.0, true, &mut self.ws)?;
+                with_tangents = true;
+                norm = self.ws.F.iter().map(|x| x * x).sum::<f64>().sqrt();
+            }
             let rel = if self.ws.scale > 0.0 {
                 norm / self.ws.scale
             } else {
                 norm
             };
             residuals.push(rel);
-            if converged(&self.ws, norm) {
+            if !switched && converged(&self.ws, norm) {
                 if modified && with_tangents {
                     // Tangents scheduled by a poor contraction arrived with the converging
                     // evaluation: factorise them for the next step rather than waste them.
@@ -979,7 +1062,7 @@ impl<'a> Integrator<'a> {
             // stale or the last correction contracted the residual too little (or it grew).
             // A poor contraction (rel > rate * last_rel) schedules tangents with the next
             // evaluation instead of a second evaluation here; a growing residual refreshes now.
-            let refresh = !modified || stale || self.refresh_next || rel > last_rel;
+            let refresh = !modified || stale || self.refresh_next || rel > last_rel || switched;
             if modified && !refresh && rel > MODIFIED_NEWTON_RATE * last_rel {
                 self.refresh_next = true;
             }

@@ -12,6 +12,11 @@
 //! The generalized-α recursion holds for any sequence of step sizes (the algorithmic
 //! acceleration is carried over), so the retried interval is integrated by the same scheme;
 //! its local error is that of the smaller steps.
+//!
+//! A step that starts or ends in a joint limit's stop and is too long to resolve it is taken
+//! back and retried the same way ([`crate::SolveError::LimitNotResolved`], the stops of
+//! [`crate::assembly::joint_forces`]); a stop that no step down to `min_step` resolves is
+//! refused before the first step ([`crate::SolveError::UnresolvableLimit`]).
 
 use super::integrator::{fixed_steps, last_step_size, DynamicSettings, Integrator, StepReport};
 use super::trajectory::{finished, start_trajectory, stopped, Trajectory};
@@ -60,8 +65,17 @@ pub struct RetriedTrajectory {
 fn retriable(e: &SolveError) -> bool {
     matches!(
         e,
-        SolveError::NotConverged { .. } | SolveError::Singular { .. } | SolveError::Body { .. }
+        SolveError::NotConverged { .. }
+            | SolveError::Singular { .. }
+            | SolveError::Body { .. }
+            | SolveError::LimitNotResolved { .. }
     )
+}
+
+/// A step of the retry (`Integrator::step_resolving_stops`): taken back when it does not
+/// resolve a joint limit's stop, unless it can no longer be halved above `min_step`.
+fn retry_step(integ: &mut Integrator, min_step: f64) -> Result<StepReport, SolveError> {
+    integ.step_resolving_stops(2.0 * min_step * (1.0 - 2e-12))
 }
 
 /// One step of the integrator's step size $h$; when its Newton iteration fails, the interval
@@ -69,8 +83,11 @@ fn retriable(e: &SolveError) -> bool {
 /// integrator's step size is $h$ again afterwards; on failure its state is the last converged
 /// one.
 pub fn step_retrying(integ: &mut Integrator, min_step: f64) -> Result<RetriedStep, Box<RetryFailure>> {
+    if let Err(error) = integ.check_stops(min_step) {
+        return Err(Box::new(RetryFailure { error, retry: None }));
+    }
     let h = integ.step_size();
-    let cause = match integ.step() {
+    let cause = match retry_step(integ, min_step) {
         Ok(report) => {
             return Ok(RetriedStep {
                 reports: vec![report],
@@ -97,7 +114,7 @@ pub fn step_retrying(integ: &mut Integrator, min_step: f64) -> Result<RetriedSte
         }
         retry.smallest_step = retry.smallest_step.min(sub);
         integ.set_step_size(sub.min(left));
-        match integ.step() {
+        match retry_step(integ, min_step) {
             Ok(rep) => {
                 reports.push(rep);
                 retry.substeps += 1;
