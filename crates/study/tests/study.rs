@@ -817,7 +817,9 @@ fn a_failed_write_names_its_file_and_leaves_no_temporary() {
         vec![std::ffi::OsString::from("summary.json")],
         "temporaries left: {left:?}"
     );
-    // A full disk (/dev/full) under a sensor file: the error names that file, not the summary.
+    // A symbolic link (to /dev/full) under a sensor file's name: nothing is written through
+    // it; the error names that file, not the summary, and the link stays. (A full disk itself:
+    // the program's tests under a file-size limit, crates/cli/tests/cli/results_folder.rs.)
     let file = example_as("four_bar", "full-four-bar");
     let study = study::load(&file).unwrap();
     let options = Options {
@@ -832,10 +834,12 @@ fn a_failed_write_names_its_file_and_leaves_no_temporary() {
     std::os::unix::fs::symlink("/dev/full", target.join(format!("{sensor}.csv"))).unwrap();
     let e = study::error::report(&*study::run(&study, &options, &mut Recorder::default()).unwrap_err());
     assert!(
-        e.contains(&format!("{sensor}.csv")) && e.contains("No space left"),
+        e.contains(&format!("{sensor}.csv")) && e.contains("is a symbolic link"),
         "{e}"
     );
     assert!(!e.contains("cannot write the summary"), "{e}");
+    let link = target.join(format!("{sensor}.csv"));
+    assert_eq!(std::fs::read_link(&link).unwrap(), Path::new("/dev/full"));
 }
 
 #[test]

@@ -6,8 +6,8 @@
 //! ```text
 //! <results>/
 //!   summary.json, summary.md      rewritten after every analysis
-//!   .flexmbs-manifest             the files flexmbs wrote here (crate::output::folder)
-//!   .flexmbs-lock                 while a run writes here (crate::output::folder)
+//!   .flexmbs-manifest             the files flexmbs wrote here, with their SHA-256 (crate::output::folder)
+//!   .flexmbs-lock                 locked by the operating system while a run writes here (crate::output::folder)
 //!   <analysis>/                   one folder per analysis, named by it
 //!     *.csv                       result groups, header "name (unit)"
 //!     *.vtu, *.pvd                ParaView: mesh and displacement fields (crate::output::vtu)
