@@ -8,11 +8,20 @@ fn main() -> ExitCode {
     if args.first().map(String::as_str) == Some("validate") {
         return validate(args[1..].to_vec());
     }
-    // Ctrl-C: a second one ends the program at once (exit 130), the first asks the run to
-    // stop at its next output step (`study::interrupt`).
+    // Ctrl-C (SIGINT) and SIGTERM (what batch schedulers and `kill` send): the first asks
+    // the run to stop at its next output step with a truthful summary (`study::interrupt`,
+    // which also learns which signal it was), a second ends the program at once (exit 130
+    // and 143, the shells' 128 + signal). The handlers only set atomics.
     let flag = study::interrupt::flag();
-    let _ = signal_hook::flag::register_conditional_shutdown(signal_hook::consts::SIGINT, 130, flag.clone());
-    let _ = signal_hook::flag::register(signal_hook::consts::SIGINT, flag);
+    let signal = study::interrupt::signal();
+    for (sig, tag, code) in [
+        (signal_hook::consts::SIGINT, study::interrupt::SIGINT, 130),
+        (signal_hook::consts::SIGTERM, study::interrupt::SIGTERM, 143),
+    ] {
+        let _ = signal_hook::flag::register_conditional_shutdown(sig, code, flag.clone());
+        let _ = signal_hook::flag::register_usize(sig, signal.clone(), tag);
+        let _ = signal_hook::flag::register(sig, flag.clone());
+    }
     match flexmbs::cli::main_with(&args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -43,3 +43,9 @@ mod command_line;
 /// outside the repository.
 #[path = "cli/docs.rs"]
 mod docs;
+
+/// Results folders: a user's file under one of our names kept (`--foreign-files keep`, a
+/// recreated analysis folder), a symbolic link refused, a full disk mid-run, SIGTERM, the
+/// lock of a running run.
+#[path = "cli/results_folder.rs"]
+mod results_folder;

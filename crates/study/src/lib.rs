@@ -33,7 +33,7 @@
 //! | `run` | the [`Runner`] and its start chain, the analyses of parts and of the mechanism, the cached reduction service, the [`Simulation`] stepped by the caller |
 //! | [`output`] | the observer, the results folder (CSV, VTU/PVD, PNG, summary) |
 //! | [`error`] | the boxed error with context and its report |
-//! | [`interrupt`] | Ctrl-C: a stop requested at the next output step |
+//! | [`interrupt`] | Ctrl-C and SIGTERM: a stop requested at the next output step |
 //!
 //! The face of the crate is this module: a study loaded ([`load`], [`parse_and_validate`],
 //! [`Document`]), run ([`run()`], [`run_with`], [`run_only`], [`run_selected`] with a

@@ -1,29 +1,49 @@
 //! The results folder as an [`Observer`]: tables as CSV, mesh frames as VTU files listed in a
 //! PVD collection, sensor streams as CSV files written whenever [`FLUSH_INTERVAL`] has passed,
-//! at an interruption and at their end (and a PNG per sensor at the end), reduced bodies copied, and `summary.json`/`summary.md` rewritten after every
-//! analysis. Layout in `crate::output`.
+//! at an interruption and at their end (and a PNG per sensor at the end), reduced bodies
+//! copied, and `summary.json`/`summary.md` rewritten after every analysis. Layout in
+//! `crate::output`.
 //!
 //! # What a run owns, and what it never touches
 //!
-//! - **Manifest** (`.flexmbs-manifest`): every file a run writes is appended to it (one path
-//!   per line, relative to the results folder) *before* the file is created, so an interrupted
-//!   run's files are known too. A run deletes only files listed there: at the start of an
-//!   analysis, the files an earlier run wrote for it (stale plots included); at the start of
-//!   the run, the files of analyses no longer in the study, and their folders when that
-//!   empties them. Nothing else is ever deleted.
-//! - **Foreign files**: a file in an analysis folder, or a `summary.json`/`summary.md`, that
-//!   the manifest does not list was not written by flexmbs. The run refuses to start
-//!   ([`ForeignFiles::Refuse`], the default) or writes beside them, leaving them alone
-//!   ([`ForeignFiles::Keep`], `--foreign-files keep`).
-//! - **Lock** (`.flexmbs-lock`, holding the process id): one run per results folder. A second
-//!   run stops with a message naming the process; a lock whose process no longer exists (a
-//!   run killed hard) is taken over.
+//! - **Manifest** (`.flexmbs-manifest`): every content a run writes is recorded there, as the
+//!   length and SHA-256 of the bytes and the path relative to the results folder, *before*
+//!   the bytes reach the file (so an interrupted run's files are known too); one line each,
+//!   `sha256 length path`, the manifest read as a log (a name keeps every content recorded
+//!   for it until the manifest is rewritten whole, at the start of a run and when it grows).
+//!   A file is the run's own when its name is listed and its bytes are one of the contents
+//!   recorded for it; a line with a path alone (a manifest of an older flexmbs) trusts the
+//!   name. Anything else under a name a run writes is the user's: a file the user put in
+//!   its place, a file in an analysis folder that was deleted and made again, a symbolic
+//!   link, a folder.
+//! - **Deleting**: only the run's own files, as just defined: at the start of an analysis,
+//!   the files an earlier run wrote for it (stale plots included); at the start of the run,
+//!   the files of analyses no longer in the study, and their folders when that empties them.
+//! - **Foreign files**: the user's files where a run writes (in an analysis folder, or a
+//!   `summary.json`/`summary.md`). The run refuses to start ([`ForeignFiles::Refuse`], the
+//!   default) or writes beside them ([`ForeignFiles::Keep`], `--foreign-files keep`). Either
+//!   way a user's file is never overwritten nor deleted: a run that would write under its
+//!   name stops there with a message naming it (the summary says `failed` and why).
+//! - **Symbolic links**: flexmbs creates none; an analysis folder or a file that is one is
+//!   the user's, and nothing is written through it (the results folder itself may be one).
+//! - **Whole files**: tables, meshes, plots, reduced bodies and the summary are written to a
+//!   temporary name beside the file and renamed, so a file is complete or absent. Sensor
+//!   rows are appended whole: a batch of rows goes to every sensor file, and when one write
+//!   fails (a full disk) every file of the stream is cut back to its last whole row, so they
+//!   end at the same row, and nothing more is appended. A file is listed in the summary once
+//!   it is written.
+//! - **Lock** (`.flexmbs-lock`): an operating-system lock on this file (`File::try_lock`)
+//!   held for the whole run, with the process id written in it for the message: a second
+//!   run stops with a message naming the process. The system releases the lock when the
+//!   process ends, however it ends, so a killed run's folder is free at once; the file stays
+//!   (deleting it would let a run waiting on the old file and a new one both lock).
 
 use crate::error::{BoxError, ResultExt};
 use crate::output::observer::{AnalysisInfo, Cell, Observer, SensorGroup, SensorStream, Series, Table};
 use crate::output::summary::{num, Csv, Summary};
-use crate::output::vtu::{write_pvd, write_vtu, PointField, VtuMesh};
-use std::collections::BTreeSet;
+use crate::output::vtu::{pvd_text, vtu_text, PointField, VtuMesh};
+use sha2::{Digest, Sha256};
+use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -34,26 +54,106 @@ use std::path::{Path, PathBuf};
 /// a mechanism step of about 100 µs (BENCHMARKS.md, the slider-crank C2 with a beam rod).
 pub const FLUSH_INTERVAL: std::time::Duration = std::time::Duration::from_millis(200);
 
+/// Where sensor rows are appended: a file, or in a test one that fails.
+trait Sink: Write + Send {
+    /// Cuts the file back to `len` bytes (its last whole row).
+    fn truncate(&mut self, len: u64) -> std::io::Result<()>;
+}
+
+impl Sink for std::fs::File {
+    fn truncate(&mut self, len: u64) -> std::io::Result<()> {
+        self.set_len(len)
+    }
+}
+
+/// One sensor's CSV file: the bytes on disk (`written`, hashed by `sha256`) and the rows
+/// waiting for the next write (`pending`, whole rows only).
+struct SensorFile {
+    sink: Box<dyn Sink>,
+    path: PathBuf,
+    rel: String,
+    written: u64,
+    sha256: Sha256,
+    pending: Vec<u8>,
+}
+
 /// A sensor stream being written: one CSV per sensor, and the values for the plots.
 struct Stream {
     x_label: String,
     groups: Vec<SensorGroup>,
     plots: bool,
-    files: Vec<(std::io::BufWriter<std::fs::File>, PathBuf)>,
+    files: Vec<SensorFile>,
     /// When the files were last flushed ([`FLUSH_INTERVAL`]).
     flushed: std::time::Instant,
+    /// The abscissa of the row waiting last, and of the last row written.
+    x_pending: Option<f64>,
+    x_written: Option<f64>,
+    /// The write that failed: nothing more is appended.
+    failed: Option<String>,
     x: Vec<f64>,
     rows: Vec<Vec<Vec<f64>>>,
 }
 
 impl Stream {
-    /// Writes every buffered row to its file; a failed write names the file.
-    fn flush(&mut self) -> Result<(), BoxError> {
-        for (w, path) in &mut self.files {
-            w.flush().context(|| format!("cannot write {}", path.display()))?;
+    /// Appends the waiting rows of every file, recording each file's new content in the
+    /// manifest first. A write that fails cuts every file back to its last whole row (they
+    /// end at the same row), stops the stream and is the error, naming the file.
+    fn flush(&mut self, manifest: &mut Manifest) -> Result<(), BoxError> {
+        if let Some(e) = &self.failed {
+            return Err(e.clone().into());
         }
+        let mut hashes = Vec::with_capacity(self.files.len());
+        for f in &self.files {
+            let mut h = f.sha256.clone();
+            h.update(&f.pending);
+            let len = f.written + f.pending.len() as u64;
+            if !f.pending.is_empty() {
+                manifest.record(&f.rel, Content::of(len, h.clone()))?;
+            }
+            hashes.push(h);
+        }
+        for k in 0..self.files.len() {
+            let f = &mut self.files[k];
+            if f.pending.is_empty() {
+                continue;
+            }
+            if let Err(e) = f.sink.write_all(&f.pending).and_then(|()| f.sink.flush()) {
+                let message = self.cut_back(k, e);
+                self.failed = Some(message.clone());
+                return Err(message.into());
+            }
+        }
+        for (f, h) in self.files.iter_mut().zip(hashes) {
+            f.written += f.pending.len() as u64;
+            f.sha256 = h;
+            f.pending.clear();
+        }
+        self.x_written = self.x_pending.or(self.x_written);
         self.flushed = std::time::Instant::now();
         Ok(())
+    }
+
+    /// After the write of file `k` failed with `e`: every file cut back to its last whole
+    /// row; the message names the file and the last row the files keep.
+    fn cut_back(&mut self, k: usize, e: std::io::Error) -> String {
+        let mut message = format!("cannot write {}: {e}", self.files[k].path.display());
+        for f in &mut self.files {
+            if let Err(e) = f.sink.truncate(f.written) {
+                message.push_str(&format!(
+                    "; and cannot cut {} back to its last whole row: {e}",
+                    f.path.display()
+                ));
+            }
+        }
+        match self.x_written {
+            Some(x) => message.push_str(&format!(
+                "; the sensor files end at their last whole row, {} = {}",
+                self.x_label,
+                num(x)
+            )),
+            None => message.push_str("; the sensor files hold their header only"),
+        }
+        message
     }
 }
 
@@ -63,7 +163,8 @@ pub enum ForeignFiles {
     /// Refuse to write into a folder holding them (the default).
     #[default]
     Refuse,
-    /// Write beside them; they are never deleted (a file of the same name is replaced).
+    /// Write beside them; they are never overwritten nor deleted (a run that would write
+    /// under the name of one stops there, naming it).
     Keep,
 }
 
@@ -71,110 +172,320 @@ pub enum ForeignFiles {
 pub const MANIFEST: &str = ".flexmbs-manifest";
 /// The lock file of a results folder (module docs).
 pub const LOCK: &str = ".flexmbs-lock";
-const MANIFEST_HEADER: &str = "# files written by flexmbs into this results folder; only these are ever deleted by it";
+const MANIFEST_HEADER: &str = "# files written by flexmbs into this results folder (sha256, length, path); only these are ever deleted or replaced by it";
 
-/// The lock of a results folder, released when dropped.
-struct FolderLock(PathBuf);
+/// A content flexmbs wrote: its length and SHA-256 (hex).
+#[derive(Clone, Debug, PartialEq, Eq)]
+struct Content {
+    len: u64,
+    sha256: String,
+}
 
-impl Drop for FolderLock {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
+impl Content {
+    fn of(len: u64, h: Sha256) -> Self {
+        Self {
+            len,
+            sha256: h.finalize().iter().map(|b| format!("{b:02x}")).collect(),
+        }
+    }
+
+    fn of_bytes(bytes: &[u8]) -> Self {
+        Self::of(bytes.len() as u64, Sha256::new_with_prefix(bytes))
+    }
+
+    /// The content of the file at `path`.
+    fn of_file(path: &Path) -> std::io::Result<Self> {
+        let mut h = Sha256::new();
+        let len = std::io::copy(&mut std::fs::File::open(path)?, &mut h)?;
+        Ok(Self::of(len, h))
     }
 }
 
-/// Whether process `pid` exists (Linux: `/proc/<pid>`; elsewhere assumed alive).
-fn process_alive(pid: u32) -> bool {
-    let proc_dir = Path::new("/proc");
-    !proc_dir.is_dir() || proc_dir.join(pid.to_string()).exists()
+/// Whose a path of the results folder is (module docs).
+enum Owner {
+    Absent,
+    /// flexmbs wrote it: its content now.
+    Flexmbs(Content),
+    /// The user's: why it is not flexmbs's.
+    User(&'static str),
 }
 
-/// How long a run waits for the process id in a lock file another run has just created: the
-/// file is created empty (atomically, so that only one run gets it) and its id written right
-/// after, so a run starting at the same moment can find it empty for a few microseconds.
-const LOCK_PID_WAIT: std::time::Duration = std::time::Duration::from_millis(1000);
-
-/// What a run found in a lock file another run holds.
-enum LockHolder {
-    /// The process id written in it.
-    Process(u32),
-    /// The file was removed while being read: the other run has ended.
-    Released,
-    /// No process id appeared within [`LOCK_PID_WAIT`].
-    Unnamed,
+/// The manifest of a results folder (module docs).
+struct Manifest {
+    root: PathBuf,
+    /// Every content recorded for each name, the latest last; empty: a line of an older
+    /// manifest, the name alone.
+    files: BTreeMap<String, Vec<Content>>,
+    /// Lines appended since the manifest was written whole.
+    appended: usize,
 }
 
-/// Reads the lock file at `path` until it holds a process id, is removed, or
-/// [`LOCK_PID_WAIT`] has passed.
-fn read_lock_holder(path: &Path) -> LockHolder {
-    let start = std::time::Instant::now();
-    loop {
-        match std::fs::read_to_string(path) {
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return LockHolder::Released,
-            Ok(text) => {
-                if let Ok(pid) = text.trim().parse::<u32>() {
-                    return LockHolder::Process(pid);
-                }
-            }
-            Err(_) => {}
+impl Manifest {
+    /// The manifest of `root` (empty when there is none); refused when it is a symbolic link.
+    fn load(root: &Path) -> Result<Self, BoxError> {
+        let path = root.join(MANIFEST);
+        if is_symlink(&path) {
+            return Err(format!(
+                "{} is a symbolic link, which flexmbs does not create: it is left alone; remove it, or write elsewhere with --out",
+                path.display()
+            )
+            .into());
         }
-        if start.elapsed() >= LOCK_PID_WAIT {
-            return LockHolder::Unnamed;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
-}
-
-impl FolderLock {
-    /// Creates the lock file with this process's id; a lock held by a live process (or one
-    /// that never names its process) is refused, a dead process's lock or a lock released
-    /// meanwhile is taken (a few attempts, as other runs may be taking it at the same time).
-    fn acquire(root: &Path) -> Result<Self, BoxError> {
-        let path = root.join(LOCK);
-        for _ in 0..4 {
-            match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
-                Ok(mut f) => {
-                    let _ = writeln!(f, "{}", std::process::id());
-                    return Ok(Self(path));
-                }
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => match read_lock_holder(&path) {
-                    LockHolder::Released => {}
-                    LockHolder::Process(pid) if !process_alive(pid) => {
-                        // A run killed hard left it: take it over.
-                        let _ = std::fs::remove_file(&path);
-                    }
-                    LockHolder::Process(pid) => {
-                        return Err(format!(
-                            "the results folder {} is in use by another flexmbs run (process {pid}): wait for it to finish or write elsewhere with --out; if no run is active, delete {}",
-                            root.display(),
-                            path.display()
-                        )
-                        .into())
-                    }
-                    LockHolder::Unnamed => {
-                        return Err(format!(
-                            "the results folder {} is in use by another flexmbs run that has not written its process id into {} within {} ms; if no run is active, delete it",
-                            root.display(),
-                            path.display(),
-                            LOCK_PID_WAIT.as_millis()
-                        )
-                        .into())
-                    }
+        let mut files: BTreeMap<String, Vec<Content>> = BTreeMap::new();
+        let text = std::fs::read_to_string(&path).unwrap_or_default();
+        // A last line without its newline was cut short (a full disk): ignored.
+        let whole = text.rfind('\n').map_or("", |end| &text[..end]);
+        for line in whole.lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#')) {
+            let (content, rel) = match line.splitn(3, ' ').collect::<Vec<_>>()[..] {
+                [h, len, rel] if h.len() == 64 && h.bytes().all(|b| b.is_ascii_hexdigit()) => match len.parse() {
+                    Ok(len) => (
+                        Some(Content {
+                            len,
+                            sha256: h.to_string(),
+                        }),
+                        rel,
+                    ),
+                    Err(_) => continue,
                 },
-                Err(e) => {
-                    return Err(Box::new(e)).context(|| format!("cannot lock the results folder {}", root.display()))
+                _ => (None, line.trim()),
+            };
+            if rel.split('/').any(|c| c == ".." || c.is_empty()) {
+                continue;
+            }
+            let entry = files.entry(rel.to_string()).or_default();
+            entry.extend(content.filter(|c| !entry.contains(c)));
+        }
+        Ok(Self {
+            root: root.to_path_buf(),
+            files,
+            appended: 0,
+        })
+    }
+
+    /// Whose `rel` is now (module docs).
+    fn owner(&self, rel: &str) -> Owner {
+        let path = self.root.join(rel);
+        // A folder on the way that is a symbolic link: nothing under it is the run's.
+        let mut parent = self.root.clone();
+        let parts: Vec<&str> = rel.split('/').collect();
+        for p in &parts[..parts.len() - 1] {
+            parent.push(p);
+            if is_symlink(&parent) {
+                return Owner::User("it is in a folder that is a symbolic link, which flexmbs does not create");
+            }
+        }
+        let meta = match std::fs::symlink_metadata(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Owner::Absent,
+            Err(_) => return Owner::User("it cannot be read"),
+            Ok(m) => m,
+        };
+        if meta.file_type().is_symlink() {
+            return Owner::User("it is a symbolic link, which flexmbs does not create");
+        }
+        if !meta.is_file() {
+            return Owner::User("it is not a file");
+        }
+        let Some(recorded) = self.files.get(rel) else {
+            return Owner::User("flexmbs did not write it (it is not in the manifest)");
+        };
+        let candidates = || recorded.iter().filter(|c| c.len == meta.len());
+        if !recorded.is_empty() && candidates().next().is_none() {
+            return Owner::User("its content is not what flexmbs wrote there");
+        }
+        match Content::of_file(&path) {
+            Ok(now) if recorded.is_empty() || candidates().any(|c| *c == now) => Owner::Flexmbs(now),
+            Ok(_) => Owner::User("its content is not what flexmbs wrote there"),
+            Err(_) => Owner::User("it cannot be read"),
+        }
+    }
+
+    /// Records `content` for `rel` (appended to the manifest file, which is rewritten whole
+    /// first when it has grown long).
+    fn record(&mut self, rel: &str, content: Content) -> Result<(), BoxError> {
+        if self.appended > 2 * self.files.len() + 256 {
+            self.rewrite()?;
+        }
+        let entry = self.files.entry(rel.to_string()).or_default();
+        if entry.last() == Some(&content) {
+            return Ok(());
+        }
+        entry.retain(|c| *c != content);
+        let line = format!("{} {} {rel}\n", content.sha256, content.len);
+        entry.push(content);
+        let path = self.root.join(MANIFEST);
+        let new = !path.exists();
+        let mut f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .context(|| format!("cannot write {}", path.display()))?;
+        let text = if new {
+            format!("{MANIFEST_HEADER}\n{line}")
+        } else {
+            line
+        };
+        f.write_all(text.as_bytes())
+            .context(|| format!("cannot write {}", path.display()))?;
+        self.appended += 1;
+        Ok(())
+    }
+
+    /// Writes the manifest whole: the latest content of every name.
+    fn rewrite(&mut self) -> Result<(), BoxError> {
+        let mut text = format!("{MANIFEST_HEADER}\n");
+        for (rel, contents) in &mut self.files {
+            match contents.last() {
+                Some(c) => {
+                    text.push_str(&format!("{} {} {rel}\n", c.sha256, c.len));
+                    contents.drain(..contents.len() - 1);
+                }
+                None => text.push_str(&format!("{rel}\n")),
+            }
+        }
+        let path = self.root.join(MANIFEST);
+        crate::output::summary::write_atomic(&path, text.as_bytes())
+            .context(|| format!("cannot write {}", path.display()))?;
+        self.appended = 0;
+        Ok(())
+    }
+
+    /// Keeps only the names whose files are flexmbs's now, each with its content now (an
+    /// older manifest's names get theirs), and writes the manifest whole.
+    fn settle(&mut self) -> Result<(), BoxError> {
+        let names: Vec<String> = self.files.keys().cloned().collect();
+        for rel in names {
+            match self.owner(&rel) {
+                Owner::Flexmbs(now) => {
+                    self.files.insert(rel, vec![now]);
+                }
+                Owner::Absent | Owner::User(_) => {
+                    self.files.remove(&rel);
                 }
             }
         }
-        Err(format!("cannot lock the results folder {}", root.display()).into())
+        self.rewrite()
+    }
+
+    /// Deletes the files `rels` that are flexmbs's, and forgets all of them (a user's file
+    /// under such a name is left as it is).
+    fn forget(&mut self, rels: &[String]) -> Result<(), BoxError> {
+        if rels.is_empty() {
+            return Ok(());
+        }
+        for rel in rels {
+            if let Owner::Flexmbs(_) = self.owner(rel) {
+                let path = self.root.join(rel);
+                match std::fs::remove_file(&path) {
+                    Ok(()) => {}
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                    Err(e) => return Err(Box::new(e)).context(|| format!("cannot delete {}", path.display())),
+                }
+            }
+            self.files.remove(rel);
+        }
+        self.rewrite()
+    }
+
+    /// Files where a run of `analyses` writes that are not flexmbs's, after [`Self::settle`]:
+    /// the summary files, analysis folders that are not folders, and anything in them that
+    /// the manifest does not list.
+    fn foreign(&self, analyses: &[String]) -> Vec<PathBuf> {
+        let mut found = Vec::new();
+        for name in ["summary.json", "summary.md"] {
+            if let Owner::User(_) = self.owner(name) {
+                found.push(self.root.join(name));
+            }
+        }
+        for a in analyses {
+            let dir = self.root.join(a);
+            if is_symlink(&dir) || dir.exists() && !dir.is_dir() {
+                found.push(dir);
+                continue;
+            }
+            let Ok(entries) = std::fs::read_dir(&dir) else {
+                continue;
+            };
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().to_string();
+                let rel = format!("{a}/{name}");
+                // A temporary of a run killed while it wrote (`summary::temporary_beside`)
+                // is neither refused nor deleted.
+                if is_temporary(&name) {
+                    continue;
+                }
+                if !self.files.contains_key(&rel) || is_symlink(&e.path()) {
+                    found.push(e.path());
+                }
+            }
+        }
+        found
+    }
+}
+
+/// Whether `name` is a temporary name of `summary::temporary_beside`: `.<pid>-<n>.tmp.<name>`.
+fn is_temporary(name: &str) -> bool {
+    name.strip_prefix('.')
+        .and_then(|rest| rest.split_once(".tmp."))
+        .and_then(|(id, _)| id.split_once('-'))
+        .is_some_and(|(pid, n)| {
+            [pid, n]
+                .iter()
+                .all(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        })
+}
+
+/// Whether `path` is a symbolic link (not followed).
+fn is_symlink(path: &Path) -> bool {
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink())
+}
+
+/// Locks the results folder `root` for this process (module docs): the open lock file,
+/// unlocked by the system when it is closed or the process ends.
+fn lock_folder(root: &Path) -> Result<std::fs::File, BoxError> {
+    let path = root.join(LOCK);
+    if is_symlink(&path) {
+        return Err(format!(
+            "{} is a symbolic link, which flexmbs does not create: it is left alone; remove it, or write elsewhere with --out",
+            path.display()
+        )
+        .into());
+    }
+    let mut f = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .context(|| format!("cannot lock the results folder {}", root.display()))?;
+    match f.try_lock() {
+        Ok(()) => {
+            // The process id, for the message of a run that finds the folder locked.
+            let _ = f.set_len(0).and_then(|()| writeln!(f, "{}", std::process::id()));
+            Ok(f)
+        }
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let holder = std::fs::read_to_string(&path)
+                .ok()
+                .and_then(|t| t.trim().parse::<u32>().ok())
+                .map_or(String::new(), |pid| format!(" (process {pid})"));
+            Err(format!(
+                "the results folder {} is in use by another flexmbs run{holder}, which holds the lock on {}: wait for it to finish or write elsewhere with --out",
+                root.display(),
+                path.display()
+            )
+            .into())
+        }
+        Err(std::fs::TryLockError::Error(e)) => Err(Box::new(e))
+            .context(|| format!("cannot lock the results folder {} ({})", root.display(), path.display())),
     }
 }
 
 /// Writes a study's results into a folder (module docs).
 pub struct ResultsFolder {
     root: PathBuf,
-    /// Every file of the manifest (relative paths).
-    manifest: BTreeSet<String>,
-    _lock: FolderLock,
+    manifest: Manifest,
+    /// The locked lock file, unlocked when dropped.
+    _lock: std::fs::File,
     /// The current analysis: its folder and name.
     dir: PathBuf,
     prefix: String,
@@ -203,10 +514,11 @@ impl ResultsFolder {
             return Err("the results folder is '' (an empty path): name a folder, e.g. --out results, or --out . for the current one".into());
         }
         std::fs::create_dir_all(root).context(|| format!("cannot create the results folder {}", root.display()))?;
-        let lock = FolderLock::acquire(root)?;
-        let manifest = read_manifest(root);
+        let lock = lock_folder(root)?;
+        let mut manifest = Manifest::load(root)?;
+        manifest.settle()?;
         if foreign == ForeignFiles::Refuse {
-            let found = foreign_files(root, analyses, &manifest);
+            let found = manifest.foreign(analyses);
             if !found.is_empty() {
                 let shown: Vec<String> = found.iter().take(5).map(|p| p.display().to_string()).collect();
                 return Err(format!(
@@ -230,20 +542,23 @@ impl ResultsFolder {
             stream: None,
         };
         // Analyses removed from the study: their files go, and their folders if that empties them.
-        let current: BTreeSet<&str> = analyses.iter().map(String::as_str).collect();
+        let current: std::collections::BTreeSet<&str> = analyses.iter().map(String::as_str).collect();
         let stale: Vec<String> = folder
             .manifest
-            .iter()
+            .files
+            .keys()
             .filter(|f| f.split_once('/').is_some_and(|(a, _)| !current.contains(a)))
             .cloned()
             .collect();
-        folder.forget(&stale)?;
+        folder.manifest.forget(&stale)?;
         for dir in stale
             .iter()
             .filter_map(|f| f.split_once('/').map(|(a, _)| a))
-            .collect::<BTreeSet<_>>()
+            .collect::<std::collections::BTreeSet<_>>()
         {
-            let _ = std::fs::remove_dir(root.join(dir));
+            if !is_symlink(&root.join(dir)) {
+                let _ = std::fs::remove_dir(root.join(dir));
+            }
         }
         Ok(folder)
     }
@@ -252,92 +567,36 @@ impl ResultsFolder {
         &self.root
     }
 
-    /// The path of `name` in the current analysis folder, listed for the summary and
-    /// recorded in the manifest before the file is created.
-    fn path(&mut self, name: &str) -> Result<PathBuf, BoxError> {
-        let rel = format!("{}/{name}", self.prefix);
-        self.record(&rel)?;
-        self.files.push(rel);
-        Ok(self.dir.join(name))
+    /// The path of `rel` (relative to the results folder), refused when a user's file is
+    /// there (module docs).
+    fn claim(&self, rel: &str) -> Result<PathBuf, BoxError> {
+        let path = self.root.join(rel);
+        match self.manifest.owner(rel) {
+            Owner::User(why) => Err(format!(
+                "refusing to write {}: {why}; the file is left as it is: move it away, or write the results elsewhere with --out",
+                path.display()
+            )
+            .into()),
+            Owner::Absent | Owner::Flexmbs(_) => Ok(path),
+        }
     }
 
-    /// Appends `rel` to the manifest (once).
-    fn record(&mut self, rel: &str) -> Result<(), BoxError> {
-        if self.manifest.insert(rel.to_string()) {
-            let path = self.root.join(MANIFEST);
-            let new = !path.exists();
-            let mut f = std::fs::OpenOptions::new()
-                .create(true)
-                .append(true)
-                .open(&path)
-                .context(|| format!("cannot write {}", path.display()))?;
-            let line = if new {
-                format!("{MANIFEST_HEADER}\n{rel}\n")
-            } else {
-                format!("{rel}\n")
-            };
-            f.write_all(line.as_bytes())
-                .context(|| format!("cannot write {}", path.display()))?;
-        }
+    /// Writes `bytes` to `rel` whole (a temporary file and a rename), recorded in the
+    /// manifest first.
+    fn write_whole(&mut self, rel: &str, bytes: &[u8]) -> Result<(), BoxError> {
+        let path = self.claim(rel)?;
+        self.manifest.record(rel, Content::of_bytes(bytes))?;
+        crate::output::summary::write_atomic(&path, bytes).context(|| format!("cannot write {}", path.display()))
+    }
+
+    /// Writes `bytes` to the file `name` of the current analysis ([`Self::write_whole`]) and
+    /// lists it for the summary once it is written.
+    fn put(&mut self, name: &str, bytes: &[u8]) -> Result<(), BoxError> {
+        let rel = format!("{}/{name}", self.prefix);
+        self.write_whole(&rel, bytes)?;
+        self.files.push(rel);
         Ok(())
     }
-
-    /// Deletes the listed files of the manifest and drops them from it.
-    fn forget(&mut self, files: &[String]) -> Result<(), BoxError> {
-        if files.is_empty() {
-            return Ok(());
-        }
-        for f in files {
-            match std::fs::remove_file(self.root.join(f)) {
-                Ok(()) => {}
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-                Err(e) => return Err(Box::new(e)).context(|| format!("cannot delete {}", self.root.join(f).display())),
-            }
-            self.manifest.remove(f);
-        }
-        let mut text = format!("{MANIFEST_HEADER}\n");
-        for f in &self.manifest {
-            text.push_str(f);
-            text.push('\n');
-        }
-        let path = self.root.join(MANIFEST);
-        crate::output::summary::write_atomic(&path, text.as_bytes())
-            .context(|| format!("cannot write {}", path.display()))
-    }
-}
-
-/// The manifest of `root` (empty when there is none).
-fn read_manifest(root: &Path) -> BTreeSet<String> {
-    std::fs::read_to_string(root.join(MANIFEST))
-        .unwrap_or_default()
-        .lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty() && !l.starts_with('#') && !l.split('/').any(|c| c == ".." || c.is_empty()))
-        .map(str::to_string)
-        .collect()
-}
-
-/// Files where a run of `analyses` writes that the manifest does not list: anything in the
-/// analysis folders, and the summary files.
-fn foreign_files(root: &Path, analyses: &[String], manifest: &BTreeSet<String>) -> Vec<PathBuf> {
-    let mut found = Vec::new();
-    for name in ["summary.json", "summary.md"] {
-        if root.join(name).exists() && !manifest.contains(name) {
-            found.push(root.join(name));
-        }
-    }
-    for a in analyses {
-        let Ok(entries) = std::fs::read_dir(root.join(a)) else {
-            continue;
-        };
-        for e in entries.flatten() {
-            let rel = format!("{a}/{}", e.file_name().to_string_lossy());
-            if !manifest.contains(&rel) {
-                found.push(e.path());
-            }
-        }
-    }
-    found
 }
 
 /// A table cell as CSV text: integers as they are, numbers as the shortest decimal that
@@ -358,18 +617,41 @@ impl Observer for ResultsFolder {
         self.files.clear();
         self.series.clear();
         self.stream = None;
+        // Nothing is written, nor deleted, through an analysis folder that is not a folder.
+        match std::fs::symlink_metadata(&self.dir) {
+            Ok(m) if m.file_type().is_symlink() => {
+                return Err(format!(
+                    "refusing to write into {}: it is a symbolic link, which flexmbs does not create; it is left as it is: remove it, or write the results elsewhere with --out",
+                    self.dir.display()
+                )
+                .into())
+            }
+            Ok(m) if !m.is_dir() => {
+                return Err(format!(
+                    "refusing to write into {}: it is not a folder; it is left as it is: move it away, or write the results elsewhere with --out",
+                    self.dir.display()
+                )
+                .into())
+            }
+            _ => {}
+        }
         // The files an earlier run wrote for this analysis (stale plots included), and only those.
         let prefix = format!("{}/", a.name);
         let old: Vec<String> = self
             .manifest
-            .iter()
+            .files
+            .keys()
             .filter(|f| f.starts_with(&prefix))
             .cloned()
             .collect();
-        self.forget(&old)?;
+        self.manifest.forget(&old)?;
         crate::interrupt::check()?;
-        std::fs::create_dir_all(&self.dir)
-            .context(|| format!("cannot create the results folder {}", self.dir.display()))
+        match std::fs::create_dir(&self.dir) {
+            Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => {
+                Err(Box::new(e)).context(|| format!("cannot create the results folder {}", self.dir.display()))
+            }
+            _ => Ok(()),
+        }
     }
 
     fn table(&mut self, t: &Table) -> Result<(), BoxError> {
@@ -378,30 +660,54 @@ impl Observer for ResultsFolder {
         for r in &t.rows {
             csv.row(&r.iter().map(cell_text).collect::<Vec<_>>());
         }
-        let p = self.path(&format!("{}.csv", t.name))?;
-        csv.write(&p).context(|| format!("cannot write {}", p.display()))
+        self.put(&format!("{}.csv", t.name), csv.text().as_bytes())
     }
 
     fn sensors(&mut self, s: &SensorStream<'_>) -> Result<(), BoxError> {
-        let mut files = Vec::new();
-        for g in s.groups {
-            let path = self.path(&format!("{}.csv", g.name))?;
-            let f = std::fs::File::create(&path).context(|| format!("cannot create {}", path.display()))?;
-            let mut w = std::io::BufWriter::new(f);
-            let mut header = vec![s.x_label.to_string()];
-            header.extend(g.columns.iter().cloned());
-            writeln!(w, "{}", header.join(",")).context(|| format!("cannot write {}", path.display()))?;
-            files.push((w, path));
-        }
-        self.stream = Some(Stream {
+        let mut stream = Stream {
             x_label: s.x_label.to_string(),
             groups: s.groups.to_vec(),
             plots: s.plots,
-            files,
+            files: Vec::new(),
             flushed: std::time::Instant::now(),
+            x_pending: None,
+            x_written: None,
+            failed: None,
             x: Vec::new(),
             rows: vec![Vec::new(); s.groups.len()],
-        });
+        };
+        let rels: Vec<String> = s
+            .groups
+            .iter()
+            .map(|g| format!("{}/{}.csv", self.prefix, g.name))
+            .collect();
+        let paths = rels.iter().map(|rel| self.claim(rel)).collect::<Result<Vec<_>, _>>()?;
+        for ((g, rel), path) in s.groups.iter().zip(rels).zip(paths) {
+            if let Owner::Flexmbs(_) = self.manifest.owner(&rel) {
+                self.manifest.forget(std::slice::from_ref(&rel))?;
+            }
+            // Recorded empty first: a file created and then not written is still the run's.
+            self.manifest.record(&rel, Content::of_bytes(b""))?;
+            // A new file: never one that appeared meanwhile, never through a symbolic link.
+            let file = std::fs::OpenOptions::new()
+                .append(true)
+                .create_new(true)
+                .open(&path)
+                .context(|| format!("cannot create {}", path.display()))?;
+            let mut header = vec![s.x_label.to_string()];
+            header.extend(g.columns.iter().cloned());
+            stream.files.push(SensorFile {
+                sink: Box::new(file),
+                path,
+                rel,
+                written: 0,
+                sha256: Sha256::new(),
+                pending: format!("{}\n", header.join(",")).into_bytes(),
+            });
+        }
+        stream.flush(&mut self.manifest)?;
+        self.files.extend(stream.files.iter().map(|f| f.rel.clone()));
+        self.stream = Some(stream);
         Ok(())
     }
 
@@ -409,30 +715,32 @@ impl Observer for ResultsFolder {
         let Some(s) = &mut self.stream else {
             return crate::interrupt::check();
         };
-        for (k, ((w, path), v)) in s.files.iter_mut().zip(values).enumerate() {
-            // The cells as `output::num` writes them, straight into the buffer.
-            let mut row = || -> std::io::Result<()> {
-                write!(w, "{x:e}")?;
-                for v in v {
-                    write!(w, ",{v:e}")?;
-                }
-                writeln!(w)
-            };
-            row().context(|| format!("cannot write {}", path.display()))?;
+        if let Some(e) = &s.failed {
+            return Err(e.clone().into());
+        }
+        for (k, (f, v)) in s.files.iter_mut().zip(values).enumerate() {
+            // The cells as `output::num` writes them, a whole row into the waiting bytes.
+            let mut row = format!("{x:e}");
+            for v in v {
+                row.push_str(&format!(",{v:e}"));
+            }
+            row.push('\n');
+            f.pending.extend_from_slice(row.as_bytes());
             if s.plots {
                 s.rows[k].push(v.clone());
             }
         }
+        s.x_pending = Some(x);
         if s.plots {
             s.x.push(x);
         }
         if let Err(stop) = crate::interrupt::check() {
             // What was computed before the interruption is kept, this row included.
-            s.flush()?;
+            s.flush(&mut self.manifest)?;
             return Err(stop);
         }
         if s.flushed.elapsed() >= FLUSH_INTERVAL {
-            s.flush()?;
+            s.flush(&mut self.manifest)?;
         }
         Ok(())
     }
@@ -443,7 +751,7 @@ impl Observer for ResultsFolder {
         let Some(mut s) = self.stream.take() else {
             return Ok(());
         };
-        s.flush()?;
+        s.flush(&mut self.manifest)?;
         if !s.plots || s.x.len() < 2 {
             return Ok(());
         }
@@ -473,9 +781,15 @@ impl Observer for ResultsFolder {
                     fig
                 })
                 .collect();
-            let path = self.path(&format!("{}.png", g.name))?;
-            plot::write_panels_png(&format!("sensor {}", g.name), &figures, &path)
-                .context(|| format!("cannot draw {}", path.display()))?;
+            let name = format!("{}.png", g.name);
+            // Drawn into a temporary file of its own, then written whole as every file is.
+            let tmp = crate::output::summary::temporary_beside(&self.dir.join(&name));
+            let drawn = plot::write_panels_png(&format!("sensor {}", g.name), &figures, &tmp)
+                .map_err(BoxError::from)
+                .and_then(|()| std::fs::read(&tmp).map_err(BoxError::from));
+            let _ = std::fs::remove_file(&tmp);
+            let bytes = drawn.context(|| format!("cannot draw {}", self.dir.join(&name).display()))?;
+            self.put(&name, &bytes)?;
         }
         Ok(())
     }
@@ -496,25 +810,21 @@ impl Observer for ResultsFolder {
             format!("{stem}{index:0digits$}.vtu")
         };
         crate::interrupt::check()?;
-        let p = self.path(&name)?;
-        write_vtu(&p, mesh, fields).context(|| format!("cannot write {}", p.display()))?;
+        self.put(&name, vtu_text(mesh, fields).as_bytes())?;
         self.series[k].1.push((key, name));
         // The collection is rewritten after every frame, so an interrupted run keeps a
         // readable one; it is listed once.
-        let path = self.dir.join(pvd);
-        self.record(&format!("{}/{pvd}", self.prefix))?;
-        write_pvd(&path, &self.series[k].1).context(|| format!("cannot write {}", path.display()))?;
+        let rel = format!("{}/{pvd}", self.prefix);
+        self.write_whole(&rel, pvd_text(&self.series[k].1).as_bytes())?;
         if self.series[k].1.len() == 1 {
-            self.files.push(format!("{}/{pvd}", self.prefix));
+            self.files.push(rel);
         }
         Ok(())
     }
 
     fn file(&mut self, name: &str, path: &Path) -> Result<(), BoxError> {
-        let target = self.path(name)?;
-        std::fs::copy(path, &target)
-            .map(|_| ())
-            .context(|| format!("cannot copy {} to {}", path.display(), target.display()))
+        let bytes = std::fs::read(path).context(|| format!("cannot read {}", path.display()))?;
+        self.put(name, &bytes)
     }
 
     fn take_files(&mut self) -> Vec<String> {
@@ -522,10 +832,11 @@ impl Observer for ResultsFolder {
     }
 
     fn summary(&mut self, s: &Summary) -> Result<(), BoxError> {
-        self.record("summary.json")?;
-        self.record("summary.md")?;
-        s.write(&self.root)
-            .context(|| format!("cannot write the summary into {}", self.root.display()))
+        // Both or neither: a user's summary.md refuses before summary.json changes.
+        self.claim("summary.json")?;
+        self.claim("summary.md")?;
+        self.write_whole("summary.json", s.json().as_bytes())?;
+        self.write_whole("summary.md", s.markdown().as_bytes())
     }
 }
 
@@ -655,6 +966,122 @@ mod tests {
         );
         assert_eq!(num(2.5e-3), "2.5e-3");
         drop(folder);
+        let _ = std::fs::remove_dir_all(&root);
+    }
+
+    /// A file that takes `budget` more bytes and then fails, having written part of the
+    /// bytes it was given: a disk that fills mid-row.
+    struct FullDisk {
+        file: std::fs::File,
+        budget: usize,
+    }
+
+    impl Write for FullDisk {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if self.budget == 0 {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::StorageFull,
+                    "no space left on device",
+                ));
+            }
+            let n = self.file.write(&buf[..buf.len().min(self.budget)])?;
+            self.budget -= n;
+            Ok(n)
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            self.file.flush()
+        }
+    }
+
+    impl Sink for FullDisk {
+        fn truncate(&mut self, len: u64) -> std::io::Result<()> {
+            self.file.set_len(len)
+        }
+    }
+
+    /// A write that fails mid-row (the energy file's disk fills after a few rows): every
+    /// sensor file is cut back to the same last whole row, each cell reads back exactly
+    /// (no `6.5` where 6.57 was written), nothing more is appended, the error names the file
+    /// and the last row kept, the files listed exist, and the next run finds the files its
+    /// own (their contents are the ones recorded).
+    #[test]
+    fn a_failed_sensor_write_leaves_whole_rows_of_one_length() {
+        let root = scratch("full-disk");
+        let mut folder = ResultsFolder::open(&root, &["run".to_string()], ForeignFiles::Refuse).unwrap();
+        let info = AnalysisInfo {
+            index: 0,
+            count: 1,
+            name: "run".into(),
+            kind: "dynamic".into(),
+            of: "the mechanism".into(),
+        };
+        folder.begin(&info).unwrap();
+        let group = |name: &str, columns: &[&str]| SensorGroup {
+            name: name.into(),
+            mbs_names: vec![name.into()],
+            columns: columns.iter().map(|c| c.to_string()).collect(),
+        };
+        let groups = vec![
+            group("angle", &["angle [rad]"]),
+            group("energy", &["kinetic [J]", "potential [J]"]),
+        ];
+        let stream = SensorStream {
+            x_label: "t [s]",
+            groups: &groups,
+            plots: false,
+        };
+        folder.sensors(&stream).unwrap();
+        let row = |k: usize| {
+            (
+                k as f64 * 1e-3,
+                vec![vec![6.57 * k as f64], vec![6.57, -6.57e-3 * k as f64]],
+            )
+        };
+        let (x, v) = row(1);
+        folder.sample(x, &v).unwrap();
+        folder.stream.as_mut().unwrap().flush(&mut folder.manifest).unwrap();
+        // The energy file's disk fills 70 bytes on: inside the third row after the first.
+        let energy = root.join("run/energy.csv");
+        let file = std::fs::OpenOptions::new().append(true).open(&energy).unwrap();
+        folder.stream.as_mut().unwrap().files[1].sink = Box::new(FullDisk { file, budget: 70 });
+        for k in 2..12 {
+            let (x, v) = row(k);
+            folder.sample(x, &v).unwrap();
+        }
+        let stream = folder.stream.as_mut().unwrap();
+        let e = stream.flush(&mut folder.manifest).unwrap_err().to_string();
+        assert!(e.contains(&energy.display().to_string()), "{e}");
+        assert!(
+            e.contains("no space left") && e.contains("last whole row, t [s] = 1e-3"),
+            "{e}"
+        );
+        let read = |name: &str| -> Vec<Vec<f64>> {
+            let text = std::fs::read_to_string(root.join("run").join(name)).unwrap();
+            assert!(text.ends_with('\n'), "{name}: a cut row: {text:?}");
+            text.lines()
+                .skip(1)
+                .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+                .collect()
+        };
+        let (angle, energies) = (read("angle.csv"), read("energy.csv"));
+        assert_eq!(angle.len(), 1, "{angle:?}");
+        assert_eq!(energies.len(), 1, "{energies:?}");
+        let (x, v) = row(1);
+        assert_eq!(angle[0], [x, v[0][0]]);
+        assert_eq!(energies[0], [x, v[1][0], v[1][1]]);
+        // Stopped: nothing more is appended.
+        let (x, v) = row(12);
+        assert!(folder.sample(x, &v).is_err());
+        assert!(folder.sensors_end().is_err());
+        let files = folder.take_files();
+        assert_eq!(files, ["run/angle.csv", "run/energy.csv"]);
+        assert!(files.iter().all(|f| root.join(f).is_file()));
+        drop(folder);
+        // The files are the run's own: a new run refuses nothing and replaces them.
+        let mut again = ResultsFolder::open(&root, &["run".to_string()], ForeignFiles::Refuse).unwrap();
+        again.begin(&info).unwrap();
+        assert!(!energy.exists());
+        drop(again);
         let _ = std::fs::remove_dir_all(&root);
     }
 }

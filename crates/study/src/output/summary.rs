@@ -6,8 +6,8 @@
 //! ```text
 //! <results>/
 //!   summary.json, summary.md      rewritten after every analysis
-//!   .flexmbs-manifest             the files flexmbs wrote here (crate::output::folder)
-//!   .flexmbs-lock                 while a run writes here (crate::output::folder)
+//!   .flexmbs-manifest             the files flexmbs wrote here, with their SHA-256 (crate::output::folder)
+//!   .flexmbs-lock                 locked by the operating system while a run writes here (crate::output::folder)
 //!   <analysis>/                   one folder per analysis, named by it
 //!     *.csv                       result groups, header "name (unit)"
 //!     *.vtu, *.pvd                ParaView: mesh and displacement fields (crate::output::vtu)
@@ -18,8 +18,10 @@ use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+/// A temporary name beside `path`, unique per process and per call (concurrent writers never
+/// share one); it ends with the file's own name, so a writer that picks a format by the
+/// extension picks the same one.
+pub fn temporary_beside(path: &Path) -> PathBuf {
     let dir = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
@@ -28,10 +30,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
-    // Unique per process and per call (concurrent writers never share a temporary).
     static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let tmp = dir.join(format!(".{name}.{}-{n}.tmp", std::process::id()));
+    dir.join(format!(".{}-{n}.tmp.{name}", std::process::id()))
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = temporary_beside(path);
     // On any failure (a full disk: the write; a vanished folder: the rename) no temporary
     // stays behind, and the error names the file that was being written.
     let named = |e: std::io::Error| std::io::Error::new(e.kind(), format!("{}: {e}", path.display()));
@@ -77,6 +83,11 @@ impl Csv {
 
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         write_atomic(path, self.text.as_bytes())
+    }
+
+    /// The text of the table, header first.
+    pub fn text(&self) -> &str {
+        &self.text
     }
 }
 
@@ -140,8 +151,13 @@ pub struct Summary {
     pub flexmbs_version: String,
     pub study: String,
     pub title: Option<String>,
-    /// `running`, `complete`, `failed` or `interrupted` (Ctrl-C; what was written is kept).
+    /// `running`, `complete`, `failed` or `interrupted` (Ctrl-C or SIGTERM; what was written
+    /// is kept).
     pub status: String,
+    /// Why a run that is `failed` or `interrupted` stopped: the analysis, the cause and, for a
+    /// time integration, the last time reached (absent while running and when complete).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
     pub parts: Vec<PartSummary>,
     pub analyses: Vec<AnalysisSummary>,
     pub total_seconds: f64,
@@ -150,9 +166,13 @@ pub struct Summary {
 impl Summary {
     /// Writes `summary.json` and `summary.md` into `dir`.
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
-        let json = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
-        write_atomic(&dir.join("summary.json"), json.as_bytes())?;
+        write_atomic(&dir.join("summary.json"), self.json().as_bytes())?;
         write_atomic(&dir.join("summary.md"), self.markdown().as_bytes())
+    }
+
+    /// The text of `summary.json`.
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
     }
 
     /// The short human summary: model sizes, analyses with timings, and what each found.
@@ -164,6 +184,9 @@ impl Summary {
             "Study `{}`, flexmbs {}, status **{}**, {:.2} s in all.\n",
             self.study, self.flexmbs_version, self.status, self.total_seconds
         );
+        if let Some(reason) = &self.reason {
+            let _ = writeln!(s, "Stopped: {reason}\n");
+        }
         let _ = writeln!(
             s,
             "## Parts\n\n| part | model | nodes | elements | interfaces |\n|---|---|---|---|---|"

@@ -176,6 +176,11 @@ pub fn write_vtu(path: &Path, mesh: &VtuMesh, fields: &[PointField<'_>]) -> std:
 /// Writes a `.pvd` collection: each entry a step value and a file name relative to the
 /// collection.
 pub fn write_pvd(path: &Path, entries: &[(f64, String)]) -> std::io::Result<()> {
+    crate::output::summary::write_atomic(path, pvd_text(entries).as_bytes())
+}
+
+/// The text of a `.pvd` collection ([`write_pvd`]).
+pub fn pvd_text(entries: &[(f64, String)]) -> String {
     let mut s = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
     );
@@ -186,5 +191,5 @@ pub fn write_pvd(path: &Path, entries: &[(f64, String)]) -> std::io::Result<()> 
         );
     }
     s.push_str("  </Collection>\n</VTKFile>\n");
-    crate::output::summary::write_atomic(path, s.as_bytes())
+    s
 }

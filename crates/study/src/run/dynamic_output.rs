@@ -28,6 +28,19 @@ impl<E: Into<BoxError>> From<E> for Halt {
     }
 }
 
+/// A time integration stopped by its output: a stop asked for (Ctrl-C, SIGTERM) or a file
+/// that cannot be written. Says where it stopped and up to where the rows went out.
+#[derive(Debug, thiserror::Error)]
+#[error("time integration stopped at t = {time:.6} s (step {step}); sensor rows up to t = {written:.6} s were sent to the results")]
+pub struct OutputStopped {
+    /// The time reached, and the time of the last sensor row handed to the output.
+    pub time: f64,
+    pub step: usize,
+    pub written: f64,
+    #[source]
+    pub source: BoxError,
+}
+
 /// The sensor rows on their way to the observer.
 struct Rows {
     /// Rows whose largest-von-Mises values are found a batch at a time (the rows reach the
@@ -199,7 +212,14 @@ impl DynamicOutput {
                 (totals, Some(failure))
             }
             Err(stop) => match stop.error {
-                Halt::Output(e) => return Err(e),
+                Halt::Output(e) => {
+                    return Err(Box::new(OutputStopped {
+                        time: integ.state().time(),
+                        step: stop.totals.steps,
+                        written: self.rows.last_written,
+                        source: e,
+                    }))
+                }
                 Halt::Sensor(e, k) => {
                     let message = format!(
                         "time integration stopped; results up to t = {:.6} s are written",

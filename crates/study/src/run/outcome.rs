@@ -74,6 +74,7 @@ pub(crate) fn record_outcome(
                 entry.status = Status::Failed;
                 entry.error = Some(crate::error::chain(&failure));
                 summary.status = failed_status();
+                summary.reason = Some(format!("analysis '{}': {}", a.name, crate::error::chain(&failure)));
                 let entry = entry.clone();
                 // The failure is the message; a summary that cannot be written (a full
                 // disk) must not replace it.
@@ -101,6 +102,7 @@ pub(crate) fn record_outcome(
             entry.status = Status::Failed;
             entry.error = Some(crate::error::chain(&*e));
             summary.status = failed_status();
+            summary.reason = Some(format!("analysis '{}': {}", a.name, crate::error::chain(&*e)));
             let entry = entry.clone();
             let _ = obs.end(info, &entry);
             let _ = obs.summary(summary);
@@ -119,7 +121,8 @@ pub(crate) fn record_outcome(
     }
 }
 
-/// The summary status of a run that stopped: `interrupted` after Ctrl-C, else `failed`.
+/// The summary status of a run that stopped: `interrupted` after Ctrl-C or SIGTERM, else
+/// `failed`.
 fn failed_status() -> String {
     if crate::interrupt::requested() {
         "interrupted".into()

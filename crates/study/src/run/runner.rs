@@ -43,6 +43,7 @@ pub fn pending_summary(study: &Study) -> Summary {
         study: study.source.path.display().to_string(),
         title: study.title.clone(),
         status: "running".into(),
+        reason: None,
         parts: study.parts.iter().map(part_summary).collect(),
         analyses: study
             .analyses
@@ -137,8 +138,12 @@ impl<'s> Runner<'s> {
             }
         }
         let info = analysis_info(study, i);
-        obs.begin(&info)?;
         let t = Instant::now();
+        if let Err(e) = obs.begin(&info) {
+            // Its folder refused (a user's file, a symbolic link) or a stop asked for: the
+            // summary says so, as for a failure of the analysis itself.
+            return self.record(i, &info, t, Err(e), obs);
+        }
         let (result, shortened) = match &a.spec {
             AnalysisSpec::Mbs(spec) => self.run_mechanism(i, spec, obs),
             _ => {
