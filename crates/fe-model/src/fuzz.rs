@@ -131,3 +131,101 @@ pub fn budget(base: usize) -> usize {
         .unwrap_or(1);
     base.saturating_mul(scale.max(1))
 }
+
+/// The format of an [`Adversarial`] deck.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeckFormat {
+    Abaqus,
+    Nastran,
+}
+
+/// A deck made to exhaust a reader: its name, format and text. Read as it is, each must give
+/// a model or a located error (file and line) within the readers' bounds; the fuzz tests
+/// also mutate each.
+#[derive(Clone, Debug)]
+pub struct Adversarial {
+    pub name: &'static str,
+    pub format: DeckFormat,
+    pub text: String,
+}
+
+/// The adversarial decks: ranges far longer than the deck (GENERATE, THRU), sets of sets
+/// that double forty times, boundaries repeated on a set, and a card in every Nastran
+/// continuation form (small field with `+` markers and blank markers, large field with `*`,
+/// free field, a continuation with no card before it, a card cut in its continuation). Files
+/// that include each other (include amplification) need files on disk and are made by the
+/// tests.
+pub fn adversarial_decks() -> Vec<Adversarial> {
+    const NODES: &str = "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n";
+    const GRIDS: &str = "GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\n";
+    let abaqus = |name, rest: String| Adversarial {
+        name,
+        format: DeckFormat::Abaqus,
+        text: format!("{NODES}{rest}"),
+    };
+    let nastran = |name, text: String| Adversarial {
+        name,
+        format: DeckFormat::Nastran,
+        text,
+    };
+    let mut sets = "*NSET, NSET=S0\n1, 2, 3, 4\n".to_string();
+    for k in 1..=40 {
+        sets.push_str(&format!("*NSET, NSET=S{k}\nS{}, S{}\n", k - 1, k - 1));
+    }
+    vec![
+        abaqus(
+            "element GENERATE of 10^12",
+            "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*ELSET, ELSET=ALL, GENERATE\n1, 1000000000000\n".into(),
+        ),
+        abaqus("node GENERATE of 10^13", "*NSET, NSET=N, GENERATE\n1, 9999999999999, 1\n".into()),
+        abaqus("node GENERATE with step 0", "*NSET, NSET=N, GENERATE\n1, 4, 0\n".into()),
+        abaqus("sets of sets doubling forty times", sets),
+        abaqus(
+            "a boundary on a set 200 times",
+            format!("*NSET, NSET=ALL\n1, 2, 3, 4\n*BOUNDARY\n{}", "ALL, ENCASTRE\n".repeat(200)),
+        ),
+        nastran(
+            "THRU of 10^8 grids, eight times",
+            format!("{GRIDS}{}", "SPC1,1,123,1,THRU,100000000\n".repeat(8)),
+        ),
+        nastran("THRU past u64", format!("{GRIDS}SPC1,1,123,1,THRU,18446744073709551616\n")),
+        nastran("RBE2 THRU past the grids", format!("{GRIDS}RBE2,9,4,123,1,THRU,5\n")),
+        nastran(
+            "THRU over every grid 200 times",
+            format!("{GRIDS}{}", "SPC1,1,123,1,THRU,4\n".repeat(200)),
+        ),
+        nastran(
+            "small field, '+' continuation markers",
+            "CORD2R  5               1.      2.      3.      2.      2.      3.      +C1\n+C1     1.      2.      4.\n".into(),
+        ),
+        nastran(
+            "small field, blank continuation markers",
+            "CORD2R  5               1.      2.      3.      2.      2.      3.\n        1.      2.      4.\n".into(),
+        ),
+        nastran(
+            "large field, '*' continuation",
+            "GRID*                  7                             1.5             2.5*G1\n*G1                  3.5               0\n".into(),
+        ),
+        nastran(
+            "large field, blank continuation",
+            "GRID*                  7                             1.5             2.5\n*                    3.5\n".into(),
+        ),
+        nastran(
+            "free field, continuation by a trailing comma",
+            "CORD2R,5,,1.,2.,3.,2.,2.,3.,\n,1.,2.,4.\n".into(),
+        ),
+        nastran(
+            "free field large, '*' continuation",
+            "GRID*,7,,1.5,2.5\n*,3.5\n".into(),
+        ),
+        nastran("a continuation with no card before it", "+C1     1.      2.      4.\n".into()),
+        nastran(
+            "a card cut in its continuation",
+            "CORD2R  5               1.      2.      3.      2.      2.      3.      +C1\n".into(),
+        ),
+        nastran(
+            "ten thousand continuations of one card",
+            format!("SET1,1,1,{}\n", ",\n,2".repeat(10_000)),
+        ),
+    ]
+}

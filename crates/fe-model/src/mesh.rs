@@ -140,3 +140,4 @@ pub mod abaqus;
 pub mod gmsh;
 pub mod import;
 pub mod nastran;
+pub mod quality;

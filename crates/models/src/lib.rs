@@ -1088,6 +1088,7 @@ fn planar_with_segment(n: usize, segment: &Segment, speed: f64, variant: Variant
     m.add_support(Support::slider(s, Vector3::x()));
     let jb = m.add_joint("pin B", s, rod_nodes[n], JointKind::Revolute { axis: z });
     m.point_masses.push(mbs::PointMass {
+        name: String::new(),
         node: s,
         mass: rod_mass / 2.0,
     });
@@ -1242,6 +1243,7 @@ pub fn slider_crank_spatial(
     let axis2 = e.cross(&axis1).normalize();
     let jb = m.add_joint("universal B", s, rod_nodes[n], JointKind::Universal { axis1, axis2 });
     m.point_masses.push(mbs::PointMass {
+        name: String::new(),
         node: s,
         mass: rod_mass / 2.0,
     });

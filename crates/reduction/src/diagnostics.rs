@@ -132,11 +132,11 @@ impl fmt::Display for DiagnosticWarning {
             DiagnosticWarning::InvalidInput { what } => write!(f, "no frequency check: {what}"),
             DiagnosticWarning::StaticOnly { excitation_hz } => write!(
                 f,
-                "no fixed-interface modes kept, but the study excites up to {excitation_hz:.4e} Hz: the body's own dynamics are missing; keep the modes up to a few times that frequency (ModeSelection::CutoffHz)"
+                "no fixed-interface modes kept, but the study excites up to {excitation_hz:.4e} Hz: the body's own dynamics are missing; keep the modes up to a few times that frequency (`cutoff_hz` in the part's [parts.reduction])"
             ),
             DiagnosticWarning::ModesMissing { highest_hz, excitation_hz, factor } => write!(
                 f,
-                "modes are missing: the highest kept fixed-interface mode is at {highest_hz:.4e} Hz, below {factor} x the excitation {excitation_hz:.4e} Hz = {:.4e} Hz; reduce again with ModeSelection::CutoffHz({:.4e})",
+                "modes are missing: the highest kept fixed-interface mode is at {highest_hz:.4e} Hz, below {factor} x the excitation {excitation_hz:.4e} Hz = {:.4e} Hz; reduce again keeping the modes below it (`cutoff_hz = {:.4e}` in the part's [parts.reduction])",
                 factor * excitation_hz,
                 factor * excitation_hz
             ),

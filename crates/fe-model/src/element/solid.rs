@@ -278,6 +278,26 @@ fn jacobian(
     Ok((J, det_J))
 }
 
+/// Checks $\det\mathbf J$ as [`solid_matrices`] will, at every point of the stiffness rule
+/// and then of the mass rule, without computing any matrix: for a check of a whole mesh
+/// before it is assembled.
+///
+/// # Errors
+/// [`ElementError::NonPositiveJacobian`] and [`ElementError::WrongNodeCount`], as
+/// [`solid_matrices`] gives them.
+pub fn check_jacobians(kind: SolidKind, element: usize, X_e: &[Point3<f64>]) -> Result<(), ElementError> {
+    check_node_count(kind, element, X_e)?;
+    let n = kind.node_count();
+    let mut N = vec![0.0; n];
+    let mut dN = vec![[0.0; 3]; n];
+    for rule in [kind.stiffness_rule(), kind.mass_rule()] {
+        for (q, xi) in rule.points.iter().enumerate() {
+            jacobian(kind, element, q, X_e, xi, &mut N, &mut dN)?;
+        }
+    }
+    Ok(())
+}
+
 fn check_node_count(kind: SolidKind, element: usize, X_e: &[Point3<f64>]) -> Result<(), ElementError> {
     if X_e.len() != kind.node_count() {
         return Err(ElementError::WrongNodeCount {

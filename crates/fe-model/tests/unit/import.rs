@@ -946,3 +946,37 @@ fn shared_fuzz_mutants_of_abaqus_and_nastran_fixtures_never_panic() {
         }
     }
 }
+
+/// The shared adversarial decks (`fe_model::fuzz::adversarial_decks`: ranges far longer than
+/// the deck, doubling sets of sets, every Nastran continuation form): each, read as it is,
+/// is a model or an error located by the deck's file and line (within the readers' bounds,
+/// not after allocating the ranges); their mutants are errors or models, never a panic.
+#[test]
+fn adversarial_decks_are_models_or_located_errors_and_their_mutants_never_panic() {
+    use fe_model::fuzz::DeckFormat;
+    let mut m = fe_model::fuzz::Mutator::new(0x6164_7665_7273_6501);
+    for deck in fe_model::fuzz::adversarial_decks() {
+        let (format, origin) = match deck.format {
+            DeckFormat::Abaqus => (Format::Abaqus, Path::new("adversarial.inp")),
+            DeckFormat::Nastran => (Format::Nastran, Path::new("adversarial.bdf")),
+        };
+        let result = match format {
+            Format::Abaqus => abaqus::parse(&deck.text, origin),
+            Format::Nastran => nastran::parse(&deck.text, origin),
+        };
+        if let Err(e) = result {
+            let message = e.to_string();
+            let file = format!("{}:", origin.display());
+            let located = message
+                .find(&file)
+                .is_some_and(|at| message[at + file.len()..].starts_with(|c: char| c.is_ascii_digit()));
+            assert!(located, "{}: the error names no file and line: {message}", deck.name);
+        }
+        for case in 0..fe_model::fuzz::budget(20) {
+            let bytes = m.mutate(deck.text.as_bytes());
+            parse_without_panic(format, &bytes, origin, &|| {
+                format!("{} mutant {case}: {:?}", deck.name, String::from_utf8_lossy(&bytes))
+            });
+        }
+    }
+}

@@ -810,3 +810,62 @@ fn cantilever_bending_frequencies_hex20_and_tet10_within_one_percent_of_timoshen
         }
     }
 }
+
+/// A mesh of the element of `kind` (its nodes moved by `at`) twice: cell 11 as it is and cell
+/// 42 with its nodes mapped by `second`.
+fn two_cell_mesh(kind: SolidKind, second: &dyn Fn(&Point3<f64>) -> Point3<f64>) -> Mesh {
+    let X = element_nodes(kind, 0.0);
+    let mut mesh = Mesh::default();
+    let n = X.len();
+    for x in &X {
+        mesh.add_node(*x);
+    }
+    for x in &X {
+        mesh.add_node(second(x));
+    }
+    mesh.cells.push(fe_model::Cell {
+        kind: kind.cell_kind(),
+        nodes: (0..n as u32).map(NodeId).collect(),
+        tag: 11,
+    });
+    mesh.cells.push(fe_model::Cell {
+        kind: kind.cell_kind(),
+        nodes: (n as u32..2 * n as u32).map(NodeId).collect(),
+        tag: 42,
+    });
+    mesh
+}
+
+/// The mesh check names an inverted or a degenerate element by its label in the file (the
+/// cell's tag), not by its position, and refuses exactly what the element matrices refuse.
+#[test]
+fn inverted_and_degenerate_cells_are_named_by_their_label_in_the_file() {
+    use fe_model::mesh::quality::{check_solid_cells, CellGeometryError};
+    for kind in SolidKind::ALL {
+        let shifted = |p: &Point3<f64>| Point3::new(p.x + 3.0, p.y, p.z);
+        assert_eq!(check_solid_cells(&two_cell_mesh(kind, &shifted)), Ok(()), "{kind:?}");
+        let mirrored = |p: &Point3<f64>| Point3::new(-p.x, p.y, p.z);
+        let e = check_solid_cells(&two_cell_mesh(kind, &mirrored)).unwrap_err();
+        assert!(
+            matches!(e, CellGeometryError::Inverted { label: 42, det_j, .. } if det_j < 0.0),
+            "{kind:?}: {e:?}"
+        );
+        let message = e.to_string();
+        assert!(
+            message.starts_with("element 42 (") && message.contains("inverted"),
+            "{message}"
+        );
+        let flat = |p: &Point3<f64>| Point3::new(p.x, p.y, 0.0);
+        let e = check_solid_cells(&two_cell_mesh(kind, &flat)).unwrap_err();
+        assert!(
+            matches!(e, CellGeometryError::Degenerate { label: 42, .. }),
+            "{kind:?}: {e:?}"
+        );
+        assert!(e.to_string().contains("element 42") && e.to_string().contains("degenerate"));
+        // The same elements fail their matrices: the check refuses what the assembly would.
+        for map in [&mirrored as &dyn Fn(&Point3<f64>) -> Point3<f64>, &flat] {
+            let X: Vec<Point3<f64>> = element_nodes(kind, 0.0).iter().map(map).collect();
+            assert!(solid::solid_matrices(kind, 1, &X, &material(), MassKind::Consistent).is_err());
+        }
+    }
+}

@@ -193,7 +193,7 @@ fn check_element_references(model: &Model) -> Result<(), ModelError> {
         }
     }
     for (i, p) in model.point_masses.iter().enumerate() {
-        check_node(model, p.node, &|| (format!("point mass {i}"), Entity::PointMass(i)))?;
+        check_node(model, p.node, &|| (p.label(i), Entity::PointMass(i)))?;
     }
     for (i, s) in model.springs.iter().enumerate() {
         let who = || (format!("spring '{}'", s.name), Entity::Spring(i));

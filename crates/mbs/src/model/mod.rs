@@ -110,8 +110,23 @@ pub struct RigidBody {
 /// A point mass on a node (translational inertia only: it does not hold the node's rotation).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PointMass {
+    /// The name messages use (the study's); empty: "point mass <index>".
+    #[serde(default)]
+    pub name: String,
     pub node: NodeId,
     pub mass: f64,
+}
+
+impl PointMass {
+    /// The point mass at `index` of the model's list as messages name it: by its name, or
+    /// by its index when it has none.
+    pub fn label(&self, index: usize) -> String {
+        if self.name.is_empty() {
+            format!("point mass {index}")
+        } else {
+            format!("point mass '{}'", self.name)
+        }
+    }
 }
 
 /// A point-to-point spring-damper along the line between two nodes (or a node and a fixed

@@ -432,8 +432,8 @@ pub fn buckling(system: &System, unloaded: &State, loaded: &State, lambda: f64) 
 pub enum EnergyCarrier {
     /// A flexible or rigid body, by name.
     Body(String),
-    /// A point mass on a node.
-    PointMass { index: usize, node: String },
+    /// A point mass on a node (`name`: its name, empty when it has none).
+    PointMass { index: usize, name: String, node: String },
     /// A point-to-point spring-damper, by name.
     Spring(String),
     /// A follower load's stiffness (a dead load has none).
@@ -450,7 +450,8 @@ impl std::fmt::Display for EnergyCarrier {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Body(name) | Self::Spring(name) => write!(f, "{name}"),
-            Self::PointMass { index, node } => write!(f, "point mass {index} on node {node}"),
+            Self::PointMass { index, name, node } if name.is_empty() => write!(f, "point mass {index} on node {node}"),
+            Self::PointMass { name, node, .. } => write!(f, "point mass '{name}' on node {node}"),
             Self::Load { index, node } => write!(f, "load {index} on node {node}"),
             Self::JointSpring { joint, coordinate } => write!(f, "joint spring {joint}[{coordinate}]"),
             Self::JointGeometry => write!(f, "joint geometry"),
@@ -741,10 +742,14 @@ fn distribute(system: &System, ws: &Workspace, phi: &[f64]) -> ModeEnergy {
         let carrier = match &e.kind {
             ElementKind::Flexible(i) => EnergyCarrier::Body(model.bodies[system.flexible[*i].body].name().to_string()),
             ElementKind::Rigid(i) => EnergyCarrier::Body(rigid_name(system, *i)),
-            ElementKind::PointMass(node, _) => EnergyCarrier::PointMass {
-                index: point_mass_index(system, ei),
-                node: node_name(*node),
-            },
+            ElementKind::PointMass(node, _) => {
+                let index = point_mass_index(system, ei);
+                EnergyCarrier::PointMass {
+                    index,
+                    name: model.point_masses.get(index).map_or(String::new(), |p| p.name.clone()),
+                    node: node_name(*node),
+                }
+            }
             ElementKind::Spring(i) => EnergyCarrier::Spring(model.springs[*i].name.clone()),
             ElementKind::Load(i) => EnergyCarrier::Load {
                 index: *i,

@@ -110,7 +110,11 @@ fn rigid_loop_is_refused_with_its_members() {
 fn unheld_coordinate_names_node_and_direction() {
     let mut m = Model::new("unheld");
     let a = m.add_node("a", Vector3::zeros());
-    m.point_masses.push(mbs::PointMass { node: a, mass: 1.0 });
+    m.point_masses.push(mbs::PointMass {
+        name: String::new(),
+        node: a,
+        mass: 1.0,
+    });
     match err(&m) {
         ModelError::UnheldCoordinate { coordinate, owner } => {
             assert_eq!(coordinate, "node 'a' rotation, component x");
@@ -245,10 +249,22 @@ fn invalid_values_carry_their_entity() {
     let mut m = Model::new("values");
     let a = m.add_node("a", Vector3::zeros());
     m.add_rigid_body(rigid("r", a, vec![], 1.0, Vector3::zeros(), [1.0; 3]));
-    m.point_masses.push(mbs::PointMass { node: a, mass: 1.0 });
-    m.point_masses.push(mbs::PointMass { node: a, mass: -1.0 });
+    m.point_masses.push(mbs::PointMass {
+        name: String::new(),
+        node: a,
+        mass: 1.0,
+    });
+    m.point_masses.push(mbs::PointMass {
+        name: String::new(),
+        node: a,
+        mass: -1.0,
+    });
     assert!(matches!(err(&m), ModelError::InvalidValue { .. }));
     assert_eq!(err(&m).entities(), [Entity::PointMass(1)]);
+    // A named point mass is named in the message, as its study file names it.
+    m.point_masses[1].name = "tip".into();
+    let message = err(&m).to_string();
+    assert!(message.contains("point mass 'tip'"), "{message}");
     m.point_masses.clear();
     m.add_driver(
         "d",

@@ -521,6 +521,7 @@ fn free_triangle() -> (System, State) {
         .collect();
     for (i, &n) in nodes.iter().enumerate() {
         m.point_masses.push(mbs::PointMass {
+            name: String::new(),
             node: n,
             mass: 1.0 + i as f64,
         });

@@ -170,8 +170,16 @@ fn two_oscillators(m1: f64, k1: f64, c1: f64, m2: f64, k2: f64, kc: f64) -> mbs:
     model
         .springs
         .push(spring("coupling", a, Some(b), Vector3::zeros(), kc, 0.0));
-    model.point_masses.push(mbs::PointMass { node: a, mass: m1 });
-    model.point_masses.push(mbs::PointMass { node: b, mass: m2 });
+    model.point_masses.push(mbs::PointMass {
+        name: String::new(),
+        node: a,
+        mass: m1,
+    });
+    model.point_masses.push(mbs::PointMass {
+        name: String::new(),
+        node: b,
+        mass: m2,
+    });
     model.add_support(mbs::Support::slider(a, Vector3::x()));
     model.add_support(mbs::Support::slider(b, Vector3::x()));
     model

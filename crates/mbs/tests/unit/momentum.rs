@@ -41,7 +41,11 @@ fn rigid_velocities_move_every_node_rigidly() {
         center_of_mass: Vector3::new(0.0, 0.0, 0.25),
         inertia: Matrix3::from_diagonal(&Vector3::new(0.05, 0.06, 0.02)),
     });
-    m.point_masses.push(PointMass { node: n1, mass: 0.5 });
+    m.point_masses.push(PointMass {
+        name: String::new(),
+        node: n1,
+        mass: 0.5,
+    });
     let sys = System::new(&m).unwrap();
     assert_eq!(sys.rigid_invariance(), Ok(()));
     // A deformed, turned configuration: every coordinate away from zero.

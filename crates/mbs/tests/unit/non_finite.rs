@@ -24,7 +24,11 @@ fn a_jacobian_that_is_not_finite_stops_the_static_analyses_with_its_force_named(
         translation: mbs::TranslationSupport::Free,
         rotation: mbs::RotationSupport::Fixed,
     });
-    model.point_masses.push(PointMass { node: b, mass: 1.0 });
+    model.point_masses.push(PointMass {
+        name: String::new(),
+        node: b,
+        mass: 1.0,
+    });
     // The bushing of the user-force tests as a pure spring f = k |d| d with its analytic
     // Jacobian k (|d| I + d d^T / |d|): where the nodes coincide the force is 0 but the
     // Jacobian is 0/0.

@@ -69,7 +69,11 @@ pub fn mixed() -> Model {
         Vector3::new(0.1, -0.05, 0.1),
         [0.01, 0.01, 0.02],
     ));
-    m.point_masses.push(PointMass { node: n[3], mass: 0.3 });
+    m.point_masses.push(PointMass {
+        name: String::new(),
+        node: n[3],
+        mass: 0.3,
+    });
     m.springs.push(Spring {
         name: "tie".into(),
         a: n[6],

@@ -253,6 +253,8 @@ fn warnings_fire_when_expected() {
     );
     println!("{d}");
     assert!(d.to_string().contains("modes are missing"));
+    // In the study file's words, not the library's type.
+    assert!(d.to_string().contains("`cutoff_hz = ") && !d.to_string().contains("ModeSelection"));
     // Excitation at the first mode: mode 1 (and any below sqrt(2) f_1) is near resonance.
     let d = diagnostics(&body, Some(f[0]), 3.0);
     let near = d.warnings.iter().find_map(|w| match w {
@@ -271,6 +273,7 @@ fn warnings_fire_when_expected() {
         "{}",
         kinds(&d)
     );
+    assert!(d.to_string().contains("`cutoff_hz`") && !d.to_string().contains("ModeSelection"));
     // Unusable inputs are reported, not panicked on.
     for (f, factor) in [(-1.0, 3.0), (f64::NAN, 3.0), (10.0, 0.5)] {
         let d = diagnostics(&body, Some(f), factor);

@@ -115,6 +115,7 @@ impl Builder<'_> {
         let m = &self.study.mechanism;
         for p in &m.point_masses {
             let point_mass = PointMass {
+                name: p.name.clone(),
                 node: self.node(&p.at, &p.path)?,
                 mass: p.mass,
             };

@@ -316,7 +316,7 @@ impl Source {
     /// Converts a `toml` parse or type error, with its key path and, for an unknown key or
     /// variant, the closest known names.
     pub fn toml_error(&self, e: &toml::de::Error) -> StudyError {
-        let mut message = e.message().trim().to_string();
+        let mut message = plain_types(e.message().trim());
         if let Some(hint) = unknown_name_hint(&message) {
             message.push_str(&hint);
         }
@@ -393,6 +393,50 @@ fn quoted_after(message: &str, prefix: &str) -> Option<String> {
     let start = message.find(prefix)? + prefix.len();
     let len = message[start..].find('`')?;
     Some(message[start..start + len].to_string())
+}
+
+/// Serde's message with the study file's words for its Rust types: "expected f64" is
+/// "expected a number", "expected usize" "expected a whole number >= 0", a sequence an array,
+/// a map or struct a table.
+pub fn plain_types(message: &str) -> String {
+    const WORDS: &[(&str, &str)] = &[
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+        ("expected usize", "expected a whole number >= 0"),
+        ("expected u64", "expected a whole number >= 0"),
+        ("expected u32", "expected a whole number >= 0"),
+        ("expected u16", "expected a whole number >= 0"),
+        ("expected u8", "expected a whole number >= 0"),
+        ("expected i64", "expected a whole number"),
+        ("expected i32", "expected a whole number"),
+        ("expected a sequence", "expected an array"),
+        ("expected a map", "expected a table"),
+        ("invalid type: sequence", "invalid type: array"),
+        ("invalid type: map", "invalid type: table"),
+        ("invalid type: floating point", "invalid type: number"),
+        ("invalid value: floating point", "invalid value: number"),
+        ("invalid type: integer", "invalid type: whole number"),
+        ("invalid value: integer", "invalid value: whole number"),
+    ];
+    let mut out = message.to_string();
+    for (rust, study) in WORDS {
+        out = out.replace(rust, study);
+    }
+    // "expected struct BeamFile" (a table in the file), "expected enum Kind".
+    for what in ["expected struct ", "expected enum "] {
+        while let Some(at) = out.find(what) {
+            let name_end = out[at + what.len()..]
+                .find(|c: char| !c.is_ascii_alphanumeric() && c != '_')
+                .map_or(out.len(), |e| at + what.len() + e);
+            let word = if what.contains("struct") {
+                "expected a table"
+            } else {
+                "expected one of its names"
+            };
+            out.replace_range(at..name_end, word);
+        }
+    }
+    out
 }
 
 /// For serde's "unknown field `x`, expected one of `a`, `b`" and "unknown variant ..."

@@ -182,10 +182,8 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
     for (i, p) in file.parts.iter().enumerate() {
         let path = KeyPath::root().key("parts").index(i);
         if v.lookup("part", &p.name).is_some() {
-            v.err(
-                &path.key("name"),
-                format!("a part named '{}' is already defined", p.name),
-            );
+            let first = file.parts.iter().position(|q| q.name == p.name).unwrap_or(i);
+            v.duplicate(&path, "part", &p.name, &KeyPath::root().key("parts").index(first), "");
             continue;
         }
         let part = v.part(&path, p, &materials, &sections, file);
@@ -269,6 +267,27 @@ fn check_name(name: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// The number of interior dofs (free, not on an interface) of the part `name` as built for
+/// its reduction (`planar`: in-plane dofs only), as the reduction partitions them; `None`
+/// when the partition fails (the reduction reports why, with its own message).
+fn interior_dofs(name: &str, built: &crate::input::part::Built, planar: bool) -> Option<usize> {
+    let mut interfaces = built.interfaces.clone();
+    if let Some(node) = built.auxiliary {
+        interfaces.push(("auxiliary".to_string(), node));
+    }
+    let flat;
+    let model = if planar {
+        let nodes: Vec<NodeId> = interfaces.iter().map(|(_, n)| *n).collect();
+        flat = reduction::planar_model(&built.model, name, &nodes).ok()?;
+        &flat
+    } else {
+        &built.model
+    };
+    let dofs = fe_model::DofMap::new(model).ok()?;
+    let p = reduction::partition(model, &dofs, &interfaces).ok()?;
+    Some(p.internal.len())
+}
+
 /// The beam theory's name, for descriptions.
 fn theory_name(theory: BeamTheory) -> &'static str {
     match theory {
@@ -294,6 +313,65 @@ impl Validator<'_> {
     /// The position of the entity `name` of `kind` in its list.
     fn lookup(&self, kind: &'static str, name: &str) -> Option<usize> {
         self.index.get(&(kind, name.to_string())).copied()
+    }
+
+    /// Marks the entity `name` of `kind` as defined with errors of its own (reported where it
+    /// is defined): references to it are not reported again as unknown.
+    fn mark_failed(&mut self, kind: &'static str, name: &str) {
+        if check_name(name).is_ok() && self.lookup(kind, name).is_none() {
+            self.failed.insert(format!("{kind}:{name}"));
+        }
+    }
+
+    /// Whether the entity `name` of `kind` is defined but failed its own checks.
+    fn has_failed(&self, kind: &str, name: &str) -> bool {
+        self.failed.contains(&format!("{kind}:{name}"))
+    }
+
+    /// `materials[0] (line 3)`: where the first entity of a duplicated name is defined, for
+    /// the message about the second.
+    fn first_defined(&self, path: &KeyPath) -> String {
+        match self.src.locate(path) {
+            Some(span) => {
+                let (line, _) = crate::input::source::line_column(&self.src.text, span.start);
+                format!("{path} (line {line})")
+            }
+            None => path.to_string(),
+        }
+    }
+
+    /// Whether `name` is the first of its name in the list `list` (`seen`: the names so far
+    /// and their positions); otherwise reports the duplicate at `path` with where the first
+    /// is defined (two entries of one name contradict each other: neither silently wins).
+    fn first_of_name<'n>(
+        &mut self,
+        seen: &mut HashMap<&'n str, usize>,
+        path: &KeyPath,
+        list: &str,
+        i: usize,
+        what: &str,
+        name: &'n str,
+    ) -> bool {
+        match seen.get(name) {
+            Some(&first) => {
+                self.duplicate(path, what, name, &KeyPath::root().key(list).index(first), "");
+                false
+            }
+            None => {
+                seen.insert(name, i);
+                true
+            }
+        }
+    }
+
+    /// Reports the entity at `path` named `name`, which the entity at `first` already is
+    /// (`note`: why names are unique, if it needs saying).
+    fn duplicate(&mut self, path: &KeyPath, what: &str, name: &str, first: &KeyPath, note: &str) {
+        let first = self.first_defined(&first.key("name"));
+        self.err(
+            &path.key("name"),
+            format!("a {what} named '{name}' is already defined at {first}{note}"),
+        );
     }
 
     fn err(&mut self, path: &KeyPath, message: impl Into<String>) {
@@ -368,18 +446,14 @@ impl Validator<'_> {
 
     fn materials(&mut self, list: &[MaterialFile]) -> Materials {
         let mut out = Vec::new();
-        let mut seen = HashSet::new();
+        let mut seen = HashMap::new();
         for (i, m) in list.iter().enumerate() {
             let path = KeyPath::root().key("materials").index(i);
             if let Err(e) = check_name(&m.name) {
                 self.err(&path.key("name"), e);
                 continue;
             }
-            if !seen.insert(m.name.as_str()) {
-                self.err(
-                    &path.key("name"),
-                    format!("a material named '{}' is already defined", m.name),
-                );
+            if !self.first_of_name(&mut seen, &path, "materials", i, "material", &m.name) {
                 continue;
             }
             let E = keys::ranged("materials", "E", m.E);
@@ -454,27 +528,21 @@ impl Validator<'_> {
         }
         // A material with errors is known, not unknown, to the parts that use it.
         for m in list {
-            if check_name(&m.name).is_ok() && self.lookup("material", &m.name).is_none() {
-                self.failed.insert(format!("material:{}", m.name));
-            }
+            self.mark_failed("material", &m.name);
         }
         Materials(out)
     }
 
     fn sections<'f>(&mut self, list: &'f [SectionFile]) -> Sections<'f> {
         let mut out: Vec<(String, KeyPath, &'f SectionFile)> = Vec::new();
-        let mut seen = HashSet::new();
+        let mut seen = HashMap::new();
         for (i, s) in list.iter().enumerate() {
             let path = KeyPath::root().key("sections").index(i);
             if let Err(e) = check_name(&s.name) {
                 self.err(&path.key("name"), e);
                 continue;
             }
-            if !seen.insert(s.name.as_str()) {
-                self.err(
-                    &path.key("name"),
-                    format!("a section named '{}' is already defined", s.name),
-                );
+            if !self.first_of_name(&mut seen, &path, "sections", i, "section", &s.name) {
                 continue;
             }
             let what = match s.shape {
@@ -512,13 +580,19 @@ impl Validator<'_> {
                 out.push((s.name.clone(), path, s));
             }
         }
+        // A section with errors is known, not unknown, to the parts that use it.
+        for s in list {
+            self.mark_failed("section", &s.name);
+        }
         Sections(out)
     }
 
     /// The section `name` built with Poisson's ratio `nu`, or an error at `at`.
     fn section(&mut self, at: &KeyPath, name: &str, sections: &Sections<'_>, nu: f64) -> Option<BeamSection> {
         let Some((_, path, s)) = self.lookup("section", name).map(|k| &sections.0[k]) else {
-            self.err(at, unknown_reference("section", name, &sections.names()));
+            if !self.has_failed("section", name) {
+                self.err(at, unknown_reference("section", name, &sections.names()));
+            }
             return None;
         };
         let k = 5.0 / 6.0;
@@ -541,7 +615,7 @@ impl Validator<'_> {
 
     fn material<'m>(&mut self, at: &KeyPath, name: &str, materials: &'m Materials) -> Option<&'m IsotropicMaterial> {
         let m = self.lookup("material", name).map(|k| &materials.0[k].1);
-        if m.is_none() && !self.failed.contains(&format!("material:{name}")) {
+        if m.is_none() && !self.has_failed("material", name) {
             self.err(at, unknown_reference("material", name, &materials.names()));
         }
         m
@@ -626,9 +700,39 @@ impl Validator<'_> {
         };
         // Build the spiders now: a surface that cannot carry an interface is an input error,
         // and should be reported with its key before anything runs.
-        if let Err(e) = part.check_build_for_reduction(|_| ()) {
-            self.fe_error(path, &part, &e);
-            return None;
+        // The interior is counted only for a mode count (its partition costs a dof map).
+        let planar = part
+            .reduction
+            .as_ref()
+            .filter(|r| matches!(r.modes, ModeSelection::Count(m) if m > 0))
+            .map(|r| r.planar);
+        let interior =
+            match part.check_build_for_reduction(|built| planar.map(|planar| interior_dofs(&p.name, built, planar))) {
+                Ok(interior) => interior,
+                Err(e) => {
+                    self.fe_error(path, &part, &e);
+                    return None;
+                }
+            };
+        // A mode count the interior cannot give fails the reduction: say so now, not after
+        // the analyses before it have run.
+        if let (
+            Some(Some(interior)),
+            Some(Reduction {
+                modes: ModeSelection::Count(m),
+                ..
+            }),
+        ) = (interior, &part.reduction)
+        {
+            if *m > 0 && *m >= interior {
+                let e = reduction::ReductionError::TooManyModes {
+                    body: p.name.clone(),
+                    requested: *m,
+                    interior,
+                };
+                self.err(&path.key("reduction").key("modes"), e.to_string());
+                return None;
+            }
         }
         let _ = file;
         Some(part)
@@ -928,6 +1032,15 @@ impl Validator<'_> {
         let file_key = path.key("mesh").key("file");
         self.file_spiders.clear();
         let (format, imported, mesh) = self.read_mesh(&file, &file_key)?;
+        // An inverted or degenerate element fails the assembly: refuse it now, by its label in
+        // the file (the assembly knows only its position in the model).
+        if let Err(e) = fe_model::mesh::quality::check_solid_cells(&mesh) {
+            self.err(
+                &file_key,
+                format!("part '{}': {} file {}: {e}", p.name, format, file.display()),
+            );
+            return None;
+        }
         let volumes = mesh.cells.iter().filter(|c| c.kind.dimension() == 3).count();
         let beams = imported.as_ref().map_or(0, |i| {
             i.beam_sections
@@ -1649,9 +1762,17 @@ impl Validator<'_> {
                 | AnalysisKind::Linearized
                 | AnalysisKind::Buckling => self.mechanism_analysis(path, a, mechanism, &out),
             };
-            if let Some(analysis) = analysis {
-                self.register("analysis", &analysis.name, out.len());
-                out.push(analysis);
+            match analysis {
+                Some(analysis) => {
+                    self.register("analysis", &analysis.name, out.len());
+                    out.push(analysis);
+                }
+                // A later `start` naming it is not reported again as unknown.
+                None => {
+                    if let Some(name) = &a.name {
+                        self.mark_failed("analysis", name);
+                    }
+                }
             }
         }
         out
@@ -1666,6 +1787,15 @@ impl Validator<'_> {
         done: &[Analysis],
     ) -> Option<Analysis> {
         let kind = a.kind.name();
+        // Bodies and point masses that failed their own checks are reported there: the
+        // mechanism is not missing, only invalid.
+        let invalid_only = self
+            .failed
+            .iter()
+            .any(|f| f.starts_with("body:") || f.starts_with("point_mass:"));
+        if mechanism.is_empty() && invalid_only {
+            return None;
+        }
         if mechanism.is_empty() {
             self.err(
                 &path.key("type"),
@@ -1693,6 +1823,7 @@ impl Validator<'_> {
                     );
                     return None;
                 }
+                None if self.has_failed("analysis", from) => return None,
                 None => {
                     let names: Vec<String> = done
                         .iter()

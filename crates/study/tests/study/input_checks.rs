@@ -393,8 +393,8 @@ angular_velocity = [0.0, 0.0, 2.0]
 }
 
 /// A reduction keeps fixed-interface modes of the interior (the dofs that are not on an
-/// interface): asking for as many as the interior has or more is refused before anything is
-/// solved, located at the part's `reduction.modes`, naming the part and both counts.
+/// interface): asking for as many as the interior has or more is refused by `check`, before
+/// anything runs, located at the part's `reduction.modes`, naming the part and both counts.
 #[test]
 fn more_reduction_modes_than_interior_dofs_are_refused_with_the_part_named() {
     let cantilever =
@@ -402,13 +402,14 @@ fn more_reduction_modes_than_interior_dofs_are_refused_with_the_part_named() {
     // 21 beam nodes, the two ends interfaces: 19 x 6 = 114 interior dofs.
     let text = cantilever.replace("[parts.reduction]\nmodes = 4", "[parts.reduction]\nmodes = 500");
     assert_ne!(text, cantilever, "the example reduces with 4 modes");
-    let e = run_error("reduction-modes", &text);
-    // Located at the key, `file:line:col: parts[0].reduction.modes: part 'beam'`.
+    let e = check("reduction-modes", &text);
+    // Located at the key, `file:line:col: parts[0].reduction.modes: ...`, the only error.
     let line = text.lines().position(|l| l == "modes = 500").unwrap() + 1;
     assert!(
-        e.contains(&format!("reduction-modes.toml:{line}:")) && e.contains("parts[0].reduction.modes: part 'beam'"),
+        e.contains(&format!("reduction-modes.toml:{line}:")) && e.contains("parts[0].reduction.modes: 500"),
         "line {line}: {e}"
     );
+    assert!(e.contains("(1 error)"), "{e}");
     assert!(
         e.contains("500 fixed-interface modes requested of 'beam', but its interior (the free dofs not on an interface) has 114 dofs, so at most 113 modes"),
         "{e}"

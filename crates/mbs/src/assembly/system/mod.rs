@@ -1893,7 +1893,7 @@ fn check_point_masses(model: &Model) -> Result<(), ModelError> {
         if !(p.mass >= 0.0 && finite(p.mass)) {
             return Err(invalid(
                 Some(Entity::PointMass(i)),
-                format!("point mass {i}"),
+                p.label(i),
                 format!("mass must be finite and >= 0, got {}", p.mass),
             ));
         }

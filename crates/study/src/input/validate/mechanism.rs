@@ -14,7 +14,7 @@ use crate::input::source::{suggestions, unknown_reference, KeyPath};
 use mbs::{Interpolation, JointKind, LoadAxes, LoadKind, RotationSupport, TimeFunction, TranslationSupport};
 use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
 use reduction::ReducedBody;
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::path::PathBuf;
 use superelement::{Damping, MassVariant};
 
@@ -472,7 +472,7 @@ impl Validator<'_> {
     ) -> Mechanism {
         let mut m = Mechanism::default();
         let part_names: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
-        let mut names = std::collections::HashSet::new();
+        let mut names = HashMap::new();
         for (i, b) in file.bodies.iter().enumerate() {
             let path = KeyPath::root().key("bodies").index(i);
             if !self.body_name(&path, &b.name, &mut names) {
@@ -508,6 +508,8 @@ impl Validator<'_> {
                     at,
                     mass,
                 });
+            } else {
+                self.mark_failed("point_mass", &p.name);
             }
         }
         for (i, s) in file.springs.iter().enumerate() {
@@ -525,10 +527,8 @@ impl Validator<'_> {
         for (i, j) in file.joints.iter().enumerate() {
             let path = KeyPath::root().key("joints").index(i);
             if self.lookup("joint", &j.name).is_some() {
-                self.err(
-                    &path.key("name"),
-                    format!("a joint named '{}' is already defined", j.name),
-                );
+                let first = file.joints.iter().position(|k| k.name == j.name).unwrap_or(i);
+                self.duplicate(&path, "joint", &j.name, &KeyPath::root().key("joints").index(first), "");
                 continue;
             }
             self.register("joint", &j.name, m.joints.len());
@@ -554,14 +554,14 @@ impl Validator<'_> {
         // Before the sensors: an `actuator-effort` sensor names an actuator.
         self.joint_forces(file, &mut m);
         self.sensors(file, &mut m);
-        let mut start_given = false;
+        let mut start_given: Option<KeyPath> = None;
         for (i, c) in file.initial.iter().enumerate() {
             let path = KeyPath::root().key("initial").index(i);
             if let Some(start) = &c.start {
-                if let Some(choice) = self.initial_start(&path, start, start_given) {
+                if let Some(choice) = self.initial_start(&path, start, start_given.as_ref()) {
                     m.start = choice;
                 }
-                start_given = true;
+                start_given.get_or_insert(path.key("start"));
                 continue;
             }
             if let Some(spec) = self.initial(&path, c, &m) {
@@ -585,9 +585,13 @@ impl Validator<'_> {
         for (i, d) in file.drivers.iter().enumerate() {
             let path = KeyPath::root().key("drivers").index(i);
             if self.lookup("driver", &d.name).is_some() {
-                self.err(
-                    &path.key("name"),
-                    format!("a driver named '{}' is already defined", d.name),
+                let first = file.drivers.iter().position(|e| e.name == d.name).unwrap_or(i);
+                self.duplicate(
+                    &path,
+                    "driver",
+                    &d.name,
+                    &KeyPath::root().key("drivers").index(first),
+                    "",
                 );
                 continue;
             }
@@ -596,6 +600,22 @@ impl Validator<'_> {
             };
             let coordinate = d.coordinate.unwrap_or(0);
             if !self.joint_coordinate(&path, m, joint, coordinate) {
+                continue;
+            }
+            // Two motions of one coordinate contradict each other: neither may win.
+            if let Some(first) = m
+                .drivers
+                .iter()
+                .find(|x| x.joint == joint && x.coordinate == coordinate)
+            {
+                let (name, first) = (first.name.clone(), self.first_defined(&first.path.key("joint")));
+                self.err(
+                    &path.key("joint"),
+                    format!(
+                        "coordinate {coordinate} of joint '{}' is already driven by driver '{name}' at {first}",
+                        d.joint
+                    ),
+                );
                 continue;
             }
             if let Some(motion) = self.time_function(&path.key("function"), &d.function, true) {
@@ -609,16 +629,24 @@ impl Validator<'_> {
                 });
             }
         }
+        // A driver with errors is known, not unknown, to the sensors that name it.
+        for d in &file.drivers {
+            self.mark_failed("driver", &d.name);
+        }
     }
 
     /// `[[sensors]]`, after the actuators (an `actuator-effort` sensor names one).
     fn sensors(&mut self, file: &StudyFile, m: &mut Mechanism) {
         for (i, s) in file.sensors.iter().enumerate() {
             let path = KeyPath::root().key("sensors").index(i);
-            if self.lookup("sensor", &s.name).is_some() {
-                self.err(
-                    &path.key("name"),
-                    format!("a sensor named '{}' is already defined", s.name),
+            if self.lookup("sensor", &s.name).is_some() || self.has_failed("sensor", &s.name) {
+                let first = file.sensors.iter().position(|t| t.name == s.name).unwrap_or(i);
+                self.duplicate(
+                    &path,
+                    "sensor",
+                    &s.name,
+                    &KeyPath::root().key("sensors").index(first),
+                    "",
                 );
                 continue;
             }
@@ -633,11 +661,13 @@ impl Validator<'_> {
                     path,
                     target,
                 });
+            } else {
+                self.mark_failed("sensor", &s.name);
             }
         }
     }
 
-    fn body_name(&mut self, path: &KeyPath, name: &str, names: &mut std::collections::HashSet<String>) -> bool {
+    fn body_name(&mut self, path: &KeyPath, name: &str, names: &mut HashMap<String, KeyPath>) -> bool {
         if let Err(e) = super::check_name(name) {
             self.err(&path.key("name"), e);
             return false;
@@ -649,14 +679,18 @@ impl Validator<'_> {
             );
             return false;
         }
-        if names.contains(name) {
-            self.err(
-                &path.key("name"),
-                format!("a body named '{name}' is already defined (flexible and rigid bodies share one name space)"),
+        if let Some(first) = names.get(name) {
+            let first = first.clone();
+            self.duplicate(
+                path,
+                "body",
+                name,
+                &first,
+                " (flexible and rigid bodies share one name space)",
             );
             return false;
         }
-        names.insert(name.to_string());
+        names.insert(name.to_string(), path.clone());
         true
     }
 
@@ -1557,6 +1591,7 @@ impl Validator<'_> {
             "reaction" => self.reaction_sensor(path, m, &of)?,
             "actuator-effort" => match self.lookup("actuator", &of) {
                 Some(a) => SensorTarget::ActuatorEffort(a),
+                None if self.has_failed("actuator", &of) => return None,
                 None => {
                     let names: Vec<String> = m.actuators.iter().map(|a| a.name.clone()).collect();
                     self.err(&op, unknown_reference("actuator", &of, &names));
@@ -1565,6 +1600,7 @@ impl Validator<'_> {
             },
             _ => match self.lookup("driver", &of) {
                 Some(d) => SensorTarget::DriverEffort(d),
+                None if self.has_failed("driver", &of) => return None,
                 None => {
                     let names: Vec<String> = m.drivers.iter().map(|d| d.name.clone()).collect();
                     self.err(&op, unknown_reference("driver", &of, &names));
@@ -1659,10 +1695,15 @@ impl Validator<'_> {
     }
 
     /// An `[[initial]]` entry with `start`: how the mechanism starts, given once.
-    fn initial_start(&mut self, path: &KeyPath, start: &str, again: bool) -> Option<StartChoice> {
+    /// `first`: where an earlier `[[initial]]` gave `start`, if one did.
+    fn initial_start(&mut self, path: &KeyPath, start: &str, first: Option<&KeyPath>) -> Option<StartChoice> {
         self.only_keys(path, "initial", "start", "the choice of the start");
-        if again {
-            self.err_key(&path.key("start"), "`start` is given twice in `[[initial]]`");
+        if let Some(first) = first {
+            let first = self.first_defined(first);
+            self.err_key(
+                &path.key("start"),
+                format!("`start` is given twice in `[[initial]]`: first at {first}"),
+            );
             return None;
         }
         match start {
@@ -1798,7 +1839,7 @@ impl Validator<'_> {
     fn joint_force_head(
         &mut self,
         m: &Mechanism,
-        names: &mut HashSet<String>,
+        names: &mut HashMap<String, KeyPath>,
         (table, i): (&str, usize),
         name: &str,
         joint: &str,
@@ -1806,10 +1847,18 @@ impl Validator<'_> {
         what: &str,
     ) -> Option<(KeyPath, usize, usize)> {
         let path = KeyPath::root().key(table).index(i);
-        if !names.insert(name.to_string()) {
-            self.err(&path.key("name"), format!("a {what} named '{name}' is already defined"));
+        if let Some(first) = names.get(name) {
+            let first = first.clone();
+            self.duplicate(
+                &path,
+                what,
+                name,
+                &first,
+                " (joint springs, joint limits and actuators share one name space)",
+            );
             return None;
         }
+        names.insert(name.to_string(), path.clone());
         let joint = self.joint_ref(&path.key("joint"), joint, m)?;
         let coordinate = coordinate.unwrap_or(0);
         self.joint_coordinate(&path, m, joint, coordinate)
@@ -1819,13 +1868,13 @@ impl Validator<'_> {
     /// `[[joint_springs]]`, `[[joint_limits]]` and `[[actuators]]` (their names unique among
     /// all three).
     fn joint_forces(&mut self, file: &StudyFile, m: &mut Mechanism) {
-        let mut names = HashSet::new();
+        let mut names = HashMap::new();
         self.joint_springs(file, m, &mut names);
         self.joint_limits(file, m, &mut names);
         self.actuators(file, m, &mut names);
     }
 
-    fn joint_springs(&mut self, file: &StudyFile, m: &mut Mechanism, names: &mut HashSet<String>) {
+    fn joint_springs(&mut self, file: &StudyFile, m: &mut Mechanism, names: &mut HashMap<String, KeyPath>) {
         for (i, s) in file.joint_springs.iter().enumerate() {
             let Some((path, joint, coordinate)) = self.joint_force_head(
                 m,
@@ -1862,7 +1911,7 @@ impl Validator<'_> {
         }
     }
 
-    fn joint_limits(&mut self, file: &StudyFile, m: &mut Mechanism, names: &mut HashSet<String>) {
+    fn joint_limits(&mut self, file: &StudyFile, m: &mut Mechanism, names: &mut HashMap<String, KeyPath>) {
         for (i, l) in file.joint_limits.iter().enumerate() {
             let Some((path, joint, coordinate)) = self.joint_force_head(
                 m,
@@ -1911,7 +1960,7 @@ impl Validator<'_> {
         }
     }
 
-    fn actuators(&mut self, file: &StudyFile, m: &mut Mechanism, names: &mut HashSet<String>) {
+    fn actuators(&mut self, file: &StudyFile, m: &mut Mechanism, names: &mut HashMap<String, KeyPath>) {
         // The sensors a PID law may measure, by name (the first of a name; a duplicate is
         // reported with the sensors): found once, not searched per actuator.
         let mut sensor_named: HashMap<&str, &SensorFile> = HashMap::with_capacity(file.sensors.len());
@@ -1959,6 +2008,10 @@ impl Validator<'_> {
                 coordinate,
                 effort,
             });
+        }
+        // An actuator with errors is known, not unknown, to the sensors that name it.
+        for a in &file.actuators {
+            self.mark_failed("actuator", &a.name);
         }
     }
 
