@@ -171,6 +171,18 @@ fn decks_in_mm_t_s_with_their_units_declared_are_their_si_twins_and_a_warning_wi
             assert!(w.contains(&fragment), "'{fragment}' in: {w}");
         }
     }
+    // A gmsh file has only lengths: read in mm, its nodes are a thousandth of the file's.
+    let gmsh = |units: &str| {
+        let text = [
+            steel(),
+            mesh_part("g", &fixture("gmsh/hex20_41.msh"), units, "tip", "spider = \"rbe3\"\n")
+                .replace("[parts.mesh]", "material = \"steel\"\n[parts.mesh]"),
+        ]
+        .join("\n");
+        study(&dir, &text).parts[0].base.mesh.nodes.clone()
+    };
+    let (m, mm) = (gmsh(""), gmsh("units = \"mm-kg-ms\"\n"));
+    assert!(m.iter().zip(&mm).all(|(a, b)| (a * 1e-3 - b).norm() < 1e-18));
     // An unknown system is a located error that lists the known ones.
     let text = mesh_part(
         "abaqus_mm",
