@@ -103,6 +103,7 @@ pub mod section;
 pub mod sparse_cholesky;
 pub mod statics;
 pub mod stress;
+pub mod units;
 
 pub use assembly::{assemble, assemble_into, assemble_with_pattern, Assembled};
 pub use box_mesh::{box_mesh, solid_model, solid_model_with_materials};

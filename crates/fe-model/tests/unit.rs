@@ -38,4 +38,7 @@ mod unit {
     /// element, a distorted mesh), exact extrapolation of linear stresses on quadratic kinds,
     /// beam section forces against the analytic cantilever under tip load and gravity.
     mod stress;
+    /// Unit systems of decks: a factor per quantity, the plausibility check, mm-t-s twins of
+    /// the Abaqus and Nastran fixtures read with and without their units.
+    mod units;
 }

@@ -114,6 +114,88 @@ fn parts_from_abaqus_and_nastran_files_match_the_gmsh_part() {
     );
 }
 
+#[test]
+fn decks_in_mm_t_s_with_their_units_declared_are_their_si_twins_and_a_warning_without() {
+    let dir = scratch("units");
+    let tip = "spider = \"rbe2\"\nnode_position = [1.0, 0.1, 0.1]\n";
+    let mm = "units = \"mm-t-s\"\n";
+    let text = [
+        mesh_part("abaqus", &fixture("import/hex20.inp"), "", "tip", tip),
+        mesh_part("abaqus_mm", &fixture("import/hex20_mm.inp"), mm, "tip", tip),
+        mesh_part("nastran", &fixture("import/hex20.bdf"), "", "RBE2_2", ""),
+        mesh_part("nastran_mm", &fixture("import/hex20_mm.bdf"), mm, "RBE2_2", ""),
+    ]
+    .join("\n");
+    let s = study(&dir, &text);
+    assert!(!s.warnings.iter().any(|w| w.contains("material")), "{:?}", s.warnings);
+    for (si, mm, clamp) in [(0, 1, "clamp"), (2, 3, "SPC1_1")] {
+        let (si, mm) = (&s.parts[si], &s.parts[mm]);
+        let f_si = clamped_frequencies(si, &si.base.mesh.node_sets[clamp]);
+        let f_mm = clamped_frequencies(mm, &mm.base.mesh.node_sets[clamp]);
+        for (x, y) in f_si.iter().zip(&f_mm) {
+            assert!(((x - y) / x).abs() < 1e-10, "{}: {f_si:?} {f_mm:?}", mm.name);
+        }
+        let m_si = fe_model::center_of_mass(&si.base).unwrap().0;
+        let m_mm = fe_model::center_of_mass(&mm.base).unwrap().0;
+        assert!(
+            ((m_si - m_mm) / m_si).abs() < 1e-12,
+            "{}: {m_si} kg, {m_mm} kg",
+            mm.name
+        );
+    }
+    // Undeclared, each deck's material is a warning under its part's file key that names
+    // the material, its line and the unit system the numbers fit.
+    let text = [
+        mesh_part(
+            "abaqus_mm",
+            &fixture("import/hex20_mm.inp"),
+            "",
+            "tip",
+            "spider = \"rbe3\"\n",
+        ),
+        mesh_part("nastran_mm", &fixture("import/hex20_mm.bdf"), "", "RBE2_2", ""),
+    ]
+    .join("\n");
+    let s = study(&dir, &text);
+    for (part, material) in [(0, "material steel ("), (1, "material MAT1_1 (")] {
+        let w = s
+            .warnings
+            .iter()
+            .find(|w| w.contains(material))
+            .unwrap_or_else(|| panic!("{material}: {:?}", s.warnings));
+        for fragment in [
+            format!("parts[{part}].mesh.file"),
+            "lighter than air".into(),
+            "units = \"mm-t-s\"".into(),
+        ] {
+            assert!(w.contains(&fragment), "'{fragment}' in: {w}");
+        }
+    }
+    // A gmsh file has only lengths: read in mm, its nodes are a thousandth of the file's.
+    let gmsh = |units: &str| {
+        let text = [
+            steel(),
+            mesh_part("g", &fixture("gmsh/hex20_41.msh"), units, "tip", "spider = \"rbe3\"\n")
+                .replace("[parts.mesh]", "material = \"steel\"\n[parts.mesh]"),
+        ]
+        .join("\n");
+        study(&dir, &text).parts[0].base.mesh.nodes.clone()
+    };
+    let (m, mm) = (gmsh(""), gmsh("units = \"mm-kg-ms\"\n"));
+    assert!(m.iter().zip(&mm).all(|(a, b)| (a * 1e-3 - b).norm() < 1e-18));
+    // An unknown system is a located error that lists the known ones.
+    let text = mesh_part(
+        "abaqus_mm",
+        &fixture("import/hex20_mm.inp"),
+        "units = \"mm\"\n",
+        "tip",
+        "",
+    );
+    std::fs::write(dir.join("bad.toml"), text).unwrap();
+    let e = study::load(&dir.join("bad.toml")).unwrap_err().to_string();
+    assert!(e.contains("units") && e.contains("mm-t-s"), "{e}");
+}
+
 /// A free steel beam with interfaces at both ends, and its reduced body.
 fn beam() -> (fe_model::FeModel, Vec<(String, fe_model::NodeId)>) {
     let mut model = fe_model::FeModel::default();

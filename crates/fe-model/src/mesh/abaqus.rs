@@ -22,6 +22,13 @@
 //! Keywords, parameter names and set or material names are case-insensitive, as in Abaqus;
 //! sets and materials keep the spelling of their first definition.
 //!
+//! # Units
+//!
+//! [`read_in`] and [`parse_in`] read a deck written in a [`UnitSystem`] other than SI:
+//! coordinates, section dimensions, `E` and densities are converted to SI as they are read.
+//! A material whose constants no solid has in SI is a note in [`ImportedModel::notes`] that
+//! names it, its line and the unit system its numbers fit.
+//!
 //! # Bounds
 //!
 //! A `GENERATE` range may name at most as many ids as the deck has data lines under `*NODE`
@@ -46,25 +53,37 @@ use super::import::{
 use crate::mesh::{CellId, CellKind, NodeId};
 use crate::model::DofMask;
 use crate::section::BeamSection;
+use crate::units::{deck_material_warning, Quantity, UnitSystem};
 use nalgebra::{Point3, Vector3};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Reads the Abaqus input file at `path` and the files it includes.
+/// Reads the Abaqus input file at `path` (in SI units) and the files it includes.
 pub fn read(path: &Path) -> Result<ImportedModel, ImportError> {
-    let text = read_text(path)?;
-    parse(text, path)
+    read_in(path, UnitSystem::Si)
 }
 
-/// Parses the text of an Abaqus input file; `origin` names it in errors and is where
-/// `*INCLUDE`d paths start from.
+/// Reads the Abaqus input file at `path`, written in `units`, and the files it includes;
+/// every quantity converted to SI.
+pub fn read_in(path: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
+    let text = read_text(path)?;
+    parse_in(text, path, units)
+}
+
+/// Parses the text of an Abaqus input file in SI units; `origin` names it in errors and is
+/// where `*INCLUDE`d paths start from.
 pub fn parse(text: impl AsRef<[u8]>, origin: &Path) -> Result<ImportedModel, ImportError> {
+    parse_in(text, origin, UnitSystem::Si)
+}
+
+/// [`parse`] for a file written in `units`: every quantity converted to SI.
+pub fn parse_in(text: impl AsRef<[u8]>, origin: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
     let mut files = Vec::new();
     let mut lines = Vec::new();
     let mut includes = Includes::default();
     includes.start(origin, text.as_ref())?;
     expand(text.as_ref(), origin, &mut includes, &mut files, &mut lines)?;
-    Reader::new(&files).run(&lines)
+    Reader::new(&files, units).run(&lines)
 }
 
 /// Our node `i` of an Abaqus element is the Abaqus node `ours_from_abaqus(kind)[i]`.
@@ -224,6 +243,8 @@ struct SetDef {
 
 struct Reader<'a> {
     files: &'a [PathBuf],
+    /// The deck's units: every quantity is converted to SI as it is read.
+    units: UnitSystem,
     builder: MeshBuilder,
     /// Elements read before all nodes are known: (id, kind, node ids, file, line).
     elements: Vec<(u64, CellKind, Vec<u64>, usize, usize)>,
@@ -284,9 +305,10 @@ struct BeamSpec {
 }
 
 impl<'a> Reader<'a> {
-    fn new(files: &'a [PathBuf]) -> Self {
+    fn new(files: &'a [PathBuf], units: UnitSystem) -> Self {
         Reader {
             files,
+            units,
             builder: MeshBuilder::default(),
             elements: Vec::new(),
             node_sets: BTreeMap::new(),
@@ -371,7 +393,8 @@ impl<'a> Reader<'a> {
                 "ELASTIC" => self.elastic(head, &keyword, data)?,
                 "DENSITY" => {
                     let values = self.material_values(head, "*DENSITY", data, 1)?;
-                    self.current_material(head, "*DENSITY")?.density = Some(values[0]);
+                    let rho = values[0] * self.units.to_si(Quantity::Density);
+                    self.current_material(head, "*DENSITY")?.density = Some(rho);
                 }
                 "SOLID SECTION" => {
                     let p = self.path(head.file);
@@ -438,7 +461,7 @@ impl<'a> Reader<'a> {
             let entity = format!("*NODE {id}");
             let mut x = [0.0; 3];
             for (c, f) in fields[1..].iter().enumerate() {
-                x[c] = self.real(l, &entity, "a finite coordinate", f)?;
+                x[c] = self.real(l, &entity, "a finite coordinate", f)? * self.units.to_si(Quantity::Length);
             }
             self.builder.add_node(id, Point3::from(x), self.path(l.file), l.line)?;
             if let Some(set) = &set {
@@ -655,7 +678,8 @@ impl<'a> Reader<'a> {
             }
         }
         let values = self.material_values(head, "*ELASTIC", data, 2)?;
-        self.current_material(head, "*ELASTIC")?.elastic = Some((values[0], values[1]));
+        let E = values[0] * self.units.to_si(Quantity::Stress);
+        self.current_material(head, "*ELASTIC")?.elastic = Some((E, values[1]));
         Ok(())
     }
 
@@ -690,7 +714,7 @@ impl<'a> Reader<'a> {
         }
         let dims = fields
             .iter()
-            .map(|f| self.real(first, &entity, "a finite dimension", f))
+            .map(|f| Ok(self.real(first, &entity, "a finite dimension", f)? * self.units.to_si(Quantity::Length)))
             .collect::<Result<Vec<_>, _>>()?;
         let n1 = match data.get(1) {
             None => Vector3::new(0.0, 0.0, -1.0),
@@ -853,6 +877,10 @@ impl<'a> Reader<'a> {
             imported
                 .materials
                 .push(material(&m.name, E, nu, rho, path, m.line, &entity)?);
+            let place = format!("{}:{}", path.display(), m.line);
+            imported
+                .notes
+                .extend(deck_material_warning(&m.name, &place, E, rho, self.units));
         }
         let find_material = |name: &str, file: usize, line: usize, entity: &str| {
             self.materials

@@ -81,7 +81,8 @@ pub struct ImportedModel {
     pub supports: Vec<ImportedSupport>,
     /// Cards or keywords that were skipped, each listed once, in order of first occurrence.
     pub ignored: Vec<Ignored>,
-    /// What was read but approximated, one sentence each (RBE3 weights, for instance).
+    /// What was read but approximated or looks wrong, one sentence each (RBE3 weights, a
+    /// material whose constants no solid has in SI).
     pub notes: Vec<String>,
 }
 

@@ -16,6 +16,13 @@
 //!
 //! A continuation line has the field width of the card it continues, whatever its marker.
 //!
+//! # Units
+//!
+//! [`read_in`] and [`parse_in`] read a deck written in a [`UnitSystem`] other than SI:
+//! `GRID` and `CORD2R` coordinates, `E`, `G` and `RHO` (times `WTMASS`) are converted to SI.
+//! A material whose constants no solid has in SI is a note in [`ImportedModel::notes`] that
+//! names it (`MAT1_<mid>`), its line and the unit system its numbers fit.
+//!
 //! # Bounds
 //!
 //! A `G1 THRU G2` range may name at most as many grids as the deck has `GRID` cards, and all
@@ -56,20 +63,32 @@ use super::import::{
 use crate::interface::SpiderKind;
 use crate::mesh::{CellId, CellKind, NodeId};
 use crate::model::DofMask;
+use crate::units::{deck_material_warning, Quantity, UnitSystem};
 use nalgebra::{Matrix3, Point3, Vector3};
 use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Reads the Nastran bulk data file at `path` and the files it includes.
+/// Reads the Nastran bulk data file at `path` (in SI units) and the files it includes.
 pub fn read(path: &Path) -> Result<ImportedModel, ImportError> {
-    let text = read_text(path)?;
-    parse(text, path)
+    read_in(path, UnitSystem::Si)
 }
 
-/// Parses the text of a Nastran input file; `origin` names it in errors and is where
-/// `INCLUDE`d paths start from.
+/// Reads the Nastran bulk data file at `path`, written in `units`, and the files it
+/// includes; every quantity converted to SI.
+pub fn read_in(path: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
+    let text = read_text(path)?;
+    parse_in(text, path, units)
+}
+
+/// Parses the text of a Nastran input file in SI units; `origin` names it in errors and is
+/// where `INCLUDE`d paths start from.
 pub fn parse(text: impl AsRef<[u8]>, origin: &Path) -> Result<ImportedModel, ImportError> {
+    parse_in(text, origin, UnitSystem::Si)
+}
+
+/// [`parse`] for a file written in `units`: every quantity converted to SI.
+pub fn parse_in(text: impl AsRef<[u8]>, origin: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
     let mut files = Vec::new();
     let mut cards = Vec::new();
     let mut in_bulk = None;
@@ -82,7 +101,7 @@ pub fn parse(text: impl AsRef<[u8]>, origin: &Path) -> Result<ImportedModel, Imp
         includes: &mut includes,
     };
     read_cards(text.as_ref(), origin, &mut deck)?;
-    Reader::new(&files, &cards).run(&cards)
+    Reader::new(&files, &cards, units).run(&cards)
 }
 
 /// Our node `i` of a Nastran element is the Nastran grid `ours_from_nastran(kind)[i]`.
@@ -338,6 +357,9 @@ type Spc = (&'static str, u64, Vec<u64>, DofMask, usize, usize);
 
 struct Reader<'a> {
     files: &'a [PathBuf],
+    /// The deck's units: lengths, moduli and densities are converted to SI in
+    /// [`Reader::finish`] and [`Reader::frame`].
+    units: UnitSystem,
     grids: Vec<Grid>,
     cord2r: BTreeMap<u64, Cord2r>,
     /// Other coordinate systems: id -> card name.
@@ -365,8 +387,9 @@ struct Reader<'a> {
 const THRU_PER_GRID: usize = 32;
 
 impl<'a> Reader<'a> {
-    fn new(files: &'a [PathBuf], cards: &[Card]) -> Self {
+    fn new(files: &'a [PathBuf], cards: &[Card], units: UnitSystem) -> Self {
         Reader {
+            units,
             grid_count: cards.iter().filter(|c| c.name == "GRID").count(),
             thru_used: Cell::new(0),
             files,
@@ -840,7 +863,8 @@ impl<'a> Reader<'a> {
         };
         for &id in chain.iter().rev() {
             let c = &self.cord2r[&id];
-            let to_basic = |p: [f64; 3]| frame.origin + frame.axes * Vector3::from(p);
+            let to_basic =
+                |p: [f64; 3]| frame.origin + frame.axes * Vector3::from(p) * self.units.to_si(Quantity::Length);
             let (a, b, cc) = (to_basic(c.abc[0]), to_basic(c.abc[1]), to_basic(c.abc[2]));
             let z = b - a;
             let y = z.cross(&(cc - a));
@@ -872,11 +896,12 @@ impl<'a> Reader<'a> {
         for g in &self.grids {
             let path = &self.files[g.file];
             let entity = format!("GRID {}", g.id);
+            let x = Vector3::from(g.x) * self.units.to_si(Quantity::Length);
             let x = if g.cp == 0 {
-                Point3::from(g.x)
+                Point3::from(x)
             } else {
                 let f = self.frame(g.cp, path, g.line, &entity)?;
-                Point3::from(f.origin + f.axes * Vector3::from(g.x))
+                Point3::from(f.origin + f.axes * x)
             };
             builder.add_node(g.id, x, path, g.line)?;
             if g.cd != 0 {
@@ -886,7 +911,10 @@ impl<'a> Reader<'a> {
         let mut imported = ImportedModel::default();
         // Materials.
         let mut material_names = BTreeMap::new();
+        let stress = self.units.to_si(Quantity::Stress);
         for (&mid, &(E, G, nu, rho, file, line)) in &self.mat1 {
+            let (E, G) = (E.map(|E| E * stress), G.map(|G| G * stress));
+            let rho = rho * self.wtmass * self.units.to_si(Quantity::Density);
             let path = &self.files[file];
             let entity = format!("MAT1 {mid}");
             let name = format!("MAT1_{mid}");
@@ -918,7 +946,11 @@ impl<'a> Reader<'a> {
             };
             imported
                 .materials
-                .push(material(&name, E, nu, rho * self.wtmass, path, line, &entity)?);
+                .push(material(&name, E, nu, rho, path, line, &entity)?);
+            let place = format!("{}:{line}", path.display());
+            imported
+                .notes
+                .extend(deck_material_warning(&name, &place, E, rho, self.units));
             material_names.insert(mid, name);
         }
         // Cells, grouped per property.

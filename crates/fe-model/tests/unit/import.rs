@@ -316,8 +316,15 @@ GRID    99      BAD
     assert!(close(x[1], [1.0, 2.0, 4.0]), "local x is basic z: {:?}", x[1]);
     assert!(close(x[2], [1.0, 0.0, 3.0]), "local y is minus basic y: {:?}", x[2]);
     assert!(close(x[3], [4.0, 2.0, 3.0]), "local z is basic x: {:?}", x[3]);
-    // The tet (1, 3, 2, 4) has the other handedness and was renumbered.
-    assert_eq!(m.notes.len(), 1, "{:?}", m.notes);
+    // The tet (1, 3, 2, 4) has the other handedness and was renumbered; the density, 7.85e-6
+    // kg/m^3 in SI, is lighter than air (a unit warning).
+    assert_eq!(m.notes.len(), 2, "{:?}", m.notes);
+    assert!(m.notes[1].contains("renumbered"), "{:?}", m.notes);
+    assert!(
+        m.notes[0].contains("MAT1_3") && m.notes[0].contains("lighter than air"),
+        "{:?}",
+        m.notes
+    );
     let model = m.to_fe_model(MassKind::Consistent, None).unwrap();
     assert_eq!(model.elements.len(), 1);
     let mat = m.material("MAT1_3").unwrap();

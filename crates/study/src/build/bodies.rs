@@ -58,6 +58,12 @@ impl Builder<'_> {
                     .entry(mbs::Entity::Node(n))
                     .or_insert_with(|| spec.path.clone());
             }
+            let node_labels = match spec.source {
+                crate::input::validate::mechanism::BodySource::Part(p) => {
+                    Some(study.parts[p].base.mesh.node_tags.clone())
+                }
+                _ => None,
+            };
             self.bodies.push(BodyOut {
                 name: spec.name.clone(),
                 reduced: body,
@@ -66,6 +72,7 @@ impl Builder<'_> {
                 frame,
                 nodes,
                 id,
+                node_labels,
             });
         }
         Ok(())

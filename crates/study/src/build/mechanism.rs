@@ -60,6 +60,26 @@ pub struct BodyOut {
     pub nodes: Vec<NodeId>,
     /// The body in the multibody model.
     pub id: mbs::BodyId,
+    /// The label of each mesh node in its source (the deck's or gmsh's node number; 1-based
+    /// positions for generated meshes), when the body is made of a part of the study; nodes
+    /// past its end (interface spiders) have none.
+    pub node_labels: Option<Vec<u64>>,
+}
+
+impl BodyOut {
+    /// Mesh node `k` (0-based index, as in the VTU files) as users read it: `node 205 (index
+    /// 4)` with its label from the mesh file, `node index 4` without one.
+    pub fn node_name(&self, k: usize) -> String {
+        match self.node_label(k) {
+            Some(label) => format!("node {label} (index {k})"),
+            None => format!("node index {k}"),
+        }
+    }
+
+    /// The label of mesh node `k` in its source file, if known.
+    pub fn node_label(&self, k: usize) -> Option<u64> {
+        self.node_labels.as_ref().and_then(|l| l.get(k).copied())
+    }
 }
 
 /// An error about the entity at `path` of the study, located in the file.

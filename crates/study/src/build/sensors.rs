@@ -326,11 +326,12 @@ fn stress_sensor(
                     study,
                     &path.key("node_at"),
                     format!(
-                        "no mesh node of body '{}' at ({}, {}, {}) (part axes); the nearest, node {k} at ({}, {}, {}), is {:.3e} m away",
+                        "no mesh node of body '{}' at ({}, {}, {}) (part axes); the nearest, {} at ({}, {}, {}), is {:.3e} m away",
                         body.name,
                         x.x,
                         x.y,
                         x.z,
+                        body.node_name(k),
                         positions[k].x,
                         positions[k].y,
                         positions[k].z,

@@ -266,6 +266,31 @@ pub struct MeshFile {
     pub file: String,
     /// Material per physical volume (cell set): `{ body = "steel" }`.
     pub materials: Option<BTreeMap<String, String>>,
+    /// The unit system the file is written in (default SI).
+    pub units: Option<UnitsFile>,
+}
+
+/// `units` of `[parts.mesh]`: a consistent unit system, converted to SI on read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+pub enum UnitsFile {
+    #[serde(rename = "SI", alias = "si", alias = "m-kg-s")]
+    Si,
+    #[serde(rename = "mm-t-s")]
+    MmTonneSecond,
+    #[serde(rename = "mm-kg-ms")]
+    MmKgMillisecond,
+}
+
+impl UnitsFile {
+    /// The unit system it names.
+    pub fn system(self) -> fe_model::units::UnitSystem {
+        use fe_model::units::UnitSystem;
+        match self {
+            UnitsFile::Si => UnitSystem::Si,
+            UnitsFile::MmTonneSecond => UnitSystem::MmTonneSecond,
+            UnitsFile::MmKgMillisecond => UnitSystem::MmKgMillisecond,
+        }
+    }
 }
 
 /// `[[parts.interfaces]]`: a 6-dof point where the part connects to the rest of a model.

@@ -457,24 +457,17 @@ impl Validator<'_> {
                 continue;
             }
             let E = keys::ranged("materials", "E", m.E);
-            if let Some(E) = E {
-                if E < 1e5 {
-                    self.warn(
-                        &path.key("E"),
-                        format!(
-                            "E = {E} Pa is softer than any solid: study files are in SI units (Pa, not MPa or GPa)"
-                        ),
-                    );
-                }
+            if let Some(implausible) = E.and_then(fe_model::units::implausible_E) {
+                self.warn(
+                    &path.key("E"),
+                    format!("{implausible}: study files are in SI units (Pa, not MPa or GPa)"),
+                );
             }
             let rho_ok = keys::in_range("materials", "rho", m.rho);
-            if rho_ok && m.rho > 0.0 && m.rho < 1.0 {
+            if let Some(implausible) = fe_model::units::implausible_rho(m.rho).filter(|_| rho_ok) {
                 self.warn(
                     &path.key("rho"),
-                    format!(
-                        "rho = {} kg/m^3 is lighter than air: study files are in SI units (kg/m^3, not g/cm^3 or t/mm^3)",
-                        m.rho
-                    ),
+                    format!("{implausible}: study files are in SI units (kg/m^3, not g/cm^3 or t/mm^3)"),
                 );
             }
             let made = match (m.nu, m.G) {
@@ -1031,7 +1024,8 @@ impl Validator<'_> {
         let file = self.src.dir().join(&m.file);
         let file_key = path.key("mesh").key("file");
         self.file_spiders.clear();
-        let (format, imported, mesh) = self.read_mesh(&file, &file_key)?;
+        let units = m.units.map_or(fe_model::units::UnitSystem::Si, |u| u.system());
+        let (format, imported, mesh) = self.read_mesh(&file, &file_key, units)?;
         // An inverted or degenerate element fails the assembly: refuse it now, by its label in
         // the file (the assembly knows only its position in the model).
         if let Err(e) = fe_model::mesh::quality::check_solid_cells(&mesh) {
@@ -1148,18 +1142,19 @@ impl Validator<'_> {
         }
     }
 
-    /// The mesh file of a part: its format, the model an Abaqus or Nastran file brings (with
-    /// its spiders kept in `file_spiders`), and the mesh.
+    /// The mesh file of a part, written in `units`: its format, the model an Abaqus or
+    /// Nastran file brings (with its spiders kept in `file_spiders`), and the mesh, in SI.
     fn read_mesh(
         &mut self,
         file: &Path,
         file_key: &KeyPath,
+        units: fe_model::units::UnitSystem,
     ) -> Option<(&'static str, Option<fe_model::ImportedModel>, fe_model::mesh::Mesh)> {
         use fe_model::mesh::{abaqus, nastran};
         let extension = file.extension().map(|e| e.to_string_lossy().to_lowercase());
         let (format, imported) = match extension.as_deref() {
-            Some("inp") => ("Abaqus", Some(abaqus::read(file))),
-            Some("bdf" | "nas" | "dat") => ("Nastran", Some(nastran::read(file))),
+            Some("inp") => ("Abaqus", Some(abaqus::read_in(file, units))),
+            Some("bdf" | "nas" | "dat") => ("Nastran", Some(nastran::read_in(file, units))),
             _ => ("gmsh", None),
         };
         let imported = match imported {
@@ -1173,7 +1168,12 @@ impl Validator<'_> {
         let mesh = match &imported {
             Some(i) => i.mesh.clone(),
             None => match fe_model::mesh::gmsh::read(file) {
-                Ok(mesh) => mesh,
+                Ok(mut mesh) => {
+                    // A gmsh file has only lengths.
+                    let length = units.to_si(fe_model::units::Quantity::Length);
+                    mesh.nodes.iter_mut().for_each(|p| p.coords *= length);
+                    mesh
+                }
                 Err(e) => {
                     self.err(file_key, format!("cannot read the mesh: {e}"));
                     return None;

@@ -367,14 +367,15 @@ impl MeshRecovery {
                 "body": body.name,
                 "von_mises_Pa": h.von_mises,
                 "node": h.node,
+                "node_label": body.node_label(h.node),
                 "position": position,
                 x: h.time,
             }));
             lines.push(format!(
-                "hot spot of body '{}': von Mises {:.6e} Pa at FE node index {}{} at {x} = {:.6}",
+                "hot spot of body '{}': von Mises {:.6e} Pa at {}{} at {x} = {:.6}",
                 body.name,
                 h.von_mises,
-                h.node,
+                body.node_name(h.node),
                 position.map_or(String::new(), |p| format!(
                     " ({:.4e}, {:.4e}, {:.4e}) m",
                     p[0], p[1], p[2]

@@ -352,3 +352,63 @@ supports = [{ at = "root" }]
         peak / exact - 1.0
     );
 }
+
+/// A part from a deck numbered 101, 202, ... (`hex20_labels.inp`): the hot spot of the
+/// summary and a stress sensor's error name its nodes by the deck's numbers, the 0-based
+/// index beside them.
+#[test]
+fn hot_spots_and_stress_sensor_errors_name_nodes_by_the_decks_labels() {
+    let deck = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fe-model/tests/data/import/hex20_labels.inp")
+        .display()
+        .to_string();
+    let text = |sensors: &str| {
+        format!(
+            r#"
+[[parts]]
+name = "bar"
+[parts.mesh]
+file = "{deck}"
+[[parts.interfaces]]
+name = "root"
+set = "clamp"
+spider = "rbe2"
+[[parts.interfaces]]
+name = "tip"
+set = "tip"
+spider = "rbe3"
+[parts.reduction]
+modes = 2
+stress_shapes = true
+
+[[bodies]]
+name = "bar"
+part = "bar"
+[[supports]]
+at = "bar.root"
+type = "clamp"
+[[loads]]
+name = "tip-force"
+type = "point"
+at = "bar.tip"
+force = [0.0, -3e3, 1e3]
+{sensors}
+[[analyses]]
+type = "equilibrium"
+name = "reduced"
+"#
+        )
+    };
+    let (_, summary, _) = run("labels-hot-spot", &text(""));
+    let summary = summary.unwrap();
+    let hot = &summary.analyses[0].results["hot_spots"][0];
+    let (index, label) = (hot["node"].as_u64().unwrap(), hot["node_label"].as_u64().unwrap());
+    // The deck numbers node n as 100 n + n % 7 (make_unit_twins.py), in order of definition.
+    let n = index + 1;
+    assert_eq!(label, 100 * n + n % 7, "{hot}");
+    // A stress sensor between nodes names the nearest by its label.
+    let sensor = "[[sensors]]\nname = \"s\"\ntype = \"stress\"\nof = \"bar\"\nnode_at = [0.5, 0.1, 0.19]\n";
+    let (_, summary, _) = run("labels-sensor", &text(sensor));
+    let e = summary.unwrap_err();
+    assert!(e.contains("the nearest, node 5506 (index 54)"), "{e}");
+}

@@ -201,6 +201,7 @@ pub static TABLES: &[Table] = &[
         "[parts.mesh]",
         &[
             key!("file", "string", "", REQ, "the mesh file, relative to the study file: gmsh `.msh` (MSH 4.1 or 2.2, ASCII or binary), Abaqus `.inp`, or Nastran bulk data `.bdf`, `.nas`, `.dat` (the extension says which)"),
+            key!("units", "string", "", def("`SI`"), range "`SI`, `m-kg-s`, `mm-t-s`, `mm-kg-ms`", "the unit system the file is written in, converted to SI on read: `mm-t-s` reads lengths in mm, moduli in MPa, densities in t/mm^3 (steel: 210000, 7.85e-9); `mm-kg-ms` lengths in mm, moduli in GPa, densities in kg/mm^3. An Abaqus or Nastran material whose constants no solid has is a warning that names the unit system its numbers fit"),
             key!("materials", "{ set = string }", "", OPT, r#"a material per physical volume (gmsh) or element set (Abaqus `*ELSET`, Nastran `PSOLID_<pid>`), `{ body = "steel", insert = "brass" }`; every volume (or beam) cell must be in exactly one of them"#),
         ],
     ),
