@@ -102,6 +102,9 @@ struct Actuator {
     law: Law,
     /// $u_h$: the effort set by the caller in place of the law (module docs).
     held: Option<f64>,
+    /// Set by a force law in place of its own law ([`crate::model::force_law`], which
+    /// adds the effort and its tangent); a PID's integral is frozen, as while held.
+    by_law: bool,
 }
 
 /// The compiled limits and actuators of a system.
@@ -233,7 +236,12 @@ impl JointForces {
                     })
                 }
             };
-            actuators.push(Actuator { dof, law, held: None });
+            actuators.push(Actuator {
+                dof,
+                law,
+                held: None,
+                by_law: false,
+            });
         }
         for (i, sensor) in model.sensors.iter().enumerate() {
             if let SensorKind::ActuatorEffort { actuator } = sensor.kind {
@@ -303,6 +311,12 @@ impl JointForces {
         Ok(())
     }
 
+    /// Actuator `index` (which exists) takes its effort from the system's force law: its own
+    /// law is left out of the forces and tangents here.
+    pub(crate) fn set_by_law(&mut self, index: usize) {
+        self.actuators[index].by_law = true;
+    }
+
     /// The effort actuator `index` is held at (`None`: its law acts).
     pub(crate) fn held(&self, index: usize) -> Option<f64> {
         self.actuators.get(index).and_then(|a| a.held)
@@ -328,6 +342,8 @@ impl JointForces {
             .zip(controls)
             .map(|(a, c)| match (&a.law, a.held) {
                 (_, Some(u)) => u,
+                // The force law's effort, added by the system.
+                _ if a.by_law => 0.0,
                 (Law::Time(f), None) => f.eval(t).0,
                 (Law::Pid(pid), None) => {
                     let (y, yd) = map_values(pid.scalar);
@@ -420,8 +436,9 @@ impl JointForces {
             }
         }
         for (a, c) in self.actuators.iter().zip(controls) {
-            if a.held.is_some() {
-                // A held effort does not depend on the configuration.
+            if a.held.is_some() || a.by_law {
+                // A held effort does not depend on the configuration; a force law's tangent
+                // is added by the system.
                 continue;
             }
             if let Law::Pid(pid @ Pid { slot: Some(slot), .. }) = &a.law {
@@ -458,7 +475,7 @@ impl JointForces {
             if let Law::Pid(Pid { scalar, setpoint, .. }) = &a.law {
                 let e = setpoint.eval(t).0 - x.scalars[*scalar];
                 // Held: the integral is frozen (module docs).
-                if a.held.is_none() {
+                if a.held.is_none() && !a.by_law {
                     c.z += 0.5 * (t - c.t) * (c.e + e);
                 }
                 c.e = e;
