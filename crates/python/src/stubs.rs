@@ -56,7 +56,7 @@ an assignment. Each table of a study file has a ``TypedDict`` (``MaterialsTable`
 """
 
 import os
-from typing import Any, Dict, Final, List, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
+from typing import Any, Callable, Dict, Final, List, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
 
 import numpy as np
 import numpy.typing as npt
