@@ -93,8 +93,7 @@ fn a_damper_law_gives_the_pid_motion() {
         cache: Some(root.join(".flexmbs-cache")),
         ..Default::default()
     };
-    let mut sim =
-        study::Simulation::new_with(&st, "swing", &options, &forces("elbow-damper", "elbow")).unwrap();
+    let mut sim = study::Simulation::new_with(&st, "swing", &options, &forces("elbow-damper", "elbow")).unwrap();
     let mut stepped = vec![sim.sensor("elbow").unwrap()[0]];
     for _ in 0..100 {
         sim.step().unwrap();
