@@ -265,7 +265,11 @@ pub(crate) fn to_py_err(py: Python<'_>, error: &(dyn std::error::Error + 'static
     // A Python exception that a force law raised is the cause of the solver's error.
     let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(error);
     while let Some(e) = cause {
-        if let Some(law) = e.downcast_ref::<mbs::force_law::LawError>() {
+        // The solver's error holds it boxed.
+        let law = e
+            .downcast_ref::<mbs::force_law::LawError>()
+            .or_else(|| e.downcast_ref::<Box<mbs::force_law::LawError>>().map(|b| &**b));
+        if let Some(law) = law {
             if let Some(raised) = law.source.as_ref().and_then(|c| c.0.downcast_ref::<PyErr>()) {
                 err.set_cause(py, Some(raised.clone_ref(py)));
                 break;

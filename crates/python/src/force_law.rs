@@ -160,17 +160,9 @@ struct PythonLaw {
     differences: Differences,
 }
 
-/// A Python exception as the law's error, about `name` when given.
-fn raised(py: Python<'_>, what: &str, e: PyErr) -> LawError {
-    let text = match e.value(py).str() {
-        Ok(s) => format!(
-            "{}: {}",
-            e.get_type(py).name().map(|n| n.to_string()).unwrap_or_default(),
-            s
-        ),
-        Err(_) => "an exception".into(),
-    };
-    LawError::new(format!("{what} raised {text}")).caused_by(e)
+/// A Python exception as the law's error: its cause, which the messages show after it.
+fn raised(_py: Python<'_>, what: &str, e: PyErr) -> LawError {
+    LawError::new(format!("{what} raised")).caused_by(e)
 }
 
 impl PythonLaw {
