@@ -129,7 +129,7 @@ pub fn run_selected(
 }
 
 /// [`run_selected`] with the force law `forces` evaluated in every Newton iteration of every
-/// analysis of the mechanism ([`force_law`]).
+/// analysis of the mechanism ([`ForceLawSource`]).
 pub fn run_selected_with(
     study: &Study,
     options: &Options,
@@ -163,7 +163,7 @@ impl Simulation {
     }
 
     /// [`Simulation::new`] with the force law `forces` evaluated in every Newton iteration of
-    /// its steps ([`force_law`]; and of the analyses its `start` runs first).
+    /// its steps ([`ForceLawSource`]; and of the analyses its `start` runs first).
     pub fn new_with(study: &Study, analysis: &str, options: &Options, forces: &Forces) -> Result<Self, BoxError> {
         let mut p = Prepared::new(study, analysis, options, forces)?;
         Self::with_start(study, p.system, p.runner.mechanism(&mut ())?, p.spec, p.first)

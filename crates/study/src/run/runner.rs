@@ -94,7 +94,7 @@ impl<'s> Runner<'s> {
     }
 
     /// This runner with the force law `forces` in every analysis of the mechanism
-    /// ([`super::force_law`]).
+    /// ([`crate::ForceLawSource`]).
     pub fn with_forces(mut self, forces: super::force_law::Forces) -> Self {
         self.forces = forces;
         self
