@@ -111,13 +111,12 @@ fn names_that_are_not_there_are_refused_with_those_that_are() {
         ..Default::default()
     };
     let mut rec = Recorder::default();
-    let err = study::run_selected_with(&st, &options, Selection::All, &forces("wrist", "elbow"), &mut rec)
-        .unwrap_err()
-        .to_string();
+    let err = study::run_selected_with(&st, &options, Selection::All, &forces("wrist", "elbow"), &mut rec).unwrap_err();
+    let err = study::error::chain(err.as_ref());
     assert!(err.contains("'wrist'") && err.contains("elbow-damper"), "{err}");
-    let err = study::run_selected_with(&st, &options, Selection::All, &forces("elbow-damper", "knee"), &mut rec)
-        .unwrap_err()
-        .to_string();
+    let err =
+        study::run_selected_with(&st, &options, Selection::All, &forces("elbow-damper", "knee"), &mut rec).unwrap_err();
+    let err = study::error::chain(err.as_ref());
     assert!(err.contains("'knee'") && err.contains("shoulder"), "{err}");
     let _ = std::fs::remove_dir_all(root);
 }
