@@ -295,6 +295,19 @@ pub enum SolveError {
         at: At,
         what: String,
     },
+    /// A force law ([`crate::model::force_law::ForceLaw`]) failed or gave a value the solver
+    /// cannot use: `output` names the output it is about (when it is about one), `step` the
+    /// time or load step, when the solver knows it; the law's error is the source (with its
+    /// own cause: a Python exception, say).
+    #[error("force law '{name}'{} at {at}{}", output.as_ref().map_or(String::new(), |o| format!(" (output '{o}')")), step_suffix(*.step))]
+    ForceLaw {
+        name: String,
+        output: Option<String>,
+        at: At,
+        step: Option<usize>,
+        /// Boxed: the largest variant would otherwise make every `Result` of the solvers large.
+        source: Box<crate::model::force_law::LawError>,
+    },
     /// Settings out of range (a negative step, rho_inf outside [0, 1], ...).
     #[error("invalid settings: {what}")]
     InvalidSettings { what: String },
@@ -386,6 +399,7 @@ impl SolveError {
             | Self::Singular { at, .. }
             | Self::Body { at, .. }
             | Self::UserForce { at, .. }
+            | Self::ForceLaw { at, .. }
             | Self::NonFiniteSensor { at, .. }
             | Self::NonFinite { at, .. }
             | Self::LimitNotResolved { at, .. } => Some(*at),
@@ -401,7 +415,7 @@ impl SolveError {
             | Self::NonFiniteSensor { step, .. }
             | Self::NonFinite { step, .. }
             | Self::LimitNotResolved { step, .. } => Some(*step),
-            Self::Body { step, .. } => *step,
+            Self::Body { step, .. } | Self::ForceLaw { step, .. } => *step,
             Self::UserForce { .. } | Self::InvalidSettings { .. } | Self::UnresolvableLimit { .. } => None,
         }
     }
@@ -419,7 +433,7 @@ impl SolveError {
                 *at = At::LoadFactor(lambda);
                 *step = load_step;
             }
-            Self::Body { at, step, .. } => {
+            Self::Body { at, step, .. } | Self::ForceLaw { at, step, .. } => {
                 *at = At::LoadFactor(lambda);
                 *step = Some(load_step);
             }

@@ -185,7 +185,7 @@ pub mod solvers;
 pub mod state;
 
 /// The paths of the modules before they were grouped, kept for the callers that name them.
-pub use model::{merge, user_force};
+pub use model::{force_law, merge, user_force};
 pub use solvers::dynamic as dynamic_solver;
 
 pub use assembly::initial::StartReport;
@@ -195,6 +195,7 @@ pub use assembly::system::sensors::{Energies, PendingRows, SensorRecord};
 pub use assembly::system::{LinearSolver, Matrices, NodeKinematics, System, DENSE_MAX};
 pub use error::{At, Entity, Incomplete, ModelError, SolveError};
 pub use ids::{BodyId, JointId, NodeId};
+pub use model::force_law::{ForceLaw, LawError, LawInput, LawOutput, LawPorts, LawTarget};
 pub use model::merge::{weld_points, WeldError};
 pub use model::time_function::{Interpolation, TimeFunction};
 pub use model::units::CoordinateQuantity;

@@ -110,6 +110,13 @@ mod joint_setup;
 #[path = "unit/user_force.rs"]
 mod user_force;
 
+/// Force laws evaluated in the step (the `ForceLaw` trait): finite-difference Jacobians
+/// against exact ones; the law's tangents in the iteration matrix; a damper law against the
+/// built-in PID on a flexible double pendulum; a law value that is not finite, and ports that
+/// name nothing, refused by name.
+#[path = "unit/force_law.rs"]
+mod force_law;
+
 /// An integrator that owns its system; loads changed between steps.
 #[path = "unit/stepping.rs"]
 mod stepping;

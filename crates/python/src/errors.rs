@@ -259,9 +259,25 @@ fn study_error_dicts<'py>(py: Python<'py>, e: &study::input::source::StudyErrors
 /// A library error as the package's exception: the first error of the chain that the package
 /// has a class for decides the class and its attributes; the message is the whole chain.
 pub(crate) fn to_py_err(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyErr {
-    match convert(py, error) {
+    let err = match convert(py, error) {
         Ok(e) | Err(e) => e,
+    };
+    // A Python exception that a force law raised is the cause of the solver's error.
+    let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(error);
+    while let Some(e) = cause {
+        // The solver's error holds it boxed.
+        let law = e
+            .downcast_ref::<mbs::force_law::LawError>()
+            .or_else(|| e.downcast_ref::<Box<mbs::force_law::LawError>>().map(|b| &**b));
+        if let Some(law) = law {
+            if let Some(raised) = law.source.as_ref().and_then(|c| c.0.downcast_ref::<PyErr>()) {
+                err.set_cause(py, Some(raised.clone_ref(py)));
+                break;
+            }
+        }
+        cause = e.source();
     }
+    err
 }
 
 fn convert(py: Python<'_>, error: &(dyn std::error::Error + 'static)) -> PyResult<PyErr> {

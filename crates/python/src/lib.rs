@@ -9,6 +9,8 @@
 //! - [`study`]: `Study` (a study file: values by key path, validation with located errors,
 //!   runs, reductions) and `Simulation` (a dynamic analysis stepped from Python, with named
 //!   loads set between steps).
+//! - [`force_law`]: `ForceLaw`, a Python callable giving actuator efforts and point loads
+//!   inside the implicit step (`Study.run(forces=...)`, `Study.simulation(forces=...)`).
 //! - [`keys`]: `study_keys()`, the study-file keys as the study crate declares them.
 //! - [`stubs`]: `_stubs()`, the text of the type stubs `flexmbs/_flexmbs.pyi`.
 //!
@@ -22,6 +24,7 @@
 use pyo3::prelude::*;
 
 pub mod errors;
+pub mod force_law;
 pub mod keys;
 pub mod rbody;
 pub mod stubs;
@@ -35,6 +38,7 @@ fn _flexmbs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<rbody::ReducedBody>()?;
     m.add_class::<study::Study>()?;
     m.add_class::<study::Simulation>()?;
+    m.add_class::<force_law::ForceLaw>()?;
     m.add_function(wrap_pyfunction!(keys::study_keys, m)?)?;
     m.add_function(wrap_pyfunction!(stubs::_stubs, m)?)?;
     Ok(())

@@ -56,7 +56,7 @@ an assignment. Each table of a study file has a ``TypedDict`` (``MaterialsTable`
 """
 
 import os
-from typing import Any, Dict, Final, List, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
+from typing import Any, Callable, Dict, Final, List, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -86,7 +86,12 @@ pub(crate) fn _stubs(m: &Bound<'_, PyModule>) -> PyResult<String> {
         let doc = doc_of(&m.getattr(f.0)?)?;
         out += &format!("\ndef {}{}:\n{}", f.0, f.1, docstring(&doc, "    "));
     }
-    for class in [&crate::rbody::STUB, &crate::study::STUB, &crate::study::SIMULATION_STUB] {
+    for class in [
+        &crate::rbody::STUB,
+        &crate::force_law::STUB,
+        &crate::study::STUB,
+        &crate::study::SIMULATION_STUB,
+    ] {
         out += &class_stub(m, class)?;
     }
     Ok(out)

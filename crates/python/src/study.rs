@@ -216,7 +216,7 @@ pub(crate) const STUB: Class = Class {
         Method("__delitem__", "(self, key: str) -> None"),
         Method(
             "run",
-            "(self, analysis: Optional[str] = None, results_dir: Optional[_Path] = None, cache: Optional[_Path] = None, t_end: Optional[float] = None) -> Results",
+            "(self, analysis: Optional[str] = None, results_dir: Optional[_Path] = None, cache: Optional[_Path] = None, t_end: Optional[float] = None, forces: Optional[ForceLaw] = None) -> Results",
         ),
         Method(
             "reduce",
@@ -224,7 +224,7 @@ pub(crate) const STUB: Class = Class {
         ),
         Method(
             "simulation",
-            "(self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None) -> \"Simulation\"",
+            "(self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None, forces: Optional[ForceLaw] = None) -> \"Simulation\"",
         ),
     ],
 };
@@ -237,13 +237,14 @@ impl Study {
         py: Python<'py>,
         analysis: Option<&str>,
         opts: &study::Options,
+        forces: &study::Forces,
     ) -> PyResult<Bound<'py, PyDict>> {
         let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
         let selection =
             study::Selection::of(&st, analysis).map_err(|e| unknown_name(py, e.what, &e.name, &e.defined))?;
         let dir = opts.results_dir(&st);
         let mut recorder = Recorder::default();
-        let outcome = py.detach(|| study::run_selected(&st, opts, selection, &mut recorder));
+        let outcome = py.detach(|| study::run_selected_with(&st, opts, selection, forces, &mut recorder));
         let d = PyDict::new(py);
         d.set_item("results_dir", dir.display().to_string())?;
         let analyses = PyList::empty(py);
@@ -397,9 +398,10 @@ impl Study {
     /// `flexmbs.Results` (sensors, tables and the summary as numpy arrays and dicts): results go
     /// into the results folder (`results_dir`, default `<study>-results` beside the study file),
     /// reduced bodies through the cache (`cache`, default `.flexmbs-cache` beside it); `t_end`
-    /// ends every dynamic analysis earlier. A solver failure raises `SolveError` whose `partial`
-    /// holds the `Results` computed before it (also written to the folder).
-    #[pyo3(signature = (analysis=None, results_dir=None, cache=None, t_end=None))]
+    /// ends every dynamic analysis earlier. `forces`: a `ForceLaw` evaluated in every Newton
+    /// iteration of the analyses of the mechanism. A solver failure raises `SolveError` whose
+    /// `partial` holds the `Results` computed before it (also written to the folder).
+    #[pyo3(signature = (analysis=None, results_dir=None, cache=None, t_end=None, forces=None))]
     fn run<'py>(
         &self,
         py: Python<'py>,
@@ -407,12 +409,14 @@ impl Study {
         results_dir: Option<PathBuf>,
         cache: Option<PathBuf>,
         t_end: Option<f64>,
+        forces: Option<PyRef<'_, crate::force_law::ForceLaw>>,
     ) -> PyResult<Bound<'py, PyAny>> {
+        let forces = forces.and_then(|f| f.forces());
         let wrap = |raw: Bound<'py, PyAny>| -> PyResult<Bound<'py, PyAny>> {
             py.import("flexmbs.results")?.getattr("Results")?.call1((raw,))
         };
         let opts = options(results_dir, cache, t_end);
-        match self.raw_results(py, analysis.as_deref(), &opts) {
+        match self.raw_results(py, analysis.as_deref(), &opts, &forces) {
             Ok(raw) => wrap(raw.into_any()),
             Err(e) => {
                 let value = e.value(py);
@@ -464,15 +468,18 @@ impl Study {
     /// Starts the dynamic analysis `analysis` (default: the study's only dynamic analysis) for
     /// stepping from Python; reduced bodies come through the cache as in a run. With
     /// `results_dir`, the simulation writes the results folder of the analysis as it steps
-    /// (the files `run(analysis)` writes), until `finish_results()`.
-    #[pyo3(signature = (analysis=None, cache=None, results_dir=None))]
+    /// (the files `run(analysis)` writes), until `finish_results()`. `forces`: a `ForceLaw`
+    /// evaluated in every Newton iteration of its steps.
+    #[pyo3(signature = (analysis=None, cache=None, results_dir=None, forces=None))]
     fn simulation(
         &self,
         py: Python<'_>,
         analysis: Option<String>,
         cache: Option<PathBuf>,
         results_dir: Option<PathBuf>,
+        forces: Option<PyRef<'_, crate::force_law::ForceLaw>>,
     ) -> PyResult<Simulation> {
+        let forces = forces.and_then(|f| f.forces());
         let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
         let name = match analysis {
             Some(n) => n,
@@ -499,8 +506,8 @@ impl Study {
         let writing = results_dir.is_some();
         let opts = options(results_dir, cache, None);
         let sim = py.detach(|| match writing {
-            true => study::Simulation::writing_results(&st, &name, &opts),
-            false => study::Simulation::new(&st, &name, &opts),
+            true => study::Simulation::writing_results_with(&st, &name, &opts, &forces),
+            false => study::Simulation::new_with(&st, &name, &opts, &forces),
         });
         let sim = sim.map_err(|e| {
             let names: Vec<String> = st.analyses.iter().map(|a| a.name.clone()).collect();

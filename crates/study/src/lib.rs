@@ -55,7 +55,10 @@ pub use error::BoxError;
 pub use input::document::Document;
 pub use input::validate::{load, parse_and_validate, Study};
 pub use output::observer::{Observer, Recorder};
-pub use run::{run, run_only, run_selected, run_with, Options, Runner, Selection, Simulation, UnknownName};
+pub use run::{
+    run, run_only, run_selected, run_selected_with, run_with, ForceLawSource, Forces, Options, Runner, Selection,
+    Simulation, UnknownName,
+};
 
 // What the command line, the Python package and the tests use beyond the facade.
 pub use build::{joint_count, BuiltMechanism};

@@ -159,6 +159,9 @@ struct Actuator {
     law: Law,
     /// $u_h$: the effort set by the caller in place of the law (module docs).
     held: Option<f64>,
+    /// Set by a force law in place of its own law ([`crate::model::force_law`], which
+    /// adds the effort and its tangent); a PID's integral is frozen, as while held.
+    by_law: bool,
 }
 
 /// The compiled limits and actuators of a system.
@@ -292,7 +295,12 @@ impl JointForces {
                     })
                 }
             };
-            actuators.push(Actuator { dof, law, held: None });
+            actuators.push(Actuator {
+                dof,
+                law,
+                held: None,
+                by_law: false,
+            });
         }
         for (i, sensor) in model.sensors.iter().enumerate() {
             if let SensorKind::ActuatorEffort { actuator } = sensor.kind {
@@ -362,6 +370,12 @@ impl JointForces {
         Ok(())
     }
 
+    /// Actuator `index` (which exists) takes its effort from the system's force law: its own
+    /// law is left out of the forces and tangents here.
+    pub(crate) fn set_by_law(&mut self, index: usize) {
+        self.actuators[index].by_law = true;
+    }
+
     /// The effort actuator `index` is held at (`None`: its law acts).
     pub(crate) fn held(&self, index: usize) -> Option<f64> {
         self.actuators.get(index).and_then(|a| a.held)
@@ -387,6 +401,8 @@ impl JointForces {
             .zip(controls)
             .map(|(a, c)| match (&a.law, a.held) {
                 (_, Some(u)) => u,
+                // The force law's effort, added by the system.
+                _ if a.by_law => 0.0,
                 (Law::Time(f), None) => f.eval(t).0,
                 (Law::Pid(pid), None) => {
                     let (y, yd) = map_values(pid.scalar);
@@ -479,8 +495,9 @@ impl JointForces {
             }
         }
         for (a, c) in self.actuators.iter().zip(controls) {
-            if a.held.is_some() {
-                // A held effort does not depend on the configuration.
+            if a.held.is_some() || a.by_law {
+                // A held effort does not depend on the configuration; a force law's tangent
+                // is added by the system.
                 continue;
             }
             if let Law::Pid(pid @ Pid { slot: Some(slot), .. }) = &a.law {
@@ -517,9 +534,10 @@ impl JointForces {
         for (a, c) in self.actuators.iter().zip(controls.iter_mut()) {
             if let Law::Pid(Pid { scalar, setpoint, .. }) = &a.law {
                 let e = setpoint.eval(t).0 - x.scalars[*scalar];
-                // Held or saturated: the integral is frozen (module docs, anti-windup).
+                // Held, saturated or driven by a force law: the integral is frozen (module
+                // docs, anti-windup).
                 let saturated = matches!(c.branch, Branch::Upper | Branch::Lower);
-                if a.held.is_none() && !saturated {
+                if a.held.is_none() && !a.by_law && !saturated {
                     c.z += 0.5 * (t - c.t) * (c.e + e);
                 }
                 c.e = e;
@@ -530,7 +548,8 @@ impl JointForces {
 
     /// Puts each PID actuator's controller on the branch of its linear law's value $v$ at `t`
     /// (module docs); `value(s)` is the value and rate of scalar coordinate `s`. Returns
-    /// whether a branch changed. A held actuator keeps its branch (its law does not act).
+    /// whether a branch changed. A held actuator, or one driven by a force law, keeps its
+    /// branch (its own law does not act).
     pub(crate) fn settle_branches(
         &self,
         value: &dyn Fn(usize) -> (f64, f64),
@@ -539,7 +558,7 @@ impl JointForces {
     ) -> bool {
         let mut changed = false;
         for (a, c) in self.actuators.iter().zip(controls.iter_mut()) {
-            if let (Law::Pid(pid), None) = (&a.law, a.held) {
+            if let (Law::Pid(pid), None, false) = (&a.law, a.held, a.by_law) {
                 let (y, yd) = value(pid.scalar);
                 // One branch at a time: from a saturated branch through the linear one, never
                 // to the opposite bound (both solutions can lie beyond the other's bound, a

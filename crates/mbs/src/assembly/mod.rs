@@ -5,6 +5,7 @@
 pub mod body;
 pub mod coordinates;
 pub mod dense_lu;
+pub mod force_law;
 pub mod initial;
 pub mod joint_forces;
 pub mod planar;

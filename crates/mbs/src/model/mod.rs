@@ -10,6 +10,7 @@
 //! directions and loads (dead and follower) are inertial vectors there; rigid-body mass data
 //! are in the axes of their reference node.
 
+pub mod force_law;
 pub mod merge;
 pub mod time_function;
 pub mod units;

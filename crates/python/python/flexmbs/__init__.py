@@ -5,6 +5,9 @@
   ``Results`` (sensors, tables, summary as numpy arrays and dicts); ``reduce`` gives the reduced
   bodies; ``simulation`` starts a dynamic analysis to step from Python.
 - ``Simulation``: ``step``, ``advance_to``, sensors and state between steps, ``set_load``.
+- ``ForceLaw``: a Python function of the time and joint coordinates giving actuator efforts
+  and point loads inside the implicit step (``Study.run(forces=...)``,
+  ``Study.simulation(forces=...)``).
 - ``ReducedBody``: a reduced-body file (``.rbody``) and its matrices, modes and mass data.
 - Errors: ``FlexmbsError`` and its subclasses ``StudyError``, ``KeyPathError``,
   ``SolveError``, ``ReducedBodyFileError`` and ``UnknownNameError`` (also a ``KeyError``: an
@@ -18,6 +21,7 @@ reference and worked examples are in docs/python.md of the repository.
 
 from ._flexmbs import (  # noqa: F401
     FlexmbsError,
+    ForceLaw,
     KeyPathError,
     ReducedBody,
     ReducedBodyFileError,
@@ -35,6 +39,7 @@ from .sweep import final, grid, peak_abs, summary_value, sweep  # noqa: F401
 __all__ = [
     "AnalysisResult",
     "FlexmbsError",
+    "ForceLaw",
     "KeyPathError",
     "ReducedBody",
     "ReducedBodyFileError",

@@ -9,7 +9,7 @@ an assignment. Each table of a study file has a ``TypedDict`` (``MaterialsTable`
 """
 
 import os
-from typing import Any, Dict, Final, List, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
+from typing import Any, Callable, Dict, Final, List, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -1083,6 +1083,29 @@ class ReducedBody:
     def __eq__(self, other: object) -> bool:
         ...
 
+class ForceLaw:
+    """A force law evaluated in every Newton iteration of the implicit time step (and of an
+    equilibrium), its derivatives in the iteration matrix.
+
+    `function(t, q, qd)` gets the time [s] and dicts `q`, `qd` of the joint coordinates [rad or
+    m] and rates it reads (`reads`: joint names, default every joint; a joint of several
+    coordinates is `name[0]`, `name[1]`, ...), and returns a dict with one entry per name of
+    `outputs`: an actuator's effort [N m or N], or a point load's force [N] (its moment [N m]
+    when the load gives no force) as three numbers in global axes, which the load's time
+    function multiplies. The outputs replace the actuators' `function`/`pid` and the loads'
+    values. Without `jacobian`, the derivatives by the coordinates and rates come from
+    finite differences (`differences`: `"central"`, 4 calls per coordinate read, or
+    `"forward"`, 2; step `step` times max(|value|, 1)); `jacobian(t, q, qd)` returns instead
+    `{output: {coordinate: (d/dq, d/dqd)}}` (three numbers each for a load; entries left out
+    are zero)."""
+
+    def __init__(self, function: Callable[[float, Dict[str, float], Dict[str, float]], Dict[str, Any]], outputs: Sequence[str], reads: Optional[Sequence[str]] = None, jacobian: Optional[Callable[[float, Dict[str, float], Dict[str, float]], Dict[str, Dict[str, Any]]]] = None, differences: str = "central", step: float = 1e-6) -> None:
+        ...
+    outputs: Final[List[str]]
+    """The actuators and point loads the law sets."""
+    reads: Final[Optional[List[str]]]
+    """The joints it reads (`None`: every joint)."""
+
 class Study:
     """A study: a study file held in memory, read and changed value by value through key paths
     (`parts.rod.reduction.modes`, `sections[0].d`, `drivers.crank-speed.function.speed`), with
@@ -1208,22 +1231,24 @@ class Study:
         ...
     def __delitem__(self, key: str) -> None:
         ...
-    def run(self, analysis: Optional[str] = None, results_dir: Optional[_Path] = None, cache: Optional[_Path] = None, t_end: Optional[float] = None) -> Results:
+    def run(self, analysis: Optional[str] = None, results_dir: Optional[_Path] = None, cache: Optional[_Path] = None, t_end: Optional[float] = None, forces: Optional[ForceLaw] = None) -> Results:
         """Runs the analyses (all, or the one named `analysis`) as `flexmbs run` does and returns a
         `flexmbs.Results` (sensors, tables and the summary as numpy arrays and dicts): results go
         into the results folder (`results_dir`, default `<study>-results` beside the study file),
         reduced bodies through the cache (`cache`, default `.flexmbs-cache` beside it); `t_end`
-        ends every dynamic analysis earlier. A solver failure raises `SolveError` whose `partial`
-        holds the `Results` computed before it (also written to the folder)."""
+        ends every dynamic analysis earlier. `forces`: a `ForceLaw` evaluated in every Newton
+        iteration of the analyses of the mechanism. A solver failure raises `SolveError` whose
+        `partial` holds the `Results` computed before it (also written to the folder)."""
     def reduce(self, part: Optional[str] = None, cache: Optional[_Path] = None) -> List[Tuple[str, ReducedBody]]:
         """Reduces the parts that have a `[parts.reduction]` (or the one named `part`) through the
         cache, as `flexmbs reduce` does without writing a results folder; returns
         `{part name: ReducedBody}`."""
-    def simulation(self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None) -> "Simulation":
+    def simulation(self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None, forces: Optional[ForceLaw] = None) -> "Simulation":
         """Starts the dynamic analysis `analysis` (default: the study's only dynamic analysis) for
         stepping from Python; reduced bodies come through the cache as in a run. With
         `results_dir`, the simulation writes the results folder of the analysis as it steps
-        (the files `run(analysis)` writes), until `finish_results()`."""
+        (the files `run(analysis)` writes), until `finish_results()`. `forces`: a `ForceLaw`
+        evaluated in every Newton iteration of its steps."""
 
 class Simulation:
     """A dynamic analysis stepped from Python (`Study.simulation`): `step()`, `advance_to(t)`,

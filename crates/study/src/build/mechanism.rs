@@ -99,7 +99,17 @@ impl BuiltMechanism {
     /// `System::new`, with a model error located at the first of its entities
     /// (`mbs::ModelError::entities`) that the study describes.
     pub fn system(&self, study: &Study) -> Result<System, BoxError> {
-        System::new(&self.model).map_err(|e| {
+        self.system_with(study, System::new)
+    }
+
+    /// The system `build` makes of the model (`System::new` with something added, a force
+    /// law), with a model error located as by [`Self::system`].
+    pub fn system_with(
+        &self,
+        study: &Study,
+        build: impl FnOnce(&Model) -> Result<System, mbs::ModelError>,
+    ) -> Result<System, BoxError> {
+        build(&self.model).map_err(|e| {
             let message = format!("the mechanism cannot be assembled: {}", crate::error::sentence(&e));
             match self.locate(&e.entities()) {
                 Some(path) => located(study, path, message),

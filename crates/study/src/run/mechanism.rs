@@ -23,15 +23,17 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Runs one analysis of the mechanism, every result to `obs`.
-/// `start`: the final state of the analysis named in its `start` key.
+/// `start`: the final state of the analysis named in its `start` key; `forces`: the run's
+/// force law.
 pub fn run_analysis(
     study: &Study,
     analysis: &MbsAnalysis,
     b: &BuiltMechanism,
     start: Option<&mbs::State>,
+    forces: &super::force_law::Forces,
     obs: &mut dyn Observer,
 ) -> Result<Outcome, BoxError> {
-    let sys = Arc::new(b.system(study)?);
+    let sys = Arc::new(super::force_law::system(study, b, forces)?);
     let mut out = Outcome::of_mechanism(study, b, &sys);
     match analysis {
         MbsAnalysis::Equilibrium {

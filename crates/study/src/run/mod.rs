@@ -10,6 +10,7 @@
 //! | [`mechanism`] | the analyses of the mechanism: equilibrium, linearized, buckling |
 //! | [`dynamic_output`] | a dynamic analysis' rows and meshes at the output times, its report and results |
 //! | [`dynamic`] | the dynamic analysis: the time integration of a run |
+//! | [`force_law`] | a force law of a run named in the study's terms: its ports on the built mechanism |
 //! | [`selection`] | analyses picked by name, or all of them |
 //! | [`simulation`] | a dynamic analysis stepped by the caller |
 //! | [`sensors`] | sensor columns and the stream of samples |
@@ -18,6 +19,7 @@
 pub mod cache;
 pub mod dynamic;
 pub mod dynamic_output;
+pub mod force_law;
 pub mod mechanism;
 pub mod mesh;
 pub mod options;
@@ -29,6 +31,7 @@ pub mod selection;
 pub mod sensors;
 pub mod simulation;
 
+pub use force_law::{ForceLawSource, Forces};
 pub use options::Options;
 pub use runner::Runner;
 pub use selection::{Selection, UnknownName};
@@ -45,13 +48,23 @@ use std::sync::Arc;
 /// file), with `observer` seeing every result too. Stops at the first analysis that fails,
 /// after writing the summary with the failure.
 pub fn run(study: &Study, options: &Options, observer: &mut dyn Observer) -> Result<Summary, BoxError> {
+    run_forced(study, options, &None, observer)
+}
+
+/// [`run`] with the force law `forces` in every analysis of the mechanism.
+fn run_forced(
+    study: &Study,
+    options: &Options,
+    forces: &Forces,
+    observer: &mut dyn Observer,
+) -> Result<Summary, BoxError> {
     // Refused before the results folder is made.
     if study.analyses.is_empty() {
         return Err(nothing_to_run(study));
     }
     let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
     let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
-    run_with(study, options, &mut (&mut folder, observer))
+    run_all(study, options, forces, &mut (&mut folder, observer))
 }
 
 /// Runs analysis `index` of `study` alone into its results folder (the other analyses'
@@ -64,10 +77,21 @@ pub fn run_only(
     index: usize,
     observer: &mut dyn Observer,
 ) -> Result<Summary, BoxError> {
+    run_only_forced(study, options, index, &None, observer)
+}
+
+/// [`run_only`] with the force law `forces` in every analysis of the mechanism.
+fn run_only_forced(
+    study: &Study,
+    options: &Options,
+    index: usize,
+    forces: &Forces,
+    observer: &mut dyn Observer,
+) -> Result<Summary, BoxError> {
     let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
     let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
     let obs: &mut dyn Observer = &mut (&mut folder, observer);
-    let mut runner = Runner::new(study, options);
+    let mut runner = Runner::new(study, options).with_forces(forces.clone());
     obs.summary(&runner.summary)?;
     runner.run_one(index, obs)?;
     runner.finish(obs)
@@ -76,11 +100,16 @@ pub fn run_only(
 /// Runs every analysis of `study`, every result to `obs` only (no results folder unless
 /// `obs` writes one); the cache of reduced bodies is used as in [`run`].
 pub fn run_with(study: &Study, options: &Options, obs: &mut dyn Observer) -> Result<Summary, BoxError> {
+    run_all(study, options, &None, obs)
+}
+
+/// [`run_with`] with the force law `forces` in every analysis of the mechanism.
+fn run_all(study: &Study, options: &Options, forces: &Forces, obs: &mut dyn Observer) -> Result<Summary, BoxError> {
     let n = study.analyses.len();
     if n == 0 {
         return Err(nothing_to_run(study));
     }
-    let mut runner = Runner::new(study, options);
+    let mut runner = Runner::new(study, options).with_forces(forces.clone());
     obs.summary(&runner.summary)?;
     for i in 0..n {
         runner.run_one(i, obs)?;
@@ -96,9 +125,21 @@ pub fn run_selected(
     selection: Selection,
     observer: &mut dyn Observer,
 ) -> Result<Summary, BoxError> {
+    run_selected_with(study, options, selection, &None, observer)
+}
+
+/// [`run_selected`] with the force law `forces` evaluated in every Newton iteration of every
+/// analysis of the mechanism ([`ForceLawSource`]).
+pub fn run_selected_with(
+    study: &Study,
+    options: &Options,
+    selection: Selection,
+    forces: &Forces,
+    observer: &mut dyn Observer,
+) -> Result<Summary, BoxError> {
     match selection {
-        Selection::All => run(study, options, observer),
-        Selection::One(i) => run_only(study, options, i, observer),
+        Selection::All => run_forced(study, options, forces, observer),
+        Selection::One(i) => run_only_forced(study, options, i, forces, observer),
     }
 }
 
@@ -118,7 +159,13 @@ impl Simulation {
     /// starts its dynamic analysis called `analysis` (from the final state of the analysis
     /// named in its `start`, which the runner runs first, without output).
     pub fn new(study: &Study, analysis: &str, options: &Options) -> Result<Self, BoxError> {
-        let mut p = Prepared::new(study, analysis, options)?;
+        Self::new_with(study, analysis, options, &None)
+    }
+
+    /// [`Simulation::new`] with the force law `forces` evaluated in every Newton iteration of
+    /// its steps ([`ForceLawSource`]; and of the analyses its `start` runs first).
+    pub fn new_with(study: &Study, analysis: &str, options: &Options, forces: &Forces) -> Result<Self, BoxError> {
+        let mut p = Prepared::new(study, analysis, options, forces)?;
         Self::with_start(study, p.system, p.runner.mechanism(&mut ())?, p.spec, p.first)
     }
 
@@ -128,6 +175,16 @@ impl Simulation {
     /// results end with [`Simulation::finish_results`] (or when the simulation is dropped),
     /// and so does the summary, `complete` or `failed`; until then it says `running`.
     pub fn writing_results(study: &Study, analysis: &str, options: &Options) -> Result<Self, BoxError> {
+        Self::writing_results_with(study, analysis, options, &None)
+    }
+
+    /// [`Simulation::writing_results`] with the force law `forces` ([`Simulation::new_with`]).
+    pub fn writing_results_with(
+        study: &Study,
+        analysis: &str,
+        options: &Options,
+        forces: &Forces,
+    ) -> Result<Self, BoxError> {
         let i = study.analysis(analysis)?;
         let names: Vec<String> = study.analyses.iter().map(|a| a.name.clone()).collect();
         let mut folder = ResultsFolder::open(&options.results_dir(study), &names, options.foreign)?;
@@ -137,7 +194,7 @@ impl Simulation {
             runner,
             system,
             first,
-        } = Prepared::new(study, analysis, options)?;
+        } = Prepared::new(study, analysis, options, forces)?;
         let summary = runner.summary.clone();
         let built = runner.into_mechanism().ok_or("the mechanism could not be built")?;
         let mut sim = Self::with_start(study, system, &built, spec, first)?;
@@ -174,13 +231,13 @@ struct Prepared<'s> {
 }
 
 impl<'s> Prepared<'s> {
-    fn new(study: &'s Study, analysis: &str, options: &Options) -> Result<Self, BoxError> {
+    fn new(study: &'s Study, analysis: &str, options: &Options, forces: &Forces) -> Result<Self, BoxError> {
         let i = study.analysis(analysis)?;
         let AnalysisSpec::Mbs(spec) = &study.analyses[i].spec else {
             return Err(format!("analysis '{analysis}' is not an analysis of the mechanism").into());
         };
-        let mut runner = Runner::new(study, options);
-        let system = Arc::new(runner.mechanism(&mut ())?.system(study)?);
+        let mut runner = Runner::new(study, options).with_forces(forces.clone());
+        let system = Arc::new(force_law::system(study, runner.mechanism(&mut ())?, forces)?);
         let start = runner.start_state(i)?;
         let first = simulation::dynamic_start(&system, start.as_ref(), study.mechanism.start);
         Ok(Self {

@@ -77,6 +77,8 @@ pub struct Runner<'s> {
     mechanism: Option<BuiltMechanism>,
     /// The final state of each analysis of the mechanism that ended in one (for `start`).
     states: Vec<Option<mbs::State>>,
+    /// The force law every analysis of the mechanism evaluates in its iterations.
+    forces: super::force_law::Forces,
 }
 
 impl<'s> Runner<'s> {
@@ -88,7 +90,20 @@ impl<'s> Runner<'s> {
             summary: pending_summary(study),
             mechanism: None,
             states: vec![None; study.analyses.len()],
+            forces: None,
         }
+    }
+
+    /// This runner with the force law `forces` in every analysis of the mechanism
+    /// ([`crate::ForceLawSource`]).
+    pub fn with_forces(mut self, forces: super::force_law::Forces) -> Self {
+        self.forces = forces;
+        self
+    }
+
+    /// The force law of the run.
+    pub fn forces(&self) -> &super::force_law::Forces {
+        &self.forces
     }
 
     /// The final state of analysis `i`, once it has run (equilibrium and dynamic analyses).
@@ -194,8 +209,9 @@ impl<'s> Runner<'s> {
                 None => Ok(None),
             },
         };
+        let forces = self.forces.clone();
         let mut result = match (start, self.mechanism(obs)) {
-            (Ok(start), Ok(built)) => super::mechanism::run_analysis(study, &spec, built, start.as_ref(), obs),
+            (Ok(start), Ok(built)) => super::mechanism::run_analysis(study, &spec, built, start.as_ref(), &forces, obs),
             (Err(e), _) | (_, Err(e)) => Err(e),
         };
         self.states[i] = result.as_mut().ok().and_then(|o| o.final_state.take());

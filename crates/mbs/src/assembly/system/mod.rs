@@ -36,10 +36,12 @@ use crate::assembly::coordinates::{
     scalar_values, unknown, values, CoordinateMap, Motion, MotionCache, NodeDerivatives, Slot,
 };
 use crate::assembly::dense_lu::{self, SMALL_LU_MAX};
+use crate::assembly::force_law::BoundLaw;
 use crate::assembly::initial::InitialPlan;
 use crate::assembly::joint_forces::JointForces;
 use crate::assembly::topology::{self, RootRotation, Topology};
 use crate::error::{Entity, ModelError, SolveError};
+use crate::model::force_law::{ForceLaw, LawBuffer};
 use crate::model::time_function::CompiledFunction;
 use crate::model::user_force::{UserBuffer, UserForce};
 use crate::model::{Body, BodyId, InitialCondition, JointId, LoadAxes, LoadKind, Model, NodeId, SensorKind};
@@ -107,6 +109,7 @@ impl Pattern {
         elements: &[ElementRef],
         joint_springs: &[JointSpringScalar],
         joint_forces: &mut JointForces,
+        law: Option<&mut BoundLaw>,
     ) -> Result<Self, ModelError> {
         let map = &topo.map;
         let n = map.n_dof;
@@ -130,6 +133,9 @@ impl Pattern {
             }
         }
         sets.extend(joint_forces.pattern_sets(topo));
+        if let Some(law) = law.as_deref() {
+            sets.extend(law.pattern_sets(&node_unknown));
+        }
         let symbolic = Pattern::structure(n, &sets);
         let lu = if n > 0 {
             Some(
@@ -189,6 +195,9 @@ impl Pattern {
             })
             .collect();
         joint_forces.bind(topo, |r, c| pattern.slot(r, c));
+        if let Some(law) = law {
+            law.bind(&node_unknown, |r, c| pattern.slot(r, c));
+        }
         Ok(pattern)
     }
 
@@ -265,6 +274,8 @@ pub(crate) struct Workspace {
     pub factor: Factor,
     /// Scratch of [`System::inertia_floor`]: $\hat{\mathbf M}\mathbf v$.
     pub momentum: Vec<f64>,
+    /// The force law's inputs, values and Jacobians ([`System::with_force_law`]).
+    pub law: Option<LawBuffer>,
 }
 
 /// A joint limit as a stop of a dynamic run ([`crate::assembly::joint_forces`], stops that a
@@ -390,6 +401,8 @@ pub struct System {
     pub(crate) drivers: Vec<CompiledFunction>,
     /// User-defined forces ([`System::with_user_forces`]).
     pub(crate) user_forces: Vec<Arc<dyn UserForce>>,
+    /// The force law evaluated in every iteration ([`System::with_force_law`]).
+    pub(crate) force_law: Option<BoundLaw>,
     pub(crate) elements: Vec<ElementRef>,
     pub(crate) pattern: Pattern,
     /// Flexible element of each body (or `None`).
@@ -443,6 +456,26 @@ impl System {
     /// [`Self::new`] with user-defined forces acting on the model's nodes
     /// ([`crate::model::user_force`]); a node id out of range is [`ModelError::UnknownNode`].
     pub fn with_user_forces(model: &Model, user_forces: Vec<Arc<dyn UserForce>>) -> Result<Self, ModelError> {
+        Self::build(model, user_forces, None)
+    }
+
+    /// [`Self::new`] with a force law evaluated in every Newton iteration, its Jacobians in the
+    /// iteration matrix ([`crate::model::force_law`]); ports that name no actuator, load or
+    /// joint coordinate of the model, or a follower load, are [`ModelError::InvalidValue`].
+    pub fn with_force_law(model: &Model, law: Arc<dyn ForceLaw>) -> Result<Self, ModelError> {
+        Self::build(model, Vec::new(), Some(law))
+    }
+
+    /// The force law of [`Self::with_force_law`], if there is one.
+    pub fn force_law(&self) -> Option<&Arc<dyn ForceLaw>> {
+        self.force_law.as_ref().map(|l| &l.law)
+    }
+
+    fn build(
+        model: &Model,
+        user_forces: Vec<Arc<dyn UserForce>>,
+        law: Option<Arc<dyn ForceLaw>>,
+    ) -> Result<Self, ModelError> {
         topology::check_references(model)?;
         let topo = topology::build(model)?;
         let Bodies {
@@ -453,12 +486,22 @@ impl System {
         } = body_elements(model, &topo)?;
         check_point_masses(model)?;
         let springs = spring_elements(model)?;
-        let loads = load_elements(model)?;
+        let mut loads = load_elements(model)?;
         let joint_springs = joint_spring_scalars(model, &topo)?;
         let drivers = compile_drivers(model)?;
         check_initial_coordinates(model, &topo)?;
         topology::held_coordinates(model, &topo)?;
         let mut joint_forces = JointForces::new(model, &topo)?;
+        let mut force_law = law.map(|l| BoundLaw::new(l, model, &topo)).transpose()?;
+        if let Some(law) = &force_law {
+            // The law gives these loads' and actuators' whole values.
+            for l in law.loads() {
+                loads[l].value = Vector3::zeros();
+            }
+            for a in law.actuators() {
+                joint_forces.set_by_law(a);
+            }
+        }
         let initial_plan = crate::assembly::initial::plan(model, &topo)?;
         let driver_starts = crate::assembly::initial::driver_starts(model, &topo, &drivers)?;
 
@@ -473,7 +516,14 @@ impl System {
         });
         let stress_maxima = stress_maxima(model, &flexible);
         let elements = element_refs(model, &topo.map, &flexible, &rigid, &springs, &loads, &user_forces)?;
-        let pattern = Pattern::build(model, &topo, &elements, &joint_springs, &mut joint_forces)?;
+        let pattern = Pattern::build(
+            model,
+            &topo,
+            &elements,
+            &joint_springs,
+            &mut joint_forces,
+            force_law.as_mut(),
+        )?;
         let evaluated = elements
             .iter()
             .zip(&pattern.elem_dofs)
@@ -500,6 +550,7 @@ impl System {
             start: None,
             drivers,
             user_forces,
+            force_law,
             elements,
             pattern,
             dof_scale,
@@ -525,6 +576,17 @@ impl System {
             return Err(ModelError::InvalidValue {
                 entity: format!("load {load}"),
                 what: "non-finite value".into(),
+                id: Some(Entity::Load(load)),
+            });
+        }
+        if self
+            .force_law
+            .as_ref()
+            .is_some_and(|law| law.loads().any(|l| l == load))
+        {
+            return Err(ModelError::InvalidValue {
+                entity: format!("load {load}"),
+                what: "its value is set by the force law".into(),
                 id: Some(Entity::Load(load)),
             });
         }
@@ -632,7 +694,18 @@ impl System {
             let (v, d, _) = scalar_values(map, &x, sc);
             (v, d)
         };
-        self.joint_forces.efforts(&value, s.time, &state.controls)
+        let mut efforts = self.joint_forces.efforts(&value, s.time, &state.controls);
+        if let Some(law) = &self.force_law {
+            // The law's efforts (NaN, which the sensors refuse, when it fails).
+            let mut buf = LawBuffer::new(law.law.ports());
+            let ok = law.evaluate(&self.topo, &x, s.time, false, &mut buf).is_ok();
+            for (a, u) in law.efforts(&buf.u) {
+                if self.joint_forces.held(a).is_none() {
+                    efforts[a] = if ok { u } else { f64::NAN };
+                }
+            }
+        }
+        efforts
     }
 
     /// Number of unknowns $\dim\dot{\mathbf q}$.
@@ -1109,6 +1182,7 @@ impl System {
             ],
             factor: self.empty_factor(),
             momentum: Vec::with_capacity(self.n_dof()),
+            law: self.force_law.as_ref().map(|l| LawBuffer::new(l.law.ports())),
         }
     }
 
@@ -1171,9 +1245,13 @@ impl System {
     ) -> Result<(), SolveError> {
         self.update_motions(state, ws);
         self.element_outputs(state, lambda, tangents, ws)?;
-        self.assemble_residual(state, ws);
+        if let (Some(law), Some(buf)) = (&self.force_law, ws.law.as_mut()) {
+            let x = values(state, &ws.presc_rate, &ws.presc_acc);
+            law.evaluate(&self.topo, &x, state.time, tangents, buf)?;
+        }
+        self.assemble_residual(state, lambda, ws);
         if tangents {
-            self.assemble_tangents(state, ws);
+            self.assemble_tangents(state, lambda, ws);
         }
         self.store_frames(ws, state);
         Ok(())
@@ -1214,7 +1292,7 @@ impl System {
 
     /// $\mathbf F$, its inertia, internal and external parts, the reactions, the residual's
     /// scale and floor from the element outputs, the joint springs and the joint forces.
-    fn assemble_residual(&self, state: &State, ws: &mut Workspace) {
+    fn assemble_residual(&self, state: &State, lambda: f64, ws: &mut Workspace) {
         let map = &self.topo.map;
         let n = map.n_dof;
         let x = values(state, &ws.presc_rate, &ws.presc_acc);
@@ -1259,6 +1337,21 @@ impl System {
                 gparts[2][d] += o.external[base + i];
             }
         }
+        // The force law's loads, as external forces on their nodes; its efforts on their rows.
+        let mut law_scale = 0.0;
+        if let (Some(law), Some(buf)) = (&self.force_law, &ws.law) {
+            let node_res = &mut ws.node_res;
+            law_scale = law.add_forces(
+                &buf.u,
+                (state.time, lambda),
+                |a| self.joint_forces.held(a).is_some(),
+                &mut ws.F,
+                |node, i, f| {
+                    node_res[node][i] -= f;
+                    parts[node][2][i] += f;
+                },
+            );
+        }
         let dot = |col: &[f64; 6], r: &[f64; 6]| (0..6).map(|i| col[i] * r[i]).sum::<f64>();
         for c in 0..nn {
             let m = &ws.motions[c];
@@ -1296,13 +1389,13 @@ impl System {
             &mut ws.reactions,
         );
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        ws.scale = norm(&gparts[0]) + norm(&gparts[1]) + norm(&gparts[2]) + joint_force_scale;
+        ws.scale = norm(&gparts[0]) + norm(&gparts[1]) + norm(&gparts[2]) + joint_force_scale + law_scale.sqrt();
         ws.floor = self.residual_floor(&ws.nodes);
     }
 
     /// $\hat{\mathbf M}$, $\hat{\mathbf C}$, $\hat{\mathbf K}$ from the elements' port matrices, the
     /// geometric terms of the node residuals, the joint springs and the joint forces.
-    fn assemble_tangents(&self, state: &State, ws: &mut Workspace) {
+    fn assemble_tangents(&self, state: &State, lambda: f64, ws: &mut Workspace) {
         let map = &self.topo.map;
         let nn = self.model.nodes.len();
         let x = values(state, &ws.presc_rate, &ws.presc_acc);
@@ -1353,6 +1446,18 @@ impl System {
         }
         self.joint_forces
             .add_tangents(&self.topo, &x, state.time, &state.controls, &mut ws.K, &mut ws.C);
+        if let (Some(law), Some(buf)) = (&self.force_law, &ws.law) {
+            let motions = &ws.motions;
+            law.add_tangents(
+                buf,
+                (state.time, lambda),
+                |a| self.joint_forces.held(a).is_some(),
+                &self.pattern.node_unknown_cols,
+                |node, col| motions[node].col(col),
+                &mut ws.K,
+                &mut ws.C,
+            );
+        }
     }
 
     /// The drivers at the state's time into the state and the workspace, and the node motions
