@@ -1159,3 +1159,8 @@ mod import;
 /// Our node orders mapped into VTK's, against VTK's cell definitions.
 #[path = "study/vtu.rs"]
 mod vtu;
+
+/// A force law of a run: an elbow damper written as a law gives the motion of the study's PID,
+/// in a run and in a stepped simulation; unknown names refused with those there are.
+#[path = "study/force_law.rs"]
+mod force_law;
