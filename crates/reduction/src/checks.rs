@@ -283,11 +283,13 @@ impl fmt::Display for Measurements {
                 c[0], c[1], c[2]
             )?;
         }
-        writeln!(
-            f,
-            "  closest interfaces / body size     {} (limit {COINCIDENT_RTOL:.0e})",
-            sci(self.closest_interfaces)
-        )
+        match self.closest_interfaces {
+            Some(r) => writeln!(
+                f,
+                "  closest interfaces / body size     {r:.3e} (limit {COINCIDENT_RTOL:.0e})"
+            ),
+            None => writeln!(f, "  closest interfaces / body size     (fewer than two interfaces)"),
+        }
     }
 }
 

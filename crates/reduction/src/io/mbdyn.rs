@@ -68,6 +68,12 @@
 //! $\int\rho\,\mathbf S\,dV$ of the translational field come from the `FLEXMBS` lines, else
 //! from $\mathbf J$ and invariant 3 (exact for solids; for beams the second-order invariants
 //! of the rigid motions then include the sections' rotary inertia).
+//!
+//! The body read passes the physical checks of every body ([`crate::checks`]), and the
+//! records as written some of their own: records 9 and 10 symmetric (the body is built from
+//! their symmetric parts), record 12's mass and centre of mass against the `FLEXMBS FIRST
+//! MOMENT` line ([`crate::checks::stated_moment_problems`]). A file that fails is refused with
+//! [`FemError::Checks`]; [`read_mbdyn_fem_unchecked`] reads it for `flexmbs inspect`.
 
 #![allow(non_snake_case)]
 
