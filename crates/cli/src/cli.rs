@@ -18,10 +18,11 @@ usage:
   flexmbs reduce STUDY.toml [--part NAME]
                                      reduce the parts that have a [parts.reduction] (or the one
                                      named) to reduced-body files (.rbody)
-  flexmbs inspect FILE.rbody [--excitation-hz F]
-                                     show a reduced body: interfaces, mass data, fixed-interface
-                                     frequencies, modal effective masses (and, with F, whether
-                                     the kept modes reach 3 x F)
+  flexmbs inspect FILE.rbody|FILE.fem [--excitation-hz F]
+                                     show a reduced body (or an MBDyn modal element file):
+                                     interfaces, mass data, fixed-interface frequencies, modal
+                                     effective masses (and, with F, whether the kept modes
+                                     reach 3 x F), the physical checks and what they measured
   flexmbs export-fem FILE.rbody OUT.fem [--reference INTERFACE]
                                      write a reduced body as an MBDyn modal element file
                                      (modal node at the reference interface, default the first)
@@ -87,11 +88,13 @@ files (.rbody), through the cache."
         }
         "inspect" => {
             "\
-usage: flexmbs inspect FILE.rbody [--excitation-hz F]
+usage: flexmbs inspect FILE.rbody|FILE.fem [--excitation-hz F]
 
-Shows a reduced body: interfaces, mass data, fixed-interface frequencies and modal effective
-masses; with F, whether the kept modes reach 3 x F. Exits with 1 when the body fails its
-physical checks (the report lists them), with 2 when the file cannot be read."
+Shows a reduced body (.rbody, or an MBDyn modal element file .fem): interfaces, mass data,
+fixed-interface frequencies and modal effective masses; with F, whether the kept modes reach
+3 x F; the physical checks every body passes before use, with what they measured. Exits with
+1 when the body fails its physical checks (the report lists them), with 2 when the file
+cannot be read."
         }
         "example" => {
             "\
@@ -319,7 +322,11 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
         }
         "inspect" => {
             let (positional, options) = parse(rest, &["excitation-hz"])?;
-            let path = one_file(&positional, "inspect", "a reduced-body file (.rbody)")?;
+            let path = one_file(
+                &positional,
+                "inspect",
+                "a reduced-body file (.rbody) or an MBDyn modal element file (.fem)",
+            )?;
             let excitation = match option(&options, "excitation-hz") {
                 Some(v) => Some(
                     v.parse::<f64>()

@@ -1,6 +1,7 @@
-//! `flexmbs inspect FILE.rbody`: what a reduced body holds, for a person checking it before
-//! using it in a study: size, interfaces, mass data, fixed-interface frequencies and modal
-//! effective masses (`reduction::diagnostics`).
+//! `flexmbs inspect FILE`: what a reduced body (`.rbody`, or an MBDyn `.fem` file) holds, for
+//! a person checking it before using it in a study: size, interfaces, mass data,
+//! fixed-interface frequencies and modal effective masses (`reduction::diagnostics`), and the
+//! physical checks every body passes before use (`reduction::checks`), with what they measured.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -19,17 +20,31 @@ pub struct Inspection {
 pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<Inspection, BoxError> {
     // Read without the physical checks so that a refused file can still be looked at; the
     // checks are reported below.
-    let body = reduction::file::read_unchecked(path).context(|| format!("cannot inspect {}", path.display()))?;
+    let is_fem = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("fem"));
+    let (body, notes, record_problems) = if is_fem {
+        reduction::mbdyn::read_mbdyn_fem_unchecked(path, None)
+            .context(|| format!("cannot inspect {}", path.display()))?
+    } else {
+        let body = reduction::file::read_unchecked(path).context(|| format!("cannot inspect {}", path.display()))?;
+        (body, Vec::new(), Vec::new())
+    };
     let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "reduced body '{}' ({}, {:.1} kB, format version {})",
+        "reduced body '{}' ({}, {:.1} kB, {})",
         body.name,
         path.display(),
         size as f64 / 1e3,
-        body.format_version
+        if is_fem {
+            "MBDyn modal element file".to_string()
+        } else {
+            format!("format version {}", body.format_version)
+        }
     );
+    for note in &notes {
+        let _ = writeln!(s, "note: {note}");
+    }
     let _ = writeln!(
         s,
         "CB coordinates: {} = 6 x {} interfaces + {} fixed-interface modes",
@@ -109,7 +124,23 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<I
     }
     let d = reduction::diagnostics(&body, excitation_hz, factor);
     let _ = write!(s, "{d}");
-    let problems = reduction::physical_problems(&body);
+    let failed_checks = checks_report(&mut s, &body, record_problems);
+    Ok(Inspection {
+        report: s,
+        failed_checks,
+    })
+}
+
+/// The physical checks of `body` (with the problems of its file's records, `record_problems`)
+/// into `s`: what they measured, then passed or the problems; the number of problems.
+fn checks_report(
+    s: &mut String,
+    body: &reduction::ReducedBody,
+    record_problems: Vec<reduction::PhysicsProblem>,
+) -> usize {
+    let (body_problems, measured) = reduction::checks::examine(body);
+    let problems: Vec<_> = record_problems.into_iter().chain(body_problems).collect();
+    let _ = write!(s, "\nphysical checks, measured:\n{measured}");
     if problems.is_empty() {
         let _ = writeln!(
             s,
@@ -121,8 +152,5 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<I
             let _ = writeln!(s, "  - {p}");
         }
     }
-    Ok(Inspection {
-        report: s,
-        failed_checks: problems.len(),
-    })
+    problems.len()
 }

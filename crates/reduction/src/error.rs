@@ -201,11 +201,11 @@ pub enum BodyFileProblem {
     /// whose own shapes are inconsistent).
     #[error("the body cannot be written: {what}")]
     Unwritable { what: String },
-    /// The file is intact but its data are physically wrong ([`crate::physics`]): no reduction
+    /// The file is intact but its data are physically wrong ([`crate::checks`]): no reduction
     /// produces them.
     #[error("physically inconsistent data (no reduction produces these; reduce the body again): {}", problems.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("; "))]
     Physics {
-        problems: Vec<crate::physics::PhysicsProblem>,
+        problems: Vec<crate::checks::PhysicsProblem>,
     },
 }
 

@@ -82,6 +82,7 @@
 //! as given, never of the permuted factor.
 #![allow(non_snake_case)]
 pub mod attachment;
+pub mod checks;
 pub mod craig_bampton;
 pub mod diagnostics;
 pub mod eigen;
@@ -90,9 +91,9 @@ pub mod geometric;
 pub mod invariants;
 pub mod io;
 pub mod modal;
-pub mod physics;
 pub mod reduced_body;
 pub mod stress;
+pub use checks::{check_body, physical_problems, BodyCheckError, Measurements, PhysicsProblem};
 pub use craig_bampton::{partition, reduce, reduce_with_progress, CbSettings, ModeSelection, Partition, Stage};
 pub use craig_bampton::{planar_model, reduce_external, reduce_external_dofs, IN_PLANE_DOFS, OUT_OF_PLANE_DOFS};
 pub use diagnostics::{diagnostics, DiagnosticWarning, Diagnostics, ModeDiagnostics};
@@ -109,7 +110,6 @@ pub use io::{matrix_market, mbdyn};
 pub use matrix_market::{read_matrix_market, write_matrix_market};
 pub use mbdyn::{read_mbdyn_fem, write_mbdyn_fem, FemError};
 pub use modal::modal_sparse;
-pub use physics::{physical_problems, PhysicsProblem};
 pub use reduced_body::{
     BeamStressElement, DenseMatrix, InertiaData, InterfacePoint, LoadPoint, MeshModes, ReducedBody, StressShapes,
     ALGORITHM_REVISION, FORMAT_VERSION,

@@ -64,6 +64,13 @@ mod matrix_market {
     include!("unit/matrix_market.rs");
 }
 
+/// `reduction::checks` on every source: edited MBDyn records (mass, symmetry, positive mass,
+/// coincident and duplicate interfaces) and node tables against K (millimetres, coincident
+/// nodes; free and supported matrices pass).
+mod checks {
+    include!("unit/checks.rs");
+}
+
 /// `reduction::mbdyn`: MBDyn `.fem` files. The manual's example reads into its stated inertia;
 /// a written file has the layout MBDyn's reader needs; solid and beam bodies come back the
 /// same; malformed files are located; no cut or mutated file panics.

@@ -210,6 +210,42 @@ fn export_fem_writes_an_mbdyn_file_that_a_study_reads_back() {
     .unwrap();
     let out = flexmbs(&dir, &["check", "fem.toml"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
+    // inspect reads it with the physical checks and what they measured.
+    let out = flexmbs(&dir, &["inspect", "beam.fem"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    for text in [
+        "MBDyn modal element file",
+        "physical checks, measured",
+        "closest interfaces",
+        "physical checks: passed",
+    ] {
+        assert!(out.stdout.contains(text), "missing '{text}' in\n{}", out.stdout);
+    }
+    // Record 12 with the mass 12.5 times too small: inspect fails it (exit 1), a study
+    // refuses it (exit 2), both naming the record.
+    let at = text.find("** RECORD GROUP 12").unwrap();
+    let start = at + text[at..].find('\n').unwrap() + 1;
+    let end = start + text[start..].find('\n').unwrap();
+    let mass: f64 = text[start..end].trim().parse().unwrap();
+    let mut wrong = text.clone();
+    wrong.replace_range(start..end, &format!("{:.17e}", mass / 12.5));
+    std::fs::write(dir.join("beam.fem"), wrong).unwrap();
+    let out = flexmbs(&dir, &["inspect", "beam.fem"]);
+    assert_eq!(out.code, 1, "{}", out.stderr);
+    assert!(
+        out.stdout.contains("physical checks: FAILED") && out.stdout.contains("record 12 mass"),
+        "{}",
+        out.stdout
+    );
+    let out = flexmbs(&dir, &["check", "fem.toml"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("bodies[0].file")
+            && out.stderr.contains("beam.fem")
+            && out.stderr.contains("record 12 mass"),
+        "{}",
+        out.stderr
+    );
     // Usage errors name what is wrong.
     let out = flexmbs(
         &dir,

@@ -68,9 +68,16 @@
 //! $\int\rho\,\mathbf S\,dV$ of the translational field come from the `FLEXMBS` lines, else
 //! from $\mathbf J$ and invariant 3 (exact for solids; for beams the second-order invariants
 //! of the rigid motions then include the sections' rotary inertia).
+//!
+//! The body read passes the physical checks of every body ([`crate::checks`]), and the
+//! records as written some of their own: records 9 and 10 symmetric (the body is built from
+//! their symmetric parts), record 12's mass and centre of mass against the `FLEXMBS FIRST
+//! MOMENT` line ([`crate::checks::stated_moment_problems`]). A file that fails is refused with
+//! [`FemError::Checks`]; [`read_mbdyn_fem_unchecked`] reads it for `flexmbs inspect`.
 
 #![allow(non_snake_case)]
 
+use crate::checks::{BodyCheckError, PhysicsProblem};
 use crate::reduced_body::{DenseMatrix, InertiaData, InterfacePoint, ReducedBody, FORMAT_VERSION};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use std::path::{Path, PathBuf};
@@ -103,6 +110,10 @@ pub enum FemError {
     /// a modal stiffness that is not positive with the interfaces held).
     #[error("{path}: {what}")]
     Body { path: PathBuf, what: String },
+    /// The records (9 and 10 symmetric, 12 against the `FLEXMBS` moments) or the body built
+    /// from them fail the physical checks ([`crate::checks`]).
+    #[error(transparent)]
+    Checks(#[from] BodyCheckError),
 }
 
 // ------------------------------------------------------------------------------------ helpers
@@ -567,23 +578,62 @@ impl<'a> Tokens<'a> {
 }
 
 /// Reads the `.fem` file at `path` as a reduced body with `interfaces` (labels of exposed
-/// nodes; `None`: every exposed node).
+/// nodes; `None`: every exposed node), which passes the physical checks ([`crate::checks`]).
 pub fn read_mbdyn_fem(path: &Path, interfaces: Option<&[String]>) -> Result<(ReducedBody, Vec<String>), FemError> {
+    checked(read_mbdyn_fem_unchecked(path, interfaces)?, path)
+}
+
+/// [`read_mbdyn_fem`] without refusing a body that fails the physical checks: the body, the
+/// notes, and the problems of the records as written (for `flexmbs inspect`, which reports
+/// them with those of the body).
+pub fn read_mbdyn_fem_unchecked(path: &Path, interfaces: Option<&[String]>) -> Result<FemBody, FemError> {
     let bytes = fe_model::input::read(path).map_err(|source| FemError::Io {
         path: path.to_path_buf(),
         action: "read",
         source,
     })?;
-    parse_mbdyn_fem(&bytes, path, interfaces)
+    parse_mbdyn_fem_unchecked(&bytes, path, interfaces)
+}
+
+/// A body read from a `.fem` file before the checks: the body, the notes on what was
+/// approximated, and the problems of the records as written (records 9, 10 symmetric,
+/// record 12 against the `FLEXMBS` first moment).
+pub type FemBody = (ReducedBody, Vec<String>, Vec<PhysicsProblem>);
+
+/// The body and notes of `read`, refused (naming `origin`) when the records or the body fail
+/// the physical checks.
+fn checked((body, notes, mut problems): FemBody, origin: &Path) -> Result<(ReducedBody, Vec<String>), FemError> {
+    problems.extend(crate::checks::physical_problems(&body));
+    if problems.is_empty() {
+        Ok((body, notes))
+    } else {
+        Err(BodyCheckError::Refused {
+            body: body.name.clone(),
+            file: origin.to_path_buf(),
+            problems,
+        }
+        .into())
+    }
 }
 
 /// Parses the text of a `.fem` file into a reduced body (module docs) and the notes on what
-/// was approximated; `origin` names the file in errors. Never panics.
+/// was approximated; `origin` names the file in errors. The body passes the physical checks.
+/// Never panics.
 pub fn parse_mbdyn_fem(
     bytes: &[u8],
     origin: &Path,
     interfaces: Option<&[String]>,
 ) -> Result<(ReducedBody, Vec<String>), FemError> {
+    checked(parse_mbdyn_fem_unchecked(bytes, origin, interfaces)?, origin)
+}
+
+/// [`parse_mbdyn_fem`] without refusing a body that fails the physical checks (see
+/// [`read_mbdyn_fem_unchecked`]).
+pub fn parse_mbdyn_fem_unchecked(
+    bytes: &[u8],
+    origin: &Path,
+    interfaces: Option<&[String]>,
+) -> Result<FemBody, FemError> {
     let text = String::from_utf8_lossy(bytes);
     let structure = |line: usize, what: String| FemError::Structure {
         path: origin.to_path_buf(),
@@ -858,7 +908,7 @@ fn build_body(
     origin: &Path,
     interfaces: Option<&[String]>,
     mut notes: Vec<String>,
-) -> Result<(ReducedBody, Vec<String>), FemError> {
+) -> Result<FemBody, FemError> {
     let body_error = |what: String| FemError::Body {
         path: origin.to_path_buf(),
         what,
@@ -872,6 +922,17 @@ fn build_body(
     let K_x = r.K.clone().unwrap_or_else(|| DMatrix::zeros(nx, nx));
     let modal = modal_inertia(&r, &y, &shapes, &mut notes, &body_error)?;
     let rigid = RigidMoments::new(&r, &modal);
+    // The records as written: the body below is built from their symmetric parts.
+    let mut problems: Vec<PhysicsProblem> = [("record 9 (modal mass)", &M_x), ("record 10 (modal stiffness)", &K_x)]
+        .into_iter()
+        .filter_map(|(name, A)| crate::checks::symmetry_problem(name, A).1)
+        .collect();
+    problems.extend(crate::checks::stated_moment_problems(
+        modal.m,
+        &modal.c_O,
+        &rigid.J_O,
+        r.first_moment.as_ref(),
+    ));
     let (M_a, K_a) = joint_matrices(&modal, &rigid, &M_x, &K_x);
     let data = joint_mass_data(&modal, &rigid);
 
@@ -928,7 +989,7 @@ fn build_body(
         load_points: Vec::new(),
         attachment_modes: 0,
     };
-    Ok((body, notes))
+    Ok((body, notes, problems))
 }
 
 /// Mass data about the frame origin $O$ summed from the lumped masses at the exposed nodes

@@ -553,20 +553,20 @@ pub fn write(body: &ReducedBody, path: &Path) -> Result<(), ReductionError> {
 }
 
 /// Reads a reduced-body file written by [`write()`] and checks its physics
-/// ([`crate::physics`]).
+/// ([`crate::checks`]).
 pub fn read(path: &Path) -> Result<ReducedBody, ReductionError> {
     checked(read_unchecked(path)?, path)
 }
 
-/// Parses the bytes of a reduced-body file and checks its physics ([`crate::physics`]);
+/// Parses the bytes of a reduced-body file and checks its physics ([`crate::checks`]);
 /// `origin` names it in errors. Never panics.
 pub fn from_bytes(bytes: &[u8], origin: &Path) -> Result<ReducedBody, ReductionError> {
     checked(from_bytes_unchecked(bytes, origin)?, origin)
 }
 
-/// `body` if [`crate::physics::physical_problems`] finds nothing, else the error naming them.
+/// `body` if [`crate::checks::physical_problems`] finds nothing, else the error naming them.
 fn checked(body: ReducedBody, origin: &Path) -> Result<ReducedBody, ReductionError> {
-    let problems = crate::physics::physical_problems(&body);
+    let problems = crate::checks::physical_problems(&body);
     if problems.is_empty() {
         Ok(body)
     } else {

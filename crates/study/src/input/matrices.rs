@@ -12,7 +12,7 @@
 //!   node order.
 
 use crate::input::schema::MatricesFile;
-use reduction::{CbSettings, ModeSelection, ReducedBody};
+use reduction::{CbSettings, ModeSelection, PhysicsProblem, ReducedBody};
 use std::path::Path;
 
 /// The data lines of a table: (1-based line, fields).
@@ -39,6 +39,7 @@ fn table(path: &Path) -> Result<Vec<(usize, Vec<String>)>, String> {
 pub fn reduce_matrices(name: &str, m: &MatricesFile, dir: &Path) -> Result<ReducedBody, (&'static str, String)> {
     let nodes_path = dir.join(&m.nodes);
     let mut nodes = Vec::new();
+    let mut node_lines = Vec::new();
     for (line, fields) in table(&nodes_path).map_err(|e| ("nodes", e))? {
         let xyz: Vec<f64> = fields
             .iter()
@@ -56,6 +57,7 @@ pub fn reduce_matrices(name: &str, m: &MatricesFile, dir: &Path) -> Result<Reduc
             ));
         }
         nodes.push([xyz[0], xyz[1], xyz[2]]);
+        node_lines.push(line);
     }
     let K = reduction::read_matrix_market(&dir.join(&m.stiffness)).map_err(|e| ("stiffness", e.to_string()))?;
     let M = reduction::read_matrix_market(&dir.join(&m.mass)).map_err(|e| ("mass", e.to_string()))?;
@@ -117,6 +119,7 @@ pub fn reduce_matrices(name: &str, m: &MatricesFile, dir: &Path) -> Result<Reduc
             dofs
         }
     };
+    check_node_table(name, &nodes_path, &node_lines, &nodes, K.as_ref(), &dofs)?;
     let mut interfaces = Vec::new();
     for (iname, &node) in &m.interfaces {
         if node >= nodes.len() {
@@ -137,6 +140,44 @@ pub fn reduce_matrices(name: &str, m: &MatricesFile, dir: &Path) -> Result<Reduc
     };
     let mut settings = CbSettings::new(modes);
     settings.keep_mesh_shapes = false;
-    reduction::reduce_external_dofs(&nodes, K.as_ref(), M.as_ref(), &dofs, name, &interfaces, &settings)
-        .map_err(|e| ("stiffness", format!("cannot reduce the matrices: {e}")))
+    let body = reduction::reduce_external_dofs(&nodes, K.as_ref(), M.as_ref(), &dofs, name, &interfaces, &settings)
+        .map_err(|e| ("stiffness", format!("cannot reduce the matrices: {e}")))?;
+    // The reduced body passes the checks of every body; its interface problems are the
+    // `interfaces` key's.
+    match reduction::check_body(&body, &dir.join(&m.stiffness)) {
+        Ok(_) => Ok(body),
+        Err(e) => {
+            let interfaces_at_fault = matches!(&e, reduction::BodyCheckError::Refused { problems, .. }
+                if problems.iter().all(|p| matches!(p, PhysicsProblem::Coincident { .. } | PhysicsProblem::DuplicateName { .. })));
+            Err((
+                if interfaces_at_fault { "interfaces" } else { "stiffness" },
+                e.to_string(),
+            ))
+        }
+    }
+}
+
+/// The node table (`path`, node `k` on line `lines[k]`) against the rigid motions of `K`
+/// (`reduction::checks::node_table_problems`), each problem's node named by its line.
+fn check_node_table(
+    name: &str,
+    path: &Path,
+    lines: &[usize],
+    nodes: &[[f64; 3]],
+    K: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    dofs: &[(usize, usize)],
+) -> Result<(), (&'static str, String)> {
+    let problems = reduction::checks::node_table_problems(nodes, K, dofs);
+    let Some(PhysicsProblem::RigidMotionStrained { node, .. }) = problems.first() else {
+        return Ok(());
+    };
+    let error = reduction::BodyCheckError::NodeTable {
+        body: name.to_string(),
+        file: path.to_path_buf(),
+        problems: problems.clone(),
+    };
+    Err((
+        "nodes",
+        format!("{}:{}: node {node}: {error}", path.display(), lines[*node]),
+    ))
 }

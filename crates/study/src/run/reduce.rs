@@ -85,6 +85,9 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
         })
     })?;
     obs.progress(&Progress::Finished);
+    // The checks every body passes before use (a body read back from the cache passes them
+    // on reading).
+    reduction::check_body(&body, &file).context(|| format!("part '{}': the reduced body is refused", part.name))?;
     obs.progress(&Progress::Info(format!(
         "part '{}': reduced in {:.2} s to {} coordinates ({} interfaces, {} modes)",
         part.name,

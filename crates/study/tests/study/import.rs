@@ -245,40 +245,8 @@ fn bodies_from_an_mbdyn_file_and_from_matrix_market_matrices() {
     }
 
     // Matrix Market: K, M on the free dofs, a node table and a dof table.
-    let dofs = DofMap::new(&model).unwrap();
-    let pattern = SystemPattern::new(&model, &dofs);
-    let assembled = fe_model::assemble(&model, &pattern).unwrap();
-    reduction::write_matrix_market(&dir.join("K.mtx"), assembled.K.as_ref()).unwrap();
-    reduction::write_matrix_market(&dir.join("M.mtx"), assembled.M.as_ref()).unwrap();
-    let nodes: String = model
-        .mesh
-        .nodes
-        .iter()
-        .map(|x| format!("{} {} {}\n", x.x, x.y, x.z))
-        .collect();
-    std::fs::write(dir.join("nodes.txt"), format!("# x y z\n{nodes}")).unwrap();
-    let names = ["ux", "uy", "uz", "rx", "ry", "rz"];
-    let table: String = (0..dofs.n_free())
-        .map(|d| {
-            let slot = dofs.full_slot(fe_model::Dof(d as u32));
-            format!("{} {}\n", slot / 6, names[slot % 6])
-        })
-        .collect();
-    std::fs::write(dir.join("dofs.txt"), table).unwrap();
-    let text = format!(
-        "[[bodies]]
-name = \"beam\"
-[bodies.matrices]
-stiffness = \"K.mtx\"
-mass = \"M.mtx\"
-nodes = \"nodes.txt\"
-dofs = \"dofs.txt\"
-interfaces = {{ a = {a}, b = {b} }}
-modes = 3
-",
-        a = interfaces[0].1.index(),
-        b = interfaces[1].1.index()
-    );
+    export_matrices(&dir, &model);
+    let text = matrices_study(interfaces[0].1.index(), interfaces[1].1.index());
     let s = study(&dir, &text);
     let from_matrices = flexible_body(&s);
     let scale = body.K_CB.data.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -299,6 +267,121 @@ modes = 3
     let e = study::load(&dir.join("study.toml")).unwrap_err().to_string();
     assert!(
         e.contains("bodies[0].matrices.nodes") && e.contains("nodes.txt:2:"),
+        "{e}"
+    );
+}
+
+/// `model`'s K and M on its free dofs (Matrix Market), its node table and dof table, in `dir`.
+fn export_matrices(dir: &Path, model: &fe_model::FeModel) {
+    let dofs = DofMap::new(model).unwrap();
+    let pattern = SystemPattern::new(model, &dofs);
+    let assembled = fe_model::assemble(model, &pattern).unwrap();
+    reduction::write_matrix_market(&dir.join("K.mtx"), assembled.K.as_ref()).unwrap();
+    reduction::write_matrix_market(&dir.join("M.mtx"), assembled.M.as_ref()).unwrap();
+    let nodes: String = model
+        .mesh
+        .nodes
+        .iter()
+        .map(|x| format!("{} {} {}\n", x.x, x.y, x.z))
+        .collect();
+    std::fs::write(dir.join("nodes.txt"), format!("# x y z\n{nodes}")).unwrap();
+    let names = ["ux", "uy", "uz", "rx", "ry", "rz"];
+    let table: String = (0..dofs.n_free())
+        .map(|d| {
+            let slot = dofs.full_slot(fe_model::Dof(d as u32));
+            format!("{} {}\n", slot / 6, names[slot % 6])
+        })
+        .collect();
+    std::fs::write(dir.join("dofs.txt"), table).unwrap();
+}
+
+/// A study of one body from the files of [`export_matrices`], interfaces on nodes `a`, `b`.
+fn matrices_study(a: usize, b: usize) -> String {
+    format!(
+        "[[bodies]]
+name = \"beam\"
+[bodies.matrices]
+stiffness = \"K.mtx\"
+mass = \"M.mtx\"
+nodes = \"nodes.txt\"
+dofs = \"dofs.txt\"
+interfaces = {{ a = {a}, b = {b} }}
+modes = 3
+"
+    )
+}
+
+/// The error of loading `text` as `dir`/study.toml.
+fn load_error(dir: &Path, text: &str) -> String {
+    std::fs::write(dir.join("study.toml"), text).unwrap();
+    study::error::report(&*study::load(&dir.join("study.toml")).unwrap_err())
+}
+
+#[test]
+fn imported_bodies_that_fail_the_physical_checks_are_refused_where_they_are_given() {
+    let dir = scratch("checks");
+    let (model, interfaces) = beam();
+    let (a, b) = (interfaces[0].1.index(), interfaces[1].1.index());
+    let mut settings = reduction::CbSettings::new(reduction::ModeSelection::Count(3));
+    settings.keep_mesh_shapes = false;
+    let body = reduction::reduce(&model, "beam", &interfaces, &settings).unwrap();
+
+    // MBDyn: record 12 with the mass 12.5 times too small.
+    let fem = reduction::mbdyn::to_mbdyn_fem(&body, 0, &dir.join("beam.fem")).unwrap();
+    let mass = format!("{:.17e}", body.inertia.mass);
+    let at = fem.find("** RECORD GROUP 12").unwrap();
+    let line_start = at + fem[at..].find('\n').unwrap() + 1;
+    let line_end = line_start + fem[line_start..].find('\n').unwrap();
+    let mut wrong = fem.clone();
+    wrong.replace_range(line_start..line_end, &format!("{:.17e}", body.inertia.mass / 12.5));
+    assert_ne!(
+        &fem[line_start..line_end],
+        mass.as_str(),
+        "the mass line is found by position"
+    );
+    std::fs::write(dir.join("beam.fem"), wrong).unwrap();
+    let e = load_error(&dir, "[[bodies]]\nname = \"beam\"\nfile = \"beam.fem\"\n");
+    assert!(
+        e.contains("bodies[0].file") && e.contains("beam.fem") && e.contains("record 12 mass"),
+        "{e}"
+    );
+
+    // Matrices: the node table in millimetres, located at the table's line of a node.
+    export_matrices(&dir, &model);
+    let text = matrices_study(a, b);
+    let mm: String = model
+        .mesh
+        .nodes
+        .iter()
+        .map(|x| format!("{} {} {}\n", 1e3 * x.x, 1e3 * x.y, 1e3 * x.z))
+        .collect();
+    std::fs::write(dir.join("nodes.txt"), format!("# x y z in mm\n{mm}")).unwrap();
+    let e = load_error(&dir, &text);
+    assert!(
+        e.contains("bodies[0].matrices.nodes") && e.contains("nodes.txt:") && e.contains("other units than m"),
+        "{e}"
+    );
+
+    // The tip node listed at the root's position: the interfaces' nodes coincide.
+    let mut lines: Vec<String> = model
+        .mesh
+        .nodes
+        .iter()
+        .map(|x| format!("{} {} {}", x.x, x.y, x.z))
+        .collect();
+    lines[b] = lines[a].clone();
+    std::fs::write(dir.join("nodes.txt"), lines.join("\n") + "\n").unwrap();
+    let e = load_error(&dir, &text);
+    assert!(
+        e.contains("bodies[0].matrices.nodes") && e.contains(&format!("nodes.txt:{}: node", b + 1)),
+        "{e}"
+    );
+
+    // Both interfaces on one node: refused by the reduction, located.
+    export_matrices(&dir, &model);
+    let e = load_error(&dir, &matrices_study(a, a));
+    assert!(
+        e.contains("bodies[0].matrices") && e.contains("used by two interfaces"),
         "{e}"
     );
 }
