@@ -301,6 +301,38 @@ fn stress_sensor(
             }
             Ok((SensorKind::Stress { body: id, node: *k }, stress_columns()))
         }
+        StressNodes::Label(label) => {
+            let Some(part) = part else {
+                return Err(located(
+                    study,
+                    &path.key("label"),
+                    format!(
+                        "body '{}' is read from a file, whose nodes have no labels: give `node` or `node_at`",
+                        body.name
+                    ),
+                ));
+            };
+            let tags = &part.base.mesh.node_tags;
+            match tags.iter().position(|t| t == label) {
+                Some(k) if k < count => Ok((SensorKind::Stress { body: id, node: k }, stress_columns())),
+                Some(k) => Err(located(
+                    study,
+                    &path.key("label"),
+                    format!("node {label} (index {k}) of part '{}' has no stresses", part.name),
+                )),
+                None => Err(located(
+                    study,
+                    &path.key("label"),
+                    format!(
+                        "part '{}' has no node {label} (its mesh file numbers {} nodes from {} to {})",
+                        part.name,
+                        tags.len(),
+                        tags.iter().min().copied().unwrap_or(0),
+                        tags.iter().max().copied().unwrap_or(0)
+                    ),
+                )),
+            }
+        }
         StressNodes::At(x) => {
             let positions: Vec<Vector3<f64>> = match (&body.reduced.mesh, part) {
                 (Some(mesh), _) => mesh.nodes.iter().map(|p| Vector3::from(*p)).collect(),
