@@ -27,7 +27,11 @@ impl Builder<'_> {
     pub(super) fn sensors(&mut self) -> Result<(), BoxError> {
         let m = &self.study.mechanism;
         for s in &m.sensors {
-            let (kinds, columns) = self.sensor(s)?;
+            let (kinds, mut columns) = self.sensor(s)?;
+            let node_labels = file_node_labels(self.study, s);
+            if node_labels.is_some() {
+                columns.push("node label [-]".into());
+            }
             let mbs_names = kinds.iter().map(|(n, _)| n.clone()).collect();
             for (n, k) in kinds {
                 self.entities
@@ -38,6 +42,7 @@ impl Builder<'_> {
                 name: s.name.clone(),
                 mbs_names,
                 columns,
+                node_labels,
             });
         }
         Ok(())
@@ -407,6 +412,24 @@ fn stress_sensor(
             ))
         }
     }
+}
+
+/// The mesh file's node numbers for a largest-von-Mises sensor (`set`) of a part read from a
+/// mesh file, whose node column is then followed by the node's label; none for generated
+/// meshes, whose labels are the index plus one, so their sensor files keep two columns.
+fn file_node_labels(study: &Study, s: &SensorSpec) -> Option<Vec<u64>> {
+    let SensorTarget::Stress {
+        body,
+        nodes: StressNodes::Set(_),
+    } = &s.target
+    else {
+        return None;
+    };
+    let BodySource::Part(p) = study.mechanism.bodies[*body].source else {
+        return None;
+    };
+    let part = &study.parts[p];
+    part.mesh_file.as_ref().map(|_| part.base.mesh.node_tags.clone())
 }
 
 /// The columns of a stress sensor at one node.
