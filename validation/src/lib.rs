@@ -5,7 +5,7 @@
 //! tolerance the method can honestly reach and the reason for it. `flexmbs validate` (or
 //! `cargo run --release -p validation`) prints every table and writes the report
 //! (`./validation-report/REPORT.md` unless `--report-dir` says otherwise);
-//! `tests/quick.rs` runs the quick subset in CI and asserts the tolerances.
+//! `tests/suite/quick.rs` runs the quick subset in CI and asserts the tolerances.
 //!
 //! The problems: the linear references A1-A5 (beam and membrane frequencies, cantilever
 //! statics, Craig-Bampton convergence, the linear transient), the geometrically nonlinear

@@ -76,7 +76,7 @@ __version__: str
 #[pyo3(pass_module)]
 pub(crate) fn _stubs(m: &Bound<'_, PyModule>) -> PyResult<String> {
     let mut out = String::from(HEADER);
-    for t in TABLES {
+    for t in TABLES.iter() {
         out += &typed_dict(t);
     }
     for class in crate::errors::STUBS {

@@ -39,19 +39,20 @@
 
 use crate::reduced_body::ReducedBody;
 use nalgebra::{DMatrix, Matrix3, Vector3};
-use std::fmt;
 
-/// One physical inconsistency of a reduced body (module docs).
-#[derive(Clone, Debug, PartialEq)]
+/// One physical inconsistency of a reduced body (module docs), with the message that names it.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum PhysicsProblem {
     /// An entry of `matrix` (`K_CB` or `M_CB`) is not finite.
+    #[error("{matrix}[{row}, {col}] is not finite")]
     NonFinite {
         matrix: &'static str,
         row: usize,
         col: usize,
     },
     /// `matrix` is not symmetric at (`row`, `col`).
+    #[error("{matrix} is not symmetric: entry ({row}, {col}) is {upper:.6e}, entry ({col}, {row}) is {lower:.6e}")]
     NotSymmetric {
         matrix: &'static str,
         row: usize,
@@ -60,72 +61,46 @@ pub enum PhysicsProblem {
         lower: f64,
     },
     /// The generalised mass of fixed-interface mode `mode` (1-based) is not positive.
+    #[error("fixed-interface mode {mode} has generalised mass {value:.6e}: a mass must be positive")]
     ModalMass { mode: usize, value: f64 },
     /// $\mathbf M_{CB}$ has no Cholesky factor: some motion has no or negative kinetic energy.
+    #[error("M_CB is not positive definite: some motion of the body has no or negative kinetic energy")]
     MassIndefinite,
     /// $\mathbf K_{CB}$ has a negative eigenvalue $\omega^2$ on the elastic motions.
+    #[error(
+        "K_CB is indefinite: an elastic motion has omega^2 = {eigenvalue:.6e} rad^2/s^2 (largest {largest:.6e}), i.e. negative strain energy"
+    )]
     StiffnessIndefinite { eigenvalue: f64, largest: f64 },
     /// A deformation that is not a rigid motion costs no strain energy.
+    #[error(
+        "K_CB has {count} zero-energy deformation(s) besides the rigid motions (eigenvalue below 1e-12 x {largest:.6e} rad^2/s^2): a mechanism"
+    )]
     Mechanism { count: usize, largest: f64 },
     /// Stored metadata (`what`: mass, a centre-of-mass or inertia entry) against the value
     /// $\boldsymbol\Phi_R^T\mathbf M_{CB}\boldsymbol\Phi_R$ implies.
+    #[error("the stored {what} {stored:.9e} contradicts M_CB, whose rigid-body part gives {from_matrices:.9e}")]
     Metadata {
         what: String,
         stored: f64,
         from_matrices: f64,
     },
     /// A stored fixed-interface frequency against $\sqrt{K_{\eta\eta}/M_{\eta\eta}}$.
+    #[error(
+        "fixed-interface mode {mode}: the stored frequency {stored:.9e} rad/s contradicts K_CB and M_CB, which give {from_matrices:.9e} rad/s"
+    )]
     Frequency {
         mode: usize,
         stored: f64,
         from_matrices: f64,
     },
     /// Two interfaces share a name.
+    #[error("two interfaces are named '{name}'")]
     DuplicateName { name: String },
     /// Two interfaces at the same point (or on the same FE node).
+    #[error(
+        "interfaces '{a}' and '{b}' coincide (distance {distance:.3e} m): the frame of the body is not fixed by them"
+    )]
     Coincident { a: String, b: String, distance: f64 },
-}
-
-impl fmt::Display for PhysicsProblem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        use PhysicsProblem::*;
-        match self {
-            NonFinite { matrix, row, col } => write!(f, "{matrix}[{row}, {col}] is not finite"),
-            NotSymmetric { matrix, row, col, upper, lower } => write!(
-                f,
-                "{matrix} is not symmetric: entry ({row}, {col}) is {upper:.6e}, entry ({col}, {row}) is {lower:.6e}"
-            ),
-            ModalMass { mode, value } => write!(
-                f,
-                "fixed-interface mode {mode} has generalised mass {value:.6e}: a mass must be positive"
-            ),
-            MassIndefinite => write!(
-                f,
-                "M_CB is not positive definite: some motion of the body has no or negative kinetic energy"
-            ),
-            StiffnessIndefinite { eigenvalue, largest } => write!(
-                f,
-                "K_CB is indefinite: an elastic motion has omega^2 = {eigenvalue:.6e} rad^2/s^2 (largest {largest:.6e}), i.e. negative strain energy"
-            ),
-            Mechanism { count, largest } => write!(
-                f,
-                "K_CB has {count} zero-energy deformation(s) besides the rigid motions (eigenvalue below 1e-12 x {largest:.6e} rad^2/s^2): a mechanism"
-            ),
-            Metadata { what, stored, from_matrices } => write!(
-                f,
-                "the stored {what} {stored:.9e} contradicts M_CB, whose rigid-body part gives {from_matrices:.9e}"
-            ),
-            Frequency { mode, stored, from_matrices } => write!(
-                f,
-                "fixed-interface mode {mode}: the stored frequency {stored:.9e} rad/s contradicts K_CB and M_CB, which give {from_matrices:.9e} rad/s"
-            ),
-            DuplicateName { name } => write!(f, "two interfaces are named '{name}'"),
-            Coincident { a, b, distance } => write!(
-                f,
-                "interfaces '{a}' and '{b}' coincide (distance {distance:.3e} m): the frame of the body is not fixed by them"
-            ),
-        }
-    }
 }
 
 /// Symmetry tolerance (module docs).

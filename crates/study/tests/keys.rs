@@ -80,7 +80,7 @@ fn every_schema_field_has_a_registry_entry_and_every_entry_a_field() {
             ));
         }
     }
-    for t in TABLES {
+    for t in TABLES.iter() {
         if !schema.iter().any(|(path, _)| *path == t.path) {
             problems.push(format!(
                 "table `{}` of the registry is not a table of the schema",
@@ -155,7 +155,7 @@ fn the_key_tables_of_the_study_file_doc_are_the_registry_s() {
         return;
     }
     panic!(
-        "the key tables of {} differ from the key registry (crates/study/src/input/keys/registry.rs); \
+        "the key tables of {} differ from the key registry (crates/study/src/input/keys/registry.toml); \
          change the registry, not the tables, and run `FLEXMBS_BLESS=1 cargo test -p study --test keys` \
          to rewrite them (- the doc, + the registry):\n{}",
         path.display(),

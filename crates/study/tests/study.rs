@@ -1146,3 +1146,16 @@ fn a_simulation_locates_a_solver_error_at_its_body() {
 /// the equilibrium, buckling and linearised analyses.
 #[path = "study/stability.rs"]
 mod stability;
+
+/// The validator against the corpus of broken study files and random and mutated files: located
+/// messages, never a panic.
+#[path = "study/broken_files.rs"]
+mod broken_files;
+
+/// Models from other codes: Abaqus and Nastran meshes, MBDyn bodies, Matrix Market matrices.
+#[path = "study/import.rs"]
+mod import;
+
+/// Our node orders mapped into VTK's, against VTK's cell definitions.
+#[path = "study/vtu.rs"]
+mod vtu;

@@ -1,6 +1,6 @@
 //! Invalid study files through the program: exit code 2, nothing on stdout and the study
 //! crate's report on stderr, never a panic. What the validation says about each file is
-//! tested in crates/study (`tests/broken_files.rs`: the corpus `tests/broken`, random and
+//! tested in crates/study (`tests/study/broken_files.rs`: the corpus `tests/broken`, random and
 //! mutated files); here, that the program prints it and exits as it should.
 
 use crate::support::*;

@@ -1,5 +1,5 @@
 //! The keys of a study file, each declared once: its table, name, value type, unit, default,
-//! range and meaning ([`TABLES`], in `keys/registry.rs`).
+//! range and meaning ([`TABLES`], read from `keys/registry.toml`).
 //!
 //! Everything else that lists keys derives from here:
 //!
@@ -245,7 +245,7 @@ mod tests {
     #[test]
     fn tables_and_keys_are_unique_and_kinds_declared() {
         let mut paths = HashSet::new();
-        for t in TABLES {
+        for t in TABLES.iter() {
             assert!(paths.insert(t.path), "table `{}` declared twice", t.path);
             let mut names = HashSet::new();
             for k in t.keys {
@@ -273,7 +273,7 @@ mod tests {
             .collect();
         assert!(unread.is_empty(), "{unread:#?}");
         // And a numeric range only on a number (or numbers), a choice only on a string.
-        for t in TABLES {
+        for t in TABLES.iter() {
             for k in t.keys {
                 match k.range() {
                     Range::Between { .. } | Range::Numbers(_) => assert!(

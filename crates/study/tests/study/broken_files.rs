@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use study::input::source::Source;
 
 /// Broken study files made on purpose: random text and mutations of good and broken studies.
-#[path = "property/generate.rs"]
+#[path = "../property/generate.rs"]
 mod generate;
 
 /// The repository's root.

@@ -7,8 +7,7 @@ use nalgebra::Point3;
 use std::path::{Path, PathBuf};
 use study::input::validate::mechanism::BodySource;
 
-/// Study texts built from parameters.
-mod common;
+use crate::common;
 
 fn scratch(name: &str) -> PathBuf {
     common::scratch_dir("import", name)
