@@ -27,7 +27,11 @@ impl Builder<'_> {
     pub(super) fn sensors(&mut self) -> Result<(), BoxError> {
         let m = &self.study.mechanism;
         for s in &m.sensors {
-            let (kinds, columns) = self.sensor(s)?;
+            let (kinds, mut columns) = self.sensor(s)?;
+            let node_labels = file_node_labels(self.study, s);
+            if node_labels.is_some() {
+                columns.push("node label [-]".into());
+            }
             let mbs_names = kinds.iter().map(|(n, _)| n.clone()).collect();
             for (n, k) in kinds {
                 self.entities
@@ -38,6 +42,7 @@ impl Builder<'_> {
                 name: s.name.clone(),
                 mbs_names,
                 columns,
+                node_labels,
             });
         }
         Ok(())
@@ -301,6 +306,38 @@ fn stress_sensor(
             }
             Ok((SensorKind::Stress { body: id, node: *k }, stress_columns()))
         }
+        StressNodes::Label(label) => {
+            let Some(part) = part else {
+                return Err(located(
+                    study,
+                    &path.key("label"),
+                    format!(
+                        "body '{}' is read from a file, whose nodes have no labels: give `node` or `node_at`",
+                        body.name
+                    ),
+                ));
+            };
+            let tags = &part.base.mesh.node_tags;
+            match tags.iter().position(|t| t == label) {
+                Some(k) if k < count => Ok((SensorKind::Stress { body: id, node: k }, stress_columns())),
+                Some(k) => Err(located(
+                    study,
+                    &path.key("label"),
+                    format!("node {label} (index {k}) of part '{}' has no stresses", part.name),
+                )),
+                None => Err(located(
+                    study,
+                    &path.key("label"),
+                    format!(
+                        "part '{}' has no node {label} (its mesh file numbers {} nodes from {} to {})",
+                        part.name,
+                        tags.len(),
+                        tags.iter().min().copied().unwrap_or(0),
+                        tags.iter().max().copied().unwrap_or(0)
+                    ),
+                )),
+            }
+        }
         StressNodes::At(x) => {
             let positions: Vec<Vector3<f64>> = match (&body.reduced.mesh, part) {
                 (Some(mesh), _) => mesh.nodes.iter().map(|p| Vector3::from(*p)).collect(),
@@ -375,6 +412,24 @@ fn stress_sensor(
             ))
         }
     }
+}
+
+/// The mesh file's node numbers for a largest-von-Mises sensor (`set`) of a part read from a
+/// mesh file, whose node column is then followed by the node's label; none for generated
+/// meshes, whose labels are the index plus one, so their sensor files keep two columns.
+fn file_node_labels(study: &Study, s: &SensorSpec) -> Option<Vec<u64>> {
+    let SensorTarget::Stress {
+        body,
+        nodes: StressNodes::Set(_),
+    } = &s.target
+    else {
+        return None;
+    };
+    let BodySource::Part(p) = study.mechanism.bodies[*body].source else {
+        return None;
+    };
+    let part = &study.parts[p];
+    part.mesh_file.as_ref().map(|_| part.base.mesh.node_tags.clone())
 }
 
 /// The columns of a stress sensor at one node.

@@ -714,8 +714,10 @@ pub struct SensorFile {
     pub reference: Option<String>,
     /// Joint, joint-rate: which scalar coordinate (default 0).
     pub coordinate: Option<usize>,
-    /// Stress: a mesh node by index, by position (part axes), or a node set.
+    /// Stress: a mesh node by index, by its label in the mesh file, by position (part axes),
+    /// or a node set.
     pub node: Option<usize>,
+    pub label: Option<u64>,
     pub node_at: Option<Vec3>,
     pub set: Option<String>,
     /// Acceleration, angular acceleration: `global` (default) or `body` axes.

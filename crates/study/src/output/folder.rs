@@ -936,6 +936,7 @@ mod tests {
             name: "s".into(),
             mbs_names: vec!["s".into()],
             columns: vec!["s [m]".into()],
+            node_labels: None,
         }];
         folder
             .sensors(&SensorStream {
@@ -1020,6 +1021,7 @@ mod tests {
             name: name.into(),
             mbs_names: vec![name.into()],
             columns: columns.iter().map(|c| c.to_string()).collect(),
+            node_labels: None,
         };
         let groups = vec![
             group("angle", &["angle [rad]"]),

@@ -56,6 +56,8 @@ pub fn sensor_columns(groups: &[SensorGroup], record: &SensorRecord) -> Result<V
 pub struct SensorSampler {
     /// Per group: its columns in a record row.
     columns: Vec<Vec<usize>>,
+    /// The groups, which add columns derived from the record's (node labels).
+    groups: Vec<SensorGroup>,
     /// The abscissa and values of the last sample.
     pub last: Option<(f64, Vec<Vec<f64>>)>,
 }
@@ -72,7 +74,11 @@ impl SensorSampler {
     ) -> Result<Self, BoxError> {
         let columns = sensor_columns(groups, record)?;
         obs.sensors(&SensorStream { x_label, groups, plots })?;
-        Ok(Self { columns, last: None })
+        Ok(Self {
+            columns,
+            groups: groups.to_vec(),
+            last: None,
+        })
     }
 
     /// Sends the last row of `record` (abscissa `x`).
@@ -110,7 +116,8 @@ impl SensorSampler {
         let values: Vec<Vec<f64>> = self
             .columns
             .iter()
-            .map(|cols| cols.iter().map(|&c| row[c]).collect())
+            .zip(&self.groups)
+            .map(|(cols, g)| g.values(cols.iter().map(|&c| row[c])))
             .collect();
         obs.sample(x, &values)?;
         self.last = Some((x, values));

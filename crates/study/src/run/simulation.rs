@@ -410,7 +410,8 @@ impl Simulation {
         Ok(self
             .columns
             .iter()
-            .map(|cols| cols.iter().map(|&c| row[c]).collect())
+            .zip(&self.groups)
+            .map(|(cols, g)| g.values(cols.iter().map(|&c| row[c])))
             .collect())
     }
 
@@ -424,7 +425,7 @@ impl Simulation {
         let values = self.integrator.sensor_values(&self.sensor_indices[g])?;
         // The group's columns are these values, in the same order.
         debug_assert_eq!(values.len(), self.columns[g].len());
-        Ok(values)
+        Ok(self.groups[g].values(values))
     }
 
     /// The state: time, coordinates, velocities and accelerations of the unknowns.

@@ -411,4 +411,35 @@ name = "reduced"
     let (_, summary, _) = run("labels-sensor", &text(sensor));
     let e = summary.unwrap_err();
     assert!(e.contains("the nearest, node 5506 (index 54)"), "{e}");
+    // A stress sensor by the deck's label reads the node of that index, the hot spot.
+    let pair = format!(
+        "[[sensors]]\nname = \"by-index\"\ntype = \"stress\"\nof = \"bar\"\nnode = {index}\n\
+         [[sensors]]\nname = \"by-label\"\ntype = \"stress\"\nof = \"bar\"\nlabel = {label}\n\
+         [[sensors]]\nname = \"tip\"\ntype = \"stress\"\nof = \"bar\"\nset = \"tip\"\n"
+    );
+    let (rec, summary, _) = run("labels-by-label", &text(&pair));
+    summary.unwrap();
+    for c in 0..8 {
+        let (by_index, by_label) = (
+            crate::setup::column(&rec, "reduced", "by-index", c),
+            crate::setup::column(&rec, "reduced", "by-label", c),
+        );
+        assert_eq!(by_index, by_label, "column {c}");
+    }
+    let vm = crate::setup::column(&rec, "reduced", "by-label", 6);
+    let hot_vm = hot["von_mises_Pa"].as_f64().unwrap();
+    assert!((vm[0] - hot_vm).abs() <= 1e-9 * hot_vm, "sensor {vm:?}, hot spot {hot}");
+    // A sensor over a set of a deck's part gives the deck's label beside the node's index.
+    let (node, node_label) = (
+        crate::setup::column(&rec, "reduced", "tip", 1),
+        crate::setup::column(&rec, "reduced", "tip", 2),
+    );
+    let n = node[0] as u64 + 1;
+    assert_eq!(node_label[0], (100 * n + n % 7) as f64, "node {node:?}");
+    // An index is not a label: the deck has no node 54.
+    let sensor = "[[sensors]]\nname = \"s\"\ntype = \"stress\"\nof = \"bar\"\nlabel = 54\n";
+    let (_, summary, _) = run("labels-unknown", &text(sensor));
+    let e = summary.unwrap_err();
+    assert!(e.contains("sensors[0].label"), "{e}");
+    assert!(e.contains("part 'bar' has no node 54"), "{e}");
 }

@@ -170,6 +170,9 @@ pub struct BodyLoadSpec {
 pub enum StressNodes {
     /// One node by index in the part's mesh (0-based, as the VTU files and the hot spot).
     Index(usize),
+    /// One node by its label in the part's mesh file (the deck's node number; the 1-based
+    /// position for generated meshes).
+    Label(u64),
     /// The mesh node at this position (part axes) \[m\].
     At(Vector3<f64>),
     /// The largest von Mises stress over a node set of the part's mesh.
@@ -1644,14 +1647,15 @@ impl Validator<'_> {
             }
             return None;
         };
-        let nodes = match (s.node, &s.node_at, &s.set) {
-            (Some(k), None, None) => StressNodes::Index(k),
-            (None, Some(x), None) => StressNodes::At(self.finite3(&path.key("node_at"), x, "node_at [m]")?),
-            (None, None, Some(set)) => StressNodes::Set(set.clone()),
+        let nodes = match (s.node, s.label, &s.node_at, &s.set) {
+            (Some(k), None, None, None) => StressNodes::Index(k),
+            (None, Some(l), None, None) => StressNodes::Label(l),
+            (None, None, Some(x), None) => StressNodes::At(self.finite3(&path.key("node_at"), x, "node_at [m]")?),
+            (None, None, None, Some(set)) => StressNodes::Set(set.clone()),
             _ => {
                 self.err(
                     path,
-                    "give the stress sensor's node by `node` (index in the part's mesh), `node_at` = [x, y, z] (part axes) or `set` (a node set: the largest von Mises stress over it), one of them",
+                    "give the stress sensor's node by `node` (index in the part's mesh), `label` (the node's number in the part's mesh file), `node_at` = [x, y, z] (part axes) or `set` (a node set: the largest von Mises stress over it), one of them",
                 );
                 return None;
             }
