@@ -188,7 +188,9 @@ fn a_full_disk_mid_run_leaves_whole_rows_and_a_failed_summary_listing_existing_f
     let dir = pendulum_run("folder-full-disk");
     let res = dir.join("res");
     // 40 KiB: the cached body (32 KB), the meshes and the summary fit; the sensor files of a
-    // 2 s run (about 140 KB each) do not.
+    // 2 s run (about 140 KB each) do not. Rows are written in blocks of at most
+    // `study::output::folder::FLUSH_BYTES` (16 KiB), so the third block of a file fails,
+    // whatever the machine's speed.
     let script = format!(
         "trap '' XFSZ; ulimit -f 40; exec '{}' run double_pendulum.toml --out res",
         env!("CARGO_BIN_EXE_flexmbs")

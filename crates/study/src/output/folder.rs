@@ -54,6 +54,11 @@ use std::path::{Path, PathBuf};
 /// a mechanism step of about 100 µs (BENCHMARKS.md, the slider-crank C2 with a beam rod).
 pub const FLUSH_INTERVAL: std::time::Duration = std::time::Duration::from_millis(200);
 
+/// Buffered sensor rows are also written when one file has this many bytes waiting: the
+/// memory a fast run holds stays bounded, and where a full disk cuts the files does not depend
+/// on the machine's speed.
+pub const FLUSH_BYTES: usize = 16 * 1024;
+
 /// Where sensor rows are appended: a file, or in a test one that fails.
 trait Sink: Write + Send {
     /// Cuts the file back to `len` bytes (its last whole row).
@@ -739,7 +744,8 @@ impl Observer for ResultsFolder {
             s.flush(&mut self.manifest)?;
             return Err(stop);
         }
-        if s.flushed.elapsed() >= FLUSH_INTERVAL {
+        let waiting = s.files.iter().map(|f| f.pending.len()).max().unwrap_or(0);
+        if waiting >= FLUSH_BYTES || s.flushed.elapsed() >= FLUSH_INTERVAL {
             s.flush(&mut self.manifest)?;
         }
         Ok(())
