@@ -103,8 +103,8 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<I
     let _ = writeln!(s, "\ninterfaces");
     let _ = writeln!(
         s,
-        "  {:>3}  {:<16} {:>8} {:>14} {:>14} {:>14}",
-        "#", "name", "FE node", "x [m]", "y [m]", "z [m]"
+        "  {:>3}  {:<16} {:>8} {:>8} {:>14} {:>14} {:>14}",
+        "#", "name", "FE node", "label", "x [m]", "y [m]", "z [m]"
     );
     for (k, p) in body.interfaces.iter().enumerate() {
         let aux = if body.auxiliary_interface == Some(k) {
@@ -112,10 +112,12 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<I
         } else {
             ""
         };
+        // The node's number in the part's mesh file; blank for generated meshes and added nodes.
+        let label = p.node_label.map(|l| l.to_string()).unwrap_or_default();
         let _ = writeln!(
             s,
-            "  {:>3}  {:<16} {:>8} {:>14.6e} {:>14.6e} {:>14.6e}{aux}",
-            k, p.name, p.node, p.position[0], p.position[1], p.position[2]
+            "  {:>3}  {:<16} {:>8} {:>8} {:>14.6e} {:>14.6e} {:>14.6e}{aux}",
+            k, p.name, p.node, label, p.position[0], p.position[1], p.position[2]
         );
     }
     let _ = writeln!(s, "\nfixed-interface modes and effective masses");

@@ -237,7 +237,9 @@ pub fn add_interface(
             rbe3_constraints(name, m, &x_m, &surface, &X, &weights, definition, candidate)?
         }
     };
-    let added = model.add_node(x_m);
+    // Tagged above the file's numbers: an RBE3 or constraint message naming it by tag must
+    // not point at a deck node of the same number.
+    let added = model.mesh.add_node_after_tags(x_m);
     debug_assert_eq!(added, m);
     substitute(&mut model.constraints, &constraints);
     model.constraints.extend(constraints);

@@ -105,6 +105,25 @@ impl Mesh {
         id
     }
 
+    /// Appends a node the source file does not have (a spider's interface node) and returns its
+    /// id; its tag is one above the largest tag so far, so that messages naming nodes by tag
+    /// never give it the number of one of the file's nodes. For meshes numbered 1, 2, ..., n
+    /// (generated meshes) that is its 1-based position, as [`Mesh::add_node`] gives.
+    pub fn add_node_after_tags(&mut self, x: Point3<f64>) -> NodeId {
+        let tag = self
+            .node_tags
+            .iter()
+            .copied()
+            .max()
+            .unwrap_or(0)
+            .max(self.nodes.len() as u64)
+            + 1;
+        let id = NodeId(self.nodes.len() as u32);
+        self.nodes.push(x);
+        self.node_tags.push(tag);
+        id
+    }
+
     /// Appends a cell and returns its id; its tag is its 1-based position.
     pub fn add_cell(&mut self, kind: CellKind, nodes: Vec<NodeId>) -> CellId {
         let id = CellId(self.cells.len() as u32);

@@ -117,7 +117,9 @@ impl ReducedBody {
     }
 
     /// Interfaces in the order of the CB coordinates: a list of dicts with `name`, `node` (the
-    /// FE node index) and `position` (undeformed, FE axes, m; numpy array of 3).
+    /// FE node index), `node_label` (the node's number in the part's mesh file; None for
+    /// generated meshes and for spider and auxiliary nodes) and `position` (undeformed, FE
+    /// axes, m; numpy array of 3).
     #[getter]
     fn interfaces<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.body
@@ -127,6 +129,7 @@ impl ReducedBody {
                 let d = PyDict::new(py);
                 d.set_item("name", &i.name)?;
                 d.set_item("node", i.node)?;
+                d.set_item("node_label", i.node_label)?;
                 d.set_item("position", PyArray1::from_slice(py, &i.position))?;
                 Ok(d)
             })

@@ -23,6 +23,8 @@ def test_reduce_and_read_the_body(segment):
     assert b.name == "segment"
     assert b.interface_names == ["a", "b"]
     assert [i["node"] for i in b.interfaces] == [0, 1]
+    # A generated mesh has no file numbers.
+    assert [i["node_label"] for i in b.interfaces] == [None, None]
     np.testing.assert_array_equal(b.interfaces[1]["position"], [0.075, 0.0, 0.0])
     assert b.n_modes == 2 and b.n_coordinates == 14
     K, M = b.K_CB, b.M_CB

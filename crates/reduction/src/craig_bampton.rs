@@ -786,6 +786,7 @@ fn finish(parts: BodyParts<'_>) -> Result<ReducedBody, ReductionError> {
                 name: name.clone(),
                 node: *node as u32,
                 position: nodes[*node],
+                node_label: None,
             })
             .collect(),
         n_modes: omega.len(),

@@ -93,6 +93,12 @@ pub struct InterfacePoint {
     pub node: u32,
     /// Undeformed position $\mathbf x_k$ in body axes (the FE model's coordinates).
     pub position: [f64; 3],
+    /// The node's number in the mesh file the part was read from, when the interface sits on a
+    /// node of that file; `None` for generated meshes and for nodes the program added (spider
+    /// and auxiliary nodes), which have no number in a file. Absent from files without labels,
+    /// so that bodies without labels keep their bytes and older files read.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub node_label: Option<u64>,
 }
 
 /// Rigid-body inertia and the mass-field invariants of the modes (module docs).

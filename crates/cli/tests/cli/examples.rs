@@ -159,6 +159,27 @@ fn inspect_shows_a_reduced_body() {
     ] {
         assert!(out.stdout.contains(text), "missing '{text}' in\n{}", out.stdout);
     }
+    // A generated mesh has no deck labels: the label column is blank.
+    let row = |stdout: &str, name: &str| -> Vec<String> {
+        let line = stdout
+            .lines()
+            .find(|l| {
+                let mut w = l.split_whitespace();
+                w.next().is_some_and(|k| k.parse::<usize>().is_ok()) && w.next() == Some(name)
+            })
+            .unwrap();
+        line.split_whitespace().map(String::from).collect()
+    };
+    assert_eq!(row(&out.stdout, "root").len(), 6, "{}", out.stdout);
+    // An interface on a deck node shows the deck's number beside the FE node.
+    let mut body = reduction::file::read(&dir.join("bodies/beam.rbody")).unwrap();
+    body.interfaces[0].node_label = Some(1001);
+    reduction::file::write(&body, &dir.join("bodies/labelled.rbody")).unwrap();
+    let out = flexmbs(&dir, &["inspect", "bodies/labelled.rbody"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let root = row(&out.stdout, &body.interfaces[0].name);
+    assert_eq!(root[3], "1001", "{}", out.stdout);
+    assert_eq!(root[2], body.interfaces[0].node.to_string(), "{}", out.stdout);
     // A copy with a negative modal stiffness and valid checksums: inspect names the problem,
     // a study refuses the file.
     let mut body = reduction::file::read(&dir.join("bodies/beam.rbody")).unwrap();

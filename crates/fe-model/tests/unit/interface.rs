@@ -430,3 +430,36 @@ fn reactions_at_a_spider_support_balance_the_load() {
         assert!((r[3 + k] + moment[k]).abs() < 1e-8 * moment.norm(), "moment {k}: {r:?}");
     }
 }
+
+/// A deck numbered out of order (its first node is 13 of 12): the spider nodes are tagged above
+/// every number of the deck, so a message naming a node by its tag never points at the
+/// deck's node 13. A mesh numbered 1, 2, ..., n tags them by position, as before.
+#[test]
+fn spider_nodes_are_tagged_above_the_decks_numbers() {
+    let mut model = clamped_box(CellKind::Hex8, [2.0, 1.0, 1.0], [2, 1, 1]);
+    assert_eq!(model.node_count(), 12);
+    let at = |x: f64| -> Vec<NodeId> {
+        (0..12u32)
+            .map(NodeId)
+            .filter(|n| (model.mesh.nodes[n.index()].x - x).abs() < 0.1)
+            .collect()
+    };
+    let (tip, mid) = (at(2.0), at(1.0));
+    let mut generated = model.clone();
+    let m = add_interface(&mut generated, "tip", &tip, None, SpiderKind::Rbe2).unwrap();
+    assert_eq!(generated.mesh.node_tags[m.index()], 13);
+    model.mesh.node_tags = std::iter::once(13).chain(1..=11).collect();
+    let m = add_interface(&mut model, "tip", &tip, None, SpiderKind::Rbe2).unwrap();
+    let n = add_interface(&mut model, "mid", &mid, None, SpiderKind::Rbe2).unwrap();
+    assert_eq!(
+        (model.mesh.node_tags[m.index()], model.mesh.node_tags[n.index()]),
+        (14, 15)
+    );
+    // Messages print the tag: the spider node's dofs are named by 14, not the deck's node 13.
+    let dofs = DofMap::new(&model).unwrap();
+    let first = (0..dofs.n_free() as u32)
+        .map(fe_model::Dof)
+        .find(|&d| dofs.full_slot(d) / 6 == m.index())
+        .unwrap();
+    assert_eq!(dofs.describe(first), (14, "ux"));
+}

@@ -1045,7 +1045,9 @@ class ReducedBody:
     """Number $n = 6N + m$ of CB coordinates."""
     interfaces: Final[List[Dict[str, Any]]]
     """Interfaces in the order of the CB coordinates: a list of dicts with `name`, `node` (the
-    FE node index) and `position` (undeformed, FE axes, m; numpy array of 3)."""
+    FE node index), `node_label` (the node's number in the part's mesh file; None for
+    generated meshes and for spider and auxiliary nodes) and `position` (undeformed, FE
+    axes, m; numpy array of 3)."""
     interface_names: Final[List[str]]
     """Names of the interfaces, in the order of the CB coordinates."""
     K_CB: Final[_Array]

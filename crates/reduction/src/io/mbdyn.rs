@@ -974,6 +974,7 @@ fn build_body(
                 name: r.labels[i].clone(),
                 node: i as u32,
                 position: (y[i] + r.origin).into(),
+                node_label: None,
             })
             .collect(),
         n_modes: nz,

@@ -449,3 +449,30 @@ fn no_truncation_or_byte_change_panics_or_is_accepted() {
     }
     println!("problems found: {kinds:?}");
 }
+
+#[test]
+fn interface_node_labels_are_optional_in_the_file() {
+    // A body without labels: no `node_label` key, so its bytes are those of a writer that
+    // never knew labels.
+    let plain = body(4, 2, false);
+    let plain_bytes = file::to_bytes(&plain, &origin()).unwrap();
+    let (_, json, _) = parts(&plain_bytes);
+    for i in json["interfaces"].as_array().unwrap() {
+        let keys: Vec<&String> = i.as_object().unwrap().keys().collect();
+        assert_eq!(keys, ["name", "node", "position"]);
+    }
+    // Labels round-trip; dropping them again gives the same bytes as before.
+    let mut labelled = plain.clone();
+    labelled.interfaces[0].node_label = Some(1001);
+    let bytes = file::to_bytes(&labelled, &origin()).unwrap();
+    assert_ne!(bytes, plain_bytes);
+    let back = file::from_bytes(&bytes, &origin()).unwrap();
+    assert_eq!(back.interfaces[0].node_label, Some(1001));
+    assert_eq!(back.interfaces[1].node_label, None);
+    assert_eq!(file::to_bytes(&back, &origin()).unwrap(), bytes);
+    labelled.interfaces[0].node_label = None;
+    assert_eq!(file::to_bytes(&labelled, &origin()).unwrap(), plain_bytes);
+    // A file written before labels existed reads, without labels.
+    let v1 = file::read(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cantilever_v1.rbody")).unwrap();
+    assert!(v1.interfaces.iter().all(|i| i.node_label.is_none()));
+}

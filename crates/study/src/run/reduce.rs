@@ -50,7 +50,9 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
     let key = super::cache::key(part, &built, reduction)
         .context(|| format!("part '{}': cannot hash its inputs", part.name))?;
     let file = super::cache::path(cache, &part.name, &key);
-    if let Some(body) = from_cache(part, &file, &key, obs) {
+    if let Some(mut body) = from_cache(part, &file, &key, obs) {
+        // A cache file written before labels were kept has none: the key is the same.
+        label_interfaces(part, &mut body);
         return Ok(Reduced {
             body: body.into(),
             built,
@@ -63,7 +65,7 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
     let t = Instant::now();
     let settings = cb_settings(reduction, &built);
     let mut progress = |stage: reduction::Stage| reduction_stage(&part.name, stage, obs);
-    let body = reduction::reduce_with_progress(
+    let mut body = reduction::reduce_with_progress(
         &built.model,
         &part.name,
         &built.interfaces,
@@ -85,6 +87,7 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
         })
     })?;
     obs.progress(&Progress::Finished);
+    label_interfaces(part, &mut body);
     // The checks every body passes before use (a body read back from the cache passes them
     // on reading).
     reduction::check_body(&body, &file).context(|| format!("part '{}': the reduced body is refused", part.name))?;
@@ -104,6 +107,20 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
         from_cache: false,
         free_dofs: n_free,
     })
+}
+
+/// Gives each interface of `body` on a node of the part's mesh file that node's number in the
+/// file. Generated meshes have no file numbers (their tags are positions), so their bodies keep
+/// no labels and their bytes; the nodes the program adds (spider and auxiliary nodes) come
+/// after the file's nodes and have no number in the file.
+fn label_interfaces(part: &Part, body: &mut ReducedBody) {
+    if part.mesh_file.is_none() {
+        return;
+    }
+    let labels = &part.base.mesh.node_tags;
+    for i in &mut body.interfaces {
+        i.node_label = labels.get(i.node as usize).copied();
+    }
 }
 
 /// The body of `part` in the cache file `file` when the file records `key` and holds that

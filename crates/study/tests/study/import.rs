@@ -385,3 +385,51 @@ fn imported_bodies_that_fail_the_physical_checks_are_refused_where_they_are_give
         "{e}"
     );
 }
+
+/// Interfaces of a deck's part carry the deck's node numbers: a beam deck numbered sparsely
+/// (10, 20, ...) gives its interface and auxiliary nodes their labels, from the reduction and
+/// from the cache; a solid deck's spider nodes, which the deck does not have, get none.
+#[test]
+fn interfaces_on_deck_nodes_keep_the_decks_labels() {
+    let dir = scratch("interface-labels");
+    let deck = dir.join("beam.inp");
+    let mut text = String::from("*NODE\n");
+    for k in 0..=4 {
+        text += &format!("{}, {}, 0., 0.\n", 10 * (k + 1), 0.25 * k as f64);
+    }
+    text += "*ELEMENT, TYPE=B31, ELSET=beam\n";
+    for k in 0..4 {
+        text += &format!("{}, {}, {}\n", k + 1, 10 * (k + 1), 10 * (k + 2));
+    }
+    text += "*NSET, NSET=root\n10\n*NSET, NSET=end\n50\n*MATERIAL, NAME=steel\n*ELASTIC\n2.1e11, 0.3\n\
+             *DENSITY\n7850.\n*BEAM SECTION, ELSET=beam, MATERIAL=steel, SECTION=RECT\n0.02, 0.01\n0., 1., 0.\n";
+    std::fs::write(&deck, text).unwrap();
+    let beam = format!(
+        "{}[[parts.interfaces]]\nname = \"root\"\nset = \"root\"\n[parts.reduction]\nmodes = 2\nauxiliary_node = true\n",
+        mesh_part("beam", &deck.display().to_string(), "", "end", "")
+    );
+    let solid = format!(
+        "{}spider = \"rbe2\"\n[parts.reduction]\nmodes = 2\n",
+        mesh_part("solid", &fixture("import/hex20_labels.inp"), "", "tip", "")
+    );
+    let s = study(&dir, &[beam, solid].concat());
+    let cache = dir.join("cache");
+    let labels = |part: usize| {
+        let r = study::reduce_part(&s, &s.parts[part], &cache, &mut ()).unwrap();
+        let labels: Vec<_> = r
+            .body
+            .interfaces
+            .iter()
+            .map(|i| (i.name.clone(), i.node_label))
+            .collect();
+        (r.from_cache, labels)
+    };
+    let beam_labels = vec![
+        ("tip".to_string(), Some(50)),
+        ("root".to_string(), Some(10)),
+        ("auxiliary".to_string(), Some(30)),
+    ];
+    assert_eq!(labels(0), (false, beam_labels.clone()));
+    assert_eq!(labels(0), (true, beam_labels));
+    assert_eq!(labels(1), (false, vec![("tip".to_string(), None)]));
+}
