@@ -241,6 +241,12 @@ PartsMeshTable = TypedDict(
         # Abaqus `.inp`, or Nastran bulk data `.bdf`, `.nas`, `.dat` (the extension says which)
         # (required)
         "file": str,
+        # the unit system the file is written in, converted to SI on read: `mm-t-s` reads lengths in
+        # mm, moduli in MPa, densities in t/mm^3 (steel: 210000, 7.85e-9); `mm-kg-ms` lengths in mm,
+        # moduli in GPa, densities in kg/mm^3. An Abaqus or Nastran material whose constants no
+        # solid has is a warning that names the unit system its numbers fit (`SI`, `m-kg-s`,
+        # `mm-t-s`, `mm-kg-ms`; default `SI`)
+        "units": str,
         # a material per physical volume (gmsh) or element set (Abaqus `*ELSET`, Nastran
         # `PSOLID_<pid>`), `{ body = "steel", insert = "brass" }`; every volume (or beam) cell must
         # be in exactly one of them
@@ -806,9 +812,12 @@ SensorsTable = TypedDict(
         "reference": str,
         # which scalar coordinate of the joint (for joint, joint-rate; default 0)
         "coordinate": int,
-        # a mesh node by index, 0-based, as in the VTU files and the hot spot of the summary; give
-        # `node`, `node_at` or `set`, one of them (for stress)
+        # a mesh node by index, 0-based, as in the VTU files and the hot spot's `node`; give `node`,
+        # `label`, `node_at` or `set`, one of them (for stress)
         "node": int,
+        # or the mesh node by its number in the part's mesh file (the deck's or gmsh's node number,
+        # the hot spot's `node_label`; generated meshes: the 1-based position) (for stress)
+        "label": int,
         # or the mesh node at this position in part axes ([m]; for stress)
         "node_at": List[float],
         # or a node set of the part's mesh (for stress)
