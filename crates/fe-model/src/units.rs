@@ -150,9 +150,9 @@ fn row(q: Quantity) -> &'static (Quantity, [i32; 3], [&'static str; 3]) {
     TABLE.iter().find(|r| r.0 == q).unwrap_or(&TABLE[0])
 }
 
-/// Young's moduli of solids lie above this (soft rubber has about 1 MPa) [Pa].
+/// Young's moduli of solids lie above this (soft rubber has about 1 MPa) \[Pa\].
 pub const E_SOFTEST: f64 = 1e5;
-/// And below this (diamond has about 1.2e12 Pa) [Pa].
+/// And below this (diamond has about 1.2e12 Pa) \[Pa\].
 pub const E_STIFFEST: f64 = 1.5e12;
 /// Densities of solids lie above this (air has 1.2 kg/m³) [kg/m³].
 pub const RHO_LIGHTEST: f64 = 1.0;
@@ -193,7 +193,7 @@ impl fmt::Display for Implausible {
     }
 }
 
-/// Young's modulus `E` [Pa] if no solid has it.
+/// Young's modulus `E` \[Pa\] if no solid has it.
 pub fn implausible_E(E: f64) -> Option<Implausible> {
     if E < E_SOFTEST {
         Some(Implausible::SoftE(E))

@@ -41,7 +41,7 @@
 //! step is solved on one *branch* (a `Branch` in the controller's state): linear, $u = v$ with
 //! the tangent above, or saturated, $u = \pm u_{max}$ with zero tangent. On a branch the law is
 //! smooth and its tangent exact, so Newton converges as without a limit. The integrator picks
-//! the branch from $v$ at the predictor ([`JointForces::settle_branches`]) and checks it at the
+//! the branch from $v$ at the predictor (`JointForces::settle_branches`) and checks it at the
 //! converged iterate: when $v$ there belongs to another branch, it switches and iterates on,
 //! one branch at a time (from a saturated branch to the linear one, never straight to the
 //! opposite bound: the two saturated solutions can each lie beyond the other's bound). A

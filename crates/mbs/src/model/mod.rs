@@ -111,7 +111,7 @@ pub struct RigidBody {
 /// A point mass on a node (translational inertia only: it does not hold the node's rotation).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PointMass {
-    /// The name messages use (the study's); empty: "point mass <index>".
+    /// The name messages use (the study's); empty: "point mass `<index>`".
     #[serde(default)]
     pub name: String,
     pub node: NodeId,
