@@ -24,7 +24,7 @@
 //!
 //! # Units
 //!
-//! [`read_in`] and [`parse_in`] read a deck written in a [`UnitSystem`] other than SI:
+//! [`read`] and [`parse`] take the [`UnitSystem`] the deck is written in; in another than SI,
 //! coordinates, section dimensions, `E` and densities are converted to SI as they are read.
 //! A material whose constants no solid has in SI is a note in [`ImportedModel::notes`] that
 //! names it, its line and the unit system its numbers fit.
@@ -58,26 +58,16 @@ use nalgebra::{Point3, Vector3};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Reads the Abaqus input file at `path` (in SI units) and the files it includes.
-pub fn read(path: &Path) -> Result<ImportedModel, ImportError> {
-    read_in(path, UnitSystem::Si)
-}
-
-/// Reads the Abaqus input file at `path`, written in `units`, and the files it includes;
-/// every quantity converted to SI.
-pub fn read_in(path: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
+/// Reads the Abaqus input file at `path`, written in `units` (`UnitSystem::Si` for SI), and
+/// the files it includes; every quantity converted to SI.
+pub fn read(path: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
     let text = read_text(path)?;
-    parse_in(text, path, units)
+    parse(text, path, units)
 }
 
-/// Parses the text of an Abaqus input file in SI units; `origin` names it in errors and is
-/// where `*INCLUDE`d paths start from.
-pub fn parse(text: impl AsRef<[u8]>, origin: &Path) -> Result<ImportedModel, ImportError> {
-    parse_in(text, origin, UnitSystem::Si)
-}
-
-/// [`parse`] for a file written in `units`: every quantity converted to SI.
-pub fn parse_in(text: impl AsRef<[u8]>, origin: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
+/// Parses the text of an Abaqus input file written in `units`, every quantity converted to
+/// SI; `origin` names it in errors and is where `*INCLUDE`d paths start from.
+pub fn parse(text: impl AsRef<[u8]>, origin: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
     let mut files = Vec::new();
     let mut lines = Vec::new();
     let mut includes = Includes::default();

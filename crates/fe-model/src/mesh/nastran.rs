@@ -18,7 +18,7 @@
 //!
 //! # Units
 //!
-//! [`read_in`] and [`parse_in`] read a deck written in a [`UnitSystem`] other than SI:
+//! [`read`] and [`parse`] take the [`UnitSystem`] the deck is written in; in another than SI,
 //! `GRID` and `CORD2R` coordinates, `E`, `G` and `RHO` (times `WTMASS`) are converted to SI.
 //! A material whose constants no solid has in SI is a note in [`ImportedModel::notes`] that
 //! names it (`MAT1_<mid>`), its line and the unit system its numbers fit.
@@ -69,26 +69,16 @@ use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Reads the Nastran bulk data file at `path` (in SI units) and the files it includes.
-pub fn read(path: &Path) -> Result<ImportedModel, ImportError> {
-    read_in(path, UnitSystem::Si)
-}
-
-/// Reads the Nastran bulk data file at `path`, written in `units`, and the files it
-/// includes; every quantity converted to SI.
-pub fn read_in(path: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
+/// Reads the Nastran bulk data file at `path`, written in `units` (`UnitSystem::Si` for SI),
+/// and the files it includes; every quantity converted to SI.
+pub fn read(path: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
     let text = read_text(path)?;
-    parse_in(text, path, units)
+    parse(text, path, units)
 }
 
-/// Parses the text of a Nastran input file in SI units; `origin` names it in errors and is
-/// where `INCLUDE`d paths start from.
-pub fn parse(text: impl AsRef<[u8]>, origin: &Path) -> Result<ImportedModel, ImportError> {
-    parse_in(text, origin, UnitSystem::Si)
-}
-
-/// [`parse`] for a file written in `units`: every quantity converted to SI.
-pub fn parse_in(text: impl AsRef<[u8]>, origin: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
+/// Parses the text of a Nastran input file written in `units`, every quantity converted to
+/// SI; `origin` names it in errors and is where `INCLUDE`d paths start from.
+pub fn parse(text: impl AsRef<[u8]>, origin: &Path, units: UnitSystem) -> Result<ImportedModel, ImportError> {
     let mut files = Vec::new();
     let mut cards = Vec::new();
     let mut in_bulk = None;

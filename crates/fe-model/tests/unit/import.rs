@@ -20,6 +20,7 @@
 
 use fe_model::mesh::import::{ImportError, ImportedModel};
 use fe_model::mesh::{abaqus, gmsh, nastran};
+use fe_model::units::UnitSystem;
 use fe_model::{
     add_interface, modal_dense, solid_model_with_materials, CellKind, DofMask, FeModel, IsotropicMaterial, MassKind,
     Mesh, NodeId, SpiderKind,
@@ -63,11 +64,11 @@ fn gmsh_model(name: &str) -> (Mesh, FeModel) {
 }
 
 fn abaqus_fixture(name: &str) -> ImportedModel {
-    abaqus::read(&data_dir().join(format!("import/{name}.inp"))).unwrap_or_else(|e| panic!("{e}"))
+    abaqus::read(&data_dir().join(format!("import/{name}.inp")), UnitSystem::Si).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn nastran_fixture(file: &str) -> ImportedModel {
-    nastran::read(&data_dir().join(format!("import/{file}"))).unwrap_or_else(|e| panic!("{e}"))
+    nastran::read(&data_dir().join(format!("import/{file}")), UnitSystem::Si).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn abaqus_model(imported: &ImportedModel) -> FeModel {
@@ -174,7 +175,7 @@ fn fixtures_give_gmsh_cells_node_for_node_and_their_sets_and_materials() {
 // ------------------------------------------------------------------------------------ inline Abaqus
 
 fn abaqus_inline(text: &str) -> Result<ImportedModel, ImportError> {
-    abaqus::parse(text, Path::new("inline.inp"))
+    abaqus::parse(text, Path::new("inline.inp"), UnitSystem::Si)
 }
 
 const ABAQUS_HEX: &str = "*Node, nset=ALLN
@@ -281,7 +282,7 @@ fn abaqus_beams_get_their_section_and_orientation() {
 // ------------------------------------------------------------------------------------ inline Nastran
 
 fn nastran_inline(text: &str) -> Result<ImportedModel, ImportError> {
-    nastran::parse(text, Path::new("inline.bdf"))
+    nastran::parse(text, Path::new("inline.bdf"), UnitSystem::Si)
 }
 
 #[test]
@@ -489,8 +490,8 @@ fn expect_io(result: Result<ImportedModel, ImportError>, file: &str) {
 
 #[test]
 fn missing_files_are_named() {
-    expect_io(abaqus::read(Path::new("no/such.inp")), "such.inp");
-    expect_io(nastran::read(Path::new("no/such.bdf")), "such.bdf");
+    expect_io(abaqus::read(Path::new("no/such.inp"), UnitSystem::Si), "such.inp");
+    expect_io(nastran::read(Path::new("no/such.bdf"), UnitSystem::Si), "such.bdf");
     expect_io(nastran_inline("INCLUDE 'gone.bdf'\n"), "gone.bdf");
 }
 
@@ -689,7 +690,7 @@ fn include_amplification_stops_at_the_file_budget_with_the_include_chain() {
     let dir = scratch("include_amplification_abaqus");
     let main = include_amplification(&dir, "inp", "*INCLUDE, INPUT={}\n", "** leaf\n");
     let m = expect_limit(
-        abaqus::read(&main),
+        abaqus::read(&main, UnitSystem::Si),
         &[
             "*INCLUDE",
             "more than 10000 files included",
@@ -702,7 +703,7 @@ fn include_amplification_stops_at_the_file_budget_with_the_include_chain() {
     let dir = scratch("include_amplification_nastran");
     let main = include_amplification(&dir, "bdf", "INCLUDE '{}'\n", "$ leaf\n");
     expect_limit(
-        nastran::read(&main),
+        nastran::read(&main, UnitSystem::Si),
         &["INCLUDE", "more than 10000 files included", "/f0.bdf:1 -> "],
     );
 }
@@ -716,13 +717,13 @@ fn an_included_file_past_the_byte_budget_is_refused_before_it_is_read() {
         .unwrap();
     std::fs::write(dir.join("main.inp"), format!("{NODES_4}*INCLUDE, INPUT=big.inc\n")).unwrap();
     let m = expect_limit(
-        abaqus::read(&dir.join("main.inp")),
+        abaqus::read(&dir.join("main.inp"), UnitSystem::Si),
         &["main.inp:6: *INCLUDE", "'big.inc'", "bytes"],
     );
     assert!(!m.contains("included by"), "the main file includes it: {m}");
     std::fs::write(dir.join("main.bdf"), "GRID,1,,0.,0.,0.\nINCLUDE 'big.inc'\n").unwrap();
     expect_limit(
-        nastran::read(&dir.join("main.bdf")),
+        nastran::read(&dir.join("main.bdf"), UnitSystem::Si),
         &["main.bdf:2: INCLUDE", "'big.inc'"],
     );
 }
@@ -823,8 +824,8 @@ enum Format {
 /// a panic into a failure that names the input; a model that is read must build.
 fn parse_without_panic(format: Format, bytes: &[u8], origin: &Path, what: &dyn Fn() -> String) {
     let result = std::panic::catch_unwind(|| match format {
-        Format::Abaqus => abaqus::parse(bytes, origin),
-        Format::Nastran => nastran::parse(bytes, origin),
+        Format::Abaqus => abaqus::parse(bytes, origin, UnitSystem::Si),
+        Format::Nastran => nastran::parse(bytes, origin, UnitSystem::Si),
     });
     match result {
         Ok(Ok(model)) => {
@@ -968,8 +969,8 @@ fn adversarial_decks_are_models_or_located_errors_and_their_mutants_never_panic(
             DeckFormat::Nastran => (Format::Nastran, Path::new("adversarial.bdf")),
         };
         let result = match format {
-            Format::Abaqus => abaqus::parse(&deck.text, origin),
-            Format::Nastran => nastran::parse(&deck.text, origin),
+            Format::Abaqus => abaqus::parse(&deck.text, origin, UnitSystem::Si),
+            Format::Nastran => nastran::parse(&deck.text, origin, UnitSystem::Si),
         };
         if let Err(e) = result {
             let message = e.to_string();

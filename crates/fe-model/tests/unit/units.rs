@@ -131,12 +131,12 @@ fn assert_twins(si: &ImportedModel, mm: &ImportedModel, what: &str) {
 
 #[test]
 fn an_abaqus_deck_in_mm_t_s_read_with_its_units_is_its_si_twin() {
-    let si = abaqus::read(&fixture("hex20.inp")).unwrap();
-    let mm = abaqus::read_in(&fixture("hex20_mm.inp"), UnitSystem::MmTonneSecond).unwrap();
+    let si = abaqus::read(&fixture("hex20.inp"), UnitSystem::Si).unwrap();
+    let mm = abaqus::read(&fixture("hex20_mm.inp"), UnitSystem::MmTonneSecond).unwrap();
     assert_twins(&si, &mm, "Abaqus");
     // Read as SI, the deck is 1000 times too light and a warning names the material, the
     // place and the system its numbers fit.
-    let wrong = abaqus::read(&fixture("hex20_mm.inp")).unwrap();
+    let wrong = abaqus::read(&fixture("hex20_mm.inp"), UnitSystem::Si).unwrap();
     let (m, _) = center_of_mass(&wrong.to_fe_model(MassKind::Consistent, None).unwrap()).unwrap();
     assert!((m - 0.314).abs() < 1e-9, "{m}");
     let [warning] = wrong.notes.as_slice() else {
@@ -155,11 +155,11 @@ fn an_abaqus_deck_in_mm_t_s_read_with_its_units_is_its_si_twin() {
 
 #[test]
 fn a_nastran_deck_in_mm_t_s_read_with_its_units_is_its_si_twin() {
-    let si = nastran::read(&fixture("hex20.bdf")).unwrap();
-    let mm = nastran::read_in(&fixture("hex20_mm.bdf"), UnitSystem::MmTonneSecond).unwrap();
+    let si = nastran::read(&fixture("hex20.bdf"), UnitSystem::Si).unwrap();
+    let mm = nastran::read(&fixture("hex20_mm.bdf"), UnitSystem::MmTonneSecond).unwrap();
     assert_twins(&si, &mm, "Nastran");
     assert!((si.spiders[0].position - mm.spiders[0].position).norm() < 1e-15);
-    let wrong = nastran::read(&fixture("hex20_mm.bdf")).unwrap();
+    let wrong = nastran::read(&fixture("hex20_mm.bdf"), UnitSystem::Si).unwrap();
     let warning = wrong.notes.iter().find(|n| n.contains("MAT1_1")).expect("a warning");
     for part in [
         "material MAT1_1 (",

@@ -243,12 +243,15 @@ pub(crate) struct LawBuffer {
 impl LawBuffer {
     pub(crate) fn new(ports: &LawPorts) -> Self {
         let (n, m) = (ports.inputs.len(), ports.n_values());
+        // Inputs x and their rates (n), outputs u and the two difference evaluations (m), the
+        // two Jacobians (m x n).
+        let (inputs, outputs) = (vec![0.0; n], vec![0.0; m]);
         Self {
-            x: vec![0.0; n],
-            xd: vec![0.0; n],
-            u: vec![0.0; m],
-            plus: vec![0.0; m],
-            minus: vec![0.0; m],
+            x: inputs.clone(),
+            xd: inputs,
+            u: outputs.clone(),
+            plus: outputs.clone(),
+            minus: outputs,
             du_dx: Mat::zeros(m, n),
             du_dxd: Mat::zeros(m, n),
         }

@@ -1153,8 +1153,8 @@ impl Validator<'_> {
         use fe_model::mesh::{abaqus, nastran};
         let extension = file.extension().map(|e| e.to_string_lossy().to_lowercase());
         let (format, imported) = match extension.as_deref() {
-            Some("inp") => ("Abaqus", Some(abaqus::read_in(file, units))),
-            Some("bdf" | "nas" | "dat") => ("Nastran", Some(nastran::read_in(file, units))),
+            Some("inp") => ("Abaqus", Some(abaqus::read(file, units))),
+            Some("bdf" | "nas" | "dat") => ("Nastran", Some(nastran::read(file, units))),
             _ => ("gmsh", None),
         };
         let imported = match imported {

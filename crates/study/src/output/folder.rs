@@ -912,6 +912,20 @@ pub fn plot_panels(headers: &[String], columns: &[Vec<f64>]) -> Vec<Vec<usize>> 
 mod tests {
     use super::*;
 
+    /// A results folder at `root` in which the one dynamic analysis "run" has begun.
+    fn dynamic_run_folder(root: &Path) -> ResultsFolder {
+        let mut folder = ResultsFolder::open(root, &["run".to_string()], ForeignFiles::Refuse).unwrap();
+        let info = AnalysisInfo {
+            index: 0,
+            count: 1,
+            name: "run".into(),
+            kind: "dynamic".into(),
+            of: "the mechanism".into(),
+        };
+        folder.begin(&info).unwrap();
+        folder
+    }
+
     /// A results folder under the system's temporary folder, removed first.
     fn scratch(name: &str) -> PathBuf {
         let root = std::env::temp_dir().join(format!("flexmbs-folder-{name}-{}", std::process::id()));
@@ -929,15 +943,7 @@ mod tests {
     #[test]
     fn sensor_rows_reach_their_files_after_the_interval_and_at_the_end() {
         let root = scratch("flush");
-        let mut folder = ResultsFolder::open(&root, &["run".to_string()], ForeignFiles::Refuse).unwrap();
-        let info = AnalysisInfo {
-            index: 0,
-            count: 1,
-            name: "run".into(),
-            kind: "dynamic".into(),
-            of: "the mechanism".into(),
-        };
-        folder.begin(&info).unwrap();
+        let mut folder = dynamic_run_folder(&root);
         let groups = vec![SensorGroup {
             name: "s".into(),
             mbs_names: vec!["s".into()],
@@ -1014,15 +1020,7 @@ mod tests {
     #[test]
     fn a_failed_sensor_write_leaves_whole_rows_of_one_length() {
         let root = scratch("full-disk");
-        let mut folder = ResultsFolder::open(&root, &["run".to_string()], ForeignFiles::Refuse).unwrap();
-        let info = AnalysisInfo {
-            index: 0,
-            count: 1,
-            name: "run".into(),
-            kind: "dynamic".into(),
-            of: "the mechanism".into(),
-        };
-        folder.begin(&info).unwrap();
+        let mut folder = dynamic_run_folder(&root);
         let group = |name: &str, columns: &[&str]| SensorGroup {
             name: name.into(),
             mbs_names: vec![name.into()],
@@ -1086,8 +1084,7 @@ mod tests {
         assert!(files.iter().all(|f| root.join(f).is_file()));
         drop(folder);
         // The files are the run's own: a new run refuses nothing and replaces them.
-        let mut again = ResultsFolder::open(&root, &["run".to_string()], ForeignFiles::Refuse).unwrap();
-        again.begin(&info).unwrap();
+        let again = dynamic_run_folder(&root);
         assert!(!energy.exists());
         drop(again);
         let _ = std::fs::remove_dir_all(&root);

@@ -33,7 +33,7 @@ use crate::assembly::body::{
     FlexibleElement, LoadElement, RigidElement, SpringElement,
 };
 use crate::assembly::coordinates::{
-    scalar_values, unknown, values, CoordinateMap, Motion, MotionCache, NodeDerivatives, Slot,
+    scalar_values, unknown, values, CoordinateMap, Motion, MotionCache, NodeDerivatives, Slot, Values,
 };
 use crate::assembly::dense_lu::{self, SMALL_LU_MAX};
 use crate::assembly::force_law::BoundLaw;
@@ -686,14 +686,9 @@ impl System {
     /// The effort $u$ of every actuator at `state` (N on a length, N m on an angle).
     pub fn actuator_efforts(&self, state: &State) -> Vec<f64> {
         let map = &self.topo.map;
-        let mut s = state.clone();
-        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
-        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let (s, pr, pa) = self.driven(state);
         let x = values(&s, &pr, &pa);
-        let value = |sc: usize| {
-            let (v, d, _) = scalar_values(map, &x, sc);
-            (v, d)
-        };
+        let value = |sc: usize| value_and_rate(map, &x, sc);
         let mut efforts = self.joint_forces.efforts(&value, s.time, &state.controls);
         if let Some(law) = &self.force_law {
             // The law's efforts (NaN, which the sensors refuse, when it fails).
@@ -811,10 +806,7 @@ impl System {
     /// Restarts every controller's integral at zero at the state's time and configuration
     /// ([`crate::assembly::joint_forces`]).
     pub(crate) fn start_controls(&self, state: &mut State) {
-        let map = &self.topo.map;
-        let mut s = state.clone();
-        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
-        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let (s, pr, pa) = self.driven(state);
         state.controls = self.joint_forces.start_controls(&values(&s, &pr, &pa), s.time);
     }
 
@@ -824,10 +816,7 @@ impl System {
         if self.joint_forces.n_actuators() == 0 {
             return;
         }
-        let map = &self.topo.map;
-        let mut s = state.clone();
-        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
-        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let (s, pr, pa) = self.driven(state);
         self.joint_forces
             .accept(&values(&s, &pr, &pa), s.time, &mut state.controls);
     }
@@ -841,14 +830,9 @@ impl System {
             return false;
         }
         let map = &self.topo.map;
-        let mut s = state.clone();
-        let (mut pr, mut pa) = (vec![0.0; map.n_prescribed()], vec![0.0; map.n_prescribed()]);
-        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let (s, pr, pa) = self.driven(state);
         let x = values(&s, &pr, &pa);
-        let value = |sc: usize| {
-            let (v, d, _) = scalar_values(map, &x, sc);
-            (v, d)
-        };
+        let value = |sc: usize| value_and_rate(map, &x, sc);
         self.joint_forces.settle_branches(&value, s.time, &mut state.controls)
     }
 
@@ -1050,12 +1034,19 @@ impl System {
         }
     }
 
-    /// Motions of all nodes at `state` (drivers evaluated at its time).
-    pub fn node_motions(&self, state: &State) -> Vec<NodeMotion> {
-        let mut s = state.clone();
+    /// `state` with the drivers applied at its time, and the prescribed coordinates' values
+    /// and rates there (read together by `coordinates::values`).
+    fn driven(&self, state: &State) -> (State, Vec<f64>, Vec<f64>) {
         let np = self.topo.map.n_prescribed();
+        let mut s = state.clone();
         let (mut pr, mut pa) = (vec![0.0; np], vec![0.0; np]);
         self.apply_drivers(&mut s, &mut pr, &mut pa);
+        (s, pr, pa)
+    }
+
+    /// Motions of all nodes at `state` (drivers evaluated at its time).
+    pub fn node_motions(&self, state: &State) -> Vec<NodeMotion> {
+        let (s, pr, pa) = self.driven(state);
         let mut motions = vec![Motion::ground(); self.model.nodes.len()];
         self.topo.map.motions_into(&values(&s, &pr, &pa), &mut motions);
         motions.iter().map(NodeMotion::from).collect()
@@ -1064,11 +1055,8 @@ impl System {
     /// Every node's motion and its derivatives at `state`, with the drivers at its time (the
     /// shared first step of [`Self::node_kinematics`] and [`Self::generalized_force`]).
     fn motions_and_derivatives(&self, state: &State) -> (Vec<Motion>, Vec<NodeDerivatives>) {
-        let mut s = state.clone();
         let map = &self.topo.map;
-        let np = map.n_prescribed();
-        let (mut pr, mut pa) = (vec![0.0; np], vec![0.0; np]);
-        self.apply_drivers(&mut s, &mut pr, &mut pa);
+        let (s, pr, pa) = self.driven(state);
         let x = values(&s, &pr, &pa);
         let nn = self.model.nodes.len();
         let mut motions = vec![Motion::ground(); nn];
@@ -2354,4 +2342,10 @@ fn check_stress_sensors(model: &Model, flexible: &[FlexibleElement]) -> Result<(
         }
     }
     Ok(())
+}
+
+/// The value and rate of scalar coordinate `sc` (the controllers' input).
+fn value_and_rate(map: &CoordinateMap, x: &Values, sc: usize) -> (f64, f64) {
+    let (v, d, _) = scalar_values(map, x, sc);
+    (v, d)
 }
