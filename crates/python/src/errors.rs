@@ -11,7 +11,7 @@
 //! | `UnknownNameError` (also a `KeyError`) | a name the study or the results do not have: an analysis (`Study.run`, `Study.simulation`), a sensor (`Simulation.sensor`, `Results.sensor`) | `name`, `what` (`"analysis"`, `"sensor"`), `matches` (the close names: the message's "did you mean"), `defined` (every name there is) |
 //! | `SolveError` | a solver stopped (Newton did not converge, a singular matrix, ...) | `time` (of the step that failed in a dynamic analysis), `load_factor` (of the load step that failed in an equilibrium), `step` (its number), `residual` (the last relative residual when Newton failed), `analysis` (its name), `file`, `line`, `column`, `key` (where the study describes the entity the solver failed at: the body whose floating frame failed); `None` when not known; `partial` (from `Study.run`: the results computed before, also in the results folder) |
 
-use crate::stubs::{Class, Function, Member::Attribute};
+use crate::signature::{Class, Function, Member::Attribute};
 use pyo3::create_exception;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;

@@ -10,7 +10,7 @@
 //! one it should not return, stops the solve with a `SolveError` located at the time and step,
 //! naming the output, with the Python exception as its `__cause__`.
 
-use crate::stubs::{Class, Member::*};
+use crate::signature::{Class, Member::*};
 use mbs::force_law::{Differences, ForceLaw as MbsLaw, LawError, LawPorts, LawTarget};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;

@@ -1,7 +1,7 @@
 //! `study_keys()`: the study-file keys as the study crate declares them once
 //! (`study::input::keys`), so Python's help on a key is the program's and the docs' own.
 
-use crate::stubs::Function;
+use crate::signature::Function;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 

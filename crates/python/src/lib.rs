@@ -27,6 +27,7 @@ pub mod errors;
 pub mod force_law;
 pub mod keys;
 pub mod rbody;
+pub mod signature;
 pub mod stubs;
 pub mod study;
 

@@ -9,7 +9,7 @@
 #![allow(non_snake_case)]
 
 use crate::errors::{chain, with_attributes, ReducedBodyFileError};
-use crate::stubs::{Class, Member::*};
+use crate::signature::{Class, Member::*};
 use numpy::ndarray::{Array2, Array3, ShapeBuilder};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;

@@ -5,42 +5,16 @@
 //! What the text is made of:
 //! - the Python signatures of the classes' members and of the module's functions, declared
 //!   next to their `#[pymethods]` (`STUB` in `rbody.rs`, `study.rs`, `errors.rs`, `keys.rs`)
-//!   as [`Class`] and [`Member`] values;
+//!   as [`Class`] and [`Member`] values (module `signature`);
 //! - every docstring, read from the built extension: PyO3 makes them of the Rust doc
 //!   comments, so the stubs say what `help()` says;
 //! - a `TypedDict` per table of a study file, from the key registry
 //!   (`study::input::keys`): the key names, their Python types and their docs as comments;
 //!   `Study.get` and `Study[...]` of a section (`study["materials"]`) return them.
 
+use crate::signature::{Class, Function, Member};
 use pyo3::prelude::*;
 use study::input::keys::{self, Key, Table, TABLES};
-
-/// One member of a class as the stubs declare it; the docstring is the extension's.
-pub enum Member {
-    /// A read-only property and its Python type: `name: Final[type]`.
-    Property(&'static str, &'static str),
-    /// A method: its name and its signature after the name, `(self, t: float) -> int`.
-    Method(&'static str, &'static str),
-    /// A static method: name and signature.
-    Static(&'static str, &'static str),
-    /// A method taking a key path (`key: str`) that returns the value there: an overload per
-    /// section of a study file (`Literal["materials"]` gives `List[MaterialsTable]`), then its
-    /// signature for any key path.
-    BySection(&'static str, &'static str),
-    /// An instance attribute of an exception, set on each raised instance: `name: type`.
-    Attribute(&'static str, &'static str),
-}
-
-/// A class of the extension as the stubs declare it.
-pub struct Class {
-    pub name: &'static str,
-    /// Its bases as written in the stubs (`FlexmbsError, KeyError`); empty: none.
-    pub bases: &'static str,
-    pub members: &'static [Member],
-}
-
-/// A function of the module: name and signature.
-pub(crate) struct Function(pub &'static str, pub &'static str);
 
 /// This generator, as the stubs declare it.
 pub(crate) const STUB: Function = Function("_stubs", "() -> str");

@@ -8,7 +8,7 @@
 
 use crate::errors::{key_err, lookup_err, simulation_err, to_py_err, unknown_name, StudyError};
 use crate::rbody::ReducedBody;
-use crate::stubs::{Class, Member::*};
+use crate::signature::{Class, Member::*};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
