@@ -1093,7 +1093,7 @@ fn planar_with_segment(n: usize, segment: &Segment, speed: f64, variant: Variant
         mass: rod_mass / 2.0,
     });
     m.add_sensor("slider", SensorKind::NodePosition { node: s });
-    if n % 2 == 0 {
+    if n.is_multiple_of(2) {
         m.add_sensor(
             "midpoint",
             SensorKind::LineDistance {

@@ -435,7 +435,7 @@ pub mod fixtures {
         settings.auxiliary_node = None;
         if auxiliary {
             assert!(
-                elements % 2 == 0,
+                elements.is_multiple_of(2),
                 "the auxiliary node is the middle node: use an even element count"
             );
             settings.auxiliary_node = Some(nodes[elements / 2]);

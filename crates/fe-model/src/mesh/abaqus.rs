@@ -540,7 +540,7 @@ impl<'a> Reader<'a> {
                     Some(f) => self.number(l, &entity, "a positive increment", f)?,
                     None => 1,
                 };
-                if step == 0 || last < first || (last - first) % step != 0 {
+                if step == 0 || last < first || !(last - first).is_multiple_of(step) {
                     return Err(self.malformed(
                         l,
                         &entity,
