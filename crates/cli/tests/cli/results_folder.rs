@@ -35,6 +35,17 @@ fn assert_listed_files_exist(res: &Path) {
 
 const MINE: &str = "my own energy balance\n0,1\n";
 
+/// A short run of the pendulum into `res` that keeps the user's files there.
+const KEEP: [&str; 8] = [
+    "run",
+    "double_pendulum.toml",
+    "--t-end",
+    "0.05",
+    "--out",
+    "res",
+    "--foreign-files",
+    "keep",
+];
 #[test]
 fn a_users_summary_md_and_energy_csv_are_kept_under_foreign_files_keep() {
     let dir = pendulum_run("folder-keep");
@@ -101,17 +112,7 @@ fn a_users_file_in_a_recreated_analysis_folder_is_kept() {
         "{}",
         out.stderr
     );
-    let keep = [
-        "run",
-        "double_pendulum.toml",
-        "--t-end",
-        "0.05",
-        "--out",
-        "res",
-        "--foreign-files",
-        "keep",
-    ];
-    let out = flexmbs(&dir, &keep);
+    let out = flexmbs(&dir, &KEEP);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(
         out.stderr.contains("refusing to write res/dynamic/tip.csv"),
@@ -126,7 +127,7 @@ fn a_users_file_in_a_recreated_analysis_folder_is_kept() {
     assert_listed_files_exist(&res);
     // Without the clash, the run writes beside the user's file and keeps it.
     std::fs::remove_file(res.join("dynamic/tip.csv")).unwrap();
-    let out = flexmbs(&dir, &keep);
+    let out = flexmbs(&dir, &KEEP);
     assert_eq!(out.code, 0, "{}", out.stderr);
     assert_eq!(
         std::fs::read_to_string(res.join("dynamic/notes.txt")).unwrap(),
@@ -151,17 +152,7 @@ fn a_symlinked_analysis_folder_is_refused() {
     );
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains(link), "{}", out.stderr);
-    let keep = [
-        "run",
-        "double_pendulum.toml",
-        "--t-end",
-        "0.05",
-        "--out",
-        "res",
-        "--foreign-files",
-        "keep",
-    ];
-    let out = flexmbs(&dir, &keep);
+    let out = flexmbs(&dir, &KEEP);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(
         out.stderr
