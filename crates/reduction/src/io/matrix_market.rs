@@ -1,5 +1,7 @@
 //! Matrix Market files of sparse matrices, for exchanging $\mathbf K$ and $\mathbf M$ with
-//! other FE codes, through the `sprs` crate's reader and writer.
+//! other FE codes. The reader and the writer are ours: the format is a banner, a size line
+//! and one `row column value` line per entry, and reading it ourselves lets every error name
+//! the file and the line.
 //!
 //! The use case: a model from another FE code (node coordinates, $\mathbf K$, $\mathbf M$)
 //! is reduced here with [`crate::reduce_external`]; and our matrices can be checked in
@@ -9,9 +11,9 @@
 //!
 //! [`write_matrix_market`] writes `coordinate real general`: every stored entry, both
 //! triangles of a symmetric matrix. We do not write the `symmetric` variant: the Matrix
-//! Market definition stores the *lower* triangle of a symmetric matrix, and sprs's symmetric
-//! writer stores the upper one, which the definition does not provide for; a general file is
-//! read the same way by every reader, at twice the size. Values are printed by Rust's `{}`
+//! Market definition stores the *lower* triangle of a symmetric matrix, and some writers
+//! store the upper one, which the definition does not provide for; a general file is read the
+//! same way by every reader, at twice the size. Values are printed by Rust's `{}`
 //! for `f64`, the shortest decimal that parses back to the same number, so a round trip is
 //! exact (`tests/unit/matrix_market.rs`). `{}` prints no exponent, so $10^{-300}$ takes about
 //! 300 characters; even the longest `f64` stays within the format's 1024-character lines.
@@ -23,10 +25,9 @@
 //! accepted too); [`read_matrix_market`] returns both triangles. Duplicate entries are summed,
 //! as the format's users expect (and as faer's triplet constructor does).
 //!
-//! sprs's reader trusts the file: it allocates what the size line announces and panics on an
-//! index outside the matrix. Before handing the text to sprs we therefore check every line
-//! ourselves ([`parse_matrix_market`]), which also lets every error name the file and the
-//! line, where sprs says only "Bad matrix market file."
+//! The reader trusts nothing the file announces: the size line's entry count is checked
+//! against the entries found (storage grows with the lines read, not with the count
+//! claimed), and every index against the size.
 
 #![allow(non_snake_case)]
 
@@ -38,15 +39,16 @@ use std::path::Path;
 /// The Matrix Market text of `A` (`coordinate real general`, every stored entry). Pure: see
 /// [`write_matrix_market`] for the file.
 pub fn to_matrix_market(A: SparseColMatRef<'_, usize, f64>) -> Vec<u8> {
-    let mut tri = sprs::TriMat::<f64>::with_capacity((A.nrows(), A.ncols()), A.compute_nnz());
+    use std::fmt::Write as _;
+    let mut out = String::from("%%MatrixMarket matrix coordinate real general\n% written by flexmbs\n");
+    let _ = writeln!(out, "{} {} {}", A.nrows(), A.ncols(), A.compute_nnz());
     for j in 0..A.ncols() {
         for (&i, &v) in A.row_idx_of_col_raw(j).iter().zip(A.val_of_col(j)) {
-            tri.add_triplet(i, j, v);
+            // `{}`: the shortest decimal that parses back to the same f64 (module docs).
+            let _ = writeln!(out, "{} {} {v}", i + 1, j + 1);
         }
     }
-    let mut out = Vec::new();
-    sprs::io::write_matrix_market_to_bufwrite(&mut out, &tri).expect("writing to a Vec<u8> cannot fail");
-    out
+    out.into_bytes()
 }
 
 /// Writes `A` to `path` as `coordinate real general` (module docs: why not `symmetric`).
@@ -77,8 +79,8 @@ enum Symmetry {
 
 /// Parses the text of a Matrix Market file; `origin` names it in errors. Never panics.
 ///
-/// The checks (module docs) run first; sprs then reads the checked text, and its triplets
-/// become a faer matrix.
+/// Every line is checked ([`check`]) and its entry kept; the entries become a faer matrix
+/// (duplicates summed).
 pub fn parse_matrix_market(bytes: &[u8], origin: &Path) -> Result<SparseColMat<usize, f64>, ReductionError> {
     let error = |line: Option<usize>, what: String| ReductionError::MatrixMarket {
         path: origin.to_path_buf(),
@@ -89,11 +91,7 @@ pub fn parse_matrix_market(bytes: &[u8], origin: &Path) -> Result<SparseColMat<u
         let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
         error(Some(line), "not text (invalid UTF-8)".into())
     })?;
-    let (shape, clean) = check(text).map_err(|(line, what)| error(line, what))?;
-    let tri: sprs::TriMat<f64> = sprs::io::read_matrix_market_from_bufread(&mut clean.as_bytes())
-        .map_err(|e| error(None, format!("sprs could not read it after our checks passed: {e}")))?;
-    let triplets: Vec<Triplet<usize, usize, f64>> =
-        tri.triplet_iter().map(|(&v, (i, j))| Triplet::new(i, j, v)).collect();
+    let (shape, triplets) = check(text).map_err(|(line, what)| error(line, what))?;
     SparseColMat::try_new_from_triplets(shape.0, shape.1, &triplets)
         .map_err(|e| error(None, format!("cannot build the sparse matrix: {e:?}")))
 }
@@ -101,16 +99,11 @@ pub fn parse_matrix_market(bytes: &[u8], origin: &Path) -> Result<SparseColMat<u
 /// An error of [`check`]: the 1-based line at fault, if one is, and why.
 type LineError = (Option<usize>, String);
 
-/// Checks what sprs would trust: the banner, the size line, and every entry (count of fields,
-/// numbers, indices in range, count of entries); in a symmetric file, that no entry is given
-/// in both triangles. Returns the shape and the text for sprs, or the 1-based line at fault
-/// and why.
-///
-/// The text for sprs is the checked content in the form its reader expects: a canonical
-/// banner (`real`, single spaces: sprs compares the banner's bytes, and reads `integer`
-/// files only into integer matrices), no comment or blank lines before the size line (its
-/// comment loop does not trim, and spins at the end of a file without a size line).
-fn check(text: &str) -> Result<((usize, usize), String), LineError> {
+/// Reads and checks the banner, the size line, and every entry (count of fields, numbers,
+/// indices in range, count of entries); in a symmetric file, that no entry is given in both
+/// triangles. Returns the shape and the entries (0-based; a symmetric file's off-diagonal
+/// entries in both triangles), or the 1-based line at fault and why.
+fn check(text: &str) -> Result<((usize, usize), Vec<Triplet<usize, usize, f64>>), LineError> {
     let mut lines = text.lines().enumerate().map(|(k, l)| (k + 1, l));
     let (_, banner) = lines.next().ok_or((Some(1), "the file is empty".to_string()))?;
     let words: Vec<String> = banner.split_whitespace().map(|w| w.to_lowercase()).collect();
@@ -140,14 +133,7 @@ fn check(text: &str) -> Result<((usize, usize), String), LineError> {
             )))
         }
     };
-    let mut clean = format!(
-        "%%MatrixMarket matrix coordinate real {}\n",
-        if symmetry == Symmetry::General {
-            "general"
-        } else {
-            "symmetric"
-        }
-    );
+    let mut triplets: Vec<Triplet<usize, usize, f64>> = Vec::new();
     let mut size: Option<(usize, usize, usize)> = None;
     let mut count = 0usize;
     let mut seen: HashMap<(usize, usize), usize> = HashMap::new();
@@ -168,8 +154,6 @@ fn check(text: &str) -> Result<((usize, usize), String), LineError> {
                         ));
                     }
                     size = Some((*r, *c, *e));
-                    clean.push_str(trimmed);
-                    clean.push('\n');
                 }
                 _ => {
                     return Err((
@@ -181,7 +165,7 @@ fn check(text: &str) -> Result<((usize, usize), String), LineError> {
             continue;
         };
         if fields.is_empty() {
-            // sprs skips blank lines between entries.
+            // Blank lines between entries are tolerated, as common readers do.
             continue;
         }
         if count == entries {
@@ -198,9 +182,10 @@ fn check(text: &str) -> Result<((usize, usize), String), LineError> {
             _ => Err((Some(line), format!("{what} index '{f}' is not in 1..={max}"))),
         };
         let (i, j) = (index(i, "row", rows)?, index(j, "column", cols)?);
-        if v.parse::<f64>().map(|x| !x.is_finite()).unwrap_or(true) {
-            return Err((Some(line), format!("value '{v}' is not a finite number")));
-        }
+        let value = match v.parse::<f64>() {
+            Ok(x) if x.is_finite() => x,
+            _ => return Err((Some(line), format!("value '{v}' is not a finite number"))),
+        };
         if symmetry == Symmetry::Symmetric && i != j {
             let key = (i.min(j), i.max(j));
             if let Some(previous) = seen.get(&key).copied() {
@@ -215,8 +200,10 @@ fn check(text: &str) -> Result<((usize, usize), String), LineError> {
             }
             seen.insert(key, line);
         }
-        clean.push_str(trimmed);
-        clean.push('\n');
+        triplets.push(Triplet::new(i, j, value));
+        if symmetry == Symmetry::Symmetric && i != j {
+            triplets.push(Triplet::new(j, i, value));
+        }
         count += 1;
     }
     let Some((rows, cols, entries)) = size else {
@@ -228,5 +215,5 @@ fn check(text: &str) -> Result<((usize, usize), String), LineError> {
             format!("the size line announces {entries} entries but the file has {count} (truncated?)"),
         ));
     }
-    Ok(((rows, cols), clean))
+    Ok(((rows, cols), triplets))
 }

@@ -111,7 +111,7 @@ fn symmetric_files_are_expanded_to_both_triangles() {
         dense(&parse_matrix_market(lower.as_bytes(), Path::new("l.mtx")).unwrap()),
         expected
     );
-    // The upper triangle (as sprs writes it), and integer values.
+    // The upper triangle (as some writers store it), and integer values.
     let upper = "%%MatrixMarket matrix coordinate integer symmetric\n3 3 5\n1 1 4\n1 2 -1\n2 2 4\n2 3 -2\n3 3 3\n";
     let U = dense(&parse_matrix_market(upper.as_bytes(), Path::new("u.mtx")).unwrap());
     assert_eq!(U[1][2], -2.0);
