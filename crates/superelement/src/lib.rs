@@ -80,7 +80,7 @@
 //!   $6N + m$ layout (out-of-plane rows and columns zero), at 41 % of the spatial body's
 //!   instructions for the residual and the mass, 37 % with the tangents (`benches/evaluate.rs`).
 //! * [`testing`]: the central-difference helper, state perturbations through exp, test states,
-//!   and (feature `testing`) reduced-body fixtures.
+//!   and reduced-body fixtures.
 //!
 //! //! The superelement's coordinates are $\mathbf q = [\mathbf r_1, \boldsymbol\pi_1, \dots,
 //! \mathbf r_N, \boldsymbol\pi_N, \boldsymbol\eta]$ ($6N + m$): absolute interface positions and

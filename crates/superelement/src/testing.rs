@@ -1,7 +1,9 @@
 //! Test helpers shared with the multibody crate: the one central-difference
 //! helper with its worst-entry report, state perturbations through the exponential map,
-//! deterministic deformed moving states and a synthetic geometric stiffness. With the
-//! `testing` feature, `fixtures` builds reduced beam bodies through `fe-model` and `reduction`.
+//! deterministic deformed moving states and a synthetic geometric stiffness; `fixtures` builds
+//! reduced beam bodies through `fe-model` and `reduction`. Compiled into every build (a few
+//! hundred lines, dropped by the linker where unused): a feature that added them for tests
+//! gave the library two builds, one for the tests and one for the program.
 
 #![allow(non_snake_case)]
 
@@ -384,7 +386,6 @@ pub fn synthetic_geometric_stiffness(
 }
 
 /// Reduced beam bodies for tests, built through `fe-model` and `reduction`.
-#[cfg(feature = "testing")]
 pub mod fixtures {
     use fe_model::{BeamProperties, BeamSection, BeamTheory, FeModel, IsotropicMaterial, MassKind, NodeId};
     use nalgebra::{Point3, Vector3};

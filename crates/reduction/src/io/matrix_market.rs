@@ -99,11 +99,14 @@ pub fn parse_matrix_market(bytes: &[u8], origin: &Path) -> Result<SparseColMat<u
 /// An error of [`check`]: the 1-based line at fault, if one is, and why.
 type LineError = (Option<usize>, String);
 
+/// The entries of a file, 0-based, as faer's triplet constructor takes them.
+type Entries = Vec<Triplet<usize, usize, f64>>;
+
 /// Reads and checks the banner, the size line, and every entry (count of fields, numbers,
 /// indices in range, count of entries); in a symmetric file, that no entry is given in both
 /// triangles. Returns the shape and the entries (0-based; a symmetric file's off-diagonal
 /// entries in both triangles), or the 1-based line at fault and why.
-fn check(text: &str) -> Result<((usize, usize), Vec<Triplet<usize, usize, f64>>), LineError> {
+fn check(text: &str) -> Result<((usize, usize), Entries), LineError> {
     let mut lines = text.lines().enumerate().map(|(k, l)| (k + 1, l));
     let (_, banner) = lines.next().ok_or((Some(1), "the file is empty".to_string()))?;
     let words: Vec<String> = banner.split_whitespace().map(|w| w.to_lowercase()).collect();
@@ -133,7 +136,7 @@ fn check(text: &str) -> Result<((usize, usize), Vec<Triplet<usize, usize, f64>>)
             )))
         }
     };
-    let mut triplets: Vec<Triplet<usize, usize, f64>> = Vec::new();
+    let mut triplets: Entries = Vec::new();
     let mut size: Option<(usize, usize, usize)> = None;
     let mut count = 0usize;
     let mut seen: HashMap<(usize, usize), usize> = HashMap::new();
