@@ -135,7 +135,8 @@ fn finite_difference_jacobians_match_the_exact_ones() {
     let (dx, dxd) = finite_difference_jacobian(&law, 0.0, &x, &xd).unwrap();
     let (ex_err, exd_err) = (max_abs_diff(&dx, &ex), max_abs_diff(&dxd, &exd));
     assert!(ex_err < 1e-5 && exd_err < 1e-5, "forward: {ex_err:e}, {exd_err:e}");
-    // ... and they are forward differences: their error is well above the central ones'.
+    // ... and they are forward differences: their error is well above the central ones'
+    // (below 1e-8): on the cubic's entry h |g''| / 2 = 1.7e-6 * 7.1 / 2 = 6e-6, far above 1e-7.
     assert!(exd_err > 1e-7, "forward error {exd_err:e}");
 }
 
@@ -168,7 +169,11 @@ fn chain_with_law(exact: bool) -> (System, mbs::State) {
 fn a_force_laws_tangents_match_central_differences_of_the_residual() {
     // A rotated, moving state at t = 0.37: the law's effort on the prismatic row and its load
     // through J^T of node n6 (with the node's geometric term), with the law's exact Jacobians
-    // and with its finite differences. Tolerance of the chain without the law (tangent.rs).
+    // and with its finite differences. Tolerance of the chain without the law (tangent.rs),
+    // 1e-6: central differences with h = 1e-6 of entries of unit size carry truncation
+    // ~1e-12 and round-off eps |F| / h ~ 1e-10, the law's own central differences ~1e-8 of
+    // its entries (measured: 1.2e-9 of the row's or column's largest entry); a missing law
+    // tangent is off by 0.26 of it (without_its_tangent_the_check_fails).
     for exact in [true, false] {
         let (sys, s) = chain_with_law(exact);
         check_tangents(&sys, &s, 1e-6, 1e-6);
@@ -178,7 +183,8 @@ fn a_force_laws_tangents_match_central_differences_of_the_residual() {
 #[test]
 fn without_its_tangent_the_check_fails() {
     // The check above can fail: the same law with its tangent zeroed (a law that claims a
-    // zero Jacobian) disagrees with the residual's differences.
+    // zero Jacobian) disagrees with the residual's differences, by 0.26 of the entry's scale
+    // against the tolerance 1e-6 of the check above.
     #[derive(Debug)]
     struct NoTangent(Spring);
     impl ForceLaw for NoTangent {
@@ -287,8 +293,10 @@ fn damper(c: f64, fail_after: Option<f64>) -> Arc<Damper> {
 fn a_damper_law_follows_the_builtin_pid() {
     // u = -c y' in the step is the PID with kd = c (set-point 0, kp = ki = 0): the same
     // equations, the same Newton tolerance; only the iteration matrices differ (central
-    // differences against the exact derivative), so the trajectories agree to the Newton
-    // tolerance's share, far below 1e-6 of the motion's peak.
+    // differences against the exact derivative), so each step's converged state may differ
+    // by Newton's tolerance, 1e-9 of the force scale: over 300 steps at most ~3e-7 of the
+    // motion's peak, and 1e-6 of it is the bound (measured 1e-15 rad: the last correction
+    // lands far below the tolerance).
     let c = 1.0;
     let pid = pendulum_with_actuator(Effort::Pid(Pid {
         joint: JointId(1),
@@ -313,7 +321,9 @@ fn a_damper_law_follows_the_builtin_pid() {
     eprintln!("elbow peak {peak:.4} rad, law vs PID {diff:.3e} rad");
     assert!(a.len() == b.len() && a.len() > 100);
     assert!(diff < 1e-6 * peak, "law vs PID: {diff:e} (peak {peak})");
-    // And the damper does act: without it the elbow moves differently.
+    // And the damper does act: without it the elbow moves differently (its torque changes
+    // the motion by a fair fraction of the peak in 0.3 s; 1e-3 only says it acted, far
+    // above the 1e-6 the two damped runs agree to).
     let free = elbow(&System::new(&law).unwrap());
     let off = a.iter().zip(&free).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
     assert!(off > 1e-3 * peak, "damper had no effect: {off:e}");
@@ -334,6 +344,7 @@ fn a_law_value_that_is_not_finite_stops_the_run_where_it_happened() {
             assert_eq!(name, "damper");
             assert_eq!(output.as_deref(), Some("elbow motor"));
             let t = at.time().unwrap();
+            // Step end times are on the step's decimals (step_end_time): 0.011 to round-off.
             assert!((t - 0.011).abs() < 1e-12, "at {t}");
         }
         other => panic!("expected a force-law error, got {other}"),
