@@ -1,6 +1,8 @@
 //! Force laws (`mbs::force_law`): the finite-difference Jacobians against a law's exact ones,
-//! the law's tangents in the iteration matrix against central differences of the residual,
-//! a damper law against the built-in PID on a flexible double pendulum, and a failing law.
+//! the law's tangents in the iteration matrix against central differences of the residual (a
+//! rigid chain; deformed flexible bodies with a saturated PID beside the law), a damper law
+//! against the built-in PID on a flexible double pendulum and over a 100 s run, and a failing
+//! law.
 
 use crate::joint_setup::double_pendulum;
 use crate::kinematics::{chain, random_state};
