@@ -4,7 +4,7 @@
 
 use crate::fixtures::{beam_body, cantilever, pendulum};
 use crate::kinematics::{chain, random_state};
-use crate::tangent::{check_tangents, mixed};
+use crate::tangent::{check_tangents, deformed_state, mixed};
 use mbs::{
     solve_dynamic, solve_dynamic_retrying, solve_static, spectrum, BodyId, DynamicSettings, Effort, InitialCondition,
     JointActuator, JointId, JointKind, JointLimit, JointSpring, Model, Pid, SensorKind, StaticSettings, Support,
@@ -238,25 +238,13 @@ fn joint_force_tangents_match_fd_on_deformed_superelements() {
     // all four forces on its one scalar joint coordinate, at a deformed, rotated, moving
     // state. Tolerance of that test (floating frames solved to 1e-12): 1e-5.
     let base = mixed();
-    let deformed = |sys: &System| {
-        let r = random_state(sys, 21);
-        let n = sys.n_dof();
-        let mut rng = superelement::testing::Rng::new(5);
-        let dq: Vec<f64> = (0..n).map(|_| 0.05 * rng.uniform()).collect();
-        let mut s = sys.retract(&sys.initial_state(), &dq);
-        s.velocity_mut().copy_from_slice(r.velocity());
-        s.acceleration_mut().copy_from_slice(r.acceleration());
-        s.set_time(0.37);
-        sys.reset_frames(&mut s);
-        s
-    };
     let sys = System::new(&base).unwrap();
-    let s = deformed(&sys);
+    let s = deformed_state(&sys);
     let mut model = base.clone();
     with_joint_forces(&mut model, &sys, &s, [(0, 0), (0, 0), (0, 0), (0, 0)]);
     model.joint_limits.pop(); // one stop: both would leave no range
     let sys = System::new(&model).unwrap();
-    let s2 = deformed(&sys);
+    let s2 = deformed_state(&sys);
     check_tangents(&sys, &s2, 1e-6, 1e-5);
 }
 

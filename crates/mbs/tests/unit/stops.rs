@@ -64,11 +64,17 @@ fn a_stiff_saturated_servo_converges_in_few_newton_iterations() {
         &torque[..4],
         torque.last().unwrap()
     );
+    // On one branch Newton converges quadratically from the predictor: 4 corrections
+    // measured; 5 leaves one for a switch of branch (the cycling ran to the limit, 20).
     assert!(most <= 5, "{most} iterations");
-    // It saturated (the first steps push at the bound) and settled where it holds the weight.
+    // It saturated (the first steps push at the bound: the saturated branch is u_max itself)
+    // and settled where it holds the weight.
     assert_eq!(torque[1], 300.0);
+    // At rest at theta = 1 - 2.8e-4 rad the torque is m g d sin(theta), below m g d sin 1 by
+    // cot(1) 2.8e-4 = 1.8e-4 of it (as measured): 1e-3.
     assert!((torque.last().unwrap() - hold).abs() < 1e-3 * hold, "{torque:?}");
-    // The integral, frozen while saturated, has yet to remove the last 3e-4 rad.
+    // The integral, frozen while saturated, has yet to remove the last 2.8e-4 rad (the loop's
+    // slow pole, near -ki/kp = -0.1/s, takes it out over tens of seconds): 1e-3.
     assert!((theta - 1.0).abs() < 1e-3, "{theta}");
 }
 
@@ -77,7 +83,10 @@ fn the_pid_tangent_matches_central_differences_saturated_and_not() {
     // The chain's joint 1 measured and joint 0 actuated (a coupling entry of the tangent) at a
     // rotated, moving state at t = 0.37 (the integral's weight 0.185), with a bound far above
     // the effort (the linear branch) and far below it (saturated: zero tangent). Tolerance of
-    // the chain's own tangent test: 1e-6.
+    // the chain's own tangent test (tangent.rs), 1e-6: central differences with h = 1e-6 of
+    // entries of unit size carry truncation ~1e-12 and round-off eps |F| / h ~ 1e-10 (measured
+    // up to 2e-9 of the row's or column's largest entry), while a wrong or missing PID entry
+    // errs by the order of the entry itself.
     let base = chain();
     for (max, saturated) in [(1e6, false), (0.05, true)] {
         let mut model = base.clone();
@@ -124,6 +133,9 @@ fn the_first_step_after_a_release_converges() {
     }
     let theta = integ.system().joint_value(integ.state(), JointId(0), 0);
     eprintln!("at most {most} iterations after the release; theta {theta}");
+    // As for the servo from rest (a_stiff_saturated_servo_converges_in_few_newton_iterations):
+    // 4 corrections measured, 5 leaving one for a switch of branch; 3.2e-4 rad left to the
+    // integral's slow pole after 3 s: 1e-3.
     assert!(most <= 5, "{most} iterations");
     assert!((theta - 1.0).abs() < 1e-3, "{theta}");
 }
@@ -179,7 +191,10 @@ fn a_driven_arm_hitting_a_stop_gets_no_more_energy_than_was_put_in() {
     // Fixed steps of 1 ms retried down to 1e-9 s, so that every step in contact has
     // omega h <= 0.1: T + U exceeds the work by at most 0.15 % of it for k = 1e4 ... 1e12
     // (without the stop control: 20 % at 1e6, 116 % at 1e8, 110 % at 1e10, and Newton fails
-    // at 1e12). Required: 0.5 %.
+    // at 1e12). Required: 0.5 %. Bound: a step entering the stop stores at most
+    // (omega h)^2 = 1 % of the impact's kinetic energy that the exact motion does not
+    // (STOP_RESOLUTION); the contact's other steps, some 30 of them, add generalized-alpha's
+    // second-order energy error. 0.5 % lies between the 0.15 % measured and that 1 %.
     for k in [1e4, 1e6, 1e8, 1e10, 1e12] {
         let sys = System::new(&driven_arm(k)).unwrap();
         let settings = DynamicSettings::new(1e-3, 1.0, 0.9);
@@ -200,6 +215,11 @@ fn a_driven_arm_hitting_a_stop_gets_no_more_energy_than_was_put_in() {
             tr.iterations.len()
         );
         assert!(excess < 5e-3, "k = {k:e}: {excess}");
+        // The deepest penetration d solves k d^2 / 2 = 10 (0.5 + d) (the push's work): just
+        // above sqrt(2 5 / k) (3 % above at k = 1e4, where the push's work over d counts), and
+        // the 0.5 % energy excess allowed deepens it by 0.25 %. Twice sqrt(2 5 / k) bounds both;
+        // 1e-6 rad is slack. (The stiffest stops, k >= 1e10, penetrate 30 micro-radians and
+        // less for less than a recorded 1 ms step: their rows stay below 0.5 rad.)
         assert!(
             highest < 0.5 + 2.0 * (2.0 * 5.0 / k).sqrt() + 1e-6,
             "k = {k:e}: {highest}"

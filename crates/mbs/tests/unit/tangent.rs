@@ -103,6 +103,22 @@ pub fn mixed() -> Model {
     m
 }
 
+/// A deformed, rotated, moving state at t = 0.37: the start moved by up to 0.05 (rad or m) in
+/// every unknown (deformations of a few percent on top of the start's rigid placement), with
+/// the velocities and accelerations of `random_state` (seed 21), the floating frames re-guessed.
+pub fn deformed_state(sys: &System) -> State {
+    let r = random_state(sys, 21);
+    let n = sys.n_dof();
+    let mut rng = superelement::testing::Rng::new(5);
+    let dq: Vec<f64> = (0..n).map(|_| 0.05 * rng.uniform()).collect();
+    let mut s = sys.retract(&sys.initial_state(), &dq);
+    s.velocity_mut().copy_from_slice(r.velocity());
+    s.acceleration_mut().copy_from_slice(r.acceleration());
+    s.set_time(0.37);
+    sys.reset_frames(&mut s);
+    s
+}
+
 /// Checks M = dF/dqdd, C = dF/dqd, K = dF/dq at `s` (central differences; rotations perturbed
 /// through exp). `tol`: see the callers.
 pub fn check_tangents(sys: &System, s: &State, h: f64, tol: f64) {
