@@ -95,8 +95,8 @@
 //! file without record 11 cannot be compared: `flexmbs inspect` says so (for files written
 //! by flexmbs, the `FLEXMBS FIRST MOMENT` line still checks mass and centre,
 //! [`stated_moment_problems`]). A file with record 12 whose record 11 holds only some of the
-//! body's nodes is inconsistent for MBDyn too, which builds the invariants from record 11
-//! when it is given.
+//! body's nodes is not one MBDyn reads right either: it builds invariants from record 11
+//! when given and adds them to the stated ones ([`crate::io::mbdyn`]).
 
 #![allow(non_snake_case)]
 

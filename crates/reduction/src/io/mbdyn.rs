@@ -71,9 +71,12 @@
 //!
 //! The body read passes the physical checks of every body ([`crate::checks`]), and the
 //! records as written some of their own: records 9 and 10 symmetric (the body is built from
-//! their symmetric parts), record 12's mass and centre of mass against the `FLEXMBS FIRST
-//! MOMENT` line ([`crate::checks::stated_moment_problems`]). A file that fails is refused with
-//! [`FemError::Checks`]; [`read_mbdyn_fem_unchecked`] reads it for `flexmbs inspect`.
+//! their symmetric parts), record 12's mass, centre of mass and inertia against the nodal
+//! masses of record 11 at the node positions of records 5-7
+//! ([`crate::checks::record_12_problems`]), its mass and centre of mass against the
+//! `FLEXMBS FIRST MOMENT` line ([`crate::checks::stated_moment_problems`]). A file that fails
+//! is refused with [`FemError::Checks`]; [`read_mbdyn_fem_unchecked`] reads it for `flexmbs
+//! inspect`, with the record checks that could not be made ([`FemBody::not_checked`]).
 
 #![allow(non_snake_case)]
 
