@@ -873,7 +873,12 @@ fn smaller_box(x: &[Vector3<f64>]) -> [f64; 3] {
     let spread = x
         .iter()
         .fold(Matrix3::zeros(), |s, p| s + (p - c) * (p - c).transpose());
-    let principal = spread.symmetric_eigen().eigenvectors;
+    // Non-finite coordinates (refused by every reader) would keep the eigensolver iterating.
+    let principal = if spread.iter().all(|v| v.is_finite()) {
+        spread.symmetric_eigen().eigenvectors
+    } else {
+        Matrix3::identity()
+    };
     let sides = |axes: &Matrix3<f64>| -> [f64; 3] {
         std::array::from_fn(|k| {
             let along = x.iter().map(|p| axes.column(k).dot(&(p - c)));

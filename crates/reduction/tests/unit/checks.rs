@@ -347,3 +347,13 @@ fn a_solid_node_table_in_millimetres_is_refused_by_the_mass() {
     let message = problem.to_string();
     assert!(message.contains("node table") && message.contains("millimetres"), "{message}");
 }
+
+#[test]
+fn a_node_cloud_with_a_non_finite_coordinate_ends() {
+    // The readers refuse such tables; the measure itself must still return (no endless
+    // eigensolver iteration, no problem claimed on a NaN).
+    let ((_, mut nodes, dofs), M) = solid_matrices();
+    nodes[3] = [f64::NAN, 0.0, f64::INFINITY];
+    let cloud = NodeCloud::new(&nodes, M.as_ref(), &dofs);
+    assert_eq!(cloud.problem(), None, "{cloud:?}");
+}
