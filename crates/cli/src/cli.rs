@@ -252,6 +252,34 @@ fn matrices_spec(path: &Path, options: &Flags) -> Result<Option<study::input::sc
     };
     let mass = required("mass", "M.mtx")?;
     let nodes = required("nodes", "NODES (x y z per line, m)")?;
+    let interfaces = interface_options(options)?;
+    let cutoff_hz = frequency_option(options, "cutoff-hz")?;
+    Ok(Some(study::input::schema::MatricesFile {
+        stiffness: path.display().to_string(),
+        mass,
+        nodes,
+        dofs: option(options, "dofs").map(str::to_string),
+        dofs_per_node: number("dofs-per-node")?,
+        interfaces,
+        modes: number("modes")?,
+        cutoff_hz,
+    }))
+}
+
+/// The option `--name`, a positive frequency in Hz, if given.
+fn frequency_option(options: &Flags, name: &str) -> Result<Option<f64>, BoxError> {
+    option(options, name)
+        .map(|v| {
+            v.parse::<f64>()
+                .ok()
+                .filter(|f| *f > 0.0 && f.is_finite())
+                .ok_or_else(|| usage(format!("--{name} needs a positive frequency in Hz, got '{v}'")))
+        })
+        .transpose()
+}
+
+/// The `--interface NAME=NODE` options of `inspect`, at least one, each name once.
+fn interface_options(options: &Flags) -> Result<std::collections::BTreeMap<String, usize>, BoxError> {
     let mut interfaces = std::collections::BTreeMap::new();
     for (_, v) in options.iter().filter(|(n, _)| n == "interface") {
         let parsed = v
@@ -272,25 +300,7 @@ fn matrices_spec(path: &Path, options: &Flags) -> Result<Option<study::input::sc
             "a Matrix Market stiffness needs --interface NAME=NODE, once per interface",
         ));
     }
-    let cutoff_hz = match option(options, "cutoff-hz") {
-        Some(v) => Some(
-            v.parse::<f64>()
-                .ok()
-                .filter(|f| *f > 0.0 && f.is_finite())
-                .ok_or_else(|| usage(format!("--cutoff-hz needs a positive frequency in Hz, got '{v}'")))?,
-        ),
-        None => None,
-    };
-    Ok(Some(study::input::schema::MatricesFile {
-        stiffness: path.display().to_string(),
-        mass,
-        nodes,
-        dofs: option(options, "dofs").map(str::to_string),
-        dofs_per_node: number("dofs-per-node")?,
-        interfaces,
-        modes: number("modes")?,
-        cutoff_hz,
-    }))
+    Ok(interfaces)
 }
 
 /// A command that ran to the end but whose checks failed (exit code 1, not 2).
@@ -436,15 +446,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 "inspect",
                 "a reduced-body file (.rbody), an MBDyn modal element file (.fem) or a Matrix Market stiffness (.mtx)",
             )?;
-            let excitation = match option(&options, "excitation-hz") {
-                Some(v) => Some(
-                    v.parse::<f64>()
-                        .ok()
-                        .filter(|f| *f > 0.0 && f.is_finite())
-                        .ok_or_else(|| usage(format!("--excitation-hz needs a positive frequency in Hz, got '{v}'")))?,
-                ),
-                None => None,
-            };
+            let excitation = frequency_option(&options, "excitation-hz")?;
             let matrices = matrices_spec(&path, &options)?;
             let source = match &matrices {
                 Some(m) => crate::inspect::Source::Matrices(m),
