@@ -219,6 +219,13 @@ fn inspect_reduces_and_checks_matrix_market_matrices() {
     let out = flexmbs(&dir, &[&args[..10], &["--interface", "b=x"]].concat());
     assert_eq!(out.code, 2);
     assert!(out.stderr.contains("--interface needs NAME=NODE"), "{}", out.stderr);
+    let out = flexmbs(&dir, &[&args[..12], &["--cutoff-hz", "-1"]].concat());
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("--cutoff-hz needs a positive frequency"),
+        "{}",
+        out.stderr
+    );
     // A file that cannot be read: exit 2, the key and the file.
     let out = flexmbs(&dir, &[&args[..2], &["--mass", "missing.mtx"], &args[4..]].concat());
     assert_eq!(out.code, 2);
