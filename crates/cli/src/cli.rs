@@ -19,10 +19,14 @@ usage:
                                      reduce the parts that have a [parts.reduction] (or the one
                                      named) to reduced-body files (.rbody)
   flexmbs inspect FILE.rbody|FILE.fem [--excitation-hz F]
-                                     show a reduced body (or an MBDyn modal element file):
-                                     interfaces, mass data, fixed-interface frequencies, modal
-                                     effective masses (and, with F, whether the kept modes
-                                     reach 3 x F), the physical checks and what they measured
+  flexmbs inspect K.mtx --mass M.mtx --nodes NODES (--dofs DOFS | --dofs-per-node 3|6)
+                  --interface NAME=NODE ... (--modes N | --cutoff-hz F) [--excitation-hz F]
+                                     show a reduced body (or an MBDyn modal element file, or
+                                     Matrix Market matrices of another code, reduced as a
+                                     study's [bodies.matrices]): interfaces, mass data,
+                                     fixed-interface frequencies, modal effective masses (and,
+                                     with F, whether the kept modes reach 3 x F), the physical
+                                     checks and what they measured
   flexmbs export-fem FILE.rbody OUT.fem [--reference INTERFACE]
                                      write a reduced body as an MBDyn modal element file
                                      (modal node at the reference interface, default the first)
@@ -89,12 +93,30 @@ files (.rbody), through the cache."
         "inspect" => {
             "\
 usage: flexmbs inspect FILE.rbody|FILE.fem [--excitation-hz F]
+       flexmbs inspect K.mtx --mass M.mtx --nodes NODES (--dofs DOFS | --dofs-per-node 3|6)
+                       --interface NAME=NODE ... (--modes N | --cutoff-hz F) [--excitation-hz F]
 
 Shows a reduced body (.rbody, or an MBDyn modal element file .fem): interfaces, mass data,
 fixed-interface frequencies and modal effective masses; with F, whether the kept modes reach
-3 x F; the physical checks every body passes before use, with what they measured. Exits with
-1 when the body fails its physical checks (the report lists them), with 2 when the file
-cannot be read."
+3 x F; the physical checks every body passes before use, with what they measured. A check
+that cannot be made is said so (an MBDyn record 12 without the nodal masses of record 11 to
+compare it with).
+
+Matrices from another code (Matrix Market stiffness K.mtx and mass M.mtx, SI units) are
+reduced first, as a study's [bodies.matrices] with the same keys is (docs/study-file.md):
+  --nodes NODES        node table, `x y z` per line [m]; node k is the k-th data line
+  --dofs DOFS          dof table, `node dof` per matrix row (dof: ux uy uz rx ry rz), or
+  --dofs-per-node 3|6  every node with 3 or 6 dofs, in node order
+  --interface NAME=NODE
+                       an interface at node NODE (0-based); once per interface, each on a
+                       node with six dofs
+  --modes N | --cutoff-hz F
+                       the fixed-interface modes kept: a count, or every mode below F Hz
+The node table is checked against K (rigid motions) and against M (mass over the volume of
+the nodes' box: a table in millimetres is refused) before the body's checks.
+
+Exits with 1 when the body fails its physical checks (the report lists them), with 2 when
+the files cannot be read or reduced."
         }
         "example" => {
             "\
@@ -182,6 +204,103 @@ fn run_options(options: &[(String, String)]) -> Result<Options, BoxError> {
         t_end: None,
         foreign,
     })
+}
+
+/// The options of `inspect`: `--excitation-hz`, and for a Matrix Market stiffness those of
+/// the study's `[bodies.matrices]` (its keys, `_` written `-`; `--interface NAME=NODE` once
+/// per interface).
+const INSPECT_OPTIONS: [&str; 8] = [
+    "excitation-hz",
+    "mass",
+    "nodes",
+    "dofs",
+    "dofs-per-node",
+    "interface",
+    "modes",
+    "cutoff-hz",
+];
+
+/// `[bodies.matrices]` from the options of `inspect` when `path` is a Matrix Market
+/// stiffness (`.mtx`); `None` for a reduced-body or MBDyn file, which take none of them.
+fn matrices_spec(path: &Path, options: &Flags) -> Result<Option<study::input::schema::MatricesFile>, BoxError> {
+    let given: Vec<&str> = options
+        .iter()
+        .map(|(n, _)| n.as_str())
+        .filter(|n| *n != "excitation-hz")
+        .collect();
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("mtx")) {
+        return match given.first() {
+            Some(name) => Err(usage(format!(
+                "--{name} is for a Matrix Market stiffness (K.mtx); {} is not one",
+                path.display()
+            ))),
+            None => Ok(None),
+        };
+    }
+    let required = |name: &str, what: &str| {
+        option(options, name)
+            .map(str::to_string)
+            .ok_or_else(|| usage(format!("a Matrix Market stiffness needs --{name} {what}")))
+    };
+    let number = |name: &str| -> Result<Option<usize>, BoxError> {
+        option(options, name)
+            .map(|v| {
+                v.parse::<usize>()
+                    .map_err(|_| usage(format!("--{name} needs a whole number, got '{v}'")))
+            })
+            .transpose()
+    };
+    let mass = required("mass", "M.mtx")?;
+    let nodes = required("nodes", "NODES (x y z per line, m)")?;
+    let interfaces = interface_options(options)?;
+    let cutoff_hz = frequency_option(options, "cutoff-hz")?;
+    Ok(Some(study::input::schema::MatricesFile {
+        stiffness: path.display().to_string(),
+        mass,
+        nodes,
+        dofs: option(options, "dofs").map(str::to_string),
+        dofs_per_node: number("dofs-per-node")?,
+        interfaces,
+        modes: number("modes")?,
+        cutoff_hz,
+    }))
+}
+
+/// The option `--name`, a positive frequency in Hz, if given.
+fn frequency_option(options: &Flags, name: &str) -> Result<Option<f64>, BoxError> {
+    option(options, name)
+        .map(|v| {
+            v.parse::<f64>()
+                .ok()
+                .filter(|f| *f > 0.0 && f.is_finite())
+                .ok_or_else(|| usage(format!("--{name} needs a positive frequency in Hz, got '{v}'")))
+        })
+        .transpose()
+}
+
+/// The `--interface NAME=NODE` options of `inspect`, at least one, each name once.
+fn interface_options(options: &Flags) -> Result<std::collections::BTreeMap<String, usize>, BoxError> {
+    let mut interfaces = std::collections::BTreeMap::new();
+    for (_, v) in options.iter().filter(|(n, _)| n == "interface") {
+        let parsed = v
+            .split_once('=')
+            .and_then(|(name, node)| Some((name.trim(), node.trim().parse::<usize>().ok()?)))
+            .filter(|(name, _)| !name.is_empty());
+        let Some((name, node)) = parsed else {
+            return Err(usage(format!(
+                "--interface needs NAME=NODE (NODE: 0-based index into the node table), got '{v}'"
+            )));
+        };
+        if interfaces.insert(name.to_string(), node).is_some() {
+            return Err(usage(format!("--interface '{name}' is given twice")));
+        }
+    }
+    if interfaces.is_empty() {
+        return Err(usage(
+            "a Matrix Market stiffness needs --interface NAME=NODE, once per interface",
+        ));
+    }
+    Ok(interfaces)
 }
 
 /// A command that ran to the end but whose checks failed (exit code 1, not 2).
@@ -321,22 +440,19 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             Ok(())
         }
         "inspect" => {
-            let (positional, options) = parse(rest, &["excitation-hz"])?;
+            let (positional, options) = parse(rest, &INSPECT_OPTIONS)?;
             let path = one_file(
                 &positional,
                 "inspect",
-                "a reduced-body file (.rbody) or an MBDyn modal element file (.fem)",
+                "a reduced-body file (.rbody), an MBDyn modal element file (.fem) or a Matrix Market stiffness (.mtx)",
             )?;
-            let excitation = match option(&options, "excitation-hz") {
-                Some(v) => Some(
-                    v.parse::<f64>()
-                        .ok()
-                        .filter(|f| *f > 0.0 && f.is_finite())
-                        .ok_or_else(|| usage(format!("--excitation-hz needs a positive frequency in Hz, got '{v}'")))?,
-                ),
-                None => None,
+            let excitation = frequency_option(&options, "excitation-hz")?;
+            let matrices = matrices_spec(&path, &options)?;
+            let source = match &matrices {
+                Some(m) => crate::inspect::Source::Matrices(m),
+                None => crate::inspect::Source::File(&path),
             };
-            let inspection = crate::inspect::inspect(&path, excitation, 3.0)?;
+            let inspection = crate::inspect::inspect(&source, excitation, 3.0)?;
             crate::say_raw!("{}", inspection.report);
             if inspection.failed_checks > 0 {
                 return Err(Box::new(ChecksFailed {

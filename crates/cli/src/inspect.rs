@@ -1,11 +1,25 @@
-//! `flexmbs inspect FILE`: what a reduced body (`.rbody`, or an MBDyn `.fem` file) holds, for
-//! a person checking it before using it in a study: size, interfaces, mass data,
-//! fixed-interface frequencies and modal effective masses (`reduction::diagnostics`), and the
-//! physical checks every body passes before use (`reduction::checks`), with what they measured.
+//! `flexmbs inspect FILE`: what a reduced body (`.rbody`, an MBDyn `.fem` file, or matrices
+//! from another code: Matrix Market K and M with a node table, reduced here as a study's
+//! `[bodies.matrices]` is) holds, for a person checking it before using it in a study: size,
+//! interfaces, mass data, fixed-interface frequencies and modal effective masses
+//! (`reduction::diagnostics`), and the physical checks every body passes before use
+//! (`reduction::checks`), with what they measured.
 
+use reduction::{PhysicsProblem, ReducedBody};
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use study::error::{BoxError, ResultExt};
+use study::input::schema::MatricesFile;
+
+/// What `inspect` is given.
+#[derive(Debug)]
+pub enum Source<'a> {
+    /// A reduced-body file (`.rbody`) or an MBDyn modal element file (`.fem`).
+    File(&'a Path),
+    /// Matrices from another code, as a study's `[bodies.matrices]` gives them (paths
+    /// relative to the current folder).
+    Matrices(&'a MatricesFile),
+}
 
 /// What `inspect` found: the report, and how many physical checks failed (the command then
 /// exits with 1 after printing the report).
@@ -15,19 +29,78 @@ pub struct Inspection {
     pub failed_checks: usize,
 }
 
+/// A body as read, before the checks of every body: where it comes from, the notes on what
+/// was approximated, the problems of its input as written, the input checks that could not be
+/// made and what the input checks measured.
+struct Read {
+    body: ReducedBody,
+    path: PathBuf,
+    format: String,
+    notes: Vec<String>,
+    problems: Vec<PhysicsProblem>,
+    not_checked: Vec<String>,
+    measured: String,
+}
+
+impl Read {
+    fn body(body: ReducedBody, path: &Path, format: String) -> Read {
+        Read {
+            body,
+            path: path.to_path_buf(),
+            format,
+            notes: Vec::new(),
+            problems: Vec::new(),
+            not_checked: Vec::new(),
+            measured: String::new(),
+        }
+    }
+}
+
+/// Reads `source` without the physical checks, so that a refused body can still be looked at.
+fn read(source: &Source<'_>) -> Result<Read, BoxError> {
+    match source {
+        Source::File(path) if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("fem")) => {
+            let fem = reduction::mbdyn::read_mbdyn_fem_unchecked(path, None)
+                .context(|| format!("cannot inspect {}", path.display()))?;
+            Ok(Read {
+                notes: fem.notes,
+                problems: fem.problems,
+                not_checked: fem.not_checked,
+                ..Read::body(fem.body, path, "MBDyn modal element file".into())
+            })
+        }
+        Source::File(path) => {
+            let body =
+                reduction::file::read_unchecked(path).context(|| format!("cannot inspect {}", path.display()))?;
+            let format = format!("format version {}", body.format_version);
+            Ok(Read::body(body, path, format))
+        }
+        Source::Matrices(m) => {
+            let path = Path::new(&m.stiffness);
+            let name = path
+                .file_stem()
+                .map_or_else(|| "matrices".to_string(), |s| s.to_string_lossy().into_owned());
+            let i = study::input::matrices::inspect_matrices(&name, m, Path::new(""))
+                .map_err(|(key, message)| format!("cannot inspect {} ({key}): {message}", path.display()))?;
+            let format = format!(
+                "Matrix Market K, mass {}, node table {}, reduced here",
+                m.mass,
+                i.node_table.display()
+            );
+            Ok(Read {
+                problems: i.node_table_problems,
+                measured: i.cloud.to_string(),
+                ..Read::body(i.body, path, format)
+            })
+        }
+    }
+}
+
 /// The report of `inspect`. `excitation_hz`: the highest frequency a study will excite; the
 /// diagnostics then check that the kept modes reach `factor` times it.
-pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<Inspection, BoxError> {
-    // Read without the physical checks so that a refused file can still be looked at; the
-    // checks are reported below.
-    let is_fem = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("fem"));
-    let (body, notes, record_problems) = if is_fem {
-        reduction::mbdyn::read_mbdyn_fem_unchecked(path, None)
-            .context(|| format!("cannot inspect {}", path.display()))?
-    } else {
-        let body = reduction::file::read_unchecked(path).context(|| format!("cannot inspect {}", path.display()))?;
-        (body, Vec::new(), Vec::new())
-    };
+pub fn inspect(source: &Source<'_>, excitation_hz: Option<f64>, factor: f64) -> Result<Inspection, BoxError> {
+    let read = read(source)?;
+    let (body, path) = (&read.body, read.path.as_path());
     let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
     let mut s = String::new();
     let _ = writeln!(
@@ -36,13 +109,9 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<I
         body.name,
         path.display(),
         size as f64 / 1e3,
-        if is_fem {
-            "MBDyn modal element file".to_string()
-        } else {
-            format!("format version {}", body.format_version)
-        }
+        read.format
     );
-    for note in &notes {
+    for note in &read.notes {
         let _ = writeln!(s, "note: {note}");
     }
     let _ = writeln!(
@@ -124,32 +193,32 @@ pub fn inspect(path: &Path, excitation_hz: Option<f64>, factor: f64) -> Result<I
     if body.n_modes == 0 {
         let _ = writeln!(s, "  none kept: static (constraint) modes only");
     }
-    let d = reduction::diagnostics(&body, excitation_hz, factor);
+    let d = reduction::diagnostics(body, excitation_hz, factor);
     let _ = write!(s, "{d}");
-    let failed_checks = checks_report(&mut s, &body, record_problems);
+    let failed_checks = checks_report(&mut s, read);
     Ok(Inspection {
         report: s,
         failed_checks,
     })
 }
 
-/// The physical checks of `body` (with the problems of its file's records, `record_problems`)
-/// into `s`: what they measured, then passed or the problems; the number of problems.
-fn checks_report(
-    s: &mut String,
-    body: &reduction::ReducedBody,
-    record_problems: Vec<reduction::PhysicsProblem>,
-) -> usize {
-    let (body_problems, measured) = reduction::checks::examine(body);
-    let problems: Vec<_> = record_problems.into_iter().chain(body_problems).collect();
-    let _ = write!(s, "\nphysical checks, measured:\n{measured}");
+/// The physical checks of the body of `read` (with the problems of its input as written)
+/// into `s`: what they measured, the checks that could not be made, then passed or the
+/// problems; the number of problems.
+fn checks_report(s: &mut String, read: Read) -> usize {
+    let (body_problems, measured) = reduction::checks::examine(&read.body);
+    let problems: Vec<_> = read.problems.into_iter().chain(body_problems).collect();
+    let _ = write!(s, "\nphysical checks, measured:\n{}{measured}", read.measured);
+    for reason in &read.not_checked {
+        let _ = writeln!(s, "physical checks: not made: {reason}");
+    }
     if problems.is_empty() {
         let _ = writeln!(
             s,
             "physical checks: passed (symmetric K_CB and M_CB, positive masses, K_CB positive semi-definite with only rigid motions free, metadata consistent with the matrices, distinct interfaces)"
         );
     } else {
-        let _ = writeln!(s, "physical checks: FAILED, studies refuse this file:");
+        let _ = writeln!(s, "physical checks: FAILED, studies refuse this body:");
         for p in &problems {
             let _ = writeln!(s, "  - {p}");
         }

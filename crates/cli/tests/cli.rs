@@ -14,6 +14,11 @@ mod support;
 #[path = "cli/examples.rs"]
 mod examples;
 
+/// `inspect` on an MBDyn file whose record 12 is compared with its nodal masses, and on Matrix
+/// Market matrices with a node table (a table in millimetres refused).
+#[path = "cli/inspect.rs"]
+mod inspect;
+
 /// Reduced bodies are cached: a second run does not reduce again; a change that matters does.
 #[path = "cli/cache.rs"]
 mod cache;

@@ -6,10 +6,13 @@
 //!
 //! - on every `.rbody` load ([`crate::io::rbody::read`], [`crate::io::rbody::from_bytes`]);
 //! - on every MBDyn `.fem` read ([`crate::io::mbdyn::read_mbdyn_fem`]): the records as
-//!   written (records 9 and 10 symmetric, record 12 against the `FLEXMBS` first moment, see
+//!   written (records 9 and 10 symmetric, record 12 against the nodal masses of record 11,
+//!   see [`record_12_problems`], and against the `FLEXMBS` first moment, see
 //!   [`stated_moment_problems`]) and the body built from them;
-//! - on matrices from another code ([`crate::reduce_external_dofs`]): the node table against
-//!   $\mathbf K$ ([`node_table_problems`]) before the reduction, the body after it;
+//! - on matrices from another code (the study's `[bodies.matrices]`, `flexmbs inspect
+//!   K.mtx ...`): the node table against $\mathbf K$ ([`node_table_problems`]) and against
+//!   the mass of $\mathbf M$ ([`NodeCloud`]) before the reduction
+//!   ([`crate::reduce_external_dofs`]), the body after it;
 //! - on a body reduced by a study, before it is used or cached;
 //! - in `flexmbs inspect`, which prints the [`Measurements`] and the problems.
 //!
@@ -57,7 +60,43 @@
 //! units than K (millimetres) or with a node at the wrong place (two coincident nodes) strains
 //! the rotations everywhere or around that node. A uniform scale of the table of a mesh
 //! of solids (three translations per node) is not seen this way (the scaled rotation is
-//! still a rigid motion); the interfaces' six dofs see it.
+//! still a rigid motion).
+//!
+//! The mass does see it ([`NodeCloud`]): the mass $m = \mathbf t_a^T\mathbf M\mathbf t_a$
+//! of a rigid translation (the largest of the three directions) over the volume $V$ of a box
+//! around the nodes with dofs is a lower bound of the material's density, for the body lies
+//! in the convex hull of its nodes (of a solid mesh; for beams and shells the box is flat or
+//! thin and the bound higher still). Of two boxes the smaller counts: along the axes, and
+//! along the principal axes of the nodes (a skewed slender body). $m/V$ below
+//! $10^{-2}$ kg/m³ ([`MIN_DENSITY`]) is refused. A node table in millimetres with $\mathbf K$ and
+//! $\mathbf M$ in SI makes $V$ $10^9$ times too large: even the densest material
+//! (22,600 kg/m³) filling its box gives $2.3\cdot 10^{-5}$, 400 times below the limit
+//! (so does a whole model in mm-t-s read as SI). A body in metres is refused only if its
+//! material fills less than $10^{-2}/\rho$ of the box: $1.3\cdot 10^{-6}$ for steel,
+//! $3\cdot 10^{-4}$ for a 30 kg/m³ foam, far below the sparsest lattice (about $10^{-4}$ of
+//! its box in steel).
+//!
+//! # Record 12 of MBDyn files against their nodal masses
+//!
+//! Record 12 states the rigid body's mass $m$, centre of mass and inertia about it; the body
+//! is built from them (with records 14-18), so the checks above cannot see a wrong record 12
+//! (a mass ten times too large makes a consistent, wrong body). Record 11, the diagonal of
+//! a lumped mass matrix at the exposed nodes, states the same data as point masses (with
+//! their diagonal rotational inertias) at the undeformed node positions of records 5-7
+//! ([`record_12_problems`]). Lumping keeps the mass (row sums and diagonal scaling both do)
+//! and, for row sums, the first moment exactly ($\sum_i N_i\mathbf x_i = \mathbf x$), so the
+//! mass must agree to $10^{-3}$ and each coordinate of the centre to $10^{-3}$ of the body's
+//! size (the farthest node with mass from the nodal centre, or the radius of gyration):
+//! room for a file printed with four digits. The second moment of point masses differs from
+//! the continuum by the mesh's resolution (a bar of $n$ two-node elements, row-sum lumped:
+//! $mL^2(1/12 + 1/(6n^2))$ about its centre, $2/n^2$ too large), so each entry of the inertia
+//! must agree to $10^{-1}$ of the largest (a mesh of five elements along the body is 8 % off;
+//! a wrong inertia, a tensor about the wrong point or a unit slip, is off by far more). A
+//! file without record 11 cannot be compared: `flexmbs inspect` says so (for files written
+//! by flexmbs, the `FLEXMBS FIRST MOMENT` line still checks mass and centre,
+//! [`stated_moment_problems`]). A file with record 12 whose record 11 holds only some of the
+//! body's nodes is not one MBDyn reads right either: it builds invariants from record 11
+//! when given and adds them to the stated ones ([`crate::io::mbdyn`]).
 
 #![allow(non_snake_case)]
 
@@ -81,7 +120,7 @@ pub enum BodyCheckError {
     },
     /// The node table `file` of matrices from another code does not match their stiffness
     /// ([`node_table_problems`]).
-    #[error("body '{body}': the node table {} does not match the stiffness matrix: {}", file.display(), list(problems))]
+    #[error("body '{body}': the node table {} does not match the matrices: {}", file.display(), list(problems))]
     NodeTable {
         body: String,
         file: PathBuf,
@@ -166,6 +205,12 @@ pub enum PhysicsProblem {
         relative: f64,
         nodes: usize,
     },
+    /// The mass of $\mathbf M$ over the volume of the box around the node table's nodes
+    /// ([`NodeCloud`]) is below [`MIN_DENSITY`]: no material is that light.
+    #[error(
+        "the mass in M ({mass:.3e} kg) over the volume of the box around the node table's nodes ({volume:.3e} m^3) is {density:.3e} kg/m^3, below {MIN_DENSITY:.0e} kg/m^3 and far below any structural material: the node table is likely in other units than K and M (millimetres make the volume 1e9 times too large)"
+    )]
+    ImplausibleDensity { mass: f64, volume: f64, density: f64 },
     /// A value the file states (`what`) against the one its other data imply (`by`).
     #[error("the stated {what} {stated:.9e} contradicts {by}, which gives {implied:.9e}")]
     Stated {
@@ -190,6 +235,15 @@ const METADATA_RTOL: f64 = 1e-6;
 const COINCIDENT_RTOL: f64 = 1e-9;
 /// A row of $\mathbf K\boldsymbol\phi$ against the magnitudes that cancel in it (module docs).
 pub const NODE_TABLE_RTOL: f64 = 1e-6;
+/// The least mass over the node cloud's box volume \[kg/m^3\] of a body in SI units (module
+/// docs).
+pub const MIN_DENSITY: f64 = 1e-2;
+/// Record 12's mass (of the mass) and centre of mass (of the body's size) against the nodal
+/// masses of record 11 (module docs).
+pub const NODAL_MASS_RTOL: f64 = 1e-3;
+/// Record 12's inertia against the nodal masses of record 11, of the largest entry (module
+/// docs).
+pub const NODAL_INERTIA_RTOL: f64 = 0.1;
 
 /// What the checks measured on a body, for `flexmbs inspect`; `None` where an earlier check
 /// failed before the quantity could be computed (module docs for each tolerance).
@@ -685,4 +739,157 @@ pub fn stated_moment_problems(
         }
     }
     out
+}
+
+/// Record 12 of an MBDyn file as `stated` (mass $m$, centre of mass $\mathbf c_O$ from the
+/// frame origin, inertia $\mathbf J$ about the centre of mass) against the same data of the
+/// file's nodal masses (`nodal`: record 11's point masses and diagonal rotational inertias at
+/// the undeformed node positions), `size` the body's size (module docs): the mass to
+/// [`NODAL_MASS_RTOL`] of the nodal mass, each coordinate of the centre to [`NODAL_MASS_RTOL`]
+/// of `size`, each entry of the inertia to [`NODAL_INERTIA_RTOL`] of the nodal inertia's
+/// largest entry. One [`PhysicsProblem::Stated`] per value outside.
+pub fn record_12_problems(
+    stated: (f64, &Vector3<f64>, &Matrix3<f64>),
+    nodal: (f64, &Vector3<f64>, &Matrix3<f64>),
+    size: f64,
+) -> Vec<PhysicsProblem> {
+    const BY: &str = "the nodal masses of record 11 at the node positions of records 5-7";
+    let mut out = Vec::new();
+    let mut check = |what: String, stated: f64, implied: f64, tolerance: f64| {
+        if !((stated - implied).abs() <= tolerance) {
+            out.push(PhysicsProblem::Stated {
+                what,
+                stated,
+                implied,
+                by: BY,
+            });
+        }
+    };
+    let axes = ["x", "y", "z"];
+    check(
+        "record 12 mass".into(),
+        stated.0,
+        nodal.0,
+        NODAL_MASS_RTOL * nodal.0.abs(),
+    );
+    for a in 0..3 {
+        check(
+            format!("record 12 centre of mass [{}] from the frame origin", axes[a]),
+            stated.1[a],
+            nodal.1[a],
+            NODAL_MASS_RTOL * size,
+        );
+    }
+    let jmax = nodal.2.amax();
+    for a in 0..3 {
+        for b in a..3 {
+            check(
+                format!("record 12 inertia about the centre of mass [{}{}]", axes[a], axes[b]),
+                stated.2[(a, b)],
+                nodal.2[(a, b)],
+                NODAL_INERTIA_RTOL * jmax,
+            );
+        }
+    }
+    out
+}
+
+/// The node table of matrices from another code against their mass (module docs): the mass
+/// of a rigid translation through $\mathbf M$ over the volume of the smaller of two boxes
+/// around the nodes that have dofs (along the axes, and along the principal axes of the
+/// cloud), a lower bound of the material's density.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeCloud {
+    /// $\mathbf t_a^T\mathbf M\mathbf t_a$, the largest of the three directions $a$ \[kg\].
+    pub mass: f64,
+    /// The sides of the box \[m\].
+    pub sides: [f64; 3],
+    /// `mass` over the box's volume \[kg/m^3\]; infinite for a straight or flat cloud (a
+    /// beam or a plate, whose volume the nodes do not span).
+    pub density_bound: f64,
+}
+
+impl NodeCloud {
+    /// The cloud of `nodes` with `M` (row $d$ dof `dofs[d].1` of node `dofs[d].0`, an index
+    /// into `nodes` checked by the caller).
+    pub fn new(nodes: &[[f64; 3]], M: SparseColMatRef<'_, usize, f64>, dofs: &[(usize, usize)]) -> NodeCloud {
+        let mut mass = [0.0f64; 3];
+        for j in 0..M.ncols().min(dofs.len()) {
+            for (&i, &v) in M.row_idx_of_col_raw(j).iter().zip(M.val_of_col(j)) {
+                let (a, b) = (dofs.get(i).map_or(6, |d| d.1), dofs[j].1);
+                if a == b && a < 3 {
+                    mass[a] += v;
+                }
+            }
+        }
+        let mut used = vec![false; nodes.len()];
+        for &(node, _) in dofs {
+            used[node] = true;
+        }
+        let x: Vec<Vector3<f64>> = nodes
+            .iter()
+            .zip(&used)
+            .filter(|(_, &u)| u)
+            .map(|(x, _)| Vector3::from(*x))
+            .collect();
+        let sides = smaller_box(&x);
+        let mass = mass.iter().fold(0.0f64, |m, &v| m.max(v));
+        let volume = sides.iter().product::<f64>();
+        NodeCloud {
+            mass,
+            sides,
+            density_bound: if volume > 0.0 { mass / volume } else { f64::INFINITY },
+        }
+    }
+
+    /// [`PhysicsProblem::ImplausibleDensity`] when the density bound is below [`MIN_DENSITY`].
+    pub fn problem(&self) -> Option<PhysicsProblem> {
+        (self.density_bound < MIN_DENSITY).then(|| PhysicsProblem::ImplausibleDensity {
+            mass: self.mass,
+            volume: self.sides.iter().product(),
+            density: self.density_bound,
+        })
+    }
+}
+
+impl fmt::Display for NodeCloud {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let [a, b, c] = self.sides;
+        writeln!(
+            f,
+            "  node table: box {a:.3e} x {b:.3e} x {c:.3e} m, mass in M {:.6e} kg, mass / box volume {:.3e} kg/m^3 (limit {MIN_DENSITY:.0e})",
+            self.mass, self.density_bound
+        )
+    }
+}
+
+/// The sides of the smaller of two boxes around `x`: along the axes, and along the principal
+/// axes of the points (which fits a skewed slender body).
+fn smaller_box(x: &[Vector3<f64>]) -> [f64; 3] {
+    if x.is_empty() {
+        return [0.0; 3];
+    }
+    let c = x.iter().sum::<Vector3<f64>>() / x.len() as f64;
+    let spread = x
+        .iter()
+        .fold(Matrix3::zeros(), |s, p| s + (p - c) * (p - c).transpose());
+    // Non-finite coordinates (refused by every reader) would keep the eigensolver iterating.
+    let principal = if spread.iter().all(|v| v.is_finite()) {
+        spread.symmetric_eigen().eigenvectors
+    } else {
+        Matrix3::identity()
+    };
+    let sides = |axes: &Matrix3<f64>| -> [f64; 3] {
+        std::array::from_fn(|k| {
+            let along = x.iter().map(|p| axes.column(k).dot(&(p - c)));
+            let (lo, hi) = along.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+            hi - lo
+        })
+    };
+    let (aligned, turned) = (sides(&Matrix3::identity()), sides(&principal));
+    if turned.iter().product::<f64>() < aligned.iter().product::<f64>() {
+        turned
+    } else {
+        aligned
+    }
 }

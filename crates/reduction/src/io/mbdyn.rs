@@ -71,9 +71,12 @@
 //!
 //! The body read passes the physical checks of every body ([`crate::checks`]), and the
 //! records as written some of their own: records 9 and 10 symmetric (the body is built from
-//! their symmetric parts), record 12's mass and centre of mass against the `FLEXMBS FIRST
-//! MOMENT` line ([`crate::checks::stated_moment_problems`]). A file that fails is refused with
-//! [`FemError::Checks`]; [`read_mbdyn_fem_unchecked`] reads it for `flexmbs inspect`.
+//! their symmetric parts), record 12's mass, centre of mass and inertia against the nodal
+//! masses of record 11 at the node positions of records 5-7
+//! ([`crate::checks::record_12_problems`]), its mass and centre of mass against the
+//! `FLEXMBS FIRST MOMENT` line ([`crate::checks::stated_moment_problems`]). A file that fails
+//! is refused with [`FemError::Checks`]; [`read_mbdyn_fem_unchecked`] reads it for `flexmbs
+//! inspect`, with the record checks that could not be made ([`FemBody::not_checked`]).
 
 #![allow(non_snake_case)]
 
@@ -595,14 +598,29 @@ pub fn read_mbdyn_fem_unchecked(path: &Path, interfaces: Option<&[String]>) -> R
     parse_mbdyn_fem_unchecked(&bytes, path, interfaces)
 }
 
-/// A body read from a `.fem` file before the checks: the body, the notes on what was
-/// approximated, and the problems of the records as written (records 9, 10 symmetric,
-/// record 12 against the `FLEXMBS` first moment).
-pub type FemBody = (ReducedBody, Vec<String>, Vec<PhysicsProblem>);
+/// A body read from a `.fem` file before the checks.
+#[derive(Clone, Debug)]
+pub struct FemBody {
+    pub body: ReducedBody,
+    /// What was approximated (records missing, taken as MBDyn takes them).
+    pub notes: Vec<String>,
+    /// The problems of the records as written: records 9 and 10 symmetric, record 12 against
+    /// the nodal masses of record 11 and against the `FLEXMBS` first moment.
+    pub problems: Vec<PhysicsProblem>,
+    /// The record checks that could not be made, each with the reason (a record 12 without
+    /// the record 11 to compare it with), for `flexmbs inspect` to say so.
+    pub not_checked: Vec<String>,
+}
 
 /// The body and notes of `read`, refused (naming `origin`) when the records or the body fail
 /// the physical checks.
-fn checked((body, notes, mut problems): FemBody, origin: &Path) -> Result<(ReducedBody, Vec<String>), FemError> {
+fn checked(read: FemBody, origin: &Path) -> Result<(ReducedBody, Vec<String>), FemError> {
+    let FemBody {
+        body,
+        notes,
+        mut problems,
+        ..
+    } = read;
     problems.extend(crate::checks::physical_problems(&body));
     if problems.is_empty() {
         Ok((body, notes))
@@ -933,6 +951,8 @@ fn build_body(
         &rigid.J_O,
         r.first_moment.as_ref(),
     ));
+    let (nodal_problems, not_checked) = record_12_against_nodal_masses(&r, &y);
+    problems.extend(nodal_problems);
     let (M_a, K_a) = joint_matrices(&modal, &rigid, &M_x, &K_x);
     let data = joint_mass_data(&modal, &rigid);
 
@@ -990,7 +1010,51 @@ fn build_body(
         load_points: Vec::new(),
         attachment_modes: 0,
     };
-    Ok((body, notes, problems))
+    Ok(FemBody {
+        body,
+        notes,
+        problems,
+        not_checked,
+    })
+}
+
+/// Record 12 against the rigid-body mass data of the nodal masses of record 11 at the
+/// undeformed node positions ([`crate::checks::record_12_problems`]); without record 11, the
+/// reason the comparison was not made.
+fn record_12_against_nodal_masses(r: &Records, y: &[Vector3<f64>]) -> (Vec<PhysicsProblem>, Vec<String>) {
+    let Some((m, c_O, J)) = r.global else {
+        // The mass data are record 11's own: nothing to compare.
+        return (Vec::new(), Vec::new());
+    };
+    let Some(lumped) = &r.lumped else {
+        let partly = if r.first_moment.is_some() {
+            "its mass and centre of mass are checked against the FLEXMBS FIRST MOMENT line only, its inertia not at all"
+        } else {
+            "its mass, centre of mass and inertia are not checked"
+        };
+        return (
+            Vec::new(),
+            vec![format!(
+                "record 12 (rigid-body inertia) was not compared with nodal masses: the file has no record 11; {partly}"
+            )],
+        );
+    };
+    let nodal = lumped_rigid(lumped, y);
+    // The body's size: the farthest node with mass from the nodal centre of mass, or the
+    // radius of gyration.
+    let size = lumped
+        .iter()
+        .zip(y)
+        .filter(|(l, _)| l[0] != 0.0)
+        .map(|(_, y)| (y - nodal.1).norm())
+        .fold(
+            (nodal.2.trace().abs() / nodal.0.abs().max(f64::MIN_POSITIVE)).sqrt(),
+            f64::max,
+        );
+    (
+        crate::checks::record_12_problems((m, &c_O, &J), (nodal.0, &nodal.1, &nodal.2), size),
+        Vec::new(),
+    )
 }
 
 /// Mass data about the frame origin $O$ summed from the lumped masses at the exposed nodes
@@ -1004,19 +1068,29 @@ struct LumpedData {
     Q: Vec<Vec<Matrix3<f64>>>,
 }
 
-fn lumped_data(lumped: &[[f64; 6]], y: &[Vector3<f64>], shapes: &DMatrix<f64>, nx: usize) -> LumpedData {
+/// $(m, \mathbf c_O, \mathbf J_{com})$ of the nodal masses of record 11 at the undeformed
+/// node positions `y` (from the frame origin $O$): point masses with their diagonal rotational
+/// inertias.
+fn lumped_rigid(lumped: &[[f64; 6]], y: &[Vector3<f64>]) -> (f64, Vector3<f64>, Matrix3<f64>) {
     let mut m = 0.0;
     let mut first = Vector3::zeros();
     let mut J_O = Matrix3::zeros();
+    for (l, y) in lumped.iter().zip(y) {
+        m += l[0];
+        first += y * l[0];
+        J_O += Matrix3::from_diagonal(&Vector3::new(l[3], l[4], l[5])) - tilde(y) * tilde(y) * l[0];
+    }
+    let c_O = first / m.max(f64::MIN_POSITIVE);
+    (m, c_O, J_O + tilde(&c_O) * tilde(&c_O) * m)
+}
+
+fn lumped_data(lumped: &[[f64; 6]], y: &[Vector3<f64>], shapes: &DMatrix<f64>, nx: usize) -> LumpedData {
     let mut inv3 = DMatrix::zeros(3, nx);
     let mut inv4 = DMatrix::zeros(3, nx);
     let mut P = vec![Matrix3::zeros(); nx];
     let mut Q = vec![vec![Matrix3::zeros(); nx]; nx];
     for (i, l) in lumped.iter().enumerate() {
         let (mi, Ji) = (l[0], Matrix3::from_diagonal(&Vector3::new(l[3], l[4], l[5])));
-        m += mi;
-        first += y[i] * mi;
-        J_O += Ji - tilde(&y[i]) * tilde(&y[i]) * mi;
         let phi_t = |j: usize| Vector3::new(shapes[(6 * i, j)], shapes[(6 * i + 1, j)], shapes[(6 * i + 2, j)]);
         let phi_r = |j: usize| Vector3::new(shapes[(6 * i + 3, j)], shapes[(6 * i + 4, j)], shapes[(6 * i + 5, j)]);
         for j in 0..nx {
@@ -1032,10 +1106,8 @@ fn lumped_data(lumped: &[[f64; 6]], y: &[Vector3<f64>], shapes: &DMatrix<f64>, n
             }
         }
     }
-    let c_O = first / m.max(f64::MIN_POSITIVE);
-    let J_com = J_O + tilde(&c_O) * tilde(&c_O) * m;
     LumpedData {
-        global: (m, c_O, J_com),
+        global: lumped_rigid(lumped, y),
         inv3,
         inv4,
         P,

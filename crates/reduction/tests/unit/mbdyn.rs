@@ -17,7 +17,7 @@ use std::path::Path;
 
 /// The manual's "Example: Dynamic Model" (input manual, appendix "Modal Element Data"):
 /// three aligned nodes with unit lumped masses and inertias, two modes.
-const MANUAL_EXAMPLE: &str = "** MBDyn MODAL DATA FILE
+pub(crate) const MANUAL_EXAMPLE: &str = "** MBDyn MODAL DATA FILE
 ** NODE SET \"ALL\"
 
 

@@ -133,6 +133,14 @@ enum AuxiliaryAt {
 }
 
 impl Part {
+    /// The number of `node` (an index into the base mesh) in the part's mesh file, the deck
+    /// label users find it by. `None` for generated meshes (their tags are positions) and for
+    /// the nodes the program adds (spider and auxiliary nodes, after the file's nodes).
+    pub fn deck_label(&self, node: usize) -> Option<u64> {
+        self.mesh_file.as_ref()?;
+        self.base.mesh.node_tags.get(node).copied()
+    }
+
     /// The FE model a static or modal analysis runs on: the part with `supports` and the
     /// interfaces. Copies the base model once.
     pub fn build(&self, supports: &[SupportSpec]) -> Result<Built, FeError> {

@@ -123,6 +123,13 @@ fn tag(built: &Built, node: NodeId) -> u64 {
         .unwrap_or(node.0 as u64 + 1)
 }
 
+/// An interface node's deck label (its number in the part's mesh file), empty without one.
+fn label_cell(label: Option<u64>) -> Cell {
+    label.map_or(Cell::Empty, |l| {
+        i64::try_from(l).map_or_else(|_| Cell::Text(l.to_string()), Cell::Int)
+    })
+}
+
 /// `x` with 7 significant digits; `-0` printed as `0`.
 fn sci(x: f64) -> String {
     format!("{:.6e}", x + 0.0)
@@ -190,6 +197,7 @@ fn run_static(
             "rx [rad]",
             "ry [rad]",
             "rz [rad]",
+            "node label",
         ],
     );
     let mut report = vec![format!(
@@ -209,6 +217,7 @@ fn run_static(
         let u = s.displacements[node.index()];
         let mut row = vec![Cell::from(name.clone()), Cell::from(node.index())];
         row.extend(u.map(Cell::Num));
+        row.push(label_cell(part.deck_label(node.index())));
         csv.row(row);
         report.push(format!(
             "interface '{name}': u = {} m, theta = {} rad",
@@ -383,10 +392,14 @@ fn run_reduce(
     let name = format!("{}.{}", part.name, reduction::file::EXTENSION);
     obs.file(&name, &r.file)?;
 
-    let mut csv = Table::new("interfaces", &["index", "name", "node", "x [m]", "y [m]", "z [m]"]);
+    let mut csv = Table::new(
+        "interfaces",
+        &["index", "name", "node", "x [m]", "y [m]", "z [m]", "node label"],
+    );
     for (k, i) in body.interfaces.iter().enumerate() {
         let mut row = vec![Cell::from(k), Cell::from(i.name.clone()), Cell::Int(i64::from(i.node))];
         row.extend(i.position.map(Cell::Num));
+        row.push(label_cell(i.node_label));
         csv.row(row);
     }
     obs.table(&csv)?;

@@ -114,12 +114,8 @@ pub fn reduce_part(study: &Study, part: &Part, cache: &Path, obs: &mut dyn Obser
 /// no labels and their bytes; the nodes the program adds (spider and auxiliary nodes) come
 /// after the file's nodes and have no number in the file.
 fn label_interfaces(part: &Part, body: &mut ReducedBody) {
-    if part.mesh_file.is_none() {
-        return;
-    }
-    let labels = &part.base.mesh.node_tags;
     for i in &mut body.interfaces {
-        i.node_label = labels.get(i.node as usize).copied();
+        i.node_label = part.deck_label(i.node as usize);
     }
 }
 

@@ -386,12 +386,53 @@ fn imported_bodies_that_fail_the_physical_checks_are_refused_where_they_are_give
     );
 }
 
+/// A free steel block [0, 0.4] x [0, 0.1] x [0, 0.05] of hex8 solids with RBE2 spiders on
+/// both end faces, and its interface nodes.
+fn spidered_block() -> (fe_model::FeModel, usize, usize) {
+    let mesh = fe_model::box_mesh::box_mesh(fe_model::CellKind::Hex8, [0.4, 0.1, 0.05], [8, 2, 1]).unwrap();
+    let steel = fe_model::IsotropicMaterial::new("steel", 2.1e11, 0.3, 7850.0).unwrap();
+    let mut model = fe_model::box_mesh::solid_model(mesh, steel, fe_model::MassKind::Consistent).unwrap();
+    let a = fe_model::add_interface_on_set(&mut model, "a", "x0", None, fe_model::SpiderKind::Rbe2).unwrap();
+    let b = fe_model::add_interface_on_set(&mut model, "b", "x1", None, fe_model::SpiderKind::Rbe2).unwrap();
+    (model, a.index(), b.index())
+}
+
+#[test]
+fn a_solid_node_table_in_millimetres_is_refused_by_the_mass_of_m() {
+    // Exported after the spiders were eliminated: three translations on the solid nodes,
+    // six on the interface nodes.
+    let dir = scratch("solid-mm");
+    let (model, a, b) = spidered_block();
+    export_matrices(&dir, &model);
+    let text = matrices_study(a, b);
+    let body = flexible_body(&study(&dir, &text));
+    assert!((body.inertia.mass - 7850.0 * 0.4 * 0.1 * 0.05).abs() < 1e-9 * body.inertia.mass);
+    // The table in millimetres, K and M in SI: the mass over the table's volume is 1e9
+    // times too small for any material.
+    let mm: String = model
+        .mesh
+        .nodes
+        .iter()
+        .map(|x| format!("{} {} {}\n", 1e3 * x.x, 1e3 * x.y, 1e3 * x.z))
+        .collect();
+    std::fs::write(dir.join("nodes.txt"), mm).unwrap();
+    let e = load_error(&dir, &text);
+    assert!(
+        e.contains("bodies[0].matrices.nodes")
+            && e.contains("nodes.txt")
+            && e.contains("kg/m^3")
+            && e.contains("millimetres"),
+        "{e}"
+    );
+}
+
 /// Interfaces of a deck's part carry the deck's node numbers: a beam deck numbered sparsely
 /// (10, 20, ...) gives its interface and auxiliary nodes their labels, from the reduction and
 /// from the cache; a solid deck's spider nodes, which the deck does not have, get none.
-#[test]
-fn interfaces_on_deck_nodes_keep_the_decks_labels() {
-    let dir = scratch("interface-labels");
+/// A beam part from an Abaqus deck numbered sparsely (nodes 10, 20, ..., 50; sets `root`
+/// (10) and `end` (50)), interfaces `tip` and `root`, reduced with the auxiliary node; and a
+/// solid part from a deck whose interface `tip` is an RBE2 spider node.
+fn labelled_parts(dir: &Path) -> String {
     let deck = dir.join("beam.inp");
     let mut text = String::from("*NODE\n");
     for k in 0..=4 {
@@ -412,7 +453,13 @@ fn interfaces_on_deck_nodes_keep_the_decks_labels() {
         "{}spider = \"rbe2\"\n[parts.reduction]\nmodes = 2\n",
         mesh_part("solid", &fixture("import/hex20_labels.inp"), "", "tip", "")
     );
-    let s = study(&dir, &[beam, solid].concat());
+    [beam, solid].concat()
+}
+
+#[test]
+fn interfaces_on_deck_nodes_keep_the_decks_labels() {
+    let dir = scratch("interface-labels");
+    let s = study(&dir, &labelled_parts(&dir));
     let cache = dir.join("cache");
     let labels = |part: usize| {
         let r = study::reduce_part(&s, &s.parts[part], &cache, &mut ()).unwrap();
@@ -432,4 +479,58 @@ fn interfaces_on_deck_nodes_keep_the_decks_labels() {
     assert_eq!(labels(0), (false, beam_labels.clone()));
     assert_eq!(labels(0), (true, beam_labels));
     assert_eq!(labels(1), (false, vec![("tip".to_string(), None)]));
+}
+
+/// The results' `interfaces.csv` (of a static and of a reduce analysis) end with the column
+/// `node label`, the deck's node number, empty for the spider node the deck does not have;
+/// the columns before it are those readers already know.
+#[test]
+fn interfaces_csv_ends_with_the_deck_label() {
+    let dir = scratch("interfaces-csv");
+    let analyses = "[[analyses]]\ntype = \"static\"\nname = \"bend\"\npart = \"beam\"\n\
+                    supports = [{ at = \"root\" }]\nloads = [{ at = \"tip\", force = [0.0, 0.0, -10.0] }]\n\
+                    [[analyses]]\ntype = \"reduce\"\nname = \"reduce-beam\"\npart = \"beam\"\n\
+                    [[analyses]]\ntype = \"reduce\"\nname = \"reduce-solid\"\npart = \"solid\"\n";
+    let s = study(&dir, &format!("{}\n{analyses}", labelled_parts(&dir)));
+    let out = dir.join("results");
+    let options = study::Options {
+        out: Some(out.clone()),
+        cache: Some(dir.join("cache")),
+        ..study::Options::default()
+    };
+    study::run(&s, &options, &mut ()).unwrap();
+    let table = |analysis: &str| {
+        let text = std::fs::read_to_string(out.join(analysis).join("interfaces.csv")).unwrap();
+        let mut lines = text
+            .lines()
+            .map(|l| l.split(',').map(str::to_string).collect::<Vec<_>>());
+        let header = lines.next().unwrap();
+        (header, lines.collect::<Vec<_>>())
+    };
+    let (header, rows) = table("bend");
+    assert_eq!(
+        header,
+        [
+            "interface",
+            "node",
+            "ux [m]",
+            "uy [m]",
+            "uz [m]",
+            "rx [rad]",
+            "ry [rad]",
+            "rz [rad]",
+            "node label"
+        ]
+    );
+    let labels: Vec<(&str, &str)> = rows.iter().map(|r| (r[0].as_str(), r[8].as_str())).collect();
+    assert_eq!(labels, [("tip", "50"), ("root", "10")]);
+    let (header, rows) = table("reduce-beam");
+    assert_eq!(
+        header,
+        ["index", "name", "node", "x [m]", "y [m]", "z [m]", "node label"]
+    );
+    let labels: Vec<(&str, &str)> = rows.iter().map(|r| (r[1].as_str(), r[6].as_str())).collect();
+    assert_eq!(labels, [("tip", "50"), ("root", "10"), ("auxiliary", "30")]);
+    let (_, rows) = table("reduce-solid");
+    assert_eq!((rows[0][1].as_str(), rows[0][6].as_str()), ("tip", ""));
 }
