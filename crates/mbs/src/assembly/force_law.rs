@@ -238,6 +238,25 @@ impl BoundLaw {
         })
     }
 
+    /// The power $\lambda x(t)\,\mathbf f\cdot\mathbf v$ of the loads the law sets, from its
+    /// values `u` (the energy balance's work of the loads): `motion(node, moment)` is the
+    /// node's velocity, or its angular velocity for a moment.
+    pub(crate) fn load_power(
+        &self,
+        u: &[f64],
+        (t, lambda): (f64, f64),
+        motion: impl Fn(usize, bool) -> nalgebra::Vector3<f64>,
+    ) -> f64 {
+        let mut power = 0.0;
+        for (acts, k) in &self.outputs {
+            if let Acts::Load { node, moment, time } = acts {
+                let v = motion(*node, *moment);
+                power += lambda * time.eval(t).0 * (0..3).map(|i| u[k + i] * v[i]).sum::<f64>();
+            }
+        }
+        power
+    }
+
     /// Adds the law's values `u` to the residual: each effort not held (`held(actuator)`) on
     /// its row of `F`, each load as the external force $\lambda x(t)\mathbf f$ of its node
     /// (`node_forces`: $-$ into the node residual, + into its external part). Returns the

@@ -15,8 +15,9 @@
 //! * Energy balance: with $E = T + U + V$ (kinetic, strain, gravity: [`System::energies`]),
 //!   the exact motion obeys $E - E_0 = W_{in} - D$, with $W_{in} = \int P_{in}\,dt$ the work of
 //!   the actuators ($u\dot x$), the drivers (effort times prescribed rate) and the loads
-//!   ($\mathbf f\cdot\mathbf v + \mathbf m\cdot\boldsymbol\omega$, user forces and loads at
-//!   flexible bodies' load points as $\mathbf Q\cdot\dot{\mathbf q}$), and $D = \int P_d\,dt$ the
+//!   ($\mathbf f\cdot\mathbf v + \mathbf m\cdot\boldsymbol\omega$, the loads a force law sets
+//!   among them; user forces and loads at flexible bodies' load points as
+//!   $\mathbf Q\cdot\dot{\mathbf q}$), and $D = \int P_d\,dt$ the
 //!   dissipation of the dampers (springs' $c\dot l^2$, joint springs' $c\dot x^2$, the limits,
 //!   the flexible bodies' damping forces $\mathbf f_d\cdot\dot{\mathbf q}$). The powers are
 //!   evaluated at each accepted step and integrated by the trapezoid rule (`EnergyAccount`,
@@ -724,7 +725,14 @@ impl System {
             .map(|(a, u)| u * rate(self.topo.joint_scalars[a.joint.index()][a.coordinate]))
             .sum();
         let drivers = ws.reactions.iter().zip(&ws.presc_rate).map(|(r, xd)| r * xd).sum();
-        let (loads, body_damping) = self.element_powers(state, ws);
+        let (mut loads, body_damping) = self.element_powers(state, ws);
+        if let (Some(law), Some(buf)) = (&self.force_law, &ws.law) {
+            // The loads a force law sets act on their nodes directly, not through a load
+            // element; `ws.law` holds the law's values at `state`. A dynamic run's load
+            // factor is 1.
+            let motion = |n: usize, moment: bool| if moment { ws.nodes[n].omega } else { ws.nodes[n].v };
+            loads += law.load_power(&buf.u, (state.time, 1.0), motion);
+        }
         let nodes = &ws.nodes;
         let mut dissipated = body_damping;
         for s in &self.springs {
