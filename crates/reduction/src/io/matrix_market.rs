@@ -79,7 +79,7 @@ enum Symmetry {
 
 /// Parses the text of a Matrix Market file; `origin` names it in errors. Never panics.
 ///
-/// Every line is checked ([`check`]) and its entry kept; the entries become a faer matrix
+/// Every line is checked (by `check`) and its entry kept; the entries become a faer matrix
 /// (duplicates summed).
 pub fn parse_matrix_market(bytes: &[u8], origin: &Path) -> Result<SparseColMat<usize, f64>, ReductionError> {
     let error = |line: Option<usize>, what: String| ReductionError::MatrixMarket {
