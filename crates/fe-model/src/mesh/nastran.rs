@@ -903,7 +903,8 @@ impl<'a> Reader<'a> {
         let mut material_names = BTreeMap::new();
         let stress = self.units.to_si(Quantity::Stress);
         for (&mid, &(E, G, nu, rho, file, line)) in &self.mat1 {
-            let (E, G) = (E.map(|E| E * stress), G.map(|G| G * stress));
+            // E and G stay in the deck's units until the checks below have passed, so that
+            // their messages quote the numbers the user wrote.
             let rho = rho * self.wtmass * self.units.to_si(Quantity::Density);
             let path = &self.files[file];
             let entity = format!("MAT1 {mid}");
@@ -934,6 +935,7 @@ impl<'a> Reader<'a> {
                 (None, Some(G), Some(nu)) => (2.0 * G * (1.0 + nu), nu),
                 _ => return Err(bad("two of E, G, NU", "fewer".into())),
             };
+            let E = E * stress;
             imported
                 .materials
                 .push(material(&name, E, nu, rho, path, line, &entity)?);

@@ -286,6 +286,27 @@ fn nastran_inline(text: &str) -> Result<ImportedModel, ImportError> {
 }
 
 #[test]
+fn a_contradictory_mat1_in_mm_t_s_is_quoted_in_the_decks_units() {
+    // E = 210000 MPa and NU = 0.3 give G = 80769 MPa; the card says 50000. The message quotes
+    // the numbers as written in the deck (MPa), not their SI conversion (Pa).
+    let text = "BEGIN BULK
+GRID    1               0.      0.      0.
+GRID    2               1.      0.      0.
+GRID    3               0.      1.      0.
+GRID    4               0.      0.      1.
+CTETRA  7       1       1       2       3       4
+PSOLID  1       3
+MAT1    3       210000. 50000.  0.3     7.85-9
+ENDDATA
+";
+    let err = nastran::parse(text, Path::new("mm.bdf"), UnitSystem::MmTonneSecond).unwrap_err();
+    let msg = err.to_string();
+    assert!(msg.contains("mm.bdf") && msg.contains("MAT1 3"), "{msg}");
+    assert!(msg.contains("G = 5e4") && msg.contains("8.0769"), "{msg}");
+    assert!(!msg.contains("e10"), "SI values in the message: {msg}");
+}
+
+#[test]
 fn nastran_field_formats_shorthand_coordinate_systems_and_lists() {
     let text = "SOL 103
 CEND
