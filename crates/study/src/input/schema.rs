@@ -270,26 +270,27 @@ pub struct MeshFile {
     pub units: Option<UnitsFile>,
 }
 
-/// `units` of `[parts.mesh]`: a consistent unit system, converted to SI on read.
+/// `units` of `[parts.mesh]`: a consistent unit system, converted to SI on read. Its names
+/// are fe-model's ([`fe_model::units::UnitSystem::parse`]), defined there once.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-pub enum UnitsFile {
-    #[serde(rename = "SI", alias = "si", alias = "m-kg-s")]
-    Si,
-    #[serde(rename = "mm-t-s")]
-    MmTonneSecond,
-    #[serde(rename = "mm-kg-ms")]
-    MmKgMillisecond,
+#[serde(try_from = "String")]
+pub struct UnitsFile(fe_model::units::UnitSystem);
+
+impl TryFrom<String> for UnitsFile {
+    type Error = String;
+
+    fn try_from(name: String) -> Result<Self, String> {
+        use fe_model::units::UnitSystem;
+        UnitSystem::parse(&name)
+            .map(UnitsFile)
+            .ok_or_else(|| format!("unknown unit system '{name}', expected {}", UnitSystem::NAMES))
+    }
 }
 
 impl UnitsFile {
     /// The unit system it names.
     pub fn system(self) -> fe_model::units::UnitSystem {
-        use fe_model::units::UnitSystem;
-        match self {
-            UnitsFile::Si => UnitSystem::Si,
-            UnitsFile::MmTonneSecond => UnitSystem::MmTonneSecond,
-            UnitsFile::MmKgMillisecond => UnitSystem::MmKgMillisecond,
-        }
+        self.0
     }
 }
 
