@@ -1010,6 +1010,13 @@ fn build_body(
         load_points: Vec::new(),
         attachment_modes: 0,
     };
+    // A file from another code whose record 12 nothing checks: its notes say so, so that a
+    // study loading it warns (inspect reports `not_checked` for every file). A file written by
+    // flexmbs has its mass and centre checked by the FIRST MOMENT line, and its inertia is a
+    // reduction of ours.
+    if r.first_moment.is_none() {
+        notes.extend(not_checked.iter().cloned());
+    }
     Ok(FemBody {
         body,
         notes,

@@ -289,6 +289,11 @@ fn a_record_12_without_nodal_masses_is_reported_as_not_compared() {
     let bare: String = text.lines().filter(|l| !l.starts_with("** FLEXMBS")).map(|l| format!("{l}\n")).collect();
     let read = parse_mbdyn_fem_unchecked(bare.as_bytes(), Path::new("beam.fem"), None).unwrap();
     assert!(read.not_checked[0].contains("are not checked"), "{:?}", read.not_checked);
+    // ... and a study loading it is told (the notes become its warnings); flexmbs's own file
+    // above adds no note.
+    assert_eq!(read.notes, read.not_checked);
+    let own = parse_mbdyn_fem_unchecked(text.as_bytes(), Path::new("beam.fem"), None).unwrap();
+    assert!(own.notes.iter().all(|n| !n.contains("record 12")), "{:?}", own.notes);
     // Record 11 alone: the mass data are its own, nothing to compare.
     let read = read_manual(super::mbdyn::MANUAL_EXAMPLE).unwrap();
     assert_eq!(read.not_checked, Vec::<String>::new());
