@@ -622,17 +622,8 @@ pub fn node_table_problems(
         return Vec::new();
     }
     // The centroid of the nodes with dofs: rotations about it keep phi of the body's size.
-    let mut used = vec![false; nodes.len()];
-    for &(node, _) in dofs {
-        used[node] = true;
-    }
-    let count = used.iter().filter(|&&u| u).count().max(1) as f64;
-    let c = nodes
-        .iter()
-        .zip(&used)
-        .filter(|(_, &u)| u)
-        .fold(Vector3::zeros(), |s, (x, _)| s + Vector3::from(*x))
-        / count;
+    let x = nodes_with_dofs(nodes, dofs);
+    let c = x.iter().fold(Vector3::zeros(), |s, x| s + x) / x.len().max(1) as f64;
     // phi[d][k]: rigid motion k (translations x, y, z, rotations about x, y, z) at dof d.
     let phi: Vec<[f64; 6]> = dofs
         .iter()
@@ -822,17 +813,7 @@ impl NodeCloud {
                 }
             }
         }
-        let mut used = vec![false; nodes.len()];
-        for &(node, _) in dofs {
-            used[node] = true;
-        }
-        let x: Vec<Vector3<f64>> = nodes
-            .iter()
-            .zip(&used)
-            .filter(|(_, &u)| u)
-            .map(|(x, _)| Vector3::from(*x))
-            .collect();
-        let sides = smaller_box(&x);
+        let sides = smaller_box(&nodes_with_dofs(nodes, dofs));
         let mass = mass.iter().fold(0.0f64, |m, &v| m.max(v));
         let volume = sides.iter().product::<f64>();
         NodeCloud {
@@ -861,6 +842,21 @@ impl fmt::Display for NodeCloud {
             self.mass, self.density_bound
         )
     }
+}
+
+/// The positions of the nodes of a node table that carry dofs (`dofs[d].0`: the node of row
+/// $d$), in the table's order: the nodes the matrices' checks measure.
+fn nodes_with_dofs(nodes: &[[f64; 3]], dofs: &[(usize, usize)]) -> Vec<Vector3<f64>> {
+    let mut used = vec![false; nodes.len()];
+    for &(node, _) in dofs {
+        used[node] = true;
+    }
+    nodes
+        .iter()
+        .zip(&used)
+        .filter(|(_, &u)| u)
+        .map(|(x, _)| Vector3::from(*x))
+        .collect()
 }
 
 /// The sides of the smaller of two boxes around `x`: along the axes, and along the principal
