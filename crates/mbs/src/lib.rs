@@ -195,7 +195,7 @@ pub use assembly::system::sensors::{Energies, PendingRows, SensorRecord};
 pub use assembly::system::{LinearSolver, Matrices, NodeKinematics, System, DENSE_MAX};
 pub use error::{At, Entity, Incomplete, ModelError, SolveError};
 pub use ids::{BodyId, JointId, NodeId};
-pub use model::force_law::{ForceLaw, LawError, LawInput, LawOutput, LawPorts, LawTarget};
+pub use model::force_law::{ForceLaw, LawError, LawInput, LawOutput, LawPorts, LawRead, LawTarget};
 pub use model::merge::{weld_points, WeldError};
 pub use model::time_function::{Interpolation, TimeFunction};
 pub use model::units::CoordinateQuantity;

@@ -1,14 +1,17 @@
-//! `flexmbs.ForceLaw`: a Python callable of the time and the joint coordinates that gives
-//! actuator efforts and point-load values inside the implicit step ([`mbs::force_law`]),
-//! passed to `Study.run(forces=...)` and `Study.simulation(forces=...)`.
+//! `flexmbs.ForceLaw`: a Python callable of the time, the joint coordinates and the position
+//! and velocity sensors that gives actuator efforts and point-load values inside the implicit
+//! step ([`mbs::force_law`]), passed to `Study.run(forces=...)` and
+//! `Study.simulation(forces=...)`.
 //!
-//! The callable is `function(t, q, qd) -> {name: value}` with `q`, `qd` dicts of the joint
-//! coordinates and rates it reads (by joint name; `name[k]` for a joint of several
-//! coordinates). It runs at every Newton iteration, and (without `jacobian`) at perturbed
-//! coordinates for its finite-difference derivatives: the GIL is taken for each call only.
-//! A Python exception, a value that is not finite, a name it should return but does not, or
-//! one it should not return, stops the solve with a `SolveError` located at the time and step,
-//! naming the output, with the Python exception as its `__cause__`.
+//! The callable is `function(t, q, qd) -> {name: value}` with `q`, `qd` dicts of what it reads
+//! and the rates (by joint name, `name[k]` for a joint of several coordinates; a position
+//! sensor's `tip.position_x`, ... with the velocity as rate; a velocity sensor's
+//! `tipv.velocity_x`, ..., in `q` only: it has no rate). It runs at every Newton iteration,
+//! and (without `jacobian`) at perturbed values for its finite-difference derivatives: the
+//! GIL is taken for each call only. A Python exception, a value that is not finite, a name it
+//! should return but does not, or one it should not return, stops the solve with a
+//! `SolveError` located at the time and step, naming the output, with the Python exception
+//! as its `__cause__`.
 
 use crate::signature::{Class, Member::*};
 use mbs::force_law::{Differences, ForceLaw as MbsLaw, LawError, LawPorts, LawTarget};
@@ -19,17 +22,22 @@ use std::sync::Arc;
 /// A force law evaluated in every Newton iteration of the implicit time step (and of an
 /// equilibrium), its derivatives in the iteration matrix.
 ///
-/// `function(t, q, qd)` gets the time [s] and dicts `q`, `qd` of the joint coordinates [rad or
-/// m] and rates it reads (`reads`: joint names, default every joint; a joint of several
-/// coordinates is `name[0]`, `name[1]`, ...), and returns a dict with one entry per name of
-/// `outputs`: an actuator's effort [N m or N], or a point load's force [N] (its moment [N m]
-/// when the load gives no force) as three numbers in global axes, which the load's time
-/// function multiplies. The outputs replace the actuators' `function`/`pid` and the loads'
-/// values. Without `jacobian`, the derivatives by the coordinates and rates come from
-/// finite differences (`differences`: `"central"`, 4 calls per coordinate read, or
-/// `"forward"`, 2; step `step` times max(|value|, 1)); `jacobian(t, q, qd)` returns instead
-/// `{output: {coordinate: (d/dq, d/dqd)}}` (three numbers each for a load; entries left out
-/// are zero).
+/// `function(t, q, qd)` gets the time [s] and dicts `q`, `qd` of the values and rates it
+/// reads (`reads`, default every joint): a joint's coordinate [rad or m] by the joint's name
+/// (`name[0]`, `name[1]`, ... for a joint of several coordinates); a `position` sensor's
+/// coordinates in global axes [m] as its CSV columns are named, `tip.position_x`,
+/// `tip.position_y`, `tip.position_z`, their rates the velocity [m/s]; a `velocity` sensor's
+/// components `tipv.velocity_x`, ... [m/s], in `q` only (no rate). A sensor's name reads its
+/// three columns. It returns a dict with one entry per name of `outputs`: an actuator's effort
+/// [N m or N], or a point load's force [N] (its moment [N m] when the load gives no force) as
+/// three numbers in global axes, which the load's time function multiplies. The outputs
+/// replace the actuators' `function`/`pid` and the loads' values. Without `jacobian`, the
+/// derivatives by the values and rates read come from finite differences (`differences`:
+/// `"central"`, 4 calls per joint coordinate or position read, 2 per velocity, or
+/// `"forward"`, half as many; step `step` times max(|value|, 1)); `jacobian(t, q, qd)`
+/// returns instead `{output: {name read: (d/dq, d/dqd)}}` (three numbers each for a load;
+/// entries left out are zero; d/dqd of a velocity is not used). The solver takes them through
+/// the motion of the sensor's point to every coordinate it depends on.
 #[pyclass(module = "flexmbs", name = "ForceLaw", frozen)]
 pub struct ForceLaw {
     source: Arc<Source>,
@@ -108,7 +116,7 @@ impl ForceLaw {
         self.source.outputs.clone()
     }
 
-    /// The joints it reads (`None`: every joint).
+    /// The joints and sensors it reads (`None`: every joint).
     #[getter]
     fn reads(&self) -> Option<Vec<String>> {
         self.source.reads.clone()
@@ -176,7 +184,9 @@ impl PythonLaw {
         let (q, qd) = (PyDict::new(py), PyDict::new(py));
         for (i, input) in self.ports.inputs.iter().enumerate() {
             q.set_item(&input.name, x[i])?;
-            qd.set_item(&input.name, xd[i])?;
+            if input.reads.has_rate() {
+                qd.set_item(&input.name, xd[i])?;
+            }
         }
         Ok((q, qd))
     }

@@ -1,7 +1,8 @@
 """Force laws evaluated inside the implicit step (``flexmbs.ForceLaw``): an elbow damper
 written in Python gives the motion of the study's own PID law on a flexible double pendulum,
 both follow the rigid double pendulum with the same damper (scipy's solve_ivp), a raising
-law stops the solve where it happened, and the law acts in a Simulation stepped by hand."""
+law stops the solve where it happened, the law acts in a Simulation stepped by hand, and a
+law reading a position sensor sees the sensor's value inside the step."""
 
 import shutil
 
@@ -136,3 +137,39 @@ def test_the_law_acts_in_a_stepped_simulation(study, tmp_path):
     state = sim.state()
     k = next(i for i, label in enumerate(state["labels"]) if "elbow" in label)
     assert sim.actuator_effort("elbow-damper") == pytest.approx(-C * state["velocity"][k], rel=1e-12)
+
+
+def test_a_law_reading_a_position_sensor_sees_it_inside_the_step(study, tmp_path):
+    calls = []
+
+    def law(t, q, qd):
+        calls.append((t, q["tip.position_x"], q["tip.position_y"], qd["tip.position_x"]))
+        assert set(q) == set(qd) == {"elbow", "tip.position_x", "tip.position_y", "tip.position_z"}
+        # The damper, plus a term of the tip that is zero: the PID's motion.
+        return {"elbow-damper": -C * qd["elbow"] + 0.0 * q["tip.position_y"]}
+
+    forces = flexmbs.ForceLaw(law, outputs=["elbow-damper"], reads=["elbow", "tip"])
+    sim = study.simulation(forces=forces)
+    pid = study.simulation()
+    for _ in range(20):
+        calls.clear()
+        sim.step()
+        pid.step()
+        tip = sim.sensor("tip")
+        t = sim.time
+        # Called in the step's Newton iterations at the step's time, at the converged state
+        # among them: the sensor's value of the step (central differences move it by 1e-6).
+        now = [c for c in calls if c[0] == t]
+        assert len(now) >= 4, calls
+        x, y = min(((cx, cy) for _, cx, cy, _ in now), key=lambda p: abs(p[0] - tip[0]) + abs(p[1] - tip[1]))
+        assert abs(x - tip[0]) < 1e-12 and abs(y - tip[1]) < 1e-12, (x, y, tip)
+    # The tip's term is zero: the PID's motion, to Newton's tolerance.
+    err, peak = peak_error(np.array(sim.sensor("elbow")), np.array(pid.sensor("elbow")))
+    assert err <= 1e-6 * peak, f"{err:.3e} (peak {peak:.3e})"
+
+
+def test_sensors_a_law_cannot_read_are_refused(study, tmp_path):
+    with pytest.raises(flexmbs.FlexmbsError, match="sensor 'torque' is not a position or velocity sensor"):
+        study.run(results_dir=tmp_path / "u", forces=damper_law(reads=["elbow", "torque"]))
+    with pytest.raises(flexmbs.FlexmbsError, match="did you mean"):
+        study.run(results_dir=tmp_path / "u", forces=damper_law(reads=["elbow", "tip.position_w"]))

@@ -1,13 +1,13 @@
-//! A [`ForceLaw`] bound to a system: its inputs' scalar coordinates, where its outputs act,
-//! and the slots of its tangent entries in the system pattern
-//! ([`crate::model::force_law`] gives the equations).
+//! A [`ForceLaw`] bound to a system: what its inputs read (scalar coordinates, node
+//! kinematics), the unknowns they hang on, where its outputs act, and the slots of its
+//! tangent entries in the system pattern ([`crate::model::force_law`] gives the equations).
 
 #![allow(non_snake_case)]
 
-use crate::assembly::coordinates::{scalar_values, Slot, Values};
+use crate::assembly::coordinates::{scalar_values, Motion, NodeDerivatives, Slot, Values};
 use crate::assembly::topology::Topology;
 use crate::error::{At, Entity, ModelError, SolveError};
-use crate::model::force_law::{ForceLaw, LawBuffer, LawError, LawTarget};
+use crate::model::force_law::{ForceLaw, LawBuffer, LawError, LawInput, LawRead, LawTarget};
 use crate::model::{LoadAxes, Model};
 use std::sync::Arc;
 
@@ -25,19 +25,33 @@ pub(crate) enum Acts {
     },
 }
 
+/// What one input reads, resolved on the system.
+#[derive(Clone, Copy, Debug)]
+enum Read {
+    /// A scalar coordinate (index in the map's scalars).
+    Scalar(usize),
+    /// The position of node `node` along inertial axis `axis`, with its velocity as rate.
+    Position { node: usize, axis: usize },
+    /// The velocity of node `node` along inertial axis `axis` (no rate).
+    Velocity { node: usize, axis: usize },
+}
+
 /// A force law bound to a system.
 #[derive(Clone, Debug)]
 pub(crate) struct BoundLaw {
     pub law: Arc<dyn ForceLaw>,
-    /// Scalar coordinate of each input.
-    inputs: Vec<usize>,
+    /// What each input reads.
+    inputs: Vec<Read>,
     /// Per output: where it acts and the index of its first value in $\mathbf u$.
     outputs: Vec<(Acts, usize)>,
-    /// Per output and per unknown input (`(input, unknown)`): the slots of its tangent
-    /// entries, one per row it acts on (the actuated row; each unknown column of the node).
+    /// The unknowns the inputs hang on (sorted): the columns of the law's tangent.
+    columns: Vec<usize>,
+    /// Per input: the position in `columns` of each unknown it hangs on (a scalar's own; a
+    /// node's unknown columns, in the order of its [`NodeDerivatives::unknown`]).
+    input_columns: Vec<Vec<usize>>,
+    /// Per output and per column: the slots of its tangent entries, one per row it acts on
+    /// (the actuated row; each unknown column of the node).
     slots: Vec<Vec<Vec<usize>>>,
-    /// The inputs that are unknowns: (input, unknown).
-    unknown_inputs: Vec<(usize, usize)>,
 }
 
 impl BoundLaw {
@@ -50,28 +64,11 @@ impl BoundLaw {
             what,
             id,
         };
-        let mut inputs = Vec::new();
-        for i in &ports.inputs {
-            let scalars = topo.joint_scalars.get(i.joint.index()).ok_or_else(|| {
-                invalid(
-                    format!("input '{}' reads joint {}, which does not exist", i.name, i.joint.0),
-                    None,
-                )
-            })?;
-            let s = scalars.get(i.coordinate).copied().ok_or_else(|| {
-                invalid(
-                    format!(
-                        "input '{}' reads coordinate {} of joint '{}', which has {}",
-                        i.name,
-                        i.coordinate,
-                        model.joints[i.joint.index()].name,
-                        scalars.len()
-                    ),
-                    Some(Entity::Joint(i.joint)),
-                )
-            })?;
-            inputs.push(s);
-        }
+        let inputs = ports
+            .inputs
+            .iter()
+            .map(|i| Self::read(i, model, topo).map_err(|(what, id)| invalid(what, id)))
+            .collect::<Result<Vec<_>, _>>()?;
         let mut outputs = Vec::new();
         let mut first = 0;
         for o in &ports.outputs {
@@ -116,21 +113,87 @@ impl BoundLaw {
             outputs.push((acts, first));
             first += o.target.width();
         }
-        let unknown_inputs = inputs
+        let n = topo.map.n_dof;
+        // The unknowns each input hangs on, then their positions in the sorted union.
+        let unknowns: Vec<Vec<usize>> = inputs
             .iter()
-            .enumerate()
-            .filter_map(|(i, &s)| match topo.map.scalars[s].slot {
-                Slot::Unknown(d) => Some((i, d)),
-                Slot::Prescribed(_) => None,
+            .map(|r| match *r {
+                Read::Scalar(s) => match topo.map.scalars[s].slot {
+                    Slot::Unknown(d) => vec![d],
+                    Slot::Prescribed(_) => Vec::new(),
+                },
+                Read::Position { node, .. } | Read::Velocity { node, .. } => topo.map.chains[node]
+                    .cols
+                    .iter()
+                    .copied()
+                    .filter(|&id| id < n)
+                    .collect(),
             })
+            .collect();
+        let mut columns: Vec<usize> = unknowns.iter().flatten().copied().collect();
+        columns.sort_unstable();
+        columns.dedup();
+        let input_columns = unknowns
+            .iter()
+            .map(|u| u.iter().map(|d| columns.binary_search(d).expect("a column")).collect())
             .collect();
         Ok(Self {
             law,
             inputs,
             outputs,
+            columns,
+            input_columns,
             slots: Vec::new(),
-            unknown_inputs,
         })
+    }
+
+    /// What input `i` reads on the system, or why it cannot (message, entity).
+    fn read(i: &LawInput, model: &Model, topo: &Topology) -> Result<Read, (String, Option<Entity>)> {
+        match i.reads {
+            LawRead::Coordinate { joint, coordinate } => {
+                let scalars = topo.joint_scalars.get(joint.index()).ok_or_else(|| {
+                    (
+                        format!("input '{}' reads joint {}, which does not exist", i.name, joint.0),
+                        None,
+                    )
+                })?;
+                scalars.get(coordinate).map(|&s| Read::Scalar(s)).ok_or_else(|| {
+                    (
+                        format!(
+                            "input '{}' reads coordinate {coordinate} of joint '{}', which has {}",
+                            i.name,
+                            model.joints[joint.index()].name,
+                            scalars.len()
+                        ),
+                        Some(Entity::Joint(joint)),
+                    )
+                })
+            }
+            LawRead::NodePosition { node, axis } | LawRead::NodeVelocity { node, axis } => {
+                if node.index() >= model.nodes.len() {
+                    return Err((
+                        format!("input '{}' reads node {}, which does not exist", i.name, node.0),
+                        None,
+                    ));
+                }
+                if axis > 2 {
+                    return Err((
+                        format!("input '{}' reads axis {axis}: the axes are 0, 1, 2 (x, y, z)", i.name),
+                        Some(Entity::Node(node)),
+                    ));
+                }
+                let node = node.index();
+                Ok(match i.reads {
+                    LawRead::NodePosition { .. } => Read::Position { node, axis },
+                    _ => Read::Velocity { node, axis },
+                })
+            }
+        }
+    }
+
+    /// A buffer for the law's evaluations and tangents on this system.
+    pub(crate) fn buffer(&self) -> LawBuffer {
+        LawBuffer::new(self.law.ports(), self.columns.len())
     }
 
     /// The loads the law sets (indices in `Model::loads`).
@@ -161,14 +224,14 @@ impl BoundLaw {
     }
 
     /// Sets of unknowns coupled by the law (for the sparse pattern): each output's rows with
-    /// every unknown input. `node_unknown`: the unknown columns of each node.
+    /// every unknown the inputs hang on. `node_unknown`: the unknown columns of each node.
     pub(crate) fn pattern_sets(&self, node_unknown: &[Vec<usize>]) -> Vec<Vec<usize>> {
         let mut one = [0];
         self.outputs
             .iter()
             .map(|(acts, _)| {
                 let mut s: Vec<usize> = Self::rows(acts, node_unknown, &mut one).to_vec();
-                s.extend(self.unknown_inputs.iter().map(|&(_, d)| d));
+                s.extend(&self.columns);
                 s.sort_unstable();
                 s.dedup();
                 s
@@ -184,20 +247,26 @@ impl BoundLaw {
             .iter()
             .map(|(acts, _)| {
                 let rows = Self::rows(acts, node_unknown, &mut one);
-                self.unknown_inputs
+                self.columns
                     .iter()
-                    .map(|&(_, d)| rows.iter().map(|&r| slot(r, d)).collect())
+                    .map(|&d| rows.iter().map(|&r| slot(r, d)).collect())
                     .collect()
             })
             .collect();
     }
 
-    /// The inputs' values and rates at `x` into `buf`.
-    fn gather(&self, topo: &Topology, x: &Values, buf: &mut LawBuffer) {
-        for (k, &s) in self.inputs.iter().enumerate() {
-            let (v, d, _) = scalar_values(&topo.map, x, s);
-            buf.x[k] = v;
-            buf.xd[k] = d;
+    /// The inputs' values and rates at `x` (node motions `motions`) into `buf`; an input
+    /// without a rate gets NaN.
+    fn gather(&self, topo: &Topology, x: &Values, motions: &[Motion], buf: &mut LawBuffer) {
+        for (k, r) in self.inputs.iter().enumerate() {
+            (buf.x[k], buf.xd[k]) = match *r {
+                Read::Scalar(s) => {
+                    let (v, d, _) = scalar_values(&topo.map, x, s);
+                    (v, d)
+                }
+                Read::Position { node, axis } => (motions[node].p[axis], motions[node].v[axis]),
+                Read::Velocity { node, axis } => (motions[node].v[axis], f64::NAN),
+            };
         }
     }
 
@@ -212,16 +281,17 @@ impl BoundLaw {
         }
     }
 
-    /// Evaluates the law at `x` (and with `tangents` its Jacobians) into `buf`.
+    /// Evaluates the law at `x` (node motions `motions`; with `tangents` its Jacobians) into
+    /// `buf`.
     pub(crate) fn evaluate(
         &self,
         topo: &Topology,
-        x: &Values,
+        (x, motions): (&Values, &[Motion]),
         t: f64,
         tangents: bool,
         buf: &mut LawBuffer,
     ) -> Result<(), SolveError> {
-        self.gather(topo, x, buf);
+        self.gather(topo, x, motions, buf);
         let law = self.law.as_ref();
         buf.evaluate(law, t).map_err(|e| self.error(t, e))?;
         if tangents {
@@ -290,38 +360,72 @@ impl BoundLaw {
         sum
     }
 
-    /// Adds $-\mathbf B\,\partial\mathbf g/\partial\mathbf y\,\mathbf P$ to `K` and the same of
-    /// $\dot{\mathbf y}$ to `C` from the Jacobians in `buf`. `column(node, unknown)`: the
-    /// column of $\mathbf J$ of the node for one of its unknowns.
+    /// The law's derivatives by the unknowns into `buf.dq`, `buf.dqd` (module docs of
+    /// [`crate::model::force_law`]: $\partial\mathbf u/\partial\mathbf q$ and
+    /// $\partial\mathbf u/\partial\dot{\mathbf q}$ over [`Self::columns`]) from its Jacobians in
+    /// `buf` and the nodes' $\mathbf J$ (`motions`) and $\partial\mathbf V/\partial\mathbf q$
+    /// (`derivs`).
+    fn chain_rule(&self, buf: &mut LawBuffer, motions: &[Motion], derivs: &[NodeDerivatives]) {
+        buf.dq.fill(0.0);
+        buf.dqd.fill(0.0);
+        let m = buf.u.len();
+        for (i, (r, cols)) in self.inputs.iter().zip(&self.input_columns).enumerate() {
+            for (j, &c) in cols.iter().enumerate() {
+                // (dy/dq, dy/dqd, dyd/dq, dyd/dqd) of the input by unknown column `c`.
+                let (y_q, y_qd, yd_q, yd_qd) = match *r {
+                    Read::Scalar(_) => (1.0, 0.0, 0.0, 1.0),
+                    Read::Position { node, axis } => {
+                        let Jv = motions[node].Jv[derivs[node].unknown[j]][axis];
+                        (Jv, 0.0, derivs[node].DV[j][axis], Jv)
+                    }
+                    Read::Velocity { node, axis } => {
+                        let Jv = motions[node].Jv[derivs[node].unknown[j]][axis];
+                        (derivs[node].DV[j][axis], Jv, 0.0, 0.0)
+                    }
+                };
+                for k in 0..m {
+                    let (g_y, g_yd) = (buf.du_dx[(k, i)], buf.du_dxd[(k, i)]);
+                    buf.dq[(k, c)] += g_y * y_q + g_yd * yd_q;
+                    buf.dqd[(k, c)] += g_y * y_qd + g_yd * yd_qd;
+                }
+            }
+        }
+    }
+
+    /// Adds $-\mathbf B\,\partial\mathbf u/\partial\mathbf q$ to `K` and
+    /// $-\mathbf B\,\partial\mathbf u/\partial\dot{\mathbf q}$ to `C` from the Jacobians in `buf`
+    /// and the node kinematics `(motions, derivs)`. `node_unknown`: each node's unknown
+    /// columns as (position in its columns, unknown).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn add_tangents(
         &self,
-        buf: &LawBuffer,
+        buf: &mut LawBuffer,
         (t, lambda): (f64, f64),
         held: impl Fn(usize) -> bool,
         node_unknown: &[Vec<(usize, usize)>],
-        column: impl Fn(usize, usize) -> [f64; 6],
+        (motions, derivs): (&[Motion], &[NodeDerivatives]),
         K: &mut [f64],
         C: &mut [f64],
     ) {
+        self.chain_rule(buf, motions, derivs);
         for ((acts, k), slots) in self.outputs.iter().zip(&self.slots) {
-            for (&(i, _), rows) in self.unknown_inputs.iter().zip(slots) {
+            for (c, rows) in slots.iter().enumerate() {
                 match acts {
                     Acts::Actuator { index, .. } => {
                         if !held(*index) {
-                            K[rows[0]] -= buf.du_dx[(*k, i)];
-                            C[rows[0]] -= buf.du_dxd[(*k, i)];
+                            K[rows[0]] -= buf.dq[(*k, c)];
+                            C[rows[0]] -= buf.dqd[(*k, c)];
                         }
                     }
                     Acts::Load { node, moment, time } => {
                         let s = lambda * time.eval(t).0;
                         let at = if *moment { 3 } else { 0 };
                         for (&(col, _), &slot) in node_unknown[*node].iter().zip(rows) {
-                            let J = column(*node, col);
+                            let J = motions[*node].col(col);
                             let (mut kx, mut cx) = (0.0, 0.0);
-                            for c in 0..3 {
-                                kx += J[at + c] * buf.du_dx[(k + c, i)];
-                                cx += J[at + c] * buf.du_dxd[(k + c, i)];
+                            for i in 0..3 {
+                                kx += J[at + i] * buf.dq[(k + i, c)];
+                                cx += J[at + i] * buf.dqd[(k + i, c)];
                             }
                             K[slot] -= s * kx;
                             C[slot] -= s * cx;

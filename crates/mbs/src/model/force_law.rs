@@ -1,6 +1,6 @@
-//! Force laws: a function of the time and of joint coordinates and their rates that gives
-//! actuator efforts and nodal load values *inside* the implicit time step, added to a system
-//! with [`crate::System::with_force_law`].
+//! Force laws: a function of the time and of joint coordinates, node positions and
+//! velocities and their rates that gives actuator efforts and nodal load values *inside* the
+//! implicit time step, added to a system with [`crate::System::with_force_law`].
 //!
 //! A controller that sets an actuator between steps ([`crate::System::set_actuator_effort`])
 //! acts with the state of the step before: its effort lags one step, and a stiff loop closed
@@ -9,11 +9,20 @@
 //! the loop is closed implicitly, as the built-in PID law is:
 //!
 //! $$\mathbf u = \mathbf g(t, \mathbf y, \dot{\mathbf y}),\qquad
-//! \hat{\mathbf K} \mathrel{-}= \mathbf B\,\frac{\partial\mathbf g}{\partial\mathbf y}\,\mathbf P,\qquad
-//! \hat{\mathbf C} \mathrel{-}= \mathbf B\,\frac{\partial\mathbf g}{\partial\dot{\mathbf y}}\,\mathbf P,$$
+//! \hat{\mathbf K} \mathrel{-}= \mathbf B\Big(\frac{\partial\mathbf g}{\partial\mathbf y}\frac{\partial\mathbf y}{\partial\mathbf q} +
+//! \frac{\partial\mathbf g}{\partial\dot{\mathbf y}}\frac{\partial\dot{\mathbf y}}{\partial\mathbf q}\Big),\qquad
+//! \hat{\mathbf C} \mathrel{-}= \mathbf B\Big(\frac{\partial\mathbf g}{\partial\mathbf y}\frac{\partial\mathbf y}{\partial\dot{\mathbf q}} +
+//! \frac{\partial\mathbf g}{\partial\dot{\mathbf y}}\frac{\partial\dot{\mathbf y}}{\partial\dot{\mathbf q}}\Big),$$
 //!
-//! with $\mathbf y$ the joint coordinates the law reads ([`LawPorts::inputs`]; $\mathbf P$ picks
-//! the unknown ones, a driven coordinate has no column), $\mathbf u$ its output values
+//! with $\mathbf y$ what the law reads ([`LawPorts::inputs`], [`LawRead`]), over the unknowns
+//! $\mathbf q$ (a driven coordinate has no column). A joint coordinate is an unknown:
+//! $\partial y/\partial\mathbf q = \partial\dot y/\partial\dot{\mathbf q} = \mathbf e_i$. A node's
+//! position $y = r_a$ along axis $a$ has $\partial y/\partial\mathbf q = \partial\dot y/\partial\dot{\mathbf q} =
+//! \mathbf J^v_a$ (the row of the node's motion Jacobian, every unknown the node hangs on: the
+//! joints above it, a flexible body's frame and modes) and the convective
+//! $\partial\dot y/\partial\mathbf q = \partial(\mathbf J^v_a\dot{\mathbf q})/\partial\mathbf q$; a node's
+//! velocity $y = v_a$ has $\partial y/\partial\mathbf q$ that convective term and
+//! $\partial y/\partial\dot{\mathbf q} = \mathbf J^v_a$, and no rate. $\mathbf u$ are its output values
 //! ([`LawPorts::outputs`]: one effort per actuator, three components per load) and $\mathbf B$
 //! where they act: an effort $u$ on its actuated coordinate's row ($\mathbf F \mathrel{-}= u$,
 //! as [`crate::assembly::joint_forces`]), a load $\lambda\,x(t)\,\mathbf f$ on its node through
@@ -39,23 +48,54 @@
 //!
 //! | symbol | Rust | meaning |
 //! |---|---|---|
-//! | $\mathbf y$, $\dot{\mathbf y}$ | `x`, `xd` | the joint coordinates the law reads and their rates, [`LawPorts::inputs`] order |
+//! | $\mathbf y$, $\dot{\mathbf y}$ | `x`, `xd` | what the law reads and its rates, [`LawPorts::inputs`] order (NaN for an input without a rate) |
 //! | $\mathbf u$ | `u` | the output values, [`LawPorts::outputs`] order (1 per actuator, 3 per load) |
 //! | $\partial\mathbf g/\partial\mathbf y$, $\partial\mathbf g/\partial\dot{\mathbf y}$ | `du_dx`, `du_dxd` | `u.len()` $\times$ `x.len()` |
 
-use crate::ids::JointId;
+use crate::ids::{JointId, NodeId};
 use faer::{Mat, MatMut};
 use std::fmt::Debug;
 use std::sync::Arc;
 
-/// A joint coordinate a force law reads: its value and rate.
+/// What a force law input reads: a value $y$ and its rate $\dot y$.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LawRead {
+    /// Scalar coordinate `coordinate` of joint `joint` (in the order of [`crate::JointKind`])
+    /// and its rate.
+    Coordinate { joint: JointId, coordinate: usize },
+    /// The position of node `node` along inertial axis `axis` (0, 1, 2: x, y, z) \[m\] and
+    /// its velocity \[m/s\]: a position sensor.
+    NodePosition { node: NodeId, axis: usize },
+    /// The velocity of node `node` along inertial axis `axis` \[m/s\]; it has no rate (an
+    /// acceleration would put the law in the mass matrix): its `xd` is NaN, and the law's
+    /// derivative by it is not taken.
+    NodeVelocity { node: NodeId, axis: usize },
+}
+
+impl LawRead {
+    /// Whether the input has a rate the law may read (all but [`Self::NodeVelocity`]).
+    pub fn has_rate(self) -> bool {
+        !matches!(self, Self::NodeVelocity { .. })
+    }
+}
+
+/// An input of a force law: what it reads, by the name the law knows it by.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LawInput {
-    /// The name the law knows it by (a joint's name, for messages and bindings).
+    /// The name the law knows it by (a joint's name, a sensor's column; for messages and
+    /// bindings).
     pub name: String,
-    pub joint: JointId,
-    /// Scalar coordinate of the joint (in the order of [`crate::JointKind`]).
-    pub coordinate: usize,
+    pub reads: LawRead,
+}
+
+impl LawInput {
+    /// Coordinate `coordinate` of joint `joint`, named `name`.
+    pub fn coordinate(name: impl Into<String>, joint: JointId, coordinate: usize) -> Self {
+        Self {
+            name: name.into(),
+            reads: LawRead::Coordinate { joint, coordinate },
+        }
+    }
 }
 
 /// What a force law's output acts on.
@@ -238,13 +278,18 @@ pub(crate) struct LawBuffer {
     minus: Vec<f64>,
     pub(crate) du_dx: Mat<f64>,
     pub(crate) du_dxd: Mat<f64>,
+    /// $\partial\mathbf u/\partial\mathbf q$, $\partial\mathbf u/\partial\dot{\mathbf q}$ over the
+    /// unknowns the inputs hang on (`crate::assembly::force_law`).
+    pub(crate) dq: Mat<f64>,
+    pub(crate) dqd: Mat<f64>,
 }
 
 impl LawBuffer {
-    pub(crate) fn new(ports: &LawPorts) -> Self {
+    /// Buffers for a law on `ports` whose inputs hang on `columns` unknowns.
+    pub(crate) fn new(ports: &LawPorts, columns: usize) -> Self {
         let (n, m) = (ports.inputs.len(), ports.n_values());
         // Inputs x and their rates (n), outputs u and the two difference evaluations (m), the
-        // two Jacobians (m x n).
+        // two Jacobians (m x n) and the two by the unknowns (m x columns).
         let (inputs, outputs) = (vec![0.0; n], vec![0.0; m]);
         Self {
             x: inputs.clone(),
@@ -254,6 +299,8 @@ impl LawBuffer {
             minus: outputs,
             du_dx: Mat::zeros(m, n),
             du_dxd: Mat::zeros(m, n),
+            dq: Mat::zeros(m, columns),
+            dqd: Mat::zeros(m, columns),
         }
     }
 
@@ -293,8 +340,10 @@ impl LawBuffer {
             Differences::Central { relative } => (relative, true),
             Differences::Forward { relative } => (relative, false),
         };
+        let inputs = &law.ports().inputs;
         for i in 0..self.x.len() {
-            for rate in [false, true] {
+            let has_rate = inputs.get(i).is_none_or(|input| input.reads.has_rate());
+            for rate in [false, true].into_iter().filter(|&rate| !rate || has_rate) {
                 let v = if rate { &mut self.xd } else { &mut self.x };
                 let base = v[i];
                 let h = relative * base.abs().max(1.0);
@@ -348,7 +397,7 @@ pub fn finite_difference_jacobian(
         }
     }
     let law = Differenced(law);
-    let mut buf = LawBuffer::new(law.ports());
+    let mut buf = LawBuffer::new(law.ports(), 0);
     buf.x.copy_from_slice(x);
     buf.xd.copy_from_slice(xd);
     buf.evaluate(&law, t)?;

@@ -1,6 +1,7 @@
 //! Force laws (`mbs::force_law`): the finite-difference Jacobians against a law's exact ones,
 //! the law's tangents in the iteration matrix against central differences of the residual (a
-//! rigid chain; deformed flexible bodies with a saturated PID beside the law), a damper law
+//! rigid chain; deformed flexible bodies with a saturated PID beside the law, and a law
+//! reading node positions and velocities there), a damper law
 //! against the built-in PID on a flexible double pendulum and over a 100 s run, and a failing
 //! law.
 
@@ -11,7 +12,7 @@ use faer::{Mat, MatMut};
 use mbs::force_law::{finite_difference_jacobian, Differences};
 use mbs::{
     solve_dynamic, DynamicSettings, Effort, ForceLaw, JointActuator, JointId, JointKind, LawError, LawInput, LawOutput,
-    LawPorts, LawTarget, Load, LoadAxes, LoadKind, Pid, SensorKind, SolveError, System, TimeFunction,
+    LawPorts, LawRead, LawTarget, Load, LoadAxes, LoadKind, Pid, SensorKind, SolveError, System, TimeFunction,
 };
 use nalgebra::Vector3;
 use std::sync::Arc;
@@ -91,11 +92,7 @@ fn ports(inputs: [(u32, usize); 2], actuator: usize, load: usize) -> LawPorts {
         inputs: inputs
             .iter()
             .enumerate()
-            .map(|(i, &(j, c))| LawInput {
-                name: format!("in{i}"),
-                joint: JointId(j),
-                coordinate: c,
-            })
+            .map(|(i, &(j, c))| LawInput::coordinate(format!("in{i}"), JointId(j), c))
             .collect(),
         outputs: vec![
             LawOutput {
@@ -276,11 +273,7 @@ fn pendulum_with_actuator(effort: Effort) -> mbs::Model {
 fn damper(c: f64, fail_after: Option<f64>) -> Arc<Damper> {
     Arc::new(Damper {
         ports: LawPorts {
-            inputs: vec![LawInput {
-                name: "elbow".into(),
-                joint: JointId(1),
-                coordinate: 0,
-            }],
+            inputs: vec![LawInput::coordinate("elbow", JointId(1), 0)],
             outputs: vec![LawOutput {
                 name: "elbow motor".into(),
                 target: LawTarget::Actuator(0),
@@ -391,9 +384,10 @@ fn ports_that_name_nothing_are_refused_by_name() {
 /// effort $u_0 = -k\sin y_0 - c\dot y_1 + a y_0\dot y_0 - s y_2$ and the load
 /// $\mathbf f = (b y_1 + s, -c\dot y_0^3 + a\dot y_2, k y_0 y_2)$.
 ///
-/// The law's arguments are the joint coordinates and rates (`ForceLaw::evaluate`); a sensor is
-/// recorded at converged steps, so a law reads it as a controller reads a measurement, between
-/// steps (a Python law from `Simulation.sensor`): within the step $s$ is a number of the law.
+/// A law's inputs are joint coordinates and node positions and velocities (`LawRead`); another
+/// sensor (here the strain energy) is recorded at converged steps, so a law reads it as a
+/// controller reads a measurement, between steps (a Python law from `Simulation.sensor`):
+/// within the step $s$ is a number of the law.
 /// It scales values and Jacobian entries and adds no column.
 #[derive(Debug)]
 struct Sensed {
@@ -570,11 +564,7 @@ fn law_and_saturated_pid_tangents_match_central_differences_on_a_deformed_flexib
     let ports = LawPorts {
         inputs: inputs
             .iter()
-            .map(|&(j, c)| LawInput {
-                name: format!("j{j}[{c}]"),
-                joint: JointId(j),
-                coordinate: c,
-            })
+            .map(|&(j, c)| LawInput::coordinate(format!("j{j}[{c}]"), JointId(j), c))
             .collect(),
         outputs: ports([(0, 0), (1, 0)], 0, load).outputs,
     };
@@ -646,6 +636,129 @@ fn law_and_saturated_pid_tangents_match_central_differences_on_a_deformed_flexib
     }
 }
 
+/// A law on a node's position (input 0, with its velocity as rate), a joint coordinate
+/// (input 1) and a node's velocity (input 2, without a rate), with its exact Jacobians: the
+/// effort $u_0 = -k\sin y_0 - c\dot y_1 + a y_0\dot y_0 - y_1 y_2$ and the load
+/// $\mathbf f = (b y_1 + y_2, -c\dot y_0^3 + a\dot y_1 y_2, k y_0 y_2)$. It refuses a rate of
+/// input 2 that is not NaN (an input without a rate is never differenced by its rate).
+#[derive(Debug)]
+struct Kinematic {
+    ports: LawPorts,
+    exact: bool,
+}
+
+impl Kinematic {
+    const K: f64 = 3.0;
+    const C: f64 = 0.7;
+    const A: f64 = 0.4;
+    const B: f64 = 2.5;
+
+    /// The effort $u_0$ at `x`, `xd`.
+    fn effort(x: &[f64], xd: &[f64]) -> f64 {
+        let (k, c, a) = (Self::K, Self::C, Self::A);
+        -k * x[0].sin() - c * xd[1] + a * x[0] * xd[0] - x[1] * x[2]
+    }
+}
+
+impl ForceLaw for Kinematic {
+    fn name(&self) -> &str {
+        "kinematic"
+    }
+    fn ports(&self) -> &LawPorts {
+        &self.ports
+    }
+    fn evaluate(&self, _t: f64, x: &[f64], xd: &[f64], u: &mut [f64]) -> Result<(), LawError> {
+        if !xd[2].is_nan() {
+            return Err(LawError::new(format!("a velocity input has the rate {}", xd[2])));
+        }
+        let (k, c, a, b) = (Self::K, Self::C, Self::A, Self::B);
+        u[0] = Self::effort(x, xd);
+        u[1] = b * x[1] + x[2];
+        u[2] = -c * xd[0].powi(3) + a * xd[1] * x[2];
+        u[3] = k * x[0] * x[2];
+        Ok(())
+    }
+    fn jacobian(
+        &self,
+        _t: f64,
+        x: &[f64],
+        xd: &[f64],
+        mut du_dx: MatMut<'_, f64>,
+        mut du_dxd: MatMut<'_, f64>,
+    ) -> Result<bool, LawError> {
+        if !self.exact {
+            return Ok(false);
+        }
+        let (k, c, a, b) = (Self::K, Self::C, Self::A, Self::B);
+        du_dx[(0, 0)] = -k * x[0].cos() + a * xd[0];
+        du_dx[(0, 1)] = -x[2];
+        du_dx[(0, 2)] = -x[1];
+        du_dxd[(0, 0)] = a * x[0];
+        du_dxd[(0, 1)] = -c;
+        du_dx[(1, 1)] = b;
+        du_dx[(1, 2)] = 1.0;
+        du_dxd[(2, 0)] = -3.0 * c * xd[0].powi(2);
+        du_dxd[(2, 1)] = a * x[2];
+        du_dx[(2, 2)] = a * xd[1];
+        du_dx[(3, 0)] = k * x[2];
+        du_dx[(3, 2)] = k * x[0];
+        Ok(true)
+    }
+}
+
+#[test]
+fn a_law_reading_node_kinematics_has_tangents_matching_central_differences_on_a_deformed_flexible_body() {
+    // The law reads the position along y of n6 (a point of rigid body r2, behind the
+    // universal joint at b2's free interface node), the universal joint's second coordinate,
+    // and the velocity along x of n2 (a point of rigid body r1, on b1's interface node): both
+    // nodes hang on joint coordinates and turning nodes, so their J changes with q (the
+    // convective terms). Exact Jacobians, then central differences.
+    let (model, load) = flexible_with_actuators(Effort::Time(TimeFunction::constant(0.0)));
+    let plain = System::new(&model).unwrap();
+    let node = |name: &str| mbs::NodeId(model.nodes.iter().position(|n| n.name == name).unwrap() as u32);
+    let (n6, n2) = (node("n6"), node("n2"));
+    let ports = LawPorts {
+        inputs: vec![
+            LawInput {
+                name: "tip.position_y".into(),
+                reads: LawRead::NodePosition { node: n6, axis: 1 },
+            },
+            LawInput::coordinate("sph[1]", JointId(1), 1),
+            LawInput {
+                name: "end.velocity_x".into(),
+                reads: LawRead::NodeVelocity { node: n2, axis: 0 },
+            },
+        ],
+        outputs: ports([(0, 0), (1, 0)], 0, load).outputs,
+    };
+    for exact in [true, false] {
+        let law = Kinematic {
+            ports: ports.clone(),
+            exact,
+        };
+        let sys = System::with_force_law(&model, Arc::new(law)).unwrap();
+        let s = deformed_state(&sys);
+        // The law reads the nodes' motions: its effort is the law of the node motions and
+        // the joint's value and rate at the state.
+        let motions = sys.node_motions(&s);
+        let (tip, end) = (&motions[n6.index()], &motions[n2.index()]);
+        let (y, r) = (sys.joint_value(&s, JointId(1), 1), sys.joint_rate(&s, JointId(1), 1));
+        let x = [tip.r.y, y, end.v.x];
+        let xd = [tip.v.y, r, f64::NAN];
+        eprintln!("exact {exact}: inputs {x:?}, rates {xd:?}");
+        assert!(x.iter().chain(&xd[..2]).all(|v| v.abs() > 1e-2), "{x:?} {xd:?}");
+        let u = sys.actuator_efforts(&s)[0];
+        assert!((u - Kinematic::effort(&x, &xd)).abs() < 1e-12 * u.abs().max(1.0), "{u}");
+        check_tangents(&sys, &s, 1e-6, 1e-5);
+        let (dk, _) = check_share(&sys, &plain, &s);
+        // The node's position hangs on more unknowns than the joint coordinate: the effort's
+        // row of K has entries in the columns of b1's modes and frame, off the joints.
+        let row = unknown_of(&plain, &plain.initial_state(), JointId(1), 0);
+        let filled = (0..dk.ncols()).filter(|&j| dk[(row, j)] != 0.0).count();
+        assert!(filled > 4, "{filled} entries in the effort's row");
+    }
+}
+
 #[test]
 fn a_flexible_double_pendulum_damped_by_a_law_settles_over_100_s_without_gaining_energy() {
     // The flexible double pendulum (two aluminium links, two modes each) released at 0.6 and
@@ -664,11 +777,7 @@ fn a_flexible_double_pendulum_damped_by_a_law_settles_over_100_s_without_gaining
         inputs: ["shoulder", "elbow"]
             .iter()
             .enumerate()
-            .map(|(j, name)| LawInput {
-                name: name.to_string(),
-                joint: JointId(j as u32),
-                coordinate: 0,
-            })
+            .map(|(j, name)| LawInput::coordinate(name.to_string(), JointId(j as u32), 0))
             .collect(),
         outputs: ["shoulder motor", "elbow motor"]
             .iter()
@@ -771,11 +880,7 @@ fn the_energy_balance_counts_the_work_of_the_loads_a_law_sets() {
         inputs: ["shoulder", "elbow"]
             .iter()
             .enumerate()
-            .map(|(j, name)| LawInput {
-                name: name.to_string(),
-                joint: JointId(j as u32),
-                coordinate: 0,
-            })
+            .map(|(j, name)| LawInput::coordinate(name.to_string(), JointId(j as u32), 0))
             .collect(),
         outputs: vec![LawOutput {
             name: "tip push".into(),

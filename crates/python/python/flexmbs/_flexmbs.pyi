@@ -1098,24 +1098,29 @@ class ForceLaw:
     """A force law evaluated in every Newton iteration of the implicit time step (and of an
     equilibrium), its derivatives in the iteration matrix.
 
-    `function(t, q, qd)` gets the time [s] and dicts `q`, `qd` of the joint coordinates [rad or
-    m] and rates it reads (`reads`: joint names, default every joint; a joint of several
-    coordinates is `name[0]`, `name[1]`, ...), and returns a dict with one entry per name of
-    `outputs`: an actuator's effort [N m or N], or a point load's force [N] (its moment [N m]
-    when the load gives no force) as three numbers in global axes, which the load's time
-    function multiplies. The outputs replace the actuators' `function`/`pid` and the loads'
-    values. Without `jacobian`, the derivatives by the coordinates and rates come from
-    finite differences (`differences`: `"central"`, 4 calls per coordinate read, or
-    `"forward"`, 2; step `step` times max(|value|, 1)); `jacobian(t, q, qd)` returns instead
-    `{output: {coordinate: (d/dq, d/dqd)}}` (three numbers each for a load; entries left out
-    are zero)."""
+    `function(t, q, qd)` gets the time [s] and dicts `q`, `qd` of the values and rates it
+    reads (`reads`, default every joint): a joint's coordinate [rad or m] by the joint's name
+    (`name[0]`, `name[1]`, ... for a joint of several coordinates); a `position` sensor's
+    coordinates in global axes [m] as its CSV columns are named, `tip.position_x`,
+    `tip.position_y`, `tip.position_z`, their rates the velocity [m/s]; a `velocity` sensor's
+    components `tipv.velocity_x`, ... [m/s], in `q` only (no rate). A sensor's name reads its
+    three columns. It returns a dict with one entry per name of `outputs`: an actuator's effort
+    [N m or N], or a point load's force [N] (its moment [N m] when the load gives no force) as
+    three numbers in global axes, which the load's time function multiplies. The outputs
+    replace the actuators' `function`/`pid` and the loads' values. Without `jacobian`, the
+    derivatives by the values and rates read come from finite differences (`differences`:
+    `"central"`, 4 calls per joint coordinate or position read, 2 per velocity, or
+    `"forward"`, half as many; step `step` times max(|value|, 1)); `jacobian(t, q, qd)`
+    returns instead `{output: {name read: (d/dq, d/dqd)}}` (three numbers each for a load;
+    entries left out are zero; d/dqd of a velocity is not used). The solver takes them through
+    the motion of the sensor's point to every coordinate it depends on."""
 
     def __init__(self, function: Callable[[float, Dict[str, float], Dict[str, float]], Dict[str, Any]], outputs: Sequence[str], reads: Optional[Sequence[str]] = None, jacobian: Optional[Callable[[float, Dict[str, float], Dict[str, float]], Dict[str, Dict[str, Any]]]] = None, differences: str = "central", step: float = 1e-6) -> None:
         ...
     outputs: Final[List[str]]
     """The actuators and point loads the law sets."""
     reads: Final[Optional[List[str]]]
-    """The joints it reads (`None`: every joint)."""
+    """The joints and sensors it reads (`None`: every joint)."""
 
 class Study:
     """A study: a study file held in memory, read and changed value by value through key paths

@@ -692,8 +692,12 @@ impl System {
         let mut efforts = self.joint_forces.efforts(&value, s.time, &state.controls);
         if let Some(law) = &self.force_law {
             // The law's efforts (NaN, which the sensors refuse, when it fails).
-            let mut buf = LawBuffer::new(law.law.ports());
-            let ok = law.evaluate(&self.topo, &x, s.time, false, &mut buf).is_ok();
+            let mut motions = vec![Motion::ground(); self.model.nodes.len()];
+            map.motions_into(&x, &mut motions);
+            let mut buf = law.buffer();
+            let ok = law
+                .evaluate(&self.topo, (&x, &motions), s.time, false, &mut buf)
+                .is_ok();
             for (a, u) in law.efforts(&buf.u) {
                 if self.joint_forces.held(a).is_none() {
                     efforts[a] = if ok { u } else { f64::NAN };
@@ -1170,7 +1174,7 @@ impl System {
             ],
             factor: self.empty_factor(),
             momentum: Vec::with_capacity(self.n_dof()),
-            law: self.force_law.as_ref().map(|l| LawBuffer::new(l.law.ports())),
+            law: self.force_law.as_ref().map(BoundLaw::buffer),
         }
     }
 
@@ -1235,7 +1239,7 @@ impl System {
         self.element_outputs(state, lambda, tangents, ws)?;
         if let (Some(law), Some(buf)) = (&self.force_law, ws.law.as_mut()) {
             let x = values(state, &ws.presc_rate, &ws.presc_acc);
-            law.evaluate(&self.topo, &x, state.time, tangents, buf)?;
+            law.evaluate(&self.topo, (&x, &ws.motions), state.time, tangents, buf)?;
         }
         self.assemble_residual(state, lambda, ws);
         if tangents {
@@ -1434,14 +1438,13 @@ impl System {
         }
         self.joint_forces
             .add_tangents(&self.topo, &x, state.time, &state.controls, &mut ws.K, &mut ws.C);
-        if let (Some(law), Some(buf)) = (&self.force_law, &ws.law) {
-            let motions = &ws.motions;
+        if let (Some(law), Some(buf)) = (&self.force_law, ws.law.as_mut()) {
             law.add_tangents(
                 buf,
                 (state.time, lambda),
                 |a| self.joint_forces.held(a).is_some(),
                 &self.pattern.node_unknown_cols,
-                |node, col| motions[node].col(col),
+                (&ws.motions, &ws.derivs),
                 &mut ws.K,
                 &mut ws.C,
             );
