@@ -255,7 +255,7 @@ unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     Some(unsafe { std::slice::from_raw_parts(p, n) })
 }
 
-/// [`slice`] for an array the library writes.
+/// [`slice()`] for an array the library writes.
 ///
 /// # Safety
 ///
