@@ -353,3 +353,22 @@ def test_two_instances_in_one_process_are_independent(examples, tmp_path):
     assert np.array_equal(np.array(angles[0]), alone[0])
     assert np.array_equal(np.array(angles[1]), alone[1])
     assert not np.array_equal(alone[0], alone[1])
+
+
+def test_a_study_with_a_mesh_carries_the_mesh_and_its_reduced_body(examples, tmp_path):
+    fmu = tmp_path / "four_bar.fmu"
+    flexmbs.Study.load(examples / "four_bar.toml").export_fmu(fmu, library=library())
+    with zipfile.ZipFile(fmu) as z:
+        names = z.namelist()
+    assert "resources/files/meshes/link_hex8.msh" in names
+    cached = sorted(n for n in names if n.startswith("resources/cache/"))
+    assert any(n.endswith(".rbody") for n in cached)
+    assert validate_fmu(str(fmu)) == []
+    # Run from its own folder, the FMU finds its reduced body in the cache it carries: it
+    # reduces nothing (the cache holds what it held).
+    s = Slave(fmu, tmp_path / "x").start(stop=0.01)
+    for _ in range(5):
+        s.step(1e-3)
+    s.close()
+    after = sorted("resources/cache/" + p.name for p in (s.folder / "resources" / "cache").iterdir())
+    assert after == cached
