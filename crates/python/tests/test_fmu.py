@@ -372,3 +372,20 @@ def test_a_study_with_a_mesh_carries_the_mesh_and_its_reduced_body(examples, tmp
     s.close()
     after = sorted("resources/cache/" + p.name for p in (s.folder / "resources" / "cache").iterdir())
     assert after == cached
+
+
+def test_reset_starts_again_from_the_study(examples, tmp_path):
+    study, fmu = arm_fmu(examples, tmp_path)
+    s = Slave(fmu, tmp_path / "a").start(parameters={"analyses.motion.rho_inf": 0.5})
+    first = pd_fmu(s, 20)
+    # Back to the instantiated state: parameters and inputs at their start values.
+    s.fmu.reset()
+    s.t = 0.0
+    rho = s.vr["analyses.motion.rho_inf"]
+    assert s.fmu.getReal([rho]) == [0.8]
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.setReal([rho], [0.5])
+    s.fmu.enterInitializationMode()
+    s.fmu.exitInitializationMode()
+    assert np.array_equal(pd_fmu(s, 20), first)
+    s.close()
