@@ -144,6 +144,10 @@ def test_the_archive_and_its_model_description_are_valid(examples, tmp_path, cli
     columns = sum(len(sim.sensor_columns(n)) for n in sim.sensor_names)
     assert len([v for v in md.modelVariables if v.causality == "output"]) == columns
     assert not [v for v in md.modelVariables if v.causality == "input"]
+    # A master's stop time after the analysis' end (0.126 s) extends the analysis to it.
+    result = fmpy.simulate_fmu(str(fmu), stop_time=0.13, output_interval=1e-3)
+    assert result["time"][-1] == pytest.approx(0.13, abs=1e-12)
+    assert result["crank-angle.coordinate_0"][-1] == pytest.approx(150.0 * 0.13, rel=1e-9)
 
 
 def test_a_missing_library_says_how_to_build_it(examples, tmp_path):
