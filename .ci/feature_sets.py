@@ -17,6 +17,7 @@ BUILDS = {
     "cargo test --release -p mbs": ["-p", "mbs"],
     "cargo test --release -p study": ["-p", "study"],
     "cargo run --release -p flexmbs": ["-p", "flexmbs"],
+    "cargo build --release -p flexmbs-fmu": ["-p", "flexmbs-fmu"],
     "pip install ./crates/python": ["-p", "flexmbs-python", "--features", "extension-module"],
 }
 # Packages whose features differ by design: the two faces (their own features) and PyO3,

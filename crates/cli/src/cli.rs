@@ -30,6 +30,10 @@ usage:
   flexmbs export-fem FILE.rbody OUT.fem [--reference INTERFACE]
                                      write a reduced body as an MBDyn modal element file
                                      (modal node at the reference interface, default the first)
+  flexmbs export-fmu STUDY.toml [--analysis NAME] [-o FILE.fmu]
+                                     write a dynamic analysis as an FMI 2.0 Co-Simulation FMU
+                                     (docs/fmu.md): inputs the actuators and point loads,
+                                     outputs the sensors, parameters the study's [fmu] table
   flexmbs example [NAME [DIR]]       list the built-in example studies, or write one into DIR
                                      (default: the current folder)
   flexmbs validate [ARGS]            the validation suite (docs/validation.md): --quick, --no-report,
@@ -117,6 +121,25 @@ the nodes' box: a table in millimetres is refused) before the body's checks.
 
 Exits with 1 when the body fails its physical checks (the report lists them), with 2 when
 the files cannot be read or reduced."
+        }
+        "export-fmu" => {
+            "\
+usage: flexmbs export-fmu STUDY.toml [--analysis NAME] [-o FILE.fmu]
+
+Writes the dynamic analysis NAME (default: the study's only one) as an FMI 2.0 Co-Simulation
+FMU (default: STUDY.fmu beside the study file), for a co-simulation master (FMPy, Simulink,
+OpenModelica, ...). Inputs: the effort of every actuator and the force and moment components
+of every point load, held over a communication step; outputs: every sensor column, with its
+unit; parameters: the study values the study's [fmu] table names. The mechanism is built and
+the analysis started once here, so a study the FMU could not start is refused now; the
+archive carries the study, the files it names and its reduced bodies, and runs without
+flexmbs (docs/fmu.md).
+
+The FMU's binary is the library libflexmbs_fmu.so, found next to the program or named by the
+environment variable FLEXMBS_FMU_LIBRARY; build it with `cargo build --release -p flexmbs-fmu`.
+
+  --analysis NAME   the dynamic analysis the FMU steps
+  -o, --out FILE    the FMU file to write"
         }
         "example" => {
             "\
@@ -493,6 +516,33 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             );
             Ok(())
         }
+        "export-fmu" => {
+            // `-o FILE` is `--out FILE`.
+            let rest: Vec<String> = rest
+                .iter()
+                .map(|a| if a == "-o" { "--out".to_string() } else { a.clone() })
+                .collect();
+            let (positional, options) = parse(&rest, &["analysis", "out"])?;
+            let path = one_file(&positional, "export-fmu", "a study file")?;
+            let out = match option(&options, "out") {
+                Some(o) => PathBuf::from(o),
+                None => path.with_extension("fmu"),
+            };
+            let library = study::fmu::library_path()?;
+            let exported = study::fmu::export(&path, option(&options, "analysis"), &library, &out)?;
+            let count = |causality: &str| exported.variables.iter().filter(|v| v.causality() == causality).count();
+            crate::say!(
+                "{}: analysis '{}' as an FMI 2.0 Co-Simulation FMU (model identifier {}): {} outputs, {} inputs, {} parameters -> {}",
+                path.display(),
+                exported.analysis,
+                exported.model_identifier,
+                count("output"),
+                count("input"),
+                count("parameter"),
+                out.display()
+            );
+            Ok(())
+        }
         "example" => {
             let (positional, _) = parse(rest, &[])?;
             match positional.as_slice() {
@@ -517,6 +567,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 "reduce",
                 "inspect",
                 "export-fem",
+                "export-fmu",
                 "example",
                 "validate",
                 "help",

@@ -188,7 +188,7 @@ fn python_type(table: &Table, key: &Key) -> String {
         "[x, y, z]" | "[Lx, Ly, Lz]" | "list of numbers" => "List[float]".into(),
         "[nx, ny, nz]" => "List[int]".into(),
         "list of [x, y, z]" | "3x3 numbers" => "List[List[float]]".into(),
-        "[string, string]" => "List[str]".into(),
+        "[string, string]" | "list of strings" => "List[str]".into(),
         "string or list of strings" => "Union[str, List[str]]".into(),
         "{ name = [x, y, z] }" => "Dict[str, List[float]]".into(),
         "{ set = string }" => "Dict[str, str]".into(),

@@ -226,6 +226,10 @@ pub(crate) const STUB: Class = Class {
             "simulation",
             "(self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None, forces: Optional[ForceLaw] = None) -> \"Simulation\"",
         ),
+        Method(
+            "export_fmu",
+            "(self, path: _Path, analysis: Optional[str] = None, library: Optional[_Path] = None) -> Dict[str, Any]",
+        ),
     ],
 };
 
@@ -392,6 +396,45 @@ impl Study {
     fn parts(&self, py: Python<'_>) -> PyResult<Vec<String>> {
         let s = self.doc.study().map_err(|e| to_py_err(py, &e))?;
         Ok(s.parts.iter().map(|p| p.name.clone()).collect())
+    }
+
+    /// Writes the dynamic analysis `analysis` (default: the study's only one) as an FMI 2.0
+    /// Co-Simulation FMU at `path`, as `flexmbs export-fmu` does (docs/fmu.md): inputs the
+    /// actuators and point loads, outputs the sensors, parameters the study's `[fmu]` table.
+    /// `library`: the FMU's binary, the shared library of `flexmbs-fmu` (default: the
+    /// environment variable `FLEXMBS_FMU_LIBRARY`; build it with
+    /// `cargo build --release -p flexmbs-fmu`). Returns a dict: `path`, `analysis`,
+    /// `model_identifier`, `inputs`, `outputs`, `parameters` (variable names).
+    #[pyo3(signature = (path, analysis=None, library=None))]
+    fn export_fmu<'py>(
+        &self,
+        py: Python<'py>,
+        path: PathBuf,
+        analysis: Option<String>,
+        library: Option<PathBuf>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let library = match library {
+            Some(l) => l,
+            None => study::fmu::library_path().map_err(|e| to_py_err(py, &*e))?,
+        };
+        let doc = &self.doc;
+        let exported = py
+            .detach(|| study::fmu::export_document(doc, analysis.as_deref(), &library, &path))
+            .map_err(|e| to_py_err(py, &*e))?;
+        let d = PyDict::new(py);
+        d.set_item("path", exported.path.display().to_string())?;
+        d.set_item("analysis", &exported.analysis)?;
+        d.set_item("model_identifier", &exported.model_identifier)?;
+        for (key, causality) in [("inputs", "input"), ("outputs", "output"), ("parameters", "parameter")] {
+            let names: Vec<&str> = exported
+                .variables
+                .iter()
+                .filter(|v| v.causality() == causality)
+                .map(|v| v.name.as_str())
+                .collect();
+            d.set_item(key, names)?;
+        }
+        Ok(d)
     }
 
     /// Runs the analyses (all, or the one named `analysis`) as `flexmbs run` does and returns a

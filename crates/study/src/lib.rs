@@ -34,6 +34,7 @@
 //! | [`output`] | the observer, the results folder (CSV, VTU/PVD, PNG, summary) |
 //! | [`error`] | the boxed error with context and its report |
 //! | [`interrupt`] | Ctrl-C and SIGTERM: a stop requested at the next output step |
+//! | [`fmu`] | a dynamic analysis as an FMI 2.0 Co-Simulation FMU: its variables, `modelDescription.xml`, archive and the instance a master steps |
 //!
 //! The face of the crate is this module: a study loaded ([`load`], [`parse_and_validate`],
 //! [`Document`]), run ([`run()`], [`run_with`], [`run_only`], [`run_selected`] with a
@@ -42,6 +43,7 @@
 //! items that the command line, the Python package and the tests use are re-exported here.
 
 pub mod error;
+pub mod fmu;
 pub mod input;
 pub mod interrupt;
 pub mod output;
@@ -56,8 +58,8 @@ pub use input::document::Document;
 pub use input::validate::{load, parse_and_validate, Study};
 pub use output::observer::{Observer, Recorder};
 pub use run::{
-    run, run_only, run_selected, run_selected_with, run_with, ForceLawSource, Forces, Options, Runner, Selection,
-    Simulation, UnknownName,
+    run, run_only, run_selected, run_selected_with, run_with, ForceLawSource, Forces, Options, Runner, SavedSimulation,
+    Selection, Simulation, UnknownName,
 };
 
 // What the command line, the Python package and the tests use beyond the facade.

@@ -56,6 +56,7 @@ fn schema_tables() -> Vec<(&'static str, BTreeSet<String>)> {
         ("actuators", fields::<ActuatorFile>()),
         ("actuators.pid", fields::<PidFile>()),
         ("output", fields::<OutputFile>()),
+        ("fmu", fields::<FmuFile>()),
     ]
 }
 

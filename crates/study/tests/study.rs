@@ -1164,3 +1164,8 @@ mod vtu;
 /// in a run and in a stepped simulation; unknown names refused with those there are.
 #[path = "study/force_law.rs"]
 mod force_law;
+
+/// A dynamic analysis as an FMU: the archive read back, its instance stepped against the
+/// simulation it wraps, bit for bit; states saved and restored; parameters and inputs checked.
+#[path = "study/fmu.rs"]
+mod fmu;

@@ -2,14 +2,14 @@
 //! validation command's ids and report folder, an empty study, a closed pipe, the progress
 //! display.
 
-use super::support::{flexmbs, scratch};
+use super::support::{examples_copy, flexmbs, scratch};
 use std::io::Read;
 use std::process::{Command, Stdio};
 
 #[test]
 fn every_command_has_help_that_exits_0() {
     let dir = scratch("command-help");
-    for command in ["run", "check", "reduce", "inspect", "example"] {
+    for command in ["run", "check", "reduce", "inspect", "example", "export-fmu"] {
         for flag in ["--help", "-h"] {
             let out = flexmbs(&dir, &[command, flag]);
             assert_eq!(out.code, 0, "{command} {flag}: {}", out.stderr);
@@ -147,4 +147,53 @@ fn progress_shows_the_stage_text_and_real_bars() {
     assert_eq!(console.shown(), Some((Some(500), "time integration".to_string())));
     console.progress(&Progress::Finished);
     assert_eq!(console.shown(), None);
+}
+
+/// `export-fmu` without the FMU library says how to build it; with a library named by
+/// `FLEXMBS_FMU_LIBRARY` it writes the FMU (its contents are checked by the study crate's
+/// tests and, with FMPy, by the Python package's).
+#[test]
+fn export_fmu_needs_the_library_and_says_how_to_build_it() {
+    let dir = scratch("export-fmu");
+    let study = examples_copy("export-fmu-examples").join("slider_crank.toml");
+    let missing = dir.join("no-such-library.so");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_flexmbs"))
+        .args([
+            "export-fmu",
+            study.to_str().unwrap(),
+            "-o",
+            dir.join("a.fmu").to_str().unwrap(),
+        ])
+        .env("FLEXMBS_FMU_LIBRARY", &missing)
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("cargo build --release -p flexmbs-fmu"), "{stderr}");
+    assert!(!dir.join("a.fmu").exists());
+    let library = dir.join("lib.so");
+    std::fs::write(&library, b"a library").unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_flexmbs"))
+        .args([
+            "export-fmu",
+            study.to_str().unwrap(),
+            "-o",
+            dir.join("a.fmu").to_str().unwrap(),
+        ])
+        .env("FLEXMBS_FMU_LIBRARY", &library)
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        stdout.contains("analysis 'run-up'") && stdout.contains("0 inputs"),
+        "{stdout}"
+    );
+    assert!(dir.join("a.fmu").is_file());
+    // Without a study file.
+    let out = flexmbs(&dir, &["export-fmu"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("needs a study file"), "{}", out.stderr);
 }

@@ -62,6 +62,8 @@ StudyFileTable = TypedDict(
         "actuators": List[ActuatorsTable],
         # how often the mechanism's analyses write
         "output": OutputTable,
+        # the parameters of the study's FMU (`flexmbs export-fmu`, docs/fmu.md)
+        "fmu": FmuTable,
         # what to compute
         "analyses": List[AnalysesTable],
     },
@@ -971,6 +973,19 @@ OutputTable = TypedDict(
     total=False,
 )
 
+# `[fmu]` of a study file.
+FmuTable = TypedDict(
+    "FmuTable",
+    {
+        # key paths of study values (numbers, booleans, strings) that the FMU exposes as parameters,
+        # set by the master before the initialisation, such as `"rigid_bodies.crank.mass"` or
+        # `"analyses.run-up.rho_inf"`; a value the study refuses is refused when it is set (default
+        # `[]`)
+        "parameters": List[str],
+    },
+    total=False,
+)
+
 
 class FlexmbsError(Exception):
     """Base class of every error raised by flexmbs."""
@@ -1185,6 +1200,8 @@ class Study:
     @overload
     def get(self, key: Literal["output"]) -> OutputTable: ...
     @overload
+    def get(self, key: Literal["fmu"]) -> FmuTable: ...
+    @overload
     def get(self, key: Literal["analyses"]) -> List[AnalysesTable]: ...
     @overload
     def get(self, key: str) -> Any:
@@ -1239,6 +1256,8 @@ class Study:
     @overload
     def __getitem__(self, key: Literal["output"]) -> OutputTable: ...
     @overload
+    def __getitem__(self, key: Literal["fmu"]) -> FmuTable: ...
+    @overload
     def __getitem__(self, key: Literal["analyses"]) -> List[AnalysesTable]: ...
     @overload
     def __getitem__(self, key: str) -> Any:
@@ -1265,6 +1284,14 @@ class Study:
         `results_dir`, the simulation writes the results folder of the analysis as it steps
         (the files `run(analysis)` writes), until `finish_results()`. `forces`: a `ForceLaw`
         evaluated in every Newton iteration of its steps."""
+    def export_fmu(self, path: _Path, analysis: Optional[str] = None, library: Optional[_Path] = None) -> Dict[str, Any]:
+        """Writes the dynamic analysis `analysis` (default: the study's only one) as an FMI 2.0
+        Co-Simulation FMU at `path`, as `flexmbs export-fmu` does (docs/fmu.md): inputs the
+        actuators and point loads, outputs the sensors, parameters the study's `[fmu]` table.
+        `library`: the FMU's binary, the shared library of `flexmbs-fmu` (default: the
+        environment variable `FLEXMBS_FMU_LIBRARY`; build it with
+        `cargo build --release -p flexmbs-fmu`). Returns a dict: `path`, `analysis`,
+        `model_identifier`, `inputs`, `outputs`, `parameters` (variable names)."""
 
 class Simulation:
     """A dynamic analysis stepped from Python (`Study.simulation`): `step()`, `advance_to(t)`,

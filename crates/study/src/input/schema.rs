@@ -68,6 +68,8 @@ pub struct StudyFile {
     #[serde(default)]
     pub actuators: Vec<ActuatorFile>,
     pub output: Option<OutputFile>,
+    /// `[fmu]`: the parameters of the study's FMU.
+    pub fmu: Option<FmuFile>,
     // ----------------------------------------------------------------------------------------
     #[serde(default)]
     pub analyses: Vec<AnalysisFile>,
@@ -804,6 +806,15 @@ pub struct PidFile {
     /// A `joint` sensor whose coordinate is measured (default: the actuated coordinate).
     pub sensor: Option<String>,
     pub max_effort: Option<f64>,
+}
+
+/// `[fmu]`: what the study's FMU exposes beyond its inputs and outputs.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FmuFile {
+    /// Key paths of study values that become parameters of the FMU.
+    #[serde(default)]
+    pub parameters: Vec<String>,
 }
 
 /// `[output]`: how often the multibody analyses write.

@@ -105,6 +105,8 @@ pub struct Study {
     pub mechanism: Mechanism,
     /// Rendered warnings (suspicious units), printed on stderr.
     pub warnings: Vec<String>,
+    /// `[fmu] parameters`: key paths of the values the study's FMU exposes as parameters.
+    pub fmu_parameters: Vec<String>,
 }
 
 impl Study {
@@ -192,6 +194,7 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
     }
     let mechanism = v.mechanism(file, &parts);
     let analyses = v.analyses(&file.analyses, &mut parts, &mechanism);
+    let fmu_parameters = v.fmu_parameters(file);
     let warnings = v.warnings.iter().map(|w| source.render(w)).collect();
     let errors = std::mem::take(&mut v.errors);
     if !errors.is_empty() {
@@ -205,6 +208,7 @@ pub fn validate(source: Source, file: &StudyFile) -> Result<Study, StudyErrors> 
         analyses,
         mechanism,
         warnings,
+        fmu_parameters,
     })
 }
 
@@ -372,6 +376,42 @@ impl Validator<'_> {
             &path.key("name"),
             format!("a {what} named '{name}' is already defined at {first}{note}"),
         );
+    }
+
+    /// `[fmu] parameters`: each a key path to a number, boolean or string of the study,
+    /// named once.
+    fn fmu_parameters(&mut self, file: &StudyFile) -> Vec<String> {
+        let Some(fmu) = &file.fmu else {
+            return Vec::new();
+        };
+        let doc = crate::input::document::Document::from_text(&self.src.text, &self.src.path);
+        let mut kept = Vec::new();
+        for (i, p) in fmu.parameters.iter().enumerate() {
+            let at = KeyPath::root().key("fmu").key("parameters").index(i);
+            if kept.contains(p) {
+                self.err(&at, format!("parameter '{p}' is named twice"));
+                continue;
+            }
+            if p == "fmu" || p.starts_with("fmu.") {
+                self.err(&at, format!("'{p}': the [fmu] table itself cannot be a parameter"));
+                continue;
+            }
+            let value = match &doc {
+                Ok(doc) => doc.get(p),
+                Err(_) => continue,
+            };
+            match value {
+                Ok(serde_json::Value::Number(_) | serde_json::Value::Bool(_) | serde_json::Value::String(_)) => {
+                    kept.push(p.clone())
+                }
+                Ok(other) => self.err(
+                    &at,
+                    format!("'{p}' is {other}; a parameter is a number, a boolean or a string of the study"),
+                ),
+                Err(e) => self.err(&at, format!("'{p}' names no value of the study: {e}")),
+            }
+        }
+        kept
     }
 
     fn err(&mut self, path: &KeyPath, message: impl Into<String>) {

@@ -35,7 +35,7 @@ pub use force_law::{ForceLawSource, Forces};
 pub use options::Options;
 pub use runner::Runner;
 pub use selection::{Selection, UnknownName};
-pub use simulation::Simulation;
+pub use simulation::{SavedSimulation, Simulation};
 
 use crate::error::BoxError;
 use crate::input::validate::{AnalysisSpec, MbsAnalysis, Study};

@@ -448,6 +448,27 @@ impl Simulation {
         self.loads.iter().map(|l| l.name.as_str()).collect()
     }
 
+    /// The force and moment of point load `name` that can be set ([`Simulation::set_load`])
+    /// with their values now \[N, N m, in the load's axes\]: a load at a node has those its
+    /// study file gives, a load at a load point inside a body both.
+    pub fn load_values(&self, name: &str) -> Result<Vec<(LoadKind, [f64; 3])>, BoxError> {
+        let Some(l) = self.loads.iter().find(|l| l.name == name) else {
+            let names: Vec<String> = self.loads.iter().map(|l| l.name.clone()).collect();
+            return Err(crate::input::source::unknown_reference("load", name, &names).into());
+        };
+        let model = self.system().model();
+        Ok(match &l.target {
+            LoadTarget::Node(loads) => loads
+                .iter()
+                .map(|&(kind, index)| (kind, model.loads[index].value.into()))
+                .collect(),
+            LoadTarget::Body(index) => {
+                let b = &model.body_loads[*index];
+                vec![(LoadKind::Force, b.force.into()), (LoadKind::Moment, b.moment.into())]
+            }
+        })
+    }
+
     /// Sets the force or moment `value` [N or N m, in the load's axes] of the point load
     /// `name`; from the next step the load is its time function times `value`. A load at a
     /// node has the force or moment its study file gives (even zero); a load at a load point
@@ -531,6 +552,56 @@ impl Simulation {
     /// finite is [`mbs::SolveError::NonFiniteSensor`] (the row stays in `record`).
     pub fn record(&self, record: &mut SensorRecord) -> Result<(), mbs::SolveError> {
         self.integrator.record(record)
+    }
+}
+
+/// A simulation's point in time kept by [`Simulation::save`]: the integrator as it was (state,
+/// algorithmic accelerations, factorised matrix, predictor history, the system with its load
+/// values and held actuator efforts) and the plan of fixed steps.
+#[derive(Clone)]
+pub struct SavedSimulation {
+    integrator: Integrator<'static>,
+    dt: f64,
+    plan: FixedPlan,
+}
+
+impl SavedSimulation {
+    /// The time of the saved state.
+    pub fn time(&self) -> f64 {
+        self.integrator.state().time()
+    }
+}
+
+impl Simulation {
+    /// The whole state of the simulation, to go back to with [`Simulation::restore`]: the
+    /// steps from a restored state are those from the saved one bit for bit (a co-simulation
+    /// master that rejects a step and redoes it shorter, or compares two inputs).
+    pub fn save(&self) -> SavedSimulation {
+        SavedSimulation {
+            integrator: self.integrator.clone(),
+            dt: self.dt,
+            plan: self.plan,
+        }
+    }
+
+    /// Goes back to `saved` (of this simulation: a state saved from another one, of another
+    /// mechanism, is refused). A simulation writing a results folder cannot go back (its
+    /// files hold the steps taken).
+    pub fn restore(&mut self, saved: &SavedSimulation) -> Result<(), BoxError> {
+        if self.recording.is_some() {
+            return Err("a simulation writing a results folder cannot go back to a saved state".into());
+        }
+        let (a, b) = (self.integrator.state(), saved.integrator.state());
+        let same = a.velocity().len() == b.velocity().len()
+            && self.integrator.system().model().sensors.len() == saved.integrator.system().model().sensors.len()
+            && self.integrator.system().model().actuators.len() == saved.integrator.system().model().actuators.len();
+        if !same {
+            return Err("the saved state is of another mechanism".into());
+        }
+        self.integrator = saved.integrator.clone();
+        self.dt = saved.dt;
+        self.plan = saved.plan;
+        Ok(())
     }
 }
 

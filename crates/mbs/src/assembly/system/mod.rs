@@ -242,7 +242,10 @@ pub struct NodeKinematics {
     pub DAd: Mat<f64>,
 }
 
-/// Buffers of one analysis: created once, refilled by every evaluation.
+/// Buffers of one analysis: created once, refilled by every evaluation. A clone carries the
+/// factorisation and the caches too, so that an integrator cloned to go back to a step
+/// continues bit for bit as the original ([`crate::Integrator`] is `Clone`).
+#[derive(Clone)]
 pub(crate) struct Workspace {
     pub motions: Vec<Motion>,
     /// Which of `motions` are current ([`System::update_motions`]).
@@ -350,6 +353,40 @@ pub(crate) enum Factor {
     },
 }
 
+/// The factors are copied; the dense LU's scratch memory is allocated anew at its size (its
+/// contents are not read before they are written).
+impl Clone for Factor {
+    fn clone(&self) -> Self {
+        match self {
+            Factor::None => Factor::None,
+            Factor::Sparse { A, lu } => Factor::Sparse {
+                A: A.clone(),
+                lu: lu.clone(),
+            },
+            Factor::Small { LU, piv, factored } => Factor::Small {
+                LU: LU.clone(),
+                piv: piv.clone(),
+                factored: *factored,
+            },
+            Factor::Dense {
+                LU,
+                perm,
+                perm_inv,
+                mem: _,
+                rhs_cols,
+                factored,
+            } => Factor::Dense {
+                LU: LU.clone(),
+                perm: perm.clone(),
+                perm_inv: perm_inv.clone(),
+                mem: MemBuffer::new(dense_scratch(LU.nrows(), *rhs_cols)),
+                rhs_cols: *rhs_cols,
+                factored: *factored,
+            },
+        }
+    }
+}
+
 /// Scratch of the dense LU and of its solve for `k` right-hand sides.
 fn dense_scratch(n: usize, k: usize) -> StackReq {
     StackReq::any_of(&[
@@ -366,6 +403,7 @@ fn dense_scratch(n: usize, k: usize) -> StackReq {
 /// 1.6x faster.
 const PARALLEL_ELEMENTS: usize = 32;
 
+#[derive(Clone)]
 pub(crate) struct ElementBuffer {
     pub out: ElementOutput,
     pub flex: Option<FlexBuffer>,

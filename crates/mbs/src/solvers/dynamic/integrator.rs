@@ -257,7 +257,13 @@ impl std::ops::Deref for Held<'_> {
     }
 }
 
-/// A generalized-α integrator over a [`System`], one step at a time.
+/// A generalized-α integrator over a [`System`], one step at a time. A clone is the
+/// integrator at the same point with everything a step reads (state, algorithmic
+/// accelerations, the factorised iteration matrix, the predictor's history, the workspace):
+/// stepping the clone gives the steps of the original bit for bit, so a caller can keep one
+/// to go back to (a co-simulation master that rejects a step). The system is shared until
+/// one of them changes it ([`Integrator::system_mut`]).
+#[derive(Clone)]
 pub struct Integrator<'a> {
     system: Held<'a>,
     state: State,
