@@ -225,7 +225,7 @@ function buildAnalysis(a) {
       group.add(d.lines);
     }
     if (!b.triangles.length) {
-      d.points = new THREE.Points(geometry, new THREE.PointsMaterial({ vertexColors: true, size: 8, sizeAttenuation: false }));
+      d.points = new THREE.Points(geometry, new THREE.PointsMaterial({ vertexColors: true, size: 9, sizeAttenuation: false }));
       d.points.userData.body = j;
       group.add(d.points);
     }
@@ -246,7 +246,7 @@ function buildAnalysis(a) {
   bounds.center = box.getCenter(new THREE.Vector3());
   bounds.size = box.getSize(new THREE.Vector3());
   bounds.radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
-  const size = bounds.radius * 0.025;
+  const size = bounds.radius * 0.012;
   for (const m of a.markers) {
     const geom = m.kind === 'ground' ? new THREE.BoxGeometry(2 * size, 2 * size, 2 * size) : new THREE.SphereGeometry(size, 12, 8);
     const color = m.kind === 'ground' ? 0x333333 : m.kind === 'joint' ? 0xd62728 : 0x888888;

@@ -97,7 +97,15 @@ fn six_dof_frame(
     if let Some((_, von_mises, principal)) = stress {
         fields.extend(vtu::stress_fields(&tensor, von_mises, principal));
     }
-    obs.frame(series, key, mesh, &fields)
+    obs.frame(series, key, mesh, &fields)?;
+    obs.view(&crate::output::view::ViewEvent::PartField {
+        series,
+        key,
+        mesh,
+        values,
+        stress: stress.map(|s| s.0.as_slice()),
+    });
+    Ok(())
 }
 
 /// The spider of each solid interface, for drawing (the auxiliary spider on every node is
