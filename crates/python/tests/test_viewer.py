@@ -127,7 +127,10 @@ def slider_crank(tmp_path_factory):
     out = tmp_path_factory.mktemp("sc") / "results"
     import subprocess
 
-    done = subprocess.run([str(path), "run", "--out", str(out), "--t-end", "0.03"], capture_output=True, text=True)
+    # In its own folder: the built-in example keeps its cache in the current folder.
+    done = subprocess.run(
+        [str(path), "run", "--out", str(out), "--t-end", "0.03"], capture_output=True, text=True, cwd=out.parent
+    )
     assert done.returncode == 0, done.stderr
     return out
 
