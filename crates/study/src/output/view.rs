@@ -32,6 +32,8 @@ pub enum ViewEvent<'a> {
         series: Series,
         key: f64,
         mesh: &'a VtuMesh,
+        /// The label of each mesh node in its file (empty when unknown).
+        labels: &'a [u64],
         values: &'a [[f64; 6]],
         stress: Option<&'a [[f64; 6]]>,
     },
@@ -432,9 +434,10 @@ impl SceneBuilder {
                 series,
                 key,
                 mesh,
+                labels,
                 values,
                 stress,
-            } => self.part_field(*series, *key, mesh, values, *stress),
+            } => self.part_field(*series, *key, (*mesh, *labels), values, *stress),
         }
     }
 
@@ -443,7 +446,7 @@ impl SceneBuilder {
         &mut self,
         series: Series,
         key: f64,
-        mesh: &VtuMesh,
+        (mesh, labels): (&VtuMesh, &[u64]),
         values: &[[f64; 6]],
         stress: Option<&[[f64; 6]]>,
     ) {
@@ -465,7 +468,7 @@ impl SceneBuilder {
                 &mesh.points,
                 &s,
                 [0.0; 3],
-                Vec::new(),
+                labels.to_vec(),
                 0,
                 |_, _| [0.0; 6],
                 None,
@@ -638,6 +641,7 @@ mod tests {
                 series: Series::Modes,
                 key: (k + 1) as f64,
                 mesh: &mesh,
+                labels: &[11, 12, 13, 14],
                 values: &values,
                 stress: None,
             });
@@ -654,5 +658,6 @@ mod tests {
         // Vertex of node 3 in shape 2 (k = 1): z displacement 4.
         let v = a.bodies[0].vertex_node.0.iter().position(|&n| n == 3).unwrap();
         assert_eq!(a.bodies[0].shapes.0[3 * 4 + 3 * v + 2], 4.0);
+        assert_eq!(a.bodies[0].node_labels, [11, 12, 13, 14]);
     }
 }
