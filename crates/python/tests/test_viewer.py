@@ -267,3 +267,42 @@ def test_the_mode_shapes_animate_with_their_frequencies(browser, solid_bar):
     page.screenshot("modes")
     page.check_drawn()
     page.check_clean()
+
+
+def test_a_mechanisms_linearised_modes_animate_about_its_equilibrium(browser, tmp_path):
+    """examples/four_bar.toml: every mode of the linearised analysis about the equilibrium,
+    with the frequencies of its table; each mode's drawing moves away from the equilibrium by
+    the page's tenth of the model's size."""
+    import subprocess
+
+    from conftest import EXAMPLES, cli_path
+
+    dst = tmp_path / "examples"
+    shutil.copytree(EXAMPLES, dst, ignore=shutil.ignore_patterns(".flexmbs-cache", "*-results", "__pycache__"))
+    done = subprocess.run([str(cli_path()), "run", str(dst / "four_bar.toml"), "--t-end", "0.01"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    res = dst / "four_bar-results"
+    page = Page(browser, res / "view.html")
+    page("v.select('linearized')")
+    freqs = np.loadtxt(res / "linearized" / "frequencies.csv", delimiter=",", skiprows=1, usecols=1, ndmin=1)
+    modes = page("v.modes()")
+    assert len(modes) == len(freqs) == 6
+    assert np.allclose([m["frequency"] for m in modes], freqs, rtol=1e-12)
+    page("v.pause()")
+    n_bodies = len(page("v.bodies()"))
+
+    def drawn():
+        return np.concatenate(
+            [[page(f"v.vertexPosition({j}, {i})") for i in range(0, page(f"v.vertexCount({j})"), 3)] for j in range(n_bodies)]
+        )
+
+    for k in range(len(modes)):
+        page(f"v.setMode({k})")
+        page("v.setPhase(0)")
+        rest = drawn()
+        page(f"v.setPhase({math.pi / 2})")
+        moved = drawn()
+        size = np.ptp(rest, axis=0).max()
+        assert 0.02 * size < np.linalg.norm(moved - rest, axis=1).max() < 0.2 * size, k
+    page.check_drawn()
+    page.check_clean()

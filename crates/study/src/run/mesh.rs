@@ -408,6 +408,27 @@ impl MeshRecovery {
         view::Frame { key, poses, markers }
     }
 
+    /// Sends the poses at `state` to the results page alone (no mesh frame) as `key` of `series`.
+    pub fn view_pose(
+        &mut self,
+        obs: &mut dyn Observer,
+        series: Series,
+        key: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+    ) -> Result<(), BoxError> {
+        let kins = self.kinematics(key, sys, state, b)?;
+        let frame = self.view_frame(key, b, &kins, &sys.node_motions(state));
+        self.send_bodies(obs);
+        obs.view(&ViewEvent::Pose {
+            series,
+            key,
+            frame: &frame,
+        });
+        Ok(())
+    }
+
     /// Sends the poses at `state` as the configuration the modes of the analysis are about.
     pub fn view_base(
         &mut self,
