@@ -14,6 +14,9 @@ usage:
                                      without a file, run the built-in example: the flexible
                                      planar slider-crank (validation problem C2), results in
                                      ./slider_crank-results/
+  flexmbs view RESULTS_DIR           write the results page view.html of a results folder again
+                                     (every run writes it: the bodies moving, the modes, the
+                                     sensors; opens in a browser, no network) and print its path
   flexmbs check STUDY.toml           validate a study file, run nothing
   flexmbs reduce STUDY.toml [--part NAME]
                                      reduce the parts that have a [parts.reduction] (or the one
@@ -79,6 +82,15 @@ the flexible planar slider-crank (validation problem C2), into ./slider_crank-re
                  run this analysis alone; when its `start` names another analysis, that one
                  (and the one its `start` names, and so on) runs first and writes its results
                  too. The other analyses' results are left as they are."
+        }
+        "view" => {
+            "\
+usage: flexmbs view RESULTS_DIR
+
+Writes the results page RESULTS_DIR/view.html again from the data it holds, with this version
+of flexmbs, and prints its path. Every `flexmbs run` writes the page: one self-contained HTML
+file (no server, no network request) with the bodies moving over time, the mode shapes, the
+stresses and the sensors of every analysis. Open it in a browser."
         }
         "check" => {
             "\
@@ -489,6 +501,13 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             }
             Ok(())
         }
+        "view" => {
+            let (positional, _) = parse(rest, &[])?;
+            let dir = one_file(&positional, "view", "a results folder")?;
+            let page = study::output::folder::rewrite_view(&dir)?;
+            crate::say!("{}", page.display());
+            Ok(())
+        }
         "export-fem" => {
             let (positional, options) = parse(rest, &["reference"])?;
             let [input, output] = positional.as_slice() else {
@@ -563,6 +582,7 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
         other => {
             let commands = [
                 "run",
+                "view",
                 "check",
                 "reduce",
                 "inspect",

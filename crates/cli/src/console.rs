@@ -134,11 +134,16 @@ pub fn run(
         .iter()
         .filter(|a| a.status == study::output::summary::Status::Done)
         .count();
+    let dir = options.results_dir(study);
     crate::tell!(
         "flexmbs: {} analyses done in {:.2} s; results in {}",
         done,
         summary.total_seconds,
-        options.results_dir(study).display()
+        dir.display()
     );
+    let page = dir.join(study::output::folder::VIEW);
+    if page.is_file() {
+        crate::tell!("flexmbs: open {} in a browser to see them", page.display());
+    }
     Ok(summary)
 }

@@ -35,7 +35,7 @@ from typing import Any, Callable, Dict, Final, List, Literal, Optional, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from .results import Results
+from .results import Page, Results
 
 _Path = Union[str, "os.PathLike[str]"]
 _Vec3 = Union[Sequence[float], npt.NDArray[np.float64]]

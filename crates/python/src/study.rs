@@ -222,6 +222,7 @@ pub(crate) const STUB: Class = Class {
             "reduce",
             "(self, part: Optional[str] = None, cache: Optional[_Path] = None) -> List[Tuple[str, ReducedBody]]",
         ),
+        Method("show", "(self, cache: Optional[_Path] = None, height: int = 560) -> Page"),
         Method(
             "simulation",
             "(self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None, forces: Optional[ForceLaw] = None) -> \"Simulation\"",
@@ -471,6 +472,24 @@ impl Study {
                 Err(e)
             }
         }
+    }
+
+    /// The model before it runs, on a results page (`view.html`'s viewer): the mechanism's
+    /// bodies, interfaces, joints, supports and point masses at the initial state, the parts
+    /// reduced through the cache (`cache`, default `.flexmbs-cache` beside the study file).
+    /// Displayed inline in Jupyter when there is a notebook kernel; returns the page's HTML
+    /// (a `flexmbs.Page`, a `str`).
+    #[pyo3(signature = (cache=None, height=560))]
+    fn show<'py>(&self, py: Python<'py>, cache: Option<PathBuf>, height: usize) -> PyResult<Bound<'py, PyAny>> {
+        let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
+        let opts = options(None, cache, None);
+        let html = py
+            .detach(|| study::model_page(&st, &opts, &mut ()))
+            .map_err(|e| to_py_err(py, &*e))?;
+        let results = py.import("flexmbs.results")?;
+        let page = results.getattr("Page")?.call1((html,))?;
+        page.call_method1("show", (height,))?;
+        Ok(page)
     }
 
     /// Reduces the parts that have a `[parts.reduction]` (or the one named `part`) through the

@@ -41,12 +41,25 @@ pub enum CellRole {
     InterfaceNode = 2,
 }
 
+/// The radius of the tube that draws a beam of section `s`: a round section's outer radius,
+/// else that of the circle of its area.
+fn section_radius(s: &fe_model::BeamSection) -> f64 {
+    match s.shape() {
+        fe_model::SectionShape::Tube { d_outer, .. } => d_outer / 2.0,
+        _ => (s.A() / std::f64::consts::PI).sqrt(),
+    }
+}
+
 /// Points and cells in VTK order.
 #[derive(Clone, Debug, Default)]
 pub struct VtuMesh {
     pub points: Vec<[f64; 3]>,
     /// VTK type, connectivity in VTK order, role.
     pub cells: Vec<(u8, Vec<usize>, CellRole)>,
+    /// The radius of each beam cell's section, cell by cell (0 for other cells; a circle of
+    /// the section's area when it is not round), for drawing beams as tubes; may be shorter
+    /// than `cells` (cells past its end have none).
+    pub radius: Vec<f64>,
 }
 
 impl VtuMesh {
@@ -55,12 +68,20 @@ impl VtuMesh {
     pub fn from_model(model: &FeModel, interfaces: &[(NodeId, Vec<NodeId>)]) -> Self {
         let points = model.mesh.nodes.iter().map(|p| [p.x, p.y, p.z]).collect();
         let mut cells = Vec::with_capacity(model.elements.len());
+        let mut radius = Vec::with_capacity(model.elements.len());
         for e in &model.elements {
+            radius.push(match e {
+                Element::Beam2(b) => model.sections.get(b.section.0 as usize).map_or(0.0, section_radius),
+                _ => 0.0,
+            });
             let kind = match e {
                 Element::Beam2(_) => CellKind::Line2,
                 other => match other.solid() {
                     Some((k, _)) => k.cell_kind(),
-                    None => continue,
+                    None => {
+                        radius.pop();
+                        continue;
+                    }
                 },
             };
             cells.push(Self::cell(kind, e.nodes()));
@@ -71,7 +92,7 @@ impl VtuMesh {
                 cells.push((3, vec![node.index(), s.index()], CellRole::SpiderLeg));
             }
         }
-        Self { points, cells }
+        Self { points, cells, radius }
     }
 
     /// One cell of `kind` with nodes in our order.

@@ -308,3 +308,53 @@ fn a_second_run_is_refused_while_the_first_holds_the_lock() {
     assert_eq!(out.code, 0, "{}", out.stderr);
     assert_eq!(summary(&res)["status"], "complete");
 }
+
+/// Every run writes the results page `view.html` (its data inside it); `flexmbs view` writes
+/// it again from those data and prints its path, and the next run finds the page its own; a
+/// page the user put there is refused, and a folder without a page is named.
+#[test]
+fn the_results_page_is_written_by_every_run_and_again_by_flexmbs_view() {
+    let dir = pendulum_run("view-page");
+    let res = dir.join("res");
+    let page = std::fs::read_to_string(res.join("view.html")).unwrap();
+    assert!(page.contains("id=\"flexmbs-data\""), "no data in the page");
+    let scene = viewer::data_of_page(&page).unwrap();
+    let names: Vec<&str> = scene.analyses.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["dynamic"]);
+    let a = &scene.analyses[0];
+    assert!(a.frames.len() > 1 && !a.bodies.is_empty() && !a.sensors.is_empty());
+    assert!(a.sensors.iter().any(|s| s.name == "energy"));
+    assert!(
+        std::fs::read_to_string(res.join(".flexmbs-manifest"))
+            .unwrap()
+            .contains(" view.html\n"),
+        "the page is recorded as the run's own"
+    );
+    let out = flexmbs(&dir, &["view", "res"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert_eq!(
+        out.stdout.trim(),
+        Path::new("res").join("view.html").display().to_string()
+    );
+    assert_eq!(std::fs::read_to_string(res.join("view.html")).unwrap(), page);
+    let again = flexmbs(
+        &dir,
+        &["run", "double_pendulum.toml", "--t-end", "0.05", "--out", "res"],
+    );
+    assert_eq!(again.code, 0, "{}", again.stderr);
+    std::fs::write(res.join("view.html"), "<html>my page</html>").unwrap();
+    let out = flexmbs(&dir, &["view", "res"]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("refusing to rewrite") && out.stderr.contains("view.html"),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(
+        std::fs::read_to_string(res.join("view.html")).unwrap(),
+        "<html>my page</html>"
+    );
+    let out = flexmbs(&dir, &["view", "nowhere"]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("view.html not found"), "{}", out.stderr);
+}

@@ -33,7 +33,7 @@ from ._flexmbs import (  # noqa: F401
     __version__,
     study_keys,
 )
-from .results import AnalysisResult, Results, Sensor, Table  # noqa: F401
+from .results import AnalysisResult, Page, Results, Sensor, Table  # noqa: F401
 from .sweep import final, grid, peak_abs, summary_value, sweep  # noqa: F401
 
 __all__ = [
@@ -41,6 +41,7 @@ __all__ = [
     "FlexmbsError",
     "ForceLaw",
     "KeyPathError",
+    "Page",
     "ReducedBody",
     "ReducedBodyFileError",
     "Results",

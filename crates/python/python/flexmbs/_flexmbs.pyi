@@ -14,7 +14,7 @@ from typing import Any, Callable, Dict, Final, List, Literal, Optional, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from .results import Results
+from .results import Page, Results
 
 _Path = Union[str, "os.PathLike[str]"]
 _Vec3 = Union[Sequence[float], npt.NDArray[np.float64]]
@@ -1278,6 +1278,12 @@ class Study:
         """Reduces the parts that have a `[parts.reduction]` (or the one named `part`) through the
         cache, as `flexmbs reduce` does without writing a results folder; returns
         `{part name: ReducedBody}`."""
+    def show(self, cache: Optional[_Path] = None, height: int = 560) -> Page:
+        """The model before it runs, on a results page (`view.html`'s viewer): the mechanism's
+        bodies, interfaces, joints, supports and point masses at the initial state, the parts
+        reduced through the cache (`cache`, default `.flexmbs-cache` beside the study file).
+        Displayed inline in Jupyter when there is a notebook kernel; returns the page's HTML
+        (a `flexmbs.Page`, a `str`)."""
     def simulation(self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None, forces: Optional[ForceLaw] = None) -> "Simulation":
         """Starts the dynamic analysis `analysis` (default: the study's only dynamic analysis) for
         stepping from Python; reduced bodies come through the cache as in a run. With

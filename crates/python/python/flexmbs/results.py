@@ -7,13 +7,57 @@ analysis), ``Sensor`` (one sensor's time column and value columns with names and
 
 from __future__ import annotations
 
+import html as _html
+from pathlib import Path
 from typing import Any, Dict, List, Optional, Union
 
 import numpy as np
 
 from ._flexmbs import _unknown_name_error
 
-__all__ = ["Results", "AnalysisResult", "Sensor", "Table"]
+__all__ = ["Results", "AnalysisResult", "Sensor", "Table", "Page"]
+
+
+class Page(str):
+    """The HTML text of a results page (``view.html``: one self-contained file, three.js
+    inlined, no network request); ``path`` is where it is. Shown inline in Jupyter as an
+    iframe."""
+
+    path: Optional[str]
+
+    def __new__(cls, text: str, path: Optional[str] = None):
+        page = super().__new__(cls, text)
+        page.path = path
+        return page
+
+    def __repr__(self) -> str:
+        where = f" at {self.path}" if self.path else ""
+        return f"<flexmbs results page{where}, {len(self)} characters>"
+
+    def iframe(self, height: int = 560) -> str:
+        """The page as an ``<iframe srcdoc=...>`` element for a notebook's output."""
+        return (
+            f'<iframe srcdoc="{_html.escape(str(self), quote=True)}" '
+            f'style="width:100%;height:{int(height)}px;border:1px solid #ccd" '
+            'sandbox="allow-scripts"></iframe>'
+        )
+
+    def show(self, height: int = 560) -> "Page":
+        """Displays the page in Jupyter (IPython.display, when there is a notebook kernel)."""
+        _display_page(self, height)
+        return self
+
+
+def _display_page(page: Page, height: int) -> None:
+    try:
+        from IPython import get_ipython
+        from IPython.display import HTML, display
+    except ImportError:
+        return
+    shell = get_ipython()
+    if shell is None or not hasattr(shell, "kernel"):
+        return
+    display(HTML(page.iframe(height)))
 
 
 def _split_unit(label: str):
@@ -157,6 +201,45 @@ class Results:
                 return a.sensors[name]
         recorded = sorted({s for a in self.analyses.values() for s in a.sensors})
         raise _unknown_name_error("sensor", name, recorded)
+
+    def show(self, height: int = 560) -> Page:
+        """The results page of the run (``view.html`` of the results folder: the bodies moving,
+        the mode shapes, stresses and sensors of every analysis), displayed inline in Jupyter
+        when there is a notebook kernel; returns its HTML (a ``Page``, a ``str``). Open the
+        file in a browser outside Jupyter."""
+        path = Path(self.results_dir) / "view.html"
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: the run wrote no results page")
+        page = Page(path.read_text(encoding="utf-8"), str(path))
+        _display_page(page, height)
+        return page
+
+    def plot(self, sensor: str, analysis: Optional[str] = None, ax=None):
+        """Plots sensor ``sensor`` (of ``analysis``, default as ``sensor``) with matplotlib
+        (the optional extra ``flexmbs[plot]``): every column against time, one axis per unit,
+        labelled with names and units. Returns the matplotlib ``Figure``; ``ax`` draws into an
+        existing axis (all the columns on it)."""
+        try:
+            import matplotlib.pyplot as plt
+        except ImportError as e:
+            raise ImportError("Results.plot needs matplotlib: pip install 'flexmbs[plot]'") from e
+        s = self.sensor(sensor, analysis)
+        units = list(dict.fromkeys(s.units))
+        if ax is None:
+            fig, axes = plt.subplots(len(units), 1, sharex=True, squeeze=False, figsize=(7, 2.4 + 1.6 * len(units)))
+            axes = [a[0] for a in axes]
+        else:
+            fig, axes = ax.figure, [ax] * len(units)
+        for unit, a in zip(units, axes):
+            for k, (name, u) in enumerate(zip(s.columns, s.units)):
+                if u == unit:
+                    a.plot(s.time, s.values[:, k], label=f"{name} [{u}]" if u else name)
+            a.set_ylabel(f"{s.name} [{unit}]" if unit else s.name)
+            a.grid(True, alpha=0.3)
+            a.legend(loc="best", fontsize="small")
+        axes[-1].set_xlabel(s.x_label)
+        axes[0].set_title(f"sensor {s.name}")
+        return fig
 
     def __repr__(self) -> str:
         return f"Results({list(self.analyses)}, results_dir={self.results_dir!r})"

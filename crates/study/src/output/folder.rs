@@ -396,7 +396,7 @@ impl Manifest {
     /// the manifest does not list.
     fn foreign(&self, analyses: &[String]) -> Vec<PathBuf> {
         let mut found = Vec::new();
-        for name in ["summary.json", "summary.md"] {
+        for name in ["summary.json", "summary.md", VIEW] {
             if let Owner::User(_) = self.owner(name) {
                 found.push(self.root.join(name));
             }
@@ -498,7 +498,14 @@ pub struct ResultsFolder {
     /// PVD entries of the current analysis, per series.
     series: Vec<(Series, Vec<(f64, String)>)>,
     stream: Option<Stream>,
+    /// The data of the results page, over the run.
+    view: crate::output::view::SceneBuilder,
 }
+
+/// The results page of a results folder (`crate::output::view`): the analyses that have
+/// something to show, with three.js inlined; its data are read back from it to write it again
+/// ([`rewrite_view`]).
+pub const VIEW: &str = "view.html";
 
 /// The VTU file stem, number width, first number and PVD name of each series.
 fn series_names(s: Series) -> (&'static str, usize, usize, &'static str) {
@@ -545,6 +552,7 @@ impl ResultsFolder {
             files: Vec::new(),
             series: Vec::new(),
             stream: None,
+            view: Default::default(),
         };
         // Analyses removed from the study: their files go, and their folders if that empties them.
         let current: std::collections::BTreeSet<&str> = analyses.iter().map(String::as_str).collect();
@@ -556,6 +564,15 @@ impl ResultsFolder {
             .cloned()
             .collect();
         folder.manifest.forget(&stale)?;
+        // The page's analyses that this run does not run again stay on it.
+        if let Owner::Flexmbs(_) = folder.manifest.owner(VIEW) {
+            if let Some(earlier) = std::fs::read_to_string(root.join(VIEW))
+                .ok()
+                .and_then(|html| viewer::data_of_page(&html).ok())
+            {
+                folder.view.keep(earlier, analyses);
+            }
+        }
         for dir in stale
             .iter()
             .filter_map(|f| f.split_once('/').map(|(a, _)| a))
@@ -622,6 +639,7 @@ impl Observer for ResultsFolder {
         self.files.clear();
         self.series.clear();
         self.stream = None;
+        self.view.begin(&a.name, &a.kind);
         // Nothing is written, nor deleted, through an analysis folder that is not a folder.
         match std::fs::symlink_metadata(&self.dir) {
             Ok(m) if m.file_type().is_symlink() => {
@@ -660,6 +678,7 @@ impl Observer for ResultsFolder {
     }
 
     fn table(&mut self, t: &Table) -> Result<(), BoxError> {
+        self.view.table(t);
         let header: Vec<&str> = t.columns.iter().map(String::as_str).collect();
         let mut csv = Csv::new(&header);
         for r in &t.rows {
@@ -669,6 +688,7 @@ impl Observer for ResultsFolder {
     }
 
     fn sensors(&mut self, s: &SensorStream<'_>) -> Result<(), BoxError> {
+        self.view.sensors(s.x_label, s.groups);
         let mut stream = Stream {
             x_label: s.x_label.to_string(),
             groups: s.groups.to_vec(),
@@ -717,6 +737,9 @@ impl Observer for ResultsFolder {
     }
 
     fn sample(&mut self, x: f64, values: &[Vec<f64>]) -> Result<(), BoxError> {
+        if self.stream.as_ref().is_some_and(|s| s.failed.is_none()) {
+            self.view.sample(x, values);
+        }
         let Some(s) = &mut self.stream else {
             return crate::interrupt::check();
         };
@@ -754,6 +777,7 @@ impl Observer for ResultsFolder {
     /// A PNG per sensor: every column against the abscissa, on one axis when the columns
     /// share a unit and a size, else in panels ([`plot_panels`]).
     fn sensors_end(&mut self) -> Result<(), BoxError> {
+        self.view.finish_sensors();
         let Some(mut s) = self.stream.take() else {
             return Ok(());
         };
@@ -828,6 +852,10 @@ impl Observer for ResultsFolder {
         Ok(())
     }
 
+    fn view(&mut self, event: &crate::output::view::ViewEvent<'_>) {
+        self.view.event(event);
+    }
+
     fn file(&mut self, name: &str, path: &Path) -> Result<(), BoxError> {
         let bytes = std::fs::read(path).context(|| format!("cannot read {}", path.display()))?;
         self.put(name, &bytes)
@@ -842,8 +870,46 @@ impl Observer for ResultsFolder {
         self.claim("summary.json")?;
         self.claim("summary.md")?;
         self.write_whole("summary.json", s.json().as_bytes())?;
-        self.write_whole("summary.md", s.markdown().as_bytes())
+        self.write_whole("summary.md", s.markdown().as_bytes())?;
+        // The page after the summary: a user's view.html stops the run with the summaries
+        // written. A page that cannot be written (a full disk) does not stop the analyses,
+        // whose files are the results: the run goes on without it (the program says where the
+        // page is only when it exists).
+        self.view.scene.title = s.title.clone().unwrap_or_else(|| s.study.clone());
+        self.claim(VIEW)?;
+        let page = viewer::page(&self.view.scene());
+        let _ = self.write_whole(VIEW, page.as_bytes());
+        Ok(())
     }
+}
+
+/// Writes the results page of the results folder `root` again from the data it holds, with
+/// this version of the viewer; returns its path. The folder is locked meanwhile, and a page
+/// that flexmbs did not write is refused (module docs).
+pub fn rewrite_view(root: &Path) -> Result<PathBuf, BoxError> {
+    let path = root.join(VIEW);
+    if !path.is_file() {
+        return Err(format!(
+            "{} not found: {} is not a results folder of `flexmbs run`, or one written before the results page existed: run the study again",
+            path.display(),
+            root.display()
+        )
+        .into());
+    }
+    let _lock = lock_folder(root)?;
+    let mut manifest = Manifest::load(root)?;
+    if let Owner::User(why) = manifest.owner(VIEW) {
+        return Err(format!("refusing to rewrite {}: {why}; it is left as it is", path.display()).into());
+    }
+    let html = std::fs::read_to_string(&path).context(|| format!("cannot read {}", path.display()))?;
+    let scene = viewer::data_of_page(&html).map_err(|e| format!("{}: {e}", path.display()))?;
+    let page = viewer::page(&scene);
+    if page != html {
+        manifest.record(VIEW, Content::of_bytes(page.as_bytes()))?;
+        crate::output::summary::write_atomic(&path, page.as_bytes())
+            .context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(path)
 }
 
 /// The unit of a column header `name [unit]` ("" without one).

@@ -7,8 +7,10 @@
 //! | [`folder`] | the results folder observer: CSV, VTU/PVD, PNG, summary |
 //! | [`summary`] | CSV text, summary types, results-folder layout, atomic writes |
 //! | [`vtu`] | VTK XML unstructured grids and `.pvd` collections |
+//! | [`view`] | the data of the results page `view.html` (bodies, poses, sensors) |
 
 pub mod folder;
 pub mod observer;
 pub mod summary;
+pub mod view;
 pub mod vtu;

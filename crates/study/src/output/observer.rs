@@ -17,6 +17,7 @@
 
 use crate::error::BoxError;
 use crate::output::summary::{AnalysisSummary, Summary};
+use crate::output::view::ViewEvent;
 use crate::output::vtu::{PointField, VtuMesh};
 use std::path::Path;
 
@@ -188,6 +189,8 @@ pub trait Observer {
     fn frame(&mut self, series: Series, key: f64, mesh: &VtuMesh, fields: &[PointField<'_>]) -> Result<(), BoxError> {
         Ok(())
     }
+    /// The data of the results page (`crate::output::view`): bodies, poses, a part's fields.
+    fn view(&mut self, event: &ViewEvent<'_>) {}
     /// A file the analysis produced (the reduced body `name` at `path`).
     fn file(&mut self, name: &str, path: &Path) -> Result<(), BoxError> {
         Ok(())
@@ -240,6 +243,10 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
         self.0.frame(series, key, mesh, fields)?;
         self.1.frame(series, key, mesh, fields)
     }
+    fn view(&mut self, e: &ViewEvent<'_>) {
+        self.0.view(e);
+        self.1.view(e);
+    }
     fn file(&mut self, name: &str, path: &Path) -> Result<(), BoxError> {
         self.0.file(name, path)?;
         self.1.file(name, path)
@@ -280,6 +287,9 @@ impl<O: Observer + ?Sized> Observer for &mut O {
     }
     fn frame(&mut self, series: Series, key: f64, mesh: &VtuMesh, fields: &[PointField<'_>]) -> Result<(), BoxError> {
         (**self).frame(series, key, mesh, fields)
+    }
+    fn view(&mut self, e: &ViewEvent<'_>) {
+        (**self).view(e)
     }
     fn file(&mut self, name: &str, path: &Path) -> Result<(), BoxError> {
         (**self).file(name, path)

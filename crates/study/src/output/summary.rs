@@ -6,6 +6,7 @@
 //! ```text
 //! <results>/
 //!   summary.json, summary.md      rewritten after every analysis
+//!   view.html                     the results page, rewritten after every analysis (crate::output::view)
 //!   .flexmbs-manifest             the files flexmbs wrote here, with their SHA-256 (crate::output::folder)
 //!   .flexmbs-lock                 locked by the operating system while a run writes here (crate::output::folder)
 //!   <analysis>/                   one folder per analysis, named by it

@@ -278,6 +278,22 @@ fn linearized(
         hz.len(),
         hz.iter().map(|f| format!("{f:.6e}")).collect::<Vec<_>>().join(", ")
     ));
+    // Each mode on the results page, about the state linearised about: a small motion along
+    // it (its largest coordinate 1e-3, so that the bodies' frames follow it; a mode of the
+    // bodies' elastic coordinates moves no node), which the page scales: the linearised mode
+    // is the direction of that motion. A mode whose frames cannot be solved along it is left
+    // off the page.
+    let mut mw = MeshRecovery::new(b, sys)?;
+    mw.view_base(obs, sys, &state, b)?;
+    for (k, e) in energies.iter().take(modes).enumerate() {
+        let largest = e.shape.iter().fold(0.0, |m: f64, x| m.max(x.abs()));
+        if e.shape.len() == sys.n_dof() && largest > 0.0 {
+            let step: Vec<f64> = e.shape.iter().map(|x| x * 1e-3 / largest).collect();
+            let mut moved = sys.retract(&state, &step);
+            sys.reset_frames(&mut moved);
+            let _ = mw.view_pose(obs, Series::Modes, (k + 1) as f64, sys, &moved, b);
+        }
+    }
     let labels: Vec<&str> = energies.iter().take(modes).map(|e| e.label.as_str()).collect();
     out.results = json!({
         "model": b.size(sys),
@@ -289,6 +305,30 @@ fn linearized(
         "about": if start.is_some() { "start".to_string() } else { format!("{about:?}") },
     });
     Ok(())
+}
+
+/// The state `base` moved along the mode `phi` (coordinates of the system's dofs) until its
+/// largest node displacement is a tenth of the model's size, its frames reset: the mode as
+/// drawn.
+fn mode_state(sys: &System, base_state: &mbs::State, phi: &[f64]) -> mbs::State {
+    let base = sys.node_motions(base_state);
+    let size = {
+        let n = base.len().max(1) as f64;
+        let c = base.iter().map(|m| m.r).sum::<Vector3<f64>>() / n;
+        base.iter().map(|m| (m.r - c).norm()).fold(1e-3, f64::max)
+    };
+    let probe = sys.retract(base_state, &phi.iter().map(|x| x * 1e-6).collect::<Vec<_>>());
+    let moved = sys
+        .node_motions(&probe)
+        .iter()
+        .zip(&base)
+        .map(|(a, b)| (a.r - b.r).norm())
+        .fold(0.0, f64::max)
+        / 1e-6;
+    let scale = if moved > 0.0 { 0.1 * size / moved } else { 0.0 };
+    let mut state = sys.retract(base_state, &phi.iter().map(|x| x * scale).collect::<Vec<_>>());
+    sys.reset_frames(&mut state);
+    state
 }
 
 /// The `buckling` analysis (`mbs::buckling` about the equilibrium under the full load, or the
@@ -353,25 +393,10 @@ fn run_buckling(
     obs.table(&table)?;
     // Each mode on the loaded configuration, its largest displacement a tenth of the model.
     let mut mw = MeshRecovery::new(b, sys)?;
-    let base = sys.node_motions(&loaded);
-    let size = {
-        let n = base.len().max(1) as f64;
-        let c = base.iter().map(|m| m.r).sum::<Vector3<f64>>() / n;
-        base.iter().map(|m| (m.r - c).norm()).fold(1e-3, f64::max)
-    };
+    mw.view_base(obs, sys, &loaded, b)?;
     for k in 0..bk.load_factors.len().min(modes) {
         let phi: Vec<f64> = (0..sys.n_dof()).map(|i| bk.modes[(i, k)]).collect();
-        let probe = sys.retract(&loaded, &phi.iter().map(|x| x * 1e-6).collect::<Vec<_>>());
-        let moved = sys
-            .node_motions(&probe)
-            .iter()
-            .zip(&base)
-            .map(|(a, b)| (a.r - b.r).norm())
-            .fold(0.0, f64::max)
-            / 1e-6;
-        let scale = if moved > 0.0 { 0.1 * size / moved } else { 0.0 };
-        let mut state = sys.retract(&loaded, &phi.iter().map(|x| x * scale).collect::<Vec<_>>());
-        sys.reset_frames(&mut state);
+        let state = mode_state(sys, &loaded, &phi);
         mw.write_series(obs, Series::Modes, (k + 1) as f64, sys, &state, b)?;
     }
     let first = bk.load_factors.iter().copied().find(|f| *f > 0.0);

@@ -7,8 +7,9 @@ use crate::build::BuiltMechanism;
 use crate::error::{BoxError, ResultExt};
 use crate::mesh::{CellRole, VtuMesh};
 use crate::output::observer::{Observer, Series};
+use crate::output::view::{self, ViewEvent};
 use crate::output::vtu::{motion_fields, stress_fields, PointField};
-use mbs::System;
+use mbs::{NodeId, System};
 use nalgebra::{Point3, Vector3};
 use reduction::NodeStresses;
 use serde_json::json;
@@ -32,6 +33,11 @@ pub struct MeshRecovery {
     /// ([`Self::track`]): the time and each body's CB coordinates (`None` without stress
     /// shapes).
     tracked: Vec<(f64, Vec<Option<Vec<f64>>>)>,
+    /// The bodies and markers of the results page, sent with the first frame
+    /// (`crate::output::view`); `None` once sent.
+    view: Option<(Vec<view::Body>, Vec<view::Marker>)>,
+    /// The node of each marker.
+    marker_nodes: Vec<NodeId>,
 }
 
 /// The largest von Mises stress of one body over the output times: value, FE node (index in
@@ -110,6 +116,7 @@ impl MeshRecovery {
             .iter()
             .any(|body| sys.superelement(body.id).is_some_and(|se| se.stress_shapes().is_some()));
         let maxima = vec![None; b.bodies.len()];
+        let (bodies, markers, marker_nodes) = view_bodies(b, sys);
         Ok(Self {
             mesh,
             flexible,
@@ -118,6 +125,8 @@ impl MeshRecovery {
             hot,
             maxima,
             tracked: Vec::new(),
+            view: Some((bodies, markers)),
+            marker_nodes,
         })
     }
 
@@ -351,7 +360,88 @@ impl MeshRecovery {
         if self.has_stress() {
             fields.extend(stress_fields(&tensor, &von_mises, &principal));
         }
-        obs.frame(series, t, &self.mesh, &fields)
+        obs.frame(series, t, &self.mesh, &fields)?;
+        let frame = self.view_frame(t, b, &kins, &motions);
+        self.send_bodies(obs);
+        obs.view(&ViewEvent::Pose {
+            series,
+            key: t,
+            frame: &frame,
+        });
+        Ok(())
+    }
+
+    /// The page's bodies and markers, the first time.
+    fn send_bodies(&mut self, obs: &mut dyn Observer) {
+        if let Some((bodies, markers)) = self.view.take() {
+            obs.view(&ViewEvent::Bodies {
+                bodies: &bodies,
+                markers: &markers,
+            });
+        }
+    }
+
+    /// The poses of the bodies (flexible, then rigid) and the positions of the markers.
+    fn view_frame(
+        &self,
+        key: f64,
+        b: &BuiltMechanism,
+        kins: &[(superelement::Kinematics, superelement::BodyState)],
+        motions: &[mbs::NodeMotion],
+    ) -> view::Frame {
+        let mut poses: Vec<view::Pose> = kins
+            .iter()
+            .map(|(kin, _)| view::pose(&kin.frame.r, &kin.frame.R, &kin.q_jj))
+            .collect();
+        for nodes in &b.rigid {
+            let m = &motions[nodes[0].index()];
+            poses.push(view::pose(&m.r, &m.R, &[]));
+        }
+        let markers = self
+            .marker_nodes
+            .iter()
+            .map(|n| {
+                let r = motions[n.index()].r;
+                [r.x, r.y, r.z]
+            })
+            .collect();
+        view::Frame { key, poses, markers }
+    }
+
+    /// Sends the poses at `state` to the results page alone (no mesh frame) as `key` of `series`.
+    pub fn view_pose(
+        &mut self,
+        obs: &mut dyn Observer,
+        series: Series,
+        key: f64,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+    ) -> Result<(), BoxError> {
+        let kins = self.kinematics(key, sys, state, b)?;
+        let frame = self.view_frame(key, b, &kins, &sys.node_motions(state));
+        self.send_bodies(obs);
+        obs.view(&ViewEvent::Pose {
+            series,
+            key,
+            frame: &frame,
+        });
+        Ok(())
+    }
+
+    /// Sends the poses at `state` as the configuration the modes of the analysis are about.
+    pub fn view_base(
+        &mut self,
+        obs: &mut dyn Observer,
+        sys: &System,
+        state: &mbs::State,
+        b: &BuiltMechanism,
+    ) -> Result<(), BoxError> {
+        let kins = self.kinematics(0.0, sys, state, b)?;
+        let frame = self.view_frame(0.0, b, &kins, &sys.node_motions(state));
+        self.send_bodies(obs);
+        obs.view(&ViewEvent::Base(&frame));
+        Ok(())
     }
 
     /// The hot spots as summary entries and report lines, `x` naming the time axis (the
@@ -385,4 +475,146 @@ impl MeshRecovery {
         }
         (serde_json::Value::Array(entries), lines)
     }
+}
+
+/// The bodies of the results page (`crate::output::view`): each flexible body's surface with
+/// its mesh shapes and stress shapes (its interfaces joined when it has no mesh shapes), each
+/// rigid body's nodes joined; and markers at the joints, supports and point masses, with
+/// their nodes.
+fn view_bodies(b: &BuiltMechanism, sys: &System) -> (Vec<view::Body>, Vec<view::Marker>, Vec<NodeId>) {
+    let mut bodies = Vec::new();
+    for body in &b.bodies {
+        let se = sys.superelement(body.id);
+        let origin = se.map_or(Vector3::zeros(), |se| se.frame_origin());
+        let origin = [origin.x, origin.y, origin.z];
+        let labels = body.node_labels.clone().unwrap_or_default();
+        match &body.reduced.mesh {
+            Some(shapes) => {
+                let points = &shapes.nodes;
+                let mut surface = match &body.mesh {
+                    Some(fe) => view::surface(points, &fe.cells, &fe.radius, view::tube_radius(points)),
+                    None => view::Surface::default(),
+                };
+                if surface.node.is_empty() {
+                    // Nodes without elements: drawn as points.
+                    surface.node = (0..points.len()).collect();
+                    surface.offset = vec![[0.0; 3]; points.len()];
+                }
+                let S = &shapes.shapes;
+                let shape = |n: usize, k: usize| std::array::from_fn(|c| S.get(6 * n + c, k));
+                let stress_shapes = se.and_then(|se| se.stress_shapes());
+                let nodal = stress_shapes.and_then(|s| s.nodal.as_ref().map(|m| (m, &s.solid_node)));
+                let value = |n: usize, k: usize| -> [f64; 6] {
+                    let (m, _) = nodal.expect("with stress shapes");
+                    std::array::from_fn(|c| m.get(6 * n + c, k))
+                };
+                let solid = |n: usize| nodal.is_some_and(|(_, s)| s.get(n).copied().unwrap_or(false));
+                let stress: Option<view::StressOf<'_>> = nodal.map(|_| {
+                    (
+                        &value as &dyn Fn(usize, usize) -> [f64; 6],
+                        &solid as &dyn Fn(usize) -> bool,
+                    )
+                });
+                bodies.push(view::body(
+                    &body.name,
+                    view::BodyKind::Flexible,
+                    points,
+                    &surface,
+                    origin,
+                    labels,
+                    S.ncols,
+                    shape,
+                    stress,
+                ));
+            }
+            None => {
+                let points: Vec<[f64; 3]> = body.reduced.interfaces.iter().map(|i| i.position).collect();
+                bodies.push(joined(&body.name, view::BodyKind::Flexible, &points, origin));
+            }
+        }
+    }
+    for nodes in &b.rigid {
+        let n0 = &b.model.nodes[nodes[0].index()];
+        let back = n0.orientation.inverse();
+        let points: Vec<[f64; 3]> = nodes
+            .iter()
+            .map(|n| {
+                let x = back * (b.model.nodes[n.index()].position - n0.position);
+                [x.x, x.y, x.z]
+            })
+            .collect();
+        // The body's name: its nodes are named `body.point`.
+        let name = n0.name.split('.').next().unwrap_or(&n0.name);
+        bodies.push(joined(name, view::BodyKind::Rigid, &points, [0.0; 3]));
+    }
+    let mut markers = Vec::new();
+    let mut marker_nodes = Vec::new();
+    let mut mark = |name: String, kind: &str, node: NodeId| {
+        let p = b.model.nodes[node.index()].position;
+        markers.push(view::Marker {
+            name,
+            kind: kind.to_string(),
+            body: None,
+            position: [p.x, p.y, p.z],
+        });
+        marker_nodes.push(node);
+    };
+    for j in &b.model.joints {
+        mark(j.name.clone(), "joint", j.child);
+    }
+    for s in &b.model.supports {
+        mark(b.model.nodes[s.node.index()].name.clone(), "ground", s.node);
+    }
+    for m in &b.model.point_masses {
+        mark(m.name.clone(), "mass", m.node);
+    }
+    (bodies, markers, marker_nodes)
+}
+
+/// A body drawn as its points, the first joined to the others, moving rigidly with its frame.
+fn joined(name: &str, kind: view::BodyKind, points: &[[f64; 3]], origin: [f64; 3]) -> view::Body {
+    let surface = view::Surface {
+        node: (0..points.len()).collect(),
+        offset: vec![[0.0; 3]; points.len()],
+        triangles: Vec::new(),
+        lines: (1..points.len() as u32).flat_map(|k| [0, k]).collect(),
+    };
+    view::body(
+        name,
+        kind,
+        points,
+        &surface,
+        origin,
+        Vec::new(),
+        0,
+        |_, _| [0.0; 6],
+        None,
+    )
+}
+
+/// The results page of the study's mechanism before it runs (`Study.show()` in Python): its
+/// bodies at the initial state of the model, one frame, without the sensors. The parts are
+/// reduced through the cache of `opts` first.
+pub fn model_page(study: &crate::Study, opts: &crate::Options, obs: &mut dyn Observer) -> Result<String, BoxError> {
+    if study.mechanism.is_empty() {
+        return Err(format!(
+            "{}: the study has no mechanism to draw before it runs; run it, and its results page shows the parts' analyses",
+            study.source.path.display()
+        )
+        .into());
+    }
+    let b = crate::run::reduce::build_mechanism(study, &opts.cache_dir(study), obs)?;
+    let sys = b.system(study)?;
+    let state = sys.initial_state();
+    let title = study
+        .title
+        .clone()
+        .unwrap_or_else(|| study.source.path.display().to_string());
+    let mut scene = view::SceneBuilder::new(&title);
+    scene.begin("model", "model");
+    let mut mw = MeshRecovery::new(&b, &sys)?;
+    mw.write(&mut scene, 0.0, &sys, &state, &b)?;
+    let mut scene = scene.scene();
+    scene.title = format!("{title}: the model before it runs");
+    Ok(viewer::page(&scene))
 }

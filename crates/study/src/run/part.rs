@@ -80,12 +80,13 @@ pub fn stress_fields(model: &fe_model::FeModel, values: &[[f64; 6]]) -> Result<S
 
 /// A field of six dofs per node as one frame with the point fields "displacement" and
 /// "rotation", and with `stress` (from [`stress_fields`]) "stress", "von_mises" and
-/// "max_principal".
+/// "max_principal"; and as a shape of the part on the results page, with the labels of the
+/// mesh nodes in their file.
 fn six_dof_frame(
     obs: &mut dyn Observer,
     series: Series,
     key: f64,
-    mesh: &VtuMesh,
+    (mesh, labels): (&VtuMesh, &[u64]),
     values: &[[f64; 6]],
     stress: Option<&StressFields>,
 ) -> Result<(), BoxError> {
@@ -97,7 +98,16 @@ fn six_dof_frame(
     if let Some((_, von_mises, principal)) = stress {
         fields.extend(vtu::stress_fields(&tensor, von_mises, principal));
     }
-    obs.frame(series, key, mesh, &fields)
+    obs.frame(series, key, mesh, &fields)?;
+    obs.view(&crate::output::view::ViewEvent::PartField {
+        series,
+        key,
+        mesh,
+        labels,
+        values,
+        stress: stress.map(|s| s.0.as_slice()),
+    });
+    Ok(())
 }
 
 /// The spider of each solid interface, for drawing (the auxiliary spider on every node is
@@ -261,7 +271,15 @@ fn run_static(
             tag(&built, NodeId(hot.0 as u32))
         ));
     }
-    six_dof_frame(obs, Series::Static, 0.0, &mesh, &s.displacements, Some(&stress))?;
+    let labels = &built.model.mesh.node_tags;
+    six_dof_frame(
+        obs,
+        Series::Static,
+        0.0,
+        (&mesh, labels),
+        &s.displacements,
+        Some(&stress),
+    )?;
     Ok(Outcome {
         free_dofs: n_free,
         report,
@@ -360,7 +378,15 @@ fn run_modal(
         // The stress of the mass-normalised shape: where each mode strains the part.
         let stress = stress_fields(&built.model, shape)
             .context(|| format!("part '{}': cannot recover the stresses of mode {}", part.name, k + 1))?;
-        six_dof_frame(obs, Series::Modes, (k + 1) as f64, &mesh, shape, Some(&stress))?;
+        let labels = &built.model.mesh.node_tags;
+        six_dof_frame(
+            obs,
+            Series::Modes,
+            (k + 1) as f64,
+            (&mesh, labels),
+            shape,
+            Some(&stress),
+        )?;
     }
     let mut report = vec![format!(
         "{} modes of {n_free} dofs ({method}, {:.3} s), mass-normalised shapes in modes.pvd",
@@ -512,7 +538,8 @@ fn cb_shapes(obs: &mut dyn Observer, part: &Part, r: &Reduced) -> Result<(), Box
                     .map(|n| std::array::from_fn(|k| shapes.shapes.get(6 * n + k, c)))
                     .collect();
                 let file = format!("shape_{:03}.vtu", c + 1);
-                six_dof_frame(obs, Series::Shapes, (c + 1) as f64, &mesh, &values, None)?;
+                let labels = &r.built.model.mesh.node_tags;
+                six_dof_frame(obs, Series::Shapes, (c + 1) as f64, (&mesh, labels), &values, None)?;
                 let nb = 6 * body.interfaces.len();
                 let row = if c < nb {
                     vec![

@@ -303,6 +303,25 @@ fn an_euler_column_of_eight_superelements_buckles_at_eulers_load() {
     assert_eq!(r["past_critical_point"], serde_json::json!(false));
     let frames = &rec.analysis("buckling").unwrap().frames;
     assert_eq!(frames.len(), 2, "a mode shape per load factor");
+    // The results page: both modes, labelled with their load factors, about the loaded
+    // column, the first a sideways deflection of the tip.
+    let dir = crate::scratch("euler-column-page");
+    let file = dir.join("column.toml");
+    std::fs::write(&file, with_load(0.1)).unwrap();
+    let mut page = study::output::view::SceneBuilder::new("column");
+    study::run_with(&study::load(&file).unwrap(), &crate::options_in(&dir, None), &mut page).unwrap();
+    let scene = page.scene();
+    let a = scene.analyses.iter().find(|a| a.name == "buckling").unwrap();
+    assert_eq!(a.bodies.len(), 8);
+    assert_eq!(a.modes.len(), 2);
+    let factor = r["load_factors"][0].as_f64().unwrap();
+    assert_eq!(a.modes[0].label, format!("mode 1: load factor {factor:.6}"));
+    let (base, mode) = (&a.base.as_ref().unwrap().poses[7], &a.modes[0].pose.poses[7]);
+    let sideways = (mode.r[1] - base.r[1]).hypot(mode.r[2] - base.r[2]);
+    assert!(
+        sideways > 1e-3,
+        "the top segment's frame moves sideways in the mode: {sideways}"
+    );
     // Loaded beyond its critical load, the straight column is reported past it.
     let (rec, summary, _) = run("euler-column-over", &with_load(1.3));
     summary.unwrap();
