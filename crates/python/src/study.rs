@@ -545,25 +545,9 @@ impl Study {
         let st = self.doc.study().map_err(|e| to_py_err(py, &e))?;
         let name = match analysis {
             Some(n) => n,
-            None => {
-                let dynamic: Vec<&str> = st
-                    .analyses
-                    .iter()
-                    .filter(|a| a.kind_name() == "dynamic")
-                    .map(|a| a.name.as_str())
-                    .collect();
-                match dynamic.as_slice() {
-                    [one] => one.to_string(),
-                    [] => return Err(StudyError::new_err("the study has no dynamic analysis to step")),
-                    many => {
-                        return Err(StudyError::new_err(format!(
-                            "the study has {} dynamic analyses ({}): name one",
-                            many.len(),
-                            many.join(", ")
-                        )))
-                    }
-                }
-            }
+            None => st
+                .dynamic_analysis(None)
+                .map_err(|e| StudyError::new_err(e.to_string()))?,
         };
         let writing = results_dir.is_some();
         let opts = options(results_dir, cache, None);

@@ -129,42 +129,6 @@ pub struct Manifest {
     pub variables: Vec<Variable>,
 }
 
-/// The dynamic analysis an FMU steps: `name`, or the study's only one.
-pub fn dynamic_analysis(study: &Study, name: Option<&str>) -> Result<String, BoxError> {
-    if let Some(name) = name {
-        let i = study.analysis(name)?;
-        if study.analyses[i].kind_name() != "dynamic" {
-            return Err(format!(
-                "analysis '{name}' is a {} analysis; an FMU steps a dynamic analysis",
-                study.analyses[i].kind_name()
-            )
-            .into());
-        }
-        return Ok(name.to_string());
-    }
-    let dynamic: Vec<&str> = study
-        .analyses
-        .iter()
-        .filter(|a| a.kind_name() == "dynamic")
-        .map(|a| a.name.as_str())
-        .collect();
-    match dynamic.as_slice() {
-        [one] => Ok(one.to_string()),
-        [] => Err(format!(
-            "{}: the study has no dynamic analysis for an FMU to step",
-            study.source.path.display()
-        )
-        .into()),
-        many => Err(format!(
-            "{}: the study has {} dynamic analyses ({}): name one (--analysis NAME)",
-            study.source.path.display(),
-            many.len(),
-            many.join(", ")
-        )
-        .into()),
-    }
-}
-
 /// A sensor column `"deflection [m]"` as its name and unit.
 fn split_column(column: &str) -> (String, Option<String>) {
     match column.rsplit_once(" [") {
@@ -479,7 +443,7 @@ pub fn export_document(
     out: &Path,
 ) -> Result<Exported, BoxError> {
     let study = doc.study()?;
-    let analysis = dynamic_analysis(&study, analysis)?;
+    let analysis = study.dynamic_analysis(analysis)?;
     let binary = std::fs::read(library).map_err(|e| {
         format!(
             "cannot read the FMU library {}: {e}; build it with `cargo build --release -p flexmbs-fmu`",

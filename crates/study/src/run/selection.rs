@@ -1,6 +1,8 @@
 //! Picking the analyses of a study: one by its name ([`Study::analysis`], with the close
-//! matches of a name the study lacks), or all of them ([`Selection`]).
+//! matches of a name the study lacks), the dynamic one a stepper steps
+//! ([`Study::dynamic_analysis`]), or all of them ([`Selection`]).
 
+use crate::error::BoxError;
 use crate::input::source::unknown_reference;
 use crate::input::validate::Study;
 
@@ -16,6 +18,37 @@ impl Study {
                 name: name.to_string(),
                 defined: self.analyses.iter().map(|a| a.name.clone()).collect(),
             })
+    }
+
+    /// The dynamic analysis a stepper (a `Simulation`, an FMU) steps: `name`, which must be a
+    /// dynamic analysis, or the study's only dynamic analysis.
+    pub fn dynamic_analysis(&self, name: Option<&str>) -> Result<String, BoxError> {
+        if let Some(name) = name {
+            let kind = self.analyses[self.analysis(name)?].kind_name();
+            if kind != "dynamic" {
+                return Err(
+                    format!("analysis '{name}' is of type '{kind}'; only a dynamic analysis is stepped").into(),
+                );
+            }
+            return Ok(name.to_string());
+        }
+        let dynamic: Vec<&str> = self
+            .analyses
+            .iter()
+            .filter(|a| a.kind_name() == "dynamic")
+            .map(|a| a.name.as_str())
+            .collect();
+        let file = self.source.path.display();
+        match dynamic.as_slice() {
+            [one] => Ok(one.to_string()),
+            [] => Err(format!("{file}: the study has no dynamic analysis to step").into()),
+            many => Err(format!(
+                "{file}: the study has {} dynamic analyses ({}): name the one to step",
+                many.len(),
+                many.join(", ")
+            )
+            .into()),
+        }
     }
 }
 

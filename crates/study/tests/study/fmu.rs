@@ -203,3 +203,21 @@ fn a_bad_fmu_table_is_located() {
     assert!(err.contains("names no value"), "{err}");
     assert!(err.contains("a parameter is a number"), "{err}");
 }
+
+#[test]
+fn the_analysis_a_stepper_steps_is_the_named_dynamic_one_or_the_only_one() {
+    let four_bar = study::load(&example("four_bar")).unwrap();
+    let only = four_bar.dynamic_analysis(None).unwrap();
+    assert_eq!(
+        four_bar.analyses[four_bar.analysis(&only).unwrap()].kind_name(),
+        "dynamic"
+    );
+    assert_eq!(four_bar.dynamic_analysis(Some(&only)).unwrap(), only);
+    let not_dynamic = four_bar.dynamic_analysis(Some("at-rest")).unwrap_err().to_string();
+    assert!(
+        not_dynamic.contains("'at-rest' is of type 'equilibrium'"),
+        "{not_dynamic}"
+    );
+    let unknown = four_bar.dynamic_analysis(Some("at-rst")).unwrap_err().to_string();
+    assert!(unknown.contains("at-rest"), "did you mean: {unknown}");
+}
