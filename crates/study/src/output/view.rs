@@ -49,22 +49,15 @@ pub struct Surface {
     pub lines: Vec<u32>,
 }
 
-/// The faces of a VTK solid cell by corner positions in its connectivity.
+/// The faces of a VTK solid cell by corner positions in its connectivity, anticlockwise seen
+/// from outside: those of fe-model's linear elements, whose corner order VTK's linear and
+/// quadratic cells share (`output::vtu`).
 fn solid_faces(vtk: u8) -> Option<&'static [&'static [usize]]> {
-    const TET: &[&[usize]] = &[&[0, 2, 1], &[0, 1, 3], &[1, 2, 3], &[0, 3, 2]];
-    const HEX: &[&[usize]] = &[
-        &[0, 3, 2, 1],
-        &[4, 5, 6, 7],
-        &[0, 1, 5, 4],
-        &[1, 2, 6, 5],
-        &[2, 3, 7, 6],
-        &[3, 0, 4, 7],
-    ];
-    const WEDGE: &[&[usize]] = &[&[0, 1, 2], &[3, 5, 4], &[0, 3, 4, 1], &[1, 4, 5, 2], &[2, 5, 3, 0]];
+    use fe_model::element::{hex8, tet4, wedge6};
     match vtk {
-        10 | 24 => Some(TET),
-        12 | 25 => Some(HEX),
-        13 => Some(WEDGE),
+        10 | 24 => Some(&tet4::FACES),
+        12 | 25 => Some(&hex8::FACES),
+        13 => Some(&wedge6::FACES),
         _ => None,
     }
 }
