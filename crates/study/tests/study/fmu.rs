@@ -1,4 +1,4 @@
-use super::{example, scratch};
+use super::{example, example_as, scratch};
 use std::path::PathBuf;
 use study::fmu::{FmiVersion, Instance, Manifest, Value, VarKind, VarType};
 use study::{Options, Simulation};
@@ -192,7 +192,8 @@ fn inputs_and_parameters_are_checked_when_set() {
 
 #[test]
 fn a_bad_fmu_table_is_located() {
-    let file = example("slider_crank");
+    // A folder of its own: other tests write the slider-crank's example folder meanwhile.
+    let file = example_as("slider_crank", "fmu-bad-table");
     let text =
         std::fs::read_to_string(&file).unwrap() + "\n[fmu]\nparameters = [\"rigid_bodies.crank.mas\", \"sensors\"]\n";
     let err = study::parse_and_validate(study::input::source::Source::from_text(&file, text))
@@ -228,8 +229,11 @@ fn the_analysis_a_stepper_steps_is_the_named_dynamic_one_or_the_only_one() {
 /// structure, the binary under `binaries/x86_64-linux`.
 #[test]
 fn the_fmi_3_description_names_the_same_variables() {
-    let file = example("controlled_arm");
-    let text = std::fs::read_to_string(&file).unwrap() + "\n[fmu]\nparameters = [\"analyses.motion.rho_inf\"]\n";
+    // A file of its own beside the example's (another test appends to the example's).
+    let example_file = example("controlled_arm");
+    let file = example_file.with_file_name("arm_three.toml");
+    let text =
+        std::fs::read_to_string(&example_file).unwrap() + "\n[fmu]\nparameters = [\"analyses.motion.rho_inf\"]\n";
     std::fs::write(&file, text).unwrap();
     let dir = scratch("fmu-3");
     let library = dir.join("lib.so");
@@ -240,14 +244,14 @@ fn the_fmi_3_description_names_the_same_variables() {
     assert_eq!(e.variables, two.variables);
     let entries = unzip(&std::fs::read(dir.join("three.fmu")).unwrap());
     let get = |n: &str| entries.iter().find(|(name, _)| name == n).map(|(_, d)| d.clone());
-    assert!(get("binaries/x86_64-linux/controlled_arm.so").is_some());
-    assert!(get("binaries/linux64/controlled_arm.so").is_none());
+    assert!(get("binaries/x86_64-linux/arm_three.so").is_some());
+    assert!(get("binaries/linux64/arm_three.so").is_none());
     let manifest: Manifest = serde_json::from_slice(&get("resources/flexmbs-fmu.json").unwrap()).unwrap();
     let xml = String::from_utf8(get("modelDescription.xml").unwrap()).unwrap();
     assert!(xml.contains(r#"fmiVersion="3.0""#), "{xml}");
     assert!(xml.contains(&format!(r#"instantiationToken="{}""#, manifest.guid)));
     assert!(!xml.contains("ScalarVariable") && !xml.contains("guid="));
-    assert!(xml.contains(r#"<CoSimulation modelIdentifier="controlled_arm""#));
+    assert!(xml.contains(r#"<CoSimulation modelIdentifier="arm_three""#));
     let floats = xml.matches("<Float64 ").count();
     assert_eq!(floats, manifest.variables.len() + 1, "the variables and time");
     let n = manifest.variables.len();
