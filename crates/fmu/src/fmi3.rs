@@ -1,5 +1,5 @@
-//! The FMI 3.0 Co-Simulation functions: the same [`Component`] and the same checks as the
-//! FMI 2.0 functions of the crate, with the calling conventions of FMI 3.0 (a native resource
+//! The FMI 3.0 Co-Simulation functions: the same instances (`Component`) and the same checks
+//! as the FMI 2.0 functions of the crate, with the calling conventions of FMI 3.0 (a native resource
 //! path, `fmi3Boolean` a C `bool`, array lengths `nValues` beside the value references, the
 //! out arguments of `fmi3DoStep`). The variables of an FMU are `Float64`, `Int32`, `Boolean`
 //! and `String`; the getters and setters of the other types exist (a master binds them all)
