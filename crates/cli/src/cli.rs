@@ -33,7 +33,7 @@ usage:
   flexmbs export-fem FILE.rbody OUT.fem [--reference INTERFACE]
                                      write a reduced body as an MBDyn modal element file
                                      (modal node at the reference interface, default the first)
-  flexmbs export-fmu STUDY.toml [--analysis NAME] [-o FILE.fmu]
+  flexmbs export-fmu STUDY.toml [--analysis NAME] [--fmi-version 2|3] [-o FILE.fmu]
                                      write a dynamic analysis as an FMI 2.0 Co-Simulation FMU
                                      (docs/fmu.md): inputs the actuators and point loads,
                                      outputs the sensors, parameters the study's [fmu] table
@@ -136,10 +136,10 @@ the files cannot be read or reduced."
         }
         "export-fmu" => {
             "\
-usage: flexmbs export-fmu STUDY.toml [--analysis NAME] [-o FILE.fmu]
+usage: flexmbs export-fmu STUDY.toml [--analysis NAME] [--fmi-version 2|3] [-o FILE.fmu]
 
-Writes the dynamic analysis NAME (default: the study's only one) as an FMI 2.0 Co-Simulation
-FMU (default: STUDY.fmu beside the study file), for a co-simulation master (FMPy, Simulink,
+Writes the dynamic analysis NAME (default: the study's only one) as an FMI 2.0 (default) or,
+with --fmi-version 3, an FMI 3.0 Co-Simulation FMU (default: STUDY.fmu beside the study file), for a co-simulation master (FMPy, Simulink,
 OpenModelica, ...). Inputs: the effort of every actuator and the force and moment components
 of every point load, held over a communication step; outputs: every sensor column, with its
 unit; parameters: the study values the study's [fmu] table names. The mechanism is built and
@@ -541,19 +541,24 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
                 .iter()
                 .map(|a| if a == "-o" { "--out".to_string() } else { a.clone() })
                 .collect();
-            let (positional, options) = parse(&rest, &["analysis", "out"])?;
+            let (positional, options) = parse(&rest, &["analysis", "out", "fmi-version"])?;
             let path = one_file(&positional, "export-fmu", "a study file")?;
+            let version = match option(&options, "fmi-version") {
+                Some(v) => study::fmu::FmiVersion::parse(v).map_err(|e| format!("--fmi-version: {e}"))?,
+                None => study::fmu::FmiVersion::V2,
+            };
             let out = match option(&options, "out") {
                 Some(o) => PathBuf::from(o),
                 None => path.with_extension("fmu"),
             };
             let library = study::fmu::library_path()?;
-            let exported = study::fmu::export(&path, option(&options, "analysis"), &library, &out)?;
+            let exported = study::fmu::export(&path, option(&options, "analysis"), version, &library, &out)?;
             let count = |causality: &str| exported.variables.iter().filter(|v| v.causality() == causality).count();
             crate::say!(
-                "{}: analysis '{}' as an FMI 2.0 Co-Simulation FMU (model identifier {}): {} outputs, {} inputs, {} parameters -> {}",
+                "{}: analysis '{}' as an FMI {} Co-Simulation FMU (model identifier {}): {} outputs, {} inputs, {} parameters -> {}",
                 path.display(),
                 exported.analysis,
+                exported.version.name(),
                 exported.model_identifier,
                 count("output"),
                 count("input"),

@@ -1,9 +1,12 @@
-//! # flexmbs-fmu: the FMI 2.0 Co-Simulation functions of a flexmbs FMU
+//! # flexmbs-fmu: the FMI 2.0 and FMI 3.0 Co-Simulation functions of a flexmbs FMU
 //!
 //! The shared library an FMU written by `flexmbs export-fmu` carries
-//! (`binaries/linux64/<modelIdentifier>.so`). It exports the C functions of the FMI 2.0
-//! standard for Co-Simulation (`fmi2Instantiate` to `fmi2FreeInstance`, the setters and getters,
-//! `fmi2DoStep`, the FMU state functions) and hands every call to a
+//! (`binaries/linux64/<modelIdentifier>.so` in an FMI 2.0 FMU,
+//! `binaries/x86_64-linux/<modelIdentifier>.so` in an FMI 3.0 one). It exports the C
+//! functions of the FMI 2.0 standard for Co-Simulation (`fmi2Instantiate` to
+//! `fmi2FreeInstance`, the setters and getters, `fmi2DoStep`, the FMU state functions) and
+//! those of FMI 3.0 ([`fmi3`]: `fmi3InstantiateCoSimulation`, `fmi3DoStep`, ...; the names of
+//! the two versions do not clash, so one library serves both), and hands every call to a
 //! [`study::fmu::Instance`], which holds the study, its mechanism and the simulation; all the
 //! modelling is there, in safe code.
 //!
@@ -30,13 +33,14 @@
 //!
 //! Neither is used. `fmi-export` builds FMI 3.0 FMUs whose variables are the fields of a Rust
 //! struct fixed at compile time (a derive macro); an FMU of flexmbs has the variables of a
-//! study (its sensors, actuators, loads, parameters), known only when it is exported, and is an
-//! FMI 2.0 FMU, the version most masters import. `fmi` imports FMUs (it loads their libraries
+//! study (its sensors, actuators, loads, parameters), known only when it is exported. `fmi` imports FMUs (it loads their libraries
 //! and reads their model descriptions); its type definitions would bring that importer's
 //! dependencies into the library and the program for the dozen C types below.
 
 // The names of the C standard: `fmi2Status`, `fmi2DoStep`, `fmi2True`.
 #![allow(non_camel_case_types, non_snake_case, non_upper_case_globals)]
+
+pub mod fmi3;
 
 use std::collections::BTreeSet;
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
@@ -113,11 +117,18 @@ enum Phase {
     Broken,
 }
 
+/// The master's logger: FMI 2.0's variadic one or FMI 3.0's.
+#[derive(Clone, Copy)]
+enum Logger {
+    Fmi2(fmi2CallbackLogger),
+    Fmi3(fmi3::fmi3LogMessageCallback),
+}
+
 /// One instance: the model and what the boundary keeps for the master.
 struct Component {
     instance: Instance,
     name: CString,
-    logger: fmi2CallbackLogger,
+    logger: Logger,
     environment: fmi2ComponentEnvironment,
     phase: Phase,
     /// The strings the last `fmi2GetString` returned (valid until the next call).
@@ -147,21 +158,36 @@ fn register(set: &Mutex<BTreeSet<usize>>, p: *mut c_void, add: bool) {
 
 /// Sends `message` to `logger` (if the master gave one). The message is passed as the
 /// format: its `%` are doubled so that a master that formats it prints them once.
+/// FMI 3.0's logger takes the message as it is.
 fn log_to(
-    logger: fmi2CallbackLogger,
+    logger: Logger,
     environment: fmi2ComponentEnvironment,
     name: &CStr,
     status: fmi2Status,
     category: &CStr,
     message: &str,
 ) {
-    let Some(logger) = logger else { return };
-    let text = message.replace('\0', " ").replace('%', "%%");
-    let Ok(text) = CString::new(text) else { return };
-    // SAFETY: `logger` is the function the master gave in `fmi2CallbackFunctions` for this
-    // purpose; every pointer passed is a valid NUL-terminated string that outlives the call,
-    // and the format has no conversion, so no variadic argument is read.
-    unsafe { logger(environment, name.as_ptr(), status, category.as_ptr(), text.as_ptr()) };
+    match logger {
+        Logger::Fmi2(Some(logger)) => {
+            let text = message.replace('\0', " ").replace('%', "%%");
+            let Ok(text) = CString::new(text) else { return };
+            // SAFETY: `logger` is the function the master gave in `fmi2CallbackFunctions`
+            // for this purpose; every pointer passed is a valid NUL-terminated string that
+            // outlives the call, and the format has no conversion, so no variadic argument
+            // is read.
+            unsafe { logger(environment, name.as_ptr(), status, category.as_ptr(), text.as_ptr()) };
+        }
+        Logger::Fmi3(Some(logger)) => {
+            let Ok(text) = CString::new(message.replace('\0', " ")) else {
+                return;
+            };
+            // SAFETY: `logger` is the `logMessage` function the master gave to
+            // `fmi3InstantiateCoSimulation`; both strings are valid, NUL-terminated and
+            // outlive the call.
+            unsafe { logger(environment, fmi3::status(status), category.as_ptr(), text.as_ptr()) };
+        }
+        Logger::Fmi2(None) | Logger::Fmi3(None) => {}
+    }
 }
 
 impl Component {
@@ -344,7 +370,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
     let cname = CString::new(name.replace('\0', " ")).unwrap_or_default();
     let fail = |message: String| {
         log_to(
-            logger,
+            Logger::Fmi2(logger),
             environment,
             &cname,
             fmi2Error,
@@ -384,7 +410,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
     let c = Box::new(Component {
         instance,
         name: cname.clone(),
-        logger,
+        logger: Logger::Fmi2(logger),
         environment,
         phase: Phase::Instantiated,
         strings: Vec::new(),

@@ -229,7 +229,7 @@ pub(crate) const STUB: Class = Class {
         ),
         Method(
             "export_fmu",
-            "(self, path: _Path, analysis: Optional[str] = None, library: Optional[_Path] = None) -> Dict[str, Any]",
+            "(self, path: _Path, analysis: Optional[str] = None, library: Optional[_Path] = None, fmi_version: int = 2) -> Dict[str, Any]",
         ),
     ],
 };
@@ -400,32 +400,36 @@ impl Study {
     }
 
     /// Writes the dynamic analysis `analysis` (default: the study's only one) as an FMI 2.0
-    /// Co-Simulation FMU at `path`, as `flexmbs export-fmu` does (docs/fmu.md): inputs the
+    /// (`fmi_version=2`, the default) or FMI 3.0 (`fmi_version=3`) Co-Simulation FMU at `path`, as `flexmbs export-fmu` does (docs/fmu.md): inputs the
     /// actuators and point loads, outputs the sensors, parameters the study's `[fmu]` table.
     /// `library`: the FMU's binary, the shared library of `flexmbs-fmu` (default: the
     /// environment variable `FLEXMBS_FMU_LIBRARY`; build it with
     /// `cargo build --release -p flexmbs-fmu`). Returns a dict: `path`, `analysis`,
-    /// `model_identifier`, `inputs`, `outputs`, `parameters` (variable names).
-    #[pyo3(signature = (path, analysis=None, library=None))]
+    /// `model_identifier`, `fmi_version` (`"2.0"` or `"3.0"`), `inputs`, `outputs`, `parameters` (variable
+    /// names).
+    #[pyo3(signature = (path, analysis=None, library=None, fmi_version=2))]
     fn export_fmu<'py>(
         &self,
         py: Python<'py>,
         path: PathBuf,
         analysis: Option<String>,
         library: Option<PathBuf>,
+        fmi_version: u8,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let version = study::fmu::FmiVersion::parse(&fmi_version.to_string()).map_err(|e| to_py_err(py, &*e))?;
         let library = match library {
             Some(l) => l,
             None => study::fmu::library_path().map_err(|e| to_py_err(py, &*e))?,
         };
         let doc = &self.doc;
         let exported = py
-            .detach(|| study::fmu::export_document(doc, analysis.as_deref(), &library, &path))
+            .detach(|| study::fmu::export_document(doc, analysis.as_deref(), version, &library, &path))
             .map_err(|e| to_py_err(py, &*e))?;
         let d = PyDict::new(py);
         d.set_item("path", exported.path.display().to_string())?;
         d.set_item("analysis", &exported.analysis)?;
         d.set_item("model_identifier", &exported.model_identifier)?;
+        d.set_item("fmi_version", exported.version.name())?;
         for (key, causality) in [("inputs", "input"), ("outputs", "output"), ("parameters", "parameter")] {
             let names: Vec<&str> = exported
                 .variables

@@ -393,3 +393,170 @@ def test_reset_starts_again_from_the_study(examples, tmp_path):
     s.fmu.exitInitializationMode()
     assert np.array_equal(pd_fmu(s, 20), first)
     s.close()
+
+
+# FMI 3.0: the same study as an FMI 3.0 Co-Simulation FMU (`--fmi-version 3`,
+# `export_fmu(..., fmi_version=3)`), the same library through its fmi3 functions.
+
+from fmpy.fmi3 import FMU3Slave, fmi3LogMessageCallback  # noqa: E402
+
+
+class Slave3(Slave):
+    """An FMPy FMU3Slave with the interface of `Slave`."""
+
+    def __init__(self, fmu, folder, name="instance", unzipped=None):
+        self.md = read_model_description(str(fmu))
+        assert self.md.fmiVersion == "3.0"
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
+        if unzipped is None:
+            unzipped = extract(str(fmu), str(folder))
+        self.folder = Path(unzipped)
+        self.messages = []
+
+        def log(_env, status, _category, message):
+            self.messages.append((status, message.decode()))
+
+        self.log = log
+        self.fmu = FMU3Slave(
+            guid=self.md.instantiationToken,
+            unzipDirectory=unzipped,
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName=name,
+        )
+        self.t = 0.0
+
+    def instantiate(self):
+        self.fmu.instantiate(logMessage=self.log)
+
+    def start(self, stop=None, parameters=None):
+        self.instantiate()
+        for name, value in (parameters or {}).items():
+            self.fmu.setFloat64([self.vr[name]], [value])
+        self.fmu.enterInitializationMode(startTime=0.0, stopTime=stop)
+        self.fmu.exitInitializationMode()
+        return self
+
+    def get(self, names=None):
+        names = names or self.outputs
+        return np.array(self.fmu.getFloat64([self.vr[n] for n in names]))
+
+    def set(self, name, value):
+        self.fmu.setFloat64([self.vr[name]], [value])
+
+    def step(self, h):
+        event, terminate, early, last = self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
+        assert not (event or terminate or early)
+        self.t += h
+        assert last == pytest.approx(self.t, abs=1e-12)
+
+
+def test_fmi3_is_valid_and_gives_the_numbers_of_fmi2_and_the_run(examples, tmp_path, cli):
+    two, three = tmp_path / "two.fmu", tmp_path / "three.fmu"
+    cli("export-fmu", examples / "slider_crank.toml", "-o", two)
+    cli("export-fmu", examples / "slider_crank.toml", "--fmi-version", "3", "-o", three)
+    with zipfile.ZipFile(three) as z:
+        assert z.testzip() is None
+        names = z.namelist()
+    assert "binaries/x86_64-linux/slider_crank.so" in names
+    assert validate_fmu(str(three)) == []
+    md2, md3 = read_model_description(str(two)), read_model_description(str(three))
+    assert md3.fmiVersion == "3.0" and md3.coSimulation.canGetAndSetFMUstate
+    assert md3.instantiationToken == md2.guid
+    v2 = {v.name: v for v in md2.modelVariables}
+    v3 = {v.name: v for v in md3.modelVariables}
+    assert v3.pop("time").causality == "independent"
+    assert set(v2) == set(v3)
+    for name, v in v3.items():
+        assert v.type == "Float64" and v.valueReference == v2[name].valueReference
+        assert (v.causality, v.variability, v.unit) == (v2[name].causality, v2[name].variability, v2[name].unit)
+    assert {u.name for u in md3.unitDefinitions} >= {"m", "rad"}
+    assert [o.variable.name for o in md3.outputs] == [o.variable.name for o in md2.outputs]
+    # Communication steps of dt: the outputs of the FMI 2.0 FMU to the last bit, and so those
+    # of `flexmbs run`.
+    r2 = fmpy.simulate_fmu(str(two), stop_time=0.005, output_interval=1e-4)
+    r3 = fmpy.simulate_fmu(str(three), stop_time=0.005, output_interval=1e-4)
+    assert len(r3) == len(r2) == 51
+    for name in r2.dtype.names:
+        assert np.array_equal(r3[name], r2[name]), name
+    out = tmp_path / "run"
+    cli("run", examples / "slider_crank.toml", "--t-end", "0.005", "--out", out)
+    sim = flexmbs.Study.load(examples / "slider_crank.toml").simulation()
+    for sensor in sim.sensor_names:
+        rows = read_csv(out / "run-up" / f"{sensor}.csv")
+        for k, column in enumerate(sim.sensor_columns(sensor)):
+            name = f"{sensor}.{column.rsplit(' [', 1)[0].replace(' ', '_')}"
+            expected = rows[:, k + 1]
+            scale = max(np.max(np.abs(expected)), 1e-300)
+            np.testing.assert_allclose(r3[name], expected, rtol=1e-12, atol=1e-12 * scale, err_msg=name)
+
+
+def arm_fmu3(examples, tmp_path):
+    study = examples / "controlled_arm_drive.toml"
+    study.write_text((examples / "controlled_arm.toml").read_text() + DRIVE)
+    fmu = tmp_path / "arm3.fmu"
+    info = flexmbs.Study.load(study).export_fmu(fmu, library=library(), fmi_version=3)
+    assert info["fmi_version"] == "3.0"
+    return study, fmu
+
+
+def test_fmi3_a_controller_in_the_master_moves_the_arm_as_in_python(examples, tmp_path):
+    study, fmu = arm_fmu3(examples, tmp_path)
+    s = Slave3(fmu, tmp_path / "a").start()
+    through_fmu = pd_fmu(s, 300)
+    s.close()
+    sim = flexmbs.Study.load(study).simulation()
+    in_python = pd_simulation(sim, 300)
+    np.testing.assert_allclose(through_fmu, in_python, rtol=1e-12, atol=1e-14)
+    assert through_fmu[-1] > 0.5
+
+
+def test_fmi3_saved_state_parameters_and_errors(examples, tmp_path):
+    study, fmu = arm_fmu3(examples, tmp_path)
+    s = Slave3(fmu, tmp_path / "a").start(parameters={"analyses.motion.rho_inf": 0.5})
+    for i in range(10):
+        s.set("drive", 0.5 * math.sin(i))
+        s.step(2e-3)
+    # A saved state redoes a step bit for bit.
+    state = s.fmu.getFMUState()
+    t = s.t
+    s.set("drive", 2.0)
+    s.step(1e-2)
+    first = s.get()
+    s.fmu.setFMUState(state)
+    s.t = t
+    s.set("drive", 2.0)
+    s.step(1e-2)
+    assert np.array_equal(first, s.get())
+    s.fmu.freeFMUState(state)
+    # A value reference the FMU does not have, for Float64 and for a type it has no variable of.
+    with pytest.raises(Exception):
+        s.fmu.getFloat64([99999])
+    assert any("99999" in m for m in s.errors())
+    with pytest.raises(Exception):
+        s.fmu.getInt8([99998])
+    assert any("99998" in m and "Int8" in m for m in s.errors())
+    with pytest.raises(Exception):
+        s.fmu.getInt8([s.vr["drive"]])
+    assert any("is of type Float64, not Int8" in m for m in s.errors())
+    # An input that is not a number.
+    with pytest.raises(Exception):
+        s.set("drive", float("nan"))
+    assert any("finite" in m for m in s.errors())
+    # An output cannot be set.
+    with pytest.raises(Exception):
+        s.set("angle." + angle_column(s), 1.0)
+    s.close()
+    # A parameter value the study refuses: refused when set, with the study's message.
+    b = Slave3(fmu, tmp_path / "b")
+    b.instantiate()
+    with pytest.raises(Exception):
+        b.fmu.setFloat64([b.vr["analyses.motion.rho_inf"]], [2.0])
+    assert any("rho_inf" in m for m in b.errors())
+    b.fmu.freeInstance()
+    # A wrong instantiation token: no instance, the reason logged.
+    c = Slave3(fmu, tmp_path / "c")
+    c.fmu.guid = "{not-this-fmu}"
+    with pytest.raises(Exception):
+        c.instantiate()
+    assert any("not the FMU's" in m for m in c.errors())

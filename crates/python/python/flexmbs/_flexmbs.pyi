@@ -1290,14 +1290,15 @@ class Study:
         `results_dir`, the simulation writes the results folder of the analysis as it steps
         (the files `run(analysis)` writes), until `finish_results()`. `forces`: a `ForceLaw`
         evaluated in every Newton iteration of its steps."""
-    def export_fmu(self, path: _Path, analysis: Optional[str] = None, library: Optional[_Path] = None) -> Dict[str, Any]:
+    def export_fmu(self, path: _Path, analysis: Optional[str] = None, library: Optional[_Path] = None, fmi_version: int = 2) -> Dict[str, Any]:
         """Writes the dynamic analysis `analysis` (default: the study's only one) as an FMI 2.0
-        Co-Simulation FMU at `path`, as `flexmbs export-fmu` does (docs/fmu.md): inputs the
+        (`fmi_version=2`, the default) or FMI 3.0 (`fmi_version=3`) Co-Simulation FMU at `path`, as `flexmbs export-fmu` does (docs/fmu.md): inputs the
         actuators and point loads, outputs the sensors, parameters the study's `[fmu]` table.
         `library`: the FMU's binary, the shared library of `flexmbs-fmu` (default: the
         environment variable `FLEXMBS_FMU_LIBRARY`; build it with
         `cargo build --release -p flexmbs-fmu`). Returns a dict: `path`, `analysis`,
-        `model_identifier`, `inputs`, `outputs`, `parameters` (variable names)."""
+        `model_identifier`, `fmi_version` (`"2.0"` or `"3.0"`), `inputs`, `outputs`, `parameters` (variable
+        names)."""
 
 class Simulation:
     """A dynamic analysis stepped from Python (`Study.simulation`): `step()`, `advance_to(t)`,

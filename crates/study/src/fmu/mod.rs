@@ -1,5 +1,6 @@
-//! A dynamic analysis of a study as an FMI 2.0 Co-Simulation FMU (Functional Mock-up Unit):
-//! the variables it exposes ([`Variable`]), its `modelDescription.xml`, the archive
+//! A dynamic analysis of a study as an FMI 2.0 or FMI 3.0 Co-Simulation FMU (Functional
+//! Mock-up Unit, [`FmiVersion`]): the variables it exposes ([`Variable`]), its
+//! `modelDescription.xml`, the archive
 //! (`export`), and the instance a master steps ([`Instance`]). No `unsafe` here: the C
 //! functions of the FMI standard are the crate `flexmbs-fmu`, a thin boundary that checks
 //! every pointer and hands the checked values to an [`Instance`].
@@ -30,6 +31,46 @@ use std::path::{Component, Path, PathBuf};
 
 /// The file in the FMU's `resources` folder that describes it to the instance.
 pub const MANIFEST: &str = "flexmbs-fmu.json";
+
+/// The version of the FMI standard an FMU is written for. An archive holds one
+/// `modelDescription.xml`, so one version per FMU; the library it carries exports the
+/// functions of both (their names do not clash), so the two differ only in the description
+/// and the folder of the binary.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum FmiVersion {
+    /// FMI 2.0 Co-Simulation, the version most masters import.
+    #[default]
+    V2,
+    /// FMI 3.0 Co-Simulation.
+    V3,
+}
+
+impl FmiVersion {
+    /// `"2"`, `"2.0"`, `"3"` or `"3.0"`.
+    pub fn parse(text: &str) -> Result<Self, BoxError> {
+        match text.trim() {
+            "2" | "2.0" => Ok(Self::V2),
+            "3" | "3.0" => Ok(Self::V3),
+            other => Err(format!("the FMI version is 2 or 3, not '{other}'").into()),
+        }
+    }
+
+    /// `"2.0"` or `"3.0"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::V2 => "2.0",
+            Self::V3 => "3.0",
+        }
+    }
+
+    /// The folder of the archive that holds the binary for 64-bit Linux.
+    pub fn binaries(self) -> &'static str {
+        match self {
+            Self::V2 => "binaries/linux64",
+            Self::V3 => "binaries/x86_64-linux",
+        }
+    }
+}
 
 /// The FMI type of a variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -373,6 +414,111 @@ pub fn model_description(m: &Manifest, model_name: &str, description: &str) -> S
     x
 }
 
+/// The value reference of the independent variable `time` of an FMI 3.0 FMU: the one after
+/// the variables'.
+pub fn time_reference(m: &Manifest) -> u32 {
+    u32::try_from(m.variables.len()).unwrap_or(u32::MAX)
+}
+
+/// The `modelDescription.xml` of the FMU `m` (FMI 3.0 Co-Simulation): the variables by
+/// their value references, Reals as `Float64`, Integers as `Int32`; its instantiation token
+/// is the manifest's `guid`. FMI 3.0 asks for the independent variable: `time` \[s\], value
+/// reference the number of variables ([`time_reference`]).
+pub fn model_description_3(m: &Manifest, model_name: &str, description: &str) -> String {
+    use std::fmt::Write;
+    let mut x = String::new();
+    let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
+    let _ = writeln!(
+        x,
+        r#"<fmiModelDescription fmiVersion="3.0" modelName="{}" instantiationToken="{}" description="{}" generationTool="flexmbs {}" variableNamingConvention="flat">"#,
+        xml_escape(model_name),
+        m.guid,
+        xml_escape(description),
+        env!("CARGO_PKG_VERSION")
+    );
+    let _ = writeln!(
+        x,
+        r#"  <CoSimulation modelIdentifier="{}" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="true" canSerializeFMUState="false" providesDirectionalDerivatives="false" providesAdjointDerivatives="false" canBeInstantiatedOnlyOncePerProcess="false" maxOutputDerivativeOrder="0" providesIntermediateUpdate="false" mightReturnEarlyFromDoStep="false" canReturnEarlyAfterIntermediateUpdate="false" hasEventMode="false" providesEvaluateDiscreteStates="false"/>"#,
+        m.model_identifier
+    );
+    let mut units: BTreeSet<&str> = m.variables.iter().filter_map(|v| v.unit.as_deref()).collect();
+    units.insert("s");
+    let _ = writeln!(x, "  <UnitDefinitions>");
+    for u in units {
+        let _ = writeln!(x, r#"    <Unit name="{}"/>"#, xml_escape(u));
+    }
+    let _ = writeln!(x, "  </UnitDefinitions>");
+    let _ = writeln!(
+        x,
+        r#"  <DefaultExperiment startTime="{:?}" stopTime="{:?}" stepSize="{:?}"/>"#,
+        m.start_time, m.end_time, m.step
+    );
+    let _ = writeln!(x, "  <ModelVariables>");
+    let _ = writeln!(
+        x,
+        r#"    <Float64 name="time" valueReference="{}" description="time of the analysis" causality="independent" variability="continuous" unit="s"/>"#,
+        time_reference(m)
+    );
+    for (vr, v) in m.variables.iter().enumerate() {
+        let (variability, initial) = match v.kind {
+            VarKind::Output { .. } => ("continuous", Some("calculated")),
+            VarKind::Actuator { .. } | VarKind::Load { .. } => ("continuous", None),
+            VarKind::Parameter { .. } => ("fixed", Some("exact")),
+        };
+        let variability = if v.ty == VarType::Real { variability } else { "fixed" };
+        let initial = initial.map(|i| format!(r#" initial="{i}""#)).unwrap_or_default();
+        let ty = match v.ty {
+            VarType::Real => "Float64",
+            VarType::Integer => "Int32",
+            VarType::Boolean => "Boolean",
+            VarType::String => "String",
+        };
+        let unit = v
+            .unit
+            .as_ref()
+            .map(|u| format!(r#" unit="{}""#, xml_escape(u)))
+            .unwrap_or_default();
+        let head = format!(
+            r#"    <{ty} name="{}" valueReference="{vr}" description="{}" causality="{}" variability="{variability}"{initial}"#,
+            xml_escape(&v.name),
+            xml_escape(&v.description),
+            v.causality()
+        );
+        match (&v.start, v.ty) {
+            // A String's start value is an element of its own.
+            (Some(s), VarType::String) => {
+                let _ = writeln!(x, "{head}>");
+                let _ = writeln!(x, r#"      <Start value="{}"/>"#, s.xml());
+                let _ = writeln!(x, "    </String>");
+            }
+            (Some(s), _) => {
+                let _ = writeln!(x, r#"{head}{unit} start="{}"/>"#, s.xml());
+            }
+            (None, _) => {
+                let _ = writeln!(x, "{head}{unit}/>");
+            }
+        }
+    }
+    let _ = writeln!(x, "  </ModelVariables>");
+    let _ = writeln!(x, "  <ModelStructure>");
+    let outputs: Vec<usize> = m
+        .variables
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| matches!(v.kind, VarKind::Output { .. }))
+        .map(|(i, _)| i)
+        .collect();
+    for i in &outputs {
+        let _ = writeln!(x, r#"    <Output valueReference="{i}"/>"#);
+    }
+    for i in &outputs {
+        let _ = writeln!(x, r#"    <InitialUnknown valueReference="{i}"/>"#);
+    }
+    let _ = writeln!(x, "  </ModelStructure>");
+    let _ = writeln!(x, "</fmiModelDescription>");
+    x
+}
+
 /// The files a study names (meshes, reduced bodies, matrices, tables): every string of the
 /// study that is the path of a file, relative to the study's folder.
 fn named_files(study_path: &Path, text: &str) -> Result<Vec<PathBuf>, BoxError> {
@@ -423,6 +569,7 @@ pub struct Exported {
     pub analysis: String,
     pub model_identifier: String,
     pub variables: Vec<Variable>,
+    pub version: FmiVersion,
     /// The files of the archive, with their sizes.
     pub files: Vec<(String, usize)>,
 }
@@ -431,14 +578,21 @@ pub struct Exported {
 /// `study_path` to `out`, with the shared library `library` (the build of `flexmbs-fmu`) as
 /// its binary. Builds the mechanism and starts the analysis once (its bodies reduced into the
 /// archive's cache), so that a study the FMU could not start is refused here.
-pub fn export(study_path: &Path, analysis: Option<&str>, library: &Path, out: &Path) -> Result<Exported, BoxError> {
-    export_document(&Document::open(study_path)?, analysis, library, out)
+pub fn export(
+    study_path: &Path,
+    analysis: Option<&str>,
+    version: FmiVersion,
+    library: &Path,
+    out: &Path,
+) -> Result<Exported, BoxError> {
+    export_document(&Document::open(study_path)?, analysis, version, library, out)
 }
 
 /// [`export`] of a study held in memory (its path anchors the files it names).
 pub fn export_document(
     doc: &Document,
     analysis: Option<&str>,
+    version: FmiVersion,
     library: &Path,
     out: &Path,
 ) -> Result<Exported, BoxError> {
@@ -459,7 +613,7 @@ pub fn export_document(
             .map(|d| d.as_nanos())
             .unwrap_or_default()
     ));
-    let result = export_with_cache(doc, &study, &analysis, binary, out, &cache);
+    let result = export_with_cache(doc, &study, &analysis, version, binary, out, &cache);
     let _ = std::fs::remove_dir_all(&cache);
     result
 }
@@ -468,6 +622,7 @@ fn export_with_cache(
     doc: &Document,
     study: &Study,
     analysis: &str,
+    version: FmiVersion,
     binary: Vec<u8>,
     out: &Path,
     cache: &Path,
@@ -530,12 +685,13 @@ fn export_with_cache(
     };
     let title = study.title.clone().unwrap_or_else(|| model_identifier.clone());
     let description = format!("{title}: dynamic analysis '{analysis}' (flexmbs)");
+    let xml = match version {
+        FmiVersion::V2 => model_description(&manifest, &model_identifier, &description),
+        FmiVersion::V3 => model_description_3(&manifest, &model_identifier, &description),
+    };
     let mut entries: Vec<(String, Vec<u8>)> = vec![
-        (
-            "modelDescription.xml".into(),
-            model_description(&manifest, &model_identifier, &description).into_bytes(),
-        ),
-        (format!("binaries/linux64/{model_identifier}.so"), binary),
+        ("modelDescription.xml".into(), xml.into_bytes()),
+        (format!("{}/{model_identifier}.so", version.binaries()), binary),
         (
             format!("resources/{MANIFEST}"),
             serde_json::to_string_pretty(&manifest)?.into_bytes(),
@@ -572,6 +728,7 @@ fn export_with_cache(
         analysis: analysis.to_string(),
         model_identifier,
         variables,
+        version,
         files: listing,
     })
 }

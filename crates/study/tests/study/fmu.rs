@@ -1,6 +1,6 @@
-use super::{example, scratch};
+use super::{example, example_as, scratch};
 use std::path::PathBuf;
-use study::fmu::{Instance, Manifest, Value, VarKind, VarType};
+use study::fmu::{FmiVersion, Instance, Manifest, Value, VarKind, VarType};
 use study::{Options, Simulation};
 
 /// The entries of a ZIP archive of stored entries (what `study::fmu::zip` writes), read from
@@ -37,7 +37,7 @@ fn exported(name: &str) -> (PathBuf, Manifest) {
     let library = dir.join("lib.so");
     std::fs::write(&library, b"the library").unwrap();
     let fmu = dir.join(format!("{name}.fmu"));
-    let e = study::fmu::export(&file, None, &library, &fmu).unwrap();
+    let e = study::fmu::export(&file, None, FmiVersion::V2, &library, &fmu).unwrap();
     assert_eq!(e.model_identifier, name);
     let entries = unzip(&std::fs::read(&fmu).unwrap());
     let names: Vec<&str> = entries.iter().map(|(n, _)| n.as_str()).collect();
@@ -131,7 +131,7 @@ fn inputs_and_parameters_are_checked_when_set() {
     let library = dir.join("lib.so");
     std::fs::write(&library, b"x").unwrap();
     let fmu = dir.join("arm.fmu");
-    let e = study::fmu::export(&file, Some("motion"), &library, &fmu).unwrap();
+    let e = study::fmu::export(&file, Some("motion"), FmiVersion::V2, &library, &fmu).unwrap();
     let names: Vec<&str> = e.variables.iter().map(|v| v.name.as_str()).collect();
     for n in [
         "motor.moment.x",
@@ -192,7 +192,8 @@ fn inputs_and_parameters_are_checked_when_set() {
 
 #[test]
 fn a_bad_fmu_table_is_located() {
-    let file = example("slider_crank");
+    // A folder of its own: other tests write the slider-crank's example folder meanwhile.
+    let file = example_as("slider_crank", "fmu-bad-table");
     let text =
         std::fs::read_to_string(&file).unwrap() + "\n[fmu]\nparameters = [\"rigid_bodies.crank.mas\", \"sensors\"]\n";
     let err = study::parse_and_validate(study::input::source::Source::from_text(&file, text))
@@ -220,4 +221,57 @@ fn the_analysis_a_stepper_steps_is_the_named_dynamic_one_or_the_only_one() {
     );
     let unknown = four_bar.dynamic_analysis(Some("at-rst")).unwrap_err().to_string();
     assert!(unknown.contains("at-rest"), "did you mean: {unknown}");
+}
+
+/// The FMI 3.0 FMU of the same study: the same manifest and resources (one instance steps
+/// both), a description of version 3.0 with the manifest's GUID as its instantiation token,
+/// `Float64` variables by value reference, units declared, the outputs in the model
+/// structure, the binary under `binaries/x86_64-linux`.
+#[test]
+fn the_fmi_3_description_names_the_same_variables() {
+    // A file of its own beside the example's (another test appends to the example's).
+    let example_file = example("controlled_arm");
+    let file = example_file.with_file_name("arm_three.toml");
+    let text =
+        std::fs::read_to_string(&example_file).unwrap() + "\n[fmu]\nparameters = [\"analyses.motion.rho_inf\"]\n";
+    std::fs::write(&file, text).unwrap();
+    let dir = scratch("fmu-3");
+    let library = dir.join("lib.so");
+    std::fs::write(&library, b"x").unwrap();
+    let two = study::fmu::export(&file, None, FmiVersion::V2, &library, &dir.join("two.fmu")).unwrap();
+    let e = study::fmu::export(&file, None, FmiVersion::V3, &library, &dir.join("three.fmu")).unwrap();
+    assert_eq!(e.version, FmiVersion::V3);
+    assert_eq!(e.variables, two.variables);
+    let entries = unzip(&std::fs::read(dir.join("three.fmu")).unwrap());
+    let get = |n: &str| entries.iter().find(|(name, _)| name == n).map(|(_, d)| d.clone());
+    assert!(get("binaries/x86_64-linux/arm_three.so").is_some());
+    assert!(get("binaries/linux64/arm_three.so").is_none());
+    let manifest: Manifest = serde_json::from_slice(&get("resources/flexmbs-fmu.json").unwrap()).unwrap();
+    let xml = String::from_utf8(get("modelDescription.xml").unwrap()).unwrap();
+    assert!(xml.contains(r#"fmiVersion="3.0""#), "{xml}");
+    assert!(xml.contains(&format!(r#"instantiationToken="{}""#, manifest.guid)));
+    assert!(!xml.contains("ScalarVariable") && !xml.contains("guid="));
+    assert!(xml.contains(r#"<CoSimulation modelIdentifier="arm_three""#));
+    let floats = xml.matches("<Float64 ").count();
+    assert_eq!(floats, manifest.variables.len() + 1, "the variables and time");
+    let n = manifest.variables.len();
+    assert!(xml.contains(&format!(
+        r#"<Float64 name="time" valueReference="{n}" description="time of the analysis" causality="independent""#
+    )));
+    assert!(xml.contains(r#"<Unit name="s"/>"#));
+    for (vr, v) in manifest.variables.iter().enumerate() {
+        let line = xml
+            .lines()
+            .find(|l| l.contains(&format!(r#"valueReference="{vr}" "#)) && l.contains("<Float64 "))
+            .unwrap_or_else(|| panic!("variable {vr} in {xml}"));
+        assert!(line.contains(&format!(r#"causality="{}""#, v.causality())), "{line}");
+        if let Some(u) = &v.unit {
+            assert!(line.contains(&format!(r#"unit="{u}""#)), "{line}");
+            assert!(xml.contains(&format!(r#"<Unit name="{u}"/>"#)));
+        }
+        let is_output = matches!(v.kind, VarKind::Output { .. });
+        assert_eq!(xml.contains(&format!(r#"<Output valueReference="{vr}"/>"#)), is_output);
+    }
+    assert!(study::fmu::FmiVersion::parse("4").is_err());
+    assert_eq!(study::fmu::FmiVersion::parse("3.0").unwrap(), FmiVersion::V3);
 }
