@@ -560,3 +560,24 @@ def test_fmi3_saved_state_parameters_and_errors(examples, tmp_path):
     with pytest.raises(Exception):
         c.instantiate()
     assert any("not the FMU's" in m for m in c.errors())
+
+
+def test_a_controller_held_over_longer_communication_steps_converges_at_first_order(examples, tmp_path):
+    # The master's PD torque is held over each communication step H (zero-order hold), so the
+    # motion with H = m dt departs from that with H = dt by O(H - dt): first order. The hub
+    # angle at t = 0.6 s for m = 1, 2, 3 and 5: the error ratios follow (m - 1), 2 and 2
+    # (measured 1.89 and 1.83). Longer holds leave the asymptotic range: at H = 10 dt = 0.02 s
+    # the hold's lag makes the sampled loop ring (the angle overshoots and swings back).
+    _, fmu = arm_fmu(examples, tmp_path)
+    dt, t_end = 2e-3, 0.6
+    final = {}
+    for m in (1, 2, 3, 5):
+        s = Slave(fmu, tmp_path / f"h{m}").start()
+        pd_fmu(s, round(t_end / (m * dt)), dt=m * dt)
+        final[m] = s.get(["angle." + angle_column(s)])[0]
+        s.close()
+    errors = {m: abs(final[m] - final[1]) for m in (2, 3, 5)}
+    assert errors[2] > 1e-5, errors
+    for coarse, fine in ((3, 2), (5, 3)):
+        ratio, expected = errors[coarse] / errors[fine], (coarse - 1) / (fine - 1)
+        assert expected / 1.25 < ratio < expected * 1.25, (coarse, fine, errors)
