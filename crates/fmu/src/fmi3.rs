@@ -608,23 +608,7 @@ pub unsafe extern "C" fn fmi3GetFMUState(instance: fmi3Instance, state: *mut fmi
     // SAFETY: `instance` is checked by `with3`; `state` is checked non-null and aligned before
     // it is read or written, and `*state` is used only if registered (a live
     // `Box<SavedInstance>` of this library).
-    unsafe {
-        with3(instance, "fmi3GetFMUState", |comp| {
-            if state.is_null() || !state.is_aligned() {
-                return Err("the FMU state pointer is null or misaligned".into());
-            }
-            let saved = comp.instance.save();
-            let old = *state;
-            if registered(&STATES, old) {
-                *(old as *mut SavedInstance) = saved;
-            } else {
-                let p = Box::into_raw(Box::new(saved)) as fmi3FMUState;
-                register(&STATES, p, true);
-                *state = p;
-            }
-            Ok(())
-        })
-    }
+    unsafe { with3(instance, "fmi3GetFMUState", |comp| get_state(comp, state)) }
 }
 
 /// `fmi3SetFMUState`: back to a state saved by `fmi3GetFMUState` of this FMU.
@@ -638,16 +622,7 @@ pub unsafe extern "C" fn fmi3SetFMUState(instance: fmi3Instance, state: fmi3FMUS
     // `Box<SavedInstance>` of this library), read through a shared reference.
     unsafe {
         with3(instance, "fmi3SetFMUState", |comp| {
-            if !registered(&STATES, state) {
-                return Err("the FMU state is not one fmi3GetFMUState returned (or it was freed)".into());
-            }
-            let saved = &*(state as *const SavedInstance);
-            comp.instance.restore(saved)?;
-            comp.last_time = comp.instance.time().unwrap_or(comp.last_time);
-            if comp.instance.time().is_some() && comp.phase == Phase::Terminated {
-                comp.phase = Phase::Stepping;
-            }
-            Ok(())
+            set_state(comp, state, "fmi3GetFMUState")
         })
     }
 }
@@ -662,24 +637,7 @@ pub unsafe extern "C" fn fmi3FreeFMUState(instance: fmi3Instance, state: *mut fm
     // SAFETY: `instance` is checked by `with3`; `state` is checked non-null and aligned, and
     // `*state` freed only if registered (a live `Box<SavedInstance>`), once (unregistered
     // first).
-    unsafe {
-        with3(instance, "fmi3FreeFMUState", |_| {
-            if state.is_null() || !state.is_aligned() {
-                return Err("the FMU state pointer is null or misaligned".into());
-            }
-            let p = *state;
-            if p.is_null() {
-                return Ok(());
-            }
-            if !registered(&STATES, p) {
-                return Err("the FMU state is not one fmi3GetFMUState returned (or it was freed)".into());
-            }
-            register(&STATES, p, false);
-            drop(Box::from_raw(p as *mut SavedInstance));
-            *state = std::ptr::null_mut();
-            Ok(())
-        })
-    }
+    unsafe { with3(instance, "fmi3FreeFMUState", |_| free_state(state, "fmi3GetFMUState")) }
 }
 
 /// The functions this FMU does not provide (the model description declares none of them):

@@ -852,6 +852,78 @@ pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
     }
 }
 
+/// The body of `fmi2GetFMUstate` and `fmi3GetFMUState`: `comp`'s whole state into the state
+/// `*state` when it is one this library returned, else into a new one stored there.
+///
+/// # Safety
+///
+/// `state` is null or points to a state pointer the master owns (checked non-null and aligned
+/// here before it is read or written).
+unsafe fn get_state(comp: &mut Component, state: *mut *mut c_void) -> Result<(), BoxError> {
+    if state.is_null() || !state.is_aligned() {
+        return Err("the FMU state pointer is null or misaligned".into());
+    }
+    let saved = comp.instance.save();
+    // SAFETY: `state` is non-null and aligned (above) and points to the master's state
+    // pointer; `*state` is written through only if registered (a live `Box<SavedInstance>`
+    // of this library).
+    unsafe {
+        let old = *state;
+        if registered(&STATES, old) {
+            *(old as *mut SavedInstance) = saved;
+        } else {
+            let p = Box::into_raw(Box::new(saved)) as *mut c_void;
+            register(&STATES, p, true);
+            *state = p;
+        }
+    }
+    Ok(())
+}
+
+/// The body of `fmi2SetFMUstate` and `fmi3SetFMUState`: `comp` back to the state `state`,
+/// which `getter` (the standard's function name) must have returned.
+fn set_state(comp: &mut Component, state: *mut c_void, getter: &str) -> Result<(), BoxError> {
+    if !registered(&STATES, state) {
+        return Err(format!("the FMU state is not one {getter} returned (or it was freed)").into());
+    }
+    // SAFETY: `state` is registered: a live `Box<SavedInstance>` of this library, read through
+    // a shared reference.
+    let saved = unsafe { &*(state as *const SavedInstance) };
+    comp.instance.restore(saved)?;
+    comp.last_time = comp.instance.time().unwrap_or(comp.last_time);
+    if comp.instance.time().is_some() && comp.phase == Phase::Terminated {
+        comp.phase = Phase::Stepping;
+    }
+    Ok(())
+}
+
+/// The body of `fmi2FreeFMUstate` and `fmi3FreeFMUState`: frees the state `*state` (one
+/// `getter` returned) and sets it to null.
+///
+/// # Safety
+///
+/// `state` is null or points to a state pointer the master owns (checked here).
+unsafe fn free_state(state: *mut *mut c_void, getter: &str) -> Result<(), BoxError> {
+    if state.is_null() || !state.is_aligned() {
+        return Err("the FMU state pointer is null or misaligned".into());
+    }
+    // SAFETY: `state` is non-null and aligned (above); `*state` is freed only if registered
+    // (a live `Box<SavedInstance>`), once (unregistered first).
+    unsafe {
+        let p = *state;
+        if p.is_null() {
+            return Ok(());
+        }
+        if !registered(&STATES, p) {
+            return Err(format!("the FMU state is not one {getter} returned (or it was freed)").into());
+        }
+        register(&STATES, p, false);
+        drop(Box::from_raw(p as *mut SavedInstance));
+        *state = std::ptr::null_mut();
+    }
+    Ok(())
+}
+
 /// `fmi2GetFMUstate`: the whole state (simulation, inputs), new or into the state `*state`.
 ///
 /// # Safety
@@ -863,23 +935,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
     // SAFETY: `c` is checked by `with`; `state` is checked non-null and aligned before it
     // is read or written, and `*state` is used only if registered (a live
     // `Box<SavedInstance>` of this library).
-    unsafe {
-        with(c, "fmi2GetFMUstate", |comp| {
-            if state.is_null() || !state.is_aligned() {
-                return Err("the FMU state pointer is null or misaligned".into());
-            }
-            let saved = comp.instance.save();
-            let old = *state;
-            if registered(&STATES, old) {
-                *(old as *mut SavedInstance) = saved;
-            } else {
-                let p = Box::into_raw(Box::new(saved)) as fmi2FMUstate;
-                register(&STATES, p, true);
-                *state = p;
-            }
-            Ok(())
-        })
-    }
+    unsafe { with(c, "fmi2GetFMUstate", |comp| get_state(comp, state)) }
 }
 
 /// `fmi2SetFMUstate`: back to a state saved by `fmi2GetFMUstate` of this FMU.
@@ -891,20 +947,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
     // SAFETY: `c` is checked by `with`; `state` is used only if registered (a live
     // `Box<SavedInstance>` of this library), read through a shared reference.
-    unsafe {
-        with(c, "fmi2SetFMUstate", |comp| {
-            if !registered(&STATES, state) {
-                return Err("the FMU state is not one fmi2GetFMUstate returned (or it was freed)".into());
-            }
-            let saved = &*(state as *const SavedInstance);
-            comp.instance.restore(saved)?;
-            comp.last_time = comp.instance.time().unwrap_or(comp.last_time);
-            if comp.instance.time().is_some() && comp.phase == Phase::Terminated {
-                comp.phase = Phase::Stepping;
-            }
-            Ok(())
-        })
-    }
+    unsafe { with(c, "fmi2SetFMUstate", |comp| set_state(comp, state, "fmi2GetFMUstate")) }
 }
 
 /// `fmi2FreeFMUstate`: frees the state `*state` and sets it to null.
@@ -916,24 +959,7 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) 
 pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     // SAFETY: `c` is checked by `with`; `state` is checked non-null and aligned, and `*state`
     // freed only if registered (a live `Box<SavedInstance>`), once (unregistered first).
-    unsafe {
-        with(c, "fmi2FreeFMUstate", |_| {
-            if state.is_null() || !state.is_aligned() {
-                return Err("the FMU state pointer is null or misaligned".into());
-            }
-            let p = *state;
-            if p.is_null() {
-                return Ok(());
-            }
-            if !registered(&STATES, p) {
-                return Err("the FMU state is not one fmi2GetFMUstate returned (or it was freed)".into());
-            }
-            register(&STATES, p, false);
-            drop(Box::from_raw(p as *mut SavedInstance));
-            *state = std::ptr::null_mut();
-            Ok(())
-        })
-    }
+    unsafe { with(c, "fmi2FreeFMUstate", |_| free_state(state, "fmi2GetFMUstate")) }
 }
 
 const NO_SERIALIZATION: &str = "this FMU does not serialize its state (canSerializeFMUstate is false)";
