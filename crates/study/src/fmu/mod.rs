@@ -305,6 +305,22 @@ pub fn model_identifier(study_path: &Path) -> String {
     id
 }
 
+/// A variable's `variability` and its `initial` attribute (with its leading space, or empty),
+/// the same in FMI 2.0 and 3.0: outputs are calculated, inputs have no `initial`, parameters
+/// are fixed and exact; a variable that is not a real is fixed.
+fn variability_and_initial(v: &Variable) -> (&'static str, String) {
+    let (variability, initial) = match v.kind {
+        VarKind::Output { .. } => ("continuous", Some("calculated")),
+        VarKind::Actuator { .. } | VarKind::Load { .. } => ("continuous", None),
+        VarKind::Parameter { .. } => ("fixed", Some("exact")),
+    };
+    let variability = if v.ty == VarType::Real { variability } else { "fixed" };
+    (
+        variability,
+        initial.map(|i| format!(r#" initial="{i}""#)).unwrap_or_default(),
+    )
+}
+
 fn xml_escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
@@ -354,13 +370,7 @@ pub fn model_description(m: &Manifest, model_name: &str, description: &str) -> S
     );
     let _ = writeln!(x, "  <ModelVariables>");
     for (vr, v) in m.variables.iter().enumerate() {
-        let (variability, initial) = match v.kind {
-            VarKind::Output { .. } => ("continuous", Some("calculated")),
-            VarKind::Actuator { .. } | VarKind::Load { .. } => ("continuous", None),
-            VarKind::Parameter { .. } => ("fixed", Some("exact")),
-        };
-        let variability = if v.ty == VarType::Real { variability } else { "fixed" };
-        let initial = initial.map(|i| format!(r#" initial="{i}""#)).unwrap_or_default();
+        let (variability, initial) = variability_and_initial(v);
         let _ = writeln!(x, r#"    <!-- index {} -->"#, vr + 1);
         let _ = writeln!(
             x,
@@ -460,13 +470,7 @@ pub fn model_description_3(m: &Manifest, model_name: &str, description: &str) ->
         time_reference(m)
     );
     for (vr, v) in m.variables.iter().enumerate() {
-        let (variability, initial) = match v.kind {
-            VarKind::Output { .. } => ("continuous", Some("calculated")),
-            VarKind::Actuator { .. } | VarKind::Load { .. } => ("continuous", None),
-            VarKind::Parameter { .. } => ("fixed", Some("exact")),
-        };
-        let variability = if v.ty == VarType::Real { variability } else { "fixed" };
-        let initial = initial.map(|i| format!(r#" initial="{i}""#)).unwrap_or_default();
+        let (variability, initial) = variability_and_initial(v);
         let ty = match v.ty {
             VarType::Real => "Float64",
             VarType::Integer => "Int32",
