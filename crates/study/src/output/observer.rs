@@ -17,9 +17,9 @@
 
 use crate::error::BoxError;
 use crate::output::summary::{AnalysisSummary, Summary};
-use crate::output::view::ViewEvent;
 use crate::output::vtu::{PointField, VtuMesh};
 use std::path::Path;
+use viewer::{Body, Frame, Marker};
 
 /// One cell of a result table.
 #[derive(Clone, Debug, PartialEq)]
@@ -402,4 +402,26 @@ impl Observer for Recorder {
         self.current().summary = Some(s.clone());
         Ok(())
     }
+}
+
+/// What an analysis hands the page, besides its tables and sensors.
+pub enum ViewEvent<'a> {
+    /// The bodies and markers of a mechanism, before its first pose.
+    Bodies { bodies: &'a [Body], markers: &'a [Marker] },
+    /// The poses the modes of the analysis are about (a buckling analysis's loaded state).
+    Base(&'a Frame),
+    /// The poses of every body at `key` (a time, a load factor, a mode number) of `series`.
+    Pose { series: Series, key: f64, frame: &'a Frame },
+    /// A field of a part: six values a node (translation, rotation) on `mesh`, with the
+    /// stress tensor (six components a node) when it has one; a static displacement, a mode
+    /// or a reduction shape, key its number.
+    PartField {
+        series: Series,
+        key: f64,
+        mesh: &'a VtuMesh,
+        /// The label of each mesh node in its file (empty when unknown).
+        labels: &'a [u64],
+        values: &'a [[f64; 6]],
+        stress: Option<&'a [[f64; 6]]>,
+    },
 }

@@ -13,31 +13,10 @@
 //! $\mathbf d$; linear in the coordinates, as the node's own shape rows).
 
 use crate::mesh::{CellRole, VtuMesh};
+pub use crate::output::observer::ViewEvent;
 use crate::output::observer::{Series, Table};
 use std::collections::HashMap;
 pub use viewer::{Analysis, Body, BodyKind, F32s, Frame, Marker, Mode, Pose, Scene, Sensor, U32s};
-
-/// What an analysis hands the page, besides its tables and sensors.
-pub enum ViewEvent<'a> {
-    /// The bodies and markers of a mechanism, before its first pose.
-    Bodies { bodies: &'a [Body], markers: &'a [Marker] },
-    /// The poses the modes of the analysis are about (a buckling analysis's loaded state).
-    Base(&'a Frame),
-    /// The poses of every body at `key` (a time, a load factor, a mode number) of `series`.
-    Pose { series: Series, key: f64, frame: &'a Frame },
-    /// A field of a part: six values a node (translation, rotation) on `mesh`, with the
-    /// stress tensor (six components a node) when it has one; a static displacement, a mode
-    /// or a reduction shape, key its number.
-    PartField {
-        series: Series,
-        key: f64,
-        mesh: &'a VtuMesh,
-        /// The label of each mesh node in its file (empty when unknown).
-        labels: &'a [u64],
-        values: &'a [[f64; 6]],
-        stress: Option<&'a [[f64; 6]]>,
-    },
-}
 
 /// The surface of a mesh (module docs): vertices (the mesh node of each and its offset from
 /// the node, non-zero on tubes), triangles and lines.
