@@ -384,7 +384,7 @@ impl Validator<'_> {
         let Some(fmu) = &file.fmu else {
             return Vec::new();
         };
-        let doc = crate::input::document::Document::from_text(&self.src.text, &self.src.path);
+        let doc = self.src.text.parse::<toml_edit::DocumentMut>();
         let mut kept = Vec::new();
         for (i, p) in fmu.parameters.iter().enumerate() {
             let at = KeyPath::root().key("fmu").key("parameters").index(i);
@@ -397,7 +397,7 @@ impl Validator<'_> {
                 continue;
             }
             let value = match &doc {
-                Ok(doc) => doc.get(p),
+                Ok(doc) => crate::input::toml_path::value_at(doc, p),
                 Err(_) => continue,
             };
             match value {
