@@ -104,9 +104,7 @@ def measure(page_path: Path, seconds: float, chromium: Path):
         info = page.evaluate(
             f"() => ({{ frames: {API}.frameCount(), bodies: {API}.bodies(),"
             f" vertices: {API}.bodies().map((b) => {API}.vertexCount(b)),"
-            " gl: (() => { const c = document.createElement('canvas').getContext('webgl2');"
-            " const e = c && c.getExtension('WEBGL_debug_renderer_info');"
-            " return e ? c.getParameter(e.UNMASKED_RENDERER_WEBGL) : (c ? c.getParameter(c.RENDERER) : 'none'); })() })"
+            f" rendering: {API}.rendering() }})"
         )
         playing = page.evaluate(
             """async (seconds) => {
@@ -180,9 +178,12 @@ def main():
     fps = playing["renders"] / playing["seconds"]
     load = os.getloadavg()
     print(f"machine: {cpu_name()}, {os.cpu_count()} cores, load {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}")
-    print(f"WebGL renderer: {info['gl']}")
-    print("  Chromium renders WebGL with SwiftShader here (software, on the CPU, no GPU):")
-    print("  the frames per second below are a lower bound of what a desktop with a GPU shows.")
+    r = info["rendering"]
+    print(f"WebGL renderer: {r['webgl']} ({'multisampled' if r['antialias'] else 'without multisampling'})")
+    if r["software"]:
+        print("  Chromium renders WebGL in software here (on the CPU, no GPU), and the page then draws")
+        print("  without multisampling: the frame rates below are those of this CPU; a browser with a GPU")
+        print("  draws the same page multisampled.")
     print(f"bodies: {', '.join(f'{b} ({n} surface vertices)' for b, n in zip(info['bodies'], info['vertices']))}; {info['frames']} frames")
     print(f"page:       {page_bytes / 1e6:9.2f} MB ({page_gz / 1e6:.2f} MB gzipped)  {page}")
     print(f"VTU series: {vtu_bytes / 1e6:9.2f} MB in {nvtu} .vtu files and the .pvd ({vtu_bytes / page_bytes:.0f}x the page)")

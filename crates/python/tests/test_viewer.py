@@ -204,6 +204,24 @@ def test_the_slider_crank_moves_as_its_vtu_files_say(browser, slider_crank):
     page.check_clean()
 
 
+def test_the_page_multisamples_on_a_gpu_and_not_on_a_software_rasteriser(browser, slider_crank):
+    page = Page(browser, slider_crank / "view.html")
+    r = page("v.rendering()")
+    # What the browser's WebGL reports, read here independently of the page.
+    name = page.page.evaluate(
+        "() => { const c = document.createElement('canvas').getContext('webgl2');"
+        " const e = c.getExtension('WEBGL_debug_renderer_info');"
+        " return c.getParameter(e ? e.UNMASKED_RENDERER_WEBGL : c.RENDERER); }"
+    )
+    assert r["webgl"] == name
+    software = any(s in name.lower() for s in ("swiftshader", "llvmpipe", "softpipe", "software"))
+    assert r["software"] == software
+    # The drawing context the page made has the multisampling it reports.
+    made = page.page.evaluate("() => document.getElementById('view').getContext('webgl2').getContextAttributes().antialias")
+    assert made == r["antialias"] == (not software)
+    page.check_clean()
+
+
 def test_the_stress_at_a_node_is_the_vtu_von_mises(browser, solid_bar):
     page = Page(browser, solid_bar / "view.html")
     page.check_clean()

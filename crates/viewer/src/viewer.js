@@ -172,7 +172,23 @@ function drawnAmplitude(a) {
 // ---- three.js scene ----------------------------------------------------------------------
 
 const canvas = document.getElementById('view');
-const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+// The WebGL implementation's name, from a throwaway context: the page's own context fixes its
+// multisampling when it is created.
+function webglRendererName() {
+  const gl = document.createElement('canvas').getContext('webgl2');
+  if (!gl) return '';
+  const info = gl.getExtension('WEBGL_debug_renderer_info');
+  const name = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER));
+  const lose = gl.getExtension('WEBGL_lose_context');
+  if (lose) lose.loseContext();
+  return name;
+}
+// Multisampled edges cost a GPU almost nothing, but a software rasteriser (SwiftShader,
+// llvmpipe: a browser without a GPU or in a virtual machine) draws every sample on the CPU, and
+// a 30k-node body plays at half the frame rate. There the page draws without multisampling.
+const glName = webglRendererName();
+const softwareGl = /swiftshader|llvmpipe|softpipe|software/i.test(glName);
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: !softwareGl, preserveDrawingBuffer: true });
 renderer.setPixelRatio(window.devicePixelRatio || 1);
 const scene3 = new THREE.Scene();
 scene3.background = new THREE.Color(0xf4f5f7);
@@ -682,6 +698,8 @@ window.flexmbsViewer = {
   value: (j, i) => { j = bodyIndex(j); vertexOf(j, i); return valueAt(state.analysis, j, i); },
   vonMises: (j, i) => { j = bodyIndex(j); const b = vertexOf(j, i); return vonMises(b, poseOf(state.analysis, j, amplitudeNow(state.analysis)).eta, i); },
   renders: () => frames,
+  // The WebGL implementation drawing the page, and whether its edges are multisampled.
+  rendering: () => ({ webgl: glName, software: softwareGl, antialias: !softwareGl }),
   ready: true,
 };
 if (data.analyses.length) {
