@@ -9,7 +9,7 @@
 //! | [`validate`] | validation `StudyFile` → `Study` (parts, analyses; `validate::mechanism`: the mechanism) |
 //! | [`part`] | a validated part and the FE model an analysis runs on |
 //! | [`matrices`] | a body reduced from another FE code's Matrix Market K and M, node and dof tables |
-//! | [`toml_path`] | key paths into a study's TOML text: resolve by index or name, read a value |
+//! | `toml_path` | key paths into a study's TOML text: resolve by index or name, read a value |
 //! | [`document`] | a study as an editable document: load from a file or text, get and set values by key path |
 //! | [`examples`] | the built-in example studies of `examples/` |
 
