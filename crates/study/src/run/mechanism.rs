@@ -282,16 +282,23 @@ fn linearized(
     // it (its largest coordinate 1e-3, so that the bodies' frames follow it; a mode of the
     // bodies' elastic coordinates moves no node), which the page scales: the linearised mode
     // is the direction of that motion. A mode whose frames cannot be solved along it is left
-    // off the page.
+    // off the page, and the report says which and why.
     let mut mw = MeshRecovery::new(b, sys)?;
     mw.view_base(obs, sys, &state, b)?;
     for (k, e) in energies.iter().take(modes).enumerate() {
         let largest = e.shape.iter().fold(0.0, |m: f64, x| m.max(x.abs()));
-        if e.shape.len() == sys.n_dof() && largest > 0.0 {
+        let shown = if e.shape.len() == sys.n_dof() && largest > 0.0 {
             let step: Vec<f64> = e.shape.iter().map(|x| x * 1e-3 / largest).collect();
             let mut moved = sys.retract(&state, &step);
             sys.reset_frames(&mut moved);
-            let _ = mw.view_pose(obs, Series::Modes, (k + 1) as f64, sys, &moved, b);
+            mw.view_pose(obs, Series::Modes, (k + 1) as f64, sys, &moved, b)
+                .map_err(|e| e.to_string())
+        } else {
+            Err("it has no shape in the mechanism's coordinates".to_string())
+        };
+        if let Err(why) = shown {
+            out.report
+                .push(format!("mode {} is not on the results page: {why}", k + 1));
         }
     }
     let labels: Vec<&str> = energies.iter().take(modes).map(|e| e.label.as_str()).collect();
