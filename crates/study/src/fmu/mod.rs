@@ -281,6 +281,13 @@ pub fn variables(study: &Study, doc: &Document, sim: &Simulation) -> Result<Vec<
     }
     let mut seen = BTreeSet::new();
     for v in &vars {
+        if v.name == "time" {
+            return Err(format!(
+                "the FMU's independent variable is called 'time'; {} cannot have that name: rename it in the study",
+                v.description
+            )
+            .into());
+        }
         if !seen.insert(v.name.as_str()) {
             return Err(format!(
                 "two FMU variables are called '{}' (a sensor column, an actuator, a load component or a parameter): rename one in the study",

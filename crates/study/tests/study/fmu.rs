@@ -275,3 +275,23 @@ fn the_fmi_3_description_names_the_same_variables() {
     assert!(study::fmu::FmiVersion::parse("4").is_err());
     assert_eq!(study::fmu::FmiVersion::parse("3.0").unwrap(), FmiVersion::V3);
 }
+
+/// An actuator called `time` would be a second FMU variable of the name FMI gives the
+/// independent variable: the export refuses it by the actuator's name.
+#[test]
+fn an_fmu_variable_called_time_is_refused() {
+    let file = example_as("controlled_arm", "fmu-time-actuator");
+    let text = std::fs::read_to_string(&file).unwrap()
+        + "\n[[actuators]]\nname = \"time\"\njoint = \"motor-axis\"\nfunction = { type = \"constant-speed\", speed = 0.0 }\n";
+    let doc = study::input::document::Document::from_text(&text, &file).unwrap();
+    let dir = scratch("fmu-time-actuator-out");
+    let library = dir.join("lib.so");
+    std::fs::write(&library, b"the library").unwrap();
+    let err = study::fmu::export_document(&doc, None, FmiVersion::V2, &library, &dir.join("arm.fmu"))
+        .err()
+        .expect("an actuator called time is refused")
+        .to_string();
+    assert!(err.contains("independent variable is called 'time'"), "{err}");
+    assert!(err.contains("actuator 'time'"), "{err}");
+    assert!(!dir.join("arm.fmu").exists());
+}
