@@ -333,7 +333,7 @@ impl Instance {
         let target = t + h;
         if target > sim.end_time() * (1.0 + 1e-12) + 1e-12 {
             return Err(format!(
-                "t = {target} is after the end of the analysis '{analysis}' (t_end = {}; give the master's stop time to fmi2SetupExperiment, or a longer t_end)",
+                "t = {target} is after the end of the analysis '{analysis}' (t_end = {}; give the master's stop time at set-up (fmi2SetupExperiment, fmi3EnterInitializationMode), or a longer t_end)",
                 sim.end_time()
             )
             .into());
