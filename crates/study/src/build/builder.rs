@@ -30,6 +30,8 @@ pub(super) struct Builder<'s> {
     /// clamped ground node (a joint to the ground).
     pub(super) joint_ids: Vec<Option<mbs::JointId>>,
     pub(super) ground_nodes: Vec<Option<NodeId>>,
+    /// The fixed joints between bodies: the study's joint name and the node its points merge into.
+    pub(super) welds: Vec<(String, NodeId)>,
     pub(super) loads: Vec<NamedLoad>,
     pub(super) groups: Vec<SensorGroup>,
 }

@@ -22,6 +22,9 @@ pub struct BuiltMechanism {
     pub bodies: Vec<BodyOut>,
     /// Per rigid body: its reference node and point nodes.
     pub rigid: Vec<Vec<NodeId>>,
+    /// The fixed joints between bodies, which the model has no joint for: the study's joint
+    /// name and the node their points merged into.
+    pub welds: Vec<(String, NodeId)>,
     /// Where each entity of the model is described in the study (the first description of a
     /// node: the body it belongs to), for locating `mbs::ModelError`s by their entity ids.
     pub entities: BTreeMap<mbs::Entity, KeyPath>,

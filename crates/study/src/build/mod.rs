@@ -50,6 +50,7 @@ pub fn build(study: &Study, bodies: ReducedBodies) -> Result<BuiltMechanism, Box
         groups: b.groups,
         bodies: b.bodies,
         rigid: b.rigid,
+        welds: b.welds,
         entities: b.entities,
         reductions,
         loads: b.loads,

@@ -47,6 +47,7 @@ impl<'s> Builder<'s> {
             rigid: Vec::new(),
             joint_ids: Vec::new(),
             ground_nodes: Vec::new(),
+            welds: Vec::new(),
             loads: Vec::new(),
             groups: Vec::new(),
         };
@@ -87,6 +88,11 @@ impl<'s> Builder<'s> {
                 ),
             )
         })?;
+        self.welds = welds
+            .iter()
+            .zip(&weld_joint)
+            .map(|((a, _), ji)| (m.joints[*ji].name.clone(), self.node_of[*a]))
+            .collect();
         for g in grounded {
             self.model.add_support(Support::clamp(self.node_of[g]));
         }

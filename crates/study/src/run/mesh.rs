@@ -562,6 +562,10 @@ fn view_bodies(b: &BuiltMechanism, sys: &System) -> (Vec<view::Body>, Vec<view::
     for j in &b.model.joints {
         mark(j.name.clone(), "joint", j.child);
     }
+    // A fixed joint between bodies merged their points into one node: still a joint of the study.
+    for (name, node) in &b.welds {
+        mark(name.clone(), "joint", *node);
+    }
     for s in &b.model.supports {
         mark(b.model.nodes[s.node.index()].name.clone(), "ground", s.node);
     }
