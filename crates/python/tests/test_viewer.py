@@ -324,3 +324,241 @@ def test_a_mechanisms_linearised_modes_animate_about_its_equilibrium(browser, tm
         assert 0.02 * size < np.linalg.norm(moved - rest, axis=1).max() < 0.2 * size, k
     page.check_drawn()
     page.check_clean()
+
+
+def srgb(linear):
+    """The sRGB encoding (what the screen shows) of linear RGB values in [0, 1] (IEC 61966-2-1)."""
+    x = np.asarray(linear, dtype=float)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0031308), 1 / 2.4) - 0.055)
+
+
+def legend(page):
+    """The legend as the page shows it: its title and the numbers at its ends."""
+    return (
+        page.page.locator("#legendTitle").text_content(),
+        float(page.page.locator("#legendMin").text_content()),
+        float(page.page.locator("#legendMax").text_content()),
+    )
+
+
+def legend_bar(page):
+    """The RGB colours (0 to 1) of the legend bar's pixels, left to right."""
+    rgb = page.page.evaluate(
+        "() => { const c = document.getElementById('legendBar');"
+        " return Array.from(c.getContext('2d').getImageData(0, 0, c.width, 1).data); }"
+    )
+    return np.array(rgb, dtype=float).reshape(-1, 4)[:, :3] / 255
+
+
+def test_colour_by_displacement_and_stress_follows_the_legend_in_the_vtus_units(browser, solid_bar):
+    """Each drawn vertex's colour is the legend bar's colour at its VTU value in the legend's
+    units (mm, MPa), and the legend spans the values of the drawn surface."""
+    page = Page(browser, solid_bar / "view.html")
+    page("v.select('bar-bending')")
+    points, fields = vtu(solid_bar / "bar-bending" / "static.vtu")
+    u = np.linalg.norm(fields["displacement"].reshape(-1, 3), axis=1)
+    shown = {
+        # The colour menu, as a user picks it: the field, the legend's title and its values.
+        "displacement": ("elastic displacement [mm]", u * 1e3),
+        "von-mises": ("von Mises stress [MPa]", fields["von_mises"] / 1e6),
+    }
+    nodes = page("Array.from({ length: v.vertexCount(0) }, (_, i) => v.nodeOfVertex(0, i))")
+    for choice, (title, expected) in shown.items():
+        page.page.select_option("#color", choice)
+        name, lo, hi = legend(page)
+        assert name == title
+        surface = expected[sorted(set(nodes))]
+        # The legend's ends, as printed (3 digits): zero and the largest value on the surface.
+        assert lo == 0 and hi == pytest.approx(surface.max(), rel=5e-3), (choice, hi, surface.max())
+        bar = legend_bar(page)
+        for i, n in list(enumerate(nodes))[::37]:
+            assert page(f"v.value(0, {i})") == pytest.approx(expected[n], rel=2e-5, abs=1e-6 * surface.max())
+            x = round((len(bar) - 1) * expected[n] / surface.max())
+            colour = srgb(page(f"v.vertexColor(0, {i})"))
+            assert np.abs(colour - bar[x]).max() < 0.04, (choice, n, colour, bar[x])
+    page.check_clean()
+
+
+def test_colour_by_body_follows_the_legend(browser, slider_crank):
+    """Coloured by body, every vertex of a body has the colour of its row in the legend, which
+    names the bodies in the order of the VTU's `body` field, and no two bodies share one."""
+    page = Page(browser, slider_crank / "view.html")
+    page.page.select_option("#color", "body")
+    rows = page.page.evaluate(
+        "() => Array.from(document.querySelectorAll('#legend > div')).map((r) =>"
+        " [r.textContent, getComputedStyle(r.querySelector('span')).backgroundColor])"
+    )
+    bodies = page("v.bodies()")
+    assert [name for name, _ in rows] == bodies
+    swatches = []
+    for j, (name, css) in enumerate(rows):
+        swatch = np.array([float(c) for c in re.findall(r"[0-9.]+", css)[:3]]) / 255
+        colours = srgb([page(f"v.vertexColor({j}, {i})") for i in range(page(f"v.vertexCount({j})"))])
+        assert np.abs(colours - swatch).max() < 1e-5, name
+        swatches.append(swatch)
+    assert len({tuple(s) for s in swatches}) == len(bodies)
+    _, fields = vtu(pvd(slider_crank / "run-up" / "mechanism.pvd")[0][1])
+    assert sorted(set(fields["body"].astype(int))) == list(range(len(bodies)))
+    page.check_clean()
+
+
+def test_the_deformation_scale_factor_enlarges_the_elastic_part_only(browser, solid_bar, slider_crank):
+    # A static deflection at 20 times its size: the VTU's displacement times 20.
+    page = Page(browser, solid_bar / "view.html")
+    page("v.select('bar-bending')")
+    page.page.fill("#scale", "20")
+    points, fields = vtu(solid_bar / "bar-bending" / "static.vtu")
+    u = fields["displacement"].reshape(-1, 3)
+    for i in range(0, page("v.vertexCount(0)"), 11):
+        n = page(f"v.nodeOfVertex(0, {i})")
+        assert np.allclose(page(f"v.vertexPosition(0, {i})"), points[n] + 20 * u[n], rtol=0, atol=2e-6)
+    page.check_clean()
+    # In a mechanism the rigid motion stays and the elastic part scales: at 0 each rod segment
+    # (four beam elements of 0.075 m) is straight and of its length, at 1 it bends.
+    page = Page(browser, slider_crank / "view.html")
+    page(f"v.setFrame({page('v.frameCount()') - 1})")
+    segment = page("v.bodies()").index("r1")
+
+    mesh_nodes = sorted({page(f"v.nodeOfVertex({segment}, {i})") for i in range(page(f"v.vertexCount({segment})"))})
+    assert len(mesh_nodes) == 5
+
+    def nodes(scale):
+        page.page.fill("#scale", str(scale))
+        return np.array([page.node_position(segment, n) for n in mesh_nodes])
+
+    straight, bent, far = nodes(0), nodes(1), nodes(3)
+    # The segment's ends: its two nodes farthest apart.
+    gaps = np.linalg.norm(straight[:, None] - straight[None], axis=2)
+    a, b = np.unravel_index(np.argmax(gaps), gaps.shape)
+    chord = straight[b] - straight[a]
+    assert np.linalg.norm(chord) == pytest.approx(0.075, rel=1e-6)
+    off_chord = lambda p: np.linalg.norm(np.cross(p - p[a], chord), axis=1) / np.linalg.norm(chord)
+    assert off_chord(straight).max() < 1e-7
+    assert off_chord(bent).max() > 1e-6
+    assert np.allclose(far - straight, 3 * (bent - straight), rtol=0, atol=1e-7)
+    page.check_clean()
+
+
+def test_play_pause_and_speed_move_the_time_as_the_controls_say(browser, slider_crank):
+    page = Page(browser, slider_crank / "view.html")
+    keys = page("v.frameKeys()")
+    end = keys[-1]
+    play = page.page.locator("#play")
+    assert not page("v.playing()") and play.text_content() == "play"
+    # The speed menu scales the time one second of playing moves: stepped here by the page's own
+    # clock function, so the arithmetic is exact.
+    for speed, seconds in [("0.25", 0.02), ("2", 0.004)]:
+        page.page.select_option("#speed", speed)
+        assert page("v.speed()") == float(speed)
+        page("v.setFrame(0)")
+        page(f"v.advance({seconds})")
+        t = float(speed) * seconds
+        assert page("v.clock()") == pytest.approx(t, abs=1e-12)
+        k = max(i for i, key in enumerate(keys) if key <= t + 1e-12)
+        assert page("v.frame()") == k and int(page.page.locator("#slider").input_value()) == k
+        assert f"(frame {k + 1} of {len(keys)})" in page.page.locator("#keyText").text_content()
+    # Play runs to the last frame and stops there; at a tenth of real time the 0.03 s of the run
+    # take at least 0.3 s, less one frame's step.
+    page.page.select_option("#speed", "0.1")
+    page("v.setFrame(0)")
+    start = page.page.evaluate("() => performance.now()")
+    play.click()
+    assert play.text_content() == "pause"
+    page.page.wait_for_function(f"!{API}.playing()", timeout=20000)
+    elapsed = (page.page.evaluate("() => performance.now()") - start) / 1000
+    assert page("v.frame()") == len(keys) - 1 and play.text_content() == "play"
+    assert elapsed > end / 0.1 - 0.1, elapsed
+    # Pause holds the time where it is: play, two frames later pause (clicked in the page, as
+    # the run would end before a second click from here under load).
+    page("v.setFrame(0)")
+    page.page.eval_on_selector(
+        "#play", "async (b) => { b.click(); await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))); b.click(); }"
+    )
+    assert play.text_content() == "play" and not page("v.playing()")
+    assert 0 < page("v.clock()") < end
+    held = page("v.clock()")
+    page.page.wait_for_timeout(300)
+    assert page("v.clock()") == held
+    page.check_clean()
+
+
+def test_the_sensor_plots_cursor_follows_the_time(browser, slider_crank):
+    """Each sensor's plot has its cursor (a black vertical line) at the time shown, and the
+    values beside it are the sensor's CSV row at that time."""
+    page = Page(browser, slider_crank / "view.html")
+    plots = page.page.locator(".plot")
+    names = [re.match(r"sensor (\S+) \(against t \[s\]\)", plots.nth(k).locator(".name").text_content()).group(1) for k in range(plots.count())]
+    assert sorted(names) == sorted(p.stem for p in (slider_crank / "run-up").glob("*.csv"))
+    keys = page("v.frameKeys()")
+    for k in [0, len(keys) // 2, len(keys) - 1]:
+        page.page.eval_on_selector("#slider", "(e, k) => { e.value = k; e.dispatchEvent(new Event('input')); }", k)
+        t = keys[k]
+        for p, name in enumerate(names):
+            csv = slider_crank / "run-up" / f"{name}.csv"
+            header = csv.read_text().splitlines()[0].split(",")
+            table = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2)
+            row = table[np.searchsorted(table[:, 0], t + 1e-12) - 1]
+            readout = dict(re.findall(r"\s*([^,=]+?) = ([^,]+)", plots.nth(p).locator("div").nth(1).text_content()))
+            assert list(readout) == header[1:], (name, readout)
+            for col, value in zip(header[1:], row[1:]):
+                assert float(readout[col]) == pytest.approx(value, rel=1e-3, abs=1e-3 * np.abs(table[:, 1:]).max()), (name, col, t)
+            # The cursor: the column of the plot's canvas with the most black pixels.
+            w, columns = plots.nth(p).locator("canvas").evaluate(
+                "(c) => { const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data; const n = new Array(c.width).fill(0);"
+                " for (let i = 0; i < d.length; i += 4) if (d[i + 3] > 60 && d[i] + d[i + 1] + d[i + 2] < 90) n[(i / 4) % c.width]++;"
+                " return [c.width, n]; }"
+            )
+            x = 4 + (t - table[0, 0]) / (table[-1, 0] - table[0, 0]) * (w - 8)
+            assert abs(int(np.argmax(columns)) - x) <= 1.5, (name, t, np.argmax(columns), x)
+    page.check_clean()
+
+
+def test_the_markers_sit_on_their_joints_supports_and_point_masses(browser, tmp_path):
+    """The built-in slider-crank with a point mass at the rod's middle: each joint's marker on
+    its joint, the slider's support on the slider, the mass on its node, as the sensors say."""
+    import subprocess
+
+    from conftest import EXAMPLES, cli_path
+
+    study = (EXAMPLES / "slider_crank.toml").read_text()
+    study += '\n[[point_masses]]\nname = "tip"\nat = "r1.b"\nmass = 0.001\n'
+    study += '\n[[sensors]]\nname = "middle"\ntype = "position"\nof = "r1.b"\n'
+    (tmp_path / "sc.toml").write_text(study)
+    done = subprocess.run([str(cli_path()), "run", "sc.toml", "--t-end", "0.02"], capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    res = tmp_path / "sc-results" / "run-up"
+    page = Page(browser, tmp_path / "sc-results" / "view.html")
+    kinds = {m["name"]: m["kind"] for m in page("v.markers()")}
+    joints = ["weld1", "weld2", "weld3", "crank-pivot", "pin-A", "pin-B"]
+    # The ground: the slider's support, and the revolute joint's ground point.
+    assert kinds == {**{j: "joint" for j in joints}, "slider.P": "ground", "ground.crank-pivot": "ground", "tip": "mass"}
+
+    def at(sensor, t):
+        table = np.loadtxt(res / f"{sensor}.csv", delimiter=",", skiprows=1, ndmin=2)
+        row = table[np.argmin(np.abs(table[:, 0] - t))]
+        assert row[0] == pytest.approx(t, abs=1e-12)
+        return row[1:]
+
+    series = pvd(res / "mechanism.pvd")
+    for k in [0, len(series) // 2, len(series) - 1]:
+        t, file = series[k]
+        page(f"v.setFrame({k})")
+        drawn = {m["name"]: np.array(m["position"]) for m in page("v.markers()")}
+        theta = at("crank-angle", t)[0]
+        expected = {
+            "crank-pivot": np.zeros(3),
+            "ground.crank-pivot": np.zeros(3),
+            "pin-A": 0.15 * np.array([np.cos(theta), np.sin(theta), 0.0]),
+            "pin-B": at("slider", t),
+            "slider.P": at("slider", t),
+            "tip": at("middle", t),
+        }
+        for name, x in expected.items():
+            assert np.allclose(drawn[name], x, rtol=0, atol=1e-9), (name, t, drawn[name], x)
+        # The welds join rod segments: each sits on a node of the VTU's deformed rod.
+        points, fields = vtu(file)
+        where = points + fields["displacement"].reshape(-1, 3)
+        for name in ["weld1", "weld2", "weld3"]:
+            assert np.linalg.norm(where - drawn[name], axis=1).min() < 1e-9, (name, t)
+    page.check_drawn()
+    page.check_clean()

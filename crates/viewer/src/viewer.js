@@ -210,6 +210,15 @@ function ramp(t) {
   return stops[k].map((c, i) => c + f * (stops[k + 1][i] - c));
 }
 
+// The ramp in three.js's working colour space (linear RGB) at 256 levels: vertex colours are
+// linear and the screen shows their sRGB encoding, so the model's colours are the legend bar's,
+// which a 2D canvas draws in sRGB.
+const rampLinear = Array.from({ length: 256 }, (_, k) => {
+  const c = new THREE.Color().setRGB(...ramp(k / 255), THREE.SRGBColorSpace);
+  return [c.r, c.g, c.b];
+});
+const noValue = (() => { const c = new THREE.Color().setRGB(0.75, 0.75, 0.75, THREE.SRGBColorSpace); return [c.r, c.g, c.b]; })();
+
 let drawn = [];   // per body: { mesh, lines, points, pos (Float64Array), geometry }
 let markers = []; // per marker: { mesh, marker }
 let bounds = { center: new THREE.Vector3(), radius: 1 };
@@ -334,7 +343,7 @@ function update() {
       let c = [base.r, base.g, base.b];
       if (field) {
         const v = state.color === 'von-mises' ? vonMises(b, eta, i) / 1e6 : displacementOf(b, eta, i) * 1e3;
-        c = Number.isNaN(v) ? [0.75, 0.75, 0.75] : ramp((Math.abs(v) - lo) / (hi - lo));
+        c = Number.isNaN(v) ? noValue : rampLinear[Math.round(255 * Math.min(1, Math.max(0, (Math.abs(v) - lo) / (hi - lo))))];
       }
       col.array[3 * i] = c[0]; col.array[3 * i + 1] = c[1]; col.array[3 * i + 2] = c[2];
     }
@@ -536,9 +545,11 @@ function drawPlots() {
     if (x != null) {
       ctx.strokeStyle = '#000';
       ctx.beginPath(); ctx.moveTo(px(x), 0); ctx.lineTo(px(x), h); ctx.stroke();
-      // The row at the cursor: the values shown beside the plot.
+      // The row at the cursor: the values shown beside the plot. The sensor's keys are float32,
+      // the frame's float64: equal to float32's precision is equal.
       let r = 0;
-      while (r + 1 < n && s.x[r + 1] <= x) r++;
+      const tol = 1e-6 * (Math.abs(x) + (x1 - x0));
+      while (r + 1 < n && s.x[r + 1] <= x + tol) r++;
       s.readout.textContent = s.columns.map((col, k) => `${col} = ${fmt(s.values[m * r + k])}`).join(', ');
     }
   }
@@ -638,22 +649,26 @@ $('color').addEventListener('change', (e) => { state.color = e.target.value; upd
 $('scale').addEventListener('input', (e) => { const s = Number(e.target.value); if (Number.isFinite(s)) { state.scale = s; update(); } });
 for (const btn of document.querySelectorAll('#views button')) btn.addEventListener('click', () => setView(btn.dataset.view));
 
+// Play on by dt seconds of the viewer's clock: the analysis's time moves by dt times the speed
+// (a mode's phase by one period every 1.5 s at speed 1, whatever the frequency); at the last
+// frame playing stops.
+function advance(dt) {
+  const a = state.analysis;
+  if (!a) return;
+  if (a.modes.length) {
+    state.phase += (2 * Math.PI * dt * state.speed) / 1.5;
+    update();
+  } else if (a.frames.length > 1) {
+    const t = state.time + dt * state.speed;
+    const end = a.frames[a.frames.length - 1].key;
+    if (t >= end) { setFrame(a.frames.length - 1); state.playing = false; $('play').textContent = 'play'; } else setTime(t);
+  }
+}
 let last = performance.now();
 function tick(now) {
   const dt = Math.min(0.1, (now - last) / 1000);
   last = now;
-  const a = state.analysis;
-  if (state.playing && a) {
-    if (a.modes.length) {
-      // One period every 1.5 s at speed 1, whatever the frequency.
-      state.phase += (2 * Math.PI * dt * state.speed) / 1.5;
-      update();
-    } else if (a.frames.length > 1) {
-      const t = state.time + dt * state.speed;
-      const end = a.frames[a.frames.length - 1].key;
-      if (t >= end) { setFrame(a.frames.length - 1); state.playing = false; $('play').textContent = 'play'; } else setTime(t);
-    }
-  }
+  if (state.playing) advance(dt);
   requestAnimationFrame(tick);
 }
 
@@ -697,6 +712,15 @@ window.flexmbsViewer = {
   // The value of the colour field at vertex i of body j (MPa, mm or the body index).
   value: (j, i) => { j = bodyIndex(j); vertexOf(j, i); return valueAt(state.analysis, j, i); },
   vonMises: (j, i) => { j = bodyIndex(j); const b = vertexOf(j, i); return vonMises(b, poseOf(state.analysis, j, amplitudeNow(state.analysis)).eta, i); },
+  // The analysis's time now (between frames while playing), and dt seconds of playing.
+  clock: () => state.time,
+  advance: (dt) => advance(dt),
+  speed: () => state.speed,
+  // The markers (joints, supports, point masses) as drawn now: name, kind, position (m).
+  markers: () => markers.map(({ mesh, marker }) => ({ name: marker.name, kind: marker.kind, position: mesh.position.toArray() })),
+  // The colour of vertex i of body j before lighting: linear RGB in [0, 1], as three.js holds
+  // it (the screen shows its sRGB encoding).
+  vertexColor: (j, i) => { j = bodyIndex(j); vertexOf(j, i); return Array.from(drawn[j].geometry.getAttribute('color').array.slice(3 * i, 3 * i + 3)); },
   renders: () => frames,
   // The WebGL implementation drawing the page, and whether its edges are multisampled.
   rendering: () => ({ webgl: glName, software: softwareGl, antialias: !softwareGl }),
