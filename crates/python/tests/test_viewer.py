@@ -562,3 +562,76 @@ def test_the_markers_sit_on_their_joints_supports_and_point_masses(browser, tmp_
             assert np.linalg.norm(where - drawn[name], axis=1).min() < 1e-9, (name, t)
     page.check_drawn()
     page.check_clean()
+
+
+def test_turn_pan_zoom_and_the_views_along_the_axes(browser, solid_bar):
+    """The mouse and the view buttons, seen in the canvas's pixels: the bar's outline along each
+    axis has the VTU's proportions; a wheel zooms by its factor; a shift-drag carries the
+    drawing with the pointer; a drag turns it, and the opposite drag turns it back; fit brings
+    the whole model back into view."""
+    from io import BytesIO
+
+    image = pytest.importorskip("matplotlib.image")
+    page = Page(browser, solid_bar / "view.html")
+    page("v.select('bar-bending')")
+    # The legend and the value under the pointer lie over the canvas: hidden, the pixels are the drawing's.
+    page.page.add_style_tag(content="#legend, #probe { visibility: hidden !important; }")
+    canvas = page.page.locator("#view")
+    box = canvas.bounding_box()
+    centre = (box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+
+    def drawn():
+        pixels = image.imread(BytesIO(canvas.screenshot()))[..., :3]
+        return np.abs(pixels - pixels[0, 0]).sum(axis=-1) > 0.05
+
+    def extent(mask):
+        ys, xs = np.nonzero(mask)
+        return np.ptp(xs) + 1, np.ptp(ys) + 1
+
+    def centroid(mask):
+        ys, xs = np.nonzero(mask)
+        return np.array([xs.mean(), ys.mean()])
+
+    points, _ = vtu(solid_bar / "bar-bending" / "static.vtu")
+    size = np.ptp(points, axis=0)
+    # Along z the screen shows x across and y up, along x the y-z cross-section (perspective:
+    # the near face looks larger, so a tenth is allowed).
+    for view, (across, up) in {"z": (0, 1), "x": (2, 1), "y": (0, 2)}.items():
+        page.page.click(f"#views button[data-view='{view}']")
+        w, h = extent(drawn())
+        assert w / h == pytest.approx(size[across] / size[up], rel=0.1), (view, w, h, size)
+    page.page.click("#views button[data-view='iso']")
+    before = drawn()
+    # The wheel: the distance times exp(deltaY / 1000), the drawing's size divided by it.
+    page.page.mouse.move(*centre)
+    page.page.mouse.wheel(0, 300)
+    page.page.wait_for_timeout(100)
+    zoomed = drawn()
+    grown = np.hypot(*extent(zoomed)) / np.hypot(*extent(before))
+    assert grown == pytest.approx(math.exp(-0.3), rel=0.1), grown
+    # (Smaller, so that nothing leaves the canvas below.)
+    # Shift-drag: the drawing follows the pointer.
+    page.page.keyboard.down("Shift")
+    page.page.mouse.down()
+    page.page.mouse.move(centre[0] + 60, centre[1] + 30, steps=5)
+    page.page.mouse.up()
+    page.page.keyboard.up("Shift")
+    panned = drawn()
+    assert np.allclose(centroid(panned) - centroid(zoomed), [60, 30], atol=6), centroid(panned) - centroid(zoomed)
+    # A drag turns the drawing; the opposite drag turns it back.
+    page.page.mouse.move(*centre)
+    page.page.mouse.down()
+    page.page.mouse.move(centre[0] + 80, centre[1], steps=5)
+    page.page.mouse.up()
+    turned = drawn()
+    assert (turned != panned).mean() > 0.01
+    page.page.mouse.down()
+    page.page.mouse.move(*centre, steps=5)
+    page.page.mouse.up()
+    back = drawn()
+    assert (back != panned).mean() < 0.002
+    # Fit: the whole bar in view again, at the size it had.
+    page.page.click("#views button[data-view='fit']")
+    fitted = drawn()
+    assert np.hypot(*extent(fitted)) == pytest.approx(np.hypot(*extent(back)) / math.exp(-0.3), rel=0.1)
+    page.check_clean()
