@@ -9,8 +9,8 @@ Runs `flexmbs run` (the program from FLEXMBS_CLI, else target/release/flexmbs) o
 benchmarks/studies/viewer_solid_bar.toml (a 29 524-node hex8 bar, 6 modes, 1000 frames, a VTU
 frame every step: the series takes about 10 GB) in a temporary folder, deleted at the end
 unless `--keep DIR` names where to run. Then, with Playwright driving the system's Chromium
-(/usr/bin/chromium or FLEXMBS_CHROMIUM) launched as crates/python/tests/test_viewer.py
-launches it:
+(/usr/bin/chromium or FLEXMBS_CHROMIUM) launched as the browser tests launch it
+(crates/python/tests/chromium.py):
 
 - load: from `page.goto` to the page's `load` event, and to its first rendered frame
   (`flexmbsViewer.renders()` > 0);
@@ -38,18 +38,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--use-angle=swiftshader",
-    "--enable-unsafe-swiftshader",
-]
+sys.path.insert(0, str(ROOT / "crates" / "python" / "tests"))
+from chromium import ARGS, CHROMIUM, MISSING  # noqa: E402 (the tests' browser, launched alike)
+
 API = "window.flexmbsViewer"
 
 
@@ -157,9 +148,9 @@ def main():
     ap.add_argument("--keep", type=Path, help="run in this folder and keep the results (about 10 GB)")
     ap.add_argument("--results", type=Path, help="measure this existing results folder instead of running")
     args = ap.parse_args()
-    chromium = Path(os.environ.get("FLEXMBS_CHROMIUM", "/usr/bin/chromium"))
+    chromium = CHROMIUM
     if not chromium.is_file():
-        sys.exit(f"no Chromium at {chromium} (apt-get install chromium, or set FLEXMBS_CHROMIUM)")
+        sys.exit(MISSING)
 
     tmp = None
     if args.results:

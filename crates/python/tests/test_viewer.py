@@ -24,27 +24,15 @@ except ImportError:
         raise
     pytest.skip("Playwright is not installed (pip install playwright)", allow_module_level=True)
 
-CHROMIUM = Path(os.environ.get("FLEXMBS_CHROMIUM", "/usr/bin/chromium"))
-ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    # WebGL on the CPU: headless Chromium without a GPU.
-    "--use-angle=swiftshader",
-    "--enable-unsafe-swiftshader",
-]
+from chromium import ARGS, CHROMIUM, MISSING  # noqa: E402 (after the skip above)
+
 API = "window.flexmbsViewer"
 
 
 @pytest.fixture(scope="module")
 def browser():
     if not CHROMIUM.is_file():
-        (pytest.fail if REQUIRED else pytest.skip)(f"no Chromium at {CHROMIUM} (apt-get install chromium, or set FLEXMBS_CHROMIUM)")
+        (pytest.fail if REQUIRED else pytest.skip)(MISSING)
     with playwright.sync_playwright() as p:
         b = p.chromium.launch(executable_path=str(CHROMIUM), headless=True, args=ARGS)
         yield b
