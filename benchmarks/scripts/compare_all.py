@@ -127,7 +127,7 @@ def reduction(a, sizes, repeats):
             loads.append(load())
             f = result_fields(run([a.bench, "--bench"], env))
             ours[size].append(f)
-            log(f"reduction {size} flexmbs run {r + 1}: {f['reduce_s']} s, {f['peak_mb']} MB, factorisation {f['factor_s']} s (load {loads[-1]})")
+            log(f"reduction {size} flexmbs run {r + 1}: {f['reduce_s']} s, {f['peak_mib']} MiB, factorisation {f['factor_s']} s (load {loads[-1]})")
             if r == 0:  # read the text once into the .npz cache, outside the timed runs
                 run([sys.executable, "-c", f"import sys; sys.path.insert(0, {os.path.dirname(eigsh)!r}); import scipy_eigsh as s; "
                      f"s.read({mtx!r}, 'K_{size}'); s.read({mtx!r}, 'M_{size}')"])
@@ -135,26 +135,26 @@ def reduction(a, sizes, repeats):
                 loads.append(load())
                 f = result_fields(run([sys.executable, eigsh, "--solver", "pardiso", "--tol", tol, mtx, size]))
                 theirs[(size, tol)].append(f)
-                log(f"reduction {size} PARDISO eigsh tol {tol} run {r + 1}: {f['eigsh_s']} s, {f['peak_mb']} MB, Cholesky {f['factor_s']} s,"
+                log(f"reduction {size} PARDISO eigsh tol {tol} run {r + 1}: {f['eigsh_s']} s, {f['peak_mib']} MiB, Cholesky {f['factor_s']} s,"
                     f" LU {f['factor_lu_s']} s, eigenvalue difference {f['difference']} (load {loads[-1]})")
     for name in os.listdir(mtx):  # the matrices take GBs at 200k dofs
         if name.endswith((".mtx", ".npz")):
             os.remove(os.path.join(mtx, name))
     med = lambda rows, k: statistics.median(float(x[k]) for x in rows)
     lines = [
-        "| block | dofs | run | wall [s] | CPU [s] | peak RSS [MB] | factorisation [s] | eigenvalues: largest relative difference to flexmbs | wall time / flexmbs | memory / flexmbs |",
+        "| block | dofs | run | wall [s] | CPU [s] | peak RSS [MiB] | factorisation [s] | eigenvalues: largest relative difference to flexmbs | wall time / flexmbs | memory / flexmbs |",
         "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for size in sizes:
         o = ours[size]
-        t_o, m_o = med(o, "reduce_s"), med(o, "peak_mb")
+        t_o, m_o = med(o, "reduce_s"), med(o, "peak_mib")
         lines.append(f"| {size} | {o[0]['dofs']} | flexmbs, whole reduction | {t_o:.2f} | {med(o, 'reduce_cpu_s'):.2f} | {m_o:.0f} | {med(o, 'factor_s'):.2f} | | 1 | 1 |")
         for tol in tols:
             t = theirs[(size, tol)]
             diff = max(float(x["difference"]) for x in t)
             lines.append(
-                f"| | | eigsh + PARDISO, tol {tol} | {med(t, 'eigsh_s'):.2f} | {med(t, 'eigsh_cpu_s'):.2f} | {med(t, 'peak_mb'):.0f} | {med(t, 'factor_s'):.2f} |"
-                f" {diff:.1e}{' (modes missed)' if diff > 1e-6 else ''} | {med(t, 'eigsh_s') / t_o:.2f}x | {med(t, 'peak_mb') / m_o:.2f}x |"
+                f"| | | eigsh + PARDISO, tol {tol} | {med(t, 'eigsh_s'):.2f} | {med(t, 'eigsh_cpu_s'):.2f} | {med(t, 'peak_mib'):.0f} | {med(t, 'factor_s'):.2f} |"
+                f" {diff:.1e}{' (modes missed)' if diff > 1e-6 else ''} | {med(t, 'eigsh_s') / t_o:.2f}x | {med(t, 'peak_mib') / m_o:.2f}x |"
             )
         lu = [x for tol in tols for x in theirs[(size, tol)]]
         lines.append(f"| | | PARDISO LU alone (pypardiso's default, matrix type 11) | | | | {med(lu, 'factor_lu_s'):.2f} | | | |")

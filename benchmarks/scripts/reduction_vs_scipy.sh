@@ -79,7 +79,7 @@ lines = [
     "the reduction; scipy: including the matrices read). Residual: max_j |K phi - lambda M phi| / |K phi| (scaled as",
     "`reduction::eigen::relative_residual`). Difference: largest relative difference between the two sets of 20 eigenvalues.",
     "",
-    "| block | dofs | ours: whole reduction [s] | peak RSS [MB] | eigen only [s] | worst residual | scipy eigsh [s] | scipy peak RSS [MB] | scipy worst residual | eigenvalue difference | time ratio (scipy / our whole reduction) | memory ratio |",
+    "| block | dofs | ours: whole reduction [s] | peak RSS [MiB] | eigen only [s] | worst residual | scipy eigsh [s] | scipy peak RSS [MiB] | scipy worst residual | eigenvalue difference | time ratio (scipy / our whole reduction) | memory ratio |",
     "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
 ]
 for size in sizes.split(","):
@@ -92,10 +92,10 @@ for size in sizes.split(","):
     sc = ["-"] * 4
     if t is not None:
         ratio = f"{float(t['eigsh_s']) / float(o['reduce_s']):.1f}x"
-        mem = f"{float(t['peak_mb']) / float(o['peak_mb']):.1f}x"
-        sc = [f"{float(t['eigsh_s']):.2f}", t["peak_mb"], f"{float(t['worst_residual']):.1e}", f"{float(t['difference']):.1e}"]
+        mem = f"{float(t['peak_mib']) / float(o['peak_mib']):.1f}x"
+        sc = [f"{float(t['eigsh_s']):.2f}", t["peak_mib"], f"{float(t['worst_residual']):.1e}", f"{float(t['difference']):.1e}"]
     lines.append(
-        f"| {size} | {o['dofs']} | {float(o['reduce_s']):.2f} | {o['peak_mb']} | {float(o['eigen_s']):.2f} | "
+        f"| {size} | {o['dofs']} | {float(o['reduce_s']):.2f} | {o['peak_mib']} | {float(o['eigen_s']):.2f} | "
         f"{float(o['worst_residual']):.1e} | {' | '.join(sc)} | {ratio} | {mem} |"
     )
 lines += [

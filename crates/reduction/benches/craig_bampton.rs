@@ -41,12 +41,13 @@ use reduction::{FactorPrecision, ReducedBody, Shift, Stage};
 use std::path::Path;
 use std::time::Instant;
 
-fn peak_rss_mb() -> f64 {
-    status_mb("VmHWM")
+fn peak_rss_mib() -> f64 {
+    status_mib("VmHWM")
 }
 
-/// A memory figure of `/proc/self/status` (`VmHWM` peak, `VmRSS` current) in MB.
-fn status_mb(field: &str) -> f64 {
+/// A memory figure of `/proc/self/status` (`VmHWM` peak, `VmRSS` current) in MiB (2^20 bytes;
+/// the file gives kB of 1024 bytes).
+fn status_mib(field: &str) -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
@@ -119,7 +120,7 @@ fn run_one(size: &str, ordering: FillOrdering) {
                 _ => "other",
             };
             if marks.last().map(|m| m.0) != Some(name) {
-                marks.push((name, t, cpu_seconds(), status_mb("VmRSS")));
+                marks.push((name, t, cpu_seconds(), status_mib("VmRSS")));
             }
         },
     )
@@ -135,7 +136,7 @@ fn run_one(size: &str, ordering: FillOrdering) {
         stages += &format!("{name} {:.2}/{:.2}, ", end - t, cpu_next - cpu);
     }
     println!(
-        "{size:>5} {:<17} {ex} x {ey} x {ez} hex8, {n_free} free dofs: model {t_model:.2} s, reduce {total:.2} s (stage wall/CPU s: {stages}{applications} operator applications, {} solves with the factor per constraint mode, {:.2} per Lanczos vector), factor {:.1} M values ({:.2} GB in {} precision, {:.0} Gflop), peak RSS {:.0} MB (RSS at stage start, MB: {rss}), f1 = {:.4} Hz",
+        "{size:>5} {:<17} {ex} x {ey} x {ez} hex8, {n_free} free dofs: model {t_model:.2} s, reduce {total:.2} s (stage wall/CPU s: {stages}{applications} operator applications, {} solves with the factor per constraint mode, {:.2} per Lanczos vector), factor {:.1} M values ({:.2} GB in {} precision, {:.0} Gflop), peak RSS {:.0} MiB (RSS at stage start, MiB: {rss}), f1 = {:.4} Hz",
         format!("{:?}", factor.2),
         solves.0,
         solves.1 as f64 / applications.max(1) as f64,
@@ -143,7 +144,7 @@ fn run_one(size: &str, ordering: FillOrdering) {
         factor.0 as f64 * factor.3.bytes() as f64 / 1e9,
         factor.3.name(),
         factor.1 / 1e9,
-        peak_rss_mb(),
+        peak_rss_mib(),
         body.fixed_interface_omega[0] / (2.0 * std::f64::consts::PI)
     );
     if let Ok(dir) = std::env::var("REDUCTION_CB_EIGENVALUES") {
@@ -160,9 +161,9 @@ fn run_one(size: &str, ordering: FillOrdering) {
                 next.map_or(cpu_end, |m| m.2) - marks[k].2,
             )
         });
-    let peak = peak_rss_mb();
+    let peak = peak_rss_mib();
     let mut result = format!(
-        "RESULT size={size} dofs={n_free} reduce_s={total:.3} reduce_cpu_s={:.3} peak_mb={peak:.0} factor_s={:.3} factor_cpu_s={:.3}",
+        "RESULT size={size} dofs={n_free} reduce_s={total:.3} reduce_cpu_s={:.3} peak_mib={peak:.0} factor_s={:.3} factor_cpu_s={:.3}",
         cpu_end - marks.first().map_or(cpu_end, |m| m.2),
         factor_s.0,
         factor_s.1

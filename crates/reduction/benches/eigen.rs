@@ -165,7 +165,7 @@ fn run(ex: usize, ey: usize, ez: usize) {
     println!("factorisation (symbolic + numeric): {t_factor:>10.0} {cpu_factor:>10.0}");
     println!("Lanczos + Rayleigh-Ritz, {N_MODES} modes:   {t_eig:>10.0} {cpu_eig:>10.0}");
     println!("total:                              {t_total:>10.0} {cpu_total:>10.0}");
-    println!("peak RSS (VmHWM, whole process):     {:>10.0} MB", peak_rss_mb());
+    println!("peak RSS (VmHWM, whole process):     {:>10.0} MiB", peak_rss_mib());
     println!("operator applications (L^-T, M, L^-1): {}", sol.operator_applications);
     println!("worst relative residual: {worst:.2e}");
     println!("frequencies (Hz): {}", f.join(" "));
@@ -227,7 +227,7 @@ fn cpu_ms() -> f64 {
 }
 
 /// Peak resident set size of this process (Linux `/proc/self/status`), 0 elsewhere.
-fn peak_rss_mb() -> f64 {
+fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {

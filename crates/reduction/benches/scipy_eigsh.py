@@ -41,7 +41,7 @@ import scipy.sparse.linalg
 K_MODES = 20
 
 
-def peak_rss_mb():
+def peak_rss_mib():
     # ru_maxrss: kilobytes on Linux, bytes on macOS.
     r = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return r / 1024.0 if sys.platform != "darwin" else r / 1024.0**2
@@ -106,7 +106,7 @@ def run(folder, n, solver="superlu", tol=0.0):
     K = read(folder, f"K_{n}")
     M = read(folder, f"M_{n}")
     t_read = time.perf_counter() - t
-    rss_before = peak_rss_mb()
+    rss_before = peak_rss_mib()
     cpu = cpu_seconds()
     t = time.perf_counter()
     t_factor = float("nan")
@@ -116,7 +116,7 @@ def run(folder, n, solver="superlu", tol=0.0):
         w, v = scipy.sparse.linalg.eigsh(K, k=K_MODES, M=M, sigma=0.0, which="LM", tol=tol)
     t_eig = time.perf_counter() - t
     cpu = cpu_seconds() - cpu
-    peak = peak_rss_mb()
+    peak = peak_rss_mib()
     order = np.argsort(w)
     w = w[order]
     v = v[:, order]
@@ -129,7 +129,7 @@ def run(folder, n, solver="superlu", tol=0.0):
     what = "PARDISO Cholesky" if solver == "pardiso" else "SuperLU"
     print(f"eigsh(K, M=M, sigma=0, k={K_MODES}, tol={tol:g}) incl. {what} factorisation: {t_eig * 1e3:10.0f} ms "
           f"(CPU user+sys {cpu * 1e3:.0f} ms)")
-    print(f"peak RSS (ru_maxrss, whole process): {peak:10.0f} MB (after reading the matrices: {rss_before:.0f} MB)")
+    print(f"peak RSS (ru_maxrss, whole process): {peak:10.0f} MiB (after reading the matrices: {rss_before:.0f} MiB)")
     t_lu = float("nan")
     if solver == "pardiso":
         t_lu = pardiso_lu_seconds(K)
@@ -143,7 +143,7 @@ def run(folder, n, solver="superlu", tol=0.0):
         rel = np.max(np.abs(w_ours - w) / np.abs(w))
         print(f"largest relative difference to reduction's eigenvalues: {rel:.2e}")
     # One machine-readable line for benchmarks/scripts/reduction_vs_scipy.sh.
-    print(f"RESULT size={n} n={K.shape[0]} solver={solver} eigsh_s={t_eig:.3f} eigsh_cpu_s={cpu:.3f} peak_mb={peak:.0f} "
+    print(f"RESULT size={n} n={K.shape[0]} solver={solver} eigsh_s={t_eig:.3f} eigsh_cpu_s={cpu:.3f} peak_mib={peak:.0f} "
           f"worst_residual={max(res):.3e} difference={rel:.3e} factor_s={t_factor:.3f} factor_lu_s={t_lu:.3f}")
 
 
