@@ -255,7 +255,7 @@ pub fn default_results_dir(study: &Path) -> PathBuf {
 /// The start section of a dynamic analysis that starts at t = 0: how each coordinate got its
 /// position and rate (`mbs::System::start_report`), or the choice to start at rest. Lines for
 /// the report, and the same as JSON for `summary.json`.
-pub fn start_section(report: &mbs::StartReport, at_rest: bool) -> (Vec<String>, serde_json::Value) {
+pub(crate) fn start_section(report: &mbs::StartReport, at_rest: bool) -> (Vec<String>, serde_json::Value) {
     let mut lines = Vec::new();
     // The report lists the values above round-off of the largest (the start's solve leaves
     // components of about 1e-14 of it where the motion has none); summary.json keeps them all.
