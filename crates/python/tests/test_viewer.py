@@ -623,3 +623,57 @@ def test_turn_pan_zoom_and_the_views_along_the_axes(browser, solid_bar):
     fitted = drawn()
     assert np.hypot(*extent(fitted)) == pytest.approx(np.hypot(*extent(back)) / math.exp(-0.3), rel=0.1)
     page.check_clean()
+
+
+def test_buckling_modes_animate_with_their_load_factors(browser, tmp_path):
+    """A clamped steel column pushed at its tip: each buckling mode is labelled with the load
+    factor of load_factors.csv, and drawn as the shape of its VTU file, about the loaded
+    column and scaled."""
+    import subprocess
+
+    from conftest import EXAMPLES, cli_path
+
+    text = (EXAMPLES / "cantilever.toml").read_text()
+    study = text[: text.index("[[analyses]]")] + (
+        '[[bodies]]\nname = "column"\npart = "beam"\n\n'
+        '[[joints]]\nname = "base"\ntype = "fixed"\nbetween = ["ground", "column.root"]\n\n'
+        '[[loads]]\nname = "push"\ntype = "point"\nat = "column.tip"\nforce = [-345.0, 0.0, 0.0]\n\n'
+        '[[analyses]]\ntype = "buckling"\nname = "buckling"\nmodes = 2\n'
+    )
+    (tmp_path / "column.toml").write_text(study)
+    done = subprocess.run([str(cli_path()), "run", "column.toml"], capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    res = tmp_path / "column-results" / "buckling"
+    page = Page(browser, tmp_path / "column-results" / "view.html")
+    assert page("v.analyses()") == ["buckling"]
+    factors = np.loadtxt(res / "load_factors.csv", delimiter=",", skiprows=1, usecols=1, ndmin=1)
+    modes = page("v.modes()")
+    assert [m["label"] for m in modes] == [f"mode {k + 1}: load factor {f:.6f}" for k, f in enumerate(factors)]
+    page("v.pause()")
+    nodes = sorted({page(f"v.nodeOfVertex(0, {i})") for i in range(page("v.vertexCount(0)"))})
+    for k in range(len(modes)):
+        page(f"v.setMode({k})")
+        points, fields = vtu(res / f"mode_{k + 1:03}.vtu")
+        shape = fields["displacement"].reshape(-1, 3)[nodes]
+        page("v.setPhase(0)")
+        rest = np.array([page.node_position(0, n) for n in nodes])
+        page(f"v.setPhase({math.pi / 2})")
+        drawn = np.array([page.node_position(0, n) for n in nodes]) - rest
+        ratio = np.sum(drawn * shape) / np.sum(shape**2)
+        assert ratio != 0
+        assert np.allclose(drawn, ratio * shape, rtol=0, atol=1e-4 * np.abs(drawn).max()), k
+        # Sideways: the column (along x) bends, its tip moving across it, a tenth of its length.
+        tip = np.argmax(points[nodes, 0])
+        assert abs(drawn[tip, 0]) < 0.05 * np.linalg.norm(drawn[tip])
+        assert np.linalg.norm(drawn[tip]) == pytest.approx(0.1 * 2.0 / 2, rel=0.05)
+        # The scale factor enlarges the drawn mode as the linear displacement field it is: the
+        # clamped root stays where it is at any scale.
+        page("v.setScale(10)")
+        ten = np.array([page.node_position(0, n) for n in nodes]) - rest
+        assert np.allclose(ten, 10 * drawn, rtol=0, atol=1e-5 * np.abs(drawn).max()), k
+        root = np.argmin(points[nodes, 0])
+        assert np.linalg.norm(ten[root]) < 1e-5 * np.linalg.norm(ten[tip]), (k, ten[root])
+        page("v.setScale(1)")
+    assert page.page.locator("#mode option").nth(0).text_content() == modes[0]["label"]
+    page.check_drawn()
+    page.check_clean()
