@@ -145,10 +145,15 @@ impl Body {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Marker {
     pub name: String,
-    /// `joint`, `ground`, `mass`.
+    /// `joint`, `ground`, `mass`; on the page of a model before it runs also `interface`,
+    /// `load` (a force) and `moment`.
     pub kind: String,
     pub body: Option<usize>,
     pub position: [f64; 3],
+    /// A load's direction (world axes), drawn as an arrow onto the point (a moment's: along
+    /// its axis); none for the other kinds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f64; 3]>,
 }
 
 /// The pose of every body at one key (time, load factor or mode number).

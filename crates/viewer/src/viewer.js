@@ -238,6 +238,10 @@ const rampLinear = Array.from({ length: 256 }, (_, k) => {
 });
 const noValue = (() => { const c = new THREE.Color().setRGB(0.75, 0.75, 0.75, THREE.SRGBColorSpace); return [c.r, c.g, c.b]; })();
 
+// The markers' colours by kind, shown in the legend's key.
+const markerColors = { joint: 0xd62728, ground: 0x333333, mass: 0x888888, interface: 0x2ca02c, load: 0xff7f0e, moment: 0x9467bd };
+const markerNames = { joint: 'joint', ground: 'ground, support', mass: 'point mass', interface: 'interface', load: 'load', moment: 'moment' };
+
 let drawn = [];   // per body: { mesh, lines, points, pos (Float64Array), geometry }
 let markers = []; // per marker: { mesh, marker }
 let bounds = { center: new THREE.Vector3(), radius: 1 };
@@ -292,9 +296,19 @@ function buildAnalysis(a) {
   bounds.radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
   const size = bounds.radius * 0.012;
   for (const m of a.markers) {
-    const geom = m.kind === 'ground' ? new THREE.BoxGeometry(2 * size, 2 * size, 2 * size) : new THREE.SphereGeometry(size, 12, 8);
-    const color = m.kind === 'ground' ? 0x333333 : m.kind === 'joint' ? 0xd62728 : 0x888888;
-    const mesh = new THREE.Mesh(geom, new THREE.MeshLambertMaterial({ color }));
+    const color = markerColors[m.kind] ?? markerColors.mass;
+    let mesh;
+    if (m.direction) {
+      // A force: an arrow onto its point; a moment: an arrow from its point along its axis.
+      const dir = new THREE.Vector3(...m.direction).normalize();
+      const len = bounds.radius * 0.15;
+      const tail = m.kind === 'moment' ? new THREE.Vector3() : dir.clone().multiplyScalar(-len);
+      mesh = new THREE.Group();
+      mesh.add(new THREE.ArrowHelper(dir, tail, len, color, 0.3 * len, 0.15 * len));
+    } else {
+      const geom = m.kind === 'ground' ? new THREE.BoxGeometry(2 * size, 2 * size, 2 * size) : new THREE.SphereGeometry(m.kind === 'interface' ? 0.7 * size : size, 12, 8);
+      mesh = new THREE.Mesh(geom, new THREE.MeshLambertMaterial({ color }));
+    }
     group.add(mesh);
     markers.push({ mesh, marker: m });
   }
@@ -513,6 +527,14 @@ function legend(field, lo, hi) {
       row.appendChild(document.createTextNode(b.name));
       box.appendChild(row);
     });
+    // The kinds of marker drawn, each with its colour.
+    const kinds = [...new Set(a.markers.map((m) => m.kind))].filter((k) => k in markerNames);
+    if (kinds.length) {
+      const key = document.createElement('div');
+      key.className = 'markers';
+      key.innerHTML = kinds.map((k) => `<span class="marker" data-kind="${k}"><span style="display:inline-block;width:8px;height:8px;border-radius:4px;background:#${markerColors[k].toString(16).padStart(6, '0')};margin:0 4px 0 8px"></span>${markerNames[k]}</span>`).join('');
+      box.appendChild(key);
+    }
     return;
   }
   box.innerHTML = '<div id="legendTitle"></div><canvas id="legendBar" width="180" height="12"></canvas><div class="ends"><span id="legendMin"></span><span id="legendMax"></span></div>';
@@ -740,7 +762,7 @@ window.flexmbsViewer = {
   advance: (dt) => advance(dt),
   speed: () => state.speed,
   // The markers (joints, supports, point masses) as drawn now: name, kind, position (m).
-  markers: () => markers.map(({ mesh, marker }) => ({ name: marker.name, kind: marker.kind, position: mesh.position.toArray() })),
+  markers: () => markers.map(({ mesh, marker }) => ({ name: marker.name, kind: marker.kind, position: mesh.position.toArray(), direction: marker.direction ?? null })),
   // The colour of vertex i of body j before lighting: linear RGB in [0, 1], as three.js holds
   // it (the screen shows its sRGB encoding).
   vertexColor: (j, i) => { j = bodyIndex(j); vertexOf(j, i); return Array.from(drawn[j].geometry.getAttribute('color').array.slice(3 * i, 3 * i + 3)); },

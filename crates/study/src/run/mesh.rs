@@ -3,7 +3,7 @@
 
 #![allow(non_snake_case)]
 
-use crate::build::BuiltMechanism;
+use crate::build::{BuiltMechanism, LoadTarget};
 use crate::error::{BoxError, ResultExt};
 use crate::mesh::{CellRole, VtuMesh};
 use crate::output::observer::{Observer, Series};
@@ -556,6 +556,7 @@ fn view_bodies(b: &BuiltMechanism, sys: &System) -> (Vec<view::Body>, Vec<view::
             kind: kind.to_string(),
             body: None,
             position: [p.x, p.y, p.z],
+            direction: None,
         });
         marker_nodes.push(node);
     };
@@ -620,5 +621,86 @@ pub fn model_page(study: &crate::Study, opts: &crate::Options, obs: &mut dyn Obs
     mw.write(&mut scene, 0.0, &sys, &state, &b)?;
     let mut scene = scene.scene();
     scene.title = format!("{title}: the model before it runs");
+    let markers = model_markers(&b, &sys, &state)?;
+    for a in &mut scene.analyses {
+        for (marker, at) in markers.iter().cloned() {
+            a.markers.push(marker);
+            a.frames.iter_mut().for_each(|f| f.markers.push(at));
+        }
+    }
     Ok(viewer::page(&scene))
+}
+
+/// The markers that the page of a model before it runs adds, with their positions there: each
+/// flexible body's interfaces, and the study's point loads as arrows in the direction of their
+/// reference vectors (a load at a load point inside a body moves with the body's frame).
+fn model_markers(
+    b: &BuiltMechanism,
+    sys: &System,
+    state: &mbs::State,
+) -> Result<Vec<(view::Marker, [f64; 3])>, BoxError> {
+    let motions = sys.node_motions(state);
+    let at_node = |n: NodeId| {
+        let r = motions[n.index()].r;
+        [r.x, r.y, r.z]
+    };
+    let mut out = Vec::new();
+    for body in &b.bodies {
+        for (interface, &node) in body.reduced.interfaces.iter().zip(&body.nodes) {
+            let marker = view::Marker {
+                name: format!("{}.{}", body.name, interface.name),
+                kind: "interface".into(),
+                body: None,
+                position: at_node(node),
+                direction: None,
+            };
+            out.push((marker, at_node(node)));
+        }
+    }
+    for load in &b.loads {
+        let (force, moment, body, position, world) = match &load.target {
+            LoadTarget::Node(entries) => {
+                let (mut f, mut m) = (Vector3::zeros(), Vector3::zeros());
+                for &(kind, k) in entries {
+                    match kind {
+                        mbs::LoadKind::Force => f += b.model.loads[k].value,
+                        mbs::LoadKind::Moment => m += b.model.loads[k].value,
+                    }
+                }
+                let Some(&(_, k)) = entries.first() else { continue };
+                let x = at_node(b.model.loads[k].node);
+                (f, m, None, x, x)
+            }
+            LoadTarget::Body(k) => {
+                let l = &b.model.body_loads[*k];
+                let Some(j) = b.bodies.iter().position(|body| body.id == l.body) else {
+                    continue;
+                };
+                let p = Vector3::from(b.bodies[j].reduced.load_points[l.point].position);
+                let origin = sys
+                    .superelement(l.body)
+                    .map_or(Vector3::zeros(), |se| se.frame_origin());
+                let world = match sys.body_kinematics(state, l.body)? {
+                    Some((kin, _)) => kin.frame.r + kin.frame.R * (p - origin),
+                    None => p,
+                };
+                let x = p - origin;
+                (l.force, l.moment, Some(j), [x.x, x.y, x.z], [world.x, world.y, world.z])
+            }
+        };
+        let (kind, d) = if force.norm() > 0.0 {
+            ("load", force)
+        } else {
+            ("moment", moment)
+        };
+        let marker = view::Marker {
+            name: load.name.clone(),
+            kind: kind.into(),
+            body,
+            position,
+            direction: (d.norm() > 0.0).then(|| [d.x, d.y, d.z]),
+        };
+        out.push((marker, world));
+    }
+    Ok(out)
 }
