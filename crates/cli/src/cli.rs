@@ -17,6 +17,7 @@ usage:
   flexmbs view RESULTS_DIR           write the results page view.html of a results folder again
                                      (every run writes it: the bodies moving, the modes, the
                                      sensors; opens in a browser, no network) and print its path
+  flexmbs view STUDY.toml            write STEM-model.html: the study's mechanism before it runs
   flexmbs check STUDY.toml           validate a study file, run nothing
   flexmbs reduce STUDY.toml [--part NAME]
                                      reduce the parts that have a [parts.reduction] (or the one
@@ -86,11 +87,16 @@ the flexible planar slider-crank (validation problem C2), into ./slider_crank-re
         "view" => {
             "\
 usage: flexmbs view RESULTS_DIR
+       flexmbs view STUDY.toml [--cache DIR]
 
 Writes the results page RESULTS_DIR/view.html again from the data it holds, with this version
 of flexmbs, and prints its path. Every `flexmbs run` writes the page: one self-contained HTML
 file (no server, no network request) with the bodies moving over time, the mode shapes, the
-stresses and the sensors of every analysis. Open it in a browser."
+stresses and the sensors of every analysis. Open it in a browser.
+
+Given a study file, writes the page of its mechanism before it runs, STEM-model.html beside the
+study: the bodies at the initial state, their interfaces, the joints, supports, point masses
+and loads (the parts reduced through the cache first, as `flexmbs run` does)."
         }
         "check" => {
             "\
@@ -362,6 +368,25 @@ fn one_file(positional: &[String], command: &str, what: &str) -> Result<PathBuf,
     }
 }
 
+/// `flexmbs view STUDY.toml`: the page of the model before it runs, written beside the study
+/// as `STEM-model.html` (the parts reduced through the cache first).
+fn model_page(path: &Path, options: &Options) -> Result<PathBuf, BoxError> {
+    let study = load(path)?;
+    let html = study::model_page(&study, options, &mut Console::default())?;
+    let stem = path.file_stem().map_or("study".into(), |s| s.to_string_lossy());
+    let out = path.with_file_name(format!("{stem}-model.html"));
+    // A file of that name that is not a page of ours is the user's: left alone.
+    if out.exists() && !std::fs::read_to_string(&out).is_ok_and(|s| s.contains(r#"id="flexmbs-data""#)) {
+        return Err(format!(
+            "refusing to overwrite {}: it is not a page flexmbs wrote; it is left as it is (move it, or copy the study under another name)",
+            out.display()
+        )
+        .into());
+    }
+    std::fs::write(&out, html).map_err(|e| format!("{}: cannot write the model's page: {e}", out.display()))?;
+    Ok(out)
+}
+
 fn load(path: &std::path::Path) -> Result<study::Study, BoxError> {
     let study = study::load(path)?;
     for w in &study.warnings {
@@ -502,9 +527,15 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             Ok(())
         }
         "view" => {
-            let (positional, _) = parse(rest, &[])?;
-            let dir = one_file(&positional, "view", "a results folder")?;
-            let page = study::output::folder::rewrite_view(&dir)?;
+            let (positional, options) = parse(rest, &["cache"])?;
+            let path = one_file(&positional, "view", "a results folder or a study file")?;
+            let page = if !path.exists() {
+                return Err(format!("{}: no such results folder or study file", path.display()).into());
+            } else if path.is_dir() {
+                study::output::folder::rewrite_view(&path)?
+            } else {
+                model_page(&path, &run_options(&options)?)?
+            };
             crate::say!("{}", page.display());
             Ok(())
         }

@@ -356,5 +356,34 @@ fn the_results_page_is_written_by_every_run_and_again_by_flexmbs_view() {
     );
     let out = flexmbs(&dir, &["view", "nowhere"]);
     assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("nowhere: no such results folder or study file"),
+        "{}",
+        out.stderr
+    );
+    std::fs::create_dir(dir.join("empty")).unwrap();
+    let out = flexmbs(&dir, &["view", "empty"]);
+    assert_eq!(out.code, 2);
     assert!(out.stderr.contains("view.html not found"), "{}", out.stderr);
+}
+
+#[test]
+fn flexmbs_view_of_a_study_writes_the_model_before_it_runs_and_keeps_a_users_file() {
+    let dir = examples_copy("view-model");
+    std::fs::copy(dir.join("double_pendulum.toml"), dir.join("pendulum.toml")).unwrap();
+    let out = flexmbs(&dir, &["view", "pendulum.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert_eq!(out.stdout.trim(), "pendulum-model.html");
+    let page = std::fs::read_to_string(dir.join("pendulum-model.html")).unwrap();
+    assert!(page.contains("the model before it runs"), "{}", &page[..200]);
+    // Written again over its own page; a user's file of that name is refused and kept.
+    assert_eq!(flexmbs(&dir, &["view", "pendulum.toml"]).code, 0);
+    std::fs::write(dir.join("pendulum-model.html"), "my notes").unwrap();
+    let out = flexmbs(&dir, &["view", "pendulum.toml"]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("refusing to overwrite"), "{}", out.stderr);
+    assert_eq!(
+        std::fs::read_to_string(dir.join("pendulum-model.html")).unwrap(),
+        "my notes"
+    );
 }
