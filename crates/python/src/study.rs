@@ -479,8 +479,8 @@ impl Study {
     }
 
     /// The model before it runs, on a results page (`view.html`'s viewer): the mechanism's
-    /// bodies, interfaces, joints, supports and point masses at the initial state, the parts
-    /// reduced through the cache (`cache`, default `.flexmbs-cache` beside the study file).
+    /// bodies, interfaces, joints, supports, point masses and loads at the initial state, the
+    /// parts reduced through the cache (`cache`, default `.flexmbs-cache` beside the study file).
     /// Displayed inline in Jupyter when there is a notebook kernel; returns the page's HTML
     /// (a `flexmbs.Page`, a `str`).
     #[pyo3(signature = (cache=None, height=560))]

@@ -373,7 +373,7 @@ def test_colour_by_body_follows_the_legend(browser, slider_crank):
     page = Page(browser, slider_crank / "view.html")
     page.page.select_option("#color", "body")
     rows = page.page.evaluate(
-        "() => Array.from(document.querySelectorAll('#legend > div')).map((r) =>"
+        "() => Array.from(document.querySelectorAll('#legend > div:not(.markers)')).map((r) =>"
         " [r.textContent, getComputedStyle(r.querySelector('span')).backgroundColor])"
     )
     bodies = page("v.bodies()")
@@ -676,4 +676,49 @@ def test_buckling_modes_animate_with_their_load_factors(browser, tmp_path):
         page("v.setScale(1)")
     assert page.page.locator("#mode option").nth(0).text_content() == modes[0]["label"]
     page.check_drawn()
+    page.check_clean()
+
+
+def test_the_model_before_it_runs_shows_interfaces_supports_and_loads(browser, tmp_path):
+    """`flexmbs view STUDY.toml`: the page of a clamped column before it runs, its interfaces,
+    the clamp and its two loads (one at an interface node, one at a load point inside the
+    body) as markers where the study puts them, the loads as arrows along their forces."""
+    import subprocess
+
+    from conftest import EXAMPLES, cli_path
+
+    text = (EXAMPLES / "cantilever.toml").read_text()
+    study = text[: text.index("[[analyses]]")].replace(
+        "modes = 4\n", 'modes = 4\nload_points = [{ name = "mid", node_at = [1.0, 0.0, 0.0] }]\n'
+    ) + (
+        '[[bodies]]\nname = "column"\npart = "beam"\n\n'
+        '[[joints]]\nname = "base"\ntype = "fixed"\nbetween = ["ground", "column.root"]\n\n'
+        '[[loads]]\nname = "push"\ntype = "point"\nat = "column.tip"\nforce = [-345.0, 0.0, 0.0]\n\n'
+        '[[loads]]\nname = "side"\ntype = "point"\nat = "column.mid"\nforce = [0.0, 0.0, -10.0]\n\n'
+        '[[analyses]]\ntype = "equilibrium"\nname = "eq"\n'
+    )
+    (tmp_path / "column.toml").write_text(study)
+    done = subprocess.run([str(cli_path()), "view", "column.toml"], capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "column-model.html"
+    page = Page(browser, tmp_path / "column-model.html")
+    assert page("v.bodies()") == ["column"] and page("v.frameCount()") == 1
+    markers = page("v.markers()")
+    drawn = {m["name"]: m for m in markers if m["kind"] != "ground"}
+    expected = {
+        "column.root": ("interface", [0, 0, 0], None),
+        "column.tip": ("interface", [2, 0, 0], None),
+        "push": ("load", [2, 0, 0], [-345, 0, 0]),
+        "side": ("load", [1, 0, 0], [0, 0, -10]),
+    }
+    for name, (kind, at, direction) in expected.items():
+        m = drawn[name]
+        assert m["kind"] == kind and np.allclose(m["position"], at, atol=1e-12), m
+        assert (m["direction"] is None) == (direction is None) and (direction is None or np.allclose(m["direction"], direction)), m
+    # The clamp: a support at the root.
+    assert [(m["name"], m["position"]) for m in markers if m["kind"] == "ground"] == [("column.root", [0, 0, 0])]
+    key = page.page.locator("#legend .markers").text_content()
+    assert all(k in key for k in ["interface", "ground, support", "load"]), key
+    page.check_drawn()
+    page.screenshot("model")
     page.check_clean()

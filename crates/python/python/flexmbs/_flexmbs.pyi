@@ -1280,8 +1280,8 @@ class Study:
         `{part name: ReducedBody}`."""
     def show(self, cache: Optional[_Path] = None, height: int = 560) -> Page:
         """The model before it runs, on a results page (`view.html`'s viewer): the mechanism's
-        bodies, interfaces, joints, supports and point masses at the initial state, the parts
-        reduced through the cache (`cache`, default `.flexmbs-cache` beside the study file).
+        bodies, interfaces, joints, supports, point masses and loads at the initial state, the
+        parts reduced through the cache (`cache`, default `.flexmbs-cache` beside the study file).
         Displayed inline in Jupyter when there is a notebook kernel; returns the page's HTML
         (a `flexmbs.Page`, a `str`)."""
     def simulation(self, analysis: Optional[str] = None, cache: Optional[_Path] = None, results_dir: Optional[_Path] = None, forces: Optional[ForceLaw] = None) -> "Simulation":
