@@ -625,22 +625,28 @@ def test_turn_pan_zoom_and_the_views_along_the_axes(browser, solid_bar):
     page.check_clean()
 
 
+def column_study(rest: str) -> str:
+    """examples/cantilever.toml's beam as a column, 2 m along x, clamped at its root and pushed
+    at its tip by 345 N (about a tenth of its Euler load), then `rest`."""
+    from conftest import EXAMPLES
+
+    text = (EXAMPLES / "cantilever.toml").read_text()
+    return text[: text.index("[[analyses]]")] + (
+        '[[bodies]]\nname = "column"\npart = "beam"\n\n'
+        '[[joints]]\nname = "base"\ntype = "fixed"\nbetween = ["ground", "column.root"]\n\n'
+        '[[loads]]\nname = "push"\ntype = "point"\nat = "column.tip"\nforce = [-345.0, 0.0, 0.0]\n\n'
+    ) + rest
+
+
 def test_buckling_modes_animate_with_their_load_factors(browser, tmp_path):
     """A clamped steel column pushed at its tip: each buckling mode is labelled with the load
     factor of load_factors.csv, and drawn as the shape of its VTU file, about the loaded
     column and scaled."""
     import subprocess
 
-    from conftest import EXAMPLES, cli_path
+    from conftest import cli_path
 
-    text = (EXAMPLES / "cantilever.toml").read_text()
-    study = text[: text.index("[[analyses]]")] + (
-        '[[bodies]]\nname = "column"\npart = "beam"\n\n'
-        '[[joints]]\nname = "base"\ntype = "fixed"\nbetween = ["ground", "column.root"]\n\n'
-        '[[loads]]\nname = "push"\ntype = "point"\nat = "column.tip"\nforce = [-345.0, 0.0, 0.0]\n\n'
-        '[[analyses]]\ntype = "buckling"\nname = "buckling"\nmodes = 2\n'
-    )
-    (tmp_path / "column.toml").write_text(study)
+    (tmp_path / "column.toml").write_text(column_study('[[analyses]]\ntype = "buckling"\nname = "buckling"\nmodes = 2\n'))
     done = subprocess.run([str(cli_path()), "run", "column.toml"], capture_output=True, text=True, cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     res = tmp_path / "column-results" / "buckling"
@@ -685,18 +691,12 @@ def test_the_model_before_it_runs_shows_interfaces_supports_and_loads(browser, t
     body) as markers where the study puts them, the loads as arrows along their forces."""
     import subprocess
 
-    from conftest import EXAMPLES, cli_path
+    from conftest import cli_path
 
-    text = (EXAMPLES / "cantilever.toml").read_text()
-    study = text[: text.index("[[analyses]]")].replace(
-        "modes = 4\n", 'modes = 4\nload_points = [{ name = "mid", node_at = [1.0, 0.0, 0.0] }]\n'
-    ) + (
-        '[[bodies]]\nname = "column"\npart = "beam"\n\n'
-        '[[joints]]\nname = "base"\ntype = "fixed"\nbetween = ["ground", "column.root"]\n\n'
-        '[[loads]]\nname = "push"\ntype = "point"\nat = "column.tip"\nforce = [-345.0, 0.0, 0.0]\n\n'
+    study = column_study(
         '[[loads]]\nname = "side"\ntype = "point"\nat = "column.mid"\nforce = [0.0, 0.0, -10.0]\n\n'
         '[[analyses]]\ntype = "equilibrium"\nname = "eq"\n'
-    )
+    ).replace("modes = 4\n", 'modes = 4\nload_points = [{ name = "mid", node_at = [1.0, 0.0, 0.0] }]\n')
     (tmp_path / "column.toml").write_text(study)
     done = subprocess.run([str(cli_path()), "view", "column.toml"], capture_output=True, text=True, cwd=tmp_path)
     assert done.returncode == 0, done.stderr
