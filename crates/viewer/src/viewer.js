@@ -294,7 +294,7 @@ function buildAnalysis(a) {
   bounds.center = box.getCenter(new THREE.Vector3());
   bounds.size = box.getSize(new THREE.Vector3());
   bounds.radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
-  const size = bounds.radius * 0.012;
+  const size = bounds.radius * 0.018;
   for (const m of a.markers) {
     const color = markerColors[m.kind] ?? markerColors.mass;
     let mesh;
@@ -309,6 +309,8 @@ function buildAnalysis(a) {
       const geom = m.kind === 'ground' ? new THREE.BoxGeometry(2 * size, 2 * size, 2 * size) : new THREE.SphereGeometry(m.kind === 'interface' ? 0.7 * size : size, 12, 8);
       mesh = new THREE.Mesh(geom, new THREE.MeshLambertMaterial({ color }));
     }
+    // Drawn over the bodies: a joint or an interface sits inside a beam's tube.
+    mesh.traverse((o) => { if (o.material) o.material.depthTest = false; o.renderOrder = 1; });
     group.add(mesh);
     markers.push({ mesh, marker: m });
   }
