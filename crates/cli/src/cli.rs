@@ -509,10 +509,10 @@ pub fn main_with(args: &[String]) -> Result<(), BoxError> {
             let excitation = frequency_option(&options, "excitation-hz")?;
             let matrices = matrices_spec(&path, &options)?;
             let source = match &matrices {
-                Some(m) => crate::inspect::Source::Matrices(m),
-                None => crate::inspect::Source::File(&path),
+                Some(m) => study::InspectSource::Matrices(m),
+                None => study::InspectSource::File(&path),
             };
-            let inspection = crate::inspect::inspect(&source, excitation, 3.0)?;
+            let inspection = study::inspect(&source, excitation, 3.0)?;
             crate::say_raw!("{}", inspection.report);
             if inspection.failed_checks > 0 {
                 return Err(Box::new(ChecksFailed {

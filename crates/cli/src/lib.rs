@@ -9,7 +9,6 @@
 //! |---|---|
 //! | [`cli`] | the command line: arguments and dispatch |
 //! | [`console`] | the observer that shows progress on stderr and the report on stdout |
-//! | [`inspect`] | `flexmbs inspect FILE.rbody` |
 //! | [`builtin`] | `flexmbs run` without a file: the flexible slider-crank (benchmark C2) |
 
 /// `println!` that cannot panic: when stdout is closed (`flexmbs check STUDY.toml | head`
@@ -43,4 +42,3 @@ macro_rules! tell {
 pub mod builtin;
 pub mod cli;
 pub mod console;
-pub mod inspect;

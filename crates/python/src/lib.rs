@@ -11,6 +11,8 @@
 //!   loads set between steps).
 //! - [`force_law`]: `ForceLaw`, a Python callable giving actuator efforts and point loads
 //!   inside the implicit step (`Study.run(forces=...)`, `Study.simulation(forces=...)`).
+//! - [`inspect`]: `inspect()`, what a reduced body holds and its physical checks, as
+//!   `flexmbs inspect` reports them (`Inspection`).
 //! - [`keys`]: `study_keys()`, the study-file keys as the study crate declares them.
 //! - [`stubs`]: `_stubs()`, the text of the type stubs `flexmbs/_flexmbs.pyi`.
 //!
@@ -25,6 +27,7 @@ use pyo3::prelude::*;
 
 pub mod errors;
 pub mod force_law;
+pub mod inspect;
 pub mod keys;
 pub mod rbody;
 pub mod signature;
@@ -40,6 +43,8 @@ fn _flexmbs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<study::Study>()?;
     m.add_class::<study::Simulation>()?;
     m.add_class::<force_law::ForceLaw>()?;
+    m.add_class::<inspect::Inspection>()?;
+    m.add_function(wrap_pyfunction!(inspect::inspect, m)?)?;
     m.add_function(wrap_pyfunction!(keys::study_keys, m)?)?;
     m.add_function(wrap_pyfunction!(stubs::_stubs, m)?)?;
     Ok(())

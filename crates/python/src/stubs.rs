@@ -56,12 +56,18 @@ pub(crate) fn _stubs(m: &Bound<'_, PyModule>) -> PyResult<String> {
     for class in crate::errors::STUBS {
         out += &class_stub(m, class)?;
     }
-    for f in [crate::errors::FUNCTION_STUB, crate::keys::STUB, STUB] {
+    for f in [
+        crate::errors::FUNCTION_STUB,
+        crate::keys::STUB,
+        crate::inspect::STUB,
+        STUB,
+    ] {
         let doc = doc_of(&m.getattr(f.0)?)?;
         out += &format!("\ndef {}{}:\n{}", f.0, f.1, docstring(&doc, "    "));
     }
     for class in [
         &crate::rbody::STUB,
+        &crate::inspect::INSPECTION_STUB,
         &crate::force_law::STUB,
         &crate::study::STUB,
         &crate::study::SIMULATION_STUB,

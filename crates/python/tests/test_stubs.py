@@ -100,7 +100,7 @@ def test_the_stubs_list_exactly_the_names_the_extension_exports():
 def test_the_exported_functions_take_the_arguments_the_stubs_declare():
     for node in stub_tree().body:
         if isinstance(node, ast.FunctionDef):
-            declared = [a.arg for a in node.args.args]
+            declared = [a.arg for a in node.args.args + node.args.kwonlyargs]
             assert list(inspect.signature(getattr(ext, node.name)).parameters) == declared, node.name
 
 

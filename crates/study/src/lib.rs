@@ -64,6 +64,7 @@ pub use run::{
 
 // What the command line, the Python package and the tests use beyond the facade.
 pub use build::{joint_count, BuiltMechanism};
+pub use run::inspect::{inspect, Inspection, Source as InspectSource};
 pub use run::mesh::model_page;
 pub use run::nothing_to_run;
 pub use run::reduce::{build_mechanism, reduce_command, reduce_part, Reduced, ReducedFile};

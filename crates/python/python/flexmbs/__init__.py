@@ -9,6 +9,8 @@
   and point loads inside the implicit step (``Study.run(forces=...)``,
   ``Study.simulation(forces=...)``).
 - ``ReducedBody``: a reduced-body file (``.rbody``) and its matrices, modes and mass data.
+- ``inspect(path)``: what a reduced body (``.rbody``, MBDyn ``.fem``, Matrix Market matrices)
+  holds and its physical checks, as ``flexmbs inspect`` reports them (an ``Inspection``).
 - Errors: ``FlexmbsError`` and its subclasses ``StudyError``, ``KeyPathError``,
   ``SolveError``, ``ReducedBodyFileError`` and ``UnknownNameError`` (also a ``KeyError``: an
   analysis or sensor name that is not there, with the close names).
@@ -22,6 +24,7 @@ reference and worked examples are in docs/python.md of the repository.
 from ._flexmbs import (  # noqa: F401
     FlexmbsError,
     ForceLaw,
+    Inspection,
     KeyPathError,
     ReducedBody,
     ReducedBodyFileError,
@@ -31,6 +34,7 @@ from ._flexmbs import (  # noqa: F401
     StudyError,
     UnknownNameError,
     __version__,
+    inspect,
     study_keys,
 )
 from .results import AnalysisResult, Page, Results, Sensor, Table  # noqa: F401
@@ -40,6 +44,7 @@ __all__ = [
     "AnalysisResult",
     "FlexmbsError",
     "ForceLaw",
+    "Inspection",
     "KeyPathError",
     "Page",
     "ReducedBody",
@@ -55,6 +60,7 @@ __all__ = [
     "__version__",
     "final",
     "grid",
+    "inspect",
     "peak_abs",
     "study_keys",
     "summary_value",

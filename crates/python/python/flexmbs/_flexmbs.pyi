@@ -1043,6 +1043,16 @@ def study_keys(table: Optional[str] = None) -> List[Dict[str, Any]]:
     ``range`` and ``doc``. With ``table``, only that table's keys. The same declarations give
     the validator's allowed keys and the key tables of docs/study-file.md."""
 
+def inspect(path: _Path, excitation_hz: Optional[float] = None, *, mass: Optional[_Path] = None, nodes: Optional[_Path] = None, dofs: Optional[_Path] = None, dofs_per_node: Optional[int] = None, interfaces: Optional[Dict[str, int]] = None, modes: Optional[int] = None, cutoff_hz: Optional[float] = None) -> "Inspection":
+    """What the reduced body at `path` holds, as `flexmbs inspect` reports it: a reduced-body
+    file (`.rbody`), an MBDyn modal element file (`.fem`), or a Matrix Market stiffness
+    (`.mtx`) with `mass`, `nodes`, `dofs` or `dofs_per_node`, `interfaces` ({name: node}) and
+    `modes` or `cutoff_hz` [Hz], the keys of a study's `[bodies.matrices]`, reduced first.
+    `excitation_hz` [Hz]: the highest frequency a study will excite; the report then says
+    whether the kept modes reach three times it. A body that fails its physical checks is
+    still reported (`Inspection.failed_checks`); a file that cannot be read or reduced raises
+    `ReducedBodyFileError` (with `.path`), a keyword that does not apply `ValueError`."""
+
 def _stubs() -> str:
     """The stub file's text for the extension module `m`."""
 
@@ -1107,6 +1117,21 @@ class ReducedBody:
     """The reduced geometric stiffness matrices G_k (n x n x n, index k first), or `None` when
     the body was reduced without geometric stiffening."""
     def __eq__(self, other: object) -> bool:
+        ...
+
+class Inspection:
+    """What `inspect` found: the report `flexmbs inspect` prints, and how many of the physical
+    checks every body passes before use failed (a study refuses a body that fails one).
+    `str(inspection)` is the report."""
+
+    report: Final[str]
+    """The report: size, interfaces, mass data, fixed-interface frequencies and modal effective
+    masses, and the physical checks with what they measured."""
+    failed_checks: Final[int]
+    """The number of physical checks the body fails (0: studies accept it)."""
+    passed: Final[bool]
+    """Whether the body passes every physical check."""
+    def __str__(self) -> str:
         ...
 
 class ForceLaw:

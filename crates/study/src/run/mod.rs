@@ -15,11 +15,13 @@
 //! | [`simulation`] | a dynamic analysis stepped by the caller |
 //! | [`sensors`] | sensor columns and the stream of samples |
 //! | [`mesh`] | the deformed meshes of the mechanism, stresses and hot spots |
+//! | [`inspect`] | what a reduced body holds and its physical checks, for a person (`flexmbs inspect`) |
 
 pub mod cache;
 pub mod dynamic;
 pub mod dynamic_output;
 pub mod force_law;
+pub mod inspect;
 pub mod mechanism;
 pub mod mesh;
 pub mod options;

@@ -1,15 +1,15 @@
-//! `flexmbs inspect FILE`: what a reduced body (`.rbody`, an MBDyn `.fem` file, or matrices
-//! from another code: Matrix Market K and M with a node table, reduced here as a study's
-//! `[bodies.matrices]` is) holds, for a person checking it before using it in a study: size,
+//! `flexmbs inspect FILE` and Python's `flexmbs.inspect`: what a reduced body (`.rbody`, an
+//! MBDyn `.fem` file, or matrices from another code: Matrix Market K and M with a node table,
+//! reduced here as a study's `[bodies.matrices]` is) holds, for a person checking it before using it in a study: size,
 //! interfaces, mass data, fixed-interface frequencies and modal effective masses
 //! (`reduction::diagnostics`), and the physical checks every body passes before use
 //! (`reduction::checks`), with what they measured.
 
+use crate::error::{BoxError, ResultExt};
+use crate::input::schema::MatricesFile;
 use reduction::{PhysicsProblem, ReducedBody};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use study::error::{BoxError, ResultExt};
-use study::input::schema::MatricesFile;
 
 /// What `inspect` is given.
 #[derive(Debug)]
@@ -80,7 +80,7 @@ fn read(source: &Source<'_>) -> Result<Read, BoxError> {
             let name = path
                 .file_stem()
                 .map_or_else(|| "matrices".to_string(), |s| s.to_string_lossy().into_owned());
-            let i = study::input::matrices::inspect_matrices(&name, m, Path::new(""))
+            let i = crate::input::matrices::inspect_matrices(&name, m, Path::new(""))
                 .map_err(|(key, message)| format!("cannot inspect {} ({key}): {message}", path.display()))?;
             let format = format!(
                 "Matrix Market K, mass {}, node table {}, reduced here",
