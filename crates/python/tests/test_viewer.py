@@ -703,6 +703,8 @@ def test_the_model_before_it_runs_shows_interfaces_supports_and_loads(browser, t
     assert done.stdout.strip() == "column-model.html"
     page = Page(browser, tmp_path / "column-model.html")
     assert page("v.bodies()") == ["column"] and page("v.frameCount()") == 1
+    # One frame: nothing to play, so no play button, speed or time slider.
+    assert not page.page.locator("#play").is_visible() and not page.page.locator("#slider").is_visible()
     markers = page("v.markers()")
     drawn = {m["name"]: m for m in markers if m["kind"] != "ground"}
     expected = {

@@ -642,7 +642,8 @@ function selectAnalysis(k) {
   state.frameCount = a.frames.length;
   buildAnalysis(a);
   buildPlots(a);
-  $('timeBox').classList.toggle('hidden', !a.frames.length && !a.modes.length);
+  // Nothing to play in one frame (the model before it runs).
+  $('timeBox').classList.toggle('hidden', a.frames.length < 2 && !a.modes.length);
   $('slider').classList.toggle('hidden', !a.frames.length);
   $('modeBox').classList.toggle('hidden', !a.modes.length);
   $('slider').max = Math.max(0, a.frames.length - 1);
