@@ -60,6 +60,7 @@ def test_matrices_from_another_code_are_reduced_with_the_study_keys(matrices, cl
     # The same report but for the paths, given here as absolute ones.
     assert found.report.replace(f"{folder}/", "") == printed
     mass = float(re.search(r"\n  mass +(\S+) kg", found.report).group(1))
+    # The report prints 7 significant digits.
     assert found.passed and mass == pytest.approx(body.mass, rel=1e-6)
 
 

@@ -360,9 +360,14 @@ def test_colour_by_displacement_and_stress_follows_the_legend_in_the_vtus_units(
         assert lo == 0 and hi == pytest.approx(surface.max(), rel=5e-3), (choice, hi, surface.max())
         bar = legend_bar(page)
         for i, n in list(enumerate(nodes))[::37]:
+            # The page sums float32 shapes: a few parts in 10^7 of each term, 2e-5 leaves room
+            # for the sum's cancellation; near zero the largest value's 1e-6.
             assert page(f"v.value(0, {i})") == pytest.approx(expected[n], rel=2e-5, abs=1e-6 * surface.max())
             x = round((len(bar) - 1) * expected[n] / surface.max())
             colour = srgb(page(f"v.vertexColor(0, {i})"))
+            # The bar has 180 pixels and the page's table 256 levels: neighbouring bar pixels
+            # differ by up to about 0.02 per channel, plus the legend's 3-digit end and the
+            # 8-bit canvas; 0.04 is two pixels' step.
             assert np.abs(colour - bar[x]).max() < 0.04, (choice, n, colour, bar[x])
     page.check_clean()
 
@@ -382,6 +387,7 @@ def test_colour_by_body_follows_the_legend(browser, slider_crank):
     for j, (name, css) in enumerate(rows):
         swatch = np.array([float(c) for c in re.findall(r"[0-9.]+", css)[:3]]) / 255
         colours = srgb([page(f"v.vertexColor({j}, {i})") for i in range(page(f"v.vertexCount({j})"))])
+        # The swatch is the 8-bit colour; the vertex its float32 linear value encoded back.
         assert np.abs(colours - swatch).max() < 1e-5, name
         swatches.append(swatch)
     assert len({tuple(s) for s in swatches}) == len(bodies)
@@ -399,6 +405,7 @@ def test_the_deformation_scale_factor_enlarges_the_elastic_part_only(browser, so
     u = fields["displacement"].reshape(-1, 3)
     for i in range(0, page("v.vertexCount(0)"), 11):
         n = page(f"v.nodeOfVertex(0, {i})")
+        # float32 vertices and shapes: 2e-7 m at scale 1 (the stress test), 20 times here.
         assert np.allclose(page(f"v.vertexPosition(0, {i})"), points[n] + 20 * u[n], rtol=0, atol=2e-6)
     page.check_clean()
     # In a mechanism the rigid motion stays and the elastic part scales: at 0 each rod segment
@@ -409,6 +416,10 @@ def test_the_deformation_scale_factor_enlarges_the_elastic_part_only(browser, so
 
     mesh_nodes = sorted({page(f"v.nodeOfVertex({segment}, {i})") for i in range(page(f"v.vertexCount({segment})"))})
     assert len(mesh_nodes) == 5
+    # The rod is drawn as a tube of its section: d = 6 mm, its ring vertices 3 mm from the node
+    # (float32 positions near 0.3 m: 1e-7 m).
+    ring = [page(f"v.vertexPosition({segment}, {i})") for i in page(f"v.verticesOfNode({segment}, {mesh_nodes[2]})")]
+    assert np.allclose(np.linalg.norm(np.array(ring) - np.mean(ring, axis=0), axis=1), 0.003, rtol=0, atol=1e-7)
 
     def nodes(scale):
         page.page.fill("#scale", str(scale))
@@ -419,6 +430,8 @@ def test_the_deformation_scale_factor_enlarges_the_elastic_part_only(browser, so
     gaps = np.linalg.norm(straight[:, None] - straight[None], axis=2)
     a, b = np.unravel_index(np.argmax(gaps), gaps.shape)
     chord = straight[b] - straight[a]
+    # float32 vertices (0.3 m from the origin: 2e-8 m steps) bound the three checks below to
+    # about 1e-7 m; the rod's bending at this time is well above 1e-6 m.
     assert np.linalg.norm(chord) == pytest.approx(0.075, rel=1e-6)
     off_chord = lambda p: np.linalg.norm(np.cross(p - p[a], chord), axis=1) / np.linalg.norm(chord)
     assert off_chord(straight).max() < 1e-7
@@ -488,6 +501,8 @@ def test_the_sensor_plots_cursor_follows_the_time(browser, slider_crank):
             row = table[np.searchsorted(table[:, 0], t + 1e-12) - 1]
             readout = dict(re.findall(r"\s*([^,=]+?) = ([^,]+)", plots.nth(p).locator("div").nth(1).text_content()))
             assert list(readout) == header[1:], (name, readout)
+            # The readout prints 4 significant digits (half a unit: 5e-4 relative) of float32
+            # values; values near zero print as a few units of the column's largest.
             for col, value in zip(header[1:], row[1:]):
                 assert float(readout[col]) == pytest.approx(value, rel=1e-3, abs=1e-3 * np.abs(table[:, 1:]).max()), (name, col, t)
             # The cursor: the column of the plot's canvas with the most black pixels.
@@ -497,6 +512,7 @@ def test_the_sensor_plots_cursor_follows_the_time(browser, slider_crank):
                 " return [c.width, n]; }"
             )
             x = 4 + (t - table[0, 0]) / (table[-1, 0] - table[0, 0]) * (w - 8)
+            # A 1-pixel line at a fractional x covers the two pixel columns around it.
             assert abs(int(np.argmax(columns)) - x) <= 1.5, (name, t, np.argmax(columns), x)
     page.check_clean()
 
@@ -541,6 +557,9 @@ def test_the_markers_sit_on_their_joints_supports_and_point_masses(browser, tmp_
             "slider.P": at("slider", t),
             "tip": at("middle", t),
         }
+        # float64 on both sides (the page's frames and the sensors' CSV of the same node
+        # positions, each printed to 17 digits): 1e-9 m only allows for the crank's
+        # cos/sin of the printed angle.
         for name, x in expected.items():
             assert np.allclose(drawn[name], x, rtol=0, atol=1e-9), (name, t, drawn[name], x)
         # The welds join rod segments: each sits on a node of the VTU's deformed rod.
@@ -605,6 +624,8 @@ def test_turn_pan_zoom_and_the_views_along_the_axes(browser, solid_bar):
     page.page.mouse.up()
     page.page.keyboard.up("Shift")
     panned = drawn()
+    # Exact for a point at the target's depth; the bar's near and far ends move a little more
+    # and less under the perspective, so the centroid within 6 of 67 pixels.
     assert np.allclose(centroid(panned) - centroid(zoomed), [60, 30], atol=6), centroid(panned) - centroid(zoomed)
     # A drag turns the drawing; the opposite drag turns it back.
     page.page.mouse.move(*centre)
@@ -617,6 +638,8 @@ def test_turn_pan_zoom_and_the_views_along_the_axes(browser, solid_bar):
     page.page.mouse.move(*centre, steps=5)
     page.page.mouse.up()
     back = drawn()
+    # The same angles again: the same picture but for edge pixels, where the angle's five
+    # steps there and back round differently.
     assert (back != panned).mean() < 0.002
     # Fit: the whole bar in view again, at the size it had.
     page.page.click("#views button[data-view='fit']")
@@ -667,8 +690,12 @@ def test_buckling_modes_animate_with_their_load_factors(browser, tmp_path):
         drawn = np.array([page.node_position(0, n) for n in nodes]) - rest
         ratio = np.sum(drawn * shape) / np.sum(shape**2)
         assert ratio != 0
+        # The mode's pose is the mode at a finite amplitude (a frame turned by 0.05 rad):
+        # second-order terms of a few parts in 10^6 of the shape, float32 vertices below that.
         assert np.allclose(drawn, ratio * shape, rtol=0, atol=1e-4 * np.abs(drawn).max()), k
-        # Sideways: the column (along x) bends, its tip moving across it, a tenth of its length.
+        # Sideways: the column (along x) bends, its tip moving across it (the axial part is of
+        # the second order, under 1 % here) by a tenth of the model's half-diagonal (1.0 m for
+        # the 2 m column; 5 % leaves room for the tube's width in the diagonal).
         tip = np.argmax(points[nodes, 0])
         assert abs(drawn[tip, 0]) < 0.05 * np.linalg.norm(drawn[tip])
         assert np.linalg.norm(drawn[tip]) == pytest.approx(0.1 * 2.0 / 2, rel=0.05)
@@ -676,6 +703,8 @@ def test_buckling_modes_animate_with_their_load_factors(browser, tmp_path):
         # clamped root stays where it is at any scale.
         page("v.setScale(10)")
         ten = np.array([page.node_position(0, n) for n in nodes]) - rest
+        # Linear in the scale to round-off (float32 positions, 1e-7 m of 2 m); the root moves
+        # only by the mode pose's own second-order drift, 1e-6 of the tip's motion.
         assert np.allclose(ten, 10 * drawn, rtol=0, atol=1e-5 * np.abs(drawn).max()), k
         root = np.argmin(points[nodes, 0])
         assert np.linalg.norm(ten[root]) < 1e-5 * np.linalg.norm(ten[tip]), (k, ten[root])
@@ -715,6 +744,7 @@ def test_the_model_before_it_runs_shows_interfaces_supports_and_loads(browser, t
     }
     for name, (kind, at, direction) in expected.items():
         m = drawn[name]
+        # The column before it runs: the study's own coordinates, in float64 throughout.
         assert m["kind"] == kind and np.allclose(m["position"], at, atol=1e-12), m
         assert (m["direction"] is None) == (direction is None) and (direction is None or np.allclose(m["direction"], direction)), m
     # The clamp: a support at the root.
